@@ -1,0 +1,30 @@
+// The subcommands of anatomy-tutor (ARCHITECTURE.md §7). Each takes the arguments after its name,
+// writes its result to stdout, one-line errors to stderr, and returns the process exit status.
+#pragma once
+
+#include <string>
+#include <vector>
+
+namespace at::app {
+
+using Argv = std::vector<std::string>;
+
+struct Command {
+  const char* name;
+  const char* summary;               // one line for `anatomy-tutor --help`
+  int (*run)(const Argv& args);
+};
+
+// Every command, in the order `--help` lists them. Defined in main.cpp.
+const std::vector<Command>& commands();
+
+// Prints "anatomy-tutor: <message>" on stderr and returns 1 (or `status`).
+int reportError(const std::string& message, int status = 1);
+
+// Volume commands (cmd_volume.cpp)
+int runDatasets(const Argv& args);
+int runStructures(const Argv& args);
+int runInfo(const Argv& args);
+int runSlice(const Argv& args);
+
+}  // namespace at::app

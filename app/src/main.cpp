@@ -1,0 +1,70 @@
+// anatomy-tutor: entry point. Dispatches to a subcommand; with none, runs the default course.
+// `main` catches at the top: anything unexpected becomes a one-line error and exit status 2.
+#include <cstdio>
+#include <exception>
+#include <string>
+
+#include "commands.h"
+
+namespace at::app {
+
+const std::vector<Command>& commands() {
+  static const std::vector<Command> table = {
+      {"datasets", "list the datasets that can be opened", runDatasets},
+      {"structures", "list a dataset's structures", runStructures},
+      {"info", "load any supported file or folder and describe it", runInfo},
+      {"slice", "write a grey slice with label overlay as PNG", runSlice},
+  };
+  return table;
+}
+
+int reportError(const std::string& message, int status) {
+  std::fprintf(stderr, "anatomy-tutor: %s\n", message.c_str());
+  return status;
+}
+
+namespace {
+
+void printUsage() {
+  std::printf("Anatomy Tutor %s — regional anatomy on CT with weighted distance fields\n\n", AT_VERSION);
+  std::printf("usage: anatomy-tutor [COMMAND] [ARGS…]    (no command: the default course)\n\n");
+  for (const Command& c : commands()) std::printf("  %-12s %s\n", c.name, c.summary);
+  std::printf("\n`anatomy-tutor COMMAND --help` describes each command.\n");
+}
+
+// Without a desktop shell yet, the default is the built-in dataset's structure list and a slice.
+int runDefault() {
+  const int status = runStructures({"phantom"});
+  if (status != 0) return status;
+  const std::string out = "phantom_slice.png";
+  const int sliceStatus = runSlice({"phantom", "--axis", "z", "--index", "128", "--out", out});
+  if (sliceStatus == 0) std::printf("wrote %s (axial slice 128 of the phantom)\n", out.c_str());
+  return sliceStatus;
+}
+
+}  // namespace
+}  // namespace at::app
+
+int main(int argc, char** argv) {
+  using namespace at::app;
+  try {
+    if (argc < 2) return runDefault();
+    const std::string name = argv[1];
+    if (name == "--help" || name == "-h" || name == "help") {
+      printUsage();
+      return 0;
+    }
+    if (name == "--version") {
+      std::printf("anatomy-tutor %s\n", AT_VERSION);
+      return 0;
+    }
+    Argv rest(argv + 2, argv + argc);
+    for (const Command& c : commands())
+      if (name == c.name) return c.run(rest);
+    return reportError("unknown command '" + name + "' (see anatomy-tutor --help)", 2);
+  } catch (const std::bad_alloc&) {
+    return reportError("out of memory", 2);
+  } catch (const std::exception& e) {
+    return reportError(std::string("internal error: ") + e.what(), 2);
+  }
+}

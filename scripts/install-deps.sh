@@ -1,0 +1,33 @@
+#!/usr/bin/env bash
+# Installs the Debian packages Anatomy Tutor builds and tests with. Idempotent: packages already
+# present are skipped, so running it twice costs one dpkg query.
+set -euo pipefail
+
+packages=(
+  build-essential cmake ninja-build pkg-config git
+  libsdl2-dev libimgui-dev
+  libepoxy-dev libegl-dev libegl1-mesa-dev libgl-dev libgl1-mesa-dri libegl-mesa0
+  libsqlite3-dev nlohmann-json3-dev
+  libdcmtk-dev libopenjp2-7-dev libnifti2-dev zlib1g-dev libpng-dev
+  doctest-dev libexpected-dev
+  xvfb xauth
+)
+
+missing=()
+for p in "${packages[@]}"; do
+  if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed"; then
+    missing+=("$p")
+  fi
+done
+
+if [ ${#missing[@]} -eq 0 ]; then
+  echo "install-deps: all ${#packages[@]} packages present"
+  exit 0
+fi
+
+echo "install-deps: installing ${missing[*]}"
+SUDO=""
+if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
+export DEBIAN_FRONTEND=noninteractive
+$SUDO apt-get update -qq
+$SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}"

@@ -1,0 +1,48 @@
+// Helpers shared by the test suites: where the real data lives, temporary folders, random seeds,
+// running the anatomy-tutor binary.
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <string>
+
+namespace at::test {
+
+// ../shared/data next to the checkout, or empty if it is absent (tests then report a skip).
+std::filesystem::path sharedDataDir();
+// Full path of a file under shared/data; empty if shared/data is absent.
+std::filesystem::path sharedData(const std::string& relative);
+// True and nothing printed if present; otherwise prints "SKIPPED: <what> needs ../shared/data".
+bool requireSharedData(const char* what);
+
+// The project's source tree (for data/ files).
+std::filesystem::path sourceDir();
+
+// A fresh, empty temporary folder removed when the object dies.
+class TempDir {
+ public:
+  explicit TempDir(const std::string& prefix = "at-test");
+  ~TempDir();
+  TempDir(const TempDir&) = delete;
+  TempDir& operator=(const TempDir&) = delete;
+  const std::filesystem::path& path() const { return path_; }
+  std::filesystem::path operator/(const std::string& name) const { return path_ / name; }
+
+ private:
+  std::filesystem::path path_;
+};
+
+// A fresh seed per run (time-based) unless AT_TEST_SEED is set; printed so a failure can be replayed.
+std::uint64_t freshSeed(const char* testName);
+
+// Runs the anatomy-tutor binary with `args` (shell-quoted by the caller) and captures stdout,
+// stderr and the exit status. The binary is found from the build tree.
+struct CommandResult {
+  int exitCode = -1;
+  std::string out;
+  std::string err;
+};
+std::filesystem::path appBinary();
+CommandResult runApp(const std::string& args, const std::string& stdinText = "");
+
+}  // namespace at::test

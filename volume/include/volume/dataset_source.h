@@ -1,0 +1,29 @@
+// Opening a dataset by name or path: "phantom" (256³), "phantom:128" (another size), or a volume
+// path with optional labels/names. Imported datasets registered in the database are resolved by
+// the app (db/) and then opened through openDatasetFiles.
+#pragma once
+
+#include <string>
+
+#include "volume/error.h"
+#include "volume/structure.h"
+
+namespace at {
+
+struct DatasetFiles {
+  std::string volumePath;       // DICOM folder, .nii[.gz], .nrrd/.nhdr
+  std::string labelsPath;       // optional: label map (any supported format, incl. DICOM SEG)
+  std::string namesPath;        // optional: JSON { "value": "name" }
+  std::string dicomSeriesUid;   // optional
+  std::string id;               // dataset id to report
+};
+
+// "phantom" or "phantom:N" → the built-in phantom; anything else → error (the app resolves names).
+Result<Dataset> openBuiltinDataset(const std::string& name);
+bool isBuiltinDatasetName(const std::string& name);
+
+// Loads volume and labels, resamples labels onto the volume grid when their grids differ, and
+// names structures from the file's segments, the names JSON, or "label_N".
+Result<Dataset> openDatasetFiles(const DatasetFiles& files);
+
+}  // namespace at

@@ -1,0 +1,19 @@
+// DICOM SEG (Segmentation Storage, binary) through DCMTK's dcmseg. Segments become labels
+// (segment number = label value; overlapping segments: the higher number wins, noted) on the
+// segmentation's own frame geometry; resample onto a CT grid with resampleLabelsNearest.
+#pragma once
+
+#include <string>
+
+#include "volume/error.h"
+#include "volume/image_file.h"
+
+namespace at {
+
+// `image` holds label values; `segments` their names.
+Result<LoadedImage> loadDicomSeg(const std::string& path);
+
+// True if the file is a DICOM Segmentation Storage object.
+bool isDicomSegFile(const std::string& path);
+
+}  // namespace at

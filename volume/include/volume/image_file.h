@@ -1,0 +1,56 @@
+// Reading images from files: what every loader returns, and one entry point that picks the loader
+// from the path (a folder → DICOM series; .nii/.nii.gz → NIfTI; .nrrd/.nhdr/.seg.nrrd → NRRD;
+// a DICOM SEG file → segmentation). Only geometry and pixel data survive loading: no patient
+// identifiers (name, ID, birth date, institution, accession, dates) are ever copied out.
+#pragma once
+
+#include <cstdint>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "volume/error.h"
+#include "volume/grid.h"
+
+namespace at {
+
+enum class ScalarKind { Int8, UInt8, Int16, UInt16, Int32, UInt32, Float32, Float64 };
+const char* toString(ScalarKind kind);
+
+// A segment (label value and its name) that a file names itself: NRRD Segment<N>_* keys,
+// DICOM SEG SegmentSequence.
+struct SegmentInfo {
+  std::uint16_t label = 0;
+  std::string name;
+  std::array<float, 3> colour{1, 1, 1};
+};
+
+struct LoadedImage {
+  FloatVolume image;                 // values after rescale (HU for CT), on the file's geometry
+  ScalarKind storedKind = ScalarKind::Int16;  // how the file stored them
+  std::vector<SegmentInfo> segments; // segment names found in the file (may be empty)
+  std::vector<std::string> notes;    // e.g. "chose series 1.2.3 (20 of 23 files)"
+};
+
+struct ImageLoadOptions {
+  std::string dicomSeriesUid;        // DICOM folders: this series; empty → the largest
+  // Refuse images whose voxels would take more than this many bytes as float (0 = derive
+  // from the memory available on this machine).
+  std::size_t maxBytes = 0;
+};
+
+// Loads any supported input, choosing the loader from the path.
+Result<LoadedImage> loadImageFile(const std::string& path, const ImageLoadOptions& options = {});
+
+// Converts a loaded image to HU int16; errors if values are not finite or lie outside int16.
+Result<Volume> toHuVolume(const LoadedImage& loaded, const std::string& pathForMessages);
+// Converts a loaded image to labels; errors if values are negative, non-integer or > 65535.
+Result<LabelMap> toLabelMap(const LoadedImage& loaded, const std::string& pathForMessages);
+
+// Reads a JSON map { "1": "spleen", "2": "kidney_right", … } of label value → name.
+Result<std::map<std::uint16_t, std::string>> loadLabelNames(const std::string& path);
+
+// Bytes this process may reasonably allocate for one image (a share of available memory).
+std::size_t availableImageBytes();
+
+}  // namespace at

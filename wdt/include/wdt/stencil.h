@@ -1,0 +1,73 @@
+// The per-voxel arithmetic of the weighted distance transform, written once for every backend:
+// the CPU sweeps, the CUDA kernels and the exact Dijkstra reference all call these functions, so
+// that the same inputs give the same float operations in the same order (results can then be
+// compared bit for bit where the visiting order is the same).
+//
+// Usable from C++ and CUDA: functions are AT_HOST_DEVICE, take plain values, use no std:: calls.
+#pragma once
+
+#include <cstdint>
+
+#if defined(__CUDACC__)
+#define AT_HOST_DEVICE __host__ __device__
+#else
+#define AT_HOST_DEVICE
+#endif
+
+namespace at::wdt {
+
+// Density of a voxel: HU windowed to 0..1 and quantised to 8 bits (0..255). Both backends use the
+// quantised value, which keeps the GPU's weight volume at one byte per voxel.
+AT_HOST_DEVICE inline std::uint8_t densityByte(float hu, float huMin, float huMax) {
+  float d = (hu - huMin) / (huMax - huMin);
+  d = d < 0.0f ? 0.0f : (d > 1.0f ? 1.0f : d);
+  return static_cast<std::uint8_t>(d * 255.0f + 0.5f);
+}
+
+AT_HOST_DEVICE inline float densityFromByte(std::uint8_t q) { return float(q) * (1.0f / 255.0f); }
+
+// Density weight rule: w = base + density.
+AT_HOST_DEVICE inline float densityWeight(std::uint8_t q, float base) { return base + densityFromByte(q); }
+
+// Physical step lengths (mm) of a sweep along axis `a` whose planes span axes `b` and `c`:
+// straight (0,0), one lateral step along b (1,0), along c (0,1), and both (1,1).
+struct SweepLengths {
+  float straight, alongB, alongC, diagonal;
+};
+
+AT_HOST_DEVICE inline float sqrtf_portable(float x) {
+#if defined(__CUDA_ARCH__)
+  return ::sqrtf(x);
+#else
+  return __builtin_sqrtf(x);
+#endif
+}
+
+AT_HOST_DEVICE inline SweepLengths sweepLengths(float spacingA, float spacingB, float spacingC) {
+  return {spacingA, sqrtf_portable(spacingA * spacingA + spacingB * spacingB),
+          sqrtf_portable(spacingA * spacingA + spacingC * spacingC),
+          sqrtf_portable(spacingA * spacingA + spacingB * spacingB + spacingC * spacingC)};
+}
+
+AT_HOST_DEVICE inline float minf(float a, float b) { return a < b ? a : b; }
+
+// Entering rule update of one voxel b with weight wb from its 9 neighbours in the previous plane,
+// n[dc+1][db+1] (out-of-grid neighbours are +infinity). Groups neighbours by step length first,
+// so the cost w(b)·|step| is computed four times, not nine. Returns min(current, best candidate).
+AT_HOST_DEVICE inline float enteringUpdate(float current, const float n[3][3], float wb, SweepLengths l) {
+  const float m00 = n[1][1];
+  const float m10 = minf(n[1][0], n[1][2]);
+  const float m01 = minf(n[0][1], n[2][1]);
+  const float m11 = minf(minf(n[0][0], n[0][2]), minf(n[2][0], n[2][2]));
+  const float c = minf(minf(m00 + wb * l.straight, m10 + wb * l.alongB),
+                       minf(m01 + wb * l.alongC, m11 + wb * l.diagonal));
+  return minf(current, c);
+}
+
+// The cost of one step a → b of physical length `len` under the entering rule.
+AT_HOST_DEVICE inline float enteringStepCost(float wb, float len) { return wb * len; }
+
+// The cost of one step a → b under the trapezoid rule: ½(w(a) + w(b))·|step|.
+AT_HOST_DEVICE inline float trapezoidStepCost(float wa, float wb, float len) { return 0.5f * (wa + wb) * len; }
+
+}  // namespace at::wdt
