@@ -1,0 +1,28 @@
+// The backend-facing form of a WDT request: everything a backend needs on the grid it computes
+// on (the volume's grid, or the coarser one when downsampling). The front end (computeWdt) builds
+// it — windowing HU to density bytes, aggregating blocks when downsampling, marking seeds — and
+// hands it to the CPU or CUDA backend. Backends never see HU or the full-resolution volume.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "volume/grid.h"
+#include "wdt/wdt.h"
+
+namespace at {
+
+struct WdtProblem {
+  Geometry grid;                       // the grid the field is computed on
+  std::vector<std::uint8_t> density;   // densityByte() per voxel (stencil.h); size grid.dims.count()
+  std::vector<std::uint8_t> seeds;     // 1 = seed voxel (D = 0); size grid.dims.count()
+  WdtParams params;                    // rule, weight rule, baseCost, passes/converge/maxPasses
+};
+
+// Builds the problem for `params` (downsampling included). Errors as computeWdt.
+Result<WdtProblem> prepareWdtProblem(const Volume& volume, const Mask& seeds, const WdtParams& params);
+
+// The CPU backend: multi-threaded, vectorised multi-axis sweeps.
+Result<WdtResult> runCpuBackend(const WdtProblem& problem, const WdtControl& control);
+
+}  // namespace at
