@@ -72,8 +72,13 @@ long long gzReadFully(gzFile_s* file, void* buffer, std::size_t size) {
   return (long long)done;
 }
 
+struct NiftiHeader {
+  NiftiImagePtr nim;
+  double pixdim[3] = {0, 0, 0};  // as stored: niftilib replaces zero pixdims with 1
+};
+
 // Reads and checks the header of the (possibly gzip-compressed) file and lets niftilib convert it.
-Result<NiftiImagePtr> readNiftiHeader(const std::string& path, gzFile_s* file) {
+Result<NiftiHeader> readNiftiHeader(const std::string& path, gzFile_s* file) {
   unsigned char header[540] = {};
   const long long got = gzReadFully(file, header, sizeof header);
   if (got < 0) return fail(path + ": the compressed data is corrupt (" + gzMessage(file) + ")");
@@ -82,7 +87,15 @@ Result<NiftiImagePtr> readNiftiHeader(const std::string& path, gzFile_s* file) {
   const std::uint32_t size = readU32(header, false);
   const std::uint32_t swapped = readU32(header, true);
   nifti_image* nim = nullptr;
+  NiftiHeader result;
+  const bool swap = size != 348 && size != 540;
   if (size == 348 || swapped == 348) {
+    for (int a = 0; a < 3; ++a) {
+      std::uint32_t bits = readU32(header + 80 + 4 * a, swap);
+      float value;
+      std::memcpy(&value, &bits, 4);
+      result.pixdim[a] = value;
+    }
     if (std::memcmp(header + 344, "n+1\0", 4) != 0)
       return fail(path + ": not a single-file NIfTI-1 image (magic at byte 344 is not \"n+1\")");
     nifti_1_header h;
@@ -92,6 +105,12 @@ Result<NiftiImagePtr> readNiftiHeader(const std::string& path, gzFile_s* file) {
     if (got < 540) return fail(path + ": file holds " + std::to_string(got) + " bytes, too short for a NIfTI-2 header");
     if (std::memcmp(header + 4, "n+2\0", 4) != 0)
       return fail(path + ": not a single-file NIfTI-2 image (magic at byte 4 is not \"n+2\")");
+    for (int a = 0; a < 3; ++a) {
+      std::uint64_t bits;
+      std::memcpy(&bits, header + 112 + 8 * a, 8);
+      if (swap) bits = __builtin_bswap64(bits);
+      std::memcpy(&result.pixdim[a], &bits, 8);
+    }
     nifti_2_header h;
     std::memcpy(&h, header, sizeof h);
     nim = nifti_convert_n2hdr2nim(h, path.c_str());
@@ -99,7 +118,8 @@ Result<NiftiImagePtr> readNiftiHeader(const std::string& path, gzFile_s* file) {
     return fail(path + ": not a NIfTI file (header size field is " + std::to_string(size) + ", not 348 or 540)");
   }
   if (!nim) return fail(path + ": niftilib cannot interpret the NIfTI header (inconsistent fields)");
-  return NiftiImagePtr(nim);
+  result.nim.reset(nim);
+  return result;
 }
 
 bool kindOf(int datatype, ScalarKind& kind) {
@@ -162,7 +182,7 @@ Result<LoadedImage> loadNifti(const std::string& path, const ImageLoadOptions& o
   if (!file) return fail(path + ": cannot open the file");
   auto header = readNiftiHeader(path, file.get());
   if (!header) return tl::unexpected(header.error());
-  NiftiImagePtr nim = std::move(*header);
+  NiftiImagePtr nim = std::move(header->nim);
 
   for (int d = 4; d <= 7; ++d)
     if (nim->dim[0] >= d && nim->dim[d] > 1)
@@ -183,7 +203,7 @@ Result<LoadedImage> loadNifti(const std::string& path, const ImageLoadOptions& o
     geometry = geometryFromAffine(path, nim->sto_xyz, dims, "sform");
   } else {
     // qform, or the plain pixdim scaling niftilib derives when qform_code is 0.
-    const double d[3] = {nim->dx, nim->dy, nim->dz};
+    const double* d = header->pixdim;
     for (int a = 0; a < 3; ++a)
       if (!(d[a] > 0) || !std::isfinite(d[a]))
         return fail(path + ": pixdim[" + std::to_string(a + 1) + "] is " + std::to_string(d[a]) +

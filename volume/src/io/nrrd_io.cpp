@@ -49,6 +49,50 @@ Result<std::string> readWholeFile(const std::string& path, const std::string& wh
   return bytes;
 }
 
+// The start of a NRRD file up to and including the blank line that ends its header (or the whole
+// file when there is none), so that the memory check comes before attached data are read.
+Result<std::string> readHeaderBytes(const std::string& path) {
+  std::error_code ec;
+  if (!fs::is_regular_file(path, ec)) return fail(path + ": no such file");
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return fail(path + ": cannot open the file");
+  constexpr std::size_t kChunk = 1 << 16, kMaxHeader = std::size_t(16) << 20;
+  std::string bytes;
+  std::size_t searched = 0;
+  while (bytes.size() < kMaxHeader) {
+    char buffer[kChunk];
+    in.read(buffer, kChunk);
+    const std::size_t got = std::size_t(in.gcount());
+    bytes.append(buffer, got);
+    if (bytes.size() >= 8 && bytes.compare(0, 7, "NRRD000") != 0)
+      return fail(path + ": not a NRRD file (it does not start with NRRD0001…NRRD0005)");
+    const std::size_t from = searched > 2 ? searched - 2 : 0;
+    const std::size_t lf = bytes.find("\n\n", from), crlf = bytes.find("\n\r\n", from);
+    if (lf != std::string::npos || crlf != std::string::npos) {
+      const std::size_t end = std::min(lf == std::string::npos ? crlf + 3 : lf + 2,
+                                       crlf == std::string::npos ? lf + 2 : crlf + 3);
+      bytes.resize(end);
+      return bytes;
+    }
+    searched = bytes.size();
+    if (got < kChunk) return bytes;  // end of file: a detached header
+  }
+  return fail(path + ": no end of the NRRD header within 16 MiB (a blank line must follow it)");
+}
+
+// The bytes of `path` from `offset` to the end.
+Result<std::string> readFileFrom(const std::string& path, std::size_t offset, const std::string& what) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return fail(what + ": cannot open the file");
+  in.seekg(0, std::ios::end);
+  const std::streamoff size = in.tellg();
+  if (size < 0 || std::size_t(size) < offset) return fail(what + ": cannot read the file");
+  std::string bytes(std::size_t(size) - offset, '\0');
+  in.seekg(std::streamoff(offset), std::ios::beg);
+  if (!bytes.empty() && !in.read(bytes.data(), std::streamsize(bytes.size()))) return fail(what + ": cannot read the file");
+  return bytes;
+}
+
 std::string trim(const std::string& s) {
   const auto b = s.find_first_not_of(" \t\r");
   if (b == std::string::npos) return {};
@@ -597,9 +641,9 @@ std::vector<SegmentInfo> parseSegments(const NrrdHeader& h, std::vector<std::str
 // [load]
 
 Result<LoadedImage> loadNrrd(const std::string& path, const ImageLoadOptions& options) {
-  auto bytes = readWholeFile(path, path);
-  if (!bytes) return tl::unexpected(bytes.error());
-  auto header = parseHeader(path, *bytes);
+  auto headerBytes = readHeaderBytes(path);
+  if (!headerBytes) return tl::unexpected(headerBytes.error());
+  auto header = parseHeader(path, *headerBytes);
   if (!header) return tl::unexpected(header.error());
   const NrrdHeader& h = *header;
 
@@ -653,7 +697,9 @@ Result<LoadedImage> loadNrrd(const std::string& path, const ImageLoadOptions& op
     if (!h.hasAttachedData) return fail(path + ": the NRRD header names no data file and holds no data");
     const std::string sizeText =
         "dimensions " + layout->dims.toString() + " × " + typeText + " need " + std::to_string(totalBytes) + " bytes";
-    if (auto ok = decodeChunk(path, *bytes, h.dataOffset, enc, totalBytes, sizeText, data); !ok)
+    auto bytes = readFileFrom(path, h.dataOffset, path);
+    if (!bytes) return tl::unexpected(bytes.error());
+    if (auto ok = decodeChunk(path, *bytes, 0, enc, totalBytes, sizeText, data); !ok)
       return tl::unexpected(ok.error());
   } else {
     const std::size_t n = files->size();
