@@ -235,10 +235,13 @@ Result<LoadedImage> loadNifti(const std::string& path, const ImageLoadOptions& o
                 " (supported: int8, uint8, int16, uint16, int32, uint32, float32, float64)");
 
   Result<Geometry> geometry;
-  if (nim->sform_code > 0) {
-    geometry = geometryFromAffine(path, nim->sto_xyz, dims, "sform");
-  } else {
-    // qform, or the plain pixdim scaling niftilib derives when qform_code is 0.
+  std::string geometryNote = "geometry from the sform";
+  if (nim->sform_code > 0) geometry = geometryFromAffine(path, nim->sto_xyz, dims, "sform");
+  if (nim->sform_code <= 0 || (!geometry && nim->qform_code > 0)) {
+    // qform, or the plain pixdim scaling niftilib derives when qform_code is 0; also the fallback
+    // when a writer set sform_code but left the sform degenerate.
+    geometryNote = geometry || nim->sform_code <= 0 ? "geometry from the qform"
+                                                    : "sform unusable (" + geometry.error().message + "); geometry from the qform";
     const double* d = header->pixdim;
     for (int a = 0; a < 3; ++a)
       if (!(d[a] > 0) || !std::isfinite(d[a]))
@@ -292,7 +295,7 @@ Result<LoadedImage> loadNifti(const std::string& path, const ImageLoadOptions& o
     case ScalarKind::Float32: convertVoxels<float>(data, out, slope, inter); break;
     case ScalarKind::Float64: convertVoxels<double>(data, out, slope, inter); break;
   }
-  loaded.notes.push_back(std::string("geometry from the ") + (nim->sform_code > 0 ? "sform" : "qform"));
+  loaded.notes.push_back(geometryNote);
   return loaded;
 }
 
