@@ -67,6 +67,23 @@ TEST_CASE("seg_small.nii.gz holds 41 labels on the CT grid and its liver voxels 
   CHECK(mean < 150);
 }
 
+TEST_CASE("seg_dicom.nii.gz reads its RAS affine as an LAS grid: rows and slices run as the README says") {
+  if (!requireSharedData("seg_dicom.nii.gz")) return;
+  const std::string path = sharedData("totalsegmentator/seg_dicom.nii.gz").string();
+  auto loaded = loadNifti(path);
+  REQUIRE_MESSAGE(loaded, loaded.error().message);
+  const Geometry& g = loaded->image.geometry;
+  CHECK(g.dims == Dims{512, 512, 20});
+  CHECK(maxAbsDifference(g.spacingMm, Vec3{0.9765625, 0.9765625, 2.0}) < 1e-6);
+  // sform diag(−0.977, 0.977, 2) in RAS: i → patient left, j → anterior, k → superior.
+  CHECK(g.orientationCode() == "LAS");
+  CHECK(maxAbsDifference(g.originMm, Vec3{-249.51171875, 61.51171875, -804.5}) < 1e-4);
+  auto labels = toLabelMap(*loaded, path);
+  REQUIRE(labels);
+  std::set<std::uint16_t> distinct(labels->voxels.begin(), labels->voxels.end());
+  CHECK(distinct.size() == 32);  // 31 structures and background
+}
+
 TEST_CASE("a float image on a random oblique grid round-trips through .nii and .nii.gz") {
   std::mt19937_64 rng(freshSeed("nifti float round trip"));
   TempDir dir;
