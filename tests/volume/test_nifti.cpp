@@ -209,7 +209,11 @@ TEST_CASE("every supported NIfTI datatype loads with scl_slope and scl_inter app
           default: std::memcpy(raw.data.data() + n * width, &stored[n], width); break;  // little endian
         }
       }
-      const auto path = dir / ("t" + std::to_string(version) + std::string(toString(c.kind)) + ".nii");
+      std::string name = "t";
+      name += std::to_string(version);
+      name += toString(c.kind);
+      name += ".nii";
+      const auto path = dir / name;
       writeBytes(path, raw.bytes());
       auto loaded = loadNifti(path.string());
       REQUIRE_MESSAGE(loaded, loaded.error().message);
