@@ -141,11 +141,12 @@ const char* kStructuresHelp =
 // --- info -------------------------------------------------------------------------------------
 
 const char* kInfoHelp =
-    "usage: anatomy-tutor info FILE|DIR [--json] [--labels PATH [--names JSON]] [--series UID]\n\n"
+    "usage: anatomy-tutor info FILE|DIR [--json] [--labels PATH] [--names JSON] [--series UID]\n\n"
     "Loads any supported input (DICOM series folder, DICOM SEG, NIfTI, NRRD) and prints its\n"
     "dimensions, spacing, origin, orientation, stored type, value (HU) range and loader notes.\n"
     "Label maps (integer images with few values, or files that name segments) and --labels\n"
-    "inputs also list each label with its name and voxel count.\n";
+    "inputs also list each label with its name and voxel count; --names JSON ({ \"value\": \"name\" })\n"
+    "names the labels of either.\n";
 
 bool isIntegerKind(ScalarKind k) { return k != ScalarKind::Float32 && k != ScalarKind::Float64; }
 
@@ -253,7 +254,6 @@ int runInfo(const Argv& argv) {
   const auto& pos = args->positional();
   if (pos.empty()) return usageError("info", "missing FILE or DIR (see --help)");
   if (pos.size() > 1) return usageError("info", "unexpected argument '" + pos[1] + "' (one FILE or DIR only)");
-  if (args->has("names") && !args->has("labels")) return usageError("info", "--names needs --labels PATH");
   const std::string path = pos[0];
 
   ImageLoadOptions options;
@@ -264,6 +264,8 @@ int runInfo(const Argv& argv) {
   const ValueSummary values = summarise(loaded->image);
   const bool labelMap = !loaded->segments.empty() ||
                         (isIntegerKind(loaded->storedKind) && values.allInteger && values.fewValues && values.min >= 0);
+  if (args->has("names") && !args->has("labels") && !labelMap)
+    return usageError("info", "--names applies to a label map, or to the label map given with --labels");
 
   // Labels with names and voxel counts: from the file itself when it is a label map, from
   // --labels (resampled onto this image's grid) otherwise.
@@ -287,6 +289,11 @@ int runInfo(const Argv& argv) {
   } else if (labelMap) {
     std::map<long, std::string> names;
     for (const SegmentInfo& s : loaded->segments) names[long(s.label)] = s.name;
+    if (auto namesPath = args->value("names")) {
+      auto fromJson = loadLabelNames(*namesPath);
+      if (!fromJson) return reportError("info: " + fromJson.error().message);
+      for (const auto& [value, name] : *fromJson) names[long(value)] = name;
+    }
     for (const auto& [value, count] : values.counts) {
       if (value == 0) continue;
       auto it = names.find(value);
