@@ -14,10 +14,13 @@
 #include <algorithm>
 #include <atomic>
 #include <chrono>
+#include <cstdlib>
 #include <cstring>
 #include <limits>
 #include <string>
 #include <thread>
+#include <type_traits>
+#include <immintrin.h>
 #include <vector>
 
 #include "step_cost.h"
@@ -95,22 +98,15 @@ AT_ALWAYS_INLINE int relaxEdge(const RowArgs& a, int i) {
   return changed;
 }
 
+// The interior of a row, written for the auto-vectoriser: restrict parameters (GCC trusts those,
+// not restrict locals; without them it versions the loop on an overlap test that adjacent planes
+// fail), no branches (minf is a compare-select, i.e. minps).
 template <CostKernel K>
-AT_ALWAYS_INLINE int rowLoop(const RowArgs& a) {
-  int changed = relaxEdge<K>(a, 0);
-  if (a.n == 1) return changed;
-  float* __restrict cur = a.cur;
-  const float* __restrict pm = a.pm;
-  const float* __restrict p0 = a.p0;
-  const float* __restrict pp = a.pp;
-  const std::uint8_t* __restrict qc = a.qc;
-  const std::uint8_t* __restrict qm = a.qm;
-  const std::uint8_t* __restrict q0 = a.q0;
-  const std::uint8_t* __restrict qp = a.qp;
-  const SweepLengths l = a.l;
-  const float base = a.base;
-  const int last = a.n - 1;
-  int changedInterior = 0;
+AT_ALWAYS_INLINE int rowInterior(float* __restrict cur, const float* __restrict pm, const float* __restrict p0,
+                                 const float* __restrict pp, const std::uint8_t* __restrict qc,
+                                 const std::uint8_t* __restrict qm, const std::uint8_t* __restrict q0,
+                                 const std::uint8_t* __restrict qp, int last, SweepLengths l, float base) {
+  int changed = 0;
 #pragma GCC ivdep
   for (int i = 1; i < last; ++i) {
     const float nb[3][3] = {{pm[i - 1], pm[i], pm[i + 1]}, {p0[i - 1], p0[i], p0[i + 1]}, {pp[i - 1], pp[i], pp[i + 1]}};
@@ -118,10 +114,20 @@ AT_ALWAYS_INLINE int rowLoop(const RowArgs& a) {
         {qm[i - 1], qm[i], qm[i + 1]}, {q0[i - 1], q0[i], q0[i + 1]}, {qp[i - 1], qp[i], qp[i + 1]}};
     const float c = cur[i];
     const float v = relaxVoxel<K>(c, nb, qn, qc[i], l, base);
-    changedInterior |= v < c;
+    // v <= c always, so "lowered" is "bits differ"; an integer test keeps the loop branch-free
+    // (a float compare here stops GCC 12 from vectorising the enteringUpdate kernels).
+    changed |= __builtin_bit_cast(int, v) ^ __builtin_bit_cast(int, c);
     cur[i] = v;
   }
-  return changed | changedInterior | relaxEdge<K>(a, last);
+  return changed != 0;
+}
+
+template <CostKernel K>
+AT_ALWAYS_INLINE int rowLoop(const RowArgs& a) {
+  int changed = relaxEdge<K>(a, 0);
+  if (a.n == 1) return changed;
+  changed |= rowInterior<K>(a.cur, a.pm, a.p0, a.pp, a.qc, a.qm, a.q0, a.qp, a.n - 1, a.l, a.base);
+  return changed | relaxEdge<K>(a, a.n - 1);
 }
 
 template <CostKernel K>
@@ -224,7 +230,7 @@ struct Run {
 
 // Transposes z slices [z0, z1) of a (w × h × depth) array with w contiguous into h contiguous.
 template <class T>
-void transposeSlices(const T* src, T* dst, int w, int h, int z0, int z1) {
+void transposeSlicesScalar(const T* src, T* dst, int w, int h, int z0, int z1) {
   constexpr int B = 32;
   const std::size_t slice = std::size_t(w) * h;
   for (int z = z0; z < z1; ++z) {
@@ -237,6 +243,48 @@ void transposeSlices(const T* src, T* dst, int w, int h, int z0, int z1) {
           for (int y = y0; y < y1; ++y) t[y + std::size_t(h) * x] = s[x + std::size_t(w) * y];
       }
   }
+}
+
+// The float version moves 8×8 tiles through AVX registers (unpack/shuffle/permute network).
+__attribute__((target("avx2"))) void transposeFloatAvx2(const float* src, float* dst, int w, int h, int z0, int z1) {
+  const std::size_t slice = std::size_t(w) * h;
+  const int w8 = w & ~7, h8 = h & ~7;
+  for (int z = z0; z < z1; ++z) {
+    const float* s = src + slice * z;
+    float* t = dst + slice * z;
+    for (int y0 = 0; y0 < h8; y0 += 8)
+      for (int x0 = 0; x0 < w8; x0 += 8) {
+        __m256 r[8], u[8], v[8];
+        for (int k = 0; k < 8; ++k) r[k] = _mm256_loadu_ps(s + x0 + std::size_t(w) * (y0 + k));
+        for (int k = 0; k < 4; ++k) {
+          u[2 * k] = _mm256_unpacklo_ps(r[2 * k], r[2 * k + 1]);
+          u[2 * k + 1] = _mm256_unpackhi_ps(r[2 * k], r[2 * k + 1]);
+        }
+        for (int k = 0; k < 2; ++k) {
+          v[4 * k + 0] = _mm256_shuffle_ps(u[4 * k], u[4 * k + 2], _MM_SHUFFLE(1, 0, 1, 0));
+          v[4 * k + 1] = _mm256_shuffle_ps(u[4 * k], u[4 * k + 2], _MM_SHUFFLE(3, 2, 3, 2));
+          v[4 * k + 2] = _mm256_shuffle_ps(u[4 * k + 1], u[4 * k + 3], _MM_SHUFFLE(1, 0, 1, 0));
+          v[4 * k + 3] = _mm256_shuffle_ps(u[4 * k + 1], u[4 * k + 3], _MM_SHUFFLE(3, 2, 3, 2));
+        }
+        for (int k = 0; k < 4; ++k) {
+          r[k] = _mm256_permute2f128_ps(v[k], v[k + 4], 0x20);
+          r[k + 4] = _mm256_permute2f128_ps(v[k], v[k + 4], 0x31);
+        }
+        for (int k = 0; k < 8; ++k) _mm256_storeu_ps(t + y0 + std::size_t(h) * (x0 + k), r[k]);
+      }
+    // Ragged edges (w or h not a multiple of 8).
+    for (int y = 0; y < h; ++y)
+      for (int x = (y < h8 ? w8 : 0); x < w; ++x) t[y + std::size_t(h) * x] = s[x + std::size_t(w) * y];
+  }
+}
+
+template <class T>
+void transposeSlices(const T* src, T* dst, int w, int h, int z0, int z1) {
+  if constexpr (std::is_same_v<T, float>) {
+    static const bool avx2 = __builtin_cpu_supports("avx2");
+    if (avx2) return transposeFloatAvx2(src, dst, w, h, z0, z1);
+  }
+  transposeSlicesScalar(src, dst, w, h, z0, z1);
 }
 
 void sweep(Run& run, const SweepGeometry& g, float* dist, const std::uint8_t* q, int dir, int tid) {
@@ -332,7 +380,8 @@ Result<WdtResult> runCpuBackend(const WdtProblem& problem, const WdtControl& con
     return fail("WDT CPU backend: problem arrays do not match the grid " + d.toString());
   if (auto ok = validateWdtParams(problem.params); !ok) return tl::unexpected(ok.error());
 
-  const int hw = int(std::max(1u, std::thread::hardware_concurrency()));
+  int hw = int(std::max(1u, std::thread::hardware_concurrency()));
+  if (const char* env = std::getenv("AT_WDT_THREADS")) hw = std::max(1, std::atoi(env));  // benchmarks
   const int threads = std::min(hw, std::max(1, std::max(d.y, d.z)));
   Run run(problem, control, threads);
   run.dims = d;

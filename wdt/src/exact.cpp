@@ -158,7 +158,7 @@ void exactWith(const WdtProblem& problem, std::vector<float>& dist) {
   const double width = 0.5 * minCost;
   const double ring = width > 0 ? std::ceil(maxCost / width) + 2 : 0;
   if (width > 0 && ring < double(1 << 22)) {
-    BucketQueue queue(float(width), std::size_t(ring));
+    BucketQueue queue{float(width), std::size_t(ring)};
     dijkstra<K>(problem, queue, dist);
   } else {
     HeapQueue queue;

@@ -36,7 +36,7 @@ inline __attribute__((always_inline)) float stepCost(std::uint8_t qa, std::uint8
     return trapezoidStepCost(densityWeight(qa, base), densityWeight(qb, base), len);
   } else if constexpr (K == CostKernel::EdgeGradient) {
     const float diff = densityFromByte(qb) - densityFromByte(qa);
-    return enteringStepCost(base + (diff < 0.0f ? -diff : diff), len);
+    return enteringStepCost(base + __builtin_fabsf(diff), len);
   } else {
     const float rise = densityFromByte(qb) - densityFromByte(qa);
     return enteringStepCost(base + (rise > 0.0f ? rise : 0.0f), len);
