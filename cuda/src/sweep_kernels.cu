@@ -102,7 +102,7 @@ struct PlaneSweep {
   int nx, nb, na;          // lanes along x, along the other plane axis, planes
   std::size_t strideB, strideA;
   int direction;
-  wdt::SweepLengths lengths;  // B = x lanes, C = the other plane axis
+  wdt::SweepLengths lengths;  // B = x lanes, C = the other plane axis (axisSweepLengths' order)
   float base;
   int* changed;
 };
@@ -322,7 +322,7 @@ template <StepRule R, WeightRule W>
 void launchTyped(const SweepArgs& a, int axis, int direction, cudaStream_t stream) {
   const float sx = a.spacing[0], sy = a.spacing[1], sz = a.spacing[2];
   if (axis == 0) {
-    LineSweep p{a.src, a.dst, a.density, a.nx, a.ny, a.nz, direction, wdt::sweepLengths(sx, sy, sz), a.baseCost,
+    LineSweep p{a.src, a.dst, a.density, a.nx, a.ny, a.nz, direction, wdt::axisSweepLengths(0, sx, sy, sz), a.baseCost,
                 a.changed};
     const dim3 grid((a.ny + kLy - 1) / kLy, (a.nz + kLz - 1) / kLz);
     sweepAlongLines<R, W><<<grid, 32, 0, stream>>>(p);
@@ -332,8 +332,7 @@ void launchTyped(const SweepArgs& a, int axis, int direction, cudaStream_t strea
     const int nb = axis == 1 ? a.nz : a.ny, na = axis == 1 ? a.ny : a.nz;
     const std::size_t strideB = axis == 1 ? sxy : std::size_t(a.nx);
     const std::size_t strideA = axis == 1 ? std::size_t(a.nx) : sxy;
-    const float sa = axis == 1 ? sy : sz, sb = axis == 1 ? sz : sy;
-    PlaneSweep p{a.src, a.dst, a.density, a.nx, nb, na, strideB, strideA, direction, wdt::sweepLengths(sa, sx, sb),
+    PlaneSweep p{a.src, a.dst, a.density, a.nx, nb, na, strideB, strideA, direction, wdt::axisSweepLengths(axis, sx, sy, sz),
                  a.baseCost, a.changed};
     const dim3 grid((a.nx + kTileX - 1) / kTileX, (nb + kTileB - 1) / kTileB);
     sweepAlongPlanes<R, W><<<grid, dim3(kTileX, kTileB), 0, stream>>>(p);

@@ -38,11 +38,11 @@ const DeviceInfo& queryDevice() {
     int count = 0;
     if (const cudaError_t e = cudaGetDeviceCount(&count); e != cudaSuccess) {
       (void)cudaGetLastError();
-      i.reason = std::string("no CUDA device (cudaGetDeviceCount: ") + cudaGetErrorString(e) + ")";
+      i.reason = std::string("cudaGetDeviceCount: ") + cudaGetErrorString(e);
       return i;
     }
     if (count == 0) {
-      i.reason = "no CUDA device";
+      i.reason = "the driver reports 0 devices";
       return i;
     }
     cudaDeviceProp prop{};
