@@ -157,4 +157,45 @@ class Event {
   cudaEvent_t event_ = nullptr;
 };
 
+// A captured CUDA graph, instantiated: one pass's launches replayed with one call.
+class GraphExec {
+ public:
+  GraphExec() = default;
+  // Captures what `enqueue(stream)` puts on `stream` and instantiates it.
+  template <class Enqueue>
+  static Result<GraphExec> capture(const Stream& stream, Enqueue&& enqueue) {
+    if (auto s = check(cudaStreamBeginCapture(stream.get(), cudaStreamCaptureModeThreadLocal), "cudaStreamBeginCapture");
+        !s) {
+      return tl::unexpected(s.error());
+    }
+    const Status enqueued = enqueue(stream.get());
+    cudaGraph_t graph = nullptr;
+    const cudaError_t ended = cudaStreamEndCapture(stream.get(), &graph);
+    if (!enqueued) {
+      if (graph) cudaGraphDestroy(graph);
+      return tl::unexpected(enqueued.error());
+    }
+    if (auto s = check(ended, "cudaStreamEndCapture"); !s) return tl::unexpected(s.error());
+    GraphExec exec;
+    const cudaError_t made = cudaGraphInstantiate(&exec.exec_, graph, 0);
+    cudaGraphDestroy(graph);
+    if (auto s = check(made, "cudaGraphInstantiate"); !s) return tl::unexpected(s.error());
+    return exec;
+  }
+  ~GraphExec() {
+    if (exec_) cudaGraphExecDestroy(exec_);
+  }
+  GraphExec(const GraphExec&) = delete;
+  GraphExec& operator=(const GraphExec&) = delete;
+  GraphExec(GraphExec&& o) noexcept : exec_(std::exchange(o.exec_, nullptr)) {}
+  GraphExec& operator=(GraphExec&& o) noexcept {
+    std::swap(exec_, o.exec_);
+    return *this;
+  }
+  Status launch(const Stream& stream) const { return check(cudaGraphLaunch(exec_, stream.get()), "cudaGraphLaunch"); }
+
+ private:
+  cudaGraphExec_t exec_ = nullptr;
+};
+
 }  // namespace at::cuda

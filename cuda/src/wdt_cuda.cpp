@@ -5,6 +5,7 @@
 #include <cuda_runtime.h>
 
 #include <chrono>
+#include <cstdlib>
 #include <cstdint>
 #include <utility>
 
@@ -79,6 +80,16 @@ Status validate(const WdtProblem& problem) {
   return check(cudaSetDevice(0), "cudaSetDevice(0)");
 }
 
+enum class Scheme { Exact, Tiled };
+
+// The exact scheme (exact_sweep.cu) unless AT_WDT_CUDA_SCHEME=tiled selects the single-launch
+// tiled scheme (sweep_kernels.cu), kept for comparison: faster per pass, but each pass propagates
+// less across tile borders, so fixed-pass fields are less accurate and converging takes more passes.
+Scheme sweepScheme() {
+  const char* env = std::getenv("AT_WDT_CUDA_SCHEME");
+  return env && std::string(env) == "tiled" ? Scheme::Tiled : Scheme::Exact;
+}
+
 #define AT_TRY(expr)                                          \
   do {                                                        \
     if (auto at_status_ = (expr); !at_status_)                \
@@ -135,43 +146,93 @@ Result<DeviceField> runCudaBackendOnDevice(const WdtProblem& problem, const WdtC
     AT_TRY(launchInitDistances(a->get(), seeds, n, s));
   }
 
-  SweepArgs args;
-  args.density = density->get();
-  args.nx = dims.x, args.ny = dims.y, args.nz = dims.z;
-  for (int i = 0; i < 3; ++i) args.spacing[i] = float(problem.grid.spacingMm[i]);
-  args.baseCost = params.baseCost;
-  args.rule = params.rule;
-  args.weight = params.weight;
-  args.changed = flag->get();
+  // One pass, as a fixed sequence of launches that starts and ends with the field in `a`.
+  const Scheme scheme = sweepScheme();
+  DeviceBuffer<std::uint8_t> densityT;  // y-contiguous copy for the exact scheme's x sweeps
+  if (scheme == Scheme::Exact) {
+    AT_TRY(prepareExactSweeps());
+    auto t = DeviceBuffer<std::uint8_t>::allocate(n);
+    if (!t) return tl::unexpected(t.error());
+    densityT = std::move(*t);
+    AT_TRY(launchTransposeXY(density->get(), densityT.get(), dims.x, dims.y, dims.z, s));
+  }
+  const float sx = float(problem.grid.spacingMm[0]), sy = float(problem.grid.spacingMm[1]),
+              sz = float(problem.grid.spacingMm[2]);
+  auto enqueuePass = [&](cudaStream_t st) -> Status {
+    if (scheme == Scheme::Tiled) {
+      SweepArgs args;
+      args.density = density->get();
+      args.nx = dims.x, args.ny = dims.y, args.nz = dims.z;
+      args.spacing[0] = sx, args.spacing[1] = sy, args.spacing[2] = sz;
+      args.baseCost = params.baseCost;
+      args.rule = params.rule;
+      args.weight = params.weight;
+      args.changed = flag->get();
+      float* cur = a->get();
+      float* next = b->get();
+      for (int axis = 0; axis < 3; ++axis) {
+        for (int direction : {+1, -1}) {
+          args.src = cur;
+          args.dst = next;
+          AT_TRY(launchSweep(args, axis, direction, st));
+          std::swap(cur, next);
+        }
+      }
+      return {};  // six swaps: the field is back in `a`
+    }
+    ExactSweepArgs e;
+    e.baseCost = params.baseCost;
+    e.rule = params.rule;
+    e.weight = params.weight;
+    e.changed = flag->get();
+    const std::size_t nxy = std::size_t(dims.x) * dims.y;
+    // x sweeps on the transposed field (y contiguous): lanes y, z; planes x.
+    AT_TRY(launchTransposeXY(a->get(), b->get(), dims.x, dims.y, dims.z, st));
+    e.density = densityT.get();
+    e.nu = dims.y, e.nv = dims.z, e.na = dims.x, e.strideV = nxy, e.strideA = std::size_t(dims.y);
+    e.lengths = wdt::axisSweepLengths(0, sx, sy, sz);
+    e.src = b->get(), e.dst = a->get(), e.direction = +1;
+    AT_TRY(launchExactSweep(e, st));
+    e.src = a->get(), e.dst = b->get(), e.direction = -1;
+    AT_TRY(launchExactSweep(e, st));
+    AT_TRY(launchTransposeXY(b->get(), a->get(), dims.y, dims.x, dims.z, st));
+    // y sweeps: lanes x, z; planes y.  z sweeps: lanes x, y; planes z.
+    e.density = density->get();
+    e.nu = dims.x, e.nv = dims.z, e.na = dims.y, e.strideV = nxy, e.strideA = std::size_t(dims.x);
+    e.lengths = wdt::axisSweepLengths(1, sx, sy, sz);
+    e.src = a->get(), e.dst = b->get(), e.direction = +1;
+    AT_TRY(launchExactSweep(e, st));
+    e.src = b->get(), e.dst = a->get(), e.direction = -1;
+    AT_TRY(launchExactSweep(e, st));
+    e.nu = dims.x, e.nv = dims.y, e.na = dims.z, e.strideV = std::size_t(dims.x), e.strideA = nxy;
+    e.lengths = wdt::axisSweepLengths(2, sx, sy, sz);
+    e.src = a->get(), e.dst = b->get(), e.direction = +1;
+    AT_TRY(launchExactSweep(e, st));
+    e.src = b->get(), e.dst = a->get(), e.direction = -1;
+    return launchExactSweep(e, st);
+  };
+  // The pass is captured once into a CUDA graph and replayed: tens of launches per pass then cost
+  // one launch call. Cancellation is therefore checked between passes.
+  auto graph = GraphExec::capture(*stream, enqueuePass);
+  if (!graph) return tl::unexpected(graph.error());
 
-  DeviceBuffer<float>* cur = &*a;
-  DeviceBuffer<float>* next = &*b;
   WdtStats stats;
   stats.backendUsed = WdtBackend::Cuda;
   stats.device = queryDevice().name;
   const int planned = params.converge ? params.maxPasses : params.passes;
   bool lastChanged = true;
-  auto cancelled = [&] { return control.cancel && control.cancel->load(std::memory_order_relaxed); };
-  for (int pass = 0; pass < planned && !stats.cancelled; ++pass) {
+  for (int pass = 0; pass < planned; ++pass) {
+    if (control.cancel && control.cancel->load(std::memory_order_relaxed)) {
+      stats.cancelled = true;
+      break;
+    }
     AT_TRY(check(cudaMemsetAsync(flag->get(), 0, sizeof(int), s), "cudaMemsetAsync(changed flag)"));
     AT_TRY(start->record(*stream));
-    for (int axis = 0; axis < 3 && !stats.cancelled; ++axis) {
-      for (int direction : {+1, -1}) {
-        if (cancelled()) {
-          stats.cancelled = true;
-          break;
-        }
-        args.src = cur->get();
-        args.dst = next->get();
-        AT_TRY(launchSweep(args, axis, direction, s));
-        std::swap(cur, next);
-      }
-    }
+    AT_TRY(graph->launch(*stream));
     AT_TRY(end->record(*stream));
     AT_TRY(check(cudaMemcpyAsync(flagHost->get(), flag->get(), sizeof(int), cudaMemcpyDeviceToHost, s),
                  "cudaMemcpyAsync(changed flag, device to host)"));
     AT_TRY(stream->synchronize());
-    if (stats.cancelled) break;
     auto ms = end->millisecondsSince(*start);
     if (!ms) return tl::unexpected(ms.error());
     stats.msPerPass.push_back(*ms);
@@ -187,7 +248,7 @@ Result<DeviceField> runCudaBackendOnDevice(const WdtProblem& problem, const WdtC
   auto impl = std::make_unique<DeviceField::Impl>();
   impl->grid = problem.grid;
   impl->downsample = params.downsample;
-  impl->distances = std::move(*cur);
+  impl->distances = std::move(*a);
   if (statsOut) *statsOut = std::move(stats);
   return DeviceField(std::move(impl));
 }

@@ -1,19 +1,18 @@
 // CUDA backend vs the CPU backend and the exact reference. Every test needing a GPU prints
 // "SKIPPED: no CUDA device (<reason>)" and passes where there is none (CI, the dev machines).
 //
-// What the GPU must satisfy (cuda/src/sweep_kernels.cu explains the tiled design):
-//   converge mode      equal to the CPU backend and to the exact reference within 1e-6 relative
-//                      (in fact bit for bit: same float operations, same fixed point);
-//   fixed passes       never below exact, never below the CPU (tile borders see the sweep's
-//                      start-of-sweep snapshot, so values can only lag), equal to the CPU bit for
-//                      bit when the grid fits in one tile;
-//   determinism        two runs give bitwise identical fields.
+// The default (exact) scheme must give the CPU backend's field bit for bit after any number of
+// passes (same stencil, same plane order, same float operations), hence also in converge mode,
+// where both equal the exact reference. The optional tiled scheme (AT_WDT_CUDA_SCHEME=tiled) lags
+// at tile borders: its fixed-pass fields are never below the CPU's nor the exact distances, and
+// converged fields are equal. Both are deterministic (two runs bitwise identical).
 #include <doctest/doctest.h>
 
 #include <algorithm>
 #include <atomic>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <limits>
 #include <random>
@@ -101,6 +100,18 @@ std::size_t countBelow(const std::vector<float>& a, const std::vector<float>& b,
   return c;
 }
 
+// Selects the tiled scheme for the lifetime of the object.
+struct TiledScheme {
+  TiledScheme() { setenv("AT_WDT_CUDA_SCHEME", "tiled", 1); }
+  ~TiledScheme() { unsetenv("AT_WDT_CUDA_SCHEME"); }
+  TiledScheme(const TiledScheme&) = delete;
+  TiledScheme& operator=(const TiledScheme&) = delete;
+};
+
+bool sameBits(const std::vector<float>& a, const std::vector<float>& b) {
+  return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(float)) == 0;
+}
+
 const StepRule kRules[] = {StepRule::Entering, StepRule::Trapezoid};
 const WeightRule kWeights[] = {WeightRule::Density, WeightRule::Uniform, WeightRule::Gradient, WeightRule::Ascent};
 
@@ -157,9 +168,32 @@ TEST_CASE("converged GPU fields equal the CPU backend and the exact reference fo
   }
 }
 
-TEST_CASE("fixed-pass GPU fields are never below the exact distances nor the CPU's, and converge towards them") {
+TEST_CASE("fixed-pass GPU fields equal the CPU backend's bit for bit for every rule, weight and size") {
   if (!requireDevice()) return;
-  std::mt19937_64 rng(at::test::freshSeed("cuda fixed passes"));
+  std::mt19937_64 rng(at::test::freshSeed("cuda exact passes"));
+  std::vector<at::Dims> sizes(std::begin(kEdgeSizes), std::end(kEdgeSizes));
+  sizes.push_back({64, 64, 64});
+  sizes.push_back({97, 45, 38});
+  for (const at::Dims& dims : sizes) {
+    for (StepRule rule : kRules) {
+      for (WeightRule weight : kWeights) {
+        WdtProblem p = randomProblem(rng, dims, {0.8, 0.6, 1.5}, rule, weight);
+        CAPTURE(dims.toString());
+        CAPTURE(at::toString(rule));
+        CAPTURE(at::toString(weight));
+        for (int passes = 1; passes <= 2; ++passes) {
+          p.params.passes = passes;
+          CHECK(sameBits(gpuField(p), cpuField(p)));
+        }
+      }
+    }
+  }
+}
+
+TEST_CASE("the tiled scheme's fixed-pass fields are never below the exact distances nor the CPU's, and converge to them") {
+  if (!requireDevice()) return;
+  TiledScheme tiled;
+  std::mt19937_64 rng(at::test::freshSeed("cuda tiled passes"));
   const at::Dims sizes[] = {{64, 64, 64}, {33, 17, 65}, {97, 45, 38}};
   for (const at::Dims& dims : sizes) {
     for (StepRule rule : kRules) {
@@ -189,19 +223,26 @@ TEST_CASE("fixed-pass GPU fields are never below the exact distances nor the CPU
           const double meanGpu = sumGpu / double(std::max<std::size_t>(1, counted));
           const double meanCpu = sumCpu / double(std::max<std::size_t>(1, counted));
           if (dims.x == 64 && weight == WeightRule::Density) {
-            std::printf("cuda fixed passes %s %s/%s passes %d: mean rel err vs exact GPU %.3g CPU %.3g\n",
+            std::printf("cuda tiled scheme %s %s/%s passes %d: mean rel err vs exact GPU %.3g CPU %.3g\n",
                         dims.toString().c_str(), at::toString(rule), at::toString(weight), passes, meanGpu, meanCpu);
           }
           CHECK(meanGpu <= previousMean);
           previousMean = meanGpu;
         }
+        p.params.converge = true;
+        p.params.maxPasses = 500;
+        const auto converged = gpuField(p);
+        CHECK(maxRelDiff(converged, exact->voxels) <= 1e-6);
+        CHECK(sameBits(converged, cpuField(p)));
+        p.params.converge = false;
       }
     }
   }
 }
 
-TEST_CASE("a grid that fits in one tile gives the CPU's fixed-pass field bit for bit") {
+TEST_CASE("in the tiled scheme a grid that fits in one tile gives the CPU's fixed-pass field bit for bit") {
   if (!requireDevice()) return;
+  TiledScheme tiled;
   std::mt19937_64 rng(at::test::freshSeed("cuda one tile"));
   // One tile: x ≤ 32 and y ≤ 8 (plane sweeps), y ≤ 8 and z ≤ 4 (line sweeps).
   const at::Dims sizes[] = {{32, 8, 4}, {17, 5, 3}, {32, 1, 4}};
@@ -222,15 +263,15 @@ TEST_CASE("a grid that fits in one tile gives the CPU's fixed-pass field bit for
   }
 }
 
-TEST_CASE("two GPU runs give bitwise identical fields") {
+TEST_CASE("two GPU runs give bitwise identical fields, in both schemes") {
   if (!requireDevice()) return;
   std::mt19937_64 rng(at::test::freshSeed("cuda determinism"));
   for (int passes : {1, 2}) {
-    WdtProblem p = randomProblem(rng, {131, 77, 59}, {0.9, 0.9, 2.0}, StepRule::Entering, WeightRule::Density);
+    WdtProblem p = randomProblem(rng, {131, 77, 59}, {0.9, 0.9, 2.0}, StepRule::Trapezoid, WeightRule::Density);
     p.params.passes = passes;
-    const auto a = gpuField(p);
-    const auto b = gpuField(p);
-    CHECK(std::memcmp(a.data(), b.data(), a.size() * sizeof(float)) == 0);
+    CHECK(sameBits(gpuField(p), gpuField(p)));
+    TiledScheme tiled;
+    CHECK(sameBits(gpuField(p), gpuField(p)));
   }
 }
 
