@@ -2,10 +2,16 @@
 
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "gl_objects.h"
+
+#if defined(AT_HAVE_CUDA)
+#include "cuda/gl_interop.h"
+#include "cuda/wdt_cuda.h"
+#endif
 
 namespace at::render::gl {
 
@@ -238,6 +244,10 @@ struct VolumeRenderer::State {
   int fboWidth = 0, fboHeight = 0;
   Geometry volumeGrid, fieldGrid;
   bool hasVolume = false, hasField = false;
+#if defined(AT_HAVE_CUDA)
+  std::optional<cuda::GlTextureTarget> interop;  // registered field texture storage
+  Dims interopDims;
+#endif
 };
 
 VolumeRenderer::VolumeRenderer(std::unique_ptr<State> s) : state_(std::move(s)) {}
@@ -304,13 +314,38 @@ Status VolumeRenderer::setVolume(const Volume& volume, const LabelMap& labels) {
   return glStatus("uploading the volume");
 }
 
-Status VolumeRenderer::allocateField(const Geometry& grid) {
-  glBindTexture(GL_TEXTURE_3D, state_->field.id());
-  setTextureParams(GL_LINEAR);
-  glTexImage3D(GL_TEXTURE_3D, 0, GL_R32F, grid.dims.x, grid.dims.y, grid.dims.z, 0, GL_RED, GL_FLOAT, nullptr);
-  state_->fieldGrid = grid;
-  state_->hasField = true;
-  return glStatus("allocating the distance field");
+bool VolumeRenderer::hasCudaInterop() {
+#if defined(AT_HAVE_CUDA)
+  return true;
+#else
+  return false;
+#endif
+}
+
+Status VolumeRenderer::setFieldFromDevice(const cuda::DeviceField& field) {
+#if defined(AT_HAVE_CUDA)
+  State& st = *state_;
+  const Geometry& grid = field.grid();
+  if (!st.interop || !(st.interopDims == grid.dims)) {
+    // New storage: allocate the texture and register it with CUDA once for this size.
+    st.interop.reset();
+    glBindTexture(GL_TEXTURE_3D, st.field.id());
+    setTextureParams(GL_LINEAR);
+    glTexImage3D(GL_TEXTURE_3D, 0, GL_R32F, grid.dims.x, grid.dims.y, grid.dims.z, 0, GL_RED, GL_FLOAT, nullptr);
+    if (auto s = glStatus("allocating the distance field"); !s) return s;
+    auto target = cuda::GlTextureTarget::registerTexture(st.field.id(), grid.dims.x, grid.dims.y, grid.dims.z);
+    if (!target) return tl::unexpected(target.error());
+    st.interop.emplace(std::move(*target));
+    st.interopDims = grid.dims;
+  }
+  if (auto s = st.interop->copyFrom(field); !s) return s;
+  st.fieldGrid = grid;
+  st.hasField = true;
+  return {};
+#else
+  (void)field;
+  return fail("render: this build has no CUDA, so a device field cannot be shown");
+#endif
 }
 
 Status VolumeRenderer::setField(const FloatVolume& field) {
@@ -323,14 +358,15 @@ Status VolumeRenderer::setField(const FloatVolume& field) {
   setTextureParams(GL_LINEAR);
   const Dims& d = field.dims();
   glTexImage3D(GL_TEXTURE_3D, 0, GL_R32F, d.x, d.y, d.z, 0, GL_RED, GL_FLOAT, finite.data());
+#if defined(AT_HAVE_CUDA)
+  state_->interop.reset();  // the storage changed: a registration would be stale
+#endif
   state_->fieldGrid = field.geometry;
   state_->hasField = true;
   return glStatus("uploading the distance field");
 }
 
 void VolumeRenderer::clearField() { state_->hasField = false; }
-
-unsigned VolumeRenderer::fieldTextureId() const { return state_->hasField ? state_->field.id() : 0; }
 
 Status VolumeRenderer::draw(const RenderSettings& s) {
   if (!state_->hasVolume) return fail("render: no volume uploaded");

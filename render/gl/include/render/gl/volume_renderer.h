@@ -12,6 +12,10 @@
 #include "render/render_settings.h"
 #include "volume/error.h"
 
+namespace at::cuda {
+class DeviceField;
+}
+
 namespace at::render::gl {
 
 class VolumeRenderer {
@@ -27,12 +31,13 @@ class VolumeRenderer {
   Status setVolume(const Volume& volume, const LabelMap& labels);
   // Uploads a distance field on its own grid (the volume's or a coarser one); +inf stays "far".
   Status setField(const FloatVolume& field);
-  // Reserves the field texture for `grid` without data (for device-to-texture copies).
-  Status allocateField(const Geometry& grid);
+  // Copies a field that lives in CUDA device memory straight into the field texture (CUDA–GL
+  // interop, no host round trip). Error when built without CUDA or when a CUDA call fails.
+  Status setFieldFromDevice(const cuda::DeviceField& field);
+  // Whether this build has the interop path (AT_HAVE_CUDA).
+  static bool hasCudaInterop();
   void clearField();
   void setSelected(std::uint16_t label) { selected_ = label; }
-  // The field texture's GL name, for CUDA–GL interop in this module only (0 if none).
-  unsigned fieldTextureId() const;
 
   // Renders one frame and reads it back.
   Result<RgbaImage> render(const RenderSettings& settings);
