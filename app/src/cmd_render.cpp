@@ -177,7 +177,7 @@ int runRender(const Argv& argv) {
   auto image = renderer->render(*settings);
   if (!image) return reportError("render: " + image.error().message);
   const double renderMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
-  if (auto st = writePng(*out, image->width, image->height, 4, image->rgba); !st)
+  if (auto st = writePng(*out, render::toRgb(*image)); !st)
     return reportError("render: " + st.error().message);
   std::printf("wrote %s (%s, %s, preset %s, %dx%d, t=%.2f; WDT %.0f ms on %s; render %.0f ms on %s)\n", out->c_str(),
               structure->id.c_str(), render::toString(preset->mode), preset->id.value_or("?").c_str(), image->width,
