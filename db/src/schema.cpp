@@ -1,0 +1,158 @@
+// The schema's migrations. Released versions are frozen: never edit one, append a new one.
+//
+// Conventions: stable text ids for curriculum content (course, lesson, question and preset ids
+// come from the course JSON, so re-seeding upserts instead of duplicating); integer ids for rows
+// the program creates (datasets, users, attempts, responses); times as ISO-8601 UTC text;
+// JSON documents as TEXT. No pixel data and no patient identifiers are ever stored.
+#include "db/schema.h"
+
+namespace at::db {
+
+namespace {
+
+constexpr std::string_view kDatasets = R"SQL(
+CREATE TABLE datasets (
+  id               INTEGER PRIMARY KEY,
+  name             TEXT NOT NULL UNIQUE,
+  species          TEXT NOT NULL DEFAULT 'human',
+  volume_path      TEXT NOT NULL,
+  volume_checksum  TEXT NOT NULL,           -- "sha256:<hex>" of the file, or of a DICOM folder's files
+  labels_path      TEXT,
+  labels_checksum  TEXT,
+  names_path       TEXT,
+  dim_x INTEGER NOT NULL, dim_y INTEGER NOT NULL, dim_z INTEGER NOT NULL,
+  spacing_x REAL NOT NULL, spacing_y REAL NOT NULL, spacing_z REAL NOT NULL,
+  origin_x REAL NOT NULL, origin_y REAL NOT NULL, origin_z REAL NOT NULL,
+  direction        TEXT NOT NULL,           -- JSON [9 numbers], row-major, columns = i, j, k in LPS
+  orientation      TEXT NOT NULL,           -- "LPS", "RAS", …
+  created_at       TEXT NOT NULL DEFAULT (strftime('%Y-%m-%dT%H:%M:%fZ', 'now'))
+);
+CREATE TABLE structures (
+  dataset_id    INTEGER NOT NULL REFERENCES datasets(id) ON DELETE CASCADE,
+  label         INTEGER NOT NULL,
+  structure_id  TEXT NOT NULL,
+  name          TEXT NOT NULL,
+  colour_r REAL NOT NULL, colour_g REAL NOT NULL, colour_b REAL NOT NULL,
+  system        TEXT NOT NULL DEFAULT '',
+  description   TEXT NOT NULL DEFAULT '',
+  PRIMARY KEY (dataset_id, label),
+  UNIQUE (dataset_id, structure_id)
+);
+CREATE TABLE presets (
+  id         TEXT PRIMARY KEY,
+  structure  TEXT,                          -- structure id it was made for, or NULL for any
+  mode       TEXT NOT NULL,
+  json       TEXT NOT NULL
+);
+)SQL";
+
+constexpr std::string_view kCurriculum = R"SQL(
+CREATE TABLE courses (
+  id           TEXT PRIMARY KEY,
+  title        TEXT NOT NULL,
+  dataset      TEXT NOT NULL,               -- dataset name: "phantom" or an imported dataset
+  description  TEXT NOT NULL DEFAULT '',
+  source       TEXT NOT NULL DEFAULT '',    -- file it was seeded from
+  json         TEXT NOT NULL                -- the course document as loaded
+);
+CREATE TABLE lessons (
+  id         TEXT PRIMARY KEY,
+  course_id  TEXT NOT NULL REFERENCES courses(id) ON DELETE CASCADE,
+  position   INTEGER NOT NULL,
+  title      TEXT NOT NULL,
+  json       TEXT NOT NULL                  -- the lesson document (steps included)
+);
+CREATE INDEX lessons_by_course ON lessons(course_id, position);
+CREATE TABLE lesson_prerequisites (
+  lesson_id    TEXT NOT NULL REFERENCES lessons(id) ON DELETE CASCADE,
+  requires_id  TEXT NOT NULL,
+  PRIMARY KEY (lesson_id, requires_id)
+);
+CREATE TABLE steps (
+  lesson_id    TEXT NOT NULL REFERENCES lessons(id) ON DELETE CASCADE,
+  position     INTEGER NOT NULL,
+  kind         TEXT NOT NULL,               -- "show", "question", …
+  structure    TEXT,
+  preset_id    TEXT,
+  question_id  TEXT,
+  json         TEXT NOT NULL,
+  PRIMARY KEY (lesson_id, position)
+);
+CREATE TABLE questions (
+  id          TEXT PRIMARY KEY,
+  lesson_id   TEXT REFERENCES lessons(id) ON DELETE CASCADE,
+  kind        TEXT NOT NULL,                -- locate, identify, name, relation, order
+  structure   TEXT,
+  difficulty  REAL NOT NULL DEFAULT 0,      -- Elo-style, updated as students answer
+  json        TEXT NOT NULL                 -- the question's spec
+);
+)SQL";
+
+constexpr std::string_view kLearners = R"SQL(
+CREATE TABLE users (
+  id          INTEGER PRIMARY KEY,
+  name        TEXT NOT NULL UNIQUE,         -- pseudonym chosen by the participant
+  role        TEXT NOT NULL DEFAULT 'student' CHECK (role IN ('student', 'expert', 'coordinator')),
+  group_name  TEXT NOT NULL DEFAULT '',
+  created_at  TEXT NOT NULL DEFAULT (strftime('%Y-%m-%dT%H:%M:%fZ', 'now'))
+);
+CREATE TABLE attempts (
+  id           INTEGER PRIMARY KEY,
+  user_id      INTEGER NOT NULL REFERENCES users(id) ON DELETE CASCADE,
+  lesson_id    TEXT NOT NULL,
+  quiz_only    INTEGER NOT NULL DEFAULT 0,
+  next_step    INTEGER NOT NULL DEFAULT 0,  -- where a resumed attempt continues
+  started_at   TEXT NOT NULL DEFAULT (strftime('%Y-%m-%dT%H:%M:%fZ', 'now')),
+  finished_at  TEXT
+);
+CREATE INDEX attempts_by_user ON attempts(user_id, lesson_id);
+CREATE TABLE responses (
+  id           INTEGER PRIMARY KEY,
+  attempt_id   INTEGER NOT NULL REFERENCES attempts(id) ON DELETE CASCADE,
+  step_index   INTEGER NOT NULL,
+  question_id  TEXT NOT NULL,
+  answer       TEXT NOT NULL,               -- JSON as given
+  correct      INTEGER NOT NULL,
+  score        REAL NOT NULL,
+  latency_ms   INTEGER NOT NULL,
+  preset_id    TEXT,
+  mode         TEXT,
+  t            REAL,
+  alpha        REAL,
+  beta         REAL,
+  created_at   TEXT NOT NULL DEFAULT (strftime('%Y-%m-%dT%H:%M:%fZ', 'now'))
+);
+CREATE INDEX responses_by_attempt ON responses(attempt_id, step_index);
+CREATE INDEX responses_by_question ON responses(question_id);
+CREATE TABLE progress (
+  user_id        INTEGER NOT NULL REFERENCES users(id) ON DELETE CASCADE,
+  dataset        TEXT NOT NULL,
+  structure      TEXT NOT NULL,
+  box            INTEGER NOT NULL DEFAULT 1,  -- Leitner box
+  due_at         TEXT NOT NULL,
+  correct_count  INTEGER NOT NULL DEFAULT 0,
+  wrong_count    INTEGER NOT NULL DEFAULT 0,
+  last_seen_at   TEXT,
+  PRIMARY KEY (user_id, dataset, structure)
+);
+CREATE TABLE user_ability (
+  user_id   INTEGER PRIMARY KEY REFERENCES users(id) ON DELETE CASCADE,
+  rating    REAL NOT NULL DEFAULT 0,         -- Elo-style ability
+  answered  INTEGER NOT NULL DEFAULT 0
+);
+)SQL";
+
+}  // namespace
+
+const std::vector<Migration>& migrations() {
+  static const std::vector<Migration> all = {
+      {1, "datasets, structures and presets", kDatasets},
+      {2, "courses, lessons, prerequisites, steps and questions", kCurriculum},
+      {3, "users, attempts, responses, progress and ability", kLearners},
+  };
+  return all;
+}
+
+int latestSchemaVersion() { return int(migrations().size()); }
+
+}  // namespace at::db
