@@ -204,7 +204,7 @@ Status Database::writeTransaction(const std::function<Status(Database&)>& body, 
     }
     std::this_thread::sleep_for(std::chrono::milliseconds(5 + int(jitter() % 50)));
   }
-  return fail(path_ + ": still locked by another process after " + std::to_string(maxAttempts) +
+  return fail("still locked by another process after " + std::to_string(maxAttempts) +
               " attempts: " + last.message);
 }
 
@@ -327,10 +327,12 @@ Result<Database> Database::open(const std::string& path, const OpenOptions& opti
   sqlite3_busy_timeout(raw, options.busyTimeoutMs);
 
   // journal_mode needs the write lock briefly; busy_timeout covers a concurrent opener.
-  auto mode = db.prepare("PRAGMA journal_mode = WAL");
-  if (!mode) return tl::unexpected(mode.error());
-  auto modeRow = mode->step();
-  if (!modeRow) return fail(path + ": cannot switch to WAL: " + modeRow.error().message);
+  {
+    auto mode = db.prepare("PRAGMA journal_mode = WAL");
+    if (!mode) return tl::unexpected(mode.error());
+    auto modeRow = mode->step();
+    if (!modeRow) return fail(path + ": cannot switch to WAL: " + modeRow.error().message);
+  }
   if (auto s = db.exec("PRAGMA foreign_keys = ON; PRAGMA synchronous = NORMAL"); !s)
     return fail(path + ": " + s.error().message);
 
