@@ -333,7 +333,7 @@ Result<Database> Database::open(const std::string& path, const OpenOptions& opti
     auto modeRow = mode->step();
     if (!modeRow) return fail(path + ": cannot switch to WAL: " + modeRow.error().message);
   }
-  if (auto s = db.exec("PRAGMA foreign_keys = ON; PRAGMA synchronous = NORMAL"); !s)
+  if (auto s = db.exec("PRAGMA foreign_keys = ON; PRAGMA synchronous = FULL"); !s)
     return fail(path + ": " + s.error().message);
 
   if (auto s = migrate(db, target); !s) return tl::unexpected(s.error());

@@ -70,7 +70,8 @@ TEST_CASE("An empty file is migrated to the newest schema version in WAL mode wi
   REQUIRE(*fk->step());
   CHECK(fk->integer(0) == 1);
   for (const char* table : {"datasets", "structures", "presets", "courses", "lessons", "lesson_prerequisites",
-                            "steps", "questions", "users", "attempts", "responses", "progress", "user_ability"})
+                            "steps", "questions", "users", "attempts", "responses", "progress", "user_ability",
+                            "question_stats"})
     CHECK_MESSAGE(countRows(*db, table) == 0, table);
 }
 
