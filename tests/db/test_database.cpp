@@ -90,7 +90,7 @@ TEST_CASE("A database at every earlier version migrates to the same schema as a 
 
   for (int from = 0; from < latestSchemaVersion(); ++from) {
     CAPTURE(from);
-    const std::string path = (dir / ("v" + std::to_string(from) + ".db")).string();
+    const std::string path = (dir / "v").string().append(std::to_string(from)).append(".db");
     {
       OpenOptions options;
       options.targetVersion = from;
