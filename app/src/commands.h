@@ -27,4 +27,7 @@ int runStructures(const Argv& args);
 int runInfo(const Argv& args);
 int runSlice(const Argv& args);
 
+// Preference studies (cmd_study.cpp)
+int runStudy(const Argv& args);
+
 }  // namespace at::app
