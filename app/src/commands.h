@@ -35,5 +35,7 @@ int runPlay(const Argv& args);
 int runProgress(const Argv& args);
 int runCourses(const Argv& args);
 int runLessons(const Argv& args);
+// Preference studies (cmd_study.cpp)
+int runStudy(const Argv& args);
 
 }  // namespace at::app

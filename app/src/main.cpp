@@ -20,6 +20,7 @@ const std::vector<Command>& commands() {
       {"lessons", "list the lessons of the courses", runLessons},
       {"play", "run a lesson in the terminal (answers from a file or typed)", runPlay},
       {"progress", "show a user's progress and what is due for review", runProgress},
+      {"study", "preference studies: register, run, status, export", runStudy},
   };
   return table;
 }

@@ -155,6 +155,60 @@ CREATE TABLE question_stats (
 );
 )SQL";
 
+constexpr std::string_view kStudies = R"SQL(
+CREATE TABLE studies (
+  id          TEXT PRIMARY KEY,
+  title       TEXT NOT NULL DEFAULT '',
+  dataset     TEXT NOT NULL,
+  seed        INTEGER NOT NULL,              -- counterbalancing seed (Latin square permutation)
+  json        TEXT NOT NULL,                 -- the protocol as stored (structures, conditions, items, scale, groups)
+  created_at  TEXT NOT NULL DEFAULT (strftime('%Y-%m-%dT%H:%M:%fZ', 'now'))
+);
+CREATE TABLE study_participants (
+  study_id         TEXT NOT NULL REFERENCES studies(id) ON DELETE CASCADE,
+  participant_id   TEXT NOT NULL,            -- pseudonymous
+  group_name       TEXT NOT NULL,
+  enrolment_index  INTEGER NOT NULL,         -- 0-based; selects the Latin square row
+  session          INTEGER NOT NULL DEFAULT 1,
+  started_at       TEXT NOT NULL DEFAULT (strftime('%Y-%m-%dT%H:%M:%fZ', 'now')),
+  completed_at     TEXT,
+  PRIMARY KEY (study_id, participant_id),
+  UNIQUE (study_id, enrolment_index)
+);
+CREATE TABLE study_trials (
+  study_id        TEXT NOT NULL,
+  participant_id  TEXT NOT NULL,
+  position        INTEGER NOT NULL,          -- 0-based presentation order
+  structure       TEXT NOT NULL,
+  a_condition     TEXT NOT NULL,             -- the blinding: which condition was shown as A
+  b_condition     TEXT NOT NULL,
+  preset_a        TEXT NOT NULL,
+  preset_b        TEXT NOT NULL,
+  view_ms_a       REAL NOT NULL DEFAULT 0,
+  view_ms_b       REAL NOT NULL DEFAULT 0,
+  toggles         INTEGER NOT NULL DEFAULT 0,
+  comment         TEXT,
+  PRIMARY KEY (study_id, participant_id, position),
+  FOREIGN KEY (study_id, participant_id) REFERENCES study_participants(study_id, participant_id) ON DELETE CASCADE
+);
+CREATE TABLE study_ratings (
+  study_id        TEXT NOT NULL,
+  participant_id  TEXT NOT NULL,
+  position        INTEGER NOT NULL,
+  item            TEXT NOT NULL,
+  rating_ab       INTEGER NOT NULL,          -- as shown: 1 = prefer A ... 5 = prefer B
+  response_ms     REAL NOT NULL DEFAULT 0,
+  t               REAL NOT NULL DEFAULT 0,
+  alpha           REAL NOT NULL DEFAULT 0,
+  beta            REAL NOT NULL DEFAULT 0,
+  app_version     TEXT NOT NULL DEFAULT '',
+  created_at      TEXT NOT NULL DEFAULT (strftime('%Y-%m-%dT%H:%M:%fZ', 'now')),
+  PRIMARY KEY (study_id, participant_id, position, item),
+  FOREIGN KEY (study_id, participant_id, position)
+    REFERENCES study_trials(study_id, participant_id, position) ON DELETE CASCADE
+);
+)SQL";
+
 }  // namespace
 
 const std::vector<Migration>& migrations() {
@@ -162,6 +216,7 @@ const std::vector<Migration>& migrations() {
       {1, "datasets, structures and presets", kDatasets},
       {2, "courses, lessons, prerequisites, steps and questions", kCurriculum},
       {3, "users, attempts, responses, progress, ability and question difficulty", kLearners},
+      {4, "preference studies: protocols, participants, blinded trials, ratings", kStudies},
   };
   return all;
 }

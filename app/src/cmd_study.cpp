@@ -1,0 +1,403 @@
+// `anatomy-tutor study …`: preference studies in the terminal (the paper's survey design).
+//   study register FILE.json                   store (or update) a study definition
+//   study list                                 studies in the database
+//   study run STUDY --participant ID --group G [--answers FILE.jsonl]
+//   study status STUDY                         participants and their completion
+//   study export STUDY --out DIR               the coordinator's files (CSV, JSON, Markdown, SVG, PNG)
+// STUDY is a stored study id, a shipped study id (data/studies/<file>.json, registered on first
+// use) or a path to a study JSON file.
+#include <algorithm>
+#include <cctype>
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <iostream>
+#include <map>
+#include <optional>
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "cli_args.h"
+#include "commands.h"
+#include "db/database.h"
+#include "db/study_store.h"
+#include "quiz/study_report.h"
+#include "volume/png_image.h"
+
+namespace at::app {
+
+namespace {
+
+namespace fs = std::filesystem;
+using Clock = std::chrono::steady_clock;
+
+const char* kStudyHelp =
+    "usage: anatomy-tutor study register FILE.json [--db PATH]\n"
+    "       anatomy-tutor study list [--db PATH]\n"
+    "       anatomy-tutor study run STUDY --participant ID --group G [--answers FILE.jsonl] [--db PATH]\n"
+    "       anatomy-tutor study status STUDY [--db PATH]\n"
+    "       anatomy-tutor study export STUDY --out DIR [--db PATH]\n"
+    "\n"
+    "Preference studies comparing the WDT rendering with the bare-structure rendering of each\n"
+    "structure, blinded as A and B with counterbalanced order (the paper's Table 2 design).\n"
+    "STUDY: a stored study id, a shipped study (data/studies) or a study JSON file.\n"
+    "run --answers: one JSON line per structure, in the order presented:\n"
+    "  {\"ratings\": {\"shape\": 2, \"context\": 1, …}, \"view_ms_a\": 4000, \"view_ms_b\": 3500,\n"
+    "   \"toggles\": 3, \"comment\": \"…\", \"response_ms\": 1200}   (ratings as shown: 1 = prefer A … 5 = prefer B)\n"
+    "Without --answers the study runs interactively on the terminal.\n";
+
+fs::path shippedStudiesDir() { return fs::path(AT_SOURCE_DIR) / "data" / "studies"; }
+
+// Finds the study: stored id, else a JSON path, else a shipped study with that id (both stored).
+Result<quiz::StudyProtocol> resolveStudy(db::Database& database, const std::string& spec) {
+  auto stored = db::findStudy(database, spec);
+  if (!stored) return tl::unexpected(stored.error());
+  if (*stored) return **stored;
+  std::optional<quiz::StudyProtocol> loaded;
+  if (fs::is_regular_file(spec)) {
+    auto p = quiz::loadStudyProtocol(spec);
+    if (!p) return tl::unexpected(p.error());
+    loaded = *p;
+  } else if (fs::is_directory(shippedStudiesDir())) {
+    std::vector<fs::path> files;
+    for (const auto& entry : fs::directory_iterator(shippedStudiesDir()))
+      if (entry.path().extension() == ".json") files.push_back(entry.path());
+    std::sort(files.begin(), files.end());
+    for (const fs::path& f : files) {
+      auto p = quiz::loadStudyProtocol(f.string());
+      if (p && p->id == spec) {
+        loaded = *p;
+        break;
+      }
+    }
+  }
+  if (!loaded) return fail("no study '" + spec + "' (not stored in " + database.path() + ", not a file, not shipped)");
+  // A file naming a stored study id resolves to the stored one when unchanged; saveStudy refuses
+  // design changes once participants exist.
+  if (auto s = db::saveStudy(database, *loaded); !s) return tl::unexpected(s.error());
+  return *loaded;
+}
+
+Result<db::Database> openDb(const cli::Args& args) { return db::openDatabase(args.value("db")); }
+
+int runRegister(const cli::Args& args) {
+  if (args.positional().size() != 1) return reportError("study register: expected one study JSON file");
+  auto protocol = quiz::loadStudyProtocol(args.positional()[0]);
+  if (!protocol) return reportError(protocol.error().message);
+  auto database = openDb(args);
+  if (!database) return reportError(database.error().message);
+  if (auto s = db::saveStudy(*database, *protocol); !s) return reportError(s.error().message);
+  std::printf("stored study '%s' (%zu structures, %zu items, groups:", protocol->id.c_str(),
+              protocol->structures.size(), protocol->items.size());
+  for (const auto& g : protocol->groups) std::printf(" %s", g.c_str());
+  std::printf(")\n");
+  return 0;
+}
+
+int runList(const cli::Args& args) {
+  auto database = openDb(args);
+  if (!database) return reportError(database.error().message);
+  auto studies = db::listStudies(*database);
+  if (!studies) return reportError(studies.error().message);
+  for (const auto& s : *studies) {
+    auto completion = db::studyCompletion(*database, s.id);
+    std::size_t done = 0, total = completion ? completion->size() : 0;
+    if (completion)
+      for (const auto& c : *completion) done += c.complete ? 1 : 0;
+    std::printf("%-28s %zu/%zu participants complete  %s\n", s.id.c_str(), done, total, s.title.c_str());
+  }
+  return 0;
+}
+
+int runStatus(const cli::Args& args) {
+  if (args.positional().size() != 1) return reportError("study status: expected STUDY");
+  auto database = openDb(args);
+  if (!database) return reportError(database.error().message);
+  auto protocol = resolveStudy(*database, args.positional()[0]);
+  if (!protocol) return reportError(protocol.error().message);
+  auto completion = db::studyCompletion(*database, protocol->id);
+  if (!completion) return reportError(completion.error().message);
+  std::printf("study %s: %zu participant(s)\n", protocol->id.c_str(), completion->size());
+  for (const auto& c : *completion)
+    std::printf("  %-20s %-14s %3d/%d ratings  %s\n", c.participantId.c_str(), c.group.c_str(), c.ratingsGiven,
+                c.ratingsExpected, c.complete ? "complete" : "in progress");
+  return 0;
+}
+
+struct TrialAnswer {
+  std::map<std::string, int> ratings;  // item → rating as shown
+  double viewMsA = 0, viewMsB = 0, responseMs = 0;
+  int toggles = 0;
+  std::string comment;
+};
+
+// Reads one answers line strictly; errors name the line number and the field.
+Result<TrialAnswer> parseAnswerLine(const std::string& line, int lineNumber, const std::string& file,
+                                    const quiz::StudyProtocol& protocol) {
+  const std::string where = file + ":" + std::to_string(lineNumber);
+  nlohmann::json j = nlohmann::json::parse(line, nullptr, false);
+  if (j.is_discarded() || !j.is_object()) return fail(where + ": not a JSON object");
+  TrialAnswer a;
+  for (auto it = j.begin(); it != j.end(); ++it) {
+    const std::string& key = it.key();
+    if (key == "ratings") {
+      if (!it->is_object()) return fail(where + ": 'ratings' must be an object of item → rating");
+      for (auto r = it->begin(); r != it->end(); ++r) {
+        bool known = false;
+        for (const auto& item : protocol.items) known = known || item.id == r.key();
+        if (!known) return fail(where + ": 'ratings." + r.key() + "' is not an item of study '" + protocol.id + "'");
+        if (!r->is_number_integer() || r->get<int>() < protocol.scale.min || r->get<int>() > protocol.scale.max)
+          return fail(where + ": 'ratings." + r.key() + "' must be an integer " + std::to_string(protocol.scale.min) +
+                      ".." + std::to_string(protocol.scale.max));
+        a.ratings[r.key()] = r->get<int>();
+      }
+    } else if (key == "view_ms_a" || key == "view_ms_b" || key == "response_ms") {
+      if (!it->is_number() || it->get<double>() < 0) return fail(where + ": '" + key + "' must be a number ≥ 0");
+      (key == "view_ms_a" ? a.viewMsA : key == "view_ms_b" ? a.viewMsB : a.responseMs) = it->get<double>();
+    } else if (key == "toggles") {
+      if (!it->is_number_integer() || it->get<int>() < 0) return fail(where + ": 'toggles' must be an integer ≥ 0");
+      a.toggles = it->get<int>();
+    } else if (key == "comment") {
+      if (!it->is_string()) return fail(where + ": 'comment' must be a string");
+      a.comment = it->get<std::string>();
+    } else {
+      return fail(where + ": unknown field '" + key + "'");
+    }
+  }
+  if (a.ratings.size() != protocol.items.size())
+    return fail(where + ": 'ratings' must rate every item (" + std::to_string(protocol.items.size()) + "), got " +
+                std::to_string(a.ratings.size()));
+  return a;
+}
+
+// Interactive trial on the terminal: toggle between A and B (the time each is "on screen" is
+// counted), rate each item, optional comment. Returns nullopt at end of input (the participant
+// stopped).
+std::optional<TrialAnswer> askTrial(const quiz::StudyProtocol& protocol) {
+  TrialAnswer a;
+  char showing = 'A';
+  auto since = Clock::now();
+  auto account = [&] {
+    const double ms = std::chrono::duration<double, std::milli>(Clock::now() - since).count();
+    (showing == 'A' ? a.viewMsA : a.viewMsB) += ms;
+    since = Clock::now();
+  };
+  std::printf("  Now showing view A. Type 'a' or 'b' to switch views, Enter to start rating.\n");
+  std::string line;
+  while (true) {
+    std::printf("  [view %c] > ", showing);
+    std::fflush(stdout);
+    if (!std::getline(std::cin, line)) return std::nullopt;
+    if (line == "a" || line == "A" || line == "b" || line == "B") {
+      const char next = char(std::toupper(line[0]));
+      if (next != showing) {
+        account();
+        showing = next;
+        ++a.toggles;
+      }
+      continue;
+    }
+    if (line.empty()) break;
+    std::printf("  please type a, b or press Enter\n");
+  }
+  account();
+  const auto started = Clock::now();
+  for (const auto& item : protocol.items) {
+    while (true) {
+      std::printf("  %s\n  ", item.wording.c_str());
+      for (int v = protocol.scale.min; v <= protocol.scale.max; ++v) {
+        auto anchor = protocol.scale.anchors.find(v);
+        std::printf("%d%s%s  ", v, anchor == protocol.scale.anchors.end() ? "" : " = ",
+                    anchor == protocol.scale.anchors.end() ? "" : anchor->second.c_str());
+      }
+      std::printf("\n  rating> ");
+      std::fflush(stdout);
+      if (!std::getline(std::cin, line)) return std::nullopt;
+      try {
+        std::size_t used = 0;
+        const int v = std::stoi(line, &used);
+        if (used == line.size() && v >= protocol.scale.min && v <= protocol.scale.max) {
+          a.ratings[item.id] = v;
+          break;
+        }
+      } catch (const std::exception&) {
+      }
+      std::printf("  please type a whole number from %d to %d\n", protocol.scale.min, protocol.scale.max);
+    }
+  }
+  a.responseMs = std::chrono::duration<double, std::milli>(Clock::now() - started).count();
+  std::printf("  Comment (optional, Enter to skip): ");
+  std::fflush(stdout);
+  if (std::getline(std::cin, line)) a.comment = line;
+  return a;
+}
+
+int runRun(const cli::Args& args) {
+  if (args.positional().size() != 1) return reportError("study run: expected STUDY (see --help)");
+  const auto participant = args.value("participant");
+  const auto group = args.value("group");
+  if (!participant || participant->empty()) return reportError("study run: --participant ID is required");
+  if (!group) return reportError("study run: --group G is required");
+  auto database = openDb(args);
+  if (!database) return reportError(database.error().message);
+  auto protocol = resolveStudy(*database, args.positional()[0]);
+  if (!protocol) return reportError(protocol.error().message);
+  auto state = db::enrolOrResume(*database, *protocol, *participant, *group);
+  if (!state) return reportError(state.error().message);
+
+  std::ifstream answersFile;
+  const std::string answersPath = args.valueOr("answers", "");
+  if (!answersPath.empty()) {
+    answersFile.open(answersPath);
+    if (!answersFile) return reportError(answersPath + ": cannot open the answers file");
+  }
+  int lineNumber = 0;
+  std::printf("Study %s — participant %s (%s), session %d\n", protocol->id.c_str(), participant->c_str(),
+              group->c_str(), state->session);
+  std::printf("For each of %zu structures you will see two renderings, A and B. Rate each item from %d (prefer A) "
+              "to %d (prefer B).\n",
+              protocol->structures.size(), protocol->scale.min, protocol->scale.max);
+
+  while (auto next = state->nextTrial(protocol->items.size())) {
+    db::StudyTrial& trial = state->trials[*next];
+    // Blinded: the structure and the conditions are not named to the participant.
+    std::printf("\nStructure %d of %zu\n", trial.position + 1, state->trials.size());
+    std::optional<TrialAnswer> answer;
+    if (answersFile.is_open()) {
+      std::string line;
+      while (std::getline(answersFile, line)) {
+        ++lineNumber;
+        if (line.find_first_not_of(" \t\r") != std::string::npos) break;
+        line.clear();
+      }
+      if (line.empty()) break;  // answers ran out: the participant stopped here
+      auto parsed = parseAnswerLine(line, lineNumber, answersPath, *protocol);
+      if (!parsed) return reportError(parsed.error().message);
+      answer = *parsed;
+    } else {
+      answer = askTrial(*protocol);
+      if (!answer) break;
+    }
+    for (const auto& item : protocol->items) {
+      if (trial.ratedItems.count(item.id)) continue;
+      db::RatingRecord r;
+      r.position = trial.position;
+      r.item = item.id;
+      r.ratingAsShown = answer->ratings.at(item.id);
+      r.responseMs = answer->responseMs;
+      r.t = protocol->t;
+      r.appVersion = AT_VERSION;
+      // Each rating is committed before the next is taken.
+      if (auto s = db::recordRating(*database, protocol->id, *participant, r); !s) return reportError(s.error().message);
+      trial.ratedItems.insert(item.id);
+      std::printf("  %s: %d recorded\n", item.id.c_str(), r.ratingAsShown);
+    }
+    if (auto s = db::recordTrialViewing(*database, protocol->id, *participant, trial.position, answer->viewMsA,
+                                        answer->viewMsB, answer->toggles, answer->comment);
+        !s)
+      return reportError(s.error().message);
+  }
+  if (!state->nextTrial(protocol->items.size())) {
+    if (auto s = db::markParticipantComplete(*database, protocol->id, *participant); !s)
+      return reportError(s.error().message);
+    std::printf("\nThank you: all %zu structures rated.\n", state->trials.size());
+  } else {
+    std::printf("\nStopped before the end; run the same command again to continue where you left off.\n");
+  }
+  return 0;
+}
+
+Status writeFile(const fs::path& path, const std::string& content) {
+  const fs::path temp = path.string() + ".part";
+  {
+    std::ofstream out(temp, std::ios::binary | std::ios::trunc);
+    if (!out) return fail(temp.string() + ": cannot write");
+    out.write(content.data(), std::streamsize(content.size()));
+    if (!out) return fail(temp.string() + ": write failed (disk full?)");
+  }
+  std::error_code ec;
+  fs::rename(temp, path, ec);
+  if (ec) return fail(path.string() + ": cannot replace (" + ec.message() + ")");
+  return {};
+}
+
+int runExport(const cli::Args& args) {
+  if (args.positional().size() != 1) return reportError("study export: expected STUDY (see --help)");
+  const auto outDir = args.value("out");
+  if (!outDir) return reportError("study export: --out DIR is required");
+  auto database = openDb(args);
+  if (!database) return reportError(database.error().message);
+  auto protocol = resolveStudy(*database, args.positional()[0]);
+  if (!protocol) return reportError(protocol.error().message);
+  std::error_code ec;
+  fs::create_directories(*outDir, ec);
+  if (ec || !fs::is_directory(*outDir)) return reportError(*outDir + ": cannot create the output folder");
+
+  auto rows = db::studyResponseRows(*database, *protocol);
+  if (!rows) return reportError(rows.error().message);
+  auto completion = db::studyCompletion(*database, protocol->id);
+  if (!completion) return reportError(completion.error().message);
+  std::size_t partial = 0;
+  for (const auto& c : *completion) partial += c.complete ? 0 : 1;
+
+  const quiz::StudySummary summary = quiz::summariseStudy(*protocol, *rows);
+  const fs::path dir = *outDir;
+  struct Output {
+    const char* name;
+    std::function<Status(const fs::path&)> write;
+  };
+  const std::vector<Output> outputs = {
+      {"responses_long.csv", [&](const fs::path& p) { return writeFile(p, quiz::responsesLongCsv(*rows)); }},
+      {"responses_wide.csv", [&](const fs::path& p) { return writeFile(p, quiz::responsesWideCsv(*protocol, *rows)); }},
+      {"data_dictionary.csv", [&](const fs::path& p) { return writeFile(p, quiz::dataDictionaryCsv(*protocol)); }},
+      {"responses_long.json", [&](const fs::path& p) { return writeFile(p, quiz::responsesLongJsonSidecar(*protocol)); }},
+      {"summary.csv", [&](const fs::path& p) { return writeFile(p, quiz::summaryCsv(summary)); }},
+      {"summary.md",
+       [&](const fs::path& p) { return writeFile(p, quiz::summaryMarkdown(*protocol, summary, completion->size(), partial)); }},
+      {"summary.svg", [&](const fs::path& p) { return writeFile(p, quiz::summarySvg(*protocol, summary)); }},
+      {"summary.png",
+       [&](const fs::path& p) -> Status {
+         const quiz::ChartImage chart = quiz::renderSummaryChart(*protocol, summary);
+         RgbImage image;
+         image.width = chart.width;
+         image.height = chart.height;
+         image.rgb = chart.rgb;
+         return writePng(p.string(), image);
+       }},
+  };
+  std::fprintf(stderr, "exporting study %s: %zu rows from %zu participant(s)\n", protocol->id.c_str(), rows->size(),
+               completion->size());
+  for (std::size_t i = 0; i < outputs.size(); ++i) {
+    std::fprintf(stderr, "[%zu/%zu] %s\n", i + 1, outputs.size(), outputs[i].name);
+    if (auto s = outputs[i].write(dir / outputs[i].name); !s) return reportError(s.error().message);
+  }
+  std::printf("wrote %zu files to %s\n", outputs.size(), dir.string().c_str());
+  return 0;
+}
+
+}  // namespace
+
+int runStudy(const Argv& argv) {
+  if (argv.empty() || argv[0] == "--help" || argv[0] == "-h") {
+    std::printf("%s", kStudyHelp);
+    return argv.empty() ? 2 : 0;
+  }
+  const std::string verb = argv[0];
+  auto args = cli::Args::parse(Argv(argv.begin() + 1, argv.end()), {"db", "participant", "group", "answers", "out"}, {});
+  if (!args) return reportError("study " + verb + ": " + args.error().message);
+  if (args->has("help")) {
+    std::printf("%s", kStudyHelp);
+    return 0;
+  }
+  if (verb == "register") return runRegister(*args);
+  if (verb == "list") return runList(*args);
+  if (verb == "run") return runRun(*args);
+  if (verb == "status") return runStatus(*args);
+  if (verb == "export") return runExport(*args);
+  return reportError("study: unknown action '" + verb + "' (register, list, run, status, export)", 2);
+}
+
+}  // namespace at::app

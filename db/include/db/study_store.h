@@ -1,0 +1,80 @@
+// Preference studies in the database: the protocol, the participants (pseudonymous, with a group
+// and an enrolment index that fixes their counterbalancing row), one trial per participant ×
+// structure with its blinded A/B mapping, and every rating as it is given (one transaction each).
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "db/database.h"
+#include "quiz/study_protocol.h"
+#include "quiz/study_report.h"
+
+namespace at::db {
+
+struct StudyTrial {
+  int position = 0;                 // 0-based presentation order
+  std::string structure;
+  std::string aCondition, bCondition;  // condition ids shown as A and B
+  std::string presetA, presetB;
+  double viewMsA = 0, viewMsB = 0;
+  int toggles = 0;
+  std::string comment;
+  std::set<std::string> ratedItems;
+};
+
+struct StudyParticipant {
+  std::string studyId;
+  std::string participantId;
+  std::string group;
+  int enrolmentIndex = 0;           // 0-based order of enrolment: the counterbalancing row
+  int session = 1;                  // how many times the participant has started (resumes count)
+  bool complete = false;
+  std::vector<StudyTrial> trials;   // in presentation order
+
+  // The first trial with an unrated item, or nullopt when every item of every trial is rated.
+  std::optional<std::size_t> nextTrial(std::size_t itemCount) const;
+};
+
+struct StudyCompletion {
+  std::string participantId, group;
+  int ratingsGiven = 0, ratingsExpected = 0;
+  bool complete = false;
+};
+
+// Stores (or updates) a study definition. A study that already has participants may only be
+// re-stored unchanged in its structures, conditions, items and seed (an error names the study).
+Status saveStudy(Database& db, const quiz::StudyProtocol& protocol);
+Result<std::optional<quiz::StudyProtocol>> findStudy(Database& db, const std::string& studyId);
+Result<std::vector<quiz::StudyProtocol>> listStudies(Database& db);
+
+// Enrols a participant (plan from the Latin square row of their enrolment index and the study's
+// seed) or resumes one already enrolled (group must match; the session count goes up).
+Result<StudyParticipant> enrolOrResume(Database& db, const quiz::StudyProtocol& protocol,
+                                       const std::string& participantId, const std::string& group);
+
+struct RatingRecord {
+  int position = 0;
+  std::string item;
+  int ratingAsShown = 0;            // 1 = prefer A … 5 = prefer B
+  double responseMs = 0;
+  double t = 0, alpha = 0, beta = 0;  // render parameters on screen
+  std::string appVersion;
+};
+// Records one rating at once (its own transaction). Re-rating the same item replaces it.
+Status recordRating(Database& db, const std::string& studyId, const std::string& participantId,
+                    const RatingRecord& rating);
+// Records viewing time, toggles and comment of a trial (replacing earlier values).
+Status recordTrialViewing(Database& db, const std::string& studyId, const std::string& participantId,
+                          int position, double viewMsA, double viewMsB, int toggles, const std::string& comment);
+Status markParticipantComplete(Database& db, const std::string& studyId, const std::string& participantId);
+
+Result<std::vector<StudyCompletion>> studyCompletion(Database& db, const std::string& studyId);
+
+// Every rating as an export row, unblinded, ordered by enrolment, position, item order.
+Result<std::vector<quiz::StudyResponseRow>> studyResponseRows(Database& db, const quiz::StudyProtocol& protocol);
+
+}  // namespace at::db

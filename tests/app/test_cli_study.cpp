@@ -1,0 +1,141 @@
+#include <doctest/doctest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <sstream>
+
+#include <nlohmann/json.hpp>
+
+#include "quiz/study_report.h"
+#include "test_support.h"
+#include "volume/png_image.h"
+
+using namespace at;
+namespace fs = std::filesystem;
+
+namespace {
+
+std::string slurp(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+// Writes an answers file: for every structure, each item rated `rating(position)` as shown.
+void writeAnswers(const fs::path& path, int structures, const std::function<int(int)>& rating, const std::string& comment = "",
+                  int stopAfter = -1) {
+  std::ofstream out(path);
+  for (int s = 0; s < structures && (stopAfter < 0 || s < stopAfter); ++s) {
+    nlohmann::json j;
+    const int r = rating(s);
+    j["ratings"] = {{"shape", r}, {"context", r}, {"localization", r}, {"utility", r}};
+    j["view_ms_a"] = 1000 + s;
+    j["view_ms_b"] = 2000 + s;
+    j["toggles"] = s % 3;
+    if (!comment.empty()) j["comment"] = comment;
+    out << j.dump() << "\n";
+  }
+}
+
+}  // namespace
+
+TEST_CASE("StudyCli_ScriptedParticipants_ExportIsCompleteDeterministicAndUnblinded") {
+  test::TempDir dir;
+  const std::string db = "--db '" + (dir / "study.db").string() + "'";
+  const std::string study = "wdt_vs_bare_phantom";
+  // P1 always prefers A as shown (so, unblinded, a mix); P2 rates 2 everywhere; P3 stops after 5
+  // structures with a hostile comment.
+  writeAnswers(dir / "p1.jsonl", 13, [](int) { return 1; });
+  writeAnswers(dir / "p2.jsonl", 13, [](int) { return 2; });
+  writeAnswers(dir / "p3.jsonl", 13, [](int) { return 4; }, "=HYPERLINK(\"x\"), \"quoted\"\nnew line — ünïcode", 5);
+  for (auto [who, group] : std::map<std::string, std::string>{{"p1", "medical"}, {"p2", "non-medical"}, {"p3", "medical"}}) {
+    auto r = test::runApp("study run " + study + " --participant " + who + " --group " + group + " --answers '" +
+                          (dir / (who + ".jsonl")).string() + "' " + db);
+    CAPTURE(r.err);
+    REQUIRE(r.exitCode == 0);
+    CHECK(r.out.find("cochlea") == std::string::npos);  // blinded: no structure names
+    CHECK(r.out.find("wdt") == std::string::npos);
+  }
+  auto status = test::runApp("study status " + study + " " + db);
+  CHECK(status.exitCode == 0);
+  CHECK(status.out.find("p3") != std::string::npos);
+  CHECK(status.out.find("20/52") != std::string::npos);
+
+  auto e1 = test::runApp("study export " + study + " --out '" + (dir / "e1").string() + "' " + db);
+  auto e2 = test::runApp("study export " + study + " --out '" + (dir / "e2").string() + "' " + db);
+  REQUIRE(e1.exitCode == 0);
+  REQUIRE(e2.exitCode == 0);
+  CHECK(e1.err.find("[8/8] summary.png") != std::string::npos);  // progress shown
+  for (const char* f : {"responses_long.csv", "responses_wide.csv", "data_dictionary.csv", "responses_long.json",
+                        "summary.csv", "summary.md", "summary.svg", "summary.png"}) {
+    CAPTURE(f);
+    REQUIRE(fs::exists(dir / "e1" / f));
+    CHECK(slurp(dir / "e1" / f) == slurp(dir / "e2" / f));  // exporting twice gives identical bytes
+  }
+  const auto rows = quiz::parseCsv(slurp(dir / "e1" / "responses_long.csv"));
+  REQUIRE(rows.size() == 1 + 13 * 4 * 2 + 5 * 4);
+  const auto& header = rows[0];
+  auto col = [&](const std::string& name) {
+    return std::size_t(std::find(header.begin(), header.end(), name) - header.begin());
+  };
+  std::map<std::string, int> p3Rows;
+  for (std::size_t i = 1; i < rows.size(); ++i) {
+    const auto& r = rows[i];
+    const std::string who = r[col("participant_id")];
+    const int shown = std::stoi(r[col("rating_ab")]);
+    const int paper = std::stoi(r[col("rating")]);
+    const bool aIsWdt = r[col("a_condition")] == "wdt";
+    CHECK(paper == (aIsWdt ? shown : 6 - shown));
+    if (who == "p3") {
+      ++p3Rows[r[col("structure")]];
+      CHECK(r[col("participant_complete")] == "0");
+      CHECK(r[col("comment")] == "'=HYPERLINK(\"x\"), \"quoted\"\nnew line — ünïcode");
+    }
+  }
+  CHECK(p3Rows.size() == 5);
+  const std::string md = slurp(dir / "e1" / "summary.md");
+  CHECK(md.find("3 participant(s), of whom 1 stopped before the end") != std::string::npos);
+  auto png = readPng((dir / "e1" / "summary.png").string());
+  REQUIRE(png.has_value());
+  CHECK(png->width > 100);
+}
+
+TEST_CASE("StudyCli_EmptyStudyExport_WritesHeadersOnly") {
+  test::TempDir dir;
+  auto r = test::runApp("study export wdt_vs_bare_phantom --out '" + (dir / "out").string() + "' --db '" +
+                        (dir / "s.db").string() + "'");
+  REQUIRE(r.exitCode == 0);
+  CHECK(quiz::parseCsv(slurp(dir / "out" / "responses_long.csv")).size() == 1);
+}
+
+TEST_CASE("StudyCli_MalformedAnswerLine_ReportsLineAndKeepsEarlierRatings") {
+  test::TempDir dir;
+  {
+    std::ofstream out(dir / "a.jsonl");
+    out << R"({"ratings": {"shape": 1, "context": 1, "localization": 1, "utility": 1}})" << "\n";
+    out << R"({"ratings": {"shape": 9, "context": 1, "localization": 1, "utility": 1}})" << "\n";
+  }
+  const std::string db = "--db '" + (dir / "s.db").string() + "'";
+  auto r = test::runApp("study run wdt_vs_bare_phantom --participant x --group medical --answers '" +
+                        (dir / "a.jsonl").string() + "' " + db);
+  CHECK(r.exitCode != 0);
+  CHECK(r.err.find("a.jsonl:2") != std::string::npos);
+  CHECK(r.err.find("ratings.shape") != std::string::npos);
+  auto status = test::runApp("study status wdt_vs_bare_phantom " + db);
+  CHECK(status.out.find("4/52") != std::string::npos);
+}
+
+TEST_CASE("StudyCli_BadArguments_OneLineErrors") {
+  test::TempDir dir;
+  const std::string db = " --db '" + (dir / "s.db").string() + "'";
+  auto noStudy = test::runApp("study run nonexistent_study --participant a --group medical" + db);
+  CHECK(noStudy.exitCode != 0);
+  CHECK(noStudy.err.find("nonexistent_study") != std::string::npos);
+  auto badGroup = test::runApp("study run wdt_vs_bare_phantom --participant a --group pilots" + db);
+  CHECK(badGroup.exitCode != 0);
+  CHECK(badGroup.err.find("pilots") != std::string::npos);
+  auto noOut = test::runApp("study export wdt_vs_bare_phantom" + db);
+  CHECK(noOut.exitCode != 0);
+}
