@@ -1,24 +1,181 @@
-// DICOM series loading on the real series in ../shared/data.
+// DICOM series on the real files in ../shared/data: the JPEG 2000 abdominal CT and the head CT.
 #include <doctest/doctest.h>
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <fstream>
+#include <map>
 
+#include "dicom_test_files.h"
 #include "test_support.h"
 #include "volume/dicom_series.h"
 #include "volume/image_file.h"
+#include "volume/nrrd_io.h"
 
 using namespace at;
+namespace fs = std::filesystem;
 
-TEST_CASE("DICOM series: the JPEG 2000 CT loads as 512x512x20 at 0.977 x 0.977 x 2 mm") {
-  if (!test::requireSharedData("DICOM series")) return;
-  auto loaded = loadDicomSeries(test::sharedData("totalsegmentator/ct_dicom").string());
+namespace {
+
+double fractionIn(const FloatVolume& v, float lo, float hi) {
+  const auto n = std::count_if(v.voxels.begin(), v.voxels.end(), [&](float x) { return x >= lo && x <= hi; });
+  return double(n) / double(v.voxels.size());
+}
+
+}  // namespace
+
+TEST_CASE("DICOM series: the JPEG 2000 CT loads as 512x512x20 with spacing from PixelSpacing and positions") {
+  if (!test::requireSharedData("DICOM series (ct_dicom)")) return;
+  const fs::path folder = test::sharedData("totalsegmentator/ct_dicom");
+  auto loaded = loadDicomSeries(folder.string());
   REQUIRE_MESSAGE(loaded, (loaded ? "" : loaded.error().message));
-  for (auto& n : loaded->notes) MESSAGE(n);
   const Geometry& g = loaded->image.geometry;
   CHECK(g.dims == Dims{512, 512, 20});
-  CHECK(g.spacingMm[0] == doctest::Approx(0.9765625).epsilon(1e-6));
+
+  const fs::path anyFile = fs::directory_iterator(folder)->path();
+  const double rowSpacing = test::dicomNumber(anyFile, DCM_PixelSpacing, 0);
+  const double columnSpacing = test::dicomNumber(anyFile, DCM_PixelSpacing, 1);
+  CHECK(g.spacingMm[0] == doctest::Approx(columnSpacing).epsilon(1e-6));
+  CHECK(g.spacingMm[1] == doctest::Approx(rowSpacing).epsilon(1e-6));
+  CHECK(std::abs(g.spacingMm[0] - 0.977) < 1e-3);
+  CHECK(std::abs(g.spacingMm[1] - 0.977) < 1e-3);
+  // 2 mm between positions although SliceThickness says 3 mm.
+  CHECK(test::dicomNumber(anyFile, DCM_SliceThickness) == doctest::Approx(3.0));
   CHECK(g.spacingMm[2] == doctest::Approx(2.0).epsilon(1e-6));
-  auto [mn, mx] = std::minmax_element(loaded->image.voxels.begin(), loaded->image.voxels.end());
-  MESSAGE(*mn << " " << *mx);
+  CHECK((loaded->storedKind == ScalarKind::UInt16));
+
+  // Rows along +x (patient left), columns along +y (posterior), slices sorted along the normal +z.
+  CHECK(g.orientationCode() == "LPS");
+  CHECK(g.originMm[2] == doctest::Approx(-804.5));
+  CHECK(g.indexToPatient({0, 0, 19})[2] == doctest::Approx(-766.5));
+}
+
+TEST_CASE("DICOM series: every decoded JPEG 2000 slice spans exactly its file's stored pixel range in HU") {
+  // Each file states its Smallest/LargestImagePixelValue: an independent check of the JPEG 2000
+  // decoding, the rescale (intercept −1024) and the sorting by position.
+  if (!test::requireSharedData("DICOM series (ct_dicom)")) return;
+  const fs::path folder = test::sharedData("totalsegmentator/ct_dicom");
+  auto loaded = loadDicomSeries(folder.string());
+  REQUIRE(loaded);
+  const Geometry& g = loaded->image.geometry;
+  const std::size_t sliceVoxels = std::size_t(g.dims.x) * g.dims.y;
+  int checked = 0;
+  for (const auto& entry : fs::directory_iterator(folder)) {
+    const double z = test::dicomNumber(entry.path(), DCM_ImagePositionPatient, 2);
+    const int k = int(std::lround(g.patientToIndex({g.originMm[0], g.originMm[1], z})[2]));
+    REQUIRE(k >= 0);
+    REQUIRE(k < g.dims.z);
+    const double intercept = test::dicomNumber(entry.path(), DCM_RescaleIntercept);
+    const double smallest = test::dicomNumber(entry.path(), DCM_SmallestImagePixelValue) + intercept;
+    const double largest = test::dicomNumber(entry.path(), DCM_LargestImagePixelValue) + intercept;
+    auto first = loaded->image.voxels.begin() + std::ptrdiff_t(k * sliceVoxels);
+    auto [lo, hi] = std::minmax_element(first, first + std::ptrdiff_t(sliceVoxels));
+    CHECK(*lo == doctest::Approx(smallest));
+    CHECK(*hi == doctest::Approx(largest));
+    ++checked;
+  }
+  CHECK(checked == 20);
+}
+
+TEST_CASE("DICOM series: the abdominal CT holds plausible Hounsfield units") {
+  if (!test::requireSharedData("DICOM series (ct_dicom)")) return;
+  auto loaded = loadDicomSeries(test::sharedData("totalsegmentator/ct_dicom").string());
+  REQUIRE(loaded);
+  const FloatVolume& v = loaded->image;
+  const double air = fractionIn(v, -1100, -900);   // outside the body, lungs, bowel gas
+  const double soft = fractionIn(v, -100, 150);    // fat, muscle, organs
+  const double bone = fractionIn(v, 300, 3000);    // vertebrae, ribs
+  MESSAGE("air " << air << ", soft tissue " << soft << ", bone " << bone);
+  CHECK(air > 0.2);
+  CHECK(soft > 0.2);
+  CHECK(bone > 0.002);
+  CHECK(bone < 0.1);
+  auto [lo, hi] = std::minmax_element(v.voxels.begin(), v.voxels.end());
+  CHECK(*lo >= -1024.0f);
+  CHECK(*hi < 3100.0f);
+}
+
+TEST_CASE("DICOM series: the head CT folder loads 93 slices and ignores its licence file") {
+  if (!test::requireSharedData("DICOM series (headsq)")) return;
+  auto loaded = loadDicomSeries(test::sharedData("headsq/dicom").string());
+  REQUIRE_MESSAGE(loaded, (loaded ? "" : loaded.error().message));
+  const Geometry& g = loaded->image.geometry;
+  CHECK(g.dims == Dims{64, 64, 93});
+  CHECK(g.spacingMm[0] == doctest::Approx(3.2));
+  CHECK(g.spacingMm[1] == doctest::Approx(3.2));
+  CHECK(g.spacingMm[2] == doctest::Approx(1.5));
+  CHECK((loaded->storedKind == ScalarKind::Int16));
+  REQUIRE(!loaded->notes.empty());
+  CHECK(loaded->notes.front().find("93 slices") != std::string::npos);
+}
+
+TEST_CASE("DICOM series: head CT slices equal the raw VTK slice files, in reverse order") {
+  // headsq/nrrd/quarter.N holds raw little-endian int16 slices. CTHead1.dcm (ImagePositionPatient
+  // z = 0) carries the pixels of quarter.93: the DICOM k axis runs opposite to the file numbering.
+  if (!test::requireSharedData("DICOM series (headsq)")) return;
+  auto loaded = loadDicomSeries(test::sharedData("headsq/dicom").string());
+  REQUIRE(loaded);
+  const std::size_t sliceVoxels = 64 * 64;
+  std::size_t mismatches = 0;
+  for (int k = 0; k < 93; ++k) {
+    std::ifstream raw(test::sharedData("headsq/nrrd/quarter." + std::to_string(93 - k)), std::ios::binary);
+    std::vector<std::int16_t> slice(sliceVoxels);
+    REQUIRE(raw.read(reinterpret_cast<char*>(slice.data()), std::streamsize(sliceVoxels * 2)));
+    for (std::size_t p = 0; p < sliceVoxels; ++p)
+      if (loaded->image.voxels[k * sliceVoxels + p] != float(slice[p])) ++mismatches;
+  }
+  CHECK(mismatches == 0);
+}
+
+TEST_CASE("DICOM series: headsq DICOM and NRRD give the same volume on the same voxel grid size") {
+  // The NRRD (space: 3D-left-handed, no origin) numbers its slices from the other end: NRRD slice
+  // k is DICOM slice 92 − k, which is what makes its index frame left-handed. Values and spacing
+  // agree; the NRRD carries no patient position, so only the DICOM grid is anchored in LPS.
+  if (!test::requireSharedData("headsq DICOM vs NRRD")) return;
+  auto dicom = loadDicomSeries(test::sharedData("headsq/dicom").string());
+  auto nrrd = loadNrrd(test::sharedData("headsq/nrrd/quarter.nhdr").string());
+  REQUIRE_MESSAGE(dicom, (dicom ? "" : dicom.error().message));
+  REQUIRE_MESSAGE(nrrd, (nrrd ? "" : nrrd.error().message));
+  const Geometry& gd = dicom->image.geometry;
+  const Geometry& gn = nrrd->image.geometry;
+  REQUIRE(gn.dims == gd.dims);
+  for (int a = 0; a < 3; ++a) CHECK(gn.spacingMm[a] == doctest::Approx(gd.spacingMm[a]));
+  CHECK((nrrd->storedKind == dicom->storedKind));
+  std::size_t mismatches = 0;
+  for (int k = 0; k < gd.dims.z; ++k)
+    for (int j = 0; j < gd.dims.y; ++j)
+      for (int i = 0; i < gd.dims.x; ++i)
+        if (dicom->image.at(i, j, k) != nrrd->image.at(i, j, gd.dims.z - 1 - k)) ++mismatches;
+  CHECK(mismatches == 0);
+}
+
+TEST_CASE("DICOM series: loadImageFile on a folder, on one file of the series, and on bad paths") {
+  if (!test::requireSharedData("DICOM series (headsq)")) return;
+  const fs::path folder = test::sharedData("headsq/dicom");
+  auto fromFolder = loadImageFile(folder.string());
+  auto fromFile = loadImageFile((folder / "CTHead40.dcm").string());
+  REQUIRE(fromFolder);
+  REQUIRE_MESSAGE(fromFile, (fromFile ? "" : fromFile.error().message));
+  CHECK(fromFile->image.geometry.sameGridAs(fromFolder->image.geometry));
+  CHECK(fromFile->image.voxels == fromFolder->image.voxels);
+  CHECK(fromFile->notes.back().find("CTHead40.dcm") != std::string::npos);
+
+  auto missing = loadImageFile((folder / "no-such-file.dcm").string());
+  REQUIRE(!missing);
+  CHECK(missing.error().message.find("no such file") != std::string::npos);
+
+  auto licence = loadImageFile((folder / "Slicer_License_head.txt").string());
+  REQUIRE(!licence);
+  CHECK(licence.error().message.find("unrecognised format") != std::string::npos);
+  CHECK(licence.error().message.find("Slicer_License_head.txt") != std::string::npos);
+}
+
+TEST_CASE("DICOM files: looksLikeDicomFile tells DICOM from other files") {
+  if (!test::requireSharedData("DICOM preamble")) return;
+  CHECK(looksLikeDicomFile(test::sharedData("headsq/dicom/CTHead1.dcm").string()));
+  CHECK(looksLikeDicomFile(test::sharedData("dcmqi/liver.dcm").string()));
+  CHECK_FALSE(looksLikeDicomFile(test::sharedData("headsq/dicom/Slicer_License_head.txt").string()));
+  CHECK_FALSE(looksLikeDicomFile(test::sharedData("headsq/nrrd/quarter.nhdr").string()));
+  CHECK_FALSE(looksLikeDicomFile(test::sharedData("headsq/nrrd/no-such-file").string()));
 }
