@@ -6,6 +6,8 @@
 #include <cstdint>
 #include <fstream>
 #include <map>
+#include <numeric>
+#include <random>
 
 #include "dicom_test_files.h"
 #include "test_support.h"
@@ -130,8 +132,9 @@ TEST_CASE("DICOM series: head CT slices equal the raw VTK slice files, in revers
 
 TEST_CASE("DICOM series: headsq DICOM and NRRD give the same volume on the same voxel grid size") {
   // The NRRD (space: 3D-left-handed, no origin) numbers its slices from the other end: NRRD slice
-  // k is DICOM slice 92 − k, which is what makes its index frame left-handed. Values and spacing
-  // agree; the NRRD carries no patient position, so only the DICOM grid is anchored in LPS.
+  // k is DICOM slice 92 − k (quarter.1 is the top DICOM slice), which is what makes its index frame
+  // left-handed. Values, spacing and in-plane axes agree; the NRRD carries no patient position, so
+  // only the DICOM grid is anchored in LPS and origins are not compared.
   if (!test::requireSharedData("headsq DICOM vs NRRD")) return;
   auto dicom = loadDicomSeries(test::sharedData("headsq/dicom").string());
   auto nrrd = loadNrrd(test::sharedData("headsq/nrrd/quarter.nhdr").string());
@@ -142,6 +145,12 @@ TEST_CASE("DICOM series: headsq DICOM and NRRD give the same volume on the same 
   REQUIRE(gn.dims == gd.dims);
   for (int a = 0; a < 3; ++a) CHECK(gn.spacingMm[a] == doctest::Approx(gd.spacingMm[a]));
   CHECK((nrrd->storedKind == dicom->storedKind));
+  // In-plane axes agree; the slice axes point opposite ways (3D-left-handed read as L, P, inferior).
+  for (int r = 0; r < 3; ++r) {
+    CHECK(gn.direction.m[r][0] == doctest::Approx(gd.direction.m[r][0]));
+    CHECK(gn.direction.m[r][1] == doctest::Approx(gd.direction.m[r][1]));
+    CHECK(gn.direction.m[r][2] == doctest::Approx(-gd.direction.m[r][2]));
+  }
   std::size_t mismatches = 0;
   for (int k = 0; k < gd.dims.z; ++k)
     for (int j = 0; j < gd.dims.y; ++j)
@@ -178,4 +187,55 @@ TEST_CASE("DICOM files: looksLikeDicomFile tells DICOM from other files") {
   CHECK_FALSE(looksLikeDicomFile(test::sharedData("headsq/dicom/Slicer_License_head.txt").string()));
   CHECK_FALSE(looksLikeDicomFile(test::sharedData("headsq/nrrd/quarter.nhdr").string()));
   CHECK_FALSE(looksLikeDicomFile(test::sharedData("headsq/nrrd/no-such-file").string()));
+}
+
+TEST_CASE("DICOM series: a randomly rotated and renamed copy of the head slices loads with the rotated geometry") {
+  // Property: rotating ImageOrientationPatient and every ImagePositionPatient by one rotation R and
+  // shuffling the file names leaves the voxels unchanged and turns the direction matrix into R.
+  if (!test::requireSharedData("DICOM series (oblique)")) return;
+  std::mt19937_64 rng(test::freshSeed("DICOM oblique series"));
+  std::normal_distribution<double> gauss;
+  // A uniformly random rotation from a random unit quaternion.
+  double q[4];
+  double length = 0;
+  for (double& c : q) length += (c = gauss(rng)) * c;
+  for (double& c : q) c /= std::sqrt(length);
+  const double w = q[0], x = q[1], y = q[2], z = q[3];
+  Mat3 rotation;
+  rotation.m = {{{1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)},
+                 {2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)},
+                 {2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)}}};
+
+  const int slices = 12;
+  std::vector<int> names(slices);
+  std::iota(names.begin(), names.end(), 0);
+  std::shuffle(names.begin(), names.end(), rng);
+  test::TempDir dir("at-dicom-oblique");
+  for (int n = 1; n <= slices; ++n) {
+    const std::string source = "CTHead" + std::to_string(n) + ".dcm";
+    REQUIRE(test::rewriteDicom(test::sharedData("headsq/dicom/" + source), dir / ("s" + std::to_string(names[n - 1]) + ".dcm"),
+                               [&](DcmDataset& d) {
+                                 const auto p = test::positionOf(d);
+                                 const Vec3 r = rotation * Vec3{p[0], p[1], p[2]};
+                                 test::setPosition(d, {r[0], r[1], r[2]});
+                                 const Vec3 row = rotation.column(0), column = rotation.column(1);
+                                 std::string iop;
+                                 for (double v : {row[0], row[1], row[2], column[0], column[1], column[2]})
+                                   iop += (iop.empty() ? "" : "\\") + std::to_string(v);
+                                 d.putAndInsertString(DCM_ImageOrientationPatient, iop.c_str());
+                               }));
+  }
+  auto rotated = loadDicomSeries(dir.path().string());
+  REQUIRE_MESSAGE(rotated, (rotated ? "" : rotated.error().message));
+  auto straight = loadDicomSeries(test::sharedData("headsq/dicom").string());
+  REQUIRE(straight);
+  const Geometry& g = rotated->image.geometry;
+  REQUIRE(g.dims == Dims{64, 64, slices});
+  CHECK(g.spacingMm[2] == doctest::Approx(1.5).epsilon(1e-4));
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c) CHECK(g.direction.m[r][c] == doctest::Approx(rotation.m[r][c]).epsilon(1e-5));
+  for (int a = 0; a < 3; ++a) CHECK(g.originMm[a] == doctest::Approx(0).epsilon(1e-4));
+  const std::size_t count = std::size_t(64) * 64 * slices;
+  CHECK(std::equal(rotated->image.voxels.begin(), rotated->image.voxels.end(), straight->image.voxels.begin()));
+  CHECK(rotated->image.voxels.size() == count);
 }

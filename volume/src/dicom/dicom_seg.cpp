@@ -182,8 +182,9 @@ Result<LoadedImage> loadDicomSeg(const std::string& path) {
       slice[p] = std::max(slice[p], value);
     }
   }
-  loaded.notes.push_back("DICOM SEG: " + std::to_string(loaded.segments.size()) + " segments in " +
-                         std::to_string(frameCount) + " frames on " + geometry.dims.toString() + " voxels");
+  auto counted = [](std::size_t n, const char* what) { return std::to_string(n) + " " + what + (n == 1 ? "" : "s"); };
+  loaded.notes.push_back("DICOM SEG: " + counted(loaded.segments.size(), "segment") + " in " +
+                         counted(frameCount, "frame") + " on " + geometry.dims.toString() + " voxels");
   if (overlapping)
     loaded.notes.push_back("segments overlap (" + std::to_string(overlapping) +
                            " voxel claims by a second segment); the higher segment number wins");
