@@ -34,6 +34,13 @@ inline std::string dicomString(const std::filesystem::path& path, const DcmTagKe
   return value.c_str();
 }
 
+// The transfer syntax a file's data set is encoded in.
+inline E_TransferSyntax dicomTransferSyntax(const std::filesystem::path& path) {
+  DcmFileFormat file;
+  if (file.loadFile(OFFilename(path.c_str())).bad()) return EXS_Unknown;
+  return file.getDataset()->getOriginalXfer();
+}
+
 // A DS/FD/IS attribute's value `index` of a file (NaN when absent).
 inline double dicomNumber(const std::filesystem::path& path, const DcmTagKey& tag, unsigned long index = 0) {
   DcmFileFormat file;

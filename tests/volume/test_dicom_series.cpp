@@ -9,6 +9,12 @@
 #include <numeric>
 #include <random>
 
+#include <dcmtk/dcmdata/dcrleerg.h>
+#include <dcmtk/dcmjpeg/djencode.h>
+#include <dcmtk/dcmjpeg/djrplol.h>
+#include <dcmtk/dcmjpls/djencode.h>
+#include <dcmtk/dcmjpls/djrparam.h>
+
 #include "dicom_test_files.h"
 #include "test_support.h"
 #include "volume/dicom_series.h"
@@ -238,4 +244,57 @@ TEST_CASE("DICOM series: a randomly rotated and renamed copy of the head slices 
   const std::size_t count = std::size_t(64) * 64 * slices;
   CHECK(std::equal(rotated->image.voxels.begin(), rotated->image.voxels.end(), straight->image.voxels.begin()));
   CHECK(rotated->image.voxels.size() == count);
+}
+
+namespace {
+
+// DCMTK's encoders, registered for the lifetime of the test program (tests make compressed inputs).
+struct EncoderRegistration {
+  EncoderRegistration() {
+    DJEncoderRegistration::registerCodecs();
+    DJLSEncoderRegistration::registerCodecs();
+    DcmRLEEncoderRegistration::registerCodecs();
+  }
+  ~EncoderRegistration() {
+    DcmRLEEncoderRegistration::cleanup();
+    DJLSEncoderRegistration::cleanup();
+    DJEncoderRegistration::cleanup();
+  }
+};
+
+}  // namespace
+
+TEST_CASE("DICOM series: RLE, JPEG-LS and lossless JPEG copies of the head slices decode to the same HU") {
+  if (!test::requireSharedData("DICOM codecs")) return;
+  static EncoderRegistration encoders;
+  auto reference = loadDicomSeries(test::sharedData("headsq/dicom").string());
+  REQUIRE(reference);
+  const int slices = 8;
+  const std::size_t count = std::size_t(64) * 64 * slices;
+  DJ_RPLossless jpegLossless;  // process 14, first-order prediction
+  DJLSRepresentationParameter jpegLsLossless(0, OFTrue);
+  const struct {
+    const char* name;
+    E_TransferSyntax syntax;
+    const DcmRepresentationParameter* parameter;
+  } codecs[] = {{"RLE", EXS_RLELossless, nullptr},
+                {"JPEG-LS", EXS_JPEGLSLossless, &jpegLsLossless},
+                {"JPEG lossless", EXS_JPEGProcess14SV1, &jpegLossless}};
+  for (const auto& codec : codecs) {
+    INFO(std::string(codec.name));
+    test::TempDir dir("at-dicom-codec");
+    for (int n = 1; n <= slices; ++n) {
+      DcmFileFormat file;
+      const std::string name = "CTHead" + std::to_string(n) + ".dcm";
+      REQUIRE(file.loadFile(OFFilename(test::sharedData("headsq/dicom/" + name).c_str())).good());
+      REQUIRE(file.getDataset()->chooseRepresentation(codec.syntax, codec.parameter).good());
+      REQUIRE(file.getDataset()->canWriteXfer(codec.syntax));
+      REQUIRE(file.saveFile(OFFilename((dir / name).c_str()), codec.syntax).good());
+    }
+    REQUIRE(test::dicomTransferSyntax(dir / "CTHead1.dcm") == codec.syntax);
+    auto decoded = loadDicomSeries(dir.path().string());
+    REQUIRE_MESSAGE(decoded, (decoded ? "" : decoded.error().message));
+    REQUIRE(decoded->image.voxels.size() == count);
+    CHECK(std::equal(decoded->image.voxels.begin(), decoded->image.voxels.end(), reference->image.voxels.begin()));
+  }
 }
