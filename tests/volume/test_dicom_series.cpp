@@ -9,6 +9,9 @@
 #include <numeric>
 #include <random>
 
+#include <dcmtk/dcmdata/dcpixel.h>
+#include <dcmtk/dcmdata/dcpixseq.h>
+#include <dcmtk/dcmdata/dcpxitem.h>
 #include <dcmtk/dcmdata/dcrleerg.h>
 #include <dcmtk/dcmjpeg/djencode.h>
 #include <dcmtk/dcmjpeg/djrplol.h>
@@ -297,4 +300,80 @@ TEST_CASE("DICOM series: RLE, JPEG-LS and lossless JPEG copies of the head slice
     REQUIRE(decoded->image.voxels.size() == count);
     CHECK(std::equal(decoded->image.voxels.begin(), decoded->image.voxels.end(), reference->image.voxels.begin()));
   }
+}
+
+namespace {
+
+void putBox(std::vector<std::uint8_t>& out, const char* type, const std::vector<std::uint8_t>& payload) {
+  const std::uint32_t size = std::uint32_t(8 + payload.size());
+  for (int shift = 24; shift >= 0; shift -= 8) out.push_back(std::uint8_t(size >> shift));
+  out.insert(out.end(), type, type + 4);
+  out.insert(out.end(), payload.begin(), payload.end());
+}
+
+// Wraps a raw J2K codestream into a minimal JP2 file (signature, ftyp, jp2h with ihdr + colr,
+// jp2c), of even length as DICOM fragments must be.
+std::vector<std::uint8_t> wrapInJp2(const std::vector<std::uint8_t>& codestream, std::uint32_t width,
+                                    std::uint32_t height, int bitsPerSample, bool isSigned) {
+  auto be32 = [](std::vector<std::uint8_t>& v, std::uint32_t x) {
+    for (int shift = 24; shift >= 0; shift -= 8) v.push_back(std::uint8_t(x >> shift));
+  };
+  std::vector<std::uint8_t> out = {0, 0, 0, 0x0C, 'j', 'P', ' ', ' ', 0x0D, 0x0A, 0x87, 0x0A};
+  putBox(out, "ftyp", {'j', 'p', '2', ' ', 0, 0, 0, 0, 'j', 'p', '2', ' '});
+  std::vector<std::uint8_t> ihdr;
+  be32(ihdr, height);
+  be32(ihdr, width);
+  ihdr.insert(ihdr.end(), {0, 1, std::uint8_t((bitsPerSample - 1) | (isSigned ? 0x80 : 0)), 7, 0, 0});
+  std::vector<std::uint8_t> header;
+  putBox(header, "ihdr", ihdr);
+  putBox(header, "colr", {1, 0, 0, 0, 0, 0, 17});  // enumerated colour space: greyscale
+  putBox(out, "jp2h", header);
+  if ((out.size() + 8 + codestream.size()) % 2) putBox(out, "xml ", {' '});
+  putBox(out, "jp2c", codestream);
+  return out;
+}
+
+}  // namespace
+
+TEST_CASE("DICOM series: JPEG 2000 frames wrapped in JP2 boxes decode like raw codestreams") {
+  if (!test::requireSharedData("DICOM JP2")) return;
+  const fs::path source = test::sharedData("totalsegmentator/ct_dicom");
+  auto reference = loadDicomSeries(source.string());
+  REQUIRE(reference);
+  test::TempDir dir("at-dicom-jp2");
+  int rewritten = 0;
+  for (const auto& entry : fs::directory_iterator(source)) {
+    const bool wrap = rewritten < 5;  // a series mixing both forms
+    if (!wrap) {
+      fs::copy_file(entry.path(), dir / entry.path().filename());
+      continue;
+    }
+    REQUIRE(test::rewriteDicom(entry.path(), dir / entry.path().filename(), [&](DcmDataset& d) {
+      DcmElement* element = nullptr;
+      REQUIRE(d.findAndGetElement(DCM_PixelData, element).good());
+      auto* pixelData = static_cast<DcmPixelData*>(element);
+      DcmPixelSequence* fragments = nullptr;
+      REQUIRE(pixelData->getEncapsulatedRepresentation(d.getOriginalXfer(), nullptr, fragments).good());
+      std::vector<std::uint8_t> codestream;
+      for (unsigned long i = 1; i < fragments->card(); ++i) {
+        DcmPixelItem* item = nullptr;
+        Uint8* bytes = nullptr;
+        REQUIRE(fragments->getItem(item, i).good());
+        REQUIRE(item->getUint8Array(bytes).good());
+        codestream.insert(codestream.end(), bytes, bytes + item->getLength());
+      }
+      const std::vector<std::uint8_t> jp2 = wrapInJp2(codestream, 512, 512, 12, false);
+      auto* sequence = new DcmPixelSequence(DCM_PixelSequenceTag);
+      sequence->insert(new DcmPixelItem(DCM_PixelItemTag));  // empty basic offset table
+      auto* frame = new DcmPixelItem(DCM_PixelItemTag);
+      frame->putUint8Array(jp2.data(), Uint32(jp2.size()));
+      sequence->insert(frame);
+      pixelData->putOriginalRepresentation(d.getOriginalXfer(), nullptr, sequence);
+    }));
+    ++rewritten;
+  }
+  REQUIRE(rewritten == 5);
+  auto decoded = loadDicomSeries(dir.path().string());
+  REQUIRE_MESSAGE(decoded, (decoded ? "" : decoded.error().message));
+  CHECK(decoded->image.voxels == reference->image.voxels);
 }
