@@ -38,4 +38,10 @@ int runLessons(const Argv& args);
 // Preference studies (cmd_study.cpp)
 int runStudy(const Argv& args);
 
+// Offscreen render of one structure (cmd_render.cpp)
+int runRender(const Argv& args);
+
+// The desktop application (desktop_app.cpp)
+int runDesktop(const Argv& args);
+
 }  // namespace at::app

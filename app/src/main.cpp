@@ -5,6 +5,7 @@
 #include <string>
 
 #include "commands.h"
+#include "desktop_support.h"
 
 namespace at::app {
 
@@ -21,6 +22,8 @@ const std::vector<Command>& commands() {
       {"play", "run a lesson in the terminal (answers from a file or typed)", runPlay},
       {"progress", "show a user's progress and what is due for review", runProgress},
       {"study", "preference studies: register, run, status, export", runStudy},
+      {"render", "render a structure offscreen in one of the paper's modes as PNG", runRender},
+      {"desktop", "open the desktop app (explore; --ui-script replays actions, --screenshot saves)", runDesktop},
   };
   return table;
 }
@@ -39,14 +42,14 @@ void printUsage() {
   std::printf("\n`anatomy-tutor COMMAND --help` describes each command.\n");
 }
 
-// Without a desktop shell yet, the default is the built-in dataset's structure list and a slice.
+// The desktop app on the default course when a display exists; otherwise one line saying so and the
+// default lesson's first views written as PNG files through the offscreen renderer.
 int runDefault() {
-  const int status = runStructures({"phantom"});
-  if (status != 0) return status;
-  const std::string out = "phantom_slice.png";
-  const int sliceStatus = runSlice({"phantom", "--axis", "z", "--index", "128", "--out", out});
-  if (sliceStatus == 0) std::printf("wrote %s (axial slice 128 of the phantom)\n", out.c_str());
-  return sliceStatus;
+  if (displayAvailable()) return runDesktop({});
+  const std::string dir = "anatomy-tutor-views";
+  std::printf("anatomy-tutor: no display (DISPLAY and WAYLAND_DISPLAY unset): writing the default lesson's "
+              "first views to %s/ instead\n", dir.c_str());
+  return writeDefaultViews(dir);
 }
 
 }  // namespace
