@@ -34,6 +34,7 @@
 #include "render/gl/volume_renderer.h"
 #include "render/gl/window_target.h"
 #include "render/scene.h"
+#include "render/structure_pick.h"
 #include "volume/dataset_source.h"
 #include "volume/png_image.h"
 
@@ -53,9 +54,10 @@ struct QualityLevel {
   double scale;
   double stepFactor;
 };
-constexpr QualityLevel kLevels[] = {{0.25, 3.0}, {0.4, 2.0}, {0.6, 1.5}, {1.0, 1.0}};
-constexpr int kFullLevel = 3;
+constexpr QualityLevel kLevels[] = {{0.1, 3.0}, {0.2, 2.0}, {0.35, 1.5}, {0.6, 1.0}, {1.0, 1.0}};
+constexpr int kFullLevel = 4;
 constexpr double kInteractionBudgetMs = 55;  // predicted render cost allowed while the user moves
+constexpr double kRefineBudgetMs = 150;      // at rest, levels predicted this cheap are skipped over
 constexpr double kRestAfterMs = 250;        // no change for this long = the user rests
 constexpr double kRefineFieldAfterMs = 400;  // mouse resting this long on a structure → full-res field
 
@@ -151,6 +153,7 @@ class DesktopApp {
     std::optional<std::string> script;
     std::optional<std::string> screenshot;
     int width = 1280, height = 720;
+    double renderScale = 1;         // resolution of the full-quality level (slow software GL: < 1)
   };
 
   explicit DesktopApp(Options options) : options_(std::move(options)), library_(presetsDirectory()) {}
@@ -327,6 +330,16 @@ Status DesktopApp::openGraphics() {
   SDL_GL_MakeCurrent(window_->window, window_->context);
   SDL_GL_SetSwapInterval(options_.script ? 0 : 1);
   glDescription_ = render::gl::currentContextDescription();
+  std::string ascii;  // ImGui's built-in font has no em dash
+  for (std::size_t i = 0; i < glDescription_.size(); ++i) {
+    if (glDescription_.compare(i, 3, "\u2014") == 0) {
+      ascii += '-';
+      i += 2;
+    } else {
+      ascii += glDescription_[i];
+    }
+  }
+  glDescription_ = ascii;
   float ddpi = 96;
   if (SDL_GetDisplayDPI(0, &ddpi, nullptr, nullptr) != 0 || !(ddpi > 0)) ddpi = 96;
   uiScale_ = std::clamp(ddpi / 96.0f, 1.0f, 3.0f);
@@ -423,9 +436,11 @@ render::RenderSettings DesktopApp::viewSettings(int level) {
   s.camera = camera_;
   const QualityLevel q = kLevels[std::clamp(level, 0, kFullLevel)];
   const int viewW = std::max(1, fbW_ - int(std::lround(320 * uiScale_ * double(fbW_) / std::max(1, winW_))));
-  s.width = std::max(16, int(std::lround(viewW * q.scale)));
-  s.height = std::max(16, int(std::lround(fbH_ * q.scale)));
+  s.width = std::max(16, int(std::lround(viewW * q.scale * options_.renderScale)));
+  s.height = std::max(16, int(std::lround(fbH_ * q.scale * options_.renderScale)));
   s.stepMm = render::effectiveStepMm(dataset_.volume.geometry, render::RenderSettings{}) * q.stepFactor;
+  s.shading = level == kFullLevel;  // gradients cost six fetches per sample: only at rest
+  s.jitter = level == kFullLevel;
   s.background = {0.04f, 0.04f, 0.05f, 1.0f};
   if (clipOn_) {
     Vec3 n{0, 0, 0};
@@ -500,7 +515,6 @@ void DesktopApp::hoverAt(double x, double y) {
     return;
   }
   const double left = 320 * uiScale_;
-  const double sx = double(fbW_) / std::max(1, winW_);
   render::RenderSettings s = viewSettings(kFullLevel);
   // Picking classifies like the WDT view (bare mode shows only one structure, yet the user points
   // at what lies under the cursor in the anatomy).
@@ -511,7 +525,8 @@ void DesktopApp::hoverAt(double x, double y) {
   scene.field = field_ ? &field_->distances : nullptr;
   scene.selected = fieldLabel_;
   const render::TransferFunction2D table = render::shadingTable(s.preset);
-  const render::PickResult hit = render::pick(scene, s, table, (x - left) * sx, y * sx);
+  const double px = (x - left) / std::max(1.0, winW_ - left) * s.width, py = y / std::max(1, winH_) * s.height;
+  const render::PickResult hit = render::pickStructure(scene, s, table, px, py);
   const std::uint16_t label = hit.hit && frames_.count(hit.label) ? hit.label : 0;
   if (label != hovered_) {
     const Structure* st = dataset_.findStructureByLabel(label);
@@ -662,7 +677,13 @@ void DesktopApp::renderVolume(Clock::time_point frameStart) {
   } else {
     interacting_ = false;
   }
-  const int level = std::min(kFullLevel, renderedLevel_ + 1);
+  int level = std::min(kFullLevel, renderedLevel_ + 1);
+  if (!interacting_ && msPerUnit_ > 0)  // at rest: skip levels that would be cheap but still coarse
+    while (level < kFullLevel) {
+      const render::RenderSettings next = viewSettings(level + 1);
+      if (msPerUnit_ * double(next.width) * double(next.height) / kLevels[level + 1].stepFactor > kRefineBudgetMs) break;
+      ++level;
+    }
   render::RenderSettings s = viewSettings(level);
   const std::uint16_t label = bare_ ? shownLabel() : (fieldLabel_ ? fieldLabel_ : shownLabel());
   renderer_->setSelected(label);
@@ -695,7 +716,7 @@ void DesktopApp::buildUi() {
   ImGui::Begin("Explore", nullptr,
                ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoResize | ImGuiWindowFlags_NoCollapse |
                    ImGuiWindowFlags_NoTitleBar);
-  ImGui::TextUnformatted("Anatomy Tutor — Explore");
+  ImGui::TextUnformatted("Anatomy Tutor - Explore");
   ImGui::TextDisabled("%s", dataset_.displayName.empty() ? dataset_.id.c_str() : dataset_.displayName.c_str());
   ImGui::Separator();
 
@@ -708,7 +729,7 @@ void DesktopApp::buildUi() {
     ImGui::TextUnformatted(selected->description.c_str());
     ImGui::PopTextWrapPos();
   }
-  ImGui::Text("Hover: %s", hovered ? hovered->displayName.c_str() : "—");
+  ImGui::Text("Hover: %s", hovered ? hovered->displayName.c_str() : "-");
   ImGui::Separator();
 
   int mode = bare_ ? 1 : 0;
@@ -772,7 +793,7 @@ void DesktopApp::buildUi() {
   const double lastMs = frameLog_.empty() ? 0 : frameLog_.back().ms;
   ImGui::TextDisabled("frame %.0f ms, level %d/%d%s", lastMs, std::max(0, renderedLevel_), kFullLevel,
                       interacting_ ? " (moving)" : "");
-  ImGui::TextDisabled("%s", worker_->busy() ? "computing a distance field…" : fieldStatus_.c_str());
+  ImGui::TextDisabled("%s", worker_->busy() ? "computing a distance field..." : fieldStatus_.c_str());
   ImGui::PushTextWrapPos(0);
   ImGui::TextDisabled("%s", glDescription_.c_str());
   for (const std::string& m : messages_) ImGui::TextColored(ImVec4(1, 0.5f, 0.4f, 1), "%s", m.c_str());
@@ -1077,15 +1098,19 @@ int runDesktop(const std::vector<std::string>& args) {
     if (a == "--help" || a == "-h") {
       std::printf(
           "usage: anatomy-tutor [desktop] [--dataset D] [--ui-script FILE.json [--screenshot OUT.png]] [--size WxH]\n"
+          "                             [--render-scale S]\n"
           "  Opens the desktop app on the default course (explore: hover to highlight, click to select).\n"
           "  --dataset    phantom, phantom:N or a volume file (default: the default course's dataset)\n"
           "  --ui-script  replay {\"actions\": [...]} (select, t, mode, view, hover, hover_structure, click,\n"
           "               orbit, zoom, clip, wait, wait_field, screenshot, hover_sweep, record, report)\n"
-          "  --screenshot save the window as PNG once the script has run and the view has settled\n");
+          "  --screenshot save the window as PNG once the script has run and the view has settled\n"
+          "  --size       window size in logical pixels (default 1280x720)\n"
+          "  --render-scale  resolution of the full-quality volume image, 0.1..1 (default 1; software GL: less)\n");
       return 0;
     }
     std::optional<std::string> value;
-    if (a == "--dataset" || a == "--ui-script" || a == "--screenshot" || a == "--size") {
+    if (a == "--dataset" || a == "--ui-script" || a == "--screenshot" || a == "--size" ||
+        a == "--render-scale") {
       value = next();
       if (!value) return reportError("desktop: option " + a + " needs a value", 2);
     }
@@ -1095,6 +1120,11 @@ int runDesktop(const std::vector<std::string>& args) {
       options.script = *value;
     } else if (a == "--screenshot") {
       options.screenshot = *value;
+    } else if (a == "--render-scale") {
+      char* end = nullptr;
+      options.renderScale = std::strtod(value->c_str(), &end);
+      if (*end != '\0' || !(options.renderScale >= 0.1 && options.renderScale <= 1))
+        return reportError("desktop: --render-scale must be a number in 0.1..1", 2);
     } else if (a == "--size") {
       if (std::sscanf(value->c_str(), "%dx%d", &options.width, &options.height) != 2 || options.width < 400 ||
           options.height < 300 || options.width > 8192 || options.height > 8192)

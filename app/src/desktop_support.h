@@ -31,7 +31,7 @@ Result<render::Preset> presetForStep(const render::PresetLibrary& library, const
 bool displayAvailable();
 
 // The no-display fallback of `anatomy-tutor` without arguments: renders the default lesson's first
-// views offscreen (EGL) into `outDir` as PNG files, printing one line per file. The built-in
+// three views (360×270) offscreen (EGL) into `outDir` as PNG files, printing one line per file. The built-in
 // phantom is opened at 128³ so that this stays quick on two CPU cores.
 int writeDefaultViews(const std::filesystem::path& outDir);
 
