@@ -207,7 +207,10 @@ TEST_CASE("DICOM series: a randomly rotated and renamed copy of the head slices 
   // A uniformly random rotation from a random unit quaternion.
   double q[4];
   double length = 0;
-  for (double& c : q) length += (c = gauss(rng)) * c;
+  for (double& c : q) {
+    c = gauss(rng);
+    length += c * c;
+  }
   for (double& c : q) c /= std::sqrt(length);
   const double w = q[0], x = q[1], y = q[2], z = q[3];
   Mat3 rotation;
@@ -222,15 +225,18 @@ TEST_CASE("DICOM series: a randomly rotated and renamed copy of the head slices 
   test::TempDir dir("at-dicom-oblique");
   for (int n = 1; n <= slices; ++n) {
     const std::string source = "CTHead" + std::to_string(n) + ".dcm";
-    REQUIRE(test::rewriteDicom(test::sharedData("headsq/dicom/" + source), dir / ("s" + std::to_string(names[n - 1]) + ".dcm"),
+    const std::string target = std::to_string(names[n - 1]) + "_slice.dcm";
+    REQUIRE(test::rewriteDicom(test::sharedData("headsq/dicom/" + source), dir / target,
                                [&](DcmDataset& d) {
                                  const auto p = test::positionOf(d);
                                  const Vec3 r = rotation * Vec3{p[0], p[1], p[2]};
                                  test::setPosition(d, {r[0], r[1], r[2]});
                                  const Vec3 row = rotation.column(0), column = rotation.column(1);
                                  std::string iop;
-                                 for (double v : {row[0], row[1], row[2], column[0], column[1], column[2]})
-                                   iop += (iop.empty() ? "" : "\\") + std::to_string(v);
+                                 for (double v : {row[0], row[1], row[2], column[0], column[1], column[2]}) {
+                                   if (!iop.empty()) iop.push_back('\\');
+                                   iop.append(std::to_string(v));
+                                 }
                                  d.putAndInsertString(DCM_ImageOrientationPatient, iop.c_str());
                                }));
   }
