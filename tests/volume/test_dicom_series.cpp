@@ -34,12 +34,18 @@ double fractionIn(const FloatVolume& v, float lo, float hi) {
   return double(n) / double(v.voxels.size());
 }
 
+// The JPEG 2000 series, loaded once for the tests that only read it (decoding takes about a second).
+const Result<LoadedImage>& ctDicom() {
+  static const Result<LoadedImage> loaded = loadDicomSeries(test::sharedData("totalsegmentator/ct_dicom").string());
+  return loaded;
+}
+
 }  // namespace
 
 TEST_CASE("DICOM series: the JPEG 2000 CT loads as 512x512x20 with spacing from PixelSpacing and positions") {
   if (!test::requireSharedData("DICOM series (ct_dicom)")) return;
   const fs::path folder = test::sharedData("totalsegmentator/ct_dicom");
-  auto loaded = loadDicomSeries(folder.string());
+  const auto& loaded = ctDicom();
   REQUIRE_MESSAGE(loaded, (loaded ? "" : loaded.error().message));
   const Geometry& g = loaded->image.geometry;
   CHECK(g.dims == Dims{512, 512, 20});
@@ -67,7 +73,7 @@ TEST_CASE("DICOM series: every decoded JPEG 2000 slice spans exactly its file's 
   // decoding, the rescale (intercept −1024) and the sorting by position.
   if (!test::requireSharedData("DICOM series (ct_dicom)")) return;
   const fs::path folder = test::sharedData("totalsegmentator/ct_dicom");
-  auto loaded = loadDicomSeries(folder.string());
+  const auto& loaded = ctDicom();
   REQUIRE(loaded);
   const Geometry& g = loaded->image.geometry;
   const std::size_t sliceVoxels = std::size_t(g.dims.x) * g.dims.y;
@@ -91,7 +97,7 @@ TEST_CASE("DICOM series: every decoded JPEG 2000 slice spans exactly its file's 
 
 TEST_CASE("DICOM series: the abdominal CT holds plausible Hounsfield units") {
   if (!test::requireSharedData("DICOM series (ct_dicom)")) return;
-  auto loaded = loadDicomSeries(test::sharedData("totalsegmentator/ct_dicom").string());
+  const auto& loaded = ctDicom();
   REQUIRE(loaded);
   const FloatVolume& v = loaded->image;
   const double air = fractionIn(v, -1100, -900);   // outside the body, lungs, bowel gas
@@ -344,7 +350,7 @@ std::vector<std::uint8_t> wrapInJp2(const std::vector<std::uint8_t>& codestream,
 TEST_CASE("DICOM series: JPEG 2000 frames wrapped in JP2 boxes decode like raw codestreams") {
   if (!test::requireSharedData("DICOM JP2")) return;
   const fs::path source = test::sharedData("totalsegmentator/ct_dicom");
-  auto reference = loadDicomSeries(source.string());
+  const auto& reference = ctDicom();
   REQUIRE(reference);
   test::TempDir dir("at-dicom-jp2");
   int rewritten = 0;
