@@ -324,3 +324,14 @@ TEST_CASE("DICOM bad input: a SEG frame at an absurd position is refused") {
   CHECK(loaded.error().message.rfind(seg.string() + ": ", 0) == 0);
   CHECK(loaded.error().message.find("implausibly many slices") != std::string::npos);
 }
+
+TEST_CASE("DICOM bad input: a JPEG 2000 frame whose size disagrees with Rows/Columns is refused") {
+  if (!test::requireSharedData("DICOM JPEG 2000 size")) return;
+  test::TempDir dir("at-dicom-bad");
+  const fs::path folder = dir / "j2ksize";
+  fs::create_directory(folder);
+  const fs::path source = fs::directory_iterator(test::sharedData("totalsegmentator/ct_dicom"))->path();
+  REQUIRE(test::rewriteDicom(source, folder / "slice.dcm", [](DcmDataset& d) { d.putAndInsertUint16(DCM_Columns, 256); }));
+  const std::string message = expectSeriesError(folder, "JPEG 2000 image is 512x512 but the header says 256x512");
+  CHECK(message.find("slice.dcm") != std::string::npos);
+}
