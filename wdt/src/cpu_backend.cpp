@@ -382,7 +382,10 @@ Result<WdtResult> runCpuBackend(const WdtProblem& problem, const WdtControl& con
 
   int hw = int(std::max(1u, std::thread::hardware_concurrency()));
   if (const char* env = std::getenv("AT_WDT_THREADS")) hw = std::max(1, std::atoi(env));  // benchmarks
-  const int threads = std::min(hw, std::max(1, std::max(d.y, d.z)));
+  // Threads meet at a barrier after every plane; below ~32K voxels per plane (128² and smaller)
+  // a plane's work is shorter than a barrier round trip and one thread is faster.
+  const std::size_t planeVoxels = d.count() / std::size_t(std::max({d.x, d.y, d.z}));
+  const int threads = int(std::min<std::size_t>(std::size_t(hw), std::max<std::size_t>(1, planeVoxels / 32768)));
   Run run(problem, control, threads);
   run.dims = d;
   run.base = problem.params.baseCost;
