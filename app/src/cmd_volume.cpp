@@ -71,6 +71,7 @@ std::vector<std::size_t> labelHistogram(const LabelMap& labels) {
 }
 
 std::string formatDouble(double v, int decimals = 3) {
+  if (std::abs(v) < 0.5 * std::pow(10.0, -decimals)) v = 0;  // no "-0.000"
   char buf[64];
   std::snprintf(buf, sizeof buf, "%.*f", decimals, v);
   return buf;
