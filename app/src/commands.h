@@ -27,4 +27,7 @@ int runStructures(const Argv& args);
 int runInfo(const Argv& args);
 int runSlice(const Argv& args);
 
+// Weighted distance transform (cmd_wdt.cpp)
+int runWdt(const Argv& args);
+
 }  // namespace at::app
