@@ -17,6 +17,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <limits>
+#include <memory>
 #include <string>
 #include <thread>
 #include <type_traits>
@@ -210,8 +211,8 @@ struct Run {
   float base = 0;
   Dims dims;
   std::vector<float> d;          // L1: x contiguous
-  std::vector<float> dT;         // L2: y contiguous (x sweeps)
-  std::vector<std::uint8_t> qT;  // density bytes in L2
+  std::unique_ptr<float[]> dT;         // L2: y contiguous (x sweeps); first touched by the team
+  std::unique_ptr<std::uint8_t[]> qT;  // density bytes in L2
   std::vector<float> infRow;
   std::vector<std::uint8_t> zeroRow;
   SweepGeometry x, y, z;
@@ -332,20 +333,26 @@ void worker(Run& run, int tid) {
   const int zs0 = int(std::int64_t(d.z) * tid / run.threads), zs1 = int(std::int64_t(d.z) * (tid + 1) / run.threads);
   const std::uint8_t* q = run.problem.density.data();
   const int planned = run.problem.params.converge ? run.problem.params.maxPasses : run.problem.params.passes;
+  {
+    const std::size_t slice = std::size_t(d.x) * d.y;
+    const std::uint8_t* seeds = run.problem.seeds.data();
+    for (std::size_t i = slice * zs0; i < slice * zs1; ++i) run.d[i] = seeds[i] ? 0.0f : kInf;
+    transposeSlices(q, run.qT.get(), d.x, d.y, zs0, zs1);
+  }
   for (int pass = 0; pass < planned; ++pass) {
     const auto t0 = std::chrono::steady_clock::now();
     run.changedBy[tid] = 0;
     if (checkCancel(run, tid)) break;
-    transposeSlices(run.d.data(), run.dT.data(), d.x, d.y, zs0, zs1);
+    transposeSlices(run.d.data(), run.dT.get(), d.x, d.y, zs0, zs1);
     run.barrier.wait();
-    sweep(run, run.x, run.dT.data(), run.qT.data(), +1, tid);
+    sweep(run, run.x, run.dT.get(), run.qT.get(), +1, tid);
     if (checkCancel(run, tid)) {
-      transposeSlices(run.dT.data(), run.d.data(), d.y, d.x, zs0, zs1);  // keep the partial x+ result
+      transposeSlices(run.dT.get(), run.d.data(), d.y, d.x, zs0, zs1);  // keep the partial x+ result
       run.barrier.wait();
       break;
     }
-    sweep(run, run.x, run.dT.data(), run.qT.data(), -1, tid);
-    transposeSlices(run.dT.data(), run.d.data(), d.y, d.x, zs0, zs1);
+    sweep(run, run.x, run.dT.get(), run.qT.get(), -1, tid);
+    transposeSlices(run.dT.get(), run.d.data(), d.y, d.x, zs0, zs1);
     if (checkCancel(run, tid)) break;
     sweep(run, run.y, run.d.data(), q, +1, tid);
     if (checkCancel(run, tid)) break;
@@ -391,10 +398,8 @@ Result<WdtResult> runCpuBackend(const WdtProblem& problem, const WdtControl& con
   run.base = problem.params.baseCost;
   run.row = rowFunction(wdt::costKernel(problem.params));
   run.d.resize(d.count());
-  for (std::size_t i = 0; i < d.count(); ++i) run.d[i] = problem.seeds[i] ? 0.0f : kInf;
-  run.dT.resize(d.count());
-  run.qT.resize(d.count());
-  transposeSlices(problem.density.data(), run.qT.data(), d.x, d.y, 0, d.z);
+  run.dT.reset(new float[d.count()]);
+  run.qT.reset(new std::uint8_t[d.count()]);
   const int longest = std::max({d.x, d.y, d.z});
   run.infRow.assign(std::size_t(longest), kInf);
   run.zeroRow.assign(std::size_t(longest), 0);
