@@ -24,6 +24,7 @@
 #include <immintrin.h>
 #include <vector>
 
+#include "huge_pages.h"
 #include "step_cost.h"
 #include "wdt/problem.h"
 #include "wdt/stencil.h"
@@ -397,9 +398,9 @@ Result<WdtResult> runCpuBackend(const WdtProblem& problem, const WdtControl& con
   run.dims = d;
   run.base = problem.params.baseCost;
   run.row = rowFunction(wdt::costKernel(problem.params));
-  run.d.resize(d.count());
-  run.dT.reset(new float[d.count()]);
-  run.qT.reset(new std::uint8_t[d.count()]);
+  wdt::resizeOnHugePages(run.d, d.count());
+  run.dT.reset(wdt::newOnHugePages<float>(d.count()));
+  run.qT.reset(wdt::newOnHugePages<std::uint8_t>(d.count()));
   const int longest = std::max({d.x, d.y, d.z});
   run.infRow.assign(std::size_t(longest), kInf);
   run.zeroRow.assign(std::size_t(longest), 0);

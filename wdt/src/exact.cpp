@@ -86,8 +86,8 @@ void dijkstra(const WdtProblem& problem, Queue& queue, std::vector<float>& dist)
     const bool interior = x > 0 && y > 0 && z > 0 && x + 1 < d.x && y + 1 < d.y && z + 1 < d.z;
     for (const Offset& s : steps) {
       if (!interior && !d.contains(x + s.dx, y + s.dy, z + s.dz)) continue;
+      // No done[v] test: a finalised v has dist[v] <= du < c, so the comparison below rejects it.
       const std::uint32_t v = std::uint32_t(std::int64_t(u) + s.delta);
-      if (done[v]) continue;
       const float c = du + wdt::stepCost<K>(qu, q[v], s.len, base);
       if (c < dist[v]) {
         dist[v] = c;

@@ -4,6 +4,7 @@
 #include <thread>
 #include <vector>
 
+#include "huge_pages.h"
 #include "wdt/problem.h"
 #include "wdt/stencil.h"
 
@@ -55,8 +56,8 @@ Result<WdtProblem> prepareWdtProblem(const Volume& volume, const Mask& seeds, co
   const int f = params.downsample;
   if (f == 1) {
     problem.grid = volume.geometry;
-    problem.density.resize(d.count());
-    problem.seeds.resize(d.count());
+    wdt::resizeOnHugePages(problem.density, d.count());
+    wdt::resizeOnHugePages(problem.seeds, d.count());
     const std::size_t slice = std::size_t(d.x) * d.y;
     parallelSlices(d.z, [&](int k0, int k1) {
       for (std::size_t i = slice * k0; i < slice * k1; ++i) {
