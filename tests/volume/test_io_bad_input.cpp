@@ -340,3 +340,50 @@ TEST_CASE("toLabelMap refuses negative, fractional and too large label values, n
   REQUIRE(labels);
   CHECK(labels->at(7, 3, 2) == std::uint16_t(loaded.image.at(7, 3, 2)));
 }
+
+TEST_CASE("randomly corrupted NIfTI and NRRD files load or fail with a one-line error, never crash") {
+  std::mt19937_64 rng(freshSeed("loader corruption fuzz"));
+  TempDir dir;
+  const std::string nrrdRaw = (dir / "raw.nrrd").string();
+  writeBytes(nrrdRaw, "NRRD0004\ntype: short\ndimension: 3\nsizes: 4 3 2\nspace: left-posterior-superior\n"
+                      "space directions: (1,0,0) (0,1,0) (0,0,2.5)\nendian: little\nencoding: raw\n"
+                      "space origin: (1,2,3)\nSegment0_Name:=a\nSegment0_LabelValue:=1\n\n" + std::string(48, '\2'));
+  const std::string sources[] = {validNifti(dir, "base.nii"), validNifti(dir, "base.nii.gz"),
+                                 validNrrd(dir, "base.nrrd"), nrrdRaw};
+  const char* digits = "0123456789-. ():%x\n";
+  int failures = 0, loads = 0;
+  for (const std::string& source : sources) {
+    const std::string original = readBytes(source);
+    const bool nrrd = source.find(".nrrd") != std::string::npos;
+    const std::size_t headerEnd = nrrd ? original.find("\n\n") + 2 : (source.find(".gz") != std::string::npos ? original.size() : 352);
+    const std::string target = (dir / ("fuzz" + source.substr(source.find('.')))).string();
+    for (int round = 0; round < 150; ++round) {
+      std::string bytes = original;
+      std::uniform_int_distribution<int> mutations(1, 6);
+      const int count = mutations(rng);
+      for (int m = 0; m < count; ++m) {
+        std::uniform_int_distribution<std::size_t> where(0, headerEnd - 1);
+        const std::size_t at = where(rng);
+        if (nrrd)
+          bytes[at] = digits[std::uniform_int_distribution<int>(0, int(std::strlen(digits)) - 1)(rng)];
+        else
+          bytes[at] = char(std::uniform_int_distribution<int>(0, 255)(rng));
+      }
+      if (round % 10 == 0) bytes.resize(std::uniform_int_distribution<std::size_t>(0, bytes.size())(rng));
+      writeBytes(target, bytes);
+      ImageLoadOptions options;
+      options.maxBytes = std::size_t(64) << 20;
+      auto loaded = nrrd ? loadNrrd(target, options) : loadNifti(target, options);
+      if (loaded) {
+        ++loads;
+        CHECK(loaded->image.voxels.size() == loaded->image.geometry.dims.count());
+        continue;
+      }
+      ++failures;
+      CHECK(loaded.error().message.rfind(target, 0) == 0);
+      CHECK(loaded.error().message.find('\n') == std::string::npos);
+    }
+  }
+  MESSAGE("corrupted files: " << failures << " refused, " << loads << " still loaded");
+  CHECK(failures > 0);
+}

@@ -53,7 +53,7 @@ TEST_CASE("seg_small.nii.gz holds 41 labels on the CT grid and its liver voxels 
   std::set<std::uint16_t> distinct(labels->voxels.begin(), labels->voxels.end());
   distinct.erase(0);
   CHECK(distinct.size() == 41);
-  // Liver (5) and vertebrae L1 (31 in labels.json's numbering is vertebrae_L1 region): check the liver.
+  // Liver is label 5 in labels.json; its mean HU must be that of soft tissue.
   double sum = 0;
   std::size_t count = 0;
   for (std::size_t n = 0; n < labels->voxels.size(); ++n)
@@ -65,6 +65,23 @@ TEST_CASE("seg_small.nii.gz holds 41 labels on the CT grid and its liver voxels 
   const double mean = sum / double(count);
   CHECK(mean > 0);
   CHECK(mean < 150);
+}
+
+TEST_CASE("seg_dicom.nii.gz reads its RAS affine as an LAS grid: rows and slices run as the README says") {
+  if (!requireSharedData("seg_dicom.nii.gz")) return;
+  const std::string path = sharedData("totalsegmentator/seg_dicom.nii.gz").string();
+  auto loaded = loadNifti(path);
+  REQUIRE_MESSAGE(loaded, loaded.error().message);
+  const Geometry& g = loaded->image.geometry;
+  CHECK(g.dims == Dims{512, 512, 20});
+  CHECK(maxAbsDifference(g.spacingMm, Vec3{0.9765625, 0.9765625, 2.0}) < 1e-6);
+  // sform diag(−0.977, 0.977, 2) in RAS: i → patient left, j → anterior, k → superior.
+  CHECK(g.orientationCode() == "LAS");
+  CHECK(maxAbsDifference(g.originMm, Vec3{-249.51171875, 61.51171875, -804.5}) < 1e-4);
+  auto labels = toLabelMap(*loaded, path);
+  REQUIRE(labels);
+  std::set<std::uint16_t> distinct(labels->voxels.begin(), labels->voxels.end());
+  CHECK(distinct.size() == 32);  // 31 structures and background
 }
 
 TEST_CASE("a float image on a random oblique grid round-trips through .nii and .nii.gz") {
@@ -192,11 +209,35 @@ TEST_CASE("every supported NIfTI datatype loads with scl_slope and scl_inter app
           default: std::memcpy(raw.data.data() + n * width, &stored[n], width); break;  // little endian
         }
       }
-      const auto path = dir / ("t" + std::to_string(version) + std::string(toString(c.kind)) + ".nii");
+      std::string name = "t";
+      name += std::to_string(version);
+      name += toString(c.kind);
+      name += ".nii";
+      const auto path = dir / name;
       writeBytes(path, raw.bytes());
       auto loaded = loadNifti(path.string());
       REQUIRE_MESSAGE(loaded, loaded.error().message);
       CHECK((loaded->storedKind == c.kind));
       for (std::size_t n = 0; n < 8; ++n) CHECK(loaded->image.voxels[n] == float(stored[n] * 2 - 3));
     }
+}
+
+TEST_CASE("a degenerate sform falls back to a valid qform, with a note") {
+  TempDir dir;
+  RawNifti raw;
+  raw.data.assign(16, '\0');
+  raw.sformCode = 1;
+  raw.srow[0][0] = raw.srow[1][1] = raw.srow[2][2] = 0;  // all-zero sform
+  raw.qformCode = 1;
+  raw.pixdim[0] = 2;
+  raw.pixdim[1] = 3;
+  raw.pixdim[2] = 4;
+  writeBytes(dir / "fallback.nii", raw.bytes());
+  auto loaded = loadNifti((dir / "fallback.nii").string());
+  REQUIRE_MESSAGE(loaded, loaded.error().message);
+  CHECK(maxAbsDifference(loaded->image.geometry.spacingMm, Vec3{2, 3, 4}) < 1e-9);
+  CHECK(loaded->image.geometry.orientationCode() == "RAS");
+  bool noted = false;
+  for (const auto& note : loaded->notes) noted |= note.find("sform unusable") != std::string::npos;
+  CHECK(noted);
 }

@@ -72,6 +72,34 @@ long long gzReadFully(gzFile_s* file, void* buffer, std::size_t size) {
   return (long long)done;
 }
 
+bool kindOf(int datatype, ScalarKind& kind);
+
+std::uint16_t readU16(const unsigned char* p, bool swap) {
+  std::uint16_t v;
+  std::memcpy(&v, p, 2);
+  if (swap) v = std::uint16_t((v >> 8) | (v << 8));
+  return v;
+}
+
+std::int64_t readI64(const unsigned char* p, bool swap) {
+  std::uint64_t v;
+  std::memcpy(&v, p, 8);
+  if (swap) v = __builtin_bswap64(v);
+  return std::int64_t(v);
+}
+
+// Checks dim[] and datatype before niftilib sees them (it prints to stderr about bad values).
+Status checkDimsAndType(const std::string& path, const std::int64_t dim[8], int datatype) {
+  if (dim[0] < 1 || dim[0] > 7) return fail(path + ": dim[0] is " + std::to_string(dim[0]) + ", not 1..7");
+  for (int d = 1; d <= dim[0]; ++d)
+    if (dim[d] < 1) return fail(path + ": dim[" + std::to_string(d) + "] is " + std::to_string(dim[d]) + ", not positive");
+  ScalarKind kind;
+  if (!kindOf(datatype, kind))
+    return fail(path + ": unsupported NIfTI datatype " + std::string(nifti_datatype_string(datatype)) + " (code " +
+                std::to_string(datatype) + "; supported: int8, uint8, int16, uint16, int32, uint32, float32, float64)");
+  return {};
+}
+
 struct NiftiHeader {
   NiftiImagePtr nim;
   double pixdim[3] = {0, 0, 0};  // as stored: niftilib replaces zero pixdims with 1
@@ -98,6 +126,10 @@ Result<NiftiHeader> readNiftiHeader(const std::string& path, gzFile_s* file) {
     }
     if (std::memcmp(header + 344, "n+1\0", 4) != 0)
       return fail(path + ": not a single-file NIfTI-1 image (magic at byte 344 is not \"n+1\")");
+    std::int64_t dim[8];
+    for (int d = 0; d < 8; ++d) dim[d] = std::int16_t(readU16(header + 40 + 2 * d, swap));
+    if (auto ok = checkDimsAndType(path, dim, std::int16_t(readU16(header + 70, swap))); !ok)
+      return tl::unexpected(ok.error());
     nifti_1_header h;
     std::memcpy(&h, header, sizeof h);
     nim = nifti_convert_n1hdr2nim(h, path.c_str());
@@ -111,6 +143,10 @@ Result<NiftiHeader> readNiftiHeader(const std::string& path, gzFile_s* file) {
       if (swap) bits = __builtin_bswap64(bits);
       std::memcpy(&result.pixdim[a], &bits, 8);
     }
+    std::int64_t dim[8];
+    for (int d = 0; d < 8; ++d) dim[d] = readI64(header + 16 + 8 * d, swap);
+    if (auto ok = checkDimsAndType(path, dim, std::int16_t(readU16(header + 12, swap))); !ok)
+      return tl::unexpected(ok.error());
     nifti_2_header h;
     std::memcpy(&h, header, sizeof h);
     nim = nifti_convert_n2hdr2nim(h, path.c_str());
@@ -199,10 +235,13 @@ Result<LoadedImage> loadNifti(const std::string& path, const ImageLoadOptions& o
                 " (supported: int8, uint8, int16, uint16, int32, uint32, float32, float64)");
 
   Result<Geometry> geometry;
-  if (nim->sform_code > 0) {
-    geometry = geometryFromAffine(path, nim->sto_xyz, dims, "sform");
-  } else {
-    // qform, or the plain pixdim scaling niftilib derives when qform_code is 0.
+  std::string geometryNote = "geometry from the sform";
+  if (nim->sform_code > 0) geometry = geometryFromAffine(path, nim->sto_xyz, dims, "sform");
+  if (nim->sform_code <= 0 || (!geometry && nim->qform_code > 0)) {
+    // qform, or the plain pixdim scaling niftilib derives when qform_code is 0; also the fallback
+    // when a writer set sform_code but left the sform degenerate.
+    geometryNote = geometry || nim->sform_code <= 0 ? "geometry from the qform"
+                                                    : "sform unusable (" + geometry.error().message + "); geometry from the qform";
     const double* d = header->pixdim;
     for (int a = 0; a < 3; ++a)
       if (!(d[a] > 0) || !std::isfinite(d[a]))
@@ -256,7 +295,7 @@ Result<LoadedImage> loadNifti(const std::string& path, const ImageLoadOptions& o
     case ScalarKind::Float32: convertVoxels<float>(data, out, slope, inter); break;
     case ScalarKind::Float64: convertVoxels<double>(data, out, slope, inter); break;
   }
-  loaded.notes.push_back(std::string("geometry from the ") + (nim->sform_code > 0 ? "sform" : "qform"));
+  loaded.notes.push_back(geometryNote);
   return loaded;
 }
 

@@ -11,6 +11,8 @@
 #include <cctype>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -493,6 +495,9 @@ Result<std::vector<std::string>> dataFiles(const std::string& path, const NrrdHe
   if (words.size() >= 4 && words.size() <= 5 && parseLong(words[1], first) && parseLong(words[2], lastValue) &&
       parseLong(words[3], step)) {
     if (step == 0) return fail(path + ": 'data file' step is 0");
+    constexpr long long kBound = 1000000000;
+    if (std::llabs(first) > kBound || std::llabs(lastValue) > kBound || std::llabs(step) > kBound)
+      return fail(path + ": 'data file' numbers " + words[1] + " " + words[2] + " " + words[3] + " are out of range");
     if ((lastValue - first) / step < 0)
       return fail(path + ": 'data file' range " + words[1] + ".." + words[2] + " with step " + words[3] + " is empty");
     const long long count = (lastValue - first) / step + 1;
@@ -520,19 +525,20 @@ struct InflateStream {
 };
 
 // Decompresses gzip (or zlib) data, possibly several members, stopping once `limit` bytes are out.
+// The output grows as data arrive, so a header's claims cannot make it allocate in advance.
 Result<std::string> gunzip(const std::string& what, const char* data, std::size_t size, std::size_t limit) {
   InflateStream stream;
   if (!stream.ready) return fail(what + ": zlib could not start decompressing");
-  std::string out;
-  out.resize(limit);
   z_stream& zs = stream.zs;
   zs.next_in = reinterpret_cast<Bytef*>(const_cast<char*>(data));
   std::size_t inLeft = size;
+  std::string out;
   std::size_t produced = 0;
   while (true) {
+    if (produced == out.size()) out.resize(std::min(limit, std::max<std::size_t>(out.size() * 2, 1 << 16)));
     const uInt inChunk = uInt(std::min<std::size_t>(inLeft, 1u << 30));
     zs.avail_in = inChunk;
-    const std::size_t outRoom = std::min<std::size_t>(limit - produced, 1u << 30);
+    const std::size_t outRoom = std::min<std::size_t>(out.size() - produced, 1u << 30);
     zs.next_out = reinterpret_cast<Bytef*>(out.data() + produced);
     zs.avail_out = uInt(outRoom);
     const int rc = inflate(&zs, Z_NO_FLUSH);
@@ -546,6 +552,7 @@ Result<std::string> gunzip(const std::string& what, const char* data, std::size_
     }
     if (produced == limit) break;
     if (rc == Z_OK && !(inLeft == 0 && zs.avail_out != 0)) continue;
+    if (rc == Z_BUF_ERROR && zs.avail_out == 0) continue;  // the output buffer was full: grow it
     if (rc == Z_OK || rc == Z_BUF_ERROR) return fail(what + ": the gzip data ends early (the file is truncated)");
     return fail(what + ": the gzip data is corrupt (" + std::string(zs.msg ? zs.msg : "zlib error") + ")");
   }
