@@ -388,12 +388,13 @@ Result<WdtResult> runCpuBackend(const WdtProblem& problem, const WdtControl& con
     return fail("WDT CPU backend: problem arrays do not match the grid " + d.toString());
   if (auto ok = validateWdtParams(problem.params); !ok) return tl::unexpected(ok.error());
 
-  int hw = int(std::max(1u, std::thread::hardware_concurrency()));
-  if (const char* env = std::getenv("AT_WDT_THREADS")) hw = std::max(1, std::atoi(env));  // benchmarks
+  const int hw = int(std::max(1u, std::thread::hardware_concurrency()));
   // Threads meet at a barrier after every plane; below ~32K voxels per plane (128² and smaller)
   // a plane's work is shorter than a barrier round trip and one thread is faster.
   const std::size_t planeVoxels = d.count() / std::size_t(std::max({d.x, d.y, d.z}));
-  const int threads = int(std::min<std::size_t>(std::size_t(hw), std::max<std::size_t>(1, planeVoxels / 32768)));
+  int threads = int(std::min<std::size_t>(std::size_t(hw), std::max<std::size_t>(1, planeVoxels / 32768)));
+  // AT_WDT_THREADS=N forces N threads (benchmarks, and tests of the multi-threaded schedule).
+  if (const char* env = std::getenv("AT_WDT_THREADS")) threads = std::clamp(std::atoi(env), 1, 256);
   Run run(problem, control, threads);
   run.dims = d;
   run.base = problem.params.baseCost;
