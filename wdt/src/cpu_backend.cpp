@@ -165,8 +165,9 @@ RowFn rowFunction(CostKernel k) {
 // [SECTION] Team
 // ─────────────────────────────────────────────────────────────────────────────────────────────
 
-// Sense-counting barrier. Spins briefly (planes take tens of microseconds), then yields: the
-// machine may be shared and a spinning waiter must not starve the thread it waits for.
+// Generation-counting barrier. Spins briefly (an idle machine's planes take tens of
+// microseconds), then sleeps on the generation word (futex): on a loaded machine the partner may
+// be descheduled, and a sleeping waiter hands it the core instead of competing for it.
 class SpinBarrier {
  public:
   explicit SpinBarrier(int n) : n_(n) {}
@@ -176,15 +177,14 @@ class SpinBarrier {
     if (count_.fetch_add(1, std::memory_order_acq_rel) == n_ - 1) {
       count_.store(0, std::memory_order_relaxed);
       generation_.fetch_add(1, std::memory_order_acq_rel);
+      generation_.notify_all();
       return;
     }
-    for (int spin = 0; generation_.load(std::memory_order_acquire) == gen; ++spin) {
-      if (spin < 4000) {
-        __builtin_ia32_pause();
-      } else {
-        std::this_thread::yield();
-      }
+    for (int spin = 0; spin < 2000; ++spin) {
+      if (generation_.load(std::memory_order_acquire) != gen) return;
+      __builtin_ia32_pause();
     }
+    while (generation_.load(std::memory_order_acquire) == gen) generation_.wait(gen, std::memory_order_acquire);
   }
 
  private:
