@@ -71,6 +71,7 @@ std::vector<std::size_t> labelHistogram(const LabelMap& labels) {
 }
 
 std::string formatDouble(double v, int decimals = 3) {
+  if (std::abs(v) < 0.5 * std::pow(10.0, -decimals)) v = 0;  // no "-0.000"
   char buf[64];
   std::snprintf(buf, sizeof buf, "%.*f", decimals, v);
   return buf;
@@ -271,7 +272,8 @@ int runInfo(const Argv& argv) {
   // --labels (resampled onto this image's grid) otherwise.
   struct LabelRow {
     long value;
-    std::string name;
+    std::string id;    // the structure id (files that only name labels: the name as written)
+    std::string name;  // display name
     std::size_t voxels;
   };
   std::vector<LabelRow> labels;
@@ -285,7 +287,8 @@ int runInfo(const Argv& argv) {
     auto ds = openDatasetFiles(files);
     if (!ds) return reportError("info: " + ds.error().message);
     const std::vector<std::size_t> counts = labelHistogram(ds->labels);
-    for (const Structure& s : ds->structures) labels.push_back({long(s.label), s.displayName, counts[s.label]});
+    for (const Structure& s : ds->structures)
+      labels.push_back({long(s.label), s.id, s.displayName, counts[s.label]});
   } else if (labelMap) {
     std::map<long, std::string> names;
     for (const SegmentInfo& s : loaded->segments) names[long(s.label)] = s.name;
@@ -297,7 +300,8 @@ int runInfo(const Argv& argv) {
     for (const auto& [value, count] : values.counts) {
       if (value == 0) continue;
       auto it = names.find(value);
-      labels.push_back({value, it != names.end() ? it->second : "label_" + std::to_string(value), count});
+      const std::string name = it != names.end() ? it->second : "label_" + std::to_string(value);
+      labels.push_back({value, name, name, count});
     }
   }
 
@@ -309,7 +313,8 @@ int runInfo(const Argv& argv) {
     out["value_range"] = {values.min, values.max};
     out["notes"] = loaded->notes;
     json list = json::array();
-    for (const auto& l : labels) list.push_back({{"label", l.value}, {"name", l.name}, {"voxels", l.voxels}});
+    for (const auto& l : labels)
+      list.push_back({{"label", l.value}, {"id", l.id}, {"name", l.name}, {"voxels", l.voxels}});
     out["labels"] = list;
     std::printf("%s\n", out.dump().c_str());
     return 0;
@@ -323,7 +328,12 @@ int runInfo(const Argv& argv) {
   for (const std::string& note : loaded->notes) std::printf("note:        %s\n", note.c_str());
   if (!labels.empty()) {
     std::printf("labels:      %zu\n", labels.size());
-    for (const auto& l : labels) std::printf("  %5ld  %-40s %10zu voxels\n", l.value, l.name.c_str(), l.voxels);
+    for (const auto& l : labels) {
+      if (l.id == l.name)
+        std::printf("  %5ld  %-64s %10zu voxels\n", l.value, l.name.c_str(), l.voxels);
+      else
+        std::printf("  %5ld  %-31s  %-31s %10zu voxels\n", l.value, l.id.c_str(), l.name.c_str(), l.voxels);
+    }
   }
   return 0;
 }

@@ -73,6 +73,7 @@ TEST_CASE("CourseJson_RoundTripsThroughCourseToJson") {
 
 TEST_CASE("CourseJson_BadInputsAreErrorsNamingTheField") {
   CHECK(errorOf("{").find("bad.json: not valid JSON") == 0);
+  CHECK(errorOf("[1]") == "bad.json: the document: must be an object");
   CHECK(errorOf(R"({"schema": 2, "id": "c"})").find("schema: unsupported version 2") != std::string::npos);
   CHECK(errorOf(R"({"id": "c"})").find("schema: missing") != std::string::npos);
   CHECK(errorOf(minimalCourse("[]")).find("lessons: must be a non-empty array") != std::string::npos);

@@ -272,3 +272,66 @@ TEST_CASE("DICOM bad input: a truncated DICOM SEG is reported by name") {
     CHECK(loaded.error().message.find('\n') == std::string::npos);
   }
 }
+
+TEST_CASE("DICOM bad input: a series larger than the memory limit is refused before decoding") {
+  if (!test::requireSharedData("DICOM memory limit")) return;
+  ImageLoadOptions options;
+  options.maxBytes = 64 * 64 * 4 * 10;  // ten slices of the 93
+  const std::string folder = test::sharedData("headsq/dicom").string();
+  auto loaded = loadDicomSeries(folder, options);
+  REQUIRE(!loaded);
+  INFO(loaded.error().message);
+  CHECK(loaded.error().message.rfind(folder + ": ", 0) == 0);
+  CHECK(loaded.error().message.find("64x64x93") != std::string::npos);
+  CHECK(loaded.error().message.find("memory limit") != std::string::npos);
+  options.maxBytes = 64 * 64 * 4 * 93;
+  CHECK(loadDicomSeries(folder, options));
+}
+
+TEST_CASE("DICOM bad input: a SEG whose frames lie kilometres apart is refused, not allocated") {
+  if (!test::requireSharedData("DICOM SEG memory limit")) return;
+  test::TempDir dir("at-dicom-bad");
+  const fs::path seg = dir / "spread.dcm";
+  int frame = 0;
+  // Frame 3 moves 10 km up: 1 mm slices would need 512×512×10⁷ voxels.
+  REQUIRE(test::rewriteDicom(test::sharedData("dcmqi/liver.dcm"), seg, [&](DcmDataset& d) {
+    test::editFramePositions(d, [&](std::array<double, 3> p) {
+      if (++frame == 3) p[2] += 1e7;
+      return p;
+    });
+  }));
+  auto loaded = loadDicomSeg(seg.string());
+  REQUIRE(!loaded);
+  INFO(loaded.error().message);
+  CHECK(loaded.error().message.rfind(seg.string() + ": ", 0) == 0);
+  CHECK(loaded.error().message.find("memory limit") != std::string::npos);
+}
+
+TEST_CASE("DICOM bad input: a SEG frame at an absurd position is refused") {
+  if (!test::requireSharedData("DICOM SEG positions")) return;
+  test::TempDir dir("at-dicom-bad");
+  const fs::path seg = dir / "absurd.dcm";
+  int frame = 0;
+  REQUIRE(test::rewriteDicom(test::sharedData("dcmqi/liver.dcm"), seg, [&](DcmDataset& d) {
+    test::editFramePositions(d, [&](std::array<double, 3> p) {
+      if (++frame == 2) p[2] += 1e15;
+      return p;
+    });
+  }));
+  auto loaded = loadDicomSeg(seg.string());
+  REQUIRE(!loaded);
+  INFO(loaded.error().message);
+  CHECK(loaded.error().message.rfind(seg.string() + ": ", 0) == 0);
+  CHECK(loaded.error().message.find("implausibly many slices") != std::string::npos);
+}
+
+TEST_CASE("DICOM bad input: a JPEG 2000 frame whose size disagrees with Rows/Columns is refused") {
+  if (!test::requireSharedData("DICOM JPEG 2000 size")) return;
+  test::TempDir dir("at-dicom-bad");
+  const fs::path folder = dir / "j2ksize";
+  fs::create_directory(folder);
+  const fs::path source = fs::directory_iterator(test::sharedData("totalsegmentator/ct_dicom"))->path();
+  REQUIRE(test::rewriteDicom(source, folder / "slice.dcm", [](DcmDataset& d) { d.putAndInsertUint16(DCM_Columns, 256); }));
+  const std::string message = expectSeriesError(folder, "JPEG 2000 image is 512x512 but the header says 256x512");
+  CHECK(message.find("slice.dcm") != std::string::npos);
+}

@@ -34,12 +34,18 @@ double fractionIn(const FloatVolume& v, float lo, float hi) {
   return double(n) / double(v.voxels.size());
 }
 
+// The JPEG 2000 series, loaded once for the tests that only read it (decoding takes about a second).
+const Result<LoadedImage>& ctDicom() {
+  static const Result<LoadedImage> loaded = loadDicomSeries(test::sharedData("totalsegmentator/ct_dicom").string());
+  return loaded;
+}
+
 }  // namespace
 
 TEST_CASE("DICOM series: the JPEG 2000 CT loads as 512x512x20 with spacing from PixelSpacing and positions") {
   if (!test::requireSharedData("DICOM series (ct_dicom)")) return;
   const fs::path folder = test::sharedData("totalsegmentator/ct_dicom");
-  auto loaded = loadDicomSeries(folder.string());
+  const auto& loaded = ctDicom();
   REQUIRE_MESSAGE(loaded, (loaded ? "" : loaded.error().message));
   const Geometry& g = loaded->image.geometry;
   CHECK(g.dims == Dims{512, 512, 20});
@@ -67,7 +73,7 @@ TEST_CASE("DICOM series: every decoded JPEG 2000 slice spans exactly its file's 
   // decoding, the rescale (intercept −1024) and the sorting by position.
   if (!test::requireSharedData("DICOM series (ct_dicom)")) return;
   const fs::path folder = test::sharedData("totalsegmentator/ct_dicom");
-  auto loaded = loadDicomSeries(folder.string());
+  const auto& loaded = ctDicom();
   REQUIRE(loaded);
   const Geometry& g = loaded->image.geometry;
   const std::size_t sliceVoxels = std::size_t(g.dims.x) * g.dims.y;
@@ -91,7 +97,7 @@ TEST_CASE("DICOM series: every decoded JPEG 2000 slice spans exactly its file's 
 
 TEST_CASE("DICOM series: the abdominal CT holds plausible Hounsfield units") {
   if (!test::requireSharedData("DICOM series (ct_dicom)")) return;
-  auto loaded = loadDicomSeries(test::sharedData("totalsegmentator/ct_dicom").string());
+  const auto& loaded = ctDicom();
   REQUIRE(loaded);
   const FloatVolume& v = loaded->image;
   const double air = fractionIn(v, -1100, -900);   // outside the body, lungs, bowel gas
@@ -207,7 +213,10 @@ TEST_CASE("DICOM series: a randomly rotated and renamed copy of the head slices 
   // A uniformly random rotation from a random unit quaternion.
   double q[4];
   double length = 0;
-  for (double& c : q) length += (c = gauss(rng)) * c;
+  for (double& c : q) {
+    c = gauss(rng);
+    length += c * c;
+  }
   for (double& c : q) c /= std::sqrt(length);
   const double w = q[0], x = q[1], y = q[2], z = q[3];
   Mat3 rotation;
@@ -222,15 +231,18 @@ TEST_CASE("DICOM series: a randomly rotated and renamed copy of the head slices 
   test::TempDir dir("at-dicom-oblique");
   for (int n = 1; n <= slices; ++n) {
     const std::string source = "CTHead" + std::to_string(n) + ".dcm";
-    REQUIRE(test::rewriteDicom(test::sharedData("headsq/dicom/" + source), dir / ("s" + std::to_string(names[n - 1]) + ".dcm"),
+    const std::string target = std::to_string(names[n - 1]) + "_slice.dcm";
+    REQUIRE(test::rewriteDicom(test::sharedData("headsq/dicom/" + source), dir / target,
                                [&](DcmDataset& d) {
                                  const auto p = test::positionOf(d);
                                  const Vec3 r = rotation * Vec3{p[0], p[1], p[2]};
                                  test::setPosition(d, {r[0], r[1], r[2]});
                                  const Vec3 row = rotation.column(0), column = rotation.column(1);
                                  std::string iop;
-                                 for (double v : {row[0], row[1], row[2], column[0], column[1], column[2]})
-                                   iop += (iop.empty() ? "" : "\\") + std::to_string(v);
+                                 for (double v : {row[0], row[1], row[2], column[0], column[1], column[2]}) {
+                                   if (!iop.empty()) iop.push_back('\\');
+                                   iop.append(std::to_string(v));
+                                 }
                                  d.putAndInsertString(DCM_ImageOrientationPatient, iop.c_str());
                                }));
   }
@@ -338,7 +350,7 @@ std::vector<std::uint8_t> wrapInJp2(const std::vector<std::uint8_t>& codestream,
 TEST_CASE("DICOM series: JPEG 2000 frames wrapped in JP2 boxes decode like raw codestreams") {
   if (!test::requireSharedData("DICOM JP2")) return;
   const fs::path source = test::sharedData("totalsegmentator/ct_dicom");
-  auto reference = loadDicomSeries(source.string());
+  const auto& reference = ctDicom();
   REQUIRE(reference);
   test::TempDir dir("at-dicom-jp2");
   int rewritten = 0;

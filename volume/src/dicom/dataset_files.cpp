@@ -189,7 +189,7 @@ Result<Dataset> openDatasetFiles(const DatasetFiles& files) {
     }
     s.id = snakeCase(name);
     if (s.id.empty()) s.id = "label_" + std::to_string(label);
-    if (usedIds.count(s.id)) s.id += "_" + std::to_string(label);
+    if (usedIds.count(s.id)) s.id.append(1, '_').append(std::to_string(label));
     usedIds.insert(s.id);
     s.displayName = name.empty() ? "Label " + std::to_string(label) : displayNameOf(name);
     dataset.structures.push_back(std::move(s));

@@ -21,6 +21,7 @@
 #include <dcmtk/dcmseg/segdoc.h>
 #include <dcmtk/dcmseg/segment.h>
 
+#include "../io/load_limits.h"
 #include "dicom_support.h"
 #include "volume/dicom_series.h"
 
@@ -162,6 +163,9 @@ Result<LoadedImage> loadDicomSeg(const std::string& path) {
     geometry.direction.m[r][1] = stackInput.column[r];
     geometry.direction.m[r][2] = stack->normal[r];
   }
+  // Frames far apart along the normal span many empty slices: check before allocating them.
+  if (auto fits = detail::checkImageFits(path, geometry.dims, ImageLoadOptions{}); !fits)
+    return tl::unexpected(fits.error());
   loaded.image = FloatVolume(geometry, 0.0f);
 
   // Frames are bit-packed: pixel p of a frame is bit p % 8 (least significant first) of byte p / 8.

@@ -39,6 +39,7 @@
 #include <dcmtk/oflog/oflog.h>
 #include <openjpeg.h>
 
+#include "../io/load_limits.h"
 #include "dicom_support.h"
 
 namespace fs = std::filesystem;
@@ -550,11 +551,7 @@ Result<LoadedImage> loadDicomSeries(const std::string& folder, const ImageLoadOp
                            " mm from ImagePositionPatient (SliceThickness says " + formatNumber(ref.sliceThickness) +
                            " mm)");
 
-  const std::size_t limit = options.maxBytes ? options.maxBytes : availableImageBytes();
-  const std::size_t bytes = geometry.dims.count() * sizeof(float);
-  if (bytes > limit)
-    return error("series of " + geometry.dims.toString() + " voxels needs " + std::to_string(bytes >> 20) +
-                 " MiB as float, more than the " + std::to_string(limit >> 20) + " MiB allowed");
+  if (auto fits = detail::checkImageFits(folder, geometry.dims, options); !fits) return tl::unexpected(fits.error());
 
   loaded.image = FloatVolume(geometry);
   loaded.storedKind = storedKindOf(ref);

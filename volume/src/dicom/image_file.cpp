@@ -37,6 +37,7 @@ Result<LoadedImage> loadImageFile(const std::string& path, const ImageLoadOption
   if (looksLikeDicomFile(path)) {
     if (isDicomSegFile(path)) return loadDicomSeg(path);
     // One image of a series: load the whole series from its folder, restricted to the file's series.
+    // (A file without SeriesInstanceUID gets the folder's largest series, as a folder would.)
     auto uid = dicom::readSeriesInstanceUid(path);
     if (!uid) return tl::unexpected(uid.error());
     ImageLoadOptions seriesOptions = options;

@@ -141,6 +141,12 @@ Result<SliceStack> stackSlices(const StackInput& input) {
     }
   }
 
+  // Guards the int slice indices below against absurd positions in broken headers.
+  const double span = distinct.back() - distinct.front();
+  if (!(base > 0) || span / base > 1e8)
+    return fail("slice positions span " + formatNumber(span) + " mm at a spacing of " + formatNumber(base) +
+                " mm: implausibly many slices");
+
   // Distinct gap values (clustered) for messages.
   auto distinctGaps = [&]() {
     std::vector<double> sorted = gaps, values;
