@@ -29,19 +29,21 @@ int runSlice(const Argv& args);
 
 // Weighted distance transform (cmd_wdt.cpp)
 int runWdt(const Argv& args);
+
+// Rendering (cmd_render.cpp)
+int runRender(const Argv& args);
+
+// The desktop application (desktop_app.cpp, desktop_support.cpp)
+int runDesktop(const Argv& args);
+
 // Datasets and learning (cmd_import.cpp, cmd_play.cpp, cmd_progress.cpp)
 int runImport(const Argv& args);
 int runPlay(const Argv& args);
 int runProgress(const Argv& args);
 int runCourses(const Argv& args);
 int runLessons(const Argv& args);
+
 // Preference studies (cmd_study.cpp)
 int runStudy(const Argv& args);
-
-// Offscreen render of one structure (cmd_render.cpp)
-int runRender(const Argv& args);
-
-// The desktop application (desktop_app.cpp)
-int runDesktop(const Argv& args);
 
 }  // namespace at::app

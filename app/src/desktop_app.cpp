@@ -5,8 +5,9 @@
 //
 // Adaptive quality: while the view or the hovered structure changes, the volume is rendered into a
 // smaller target with longer steps (the level whose predicted cost fits the interaction budget);
-// when the user rests, each frame renders one level finer up to full resolution; an unchanged view
-// is not rendered again. The frame never waits for a distance field: until the hovered structure's
+// when the user rests, each frame renders one level finer, up to full resolution or to the finest
+// level predicted to fit the frame budget (--frame-budget; "Full quality at rest" and scripted
+// screenshots lift it); an unchanged view is not rendered again. The frame never waits for a distance field: until the hovered structure's
 // field arrives the previous one stays on screen.
 //
 // Scripted mode (--ui-script FILE.json [--screenshot OUT.png]) replays actions from
@@ -144,6 +145,7 @@ struct FrameRecord {
   double ms = 0;
   int level = -1;          // quality level rendered this frame, -1 when the image was reused
   bool interacting = false;
+  double uploadMs = 0;     // distance field uploaded to the GL this frame
 };
 
 class DesktopApp {
@@ -154,6 +156,7 @@ class DesktopApp {
     std::optional<std::string> screenshot;
     int width = 1280, height = 720;
     double renderScale = 1;         // resolution of the full-quality level (slow software GL: < 1)
+    double frameBudgetMs = 100;     // at rest, finer levels predicted to cost more are not rendered
   };
 
   explicit DesktopApp(Options options) : options_(std::move(options)), library_(presetsDirectory()) {}
@@ -240,6 +243,8 @@ class DesktopApp {
   double msPerUnit_ = 0;  // measured render cost per (pixel / step factor), EMA
   Clock::time_point lastChange_ = Clock::now();
   bool interacting_ = false;
+  bool fullAtRest_ = false;  // render full quality at rest even beyond the frame budget
+  bool restCapped_ = false;  // the image at rest stopped below full quality (frame budget)
   std::optional<std::pair<std::uint16_t, Clock::time_point>> pendingHighlight_;
 
   // Mouse
@@ -635,7 +640,10 @@ void DesktopApp::updateFields() {
   auto best = fineField ? fineField : coarseField;
   const std::string key = fineField ? fine->key() : coarse->key();
   if (best && (best != field_ || fieldLabel_ != label) && renderer_) {
-    if (auto st = renderer_->setField(best->distances); !st) {
+    const Clock::time_point uploadStart = Clock::now();
+    const Status uploaded = renderer_->setField(best->distances);
+    if (recording_ && !frameLog_.empty()) frameLog_.back().uploadMs = msBetween(uploadStart, Clock::now());
+    if (auto st = uploaded; !st) {
       message("uploading the field: " + st.error().message);
       return;
     }
@@ -672,11 +680,24 @@ void DesktopApp::renderVolume(Clock::time_point frameStart) {
     markChanged();
     renderedLevel_ = level - 1;
   } else if (renderedLevel_ >= kFullLevel || msBetween(lastChange_, now) < kRestAfterMs) {
-    interacting_ = renderedLevel_ < kFullLevel;
+    interacting_ = renderedLevel_ < kFullLevel && msBetween(lastChange_, now) < kRestAfterMs;
     return;  // nothing new to show, or the user is still moving: keep the image
   } else {
     interacting_ = false;
+    // Within the frame budget unless full quality is asked for (the checkbox, or a scripted
+    // screenshot outside a measured sweep).
+    const bool capped = !fullAtRest_ && (!options_.script || recording_);
+    if (capped && msPerUnit_ > 0) {
+      const render::RenderSettings next = viewSettings(renderedLevel_ + 1);
+      if (msPerUnit_ * double(next.width) * double(next.height) / kLevels[renderedLevel_ + 1].stepFactor >
+          options_.frameBudgetMs) {
+        renderedKey_ = key;
+        restCapped_ = true;
+        return;
+      }
+    }
   }
+  restCapped_ = false;
   int level = std::min(kFullLevel, renderedLevel_ + 1);
   if (!interacting_ && msPerUnit_ > 0)  // at rest: skip levels that would be cheap but still coarse
     while (level < kFullLevel) {
@@ -743,6 +764,9 @@ void DesktopApp::buildUi() {
     markChanged();
   }
   if (ImGui::SliderFloat("t (context)", &t_, 0, 1, "%.2f")) markChanged();
+  if (ImGui::Checkbox("Full quality at rest", &fullAtRest_)) markChanged();
+  if (ImGui::IsItemHovered())
+    ImGui::SetTooltip("Off: the view at rest stays within %.0f ms per frame (coarser on slow GL)", options_.frameBudgetMs);
 
   ImGui::TextUnformatted("View");
   const char* views[] = {"anterior", "posterior", "lateral_left", "lateral_right", "superior", "inferior"};
@@ -815,7 +839,7 @@ void DesktopApp::buildUi() {
 
 bool DesktopApp::settled() {
   if (!renderer_) return true;
-  if (renderedKey_ != stateKey() || renderedLevel_ < kFullLevel) return false;
+  if (renderedKey_ != stateKey() || (renderedLevel_ < kFullLevel && !restCapped_)) return false;
   if (bare_) return true;
   const std::uint16_t label = shownLabel();
   auto fine = fieldRequest(label, 1);
@@ -957,9 +981,10 @@ bool DesktopApp::stepScript() {
         done();
         actions_.insert(actions_.begin(), sweep.begin(), sweep.end());
       } else if (what == "report") {
-        std::vector<double> all, moving, rest;
+        std::vector<double> all, moving, rest, uploads;
         std::map<int, int> perLevel;
         for (const FrameRecord& f : frameLog_) {
+          if (f.uploadMs > 0) uploads.push_back(f.uploadMs);
           all.push_back(f.ms);
           (f.interacting ? moving : rest).push_back(f.ms);
           perLevel[f.level]++;
@@ -976,6 +1001,9 @@ bool DesktopApp::stepScript() {
                   {"rest_frames", rest.size()},
                   {"rest_ms_p99", percentile(rest, 99)},
                   {"frames_per_level", levels},
+                  {"field_uploads", uploads.size()},
+                  {"field_upload_ms_max", uploads.empty() ? 0 : *std::max_element(uploads.begin(), uploads.end())},
+                  {"frame_budget_ms", options_.frameBudgetMs},
                   {"highlights", latencies_.size()},
                   {"highlight_ms_p50", percentile(latencies_, 50)},
                   {"highlight_ms_p99", percentile(latencies_, 99)},
@@ -1036,7 +1064,8 @@ int DesktopApp::run() {
   while (!quit_) {
     const Clock::time_point frameStart = Clock::now();
     SDL_Event e;
-    const bool idle = !options_.script && renderedLevel_ >= kFullLevel && !worker_->busy() && renderedKey_ == stateKey();
+    const bool idle = !options_.script && (renderedLevel_ >= kFullLevel || restCapped_) && !worker_->busy() &&
+                      renderedKey_ == stateKey();
     if (idle && SDL_WaitEventTimeout(&e, 100)) handleEvent(e);
     while (SDL_PollEvent(&e)) handleEvent(e);
     SDL_GetWindowSize(window_->window, &winW_, &winH_);
@@ -1098,19 +1127,21 @@ int runDesktop(const std::vector<std::string>& args) {
     if (a == "--help" || a == "-h") {
       std::printf(
           "usage: anatomy-tutor [desktop] [--dataset D] [--ui-script FILE.json [--screenshot OUT.png]] [--size WxH]\n"
-          "                             [--render-scale S]\n"
+          "                             [--render-scale S] [--frame-budget MS]\n"
           "  Opens the desktop app on the default course (explore: hover to highlight, click to select).\n"
           "  --dataset    phantom, phantom:N or a volume file (default: the default course's dataset)\n"
           "  --ui-script  replay {\"actions\": [...]} (select, t, mode, view, hover, hover_structure, click,\n"
           "               orbit, zoom, clip, wait, wait_field, screenshot, hover_sweep, record, report)\n"
           "  --screenshot save the window as PNG once the script has run and the view has settled\n"
           "  --size       window size in logical pixels (default 1280x720)\n"
-          "  --render-scale  resolution of the full-quality volume image, 0.1..1 (default 1; software GL: less)\n");
+          "  --render-scale  resolution of the full-quality volume image, 0.1..1 (default 1; software GL: less)\n"
+          "  --frame-budget  at rest, finer images predicted to take longer are not rendered (default 100 ms;\n"
+          "               scripted screenshots and the 'Full quality at rest' box render full quality anyway)\n");
       return 0;
     }
     std::optional<std::string> value;
     if (a == "--dataset" || a == "--ui-script" || a == "--screenshot" || a == "--size" ||
-        a == "--render-scale") {
+        a == "--render-scale" || a == "--frame-budget") {
       value = next();
       if (!value) return reportError("desktop: option " + a + " needs a value", 2);
     }
@@ -1120,6 +1151,11 @@ int runDesktop(const std::vector<std::string>& args) {
       options.script = *value;
     } else if (a == "--screenshot") {
       options.screenshot = *value;
+    } else if (a == "--frame-budget") {
+      char* end = nullptr;
+      options.frameBudgetMs = std::strtod(value->c_str(), &end);
+      if (*end != '\0' || !(options.frameBudgetMs >= 10 && options.frameBudgetMs <= 100000))
+        return reportError("desktop: --frame-budget must be a number of milliseconds in 10..100000", 2);
     } else if (a == "--render-scale") {
       char* end = nullptr;
       options.renderScale = std::strtod(value->c_str(), &end);
