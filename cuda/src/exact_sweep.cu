@@ -1,25 +1,37 @@
-// The default sweep scheme: overlapped plane groups, equal to a serial sweep bit for bit.
+// The sweep kernels: one launch per sweep, equal to a serial sweep bit for bit.
 //
 // A sweep along axis a must visit its planes in order (plane p reads plane p∓1 after that plane's
 // update), and one plane's update reaches one voxel further sideways per plane (a 45° cone). The
-// sweep runs as ceil(planes / K) launches of K planes each (K = 8: 32 launches per sweep at 256³,
-// not one per plane). In a launch, each block owns a TU × TV tile of lanes and computes its K
-// planes in shared memory over the tile plus a halo that shrinks by one voxel per plane (K − 1 at
-// the first plane, 0 at the last): exactly the cone the tile's results depend on. The halo voxels
-// are recomputed redundantly from the same inputs, so they equal what the neighbouring block
-// computes, and no block reads another block's output of the same launch.
+// planes are cut into groups of K and the lanes into TU × TV tiles; a work item is one group of one
+// tile. An item computes its K planes in shared memory over the tile plus a halo that shrinks by
+// one voxel per plane (K − 1 at the first plane, 0 at the last): exactly the cone the tile's
+// results depend on. The halo voxels are recomputed redundantly from the same inputs, so they
+// equal what the neighbouring tiles compute.
 //
-// Inputs of a launch: the field before the sweep (`src`, never written during the sweep) for the
-// planes' old values, and the final values of the plane before the group, written to `dst` by the
-// previous launch (complete: launches on one stream are ordered). Outputs: the tile interiors of
-// the K planes in `dst`. Every read is of data no thread writes during the launch, so the result
-// is deterministic and identical to the CPU backend's serial sweep (same stencil, same order of
-// float operations, no FMA contraction: --fmad=false).
+// Inputs of item (group g, tile t): the field before the sweep (`src`, never written during the
+// sweep) for the planes' old values, the densities, and the final values of the plane before the
+// group over the tile plus a K-voxel ring, which items (g − 1, t') of t and its 8 neighbours
+// wrote to `dst`. Each tile has a progress counter (groups completed) in global memory, published
+// with a release store after the item's writes; item (g, t) waits with acquire loads until the
+// counters of t and its neighbours reach g, then reads that plane. Every read is of data that is
+// complete and that nobody writes afterwards in the sweep, so the result is deterministic and
+// identical to the CPU backend's serial sweep (same stencil, same order of float operations, no
+// FMA contraction: --fmad=false).
 //
-// The x sweeps run on a copy of the field transposed to y-contiguous layout (as the CPU backend
-// does), so that every sweep's lanes are coalesced along the contiguous axis.
+// Scheduling: one launch per sweep, a grid of as many blocks as fit on the device at once, each
+// taking items from a global ticket counter in (group, tile) order. An item only waits for items
+// with smaller tickets, which were taken by blocks already running; so the smallest unfinished
+// item can always proceed and the sweep cannot deadlock, whatever the number of resident blocks.
+// A block fetches its next ticket while it computes, and issues its loads of `src` and densities
+// (which depend on no other item) before it waits.
+//
+// Layout: lanes (u, v) and planes a have arbitrary strides, so x sweeps run on the x-contiguous
+// field directly (u = y, v = z): an item's K planes of one lane are K consecutive floats. The
+// item's outputs are staged in shared memory and written at its end in the order that is
+// contiguous in memory (u-major for y and z sweeps, plane-major for x sweeps).
 #include <cuda_runtime.h>
 
+#include <algorithm>
 #include <string>
 
 #include "cuda_util.h"
@@ -29,175 +41,301 @@
 namespace at::cuda {
 namespace {
 
-constexpr int kTU = 32, kTV = 16;     // tile lanes: u contiguous
-constexpr int kK = 8;                 // planes per launch
-constexpr int kRU = kTU + 2 * kK;     // region including the widest read halo (K)
-constexpr int kRV = kTV + 2 * kK;
-constexpr int kRN = kRU * kRV;
-constexpr int kThreads = 512;
-static_assert(kRN % kThreads == 0, "the load loop covers the region exactly");
-constexpr int kSlots = kK + 1;        // slot 0: the plane before the group; slots 1..K: its planes
-constexpr std::size_t kSmemBytes = std::size_t(kSlots) * kRN * (sizeof(float) + 1);
+// Tile shape (TU × TV lanes, u contiguous in shared memory), planes per item K, block size.
+template <int K_, int TU_, int TV_, int Threads_, int MinBlocks_>
+struct Shape {
+  static constexpr int K = K_, TU = TU_, TV = TV_, Threads = Threads_, MinBlocks = MinBlocks_;
+  static constexpr int RU = TU + 2 * K, RV = TV + 2 * K, RN = RU * RV;  // region: tile + K ring
+  static constexpr int Cells = RN / Threads;                           // region cells per thread
+  static_assert(RN % Threads == 0, "each thread owns the same number of region cells");
+  static_assert(K <= TU && K <= TV, "the ring of the plane before the group lies in the 8 neighbouring tiles");
+  static constexpr int Out = K * TU * TV;
+  // Shared memory: two distance planes (previous, current), K staged output planes, K + 1 density
+  // planes (slot 0: the plane before the group; slots 1..K: the group's planes).
+  static constexpr std::size_t Bytes = std::size_t(2 * RN + Out) * sizeof(float) + std::size_t(K + 1) * RN;
+};
+using ShapeNarrow = Shape<8, 32, 16, 512, 2>;  // 1536 region cells, 3 per thread
+using ShapeDeep = Shape<16, 16, 16, 768, 1>;   // 2304 region cells, 3 per thread
 
-struct GroupArgs {
+struct SweepParams {
   const float* src;
   float* dst;
   const std::uint8_t* q;
   int nu, nv, na;
-  std::size_t strideV, strideA;
+  long long strideU, strideV, strideA;
   int direction;
-  int first;                 // step index (0-based, in sweep order) of the group's first plane
-  wdt::SweepLengths lengths; // B = u, C = v
+  wdt::SweepLengths lengths;  // B = u, C = v
   float base;
+  int tilesU, tilesV, groups;
+  unsigned* sync;             // [0]: ticket counter; [1 + t]: groups completed by tile t
   int* changed;
 };
 
-template <StepRule R, WeightRule W>
-__global__ void __launch_bounds__(kThreads, 1) sweepGroup(GroupArgs p) {
+__device__ __forceinline__ unsigned loadAcquire(const unsigned* p) {
+  unsigned v;
+  asm volatile("ld.acquire.gpu.global.u32 %0, [%1];" : "=r"(v) : "l"(p) : "memory");
+  return v;
+}
+
+__device__ __forceinline__ void storeRelease(unsigned* p, unsigned v) {
+  asm volatile("st.release.gpu.global.u32 [%0], %1;" ::"l"(p), "r"(v) : "memory");
+}
+
+template <StepRule R, WeightRule W, class S>
+__global__ void __launch_bounds__(S::Threads, S::MinBlocks) sweepKernel(SweepParams p) {
+  constexpr int K = S::K, TU = S::TU, TV = S::TV, RU = S::RU, RN = S::RN, C = S::Cells;
   constexpr bool kQn = kNeedsNeighbourDensity<R, W>;
   extern __shared__ float smem[];
-  float* sD = smem;                                                      // kSlots × kRN
-  std::uint8_t* sQ = reinterpret_cast<std::uint8_t*>(smem + kSlots * kRN);  // kSlots × kRN
+  float* sD = smem;                                                           // 2 × RN
+  float* sOut = smem + 2 * RN;                                                // K × TU·TV
+  std::uint8_t* sQ = reinterpret_cast<std::uint8_t*>(smem + 2 * RN + S::Out);  // (K + 1) × RN
+  __shared__ unsigned sTicket;
 
-  const int u0 = int(blockIdx.x) * kTU - kK, v0 = int(blockIdx.y) * kTV - kK;  // region origin
-  const int steps = min(kK, p.na - p.first);
-  auto planeOffset = [&](int step) {
-    const int a = p.direction > 0 ? step : p.na - 1 - step;
-    return std::size_t(a) * p.strideA;
+  const int tid = int(threadIdx.x);
+  const int tiles = p.tilesU * p.tilesV;
+  const unsigned items = unsigned(p.groups) * unsigned(tiles);
+  unsigned* counter = p.sync;
+  unsigned* done = p.sync + 1;
+  auto planeOffset = [&](int step) {  // step: index in sweep order
+    return (p.direction > 0 ? step : p.na - 1 - step) * p.strideA;
   };
 
-  // Load: slot 0 = final values of the previous plane (dst), slots 1.. = old values (src). All of
-  // a thread's loads go into registers first, then into shared memory, so they are all in flight
-  // at once (the load phase is latency-bound otherwise).
-  constexpr int kPer = kRN / kThreads;
-  float dv[kSlots][kPer];
-  std::uint8_t qv[kSlots][kPer];
-#pragma unroll
-  for (int slot = 0; slot < kSlots; ++slot) {
-    const int step = p.first + slot - 1;
-    const bool planeOk = slot <= steps && step >= 0;
-    const std::size_t plane = planeOk ? planeOffset(step) : 0;
-#pragma unroll
-    for (int k = 0; k < kPer; ++k) {
-      const int r = int(threadIdx.x) + k * kThreads;
-      const int gu = u0 + r % kRU, gv = v0 + r / kRU;
-      const bool ok = planeOk && gu >= 0 && gu < p.nu && gv >= 0 && gv < p.nv;
-      const std::size_t i = ok ? std::size_t(gu) + std::size_t(gv) * p.strideV + plane : 0;
-      dv[slot][k] = ok ? (slot == 0 ? p.dst[i] : __ldg(p.src + i)) : kInf;
-      qv[slot][k] = ok && (slot > 0 || kQn) ? __ldg(p.q + i) : 0;
-    }
-  }
-#pragma unroll
-  for (int slot = 0; slot < kSlots; ++slot) {
-#pragma unroll
-    for (int k = 0; k < kPer; ++k) {
-      sD[slot * kRN + int(threadIdx.x) + k * kThreads] = dv[slot][k];
-      sQ[slot * kRN + int(threadIdx.x) + k * kThreads] = qv[slot][k];
-    }
-  }
+  if (tid == 0) sTicket = atomicAdd(counter, 1u);
   __syncthreads();
-
+  unsigned ticket = sTicket;
   bool changed = false;
-  for (int s = 1; s <= steps; ++s) {
-    const int h = kK - s;                       // valid halo at this plane
-    const int w = kTU + 2 * h, hgt = kTV + 2 * h;
-    const float* prev = sD + (s - 1) * kRN;
-    const std::uint8_t* qPrev = sQ + (s - 1) * kRN;
-    float* cur = sD + s * kRN;
-    for (int i = threadIdx.x; i < w * hgt; i += kThreads) {
-      const int ru = kK - h + i % w, rv = kK - h + i / w;
-      const int gu = u0 + ru, gv = v0 + rv;
-      if (gu < 0 || gu >= p.nu || gv < 0 || gv >= p.nv) continue;  // stays +infinity
-      const int r = rv * kRU + ru;
-      float n[3][3];
-      std::uint8_t qn[3][3];
+  while (ticket < items) {
+    __syncthreads();  // every thread has read sTicket (and finished the previous item's reads)
+    if (tid == 0) sTicket = atomicAdd(counter, 1u);  // the next item, read after the last barrier
+    const int g = int(ticket / unsigned(tiles)), t = int(ticket % unsigned(tiles));
+    const int tu = t % p.tilesU, tv = t / p.tilesU;
+    const int first = g * K, steps = min(K, p.na - first);
+    const int u0 = tu * TU - K, v0 = tv * TV - K;  // region origin in lanes
+
+    // Loads that depend on no other item: old values (registers) and densities (shared memory).
+    long long lane[C];
+    bool inGrid[C];
 #pragma unroll
-      for (int dc = 0; dc < 3; ++dc) {
+    for (int c = 0; c < C; ++c) {
+      const int r = tid + c * S::Threads;
+      const int gu = u0 + r % RU, gv = v0 + r / RU;
+      inGrid[c] = gu >= 0 && gu < p.nu && gv >= 0 && gv < p.nv;
+      lane[c] = inGrid[c] ? gu * p.strideU + gv * p.strideV : 0;
+    }
+    float old[K][C];
 #pragma unroll
-        for (int db = 0; db < 3; ++db) {
-          n[dc][db] = prev[r + (dc - 1) * kRU + (db - 1)];
-          qn[dc][db] = kQn ? qPrev[r + (dc - 1) * kRU + (db - 1)] : 0;
-        }
+    for (int s = 1; s <= K; ++s) {
+#pragma unroll
+      for (int c = 0; c < C; ++c) {
+        const bool ok = inGrid[c] && s <= steps;
+        old[s - 1][c] = ok ? __ldg(p.src + lane[c] + planeOffset(first + s - 1)) : kInf;
       }
-      const float old = cur[r];
-      const float v = relax<R, W>(old, n, qn, sQ[s * kRN + r], p.lengths, p.base);
-      cur[r] = v;
-      if (ru >= kK && ru < kK + kTU && rv >= kK && rv < kK + kTV) {
-        changed |= v < old;
-        p.dst[std::size_t(gu) + std::size_t(gv) * p.strideV + planeOffset(p.first + s - 1)] = v;
+    }
+#pragma unroll
+    for (int s = kQn ? 0 : 1; s <= K; ++s) {
+      std::uint8_t qv[C];
+#pragma unroll
+      for (int c = 0; c < C; ++c) {
+        const bool ok = inGrid[c] && s <= steps && first + s - 1 >= 0;
+        qv[c] = ok ? __ldg(p.q + lane[c] + planeOffset(first + s - 1)) : std::uint8_t(0);
+      }
+#pragma unroll
+      for (int c = 0; c < C; ++c) sQ[s * RN + tid + c * S::Threads] = qv[c];
+    }
+
+    // Wait until the plane before the group is final over the region (tiles t and neighbours).
+    if (g > 0 && tid < 9) {
+      const int nu = tu + tid % 3 - 1, nv = tv + tid / 3 - 1;
+      if (nu >= 0 && nu < p.tilesU && nv >= 0 && nv < p.tilesV) {
+        const unsigned* flag = done + nv * p.tilesU + nu;
+        while (loadAcquire(flag) < unsigned(g)) __nanosleep(32);
       }
     }
     __syncthreads();
+#pragma unroll
+    for (int c = 0; c < C; ++c) {
+      const int r = tid + c * S::Threads;
+      // L2 loads (ld.cg): the values were written by other blocks during this launch.
+      sD[r] = inGrid[c] && g > 0 ? __ldcg(p.dst + lane[c] + planeOffset(first - 1)) : kInf;
+      if (!inGrid[c]) sD[RN + r] = kInf;  // outside the grid both planes stay +infinity
+    }
+    __syncthreads();
+
+#pragma unroll
+    for (int s = 1; s <= K; ++s) {
+      if (s > steps) continue;  // uniform across the block
+      const int h = K - s;  // valid halo of this plane
+      const float* prev = sD + ((s - 1) & 1) * RN;
+      float* cur = sD + (s & 1) * RN;
+      const std::uint8_t* qPrev = sQ + (s - 1) * RN;
+#pragma unroll
+      for (int c = 0; c < C; ++c) {
+        const int r = tid + c * S::Threads;
+        const int ru = r % RU, rv = r / RU;
+        if (!inGrid[c] || ru < K - h || ru >= K + TU + h || rv < K - h || rv >= K + TV + h) continue;
+        float n[3][3];
+        std::uint8_t qn[3][3];
+#pragma unroll
+        for (int dc = 0; dc < 3; ++dc) {
+#pragma unroll
+          for (int db = 0; db < 3; ++db) {
+            n[dc][db] = prev[r + (dc - 1) * RU + (db - 1)];
+            qn[dc][db] = kQn ? qPrev[r + (dc - 1) * RU + (db - 1)] : 0;
+          }
+        }
+        const float v = relax<R, W>(old[s - 1][c], n, qn, sQ[s * RN + r], p.lengths, p.base);
+        cur[r] = v;
+        if (ru >= K && ru < K + TU && rv >= K && rv < K + TV) {
+          changed |= v < old[s - 1][c];
+          sOut[(s - 1) * TU * TV + (rv - K) * TU + (ru - K)] = v;
+        }
+      }
+      __syncthreads();
+    }
+
+    // Write the tile's planes, contiguous runs first, then publish the group.
+    const bool planesContiguous = p.strideA == 1;
+    for (int i = tid; i < S::Out; i += S::Threads) {
+      int s, lu, lv;
+      if (planesContiguous) {
+        s = i % K, lu = (i / K) % TU, lv = i / (K * TU);
+      } else {
+        s = i / (TU * TV), lu = i % TU, lv = (i / TU) % TV;
+      }
+      const int gu = tu * TU + lu, gv = tv * TV + lv;
+      if (s >= steps || gu >= p.nu || gv >= p.nv) continue;
+      __stcg(p.dst + gu * p.strideU + gv * p.strideV + planeOffset(first + s), sOut[s * TU * TV + lv * TU + lu]);
+    }
+    __syncthreads();
+    if (tid == 0) {
+      __threadfence();
+      storeRelease(done + t, unsigned(g + 1));
+    }
+    ticket = sTicket;
   }
-  if (__syncthreads_or(changed) && threadIdx.x == 0) *p.changed = 1;
+  if (__syncthreads_or(changed) && tid == 0) atomicOr(p.changed, 1);
 }
 
-template <StepRule R, WeightRule W>
-cudaError_t allowLargeSharedMemory() {
-  return cudaFuncSetAttribute(sweepGroup<R, W>, cudaFuncAttributeMaxDynamicSharedMemorySize, int(kSmemBytes));
+template <class S>
+int tileCount(const ExactSweepArgs& a) {
+  return ((a.nu + S::TU - 1) / S::TU) * ((a.nv + S::TV - 1) / S::TV);
 }
 
-template <StepRule R, WeightRule W>
-Status launchGroups(const ExactSweepArgs& a, cudaStream_t stream) {
-  GroupArgs p{a.src, a.dst, a.density, a.nu, a.nv, a.na, a.strideV, a.strideA, a.direction, 0, a.lengths,
-              a.baseCost, a.changed};
-  const dim3 grid((a.nu + kTU - 1) / kTU, (a.nv + kTV - 1) / kTV);
-  for (p.first = 0; p.first < a.na; p.first += kK) {
-    sweepGroup<R, W><<<grid, kThreads, kSmemBytes, stream>>>(p);
-  }
+// Blocks of one kernel that fit on the device at once (occupancy × multiprocessors), per kernel.
+struct Residency {
+  int narrow = 0, deep = 0;
+};
+
+template <StepRule R, WeightRule W, class S>
+cudaError_t prepareKernel(int multiprocessors, int& resident) {
+  cudaError_t e = cudaFuncSetAttribute(sweepKernel<R, W, S>, cudaFuncAttributeMaxDynamicSharedMemorySize, int(S::Bytes));
+  int perSm = 0;
+  if (e == cudaSuccess) e = cudaOccupancyMaxActiveBlocksPerMultiprocessor(&perSm, sweepKernel<R, W, S>, S::Threads, S::Bytes);
+  if (e == cudaSuccess && perSm < 1) return cudaErrorInvalidConfiguration;
+  const int blocks = perSm * multiprocessors;
+  resident = resident == 0 ? blocks : std::min(resident, blocks);
+  return e;
+}
+
+template <class S>
+cudaError_t prepareShape(int multiprocessors, int& resident) {
+  cudaError_t e = prepareKernel<StepRule::Trapezoid, WeightRule::Density, S>(multiprocessors, resident);
+  if (e == cudaSuccess) e = prepareKernel<StepRule::Entering, WeightRule::Density, S>(multiprocessors, resident);
+  if (e == cudaSuccess) e = prepareKernel<StepRule::Entering, WeightRule::Uniform, S>(multiprocessors, resident);
+  if (e == cudaSuccess) e = prepareKernel<StepRule::Entering, WeightRule::Gradient, S>(multiprocessors, resident);
+  if (e == cudaSuccess) e = prepareKernel<StepRule::Entering, WeightRule::Ascent, S>(multiprocessors, resident);
+  return e;
+}
+
+struct Prepared {
+  cudaError_t error = cudaSuccess;
+  Residency resident;
+};
+
+const Prepared& prepared() {
+  static const Prepared state = [] {
+    Prepared s;
+    int device = 0, multiprocessors = 0;
+    s.error = cudaGetDevice(&device);
+    if (s.error == cudaSuccess) s.error = cudaDeviceGetAttribute(&multiprocessors, cudaDevAttrMultiProcessorCount, device);
+    if (s.error == cudaSuccess) s.error = prepareShape<ShapeNarrow>(multiprocessors, s.resident.narrow);
+    if (s.error == cudaSuccess) s.error = prepareShape<ShapeDeep>(multiprocessors, s.resident.deep);
+    return s;
+  }();
+  return state;
+}
+
+template <StepRule R, WeightRule W, class S>
+Status launchShape(const ExactSweepArgs& a, int resident, cudaStream_t stream) {
+  SweepParams p{a.src,     a.dst,       a.density, a.nu, a.nv, a.na, (long long)a.strideU, (long long)a.strideV,
+                (long long)a.strideA, a.direction, a.lengths, a.baseCost, (a.nu + S::TU - 1) / S::TU,
+                (a.nv + S::TV - 1) / S::TV, (a.na + S::K - 1) / S::K, a.sync, a.changed};
+  const long long items = (long long)p.groups * p.tilesU * p.tilesV;
+  const int blocks = int(std::min<long long>(items, resident));
+  sweepKernel<R, W, S><<<blocks, S::Threads, S::Bytes, stream>>>(p);
   return check(cudaGetLastError(), "launch of a sweep kernel");
 }
 
-template <class T>
-__global__ void transposeXY(const T* __restrict__ in, T* __restrict__ out, int nx, int ny) {
-  __shared__ T tile[32][33];
-  const std::size_t slice = std::size_t(nx) * ny * blockIdx.z;
-  const int x0 = blockIdx.x * 32, y0 = blockIdx.y * 32;
-  for (int dy = threadIdx.y; dy < 32; dy += 8) {
-    const int x = x0 + threadIdx.x, y = y0 + dy;
-    if (x < nx && y < ny) tile[dy][threadIdx.x] = in[slice + x + std::size_t(nx) * y];
+template <class S>
+Status launchTyped(const ExactSweepArgs& a, int resident, cudaStream_t stream) {
+  // Only density weights tell the two step rules apart: uniform weights cost len under both
+  // (½(1 + 1)·len = len exactly), gradient and ascent weights belong to the edge a → b and both
+  // rules charge w(a→b)·len (as the CPU backend's step_cost.h does).
+  if (a.rule == StepRule::Trapezoid && a.weight == WeightRule::Density) {
+    return launchShape<StepRule::Trapezoid, WeightRule::Density, S>(a, resident, stream);
   }
-  __syncthreads();
-  for (int dx = threadIdx.y; dx < 32; dx += 8) {
-    const int y = y0 + threadIdx.x, x = x0 + dx;
-    if (x < nx && y < ny) out[slice + y + std::size_t(ny) * x] = tile[threadIdx.x][dx];
+  switch (a.weight) {
+    case WeightRule::Density: return launchShape<StepRule::Entering, WeightRule::Density, S>(a, resident, stream);
+    case WeightRule::Uniform: return launchShape<StepRule::Entering, WeightRule::Uniform, S>(a, resident, stream);
+    case WeightRule::Gradient: return launchShape<StepRule::Entering, WeightRule::Gradient, S>(a, resident, stream);
+    case WeightRule::Ascent: return launchShape<StepRule::Entering, WeightRule::Ascent, S>(a, resident, stream);
+  }
+  return fail("WDT CUDA backend: unknown weight rule");
+}
+
+__global__ void initDistances(float* d, const std::uint8_t* seeds, std::size_t count) {
+  for (std::size_t i = blockIdx.x * std::size_t(blockDim.x) + threadIdx.x; i < count;
+       i += std::size_t(gridDim.x) * blockDim.x) {
+    d[i] = seeds[i] ? 0.0f : kInf;
+  }
+}
+
+__global__ void fill(float* d, std::size_t count, float value) {
+  for (std::size_t i = blockIdx.x * std::size_t(blockDim.x) + threadIdx.x; i < count;
+       i += std::size_t(gridDim.x) * blockDim.x) {
+    d[i] = value;
   }
 }
 
 }  // namespace
 
 Status prepareExactSweeps() {
-  static const cudaError_t status = [] {
-    cudaError_t e = allowLargeSharedMemory<StepRule::Trapezoid, WeightRule::Density>();
-    if (e == cudaSuccess) e = allowLargeSharedMemory<StepRule::Entering, WeightRule::Density>();
-    if (e == cudaSuccess) e = allowLargeSharedMemory<StepRule::Entering, WeightRule::Uniform>();
-    if (e == cudaSuccess) e = allowLargeSharedMemory<StepRule::Entering, WeightRule::Gradient>();
-    if (e == cudaSuccess) e = allowLargeSharedMemory<StepRule::Entering, WeightRule::Ascent>();
-    return e;
-  }();
-  return check(status, "cudaFuncSetAttribute(sweep kernels, " + std::to_string(kSmemBytes) + " bytes of shared memory)");
+  return check(prepared().error, "preparing the sweep kernels (shared memory limit, occupancy)");
+}
+
+int sweepSyncWords(const ExactSweepArgs& a) {
+  const int tiles = a.shape == SweepShape::Deep ? tileCount<ShapeDeep>(a) : tileCount<ShapeNarrow>(a);
+  return 1 + tiles;
 }
 
 Status launchExactSweep(const ExactSweepArgs& a, cudaStream_t stream) {
-  if (a.rule == StepRule::Trapezoid && a.weight == WeightRule::Density) {
-    return launchGroups<StepRule::Trapezoid, WeightRule::Density>(a, stream);
-  }
-  switch (a.weight) {  // see launchSweep: the other combinations cost the same under both rules
-    case WeightRule::Density: return launchGroups<StepRule::Entering, WeightRule::Density>(a, stream);
-    case WeightRule::Uniform: return launchGroups<StepRule::Entering, WeightRule::Uniform>(a, stream);
-    case WeightRule::Gradient: return launchGroups<StepRule::Entering, WeightRule::Gradient>(a, stream);
-    case WeightRule::Ascent: return launchGroups<StepRule::Entering, WeightRule::Ascent>(a, stream);
-  }
-  return fail("WDT CUDA backend: unknown weight rule");
+  if (auto s = prepareExactSweeps(); !s) return s;
+  if (a.shape == SweepShape::Deep) return launchTyped<ShapeDeep>(a, prepared().resident.deep, stream);
+  return launchTyped<ShapeNarrow>(a, prepared().resident.narrow, stream);
 }
 
-template <class T>
-Status launchTransposeXY(const T* in, T* out, int nx, int ny, int nz, cudaStream_t stream) {
-  const dim3 grid((nx + 31) / 32, (ny + 31) / 32, nz);
-  transposeXY<T><<<grid, dim3(32, 8), 0, stream>>>(in, out, nx, ny);
-  return check(cudaGetLastError(), "launch of the transpose kernel");
+Status launchInitDistances(float* d, const std::uint8_t* seeds, std::size_t count, cudaStream_t stream) {
+  if (count == 0) return {};
+  const std::size_t blocks = (count + 255) / 256;
+  initDistances<<<unsigned(blocks < 8192 ? blocks : 8192), 256, 0, stream>>>(d, seeds, count);
+  return check(cudaGetLastError(), "launch of the distance initialisation kernel");
 }
-template Status launchTransposeXY<float>(const float*, float*, int, int, int, cudaStream_t);
-template Status launchTransposeXY<std::uint8_t>(const std::uint8_t*, std::uint8_t*, int, int, int, cudaStream_t);
+
+Status launchFill(float* d, std::size_t count, float value, cudaStream_t stream) {
+  if (count == 0) return {};
+  const std::size_t blocks = (count + 255) / 256;
+  fill<<<unsigned(blocks < 8192 ? blocks : 8192), 256, 0, stream>>>(d, count, value);
+  return check(cudaGetLastError(), "launch of the fill kernel");
+}
 
 }  // namespace at::cuda
