@@ -3,11 +3,10 @@
 // reference where affordable. The input is a synthetic head: air, a soft-tissue ball with noise,
 // a dense skull shell and a few dense blobs, 0.2 mm voxels, seeds in a small central ball.
 //
-// Sweep shapes: "auto" (the backend's choice by plane size), or "narrow" / "deep" forced through
-// AT_WDT_CUDA_SHAPE. Wall time is the whole runCudaBackend call; the warm-up call of each
-// configuration allocates the backend's cached workspace, the measured calls reuse it.
+// Wall time is the whole runCudaBackend call; the warm-up call of each configuration allocates the
+// backend's cached workspace, the measured calls reuse it.
 //
-//   wdt_cuda_bench [--sizes 128,256,512] [--reps 10] [--check-max 256] [--shapes auto,narrow,deep]
+//   wdt_cuda_bench [--sizes 128,256,512] [--reps 10] [--check-max 256]
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -65,14 +64,6 @@ double maxRelDiff(const std::vector<float>& a, const std::vector<float>& b) {
   return m;
 }
 
-std::vector<std::string> parseNames(const char* s) {
-  std::vector<std::string> out;
-  std::stringstream in(s);
-  std::string item;
-  while (std::getline(in, item, ',')) out.push_back(item);
-  return out;
-}
-
 std::vector<int> parseList(const char* s) {
   std::vector<int> out;
   std::stringstream in(s);
@@ -85,14 +76,12 @@ std::vector<int> parseList(const char* s) {
 
 int main(int argc, char** argv) {
   std::vector<int> sizes = {128, 256, 512};
-  std::vector<std::string> shapes = {"auto"};
   int reps = 10, checkMax = 256;
   for (int a = 1; a + 1 < argc; a += 2) {
     const std::string flag = argv[a];
     if (flag == "--sizes") sizes = parseList(argv[a + 1]);
     else if (flag == "--reps") reps = std::atoi(argv[a + 1]);
     else if (flag == "--check-max") checkMax = std::atoi(argv[a + 1]);
-    else if (flag == "--shapes") shapes = parseNames(argv[a + 1]);
     else {
       std::fprintf(stderr, "wdt_cuda_bench: unknown option %s\n", flag.c_str());
       return 2;
@@ -115,9 +104,6 @@ int main(int argc, char** argv) {
       }
       exact = std::move(*e);
     }
-    for (const std::string& shape : shapes) {
-    if (shape == "auto") unsetenv("AT_WDT_CUDA_SHAPE");
-    else setenv("AT_WDT_CUDA_SHAPE", shape.c_str(), 1);
     for (int mode : {1, 2, 0}) {  // passes; 0 = converge
       p.params.converge = mode == 0;
       p.params.passes = mode == 0 ? 2 : mode;
@@ -153,9 +139,8 @@ int main(int argc, char** argv) {
                     acc.meanRelErr, acc.p99RelErr, acc.maxRelErr, acc.belowExact, cacc.meanRelErr, cacc.p99RelErr,
                     cpu->stats.passesRun, maxRelDiff(last.field.distances.voxels, cpu->field.distances.voxels));
       }
-      std::printf(",\"shape\":\"%s\"}\n", shape.c_str());
+      std::printf("}\n");
       std::fflush(stdout);
-    }
     }
   }
   return 0;

@@ -34,6 +34,8 @@
 #include <algorithm>
 #include <string>
 
+#include <cuda_pipeline_primitives.h>
+
 #include "cuda_util.h"
 #include "sweep_kernels.h"
 #include "sweep_rules.cuh"
@@ -50,12 +52,13 @@ struct Shape {
   static_assert(RN % Threads == 0, "each thread owns the same number of region cells");
   static_assert(K <= TU && K <= TV, "the ring of the plane before the group lies in the 8 neighbouring tiles");
   static constexpr int Out = K * TU * TV;
-  // Shared memory: two distance planes (previous, current), K staged output planes, K + 1 density
-  // planes (slot 0: the plane before the group; slots 1..K: the group's planes).
-  static constexpr std::size_t Bytes = std::size_t(2 * RN + Out) * sizeof(float) + std::size_t(K + 1) * RN;
+  // Shared memory: two distance planes (previous, current), K staged output planes, the K planes'
+  // old values, K + 1 density planes (slot 0: the plane before the group; slots 1..K: its planes).
+  static constexpr std::size_t Bytes = std::size_t(2 * RN + Out + K * RN) * sizeof(float) + std::size_t(K + 1) * RN;
 };
-using ShapeNarrow = Shape<8, 32, 16, 512, 2>;  // 1536 region cells, 3 per thread
-using ShapeDeep = Shape<16, 16, 16, 768, 1>;   // 2304 region cells, 3 per thread
+// 8 planes over 32×16-lane tiles: 1536 region cells, 3 per thread; two blocks per multiprocessor,
+// so that one block's loads and waits overlap the other's plane steps.
+using S8 = Shape<8, 32, 16, 512, 2>;
 
 struct SweepParams {
   const float* src;
@@ -86,9 +89,10 @@ __global__ void __launch_bounds__(S::Threads, S::MinBlocks) sweepKernel(SweepPar
   constexpr int K = S::K, TU = S::TU, TV = S::TV, RU = S::RU, RN = S::RN, C = S::Cells;
   constexpr bool kQn = kNeedsNeighbourDensity<R, W>;
   extern __shared__ float smem[];
-  float* sD = smem;                                                           // 2 × RN
-  float* sOut = smem + 2 * RN;                                                // K × TU·TV
-  std::uint8_t* sQ = reinterpret_cast<std::uint8_t*>(smem + 2 * RN + S::Out);  // (K + 1) × RN
+  float* sD = smem;                                                  // 2 × RN
+  float* sOut = sD + 2 * RN;                                         // K × TU·TV
+  float* sOld = sOut + S::Out;                                       // K × RN
+  std::uint8_t* sQ = reinterpret_cast<std::uint8_t*>(sOld + K * RN);  // (K + 1) × RN
   __shared__ unsigned sTicket;
 
   const int tid = int(threadIdx.x);
@@ -112,7 +116,8 @@ __global__ void __launch_bounds__(S::Threads, S::MinBlocks) sweepKernel(SweepPar
     const int first = g * K, steps = min(K, p.na - first);
     const int u0 = tu * TU - K, v0 = tv * TV - K;  // region origin in lanes
 
-    // Loads that depend on no other item: old values (registers) and densities (shared memory).
+    // Loads that depend on no other item, all in flight at once: old values (asynchronous copies
+    // into shared memory) and densities (registers, then shared memory).
     long long lane[C];
     bool inGrid[C];
 #pragma unroll
@@ -122,25 +127,32 @@ __global__ void __launch_bounds__(S::Threads, S::MinBlocks) sweepKernel(SweepPar
       inGrid[c] = gu >= 0 && gu < p.nu && gv >= 0 && gv < p.nv;
       lane[c] = inGrid[c] ? gu * p.strideU + gv * p.strideV : 0;
     }
-    float old[K][C];
 #pragma unroll
     for (int s = 1; s <= K; ++s) {
 #pragma unroll
       for (int c = 0; c < C; ++c) {
-        const bool ok = inGrid[c] && s <= steps;
-        old[s - 1][c] = ok ? __ldg(p.src + lane[c] + planeOffset(first + s - 1)) : kInf;
+        float* to = sOld + (s - 1) * RN + tid + c * S::Threads;
+        if (inGrid[c] && s <= steps) {
+          __pipeline_memcpy_async(to, p.src + lane[c] + planeOffset(first + s - 1), sizeof(float));
+        } else {
+          *to = kInf;
+        }
+      }
+    }
+    __pipeline_commit();
+    std::uint8_t qv[K + 1][C];
+#pragma unroll
+    for (int s = kQn ? 0 : 1; s <= K; ++s) {
+#pragma unroll
+      for (int c = 0; c < C; ++c) {
+        const bool ok = inGrid[c] && s <= steps && first + s - 1 >= 0;
+        qv[s][c] = ok ? __ldg(p.q + lane[c] + planeOffset(first + s - 1)) : std::uint8_t(0);
       }
     }
 #pragma unroll
     for (int s = kQn ? 0 : 1; s <= K; ++s) {
-      std::uint8_t qv[C];
 #pragma unroll
-      for (int c = 0; c < C; ++c) {
-        const bool ok = inGrid[c] && s <= steps && first + s - 1 >= 0;
-        qv[c] = ok ? __ldg(p.q + lane[c] + planeOffset(first + s - 1)) : std::uint8_t(0);
-      }
-#pragma unroll
-      for (int c = 0; c < C; ++c) sQ[s * RN + tid + c * S::Threads] = qv[c];
+      for (int c = 0; c < C; ++c) sQ[s * RN + tid + c * S::Threads] = qv[s][c];
     }
 
     // Wait until the plane before the group is final over the region (tiles t and neighbours).
@@ -159,6 +171,7 @@ __global__ void __launch_bounds__(S::Threads, S::MinBlocks) sweepKernel(SweepPar
       sD[r] = inGrid[c] && g > 0 ? __ldcg(p.dst + lane[c] + planeOffset(first - 1)) : kInf;
       if (!inGrid[c]) sD[RN + r] = kInf;  // outside the grid both planes stay +infinity
     }
+    __pipeline_wait_prior(0);  // this thread's old values (each thread reads only its own)
     __syncthreads();
 
 #pragma unroll
@@ -183,17 +196,31 @@ __global__ void __launch_bounds__(S::Threads, S::MinBlocks) sweepKernel(SweepPar
             qn[dc][db] = kQn ? qPrev[r + (dc - 1) * RU + (db - 1)] : 0;
           }
         }
-        const float v = relax<R, W>(old[s - 1][c], n, qn, sQ[s * RN + r], p.lengths, p.base);
+        const float old = sOld[(s - 1) * RN + r];
+        const float v = relax<R, W>(old, n, qn, sQ[s * RN + r], p.lengths, p.base);
         cur[r] = v;
         if (ru >= K && ru < K + TU && rv >= K && rv < K + TV) {
-          changed |= v < old[s - 1][c];
+          changed |= v < old;
           sOut[(s - 1) * TU * TV + (rv - K) * TU + (ru - K)] = v;
         }
       }
       __syncthreads();
     }
 
-    // Write the tile's planes, contiguous runs first, then publish the group.
+    // Publish the group as soon as its last plane (the only one later items read) is written; the
+    // other planes are written after, in the order that is contiguous in memory.
+    auto write = [&](int s, int lu, int lv) {
+      const int gu = tu * TU + lu, gv = tv * TV + lv;
+      if (gu < p.nu && gv < p.nv) {
+        __stcg(p.dst + gu * p.strideU + gv * p.strideV + planeOffset(first + s), sOut[s * TU * TV + lv * TU + lu]);
+      }
+    };
+    for (int i = tid; i < TU * TV; i += S::Threads) write(steps - 1, i % TU, i / TU);
+    __syncthreads();
+    if (tid == 0) {
+      __threadfence();
+      storeRelease(done + t, unsigned(g + 1));
+    }
     const bool planesContiguous = p.strideA == 1;
     for (int i = tid; i < S::Out; i += S::Threads) {
       int s, lu, lv;
@@ -202,95 +229,56 @@ __global__ void __launch_bounds__(S::Threads, S::MinBlocks) sweepKernel(SweepPar
       } else {
         s = i / (TU * TV), lu = i % TU, lv = (i / TU) % TV;
       }
-      const int gu = tu * TU + lu, gv = tv * TV + lv;
-      if (s >= steps || gu >= p.nu || gv >= p.nv) continue;
-      __stcg(p.dst + gu * p.strideU + gv * p.strideV + planeOffset(first + s), sOut[s * TU * TV + lv * TU + lu]);
-    }
-    __syncthreads();
-    if (tid == 0) {
-      __threadfence();
-      storeRelease(done + t, unsigned(g + 1));
+      if (s < steps - 1) write(s, lu, lv);
     }
     ticket = sTicket;
   }
   if (__syncthreads_or(changed) && tid == 0) atomicOr(p.changed, 1);
 }
 
-template <class S>
-int tileCount(const ExactSweepArgs& a) {
-  return ((a.nu + S::TU - 1) / S::TU) * ((a.nv + S::TV - 1) / S::TV);
-}
-
-// Blocks of one kernel that fit on the device at once (occupancy × multiprocessors), per kernel.
-struct Residency {
-  int narrow = 0, deep = 0;
-};
-
-template <StepRule R, WeightRule W, class S>
+template <StepRule R, WeightRule W>
 cudaError_t prepareKernel(int multiprocessors, int& resident) {
-  cudaError_t e = cudaFuncSetAttribute(sweepKernel<R, W, S>, cudaFuncAttributeMaxDynamicSharedMemorySize, int(S::Bytes));
+  cudaError_t e = cudaFuncSetAttribute(sweepKernel<R, W, S8>, cudaFuncAttributeMaxDynamicSharedMemorySize, int(S8::Bytes));
   int perSm = 0;
-  if (e == cudaSuccess) e = cudaOccupancyMaxActiveBlocksPerMultiprocessor(&perSm, sweepKernel<R, W, S>, S::Threads, S::Bytes);
+  if (e == cudaSuccess) e = cudaOccupancyMaxActiveBlocksPerMultiprocessor(&perSm, sweepKernel<R, W, S8>, S8::Threads, S8::Bytes);
   if (e == cudaSuccess && perSm < 1) return cudaErrorInvalidConfiguration;
   const int blocks = perSm * multiprocessors;
   resident = resident == 0 ? blocks : std::min(resident, blocks);
   return e;
 }
 
-template <class S>
-cudaError_t prepareShape(int multiprocessors, int& resident) {
-  cudaError_t e = prepareKernel<StepRule::Trapezoid, WeightRule::Density, S>(multiprocessors, resident);
-  if (e == cudaSuccess) e = prepareKernel<StepRule::Entering, WeightRule::Density, S>(multiprocessors, resident);
-  if (e == cudaSuccess) e = prepareKernel<StepRule::Entering, WeightRule::Uniform, S>(multiprocessors, resident);
-  if (e == cudaSuccess) e = prepareKernel<StepRule::Entering, WeightRule::Gradient, S>(multiprocessors, resident);
-  if (e == cudaSuccess) e = prepareKernel<StepRule::Entering, WeightRule::Ascent, S>(multiprocessors, resident);
-  return e;
-}
-
 struct Prepared {
   cudaError_t error = cudaSuccess;
-  Residency resident;
+  int resident = 0;  // blocks that fit on the device at once (the least over the kernels)
 };
 
 const Prepared& prepared() {
   static const Prepared state = [] {
     Prepared s;
     int device = 0, multiprocessors = 0;
-    s.error = cudaGetDevice(&device);
-    if (s.error == cudaSuccess) s.error = cudaDeviceGetAttribute(&multiprocessors, cudaDevAttrMultiProcessorCount, device);
-    if (s.error == cudaSuccess) s.error = prepareShape<ShapeNarrow>(multiprocessors, s.resident.narrow);
-    if (s.error == cudaSuccess) s.error = prepareShape<ShapeDeep>(multiprocessors, s.resident.deep);
+    cudaError_t& e = s.error;
+    e = cudaGetDevice(&device);
+    if (e == cudaSuccess) e = cudaDeviceGetAttribute(&multiprocessors, cudaDevAttrMultiProcessorCount, device);
+    if (e == cudaSuccess) e = prepareKernel<StepRule::Trapezoid, WeightRule::Density>(multiprocessors, s.resident);
+    if (e == cudaSuccess) e = prepareKernel<StepRule::Entering, WeightRule::Density>(multiprocessors, s.resident);
+    if (e == cudaSuccess) e = prepareKernel<StepRule::Entering, WeightRule::Uniform>(multiprocessors, s.resident);
+    if (e == cudaSuccess) e = prepareKernel<StepRule::Entering, WeightRule::Gradient>(multiprocessors, s.resident);
+    if (e == cudaSuccess) e = prepareKernel<StepRule::Entering, WeightRule::Ascent>(multiprocessors, s.resident);
     return s;
   }();
   return state;
 }
 
-template <StepRule R, WeightRule W, class S>
-Status launchShape(const ExactSweepArgs& a, int resident, cudaStream_t stream) {
+template <StepRule R, WeightRule W>
+Status launchTyped(const ExactSweepArgs& a, cudaStream_t stream) {
+  using S = S8;
   SweepParams p{a.src,     a.dst,       a.density, a.nu, a.nv, a.na, (long long)a.strideU, (long long)a.strideV,
                 (long long)a.strideA, a.direction, a.lengths, a.baseCost, (a.nu + S::TU - 1) / S::TU,
                 (a.nv + S::TV - 1) / S::TV, (a.na + S::K - 1) / S::K, a.sync, a.changed};
   const long long items = (long long)p.groups * p.tilesU * p.tilesV;
-  const int blocks = int(std::min<long long>(items, resident));
+  const int blocks = int(std::min<long long>(items, prepared().resident));
   sweepKernel<R, W, S><<<blocks, S::Threads, S::Bytes, stream>>>(p);
   return check(cudaGetLastError(), "launch of a sweep kernel");
-}
-
-template <class S>
-Status launchTyped(const ExactSweepArgs& a, int resident, cudaStream_t stream) {
-  // Only density weights tell the two step rules apart: uniform weights cost len under both
-  // (½(1 + 1)·len = len exactly), gradient and ascent weights belong to the edge a → b and both
-  // rules charge w(a→b)·len (as the CPU backend's step_cost.h does).
-  if (a.rule == StepRule::Trapezoid && a.weight == WeightRule::Density) {
-    return launchShape<StepRule::Trapezoid, WeightRule::Density, S>(a, resident, stream);
-  }
-  switch (a.weight) {
-    case WeightRule::Density: return launchShape<StepRule::Entering, WeightRule::Density, S>(a, resident, stream);
-    case WeightRule::Uniform: return launchShape<StepRule::Entering, WeightRule::Uniform, S>(a, resident, stream);
-    case WeightRule::Gradient: return launchShape<StepRule::Entering, WeightRule::Gradient, S>(a, resident, stream);
-    case WeightRule::Ascent: return launchShape<StepRule::Entering, WeightRule::Ascent, S>(a, resident, stream);
-  }
-  return fail("WDT CUDA backend: unknown weight rule");
 }
 
 __global__ void initDistances(float* d, const std::uint8_t* seeds, std::size_t count) {
@@ -314,14 +302,24 @@ Status prepareExactSweeps() {
 }
 
 int sweepSyncWords(const ExactSweepArgs& a) {
-  const int tiles = a.shape == SweepShape::Deep ? tileCount<ShapeDeep>(a) : tileCount<ShapeNarrow>(a);
-  return 1 + tiles;
+  return 1 + ((a.nu + S8::TU - 1) / S8::TU) * ((a.nv + S8::TV - 1) / S8::TV);
 }
 
 Status launchExactSweep(const ExactSweepArgs& a, cudaStream_t stream) {
   if (auto s = prepareExactSweeps(); !s) return s;
-  if (a.shape == SweepShape::Deep) return launchTyped<ShapeDeep>(a, prepared().resident.deep, stream);
-  return launchTyped<ShapeNarrow>(a, prepared().resident.narrow, stream);
+  // Only density weights tell the two step rules apart: uniform weights cost len under both
+  // (½(1 + 1)·len = len exactly), gradient and ascent weights belong to the edge a → b and both
+  // rules charge w(a→b)·len (as the CPU backend's step_cost.h does).
+  if (a.rule == StepRule::Trapezoid && a.weight == WeightRule::Density) {
+    return launchTyped<StepRule::Trapezoid, WeightRule::Density>(a, stream);
+  }
+  switch (a.weight) {
+    case WeightRule::Density: return launchTyped<StepRule::Entering, WeightRule::Density>(a, stream);
+    case WeightRule::Uniform: return launchTyped<StepRule::Entering, WeightRule::Uniform>(a, stream);
+    case WeightRule::Gradient: return launchTyped<StepRule::Entering, WeightRule::Gradient>(a, stream);
+    case WeightRule::Ascent: return launchTyped<StepRule::Entering, WeightRule::Ascent>(a, stream);
+  }
+  return fail("WDT CUDA backend: unknown weight rule");
 }
 
 Status launchInitDistances(float* d, const std::uint8_t* seeds, std::size_t count, cudaStream_t stream) {

@@ -11,11 +11,6 @@
 
 namespace at::cuda {
 
-// Tile shape of a sweep: Narrow = 8 planes per item over 32×16-lane tiles (less redundant work,
-// for large planes), Deep = 16 planes per item over 16×16-lane tiles (half the items in sequence
-// per sweep, more redundant work: for small planes, where latency dominates).
-enum class SweepShape { Narrow, Deep };
-
 // Fills `d` (count floats) with 0 where seeds[i] != 0 and +infinity elsewhere.
 Status launchInitDistances(float* d, const std::uint8_t* seeds, std::size_t count, cudaStream_t stream);
 
@@ -33,7 +28,6 @@ struct ExactSweepArgs {
   float baseCost = 0;
   StepRule rule = StepRule::Entering;
   WeightRule weight = WeightRule::Density;
-  SweepShape shape = SweepShape::Narrow;
   unsigned* sync = nullptr;               // sweepSyncWords(args) words, zero before the launch
   int* changed = nullptr;
 };

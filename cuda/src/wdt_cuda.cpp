@@ -12,9 +12,15 @@
 #include <memory>
 #include <mutex>
 #include <optional>
+#include <new>
 #include <string>
+#include <thread>
 #include <utility>
 #include <vector>
+
+#if defined(__linux__)
+#include <sys/mman.h>
+#endif
 
 #include "cuda_util.h"
 #include "sweep_kernels.h"
@@ -87,19 +93,6 @@ Status validate(const WdtProblem& problem) {
   return check(cudaSetDevice(0), "cudaSetDevice(0)");
 }
 
-// Planes of at most this many lanes sweep with the deep shape (16 planes per item): fewer items
-// in sequence per sweep, which is what bounds small grids; larger planes use the narrow shape
-// (less redundant work). AT_WDT_CUDA_SHAPE=narrow|deep overrides the choice (benchmarks).
-constexpr std::size_t kDeepMaxLanes = 160 * 160;
-
-SweepShape sweepShape(int nu, int nv) {
-  if (const char* env = std::getenv("AT_WDT_CUDA_SHAPE")) {
-    if (std::string(env) == "deep") return SweepShape::Deep;
-    if (std::string(env) == "narrow") return SweepShape::Narrow;
-  }
-  return std::size_t(nu) * std::size_t(nv) <= kDeepMaxLanes ? SweepShape::Deep : SweepShape::Narrow;
-}
-
 #define AT_TRY(expr)                                          \
   do {                                                        \
     if (auto at_status_ = (expr); !at_status_)                \
@@ -123,11 +116,9 @@ struct PassKey {
   float baseCost = 0;
   StepRule rule = StepRule::Entering;
   WeightRule weight = WeightRule::Density;
-  SweepShape shapes[3] = {SweepShape::Narrow, SweepShape::Narrow, SweepShape::Narrow};
   bool operator==(const PassKey& o) const {
     return spacing[0] == o.spacing[0] && spacing[1] == o.spacing[1] && spacing[2] == o.spacing[2] &&
-           baseCost == o.baseCost && rule == o.rule && weight == o.weight && shapes[0] == o.shapes[0] &&
-           shapes[1] == o.shapes[1] && shapes[2] == o.shapes[2];
+           baseCost == o.baseCost && rule == o.rule && weight == o.weight;
   }
 };
 
@@ -250,9 +241,6 @@ Status preparePass(Workspace& w, const WdtProblem& problem) {
   key.baseCost = params.baseCost;
   key.rule = params.rule;
   key.weight = params.weight;
-  key.shapes[0] = sweepShape(d.y, d.z);
-  key.shapes[1] = sweepShape(d.x, d.z);
-  key.shapes[2] = sweepShape(d.x, d.y);
   if (w.passKey && *w.passKey == key) return {};
   w.passKey.reset();
 
@@ -265,7 +253,6 @@ Status preparePass(Workspace& w, const WdtProblem& problem) {
     e.rule = params.rule;
     e.weight = params.weight;
     e.changed = w.flag.get();
-    e.shape = key.shapes[axis];
     e.lengths = wdt::axisSweepLengths(axis, key.spacing[0], key.spacing[1], key.spacing[2]);
     if (axis == 0) {  // lanes y, z; planes x (contiguous)
       e.nu = d.y, e.nv = d.z, e.na = d.x, e.strideU = nx, e.strideV = nxy, e.strideA = 1;
@@ -296,6 +283,20 @@ Status preparePass(Workspace& w, const WdtProblem& problem) {
   AT_ASSIGN(w.pass, GraphExec::capture(w.stream, enqueuePass));
   w.passKey = key;
   return {};
+}
+
+// Makes `v` hold `count` floats (zero). A large fresh vector takes one page fault per 4 KiB as it
+// is first written, which is slow on virtual machines; on Linux the memory is advised to
+// transparent huge pages before the first touch.
+void allocateHostField(std::vector<float>& v, std::size_t count) {
+  v.reserve(count);
+#if defined(__linux__)
+  constexpr std::uintptr_t kHuge = std::uintptr_t(2) << 20;
+  const std::uintptr_t begin = (reinterpret_cast<std::uintptr_t>(v.data()) + kHuge - 1) & ~(kHuge - 1);
+  const std::uintptr_t end = reinterpret_cast<std::uintptr_t>(v.data() + count) & ~(kHuge - 1);
+  if (end > begin) (void)madvise(reinterpret_cast<void*>(begin), end - begin, MADV_HUGEPAGE);  // advice only
+#endif
+  v.resize(count);
 }
 
 // Uploads the problem and runs the passes; the field ends in w.a.
@@ -391,10 +392,24 @@ Result<WdtResult> runCudaBackend(const WdtProblem& problem, const WdtControl& co
   std::unique_ptr<Workspace> w;
   AT_ASSIGN(w, WorkspaceCache::instance().take(problem.grid.dims));
   WdtResult result;
-  AT_TRY(runPasses(*w, problem, control, result.stats));
   FloatVolume& out = result.field.distances;
   out.geometry = problem.grid;
-  out.voxels.resize(w->a.size());
+  {
+    // The host field is allocated on a second thread while the GPU runs.
+    bool allocated = true;
+    std::jthread allocation([&] {
+      try {
+        allocateHostField(out.voxels, w->a.size());
+      } catch (const std::bad_alloc&) {
+        allocated = false;
+      }
+    });
+    AT_TRY(runPasses(*w, problem, control, result.stats));
+    allocation.join();
+    if (!allocated) {
+      return fail("WDT CUDA backend: cannot allocate " + std::to_string(w->a.bytes()) + " bytes of host memory for the field");
+    }
+  }
   AT_TRY(w->transfer(out.voxels.data(), w->a.get(), w->a.bytes(), false));
   WorkspaceCache::instance().put(std::move(w));
   result.field.downsample = problem.params.downsample;
