@@ -1,40 +1,26 @@
-// The sweep kernels: one launch per sweep, equal to a serial sweep bit for bit.
+// The sweep kernels: overlapped plane groups, equal to a serial sweep bit for bit.
 //
 // A sweep along axis a must visit its planes in order (plane p reads plane p∓1 after that plane's
 // update), and one plane's update reaches one voxel further sideways per plane (a 45° cone). The
-// planes are cut into groups of K and the lanes into TU × TV tiles; a work item is one group of one
-// tile. An item computes its K planes in shared memory over the tile plus a halo that shrinks by
-// one voxel per plane (K − 1 at the first plane, 0 at the last): exactly the cone the tile's
-// results depend on. The halo voxels are recomputed redundantly from the same inputs, so they
-// equal what the neighbouring tiles compute.
+// sweep runs as ceil(planes / K) launches of K planes each (K = 8: 32 launches per sweep at 256³,
+// not one per plane). In a launch, each block owns a TU × TV tile of lanes and computes its K
+// planes in shared memory over the tile plus a halo that shrinks by one voxel per plane (K − 1 at
+// the first plane, 0 at the last): exactly the cone the tile's results depend on. The halo voxels
+// are recomputed redundantly from the same inputs, so they equal what the neighbouring block
+// computes, and no block reads another block's output of the same launch.
 //
-// Inputs of item (group g, tile t): the field before the sweep (`src`, never written during the
-// sweep) for the planes' old values, the densities, and the final values of the plane before the
-// group over the tile plus a K-voxel ring, which items (g − 1, t') of t and its 8 neighbours
-// wrote to `dst`. Each tile has a progress counter (groups completed) in global memory, published
-// with a release store after the item's writes; item (g, t) waits with acquire loads until the
-// counters of t and its neighbours reach g, then reads that plane. Every read is of data that is
-// complete and that nobody writes afterwards in the sweep, so the result is deterministic and
-// identical to the CPU backend's serial sweep (same stencil, same order of float operations, no
-// FMA contraction: --fmad=false).
+// Inputs of a launch: the field before the sweep (`src`, never written during the sweep) for the
+// planes' old values, and the final values of the plane before the group, written to `dst` by the
+// previous launch (complete: launches on one stream are ordered). Outputs: the tile interiors of
+// the K planes in `dst`. Every read is of data no thread writes during the launch, so the result
+// is deterministic and identical to the CPU backend's serial sweep (same stencil, same order of
+// float operations, no FMA contraction: --fmad=false).
 //
-// Scheduling: one launch per sweep, a grid of as many blocks as fit on the device at once, each
-// taking items from a global ticket counter in (group, tile) order. An item only waits for items
-// with smaller tickets, which were taken by blocks already running; so the smallest unfinished
-// item can always proceed and the sweep cannot deadlock, whatever the number of resident blocks.
-// A block fetches its next ticket while it computes, and issues its loads of `src` and densities
-// (which depend on no other item) before it waits.
-//
-// Layout: lanes (u, v) and planes a have arbitrary strides, so x sweeps run on the x-contiguous
-// field directly (u = y, v = z): an item's K planes of one lane are K consecutive floats. The
-// item's outputs are staged in shared memory and written at its end in the order that is
-// contiguous in memory (u-major for y and z sweeps, plane-major for x sweeps).
+// The x sweeps run on a copy of the field transposed to y-contiguous layout (as the CPU backend
+// does), so that every sweep's lanes are coalesced along the contiguous axis.
 #include <cuda_runtime.h>
 
-#include <algorithm>
 #include <string>
-
-#include <cuda_pipeline_primitives.h>
 
 #include "cuda_util.h"
 #include "sweep_kernels.h"
@@ -43,242 +29,148 @@
 namespace at::cuda {
 namespace {
 
-// Tile shape (TU × TV lanes, u contiguous in shared memory), planes per item K, block size.
-template <int K_, int TU_, int TV_, int Threads_, int MinBlocks_>
-struct Shape {
-  static constexpr int K = K_, TU = TU_, TV = TV_, Threads = Threads_, MinBlocks = MinBlocks_;
-  static constexpr int RU = TU + 2 * K, RV = TV + 2 * K, RN = RU * RV;  // region: tile + K ring
-  static constexpr int Cells = RN / Threads;                           // region cells per thread
-  static_assert(RN % Threads == 0, "each thread owns the same number of region cells");
-  static_assert(K <= TU && K <= TV, "the ring of the plane before the group lies in the 8 neighbouring tiles");
-  static constexpr int Out = K * TU * TV;
-  // Shared memory: two distance planes (previous, current), K staged output planes, the K planes'
-  // old values, K + 1 density planes (slot 0: the plane before the group; slots 1..K: its planes).
-  static constexpr std::size_t Bytes = std::size_t(2 * RN + Out + K * RN) * sizeof(float) + std::size_t(K + 1) * RN;
-};
-// 8 planes over 32×16-lane tiles: 1536 region cells, 3 per thread; two blocks per multiprocessor,
-// so that one block's loads and waits overlap the other's plane steps.
-using S8 = Shape<8, 32, 16, 512, 2>;
+constexpr int kTU = 32, kTV = 16;     // tile lanes: u contiguous
+constexpr int kK = 8;                 // planes per launch
+constexpr int kRU = kTU + 2 * kK;     // region including the widest read halo (K)
+constexpr int kRV = kTV + 2 * kK;
+constexpr int kRN = kRU * kRV;
+constexpr int kThreads = 512;
+static_assert(kRN % kThreads == 0, "the load loop covers the region exactly");
+constexpr int kSlots = kK + 1;        // slot 0: the plane before the group; slots 1..K: its planes
+constexpr std::size_t kSmemBytes = std::size_t(kSlots) * kRN * (sizeof(float) + 1);
 
-struct SweepParams {
+struct GroupArgs {
   const float* src;
   float* dst;
   const std::uint8_t* q;
   int nu, nv, na;
-  long long strideU, strideV, strideA;
+  std::size_t strideV, strideA;
   int direction;
-  wdt::SweepLengths lengths;  // B = u, C = v
+  int first;                 // step index (0-based, in sweep order) of the group's first plane
+  wdt::SweepLengths lengths; // B = u, C = v
   float base;
-  int tilesU, tilesV, groups;
-  unsigned* sync;             // [0]: ticket counter; [1 + t]: groups completed by tile t
   int* changed;
 };
 
-__device__ __forceinline__ unsigned loadAcquire(const unsigned* p) {
-  unsigned v;
-  asm volatile("ld.acquire.gpu.global.u32 %0, [%1];" : "=r"(v) : "l"(p) : "memory");
-  return v;
-}
-
-__device__ __forceinline__ void storeRelease(unsigned* p, unsigned v) {
-  asm volatile("st.release.gpu.global.u32 [%0], %1;" ::"l"(p), "r"(v) : "memory");
-}
-
-template <StepRule R, WeightRule W, class S>
-__global__ void __launch_bounds__(S::Threads, S::MinBlocks) sweepKernel(SweepParams p) {
-  constexpr int K = S::K, TU = S::TU, TV = S::TV, RU = S::RU, RN = S::RN, C = S::Cells;
+template <StepRule R, WeightRule W>
+__global__ void __launch_bounds__(kThreads, 1) sweepGroup(GroupArgs p) {
   constexpr bool kQn = kNeedsNeighbourDensity<R, W>;
   extern __shared__ float smem[];
-  float* sD = smem;                                                  // 2 × RN
-  float* sOut = sD + 2 * RN;                                         // K × TU·TV
-  float* sOld = sOut + S::Out;                                       // K × RN
-  std::uint8_t* sQ = reinterpret_cast<std::uint8_t*>(sOld + K * RN);  // (K + 1) × RN
-  __shared__ unsigned sTicket;
+  float* sD = smem;                                                      // kSlots × kRN
+  std::uint8_t* sQ = reinterpret_cast<std::uint8_t*>(smem + kSlots * kRN);  // kSlots × kRN
 
-  const int tid = int(threadIdx.x);
-  const int tiles = p.tilesU * p.tilesV;
-  const unsigned items = unsigned(p.groups) * unsigned(tiles);
-  unsigned* counter = p.sync;
-  unsigned* done = p.sync + 1;
-  auto planeOffset = [&](int step) {  // step: index in sweep order
-    return (p.direction > 0 ? step : p.na - 1 - step) * p.strideA;
+  const int u0 = int(blockIdx.x) * kTU - kK, v0 = int(blockIdx.y) * kTV - kK;  // region origin
+  const int steps = min(kK, p.na - p.first);
+  auto planeOffset = [&](int step) {
+    const int a = p.direction > 0 ? step : p.na - 1 - step;
+    return std::size_t(a) * p.strideA;
   };
 
-  if (tid == 0) sTicket = atomicAdd(counter, 1u);
+  // Load: slot 0 = final values of the previous plane (dst), slots 1.. = old values (src). All of
+  // a thread's loads go into registers first, then into shared memory, so they are all in flight
+  // at once (the load phase is latency-bound otherwise).
+  constexpr int kPer = kRN / kThreads;
+  float dv[kSlots][kPer];
+  std::uint8_t qv[kSlots][kPer];
+#pragma unroll
+  for (int slot = 0; slot < kSlots; ++slot) {
+    const int step = p.first + slot - 1;
+    const bool planeOk = slot <= steps && step >= 0;
+    const std::size_t plane = planeOk ? planeOffset(step) : 0;
+#pragma unroll
+    for (int k = 0; k < kPer; ++k) {
+      const int r = int(threadIdx.x) + k * kThreads;
+      const int gu = u0 + r % kRU, gv = v0 + r / kRU;
+      const bool ok = planeOk && gu >= 0 && gu < p.nu && gv >= 0 && gv < p.nv;
+      const std::size_t i = ok ? std::size_t(gu) + std::size_t(gv) * p.strideV + plane : 0;
+      dv[slot][k] = ok ? (slot == 0 ? p.dst[i] : __ldg(p.src + i)) : kInf;
+      qv[slot][k] = ok && (slot > 0 || kQn) ? __ldg(p.q + i) : 0;
+    }
+  }
+#pragma unroll
+  for (int slot = 0; slot < kSlots; ++slot) {
+#pragma unroll
+    for (int k = 0; k < kPer; ++k) {
+      sD[slot * kRN + int(threadIdx.x) + k * kThreads] = dv[slot][k];
+      sQ[slot * kRN + int(threadIdx.x) + k * kThreads] = qv[slot][k];
+    }
+  }
   __syncthreads();
-  unsigned ticket = sTicket;
+
+  // The plane loop is unrolled: each plane's halo h, region width and height are then constants
+  // (no run-time division to find a thread's voxel) and so is its trip count.
   bool changed = false;
-  while (ticket < items) {
-    __syncthreads();  // every thread has read sTicket (and finished the previous item's reads)
-    if (tid == 0) sTicket = atomicAdd(counter, 1u);  // the next item, read after the last barrier
-    const int g = int(ticket / unsigned(tiles)), t = int(ticket % unsigned(tiles));
-    const int tu = t % p.tilesU, tv = t / p.tilesU;
-    const int first = g * K, steps = min(K, p.na - first);
-    const int u0 = tu * TU - K, v0 = tv * TV - K;  // region origin in lanes
-
-    // Loads that depend on no other item, all in flight at once: old values (asynchronous copies
-    // into shared memory) and densities (registers, then shared memory).
-    long long lane[C];
-    bool inGrid[C];
 #pragma unroll
-    for (int c = 0; c < C; ++c) {
-      const int r = tid + c * S::Threads;
-      const int gu = u0 + r % RU, gv = v0 + r / RU;
-      inGrid[c] = gu >= 0 && gu < p.nu && gv >= 0 && gv < p.nv;
-      lane[c] = inGrid[c] ? gu * p.strideU + gv * p.strideV : 0;
-    }
+  for (int s = 1; s <= kK; ++s) {
+    if (s <= steps) {  // uniform across the block
+      const int h = kK - s;                       // valid halo at this plane
+      const int w = kTU + 2 * h, hgt = kTV + 2 * h;
+      const float* prev = sD + (s - 1) * kRN;
+      const std::uint8_t* qPrev = sQ + (s - 1) * kRN;
+      float* cur = sD + s * kRN;
+      float* dstPlane = p.dst + planeOffset(p.first + s - 1);
 #pragma unroll
-    for (int s = 1; s <= K; ++s) {
+      for (int i0 = 0; i0 < w * hgt; i0 += kThreads) {
+        const int i = i0 + int(threadIdx.x);
+        const int ru = kK - h + i % w, rv = kK - h + i / w;
+        const int gu = u0 + ru, gv = v0 + rv;
+        if (i < w * hgt && gu >= 0 && gu < p.nu && gv >= 0 && gv < p.nv) {  // else stays +infinity
+          const int r = rv * kRU + ru;
+          float n[3][3];
+          std::uint8_t qn[3][3];
 #pragma unroll
-      for (int c = 0; c < C; ++c) {
-        float* to = sOld + (s - 1) * RN + tid + c * S::Threads;
-        if (inGrid[c] && s <= steps) {
-          __pipeline_memcpy_async(to, p.src + lane[c] + planeOffset(first + s - 1), sizeof(float));
-        } else {
-          *to = kInf;
-        }
-      }
-    }
-    __pipeline_commit();
-    std::uint8_t qv[K + 1][C];
+          for (int dc = 0; dc < 3; ++dc) {
 #pragma unroll
-    for (int s = kQn ? 0 : 1; s <= K; ++s) {
-#pragma unroll
-      for (int c = 0; c < C; ++c) {
-        const bool ok = inGrid[c] && s <= steps && first + s - 1 >= 0;
-        qv[s][c] = ok ? __ldg(p.q + lane[c] + planeOffset(first + s - 1)) : std::uint8_t(0);
-      }
-    }
-#pragma unroll
-    for (int s = kQn ? 0 : 1; s <= K; ++s) {
-#pragma unroll
-      for (int c = 0; c < C; ++c) sQ[s * RN + tid + c * S::Threads] = qv[s][c];
-    }
-
-    // Wait until the plane before the group is final over the region (tiles t and neighbours).
-    if (g > 0 && tid < 9) {
-      const int nu = tu + tid % 3 - 1, nv = tv + tid / 3 - 1;
-      if (nu >= 0 && nu < p.tilesU && nv >= 0 && nv < p.tilesV) {
-        const unsigned* flag = done + nv * p.tilesU + nu;
-        while (loadAcquire(flag) < unsigned(g)) __nanosleep(32);
-      }
-    }
-    __syncthreads();
-#pragma unroll
-    for (int c = 0; c < C; ++c) {
-      const int r = tid + c * S::Threads;
-      // L2 loads (ld.cg): the values were written by other blocks during this launch.
-      sD[r] = inGrid[c] && g > 0 ? __ldcg(p.dst + lane[c] + planeOffset(first - 1)) : kInf;
-      if (!inGrid[c]) sD[RN + r] = kInf;  // outside the grid both planes stay +infinity
-    }
-    __pipeline_wait_prior(0);  // this thread's old values (each thread reads only its own)
-    __syncthreads();
-
-#pragma unroll
-    for (int s = 1; s <= K; ++s) {
-      if (s > steps) continue;  // uniform across the block
-      const int h = K - s;  // valid halo of this plane
-      const float* prev = sD + ((s - 1) & 1) * RN;
-      float* cur = sD + (s & 1) * RN;
-      const std::uint8_t* qPrev = sQ + (s - 1) * RN;
-#pragma unroll
-      for (int c = 0; c < C; ++c) {
-        const int r = tid + c * S::Threads;
-        const int ru = r % RU, rv = r / RU;
-        if (!inGrid[c] || ru < K - h || ru >= K + TU + h || rv < K - h || rv >= K + TV + h) continue;
-        float n[3][3];
-        std::uint8_t qn[3][3];
-#pragma unroll
-        for (int dc = 0; dc < 3; ++dc) {
-#pragma unroll
-          for (int db = 0; db < 3; ++db) {
-            n[dc][db] = prev[r + (dc - 1) * RU + (db - 1)];
-            qn[dc][db] = kQn ? qPrev[r + (dc - 1) * RU + (db - 1)] : 0;
+            for (int db = 0; db < 3; ++db) {
+              n[dc][db] = prev[r + (dc - 1) * kRU + (db - 1)];
+              qn[dc][db] = kQn ? qPrev[r + (dc - 1) * kRU + (db - 1)] : 0;
+            }
           }
-        }
-        const float old = sOld[(s - 1) * RN + r];
-        const float v = relax<R, W>(old, n, qn, sQ[s * RN + r], p.lengths, p.base);
-        cur[r] = v;
-        if (ru >= K && ru < K + TU && rv >= K && rv < K + TV) {
-          changed |= v < old;
-          sOut[(s - 1) * TU * TV + (rv - K) * TU + (ru - K)] = v;
+          const float old = cur[r];
+          const float v = relax<R, W>(old, n, qn, sQ[s * kRN + r], p.lengths, p.base);
+          cur[r] = v;
+          if (ru >= kK && ru < kK + kTU && rv >= kK && rv < kK + kTV) {
+            changed |= v < old;
+            dstPlane[std::size_t(gu) + std::size_t(gv) * p.strideV] = v;
+          }
         }
       }
       __syncthreads();
     }
-
-    // Publish the group as soon as its last plane (the only one later items read) is written; the
-    // other planes are written after, in the order that is contiguous in memory.
-    auto write = [&](int s, int lu, int lv) {
-      const int gu = tu * TU + lu, gv = tv * TV + lv;
-      if (gu < p.nu && gv < p.nv) {
-        __stcg(p.dst + gu * p.strideU + gv * p.strideV + planeOffset(first + s), sOut[s * TU * TV + lv * TU + lu]);
-      }
-    };
-    for (int i = tid; i < TU * TV; i += S::Threads) write(steps - 1, i % TU, i / TU);
-    __syncthreads();
-    if (tid == 0) {
-      __threadfence();
-      storeRelease(done + t, unsigned(g + 1));
-    }
-    const bool planesContiguous = p.strideA == 1;
-    for (int i = tid; i < S::Out; i += S::Threads) {
-      int s, lu, lv;
-      if (planesContiguous) {
-        s = i % K, lu = (i / K) % TU, lv = i / (K * TU);
-      } else {
-        s = i / (TU * TV), lu = i % TU, lv = (i / TU) % TV;
-      }
-      if (s < steps - 1) write(s, lu, lv);
-    }
-    ticket = sTicket;
   }
-  if (__syncthreads_or(changed) && tid == 0) atomicOr(p.changed, 1);
+  if (__syncthreads_or(changed) && threadIdx.x == 0) *p.changed = 1;
 }
 
 template <StepRule R, WeightRule W>
-cudaError_t prepareKernel(int multiprocessors, int& resident) {
-  cudaError_t e = cudaFuncSetAttribute(sweepKernel<R, W, S8>, cudaFuncAttributeMaxDynamicSharedMemorySize, int(S8::Bytes));
-  int perSm = 0;
-  if (e == cudaSuccess) e = cudaOccupancyMaxActiveBlocksPerMultiprocessor(&perSm, sweepKernel<R, W, S8>, S8::Threads, S8::Bytes);
-  if (e == cudaSuccess && perSm < 1) return cudaErrorInvalidConfiguration;
-  const int blocks = perSm * multiprocessors;
-  resident = resident == 0 ? blocks : std::min(resident, blocks);
-  return e;
-}
-
-struct Prepared {
-  cudaError_t error = cudaSuccess;
-  int resident = 0;  // blocks that fit on the device at once (the least over the kernels)
-};
-
-const Prepared& prepared() {
-  static const Prepared state = [] {
-    Prepared s;
-    int device = 0, multiprocessors = 0;
-    cudaError_t& e = s.error;
-    e = cudaGetDevice(&device);
-    if (e == cudaSuccess) e = cudaDeviceGetAttribute(&multiprocessors, cudaDevAttrMultiProcessorCount, device);
-    if (e == cudaSuccess) e = prepareKernel<StepRule::Trapezoid, WeightRule::Density>(multiprocessors, s.resident);
-    if (e == cudaSuccess) e = prepareKernel<StepRule::Entering, WeightRule::Density>(multiprocessors, s.resident);
-    if (e == cudaSuccess) e = prepareKernel<StepRule::Entering, WeightRule::Uniform>(multiprocessors, s.resident);
-    if (e == cudaSuccess) e = prepareKernel<StepRule::Entering, WeightRule::Gradient>(multiprocessors, s.resident);
-    if (e == cudaSuccess) e = prepareKernel<StepRule::Entering, WeightRule::Ascent>(multiprocessors, s.resident);
-    return s;
-  }();
-  return state;
+cudaError_t allowLargeSharedMemory() {
+  return cudaFuncSetAttribute(sweepGroup<R, W>, cudaFuncAttributeMaxDynamicSharedMemorySize, int(kSmemBytes));
 }
 
 template <StepRule R, WeightRule W>
-Status launchTyped(const ExactSweepArgs& a, cudaStream_t stream) {
-  using S = S8;
-  SweepParams p{a.src,     a.dst,       a.density, a.nu, a.nv, a.na, (long long)a.strideU, (long long)a.strideV,
-                (long long)a.strideA, a.direction, a.lengths, a.baseCost, (a.nu + S::TU - 1) / S::TU,
-                (a.nv + S::TV - 1) / S::TV, (a.na + S::K - 1) / S::K, a.sync, a.changed};
-  const long long items = (long long)p.groups * p.tilesU * p.tilesV;
-  const int blocks = int(std::min<long long>(items, prepared().resident));
-  sweepKernel<R, W, S><<<blocks, S::Threads, S::Bytes, stream>>>(p);
+Status launchGroups(const ExactSweepArgs& a, cudaStream_t stream) {
+  GroupArgs p{a.src, a.dst, a.density, a.nu, a.nv, a.na, a.strideV, a.strideA, a.direction, 0, a.lengths,
+              a.baseCost, a.changed};
+  const dim3 grid((a.nu + kTU - 1) / kTU, (a.nv + kTV - 1) / kTV);
+  for (p.first = 0; p.first < a.na; p.first += kK) {
+    sweepGroup<R, W><<<grid, kThreads, kSmemBytes, stream>>>(p);
+  }
   return check(cudaGetLastError(), "launch of a sweep kernel");
+}
+
+template <class T>
+__global__ void transposeXY(const T* __restrict__ in, T* __restrict__ out, int nx, int ny) {
+  __shared__ T tile[32][33];
+  const std::size_t slice = std::size_t(nx) * ny * blockIdx.z;
+  const int x0 = blockIdx.x * 32, y0 = blockIdx.y * 32;
+  for (int dy = threadIdx.y; dy < 32; dy += 8) {
+    const int x = x0 + threadIdx.x, y = y0 + dy;
+    if (x < nx && y < ny) tile[dy][threadIdx.x] = in[slice + x + std::size_t(nx) * y];
+  }
+  __syncthreads();
+  for (int dx = threadIdx.y; dx < 32; dx += 8) {
+    const int y = y0 + threadIdx.x, x = x0 + dx;
+    if (x < nx && y < ny) out[slice + y + std::size_t(ny) * x] = tile[threadIdx.x][dx];
+  }
 }
 
 __global__ void initDistances(float* d, const std::uint8_t* seeds, std::size_t count) {
@@ -298,29 +190,41 @@ __global__ void fill(float* d, std::size_t count, float value) {
 }  // namespace
 
 Status prepareExactSweeps() {
-  return check(prepared().error, "preparing the sweep kernels (shared memory limit, occupancy)");
-}
-
-int sweepSyncWords(const ExactSweepArgs& a) {
-  return 1 + ((a.nu + S8::TU - 1) / S8::TU) * ((a.nv + S8::TV - 1) / S8::TV);
+  static const cudaError_t status = [] {
+    cudaError_t e = allowLargeSharedMemory<StepRule::Trapezoid, WeightRule::Density>();
+    if (e == cudaSuccess) e = allowLargeSharedMemory<StepRule::Entering, WeightRule::Density>();
+    if (e == cudaSuccess) e = allowLargeSharedMemory<StepRule::Entering, WeightRule::Uniform>();
+    if (e == cudaSuccess) e = allowLargeSharedMemory<StepRule::Entering, WeightRule::Gradient>();
+    if (e == cudaSuccess) e = allowLargeSharedMemory<StepRule::Entering, WeightRule::Ascent>();
+    return e;
+  }();
+  return check(status, "cudaFuncSetAttribute(sweep kernels, " + std::to_string(kSmemBytes) + " bytes of shared memory)");
 }
 
 Status launchExactSweep(const ExactSweepArgs& a, cudaStream_t stream) {
-  if (auto s = prepareExactSweeps(); !s) return s;
+  if (a.rule == StepRule::Trapezoid && a.weight == WeightRule::Density) {
+    return launchGroups<StepRule::Trapezoid, WeightRule::Density>(a, stream);
+  }
   // Only density weights tell the two step rules apart: uniform weights cost len under both
   // (½(1 + 1)·len = len exactly), gradient and ascent weights belong to the edge a → b and both
   // rules charge w(a→b)·len (as the CPU backend's step_cost.h does).
-  if (a.rule == StepRule::Trapezoid && a.weight == WeightRule::Density) {
-    return launchTyped<StepRule::Trapezoid, WeightRule::Density>(a, stream);
-  }
   switch (a.weight) {
-    case WeightRule::Density: return launchTyped<StepRule::Entering, WeightRule::Density>(a, stream);
-    case WeightRule::Uniform: return launchTyped<StepRule::Entering, WeightRule::Uniform>(a, stream);
-    case WeightRule::Gradient: return launchTyped<StepRule::Entering, WeightRule::Gradient>(a, stream);
-    case WeightRule::Ascent: return launchTyped<StepRule::Entering, WeightRule::Ascent>(a, stream);
+    case WeightRule::Density: return launchGroups<StepRule::Entering, WeightRule::Density>(a, stream);
+    case WeightRule::Uniform: return launchGroups<StepRule::Entering, WeightRule::Uniform>(a, stream);
+    case WeightRule::Gradient: return launchGroups<StepRule::Entering, WeightRule::Gradient>(a, stream);
+    case WeightRule::Ascent: return launchGroups<StepRule::Entering, WeightRule::Ascent>(a, stream);
   }
   return fail("WDT CUDA backend: unknown weight rule");
 }
+
+template <class T>
+Status launchTransposeXY(const T* in, T* out, int nx, int ny, int nz, cudaStream_t stream) {
+  const dim3 grid((nx + 31) / 32, (ny + 31) / 32, nz);
+  transposeXY<T><<<grid, dim3(32, 8), 0, stream>>>(in, out, nx, ny);
+  return check(cudaGetLastError(), "launch of the transpose kernel");
+}
+template Status launchTransposeXY<float>(const float*, float*, int, int, int, cudaStream_t);
+template Status launchTransposeXY<std::uint8_t>(const std::uint8_t*, std::uint8_t*, int, int, int, cudaStream_t);
 
 Status launchInitDistances(float* d, const std::uint8_t* seeds, std::size_t count, cudaStream_t stream) {
   if (count == 0) return {};

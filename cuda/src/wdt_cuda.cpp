@@ -128,18 +128,15 @@ struct PassKey {
 struct Workspace {
   Dims dims;
   Stream stream;
-  DeviceBuffer<std::uint8_t> density;
+  DeviceBuffer<std::uint8_t> density, densityT;  // densityT: y-contiguous copy for the x sweeps
   DeviceBuffer<float> a, b;  // the field (in `a` between passes) and the sweeps' second buffer
   DeviceBuffer<int> flag;
-  DeviceBuffer<unsigned> sync;
   PinnedBuffer<int> flagHost;
   PinnedBuffer<std::uint8_t> staging[2];
   Event chunkDone[2];
   Event start, end;
   GraphExec pass;
   std::optional<PassKey> passKey;
-  ExactSweepArgs sweeps[6];  // the pass's sweeps, in order
-  std::size_t syncWords = 0;
 
   static Result<std::unique_ptr<Workspace>> create(Dims dims) {
     const std::size_t n = dims.count();
@@ -147,6 +144,7 @@ struct Workspace {
     w->dims = dims;
     AT_ASSIGN(w->stream, Stream::create());
     AT_ASSIGN(w->density, DeviceBuffer<std::uint8_t>::allocate(n));
+    AT_ASSIGN(w->densityT, DeviceBuffer<std::uint8_t>::allocate(n));
     AT_ASSIGN(w->a, DeviceBuffer<float>::allocate(n));
     AT_ASSIGN(w->b, DeviceBuffer<float>::allocate(n));
     AT_ASSIGN(w->flag, DeviceBuffer<int>::allocate(1));
@@ -231,8 +229,9 @@ class WorkspaceCache {
   std::vector<std::unique_ptr<Workspace>> kept_;
 };
 
-// Prepares the pass's six sweeps (x+ x− y+ y− z+ z−, ping-ponging a → b → a) and captures them,
-// with the reset of their scheduling words, as one CUDA graph; reused while the key matches.
+// Captures one pass as a CUDA graph, reused while the key matches: the x sweeps run on a copy of
+// the field transposed to y-contiguous layout (so that every sweep's lanes are coalesced), then
+// the y and z sweeps; the field starts and ends the pass in `a`.
 Status preparePass(Workspace& w, const WdtProblem& problem) {
   const Dims d = w.dims;
   const WdtParams& params = problem.params;
@@ -244,41 +243,40 @@ Status preparePass(Workspace& w, const WdtProblem& problem) {
   if (w.passKey && *w.passKey == key) return {};
   w.passKey.reset();
 
-  const std::size_t nx = std::size_t(d.x), nxy = nx * std::size_t(d.y);
-  std::size_t offset = 0, syncOffset[6] = {};
-  for (int axis = 0; axis < 3; ++axis) {
-    ExactSweepArgs e;
-    e.density = w.density.get();
-    e.baseCost = params.baseCost;
-    e.rule = params.rule;
-    e.weight = params.weight;
-    e.changed = w.flag.get();
-    e.lengths = wdt::axisSweepLengths(axis, key.spacing[0], key.spacing[1], key.spacing[2]);
-    if (axis == 0) {  // lanes y, z; planes x (contiguous)
-      e.nu = d.y, e.nv = d.z, e.na = d.x, e.strideU = nx, e.strideV = nxy, e.strideA = 1;
-    } else if (axis == 1) {  // lanes x, z; planes y
-      e.nu = d.x, e.nv = d.z, e.na = d.y, e.strideU = 1, e.strideV = nxy, e.strideA = nx;
-    } else {  // lanes x, y; planes z
-      e.nu = d.x, e.nv = d.y, e.na = d.z, e.strideU = 1, e.strideV = nx, e.strideA = nxy;
-    }
-    for (int direction : {+1, -1}) {
-      ExactSweepArgs& s = w.sweeps[2 * axis + (direction > 0 ? 0 : 1)];
-      s = e;
-      s.direction = direction;
-      s.src = direction > 0 ? w.a.get() : w.b.get();
-      s.dst = direction > 0 ? w.b.get() : w.a.get();
-      syncOffset[2 * axis + (direction > 0 ? 0 : 1)] = offset;
-      offset += std::size_t(sweepSyncWords(s));
-    }
-  }
-  if (offset > w.sync.size()) AT_ASSIGN(w.sync, DeviceBuffer<unsigned>::allocate(offset));
-  w.syncWords = offset;
-  for (int i = 0; i < 6; ++i) w.sweeps[i].sync = w.sync.get() + syncOffset[i];
-
   auto enqueuePass = [&](cudaStream_t st) -> Status {
-    AT_TRY(check(cudaMemsetAsync(w.sync.get(), 0, w.syncWords * sizeof(unsigned), st), "cudaMemsetAsync(sweep sync)"));
-    for (const ExactSweepArgs& s : w.sweeps) AT_TRY(launchExactSweep(s, st));
-    return {};
+    ExactSweepArgs e;
+    e.baseCost = key.baseCost;
+    e.rule = key.rule;
+    e.weight = key.weight;
+    e.changed = w.flag.get();
+    const float sx = key.spacing[0], sy = key.spacing[1], sz = key.spacing[2];
+    const std::size_t nxy = std::size_t(d.x) * d.y;
+    float* a = w.a.get();
+    float* b = w.b.get();
+    // x sweeps on the transposed field (y contiguous): lanes y, z; planes x.
+    AT_TRY(launchTransposeXY(a, b, d.x, d.y, d.z, st));
+    e.density = w.densityT.get();
+    e.nu = d.y, e.nv = d.z, e.na = d.x, e.strideV = nxy, e.strideA = std::size_t(d.y);
+    e.lengths = wdt::axisSweepLengths(0, sx, sy, sz);
+    e.src = b, e.dst = a, e.direction = +1;
+    AT_TRY(launchExactSweep(e, st));
+    e.src = a, e.dst = b, e.direction = -1;
+    AT_TRY(launchExactSweep(e, st));
+    AT_TRY(launchTransposeXY(b, a, d.y, d.x, d.z, st));
+    // y sweeps: lanes x, z; planes y.  z sweeps: lanes x, y; planes z.
+    e.density = w.density.get();
+    e.nu = d.x, e.nv = d.z, e.na = d.y, e.strideV = nxy, e.strideA = std::size_t(d.x);
+    e.lengths = wdt::axisSweepLengths(1, sx, sy, sz);
+    e.src = a, e.dst = b, e.direction = +1;
+    AT_TRY(launchExactSweep(e, st));
+    e.src = b, e.dst = a, e.direction = -1;
+    AT_TRY(launchExactSweep(e, st));
+    e.nu = d.x, e.nv = d.y, e.na = d.z, e.strideV = std::size_t(d.x), e.strideA = nxy;
+    e.lengths = wdt::axisSweepLengths(2, sx, sy, sz);
+    e.src = a, e.dst = b, e.direction = +1;
+    AT_TRY(launchExactSweep(e, st));
+    e.src = b, e.dst = a, e.direction = -1;
+    return launchExactSweep(e, st);
   };
   AT_ASSIGN(w.pass, GraphExec::capture(w.stream, enqueuePass));
   w.passKey = key;
@@ -310,6 +308,7 @@ Status runPasses(Workspace& w, const WdtProblem& problem, const WdtControl& cont
   AT_TRY(w.transfer(seeds, problem.seeds.data(), n, true));
   AT_TRY(launchInitDistances(w.a.get(), seeds, n, s));
   AT_TRY(w.transfer(w.density.get(), problem.density.data(), n, true));
+  AT_TRY(launchTransposeXY(w.density.get(), w.densityT.get(), w.dims.x, w.dims.y, w.dims.z, s));
   AT_TRY(preparePass(w, problem));
 
   stats.backendUsed = WdtBackend::Cuda;

@@ -1,12 +1,12 @@
 // The CUDA backend of the weighted distance transform. Nothing here exposes CUDA types: callers
 // see plain C++ (the cuda/ folder is the only place that includes cuda_runtime.h).
 //
-// Each sweep is one kernel launch (cuda/src/exact_sweep.cu): blocks take (plane group, tile)
-// items in order and wait for their neighbours' progress counters, so fields equal the CPU
-// backend's bit for bit after any number of passes (and hence the exact reference once
-// converged), deterministically. A pass is replayed as one CUDA graph: progress and cancellation
-// are per pass. Device buffers, staging memory and the captured pass are kept for the next call
-// on a grid of the same size (the two most recent sizes).
+// Each sweep is ceil(planes / 8) launches of overlapped plane groups (cuda/src/exact_sweep.cu);
+// fields equal the CPU backend's bit for bit after any number of passes (and hence the exact
+// reference once converged). Deterministic: no thread reads data written in the same launch by
+// another block. A pass is replayed as one CUDA graph: progress and cancellation are per pass.
+// Device buffers, staging memory and the captured pass are kept for the next call on a grid of
+// the same size (the two most recent sizes).
 #pragma once
 
 #include <memory>
