@@ -204,6 +204,8 @@ class WorkspaceCache {
     static WorkspaceCache* cache = new WorkspaceCache;
     return *cache;
   }
+  // A kept workspace of these dims, or a new one; if allocating fails, the kept workspaces are
+  // freed and the allocation is tried once more.
   Result<std::unique_ptr<Workspace>> take(Dims dims) {
     {
       std::lock_guard<std::mutex> lock(mutex_);
@@ -215,6 +217,15 @@ class WorkspaceCache {
         }
       }
     }
+    auto made = Workspace::create(dims);
+    if (made) return made;
+    std::vector<std::unique_ptr<Workspace>> freed;
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      freed.swap(kept_);
+    }
+    if (freed.empty()) return made;
+    freed.clear();
     return Workspace::create(dims);
   }
   void put(std::unique_ptr<Workspace> w) {
