@@ -18,8 +18,21 @@
 
 using namespace at;
 
+namespace {
+// Debian's python3-skimage installs for the system interpreter; a python3 earlier on PATH (pyenv,
+// a virtualenv) may not see it, so the system one is tried first.
+std::string pythonWithSkimage() {
+  for (const char* python : {"/usr/bin/python3", "python3"}) {
+    const std::string probe = std::string(python) + " -c 'import skimage.graph' >/dev/null 2>&1";
+    if (std::system(probe.c_str()) == 0) return python;
+  }
+  return {};
+}
+}  // namespace
+
 TEST_CASE("Trapezoid converged field equals skimage MCP_Geometric (fully connected)") {
-  if (std::system("python3 -c 'import skimage.graph' >/dev/null 2>&1") != 0) {
+  const std::string python = pythonWithSkimage();
+  if (python.empty()) {
     std::printf("SKIPPED: python3 with scikit-image (skimage) is not installed\n");
     return;
   }
@@ -56,7 +69,7 @@ TEST_CASE("Trapezoid converged field equals skimage MCP_Geometric (fully connect
        << "cum, _ = mcp.find_costs([(5, 4, 3), (1, 2, 10)])\n"
        << "np.savetxt('" << out << "', cum.reshape(-1))\n";
   }
-  REQUIRE(std::system(("python3 " + script).c_str()) == 0);
+  REQUIRE(std::system((python + " " + script).c_str()) == 0);
   std::ifstream in(out);
   std::vector<double> expected;
   for (double x; in >> x;) expected.push_back(x);
