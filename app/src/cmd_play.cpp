@@ -226,9 +226,9 @@ int runPlay(const Argv& argv) {
     idByName[lower(s.displayName)] = s.id;
   }
 
-  auto dataset = loadCourseDataset(*database, course->datasetId);
-  if (!dataset) return reportError("play: " + dataset.error().message);
-  quiz::DatasetKeyComputer keys(*dataset, wdtDistanceField(*dataset));
+  db::Database& databaseRef = *database;
+  const std::string datasetId = course->datasetId;
+  LazyKeyComputer keys(*structures, [&databaseRef, datasetId] { return loadCourseDataset(databaseRef, datasetId); });
 
   lessons::LessonEngine engine(curriculum, progress, keys);
   const auto mode = args->has("quiz-only") ? lessons::LessonMode::QuizOnly : lessons::LessonMode::Guided;
@@ -253,6 +253,7 @@ int runPlay(const Argv& argv) {
         if (!line || (source->interactive() && lower(trim(*line)) == "quit")) {
           std::printf("\nstopped before step %d of %d; your answers are saved — run the same command to resume\n",
                       view->position, view->count);
+          std::fflush(stdout);
           return line ? 0 : reportError("play: " + std::string(source->interactive() ? "input" : "the answers file") +
                                         " ended before the lesson did (resume with the same command)");
         }
@@ -269,6 +270,7 @@ int runPlay(const Argv& argv) {
           std::fflush(stdout);
           break;
         }
+        std::fflush(stdout);
         if (!source->interactive())
           return reportError("play: " + source->where() + ": " + grade.error().message +
                              " (earlier answers are saved; fix the line and run again to resume)");

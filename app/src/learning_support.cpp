@@ -50,11 +50,49 @@ quiz::DistanceFieldFunction wdtDistanceField(const Dataset& dataset) {
   return [&dataset](const Mask& seeds) -> Result<FloatVolume> {
     WdtParams params;
     params.converge = true;
+    params.downsample = 2;
     auto result = computeWdt(dataset.volume, seeds, params);
     if (!result) return tl::unexpected(result.error());
     if (result->field.downsample == 1) return std::move(result->field.distances);
     return upsampleField(result->field, dataset.labels.geometry);
   };
+}
+
+LazyKeyComputer::LazyKeyComputer(std::vector<Structure> structures, Loader loader)
+    : structures_(std::move(structures)), loader_(std::move(loader)) {}
+
+bool LazyKeyComputer::hasStructure(const std::string& structureId) const {
+  for (const Structure& s : structures_)
+    if (s.id == structureId) return true;
+  return false;
+}
+
+Result<quiz::KeyComputer*> LazyKeyComputer::loaded() {
+  if (!keys_) {
+    auto dataset = loader_();
+    if (!dataset) return tl::unexpected(dataset.error());
+    dataset_ = std::make_unique<Dataset>(std::move(*dataset));
+    keys_ = std::make_unique<quiz::DatasetKeyComputer>(*dataset_, wdtDistanceField(*dataset_));
+  }
+  return keys_.get();
+}
+
+Result<quiz::StructureDistances> LazyKeyComputer::distancesFrom(const std::string& structureId) {
+  auto keys = loaded();
+  if (!keys) return tl::unexpected(keys.error());
+  return (*keys)->distancesFrom(structureId);
+}
+
+Result<Vec3> LazyKeyComputer::centroidMm(const std::string& structureId) {
+  auto keys = loaded();
+  if (!keys) return tl::unexpected(keys.error());
+  return (*keys)->centroidMm(structureId);
+}
+
+Result<std::vector<std::string>> LazyKeyComputer::structuresAlong(const Vec3& entryMm, const Vec3& targetMm) {
+  auto keys = loaded();
+  if (!keys) return tl::unexpected(keys.error());
+  return (*keys)->structuresAlong(entryMm, targetMm);
 }
 
 }  // namespace at::app

@@ -3,9 +3,11 @@
 // for key computation, and a KeyComputer whose distances come from computeWdt.
 #pragma once
 
+#include <functional>
 #include <memory>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "db/database.h"
 #include "db/sqlite_repositories.h"
@@ -29,7 +31,30 @@ db::BuiltinStructures builtinStructures();
 Result<Dataset> loadCourseDataset(db::Database& db, const std::string& datasetId);
 
 // Distance fields for key computation: the weighted distance transform (density weights, the
-// paper's entering rule, sweeps until converged) from a structure's voxels, on the label grid.
+// paper's entering rule, sweeps until converged) from a structure's voxels, computed on a grid
+// coarser by 2 per axis (as the paper does for interaction: 8x fewer voxels) and sampled back
+// trilinearly onto the label grid. Keys compare distances between structures millimetres apart,
+// and a relation key must win by kRelationMargin, so the coarser grid does not change them.
 quiz::DistanceFieldFunction wdtDistanceField(const Dataset& dataset);
+
+// A KeyComputer that answers hasStructure from a structure list and loads the dataset (and computes
+// distance fields) only when a key needs it: lessons without relation, order or computed identify
+// questions start without building a volume.
+class LazyKeyComputer final : public quiz::KeyComputer {
+ public:
+  using Loader = std::function<Result<Dataset>()>;
+  LazyKeyComputer(std::vector<Structure> structures, Loader loader);
+  bool hasStructure(const std::string& structureId) const override;
+  Result<quiz::StructureDistances> distancesFrom(const std::string& structureId) override;
+  Result<Vec3> centroidMm(const std::string& structureId) override;
+  Result<std::vector<std::string>> structuresAlong(const Vec3& entryMm, const Vec3& targetMm) override;
+
+ private:
+  Result<quiz::KeyComputer*> loaded();
+  std::vector<Structure> structures_;
+  Loader loader_;
+  std::unique_ptr<Dataset> dataset_;
+  std::unique_ptr<quiz::DatasetKeyComputer> keys_;
+};
 
 }  // namespace at::app
