@@ -20,7 +20,7 @@ class Reader {
 
   // Call first: the value must be an object whose keys are all in `allowed`.
   Status expect(std::initializer_list<const char*> allowed) const {
-    if (!j_.is_object()) return fail(path_ + ": must be an object");
+    if (!j_.is_object()) return fail((path_.empty() ? std::string("the document") : path_) + ": must be an object");
     for (const auto& [key, value] : j_.items()) {
       bool known = false;
       for (const char* a : allowed) known = known || key == a;
