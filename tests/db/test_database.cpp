@@ -10,10 +10,13 @@
 #include <thread>
 
 #include "db/checksum.h"
+#include "db/course_store.h"
 #include "db/database.h"
 #include "db/dataset_store.h"
 #include "db/schema.h"
+#include "lessons/course_json.h"
 #include "test_support.h"
+#include "toy_course.h"
 
 namespace fs = std::filesystem;
 using namespace at;
@@ -98,6 +101,7 @@ TEST_CASE("A database at every earlier version migrates to the same schema as a 
       REQUIRE(old);
       CHECK(*old->schemaVersion() == from);
       if (from >= 1) REQUIRE(registerDataset(*old, sampleRecord("kept"), {}));
+      if (from >= 2) REQUIRE(storeCourse(*old, test::toyCourse(), "v" + std::to_string(from)));
     }
     auto db = Database::open(path);
     REQUIRE_MESSAGE(db, (db ? "" : db.error().message));
@@ -108,6 +112,12 @@ TEST_CASE("A database at every earlier version migrates to the same schema as a 
       REQUIRE(kept);
       REQUIRE(kept->has_value());
       CHECK((*kept)->geometry.spacingMm[1] == doctest::Approx(0.75));
+    }
+    if (from >= 2) {
+      SqliteCurriculumRepository repo(*db, test::toyBuiltin());
+      auto course = repo.course("toy");
+      REQUIRE(course);
+      CHECK(lessons::courseToJson(*course) == lessons::courseToJson(test::toyCourse()));
     }
   }
 }

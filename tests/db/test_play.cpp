@@ -347,6 +347,21 @@ TEST_CASE("Interactive play takes typed answers on stdin and stops cleanly at 'q
   CHECK(scalar(dbPath, "SELECT count(*) FROM responses") == 2);
 }
 
+TEST_CASE("Quiz-only play skips the teaching steps and records the attempt's mode") {
+  if (!appAvailable()) return;
+  test::TempDir dir;
+  const std::string dbPath = (dir / "q.db").string();
+  storeQuickCourse(dbPath);
+  const fs::path file = writeLines(dir / "q.jsonl", quickAnswers());
+  auto r = test::runApp(playArgs("quick.check", "ida", file, dbPath) + " --quiz-only");
+  CHECK_MESSAGE(r.exitCode == 0, r.err);
+  CHECK(r.out.find("quiz only") != std::string::npos);
+  CHECK(r.out.find("Look at it.") == std::string::npos);
+  CHECK(r.out.find("\n[1/6] Question") != std::string::npos);
+  CHECK(r.out.find("Lesson finished: score 1.00") != std::string::npos);
+  CHECK(scalar(dbPath, "SELECT count(*) FROM attempts WHERE mode = 'quiz_only' AND finished_at IS NOT NULL") == 1);
+}
+
 TEST_CASE("courses and lessons list the seeded default course; seeding twice adds nothing") {
   if (!appAvailable()) return;
   test::TempDir dir;
