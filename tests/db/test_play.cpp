@@ -399,6 +399,13 @@ TEST_CASE("The TotalSegmentator sample imports with its 41 structures and carrie
   CHECK(duplicate.exitCode != 0);
   CHECK(duplicate.err.find("'abdomen' is already imported") != std::string::npos);
   CHECK(scalar(dbPath, "SELECT count(*) FROM datasets") == 1);
+  // Labels of another scan (the head) do not align with this CT: refused, nothing registered.
+  auto misaligned = test::runApp("import --volume '" + ct.string() + "' --labels '" +
+                                 test::sharedData("headsq/nrrd/quarter.nhdr").string() + "' --name head_on_abdomen --db '" +
+                                 dbPath + "'");
+  CHECK(misaligned.exitCode != 0);
+  CHECK(misaligned.err.find("overlap") != std::string::npos);
+  CHECK(scalar(dbPath, "SELECT count(*) FROM datasets") == 1);
 
   // A course written here, on the imported dataset, seeded through AT_DATA_DIR.
   const std::string courseJson = R"({
