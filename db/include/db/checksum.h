@@ -1,0 +1,20 @@
+// Content checksums for the files a dataset references (the database stores paths + checksums,
+// never pixels), so a moved or modified file is noticed.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <string_view>
+
+#include "volume/error.h"
+
+namespace at::db {
+
+// SHA-256 (FIPS 180-4) of a byte string, as 64 lowercase hex digits.
+std::string sha256Hex(std::string_view bytes);
+
+// "sha256:<hex>" of a file's bytes, or for a folder (a DICOM series) of the sorted list of its
+// regular files' relative names and contents.
+Result<std::string> checksumPath(const std::string& path);
+
+}  // namespace at::db

@@ -1,0 +1,215 @@
+#include "db/dataset_store.h"
+
+#include <filesystem>
+
+#include <nlohmann/json.hpp>
+
+namespace at::db {
+
+namespace {
+
+constexpr const char* kSelectDataset =
+    "SELECT d.id, d.name, d.species, d.volume_path, d.volume_checksum, d.labels_path, d.labels_checksum,"
+    " d.names_path, d.dim_x, d.dim_y, d.dim_z, d.spacing_x, d.spacing_y, d.spacing_z,"
+    " d.origin_x, d.origin_y, d.origin_z, d.direction, d.orientation, d.created_at,"
+    " (SELECT count(*) FROM structures s WHERE s.dataset_id = d.id)"
+    " FROM datasets d";
+
+Result<DatasetRecord> readRecord(const Statement& s) {
+  DatasetRecord r;
+  r.id = s.int64(0);
+  r.name = s.text(1);
+  r.species = s.text(2);
+  r.volumePath = s.text(3);
+  r.volumeChecksum = s.text(4);
+  r.labelsPath = s.optionalText(5).value_or("");
+  r.labelsChecksum = s.optionalText(6).value_or("");
+  r.namesPath = s.optionalText(7).value_or("");
+  r.geometry.dims = {s.integer(8), s.integer(9), s.integer(10)};
+  r.geometry.spacingMm = {s.real(11), s.real(12), s.real(13)};
+  r.geometry.originMm = {s.real(14), s.real(15), s.real(16)};
+  const auto direction = nlohmann::json::parse(s.text(17), nullptr, false);
+  if (!direction.is_array() || direction.size() != 9)
+    return fail("dataset '" + r.name + "': stored direction is not 9 numbers");
+  for (int row = 0; row < 3; ++row)
+    for (int col = 0; col < 3; ++col) r.geometry.direction.m[row][col] = direction[std::size_t(row * 3 + col)].get<double>();
+  r.orientation = s.text(18);
+  r.createdAt = s.text(19);
+  r.structureCount = s.integer(20);
+  return r;
+}
+
+std::optional<std::string> nonEmpty(const std::string& s) {
+  if (s.empty()) return std::nullopt;
+  return s;
+}
+
+}  // namespace
+
+Result<std::int64_t> registerDataset(Database& db, const DatasetRecord& record,
+                                     const std::vector<Structure>& structures) {
+  std::int64_t id = 0;
+  auto status = db.writeTransaction([&](Database& d) -> Status {
+    auto exists = d.prepare("SELECT 1 FROM datasets WHERE name = ?1");
+    if (!exists) return tl::unexpected(exists.error());
+    exists->bind(1, record.name);
+    auto row = exists->step();
+    if (!row) return tl::unexpected(row.error());
+    if (*row) return fail("a dataset named '" + record.name + "' is already imported; choose another --name");
+
+    auto insert = d.prepare(
+        "INSERT INTO datasets (name, species, volume_path, volume_checksum, labels_path, labels_checksum,"
+        " names_path, dim_x, dim_y, dim_z, spacing_x, spacing_y, spacing_z, origin_x, origin_y, origin_z,"
+        " direction, orientation) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13, ?14, ?15,"
+        " ?16, ?17, ?18)");
+    if (!insert) return tl::unexpected(insert.error());
+    nlohmann::json direction = nlohmann::json::array();
+    for (int row = 0; row < 3; ++row)
+      for (int col = 0; col < 3; ++col) direction.push_back(record.geometry.direction.m[row][col]);
+    const Geometry& g = record.geometry;
+    insert->bind(1, record.name)
+        .bind(2, record.species)
+        .bind(3, record.volumePath)
+        .bind(4, record.volumeChecksum)
+        .bind(5, nonEmpty(record.labelsPath))
+        .bind(6, nonEmpty(record.labelsChecksum))
+        .bind(7, nonEmpty(record.namesPath))
+        .bind(8, g.dims.x)
+        .bind(9, g.dims.y)
+        .bind(10, g.dims.z)
+        .bind(11, g.spacingMm[0])
+        .bind(12, g.spacingMm[1])
+        .bind(13, g.spacingMm[2])
+        .bind(14, g.originMm[0])
+        .bind(15, g.originMm[1])
+        .bind(16, g.originMm[2])
+        .bind(17, direction.dump())
+        .bind(18, record.orientation);
+    if (auto s = insert->run(); !s) return s;
+    id = d.lastInsertId();
+
+    auto add = d.prepare(
+        "INSERT INTO structures (dataset_id, label, structure_id, name, colour_r, colour_g, colour_b, system,"
+        " description) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9)");
+    if (!add) return tl::unexpected(add.error());
+    for (const Structure& st : structures) {
+      add->reset();
+      add->bind(1, id)
+          .bind(2, int(st.label))
+          .bind(3, st.id)
+          .bind(4, st.displayName)
+          .bind(5, double(st.colour[0]))
+          .bind(6, double(st.colour[1]))
+          .bind(7, double(st.colour[2]))
+          .bind(8, st.system)
+          .bind(9, st.description);
+      if (auto s = add->run(); !s)
+        return fail("structure " + std::to_string(st.label) + " '" + st.id + "': " + s.error().message);
+    }
+    return {};
+  });
+  if (!status) return tl::unexpected(status.error());
+  return id;
+}
+
+Result<std::vector<DatasetRecord>> listDatasets(Database& db) {
+  auto s = db.prepare(std::string(kSelectDataset) + " ORDER BY d.name");
+  if (!s) return tl::unexpected(s.error());
+  std::vector<DatasetRecord> out;
+  while (true) {
+    auto row = s->step();
+    if (!row) return tl::unexpected(row.error());
+    if (!*row) break;
+    auto r = readRecord(*s);
+    if (!r) return tl::unexpected(r.error());
+    out.push_back(std::move(*r));
+  }
+  return out;
+}
+
+Result<std::optional<DatasetRecord>> findDataset(Database& db, const std::string& name) {
+  auto s = db.prepare(std::string(kSelectDataset) + " WHERE d.name = ?1");
+  if (!s) return tl::unexpected(s.error());
+  s->bind(1, name);
+  auto row = s->step();
+  if (!row) return tl::unexpected(row.error());
+  if (!*row) return std::optional<DatasetRecord>{};
+  auto r = readRecord(*s);
+  if (!r) return tl::unexpected(r.error());
+  return std::optional<DatasetRecord>(std::move(*r));
+}
+
+Result<std::vector<Structure>> datasetStructures(Database& db, std::int64_t datasetId) {
+  auto s = db.prepare(
+      "SELECT label, structure_id, name, colour_r, colour_g, colour_b, system, description FROM structures"
+      " WHERE dataset_id = ?1 ORDER BY label");
+  if (!s) return tl::unexpected(s.error());
+  s->bind(1, datasetId);
+  std::vector<Structure> out;
+  while (true) {
+    auto row = s->step();
+    if (!row) return tl::unexpected(row.error());
+    if (!*row) break;
+    Structure st;
+    st.label = static_cast<std::uint16_t>(s->integer(0));
+    st.id = s->text(1);
+    st.displayName = s->text(2);
+    st.colour = {float(s->real(3)), float(s->real(4)), float(s->real(5))};
+    st.system = s->text(6);
+    st.description = s->text(7);
+    out.push_back(std::move(st));
+  }
+  return out;
+}
+
+DatasetFiles datasetFiles(const DatasetRecord& record) {
+  DatasetFiles files;
+  files.volumePath = record.volumePath;
+  files.labelsPath = record.labelsPath;
+  files.namesPath = record.namesPath;
+  files.id = record.name;
+  return files;
+}
+
+namespace {
+
+// Opens an existing database only: listing must not create one as a side effect.
+Result<std::optional<Database>> openExisting(const std::optional<std::string>& dbPath) {
+  std::string path;
+  if (dbPath) {
+    path = *dbPath;
+  } else {
+    auto def = defaultDatabasePath();
+    if (!def) return tl::unexpected(def.error());
+    path = *def;
+  }
+  std::error_code ec;
+  if (!std::filesystem::exists(path, ec)) return std::optional<Database>{};
+  OpenOptions options;
+  options.create = false;
+  auto db = Database::open(path, options);
+  if (!db) return tl::unexpected(db.error());
+  return std::optional<Database>(std::move(*db));
+}
+
+}  // namespace
+
+Result<std::vector<DatasetRecord>> listImportedDatasets(const std::optional<std::string>& dbPath) {
+  auto db = openExisting(dbPath);
+  if (!db) return tl::unexpected(db.error());
+  if (!*db) return std::vector<DatasetRecord>{};
+  return listDatasets(**db);
+}
+
+Result<std::optional<DatasetFiles>> findImportedDataset(const std::optional<std::string>& dbPath,
+                                                        const std::string& name) {
+  auto db = openExisting(dbPath);
+  if (!db) return tl::unexpected(db.error());
+  if (!*db) return std::optional<DatasetFiles>{};
+  auto record = findDataset(**db, name);
+  if (!record) return tl::unexpected(record.error());
+  if (!*record) return std::optional<DatasetFiles>{};
+  return std::optional<DatasetFiles>(datasetFiles(**record));
+}
+
+}  // namespace at::db

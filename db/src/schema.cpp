@@ -1,0 +1,171 @@
+// The schema's migrations. Released versions are frozen: never edit one, append a new one.
+//
+// Conventions: stable text ids for curriculum content (course, lesson, question and preset ids
+// come from the course JSON, so re-seeding upserts instead of duplicating); integer ids for rows
+// the program creates (datasets, users, attempts, responses); times as ISO-8601 UTC text;
+// JSON documents as TEXT. No pixel data and no patient identifiers are ever stored.
+#include "db/schema.h"
+
+namespace at::db {
+
+namespace {
+
+constexpr std::string_view kDatasets = R"SQL(
+CREATE TABLE datasets (
+  id               INTEGER PRIMARY KEY,
+  name             TEXT NOT NULL UNIQUE,
+  species          TEXT NOT NULL DEFAULT 'human',
+  volume_path      TEXT NOT NULL,
+  volume_checksum  TEXT NOT NULL,           -- "sha256:<hex>" of the file, or of a DICOM folder's files
+  labels_path      TEXT,
+  labels_checksum  TEXT,
+  names_path       TEXT,
+  dim_x INTEGER NOT NULL, dim_y INTEGER NOT NULL, dim_z INTEGER NOT NULL,
+  spacing_x REAL NOT NULL, spacing_y REAL NOT NULL, spacing_z REAL NOT NULL,
+  origin_x REAL NOT NULL, origin_y REAL NOT NULL, origin_z REAL NOT NULL,
+  direction        TEXT NOT NULL,           -- JSON [9 numbers], row-major, columns = i, j, k in LPS
+  orientation      TEXT NOT NULL,           -- "LPS", "RAS", …
+  created_at       TEXT NOT NULL DEFAULT (strftime('%Y-%m-%dT%H:%M:%fZ', 'now'))
+);
+CREATE TABLE structures (
+  dataset_id    INTEGER NOT NULL REFERENCES datasets(id) ON DELETE CASCADE,
+  label         INTEGER NOT NULL,
+  structure_id  TEXT NOT NULL,
+  name          TEXT NOT NULL,
+  colour_r REAL NOT NULL, colour_g REAL NOT NULL, colour_b REAL NOT NULL,
+  system        TEXT NOT NULL DEFAULT '',
+  description   TEXT NOT NULL DEFAULT '',
+  PRIMARY KEY (dataset_id, label),
+  UNIQUE (dataset_id, structure_id)
+);
+CREATE TABLE presets (
+  id         TEXT PRIMARY KEY,
+  structure  TEXT,                          -- structure id it was made for, or NULL for any
+  mode       TEXT NOT NULL,
+  json       TEXT NOT NULL
+);
+)SQL";
+
+constexpr std::string_view kCurriculum = R"SQL(
+CREATE TABLE courses (
+  id        TEXT PRIMARY KEY,
+  title     TEXT NOT NULL,
+  summary   TEXT NOT NULL DEFAULT '',
+  dataset   TEXT NOT NULL,                  -- dataset name: "phantom" or an imported dataset
+  version   INTEGER NOT NULL,               -- content version; seeding replaces older content only
+  synonyms  TEXT NOT NULL DEFAULT '{}',     -- JSON {structure id: [accepted names]}
+  source    TEXT NOT NULL DEFAULT ''        -- file it was seeded from
+);
+CREATE TABLE lessons (
+  id         TEXT PRIMARY KEY,
+  course_id  TEXT NOT NULL REFERENCES courses(id) ON DELETE CASCADE,
+  position   INTEGER NOT NULL,
+  title      TEXT NOT NULL,
+  summary    TEXT NOT NULL DEFAULT ''
+);
+CREATE INDEX lessons_by_course ON lessons(course_id, position);
+CREATE TABLE lesson_prerequisites (
+  lesson_id    TEXT NOT NULL REFERENCES lessons(id) ON DELETE CASCADE,
+  requires_id  TEXT NOT NULL,
+  position     INTEGER NOT NULL,
+  PRIMARY KEY (lesson_id, requires_id)
+);
+CREATE TABLE questions (
+  id          TEXT PRIMARY KEY,
+  lesson_id   TEXT NOT NULL REFERENCES lessons(id) ON DELETE CASCADE,
+  kind        TEXT NOT NULL,                -- locate, identify, name, relation, order
+  target      TEXT NOT NULL,                -- structure id the question trains
+  difficulty  REAL NOT NULL,                -- initial Elo difficulty from the course
+  json        TEXT NOT NULL                 -- the question as in the course JSON
+);
+CREATE TABLE steps (
+  lesson_id    TEXT NOT NULL REFERENCES lessons(id) ON DELETE CASCADE,
+  position     INTEGER NOT NULL,
+  kind         TEXT NOT NULL CHECK (kind IN ('show', 'question', 'study')),
+  structure    TEXT NOT NULL DEFAULT '',
+  preset_id    TEXT NOT NULL DEFAULT '',
+  view         TEXT NOT NULL DEFAULT '',
+  title        TEXT NOT NULL DEFAULT '',
+  text         TEXT NOT NULL DEFAULT '',
+  question_id  TEXT REFERENCES questions(id) ON DELETE CASCADE,
+  study_items  TEXT NOT NULL DEFAULT '[]',  -- JSON list (study steps)
+  PRIMARY KEY (lesson_id, position)
+);
+)SQL";
+
+// Learner data is never deleted by re-seeding: responses keep the question id and structure as
+// text, so history survives a course update that drops a question.
+constexpr std::string_view kLearners = R"SQL(
+CREATE TABLE users (
+  id          INTEGER PRIMARY KEY,
+  name        TEXT NOT NULL UNIQUE,         -- pseudonym chosen by the participant
+  role        TEXT NOT NULL DEFAULT 'student' CHECK (role IN ('student', 'expert', 'coordinator')),
+  group_name  TEXT NOT NULL DEFAULT '',
+  created_at  TEXT NOT NULL DEFAULT (strftime('%Y-%m-%dT%H:%M:%fZ', 'now'))
+);
+CREATE TABLE attempts (
+  id           INTEGER PRIMARY KEY,
+  user_id      INTEGER NOT NULL REFERENCES users(id) ON DELETE CASCADE,
+  lesson_id    TEXT NOT NULL,
+  mode         TEXT NOT NULL CHECK (mode IN ('guided', 'quiz_only')),
+  started_at   INTEGER NOT NULL,            -- Unix seconds
+  finished_at  INTEGER,                     -- NULL while in progress
+  score        REAL NOT NULL DEFAULT 0      -- mean question score, set when finished
+);
+CREATE INDEX attempts_by_user ON attempts(user_id, lesson_id);
+CREATE TABLE responses (
+  id           INTEGER PRIMARY KEY,
+  attempt_id   INTEGER NOT NULL REFERENCES attempts(id) ON DELETE CASCADE,
+  step_index   INTEGER NOT NULL,
+  question_id  TEXT NOT NULL,
+  structure    TEXT NOT NULL,
+  answer       TEXT NOT NULL,               -- JSON as given
+  correct      INTEGER NOT NULL,
+  score        REAL NOT NULL,
+  latency_ms   INTEGER NOT NULL,
+  preset_id    TEXT NOT NULL DEFAULT '',
+  mode         TEXT NOT NULL DEFAULT '',
+  t            REAL,
+  alpha        REAL,
+  beta         REAL,
+  answered_at  INTEGER NOT NULL,            -- Unix seconds
+  created_at   TEXT NOT NULL DEFAULT (strftime('%Y-%m-%dT%H:%M:%fZ', 'now')),
+  UNIQUE (attempt_id, step_index)
+);
+CREATE INDEX responses_by_question ON responses(question_id);
+CREATE TABLE progress (
+  user_id           INTEGER NOT NULL REFERENCES users(id) ON DELETE CASCADE,
+  structure         TEXT NOT NULL,
+  box               INTEGER NOT NULL,       -- Leitner box 1..5
+  due_at            INTEGER NOT NULL,       -- Unix seconds
+  answered          INTEGER NOT NULL,
+  correct           INTEGER NOT NULL,
+  last_answered_at  INTEGER NOT NULL,
+  PRIMARY KEY (user_id, structure)
+);
+CREATE TABLE user_ability (
+  user_id   INTEGER PRIMARY KEY REFERENCES users(id) ON DELETE CASCADE,
+  rating    REAL NOT NULL,                  -- Elo-style ability
+  answered  INTEGER NOT NULL
+);
+CREATE TABLE question_stats (
+  question_id  TEXT PRIMARY KEY,            -- kept across re-seeding
+  difficulty   REAL NOT NULL,               -- Elo difficulty learned from answers
+  answered     INTEGER NOT NULL
+);
+)SQL";
+
+}  // namespace
+
+const std::vector<Migration>& migrations() {
+  static const std::vector<Migration> all = {
+      {1, "datasets, structures and presets", kDatasets},
+      {2, "courses, lessons, prerequisites, steps and questions", kCurriculum},
+      {3, "users, attempts, responses, progress, ability and question difficulty", kLearners},
+  };
+  return all;
+}
+
+int latestSchemaVersion() { return int(migrations().size()); }
+
+}  // namespace at::db

@@ -1,0 +1,332 @@
+// The SQLite layer: opening, migrations from every version, refusal of newer files, RAII
+// transactions, verbatim storage through bound parameters, concurrent writers, checksums.
+#include <doctest/doctest.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <set>
+#include <thread>
+
+#include "db/checksum.h"
+#include "db/course_store.h"
+#include "db/database.h"
+#include "db/dataset_store.h"
+#include "db/schema.h"
+#include "lessons/course_json.h"
+#include "test_support.h"
+#include "toy_course.h"
+
+namespace fs = std::filesystem;
+using namespace at;
+using namespace at::db;
+
+namespace {
+
+std::string readBytes(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  return std::string(std::istreambuf_iterator<char>(in), {});
+}
+
+// Every table, index and their SQL: the schema as a comparable set.
+std::set<std::string> schemaOf(Database& db) {
+  auto s = db.prepare("SELECT type || ' ' || name || ': ' || coalesce(sql, '') FROM sqlite_master"
+                      " WHERE name NOT LIKE 'sqlite_%'");
+  REQUIRE(s);
+  std::set<std::string> out;
+  while (*s->step()) out.insert(s->text(0));
+  return out;
+}
+
+std::int64_t countRows(Database& db, const std::string& table) {
+  auto s = db.prepare("SELECT count(*) FROM " + table);
+  REQUIRE(s);
+  REQUIRE(*s->step());
+  return s->int64(0);
+}
+
+DatasetRecord sampleRecord(const std::string& name) {
+  DatasetRecord r;
+  r.name = name;
+  r.species = "dog";
+  r.volumePath = "/data/ct.nii.gz";
+  r.volumeChecksum = "sha256:" + std::string(64, 'a');
+  r.geometry.dims = {4, 5, 6};
+  r.geometry.spacingMm = {0.5, 0.75, 2.0};
+  r.geometry.originMm = {-10, 20.5, 30};
+  r.orientation = "LPS";
+  return r;
+}
+
+}  // namespace
+
+TEST_CASE("An empty file is migrated to the newest schema version in WAL mode with foreign keys on") {
+  test::TempDir dir;
+  auto db = Database::open((dir / "a.db").string());
+  REQUIRE_MESSAGE(db, (db ? "" : db.error().message));
+  CHECK(*db->schemaVersion() == latestSchemaVersion());
+  auto mode = db->prepare("PRAGMA journal_mode");
+  REQUIRE(*mode->step());
+  CHECK(mode->text(0) == "wal");
+  auto fk = db->prepare("PRAGMA foreign_keys");
+  REQUIRE(*fk->step());
+  CHECK(fk->integer(0) == 1);
+  for (const char* table : {"datasets", "structures", "presets", "courses", "lessons", "lesson_prerequisites",
+                            "steps", "questions", "users", "attempts", "responses", "progress", "user_ability",
+                            "question_stats"})
+    CHECK_MESSAGE(countRows(*db, table) == 0, table);
+}
+
+TEST_CASE("Migrations are numbered consecutively from 1") {
+  const auto& all = migrations();
+  REQUIRE(!all.empty());
+  for (std::size_t i = 0; i < all.size(); ++i) CHECK(all[i].version == int(i + 1));
+  CHECK(latestSchemaVersion() == int(all.size()));
+}
+
+TEST_CASE("A database at every earlier version migrates to the same schema as a fresh one and keeps its rows") {
+  test::TempDir dir;
+  auto fresh = Database::open((dir / "fresh.db").string());
+  REQUIRE(fresh);
+  const auto reference = schemaOf(*fresh);
+
+  for (int from = 0; from < latestSchemaVersion(); ++from) {
+    CAPTURE(from);
+    const std::string path = (dir / "v").string().append(std::to_string(from)).append(".db");
+    {
+      OpenOptions options;
+      options.targetVersion = from;
+      auto old = Database::open(path, options);
+      REQUIRE(old);
+      CHECK(*old->schemaVersion() == from);
+      if (from >= 1) REQUIRE(registerDataset(*old, sampleRecord("kept"), {}));
+      if (from >= 2) REQUIRE(storeCourse(*old, test::toyCourse(), "v" + std::to_string(from)));
+    }
+    auto db = Database::open(path);
+    REQUIRE_MESSAGE(db, (db ? "" : db.error().message));
+    CHECK(*db->schemaVersion() == latestSchemaVersion());
+    CHECK(schemaOf(*db) == reference);
+    if (from >= 1) {
+      auto kept = findDataset(*db, "kept");
+      REQUIRE(kept);
+      REQUIRE(kept->has_value());
+      CHECK((*kept)->geometry.spacingMm[1] == doctest::Approx(0.75));
+    }
+    if (from >= 2) {
+      SqliteCurriculumRepository repo(*db, test::toyBuiltin());
+      auto course = repo.course("toy");
+      REQUIRE(course);
+      CHECK(lessons::courseToJson(*course) == lessons::courseToJson(test::toyCourse()));
+    }
+  }
+}
+
+TEST_CASE("A database from a newer program version is refused and left byte-identical") {
+  test::TempDir dir;
+  const fs::path path = dir / "newer.db";
+  {
+    auto db = Database::open(path.string());
+    REQUIRE(db);
+    REQUIRE(registerDataset(*db, sampleRecord("x"), {}));
+    REQUIRE(db->exec("PRAGMA user_version = " + std::to_string(latestSchemaVersion() + 1)));
+    // Leave the file as a rollback-journal database with no side files, so any write shows.
+    REQUIRE(db->exec("PRAGMA journal_mode = DELETE"));
+  }
+  REQUIRE(!fs::exists(path.string() + "-wal"));
+  const std::string before = readBytes(path);
+  const auto mtime = fs::last_write_time(path);
+
+  auto refused = Database::open(path.string());
+  REQUIRE(!refused);
+  CHECK(refused.error().message.find("newer version") != std::string::npos);
+  CHECK(refused.error().message.find(path.string()) != std::string::npos);
+  CHECK(readBytes(path) == before);
+  CHECK(fs::last_write_time(path) == mtime);
+  CHECK(!fs::exists(path.string() + "-wal"));
+}
+
+TEST_CASE("A file that is not a database is refused with its name and left untouched") {
+  test::TempDir dir;
+  const fs::path path = dir / "notes.db";
+  {
+    std::ofstream f(path, std::ios::binary);
+    f << "these are my lecture notes, not a database\n" << std::string(600, 'x');
+  }
+  const std::string before = readBytes(path);
+  auto refused = Database::open(path.string());
+  REQUIRE(!refused);
+  CHECK(refused.error().message.find("notes.db") != std::string::npos);
+  CHECK(readBytes(path) == before);
+}
+
+TEST_CASE("openDatabase creates the folder of the default path under XDG_DATA_HOME") {
+  test::TempDir dir;
+  const char* old = std::getenv("XDG_DATA_HOME");
+  const std::string saved = old ? old : "";
+  ::setenv("XDG_DATA_HOME", (dir / "xdg").c_str(), 1);
+  auto path = defaultDatabasePath();
+  REQUIRE(path);
+  CHECK(*path == (dir / "xdg" / "anatomy-tutor" / "anatomy-tutor.db").string());
+  auto db = openDatabase(std::nullopt);
+  if (old) ::setenv("XDG_DATA_HOME", saved.c_str(), 1); else ::unsetenv("XDG_DATA_HOME");
+  REQUIRE(db);
+  CHECK(fs::exists(*path));
+}
+
+TEST_CASE("A transaction that dies uncommitted is rolled back; a committed one persists") {
+  test::TempDir dir;
+  auto db = Database::open((dir / "t.db").string());
+  REQUIRE(db);
+  {
+    auto tx = Transaction::begin(*db);
+    REQUIRE(tx);
+    REQUIRE(db->exec("INSERT INTO presets (id, mode, json) VALUES ('lost', 'wdt', '{}')"));
+  }
+  CHECK(countRows(*db, "presets") == 0);
+  {
+    auto tx = Transaction::begin(*db);
+    REQUIRE(tx);
+    REQUIRE(db->exec("INSERT INTO presets (id, mode, json) VALUES ('kept', 'wdt', '{}')"));
+    REQUIRE(tx->commit());
+  }
+  CHECK(countRows(*db, "presets") == 1);
+  auto failed = db->writeTransaction([](Database& d) -> Status {
+    if (auto s = d.exec("INSERT INTO presets (id, mode, json) VALUES ('half', 'wdt', '{}')"); !s) return s;
+    return fail("the second half failed");
+  });
+  CHECK(!failed);
+  CHECK(countRows(*db, "presets") == 1);
+}
+
+TEST_CASE("Names and free text with quotes, semicolons and SQL keywords are stored verbatim") {
+  test::TempDir dir;
+  auto db = Database::open((dir / "h.db").string());
+  REQUIRE(db);
+  const std::vector<std::string> hostile = {
+      "Robert'); DROP TABLE datasets;--",
+      "\"quoted\" name; SELECT * FROM users WHERE 1=1 OR ''='",
+      "O'Brien's \"ear\" -- comment /* block */",
+      "naïve façade ✓ \t tab\nnewline",
+      std::string("embedded\0nul", 12),
+  };
+  for (std::size_t i = 0; i < hostile.size(); ++i) {
+    DatasetRecord r = sampleRecord(hostile[i]);
+    r.species = hostile[(i + 1) % hostile.size()];
+    r.volumePath = "/tmp/" + hostile[(i + 2) % hostile.size()];
+    Structure st;
+    st.label = 7;
+    st.id = hostile[(i + 3) % hostile.size()];
+    st.displayName = hostile[(i + 4) % hostile.size()];
+    st.description = hostile[i];
+    auto id = registerDataset(*db, r, {st});
+    REQUIRE_MESSAGE(id, (id ? "" : id.error().message));
+    auto back = findDataset(*db, hostile[i]);
+    REQUIRE(back);
+    REQUIRE(back->has_value());
+    CHECK((*back)->name == r.name);
+    CHECK((*back)->species == r.species);
+    CHECK((*back)->volumePath == r.volumePath);
+    auto structures = datasetStructures(*db, *id);
+    REQUIRE(structures);
+    REQUIRE(structures->size() == 1);
+    CHECK((*structures)[0].id == st.id);
+    CHECK((*structures)[0].displayName == st.displayName);
+    CHECK((*structures)[0].description == st.description);
+  }
+  CHECK(countRows(*db, "datasets") == std::int64_t(hostile.size()));
+}
+
+TEST_CASE("Registering a dataset under a name already used fails and writes nothing") {
+  test::TempDir dir;
+  auto db = Database::open((dir / "d.db").string());
+  REQUIRE(db);
+  Structure st;
+  st.label = 1;
+  st.id = "liver";
+  st.displayName = "Liver";
+  REQUIRE(registerDataset(*db, sampleRecord("abdomen"), {st}));
+  auto again = registerDataset(*db, sampleRecord("abdomen"), {st});
+  REQUIRE(!again);
+  CHECK(again.error().message.find("'abdomen' is already imported") != std::string::npos);
+  CHECK(countRows(*db, "datasets") == 1);
+  CHECK(countRows(*db, "structures") == 1);
+  auto listed = listDatasets(*db);
+  REQUIRE(listed);
+  REQUIRE(listed->size() == 1);
+  CHECK((*listed)[0].structureCount == 1);
+  CHECK((*listed)[0].species == "dog");
+  CHECK((*listed)[0].geometry.dims == Dims{4, 5, 6});
+}
+
+TEST_CASE("listImportedDatasets on a database that does not exist lists nothing and creates nothing") {
+  test::TempDir dir;
+  const fs::path path = dir / "missing" / "x.db";
+  auto listed = listImportedDatasets(path.string());
+  REQUIRE(listed);
+  CHECK(listed->empty());
+  CHECK(!fs::exists(path));
+  auto found = findImportedDataset(path.string(), "abdomen");
+  REQUIRE(found);
+  CHECK(!found->has_value());
+}
+
+TEST_CASE("Two connections writing at once through writeTransaction lose no row") {
+  test::TempDir dir;
+  const std::string path = (dir / "c.db").string();
+  REQUIRE(Database::open(path));
+  constexpr int kPerWriter = 150;
+  auto writer = [&](int w, std::string* error) {
+    auto db = Database::open(path);
+    if (!db) {
+      *error = db.error().message;
+      return;
+    }
+    for (int i = 0; i < kPerWriter; ++i) {
+      auto s = db->writeTransaction([&](Database& d) -> Status {
+        auto insert = d.prepare("INSERT INTO presets (id, mode, json) VALUES (?1, 'wdt', '{}')");
+        if (!insert) return tl::unexpected(insert.error());
+        insert->bind(1, "w" + std::to_string(w) + "-" + std::to_string(i));
+        return insert->run();
+      });
+      if (!s) {
+        *error = s.error().message;
+        return;
+      }
+    }
+  };
+  std::string e1, e2;
+  std::thread a(writer, 1, &e1), b(writer, 2, &e2);
+  a.join();
+  b.join();
+  CHECK(e1.empty());
+  CHECK(e2.empty());
+  auto db = Database::open(path);
+  REQUIRE(db);
+  CHECK(countRows(*db, "presets") == 2 * kPerWriter);
+}
+
+TEST_CASE("SHA-256 matches the FIPS 180-4 test vectors") {
+  CHECK(sha256Hex("") == "e3b0c44298fc1c149afbf4c8996fb92427ae41e4649b934ca495991b7852b855");
+  CHECK(sha256Hex("abc") == "ba7816bf8f01cfea414140de5dae2223b00361a396177a9cb410ff61f20015ad");
+  CHECK(sha256Hex("abcdbcdecdefdefgefghfghighijhijkijkljklmklmnlmnomnopnopq") ==
+        "248d6a61d20638b8e5c026930c3e6039a33ce45964ff2167f6ecedd419db06c1");
+  CHECK(sha256Hex(std::string(1000000, 'a')) == "cdc76e5c9914fb9281a1c7e284d73e67f1809a48a497200e046d39ccc7112cd0");
+}
+
+TEST_CASE("checksumPath hashes a file's bytes and notices a changed file in a folder") {
+  test::TempDir dir;
+  fs::create_directories(dir / "series");
+  { std::ofstream(dir / "series" / "1.dcm", std::ios::binary) << "slice one"; }
+  { std::ofstream(dir / "series" / "2.dcm", std::ios::binary) << "slice two"; }
+  auto file = checksumPath((dir / "series" / "1.dcm").string());
+  REQUIRE(file);
+  CHECK(*file == "sha256:" + sha256Hex("slice one"));
+  auto folder = checksumPath((dir / "series").string());
+  REQUIRE(folder);
+  { std::ofstream(dir / "series" / "2.dcm", std::ios::binary) << "slice 2!!"; }
+  auto changed = checksumPath((dir / "series").string());
+  REQUIRE(changed);
+  CHECK(*changed != *folder);
+  CHECK(!checksumPath((dir / "nothing").string()));
+}
