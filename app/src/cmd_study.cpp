@@ -360,12 +360,7 @@ int runExport(const cli::Args& args) {
       {"summary.svg", [&](const fs::path& p) { return writeFile(p, quiz::summarySvg(*protocol, summary)); }},
       {"summary.png",
        [&](const fs::path& p) -> Status {
-         const quiz::ChartImage chart = quiz::renderSummaryChart(*protocol, summary);
-         RgbImage image;
-         image.width = chart.width;
-         image.height = chart.height;
-         image.rgb = chart.rgb;
-         return writePng(p.string(), image);
+         return writePng(p.string(), quiz::renderSummaryChart(*protocol, summary));
        }},
   };
   std::fprintf(stderr, "exporting study %s: %zu rows from %zu participant(s)\n", protocol->id.c_str(), rows->size(),

@@ -27,6 +27,16 @@ int runStructures(const Argv& args);
 int runInfo(const Argv& args);
 int runSlice(const Argv& args);
 
+// Weighted distance transform (cmd_wdt.cpp)
+int runWdt(const Argv& args);
+
+// Datasets and learning (cmd_import.cpp, cmd_play.cpp, cmd_progress.cpp)
+int runImport(const Argv& args);
+int runPlay(const Argv& args);
+int runProgress(const Argv& args);
+int runCourses(const Argv& args);
+int runLessons(const Argv& args);
+
 // Preference studies (cmd_study.cpp)
 int runStudy(const Argv& args);
 

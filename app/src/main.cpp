@@ -14,6 +14,12 @@ const std::vector<Command>& commands() {
       {"structures", "list a dataset's structures", runStructures},
       {"info", "load any supported file or folder and describe it", runInfo},
       {"slice", "write a grey slice with label overlay as PNG", runSlice},
+      {"wdt", "weighted distance field of a structure (CPU or CUDA), with --check against exact", runWdt},
+      {"import", "register a dataset (volume, labels, names) in the database", runImport},
+      {"courses", "list the courses", runCourses},
+      {"lessons", "list the lessons of the courses", runLessons},
+      {"play", "run a lesson in the terminal (answers from a file or typed)", runPlay},
+      {"progress", "show a user's progress and what is due for review", runProgress},
       {"study", "preference studies: register, run, status, export", runStudy},
   };
   return table;

@@ -58,35 +58,31 @@ Statement& Statement::operator=(Statement&& other) noexcept {
   return *this;
 }
 
-#define AT_DB_CHECK_BIND(expr)                                                                     \
-  do {                                                                                             \
-    const int rc_ = (expr);                                                                        \
-    if (rc_ != SQLITE_OK && bindError_.empty())                                                    \
-      bindError_ = "binding parameter " + std::to_string(index) + ": " + errorText(db_, rc_);      \
-  } while (0)
+void Statement::noteBind(int rc, int index) {
+  if (rc != SQLITE_OK && bindError_.empty())
+    bindError_ = "binding parameter " + std::to_string(index) + ": " + errorText(db_, rc);
+}
 
 Statement& Statement::bind(int index, std::int64_t value) {
-  AT_DB_CHECK_BIND(sqlite3_bind_int64(stmt_, index, value));
+  noteBind(sqlite3_bind_int64(stmt_, index, value), index);
   return *this;
 }
 
 Statement& Statement::bind(int index, double value) {
-  AT_DB_CHECK_BIND(sqlite3_bind_double(stmt_, index, value));
+  noteBind(sqlite3_bind_double(stmt_, index, value), index);
   return *this;
 }
 
 Statement& Statement::bind(int index, std::string_view text) {
   // SQLITE_TRANSIENT: SQLite copies the bytes, so temporaries are safe to pass.
-  AT_DB_CHECK_BIND(sqlite3_bind_text64(stmt_, index, text.data(), text.size(), SQLITE_TRANSIENT, SQLITE_UTF8));
+  noteBind(sqlite3_bind_text64(stmt_, index, text.data(), text.size(), SQLITE_TRANSIENT, SQLITE_UTF8), index);
   return *this;
 }
 
 Statement& Statement::bindNull(int index) {
-  AT_DB_CHECK_BIND(sqlite3_bind_null(stmt_, index));
+  noteBind(sqlite3_bind_null(stmt_, index), index);
   return *this;
 }
-
-#undef AT_DB_CHECK_BIND
 
 Result<bool> Statement::step() {
   if (!bindError_.empty()) return fail("SQL: " + bindError_ + " in: " + sql_);
@@ -333,7 +329,7 @@ Result<Database> Database::open(const std::string& path, const OpenOptions& opti
     auto modeRow = mode->step();
     if (!modeRow) return fail(path + ": cannot switch to WAL: " + modeRow.error().message);
   }
-  if (auto s = db.exec("PRAGMA foreign_keys = ON; PRAGMA synchronous = NORMAL"); !s)
+  if (auto s = db.exec("PRAGMA foreign_keys = ON; PRAGMA synchronous = FULL"); !s)
     return fail(path + ": " + s.error().message);
 
   if (auto s = migrate(db, target); !s) return tl::unexpected(s.error());

@@ -48,46 +48,53 @@ CREATE TABLE presets (
 
 constexpr std::string_view kCurriculum = R"SQL(
 CREATE TABLE courses (
-  id           TEXT PRIMARY KEY,
-  title        TEXT NOT NULL,
-  dataset      TEXT NOT NULL,               -- dataset name: "phantom" or an imported dataset
-  description  TEXT NOT NULL DEFAULT '',
-  source       TEXT NOT NULL DEFAULT '',    -- file it was seeded from
-  json         TEXT NOT NULL                -- the course document as loaded
+  id        TEXT PRIMARY KEY,
+  title     TEXT NOT NULL,
+  summary   TEXT NOT NULL DEFAULT '',
+  dataset   TEXT NOT NULL,                  -- dataset name: "phantom" or an imported dataset
+  version   INTEGER NOT NULL,               -- content version; seeding replaces older content only
+  synonyms  TEXT NOT NULL DEFAULT '{}',     -- JSON {structure id: [accepted names]}
+  source    TEXT NOT NULL DEFAULT ''        -- file it was seeded from
 );
 CREATE TABLE lessons (
   id         TEXT PRIMARY KEY,
   course_id  TEXT NOT NULL REFERENCES courses(id) ON DELETE CASCADE,
   position   INTEGER NOT NULL,
   title      TEXT NOT NULL,
-  json       TEXT NOT NULL                  -- the lesson document (steps included)
+  summary    TEXT NOT NULL DEFAULT ''
 );
 CREATE INDEX lessons_by_course ON lessons(course_id, position);
 CREATE TABLE lesson_prerequisites (
   lesson_id    TEXT NOT NULL REFERENCES lessons(id) ON DELETE CASCADE,
   requires_id  TEXT NOT NULL,
+  position     INTEGER NOT NULL,
   PRIMARY KEY (lesson_id, requires_id)
+);
+CREATE TABLE questions (
+  id          TEXT PRIMARY KEY,
+  lesson_id   TEXT NOT NULL REFERENCES lessons(id) ON DELETE CASCADE,
+  kind        TEXT NOT NULL,                -- locate, identify, name, relation, order
+  target      TEXT NOT NULL,                -- structure id the question trains
+  difficulty  REAL NOT NULL,                -- initial Elo difficulty from the course
+  json        TEXT NOT NULL                 -- the question as in the course JSON
 );
 CREATE TABLE steps (
   lesson_id    TEXT NOT NULL REFERENCES lessons(id) ON DELETE CASCADE,
   position     INTEGER NOT NULL,
-  kind         TEXT NOT NULL,               -- "show", "question", …
-  structure    TEXT,
-  preset_id    TEXT,
-  question_id  TEXT,
-  json         TEXT NOT NULL,
+  kind         TEXT NOT NULL CHECK (kind IN ('show', 'question', 'study')),
+  structure    TEXT NOT NULL DEFAULT '',
+  preset_id    TEXT NOT NULL DEFAULT '',
+  view         TEXT NOT NULL DEFAULT '',
+  title        TEXT NOT NULL DEFAULT '',
+  text         TEXT NOT NULL DEFAULT '',
+  question_id  TEXT REFERENCES questions(id) ON DELETE CASCADE,
+  study_items  TEXT NOT NULL DEFAULT '[]',  -- JSON list (study steps)
   PRIMARY KEY (lesson_id, position)
-);
-CREATE TABLE questions (
-  id          TEXT PRIMARY KEY,
-  lesson_id   TEXT REFERENCES lessons(id) ON DELETE CASCADE,
-  kind        TEXT NOT NULL,                -- locate, identify, name, relation, order
-  structure   TEXT,
-  difficulty  REAL NOT NULL DEFAULT 0,      -- Elo-style, updated as students answer
-  json        TEXT NOT NULL                 -- the question's spec
 );
 )SQL";
 
+// Learner data is never deleted by re-seeding: responses keep the question id and structure as
+// text, so history survives a course update that drops a question.
 constexpr std::string_view kLearners = R"SQL(
 CREATE TABLE users (
   id          INTEGER PRIMARY KEY,
@@ -100,10 +107,10 @@ CREATE TABLE attempts (
   id           INTEGER PRIMARY KEY,
   user_id      INTEGER NOT NULL REFERENCES users(id) ON DELETE CASCADE,
   lesson_id    TEXT NOT NULL,
-  quiz_only    INTEGER NOT NULL DEFAULT 0,
-  next_step    INTEGER NOT NULL DEFAULT 0,  -- where a resumed attempt continues
-  started_at   TEXT NOT NULL DEFAULT (strftime('%Y-%m-%dT%H:%M:%fZ', 'now')),
-  finished_at  TEXT
+  mode         TEXT NOT NULL CHECK (mode IN ('guided', 'quiz_only')),
+  started_at   INTEGER NOT NULL,            -- Unix seconds
+  finished_at  INTEGER,                     -- NULL while in progress
+  score        REAL NOT NULL DEFAULT 0      -- mean question score, set when finished
 );
 CREATE INDEX attempts_by_user ON attempts(user_id, lesson_id);
 CREATE TABLE responses (
@@ -111,34 +118,40 @@ CREATE TABLE responses (
   attempt_id   INTEGER NOT NULL REFERENCES attempts(id) ON DELETE CASCADE,
   step_index   INTEGER NOT NULL,
   question_id  TEXT NOT NULL,
+  structure    TEXT NOT NULL,
   answer       TEXT NOT NULL,               -- JSON as given
   correct      INTEGER NOT NULL,
   score        REAL NOT NULL,
   latency_ms   INTEGER NOT NULL,
-  preset_id    TEXT,
-  mode         TEXT,
+  preset_id    TEXT NOT NULL DEFAULT '',
+  mode         TEXT NOT NULL DEFAULT '',
   t            REAL,
   alpha        REAL,
   beta         REAL,
-  created_at   TEXT NOT NULL DEFAULT (strftime('%Y-%m-%dT%H:%M:%fZ', 'now'))
+  answered_at  INTEGER NOT NULL,            -- Unix seconds
+  created_at   TEXT NOT NULL DEFAULT (strftime('%Y-%m-%dT%H:%M:%fZ', 'now')),
+  UNIQUE (attempt_id, step_index)
 );
-CREATE INDEX responses_by_attempt ON responses(attempt_id, step_index);
 CREATE INDEX responses_by_question ON responses(question_id);
 CREATE TABLE progress (
-  user_id        INTEGER NOT NULL REFERENCES users(id) ON DELETE CASCADE,
-  dataset        TEXT NOT NULL,
-  structure      TEXT NOT NULL,
-  box            INTEGER NOT NULL DEFAULT 1,  -- Leitner box
-  due_at         TEXT NOT NULL,
-  correct_count  INTEGER NOT NULL DEFAULT 0,
-  wrong_count    INTEGER NOT NULL DEFAULT 0,
-  last_seen_at   TEXT,
-  PRIMARY KEY (user_id, dataset, structure)
+  user_id           INTEGER NOT NULL REFERENCES users(id) ON DELETE CASCADE,
+  structure         TEXT NOT NULL,
+  box               INTEGER NOT NULL,       -- Leitner box 1..5
+  due_at            INTEGER NOT NULL,       -- Unix seconds
+  answered          INTEGER NOT NULL,
+  correct           INTEGER NOT NULL,
+  last_answered_at  INTEGER NOT NULL,
+  PRIMARY KEY (user_id, structure)
 );
 CREATE TABLE user_ability (
   user_id   INTEGER PRIMARY KEY REFERENCES users(id) ON DELETE CASCADE,
-  rating    REAL NOT NULL DEFAULT 0,         -- Elo-style ability
-  answered  INTEGER NOT NULL DEFAULT 0
+  rating    REAL NOT NULL,                  -- Elo-style ability
+  answered  INTEGER NOT NULL
+);
+CREATE TABLE question_stats (
+  question_id  TEXT PRIMARY KEY,            -- kept across re-seeding
+  difficulty   REAL NOT NULL,               -- Elo difficulty learned from answers
+  answered     INTEGER NOT NULL
 );
 )SQL";
 
@@ -202,7 +215,7 @@ const std::vector<Migration>& migrations() {
   static const std::vector<Migration> all = {
       {1, "datasets, structures and presets", kDatasets},
       {2, "courses, lessons, prerequisites, steps and questions", kCurriculum},
-      {3, "users, attempts, responses, progress and ability", kLearners},
+      {3, "users, attempts, responses, progress, ability and question difficulty", kLearners},
       {4, "preference studies: protocols, participants, blinded trials, ratings", kStudies},
   };
   return all;

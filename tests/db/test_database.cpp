@@ -10,10 +10,13 @@
 #include <thread>
 
 #include "db/checksum.h"
+#include "db/course_store.h"
 #include "db/database.h"
 #include "db/dataset_store.h"
 #include "db/schema.h"
+#include "lessons/course_json.h"
 #include "test_support.h"
+#include "toy_course.h"
 
 namespace fs = std::filesystem;
 using namespace at;
@@ -70,7 +73,8 @@ TEST_CASE("An empty file is migrated to the newest schema version in WAL mode wi
   REQUIRE(*fk->step());
   CHECK(fk->integer(0) == 1);
   for (const char* table : {"datasets", "structures", "presets", "courses", "lessons", "lesson_prerequisites",
-                            "steps", "questions", "users", "attempts", "responses", "progress", "user_ability"})
+                            "steps", "questions", "users", "attempts", "responses", "progress", "user_ability",
+                            "question_stats"})
     CHECK_MESSAGE(countRows(*db, table) == 0, table);
 }
 
@@ -89,7 +93,7 @@ TEST_CASE("A database at every earlier version migrates to the same schema as a 
 
   for (int from = 0; from < latestSchemaVersion(); ++from) {
     CAPTURE(from);
-    const std::string path = (dir / ("v" + std::to_string(from) + ".db")).string();
+    const std::string path = (dir / "v").string().append(std::to_string(from)).append(".db");
     {
       OpenOptions options;
       options.targetVersion = from;
@@ -97,6 +101,7 @@ TEST_CASE("A database at every earlier version migrates to the same schema as a 
       REQUIRE(old);
       CHECK(*old->schemaVersion() == from);
       if (from >= 1) REQUIRE(registerDataset(*old, sampleRecord("kept"), {}));
+      if (from >= 2) REQUIRE(storeCourse(*old, test::toyCourse(), "v" + std::to_string(from)));
     }
     auto db = Database::open(path);
     REQUIRE_MESSAGE(db, (db ? "" : db.error().message));
@@ -107,6 +112,12 @@ TEST_CASE("A database at every earlier version migrates to the same schema as a 
       REQUIRE(kept);
       REQUIRE(kept->has_value());
       CHECK((*kept)->geometry.spacingMm[1] == doctest::Approx(0.75));
+    }
+    if (from >= 2) {
+      SqliteCurriculumRepository repo(*db, test::toyBuiltin());
+      auto course = repo.course("toy");
+      REQUIRE(course);
+      CHECK(lessons::courseToJson(*course) == lessons::courseToJson(test::toyCourse()));
     }
   }
 }

@@ -65,6 +65,7 @@ class Statement {
  private:
   friend class Database;
   Statement(sqlite3_stmt* stmt, sqlite3* db, std::string sql);
+  void noteBind(int rc, int index);  // keeps the first bind error for step()
   sqlite3_stmt* stmt_ = nullptr;
   sqlite3* db_ = nullptr;
   std::string sql_;

@@ -17,6 +17,7 @@
 
 #include "lessons/repositories.h"
 #include "lessons/scheduling.h"
+#include "quiz/elo.h"
 #include "quiz/grading.h"
 #include "quiz/keys.h"
 

@@ -30,7 +30,8 @@ Result<Grade> gradeLocate(const ResolvedQuestion& question, const Pick& pick, co
 Result<Grade> gradeChoice(const ResolvedQuestion& question, int choice, const GradingContext& context);
 // Name: matchName against the target's names (catalog entry + question synonyms).
 Result<Grade> gradeName(const ResolvedQuestion& question, const std::string& text, const GradingContext& context);
-// Order: correct when the sequence equals keyOrder; score = LCS(answer, key) / |key|.
+// Order: correct when the sequence equals keyOrder; otherwise score = LCS(answer, key) /
+// max(|answer|, |key|) (structures listed that the path does not meet cost like missing ones).
 // Entries may be structure ids or names (resolved through the catalog, exact after normalisation).
 Result<Grade> gradeOrder(const ResolvedQuestion& question, const std::vector<std::string>& order,
                          const GradingContext& context);

@@ -10,8 +10,8 @@ namespace at::quiz {
 
 // Canonical form for comparison: UTF-8 Latin letters folded to ASCII lower case (é→e, ß→ss,
 // æ→ae …), punctuation and hyphens turned into spaces, runs of space collapsed, and the words
-// "left"/"right" (and "l"/"r" abbreviations as whole words) moved to the end in that order:
-// "Semicircular-Canal, LEFT lateral" → "semicircular canal lateral left".
+// "left"/"right" (and "l"/"r" abbreviations as whole words) moved to the end, the articles
+// "the", "a", "an" dropped: "The Semicircular-Canal, LEFT lateral" → "semicircular canal lateral left".
 std::string normalizeName(const std::string& text);
 
 // Optimal string alignment (restricted Damerau–Levenshtein) distance on bytes: insertions,
@@ -40,8 +40,8 @@ struct NameMatch {
 };
 
 // Matches `typed` against `targetNames` (the target's spellings). Exact after normalisation →
-// accepted. Otherwise accepted when the distance is within typoAllowance of the typed text's
-// normalised length, unless some entry of `catalog` for a structure other than `targetId` is
+// accepted. Otherwise accepted when the distance to the closest target spelling is within
+// typoAllowance of that spelling's normalised length, unless some entry of `catalog` for a structure other than `targetId` is
 // at the same or a smaller distance (then `closerStructure` names it).
 NameMatch matchName(const std::string& typed, const std::string& targetId,
                     const std::vector<std::string>& targetNames, const NameCatalog& catalog);

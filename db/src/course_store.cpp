@@ -1,0 +1,166 @@
+#include "db/course_store.h"
+
+#include <algorithm>
+
+#include <nlohmann/json.hpp>
+
+#include "lessons/course_json.h"
+
+namespace at::db {
+
+const char* toString(SeedOutcome outcome) {
+  switch (outcome) {
+    case SeedOutcome::Added: return "added";
+    case SeedOutcome::Updated: return "updated";
+    case SeedOutcome::Unchanged: return "unchanged";
+    case SeedOutcome::KeptNewer: return "kept newer";
+  }
+  return "?";
+}
+
+namespace {
+
+// Inserts one row; a primary-key clash means the id belongs to another course.
+Status insertOwned(Statement& s, const std::string& what, const std::string& id, const std::string& courseId) {
+  auto status = s.run();
+  if (!status && status.error().message.find("UNIQUE") != std::string::npos)
+    return fail(what + " id '" + id + "' of course '" + courseId + "' is already used by another course");
+  return status;
+}
+
+Status writeCourse(Database& d, const lessons::Course& course, const std::string& source) {
+  nlohmann::json synonyms = nlohmann::json::object();
+  for (const auto& [structure, names] : course.synonyms) synonyms[structure] = names;
+
+  auto upsert = d.prepare(
+      "INSERT INTO courses (id, title, summary, dataset, version, synonyms, source) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7)"
+      " ON CONFLICT(id) DO UPDATE SET title = excluded.title, summary = excluded.summary,"
+      " dataset = excluded.dataset, version = excluded.version, synonyms = excluded.synonyms, source = excluded.source");
+  if (!upsert) return tl::unexpected(upsert.error());
+  upsert->bind(1, course.id)
+      .bind(2, course.title)
+      .bind(3, course.summary)
+      .bind(4, course.datasetId)
+      .bind(5, course.version)
+      .bind(6, synonyms.dump())
+      .bind(7, source);
+  if (auto s = upsert->run(); !s) return s;
+
+  // Old content goes (steps, prerequisites and questions cascade with their lessons) …
+  auto drop = d.prepare("DELETE FROM lessons WHERE course_id = ?1");
+  if (!drop) return tl::unexpected(drop.error());
+  drop->bind(1, course.id);
+  if (auto s = drop->run(); !s) return s;
+
+  // … and the new content comes in under the same stable ids.
+  auto lesson = d.prepare("INSERT INTO lessons (id, course_id, position, title, summary) VALUES (?1, ?2, ?3, ?4, ?5)");
+  auto prereq = d.prepare("INSERT INTO lesson_prerequisites (lesson_id, requires_id, position) VALUES (?1, ?2, ?3)");
+  auto question = d.prepare(
+      "INSERT INTO questions (id, lesson_id, kind, target, difficulty, json) VALUES (?1, ?2, ?3, ?4, ?5, ?6)");
+  auto step = d.prepare(
+      "INSERT INTO steps (lesson_id, position, kind, structure, preset_id, view, title, text, question_id, study_items)"
+      " VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10)");
+  for (auto* s : {&lesson, &prereq, &question, &step})
+    if (!*s) return tl::unexpected(s->error());
+
+  for (std::size_t li = 0; li < course.lessons.size(); ++li) {
+    const lessons::Lesson& l = course.lessons[li];
+    lesson->reset();
+    lesson->bind(1, l.id).bind(2, course.id).bind(3, int(li)).bind(4, l.title).bind(5, l.summary);
+    if (auto s = insertOwned(*lesson, "lesson", l.id, course.id); !s) return s;
+    for (std::size_t pi = 0; pi < l.prerequisites.size(); ++pi) {
+      prereq->reset();
+      prereq->bind(1, l.id).bind(2, l.prerequisites[pi]).bind(3, int(pi));
+      if (auto s = prereq->run(); !s) return fail("lesson '" + l.id + "' prerequisites: " + s.error().message);
+    }
+    for (std::size_t si = 0; si < l.steps.size(); ++si) {
+      const lessons::Step& st = l.steps[si];
+      std::optional<std::string> questionId;
+      std::string structure;
+      if (st.kind == lessons::StepKind::Question) {
+        const quiz::Question& q = st.question;
+        question->reset();
+        question->bind(1, q.id)
+            .bind(2, l.id)
+            .bind(3, quiz::toString(q.kind))
+            .bind(4, q.target)
+            .bind(5, q.difficulty)
+            .bind(6, lessons::questionToJson(q));
+        if (auto s = insertOwned(*question, "question", q.id, course.id); !s) return s;
+        questionId = q.id;
+        structure = q.target;
+      } else if (st.kind == lessons::StepKind::Show) {
+        structure = st.show.structure;
+      } else {
+        structure = st.study.structure;
+      }
+      const bool show = st.kind == lessons::StepKind::Show;
+      step->reset();
+      step->bind(1, l.id)
+          .bind(2, int(si))
+          .bind(3, lessons::toString(st.kind))
+          .bind(4, structure)
+          .bind(5, show ? st.show.presetId : std::string())
+          .bind(6, show ? std::string(lessons::toString(st.show.view)) : std::string())
+          .bind(7, show ? st.show.title : std::string())
+          .bind(8, show ? st.show.text : std::string())
+          .bind(9, questionId)
+          .bind(10, nlohmann::json(st.study.items).dump());
+      if (auto s = step->run(); !s)
+        return fail("lesson '" + l.id + "' step " + std::to_string(si) + ": " + s.error().message);
+    }
+  }
+  return {};
+}
+
+}  // namespace
+
+Result<SeedOutcome> storeCourse(Database& db, const lessons::Course& course, const std::string& source) {
+  SeedOutcome outcome = SeedOutcome::Unchanged;
+  auto status = db.writeTransaction([&](Database& d) -> Status {
+    auto stored = d.prepare("SELECT version FROM courses WHERE id = ?1");
+    if (!stored) return tl::unexpected(stored.error());
+    stored->bind(1, course.id);
+    auto row = stored->step();
+    if (!row) return tl::unexpected(row.error());
+    if (*row) {
+      const int version = stored->integer(0);
+      if (version == course.version) {
+        outcome = SeedOutcome::Unchanged;
+        return {};
+      }
+      if (version > course.version) {
+        outcome = SeedOutcome::KeptNewer;
+        return {};
+      }
+      outcome = SeedOutcome::Updated;
+    } else {
+      outcome = SeedOutcome::Added;
+    }
+    stored->reset();
+    return writeCourse(d, course, source);
+  });
+  if (!status) return fail("course '" + course.id + "': " + status.error().message);
+  return outcome;
+}
+
+Result<std::vector<SeedReport>> seedCourses(Database& db, const std::filesystem::path& dir) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  if (!fs::is_directory(dir, ec)) return fail(dir.string() + ": course folder not found");
+  std::vector<fs::path> files;
+  for (const auto& entry : fs::directory_iterator(dir, ec))
+    if (entry.is_regular_file() && entry.path().extension() == ".json") files.push_back(entry.path());
+  std::sort(files.begin(), files.end());
+  std::vector<SeedReport> reports;
+  for (const auto& file : files) {
+    auto course = lessons::loadCourseJson(file);
+    if (!course) return tl::unexpected(course.error());
+    auto outcome = storeCourse(db, *course, fs::absolute(file).string());
+    if (!outcome) return fail(file.string() + ": " + outcome.error().message);
+    reports.push_back({file.string(), course->id, *outcome});
+  }
+  return reports;
+}
+
+}  // namespace at::db

@@ -1,0 +1,488 @@
+#include "db/sqlite_repositories.h"
+
+#include <nlohmann/json.hpp>
+
+#include "db/dataset_store.h"
+#include "lessons/course_json.h"
+#include "quiz/answer_json.h"
+
+namespace at::db {
+
+using namespace at::lessons;
+
+namespace {
+
+// Runs `each` for every row of a prepared, bound statement.
+template <class F>
+Status forEachRow(Statement& s, F&& each) {
+  while (true) {
+    auto row = s.step();
+    if (!row) return tl::unexpected(row.error());
+    if (!*row) return {};
+    if (Status st = each(s); !st) return st;
+  }
+}
+
+}  // namespace
+
+// ---------------------------------------------------------------------------------------------
+// Curriculum
+
+SqliteCurriculumRepository::SqliteCurriculumRepository(Database& db, BuiltinStructures builtin)
+    : db_(db), builtin_(std::move(builtin)) {}
+
+Result<std::vector<Course>> SqliteCurriculumRepository::courses() {
+  auto s = db_.prepare("SELECT id FROM courses ORDER BY title, id");
+  if (!s) return tl::unexpected(s.error());
+  std::vector<std::string> ids;
+  if (auto st = forEachRow(*s, [&](Statement& r) -> Status { ids.push_back(r.text(0)); return {}; }); !st)
+    return tl::unexpected(st.error());
+  std::vector<Course> out;
+  for (const auto& id : ids) {
+    auto c = course(id);
+    if (!c) return tl::unexpected(c.error());
+    out.push_back(std::move(*c));
+  }
+  return out;
+}
+
+Result<Course> SqliteCurriculumRepository::course(const std::string& courseId) {
+  auto s = db_.prepare("SELECT id, title, summary, dataset, version, synonyms FROM courses WHERE id = ?1");
+  if (!s) return tl::unexpected(s.error());
+  s->bind(1, courseId);
+  auto row = s->step();
+  if (!row) return tl::unexpected(row.error());
+  if (!*row) return fail("unknown course '" + courseId + "'");
+  Course c;
+  c.id = s->text(0);
+  c.title = s->text(1);
+  c.summary = s->text(2);
+  c.datasetId = s->text(3);
+  c.version = s->integer(4);
+  const auto synonyms = nlohmann::json::parse(s->text(5), nullptr, false);
+  if (!synonyms.is_object()) return fail("course '" + courseId + "': stored synonyms are not a JSON object");
+  for (const auto& [structure, names] : synonyms.items())
+    for (const auto& n : names) c.synonyms[structure].push_back(n.get<std::string>());
+
+  auto ls = db_.prepare("SELECT id FROM lessons WHERE course_id = ?1 ORDER BY position");
+  if (!ls) return tl::unexpected(ls.error());
+  ls->bind(1, courseId);
+  std::vector<std::string> ids;
+  if (auto st = forEachRow(*ls, [&](Statement& r) -> Status { ids.push_back(r.text(0)); return {}; }); !st)
+    return tl::unexpected(st.error());
+  for (const auto& id : ids) {
+    auto l = lesson(id);
+    if (!l) return tl::unexpected(l.error());
+    c.lessons.push_back(std::move(*l));
+  }
+  return c;
+}
+
+Result<Lesson> SqliteCurriculumRepository::lesson(const std::string& lessonId) {
+  auto s = db_.prepare("SELECT id, course_id, title, summary FROM lessons WHERE id = ?1");
+  if (!s) return tl::unexpected(s.error());
+  s->bind(1, lessonId);
+  auto row = s->step();
+  if (!row) return tl::unexpected(row.error());
+  if (!*row) return fail("unknown lesson '" + lessonId + "'");
+  Lesson l;
+  l.id = s->text(0);
+  l.courseId = s->text(1);
+  l.title = s->text(2);
+  l.summary = s->text(3);
+
+  auto pre = db_.prepare("SELECT requires_id FROM lesson_prerequisites WHERE lesson_id = ?1 ORDER BY position");
+  if (!pre) return tl::unexpected(pre.error());
+  pre->bind(1, lessonId);
+  if (auto st = forEachRow(*pre, [&](Statement& r) -> Status { l.prerequisites.push_back(r.text(0)); return {}; }); !st)
+    return tl::unexpected(st.error());
+
+  auto steps = db_.prepare(
+      "SELECT s.kind, s.structure, s.preset_id, s.view, s.title, s.text, s.study_items, q.json"
+      " FROM steps s LEFT JOIN questions q ON q.id = s.question_id WHERE s.lesson_id = ?1 ORDER BY s.position");
+  if (!steps) return tl::unexpected(steps.error());
+  steps->bind(1, lessonId);
+  auto status = forEachRow(*steps, [&](Statement& r) -> Status {
+    Step step;
+    auto kind = parseStepKind(r.text(0));
+    if (!kind) return tl::unexpected(kind.error());
+    step.kind = *kind;
+    const std::string where = "lesson '" + lessonId + "' step " + std::to_string(l.steps.size());
+    switch (step.kind) {
+      case StepKind::Show: {
+        step.show.structure = r.text(1);
+        step.show.presetId = r.text(2);
+        auto view = parseCameraView(r.text(3));
+        if (!view) return fail(where + ": " + view.error().message);
+        step.show.view = *view;
+        step.show.title = r.text(4);
+        step.show.text = r.text(5);
+        break;
+      }
+      case StepKind::Question: {
+        if (r.isNull(7)) return fail(where + ": its question is missing");
+        auto q = parseQuestionJson(r.text(7), where);
+        if (!q) return tl::unexpected(q.error());
+        step.question = std::move(*q);
+        break;
+      }
+      case StepKind::Study: {
+        step.study.structure = r.text(1);
+        const auto items = nlohmann::json::parse(r.text(6), nullptr, false);
+        if (!items.is_array()) return fail(where + ": stored study items are not a JSON list");
+        for (const auto& item : items) step.study.items.push_back(item.get<std::string>());
+        break;
+      }
+    }
+    l.steps.push_back(std::move(step));
+    return {};
+  });
+  if (!status) return tl::unexpected(status.error());
+  return l;
+}
+
+Result<quiz::Question> SqliteCurriculumRepository::question(const std::string& questionId) {
+  auto s = db_.prepare("SELECT json FROM questions WHERE id = ?1");
+  if (!s) return tl::unexpected(s.error());
+  s->bind(1, questionId);
+  auto row = s->step();
+  if (!row) return tl::unexpected(row.error());
+  if (!*row) return fail("unknown question '" + questionId + "'");
+  return parseQuestionJson(s->text(0), "question '" + questionId + "'");
+}
+
+Result<std::vector<Structure>> SqliteCurriculumRepository::structures(const std::string& datasetId) {
+  if (builtin_) {
+    if (auto found = builtin_(datasetId)) return std::move(*found);
+  }
+  auto record = findDataset(db_, datasetId);
+  if (!record) return tl::unexpected(record.error());
+  if (!*record) return fail("unknown dataset '" + datasetId + "' (import it with `anatomy-tutor import`)");
+  return datasetStructures(db_, (*record)->id);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Users
+
+namespace {
+
+Result<User> readUser(const Statement& s) {
+  User u;
+  u.id = s.int64(0);
+  u.name = s.text(1);
+  auto role = parseRole(s.text(2));
+  if (!role) return tl::unexpected(role.error());
+  u.role = *role;
+  u.group = s.text(3);
+  return u;
+}
+
+constexpr const char* kSelectUser = "SELECT id, name, role, group_name FROM users";
+
+}  // namespace
+
+Result<std::optional<User>> SqliteUserRepository::findUser(const std::string& name) {
+  auto s = db_.prepare(std::string(kSelectUser) + " WHERE name = ?1");
+  if (!s) return tl::unexpected(s.error());
+  s->bind(1, name);
+  auto row = s->step();
+  if (!row) return tl::unexpected(row.error());
+  if (!*row) return std::optional<User>{};
+  auto u = readUser(*s);
+  if (!u) return tl::unexpected(u.error());
+  return std::optional<User>(std::move(*u));
+}
+
+Result<User> SqliteUserRepository::user(std::int64_t userId) {
+  auto s = db_.prepare(std::string(kSelectUser) + " WHERE id = ?1");
+  if (!s) return tl::unexpected(s.error());
+  s->bind(1, userId);
+  auto row = s->step();
+  if (!row) return tl::unexpected(row.error());
+  if (!*row) return fail("unknown user id " + std::to_string(userId));
+  return readUser(*s);
+}
+
+Result<User> SqliteUserRepository::createUser(const std::string& name, Role role, const std::string& group) {
+  if (name.empty()) return fail("a user name must not be empty");
+  User u{0, name, role, group};
+  auto status = db_.writeTransaction([&](Database& d) -> Status {
+    auto taken = d.prepare("SELECT 1 FROM users WHERE name = ?1");
+    if (!taken) return tl::unexpected(taken.error());
+    taken->bind(1, name);
+    auto row = taken->step();
+    if (!row) return tl::unexpected(row.error());
+    if (*row) return fail("the user name '" + name + "' is already taken");
+    auto insert = d.prepare("INSERT INTO users (name, role, group_name) VALUES (?1, ?2, ?3)");
+    if (!insert) return tl::unexpected(insert.error());
+    insert->bind(1, name).bind(2, toString(role)).bind(3, group);
+    if (auto s = insert->run(); !s) return s;
+    u.id = d.lastInsertId();
+    return {};
+  });
+  if (!status) return tl::unexpected(status.error());
+  return u;
+}
+
+Result<std::vector<User>> SqliteUserRepository::users() {
+  auto s = db_.prepare(std::string(kSelectUser) + " ORDER BY name");
+  if (!s) return tl::unexpected(s.error());
+  std::vector<User> out;
+  auto status = forEachRow(*s, [&](Statement& r) -> Status {
+    auto u = readUser(r);
+    if (!u) return tl::unexpected(u.error());
+    out.push_back(std::move(*u));
+    return {};
+  });
+  if (!status) return tl::unexpected(status.error());
+  return out;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Progress
+
+namespace {
+
+constexpr const char* kSelectAttempt = "SELECT id, user_id, lesson_id, mode, started_at, finished_at, score FROM attempts";
+
+Result<Attempt> readAttempt(const Statement& s) {
+  Attempt a;
+  a.id = s.int64(0);
+  a.userId = s.int64(1);
+  a.lessonId = s.text(2);
+  auto mode = parseLessonMode(s.text(3));
+  if (!mode) return tl::unexpected(mode.error());
+  a.mode = *mode;
+  a.startedAt = s.int64(4);
+  if (!s.isNull(5)) a.finishedAt = s.int64(5);
+  a.score = s.real(6);
+  return a;
+}
+
+constexpr const char* kSelectProgress =
+    "SELECT user_id, structure, box, due_at, answered, correct, last_answered_at FROM progress";
+
+StructureProgress readProgress(const Statement& s) {
+  StructureProgress p;
+  p.userId = s.int64(0);
+  p.structureId = s.text(1);
+  p.box = s.integer(2);
+  p.dueAt = s.int64(3);
+  p.answered = s.integer(4);
+  p.correct = s.integer(5);
+  p.lastAnsweredAt = s.int64(6);
+  return p;
+}
+
+}  // namespace
+
+Result<std::optional<Attempt>> SqliteProgressRepository::openAttempt(std::int64_t userId, const std::string& lessonId) {
+  auto s = db_.prepare(std::string(kSelectAttempt) +
+                       " WHERE user_id = ?1 AND lesson_id = ?2 AND finished_at IS NULL ORDER BY id DESC LIMIT 1");
+  if (!s) return tl::unexpected(s.error());
+  s->bind(1, userId).bind(2, lessonId);
+  auto row = s->step();
+  if (!row) return tl::unexpected(row.error());
+  if (!*row) return std::optional<Attempt>{};
+  auto a = readAttempt(*s);
+  if (!a) return tl::unexpected(a.error());
+  return std::optional<Attempt>(std::move(*a));
+}
+
+Result<Attempt> SqliteProgressRepository::startAttempt(std::int64_t userId, const std::string& lessonId,
+                                                       LessonMode mode, UnixSeconds startedAt) {
+  Attempt a;
+  a.userId = userId;
+  a.lessonId = lessonId;
+  a.mode = mode;
+  a.startedAt = startedAt;
+  auto status = db_.writeTransaction([&](Database& d) -> Status {
+    auto insert = d.prepare("INSERT INTO attempts (user_id, lesson_id, mode, started_at) VALUES (?1, ?2, ?3, ?4)");
+    if (!insert) return tl::unexpected(insert.error());
+    insert->bind(1, userId).bind(2, lessonId).bind(3, toString(mode)).bind(4, startedAt);
+    if (auto s = insert->run(); !s) return s;
+    a.id = d.lastInsertId();
+    return {};
+  });
+  if (!status) return fail("starting lesson '" + lessonId + "': " + status.error().message);
+  return a;
+}
+
+Status SqliteProgressRepository::finishAttempt(std::int64_t attemptId, UnixSeconds finishedAt, double score) {
+  return db_.writeTransaction([&](Database& d) -> Status {
+    auto update = d.prepare("UPDATE attempts SET finished_at = ?2, score = ?3 WHERE id = ?1");
+    if (!update) return tl::unexpected(update.error());
+    update->bind(1, attemptId).bind(2, finishedAt).bind(3, score);
+    if (auto s = update->run(); !s) return s;
+    if (d.changes() != 1) return fail("unknown attempt " + std::to_string(attemptId));
+    return {};
+  });
+}
+
+Result<bool> SqliteProgressRepository::hasFinished(std::int64_t userId, const std::string& lessonId) {
+  auto s = db_.prepare(
+      "SELECT EXISTS (SELECT 1 FROM attempts WHERE user_id = ?1 AND lesson_id = ?2 AND finished_at IS NOT NULL)");
+  if (!s) return tl::unexpected(s.error());
+  s->bind(1, userId).bind(2, lessonId);
+  auto row = s->step();
+  if (!row) return tl::unexpected(row.error());
+  return *row && s->integer(0) != 0;
+}
+
+Result<std::vector<Response>> SqliteProgressRepository::responses(std::int64_t attemptId) {
+  auto s = db_.prepare(
+      "SELECT id, attempt_id, step_index, question_id, structure, answer, correct, score, latency_ms, preset_id,"
+      " mode, t, alpha, beta, answered_at FROM responses WHERE attempt_id = ?1 ORDER BY id");
+  if (!s) return tl::unexpected(s.error());
+  s->bind(1, attemptId);
+  std::vector<Response> out;
+  auto status = forEachRow(*s, [&](Statement& r) -> Status {
+    Response x;
+    x.id = r.int64(0);
+    x.attemptId = r.int64(1);
+    x.stepIndex = r.integer(2);
+    x.questionId = r.text(3);
+    x.structureId = r.text(4);
+    auto answer = quiz::answerFromJson(r.text(5));
+    if (!answer) return fail("response " + std::to_string(x.id) + ": " + answer.error().message);
+    x.answer = std::move(*answer);
+    x.correct = r.integer(6) != 0;
+    x.score = r.real(7);
+    x.latencyMs = r.int64(8);
+    x.render.presetId = r.text(9);
+    x.render.mode = r.text(10);
+    x.render.t = r.optionalReal(11).value_or(0);
+    x.render.alpha = r.optionalReal(12).value_or(0);
+    x.render.beta = r.optionalReal(13).value_or(0);
+    x.answeredAt = r.int64(14);
+    out.push_back(std::move(x));
+    return {};
+  });
+  if (!status) return tl::unexpected(status.error());
+  return out;
+}
+
+Result<std::int64_t> SqliteProgressRepository::recordAnswer(const AnswerRecord& record) {
+  const Response& r = record.response;
+  const StructureProgress& p = record.progress;
+  std::int64_t id = 0;
+  auto status = db_.writeTransaction([&](Database& d) -> Status {
+    auto insert = d.prepare(
+        "INSERT INTO responses (attempt_id, step_index, question_id, structure, answer, correct, score, latency_ms,"
+        " preset_id, mode, t, alpha, beta, answered_at)"
+        " VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13, ?14)");
+    if (!insert) return tl::unexpected(insert.error());
+    insert->bind(1, r.attemptId)
+        .bind(2, r.stepIndex)
+        .bind(3, r.questionId)
+        .bind(4, r.structureId)
+        .bind(5, quiz::answerToJson(r.answer))
+        .bind(6, r.correct ? 1 : 0)
+        .bind(7, r.score)
+        .bind(8, r.latencyMs)
+        .bind(9, r.render.presetId)
+        .bind(10, r.render.mode)
+        .bind(11, r.render.t)
+        .bind(12, r.render.alpha)
+        .bind(13, r.render.beta)
+        .bind(14, r.answeredAt);
+    if (auto s = insert->run(); !s) {
+      if (s.error().message.find("UNIQUE") != std::string::npos)
+        return fail("step " + std::to_string(r.stepIndex) + " of attempt " + std::to_string(r.attemptId) +
+                    " is already answered");
+      if (s.error().message.find("FOREIGN KEY") != std::string::npos)
+        return fail("unknown attempt " + std::to_string(r.attemptId));
+      return s;
+    }
+    id = d.lastInsertId();
+
+    auto progress = d.prepare(
+        "INSERT INTO progress (user_id, structure, box, due_at, answered, correct, last_answered_at)"
+        " VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7) ON CONFLICT (user_id, structure) DO UPDATE SET box = excluded.box,"
+        " due_at = excluded.due_at, answered = excluded.answered, correct = excluded.correct,"
+        " last_answered_at = excluded.last_answered_at");
+    if (!progress) return tl::unexpected(progress.error());
+    progress->bind(1, p.userId)
+        .bind(2, p.structureId)
+        .bind(3, p.box)
+        .bind(4, p.dueAt)
+        .bind(5, p.answered)
+        .bind(6, p.correct)
+        .bind(7, p.lastAnsweredAt);
+    if (auto s = progress->run(); !s) return s;
+
+    auto ability = d.prepare(
+        "INSERT INTO user_ability (user_id, rating, answered) VALUES (?1, ?2, 1)"
+        " ON CONFLICT (user_id) DO UPDATE SET rating = excluded.rating, answered = answered + 1");
+    if (!ability) return tl::unexpected(ability.error());
+    ability->bind(1, p.userId).bind(2, record.abilityAfter);
+    if (auto s = ability->run(); !s) return s;
+
+    auto difficulty = d.prepare(
+        "INSERT INTO question_stats (question_id, difficulty, answered) VALUES (?1, ?2, 1)"
+        " ON CONFLICT (question_id) DO UPDATE SET difficulty = excluded.difficulty, answered = answered + 1");
+    if (!difficulty) return tl::unexpected(difficulty.error());
+    difficulty->bind(1, r.questionId).bind(2, record.difficultyAfter);
+    return difficulty->run();
+  });
+  if (!status) return fail("recording the answer: " + status.error().message);
+  return id;
+}
+
+Result<std::optional<StructureProgress>> SqliteProgressRepository::progress(std::int64_t userId,
+                                                                            const std::string& structureId) {
+  auto s = db_.prepare(std::string(kSelectProgress) + " WHERE user_id = ?1 AND structure = ?2");
+  if (!s) return tl::unexpected(s.error());
+  s->bind(1, userId).bind(2, structureId);
+  auto row = s->step();
+  if (!row) return tl::unexpected(row.error());
+  if (!*row) return std::optional<StructureProgress>{};
+  return std::optional<StructureProgress>(readProgress(*s));
+}
+
+Result<std::vector<StructureProgress>> SqliteProgressRepository::allProgress(std::int64_t userId) {
+  auto s = db_.prepare(std::string(kSelectProgress) + " WHERE user_id = ?1 ORDER BY structure");
+  if (!s) return tl::unexpected(s.error());
+  s->bind(1, userId);
+  std::vector<StructureProgress> out;
+  auto status = forEachRow(*s, [&](Statement& r) -> Status { out.push_back(readProgress(r)); return {}; });
+  if (!status) return tl::unexpected(status.error());
+  return out;
+}
+
+Result<std::optional<double>> SqliteProgressRepository::ability(std::int64_t userId) {
+  auto s = db_.prepare("SELECT rating FROM user_ability WHERE user_id = ?1");
+  if (!s) return tl::unexpected(s.error());
+  s->bind(1, userId);
+  auto row = s->step();
+  if (!row) return tl::unexpected(row.error());
+  if (!*row) return std::optional<double>{};
+  return std::optional<double>(s->real(0));
+}
+
+Result<std::optional<double>> SqliteProgressRepository::questionDifficulty(const std::string& questionId) {
+  auto s = db_.prepare("SELECT difficulty FROM question_stats WHERE question_id = ?1");
+  if (!s) return tl::unexpected(s.error());
+  s->bind(1, questionId);
+  auto row = s->step();
+  if (!row) return tl::unexpected(row.error());
+  if (!*row) return std::optional<double>{};
+  return std::optional<double>(s->real(0));
+}
+
+Result<std::vector<Attempt>> SqliteProgressRepository::attempts(std::int64_t userId) {
+  auto s = db_.prepare(std::string(kSelectAttempt) + " WHERE user_id = ?1 ORDER BY id DESC");
+  if (!s) return tl::unexpected(s.error());
+  s->bind(1, userId);
+  std::vector<Attempt> out;
+  auto status = forEachRow(*s, [&](Statement& r) -> Status {
+    auto a = readAttempt(r);
+    if (!a) return tl::unexpected(a.error());
+    out.push_back(std::move(*a));
+    return {};
+  });
+  if (!status) return tl::unexpected(status.error());
+  return out;
+}
+
+}  // namespace at::db

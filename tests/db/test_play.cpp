@@ -1,0 +1,455 @@
+// The learning commands through the real anatomy-tutor binary: every shipped lesson played from
+// answers computed from its keys, kill -9 in the middle of a lesson and resume, concurrent
+// players, malformed answer lines, and a real abdominal course on the TotalSegmentator sample.
+#include <doctest/doctest.h>
+
+#include <chrono>
+#include <csignal>
+#include <fcntl.h>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <thread>
+#include <unistd.h>
+
+#include "db/course_store.h"
+#include "db/database.h"
+#include "lessons/course_json.h"
+#include "quiz/answer_json.h"
+#include "quiz/keys.h"
+#include "test_support.h"
+#include "volume/dataset_source.h"
+#include "volume/phantom.h"
+#include "wdt/wdt.h"
+
+namespace fs = std::filesystem;
+using namespace at;
+
+namespace {
+
+bool appAvailable() {
+  if (fs::exists(test::appBinary())) return true;
+  std::printf("SKIPPED: %s is not built\n", test::appBinary().c_str());
+  return false;
+}
+
+std::int64_t scalar(const std::string& dbPath, const std::string& sql) {
+  auto db = db::Database::open(dbPath);
+  REQUIRE_MESSAGE(db, (db ? "" : db.error().message));
+  auto s = db->prepare(sql);
+  REQUIRE_MESSAGE(s, (s ? "" : s.error().message));
+  auto row = s->step();
+  REQUIRE(row);
+  REQUIRE(*row);
+  return s->int64(0);
+}
+
+// The same distance fields as the app's key computer (app/src/learning_support.cpp,
+// wdtDistanceField): density weights, entering rule, converged, on a grid coarser by 2, sampled
+// back onto the label grid.
+quiz::DistanceFieldFunction distanceFieldLikeTheApp(const Dataset& dataset) {
+  return [&dataset](const Mask& seeds) -> Result<FloatVolume> {
+    WdtParams params;
+    params.converge = true;
+    params.downsample = 2;
+    auto result = computeWdt(dataset.volume, seeds, params);
+    if (!result) return tl::unexpected(result.error());
+    if (result->field.downsample == 1) return std::move(result->field.distances);
+    return upsampleField(result->field, dataset.labels.geometry);
+  };
+}
+
+// The right answer to a resolved question, as an answers-file line.
+std::string rightAnswerLine(const quiz::ResolvedQuestion& q, const std::vector<Structure>& structures) {
+  quiz::Answer a;
+  switch (q.question.kind) {
+    case quiz::QuestionKind::Locate: a.pick = quiz::Pick{q.question.target, 0.0}; break;
+    case quiz::QuestionKind::Identify:
+    case quiz::QuestionKind::Relation: a.choice = q.keyChoice; break;
+    case quiz::QuestionKind::Order: a.order = q.keyOrder; break;
+    case quiz::QuestionKind::Name:
+      for (const auto& s : structures)
+        if (s.id == q.question.target) a.text = s.displayName;
+      break;
+  }
+  return quiz::answerToJson(a);
+}
+
+// Answers files for every lesson of `course`, from keys computed on `dataset`.
+std::map<std::string, std::vector<std::string>> answersFor(const lessons::Course& course, const Dataset& dataset) {
+  quiz::DatasetKeyComputer keys(dataset, distanceFieldLikeTheApp(dataset));
+  std::map<std::string, std::vector<std::string>> out;
+  for (const auto& lesson : course.lessons) {
+    auto& lines = out[lesson.id];
+    for (const auto& step : lesson.steps) {
+      if (step.kind != lessons::StepKind::Question) continue;
+      auto resolved = quiz::resolveQuestion(step.question, keys);
+      REQUIRE_MESSAGE(resolved, (resolved ? "" : resolved.error().message));
+      lines.push_back(rightAnswerLine(*resolved, dataset.structures));
+    }
+  }
+  return out;
+}
+
+fs::path writeLines(const fs::path& path, const std::vector<std::string>& lines) {
+  std::ofstream f(path);
+  for (const auto& l : lines) f << l << "\n";
+  return path;
+}
+
+// A quick course on the phantom whose keys need no distance field (no volume is built).
+lessons::Course quickCourse() {
+  lessons::Course c;
+  c.id = "quick";
+  c.title = "Quick ear check";
+  c.datasetId = "phantom";
+  const auto structures = phantomStructures();
+  REQUIRE(structures.size() >= 4);
+  lessons::Lesson l;
+  l.id = "quick.check";
+  l.courseId = c.id;
+  l.title = "Quick check";
+  lessons::Step show;
+  show.kind = lessons::StepKind::Show;
+  show.show.structure = structures[0].id;
+  show.show.presetId = "default_wdt";
+  show.show.title = "Look";
+  show.show.text = "Look at it.";
+  l.steps.push_back(show);
+  for (int i = 0; i < 6; ++i) {
+    const Structure& target = structures[std::size_t(i % 4)];
+    lessons::Step step;
+    step.kind = lessons::StepKind::Question;
+    quiz::Question& q = step.question;
+    q.id = "quick.check.q" + std::to_string(i);
+    q.target = target.id;
+    q.prompt = "Question " + std::to_string(i) + " about " + target.id;
+    if (i % 3 == 0) {
+      q.kind = quiz::QuestionKind::Name;
+    } else if (i % 3 == 1) {
+      q.kind = quiz::QuestionKind::Locate;
+    } else {
+      q.kind = quiz::QuestionKind::Identify;
+      q.choices = {structures[0].id, structures[1].id, structures[2].id, structures[3].id};
+    }
+    l.steps.push_back(step);
+  }
+  c.lessons.push_back(l);
+  return c;
+}
+
+// Right answers for quickCourse(): its identify choices are listed, so no keys are needed.
+std::vector<std::string> quickAnswers() {
+  const auto structures = phantomStructures();
+  std::vector<std::string> lines;
+  const lessons::Course course = quickCourse();
+  for (const auto& step : course.lessons[0].steps) {
+    if (step.kind != lessons::StepKind::Question) continue;
+    quiz::ResolvedQuestion r;
+    r.question = step.question;
+    r.choices = step.question.choices;
+    for (std::size_t i = 0; i < r.choices.size(); ++i)
+      if (r.choices[i] == step.question.target) r.keyChoice = int(i);
+    lines.push_back(rightAnswerLine(r, structures));
+  }
+  return lines;
+}
+
+void storeQuickCourse(const std::string& dbPath) {
+  auto db = db::Database::open(dbPath);
+  REQUIRE(db);
+  auto stored = db::storeCourse(*db, quickCourse(), "test");
+  REQUIRE_MESSAGE(stored, (stored ? "" : stored.error().message));
+}
+
+std::string playArgs(const std::string& lesson, const std::string& user, const fs::path& answers,
+                     const std::string& dbPath) {
+  return "play " + lesson + " --user " + user + " --new-user --answers '" + answers.string() + "' --db '" + dbPath + "'";
+}
+
+}  // namespace
+
+TEST_CASE("Every shipped lesson plays to the end from answers computed from the course's keys") {
+  if (!appAvailable()) return;
+  test::TempDir dir;
+  const std::string dbPath = (dir / "shipped.db").string();
+  std::vector<fs::path> files;
+  for (const auto& e : fs::directory_iterator(test::sourceDir() / "data" / "courses"))
+    if (e.path().extension() == ".json") files.push_back(e.path());
+  REQUIRE(!files.empty());
+  std::sort(files.begin(), files.end());
+  for (const auto& file : files) {
+    CAPTURE(file);
+    auto course = lessons::loadCourseJson(file);
+    REQUIRE_MESSAGE(course, (course ? "" : course.error().message));
+    REQUIRE(isBuiltinDatasetName(course->datasetId));  // shipped courses use the built-in phantom
+    auto dataset = openBuiltinDataset(course->datasetId);
+    REQUIRE(dataset);
+    const auto answers = answersFor(*course, *dataset);
+    int questions = 0;
+    for (const auto& lesson : course->lessons) {  // teaching order satisfies the prerequisites
+      CAPTURE(lesson.id);
+      const fs::path answersFile = writeLines(dir / (lesson.id + ".jsonl"), answers.at(lesson.id));
+      auto r = test::runApp(playArgs(lesson.id, "student", answersFile, dbPath));
+      CHECK_MESSAGE(r.exitCode == 0, r.err);
+      CHECK(r.out.find("Lesson finished: score 1.00") != std::string::npos);
+      questions += int(answers.at(lesson.id).size());
+      CHECK(scalar(dbPath, "SELECT count(*) FROM responses") == questions);
+    }
+    CHECK(scalar(dbPath, "SELECT count(*) FROM responses WHERE correct = 0") == 0);
+    CHECK(scalar(dbPath, "SELECT count(*) FROM attempts WHERE finished_at IS NULL") == 0);
+  }
+  auto progress = test::runApp("progress --user student --db '" + dbPath + "'");
+  CHECK_MESSAGE(progress.exitCode == 0, progress.err);
+  CHECK(progress.out.find("finished, best score 1.00") != std::string::npos);
+  CHECK(progress.out.find("Due for review now: nothing") != std::string::npos);
+}
+
+TEST_CASE("play killed with SIGKILL mid-lesson keeps every answer and resumes at the next step") {
+  if (!appAvailable()) return;
+  test::TempDir dir;
+  const std::string dbPath = (dir / "crash.db").string();
+  storeQuickCourse(dbPath);
+  const auto answers = quickAnswers();
+  const int answeredBeforeKill = 4;
+
+  const fs::path fifo = dir / "answers.fifo";
+  REQUIRE(mkfifo(fifo.c_str(), 0600) == 0);
+  const pid_t child = fork();
+  REQUIRE(child >= 0);
+  if (child == 0) {
+    const int devnull = open("/dev/null", O_WRONLY);
+    dup2(devnull, 1);
+    dup2(devnull, 2);
+    const std::string app = test::appBinary().string();
+    execl(app.c_str(), app.c_str(), "play", "quick.check", "--user", "eve", "--new-user", "--answers", fifo.c_str(),
+          "--db", dbPath.c_str(), static_cast<char*>(nullptr));
+    _exit(127);
+  }
+  const int out = open(fifo.c_str(), O_WRONLY);  // waits for play to open its end
+  REQUIRE(out >= 0);
+  const auto countResponses = [&] { return scalar(dbPath, "SELECT count(*) FROM responses"); };
+  for (int i = 0; i < answeredBeforeKill; ++i) {
+    const std::string line = answers[std::size_t(i)] + "\n";
+    REQUIRE(write(out, line.data(), line.size()) == ssize_t(line.size()));
+    // Wait until play has committed this answer (it then waits for the next line).
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+    while (countResponses() < i + 1 && std::chrono::steady_clock::now() < deadline)
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    REQUIRE(countResponses() == i + 1);
+  }
+  REQUIRE(kill(child, SIGKILL) == 0);
+  int status = 0;
+  REQUIRE(waitpid(child, &status, 0) == child);
+  CHECK(WIFSIGNALED(status));
+  close(out);
+
+  CHECK(countResponses() == answeredBeforeKill);
+  CHECK(scalar(dbPath, "SELECT count(*) FROM attempts WHERE finished_at IS NULL") == 1);
+
+  const fs::path rest = writeLines(dir / "rest.jsonl", {answers.begin() + answeredBeforeKill, answers.end()});
+  auto r = test::runApp(playArgs("quick.check", "eve", rest, dbPath));
+  CHECK_MESSAGE(r.exitCode == 0, r.err);
+  CHECK(r.out.find("resuming attempt") != std::string::npos);
+  // The first step shown after resuming is the fifth question (step 6 of 7: one show step first).
+  const auto firstStep = r.out.find("\n[");
+  REQUIRE(firstStep != std::string::npos);
+  CHECK(r.out.compare(firstStep, 7, "\n[6/7] ") == 0);
+  CHECK(r.out.find("Question 0 about") == std::string::npos);
+  CHECK(r.out.find("Lesson finished: score 1.00") != std::string::npos);
+  CHECK(countResponses() == std::int64_t(answers.size()));
+  CHECK(scalar(dbPath, "SELECT count(DISTINCT step_index) FROM responses") == std::int64_t(answers.size()));
+  CHECK(scalar(dbPath, "SELECT count(*) FROM attempts") == 1);
+  CHECK(scalar(dbPath, "SELECT count(*) FROM attempts WHERE finished_at IS NOT NULL") == 1);
+}
+
+TEST_CASE("Four play processes recording into one database at once lose nothing") {
+  if (!appAvailable()) return;
+  test::TempDir dir;
+  const std::string dbPath = (dir / "many.db").string();
+  storeQuickCourse(dbPath);
+  const auto answers = quickAnswers();
+  const fs::path file = writeLines(dir / "a.jsonl", answers);
+  constexpr int kPlayers = 4;
+  std::vector<std::thread> players;
+  std::vector<test::CommandResult> results(kPlayers);
+  for (int i = 0; i < kPlayers; ++i)
+    players.emplace_back([&, i] { results[std::size_t(i)] = test::runApp(playArgs("quick.check", "p" + std::to_string(i), file, dbPath)); });
+  for (auto& t : players) t.join();
+  for (const auto& r : results) CHECK_MESSAGE(r.exitCode == 0, r.err);
+  CHECK(scalar(dbPath, "SELECT count(*) FROM responses") == kPlayers * std::int64_t(answers.size()));
+  CHECK(scalar(dbPath, "SELECT count(*) FROM users") == kPlayers);
+  CHECK(scalar(dbPath, "SELECT sum(answered) FROM question_stats") == kPlayers * std::int64_t(answers.size()));
+}
+
+TEST_CASE("A malformed answers line is reported with its number and reason, earlier answers kept") {
+  if (!appAvailable()) return;
+  test::TempDir dir;
+  const std::string dbPath = (dir / "bad.db").string();
+  storeQuickCourse(dbPath);
+  const auto answers = quickAnswers();
+
+  const fs::path broken = writeLines(dir / "broken.jsonl", {answers[0], "", "{\"choice\": "});
+  auto r = test::runApp(playArgs("quick.check", "fay", broken, dbPath));
+  CHECK(r.exitCode != 0);
+  CHECK(r.err.find("broken.jsonl:3: not valid JSON") != std::string::npos);
+  CHECK(scalar(dbPath, "SELECT count(*) FROM responses") == 1);
+
+  // An answer of the wrong kind for the question (a choice for a locate question) names its line.
+  const fs::path wrongKind = writeLines(dir / "wrong.jsonl", {"{\"choice\": 1}"});
+  auto w = test::runApp(playArgs("quick.check", "fay", wrongKind, dbPath));
+  CHECK(w.exitCode != 0);
+  CHECK(w.err.find("wrong.jsonl:1: ") != std::string::npos);
+  CHECK(scalar(dbPath, "SELECT count(*) FROM responses") == 1);
+
+  const fs::path unknownField = writeLines(dir / "field.jsonl", {"{\"pick\": \"x\", \"colour\": 3}"});
+  auto u = test::runApp(playArgs("quick.check", "fay", unknownField, dbPath));
+  CHECK(u.exitCode != 0);
+  CHECK(u.err.find("field.jsonl:1: ") != std::string::npos);
+  CHECK(u.err.find("colour") != std::string::npos);
+}
+
+TEST_CASE("Unknown lessons and users get a clear message") {
+  if (!appAvailable()) return;
+  test::TempDir dir;
+  const std::string dbPath = (dir / "u.db").string();
+  auto lesson = test::runApp("play no_such_lesson --user zoe --new-user --db '" + dbPath + "'");
+  CHECK(lesson.exitCode != 0);
+  CHECK(lesson.err.find("unknown lesson 'no_such_lesson'") != std::string::npos);
+  auto user = test::runApp("play inner_ear --user nobody --db '" + dbPath + "'");
+  CHECK(user.exitCode != 0);
+  CHECK(user.err.find("unknown user 'nobody'") != std::string::npos);
+  auto progress = test::runApp("progress --user nobody --db '" + dbPath + "'");
+  CHECK(progress.exitCode != 0);
+  CHECK(progress.err.find("unknown user 'nobody'") != std::string::npos);
+}
+
+TEST_CASE("Interactive play takes typed answers on stdin and stops cleanly at 'quit'") {
+  if (!appAvailable()) return;
+  test::TempDir dir;
+  const std::string dbPath = (dir / "i.db").string();
+  storeQuickCourse(dbPath);
+  const auto structures = phantomStructures();
+  // Question 0 is a name question: type the display name; then quit at question 1.
+  auto r = test::runApp("play quick.check --user gus --new-user --db '" + dbPath + "'",
+                        structures[0].displayName + "\nquit\n");
+  CHECK_MESSAGE(r.exitCode == 0, r.err);
+  CHECK(r.out.find("correct (score 1.00)") != std::string::npos);
+  CHECK(r.out.find("run the same command to resume") != std::string::npos);
+  CHECK(scalar(dbPath, "SELECT count(*) FROM responses") == 1);
+  // A locate question typed as a structure's display name; nonsense is asked again, not recorded.
+  auto again = test::runApp("play quick.check --user gus --db '" + dbPath + "'",
+                            "no such thing\n" + structures[1].displayName + "\nquit\n");
+  CHECK_MESSAGE(again.exitCode == 0, again.err);
+  CHECK(again.out.find("try again") != std::string::npos);
+  CHECK(scalar(dbPath, "SELECT count(*) FROM responses") == 2);
+}
+
+TEST_CASE("Quiz-only play skips the teaching steps and records the attempt's mode") {
+  if (!appAvailable()) return;
+  test::TempDir dir;
+  const std::string dbPath = (dir / "q.db").string();
+  storeQuickCourse(dbPath);
+  const fs::path file = writeLines(dir / "q.jsonl", quickAnswers());
+  auto r = test::runApp(playArgs("quick.check", "ida", file, dbPath) + " --quiz-only");
+  CHECK_MESSAGE(r.exitCode == 0, r.err);
+  CHECK(r.out.find("quiz only") != std::string::npos);
+  CHECK(r.out.find("Look at it.") == std::string::npos);
+  CHECK(r.out.find("\n[1/6] Question") != std::string::npos);
+  CHECK(r.out.find("Lesson finished: score 1.00") != std::string::npos);
+  CHECK(scalar(dbPath, "SELECT count(*) FROM attempts WHERE mode = 'quiz_only' AND finished_at IS NOT NULL") == 1);
+}
+
+TEST_CASE("courses and lessons list the seeded default course; seeding twice adds nothing") {
+  if (!appAvailable()) return;
+  test::TempDir dir;
+  const std::string dbPath = (dir / "l.db").string();
+  auto courses = test::runApp("courses --db '" + dbPath + "'");
+  CHECK_MESSAGE(courses.exitCode == 0, courses.err);
+  const auto lessonsBefore = scalar(dbPath, "SELECT count(*) FROM lessons");
+  const auto stepsBefore = scalar(dbPath, "SELECT count(*) FROM steps");
+  CHECK(lessonsBefore >= 4);
+  auto lessons = test::runApp("lessons --db '" + dbPath + "'");
+  CHECK_MESSAGE(lessons.exitCode == 0, lessons.err);
+  CHECK(lessons.out.find("inner_ear") != std::string::npos);
+  CHECK(scalar(dbPath, "SELECT count(*) FROM lessons") == lessonsBefore);
+  CHECK(scalar(dbPath, "SELECT count(*) FROM steps") == stepsBefore);
+  CHECK(scalar(dbPath, "SELECT count(*) FROM courses") == 1);
+}
+
+TEST_CASE("The TotalSegmentator sample imports with its 41 structures and carries a small abdominal course") {
+  if (!appAvailable()) return;
+  if (!test::requireSharedData("abdominal course")) return;
+  test::TempDir dir;
+  const std::string dbPath = (dir / "abdomen.db").string();
+  const auto ct = test::sharedData("totalsegmentator/ct_small.nii.gz");
+  const auto seg = test::sharedData("totalsegmentator/seg_small.nii.gz");
+  const auto names = test::sharedData("totalsegmentator/labels.json");
+  const std::string importArgs = "import --volume '" + ct.string() + "' --labels '" + seg.string() + "' --names '" +
+                                 names.string() + "' --name 'abdomen' --db '" + dbPath + "'";
+  auto imported = test::runApp(importArgs);
+  REQUIRE_MESSAGE(imported.exitCode == 0, imported.err);
+  CHECK(imported.out.find("41 structures") != std::string::npos);
+  CHECK(scalar(dbPath, "SELECT count(*) FROM structures") == 41);
+  CHECK(scalar(dbPath, "SELECT dim_x * 10000 + dim_y * 100 + dim_z FROM datasets WHERE name = 'abdomen'") ==
+        122 * 10000 + 101 * 100 + 30);
+  auto duplicate = test::runApp(importArgs);
+  CHECK(duplicate.exitCode != 0);
+  CHECK(duplicate.err.find("'abdomen' is already imported") != std::string::npos);
+  CHECK(scalar(dbPath, "SELECT count(*) FROM datasets") == 1);
+  // Labels of another scan (the head) do not align with this CT: refused, nothing registered.
+  auto misaligned = test::runApp("import --volume '" + ct.string() + "' --labels '" +
+                                 test::sharedData("headsq/nrrd/quarter.nhdr").string() + "' --name head_on_abdomen --db '" +
+                                 dbPath + "'");
+  CHECK(misaligned.exitCode != 0);
+  CHECK(misaligned.err.find("overlap") != std::string::npos);
+  CHECK(scalar(dbPath, "SELECT count(*) FROM datasets") == 1);
+
+  // A course written here, on the imported dataset, seeded through AT_DATA_DIR.
+  const std::string courseJson = R"({
+    "schema": 1, "id": "abdomen_basics", "title": "Abdomen and lumbar spine", "dataset": "abdomen", "version": 1,
+    "lessons": [{
+      "id": "abdomen.upper", "title": "Upper abdominal organs",
+      "steps": [
+        {"kind": "show", "structure": "liver", "preset": "default_wdt", "view": "anterior", "title": "The liver",
+         "text": "The largest solid organ, under the right dome of the diaphragm."},
+        {"kind": "question", "question": {"id": "abdomen.upper.locate_liver", "kind": "locate",
+         "prompt": "Click the liver.", "target": "liver"}},
+        {"kind": "question", "question": {"id": "abdomen.upper.identify_spleen", "kind": "identify",
+         "prompt": "Which organ is highlighted?", "target": "spleen", "distractors": 3}},
+        {"kind": "question", "question": {"id": "abdomen.upper.name_kidney", "kind": "name",
+         "prompt": "Name the highlighted organ.", "target": "kidney_left"}},
+        {"kind": "question", "question": {"id": "abdomen.upper.nearest_to_right_kidney", "kind": "relation",
+         "prompt": "Which lies nearest to the right kidney?", "target": "kidney_right",
+         "relation": {"from": "kidney_right", "kind": "nearest", "candidates": ["liver", "spleen", "lung_upper_lobe_left"]}}},
+        {"kind": "question", "question": {"id": "abdomen.upper.order_back_to_aorta", "kind": "order",
+         "prompt": "A needle from the left back muscles to the aorta: what does it pass, in order?", "target": "aorta",
+         "order": {"entry_structure": "autochthon_left", "target_structure": "aorta"}}}
+      ]}]})";
+  fs::create_directories(dir / "data" / "courses");
+  { std::ofstream(dir / "data" / "courses" / "abdomen.json") << courseJson; }
+  auto course = lessons::parseCourseJson(courseJson, "abdomen.json");
+  REQUIRE_MESSAGE(course, (course ? "" : course.error().message));
+
+  DatasetFiles files;
+  files.volumePath = ct.string();
+  files.labelsPath = seg.string();
+  files.namesPath = names.string();
+  files.id = "abdomen";
+  auto dataset = openDatasetFiles(files);
+  REQUIRE(dataset);
+  const auto answers = answersFor(*course, *dataset);
+  const fs::path answersFile = writeLines(dir / "abdomen.jsonl", answers.at("abdomen.upper"));
+
+  ::setenv("AT_DATA_DIR", (dir / "data").c_str(), 1);
+  auto played = test::runApp(playArgs("abdomen.upper", "hal", answersFile, dbPath));
+  auto progress = test::runApp("progress --user hal --db '" + dbPath + "'");
+  ::unsetenv("AT_DATA_DIR");
+  CHECK_MESSAGE(played.exitCode == 0, played.err);
+  CHECK(played.out.find("Lesson finished: score 1.00") != std::string::npos);
+  CHECK(scalar(dbPath, "SELECT count(*) FROM responses WHERE correct = 1") == 5);
+  CHECK_MESSAGE(progress.exitCode == 0, progress.err);
+  CHECK(progress.out.find("Kidney right") != std::string::npos);
+}

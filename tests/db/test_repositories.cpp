@@ -1,0 +1,400 @@
+// The lessons/ storage interfaces over SQLite: round trips, idempotent seeding, one-transaction
+// answers, resuming through the LessonEngine, and concurrent recorders.
+#include <doctest/doctest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <thread>
+
+#include "db/course_store.h"
+#include "db/database.h"
+#include "db/sqlite_repositories.h"
+#include "lessons/course_json.h"
+#include "lessons/lesson_engine.h"
+#include "quiz/answer_json.h"
+#include "test_support.h"
+#include "toy_course.h"
+
+namespace fs = std::filesystem;
+using namespace at;
+using namespace at::db;
+using namespace at::lessons;
+
+namespace {
+
+std::int64_t countRows(Database& db, const std::string& table) {
+  auto s = db.prepare("SELECT count(*) FROM " + table);
+  REQUIRE(s);
+  REQUIRE(*s->step());
+  return s->int64(0);
+}
+
+Database openFresh(const test::TempDir& dir, const std::string& name = "r.db") {
+  auto db = Database::open((dir / name).string());
+  REQUIRE_MESSAGE(db, (db ? "" : db.error().message));
+  return std::move(*db);
+}
+
+// The answer that is right for a resolved question (names from the toy structures).
+quiz::Answer rightAnswer(const quiz::ResolvedQuestion& q) {
+  quiz::Answer a;
+  switch (q.question.kind) {
+    case quiz::QuestionKind::Locate: a.pick = quiz::Pick{q.question.target, 0.0}; break;
+    case quiz::QuestionKind::Identify:
+    case quiz::QuestionKind::Relation: a.choice = q.keyChoice; break;
+    case quiz::QuestionKind::Order: a.order = q.keyOrder; break;
+    case quiz::QuestionKind::Name:
+      for (const auto& s : test::toyStructures())
+        if (s.id == q.question.target) a.text = s.displayName;
+      break;
+  }
+  return a;
+}
+
+// Plays the current lesson to the end (or `stopAfter` answers), answering right.
+int playRight(LessonEngine& engine, int stopAfter = 1 << 30) {
+  int answered = 0;
+  while (!engine.atEnd()) {
+    auto view = engine.current();
+    REQUIRE(view);
+    if (view->kind == StepKind::Question) {
+      if (answered == stopAfter) return answered;
+      auto q = engine.currentQuestion();
+      REQUIRE(q);
+      RenderState render{"p", "wdt", 0.25, 1.5, 0.75};
+      auto grade = engine.answer(rightAnswer(*q), render, 1200);
+      REQUIRE_MESSAGE(grade, (grade ? "" : grade.error().message));
+      CHECK(grade->correct);
+      ++answered;
+    }
+    REQUIRE(engine.next());
+  }
+  return answered;
+}
+
+}  // namespace
+
+TEST_CASE("A stored course reads back identical, including texts with quotes and SQL") {
+  test::TempDir dir;
+  Database db = openFresh(dir);
+  Course course = test::toyCourse();
+  course.lessons[0].steps[0].show.text = "It's the \"stirrup\"; DROP TABLE lessons; -- really";
+  course.synonyms["incus"] = {"anvil", "l'enclume"};
+  auto stored = storeCourse(db, course, "memory");
+  REQUIRE_MESSAGE(stored, (stored ? "" : stored.error().message));
+  CHECK(bool(*stored == SeedOutcome::Added));
+
+  SqliteCurriculumRepository repo(db, test::toyBuiltin());
+  auto back = repo.course("toy");
+  REQUIRE_MESSAGE(back, (back ? "" : back.error().message));
+  CHECK(courseToJson(*back) == courseToJson(course));
+  auto lesson = repo.lesson("toy.middle");
+  REQUIRE(lesson);
+  CHECK(lesson->prerequisites == std::vector<std::string>{"toy.ossicles"});
+  auto q = repo.question("toy.middle.order_drill");
+  REQUIRE(q);
+  CHECK(q->order.entryStructure == "malleus");
+  auto all = repo.courses();
+  REQUIRE(all);
+  CHECK(all->size() == 1);
+
+  CHECK(repo.lesson("nope").error().message == "unknown lesson 'nope'");
+  CHECK(repo.course("nope").error().message == "unknown course 'nope'");
+  CHECK(repo.question("nope").error().message == "unknown question 'nope'");
+  auto structures = repo.structures("toy");
+  REQUIRE(structures);
+  CHECK(structures->size() == 5);
+  CHECK(!repo.structures("nowhere"));
+}
+
+TEST_CASE("Seeding the same course files twice changes nothing; a newer version replaces the content") {
+  test::TempDir dir;
+  Database db = openFresh(dir);
+  fs::create_directories(dir / "courses");
+  Course course = test::toyCourse(1);
+  { std::ofstream(dir / "courses" / "toy.json") << courseToJson(course); }
+
+  auto first = seedCourses(db, dir / "courses");
+  REQUIRE_MESSAGE(first, (first ? "" : first.error().message));
+  REQUIRE(first->size() == 1);
+  CHECK(bool((*first)[0].outcome == SeedOutcome::Added));
+  const auto counts = [&] {
+    return std::vector<std::int64_t>{countRows(db, "courses"), countRows(db, "lessons"), countRows(db, "steps"),
+                                     countRows(db, "questions"), countRows(db, "lesson_prerequisites")};
+  };
+  const auto afterFirst = counts();
+  CHECK(afterFirst == std::vector<std::int64_t>{1, 2, 8, 6, 1});
+
+  for (int i = 0; i < 3; ++i) {
+    auto again = seedCourses(db, dir / "courses");
+    REQUIRE(again);
+    CHECK(bool((*again)[0].outcome == SeedOutcome::Unchanged));
+    CHECK(counts() == afterFirst);
+  }
+
+  // A learner answers before the course is updated: the answer must survive the update.
+  SqliteUserRepository users(db);
+  SqliteProgressRepository progress(db);
+  auto user = users.createUser("ana", Role::Student, "");
+  REQUIRE(user);
+  auto attempt = progress.startAttempt(user->id, "toy.ossicles", LessonMode::Guided, 100);
+  REQUIRE(attempt);
+  AnswerRecord record;
+  record.response.attemptId = attempt->id;
+  record.response.stepIndex = 1;
+  record.response.questionId = "toy.ossicles.name_stapes";
+  record.response.structureId = "stapes";
+  record.response.answer.text = "stapes";
+  record.progress = {user->id, "stapes", 2, 200, 1, 1, 100};
+  REQUIRE(progress.recordAnswer(record));
+
+  Course v2 = test::toyCourse(2);
+  v2.lessons[1].steps.pop_back();  // one question fewer
+  v2.lessons[0].title = "The ossicles";
+  { std::ofstream(dir / "courses" / "toy.json") << courseToJson(v2); }
+  auto updated = seedCourses(db, dir / "courses");
+  REQUIRE(updated);
+  CHECK(bool((*updated)[0].outcome == SeedOutcome::Updated));
+  CHECK(counts() == std::vector<std::int64_t>{1, 2, 7, 5, 1});
+  SqliteCurriculumRepository repo(db, test::toyBuiltin());
+  CHECK(courseToJson(*repo.course("toy")) == courseToJson(v2));
+  CHECK(countRows(db, "responses") == 1);
+  CHECK(countRows(db, "attempts") == 1);
+
+  // An older file never downgrades what is stored.
+  { std::ofstream(dir / "courses" / "toy.json") << courseToJson(test::toyCourse(1)); }
+  auto older = seedCourses(db, dir / "courses");
+  REQUIRE(older);
+  CHECK(bool((*older)[0].outcome == SeedOutcome::KeptNewer));
+  CHECK(repo.lesson("toy.ossicles")->title == "The ossicles");
+}
+
+TEST_CASE("A course reusing another course's lesson id is refused and writes nothing") {
+  test::TempDir dir;
+  Database db = openFresh(dir);
+  REQUIRE(storeCourse(db, test::toyCourse(), "a"));
+  Course other = test::toyCourse();
+  other.id = "other";
+  other.lessons.resize(1);  // its lesson id "toy.ossicles" belongs to course "toy"
+  auto refused = storeCourse(db, other, "b");
+  REQUIRE(!refused);
+  CHECK(refused.error().message.find("'toy.ossicles'") != std::string::npos);
+  CHECK(countRows(db, "courses") == 1);
+  CHECK(countRows(db, "lessons") == 2);
+}
+
+TEST_CASE("Seeding reports a broken course file by name") {
+  test::TempDir dir;
+  Database db = openFresh(dir);
+  fs::create_directories(dir / "courses");
+  { std::ofstream(dir / "courses" / "broken.json") << "{\"schema\": 1, \"id\": \"x\""; }
+  auto seeded = seedCourses(db, dir / "courses");
+  REQUIRE(!seeded);
+  CHECK(seeded.error().message.find("broken.json") != std::string::npos);
+  CHECK(countRows(db, "courses") == 0);
+}
+
+TEST_CASE("Users are created once, found by pseudonym, and hostile names are kept verbatim") {
+  test::TempDir dir;
+  Database db = openFresh(dir);
+  SqliteUserRepository users(db);
+  const std::string hostile = "x'); DELETE FROM users; --\"";
+  auto u = users.createUser(hostile, Role::Coordinator, "group; DROP TABLE users");
+  REQUIRE(u);
+  CHECK(u->id > 0);
+  auto found = users.findUser(hostile);
+  REQUIRE(found);
+  REQUIRE(found->has_value());
+  CHECK(bool((*found)->role == Role::Coordinator));
+  CHECK((*found)->group == "group; DROP TABLE users");
+  CHECK(users.user(u->id)->name == hostile);
+  auto taken = users.createUser(hostile, Role::Student, "");
+  REQUIRE(!taken);
+  CHECK(taken.error().message.find("already taken") != std::string::npos);
+  CHECK(!users.createUser("", Role::Student, ""));
+  CHECK(!users.findUser("nobody")->has_value());
+  CHECK(!users.user(999));
+  CHECK(users.users()->size() == 1);
+}
+
+TEST_CASE("An answer is stored with its progress, ability and difficulty in one transaction") {
+  test::TempDir dir;
+  Database db = openFresh(dir);
+  SqliteUserRepository users(db);
+  SqliteProgressRepository progress(db);
+  auto user = users.createUser("ben", Role::Student, "");
+  REQUIRE(user);
+  CHECK(!progress.openAttempt(user->id, "toy.ossicles")->has_value());
+  auto attempt = progress.startAttempt(user->id, "toy.ossicles", LessonMode::QuizOnly, 1000);
+  REQUIRE(attempt);
+  auto open = progress.openAttempt(user->id, "toy.ossicles");
+  REQUIRE(open->has_value());
+  CHECK(bool((*open)->mode == LessonMode::QuizOnly));
+  CHECK((*open)->startedAt == 1000);
+
+  AnswerRecord r;
+  r.response.attemptId = attempt->id;
+  r.response.stepIndex = 3;
+  r.response.questionId = "toy.ossicles.locate_malleus";
+  r.response.structureId = "malleus";
+  r.response.answer.pick = quiz::Pick{"incus", 0.25};
+  r.response.correct = true;
+  r.response.score = 1;
+  r.response.latencyMs = 4321;
+  r.response.render = {"malleus_wdt", "wdt", 0.3, 1.7, 0.9};
+  r.response.answeredAt = 1010;
+  r.progress = {user->id, "malleus", 2, 1010 + 86400, 1, 1, 1010};
+  r.abilityAfter = 1516;
+  r.difficultyAfter = 1484;
+  auto id = progress.recordAnswer(r);
+  REQUIRE_MESSAGE(id, (id ? "" : id.error().message));
+
+  auto responses = progress.responses(attempt->id);
+  REQUIRE(responses);
+  REQUIRE(responses->size() == 1);
+  const Response& back = (*responses)[0];
+  CHECK(back.id == *id);
+  CHECK(back.stepIndex == 3);
+  CHECK(back.structureId == "malleus");
+  CHECK(quiz::answerToJson(back.answer) == quiz::answerToJson(r.response.answer));
+  CHECK(back.latencyMs == 4321);
+  CHECK(back.render.presetId == "malleus_wdt");
+  CHECK(back.render.t == doctest::Approx(0.3));
+  CHECK(back.render.alpha == doctest::Approx(1.7));
+  CHECK(back.render.beta == doctest::Approx(0.9));
+  CHECK(back.answeredAt == 1010);
+  auto p = progress.progress(user->id, "malleus");
+  REQUIRE(p->has_value());
+  CHECK((*p)->box == 2);
+  CHECK((*p)->dueAt == 1010 + 86400);
+  CHECK(*progress.ability(user->id) == std::optional<double>(1516));
+  CHECK(*progress.questionDifficulty("toy.ossicles.locate_malleus") == std::optional<double>(1484));
+  CHECK(!progress.questionDifficulty("never")->has_value());
+
+  // The same step again is refused, and nothing of it is written (progress keeps box 2).
+  AnswerRecord again = r;
+  again.progress.box = 1;
+  again.abilityAfter = 1400;
+  auto dup = progress.recordAnswer(again);
+  REQUIRE(!dup);
+  CHECK(dup.error().message.find("already answered") != std::string::npos);
+  CHECK((*progress.progress(user->id, "malleus"))->box == 2);
+  CHECK(*progress.ability(user->id) == std::optional<double>(1516));
+  CHECK(countRows(db, "responses") == 1);
+
+  REQUIRE(!*progress.hasFinished(user->id, "toy.ossicles"));
+  REQUIRE(progress.finishAttempt(attempt->id, 1100, 0.75));
+  CHECK(*progress.hasFinished(user->id, "toy.ossicles"));
+  CHECK(!progress.openAttempt(user->id, "toy.ossicles")->has_value());
+  CHECK(!progress.finishAttempt(9999, 1, 0));
+  auto attempts = progress.attempts(user->id);
+  REQUIRE(attempts);
+  REQUIRE(attempts->size() == 1);
+  CHECK((*attempts)[0].score == doctest::Approx(0.75));
+  CHECK(progress.allProgress(user->id)->size() == 1);
+}
+
+TEST_CASE("The LessonEngine on SQLite resumes a lesson at the next step after the process is gone") {
+  test::TempDir dir;
+  const std::string path = (dir / "e.db").string();
+  std::int64_t userId = 0;
+  {
+    Database db = openFresh(dir, "e.db");
+    REQUIRE(storeCourse(db, test::toyCourse(), "toy"));
+    SqliteUserRepository users(db);
+    userId = users.createUser("cleo", Role::Student, "")->id;
+  }
+  {
+    auto db = Database::open(path);
+    REQUIRE(db);
+    SqliteCurriculumRepository curriculum(*db, test::toyBuiltin());
+    SqliteProgressRepository progress(*db);
+    test::ToyKeys keys;
+    LessonEngine engine(curriculum, progress, keys);
+    // Prerequisite not finished yet.
+    auto locked = engine.start(userId, "toy.middle");
+    REQUIRE(!locked);
+    CHECK(locked.error().message.find("toy.ossicles") != std::string::npos);
+    LessonEngine first(curriculum, progress, keys);
+    REQUIRE(first.start(userId, "toy.ossicles"));
+    CHECK(playRight(first, 2) == 2);  // then the "process" goes away
+  }
+  auto db = Database::open(path);
+  REQUIRE(db);
+  SqliteCurriculumRepository curriculum(*db, test::toyBuiltin());
+  SqliteProgressRepository progress(*db);
+  test::ToyKeys keys;
+  LessonEngine engine(curriculum, progress, keys);
+  REQUIRE(engine.start(userId, "toy.ossicles"));
+  CHECK(engine.resumed());
+  auto view = engine.current();
+  REQUIRE(view);
+  CHECK(view->questionId == "toy.ossicles.locate_malleus");
+  CHECK(playRight(engine) == 1);
+  auto score = engine.finish();
+  REQUIRE(score);
+  CHECK(*score == doctest::Approx(1.0));
+  CHECK(countRows(*db, "responses") == 3);
+
+  LessonEngine next(curriculum, progress, keys);
+  REQUIRE(next.start(userId, "toy.middle"));
+  CHECK(playRight(next) == 3);
+  REQUIRE(next.finish());
+  CHECK(countRows(*db, "responses") == 6);
+  auto ability = progress.ability(userId);
+  REQUIRE(ability->has_value());
+  CHECK(**ability > 1500);
+}
+
+TEST_CASE("Two connections recording answers for the same user at once lose nothing") {
+  test::TempDir dir;
+  const std::string path = (dir / "c.db").string();
+  std::int64_t userId = 0, attemptA = 0, attemptB = 0;
+  {
+    Database db = openFresh(dir, "c.db");
+    SqliteUserRepository users(db);
+    SqliteProgressRepository progress(db);
+    userId = users.createUser("dana", Role::Student, "")->id;
+    attemptA = progress.startAttempt(userId, "a", LessonMode::Guided, 1)->id;
+    attemptB = progress.startAttempt(userId, "b", LessonMode::Guided, 1)->id;
+  }
+  constexpr int kAnswers = 120;
+  auto recorder = [&](std::int64_t attempt, std::string* error) {
+    auto db = Database::open(path);
+    if (!db) {
+      *error = db.error().message;
+      return;
+    }
+    SqliteProgressRepository progress(*db);
+    for (int i = 0; i < kAnswers; ++i) {
+      AnswerRecord r;
+      r.response.attemptId = attempt;
+      r.response.stepIndex = i;
+      r.response.questionId = std::string("q").append(std::to_string(i % 7));
+      r.response.structureId = std::string("s").append(std::to_string(i % 5));
+      r.response.answer.choice = i % 3;
+      r.progress = {userId, r.response.structureId, 1, 10, 1, 0, 5};
+      if (auto id = progress.recordAnswer(r); !id) {
+        *error = id.error().message;
+        return;
+      }
+    }
+  };
+  std::string ea, eb;
+  std::thread a(recorder, attemptA, &ea), b(recorder, attemptB, &eb);
+  a.join();
+  b.join();
+  CHECK(ea.empty());
+  CHECK(eb.empty());
+  auto db = Database::open(path);
+  REQUIRE(db);
+  CHECK(countRows(*db, "responses") == 2 * kAnswers);
+  auto answered = db->prepare("SELECT answered FROM user_ability WHERE user_id = ?1");
+  REQUIRE(answered);
+  answered->bind(1, userId);
+  REQUIRE(*answered->step());
+  CHECK(answered->int64(0) == 2 * kAnswers);
+  auto stats = db->prepare("SELECT sum(answered) FROM question_stats");
+  REQUIRE(*stats->step());
+  CHECK(stats->int64(0) == 2 * kAnswers);
+}

@@ -1,0 +1,59 @@
+// PNG writing and reading (libpng).
+#include <doctest/doctest.h>
+
+#include <fstream>
+#include <random>
+
+#include "test_support.h"
+#include "volume/png_image.h"
+
+using namespace at;
+
+TEST_CASE("a random RGB image survives a PNG round trip byte for byte") {
+  std::mt19937_64 rng(test::freshSeed("png round trip"));
+  for (auto [w, h] : {std::pair{1, 1}, std::pair{7, 3}, std::pair{64, 48}}) {
+    CAPTURE(w);
+    CAPTURE(h);
+    RgbImage image(w, h);
+    for (auto& byte : image.rgb) byte = std::uint8_t(rng() & 0xFF);
+    test::TempDir dir;
+    const std::string path = (dir / "image.png").string();
+    REQUIRE(writePng(path, image).has_value());
+    auto back = readPng(path);
+    REQUIRE(back.has_value());
+    CHECK(back->width == w);
+    CHECK(back->height == h);
+    CHECK(back->rgb == image.rgb);
+  }
+}
+
+TEST_CASE("PNG errors name the file and the problem") {
+  test::TempDir dir;
+  const std::string missing = (dir / "missing.png").string();
+  auto r = readPng(missing);
+  REQUIRE_FALSE(r.has_value());
+  CHECK(r.error().message.find(missing) != std::string::npos);
+
+  const std::string text = (dir / "text.png").string();
+  std::ofstream(text) << "this is not a PNG file at all";
+  r = readPng(text);
+  REQUIRE_FALSE(r.has_value());
+  CHECK(r.error().message.find("not a PNG") != std::string::npos);
+
+  // A valid signature and header cut off in the middle: libpng's error comes back as a value.
+  RgbImage image(32, 32);
+  const std::string good = (dir / "good.png").string();
+  REQUIRE(writePng(good, image).has_value());
+  std::ifstream in(good, std::ios::binary);
+  std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::string truncated = (dir / "truncated.png").string();
+  std::ofstream(truncated, std::ios::binary) << bytes.substr(0, 40);
+  r = readPng(truncated);
+  REQUIRE_FALSE(r.has_value());
+  CHECK(r.error().message.find(truncated) != std::string::npos);
+
+  CHECK_FALSE(writePng((dir / "empty.png").string(), RgbImage{}).has_value());
+  auto unwritable = writePng((dir / "no_such_dir" / "x.png").string(), image);
+  REQUIRE_FALSE(unwritable.has_value());
+  CHECK(unwritable.error().message.find("no_such_dir") != std::string::npos);
+}

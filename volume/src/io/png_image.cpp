@@ -1,0 +1,141 @@
+// PNG through libpng. libpng reports errors by longjmp; every libpng call that can fail runs in
+// a function whose frame holds no C++ objects with destructors (setjmp/longjmp would skip them),
+// and the png structs and FILE* are owned by RAII guards declared in the caller's frame.
+#include "volume/png_image.h"
+
+#include <png.h>
+
+#include <cstdio>
+#include <cstring>
+
+namespace at {
+
+namespace {
+
+struct FileCloser {
+  std::FILE* file = nullptr;
+  ~FileCloser() {
+    if (file) std::fclose(file);
+  }
+};
+
+// libpng's error handler: keep the message, then longjmp back to the setjmp in the caller.
+struct ErrorSink {
+  char message[256] = "unknown libpng error";
+};
+
+void onPngError(png_structp png, png_const_charp msg) {
+  auto* sink = static_cast<ErrorSink*>(png_get_error_ptr(png));
+  if (sink) {
+    std::snprintf(sink->message, sizeof sink->message, "%s", msg ? msg : "libpng error");
+  }
+  png_longjmp(png, 1);
+}
+
+void onPngWarning(png_structp, png_const_charp) {}
+
+struct WriteGuard {
+  png_structp png = nullptr;
+  png_infop info = nullptr;
+  ~WriteGuard() {
+    if (png) png_destroy_write_struct(&png, info ? &info : nullptr);
+  }
+};
+
+struct ReadGuard {
+  png_structp png = nullptr;
+  png_infop info = nullptr;
+  ~ReadGuard() {
+    if (png) png_destroy_read_struct(&png, info ? &info : nullptr, nullptr);
+  }
+};
+
+// Returns false after a libpng error (message in sink). No C++ objects with destructors live in
+// this frame; `rows` is owned by the caller.
+bool writeRows(WriteGuard& g, std::FILE* file, int width, int height, png_bytep* rows) {
+  if (setjmp(png_jmpbuf(g.png))) return false;
+  png_init_io(g.png, file);
+  png_set_IHDR(g.png, g.info, png_uint_32(width), png_uint_32(height), 8, PNG_COLOR_TYPE_RGB, PNG_INTERLACE_NONE,
+               PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
+  png_write_info(g.png, g.info);
+  png_write_image(g.png, rows);
+  png_write_end(g.png, nullptr);
+  return true;
+}
+
+// Reads the header and configures transforms to 8-bit RGB. Same frame rule as writeRows.
+bool readHeader(ReadGuard& g, std::FILE* file, png_uint_32* width, png_uint_32* height) {
+  if (setjmp(png_jmpbuf(g.png))) return false;
+  png_init_io(g.png, file);
+  png_set_sig_bytes(g.png, 8);
+  png_read_info(g.png, g.info);
+  *width = png_get_image_width(g.png, g.info);
+  *height = png_get_image_height(g.png, g.info);
+  const int colour = png_get_color_type(g.png, g.info);
+  const int depth = png_get_bit_depth(g.png, g.info);
+  if (depth == 16) png_set_strip_16(g.png);
+  if (colour == PNG_COLOR_TYPE_PALETTE) png_set_palette_to_rgb(g.png);
+  if (colour == PNG_COLOR_TYPE_GRAY && depth < 8) png_set_expand_gray_1_2_4_to_8(g.png);
+  if (png_get_valid(g.png, g.info, PNG_INFO_tRNS)) png_set_tRNS_to_alpha(g.png);
+  if (colour == PNG_COLOR_TYPE_GRAY || colour == PNG_COLOR_TYPE_GRAY_ALPHA) png_set_gray_to_rgb(g.png);
+  png_set_strip_alpha(g.png);
+  png_read_update_info(g.png, g.info);
+  return png_get_rowbytes(g.png, g.info) == std::size_t(*width) * 3;
+}
+
+bool readRows(ReadGuard& g, png_bytep* rows) {
+  if (setjmp(png_jmpbuf(g.png))) return false;
+  png_read_image(g.png, rows);
+  png_read_end(g.png, nullptr);
+  return true;
+}
+
+}  // namespace
+
+Status writePng(const std::string& path, const RgbImage& image) {
+  if (image.width <= 0 || image.height <= 0 ||
+      image.rgb.size() != std::size_t(image.width) * std::size_t(image.height) * 3)
+    return fail(path + ": cannot write an empty or inconsistent image (" + std::to_string(image.width) + "x" +
+                std::to_string(image.height) + ")");
+  FileCloser file{std::fopen(path.c_str(), "wb")};
+  if (!file.file) return fail(path + ": cannot create file: " + std::strerror(errno));
+  ErrorSink sink;
+  WriteGuard g;
+  g.png = png_create_write_struct(PNG_LIBPNG_VER_STRING, &sink, onPngError, onPngWarning);
+  if (!g.png) return fail(path + ": libpng could not start");
+  g.info = png_create_info_struct(g.png);
+  if (!g.info) return fail(path + ": libpng could not start");
+  std::vector<png_bytep> rows(std::size_t(image.height));
+  for (int y = 0; y < image.height; ++y)
+    rows[std::size_t(y)] = const_cast<png_bytep>(image.pixel(0, y));
+  if (!writeRows(g, file.file, image.width, image.height, rows.data()))
+    return fail(path + ": cannot write PNG: " + sink.message);
+  if (std::fflush(file.file) != 0) return fail(path + ": cannot write PNG: " + std::strerror(errno));
+  return {};
+}
+
+Result<RgbImage> readPng(const std::string& path) {
+  FileCloser file{std::fopen(path.c_str(), "rb")};
+  if (!file.file) return fail(path + ": cannot open file: " + std::strerror(errno));
+  png_byte signature[8] = {};
+  if (std::fread(signature, 1, 8, file.file) != 8 || png_sig_cmp(signature, 0, 8) != 0)
+    return fail(path + ": not a PNG file (wrong signature)");
+  ErrorSink sink;
+  ReadGuard g;
+  g.png = png_create_read_struct(PNG_LIBPNG_VER_STRING, &sink, onPngError, onPngWarning);
+  if (!g.png) return fail(path + ": libpng could not start");
+  g.info = png_create_info_struct(g.png);
+  if (!g.info) return fail(path + ": libpng could not start");
+  png_uint_32 width = 0, height = 0;
+  if (!readHeader(g, file.file, &width, &height)) return fail(path + ": cannot read PNG: " + sink.message);
+  constexpr png_uint_32 kMaxSide = 1u << 15;
+  if (width == 0 || height == 0 || width > kMaxSide || height > kMaxSide)
+    return fail(path + ": PNG size " + std::to_string(width) + "x" + std::to_string(height) + " is not supported");
+  RgbImage image{int(width), int(height)};
+  std::vector<png_bytep> rows(height);
+  for (png_uint_32 y = 0; y < height; ++y) rows[y] = image.pixel(0, int(y));
+  if (!readRows(g, rows.data())) return fail(path + ": cannot read PNG: " + sink.message);
+  return image;
+}
+
+}  // namespace at
