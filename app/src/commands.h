@@ -27,4 +27,7 @@ int runStructures(const Argv& args);
 int runInfo(const Argv& args);
 int runSlice(const Argv& args);
 
+// Rendering (cmd_render.cpp)
+int runRender(const Argv& args);
+
 }  // namespace at::app
