@@ -1,0 +1,859 @@
+// NRRD reader and writer (http://teem.sourceforge.net/nrrd/format.html), written here rather than
+// through teem: the parts of the format medical files use are small.
+//
+// Sections: [header] parsing the text header · [geometry] space, directions, origin, spacings ·
+// [data] locating, decoding (raw, gzip) and converting the voxel data · [load] loadNrrd ·
+// [write] writeNrrd.
+#include "volume/nrrd_io.h"
+
+#include <algorithm>
+#include <bit>
+#include <cctype>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <map>
+#include <optional>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <zlib.h>
+
+#include "load_limits.h"
+
+namespace at {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+// ---------------------------------------------------------------------------------------------
+// [header]
+
+Result<std::string> readWholeFile(const std::string& path, const std::string& what) {
+  std::error_code ec;
+  if (!fs::is_regular_file(path, ec)) return fail(what + ": no such file");
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return fail(what + ": cannot open the file");
+  std::string bytes;
+  in.seekg(0, std::ios::end);
+  const std::streamoff size = in.tellg();
+  in.seekg(0, std::ios::beg);
+  if (size < 0) return fail(what + ": cannot read the file");
+  bytes.resize(std::size_t(size));
+  if (size > 0 && !in.read(bytes.data(), size)) return fail(what + ": cannot read the file");
+  return bytes;
+}
+
+// The start of a NRRD file up to and including the blank line that ends its header (or the whole
+// file when there is none), so that the memory check comes before attached data are read.
+Result<std::string> readHeaderBytes(const std::string& path) {
+  std::error_code ec;
+  if (!fs::is_regular_file(path, ec)) return fail(path + ": no such file");
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return fail(path + ": cannot open the file");
+  constexpr std::size_t kChunk = 1 << 16, kMaxHeader = std::size_t(16) << 20;
+  std::string bytes;
+  std::size_t searched = 0;
+  while (bytes.size() < kMaxHeader) {
+    char buffer[kChunk];
+    in.read(buffer, kChunk);
+    const std::size_t got = std::size_t(in.gcount());
+    bytes.append(buffer, got);
+    if (bytes.size() >= 8 && bytes.compare(0, 7, "NRRD000") != 0)
+      return fail(path + ": not a NRRD file (it does not start with NRRD0001…NRRD0005)");
+    const std::size_t from = searched > 2 ? searched - 2 : 0;
+    const std::size_t lf = bytes.find("\n\n", from), crlf = bytes.find("\n\r\n", from);
+    if (lf != std::string::npos || crlf != std::string::npos) {
+      const std::size_t end = std::min(lf == std::string::npos ? crlf + 3 : lf + 2,
+                                       crlf == std::string::npos ? lf + 2 : crlf + 3);
+      bytes.resize(end);
+      return bytes;
+    }
+    searched = bytes.size();
+    if (got < kChunk) return bytes;  // end of file: a detached header
+  }
+  return fail(path + ": no end of the NRRD header within 16 MiB (a blank line must follow it)");
+}
+
+// The bytes of `path` from `offset` to the end.
+Result<std::string> readFileFrom(const std::string& path, std::size_t offset, const std::string& what) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return fail(what + ": cannot open the file");
+  in.seekg(0, std::ios::end);
+  const std::streamoff size = in.tellg();
+  if (size < 0 || std::size_t(size) < offset) return fail(what + ": cannot read the file");
+  std::string bytes(std::size_t(size) - offset, '\0');
+  in.seekg(std::streamoff(offset), std::ios::beg);
+  if (!bytes.empty() && !in.read(bytes.data(), std::streamsize(bytes.size()))) return fail(what + ": cannot read the file");
+  return bytes;
+}
+
+std::string trim(const std::string& s) {
+  const auto b = s.find_first_not_of(" \t\r");
+  if (b == std::string::npos) return {};
+  const auto e = s.find_last_not_of(" \t\r");
+  return s.substr(b, e - b + 1);
+}
+
+std::vector<std::string> splitWords(const std::string& s) {
+  std::vector<std::string> words;
+  std::istringstream in(s);
+  std::string w;
+  while (in >> w) words.push_back(w);
+  return words;
+}
+
+std::string lower(std::string s) {
+  for (char& c : s) c = char(std::tolower(static_cast<unsigned char>(c)));
+  return s;
+}
+
+struct NrrdHeader {
+  std::map<std::string, std::string> fields;     // "sizes" → "64 64 93"
+  std::map<std::string, std::string> keyValues;  // "Segment0_Name" → "liver"
+  std::vector<std::string> listFiles;            // file names after "data file: LIST"
+  bool hasAttachedData = false;
+  std::size_t dataOffset = 0;                    // start of attached data in the file
+};
+
+Result<NrrdHeader> parseHeader(const std::string& path, const std::string& bytes) {
+  if (bytes.size() < 8 || bytes.compare(0, 7, "NRRD000") != 0 || bytes[7] < '1' || bytes[7] > '5')
+    return fail(path + ": not a NRRD file (it does not start with NRRD0001…NRRD0005)");
+  NrrdHeader header;
+  std::size_t pos = bytes.find('\n');
+  if (pos == std::string::npos) return fail(path + ": the NRRD header ends after its first line");
+  ++pos;
+  int lineNumber = 1;
+  bool inList = false;
+  while (pos < bytes.size()) {
+    std::size_t end = bytes.find('\n', pos);
+    const bool last = end == std::string::npos;
+    if (last) end = bytes.size();
+    std::string line = bytes.substr(pos, end - pos);
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    pos = last ? bytes.size() : end + 1;
+    ++lineNumber;
+    if (line.empty()) {
+      header.hasAttachedData = true;
+      header.dataOffset = pos;
+      break;
+    }
+    if (line[0] == '#') continue;
+    if (inList) {
+      header.listFiles.push_back(trim(line));
+      continue;
+    }
+    const std::size_t field = line.find(": ");
+    const std::size_t kv = line.find(":=");
+    if (kv != std::string::npos && (field == std::string::npos || kv < field)) {
+      header.keyValues[line.substr(0, kv)] = line.substr(kv + 2);
+      continue;
+    }
+    if (field == std::string::npos)
+      return fail(path + ": header line " + std::to_string(lineNumber) + " is not a \"field: value\" line");
+    const std::string name = lower(trim(line.substr(0, field)));
+    const std::string value = trim(line.substr(field + 2));
+    header.fields[name] = value;
+    if (name == "data file" || name == "datafile") {
+      const auto words = splitWords(value);
+      if (!words.empty() && words[0] == "LIST") inList = true;
+    }
+  }
+  if (header.fields.count("datafile") && !header.fields.count("data file"))
+    header.fields["data file"] = header.fields["datafile"];
+  return header;
+}
+
+std::optional<ScalarKind> parseType(const std::string& text) {
+  static const std::map<std::string, ScalarKind> kinds = {
+      {"signed char", ScalarKind::Int8},     {"int8", ScalarKind::Int8},
+      {"int8_t", ScalarKind::Int8},          {"uchar", ScalarKind::UInt8},
+      {"unsigned char", ScalarKind::UInt8},  {"uint8", ScalarKind::UInt8},
+      {"uint8_t", ScalarKind::UInt8},        {"short", ScalarKind::Int16},
+      {"short int", ScalarKind::Int16},      {"signed short", ScalarKind::Int16},
+      {"signed short int", ScalarKind::Int16}, {"int16", ScalarKind::Int16},
+      {"int16_t", ScalarKind::Int16},        {"ushort", ScalarKind::UInt16},
+      {"unsigned short", ScalarKind::UInt16}, {"unsigned short int", ScalarKind::UInt16},
+      {"uint16", ScalarKind::UInt16},        {"uint16_t", ScalarKind::UInt16},
+      {"int", ScalarKind::Int32},            {"signed int", ScalarKind::Int32},
+      {"int32", ScalarKind::Int32},          {"int32_t", ScalarKind::Int32},
+      {"uint", ScalarKind::UInt32},          {"unsigned int", ScalarKind::UInt32},
+      {"uint32", ScalarKind::UInt32},        {"uint32_t", ScalarKind::UInt32},
+      {"float", ScalarKind::Float32},        {"double", ScalarKind::Float64}};
+  const auto it = kinds.find(text);
+  if (it == kinds.end()) return std::nullopt;
+  return it->second;
+}
+
+std::size_t bytesOf(ScalarKind kind) {
+  switch (kind) {
+    case ScalarKind::Int8:
+    case ScalarKind::UInt8: return 1;
+    case ScalarKind::Int16:
+    case ScalarKind::UInt16: return 2;
+    case ScalarKind::Int32:
+    case ScalarKind::UInt32:
+    case ScalarKind::Float32: return 4;
+    case ScalarKind::Float64: return 8;
+  }
+  return 1;
+}
+
+const char* nrrdTypeName(ScalarKind kind) {
+  switch (kind) {
+    case ScalarKind::Int8: return "int8";
+    case ScalarKind::UInt8: return "uint8";
+    case ScalarKind::Int16: return "short";
+    case ScalarKind::UInt16: return "ushort";
+    case ScalarKind::Int32: return "int";
+    case ScalarKind::UInt32: return "uint";
+    case ScalarKind::Float32: return "float";
+    case ScalarKind::Float64: return "double";
+  }
+  return "short";
+}
+
+bool parseDouble(const std::string& text, double& out) {
+  const std::string t = lower(text);
+  if (t == "nan") {
+    out = std::numeric_limits<double>::quiet_NaN();
+    return true;
+  }
+  char* end = nullptr;
+  out = std::strtod(text.c_str(), &end);
+  return end != text.c_str() && *end == '\0';
+}
+
+bool parseLong(const std::string& text, long long& out) {
+  char* end = nullptr;
+  out = std::strtoll(text.c_str(), &end, 10);
+  return !text.empty() && end != text.c_str() && *end == '\0';
+}
+
+// "(a,b,c)" → vector.
+bool parseVector(const std::string& text, Vec3& out) {
+  if (text.size() < 2 || text.front() != '(' || text.back() != ')') return false;
+  std::string inner = text.substr(1, text.size() - 2);
+  std::vector<std::string> parts;
+  std::size_t start = 0;
+  while (true) {
+    const std::size_t comma = inner.find(',', start);
+    parts.push_back(trim(inner.substr(start, comma == std::string::npos ? std::string::npos : comma - start)));
+    if (comma == std::string::npos) break;
+    start = comma + 1;
+  }
+  if (parts.size() != 3) return false;
+  for (int a = 0; a < 3; ++a)
+    if (!parseDouble(parts[std::size_t(a)], out[std::size_t(a)]) || !std::isfinite(out[std::size_t(a)])) return false;
+  return true;
+}
+
+// Space directions are written "(a,b,c) (d,e,f) none"; vectors may hold spaces after commas.
+std::vector<std::string> splitVectors(const std::string& value) {
+  std::vector<std::string> out;
+  std::size_t pos = 0;
+  while (pos < value.size()) {
+    while (pos < value.size() && std::isspace(static_cast<unsigned char>(value[pos]))) ++pos;
+    if (pos >= value.size()) break;
+    if (value[pos] == '(') {
+      const std::size_t close = value.find(')', pos);
+      if (close == std::string::npos) {
+        out.push_back(value.substr(pos));
+        break;
+      }
+      std::string v = value.substr(pos, close - pos + 1);
+      v.erase(std::remove_if(v.begin(), v.end(), [](char c) { return std::isspace(static_cast<unsigned char>(c)); }),
+              v.end());
+      out.push_back(v);
+      pos = close + 1;
+    } else {
+      std::size_t end = pos;
+      while (end < value.size() && !std::isspace(static_cast<unsigned char>(value[end]))) ++end;
+      out.push_back(value.substr(pos, end - pos));
+      pos = end;
+    }
+  }
+  return out;
+}
+
+// ---------------------------------------------------------------------------------------------
+// [geometry]
+
+// Signs that take coordinates of the file's space to LPS. "3D-left-handed" has no anatomical
+// meaning; it is read as left, posterior, inferior (z flipped makes a right-handed LPS frame), which
+// is how the headsq sample matches its DICOM series (slice 1 of the NRRD is the top DICOM slice).
+Result<Vec3> spaceToLps(const std::string& path, const std::string& space, std::vector<std::string>& notes) {
+  const std::string s = lower(space);
+  if (s == "left-posterior-superior" || s == "lps" || s == "3d-right-handed" || s == "scanner-xyz")
+    return Vec3{1, 1, 1};
+  if (s == "right-anterior-superior" || s == "ras") return Vec3{-1, -1, 1};
+  if (s == "left-anterior-superior" || s == "las") return Vec3{1, -1, 1};
+  if (s == "3d-left-handed") {
+    notes.push_back("space 3D-left-handed read as left-posterior-inferior");
+    return Vec3{1, 1, -1};
+  }
+  return fail(path + ": unsupported NRRD space '" + space +
+              "' (supported: left-posterior-superior, right-anterior-superior, left-anterior-superior, "
+              "3D-right-handed, 3D-left-handed, scanner-xyz)");
+}
+
+struct Layout {
+  Dims dims;
+  std::size_t valueCount = 0;   // all values in the file, including a size-1 non-spatial axis
+  std::vector<int> spatialAxes; // the three axes of the grid among the file's axes
+};
+
+Result<Layout> parseLayout(const std::string& path, const NrrdHeader& h) {
+  const auto dimIt = h.fields.find("dimension");
+  if (dimIt == h.fields.end()) return fail(path + ": the NRRD header has no 'dimension' field");
+  long long dimension = 0;
+  if (!parseLong(dimIt->second, dimension) || dimension < 1)
+    return fail(path + ": dimension '" + dimIt->second + "' is not a positive integer");
+  if (dimension != 3 && dimension != 4)
+    return fail(path + ": dimension " + std::to_string(dimension) + " is not supported (3, or 4 with one size-1 axis)");
+  const auto sizesIt = h.fields.find("sizes");
+  if (sizesIt == h.fields.end()) return fail(path + ": the NRRD header has no 'sizes' field");
+  const auto words = splitWords(sizesIt->second);
+  if (words.size() != std::size_t(dimension))
+    return fail(path + ": 'sizes' lists " + std::to_string(words.size()) + " values but dimension is " +
+                std::to_string(dimension));
+  std::vector<long long> sizes;
+  for (const auto& w : words) {
+    long long v = 0;
+    if (!parseLong(w, v) || v < 1 || v > std::numeric_limits<int>::max())
+      return fail(path + ": size '" + w + "' is not a positive integer");
+    sizes.push_back(v);
+  }
+  Layout layout;
+  if (dimension == 3) {
+    layout.spatialAxes = {0, 1, 2};
+  } else {
+    // The non-spatial axis: "none" in space directions, else a non-domain kind, else the first size-1 axis.
+    int other = -1;
+    if (const auto it = h.fields.find("space directions"); it != h.fields.end()) {
+      const auto vectors = splitVectors(it->second);
+      for (std::size_t a = 0; a < vectors.size(); ++a)
+        if (vectors[a] == "none") other = int(a);
+    }
+    if (other < 0)
+      if (const auto it = h.fields.find("kinds"); it != h.fields.end()) {
+        const auto kinds = splitWords(it->second);
+        for (std::size_t a = 0; a < kinds.size(); ++a)
+          if (kinds[a] != "domain" && kinds[a] != "space") other = int(a);
+      }
+    if (other < 0)
+      for (int a = 0; a < 4 && other < 0; ++a)
+        if (sizes[std::size_t(a)] == 1) other = a;
+    if (other < 0) return fail(path + ": 4-dimensional NRRD without a non-spatial axis is not supported");
+    if (sizes[std::size_t(other)] != 1)
+      return fail(path + ": axis " + std::to_string(other) + " holds " + std::to_string(sizes[std::size_t(other)]) +
+                  " layers or components; only single-layer images are supported");
+    for (int a = 0; a < 4; ++a)
+      if (a != other) layout.spatialAxes.push_back(a);
+  }
+  layout.dims = {int(sizes[std::size_t(layout.spatialAxes[0])]), int(sizes[std::size_t(layout.spatialAxes[1])]),
+                 int(sizes[std::size_t(layout.spatialAxes[2])])};
+  layout.valueCount = layout.dims.count();
+  return layout;
+}
+
+Result<Geometry> parseGeometry(const std::string& path, const NrrdHeader& h, const Layout& layout,
+                               std::vector<std::string>& notes) {
+  Vec3 toLps{1, 1, 1};
+  const auto spaceIt = h.fields.find("space");
+  if (spaceIt != h.fields.end()) {
+    auto signs = spaceToLps(path, spaceIt->second, notes);
+    if (!signs) return tl::unexpected(signs.error());
+    toLps = *signs;
+  } else if (const auto sd = h.fields.find("space dimension"); sd != h.fields.end() && trim(sd->second) != "3") {
+    return fail(path + ": space dimension " + sd->second + " is not supported (3 only)");
+  }
+
+  Vec3 columns[3];
+  if (const auto it = h.fields.find("space directions"); it != h.fields.end()) {
+    const auto vectors = splitVectors(it->second);
+    for (int c = 0; c < 3; ++c) {
+      const std::size_t axis = std::size_t(layout.spatialAxes[std::size_t(c)]);
+      if (axis >= vectors.size() || !parseVector(vectors[axis], columns[c]))
+        return fail(path + ": 'space directions' has no valid vector for axis " + std::to_string(axis) + " ('" +
+                    it->second + "')");
+    }
+  } else if (const auto sp = h.fields.find("spacings"); sp != h.fields.end()) {
+    const auto words = splitWords(sp->second);
+    for (int c = 0; c < 3; ++c) {
+      const std::size_t axis = std::size_t(layout.spatialAxes[std::size_t(c)]);
+      double s = 0;
+      if (axis >= words.size() || !parseDouble(words[axis], s) || !std::isfinite(s))
+        return fail(path + ": 'spacings' has no valid value for axis " + std::to_string(axis));
+      if (s <= 0)
+        return fail(path + ": spacing " + words[axis] + " of axis " + std::to_string(axis) + " is not positive");
+      columns[c] = {0, 0, 0};
+      columns[c][std::size_t(c)] = s;
+    }
+  } else {
+    notes.push_back("no space directions or spacings: 1 mm voxels assumed");
+    for (int c = 0; c < 3; ++c) {
+      columns[c] = {0, 0, 0};
+      columns[c][std::size_t(c)] = 1;
+    }
+  }
+
+  Geometry g;
+  g.dims = layout.dims;
+  for (int c = 0; c < 3; ++c) {
+    const Vec3 v{toLps[0] * columns[c][0], toLps[1] * columns[c][1], toLps[2] * columns[c][2]};
+    const double length = norm(v);
+    if (!(length > 1e-9)) return fail(path + ": axis " + std::to_string(c) + " has zero spacing");
+    g.spacingMm[std::size_t(c)] = length;
+    for (int r = 0; r < 3; ++r) g.direction.m[std::size_t(r)][std::size_t(c)] = v[std::size_t(r)] / length;
+  }
+  if (std::abs(g.direction.determinant()) < 1e-6)
+    return fail(path + ": 'space directions' are parallel (the grid is degenerate)");
+  if (const auto it = h.fields.find("space origin"); it != h.fields.end()) {
+    Vec3 o;
+    if (!parseVector(trim(it->second), o)) return fail(path + ": 'space origin' '" + it->second + "' is not (x,y,z)");
+    g.originMm = {toLps[0] * o[0], toLps[1] * o[1], toLps[2] * o[2]};
+  }
+  return g;
+}
+
+// ---------------------------------------------------------------------------------------------
+// [data]
+
+// A "%d"-style format with exactly one integer conversion (flags 0, -, +, space and a width).
+Result<std::string> formatFileName(const std::string& path, const std::string& format, long long n) {
+  std::string out;
+  bool converted = false;
+  for (std::size_t i = 0; i < format.size(); ++i) {
+    if (format[i] != '%') {
+      out += format[i];
+      continue;
+    }
+    if (i + 1 < format.size() && format[i + 1] == '%') {
+      out += '%';
+      ++i;
+      continue;
+    }
+    std::size_t j = i + 1;
+    bool zeroPad = false, left = false, plus = false;
+    while (j < format.size() && std::strchr("0-+ ", format[j])) {
+      zeroPad |= format[j] == '0';
+      left |= format[j] == '-';
+      plus |= format[j] == '+';
+      ++j;
+    }
+    int width = 0;
+    while (j < format.size() && std::isdigit(static_cast<unsigned char>(format[j])) && width < 100)
+      width = width * 10 + (format[j++] - '0');
+    if (j >= format.size() || !std::strchr("diu", format[j]) || converted)
+      return fail(path + ": data file format '" + format + "' must hold exactly one %d conversion");
+    converted = true;
+    std::string digits = std::to_string(n < 0 ? -n : n);
+    std::string sign = n < 0 ? "-" : (plus ? "+" : "");
+    std::string number;
+    const int pad = width - int(digits.size() + sign.size());
+    if (pad > 0 && zeroPad && !left)
+      number = sign + std::string(std::size_t(pad), '0') + digits;
+    else if (pad > 0 && left)
+      number = sign + digits + std::string(std::size_t(pad), ' ');
+    else if (pad > 0)
+      number = std::string(std::size_t(pad), ' ') + sign + digits;
+    else
+      number = sign + digits;
+    out += number;
+    i = j;
+  }
+  if (!converted) return fail(path + ": data file format '" + format + "' has no %d conversion");
+  return out;
+}
+
+// The data files a header names, resolved against the header's folder; empty → attached data.
+Result<std::vector<std::string>> dataFiles(const std::string& path, const NrrdHeader& h) {
+  const auto it = h.fields.find("data file");
+  if (it == h.fields.end()) return std::vector<std::string>{};
+  const fs::path folder = fs::path(path).parent_path();
+  auto resolve = [&](const std::string& name) {
+    const fs::path p(name);
+    return (p.is_absolute() ? p : folder / p).string();
+  };
+  const auto words = splitWords(it->second);
+  if (words.empty()) return fail(path + ": 'data file' is empty");
+  std::vector<std::string> files;
+  if (words[0] == "LIST") {
+    if (h.listFiles.empty()) return fail(path + ": 'data file: LIST' is followed by no file names");
+    for (const auto& name : h.listFiles) files.push_back(resolve(name));
+    return files;
+  }
+  long long first = 0, lastValue = 0, step = 0;
+  if (words.size() >= 4 && words.size() <= 5 && parseLong(words[1], first) && parseLong(words[2], lastValue) &&
+      parseLong(words[3], step)) {
+    if (step == 0) return fail(path + ": 'data file' step is 0");
+    constexpr long long kBound = 1000000000;
+    if (std::llabs(first) > kBound || std::llabs(lastValue) > kBound || std::llabs(step) > kBound)
+      return fail(path + ": 'data file' numbers " + words[1] + " " + words[2] + " " + words[3] + " are out of range");
+    if ((lastValue - first) / step < 0)
+      return fail(path + ": 'data file' range " + words[1] + ".." + words[2] + " with step " + words[3] + " is empty");
+    const long long count = (lastValue - first) / step + 1;
+    if (count > 1000000) return fail(path + ": 'data file' names " + std::to_string(count) + " files");
+    for (long long n = first, i = 0; i < count; ++i, n += step) {
+      auto name = formatFileName(path, words[0], n);
+      if (!name) return tl::unexpected(name.error());
+      files.push_back(resolve(*name));
+    }
+    return files;
+  }
+  files.push_back(resolve(it->second));
+  return files;
+}
+
+struct InflateStream {
+  z_stream zs{};
+  bool ready = false;
+  InflateStream() { ready = inflateInit2(&zs, 15 + 32) == Z_OK; }
+  ~InflateStream() {
+    if (ready) inflateEnd(&zs);
+  }
+  InflateStream(const InflateStream&) = delete;
+  InflateStream& operator=(const InflateStream&) = delete;
+};
+
+// Decompresses gzip (or zlib) data, possibly several members, stopping once `limit` bytes are out.
+// The output grows as data arrive, so a header's claims cannot make it allocate in advance.
+Result<std::string> gunzip(const std::string& what, const char* data, std::size_t size, std::size_t limit) {
+  InflateStream stream;
+  if (!stream.ready) return fail(what + ": zlib could not start decompressing");
+  z_stream& zs = stream.zs;
+  zs.next_in = reinterpret_cast<Bytef*>(const_cast<char*>(data));
+  std::size_t inLeft = size;
+  std::string out;
+  std::size_t produced = 0;
+  while (true) {
+    if (produced == out.size()) out.resize(std::min(limit, std::max<std::size_t>(out.size() * 2, 1 << 16)));
+    const uInt inChunk = uInt(std::min<std::size_t>(inLeft, 1u << 30));
+    zs.avail_in = inChunk;
+    const std::size_t outRoom = std::min<std::size_t>(out.size() - produced, 1u << 30);
+    zs.next_out = reinterpret_cast<Bytef*>(out.data() + produced);
+    zs.avail_out = uInt(outRoom);
+    const int rc = inflate(&zs, Z_NO_FLUSH);
+    inLeft -= inChunk - zs.avail_in;
+    produced += outRoom - zs.avail_out;
+    if (rc == Z_STREAM_END) {
+      if (inLeft == 0 || produced == limit) break;
+      // Another gzip member follows.
+      if (inflateReset(&zs) != Z_OK) return fail(what + ": zlib could not restart decompressing");
+      continue;
+    }
+    if (produced == limit) break;
+    if (rc == Z_OK && !(inLeft == 0 && zs.avail_out != 0)) continue;
+    if (rc == Z_BUF_ERROR && zs.avail_out == 0) continue;  // the output buffer was full: grow it
+    if (rc == Z_OK || rc == Z_BUF_ERROR) return fail(what + ": the gzip data ends early (the file is truncated)");
+    return fail(what + ": the gzip data is corrupt (" + std::string(zs.msg ? zs.msg : "zlib error") + ")");
+  }
+  out.resize(produced);
+  return out;
+}
+
+struct Encoding {
+  bool gzip = false;
+  long long lineSkip = 0;
+  long long byteSkip = 0;
+};
+
+// Extracts exactly `need` bytes of decoded voxel data from one data file's bytes (from `offset`).
+Status decodeChunk(const std::string& what, const std::string& bytes, std::size_t offset, const Encoding& enc,
+                   std::size_t need, const std::string& sizeText, std::string& out) {
+  std::size_t pos = offset;
+  for (long long n = 0; n < enc.lineSkip; ++n) {
+    const std::size_t nl = bytes.find('\n', pos);
+    if (nl == std::string::npos) return fail(what + ": fewer lines than 'line skip' " + std::to_string(enc.lineSkip));
+    pos = nl + 1;
+  }
+  if (!enc.gzip) {
+    const std::size_t available = bytes.size() - pos;
+    if (enc.byteSkip == -1) {
+      if (available < need)
+        return fail(what + ": " + sizeText + " but the data holds " + std::to_string(available));
+      out.append(bytes, bytes.size() - need, need);
+      return {};
+    }
+    const std::size_t skip = std::size_t(enc.byteSkip);
+    const std::size_t holds = available > skip ? available - skip : 0;
+    if (holds != need) return fail(what + ": " + sizeText + " but the data holds " + std::to_string(holds));
+    out.append(bytes, pos + skip, need);
+    return {};
+  }
+  if (enc.byteSkip < 0) return fail(what + ": 'byte skip: -1' is only allowed with raw encoding");
+  const std::size_t skip = std::size_t(enc.byteSkip);
+  auto plain = gunzip(what, bytes.data() + pos, bytes.size() - pos, skip + need + 1);
+  if (!plain) return tl::unexpected(plain.error());
+  const std::size_t holds = plain->size() > skip ? plain->size() - skip : 0;
+  if (holds != need)
+    return fail(what + ": " + sizeText + " but the decompressed data holds " +
+                (holds > need ? "more" : std::to_string(holds)));
+  out.append(*plain, skip, need);
+  return {};
+}
+
+template <class T>
+void convertValues(const std::string& bytes, bool swap, std::vector<float>& out) {
+  const std::size_t n = out.size();
+  for (std::size_t i = 0; i < n; ++i) {
+    unsigned char raw[sizeof(T)];
+    std::memcpy(raw, bytes.data() + i * sizeof(T), sizeof(T));
+    if (swap)
+      for (std::size_t b = 0; b < sizeof(T) / 2; ++b) std::swap(raw[b], raw[sizeof(T) - 1 - b]);
+    T v;
+    std::memcpy(&v, raw, sizeof(T));
+    out[i] = float(v);
+  }
+}
+
+std::vector<SegmentInfo> parseSegments(const NrrdHeader& h, std::vector<std::string>& notes) {
+  std::vector<SegmentInfo> segments;
+  for (int n = 0; n < 65536; ++n) {
+    const std::string prefix = "Segment" + std::to_string(n) + "_";
+    const auto name = h.keyValues.find(prefix + "Name");
+    if (name == h.keyValues.end()) break;
+    SegmentInfo s;
+    s.name = trim(name->second);
+    long long value = n + 1;
+    if (const auto it = h.keyValues.find(prefix + "LabelValue"); it != h.keyValues.end()) {
+      if (!parseLong(trim(it->second), value) || value < 0 || value > 65535) {
+        notes.push_back("segment " + s.name + " has an invalid label value '" + it->second + "'; skipped");
+        continue;
+      }
+    }
+    s.label = std::uint16_t(value);
+    if (const auto it = h.keyValues.find(prefix + "Color"); it != h.keyValues.end()) {
+      const auto words = splitWords(it->second);
+      double c[3];
+      if (words.size() == 3 && parseDouble(words[0], c[0]) && parseDouble(words[1], c[1]) && parseDouble(words[2], c[2]))
+        s.colour = {float(c[0]), float(c[1]), float(c[2])};
+    }
+    segments.push_back(s);
+  }
+  return segments;
+}
+
+}  // namespace
+
+// ---------------------------------------------------------------------------------------------
+// [load]
+
+Result<LoadedImage> loadNrrd(const std::string& path, const ImageLoadOptions& options) {
+  auto headerBytes = readHeaderBytes(path);
+  if (!headerBytes) return tl::unexpected(headerBytes.error());
+  auto header = parseHeader(path, *headerBytes);
+  if (!header) return tl::unexpected(header.error());
+  const NrrdHeader& h = *header;
+
+  const auto typeIt = h.fields.find("type");
+  if (typeIt == h.fields.end()) return fail(path + ": the NRRD header has no 'type' field");
+  const auto kind = parseType(typeIt->second);
+  if (!kind)
+    return fail(path + ": unsupported NRRD type '" + typeIt->second +
+                "' (supported: int8, uint8, int16, uint16, int32, uint32, float, double)");
+
+  Encoding enc;
+  const auto encIt = h.fields.find("encoding");
+  if (encIt == h.fields.end()) return fail(path + ": the NRRD header has no 'encoding' field");
+  const std::string encoding = lower(encIt->second);
+  if (encoding == "gzip" || encoding == "gz")
+    enc.gzip = true;
+  else if (encoding != "raw")
+    return fail(path + ": unsupported NRRD encoding '" + encIt->second + "' (supported: raw, gzip)");
+  if (const auto it = h.fields.find("line skip"); it != h.fields.end())
+    if (!parseLong(it->second, enc.lineSkip) || enc.lineSkip < 0)
+      return fail(path + ": 'line skip' '" + it->second + "' is not a non-negative integer");
+  if (const auto it = h.fields.find("byte skip"); it != h.fields.end())
+    if (!parseLong(it->second, enc.byteSkip) || enc.byteSkip < -1)
+      return fail(path + ": 'byte skip' '" + it->second + "' is not -1 or a non-negative integer");
+
+  bool swap = false;
+  if (bytesOf(*kind) > 1) {
+    const auto endianIt = h.fields.find("endian");
+    if (endianIt == h.fields.end()) return fail(path + ": the NRRD header has no 'endian' field for multi-byte data");
+    const std::string endian = lower(endianIt->second);
+    if (endian != "little" && endian != "big")
+      return fail(path + ": 'endian' is '" + endianIt->second + "', not little or big");
+    swap = endian == "big";
+  }
+
+  LoadedImage loaded;
+  loaded.storedKind = *kind;
+  auto layout = parseLayout(path, h);
+  if (!layout) return tl::unexpected(layout.error());
+  auto geometry = parseGeometry(path, h, *layout, loaded.notes);
+  if (!geometry) return tl::unexpected(geometry.error());
+  if (auto fits = detail::checkImageFits(path, layout->dims, options); !fits) return tl::unexpected(fits.error());
+
+  auto files = dataFiles(path, h);
+  if (!files) return tl::unexpected(files.error());
+  const std::size_t totalBytes = layout->valueCount * bytesOf(*kind);
+  const std::string typeText = std::string(toString(*kind));
+  std::string data;
+  data.reserve(totalBytes);
+  if (files->empty()) {
+    if (!h.hasAttachedData) return fail(path + ": the NRRD header names no data file and holds no data");
+    const std::string sizeText =
+        "dimensions " + layout->dims.toString() + " × " + typeText + " need " + std::to_string(totalBytes) + " bytes";
+    auto bytes = readFileFrom(path, h.dataOffset, path);
+    if (!bytes) return tl::unexpected(bytes.error());
+    if (auto ok = decodeChunk(path, *bytes, 0, enc, totalBytes, sizeText, data); !ok)
+      return tl::unexpected(ok.error());
+  } else {
+    const std::size_t n = files->size();
+    if (totalBytes % n != 0)
+      return fail(path + ": " + std::to_string(totalBytes) + " bytes of data cannot be split evenly over " +
+                  std::to_string(n) + " data files");
+    const std::size_t perFile = totalBytes / n;
+    const std::string sizeText = "each of the " + std::to_string(n) + " data files of " + layout->dims.toString() +
+                                 " × " + typeText + " needs " + std::to_string(perFile) + " bytes";
+    for (const std::string& file : *files) {
+      const std::string what = path + ": data file " + file;
+      auto fileBytes = readWholeFile(file, what);
+      if (!fileBytes) return tl::unexpected(fileBytes.error());
+      if (auto ok = decodeChunk(what, *fileBytes, 0, enc, perFile, sizeText, data); !ok)
+        return tl::unexpected(ok.error());
+    }
+    if (n > 1) loaded.notes.push_back("read " + std::to_string(n) + " data files");
+  }
+
+  loaded.image.geometry = *geometry;
+  loaded.image.voxels.resize(layout->valueCount);
+  std::vector<float>& out = loaded.image.voxels;
+  switch (*kind) {
+    case ScalarKind::Int8: convertValues<std::int8_t>(data, swap, out); break;
+    case ScalarKind::UInt8: convertValues<std::uint8_t>(data, swap, out); break;
+    case ScalarKind::Int16: convertValues<std::int16_t>(data, swap, out); break;
+    case ScalarKind::UInt16: convertValues<std::uint16_t>(data, swap, out); break;
+    case ScalarKind::Int32: convertValues<std::int32_t>(data, swap, out); break;
+    case ScalarKind::UInt32: convertValues<std::uint32_t>(data, swap, out); break;
+    case ScalarKind::Float32: convertValues<float>(data, swap, out); break;
+    case ScalarKind::Float64: convertValues<double>(data, swap, out); break;
+  }
+  loaded.segments = parseSegments(h, loaded.notes);
+  return loaded;
+}
+
+// ---------------------------------------------------------------------------------------------
+// [write]
+
+namespace {
+
+struct DeflateStream {
+  z_stream zs{};
+  bool ready = false;
+  DeflateStream() { ready = deflateInit2(&zs, Z_DEFAULT_COMPRESSION, Z_DEFLATED, 15 + 16, 8, Z_DEFAULT_STRATEGY) == Z_OK; }
+  ~DeflateStream() {
+    if (ready) deflateEnd(&zs);
+  }
+  DeflateStream(const DeflateStream&) = delete;
+  DeflateStream& operator=(const DeflateStream&) = delete;
+};
+
+Result<std::string> gzipBytes(const std::string& path, const std::string& plain) {
+  DeflateStream stream;
+  if (!stream.ready) return fail(path + ": zlib could not start compressing");
+  z_stream& zs = stream.zs;
+  std::string out;
+  out.resize(deflateBound(&zs, uLong(plain.size())) + 64);
+  zs.next_in = reinterpret_cast<Bytef*>(const_cast<char*>(plain.data()));
+  zs.avail_in = uInt(plain.size());
+  zs.next_out = reinterpret_cast<Bytef*>(out.data());
+  zs.avail_out = uInt(out.size());
+  if (deflate(&zs, Z_FINISH) != Z_STREAM_END) return fail(path + ": zlib could not compress the data");
+  out.resize(zs.total_out);
+  return out;
+}
+
+template <class T>
+Status packValues(const std::string& path, const std::vector<float>& values, const Dims& dims, std::string& out) {
+  out.resize(values.size() * sizeof(T));
+  for (std::size_t n = 0; n < values.size(); ++n) {
+    const float v = values[n];
+    T stored;
+    if constexpr (std::is_floating_point_v<T>) {
+      stored = T(v);
+    } else {
+      if (!std::isfinite(v) || v != std::floor(v) || double(v) < double(std::numeric_limits<T>::lowest()) ||
+          double(v) > double(std::numeric_limits<T>::max())) {
+        const std::size_t i = n % std::size_t(dims.x), j = (n / std::size_t(dims.x)) % std::size_t(dims.y),
+                          k = n / (std::size_t(dims.x) * std::size_t(dims.y));
+        std::ostringstream s;
+        s << v;
+        return fail(path + ": voxel (" + std::to_string(i) + "," + std::to_string(j) + "," + std::to_string(k) +
+                    ") value " + s.str() + " cannot be stored as the requested integer type");
+      }
+      stored = T(v);
+    }
+    std::memcpy(out.data() + n * sizeof(T), &stored, sizeof(T));
+  }
+  return {};
+}
+
+std::string numberText(double v) {
+  char buffer[64];
+  std::snprintf(buffer, sizeof buffer, "%.17g", v);
+  return buffer;
+}
+
+}  // namespace
+
+Status writeNrrd(const std::string& path, const FloatVolume& image, ScalarKind storedKind) {
+  const Geometry& g = image.geometry;
+  if (g.dims.count() == 0 || image.voxels.size() != g.dims.count()) return fail(path + ": image to write is empty");
+  static_assert(std::endian::native == std::endian::little, "writeNrrd writes native byte order as little endian");
+  std::string plain;
+  Status packed;
+  switch (storedKind) {
+    case ScalarKind::Int8: packed = packValues<std::int8_t>(path, image.voxels, g.dims, plain); break;
+    case ScalarKind::UInt8: packed = packValues<std::uint8_t>(path, image.voxels, g.dims, plain); break;
+    case ScalarKind::Int16: packed = packValues<std::int16_t>(path, image.voxels, g.dims, plain); break;
+    case ScalarKind::UInt16: packed = packValues<std::uint16_t>(path, image.voxels, g.dims, plain); break;
+    case ScalarKind::Int32: packed = packValues<std::int32_t>(path, image.voxels, g.dims, plain); break;
+    case ScalarKind::UInt32: packed = packValues<std::uint32_t>(path, image.voxels, g.dims, plain); break;
+    case ScalarKind::Float32: packed = packValues<float>(path, image.voxels, g.dims, plain); break;
+    case ScalarKind::Float64: packed = packValues<double>(path, image.voxels, g.dims, plain); break;
+  }
+  if (!packed) return packed;
+  auto compressed = gzipBytes(path, plain);
+  if (!compressed) return tl::unexpected(compressed.error());
+
+  std::ostringstream header;
+  header << "NRRD0004\n";
+  header << "type: " << nrrdTypeName(storedKind) << "\n";
+  header << "dimension: 3\n";
+  header << "space: left-posterior-superior\n";
+  header << "sizes: " << g.dims.x << " " << g.dims.y << " " << g.dims.z << "\n";
+  header << "space directions:";
+  for (int c = 0; c < 3; ++c) {
+    header << " (";
+    for (int r = 0; r < 3; ++r)
+      header << (r ? "," : "") << numberText(g.direction.m[std::size_t(r)][std::size_t(c)] * g.spacingMm[std::size_t(c)]);
+    header << ")";
+  }
+  header << "\nkinds: domain domain domain\n";
+  header << "endian: little\n";
+  header << "encoding: gzip\n";
+  header << "space origin: (" << numberText(g.originMm[0]) << "," << numberText(g.originMm[1]) << ","
+         << numberText(g.originMm[2]) << ")\n\n";
+
+  std::ofstream out(path, std::ios::binary | std::ios::trunc);
+  if (!out) return fail(path + ": cannot create the file");
+  const std::string text = header.str();
+  out.write(text.data(), std::streamsize(text.size()));
+  out.write(compressed->data(), std::streamsize(compressed->size()));
+  out.close();
+  if (!out) return fail(path + ": writing the file failed");
+  return {};
+}
+
+}  // namespace at
