@@ -27,6 +27,9 @@ int runStructures(const Argv& args);
 int runInfo(const Argv& args);
 int runSlice(const Argv& args);
 
+// Weighted distance transform (cmd_wdt.cpp)
+int runWdt(const Argv& args);
+
 // Rendering (cmd_render.cpp)
 int runRender(const Argv& args);
 

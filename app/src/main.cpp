@@ -14,6 +14,7 @@ const std::vector<Command>& commands() {
       {"structures", "list a dataset's structures", runStructures},
       {"info", "load any supported file or folder and describe it", runInfo},
       {"slice", "write a grey slice with label overlay as PNG", runSlice},
+      {"wdt", "weighted distance field of a structure (CPU or CUDA), with --check against exact", runWdt},
       {"render", "render a structure in one of the paper's modes to PNG (offscreen)", runRender},
   };
   return table;

@@ -1,5 +1,9 @@
 // The CUDA backend of the weighted distance transform. Nothing here exposes CUDA types: callers
 // see plain C++ (the cuda/ folder is the only place that includes cuda_runtime.h).
+//
+// Sweeps run one kernel launch per sweep over ping-pong buffers (design and its determinism
+// argument: cuda/src/sweep_kernels.cu). Converged fields equal the CPU backend's; a fixed number
+// of passes may leave values slightly above the CPU's (never below the exact distances).
 #pragma once
 
 #include <memory>
@@ -22,5 +26,42 @@ const DeviceInfo& queryDevice();
 // Computes the field on the GPU and copies it back. Errors carry the failing CUDA call's name and
 // message; the caller (computeWdt with backend auto) then falls back to the CPU.
 Result<WdtResult> runCudaBackend(const WdtProblem& problem, const WdtControl& control);
+
+// A float32 distance field that lives in device memory (for the renderer's CUDA–GL interop):
+// grid().dims.count() floats, x contiguous, +infinity where unreachable. Move-only; frees its
+// memory when destroyed.
+class DeviceField {
+ public:
+  DeviceField();
+  ~DeviceField();
+  DeviceField(DeviceField&&) noexcept;
+  DeviceField& operator=(DeviceField&&) noexcept;
+  DeviceField(const DeviceField&) = delete;
+  DeviceField& operator=(const DeviceField&) = delete;
+
+  const Geometry& grid() const;
+  int downsample() const;
+  // Device address of the first voxel (a `const float*` in device code); null when empty.
+  const void* devicePointer() const;
+
+  struct Impl;
+
+ private:
+  explicit DeviceField(std::unique_ptr<Impl> impl);
+  std::unique_ptr<Impl> impl_;
+  friend Result<DeviceField> makeDeviceField(const Geometry& grid, float fill);
+  friend Result<DeviceField> runCudaBackendOnDevice(const WdtProblem&, const WdtControl&, WdtStats*);
+};
+
+// An allocated field on `grid` with every voxel set to `fill`. Errors: no device, allocation
+// failure (message names the call and the byte count).
+Result<DeviceField> makeDeviceField(const Geometry& grid, float fill);
+
+// As runCudaBackend, but the field stays on the device. `stats` (optional) receives the run's
+// statistics; their msTotal excludes the copy back.
+Result<DeviceField> runCudaBackendOnDevice(const WdtProblem& problem, const WdtControl& control, WdtStats* stats);
+
+// Copies the field into `out` (geometry and voxels replaced).
+Status copyToHost(const DeviceField& field, FloatVolume& out);
 
 }  // namespace at::cuda

@@ -25,4 +25,8 @@ Result<WdtProblem> prepareWdtProblem(const Volume& volume, const Mask& seeds, co
 // The CPU backend: multi-threaded, vectorised multi-axis sweeps.
 Result<WdtResult> runCpuBackend(const WdtProblem& problem, const WdtControl& control);
 
+// The exact reference on the problem's own grid (coarse when downsampled): Dijkstra with the
+// same step costs, bit for bit, as the sweeps. exactWdt is this on the full-resolution problem.
+Result<FloatVolume> exactWdtOnProblem(const WdtProblem& problem);
+
 }  // namespace at

@@ -49,6 +49,19 @@ AT_HOST_DEVICE inline SweepLengths sweepLengths(float spacingA, float spacingB, 
           sqrtf_portable(spacingA * spacingA + spacingB * spacingB + spacingC * spacingC)};
 }
 
+// Lengths of a sweep along grid axis `axis` (0 = i, 1 = j, 2 = k) with the plane axes in the order
+// every backend uses: i → (b = j, c = k), j → (b = i, c = k), k → (b = i, c = j). Unlike calling
+// sweepLengths per axis, the diagonal is summed in one canonical order (sx² + sy²) + sz² for every
+// axis, so each of the 26 steps has exactly one float length whichever sweep takes it — the exact
+// reference (Dijkstra) uses the same lengths and converged sweeps then equal it bit for bit.
+AT_HOST_DEVICE inline SweepLengths axisSweepLengths(int axis, float sx, float sy, float sz) {
+  const float xx = sx * sx, yy = sy * sy, zz = sz * sz;
+  const float diagonal = sqrtf_portable((xx + yy) + zz);
+  if (axis == 0) return {sx, sqrtf_portable(xx + yy), sqrtf_portable(xx + zz), diagonal};
+  if (axis == 1) return {sy, sqrtf_portable(xx + yy), sqrtf_portable(yy + zz), diagonal};
+  return {sz, sqrtf_portable(xx + zz), sqrtf_portable(yy + zz), diagonal};
+}
+
 AT_HOST_DEVICE inline float minf(float a, float b) { return a < b ? a : b; }
 
 // Entering rule update of one voxel b with weight wb from its 9 neighbours in the previous plane,

@@ -46,6 +46,10 @@ struct WdtParams {
   WdtBackend backend = WdtBackend::Auto;
 };
 
+// Checks the params: passes >= 1, downsample >= 1, huMax > huMin, baseCost >= 0 (and finite),
+// maxPasses >= 1. The error names the field ("WDT params: passes must be >= 1, got 0").
+Status validateWdtParams(const WdtParams& params);
+
 // A distance field on its own grid (the volume's, or a coarser one when downsampled: same
 // physical extent, spacing × factor, origin moved to the block centres).
 struct DistanceField {

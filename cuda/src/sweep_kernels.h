@@ -1,0 +1,62 @@
+// Launchers for the sweep kernels (sweep_kernels.cu). Private to cuda/src.
+#pragma once
+
+#include <cuda_runtime.h>
+
+#include <cstdint>
+
+#include "volume/error.h"
+#include "wdt/stencil.h"
+#include "wdt/wdt.h"
+
+namespace at::cuda {
+
+// One sweep of the distance volume: reads `src` (never written during the sweep), writes every
+// voxel of `dst`. Sets *changed to 1 if any voxel decreased. Volumes are nx·ny·nz, x contiguous.
+struct SweepArgs {
+  const float* src = nullptr;
+  float* dst = nullptr;
+  const std::uint8_t* density = nullptr;  // densityByte per voxel
+  int nx = 0, ny = 0, nz = 0;
+  float spacing[3] = {1, 1, 1};           // mm along x, y, z
+  float baseCost = 0;
+  StepRule rule = StepRule::Entering;
+  WeightRule weight = WeightRule::Density;
+  int* changed = nullptr;                 // device flag
+};
+
+// axis 0 = x, 1 = y, 2 = z; direction +1 (increasing index) or -1.
+Status launchSweep(const SweepArgs& args, int axis, int direction, cudaStream_t stream);
+
+// Fills `d` (count floats) with 0 where seeds[i] != 0 and +infinity elsewhere.
+Status launchInitDistances(float* d, const std::uint8_t* seeds, std::size_t count, cudaStream_t stream);
+
+// One sweep in the exact scheme (exact_sweep.cu): planes of nu × nv lanes (u contiguous, stride 1;
+// v stride strideV), na planes of stride strideA, visited in `direction`. Reads `src` (the field
+// before the sweep) and writes every voxel of `dst`, exactly as a serial sweep would.
+struct ExactSweepArgs {
+  const float* src = nullptr;
+  float* dst = nullptr;
+  const std::uint8_t* density = nullptr;  // in the same layout as src
+  int nu = 0, nv = 0, na = 0;
+  std::size_t strideV = 0, strideA = 0;
+  int direction = 1;
+  wdt::SweepLengths lengths{};            // B = u, C = v (wdt::axisSweepLengths' plane order)
+  float baseCost = 0;
+  StepRule rule = StepRule::Entering;
+  WeightRule weight = WeightRule::Density;
+  int* changed = nullptr;
+};
+Status launchExactSweep(const ExactSweepArgs& args, cudaStream_t stream);
+// Once per process, before the first launchExactSweep (and outside stream capture): lets the
+// kernels use more than 48 KB of shared memory.
+Status prepareExactSweeps();
+
+// out[y + ny·(x + nx·z)] = in[x + nx·(y + ny·z)]: swaps the two fastest axes of an nx×ny×nz array.
+template <class T>
+Status launchTransposeXY(const T* in, T* out, int nx, int ny, int nz, cudaStream_t stream);
+
+// Sets `count` floats at `d` to `value`.
+Status launchFill(float* d, std::size_t count, float value, cudaStream_t stream);
+
+}  // namespace at::cuda

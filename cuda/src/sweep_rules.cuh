@@ -1,0 +1,60 @@
+// Per-voxel rules of the sweep kernels, shared by both schemes (sweep_kernels.cu, exact_sweep.cu):
+// the step costs of every (rule, weight) pair, built on wdt/stencil.h exactly as the CPU backend's
+// step_cost.h builds them. Private to cuda/src.
+#pragma once
+
+#include <cstdint>
+
+#include "wdt/stencil.h"
+#include "wdt/wdt.h"
+
+namespace at::cuda {
+namespace {
+
+constexpr float kInf = __builtin_huge_valf();
+
+// Whether the cost of a step depends on the neighbour's (a's) density, not only on b's.
+template <StepRule R, WeightRule W>
+constexpr bool kNeedsNeighbourDensity = !(R == StepRule::Entering && (W == WeightRule::Density || W == WeightRule::Uniform));
+
+// Cost of one step a → b of length `len`, for rules whose weight involves a (see wdt.h).
+template <StepRule R, WeightRule W>
+__device__ __forceinline__ float stepCost(std::uint8_t qa, std::uint8_t qb, float len, float base) {
+  if constexpr (W == WeightRule::Uniform) {
+    return wdt::enteringStepCost(1.0f, len);  // ½(1 + 1)·len = len: both rules, bit for bit
+  } else if constexpr (W == WeightRule::Density) {
+    const float wb = wdt::densityWeight(qb, base);
+    if constexpr (R == StepRule::Entering) return wdt::enteringStepCost(wb, len);
+    else return wdt::trapezoidStepCost(wdt::densityWeight(qa, base), wb, len);
+  } else {
+    const float df = wdt::densityFromByte(qb) - wdt::densityFromByte(qa);
+    const float w = base + (W == WeightRule::Gradient ? fabsf(df) : (df > 0.0f ? df : 0.0f));
+    return wdt::enteringStepCost(w, len);  // an edge weight: both rules charge w(a→b)·|step|
+  }
+}
+
+// New value of voxel b (current value `cur`, density byte qb) from its previous-plane neighbours
+// n[dc+1][db+1] (densities qn, used only when the rule needs them).
+template <StepRule R, WeightRule W>
+__device__ __forceinline__ float relax(float cur, const float n[3][3], const std::uint8_t qn[3][3], std::uint8_t qb,
+                                       const wdt::SweepLengths& l, float base) {
+  if constexpr (R == StepRule::Entering && W == WeightRule::Density) {
+    return wdt::enteringUpdate(cur, n, wdt::densityWeight(qb, base), l);
+  } else if constexpr (R == StepRule::Entering && W == WeightRule::Uniform) {
+    return wdt::enteringUpdate(cur, n, 1.0f, l);
+  } else {
+    float best = cur;
+#pragma unroll
+    for (int dc = 0; dc < 3; ++dc) {
+#pragma unroll
+      for (int db = 0; db < 3; ++db) {
+        const float len = dc == 1 ? (db == 1 ? l.straight : l.alongB) : (db == 1 ? l.alongC : l.diagonal);
+        best = wdt::minf(best, n[dc][db] + stepCost<R, W>(qn[dc][db], qb, len, base));
+      }
+    }
+    return best;
+  }
+}
+
+}  // namespace
+}  // namespace at::cuda

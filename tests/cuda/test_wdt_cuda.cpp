@@ -1,0 +1,356 @@
+// CUDA backend vs the CPU backend and the exact reference. Every test needing a GPU prints
+// "SKIPPED: no CUDA device (<reason>)" and passes where there is none (CI, the dev machines).
+//
+// The default (exact) scheme must give the CPU backend's field bit for bit after any number of
+// passes (same stencil, same plane order, same float operations), hence also in converge mode,
+// where both equal the exact reference. The optional tiled scheme (AT_WDT_CUDA_SCHEME=tiled) lags
+// at tile borders: its fixed-pass fields are never below the CPU's nor the exact distances, and
+// converged fields are equal. Both are deterministic (two runs bitwise identical).
+#include <doctest/doctest.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <limits>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "cuda/wdt_cuda.h"
+#include "test_support.h"
+#include "wdt/problem.h"
+
+namespace {
+
+using at::StepRule;
+using at::WdtProblem;
+using at::WeightRule;
+
+bool requireDevice() {
+  const auto& info = at::cuda::queryDevice();
+  if (!info.available) {
+    std::printf("SKIPPED: no CUDA device (%s)\n", info.reason.c_str());
+    return false;
+  }
+  return true;
+}
+
+// A random problem: density bytes mixing smooth regions, noise and dense slabs, a few seeds.
+WdtProblem randomProblem(std::mt19937_64& rng, at::Dims dims, at::Vec3 spacing, StepRule rule, WeightRule weight) {
+  WdtProblem p;
+  p.grid.dims = dims;
+  p.grid.spacingMm = spacing;
+  const std::size_t n = dims.count();
+  p.density.resize(n);
+  p.seeds.assign(n, 0);
+  std::uniform_int_distribution<int> byte(0, 255);
+  std::uniform_real_distribution<double> unit(0, 1);
+  const double fx = 0.1 + unit(rng) * 0.4, fy = 0.1 + unit(rng) * 0.4, fz = 0.1 + unit(rng) * 0.4;
+  const int slab = dims.x > 4 ? int(unit(rng) * dims.x) : -1;
+  for (int k = 0; k < dims.z; ++k)
+    for (int j = 0; j < dims.y; ++j)
+      for (int i = 0; i < dims.x; ++i) {
+        const double smooth = 0.5 + 0.5 * std::sin(fx * i) * std::cos(fy * j + fz * k);
+        int q = int(smooth * 200) + byte(rng) / 8;
+        if (i == slab && (j + k) % 7 != 0) q = 255;  // a dense wall with holes
+        p.density[dims.index(i, j, k)] = std::uint8_t(std::min(255, q));
+      }
+  const int seeds = 1 + int(unit(rng) * 3);
+  for (int s = 0; s < seeds; ++s) {
+    p.seeds[std::size_t(unit(rng) * double(n)) % n] = 1;
+  }
+  p.params.rule = rule;
+  p.params.weight = weight;
+  p.params.baseCost = 0.02f + float(unit(rng)) * 0.2f;
+  return p;
+}
+
+std::vector<float> gpuField(const WdtProblem& p, at::WdtStats* stats = nullptr) {
+  auto r = at::cuda::runCudaBackend(p, {});
+  REQUIRE_MESSAGE(r.has_value(), (r ? std::string() : r.error().message));
+  if (stats) *stats = r->stats;
+  return r->field.distances.voxels;
+}
+
+std::vector<float> cpuField(const WdtProblem& p) {
+  auto r = at::runCpuBackend(p, {});
+  REQUIRE_MESSAGE(r.has_value(), (r ? std::string() : r.error().message));
+  return r->field.distances.voxels;
+}
+
+double relDiff(float a, float b) {
+  if (a == b) return 0;  // equal infinities included
+  if (std::isinf(a) || std::isinf(b)) return std::numeric_limits<double>::infinity();
+  return std::fabs(double(a) - double(b)) / std::max(1e-30, std::fabs(double(b)));
+}
+
+double maxRelDiff(const std::vector<float>& a, const std::vector<float>& b) {
+  double m = 0;
+  for (std::size_t i = 0; i < a.size(); ++i) m = std::max(m, relDiff(a[i], b[i]));
+  return m;
+}
+
+// Voxels where a < b·(1 − tol) (a below b beyond rounding).
+std::size_t countBelow(const std::vector<float>& a, const std::vector<float>& b, double tol) {
+  std::size_t c = 0;
+  for (std::size_t i = 0; i < a.size(); ++i) c += double(a[i]) < double(b[i]) * (1 - tol);
+  return c;
+}
+
+// Selects the tiled scheme for the lifetime of the object.
+struct TiledScheme {
+  TiledScheme() { setenv("AT_WDT_CUDA_SCHEME", "tiled", 1); }
+  ~TiledScheme() { unsetenv("AT_WDT_CUDA_SCHEME"); }
+  TiledScheme(const TiledScheme&) = delete;
+  TiledScheme& operator=(const TiledScheme&) = delete;
+};
+
+bool sameBits(const std::vector<float>& a, const std::vector<float>& b) {
+  return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(float)) == 0;
+}
+
+const StepRule kRules[] = {StepRule::Entering, StepRule::Trapezoid};
+const WeightRule kWeights[] = {WeightRule::Density, WeightRule::Uniform, WeightRule::Gradient, WeightRule::Ascent};
+
+const at::Dims kEdgeSizes[] = {{1, 1, 1}, {2, 2, 2}, {31, 31, 31}, {33, 33, 33}, {33, 17, 65}, {1, 40, 3},
+                               {70, 1, 9},  {5, 9, 1}, {40, 37, 2}};
+
+}  // namespace
+
+TEST_CASE("queryDevice answers without a GPU instead of crashing, and the backend then returns an error") {
+  const auto& info = at::cuda::queryDevice();
+  CHECK(&info == &at::cuda::queryDevice());  // cached
+  if (info.available) {
+    CHECK_FALSE(info.name.empty());
+    return;
+  }
+  CHECK_FALSE(info.reason.empty());
+  WdtProblem p;
+  p.grid.dims = {2, 2, 2};
+  p.density.assign(8, 0);
+  p.seeds.assign(8, 0);
+  p.seeds[0] = 1;
+  auto r = at::cuda::runCudaBackend(p, {});
+  REQUIRE_FALSE(r.has_value());
+  CHECK(r.error().message.find(info.reason) != std::string::npos);
+  std::printf("SKIPPED: no CUDA device (%s)\n", info.reason.c_str());
+}
+
+TEST_CASE("converged GPU fields equal the CPU backend and the exact reference for every rule, weight and edge size") {
+  if (!requireDevice()) return;
+  std::mt19937_64 rng(at::test::freshSeed("cuda converge"));
+  for (const at::Dims& dims : kEdgeSizes) {
+    for (StepRule rule : kRules) {
+      for (WeightRule weight : kWeights) {
+        const at::Vec3 spacing = (dims.x % 2) ? at::Vec3{0.7, 1.3, 2.5} : at::Vec3{1, 1, 1};
+        WdtProblem p = randomProblem(rng, dims, spacing, rule, weight);
+        p.params.converge = true;
+        p.params.maxPasses = 200;
+        CAPTURE(dims.toString());
+        CAPTURE(at::toString(rule));
+        CAPTURE(at::toString(weight));
+        at::WdtStats stats;
+        const auto gpu = gpuField(p, &stats);
+        const auto cpu = cpuField(p);
+        auto exact = at::exactWdtOnProblem(p);
+        REQUIRE(exact.has_value());
+        CHECK(stats.converged);
+        CHECK(maxRelDiff(gpu, cpu) <= 1e-6);
+        CHECK(maxRelDiff(gpu, exact->voxels) <= 1e-6);
+        for (std::size_t i = 0; i < gpu.size(); ++i) {
+          if (p.seeds[i]) REQUIRE(gpu[i] == 0.0f);
+        }
+      }
+    }
+  }
+}
+
+TEST_CASE("fixed-pass GPU fields equal the CPU backend's bit for bit for every rule, weight and size") {
+  if (!requireDevice()) return;
+  std::mt19937_64 rng(at::test::freshSeed("cuda exact passes"));
+  std::vector<at::Dims> sizes(std::begin(kEdgeSizes), std::end(kEdgeSizes));
+  sizes.push_back({64, 64, 64});
+  sizes.push_back({97, 45, 38});
+  for (const at::Dims& dims : sizes) {
+    for (StepRule rule : kRules) {
+      for (WeightRule weight : kWeights) {
+        WdtProblem p = randomProblem(rng, dims, {0.8, 0.6, 1.5}, rule, weight);
+        CAPTURE(dims.toString());
+        CAPTURE(at::toString(rule));
+        CAPTURE(at::toString(weight));
+        for (int passes = 1; passes <= 2; ++passes) {
+          p.params.passes = passes;
+          CHECK(sameBits(gpuField(p), cpuField(p)));
+        }
+      }
+    }
+  }
+}
+
+TEST_CASE("the tiled scheme's fixed-pass fields are never below the exact distances nor the CPU's, and converge to them") {
+  if (!requireDevice()) return;
+  TiledScheme tiled;
+  std::mt19937_64 rng(at::test::freshSeed("cuda tiled passes"));
+  const at::Dims sizes[] = {{64, 64, 64}, {33, 17, 65}, {97, 45, 38}};
+  for (const at::Dims& dims : sizes) {
+    for (StepRule rule : kRules) {
+      for (WeightRule weight : kWeights) {
+        WdtProblem p = randomProblem(rng, dims, {0.8, 0.8, 1.5}, rule, weight);
+        CAPTURE(dims.toString());
+        CAPTURE(at::toString(rule));
+        CAPTURE(at::toString(weight));
+        auto exact = at::exactWdtOnProblem(p);
+        REQUIRE(exact.has_value());
+        double previousMean = std::numeric_limits<double>::infinity();
+        for (int passes = 1; passes <= 3; ++passes) {
+          p.params.passes = passes;
+          const auto gpu = gpuField(p);
+          const auto cpu = cpuField(p);
+          CHECK(countBelow(gpu, exact->voxels, 1e-6) == 0);
+          CHECK(countBelow(gpu, cpu, 1e-6) == 0);
+          double sumGpu = 0, sumCpu = 0;
+          std::size_t counted = 0;
+          for (std::size_t i = 0; i < gpu.size(); ++i) {
+            if (exact->voxels[i] > 0 && std::isfinite(exact->voxels[i])) {
+              sumGpu += relDiff(gpu[i], exact->voxels[i]);
+              sumCpu += relDiff(cpu[i], exact->voxels[i]);
+              ++counted;
+            }
+          }
+          const double meanGpu = sumGpu / double(std::max<std::size_t>(1, counted));
+          const double meanCpu = sumCpu / double(std::max<std::size_t>(1, counted));
+          if (dims.x == 64 && weight == WeightRule::Density) {
+            std::printf("cuda tiled scheme %s %s/%s passes %d: mean rel err vs exact GPU %.3g CPU %.3g\n",
+                        dims.toString().c_str(), at::toString(rule), at::toString(weight), passes, meanGpu, meanCpu);
+          }
+          CHECK(meanGpu <= previousMean);
+          previousMean = meanGpu;
+        }
+        p.params.converge = true;
+        p.params.maxPasses = 500;
+        const auto converged = gpuField(p);
+        CHECK(maxRelDiff(converged, exact->voxels) <= 1e-6);
+        CHECK(sameBits(converged, cpuField(p)));
+        p.params.converge = false;
+      }
+    }
+  }
+}
+
+TEST_CASE("in the tiled scheme a grid that fits in one tile gives the CPU's fixed-pass field bit for bit") {
+  if (!requireDevice()) return;
+  TiledScheme tiled;
+  std::mt19937_64 rng(at::test::freshSeed("cuda one tile"));
+  // One tile: x ≤ 32 and y ≤ 8 (plane sweeps), y ≤ 8 and z ≤ 4 (line sweeps).
+  const at::Dims sizes[] = {{32, 8, 4}, {17, 5, 3}, {32, 1, 4}};
+  for (const at::Dims& dims : sizes) {
+    for (StepRule rule : kRules) {
+      for (WeightRule weight : kWeights) {
+        WdtProblem p = randomProblem(rng, dims, {0.6, 1.1, 1.9}, rule, weight);
+        p.params.passes = 1;
+        CAPTURE(dims.toString());
+        CAPTURE(at::toString(rule));
+        CAPTURE(at::toString(weight));
+        const auto gpu = gpuField(p);
+        const auto cpu = cpuField(p);
+        REQUIRE(gpu.size() == cpu.size());
+        CHECK(std::memcmp(gpu.data(), cpu.data(), gpu.size() * sizeof(float)) == 0);
+      }
+    }
+  }
+}
+
+TEST_CASE("two GPU runs give bitwise identical fields, in both schemes") {
+  if (!requireDevice()) return;
+  std::mt19937_64 rng(at::test::freshSeed("cuda determinism"));
+  for (int passes : {1, 2}) {
+    WdtProblem p = randomProblem(rng, {131, 77, 59}, {0.9, 0.9, 2.0}, StepRule::Trapezoid, WeightRule::Density);
+    p.params.passes = passes;
+    CHECK(sameBits(gpuField(p), gpuField(p)));
+    TiledScheme tiled;
+    CHECK(sameBits(gpuField(p), gpuField(p)));
+  }
+}
+
+TEST_CASE("the GPU reports per-pass progress and timings, and stops when cancelled") {
+  if (!requireDevice()) return;
+  std::mt19937_64 rng(at::test::freshSeed("cuda control"));
+  WdtProblem p = randomProblem(rng, {48, 40, 36}, {1, 1, 1}, StepRule::Entering, WeightRule::Density);
+  p.params.passes = 3;
+  std::vector<std::pair<int, int>> calls;
+  at::WdtControl control;
+  control.progress = [&](int done, int planned) { calls.emplace_back(done, planned); };
+  auto r = at::cuda::runCudaBackend(p, control);
+  REQUIRE(r.has_value());
+  REQUIRE(calls.size() == 3);
+  CHECK(calls[2] == std::pair<int, int>{3, 3});
+  CHECK(r->stats.passesRun == 3);
+  CHECK(r->stats.msPerPass.size() == 3);
+  CHECK((r->stats.backendUsed == at::WdtBackend::Cuda));
+  CHECK(r->stats.device == at::cuda::queryDevice().name);
+  CHECK(r->field.distances.geometry.dims == p.grid.dims);
+
+  std::atomic<bool> cancel{true};
+  at::WdtControl cancelled;
+  cancelled.cancel = &cancel;
+  auto c = at::cuda::runCudaBackend(p, cancelled);
+  REQUIRE(c.has_value());
+  CHECK(c->stats.cancelled);
+  CHECK(c->stats.passesRun == 0);
+  CHECK_FALSE(c->stats.converged);
+  auto exact = at::exactWdtOnProblem(p);
+  REQUIRE(exact.has_value());
+  CHECK(countBelow(c->field.distances.voxels, exact->voxels, 1e-6) == 0);
+
+  // Cancel after the first pass: the partial field is returned, one pass recorded.
+  std::atomic<bool> later{false};
+  at::WdtControl afterOne;
+  afterOne.cancel = &later;
+  afterOne.progress = [&](int, int) { later = true; };
+  auto d = at::cuda::runCudaBackend(p, afterOne);
+  REQUIRE(d.has_value());
+  CHECK(d->stats.cancelled);
+  CHECK(d->stats.passesRun == 1);
+}
+
+TEST_CASE("a field kept on the device copies back to the same values as runCudaBackend") {
+  if (!requireDevice()) return;
+  std::mt19937_64 rng(at::test::freshSeed("cuda device field"));
+  WdtProblem p = randomProblem(rng, {50, 33, 20}, {1, 1, 1}, StepRule::Trapezoid, WeightRule::Density);
+  at::WdtStats stats;
+  auto field = at::cuda::runCudaBackendOnDevice(p, {}, &stats);
+  REQUIRE(field.has_value());
+  CHECK(field->devicePointer() != nullptr);
+  CHECK(field->grid().dims == p.grid.dims);
+  CHECK(stats.passesRun == p.params.passes);
+  at::FloatVolume host;
+  REQUIRE(at::cuda::copyToHost(*field, host).has_value());
+  const auto direct = gpuField(p);
+  CHECK(std::memcmp(host.voxels.data(), direct.data(), direct.size() * sizeof(float)) == 0);
+
+  at::cuda::DeviceField moved = std::move(*field);
+  CHECK(moved.devicePointer() != nullptr);
+  auto filled = at::cuda::makeDeviceField(p.grid, 7.5f);
+  REQUIRE(filled.has_value());
+  REQUIRE(at::cuda::copyToHost(*filled, host).has_value());
+  CHECK(std::all_of(host.voxels.begin(), host.voxels.end(), [](float v) { return v == 7.5f; }));
+}
+
+TEST_CASE("an impossible allocation comes back as an error naming the CUDA call, and the device stays usable") {
+  if (!requireDevice()) return;
+  at::Geometry huge;
+  huge.dims = {100000, 100000, 100000};  // 4·10^15 bytes
+  auto r = at::cuda::makeDeviceField(huge, 0.0f);
+  REQUIRE_FALSE(r.has_value());
+  CHECK(r.error().message.find("cudaMalloc") != std::string::npos);
+  std::printf("expected error: %s\n", r.error().message.c_str());
+
+  std::mt19937_64 rng(at::test::freshSeed("cuda after error"));
+  WdtProblem p = randomProblem(rng, {20, 20, 20}, {1, 1, 1}, StepRule::Entering, WeightRule::Uniform);
+  p.params.converge = true;
+  const auto gpu = gpuField(p);
+  CHECK(maxRelDiff(gpu, cpuField(p)) <= 1e-6);
+}

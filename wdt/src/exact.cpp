@@ -1,0 +1,281 @@
+// The exact reference (Dijkstra on the 26-connected grid), field upsampling and accuracy.
+//
+// Candidates are D(a) + stepCost(a → b) with the lengths of wdt::axisSweepLengths and the costs of
+// step_cost.h: the very floats the sweeps add (the sweeps' grouped min-then-add equals add-then-min
+// because float addition is monotone). Converged sweeps therefore equal this reference bit for bit.
+//
+// Queue: Dial's buckets of width W = ½ · (smallest possible step cost). Every step costs at least
+// 2W, so a voxel popped from bucket k can only push into buckets > k: all voxels of a bucket are
+// final when it is reached, whatever their order inside it, and the result is exact Dijkstra.
+// Live keys span at most (largest step cost)/W buckets, so the buckets form a ring. When the base
+// cost is 0 (free steps) a binary heap with lazy deletion is used instead.
+#include <algorithm>
+#include <cassert>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <queue>
+#include <vector>
+
+#include "step_cost.h"
+#include "wdt/problem.h"
+#include "wdt/stencil.h"
+
+namespace at {
+
+namespace {
+
+using wdt::CostKernel;
+
+constexpr float kInf = std::numeric_limits<float>::infinity();
+
+struct Offset {
+  int dx, dy, dz;
+  std::int64_t delta;
+  float len;
+};
+
+// The 26 steps and their lengths, taken from the sweep that handles them (any sweep along an axis
+// in which the step moves gives the same float; axisSweepLengths guarantees it).
+std::vector<Offset> offsets(const Geometry& g) {
+  const float sx = float(g.spacingMm[0]), sy = float(g.spacingMm[1]), sz = float(g.spacingMm[2]);
+  const Dims d = g.dims;
+  std::vector<Offset> out;
+  for (int dz = -1; dz <= 1; ++dz)
+    for (int dy = -1; dy <= 1; ++dy)
+      for (int dx = -1; dx <= 1; ++dx) {
+        if (!dx && !dy && !dz) continue;
+        float len;
+        if (dx) {  // x sweep: b = y, c = z
+          const wdt::SweepLengths l = wdt::axisSweepLengths(0, sx, sy, sz);
+          len = dy ? (dz ? l.diagonal : l.alongB) : (dz ? l.alongC : l.straight);
+        } else if (dy) {  // y sweep: b = x (0 here), c = z
+          const wdt::SweepLengths l = wdt::axisSweepLengths(1, sx, sy, sz);
+          len = dz ? l.alongC : l.straight;
+        } else {
+          len = wdt::axisSweepLengths(2, sx, sy, sz).straight;
+        }
+        const std::int64_t delta = dx + std::int64_t(d.x) * (dy + std::int64_t(d.y) * dz);
+        out.push_back({dx, dy, dz, delta, len});
+      }
+  return out;
+}
+
+// Dijkstra over `problem` with pop order given by Queue (buckets or heap).
+template <CostKernel K, class Queue>
+void dijkstra(const WdtProblem& problem, Queue& queue, std::vector<float>& dist) {
+  const Dims d = problem.grid.dims;
+  const std::vector<Offset> steps = offsets(problem.grid);
+  const std::uint8_t* q = problem.density.data();
+  const float base = problem.params.baseCost;
+  std::vector<std::uint8_t> done(d.count(), 0);
+  for (std::size_t i = 0; i < d.count(); ++i)
+    if (problem.seeds[i]) {
+      dist[i] = 0.0f;
+      queue.push(std::uint32_t(i), 0.0f);
+    }
+  std::uint32_t u;
+  while (queue.pop(u)) {
+    if (done[u]) continue;
+    done[u] = 1;
+    const float du = dist[u];
+    const std::uint8_t qu = q[u];
+    const int x = int(u % std::uint32_t(d.x));
+    const std::uint32_t yz = u / std::uint32_t(d.x);
+    const int y = int(yz % std::uint32_t(d.y)), z = int(yz / std::uint32_t(d.y));
+    const bool interior = x > 0 && y > 0 && z > 0 && x + 1 < d.x && y + 1 < d.y && z + 1 < d.z;
+    for (const Offset& s : steps) {
+      if (!interior && !d.contains(x + s.dx, y + s.dy, z + s.dz)) continue;
+      const std::uint32_t v = std::uint32_t(std::int64_t(u) + s.delta);
+      if (done[v]) continue;
+      const float c = du + wdt::stepCost<K>(qu, q[v], s.len, base);
+      if (c < dist[v]) {
+        dist[v] = c;
+        queue.push(v, c);
+      }
+    }
+  }
+}
+
+class BucketQueue {
+ public:
+  BucketQueue(float width, std::size_t ring) : inv_(1.0 / double(width)), ring_(ring) {}
+  void push(std::uint32_t v, float key) {
+    std::size_t k = std::size_t(double(key) * inv_);
+    if (k < current_) k = current_;  // cannot happen with steps >= 2 widths; kept for safety
+    ring_[k % ring_.size()].push_back(v);
+    ++pending_;
+  }
+  bool pop(std::uint32_t& v) {
+    if (pending_ == 0) return false;
+    for (;;) {
+      std::vector<std::uint32_t>& b = ring_[current_ % ring_.size()];
+      if (cursor_ < b.size()) {
+        v = b[cursor_++];
+        --pending_;
+        return true;
+      }
+      b.clear();
+      cursor_ = 0;
+      ++current_;
+    }
+  }
+
+ private:
+  double inv_;
+  std::vector<std::vector<std::uint32_t>> ring_;
+  std::size_t current_ = 0, cursor_ = 0, pending_ = 0;
+};
+
+class HeapQueue {
+ public:
+  void push(std::uint32_t v, float key) { heap_.push({key, v}); }
+  bool pop(std::uint32_t& v) {
+    if (heap_.empty()) return false;
+    v = heap_.top().second;
+    heap_.pop();
+    return true;
+  }
+
+ private:
+  using Entry = std::pair<float, std::uint32_t>;
+  std::priority_queue<Entry, std::vector<Entry>, std::greater<Entry>> heap_;
+};
+
+template <CostKernel K>
+void exactWith(const WdtProblem& problem, std::vector<float>& dist) {
+  const Geometry& g = problem.grid;
+  float wLo, wHi;
+  wdt::weightRange(K, problem.params.baseCost, wLo, wHi);
+  float lenLo = kInf, lenHi = 0;
+  for (const Offset& s : offsets(g)) {
+    lenLo = std::min(lenLo, s.len);
+    lenHi = std::max(lenHi, s.len);
+  }
+  // Smallest cost a step can have, with margin for the rounding of the cost itself.
+  const double minCost = double(wLo) * double(lenLo) * (1.0 - 1e-5);
+  const double maxCost = double(wHi) * double(lenHi) * (1.0 + 1e-5);
+  const double width = 0.5 * minCost;
+  const double ring = width > 0 ? std::ceil(maxCost / width) + 2 : 0;
+  if (width > 0 && ring < double(1 << 22)) {
+    BucketQueue queue{float(width), std::size_t(ring)};
+    dijkstra<K>(problem, queue, dist);
+  } else {
+    HeapQueue queue;
+    dijkstra<K>(problem, queue, dist);
+  }
+}
+
+}  // namespace
+
+Result<FloatVolume> exactWdtOnProblem(const WdtProblem& problem) {
+  const Dims d = problem.grid.dims;
+  if (d.count() == 0 || problem.density.size() != d.count() || problem.seeds.size() != d.count())
+    return fail("WDT exact: problem arrays do not match the grid " + d.toString());
+  if (d.count() >= (std::size_t(1) << 32)) return fail("WDT exact: grid " + d.toString() + " is too large");
+  FloatVolume out(problem.grid, kInf);
+  switch (wdt::costKernel(problem.params)) {
+    case CostKernel::EnterDensity: exactWith<CostKernel::EnterDensity>(problem, out.voxels); break;
+    case CostKernel::EnterUniform: exactWith<CostKernel::EnterUniform>(problem, out.voxels); break;
+    case CostKernel::TrapezoidDensity: exactWith<CostKernel::TrapezoidDensity>(problem, out.voxels); break;
+    case CostKernel::EdgeGradient: exactWith<CostKernel::EdgeGradient>(problem, out.voxels); break;
+    case CostKernel::EdgeAscent: exactWith<CostKernel::EdgeAscent>(problem, out.voxels); break;
+  }
+  return out;
+}
+
+Result<FloatVolume> exactWdt(const Volume& volume, const Mask& seeds, const WdtParams& params) {
+  WdtParams full = params;
+  full.downsample = 1;
+  auto problem = prepareWdtProblem(volume, seeds, full);
+  if (!problem) return tl::unexpected(problem.error());
+  return exactWdtOnProblem(*problem);
+}
+
+// Trilinear in the patient frame: each target voxel centre is mapped into the field's index space
+// (clamped to the field's extent, so the border blocks hold their value). Where all 8 corners are
+// finite the result is the trilinear blend; where any corner is +infinity (the edge of the
+// reachable region) blending would give +infinity or a meaningless mix, so the sample takes the
+// value of its nearest corner instead (finite or +infinity).
+FloatVolume upsampleField(const DistanceField& field, const Geometry& target) {
+  const FloatVolume& src = field.distances;
+  const Geometry& sg = src.geometry;
+  const Dims sd = sg.dims;
+  FloatVolume out(target, kInf);
+  if (sd.count() == 0) return out;
+  // index_src = A · index_target + b, affine: evaluate the origin and the three axis steps once.
+  const Vec3 b = sg.patientToIndex(target.indexToPatient({0, 0, 0}));
+  Vec3 cols[3];
+  for (int a = 0; a < 3; ++a) {
+    Vec3 e{0, 0, 0};
+    e[a] = 1;
+    cols[a] = sg.patientToIndex(target.indexToPatient(e)) - b;
+  }
+  const int n[3] = {sd.x, sd.y, sd.z};
+  const Dims td = target.dims;
+  for (int k = 0; k < td.z; ++k)
+    for (int j = 0; j < td.y; ++j)
+      for (int i = 0; i < td.x; ++i) {
+        double p[3];
+        int i0[3], i1[3];
+        double t[3];
+        for (int a = 0; a < 3; ++a) {
+          p[a] = b[a] + cols[0][a] * i + cols[1][a] * j + cols[2][a] * k;
+          p[a] = std::clamp(p[a], 0.0, double(n[a] - 1));
+          i0[a] = std::min(int(p[a]), n[a] - 1);
+          i1[a] = std::min(i0[a] + 1, n[a] - 1);
+          t[a] = p[a] - i0[a];
+        }
+        double acc = 0;
+        bool finite = true;
+        for (int c = 0; c < 8 && finite; ++c) {
+          const int cx = c & 1 ? i1[0] : i0[0], cy = c & 2 ? i1[1] : i0[1], cz = c & 4 ? i1[2] : i0[2];
+          const float v = src.voxels[sd.index(cx, cy, cz)];
+          const double w = (c & 1 ? t[0] : 1 - t[0]) * (c & 2 ? t[1] : 1 - t[1]) * (c & 4 ? t[2] : 1 - t[2]);
+          if (!std::isfinite(v)) {
+            finite = false;
+          } else {
+            acc += w * v;
+          }
+        }
+        float value;
+        if (finite) {
+          value = float(acc);
+        } else {
+          value = src.voxels[sd.index(t[0] < 0.5 ? i0[0] : i1[0], t[1] < 0.5 ? i0[1] : i1[1],
+                                      t[2] < 0.5 ? i0[2] : i1[2])];
+        }
+        out.voxels[td.index(i, j, k)] = value;
+      }
+  return out;
+}
+
+WdtAccuracy compareToExact(const FloatVolume& field, const FloatVolume& exact) {
+  assert(field.voxels.size() == exact.voxels.size() && "compareToExact: fields on different grids");
+  WdtAccuracy acc;
+  std::vector<double> errs;
+  errs.reserve(exact.voxels.size());
+  double sum = 0;
+  std::size_t within = 0;
+  for (std::size_t i = 0; i < exact.voxels.size(); ++i) {
+    const double e = exact.voxels[i];
+    if (!std::isfinite(e) || !(e > 0)) continue;
+    const double v = field.voxels[i];
+    const double rel = std::isfinite(v) ? std::abs(v - e) / e : std::numeric_limits<double>::infinity();
+    errs.push_back(rel);
+    sum += rel;
+    if (rel <= 1e-5) ++within;
+    if (v < e * (1 - 1e-5)) ++acc.belowExact;
+    acc.maxRelErr = std::max(acc.maxRelErr, rel);
+  }
+  acc.compared = errs.size();
+  if (errs.empty()) return acc;
+  acc.meanRelErr = sum / double(errs.size());
+  acc.exactFraction = double(within) / double(errs.size());
+  const std::size_t k = std::min(errs.size() - 1, std::size_t(std::ceil(0.99 * double(errs.size()))) - 1);
+  std::nth_element(errs.begin(), errs.begin() + std::ptrdiff_t(k), errs.end());
+  acc.p99RelErr = errs[k];
+  return acc;
+}
+
+}  // namespace at
