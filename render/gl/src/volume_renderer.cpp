@@ -131,7 +131,8 @@ void main() {
       if (c.a <= 0.0) continue;
       float alpha = 1.0 - pow(1.0 - min(c.a, 0.999999), exponent);
       vec3 rgb = c.rgb;
-      if (uShading != 0) {
+      // Shading costs six more fetches: skip it where the sample cannot change a pixel's 8-bit value.
+      if (uShading != 0 && alpha * (1.0 - acc.a) > 1.0 / 1024.0) {
         vec3 g = gradientAt(pt, uMode == 1);
         float gl = length(g);
         float diffuse = 1.0, spec = 0.0;
