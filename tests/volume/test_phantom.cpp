@@ -210,6 +210,9 @@ TEST_CASE("dense otic capsule (>= 1500 HU) surrounds the cochlea and the lateral
     const std::size_t dense =
         std::size_t(std::count_if(shell.begin(), shell.end(), [](std::int16_t hu) { return hu >= 1500; }));
     CHECK(double(dense) / double(shell.size()) > 0.97);
+    double sum = 0;
+    for (std::int16_t hu : shell) sum += hu;
+    CHECK(sum / double(shell.size()) >= 1800);
   }
 }
 
@@ -227,6 +230,16 @@ TEST_CASE("fluid joins cochlea, vestibule and canals, sealed from the air of the
     CHECK(countComponents(maskOf(ds, {"tympanic_cavity", "malleus", "incus", "stapes"})) == 1);
     CHECK(countComponents(maskOf(ds, {"stapes", "vestibule"})) == 1);
     CHECK(countComponents(maskOf(ds, {"malleus", "incus", "stapes"})) == 1);
+    // Each canal and the cochlea open into the vestibule themselves.
+    for (const std::string id : {"cochlea", "lateral_semicircular_canal", "posterior_semicircular_canal",
+                                 "superior_semicircular_canal"}) {
+      CAPTURE(id);
+      CHECK(countComponents(maskOf(ds, {id, "vestibule"})) == 1);
+    }
+    // The facial nerve starts inside the internal auditory canal; the tympanic membrane separates
+    // the external auditory canal from the tympanic cavity.
+    CHECK(countComponents(maskOf(ds, {"facial_nerve", "internal_auditory_canal"})) == 1);
+    CHECK(countComponents(maskOf(ds, {"external_auditory_canal", "tympanic_cavity"})) == 2);
   }
 }
 
@@ -270,6 +283,10 @@ TEST_CASE("phantom structures sit at anatomically plausible relative positions")
   CHECK(superior.boxMaxMm[2] - superior.boxMinMm[2] > 4.5);  // vertical loop
   const MaskStats nerve = statsOf(ds, "facial_nerve");
   CHECK(nerve.boxMaxMm[2] - nerve.boxMinMm[2] > 10);
+  // The IAC opens on the medial face of the bone (x = 16 mm); the malleus handle reaches the
+  // lateral wall of the tympanic cavity (the tympanic membrane).
+  CHECK(statsOf(ds, "internal_auditory_canal").boxMaxMm[0] > 15.5);
+  CHECK(statsOf(ds, "malleus").boxMinMm[0] < statsOf(ds, "tympanic_cavity").boxMinMm[0] + 0.6);
 }
 
 TEST_CASE("the three semicircular canals lie in mutually orthogonal planes") {

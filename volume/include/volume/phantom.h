@@ -2,7 +2,13 @@
 // analytic (tubes, spirals, ellipsoids, tori) placed at plausible relative positions, with HU in
 // realistic ranges and mild seeded noise. Its purpose is to make the paper's effects visible and
 // testable: air- and fluid-filled canals near the cochlea are cheaply reachable from it, voxels
-// behind thick otic capsule are not.
+// behind thick otic capsule are not; the ossicles sit in air reachable from the tympanic cavity.
+//
+// Convention: a RIGHT temporal bone in LPS millimetres, identity direction, the cube centred at 0:
+// lateral = −x (towards the skin and the external auditory canal), medial = +x (the internal
+// auditory canal opens on the medial face), anterior = −y, posterior = +y, superior = +z.
+// Anatomy is placed in millimetres, so every size shows the same anatomy (tubes thinner than a
+// voxel are widened to 0.9 voxel so that they stay connected on coarse grids).
 #pragma once
 
 #include <cstdint>

@@ -479,11 +479,21 @@ bool allowed(Where where, std::uint16_t current) {
 }
 
 void paintBase(const Canvas& c, int k0, int k1) {
+  // blockSd split by axis: the y and z terms are constant along a row.
+  const int n = c.n;
+  std::vector<double> rowQ(static_cast<std::size_t>(n));
+  for (int i = 0; i < n; ++i) rowQ[std::size_t(i)] = std::abs(c.coord(i) - kBlockCentre[0]) - kBlockHalf[0] + kBlockRounding;
   for (int k = k0; k < k1; ++k)
-    for (int j = 0; j < c.n; ++j) {
-      std::size_t idx = std::size_t(c.n) * (std::size_t(j) + std::size_t(c.n) * std::size_t(k));
-      for (int i = 0; i < c.n; ++i, ++idx) {
-        const double d = blockSd({c.coord(i), c.coord(j), c.coord(k)});
+    for (int j = 0; j < n; ++j) {
+      const double qy = std::abs(c.coord(j) - kBlockCentre[1]) - kBlockHalf[1] + kBlockRounding;
+      const double qz = std::abs(c.coord(k) - kBlockCentre[2]) - kBlockHalf[2] + kBlockRounding;
+      const double outsideYz = (qy > 0 ? qy * qy : 0) + (qz > 0 ? qz * qz : 0);
+      const double insideYz = std::max(qy, qz);
+      std::size_t idx = std::size_t(n) * (std::size_t(j) + std::size_t(n) * std::size_t(k));
+      for (int i = 0; i < n; ++i, ++idx) {
+        const double qxv = rowQ[std::size_t(i)];
+        const double outside = outsideYz + (qxv > 0 ? qxv * qxv : 0);
+        const double d = std::sqrt(outside) + std::min(std::max(insideYz, qxv), 0.0) - kBlockRounding;
         Material m = kAir;
         if (d <= -kCortexMm) m = kCancellous;
         else if (d <= 0) m = kCortical;
@@ -495,7 +505,7 @@ void paintBase(const Canvas& c, int k0, int k1) {
 
 void paintOp(const Canvas& c, const PaintOp& op, int k0, int k1) {
   for (const Shape& s : op.shapes) {
-    Vec3 lo, hi;
+    Vec3 lo{}, hi{};
     s.bounds(lo, hi);
     int ib[2][3];
     for (int a = 0; a < 3; ++a) c.indexRange(lo[a] - op.growMm, hi[a] + op.growMm, ib[0][a], ib[1][a]);
@@ -524,24 +534,32 @@ class BoneTexture {
       values_[v] = float(double(splitmix64(kAnatomySeed ^ (v * 0xD6E8FEB86659FD93ULL)) >> 11) /
                          9007199254740992.0);
   }
-  double at(double x, double y, double z) const {
-    const double p[3] = {(x - corner_) / kStepMm, (y - corner_) / kStepMm, (z - corner_) / kStepMm};
-    int i[3];
-    double f[3];
-    for (int a = 0; a < 3; ++a) {
+  // Values along the lattice x nodes, interpolated bilinearly at (y, z): one row's worth.
+  void row(double y, double z, std::vector<double>& out) const {
+    int i[2];
+    double f[2];
+    const double p[2] = {(y - corner_) / kStepMm, (z - corner_) / kStepMm};
+    for (int a = 0; a < 2; ++a) {
       const double q = std::clamp(p[a], 0.0, double(n_ - 2) - 1e-9);
       i[a] = int(q);
       f[a] = q - i[a];
     }
-    double sum = 0;
-    for (int dz = 0; dz < 2; ++dz)
-      for (int dy = 0; dy < 2; ++dy)
-        for (int dx = 0; dx < 2; ++dx) {
-          const double w = (dx ? f[0] : 1 - f[0]) * (dy ? f[1] : 1 - f[1]) * (dz ? f[2] : 1 - f[2]);
-          sum += w * values_[std::size_t(i[0] + dx) + std::size_t(n_) * (std::size_t(i[1] + dy) +
-                                                                          std::size_t(n_) * std::size_t(i[2] + dz))];
-        }
-    return sum;
+    out.resize(std::size_t(n_));
+    for (int x = 0; x < n_; ++x) {
+      double sum = 0;
+      for (int dz = 0; dz < 2; ++dz)
+        for (int dy = 0; dy < 2; ++dy)
+          sum += (dy ? f[0] : 1 - f[0]) * (dz ? f[1] : 1 - f[1]) *
+                 values_[std::size_t(x) + std::size_t(n_) * (std::size_t(i[0] + dy) + std::size_t(n_) * std::size_t(i[1] + dz))];
+      out[std::size_t(x)] = sum;
+    }
+  }
+  // Linear interpolation in x of a row from row().
+  double along(const std::vector<double>& rowValues, double x) const {
+    const double q = std::clamp((x - corner_) / kStepMm, 0.0, double(n_ - 2) - 1e-9);
+    const int i = int(q);
+    const double f = q - i;
+    return rowValues[std::size_t(i)] * (1 - f) + rowValues[std::size_t(i) + 1] * f;
   }
 
  private:
@@ -554,20 +572,22 @@ class BoneTexture {
 void paintHu(const Canvas& c, const BoneTexture& texture, std::uint64_t seed, std::vector<std::int16_t>& hu,
              int k0, int k1) {
   const std::uint64_t seedMix = splitmix64(seed ^ 0xA0761D6478BD642FULL);
+  std::vector<double> textureRow;
   for (int k = k0; k < k1; ++k)
     for (int j = 0; j < c.n; ++j) {
+      texture.row(c.coord(j), c.coord(k), textureRow);
       std::size_t idx = std::size_t(c.n) * (std::size_t(j) + std::size_t(c.n) * std::size_t(k));
       for (int i = 0; i < c.n; ++i, ++idx) {
         const Material m = Material((*c.material)[idx]);
         double value = materialHu(m);
-        if (m == kCancellous) value += 300.0 * (texture.at(c.coord(i), c.coord(j), c.coord(k)) - 0.5);
+        if (m == kCancellous) value += 300.0 * (texture.along(textureRow, c.coord(i)) - 0.5);
         // Irwin–Hall: four 16-bit uniforms, mean 2, variance 1/3 → unit normal-ish noise.
         const std::uint64_t h = splitmix64(seedMix + idx * 0x9E3779B97F4A7C15ULL);
         const double sum = double(h & 0xFFFF) + double((h >> 16) & 0xFFFF) + double((h >> 32) & 0xFFFF) +
                            double(h >> 48);
         const double z = (sum / 65536.0 - 2.0) * 1.7320508075688772;
-        value += kNoiseSigmaHu * z;
-        hu[idx] = std::int16_t(std::clamp(std::lround(value), -1024L, 3071L));
+        value = std::clamp(value + kNoiseSigmaHu * z, -1024.0, 3071.0);
+        hu[idx] = std::int16_t(std::floor(value + 0.5));
       }
     }
 }

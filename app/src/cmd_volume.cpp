@@ -1,0 +1,420 @@
+// Volume commands: datasets, structures, info, slice (ARCHITECTURE.md §7).
+// Datasets are opened by name ("phantom", "phantom:N") or from files (a DATASET path, or
+// --volume PATH with optional --labels PATH, --names JSON, --series UID).
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <map>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "cli_args.h"
+#include "commands.h"
+#include "volume/dataset_source.h"
+#include "volume/image_file.h"
+#include "volume/phantom.h"
+#include "volume/png_image.h"
+
+namespace at::app {
+
+namespace {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+// --- shared helpers ----------------------------------------------------------------------------
+
+// Options every dataset-taking command accepts, besides the DATASET positional.
+const std::set<std::string> kDatasetOptions = {"volume", "labels", "names", "series"};
+
+std::set<std::string> with(std::set<std::string> a, const std::set<std::string>& b) {
+  a.insert(b.begin(), b.end());
+  return a;
+}
+
+// Opens the dataset named by the arguments: a built-in name, a path (file or DICOM folder), or
+// --volume PATH. --labels, --names and --series apply to files only.
+Result<Dataset> openDatasetArg(const cli::Args& args) {
+  const auto& pos = args.positional();
+  const auto volume = args.value("volume");
+  if (volume && !pos.empty()) return fail("give either DATASET or --volume PATH, not both");
+  if (!volume && pos.empty()) return fail("missing DATASET (a built-in name such as 'phantom', or a path)");
+  if (pos.size() > 1) return fail("unexpected argument '" + pos[1] + "' (one DATASET only)");
+  const std::string name = volume ? *volume : pos[0];
+  if (!volume && isBuiltinDatasetName(name)) {
+    for (const char* option : {"labels", "names", "series"})
+      if (args.has(option))
+        return fail(std::string("--") + option + " applies to datasets from files, not to '" + name + "'");
+    return openBuiltinDataset(name);
+  }
+  std::error_code ec;
+  if (!fs::exists(name, ec))
+    return fail("unknown dataset '" + name + "': not a built-in dataset (phantom, phantom:N) and no such file or folder");
+  if (args.has("names") && !args.has("labels")) return fail("--names needs --labels PATH");
+  DatasetFiles files;
+  files.volumePath = name;
+  files.labelsPath = args.valueOr("labels", "");
+  files.namesPath = args.valueOr("names", "");
+  files.dicomSeriesUid = args.valueOr("series", "");
+  files.id = fs::path(name).filename().string();
+  return openDatasetFiles(files);
+}
+
+std::vector<std::size_t> labelHistogram(const LabelMap& labels) {
+  std::vector<std::size_t> counts(65536, 0);
+  for (std::uint16_t v : labels.voxels) ++counts[v];
+  return counts;
+}
+
+std::string formatDouble(double v, int decimals = 3) {
+  if (std::abs(v) < 0.5 * std::pow(10.0, -decimals)) v = 0;  // no "-0.000"
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.*f", decimals, v);
+  return buf;
+}
+
+std::string formatVec(const Vec3& v, const char* sep, int decimals = 3) {
+  return formatDouble(v[0], decimals) + sep + formatDouble(v[1], decimals) + sep + formatDouble(v[2], decimals);
+}
+
+json vecJson(const Vec3& v) { return json::array({v[0], v[1], v[2]}); }
+
+json geometryJson(const Geometry& g) {
+  json dir = json::array();
+  for (int c = 0; c < 3; ++c) dir.push_back(vecJson(g.direction.column(c)));
+  return {{"dimensions", {g.dims.x, g.dims.y, g.dims.z}},
+          {"spacing_mm", vecJson(g.spacingMm)},
+          {"origin_mm", vecJson(g.originMm)},
+          {"direction_columns", dir},
+          {"orientation", g.orientationCode()}};
+}
+
+void printGeometry(const Geometry& g) {
+  std::printf("dimensions:  %s\n", g.dims.toString().c_str());
+  std::printf("spacing:     %s mm\n", formatVec(g.spacingMm, " x ").c_str());
+  std::printf("origin:      (%s) mm, LPS\n", formatVec(g.originMm, ", ").c_str());
+  std::printf("orientation: %s (axis directions in LPS: i (%s), j (%s), k (%s))\n", g.orientationCode().c_str(),
+              formatVec(g.direction.column(0), ", ", 3).c_str(), formatVec(g.direction.column(1), ", ", 3).c_str(),
+              formatVec(g.direction.column(2), ", ", 3).c_str());
+}
+
+int usageError(const std::string& command, const std::string& message) {
+  return reportError(command + ": " + message, 2);
+}
+
+// --- datasets ---------------------------------------------------------------------------------
+
+// One row of `datasets`. Imported datasets (registered by `import` in the database, db/) are
+// listed by the database layer and appended to the built-in ones here once it exists.
+struct DatasetListing {
+  std::string id;
+  std::string name;
+  std::string detail;
+};
+
+std::vector<DatasetListing> builtinDatasets() {
+  const PhantomOptions defaults;
+  return {{"phantom", "Temporal-bone phantom (synthetic)",
+           std::to_string(defaults.size) + "^3 over " + formatDouble(defaults.extentMm, 1) + " mm, " +
+               std::to_string(phantomStructures().size()) + " structures; phantom:N for N^3 (N = 16 … 1024)"}};
+}
+
+const char* kDatasetsHelp =
+    "usage: anatomy-tutor datasets [--json]\n\n"
+    "Lists the datasets that can be opened by name. The built-in phantom is always available;\n"
+    "datasets imported with `anatomy-tutor import` are listed once the database exists. Any\n"
+    "supported file or folder can also be opened directly by its path.\n";
+
+// --- structures -------------------------------------------------------------------------------
+
+const char* kStructuresHelp =
+    "usage: anatomy-tutor structures DATASET [--json]\n"
+    "       anatomy-tutor structures --volume PATH --labels PATH [--names JSON] [--series UID] [--json]\n\n"
+    "Lists a dataset's structures: label value, id, name, system and voxel count.\n"
+    "DATASET is a built-in name (phantom, phantom:N) or a volume path (DICOM folder, .nii[.gz],\n"
+    ".nrrd/.nhdr); --labels gives a label map on any grid (resampled onto the volume), --names a\n"
+    "JSON map { \"value\": \"name\" }, --series the DICOM series UID.\n";
+
+// --- info -------------------------------------------------------------------------------------
+
+const char* kInfoHelp =
+    "usage: anatomy-tutor info FILE|DIR [--json] [--labels PATH] [--names JSON] [--series UID]\n\n"
+    "Loads any supported input (DICOM series folder, DICOM SEG, NIfTI, NRRD) and prints its\n"
+    "dimensions, spacing, origin, orientation, stored type, value (HU) range and loader notes.\n"
+    "Label maps (integer images with few values, or files that name segments) and --labels\n"
+    "inputs also list each label with its name and voxel count; --names JSON ({ \"value\": \"name\" })\n"
+    "names the labels of either.\n";
+
+bool isIntegerKind(ScalarKind k) { return k != ScalarKind::Float32 && k != ScalarKind::Float64; }
+
+struct ValueSummary {
+  double min = 0, max = 0;
+  bool allInteger = true;
+  std::map<long, std::size_t> counts;  // filled while there are at most kMaxLabels distinct values
+  bool fewValues = true;
+};
+constexpr std::size_t kMaxLabels = 512;
+
+ValueSummary summarise(const FloatVolume& image) {
+  ValueSummary s;
+  bool first = true;
+  for (float v : image.voxels) {
+    if (first || v < s.min) s.min = v;
+    if (first || v > s.max) s.max = v;
+    first = false;
+    if (s.allInteger && v != std::floor(v)) s.allInteger = false;
+    if (s.fewValues && s.allInteger) {
+      ++s.counts[long(v)];
+      if (s.counts.size() > kMaxLabels) s.fewValues = false;
+    }
+  }
+  if (!s.allInteger || !s.fewValues) s.counts.clear();
+  return s;
+}
+
+// --- slice ------------------------------------------------------------------------------------
+
+const char* kSliceHelp =
+    "usage: anatomy-tutor slice DATASET --axis x|y|z --index N --out FILE.png\n"
+    "                           [--window C,W] [--alpha A] [--volume PATH --labels PATH ...]\n\n"
+    "Writes one slice as a grey PNG (window centre C and width W in HU; default 400,2000) with\n"
+    "each labelled structure overlaid in its colour at opacity A (default 0.5; 0 = no overlay).\n"
+    "--axis picks the voxel axis the slice is perpendicular to (z: axial for LPS data) and --index\n"
+    "the slice (0-based). Image columns follow the i axis (j for --axis x); rows follow j for axial\n"
+    "slices and run from the top (highest k) down otherwise.\n";
+
+double srgbEncode(double linear) {
+  linear = std::clamp(linear, 0.0, 1.0);
+  return linear <= 0.0031308 ? 12.92 * linear : 1.055 * std::pow(linear, 1.0 / 2.4) - 0.055;
+}
+
+}  // namespace
+
+int runDatasets(const Argv& argv) {
+  auto args = cli::Args::parse(argv, {}, {"json"});
+  if (!args) return usageError("datasets", args.error().message);
+  if (args->has("help")) {
+    std::printf("%s", kDatasetsHelp);
+    return 0;
+  }
+  if (!args->positional().empty()) return usageError("datasets", "unexpected argument '" + args->positional()[0] + "'");
+  const std::vector<DatasetListing> rows = builtinDatasets();
+  if (args->has("json")) {
+    json list = json::array();
+    for (const auto& r : rows) list.push_back({{"id", r.id}, {"name", r.name}, {"detail", r.detail}, {"builtin", true}});
+    std::printf("%s\n", json{{"datasets", list}}.dump().c_str());
+    return 0;
+  }
+  for (const auto& r : rows) std::printf("%-10s %s — %s\n", r.id.c_str(), r.name.c_str(), r.detail.c_str());
+  std::printf("(imported datasets are listed here once `anatomy-tutor import` and its database exist;\n"
+              " any supported file or folder can be opened by its path)\n");
+  return 0;
+}
+
+int runStructures(const Argv& argv) {
+  auto args = cli::Args::parse(argv, kDatasetOptions, {"json"});
+  if (!args) return usageError("structures", args.error().message);
+  if (args->has("help")) {
+    std::printf("%s", kStructuresHelp);
+    return 0;
+  }
+  auto ds = openDatasetArg(*args);
+  if (!ds) return reportError("structures: " + ds.error().message);
+  const std::vector<std::size_t> counts = labelHistogram(ds->labels);
+  if (args->has("json")) {
+    json list = json::array();
+    for (const Structure& s : ds->structures)
+      list.push_back({{"label", s.label},
+                      {"id", s.id},
+                      {"name", s.displayName},
+                      {"system", s.system},
+                      {"voxels", counts[s.label]},
+                      {"colour", {s.colour[0], s.colour[1], s.colour[2]}}});
+    std::printf("%s\n", json{{"dataset", ds->id}, {"name", ds->displayName}, {"structures", list}}.dump().c_str());
+    return 0;
+  }
+  std::printf("%s — %s (%s)\n", ds->id.c_str(), ds->displayName.c_str(), ds->volume.dims().toString().c_str());
+  std::printf("%5s  %-30s %-30s %-13s %10s\n", "label", "id", "name", "system", "voxels");
+  for (const Structure& s : ds->structures)
+    std::printf("%5u  %-30s %-30s %-13s %10zu\n", unsigned(s.label), s.id.c_str(), s.displayName.c_str(),
+                s.system.c_str(), counts[s.label]);
+  return 0;
+}
+
+int runInfo(const Argv& argv) {
+  auto args = cli::Args::parse(argv, {"labels", "names", "series"}, {"json"});
+  if (!args) return usageError("info", args.error().message);
+  if (args->has("help")) {
+    std::printf("%s", kInfoHelp);
+    return 0;
+  }
+  const auto& pos = args->positional();
+  if (pos.empty()) return usageError("info", "missing FILE or DIR (see --help)");
+  if (pos.size() > 1) return usageError("info", "unexpected argument '" + pos[1] + "' (one FILE or DIR only)");
+  const std::string path = pos[0];
+
+  ImageLoadOptions options;
+  options.dicomSeriesUid = args->valueOr("series", "");
+  auto loaded = loadImageFile(path, options);
+  if (!loaded) return reportError("info: " + loaded.error().message);
+  const Geometry& g = loaded->image.geometry;
+  const ValueSummary values = summarise(loaded->image);
+  const bool labelMap = !loaded->segments.empty() ||
+                        (isIntegerKind(loaded->storedKind) && values.allInteger && values.fewValues && values.min >= 0);
+  if (args->has("names") && !args->has("labels") && !labelMap)
+    return usageError("info", "--names applies to a label map, or to the label map given with --labels");
+
+  // Labels with names and voxel counts: from the file itself when it is a label map, from
+  // --labels (resampled onto this image's grid) otherwise.
+  struct LabelRow {
+    long value;
+    std::string id;    // the structure id (files that only name labels: the name as written)
+    std::string name;  // display name
+    std::size_t voxels;
+  };
+  std::vector<LabelRow> labels;
+  if (args->has("labels")) {
+    DatasetFiles files;
+    files.volumePath = path;
+    files.labelsPath = *args->value("labels");
+    files.namesPath = args->valueOr("names", "");
+    files.dicomSeriesUid = options.dicomSeriesUid;
+    files.id = fs::path(path).filename().string();
+    auto ds = openDatasetFiles(files);
+    if (!ds) return reportError("info: " + ds.error().message);
+    const std::vector<std::size_t> counts = labelHistogram(ds->labels);
+    for (const Structure& s : ds->structures)
+      labels.push_back({long(s.label), s.id, s.displayName, counts[s.label]});
+  } else if (labelMap) {
+    std::map<long, std::string> names;
+    for (const SegmentInfo& s : loaded->segments) names[long(s.label)] = s.name;
+    if (auto namesPath = args->value("names")) {
+      auto fromJson = loadLabelNames(*namesPath);
+      if (!fromJson) return reportError("info: " + fromJson.error().message);
+      for (const auto& [value, name] : *fromJson) names[long(value)] = name;
+    }
+    for (const auto& [value, count] : values.counts) {
+      if (value == 0) continue;
+      auto it = names.find(value);
+      const std::string name = it != names.end() ? it->second : "label_" + std::to_string(value);
+      labels.push_back({value, name, name, count});
+    }
+  }
+
+  if (args->has("json")) {
+    json out = geometryJson(g);
+    out["path"] = path;
+    out["kind"] = labelMap ? "label map" : "image";
+    out["stored_type"] = toString(loaded->storedKind);
+    out["value_range"] = {values.min, values.max};
+    out["notes"] = loaded->notes;
+    json list = json::array();
+    for (const auto& l : labels)
+      list.push_back({{"label", l.value}, {"id", l.id}, {"name", l.name}, {"voxels", l.voxels}});
+    out["labels"] = list;
+    std::printf("%s\n", out.dump().c_str());
+    return 0;
+  }
+  std::printf("path:        %s\n", path.c_str());
+  std::printf("kind:        %s\n", labelMap ? "label map" : "image (values after rescale; HU for CT)");
+  printGeometry(g);
+  std::printf("stored type: %s\n", toString(loaded->storedKind));
+  std::printf("%s %s … %s\n", labelMap ? "value range:" : "HU range:   ", formatDouble(values.min, 1).c_str(),
+              formatDouble(values.max, 1).c_str());
+  for (const std::string& note : loaded->notes) std::printf("note:        %s\n", note.c_str());
+  if (!labels.empty()) {
+    std::printf("labels:      %zu\n", labels.size());
+    for (const auto& l : labels) {
+      if (l.id == l.name)
+        std::printf("  %5ld  %-64s %10zu voxels\n", l.value, l.name.c_str(), l.voxels);
+      else
+        std::printf("  %5ld  %-31s  %-31s %10zu voxels\n", l.value, l.id.c_str(), l.name.c_str(), l.voxels);
+    }
+  }
+  return 0;
+}
+
+int runSlice(const Argv& argv) {
+  auto args = cli::Args::parse(argv, with(kDatasetOptions, {"axis", "index", "out", "window", "alpha"}), {});
+  if (!args) return usageError("slice", args.error().message);
+  if (args->has("help")) {
+    std::printf("%s", kSliceHelp);
+    return 0;
+  }
+  const auto axisText = args->value("axis");
+  if (!axisText) return usageError("slice", "missing --axis x|y|z");
+  if (*axisText != "x" && *axisText != "y" && *axisText != "z")
+    return usageError("slice", "--axis must be x, y or z, not '" + *axisText + "'");
+  const int axis = (*axisText)[0] - 'x';
+  if (!args->value("index")) return usageError("slice", "missing --index N");
+  auto index = args->integer("index", 0);
+  if (!index) return usageError("slice", index.error().message);
+  const auto out = args->value("out");
+  if (!out || out->empty()) return usageError("slice", "missing --out FILE.png");
+  double centre = 400, width = 2000;
+  if (auto w = args->value("window")) {
+    const auto comma = w->find(',');
+    char* end = nullptr;
+    bool ok = comma != std::string::npos;
+    if (ok) {
+      const std::string c = w->substr(0, comma), wd = w->substr(comma + 1);
+      centre = std::strtod(c.c_str(), &end);
+      ok = !c.empty() && *end == '\0';
+      width = std::strtod(wd.c_str(), &end);
+      ok = ok && !wd.empty() && *end == '\0' && std::isfinite(centre) && std::isfinite(width) && width > 0;
+    }
+    if (!ok) return usageError("slice", "--window must be CENTRE,WIDTH in HU with WIDTH > 0 (e.g. 400,2000), not '" + *w + "'");
+  }
+  auto alpha = args->number("alpha", 0.5);
+  if (!alpha) return usageError("slice", alpha.error().message);
+  if (*alpha < 0 || *alpha > 1) return usageError("slice", "--alpha must lie in 0 … 1");
+
+  auto ds = openDatasetArg(*args);
+  if (!ds) return reportError("slice: " + ds.error().message);
+  const Dims& d = ds->volume.dims();
+  const int extent[3] = {d.x, d.y, d.z};
+  if (*index < 0 || *index >= extent[axis])
+    return reportError("slice: --index " + std::to_string(*index) + " is outside 0 … " +
+                       std::to_string(extent[axis] - 1) + " for axis " + *axisText + " of " + ds->id + " (" +
+                       d.toString() + ")");
+
+  // Image axes: columns along u, rows along v (v reversed for the vertical k axis so that the
+  // highest k, superior in LPS data, is at the top).
+  const int uAxis = axis == 0 ? 1 : 0;
+  const int vAxis = axis == 2 ? 1 : 2;
+  const bool flipV = vAxis == 2;
+  RgbImage image(extent[uAxis], extent[vAxis]);
+  std::vector<std::array<std::uint8_t, 3>> colours(65536, {0, 0, 0});
+  std::vector<bool> known(65536, false);
+  for (const Structure& s : ds->structures) {
+    for (int c = 0; c < 3; ++c) colours[s.label][std::size_t(c)] = std::uint8_t(std::lround(255 * srgbEncode(s.colour[std::size_t(c)])));
+    known[s.label] = true;
+  }
+  const double lo = centre - width / 2;
+  for (int row = 0; row < image.height; ++row)
+    for (int col = 0; col < image.width; ++col) {
+      int ijk[3];
+      ijk[axis] = *index;
+      ijk[uAxis] = col;
+      ijk[vAxis] = flipV ? extent[vAxis] - 1 - row : row;
+      const double hu = ds->volume.at(ijk[0], ijk[1], ijk[2]);
+      const double grey = std::clamp((hu - lo) / width, 0.0, 1.0) * 255.0;
+      const std::uint16_t label = ds->labels.empty() ? 0 : ds->labels.at(ijk[0], ijk[1], ijk[2]);
+      std::uint8_t* px = image.pixel(col, row);
+      for (int c = 0; c < 3; ++c) {
+        double v = grey;
+        if (label != 0 && known[label]) v = (1 - *alpha) * grey + *alpha * colours[label][std::size_t(c)];
+        px[c] = std::uint8_t(std::lround(std::clamp(v, 0.0, 255.0)));
+      }
+    }
+  if (auto st = writePng(*out, image); !st) return reportError("slice: " + st.error().message);
+  std::printf("wrote %s (%dx%d, axis %s index %d of %s, window %s,%s)\n", out->c_str(), image.width, image.height,
+              axisText->c_str(), *index, ds->id.c_str(), formatDouble(centre, 0).c_str(), formatDouble(width, 0).c_str());
+  return 0;
+}
+
+}  // namespace at::app

@@ -1,0 +1,26 @@
+// Course JSON (schema: data/courses/README.md). Strict: unknown fields, wrong types, missing
+// required fields, bad enum values and duplicate ids are errors naming the field by its path
+// ("temporal_bone.json: lessons[2].steps[4].question.kind: unknown kind 'pick'").
+// Structure ids are checked against a dataset elsewhere (resolveQuestion, tests).
+#pragma once
+
+#include <filesystem>
+#include <string>
+
+#include "lessons/curriculum.h"
+#include "quiz/question.h"
+#include "volume/error.h"
+
+namespace at::lessons {
+
+Result<Course> loadCourseJson(const std::filesystem::path& path);
+// `sourceName` prefixes error messages.
+Result<Course> parseCourseJson(const std::string& text, const std::string& sourceName);
+std::string courseToJson(const Course& course);
+
+// One question in the same schema as a course's question steps (for db/ to store questions as
+// text). `sourceName` prefixes errors.
+std::string questionToJson(const quiz::Question& question);
+Result<quiz::Question> parseQuestionJson(const std::string& text, const std::string& sourceName);
+
+}  // namespace at::lessons

@@ -1,0 +1,122 @@
+// The lesson state machine (ARCHITECTURE.md §5):
+//
+//   start(user, lesson) ──► [step shown] ──answer()──► [feedback] ──next()──► [step shown] … ──► finish()
+//          │ resumes an open attempt at its first unanswered step
+//
+// Show steps need only next(). Every answer is graded, then recorded through
+// ProgressRepository::recordAnswer (response + Leitner progress + Elo, one committed transaction)
+// BEFORE answer() returns its feedback. A lesson whose prerequisites are not finished cannot start.
+// QuizOnly mode skips show steps and hides labels and structure names in step views.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "lessons/repositories.h"
+#include "lessons/scheduling.h"
+#include "quiz/elo.h"
+#include "quiz/grading.h"
+#include "quiz/keys.h"
+
+namespace at::lessons {
+
+struct EngineOptions {
+  double eloK = quiz::kDefaultEloK;
+  LeitnerSchedule schedule;
+  std::function<UnixSeconds()> clock;  // empty = the system clock
+};
+
+// What the UI (or `play`) shows for the current step.
+struct StepView {
+  int index = 0;            // in the lesson's steps
+  int position = 0;         // 1-based among the steps this mode shows
+  int count = 0;            // steps this mode shows
+  StepKind kind = StepKind::Show;
+  bool labelsVisible = true;  // false in QuizOnly: no labels, no structure names
+  // Show
+  std::string structure;      // id (always: the renderer needs it)
+  std::string structureName;  // display name; empty when labels are hidden
+  std::string presetId;
+  CameraView view = CameraView::LateralRight;
+  std::string title;
+  std::string text;
+  // Question
+  std::string questionId;
+  quiz::QuestionKind questionKind = quiz::QuestionKind::Locate;
+  std::string prompt;
+  std::vector<std::string> choiceIds;    // Identify/Relation/Order
+  std::vector<std::string> choiceNames;  // display names of choiceIds
+  std::optional<quiz::Grade> feedback;   // set once answered
+};
+
+class LessonEngine {
+ public:
+  LessonEngine(CurriculumRepository& curriculum, ProgressRepository& progress, quiz::KeyComputer& keys,
+               EngineOptions options = {});
+
+  // Starts the user's attempt at the lesson, or resumes the open one (then its stored mode wins
+  // and `mode` is ignored). Errors: unknown lesson, unfinished prerequisites (naming them), a
+  // study step, a question whose key cannot be computed.
+  Status start(std::int64_t userId, const std::string& lessonId, LessonMode mode = LessonMode::Guided);
+
+  bool started() const { return attempt_.has_value(); }
+  bool resumed() const { return resumed_; }
+  const Attempt& attempt() const;
+  const Lesson& lesson() const { return lesson_; }
+  // True when every shown step has been passed (next() past the last one).
+  bool atEnd() const;
+
+  // The current step; error when not started or at the end.
+  Result<StepView> current() const;
+  // The resolved question of the current step (keys included; for the app's pick sampling).
+  Result<quiz::ResolvedQuestion> currentQuestion() const;
+
+  // Grades and records the answer to the current question step. Errors: not a question step,
+  // already answered, an answer that does not fit (reported, nothing recorded), storage failure
+  // (nothing graded counts as given).
+  Result<quiz::Grade> answer(const quiz::Answer& answer, const RenderState& render, std::int64_t latencyMs);
+
+  // Moves past the current step. Error on an unanswered question step or at the end.
+  Status next();
+
+  // Finishes the attempt (all question steps answered), storing the mean score; returns it.
+  Result<double> finish();
+
+  // Current Elo ability of the user (kDefaultAbility before any answer).
+  Result<double> ability() const;
+
+ private:
+  UnixSeconds now() const;
+  quiz::GradingContext gradingContext() const;
+
+  CurriculumRepository& curriculum_;
+  ProgressRepository& progress_;
+  quiz::KeyComputer& keys_;
+  EngineOptions options_;
+
+  Lesson lesson_;
+  Course course_;
+  std::vector<Structure> structures_;
+  std::optional<Attempt> attempt_;
+  bool resumed_ = false;
+  std::vector<int> shown_;                                 // step indices this mode shows
+  std::vector<std::optional<quiz::ResolvedQuestion>> resolved_;  // per step
+  std::vector<std::optional<quiz::Grade>> grades_;         // per step
+  std::size_t cursor_ = 0;                                 // into shown_
+};
+
+// Structures due for review for the user at `now`, earliest first.
+Result<std::vector<StructureProgress>> reviewQueue(ProgressRepository& progress, std::int64_t userId,
+                                                   UnixSeconds now);
+
+// Adaptive review: among the course's questions whose structure is due at `now` or never answered,
+// the one whose difficulty best matches the user's ability (quiz::chooseAdaptive). nullopt when
+// nothing is due.
+Result<std::optional<quiz::Question>> chooseReviewQuestion(CurriculumRepository& curriculum,
+                                                           ProgressRepository& progress, std::int64_t userId,
+                                                           const std::string& courseId, UnixSeconds now);
+
+}  // namespace at::lessons

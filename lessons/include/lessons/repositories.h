@@ -1,0 +1,146 @@
+// Storage as seen by lessons/: small pure interfaces over plain structs. db/ implements them on
+// SQLite; tests use an in-memory implementation. Every method reports failures as values.
+// Times are Unix seconds (UTC).
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "lessons/curriculum.h"
+#include "quiz/question.h"
+#include "volume/error.h"
+#include "volume/structure.h"
+
+namespace at::lessons {
+
+using UnixSeconds = std::int64_t;
+
+// ---------------------------------------------------------------------------------------------
+// Curriculum (read side; seeding is db/'s business)
+class CurriculumRepository {
+ public:
+  virtual ~CurriculumRepository() = default;
+  // Every course with its lessons, steps and questions.
+  virtual Result<std::vector<Course>> courses() = 0;
+  // Error "unknown course 'x'" if absent.
+  virtual Result<Course> course(const std::string& courseId) = 0;
+  // Error "unknown lesson 'x'" if absent.
+  virtual Result<Lesson> lesson(const std::string& lessonId) = 0;
+  // Error "unknown question 'x'" if absent.
+  virtual Result<quiz::Question> question(const std::string& questionId) = 0;
+  // The structures of a dataset (ids and display names); error if the dataset is unknown.
+  virtual Result<std::vector<Structure>> structures(const std::string& datasetId) = 0;
+};
+
+// ---------------------------------------------------------------------------------------------
+// Users (pseudonymous: a chosen name, never a real identity)
+enum class Role { Student, Expert, Coordinator };
+const char* toString(Role role);  // "student", "expert", "coordinator"
+Result<Role> parseRole(const std::string& text);
+
+struct User {
+  std::int64_t id = 0;
+  std::string name;         // pseudonym, unique
+  Role role = Role::Student;
+  std::string group;        // e.g. "first-year 2026", may be empty
+};
+
+class UserRepository {
+ public:
+  virtual ~UserRepository() = default;
+  virtual Result<std::optional<User>> findUser(const std::string& name) = 0;
+  virtual Result<User> user(std::int64_t userId) = 0;  // error if unknown
+  // Error if the name is taken or empty. Returns the user with its id.
+  virtual Result<User> createUser(const std::string& name, Role role, const std::string& group) = 0;
+  virtual Result<std::vector<User>> users() = 0;
+};
+
+// ---------------------------------------------------------------------------------------------
+// Attempts, responses, progress, adaptation
+enum class LessonMode {
+  Guided,    // show steps and questions
+  QuizOnly,  // questions only; labels and structure names hidden in step views
+};
+const char* toString(LessonMode mode);  // "guided", "quiz_only"
+Result<LessonMode> parseLessonMode(const std::string& text);
+
+struct Attempt {
+  std::int64_t id = 0;
+  std::int64_t userId = 0;
+  std::string lessonId;
+  LessonMode mode = LessonMode::Guided;
+  UnixSeconds startedAt = 0;
+  std::optional<UnixSeconds> finishedAt;  // unset while in progress
+  double score = 0;                        // mean question score, set when finished
+};
+
+// Render parameters on screen when the answer was given.
+struct RenderState {
+  std::string presetId;
+  std::string mode;  // "wdt", "bare", …
+  double t = 0.5;
+  double alpha = 1.6;
+  double beta = 1.0;
+};
+
+struct Response {
+  std::int64_t id = 0;        // set by the repository
+  std::int64_t attemptId = 0;
+  int stepIndex = 0;          // index in the lesson's steps
+  std::string questionId;
+  std::string structureId;    // the question's target
+  quiz::Answer answer;        // stored verbatim (quiz/answer_json.h gives a JSON form)
+  bool correct = false;
+  double score = 0;
+  std::int64_t latencyMs = 0; // from the question being shown to the answer
+  RenderState render;
+  UnixSeconds answeredAt = 0;
+};
+
+// Leitner box and review time of one structure for one user.
+struct StructureProgress {
+  std::int64_t userId = 0;
+  std::string structureId;
+  int box = 0;                // 0 = never answered; 1..kLeitnerBoxes
+  UnixSeconds dueAt = 0;      // due for review at or after this time
+  int answered = 0;
+  int correct = 0;
+  UnixSeconds lastAnsweredAt = 0;
+};
+
+// Everything one answer changes, written in ONE transaction.
+struct AnswerRecord {
+  Response response;
+  StructureProgress progress;   // the structure's state after this answer
+  double abilityAfter = 1500;   // the user's Elo ability after this answer
+  double difficultyAfter = 1500;// the question's Elo difficulty after this answer
+};
+
+class ProgressRepository {
+ public:
+  virtual ~ProgressRepository() = default;
+  // The user's unfinished attempt at the lesson (the latest if several), if any.
+  virtual Result<std::optional<Attempt>> openAttempt(std::int64_t userId, const std::string& lessonId) = 0;
+  // A new attempt (id set). The engine only calls it when openAttempt gave none.
+  virtual Result<Attempt> startAttempt(std::int64_t userId, const std::string& lessonId, LessonMode mode,
+                                       UnixSeconds startedAt) = 0;
+  virtual Status finishAttempt(std::int64_t attemptId, UnixSeconds finishedAt, double score) = 0;
+  // True if the user has at least one finished attempt at the lesson.
+  virtual Result<bool> hasFinished(std::int64_t userId, const std::string& lessonId) = 0;
+  // Responses of an attempt in the order they were recorded.
+  virtual Result<std::vector<Response>> responses(std::int64_t attemptId) = 0;
+  // Stores the response, the structure's progress, the ability and the question difficulty in one
+  // transaction, COMMITTED (durable) before returning. Returns the response id.
+  virtual Result<std::int64_t> recordAnswer(const AnswerRecord& record) = 0;
+  // nullopt = never answered.
+  virtual Result<std::optional<StructureProgress>> progress(std::int64_t userId, const std::string& structureId) = 0;
+  virtual Result<std::vector<StructureProgress>> allProgress(std::int64_t userId) = 0;
+  // nullopt = no answer yet (the engine then uses quiz::kDefaultAbility).
+  virtual Result<std::optional<double>> ability(std::int64_t userId) = 0;
+  // nullopt = never answered by anyone (the engine then uses the question's initial difficulty).
+  virtual Result<std::optional<double>> questionDifficulty(const std::string& questionId) = 0;
+};
+
+}  // namespace at::lessons

@@ -1,0 +1,402 @@
+#include "lessons/course_json.h"
+
+#include <fstream>
+#include <set>
+#include <sstream>
+
+#include <nlohmann/json.hpp>
+
+namespace at::lessons {
+namespace {
+
+using nlohmann::json;
+
+constexpr int kSchema = 1;
+
+// Reads one JSON object strictly: every key must be known, types checked, errors name the path.
+class Reader {
+ public:
+  Reader(const json& object, std::string path) : j_(object), path_(std::move(path)) {}
+
+  // Call first: the value must be an object whose keys are all in `allowed`.
+  Status expect(std::initializer_list<const char*> allowed) const {
+    if (!j_.is_object()) return fail((path_.empty() ? std::string("the document") : path_) + ": must be an object");
+    for (const auto& [key, value] : j_.items()) {
+      bool known = false;
+      for (const char* a : allowed) known = known || key == a;
+      if (!known) return fail(field(key) + ": unknown field");
+    }
+    return {};
+  }
+
+  std::string field(const std::string& key) const { return path_.empty() ? key : path_ + "." + key; }
+  bool has(const char* key) const { return j_.contains(key); }
+  const json& raw(const char* key) const { return j_.at(key); }
+
+  Result<std::string> string(const char* key, bool required, std::string fallback = {}) const {
+    if (!j_.contains(key)) {
+      if (required) return fail(field(key) + ": missing");
+      return fallback;
+    }
+    if (!j_[key].is_string()) return fail(field(key) + ": must be a string");
+    std::string value = j_[key].get<std::string>();
+    if (required && value.empty()) return fail(field(key) + ": must not be empty");
+    return value;
+  }
+
+  Result<double> number(const char* key, double fallback) const {
+    if (!j_.contains(key)) return fallback;
+    if (!j_[key].is_number()) return fail(field(key) + ": must be a number");
+    return j_[key].get<double>();
+  }
+
+  Result<int> integer(const char* key, int fallback) const {
+    if (!j_.contains(key)) return fallback;
+    if (!j_[key].is_number_integer()) return fail(field(key) + ": must be an integer");
+    return j_[key].get<int>();
+  }
+
+  Result<std::vector<std::string>> strings(const char* key) const {
+    std::vector<std::string> out;
+    if (!j_.contains(key)) return out;
+    if (!j_[key].is_array()) return fail(field(key) + ": must be an array of strings");
+    for (std::size_t i = 0; i < j_[key].size(); ++i) {
+      const json& item = j_[key][i];
+      if (!item.is_string() || item.get<std::string>().empty()) {
+        return fail(field(key) + "[" + std::to_string(i) + "]: must be a non-empty string");
+      }
+      out.push_back(item.get<std::string>());
+    }
+    return out;
+  }
+
+  Result<std::optional<Vec3>> point(const char* key) const {
+    if (!j_.contains(key)) return std::optional<Vec3>{};
+    const json& v = j_[key];
+    if (!v.is_array() || v.size() != 3 || !v[0].is_number() || !v[1].is_number() || !v[2].is_number()) {
+      return fail(field(key) + ": must be [x, y, z] in millimetres");
+    }
+    return std::optional<Vec3>(Vec3{v[0].get<double>(), v[1].get<double>(), v[2].get<double>()});
+  }
+
+ private:
+  const json& j_;
+  std::string path_;
+};
+
+#define AT_TRY(var, expr)                                   \
+  auto var##_result = (expr);                               \
+  if (!var##_result) return tl::unexpected(var##_result.error()); \
+  auto var = std::move(*var##_result)
+
+Result<quiz::Question> readQuestion(const json& j, const std::string& path) {
+  Reader r(j, path);
+  if (auto ok = r.expect({"id", "kind", "prompt", "target", "tolerance_mm", "choices", "distractors", "synonyms",
+                          "relation", "order", "difficulty", "explanation"});
+      !ok) {
+    return tl::unexpected(ok.error());
+  }
+  quiz::Question q;
+  AT_TRY(id, r.string("id", true));
+  AT_TRY(kindText, r.string("kind", true));
+  auto kind = quiz::parseQuestionKind(kindText);
+  if (!kind) return fail(r.field("kind") + ": " + kind.error().message);
+  AT_TRY(prompt, r.string("prompt", true));
+  AT_TRY(target, r.string("target", true));
+  AT_TRY(tolerance, r.number("tolerance_mm", 0));
+  AT_TRY(choices, r.strings("choices"));
+  AT_TRY(distractors, r.integer("distractors", 3));
+  AT_TRY(synonyms, r.strings("synonyms"));
+  AT_TRY(difficulty, r.number("difficulty", 1500));
+  AT_TRY(explanation, r.string("explanation", false));
+  q.id = id;
+  q.kind = *kind;
+  q.prompt = prompt;
+  q.target = target;
+  q.toleranceMm = tolerance;
+  q.choices = choices;
+  q.distractors = distractors;
+  q.synonyms = synonyms;
+  q.difficulty = difficulty;
+  q.explanation = explanation;
+
+  const auto onlyFor = [&](const char* key, quiz::QuestionKind k) -> Status {
+    if (r.has(key) && q.kind != k) {
+      return fail(r.field(key) + ": only allowed for " + quiz::toString(k) + " questions");
+    }
+    return {};
+  };
+  for (auto [key, k] : {std::pair{"tolerance_mm", quiz::QuestionKind::Locate},
+                        std::pair{"choices", quiz::QuestionKind::Identify},
+                        std::pair{"distractors", quiz::QuestionKind::Identify},
+                        std::pair{"synonyms", quiz::QuestionKind::Name},
+                        std::pair{"relation", quiz::QuestionKind::Relation},
+                        std::pair{"order", quiz::QuestionKind::Order}}) {
+    if (auto ok = onlyFor(key, k); !ok) return tl::unexpected(ok.error());
+  }
+  if (q.toleranceMm < 0) return fail(r.field("tolerance_mm") + ": must be >= 0");
+  if (q.distractors < 1) return fail(r.field("distractors") + ": must be >= 1");
+  if (!(q.difficulty > 0 && q.difficulty < 4000)) return fail(r.field("difficulty") + ": must be an Elo rating in 0..4000");
+
+  if (q.kind == quiz::QuestionKind::Relation) {
+    if (!r.has("relation")) return fail(r.field("relation") + ": missing");
+    Reader rel(r.raw("relation"), r.field("relation"));
+    if (auto ok = rel.expect({"from", "kind", "candidates", "threshold_mm"}); !ok) return tl::unexpected(ok.error());
+    AT_TRY(from, rel.string("from", true));
+    AT_TRY(relKindText, rel.string("kind", true));
+    auto relKind = quiz::parseRelationKind(relKindText);
+    if (!relKind) return fail(rel.field("kind") + ": " + relKind.error().message);
+    AT_TRY(candidates, rel.strings("candidates"));
+    AT_TRY(threshold, rel.number("threshold_mm", 0));
+    if (candidates.size() < 2) return fail(rel.field("candidates") + ": needs at least 2 structure ids");
+    if (*relKind == quiz::RelationKind::Reachable && !(threshold > 0)) {
+      return fail(rel.field("threshold_mm") + ": reachable needs a threshold > 0");
+    }
+    if (*relKind == quiz::RelationKind::Nearest && rel.has("threshold_mm")) {
+      return fail(rel.field("threshold_mm") + ": only allowed for reachable");
+    }
+    q.relation = quiz::RelationSpec{from, *relKind, candidates, threshold};
+  }
+  if (q.kind == quiz::QuestionKind::Order) {
+    if (!r.has("order")) return fail(r.field("order") + ": missing");
+    Reader ord(r.raw("order"), r.field("order"));
+    if (auto ok = ord.expect({"entry_mm", "target_mm", "entry_structure", "target_structure", "extra_choices"}); !ok) {
+      return tl::unexpected(ok.error());
+    }
+    AT_TRY(entryMm, ord.point("entry_mm"));
+    AT_TRY(targetMm, ord.point("target_mm"));
+    AT_TRY(entryStructure, ord.string("entry_structure", false));
+    AT_TRY(targetStructure, ord.string("target_structure", false));
+    AT_TRY(extra, ord.integer("extra_choices", 2));
+    if (entryMm.has_value() == !entryStructure.empty()) {
+      return fail(ord.field("entry_mm") + ": give exactly one of entry_mm and entry_structure");
+    }
+    if (targetMm.has_value() == !targetStructure.empty()) {
+      return fail(ord.field("target_mm") + ": give exactly one of target_mm and target_structure");
+    }
+    if (extra < 0) return fail(ord.field("extra_choices") + ": must be >= 0");
+    q.order = quiz::OrderSpec{entryMm, targetMm, entryStructure, targetStructure, extra};
+  }
+  return q;
+}
+
+Result<Step> readStep(const json& j, const std::string& path) {
+  Reader r(j, path);
+  if (!j.is_object()) return fail(path + ": must be an object");
+  AT_TRY(kindText, r.string("kind", true));
+  auto kind = parseStepKind(kindText);
+  if (!kind) return fail(r.field("kind") + ": " + kind.error().message);
+  Step step;
+  step.kind = *kind;
+  if (step.kind == StepKind::Show) {
+    if (auto ok = r.expect({"kind", "structure", "preset", "view", "title", "text"}); !ok) {
+      return tl::unexpected(ok.error());
+    }
+    AT_TRY(structure, r.string("structure", true));
+    AT_TRY(preset, r.string("preset", true));
+    AT_TRY(viewText, r.string("view", true));
+    auto view = parseCameraView(viewText);
+    if (!view) return fail(r.field("view") + ": " + view.error().message);
+    AT_TRY(title, r.string("title", true));
+    AT_TRY(text, r.string("text", true));
+    step.show = ShowStep{structure, preset, *view, title, text};
+  } else if (step.kind == StepKind::Question) {
+    if (auto ok = r.expect({"kind", "question"}); !ok) return tl::unexpected(ok.error());
+    if (!r.has("question")) return fail(r.field("question") + ": missing");
+    AT_TRY(question, readQuestion(r.raw("question"), r.field("question")));
+    step.question = question;
+  } else {
+    if (auto ok = r.expect({"kind", "structure", "items"}); !ok) return tl::unexpected(ok.error());
+    AT_TRY(structure, r.string("structure", true));
+    AT_TRY(items, r.strings("items"));
+    if (items.empty()) return fail(r.field("items") + ": needs at least one Likert item");
+    step.study = StudyStep{structure, items};
+  }
+  return step;
+}
+
+Result<Lesson> readLesson(const json& j, const std::string& path, const std::string& courseId) {
+  Reader r(j, path);
+  if (auto ok = r.expect({"id", "title", "summary", "prerequisites", "steps"}); !ok) return tl::unexpected(ok.error());
+  Lesson lesson;
+  lesson.courseId = courseId;
+  AT_TRY(id, r.string("id", true));
+  AT_TRY(title, r.string("title", true));
+  AT_TRY(summary, r.string("summary", false));
+  AT_TRY(prerequisites, r.strings("prerequisites"));
+  lesson.id = id;
+  lesson.title = title;
+  lesson.summary = summary;
+  lesson.prerequisites = prerequisites;
+  if (!r.has("steps") || !r.raw("steps").is_array() || r.raw("steps").empty()) {
+    return fail(r.field("steps") + ": must be a non-empty array");
+  }
+  for (std::size_t i = 0; i < r.raw("steps").size(); ++i) {
+    AT_TRY(step, readStep(r.raw("steps")[i], r.field("steps") + "[" + std::to_string(i) + "]"));
+    lesson.steps.push_back(std::move(step));
+  }
+  return lesson;
+}
+
+json questionJson(const quiz::Question& q) {
+  json j = {{"id", q.id}, {"kind", quiz::toString(q.kind)}, {"prompt", q.prompt}, {"target", q.target},
+            {"difficulty", q.difficulty}};
+  if (!q.explanation.empty()) j["explanation"] = q.explanation;
+  switch (q.kind) {
+    case quiz::QuestionKind::Locate:
+      j["tolerance_mm"] = q.toleranceMm;
+      break;
+    case quiz::QuestionKind::Identify:
+      if (!q.choices.empty()) j["choices"] = q.choices;
+      else j["distractors"] = q.distractors;
+      break;
+    case quiz::QuestionKind::Name:
+      if (!q.synonyms.empty()) j["synonyms"] = q.synonyms;
+      break;
+    case quiz::QuestionKind::Relation: {
+      json rel = {{"from", q.relation.from}, {"kind", quiz::toString(q.relation.kind)},
+                  {"candidates", q.relation.candidates}};
+      if (q.relation.kind == quiz::RelationKind::Reachable) rel["threshold_mm"] = q.relation.thresholdMm;
+      j["relation"] = rel;
+      break;
+    }
+    case quiz::QuestionKind::Order: {
+      json ord = {{"extra_choices", q.order.extraChoices}};
+      if (q.order.entryMm) ord["entry_mm"] = *q.order.entryMm;
+      else ord["entry_structure"] = q.order.entryStructure;
+      if (q.order.targetMm) ord["target_mm"] = *q.order.targetMm;
+      else ord["target_structure"] = q.order.targetStructure;
+      j["order"] = ord;
+      break;
+    }
+  }
+  return j;
+}
+
+}  // namespace
+
+Result<Course> parseCourseJson(const std::string& text, const std::string& sourceName) {
+  json j;
+  try {
+    j = json::parse(text);
+  } catch (const json::parse_error& e) {
+    return fail(sourceName + ": not valid JSON: " + e.what());
+  }
+  const auto prefixed = [&](Error e) { return tl::unexpected(withContext(sourceName, std::move(e))); };
+  Reader r(j, "");
+  if (auto ok = r.expect({"schema", "id", "title", "summary", "dataset", "version", "synonyms", "lessons"}); !ok) {
+    return prefixed(ok.error());
+  }
+  auto schema = r.integer("schema", -1);
+  if (!schema) return prefixed(schema.error());
+  if (*schema != kSchema) {
+    return fail(sourceName + ": schema: " + (r.has("schema") ? "unsupported version " + std::to_string(*schema) : "missing") +
+                " (this program reads schema " + std::to_string(kSchema) + ")");
+  }
+  Course course;
+  const auto take = [&](auto result, auto& into) -> bool {
+    if (!result) return false;
+    into = std::move(*result);
+    return true;
+  };
+  for (auto [key, into, required] : {std::tuple{"id", &course.id, true}, std::tuple{"title", &course.title, true},
+                                     std::tuple{"summary", &course.summary, false},
+                                     std::tuple{"dataset", &course.datasetId, true}}) {
+    auto value = r.string(key, required);
+    if (!take(value, *into)) return prefixed(value.error());
+  }
+  auto version = r.integer("version", 1);
+  if (!take(version, course.version)) return prefixed(version.error());
+  if (course.version < 1) return fail(sourceName + ": version: must be >= 1");
+
+  if (r.has("synonyms")) {
+    const json& syn = r.raw("synonyms");
+    if (!syn.is_object()) return fail(sourceName + ": synonyms: must be an object of structure id → [names]");
+    for (const auto& [structure, names] : syn.items()) {
+      Reader entry(syn, "synonyms");
+      auto list = entry.strings(structure.c_str());
+      if (!list) return prefixed(list.error());
+      course.synonyms[structure] = *list;
+    }
+  }
+
+  if (!r.has("lessons") || !r.raw("lessons").is_array() || r.raw("lessons").empty()) {
+    return fail(sourceName + ": lessons: must be a non-empty array");
+  }
+  std::set<std::string> lessonIds, questionIds;
+  for (std::size_t i = 0; i < r.raw("lessons").size(); ++i) {
+    const std::string path = "lessons[" + std::to_string(i) + "]";
+    auto lesson = readLesson(r.raw("lessons")[i], path, course.id);
+    if (!lesson) return prefixed(lesson.error());
+    if (!lessonIds.insert(lesson->id).second) {
+      return fail(sourceName + ": " + path + ".id: duplicate lesson id '" + lesson->id + "'");
+    }
+    for (std::size_t p = 0; p < lesson->prerequisites.size(); ++p) {
+      const std::string& pre = lesson->prerequisites[p];
+      if (pre == lesson->id || !lessonIds.count(pre)) {
+        return fail(sourceName + ": " + path + ".prerequisites[" + std::to_string(p) + "]: '" + pre +
+                    "' is not an earlier lesson of this course");
+      }
+    }
+    for (std::size_t s = 0; s < lesson->steps.size(); ++s) {
+      const Step& step = lesson->steps[s];
+      if (step.kind == StepKind::Question && !questionIds.insert(step.question.id).second) {
+        return fail(sourceName + ": " + path + ".steps[" + std::to_string(s) + "].question.id: duplicate question id '" +
+                    step.question.id + "'");
+      }
+    }
+    course.lessons.push_back(std::move(*lesson));
+  }
+  return course;
+}
+
+Result<Course> loadCourseJson(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return fail(path.string() + ": cannot open the course file");
+  std::ostringstream text;
+  text << in.rdbuf();
+  return parseCourseJson(text.str(), path.filename().string());
+}
+
+std::string courseToJson(const Course& course) {
+  json lessons = json::array();
+  for (const Lesson& lesson : course.lessons) {
+    json steps = json::array();
+    for (const Step& step : lesson.steps) {
+      switch (step.kind) {
+        case StepKind::Show:
+          steps.push_back({{"kind", "show"}, {"structure", step.show.structure}, {"preset", step.show.presetId},
+                           {"view", toString(step.show.view)}, {"title", step.show.title}, {"text", step.show.text}});
+          break;
+        case StepKind::Question:
+          steps.push_back({{"kind", "question"}, {"question", questionJson(step.question)}});
+          break;
+        case StepKind::Study:
+          steps.push_back({{"kind", "study"}, {"structure", step.study.structure}, {"items", step.study.items}});
+          break;
+      }
+    }
+    lessons.push_back({{"id", lesson.id}, {"title", lesson.title}, {"summary", lesson.summary},
+                       {"prerequisites", lesson.prerequisites}, {"steps", steps}});
+  }
+  json j = {{"schema", kSchema}, {"id", course.id}, {"title", course.title}, {"summary", course.summary},
+            {"dataset", course.datasetId}, {"version", course.version}, {"synonyms", course.synonyms},
+            {"lessons", lessons}};
+  return j.dump(2);
+}
+
+std::string questionToJson(const quiz::Question& question) { return questionJson(question).dump(); }
+
+Result<quiz::Question> parseQuestionJson(const std::string& text, const std::string& sourceName) {
+  json j;
+  try {
+    j = json::parse(text);
+  } catch (const json::parse_error& e) {
+    return fail(sourceName + ": not valid JSON: " + e.what());
+  }
+  auto q = readQuestion(j, "question");
+  if (!q) return tl::unexpected(withContext(sourceName, q.error()));
+  return q;
+}
+
+}  // namespace at::lessons

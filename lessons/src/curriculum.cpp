@@ -1,0 +1,67 @@
+#include "lessons/curriculum.h"
+#include "lessons/repositories.h"
+
+namespace at::lessons {
+
+const char* toString(CameraView view) {
+  switch (view) {
+    case CameraView::Anterior: return "anterior";
+    case CameraView::Posterior: return "posterior";
+    case CameraView::LateralLeft: return "lateral_left";
+    case CameraView::LateralRight: return "lateral_right";
+    case CameraView::Superior: return "superior";
+    case CameraView::Inferior: return "inferior";
+  }
+  return "lateral_right";
+}
+
+Result<CameraView> parseCameraView(const std::string& text) {
+  for (CameraView v : {CameraView::Anterior, CameraView::Posterior, CameraView::LateralLeft, CameraView::LateralRight,
+                       CameraView::Superior, CameraView::Inferior}) {
+    if (text == toString(v)) return v;
+  }
+  return fail("unknown view '" + text +
+              "' (expected anterior, posterior, lateral_left, lateral_right, superior or inferior)");
+}
+
+const char* toString(StepKind kind) {
+  switch (kind) {
+    case StepKind::Show: return "show";
+    case StepKind::Question: return "question";
+    case StepKind::Study: return "study";
+  }
+  return "show";
+}
+
+Result<StepKind> parseStepKind(const std::string& text) {
+  for (StepKind k : {StepKind::Show, StepKind::Question, StepKind::Study}) {
+    if (text == toString(k)) return k;
+  }
+  return fail("unknown step kind '" + text + "' (expected show, question or study)");
+}
+
+const char* toString(Role role) {
+  switch (role) {
+    case Role::Student: return "student";
+    case Role::Expert: return "expert";
+    case Role::Coordinator: return "coordinator";
+  }
+  return "student";
+}
+
+Result<Role> parseRole(const std::string& text) {
+  for (Role r : {Role::Student, Role::Expert, Role::Coordinator}) {
+    if (text == toString(r)) return r;
+  }
+  return fail("unknown role '" + text + "' (expected student, expert or coordinator)");
+}
+
+const char* toString(LessonMode mode) { return mode == LessonMode::Guided ? "guided" : "quiz_only"; }
+
+Result<LessonMode> parseLessonMode(const std::string& text) {
+  if (text == "guided") return LessonMode::Guided;
+  if (text == "quiz_only") return LessonMode::QuizOnly;
+  return fail("unknown lesson mode '" + text + "' (expected guided or quiz_only)");
+}
+
+}  // namespace at::lessons

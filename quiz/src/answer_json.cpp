@@ -1,0 +1,73 @@
+#include "quiz/answer_json.h"
+
+#include <cmath>
+
+#include <nlohmann/json.hpp>
+
+namespace at::quiz {
+
+std::string answerToJson(const Answer& answer) {
+  nlohmann::json j = nlohmann::json::object();
+  if (answer.choice) j["choice"] = *answer.choice;
+  if (answer.text) j["text"] = *answer.text;
+  if (answer.pick) {
+    j["pick"] = answer.pick->structure;
+    if (std::isfinite(answer.pick->distanceMm) && answer.pick->distanceMm >= 0) {
+      j["distance_mm"] = answer.pick->distanceMm;
+    }
+  }
+  if (answer.order) j["order"] = *answer.order;
+  return j.dump();
+}
+
+Result<Answer> answerFromJson(const std::string& line) {
+  nlohmann::json j;
+  try {
+    j = nlohmann::json::parse(line);
+  } catch (const nlohmann::json::parse_error& e) {
+    return fail(std::string("not valid JSON: ") + e.what());
+  }
+  if (!j.is_object()) return fail("an answer must be a JSON object such as {\"choice\": 1}");
+  Answer answer;
+  int fields = 0;
+  for (const auto& [key, value] : j.items()) {
+    if (key == "choice") {
+      if (!value.is_number_integer()) return fail("choice: must be an integer index");
+      answer.choice = value.get<int>();
+      ++fields;
+    } else if (key == "text") {
+      if (!value.is_string()) return fail("text: must be a string");
+      answer.text = value.get<std::string>();
+      ++fields;
+    } else if (key == "pick") {
+      if (!value.is_string() && !value.is_null()) return fail("pick: must be a structure id or null");
+      Pick pick;
+      pick.structure = value.is_null() ? "" : value.get<std::string>();
+      if (j.contains("distance_mm")) {
+        const auto& d = j["distance_mm"];
+        if (!d.is_number() || d.get<double>() < 0) return fail("distance_mm: must be a number >= 0");
+        pick.distanceMm = d.get<double>();
+      }
+      answer.pick = pick;
+      ++fields;
+    } else if (key == "distance_mm") {
+      if (!j.contains("pick")) return fail("distance_mm: only allowed with pick");
+    } else if (key == "order") {
+      if (!value.is_array()) return fail("order: must be an array of structure ids");
+      std::vector<std::string> order;
+      for (const auto& item : value) {
+        if (!item.is_string()) return fail("order: every entry must be a string");
+        order.push_back(item.get<std::string>());
+      }
+      answer.order = order;
+      ++fields;
+    } else {
+      return fail("unknown field '" + key + "' (expected choice, text, pick with distance_mm, or order)");
+    }
+  }
+  if (fields == 0) return fail("no answer: give one of choice, text, pick or order");
+  if (fields > 1) return fail("more than one answer field: give exactly one of choice, text, pick or order");
+  return answer;
+}
+
+}  // namespace at::quiz

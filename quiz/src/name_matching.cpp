@@ -1,0 +1,168 @@
+#include "quiz/name_matching.h"
+
+#include <algorithm>
+#include <cstdint>
+#include <sstream>
+
+namespace at::quiz {
+namespace {
+
+// ASCII folding of U+00C0..U+00FF. Digits stand for two-letter folds: 3 = ae, 4 = th, 5 = ss;
+// a space for the multiplication and division signs.
+constexpr const char kLatin1[] = "aaaaaa3ceeeeiiiidnooooo ouuuuy45aaaaaa3ceeeeiiiidnooooo ouuuuy4y";
+// ASCII folding of U+0100..U+017F. 1 = ij, 2 = oe.
+constexpr const char kLatinExtA[] =
+    "aaaaaaccccccccddddeeeeeeeeeegggggggghhhhiiiiiiiiii11jjkkkllllllllllnnnnnnnnnoooooo22rrrrrrssssssss"
+    "ttttttuuuuuuuuuuuuwwyyyzzzzzzs";
+
+void appendFold(std::string& out, char folded) {
+  switch (folded) {
+    case '1': out += "ij"; break;
+    case '2': out += "oe"; break;
+    case '3': out += "ae"; break;
+    case '4': out += "th"; break;
+    case '5': out += "ss"; break;
+    default: out += folded;
+  }
+}
+
+// Decodes one UTF-8 sequence at text[i]; returns the code point and advances i. Invalid bytes
+// decode as U+FFFD, one byte at a time.
+std::uint32_t decodeUtf8(const std::string& text, std::size_t& i) {
+  const auto byte = [&](std::size_t k) { return static_cast<unsigned char>(text[k]); };
+  const unsigned char c = byte(i);
+  int length = c < 0x80 ? 1 : (c >> 5) == 0x6 ? 2 : (c >> 4) == 0xE ? 3 : (c >> 3) == 0x1E ? 4 : 0;
+  if (length == 0 || i + length > text.size()) {
+    ++i;
+    return 0xFFFD;
+  }
+  std::uint32_t cp = length == 1 ? c : length == 2 ? (c & 0x1F) : length == 3 ? (c & 0x0F) : (c & 0x07);
+  for (int k = 1; k < length; ++k) {
+    if ((byte(i + k) & 0xC0) != 0x80) {
+      ++i;
+      return 0xFFFD;
+    }
+    cp = (cp << 6) | (byte(i + k) & 0x3F);
+  }
+  i += length;
+  return cp;
+}
+
+// Case- and accent-folded text with every non-alphanumeric character as a space.
+std::string foldCharacters(const std::string& text) {
+  std::string out;
+  std::size_t i = 0;
+  while (i < text.size()) {
+    const std::size_t start = i;
+    const std::uint32_t cp = decodeUtf8(text, i);
+    if (cp < 0x80) {
+      const char c = static_cast<char>(cp);
+      if (c >= 'A' && c <= 'Z') out += static_cast<char>(c - 'A' + 'a');
+      else if ((c >= 'a' && c <= 'z') || (c >= '0' && c <= '9')) out += c;
+      else out += ' ';
+    } else if (cp >= 0xC0 && cp <= 0xFF) {
+      appendFold(out, kLatin1[cp - 0xC0]);
+    } else if (cp >= 0x100 && cp <= 0x17F) {
+      appendFold(out, kLatinExtA[cp - 0x100]);
+    } else if (cp >= 0x300 && cp <= 0x36F) {
+      // combining diacritical mark: dropped, so decomposed "e" + U+0301 folds like "é"
+    } else if (cp < 0xC0 || (cp >= 0x2000 && cp <= 0x206F) || cp == 0xFFFD) {
+      out += ' ';  // Latin-1 punctuation, no-break space, general punctuation (’ – …), bad bytes
+    } else {
+      out.append(text, start, i - start);  // other scripts kept as they are
+    }
+  }
+  return out;
+}
+
+}  // namespace
+
+std::string normalizeName(const std::string& text) {
+  std::istringstream words(foldCharacters(text));
+  std::vector<std::string> body;
+  std::vector<std::string> sides;
+  std::string word;
+  while (words >> word) {
+    if (word == "the" || word == "a" || word == "an") continue;
+    if (word == "left" || word == "l") sides.push_back("left");
+    else if (word == "right" || word == "r") sides.push_back("right");
+    else body.push_back(word);
+  }
+  std::string out;
+  for (const auto* list : {&body, &sides}) {
+    for (const std::string& w : *list) {
+      if (!out.empty()) out += ' ';
+      out += w;
+    }
+  }
+  return out;
+}
+
+int damerauLevenshtein(const std::string& a, const std::string& b) {
+  const std::size_t n = a.size(), m = b.size();
+  std::vector<std::vector<int>> d(n + 1, std::vector<int>(m + 1, 0));
+  for (std::size_t i = 0; i <= n; ++i) d[i][0] = static_cast<int>(i);
+  for (std::size_t j = 0; j <= m; ++j) d[0][j] = static_cast<int>(j);
+  for (std::size_t i = 1; i <= n; ++i) {
+    for (std::size_t j = 1; j <= m; ++j) {
+      const int cost = a[i - 1] == b[j - 1] ? 0 : 1;
+      d[i][j] = std::min({d[i - 1][j] + 1, d[i][j - 1] + 1, d[i - 1][j - 1] + cost});
+      if (i > 1 && j > 1 && a[i - 1] == b[j - 2] && a[i - 2] == b[j - 1]) {
+        d[i][j] = std::min(d[i][j], d[i - 2][j - 2] + 1);
+      }
+    }
+  }
+  return d[n][m];
+}
+
+int typoAllowance(std::size_t normalizedLength) {
+  if (normalizedLength <= 4) return 0;
+  if (normalizedLength <= 8) return 1;
+  if (normalizedLength <= 16) return 2;
+  return 3;
+}
+
+NameMatch matchName(const std::string& typed, const std::string& targetId,
+                    const std::vector<std::string>& targetNames, const NameCatalog& catalog) {
+  NameMatch match;
+  const std::string text = normalizeName(typed);
+  if (text.empty()) return match;
+
+  std::size_t matchedLength = 0;
+  for (const std::string& name : targetNames) {
+    const std::string normal = normalizeName(name);
+    if (normal.empty()) continue;
+    const int distance = damerauLevenshtein(text, normal);
+    if (match.distance < 0 || distance < match.distance) {
+      match.distance = distance;
+      match.matchedName = name;
+      matchedLength = normal.size();
+    }
+  }
+  if (match.distance < 0) return match;
+  if (match.distance == 0) {
+    match.accepted = true;
+    return match;
+  }
+  if (match.distance > typoAllowance(matchedLength)) return match;
+
+  // A typo is forgiven only when no other structure's spelling is as close.
+  int closest = -1;
+  for (const NameEntry& entry : catalog) {
+    if (entry.structureId == targetId) continue;
+    for (const std::string& name : entry.names) {
+      const std::string normal = normalizeName(name);
+      if (normal.empty()) continue;
+      const int distance = damerauLevenshtein(text, normal);
+      if (distance <= match.distance && (closest < 0 || distance < closest)) {
+        closest = distance;
+        match.closerStructure = entry.structureId;
+        match.closerName = name;
+      }
+    }
+  }
+  match.accepted = closest < 0;
+  return match;
+}
+
+}  // namespace at::quiz

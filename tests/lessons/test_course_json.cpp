@@ -1,0 +1,113 @@
+#include <doctest/doctest.h>
+
+#include <fstream>
+#include <set>
+
+#include "lessons/course_json.h"
+#include "test_support.h"
+
+using namespace at;
+using namespace at::lessons;
+
+namespace {
+
+std::string minimalCourse(const std::string& lessons) {
+  return R"({"schema": 1, "id": "c", "title": "C", "dataset": "phantom", "lessons": )" + lessons + "}";
+}
+
+const char* kShow = R"({"kind": "show", "structure": "cochlea", "preset": "cochlea_wdt", "view": "superior", "title": "T", "text": "X"})";
+
+std::string errorOf(const std::string& text) {
+  auto r = parseCourseJson(text, "bad.json");
+  REQUIRE_FALSE(r);
+  return r.error().message;
+}
+
+}  // namespace
+
+TEST_CASE("ShippedCourse_ParsesWithFourLessonsEachWithShowStepsAndFiveMixedQuestions") {
+  auto course = loadCourseJson(test::sourceDir() / "data/courses/temporal_bone.json");
+  REQUIRE_MESSAGE(course, (course ? "" : course.error().message));
+  CHECK(course->id == "temporal_bone");
+  CHECK(course->datasetId == "phantom");
+  REQUIRE(course->lessons.size() >= 4);
+  std::set<quiz::QuestionKind> allKinds;
+  for (const Lesson& lesson : course->lessons) {
+    int shows = 0, questions = 0;
+    std::set<quiz::QuestionKind> kinds;
+    for (const Step& step : lesson.steps) {
+      if (step.kind == StepKind::Show) {
+        ++shows;
+        CHECK_MESSAGE(step.show.text.size() > 150, lesson.id << ": show text too short for " << step.show.structure);
+        const std::string& preset = step.show.presetId;
+        CHECK((preset == step.show.structure + "_wdt" || preset == step.show.structure + "_bare"));
+      }
+      if (step.kind == StepKind::Question) {
+        ++questions;
+        kinds.insert(step.question.kind);
+        allKinds.insert(step.question.kind);
+      }
+    }
+    CHECK_MESSAGE(shows >= 2, lesson.id);
+    CHECK_MESSAGE(questions >= 5, lesson.id);
+    CHECK_MESSAGE(kinds.size() >= 3, lesson.id);
+  }
+  CHECK(allKinds.size() == 5);
+}
+
+TEST_CASE("CourseJson_RoundTripsThroughCourseToJson") {
+  auto course = loadCourseJson(test::sourceDir() / "data/courses/temporal_bone.json");
+  REQUIRE(course);
+  auto again = parseCourseJson(courseToJson(*course), "round-trip");
+  REQUIRE_MESSAGE(again, (again ? "" : again.error().message));
+  CHECK(courseToJson(*again) == courseToJson(*course));
+  for (const Lesson& lesson : course->lessons) {
+    for (const Step& step : lesson.steps) {
+      if (step.kind != StepKind::Question) continue;
+      auto q = parseQuestionJson(questionToJson(step.question), step.question.id);
+      REQUIRE(q);
+      CHECK(questionToJson(*q) == questionToJson(step.question));
+    }
+  }
+}
+
+TEST_CASE("CourseJson_BadInputsAreErrorsNamingTheField") {
+  CHECK(errorOf("{").find("bad.json: not valid JSON") == 0);
+  CHECK(errorOf("[1]") == "bad.json: the document: must be an object");
+  CHECK(errorOf(R"({"schema": 2, "id": "c"})").find("schema: unsupported version 2") != std::string::npos);
+  CHECK(errorOf(R"({"id": "c"})").find("schema: missing") != std::string::npos);
+  CHECK(errorOf(minimalCourse("[]")).find("lessons: must be a non-empty array") != std::string::npos);
+  CHECK(errorOf(R"({"schema": 1, "id": "c", "title": "C", "dataset": "phantom", "colour": 1, "lessons": []})") ==
+        "bad.json: colour: unknown field");
+  const std::string lesson = R"([{"id": "a", "title": "A", "steps": [)";
+  CHECK(errorOf(minimalCourse(lesson + R"({"kind": "show", "structure": "cochlea", "preset": "p", "view": "sideways", "title": "T", "text": "X"}]}])"))
+            .find("lessons[0].steps[0].view: unknown view 'sideways'") != std::string::npos);
+  CHECK(errorOf(minimalCourse(lesson + R"({"kind": "question", "question": {"id": "q", "kind": "pick", "prompt": "P", "target": "cochlea"}}]}])"))
+            .find("lessons[0].steps[0].question.kind: unknown question kind 'pick'") != std::string::npos);
+  CHECK(errorOf(minimalCourse(lesson + R"({"kind": "question", "question": {"id": "q", "kind": "name", "prompt": "P", "target": "cochlea", "tolerance_mm": 1}}]}])"))
+            .find("question.tolerance_mm: only allowed for locate questions") != std::string::npos);
+  CHECK(errorOf(minimalCourse(lesson + R"({"kind": "question", "question": {"id": "q", "kind": "relation", "prompt": "P", "target": "cochlea", "relation": {"from": "cochlea", "kind": "reachable", "candidates": ["a", "b"]}}}]}])"))
+            .find("relation.threshold_mm: reachable needs a threshold > 0") != std::string::npos);
+  CHECK(errorOf(minimalCourse(lesson + R"({"kind": "question", "question": {"id": "q", "kind": "order", "prompt": "P", "target": "cochlea", "order": {"entry_mm": [1, 2], "target_structure": "x"}}}]}])"))
+            .find("order.entry_mm: must be [x, y, z]") != std::string::npos);
+  CHECK(errorOf(minimalCourse(lesson + R"({"kind": "question", "question": {"id": "q", "kind": "order", "prompt": "P", "target": "cochlea", "order": {"entry_mm": [1, 2, 3], "entry_structure": "y", "target_structure": "x"}}}]}])"))
+            .find("give exactly one of entry_mm and entry_structure") != std::string::npos);
+  CHECK(errorOf(minimalCourse(lesson + R"({"kind": "question", "question": {"kind": "name", "prompt": "P", "target": "cochlea"}}]}])"))
+            .find("question.id: missing") != std::string::npos);
+  CHECK(errorOf(minimalCourse(R"([{"id": "a", "title": "A", "prerequisites": ["b"], "steps": [)" + std::string(kShow) + "]}]"))
+            .find("prerequisites[0]: 'b' is not an earlier lesson") != std::string::npos);
+  CHECK(errorOf(minimalCourse(R"([{"id": "a", "title": "A", "steps": [)" + std::string(kShow) + R"(]}, {"id": "a", "title": "B", "steps": [)" +
+                              kShow + "]}]"))
+            .find("duplicate lesson id 'a'") != std::string::npos);
+  const std::string q = R"({"kind": "question", "question": {"id": "dup", "kind": "name", "prompt": "P", "target": "cochlea"}})";
+  CHECK(errorOf(minimalCourse(lesson + q + "," + q + "]}]")).find("duplicate question id 'dup'") != std::string::npos);
+}
+
+TEST_CASE("LoadCourseJson_MissingFileIsAnErrorNamingIt") {
+  test::TempDir dir;
+  auto r = loadCourseJson(dir / "nope.json");
+  REQUIRE_FALSE(r);
+  CHECK(r.error().message.find("nope.json") != std::string::npos);
+  std::ofstream(dir / "empty.json") << "";
+  CHECK_FALSE(loadCourseJson(dir / "empty.json"));
+}

@@ -1,0 +1,251 @@
+// The shipped course on the phantom: every structure id exists, every key computes, computed keys
+// match hand-reasoned anatomy, and every lesson plays through the engine.
+#include <doctest/doctest.h>
+
+#include <algorithm>
+#include <memory>
+
+#include "in_memory_repositories.h"
+#include "lessons/course_json.h"
+#include "lessons/lesson_engine.h"
+#include "test_support.h"
+#include "volume/phantom.h"
+#include "wdt/wdt.h"
+
+using namespace at;
+using namespace at::lessons;
+
+namespace {
+
+// The phantom at 128³ (0.4 mm voxels) with a WDT-backed key computer (CPU, default parameters),
+// built once for all tests in this file.
+struct PhantomKeys {
+  Dataset dataset;
+  std::unique_ptr<quiz::DatasetKeyComputer> keys;
+  Course course;
+};
+
+PhantomKeys& phantomKeys() {
+  static PhantomKeys p = [] {
+    PhantomKeys k;
+    PhantomOptions options;
+    options.size = 128;
+    k.dataset = makePhantom(options);
+    const Dataset* dataset = &k.dataset;
+    k.keys = std::make_unique<quiz::DatasetKeyComputer>(k.dataset, [dataset](const Mask& seeds) -> Result<FloatVolume> {
+      WdtParams params;
+      params.backend = WdtBackend::Cpu;
+      auto r = computeWdt(dataset->volume, seeds, params);
+      if (!r) return tl::unexpected(r.error());
+      return std::move(r->field.distances);
+    });
+    auto course = loadCourseJson(test::sourceDir() / "data/courses/temporal_bone.json");
+    REQUIRE_MESSAGE(course, (course ? "" : course.error().message));
+    k.course = *course;
+    return k;
+  }();
+  return p;
+}
+
+const quiz::Question& findQuestion(const Course& course, const std::string& id) {
+  for (const Lesson& l : course.lessons)
+    for (const Step& s : l.steps)
+      if (s.kind == StepKind::Question && s.question.id == id) return s.question;
+  FAIL("no question " << id);
+  throw 0;
+}
+
+std::ptrdiff_t position(const std::vector<std::string>& v, const std::string& x) {
+  const auto it = std::find(v.begin(), v.end(), x);
+  return it == v.end() ? -1 : it - v.begin();
+}
+
+// The right answer to a resolved question, as a student would give it.
+quiz::Answer rightAnswer(const quiz::ResolvedQuestion& q, const Dataset& d) {
+  quiz::Answer a;
+  switch (q.question.kind) {
+    case quiz::QuestionKind::Locate: a.pick = quiz::Pick{q.question.target, 0}; break;
+    case quiz::QuestionKind::Identify:
+    case quiz::QuestionKind::Relation: a.choice = q.keyChoice; break;
+    case quiz::QuestionKind::Name: a.text = d.findStructure(q.question.target)->displayName; break;
+    case quiz::QuestionKind::Order: a.order = q.keyOrder; break;
+  }
+  return a;
+}
+
+}  // namespace
+
+TEST_CASE("ShippedCourse_EveryStructureExistsAndEveryQuestionKeyComputesOnThePhantom") {
+  PhantomKeys& p = phantomKeys();
+  for (const auto& [id, names] : p.course.synonyms) CHECK_MESSAGE(p.keys->hasStructure(id), "synonyms: " << id);
+  for (const Lesson& lesson : p.course.lessons) {
+    for (const Step& step : lesson.steps) {
+      if (step.kind == StepKind::Show) {
+        CHECK_MESSAGE(p.keys->hasStructure(step.show.structure), lesson.id << ": " << step.show.structure);
+        continue;
+      }
+      auto r = quiz::resolveQuestion(step.question, *p.keys);
+      REQUIRE_MESSAGE(r, (r ? "" : r.error().message));
+      switch (step.question.kind) {
+        case quiz::QuestionKind::Identify:
+        case quiz::QuestionKind::Relation:
+          CHECK(r->keyChoice >= 0);
+          CHECK(r->keyChoice < int(r->choices.size()));
+          break;
+        case quiz::QuestionKind::Order:
+          CHECK(r->keyOrder.size() >= 2);
+          for (const std::string& id : r->keyOrder) CHECK(position(r->choices, id) >= 0);
+          break;
+        default: break;
+      }
+    }
+  }
+}
+
+TEST_CASE("PhantomKeys_FromTheCochleaTheVestibuleIsNearerThanTheSigmoidSinusAndCarotid") {
+  PhantomKeys& p = phantomKeys();
+  auto d = p.keys->distancesFrom("cochlea");
+  REQUIRE(d);
+  CHECK((*d)["vestibule"] < (*d)["carotid_canal"]);
+  CHECK((*d)["carotid_canal"] < (*d)["sigmoid_sinus"]);
+  auto r = quiz::resolveQuestion(findQuestion(p.course, "inner_ear.cochlea_nearest"), *p.keys);
+  REQUIRE(r);
+  CHECK(r->choices[std::size_t(r->keyChoice)] == "vestibule");
+}
+
+TEST_CASE("PhantomKeys_ReachabilityFollowsFluidAndAirNotDenseBone") {
+  PhantomKeys& p = phantomKeys();
+  auto vestibule = quiz::resolveQuestion(findQuestion(p.course, "inner_ear.vestibule_reachable"), *p.keys);
+  REQUIRE(vestibule);
+  CHECK(vestibule->choices[std::size_t(vestibule->keyChoice)] == "posterior_semicircular_canal");
+  auto cells = quiz::resolveQuestion(findQuestion(p.course, "mastoidectomy_landmarks.air_cells_reachable"), *p.keys);
+  REQUIRE(cells);
+  CHECK(cells->choices[std::size_t(cells->keyChoice)] == "tympanic_cavity");
+  auto stapes = quiz::resolveQuestion(findQuestion(p.course, "middle_ear.stapes_nearest"), *p.keys);
+  REQUIRE(stapes);
+  CHECK(stapes->choices[std::size_t(stapes->keyChoice)] == "vestibule");
+  auto nerve = quiz::resolveQuestion(findQuestion(p.course, "facial_nerve.nearest_canal"), *p.keys);
+  REQUIRE(nerve);
+  CHECK(nerve->choices[std::size_t(nerve->keyChoice)] == "lateral_semicircular_canal");
+}
+
+TEST_CASE("PhantomKeys_MastoidDrillPathMeetsAirCellsBeforeTheLateralCanal") {
+  PhantomKeys& p = phantomKeys();
+  auto r = quiz::resolveQuestion(findQuestion(p.course, "mastoidectomy_landmarks.order_drill_path"), *p.keys);
+  REQUIRE(r);
+  CHECK(r->keyOrder.front() == "mastoid_air_cells");
+  CHECK(r->keyOrder.back() == "lateral_semicircular_canal");
+  CHECK(position(r->keyOrder, "sigmoid_sinus") == -1);  // the path stays in front of the sinus
+}
+
+TEST_CASE("PhantomKeys_SoundPathAndFacialNervePathMeetStructuresInAnatomicalOrder") {
+  PhantomKeys& p = phantomKeys();
+  auto sound = quiz::resolveQuestion(findQuestion(p.course, "middle_ear.order_sound_path"), *p.keys);
+  REQUIRE(sound);
+  const auto& s = sound->keyOrder;
+  CHECK(s.front() == "external_auditory_canal");
+  CHECK(s.back() == "vestibule");
+  CHECK(position(s, "tympanic_cavity") > 0);
+  CHECK(position(s, "stapes") > position(s, "tympanic_cavity"));
+  auto nerve = quiz::resolveQuestion(findQuestion(p.course, "facial_nerve.order_iac_to_middle_ear"), *p.keys);
+  REQUIRE(nerve);
+  const auto& n = nerve->keyOrder;
+  CHECK(n.front() == "internal_auditory_canal");
+  CHECK(n.back() == "tympanic_cavity");
+  CHECK(position(n, "facial_nerve") > 0);
+}
+
+TEST_CASE("PhantomKeys_IdentifyDistractorsAreTheStructuresNearestTheTarget") {
+  PhantomKeys& p = phantomKeys();
+  const quiz::Question& q = findQuestion(p.course, "inner_ear.identify_vestibule");
+  auto r = quiz::resolveQuestion(q, *p.keys);
+  REQUIRE(r);
+  auto d = p.keys->distancesFrom("vestibule");
+  REQUIRE(d);
+  double farthestChoice = 0;
+  for (const std::string& id : r->choices) {
+    if (id != "vestibule") farthestChoice = std::max(farthestChoice, (*d)[id]);
+  }
+  for (const auto& [id, dist] : *d) {
+    if (id != "vestibule" && position(r->choices, id) < 0) CHECK_MESSAGE(dist >= farthestChoice, id);
+  }
+  CHECK(position(r->choices, "sigmoid_sinus") == -1);
+}
+
+TEST_CASE("ShippedCourse_NameQuestionsAcceptSynonymsButNotTheNeighbouringCanal") {
+  PhantomKeys& p = phantomKeys();
+  test::InMemoryCurriculum curriculum;
+  curriculum.courseList = {p.course};
+  curriculum.datasets["phantom"] = phantomStructures();
+  test::InMemoryProgress progress;
+  LessonEngine engine(curriculum, progress, *p.keys);
+  REQUIRE(engine.start(1, "inner_ear", LessonMode::QuizOnly));
+  REQUIRE(engine.current());
+  // Go to the name question of the lateral canal.
+  while (engine.current()->questionId != "inner_ear.name_lateral_canal") {
+    auto q = engine.currentQuestion();
+    REQUIRE(q);
+    REQUIRE(engine.answer(rightAnswer(*q, p.dataset), {}, 1));
+    REQUIRE(engine.next());
+  }
+  quiz::Answer a;
+  a.text = "Horizontal  semi-circular canal";
+  auto g = engine.answer(a, {}, 1);
+  REQUIRE(g);
+  CHECK(g->correct);
+
+  // A grading context built like the engine's: "external auditory canal" is not a typo of the internal one.
+  quiz::GradingContext context;
+  for (const Structure& s : phantomStructures()) {
+    quiz::NameEntry e{s.id, {s.displayName}};
+    for (const std::string& syn : p.course.synonyms[s.id]) e.names.push_back(syn);
+    context.names.push_back(e);
+  }
+  quiz::ResolvedQuestion iac;
+  iac.question.id = "t";
+  iac.question.kind = quiz::QuestionKind::Name;
+  iac.question.target = "internal_auditory_canal";
+  a.text = "external auditory canal";
+  CHECK_FALSE(quiz::grade(iac, a, context)->correct);
+  a.text = "internal acoustic meatus";
+  CHECK(quiz::grade(iac, a, context)->correct);
+  a.text = "internal auditory canl";
+  CHECK(quiz::grade(iac, a, context)->correct);
+}
+
+TEST_CASE("ShippedCourse_EveryLessonPlaysThroughInOrderWithPrerequisites") {
+  PhantomKeys& p = phantomKeys();
+  test::InMemoryCurriculum curriculum;
+  curriculum.courseList = {p.course};
+  curriculum.datasets["phantom"] = phantomStructures();
+  test::InMemoryProgress progress;
+  LessonEngine engine(curriculum, progress, *p.keys);
+  // The last lesson is locked until its prerequisites are done.
+  auto locked = engine.start(1, "mastoidectomy_landmarks");
+  REQUIRE_FALSE(locked);
+  CHECK(locked.error().message.find("'facial_nerve'") != std::string::npos);
+  CHECK(locked.error().message.find("'middle_ear'") != std::string::npos);
+
+  std::size_t answered = 0;
+  for (const Lesson& lesson : p.course.lessons) {
+    REQUIRE_MESSAGE(engine.start(1, lesson.id), lesson.id);
+    while (!engine.atEnd()) {
+      auto step = engine.current();
+      REQUIRE(step);
+      if (step->kind == StepKind::Question) {
+        auto q = engine.currentQuestion();
+        REQUIRE(q);
+        auto g = engine.answer(rightAnswer(*q, p.dataset), {}, 100);
+        REQUIRE(g);
+        CHECK_MESSAGE(g->correct, q->question.id);
+        ++answered;
+      }
+      REQUIRE(engine.next());
+    }
+    auto score = engine.finish();
+    REQUIRE(score);
+    CHECK(*score == doctest::Approx(1.0));
+  }
+  CHECK(progress.responseList.size() == answered);
+  CHECK(answered >= 20);
+}

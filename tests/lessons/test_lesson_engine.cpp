@@ -1,0 +1,302 @@
+#include <doctest/doctest.h>
+
+#include "in_memory_repositories.h"
+#include "lessons/lesson_engine.h"
+#include "quiz/elo.h"
+
+using namespace at;
+using namespace at::lessons;
+
+namespace {
+
+Step showStep(const std::string& structure) {
+  Step s;
+  s.kind = StepKind::Show;
+  s.show = {structure, structure + "_wdt", CameraView::LateralRight, "About " + structure, "Text."};
+  return s;
+}
+
+Step questionStep(quiz::Question q) {
+  Step s;
+  s.kind = StepKind::Question;
+  s.question = std::move(q);
+  return s;
+}
+
+quiz::Question nameQ(const std::string& id, const std::string& target, double difficulty = 1500) {
+  quiz::Question q;
+  q.id = id;
+  q.kind = quiz::QuestionKind::Name;
+  q.target = target;
+  q.prompt = "Name the highlighted structure.";
+  q.difficulty = difficulty;
+  return q;
+}
+
+quiz::Question identifyQ(const std::string& id, const std::string& target) {
+  quiz::Question q;
+  q.id = id;
+  q.kind = quiz::QuestionKind::Identify;
+  q.target = target;
+  q.prompt = "Which structure is highlighted?";
+  q.distractors = 2;
+  return q;
+}
+
+// Course "toy": lesson "one" (show, name cochlea, show, identify stapes, name vestibule), lesson
+// "two" requiring "one" (name incus).
+struct Fixture {
+  test::InMemoryCurriculum curriculum;
+  test::InMemoryProgress progress;
+  test::TableKeyComputer keys;
+  UnixSeconds clock = 1'000'000;
+
+  Fixture() {
+    Course c;
+    c.id = "toy";
+    c.title = "Toy";
+    c.datasetId = "phantom";
+    c.synonyms["stapes"] = {"stirrup"};
+    Lesson one;
+    one.id = "one";
+    one.courseId = "toy";
+    one.title = "Lesson one";
+    one.steps = {showStep("cochlea"), questionStep(nameQ("one.q1", "cochlea", 1400)), showStep("stapes"),
+                 questionStep(identifyQ("one.q2", "stapes")), questionStep(nameQ("one.q3", "vestibule", 1600))};
+    Lesson two;
+    two.id = "two";
+    two.courseId = "toy";
+    two.title = "Lesson two";
+    two.prerequisites = {"one"};
+    two.steps = {questionStep(nameQ("two.q1", "incus"))};
+    c.lessons = {one, two};
+    curriculum.courseList = {c};
+    curriculum.datasets["phantom"] = {{1, "cochlea", "Cochlea"}, {2, "vestibule", "Vestibule"},
+                                      {3, "stapes", "Stapes"},   {4, "incus", "Incus"},
+                                      {5, "malleus", "Malleus"}};
+    keys.structureIds = {"cochlea", "vestibule", "stapes", "incus", "malleus"};
+    keys.distances["stapes"] = {{"stapes", 0}, {"incus", 0.1}, {"malleus", 0.9}, {"vestibule", 0.4}, {"cochlea", 3}};
+  }
+
+  EngineOptions options() {
+    EngineOptions o;
+    o.clock = [this] { return clock; };
+    return o;
+  }
+};
+
+quiz::Answer text(const std::string& t) {
+  quiz::Answer a;
+  a.text = t;
+  return a;
+}
+
+quiz::Answer choice(int c) {
+  quiz::Answer a;
+  a.choice = c;
+  return a;
+}
+
+int indexOf(const std::vector<std::string>& v, const std::string& x) {
+  return int(std::find(v.begin(), v.end(), x) - v.begin());
+}
+
+}  // namespace
+
+TEST_CASE("LessonEngine_RunsALessonStartToFinishRecordingEveryAnswer") {
+  Fixture f;
+  LessonEngine engine(f.curriculum, f.progress, f.keys, f.options());
+  REQUIRE(engine.start(1, "one"));
+  CHECK_FALSE(engine.resumed());
+
+  auto step = engine.current();
+  REQUIRE(step);
+  CHECK((step->kind == StepKind::Show));
+  CHECK(step->position == 1);
+  CHECK(step->count == 5);
+  CHECK(step->structureName == "Cochlea");
+  CHECK_FALSE(engine.answer(text("cochlea"), {}, 10));  // a show step takes no answer
+  REQUIRE(engine.next());
+
+  step = engine.current();
+  CHECK((step->kind == StepKind::Question));
+  CHECK_FALSE(engine.next());  // unanswered question: cannot move on
+  auto g = engine.answer(text("Cochlea"), RenderState{"cochlea_wdt", "wdt", 0.4, 1.6, 1.0}, 1234);
+  REQUIRE(g);
+  CHECK(g->correct);
+  // Recorded before answer() returned: response, progress, Elo.
+  REQUIRE(f.progress.responseList.size() == 1);
+  const Response& r = f.progress.responseList[0];
+  CHECK(r.questionId == "one.q1");
+  CHECK(r.stepIndex == 1);
+  CHECK(r.latencyMs == 1234);
+  CHECK(r.render.presetId == "cochlea_wdt");
+  CHECK(r.render.t == 0.4);
+  CHECK(*r.answer.text == "Cochlea");
+  CHECK(f.progress.progressMap[{1, "cochlea"}].box == 2);
+  const auto elo = quiz::updateElo(1500, 1400, 1.0);
+  CHECK(f.progress.abilities[1] == doctest::Approx(elo.ability));
+  CHECK(f.progress.difficulties["one.q1"] == doctest::Approx(elo.difficulty));
+  CHECK_FALSE(engine.answer(text("cochlea"), {}, 10));  // answered once only
+  CHECK(engine.current()->feedback.has_value());
+  REQUIRE(engine.next());
+  REQUIRE(engine.next());  // show stapes
+
+  step = engine.current();
+  REQUIRE((step->questionKind == quiz::QuestionKind::Identify));
+  CHECK(step->choiceIds.size() == 3);  // stapes + 2 nearest (incus, vestibule)
+  CHECK(indexOf(step->choiceIds, "malleus") == 3);
+  const int wrong = indexOf(step->choiceIds, "incus");
+  g = engine.answer(choice(wrong), {}, 500);
+  REQUIRE(g);
+  CHECK_FALSE(g->correct);
+  CHECK(f.progress.progressMap[{1, "stapes"}].box == 1);
+  CHECK(f.progress.progressMap[{1, "stapes"}].dueAt == f.clock + 600);
+  REQUIRE(engine.next());
+
+  CHECK_FALSE(engine.finish());  // one question left
+  REQUIRE(engine.answer(text("vestibul"), {}, 50));
+  REQUIRE(engine.next());
+  CHECK(engine.atEnd());
+  CHECK_FALSE(engine.current());
+  auto score = engine.finish();
+  REQUIRE(score);
+  CHECK(*score == doctest::Approx(2.0 / 3.0));
+  CHECK(f.progress.attemptList[0].finishedAt.has_value());
+  CHECK(f.progress.attemptList[0].score == doctest::Approx(2.0 / 3.0));
+  CHECK(f.progress.responseList.size() == 3);
+}
+
+TEST_CASE("LessonEngine_ResumesAPartialAttemptAtTheFirstUnansweredStep") {
+  Fixture f;
+  {
+    LessonEngine engine(f.curriculum, f.progress, f.keys, f.options());
+    REQUIRE(engine.start(1, "one"));
+    REQUIRE(engine.next());
+    REQUIRE(engine.answer(text("cochlea"), {}, 10));
+    // the process dies here, after the answer, before next()
+  }
+  LessonEngine engine(f.curriculum, f.progress, f.keys, f.options());
+  REQUIRE(engine.start(1, "one"));
+  CHECK(engine.resumed());
+  CHECK(f.progress.attemptList.size() == 1);
+  auto step = engine.current();
+  REQUIRE(step);
+  CHECK(step->index == 2);  // the show step after the answered question
+  REQUIRE(engine.next());
+  REQUIRE(engine.current()->questionId == "one.q2");
+  const auto stapes = indexOf(engine.current()->choiceIds, "stapes");
+  REQUIRE(engine.answer(choice(stapes), {}, 10)->correct);
+  {
+    // die again after answering q2 and moving on
+    REQUIRE(engine.next());
+  }
+  LessonEngine third(f.curriculum, f.progress, f.keys, f.options());
+  REQUIRE(third.start(1, "one"));
+  CHECK(third.current()->questionId == "one.q3");
+  // The choices shown are stable across resumes (same order as before).
+  CHECK(f.progress.responseList.size() == 2);
+  REQUIRE(third.answer(text("vestibule"), {}, 10));
+  REQUIRE(third.next());
+  CHECK(*third.finish() == doctest::Approx(1.0));
+}
+
+TEST_CASE("LessonEngine_PrerequisitesMustBeFinishedAndTheErrorNamesThem") {
+  Fixture f;
+  LessonEngine engine(f.curriculum, f.progress, f.keys, f.options());
+  auto blocked = engine.start(1, "two");
+  REQUIRE_FALSE(blocked);
+  CHECK(blocked.error().message == "lesson 'two' (Lesson two) needs 'one' (Lesson one) finished first");
+  CHECK(f.progress.attemptList.empty());
+
+  REQUIRE(engine.start(1, "one"));
+  while (!engine.atEnd()) {
+    auto step = engine.current();
+    if (step->kind == StepKind::Question) {
+      if (step->questionKind == quiz::QuestionKind::Identify) REQUIRE(engine.answer(choice(0), {}, 1));
+      else REQUIRE(engine.answer(text(step->structure), {}, 1));
+    }
+    REQUIRE(engine.next());
+  }
+  REQUIRE(engine.finish());
+  CHECK(engine.start(1, "two"));
+  // Another user has not finished lesson one.
+  CHECK_FALSE(engine.start(2, "two"));
+  CHECK_FALSE(engine.start(1, "three"));
+}
+
+TEST_CASE("LessonEngine_QuizOnlyModeSkipsShowStepsAndHidesNames") {
+  Fixture f;
+  LessonEngine engine(f.curriculum, f.progress, f.keys, f.options());
+  REQUIRE(engine.start(1, "one", LessonMode::QuizOnly));
+  auto step = engine.current();
+  REQUIRE(step);
+  CHECK((step->kind == StepKind::Question));
+  CHECK(step->count == 3);
+  CHECK_FALSE(step->labelsVisible);
+  CHECK(step->structureName.empty());
+  // Resuming keeps the stored mode whatever is asked.
+  REQUIRE(engine.answer(text("cochlea"), {}, 1));
+  LessonEngine again(f.curriculum, f.progress, f.keys, f.options());
+  REQUIRE(again.start(1, "one", LessonMode::Guided));
+  CHECK((again.attempt().mode == LessonMode::QuizOnly));
+  CHECK(again.current()->questionId == "one.q2");
+}
+
+TEST_CASE("LessonEngine_StorageFailureMeansTheAnswerDidNotCount") {
+  Fixture f;
+  LessonEngine engine(f.curriculum, f.progress, f.keys, f.options());
+  REQUIRE(engine.start(1, "one"));
+  REQUIRE(engine.next());
+  f.progress.failNextRecord = true;
+  auto g = engine.answer(text("cochlea"), {}, 1);
+  REQUIRE_FALSE(g);
+  CHECK(g.error().message.find("disk full") != std::string::npos);
+  CHECK_FALSE(engine.next());                       // still unanswered
+  CHECK(engine.answer(text("cochlea"), {}, 1));     // can be given again
+  CHECK(f.progress.responseList.size() == 1);
+}
+
+TEST_CASE("LessonEngine_MalformedAnswerIsReportedAndNothingRecorded") {
+  Fixture f;
+  LessonEngine engine(f.curriculum, f.progress, f.keys, f.options());
+  REQUIRE(engine.start(1, "one"));
+  REQUIRE(engine.next());
+  CHECK_FALSE(engine.answer(choice(0), {}, 1));  // a name question needs text
+  CHECK(f.progress.responseList.empty());
+}
+
+TEST_CASE("ReviewQueue_AndAdaptiveReview_FollowDueTimesAndAbility") {
+  Fixture f;
+  LessonEngine engine(f.curriculum, f.progress, f.keys, f.options());
+  REQUIRE(engine.start(1, "one"));
+  REQUIRE(engine.next());
+  REQUIRE(engine.answer(text("cochlea"), {}, 1));   // right: due in 2 days
+  REQUIRE(engine.next());
+  REQUIRE(engine.next());
+  REQUIRE(engine.answer(choice(indexOf(engine.current()->choiceIds, "incus")), {}, 1));  // wrong: 10 min
+  auto queue = reviewQueue(f.progress, 1, f.clock + 3600);
+  REQUIRE(queue);
+  REQUIRE(queue->size() == 1);
+  CHECK(queue->front().structureId == "stapes");
+  queue = reviewQueue(f.progress, 1, f.clock + 3 * 86400);
+  REQUIRE(queue->size() == 2);
+  CHECK(queue->front().structureId == "stapes");  // due earlier
+  CHECK(queue->back().structureId == "cochlea");
+
+  // Candidates 1 hour later: stapes (due), vestibule and incus (never answered); cochlea is not due.
+  auto chosen = chooseReviewQuestion(f.curriculum, f.progress, 1, "toy", f.clock + 3600);
+  REQUIRE(chosen);
+  REQUIRE(chosen->has_value());
+  CHECK((*chosen)->target != "cochlea");
+  // The choice is the eligible question whose expected success is nearest 0.7 (recomputed here).
+  const double ability = f.progress.abilities[1];
+  double bestGap = 2;
+  std::string best;
+  for (const auto& [id, diff] : std::vector<std::pair<std::string, double>>{
+           {"one.q2", f.progress.difficulties["one.q2"]}, {"one.q3", 1600}, {"two.q1", 1500}}) {
+    const double gap = std::abs(quiz::expectedScore(ability, diff) - 0.7);
+    if (gap < bestGap) bestGap = gap, best = id;
+  }
+  CHECK((*chosen)->id == best);
+}

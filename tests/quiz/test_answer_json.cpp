@@ -1,0 +1,48 @@
+#include <doctest/doctest.h>
+
+#include "quiz/answer_json.h"
+
+using namespace at::quiz;
+
+TEST_CASE("AnswerJson_ParsesEveryPlayLineFormAndRoundTrips") {
+  auto choice = answerFromJson(R"({"choice": 2})");
+  REQUIRE(choice);
+  CHECK(*choice->choice == 2);
+  auto text = answerFromJson(R"({"text": "Cochlea; DROP TABLE users; \"quoted\""})");
+  REQUIRE(text);
+  CHECK(*text->text == "Cochlea; DROP TABLE users; \"quoted\"");
+  auto pick = answerFromJson(R"({"pick": "stapes", "distance_mm": 0.3})");
+  REQUIRE(pick);
+  CHECK(pick->pick->structure == "stapes");
+  CHECK(pick->pick->distanceMm == doctest::Approx(0.3));
+  auto nothing = answerFromJson(R"({"pick": null})");
+  REQUIRE(nothing);
+  CHECK(nothing->pick->structure.empty());
+  CHECK(nothing->pick->distanceMm < 0);
+  auto order = answerFromJson(R"({"order": ["a", "b"]})");
+  REQUIRE(order);
+  CHECK(*order->order == std::vector<std::string>{"a", "b"});
+
+  for (const auto* a : {&*choice, &*text, &*pick, &*order}) {
+    auto again = answerFromJson(answerToJson(*a));
+    REQUIRE(again);
+    CHECK(answerToJson(*again) == answerToJson(*a));
+  }
+}
+
+TEST_CASE("AnswerJson_MalformedLinesAreErrorsSayingWhy") {
+  const auto message = [](const char* line) {
+    auto r = answerFromJson(line);
+    REQUIRE_FALSE(r);
+    return r.error().message;
+  };
+  CHECK(message("{choice: 2}").find("not valid JSON") != std::string::npos);
+  CHECK(message("[1]").find("object") != std::string::npos);
+  CHECK(message(R"({"choice": "2"})").find("choice") != std::string::npos);
+  CHECK(message(R"({"colour": 2})").find("unknown field 'colour'") != std::string::npos);
+  CHECK(message(R"({})").find("no answer") != std::string::npos);
+  CHECK(message(R"({"choice": 1, "text": "x"})").find("more than one") != std::string::npos);
+  CHECK(message(R"({"distance_mm": 0.3})").find("only allowed with pick") != std::string::npos);
+  CHECK(message(R"({"pick": "stapes", "distance_mm": -1})").find("distance_mm") != std::string::npos);
+  CHECK(message(R"({"order": ["a", 3]})").find("order") != std::string::npos);
+}

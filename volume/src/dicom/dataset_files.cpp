@@ -1,0 +1,200 @@
+// openDatasetFiles: a volume, optional labels and optional names → a Dataset on the volume's grid.
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <filesystem>
+#include <map>
+#include <set>
+
+#include "dicom_support.h"
+#include "volume/dataset_source.h"
+#include "volume/image_file.h"
+#include "volume/resample.h"
+
+namespace fs = std::filesystem;
+
+namespace at {
+
+namespace {
+
+using dicom::formatNumber;
+
+// "Vertebrae L1" → "vertebrae_l1"; "kidney-left (2)" → "kidney_left_2".
+std::string snakeCase(const std::string& name) {
+  std::string id;
+  for (unsigned char c : name) {
+    if (std::isalnum(c)) id += char(std::tolower(c));
+    else if (!id.empty() && id.back() != '_') id += '_';
+  }
+  while (!id.empty() && id.back() == '_') id.pop_back();
+  return id;
+}
+
+// "kidney_right" → "Kidney right"; names with spaces or capitals are kept as written.
+std::string displayNameOf(const std::string& name) {
+  std::string out = name;
+  std::replace(out.begin(), out.end(), '_', ' ');
+  if (!out.empty()) out[0] = char(std::toupper(static_cast<unsigned char>(out[0])));
+  return out;
+}
+
+// Distinct colours for labels without one: hues spaced by the golden angle, as linear RGB.
+std::array<float, 3> paletteColour(std::uint16_t label) {
+  const double hue = std::fmod(label * 137.508, 360.0) / 60.0;
+  const double x = 1 - std::abs(std::fmod(hue, 2.0) - 1);
+  double r = 0, g = 0, b = 0;
+  switch (int(hue)) {
+    case 0: r = 1, g = x; break;
+    case 1: r = x, g = 1; break;
+    case 2: g = 1, b = x; break;
+    case 3: g = x, b = 1; break;
+    case 4: r = x, b = 1; break;
+    default: r = 1, b = x; break;
+  }
+  auto mix = [](double c) { return float(std::pow(0.25 + 0.7 * c, 2.2)); };
+  return {mix(r), mix(g), mix(b)};
+}
+
+// The box spanned by a grid's voxel centres in LPS millimetres.
+struct BoxMm {
+  Vec3 lo{0, 0, 0}, hi{0, 0, 0};
+};
+
+BoxMm boxOf(const Geometry& g) {
+  BoxMm box;
+  bool first = true;
+  for (int c = 0; c < 8; ++c) {
+    const Vec3 ijk{(c & 1) ? g.dims.x - 1.0 : 0.0, (c & 2) ? g.dims.y - 1.0 : 0.0, (c & 4) ? g.dims.z - 1.0 : 0.0};
+    const Vec3 p = g.indexToPatient(ijk);
+    for (int a = 0; a < 3; ++a) {
+      box.lo[a] = first ? p[a] : std::min(box.lo[a], p[a]);
+      box.hi[a] = first ? p[a] : std::max(box.hi[a], p[a]);
+    }
+    first = false;
+  }
+  return box;
+}
+
+std::string describe(const BoxMm& box) {
+  static const char* const axes[3] = {"x ", ", y ", ", z "};
+  std::string out;
+  for (int a = 0; a < 3; ++a) {
+    out += axes[a];
+    out += formatNumber(box.lo[a]);
+    out += "…";
+    out += formatNumber(box.hi[a]);
+  }
+  return out + " mm";
+}
+
+bool boxesOverlap(const Geometry& a, const Geometry& b) {
+  // Half a voxel of slack around each box: the grids' voxels, not just their centres, count.
+  const BoxMm ba = boxOf(a), bb = boxOf(b);
+  for (int axis = 0; axis < 3; ++axis) {
+    const double slack = 0.5 * std::max({a.spacingMm[0], a.spacingMm[1], a.spacingMm[2], b.spacingMm[0],
+                                         b.spacingMm[1], b.spacingMm[2]});
+    if (ba.hi[axis] + slack < bb.lo[axis] || bb.hi[axis] + slack < ba.lo[axis]) return false;
+  }
+  return true;
+}
+
+std::string datasetIdFromPath(const std::string& path) {
+  fs::path p(path);
+  if (p.filename().empty()) p = p.parent_path();  // "ct/" → "ct"
+  std::string name = p.filename().string();
+  for (const char* suffix : {".nii.gz", ".nii", ".nrrd", ".nhdr", ".dcm"}) {
+    const std::string s = suffix;
+    if (name.size() > s.size() && name.compare(name.size() - s.size(), s.size(), s) == 0) {
+      name.resize(name.size() - s.size());
+      break;
+    }
+  }
+  const std::string id = snakeCase(name);
+  return id.empty() ? "dataset" : id;
+}
+
+}  // namespace
+
+Result<Dataset> openDatasetFiles(const DatasetFiles& files) {
+  if (files.volumePath.empty()) return fail("no volume file given");
+  ImageLoadOptions volumeOptions;
+  volumeOptions.dicomSeriesUid = files.dicomSeriesUid;
+  auto volumeImage = loadImageFile(files.volumePath, volumeOptions);
+  if (!volumeImage) return tl::unexpected(volumeImage.error());
+  auto volume = toHuVolume(*volumeImage, files.volumePath);
+  if (!volume) return tl::unexpected(volume.error());
+
+  Dataset dataset;
+  dataset.id = files.id.empty() ? datasetIdFromPath(files.volumePath) : files.id;
+  dataset.displayName = dataset.id;
+  dataset.volume = std::move(*volume);
+  dataset.provenance.source = files.volumePath;
+  dataset.provenance.notes = volumeImage->notes;
+  const Geometry& grid = dataset.volume.geometry;
+
+  std::vector<SegmentInfo> segments;
+  if (files.labelsPath.empty()) {
+    dataset.labels = LabelMap(grid, 0);
+  } else {
+    auto labelImage = loadImageFile(files.labelsPath);
+    if (!labelImage) return tl::unexpected(labelImage.error());
+    auto labels = toLabelMap(*labelImage, files.labelsPath);
+    if (!labels) return tl::unexpected(labels.error());
+    for (const std::string& note : labelImage->notes) dataset.provenance.notes.push_back(files.labelsPath + ": " + note);
+    segments = labelImage->segments;
+    dataset.provenance.labelsSource = files.labelsPath;
+
+    if (labels->geometry.sameGridAs(grid)) {
+      labels->geometry = grid;
+      dataset.labels = std::move(*labels);
+    } else {
+      if (!boxesOverlap(labels->geometry, grid))
+        return fail(files.labelsPath + " does not overlap " + files.volumePath + " on the patient frame: labels span " +
+                    describe(boxOf(labels->geometry)) + ", the volume spans " + describe(boxOf(grid)));
+      auto resampled = resampleLabelsNearest(*labels, grid);
+      if (!resampled)
+        return fail(files.labelsPath + " cannot be resampled onto " + files.volumePath + ": " +
+                    resampled.error().message);
+      dataset.provenance.notes.push_back(
+          "labels resampled (nearest neighbour) from their " + labels->geometry.dims.toString() + " " +
+          labels->geometry.orientationCode() + " grid onto the volume's " + grid.dims.toString() + " " +
+          grid.orientationCode() + " grid through both patient frames");
+      dataset.labels = std::move(*resampled);
+    }
+  }
+
+  std::map<std::uint16_t, std::string> names;
+  if (!files.namesPath.empty()) {
+    auto loadedNames = loadLabelNames(files.namesPath);
+    if (!loadedNames) return tl::unexpected(loadedNames.error());
+    names = std::move(*loadedNames);
+  }
+
+  // Only labels present in the map become structures.
+  std::vector<std::size_t> counts(65536, 0);
+  for (std::uint16_t v : dataset.labels.voxels) ++counts[v];
+  std::set<std::string> usedIds;
+  for (std::size_t label = 1; label < counts.size(); ++label) {
+    if (!counts[label]) continue;
+    Structure s;
+    s.label = std::uint16_t(label);
+    s.colour = paletteColour(s.label);
+    std::string name;
+    auto segment = std::find_if(segments.begin(), segments.end(), [&](const SegmentInfo& i) { return i.label == label; });
+    if (segment != segments.end()) {
+      name = segment->name;
+      s.colour = segment->colour;
+    } else if (auto it = names.find(s.label); it != names.end()) {
+      name = it->second;
+    }
+    s.id = snakeCase(name);
+    if (s.id.empty()) s.id = "label_" + std::to_string(label);
+    if (usedIds.count(s.id)) s.id.append(1, '_').append(std::to_string(label));
+    usedIds.insert(s.id);
+    s.displayName = name.empty() ? "Label " + std::to_string(label) : displayNameOf(name);
+    dataset.structures.push_back(std::move(s));
+  }
+  return dataset;
+}
+
+}  // namespace at
