@@ -2,13 +2,13 @@
 # Regenerates the paper's figures on the built-in phantom into docs/figures/ with the shipped
 # presets (data/presets). Each panel is one PNG; docs/figures/README.md says what each shows.
 #   scripts/make_figures.sh [BUILD_DIR]        (default: build; needs build/app/anatomy-tutor)
-# Environment: DATASET (default phantom, i.e. 256³), SIZE (default 512x512), OUT (default docs/figures).
+# Environment: DATASET (default phantom, i.e. 256³), SIZE (default 448x448: panels stay under 300 KB), OUT (default docs/figures).
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 build="${1:-$root/build}"
 app="$build/app/anatomy-tutor"
 dataset="${DATASET:-phantom}"
-size="${SIZE:-512x512}"
+size="${SIZE:-448x448}"
 out="${OUT:-$root/docs/figures}"
 mkdir -p "$out"
 [ -x "$app" ] || { echo "make_figures: $app not built (ninja -C $build anatomy-tutor)" >&2; exit 1; }
