@@ -11,6 +11,7 @@ packages=(
   libdcmtk-dev libopenjp2-7-dev libnifti2-dev zlib1g-dev libpng-dev
   doctest-dev libexpected-dev
   xvfb xauth
+  python3-skimage
 )
 
 missing=()

@@ -496,11 +496,9 @@ std::string summarySvg(const StudyProtocol& protocol, const StudySummary& summar
   return svg;
 }
 
-ChartImage renderSummaryChart(const StudyProtocol& protocol, const StudySummary& summary, const ChartLayout& L) {
-  ChartImage img;
-  img.width = L.width;
-  img.height = L.height(summary.items.size());
-  img.rgb.assign(std::size_t(img.width) * std::size_t(img.height) * 3, 255);
+RgbImage renderSummaryChart(const StudyProtocol& protocol, const StudySummary& summary, const ChartLayout& L) {
+  RgbImage img(L.width, L.height(summary.items.size()));
+  std::fill(img.rgb.begin(), img.rgb.end(), std::uint8_t(255));
   auto put = [&](int x, int y, std::array<std::uint8_t, 3> c) {
     if (x < 0 || y < 0 || x >= img.width || y >= img.height) return;
     std::uint8_t* p = &img.rgb[(std::size_t(y) * std::size_t(img.width) + std::size_t(x)) * 3];

@@ -155,7 +155,7 @@ TEST_CASE("StudySummary_EmptyStudy_HasEmptyCellsAndStillRenders") {
   const StudySummary s = summariseStudy(p, {});
   for (const auto& c : s.cells) CHECK(c.stats.n == 0);
   CHECK(summaryCsv(s).find("shape,all,0,") != std::string::npos);
-  const ChartImage img = renderSummaryChart(p, s);
+  const at::RgbImage img = renderSummaryChart(p, s);
   CHECK(img.width > 0);
   CHECK(summarySvg(p, s).find("<svg") == 0);
 }
@@ -169,7 +169,7 @@ TEST_CASE("SummaryChart_MarkersSitAtTheMeans") {
   }
   const StudySummary s = summariseStudy(p, rows);
   const ChartLayout layout;
-  const ChartImage img = renderSummaryChart(p, s, layout);
+  const at::RgbImage img = renderSummaryChart(p, s, layout);
   auto pixel = [&](int x, int y) {
     const std::uint8_t* q = &img.rgb[(std::size_t(y) * img.width + x) * 3];
     return std::array<std::uint8_t, 3>{q[0], q[1], q[2]};

@@ -17,12 +17,14 @@
 #include <cstdlib>
 #include <cstring>
 #include <limits>
+#include <memory>
 #include <string>
 #include <thread>
 #include <type_traits>
 #include <immintrin.h>
 #include <vector>
 
+#include "huge_pages.h"
 #include "step_cost.h"
 #include "wdt/problem.h"
 #include "wdt/stencil.h"
@@ -163,8 +165,9 @@ RowFn rowFunction(CostKernel k) {
 // [SECTION] Team
 // ─────────────────────────────────────────────────────────────────────────────────────────────
 
-// Sense-counting barrier. Spins briefly (planes take tens of microseconds), then yields: the
-// machine may be shared and a spinning waiter must not starve the thread it waits for.
+// Generation-counting barrier. Spins briefly (an idle machine's planes take tens of
+// microseconds), then sleeps on the generation word (futex): on a loaded machine the partner may
+// be descheduled, and a sleeping waiter hands it the core instead of competing for it.
 class SpinBarrier {
  public:
   explicit SpinBarrier(int n) : n_(n) {}
@@ -174,15 +177,14 @@ class SpinBarrier {
     if (count_.fetch_add(1, std::memory_order_acq_rel) == n_ - 1) {
       count_.store(0, std::memory_order_relaxed);
       generation_.fetch_add(1, std::memory_order_acq_rel);
+      generation_.notify_all();
       return;
     }
-    for (int spin = 0; generation_.load(std::memory_order_acquire) == gen; ++spin) {
-      if (spin < 4000) {
-        __builtin_ia32_pause();
-      } else {
-        std::this_thread::yield();
-      }
+    for (int spin = 0; spin < 2000; ++spin) {
+      if (generation_.load(std::memory_order_acquire) != gen) return;
+      __builtin_ia32_pause();
     }
+    while (generation_.load(std::memory_order_acquire) == gen) generation_.wait(gen, std::memory_order_acquire);
   }
 
  private:
@@ -210,8 +212,8 @@ struct Run {
   float base = 0;
   Dims dims;
   std::vector<float> d;          // L1: x contiguous
-  std::vector<float> dT;         // L2: y contiguous (x sweeps)
-  std::vector<std::uint8_t> qT;  // density bytes in L2
+  std::unique_ptr<float[]> dT;         // L2: y contiguous (x sweeps); first touched by the team
+  std::unique_ptr<std::uint8_t[]> qT;  // density bytes in L2
   std::vector<float> infRow;
   std::vector<std::uint8_t> zeroRow;
   SweepGeometry x, y, z;
@@ -332,20 +334,26 @@ void worker(Run& run, int tid) {
   const int zs0 = int(std::int64_t(d.z) * tid / run.threads), zs1 = int(std::int64_t(d.z) * (tid + 1) / run.threads);
   const std::uint8_t* q = run.problem.density.data();
   const int planned = run.problem.params.converge ? run.problem.params.maxPasses : run.problem.params.passes;
+  {
+    const std::size_t slice = std::size_t(d.x) * d.y;
+    const std::uint8_t* seeds = run.problem.seeds.data();
+    for (std::size_t i = slice * zs0; i < slice * zs1; ++i) run.d[i] = seeds[i] ? 0.0f : kInf;
+    transposeSlices(q, run.qT.get(), d.x, d.y, zs0, zs1);
+  }
   for (int pass = 0; pass < planned; ++pass) {
     const auto t0 = std::chrono::steady_clock::now();
     run.changedBy[tid] = 0;
     if (checkCancel(run, tid)) break;
-    transposeSlices(run.d.data(), run.dT.data(), d.x, d.y, zs0, zs1);
+    transposeSlices(run.d.data(), run.dT.get(), d.x, d.y, zs0, zs1);
     run.barrier.wait();
-    sweep(run, run.x, run.dT.data(), run.qT.data(), +1, tid);
+    sweep(run, run.x, run.dT.get(), run.qT.get(), +1, tid);
     if (checkCancel(run, tid)) {
-      transposeSlices(run.dT.data(), run.d.data(), d.y, d.x, zs0, zs1);  // keep the partial x+ result
+      transposeSlices(run.dT.get(), run.d.data(), d.y, d.x, zs0, zs1);  // keep the partial x+ result
       run.barrier.wait();
       break;
     }
-    sweep(run, run.x, run.dT.data(), run.qT.data(), -1, tid);
-    transposeSlices(run.dT.data(), run.d.data(), d.y, d.x, zs0, zs1);
+    sweep(run, run.x, run.dT.get(), run.qT.get(), -1, tid);
+    transposeSlices(run.dT.get(), run.d.data(), d.y, d.x, zs0, zs1);
     if (checkCancel(run, tid)) break;
     sweep(run, run.y, run.d.data(), q, +1, tid);
     if (checkCancel(run, tid)) break;
@@ -380,21 +388,20 @@ Result<WdtResult> runCpuBackend(const WdtProblem& problem, const WdtControl& con
     return fail("WDT CPU backend: problem arrays do not match the grid " + d.toString());
   if (auto ok = validateWdtParams(problem.params); !ok) return tl::unexpected(ok.error());
 
-  int hw = int(std::max(1u, std::thread::hardware_concurrency()));
-  if (const char* env = std::getenv("AT_WDT_THREADS")) hw = std::max(1, std::atoi(env));  // benchmarks
+  const int hw = int(std::max(1u, std::thread::hardware_concurrency()));
   // Threads meet at a barrier after every plane; below ~32K voxels per plane (128² and smaller)
   // a plane's work is shorter than a barrier round trip and one thread is faster.
   const std::size_t planeVoxels = d.count() / std::size_t(std::max({d.x, d.y, d.z}));
-  const int threads = int(std::min<std::size_t>(std::size_t(hw), std::max<std::size_t>(1, planeVoxels / 32768)));
+  int threads = int(std::min<std::size_t>(std::size_t(hw), std::max<std::size_t>(1, planeVoxels / 32768)));
+  // AT_WDT_THREADS=N forces N threads (benchmarks, and tests of the multi-threaded schedule).
+  if (const char* env = std::getenv("AT_WDT_THREADS")) threads = std::clamp(std::atoi(env), 1, 256);
   Run run(problem, control, threads);
   run.dims = d;
   run.base = problem.params.baseCost;
   run.row = rowFunction(wdt::costKernel(problem.params));
-  run.d.resize(d.count());
-  for (std::size_t i = 0; i < d.count(); ++i) run.d[i] = problem.seeds[i] ? 0.0f : kInf;
-  run.dT.resize(d.count());
-  run.qT.resize(d.count());
-  transposeSlices(problem.density.data(), run.qT.data(), d.x, d.y, 0, d.z);
+  wdt::resizeOnHugePages(run.d, d.count());
+  run.dT.reset(wdt::newOnHugePages<float>(d.count()));
+  run.qT.reset(wdt::newOnHugePages<std::uint8_t>(d.count()));
   const int longest = std::max({d.x, d.y, d.z});
   run.infRow.assign(std::size_t(longest), kInf);
   run.zeroRow.assign(std::size_t(longest), 0);

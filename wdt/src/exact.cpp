@@ -68,17 +68,18 @@ void dijkstra(const WdtProblem& problem, Queue& queue, std::vector<float>& dist)
   const std::vector<Offset> steps = offsets(problem.grid);
   const std::uint8_t* q = problem.density.data();
   const float base = problem.params.baseCost;
-  std::vector<std::uint8_t> done(d.count(), 0);
   for (std::size_t i = 0; i < d.count(); ++i)
     if (problem.seeds[i]) {
       dist[i] = 0.0f;
       queue.push(std::uint32_t(i), 0.0f);
     }
   std::uint32_t u;
-  while (queue.pop(u)) {
-    if (done[u]) continue;
-    done[u] = 1;
+  float key;
+  while (queue.pop(u, key)) {
+    // Stale entry: u was improved after this push (and is or will be popped with its lower key).
+    // Keys are pushed only on a strict improvement, so the entry holding dist[u] is unique.
     const float du = dist[u];
+    if (key != du) continue;
     const std::uint8_t qu = q[u];
     const int x = int(u % std::uint32_t(d.x));
     const std::uint32_t yz = u / std::uint32_t(d.x);
@@ -86,8 +87,8 @@ void dijkstra(const WdtProblem& problem, Queue& queue, std::vector<float>& dist)
     const bool interior = x > 0 && y > 0 && z > 0 && x + 1 < d.x && y + 1 < d.y && z + 1 < d.z;
     for (const Offset& s : steps) {
       if (!interior && !d.contains(x + s.dx, y + s.dy, z + s.dz)) continue;
+      // A finalised v has dist[v] <= du <= c, so the comparison below rejects it.
       const std::uint32_t v = std::uint32_t(std::int64_t(u) + s.delta);
-      if (done[v]) continue;
       const float c = du + wdt::stepCost<K>(qu, q[v], s.len, base);
       if (c < dist[v]) {
         dist[v] = c;
@@ -103,15 +104,17 @@ class BucketQueue {
   void push(std::uint32_t v, float key) {
     std::size_t k = std::size_t(double(key) * inv_);
     if (k < current_) k = current_;  // cannot happen with steps >= 2 widths; kept for safety
-    ring_[k % ring_.size()].push_back(v);
+    ring_[k % ring_.size()].push_back({v, key});
     ++pending_;
   }
-  bool pop(std::uint32_t& v) {
+  bool pop(std::uint32_t& v, float& key) {
     if (pending_ == 0) return false;
     for (;;) {
-      std::vector<std::uint32_t>& b = ring_[current_ % ring_.size()];
+      std::vector<Entry>& b = ring_[current_ % ring_.size()];
       if (cursor_ < b.size()) {
-        v = b[cursor_++];
+        v = b[cursor_].node;
+        key = b[cursor_].key;
+        ++cursor_;
         --pending_;
         return true;
       }
@@ -122,16 +125,21 @@ class BucketQueue {
   }
 
  private:
+  struct Entry {
+    std::uint32_t node;
+    float key;
+  };
   double inv_;
-  std::vector<std::vector<std::uint32_t>> ring_;
+  std::vector<std::vector<Entry>> ring_;
   std::size_t current_ = 0, cursor_ = 0, pending_ = 0;
 };
 
 class HeapQueue {
  public:
   void push(std::uint32_t v, float key) { heap_.push({key, v}); }
-  bool pop(std::uint32_t& v) {
+  bool pop(std::uint32_t& v, float& key) {
     if (heap_.empty()) return false;
+    key = heap_.top().first;
     v = heap_.top().second;
     heap_.pop();
     return true;

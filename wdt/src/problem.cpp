@@ -1,7 +1,10 @@
 // prepareWdtProblem: HU → density bytes, seeds, and block aggregation for downsampled fields.
 #include <algorithm>
 #include <string>
+#include <thread>
+#include <vector>
 
+#include "huge_pages.h"
 #include "wdt/problem.h"
 #include "wdt/stencil.h"
 
@@ -20,6 +23,16 @@ Geometry coarseGrid(const Geometry& fine, int f) {
   return g;
 }
 
+// Runs body(k0, k1) over [0, n) split among the cores.
+template <class Body>
+void parallelSlices(int n, Body body) {
+  const int threads = std::max(1, std::min(n, int(std::thread::hardware_concurrency())));
+  std::vector<std::thread> team;
+  for (int t = 1; t < threads; ++t) team.emplace_back([&, t] { body(n * t / threads, n * (t + 1) / threads); });
+  body(0, n / threads);
+  for (std::thread& t : team) t.join();
+}
+
 }  // namespace
 
 Result<WdtProblem> prepareWdtProblem(const Volume& volume, const Mask& seeds, const WdtParams& params) {
@@ -33,17 +46,25 @@ Result<WdtProblem> prepareWdtProblem(const Volume& volume, const Mask& seeds, co
   if (std::none_of(seeds.voxels.begin(), seeds.voxels.end(), [](std::uint8_t v) { return v != 0; }))
     return fail("WDT: structure mask is empty");
 
+  // HU → density byte through a table over the whole int16 range (bit-identical to densityByte,
+  // which computes each entry), applied by all cores.
+  std::vector<std::uint8_t> lut(65536);
+  for (int h = -32768; h <= 32767; ++h) lut[std::size_t(h + 32768)] = wdt::densityByte(float(h), params.huMin, params.huMax);
+
   WdtProblem problem;
   problem.params = params;
   const int f = params.downsample;
   if (f == 1) {
     problem.grid = volume.geometry;
-    problem.density.resize(d.count());
-    problem.seeds.resize(d.count());
-    for (std::size_t i = 0; i < d.count(); ++i) {
-      problem.density[i] = wdt::densityByte(float(volume.voxels[i]), params.huMin, params.huMax);
-      problem.seeds[i] = seeds.voxels[i] != 0 ? 1 : 0;
-    }
+    wdt::resizeOnHugePages(problem.density, d.count());
+    wdt::resizeOnHugePages(problem.seeds, d.count());
+    const std::size_t slice = std::size_t(d.x) * d.y;
+    parallelSlices(d.z, [&](int k0, int k1) {
+      for (std::size_t i = slice * k0; i < slice * k1; ++i) {
+        problem.density[i] = lut[std::size_t(volume.voxels[i] + 32768)];
+        problem.seeds[i] = seeds.voxels[i] != 0 ? 1 : 0;
+      }
+    });
     return problem;
   }
 
@@ -62,7 +83,7 @@ Result<WdtProblem> prepareWdtProblem(const Volume& volume, const Mask& seeds, co
       const std::size_t fineRow = d.index(0, j, k);
       const std::size_t coarseRow = c.index(0, j / f, k / f);
       for (int i = 0; i < d.x; ++i) {
-        const std::uint8_t q = wdt::densityByte(float(volume.voxels[fineRow + i]), params.huMin, params.huMax);
+        const std::uint8_t q = lut[std::size_t(volume.voxels[fineRow + i] + 32768)];
         std::uint8_t& dq = problem.density[coarseRow + i / f];
         dq = std::max(dq, q);
         if (seeds.voxels[fineRow + i]) problem.seeds[coarseRow + i / f] = 1;

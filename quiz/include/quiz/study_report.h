@@ -16,6 +16,7 @@
 
 #include "quiz/likert_stats.h"
 #include "quiz/study_protocol.h"
+#include "volume/png_image.h"
 
 namespace at::quiz {
 
@@ -78,10 +79,6 @@ std::string summaryMarkdown(const StudyProtocol& protocol, const StudySummary& s
 // marker per column (group/all) at its mean with its 95 % interval as a bar.
 std::string summarySvg(const StudyProtocol& protocol, const StudySummary& summary);
 
-struct ChartImage {
-  int width = 0, height = 0;
-  std::vector<std::uint8_t> rgb;  // row-major, 3 bytes per pixel
-};
 struct ChartLayout {
   int width = 900, rowHeight = 70, top = 40, bottom = 50, left = 220, right = 40;
   // x pixel of a scale value (1..5) and y pixel of the marker for (item, column).
@@ -91,6 +88,6 @@ struct ChartLayout {
 };
 // Colour of each column's markers (the SVG uses the same).
 std::array<std::uint8_t, 3> chartColumnColour(std::size_t column);
-ChartImage renderSummaryChart(const StudyProtocol& protocol, const StudySummary& summary, const ChartLayout& layout = {});
+RgbImage renderSummaryChart(const StudyProtocol& protocol, const StudySummary& summary, const ChartLayout& layout = {});
 
 }  // namespace at::quiz
