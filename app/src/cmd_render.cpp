@@ -3,7 +3,6 @@
 #include <cstdio>
 #include <filesystem>
 #include <sstream>
-#include <unistd.h>
 
 #include "cli_args.h"
 #include "commands.h"
