@@ -30,6 +30,9 @@ int runSlice(const Argv& args);
 // Weighted distance transform (cmd_wdt.cpp)
 int runWdt(const Argv& args);
 
+// Rendering (cmd_render.cpp)
+int runRender(const Argv& args);
+
 // Datasets and learning (cmd_import.cpp, cmd_play.cpp, cmd_progress.cpp)
 int runImport(const Argv& args);
 int runPlay(const Argv& args);

@@ -15,6 +15,7 @@ const std::vector<Command>& commands() {
       {"info", "load any supported file or folder and describe it", runInfo},
       {"slice", "write a grey slice with label overlay as PNG", runSlice},
       {"wdt", "weighted distance field of a structure (CPU or CUDA), with --check against exact", runWdt},
+      {"render", "render a structure in one of the paper's modes to PNG (offscreen)", runRender},
       {"import", "register a dataset (volume, labels, names) in the database", runImport},
       {"courses", "list the courses", runCourses},
       {"lessons", "list the lessons of the courses", runLessons},

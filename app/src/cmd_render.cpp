@@ -1,0 +1,187 @@
+// anatomy-tutor render: one offscreen frame of a structure in one of the paper's modes, as PNG.
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <sstream>
+
+#include "cli_args.h"
+#include "commands.h"
+#include "render/gl/egl_context.h"
+#include "render/gl/volume_renderer.h"
+#include "render/preset.h"
+#include "render/scene.h"
+#include "volume/dataset_source.h"
+#include "volume/png_image.h"
+#include "wdt/wdt.h"
+
+namespace at::app {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+const char* kUsage =
+    "usage: anatomy-tutor render DATASET STRUCTURE (--preset NAME | --mode MODE) [--t T] [--size WxH]\n"
+    "                            [--view NAME] [--clip NX,NY,NZ,D] [--backend cpu|cuda|auto] [--passes N]\n"
+    "                            [--context F] [--presets DIR] [--labels FILE] --out F.png\n"
+    "  DATASET     phantom, phantom:N, or a volume file/folder (with --labels for its label map)\n"
+    "  MODE        wdt | bare | unweighted | fuzzy | outline | lighting (the structure's shipped preset)\n"
+    "  --preset    a preset id from the presets folder, or a path to a .json preset\n"
+    "  --t         context blend 0..1 (overrides the preset)\n"
+    "  --view      anterior, posterior, lateral_left, lateral_right, superior, inferior\n"
+    "  --clip      plane n·p = d in LPS mm; the side the normal points to is cut away\n"
+    "  --context   view radius as a multiple of the structure's radius (default 2.5)\n"
+    "  --presets   presets folder (default: data/presets of the source tree or next to the binary)\n";
+
+fs::path defaultPresetsDir() {
+  const fs::path source = fs::path(AT_SOURCE_DIR) / "data" / "presets";
+  if (fs::is_directory(source)) return source;
+  std::error_code ec;
+  const fs::path exe = fs::read_symlink("/proc/self/exe", ec);
+  if (!ec) {
+    for (const fs::path& p : {exe.parent_path() / "data" / "presets",
+                              exe.parent_path().parent_path() / "share" / "anatomy-tutor" / "presets"})
+      if (fs::is_directory(p)) return p;
+  }
+  return source;
+}
+
+Result<std::pair<int, int>> parseSize(const std::string& text) {
+  int w = 0, h = 0;
+  char x = 0, extra = 0;
+  if (std::sscanf(text.c_str(), "%d%c%d%c", &w, &x, &h, &extra) != 3 || (x != 'x' && x != 'X') || w < 1 ||
+      h < 1 || w > 8192 || h > 8192)
+    return fail("option --size: '" + text + "' is not WxH with 1..8192 pixels per side");
+  return std::make_pair(w, h);
+}
+
+Result<std::array<float, 4>> parseClip(const std::string& text) {
+  std::array<float, 4> c{};
+  std::stringstream ss(text);
+  std::string part;
+  int n = 0;
+  while (std::getline(ss, part, ',')) {
+    if (n >= 4) break;
+    char* end = nullptr;
+    c[std::size_t(n)] = std::strtof(part.c_str(), &end);
+    if (part.empty() || *end != '\0') return fail("option --clip: '" + text + "' is not NX,NY,NZ,D");
+    ++n;
+  }
+  if (n != 4 || std::getline(ss, part, ',')) return fail("option --clip: '" + text + "' is not NX,NY,NZ,D");
+  return c;
+}
+
+Result<Dataset> openDataset(const std::string& name, const std::string& labels) {
+  if (isBuiltinDatasetName(name)) return openBuiltinDataset(name);
+  DatasetFiles files;
+  files.volumePath = name;
+  files.labelsPath = labels;
+  files.id = fs::path(name).stem().string();
+  return openDatasetFiles(files);
+}
+
+}  // namespace
+
+int runRender(const Argv& argv) {
+  auto args = cli::Args::parse(
+      argv, {"preset", "mode", "t", "size", "view", "clip", "backend", "passes", "context", "presets", "labels", "out"},
+      {});
+  if (!args) return reportError("render: " + args.error().message, 2);
+  if (args->has("help")) {
+    std::printf("%s", kUsage);
+    return 0;
+  }
+  if (args->positional().size() != 2) return reportError("render: expected DATASET STRUCTURE (see --help)", 2);
+  if (args->has("preset") == args->has("mode"))
+    return reportError("render: give exactly one of --preset NAME or --mode MODE", 2);
+  const auto out = args->value("out");
+  if (!out) return reportError("render: --out F.png is required", 2);
+
+  const render::PresetLibrary library(args->has("presets") ? fs::path(*args->value("presets")) : defaultPresetsDir());
+  auto dataset = openDataset(args->positional()[0], args->valueOr("labels", ""));
+  if (!dataset) return reportError("render: " + dataset.error().message);
+  const Structure* structure = dataset->findStructure(args->positional()[1]);
+  if (!structure) {
+    std::string ids;
+    for (const Structure& s : dataset->structures) ids += (ids.empty() ? "" : ", ") + s.id;
+    return reportError("render: dataset '" + dataset->id + "' has no structure '" + args->positional()[1] +
+                       "' (it has: " + ids + ")");
+  }
+
+  Result<render::Preset> preset = fail("no preset");
+  if (auto name = args->value("preset")) {
+    preset = (name->size() > 5 && name->substr(name->size() - 5) == ".json") ? render::loadPreset(*name)
+                                                                              : library.load(*name);
+  } else {
+    auto mode = render::parseRenderMode(*args->value("mode"));
+    if (!mode) return reportError("render: --mode: " + mode.error().message, 2);
+    preset = library.forStructure(structure->id, *mode);
+  }
+  if (!preset) return reportError("render: " + preset.error().message);
+  auto t = args->number("t", preset->t);
+  if (!t || *t < 0 || *t > 1) return reportError("render: option --t must be a number in 0..1", 2);
+  preset->t = float(*t);
+
+  render::ViewRequest request;
+  if (auto size = args->value("size")) {
+    auto wh = parseSize(*size);
+    if (!wh) return reportError("render: " + wh.error().message, 2);
+    request.width = wh->first;
+    request.height = wh->second;
+  }
+  if (auto v = args->value("view")) request.view = *v;
+  if (auto c = args->value("clip")) {
+    auto clip = parseClip(*c);
+    if (!clip) return reportError("render: " + clip.error().message, 2);
+    request.clip = *clip;
+  }
+  auto context = args->number("context", request.contextScale);
+  if (!context || *context <= 0) return reportError("render: option --context must be a positive number", 2);
+  request.contextScale = *context;
+  auto frame = render::structureFrame(dataset->labels, structure->label);
+  if (!frame) return reportError("render: " + structure->id + ": " + frame.error().message);
+  auto settings = render::settingsFor(*preset, *frame, request);
+  if (!settings) return reportError("render: " + settings.error().message, 2);
+  settings->background = {0.04f, 0.04f, 0.05f, 1.0f};
+
+  std::optional<DistanceField> field;
+  double wdtMs = 0;
+  std::string wdtDevice = "none";
+  if (render::modeNeedsField(preset->mode)) {
+    auto passes = args->integer("passes", 2);
+    if (!passes || *passes < 1) return reportError("render: option --passes must be a positive integer", 2);
+    auto params = render::wdtParamsFor(*preset, *passes);
+    if (!params) return reportError("render: " + params.error().message);
+    auto backend = parseBackend(args->valueOr("backend", "auto"));
+    if (!backend) return reportError("render: --backend: " + backend.error().message, 2);
+    params->backend = *backend;
+    auto wdt = computeWdt(dataset->volume, render::structureMask(dataset->labels, structure->label), *params);
+    if (!wdt) return reportError("render: " + wdt.error().message);
+    if (!wdt->stats.warning.empty()) std::fprintf(stderr, "anatomy-tutor: render: %s\n", wdt->stats.warning.c_str());
+    wdtMs = wdt->stats.msTotal;
+    wdtDevice = wdt->stats.device;
+    field = std::move(wdt->field);
+  }
+
+  auto context3d = render::gl::EglContext::create();
+  if (!context3d) return reportError("render: " + context3d.error().message);
+  auto renderer = render::gl::VolumeRenderer::create();
+  if (!renderer) return reportError("render: " + renderer.error().message);
+  if (auto st = renderer->setVolume(dataset->volume, dataset->labels); !st)
+    return reportError("render: " + st.error().message);
+  if (field)
+    if (auto st = renderer->setField(field->distances); !st) return reportError("render: " + st.error().message);
+  renderer->setSelected(structure->label);
+  const auto start = std::chrono::steady_clock::now();
+  auto image = renderer->render(*settings);
+  if (!image) return reportError("render: " + image.error().message);
+  const double renderMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  if (auto st = writePng(*out, render::toRgb(*image)); !st)
+    return reportError("render: " + st.error().message);
+  std::printf("wrote %s (%s, %s, preset %s, %dx%d, t=%.2f; WDT %.0f ms on %s; render %.0f ms on %s)\n", out->c_str(),
+              structure->id.c_str(), render::toString(preset->mode), preset->id.value_or("?").c_str(), image->width,
+              image->height, double(preset->t), wdtMs, wdtDevice.c_str(), renderMs, context3d->description().c_str());
+  return 0;
+}
+
+}  // namespace at::app

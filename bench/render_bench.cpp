@@ -1,0 +1,234 @@
+// render_bench: GPU frame time of the ray caster and the hover cycle, as JSON lines.
+//
+//   render_bench [--size WxH] [--volume N] [--hover-volume N] [--frames N] [--warmup N]
+//                [--cycles N] [--structure ID] [--presets DIR] [--field-downsample F]
+//
+// 1. frame: phantom at N³ (default 512), the structure's WDT preset with Phong shading, a field
+//    from computeWdt (backend auto; downsampled by F for the 512³ set-up), GPU time of each frame
+//    from GL timer queries; median and p90 of `frames` after `warmup`.
+// 2. hover: phantom at M³ (default 256): pick under the cursor (CPU) → full-resolution WDT of the
+//    picked structure (CUDA when available) → field into the GL texture → next frame (glFinish);
+//    wall-clock per step and end to end, for `cycles` hovers alternating between structures.
+// EGL only: no SDL, DCMTK or SQLite.
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <cstring>
+#include <string>
+#include <vector>
+
+#include "render/gl/egl_context.h"
+#include "render/gl/volume_renderer.h"
+#include "render/preset.h"
+#include "render/scene.h"
+#include "volume/phantom.h"
+#include "wdt/problem.h"
+#include "wdt/wdt.h"
+
+#if defined(AT_HAVE_CUDA)
+#include "cuda/wdt_cuda.h"
+#endif
+
+using namespace at;
+using Clock = std::chrono::steady_clock;
+
+namespace {
+
+double msSince(Clock::time_point t) { return std::chrono::duration<double, std::milli>(Clock::now() - t).count(); }
+
+double percentile(std::vector<double> v, double q) {
+  if (v.empty()) return 0;
+  std::sort(v.begin(), v.end());
+  const std::size_t i = std::min(v.size() - 1, std::size_t(q * double(v.size() - 1) + 0.5));
+  return v[i];
+}
+
+struct Options {
+  int width = 1920, height = 1080, volume = 512, hoverVolume = 256, frames = 100, warmup = 10, cycles = 10;
+  int fieldDownsample = 2;
+  std::string structure = "cochlea";
+  std::string presets = AT_BENCH_PRESETS_DIR;
+};
+
+bool parse(int argc, char** argv, Options& o) {
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    const auto next = [&]() -> const char* { return i + 1 < argc ? argv[++i] : nullptr; };
+    const char* v = nullptr;
+    if (a == "--size" && (v = next())) {
+      if (std::sscanf(v, "%dx%d", &o.width, &o.height) != 2) return false;
+    } else if (a == "--volume" && (v = next())) o.volume = std::atoi(v);
+    else if (a == "--hover-volume" && (v = next())) o.hoverVolume = std::atoi(v);
+    else if (a == "--frames" && (v = next())) o.frames = std::atoi(v);
+    else if (a == "--warmup" && (v = next())) o.warmup = std::atoi(v);
+    else if (a == "--cycles" && (v = next())) o.cycles = std::atoi(v);
+    else if (a == "--field-downsample" && (v = next())) o.fieldDownsample = std::atoi(v);
+    else if (a == "--structure" && (v = next())) o.structure = v;
+    else if (a == "--presets" && (v = next())) o.presets = v;
+    else return false;
+  }
+  return o.width > 0 && o.height > 0 && o.volume > 8 && o.hoverVolume > 8 && o.frames > 0 && o.cycles > 0 &&
+         o.fieldDownsample >= 1;
+}
+
+int failWith(const std::string& m) {
+  std::fprintf(stderr, "render_bench: %s\n", m.c_str());
+  return 1;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  Options o;
+  if (!parse(argc, argv, o)) {
+    std::fprintf(stderr,
+                 "usage: render_bench [--size WxH] [--volume N] [--hover-volume N] [--frames N] [--warmup N] "
+                 "[--cycles N] [--structure ID] [--presets DIR] [--field-downsample F]\n");
+    return 2;
+  }
+  auto ctx = render::gl::EglContext::create();
+  if (!ctx) return failWith(ctx.error().message);
+  auto renderer = render::gl::VolumeRenderer::create();
+  if (!renderer) return failWith(renderer.error().message);
+  const render::PresetLibrary library(o.presets);
+
+  // 1. Frame time at full size.
+  {
+    const auto t0 = Clock::now();
+    const Dataset ds = makePhantom({o.volume, 51.2, 1});
+    const double phantomMs = msSince(t0);
+    const Structure* s = ds.findStructure(o.structure);
+    if (!s) return failWith("phantom has no structure '" + o.structure + "'");
+    auto preset = library.forStructure(s->id, render::RenderMode::Wdt);
+    if (!preset) return failWith(preset.error().message);
+    auto params = render::wdtParamsFor(*preset);
+    if (!params) return failWith(params.error().message);
+    params->downsample = o.fieldDownsample;
+    auto wdt = computeWdt(ds.volume, render::structureMask(ds.labels, s->label), *params);
+    if (!wdt) return failWith(wdt.error().message);
+    if (auto st = renderer->setVolume(ds.volume, ds.labels); !st) return failWith(st.error().message);
+    if (auto st = renderer->setField(wdt->field.distances); !st) return failWith(st.error().message);
+    renderer->setSelected(s->label);
+    auto frame = render::structureFrame(ds.labels, s->label);
+    if (!frame) return failWith(frame.error().message);
+    render::ViewRequest req;
+    req.width = o.width;
+    req.height = o.height;
+    auto settings = render::settingsFor(*preset, *frame, req);
+    if (!settings) return failWith(settings.error().message);
+    settings->shading = true;
+    std::vector<double> gpuMs;
+    for (int i = 0; i < o.warmup + o.frames; ++i) {
+      auto ms = renderer->renderTimed(*settings);
+      if (!ms) return failWith(ms.error().message);
+      if (i >= o.warmup) gpuMs.push_back(*ms);
+    }
+    const double median = percentile(gpuMs, 0.5);
+    std::printf(
+        "{\"bench\":\"render_frame\",\"device\":\"%s\",\"width\":%d,\"height\":%d,\"volume\":%d,\"field_grid\":\"%s\","
+        "\"structure\":\"%s\",\"preset\":\"%s\",\"frames\":%d,\"gpu_ms_median\":%.3f,\"gpu_ms_p90\":%.3f,"
+        "\"fps_median\":%.1f,\"phantom_ms\":%.0f,\"wdt_ms\":%.1f,\"wdt_device\":\"%s\"}\n",
+        ctx->description().c_str(), o.width, o.height, o.volume,
+        wdt->field.distances.dims().toString().c_str(), s->id.c_str(), preset->id.value_or("?").c_str(), o.frames,
+        median, percentile(gpuMs, 0.9), median > 0 ? 1000.0 / median : 0.0, phantomMs, wdt->stats.msTotal,
+        wdt->stats.device.c_str());
+    std::fflush(stdout);
+  }
+
+  // 2. Hover cycle.
+  {
+    const Dataset ds = makePhantom({o.hoverVolume, 51.2, 1});
+    if (auto st = renderer->setVolume(ds.volume, ds.labels); !st) return failWith(st.error().message);
+    const Structure* first = ds.findStructure(o.structure);
+    if (!first) return failWith("phantom has no structure '" + o.structure + "'");
+    auto preset = library.forStructure(first->id, render::RenderMode::Wdt);
+    if (!preset) return failWith(preset.error().message);
+    auto frame = render::structureFrame(ds.labels, first->label);
+    if (!frame) return failWith(frame.error().message);
+    render::ViewRequest req;
+    req.width = o.width;
+    req.height = o.height;
+    req.contextScale = 4;
+    auto settings = render::settingsFor(*preset, *frame, req);
+    if (!settings) return failWith(settings.error().message);
+    // Hover targets: the projected centroids of the structures visible in bare mode from this view.
+    render::RenderSettings pickSettings = *settings;
+    pickSettings.preset.mode = render::RenderMode::Bare;
+    const render::TransferFunction2D table = render::shadingTable(pickSettings.preset);
+    struct Target {
+      std::uint16_t label;
+      double x, y;
+    };
+    std::vector<Target> targets;
+    for (const Structure& s : ds.structures) {
+      auto f = render::structureFrame(ds.labels, s.label);
+      if (!f) continue;
+      auto px = settings->camera.project(f->centroidMm, o.width, o.height);
+      if (!px || (*px)[0] < 0 || (*px)[1] < 0 || (*px)[0] >= o.width || (*px)[1] >= o.height) continue;
+      targets.push_back({s.label, (*px)[0], (*px)[1]});
+    }
+    if (targets.empty()) return failWith("no structure projects into the hover view");
+    std::vector<double> totals;
+    for (int c = 0; c < o.cycles; ++c) {
+      const Target& tg = targets[std::size_t(c) % targets.size()];
+      const auto t0 = Clock::now();
+      render::SceneVolumes scene{&ds.volume, &ds.labels, nullptr, tg.label};
+      const render::PickResult hit = render::pick(scene, pickSettings, table, tg.x, tg.y);
+      const double pickMs = msSince(t0);
+      const std::uint16_t label = hit.hit && hit.label ? hit.label : tg.label;
+      auto params = render::wdtParamsFor(*preset);
+      if (!params) return failWith(params.error().message);
+      const auto t1 = Clock::now();
+      double wdtMs = 0, uploadMs = 0;
+      std::string wdtDevice;
+      int passesRun = 0;
+      bool onDevice = false;
+#if defined(AT_HAVE_CUDA)
+      if (cuda::queryDevice().available) {
+        // The GPU path: the field stays in device memory and goes into the GL texture directly.
+        auto problem = prepareWdtProblem(ds.volume, render::structureMask(ds.labels, label), *params);
+        if (!problem) return failWith(problem.error().message);
+        WdtStats stats;
+        auto dfield = cuda::runCudaBackendOnDevice(*problem, {}, &stats);
+        if (!dfield) return failWith(dfield.error().message);
+        wdtMs = msSince(t1);
+        wdtDevice = stats.device;
+        passesRun = stats.passesRun;
+        const auto t2 = Clock::now();
+        if (auto st = renderer->setFieldFromDevice(*dfield); !st) return failWith(st.error().message);
+        uploadMs = msSince(t2);
+        onDevice = true;
+      }
+#endif
+      if (!onDevice) {
+        auto wdt = computeWdt(ds.volume, render::structureMask(ds.labels, label), *params);
+        if (!wdt) return failWith(wdt.error().message);
+        wdtMs = msSince(t1);
+        wdtDevice = wdt->stats.device;
+        passesRun = wdt->stats.passesRun;
+        const auto t2 = Clock::now();
+        if (auto st = renderer->setField(wdt->field.distances); !st) return failWith(st.error().message);
+        uploadMs = msSince(t2);
+      }
+      renderer->setSelected(label);
+      const auto t3 = Clock::now();
+      auto gpu = renderer->renderTimed(*settings);  // waits for the GPU result
+      if (!gpu) return failWith(gpu.error().message);
+      const double frameMs = msSince(t3);
+      const double total = msSince(t0);
+      totals.push_back(total);
+      std::printf(
+          "{\"bench\":\"hover_cycle\",\"volume\":%d,\"cycle\":%d,\"picked_label\":%u,\"pick_hit\":%s,\"pick_ms\":%.3f,"
+          "\"wdt_ms\":%.2f,\"wdt_device\":\"%s\",\"wdt_passes\":%d,\"field_path\":\"%s\",\"field_upload_ms\":%.2f,\"frame_ms\":%.2f,"
+          "\"frame_gpu_ms\":%.3f,\"total_ms\":%.2f}\n",
+          o.hoverVolume, c, unsigned(label), hit.hit ? "true" : "false", pickMs, wdtMs, wdtDevice.c_str(), passesRun,
+          onDevice ? "cuda-gl interop" : "host upload", uploadMs, frameMs, *gpu, total);
+      std::fflush(stdout);
+    }
+    std::printf("{\"bench\":\"hover_summary\",\"volume\":%d,\"width\":%d,\"height\":%d,\"cycles\":%d,"
+                "\"total_ms_median\":%.2f,\"total_ms_max\":%.2f,\"device\":\"%s\"}\n",
+                o.hoverVolume, o.width, o.height, o.cycles, percentile(totals, 0.5), percentile(totals, 1.0),
+                ctx->description().c_str());
+  }
+  return 0;
+}

@@ -1,0 +1,511 @@
+#include "render/gl/volume_renderer.h"
+
+#include <cmath>
+#include <limits>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "gl_objects.h"
+
+#if defined(AT_HAVE_CUDA)
+#include "cuda/gl_interop.h"
+#include "cuda/wdt_cuda.h"
+#endif
+
+namespace at::render::gl {
+
+namespace {
+
+const char* kVertexShader = R"(#version 430 core
+void main() {
+  // One triangle covering the viewport.
+  vec2 p = vec2(float((gl_VertexID << 1) & 2), float(gl_VertexID & 2));
+  gl_Position = vec4(p * 2.0 - 1.0, 0.0, 1.0);
+}
+)";
+
+// Classification and shading as render_settings.h documents; keep in step with pick().
+const char* kFragmentShader = R"(#version 430 core
+out vec4 fragColor;
+uniform mat4 uInvViewProj;
+uniform mat4 uPatientToTex;
+uniform mat4 uPatientToField;
+uniform vec2 uViewport;
+uniform sampler3D uHu;
+uniform sampler3D uMask;
+uniform sampler3D uField;
+uniform sampler2D uTable;
+uniform int uMode;          // 0 table, 1 bare, 2 lighting
+uniform int uHasField;
+uniform float uStepMm;
+uniform float uRefMm;
+uniform float uLog2Alpha;
+uniform vec2 uDataRange;
+uniform vec2 uTableSize;
+uniform int uHasClip;
+uniform vec4 uClip;
+uniform vec3 uHighlight;
+uniform vec2 uLighting;     // alpha, beta of Eq. 6
+uniform vec3 uSpacingMm;
+uniform ivec3 uDims;
+uniform int uJitter;
+uniform int uShading;
+uniform vec4 uBackground;
+
+float huAt(vec3 t) { return texture(uHu, t).r * 65535.0 - 32768.0; }
+float fieldAt(vec3 f) { return texture(uField, f).r; }
+
+// The selected structure's mask (1 inside), linearly filtered: the bare-mode surface is at 0.5.
+float maskAt(vec3 t) { return texture(uMask, t).r; }
+
+float normalisedDistance(float d) {
+  return 2.0 / (1.0 + exp2(min(d * uLog2Alpha, 126.0)));
+}
+
+vec4 tableAt(float hu, float n) {
+  float u = clamp((hu - uDataRange.x) / (uDataRange.y - uDataRange.x), 0.0, 1.0);
+  vec2 uv = (vec2(u, clamp(n, 0.0, 1.0)) * (uTableSize - 1.0) + 0.5) / uTableSize;
+  return texture(uTable, uv);
+}
+
+vec3 gradientAt(vec3 t, bool mask) {
+  vec3 d = 1.0 / vec3(uDims);
+  vec3 g;
+  if (mask) {
+    g = vec3(maskAt(t + vec3(d.x, 0, 0)) - maskAt(t - vec3(d.x, 0, 0)),
+             maskAt(t + vec3(0, d.y, 0)) - maskAt(t - vec3(0, d.y, 0)),
+             maskAt(t + vec3(0, 0, d.z)) - maskAt(t - vec3(0, 0, d.z)));
+  } else {
+    g = vec3(huAt(t + vec3(d.x, 0, 0)) - huAt(t - vec3(d.x, 0, 0)),
+             huAt(t + vec3(0, d.y, 0)) - huAt(t - vec3(0, d.y, 0)),
+             huAt(t + vec3(0, 0, d.z)) - huAt(t - vec3(0, 0, d.z)));
+  }
+  return g / (2.0 * uSpacingMm);
+}
+
+float hash(vec2 p) {
+  return fract(sin(dot(p, vec2(12.9898, 78.233))) * 43758.5453);
+}
+
+void main() {
+  vec2 ndc = gl_FragCoord.xy / uViewport * 2.0 - 1.0;
+  vec4 a = uInvViewProj * vec4(ndc, -1.0, 1.0);
+  vec4 b = uInvViewProj * vec4(ndc, 1.0, 1.0);
+  vec3 origin = a.xyz / a.w;
+  vec3 dir = normalize(b.xyz / b.w - origin);
+  vec3 oT = (uPatientToTex * vec4(origin, 1.0)).xyz;
+  vec3 dT = (uPatientToTex * vec4(dir, 0.0)).xyz;
+  // Slab test against the texture box [0,1]^3.
+  vec3 inv = 1.0 / dT;
+  vec3 ta = (vec3(0.0) - oT) * inv, tb = (vec3(1.0) - oT) * inv;
+  vec3 tmin = min(ta, tb), tmax = max(ta, tb);
+  float t0 = max(max(tmin.x, tmin.y), max(tmin.z, 0.0));
+  float t1 = min(min(tmax.x, tmax.y), tmax.z);
+  vec4 acc = vec4(0.0);
+  if (t0 < t1) {
+    vec3 oF = (uPatientToField * vec4(origin, 1.0)).xyz;
+    vec3 dF = (uPatientToField * vec4(dir, 0.0)).xyz;
+    float start = t0 + uStepMm * (uJitter != 0 ? hash(gl_FragCoord.xy) : 0.5);
+    float exponent = uStepMm / uRefMm;
+    vec3 light = -dir;
+    for (float tm = start; tm < t1; tm += uStepMm) {
+      vec3 p = origin + tm * dir;
+      if (uHasClip != 0 && dot(uClip.xyz, p) > uClip.w) continue;
+      vec3 pt = oT + tm * dT;
+      vec4 c;
+      float d = 1e30;
+      if (uMode == 1) {
+        float m = maskAt(pt);
+        if (m < 0.5) continue;
+        c = vec4(uHighlight, 1.0);
+      } else {
+        float hu = huAt(pt);
+        float n = 0.0;
+        if (uHasField != 0) {
+          d = fieldAt(oF + tm * dF);
+          n = normalisedDistance(d);
+        }
+        c = tableAt(hu, n);
+      }
+      if (c.a <= 0.0) continue;
+      float alpha = 1.0 - pow(1.0 - min(c.a, 0.999999), exponent);
+      vec3 rgb = c.rgb;
+      // Shading costs six more fetches: skip it where the sample cannot change a pixel's 8-bit value.
+      if (uShading != 0 && alpha * (1.0 - acc.a) > 1.0 / 1024.0) {
+        vec3 g = gradientAt(pt, uMode == 1);
+        float gl = length(g);
+        float diffuse = 1.0, spec = 0.0;
+        if (gl > 1e-6) {
+          vec3 nrm = -g / gl;
+          float ndl = abs(dot(nrm, light));
+          diffuse = ndl;
+          spec = pow(ndl, 24.0);
+        }
+        if (uMode == 2) {
+          float ka = uLighting.y / pow(uLighting.x * min(d, 1e6) + 1.0, 2.0);
+          rgb = rgb * (ka * uHighlight + 0.2 * diffuse) + 0.1 * spec * ka;
+        } else {
+          rgb = rgb * (0.3 + 0.7 * diffuse) + 0.2 * spec;
+        }
+      } else if (uMode == 2) {
+        float ka = uLighting.y / pow(uLighting.x * min(d, 1e6) + 1.0, 2.0);
+        rgb = rgb * ka * uHighlight;
+      }
+      acc.rgb += (1.0 - acc.a) * alpha * clamp(rgb, 0.0, 1.0);
+      acc.a += (1.0 - acc.a) * alpha;
+      if (acc.a > 0.995) break;
+    }
+  }
+  float bgA = uBackground.a * (1.0 - acc.a);
+  float outA = acc.a + bgA;
+  vec3 premul = acc.rgb + bgA * uBackground.rgb;
+  fragColor = vec4(outA > 0.0 ? premul / outA : vec3(0.0), outA);
+}
+)";
+
+// Builds the selected structure's mask (R8: 1 where label == selected) from the label texture.
+const char* kMaskShader = R"(#version 430 core
+layout(local_size_x = 8, local_size_y = 8, local_size_z = 4) in;
+layout(binding = 0) uniform usampler3D uLabels;
+layout(r8, binding = 1) writeonly uniform image3D uMaskOut;
+uniform uint uSelected;
+uniform ivec3 uDims;
+void main() {
+  ivec3 p = ivec3(gl_GlobalInvocationID);
+  if (any(greaterThanEqual(p, uDims))) return;
+  uint l = texelFetch(uLabels, p, 0).r;
+  imageStore(uMaskOut, p, vec4(l == uSelected && uSelected != 0u ? 1.0 : 0.0));
+}
+)";
+
+std::string shaderLog(GLuint shader) {
+  GLint len = 0;
+  glGetShaderiv(shader, GL_INFO_LOG_LENGTH, &len);
+  std::string log(std::size_t(std::max(len, 1)), '\0');
+  glGetShaderInfoLog(shader, len, nullptr, log.data());
+  return log;
+}
+
+template <class S>
+Result<S> compile(const char* source, const char* what) {
+  S s = S::make();
+  glShaderSource(s.id(), 1, &source, nullptr);
+  glCompileShader(s.id());
+  GLint ok = 0;
+  glGetShaderiv(s.id(), GL_COMPILE_STATUS, &ok);
+  if (!ok) return fail(std::string("GL: ") + what + " shader does not compile: " + shaderLog(s.id()));
+  return s;
+}
+
+// Matrix taking patient mm (LPS) to normalised texture coordinates of `g` (voxel centres at
+// (i + 0.5) / dims).
+Mat4 patientToTexture(const Geometry& g) {
+  Mat4 m;  // index = D⁻¹ S⁻¹ (p − o);  tex = (index + 0.5) / dims
+  const Mat3 dinv = g.direction.inverse();
+  const double dims[3] = {double(g.dims.x), double(g.dims.y), double(g.dims.z)};
+  for (int r = 0; r < 3; ++r) {
+    const double s = 1.0 / (g.spacingMm[std::size_t(r)] * dims[r]);
+    double off = 0;
+    for (int c = 0; c < 3; ++c) {
+      m(r, c) = dinv.m[std::size_t(r)][std::size_t(c)] * s;
+      off += dinv.m[std::size_t(r)][std::size_t(c)] * g.originMm[std::size_t(c)];
+    }
+    m(r, 3) = -off * s + 0.5 / dims[r];
+  }
+  return m;
+}
+
+void setTextureParams(GLenum filter) {
+  glTexParameteri(GL_TEXTURE_3D, GL_TEXTURE_MIN_FILTER, GLint(filter));
+  glTexParameteri(GL_TEXTURE_3D, GL_TEXTURE_MAG_FILTER, GLint(filter));
+  glTexParameteri(GL_TEXTURE_3D, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+  glTexParameteri(GL_TEXTURE_3D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+  glTexParameteri(GL_TEXTURE_3D, GL_TEXTURE_WRAP_R, GL_CLAMP_TO_EDGE);
+}
+
+Status glStatus(const char* what) {
+  const GLenum e = glGetError();
+  if (e == GL_NO_ERROR) return {};
+  if (e == GL_OUT_OF_MEMORY) return fail(std::string("GL: out of GPU memory during ") + what);
+  return fail(std::string("GL: error 0x") + [&] {
+    char buf[16];
+    std::snprintf(buf, sizeof buf, "%04x", unsigned(e));
+    return std::string(buf);
+  }() + " during " + what);
+}
+
+}  // namespace
+
+struct VolumeRenderer::State {
+  Program program, maskProgram;
+  VertexArray vao;
+  Texture hu, labels, field, table, mask;
+  int maskLabel = -1;  // label the mask texture holds; -1 = stale
+  std::optional<Preset> tablePreset;  // the preset the table texture was built from
+  TransferFunction2D tableInfo;       // its axes (rgba dropped after upload)
+  Framebuffer fbo;
+  Renderbuffer colour;
+  Query timer;
+  int fboWidth = 0, fboHeight = 0;
+  Geometry volumeGrid, fieldGrid;
+  bool hasVolume = false, hasField = false;
+#if defined(AT_HAVE_CUDA)
+  std::optional<cuda::GlTextureTarget> interop;  // registered field texture storage
+  Dims interopDims;
+#endif
+};
+
+VolumeRenderer::VolumeRenderer(std::unique_ptr<State> s) : state_(std::move(s)) {}
+VolumeRenderer::~VolumeRenderer() = default;
+VolumeRenderer::VolumeRenderer(VolumeRenderer&&) noexcept = default;
+VolumeRenderer& VolumeRenderer::operator=(VolumeRenderer&&) noexcept = default;
+
+Result<VolumeRenderer> VolumeRenderer::create() {
+  auto s = std::make_unique<State>();
+  auto vs = compile<VertexShader>(kVertexShader, "vertex");
+  if (!vs) return tl::unexpected(vs.error());
+  auto fs = compile<FragmentShader>(kFragmentShader, "fragment");
+  if (!fs) return tl::unexpected(fs.error());
+  s->program = Program::make();
+  glAttachShader(s->program.id(), vs->id());
+  glAttachShader(s->program.id(), fs->id());
+  glLinkProgram(s->program.id());
+  GLint ok = 0;
+  glGetProgramiv(s->program.id(), GL_LINK_STATUS, &ok);
+  if (!ok) {
+    GLint len = 0;
+    glGetProgramiv(s->program.id(), GL_INFO_LOG_LENGTH, &len);
+    std::string log(std::size_t(std::max(len, 1)), '\0');
+    glGetProgramInfoLog(s->program.id(), len, nullptr, log.data());
+    return fail("GL: ray caster does not link: " + log);
+  }
+  auto cs = compile<ComputeShader>(kMaskShader, "mask compute");
+  if (!cs) return tl::unexpected(cs.error());
+  s->maskProgram = Program::make();
+  glAttachShader(s->maskProgram.id(), cs->id());
+  glLinkProgram(s->maskProgram.id());
+  glGetProgramiv(s->maskProgram.id(), GL_LINK_STATUS, &ok);
+  if (!ok) return fail("GL: mask compute shader does not link");
+  s->vao = VertexArray::make();
+  s->hu = Texture::make();
+  s->labels = Texture::make();
+  s->field = Texture::make();
+  s->table = Texture::make();
+  s->fbo = Framebuffer::make();
+  s->colour = Renderbuffer::make();
+  s->timer = Query::make();
+  if (auto st = glStatus("creating the ray caster"); !st) return tl::unexpected(st.error());
+  return VolumeRenderer(std::move(s));
+}
+
+Status VolumeRenderer::setVolume(const Volume& volume, const LabelMap& labels) {
+  if (volume.empty()) return fail("render: the volume is empty");
+  if (!labels.empty() && !(labels.dims() == volume.dims()))
+    return fail("render: labels " + labels.dims().toString() + " are not on the volume's grid " +
+                volume.dims().toString());
+  const Dims& d = volume.dims();
+  glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
+  std::vector<std::uint16_t> shifted(volume.voxels.size());
+  for (std::size_t i = 0; i < shifted.size(); ++i) shifted[i] = std::uint16_t(int(volume.voxels[i]) + 32768);
+  glBindTexture(GL_TEXTURE_3D, state_->hu.id());
+  setTextureParams(GL_LINEAR);
+  glTexImage3D(GL_TEXTURE_3D, 0, GL_R16, d.x, d.y, d.z, 0, GL_RED, GL_UNSIGNED_SHORT, shifted.data());
+  shifted.clear();
+  shifted.shrink_to_fit();
+  glBindTexture(GL_TEXTURE_3D, state_->labels.id());
+  setTextureParams(GL_NEAREST);
+  if (labels.empty()) {
+    std::vector<std::uint16_t> zeros(volume.voxels.size(), 0);
+    glTexImage3D(GL_TEXTURE_3D, 0, GL_R16UI, d.x, d.y, d.z, 0, GL_RED_INTEGER, GL_UNSIGNED_SHORT, zeros.data());
+  } else {
+    glTexImage3D(GL_TEXTURE_3D, 0, GL_R16UI, d.x, d.y, d.z, 0, GL_RED_INTEGER, GL_UNSIGNED_SHORT, labels.voxels.data());
+  }
+  // The mask texture needs immutable storage to be written as an image.
+  state_->mask = Texture::make();
+  glBindTexture(GL_TEXTURE_3D, state_->mask.id());
+  glTexStorage3D(GL_TEXTURE_3D, 1, GL_R8, d.x, d.y, d.z);
+  setTextureParams(GL_LINEAR);
+  state_->maskLabel = -1;
+  state_->volumeGrid = volume.geometry;
+  state_->hasVolume = true;
+  state_->hasField = false;
+  return glStatus("uploading the volume");
+}
+
+bool VolumeRenderer::hasCudaInterop() {
+#if defined(AT_HAVE_CUDA)
+  return true;
+#else
+  return false;
+#endif
+}
+
+Status VolumeRenderer::setFieldFromDevice(const cuda::DeviceField& field) {
+#if defined(AT_HAVE_CUDA)
+  State& st = *state_;
+  const Geometry& grid = field.grid();
+  if (!st.interop || !(st.interopDims == grid.dims)) {
+    // New storage: allocate the texture and register it with CUDA once for this size.
+    st.interop.reset();
+    glBindTexture(GL_TEXTURE_3D, st.field.id());
+    setTextureParams(GL_LINEAR);
+    glTexImage3D(GL_TEXTURE_3D, 0, GL_R32F, grid.dims.x, grid.dims.y, grid.dims.z, 0, GL_RED, GL_FLOAT, nullptr);
+    if (auto s = glStatus("allocating the distance field"); !s) return s;
+    auto target = cuda::GlTextureTarget::registerTexture(st.field.id(), grid.dims.x, grid.dims.y, grid.dims.z);
+    if (!target) return tl::unexpected(target.error());
+    st.interop.emplace(std::move(*target));
+    st.interopDims = grid.dims;
+  }
+  if (auto s = st.interop->copyFrom(field); !s) return s;
+  st.fieldGrid = grid;
+  st.hasField = true;
+  return {};
+#else
+  (void)field;
+  return fail("render: this build has no CUDA, so a device field cannot be shown");
+#endif
+}
+
+Status VolumeRenderer::setField(const FloatVolume& field) {
+  if (field.empty()) return fail("render: the distance field is empty");
+  std::vector<float> finite(field.voxels.size());
+  for (std::size_t i = 0; i < finite.size(); ++i)
+    finite[i] = std::isfinite(field.voxels[i]) ? field.voxels[i] : 1e30f;
+  glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
+  glBindTexture(GL_TEXTURE_3D, state_->field.id());
+  setTextureParams(GL_LINEAR);
+  const Dims& d = field.dims();
+  glTexImage3D(GL_TEXTURE_3D, 0, GL_R32F, d.x, d.y, d.z, 0, GL_RED, GL_FLOAT, finite.data());
+#if defined(AT_HAVE_CUDA)
+  state_->interop.reset();  // the storage changed: a registration would be stale
+#endif
+  state_->fieldGrid = field.geometry;
+  state_->hasField = true;
+  return glStatus("uploading the distance field");
+}
+
+void VolumeRenderer::clearField() { state_->hasField = false; }
+
+Status VolumeRenderer::draw(const RenderSettings& s) {
+  if (!state_->hasVolume) return fail("render: no volume uploaded");
+  if (s.width <= 0 || s.height <= 0 || s.width > 16384 || s.height > 16384)
+    return fail("render: image size " + std::to_string(s.width) + "x" + std::to_string(s.height) + " is out of range");
+  State& st = *state_;
+  if (st.fboWidth != s.width || st.fboHeight != s.height) {
+    glBindRenderbuffer(GL_RENDERBUFFER, st.colour.id());
+    glRenderbufferStorage(GL_RENDERBUFFER, GL_RGBA8, s.width, s.height);
+    glBindFramebuffer(GL_FRAMEBUFFER, st.fbo.id());
+    glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_RENDERBUFFER, st.colour.id());
+    if (glCheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
+      return fail("render: the offscreen framebuffer is incomplete");
+    st.fboWidth = s.width;
+    st.fboHeight = s.height;
+  }
+  if (s.preset.mode == RenderMode::Bare && st.maskLabel != int(selected_)) {
+    const Dims& d = st.volumeGrid.dims;
+    glUseProgram(st.maskProgram.id());
+    glActiveTexture(GL_TEXTURE0);
+    glBindTexture(GL_TEXTURE_3D, st.labels.id());
+    glUniform1i(glGetUniformLocation(st.maskProgram.id(), "uLabels"), 0);
+    glBindImageTexture(1, st.mask.id(), 0, GL_TRUE, 0, GL_WRITE_ONLY, GL_R8);
+    glUniform1ui(glGetUniformLocation(st.maskProgram.id(), "uSelected"), selected_);
+    glUniform3i(glGetUniformLocation(st.maskProgram.id(), "uDims"), d.x, d.y, d.z);
+    glDispatchCompute(GLuint((d.x + 7) / 8), GLuint((d.y + 7) / 8), GLuint((d.z + 3) / 4));
+    glMemoryBarrier(GL_TEXTURE_FETCH_BARRIER_BIT);
+    st.maskLabel = int(selected_);
+    if (auto e = glStatus("building the structure mask"); !e) return e;
+  }
+  // The 2-D table of the mode.
+  if (!st.tablePreset || !(*st.tablePreset == s.preset)) {
+    TransferFunction2D table = shadingTable(s.preset);
+    glBindTexture(GL_TEXTURE_2D, st.table.id());
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+    glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA32F, table.dataSize, table.distanceSize, 0, GL_RGBA, GL_FLOAT,
+                 table.rgba.data());
+    table.rgba.clear();
+    st.tableInfo = std::move(table);
+    st.tablePreset = s.preset;
+  }
+  const TransferFunction2D& table = st.tableInfo;
+
+  glBindFramebuffer(GL_FRAMEBUFFER, st.fbo.id());
+  glViewport(0, 0, s.width, s.height);
+  glDisable(GL_DEPTH_TEST);
+  glDisable(GL_BLEND);
+  const GLuint p = st.program.id();
+  glUseProgram(p);
+  const auto loc = [p](const char* n) { return glGetUniformLocation(p, n); };
+  const auto setMat = [&](const char* n, const Mat4& m) {
+    const auto f = m.toFloat();
+    glUniformMatrix4fv(loc(n), 1, GL_FALSE, f.data());
+  };
+  setMat("uInvViewProj", s.camera.viewProjection(double(s.width) / double(s.height)).inverse());
+  setMat("uPatientToTex", patientToTexture(st.volumeGrid));
+  setMat("uPatientToField", patientToTexture(st.hasField ? st.fieldGrid : st.volumeGrid));
+  glUniform2f(loc("uViewport"), float(s.width), float(s.height));
+  const RenderMode mode = s.preset.mode;
+  glUniform1i(loc("uMode"), mode == RenderMode::Bare ? 1 : (mode == RenderMode::Lighting ? 2 : 0));
+  glUniform1i(loc("uHasField"), st.hasField ? 1 : 0);
+  glUniform1f(loc("uStepMm"), float(effectiveStepMm(st.volumeGrid, s)));
+  glUniform1f(loc("uRefMm"), float(s.opacityRefMm));
+  glUniform1f(loc("uLog2Alpha"), std::log2(s.preset.alpha));
+  glUniform2f(loc("uDataRange"), float(table.dataMin), float(table.dataMax));
+  glUniform2f(loc("uTableSize"), float(table.dataSize), float(table.distanceSize));
+  glUniform1i(loc("uHasClip"), s.clip ? 1 : 0);
+  if (s.clip)
+    glUniform4f(loc("uClip"), float(s.clip->normal[0]), float(s.clip->normal[1]), float(s.clip->normal[2]),
+                float(s.clip->d));
+  glUniform3f(loc("uHighlight"), s.preset.highlightRgb[0], s.preset.highlightRgb[1], s.preset.highlightRgb[2]);
+  glUniform2f(loc("uLighting"), s.preset.lightingAlpha, s.preset.lightingBeta);
+  glUniform3f(loc("uSpacingMm"), float(st.volumeGrid.spacingMm[0]), float(st.volumeGrid.spacingMm[1]),
+              float(st.volumeGrid.spacingMm[2]));
+  glUniform3i(loc("uDims"), st.volumeGrid.dims.x, st.volumeGrid.dims.y, st.volumeGrid.dims.z);
+  glUniform1i(loc("uJitter"), s.jitter ? 1 : 0);
+  glUniform1i(loc("uShading"), s.shading ? 1 : 0);
+  glUniform4f(loc("uBackground"), s.background[0], s.background[1], s.background[2], s.background[3]);
+  glActiveTexture(GL_TEXTURE0);
+  glBindTexture(GL_TEXTURE_3D, st.hu.id());
+  glUniform1i(loc("uHu"), 0);
+  glActiveTexture(GL_TEXTURE1);
+  glBindTexture(GL_TEXTURE_3D, st.mask.id());
+  glUniform1i(loc("uMask"), 1);
+  glActiveTexture(GL_TEXTURE2);
+  glBindTexture(GL_TEXTURE_3D, st.field.id());
+  glUniform1i(loc("uField"), 2);
+  glActiveTexture(GL_TEXTURE3);
+  glBindTexture(GL_TEXTURE_2D, st.table.id());
+  glUniform1i(loc("uTable"), 3);
+  glActiveTexture(GL_TEXTURE0);
+  glBindVertexArray(st.vao.id());
+  glDrawArrays(GL_TRIANGLES, 0, 3);
+  return glStatus("drawing");
+}
+
+Result<RgbaImage> VolumeRenderer::render(const RenderSettings& s) {
+  if (auto st = draw(s); !st) return tl::unexpected(st.error());
+  RgbaImage image(s.width, s.height);
+  std::vector<std::uint8_t> rows(image.rgba.size());
+  glPixelStorei(GL_PACK_ALIGNMENT, 1);
+  glReadPixels(0, 0, s.width, s.height, GL_RGBA, GL_UNSIGNED_BYTE, rows.data());
+  if (auto st = glStatus("reading the image back"); !st) return tl::unexpected(st.error());
+  const std::size_t stride = std::size_t(s.width) * 4;
+  for (int y = 0; y < s.height; ++y)  // GL's row 0 is the bottom
+    std::copy_n(rows.data() + std::size_t(s.height - 1 - y) * stride, stride, image.rgba.data() + std::size_t(y) * stride);
+  return image;
+}
+
+Result<double> VolumeRenderer::renderTimed(const RenderSettings& s) {
+  glBeginQuery(GL_TIME_ELAPSED, state_->timer.id());
+  const Status st = draw(s);
+  glEndQuery(GL_TIME_ELAPSED);
+  if (!st) return tl::unexpected(st.error());
+  GLuint64 ns = 0;
+  glGetQueryObjectui64v(state_->timer.id(), GL_QUERY_RESULT, &ns);
+  return double(ns) * 1e-6;
+}
+
+}  // namespace at::render::gl

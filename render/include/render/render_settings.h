@@ -1,0 +1,70 @@
+// What one frame shows: the volumes (HU, labels, distance field, selected structure), the mode and
+// preset, the camera and clipping plane. The GL ray caster (render/gl) and CPU picking read the same
+// settings and classify samples the same way, so a pick returns what the user sees.
+//
+// Sample classification per mode (s = HU, D = distance field, n = f(D) = 2/(1+α^D)):
+//   wdt, unweighted, outline, lighting: rgba = table(s, n), the 2-D TF of Algorithm 1.
+//   fuzzy (Eqs. 4–5): w = distTF(n).A; K'd = Kd(1−w) + Kh·w interpolated in CIE XYZ, Kd = dataTF(s).RGB,
+//       Kh = distTF(n).RGB (the highlight colour from a 1-D TF); A = lerp(t·dataTF(s).A, dataTF(s).A, w).
+//   bare: the selected structure's mask (trilinear, surface at 0.5) in highlight_rgb, opaque.
+// Opacity is per `opacityRefMm` of ray and corrected to the step: a' = 1 − (1 − a)^(step/ref).
+// lighting adds Eq. 6: ambient k_a = β/(α_l·D + 1)² in highlight colour, the structure as the light.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <optional>
+
+#include "render/camera.h"
+#include "render/preset.h"
+#include "render/transfer_function.h"
+#include "volume/grid.h"
+#include "wdt/wdt.h"
+
+namespace at::render {
+
+struct RenderSettings {
+  Preset preset;                       // TFs, t, α, highlight, lighting; preset.mode is the mode
+  Camera camera;
+  std::optional<ClipPlane> clip;
+  int width = 512, height = 512;
+  double stepMm = 0;                   // 0: half the volume's smallest spacing
+  double opacityRefMm = 0.25;          // TF opacity is per this length of ray
+  std::array<float, 4> background{0, 0, 0, 0};  // composited under the volume (straight RGBA)
+  bool jitter = true;                  // per-pixel ray start offsets (deterministic hash)
+  bool shading = true;                 // Phong from gradients
+  int tableSize = 256;                 // entries per axis of the 2-D table
+};
+
+// What the ray caster samples. The field may lie on a coarser grid (downsampled); it is sampled
+// trilinearly in the patient frame. `selected` is the label of the structure (0 = none).
+struct SceneVolumes {
+  const Volume* volume = nullptr;
+  const LabelMap* labels = nullptr;     // same grid as volume
+  const FloatVolume* field = nullptr;   // distance field on its own grid
+  std::uint16_t selected = 0;
+};
+
+// The 2-D table the mode samples (see the classification above). For bare mode it is the wdt
+// table (unused by the shader but kept for picking consistency).
+TransferFunction2D shadingTable(const Preset& preset);
+double effectiveStepMm(const Geometry& volumeGrid, const RenderSettings& settings);
+// The value the ray caster composites: opacity corrected from `opacityRefMm` to the step.
+float correctedOpacity(float alpha, double stepMm, double refMm);
+// sRGB display value ↔ CIE XYZ (D65), for the fuzzy mode's colour interpolation.
+std::array<float, 3> srgbToXyz(const std::array<float, 3>& rgb);
+std::array<float, 3> xyzToSrgb(const std::array<float, 3>& xyz);
+
+struct PickResult {
+  bool hit = false;
+  std::uint16_t label = 0;   // label at the hit sample (0 if that sample is unlabelled)
+  Vec3 pointMm{0, 0, 0};     // LPS
+  double accumulatedOpacity = 0;
+};
+
+// Marches the ray through pixel (x, y) as the ray caster does (without jitter) and returns the
+// first sample where accumulated opacity reaches `threshold`; hit = false when it never does.
+PickResult pick(const SceneVolumes& scene, const RenderSettings& settings, const TransferFunction2D& table,
+                double x, double y, double threshold = 0.5);
+
+}  // namespace at::render

@@ -1,0 +1,148 @@
+#include "render/render_settings.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace at::render {
+
+namespace {
+
+float srgbToLinear(float c) { return c <= 0.04045f ? c / 12.92f : std::pow((c + 0.055f) / 1.055f, 2.4f); }
+float linearToSrgb(float c) {
+  c = std::clamp(c, 0.0f, 1.0f);
+  return c <= 0.0031308f ? 12.92f * c : 1.055f * std::pow(c, 1.0f / 2.4f) - 0.055f;
+}
+
+// Trilinear sample of a grid at continuous index coordinates, clamped to the edge (GL_CLAMP_TO_EDGE).
+template <class T, class F>
+double trilinear(const Grid<T>& g, const Vec3& ijk, F value) {
+  const Dims& d = g.dims();
+  double c[3] = {std::clamp(ijk[0], 0.0, double(d.x - 1)), std::clamp(ijk[1], 0.0, double(d.y - 1)),
+                 std::clamp(ijk[2], 0.0, double(d.z - 1))};
+  const int i0 = int(c[0]), j0 = int(c[1]), k0 = int(c[2]);
+  const int i1 = std::min(i0 + 1, d.x - 1), j1 = std::min(j0 + 1, d.y - 1), k1 = std::min(k0 + 1, d.z - 1);
+  const double fx = c[0] - i0, fy = c[1] - j0, fz = c[2] - k0;
+  const auto v = [&](int i, int j, int k) { return double(value(g.voxels[d.index(i, j, k)])); };
+  const double x00 = v(i0, j0, k0) * (1 - fx) + v(i1, j0, k0) * fx;
+  const double x10 = v(i0, j1, k0) * (1 - fx) + v(i1, j1, k0) * fx;
+  const double x01 = v(i0, j0, k1) * (1 - fx) + v(i1, j0, k1) * fx;
+  const double x11 = v(i0, j1, k1) * (1 - fx) + v(i1, j1, k1) * fx;
+  return (x00 * (1 - fy) + x10 * fy) * (1 - fz) + (x01 * (1 - fy) + x11 * fy) * fz;
+}
+
+}  // namespace
+
+std::array<float, 3> srgbToXyz(const std::array<float, 3>& rgb) {
+  const float r = srgbToLinear(rgb[0]), g = srgbToLinear(rgb[1]), b = srgbToLinear(rgb[2]);
+  return {0.4124564f * r + 0.3575761f * g + 0.1804375f * b, 0.2126729f * r + 0.7151522f * g + 0.0721750f * b,
+          0.0193339f * r + 0.1191920f * g + 0.9503041f * b};
+}
+
+std::array<float, 3> xyzToSrgb(const std::array<float, 3>& xyz) {
+  const float x = xyz[0], y = xyz[1], z = xyz[2];
+  return {linearToSrgb(3.2404542f * x - 1.5371385f * y - 0.4985314f * z),
+          linearToSrgb(-0.9692660f * x + 1.8760108f * y + 0.0415560f * z),
+          linearToSrgb(0.0556434f * x - 0.2040259f * y + 1.0572252f * z)};
+}
+
+TransferFunction2D shadingTable(const Preset& preset) {
+  auto data = TransferFunction1D::fromPoints(preset.dataTf);
+  auto dist = TransferFunction1D::fromPoints(preset.distanceTf);
+  // Presets are validated on load; a hand-built invalid one falls back to the defaults.
+  if (!data) data = TransferFunction1D::fromPoints(Preset{}.dataTf);
+  if (!dist) dist = TransferFunction1D::fromPoints(Preset{}.distanceTf);
+  TransferFunction2D table = buildTransferFunction2D(*data, *dist, preset.t);
+  if (preset.mode != RenderMode::Fuzzy) return table;
+  // Eqs. 4–5 replace Algorithm 1's colours and opacities.
+  const int n = table.dataSize, m = table.distanceSize;
+  for (int j = 0; j < m; ++j) {
+    const Rgba kh = dist->evaluate(double(j) / double(m - 1));
+    const auto xyzH = srgbToXyz({kh[0], kh[1], kh[2]});
+    const float w = kh[3];
+    for (int i = 0; i < n; ++i) {
+      const Rgba kd = data->evaluate(table.dataMin + (table.dataMax - table.dataMin) * double(i) / double(n - 1));
+      const auto xyzD = srgbToXyz({kd[0], kd[1], kd[2]});
+      std::array<float, 3> mix;
+      for (int c = 0; c < 3; ++c) mix[c] = xyzD[c] * (1 - w) + xyzH[c] * w;
+      const auto rgb = xyzToSrgb(mix);
+      Rgba& o = table.rgba[std::size_t(i) + std::size_t(n) * std::size_t(j)];
+      o = {rgb[0], rgb[1], rgb[2], preset.t * kd[3] + (kd[3] - preset.t * kd[3]) * w};
+    }
+  }
+  return table;
+}
+
+double effectiveStepMm(const Geometry& g, const RenderSettings& s) {
+  if (s.stepMm > 0) return s.stepMm;
+  return 0.5 * std::min({g.spacingMm[0], g.spacingMm[1], g.spacingMm[2]});
+}
+
+float correctedOpacity(float alpha, double stepMm, double refMm) {
+  return float(1.0 - std::pow(1.0 - std::clamp(double(alpha), 0.0, 0.999999), stepMm / refMm));
+}
+
+PickResult pick(const SceneVolumes& scene, const RenderSettings& s, const TransferFunction2D& table, double x,
+                double y, double threshold) {
+  PickResult result;
+  if (!scene.volume || scene.volume->empty()) return result;
+  const Geometry& g = scene.volume->geometry;
+  const Ray ray = s.camera.rayThroughPixel(x, y, s.width, s.height);
+  // Intersect with the volume's box in index space (voxel centres at integers, box ±0.5).
+  const Vec3 o = g.patientToIndex(ray.origin);
+  const Vec3 e = g.patientToIndex(ray.origin + ray.direction);
+  const Vec3 dirIdx = e - o;  // index units per mm
+  double t0 = 0, t1 = 1e30;
+  const double hi[3] = {g.dims.x - 0.5, g.dims.y - 0.5, g.dims.z - 0.5};
+  for (int a = 0; a < 3; ++a) {
+    if (std::fabs(dirIdx[a]) < 1e-12) {
+      if (o[a] < -0.5 || o[a] > hi[a]) return result;
+      continue;
+    }
+    double ta = (-0.5 - o[a]) / dirIdx[a], tb = (hi[a] - o[a]) / dirIdx[a];
+    if (ta > tb) std::swap(ta, tb);
+    t0 = std::max(t0, ta);
+    t1 = std::min(t1, tb);
+  }
+  if (!(t0 < t1)) return result;
+  const double step = effectiveStepMm(g, s);
+  const bool bare = s.preset.mode == RenderMode::Bare;
+  const float alphaF = s.preset.alpha;
+  const Geometry* fg = scene.field ? &scene.field->geometry : nullptr;
+  double accumulated = 0;
+  for (double tm = t0 + 0.5 * step; tm < t1; tm += step) {
+    const Vec3 p = ray.origin + tm * ray.direction;
+    if (s.clip && !s.clip->keeps(p)) continue;
+    const Vec3 ijk = g.patientToIndex(p);
+    float a = 0;
+    if (bare) {
+      if (!scene.labels || scene.selected == 0) continue;
+      const std::uint16_t sel = scene.selected;
+      const double mask = trilinear(*scene.labels, ijk, [sel](std::uint16_t l) { return l == sel ? 1.0 : 0.0; });
+      a = mask >= 0.5 ? 1.0f : 0.0f;
+    } else {
+      const double hu = trilinear(*scene.volume, ijk, [](std::int16_t v) { return double(v); });
+      float n = 0;
+      if (fg) {
+        const double d = trilinear(*scene.field, fg->patientToIndex(p), [](float v) { return std::isinf(v) ? 1e30 : double(v); });
+        n = normaliseDistance(float(d), alphaF);
+      }
+      a = table.lookup(hu, n)[3];
+    }
+    const float ac = correctedOpacity(a, step, s.opacityRefMm);
+    accumulated += (1 - accumulated) * ac;
+    if (accumulated >= threshold) {
+      result.hit = true;
+      result.pointMm = p;
+      result.accumulatedOpacity = accumulated;
+      if (scene.labels) {
+        const int i = int(std::lround(ijk[0])), j = int(std::lround(ijk[1])), k = int(std::lround(ijk[2]));
+        if (g.dims.contains(i, j, k)) result.label = scene.labels->at(i, j, k);
+      }
+      return result;
+    }
+  }
+  result.accumulatedOpacity = accumulated;
+  return result;
+}
+
+}  // namespace at::render
