@@ -255,8 +255,9 @@ int runRun(const cli::Args& args) {
     if (!answersFile) return reportError(answersPath + ": cannot open the answers file");
   }
   int lineNumber = 0;
-  std::printf("Study %s — participant %s (%s), session %d\n", protocol->id.c_str(), participant->c_str(),
-              group->c_str(), state->session);
+  // Participants see neither the study's id nor its title: both may name the conditions.
+  std::printf("Preference study — participant %s (%s), session %d\n", participant->c_str(), group->c_str(),
+              state->session);
   std::printf("For each of %zu structures you will see two renderings, A and B. Rate each item from %d (prefer A) "
               "to %d (prefer B).\n",
               protocol->structures.size(), protocol->scale.min, protocol->scale.max);
