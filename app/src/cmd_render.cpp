@@ -33,18 +33,6 @@ const char* kUsage =
     "  --context   view radius as a multiple of the structure's radius (default 2.5)\n"
     "  --presets   presets folder (default: data/presets of the source tree or next to the binary)\n";
 
-fs::path defaultPresetsDir() {
-  const fs::path source = fs::path(AT_SOURCE_DIR) / "data" / "presets";
-  if (fs::is_directory(source)) return source;
-  std::error_code ec;
-  const fs::path exe = fs::read_symlink("/proc/self/exe", ec);
-  if (!ec) {
-    for (const fs::path& p : {exe.parent_path() / "data" / "presets",
-                              exe.parent_path().parent_path() / "share" / "anatomy-tutor" / "presets"})
-      if (fs::is_directory(p)) return p;
-  }
-  return source;
-}
 
 Result<std::pair<int, int>> parseSize(const std::string& text) {
   int w = 0, h = 0;
@@ -182,6 +170,20 @@ int runRender(const Argv& argv) {
               structure->id.c_str(), render::toString(preset->mode), preset->id.value_or("?").c_str(), image->width,
               image->height, double(preset->t), wdtMs, wdtDevice.c_str(), renderMs, context3d->description().c_str());
   return 0;
+}
+
+std::filesystem::path defaultPresetsDir() {
+  namespace fs = std::filesystem;
+  const fs::path source = fs::path(AT_SOURCE_DIR) / "data" / "presets";
+  if (fs::is_directory(source)) return source;
+  std::error_code ec;
+  const fs::path exe = fs::read_symlink("/proc/self/exe", ec);
+  if (!ec) {
+    for (const fs::path& p : {exe.parent_path() / "data" / "presets",
+                              exe.parent_path().parent_path() / "share" / "anatomy-tutor" / "presets"})
+      if (fs::is_directory(p)) return p;
+  }
+  return source;
 }
 
 }  // namespace at::app
