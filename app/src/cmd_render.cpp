@@ -3,10 +3,10 @@
 #include <cstdio>
 #include <filesystem>
 #include <sstream>
-#include <unistd.h>
 
 #include "cli_args.h"
 #include "commands.h"
+#include "dataset_resolver.h"
 #include "render/gl/egl_context.h"
 #include "render/gl/volume_renderer.h"
 #include "render/preset.h"
@@ -24,8 +24,8 @@ namespace fs = std::filesystem;
 const char* kUsage =
     "usage: anatomy-tutor render DATASET STRUCTURE (--preset NAME | --mode MODE) [--t T] [--size WxH]\n"
     "                            [--view NAME] [--clip NX,NY,NZ,D] [--backend cpu|cuda|auto] [--passes N]\n"
-    "                            [--context F] [--presets DIR] [--labels FILE] --out F.png\n"
-    "  DATASET     phantom, phantom:N, or a volume file/folder (with --labels for its label map)\n"
+    "                            [--context F] [--presets DIR] [--labels FILE] [--db PATH] --out F.png\n"
+    "  DATASET     phantom, phantom:N, an imported dataset, or a volume file/folder (--labels: its labels)\n"
     "  MODE        wdt | bare | unweighted | fuzzy | outline | lighting (the structure's shipped preset)\n"
     "  --preset    a preset id from the presets folder, or a path to a .json preset\n"
     "  --t         context blend 0..1 (overrides the preset)\n"
@@ -34,18 +34,6 @@ const char* kUsage =
     "  --context   view radius as a multiple of the structure's radius (default 2.5)\n"
     "  --presets   presets folder (default: data/presets of the source tree or next to the binary)\n";
 
-fs::path defaultPresetsDir() {
-  const fs::path source = fs::path(AT_SOURCE_DIR) / "data" / "presets";
-  if (fs::is_directory(source)) return source;
-  std::error_code ec;
-  const fs::path exe = fs::read_symlink("/proc/self/exe", ec);
-  if (!ec) {
-    for (const fs::path& p : {exe.parent_path() / "data" / "presets",
-                              exe.parent_path().parent_path() / "share" / "anatomy-tutor" / "presets"})
-      if (fs::is_directory(p)) return p;
-  }
-  return source;
-}
 
 Result<std::pair<int, int>> parseSize(const std::string& text) {
   int w = 0, h = 0;
@@ -72,20 +60,12 @@ Result<std::array<float, 4>> parseClip(const std::string& text) {
   return c;
 }
 
-Result<Dataset> openDataset(const std::string& name, const std::string& labels) {
-  if (isBuiltinDatasetName(name)) return openBuiltinDataset(name);
-  DatasetFiles files;
-  files.volumePath = name;
-  files.labelsPath = labels;
-  files.id = fs::path(name).stem().string();
-  return openDatasetFiles(files);
-}
 
 }  // namespace
 
 int runRender(const Argv& argv) {
   auto args = cli::Args::parse(
-      argv, {"preset", "mode", "t", "size", "view", "clip", "backend", "passes", "context", "presets", "labels", "out"},
+      argv, {"preset", "mode", "t", "size", "view", "clip", "backend", "passes", "context", "presets", "labels", "out", "db"},
       {});
   if (!args) return reportError("render: " + args.error().message, 2);
   if (args->has("help")) {
@@ -99,7 +79,11 @@ int runRender(const Argv& argv) {
   if (!out) return reportError("render: --out F.png is required", 2);
 
   const render::PresetLibrary library(args->has("presets") ? fs::path(*args->value("presets")) : defaultPresetsDir());
-  auto dataset = openDataset(args->positional()[0], args->valueOr("labels", ""));
+  DatasetRequest datasetRequest;
+  datasetRequest.name = args->positional()[0];
+  datasetRequest.labelsPath = args->valueOr("labels", "");
+  datasetRequest.dbPath = args->value("db");
+  auto dataset = openNamedDataset(datasetRequest);
   if (!dataset) return reportError("render: " + dataset.error().message);
   const Structure* structure = dataset->findStructure(args->positional()[1]);
   if (!structure) {
@@ -183,6 +167,20 @@ int runRender(const Argv& argv) {
               structure->id.c_str(), render::toString(preset->mode), preset->id.value_or("?").c_str(), image->width,
               image->height, double(preset->t), wdtMs, wdtDevice.c_str(), renderMs, context3d->description().c_str());
   return 0;
+}
+
+std::filesystem::path defaultPresetsDir() {
+  namespace fs = std::filesystem;
+  const fs::path source = fs::path(AT_SOURCE_DIR) / "data" / "presets";
+  if (fs::is_directory(source)) return source;
+  std::error_code ec;
+  const fs::path exe = fs::read_symlink("/proc/self/exe", ec);
+  if (!ec) {
+    for (const fs::path& p : {exe.parent_path() / "data" / "presets",
+                              exe.parent_path().parent_path() / "share" / "anatomy-tutor" / "presets"})
+      if (fs::is_directory(p)) return p;
+  }
+  return source;
 }
 
 }  // namespace at::app

@@ -25,6 +25,7 @@
 #include "db/database.h"
 #include "db/study_store.h"
 #include "quiz/study_report.h"
+#include "render/preset.h"
 #include "volume/png_image.h"
 
 namespace at::app {
@@ -245,6 +246,17 @@ int runRun(const cli::Args& args) {
   if (!database) return reportError(database.error().message);
   auto protocol = resolveStudy(*database, args.positional()[0]);
   if (!protocol) return reportError(protocol.error().message);
+  // Both presets of every structure must exist before anyone is enrolled; the WDT preset's α and
+  // β are recorded with each rating (the render parameters on screen).
+  const render::PresetLibrary presets(defaultPresetsDir());
+  std::map<std::string, render::Preset> wdtPreset;
+  for (const std::string& structure : protocol->structures) {
+    for (int condition = 0; condition < 2; ++condition) {
+      auto preset = presets.load(protocol->presetFor(structure, condition));
+      if (!preset) return reportError("study " + protocol->id + ": " + preset.error().message);
+      if (condition == 0) wdtPreset[structure] = *preset;
+    }
+  }
   auto state = db::enrolOrResume(*database, *protocol, *participant, *group);
   if (!state) return reportError(state.error().message);
 
@@ -255,8 +267,9 @@ int runRun(const cli::Args& args) {
     if (!answersFile) return reportError(answersPath + ": cannot open the answers file");
   }
   int lineNumber = 0;
-  std::printf("Study %s — participant %s (%s), session %d\n", protocol->id.c_str(), participant->c_str(),
-              group->c_str(), state->session);
+  // Participants see neither the study's id nor its title: both may name the conditions.
+  std::printf("Preference study — participant %s (%s), session %d\n", participant->c_str(), group->c_str(),
+              state->session);
   std::printf("For each of %zu structures you will see two renderings, A and B. Rate each item from %d (prefer A) "
               "to %d (prefer B).\n",
               protocol->structures.size(), protocol->scale.min, protocol->scale.max);
@@ -289,6 +302,8 @@ int runRun(const cli::Args& args) {
       r.ratingAsShown = answer->ratings.at(item.id);
       r.responseMs = answer->responseMs;
       r.t = protocol->t;
+      r.alpha = wdtPreset[trial.structure].alpha;
+      r.beta = wdtPreset[trial.structure].lightingBeta;
       r.appVersion = AT_VERSION;
       // Each rating is committed before the next is taken.
       if (auto s = db::recordRating(*database, protocol->id, *participant, r); !s) return reportError(s.error().message);

@@ -14,6 +14,8 @@
 
 #include "cli_args.h"
 #include "commands.h"
+#include "dataset_resolver.h"
+#include "db/dataset_store.h"
 #include "volume/dataset_source.h"
 #include "volume/image_file.h"
 #include "volume/phantom.h"
@@ -29,39 +31,28 @@ using nlohmann::json;
 // --- shared helpers ----------------------------------------------------------------------------
 
 // Options every dataset-taking command accepts, besides the DATASET positional.
-const std::set<std::string> kDatasetOptions = {"volume", "labels", "names", "series"};
+const std::set<std::string> kDatasetOptions = {"volume", "labels", "names", "series", "db"};
 
 std::set<std::string> with(std::set<std::string> a, const std::set<std::string>& b) {
   a.insert(b.begin(), b.end());
   return a;
 }
 
-// Opens the dataset named by the arguments: a built-in name, a path (file or DICOM folder), or
-// --volume PATH. --labels, --names and --series apply to files only.
+// Opens the dataset named by the arguments: a built-in name, an imported dataset, a path (file or
+// DICOM folder), or --volume PATH. --labels, --names and --series apply to files only.
 Result<Dataset> openDatasetArg(const cli::Args& args) {
   const auto& pos = args.positional();
   const auto volume = args.value("volume");
   if (volume && !pos.empty()) return fail("give either DATASET or --volume PATH, not both");
   if (!volume && pos.empty()) return fail("missing DATASET (a built-in name such as 'phantom', or a path)");
   if (pos.size() > 1) return fail("unexpected argument '" + pos[1] + "' (one DATASET only)");
-  const std::string name = volume ? *volume : pos[0];
-  if (!volume && isBuiltinDatasetName(name)) {
-    for (const char* option : {"labels", "names", "series"})
-      if (args.has(option))
-        return fail(std::string("--") + option + " applies to datasets from files, not to '" + name + "'");
-    return openBuiltinDataset(name);
-  }
-  std::error_code ec;
-  if (!fs::exists(name, ec))
-    return fail("unknown dataset '" + name + "': not a built-in dataset (phantom, phantom:N) and no such file or folder");
-  if (args.has("names") && !args.has("labels")) return fail("--names needs --labels PATH");
-  DatasetFiles files;
-  files.volumePath = name;
-  files.labelsPath = args.valueOr("labels", "");
-  files.namesPath = args.valueOr("names", "");
-  files.dicomSeriesUid = args.valueOr("series", "");
-  files.id = fs::path(name).filename().string();
-  return openDatasetFiles(files);
+  DatasetRequest request;
+  request.name = volume ? *volume : pos[0];
+  request.labelsPath = args.valueOr("labels", "");
+  request.namesPath = args.valueOr("names", "");
+  request.seriesUid = args.valueOr("series", "");
+  request.dbPath = args.value("db");
+  return openNamedDataset(request);
 }
 
 std::vector<std::size_t> labelHistogram(const LabelMap& labels) {
@@ -124,9 +115,9 @@ std::vector<DatasetListing> builtinDatasets() {
 }
 
 const char* kDatasetsHelp =
-    "usage: anatomy-tutor datasets [--json]\n\n"
-    "Lists the datasets that can be opened by name. The built-in phantom is always available;\n"
-    "datasets imported with `anatomy-tutor import` are listed once the database exists. Any\n"
+    "usage: anatomy-tutor datasets [--json] [--db PATH]\n\n"
+    "Lists the datasets that can be opened by name: the built-in phantom and the datasets imported\n"
+    "with `anatomy-tutor import` into the database (--db PATH, else the default database). Any\n"
     "supported file or folder can also be opened directly by its path.\n";
 
 // --- structures -------------------------------------------------------------------------------
@@ -195,23 +186,34 @@ double srgbEncode(double linear) {
 }  // namespace
 
 int runDatasets(const Argv& argv) {
-  auto args = cli::Args::parse(argv, {}, {"json"});
+  auto args = cli::Args::parse(argv, {"db"}, {"json"});
   if (!args) return usageError("datasets", args.error().message);
   if (args->has("help")) {
     std::printf("%s", kDatasetsHelp);
     return 0;
   }
   if (!args->positional().empty()) return usageError("datasets", "unexpected argument '" + args->positional()[0] + "'");
-  const std::vector<DatasetListing> rows = builtinDatasets();
+  std::vector<DatasetListing> rows = builtinDatasets();
+  std::vector<bool> builtin(rows.size(), true);
+  auto imported = db::listImportedDatasets(args->value("db"));
+  if (!imported) return reportError("datasets: " + imported.error().message);
+  for (const db::DatasetRecord& r : *imported) {
+    rows.push_back({r.name, r.species + " dataset from " + r.volumePath,
+                    r.geometry.dims.toString() + ", " + std::to_string(r.structureCount) + " structures, imported " +
+                        r.createdAt});
+    builtin.push_back(false);
+  }
   if (args->has("json")) {
     json list = json::array();
-    for (const auto& r : rows) list.push_back({{"id", r.id}, {"name", r.name}, {"detail", r.detail}, {"builtin", true}});
+    for (std::size_t i = 0; i < rows.size(); ++i)
+      list.push_back({{"id", rows[i].id}, {"name", rows[i].name}, {"detail", rows[i].detail}, {"builtin", bool(builtin[i])}});
     std::printf("%s\n", json{{"datasets", list}}.dump().c_str());
     return 0;
   }
   for (const auto& r : rows) std::printf("%-10s %s — %s\n", r.id.c_str(), r.name.c_str(), r.detail.c_str());
-  std::printf("(imported datasets are listed here once `anatomy-tutor import` and its database exist;\n"
-              " any supported file or folder can be opened by its path)\n");
+  if (imported->empty())
+    std::printf("(no imported datasets yet: `anatomy-tutor import` adds them; any supported file or folder can\n"
+                " also be opened by its path)\n");
   return 0;
 }
 

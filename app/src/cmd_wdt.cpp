@@ -11,6 +11,7 @@
 
 #include "cli_args.h"
 #include "commands.h"
+#include "dataset_resolver.h"
 #include "volume/dataset_source.h"
 #include "volume/mask.h"
 #include "volume/nifti_io.h"
@@ -23,7 +24,8 @@ namespace {
 constexpr const char* kUsage =
     "usage: anatomy-tutor wdt DATASET STRUCTURE [options]\n"
     "  Weighted distance field of STRUCTURE (id or name) through the CT densities.\n"
-    "  DATASET: phantom | phantom:N (the built-in phantom at N^3)\n"
+    "  DATASET: phantom | phantom:N (the built-in phantom at N^3), an imported dataset (--db PATH),\n"
+    "           or a volume path\n"
     "  --backend auto|cpu|cuda     (default auto: CUDA when available, else CPU)\n"
     "  --passes N | --converge     fixed passes (default 2) or until a pass changes nothing\n"
     "  --rule entering|trapezoid   step cost w(b)|step| or (w(a)+w(b))/2 |step|\n"
@@ -101,7 +103,7 @@ nlohmann::json dimsJson(const Dims& d) { return nlohmann::json::array({d.x, d.y,
 }  // namespace
 
 int runWdt(const Argv& argv) {
-  auto parsed = cli::Args::parse(argv, {"backend", "passes", "rule", "weight", "hu-window", "base", "downsample", "out"},
+  auto parsed = cli::Args::parse(argv, {"backend", "passes", "rule", "weight", "hu-window", "base", "downsample", "out", "db"},
                                  {"converge", "check", "json"});
   if (!parsed) return reportError("wdt: " + parsed.error().message);
   const cli::Args& args = *parsed;
@@ -114,7 +116,10 @@ int runWdt(const Argv& argv) {
   if (!params) return reportError("wdt: " + params.error().message);
 
   const std::string datasetName = args.positional()[0], structureName = args.positional()[1];
-  auto dataset = openBuiltinDataset(datasetName);
+  DatasetRequest request;
+  request.name = datasetName;
+  request.dbPath = args.value("db");
+  auto dataset = openNamedDataset(request);
   if (!dataset) return reportError("wdt: " + dataset.error().message);
   const Structure* structure = dataset->findStructure(structureName);
   if (!structure)

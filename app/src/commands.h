@@ -2,6 +2,7 @@
 // writes its result to stdout, one-line errors to stderr, and returns the process exit status.
 #pragma once
 
+#include <filesystem>
 #include <string>
 #include <vector>
 
@@ -32,6 +33,8 @@ int runWdt(const Argv& args);
 
 // Rendering (cmd_render.cpp)
 int runRender(const Argv& args);
+// The shipped presets: data/presets of the source tree, else next to the installed binary.
+std::filesystem::path defaultPresetsDir();
 
 // The desktop application (desktop_app.cpp, desktop_support.cpp)
 int runDesktop(const Argv& args);

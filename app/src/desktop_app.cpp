@@ -159,7 +159,7 @@ class DesktopApp {
     double frameBudgetMs = 100;     // at rest, finer levels predicted to cost more are not rendered
   };
 
-  explicit DesktopApp(Options options) : options_(std::move(options)), library_(presetsDirectory()) {}
+  explicit DesktopApp(Options options) : options_(std::move(options)), library_(defaultPresetsDir()) {}
   int run();
 
  private:

@@ -19,19 +19,6 @@ namespace at::app {
 
 namespace fs = std::filesystem;
 
-fs::path presetsDirectory() {
-  const fs::path source = fs::path(AT_SOURCE_DIR) / "data" / "presets";
-  if (fs::is_directory(source)) return source;
-  std::error_code ec;
-  const fs::path exe = fs::read_symlink("/proc/self/exe", ec);
-  if (!ec) {
-    for (const fs::path& p : {exe.parent_path() / "data" / "presets",
-                              exe.parent_path().parent_path() / "share" / "anatomy-tutor" / "presets"})
-      if (fs::is_directory(p)) return p;
-  }
-  return source;
-}
-
 Result<lessons::Course> loadDefaultCourse() {
   const fs::path dir = courseDirectory();
   const fs::path preferred = dir / "temporal_bone.json";
@@ -92,7 +79,7 @@ int writeDefaultViews(const fs::path& outDir) {
   std::error_code ec;
   fs::create_directories(outDir, ec);
   if (ec) return reportError(outDir.string() + ": cannot create the folder (" + ec.message() + ")");
-  const render::PresetLibrary library(presetsDirectory());
+  const render::PresetLibrary library(defaultPresetsDir());
   int index = 0;
   for (const lessons::ShowStep& step : views) {
     if (index == kFallbackViews) break;

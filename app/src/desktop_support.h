@@ -12,9 +12,6 @@
 
 namespace at::app {
 
-// data/presets of the source tree, or next to the binary when installed.
-std::filesystem::path presetsDirectory();
-
 // The default course: temporal_bone.json in the course folder (learning_support.h), else the
 // first course file there by name.
 Result<lessons::Course> loadDefaultCourse();

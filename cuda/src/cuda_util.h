@@ -66,7 +66,7 @@ class DeviceBuffer {
   std::size_t count_ = 0;
 };
 
-// Page-locked host memory for small asynchronous read-backs (the per-pass "changed" flag).
+// Page-locked host memory: asynchronous read-backs (the per-pass "changed" flag), transfer staging.
 template <class T>
 class PinnedBuffer {
  public:
@@ -128,9 +128,11 @@ class Stream {
 class Event {
  public:
   Event() = default;
-  static Result<Event> create() {
+  static Result<Event> create(unsigned flags = cudaEventDefault) {
     Event event;
-    if (auto s = check(cudaEventCreate(&event.event_), "cudaEventCreate"); !s) return tl::unexpected(s.error());
+    if (auto s = check(cudaEventCreateWithFlags(&event.event_, flags), "cudaEventCreate"); !s) {
+      return tl::unexpected(s.error());
+    }
     return event;
   }
   ~Event() {
@@ -144,6 +146,7 @@ class Event {
     return *this;
   }
   Status record(const Stream& stream) { return check(cudaEventRecord(event_, stream.get()), "cudaEventRecord"); }
+  Status synchronize() const { return check(cudaEventSynchronize(event_), "cudaEventSynchronize"); }
   // Milliseconds from `start` to this event; both must have completed.
   Result<float> millisecondsSince(const Event& start) const {
     float ms = 0;

@@ -1,4 +1,4 @@
-// The default sweep scheme: overlapped plane groups, equal to a serial sweep bit for bit.
+// The sweep kernels: overlapped plane groups, equal to a serial sweep bit for bit.
 //
 // A sweep along axis a must visit its planes in order (plane p reads plane p∓1 after that plane's
 // update), and one plane's update reaches one voxel further sideways per plane (a 45° cone). The
@@ -97,37 +97,46 @@ __global__ void __launch_bounds__(kThreads, 1) sweepGroup(GroupArgs p) {
   }
   __syncthreads();
 
+  // The plane loop is unrolled: each plane's halo h, region width and height are then constants
+  // (no run-time division to find a thread's voxel) and so is its trip count.
   bool changed = false;
-  for (int s = 1; s <= steps; ++s) {
-    const int h = kK - s;                       // valid halo at this plane
-    const int w = kTU + 2 * h, hgt = kTV + 2 * h;
-    const float* prev = sD + (s - 1) * kRN;
-    const std::uint8_t* qPrev = sQ + (s - 1) * kRN;
-    float* cur = sD + s * kRN;
-    for (int i = threadIdx.x; i < w * hgt; i += kThreads) {
-      const int ru = kK - h + i % w, rv = kK - h + i / w;
-      const int gu = u0 + ru, gv = v0 + rv;
-      if (gu < 0 || gu >= p.nu || gv < 0 || gv >= p.nv) continue;  // stays +infinity
-      const int r = rv * kRU + ru;
-      float n[3][3];
-      std::uint8_t qn[3][3];
 #pragma unroll
-      for (int dc = 0; dc < 3; ++dc) {
+  for (int s = 1; s <= kK; ++s) {
+    if (s <= steps) {  // uniform across the block
+      const int h = kK - s;                       // valid halo at this plane
+      const int w = kTU + 2 * h, hgt = kTV + 2 * h;
+      const float* prev = sD + (s - 1) * kRN;
+      const std::uint8_t* qPrev = sQ + (s - 1) * kRN;
+      float* cur = sD + s * kRN;
+      float* dstPlane = p.dst + planeOffset(p.first + s - 1);
 #pragma unroll
-        for (int db = 0; db < 3; ++db) {
-          n[dc][db] = prev[r + (dc - 1) * kRU + (db - 1)];
-          qn[dc][db] = kQn ? qPrev[r + (dc - 1) * kRU + (db - 1)] : 0;
+      for (int i0 = 0; i0 < w * hgt; i0 += kThreads) {
+        const int i = i0 + int(threadIdx.x);
+        const int ru = kK - h + i % w, rv = kK - h + i / w;
+        const int gu = u0 + ru, gv = v0 + rv;
+        if (i < w * hgt && gu >= 0 && gu < p.nu && gv >= 0 && gv < p.nv) {  // else stays +infinity
+          const int r = rv * kRU + ru;
+          float n[3][3];
+          std::uint8_t qn[3][3];
+#pragma unroll
+          for (int dc = 0; dc < 3; ++dc) {
+#pragma unroll
+            for (int db = 0; db < 3; ++db) {
+              n[dc][db] = prev[r + (dc - 1) * kRU + (db - 1)];
+              qn[dc][db] = kQn ? qPrev[r + (dc - 1) * kRU + (db - 1)] : 0;
+            }
+          }
+          const float old = cur[r];
+          const float v = relax<R, W>(old, n, qn, sQ[s * kRN + r], p.lengths, p.base);
+          cur[r] = v;
+          if (ru >= kK && ru < kK + kTU && rv >= kK && rv < kK + kTV) {
+            changed |= v < old;
+            dstPlane[std::size_t(gu) + std::size_t(gv) * p.strideV] = v;
+          }
         }
       }
-      const float old = cur[r];
-      const float v = relax<R, W>(old, n, qn, sQ[s * kRN + r], p.lengths, p.base);
-      cur[r] = v;
-      if (ru >= kK && ru < kK + kTU && rv >= kK && rv < kK + kTV) {
-        changed |= v < old;
-        p.dst[std::size_t(gu) + std::size_t(gv) * p.strideV + planeOffset(p.first + s - 1)] = v;
-      }
+      __syncthreads();
     }
-    __syncthreads();
   }
   if (__syncthreads_or(changed) && threadIdx.x == 0) *p.changed = 1;
 }
@@ -164,6 +173,20 @@ __global__ void transposeXY(const T* __restrict__ in, T* __restrict__ out, int n
   }
 }
 
+__global__ void initDistances(float* d, const std::uint8_t* seeds, std::size_t count) {
+  for (std::size_t i = blockIdx.x * std::size_t(blockDim.x) + threadIdx.x; i < count;
+       i += std::size_t(gridDim.x) * blockDim.x) {
+    d[i] = seeds[i] ? 0.0f : kInf;
+  }
+}
+
+__global__ void fill(float* d, std::size_t count, float value) {
+  for (std::size_t i = blockIdx.x * std::size_t(blockDim.x) + threadIdx.x; i < count;
+       i += std::size_t(gridDim.x) * blockDim.x) {
+    d[i] = value;
+  }
+}
+
 }  // namespace
 
 Status prepareExactSweeps() {
@@ -182,7 +205,10 @@ Status launchExactSweep(const ExactSweepArgs& a, cudaStream_t stream) {
   if (a.rule == StepRule::Trapezoid && a.weight == WeightRule::Density) {
     return launchGroups<StepRule::Trapezoid, WeightRule::Density>(a, stream);
   }
-  switch (a.weight) {  // see launchSweep: the other combinations cost the same under both rules
+  // Only density weights tell the two step rules apart: uniform weights cost len under both
+  // (½(1 + 1)·len = len exactly), gradient and ascent weights belong to the edge a → b and both
+  // rules charge w(a→b)·len (as the CPU backend's step_cost.h does).
+  switch (a.weight) {
     case WeightRule::Density: return launchGroups<StepRule::Entering, WeightRule::Density>(a, stream);
     case WeightRule::Uniform: return launchGroups<StepRule::Entering, WeightRule::Uniform>(a, stream);
     case WeightRule::Gradient: return launchGroups<StepRule::Entering, WeightRule::Gradient>(a, stream);
@@ -199,5 +225,19 @@ Status launchTransposeXY(const T* in, T* out, int nx, int ny, int nz, cudaStream
 }
 template Status launchTransposeXY<float>(const float*, float*, int, int, int, cudaStream_t);
 template Status launchTransposeXY<std::uint8_t>(const std::uint8_t*, std::uint8_t*, int, int, int, cudaStream_t);
+
+Status launchInitDistances(float* d, const std::uint8_t* seeds, std::size_t count, cudaStream_t stream) {
+  if (count == 0) return {};
+  const std::size_t blocks = (count + 255) / 256;
+  initDistances<<<unsigned(blocks < 8192 ? blocks : 8192), 256, 0, stream>>>(d, seeds, count);
+  return check(cudaGetLastError(), "launch of the distance initialisation kernel");
+}
+
+Status launchFill(float* d, std::size_t count, float value, cudaStream_t stream) {
+  if (count == 0) return {};
+  const std::size_t blocks = (count + 255) / 256;
+  fill<<<unsigned(blocks < 8192 ? blocks : 8192), 256, 0, stream>>>(d, count, value);
+  return check(cudaGetLastError(), "launch of the fill kernel");
+}
 
 }  // namespace at::cuda

@@ -4,10 +4,23 @@
 
 #include <cuda_runtime.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdlib>
 #include <cstdint>
+#include <cstring>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <new>
+#include <string>
+#include <thread>
 #include <utility>
+#include <vector>
+
+#if defined(__linux__)
+#include <sys/mman.h>
+#endif
 
 #include "cuda_util.h"
 #include "sweep_kernels.h"
@@ -80,21 +93,263 @@ Status validate(const WdtProblem& problem) {
   return check(cudaSetDevice(0), "cudaSetDevice(0)");
 }
 
-enum class Scheme { Exact, Tiled };
-
-// The exact scheme (exact_sweep.cu) unless AT_WDT_CUDA_SCHEME=tiled selects the single-launch
-// tiled scheme (sweep_kernels.cu), kept for comparison: faster per pass, but each pass propagates
-// less across tile borders, so fixed-pass fields are less accurate and converging takes more passes.
-Scheme sweepScheme() {
-  const char* env = std::getenv("AT_WDT_CUDA_SCHEME");
-  return env && std::string(env) == "tiled" ? Scheme::Tiled : Scheme::Exact;
-}
-
 #define AT_TRY(expr)                                          \
   do {                                                        \
     if (auto at_status_ = (expr); !at_status_)                \
       return tl::unexpected(std::move(at_status_).error());   \
   } while (0)
+
+#define AT_ASSIGN(var, expr)                                  \
+  do {                                                        \
+    auto at_made_ = (expr);                                   \
+    if (!at_made_) return tl::unexpected(at_made_.error());   \
+    var = std::move(*at_made_);                               \
+  } while (0)
+
+// Host transfers go through two page-locked staging chunks, so that the copy between the caller's
+// (pageable) memory and one chunk overlaps the DMA of the other.
+constexpr std::size_t kStagingBytes = std::size_t(4) << 20;
+
+// What one captured pass depends on besides the workspace's buffers.
+struct PassKey {
+  float spacing[3] = {0, 0, 0};
+  float baseCost = 0;
+  StepRule rule = StepRule::Entering;
+  WeightRule weight = WeightRule::Density;
+  bool operator==(const PassKey& o) const {
+    return spacing[0] == o.spacing[0] && spacing[1] == o.spacing[1] && spacing[2] == o.spacing[2] &&
+           baseCost == o.baseCost && rule == o.rule && weight == o.weight;
+  }
+};
+
+// Everything a run on one grid size needs: device buffers, staging, stream, events and the
+// captured pass. Kept between calls (see WorkspaceCache): allocation, graph capture and
+// instantiation then cost nothing on the next call of the same size.
+struct Workspace {
+  Dims dims;
+  Stream stream;
+  DeviceBuffer<std::uint8_t> density, densityT;  // densityT: y-contiguous copy for the x sweeps
+  DeviceBuffer<float> a, b;  // the field (in `a` between passes) and the sweeps' second buffer
+  DeviceBuffer<int> flag;
+  PinnedBuffer<int> flagHost;
+  PinnedBuffer<std::uint8_t> staging[2];
+  Event chunkDone[2];
+  Event start, end;
+  GraphExec pass;
+  std::optional<PassKey> passKey;
+
+  static Result<std::unique_ptr<Workspace>> create(Dims dims) {
+    const std::size_t n = dims.count();
+    auto w = std::make_unique<Workspace>();
+    w->dims = dims;
+    AT_ASSIGN(w->stream, Stream::create());
+    AT_ASSIGN(w->density, DeviceBuffer<std::uint8_t>::allocate(n));
+    AT_ASSIGN(w->densityT, DeviceBuffer<std::uint8_t>::allocate(n));
+    AT_ASSIGN(w->a, DeviceBuffer<float>::allocate(n));
+    AT_ASSIGN(w->b, DeviceBuffer<float>::allocate(n));
+    AT_ASSIGN(w->flag, DeviceBuffer<int>::allocate(1));
+    AT_ASSIGN(w->flagHost, PinnedBuffer<int>::allocate(1));
+    for (int i = 0; i < 2; ++i) {
+      AT_ASSIGN(w->staging[i], PinnedBuffer<std::uint8_t>::allocate(kStagingBytes));
+      AT_ASSIGN(w->chunkDone[i], Event::create(cudaEventDisableTiming));
+    }
+    AT_ASSIGN(w->start, Event::create());
+    AT_ASSIGN(w->end, Event::create());
+    return w;
+  }
+
+  // Copies `bytes` from host `from` to device `to` (upload) or back (download), staged.
+  Status transfer(void* to, const void* from, std::size_t bytes, bool upload) {
+    const cudaStream_t s = stream.get();
+    const char* what = upload ? "cudaMemcpyAsync(host to device)" : "cudaMemcpyAsync(device to host)";
+    std::size_t chunks = (bytes + kStagingBytes - 1) / kStagingBytes;
+    auto part = [&](std::size_t i) { return std::min(kStagingBytes, bytes - i * kStagingBytes); };
+    if (upload) {
+      for (std::size_t i = 0; i < chunks; ++i) {
+        const int k = int(i % 2);
+        if (i >= 2) AT_TRY(chunkDone[k].synchronize());  // its previous DMA has read the chunk
+        std::memcpy(staging[k].get(), static_cast<const std::uint8_t*>(from) + i * kStagingBytes, part(i));
+        AT_TRY(check(cudaMemcpyAsync(static_cast<std::uint8_t*>(to) + i * kStagingBytes, staging[k].get(), part(i),
+                                     cudaMemcpyHostToDevice, s),
+                     what));
+        AT_TRY(chunkDone[k].record(stream));
+      }
+      return {};
+    }
+    auto enqueue = [&](std::size_t i) -> Status {
+      const int k = int(i % 2);
+      AT_TRY(check(cudaMemcpyAsync(staging[k].get(), static_cast<const std::uint8_t*>(from) + i * kStagingBytes,
+                                   part(i), cudaMemcpyDeviceToHost, s),
+                   what));
+      return chunkDone[k].record(stream);
+    };
+    if (chunks > 0) AT_TRY(enqueue(0));
+    for (std::size_t i = 0; i < chunks; ++i) {
+      if (i + 1 < chunks) AT_TRY(enqueue(i + 1));  // in flight while chunk i is copied out
+      AT_TRY(chunkDone[i % 2].synchronize());
+      std::memcpy(static_cast<std::uint8_t*>(to) + i * kStagingBytes, staging[i % 2].get(), part(i));
+    }
+    return {};
+  }
+};
+
+// The workspaces of the most recent grid sizes (a hover field and a full field alternate in the
+// app). A call takes one out (or makes one) and puts it back when done, so concurrent calls never
+// share one.
+class WorkspaceCache {
+ public:
+  static WorkspaceCache& instance() {
+    // Never destroyed: freeing CUDA resources from a static destructor races the runtime's own
+    // teardown at exit; the process's exit releases them.
+    static WorkspaceCache* cache = new WorkspaceCache;
+    return *cache;
+  }
+  // A kept workspace of these dims, or a new one; if allocating fails, the kept workspaces are
+  // freed and the allocation is tried once more.
+  Result<std::unique_ptr<Workspace>> take(Dims dims) {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      for (auto it = kept_.begin(); it != kept_.end(); ++it) {
+        if ((*it)->dims == dims) {
+          auto w = std::move(*it);
+          kept_.erase(it);
+          return w;
+        }
+      }
+    }
+    auto made = Workspace::create(dims);
+    if (made) return made;
+    std::vector<std::unique_ptr<Workspace>> freed;
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      freed.swap(kept_);
+    }
+    if (freed.empty()) return made;
+    freed.clear();
+    return Workspace::create(dims);
+  }
+  void put(std::unique_ptr<Workspace> w) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    kept_.insert(kept_.begin(), std::move(w));
+    if (kept_.size() > kKept) kept_.pop_back();
+  }
+
+ private:
+  static constexpr std::size_t kKept = 2;
+  std::mutex mutex_;
+  std::vector<std::unique_ptr<Workspace>> kept_;
+};
+
+// Captures one pass as a CUDA graph, reused while the key matches: the x sweeps run on a copy of
+// the field transposed to y-contiguous layout (so that every sweep's lanes are coalesced), then
+// the y and z sweeps; the field starts and ends the pass in `a`.
+Status preparePass(Workspace& w, const WdtProblem& problem) {
+  const Dims d = w.dims;
+  const WdtParams& params = problem.params;
+  PassKey key;
+  for (int i = 0; i < 3; ++i) key.spacing[i] = float(problem.grid.spacingMm[i]);
+  key.baseCost = params.baseCost;
+  key.rule = params.rule;
+  key.weight = params.weight;
+  if (w.passKey && *w.passKey == key) return {};
+  w.passKey.reset();
+
+  auto enqueuePass = [&](cudaStream_t st) -> Status {
+    ExactSweepArgs e;
+    e.baseCost = key.baseCost;
+    e.rule = key.rule;
+    e.weight = key.weight;
+    e.changed = w.flag.get();
+    const float sx = key.spacing[0], sy = key.spacing[1], sz = key.spacing[2];
+    const std::size_t nxy = std::size_t(d.x) * d.y;
+    float* a = w.a.get();
+    float* b = w.b.get();
+    // x sweeps on the transposed field (y contiguous): lanes y, z; planes x.
+    AT_TRY(launchTransposeXY(a, b, d.x, d.y, d.z, st));
+    e.density = w.densityT.get();
+    e.nu = d.y, e.nv = d.z, e.na = d.x, e.strideV = nxy, e.strideA = std::size_t(d.y);
+    e.lengths = wdt::axisSweepLengths(0, sx, sy, sz);
+    e.src = b, e.dst = a, e.direction = +1;
+    AT_TRY(launchExactSweep(e, st));
+    e.src = a, e.dst = b, e.direction = -1;
+    AT_TRY(launchExactSweep(e, st));
+    AT_TRY(launchTransposeXY(b, a, d.y, d.x, d.z, st));
+    // y sweeps: lanes x, z; planes y.  z sweeps: lanes x, y; planes z.
+    e.density = w.density.get();
+    e.nu = d.x, e.nv = d.z, e.na = d.y, e.strideV = nxy, e.strideA = std::size_t(d.x);
+    e.lengths = wdt::axisSweepLengths(1, sx, sy, sz);
+    e.src = a, e.dst = b, e.direction = +1;
+    AT_TRY(launchExactSweep(e, st));
+    e.src = b, e.dst = a, e.direction = -1;
+    AT_TRY(launchExactSweep(e, st));
+    e.nu = d.x, e.nv = d.y, e.na = d.z, e.strideV = std::size_t(d.x), e.strideA = nxy;
+    e.lengths = wdt::axisSweepLengths(2, sx, sy, sz);
+    e.src = a, e.dst = b, e.direction = +1;
+    AT_TRY(launchExactSweep(e, st));
+    e.src = b, e.dst = a, e.direction = -1;
+    return launchExactSweep(e, st);
+  };
+  AT_ASSIGN(w.pass, GraphExec::capture(w.stream, enqueuePass));
+  w.passKey = key;
+  return {};
+}
+
+// Makes `v` hold `count` floats (zero). A large fresh vector takes one page fault per 4 KiB as it
+// is first written, which is slow on virtual machines; on Linux the memory is advised to
+// transparent huge pages before the first touch.
+void allocateHostField(std::vector<float>& v, std::size_t count) {
+  v.reserve(count);
+#if defined(__linux__)
+  constexpr std::uintptr_t kHuge = std::uintptr_t(2) << 20;
+  const std::uintptr_t begin = (reinterpret_cast<std::uintptr_t>(v.data()) + kHuge - 1) & ~(kHuge - 1);
+  const std::uintptr_t end = reinterpret_cast<std::uintptr_t>(v.data() + count) & ~(kHuge - 1);
+  if (end > begin) (void)madvise(reinterpret_cast<void*>(begin), end - begin, MADV_HUGEPAGE);  // advice only
+#endif
+  v.resize(count);
+}
+
+// Uploads the problem and runs the passes; the field ends in w.a.
+Status runPasses(Workspace& w, const WdtProblem& problem, const WdtControl& control, WdtStats& stats) {
+  const std::size_t n = w.dims.count();
+  const WdtParams& params = problem.params;
+  const cudaStream_t s = w.stream.get();
+  AT_TRY(prepareExactSweeps());
+  // Seeds travel once, through the second distance buffer's memory viewed as bytes.
+  std::uint8_t* seeds = reinterpret_cast<std::uint8_t*>(w.b.get());
+  AT_TRY(w.transfer(seeds, problem.seeds.data(), n, true));
+  AT_TRY(launchInitDistances(w.a.get(), seeds, n, s));
+  AT_TRY(w.transfer(w.density.get(), problem.density.data(), n, true));
+  AT_TRY(launchTransposeXY(w.density.get(), w.densityT.get(), w.dims.x, w.dims.y, w.dims.z, s));
+  AT_TRY(preparePass(w, problem));
+
+  stats.backendUsed = WdtBackend::Cuda;
+  stats.device = queryDevice().name;
+  const int planned = params.converge ? params.maxPasses : params.passes;
+  bool lastChanged = true;
+  for (int pass = 0; pass < planned; ++pass) {
+    if (control.cancel && control.cancel->load(std::memory_order_relaxed)) {
+      stats.cancelled = true;
+      break;
+    }
+    AT_TRY(check(cudaMemsetAsync(w.flag.get(), 0, sizeof(int), s), "cudaMemsetAsync(changed flag)"));
+    AT_TRY(w.start.record(w.stream));
+    AT_TRY(w.pass.launch(w.stream));
+    AT_TRY(w.end.record(w.stream));
+    AT_TRY(check(cudaMemcpyAsync(w.flagHost.get(), w.flag.get(), sizeof(int), cudaMemcpyDeviceToHost, s),
+                 "cudaMemcpyAsync(changed flag, device to host)"));
+    AT_TRY(w.stream.synchronize());
+    auto ms = w.end.millisecondsSince(w.start);
+    if (!ms) return tl::unexpected(ms.error());
+    stats.msPerPass.push_back(*ms);
+    stats.passesRun = pass + 1;
+    lastChanged = *w.flagHost.get() != 0;
+    if (control.progress) control.progress(pass + 1, planned);
+    if (params.converge && !lastChanged) break;
+  }
+  AT_TRY(w.stream.synchronize());
+  stats.converged = stats.passesRun > 0 && !lastChanged && !stats.cancelled;
+  return {};
+}
 
 }  // namespace
 
@@ -114,141 +369,20 @@ Result<DeviceField> makeDeviceField(const Geometry& grid, float fill) {
 Result<DeviceField> runCudaBackendOnDevice(const WdtProblem& problem, const WdtControl& control, WdtStats* statsOut) {
   const auto t0 = std::chrono::steady_clock::now();
   AT_TRY(validate(problem));
-  const Dims dims = problem.grid.dims;
-  const std::size_t n = dims.count();
-  const WdtParams& params = problem.params;
-
-  auto stream = Stream::create();
-  if (!stream) return tl::unexpected(stream.error());
-  auto density = DeviceBuffer<std::uint8_t>::allocate(n);
-  if (!density) return tl::unexpected(density.error());
-  auto a = DeviceBuffer<float>::allocate(n);
-  if (!a) return tl::unexpected(a.error());
-  auto b = DeviceBuffer<float>::allocate(n);
-  if (!b) return tl::unexpected(b.error());
-  auto flag = DeviceBuffer<int>::allocate(1);
-  if (!flag) return tl::unexpected(flag.error());
-  auto flagHost = PinnedBuffer<int>::allocate(1);
-  if (!flagHost) return tl::unexpected(flagHost.error());
-  auto start = Event::create();
-  if (!start) return tl::unexpected(start.error());
-  auto end = Event::create();
-  if (!end) return tl::unexpected(end.error());
-  const cudaStream_t s = stream->get();
-
-  {
-    // Seeds travel once, through the second distance buffer's memory viewed as bytes.
-    std::uint8_t* seeds = reinterpret_cast<std::uint8_t*>(b->get());
-    AT_TRY(check(cudaMemcpyAsync(density->get(), problem.density.data(), n, cudaMemcpyHostToDevice, s),
-                 "cudaMemcpyAsync(density, host to device)"));
-    AT_TRY(check(cudaMemcpyAsync(seeds, problem.seeds.data(), n, cudaMemcpyHostToDevice, s),
-                 "cudaMemcpyAsync(seeds, host to device)"));
-    AT_TRY(launchInitDistances(a->get(), seeds, n, s));
-  }
-
-  // One pass, as a fixed sequence of launches that starts and ends with the field in `a`.
-  const Scheme scheme = sweepScheme();
-  DeviceBuffer<std::uint8_t> densityT;  // y-contiguous copy for the exact scheme's x sweeps
-  if (scheme == Scheme::Exact) {
-    AT_TRY(prepareExactSweeps());
-    auto t = DeviceBuffer<std::uint8_t>::allocate(n);
-    if (!t) return tl::unexpected(t.error());
-    densityT = std::move(*t);
-    AT_TRY(launchTransposeXY(density->get(), densityT.get(), dims.x, dims.y, dims.z, s));
-  }
-  const float sx = float(problem.grid.spacingMm[0]), sy = float(problem.grid.spacingMm[1]),
-              sz = float(problem.grid.spacingMm[2]);
-  auto enqueuePass = [&](cudaStream_t st) -> Status {
-    if (scheme == Scheme::Tiled) {
-      SweepArgs args;
-      args.density = density->get();
-      args.nx = dims.x, args.ny = dims.y, args.nz = dims.z;
-      args.spacing[0] = sx, args.spacing[1] = sy, args.spacing[2] = sz;
-      args.baseCost = params.baseCost;
-      args.rule = params.rule;
-      args.weight = params.weight;
-      args.changed = flag->get();
-      float* cur = a->get();
-      float* next = b->get();
-      for (int axis = 0; axis < 3; ++axis) {
-        for (int direction : {+1, -1}) {
-          args.src = cur;
-          args.dst = next;
-          AT_TRY(launchSweep(args, axis, direction, st));
-          std::swap(cur, next);
-        }
-      }
-      return {};  // six swaps: the field is back in `a`
-    }
-    ExactSweepArgs e;
-    e.baseCost = params.baseCost;
-    e.rule = params.rule;
-    e.weight = params.weight;
-    e.changed = flag->get();
-    const std::size_t nxy = std::size_t(dims.x) * dims.y;
-    // x sweeps on the transposed field (y contiguous): lanes y, z; planes x.
-    AT_TRY(launchTransposeXY(a->get(), b->get(), dims.x, dims.y, dims.z, st));
-    e.density = densityT.get();
-    e.nu = dims.y, e.nv = dims.z, e.na = dims.x, e.strideV = nxy, e.strideA = std::size_t(dims.y);
-    e.lengths = wdt::axisSweepLengths(0, sx, sy, sz);
-    e.src = b->get(), e.dst = a->get(), e.direction = +1;
-    AT_TRY(launchExactSweep(e, st));
-    e.src = a->get(), e.dst = b->get(), e.direction = -1;
-    AT_TRY(launchExactSweep(e, st));
-    AT_TRY(launchTransposeXY(b->get(), a->get(), dims.y, dims.x, dims.z, st));
-    // y sweeps: lanes x, z; planes y.  z sweeps: lanes x, y; planes z.
-    e.density = density->get();
-    e.nu = dims.x, e.nv = dims.z, e.na = dims.y, e.strideV = nxy, e.strideA = std::size_t(dims.x);
-    e.lengths = wdt::axisSweepLengths(1, sx, sy, sz);
-    e.src = a->get(), e.dst = b->get(), e.direction = +1;
-    AT_TRY(launchExactSweep(e, st));
-    e.src = b->get(), e.dst = a->get(), e.direction = -1;
-    AT_TRY(launchExactSweep(e, st));
-    e.nu = dims.x, e.nv = dims.y, e.na = dims.z, e.strideV = std::size_t(dims.x), e.strideA = nxy;
-    e.lengths = wdt::axisSweepLengths(2, sx, sy, sz);
-    e.src = a->get(), e.dst = b->get(), e.direction = +1;
-    AT_TRY(launchExactSweep(e, st));
-    e.src = b->get(), e.dst = a->get(), e.direction = -1;
-    return launchExactSweep(e, st);
-  };
-  // The pass is captured once into a CUDA graph and replayed: tens of launches per pass then cost
-  // one launch call. Cancellation is therefore checked between passes.
-  auto graph = GraphExec::capture(*stream, enqueuePass);
-  if (!graph) return tl::unexpected(graph.error());
-
+  std::unique_ptr<Workspace> w;
+  AT_ASSIGN(w, WorkspaceCache::instance().take(problem.grid.dims));
   WdtStats stats;
-  stats.backendUsed = WdtBackend::Cuda;
-  stats.device = queryDevice().name;
-  const int planned = params.converge ? params.maxPasses : params.passes;
-  bool lastChanged = true;
-  for (int pass = 0; pass < planned; ++pass) {
-    if (control.cancel && control.cancel->load(std::memory_order_relaxed)) {
-      stats.cancelled = true;
-      break;
-    }
-    AT_TRY(check(cudaMemsetAsync(flag->get(), 0, sizeof(int), s), "cudaMemsetAsync(changed flag)"));
-    AT_TRY(start->record(*stream));
-    AT_TRY(graph->launch(*stream));
-    AT_TRY(end->record(*stream));
-    AT_TRY(check(cudaMemcpyAsync(flagHost->get(), flag->get(), sizeof(int), cudaMemcpyDeviceToHost, s),
-                 "cudaMemcpyAsync(changed flag, device to host)"));
-    AT_TRY(stream->synchronize());
-    auto ms = end->millisecondsSince(*start);
-    if (!ms) return tl::unexpected(ms.error());
-    stats.msPerPass.push_back(*ms);
-    stats.passesRun = pass + 1;
-    lastChanged = *flagHost->get() != 0;
-    if (control.progress) control.progress(pass + 1, planned);
-    if (params.converge && !lastChanged) break;
-  }
-  AT_TRY(stream->synchronize());
-  stats.converged = stats.passesRun > 0 && !lastChanged && !stats.cancelled;
-  stats.msTotal = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-
+  AT_TRY(runPasses(*w, problem, control, stats));
+  // The field leaves in its own buffer; the workspace keeps its buffers for the next call.
   auto impl = std::make_unique<DeviceField::Impl>();
   impl->grid = problem.grid;
-  impl->downsample = params.downsample;
-  impl->distances = std::move(*a);
+  impl->downsample = problem.params.downsample;
+  AT_ASSIGN(impl->distances, DeviceBuffer<float>::allocate(w->a.size()));
+  AT_TRY(check(cudaMemcpyAsync(impl->distances.get(), w->a.get(), w->a.bytes(), cudaMemcpyDeviceToDevice, w->stream.get()),
+               "cudaMemcpyAsync(distances, device to device)"));
+  AT_TRY(w->stream.synchronize());
+  WorkspaceCache::instance().put(std::move(w));
+  stats.msTotal = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   if (statsOut) *statsOut = std::move(stats);
   return DeviceField(std::move(impl));
 }
@@ -264,11 +398,31 @@ Status copyToHost(const DeviceField& field, FloatVolume& out) {
 
 Result<WdtResult> runCudaBackend(const WdtProblem& problem, const WdtControl& control) {
   const auto t0 = std::chrono::steady_clock::now();
+  AT_TRY(validate(problem));
+  std::unique_ptr<Workspace> w;
+  AT_ASSIGN(w, WorkspaceCache::instance().take(problem.grid.dims));
   WdtResult result;
-  auto field = runCudaBackendOnDevice(problem, control, &result.stats);
-  if (!field) return tl::unexpected(field.error());
-  AT_TRY(copyToHost(*field, result.field.distances));
-  result.field.downsample = field->downsample();
+  FloatVolume& out = result.field.distances;
+  out.geometry = problem.grid;
+  {
+    // The host field is allocated on a second thread while the GPU runs.
+    bool allocated = true;
+    std::jthread allocation([&] {
+      try {
+        allocateHostField(out.voxels, w->a.size());
+      } catch (const std::bad_alloc&) {
+        allocated = false;
+      }
+    });
+    AT_TRY(runPasses(*w, problem, control, result.stats));
+    allocation.join();
+    if (!allocated) {
+      return fail("WDT CUDA backend: cannot allocate " + std::to_string(w->a.bytes()) + " bytes of host memory for the field");
+    }
+  }
+  AT_TRY(w->transfer(out.voxels.data(), w->a.get(), w->a.bytes(), false));
+  WorkspaceCache::instance().put(std::move(w));
+  result.field.downsample = problem.params.downsample;
   result.stats.msTotal = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   return result;
 }

@@ -1,11 +1,9 @@
 // CUDA backend vs the CPU backend and the exact reference. Every test needing a GPU prints
 // "SKIPPED: no CUDA device (<reason>)" and passes where there is none (CI, the dev machines).
 //
-// The default (exact) scheme must give the CPU backend's field bit for bit after any number of
-// passes (same stencil, same plane order, same float operations), hence also in converge mode,
-// where both equal the exact reference. The optional tiled scheme (AT_WDT_CUDA_SCHEME=tiled) lags
-// at tile borders: its fixed-pass fields are never below the CPU's nor the exact distances, and
-// converged fields are equal. Both are deterministic (two runs bitwise identical).
+// The GPU field must equal the CPU backend's bit for bit after any number of passes (same stencil,
+// same plane order, same float operations), hence also in converge mode, where both equal the
+// exact reference; deterministically (two runs bitwise identical).
 #include <doctest/doctest.h>
 
 #include <algorithm>
@@ -100,14 +98,6 @@ std::size_t countBelow(const std::vector<float>& a, const std::vector<float>& b,
   return c;
 }
 
-// Selects the tiled scheme for the lifetime of the object.
-struct TiledScheme {
-  TiledScheme() { setenv("AT_WDT_CUDA_SCHEME", "tiled", 1); }
-  ~TiledScheme() { unsetenv("AT_WDT_CUDA_SCHEME"); }
-  TiledScheme(const TiledScheme&) = delete;
-  TiledScheme& operator=(const TiledScheme&) = delete;
-};
-
 bool sameBits(const std::vector<float>& a, const std::vector<float>& b) {
   return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(float)) == 0;
 }
@@ -190,88 +180,37 @@ TEST_CASE("fixed-pass GPU fields equal the CPU backend's bit for bit for every r
   }
 }
 
-TEST_CASE("the tiled scheme's fixed-pass fields are never below the exact distances nor the CPU's, and converge to them") {
+TEST_CASE("fixed-pass GPU fields equal the CPU's bit for bit over many tiles and plane groups") {
   if (!requireDevice()) return;
-  TiledScheme tiled;
-  std::mt19937_64 rng(at::test::freshSeed("cuda tiled passes"));
-  const at::Dims sizes[] = {{64, 64, 64}, {33, 17, 65}, {97, 45, 38}};
+  std::mt19937_64 rng(at::test::freshSeed("cuda tiles"));
+  // Planes of several 32×16-lane tiles with partial last tiles and plane groups (8 planes), a
+  // plane of exactly one tile and group, and planes with many tiles in both directions.
+  const at::Dims sizes[] = {{97, 45, 38}, {33, 17, 65}, {180, 170, 19}, {32, 16, 8}, {16, 32, 16}};
   for (const at::Dims& dims : sizes) {
     for (StepRule rule : kRules) {
       for (WeightRule weight : kWeights) {
-        WdtProblem p = randomProblem(rng, dims, {0.8, 0.8, 1.5}, rule, weight);
+        if (dims.x == 180 && !(weight == WeightRule::Density || weight == WeightRule::Gradient)) continue;
+        WdtProblem p = randomProblem(rng, dims, {0.7, 0.9, 1.6}, rule, weight);
         CAPTURE(dims.toString());
         CAPTURE(at::toString(rule));
         CAPTURE(at::toString(weight));
-        auto exact = at::exactWdtOnProblem(p);
-        REQUIRE(exact.has_value());
-        double previousMean = std::numeric_limits<double>::infinity();
-        for (int passes = 1; passes <= 3; ++passes) {
+        for (int passes = 1; passes <= 2; ++passes) {
           p.params.passes = passes;
-          const auto gpu = gpuField(p);
-          const auto cpu = cpuField(p);
-          CHECK(countBelow(gpu, exact->voxels, 1e-6) == 0);
-          CHECK(countBelow(gpu, cpu, 1e-6) == 0);
-          double sumGpu = 0, sumCpu = 0;
-          std::size_t counted = 0;
-          for (std::size_t i = 0; i < gpu.size(); ++i) {
-            if (exact->voxels[i] > 0 && std::isfinite(exact->voxels[i])) {
-              sumGpu += relDiff(gpu[i], exact->voxels[i]);
-              sumCpu += relDiff(cpu[i], exact->voxels[i]);
-              ++counted;
-            }
-          }
-          const double meanGpu = sumGpu / double(std::max<std::size_t>(1, counted));
-          const double meanCpu = sumCpu / double(std::max<std::size_t>(1, counted));
-          if (dims.x == 64 && weight == WeightRule::Density) {
-            std::printf("cuda tiled scheme %s %s/%s passes %d: mean rel err vs exact GPU %.3g CPU %.3g\n",
-                        dims.toString().c_str(), at::toString(rule), at::toString(weight), passes, meanGpu, meanCpu);
-          }
-          CHECK(meanGpu <= previousMean);
-          previousMean = meanGpu;
+          CHECK(sameBits(gpuField(p), cpuField(p)));
         }
-        p.params.converge = true;
-        p.params.maxPasses = 500;
-        const auto converged = gpuField(p);
-        CHECK(maxRelDiff(converged, exact->voxels) <= 1e-6);
-        CHECK(sameBits(converged, cpuField(p)));
-        p.params.converge = false;
       }
     }
   }
 }
 
-TEST_CASE("in the tiled scheme a grid that fits in one tile gives the CPU's fixed-pass field bit for bit") {
-  if (!requireDevice()) return;
-  TiledScheme tiled;
-  std::mt19937_64 rng(at::test::freshSeed("cuda one tile"));
-  // One tile: x ≤ 32 and y ≤ 8 (plane sweeps), y ≤ 8 and z ≤ 4 (line sweeps).
-  const at::Dims sizes[] = {{32, 8, 4}, {17, 5, 3}, {32, 1, 4}};
-  for (const at::Dims& dims : sizes) {
-    for (StepRule rule : kRules) {
-      for (WeightRule weight : kWeights) {
-        WdtProblem p = randomProblem(rng, dims, {0.6, 1.1, 1.9}, rule, weight);
-        p.params.passes = 1;
-        CAPTURE(dims.toString());
-        CAPTURE(at::toString(rule));
-        CAPTURE(at::toString(weight));
-        const auto gpu = gpuField(p);
-        const auto cpu = cpuField(p);
-        REQUIRE(gpu.size() == cpu.size());
-        CHECK(std::memcmp(gpu.data(), cpu.data(), gpu.size() * sizeof(float)) == 0);
-      }
-    }
-  }
-}
-
-TEST_CASE("two GPU runs give bitwise identical fields, in both schemes") {
+TEST_CASE("two GPU runs give bitwise identical fields") {
   if (!requireDevice()) return;
   std::mt19937_64 rng(at::test::freshSeed("cuda determinism"));
   for (int passes : {1, 2}) {
     WdtProblem p = randomProblem(rng, {131, 77, 59}, {0.9, 0.9, 2.0}, StepRule::Trapezoid, WeightRule::Density);
     p.params.passes = passes;
-    CHECK(sameBits(gpuField(p), gpuField(p)));
-    TiledScheme tiled;
-    CHECK(sameBits(gpuField(p), gpuField(p)));
+    const auto first = gpuField(p);
+    for (int run = 0; run < 3; ++run) CHECK(sameBits(gpuField(p), first));
   }
 }
 

@@ -3,6 +3,7 @@
 #include <fstream>
 
 #include "render/preset.h"
+#include "volume/phantom.h"
 #include "test_support.h"
 
 using namespace at::render;
@@ -136,4 +137,19 @@ TEST_CASE("Every shipped preset in data/presets loads") {
     CHECK_MESSAGE(p, (p ? std::string() : p.error().message));
   }
   for (RenderMode m : allRenderModes()) CHECK(lib.forStructure("no_such_structure", m));
+}
+
+TEST_CASE("Every phantom structure ships a WDT-context and a bare preset made for it") {
+  PresetLibrary lib(at::test::sourceDir() / "data" / "presets");
+  for (const at::Structure& s : at::phantomStructures()) {
+    CAPTURE(s.id);
+    auto wdt = lib.load(s.id + "_wdt");
+    REQUIRE_MESSAGE(wdt, wdt.error().message);
+    CHECK((wdt->mode == RenderMode::Wdt));
+    CHECK(wdt->structure == std::optional<std::string>(s.id));
+    auto bare = lib.load(s.id + "_bare");
+    REQUIRE_MESSAGE(bare, bare.error().message);
+    CHECK((bare->mode == RenderMode::Bare));
+    CHECK(bare->structure == std::optional<std::string>(s.id));
+  }
 }

@@ -1,13 +1,13 @@
 // The CUDA backend of the weighted distance transform. Nothing here exposes CUDA types: callers
 // see plain C++ (the cuda/ folder is the only place that includes cuda_runtime.h).
 //
-// Default scheme (cuda/src/exact_sweep.cu): each sweep is ceil(planes / 8) launches of
-// overlapped plane groups; fields equal the CPU backend's bit for bit after any number of passes
-// (and hence the exact reference once converged). Deterministic: no thread reads data written in
-// the same launch by another block. AT_WDT_CUDA_SCHEME=tiled selects the one-launch-per-sweep
-// tiled scheme (cuda/src/sweep_kernels.cu): ~3.5× faster per pass, but tile borders lag, so fixed
-// passes are less accurate (never below exact) and converging takes ~3.5× more passes.
-// A pass is replayed as one CUDA graph: progress and cancellation are per pass.
+// Each sweep is ceil(planes / 8) launches of overlapped plane groups (cuda/src/exact_sweep.cu);
+// fields equal the CPU backend's bit for bit after any number of passes (and hence the exact
+// reference once converged). Deterministic: no thread reads data written in the same launch by
+// another block. A pass is replayed as one CUDA graph: progress and cancellation are per pass.
+// Device buffers, staging memory and the captured pass are kept for the next call on a grid of
+// the same size (the two most recent sizes: about 10 bytes of device memory per voxel each, held
+// until the process ends or an allocation needs the memory).
 #pragma once
 
 #include <memory>

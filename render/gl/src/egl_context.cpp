@@ -88,11 +88,15 @@ Result<EglContext> EglContext::create() {
   state->display = openDisplay(why);
   if (state->display == EGL_NO_DISPLAY) return fail("EGL: " + why);
   if (!eglBindAPI(EGL_OPENGL_API)) return fail("EGL: eglBindAPI(OpenGL) failed (" + eglErrorName(eglGetError()) + ")");
-  const EGLint configAttribs[] = {EGL_RENDERABLE_TYPE, EGL_OPENGL_BIT, EGL_NONE};
+  // EGL_SURFACE_TYPE defaults to windows, which headless displays lack: ask for pbuffer configs
+  // first, then any desktop-GL config, then none at all (EGL_KHR_no_config_context).
+  const EGLint pbufferAttribs[] = {EGL_SURFACE_TYPE, EGL_PBUFFER_BIT, EGL_RENDERABLE_TYPE, EGL_OPENGL_BIT, EGL_NONE};
+  const EGLint anyAttribs[] = {EGL_SURFACE_TYPE, 0, EGL_RENDERABLE_TYPE, EGL_OPENGL_BIT, EGL_NONE};
   EGLConfig config = nullptr;
   EGLint count = 0;
   const bool noConfig = hasExtension(eglQueryString(state->display, EGL_EXTENSIONS), "EGL_KHR_no_config_context");
-  if (!eglChooseConfig(state->display, configAttribs, &config, 1, &count) || count == 0) {
+  if ((!eglChooseConfig(state->display, pbufferAttribs, &config, 1, &count) || count == 0) &&
+      (!eglChooseConfig(state->display, anyAttribs, &config, 1, &count) || count == 0)) {
     if (!noConfig) return fail("EGL: no config supports desktop OpenGL");
     config = EGL_NO_CONFIG_KHR;
   }

@@ -65,6 +65,10 @@ struct VertexShaderTraits {
   static GLuint create() { return glCreateShader(GL_VERTEX_SHADER); }
   static void destroy(GLuint id) { glDeleteShader(id); }
 };
+struct ComputeShaderTraits {
+  static GLuint create() { return glCreateShader(GL_COMPUTE_SHADER); }
+  static void destroy(GLuint id) { glDeleteShader(id); }
+};
 struct FragmentShaderTraits {
   static GLuint create() { return glCreateShader(GL_FRAGMENT_SHADER); }
   static void destroy(GLuint id) { glDeleteShader(id); }
@@ -78,5 +82,6 @@ using Query = GlObject<QueryTraits>;
 using Program = GlObject<ProgramTraits>;
 using VertexShader = GlObject<VertexShaderTraits>;
 using FragmentShader = GlObject<FragmentShaderTraits>;
+using ComputeShader = GlObject<ComputeShaderTraits>;
 
 }  // namespace at::render::gl

@@ -33,7 +33,7 @@ uniform mat4 uPatientToTex;
 uniform mat4 uPatientToField;
 uniform vec2 uViewport;
 uniform sampler3D uHu;
-uniform usampler3D uLabels;
+uniform sampler3D uMask;
 uniform sampler3D uField;
 uniform sampler2D uTable;
 uniform int uMode;          // 0 table, 1 bare, 2 lighting
@@ -49,7 +49,6 @@ uniform vec3 uHighlight;
 uniform vec2 uLighting;     // alpha, beta of Eq. 6
 uniform vec3 uSpacingMm;
 uniform ivec3 uDims;
-uniform uint uSelected;
 uniform int uJitter;
 uniform int uShading;
 uniform vec4 uBackground;
@@ -57,20 +56,8 @@ uniform vec4 uBackground;
 float huAt(vec3 t) { return texture(uHu, t).r * 65535.0 - 32768.0; }
 float fieldAt(vec3 f) { return texture(uField, f).r; }
 
-float maskAt(vec3 t) {
-  vec3 c = clamp(t * vec3(uDims) - 0.5, vec3(0.0), vec3(uDims - 1));
-  ivec3 i0 = ivec3(floor(c));
-  ivec3 i1 = min(i0 + 1, uDims - 1);
-  vec3 f = c - vec3(i0);
-  float v[8];
-  for (int n = 0; n < 8; ++n) {
-    ivec3 q = ivec3((n & 1) != 0 ? i1.x : i0.x, (n & 2) != 0 ? i1.y : i0.y, (n & 4) != 0 ? i1.z : i0.z);
-    v[n] = texelFetch(uLabels, q, 0).r == uSelected ? 1.0 : 0.0;
-  }
-  float x00 = mix(v[0], v[1], f.x), x10 = mix(v[2], v[3], f.x);
-  float x01 = mix(v[4], v[5], f.x), x11 = mix(v[6], v[7], f.x);
-  return mix(mix(x00, x10, f.y), mix(x01, x11, f.y), f.z);
-}
+// The selected structure's mask (1 inside), linearly filtered: the bare-mode surface is at 0.5.
+float maskAt(vec3 t) { return texture(uMask, t).r; }
 
 float normalisedDistance(float d) {
   return 2.0 / (1.0 + exp2(min(d * uLog2Alpha, 126.0)));
@@ -144,7 +131,8 @@ void main() {
       if (c.a <= 0.0) continue;
       float alpha = 1.0 - pow(1.0 - min(c.a, 0.999999), exponent);
       vec3 rgb = c.rgb;
-      if (uShading != 0) {
+      // Shading costs six more fetches: skip it where the sample cannot change a pixel's 8-bit value.
+      if (uShading != 0 && alpha * (1.0 - acc.a) > 1.0 / 1024.0) {
         vec3 g = gradientAt(pt, uMode == 1);
         float gl = length(g);
         float diffuse = 1.0, spec = 0.0;
@@ -173,6 +161,21 @@ void main() {
   float outA = acc.a + bgA;
   vec3 premul = acc.rgb + bgA * uBackground.rgb;
   fragColor = vec4(outA > 0.0 ? premul / outA : vec3(0.0), outA);
+}
+)";
+
+// Builds the selected structure's mask (R8: 1 where label == selected) from the label texture.
+const char* kMaskShader = R"(#version 430 core
+layout(local_size_x = 8, local_size_y = 8, local_size_z = 4) in;
+layout(binding = 0) uniform usampler3D uLabels;
+layout(r8, binding = 1) writeonly uniform image3D uMaskOut;
+uniform uint uSelected;
+uniform ivec3 uDims;
+void main() {
+  ivec3 p = ivec3(gl_GlobalInvocationID);
+  if (any(greaterThanEqual(p, uDims))) return;
+  uint l = texelFetch(uLabels, p, 0).r;
+  imageStore(uMaskOut, p, vec4(l == uSelected && uSelected != 0u ? 1.0 : 0.0));
 }
 )";
 
@@ -235,9 +238,12 @@ Status glStatus(const char* what) {
 }  // namespace
 
 struct VolumeRenderer::State {
-  Program program;
+  Program program, maskProgram;
   VertexArray vao;
-  Texture hu, labels, field, table;
+  Texture hu, labels, field, table, mask;
+  int maskLabel = -1;  // label the mask texture holds; -1 = stale
+  std::optional<Preset> tablePreset;  // the preset the table texture was built from
+  TransferFunction2D tableInfo;       // its axes (rgba dropped after upload)
   Framebuffer fbo;
   Renderbuffer colour;
   Query timer;
@@ -274,6 +280,13 @@ Result<VolumeRenderer> VolumeRenderer::create() {
     glGetProgramInfoLog(s->program.id(), len, nullptr, log.data());
     return fail("GL: ray caster does not link: " + log);
   }
+  auto cs = compile<ComputeShader>(kMaskShader, "mask compute");
+  if (!cs) return tl::unexpected(cs.error());
+  s->maskProgram = Program::make();
+  glAttachShader(s->maskProgram.id(), cs->id());
+  glLinkProgram(s->maskProgram.id());
+  glGetProgramiv(s->maskProgram.id(), GL_LINK_STATUS, &ok);
+  if (!ok) return fail("GL: mask compute shader does not link");
   s->vao = VertexArray::make();
   s->hu = Texture::make();
   s->labels = Texture::make();
@@ -308,6 +321,12 @@ Status VolumeRenderer::setVolume(const Volume& volume, const LabelMap& labels) {
   } else {
     glTexImage3D(GL_TEXTURE_3D, 0, GL_R16UI, d.x, d.y, d.z, 0, GL_RED_INTEGER, GL_UNSIGNED_SHORT, labels.voxels.data());
   }
+  // The mask texture needs immutable storage to be written as an image.
+  state_->mask = Texture::make();
+  glBindTexture(GL_TEXTURE_3D, state_->mask.id());
+  glTexStorage3D(GL_TEXTURE_3D, 1, GL_R8, d.x, d.y, d.z);
+  setTextureParams(GL_LINEAR);
+  state_->maskLabel = -1;
   state_->volumeGrid = volume.geometry;
   state_->hasVolume = true;
   state_->hasField = false;
@@ -383,15 +402,35 @@ Status VolumeRenderer::draw(const RenderSettings& s) {
     st.fboWidth = s.width;
     st.fboHeight = s.height;
   }
+  if (s.preset.mode == RenderMode::Bare && st.maskLabel != int(selected_)) {
+    const Dims& d = st.volumeGrid.dims;
+    glUseProgram(st.maskProgram.id());
+    glActiveTexture(GL_TEXTURE0);
+    glBindTexture(GL_TEXTURE_3D, st.labels.id());
+    glUniform1i(glGetUniformLocation(st.maskProgram.id(), "uLabels"), 0);
+    glBindImageTexture(1, st.mask.id(), 0, GL_TRUE, 0, GL_WRITE_ONLY, GL_R8);
+    glUniform1ui(glGetUniformLocation(st.maskProgram.id(), "uSelected"), selected_);
+    glUniform3i(glGetUniformLocation(st.maskProgram.id(), "uDims"), d.x, d.y, d.z);
+    glDispatchCompute(GLuint((d.x + 7) / 8), GLuint((d.y + 7) / 8), GLuint((d.z + 3) / 4));
+    glMemoryBarrier(GL_TEXTURE_FETCH_BARRIER_BIT);
+    st.maskLabel = int(selected_);
+    if (auto e = glStatus("building the structure mask"); !e) return e;
+  }
   // The 2-D table of the mode.
-  const TransferFunction2D table = shadingTable(s.preset);
-  glBindTexture(GL_TEXTURE_2D, st.table.id());
-  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
-  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
-  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
-  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
-  glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA32F, table.dataSize, table.distanceSize, 0, GL_RGBA, GL_FLOAT,
-               table.rgba.data());
+  if (!st.tablePreset || !(*st.tablePreset == s.preset)) {
+    TransferFunction2D table = shadingTable(s.preset);
+    glBindTexture(GL_TEXTURE_2D, st.table.id());
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+    glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA32F, table.dataSize, table.distanceSize, 0, GL_RGBA, GL_FLOAT,
+                 table.rgba.data());
+    table.rgba.clear();
+    st.tableInfo = std::move(table);
+    st.tablePreset = s.preset;
+  }
+  const TransferFunction2D& table = st.tableInfo;
 
   glBindFramebuffer(GL_FRAMEBUFFER, st.fbo.id());
   glViewport(0, 0, s.width, s.height);
@@ -425,7 +464,6 @@ Status VolumeRenderer::draw(const RenderSettings& s) {
   glUniform3f(loc("uSpacingMm"), float(st.volumeGrid.spacingMm[0]), float(st.volumeGrid.spacingMm[1]),
               float(st.volumeGrid.spacingMm[2]));
   glUniform3i(loc("uDims"), st.volumeGrid.dims.x, st.volumeGrid.dims.y, st.volumeGrid.dims.z);
-  glUniform1ui(loc("uSelected"), selected_);
   glUniform1i(loc("uJitter"), s.jitter ? 1 : 0);
   glUniform1i(loc("uShading"), s.shading ? 1 : 0);
   glUniform4f(loc("uBackground"), s.background[0], s.background[1], s.background[2], s.background[3]);
@@ -433,8 +471,8 @@ Status VolumeRenderer::draw(const RenderSettings& s) {
   glBindTexture(GL_TEXTURE_3D, st.hu.id());
   glUniform1i(loc("uHu"), 0);
   glActiveTexture(GL_TEXTURE1);
-  glBindTexture(GL_TEXTURE_3D, st.labels.id());
-  glUniform1i(loc("uLabels"), 1);
+  glBindTexture(GL_TEXTURE_3D, st.mask.id());
+  glUniform1i(loc("uMask"), 1);
   glActiveTexture(GL_TEXTURE2);
   glBindTexture(GL_TEXTURE_3D, st.field.id());
   glUniform1i(loc("uField"), 2);

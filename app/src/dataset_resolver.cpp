@@ -1,0 +1,42 @@
+#include "dataset_resolver.h"
+
+#include <filesystem>
+
+#include "db/dataset_store.h"
+#include "volume/dataset_source.h"
+
+namespace at::app {
+
+namespace fs = std::filesystem;
+
+Result<Dataset> openNamedDataset(const DatasetRequest& request) {
+  const bool fileOptions = !request.labelsPath.empty() || !request.namesPath.empty() || !request.seriesUid.empty();
+  if (isBuiltinDatasetName(request.name)) {
+    if (fileOptions) return fail("--labels, --names and --series apply to datasets from files, not to '" + request.name + "'");
+    return openBuiltinDataset(request.name);
+  }
+  std::error_code ec;
+  if (fs::exists(request.name, ec)) {
+    if (!request.namesPath.empty() && request.labelsPath.empty()) return fail("--names needs --labels PATH");
+    DatasetFiles files;
+    files.volumePath = request.name;
+    files.labelsPath = request.labelsPath;
+    files.namesPath = request.namesPath;
+    files.dicomSeriesUid = request.seriesUid;
+    files.id = fs::path(request.name).filename().string();
+    return openDatasetFiles(files);
+  }
+  auto imported = db::findImportedDataset(request.dbPath, request.name);
+  if (!imported) return tl::unexpected(imported.error());
+  if (*imported) {
+    if (fileOptions) return fail("--labels, --names and --series apply to datasets from files, not to imported '" + request.name + "'");
+    return openDatasetFiles(**imported);
+  }
+  std::string known;
+  if (auto all = db::listImportedDatasets(request.dbPath))
+    for (const auto& record : *all) known += (known.empty() ? "" : ", ") + record.name;
+  return fail("unknown dataset '" + request.name + "': not built in (phantom, phantom:N), not imported" +
+              (known.empty() ? std::string() : " (imported: " + known + ")") + ", and no such file or folder");
+}
+
+}  // namespace at::app

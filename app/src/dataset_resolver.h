@@ -1,0 +1,27 @@
+// Opening a dataset named on the command line, the same way for every command: a built-in name
+// (phantom, phantom:N), a dataset imported into the database (`anatomy-tutor import`), or a path
+// to a volume file or DICOM folder with optional labels and names.
+#pragma once
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "volume/error.h"
+#include "volume/structure.h"
+
+namespace at::app {
+
+struct DatasetRequest {
+  std::string name;                   // built-in name, imported name or path
+  std::string labelsPath;             // paths only: label map on any grid
+  std::string namesPath;              // paths only: JSON { "value": "name" }
+  std::string seriesUid;              // paths only: DICOM series
+  std::optional<std::string> dbPath;  // --db; the default database when absent
+};
+
+// Errors name what was tried ("unknown dataset 'abdomen': not built in, not imported in
+// <db> (imported: …), and no such file or folder").
+Result<Dataset> openNamedDataset(const DatasetRequest& request);
+
+}  // namespace at::app
