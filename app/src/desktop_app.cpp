@@ -535,7 +535,12 @@ void DesktopApp::hoverAt(double x, double y) {
   const std::uint16_t label = hit.hit && frames_.count(hit.label) ? hit.label : 0;
   if (label != hovered_) {
     const Structure* st = dataset_.findStructureByLabel(label);
-    event({{"event", "hover"}, {"x", x}, {"y", y}, {"label", label}, {"structure", st ? st->id : ""}});
+    json e = {{"event", "hover"}, {"x", x}, {"y", y}, {"label", label}, {"structure", st ? st->id : ""}};
+    if (st) {  // the colour its WDT preset gives the structure itself (distance TF at normalised 1)
+      const auto& tf = presetOf(label, false).distanceTf;
+      if (!tf.empty()) e["highlight_rgb"] = {tf.back().rgba[0], tf.back().rgba[1], tf.back().rgba[2]};
+    }
+    event(e);
   }
   setHovered(label);
 }
