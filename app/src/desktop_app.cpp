@@ -55,8 +55,8 @@ struct QualityLevel {
   double scale;
   double stepFactor;
 };
-constexpr QualityLevel kLevels[] = {{0.1, 3.0}, {0.2, 2.0}, {0.35, 1.5}, {0.6, 1.0}, {1.0, 1.0}};
-constexpr int kFullLevel = 4;
+constexpr QualityLevel kLevels[] = {{0.05, 4.0}, {0.1, 3.0}, {0.2, 2.0}, {0.35, 1.5}, {0.6, 1.0}, {1.0, 1.0}};
+constexpr int kFullLevel = 5;
 constexpr double kInteractionBudgetMs = 55;  // predicted render cost allowed while the user moves
 constexpr double kRefineBudgetMs = 150;      // at rest, levels predicted this cheap are skipped over
 constexpr double kRestAfterMs = 250;        // no change for this long = the user rests
@@ -146,6 +146,7 @@ struct FrameRecord {
   int level = -1;          // quality level rendered this frame, -1 when the image was reused
   bool interacting = false;
   double uploadMs = 0;     // distance field uploaded to the GL this frame
+  double renderMs = 0;     // the volume render of this frame (0 when reused)
 };
 
 class DesktopApp {
@@ -728,7 +729,10 @@ void DesktopApp::renderVolume(Clock::time_point frameStart) {
   if (auto st = texture_->upload(*image); !st) message(st.error().message);
   renderedKey_ = key;
   renderedLevel_ = level;
-  if (recording_ && !frameLog_.empty()) frameLog_.back().level = level;
+  if (recording_ && !frameLog_.empty()) {
+    frameLog_.back().level = level;
+    frameLog_.back().renderMs = ms;
+  }
   (void)frameStart;
 }
 
@@ -986,10 +990,13 @@ bool DesktopApp::stepScript() {
         done();
         actions_.insert(actions_.begin(), sweep.begin(), sweep.end());
       } else if (what == "report") {
-        std::vector<double> all, moving, rest, uploads;
+        std::vector<double> all, moving, rest, uploads, renders;
         std::map<int, int> perLevel;
+        int overBudget = 0;
         for (const FrameRecord& f : frameLog_) {
           if (f.uploadMs > 0) uploads.push_back(f.uploadMs);
+          if (f.level >= 0) renders.push_back(f.renderMs);
+          if (f.ms > options_.frameBudgetMs) ++overBudget;
           all.push_back(f.ms);
           (f.interacting ? moving : rest).push_back(f.ms);
           perLevel[f.level]++;
@@ -1009,6 +1016,10 @@ bool DesktopApp::stepScript() {
                   {"field_uploads", uploads.size()},
                   {"field_upload_ms_max", uploads.empty() ? 0 : *std::max_element(uploads.begin(), uploads.end())},
                   {"frame_budget_ms", options_.frameBudgetMs},
+                  {"frames_over_budget", overBudget},
+                  {"renders", renders.size()},
+                  {"render_ms_p50", percentile(renders, 50)},
+                  {"render_ms_max", renders.empty() ? 0 : *std::max_element(renders.begin(), renders.end())},
                   {"highlights", latencies_.size()},
                   {"highlight_ms_p50", percentile(latencies_, 50)},
                   {"highlight_ms_p99", percentile(latencies_, 99)},
