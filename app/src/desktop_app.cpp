@@ -32,6 +32,7 @@
 #include "commands.h"
 #include "desktop_support.h"
 #include "field_worker.h"
+#include "lessons/curriculum.h"
 #include "render/gl/volume_renderer.h"
 #include "render/gl/window_target.h"
 #include "render/scene.h"
@@ -181,6 +182,8 @@ class DesktopApp {
   void setHovered(std::uint16_t label);
   void select(std::uint16_t label);
   void setView(const std::string& name);
+  void applyStep();  // the current lesson step's structure, preset and view
+  void lessonPanel();
   bool inView(double x, double y) const;
   std::optional<std::array<double, 2>> projectStructure(std::uint16_t label) const;
 
@@ -205,7 +208,8 @@ class DesktopApp {
   std::map<std::uint16_t, render::StructureFrame> frames_;
   std::map<std::pair<std::uint16_t, bool>, render::Preset> presets_;
   std::string startView_ = "lateral_right";
-  std::string startTitle_, startText_;
+  std::optional<lessons::Course> course_;
+  int lessonIndex_ = 0, stepIndex_ = 0;
 
   // Graphics
   SdlSession sdl_;
@@ -281,9 +285,8 @@ Status DesktopApp::loadContent() {
       startStructure = views.front().structure;
       startPreset = views.front().presetId;
       startView_ = lessons::toString(views.front().view);
-      startTitle_ = views.front().title;
-      startText_ = views.front().text;
     }
+    course_ = *course;
   } else {
     message("default course: " + course.error().message);
   }
@@ -496,6 +499,74 @@ std::optional<std::array<double, 2>> DesktopApp::projectStructure(std::uint16_t 
   auto p = camera_.project(it->second.centroidMm, viewW, viewH);
   if (!p || (*p)[0] < 0 || (*p)[0] >= viewW || (*p)[1] < 0 || (*p)[1] >= viewH) return std::nullopt;
   return std::array<double, 2>{(*p)[0] + left, (*p)[1]};
+}
+
+void DesktopApp::applyStep() {
+  if (!course_ || lessonIndex_ >= int(course_->lessons.size())) return;
+  const lessons::Lesson& lesson = course_->lessons[std::size_t(lessonIndex_)];
+  if (stepIndex_ >= int(lesson.steps.size())) return;
+  const lessons::Step& step = lesson.steps[std::size_t(stepIndex_)];
+  if (step.kind != lessons::StepKind::Show) return;
+  const Structure* s = dataset_.findStructure(step.show.structure);
+  if (!s || !frames_.count(s->label)) {
+    message("lesson step: no structure '" + step.show.structure + "' in dataset '" + dataset_.id + "'");
+    return;
+  }
+  auto preset = presetForStep(library_, s->id, step.show.presetId);
+  if (!preset) {
+    message(preset.error().message);
+    return;
+  }
+  bare_ = preset->mode == render::RenderMode::Bare;
+  t_ = preset->t;
+  presets_[{s->label, bare_}] = *preset;
+  hovered_ = 0;
+  select(s->label);
+  setView(lessons::toString(step.show.view));
+}
+
+void DesktopApp::lessonPanel() {
+  if (!course_ || course_->lessons.empty()) return;
+  if (!ImGui::CollapsingHeader(("Lesson - " + course_->title).c_str(), ImGuiTreeNodeFlags_DefaultOpen)) return;
+  const lessons::Lesson& current = course_->lessons[std::size_t(lessonIndex_)];
+  if (ImGui::BeginCombo("##lesson", current.title.c_str())) {
+    for (int i = 0; i < int(course_->lessons.size()); ++i)
+      if (ImGui::Selectable(course_->lessons[std::size_t(i)].title.c_str(), i == lessonIndex_)) {
+        lessonIndex_ = i;
+        stepIndex_ = 0;
+        applyStep();
+      }
+    ImGui::EndCombo();
+  }
+  const lessons::Lesson& lesson = course_->lessons[std::size_t(lessonIndex_)];
+  if (lesson.steps.empty()) return;
+  const int n = int(lesson.steps.size());
+  if (ImGui::ArrowButton("##prev", ImGuiDir_Left) && stepIndex_ > 0) {
+    --stepIndex_;
+    applyStep();
+  }
+  ImGui::SameLine();
+  ImGui::Text("step %d of %d", stepIndex_ + 1, n);
+  ImGui::SameLine();
+  if (ImGui::ArrowButton("##next", ImGuiDir_Right) && stepIndex_ + 1 < n) {
+    ++stepIndex_;
+    applyStep();
+  }
+  const lessons::Step& step = lesson.steps[std::size_t(stepIndex_)];
+  ImGui::BeginChild("step", ImVec2(0, ImGui::GetTextLineHeightWithSpacing() * 7), true);
+  ImGui::PushTextWrapPos(0);
+  if (step.kind == lessons::StepKind::Show) {
+    ImGui::TextColored(ImVec4(1, 0.75f, 0.3f, 1), "%s", step.show.title.c_str());
+    ImGui::TextUnformatted(step.show.text.c_str());
+  } else if (step.kind == lessons::StepKind::Question) {
+    ImGui::TextColored(ImVec4(0.6f, 0.8f, 1, 1), "Question");
+    ImGui::TextUnformatted(step.question.prompt.c_str());
+    ImGui::TextDisabled("Answer questions with `anatomy-tutor play` (the desktop runner does not grade yet).");
+  } else {
+    ImGui::TextDisabled("A study step: run studies with `anatomy-tutor study run`.");
+  }
+  ImGui::PopTextWrapPos();
+  ImGui::EndChild();
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -749,6 +820,7 @@ void DesktopApp::buildUi() {
   ImGui::TextUnformatted("Anatomy Tutor - Explore");
   ImGui::TextDisabled("%s", dataset_.displayName.empty() ? dataset_.id.c_str() : dataset_.displayName.c_str());
   ImGui::Separator();
+  lessonPanel();
 
   const Structure* selected = dataset_.findStructureByLabel(selected_);
   const Structure* hovered = dataset_.findStructureByLabel(hovered_);
