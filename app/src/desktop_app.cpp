@@ -33,6 +33,7 @@
 #include "desktop_support.h"
 #include "field_worker.h"
 #include "lessons/curriculum.h"
+#include "quiz/grading.h"
 #include "render/gl/volume_renderer.h"
 #include "render/gl/window_target.h"
 #include "render/scene.h"
@@ -184,6 +185,7 @@ class DesktopApp {
   void setView(const std::string& name);
   void applyStep();  // the current lesson step's structure, preset and view
   void lessonPanel();
+  const quiz::Question* activeLocate() const;  // the current step, when it is a locate question
   bool inView(double x, double y) const;
   std::optional<std::array<double, 2>> projectStructure(std::uint16_t label) const;
 
@@ -210,6 +212,7 @@ class DesktopApp {
   std::string startView_ = "lateral_right";
   std::optional<lessons::Course> course_;
   int lessonIndex_ = 0, stepIndex_ = 0;
+  std::optional<quiz::Grade> lastGrade_;  // the current locate question's last graded click
 
   // Graphics
   SdlSession sdl_;
@@ -501,7 +504,17 @@ std::optional<std::array<double, 2>> DesktopApp::projectStructure(std::uint16_t 
   return std::array<double, 2>{(*p)[0] + left, (*p)[1]};
 }
 
+const quiz::Question* DesktopApp::activeLocate() const {
+  if (!course_ || lessonIndex_ >= int(course_->lessons.size())) return nullptr;
+  const lessons::Lesson& lesson = course_->lessons[std::size_t(lessonIndex_)];
+  if (stepIndex_ >= int(lesson.steps.size())) return nullptr;
+  const lessons::Step& step = lesson.steps[std::size_t(stepIndex_)];
+  if (step.kind != lessons::StepKind::Question || step.question.kind != quiz::QuestionKind::Locate) return nullptr;
+  return &step.question;
+}
+
 void DesktopApp::applyStep() {
+  lastGrade_.reset();
   if (!course_ || lessonIndex_ >= int(course_->lessons.size())) return;
   const lessons::Lesson& lesson = course_->lessons[std::size_t(lessonIndex_)];
   if (stepIndex_ >= int(lesson.steps.size())) return;
@@ -561,7 +574,14 @@ void DesktopApp::lessonPanel() {
   } else if (step.kind == lessons::StepKind::Question) {
     ImGui::TextColored(ImVec4(0.6f, 0.8f, 1, 1), "Question");
     ImGui::TextUnformatted(step.question.prompt.c_str());
-    ImGui::TextDisabled("Answer questions with `anatomy-tutor play` (the desktop runner does not grade yet).");
+    if (step.question.kind == quiz::QuestionKind::Locate) {
+      ImGui::TextDisabled("Click it in the view.");
+      if (lastGrade_)
+        ImGui::TextColored(lastGrade_->correct ? ImVec4(0.5f, 1, 0.5f, 1) : ImVec4(1, 0.5f, 0.4f, 1), "%s %s",
+                           lastGrade_->correct ? "Correct." : "Not quite.", lastGrade_->feedback.c_str());
+    } else {
+      ImGui::TextDisabled("Answer this kind with `anatomy-tutor play` (the desktop grades locate questions only).");
+    }
   } else {
     ImGui::TextDisabled("A study step: run studies with `anatomy-tutor study run`.");
   }
@@ -627,6 +647,26 @@ void DesktopApp::select(std::uint16_t label) {
 
 void DesktopApp::clickAt(double x, double y) {
   hoverAt(x, y);
+  if (const quiz::Question* q = activeLocate()) {
+    // A locate answer: the structure under the cursor. The weighted distance to the target is
+    // left unknown (-1), so only a hit on the target itself is correct.
+    const Structure* st = dataset_.findStructureByLabel(hovered_);
+    quiz::ResolvedQuestion resolved;
+    resolved.question = *q;
+    quiz::Pick pick;
+    pick.structure = st ? st->id : "";
+    quiz::GradingContext context;  // display names for the feedback
+    for (const Structure& d : dataset_.structures) context.names.push_back({d.id, {d.displayName}});
+    auto graded = quiz::gradeLocate(resolved, pick, context);
+    if (!graded) {
+      message("grading: " + graded.error().message);
+    } else {
+      lastGrade_ = *graded;
+      event({{"event", "graded"}, {"question", q->id}, {"clicked", pick.structure}, {"correct", graded->correct},
+             {"feedback", graded->feedback}});
+    }
+    return;
+  }
   if (hovered_) select(hovered_);
 }
 
@@ -1008,6 +1048,30 @@ bool DesktopApp::stepScript() {
           hoverAt((*p)[0], (*p)[1]);
         }
         done();
+      } else if (what == "lesson") {
+        if (!course_) {
+          message("ui script: no course is loaded");
+          finishScript(2);
+          return true;
+        }
+        const int l = a.at("lesson").get<int>(), st = a.value("step", 0);
+        if (l < 0 || l >= int(course_->lessons.size()) || st < 0 ||
+            st >= int(course_->lessons[std::size_t(l)].steps.size())) {
+          message("ui script: no lesson " + std::to_string(l) + " step " + std::to_string(st));
+          finishScript(2);
+          return true;
+        }
+        lessonIndex_ = l;
+        stepIndex_ = st;
+        applyStep();
+        done();
+      } else if (what == "click_structure") {
+        const Structure* s = structureArg();
+        if (!s) return true;
+        auto p = projectStructure(s->label);
+        event({{"event", "click_structure"}, {"structure", s->id}, {"visible", p.has_value()}});
+        if (p) clickAt((*p)[0], (*p)[1]);
+        done();
       } else if (what == "orbit") {
         camera_.orbit(a.value("azimuth", 0.0), a.value("elevation", 0.0));
         markChanged();
@@ -1219,7 +1283,8 @@ int runDesktop(const std::vector<std::string>& args) {
           "  Opens the desktop app on the default course (explore: hover to highlight, click to select).\n"
           "  --dataset    phantom, phantom:N or a volume file (default: the default course's dataset)\n"
           "  --ui-script  replay {\"actions\": [...]} (select, t, mode, view, hover, hover_structure, click,\n"
-          "               orbit, zoom, clip, wait, wait_field, screenshot, hover_sweep, record, report)\n"
+          "               click_structure, lesson, orbit, zoom, clip, wait, wait_field, screenshot,\n"
+          "               hover_sweep, record, report)\n"
           "  --screenshot save the window as PNG once the script has run and the view has settled\n"
           "  --size       window size in logical pixels (default 1280x720)\n"
           "  --render-scale  resolution of the full-quality volume image, 0.1..1 (default 1; software GL: less)\n"
