@@ -37,7 +37,8 @@ namespace {
 
 void printUsage() {
   std::printf("Anatomy Tutor %s — regional anatomy on CT with weighted distance fields\n\n", AT_VERSION);
-  std::printf("usage: anatomy-tutor [COMMAND] [ARGS…]    (no command: the default course)\n\n");
+  std::printf("usage: anatomy-tutor [COMMAND] [ARGS…]    (no command: the desktop app on the default course;\n"
+              "                                        desktop options such as --ui-script F.json also work alone)\n\n");
   for (const Command& c : commands()) std::printf("  %-12s %s\n", c.name, c.summary);
   std::printf("\n`anatomy-tutor COMMAND --help` describes each command.\n");
 }
@@ -68,6 +69,9 @@ int main(int argc, char** argv) {
       std::printf("anatomy-tutor %s\n", AT_VERSION);
       return 0;
     }
+    // Options without a command belong to the desktop app (`anatomy-tutor --ui-script F.json
+    // --screenshot OUT.png`, `anatomy-tutor --size 1600x900`).
+    if (name.rfind("--", 0) == 0) return runDesktop(Argv(argv + 1, argv + argc));
     Argv rest(argv + 2, argv + argc);
     for (const Command& c : commands())
       if (name == c.name) return c.run(rest);
