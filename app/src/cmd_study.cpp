@@ -12,7 +12,6 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
-#include <functional>
 #include <iostream>
 #include <map>
 #include <optional>
@@ -26,7 +25,7 @@
 #include "db/study_store.h"
 #include "quiz/study_report.h"
 #include "render/preset.h"
-#include "volume/png_image.h"
+#include "study_session.h"
 
 namespace at::app {
 
@@ -49,38 +48,6 @@ const char* kStudyHelp =
     "  {\"ratings\": {\"shape\": 2, \"context\": 1, …}, \"view_ms_a\": 4000, \"view_ms_b\": 3500,\n"
     "   \"toggles\": 3, \"comment\": \"…\", \"response_ms\": 1200}   (ratings as shown: 1 = prefer A … 5 = prefer B)\n"
     "Without --answers the study runs interactively on the terminal.\n";
-
-fs::path shippedStudiesDir() { return fs::path(AT_SOURCE_DIR) / "data" / "studies"; }
-
-// Finds the study: stored id, else a JSON path, else a shipped study with that id (both stored).
-Result<quiz::StudyProtocol> resolveStudy(db::Database& database, const std::string& spec) {
-  auto stored = db::findStudy(database, spec);
-  if (!stored) return tl::unexpected(stored.error());
-  if (*stored) return **stored;
-  std::optional<quiz::StudyProtocol> loaded;
-  if (fs::is_regular_file(spec)) {
-    auto p = quiz::loadStudyProtocol(spec);
-    if (!p) return tl::unexpected(p.error());
-    loaded = *p;
-  } else if (fs::is_directory(shippedStudiesDir())) {
-    std::vector<fs::path> files;
-    for (const auto& entry : fs::directory_iterator(shippedStudiesDir()))
-      if (entry.path().extension() == ".json") files.push_back(entry.path());
-    std::sort(files.begin(), files.end());
-    for (const fs::path& f : files) {
-      auto p = quiz::loadStudyProtocol(f.string());
-      if (p && p->id == spec) {
-        loaded = *p;
-        break;
-      }
-    }
-  }
-  if (!loaded) return fail("no study '" + spec + "' (not stored in " + database.path() + ", not a file, not shipped)");
-  // A file naming a stored study id resolves to the stored one when unchanged; saveStudy refuses
-  // design changes once participants exist.
-  if (auto s = db::saveStudy(database, *loaded); !s) return tl::unexpected(s.error());
-  return *loaded;
-}
 
 Result<db::Database> openDb(const cli::Args& args) { return db::openDatabase(args.value("db")); }
 
@@ -248,15 +215,8 @@ int runRun(const cli::Args& args) {
   if (!protocol) return reportError(protocol.error().message);
   // Both presets of every structure must exist before anyone is enrolled; the WDT preset's α and
   // β are recorded with each rating (the render parameters on screen).
-  const render::PresetLibrary presets(defaultPresetsDir());
-  std::map<std::string, render::Preset> wdtPreset;
-  for (const std::string& structure : protocol->structures) {
-    for (int condition = 0; condition < 2; ++condition) {
-      auto preset = presets.load(protocol->presetFor(structure, condition));
-      if (!preset) return reportError("study " + protocol->id + ": " + preset.error().message);
-      if (condition == 0) wdtPreset[structure] = *preset;
-    }
-  }
+  auto presets = loadStudyPresets(render::PresetLibrary(defaultPresetsDir()), *protocol);
+  if (!presets) return reportError(presets.error().message);
   auto state = db::enrolOrResume(*database, *protocol, *participant, *group);
   if (!state) return reportError(state.error().message);
 
@@ -296,15 +256,8 @@ int runRun(const cli::Args& args) {
     }
     for (const auto& item : protocol->items) {
       if (trial.ratedItems.count(item.id)) continue;
-      db::RatingRecord r;
-      r.position = trial.position;
-      r.item = item.id;
-      r.ratingAsShown = answer->ratings.at(item.id);
-      r.responseMs = answer->responseMs;
-      r.t = protocol->t;
-      r.alpha = wdtPreset[trial.structure].alpha;
-      r.beta = wdtPreset[trial.structure].lightingBeta;
-      r.appVersion = AT_VERSION;
+      const db::RatingRecord r = makeRating(*protocol, presets->at(protocol->presetFor(trial.structure, 0)),
+                                            trial.position, item.id, answer->ratings.at(item.id), answer->responseMs);
       // Each rating is committed before the next is taken.
       if (auto s = db::recordRating(*database, protocol->id, *participant, r); !s) return reportError(s.error().message);
       trial.ratedItems.insert(item.id);
@@ -325,20 +278,6 @@ int runRun(const cli::Args& args) {
   return 0;
 }
 
-Status writeFile(const fs::path& path, const std::string& content) {
-  const fs::path temp = path.string() + ".part";
-  {
-    std::ofstream out(temp, std::ios::binary | std::ios::trunc);
-    if (!out) return fail(temp.string() + ": cannot write");
-    out.write(content.data(), std::streamsize(content.size()));
-    if (!out) return fail(temp.string() + ": write failed (disk full?)");
-  }
-  std::error_code ec;
-  fs::rename(temp, path, ec);
-  if (ec) return fail(path.string() + ": cannot replace (" + ec.message() + ")");
-  return {};
-}
-
 int runExport(const cli::Args& args) {
   if (args.positional().size() != 1) return reportError("study export: expected STUDY (see --help)");
   const auto outDir = args.value("out");
@@ -347,44 +286,15 @@ int runExport(const cli::Args& args) {
   if (!database) return reportError(database.error().message);
   auto protocol = resolveStudy(*database, args.positional()[0]);
   if (!protocol) return reportError(protocol.error().message);
-  std::error_code ec;
-  fs::create_directories(*outDir, ec);
-  if (ec || !fs::is_directory(*outDir)) return reportError(*outDir + ": cannot create the output folder");
-
-  auto rows = db::studyResponseRows(*database, *protocol);
-  if (!rows) return reportError(rows.error().message);
-  auto completion = db::studyCompletion(*database, protocol->id);
-  if (!completion) return reportError(completion.error().message);
-  std::size_t partial = 0;
-  for (const auto& c : *completion) partial += c.complete ? 0 : 1;
-
-  const quiz::StudySummary summary = quiz::summariseStudy(*protocol, *rows);
-  const fs::path dir = *outDir;
-  struct Output {
-    const char* name;
-    std::function<Status(const fs::path&)> write;
-  };
-  const std::vector<Output> outputs = {
-      {"responses_long.csv", [&](const fs::path& p) { return writeFile(p, quiz::responsesLongCsv(*rows)); }},
-      {"responses_wide.csv", [&](const fs::path& p) { return writeFile(p, quiz::responsesWideCsv(*protocol, *rows)); }},
-      {"data_dictionary.csv", [&](const fs::path& p) { return writeFile(p, quiz::dataDictionaryCsv(*protocol)); }},
-      {"responses_long.json", [&](const fs::path& p) { return writeFile(p, quiz::responsesLongJsonSidecar(*protocol)); }},
-      {"summary.csv", [&](const fs::path& p) { return writeFile(p, quiz::summaryCsv(summary)); }},
-      {"summary.md",
-       [&](const fs::path& p) { return writeFile(p, quiz::summaryMarkdown(*protocol, summary, completion->size(), partial)); }},
-      {"summary.svg", [&](const fs::path& p) { return writeFile(p, quiz::summarySvg(*protocol, summary)); }},
-      {"summary.png",
-       [&](const fs::path& p) -> Status {
-         return writePng(p.string(), quiz::renderSummaryChart(*protocol, summary));
-       }},
-  };
-  std::fprintf(stderr, "exporting study %s: %zu rows from %zu participant(s)\n", protocol->id.c_str(), rows->size(),
-               completion->size());
-  for (std::size_t i = 0; i < outputs.size(); ++i) {
-    std::fprintf(stderr, "[%zu/%zu] %s\n", i + 1, outputs.size(), outputs[i].name);
-    if (auto s = outputs[i].write(dir / outputs[i].name); !s) return reportError(s.error().message);
+  auto exporter = StudyExport::prepare(*database, *protocol, *outDir);
+  if (!exporter) return reportError(exporter.error().message);
+  std::fprintf(stderr, "exporting study %s: %zu rows from %zu participant(s)\n", protocol->id.c_str(),
+               exporter->rowCount(), exporter->participantCount());
+  while (!exporter->done()) {
+    std::fprintf(stderr, "[%zu/%zu] %s\n", exporter->written() + 1, exporter->fileCount(), exporter->nextName().c_str());
+    if (auto s = exporter->writeNext(); !s) return reportError(s.error().message);
   }
-  std::printf("wrote %zu files to %s\n", outputs.size(), dir.string().c_str());
+  std::printf("wrote %zu files to %s\n", exporter->fileCount(), outDir->c_str());
   return 0;
 }
 

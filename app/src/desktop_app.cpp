@@ -38,6 +38,7 @@
 #include "render/gl/window_target.h"
 #include "render/scene.h"
 #include "render/structure_pick.h"
+#include "study_panel.h"
 #include "volume/dataset_source.h"
 #include "volume/png_image.h"
 
@@ -157,6 +158,7 @@ class DesktopApp {
     std::string dataset;            // empty: the default course's dataset
     std::optional<std::string> script;
     std::optional<std::string> screenshot;
+    std::optional<std::string> db;  // the study database (nullopt: the default)
     int width = 1280, height = 720;
     double renderScale = 1;         // resolution of the full-quality level (slow software GL: < 1)
     double frameBudgetMs = 100;     // at rest, finer levels predicted to cost more are not rendered
@@ -175,6 +177,8 @@ class DesktopApp {
   void updateFields();
   void renderVolume(Clock::time_point frameStart);
   void buildUi();
+  void explorePanel(float panelW);
+  void syncStudyView();  // participant mode: the trial's structure with the preset of the side shown
   bool stepScript();  // true when the script has finished (or there is none)
 
   // Interaction
@@ -272,6 +276,7 @@ class DesktopApp {
   std::vector<double> latencies_;
   bool recording_ = false;
   std::vector<std::string> messages_;
+  std::unique_ptr<StudyPanel> study_;
 };
 
 // ---------------------------------------------------------------------------------------------
@@ -607,6 +612,7 @@ void DesktopApp::setHovered(std::uint16_t label) {
 }
 
 void DesktopApp::hoverAt(double x, double y) {
+  if (study_->participantActive()) return;  // the view stays on the trial's structure
   if (!inView(x, y)) {
     setHovered(0);
     return;
@@ -646,6 +652,7 @@ void DesktopApp::select(std::uint16_t label) {
 }
 
 void DesktopApp::clickAt(double x, double y) {
+  if (study_->participantActive()) return;
   hoverAt(x, y);
   if (const quiz::Question* q = activeLocate()) {
     // A locate answer: the structure under the cursor. The weighted distance to the target is
@@ -675,6 +682,9 @@ void DesktopApp::handleEvent(const SDL_Event& e) {
   if (e.type == SDL_QUIT) quit_ = true;
   if (e.type == SDL_WINDOWEVENT && e.window.event == SDL_WINDOWEVENT_CLOSE) quit_ = true;
   if (options_.script) return;  // scripted runs take no user input
+  if (e.type == SDL_KEYDOWN && study_->participantActive() && !ImGui::GetIO().WantTextInput &&
+      (e.key.keysym.sym == SDLK_a || e.key.keysym.sym == SDLK_b))
+    study_->showSide(e.key.keysym.sym == SDLK_a ? 'A' : 'B');
   const bool overUi = ImGui::GetIO().WantCaptureMouse;
   switch (e.type) {
     case SDL_MOUSEBUTTONDOWN:
@@ -852,6 +862,41 @@ void DesktopApp::renderVolume(Clock::time_point frameStart) {
 
 void DesktopApp::buildUi() {
   const float panelW = 320 * uiScale_;
+  if (study_->participantActive())
+    study_->drawParticipant(panelW, float(winH_));  // in place of the explore panel: no names shown
+  else
+    explorePanel(panelW);
+  study_->drawCoordinator(panelW + 20, 20);
+  if (texture_ && texture_->handle()) {
+    ImGui::GetBackgroundDrawList()->AddImage(reinterpret_cast<ImTextureID>(texture_->handle()), ImVec2(panelW, 0),
+                                             ImVec2(float(winW_), float(winH_)));
+  }
+  if (!renderer_) {
+    ImGui::GetBackgroundDrawList()->AddText(ImVec2(panelW + 20, 20), IM_COL32(255, 140, 120, 255),
+                                            "The volume view is unavailable (see the messages on the left).");
+  }
+}
+
+void DesktopApp::syncStudyView() {
+  const auto shown = study_->shown();
+  if (!shown) return;
+  const Structure* s = dataset_.findStructure(shown->structure);
+  if (!s || !frames_.count(s->label)) return;  // loadStudyPresets and the dataset disagree: view unchanged
+  const bool bare = shown->preset.mode == render::RenderMode::Bare;
+  presets_[{s->label, bare}] = shown->preset;
+  t_ = float(shown->t);
+  if (bare != bare_) {
+    bare_ = bare;
+    markChanged();
+  }
+  if (selected_ != s->label || hovered_) {
+    hovered_ = 0;
+    selected_ = s->label;
+    setView(shown->preset.view.value_or("lateral_left"));
+  }
+}
+
+void DesktopApp::explorePanel(float panelW) {
   ImGui::SetNextWindowPos(ImVec2(0, 0));
   ImGui::SetNextWindowSize(ImVec2(panelW, float(winH_)));
   ImGui::Begin("Explore", nullptr,
@@ -859,6 +904,7 @@ void DesktopApp::buildUi() {
                    ImGuiWindowFlags_NoTitleBar);
   ImGui::TextUnformatted("Anatomy Tutor - Explore");
   ImGui::TextDisabled("%s", dataset_.displayName.empty() ? dataset_.id.c_str() : dataset_.displayName.c_str());
+  if (ImGui::SmallButton("Studies...")) study_->openCoordinator();
   ImGui::Separator();
   lessonPanel();
 
@@ -944,15 +990,6 @@ void DesktopApp::buildUi() {
   for (const std::string& m : messages_) ImGui::TextColored(ImVec4(1, 0.5f, 0.4f, 1), "%s", m.c_str());
   ImGui::PopTextWrapPos();
   ImGui::End();
-
-  if (texture_ && texture_->handle()) {
-    ImGui::GetBackgroundDrawList()->AddImage(reinterpret_cast<ImTextureID>(texture_->handle()), ImVec2(panelW, 0),
-                                             ImVec2(float(winW_), float(winH_)));
-  }
-  if (!renderer_) {
-    ImGui::GetBackgroundDrawList()->AddText(ImVec2(panelW + 20, 20), IM_COL32(255, 140, 120, 255),
-                                            "The volume view is unavailable (see the messages on the left).");
-  }
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -1003,7 +1040,15 @@ bool DesktopApp::stepScript() {
       return s;
     };
     try {
-      if (what == "select") {
+      if (auto r = study_->scriptAction(what, a)) {  // study_* and coordinator_* actions
+        if (!*r) {
+          message(r->error().message);
+          finishScript(2);
+          return true;
+        }
+        if (!**r) return false;  // still running (an export)
+        done();
+      } else if (what == "select") {
         const Structure* s = structureArg();
         if (!s) return true;
         setHovered(0);
@@ -1208,6 +1253,7 @@ int DesktopApp::run() {
     for (const json& a : script["actions"]) actions_.push_back(a);
   }
   if (auto st = loadContent(); !st) return reportError(st.error().message);
+  study_ = std::make_unique<StudyPanel>(options_.db, library_, [this](json j) { event(std::move(j)); });
   if (auto st = openGraphics(); !st) return reportError(st.error().message);
   SDL_GetWindowSize(window_->window, &winW_, &winH_);
   SDL_GL_GetDrawableSize(window_->window, &fbW_, &fbH_);
@@ -1228,6 +1274,7 @@ int DesktopApp::run() {
 
     const bool record = recording_;
     if (record) frameLog_.push_back({});
+    syncStudyView();
     updateFields();
     renderVolume(frameStart);
     ImGui_ImplOpenGL3_NewFrame();
@@ -1279,12 +1326,14 @@ int runDesktop(const std::vector<std::string>& args) {
     if (a == "--help" || a == "-h") {
       std::printf(
           "usage: anatomy-tutor [desktop] [--dataset D] [--ui-script FILE.json [--screenshot OUT.png]] [--size WxH]\n"
-          "                             [--render-scale S] [--frame-budget MS]\n"
+          "                             [--render-scale S] [--frame-budget MS] [--db PATH]\n"
           "  Opens the desktop app on the default course (explore: hover to highlight, click to select).\n"
           "  --dataset    phantom, phantom:N or a volume file (default: the default course's dataset)\n"
           "  --ui-script  replay {\"actions\": [...]} (select, t, mode, view, hover, hover_structure, click,\n"
           "               click_structure, lesson, orbit, zoom, clip, wait, wait_field, screenshot,\n"
-          "               hover_sweep, record, report)\n"
+          "               hover_sweep, record, report; study_start, study_toggle, study_rate, study_comment,\n"
+          "               study_next, study_close, coordinator_open, coordinator_export, coordinator_summary)\n"
+          "  --db         the study database (default: the app's database)\n"
           "  --screenshot save the window as PNG once the script has run and the view has settled\n"
           "  --size       window size in logical pixels (default 1280x720)\n"
           "  --render-scale  resolution of the full-quality volume image, 0.1..1 (default 1; software GL: less)\n"
@@ -1293,13 +1342,15 @@ int runDesktop(const std::vector<std::string>& args) {
       return 0;
     }
     std::optional<std::string> value;
-    if (a == "--dataset" || a == "--ui-script" || a == "--screenshot" || a == "--size" ||
+    if (a == "--dataset" || a == "--db" || a == "--ui-script" || a == "--screenshot" || a == "--size" ||
         a == "--render-scale" || a == "--frame-budget") {
       value = next();
       if (!value) return reportError("desktop: option " + a + " needs a value", 2);
     }
     if (a == "--dataset") {
       options.dataset = *value;
+    } else if (a == "--db") {
+      options.db = *value;
     } else if (a == "--ui-script") {
       options.script = *value;
     } else if (a == "--screenshot") {

@@ -1,0 +1,144 @@
+#include "study_session.h"
+
+#include <algorithm>
+#include <fstream>
+#include <optional>
+
+#include "commands.h"
+#include "volume/png_image.h"
+
+namespace at::app {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+fs::path shippedStudiesDir() { return fs::path(AT_SOURCE_DIR) / "data" / "studies"; }
+
+std::vector<fs::path> shippedStudyFiles() {
+  std::vector<fs::path> files;
+  std::error_code ec;
+  if (!fs::is_directory(shippedStudiesDir(), ec)) return files;
+  for (const auto& entry : fs::directory_iterator(shippedStudiesDir(), ec))
+    if (entry.path().extension() == ".json") files.push_back(entry.path());
+  std::sort(files.begin(), files.end());
+  return files;
+}
+
+}  // namespace
+
+Result<quiz::StudyProtocol> resolveStudy(db::Database& database, const std::string& spec) {
+  auto stored = db::findStudy(database, spec);
+  if (!stored) return tl::unexpected(stored.error());
+  if (*stored) return **stored;
+  std::optional<quiz::StudyProtocol> loaded;
+  if (fs::is_regular_file(spec)) {
+    auto p = quiz::loadStudyProtocol(spec);
+    if (!p) return tl::unexpected(p.error());
+    loaded = *p;
+  } else {
+    for (const fs::path& f : shippedStudyFiles()) {
+      auto p = quiz::loadStudyProtocol(f.string());
+      if (p && p->id == spec) {
+        loaded = *p;
+        break;
+      }
+    }
+  }
+  if (!loaded) return fail("no study '" + spec + "' (not stored in " + database.path() + ", not a file, not shipped)");
+  // A file naming a stored study id resolves to the stored one when unchanged; saveStudy refuses
+  // design changes once participants exist.
+  if (auto s = db::saveStudy(database, *loaded); !s) return tl::unexpected(s.error());
+  return *loaded;
+}
+
+std::vector<std::string> shippedStudyIds() {
+  std::vector<std::string> ids;
+  for (const fs::path& f : shippedStudyFiles())
+    if (auto p = quiz::loadStudyProtocol(f.string())) ids.push_back(p->id);
+  return ids;
+}
+
+Result<std::map<std::string, render::Preset>> loadStudyPresets(const render::PresetLibrary& library,
+                                                               const quiz::StudyProtocol& protocol) {
+  std::map<std::string, render::Preset> presets;
+  for (const std::string& structure : protocol.structures)
+    for (int condition = 0; condition < 2; ++condition) {
+      const std::string id = protocol.presetFor(structure, condition);
+      auto preset = library.load(id);
+      if (!preset) return fail("study " + protocol.id + ": " + preset.error().message);
+      presets[id] = *preset;
+    }
+  return presets;
+}
+
+db::RatingRecord makeRating(const quiz::StudyProtocol& protocol, const render::Preset& wdtPreset, int position,
+                            const std::string& item, int ratingAsShown, double responseMs) {
+  db::RatingRecord r;
+  r.position = position;
+  r.item = item;
+  r.ratingAsShown = ratingAsShown;
+  r.responseMs = responseMs;
+  r.t = protocol.t;
+  r.alpha = wdtPreset.alpha;
+  r.beta = wdtPreset.lightingBeta;
+  r.appVersion = AT_VERSION;
+  return r;
+}
+
+Status writeFileAtomically(const fs::path& path, const std::string& content) {
+  const fs::path temp = path.string() + ".part";
+  {
+    std::ofstream out(temp, std::ios::binary | std::ios::trunc);
+    if (!out) return fail(temp.string() + ": cannot write");
+    out.write(content.data(), std::streamsize(content.size()));
+    if (!out) return fail(temp.string() + ": write failed (disk full?)");
+  }
+  std::error_code ec;
+  fs::rename(temp, path, ec);
+  if (ec) return fail(path.string() + ": cannot replace (" + ec.message() + ")");
+  return {};
+}
+
+Result<StudyExport> StudyExport::prepare(db::Database& database, const quiz::StudyProtocol& protocol,
+                                         const fs::path& outDir) {
+  std::error_code ec;
+  fs::create_directories(outDir, ec);
+  if (ec || !fs::is_directory(outDir)) return fail(outDir.string() + ": cannot create the output folder");
+  auto rows = db::studyResponseRows(database, protocol);
+  if (!rows) return tl::unexpected(rows.error());
+  auto completion = db::studyCompletion(database, protocol.id);
+  if (!completion) return tl::unexpected(completion.error());
+  StudyExport e;
+  e.protocol_ = protocol;
+  e.rows_ = std::move(*rows);
+  e.participants_ = completion->size();
+  for (const auto& c : *completion) e.partial_ += c.complete ? 0 : 1;
+  e.summary_ = quiz::summariseStudy(protocol, e.rows_);
+  e.dir_ = outDir;
+  e.names_ = {"responses_long.csv", "responses_wide.csv", "data_dictionary.csv", "responses_long.json",
+              "summary.csv",        "summary.md",         "summary.svg",         "summary.png"};
+  return e;
+}
+
+Status StudyExport::writeNext() {
+  if (done()) return {};
+  const std::string& name = names_[next_];
+  const fs::path path = dir_ / name;
+  Status st;
+  switch (next_) {
+    case 0: st = writeFileAtomically(path, quiz::responsesLongCsv(rows_)); break;
+    case 1: st = writeFileAtomically(path, quiz::responsesWideCsv(protocol_, rows_)); break;
+    case 2: st = writeFileAtomically(path, quiz::dataDictionaryCsv(protocol_)); break;
+    case 3: st = writeFileAtomically(path, quiz::responsesLongJsonSidecar(protocol_)); break;
+    case 4: st = writeFileAtomically(path, quiz::summaryCsv(summary_)); break;
+    case 5: st = writeFileAtomically(path, quiz::summaryMarkdown(protocol_, summary_, participants_, partial_)); break;
+    case 6: st = writeFileAtomically(path, quiz::summarySvg(protocol_, summary_)); break;
+    default: st = writePng(path.string(), quiz::renderSummaryChart(protocol_, summary_)); break;
+  }
+  if (!st) return st;
+  ++next_;
+  return {};
+}
+
+}  // namespace at::app

@@ -1,0 +1,67 @@
+// What the terminal study runner (cmd_study.cpp) and the desktop study panel (study_panel.cpp)
+// share: finding a study, its presets, one rating's record, and the coordinator's export written
+// one file at a time (so a UI can show "[k/8] file" between steps).
+#pragma once
+
+#include <cstddef>
+#include <filesystem>
+#include <functional>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "db/database.h"
+#include "db/study_store.h"
+#include "quiz/study_report.h"
+#include "render/preset.h"
+#include "volume/error.h"
+
+namespace at::app {
+
+// The study: a stored id, else a study JSON file, else a shipped study (data/studies) with that
+// id. Files and shipped studies are stored (saveStudy) before they are returned.
+Result<quiz::StudyProtocol> resolveStudy(db::Database& database, const std::string& spec);
+
+// Ids of the shipped studies (data/studies/*.json that parse), in file-name order.
+std::vector<std::string> shippedStudyIds();
+
+// Both presets of every structure of the study, by preset id; an error names the missing one.
+Result<std::map<std::string, render::Preset>> loadStudyPresets(const render::PresetLibrary& library,
+                                                               const quiz::StudyProtocol& protocol);
+
+// One rating as it is stored: the item's rating as shown with the WDT preset's render
+// parameters (α, β) and the study's t.
+db::RatingRecord makeRating(const quiz::StudyProtocol& protocol, const render::Preset& wdtPreset, int position,
+                            const std::string& item, int ratingAsShown, double responseMs);
+
+// Writes `content` to `path` through a temporary file renamed into place.
+Status writeFileAtomically(const std::filesystem::path& path, const std::string& content);
+
+// The coordinator's export of one study: 8 files (long and wide CSV, data dictionary, JSON
+// sidecar, summary CSV/Markdown/SVG/PNG). `prepare` reads the database once; `writeNext` writes
+// one file per call.
+class StudyExport {
+ public:
+  static Result<StudyExport> prepare(db::Database& database, const quiz::StudyProtocol& protocol,
+                                     const std::filesystem::path& outDir);
+  std::size_t fileCount() const { return names_.size(); }
+  std::size_t written() const { return next_; }
+  bool done() const { return next_ >= names_.size(); }
+  // Name of the file `writeNext` writes next ("responses_long.csv"), empty when done.
+  std::string nextName() const { return done() ? std::string() : names_[next_]; }
+  Status writeNext();
+  const quiz::StudySummary& summary() const { return summary_; }
+  std::size_t rowCount() const { return rows_.size(); }
+  std::size_t participantCount() const { return participants_; }
+
+ private:
+  quiz::StudyProtocol protocol_;
+  std::vector<quiz::StudyResponseRow> rows_;
+  quiz::StudySummary summary_;
+  std::size_t participants_ = 0, partial_ = 0;
+  std::filesystem::path dir_;
+  std::vector<std::string> names_;
+  std::size_t next_ = 0;
+};
+
+}  // namespace at::app

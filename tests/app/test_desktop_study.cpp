@@ -1,0 +1,217 @@
+// The desktop app's study screens as a participant and a coordinator use them: scripted runs under
+// Xvfb (Mesa) of the shipped study on the phantom. The participant screens' drawn labels (printed
+// by the app as "study_screen" events) must not name a structure, preset, condition or the study.
+#include <doctest/doctest.h>
+
+#include <algorithm>
+#include <cctype>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <sys/wait.h>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "test_support.h"
+#include "volume/png_image.h"
+
+namespace fs = std::filesystem;
+using at::test::TempDir;
+using json = nlohmann::json;
+
+namespace {
+
+bool haveXvfb() { return std::system("command -v xvfb-run >/dev/null 2>&1") == 0; }
+
+struct Run {
+  int exitCode = -1;
+  std::vector<json> events;
+  std::string err;
+};
+
+Run runStudyScript(const TempDir& dir, const json& script, const fs::path& db, const std::string& screenshot) {
+  const fs::path scriptPath = dir / "script.json", out = dir / "stdout", err = dir / "stderr";
+  std::ofstream(scriptPath) << script.dump();
+  const std::string cmd = "xvfb-run -a -s '-screen 0 1280x800x24' '" + at::test::appBinary().string() +
+                          "' desktop --dataset phantom:128 --size 800x600 --render-scale 0.4 --db '" + db.string() +
+                          "' --ui-script '" + scriptPath.string() + "'" +
+                          (screenshot.empty() ? "" : " --screenshot '" + screenshot + "'") + " >'" + out.string() +
+                          "' 2>'" + err.string() + "'";
+  const int status = std::system(cmd.c_str());
+  Run r;
+  r.exitCode = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  r.err = at::test::readFile(err);
+  std::istringstream lines(at::test::readFile(out));
+  for (std::string line; std::getline(lines, line);)
+    if (!line.empty() && line[0] == '{') r.events.push_back(json::parse(line, nullptr, false));
+  return r;
+}
+
+std::vector<json> eventsOf(const Run& r, const std::string& kind) {
+  std::vector<json> found;
+  for (const json& e : r.events)
+    if (e.is_object() && e.value("event", "") == kind) found.push_back(e);
+  return found;
+}
+
+std::string lower(std::string s) {
+  for (char& c : s) c = char(std::tolower(static_cast<unsigned char>(c)));
+  return s;
+}
+
+json shippedStudy() {
+  std::ifstream in(at::test::sourceDir() / "data" / "studies" / "paper_survey.json");
+  return json::parse(in);
+}
+
+// Everything that would unblind a participant: structure ids (also with spaces), preset ids,
+// condition ids and labels, the study's id and title.
+std::vector<std::string> forbiddenWords(const json& study) {
+  std::vector<std::string> words = {study["id"].get<std::string>(), study["title"].get<std::string>()};
+  for (const json& s : study["structures"]) {
+    std::string id = s.get<std::string>(), spaced = id;
+    std::replace(spaced.begin(), spaced.end(), '_', ' ');
+    words.insert(words.end(), {id, spaced});
+    for (const json& c : study["conditions"]) words.push_back(id + c["preset_suffix"].get<std::string>());
+  }
+  for (const json& c : study["conditions"]) words.insert(words.end(), {c["id"].get<std::string>(), c["label"].get<std::string>()});
+  return words;
+}
+
+json rateAll(const json& study, int rating) {
+  json actions = json::array();
+  for (const json& item : study["items"]) actions.push_back({{"do", "study_rate"}, {"item", item["id"]}, {"rating", rating}});
+  return actions;
+}
+
+void append(json& list, const json& more) {
+  for (const json& a : more) list.push_back(a);
+}
+
+}  // namespace
+
+TEST_CASE("the study runner shows no structure names and its ratings land in the database") {
+  if (!haveXvfb()) {
+    MESSAGE("SKIPPED: xvfb-run is not installed");
+    return;
+  }
+  TempDir dir("at-study-ui");
+  const json study = shippedStudy();
+  const std::string studyId = study["id"];
+  json actions = json::array();
+  actions.push_back({{"do", "study_start"}, {"study", studyId}, {"participant", "P1"}, {"group", "medical"}});
+  actions.push_back({{"do", "wait"}, {"ms", 100}});
+  actions.push_back({{"do", "study_toggle"}});
+  actions.push_back({{"do", "wait"}, {"ms", 50}});
+  append(actions, rateAll(study, 2));
+  actions.push_back({{"do", "study_comment"}, {"text", "first"}});
+  actions.push_back({{"do", "study_next"}});
+  actions.push_back({{"do", "wait"}, {"ms", 100}});
+  actions.push_back({{"do", "study_toggle"}, {"side", "B"}});
+  actions.push_back({{"do", "study_toggle"}, {"side", "A"}});
+  append(actions, rateAll(study, 4));
+  actions.push_back({{"do", "study_next"}});
+  actions.push_back({{"do", "wait"}, {"ms", 100}});
+  const fs::path db = dir / "study.db", shot = dir / "participant.png";
+  const Run r = runStudyScript(dir, {{"actions", actions}}, db, shot.string());
+  INFO("stderr: " << r.err);
+  REQUIRE(r.exitCode == 0);
+
+  // Three participant screens were shown (structures 1, 2, 3), each only in the participant window.
+  const auto screens = eventsOf(r, "study_screen");
+  REQUIRE(screens.size() >= 3);
+  const std::vector<std::string> forbidden = forbiddenWords(study);
+  const std::size_t n = study["structures"].size();
+  for (std::size_t k = 0; k < 3; ++k) {
+    const json& screen = screens[k];
+    CHECK(screen["windows"] == json::array({"Preference study"}));
+    std::string all;
+    for (const json& label : screen["labels"]) all += lower(label.get<std::string>()) + "\n";
+    INFO("screen " << k << ": " << all);
+    CHECK(all.find("structure " + std::to_string(k + 1) + " of " + std::to_string(n)) != std::string::npos);
+    CHECK(all.find(lower(study["items"][0]["wording"].get<std::string>())) != std::string::npos);
+    CHECK(all.find(lower(study["scale"]["anchors"]["1"].get<std::string>())) != std::string::npos);
+    for (const std::string& word : forbidden) CHECK_MESSAGE(all.find(lower(word)) == std::string::npos, word);
+  }
+
+  const auto recorded = eventsOf(r, "study_recorded");
+  REQUIRE(recorded.size() == 2);
+  CHECK(recorded[0]["toggles"] == 1);
+  CHECK(recorded[1]["toggles"] == 2);
+  CHECK(recorded[0]["view_ms_a"].get<double>() > 0);
+  CHECK(recorded[0]["view_ms_b"].get<double>() > 0);
+
+  // The ratings are in the database: 2 structures × items, read back by the terminal commands.
+  const std::size_t items = study["items"].size();
+  const auto status = at::test::runApp("study status " + studyId + " --db '" + db.string() + "'");
+  INFO(status.out << status.err);
+  CHECK(status.exitCode == 0);
+  CHECK(status.out.find("P1") != std::string::npos);
+  CHECK(status.out.find(std::to_string(2 * items) + "/" + std::to_string(n * items) + " ratings") != std::string::npos);
+
+  // The screenshot shows the volume view beside the participant panel (not an empty view).
+  auto image = at::readPng(shot.string());
+  REQUIRE(image);
+  int lit = 0, total = 0;
+  for (int y = 0; y < image->height; y += 4)
+    for (int x = image->width / 2; x < image->width; x += 4) {
+      const std::uint8_t* p = image->pixel(x, y);
+      lit += (p[0] + p[1] + p[2] > 60) ? 1 : 0;
+      ++total;
+    }
+  CHECK(lit > total / 100);
+}
+
+TEST_CASE("the coordinator export writes the eight study files and shows the summary") {
+  if (!haveXvfb()) {
+    MESSAGE("SKIPPED: xvfb-run is not installed");
+    return;
+  }
+  TempDir dir("at-study-ui");
+  const json study = shippedStudy();
+  const std::string studyId = study["id"];
+  json actions = json::array();
+  actions.push_back({{"do", "study_start"}, {"study", studyId}, {"participant", "P2"}, {"group", "non-medical"}});
+  append(actions, rateAll(study, 1));
+  actions.push_back({{"do", "study_next"}});
+  actions.push_back({{"do", "study_close"}});
+  actions.push_back({{"do", "coordinator_open"}, {"study", studyId}});
+  actions.push_back({{"do", "coordinator_export"}, {"out", (dir / "export").string()}});
+  actions.push_back({{"do", "coordinator_summary"}});
+  const Run r = runStudyScript(dir, {{"actions", actions}}, dir / "study.db", "");
+  INFO("stderr: " << r.err);
+  REQUIRE(r.exitCode == 0);
+
+  const auto progress = eventsOf(r, "export_progress");
+  REQUIRE(progress.size() == 8);
+  for (std::size_t k = 0; k < progress.size(); ++k) {
+    CHECK(progress[k]["k"] == k + 1);
+    CHECK(progress[k]["n"] == 8);
+    const fs::path file = dir / "export" / progress[k]["file"].get<std::string>();
+    CHECK_MESSAGE(fs::is_regular_file(file), file.string());
+    CHECK(fs::file_size(file) > 0);
+  }
+  // One structure rated: the long table has a header and one row per item.
+  const std::string longCsv = at::test::readFile(dir / "export" / "responses_long.csv");
+  const std::size_t items = study["items"].size();
+  CHECK(std::count(longCsv.begin(), longCsv.end(), '\n') == std::ptrdiff_t(items + 1));
+
+  const auto summary = eventsOf(r, "study_summary");
+  REQUIRE(summary.size() == 1);
+  bool sawAll = false;
+  for (const json& cell : summary[0]["cells"]) {
+    if (cell["group"] != "all") continue;
+    sawAll = true;
+    CHECK(cell["n"] == 1);
+    // Rated 1 (prefer A) on the shown scale: unblinded it is 1 or 5 depending on which side was WDT.
+    const double mean = cell["mean"];
+    CHECK((mean == doctest::Approx(1) || mean == doctest::Approx(5)));
+  }
+  CHECK(sawAll);
+  REQUIRE(summary[0]["completion"].size() == 1);
+  CHECK(summary[0]["completion"][0]["participant"] == "P2");
+  CHECK(summary[0]["completion"][0]["given"] == items);
+}
