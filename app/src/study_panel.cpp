@@ -171,7 +171,8 @@ void StudyPanel::drawParticipant(float width, float height) {
     // The screen drawn last frame is now on screen: print its labels and the visible windows.
     json windows = json::array();
     for (ImGuiWindow* w : ImGui::GetCurrentContext()->Windows)
-      if (w->WasActive && std::strncmp(w->Name, "Debug##", 7) != 0) windows.push_back(visible(w->Name));
+      if (w->WasActive && !(w->Flags & ImGuiWindowFlags_ChildWindow) && std::strncmp(w->Name, "Debug##", 7) != 0)
+        windows.push_back(visible(w->Name));  // top-level windows, tooltips and popups included
     events_({{"event", "study_screen"}, {"labels", labels_}, {"windows", windows}});
     announce_ = false;
   }
