@@ -30,4 +30,8 @@ if [ -d ../shared/data/totalsegmentator ]; then
 fi
 cp bench/run_on_gpu.sh .gpu/
 cp -r data/presets .gpu/presets 2>/dev/null || true
+# The render tests read presets and golden images below the source directory compiled into them;
+# run_on_gpu.sh recreates that path from these copies when the machine lacks it.
+cp -r tests/render/golden .gpu/golden
+pwd > .gpu/source_dir.txt
 du -sh .gpu
