@@ -2,7 +2,7 @@
 //
 //   render_bench [--size WxH] [--volume N] [--hover-volume N] [--frames N] [--warmup N]
 //                [--cycles N] [--structure ID] [--presets DIR] [--field-downsample F]
-//                [--ray-caster compute|fragment] [--step-voxels S]
+//                [--ray-caster compute|fragment] [--step-voxels S] [--compare-step S [--images DIR]]
 //
 // 1. frame: phantom at N³ (default 512), the structure's WDT preset with Phong shading, a field
 //    from computeWdt (backend auto; downsampled by F for the 512³ set-up), GPU time of each frame
@@ -12,6 +12,9 @@
 //    wall-clock per step and end to end, for `cycles` hovers alternating between structures.
 // --ray-caster picks the shader stage that casts the rays (same image); --step-voxels sets the
 // sampling step to S × the smallest spacing (default: the renderer's, half a voxel).
+// --compare-step renders the frame set-up once with the frame's step and once with S voxels and
+// prints how far the images differ (mean |diff| per channel, share of pixels off by > 16), writing
+// both as PNG into DIR with --images.
 // EGL only: no SDL, DCMTK or SQLite.
 #include <algorithm>
 #include <chrono>
@@ -22,9 +25,11 @@
 
 #include "render/gl/egl_context.h"
 #include "render/gl/volume_renderer.h"
+#include "render/image.h"
 #include "render/preset.h"
 #include "render/scene.h"
 #include "volume/phantom.h"
+#include "volume/png_image.h"
 #include "wdt/problem.h"
 #include "wdt/wdt.h"
 
@@ -50,6 +55,8 @@ struct Options {
   int width = 1920, height = 1080, volume = 512, hoverVolume = 256, frames = 100, warmup = 10, cycles = 10;
   int fieldDownsample = 2;
   double stepVoxels = 0;  // 0: the renderer's default step
+  double compareStepVoxels = 0;
+  std::string imagesDir;
   render::gl::RayCaster rayCaster = render::gl::RayCaster::Compute;
   std::string structure = "cochlea";
   std::string presets = AT_BENCH_PRESETS_DIR;
@@ -69,6 +76,8 @@ bool parse(int argc, char** argv, Options& o) {
     else if (a == "--cycles" && (v = next())) o.cycles = std::atoi(v);
     else if (a == "--field-downsample" && (v = next())) o.fieldDownsample = std::atoi(v);
     else if (a == "--step-voxels" && (v = next())) o.stepVoxels = std::atof(v);
+    else if (a == "--compare-step" && (v = next())) o.compareStepVoxels = std::atof(v);
+    else if (a == "--images" && (v = next())) o.imagesDir = v;
     else if (a == "--ray-caster" && (v = next())) {
       if (std::string(v) == "compute") o.rayCaster = render::gl::RayCaster::Compute;
       else if (std::string(v) == "fragment") o.rayCaster = render::gl::RayCaster::Fragment;
@@ -78,7 +87,7 @@ bool parse(int argc, char** argv, Options& o) {
     else return false;
   }
   return o.width > 0 && o.height > 0 && o.volume > 8 && o.hoverVolume > 8 && o.frames > 0 && o.cycles > 0 &&
-         o.fieldDownsample >= 1 && o.stepVoxels >= 0;
+         o.fieldDownsample >= 1 && o.stepVoxels >= 0 && o.compareStepVoxels >= 0;
 }
 
 int failWith(const std::string& m) {
@@ -94,7 +103,7 @@ int main(int argc, char** argv) {
     std::fprintf(stderr,
                  "usage: render_bench [--size WxH] [--volume N] [--hover-volume N] [--frames N] [--warmup N] "
                  "[--cycles N] [--structure ID] [--presets DIR] [--field-downsample F] "
-                 "[--ray-caster compute|fragment] [--step-voxels S]\n");
+                 "[--ray-caster compute|fragment] [--step-voxels S] [--compare-step S [--images DIR]]\n");
     return 2;
   }
   auto ctx = render::gl::EglContext::create();
@@ -151,6 +160,37 @@ int main(int argc, char** argv) {
         median, percentile(gpuMs, 0.9), median > 0 ? 1000.0 / median : 0.0, phantomMs, wdt->stats.msTotal,
         wdt->stats.device.c_str(), rayCasterName, render::effectiveStepMm(ds.volume.geometry, *settings));
     std::fflush(stdout);
+    if (o.compareStepVoxels > 0) {
+      auto reference = renderer->render(*settings);
+      if (!reference) return failWith(reference.error().message);
+      render::RenderSettings coarse = *settings;
+      coarse.stepMm = o.compareStepVoxels * std::min({ds.volume.geometry.spacingMm[0], ds.volume.geometry.spacingMm[1],
+                                                      ds.volume.geometry.spacingMm[2]});
+      auto other = renderer->render(coarse);
+      if (!other) return failWith(other.error().message);
+      const RgbImage a = render::toRgb(*reference), b = render::toRgb(*other);
+      double sum = 0;
+      std::size_t off = 0;
+      for (std::size_t p = 0; p < a.rgb.size(); p += 3) {
+        int worst = 0;
+        for (std::size_t c = 0; c < 3; ++c) {
+          const int d = std::abs(int(a.rgb[p + c]) - int(b.rgb[p + c]));
+          sum += d;
+          worst = std::max(worst, d);
+        }
+        off += worst > 16;
+      }
+      const double pixels = double(a.rgb.size() / 3);
+      std::printf("{\"bench\":\"step_compare\",\"volume\":%d,\"width\":%d,\"height\":%d,\"step_mm\":%.4f,"
+                  "\"other_step_mm\":%.4f,\"mean_abs_diff\":%.3f,\"share_off_by_16\":%.5f}\n",
+                  o.volume, o.width, o.height, render::effectiveStepMm(ds.volume.geometry, *settings), coarse.stepMm,
+                  sum / (3 * pixels), double(off) / pixels);
+      std::fflush(stdout);
+      if (!o.imagesDir.empty()) {
+        if (auto st = writePng(o.imagesDir + "/step_reference.png", a); !st) return failWith(st.error().message);
+        if (auto st = writePng(o.imagesDir + "/step_other.png", b); !st) return failWith(st.error().message);
+      }
+    }
   }
 
   // 2. Hover cycle.

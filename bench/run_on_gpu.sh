@@ -29,6 +29,7 @@ run ./wdt_bench "$@" --data "$AT_SHARED_DATA" > "$OUT/wdt_bench.jsonl"
 if [ -x ./render_bench ]; then
   run ./render_bench --presets presets > "$OUT/render_bench.jsonl"
   run ./render_bench --presets presets --ray-caster fragment --frames 10 --warmup 2 --cycles 4 >> "$OUT/render_bench.jsonl"
-  run ./render_bench --presets presets --step-voxels 1 --frames 50 --warmup 5 --cycles 6 >> "$OUT/render_bench.jsonl"
+  run ./render_bench --presets presets --step-voxels 1 --frames 50 --warmup 5 --cycles 6 --compare-step 1 \
+    --images "$OUT" >> "$OUT/render_bench.jsonl"
 fi
 true

@@ -119,12 +119,19 @@ vec4 castRay(vec2 pixel) {
     bvec3 moving = notEqual(dT, vec3(0.0));
     vec3 light = -dir;
     int i = 0;
+    ivec3 lastCell = ivec3(-1);
+    bool occupied = true;
     while (i < count) {
       float tm = start + float(i) * uStepMm;
       vec3 pt = oT + tm * dT;
-      // Continuous voxel coordinates (centres at integers) and the block holding them.
+      // Continuous voxel coordinates (centres at integers) and the block holding them; the
+      // occupancy is fetched again only when the ray enters another block.
       ivec3 cell = clamp(ivec3(floor((pt * dims - 0.5) / block)), ivec3(0), uBlocks - 1);
-      if (uSkip != 0 && texelFetch(uOccupancy, cell, 0).r == 0u) {
+      if (uSkip != 0 && cell != lastCell) {
+        lastCell = cell;
+        occupied = texelFetch(uOccupancy, cell, 0).r != 0u;
+      }
+      if (uSkip != 0 && !occupied) {
         // Jump to the first sample of the regular sequence past this block (the outermost blocks
         // reach beyond the box, so a ray leaving through them ends).
         vec3 lo = mix(vec3(cell * uBlock), vec3(-2.0), equal(cell, ivec3(0)));
@@ -173,7 +180,8 @@ vec4 castRay(vec2 pixel) {
         if (len > 1e-3) {
           float ndl = abs(dot(nrm, light));
           diffuse = ndl;
-          spec = pow(ndl, 24.0);
+          float n2 = ndl * ndl, n4 = n2 * n2, n8 = n4 * n4;
+          spec = n8 * n8 * n8;  // ndl^24 without pow's log/exp
         }
         if (uMode == 2) {
           float ka = uLighting.y / pow(uLighting.x * min(d, 1e6) + 1.0, 2.0);
