@@ -12,7 +12,7 @@
 //    wall-clock per step and end to end, for `cycles` hovers alternating between structures.
 // --ray-caster picks the shader stage that casts the rays (same image); --step-voxels sets the
 // sampling step to S × the smallest spacing (default: the renderer's, half a voxel).
-// --compare-step renders the frame set-up once with the frame's step and once with S voxels and
+// --compare-step renders the frame set-up once with the default step and once with S voxels and
 // prints how far the images differ (mean |diff| per channel, share of pixels off by > 16), writing
 // both as PNG into DIR with --images.
 // EGL only: no SDL, DCMTK or SQLite.
@@ -161,7 +161,9 @@ int main(int argc, char** argv) {
         wdt->stats.device.c_str(), rayCasterName, render::effectiveStepMm(ds.volume.geometry, *settings));
     std::fflush(stdout);
     if (o.compareStepVoxels > 0) {
-      auto reference = renderer->render(*settings);
+      render::RenderSettings standard = *settings;
+      standard.stepMm = 0;  // the renderer's default step
+      auto reference = renderer->render(standard);
       if (!reference) return failWith(reference.error().message);
       render::RenderSettings coarse = *settings;
       coarse.stepMm = o.compareStepVoxels * std::min({ds.volume.geometry.spacingMm[0], ds.volume.geometry.spacingMm[1],
@@ -183,7 +185,7 @@ int main(int argc, char** argv) {
       const double pixels = double(a.rgb.size() / 3);
       std::printf("{\"bench\":\"step_compare\",\"volume\":%d,\"width\":%d,\"height\":%d,\"step_mm\":%.4f,"
                   "\"other_step_mm\":%.4f,\"mean_abs_diff\":%.3f,\"share_off_by_16\":%.5f}\n",
-                  o.volume, o.width, o.height, render::effectiveStepMm(ds.volume.geometry, *settings), coarse.stepMm,
+                  o.volume, o.width, o.height, render::effectiveStepMm(ds.volume.geometry, standard), coarse.stepMm,
                   sum / (3 * pixels), double(off) / pixels);
       std::fflush(stdout);
       if (!o.imagesDir.empty()) {
