@@ -1,17 +1,18 @@
 #!/usr/bin/env bash
 # Runs on the GPU machine from the repository root with .gpu/ and .gl/ carried (see
-# collect_gpu_binaries.sh): unpacks the GL loader packages, then runs the CUDA, WDT and render
-# tests, the WDT benchmark (CPU and CUDA) and the render benchmark (compute and fragment ray
-# casters, default and one-voxel steps), writing logs and JSON lines to $OUT.
+# collect_gpu_binaries.sh): unpacks the GL loader packages, then runs the CUDA, WDT and GL tests,
+# the WDT benchmark on the GPU and the render benchmark (compute ray caster at the default and a
+# one-voxel step, with the image difference between them, and the fragment ray caster), writing
+# logs and JSON lines to $OUT.
 set -uo pipefail
 for f in .gl/*.deb; do dpkg -x "$f" /; done
 ldconfig
 export __EGL_VENDOR_LIBRARY_FILENAMES=/usr/local/nvidia/share/glvnd/egl_vendor.d/10_nvidia.json
 export LD_LIBRARY_PATH=$PWD/.gpu/lib:${LD_LIBRARY_PATH:-}
-# The benchmarks' real CT: wdt_bench reads DIR/totalsegmentator/ (--data DIR), the tests
-# AT_SHARED_DATA/totalsegmentator/.
-export AT_SHARED_DATA=$PWD/.gpu/shared
-mkdir -p .gpu/shared/totalsegmentator && cp .gpu/data/* .gpu/shared/totalsegmentator/ 2>/dev/null
+mkdir -p .gpu/shared/data/totalsegmentator && cp .gpu/data/* .gpu/shared/data/totalsegmentator/
+export AT_SHARED_DATA=$PWD/.gpu/shared/data
+# The render tests read presets and golden images below the source directory compiled into them:
+# recreate that path from the copies in .gpu/ when this machine lacks it.
 src=$(cat .gpu/source_dir.txt 2>/dev/null)
 if [ -n "$src" ] && [ ! -e "$src" ]; then
   mkdir -p "$src/data" "$src/tests/render"
@@ -19,17 +20,17 @@ if [ -n "$src" ] && [ ! -e "$src" ]; then
   ln -s "$PWD/.gpu/golden" "$src/tests/render/golden"
 fi
 cd .gpu
-nvidia-smi -L | tee "$OUT/machine.txt"
-lscpu | grep -E "Model name|^CPU\(s\)" >> "$OUT/machine.txt"
-run() { echo "== $*" | tee -a "$OUT/log.txt"; "$@" 2>&1 | tee -a "$OUT/log.txt"; echo "== exit ${PIPESTATUS[0]}" | tee -a "$OUT/log.txt"; }
-run ./test_cuda
-[ -x ./test_wdt ] && run ./test_wdt
-[ -x ./test_render ] && run ./test_render
-run ./wdt_bench "$@" --data "$AT_SHARED_DATA" > "$OUT/wdt_bench.jsonl"
-if [ -x ./render_bench ]; then
-  run ./render_bench --presets presets > "$OUT/render_bench.jsonl"
-  run ./render_bench --presets presets --ray-caster fragment --frames 10 --warmup 2 --cycles 4 >> "$OUT/render_bench.jsonl"
-  run ./render_bench --presets presets --step-voxels 1 --frames 50 --warmup 5 --cycles 6 --compare-step 1 \
-    --images "$OUT" >> "$OUT/render_bench.jsonl"
-fi
+{ nvidia-smi -L; nvidia-smi --query-gpu=name,driver_version,clocks.max.sm --format=csv; lscpu | grep -E "Model name|^CPU\(s\)"; } > "$OUT/machine.txt" 2>&1
+log() { echo "== $*" >> "$OUT/tests.log"; "$@" >> "$OUT/tests.log" 2>&1; echo "   exit $?" >> "$OUT/tests.log"; }
+log ./test_cuda
+log ./test_wdt
+log ./test_render
+# wdt_bench reads DIR/totalsegmentator/ (--data DIR).
+./wdt_bench --sizes 128,256,512 --backends cuda --repeats 10 --data "$PWD/shared/data" > "$OUT/wdt_bench_cuda.jsonl" 2> "$OUT/wdt_bench.err"
+rb() { ./render_bench --size 1920x1080 --volume 512 --hover-volume 256 --presets "$PWD/presets" "$@" >> "$OUT/render_bench.jsonl" 2>> "$OUT/render_bench.err"; }
+rb --frames 30 --warmup 5 --cycles 16 --compare-step 1 --images "$OUT"
+rb --frames 30 --warmup 5 --cycles 6 --step-voxels 1
+rb --frames 5 --warmup 1 --cycles 3 --ray-caster fragment
+tail -n 3 "$OUT/tests.log"
+grep -v hover_cycle "$OUT/render_bench.jsonl"
 true

@@ -36,6 +36,9 @@ int runRender(const Argv& args);
 // The shipped presets: data/presets of the source tree, else next to the installed binary.
 std::filesystem::path defaultPresetsDir();
 
+// The desktop application (desktop_app.cpp, desktop_support.cpp)
+int runDesktop(const Argv& args);
+
 // Datasets and learning (cmd_import.cpp, cmd_play.cpp, cmd_progress.cpp)
 int runImport(const Argv& args);
 int runPlay(const Argv& args);

@@ -5,6 +5,7 @@
 #include <string>
 
 #include "commands.h"
+#include "desktop_support.h"
 
 namespace at::app {
 
@@ -16,6 +17,7 @@ const std::vector<Command>& commands() {
       {"slice", "write a grey slice with label overlay as PNG", runSlice},
       {"wdt", "weighted distance field of a structure (CPU or CUDA), with --check against exact", runWdt},
       {"render", "render a structure in one of the paper's modes to PNG (offscreen)", runRender},
+      {"desktop", "open the desktop app (explore; --ui-script replays actions, --screenshot saves)", runDesktop},
       {"import", "register a dataset (volume, labels, names) in the database", runImport},
       {"courses", "list the courses", runCourses},
       {"lessons", "list the lessons of the courses", runLessons},
@@ -35,19 +37,20 @@ namespace {
 
 void printUsage() {
   std::printf("Anatomy Tutor %s — regional anatomy on CT with weighted distance fields\n\n", AT_VERSION);
-  std::printf("usage: anatomy-tutor [COMMAND] [ARGS…]    (no command: the default course)\n\n");
+  std::printf("usage: anatomy-tutor [COMMAND] [ARGS…]    (no command: the desktop app on the default course;\n"
+              "                                        desktop options such as --ui-script F.json also work alone)\n\n");
   for (const Command& c : commands()) std::printf("  %-12s %s\n", c.name, c.summary);
   std::printf("\n`anatomy-tutor COMMAND --help` describes each command.\n");
 }
 
-// Without a desktop shell yet, the default is the built-in dataset's structure list and a slice.
+// The desktop app on the default course when a display exists; otherwise one line saying so and the
+// default lesson's first views written as PNG files through the offscreen renderer.
 int runDefault() {
-  const int status = runStructures({"phantom"});
-  if (status != 0) return status;
-  const std::string out = "phantom_slice.png";
-  const int sliceStatus = runSlice({"phantom", "--axis", "z", "--index", "128", "--out", out});
-  if (sliceStatus == 0) std::printf("wrote %s (axial slice 128 of the phantom)\n", out.c_str());
-  return sliceStatus;
+  if (displayAvailable()) return runDesktop({});
+  const std::string dir = "anatomy-tutor-views";
+  std::printf("anatomy-tutor: no display (DISPLAY and WAYLAND_DISPLAY unset): writing the default lesson's "
+              "first views to %s/ instead\n", dir.c_str());
+  return writeDefaultViews(dir);
 }
 
 }  // namespace
@@ -66,6 +69,9 @@ int main(int argc, char** argv) {
       std::printf("anatomy-tutor %s\n", AT_VERSION);
       return 0;
     }
+    // Options without a command belong to the desktop app (`anatomy-tutor --ui-script F.json
+    // --screenshot OUT.png`, `anatomy-tutor --size 1600x900`).
+    if (name.rfind("--", 0) == 0) return runDesktop(Argv(argv + 1, argv + argc));
     Argv rest(argv + 2, argv + argc);
     for (const Command& c : commands())
       if (name == c.name) return c.run(rest);

@@ -16,13 +16,6 @@ namespace fs = std::filesystem;
 
 namespace {
 
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
-
 // Writes an answers file: for every structure, each item rated `rating(position)` as shown.
 void writeAnswers(const fs::path& path, int structures, const std::function<int(int)>& rating, const std::string& comment = "",
                   int stopAfter = -1) {
@@ -72,9 +65,9 @@ TEST_CASE("StudyCli_ScriptedParticipants_ExportIsCompleteDeterministicAndUnblind
                         "summary.csv", "summary.md", "summary.svg", "summary.png"}) {
     CAPTURE(f);
     REQUIRE(fs::exists(dir / "e1" / f));
-    CHECK(slurp(dir / "e1" / f) == slurp(dir / "e2" / f));  // exporting twice gives identical bytes
+    CHECK(test::readFile(dir / "e1" / f) == test::readFile(dir / "e2" / f));  // exporting twice gives identical bytes
   }
-  const auto rows = quiz::parseCsv(slurp(dir / "e1" / "responses_long.csv"));
+  const auto rows = quiz::parseCsv(test::readFile(dir / "e1" / "responses_long.csv"));
   REQUIRE(rows.size() == 1 + 13 * 4 * 2 + 5 * 4);
   const auto& header = rows[0];
   auto col = [&](const std::string& name) {
@@ -97,7 +90,7 @@ TEST_CASE("StudyCli_ScriptedParticipants_ExportIsCompleteDeterministicAndUnblind
     }
   }
   CHECK(p3Rows.size() == 5);
-  const std::string md = slurp(dir / "e1" / "summary.md");
+  const std::string md = test::readFile(dir / "e1" / "summary.md");
   CHECK(md.find("3 participant(s), of whom 1 stopped before the end") != std::string::npos);
   auto png = readPng((dir / "e1" / "summary.png").string());
   REQUIRE(png.has_value());
@@ -109,7 +102,7 @@ TEST_CASE("StudyCli_EmptyStudyExport_WritesHeadersOnly") {
   auto r = test::runApp("study export wdt_vs_bare_phantom --out '" + (dir / "out").string() + "' --db '" +
                         (dir / "s.db").string() + "'");
   REQUIRE(r.exitCode == 0);
-  CHECK(quiz::parseCsv(slurp(dir / "out" / "responses_long.csv")).size() == 1);
+  CHECK(quiz::parseCsv(test::readFile(dir / "out" / "responses_long.csv")).size() == 1);
 }
 
 TEST_CASE("StudyCli_MalformedAnswerLine_ReportsLineAndKeepsEarlierRatings") {

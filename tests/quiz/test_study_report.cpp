@@ -199,3 +199,20 @@ TEST_CASE("LongAndWideCsv_PartialParticipantAndHostileComment_RoundTrip") {
   CHECK(responsesLongJsonSidecar(p).find("\"rating_ab\"") != std::string::npos);
   CHECK(parseCsv(dataDictionaryCsv(p)).size() == 1 + 22);
 }
+
+TEST_CASE("StudySummary_OneParticipant_HasNoSpreadAndNoEvidence") {
+  const StudyProtocol p = smallProtocol();
+  // One participant rating 1 everywhere: mean 1, SD undefined (reported 0, interval collapsed),
+  // and the exact Wilcoxon p-value with a single non-zero difference is 1 (W+ = 0 or 1 equally likely).
+  std::vector<StudyResponseRow> rows = {row("solo", "medical", "cochlea", "shape", 1),
+                                        row("solo", "medical", "stapes", "shape", 1)};
+  const StudySummary s = summariseStudy(p, rows);
+  const SummaryCell& cell = s.at(0, 2);
+  CHECK(cell.stats.n == 1);
+  CHECK(cell.stats.mean == doctest::Approx(1.0));
+  CHECK(cell.stats.sd == 0.0);
+  CHECK(cell.stats.ciLow == cell.stats.ciHigh);
+  CHECK(cell.stats.pValue == doctest::Approx(1.0));
+  CHECK(cell.preferred == "none");
+  CHECK(summaryCsv(s).find("shape,all,1,1,,,,") != std::string::npos);
+}

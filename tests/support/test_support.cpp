@@ -65,14 +65,12 @@ fs::path appBinary() {
   return fs::path(AT_BINARY_DIR) / "app" / "anatomy-tutor";
 }
 
-namespace {
-std::string slurp(const fs::path& p) {
+std::string readFile(const fs::path& p) {
   std::ifstream in(p, std::ios::binary);
   std::stringstream ss;
   ss << in.rdbuf();
   return ss.str();
 }
-}  // namespace
 
 CommandResult runApp(const std::string& args, const std::string& stdinText) {
   TempDir dir("at-run");
@@ -86,8 +84,8 @@ CommandResult runApp(const std::string& args, const std::string& stdinText) {
   const int status = std::system(cmd.c_str());
   CommandResult r;
   r.exitCode = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  r.out = slurp(out);
-  r.err = slurp(err);
+  r.out = readFile(out);
+  r.err = readFile(err);
   return r;
 }
 

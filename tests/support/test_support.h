@@ -15,6 +15,9 @@ std::filesystem::path sharedData(const std::string& relative);
 // True and nothing printed if present; otherwise prints "SKIPPED: <what> needs ../shared/data".
 bool requireSharedData(const char* what);
 
+// The whole content of a file (empty if it cannot be read).
+std::string readFile(const std::filesystem::path& path);
+
 // The project's source tree (for data/ files).
 std::filesystem::path sourceDir();
 

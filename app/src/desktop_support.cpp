@@ -1,0 +1,124 @@
+#include "desktop_support.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+
+#include "commands.h"
+#include "learning_support.h"
+#include "lessons/course_json.h"
+#include "render/gl/egl_context.h"
+#include "render/gl/volume_renderer.h"
+#include "render/scene.h"
+#include "volume/dataset_source.h"
+#include "volume/png_image.h"
+#include "wdt/wdt.h"
+
+namespace at::app {
+
+namespace fs = std::filesystem;
+
+Result<lessons::Course> loadDefaultCourse() {
+  const fs::path dir = courseDirectory();
+  const fs::path preferred = dir / "temporal_bone.json";
+  if (fs::is_regular_file(preferred)) return lessons::loadCourseJson(preferred);
+  std::error_code ec;
+  std::vector<fs::path> files;
+  for (const auto& entry : fs::directory_iterator(dir, ec))
+    if (entry.path().extension() == ".json") files.push_back(entry.path());
+  if (ec) return fail(dir.string() + ": cannot list the course folder (" + ec.message() + ")");
+  if (files.empty()) return fail(dir.string() + ": no course file (*.json) in the course folder");
+  std::sort(files.begin(), files.end());
+  return lessons::loadCourseJson(files.front());
+}
+
+std::vector<lessons::ShowStep> firstLessonViews(const lessons::Course& course) {
+  std::vector<lessons::ShowStep> views;
+  if (course.lessons.empty()) return views;
+  for (const lessons::Step& step : course.lessons.front().steps)
+    if (step.kind == lessons::StepKind::Show) views.push_back(step.show);
+  return views;
+}
+
+Result<render::Preset> presetForStep(const render::PresetLibrary& library, const std::string& structureId,
+                                     const std::string& presetId) {
+  if (!presetId.empty() && fs::is_regular_file(library.dir() / (presetId + ".json"))) return library.load(presetId);
+  const bool bare = presetId.size() >= 5 && presetId.substr(presetId.size() - 5) == "_bare";
+  return library.forStructure(structureId, bare ? render::RenderMode::Bare : render::RenderMode::Wdt);
+}
+
+bool displayAvailable() {
+  for (const char* name : {"DISPLAY", "WAYLAND_DISPLAY"})
+    if (const char* v = std::getenv(name); v && *v) return true;
+  return false;
+}
+
+// The first views only: each costs a field and a software-GL frame.
+constexpr int kFallbackViews = 3;
+
+int writeDefaultViews(const fs::path& outDir) {
+  const auto start = std::chrono::steady_clock::now();
+  auto course = loadDefaultCourse();
+  if (!course) return reportError(course.error().message);
+  const auto views = firstLessonViews(*course);
+  if (views.empty()) return reportError("course '" + course->id + "': its first lesson has no views to show");
+  // The phantom at 128³ (0.4 mm voxels): same anatomy, an eighth of the voxels.
+  const std::string datasetName = course->datasetId == "phantom" ? "phantom:128" : course->datasetId;
+  if (!isBuiltinDatasetName(datasetName))
+    return reportError("course '" + course->id + "': dataset '" + course->datasetId +
+                       "' is not built in; open it on a display with `anatomy-tutor desktop`");
+  auto dataset = openBuiltinDataset(datasetName);
+  if (!dataset) return reportError(dataset.error().message);
+  auto context = render::gl::EglContext::create();
+  if (!context) return reportError("offscreen rendering: " + context.error().message);
+  auto renderer = render::gl::VolumeRenderer::create();
+  if (!renderer) return reportError("offscreen rendering: " + renderer.error().message);
+  if (auto st = renderer->setVolume(dataset->volume, dataset->labels); !st) return reportError(st.error().message);
+
+  std::error_code ec;
+  fs::create_directories(outDir, ec);
+  if (ec) return reportError(outDir.string() + ": cannot create the folder (" + ec.message() + ")");
+  const render::PresetLibrary library(defaultPresetsDir());
+  int index = 0;
+  for (const lessons::ShowStep& step : views) {
+    if (index == kFallbackViews) break;
+    ++index;
+    const Structure* structure = dataset->findStructure(step.structure);
+    if (!structure) return reportError("course step " + std::to_string(index) + ": no structure '" + step.structure + "'");
+    auto preset = presetForStep(library, structure->id, step.presetId);
+    if (!preset) return reportError(preset.error().message);
+    auto frame = render::structureFrame(dataset->labels, structure->label);
+    if (!frame) return reportError(structure->id + ": " + frame.error().message);
+    render::ViewRequest request;
+    request.width = 360;  // small: software GL on two cores renders about 10⁵ rays per second
+    request.height = 270;
+    request.view = lessons::toString(step.view);
+    auto settings = render::settingsFor(*preset, *frame, request);
+    if (!settings) return reportError(settings.error().message);
+    settings->background = {0.04f, 0.04f, 0.05f, 1.0f};
+    renderer->setSelected(structure->label);
+    if (render::modeNeedsField(preset->mode)) {
+      auto params = render::wdtParamsFor(*preset);
+      if (!params) return reportError(params.error().message);
+      auto field = computeWdt(dataset->volume, render::structureMask(dataset->labels, structure->label), *params);
+      if (!field) return reportError(structure->id + ": " + field.error().message);
+      if (auto st = renderer->setField(field->field.distances); !st) return reportError(st.error().message);
+    } else {
+      renderer->clearField();
+    }
+    auto image = renderer->render(*settings);
+    if (!image) return reportError(image.error().message);
+    char name[128];
+    std::snprintf(name, sizeof name, "%02d_%s_%s.png", index, structure->id.c_str(), render::toString(preset->mode));
+    const fs::path out = outDir / name;
+    if (auto st = writePng(out.string(), render::toRgb(*image)); !st) return reportError(st.error().message);
+    std::printf("wrote %s (%s, %s view)\n", out.string().c_str(), step.title.c_str(), lessons::toString(step.view));
+  }
+  const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  std::printf("%d views of '%s' in %.1f s (%s)\n", index, course->lessons.front().title.c_str(), s,
+              context->description().c_str());
+  return 0;
+}
+
+}  // namespace at::app

@@ -1,0 +1,79 @@
+// Distance fields for the desktop view, computed off the UI thread (issue 7, "hover to highlight").
+//
+// One worker thread; requests are latest-wins: a new request replaces the pending one, and the
+// running computation is cancelled through WdtControl::cancel unless it is for the same key. The
+// UI thread never waits: it asks `cached` for what exists and `takeFinished` for what arrived.
+// Finished fields go into a small LRU cache keyed by structure label, downsample factor and the
+// WDT parameters that shape the field.
+#pragma once
+
+#include <atomic>
+#include <condition_variable>
+#include <cstdint>
+#include <list>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "volume/structure.h"
+#include "wdt/wdt.h"
+
+namespace at::app {
+
+struct FieldRequest {
+  std::uint16_t label = 0;
+  WdtParams params;          // params.downsample picks the resolution
+  std::string key() const;   // label, downsample and every parameter that changes the field
+};
+
+struct FinishedField {
+  FieldRequest request;
+  std::shared_ptr<const DistanceField> field;  // null when it failed
+  double ms = 0;
+  std::string device;
+  std::string message;  // error, or the backend's warning (e.g. why auto fell back to the CPU)
+};
+
+class FieldWorker {
+ public:
+  // `dataset` must outlive the worker. `capacity`: fields kept in the LRU cache (≥ 1).
+  FieldWorker(const Dataset& dataset, std::size_t capacity);
+  ~FieldWorker();
+  FieldWorker(const FieldWorker&) = delete;
+  FieldWorker& operator=(const FieldWorker&) = delete;
+
+  // Queues `request` unless it is cached or already running; replaces any queued request and
+  // cancels a running one for another key.
+  void request(const FieldRequest& request);
+  // Drops the queued request and cancels the running one (e.g. the user left the structure).
+  void cancelAll();
+  // The cached field for `request`, marking it most recently used; null if absent.
+  std::shared_ptr<const DistanceField> cached(const FieldRequest& request);
+  // Fields (and failures) finished since the last call, oldest first.
+  std::vector<FinishedField> takeFinished();
+  bool busy() const;
+  // Computations cancelled because a newer request arrived (for the log and tests).
+  int cancelledCount() const { return cancelled_.load(); }
+
+ private:
+  void run();
+  void insert(const std::string& key, std::shared_ptr<const DistanceField> field);
+
+  const Dataset& dataset_;
+  const std::size_t capacity_;
+  mutable std::mutex mutex_;
+  std::condition_variable wake_;
+  std::optional<FieldRequest> queued_;
+  std::optional<std::string> runningKey_;
+  std::atomic<bool> cancelRunning_{false};
+  std::atomic<int> cancelled_{0};
+  bool stop_ = false;
+  std::list<std::pair<std::string, std::shared_ptr<const DistanceField>>> lru_;  // front = newest
+  std::vector<FinishedField> finished_;
+  std::thread thread_;
+};
+
+}  // namespace at::app
