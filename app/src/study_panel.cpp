@@ -237,6 +237,13 @@ void StudyPanel::drawParticipant(float width, float height) {
     }
   }
   if (saveFailed_) textWrapped("Your answers could not be saved. Please tell the study coordinator.");
+  // Leaves participant mode; answers up to the last Next are saved, and starting the same
+  // participant again resumes at the first unrated structure.
+  ImGui::SameLine(ImGui::GetWindowWidth() - 80);
+  if (button("Pause")) {
+    session_.reset();
+    saveFailed_ = false;
+  }
   ImGui::End();
 }
 
@@ -298,7 +305,9 @@ Status StudyPanel::startExport(const std::string& outDir) {
   if (!prepared) return tl::unexpected(prepared.error());
   export_ = std::move(*prepared);
   exportFailed_ = false;
-  exportStatus_ = "[0/" + std::to_string(export_->fileCount()) + "] preparing";
+  char progress[64];
+  std::snprintf(progress, sizeof progress, "[0/%zu] preparing", export_->fileCount());
+  exportStatus_ = progress;
   return {};
 }
 
@@ -314,7 +323,9 @@ void StudyPanel::stepExport() {
     export_.reset();
     return;
   }
-  exportStatus_ = "[" + std::to_string(k) + "/" + std::to_string(n) + "] " + name;
+  char progress[64];
+  std::snprintf(progress, sizeof progress, "[%zu/%zu] ", k, n);
+  exportStatus_ = progress + name;
   events_({{"event", "export_progress"}, {"k", k}, {"n", n}, {"file", name}});
   if (export_->done()) events_({{"event", "export_done"}, {"files", n}, {"rows", export_->rowCount()}});
 }
