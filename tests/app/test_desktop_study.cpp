@@ -104,8 +104,11 @@ TEST_CASE("the study runner shows no structure names and its ratings land in the
   json actions = json::array();
   actions.push_back({{"do", "study_start"}, {"study", studyId}, {"participant", "P1"}, {"group", "medical"}});
   actions.push_back({{"do", "wait"}, {"ms", 100}});
+  actions.push_back({{"do", "wait_field"}});
+  actions.push_back({{"do", "screenshot"}, {"path", (dir / "view_a.png").string()}});
   actions.push_back({{"do", "study_toggle"}});
-  actions.push_back({{"do", "wait"}, {"ms", 50}});
+  actions.push_back({{"do", "wait_field"}});
+  actions.push_back({{"do", "screenshot"}, {"path", (dir / "view_b.png").string()}});
   append(actions, rateAll(study, 2));
   actions.push_back({{"do", "study_comment"}, {"text", "first"}});
   actions.push_back({{"do", "study_next"}});
@@ -163,6 +166,20 @@ TEST_CASE("the study runner shows no structure names and its ratings land in the
       ++total;
     }
   CHECK(lit > total / 100);
+
+  // Toggling A/B changes what the volume view shows (the two conditions' presets differ).
+  auto a = at::readPng((dir / "view_a.png").string()), b = at::readPng((dir / "view_b.png").string());
+  REQUIRE(a);
+  REQUIRE(b);
+  REQUIRE(a->width == b->width);
+  double diff = 0;
+  int samples = 0;
+  for (int y = 0; y < a->height; y += 2)
+    for (int x = a->width / 2; x < a->width; x += 2) {
+      for (int c = 0; c < 3; ++c) diff += std::abs(int(a->pixel(x, y)[c]) - int(b->pixel(x, y)[c]));
+      ++samples;
+    }
+  CHECK(diff / samples > 3.0);
 }
 
 TEST_CASE("the coordinator export writes the eight study files and shows the summary") {
