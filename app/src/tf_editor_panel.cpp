@@ -169,6 +169,7 @@ bool TfEditorPanel::draw(float x, float width, float height) {
   edited |= splineEditor("##distance_tf", false, w, 90);
   ImGui::TextDisabled("drag: move; double/ctrl-click: add; right-click: menu");
 
+  ImGui::PushItemWidth(w * 0.55f);
   render::Preset& p = preset_;
   int mode = int(std::find(render::allRenderModes().begin(), render::allRenderModes().end(), p.mode) -
                  render::allRenderModes().begin());
@@ -211,6 +212,7 @@ bool TfEditorPanel::draw(float x, float width, float height) {
   ImGui::PushTextWrapPos(0);
   ImGui::TextDisabled("%s", saveStatus_.c_str());
   ImGui::PopTextWrapPos();
+  ImGui::PopItemWidth();
   ImGui::End();
   if (edited) changed();
   return edited;
