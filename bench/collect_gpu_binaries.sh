@@ -10,8 +10,11 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 cmake -S . -B build-gpu -G Ninja -DCMAKE_BUILD_TYPE=Release -DAT_BUILD_APP=OFF -DCMAKE_CUDA_ARCHITECTURES=90 >/dev/null
 targets="test_cuda test_wdt wdt_bench"
+# The list is read whole first: `grep -q` on the pipe would stop early and, under pipefail, a
+# ninja killed by SIGPIPE made a present target look absent.
+all_targets=$(ninja -C build-gpu -t targets all 2>/dev/null)
 for t in wdt_cuda_bench render_bench test_render; do
-  if ninja -C build-gpu -t targets all 2>/dev/null | grep -q "^$t:"; then targets="$targets $t"; fi
+  if grep -q "^$t:" <<<"$all_targets"; then targets="$targets $t"; fi
 done
 ninja -C build-gpu -j2 $targets
 rm -rf .gpu && mkdir -p .gpu/lib .gpu/data
@@ -30,4 +33,8 @@ if [ -d ../shared/data/totalsegmentator ]; then
 fi
 cp bench/run_on_gpu.sh .gpu/
 cp -r data/presets .gpu/presets 2>/dev/null || true
+# The render tests read presets and golden images below the source directory compiled into them;
+# run_on_gpu.sh recreates that path from these copies when the machine lacks it.
+cp -r tests/render/golden .gpu/golden
+pwd > .gpu/source_dir.txt
 du -sh .gpu

@@ -2,6 +2,7 @@
 //
 //   render_bench [--size WxH] [--volume N] [--hover-volume N] [--frames N] [--warmup N]
 //                [--cycles N] [--structure ID] [--presets DIR] [--field-downsample F]
+//                [--ray-caster compute|fragment] [--step-voxels S] [--compare-step S [--images DIR]]
 //
 // 1. frame: phantom at N³ (default 512), the structure's WDT preset with Phong shading, a field
 //    from computeWdt (backend auto; downsampled by F for the 512³ set-up), GPU time of each frame
@@ -9,6 +10,11 @@
 // 2. hover: phantom at M³ (default 256): pick under the cursor (CPU) → full-resolution WDT of the
 //    picked structure (CUDA when available) → field into the GL texture → next frame (glFinish);
 //    wall-clock per step and end to end, for `cycles` hovers alternating between structures.
+// --ray-caster picks the shader stage that casts the rays (same image); --step-voxels sets the
+// sampling step to S × the smallest spacing (default: the renderer's, half a voxel).
+// --compare-step renders the frame set-up once with the default step and once with S voxels and
+// prints how far the images differ (mean |diff| per channel, share of pixels off by > 16), writing
+// both as PNG into DIR with --images.
 // EGL only: no SDL, DCMTK or SQLite.
 #include <algorithm>
 #include <chrono>
@@ -19,9 +25,11 @@
 
 #include "render/gl/egl_context.h"
 #include "render/gl/volume_renderer.h"
+#include "render/image.h"
 #include "render/preset.h"
 #include "render/scene.h"
 #include "volume/phantom.h"
+#include "volume/png_image.h"
 #include "wdt/problem.h"
 #include "wdt/wdt.h"
 
@@ -46,6 +54,10 @@ double percentile(std::vector<double> v, double q) {
 struct Options {
   int width = 1920, height = 1080, volume = 512, hoverVolume = 256, frames = 100, warmup = 10, cycles = 10;
   int fieldDownsample = 2;
+  double stepVoxels = 0;  // 0: the renderer's default step
+  double compareStepVoxels = 0;
+  std::string imagesDir;
+  render::gl::RayCaster rayCaster = render::gl::RayCaster::Compute;
   std::string structure = "cochlea";
   std::string presets = AT_BENCH_PRESETS_DIR;
 };
@@ -63,12 +75,19 @@ bool parse(int argc, char** argv, Options& o) {
     else if (a == "--warmup" && (v = next())) o.warmup = std::atoi(v);
     else if (a == "--cycles" && (v = next())) o.cycles = std::atoi(v);
     else if (a == "--field-downsample" && (v = next())) o.fieldDownsample = std::atoi(v);
-    else if (a == "--structure" && (v = next())) o.structure = v;
+    else if (a == "--step-voxels" && (v = next())) o.stepVoxels = std::atof(v);
+    else if (a == "--compare-step" && (v = next())) o.compareStepVoxels = std::atof(v);
+    else if (a == "--images" && (v = next())) o.imagesDir = v;
+    else if (a == "--ray-caster" && (v = next())) {
+      if (std::string(v) == "compute") o.rayCaster = render::gl::RayCaster::Compute;
+      else if (std::string(v) == "fragment") o.rayCaster = render::gl::RayCaster::Fragment;
+      else return false;
+    } else if (a == "--structure" && (v = next())) o.structure = v;
     else if (a == "--presets" && (v = next())) o.presets = v;
     else return false;
   }
   return o.width > 0 && o.height > 0 && o.volume > 8 && o.hoverVolume > 8 && o.frames > 0 && o.cycles > 0 &&
-         o.fieldDownsample >= 1;
+         o.fieldDownsample >= 1 && o.stepVoxels >= 0 && o.compareStepVoxels >= 0;
 }
 
 int failWith(const std::string& m) {
@@ -83,13 +102,19 @@ int main(int argc, char** argv) {
   if (!parse(argc, argv, o)) {
     std::fprintf(stderr,
                  "usage: render_bench [--size WxH] [--volume N] [--hover-volume N] [--frames N] [--warmup N] "
-                 "[--cycles N] [--structure ID] [--presets DIR] [--field-downsample F]\n");
+                 "[--cycles N] [--structure ID] [--presets DIR] [--field-downsample F] "
+                 "[--ray-caster compute|fragment] [--step-voxels S] [--compare-step S [--images DIR]]\n");
     return 2;
   }
   auto ctx = render::gl::EglContext::create();
   if (!ctx) return failWith(ctx.error().message);
   auto renderer = render::gl::VolumeRenderer::create();
   if (!renderer) return failWith(renderer.error().message);
+  renderer->setRayCaster(o.rayCaster);
+  const char* rayCasterName = o.rayCaster == render::gl::RayCaster::Compute ? "compute" : "fragment";
+  const auto stepFor = [&](const Geometry& g) {
+    return o.stepVoxels > 0 ? o.stepVoxels * std::min({g.spacingMm[0], g.spacingMm[1], g.spacingMm[2]}) : 0.0;
+  };
   const render::PresetLibrary library(o.presets);
 
   // 1. Frame time at full size.
@@ -117,6 +142,7 @@ int main(int argc, char** argv) {
     auto settings = render::settingsFor(*preset, *frame, req);
     if (!settings) return failWith(settings.error().message);
     settings->shading = true;
+    settings->stepMm = stepFor(ds.volume.geometry);
     std::vector<double> gpuMs;
     for (int i = 0; i < o.warmup + o.frames; ++i) {
       auto ms = renderer->renderTimed(*settings);
@@ -127,12 +153,46 @@ int main(int argc, char** argv) {
     std::printf(
         "{\"bench\":\"render_frame\",\"device\":\"%s\",\"width\":%d,\"height\":%d,\"volume\":%d,\"field_grid\":\"%s\","
         "\"structure\":\"%s\",\"preset\":\"%s\",\"frames\":%d,\"gpu_ms_median\":%.3f,\"gpu_ms_p90\":%.3f,"
-        "\"fps_median\":%.1f,\"phantom_ms\":%.0f,\"wdt_ms\":%.1f,\"wdt_device\":\"%s\"}\n",
+        "\"fps_median\":%.1f,\"phantom_ms\":%.0f,\"wdt_ms\":%.1f,\"wdt_device\":\"%s\",\"ray_caster\":\"%s\","
+        "\"step_mm\":%.4f}\n",
         ctx->description().c_str(), o.width, o.height, o.volume,
         wdt->field.distances.dims().toString().c_str(), s->id.c_str(), preset->id.value_or("?").c_str(), o.frames,
         median, percentile(gpuMs, 0.9), median > 0 ? 1000.0 / median : 0.0, phantomMs, wdt->stats.msTotal,
-        wdt->stats.device.c_str());
+        wdt->stats.device.c_str(), rayCasterName, render::effectiveStepMm(ds.volume.geometry, *settings));
     std::fflush(stdout);
+    if (o.compareStepVoxels > 0) {
+      render::RenderSettings standard = *settings;
+      standard.stepMm = 0;  // the renderer's default step
+      auto reference = renderer->render(standard);
+      if (!reference) return failWith(reference.error().message);
+      render::RenderSettings coarse = *settings;
+      coarse.stepMm = o.compareStepVoxels * std::min({ds.volume.geometry.spacingMm[0], ds.volume.geometry.spacingMm[1],
+                                                      ds.volume.geometry.spacingMm[2]});
+      auto other = renderer->render(coarse);
+      if (!other) return failWith(other.error().message);
+      const RgbImage a = render::toRgb(*reference), b = render::toRgb(*other);
+      double sum = 0;
+      std::size_t off = 0;
+      for (std::size_t p = 0; p < a.rgb.size(); p += 3) {
+        int worst = 0;
+        for (std::size_t c = 0; c < 3; ++c) {
+          const int d = std::abs(int(a.rgb[p + c]) - int(b.rgb[p + c]));
+          sum += d;
+          worst = std::max(worst, d);
+        }
+        off += worst > 16;
+      }
+      const double pixels = double(a.rgb.size() / 3);
+      std::printf("{\"bench\":\"step_compare\",\"volume\":%d,\"width\":%d,\"height\":%d,\"step_mm\":%.4f,"
+                  "\"other_step_mm\":%.4f,\"mean_abs_diff\":%.3f,\"share_off_by_16\":%.5f}\n",
+                  o.volume, o.width, o.height, render::effectiveStepMm(ds.volume.geometry, standard), coarse.stepMm,
+                  sum / (3 * pixels), double(off) / pixels);
+      std::fflush(stdout);
+      if (!o.imagesDir.empty()) {
+        if (auto st = writePng(o.imagesDir + "/step_reference.png", a); !st) return failWith(st.error().message);
+        if (auto st = writePng(o.imagesDir + "/step_other.png", b); !st) return failWith(st.error().message);
+      }
+    }
   }
 
   // 2. Hover cycle.
@@ -151,6 +211,7 @@ int main(int argc, char** argv) {
     req.contextScale = 4;
     auto settings = render::settingsFor(*preset, *frame, req);
     if (!settings) return failWith(settings.error().message);
+    settings->stepMm = stepFor(ds.volume.geometry);
     // Hover targets: the projected centroids of the structures visible in bare mode from this view.
     render::RenderSettings pickSettings = *settings;
     pickSettings.preset.mode = render::RenderMode::Bare;
@@ -168,7 +229,7 @@ int main(int argc, char** argv) {
       targets.push_back({s.label, (*px)[0], (*px)[1]});
     }
     if (targets.empty()) return failWith("no structure projects into the hover view");
-    std::vector<double> totals;
+    std::vector<double> totals, frameGpu;
     for (int c = 0; c < o.cycles; ++c) {
       const Target& tg = targets[std::size_t(c) % targets.size()];
       const auto t0 = Clock::now();
@@ -217,6 +278,7 @@ int main(int argc, char** argv) {
       const double frameMs = msSince(t3);
       const double total = msSince(t0);
       totals.push_back(total);
+      frameGpu.push_back(*gpu);
       std::printf(
           "{\"bench\":\"hover_cycle\",\"volume\":%d,\"cycle\":%d,\"picked_label\":%u,\"pick_hit\":%s,\"pick_ms\":%.3f,"
           "\"wdt_ms\":%.2f,\"wdt_device\":\"%s\",\"wdt_passes\":%d,\"field_path\":\"%s\",\"field_upload_ms\":%.2f,\"frame_ms\":%.2f,"
@@ -226,9 +288,9 @@ int main(int argc, char** argv) {
       std::fflush(stdout);
     }
     std::printf("{\"bench\":\"hover_summary\",\"volume\":%d,\"width\":%d,\"height\":%d,\"cycles\":%d,"
-                "\"total_ms_median\":%.2f,\"total_ms_max\":%.2f,\"device\":\"%s\"}\n",
+                "\"total_ms_median\":%.2f,\"total_ms_max\":%.2f,\"frame_gpu_ms_median\":%.3f,\"device\":\"%s\",\"ray_caster\":\"%s\",\"step_mm\":%.4f}\n",
                 o.hoverVolume, o.width, o.height, o.cycles, percentile(totals, 0.5), percentile(totals, 1.0),
-                ctx->description().c_str());
+                percentile(frameGpu, 0.5), ctx->description().c_str(), rayCasterName, render::effectiveStepMm(ds.volume.geometry, *settings));
   }
   return 0;
 }

@@ -11,11 +11,15 @@ namespace at::render::gl {
 struct EglContext::State {
   EGLDisplay display = EGL_NO_DISPLAY;
   EGLContext context = EGL_NO_CONTEXT;
+  // Order: unbind, destroy the context, terminate the display, then drop this thread's EGL state.
+  // GL objects must be gone before (their owners die before the EglContext). Must run before the
+  // driver's own exit-time teardown, i.e. not from a static destructor.
   ~State() {
     if (display != EGL_NO_DISPLAY) {
       eglMakeCurrent(display, EGL_NO_SURFACE, EGL_NO_SURFACE, EGL_NO_CONTEXT);
       if (context != EGL_NO_CONTEXT) eglDestroyContext(display, context);
       eglTerminate(display);
+      eglReleaseThread();
     }
   }
 };

@@ -1,6 +1,8 @@
 #include "render/gl/volume_renderer.h"
 
+#include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <optional>
 #include <string>
@@ -17,6 +19,8 @@ namespace at::render::gl {
 
 namespace {
 
+constexpr int kOccupancyStale = -2, kOccupancyTable = -1;
+
 const char* kVertexShader = R"(#version 430 core
 void main() {
   // One triangle covering the viewport.
@@ -25,9 +29,13 @@ void main() {
 }
 )";
 
-// Classification and shading as render_settings.h documents; keep in step with pick().
-const char* kFragmentShader = R"(#version 430 core
-out vec4 fragColor;
+// Classification and shading as render_settings.h documents; keep in step with pick(). The table's
+// opacities are already corrected to the step (baked on the CPU), normals come from a volume
+// computed once per volume, and rays jump over blocks the occupancy grid marks empty: such a
+// block holds no sample that can classify to a non-zero opacity, so jumping keeps the image.
+// castRay(pixel centre in window coordinates) is the whole ray; the fragment and compute entry
+// points below only differ in how they reach a pixel.
+const char* kRayCaster = R"(
 uniform mat4 uInvViewProj;
 uniform mat4 uPatientToTex;
 uniform mat4 uPatientToField;
@@ -35,11 +43,13 @@ uniform vec2 uViewport;
 uniform sampler3D uHu;
 uniform sampler3D uMask;
 uniform sampler3D uField;
-uniform sampler2D uTable;
+uniform sampler3D uNormals;     // unit HU gradient direction (RGBA8 snorm), zero where flat
+uniform usampler3D uOccupancy;  // 1 per block that may hold a visible sample
+uniform sampler2D uTable;       // RGBA, alpha corrected to the step
 uniform int uMode;          // 0 table, 1 bare, 2 lighting
 uniform int uHasField;
 uniform float uStepMm;
-uniform float uRefMm;
+uniform float uBareAlpha;   // the bare mode's opaque sample, corrected to the step
 uniform float uLog2Alpha;
 uniform vec2 uDataRange;
 uniform vec2 uTableSize;
@@ -49,8 +59,11 @@ uniform vec3 uHighlight;
 uniform vec2 uLighting;     // alpha, beta of Eq. 6
 uniform vec3 uSpacingMm;
 uniform ivec3 uDims;
+uniform int uBlock;         // voxels per occupancy block edge
+uniform ivec3 uBlocks;
 uniform int uJitter;
 uniform int uShading;
+uniform int uSkip;
 uniform vec4 uBackground;
 
 float huAt(vec3 t) { return texture(uHu, t).r * 65535.0 - 32768.0; }
@@ -69,18 +82,11 @@ vec4 tableAt(float hu, float n) {
   return texture(uTable, uv);
 }
 
-vec3 gradientAt(vec3 t, bool mask) {
+vec3 maskGradientAt(vec3 t) {
   vec3 d = 1.0 / vec3(uDims);
-  vec3 g;
-  if (mask) {
-    g = vec3(maskAt(t + vec3(d.x, 0, 0)) - maskAt(t - vec3(d.x, 0, 0)),
-             maskAt(t + vec3(0, d.y, 0)) - maskAt(t - vec3(0, d.y, 0)),
-             maskAt(t + vec3(0, 0, d.z)) - maskAt(t - vec3(0, 0, d.z)));
-  } else {
-    g = vec3(huAt(t + vec3(d.x, 0, 0)) - huAt(t - vec3(d.x, 0, 0)),
-             huAt(t + vec3(0, d.y, 0)) - huAt(t - vec3(0, d.y, 0)),
-             huAt(t + vec3(0, 0, d.z)) - huAt(t - vec3(0, 0, d.z)));
-  }
+  vec3 g = vec3(maskAt(t + vec3(d.x, 0, 0)) - maskAt(t - vec3(d.x, 0, 0)),
+                maskAt(t + vec3(0, d.y, 0)) - maskAt(t - vec3(0, d.y, 0)),
+                maskAt(t + vec3(0, 0, d.z)) - maskAt(t - vec3(0, 0, d.z)));
   return g / (2.0 * uSpacingMm);
 }
 
@@ -88,8 +94,8 @@ float hash(vec2 p) {
   return fract(sin(dot(p, vec2(12.9898, 78.233))) * 43758.5453);
 }
 
-void main() {
-  vec2 ndc = gl_FragCoord.xy / uViewport * 2.0 - 1.0;
+vec4 castRay(vec2 pixel) {
+  vec2 ndc = pixel / uViewport * 2.0 - 1.0;
   vec4 a = uInvViewProj * vec4(ndc, -1.0, 1.0);
   vec4 b = uInvViewProj * vec4(ndc, 1.0, 1.0);
   vec3 origin = a.xyz / a.w;
@@ -106,19 +112,45 @@ void main() {
   if (t0 < t1) {
     vec3 oF = (uPatientToField * vec4(origin, 1.0)).xyz;
     vec3 dF = (uPatientToField * vec4(dir, 0.0)).xyz;
-    float start = t0 + uStepMm * (uJitter != 0 ? hash(gl_FragCoord.xy) : 0.5);
-    float exponent = uStepMm / uRefMm;
+    float start = t0 + uStepMm * (uJitter != 0 ? hash(pixel) : 0.5);
+    int count = int(ceil((t1 - start) / uStepMm));
+    vec3 dims = vec3(uDims);
+    float block = float(uBlock);
+    bvec3 moving = notEqual(dT, vec3(0.0));
     vec3 light = -dir;
-    for (float tm = start; tm < t1; tm += uStepMm) {
+    int i = 0;
+    ivec3 lastCell = ivec3(-1);
+    bool occupied = true;
+    while (i < count) {
+      float tm = start + float(i) * uStepMm;
+      vec3 pt = oT + tm * dT;
+      // Continuous voxel coordinates (centres at integers) and the block holding them; the
+      // occupancy is fetched again only when the ray enters another block.
+      ivec3 cell = clamp(ivec3(floor((pt * dims - 0.5) / block)), ivec3(0), uBlocks - 1);
+      if (uSkip != 0 && cell != lastCell) {
+        lastCell = cell;
+        occupied = texelFetch(uOccupancy, cell, 0).r != 0u;
+      }
+      if (uSkip != 0 && !occupied) {
+        // Jump to the first sample of the regular sequence past this block (the outermost blocks
+        // reach beyond the box, so a ray leaving through them ends).
+        vec3 lo = mix(vec3(cell * uBlock), vec3(-2.0), equal(cell, ivec3(0)));
+        vec3 hi = mix(vec3((cell + 1) * uBlock), dims + 2.0, equal(cell, uBlocks - 1));
+        vec3 bound = mix(lo, hi, greaterThan(dT, vec3(0.0)));
+        vec3 te = mix(vec3(1e30), ((bound + 0.5) / dims - oT) * inv, moving);
+        float tExit = min(te.x, min(te.y, te.z));
+        i = max(i + 1, int(ceil((tExit - start) / uStepMm - 1e-3)));
+        continue;
+      }
+      ++i;
       vec3 p = origin + tm * dir;
       if (uHasClip != 0 && dot(uClip.xyz, p) > uClip.w) continue;
-      vec3 pt = oT + tm * dT;
       vec4 c;
       float d = 1e30;
       if (uMode == 1) {
         float m = maskAt(pt);
         if (m < 0.5) continue;
-        c = vec4(uHighlight, 1.0);
+        c = vec4(uHighlight, uBareAlpha);
       } else {
         float hu = huAt(pt);
         float n = 0.0;
@@ -128,19 +160,28 @@ void main() {
         }
         c = tableAt(hu, n);
       }
-      if (c.a <= 0.0) continue;
-      float alpha = 1.0 - pow(1.0 - min(c.a, 0.999999), exponent);
+      float alpha = c.a;
+      if (alpha <= 0.0) continue;
       vec3 rgb = c.rgb;
-      // Shading costs six more fetches: skip it where the sample cannot change a pixel's 8-bit value.
+      // Shading: skip it where the sample cannot change a pixel's 8-bit value.
       if (uShading != 0 && alpha * (1.0 - acc.a) > 1.0 / 1024.0) {
-        vec3 g = gradientAt(pt, uMode == 1);
-        float gl = length(g);
+        vec3 nrm;
+        float len;
+        if (uMode == 1) {
+          vec3 g = maskGradientAt(pt);
+          len = length(g) > 1e-6 ? 1.0 : 0.0;
+          nrm = len > 0.0 ? normalize(g) : vec3(0.0);
+        } else {
+          nrm = texture(uNormals, pt).xyz;  // interpolated unit normals: near unit length
+          len = length(nrm);
+          nrm = len > 1e-3 ? nrm / len : vec3(0.0);
+        }
         float diffuse = 1.0, spec = 0.0;
-        if (gl > 1e-6) {
-          vec3 nrm = -g / gl;
+        if (len > 1e-3) {
           float ndl = abs(dot(nrm, light));
           diffuse = ndl;
-          spec = pow(ndl, 24.0);
+          float n2 = ndl * ndl, n4 = n2 * n2, n8 = n4 * n4;
+          spec = n8 * n8 * n8;  // ndl^24 without pow's log/exp
         }
         if (uMode == 2) {
           float ka = uLighting.y / pow(uLighting.x * min(d, 1e6) + 1.0, 2.0);
@@ -160,7 +201,46 @@ void main() {
   float bgA = uBackground.a * (1.0 - acc.a);
   float outA = acc.a + bgA;
   vec3 premul = acc.rgb + bgA * uBackground.rgb;
-  fragColor = vec4(outA > 0.0 ? premul / outA : vec3(0.0), outA);
+  return vec4(outA > 0.0 ? premul / outA : vec3(0.0), outA);
+}
+)";
+
+const char* kFragmentMain = R"(#version 430 core
+out vec4 fragColor;
+vec4 castRay(vec2 pixel);
+void main() { fragColor = castRay(gl_FragCoord.xy); }
+)";
+
+// The same rays from a compute shader, one invocation per pixel into the colour image.
+const char* kComputeMain = R"(#version 430 core
+layout(local_size_x = 8, local_size_y = 8) in;
+layout(rgba8, binding = 0) writeonly uniform image2D uImage;
+uniform vec2 uViewport;
+vec4 castRay(vec2 pixel);
+void main() {
+  ivec2 p = ivec2(gl_GlobalInvocationID.xy);
+  if (any(greaterThanEqual(p, ivec2(uViewport)))) return;
+  imageStore(uImage, p, castRay(vec2(p) + 0.5));
+}
+)";
+
+// Unit gradient directions of HU at voxel centres (central differences in mm, edge-clamped as the
+// old per-sample gradient was), zero where the gradient vanishes. Run once per volume.
+const char* kNormalShader = R"(#version 430 core
+layout(local_size_x = 8, local_size_y = 8, local_size_z = 4) in;
+layout(binding = 0) uniform sampler3D uHu;
+layout(rgba8_snorm, binding = 1) writeonly uniform image3D uNormalsOut;
+uniform ivec3 uDims;
+uniform vec3 uSpacingMm;
+float hu(ivec3 p) { return texelFetch(uHu, clamp(p, ivec3(0), uDims - 1), 0).r * 65535.0; }
+void main() {
+  ivec3 p = ivec3(gl_GlobalInvocationID);
+  if (any(greaterThanEqual(p, uDims))) return;
+  vec3 g = vec3(hu(p + ivec3(1, 0, 0)) - hu(p - ivec3(1, 0, 0)),
+                hu(p + ivec3(0, 1, 0)) - hu(p - ivec3(0, 1, 0)),
+                hu(p + ivec3(0, 0, 1)) - hu(p - ivec3(0, 0, 1))) / (2.0 * uSpacingMm);
+  float len = length(g);
+  imageStore(uNormalsOut, p, vec4(len > 1e-6 ? g / len : vec3(0.0), 0.0));
 }
 )";
 
@@ -198,6 +278,28 @@ Result<S> compile(const char* source, const char* what) {
   return s;
 }
 
+Result<Program> link(std::initializer_list<GLuint> shaders, const char* what) {
+  Program p = Program::make();
+  for (GLuint sh : shaders) glAttachShader(p.id(), sh);
+  glLinkProgram(p.id());
+  GLint ok = 0;
+  glGetProgramiv(p.id(), GL_LINK_STATUS, &ok);
+  if (!ok) {
+    GLint len = 0;
+    glGetProgramiv(p.id(), GL_INFO_LOG_LENGTH, &len);
+    std::string log(std::size_t(std::max(len, 1)), '\0');
+    glGetProgramInfoLog(p.id(), len, nullptr, log.data());
+    return fail(std::string("GL: the ") + what + " does not link: " + log);
+  }
+  return p;
+}
+
+Result<Program> linkCompute(const char* source, const char* what) {
+  auto cs = compile<ComputeShader>(source, what);
+  if (!cs) return tl::unexpected(cs.error());
+  return link({cs->id()}, what);
+}
+
 // Matrix taking patient mm (LPS) to normalised texture coordinates of `g` (voxel centres at
 // (i + 0.5) / dims).
 Mat4 patientToTexture(const Geometry& g) {
@@ -224,6 +326,113 @@ void setTextureParams(GLenum filter) {
   glTexParameteri(GL_TEXTURE_3D, GL_TEXTURE_WRAP_R, GL_CLAMP_TO_EDGE);
 }
 
+// Edge of the blocks of the occupancy grid, in voxels.
+constexpr int kBlockVoxels = 8;
+
+// What the occupancy grid is built from, per block of kBlockVoxels³ voxels, computed once per
+// volume. A sample in block b interpolates voxels of b and the first voxel beyond it, so the HU
+// range covers the 27 neighbouring blocks (any interpolated value lies inside it); the labels are
+// those of the block itself (bare-mode occupancy looks at the neighbours).
+struct BlockSummary {
+  Dims blocks;
+  std::vector<std::int16_t> huMin, huMax;
+  std::vector<std::vector<std::uint16_t>> labels;  // sorted
+
+  std::size_t index(int i, int j, int k) const { return blocks.index(i, j, k); }
+};
+
+BlockSummary summariseBlocks(const Volume& volume, const LabelMap& labels) {
+  const Dims& d = volume.dims();
+  BlockSummary b;
+  b.blocks = {(d.x + kBlockVoxels - 1) / kBlockVoxels, (d.y + kBlockVoxels - 1) / kBlockVoxels,
+              (d.z + kBlockVoxels - 1) / kBlockVoxels};
+  const std::size_t n = b.blocks.count();
+  std::vector<std::int16_t> ownMin(n, std::numeric_limits<std::int16_t>::max());
+  std::vector<std::int16_t> ownMax(n, std::numeric_limits<std::int16_t>::min());
+  b.labels.assign(n, {});
+  const bool hasLabels = !labels.empty();
+  for (int k = 0; k < d.z; ++k)
+    for (int j = 0; j < d.y; ++j) {
+      const std::size_t row = d.index(0, j, k);
+      const std::size_t blockRow = b.index(0, j / kBlockVoxels, k / kBlockVoxels);
+      std::size_t lastBlock = n;
+      std::uint16_t lastLabel = 0;
+      for (int i = 0; i < d.x; ++i) {
+        const std::size_t bi = blockRow + std::size_t(i / kBlockVoxels);
+        const std::int16_t v = volume.voxels[row + std::size_t(i)];
+        ownMin[bi] = std::min(ownMin[bi], v);
+        ownMax[bi] = std::max(ownMax[bi], v);
+        if (!hasLabels) continue;
+        const std::uint16_t l = labels.voxels[row + std::size_t(i)];
+        if (l == 0 || (bi == lastBlock && l == lastLabel)) continue;
+        lastBlock = bi;
+        lastLabel = l;
+        auto& set = b.labels[bi];
+        const auto at = std::lower_bound(set.begin(), set.end(), l);
+        if (at == set.end() || *at != l) set.insert(at, l);
+      }
+    }
+  b.huMin.resize(n);
+  b.huMax.resize(n);
+  const Dims& nb = b.blocks;
+  for (int k = 0; k < nb.z; ++k)
+    for (int j = 0; j < nb.y; ++j)
+      for (int i = 0; i < nb.x; ++i) {
+        std::int16_t lo = std::numeric_limits<std::int16_t>::max(), hi = std::numeric_limits<std::int16_t>::min();
+        for (int dk = std::max(k - 1, 0); dk <= std::min(k + 1, nb.z - 1); ++dk)
+          for (int dj = std::max(j - 1, 0); dj <= std::min(j + 1, nb.y - 1); ++dj)
+            for (int di = std::max(i - 1, 0); di <= std::min(i + 1, nb.x - 1); ++di) {
+              lo = std::min(lo, ownMin[b.index(di, dj, dk)]);
+              hi = std::max(hi, ownMax[b.index(di, dj, dk)]);
+            }
+        b.huMin[b.index(i, j, k)] = lo;
+        b.huMax[b.index(i, j, k)] = hi;
+      }
+  return b;
+}
+
+// Occupancy for the table modes: a block may hold a visible sample when some table column its HU
+// range reaches (with the linear filter's neighbour) has a non-zero opacity at any distance.
+std::vector<std::uint8_t> tableOccupancy(const BlockSummary& b, const TransferFunction2D& table,
+                                         const std::vector<float>& columnMaxAlpha) {
+  std::vector<std::uint8_t> occ(b.blocks.count(), 0);
+  // Prefix counts of visible columns: "any visible column in [c0, c1]" in O(1).
+  std::vector<int> visibleBefore(columnMaxAlpha.size() + 1, 0);
+  for (std::size_t c = 0; c < columnMaxAlpha.size(); ++c)
+    visibleBefore[c + 1] = visibleBefore[c] + (columnMaxAlpha[c] > 0.0f ? 1 : 0);
+  const double last = double(table.dataSize - 1);
+  const auto column = [&](double hu) {
+    return std::clamp((hu - table.dataMin) / (table.dataMax - table.dataMin), 0.0, 1.0) * last;
+  };
+  for (std::size_t i = 0; i < occ.size(); ++i) {
+    if (b.huMin[i] > b.huMax[i]) continue;
+    const int c0 = std::max(0, int(std::floor(column(b.huMin[i]))));
+    const int c1 = std::min(table.dataSize - 1, int(std::ceil(column(b.huMax[i]))));
+    occ[i] = visibleBefore[std::size_t(c1) + 1] - visibleBefore[std::size_t(c0)] > 0 ? 1 : 0;
+  }
+  return occ;
+}
+
+// Occupancy for bare mode: a block may hold mask ≥ 0.5 when it or a neighbour holds the label.
+std::vector<std::uint8_t> labelOccupancy(const BlockSummary& b, std::uint16_t label) {
+  std::vector<std::uint8_t> own(b.blocks.count(), 0), occ(b.blocks.count(), 0);
+  if (label == 0) return occ;
+  for (std::size_t i = 0; i < own.size(); ++i)
+    own[i] = std::binary_search(b.labels[i].begin(), b.labels[i].end(), label) ? 1 : 0;
+  const Dims& nb = b.blocks;
+  for (int k = 0; k < nb.z; ++k)
+    for (int j = 0; j < nb.y; ++j)
+      for (int i = 0; i < nb.x; ++i) {
+        std::uint8_t any = 0;
+        for (int dk = std::max(k - 1, 0); dk <= std::min(k + 1, nb.z - 1) && !any; ++dk)
+          for (int dj = std::max(j - 1, 0); dj <= std::min(j + 1, nb.y - 1) && !any; ++dj)
+            for (int di = std::max(i - 1, 0); di <= std::min(i + 1, nb.x - 1) && !any; ++di)
+              any = own[b.index(di, dj, dk)];
+        occ[b.index(i, j, k)] = any;
+      }
+  return occ;
+}
+
 Status glStatus(const char* what) {
   const GLenum e = glGetError();
   if (e == GL_NO_ERROR) return {};
@@ -238,14 +447,19 @@ Status glStatus(const char* what) {
 }  // namespace
 
 struct VolumeRenderer::State {
-  Program program, maskProgram;
+  Program program, computeProgram, maskProgram, normalProgram;  // program: the fragment ray caster
   VertexArray vao;
-  Texture hu, labels, field, table, mask;
+  Texture hu, labels, field, table, mask, normals, occupancy;
   int maskLabel = -1;  // label the mask texture holds; -1 = stale
-  std::optional<Preset> tablePreset;  // the preset the table texture was built from
+  std::optional<Preset> tablePreset;  // the preset the table texture was built from …
+  double tableStepMm = 0, tableRefMm = 0;  // … and the step its opacities are corrected to
   TransferFunction2D tableInfo;       // its axes (rgba dropped after upload)
+  std::vector<float> columnMaxAlpha;  // per table column: the largest corrected opacity
+  BlockSummary blocks;
+  int occupancyFor = kOccupancyStale;  // kOccupancyTable, a bare-mode label, or stale
   Framebuffer fbo;
-  Renderbuffer colour;
+  Texture colour;  // RGBA8, the framebuffer's attachment and the compute path's image
+  RayCaster rayCaster = RayCaster::Compute;
   Query timer;
   int fboWidth = 0, fboHeight = 0;
   Geometry volumeGrid, fieldGrid;
@@ -265,35 +479,33 @@ Result<VolumeRenderer> VolumeRenderer::create() {
   auto s = std::make_unique<State>();
   auto vs = compile<VertexShader>(kVertexShader, "vertex");
   if (!vs) return tl::unexpected(vs.error());
-  auto fs = compile<FragmentShader>(kFragmentShader, "fragment");
-  if (!fs) return tl::unexpected(fs.error());
-  s->program = Program::make();
-  glAttachShader(s->program.id(), vs->id());
-  glAttachShader(s->program.id(), fs->id());
-  glLinkProgram(s->program.id());
-  GLint ok = 0;
-  glGetProgramiv(s->program.id(), GL_LINK_STATUS, &ok);
-  if (!ok) {
-    GLint len = 0;
-    glGetProgramiv(s->program.id(), GL_INFO_LOG_LENGTH, &len);
-    std::string log(std::size_t(std::max(len, 1)), '\0');
-    glGetProgramInfoLog(s->program.id(), len, nullptr, log.data());
-    return fail("GL: ray caster does not link: " + log);
-  }
-  auto cs = compile<ComputeShader>(kMaskShader, "mask compute");
-  if (!cs) return tl::unexpected(cs.error());
-  s->maskProgram = Program::make();
-  glAttachShader(s->maskProgram.id(), cs->id());
-  glLinkProgram(s->maskProgram.id());
-  glGetProgramiv(s->maskProgram.id(), GL_LINK_STATUS, &ok);
-  if (!ok) return fail("GL: mask compute shader does not link");
+  const std::string rayCaster = std::string("#version 430 core\n") + kRayCaster;
+  auto fsMain = compile<FragmentShader>(kFragmentMain, "fragment");
+  if (!fsMain) return tl::unexpected(fsMain.error());
+  auto fsRay = compile<FragmentShader>(rayCaster.c_str(), "fragment ray caster");
+  if (!fsRay) return tl::unexpected(fsRay.error());
+  auto fragment = link({vs->id(), fsMain->id(), fsRay->id()}, "fragment ray caster");
+  if (!fragment) return tl::unexpected(fragment.error());
+  s->program = std::move(*fragment);
+  auto csMain = compile<ComputeShader>(kComputeMain, "compute");
+  if (!csMain) return tl::unexpected(csMain.error());
+  auto csRay = compile<ComputeShader>(rayCaster.c_str(), "compute ray caster");
+  if (!csRay) return tl::unexpected(csRay.error());
+  auto compute = link({csMain->id(), csRay->id()}, "compute ray caster");
+  if (!compute) return tl::unexpected(compute.error());
+  s->computeProgram = std::move(*compute);
+  auto mask = linkCompute(kMaskShader, "mask");
+  if (!mask) return tl::unexpected(mask.error());
+  s->maskProgram = std::move(*mask);
+  auto normals = linkCompute(kNormalShader, "normal");
+  if (!normals) return tl::unexpected(normals.error());
+  s->normalProgram = std::move(*normals);
   s->vao = VertexArray::make();
   s->hu = Texture::make();
   s->labels = Texture::make();
   s->field = Texture::make();
   s->table = Texture::make();
   s->fbo = Framebuffer::make();
-  s->colour = Renderbuffer::make();
   s->timer = Query::make();
   if (auto st = glStatus("creating the ray caster"); !st) return tl::unexpected(st.error());
   return VolumeRenderer(std::move(s));
@@ -327,6 +539,29 @@ Status VolumeRenderer::setVolume(const Volume& volume, const LabelMap& labels) {
   glTexStorage3D(GL_TEXTURE_3D, 1, GL_R8, d.x, d.y, d.z);
   setTextureParams(GL_LINEAR);
   state_->maskLabel = -1;
+  // Normals for shading, once per volume.
+  state_->normals = Texture::make();
+  glBindTexture(GL_TEXTURE_3D, state_->normals.id());
+  glTexStorage3D(GL_TEXTURE_3D, 1, GL_RGBA8_SNORM, d.x, d.y, d.z);
+  setTextureParams(GL_LINEAR);
+  glUseProgram(state_->normalProgram.id());
+  glActiveTexture(GL_TEXTURE0);
+  glBindTexture(GL_TEXTURE_3D, state_->hu.id());
+  glUniform1i(glGetUniformLocation(state_->normalProgram.id(), "uHu"), 0);
+  glBindImageTexture(1, state_->normals.id(), 0, GL_TRUE, 0, GL_WRITE_ONLY, GL_RGBA8_SNORM);
+  glUniform3i(glGetUniformLocation(state_->normalProgram.id(), "uDims"), d.x, d.y, d.z);
+  glUniform3f(glGetUniformLocation(state_->normalProgram.id(), "uSpacingMm"), float(volume.geometry.spacingMm[0]),
+              float(volume.geometry.spacingMm[1]), float(volume.geometry.spacingMm[2]));
+  glDispatchCompute(GLuint((d.x + 7) / 8), GLuint((d.y + 7) / 8), GLuint((d.z + 3) / 4));
+  glMemoryBarrier(GL_TEXTURE_FETCH_BARRIER_BIT);
+  // Block summaries for empty-space skipping; the occupancy grid follows the table or label.
+  state_->blocks = summariseBlocks(volume, labels);
+  const Dims& nb = state_->blocks.blocks;
+  state_->occupancy = Texture::make();
+  glBindTexture(GL_TEXTURE_3D, state_->occupancy.id());
+  glTexStorage3D(GL_TEXTURE_3D, 1, GL_R8UI, nb.x, nb.y, nb.z);
+  setTextureParams(GL_NEAREST);
+  state_->occupancyFor = kOccupancyStale;
   state_->volumeGrid = volume.geometry;
   state_->hasVolume = true;
   state_->hasField = false;
@@ -387,16 +622,19 @@ Status VolumeRenderer::setField(const FloatVolume& field) {
 
 void VolumeRenderer::clearField() { state_->hasField = false; }
 
+void VolumeRenderer::setRayCaster(RayCaster r) { state_->rayCaster = r; }
+
 Status VolumeRenderer::draw(const RenderSettings& s) {
   if (!state_->hasVolume) return fail("render: no volume uploaded");
   if (s.width <= 0 || s.height <= 0 || s.width > 16384 || s.height > 16384)
     return fail("render: image size " + std::to_string(s.width) + "x" + std::to_string(s.height) + " is out of range");
   State& st = *state_;
   if (st.fboWidth != s.width || st.fboHeight != s.height) {
-    glBindRenderbuffer(GL_RENDERBUFFER, st.colour.id());
-    glRenderbufferStorage(GL_RENDERBUFFER, GL_RGBA8, s.width, s.height);
+    st.colour = Texture::make();
+    glBindTexture(GL_TEXTURE_2D, st.colour.id());
+    glTexStorage2D(GL_TEXTURE_2D, 1, GL_RGBA8, s.width, s.height);
     glBindFramebuffer(GL_FRAMEBUFFER, st.fbo.id());
-    glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_RENDERBUFFER, st.colour.id());
+    glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, st.colour.id(), 0);
     if (glCheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
       return fail("render: the offscreen framebuffer is incomplete");
     st.fboWidth = s.width;
@@ -416,27 +654,53 @@ Status VolumeRenderer::draw(const RenderSettings& s) {
     st.maskLabel = int(selected_);
     if (auto e = glStatus("building the structure mask"); !e) return e;
   }
-  // The 2-D table of the mode.
-  if (!st.tablePreset || !(*st.tablePreset == s.preset)) {
+  // The 2-D table of the mode, its opacities corrected to the step.
+  const double stepMm = effectiveStepMm(st.volumeGrid, s);
+  if (!st.tablePreset || !(*st.tablePreset == s.preset) || st.tableStepMm != stepMm ||
+      st.tableRefMm != s.opacityRefMm) {
     TransferFunction2D table = shadingTable(s.preset);
+    st.columnMaxAlpha.assign(std::size_t(table.dataSize), 0.0f);
+    for (int j = 0; j < table.distanceSize; ++j)
+      for (int i = 0; i < table.dataSize; ++i) {
+        Rgba& v = table.rgba[std::size_t(i) + std::size_t(table.dataSize) * std::size_t(j)];
+        v[3] = v[3] > 0.0f ? correctedOpacity(v[3], stepMm, s.opacityRefMm) : 0.0f;
+        st.columnMaxAlpha[std::size_t(i)] = std::max(st.columnMaxAlpha[std::size_t(i)], v[3]);
+      }
     glBindTexture(GL_TEXTURE_2D, st.table.id());
     glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
     glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
     glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
     glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
-    glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA32F, table.dataSize, table.distanceSize, 0, GL_RGBA, GL_FLOAT,
+    glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA16F, table.dataSize, table.distanceSize, 0, GL_RGBA, GL_FLOAT,
                  table.rgba.data());
     table.rgba.clear();
     st.tableInfo = std::move(table);
     st.tablePreset = s.preset;
+    st.tableStepMm = stepMm;
+    st.tableRefMm = s.opacityRefMm;
+    if (st.occupancyFor == kOccupancyTable) st.occupancyFor = kOccupancyStale;
   }
   const TransferFunction2D& table = st.tableInfo;
+  // Which blocks rays may skip.
+  const int occupancyFor = s.preset.mode == RenderMode::Bare ? int(selected_) : kOccupancyTable;
+  if (st.occupancyFor != occupancyFor) {
+    const std::vector<std::uint8_t> occ = occupancyFor == kOccupancyTable
+                                              ? tableOccupancy(st.blocks, table, st.columnMaxAlpha)
+                                              : labelOccupancy(st.blocks, selected_);
+    const Dims& nb = st.blocks.blocks;
+    glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
+    glBindTexture(GL_TEXTURE_3D, st.occupancy.id());
+    glTexSubImage3D(GL_TEXTURE_3D, 0, 0, 0, 0, nb.x, nb.y, nb.z, GL_RED_INTEGER, GL_UNSIGNED_BYTE, occ.data());
+    st.occupancyFor = occupancyFor;
+    if (auto e = glStatus("uploading the occupancy grid"); !e) return e;
+  }
 
   glBindFramebuffer(GL_FRAMEBUFFER, st.fbo.id());
   glViewport(0, 0, s.width, s.height);
   glDisable(GL_DEPTH_TEST);
   glDisable(GL_BLEND);
-  const GLuint p = st.program.id();
+  const bool compute = st.rayCaster == RayCaster::Compute;
+  const GLuint p = compute ? st.computeProgram.id() : st.program.id();
   glUseProgram(p);
   const auto loc = [p](const char* n) { return glGetUniformLocation(p, n); };
   const auto setMat = [&](const char* n, const Mat4& m) {
@@ -450,8 +714,8 @@ Status VolumeRenderer::draw(const RenderSettings& s) {
   const RenderMode mode = s.preset.mode;
   glUniform1i(loc("uMode"), mode == RenderMode::Bare ? 1 : (mode == RenderMode::Lighting ? 2 : 0));
   glUniform1i(loc("uHasField"), st.hasField ? 1 : 0);
-  glUniform1f(loc("uStepMm"), float(effectiveStepMm(st.volumeGrid, s)));
-  glUniform1f(loc("uRefMm"), float(s.opacityRefMm));
+  glUniform1f(loc("uStepMm"), float(stepMm));
+  glUniform1f(loc("uBareAlpha"), correctedOpacity(1.0f, stepMm, s.opacityRefMm));
   glUniform1f(loc("uLog2Alpha"), std::log2(s.preset.alpha));
   glUniform2f(loc("uDataRange"), float(table.dataMin), float(table.dataMax));
   glUniform2f(loc("uTableSize"), float(table.dataSize), float(table.distanceSize));
@@ -464,8 +728,11 @@ Status VolumeRenderer::draw(const RenderSettings& s) {
   glUniform3f(loc("uSpacingMm"), float(st.volumeGrid.spacingMm[0]), float(st.volumeGrid.spacingMm[1]),
               float(st.volumeGrid.spacingMm[2]));
   glUniform3i(loc("uDims"), st.volumeGrid.dims.x, st.volumeGrid.dims.y, st.volumeGrid.dims.z);
+  glUniform1i(loc("uBlock"), kBlockVoxels);
+  glUniform3i(loc("uBlocks"), st.blocks.blocks.x, st.blocks.blocks.y, st.blocks.blocks.z);
   glUniform1i(loc("uJitter"), s.jitter ? 1 : 0);
   glUniform1i(loc("uShading"), s.shading ? 1 : 0);
+  glUniform1i(loc("uSkip"), s.skipEmptySpace ? 1 : 0);
   glUniform4f(loc("uBackground"), s.background[0], s.background[1], s.background[2], s.background[3]);
   glActiveTexture(GL_TEXTURE0);
   glBindTexture(GL_TEXTURE_3D, st.hu.id());
@@ -479,9 +746,22 @@ Status VolumeRenderer::draw(const RenderSettings& s) {
   glActiveTexture(GL_TEXTURE3);
   glBindTexture(GL_TEXTURE_2D, st.table.id());
   glUniform1i(loc("uTable"), 3);
+  glActiveTexture(GL_TEXTURE4);
+  glBindTexture(GL_TEXTURE_3D, st.normals.id());
+  glUniform1i(loc("uNormals"), 4);
+  glActiveTexture(GL_TEXTURE5);
+  glBindTexture(GL_TEXTURE_3D, st.occupancy.id());
+  glUniform1i(loc("uOccupancy"), 5);
   glActiveTexture(GL_TEXTURE0);
-  glBindVertexArray(st.vao.id());
-  glDrawArrays(GL_TRIANGLES, 0, 3);
+  if (compute) {
+    glBindImageTexture(0, st.colour.id(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA8);
+    glUniform1i(loc("uImage"), 0);
+    glDispatchCompute(GLuint((s.width + 7) / 8), GLuint((s.height + 7) / 8), 1);
+    glMemoryBarrier(GL_FRAMEBUFFER_BARRIER_BIT | GL_TEXTURE_FETCH_BARRIER_BIT | GL_TEXTURE_UPDATE_BARRIER_BIT);
+  } else {
+    glBindVertexArray(st.vao.id());
+    glDrawArrays(GL_TRIANGLES, 0, 3);
+  }
   return glStatus("drawing");
 }
 

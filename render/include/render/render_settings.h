@@ -33,6 +33,8 @@ struct RenderSettings {
   std::array<float, 4> background{0, 0, 0, 0};  // composited under the volume (straight RGBA)
   bool jitter = true;                  // per-pixel ray start offsets (deterministic hash)
   bool shading = true;                 // Phong from gradients
+  bool skipEmptySpace = true;          // GL: jump over blocks that cannot hold a visible sample
+                                       // (same image; off marches every sample, for tests/benchmarks)
   int tableSize = 256;                 // entries per axis of the 2-D table
 };
 

@@ -1,6 +1,9 @@
 // An offscreen OpenGL 4.3+ core context through EGL, without a window: Mesa's surfaceless
 // platform (llvmpipe where there is no GPU), or the EGL device platform (NVIDIA's EGL). The
 // context is made current on the creating thread; rendering goes to framebuffer objects.
+// Lifetime: destroy every object holding GL resources (VolumeRenderer) before the EglContext, and
+// destroy the EglContext before main returns — never from a static destructor: drivers (NVIDIA's
+// EGL, CUDA) tear themselves down at exit first, and a late eglTerminate then crashes.
 #pragma once
 
 #include <memory>

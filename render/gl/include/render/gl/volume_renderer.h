@@ -18,6 +18,11 @@ class DeviceField;
 
 namespace at::render::gl {
 
+// Where the rays are cast: a compute shader (one invocation per pixel, the default) or a
+// fragment shader over a full-screen triangle. Both run the same ray code and give the same
+// image; the choice is for benchmarks (on NVIDIA's headless EGL, compute ran faster).
+enum class RayCaster { Compute, Fragment };
+
 class VolumeRenderer {
  public:
   // Compiles the shaders. Errors carry the GLSL log.
@@ -38,6 +43,7 @@ class VolumeRenderer {
   static bool hasCudaInterop();
   void clearField();
   void setSelected(std::uint16_t label) { selected_ = label; }
+  void setRayCaster(RayCaster rayCaster);
 
   // Renders one frame and reads it back.
   Result<RgbaImage> render(const RenderSettings& settings);

@@ -1,0 +1,103 @@
+// The ray caster's fast paths keep the image: jumping over empty blocks skips only samples that
+// would have classified to zero opacity, and the compute and fragment shader stages run the same rays.
+#include <doctest/doctest.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <random>
+
+#include "render/gl/volume_renderer.h"
+#include "render_fixture.h"
+#include "test_support.h"
+
+using namespace at;
+using namespace at::render;
+
+namespace {
+
+// Air with random blobs of soft tissue and bone, some one voxel thin and on block boundaries, a
+// labelled structure among them and a distance field from its centre: a scene with empty blocks
+// next to visible ones everywhere.
+struct RandomScene {
+  Volume volume;
+  LabelMap labels;
+  FloatVolume field;
+};
+
+RandomScene randomScene(std::mt19937_64& rng) {
+  Geometry g;
+  g.dims = {61, 53, 67};  // not multiples of the block edge
+  g.spacingMm = {0.3, 0.35, 0.27};
+  g.originMm = {-9, -9.1, -8.9};
+  RandomScene s{Volume(g, -1000), LabelMap(g, 0), FloatVolume(g, 0.0f)};
+  std::uniform_int_distribution<int> ix(0, g.dims.x - 1), iy(0, g.dims.y - 1), iz(0, g.dims.z - 1);
+  std::uniform_int_distribution<int> radius(0, 3), hu(-50, 1800);
+  for (int b = 0; b < 6; ++b) {
+    // Blob 0 is the structure: large enough for bare mode's mask to cross 0.5.
+    const int cx = ix(rng), cy = iy(rng), cz = iz(rng), r = b == 0 ? 3 : radius(rng);
+    const auto v = std::int16_t(b == 0 ? 40 : hu(rng));
+    for (int k = std::max(0, cz - r); k <= std::min(g.dims.z - 1, cz + r); ++k)
+      for (int j = std::max(0, cy - r); j <= std::min(g.dims.y - 1, cy + r); ++j)
+        for (int i = std::max(0, cx - r); i <= std::min(g.dims.x - 1, cx + r); ++i) {
+          s.volume.at(i, j, k) = v;
+          if (b == 0) s.labels.at(i, j, k) = 7;
+        }
+  }
+  // Single bright voxels on the block edges (indices 7, 8, 15, 16 …).
+  for (int i = 7; i + 1 < g.dims.x; i += 16) s.volume.at(i, 8, 16) = 1500;
+  for (int k = 8; k + 1 < g.dims.z; k += 24) s.volume.at(40, 31, k) = 1500;
+  const Vec3 centre = g.indexToPatient({double(g.dims.x) / 2, double(g.dims.y) / 2, double(g.dims.z) / 2});
+  for (int k = 0; k < g.dims.z; ++k)
+    for (int j = 0; j < g.dims.y; ++j)
+      for (int i = 0; i < g.dims.x; ++i)
+        s.field.at(i, j, k) = float(norm(g.indexToPatient({double(i), double(j), double(k)}) - centre));
+  return s;
+}
+
+int maxChannelDiff(const RgbaImage& a, const RgbaImage& b) {
+  int worst = 0;
+  for (std::size_t i = 0; i < a.rgba.size(); ++i) worst = std::max(worst, std::abs(int(a.rgba[i]) - int(b.rgba[i])));
+  return worst;
+}
+
+}  // namespace
+
+TEST_CASE("Skipping empty blocks and the fragment stage give the image of marching every sample") {
+  auto* gl = test::glRenderer();
+  if (!gl) return;
+  std::mt19937_64 rng(test::freshSeed("gl_fast_paths"));
+  const RandomScene scene = randomScene(rng);
+  REQUIRE(gl->setVolume(scene.volume, scene.labels));
+  REQUIRE(gl->setField(scene.field));
+  gl->setSelected(7);
+  std::uniform_real_distribution<double> angle(-180, 180);
+  for (RenderMode mode : {RenderMode::Wdt, RenderMode::Bare, RenderMode::Lighting}) {
+    for (int view = 0; view < 3; ++view) {
+      RenderSettings s;
+      s.width = 48;
+      s.height = 40;
+      s.preset.mode = mode;
+      s.preset.t = 0.5f;
+      s.camera = Camera::named(NamedView::Anterior, {0, 0, 0}, 12);
+      s.camera.orbit(angle(rng), angle(rng) / 4);
+      CAPTURE(int(mode));
+      CAPTURE(view);
+      s.skipEmptySpace = false;
+      gl->setRayCaster(gl::RayCaster::Compute);
+      auto every = gl->render(s);
+      REQUIRE_MESSAGE(every, every.error().message);
+      s.skipEmptySpace = true;
+      auto skipping = gl->render(s);
+      REQUIRE(skipping);
+      gl->setRayCaster(gl::RayCaster::Fragment);
+      auto fragment = gl->render(s);
+      gl->setRayCaster(gl::RayCaster::Compute);
+      REQUIRE(fragment);
+      std::size_t drawn = 0;
+      for (std::size_t i = 3; i < every->rgba.size(); i += 4) drawn += every->rgba[i] > 0;
+      CHECK(drawn > 0);  // the view shows something, so the comparison means something
+      CHECK(maxChannelDiff(*every, *skipping) <= 1);
+      CHECK(maxChannelDiff(*every, *fragment) <= 1);
+    }
+  }
+}
