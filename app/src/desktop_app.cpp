@@ -39,6 +39,7 @@
 #include "render/scene.h"
 #include "render/structure_pick.h"
 #include "study_panel.h"
+#include "tf_editor_panel.h"
 #include "volume/dataset_source.h"
 #include "volume/png_image.h"
 
@@ -158,7 +159,7 @@ class DesktopApp {
     std::string dataset;            // empty: the default course's dataset
     std::optional<std::string> script;
     std::optional<std::string> screenshot;
-    std::optional<std::string> db;  // the study database (nullopt: the default)
+    std::optional<std::string> dbPath;  // the database: presets saved in the expert panel, studies
     int width = 1280, height = 720;
     double renderScale = 1;         // resolution of the full-quality level (slow software GL: < 1)
     double frameBudgetMs = 100;     // at rest, finer levels predicted to cost more are not rendered
@@ -206,6 +207,9 @@ class DesktopApp {
   void message(const std::string& text);
   void event(json j);
   int finishScript(int status);
+  void setExpert(bool on);  // opens the expert panel on the shown preset, or closes it
+  void syncExpert();        // the edited preset changed: mode and t follow it
+  bool expertOn() const { return expert_ && expert_->active(); }
 
   Options options_;
   render::PresetLibrary library_;
@@ -277,6 +281,7 @@ class DesktopApp {
   bool recording_ = false;
   std::vector<std::string> messages_;
   std::unique_ptr<StudyPanel> study_;
+  std::unique_ptr<TfEditorPanel> expert_;
 };
 
 // ---------------------------------------------------------------------------------------------
@@ -336,6 +341,7 @@ Status DesktopApp::loadContent() {
     message(preset.error().message);
   }
   worker_ = std::make_unique<FieldWorker>(dataset_, 8);
+  expert_ = std::make_unique<TfEditorPanel>(dataset_, options_.dbPath, [this](json j) { event(std::move(j)); });
   return {};
 }
 
@@ -428,7 +434,7 @@ int DesktopApp::coarseDownsample() const {
 }
 
 std::optional<FieldRequest> DesktopApp::fieldRequest(std::uint16_t label, int downsample) {
-  auto params = render::wdtParamsFor(presetOf(label, false));
+  auto params = render::wdtParamsFor(expertOn() ? expert_->preset() : presetOf(label, false));
   if (!params) return std::nullopt;
   FieldRequest r;
   r.label = label;
@@ -439,6 +445,7 @@ std::optional<FieldRequest> DesktopApp::fieldRequest(std::uint16_t label, int do
 }
 
 render::Preset DesktopApp::displayPreset() {
+  if (expertOn()) return expert_->preset();
   // Field modes show the structure whose field is uploaded; before any field, its bare preset.
   const bool useBare = bare_ || fieldLabel_ == 0;
   const std::uint16_t label = bare_ ? shownLabel() : (fieldLabel_ ? fieldLabel_ : shownLabel());
@@ -476,7 +483,7 @@ std::string DesktopApp::stateKey() {
                 fieldKey_.c_str(), eye[0], eye[1], eye[2], camera_.target[0], camera_.target[1], camera_.target[2],
                 camera_.up()[0], camera_.up()[1], camera_.up()[2], int(clipOn_), clipAxis_, int(clipFlip_),
                 double(clipOffsetMm_), fbW_, fbH_);
-  return buf;
+  return std::string(buf) + (expertOn() ? "|expert" + std::to_string(expert_->revision()) : "");
 }
 
 void DesktopApp::setView(const std::string& name) {
@@ -871,6 +878,9 @@ void DesktopApp::buildUi() {
     ImGui::GetBackgroundDrawList()->AddImage(reinterpret_cast<ImTextureID>(texture_->handle()), ImVec2(panelW, 0),
                                              ImVec2(float(winW_), float(winH_)));
   }
+  if (!study_->participantActive() && expertOn() &&
+      expert_->draw(float(winW_) - 340 * uiScale_, 340 * uiScale_, float(winH_)))
+    syncExpert();
   if (!renderer_) {
     ImGui::GetBackgroundDrawList()->AddText(ImVec2(panelW + 20, 20), IM_COL32(255, 140, 120, 255),
                                             "The volume view is unavailable (see the messages on the left).");
@@ -880,6 +890,7 @@ void DesktopApp::buildUi() {
 void DesktopApp::syncStudyView() {
   const auto shown = study_->shown();
   if (!shown) return;
+  if (expertOn()) setExpert(false);  // the trial's presets, not an edited one
   const Structure* s = dataset_.findStructure(shown->structure);
   if (!s || !frames_.count(s->label)) return;  // loadStudyPresets and the dataset disagree: view unchanged
   const bool bare = shown->preset.mode == render::RenderMode::Bare;
@@ -932,6 +943,8 @@ void DesktopApp::explorePanel(float panelW) {
   }
   if (ImGui::SliderFloat("t (context)", &t_, 0, 1, "%.2f")) markChanged();
   if (ImGui::Checkbox("Full quality at rest", &fullAtRest_)) markChanged();
+  ImGui::SameLine();
+  if (bool on = expertOn(); ImGui::Checkbox("Expert", &on)) setExpert(on);
   if (ImGui::IsItemHovered())
     ImGui::SetTooltip("Off: the view at rest stays within %.0f ms per frame (coarser on slow GL)", options_.frameBudgetMs);
 
@@ -1002,6 +1015,25 @@ bool DesktopApp::settled() {
   const std::uint16_t label = shownLabel();
   auto fine = fieldRequest(label, 1);
   return fine && fieldLabel_ == label && fieldKey_ == fine->key();
+}
+
+void DesktopApp::setExpert(bool on) {
+  if (!on) {
+    expert_->stop();
+  } else {
+    const std::uint16_t label = shownLabel();
+    render::Preset p = presetOf(label, bare_);
+    p.t = t_;
+    const Structure* s = dataset_.findStructureByLabel(label);
+    expert_->start(p, s ? s->id : std::string());
+  }
+  markChanged();
+}
+
+void DesktopApp::syncExpert() {
+  bare_ = expert_->preset().mode == render::RenderMode::Bare;
+  t_ = expert_->preset().t;
+  markChanged();
 }
 
 int DesktopApp::finishScript(int status) {
@@ -1170,6 +1202,18 @@ bool DesktopApp::stepScript() {
         sweep.push_back({{"do", "report"}, {"out", a.value("out", "")}});
         done();
         actions_.insert(actions_.begin(), sweep.begin(), sweep.end());
+      } else if (what == "expert") {
+        setExpert(a.value("on", true));
+        done();
+      } else if (TfEditorPanel::handled(what)) {
+        if (!expertOn()) setExpert(true);
+        if (auto st = expert_->scriptAction(what, a); !st) {
+          message("ui script: action " + a.dump() + ": " + st.error().message);
+          finishScript(2);
+          return true;
+        }
+        syncExpert();
+        done();
       } else if (what == "report") {
         std::vector<double> all, moving, rest, uploads, renders;
         std::map<int, int> perLevel;
@@ -1253,7 +1297,7 @@ int DesktopApp::run() {
     for (const json& a : script["actions"]) actions_.push_back(a);
   }
   if (auto st = loadContent(); !st) return reportError(st.error().message);
-  study_ = std::make_unique<StudyPanel>(options_.db, library_, [this](json j) { event(std::move(j)); });
+  study_ = std::make_unique<StudyPanel>(options_.dbPath, library_, [this](json j) { event(std::move(j)); });
   if (auto st = openGraphics(); !st) return reportError(st.error().message);
   SDL_GetWindowSize(window_->window, &winW_, &winH_);
   SDL_GL_GetDrawableSize(window_->window, &fbW_, &fbH_);
@@ -1331,9 +1375,11 @@ int runDesktop(const std::vector<std::string>& args) {
           "  --dataset    phantom, phantom:N or a volume file (default: the default course's dataset)\n"
           "  --ui-script  replay {\"actions\": [...]} (select, t, mode, view, hover, hover_structure, click,\n"
           "               click_structure, lesson, orbit, zoom, clip, wait, wait_field, screenshot,\n"
-          "               hover_sweep, record, report; study_start, study_toggle, study_rate, study_comment,\n"
-          "               study_next, study_close, coordinator_open, coordinator_export, coordinator_summary)\n"
-          "  --db         the study database (default: the app's database)\n"
+          "               hover_sweep, record, report; expert, tf_add_point, tf_move_point,\n"
+          "               tf_delete_point, tf_colour, preset_set, preset_save; study_start, study_toggle,\n"
+          "               study_rate, study_comment, study_next, study_close, coordinator_open,\n"
+          "               coordinator_export, coordinator_summary)\n"
+          "  --db         the database: presets saved in the expert panel, studies (default: the user's)\n"
           "  --screenshot save the window as PNG once the script has run and the view has settled\n"
           "  --size       window size in logical pixels (default 1280x720)\n"
           "  --render-scale  resolution of the full-quality volume image, 0.1..1 (default 1; software GL: less)\n"
@@ -1342,17 +1388,17 @@ int runDesktop(const std::vector<std::string>& args) {
       return 0;
     }
     std::optional<std::string> value;
-    if (a == "--dataset" || a == "--db" || a == "--ui-script" || a == "--screenshot" || a == "--size" ||
-        a == "--render-scale" || a == "--frame-budget") {
+    if (a == "--dataset" || a == "--ui-script" || a == "--screenshot" || a == "--size" ||
+        a == "--render-scale" || a == "--frame-budget" || a == "--db") {
       value = next();
       if (!value) return reportError("desktop: option " + a + " needs a value", 2);
     }
     if (a == "--dataset") {
       options.dataset = *value;
-    } else if (a == "--db") {
-      options.db = *value;
     } else if (a == "--ui-script") {
       options.script = *value;
+    } else if (a == "--db") {
+      options.dbPath = *value;
     } else if (a == "--screenshot") {
       options.screenshot = *value;
     } else if (a == "--frame-budget") {

@@ -167,7 +167,10 @@ struct Workspace {
     if (upload) {
       for (std::size_t i = 0; i < chunks; ++i) {
         const int k = int(i % 2);
-        if (i >= 2) AT_TRY(chunkDone[k].synchronize());  // its previous DMA has read the chunk
+        // The chunk's previous DMA — of this transfer or of an earlier one still in flight —
+        // must have read it before the host overwrites it (waiting on a never-recorded event
+        // returns at once).
+        AT_TRY(chunkDone[k].synchronize());
         std::memcpy(staging[k].get(), static_cast<const std::uint8_t*>(from) + i * kStagingBytes, part(i));
         AT_TRY(check(cudaMemcpyAsync(static_cast<std::uint8_t*>(to) + i * kStagingBytes, staging[k].get(), part(i),
                                      cudaMemcpyHostToDevice, s),

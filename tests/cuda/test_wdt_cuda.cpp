@@ -102,6 +102,20 @@ bool sameBits(const std::vector<float>& a, const std::vector<float>& b) {
   return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(float)) == 0;
 }
 
+// For failure messages: how many voxels differ and the first one (index and both values, exact).
+std::string describeDifference(const std::vector<float>& gpu, const std::vector<float>& cpu, const at::Dims& dims) {
+  if (gpu.size() != cpu.size()) return "sizes differ";
+  std::size_t count = 0, first = 0;
+  for (std::size_t i = 0; i < gpu.size(); ++i)
+    if (std::memcmp(&gpu[i], &cpu[i], sizeof(float)) != 0 && count++ == 0) first = i;
+  if (count == 0) return "identical";
+  char buf[200];
+  std::snprintf(buf, sizeof buf, "%zu voxels differ; first at (%zu,%zu,%zu): gpu %.9g cpu %.9g", count,
+                first % std::size_t(dims.x), (first / std::size_t(dims.x)) % std::size_t(dims.y),
+                first / (std::size_t(dims.x) * std::size_t(dims.y)), double(gpu[first]), double(cpu[first]));
+  return buf;
+}
+
 const StepRule kRules[] = {StepRule::Entering, StepRule::Trapezoid};
 const WeightRule kWeights[] = {WeightRule::Density, WeightRule::Uniform, WeightRule::Gradient, WeightRule::Ascent};
 
@@ -140,8 +154,10 @@ TEST_CASE("converged GPU fields equal the CPU backend and the exact reference fo
         p.params.converge = true;
         p.params.maxPasses = 200;
         CAPTURE(dims.toString());
-        CAPTURE(at::toString(rule));
-        CAPTURE(at::toString(weight));
+        const std::string ruleName = at::toString(rule);
+        CAPTURE(ruleName);
+        const std::string weightName = at::toString(weight);
+        CAPTURE(weightName);
         at::WdtStats stats;
         const auto gpu = gpuField(p, &stats);
         const auto cpu = cpuField(p);
@@ -169,11 +185,14 @@ TEST_CASE("fixed-pass GPU fields equal the CPU backend's bit for bit for every r
       for (WeightRule weight : kWeights) {
         WdtProblem p = randomProblem(rng, dims, {0.8, 0.6, 1.5}, rule, weight);
         CAPTURE(dims.toString());
-        CAPTURE(at::toString(rule));
-        CAPTURE(at::toString(weight));
+        const std::string ruleName = at::toString(rule);
+        CAPTURE(ruleName);
+        const std::string weightName = at::toString(weight);
+        CAPTURE(weightName);
         for (int passes = 1; passes <= 2; ++passes) {
           p.params.passes = passes;
-          CHECK(sameBits(gpuField(p), cpuField(p)));
+          const auto gpu = gpuField(p), cpu = cpuField(p);
+          CHECK_MESSAGE(sameBits(gpu, cpu), describeDifference(gpu, cpu, dims) << " after " << passes << " pass(es)");
         }
       }
     }
@@ -192,11 +211,14 @@ TEST_CASE("fixed-pass GPU fields equal the CPU's bit for bit over many tiles and
         if (dims.x == 180 && !(weight == WeightRule::Density || weight == WeightRule::Gradient)) continue;
         WdtProblem p = randomProblem(rng, dims, {0.7, 0.9, 1.6}, rule, weight);
         CAPTURE(dims.toString());
-        CAPTURE(at::toString(rule));
-        CAPTURE(at::toString(weight));
+        const std::string ruleName = at::toString(rule);
+        CAPTURE(ruleName);
+        const std::string weightName = at::toString(weight);
+        CAPTURE(weightName);
         for (int passes = 1; passes <= 2; ++passes) {
           p.params.passes = passes;
-          CHECK(sameBits(gpuField(p), cpuField(p)));
+          const auto gpu = gpuField(p), cpu = cpuField(p);
+          CHECK_MESSAGE(sameBits(gpu, cpu), describeDifference(gpu, cpu, dims) << " after " << passes << " pass(es)");
         }
       }
     }
