@@ -187,7 +187,7 @@ TEST_CASE("DICOM bad input: empty folders, folders without DICOM files, and miss
 
   fs::create_directory(dir / "text");
   std::ofstream(dir / "text" / "README.txt") << "not DICOM\n";
-  std::ofstream(dir / "text" / "fake.dcm") << std::string(200, 'x');
+  std::ofstream(dir / "text" / "not_dicom.dcm") << std::string(200, 'x');
   expectSeriesError(dir / "text", "no DICOM files");
 
   expectSeriesError(dir / "absent", "no such folder");
