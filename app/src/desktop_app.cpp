@@ -1420,7 +1420,7 @@ int runDesktop(const std::vector<std::string>& args) {
     }
   }
   if (options.screenshot && !options.script) options.script = std::string();  // the default view
-  if (!displayAvailable()) return reportError("desktop: no display (DISPLAY and WAYLAND_DISPLAY are unset)");
+  if (!displayAvailable()) return reportError("desktop: no display (none named in DISPLAY/WAYLAND_DISPLAY, or it cannot be opened)");
   return DesktopApp(options).run();
 }
 

@@ -1,9 +1,12 @@
 #include "desktop_support.h"
 
+#include <SDL.h>
+
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
+#include <string>
 
 #include "commands.h"
 #include "learning_support.h"
@@ -49,9 +52,19 @@ Result<render::Preset> presetForStep(const render::PresetLibrary& library, const
 }
 
 bool displayAvailable() {
+  bool named = false;
   for (const char* name : {"DISPLAY", "WAYLAND_DISPLAY"})
-    if (const char* v = std::getenv(name); v && *v) return true;
-  return false;
+    if (const char* v = std::getenv(name); v && *v) named = true;
+  if (!named) return false;
+  // The variable may name a display that is gone (a closed SSH forwarding, a stopped Xvfb): only a
+  // video subsystem that initialises means a window can be opened.
+  // SDL falls back to its offscreen/dummy drivers when the named display fails, so the driver
+  // that came up must be a windowing one.
+  if (SDL_Init(SDL_INIT_VIDEO) != 0) return false;
+  const char* driver = SDL_GetCurrentVideoDriver();
+  const bool windowing = driver && (std::string(driver) == "x11" || std::string(driver) == "wayland");
+  SDL_QuitSubSystem(SDL_INIT_VIDEO);
+  return windowing;
 }
 
 // The first views only: each costs a field and a software-GL frame.

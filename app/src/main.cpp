@@ -48,7 +48,7 @@ void printUsage() {
 int runDefault() {
   if (displayAvailable()) return runDesktop({});
   const std::string dir = "anatomy-tutor-views";
-  std::printf("anatomy-tutor: no display (DISPLAY and WAYLAND_DISPLAY unset): writing the default lesson's "
+  std::printf("anatomy-tutor: no display (none named in DISPLAY/WAYLAND_DISPLAY, or it cannot be opened): writing the default lesson's "
               "first views to %s/ instead\n", dir.c_str());
   return writeDefaultViews(dir);
 }
