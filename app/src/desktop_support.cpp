@@ -58,7 +58,7 @@ bool displayAvailable() {
   if (!named) return false;
   // The variable may name a display that is gone (a closed SSH forwarding, a stopped Xvfb): only a
   // video subsystem that initialises means a window can be opened.
-  // SDL falls back to its offscreen/dummy drivers when the named display fails, so the driver
+  // SDL falls back to its offscreen video driver when the named display fails, so the driver
   // that came up must be a windowing one.
   if (SDL_Init(SDL_INIT_VIDEO) != 0) return false;
   const char* driver = SDL_GetCurrentVideoDriver();
