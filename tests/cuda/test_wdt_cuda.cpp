@@ -116,6 +116,21 @@ std::string describeDifference(const std::vector<float>& gpu, const std::vector<
   return buf;
 }
 
+// After 1 and 2 passes the GPU field must equal the CPU backend's bit for bit.
+void checkFixedPassesMatchCpu(WdtProblem p) {
+  const at::Dims dims = p.grid.dims;
+  CAPTURE(dims.toString());
+  const std::string ruleName = at::toString(p.params.rule);
+  CAPTURE(ruleName);
+  const std::string weightName = at::toString(p.params.weight);
+  CAPTURE(weightName);
+  for (int passes = 1; passes <= 2; ++passes) {
+    p.params.passes = passes;
+    const auto gpu = gpuField(p), cpu = cpuField(p);
+    CHECK_MESSAGE(sameBits(gpu, cpu), describeDifference(gpu, cpu, dims) << " after " << passes << " pass(es)");
+  }
+}
+
 const StepRule kRules[] = {StepRule::Entering, StepRule::Trapezoid};
 const WeightRule kWeights[] = {WeightRule::Density, WeightRule::Uniform, WeightRule::Gradient, WeightRule::Ascent};
 
@@ -183,17 +198,7 @@ TEST_CASE("fixed-pass GPU fields equal the CPU backend's bit for bit for every r
   for (const at::Dims& dims : sizes) {
     for (StepRule rule : kRules) {
       for (WeightRule weight : kWeights) {
-        WdtProblem p = randomProblem(rng, dims, {0.8, 0.6, 1.5}, rule, weight);
-        CAPTURE(dims.toString());
-        const std::string ruleName = at::toString(rule);
-        CAPTURE(ruleName);
-        const std::string weightName = at::toString(weight);
-        CAPTURE(weightName);
-        for (int passes = 1; passes <= 2; ++passes) {
-          p.params.passes = passes;
-          const auto gpu = gpuField(p), cpu = cpuField(p);
-          CHECK_MESSAGE(sameBits(gpu, cpu), describeDifference(gpu, cpu, dims) << " after " << passes << " pass(es)");
-        }
+        checkFixedPassesMatchCpu(randomProblem(rng, dims, {0.8, 0.6, 1.5}, rule, weight));
       }
     }
   }
@@ -209,17 +214,7 @@ TEST_CASE("fixed-pass GPU fields equal the CPU's bit for bit over many tiles and
     for (StepRule rule : kRules) {
       for (WeightRule weight : kWeights) {
         if (dims.x == 180 && !(weight == WeightRule::Density || weight == WeightRule::Gradient)) continue;
-        WdtProblem p = randomProblem(rng, dims, {0.7, 0.9, 1.6}, rule, weight);
-        CAPTURE(dims.toString());
-        const std::string ruleName = at::toString(rule);
-        CAPTURE(ruleName);
-        const std::string weightName = at::toString(weight);
-        CAPTURE(weightName);
-        for (int passes = 1; passes <= 2; ++passes) {
-          p.params.passes = passes;
-          const auto gpu = gpuField(p), cpu = cpuField(p);
-          CHECK_MESSAGE(sameBits(gpu, cpu), describeDifference(gpu, cpu, dims) << " after " << passes << " pass(es)");
-        }
+        checkFixedPassesMatchCpu(randomProblem(rng, dims, {0.7, 0.9, 1.6}, rule, weight));
       }
     }
   }
