@@ -775,7 +775,13 @@ void DesktopApp::updateFields() {
   const std::string key = fineField ? fine->key() : coarse->key();
   if (best && (best != field_ || fieldLabel_ != label) && renderer_) {
     const Clock::time_point uploadStart = Clock::now();
-    const Status uploaded = renderer_->setField(best->distances);
+    // A field computed on the GPU goes into the texture there (CUDA–GL interop).
+    const auto onDevice = worker_->cachedOnDevice(fineField ? *fine : *coarse);
+    Status uploaded = onDevice ? renderer_->setFieldFromDevice(*onDevice) : renderer_->setField(best->distances);
+    if (onDevice && !uploaded) {
+      message("CUDA-GL interop failed, uploading the field from host memory: " + uploaded.error().message);
+      uploaded = renderer_->setField(best->distances);
+    }
     if (recording_ && !frameLog_.empty()) frameLog_.back().uploadMs = msBetween(uploadStart, Clock::now());
     if (auto st = uploaded; !st) {
       message("uploading the field: " + st.error().message);
