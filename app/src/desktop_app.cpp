@@ -902,7 +902,11 @@ void DesktopApp::explorePanel(float panelW) {
   if (!hideNames) ImGui::InputTextWithHint("##search", "search structures", search_, sizeof search_);
   const std::string query = lower(search_);
   ImGui::BeginChild("structures", ImVec2(0, -ImGui::GetTextLineHeightWithSpacing() * 5.5f), true);
-  if (hideNames) ImGui::TextDisabled("(structure names are hidden during the question)");
+  if (hideNames) {
+    ImGui::PushTextWrapPos(0);
+    ImGui::TextDisabled("(structure names are hidden during the question)");
+    ImGui::PopTextWrapPos();
+  }
   for (const auto& [system, list] : bySystem_) {
     if (hideNames) break;
     std::vector<const Structure*> shown;

@@ -184,7 +184,8 @@ Status LessonPanel::startLesson(const std::string& lessonId, lessons::LessonMode
   const lessons::Attempt& attempt = st.engine->attempt();
   events_({{"event", "lesson_started"}, {"lesson", lessonId}, {"course", course->id}, {"user", st.user.name},
            {"attempt", attempt.id}, {"resumed", st.engine->resumed()}, {"mode", lessons::toString(attempt.mode)}});
-  return showCurrent();
+  // Resumed after its last question was answered but before it was finished: finish it now.
+  return st.engine->atEnd() ? finishLesson() : showCurrent();
 }
 
 Status LessonPanel::showCurrent() {
@@ -225,8 +226,11 @@ Status LessonPanel::nextStep() {
   if (!store_ || !store_->engine || !step_) return at::fail("no lesson is running");
   lessons::LessonEngine& engine = *store_->engine;
   if (auto st = engine.next(); !st) return st;
-  if (!engine.atEnd()) return showCurrent();
-  auto score = engine.finish();
+  return engine.atEnd() ? finishLesson() : showCurrent();
+}
+
+Status LessonPanel::finishLesson() {
+  auto score = store_->engine->finish();
   if (!score) return tl::unexpected(score.error());
   finishedScore_ = *score;
   step_.reset();
@@ -308,6 +312,7 @@ Status LessonPanel::startReview() {
   if (!s) return tl::unexpected(s.error());
   Store& st = **s;
   if (step_) return at::fail("finish or leave the running lesson first");
+  finishedScore_.reset();
   if (courses_.empty()) return at::fail("no course to review");
   const lessons::Course& course = courses_[std::size_t(courseIndex_)];
   auto question = lessons::chooseReviewQuestion(st.curriculum, st.progress, st.user.id, course.id, unixNow());
@@ -415,6 +420,7 @@ void LessonPanel::drawCourses() {
 }
 
 void LessonPanel::drawLesson() {
+  if (!store_->engine) return;
   lessons::LessonEngine& engine = *store_->engine;
   ImGui::TextColored(kHeading, "%s", engine.lesson().title.c_str());
   if (finishedScore_) {
@@ -521,8 +527,8 @@ void LessonPanel::drawQuestion() {
   if (a.grade) {
     ImGui::TextColored(a.grade->correct ? kRight : kWrong, "%s", a.grade->correct ? "Correct." : "Not quite.");
     ImGui::TextUnformatted(a.grade->feedback.c_str());
-    if (a.review && ImGui::Button("Done")) asked_.reset();
   }
+  if (a.review && ImGui::Button(a.grade ? "Done" : "Skip")) asked_.reset();
   ImGui::PopTextWrapPos();
 }
 

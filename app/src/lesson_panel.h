@@ -111,6 +111,7 @@ class LessonPanel {
   Status startLesson(const std::string& lessonId, lessons::LessonMode mode);
   Status showCurrent();                                   // the engine's current step → view, asked_
   Status nextStep();                                      // past the current step (finishes at the end)
+  Status finishLesson();                                  // stores the score, back to the lists
   Status startReview();
   Result<quiz::Grade> submit(const quiz::Answer& answer);  // grades (and, in a lesson, records)
   Result<quiz::Answer> answerFromScript(const nlohmann::json& value) const;
