@@ -32,6 +32,7 @@
 #include "commands.h"
 #include "desktop_support.h"
 #include "field_worker.h"
+#include "learning_support.h"
 #include "lesson_panel.h"
 #include "lessons/curriculum.h"
 #include "render/gl/volume_renderer.h"
@@ -41,6 +42,7 @@
 #include "study_panel.h"
 #include "tf_editor_panel.h"
 #include "volume/dataset_source.h"
+#include "volume/mask.h"
 #include "volume/png_image.h"
 
 namespace at::app {
@@ -72,6 +74,18 @@ double percentile(std::vector<double> v, double p) {
   const double pos = p / 100.0 * double(v.size() - 1);
   const std::size_t lo = std::size_t(std::floor(pos)), hi = std::min(v.size() - 1, lo + 1);
   return v[lo] + (v[hi] - v[lo]) * (pos - double(lo));
+}
+
+// The weighted distance in mm of `pointMm` from the structure `label` (the distance field the
+// answer keys use, learning_support.h), at the voxel containing the point; -1 when unknown.
+double weightedDistanceAt(const Dataset& dataset, std::uint16_t label, const Vec3& pointMm) {
+  auto field = wdtDistanceField(dataset)(structureMask(dataset.labels, label));
+  if (!field) return -1;
+  const Vec3 ijk = field->geometry.patientToIndex(pointMm);
+  const int i = int(std::lround(ijk[0])), j = int(std::lround(ijk[1])), k = int(std::lround(ijk[2]));
+  if (!field->dims().contains(i, j, k)) return -1;
+  const double d = field->at(i, j, k);
+  return std::isfinite(d) ? d : -1;
 }
 
 std::string lower(std::string s) {
@@ -263,6 +277,7 @@ class DesktopApp {
   // Mouse
   bool leftDown_ = false, panDown_ = false, dragged_ = false;
   double downX_ = 0, downY_ = 0, lastX_ = 0, lastY_ = 0;
+  std::optional<Vec3> lastPickMm_;  // where the last hover pick met the volume (LPS mm)
 
   // Script and measurements
   std::deque<json> actions_;
@@ -579,6 +594,8 @@ void DesktopApp::hoverAt(double x, double y) {
   const render::TransferFunction2D table = render::shadingTable(s.preset);
   const double px = (x - left) / std::max(1.0, winW_ - left) * s.width, py = y / std::max(1, winH_) * s.height;
   const render::PickResult hit = render::pickStructure(scene, s, table, px, py);
+  if (hit.hit) lastPickMm_ = hit.pointMm;
+  else lastPickMm_.reset();
   const std::uint16_t label = hit.hit && frames_.count(hit.label) ? hit.label : 0;
   if (label != hovered_) {
     const Structure* st = dataset_.findStructureByLabel(label);
@@ -604,10 +621,15 @@ void DesktopApp::clickAt(double x, double y) {
   if (study_->participantActive()) return;
   hoverAt(x, y);
   if (lesson_->wantsClick()) {
-    // A locate answer: the structure under the cursor. The weighted distance to the target is
-    // left unknown (-1), so only a hit on the target itself is correct.
+    // A locate answer: the structure under the cursor, and for a question with a tolerance that
+    // was missed, the clicked point's weighted distance from the target (else unknown: -1).
     const Structure* st = dataset_.findStructureByLabel(hovered_);
-    lesson_->clicked(st ? st->id : "");
+    const auto targetId = lesson_->questionTarget();
+    const Structure* target = targetId ? dataset_.findStructure(*targetId) : nullptr;
+    double distanceMm = -1;
+    if (lesson_->wantsClickDistance() && target && st != target && lastPickMm_)
+      distanceMm = weightedDistanceAt(dataset_, target->label, *lastPickMm_);
+    lesson_->clicked(st ? st->id : "", distanceMm);
     return;
   }
   if (hovered_) select(hovered_);
@@ -1064,7 +1086,7 @@ bool DesktopApp::stepScript() {
           hoverAt((*p)[0], (*p)[1]);
         }
         done();
-      } else if (LessonPanel::handled(what)) {  // lessons, lesson, lesson_next, answer, review, lesson_close
+      } else if (LessonPanel::handled(what)) {  // lesson_user, lessons, lesson, lesson_next, answer, review, lesson_close
         if (auto st = lesson_->scriptAction(what, a); !st) {
           message("ui script: action " + a.dump() + ": " + st.error().message);
           finishScript(2);
@@ -1310,8 +1332,8 @@ int runDesktop(const std::vector<std::string>& args) {
           "               hover_sweep, record, report; expert, tf_add_point, tf_move_point,\n"
           "               tf_delete_point, tf_colour, preset_set, preset_save; study_start, study_toggle,\n"
           "               study_rate, study_comment, study_next, study_close, coordinator_open,\n"
-          "               coordinator_export, coordinator_summary; lessons, lesson, lesson_next, answer,\n"
-          "               review, lesson_close)\n"
+          "               coordinator_export, coordinator_summary; lesson_user, lessons, lesson,\n"
+          "               lesson_next, answer, review, lesson_close)\n"
           "  --db         the database: presets saved in the expert panel, studies, lesson progress (default: the user's)\n"
           "  --user       whose lesson progress to show and record (default: student; the same name as\n"
           "               `anatomy-tutor play --user` shares the progress; created when new)\n"

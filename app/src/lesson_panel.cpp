@@ -87,18 +87,40 @@ Result<LessonPanel::Store*> LessonPanel::store() {
     return at::fail(storeError_);
   }
   auto s = std::make_unique<Store>(std::move(*opened));
-  auto user = s->users.findUser(userName_);
+  auto user = findOrCreateUser(s->users, userName_);
   if (!user) return at::fail(storeError_ = "lessons: " + user.error().message);
-  if (*user) {
-    s->user = **user;
-  } else {
-    auto created = s->users.createUser(userName_, lessons::Role::Student, "");
-    if (!created) return at::fail(storeError_ = "lessons: user '" + userName_ + "': " + created.error().message);
-    s->user = *created;
-  }
+  s->user = *user;
+  std::snprintf(userEdit_, sizeof userEdit_, "%s", s->user.name.c_str());
   store_ = std::move(s);
   if (auto st = refresh(); !st) return tl::unexpected(st.error());
   return store_.get();
+}
+
+Result<lessons::User> LessonPanel::findOrCreateUser(lessons::UserRepository& users, const std::string& name) {
+  auto user = users.findUser(name);
+  if (!user) return tl::unexpected(user.error());
+  if (*user) return **user;
+  auto created = users.createUser(name, lessons::Role::Student, "");
+  if (!created) return at::fail("user '" + name + "': " + created.error().message);
+  return *created;
+}
+
+Status LessonPanel::switchUser(const std::string& name) {
+  if (step_) return at::fail("leave the running lesson before changing the user");
+  if (name.empty()) return at::fail("type a user name (a pseudonym)");
+  auto s = store();
+  if (!s) return tl::unexpected(s.error());
+  auto user = findOrCreateUser((*s)->users, name);
+  if (!user) return tl::unexpected(user.error());
+  (*s)->user = *user;
+  userName_ = name;
+  std::snprintf(userEdit_, sizeof userEdit_, "%s", name.c_str());
+  asked_.reset();
+  finishedScore_.reset();
+  (*s)->engine.reset();
+  message_.clear();
+  events_({{"event", "lesson_user"}, {"user", user->name}, {"id", user->id}});
+  return refresh();
 }
 
 Status LessonPanel::refresh() {
@@ -246,6 +268,10 @@ bool LessonPanel::wantsClick() const {
   return asked_ && !asked_->grade && asked_->question.question.kind == quiz::QuestionKind::Locate;
 }
 
+bool LessonPanel::wantsClickDistance() const {
+  return wantsClick() && asked_->question.question.toleranceMm > 0;
+}
+
 bool LessonPanel::namesHidden() const {
   if (step_ && !step_->labelsVisible) return true;
   return asked_ && !asked_->grade && namesGiveAway(asked_->question.question.kind);
@@ -361,7 +387,16 @@ void LessonPanel::drawContent() {
     ImGui::PopTextWrapPos();
     return;
   }
-  ImGui::TextDisabled("user: %s", (*s)->user.name.c_str());
+  if (step_) {
+    ImGui::TextDisabled("user: %s", (*s)->user.name.c_str());
+  } else {
+    ImGui::SetNextItemWidth(ImGui::GetFontSize() * 9);
+    const bool entered = ImGui::InputText("##user", userEdit_, sizeof userEdit_, ImGuiInputTextFlags_EnterReturnsTrue);
+    ImGui::SameLine();
+    if ((ImGui::SmallButton("switch user") || entered) && userEdit_ != (*s)->user.name)
+      if (auto st = switchUser(userEdit_); !st) fail("user: " + st.error().message);
+    if (ImGui::IsItemHovered()) ImGui::SetTooltip("progress is per user; `anatomy-tutor play --user NAME` shares it");
+  }
   if (step_ || finishedScore_) drawLesson();
   else if (asked_ && asked_->review) drawQuestion();
   else drawCourses();
@@ -548,7 +583,7 @@ void LessonPanel::drawReview() {
 // Scripted actions
 
 bool LessonPanel::handled(const std::string& what) {
-  return what == "lessons" || what == "lesson" || what == "lesson_next" || what == "answer" || what == "review" || what == "lesson_close";
+  return what == "lesson_user" || what == "lessons" || what == "lesson" || what == "lesson_next" || what == "answer" || what == "review" || what == "lesson_close";
 }
 
 Result<quiz::Answer> LessonPanel::answerFromScript(const json& value) const {
@@ -622,6 +657,7 @@ Status LessonPanel::scriptAction(const std::string& what, const json& a) {
     return {};
   }
   if (what == "lesson_next") return nextStep();
+  if (what == "lesson_user") return switchUser(a.at("name").get<std::string>());
   if (what == "lesson_close") {
     step_.reset();
     asked_.reset();

@@ -62,6 +62,9 @@ class LessonPanel {
 
   // The current step is a locate question not yet answered: a click in the view answers it.
   bool wantsClick() const;
+  // The current locate question accepts clicks near its target (a tolerance in mm): a click off
+  // the target needs its weighted distance from the target to be graded.
+  bool wantsClickDistance() const;
   // A click in the 3-D view on `structure` ("" for none). `distanceMm`: the weighted distance of
   // the click from the question's target when known, else negative. Returns true when the click
   // answered a locate question (the app then does not treat it as a selection).
@@ -72,6 +75,7 @@ class LessonPanel {
   std::optional<std::string> questionTarget() const;
 
   // Scripted actions (events in brackets):
+  //   "lesson_user" {name}        switches to (or creates) the user [lesson_user]
   //   "lessons" {course?}         the course's lesson list with progress and locks [lessons]
   //   "lesson" {course?, lesson, mode?: "guided"|"quiz_only"}  start or resume [lesson_started,
   //                               lesson_step; lesson_refused when locked, then an error]
@@ -107,6 +111,8 @@ class LessonPanel {
   };
 
   Result<Store*> store();
+  static Result<lessons::User> findOrCreateUser(lessons::UserRepository& users, const std::string& name);
+  Status switchUser(const std::string& name);             // no lesson may be running
   Status refresh();                                       // courses, lesson rows, review queue
   Status startLesson(const std::string& lessonId, lessons::LessonMode mode);
   Status showCurrent();                                   // the engine's current step → view, asked_
@@ -143,6 +149,7 @@ class LessonPanel {
   std::optional<double> finishedScore_;    // the lesson just finished
   std::string runningLesson_;
   std::string message_;
+  char userEdit_[64] = "";
 };
 
 }  // namespace at::app

@@ -3,6 +3,7 @@
 // their answers in the database where `anatomy-tutor progress` finds them.
 #include <doctest/doctest.h>
 
+#include <algorithm>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -161,6 +162,8 @@ TEST_CASE("a desktop lesson grades clicks, choices and names, records them, resu
                {{"do", "lesson_next"}},
                {{"do", "answer"}, {"value", 0}},
                {{"do", "lesson_next"}},
+               {{"do", "lessons"}},
+               {{"do", "lesson_user"}, {"name", "someone_else"}},
                {{"do", "lessons"}}};
   const Run again = runLessonScript(dir, {{"actions", more}}, db, "tester");
   INFO(again.err);
@@ -177,6 +180,11 @@ TEST_CASE("a desktop lesson grades clicks, choices and names, records them, resu
   REQUIRE(moreGraded.size() == 3);
   CHECK(moreGraded[0].value("clicked", "") != "superior_semicircular_canal");
   CHECK_FALSE(moreGraded[0].value("correct", true));
+  // The question accepts clicks within 0.4 mm of the canal: the miss is graded with the clicked
+  // point's weighted distance from it, which the stored answer keeps.
+  const json& missed = moreGraded[0].at("answer");
+  REQUIRE(missed.contains("distance_mm"));
+  CHECK(missed.at("distance_mm").get<double>() > 0.4);
   double total = 0;
   for (const json& g : graded) total += g.value("score", 0.0);
   for (const json& g : moreGraded) total += g.value("score", 0.0);
@@ -185,12 +193,18 @@ TEST_CASE("a desktop lesson grades clicks, choices and names, records them, resu
   CHECK(finished[0].value("score", -1.0) == doctest::Approx(total / 6));
   // Finished: the lessons that needed only it are open now, the last one still needs two.
   const auto after = eventsOf(again, "lessons");
-  REQUIRE(after.size() == 1);
+  REQUIRE(after.size() == 2);
   const json& rowsAfter = after[0].at("lessons");
   CHECK(rowsAfter[0].value("best_score", -1.0) == doctest::Approx(total / 6));
   CHECK_FALSE(rowsAfter[1].value("locked", true));
   CHECK_FALSE(rowsAfter[2].value("locked", true));
   CHECK(rowsAfter[3].value("locked", false));
+  // Progress is per user: another user starts from nothing.
+  const json& other = after[1].at("lessons");
+  CHECK(other[0].value("attempts", -1) == 0);
+  CHECK(other[1].value("locked", false));
+  REQUIRE(eventsOf(again, "lesson_user").size() == 1);
+  CHECK(eventsOf(again, "lesson_user")[0].value("user", "") == "someone_else");
   const auto report = at::test::runApp("progress --user tester --db '" + db.string() + "'");
   CHECK(report.out.find("finished, best score") != std::string::npos);
 }
@@ -233,4 +247,26 @@ TEST_CASE("the review button asks a question of the course and grades its answer
   REQUIRE(asked.size() == 1);
   CHECK(asked[0].at("question").is_string());
   CHECK(asked[0].value("course", "") == "temporal_bone");
+
+  // The choice is deterministic (nothing changed in between): ask it again and answer it right
+  // when it asks for a structure's name or identity (the kinds whose right answer is its target).
+  const std::string kind = asked[0].value("question_kind", ""), target = asked[0].value("target", "");
+  if (kind != "name" && kind != "identify") {
+    MESSAGE("the review question is a " << kind << " question; its answer is not checked here");
+    return;
+  }
+  std::string spoken = target;
+  std::replace(spoken.begin(), spoken.end(), '_', ' ');
+  const Run answered = runLessonScript(
+      dir, {{"actions", {{{"do", "review"}}, {{"do", "answer"}, {"value", kind == "name" ? spoken : target}}}}}, db,
+      "reviewer");
+  INFO(answered.err);
+  REQUIRE(answered.exitCode == 0);
+  const auto again = eventsOf(answered, "review_question");
+  REQUIRE(again.size() == 1);
+  CHECK(again[0].at("question") == asked[0].at("question"));
+  const auto graded = eventsOf(answered, "graded");
+  REQUIRE(graded.size() == 1);
+  CHECK(graded[0].value("review", false));
+  CHECK(graded[0].value("correct", false));
 }
