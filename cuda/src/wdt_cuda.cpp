@@ -18,12 +18,9 @@
 #include <utility>
 #include <vector>
 
-#if defined(__linux__)
-#include <sys/mman.h>
-#endif
-
 #include "cuda_util.h"
 #include "sweep_kernels.h"
+#include "wdt/huge_pages.h"
 
 namespace at::cuda {
 
@@ -296,20 +293,6 @@ Status preparePass(Workspace& w, const Geometry& grid, const WdtParams& params) 
   return {};
 }
 
-// Makes `v` hold `count` floats (zero). A large fresh vector takes one page fault per 4 KiB as it
-// is first written, which is slow on virtual machines; on Linux the memory is advised to
-// transparent huge pages before the first touch.
-void allocateHostField(std::vector<float>& v, std::size_t count) {
-  v.reserve(count);
-#if defined(__linux__)
-  constexpr std::uintptr_t kHuge = std::uintptr_t(2) << 20;
-  const std::uintptr_t begin = (reinterpret_cast<std::uintptr_t>(v.data()) + kHuge - 1) & ~(kHuge - 1);
-  const std::uintptr_t end = reinterpret_cast<std::uintptr_t>(v.data() + count) & ~(kHuge - 1);
-  if (end > begin) (void)madvise(reinterpret_cast<void*>(begin), end - begin, MADV_HUGEPAGE);  // advice only
-#endif
-  v.resize(count);
-}
-
 // Seeds live, as bytes, in the second distance buffer's memory until launchInitDistances.
 std::uint8_t* seedBytes(Workspace& w) { return reinterpret_cast<std::uint8_t*>(w.b.get()); }
 
@@ -431,7 +414,7 @@ Result<WdtResult> runCudaBackend(const WdtProblem& problem, const WdtControl& co
     bool allocated = true;
     std::jthread allocation([&] {
       try {
-        allocateHostField(out.voxels, w->a.size());
+        wdt::resizeOnHugePages(out.voxels, w->a.size());
       } catch (const std::bad_alloc&) {
         allocated = false;
       }

@@ -4,7 +4,7 @@
 #include <thread>
 #include <vector>
 
-#include "huge_pages.h"
+#include "wdt/huge_pages.h"
 #include "wdt/problem.h"
 #include "wdt/stencil.h"
 
