@@ -1087,11 +1087,13 @@ bool DesktopApp::stepScript() {
         }
         done();
       } else if (LessonPanel::handled(what)) {  // lesson_user, lessons, lesson, lesson_next, answer, review, lesson_close
-        if (auto st = lesson_->scriptAction(what, a); !st) {
+        auto st = lesson_->scriptAction(what, a);
+        if (!st) {
           message("ui script: action " + a.dump() + ": " + st.error().message);
           finishScript(2);
           return true;
         }
+        if (!*st) return false;  // a lesson still being prepared
         done();
       } else if (what == "click_structure") {
         const Structure* s = structureArg();

@@ -180,6 +180,7 @@ void LessonPanel::fail(const std::string& text) {
 // Running a lesson
 
 Status LessonPanel::startLesson(const std::string& lessonId, lessons::LessonMode mode) {
+  if (pending_) return at::fail("another lesson is being prepared");
   auto s = store();
   if (!s) return tl::unexpected(s.error());
   Store& st = **s;
@@ -189,14 +190,45 @@ Status LessonPanel::startLesson(const std::string& lessonId, lessons::LessonMode
   if (!course) return tl::unexpected(course.error());
   auto keys = st.keysFor(course->datasetId);
   if (!keys) return tl::unexpected(keys.error());
-  auto engine = std::make_unique<lessons::LessonEngine>(st.curriculum, st.progress, **keys);
-  if (auto started = engine->start(st.user.id, lessonId, mode); !started) {
-    events_({{"event", "lesson_refused"}, {"lesson", lessonId}, {"message", started.error().message}});
-    return tl::unexpected(started.error());
+  // LessonEngine::start computes the answer keys (distance fields: seconds on a large dataset)
+  // on a thread of its own; until it is done the panel does not touch the store.
+  Pending pending;
+  pending.engine = std::make_unique<lessons::LessonEngine>(st.curriculum, st.progress, **keys);
+  pending.lessonId = lessonId;
+  pending.courseId = course->id;
+  pending.title = lesson->title;
+  lessons::LessonEngine* engine = pending.engine.get();
+  const std::int64_t userId = st.user.id;
+  pending.started = std::async(std::launch::async, [engine, userId, lessonId, mode] {
+    return engine->start(userId, lessonId, mode);
+  });
+  pending_ = std::move(pending);
+  startResult_.reset();
+  step_.reset();
+  asked_.reset();
+  finishedScore_.reset();
+  return {};
+}
+
+void LessonPanel::pollStart() {
+  if (!pending_ || pending_->started.wait_for(std::chrono::seconds(0)) != std::future_status::ready) return;
+  startResult_ = completeStart();
+  if (!*startResult_) fail(startResult_->error().message);
+}
+
+Status LessonPanel::completeStart() {
+  Pending pending = std::move(*pending_);
+  pending_.reset();
+  Status started = pending.started.get();
+  if (!started) {
+    events_({{"event", "lesson_refused"}, {"lesson", pending.lessonId}, {"message", started.error().message}});
+    return started;
   }
-  st.engine = std::move(engine);
+  Store& st = *store_;
+  const std::string lessonId = pending.lessonId;
+  st.engine = std::move(pending.engine);
   for (int i = 0; i < int(courses_.size()); ++i)
-    if (courses_[std::size_t(i)].id == course->id && i != courseIndex_) {
+    if (courses_[std::size_t(i)].id == pending.courseId && i != courseIndex_) {
       courseIndex_ = i;
       if (auto r = refresh(); !r) return r;
     }
@@ -204,7 +236,7 @@ Status LessonPanel::startLesson(const std::string& lessonId, lessons::LessonMode
   finishedScore_.reset();
   message_.clear();
   const lessons::Attempt& attempt = st.engine->attempt();
-  events_({{"event", "lesson_started"}, {"lesson", lessonId}, {"course", course->id}, {"user", st.user.name},
+  events_({{"event", "lesson_started"}, {"lesson", lessonId}, {"course", pending.courseId}, {"user", st.user.name},
            {"attempt", attempt.id}, {"resumed", st.engine->resumed()}, {"mode", lessons::toString(attempt.mode)}});
   // Resumed after its last question was answered but before it was finished: finish it now.
   return st.engine->atEnd() ? finishLesson() : showCurrent();
@@ -380,6 +412,12 @@ void LessonPanel::draw(float height) {
 }
 
 void LessonPanel::drawContent() {
+  pollStart();
+  if (pending_) {
+    ImGui::TextColored(kHeading, "%s", pending_->title.c_str());
+    ImGui::TextDisabled("Preparing the lesson: computing its answer keys...");
+    return;
+  }
   auto s = store();
   if (!s) {
     ImGui::PushTextWrapPos(0);
@@ -619,8 +657,16 @@ Result<quiz::Answer> LessonPanel::answerFromScript(const json& value) const {
   return answer;
 }
 
-Status LessonPanel::scriptAction(const std::string& what, const json& a) {
-  if (what == "lesson") {
+Result<bool> LessonPanel::scriptAction(const std::string& what, const json& a) {
+  if (what == "lesson") return scriptStartLesson(a);
+  if (pending_) return false;  // the other actions wait for a lesson being prepared
+  if (auto st = scriptStep(what, a); !st) return tl::unexpected(st.error());
+  return true;
+}
+
+// The same path as the Start button: the engine starts on its thread while frames go on.
+Result<bool> LessonPanel::scriptStartLesson(const json& a) {
+  if (!scriptStarting_) {
     const std::string lessonId = a.at("lesson").get<std::string>();
     auto s = store();
     if (!s) return tl::unexpected(s.error());
@@ -633,8 +679,19 @@ Status LessonPanel::scriptAction(const std::string& what, const json& a) {
     }
     auto mode = lessons::parseLessonMode(a.value("mode", "guided"));
     if (!mode) return tl::unexpected(mode.error());
-    return startLesson(lessonId, *mode);
+    if (auto st = startLesson(lessonId, *mode); !st) return tl::unexpected(st.error());
+    scriptStarting_ = true;
   }
+  pollStart();
+  if (pending_) return false;
+  scriptStarting_ = false;
+  const Status result = startResult_.value_or(Status{});
+  startResult_.reset();
+  if (!result) return tl::unexpected(result.error());
+  return true;
+}
+
+Status LessonPanel::scriptStep(const std::string& what, const json& a) {
   if (what == "lessons") {  // selects a course and reports its lesson list as shown
     auto s = store();
     if (!s) return tl::unexpected(s.error());

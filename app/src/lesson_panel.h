@@ -17,6 +17,7 @@
 #include <chrono>
 #include <cstdint>
 #include <functional>
+#include <future>
 #include <memory>
 #include <optional>
 #include <string>
@@ -86,7 +87,9 @@ class LessonPanel {
   //   "lesson_close"              leaves the lesson (answers are saved; "lesson" resumes it)
   // Locate questions are answered by "click"/"click_structure" in the app. Errors name the problem.
   static bool handled(const std::string& what);
-  Status scriptAction(const std::string& what, const nlohmann::json& action);
+  // Returns true when the action is done, false while it runs (a lesson being prepared: call
+  // again next frame).
+  Result<bool> scriptAction(const std::string& what, const nlohmann::json& action);
 
  private:
   struct Store;
@@ -114,7 +117,12 @@ class LessonPanel {
   static Result<lessons::User> findOrCreateUser(lessons::UserRepository& users, const std::string& name);
   Status switchUser(const std::string& name);             // no lesson may be running
   Status refresh();                                       // courses, lesson rows, review queue
+  // Starts the engine on a thread; pollStart() (each frame, and scripts) completes the start.
   Status startLesson(const std::string& lessonId, lessons::LessonMode mode);
+  void pollStart();
+  Status completeStart();                                 // the started engine becomes the lesson
+  Result<bool> scriptStartLesson(const nlohmann::json& action);
+  Status scriptStep(const std::string& what, const nlohmann::json& action);
   Status showCurrent();                                   // the engine's current step → view, asked_
   Status nextStep();                                      // past the current step (finishes at the end)
   Status finishLesson();                                  // stores the score, back to the lists
@@ -137,6 +145,15 @@ class LessonPanel {
   RenderStateSource renderState_;
   std::unique_ptr<Store> store_;
   std::string storeError_;
+  // A lesson being started (declared after store_: destroyed, that is joined, before it).
+  struct Pending {
+    std::unique_ptr<lessons::LessonEngine> engine;
+    std::future<Status> started;
+    std::string lessonId, courseId, title;
+  };
+  std::optional<Pending> pending_;
+  std::optional<Status> startResult_;  // how the last start ended (for the script that asked)
+  bool scriptStarting_ = false;
 
   std::vector<lessons::Course> courses_;
   int courseIndex_ = 0;
