@@ -1252,7 +1252,7 @@ int DesktopApp::run() {
   if (auto st = loadContent(); !st) return reportError(st.error().message);
   study_ = std::make_unique<StudyPanel>(options_.dbPath, library_, [this](json j) { event(std::move(j)); });
   lesson_ = std::make_unique<LessonPanel>(
-      options_.dbPath, options_.userName, [this](json j) { event(std::move(j)); },
+      options_.dbPath, options_.userName, dataset_.id, [this](json j) { event(std::move(j)); },
       [this](const LessonPanel::Shown& shown) { showLessonStructure(shown); }, [this] { return renderState(); });
   if (auto st = openGraphics(); !st) return reportError(st.error().message);
   SDL_GetWindowSize(window_->window, &winW_, &winH_);

@@ -14,6 +14,7 @@
 #include "quiz/answer_json.h"
 #include "quiz/grading.h"
 #include "quiz/keys.h"
+#include "volume/dataset_source.h"
 
 namespace at::app {
 
@@ -68,10 +69,11 @@ struct LessonPanel::Store {
   }
 };
 
-LessonPanel::LessonPanel(std::optional<std::string> dbPath, std::string userName, EventSink events, ShowStructure show,
-                         RenderStateSource renderState)
+LessonPanel::LessonPanel(std::optional<std::string> dbPath, std::string userName, std::string viewDataset,
+                         EventSink events, ShowStructure show, RenderStateSource renderState)
     : dbPath_(std::move(dbPath)),
       userName_(std::move(userName)),
+      viewDataset_(std::move(viewDataset)),
       events_(std::move(events)),
       show_(std::move(show)),
       renderState_(std::move(renderState)) {}
@@ -459,6 +461,13 @@ void LessonPanel::drawCourses() {
         if (auto st = refresh(); !st) fail(st.error().message);
       }
     ImGui::EndCombo();
+  }
+  // The built-in phantom at any size has the same structures; other datasets only their own.
+  if (course.datasetId != viewDataset_ && !(isBuiltinDatasetName(course.datasetId) && isBuiltinDatasetName(viewDataset_))) {
+    ImGui::PushTextWrapPos(0);
+    ImGui::TextColored(kWrong, "This course is on dataset '%s' but the view shows '%s': open it with --dataset %s.",
+                       course.datasetId.c_str(), viewDataset_.c_str(), course.datasetId.c_str());
+    ImGui::PopTextWrapPos();
   }
   ImGui::Checkbox("quiz only (no teaching steps, no names)", &modeQuizOnly_);
   ImGui::PushTextWrapPos(0);

@@ -53,8 +53,9 @@ class LessonPanel {
 
   // `dbPath`: the database (nullopt: the default one), opened and seeded with the default course
   // on first use. `userName`: the pseudonymous user, created as a student when first needed.
-  LessonPanel(std::optional<std::string> dbPath, std::string userName, EventSink events, ShowStructure show,
-              RenderStateSource renderState);
+  // `viewDataset`: the id of the dataset the view shows (a course on another one gets a warning).
+  LessonPanel(std::optional<std::string> dbPath, std::string userName, std::string viewDataset, EventSink events,
+              ShowStructure show, RenderStateSource renderState);
   ~LessonPanel();
 
   // Draws the panel inside the current ImGui window (the app's left panel), in a scrolling
@@ -140,6 +141,7 @@ class LessonPanel {
 
   std::optional<std::string> dbPath_;
   std::string userName_;
+  std::string viewDataset_;
   EventSink events_;
   ShowStructure show_;
   RenderStateSource renderState_;
