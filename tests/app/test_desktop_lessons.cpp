@@ -228,17 +228,25 @@ TEST_CASE("a lesson whose prerequisites are unfinished cannot be started from a 
   }
   TempDir dir("desktop-lessons-locked");
   const fs::path db = dir / "tutor.db";
-  const Run r = runLessonScript(dir, {{"actions", {{{"do", "lesson"}, {"lesson", "mastoidectomy_landmarks"}}}}}, db,
-                                "newcomer");
+  // The open first lesson starts (in quiz-only mode: its questions alone); the locked one refuses.
+  const json actions = {{{"do", "lesson"}, {"lesson", "inner_ear"}, {"mode", "quiz_only"}},
+                        {{"do", "lesson"}, {"lesson", "mastoidectomy_landmarks"}}};
+  const Run r = runLessonScript(dir, {{"actions", actions}}, db, "newcomer");
   INFO(r.err);
   CHECK(r.exitCode == 2);
+  const auto started = eventsOf(r, "lesson_started");
+  REQUIRE(started.size() == 1);
+  CHECK(started[0].value("mode", "") == "quiz_only");
+  const auto steps = eventsOf(r, "lesson_step");
+  REQUIRE(steps.size() == 1);
+  CHECK(steps[0].value("kind", "") == "question");
+  CHECK(steps[0].value("count", 0) == 6);
   const auto refused = eventsOf(r, "lesson_refused");
   REQUIRE(refused.size() == 1);
   const std::string message = refused[0].value("message", "");
   CHECK(message.find("facial_nerve") != std::string::npos);
   CHECK(message.find("middle_ear") != std::string::npos);
   CHECK(r.err.find("needs") != std::string::npos);
-  CHECK(eventsOf(r, "lesson_step").empty());
 }
 
 TEST_CASE("the review button asks a question of the course and grades its answer without a lesson running") {
