@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <cstdlib>
+#include <limits>
 #include <random>
 
 #include "render/gl/volume_renderer.h"
@@ -100,4 +101,67 @@ TEST_CASE("Skipping empty blocks and the fragment stage give the image of marchi
       CHECK(maxChannelDiff(*every, *fragment) <= 1);
     }
   }
+}
+
+TEST_CASE("A field uploaded slice by slice keeps the old field on screen until it is complete, then renders as one uploaded at once") {
+  auto* gl = test::glRenderer();
+  if (!gl) return;
+  std::mt19937_64 rng(test::freshSeed("gl_field_steps"));
+  const RandomScene scene = randomScene(rng);
+  REQUIRE(gl->setVolume(scene.volume, scene.labels));
+  gl->setSelected(7);
+  // Two different fields on the volume's grid: distance from the centre, and from a corner.
+  const FloatVolume& first = scene.field;
+  FloatVolume second = scene.field;
+  const Geometry& g = second.geometry;
+  const Vec3 corner = g.indexToPatient({0, 0, 0});
+  for (int k = 0; k < g.dims.z; ++k)
+    for (int j = 0; j < g.dims.y; ++j)
+      for (int i = 0; i < g.dims.x; ++i)
+        second.at(i, j, k) = float(norm(g.indexToPatient({double(i), double(j), double(k)}) - corner));
+  second.at(3, 4, 5) = std::numeric_limits<float>::infinity();  // unreachable voxels upload too
+
+  RenderSettings s;
+  s.width = 48;
+  s.height = 40;
+  s.preset.mode = RenderMode::Wdt;
+  s.preset.t = 0.0f;  // only what the field reaches shows: the two fields give different images
+  s.camera = Camera::named(NamedView::Anterior, {0, 0, 0}, 12);
+  s.camera.orbit(std::uniform_real_distribution<double>(-180, 180)(rng), 10);
+
+  REQUIRE(gl->setField(second));
+  auto atOnce = gl->render(s);
+  REQUIRE(atOnce);
+  REQUIRE(gl->setField(first));
+  auto before = gl->render(s);
+  REQUIRE(before);
+  REQUIRE(maxChannelDiff(*atOnce, *before) > 8);  // the fields tell apart in the image
+
+  // A zero budget uploads one slice per call: dims.z calls, the old field shown until the last.
+  int calls = 0;
+  for (;;) {
+    auto done = gl->uploadFieldStep(second, 0.0);
+    REQUIRE_MESSAGE(done, done.error().message);
+    ++calls;
+    if (*done) break;
+    if (calls == 1 || calls == g.dims.z / 2) {
+      auto during = gl->render(s);
+      REQUIRE(during);
+      CHECK(maxChannelDiff(*during, *before) == 0);
+    }
+    REQUIRE(calls < g.dims.z);
+  }
+  CHECK(calls == g.dims.z);
+  auto after = gl->render(s);
+  REQUIRE(after);
+  CHECK(maxChannelDiff(*after, *atOnce) == 0);
+
+  // Another field part-way through starts over; a generous budget finishes in one call.
+  REQUIRE(gl->uploadFieldStep(first, 0.0).value() == false);
+  auto restarted = gl->uploadFieldStep(second, 1e6);
+  REQUIRE(restarted);
+  CHECK(*restarted);
+  auto again = gl->render(s);
+  REQUIRE(again);
+  CHECK(maxChannelDiff(*again, *atOnce) == 0);
 }

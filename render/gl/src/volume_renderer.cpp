@@ -1,6 +1,7 @@
 #include "render/gl/volume_renderer.h"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -450,6 +451,11 @@ struct VolumeRenderer::State {
   Program program, computeProgram, maskProgram, normalProgram;  // program: the fragment ray caster
   VertexArray vao;
   Texture hu, labels, field, table, mask, normals, occupancy;
+  // uploadFieldStep: the texture being filled, what it is filled from and the next z-slice.
+  Texture pendingField;
+  const float* pendingSource = nullptr;
+  Geometry pendingGrid;
+  int pendingNextSlice = 0;
   int maskLabel = -1;  // label the mask texture holds; -1 = stale
   std::optional<Preset> tablePreset;  // the preset the table texture was built from …
   double tableStepMm = 0, tableRefMm = 0;  // … and the step its opacities are corrected to
@@ -618,6 +624,48 @@ Status VolumeRenderer::setField(const FloatVolume& field) {
   state_->fieldGrid = field.geometry;
   state_->hasField = true;
   return glStatus("uploading the distance field");
+}
+
+Result<bool> VolumeRenderer::uploadFieldStep(const FloatVolume& field, double budgetMs) {
+  if (field.empty()) return fail("render: the distance field is empty");
+  State& st = *state_;
+  const Dims& d = field.dims();
+  const Geometry& g = field.geometry;
+  const bool sameGrid = st.pendingGrid.dims == g.dims && st.pendingGrid.spacingMm == g.spacingMm &&
+                        st.pendingGrid.originMm == g.originMm;
+  if (st.pendingSource != field.voxels.data() || !sameGrid || !st.pendingField) {
+    st.pendingField = Texture::make();
+    glBindTexture(GL_TEXTURE_3D, st.pendingField.id());
+    setTextureParams(GL_LINEAR);
+    glTexStorage3D(GL_TEXTURE_3D, 1, GL_R32F, d.x, d.y, d.z);
+    if (auto e = glStatus("allocating the distance field"); !e) return tl::unexpected(e.error());
+    st.pendingSource = field.voxels.data();
+    st.pendingGrid = field.geometry;
+    st.pendingNextSlice = 0;
+  }
+  const auto start = std::chrono::steady_clock::now();
+  const std::size_t slice = std::size_t(d.x) * std::size_t(d.y);
+  std::vector<float> finite(slice);
+  glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
+  glBindTexture(GL_TEXTURE_3D, st.pendingField.id());
+  do {
+    const float* src = field.voxels.data() + slice * std::size_t(st.pendingNextSlice);
+    for (std::size_t i = 0; i < slice; ++i) finite[i] = std::isfinite(src[i]) ? src[i] : 1e30f;
+    glTexSubImage3D(GL_TEXTURE_3D, 0, 0, 0, st.pendingNextSlice, d.x, d.y, 1, GL_RED, GL_FLOAT, finite.data());
+    ++st.pendingNextSlice;
+  } while (st.pendingNextSlice < d.z &&
+           std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count() < budgetMs);
+  if (auto e = glStatus("uploading the distance field"); !e) return tl::unexpected(e.error());
+  if (st.pendingNextSlice < d.z) return false;
+  std::swap(st.field, st.pendingField);
+  st.pendingField = Texture();
+  st.pendingSource = nullptr;
+#if defined(AT_HAVE_CUDA)
+  st.interop.reset();  // the storage changed: a registration would be stale
+#endif
+  st.fieldGrid = field.geometry;
+  st.hasField = true;
+  return true;
 }
 
 void VolumeRenderer::clearField() { state_->hasField = false; }

@@ -36,6 +36,13 @@ class VolumeRenderer {
   Status setVolume(const Volume& volume, const LabelMap& labels);
   // Uploads a distance field on its own grid (the volume's or a coarser one); +inf stays "far".
   Status setField(const FloatVolume& field);
+  // Uploads `field` a few z-slices per call, for a frame loop that must not stall: software GL
+  // takes ~0.2 s for a whole 256³ float field. Each call uploads slices until about `budgetMs` of
+  // wall time has passed (at least one slice) into a second texture; the field shown (and
+  // rendered) stays the previous one until the last slice is in, when the two textures swap and
+  // the call returns true. A call with another field (another address or grid) starts over; the
+  // caller keeps `field` alive and unchanged until the call that returns true.
+  Result<bool> uploadFieldStep(const FloatVolume& field, double budgetMs);
   // Copies a field that lives in CUDA device memory straight into the field texture (CUDA–GL
   // interop, no host round trip). Error when built without CUDA or when a CUDA call fails.
   Status setFieldFromDevice(const cuda::DeviceField& field);
