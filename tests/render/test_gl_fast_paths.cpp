@@ -164,4 +164,10 @@ TEST_CASE("A field uploaded slice by slice keeps the old field on screen until i
   auto again = gl->render(s);
   REQUIRE(again);
   CHECK(maxChannelDiff(*again, *atOnce) == 0);
+
+  // The whole-field upload still works on the swapped-in texture.
+  REQUIRE(gl->setField(first));
+  auto back = gl->render(s);
+  REQUIRE(back);
+  CHECK(maxChannelDiff(*back, *before) == 0);
 }

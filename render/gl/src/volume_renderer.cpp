@@ -637,7 +637,9 @@ Result<bool> VolumeRenderer::uploadFieldStep(const FloatVolume& field, double bu
     st.pendingField = Texture::make();
     glBindTexture(GL_TEXTURE_3D, st.pendingField.id());
     setTextureParams(GL_LINEAR);
-    glTexStorage3D(GL_TEXTURE_3D, 1, GL_R32F, d.x, d.y, d.z);
+    // Mutable storage, as setField's: the texture becomes the field texture, which setField and
+    // setFieldFromDevice re-specify.
+    glTexImage3D(GL_TEXTURE_3D, 0, GL_R32F, d.x, d.y, d.z, 0, GL_RED, GL_FLOAT, nullptr);
     if (auto e = glStatus("allocating the distance field"); !e) return tl::unexpected(e.error());
     st.pendingSource = field.voxels.data();
     st.pendingGrid = field.geometry;
