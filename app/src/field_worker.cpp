@@ -72,6 +72,18 @@ bool FieldWorker::busy() const {
   return runningKey_.has_value() || queued_.has_value();
 }
 
+std::optional<FieldWorker::Running> FieldWorker::running() const {
+  std::lock_guard lock(mutex_);
+  if (!runningRequest_) return std::nullopt;
+  Running r;
+  r.request = *runningRequest_;
+  r.passesDone = passesDone_.load();
+  r.passesPlanned = passesPlanned_.load();
+  if (r.passesPlanned == 0) r.passesPlanned = r.request.params.converge ? r.request.params.maxPasses : r.request.params.passes;
+  r.elapsedMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - runningSince_).count();
+  return r;
+}
+
 void FieldWorker::insert(const std::string& key, std::shared_ptr<const DistanceField> field) {
   lru_.emplace_front(key, std::move(field));
   while (lru_.size() > capacity_) lru_.pop_back();
@@ -87,6 +99,10 @@ void FieldWorker::run() {
       job = *queued_;
       queued_.reset();
       runningKey_ = job.key();
+      runningRequest_ = job;
+      runningSince_ = std::chrono::steady_clock::now();
+      passesDone_ = 0;
+      passesPlanned_ = 0;
       cancelRunning_ = false;
     }
     FinishedField done;
@@ -98,6 +114,10 @@ void FieldWorker::run() {
       const Mask seeds = render::structureMask(dataset_.labels, job.label);
       WdtControl control;
       control.cancel = &cancelRunning_;
+      control.progress = [this](int done, int planned) {
+        passesDone_ = done;
+        passesPlanned_ = planned;
+      };
       auto result = computeWdt(dataset_.volume, seeds, job.params, control);
       if (!result) {
         done.message = structure->id + ": " + result.error().message;
@@ -105,6 +125,7 @@ void FieldWorker::run() {
         cancelled_.fetch_add(1);
         std::lock_guard lock(mutex_);
         runningKey_.reset();
+        runningRequest_.reset();
         continue;  // stale: a newer request replaced it
       } else {
         done.field = std::make_shared<const DistanceField>(std::move(result->field));
@@ -116,6 +137,7 @@ void FieldWorker::run() {
     std::lock_guard lock(mutex_);
     if (done.field) insert(*runningKey_, done.field);
     runningKey_.reset();
+    runningRequest_.reset();
     finished_.push_back(std::move(done));
   }
 }
