@@ -39,6 +39,23 @@ Status prepareExactSweeps();
 template <class T>
 Status launchTransposeXY(const T* in, T* out, int nx, int ny, int nz, cudaStream_t stream);
 
+// Density bytes and seeds of one structure on a (possibly coarser) grid, from device-resident HU
+// and labels: coarse voxel c takes the largest lut[HU + 32768] of its factor³ block of fine voxels
+// and is a seed if any of them holds `label` (prepareWdtProblem's rules). Sets *anySeed to 1 if
+// any voxel is a seed (the caller zeroes it first).
+struct BuildProblemArgs {
+  const std::int16_t* hu = nullptr;
+  const std::uint16_t* labels = nullptr;
+  const std::uint8_t* lut = nullptr;  // 65536 entries (densityTable)
+  std::uint16_t label = 0;
+  int factor = 1;
+  struct { int x, y, z; } fine{0, 0, 0}, coarse{0, 0, 0};
+  std::uint8_t* density = nullptr;
+  std::uint8_t* seeds = nullptr;
+  int* anySeed = nullptr;
+};
+Status launchBuildProblem(const BuildProblemArgs& args, cudaStream_t stream);
+
 // Sets `count` floats at `d` to `value`.
 Status launchFill(float* d, std::size_t count, float value, cudaStream_t stream);
 

@@ -18,12 +18,9 @@
 #include <utility>
 #include <vector>
 
-#if defined(__linux__)
-#include <sys/mman.h>
-#endif
-
 #include "cuda_util.h"
 #include "sweep_kernels.h"
+#include "wdt/huge_pages.h"
 
 namespace at::cuda {
 
@@ -246,11 +243,10 @@ class WorkspaceCache {
 // Captures one pass as a CUDA graph, reused while the key matches: the x sweeps run on a copy of
 // the field transposed to y-contiguous layout (so that every sweep's lanes are coalesced), then
 // the y and z sweeps; the field starts and ends the pass in `a`.
-Status preparePass(Workspace& w, const WdtProblem& problem) {
+Status preparePass(Workspace& w, const Geometry& grid, const WdtParams& params) {
   const Dims d = w.dims;
-  const WdtParams& params = problem.params;
   PassKey key;
-  for (int i = 0; i < 3; ++i) key.spacing[i] = float(problem.grid.spacingMm[i]);
+  for (int i = 0; i < 3; ++i) key.spacing[i] = float(grid.spacingMm[i]);
   key.baseCost = params.baseCost;
   key.rule = params.rule;
   key.weight = params.weight;
@@ -297,33 +293,30 @@ Status preparePass(Workspace& w, const WdtProblem& problem) {
   return {};
 }
 
-// Makes `v` hold `count` floats (zero). A large fresh vector takes one page fault per 4 KiB as it
-// is first written, which is slow on virtual machines; on Linux the memory is advised to
-// transparent huge pages before the first touch.
-void allocateHostField(std::vector<float>& v, std::size_t count) {
-  v.reserve(count);
-#if defined(__linux__)
-  constexpr std::uintptr_t kHuge = std::uintptr_t(2) << 20;
-  const std::uintptr_t begin = (reinterpret_cast<std::uintptr_t>(v.data()) + kHuge - 1) & ~(kHuge - 1);
-  const std::uintptr_t end = reinterpret_cast<std::uintptr_t>(v.data() + count) & ~(kHuge - 1);
-  if (end > begin) (void)madvise(reinterpret_cast<void*>(begin), end - begin, MADV_HUGEPAGE);  // advice only
-#endif
-  v.resize(count);
-}
+// Seeds live, as bytes, in the second distance buffer's memory until launchInitDistances.
+std::uint8_t* seedBytes(Workspace& w) { return reinterpret_cast<std::uint8_t*>(w.b.get()); }
 
-// Uploads the problem and runs the passes; the field ends in w.a.
-Status runPasses(Workspace& w, const WdtProblem& problem, const WdtControl& control, WdtStats& stats) {
-  const std::size_t n = w.dims.count();
-  const WdtParams& params = problem.params;
+// With the density in w.density and the seeds in seedBytes(w): the initial field in w.a, the
+// transposed density, and the captured pass.
+Status finishLoading(Workspace& w, const Geometry& grid, const WdtParams& params) {
   const cudaStream_t s = w.stream.get();
   AT_TRY(prepareExactSweeps());
-  // Seeds travel once, through the second distance buffer's memory viewed as bytes.
-  std::uint8_t* seeds = reinterpret_cast<std::uint8_t*>(w.b.get());
-  AT_TRY(w.transfer(seeds, problem.seeds.data(), n, true));
-  AT_TRY(launchInitDistances(w.a.get(), seeds, n, s));
-  AT_TRY(w.transfer(w.density.get(), problem.density.data(), n, true));
+  AT_TRY(launchInitDistances(w.a.get(), seedBytes(w), w.dims.count(), s));
   AT_TRY(launchTransposeXY(w.density.get(), w.densityT.get(), w.dims.x, w.dims.y, w.dims.z, s));
-  AT_TRY(preparePass(w, problem));
+  return preparePass(w, grid, params);
+}
+
+// Uploads a host problem.
+Status loadHostProblem(Workspace& w, const WdtProblem& problem) {
+  const std::size_t n = w.dims.count();
+  AT_TRY(w.transfer(seedBytes(w), problem.seeds.data(), n, true));
+  AT_TRY(w.transfer(w.density.get(), problem.density.data(), n, true));
+  return finishLoading(w, problem.grid, problem.params);
+}
+
+// Runs the passes on a loaded workspace; the field ends in w.a.
+Status runPasses(Workspace& w, const WdtParams& params, const WdtControl& control, WdtStats& stats) {
+  const cudaStream_t s = w.stream.get();
 
   stats.backendUsed = WdtBackend::Cuda;
   stats.device = queryDevice().name;
@@ -369,17 +362,13 @@ Result<DeviceField> makeDeviceField(const Geometry& grid, float fill) {
   return DeviceField(std::move(impl));
 }
 
-Result<DeviceField> runCudaBackendOnDevice(const WdtProblem& problem, const WdtControl& control, WdtStats* statsOut) {
-  const auto t0 = std::chrono::steady_clock::now();
-  AT_TRY(validate(problem));
-  std::unique_ptr<Workspace> w;
-  AT_ASSIGN(w, WorkspaceCache::instance().take(problem.grid.dims));
-  WdtStats stats;
-  AT_TRY(runPasses(*w, problem, control, stats));
-  // The field leaves in its own buffer; the workspace keeps its buffers for the next call.
+// The field leaves in its own buffer; the workspace keeps its buffers for the next call.
+Result<std::unique_ptr<DeviceField::Impl>> takeField(std::unique_ptr<Workspace> w, const Geometry& grid, int downsample,
+                                                     std::chrono::steady_clock::time_point t0, WdtStats& stats,
+                                                     WdtStats* statsOut) {
   auto impl = std::make_unique<DeviceField::Impl>();
-  impl->grid = problem.grid;
-  impl->downsample = problem.params.downsample;
+  impl->grid = grid;
+  impl->downsample = downsample;
   AT_ASSIGN(impl->distances, DeviceBuffer<float>::allocate(w->a.size()));
   AT_TRY(check(cudaMemcpyAsync(impl->distances.get(), w->a.get(), w->a.bytes(), cudaMemcpyDeviceToDevice, w->stream.get()),
                "cudaMemcpyAsync(distances, device to device)"));
@@ -387,7 +376,20 @@ Result<DeviceField> runCudaBackendOnDevice(const WdtProblem& problem, const WdtC
   WorkspaceCache::instance().put(std::move(w));
   stats.msTotal = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   if (statsOut) *statsOut = std::move(stats);
-  return DeviceField(std::move(impl));
+  return impl;
+}
+
+Result<DeviceField> runCudaBackendOnDevice(const WdtProblem& problem, const WdtControl& control, WdtStats* statsOut) {
+  const auto t0 = std::chrono::steady_clock::now();
+  AT_TRY(validate(problem));
+  std::unique_ptr<Workspace> w;
+  AT_ASSIGN(w, WorkspaceCache::instance().take(problem.grid.dims));
+  WdtStats stats;
+  AT_TRY(loadHostProblem(*w, problem));
+  AT_TRY(runPasses(*w, problem.params, control, stats));
+  auto impl = takeField(std::move(w), problem.grid, problem.params.downsample, t0, stats, statsOut);
+  if (!impl) return tl::unexpected(impl.error());
+  return DeviceField(std::move(*impl));
 }
 
 Status copyToHost(const DeviceField& field, FloatVolume& out) {
@@ -412,12 +414,13 @@ Result<WdtResult> runCudaBackend(const WdtProblem& problem, const WdtControl& co
     bool allocated = true;
     std::jthread allocation([&] {
       try {
-        allocateHostField(out.voxels, w->a.size());
+        wdt::resizeOnHugePages(out.voxels, w->a.size());
       } catch (const std::bad_alloc&) {
         allocated = false;
       }
     });
-    AT_TRY(runPasses(*w, problem, control, result.stats));
+    AT_TRY(loadHostProblem(*w, problem));
+    AT_TRY(runPasses(*w, problem.params, control, result.stats));
     allocation.join();
     if (!allocated) {
       return fail("WDT CUDA backend: cannot allocate " + std::to_string(w->a.bytes()) + " bytes of host memory for the field");
@@ -428,6 +431,94 @@ Result<WdtResult> runCudaBackend(const WdtProblem& problem, const WdtControl& co
   result.field.downsample = problem.params.downsample;
   result.stats.msTotal = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   return result;
+}
+
+struct DeviceVolume::Impl {
+  Geometry grid;
+  DeviceBuffer<std::int16_t> hu;
+  DeviceBuffer<std::uint16_t> labels;
+  DeviceBuffer<std::uint8_t> lut;                   // densityTable of `window`
+  std::optional<std::pair<float, float>> window;    // HU window the table holds
+  std::mutex mutex;                                 // one call at a time (the table is shared)
+};
+
+DeviceVolume::DeviceVolume() = default;
+DeviceVolume::~DeviceVolume() = default;
+DeviceVolume::DeviceVolume(DeviceVolume&&) noexcept = default;
+DeviceVolume& DeviceVolume::operator=(DeviceVolume&&) noexcept = default;
+DeviceVolume::DeviceVolume(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
+
+const Geometry& DeviceVolume::grid() const {
+  static const Geometry empty{};
+  return impl_ ? impl_->grid : empty;
+}
+
+Result<DeviceVolume> uploadVolume(const Volume& volume, const LabelMap& labels) {
+  const Dims d = volume.dims();
+  if (d.count() == 0 || volume.voxels.size() != d.count()) return fail("CUDA device volume: the volume is empty (" + d.toString() + ")");
+  if (!(labels.dims() == d) || labels.voxels.size() != d.count())
+    return fail("CUDA device volume: the label map is " + labels.dims().toString() + " but the volume is " + d.toString());
+  if (!queryDevice().available) return fail("CUDA device volume: " + queryDevice().reason);
+  AT_TRY(check(cudaSetDevice(0), "cudaSetDevice(0)"));
+  auto impl = std::make_unique<DeviceVolume::Impl>();
+  impl->grid = volume.geometry;
+  AT_ASSIGN(impl->hu, DeviceBuffer<std::int16_t>::allocate(d.count()));
+  AT_ASSIGN(impl->labels, DeviceBuffer<std::uint16_t>::allocate(d.count()));
+  AT_ASSIGN(impl->lut, DeviceBuffer<std::uint8_t>::allocate(65536));
+  AT_TRY(check(cudaMemcpy(impl->hu.get(), volume.voxels.data(), impl->hu.bytes(), cudaMemcpyHostToDevice),
+               "cudaMemcpy(HU volume, host to device)"));
+  AT_TRY(check(cudaMemcpy(impl->labels.get(), labels.voxels.data(), impl->labels.bytes(), cudaMemcpyHostToDevice),
+               "cudaMemcpy(label map, host to device)"));
+  return DeviceVolume(std::move(impl));
+}
+
+Result<DeviceField> runCudaBackendOnDevice(const DeviceVolume& volume, std::uint16_t label, const WdtParams& params,
+                                           const WdtControl& control, WdtStats* statsOut) {
+  const auto t0 = std::chrono::steady_clock::now();
+  if (!volume.impl_) return fail("WDT CUDA backend: the device volume is empty");
+  AT_TRY(validateWdtParams(params));
+  if (!queryDevice().available) return fail("WDT CUDA backend: " + queryDevice().reason);
+  AT_TRY(check(cudaSetDevice(0), "cudaSetDevice(0)"));
+  DeviceVolume::Impl& v = *volume.impl_;
+  std::lock_guard lock(v.mutex);
+  if (!v.window || v.window->first != params.huMin || v.window->second != params.huMax) {
+    const std::vector<std::uint8_t> lut = densityTable(params);
+    v.window.reset();
+    AT_TRY(check(cudaMemcpy(v.lut.get(), lut.data(), lut.size(), cudaMemcpyHostToDevice),
+                 "cudaMemcpy(density table, host to device)"));
+    v.window = std::make_pair(params.huMin, params.huMax);
+  }
+  const int f = params.downsample;
+  const Geometry grid = f == 1 ? v.grid : downsampledGrid(v.grid, f);
+  std::unique_ptr<Workspace> w;
+  AT_ASSIGN(w, WorkspaceCache::instance().take(grid.dims));
+  const cudaStream_t s = w->stream.get();
+  BuildProblemArgs build;
+  build.hu = v.hu.get();
+  build.labels = v.labels.get();
+  build.lut = v.lut.get();
+  build.label = label;
+  build.factor = f;
+  build.fine = {v.grid.dims.x, v.grid.dims.y, v.grid.dims.z};
+  build.coarse = {grid.dims.x, grid.dims.y, grid.dims.z};
+  build.density = w->density.get();
+  build.seeds = seedBytes(*w);
+  build.anySeed = w->flag.get();
+  AT_TRY(check(cudaMemsetAsync(w->flag.get(), 0, sizeof(int), s), "cudaMemsetAsync(seed flag)"));
+  AT_TRY(launchBuildProblem(build, s));
+  AT_TRY(check(cudaMemcpyAsync(w->flagHost.get(), w->flag.get(), sizeof(int), cudaMemcpyDeviceToHost, s),
+               "cudaMemcpyAsync(seed flag, device to host)"));
+  AT_TRY(finishLoading(*w, grid, params));
+  AT_TRY(w->stream.synchronize());
+  if (*w->flagHost.get() == 0) {
+    WorkspaceCache::instance().put(std::move(w));
+    return fail("WDT: no voxel carries label " + std::to_string(label) + " (the structure mask is empty)");
+  }
+  WdtStats stats;
+  AT_TRY(runPasses(*w, params, control, stats));
+  auto impl = takeField(std::move(w), grid, f, t0, stats, statsOut);
+  if (!impl) return tl::unexpected(impl.error());
+  return DeviceField(std::move(*impl));
 }
 
 }  // namespace at::cuda

@@ -310,3 +310,64 @@ TEST_CASE("an impossible allocation comes back as an error naming the CUDA call,
   const auto gpu = gpuField(p);
   CHECK(maxRelDiff(gpu, cpuField(p)) <= 1e-6);
 }
+
+TEST_CASE("a resident device volume gives the host path's fields bit for bit, downsampled too, and names a missing label") {
+  std::mt19937_64 rng(at::test::freshSeed("cuda device volume"));
+  // A random CT (HU over the whole window and beyond) with three labelled blobs.
+  const at::Dims dims{37, 29, 23};
+  at::Volume ct;
+  ct.geometry.dims = dims;
+  ct.geometry.spacingMm = {0.7, 0.9, 1.3};
+  ct.voxels.resize(dims.count());
+  at::LabelMap labels;
+  labels.geometry = ct.geometry;
+  labels.voxels.assign(dims.count(), 0);
+  std::uniform_int_distribution<int> hu(-1400, 3200);
+  for (auto& v : ct.voxels) v = std::int16_t(hu(rng));
+  std::uniform_int_distribution<int> at(0, 1 << 20);
+  for (std::uint16_t label = 1; label <= 3; ++label) {
+    const int ci = at(rng) % dims.x, cj = at(rng) % dims.y, ck = at(rng) % dims.z;
+    for (int k = std::max(0, ck - 2); k < std::min(dims.z, ck + 2); ++k)
+      for (int j = std::max(0, cj - 2); j < std::min(dims.y, cj + 2); ++j)
+        for (int i = std::max(0, ci - 3); i < std::min(dims.x, ci + 3); ++i) labels.voxels[dims.index(i, j, k)] = label;
+  }
+  auto uploaded = at::cuda::uploadVolume(ct, labels);
+  if (!at::cuda::queryDevice().available) {
+    REQUIRE_FALSE(uploaded.has_value());
+    std::printf("SKIPPED: no CUDA device (%s)\n", uploaded.error().message.c_str());
+    return;
+  }
+  REQUIRE_MESSAGE(uploaded.has_value(), (uploaded ? std::string() : uploaded.error().message));
+  for (const int factor : {1, 2, 3}) {
+    for (std::uint16_t label = 1; label <= 3; ++label) {
+      at::Mask mask;
+      mask.geometry = ct.geometry;
+      mask.voxels.resize(dims.count());
+      for (std::size_t i = 0; i < dims.count(); ++i) mask.voxels[i] = labels.voxels[i] == label;
+      if (std::none_of(mask.voxels.begin(), mask.voxels.end(), [](std::uint8_t v) { return v != 0; })) continue;
+      at::WdtParams params;
+      params.downsample = factor;
+      params.passes = 2;
+      params.huMin = label == 2 ? -500.0f : -1000.0f;  // a second window: the density table is rebuilt
+      params.rule = label == 3 ? StepRule::Trapezoid : StepRule::Entering;
+      auto problem = at::prepareWdtProblem(ct, mask, params);
+      REQUIRE(problem.has_value());
+      const auto host = gpuField(*problem);
+      at::WdtStats stats;
+      auto field = at::cuda::runCudaBackendOnDevice(*uploaded, label, params, {}, &stats);
+      REQUIRE_MESSAGE(field.has_value(), (field ? std::string() : field.error().message));
+      CHECK(field->grid().dims == problem->grid.dims);
+      CHECK(field->grid().spacingMm == problem->grid.spacingMm);
+      CHECK(field->downsample() == factor);
+      at::FloatVolume back;
+      REQUIRE(at::cuda::copyToHost(*field, back).has_value());
+      CAPTURE(factor);
+      CAPTURE(label);
+      CHECK_MESSAGE(sameBits(back.voxels, host), describeDifference(back.voxels, host, problem->grid.dims));
+      CHECK(stats.passesRun == 2);
+    }
+  }
+  auto missing = at::cuda::runCudaBackendOnDevice(*uploaded, 9, at::WdtParams{}, {}, nullptr);
+  REQUIRE_FALSE(missing.has_value());
+  CHECK(missing.error().message.find("label 9") != std::string::npos);
+}

@@ -24,7 +24,7 @@
 #include <immintrin.h>
 #include <vector>
 
-#include "huge_pages.h"
+#include "wdt/huge_pages.h"
 #include "step_cost.h"
 #include "wdt/problem.h"
 #include "wdt/stencil.h"

@@ -4,24 +4,13 @@
 #include <thread>
 #include <vector>
 
-#include "huge_pages.h"
+#include "wdt/huge_pages.h"
 #include "wdt/problem.h"
 #include "wdt/stencil.h"
 
 namespace at {
 
 namespace {
-
-// Coarse grid of a downsampling by `f`: ceil(dims / f) voxels, spacing × f, same direction, origin
-// at the centre of the first block (fine index (f − 1)/2 on each axis).
-Geometry coarseGrid(const Geometry& fine, int f) {
-  Geometry g = fine;
-  g.dims = {(fine.dims.x + f - 1) / f, (fine.dims.y + f - 1) / f, (fine.dims.z + f - 1) / f};
-  for (int a = 0; a < 3; ++a) g.spacingMm[a] = fine.spacingMm[a] * f;
-  const double c = 0.5 * (f - 1);
-  g.originMm = fine.indexToPatient({c, c, c});
-  return g;
-}
 
 // Runs body(k0, k1) over [0, n) split among the cores.
 template <class Body>
@@ -34,6 +23,21 @@ void parallelSlices(int n, Body body) {
 }
 
 }  // namespace
+
+Geometry downsampledGrid(const Geometry& fine, int f) {
+  Geometry g = fine;
+  g.dims = {(fine.dims.x + f - 1) / f, (fine.dims.y + f - 1) / f, (fine.dims.z + f - 1) / f};
+  for (int a = 0; a < 3; ++a) g.spacingMm[a] = fine.spacingMm[a] * f;
+  const double c = 0.5 * (f - 1);
+  g.originMm = fine.indexToPatient({c, c, c});
+  return g;
+}
+
+std::vector<std::uint8_t> densityTable(const WdtParams& params) {
+  std::vector<std::uint8_t> lut(65536);
+  for (int h = -32768; h <= 32767; ++h) lut[std::size_t(h + 32768)] = wdt::densityByte(float(h), params.huMin, params.huMax);
+  return lut;
+}
 
 Result<WdtProblem> prepareWdtProblem(const Volume& volume, const Mask& seeds, const WdtParams& params) {
   if (auto ok = validateWdtParams(params); !ok) return tl::unexpected(ok.error());
@@ -48,8 +52,7 @@ Result<WdtProblem> prepareWdtProblem(const Volume& volume, const Mask& seeds, co
 
   // HU → density byte through a table over the whole int16 range (bit-identical to densityByte,
   // which computes each entry), applied by all cores.
-  std::vector<std::uint8_t> lut(65536);
-  for (int h = -32768; h <= 32767; ++h) lut[std::size_t(h + 32768)] = wdt::densityByte(float(h), params.huMin, params.huMax);
+  const std::vector<std::uint8_t> lut = densityTable(params);
 
   WdtProblem problem;
   problem.params = params;
@@ -74,7 +77,7 @@ Result<WdtProblem> prepareWdtProblem(const Volume& volume, const Mask& seeds, co
   // and the field would flow into the neighbouring compartment). The price: thin air channels
   // narrower than a block close up on the coarse grid — an overestimate, never a leak.
   // A coarse voxel is a seed if any fine voxel of its block is.
-  problem.grid = coarseGrid(volume.geometry, f);
+  problem.grid = downsampledGrid(volume.geometry, f);
   const Dims c = problem.grid.dims;
   problem.density.assign(c.count(), 0);
   problem.seeds.assign(c.count(), 0);

@@ -10,6 +10,7 @@
 // until the process ends or an allocation needs the memory).
 #pragma once
 
+#include <cstdint>
 #include <memory>
 #include <string>
 
@@ -30,6 +31,8 @@ const DeviceInfo& queryDevice();
 // Computes the field on the GPU and copies it back. Errors carry the failing CUDA call's name and
 // message; the caller (computeWdt with backend auto) then falls back to the CPU.
 Result<WdtResult> runCudaBackend(const WdtProblem& problem, const WdtControl& control);
+
+class DeviceVolume;
 
 // A float32 distance field that lives in device memory (for the renderer's CUDA–GL interop):
 // grid().dims.count() floats, x contiguous, +infinity where unreachable. Move-only; frees its
@@ -55,6 +58,8 @@ class DeviceField {
   std::unique_ptr<Impl> impl_;
   friend Result<DeviceField> makeDeviceField(const Geometry& grid, float fill);
   friend Result<DeviceField> runCudaBackendOnDevice(const WdtProblem&, const WdtControl&, WdtStats*);
+  friend Result<DeviceField> runCudaBackendOnDevice(const DeviceVolume&, std::uint16_t, const WdtParams&,
+                                                    const WdtControl&, WdtStats*);
 };
 
 // An allocated field on `grid` with every voxel set to `fill`. Errors: no device, allocation
@@ -64,6 +69,42 @@ Result<DeviceField> makeDeviceField(const Geometry& grid, float fill);
 // As runCudaBackend, but the field stays on the device. `stats` (optional) receives the run's
 // statistics; their msTotal excludes the copy back.
 Result<DeviceField> runCudaBackendOnDevice(const WdtProblem& problem, const WdtControl& control, WdtStats* stats);
+
+// A CT volume and its label map kept in device memory (4 bytes per voxel), so that repeated
+// fields on the same data — hovering from structure to structure — upload nothing: each request's
+// density bytes and seeds are made on the device, byte for byte what prepareWdtProblem makes on
+// the host (downsampling included), so the fields equal runCudaBackend's bit for bit. Calls on one
+// DeviceVolume are serialised (it caches the density table of the last HU window). Move-only;
+// frees its memory when destroyed.
+class DeviceVolume {
+ public:
+  DeviceVolume();
+  ~DeviceVolume();
+  DeviceVolume(DeviceVolume&&) noexcept;
+  DeviceVolume& operator=(DeviceVolume&&) noexcept;
+  DeviceVolume(const DeviceVolume&) = delete;
+  DeviceVolume& operator=(const DeviceVolume&) = delete;
+
+  const Geometry& grid() const;
+
+  struct Impl;
+
+ private:
+  explicit DeviceVolume(std::unique_ptr<Impl> impl);
+  std::unique_ptr<Impl> impl_;
+  friend Result<DeviceVolume> uploadVolume(const Volume&, const LabelMap&);
+  friend Result<DeviceField> runCudaBackendOnDevice(const DeviceVolume&, std::uint16_t, const WdtParams&,
+                                                    const WdtControl&, WdtStats*);
+};
+
+// Copies `volume` and `labels` (same dims) to the device. Errors: no device, mismatched or empty
+// grids, allocation failure.
+Result<DeviceVolume> uploadVolume(const Volume& volume, const LabelMap& labels);
+
+// The field of the structure `label` (its voxels are the seeds) on `volume` with `params`, left
+// on the device. Errors as runCudaBackend, and "no voxel carries label N" for an absent structure.
+Result<DeviceField> runCudaBackendOnDevice(const DeviceVolume& volume, std::uint16_t label, const WdtParams& params,
+                                           const WdtControl& control, WdtStats* stats);
 
 // Copies the field into `out` (geometry and voxels replaced).
 Status copyToHost(const DeviceField& field, FloatVolume& out);

@@ -19,6 +19,15 @@ struct WdtProblem {
   WdtParams params;                    // rule, weight rule, baseCost, passes/converge/maxPasses
 };
 
+// Coarse grid of a downsampling by `factor`: ceil(dims / factor) voxels, spacing × factor, same
+// direction, origin at the centre of the first block (fine index (factor − 1)/2 on each axis).
+Geometry downsampledGrid(const Geometry& fine, int factor);
+
+// The density byte of every int16 HU value under the params' window: entry h + 32768 is
+// wdt::densityByte(h, huMin, huMax). Backends that build problems themselves (on the GPU) use it
+// so that their bytes equal prepareWdtProblem's.
+std::vector<std::uint8_t> densityTable(const WdtParams& params);
+
 // Builds the problem for `params` (downsampling included). Errors as computeWdt.
 Result<WdtProblem> prepareWdtProblem(const Volume& volume, const Mask& seeds, const WdtParams& params);
 
