@@ -10,6 +10,10 @@
 // screenshots lift it); an unchanged view is not rendered again. The frame never waits for a distance field: until the hovered structure's
 // field arrives the previous one stays on screen.
 //
+// Long work: the import window (ImportPanel) loads and registers datasets on a background thread
+// with progress and Cancel, and an imported dataset can be opened in place (showDataset); a
+// running full-resolution field shows its passes and can be cancelled (the coarse field stays).
+//
 // Scripted mode (--ui-script FILE.json [--screenshot OUT.png]) replays actions from
 // {"actions": [{"do": "select", "structure": "cochlea"}, …]} and prints one JSON line per event.
 #include <algorithm>

@@ -144,6 +144,14 @@ TEST_CASE("ImportInTheApp_AbdominalCt_StoresItReportsEachStageAndOpensItInTheExp
   auto structures = at::test::runApp("structures abdomen --db '" + db.string() + "'");
   CHECK(structures.exitCode == 0);
   CHECK(structures.out.find("liver") != std::string::npos);
+
+  // And the desktop opens it by name next time.
+  const Run again = runDesktop(dir, {{"actions", {{{"do", "select"}, {"structure", "spleen"}}}}}, db, "abdomen");
+  INFO(again.err);
+  CHECK(again.exitCode == 0);
+  const auto spleen = eventsOf(again, "select");
+  REQUIRE(spleen.size() == 1);
+  CHECK(spleen[0].at("structure") == "spleen");
 }
 
 TEST_CASE("ImportInTheApp_FileThatDoesNotLoad_ShowsTheLoadersMessageStoresNothingAndTheAppKeepsWorking") {
