@@ -189,6 +189,7 @@ class DesktopApp {
   void buildUi();
   void explorePanel(float panelW);
   void fieldProgress();  // the running field's progress; a full-resolution one can be cancelled
+  float statusHeight() const;  // below the structure list: status lines and messages
   void cancelFineField();
   void syncStudyView();  // participant mode: the trial's structure with the preset of the side shown
   bool stepScript();  // true when the script has finished (or there is none)
@@ -789,8 +790,7 @@ void DesktopApp::updateFields() {
     lastFieldWarning_ = f.message;
     if (!gpuFields_ && !cpuFieldNotice_ && f.message.empty()) {
       cpuFieldNotice_ = true;
-      message("no CUDA GPU in use: distance fields are computed on the " + f.device +
-              ", coarse while hovering and at full resolution when the mouse rests");
+      message("No CUDA GPU: distance fields run on the " + f.device + ", coarse while hovering, full resolution at rest.");
     }
     char buf[200];
     std::snprintf(buf, sizeof buf, "%s: field 1/%d in %.0f ms on %s", id.c_str(), f.request.params.downsample, f.ms,
@@ -919,7 +919,10 @@ void DesktopApp::buildUi() {
   else
     explorePanel(panelW);
   study_->drawCoordinator(panelW + 20, 20);
-  import_->draw(panelW + 40, 40);
+  if (study_->participantActive())
+    import_->poll();  // the participant sees no other window
+  else
+    import_->draw(panelW + 40, 40);
   if (auto imported = import_->takeDatasetToOpen(); imported && !study_->participantActive()) {
     const std::string id = imported->id;
     if (auto st = showDataset(std::move(*imported), "", ""); !st) message("opening '" + id + "': " + st.error().message);
@@ -1020,7 +1023,7 @@ void DesktopApp::explorePanel(float panelW) {
 
   ImGui::InputTextWithHint("##search", "search structures", search_, sizeof search_);
   const std::string query = lower(search_);
-  ImGui::BeginChild("structures", ImVec2(0, -ImGui::GetTextLineHeightWithSpacing() * 5.5f), true);
+  ImGui::BeginChild("structures", ImVec2(0, -statusHeight()), true);
   for (const auto& [system, list] : bySystem_) {
     std::vector<const Structure*> shown;
     for (const Structure* s : list)
@@ -1055,6 +1058,16 @@ void DesktopApp::explorePanel(float panelW) {
   for (const std::string& m : messages_) ImGui::TextColored(ImVec4(1, 0.5f, 0.4f, 1), "%s", m.c_str());
   ImGui::PopTextWrapPos();
   ImGui::End();
+}
+
+float DesktopApp::statusHeight() const {
+  // The status lines, the GL description (two lines) and the messages as they wrap, so that the
+  // messages stay visible; at most half of what is left for the structure list and them.
+  float height = ImGui::GetTextLineHeightWithSpacing() * 5.5f;
+  const float wrap = ImGui::GetContentRegionAvail().x;
+  for (const std::string& m : messages_)
+    height += ImGui::CalcTextSize(m.c_str(), nullptr, false, wrap).y + ImGui::GetStyle().ItemSpacing.y;
+  return std::min(height, std::max(ImGui::GetTextLineHeightWithSpacing() * 5.5f, ImGui::GetContentRegionAvail().y * 0.5f));
 }
 
 void DesktopApp::fieldProgress() {

@@ -162,18 +162,21 @@ void ImportPanel::draw(float x, float y) {
 
 void ImportPanel::drawWindow(float x, float y) {
   ImGui::SetNextWindowPos(ImVec2(x, y), ImGuiCond_Appearing);
-  ImGui::SetNextWindowSize(ImVec2(560, 0), ImGuiCond_Appearing);
-  if (!ImGui::Begin("Import dataset", &open_)) {
+  const float width = ImGui::GetFontSize() * 48;
+  ImGui::SetNextWindowSizeConstraints(ImVec2(width, 0), ImVec2(width, 10000));
+  if (!ImGui::Begin("Import dataset", &open_, ImGuiWindowFlags_AlwaysAutoResize)) {
     ImGui::End();
     return;
   }
   const bool busy = running();
   ImGui::BeginDisabled(busy);
+  ImGui::PushItemWidth(-ImGui::GetFontSize() * 4.5f);
   ImGui::InputTextWithHint("volume", "DICOM folder, .nii, .nii.gz, .nrrd or .nhdr", volume_, sizeof volume_);
   ImGui::InputTextWithHint("labels", "optional: label map (those formats or DICOM SEG)", labels_, sizeof labels_);
   ImGui::InputTextWithHint("names", "optional: JSON {\"1\": \"spleen\", ...}", names_, sizeof names_);
   ImGui::InputTextWithHint("name", "what the dataset will be called", name_, sizeof name_);
   ImGui::InputText("species", species_, sizeof species_);
+  ImGui::PopItemWidth();
   if (ImGui::Button("Import")) {
     ImportRequest request;
     request.volumePath = volume_;
@@ -240,6 +243,13 @@ std::optional<Result<bool>> ImportPanel::scriptAction(const std::string& what, c
         if (!cancelAt) return R(fail("ui script: import: \"cancel_at\" must be one of " + stageList()));
       }
       if (auto st = launch(request, cancelAt); !st) return R(tl::unexpected(st.error()));
+      // Shown as a user would see it: the window open on the form that started it.
+      open_ = true;
+      std::snprintf(volume_, sizeof volume_, "%s", request.volumePath.c_str());
+      std::snprintf(labels_, sizeof labels_, "%s", request.labelsPath.c_str());
+      std::snprintf(names_, sizeof names_, "%s", request.namesPath.c_str());
+      std::snprintf(name_, sizeof name_, "%s", request.name.c_str());
+      std::snprintf(species_, sizeof species_, "%s", request.species.c_str());
       if (!a.value("wait", true)) return R(true);
       scriptImporting_ = true;
       return R(false);

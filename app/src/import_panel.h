@@ -37,8 +37,9 @@ class ImportPanel {
   void open() { open_ = true; }
   bool running() const;
 
-  // Every frame: reports the running import's progress and outcome (events, status line), then
-  // draws the window at (x, y) when it is open.
+  // Every frame: reports the running import's progress and outcome (events, status line).
+  void poll();
+  // poll(), then the window at (x, y) when it is open.
   void draw(float x, float y);
 
   // Starts an import on the background thread; an error while another one runs.
@@ -57,7 +58,6 @@ class ImportPanel {
  private:
   struct Job;
   Status launch(const ImportRequest& request, std::optional<ImportStage> cancelAt);
-  void poll();  // progress and outcome of the job, on the UI thread
   void drawWindow(float x, float y);
 
   std::optional<std::string> dbPath_;
