@@ -238,6 +238,36 @@ TEST_CASE("ImportInTheApp_Cancelled_StoresNothingAndTheNameStaysFree") {
   CHECK(importedNames(db) == std::vector<std::string>{"abdomen"});
 }
 
+TEST_CASE("StudyExport_CancelledPartWay_StopsAndLeavesNoPartialSetBehind") {
+  if (!haveXvfb()) {
+    MESSAGE("SKIPPED: xvfb-run is not installed");
+    return;
+  }
+  TempDir dir("desktop-export-cancel");
+  std::ifstream in(at::test::sourceDir() / "data" / "studies" / "paper_survey.json");
+  const std::string studyId = json::parse(in).at("id");
+  const fs::path out = dir / "export";
+  const json script = {{"actions",
+                        {{{"do", "coordinator_open"}, {"study", studyId}},
+                         {{"do", "coordinator_export"}, {"out", out.string()}, {"cancel_after", 3}}}}};
+  const Run r = runDesktop(dir, script, dir / "t.db");
+  INFO(r.err);
+  REQUIRE(r.exitCode == 0);
+  CHECK(eventsOf(r, "export_progress").size() == 3);
+  CHECK(eventsOf(r, "export_done").empty());
+  const auto cancelled = eventsOf(r, "export_cancelled");
+  REQUIRE(cancelled.size() == 1);
+  CHECK(cancelled[0].at("written") == 3);
+  CHECK(cancelled[0].at("n") == 8);
+  CHECK(cancelled[0].at("removed") == true);
+  // The three files written were removed again.
+  for (const json& e : eventsOf(r, "export_progress")) CHECK(!fs::exists(out / e.at("file").get<std::string>()));
+  std::size_t left = 0;
+  if (fs::exists(out))
+    for (const auto& entry : fs::directory_iterator(out)) left += entry.is_regular_file();
+  CHECK(left == 0);
+}
+
 TEST_CASE("FullResolutionCpuField_CancelledFromTheApp_StopsAndIsNotAskedForAgain") {
   if (!haveXvfb()) {
     MESSAGE("SKIPPED: xvfb-run is not installed");
