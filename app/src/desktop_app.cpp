@@ -919,13 +919,14 @@ void DesktopApp::buildUi() {
   else
     explorePanel(panelW);
   study_->drawCoordinator(panelW + 20, 20);
-  if (study_->participantActive())
-    import_->poll();  // the participant sees no other window
-  else
+  if (study_->participantActive()) {
+    import_->poll();  // the participant sees no other window, and the trial's dataset stays
+  } else {
     import_->draw(panelW + 40, 40);
-  if (auto imported = import_->takeDatasetToOpen(); imported && !study_->participantActive()) {
-    const std::string id = imported->id;
-    if (auto st = showDataset(std::move(*imported), "", ""); !st) message("opening '" + id + "': " + st.error().message);
+    if (auto imported = import_->takeDatasetToOpen()) {
+      const std::string id = imported->id;
+      if (auto st = showDataset(std::move(*imported), "", ""); !st) message("opening '" + id + "': " + st.error().message);
+    }
   }
   if (texture_ && texture_->handle()) {
     ImGui::GetBackgroundDrawList()->AddImage(reinterpret_cast<ImTextureID>(texture_->handle()), ImVec2(panelW, 0),
