@@ -38,8 +38,9 @@
 #include "desktop_support.h"
 #include "field_worker.h"
 #include "import_panel.h"
+#include "learning_support.h"
+#include "lesson_panel.h"
 #include "lessons/curriculum.h"
-#include "quiz/grading.h"
 #include "render/gl/volume_renderer.h"
 #include "render/gl/window_target.h"
 #include "render/scene.h"
@@ -47,6 +48,7 @@
 #include "study_panel.h"
 #include "tf_editor_panel.h"
 #include "volume/dataset_source.h"
+#include "volume/mask.h"
 #include "volume/png_image.h"
 
 namespace at::app {
@@ -78,6 +80,18 @@ double percentile(std::vector<double> v, double p) {
   const double pos = p / 100.0 * double(v.size() - 1);
   const std::size_t lo = std::size_t(std::floor(pos)), hi = std::min(v.size() - 1, lo + 1);
   return v[lo] + (v[hi] - v[lo]) * (pos - double(lo));
+}
+
+// The weighted distance in mm of `pointMm` from the structure `label` (the distance field the
+// answer keys use, learning_support.h), at the voxel containing the point; -1 when unknown.
+double weightedDistanceAt(const Dataset& dataset, std::uint16_t label, const Vec3& pointMm) {
+  auto field = wdtDistanceField(dataset)(structureMask(dataset.labels, label));
+  if (!field) return -1;
+  const Vec3 ijk = field->geometry.patientToIndex(pointMm);
+  const int i = int(std::lround(ijk[0])), j = int(std::lround(ijk[1])), k = int(std::lround(ijk[2]));
+  if (!field->dims().contains(i, j, k)) return -1;
+  const double d = field->at(i, j, k);
+  return std::isfinite(d) ? d : -1;
 }
 
 std::string lower(std::string s) {
@@ -165,7 +179,8 @@ class DesktopApp {
     std::string dataset;            // empty: the default course's dataset; else as openNamedDataset takes it
     std::optional<std::string> script;
     std::optional<std::string> screenshot;
-    std::optional<std::string> dbPath;  // the database: presets saved in the expert panel, studies
+    std::optional<std::string> dbPath;  // the database: presets saved in the expert panel, studies, lessons
+    std::string userName = kDefaultLessonUser;  // whose lesson progress the lesson panel shows and records
     int width = 1280, height = 720;
     double renderScale = 1;         // resolution of the full-quality level (slow software GL: < 1)
     double frameBudgetMs = 100;     // at rest, finer levels predicted to cost more are not rendered
@@ -200,9 +215,8 @@ class DesktopApp {
   void setHovered(std::uint16_t label);
   void select(std::uint16_t label);
   void setView(const std::string& name);
-  void applyStep();  // the current lesson step's structure, preset and view
-  void lessonPanel();
-  const quiz::Question* activeLocate() const;  // the current step, when it is a locate question
+  void showLessonStructure(const LessonPanel::Shown& shown);  // a lesson step's structure, preset and view
+  lessons::RenderState renderState();                          // stored with each lesson answer
   bool inView(double x, double y) const;
   std::optional<std::array<double, 2>> projectStructure(std::uint16_t label) const;
 
@@ -230,9 +244,6 @@ class DesktopApp {
   std::map<std::uint16_t, render::StructureFrame> frames_;
   std::map<std::pair<std::uint16_t, bool>, render::Preset> presets_;
   std::string startView_ = "lateral_right";
-  std::optional<lessons::Course> course_;
-  int lessonIndex_ = 0, stepIndex_ = 0;
-  std::optional<quiz::Grade> lastGrade_;  // the current locate question's last graded click
 
   // Graphics
   SdlSession sdl_;
@@ -281,6 +292,7 @@ class DesktopApp {
   // Mouse
   bool leftDown_ = false, panDown_ = false, dragged_ = false;
   double downX_ = 0, downY_ = 0, lastX_ = 0, lastY_ = 0;
+  std::optional<Vec3> lastPickMm_;  // where the last hover pick met the volume (LPS mm)
 
   // Script and measurements
   std::deque<json> actions_;
@@ -296,6 +308,7 @@ class DesktopApp {
   bool recording_ = false;
   std::vector<std::string> messages_;
   std::unique_ptr<StudyPanel> study_;
+  std::unique_ptr<LessonPanel> lesson_;
   std::unique_ptr<TfEditorPanel> expert_;
   std::unique_ptr<ImportPanel> import_;
 };
@@ -315,7 +328,6 @@ Status DesktopApp::loadContent() {
       startPreset = views.front().presetId;
       startView_ = lessons::toString(views.front().view);
     }
-    course_ = *course;
   } else {
     message("default course: " + course.error().message);
   }
@@ -376,6 +388,7 @@ Status DesktopApp::showDataset(Dataset dataset, const std::string& startStructur
       renderer_.reset();
     }
     setView(viewName_.empty() ? startView_ : viewName_);
+    if (lesson_) lesson_->setViewDataset(dataset_.id);
     event({{"event", "dataset"}, {"dataset", dataset_.id}, {"structures", dataset_.structures.size()},
            {"selected", start->id}});
   }
@@ -553,28 +566,13 @@ std::optional<std::array<double, 2>> DesktopApp::projectStructure(std::uint16_t 
   return std::array<double, 2>{(*p)[0] + left, (*p)[1]};
 }
 
-const quiz::Question* DesktopApp::activeLocate() const {
-  if (!course_ || lessonIndex_ >= int(course_->lessons.size())) return nullptr;
-  const lessons::Lesson& lesson = course_->lessons[std::size_t(lessonIndex_)];
-  if (stepIndex_ >= int(lesson.steps.size())) return nullptr;
-  const lessons::Step& step = lesson.steps[std::size_t(stepIndex_)];
-  if (step.kind != lessons::StepKind::Question || step.question.kind != quiz::QuestionKind::Locate) return nullptr;
-  return &step.question;
-}
-
-void DesktopApp::applyStep() {
-  lastGrade_.reset();
-  if (!course_ || lessonIndex_ >= int(course_->lessons.size())) return;
-  const lessons::Lesson& lesson = course_->lessons[std::size_t(lessonIndex_)];
-  if (stepIndex_ >= int(lesson.steps.size())) return;
-  const lessons::Step& step = lesson.steps[std::size_t(stepIndex_)];
-  if (step.kind != lessons::StepKind::Show) return;
-  const Structure* s = dataset_.findStructure(step.show.structure);
+void DesktopApp::showLessonStructure(const LessonPanel::Shown& shown) {
+  const Structure* s = dataset_.findStructure(shown.structure);
   if (!s || !frames_.count(s->label)) {
-    message("lesson step: no structure '" + step.show.structure + "' in dataset '" + dataset_.id + "'");
+    message("lesson step: no structure '" + shown.structure + "' in dataset '" + dataset_.id + "'");
     return;
   }
-  auto preset = presetForStep(library_, s->id, step.show.presetId);
+  auto preset = presetForStep(library_, s->id, shown.presetId);
   if (!preset) {
     message(preset.error().message);
     return;
@@ -584,58 +582,18 @@ void DesktopApp::applyStep() {
   presets_[{s->label, bare_}] = *preset;
   hovered_ = 0;
   select(s->label);
-  setView(lessons::toString(step.show.view));
+  setView(shown.view ? lessons::toString(*shown.view) : (viewName_.empty() ? startView_ : viewName_));
 }
 
-void DesktopApp::lessonPanel() {
-  if (!course_ || course_->lessons.empty()) return;
-  if (!ImGui::CollapsingHeader(("Lesson - " + course_->title).c_str(), ImGuiTreeNodeFlags_DefaultOpen)) return;
-  const lessons::Lesson& current = course_->lessons[std::size_t(lessonIndex_)];
-  if (ImGui::BeginCombo("##lesson", current.title.c_str())) {
-    for (int i = 0; i < int(course_->lessons.size()); ++i)
-      if (ImGui::Selectable(course_->lessons[std::size_t(i)].title.c_str(), i == lessonIndex_)) {
-        lessonIndex_ = i;
-        stepIndex_ = 0;
-        applyStep();
-      }
-    ImGui::EndCombo();
-  }
-  const lessons::Lesson& lesson = course_->lessons[std::size_t(lessonIndex_)];
-  if (lesson.steps.empty()) return;
-  const int n = int(lesson.steps.size());
-  if (ImGui::ArrowButton("##prev", ImGuiDir_Left) && stepIndex_ > 0) {
-    --stepIndex_;
-    applyStep();
-  }
-  ImGui::SameLine();
-  ImGui::Text("step %d of %d", stepIndex_ + 1, n);
-  ImGui::SameLine();
-  if (ImGui::ArrowButton("##next", ImGuiDir_Right) && stepIndex_ + 1 < n) {
-    ++stepIndex_;
-    applyStep();
-  }
-  const lessons::Step& step = lesson.steps[std::size_t(stepIndex_)];
-  ImGui::BeginChild("step", ImVec2(0, ImGui::GetTextLineHeightWithSpacing() * 7), true);
-  ImGui::PushTextWrapPos(0);
-  if (step.kind == lessons::StepKind::Show) {
-    ImGui::TextColored(ImVec4(1, 0.75f, 0.3f, 1), "%s", step.show.title.c_str());
-    ImGui::TextUnformatted(step.show.text.c_str());
-  } else if (step.kind == lessons::StepKind::Question) {
-    ImGui::TextColored(ImVec4(0.6f, 0.8f, 1, 1), "Question");
-    ImGui::TextUnformatted(step.question.prompt.c_str());
-    if (step.question.kind == quiz::QuestionKind::Locate) {
-      ImGui::TextDisabled("Click it in the view.");
-      if (lastGrade_)
-        ImGui::TextColored(lastGrade_->correct ? ImVec4(0.5f, 1, 0.5f, 1) : ImVec4(1, 0.5f, 0.4f, 1), "%s %s",
-                           lastGrade_->correct ? "Correct." : "Not quite.", lastGrade_->feedback.c_str());
-    } else {
-      ImGui::TextDisabled("Answer this kind with `anatomy-tutor play` (the desktop grades locate questions only).");
-    }
-  } else {
-    ImGui::TextDisabled("A study step: run studies with `anatomy-tutor study run`.");
-  }
-  ImGui::PopTextWrapPos();
-  ImGui::EndChild();
+lessons::RenderState DesktopApp::renderState() {
+  const render::Preset p = displayPreset();
+  lessons::RenderState r;
+  r.presetId = p.id.value_or(p.name);
+  r.mode = bare_ ? "bare" : "wdt";
+  r.t = t_;
+  r.alpha = p.alpha;
+  r.beta = p.lightingBeta;
+  return r;
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -675,6 +633,8 @@ void DesktopApp::hoverAt(double x, double y) {
   const render::TransferFunction2D table = render::shadingTable(s.preset);
   const double px = (x - left) / std::max(1.0, winW_ - left) * s.width, py = y / std::max(1, winH_) * s.height;
   const render::PickResult hit = render::pickStructure(scene, s, table, px, py);
+  if (hit.hit) lastPickMm_ = hit.pointMm;
+  else lastPickMm_.reset();
   const std::uint16_t label = hit.hit && frames_.count(hit.label) ? hit.label : 0;
   if (label != hovered_) {
     const Structure* st = dataset_.findStructureByLabel(label);
@@ -699,24 +659,16 @@ void DesktopApp::select(std::uint16_t label) {
 void DesktopApp::clickAt(double x, double y) {
   if (study_->participantActive()) return;
   hoverAt(x, y);
-  if (const quiz::Question* q = activeLocate()) {
-    // A locate answer: the structure under the cursor. The weighted distance to the target is
-    // left unknown (-1), so only a hit on the target itself is correct.
+  if (lesson_->wantsClick()) {
+    // A locate answer: the structure under the cursor, and for a question with a tolerance that
+    // was missed, the clicked point's weighted distance from the target (else unknown: -1).
     const Structure* st = dataset_.findStructureByLabel(hovered_);
-    quiz::ResolvedQuestion resolved;
-    resolved.question = *q;
-    quiz::Pick pick;
-    pick.structure = st ? st->id : "";
-    quiz::GradingContext context;  // display names for the feedback
-    for (const Structure& d : dataset_.structures) context.names.push_back({d.id, {d.displayName}});
-    auto graded = quiz::gradeLocate(resolved, pick, context);
-    if (!graded) {
-      message("grading: " + graded.error().message);
-    } else {
-      lastGrade_ = *graded;
-      event({{"event", "graded"}, {"question", q->id}, {"clicked", pick.structure}, {"correct", graded->correct},
-             {"feedback", graded->feedback}});
-    }
+    const auto targetId = lesson_->questionTarget();
+    const Structure* target = targetId ? dataset_.findStructure(*targetId) : nullptr;
+    double distanceMm = -1;
+    if (lesson_->wantsClickDistance() && target && st != target && lastPickMm_)
+      distanceMm = weightedDistanceAt(dataset_, target->label, *lastPickMm_);
+    lesson_->clicked(st ? st->id : "", distanceMm);
     return;
   }
   if (hovered_) select(hovered_);
@@ -820,7 +772,13 @@ void DesktopApp::updateFields() {
   const std::string key = fineField ? fine->key() : coarse->key();
   if (best && (best != field_ || fieldLabel_ != label) && renderer_) {
     const Clock::time_point uploadStart = Clock::now();
-    const Status uploaded = renderer_->setField(best->distances);
+    // A field computed on the GPU goes into the texture there (CUDA–GL interop).
+    const auto onDevice = worker_->cachedOnDevice(fineField ? *fine : *coarse);
+    Status uploaded = onDevice ? renderer_->setFieldFromDevice(*onDevice) : renderer_->setField(best->distances);
+    if (onDevice && !uploaded) {
+      message("CUDA-GL interop failed, uploading the field from host memory: " + uploaded.error().message);
+      uploaded = renderer_->setField(best->distances);
+    }
     if (recording_ && !frameLog_.empty()) frameLog_.back().uploadMs = msBetween(uploadStart, Clock::now());
     if (auto st = uploaded; !st) {
       message("uploading the field: " + st.error().message);
@@ -973,10 +931,14 @@ void DesktopApp::explorePanel(float panelW) {
   ImGui::SameLine();
   if (ImGui::SmallButton("Import...")) import_->open();
   ImGui::Separator();
-  lessonPanel();
+  lesson_->draw(float(winH_) * 0.4f);
+  ImGui::Separator();
 
-  const Structure* selected = dataset_.findStructureByLabel(selected_);
-  const Structure* hovered = dataset_.findStructureByLabel(hovered_);
+  // While a question would be given away by a name (and throughout a quiz-only lesson), no
+  // structure name is shown: not the selected or hovered one, nor the browser.
+  const bool hideNames = lesson_->namesHidden();
+  const Structure* selected = hideNames ? nullptr : dataset_.findStructureByLabel(selected_);
+  const Structure* hovered = hideNames ? nullptr : dataset_.findStructureByLabel(hovered_);
   if (selected) {
     ImGui::TextColored(ImVec4(1, 0.75f, 0.3f, 1), "%s", selected->displayName.c_str());
     ImGui::TextDisabled("%s", selected->system.c_str());
@@ -1022,10 +984,16 @@ void DesktopApp::explorePanel(float panelW) {
   }
   ImGui::Separator();
 
-  ImGui::InputTextWithHint("##search", "search structures", search_, sizeof search_);
+  if (!hideNames) ImGui::InputTextWithHint("##search", "search structures", search_, sizeof search_);
   const std::string query = lower(search_);
   ImGui::BeginChild("structures", ImVec2(0, -statusHeight()), true);
+  if (hideNames) {
+    ImGui::PushTextWrapPos(0);
+    ImGui::TextDisabled("(structure names are hidden during the question)");
+    ImGui::PopTextWrapPos();
+  }
   for (const auto& [system, list] : bySystem_) {
+    if (hideNames) break;
     std::vector<const Structure*> shown;
     for (const Structure* s : list)
       if (query.empty() || lower(s->displayName).find(query) != std::string::npos ||
@@ -1252,22 +1220,14 @@ bool DesktopApp::stepScript() {
           hoverAt((*p)[0], (*p)[1]);
         }
         done();
-      } else if (what == "lesson") {
-        if (!course_) {
-          message("ui script: no course is loaded");
+      } else if (LessonPanel::handled(what)) {  // lesson_user, lessons, lesson, lesson_next, answer, review, lesson_close
+        auto st = lesson_->scriptAction(what, a);
+        if (!st) {
+          message("ui script: action " + a.dump() + ": " + st.error().message);
           finishScript(2);
           return true;
         }
-        const int l = a.at("lesson").get<int>(), st = a.value("step", 0);
-        if (l < 0 || l >= int(course_->lessons.size()) || st < 0 ||
-            st >= int(course_->lessons[std::size_t(l)].steps.size())) {
-          message("ui script: no lesson " + std::to_string(l) + " step " + std::to_string(st));
-          finishScript(2);
-          return true;
-        }
-        lessonIndex_ = l;
-        stepIndex_ = st;
-        applyStep();
+        if (!*st) return false;  // a lesson still being prepared
         done();
       } else if (what == "click_structure") {
         const Structure* s = structureArg();
@@ -1425,6 +1385,9 @@ int DesktopApp::run() {
   }
   if (auto st = loadContent(); !st) return reportError(st.error().message);
   study_ = std::make_unique<StudyPanel>(options_.dbPath, library_, [this](json j) { event(std::move(j)); });
+  lesson_ = std::make_unique<LessonPanel>(
+      options_.dbPath, options_.userName, dataset_.id, [this](json j) { event(std::move(j)); },
+      [this](const LessonPanel::Shown& shown) { showLessonStructure(shown); }, [this] { return renderState(); });
   import_ = std::make_unique<ImportPanel>(
       options_.dbPath, [this](json j) { event(std::move(j)); }, [this](const std::string& m) { message(m); });
   if (auto st = openGraphics(); !st) return reportError(st.error().message);
@@ -1499,19 +1462,22 @@ int runDesktop(const std::vector<std::string>& args) {
     if (a == "--help" || a == "-h") {
       std::printf(
           "usage: anatomy-tutor [desktop] [--dataset D] [--ui-script FILE.json [--screenshot OUT.png]] [--size WxH]\n"
-          "                             [--render-scale S] [--frame-budget MS] [--db PATH]\n"
+          "                             [--render-scale S] [--frame-budget MS] [--db PATH] [--user NAME]\n"
           "  Opens the desktop app on the default course (explore: hover to highlight, click to select).\n"
           "  --dataset    phantom, phantom:N, a dataset imported into --db, or a volume file or DICOM folder\n"
           "               (default: the default course's dataset)\n"
           "  --ui-script  replay {\"actions\": [...]} (select, t, mode, view, hover, hover_structure, click,\n"
-          "               click_structure, lesson, orbit, zoom, clip, wait, wait_field, screenshot,\n"
+          "               click_structure, orbit, zoom, clip, wait, wait_field, screenshot,\n"
           "               hover_sweep, record, report; expert, tf_add_point, tf_move_point,\n"
           "               tf_delete_point, tf_colour, preset_set, preset_save; study_start, study_toggle,\n"
           "               study_rate, study_comment, study_next, study_close, coordinator_open,\n"
-          "               coordinator_export, coordinator_summary; import, cancel_import, open_imported,\n"
-          "               cancel_field)\n"
-          "  --db         the database: imported datasets, presets saved in the expert panel, studies\n"
-          "               (default: the user's)\n"
+          "               coordinator_export, coordinator_summary; lesson_user, lessons, lesson,\n"
+          "               lesson_next, answer, review, lesson_close; import, cancel_import,\n"
+          "               open_imported, cancel_field)\n"
+          "  --db         the database: imported datasets, presets saved in the expert panel, studies,\n"
+          "               lesson progress (default: the user's)\n"
+          "  --user       whose lesson progress to show and record (default: student; the same name as\n"
+          "               `anatomy-tutor play --user` shares the progress; created when new)\n"
           "  --screenshot save the window as PNG once the script has run and the view has settled\n"
           "  --size       window size in logical pixels (default 1280x720)\n"
           "  --render-scale  resolution of the full-quality volume image, 0.1..1 (default 1; software GL: less)\n"
@@ -1521,7 +1487,7 @@ int runDesktop(const std::vector<std::string>& args) {
     }
     std::optional<std::string> value;
     if (a == "--dataset" || a == "--ui-script" || a == "--screenshot" || a == "--size" ||
-        a == "--render-scale" || a == "--frame-budget" || a == "--db") {
+        a == "--render-scale" || a == "--frame-budget" || a == "--db" || a == "--user") {
       value = next();
       if (!value) return reportError("desktop: option " + a + " needs a value", 2);
     }
@@ -1531,6 +1497,9 @@ int runDesktop(const std::vector<std::string>& args) {
       options.script = *value;
     } else if (a == "--db") {
       options.dbPath = *value;
+    } else if (a == "--user") {
+      if (value->empty()) return reportError("desktop: --user needs a name", 2);
+      options.userName = *value;
     } else if (a == "--screenshot") {
       options.screenshot = *value;
     } else if (a == "--frame-budget") {

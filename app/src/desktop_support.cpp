@@ -52,6 +52,11 @@ Result<render::Preset> presetForStep(const render::PresetLibrary& library, const
 }
 
 bool displayAvailable() {
+  if (const char* offscreen = std::getenv("AT_DESKTOP_OFFSCREEN"); offscreen && std::string(offscreen) == "1") {
+    if (SDL_Init(SDL_INIT_VIDEO) != 0) return false;
+    SDL_QuitSubSystem(SDL_INIT_VIDEO);
+    return true;
+  }
   bool named = false;
   for (const char* name : {"DISPLAY", "WAYLAND_DISPLAY"})
     if (const char* v = std::getenv(name); v && *v) named = true;

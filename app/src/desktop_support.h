@@ -25,6 +25,8 @@ Result<render::Preset> presetForStep(const render::PresetLibrary& library, const
                                      const std::string& presetId);
 
 // A display server to open a window on: DISPLAY (X11) or WAYLAND_DISPLAY set and non-empty.
+// For measuring the app on a headless GPU machine, AT_DESKTOP_OFFSCREEN=1 with
+// SDL_VIDEODRIVER=offscreen accepts SDL's offscreen driver (an EGL pbuffer, no window shown).
 bool displayAvailable();
 
 // The no-display fallback of `anatomy-tutor` without arguments: renders the default lesson's first

@@ -5,7 +5,21 @@
 
 #include "render/scene.h"
 
+#if defined(AT_HAVE_CUDA)
+#include "cuda/wdt_cuda.h"
+#include "wdt/huge_pages.h"
+#endif
+
 namespace at::app {
+
+#if defined(AT_HAVE_CUDA)
+struct FieldWorker::DeviceState {
+  std::optional<cuda::DeviceVolume> volume;
+  bool unusable = false;  // the upload or a run failed: computeWdt from now on
+};
+#else
+struct FieldWorker::DeviceState {};
+#endif
 
 std::string FieldRequest::key() const {
   char buf[256];
@@ -34,7 +48,7 @@ void FieldWorker::request(const FieldRequest& request) {
   {
     std::lock_guard lock(mutex_);
     for (const auto& entry : lru_)
-      if (entry.first == key) return;
+      if (entry.key == key) return;
     if (runningKey_ && *runningKey_ == key) {
       queued_.reset();  // the running one is what the user wants now
       return;
@@ -55,10 +69,18 @@ std::shared_ptr<const DistanceField> FieldWorker::cached(const FieldRequest& req
   const std::string key = request.key();
   std::lock_guard lock(mutex_);
   for (auto it = lru_.begin(); it != lru_.end(); ++it)
-    if (it->first == key) {
+    if (it->key == key) {
       lru_.splice(lru_.begin(), lru_, it);
-      return lru_.front().second;
+      return lru_.front().field;
     }
+  return nullptr;
+}
+
+std::shared_ptr<const cuda::DeviceField> FieldWorker::cachedOnDevice(const FieldRequest& request) {
+  const std::string key = request.key();
+  std::lock_guard lock(mutex_);
+  for (const Entry& entry : lru_)
+    if (entry.key == key) return entry.deviceField;
   return nullptr;
 }
 
@@ -84,8 +106,8 @@ std::optional<FieldWorker::Running> FieldWorker::running() const {
   return r;
 }
 
-void FieldWorker::insert(const std::string& key, std::shared_ptr<const DistanceField> field) {
-  lru_.emplace_front(key, std::move(field));
+void FieldWorker::insert(Entry entry) {
+  lru_.push_front(std::move(entry));
   while (lru_.size() > capacity_) lru_.pop_back();
 }
 
@@ -111,14 +133,31 @@ void FieldWorker::run() {
     if (!structure) {
       done.message = "no structure with label " + std::to_string(job.label);
     } else {
-      const Mask seeds = render::structureMask(dataset_.labels, job.label);
       WdtControl control;
       control.cancel = &cancelRunning_;
       control.progress = [this](int done, int planned) {
         passesDone_ = done;
         passesPlanned_ = planned;
       };
+      bool cancelledOnDevice = false;
+      if (auto onDevice = computeOnDevice(job, control, cancelledOnDevice)) {
+        if (cancelledOnDevice) {
+          cancelled_.fetch_add(1);
+          std::lock_guard lock(mutex_);
+          runningKey_.reset();
+          runningRequest_.reset();
+          continue;
+        }
+        std::lock_guard lock(mutex_);
+        if (onDevice->field) insert({*runningKey_, onDevice->field, onDevice->deviceField});
+        runningKey_.reset();
+        runningRequest_.reset();
+        finished_.push_back(std::move(*onDevice));
+        continue;
+      }
+      const Mask seeds = render::structureMask(dataset_.labels, job.label);
       auto result = computeWdt(dataset_.volume, seeds, job.params, control);
+      if (result && !deviceWarning_.empty()) result->stats.warning = std::exchange(deviceWarning_, "");
       if (!result) {
         done.message = structure->id + ": " + result.error().message;
       } else if (result->stats.cancelled) {
@@ -135,11 +174,63 @@ void FieldWorker::run() {
       }
     }
     std::lock_guard lock(mutex_);
-    if (done.field) insert(*runningKey_, done.field);
+    if (done.field) insert({*runningKey_, done.field, nullptr});
     runningKey_.reset();
     runningRequest_.reset();
     finished_.push_back(std::move(done));
   }
+}
+
+std::optional<FinishedField> FieldWorker::computeOnDevice(const FieldRequest& job, WdtControl& control,
+                                                          bool& cancelled) {
+#if defined(AT_HAVE_CUDA)
+  if (job.params.backend == WdtBackend::Cpu || !cuda::queryDevice().available) return std::nullopt;
+  if (!device_) device_ = std::make_unique<DeviceState>();
+  DeviceState& d = *device_;
+  if (d.unusable) return std::nullopt;
+  auto giveUp = [&](const std::string& why) -> std::optional<FinishedField> {
+    d.unusable = true;
+    d.volume.reset();
+    if (job.params.backend == WdtBackend::Cuda) {
+      FinishedField failed;
+      failed.request = job;
+      failed.message = why;
+      return failed;
+    }
+    deviceWarning_ = "CUDA backend failed, computed on the CPU instead: " + why;
+    return std::nullopt;
+  };
+  const auto t0 = std::chrono::steady_clock::now();
+  if (!d.volume) {
+    auto uploaded = cuda::uploadVolume(dataset_.volume, dataset_.labels);
+    if (!uploaded) return giveUp(uploaded.error().message);
+    d.volume = std::move(*uploaded);
+  }
+  WdtStats stats;
+  auto field = cuda::runCudaBackendOnDevice(*d.volume, job.label, job.params, control, &stats);
+  if (!field) return giveUp(field.error().message);
+  FinishedField done;
+  done.request = job;
+  if (stats.cancelled) {
+    cancelled = true;
+    return done;
+  }
+  auto host = std::make_shared<DistanceField>();
+  host->downsample = field->downsample();
+  // Fresh memory on huge pages: 4 KiB page faults would cost more than the copy (~40 ms at 256³).
+  wdt::resizeOnHugePages(host->distances.voxels, field->grid().dims.count());
+  if (auto copied = cuda::copyToHost(*field, host->distances); !copied) return giveUp(copied.error().message);
+  done.field = std::move(host);
+  done.deviceField = std::make_shared<const cuda::DeviceField>(std::move(*field));
+  done.ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  done.device = stats.device;
+  return done;
+#else
+  (void)job;
+  (void)control;
+  (void)cancelled;
+  return std::nullopt;
+#endif
 }
 
 }  // namespace at::app

@@ -5,6 +5,13 @@
 // UI thread never waits: it asks `cached` for what exists and `takeFinished` for what arrived.
 // Finished fields go into a small LRU cache keyed by structure label, downsample factor and the
 // WDT parameters that shape the field.
+//
+// With a CUDA device (backend auto or cuda), the worker uploads the dataset's HU and labels to the
+// GPU once and computes each field there (cuda::DeviceVolume): nothing is uploaded per field, and
+// the field stays on the device as well, so the view can take it through CUDA–GL interop
+// (`cachedOnDevice`) instead of uploading the host copy. The host copy is still made (off the UI
+// thread) for picking. Any CUDA failure under `auto` falls back to computeWdt's CPU path with a
+// one-line message.
 #pragma once
 
 #include <atomic>
@@ -22,6 +29,10 @@
 #include "volume/structure.h"
 #include "wdt/wdt.h"
 
+namespace at::cuda {
+class DeviceField;
+}
+
 namespace at::app {
 
 struct FieldRequest {
@@ -33,6 +44,7 @@ struct FieldRequest {
 struct FinishedField {
   FieldRequest request;
   std::shared_ptr<const DistanceField> field;  // null when it failed
+  std::shared_ptr<const cuda::DeviceField> deviceField;  // the same field on the GPU, or null
   double ms = 0;
   std::string device;
   std::string message;  // error, or the backend's warning (e.g. why auto fell back to the CPU)
@@ -53,6 +65,8 @@ class FieldWorker {
   void cancelAll();
   // The cached field for `request`, marking it most recently used; null if absent.
   std::shared_ptr<const DistanceField> cached(const FieldRequest& request);
+  // The cached field's device copy (computed on the GPU), or null.
+  std::shared_ptr<const cuda::DeviceField> cachedOnDevice(const FieldRequest& request);
   // Fields (and failures) finished since the last call, oldest first.
   std::vector<FinishedField> takeFinished();
   bool busy() const;
@@ -69,7 +83,15 @@ class FieldWorker {
 
  private:
   void run();
-  void insert(const std::string& key, std::shared_ptr<const DistanceField> field);
+  struct Entry {
+    std::string key;
+    std::shared_ptr<const DistanceField> field;
+    std::shared_ptr<const cuda::DeviceField> deviceField;
+  };
+  void insert(Entry entry);
+  // The field on the GPU (device-resident volume), or nullopt to use computeWdt instead; sets
+  // `cancelled` when the run stopped for a newer request. Worker thread only.
+  std::optional<FinishedField> computeOnDevice(const FieldRequest& job, WdtControl& control, bool& cancelled);
 
   const Dataset& dataset_;
   const std::size_t capacity_;
@@ -83,7 +105,10 @@ class FieldWorker {
   std::atomic<bool> cancelRunning_{false};
   std::atomic<int> cancelled_{0};
   bool stop_ = false;
-  std::list<std::pair<std::string, std::shared_ptr<const DistanceField>>> lru_;  // front = newest
+  std::list<Entry> lru_;  // front = newest
+  struct DeviceState;
+  std::unique_ptr<DeviceState> device_;  // worker thread only
+  std::string deviceWarning_;            // why the GPU path was given up, for the next result
   std::vector<FinishedField> finished_;
   std::thread thread_;
 };

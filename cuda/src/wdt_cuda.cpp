@@ -204,19 +204,22 @@ class WorkspaceCache {
     static WorkspaceCache* cache = new WorkspaceCache;
     return *cache;
   }
+  // A kept workspace of these dims, or null.
+  std::unique_ptr<Workspace> takeKept(Dims dims) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    for (auto it = kept_.begin(); it != kept_.end(); ++it) {
+      if ((*it)->dims == dims) {
+        auto w = std::move(*it);
+        kept_.erase(it);
+        return w;
+      }
+    }
+    return nullptr;
+  }
   // A kept workspace of these dims, or a new one; if allocating fails, the kept workspaces are
   // freed and the allocation is tried once more.
   Result<std::unique_ptr<Workspace>> take(Dims dims) {
-    {
-      std::lock_guard<std::mutex> lock(mutex_);
-      for (auto it = kept_.begin(); it != kept_.end(); ++it) {
-        if ((*it)->dims == dims) {
-          auto w = std::move(*it);
-          kept_.erase(it);
-          return w;
-        }
-      }
-    }
+    if (auto kept = takeKept(dims)) return kept;
     auto made = Workspace::create(dims);
     if (made) return made;
     std::vector<std::unique_ptr<Workspace>> freed;
@@ -396,8 +399,15 @@ Status copyToHost(const DeviceField& field, FloatVolume& out) {
   out.geometry = field.grid();
   out.voxels.resize(field.grid().dims.count());
   if (out.voxels.empty()) return {};
-  return check(cudaMemcpy(out.voxels.data(), field.devicePointer(), out.voxels.size() * sizeof(float),
-                          cudaMemcpyDeviceToHost),
+  const std::size_t bytes = out.voxels.size() * sizeof(float);
+  // Through the pinned staging chunks of the workspace kept from the run that made the field, when
+  // there is one: a plain copy into pageable memory runs at a fraction of the speed.
+  if (auto w = WorkspaceCache::instance().takeKept(field.grid().dims)) {
+    AT_TRY(w->transfer(out.voxels.data(), field.devicePointer(), bytes, false));
+    WorkspaceCache::instance().put(std::move(w));
+    return {};
+  }
+  return check(cudaMemcpy(out.voxels.data(), field.devicePointer(), bytes, cudaMemcpyDeviceToHost),
                "cudaMemcpy(distances, device to host)");
 }
 

@@ -205,30 +205,3 @@ TEST_CASE("without a display, anatomy-tutor says so in one line and writes the d
   }
   CHECK(pngs >= 2);
 }
-
-TEST_CASE("a locate click on the target is graded correct, a click on another structure wrong") {
-  if (!haveXvfb()) {
-    MESSAGE("SKIPPED: xvfb-run is not installed");
-    return;
-  }
-  TempDir dir("desktop-locate");
-  // Lesson 4 of the default course: its first step frames the temporal line from the side, its
-  // fifth asks to locate it.
-  const json script = {{"actions",
-                        {{{"do", "lesson"}, {"lesson", 3}, {"step", 0}},
-                         {{"do", "lesson"}, {"lesson", 3}, {"step", 4}},
-                         {{"do", "click_structure"}, {"structure", "external_auditory_canal"}},
-                         {{"do", "click_structure"}, {"structure", "temporal_line"}}}}};
-  const Run r = runScript(dir, script, "");
-  INFO(r.err);
-  REQUIRE(r.exitCode == 0);
-  std::vector<json> grades;
-  for (const json& e : r.events)
-    if (e.is_object() && e.value("event", "") == "graded") grades.push_back(e);
-  REQUIRE(grades.size() == 2);
-  CHECK(grades[0].value("question", "") == "mastoidectomy_landmarks.locate_temporal_line");
-  CHECK(grades[0].value("clicked", "") == "external_auditory_canal");
-  CHECK_FALSE(grades[0].value("correct", true));
-  CHECK(grades[1].value("clicked", "") == "temporal_line");
-  CHECK(grades[1].value("correct", false));
-}

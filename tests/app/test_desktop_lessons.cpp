@@ -1,0 +1,292 @@
+// The desktop lesson runner as a user meets it: scripted runs under Xvfb that start lessons through
+// the LessonEngine, answer questions of several kinds (locate by a click in the 3-D view), and leave
+// their answers in the database where `anatomy-tutor progress` finds them.
+#include <doctest/doctest.h>
+
+#include <algorithm>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "test_support.h"
+
+namespace fs = std::filesystem;
+using at::test::TempDir;
+using json = nlohmann::json;
+
+namespace {
+
+bool haveXvfb() { return std::system("command -v xvfb-run >/dev/null 2>&1") == 0; }
+
+struct Run {
+  int exitCode = -1;
+  std::vector<json> events;
+  std::string err;
+};
+
+// Runs `script` on the 128³ phantom in a small window (software GL on two shared cores is slow),
+// with lesson progress in `db` under the user `user`. The app's exit status is written by a
+// wrapper inside xvfb-run: xvfb-run's own status at times reports a failed clean-up of its
+// temporary folder instead.
+Run runLessonScript(const TempDir& dir, const json& script, const fs::path& db, const std::string& user) {
+  const fs::path scriptPath = dir / "script.json", out = dir / "stdout", err = dir / "stderr",
+                 wrapper = dir / "run.sh", status = dir / "status";
+  std::ofstream(scriptPath) << script.dump();
+  fs::remove(status);
+  std::ofstream(wrapper) << "'" << at::test::appBinary().string()
+                         << "' desktop --dataset phantom:128 --size 800x600 --render-scale 0.3 --db '" << db.string()
+                         << "' --user '" << user << "' --ui-script '" << scriptPath.string() << "' >'" << out.string()
+                         << "' 2>'" << err.string() << "'\necho $? >'" << status.string() << "'\n";
+  const std::string cmd = "xvfb-run -a -s '-screen 0 1280x800x24' sh '" + wrapper.string() + "'";
+  std::system(cmd.c_str());
+  Run r;
+  std::ifstream statusIn(status);
+  if (!(statusIn >> r.exitCode)) r.exitCode = -1;
+  r.err = at::test::readFile(err);
+  std::istringstream lines(at::test::readFile(out));
+  for (std::string line; std::getline(lines, line);)
+    if (!line.empty() && line[0] == '{') r.events.push_back(json::parse(line, nullptr, false));
+  return r;
+}
+
+std::vector<json> eventsOf(const Run& r, const std::string& kind) {
+  std::vector<json> found;
+  for (const json& e : r.events)
+    if (e.is_object() && e.value("event", "") == kind) found.push_back(e);
+  return found;
+}
+
+json next(int times) {
+  json actions = json::array();
+  for (int i = 0; i < times; ++i) actions.push_back({{"do", "lesson_next"}});
+  return actions;
+}
+
+void append(json& list, const json& more) {
+  for (const json& a : more) list.push_back(a);
+}
+
+}  // namespace
+
+TEST_CASE("a desktop lesson grades clicks, choices and names, records them, resumes, and the terminal sees the same progress") {
+  if (!haveXvfb()) {
+    MESSAGE("SKIPPED: xvfb-run is not installed");
+    return;
+  }
+  TempDir dir("desktop-lessons");
+  const fs::path db = dir / "tutor.db";
+  // inner_ear: four show steps, then locate the cochlea, identify the vestibule, name the lateral
+  // canal. The cochlea is clicked (from above in the WDT view, where nothing lies in front of it;
+  // the view settled first, since picking classifies with the shown field), the vestibule
+  // chosen (right), the canal misnamed (wrong).
+  json actions = {{{"do", "lessons"}, {"course", "temporal_bone"}},
+                  {{"do", "lesson"}, {"course", "temporal_bone"}, {"lesson", "inner_ear"}}};
+  append(actions, next(4));
+  append(actions, {{{"do", "mode"}, {"value", "wdt"}},  // the last show step left the bare preset on
+                   {{"do", "view"}, {"value", "superior"}},
+                   {{"do", "wait_field"}},
+                   {{"do", "click_structure"}, {"structure", "cochlea"}},
+                   {{"do", "lesson_next"}},
+                   {{"do", "answer"}, {"value", "vestibule"}},
+                   {{"do", "lesson_next"}},
+                   {{"do", "answer"}, {"value", "cochlea"}}});
+  const Run r = runLessonScript(dir, {{"actions", actions}}, db, "tester");
+  INFO(r.err);
+  REQUIRE(r.exitCode == 0);
+
+  // Before any answer: the first lesson open, the others locked behind their prerequisites.
+  const auto lists = eventsOf(r, "lessons");
+  REQUIRE(lists.size() == 1);
+  const json& rows = lists[0].at("lessons");
+  REQUIRE(rows.size() == 4);
+  CHECK(rows[0].value("id", "") == "inner_ear");
+  CHECK_FALSE(rows[0].value("locked", true));
+  CHECK(rows[1].value("locked", false));
+  CHECK(rows[1].at("missing") == json{"The inner ear"});
+  CHECK(rows[3].at("missing").size() == 2);
+
+  const auto started = eventsOf(r, "lesson_started");
+  REQUIRE(started.size() == 1);
+  CHECK(started[0].value("user", "") == "tester");
+  CHECK_FALSE(started[0].value("resumed", true));
+  const auto steps = eventsOf(r, "lesson_step");
+  REQUIRE(steps.size() == 7);
+  CHECK(steps[0].value("kind", "") == "show");
+  CHECK(steps[4].value("question_kind", "") == "locate");
+  CHECK(steps[5].value("question_kind", "") == "identify");
+  CHECK(steps[6].value("question_kind", "") == "name");
+
+  const auto graded = eventsOf(r, "graded");
+  REQUIRE(graded.size() == 3);
+  CHECK(graded[0].value("question", "") == "inner_ear.locate_cochlea");
+  CHECK(graded[0].value("clicked", "") == "cochlea");
+  CHECK(graded[0].value("correct", false));
+  CHECK(graded[1].value("question", "") == "inner_ear.identify_vestibule");
+  CHECK(graded[1].value("correct", false));
+  CHECK(graded[1].value("score", 0.0) == doctest::Approx(1.0));
+  CHECK(graded[2].value("question", "") == "inner_ear.name_lateral_canal");
+  CHECK_FALSE(graded[2].value("correct", true));
+  CHECK(graded[2].value("score", 1.0) == doctest::Approx(0.0));
+  CHECK_FALSE(graded[2].value("feedback", "").empty());
+  for (const json& g : graded) CHECK_FALSE(g.value("review", true));
+
+  // The answers are in the database: the terminal's progress report counts them per structure.
+  const auto progress = at::test::runApp("progress --user tester --db '" + db.string() + "'");
+  INFO(progress.out << progress.err);
+  REQUIRE(progress.exitCode == 0);
+  CHECK(progress.out.find("3 answers, 2 correct") != std::string::npos);
+  CHECK(progress.out.find("in progress") != std::string::npos);
+  std::istringstream lines(progress.out);
+  int structureLines = 0;
+  for (std::string line; std::getline(lines, line);) {
+    std::istringstream words(line);
+    std::vector<std::string> w;
+    for (std::string x; words >> x;) w.push_back(x);
+    // "  Cochlea   2   1   1  in 2 days": name, box, answered, correct, next review.
+    const auto has = [&](const std::string& name) { return line.find("  " + name + " ") == 0; };
+    if (has("Cochlea") || has("Vestibule")) {
+      REQUIRE(w.size() >= 4);
+      ++structureLines;
+      CHECK(w[1] == "2");  // box 2: a first right answer lands there
+      CHECK(w[2] == "1");  // answered
+      CHECK(w[3] == "1");  // correct
+    }
+  }
+  CHECK(structureLines == 2);
+
+  // Run again: the open attempt resumes after the last answered question (locate the superior
+  // canal); a click on another structure (what lies over the cochlea from above) is graded wrong; the two relation questions are
+  // answered, and the lesson finishes with the mean score of its six answers.
+  json more = {{{"do", "lesson"}, {"lesson", "inner_ear"}},
+               {{"do", "mode"}, {"value", "wdt"}},
+               {{"do", "view"}, {"value", "superior"}},
+               {{"do", "wait_field"}},
+               {{"do", "click_structure"}, {"structure", "cochlea"}},
+               {{"do", "lesson_next"}},
+               {{"do", "answer"}, {"value", 0}},
+               {{"do", "lesson_next"}},
+               {{"do", "answer"}, {"value", 0}},
+               {{"do", "lesson_next"}},
+               {{"do", "lessons"}},
+               {{"do", "lesson_user"}, {"name", "someone_else"}},
+               {{"do", "lessons"}}};
+  const Run again = runLessonScript(dir, {{"actions", more}}, db, "tester");
+  INFO(again.err);
+  REQUIRE(again.exitCode == 0);
+  const auto resumed = eventsOf(again, "lesson_started");
+  REQUIRE(resumed.size() == 1);
+  CHECK(resumed[0].value("resumed", false));
+  const auto resumedSteps = eventsOf(again, "lesson_step");
+  REQUIRE(resumedSteps.size() == 3);
+  CHECK(resumedSteps[0].value("position", 0) == 8);
+  CHECK(resumedSteps[0].value("question", "") == "inner_ear.locate_superior_canal");
+  CHECK(resumedSteps[1].value("question_kind", "") == "relation");
+  const auto moreGraded = eventsOf(again, "graded");
+  REQUIRE(moreGraded.size() == 3);
+  const std::string missedOn = moreGraded[0].value("clicked", "");
+  CHECK_FALSE(missedOn.empty());
+  CHECK(missedOn != "superior_semicircular_canal");
+  CHECK_FALSE(moreGraded[0].value("correct", true));
+  // The question accepts clicks within 0.4 mm of the canal: the miss is graded with the clicked
+  // point's weighted distance from it, which the stored answer keeps.
+  const json& missed = moreGraded[0].at("answer");
+  REQUIRE(missed.contains("distance_mm"));
+  CHECK(missed.at("distance_mm").get<double>() > 0.4);
+  double total = 0;
+  for (const json& g : graded) total += g.value("score", 0.0);
+  for (const json& g : moreGraded) total += g.value("score", 0.0);
+  const auto finished = eventsOf(again, "lesson_finished");
+  REQUIRE(finished.size() == 1);
+  CHECK(finished[0].value("score", -1.0) == doctest::Approx(total / 6));
+  // Finished: the lessons that needed only it are open now, the last one still needs two.
+  const auto after = eventsOf(again, "lessons");
+  REQUIRE(after.size() == 2);
+  const json& rowsAfter = after[0].at("lessons");
+  CHECK(rowsAfter[0].value("best_score", -1.0) == doctest::Approx(total / 6));
+  CHECK_FALSE(rowsAfter[1].value("locked", true));
+  CHECK_FALSE(rowsAfter[2].value("locked", true));
+  CHECK(rowsAfter[3].value("locked", false));
+  // Progress is per user: another user starts from nothing.
+  const json& other = after[1].at("lessons");
+  CHECK(other[0].value("attempts", -1) == 0);
+  CHECK(other[1].value("locked", false));
+  REQUIRE(eventsOf(again, "lesson_user").size() == 1);
+  CHECK(eventsOf(again, "lesson_user")[0].value("user", "") == "someone_else");
+  const auto report = at::test::runApp("progress --user tester --db '" + db.string() + "'");
+  CHECK(report.out.find("finished, best score") != std::string::npos);
+}
+
+TEST_CASE("a lesson whose prerequisites are unfinished cannot be started from a script, and says which they are") {
+  if (!haveXvfb()) {
+    MESSAGE("SKIPPED: xvfb-run is not installed");
+    return;
+  }
+  TempDir dir("desktop-lessons-locked");
+  const fs::path db = dir / "tutor.db";
+  // The open first lesson starts (in quiz-only mode: its questions alone); the locked one refuses.
+  const json actions = {{{"do", "lesson"}, {"lesson", "inner_ear"}, {"mode", "quiz_only"}},
+                        {{"do", "lesson"}, {"lesson", "mastoidectomy_landmarks"}}};
+  const Run r = runLessonScript(dir, {{"actions", actions}}, db, "newcomer");
+  INFO(r.err);
+  CHECK(r.exitCode == 2);
+  const auto started = eventsOf(r, "lesson_started");
+  REQUIRE(started.size() == 1);
+  CHECK(started[0].value("mode", "") == "quiz_only");
+  const auto steps = eventsOf(r, "lesson_step");
+  REQUIRE(steps.size() == 1);
+  CHECK(steps[0].value("kind", "") == "question");
+  CHECK(steps[0].value("count", 0) == 6);
+  const auto refused = eventsOf(r, "lesson_refused");
+  REQUIRE(refused.size() == 1);
+  const std::string message = refused[0].value("message", "");
+  CHECK(message.find("facial_nerve") != std::string::npos);
+  CHECK(message.find("middle_ear") != std::string::npos);
+  CHECK(r.err.find("needs") != std::string::npos);
+}
+
+TEST_CASE("the review button asks a question of the course and grades its answer without a lesson running") {
+  if (!haveXvfb()) {
+    MESSAGE("SKIPPED: xvfb-run is not installed");
+    return;
+  }
+  TempDir dir("desktop-lessons-review");
+  const fs::path db = dir / "tutor.db";
+  // Nothing answered yet: every question's structure counts as due, so a review question exists.
+  const Run r = runLessonScript(dir, {{"actions", {{{"do", "review"}}}}}, db, "reviewer");
+  INFO(r.err);
+  REQUIRE(r.exitCode == 0);
+  const auto queue = eventsOf(r, "review_queue");
+  REQUIRE(queue.size() == 1);
+  CHECK(queue[0].at("due").empty());  // nothing answered: nothing scheduled
+  const auto asked = eventsOf(r, "review_question");
+  REQUIRE(asked.size() == 1);
+  CHECK(asked[0].at("question").is_string());
+  CHECK(asked[0].value("course", "") == "temporal_bone");
+
+  // The choice is deterministic (nothing changed in between): ask it again and answer it right
+  // when it asks for a structure's name or identity (the kinds whose right answer is its target).
+  const std::string kind = asked[0].value("question_kind", ""), target = asked[0].value("target", "");
+  if (kind != "name" && kind != "identify") {
+    MESSAGE("the review question is a " << kind << " question; its answer is not checked here");
+    return;
+  }
+  std::string spoken = target;
+  std::replace(spoken.begin(), spoken.end(), '_', ' ');
+  const Run answered = runLessonScript(
+      dir, {{"actions", {{{"do", "review"}}, {{"do", "answer"}, {"value", kind == "name" ? spoken : target}}}}}, db,
+      "reviewer");
+  INFO(answered.err);
+  REQUIRE(answered.exitCode == 0);
+  const auto again = eventsOf(answered, "review_question");
+  REQUIRE(again.size() == 1);
+  CHECK(again[0].at("question") == asked[0].at("question"));
+  const auto graded = eventsOf(answered, "graded");
+  REQUIRE(graded.size() == 1);
+  CHECK(graded[0].value("review", false));
+  CHECK(graded[0].value("correct", false));
+}
