@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cstdio>
+#include <filesystem>
 #include <mutex>
 #include <vector>
 
@@ -24,6 +25,24 @@ std::optional<ImportStage> parseStage(const std::string& name) {
   for (ImportStage s : kStages)
     if (name == toString(s)) return s;
   return std::nullopt;
+}
+
+// What the loaders count (ImageLoadOptions::progress) for `path`: slices of a DICOM series,
+// data files of an NRRD (a detached header may name many), bytes otherwise (shown as a percentage).
+std::string unitsText(const std::string& path, std::size_t done, std::size_t total) {
+  std::error_code ec;
+  const auto ends = [&](const char* suffix) {
+    const std::string s = suffix;
+    return path.size() >= s.size() && path.compare(path.size() - s.size(), s.size(), s) == 0;
+  };
+  char text[64];
+  if (std::filesystem::is_directory(path, ec) || ends(".dcm"))
+    std::snprintf(text, sizeof text, "slice %zu of %zu", done, total);
+  else if (ends(".nhdr") || ends(".nrrd"))
+    std::snprintf(text, sizeof text, "file %zu of %zu", done, total);
+  else
+    std::snprintf(text, sizeof text, "%.0f%%", 100.0 * double(done) / double(total));
+  return text;
 }
 
 std::string stageList() {
@@ -210,7 +229,10 @@ void ImportPanel::drawWindow(float x, float y) {
     if (cancelling)
       std::snprintf(overlay, sizeof overlay, "cancelling (%s)...", toString(stage));
     else if (total > 0)
-      std::snprintf(overlay, sizeof overlay, "%s %.0f%%", toString(stage), 100.0 * within);
+      std::snprintf(overlay, sizeof overlay, "%s: %s", toString(stage),
+                    unitsText(stage == ImportStage::LoadingLabels ? job_->request.labelsPath : job_->request.volumePath,
+                              done, total)
+                        .c_str());
     else
       std::snprintf(overlay, sizeof overlay, "%s...", toString(stage));
     ImGui::ProgressBar(fraction, ImVec2(-90, 0), overlay);
