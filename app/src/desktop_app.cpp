@@ -25,6 +25,7 @@
 #include <optional>
 #include <sstream>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include <SDL.h>
@@ -184,6 +185,8 @@ class DesktopApp {
     int width = 1280, height = 720;
     double renderScale = 1;         // resolution of the full-quality level (slow software GL: < 1)
     double frameBudgetMs = 100;     // at rest, finer levels predicted to cost more are not rendered
+    double maxFps = 0;              // > 0: frames start at most this often (a display's refresh
+                                    // rate for scripted runs, which swap without vsync)
   };
 
   explicit DesktopApp(Options options) : options_(std::move(options)), library_(defaultPresetsDir()) {}
@@ -1444,6 +1447,9 @@ int DesktopApp::run() {
       frameLog_.back().ms = msBetween(frameStart, end);
       frameLog_.back().interacting = interacting_;
     }
+    if (options_.maxFps > 0)
+      std::this_thread::sleep_until(frameStart + std::chrono::duration_cast<Clock::duration>(
+                                                     std::chrono::duration<double>(1.0 / options_.maxFps)));
   }
   worker_->cancelAll();
   return scriptStatus_;
@@ -1462,7 +1468,7 @@ int runDesktop(const std::vector<std::string>& args) {
     if (a == "--help" || a == "-h") {
       std::printf(
           "usage: anatomy-tutor [desktop] [--dataset D] [--ui-script FILE.json [--screenshot OUT.png]] [--size WxH]\n"
-          "                             [--render-scale S] [--frame-budget MS] [--db PATH] [--user NAME]\n"
+          "                             [--render-scale S] [--frame-budget MS] [--max-fps N] [--db PATH] [--user NAME]\n"
           "  Opens the desktop app on the default course (explore: hover to highlight, click to select).\n"
           "  --dataset    phantom, phantom:N, a dataset imported into --db, or a volume file or DICOM folder\n"
           "               (default: the default course's dataset)\n"
@@ -1482,12 +1488,14 @@ int runDesktop(const std::vector<std::string>& args) {
           "  --size       window size in logical pixels (default 1280x720)\n"
           "  --render-scale  resolution of the full-quality volume image, 0.1..1 (default 1; software GL: less)\n"
           "  --frame-budget  at rest, finer images predicted to take longer are not rendered (default 100 ms;\n"
-          "               scripted screenshots and the 'Full quality at rest' box render full quality anyway)\n");
+          "               scripted screenshots and the 'Full quality at rest' box render full quality anyway)\n"
+          "  --max-fps    start frames at most N times a second (scripted runs swap without vsync and\n"
+          "               otherwise draw as fast as they can; 60 measures them as on a 60 Hz display)\n");
       return 0;
     }
     std::optional<std::string> value;
     if (a == "--dataset" || a == "--ui-script" || a == "--screenshot" || a == "--size" ||
-        a == "--render-scale" || a == "--frame-budget" || a == "--db" || a == "--user") {
+        a == "--render-scale" || a == "--frame-budget" || a == "--max-fps" || a == "--db" || a == "--user") {
       value = next();
       if (!value) return reportError("desktop: option " + a + " needs a value", 2);
     }
@@ -1507,6 +1515,11 @@ int runDesktop(const std::vector<std::string>& args) {
       options.frameBudgetMs = std::strtod(value->c_str(), &end);
       if (*end != '\0' || !(options.frameBudgetMs >= 10 && options.frameBudgetMs <= 100000))
         return reportError("desktop: --frame-budget must be a number of milliseconds in 10..100000", 2);
+    } else if (a == "--max-fps") {
+      char* end = nullptr;
+      options.maxFps = std::strtod(value->c_str(), &end);
+      if (*end != '\0' || !(options.maxFps >= 1 && options.maxFps <= 1000))
+        return reportError("desktop: --max-fps must be a number in 1..1000", 2);
     } else if (a == "--render-scale") {
       char* end = nullptr;
       options.renderScale = std::strtod(value->c_str(), &end);
