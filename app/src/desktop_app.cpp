@@ -10,6 +10,10 @@
 // screenshots lift it); an unchanged view is not rendered again. The frame never waits for a distance field: until the hovered structure's
 // field arrives the previous one stays on screen.
 //
+// Long work: the import window (ImportPanel) loads and registers datasets on a background thread
+// with progress and Cancel, and an imported dataset can be opened in place (showDataset); a
+// running full-resolution field shows its passes and can be cancelled (the coarse field stays).
+//
 // Scripted mode (--ui-script FILE.json [--screenshot OUT.png]) replays actions from
 // {"actions": [{"do": "select", "structure": "cochlea"}, …]} and prints one JSON line per event.
 #include <algorithm>
@@ -31,8 +35,10 @@
 #include <nlohmann/json.hpp>
 
 #include "commands.h"
+#include "dataset_resolver.h"
 #include "desktop_support.h"
 #include "field_worker.h"
+#include "import_panel.h"
 #include "learning_support.h"
 #include "lesson_panel.h"
 #include "lessons/curriculum.h"
@@ -171,7 +177,7 @@ struct FrameRecord {
 class DesktopApp {
  public:
   struct Options {
-    std::string dataset;            // empty: the default course's dataset
+    std::string dataset;            // empty: the default course's dataset; else as openNamedDataset takes it
     std::optional<std::string> script;
     std::optional<std::string> screenshot;
     std::optional<std::string> dbPath;  // the database: presets saved in the expert panel, studies, lessons
@@ -189,6 +195,9 @@ class DesktopApp {
  private:
   // Set-up
   Status loadContent();
+  // Shows `dataset` in the explore view (at start-up and when an imported one is opened), starting
+  // on `startStructure` when it has one; an error leaves the current dataset on screen.
+  Status showDataset(Dataset dataset, const std::string& startStructure, const std::string& startPreset);
   Status openGraphics();
 
   // Per frame
@@ -197,6 +206,9 @@ class DesktopApp {
   void renderVolume(Clock::time_point frameStart);
   void buildUi();
   void explorePanel(float panelW);
+  void fieldProgress();  // the running field's progress; a full-resolution one can be cancelled
+  float statusHeight() const;  // below the structure list: status lines and messages
+  void cancelFineField();
   void syncStudyView();  // participant mode: the trial's structure with the preset of the side shown
   bool stepScript();  // true when the script has finished (or there is none)
 
@@ -266,6 +278,9 @@ class DesktopApp {
   bool gpuFields_ = false;
   std::string fieldStatus_;
   Clock::time_point hoverSince_ = Clock::now();
+  std::string declinedFieldKey_;  // a full-resolution field the user cancelled: not asked again
+  std::string lastFieldWarning_;  // shown once, not on every field
+  bool cpuFieldNotice_ = false;   // told the user that fields run on the CPU
 
   // Rendering
   std::string renderedKey_;
@@ -298,6 +313,7 @@ class DesktopApp {
   std::unique_ptr<StudyPanel> study_;
   std::unique_ptr<LessonPanel> lesson_;
   std::unique_ptr<TfEditorPanel> expert_;
+  std::unique_ptr<ImportPanel> import_;
 };
 
 // ---------------------------------------------------------------------------------------------
@@ -319,23 +335,28 @@ Status DesktopApp::loadContent() {
     message("default course: " + course.error().message);
   }
   if (datasetName.empty()) datasetName = "phantom";
-  if (!isBuiltinDatasetName(datasetName)) {
-    DatasetFiles files;
-    files.volumePath = datasetName;
-    files.id = std::filesystem::path(datasetName).stem().string();
-    auto ds = openDatasetFiles(files);
-    if (!ds) return tl::unexpected(ds.error());
-    dataset_ = std::move(*ds);
-  } else {
-    auto ds = openBuiltinDataset(datasetName);
-    if (!ds) return tl::unexpected(ds.error());
-    dataset_ = std::move(*ds);
-  }
-  if (dataset_.structures.empty()) return fail("dataset '" + dataset_.id + "' has no labelled structures");
+  DatasetRequest request;
+  request.name = datasetName;
+  request.dbPath = options_.dbPath;
+  auto ds = openNamedDataset(request);
+  if (!ds) return tl::unexpected(ds.error());
+  return showDataset(std::move(*ds), startStructure, startPreset);
+}
+
+Status DesktopApp::showDataset(Dataset dataset, const std::string& startStructure, const std::string& startPreset) {
+  if (dataset.structures.empty()) return fail("dataset '" + dataset.id + "' has no labelled structures");
+  std::map<std::uint16_t, render::StructureFrame> frames;
+  for (const Structure& s : dataset.structures)
+    if (auto frame = render::structureFrame(dataset.labels, s.label)) frames[s.label] = *frame;
+  if (frames.empty()) return fail("dataset '" + dataset.id + "': no structure has any voxel");
+  if (expert_ && expertOn()) setExpert(false);
+  worker_.reset();  // it holds a reference to dataset_
+  dataset_ = std::move(dataset);
+  frames_ = std::move(frames);
+  bySystem_.clear();
+  presets_.clear();
   for (const Structure& s : dataset_.structures) {
-    auto frame = render::structureFrame(dataset_.labels, s.label);
-    if (!frame) continue;  // a named label with no voxels: not shown in the browser
-    frames_[s.label] = *frame;
+    if (!frames_.count(s.label)) continue;  // a named label with no voxels: not shown in the browser
     auto it = std::find_if(bySystem_.begin(), bySystem_.end(), [&](const auto& g) { return g.first == s.system; });
     if (it == bySystem_.end()) {
       bySystem_.push_back({s.system.empty() ? std::string("other") : s.system, {}});
@@ -343,10 +364,17 @@ Status DesktopApp::loadContent() {
     }
     it->second.push_back(&s);
   }
-  if (frames_.empty()) return fail("dataset '" + dataset_.id + "': no structure has any voxel");
   const Structure* start = startStructure.empty() ? nullptr : dataset_.findStructure(startStructure);
   if (!start || !frames_.count(start->label)) start = dataset_.findStructureByLabel(frames_.begin()->first);
+  hovered_ = 0;
   selected_ = start->label;
+  field_.reset();
+  fieldLabel_ = 0;
+  fieldKey_.clear();
+  declinedFieldKey_.clear();
+  pendingHighlight_.reset();
+  renderedKey_.clear();
+  clipOffsetMm_ = 0;
   auto preset = presetForStep(library_, start->id, startPreset);
   if (preset) {
     bare_ = preset->mode == render::RenderMode::Bare;
@@ -357,6 +385,16 @@ Status DesktopApp::loadContent() {
   }
   worker_ = std::make_unique<FieldWorker>(dataset_, 8);
   expert_ = std::make_unique<TfEditorPanel>(dataset_, options_.dbPath, [this](json j) { event(std::move(j)); });
+  if (renderer_) {  // a dataset opened after start-up
+    if (auto st = renderer_->setVolume(dataset_.volume, dataset_.labels); !st) {
+      message("volume renderer: " + st.error().message);
+      renderer_.reset();
+    }
+    setView(viewName_.empty() ? startView_ : viewName_);
+    if (lesson_) lesson_->setViewDataset(dataset_.id);
+    event({{"event", "dataset"}, {"dataset", dataset_.id}, {"structures", dataset_.structures.size()},
+           {"selected", start->id}});
+  }
   return {};
 }
 
@@ -567,6 +605,7 @@ lessons::RenderState DesktopApp::renderState() {
 void DesktopApp::setHovered(std::uint16_t label) {
   if (label == hovered_) return;
   hovered_ = label;
+  declinedFieldKey_.clear();
   hoverSince_ = Clock::now();
   markChanged();
   const std::uint16_t shown = shownLabel();
@@ -702,7 +741,12 @@ void DesktopApp::updateFields() {
       continue;
     }
     if (f.device.find("CPU") == std::string::npos && !f.device.empty()) gpuFields_ = true;
-    if (!f.message.empty()) message(f.message);
+    if (!f.message.empty() && f.message != lastFieldWarning_) message(f.message);  // e.g. a CUDA failure
+    lastFieldWarning_ = f.message;
+    if (!gpuFields_ && !cpuFieldNotice_ && f.message.empty()) {
+      cpuFieldNotice_ = true;
+      message("No CUDA GPU: distance fields run on the " + f.device + ", coarse while hovering, full resolution at rest.");
+    }
     char buf[200];
     std::snprintf(buf, sizeof buf, "%s: field 1/%d in %.0f ms on %s", id.c_str(), f.request.params.downsample, f.ms,
                   f.device.c_str());
@@ -720,7 +764,9 @@ void DesktopApp::updateFields() {
   auto coarseField = fineField ? nullptr : worker_->cached(*coarse);
   const bool resting = msBetween(hoverSince_, Clock::now()) > kRefineFieldAfterMs;
   if (!fineField) {
-    if (gpuFields_ || coarseDownsample() == 1 || (coarseField && resting))
+    if (fine->key() == declinedFieldKey_ && (coarseField || coarseDownsample() == 1))
+      ;  // the user cancelled this full-resolution field: keep the coarse one
+    else if (gpuFields_ || coarseDownsample() == 1 || (coarseField && resting))
       worker_->request(*fine);
     else if (!coarseField)
       worker_->request(*coarse);
@@ -834,6 +880,15 @@ void DesktopApp::buildUi() {
   else
     explorePanel(panelW);
   study_->drawCoordinator(panelW + 20, 20);
+  if (study_->participantActive()) {
+    import_->poll();  // the participant sees no other window, and the trial's dataset stays
+  } else {
+    import_->draw(panelW + 40, 40);
+    if (auto imported = import_->takeDatasetToOpen()) {
+      const std::string id = imported->id;
+      if (auto st = showDataset(std::move(*imported), "", ""); !st) message("opening '" + id + "': " + st.error().message);
+    }
+  }
   if (texture_ && texture_->handle()) {
     ImGui::GetBackgroundDrawList()->AddImage(reinterpret_cast<ImTextureID>(texture_->handle()), ImVec2(panelW, 0),
                                              ImVec2(float(winW_), float(winH_)));
@@ -876,6 +931,8 @@ void DesktopApp::explorePanel(float panelW) {
   ImGui::TextUnformatted("Anatomy Tutor - Explore");
   ImGui::TextDisabled("%s", dataset_.displayName.empty() ? dataset_.id.c_str() : dataset_.displayName.c_str());
   if (ImGui::SmallButton("Studies...")) study_->openCoordinator();
+  ImGui::SameLine();
+  if (ImGui::SmallButton("Import...")) import_->open();
   ImGui::Separator();
   lesson_->draw(float(winH_) * 0.4f);
   ImGui::Separator();
@@ -932,7 +989,7 @@ void DesktopApp::explorePanel(float panelW) {
 
   if (!hideNames) ImGui::InputTextWithHint("##search", "search structures", search_, sizeof search_);
   const std::string query = lower(search_);
-  ImGui::BeginChild("structures", ImVec2(0, -ImGui::GetTextLineHeightWithSpacing() * 5.5f), true);
+  ImGui::BeginChild("structures", ImVec2(0, -statusHeight()), true);
   if (hideNames) {
     ImGui::PushTextWrapPos(0);
     ImGui::TextDisabled("(structure names are hidden during the question)");
@@ -967,12 +1024,58 @@ void DesktopApp::explorePanel(float panelW) {
   const double lastMs = frameLog_.empty() ? 0 : frameLog_.back().ms;
   ImGui::TextDisabled("frame %.0f ms, level %d/%d%s", lastMs, std::max(0, renderedLevel_), kFullLevel,
                       interacting_ ? " (moving)" : "");
-  ImGui::TextDisabled("%s", worker_->busy() ? "computing a distance field..." : fieldStatus_.c_str());
+  fieldProgress();
   ImGui::PushTextWrapPos(0);
   ImGui::TextDisabled("%s", glDescription_.c_str());
   for (const std::string& m : messages_) ImGui::TextColored(ImVec4(1, 0.5f, 0.4f, 1), "%s", m.c_str());
   ImGui::PopTextWrapPos();
   ImGui::End();
+}
+
+float DesktopApp::statusHeight() const {
+  // The status lines, the GL description (two lines) and the messages as they wrap, so that the
+  // messages stay visible; at most half of what is left for the structure list and them.
+  float height = ImGui::GetTextLineHeightWithSpacing() * 5.5f;
+  const float wrap = ImGui::GetContentRegionAvail().x;
+  for (const std::string& m : messages_)
+    height += ImGui::CalcTextSize(m.c_str(), nullptr, false, wrap).y + ImGui::GetStyle().ItemSpacing.y;
+  return std::min(height, std::max(ImGui::GetTextLineHeightWithSpacing() * 5.5f, ImGui::GetContentRegionAvail().y * 0.5f));
+}
+
+void DesktopApp::fieldProgress() {
+  const auto running = worker_->running();
+  if (!running || running->elapsedMs < 250) {  // quick fields need no bar
+    if (!declinedFieldKey_.empty() && !running) {
+      ImGui::TextDisabled("full resolution cancelled");
+      ImGui::SameLine();
+      if (ImGui::SmallButton("Compute it")) declinedFieldKey_.clear();
+    } else {
+      ImGui::TextDisabled("%s", worker_->busy() ? "computing a distance field..." : fieldStatus_.c_str());
+    }
+    return;
+  }
+  const int ds = running->request.params.downsample;
+  char text[200];
+  std::snprintf(text, sizeof text, "%s field: pass %d/%d, %.1f s", ds == 1 ? "full-res" : ("1/" + std::to_string(ds)).c_str(),
+                running->passesDone, running->passesPlanned, running->elapsedMs / 1000);
+  const float fraction = float(running->passesDone) / float(std::max(1, running->passesPlanned));
+  ImGui::ProgressBar(fraction, ImVec2(ds == 1 ? -60 * uiScale_ : -1, 0), text);
+  if (ds == 1) {
+    ImGui::SameLine();
+    if (ImGui::SmallButton("Cancel##field")) cancelFineField();
+    if (ImGui::IsItemHovered()) ImGui::SetTooltip("Stop the full-resolution field; the coarse one stays on screen");
+  }
+}
+
+void DesktopApp::cancelFineField() {
+  const auto running = worker_->running();
+  if (!running || running->request.params.downsample != 1) return;
+  declinedFieldKey_ = running->request.key();
+  worker_->cancelAll();
+  const Structure* st = dataset_.findStructureByLabel(running->request.label);
+  event({{"event", "field_cancelled"}, {"structure", st ? st->id : ""}, {"downsample", 1},
+         {"passes_done", running->passesDone}, {"passes_planned", running->passesPlanned},
+         {"elapsed_ms", running->elapsedMs}});
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -984,6 +1087,10 @@ bool DesktopApp::settled() {
   if (bare_) return true;
   const std::uint16_t label = shownLabel();
   auto fine = fieldRequest(label, 1);
+  if (fine && fine->key() == declinedFieldKey_) {  // the user cancelled it: the coarse field is final
+    auto coarse = fieldRequest(label, coarseDownsample());
+    return coarse && fieldLabel_ == label && fieldKey_ == coarse->key();
+  }
   return fine && fieldLabel_ == label && fieldKey_ == fine->key();
 }
 
@@ -1049,6 +1156,27 @@ bool DesktopApp::stepScript() {
           return true;
         }
         if (!**r) return false;  // still running (an export)
+        done();
+      } else if (auto r = import_->scriptAction(what, a)) {  // import, cancel_import, open_imported
+        if (!*r) {
+          message(r->error().message);
+          finishScript(2);
+          return true;
+        }
+        if (!**r) return false;  // still running
+        done();
+      } else if (what == "cancel_field") {
+        // Waits for a full-resolution field to be computing, then cancels it as the button does.
+        const auto running = worker_->running();
+        if (!running || running->request.params.downsample != 1) {
+          if (msBetween(actionStart_, now) > a.value("timeout_ms", 60000.0)) {
+            message("ui script: cancel_field: no full-resolution field was computing");
+            finishScript(1);
+            return true;
+          }
+          return false;
+        }
+        cancelFineField();
         done();
       } else if (what == "select") {
         const Structure* s = structureArg();
@@ -1263,6 +1391,8 @@ int DesktopApp::run() {
   lesson_ = std::make_unique<LessonPanel>(
       options_.dbPath, options_.userName, dataset_.id, [this](json j) { event(std::move(j)); },
       [this](const LessonPanel::Shown& shown) { showLessonStructure(shown); }, [this] { return renderState(); });
+  import_ = std::make_unique<ImportPanel>(
+      options_.dbPath, [this](json j) { event(std::move(j)); }, [this](const std::string& m) { message(m); });
   if (auto st = openGraphics(); !st) return reportError(st.error().message);
   SDL_GetWindowSize(window_->window, &winW_, &winH_);
   SDL_GL_GetDrawableSize(window_->window, &fbW_, &fbH_);
@@ -1340,15 +1470,18 @@ int runDesktop(const std::vector<std::string>& args) {
           "usage: anatomy-tutor [desktop] [--dataset D] [--ui-script FILE.json [--screenshot OUT.png]] [--size WxH]\n"
           "                             [--render-scale S] [--frame-budget MS] [--max-fps N] [--db PATH] [--user NAME]\n"
           "  Opens the desktop app on the default course (explore: hover to highlight, click to select).\n"
-          "  --dataset    phantom, phantom:N or a volume file (default: the default course's dataset)\n"
+          "  --dataset    phantom, phantom:N, a dataset imported into --db, or a volume file or DICOM folder\n"
+          "               (default: the default course's dataset)\n"
           "  --ui-script  replay {\"actions\": [...]} (select, t, mode, view, hover, hover_structure, click,\n"
           "               click_structure, orbit, zoom, clip, wait, wait_field, screenshot,\n"
           "               hover_sweep, record, report; expert, tf_add_point, tf_move_point,\n"
           "               tf_delete_point, tf_colour, preset_set, preset_save; study_start, study_toggle,\n"
           "               study_rate, study_comment, study_next, study_close, coordinator_open,\n"
           "               coordinator_export, coordinator_summary; lesson_user, lessons, lesson,\n"
-          "               lesson_next, answer, review, lesson_close)\n"
-          "  --db         the database: presets saved in the expert panel, studies, lesson progress (default: the user's)\n"
+          "               lesson_next, answer, review, lesson_close; import, cancel_import,\n"
+          "               open_imported, cancel_field)\n"
+          "  --db         the database: imported datasets, presets saved in the expert panel, studies,\n"
+          "               lesson progress (default: the user's)\n"
           "  --user       whose lesson progress to show and record (default: student; the same name as\n"
           "               `anatomy-tutor play --user` shares the progress; created when new)\n"
           "  --screenshot save the window as PNG once the script has run and the view has settled\n"

@@ -94,6 +94,18 @@ bool FieldWorker::busy() const {
   return runningKey_.has_value() || queued_.has_value();
 }
 
+std::optional<FieldWorker::Running> FieldWorker::running() const {
+  std::lock_guard lock(mutex_);
+  if (!runningRequest_) return std::nullopt;
+  Running r;
+  r.request = *runningRequest_;
+  r.passesDone = passesDone_.load();
+  r.passesPlanned = passesPlanned_.load();
+  if (r.passesPlanned == 0) r.passesPlanned = r.request.params.converge ? r.request.params.maxPasses : r.request.params.passes;
+  r.elapsedMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - runningSince_).count();
+  return r;
+}
+
 void FieldWorker::insert(Entry entry) {
   lru_.push_front(std::move(entry));
   while (lru_.size() > capacity_) lru_.pop_back();
@@ -109,6 +121,10 @@ void FieldWorker::run() {
       job = *queued_;
       queued_.reset();
       runningKey_ = job.key();
+      runningRequest_ = job;
+      runningSince_ = std::chrono::steady_clock::now();
+      passesDone_ = 0;
+      passesPlanned_ = 0;
       cancelRunning_ = false;
     }
     FinishedField done;
@@ -119,17 +135,23 @@ void FieldWorker::run() {
     } else {
       WdtControl control;
       control.cancel = &cancelRunning_;
+      control.progress = [this](int done, int planned) {
+        passesDone_ = done;
+        passesPlanned_ = planned;
+      };
       bool cancelledOnDevice = false;
       if (auto onDevice = computeOnDevice(job, control, cancelledOnDevice)) {
         if (cancelledOnDevice) {
           cancelled_.fetch_add(1);
           std::lock_guard lock(mutex_);
           runningKey_.reset();
+          runningRequest_.reset();
           continue;
         }
         std::lock_guard lock(mutex_);
         if (onDevice->field) insert({*runningKey_, onDevice->field, onDevice->deviceField});
         runningKey_.reset();
+        runningRequest_.reset();
         finished_.push_back(std::move(*onDevice));
         continue;
       }
@@ -142,6 +164,7 @@ void FieldWorker::run() {
         cancelled_.fetch_add(1);
         std::lock_guard lock(mutex_);
         runningKey_.reset();
+        runningRequest_.reset();
         continue;  // stale: a newer request replaced it
       } else {
         done.field = std::make_shared<const DistanceField>(std::move(result->field));
@@ -153,6 +176,7 @@ void FieldWorker::run() {
     std::lock_guard lock(mutex_);
     if (done.field) insert({*runningKey_, done.field, nullptr});
     runningKey_.reset();
+    runningRequest_.reset();
     finished_.push_back(std::move(done));
   }
 }

@@ -15,6 +15,7 @@
 #pragma once
 
 #include <atomic>
+#include <chrono>
 #include <condition_variable>
 #include <cstdint>
 #include <list>
@@ -69,6 +70,14 @@ class FieldWorker {
   // Fields (and failures) finished since the last call, oldest first.
   std::vector<FinishedField> takeFinished();
   bool busy() const;
+  // The computation running now, for a progress bar: its request, passes done of passes planned
+  // (the WDT reports after each pass) and how long it has run. nullopt when idle.
+  struct Running {
+    FieldRequest request;
+    int passesDone = 0, passesPlanned = 0;
+    double elapsedMs = 0;
+  };
+  std::optional<Running> running() const;
   // Computations cancelled because a newer request arrived (for the log and tests).
   int cancelledCount() const { return cancelled_.load(); }
 
@@ -90,6 +99,9 @@ class FieldWorker {
   std::condition_variable wake_;
   std::optional<FieldRequest> queued_;
   std::optional<std::string> runningKey_;
+  std::optional<FieldRequest> runningRequest_;
+  std::chrono::steady_clock::time_point runningSince_;
+  std::atomic<int> passesDone_{0}, passesPlanned_{0};
   std::atomic<bool> cancelRunning_{false};
   std::atomic<int> cancelled_{0};
   bool stop_ = false;

@@ -57,6 +57,8 @@ class LessonPanel {
   LessonPanel(std::optional<std::string> dbPath, std::string userName, std::string viewDataset, EventSink events,
               ShowStructure show, RenderStateSource renderState);
   ~LessonPanel();
+  // The view now shows another dataset (an imported one was opened).
+  void setViewDataset(std::string id) { viewDataset_ = std::move(id); }
 
   // Draws the panel inside the current ImGui window (the app's left panel), in a scrolling
   // region `height` pixels high.

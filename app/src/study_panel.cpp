@@ -330,6 +330,18 @@ void StudyPanel::stepExport() {
   if (export_->done()) events_({{"event", "export_done"}, {"files", n}, {"rows", export_->rowCount()}});
 }
 
+void StudyPanel::cancelExport() {
+  if (!export_ || export_->done()) return;
+  const std::size_t k = export_->written(), n = export_->fileCount();
+  const Status removed = export_->discardWritten();
+  export_.reset();
+  exportFailed_ = !removed;
+  exportStatus_ = removed ? "Export cancelled after " + std::to_string(k) + " of " + std::to_string(n) +
+                                " files; those were removed."
+                          : "Export cancelled; " + removed.error().message;
+  events_({{"event", "export_cancelled"}, {"written", k}, {"n", n}, {"removed", bool(removed)}});
+}
+
 void StudyPanel::summaryTable() {
   if (!summary_ || summary_->items.empty()) return;
   const quiz::StudySummary& sum = *summary_;
@@ -457,7 +469,11 @@ void StudyPanel::drawCoordinator(float x, float y) {
     if (running) ImGui::EndDisabled();
     if (export_) {
       ImGui::ProgressBar(float(export_->written()) / float(std::max<std::size_t>(1, export_->fileCount())),
-                         ImVec2(-1, 0), exportStatus_.c_str());
+                         ImVec2(running ? -80 : -1, 0), exportStatus_.c_str());
+      if (running) {
+        ImGui::SameLine();
+        if (ImGui::Button("Cancel##export")) cancelExport();
+      }
     } else if (!exportStatus_.empty()) {
       ImGui::TextColored(exportFailed_ ? ImVec4(1, 0.5f, 0.4f, 1) : ImVec4(1, 1, 1, 1), "%s", exportStatus_.c_str());
     }
@@ -526,6 +542,11 @@ std::optional<Result<bool>> StudyPanel::scriptAction(const std::string& what, co
       }
       if (auto st = startExport(a.at("out").get<std::string>()); !st) return R(tl::unexpected(st.error()));
       return R(false);
+    }
+    // "cancel_after": k presses Cancel once k files are written (one file per frame: deterministic).
+    if (a.contains("cancel_after") && !export_->done() && export_->written() >= a.at("cancel_after").get<std::size_t>()) {
+      cancelExport();
+      return R(true);
     }
     if (!export_->done()) return R(false);
     export_.reset();

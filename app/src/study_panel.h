@@ -1,7 +1,7 @@
 // The desktop app's study screens (issue 7): the participant mode of a preference study (blinded
 // A/B renderings of each structure, the protocol's items on its 1–5 scale, a comment, progress)
 // and the coordinator panel (studies, participants and completion, the export stepped one file
-// per frame, the Table-2 summary and its chart).
+// per frame with a Cancel that removes what it wrote, the Table-2 summary and its chart).
 //
 // Blinding: while participant mode is active the app draws only the participant window and the
 // volume view; that window shows no structure, preset, condition or study names. Every text it
@@ -58,7 +58,8 @@ class StudyPanel {
   // A scripted action ("study_start", "study_toggle", "study_rate", "study_comment", "study_next",
   // "study_close", "coordinator_open", "coordinator_export", "coordinator_summary"). Returns
   // nullopt when `what` is not one of them, true when the action is done, false while it runs
-  // (an export), or an error naming the problem.
+  // (an export; with "cancel_after": k it is cancelled once k files are written), or an error
+  // naming the problem.
   std::optional<Result<bool>> scriptAction(const std::string& what, const nlohmann::json& action);
 
  private:
@@ -71,6 +72,7 @@ class StudyPanel {
   Status selectStudy(const std::string& id);
   Status startExport(const std::string& outDir);
   void stepExport();
+  void cancelExport();  // stops a running export and removes the files it wrote
   void refreshStudies();
   void summaryTable();
   void summaryChart();

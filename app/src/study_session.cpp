@@ -141,4 +141,13 @@ Status StudyExport::writeNext() {
   return {};
 }
 
+Status StudyExport::discardWritten() {
+  for (; next_ > 0; --next_) {
+    std::error_code ec;
+    const fs::path path = dir_ / names_[next_ - 1];
+    if (!fs::remove(path, ec) && ec) return fail(path.string() + ": cannot remove (" + ec.message() + ")");
+  }
+  return {};
+}
+
 }  // namespace at::app

@@ -50,6 +50,9 @@ class StudyExport {
   // Name of the file `writeNext` writes next ("responses_long.csv"), empty when done.
   std::string nextName() const { return done() ? std::string() : names_[next_]; }
   Status writeNext();
+  // Removes the files this export has written so far, so that a cancelled export leaves no
+  // partial set behind; an error names the file that could not be removed.
+  Status discardWritten();
   const quiz::StudySummary& summary() const { return summary_; }
   std::size_t rowCount() const { return rows_.size(); }
   std::size_t participantCount() const { return participants_; }

@@ -3,6 +3,9 @@
 // the app (db/) and then opened through openDatasetFiles.
 #pragma once
 
+#include <atomic>
+#include <cstddef>
+#include <functional>
 #include <string>
 
 #include "volume/error.h"
@@ -22,8 +25,18 @@ struct DatasetFiles {
 Result<Dataset> openBuiltinDataset(const std::string& name);
 bool isBuiltinDatasetName(const std::string& name);
 
+// Progress and cancellation of openDatasetFiles (all optional). `progress` is called on the
+// loading thread as each part starts (done = total = 0) and as its voxels are read (the loaders'
+// units, see ImageLoadOptions::progress). Setting *cancel makes the load stop at the next check
+// and fail with "<path>: loading cancelled".
+enum class DatasetLoadPart { Volume, Labels, Resampling, Names };
+struct DatasetLoadControl {
+  std::function<void(DatasetLoadPart, std::size_t done, std::size_t total)> progress;
+  const std::atomic<bool>* cancel = nullptr;
+};
+
 // Loads volume and labels, resamples labels onto the volume grid when their grids differ, and
 // names structures from the file's segments, the names JSON, or "label_N".
-Result<Dataset> openDatasetFiles(const DatasetFiles& files);
+Result<Dataset> openDatasetFiles(const DatasetFiles& files, const DatasetLoadControl& control = {});
 
 }  // namespace at

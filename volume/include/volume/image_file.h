@@ -4,7 +4,10 @@
 // identifiers (name, ID, birth date, institution, accession, dates) are ever copied out.
 #pragma once
 
+#include <atomic>
+#include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <map>
 #include <string>
 #include <vector>
@@ -37,6 +40,12 @@ struct ImageLoadOptions {
   // Refuse images whose voxels would take more than this many bytes as float (0 = derive
   // from the memory available on this machine).
   std::size_t maxBytes = 0;
+  // Optional, for long loads: `progress` receives (parts read, parts in total) as the voxels are
+  // read (a DICOM series: slices; a detached NRRD: data files; NIfTI: bytes of voxel data), from
+  // the loading threads but never concurrently. Setting *cancel from any thread makes the loader stop at its
+  // next check and fail with "<path>: loading cancelled".
+  std::function<void(std::size_t, std::size_t)> progress;
+  const std::atomic<bool>* cancel = nullptr;
 };
 
 // Loads any supported input, choosing the loader from the path.

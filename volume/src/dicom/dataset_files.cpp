@@ -115,9 +115,20 @@ std::string datasetIdFromPath(const std::string& path) {
 
 }  // namespace
 
-Result<Dataset> openDatasetFiles(const DatasetFiles& files) {
+Result<Dataset> openDatasetFiles(const DatasetFiles& files, const DatasetLoadControl& control) {
   if (files.volumePath.empty()) return fail("no volume file given");
-  ImageLoadOptions volumeOptions;
+  const auto cancelled = [&] { return control.cancel && control.cancel->load(std::memory_order_relaxed); };
+  // The loader options of one part: its progress goes to control.progress under that part.
+  const auto optionsFor = [&](DatasetLoadPart part) {
+    ImageLoadOptions options;
+    options.cancel = control.cancel;
+    if (control.progress) {
+      control.progress(part, 0, 0);
+      options.progress = [&control, part](std::size_t done, std::size_t total) { control.progress(part, done, total); };
+    }
+    return options;
+  };
+  ImageLoadOptions volumeOptions = optionsFor(DatasetLoadPart::Volume);
   volumeOptions.dicomSeriesUid = files.dicomSeriesUid;
   auto volumeImage = loadImageFile(files.volumePath, volumeOptions);
   if (!volumeImage) return tl::unexpected(volumeImage.error());
@@ -136,7 +147,8 @@ Result<Dataset> openDatasetFiles(const DatasetFiles& files) {
   if (files.labelsPath.empty()) {
     dataset.labels = LabelMap(grid, 0);
   } else {
-    auto labelImage = loadImageFile(files.labelsPath);
+    if (cancelled()) return fail(files.labelsPath + ": loading cancelled");
+    auto labelImage = loadImageFile(files.labelsPath, optionsFor(DatasetLoadPart::Labels));
     if (!labelImage) return tl::unexpected(labelImage.error());
     auto labels = toLabelMap(*labelImage, files.labelsPath);
     if (!labels) return tl::unexpected(labels.error());
@@ -151,6 +163,8 @@ Result<Dataset> openDatasetFiles(const DatasetFiles& files) {
       if (!boxesOverlap(labels->geometry, grid))
         return fail(files.labelsPath + " does not overlap " + files.volumePath + " on the patient frame: labels span " +
                     describe(boxOf(labels->geometry)) + ", the volume spans " + describe(boxOf(grid)));
+      if (cancelled()) return fail(files.labelsPath + ": loading cancelled");
+      if (control.progress) control.progress(DatasetLoadPart::Resampling, 0, 0);
       auto resampled = resampleLabelsNearest(*labels, grid);
       if (!resampled)
         return fail(files.labelsPath + " cannot be resampled onto " + files.volumePath + ": " +
@@ -163,8 +177,10 @@ Result<Dataset> openDatasetFiles(const DatasetFiles& files) {
     }
   }
 
+  if (cancelled()) return fail((files.labelsPath.empty() ? files.volumePath : files.labelsPath) + ": loading cancelled");
   std::map<std::uint16_t, std::string> names;
   if (!files.namesPath.empty()) {
+    if (control.progress) control.progress(DatasetLoadPart::Names, 0, 0);
     auto loadedNames = loadLabelNames(files.namesPath);
     if (!loadedNames) return tl::unexpected(loadedNames.error());
     names = std::move(*loadedNames);

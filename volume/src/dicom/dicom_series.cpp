@@ -443,6 +443,7 @@ Result<LoadedImage> loadDicomSeries(const std::string& folder, const ImageLoadOp
   std::map<std::string, std::vector<SliceHeader>> series;
   std::size_t notImages = 0;
   for (const fs::path& file : files) {
+    if (detail::loadCancelled(options)) return tl::unexpected(detail::cancelledError(folder));
     auto header = readSliceHeader(file);
     if (!header) return error(header.error().message);
     if (header->first == FileKind::NotAnImage) {
@@ -559,15 +560,18 @@ Result<LoadedImage> loadDicomSeries(const std::string& folder, const ImageLoadOp
   // Decode slices in parallel: each worker owns its DCMTK file objects and OpenJPEG codecs.
   const std::size_t sliceVoxels = std::size_t(ref.columns) * std::size_t(ref.rows);
   std::atomic<std::size_t> next{0};
-  std::mutex errorMutex;
+  std::mutex mutex;  // guards firstError, decoded and the progress callback
   std::optional<std::pair<std::size_t, Error>> firstError;
+  std::size_t decoded = 0;
+  if (options.progress) options.progress(0, slices.size());
   auto work = [&]() {
     for (std::size_t s = next++; s < slices.size(); s = next++) {
+      if (detail::loadCancelled(options)) return;
       float* out = loaded.image.voxels.data() + std::size_t(stack->sliceOf[s]) * sliceVoxels;
-      if (auto ok = readSlicePixels(slices[s], out); !ok) {
-        std::lock_guard lock(errorMutex);
-        if (!firstError || s < firstError->first) firstError = {s, ok.error()};
-      }
+      auto ok = readSlicePixels(slices[s], out);
+      std::lock_guard lock(mutex);
+      if (!ok && (!firstError || s < firstError->first)) firstError = {s, ok.error()};
+      if (ok && options.progress) options.progress(++decoded, slices.size());
     }
   };
   const unsigned threads = std::clamp(std::thread::hardware_concurrency(), 1u, 8u);
@@ -575,6 +579,7 @@ Result<LoadedImage> loadDicomSeries(const std::string& folder, const ImageLoadOp
   for (unsigned t = 1; t < std::min<std::size_t>(threads, slices.size()); ++t) workers.emplace_back(work);
   work();
   for (std::thread& w : workers) w.join();
+  if (detail::loadCancelled(options)) return tl::unexpected(detail::cancelledError(folder));
   if (firstError) return error(firstError->second.message);
   return loaded;
 }

@@ -19,6 +19,12 @@ inline std::string byteCountText(double bytes) {
   return text;
 }
 
+// True once the caller asked the load to stop (ImageLoadOptions::cancel).
+inline bool loadCancelled(const ImageLoadOptions& options) {
+  return options.cancel && options.cancel->load(std::memory_order_relaxed);
+}
+inline Error cancelledError(const std::string& path) { return Error{path + ": loading cancelled"}; }
+
 // Fails if the image's float voxels exceed options.maxBytes (or availableImageBytes() when 0).
 inline Status checkImageFits(const std::string& path, const Dims& dims, const ImageLoadOptions& options) {
   const std::size_t limit = options.maxBytes ? options.maxBytes : availableImageBytes();

@@ -261,7 +261,22 @@ Result<LoadedImage> loadNifti(const std::string& path, const ImageLoadOptions& o
   if (gzrewind(file.get()) != 0 || gzseek(file.get(), z_off_t(nim->iname_offset), SEEK_SET) < 0)
     return fail(path + ": vox_offset " + std::to_string(nim->iname_offset) + " lies beyond the end of the file");
   std::vector<unsigned char> raw(needBytes);
-  const long long got = gzReadFully(file.get(), raw.data(), needBytes);
+  // Read in 16 MiB pieces so that a large (compressed) image reports progress and can be cancelled.
+  constexpr std::size_t kPiece = std::size_t(16) << 20;
+  long long got = 0;
+  if (options.progress) options.progress(0, needBytes);
+  while (std::size_t(got) < needBytes) {
+    if (detail::loadCancelled(options)) return tl::unexpected(detail::cancelledError(path));
+    const std::size_t want = std::min(kPiece, needBytes - std::size_t(got));
+    const long long piece = gzReadFully(file.get(), raw.data() + got, want);
+    if (piece < 0) {
+      got = -1;
+      break;
+    }
+    got += piece;
+    if (options.progress) options.progress(std::size_t(got), needBytes);
+    if (std::size_t(piece) < want) break;  // end of file
+  }
   if (got < 0) return fail(path + ": the compressed data is corrupt (" + gzMessage(file.get()) + ")");
   if (std::size_t(got) != needBytes)
     return fail(path + ": " + sizeText + " but the file holds " + std::to_string(got) + " after the header");

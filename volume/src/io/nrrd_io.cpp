@@ -716,12 +716,16 @@ Result<LoadedImage> loadNrrd(const std::string& path, const ImageLoadOptions& op
     const std::size_t perFile = totalBytes / n;
     const std::string sizeText = "each of the " + std::to_string(n) + " data files of " + layout->dims.toString() +
                                  " × " + typeText + " needs " + std::to_string(perFile) + " bytes";
-    for (const std::string& file : *files) {
+    if (options.progress) options.progress(0, n);
+    for (std::size_t i = 0; i < n; ++i) {
+      if (detail::loadCancelled(options)) return tl::unexpected(detail::cancelledError(path));
+      const std::string& file = (*files)[i];
       const std::string what = path + ": data file " + file;
       auto fileBytes = readWholeFile(file, what);
       if (!fileBytes) return tl::unexpected(fileBytes.error());
       if (auto ok = decodeChunk(what, *fileBytes, 0, enc, perFile, sizeText, data); !ok)
         return tl::unexpected(ok.error());
+      if (options.progress) options.progress(i + 1, n);
     }
     if (n > 1) loaded.notes.push_back("read " + std::to_string(n) + " data files");
   }

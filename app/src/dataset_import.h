@@ -1,0 +1,55 @@
+// Importing a dataset into the database: what `anatomy-tutor import` and the desktop app's import
+// panel both run, so that the two cannot drift apart. The volume and the optional labels and names
+// are loaded (openDatasetFiles) to check that they align; the database keeps absolute paths,
+// SHA-256 checksums, the geometry and the structures, never pixels or patient identifiers.
+#pragma once
+
+#include <atomic>
+#include <cstddef>
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "db/dataset_store.h"
+#include "volume/error.h"
+#include "volume/structure.h"
+
+namespace at::app {
+
+struct ImportRequest {
+  std::string volumePath;             // DICOM folder, .nii[.gz], .nrrd/.nhdr (relative: to the cwd)
+  std::string labelsPath;             // optional label map (any of those or DICOM SEG)
+  std::string namesPath;              // optional JSON {"1": "spleen", …}
+  std::string name;                   // what commands will take as DATASET
+  std::string species = "human";      // lower-case letters, '-' and '_'
+  std::optional<std::string> dbPath;  // nullopt: the default database
+};
+
+// The stages in the order they run.
+enum class ImportStage { Checking, LoadingVolume, LoadingLabels, CheckingAlignment, Checksums, Storing };
+const char* toString(ImportStage stage);  // "loading volume", …
+
+// Optional progress and cancellation. `progress` is called on the importing thread as each stage
+// starts (done = total = 0) and, while the volume or labels load, with the loaders' units (DICOM
+// slices, NRRD data files, NIfTI bytes). Setting *cancel from any thread stops the import at its
+// next check: it then fails with kImportCancelled and has stored nothing. The last check is just
+// before storing; once storing begins the import completes.
+struct ImportControl {
+  std::function<void(ImportStage, std::size_t done, std::size_t total)> progress;
+  const std::atomic<bool>* cancel = nullptr;
+};
+inline constexpr const char* kImportCancelled = "import cancelled; nothing was stored";
+
+struct ImportedDataset {
+  db::DatasetRecord record;                  // as stored (id, paths, checksums, geometry)
+  Dataset dataset;                           // as loaded, so the app can show it without loading again
+  std::vector<std::string> emptyStructures;  // named structures with no voxel on the volume grid
+};
+
+// Validates the request (name not built in and not taken, species, files exist), loads, checks
+// alignment, checksums the files and registers the dataset in one transaction. Errors are one
+// line naming the file or field and the problem; nothing is stored then.
+Result<ImportedDataset> importDataset(const ImportRequest& request, const ImportControl& control = {});
+
+}  // namespace at::app
