@@ -73,6 +73,7 @@ constexpr int kFullLevel = 5;
 constexpr double kInteractionBudgetMs = 55;  // predicted render cost allowed while the user moves
 constexpr double kRefineBudgetMs = 150;      // at rest, levels predicted this cheap are skipped over
 constexpr double kRestAfterMs = 250;        // no change for this long = the user rests
+constexpr double kFieldUploadStepMs = 20;  // per frame, for a field uploaded from host memory
 constexpr double kRefineFieldAfterMs = 400;  // mouse resting this long on a structure → full-res field
 
 double percentile(std::vector<double> v, double p) {
@@ -276,6 +277,7 @@ class DesktopApp {
   std::uint16_t fieldLabel_ = 0;
   std::string fieldKey_;
   bool gpuFields_ = false;
+  bool fieldUploading_ = false;  // a host field is going up slice by slice (see updateFields)
   std::string fieldStatus_;
   Clock::time_point hoverSince_ = Clock::now();
   std::string declinedFieldKey_;  // a full-resolution field the user cancelled: not asked again
@@ -776,17 +778,26 @@ void DesktopApp::updateFields() {
   if (best && (best != field_ || fieldLabel_ != label) && renderer_) {
     const Clock::time_point uploadStart = Clock::now();
     // A field computed on the GPU goes into the texture there (CUDA–GL interop).
+    // A host field goes up a few slices per frame (software GL needs ~0.2 s for a 256³ field);
+    // the view keeps the previous field until the new one is complete.
     const auto onDevice = worker_->cachedOnDevice(fineField ? *fine : *coarse);
-    Status uploaded = onDevice ? renderer_->setFieldFromDevice(*onDevice) : renderer_->setField(best->distances);
-    if (onDevice && !uploaded) {
+    Status uploaded = onDevice ? renderer_->setFieldFromDevice(*onDevice) : Status{};
+    bool complete = bool(onDevice) && bool(uploaded);
+    if (onDevice && !uploaded)
       message("CUDA-GL interop failed, uploading the field from host memory: " + uploaded.error().message);
-      uploaded = renderer_->setField(best->distances);
+    if (!complete) {
+      auto step = renderer_->uploadFieldStep(best->distances, kFieldUploadStepMs);
+      uploaded = step ? Status{} : Status(tl::unexpected(step.error()));
+      complete = step && *step;
     }
-    if (recording_ && !frameLog_.empty()) frameLog_.back().uploadMs = msBetween(uploadStart, Clock::now());
+    if (recording_ && !frameLog_.empty()) frameLog_.back().uploadMs += msBetween(uploadStart, Clock::now());
     if (auto st = uploaded; !st) {
       message("uploading the field: " + st.error().message);
+      fieldUploading_ = false;
       return;
     }
+    fieldUploading_ = !complete;
+    if (!complete) return;
     renderer_->setSelected(label);
     field_ = best;
     fieldLabel_ = label;
@@ -1402,7 +1413,7 @@ int DesktopApp::run() {
     const Clock::time_point frameStart = Clock::now();
     SDL_Event e;
     const bool idle = !options_.script && (renderedLevel_ >= kFullLevel || restCapped_) && !worker_->busy() &&
-                      renderedKey_ == stateKey();
+                      !fieldUploading_ && renderedKey_ == stateKey();
     if (idle && SDL_WaitEventTimeout(&e, 100)) handleEvent(e);
     while (SDL_PollEvent(&e)) handleEvent(e);
     SDL_GetWindowSize(window_->window, &winW_, &winH_);
