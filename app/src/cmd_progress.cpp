@@ -91,7 +91,8 @@ int runProgress(const Argv& argv) {
   if (!args) return reportError("progress: " + args.error().message);
   if (args->has("help")) {
     std::printf("usage: anatomy-tutor progress --user NAME [--db PATH]\n\n"
-                "Shows a user's lessons, per-structure progress (Leitner box, answers, next review)\n"
+                "Shows a user's lessons, per-structure progress (Leitner box, answers, next review;\n"
+                "answers to review questions count too, and are also totalled on their own)\n"
                 "and the structures due for review now.\n");
     return 0;
   }
@@ -119,6 +120,10 @@ int runProgress(const Argv& argv) {
   auto ability = progress.ability(userId);
   if (!ability) return reportError("progress: " + ability.error().message);
 
+  auto reviews = progress.reviewResponses(userId);
+  if (!reviews) return reportError("progress: " + reviews.error().message);
+
+  // Lesson and review answers alike: both move the per-structure counts.
   int answered = 0, correct = 0;
   for (const auto& p : *all) {
     answered += p.answered;
@@ -126,6 +131,10 @@ int runProgress(const Argv& argv) {
   }
   std::printf("%s (%s%s%s): %d answers, %d correct", (*user)->name.c_str(), lessons::toString((*user)->role),
               (*user)->group.empty() ? "" : ", group ", (*user)->group.c_str(), answered, correct);
+  if (!reviews->empty()) {
+    const auto right = std::count_if(reviews->begin(), reviews->end(), [](const lessons::ReviewResponse& r) { return r.correct; });
+    std::printf(" (%zu in review, %ld correct)", reviews->size(), long(right));
+  }
   if (*ability) std::printf(", ability %.0f", **ability);
   std::printf("\n");
 

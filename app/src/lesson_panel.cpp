@@ -320,23 +320,21 @@ Result<quiz::Grade> LessonPanel::submit(const quiz::Answer& answer) {
   if (!asked_) return at::fail("no question is asked");
   if (asked_->grade) return at::fail("this question is already answered");
   Result<quiz::Grade> grade = at::fail("no lesson is running");
-  if (asked_->review) {
-    // The engine's grading context, for a question outside a lesson: every structure's display
-    // name, its id with spaces, and the course's synonyms.
-    quiz::GradingContext context;
-    for (const Structure& s : store_->structures) {
-      quiz::NameEntry entry{s.id, {}};
-      if (!s.displayName.empty()) entry.names.push_back(s.displayName);
-      std::string spaced = s.id;
-      std::replace(spaced.begin(), spaced.end(), '_', ' ');
-      entry.names.push_back(spaced);
-      if (auto it = store_->reviewCourse.synonyms.find(s.id); it != store_->reviewCourse.synonyms.end())
-        entry.names.insert(entry.names.end(), it->second.begin(), it->second.end());
-      context.names.push_back(std::move(entry));
-    }
-    grade = quiz::grade(asked_->question, answer, context);
+  const auto latency = std::chrono::duration_cast<std::chrono::milliseconds>(Clock::now() - asked_->shownAt);
+  if (asked_->review && store_) {
+    // Graded as a lesson answer and recorded with the structure's progress and Elo, so the
+    // review queue moves.
+    auto keys = store_->keysFor(store_->reviewCourse.datasetId);
+    if (!keys) return tl::unexpected(keys.error());
+    lessons::ReviewAnswer review;
+    review.userId = store_->user.id;
+    review.courseId = store_->reviewCourse.id;
+    review.question = asked_->question.question;
+    review.answer = answer;
+    review.render = renderState_();
+    review.latencyMs = latency.count();
+    grade = lessons::answerReview(store_->curriculum, store_->progress, **keys, review);
   } else if (store_ && store_->engine) {
-    const auto latency = std::chrono::duration_cast<std::chrono::milliseconds>(Clock::now() - asked_->shownAt);
     grade = store_->engine->answer(answer, renderState_(), latency.count());
   }
   if (!grade) return grade;
@@ -349,7 +347,8 @@ Result<quiz::Grade> LessonPanel::submit(const quiz::Answer& answer) {
             {"kind", quiz::toString(asked_->question.question.kind)},
             {"answer", json::parse(quiz::answerToJson(answer), nullptr, false)},
             {"correct", grade->correct}, {"score", grade->score},
-            {"feedback", grade->feedback}, {"review", asked_->review}};
+            {"feedback", grade->feedback}, {"review", asked_->review},
+            {"recorded", true}};  // graded means committed: answer() and answerReview() store first
   if (answer.pick) e["clicked"] = answer.pick->structure;
   events_(e);
   if (auto st = refresh(); !st) fail(st.error().message);
@@ -609,6 +608,7 @@ void LessonPanel::drawQuestion() {
   if (a.grade) {
     ImGui::TextColored(a.grade->correct ? kRight : kWrong, "%s", a.grade->correct ? "Correct." : "Not quite.");
     ImGui::TextUnformatted(a.grade->feedback.c_str());
+    if (a.review) ImGui::TextDisabled("Saved: the review queue is updated.");
   }
   if (a.review && ImGui::Button(a.grade ? "Done" : "Skip")) asked_.reset();
   ImGui::PopTextWrapPos();

@@ -10,8 +10,8 @@
 // a question must not give its answer away (identify/name questions, quiz-only lessons)
 // namesHidden() tells the app to hide structure names.
 //
-// Review answers are graded (the same grading as in lessons) but not recorded: the engine records
-// answers only within a lesson attempt.
+// Review answers go through lessons::answerReview: graded as lesson answers and committed with the
+// structure's Leitner progress and Elo before their feedback shows, so the review queue moves.
 #pragma once
 
 #include <chrono>
@@ -86,7 +86,8 @@ class LessonPanel {
   //   "lesson_next"               past the current step [lesson_step, or lesson_finished with the score]
   //   "answer" {value}            a choice (index, or a choice's id or name), a typed name, a list of
   //                               structures (order), or a `play --answers` object [graded]
-  //   "review"                    [review_queue, review_question]; "answer" then answers it
+  //   "review"                    [review_queue, review_question]; "answer" then answers it (the
+  //                               graded event says review and recorded; the queue moves)
   //   "lesson_close"              leaves the lesson (answers are saved; "lesson" resumes it)
   // Locate questions are answered by "click"/"click_structure" in the app. Errors name the problem.
   static bool handled(const std::string& what);
@@ -130,7 +131,7 @@ class LessonPanel {
   Status nextStep();                                      // past the current step (finishes at the end)
   Status finishLesson();                                  // stores the score, back to the lists
   Status startReview();
-  Result<quiz::Grade> submit(const quiz::Answer& answer);  // grades (and, in a lesson, records)
+  Result<quiz::Grade> submit(const quiz::Answer& answer);  // grades and records (lesson or review)
   Result<quiz::Answer> answerFromScript(const nlohmann::json& value) const;
   std::string displayName(const std::string& structureId) const;
   void fail(const std::string& text);                     // shows the message in the panel

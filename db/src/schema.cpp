@@ -209,6 +209,31 @@ CREATE TABLE study_ratings (
 );
 )SQL";
 
+// Answers to review questions, asked outside any lesson attempt: the same columns as responses,
+// keyed by the user instead of an attempt. They move progress, ability and question difficulty
+// like lesson answers (one transaction per answer).
+constexpr std::string_view kReviews = R"SQL(
+CREATE TABLE review_responses (
+  id           INTEGER PRIMARY KEY,
+  user_id      INTEGER NOT NULL REFERENCES users(id) ON DELETE CASCADE,
+  question_id  TEXT NOT NULL,
+  structure    TEXT NOT NULL,
+  answer       TEXT NOT NULL,               -- JSON as given
+  correct      INTEGER NOT NULL,
+  score        REAL NOT NULL,
+  latency_ms   INTEGER NOT NULL,
+  preset_id    TEXT NOT NULL DEFAULT '',
+  mode         TEXT NOT NULL DEFAULT '',
+  t            REAL,
+  alpha        REAL,
+  beta         REAL,
+  answered_at  INTEGER NOT NULL,            -- Unix seconds
+  created_at   TEXT NOT NULL DEFAULT (strftime('%Y-%m-%dT%H:%M:%fZ', 'now'))
+);
+CREATE INDEX review_responses_by_user ON review_responses(user_id, id);
+CREATE INDEX review_responses_by_question ON review_responses(question_id);
+)SQL";
+
 }  // namespace
 
 const std::vector<Migration>& migrations() {
@@ -217,6 +242,7 @@ const std::vector<Migration>& migrations() {
       {2, "courses, lessons, prerequisites, steps and questions", kCurriculum},
       {3, "users, attempts, responses, progress, ability and question difficulty", kLearners},
       {4, "preference studies: protocols, participants, blinded trials, ratings", kStudies},
+      {5, "review responses: answers to review questions outside lesson attempts", kReviews},
   };
   return all;
 }

@@ -362,6 +362,44 @@ Result<std::vector<Response>> SqliteProgressRepository::responses(std::int64_t a
   return out;
 }
 
+namespace {
+
+// The learner-model half of recording an answer, inside the caller's transaction: the structure's
+// progress, the user's ability and the question's difficulty.
+Status writeLearnerModel(Database& d, const StructureProgress& p, const std::string& questionId, double abilityAfter,
+                         double difficultyAfter) {
+  auto progress = d.prepare(
+      "INSERT INTO progress (user_id, structure, box, due_at, answered, correct, last_answered_at)"
+      " VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7) ON CONFLICT (user_id, structure) DO UPDATE SET box = excluded.box,"
+      " due_at = excluded.due_at, answered = excluded.answered, correct = excluded.correct,"
+      " last_answered_at = excluded.last_answered_at");
+  if (!progress) return tl::unexpected(progress.error());
+  progress->bind(1, p.userId)
+      .bind(2, p.structureId)
+      .bind(3, p.box)
+      .bind(4, p.dueAt)
+      .bind(5, p.answered)
+      .bind(6, p.correct)
+      .bind(7, p.lastAnsweredAt);
+  if (auto s = progress->run(); !s) return s;
+
+  auto ability = d.prepare(
+      "INSERT INTO user_ability (user_id, rating, answered) VALUES (?1, ?2, 1)"
+      " ON CONFLICT (user_id) DO UPDATE SET rating = excluded.rating, answered = answered + 1");
+  if (!ability) return tl::unexpected(ability.error());
+  ability->bind(1, p.userId).bind(2, abilityAfter);
+  if (auto s = ability->run(); !s) return s;
+
+  auto difficulty = d.prepare(
+      "INSERT INTO question_stats (question_id, difficulty, answered) VALUES (?1, ?2, 1)"
+      " ON CONFLICT (question_id) DO UPDATE SET difficulty = excluded.difficulty, answered = answered + 1");
+  if (!difficulty) return tl::unexpected(difficulty.error());
+  difficulty->bind(1, questionId).bind(2, difficultyAfter);
+  return difficulty->run();
+}
+
+}  // namespace
+
 Result<std::int64_t> SqliteProgressRepository::recordAnswer(const AnswerRecord& record) {
   const Response& r = record.response;
   const StructureProgress& p = record.progress;
@@ -395,38 +433,79 @@ Result<std::int64_t> SqliteProgressRepository::recordAnswer(const AnswerRecord& 
       return s;
     }
     id = d.lastInsertId();
-
-    auto progress = d.prepare(
-        "INSERT INTO progress (user_id, structure, box, due_at, answered, correct, last_answered_at)"
-        " VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7) ON CONFLICT (user_id, structure) DO UPDATE SET box = excluded.box,"
-        " due_at = excluded.due_at, answered = excluded.answered, correct = excluded.correct,"
-        " last_answered_at = excluded.last_answered_at");
-    if (!progress) return tl::unexpected(progress.error());
-    progress->bind(1, p.userId)
-        .bind(2, p.structureId)
-        .bind(3, p.box)
-        .bind(4, p.dueAt)
-        .bind(5, p.answered)
-        .bind(6, p.correct)
-        .bind(7, p.lastAnsweredAt);
-    if (auto s = progress->run(); !s) return s;
-
-    auto ability = d.prepare(
-        "INSERT INTO user_ability (user_id, rating, answered) VALUES (?1, ?2, 1)"
-        " ON CONFLICT (user_id) DO UPDATE SET rating = excluded.rating, answered = answered + 1");
-    if (!ability) return tl::unexpected(ability.error());
-    ability->bind(1, p.userId).bind(2, record.abilityAfter);
-    if (auto s = ability->run(); !s) return s;
-
-    auto difficulty = d.prepare(
-        "INSERT INTO question_stats (question_id, difficulty, answered) VALUES (?1, ?2, 1)"
-        " ON CONFLICT (question_id) DO UPDATE SET difficulty = excluded.difficulty, answered = answered + 1");
-    if (!difficulty) return tl::unexpected(difficulty.error());
-    difficulty->bind(1, r.questionId).bind(2, record.difficultyAfter);
-    return difficulty->run();
+    return writeLearnerModel(d, p, r.questionId, record.abilityAfter, record.difficultyAfter);
   });
   if (!status) return fail("recording the answer: " + status.error().message);
   return id;
+}
+
+Result<std::int64_t> SqliteProgressRepository::recordReviewAnswer(const ReviewRecord& record) {
+  const ReviewResponse& r = record.response;
+  const StructureProgress& p = record.progress;
+  if (p.userId != r.userId || p.structureId != r.structureId)
+    return fail("recording the review answer: its progress is for another user or structure");
+  std::int64_t id = 0;
+  auto status = db_.writeTransaction([&](Database& d) -> Status {
+    auto insert = d.prepare(
+        "INSERT INTO review_responses (user_id, question_id, structure, answer, correct, score, latency_ms,"
+        " preset_id, mode, t, alpha, beta, answered_at)"
+        " VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13)");
+    if (!insert) return tl::unexpected(insert.error());
+    insert->bind(1, r.userId)
+        .bind(2, r.questionId)
+        .bind(3, r.structureId)
+        .bind(4, quiz::answerToJson(r.answer))
+        .bind(5, r.correct ? 1 : 0)
+        .bind(6, r.score)
+        .bind(7, r.latencyMs)
+        .bind(8, r.render.presetId)
+        .bind(9, r.render.mode)
+        .bind(10, r.render.t)
+        .bind(11, r.render.alpha)
+        .bind(12, r.render.beta)
+        .bind(13, r.answeredAt);
+    if (auto s = insert->run(); !s) {
+      if (s.error().message.find("FOREIGN KEY") != std::string::npos)
+        return fail("unknown user id " + std::to_string(r.userId));
+      return s;
+    }
+    id = d.lastInsertId();
+    return writeLearnerModel(d, p, r.questionId, record.abilityAfter, record.difficultyAfter);
+  });
+  if (!status) return fail("recording the review answer: " + status.error().message);
+  return id;
+}
+
+Result<std::vector<ReviewResponse>> SqliteProgressRepository::reviewResponses(std::int64_t userId) {
+  auto s = db_.prepare(
+      "SELECT id, user_id, question_id, structure, answer, correct, score, latency_ms, preset_id, mode, t, alpha,"
+      " beta, answered_at FROM review_responses WHERE user_id = ?1 ORDER BY id");
+  if (!s) return tl::unexpected(s.error());
+  s->bind(1, userId);
+  std::vector<ReviewResponse> out;
+  auto status = forEachRow(*s, [&](Statement& r) -> Status {
+    ReviewResponse x;
+    x.id = r.int64(0);
+    x.userId = r.int64(1);
+    x.questionId = r.text(2);
+    x.structureId = r.text(3);
+    auto answer = quiz::answerFromJson(r.text(4));
+    if (!answer) return fail("review response " + std::to_string(x.id) + ": " + answer.error().message);
+    x.answer = std::move(*answer);
+    x.correct = r.integer(5) != 0;
+    x.score = r.real(6);
+    x.latencyMs = r.int64(7);
+    x.render.presetId = r.text(8);
+    x.render.mode = r.text(9);
+    x.render.t = r.optionalReal(10).value_or(0);
+    x.render.alpha = r.optionalReal(11).value_or(0);
+    x.render.beta = r.optionalReal(12).value_or(0);
+    x.answeredAt = r.int64(13);
+    out.push_back(std::move(x));
+    return {};
+  });
+  if (!status) return tl::unexpected(status.error());
+  return out;
 }
 
 Result<std::optional<StructureProgress>> SqliteProgressRepository::progress(std::int64_t userId,

@@ -14,36 +14,61 @@ bool isQuestion(const Lesson& lesson, int index) {
   return lesson.steps[std::size_t(index)].kind == StepKind::Question;
 }
 
-}  // namespace
-
-LessonEngine::LessonEngine(CurriculumRepository& curriculum, ProgressRepository& progress, quiz::KeyComputer& keys,
-                           EngineOptions options)
-    : curriculum_(curriculum), progress_(progress), keys_(keys), options_(std::move(options)) {}
-
-UnixSeconds LessonEngine::now() const {
-  if (options_.clock) return options_.clock();
+UnixSeconds clockNow(const EngineOptions& options) {
+  if (options.clock) return options.clock();
   return std::chrono::duration_cast<std::chrono::seconds>(std::chrono::system_clock::now().time_since_epoch()).count();
 }
 
-const Attempt& LessonEngine::attempt() const {
-  assert(attempt_ && "LessonEngine::attempt: call start() first");
-  return *attempt_;
+// What one graded answer does to the learner model: the structure's next Leitner state and the
+// Elo update of the user's ability against the question's difficulty.
+struct Outcome {
+  StructureProgress progress;
+  quiz::EloUpdate elo;
+};
+
+Result<Outcome> outcomeOf(ProgressRepository& progress, std::int64_t userId, const quiz::Question& question,
+                          const quiz::Grade& grade, UnixSeconds at, const EngineOptions& options) {
+  auto before = progress.progress(userId, question.target);
+  if (!before) return tl::unexpected(before.error());
+  const StructureProgress previous = before->value_or(StructureProgress{userId, question.target});
+  auto ability = progress.ability(userId);
+  if (!ability) return tl::unexpected(ability.error());
+  auto difficulty = progress.questionDifficulty(question.id);
+  if (!difficulty) return tl::unexpected(difficulty.error());
+  Outcome outcome;
+  outcome.elo = quiz::updateElo(ability->value_or(quiz::kDefaultAbility),
+                                difficulty->value_or(question.difficulty), grade.score, options.eloK);
+  outcome.progress = scheduleAnswer(previous, grade.correct, at, options.schedule);
+  return outcome;
 }
 
-quiz::GradingContext LessonEngine::gradingContext() const {
+}  // namespace
+
+quiz::GradingContext gradingContext(const std::vector<Structure>& structures, const Course& course) {
   quiz::GradingContext context;
-  for (const Structure& s : structures_) {
+  for (const Structure& s : structures) {
     quiz::NameEntry entry{s.id, {}};
     if (!s.displayName.empty()) entry.names.push_back(s.displayName);
     std::string spaced = s.id;
     std::replace(spaced.begin(), spaced.end(), '_', ' ');
     entry.names.push_back(spaced);
-    if (const auto it = course_.synonyms.find(s.id); it != course_.synonyms.end()) {
+    if (const auto it = course.synonyms.find(s.id); it != course.synonyms.end()) {
       entry.names.insert(entry.names.end(), it->second.begin(), it->second.end());
     }
     context.names.push_back(std::move(entry));
   }
   return context;
+}
+
+LessonEngine::LessonEngine(CurriculumRepository& curriculum, ProgressRepository& progress, quiz::KeyComputer& keys,
+                           EngineOptions options)
+    : curriculum_(curriculum), progress_(progress), keys_(keys), options_(std::move(options)) {}
+
+UnixSeconds LessonEngine::now() const { return clockNow(options_); }
+
+const Attempt& LessonEngine::attempt() const {
+  assert(attempt_ && "LessonEngine::attempt: call start() first");
+  return *attempt_;
 }
 
 Status LessonEngine::start(std::int64_t userId, const std::string& lessonId, LessonMode mode) {
@@ -108,7 +133,7 @@ Status LessonEngine::start(std::int64_t userId, const std::string& lessonId, Les
   if (resumed_) {
     auto responses = progress_.responses(attempt.id);
     if (!responses) return tl::unexpected(responses.error());
-    const quiz::GradingContext context = gradingContext();
+    const quiz::GradingContext context = gradingContext(structures_, course_);
     for (const Response& response : *responses) {
       if (response.stepIndex < 0 || response.stepIndex >= int(lesson_.steps.size()) ||
           !resolved_[std::size_t(response.stepIndex)]) {
@@ -142,7 +167,7 @@ Result<StepView> LessonEngine::current() const {
   if (atEnd()) return fail("lesson '" + lesson_.id + "': no more steps; finish the attempt");
   const int index = shown_[cursor_];
   const Step& step = lesson_.steps[std::size_t(index)];
-  const quiz::GradingContext context = gradingContext();
+  const quiz::GradingContext context = gradingContext(structures_, course_);
   StepView view;
   view.index = index;
   view.position = int(cursor_) + 1;
@@ -194,36 +219,27 @@ Result<quiz::Grade> LessonEngine::answer(const quiz::Answer& answer, const Rende
     return fail("lesson '" + lesson_.id + "': step " + std::to_string(cursor_ + 1) + " is already answered");
   }
   const quiz::ResolvedQuestion& question = *resolved_[std::size_t(index)];
-  auto grade = quiz::grade(question, answer, gradingContext());
+  auto grade = quiz::grade(question, answer, gradingContext(structures_, course_));
   if (!grade) return tl::unexpected(grade.error());
 
   const UnixSeconds at = now();
-  const std::string& structure = question.question.target;
-  auto before = progress_.progress(attempt_->userId, structure);
-  if (!before) return tl::unexpected(before.error());
-  StructureProgress previous = before->value_or(StructureProgress{attempt_->userId, structure});
-  auto ability = progress_.ability(attempt_->userId);
-  if (!ability) return tl::unexpected(ability.error());
-  auto difficulty = progress_.questionDifficulty(question.question.id);
-  if (!difficulty) return tl::unexpected(difficulty.error());
-  const quiz::EloUpdate elo =
-      quiz::updateElo(ability->value_or(quiz::kDefaultAbility), difficulty->value_or(question.question.difficulty),
-                      grade->score, options_.eloK);
+  auto outcome = outcomeOf(progress_, attempt_->userId, question.question, *grade, at, options_);
+  if (!outcome) return tl::unexpected(outcome.error());
 
   AnswerRecord record;
   record.response.attemptId = attempt_->id;
   record.response.stepIndex = index;
   record.response.questionId = question.question.id;
-  record.response.structureId = structure;
+  record.response.structureId = question.question.target;
   record.response.answer = answer;
   record.response.correct = grade->correct;
   record.response.score = grade->score;
   record.response.latencyMs = latencyMs;
   record.response.render = render;
   record.response.answeredAt = at;
-  record.progress = scheduleAnswer(previous, grade->correct, at, options_.schedule);
-  record.abilityAfter = elo.ability;
-  record.difficultyAfter = elo.difficulty;
+  record.progress = outcome->progress;
+  record.abilityAfter = outcome->elo.ability;
+  record.difficultyAfter = outcome->elo.difficulty;
   auto stored = progress_.recordAnswer(record);
   if (!stored) return tl::unexpected(withContext("recording the answer", stored.error()));
 
@@ -309,6 +325,48 @@ Result<std::optional<quiz::Question>> chooseReviewQuestion(CurriculumRepository&
   const auto chosen = quiz::chooseAdaptive(candidates, ability->value_or(quiz::kDefaultAbility));
   if (!chosen) return std::optional<quiz::Question>{};
   return std::optional<quiz::Question>(questions[*chosen]);
+}
+
+Result<quiz::Grade> answerReview(CurriculumRepository& curriculum, ProgressRepository& progress,
+                                 quiz::KeyComputer& keys, const ReviewAnswer& review, const EngineOptions& options) {
+  auto course = curriculum.course(review.courseId);
+  if (!course) return tl::unexpected(course.error());
+  const quiz::Question* stored = nullptr;
+  for (const Lesson& lesson : course->lessons) {
+    for (const Step& step : lesson.steps) {
+      if (step.kind == StepKind::Question && step.question.id == review.question.id) stored = &step.question;
+    }
+  }
+  if (!stored) {
+    return fail("review: question '" + review.question.id + "' is not in course '" + review.courseId + "'");
+  }
+  auto structures = curriculum.structures(course->datasetId);
+  if (!structures) return tl::unexpected(structures.error());
+  auto resolved = quiz::resolveQuestion(*stored, keys);
+  if (!resolved) return tl::unexpected(withContext("review", resolved.error()));
+  auto grade = quiz::grade(*resolved, review.answer, gradingContext(*structures, *course));
+  if (!grade) return tl::unexpected(grade.error());
+
+  const UnixSeconds at = clockNow(options);
+  auto outcome = outcomeOf(progress, review.userId, *stored, *grade, at, options);
+  if (!outcome) return tl::unexpected(outcome.error());
+
+  ReviewRecord record;
+  record.response.userId = review.userId;
+  record.response.questionId = stored->id;
+  record.response.structureId = stored->target;
+  record.response.answer = review.answer;
+  record.response.correct = grade->correct;
+  record.response.score = grade->score;
+  record.response.latencyMs = review.latencyMs;
+  record.response.render = review.render;
+  record.response.answeredAt = at;
+  record.progress = outcome->progress;
+  record.abilityAfter = outcome->elo.ability;
+  record.difficultyAfter = outcome->elo.difficulty;
+  auto recorded = progress.recordReviewAnswer(record);
+  if (!recorded) return tl::unexpected(withContext("review", recorded.error()));
+  return *grade;
 }
 
 }  // namespace at::lessons

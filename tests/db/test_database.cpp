@@ -74,7 +74,7 @@ TEST_CASE("An empty file is migrated to the newest schema version in WAL mode wi
   CHECK(fk->integer(0) == 1);
   for (const char* table : {"datasets", "structures", "presets", "courses", "lessons", "lesson_prerequisites",
                             "steps", "questions", "users", "attempts", "responses", "progress", "user_ability",
-                            "question_stats"})
+                            "question_stats", "review_responses"})
     CHECK_MESSAGE(countRows(*db, table) == 0, table);
 }
 
@@ -102,6 +102,13 @@ TEST_CASE("A database at every earlier version migrates to the same schema as a 
       CHECK(*old->schemaVersion() == from);
       if (from >= 1) REQUIRE(registerDataset(*old, sampleRecord("kept"), {}));
       if (from >= 2) REQUIRE(storeCourse(*old, test::toyCourse(), "v" + std::to_string(from)));
+      if (from >= 3) {  // a learner's history: a user, an attempt, an answer and its progress
+        REQUIRE(old->exec("INSERT INTO users (id, name) VALUES (7, 'kept-learner');"
+                          "INSERT INTO attempts (id, user_id, lesson_id, mode, started_at) VALUES (3, 7, 'toy.ossicles', 'guided', 100);"
+                          "INSERT INTO responses (attempt_id, step_index, question_id, structure, answer, correct, score,"
+                          " latency_ms, answered_at) VALUES (3, 1, 'toy.ossicles.name_stapes', 'stapes', '{\"text\":\"stapes\"}', 1, 1, 500, 110);"
+                          "INSERT INTO progress VALUES (7, 'stapes', 2, 200000, 1, 1, 110);"));
+      }
     }
     auto db = Database::open(path);
     REQUIRE_MESSAGE(db, (db ? "" : db.error().message));
@@ -119,7 +126,61 @@ TEST_CASE("A database at every earlier version migrates to the same schema as a 
       REQUIRE(course);
       CHECK(lessons::courseToJson(*course) == lessons::courseToJson(test::toyCourse()));
     }
+    if (from >= 3) {
+      SqliteProgressRepository progress(*db);
+      auto responses = progress.responses(3);
+      REQUIRE(responses);
+      REQUIRE(responses->size() == 1);
+      CHECK((*responses)[0].answer.text == std::optional<std::string>("stapes"));
+      auto p = progress.progress(7, "stapes");
+      REQUIRE(p);
+      REQUIRE(p->has_value());
+      CHECK((*p)->box == 2);
+    }
+    // The newest migration's table works on the migrated file: a review answer of the kept
+    // learner (or a new one) is recorded and read back.
+    std::int64_t learner = 7;
+    if (from < 3) {
+      SqliteUserRepository users(*db);
+      auto created = users.createUser("new-learner", lessons::Role::Student, "");
+      REQUIRE(created);
+      learner = created->id;
+    }
+    SqliteProgressRepository progress(*db);
+    lessons::ReviewRecord review;
+    review.response.userId = learner;
+    review.response.questionId = "toy.ossicles.name_stapes";
+    review.response.structureId = "stapes";
+    review.response.answer.text = "stapes";
+    review.response.correct = true;
+    review.response.answeredAt = 300000;
+    review.progress = {learner, "stapes", 3, 300000 + 4 * 86400, 2, 2, 300000};
+    auto recorded = progress.recordReviewAnswer(review);
+    REQUIRE_MESSAGE(recorded, (recorded ? "" : recorded.error().message));
+    CHECK(progress.reviewResponses(learner)->size() == 1);
   }
+}
+
+TEST_CASE("The newest migration adds the review responses table to a version-4 database") {
+  REQUIRE(latestSchemaVersion() >= 5);
+  CHECK(migrations()[4].summary.find("review") != std::string_view::npos);
+  test::TempDir dir;
+  const std::string path = (dir / "v4.db").string();
+  {
+    OpenOptions options;
+    options.targetVersion = 4;
+    auto old = Database::open(path, options);
+    REQUIRE(old);
+    auto table = old->prepare("SELECT count(*) FROM sqlite_master WHERE name = 'review_responses'");
+    REQUIRE(*table->step());
+    CHECK(table->int64(0) == 0);
+  }
+  auto db = Database::open(path);
+  REQUIRE(db);
+  CHECK(*db->schemaVersion() == latestSchemaVersion());
+  auto table = db->prepare("SELECT count(*) FROM sqlite_master WHERE name = 'review_responses'");
+  REQUIRE(*table->step());
+  CHECK(table->int64(0) == 1);
 }
 
 TEST_CASE("A database from a newer program version is refused and left byte-identical") {
@@ -129,6 +190,10 @@ TEST_CASE("A database from a newer program version is refused and left byte-iden
     auto db = Database::open(path.string());
     REQUIRE(db);
     REQUIRE(registerDataset(*db, sampleRecord("x"), {}));
+    // Rows in the newest tables too (review responses): a newer program's data must survive.
+    REQUIRE(db->exec("INSERT INTO users (id, name) VALUES (1, 'u');"
+                     "INSERT INTO review_responses (user_id, question_id, structure, answer, correct, score, latency_ms,"
+                     " answered_at) VALUES (1, 'q', 's', '{\"choice\":1}', 1, 1, 10, 20)"));
     REQUIRE(db->exec("PRAGMA user_version = " + std::to_string(latestSchemaVersion() + 1)));
     // Leave the file as a rollback-journal database with no side files, so any write shows.
     REQUIRE(db->exec("PRAGMA journal_mode = DELETE"));

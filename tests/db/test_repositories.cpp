@@ -398,3 +398,211 @@ TEST_CASE("Two connections recording answers for the same user at once lose noth
   REQUIRE(*stats->step());
   CHECK(stats->int64(0) == 2 * kAnswers);
 }
+
+TEST_CASE("A review answer is stored with its progress, ability and difficulty in one transaction, outside any attempt") {
+  test::TempDir dir;
+  Database db = openFresh(dir);
+  SqliteUserRepository users(db);
+  SqliteProgressRepository progress(db);
+  auto user = users.createUser("eve", Role::Student, "");
+  REQUIRE(user);
+
+  ReviewRecord r;
+  r.response.userId = user->id;
+  r.response.questionId = "toy.ossicles.name_stapes";
+  r.response.structureId = "stapes";
+  r.response.answer.text = "stirrup'; DROP TABLE review_responses; --";
+  r.response.correct = false;
+  r.response.score = 0;
+  r.response.latencyMs = 6789;
+  r.response.render = {"stapes_wdt", "bare", 0.15, 2.1, 0.6};
+  r.response.answeredAt = 5000;
+  r.progress = {user->id, "stapes", 1, 5600, 3, 1, 5000};
+  r.abilityAfter = 1488;
+  r.difficultyAfter = 1512;
+  auto id = progress.recordReviewAnswer(r);
+  REQUIRE_MESSAGE(id, (id ? "" : id.error().message));
+
+  auto back = progress.reviewResponses(user->id);
+  REQUIRE(back);
+  REQUIRE(back->size() == 1);
+  const ReviewResponse& x = (*back)[0];
+  CHECK(x.id == *id);
+  CHECK(x.userId == user->id);
+  CHECK(x.questionId == "toy.ossicles.name_stapes");
+  CHECK(x.structureId == "stapes");
+  CHECK(x.answer.text == r.response.answer.text);
+  CHECK(quiz::answerToJson(x.answer) == quiz::answerToJson(r.response.answer));
+  CHECK_FALSE(x.correct);
+  CHECK(x.score == 0);
+  CHECK(x.latencyMs == 6789);
+  CHECK(x.render.presetId == "stapes_wdt");
+  CHECK(x.render.mode == "bare");
+  CHECK(x.render.t == doctest::Approx(0.15));
+  CHECK(x.render.alpha == doctest::Approx(2.1));
+  CHECK(x.render.beta == doctest::Approx(0.6));
+  CHECK(x.answeredAt == 5000);
+  auto p = progress.progress(user->id, "stapes");
+  REQUIRE(p->has_value());
+  CHECK((*p)->box == 1);
+  CHECK((*p)->dueAt == 5600);
+  CHECK((*p)->answered == 3);
+  CHECK(*progress.ability(user->id) == std::optional<double>(1488));
+  CHECK(*progress.questionDifficulty("toy.ossicles.name_stapes") == std::optional<double>(1512));
+  CHECK(countRows(db, "responses") == 0);
+  CHECK(progress.reviewResponses(user->id + 1)->empty());
+
+  // A user that does not exist is refused by name, and nothing is written.
+  ReviewRecord stranger = r;
+  stranger.response.userId = stranger.progress.userId = user->id + 100;
+  auto refused = progress.recordReviewAnswer(stranger);
+  REQUIRE(!refused);
+  CHECK(refused.error().message.find("unknown user") != std::string::npos);
+  CHECK(countRows(db, "review_responses") == 1);
+  CHECK(countRows(db, "progress") == 1);
+}
+
+TEST_CASE("A review answer that fails in its last write leaves no trace of its first ones") {
+  test::TempDir dir;
+  Database db = openFresh(dir);
+  SqliteUserRepository users(db);
+  SqliteProgressRepository progress(db);
+  auto user = users.createUser("fay", Role::Student, "");
+  REQUIRE(user);
+  // The question's difficulty is the transaction's last write: make it fail as a full disk would.
+  REQUIRE(db.exec("CREATE TRIGGER stats_fail BEFORE INSERT ON question_stats"
+                  " BEGIN SELECT RAISE(ABORT, 'database or disk is full'); END"));
+  ReviewRecord r;
+  r.response.userId = user->id;
+  r.response.questionId = "toy.ossicles.name_stapes";
+  r.response.structureId = "stapes";
+  r.response.answer.text = "stapes";
+  r.response.correct = true;
+  r.response.score = 1;
+  r.response.answeredAt = 7000;
+  r.progress = {user->id, "stapes", 2, 7000 + 2 * 86400, 1, 1, 7000};
+  r.abilityAfter = 1516;
+  r.difficultyAfter = 1484;
+  auto failed = progress.recordReviewAnswer(r);
+  REQUIRE(!failed);
+  CHECK(failed.error().message.find("disk is full") != std::string::npos);
+  CHECK(countRows(db, "review_responses") == 0);
+  CHECK(countRows(db, "progress") == 0);
+  CHECK(countRows(db, "user_ability") == 0);
+  CHECK(!progress.ability(user->id)->has_value());
+
+  // Through answerReview the failure is reported and the queue does not move either.
+  REQUIRE(storeCourse(db, test::toyCourse(), "toy"));
+  SqliteCurriculumRepository curriculum(db, test::toyBuiltin());
+  test::ToyKeys keys;
+  ReviewAnswer review;
+  review.userId = user->id;
+  review.courseId = "toy";
+  review.question = *curriculum.question("toy.ossicles.name_stapes");
+  review.answer.text = "Stapes";
+  auto grade = answerReview(curriculum, progress, keys, review);
+  REQUIRE(!grade);
+  CHECK(grade.error().message.find("disk is full") != std::string::npos);
+  CHECK(countRows(db, "review_responses") == 0);
+  CHECK(countRows(db, "progress") == 0);
+}
+
+TEST_CASE("answerReview on SQLite moves the review queue: right answers up a box and out of it, a wrong one to box 1") {
+  test::TempDir dir;
+  const std::string path = (dir / "q.db").string();
+  {
+    Database db = openFresh(dir, "q.db");
+    REQUIRE(storeCourse(db, test::toyCourse(), "toy"));
+  }
+  auto db = Database::open(path);
+  REQUIRE(db);
+  SqliteCurriculumRepository curriculum(*db, test::toyBuiltin());
+  SqliteProgressRepository progress(*db);
+  SqliteUserRepository users(*db);
+  test::ToyKeys keys;
+  const std::int64_t userId = users.createUser("gil", Role::Student, "")->id;
+  UnixSeconds clock = 2'000'000;
+  EngineOptions options;
+  options.clock = [&clock] { return clock; };
+  const auto inQueue = [&](UnixSeconds at) {
+    auto queue = reviewQueue(progress, userId, at);
+    REQUIRE(queue);
+    return std::any_of(queue->begin(), queue->end(), [](const StructureProgress& p) { return p.structureId == "stapes"; });
+  };
+  const auto review = [&](const std::string& questionId, quiz::Answer answer) {
+    ReviewAnswer r;
+    r.userId = userId;
+    r.courseId = "toy";
+    auto q = curriculum.question(questionId);
+    REQUIRE(q);
+    r.question = *q;
+    r.answer = std::move(answer);
+    r.render = {"stapes_wdt", "wdt", 0.5, 1.6, 1.0};
+    r.latencyMs = 900;
+    auto grade = answerReview(curriculum, progress, keys, r, options);
+    REQUIRE_MESSAGE(grade, (grade ? "" : grade.error().message));
+    return *grade;
+  };
+  quiz::Answer wrongName, rightName, rightRelation;
+  wrongName.text = "Incus";
+  rightName.text = "stirrup";  // the course's synonym
+  const auto relation = quiz::resolveQuestion(*curriculum.question("toy.middle.nearest_to_stapes"), keys);
+  REQUIRE(relation);
+  rightRelation.choice = relation->keyChoice;
+
+  // Wrong: box 1, due after the relearn delay.
+  CHECK_FALSE(review("toy.ossicles.name_stapes", wrongName).correct);
+  auto p = *progress.progress(userId, "stapes");
+  REQUIRE(p.has_value());
+  CHECK(p->box == 1);
+  CHECK(p->dueAt == clock + LeitnerSchedule{}.relearnDelay);
+  CHECK_FALSE(inQueue(clock));
+  clock += LeitnerSchedule{}.relearnDelay;
+  CHECK(inQueue(clock));
+
+  // Right: box 2, due in 2 days, out of the queue now; a stapes question is no longer chosen.
+  CHECK(review("toy.ossicles.name_stapes", rightName).correct);
+  p = *progress.progress(userId, "stapes");
+  CHECK(p->box == 2);
+  CHECK(p->dueAt == clock + LeitnerSchedule{}.intervals[1]);
+  CHECK_FALSE(inQueue(clock));
+  auto chosen = chooseReviewQuestion(curriculum, progress, userId, "toy", clock);
+  REQUIRE(chosen);
+  REQUIRE(chosen->has_value());
+  CHECK((*chosen)->target != "stapes");
+
+  // Due again after the interval; right again: box 3.
+  clock = p->dueAt;
+  CHECK(inQueue(clock));
+  CHECK(review("toy.middle.nearest_to_stapes", rightRelation).correct);
+  p = *progress.progress(userId, "stapes");
+  CHECK(p->box == 3);
+  CHECK(p->dueAt == clock + LeitnerSchedule{}.intervals[2]);
+  CHECK(p->answered == 3);
+  CHECK(p->correct == 2);
+
+  // Wrong from box 3: back to box 1.
+  clock = p->dueAt + 10;
+  CHECK_FALSE(review("toy.ossicles.name_stapes", wrongName).correct);
+  p = *progress.progress(userId, "stapes");
+  CHECK(p->box == 1);
+  CHECK(p->dueAt == clock + LeitnerSchedule{}.relearnDelay);
+
+  // Every review answer is stored in order, outside any attempt, and moved the Elo ratings.
+  auto stored = progress.reviewResponses(userId);
+  REQUIRE(stored);
+  REQUIRE(stored->size() == 4);
+  CHECK((*stored)[0].questionId == "toy.ossicles.name_stapes");
+  CHECK((*stored)[2].questionId == "toy.middle.nearest_to_stapes");
+  CHECK((*stored)[2].answer.choice == std::optional<int>(relation->keyChoice));
+  CHECK((*stored)[1].correct);
+  CHECK((*stored)[1].render.mode == "wdt");
+  CHECK((*stored)[3].answeredAt == clock);
+  CHECK(countRows(*db, "responses") == 0);
+  CHECK(countRows(*db, "attempts") == 0);
+  auto answered = db->prepare("SELECT answered FROM user_ability WHERE user_id = ?1");
+  REQUIRE(answered);
+  answered->bind(1, userId);
+  REQUIRE(*answered->step());
+  CHECK(answered->int64(0) == 4);
+}

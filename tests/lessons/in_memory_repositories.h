@@ -1,6 +1,6 @@
 // FOR TESTS ONLY: the lessons/ repository interfaces over plain containers, so that the engine can
 // be tested without db/. The product uses db/'s SQLite implementation. `failNextRecord` simulates
-// a storage failure.
+// a storage failure of the next recordAnswer or recordReviewAnswer (nothing is stored).
 #pragma once
 
 #include <algorithm>
@@ -52,6 +52,7 @@ class InMemoryProgress final : public lessons::ProgressRepository {
  public:
   std::vector<lessons::Attempt> attemptList;
   std::vector<lessons::Response> responseList;
+  std::vector<lessons::ReviewResponse> reviewList;
   std::map<std::pair<std::int64_t, std::string>, lessons::StructureProgress> progressMap;
   std::map<std::int64_t, double> abilities;
   std::map<std::string, double> difficulties;
@@ -113,6 +114,26 @@ class InMemoryProgress final : public lessons::ProgressRepository {
     abilities[userId] = record.abilityAfter;
     difficulties[r.questionId] = record.difficultyAfter;
     return r.id;
+  }
+  Result<std::int64_t> recordReviewAnswer(const lessons::ReviewRecord& record) override {
+    if (failNextRecord) {
+      failNextRecord = false;
+      return fail("disk full");
+    }
+    lessons::ReviewResponse r = record.response;
+    r.id = std::int64_t(reviewList.size()) + 1;
+    reviewList.push_back(r);
+    progressMap[{record.progress.userId, record.progress.structureId}] = record.progress;
+    abilities[r.userId] = record.abilityAfter;
+    difficulties[r.questionId] = record.difficultyAfter;
+    return r.id;
+  }
+  Result<std::vector<lessons::ReviewResponse>> reviewResponses(std::int64_t userId) override {
+    std::vector<lessons::ReviewResponse> out;
+    for (const auto& r : reviewList) {
+      if (r.userId == userId) out.push_back(r);
+    }
+    return out;
   }
   Result<std::optional<lessons::StructureProgress>> progress(std::int64_t userId, const std::string& structureId) override {
     const auto it = progressMap.find({userId, structureId});

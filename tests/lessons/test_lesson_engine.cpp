@@ -300,3 +300,170 @@ TEST_CASE("ReviewQueue_AndAdaptiveReview_FollowDueTimesAndAbility") {
   }
   CHECK((*chosen)->id == best);
 }
+
+// ---------------------------------------------------------------------------------------------
+// Review answers (answerReview): graded like lesson answers, recorded, and moving the queue.
+
+namespace {
+
+// The stapes identify question of the fixture resolved as the app resolves it before asking.
+quiz::ResolvedQuestion resolvedStapes(Fixture& f) {
+  auto q = f.curriculum.question("one.q2");
+  REQUIRE(q);
+  auto resolved = quiz::resolveQuestion(*q, f.keys);
+  REQUIRE_MESSAGE(resolved, (resolved ? "" : resolved.error().message));
+  return *resolved;
+}
+
+ReviewAnswer reviewOf(const quiz::Question& question, quiz::Answer answer) {
+  ReviewAnswer r;
+  r.userId = 1;
+  r.courseId = "toy";
+  r.question = question;
+  r.answer = std::move(answer);
+  r.render = {"stapes_wdt", "wdt", 0.4, 1.2, 0.8};
+  r.latencyMs = 2345;
+  return r;
+}
+
+bool inQueue(Fixture& f, const std::string& structure, UnixSeconds at) {
+  auto queue = reviewQueue(f.progress, 1, at);
+  REQUIRE(queue);
+  return std::any_of(queue->begin(), queue->end(),
+                     [&](const StructureProgress& p) { return p.structureId == structure; });
+}
+
+}  // namespace
+
+TEST_CASE("AnswerReview_RightAnswerMovesTheStructureUpABoxAndOutOfTheQueue") {
+  Fixture f;
+  LessonEngine engine(f.curriculum, f.progress, f.keys, f.options());
+  REQUIRE(engine.start(1, "one"));
+  REQUIRE(engine.next());
+  REQUIRE(engine.answer(text("cochlea"), {}, 1));
+  REQUIRE(engine.next());
+  REQUIRE(engine.next());
+  REQUIRE(engine.answer(choice(indexOf(engine.current()->choiceIds, "incus")), {}, 1));  // wrong: box 1
+  f.clock += 3600;
+  REQUIRE(inQueue(f, "stapes", f.clock));
+
+  const quiz::ResolvedQuestion q = resolvedStapes(f);
+  const double abilityBefore = f.progress.abilities.at(1), difficultyBefore = f.progress.difficulties.at("one.q2");
+  auto grade = answerReview(f.curriculum, f.progress, f.keys,
+                            reviewOf(q.question, choice(indexOf(q.choices, "stapes"))), f.options());
+  REQUIRE_MESSAGE(grade, (grade ? "" : grade.error().message));
+  CHECK(grade->correct);
+  CHECK(grade->score == doctest::Approx(1.0));
+
+  // Box 1 → 2, due after box 2's interval: no longer in the queue now, back when that has passed.
+  const StructureProgress& p = f.progress.progressMap.at({1, "stapes"});
+  CHECK(p.box == 2);
+  CHECK(p.dueAt == f.clock + LeitnerSchedule{}.intervals[1]);
+  CHECK(p.answered == 2);
+  CHECK(p.correct == 1);
+  CHECK(p.lastAnsweredAt == f.clock);
+  CHECK_FALSE(inQueue(f, "stapes", f.clock));
+  CHECK(inQueue(f, "stapes", p.dueAt));
+
+  // Elo moved from the values before the review, as for a lesson answer.
+  const quiz::EloUpdate elo = quiz::updateElo(abilityBefore, difficultyBefore, 1.0);
+  CHECK(f.progress.abilities.at(1) == doctest::Approx(elo.ability));
+  CHECK(f.progress.difficulties.at("one.q2") == doctest::Approx(elo.difficulty));
+  CHECK(f.progress.abilities.at(1) > abilityBefore);
+
+  // The review response is stored on its own (no attempt), with what was on screen.
+  CHECK(f.progress.responseList.size() == 2);
+  REQUIRE(f.progress.reviewList.size() == 1);
+  const ReviewResponse& r = f.progress.reviewList[0];
+  CHECK(r.userId == 1);
+  CHECK(r.questionId == "one.q2");
+  CHECK(r.structureId == "stapes");
+  CHECK(r.correct);
+  CHECK(r.latencyMs == 2345);
+  CHECK(r.render.presetId == "stapes_wdt");
+  CHECK(r.answeredAt == f.clock);
+  CHECK(r.answer.choice == std::optional<int>(indexOf(q.choices, "stapes")));
+}
+
+TEST_CASE("AnswerReview_WrongAnswerSendsTheStructureBackToBoxOne") {
+  Fixture f;
+  LessonEngine engine(f.curriculum, f.progress, f.keys, f.options());
+  REQUIRE(engine.start(1, "one"));
+  REQUIRE(engine.next());
+  REQUIRE(engine.answer(text("cochlea"), {}, 1));  // right: box 2, due in 2 days
+  f.clock += 3 * 86400;
+  REQUIRE(inQueue(f, "cochlea", f.clock));
+
+  auto q = f.curriculum.question("one.q1");
+  REQUIRE(q);
+  auto grade = answerReview(f.curriculum, f.progress, f.keys, reviewOf(*q, text("malleus")), f.options());
+  REQUIRE(grade);
+  CHECK_FALSE(grade->correct);
+  const StructureProgress& p = f.progress.progressMap.at({1, "cochlea"});
+  CHECK(p.box == 1);
+  CHECK(p.dueAt == f.clock + LeitnerSchedule{}.relearnDelay);
+  CHECK(p.answered == 2);
+  CHECK(p.correct == 1);
+  CHECK_FALSE(inQueue(f, "cochlea", f.clock));
+  CHECK(inQueue(f, "cochlea", f.clock + LeitnerSchedule{}.relearnDelay));
+  REQUIRE(f.progress.reviewList.size() == 1);
+  CHECK_FALSE(f.progress.reviewList[0].correct);
+}
+
+TEST_CASE("AnswerReview_GradesNamesWithTheCourseSynonymsAsLessonsDo") {
+  Fixture f;
+  const quiz::GradingContext context = gradingContext(f.curriculum.datasets["phantom"], f.curriculum.courseList[0]);
+  const auto stapes = std::find_if(context.names.begin(), context.names.end(),
+                                   [](const quiz::NameEntry& e) { return e.structureId == "stapes"; });
+  REQUIRE(stapes != context.names.end());
+  CHECK(stapes->names == std::vector<std::string>{"Stapes", "stapes", "stirrup"});
+  CHECK(context.displayName("stapes") == "Stapes");
+
+  // A review name question on the stapes, answered with the course's synonym.
+  f.curriculum.courseList[0].lessons[1].steps.push_back(questionStep(nameQ("two.q2", "stapes")));
+  auto q = f.curriculum.question("two.q2");
+  REQUIRE(q);
+  auto grade = answerReview(f.curriculum, f.progress, f.keys, reviewOf(*q, text("Stirrup")), f.options());
+  REQUIRE_MESSAGE(grade, (grade ? "" : grade.error().message));
+  CHECK(grade->correct);
+  // Another structure's name is not accepted.
+  CHECK_FALSE(answerReview(f.curriculum, f.progress, f.keys, reviewOf(*q, text("incus")), f.options())->correct);
+  // A first review answer starts the structure's progress as a first lesson answer would; the
+  // second (wrong) one sent it back to box 1.
+  CHECK(f.progress.reviewList.size() == 2);
+  CHECK(f.progress.progressMap.at({1, "stapes"}).box == 1);
+  CHECK(f.progress.progressMap.at({1, "stapes"}).answered == 2);
+}
+
+TEST_CASE("AnswerReview_StorageFailureOrBadInputRecordsNothing") {
+  Fixture f;
+  auto q = f.curriculum.question("one.q1");
+  REQUIRE(q);
+
+  f.progress.failNextRecord = true;
+  auto failed = answerReview(f.curriculum, f.progress, f.keys, reviewOf(*q, text("cochlea")), f.options());
+  REQUIRE_FALSE(failed);
+  CHECK(failed.error().message.find("disk full") != std::string::npos);
+  CHECK(f.progress.reviewList.empty());
+  CHECK(f.progress.progressMap.empty());
+  CHECK(f.progress.abilities.empty());
+  CHECK(f.progress.difficulties.empty());
+
+  // An answer that does not fit the question (a choice for a name question).
+  CHECK_FALSE(answerReview(f.curriculum, f.progress, f.keys, reviewOf(*q, choice(0)), f.options()));
+  // A question of another course, and an unknown course.
+  quiz::Question stranger = *q;
+  stranger.id = "elsewhere.q1";
+  auto foreign = answerReview(f.curriculum, f.progress, f.keys, reviewOf(stranger, text("cochlea")), f.options());
+  REQUIRE_FALSE(foreign);
+  CHECK(foreign.error().message.find("elsewhere.q1") != std::string::npos);
+  ReviewAnswer unknownCourse = reviewOf(*q, text("cochlea"));
+  unknownCourse.courseId = "nope";
+  CHECK_FALSE(answerReview(f.curriculum, f.progress, f.keys, unknownCourse, f.options()));
+  CHECK(f.progress.reviewList.empty());
+  CHECK(f.progress.progressMap.empty());
+
+  // After the failure the same answer can be given and counts.
+  CHECK(answerReview(f.curriculum, f.progress, f.keys, reviewOf(*q, text("cochlea")), f.options()));
+  CHECK(f.progress.reviewList.size() == 1);
+}

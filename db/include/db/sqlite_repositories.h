@@ -53,6 +53,8 @@ class SqliteProgressRepository final : public lessons::ProgressRepository {
   Result<bool> hasFinished(std::int64_t userId, const std::string& lessonId) override;
   Result<std::vector<lessons::Response>> responses(std::int64_t attemptId) override;
   Result<std::int64_t> recordAnswer(const lessons::AnswerRecord& record) override;
+  Result<std::int64_t> recordReviewAnswer(const lessons::ReviewRecord& record) override;
+  Result<std::vector<lessons::ReviewResponse>> reviewResponses(std::int64_t userId) override;
   Result<std::optional<lessons::StructureProgress>> progress(std::int64_t userId,
                                                              const std::string& structureId) override;
   Result<std::vector<lessons::StructureProgress>> allProgress(std::int64_t userId) override;

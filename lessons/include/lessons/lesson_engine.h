@@ -7,6 +7,10 @@
 // ProgressRepository::recordAnswer (response + Leitner progress + Elo, one committed transaction)
 // BEFORE answer() returns its feedback. A lesson whose prerequisites are not finished cannot start.
 // QuizOnly mode skips show steps and hides labels and structure names in step views.
+//
+// Review questions (chooseReviewQuestion) are asked outside any attempt; answerReview grades them
+// the same way and records them through ProgressRepository::recordReviewAnswer, so the review
+// queue moves after a review exactly as after a lesson answer.
 #pragma once
 
 #include <cstdint>
@@ -52,6 +56,11 @@ struct StepView {
   std::optional<quiz::Grade> feedback;   // set once answered
 };
 
+// The names a typed answer may use for each structure of a course's dataset: its display name,
+// its id with spaces for underscores, and the course's synonyms. Lesson and review answers are
+// graded with this context.
+quiz::GradingContext gradingContext(const std::vector<Structure>& structures, const Course& course);
+
 class LessonEngine {
  public:
   LessonEngine(CurriculumRepository& curriculum, ProgressRepository& progress, quiz::KeyComputer& keys,
@@ -90,7 +99,6 @@ class LessonEngine {
 
  private:
   UnixSeconds now() const;
-  quiz::GradingContext gradingContext() const;
 
   CurriculumRepository& curriculum_;
   ProgressRepository& progress_;
@@ -118,5 +126,26 @@ Result<std::vector<StructureProgress>> reviewQueue(ProgressRepository& progress,
 Result<std::optional<quiz::Question>> chooseReviewQuestion(CurriculumRepository& curriculum,
                                                            ProgressRepository& progress, std::int64_t userId,
                                                            const std::string& courseId, UnixSeconds now);
+
+// An answer to a review question.
+struct ReviewAnswer {
+  std::int64_t userId = 0;
+  std::string courseId;        // the course the question was chosen from
+  quiz::Question question;     // as chooseReviewQuestion gave it (only its id is used: the
+                               // course's stored question is graded)
+  quiz::Answer answer;
+  RenderState render;          // on screen when it was given
+  std::int64_t latencyMs = 0;  // from the question being shown to the answer
+};
+
+// Grades a review answer as LessonEngine::answer grades a lesson answer (the question's keys
+// resolved through `keys`, the course's gradingContext), schedules the structure's Leitner box
+// (scheduleAnswer), updates the Elo ability and question difficulty, and records all of it through
+// ProgressRepository::recordReviewAnswer (one committed transaction) before returning the grade.
+// Errors: unknown course, a question not in the course, keys that cannot be computed, an answer
+// that does not fit the question, a storage failure — in every case nothing is recorded.
+Result<quiz::Grade> answerReview(CurriculumRepository& curriculum, ProgressRepository& progress,
+                                 quiz::KeyComputer& keys, const ReviewAnswer& review,
+                                 const EngineOptions& options = {});
 
 }  // namespace at::lessons

@@ -118,6 +118,28 @@ struct AnswerRecord {
   double difficultyAfter = 1500;// the question's Elo difficulty after this answer
 };
 
+// One answer to a review question (asked outside any lesson attempt, lessons::answerReview).
+struct ReviewResponse {
+  std::int64_t id = 0;        // set by the repository
+  std::int64_t userId = 0;
+  std::string questionId;
+  std::string structureId;    // the question's target
+  quiz::Answer answer;        // stored verbatim (quiz/answer_json.h gives a JSON form)
+  bool correct = false;
+  double score = 0;
+  std::int64_t latencyMs = 0; // from the question being shown to the answer
+  RenderState render;
+  UnixSeconds answeredAt = 0;
+};
+
+// Everything one review answer changes, written in ONE transaction (as AnswerRecord).
+struct ReviewRecord {
+  ReviewResponse response;
+  StructureProgress progress;   // the structure's state after this answer
+  double abilityAfter = 1500;   // the user's Elo ability after this answer
+  double difficultyAfter = 1500;// the question's Elo difficulty after this answer
+};
+
 class ProgressRepository {
  public:
   virtual ~ProgressRepository() = default;
@@ -134,6 +156,12 @@ class ProgressRepository {
   // Stores the response, the structure's progress, the ability and the question difficulty in one
   // transaction, COMMITTED (durable) before returning. Returns the response id.
   virtual Result<std::int64_t> recordAnswer(const AnswerRecord& record) = 0;
+  // As recordAnswer, for an answer to a review question: the review response, the structure's
+  // progress, the ability and the question difficulty in one transaction, COMMITTED before
+  // returning; on failure nothing is stored. Returns the review response id.
+  virtual Result<std::int64_t> recordReviewAnswer(const ReviewRecord& record) = 0;
+  // The user's review responses in the order they were recorded.
+  virtual Result<std::vector<ReviewResponse>> reviewResponses(std::int64_t userId) = 0;
   // nullopt = never answered.
   virtual Result<std::optional<StructureProgress>> progress(std::int64_t userId, const std::string& structureId) = 0;
   virtual Result<std::vector<StructureProgress>> allProgress(std::int64_t userId) = 0;
