@@ -13,6 +13,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include "db/database.h"
+#include "db/sqlite_repositories.h"
 #include "test_support.h"
 
 namespace fs = std::filesystem;
@@ -289,4 +291,135 @@ TEST_CASE("the review button asks a question of the course and grades its answer
   REQUIRE(graded.size() == 1);
   CHECK(graded[0].value("review", false));
   CHECK(graded[0].value("correct", false));
+  CHECK(graded[0].value("recorded", false));
+}
+
+namespace {
+
+std::vector<std::string> dueIn(const json& queueEvent) {
+  std::vector<std::string> due;
+  for (const json& id : queueEvent.at("due")) due.push_back(id.get<std::string>());
+  return due;
+}
+
+bool lists(const std::vector<std::string>& due, const std::string& structure) {
+  return std::find(due.begin(), due.end(), structure) != due.end();
+}
+
+}  // namespace
+
+TEST_CASE("a review answer is recorded: a wrong one puts its structure in the queue, a right one takes it out") {
+  if (!haveXvfb()) {
+    MESSAGE("SKIPPED: xvfb-run is not installed");
+    return;
+  }
+  TempDir dir("desktop-lessons-review-queue");
+  const fs::path db = dir / "tutor.db";
+  const Run first = runLessonScript(dir, {{"actions", {{{"do", "review"}}}}}, db, "reviewer");
+  INFO(first.err);
+  REQUIRE(first.exitCode == 0);
+  const auto asked = eventsOf(first, "review_question");
+  REQUIRE(asked.size() == 1);
+  REQUIRE(asked[0].at("question").is_string());
+  const std::string question = asked[0].value("question", ""), kind = asked[0].value("question_kind", ""),
+                    target = asked[0].value("target", "");
+  if (kind != "name" && kind != "identify") {
+    MESSAGE("the review question is a " << kind << " question; its answer is not checked here");
+    return;
+  }
+  std::string spoken = target;
+  std::replace(spoken.begin(), spoken.end(), '_', ' ');
+  const json right = kind == "name" ? json(spoken) : json(target);
+  json wrong = "cochlea";
+  if (kind == "identify") {
+    for (const json& c : asked[0].at("choices"))
+      if (c != target) wrong = c;
+  } else if (target == "cochlea") {
+    wrong = "stapes";
+  }
+
+  // Answered wrong: recorded, the structure in box 1 and due again in 10 minutes.
+  const Run missed = runLessonScript(dir, {{"actions", {{{"do", "review"}}, {{"do", "answer"}, {"value", wrong}}}}},
+                                     db, "reviewer");
+  INFO(missed.err);
+  REQUIRE(missed.exitCode == 0);
+  REQUIRE(eventsOf(missed, "review_question").size() == 1);
+  REQUIRE(eventsOf(missed, "review_question")[0].value("question", "") == question);
+  const auto missedGrade = eventsOf(missed, "graded");
+  REQUIRE(missedGrade.size() == 1);
+  CHECK_FALSE(missedGrade[0].value("correct", true));
+  CHECK(missedGrade[0].value("recorded", false));
+  {
+    auto database = at::db::Database::open(db.string());
+    REQUIRE(database);
+    at::db::SqliteUserRepository users(*database);
+    at::db::SqliteProgressRepository progress(*database);
+    auto user = users.findUser("reviewer");
+    REQUIRE(user);
+    REQUIRE(user->has_value());
+    auto stored = progress.reviewResponses((*user)->id);
+    REQUIRE(stored);
+    REQUIRE(stored->size() == 1);
+    CHECK((*stored)[0].questionId == question);
+    CHECK((*stored)[0].structureId == target);
+    CHECK_FALSE((*stored)[0].correct);
+    CHECK((*stored)[0].render.mode == "wdt");
+    auto p = progress.progress((*user)->id, target);
+    REQUIRE(p);
+    REQUIRE(p->has_value());
+    CHECK((*p)->box == 1);
+    CHECK((*p)->dueAt == (*stored)[0].answeredAt + 600);
+    // Ten minutes pass (the structure is due now), and every other structure of the course was
+    // answered and is not due: the review can only ask about this one.
+    REQUIRE(database->exec("UPDATE progress SET due_at = due_at - 600, last_answered_at = last_answered_at - 600"));
+    auto others = database->prepare(
+        "INSERT INTO progress (user_id, structure, box, due_at, answered, correct, last_answered_at)"
+        " SELECT ?1, target, 2, CAST(strftime('%s', 'now') AS INTEGER) + 86400, 1, 1,"
+        " CAST(strftime('%s', 'now') AS INTEGER) FROM (SELECT DISTINCT target FROM questions WHERE target != ?2)");
+    REQUIRE(others);
+    others->bind(1, (*user)->id).bind(2, target);
+    REQUIRE(others->run());
+  }
+
+  // In the queue now; answered right it leaves the queue at once, and nothing is left to review.
+  const Run fixed = runLessonScript(
+      dir, {{"actions", {{{"do", "review"}}, {{"do", "answer"}, {"value", right}}, {{"do", "review"}}}}}, db, "reviewer");
+  INFO(fixed.err);
+  REQUIRE(fixed.exitCode == 0);
+  const auto queues = eventsOf(fixed, "review_queue");
+  REQUIRE(queues.size() == 2);
+  CHECK(dueIn(queues[0]) == std::vector<std::string>{target});
+  CHECK_FALSE(lists(dueIn(queues[1]), target));
+  const auto reasked = eventsOf(fixed, "review_question");
+  REQUIRE(reasked.size() == 2);
+  REQUIRE(reasked[0].value("target", "") == target);
+  CHECK(reasked[1].at("question").is_null());
+  const auto fixedGrade = eventsOf(fixed, "graded");
+  REQUIRE(fixedGrade.size() == 1);
+  CHECK(fixedGrade[0].value("correct", false));
+  CHECK(fixedGrade[0].value("review", false));
+  CHECK(fixedGrade[0].value("recorded", false));
+
+  // The database holds both review answers, and the terminal's report counts them.
+  {
+    auto database = at::db::Database::open(db.string());
+    REQUIRE(database);
+    at::db::SqliteUserRepository users(*database);
+    at::db::SqliteProgressRepository progress(*database);
+    const std::int64_t userId = (**users.findUser("reviewer")).id;
+    auto stored = progress.reviewResponses(userId);
+    REQUIRE(stored);
+    REQUIRE(stored->size() == 2);
+    CHECK((*stored)[1].correct);
+    CHECK((*stored)[1].questionId == reasked[0].value("question", ""));
+    auto p = progress.progress(userId, target);
+    REQUIRE(p->has_value());
+    CHECK((*p)->box == 2);
+    CHECK((*p)->dueAt >= (*stored)[1].answeredAt + 86400);
+  }
+  const auto report = at::test::runApp("progress --user reviewer --db '" + db.string() + "'");
+  INFO(report.out << report.err);
+  REQUIRE(report.exitCode == 0);
+  CHECK(report.out.find("(2 in review, 1 correct)") != std::string::npos);
+  CHECK(report.out.find("Due for review now: nothing") != std::string::npos);
 }
