@@ -1,11 +1,14 @@
-// anatomy-tutor play: one lesson in the terminal through the LessonEngine. Answers come from a
-// JSON-lines file (--answers) or interactively from stdin. The engine commits every answer to the
-// database before its feedback is printed, so an interrupted lesson resumes at the next step.
+// anatomy-tutor play: one lesson in the terminal through the LessonEngine, or (--review COURSE)
+// the course's review questions through lessons::answerReview. Answers come from a JSON-lines file
+// (--answers) or interactively from stdin. Every answer is committed to the database before its
+// feedback is printed, so an interrupted lesson resumes at the next step.
 #include <algorithm>
 #include <cctype>
 #include <chrono>
 #include <cstdio>
+#include <ctime>
 #include <fstream>
+#include <functional>
 #include <iostream>
 #include <map>
 #include <sstream>
@@ -23,10 +26,14 @@ namespace {
 
 constexpr const char* kPlayHelp =
     "usage: anatomy-tutor play LESSON --user NAME [--answers FILE.jsonl] [--quiz-only]\n"
-    "                          [--new-user [--group GROUP]] [--db PATH]\n\n"
+    "                          [--new-user [--group GROUP]] [--db PATH]\n"
+    "       anatomy-tutor play --review COURSE --user NAME [--answers FILE.jsonl] [--db PATH]\n\n"
     "Runs a lesson in the terminal: prints each step, asks its questions and grades the answers.\n"
     "Every answer is saved before the next step is shown; running the same command again after an\n"
     "interruption resumes at the next step.\n\n"
+    "With --review, asks the course's review questions instead (structures due for review, or never\n"
+    "answered, chosen to suit the user's ability) until nothing is due or the answers end. Each\n"
+    "answer is saved and reschedules its structure (`anatomy-tutor progress` shows the queue).\n\n"
     "  --answers    one JSON object per line answering the questions from the current one on:\n"
     "                 {\"choice\": 2}  index of a listed choice (they are printed numbered from 0)\n"
     "                 {\"text\": \"cochlea\"}  a typed name\n"
@@ -174,17 +181,126 @@ void printStep(const lessons::StepView& v) {
   std::fflush(stdout);
 }
 
+enum class Asked { Graded, Quit, InputEnded };
+
+// Reads answers to the question `view` until one is graded by `grade` (which records it), printing
+// the grade. Interactive input may retry after a bad answer; from a file a bad answer is an error
+// naming its line.
+Result<Asked> askQuestion(AnswerSource& source, const lessons::StepView& view,
+                          const std::map<std::string, std::string>& idByName,
+                          const std::function<Result<quiz::Grade>(const quiz::Answer&, std::int64_t)>& grade) {
+  const auto shownAt = std::chrono::steady_clock::now();
+  while (true) {
+    auto line = source.nextLine();
+    if (!line) return Asked::InputEnded;
+    if (source.interactive() && lower(trim(*line)) == "quit") return Asked::Quit;
+    auto answer = source.interactive() ? parseTerminalAnswer(*line, view, idByName) : quiz::answerFromJson(*line);
+    const auto latency =
+        std::chrono::duration_cast<std::chrono::milliseconds>(std::chrono::steady_clock::now() - shownAt);
+    Result<quiz::Grade> graded = answer ? grade(*answer, latency.count())
+                                        : Result<quiz::Grade>(tl::unexpected(answer.error()));
+    if (graded) {
+      std::printf("  %s (score %.2f): ", graded->correct ? "correct" : "wrong", graded->score);
+      printWrapped(graded->feedback, 0);
+      std::fflush(stdout);
+      return Asked::Graded;
+    }
+    std::fflush(stdout);
+    if (!source.interactive()) return fail(source.where() + ": " + graded.error().message);
+    std::printf("  %s — try again\n", graded.error().message.c_str());
+  }
+}
+
+// What `play` shows on a terminal: no 3-D view, so no preset and the default t, α, β.
+lessons::RenderState terminalRender() {
+  lessons::RenderState render;
+  render.mode = "terminal";
+  return render;
+}
+
+// play --review COURSE: review questions until nothing is due or the answers end.
+int runReview(const std::string& courseId, std::int64_t userId, db::Database& database,
+              db::SqliteCurriculumRepository& curriculum, db::SqliteProgressRepository& progress,
+              AnswerSource& source) {
+  auto course = curriculum.course(courseId);
+  if (!course) return reportError("play: " + course.error().message + " (see `anatomy-tutor courses`)");
+  auto structures = curriculum.structures(course->datasetId);
+  if (!structures) return reportError("play: " + structures.error().message);
+  std::map<std::string, std::string> idByName, nameById;
+  for (const Structure& s : *structures) {
+    idByName[lower(s.id)] = s.id;
+    idByName[lower(s.displayName)] = s.id;
+    nameById[s.id] = s.displayName.empty() ? s.id : s.displayName;
+  }
+  const std::string datasetId = course->datasetId;
+  LazyKeyComputer keys(*structures, [&database, datasetId] { return loadCourseDataset(database, datasetId); });
+
+  std::printf("Review: %s (%s)\n", course->title.c_str(), courseId.c_str());
+  int asked = 0, right = 0;
+  while (true) {
+    const auto now = lessons::UnixSeconds(std::time(nullptr));
+    auto question = lessons::chooseReviewQuestion(curriculum, progress, userId, courseId, now);
+    if (!question) return reportError("play: " + question.error().message);
+    if (!*question) {
+      std::printf("\nNothing %sis due for review in this course now.\n", asked ? "more " : "");
+      break;
+    }
+    auto resolved = quiz::resolveQuestion(**question, keys);
+    if (!resolved) return reportError("play: " + resolved.error().message);
+    lessons::StepView view;  // for the terminal answer forms
+    view.kind = lessons::StepKind::Question;
+    view.questionId = resolved->question.id;
+    view.questionKind = resolved->question.kind;
+    view.prompt = resolved->question.prompt;
+    view.choiceIds = resolved->choices;
+    for (const std::string& id : resolved->choices) view.choiceNames.push_back(nameById.count(id) ? nameById[id] : id);
+    std::printf("\n[review %d] Question (%s)\n", asked + 1, quiz::toString(view.questionKind));
+    printWrapped(view.prompt, 2);
+    for (std::size_t i = 0; i < view.choiceNames.size(); ++i) std::printf("    %zu) %s\n", i, view.choiceNames[i].c_str());
+    std::fflush(stdout);
+
+    bool correct = false;
+    auto result = askQuestion(source, view, idByName, [&](const quiz::Answer& answer, std::int64_t latencyMs) {
+      lessons::ReviewAnswer review;
+      review.userId = userId;
+      review.courseId = courseId;
+      review.question = resolved->question;
+      review.answer = answer;
+      review.render = terminalRender();
+      review.latencyMs = latencyMs;
+      auto grade = lessons::answerReview(curriculum, progress, keys, review);
+      if (grade) correct = grade->correct;
+      return grade;
+    });
+    if (!result) return reportError("play: " + result.error().message + " (earlier answers are saved)");
+    if (*result != Asked::Graded) {  // a review has nothing to resume: stopping is fine
+      std::printf("\n%s\n", *result == Asked::Quit ? "stopped" : "no more answers");
+      break;
+    }
+    ++asked;
+    right += correct ? 1 : 0;
+  }
+  std::printf("Review answers saved: %d, %d correct.\n", asked, right);
+  return 0;
+}
+
 }  // namespace
 
 int runPlay(const Argv& argv) {
-  auto args = cli::Args::parse(argv, {"user", "answers", "db", "group"}, {"quiz-only", "new-user"});
+  auto args = cli::Args::parse(argv, {"user", "answers", "db", "group", "review"}, {"quiz-only", "new-user"});
   if (!args) return reportError("play: " + args.error().message);
   if (args->has("help")) {
     std::printf("%s", kPlayHelp);
     return 0;
   }
-  if (args->positional().size() != 1) return reportError("play: give exactly one LESSON (see `anatomy-tutor lessons`)");
-  const std::string lessonId = args->positional()[0];
+  const auto reviewCourse = args->value("review");
+  if (reviewCourse) {
+    if (!args->positional().empty()) return reportError("play: give either a LESSON or --review COURSE, not both");
+    if (args->has("quiz-only")) return reportError("play: --quiz-only is for lessons, not --review");
+  } else if (args->positional().size() != 1) {
+    return reportError("play: give exactly one LESSON (see `anatomy-tutor lessons`)");
+  }
+  const std::string lessonId = reviewCourse ? "" : args->positional()[0];
   const auto userName = args->value("user");
   if (!userName || userName->empty()) return reportError("play: --user NAME is required");
 
@@ -213,6 +329,8 @@ int runPlay(const Argv& argv) {
     std::printf("created user '%s'\n", created->name.c_str());
     *user = *created;
   }
+
+  if (reviewCourse) return runReview(*reviewCourse, (*user)->id, *database, curriculum, progress, *source);
 
   auto lesson = curriculum.lesson(lessonId);
   if (!lesson) return reportError("play: " + lesson.error().message + " (see `anatomy-tutor lessons`)");
@@ -247,34 +365,19 @@ int runPlay(const Argv& argv) {
     if (!view) return reportError("play: " + view.error().message);
     printStep(*view);
     if (view->kind == lessons::StepKind::Question) {
-      const auto shownAt = std::chrono::steady_clock::now();
-      while (true) {
-        auto line = source->nextLine();
-        if (!line || (source->interactive() && lower(trim(*line)) == "quit")) {
-          std::printf("\nstopped before step %d of %d; your answers are saved — run the same command to resume\n",
-                      view->position, view->count);
-          std::fflush(stdout);
-          return line ? 0 : reportError("play: " + std::string(source->interactive() ? "input" : "the answers file") +
-                                        " ended before the lesson did (resume with the same command)");
-        }
-        auto answer = source->interactive() ? parseTerminalAnswer(*line, *view, idByName) : quiz::answerFromJson(*line);
-        const auto latency = std::chrono::duration_cast<std::chrono::milliseconds>(
-            std::chrono::steady_clock::now() - shownAt);
-        lessons::RenderState render;
-        render.mode = "terminal";  // no 3-D view on screen: no preset, default t, α, β
-        Result<quiz::Grade> grade = answer ? engine.answer(*answer, render, latency.count())
-                                           : Result<quiz::Grade>(tl::unexpected(answer.error()));
-        if (grade) {
-          std::printf("  %s (score %.2f): ", grade->correct ? "correct" : "wrong", grade->score);
-          printWrapped(grade->feedback, 0);
-          std::fflush(stdout);
-          break;
-        }
+      auto asked = askQuestion(*source, *view, idByName, [&](const quiz::Answer& answer, std::int64_t latencyMs) {
+        return engine.answer(answer, terminalRender(), latencyMs);
+      });
+      if (!asked)
+        return reportError("play: " + asked.error().message +
+                           " (earlier answers are saved; fix the line and run again to resume)");
+      if (*asked != Asked::Graded) {
+        std::printf("\nstopped before step %d of %d; your answers are saved — run the same command to resume\n",
+                    view->position, view->count);
         std::fflush(stdout);
-        if (!source->interactive())
-          return reportError("play: " + source->where() + ": " + grade.error().message +
-                             " (earlier answers are saved; fix the line and run again to resume)");
-        std::printf("  %s — try again\n", grade.error().message.c_str());
+        return *asked == Asked::Quit ? 0
+                                     : reportError("play: " + std::string(source->interactive() ? "input" : "the answers file") +
+                                                   " ended before the lesson did (resume with the same command)");
       }
     } else if (waitOnShow) {
       std::printf("  (Enter to continue) ");

@@ -453,3 +453,62 @@ TEST_CASE("The TotalSegmentator sample imports with its 41 structures and carrie
   CHECK_MESSAGE(progress.exitCode == 0, progress.err);
   CHECK(progress.out.find("Kidney right") != std::string::npos);
 }
+
+TEST_CASE("play --review asks the due questions, records each answer and empties the queue") {
+  if (!appAvailable()) return;
+  test::TempDir dir;
+  const std::string dbPath = (dir / "rv.db").string();
+  storeQuickCourse(dbPath);
+  const auto structures = phantomStructures();
+  const auto answers = quickAnswers();
+  // Nothing answered: every structure is eligible, all questions equally hard, so the review asks
+  // in question-id order, one question per structure: q0 (name), q1 (locate), q2 (identify), q3
+  // (name); q4 and q5 train structures already reviewed.
+  const fs::path file = writeLines(dir / "review.jsonl", {answers[0], answers[1], answers[2], answers[3]});
+  const std::string review = "play --review quick --user hal --new-user --answers '" + file.string() + "' --db '" + dbPath + "'";
+  auto r = test::runApp(review);
+  CHECK_MESSAGE(r.exitCode == 0, r.err);
+  CHECK(r.out.find("[review 1] Question (name)") != std::string::npos);
+  CHECK(r.out.find("[review 2] Question (locate)") != std::string::npos);
+  CHECK(r.out.find("[review 4] Question (name)") != std::string::npos);
+  CHECK(r.out.find("Nothing more is due for review") != std::string::npos);
+  CHECK(r.out.find("Review answers saved: 4, 4 correct.") != std::string::npos);
+  CHECK(scalar(dbPath, "SELECT count(*) FROM review_responses WHERE correct = 1 AND mode = 'terminal'") == 4);
+  CHECK(scalar(dbPath, "SELECT count(*) FROM responses") == 0);
+  CHECK(scalar(dbPath, "SELECT count(*) FROM progress WHERE box = 2") == 4);
+
+  auto report = test::runApp("progress --user hal --db '" + dbPath + "'");
+  CHECK_MESSAGE(report.exitCode == 0, report.err);
+  CHECK(report.out.find("4 answers, 4 correct (4 in review, 4 correct)") != std::string::npos);
+  CHECK(report.out.find("Due for review now: nothing") != std::string::npos);
+
+  // Again: nothing is due, nothing is asked.
+  auto again = test::runApp(review);
+  CHECK_MESSAGE(again.exitCode == 0, again.err);
+  CHECK(again.out.find("Nothing is due for review") != std::string::npos);
+  CHECK(scalar(dbPath, "SELECT count(*) FROM review_responses") == 4);
+
+  // Another user names the first structure wrongly: box 1; the answers then end, which ends the
+  // review without an error.
+  quiz::Answer wrong;
+  wrong.text = structures[1].displayName;
+  const fs::path wrongFile = writeLines(dir / "wrong.jsonl", {quiz::answerToJson(wrong)});
+  auto w = test::runApp("play --review quick --user ivy --new-user --answers '" + wrongFile.string() + "' --db '" + dbPath + "'");
+  CHECK_MESSAGE(w.exitCode == 0, w.err);
+  CHECK(w.out.find("wrong (score 0.00)") != std::string::npos);
+  CHECK(w.out.find("Review answers saved: 1, 0 correct.") != std::string::npos);
+  CHECK(scalar(dbPath, "SELECT box FROM progress JOIN users ON users.id = progress.user_id WHERE users.name = 'ivy'") == 1);
+
+  // A malformed line names its line and records nothing; a lesson and --review together are refused.
+  const fs::path broken = writeLines(dir / "broken.jsonl", {"{\"text\": "});
+  auto b = test::runApp("play --review quick --user jo --new-user --answers '" + broken.string() + "' --db '" + dbPath + "'");
+  CHECK(b.exitCode != 0);
+  CHECK(b.err.find("broken.jsonl:1: ") != std::string::npos);
+  CHECK(scalar(dbPath, "SELECT count(*) FROM review_responses") == 5);
+  auto both = test::runApp("play quick.check --review quick --user hal --db '" + dbPath + "'");
+  CHECK(both.exitCode != 0);
+  CHECK(both.err.find("not both") != std::string::npos);
+  auto unknown = test::runApp("play --review nope --user hal --db '" + dbPath + "'");
+  CHECK(unknown.exitCode != 0);
+  CHECK(unknown.err.find("unknown course 'nope'") != std::string::npos);
+}
