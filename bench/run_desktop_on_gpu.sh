@@ -13,7 +13,7 @@ src=$(cat .desk/source_dir.txt)
 [ -e "$src" ] || { mkdir -p "$(dirname "$src")" && ln -s "$PWD" "$src"; }
 export LD_LIBRARY_PATH=/tmp/desk/lib SDL_VIDEODRIVER=offscreen AT_DESKTOP_OFFSCREEN=1 XDG_DATA_HOME=/tmp/xdg
 script=$PWD/bench/desktop_hover_sweep.json
-for r in 1 2; do
+for r in ${RUNS:-1 2}; do
   mkdir -p "$OUT/run$r" && cd "$OUT/run$r"
   timeout 200 /tmp/desk/anatomy-tutor desktop --size 1280x720 --max-fps 60 --ui-script "$script" > desk.log 2>&1
   echo "run $r: exit $?"

@@ -273,7 +273,8 @@ class DesktopApp {
 
   // Fields
   std::unique_ptr<FieldWorker> worker_;
-  std::shared_ptr<const DistanceField> field_;
+  std::shared_ptr<const DistanceField> field_;  // host copy of the field shown (picking); may lag a GPU field
+  const void* fieldSource_ = nullptr;            // identity of the field in the texture; null = none
   std::uint16_t fieldLabel_ = 0;
   std::string fieldKey_;
   bool gpuFields_ = false;
@@ -371,6 +372,7 @@ Status DesktopApp::showDataset(Dataset dataset, const std::string& startStructur
   hovered_ = 0;
   selected_ = start->label;
   field_.reset();
+  fieldSource_ = nullptr;
   fieldLabel_ = 0;
   fieldKey_.clear();
   declinedFieldKey_.clear();
@@ -738,7 +740,7 @@ void DesktopApp::updateFields() {
   for (FinishedField& f : worker_->takeFinished()) {
     const Structure* st = dataset_.findStructureByLabel(f.request.label);
     const std::string id = st ? st->id : std::to_string(f.request.label);
-    if (!f.field) {
+    if (!f.field && !f.deviceField) {
       message("distance field of " + id + ": " + f.message);
       continue;
     }
@@ -762,47 +764,60 @@ void DesktopApp::updateFields() {
   auto fine = fieldRequest(label, 1);
   auto coarse = fieldRequest(label, coarseDownsample());
   if (!fine || !coarse) return;
+  // A field is ready when its host copy or (computed on the GPU) its device copy exists; a GPU
+  // field is shown from the device before its host copy (for picking) has arrived.
   auto fineField = worker_->cached(*fine);
-  auto coarseField = fineField ? nullptr : worker_->cached(*coarse);
+  auto fineDevice = worker_->cachedOnDevice(*fine);
+  const bool fineReady = fineField || fineDevice;
+  auto coarseField = fineReady ? nullptr : worker_->cached(*coarse);
+  auto coarseDevice = fineReady ? nullptr : worker_->cachedOnDevice(*coarse);
+  const bool coarseReady = coarseField || coarseDevice;
   const bool resting = msBetween(hoverSince_, Clock::now()) > kRefineFieldAfterMs;
-  if (!fineField) {
-    if (fine->key() == declinedFieldKey_ && (coarseField || coarseDownsample() == 1))
+  if (!fineReady) {
+    if (fine->key() == declinedFieldKey_ && (coarseReady || coarseDownsample() == 1))
       ;  // the user cancelled this full-resolution field: keep the coarse one
-    else if (gpuFields_ || coarseDownsample() == 1 || (coarseField && resting))
+    else if (gpuFields_ || coarseDownsample() == 1 || (coarseReady && resting))
       worker_->request(*fine);
-    else if (!coarseField)
+    else if (!coarseReady)
       worker_->request(*coarse);
   }
-  auto best = fineField ? fineField : coarseField;
-  const std::string key = fineField ? fine->key() : coarse->key();
-  if (best && (best != field_ || fieldLabel_ != label) && renderer_) {
-    const Clock::time_point uploadStart = Clock::now();
-    // A field computed on the GPU goes into the texture there (CUDA–GL interop).
-    // A host field goes up a few slices per frame (software GL needs ~0.2 s for a 256³ field);
-    // the view keeps the previous field until the new one is complete.
-    const auto onDevice = worker_->cachedOnDevice(fineField ? *fine : *coarse);
-    Status uploaded = onDevice ? renderer_->setFieldFromDevice(*onDevice) : Status{};
-    bool complete = bool(onDevice) && bool(uploaded);
-    if (onDevice && !uploaded)
-      message("CUDA-GL interop failed, uploading the field from host memory: " + uploaded.error().message);
-    if (!complete) {
-      auto step = renderer_->uploadFieldStep(best->distances, kFieldUploadStepMs);
-      uploaded = step ? Status{} : Status(tl::unexpected(step.error()));
-      complete = step && *step;
-    }
-    if (recording_ && !frameLog_.empty()) frameLog_.back().uploadMs += msBetween(uploadStart, Clock::now());
-    if (auto st = uploaded; !st) {
-      message("uploading the field: " + st.error().message);
-      fieldUploading_ = false;
-      return;
-    }
-    fieldUploading_ = !complete;
-    if (!complete) return;
-    renderer_->setSelected(label);
-    field_ = best;
-    fieldLabel_ = label;
-    fieldKey_ = key;
+  const auto best = fineReady ? fineField : coarseField;  // host copy; may still be missing
+  const auto bestDevice = fineReady ? fineDevice : coarseDevice;
+  const void* source = bestDevice ? static_cast<const void*>(bestDevice.get()) : static_cast<const void*>(best.get());
+  const std::string key = fineReady ? fine->key() : coarse->key();
+  if (source && source == fieldSource_ && key == fieldKey_ && fieldLabel_ == label) {
+    if (!field_ && best) field_ = best;  // the host copy of the field shown arrived
+    return;
   }
+  if (!source || !renderer_) return;
+  const Clock::time_point uploadStart = Clock::now();
+  // A field computed on the GPU goes into the texture there (CUDA–GL interop). A host field goes
+  // up a few slices per frame (software GL needs ~0.2 s for a 256³ field); the view keeps the
+  // previous field until the new one is complete.
+  Status uploaded = bestDevice ? renderer_->setFieldFromDevice(*bestDevice) : Status{};
+  bool complete = bestDevice && uploaded;
+  if (bestDevice && !uploaded) {
+    message("CUDA-GL interop failed, uploading the field from host memory: " + uploaded.error().message);
+    if (!best) return;  // try again when the host copy is there
+  }
+  if (!complete) {
+    auto step = renderer_->uploadFieldStep(best->distances, kFieldUploadStepMs);
+    uploaded = step ? Status{} : Status(tl::unexpected(step.error()));
+    complete = step && *step;
+  }
+  if (recording_ && !frameLog_.empty()) frameLog_.back().uploadMs += msBetween(uploadStart, Clock::now());
+  if (auto st = uploaded; !st) {
+    message("uploading the field: " + st.error().message);
+    fieldUploading_ = false;
+    return;
+  }
+  fieldUploading_ = !complete;
+  if (!complete) return;
+  renderer_->setSelected(label);
+  field_ = best;
+  fieldSource_ = source;
+  fieldLabel_ = label;
+  fieldKey_ = key;
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -859,7 +874,7 @@ void DesktopApp::renderVolume(Clock::time_point frameStart) {
   render::RenderSettings s = viewSettings(level);
   const std::uint16_t label = bare_ ? shownLabel() : (fieldLabel_ ? fieldLabel_ : shownLabel());
   renderer_->setSelected(label);
-  if (bare_ || !field_) s.preset.mode = render::RenderMode::Bare;
+  if (bare_ || !fieldSource_) s.preset.mode = render::RenderMode::Bare;
   const Clock::time_point start = Clock::now();
   auto image = renderer_->render(s);
   if (!image) {

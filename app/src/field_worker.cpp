@@ -139,20 +139,13 @@ void FieldWorker::run() {
         passesDone_ = done;
         passesPlanned_ = planned;
       };
-      bool cancelledOnDevice = false;
-      if (auto onDevice = computeOnDevice(job, control, cancelledOnDevice)) {
-        if (cancelledOnDevice) {
-          cancelled_.fetch_add(1);
-          std::lock_guard lock(mutex_);
-          runningKey_.reset();
-          runningRequest_.reset();
-          continue;
-        }
+      const DeviceOutcome onDevice = computeOnDevice(job, control);
+      if (onDevice.kind != DeviceOutcome::NotUsed) {
+        if (onDevice.kind == DeviceOutcome::Cancelled) cancelled_.fetch_add(1);
         std::lock_guard lock(mutex_);
-        if (onDevice->field) insert({*runningKey_, onDevice->field, onDevice->deviceField});
+        if (onDevice.kind == DeviceOutcome::Failed) finished_.push_back(onDevice.failure);
         runningKey_.reset();
         runningRequest_.reset();
-        finished_.push_back(std::move(*onDevice));
         continue;
       }
       const Mask seeds = render::structureMask(dataset_.labels, job.label);
@@ -181,24 +174,24 @@ void FieldWorker::run() {
   }
 }
 
-std::optional<FinishedField> FieldWorker::computeOnDevice(const FieldRequest& job, WdtControl& control,
-                                                          bool& cancelled) {
+FieldWorker::DeviceOutcome FieldWorker::computeOnDevice(const FieldRequest& job, WdtControl& control) {
+  DeviceOutcome outcome;
 #if defined(AT_HAVE_CUDA)
-  if (job.params.backend == WdtBackend::Cpu || !cuda::queryDevice().available) return std::nullopt;
+  if (job.params.backend == WdtBackend::Cpu || !cuda::queryDevice().available) return outcome;
   if (!device_) device_ = std::make_unique<DeviceState>();
   DeviceState& d = *device_;
-  if (d.unusable) return std::nullopt;
-  auto giveUp = [&](const std::string& why) -> std::optional<FinishedField> {
+  if (d.unusable) return outcome;
+  auto giveUp = [&](const std::string& why) {
     d.unusable = true;
     d.volume.reset();
     if (job.params.backend == WdtBackend::Cuda) {
-      FinishedField failed;
-      failed.request = job;
-      failed.message = why;
-      return failed;
+      outcome.kind = DeviceOutcome::Failed;
+      outcome.failure.request = job;
+      outcome.failure.message = why;
+    } else {
+      deviceWarning_ = "CUDA backend failed, computed on the CPU instead: " + why;
     }
-    deviceWarning_ = "CUDA backend failed, computed on the CPU instead: " + why;
-    return std::nullopt;
+    return outcome;
   };
   const auto t0 = std::chrono::steady_clock::now();
   if (!d.volume) {
@@ -209,27 +202,46 @@ std::optional<FinishedField> FieldWorker::computeOnDevice(const FieldRequest& jo
   WdtStats stats;
   auto field = cuda::runCudaBackendOnDevice(*d.volume, job.label, job.params, control, &stats);
   if (!field) return giveUp(field.error().message);
+  if (stats.cancelled) {
+    outcome.kind = DeviceOutcome::Cancelled;
+    return outcome;
+  }
+  // Published at once: the view shows the device field through interop while the host copy,
+  // which only picking reads, is still being made.
+  const std::string key = job.key();
+  auto device = std::make_shared<const cuda::DeviceField>(std::move(*field));
   FinishedField done;
   done.request = job;
-  if (stats.cancelled) {
-    cancelled = true;
-    return done;
-  }
-  auto host = std::make_shared<DistanceField>();
-  host->downsample = field->downsample();
-  // Fresh memory on huge pages: 4 KiB page faults would cost more than the copy (~40 ms at 256³).
-  wdt::resizeOnHugePages(host->distances.voxels, field->grid().dims.count());
-  if (auto copied = cuda::copyToHost(*field, host->distances); !copied) return giveUp(copied.error().message);
-  done.field = std::move(host);
-  done.deviceField = std::make_shared<const cuda::DeviceField>(std::move(*field));
+  done.deviceField = device;
   done.ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   done.device = stats.device;
-  return done;
+  {
+    std::lock_guard lock(mutex_);
+    insert({key, nullptr, device});
+    finished_.push_back(std::move(done));
+  }
+  auto host = std::make_shared<DistanceField>();
+  host->downsample = device->downsample();
+  // Fresh memory on huge pages: 4 KiB page faults would cost more than the copy (~40 ms at 256³).
+  wdt::resizeOnHugePages(host->distances.voxels, device->grid().dims.count());
+  const Status copied = cuda::copyToHost(*device, host->distances);
+  std::lock_guard lock(mutex_);
+  for (auto it = lru_.begin(); it != lru_.end(); ++it) {
+    if (it->key != key || it->deviceField != device) continue;
+    if (copied) it->field = std::move(host);
+    else lru_.erase(it);  // without a host copy the entry is dropped and recomputed on the CPU
+    break;
+  }
+  if (!copied) {
+    d.unusable = true;
+    deviceWarning_ = "CUDA backend failed, computed on the CPU instead: " + copied.error().message;
+  }
+  outcome.kind = DeviceOutcome::Published;
+  return outcome;
 #else
   (void)job;
   (void)control;
-  (void)cancelled;
-  return std::nullopt;
+  return outcome;
 #endif
 }
 

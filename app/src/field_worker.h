@@ -43,8 +43,10 @@ struct FieldRequest {
 
 struct FinishedField {
   FieldRequest request;
-  std::shared_ptr<const DistanceField> field;  // null when it failed
-  std::shared_ptr<const cuda::DeviceField> deviceField;  // the same field on the GPU, or null
+  std::shared_ptr<const DistanceField> field;  // null when it failed, or for a GPU field (below)
+  // A field computed on the GPU: its device copy. Its host copy (for picking) follows in the
+  // cache (`cached`) a little later; `field` stays null here.
+  std::shared_ptr<const cuda::DeviceField> deviceField;
   double ms = 0;
   std::string device;
   std::string message;  // error, or the backend's warning (e.g. why auto fell back to the CPU)
@@ -63,7 +65,8 @@ class FieldWorker {
   void request(const FieldRequest& request);
   // Drops the queued request and cancels the running one (e.g. the user left the structure).
   void cancelAll();
-  // The cached field for `request`, marking it most recently used; null if absent.
+  // The cached field's host copy for `request`, marking it most recently used; null if absent
+  // (or, for a GPU field, while its host copy is still being made).
   std::shared_ptr<const DistanceField> cached(const FieldRequest& request);
   // The cached field's device copy (computed on the GPU), or null.
   std::shared_ptr<const cuda::DeviceField> cachedOnDevice(const FieldRequest& request);
@@ -89,9 +92,14 @@ class FieldWorker {
     std::shared_ptr<const cuda::DeviceField> deviceField;
   };
   void insert(Entry entry);
-  // The field on the GPU (device-resident volume), or nullopt to use computeWdt instead; sets
-  // `cancelled` when the run stopped for a newer request. Worker thread only.
-  std::optional<FinishedField> computeOnDevice(const FieldRequest& job, WdtControl& control, bool& cancelled);
+  // The field on the GPU (device-resident volume). Published: the entry (device field first, its
+  // host copy attached when made) and the finished record are in place. NotUsed: no device, or
+  // given up under `auto` — use computeWdt. Worker thread only.
+  struct DeviceOutcome {
+    enum Kind { NotUsed, Published, Cancelled, Failed } kind = NotUsed;
+    FinishedField failure;  // Failed (backend cuda): what to report
+  };
+  DeviceOutcome computeOnDevice(const FieldRequest& job, WdtControl& control);
 
   const Dataset& dataset_;
   const std::size_t capacity_;
