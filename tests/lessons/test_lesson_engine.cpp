@@ -71,9 +71,16 @@ struct Fixture {
     two.steps = {questionStep(nameQ("two.q1", "incus"))};
     c.lessons = {one, two};
     curriculum.courseList = {c};
-    curriculum.datasets["phantom"] = {{1, "cochlea", "Cochlea"}, {2, "vestibule", "Vestibule"},
-                                      {3, "stapes", "Stapes"},   {4, "incus", "Incus"},
-                                      {5, "malleus", "Malleus"}};
+    const auto structure = [](std::uint16_t label, const char* id, const char* name) {
+      Structure s;
+      s.label = label;
+      s.id = id;
+      s.displayName = name;
+      return s;
+    };
+    curriculum.datasets["phantom"] = {structure(1, "cochlea", "Cochlea"), structure(2, "vestibule", "Vestibule"),
+                                      structure(3, "stapes", "Stapes"), structure(4, "incus", "Incus"),
+                                      structure(5, "malleus", "Malleus")};
     keys.structureIds = {"cochlea", "vestibule", "stapes", "incus", "malleus"};
     keys.distances["stapes"] = {{"stapes", 0}, {"incus", 0.1}, {"malleus", 0.9}, {"vestibule", 0.4}, {"cochlea", 3}};
   }
