@@ -13,6 +13,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "desktop_script.h"
 #include "test_support.h"
 #include "volume/png_image.h"
 
@@ -24,38 +25,15 @@ namespace {
 
 constexpr int kPanel = 320;  // the explore panel's width at UI scale 1 (the view lies right of it)
 
-bool haveXvfb() { return std::system("command -v xvfb-run >/dev/null 2>&1") == 0; }
+using Run = at::test::DesktopRun;
+using at::test::haveXvfb;
 
-struct Run {
-  int exitCode = -1;
-  std::vector<json> events;  // the JSON lines the scripted mode prints
-  std::string err;
-};
-
-std::string slurp(const fs::path& p) {
-  std::ifstream f(p, std::ios::binary);
-  std::stringstream ss;
-  ss << f.rdbuf();
-  return ss.str();
-}
-
-// Writes `script` and runs the app on it under xvfb-run on the 128³ phantom, in an 800×480 window
-// with the volume at 0.4 of the view's resolution (software GL on two shared cores is slow).
+// Runs `script` on the 128³ phantom in an 800×480 window with the volume at 0.4 of the view's
+// resolution (software GL on two shared cores is slow).
 Run runScript(const TempDir& dir, const json& script, const std::string& screenshot) {
-  const fs::path scriptPath = dir / "script.json", out = dir / "stdout", err = dir / "stderr";
-  std::ofstream(scriptPath) << script.dump();
-  const std::string cmd = "xvfb-run -a -s '-screen 0 1280x800x24' '" + at::test::appBinary().string() +
-                          "' desktop --dataset phantom:128 --size 800x480 --render-scale 0.4 --ui-script '" + scriptPath.string() + "'" +
-                          (screenshot.empty() ? "" : " --screenshot '" + screenshot + "'") + " >'" + out.string() +
-                          "' 2>'" + err.string() + "'";
-  const int status = std::system(cmd.c_str());
-  Run r;
-  r.exitCode = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  r.err = slurp(err);
-  std::istringstream lines(slurp(out));
-  for (std::string line; std::getline(lines, line);)
-    if (!line.empty() && line[0] == '{') r.events.push_back(json::parse(line, nullptr, false));
-  return r;
+  at::test::DesktopOptions options;
+  options.screenshot = screenshot;
+  return at::test::runDesktopScript(dir, script, options);
 }
 
 const json* findEvent(const Run& r, const std::string& kind) {
@@ -184,10 +162,10 @@ TEST_CASE("without a display, anatomy-tutor says so in one line and writes the d
   const std::string cmd = "cd '" + dir.path().string() + "' && " + environment + " '" +
                           at::test::appBinary().string() + "' >'" + out.string() + "' 2>'" + err.string() + "'";
   const int status = std::system(cmd.c_str());
-  const std::string text = slurp(out);
-  INFO(text << slurp(err));
+  const std::string text = at::test::readFile(out);
+  INFO(text << at::test::readFile(err));
   REQUIRE(WIFEXITED(status));
-  if (WEXITSTATUS(status) != 0 && slurp(err).find("offscreen rendering") != std::string::npos) {
+  if (WEXITSTATUS(status) != 0 && at::test::readFile(err).find("offscreen rendering") != std::string::npos) {
     MESSAGE("SKIPPED: no EGL offscreen context here");
     return;
   }

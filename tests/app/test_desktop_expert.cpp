@@ -15,6 +15,7 @@
 #include "db/database.h"
 #include "db/preset_store.h"
 #include "render/preset.h"
+#include "desktop_script.h"
 #include "test_support.h"
 #include "volume/png_image.h"
 
@@ -26,13 +27,6 @@ namespace {
 
 constexpr int kWidth = 1100, kHeight = 480;
 constexpr int kExplore = 320, kExpert = 340;  // panel widths at UI scale 1: the view shows between them
-
-std::string slurp(const fs::path& p) {
-  std::ifstream f(p, std::ios::binary);
-  std::stringstream ss;
-  ss << f.rdbuf();
-  return ss.str();
-}
 
 // Mean absolute difference per channel over the visible part of the volume view.
 double viewDifference(const at::RgbImage& a, const at::RgbImage& b) {
@@ -49,7 +43,7 @@ double viewDifference(const at::RgbImage& a, const at::RgbImage& b) {
 }  // namespace
 
 TEST_CASE("editing the data TF in the expert panel changes the view, and Save as stores and exports a valid preset") {
-  if (std::system("command -v xvfb-run >/dev/null 2>&1") != 0) {
+  if (!at::test::haveXvfb()) {
     MESSAGE("SKIPPED: xvfb-run is not installed");
     return;
   }
@@ -65,24 +59,17 @@ TEST_CASE("editing the data TF in the expert panel changes the view, and Save as
         {{"do", "preset_set"}, {"t", 1.0}},
         {{"do", "preset_save"}, {"name", "my_cochlea"}, {"export", exported.string()}},
         {{"do", "wait_field"}}}}};
-  const fs::path scriptPath = dir / "script.json", out = dir / "stdout", err = dir / "stderr";
-  std::ofstream(scriptPath) << script.dump();
-  const std::string cmd = "xvfb-run -a -s '-screen 0 1280x800x24' '" + at::test::appBinary().string() +
-                          "' desktop --dataset phantom:128 --size " + std::to_string(kWidth) + "x" +
-                          std::to_string(kHeight) + " --render-scale 0.4 --db '" + dbPath.string() +
-                          "' --ui-script '" + scriptPath.string() + "' --screenshot '" + after.string() + "' >'" +
-                          out.string() + "' 2>'" + err.string() + "'";
-  const int status = std::system(cmd.c_str());
-  INFO(slurp(err));
-  INFO(slurp(out));
-  REQUIRE(WIFEXITED(status));
-  REQUIRE(WEXITSTATUS(status) == 0);
+  at::test::DesktopOptions options;
+  options.size = std::to_string(kWidth) + "x" + std::to_string(kHeight);
+  options.db = dbPath;
+  options.screenshot = after.string();
+  const at::test::DesktopRun run = at::test::runDesktopScript(dir, script, options);
+  INFO(run.err);
+  REQUIRE(run.exitCode == 0);
 
   // The preset the panel started from, as the app reported it.
   std::optional<at::render::Preset> original;
-  std::istringstream lines(slurp(out));
-  for (std::string line; std::getline(lines, line);) {
-    const json e = json::parse(line, nullptr, false);
+  for (const json& e : run.events) {
     if (e.is_object() && e.value("event", "") == "expert") {
       auto p = at::render::parsePreset(e.at("preset").dump(), "expert event");
       REQUIRE_MESSAGE(p.has_value(), p.error().message);

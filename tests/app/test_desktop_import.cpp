@@ -14,6 +14,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "desktop_script.h"
 #include "test_support.h"
 #include "volume/png_image.h"
 
@@ -23,47 +24,19 @@ using json = nlohmann::json;
 
 namespace {
 
-bool haveXvfb() { return std::system("command -v xvfb-run >/dev/null 2>&1") == 0; }
-
-struct Run {
-  int exitCode = -1;
-  std::vector<json> events;
-  std::string err;
-};
-
-std::string slurp(const fs::path& p) {
-  std::ifstream f(p, std::ios::binary);
-  std::stringstream ss;
-  ss << f.rdbuf();
-  return ss.str();
-}
+using Run = at::test::DesktopRun;
+using at::test::eventsOf;
+using at::test::haveXvfb;
 
 // Runs the desktop app on `script` under xvfb-run with the database `db`, in a small window with a
 // coarse volume image (software GL on two shared cores is slow).
 Run runDesktop(const TempDir& dir, const json& script, const fs::path& db, const std::string& dataset = "phantom:128",
                const std::string& screenshot = "") {
-  const fs::path scriptPath = dir / "script.json", out = dir / "stdout", err = dir / "stderr";
-  std::ofstream(scriptPath) << script.dump();
-  const std::string cmd = "xvfb-run -a -s '-screen 0 1280x800x24' '" + at::test::appBinary().string() +
-                          "' desktop --dataset " + dataset + " --size 800x480 --render-scale 0.4 --db '" + db.string() +
-                          "' --ui-script '" + scriptPath.string() + "'" +
-                          (screenshot.empty() ? "" : " --screenshot '" + screenshot + "'") + " >'" + out.string() +
-                          "' 2>'" + err.string() + "'";
-  const int status = std::system(cmd.c_str());
-  Run r;
-  r.exitCode = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  r.err = slurp(err);
-  std::istringstream lines(slurp(out));
-  for (std::string line; std::getline(lines, line);)
-    if (!line.empty() && line[0] == '{') r.events.push_back(json::parse(line, nullptr, false));
-  return r;
-}
-
-std::vector<json> eventsOf(const Run& r, const std::string& kind) {
-  std::vector<json> out;
-  for (const json& e : r.events)
-    if (e.is_object() && e.value("event", "") == kind) out.push_back(e);
-  return out;
+  at::test::DesktopOptions options;
+  options.dataset = dataset;
+  options.db = db;
+  options.screenshot = screenshot;
+  return at::test::runDesktopScript(dir, script, options);
 }
 
 // The names of the imported datasets in `db`, through `anatomy-tutor datasets --json`.

@@ -15,6 +15,7 @@
 
 #include "db/database.h"
 #include "db/sqlite_repositories.h"
+#include "desktop_script.h"
 #include "test_support.h"
 
 namespace fs = std::filesystem;
@@ -23,44 +24,19 @@ using json = nlohmann::json;
 
 namespace {
 
-bool haveXvfb() { return std::system("command -v xvfb-run >/dev/null 2>&1") == 0; }
+using Run = at::test::DesktopRun;
+using at::test::eventsOf;
+using at::test::haveXvfb;
 
-struct Run {
-  int exitCode = -1;
-  std::vector<json> events;
-  std::string err;
-};
-
-// Runs `script` on the 128³ phantom in a small window (software GL on two shared cores is slow),
-// with lesson progress in `db` under the user `user`. The app's exit status is written by a
-// wrapper inside xvfb-run: xvfb-run's own status at times reports a failed clean-up of its
-// temporary folder instead.
+// Runs `script` on the 128³ phantom in a small window, with lesson progress in `db` under the user
+// `user`.
 Run runLessonScript(const TempDir& dir, const json& script, const fs::path& db, const std::string& user) {
-  const fs::path scriptPath = dir / "script.json", out = dir / "stdout", err = dir / "stderr",
-                 wrapper = dir / "run.sh", status = dir / "status";
-  std::ofstream(scriptPath) << script.dump();
-  fs::remove(status);
-  std::ofstream(wrapper) << "'" << at::test::appBinary().string()
-                         << "' desktop --dataset phantom:128 --size 800x600 --render-scale 0.3 --db '" << db.string()
-                         << "' --user '" << user << "' --ui-script '" << scriptPath.string() << "' >'" << out.string()
-                         << "' 2>'" << err.string() << "'\necho $? >'" << status.string() << "'\n";
-  const std::string cmd = "xvfb-run -a -s '-screen 0 1280x800x24' sh '" + wrapper.string() + "'";
-  std::system(cmd.c_str());
-  Run r;
-  std::ifstream statusIn(status);
-  if (!(statusIn >> r.exitCode)) r.exitCode = -1;
-  r.err = at::test::readFile(err);
-  std::istringstream lines(at::test::readFile(out));
-  for (std::string line; std::getline(lines, line);)
-    if (!line.empty() && line[0] == '{') r.events.push_back(json::parse(line, nullptr, false));
-  return r;
-}
-
-std::vector<json> eventsOf(const Run& r, const std::string& kind) {
-  std::vector<json> found;
-  for (const json& e : r.events)
-    if (e.is_object() && e.value("event", "") == kind) found.push_back(e);
-  return found;
+  at::test::DesktopOptions options;
+  options.size = "800x600";
+  options.renderScale = 0.3;
+  options.db = db;
+  options.user = user;
+  return at::test::runDesktopScript(dir, script, options);
 }
 
 json next(int times) {

@@ -15,6 +15,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "desktop_script.h"
 #include "test_support.h"
 #include "volume/png_image.h"
 
@@ -24,37 +25,16 @@ using json = nlohmann::json;
 
 namespace {
 
-bool haveXvfb() { return std::system("command -v xvfb-run >/dev/null 2>&1") == 0; }
-
-struct Run {
-  int exitCode = -1;
-  std::vector<json> events;
-  std::string err;
-};
+using Run = at::test::DesktopRun;
+using at::test::eventsOf;
+using at::test::haveXvfb;
 
 Run runStudyScript(const TempDir& dir, const json& script, const fs::path& db, const std::string& screenshot) {
-  const fs::path scriptPath = dir / "script.json", out = dir / "stdout", err = dir / "stderr";
-  std::ofstream(scriptPath) << script.dump();
-  const std::string cmd = "xvfb-run -a -s '-screen 0 1280x800x24' '" + at::test::appBinary().string() +
-                          "' desktop --dataset phantom:128 --size 800x600 --render-scale 0.4 --db '" + db.string() +
-                          "' --ui-script '" + scriptPath.string() + "'" +
-                          (screenshot.empty() ? "" : " --screenshot '" + screenshot + "'") + " >'" + out.string() +
-                          "' 2>'" + err.string() + "'";
-  const int status = std::system(cmd.c_str());
-  Run r;
-  r.exitCode = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  r.err = at::test::readFile(err);
-  std::istringstream lines(at::test::readFile(out));
-  for (std::string line; std::getline(lines, line);)
-    if (!line.empty() && line[0] == '{') r.events.push_back(json::parse(line, nullptr, false));
-  return r;
-}
-
-std::vector<json> eventsOf(const Run& r, const std::string& kind) {
-  std::vector<json> found;
-  for (const json& e : r.events)
-    if (e.is_object() && e.value("event", "") == kind) found.push_back(e);
-  return found;
+  at::test::DesktopOptions options;
+  options.size = "800x600";
+  options.db = db;
+  options.screenshot = screenshot;
+  return at::test::runDesktopScript(dir, script, options);
 }
 
 std::string lower(std::string s) {
