@@ -787,6 +787,7 @@ void DesktopApp::updateFields() {
   const std::string key = fineReady ? fine->key() : coarse->key();
   if (source && source == fieldSource_ && key == fieldKey_ && fieldLabel_ == label) {
     if (!field_ && best) field_ = best;  // the host copy of the field shown arrived
+    fieldUploading_ = false;             // back on the field shown: a half-done upload is dropped
     return;
   }
   if (!source || !renderer_) return;
