@@ -758,6 +758,9 @@ void DesktopApp::updateFields() {
     event({{"event", "field"}, {"structure", id}, {"downsample", f.request.params.downsample}, {"ms", f.ms},
            {"device", f.device}});
   }
+  // Set again below while the field wanted is still going up; every other way out leaves it off,
+  // so that the loop can go idle.
+  fieldUploading_ = false;
   if (bare_) return;
   const std::uint16_t label = shownLabel();
   if (!label) return;
@@ -787,7 +790,6 @@ void DesktopApp::updateFields() {
   const std::string key = fineReady ? fine->key() : coarse->key();
   if (source && source == fieldSource_ && key == fieldKey_ && fieldLabel_ == label) {
     if (!field_ && best) field_ = best;  // the host copy of the field shown arrived
-    fieldUploading_ = false;             // back on the field shown: a half-done upload is dropped
     return;
   }
   if (!source || !renderer_) return;
@@ -809,7 +811,6 @@ void DesktopApp::updateFields() {
   if (recording_ && !frameLog_.empty()) frameLog_.back().uploadMs += msBetween(uploadStart, Clock::now());
   if (auto st = uploaded; !st) {
     message("uploading the field: " + st.error().message);
-    fieldUploading_ = false;
     return;
   }
   fieldUploading_ = !complete;
