@@ -453,6 +453,8 @@ struct VolumeRenderer::State {
   Texture hu, labels, field, table, mask, normals, occupancy;
   // uploadFieldStep: the texture being filled, what it is filled from and the next z-slice.
   Texture pendingField;
+  Dims pendingDims;   // of pendingField's storage (zero: none)
+  Dims fieldDims;     // of field's storage
   const float* pendingSource = nullptr;
   Geometry pendingGrid;
   int pendingNextSlice = 0;
@@ -523,6 +525,11 @@ Status VolumeRenderer::setVolume(const Volume& volume, const LabelMap& labels) {
     return fail("render: labels " + labels.dims().toString() + " are not on the volume's grid " +
                 volume.dims().toString());
   const Dims& d = volume.dims();
+  // A field upload in progress, and its spare texture, belong to the previous volume.
+  state_->pendingField = Texture();
+  state_->pendingDims = Dims{};
+  state_->pendingSource = nullptr;
+  state_->pendingGrid = Geometry{};
   glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
   std::vector<std::uint16_t> shifted(volume.voxels.size());
   for (std::size_t i = 0; i < shifted.size(); ++i) shifted[i] = std::uint16_t(int(volume.voxels[i]) + 32768);
@@ -592,6 +599,7 @@ Status VolumeRenderer::setFieldFromDevice(const cuda::DeviceField& field) {
     glBindTexture(GL_TEXTURE_3D, st.field.id());
     setTextureParams(GL_LINEAR);
     glTexImage3D(GL_TEXTURE_3D, 0, GL_R32F, grid.dims.x, grid.dims.y, grid.dims.z, 0, GL_RED, GL_FLOAT, nullptr);
+    st.fieldDims = grid.dims;
     if (auto s = glStatus("allocating the distance field"); !s) return s;
     auto target = cuda::GlTextureTarget::registerTexture(st.field.id(), grid.dims.x, grid.dims.y, grid.dims.z);
     if (!target) return tl::unexpected(target.error());
@@ -618,6 +626,7 @@ Status VolumeRenderer::setField(const FloatVolume& field) {
   setTextureParams(GL_LINEAR);
   const Dims& d = field.dims();
   glTexImage3D(GL_TEXTURE_3D, 0, GL_R32F, d.x, d.y, d.z, 0, GL_RED, GL_FLOAT, finite.data());
+  state_->fieldDims = d;
 #if defined(AT_HAVE_CUDA)
   state_->interop.reset();  // the storage changed: a registration would be stale
 #endif
@@ -633,17 +642,23 @@ Result<bool> VolumeRenderer::uploadFieldStep(const FloatVolume& field, double bu
   const Geometry& g = field.geometry;
   const bool sameGrid = st.pendingGrid.dims == g.dims && st.pendingGrid.spacingMm == g.spacingMm &&
                         st.pendingGrid.originMm == g.originMm;
-  if (st.pendingSource != field.voxels.data() || !sameGrid || !st.pendingField) {
-    st.pendingField = Texture::make();
-    glBindTexture(GL_TEXTURE_3D, st.pendingField.id());
-    setTextureParams(GL_LINEAR);
-    // Mutable storage, as setField's: the texture becomes the field texture, which setField and
-    // setFieldFromDevice re-specify.
-    glTexImage3D(GL_TEXTURE_3D, 0, GL_R32F, d.x, d.y, d.z, 0, GL_RED, GL_FLOAT, nullptr);
-    if (auto e = glStatus("allocating the distance field"); !e) return tl::unexpected(e.error());
+  if (st.pendingSource != field.voxels.data() || !sameGrid) {
+    // A new field. The spare texture (the field texture before the last swap) is reused when it
+    // has these dims; allocating one (software GL: tens of ms at 256³) is a call's whole work.
     st.pendingSource = field.voxels.data();
-    st.pendingGrid = field.geometry;
+    st.pendingGrid = g;
     st.pendingNextSlice = 0;
+    if (!st.pendingField || !(st.pendingDims == d)) {
+      st.pendingField = Texture::make();
+      glBindTexture(GL_TEXTURE_3D, st.pendingField.id());
+      setTextureParams(GL_LINEAR);
+      // Mutable storage, as setField's: the texture becomes the field texture, which setField and
+      // setFieldFromDevice re-specify.
+      glTexImage3D(GL_TEXTURE_3D, 0, GL_R32F, d.x, d.y, d.z, 0, GL_RED, GL_FLOAT, nullptr);
+      if (auto e = glStatus("allocating the distance field"); !e) return tl::unexpected(e.error());
+      st.pendingDims = d;
+      return false;
+    }
   }
   const auto start = std::chrono::steady_clock::now();
   const std::size_t slice = std::size_t(d.x) * std::size_t(d.y);
@@ -659,9 +674,11 @@ Result<bool> VolumeRenderer::uploadFieldStep(const FloatVolume& field, double bu
            std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count() < budgetMs);
   if (auto e = glStatus("uploading the distance field"); !e) return tl::unexpected(e.error());
   if (st.pendingNextSlice < d.z) return false;
+  // The filled texture becomes the field; the previous field texture is the spare for the next.
   std::swap(st.field, st.pendingField);
-  st.pendingField = Texture();
+  std::swap(st.fieldDims, st.pendingDims);
   st.pendingSource = nullptr;
+  st.pendingGrid = Geometry{};
 #if defined(AT_HAVE_CUDA)
   st.interop.reset();  // the storage changed: a registration would be stale
 #endif

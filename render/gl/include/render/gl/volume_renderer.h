@@ -40,8 +40,10 @@ class VolumeRenderer {
   // takes ~0.2 s for a whole 256³ float field. Each call uploads slices until about `budgetMs` of
   // wall time has passed (at least one slice) into a second texture; the field shown (and
   // rendered) stays the previous one until the last slice is in, when the two textures swap and
-  // the call returns true. A call with another field (another address or grid) starts over; the
-  // caller keeps `field` alive and unchanged until the call that returns true.
+  // the call returns true. The texture replaced is kept as the next upload's target; when none of
+  // these dims exists, allocating it is the first call's only work. A call with another field
+  // (another address or grid) starts over; the caller keeps `field` alive and unchanged until the
+  // call that returns true. setVolume drops an upload in progress.
   Result<bool> uploadFieldStep(const FloatVolume& field, double budgetMs);
   // Copies a field that lives in CUDA device memory straight into the field texture (CUDA–GL
   // interop, no host round trip). Error when built without CUDA or when a CUDA call fails.
