@@ -769,12 +769,10 @@ void DesktopApp::updateFields() {
   if (!fine || !coarse) return;
   // A field is ready when its host copy or (computed on the GPU) its device copy exists; a GPU
   // field is shown from the device before its host copy (for picking) has arrived.
-  auto fineField = worker_->cached(*fine);
-  auto fineDevice = worker_->cachedOnDevice(*fine);
-  const bool fineReady = fineField || fineDevice;
-  auto coarseField = fineReady ? nullptr : worker_->cached(*coarse);
-  auto coarseDevice = fineReady ? nullptr : worker_->cachedOnDevice(*coarse);
-  const bool coarseReady = coarseField || coarseDevice;
+  const FieldWorker::Cached fineCached = worker_->cached(*fine);
+  const bool fineReady = fineCached.ready();
+  const FieldWorker::Cached coarseCached = fineReady ? FieldWorker::Cached{} : worker_->cached(*coarse);
+  const bool coarseReady = coarseCached.ready();
   const bool resting = msBetween(hoverSince_, Clock::now()) > kRefineFieldAfterMs;
   if (!fineReady) {
     if (fine->key() == declinedFieldKey_ && (coarseReady || coarseDownsample() == 1))
@@ -784,8 +782,9 @@ void DesktopApp::updateFields() {
     else if (!coarseReady)
       worker_->request(*coarse);
   }
-  const auto best = fineReady ? fineField : coarseField;  // host copy; may still be missing
-  const auto bestDevice = fineReady ? fineDevice : coarseDevice;
+  const FieldWorker::Cached& chosen = fineReady ? fineCached : coarseCached;
+  const auto& best = chosen.host;  // may still be missing for a GPU field
+  const auto& bestDevice = chosen.device;
   const void* source = bestDevice ? static_cast<const void*>(bestDevice.get()) : static_cast<const void*>(best.get());
   const std::string key = fineReady ? fine->key() : coarse->key();
   if (source && source == fieldSource_ && key == fieldKey_ && fieldLabel_ == label) {

@@ -65,23 +65,15 @@ void FieldWorker::cancelAll() {
   if (runningKey_) cancelRunning_ = true;
 }
 
-std::shared_ptr<const DistanceField> FieldWorker::cached(const FieldRequest& request) {
+FieldWorker::Cached FieldWorker::cached(const FieldRequest& request) {
   const std::string key = request.key();
   std::lock_guard lock(mutex_);
   for (auto it = lru_.begin(); it != lru_.end(); ++it)
     if (it->key == key) {
       lru_.splice(lru_.begin(), lru_, it);
-      return lru_.front().field;
+      return {lru_.front().field, lru_.front().deviceField};
     }
-  return nullptr;
-}
-
-std::shared_ptr<const cuda::DeviceField> FieldWorker::cachedOnDevice(const FieldRequest& request) {
-  const std::string key = request.key();
-  std::lock_guard lock(mutex_);
-  for (const Entry& entry : lru_)
-    if (entry.key == key) return entry.deviceField;
-  return nullptr;
+  return {};
 }
 
 std::vector<FinishedField> FieldWorker::takeFinished() {
@@ -140,7 +132,7 @@ void FieldWorker::run() {
         passesPlanned_ = planned;
       };
       const DeviceOutcome onDevice = computeOnDevice(job, control);
-      if (onDevice.kind != DeviceOutcome::NotUsed) {
+      if (onDevice.kind != DeviceOutcome::NotUsed && onDevice.kind != DeviceOutcome::GaveUp) {
         if (onDevice.kind == DeviceOutcome::Cancelled) cancelled_.fetch_add(1);
         std::lock_guard lock(mutex_);
         if (onDevice.kind == DeviceOutcome::Failed) finished_.push_back(onDevice.failure);
@@ -148,8 +140,10 @@ void FieldWorker::run() {
         runningRequest_.reset();
         continue;
       }
+      WdtParams params = job.params;
+      if (onDevice.kind == DeviceOutcome::GaveUp) params.backend = WdtBackend::Cpu;  // as the warning says
       const Mask seeds = render::structureMask(dataset_.labels, job.label);
-      auto result = computeWdt(dataset_.volume, seeds, job.params, control);
+      auto result = computeWdt(dataset_.volume, seeds, params, control);
       if (result && !deviceWarning_.empty()) result->stats.warning = std::exchange(deviceWarning_, "");
       if (!result) {
         done.message = structure->id + ": " + result.error().message;
@@ -180,7 +174,10 @@ FieldWorker::DeviceOutcome FieldWorker::computeOnDevice(const FieldRequest& job,
   if (job.params.backend == WdtBackend::Cpu || !cuda::queryDevice().available) return outcome;
   if (!device_) device_ = std::make_unique<DeviceState>();
   DeviceState& d = *device_;
-  if (d.unusable) return outcome;
+  if (d.unusable) {
+    outcome.kind = DeviceOutcome::GaveUp;
+    return outcome;
+  }
   auto giveUp = [&](const std::string& why) {
     d.unusable = true;
     d.volume.reset();
@@ -189,6 +186,7 @@ FieldWorker::DeviceOutcome FieldWorker::computeOnDevice(const FieldRequest& job,
       outcome.failure.request = job;
       outcome.failure.message = why;
     } else {
+      outcome.kind = DeviceOutcome::GaveUp;
       deviceWarning_ = "CUDA backend failed, computed on the CPU instead: " + why;
     }
     return outcome;

@@ -65,11 +65,14 @@ class FieldWorker {
   void request(const FieldRequest& request);
   // Drops the queued request and cancels the running one (e.g. the user left the structure).
   void cancelAll();
-  // The cached field's host copy for `request`, marking it most recently used; null if absent
-  // (or, for a GPU field, while its host copy is still being made).
-  std::shared_ptr<const DistanceField> cached(const FieldRequest& request);
-  // The cached field's device copy (computed on the GPU), or null.
-  std::shared_ptr<const cuda::DeviceField> cachedOnDevice(const FieldRequest& request);
+  // The cached field for `request`, marking it most recently used. `host` is null while a GPU
+  // field's host copy is still being made; `device` is set only for fields computed on the GPU.
+  struct Cached {
+    std::shared_ptr<const DistanceField> host;
+    std::shared_ptr<const cuda::DeviceField> device;
+    bool ready() const { return host || device; }
+  };
+  Cached cached(const FieldRequest& request);
   // Fields (and failures) finished since the last call, oldest first.
   std::vector<FinishedField> takeFinished();
   bool busy() const;
@@ -93,10 +96,11 @@ class FieldWorker {
   };
   void insert(Entry entry);
   // The field on the GPU (device-resident volume). Published: the entry (device field first, its
-  // host copy attached when made) and the finished record are in place. NotUsed: no device, or
-  // given up under `auto` — use computeWdt. Worker thread only.
+  // host copy attached when made) and the finished record are in place. NotUsed: no device or
+  // backend cpu — use computeWdt. GaveUp: a CUDA failure under `auto`, now or before — compute
+  // on the CPU. Worker thread only.
   struct DeviceOutcome {
-    enum Kind { NotUsed, Published, Cancelled, Failed } kind = NotUsed;
+    enum Kind { NotUsed, GaveUp, Published, Cancelled, Failed } kind = NotUsed;
     FinishedField failure;  // Failed (backend cuda): what to report
   };
   DeviceOutcome computeOnDevice(const FieldRequest& job, WdtControl& control);

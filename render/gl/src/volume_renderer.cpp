@@ -319,6 +319,12 @@ Mat4 patientToTexture(const Geometry& g) {
   return m;
 }
 
+// Distances as the field texture holds them: +infinity (unreachable) is stored as 1e30, which the
+// shader's normalisation treats as far.
+void copyFinite(const float* src, std::size_t count, float* dst) {
+  for (std::size_t i = 0; i < count; ++i) dst[i] = std::isfinite(src[i]) ? src[i] : 1e30f;
+}
+
 void setTextureParams(GLenum filter) {
   glTexParameteri(GL_TEXTURE_3D, GL_TEXTURE_MIN_FILTER, GLint(filter));
   glTexParameteri(GL_TEXTURE_3D, GL_TEXTURE_MAG_FILTER, GLint(filter));
@@ -619,8 +625,7 @@ Status VolumeRenderer::setFieldFromDevice(const cuda::DeviceField& field) {
 Status VolumeRenderer::setField(const FloatVolume& field) {
   if (field.empty()) return fail("render: the distance field is empty");
   std::vector<float> finite(field.voxels.size());
-  for (std::size_t i = 0; i < finite.size(); ++i)
-    finite[i] = std::isfinite(field.voxels[i]) ? field.voxels[i] : 1e30f;
+  copyFinite(field.voxels.data(), finite.size(), finite.data());
   glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
   glBindTexture(GL_TEXTURE_3D, state_->field.id());
   setTextureParams(GL_LINEAR);
@@ -667,7 +672,7 @@ Result<bool> VolumeRenderer::uploadFieldStep(const FloatVolume& field, double bu
   glBindTexture(GL_TEXTURE_3D, st.pendingField.id());
   do {
     const float* src = field.voxels.data() + slice * std::size_t(st.pendingNextSlice);
-    for (std::size_t i = 0; i < slice; ++i) finite[i] = std::isfinite(src[i]) ? src[i] : 1e30f;
+    copyFinite(src, slice, finite.data());
     glTexSubImage3D(GL_TEXTURE_3D, 0, 0, 0, st.pendingNextSlice, d.x, d.y, 1, GL_RED, GL_FLOAT, finite.data());
     ++st.pendingNextSlice;
   } while (st.pendingNextSlice < d.z &&
