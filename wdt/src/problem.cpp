@@ -22,6 +22,15 @@ void parallelSlices(int n, Body body) {
   for (std::thread& t : team) t.join();
 }
 
+// The full-resolution problem arrays over n voxels. Restrict parameters: byte stores may alias
+// anything, and without them every iteration reloads every pointer (3× slower, measured at 256³).
+void densityAndSeeds(const std::int16_t* __restrict hu, const std::uint8_t* __restrict mask,
+                     const std::uint8_t* __restrict lut, std::uint8_t* __restrict density,
+                     std::uint8_t* __restrict seeds, std::size_t n) {
+  for (std::size_t i = 0; i < n; ++i) density[i] = lut[std::size_t(hu[i] + 32768)];
+  for (std::size_t i = 0; i < n; ++i) seeds[i] = mask[i] != 0 ? 1 : 0;
+}
+
 }  // namespace
 
 Geometry downsampledGrid(const Geometry& fine, int f) {
@@ -63,10 +72,9 @@ Result<WdtProblem> prepareWdtProblem(const Volume& volume, const Mask& seeds, co
     wdt::resizeOnHugePages(problem.seeds, d.count());
     const std::size_t slice = std::size_t(d.x) * d.y;
     parallelSlices(d.z, [&](int k0, int k1) {
-      for (std::size_t i = slice * k0; i < slice * k1; ++i) {
-        problem.density[i] = lut[std::size_t(volume.voxels[i] + 32768)];
-        problem.seeds[i] = seeds.voxels[i] != 0 ? 1 : 0;
-      }
+      const std::size_t i0 = slice * k0, n = slice * (k1 - k0);
+      densityAndSeeds(volume.voxels.data() + i0, seeds.voxels.data() + i0, lut.data(), problem.density.data() + i0,
+                      problem.seeds.data() + i0, n);
     });
     return problem;
   }
