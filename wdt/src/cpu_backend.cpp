@@ -342,7 +342,6 @@ struct Run {
   std::vector<float> d;          // L1: x contiguous; allocated by thread 0 of the team
   std::unique_ptr<float[]> dT;         // L2: y contiguous (x sweeps); first touched by the team
   std::unique_ptr<std::uint8_t[]> qT;  // density bytes in L2
-  std::size_t sliceT = 0;              // elements from one L2 slice (z) to the next, in dT and qT
   std::vector<float> infRow;
   std::vector<std::uint8_t> zeroRow;
   SweepGeometry x, y, z;
@@ -410,10 +409,10 @@ void transposeRows(const float* s, float* t, int w, int h, int y0, int y1) {
   transposeRowsScalar(s, t, w, h, y0, y1);
 }
 
-// Whole z slices [z0, z1) of a (w × h × depth) array; slices lie srcSlice and dstSlice apart.
-void transposeSlices(const float* src, std::size_t srcSlice, float* dst, std::size_t dstSlice, int w, int h, int z0,
-                     int z1) {
-  for (int z = z0; z < z1; ++z) transposeRows(src + srcSlice * z, dst + dstSlice * z, w, h, 0, h);
+// Whole z slices [z0, z1) of a (w × h × depth) array.
+void transposeSlices(const float* src, float* dst, int w, int h, int z0, int z1) {
+  const std::size_t slice = std::size_t(w) * h;
+  for (int z = z0; z < z1; ++z) transposeRows(src + slice * z, dst + slice * z, w, h, 0, h);
 }
 
 // The starting state of one z slice, produced directly in the x sweeps' layout: dT = transposed
@@ -546,7 +545,7 @@ bool checkCancel(Run& run, int tid) {
 // way), so the transposes need no extra barriers.
 void worker(Run& run, int tid) {
   const Dims d = run.dims;
-  const std::size_t nxy = std::size_t(d.x) * d.y, sT = run.sliceT;
+  const std::size_t nxy = std::size_t(d.x) * d.y;
   const int zs0 = int(std::int64_t(d.z) * tid / run.threads), zs1 = int(std::int64_t(d.z) * (tid + 1) / run.threads);
   const std::uint8_t* q = run.problem.density.data();
   const int planned = run.problem.params.converge ? run.problem.params.maxPasses : run.problem.params.passes;
@@ -556,35 +555,35 @@ void worker(Run& run, int tid) {
     if (tid == 0) wdt::resizeOnHugePages(run.d, d.count());
     const std::uint8_t* seeds = run.problem.seeds.data();
     for (int z; (z = run.nextSlice.fetch_add(1, std::memory_order_relaxed)) < d.z;)
-      initSlice(seeds + nxy * z, q + nxy * z, run.dT.get() + sT * z, run.qT.get() + sT * z, d.x, d.y);
+      initSlice(seeds + nxy * z, q + nxy * z, run.dT.get() + nxy * z, run.qT.get() + nxy * z, d.x, d.y);
   }
   bool l1Valid = false, l2Valid = true;  // the same in every thread: decided by shared state only
   // z− hook: this thread's rows (y) of the finished plane z go to L2.
   const auto toL2 = [&](int z, int r0, int r1) {
-    transposeRows(run.d.data() + nxy * z, run.dT.get() + sT * z, d.x, d.y, r0, r1);
+    transposeRows(run.d.data() + nxy * z, run.dT.get() + nxy * z, d.x, d.y, r0, r1);
   };
   for (int pass = 0; pass < planned; ++pass) {
     const auto t0 = std::chrono::steady_clock::now();
     run.changedBy[tid] = 0;
     if (checkCancel(run, tid)) {
       if (!l1Valid) {
-        transposeSlices(run.dT.get(), sT, run.d.data(), nxy, d.y, d.x, zs0, zs1);
+        transposeSlices(run.dT.get(), run.d.data(), d.y, d.x, zs0, zs1);
         run.barrier.wait();
       }
       break;
     }
     if (!l2Valid) {
-      transposeSlices(run.d.data(), nxy, run.dT.get(), sT, d.x, d.y, zs0, zs1);
+      transposeSlices(run.d.data(), run.dT.get(), d.x, d.y, zs0, zs1);
       run.barrier.wait();
     }
     sweep(run, run.x, run.dT.get(), run.qT.get(), +1, tid);
     if (checkCancel(run, tid)) {
-      transposeSlices(run.dT.get(), sT, run.d.data(), nxy, d.y, d.x, zs0, zs1);  // keep the partial x+ result
+      transposeSlices(run.dT.get(), run.d.data(), d.y, d.x, zs0, zs1);  // keep the partial x+ result
       run.barrier.wait();
       break;
     }
     sweep(run, run.x, run.dT.get(), run.qT.get(), -1, tid);
-    transposeSlices(run.dT.get(), sT, run.d.data(), nxy, d.y, d.x, zs0, zs1);
+    transposeSlices(run.dT.get(), run.d.data(), d.y, d.x, zs0, zs1);
     l1Valid = true;
     if (checkCancel(run, tid)) break;
     sweep(run, run.y, run.d.data(), q, +1, tid);
@@ -635,13 +634,8 @@ Result<WdtResult> runCpuBackend(const WdtProblem& problem, const WdtControl& con
   run.dims = d;
   run.base = problem.params.baseCost;
   run.plane = planeFunction(wdt::costKernel(problem.params));
-  const std::size_t nxy = std::size_t(d.x) * d.y;
-  // L2 slices are padded to 64 elements past a multiple of 4096: the x sweeps step from row to
-  // row of a plane by one slice, and at power-of-two sizes (256² floats = 256 KiB) unpadded rows
-  // all fall into the same few cache sets, so a plane swept from L3 instead of L2.
-  run.sliceT = nxy + (64 + 4096 - nxy % 4096) % 4096;
-  run.dT.reset(wdt::newOnHugePages<float>(run.sliceT * std::size_t(d.z)));
-  run.qT.reset(wdt::newOnHugePages<std::uint8_t>(run.sliceT * std::size_t(d.z)));
+  run.dT.reset(wdt::newOnHugePages<float>(d.count()));
+  run.qT.reset(wdt::newOnHugePages<std::uint8_t>(d.count()));
   const int longest = std::max({d.x, d.y, d.z});
   run.infRow.assign(std::size_t(longest), kInf);
   run.zeroRow.assign(std::size_t(longest), 0);
@@ -649,7 +643,8 @@ Result<WdtResult> runCpuBackend(const WdtProblem& problem, const WdtControl& con
 
   const float sx = float(grid.spacingMm[0]), sy = float(grid.spacingMm[1]), sz = float(grid.spacingMm[2]);
   // L2 (y contiguous): planes x, rows z.        L1 (x contiguous): y sweep planes y, rows z;
-  run.x = {std::size_t(d.y), run.sliceT, d.y, d.z, d.x, wdt::axisSweepLengths(0, sx, sy, sz)};
+  const std::size_t nxy = std::size_t(d.x) * d.y;
+  run.x = {std::size_t(d.y), nxy, d.y, d.z, d.x, wdt::axisSweepLengths(0, sx, sy, sz)};
   run.y = {std::size_t(d.x), nxy, d.x, d.z, d.y, wdt::axisSweepLengths(1, sx, sy, sz)};
   // z sweep planes z, rows y.
   run.z = {nxy, std::size_t(d.x), d.x, d.y, d.z, wdt::axisSweepLengths(2, sx, sy, sz)};
