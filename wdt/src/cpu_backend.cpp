@@ -390,8 +390,8 @@ void transposeRowsScalar(const T* s, T* t, int w, int h, int y0, int y1) {
 __attribute__((target("avx2"))) void transposeRowsFloatAvx2(const float* s, float* t, int w, int h, int y0, int y1) {
   const int w8 = w & ~7;
   const int y8 = y0 + ((y1 - y0) & ~7);
-  for (int yb = y0; yb < y8; yb += 8)
-    for (int xb = 0; xb < w8; xb += 8) {
+  for (int xb = 0; xb < w8; xb += 8)
+    for (int yb = y0; yb < y8; yb += 8) {
       __m256 r[8], u[8], v[8];
       for (int k = 0; k < 8; ++k) r[k] = _mm256_loadu_ps(s + xb + std::size_t(w) * (yb + k));
       for (int k = 0; k < 4; ++k) {
