@@ -2,7 +2,8 @@
 // the order x+ x− y+ y− z+ z−, every voxel from its 9 neighbours in the previous plane): equal bit
 // for bit. The backend reorganises memory (transposed copies for the x sweeps, transposes folded
 // into sweeps, initial state built directly in the transposed layout), vectorises and splits rows
-// among threads; none of that may change a single float.
+// among threads; none of that may change a single float. AT_WDT_NO_AVX2 switches the backend to
+// its baseline code so that both the AVX2 and the SSE2 kernels, transposes and set-up are checked.
 #include <doctest/doctest.h>
 
 #include <atomic>
@@ -131,7 +132,8 @@ bool sameBits(const std::vector<float>& a, const std::vector<float>& b) {
 
 }  // namespace
 
-TEST_CASE("After 1, 2 and 3 passes the CPU backend equals the plainly written sweeps bit for bit, on 1 to 3 threads") {
+TEST_CASE("After 1, 2 and 3 passes the CPU backend equals the plainly written sweeps bit for bit, on 1 to 3 threads, "
+          "with and without AVX2") {
   std::mt19937_64 rng(test::freshSeed("fixed-pass sweeps vs plain"));
   // Sizes around the 8-wide tiles and vectors of the transposes and row kernels: multiples of 8,
   // ragged edges, one-voxel axes, x − 1 a multiple of 8.
@@ -155,16 +157,20 @@ TEST_CASE("After 1, 2 and 3 passes the CPU backend equals the plainly written sw
       auto problem = prepareWdtProblem(volume, mask, params);
       REQUIRE(problem);
       const std::vector<float> expected = plainPasses(*problem, passes);
-      for (const char* threads : {"1", "2", "3"}) {
-        CAPTURE(passes);
-        CAPTURE(threads);
-        setenv("AT_WDT_THREADS", threads, 1);
-        auto r = runCpuBackend(*problem, {});
-        unsetenv("AT_WDT_THREADS");
-        REQUIRE(r);
-        CHECK(r->stats.passesRun == passes);
-        CHECK(sameBits(r->field.distances.voxels, expected));
-      }
+      for (const char* threads : {"1", "2", "3"})
+        for (const bool baseline : {false, true}) {
+          CAPTURE(passes);
+          CAPTURE(threads);
+          CAPTURE(baseline);
+          setenv("AT_WDT_THREADS", threads, 1);
+          if (baseline) setenv("AT_WDT_NO_AVX2", "1", 1);
+          auto r = runCpuBackend(*problem, {});
+          unsetenv("AT_WDT_THREADS");
+          unsetenv("AT_WDT_NO_AVX2");
+          REQUIRE(r);
+          CHECK(r->stats.passesRun == passes);
+          CHECK(sameBits(r->field.distances.voxels, expected));
+        }
     }
   }
 }

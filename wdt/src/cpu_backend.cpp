@@ -288,8 +288,7 @@ PlaneFn pickPlane(bool avx2) {
   return avx2 ? &planeAvx2<K> : &planeBaseline<K>;
 }
 
-PlaneFn planeFunction(CostKernel k) {
-  const bool avx2 = __builtin_cpu_supports("avx2");
+PlaneFn planeFunction(CostKernel k, bool avx2) {
   switch (k) {
     case CostKernel::EnterDensity: return pickPlane<CostKernel::EnterDensity>(avx2);
     case CostKernel::EnterUniform: return pickPlane<CostKernel::EnterUniform>(avx2);
@@ -348,6 +347,7 @@ struct Run {
   const WdtControl& control;
   int threads = 1;
   PlaneFn plane = nullptr;
+  bool avx2 = false;             // AVX2 row kernels, transposes and initialisation
   float base = 0;
   Dims dims;
   std::vector<float> d;          // L1: x contiguous; allocated by thread 0 of the team
@@ -414,16 +414,15 @@ __attribute__((target("avx2"))) void transposeRowsFloatAvx2(const float* s, floa
     for (int x = (y < y8 ? w8 : 0); x < w; ++x) t[y + std::size_t(h) * x] = s[x + std::size_t(w) * y];
 }
 
-void transposeRows(const float* s, float* t, int w, int h, int y0, int y1) {
-  static const bool avx2 = __builtin_cpu_supports("avx2");
+void transposeRows(const float* s, float* t, int w, int h, int y0, int y1, bool avx2) {
   if (avx2) return transposeRowsFloatAvx2(s, t, w, h, y0, y1);
   transposeRowsScalar(s, t, w, h, y0, y1);
 }
 
 // Whole z slices [z0, z1) of a (w × h × depth) array.
-void transposeSlices(const float* src, float* dst, int w, int h, int z0, int z1) {
+void transposeSlices(const float* src, float* dst, int w, int h, int z0, int z1, bool avx2) {
   const std::size_t slice = std::size_t(w) * h;
-  for (int z = z0; z < z1; ++z) transposeRows(src + slice * z, dst + slice * z, w, h, 0, h);
+  for (int z = z0; z < z1; ++z) transposeRows(src + slice * z, dst + slice * z, w, h, 0, h, avx2);
 }
 
 // The starting state of one z slice, produced directly in the x sweeps' layout: dT = transposed
@@ -483,8 +482,8 @@ __attribute__((target("avx2"))) void initSliceAvx2(const std::uint8_t* seeds, co
   initSliceScalar(seeds, q, dT, qT, w, h, h8, h, 0);   // bottom rows
 }
 
-void initSlice(const std::uint8_t* seeds, const std::uint8_t* q, float* dT, std::uint8_t* qT, int w, int h) {
-  static const bool avx2 = __builtin_cpu_supports("avx2");
+void initSlice(const std::uint8_t* seeds, const std::uint8_t* q, float* dT, std::uint8_t* qT, int w, int h,
+               bool avx2) {
   if (avx2) return initSliceAvx2(seeds, q, dT, qT, w, h);
   initSliceScalar(seeds, q, dT, qT, w, h, 0, h, 0);
 }
@@ -569,35 +568,35 @@ void worker(Run& run, int tid) {
     if (tid == 0) wdt::resizeOnHugePages(run.d, d.count());
     const std::uint8_t* seeds = run.problem.seeds.data();
     for (int z; (z = run.nextSlice.fetch_add(1, std::memory_order_relaxed)) < d.z;)
-      initSlice(seeds + nxy * z, q + nxy * z, run.dT.get() + nxy * z, run.qT.get() + nxy * z, d.x, d.y);
+      initSlice(seeds + nxy * z, q + nxy * z, run.dT.get() + nxy * z, run.qT.get() + nxy * z, d.x, d.y, run.avx2);
   }
   bool l1Valid = false, l2Valid = true;  // the same in every thread: decided by shared state only
   // z− hook: this thread's rows (y) of the finished plane z go to L2.
   const auto toL2 = [&](int z, int r0, int r1) {
-    transposeRows(run.d.data() + nxy * z, run.dT.get() + nxy * z, d.x, d.y, r0, r1);
+    transposeRows(run.d.data() + nxy * z, run.dT.get() + nxy * z, d.x, d.y, r0, r1, run.avx2);
   };
   for (int pass = 0; pass < planned; ++pass) {
     const auto t0 = std::chrono::steady_clock::now();
     run.changedBy[tid] = 0;
     if (checkCancel(run, tid)) {
       if (!l1Valid) {
-        transposeSlices(run.dT.get(), run.d.data(), d.y, d.x, zs0, zs1);
+        transposeSlices(run.dT.get(), run.d.data(), d.y, d.x, zs0, zs1, run.avx2);
         run.barrier.wait();
       }
       break;
     }
     if (!l2Valid) {
-      transposeSlices(run.d.data(), run.dT.get(), d.x, d.y, zs0, zs1);
+      transposeSlices(run.d.data(), run.dT.get(), d.x, d.y, zs0, zs1, run.avx2);
       run.barrier.wait();
     }
     sweep(run, run.x, run.dT.get(), run.qT.get(), +1, tid);
     if (checkCancel(run, tid)) {
-      transposeSlices(run.dT.get(), run.d.data(), d.y, d.x, zs0, zs1);  // keep the partial x+ result
+      transposeSlices(run.dT.get(), run.d.data(), d.y, d.x, zs0, zs1, run.avx2);  // keep the partial x+ result
       run.barrier.wait();
       break;
     }
     sweep(run, run.x, run.dT.get(), run.qT.get(), -1, tid);
-    transposeSlices(run.dT.get(), run.d.data(), d.y, d.x, zs0, zs1);
+    transposeSlices(run.dT.get(), run.d.data(), d.y, d.x, zs0, zs1, run.avx2);
     l1Valid = true;
     if (checkCancel(run, tid)) break;
     sweep(run, run.y, run.d.data(), q, +1, tid);
@@ -647,7 +646,9 @@ Result<WdtResult> runCpuBackend(const WdtProblem& problem, const WdtControl& con
   Run run(problem, control, threads);
   run.dims = d;
   run.base = problem.params.baseCost;
-  run.plane = planeFunction(wdt::costKernel(problem.params));
+  // AT_WDT_NO_AVX2 (any value) takes the baseline (SSE2) code on an AVX2 machine: tests use it.
+  run.avx2 = __builtin_cpu_supports("avx2") && !std::getenv("AT_WDT_NO_AVX2");
+  run.plane = planeFunction(wdt::costKernel(problem.params), run.avx2);
   run.dT.reset(wdt::newOnHugePages<float>(d.count()));
   run.qT.reset(wdt::newOnHugePages<std::uint8_t>(d.count()));
   const int longest = std::max({d.x, d.y, d.z});
