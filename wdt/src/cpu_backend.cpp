@@ -196,6 +196,34 @@ __attribute__((target("avx2"), noinline)) int enteringPairAvx2(float* c0, float*
   return tail != 0 || !_mm256_testz_si256(changed, changed);
 }
 
+// The two ends (i = 0 and i = n − 1, n ≥ 2) of the row pair of enteringPairAvx2, with +infinity
+// beyond the row as relaxEdge: the same values and float operations, without its general loops.
+template <bool Uniform>
+__attribute__((noinline)) int enteringPairEnds(float* c0, float* c1, const float* p0, const float* p1, const float* p2,
+                                               const float* p3, const std::uint8_t* q0, const std::uint8_t* q1, int n,
+                                               SweepLengths l, float base) {
+  int changed = 0;
+  for (const int i : {0, n - 1}) {
+    const float* rows[4] = {p0, p1, p2, p3};
+    float lo[4], mid[4], hi[4];
+    for (int k = 0; k < 4; ++k) {
+      lo[k] = i > 0 ? rows[k][i - 1] : kInf;
+      mid[k] = rows[k][i];
+      hi[k] = i + 1 < n ? rows[k][i + 1] : kInf;
+    }
+    const float nbA[3][3] = {{lo[0], mid[0], hi[0]}, {lo[1], mid[1], hi[1]}, {lo[2], mid[2], hi[2]}};
+    const float nbB[3][3] = {{lo[1], mid[1], hi[1]}, {lo[2], mid[2], hi[2]}, {lo[3], mid[3], hi[3]}};
+    const float wa = Uniform ? 1.0f : wdt::densityWeight(q0[i], base);
+    const float wb = Uniform ? 1.0f : wdt::densityWeight(q1[i], base);
+    const float va = wdt::enteringUpdate(c0[i], nbA, wa, l), vb = wdt::enteringUpdate(c1[i], nbB, wb, l);
+    changed |= (__builtin_bit_cast(int, va) ^ __builtin_bit_cast(int, c0[i])) |
+               (__builtin_bit_cast(int, vb) ^ __builtin_bit_cast(int, c1[i]));
+    c0[i] = va;
+    c1[i] = vb;
+  }
+  return changed != 0;
+}
+
 // The rows [r0, r1) of one plane, pairs first. A row outside the plane is +infinity (zeroRow
 // for its density bytes).
 struct PlaneArgs {
@@ -249,13 +277,17 @@ AT_ALWAYS_INLINE int planeLoop(const PlaneArgs& pa) {
       const std::uint8_t* qc0 = pa.qPlane + pa.rowStride * r;
       fetchNext(c0, qc0);
       fetchNext(c0 + pa.rowStride, qc0 + pa.rowStride);
-      if (pa.n > 2)
-        changed |= enteringPairAvx2<K == CostKernel::EnterUniform>(c0, c0 + pa.rowStride, prevRow(r - 1), prevRow(r),
-                                                                   prevRow(r + 1), prevRow(r + 2), qc0,
-                                                                   qc0 + pa.rowStride, pa.n - 1, pa.l, pa.base,
-                                                                   pa.down);
-      edges(r);
-      edges(r + 1);
+      if (pa.n > 2) {
+        constexpr bool uniform = K == CostKernel::EnterUniform;
+        const float *p0 = prevRow(r - 1), *p1 = prevRow(r), *p2 = prevRow(r + 1), *p3 = prevRow(r + 2);
+        float* c1 = c0 + pa.rowStride;
+        const std::uint8_t* qc1 = qc0 + pa.rowStride;
+        changed |= enteringPairAvx2<uniform>(c0, c1, p0, p1, p2, p3, qc0, qc1, pa.n - 1, pa.l, pa.base, pa.down);
+        changed |= enteringPairEnds<uniform>(c0, c1, p0, p1, p2, p3, qc0, qc1, pa.n, pa.l, pa.base);
+      } else {
+        edges(r);
+        edges(r + 1);
+      }
     }
     r = pairsEnd;
   }
