@@ -159,9 +159,10 @@ AT_AVX2_INLINE void enteringUpdate8(float* c, __m256 m00, __m256 m10, __m256 m01
 }
 
 template <bool Uniform>
-__attribute__((target("avx2"), noinline)) int enteringPairAvx2(float* c0, float* c1, const float* p0, const float* p1, const float* p2,
-                                    const float* p3, const std::uint8_t* q0, const std::uint8_t* q1, int last,
-                                    SweepLengths l, float base, bool down) {
+__attribute__((target("avx2"), noinline)) int enteringPairAvx2(float* c0, float* c1, const float* p0,
+                                                               const float* p1, const float* p2, const float* p3,
+                                                               const std::uint8_t* q0, const std::uint8_t* q1,
+                                                               int last, SweepLengths l, float base, bool down) {
   const __m256 ls = _mm256_set1_ps(l.straight), lb = _mm256_set1_ps(l.alongB);
   const __m256 lc = _mm256_set1_ps(l.alongC), ld = _mm256_set1_ps(l.diagonal);
   const __m256 vbase = _mm256_set1_ps(base), scale = _mm256_set1_ps(1.0f / 255.0f), one = _mm256_set1_ps(1.0f);
@@ -183,8 +184,10 @@ __attribute__((target("avx2"), noinline)) int enteringPairAvx2(float* c0, float*
   }
   int tail = 0;
   for (int i = vectorEnd; i < last; ++i) {
-    const float nbA[3][3] = {{p0[i - 1], p0[i], p0[i + 1]}, {p1[i - 1], p1[i], p1[i + 1]}, {p2[i - 1], p2[i], p2[i + 1]}};
-    const float nbB[3][3] = {{p1[i - 1], p1[i], p1[i + 1]}, {p2[i - 1], p2[i], p2[i + 1]}, {p3[i - 1], p3[i], p3[i + 1]}};
+    const float nbA[3][3] = {
+        {p0[i - 1], p0[i], p0[i + 1]}, {p1[i - 1], p1[i], p1[i + 1]}, {p2[i - 1], p2[i], p2[i + 1]}};
+    const float nbB[3][3] = {
+        {p1[i - 1], p1[i], p1[i + 1]}, {p2[i - 1], p2[i], p2[i + 1]}, {p3[i - 1], p3[i], p3[i + 1]}};
     const float wa = Uniform ? 1.0f : wdt::densityWeight(q0[i], base);
     const float wb = Uniform ? 1.0f : wdt::densityWeight(q1[i], base);
     const float va = wdt::enteringUpdate(c0[i], nbA, wa, l), vb = wdt::enteringUpdate(c1[i], nbB, wb, l);
@@ -506,7 +509,8 @@ __attribute__((target("avx2"))) void initSliceAvx2(const std::uint8_t* seeds, co
         for (int half = 0; half < 2; ++half) {
           const __m128i bytes = half ? _mm_unpackhi_epi64(sc[j], sc[j]) : sc[j];
           const __m256i notSeed = _mm256_cmpeq_epi32(_mm256_cvtepu8_epi32(bytes), zero);
-          _mm256_storeu_ps(dT + yb + std::size_t(h) * (xb + 2 * j + half), _mm256_and_ps(inf, _mm256_castsi256_ps(notSeed)));
+          const __m256 d = _mm256_and_ps(inf, _mm256_castsi256_ps(notSeed));  // seed ? +0 : +∞
+          _mm256_storeu_ps(dT + yb + std::size_t(h) * (xb + 2 * j + half), d);
         }
       }
     }
