@@ -1,6 +1,6 @@
 // The CPU backend: the paper's multi-axis sweeps (Algorithm 2), multi-threaded and vectorised.
 //
-// [SECTION] Row kernel   one row of a plane, vectorised along the contiguous axis (AVX2 or SSE2)
+// [SECTION] Row kernel   a thread's rows of one plane, vectorised along the contiguous axis (AVX2 or SSE2)
 // [SECTION] Team         a spin barrier and the per-plane split of rows among threads
 // [SECTION] Schedule     one pass = x+ x− y+ y− z+ z−, transposes, convergence, cancellation
 //
