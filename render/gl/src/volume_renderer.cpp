@@ -122,26 +122,34 @@ vec4 castRay(vec2 pixel) {
     int i = 0;
     ivec3 lastCell = ivec3(-1);
     bool occupied = true;
+    // Samples before tBlockEnd lie in the occupied block the ray last entered: they skip the
+    // block lookup. (A sample just past that block taken as inside it only costs its classification:
+    // an empty block's samples all classify to zero opacity.)
+    float tBlockEnd = -1e30;
     while (i < count) {
       float tm = start + float(i) * uStepMm;
       vec3 pt = oT + tm * dT;
-      // Continuous voxel coordinates (centres at integers) and the block holding them; the
-      // occupancy is fetched again only when the ray enters another block.
-      ivec3 cell = clamp(ivec3(floor((pt * dims - 0.5) / block)), ivec3(0), uBlocks - 1);
-      if (uSkip != 0 && cell != lastCell) {
-        lastCell = cell;
-        occupied = texelFetch(uOccupancy, cell, 0).r != 0u;
-      }
-      if (uSkip != 0 && !occupied) {
-        // Jump to the first sample of the regular sequence past this block (the outermost blocks
-        // reach beyond the box, so a ray leaving through them ends).
+      if (uSkip != 0 && tm >= tBlockEnd) {
+        // Continuous voxel coordinates (centres at integers) and the block holding them; the
+        // occupancy is fetched again only when the ray enters another block.
+        ivec3 cell = clamp(ivec3(floor((pt * dims - 0.5) / block)), ivec3(0), uBlocks - 1);
+        if (cell != lastCell) {
+          lastCell = cell;
+          occupied = texelFetch(uOccupancy, cell, 0).r != 0u;
+        }
+        // Where the ray leaves this block (the outermost blocks reach beyond the box, so a ray
+        // leaving through them ends).
         vec3 lo = mix(vec3(cell * uBlock), vec3(-2.0), equal(cell, ivec3(0)));
         vec3 hi = mix(vec3((cell + 1) * uBlock), dims + 2.0, equal(cell, uBlocks - 1));
         vec3 bound = mix(lo, hi, greaterThan(dT, vec3(0.0)));
         vec3 te = mix(vec3(1e30), ((bound + 0.5) / dims - oT) * inv, moving);
         float tExit = min(te.x, min(te.y, te.z));
-        i = max(i + 1, int(ceil((tExit - start) / uStepMm - 1e-3)));
-        continue;
+        if (!occupied) {
+          // Jump to the first sample of the regular sequence past this block.
+          i = max(i + 1, int(ceil((tExit - start) / uStepMm - 1e-3)));
+          continue;
+        }
+        tBlockEnd = tExit;
       }
       ++i;
       vec3 p = origin + tm * dir;
