@@ -55,6 +55,7 @@ uniform float uStepMm;
 uniform float uBareAlpha;   // the bare mode's opaque sample, corrected to the step
 uniform float uLog2Alpha;
 uniform vec2 uDataRange;
+uniform vec2 uVisibleHu;    // table modes: samples outside this HU range classify to zero opacity
 uniform vec2 uTableSize;
 uniform vec4 uClip;
 uniform vec3 uHighlight;
@@ -162,6 +163,9 @@ vec4 castRay(vec2 pixel) {
         c = vec4(uHighlight, uBareAlpha);
       } else {
         float hu = huAt(pt);
+        // Transparent at every distance (no table column it filters from is visible): skip the
+        // field and table reads.
+        if (hu < uVisibleHu.x || hu > uVisibleHu.y) continue;
         float n = 0.0;
         if (uHasField != 0) {
           d = fieldAt(oF + tm * dF);
@@ -428,6 +432,27 @@ std::vector<std::uint8_t> tableOccupancy(const BlockSummary& b, const TransferFu
   return occ;
 }
 
+// The HU range outside which a table lookup is zero at every distance: the linear filter reads
+// columns floor(c) and floor(c) + 1 at column coordinate c = (hu − dataMin) / span · (size − 1),
+// so a sample at or before the centre of the column preceding the first visible one (or at or
+// after the centre of the one following the last) reads only invisible columns. A hundredth of a
+// column of margin keeps the test on the safe side of float rounding. Empty range: nothing visible.
+std::array<float, 2> visibleHuRange(const TransferFunction2D& table, const std::vector<float>& columnMaxAlpha) {
+  int first = -1, last = -1;
+  for (int c = 0; c < int(columnMaxAlpha.size()); ++c) {
+    if (columnMaxAlpha[std::size_t(c)] > 0.0f) {
+      if (first < 0) first = c;
+      last = c;
+    }
+  }
+  constexpr float kFar = 1e30f;
+  if (first < 0) return {kFar, -kFar};
+  const double perColumn = (table.dataMax - table.dataMin) / double(table.dataSize - 1);
+  const float lo = first == 0 ? -kFar : float(table.dataMin + (first - 1 - 0.01) * perColumn);
+  const float hi = last == table.dataSize - 1 ? kFar : float(table.dataMin + (last + 1 + 0.01) * perColumn);
+  return {lo, hi};
+}
+
 // Occupancy for bare mode: a block may hold mask ≥ 0.5 when it or a neighbour holds the label.
 std::vector<std::uint8_t> labelOccupancy(const BlockSummary& b, std::uint16_t label) {
   std::vector<std::uint8_t> own(b.blocks.count(), 0), occ(b.blocks.count(), 0);
@@ -499,6 +524,7 @@ struct VolumeRenderer::State {
   double tableStepMm = 0, tableRefMm = 0;  // … and the step its opacities are corrected to
   TransferFunction2D tableInfo;       // its axes (rgba dropped after upload)
   std::vector<float> columnMaxAlpha;  // per table column: the largest corrected opacity
+  std::array<float, 2> visibleHu{};    // visibleHuRange of the table
   BlockSummary blocks;
   int occupancyFor = kOccupancyStale;  // kOccupancyTable, a bare-mode label, or stale
   Framebuffer fbo;
@@ -791,6 +817,7 @@ Status VolumeRenderer::draw(const RenderSettings& s) {
         v[3] = v[3] > 0.0f ? correctedOpacity(v[3], stepMm, s.opacityRefMm) : 0.0f;
         st.columnMaxAlpha[std::size_t(i)] = std::max(st.columnMaxAlpha[std::size_t(i)], v[3]);
       }
+    st.visibleHu = visibleHuRange(table, st.columnMaxAlpha);
     glBindTexture(GL_TEXTURE_2D, st.table.id());
     glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
     glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
@@ -848,6 +875,7 @@ Status VolumeRenderer::draw(const RenderSettings& s) {
   glUniform1f(loc("uBareAlpha"), correctedOpacity(1.0f, stepMm, s.opacityRefMm));
   glUniform1f(loc("uLog2Alpha"), std::log2(s.preset.alpha));
   glUniform2f(loc("uDataRange"), float(table.dataMin), float(table.dataMax));
+  glUniform2f(loc("uVisibleHu"), st.visibleHu[0], st.visibleHu[1]);
   glUniform2f(loc("uTableSize"), float(table.dataSize), float(table.distanceSize));
   if (s.clip)
     glUniform4f(loc("uClip"), float(s.clip->normal[0]), float(s.clip->normal[1]), float(s.clip->normal[2]),
