@@ -11,10 +11,13 @@
 //
 // Inputs of a launch: the field before the sweep (`src`, never written during the sweep) for the
 // planes' old values, and the final values of the plane before the group, written to `dst` by the
-// previous launch (complete: launches on one stream are ordered). Outputs: the tile interiors of
-// the K planes in `dst`. Every read is of data no thread writes during the launch, so the result
-// is deterministic and identical to the CPU backend's serial sweep (same stencil, same order of
-// float operations, no FMA contraction: --fmad=false).
+// previous launch. Outputs: the tile interiors of the K planes in `dst`. Every read is of data no
+// thread writes during the launch, so the result is deterministic and identical to the CPU
+// backend's serial sweep (same stencil, same float operations, no FMA contraction: --fmad=false).
+//
+// Launches overlap through programmatic dependent launch (sm_90): a group's blocks start while the
+// previous group still runs, load their old values and densities, and only then wait for the
+// previous grid to complete before reading the plane it wrote (details at sweepGroup).
 //
 // The x sweeps run on a copy of the field transposed to y-contiguous layout (as the CPU backend
 // does), so that every sweep's lanes are coalesced along the contiguous axis.
@@ -29,15 +32,41 @@
 namespace at::cuda {
 namespace {
 
-constexpr int kTU = 32, kTV = 16;     // tile lanes: u contiguous
-constexpr int kK = 8;                 // planes per launch
-constexpr int kRU = kTU + 2 * kK;     // region including the widest read halo (K)
-constexpr int kRV = kTV + 2 * kK;
-constexpr int kRN = kRU * kRV;
-constexpr int kThreads = 512;
-static_assert(kRN % kThreads == 0, "the load loop covers the region exactly");
-constexpr int kSlots = kK + 1;        // slot 0: the plane before the group; slots 1..K: its planes
-constexpr std::size_t kSmemBytes = std::size_t(kSlots) * kRN * (sizeof(float) + 1);
+// Tile shape: TU × TV lanes of output per block (u contiguous), K planes per launch, T threads.
+// Measured on an H100 (bench/RESULTS.md): K = 8 beat K = 6, 7, 10 and 12, 32 × 16 beat 32 × 8 and
+// 64 × 16, loading all K planes up front beat loading 3 or 4 planes ahead.
+struct Shape {
+  static constexpr int TU = 32, TV = 16, K = 8, T = 512;
+  // Two blocks per multiprocessor (at most 64 registers a thread), so that the next group's blocks
+  // can become resident and load while this group's run.
+  static constexpr int MinBlocks = 2;
+  static constexpr int RU = TU + 2 * K, RV = TV + 2 * K;  // region: the tile and its widest halo
+  static constexpr int RN = RU * RV;
+  static constexpr int Core = TU * TV;
+  static constexpr int CoreSlots = Core / T;               // a thread's first CoreSlots voxels are the tile's
+  static constexpr int Slots = (RN + T - 1) / T;           // region voxels per thread
+  static constexpr int Pitch = RU + 1;                     // odd row pitch: columns hit distinct banks
+  static constexpr int PlaneFloats = RV * Pitch;
+  static_assert(Core % T == 0, "the tile splits evenly among the threads");
+
+  // Ring of halo voxel number n (0 = first of ring 1; ring ρ = the voxels at Chebyshev distance ρ
+  // outside the tile), K + 1 past the halo.
+  static constexpr int haloRing(int n) {
+    for (int ring = 1, first = 0; ring <= K; ++ring) {
+      first += 2 * (TU + 2 * ring) + 2 * (TV + 2 * ring) - 4;
+      if (n < first) return ring;
+    }
+    return K + 1;
+  }
+  // The last plane of a group at which any thread computes its slot k (slots hold region voxels
+  // in ring order, so a slot's first voxel has its smallest ring): later planes' old values of
+  // that slot are never loaded or kept.
+  static constexpr int lastPlaneOfSlot(int k) {
+    if (k < CoreSlots) return K;
+    const int ring = haloRing(k * T - Core);
+    return ring >= K ? 0 : K - ring;
+  }
+};
 
 struct GroupArgs {
   const float* src;
@@ -52,86 +81,146 @@ struct GroupArgs {
   int* changed;
 };
 
-template <StepRule R, WeightRule W>
-__global__ void __launch_bounds__(kThreads, 1) sweepGroup(GroupArgs p) {
-  constexpr bool kQn = kNeedsNeighbourDensity<R, W>;
-  extern __shared__ float smem[];
-  float* sD = smem;                                                      // kSlots × kRN
-  std::uint8_t* sQ = reinterpret_cast<std::uint8_t*>(smem + kSlots * kRN);  // kSlots × kRN
+// Region voxel number n (the tile first, row by row; then the halo ring by ring outwards, each
+// ring's top row, bottom row, left column, right column). ring = K + 1 marks n past the region.
+struct RegionVoxel {
+  int ru, rv, ring;
+};
 
-  const int u0 = int(blockIdx.x) * kTU - kK, v0 = int(blockIdx.y) * kTV - kK;  // region origin
-  const int steps = min(kK, p.na - p.first);
+__device__ __forceinline__ RegionVoxel regionVoxel(int n) {
+  using S = Shape;
+  if (n < S::Core) return {S::K + n % S::TU, S::K + n / S::TU, 0};
+  if (n >= S::RN) return {0, 0, S::K + 1};
+  n -= S::Core;
+  int ring = 1, first = 0;
+  for (; ring < S::K; ++ring) {
+    const int perimeter = 2 * (S::TU + 2 * ring) + 2 * (S::TV + 2 * ring) - 4;
+    if (n < first + perimeter) break;
+    first += perimeter;
+  }
+  const int o = n - first, w = S::TU + 2 * ring, h = S::TV + 2 * ring, left = S::K - ring, top = S::K - ring;
+  if (o < w) return {left + o, top, ring};
+  if (o < 2 * w) return {left + o - w, top + h - 1, ring};
+  if (o < 2 * w + h - 2) return {left, top + 1 + o - 2 * w, ring};
+  return {left + w - 1, top + 1 + o - 2 * w - (h - 2), ring};
+}
+
+// Programmatic dependent launch: waitForPreviousGrid blocks until the grids this one depends on
+// have completed and their writes are visible (a no-op without the launch attribute);
+// allowNextGrid lets the next grid be scheduled once every block of this one has called it.
+__device__ __forceinline__ void waitForPreviousGrid() { asm volatile("griddepcontrol.wait;" ::: "memory"); }
+__device__ __forceinline__ void allowNextGrid() { asm volatile("griddepcontrol.launch_dependents;" ::: "memory"); }
+
+// One group of K planes of a sweep. Each thread owns Slots fixed voxels of the region for the
+// whole launch, numbered as in regionVoxel: the voxels computed at plane s (rings ≤ K − s) are a
+// prefix of the numbering, so whole warps drop out as the halo shrinks. A voxel's old values and
+// densities for all K planes are loaded into registers up front (all loads in flight at once, each
+// waited for only when its plane comes), so shared memory holds just two planes of distances, the
+// previous and the current, and no index is computed per plane.
+//
+// A group after the first of its sweep loads its old values while the previous group still runs:
+// those planes were written by the previous sweep, whose grids completed before the previous group
+// passed its wait. Distances are read through L2 only (ld.global.cg): an L1 line filled by an
+// older grid still running on the same multiprocessor can be stale (reading them through L1 gave
+// wrong fields on an H100). The first group of a sweep reads planes the previous sweep's last group
+// may still be writing, so it waits first.
+template <StepRule R, WeightRule W>
+__global__ void __launch_bounds__(Shape::T, Shape::MinBlocks) sweepGroup(GroupArgs p) {
+  using S = Shape;
+  constexpr bool kQn = kNeedsNeighbourDensity<R, W>;
+  constexpr int K = S::K, Slots = S::Slots, Pitch = S::Pitch;
+  __shared__ float sD[2][S::PlaneFloats];
+  __shared__ std::uint8_t sQ[kQn ? 2 : 1][kQn ? S::PlaneFloats : 1];
+
+  const int u0 = int(blockIdx.x) * S::TU - K, v0 = int(blockIdx.y) * S::TV - K;  // region origin
+  const int steps = min(K, p.na - p.first);
   auto planeOffset = [&](int step) {
     const int a = p.direction > 0 ? step : p.na - 1 - step;
     return std::size_t(a) * p.strideA;
   };
 
-  // Load: slot 0 = final values of the previous plane (dst), slots 1.. = old values (src). All of
-  // a thread's loads go into registers first, then into shared memory, so they are all in flight
-  // at once (the load phase is latency-bound otherwise).
-  constexpr int kPer = kRN / kThreads;
-  float dv[kSlots][kPer];
-  std::uint8_t qv[kSlots][kPer];
+  // Per slot: shared-memory index, voxel offset within a plane (32 bits: launchExactSweep checks
+  // that it fits), and the last plane of the group that computes it (0: none; tile voxels every
+  // plane, halo ring ρ up to plane K − ρ).
+  int r[Slots], last[Slots];
+  bool inRegion[Slots], inside[Slots];
+  unsigned g[Slots];
 #pragma unroll
-  for (int slot = 0; slot < kSlots; ++slot) {
-    const int step = p.first + slot - 1;
-    const bool planeOk = slot <= steps && step >= 0;
-    const std::size_t plane = planeOk ? planeOffset(step) : 0;
+  for (int k = 0; k < Slots; ++k) {
+    const RegionVoxel v = regionVoxel(int(threadIdx.x) + k * S::T);
+    const int gu = u0 + v.ru, gv = v0 + v.rv;
+    r[k] = v.rv * Pitch + v.ru;
+    inRegion[k] = v.ring <= K;
+    inside[k] = inRegion[k] && gu >= 0 && gu < p.nu && gv >= 0 && gv < p.nv;
+    g[k] = inside[k] ? unsigned(gu) + unsigned(gv) * unsigned(p.strideV) : 0u;
+    last[k] = !inside[k] ? 0 : k < S::CoreSlots ? steps : min(steps, K - v.ring);
+  }
+  auto active = [&](int k, int s) { return s <= S::lastPlaneOfSlot(k) && s <= last[k]; };
+
+  if (p.first == 0) {
+    waitForPreviousGrid();
+    allowNextGrid();
+  }
+  float oldD[K][Slots];
+  std::uint8_t q[K][Slots];
 #pragma unroll
-    for (int k = 0; k < kPer; ++k) {
-      const int r = int(threadIdx.x) + k * kThreads;
-      const int gu = u0 + r % kRU, gv = v0 + r / kRU;
-      const bool ok = planeOk && gu >= 0 && gu < p.nu && gv >= 0 && gv < p.nv;
-      const std::size_t i = ok ? std::size_t(gu) + std::size_t(gv) * p.strideV + plane : 0;
-      dv[slot][k] = ok ? (slot == 0 ? p.dst[i] : __ldg(p.src + i)) : kInf;
-      qv[slot][k] = ok && (slot > 0 || kQn) ? __ldg(p.q + i) : 0;
+  for (int s = 1; s <= K; ++s) {
+    const std::size_t plane = s <= steps ? planeOffset(p.first + s - 1) : 0;
+#pragma unroll
+    for (int k = 0; k < Slots; ++k) {
+      const bool used = active(k, s);
+      oldD[s - 1][k] = used ? __ldcg(p.src + plane + g[k]) : kInf;
+      q[s - 1][k] = used ? __ldg(p.q + plane + g[k]) : 0;
     }
   }
+  if (p.first > 0) {
+    waitForPreviousGrid();  // the plane before the group, read next, is complete
+    allowNextGrid();
+  }
+  const bool hasPrev = p.first > 0;
+  const std::size_t prevPlane = hasPrev ? planeOffset(p.first - 1) : 0;
 #pragma unroll
-  for (int slot = 0; slot < kSlots; ++slot) {
-#pragma unroll
-    for (int k = 0; k < kPer; ++k) {
-      sD[slot * kRN + int(threadIdx.x) + k * kThreads] = dv[slot][k];
-      sQ[slot * kRN + int(threadIdx.x) + k * kThreads] = qv[slot][k];
+  for (int k = 0; k < Slots; ++k) {
+    if (inRegion[k]) {
+      const bool load = hasPrev && inside[k];
+      sD[0][r[k]] = load ? __ldcg(p.dst + prevPlane + g[k]) : kInf;
+      sD[1][r[k]] = kInf;  // voxels outside the grid stay +infinity in both planes
+      if constexpr (kQn) {
+        sQ[0][r[k]] = load ? __ldg(p.q + prevPlane + g[k]) : 0;
+        sQ[1][r[k]] = 0;
+      }
     }
   }
   __syncthreads();
 
-  // The plane loop is unrolled: each plane's halo h, region width and height are then constants
-  // (no run-time division to find a thread's voxel) and so is its trip count.
   bool changed = false;
 #pragma unroll
-  for (int s = 1; s <= kK; ++s) {
+  for (int s = 1; s <= K; ++s) {
     if (s <= steps) {  // uniform across the block
-      const int h = kK - s;                       // valid halo at this plane
-      const int w = kTU + 2 * h, hgt = kTV + 2 * h;
-      const float* prev = sD + (s - 1) * kRN;
-      const std::uint8_t* qPrev = sQ + (s - 1) * kRN;
-      float* cur = sD + s * kRN;
+      const float* prev = sD[(s - 1) & 1];
+      float* cur = sD[s & 1];
+      const std::uint8_t* qPrev = sQ[kQn ? (s - 1) & 1 : 0];
       float* dstPlane = p.dst + planeOffset(p.first + s - 1);
 #pragma unroll
-      for (int i0 = 0; i0 < w * hgt; i0 += kThreads) {
-        const int i = i0 + int(threadIdx.x);
-        const int ru = kK - h + i % w, rv = kK - h + i / w;
-        const int gu = u0 + ru, gv = v0 + rv;
-        if (i < w * hgt && gu >= 0 && gu < p.nu && gv >= 0 && gv < p.nv) {  // else stays +infinity
-          const int r = rv * kRU + ru;
+      for (int k = 0; k < Slots; ++k) {
+        if (active(k, s)) {
           float n[3][3];
           std::uint8_t qn[3][3];
 #pragma unroll
           for (int dc = 0; dc < 3; ++dc) {
 #pragma unroll
             for (int db = 0; db < 3; ++db) {
-              n[dc][db] = prev[r + (dc - 1) * kRU + (db - 1)];
-              qn[dc][db] = kQn ? qPrev[r + (dc - 1) * kRU + (db - 1)] : 0;
+              n[dc][db] = prev[r[k] + (dc - 1) * Pitch + (db - 1)];
+              qn[dc][db] = kQn ? qPrev[r[k] + (dc - 1) * Pitch + (db - 1)] : 0;
             }
           }
-          const float old = cur[r];
-          const float v = relax<R, W>(old, n, qn, sQ[s * kRN + r], p.lengths, p.base);
-          cur[r] = v;
-          if (ru >= kK && ru < kK + kTU && rv >= kK && rv < kK + kTV) {
+          const float old = oldD[s - 1][k];
+          const float v = relax<R, W>(old, n, qn, q[s - 1][k], p.lengths, p.base);
+          cur[r[k]] = v;
+          if constexpr (kQn) sQ[s & 1][r[k]] = q[s - 1][k];
+          if (k < S::CoreSlots) {
             changed |= v < old;
-            dstPlane[std::size_t(gu) + std::size_t(gv) * p.strideV] = v;
+            dstPlane[g[k]] = v;
           }
         }
       }
@@ -142,19 +231,24 @@ __global__ void __launch_bounds__(kThreads, 1) sweepGroup(GroupArgs p) {
 }
 
 template <StepRule R, WeightRule W>
-cudaError_t allowLargeSharedMemory() {
-  return cudaFuncSetAttribute(sweepGroup<R, W>, cudaFuncAttributeMaxDynamicSharedMemorySize, int(kSmemBytes));
-}
-
-template <StepRule R, WeightRule W>
 Status launchGroups(const ExactSweepArgs& a, cudaStream_t stream) {
+  using S = Shape;
   GroupArgs p{a.src, a.dst, a.density, a.nu, a.nv, a.na, a.strideV, a.strideA, a.direction, 0, a.lengths,
               a.baseCost, a.changed};
-  const dim3 grid((a.nu + kTU - 1) / kTU, (a.nv + kTV - 1) / kTV);
-  for (p.first = 0; p.first < a.na; p.first += kK) {
-    sweepGroup<R, W><<<grid, kThreads, kSmemBytes, stream>>>(p);
+  cudaLaunchConfig_t config{};
+  config.gridDim = dim3((a.nu + S::TU - 1) / S::TU, (a.nv + S::TV - 1) / S::TV);
+  config.blockDim = dim3(S::T);
+  config.stream = stream;
+  cudaLaunchAttribute attribute{};
+  attribute.id = cudaLaunchAttributeProgrammaticStreamSerialization;
+  attribute.val.programmaticStreamSerializationAllowed = 1;
+  config.attrs = &attribute;
+  config.numAttrs = 1;
+  for (p.first = 0; p.first < a.na; p.first += S::K) {
+    if (const cudaError_t e = cudaLaunchKernelEx(&config, sweepGroup<R, W>, p); e != cudaSuccess)
+      return check(e, "launch of a sweep kernel");
   }
-  return check(cudaGetLastError(), "launch of a sweep kernel");
+  return {};
 }
 
 template <class T>
@@ -189,19 +283,11 @@ __global__ void fill(float* d, std::size_t count, float value) {
 
 }  // namespace
 
-Status prepareExactSweeps() {
-  static const cudaError_t status = [] {
-    cudaError_t e = allowLargeSharedMemory<StepRule::Trapezoid, WeightRule::Density>();
-    if (e == cudaSuccess) e = allowLargeSharedMemory<StepRule::Entering, WeightRule::Density>();
-    if (e == cudaSuccess) e = allowLargeSharedMemory<StepRule::Entering, WeightRule::Uniform>();
-    if (e == cudaSuccess) e = allowLargeSharedMemory<StepRule::Entering, WeightRule::Gradient>();
-    if (e == cudaSuccess) e = allowLargeSharedMemory<StepRule::Entering, WeightRule::Ascent>();
-    return e;
-  }();
-  return check(status, "cudaFuncSetAttribute(sweep kernels, " + std::to_string(kSmemBytes) + " bytes of shared memory)");
-}
-
 Status launchExactSweep(const ExactSweepArgs& a, cudaStream_t stream) {
+  if (std::size_t(a.nv - 1) * a.strideV + std::size_t(a.nu) > std::size_t(0xffffffffu)) {
+    return fail("WDT CUDA backend: planes of " + std::to_string(a.nu) + "x" + std::to_string(a.nv) +
+                " lanes with stride " + std::to_string(a.strideV) + " exceed the kernels' 32-bit voxel offsets");
+  }
   if (a.rule == StepRule::Trapezoid && a.weight == WeightRule::Density) {
     return launchGroups<StepRule::Trapezoid, WeightRule::Density>(a, stream);
   }

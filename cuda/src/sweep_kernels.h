@@ -31,9 +31,6 @@ struct ExactSweepArgs {
   int* changed = nullptr;
 };
 Status launchExactSweep(const ExactSweepArgs& args, cudaStream_t stream);
-// Once per process, before the first launchExactSweep (and outside stream capture): lets the
-// kernels use more than 48 KB of shared memory.
-Status prepareExactSweeps();
 
 // out[y + ny·(x + nx·z)] = in[x + nx·(y + ny·z)]: swaps the two fastest axes of an nx×ny×nz array.
 template <class T>

@@ -303,7 +303,6 @@ std::uint8_t* seedBytes(Workspace& w) { return reinterpret_cast<std::uint8_t*>(w
 // transposed density, and the captured pass.
 Status finishLoading(Workspace& w, const Geometry& grid, const WdtParams& params) {
   const cudaStream_t s = w.stream.get();
-  AT_TRY(prepareExactSweeps());
   AT_TRY(launchInitDistances(w.a.get(), seedBytes(w), w.dims.count(), s));
   AT_TRY(launchTransposeXY(w.density.get(), w.densityT.get(), w.dims.x, w.dims.y, w.dims.z, s));
   return preparePass(w, grid, params);

@@ -62,7 +62,16 @@ AT_HOST_DEVICE inline SweepLengths axisSweepLengths(int axis, float sx, float sy
   return {sz, sqrtf_portable(xx + zz), sqrtf_portable(yy + zz), diagonal};
 }
 
-AT_HOST_DEVICE inline float minf(float a, float b) { return a < b ? a : b; }
+// The smaller of two distances. Distances are never NaN or −0 (sums of +0, positive costs and
+// +infinity), so the compare-select and the GPU's min instruction give the same bits; the GPU
+// uses its single min instruction (a compare and a select would be two).
+AT_HOST_DEVICE inline float minf(float a, float b) {
+#if defined(__CUDA_ARCH__)
+  return fminf(a, b);
+#else
+  return a < b ? a : b;
+#endif
+}
 
 // Entering rule update of one voxel b with weight wb from its 9 neighbours in the previous plane,
 // n[dc+1][db+1] (out-of-grid neighbours are +infinity). Groups neighbours by step length first,
