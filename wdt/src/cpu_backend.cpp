@@ -673,10 +673,11 @@ Result<WdtResult> runCpuBackend(const WdtProblem& problem, const WdtControl& con
   if (auto ok = validateWdtParams(problem.params); !ok) return tl::unexpected(ok.error());
 
   const int hw = int(std::max(1u, std::thread::hardware_concurrency()));
-  // Threads meet at a barrier after every plane; below ~32K voxels per plane (128² and smaller)
-  // a plane's work is shorter than a barrier round trip and one thread is faster.
+  // Threads meet at a barrier after every plane: one thread per 2K voxels of a plane, at most one
+  // per core. Measured on 2 cores (bench/RESULTS.md): 2 threads take 0.85 against 1.42 ms per pass
+  // at 64³ (4K voxels a plane) and 5.6 against 10.7 at 128³; at 32³ (1K) the two are even.
   const std::size_t planeVoxels = d.count() / std::size_t(std::max({d.x, d.y, d.z}));
-  int threads = int(std::min<std::size_t>(std::size_t(hw), std::max<std::size_t>(1, planeVoxels / 32768)));
+  int threads = int(std::min<std::size_t>(std::size_t(hw), std::max<std::size_t>(1, planeVoxels / 2048)));
   // AT_WDT_THREADS=N forces N threads (benchmarks, and tests of the multi-threaded schedule).
   if (const char* env = std::getenv("AT_WDT_THREADS")) threads = std::clamp(std::atoi(env), 1, 256);
   Run run(problem, control, threads);
