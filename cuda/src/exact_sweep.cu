@@ -33,8 +33,9 @@ namespace at::cuda {
 namespace {
 
 // Tile shape: TU × TV lanes of output per block (u contiguous), K planes per launch, T threads.
-// Measured on an H100 (bench/RESULTS.md): K = 8 beat K = 6, 7, 10 and 12, 32 × 16 beat 32 × 8 and
-// 64 × 16, loading all K planes up front beat loading 3 or 4 planes ahead.
+// Measured on an H100 (bench/RESULTS.md): K = 8 beat K = 6 at 128³ and 256³ (K = 10 and 12, with
+// 3–4 planes loaded ahead, were slower still), 32 × 16 beat 32 × 8 and 64 × 16, and loading all K
+// planes up front beat loading 3 or 4 planes ahead.
 struct Shape {
   static constexpr int TU = 32, TV = 16, K = 8, T = 512;
   // Two blocks per multiprocessor (at most 64 registers a thread), so that the next group's blocks
