@@ -20,10 +20,12 @@
 #include <cstring>
 #include <limits>
 #include <memory>
+#include <mutex>
 #include <string>
 #include <thread>
 #include <type_traits>
 #include <immintrin.h>
+#include <utility>
 #include <vector>
 
 #include "wdt/huge_pages.h"
@@ -664,6 +666,43 @@ void worker(Run& run, int tid) {
 
 }  // namespace
 
+namespace {
+
+// The x sweeps' scratch arrays (dT, qT) of the most recent size, kept between calls: fresh ones
+// cost their page faults and zeroing in every call (80 MB at 256³: 10–12 ms of a 2-pass field's
+// ~120 ms, bench/RESULTS.md). One set, of at most kKeptScratchVoxels (80 MB stays allocated; a
+// 512³ run's 640 MB does not); a call that finds it taken (another thread's run) or of another size
+// allocates its own, and the last call to finish leaves its set here.
+constexpr std::size_t kKeptScratchVoxels = std::size_t(256) * 256 * 256;
+struct Scratch {
+  std::size_t count = 0;
+  std::unique_ptr<float[]> dT;
+  std::unique_ptr<std::uint8_t[]> qT;
+};
+
+std::mutex gScratchMutex;
+Scratch gScratch;
+
+Scratch takeScratch(std::size_t count) {
+  {
+    std::lock_guard<std::mutex> lock(gScratchMutex);
+    if (gScratch.count == count && gScratch.dT) return std::exchange(gScratch, Scratch{});
+  }
+  Scratch s;
+  s.count = count;
+  s.dT.reset(wdt::newOnHugePages<float>(count));
+  s.qT.reset(wdt::newOnHugePages<std::uint8_t>(count));
+  return s;
+}
+
+void keepScratch(Scratch s) {
+  if (s.count > kKeptScratchVoxels) return;  // freed here
+  std::lock_guard<std::mutex> lock(gScratchMutex);
+  gScratch = std::move(s);
+}
+
+}  // namespace
+
 Result<WdtResult> runCpuBackend(const WdtProblem& problem, const WdtControl& control) {
   const auto t0 = std::chrono::steady_clock::now();
   const Geometry& grid = problem.grid;
@@ -686,8 +725,9 @@ Result<WdtResult> runCpuBackend(const WdtProblem& problem, const WdtControl& con
   // AT_WDT_NO_AVX2 (any value) takes the baseline (SSE2) code on an AVX2 machine: tests use it.
   run.avx2 = __builtin_cpu_supports("avx2") && !std::getenv("AT_WDT_NO_AVX2");
   run.plane = planeFunction(wdt::costKernel(problem.params), run.avx2);
-  run.dT.reset(wdt::newOnHugePages<float>(d.count()));
-  run.qT.reset(wdt::newOnHugePages<std::uint8_t>(d.count()));
+  Scratch scratch = takeScratch(d.count());
+  run.dT = std::move(scratch.dT);
+  run.qT = std::move(scratch.qT);
   const int longest = std::max({d.x, d.y, d.z});
   run.infRow.assign(std::size_t(longest), kInf);
   run.zeroRow.assign(std::size_t(longest), 0);
@@ -706,6 +746,9 @@ Result<WdtResult> runCpuBackend(const WdtProblem& problem, const WdtControl& con
   for (int t = 1; t < threads; ++t) team.emplace_back([&run, t] { worker(run, t); });
   worker(run, 0);
   for (std::thread& t : team) t.join();
+  scratch.dT = std::move(run.dT);
+  scratch.qT = std::move(run.qT);
+  keepScratch(std::move(scratch));
 
   WdtResult result;
   result.field.distances.geometry = grid;
