@@ -1,6 +1,7 @@
 // Running the desktop app on a UI script under Xvfb, as the desktop tests do.
 #pragma once
 
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -15,6 +16,14 @@
 namespace at::test {
 
 inline bool haveXvfb() { return std::system("command -v xvfb-run >/dev/null 2>&1") == 0; }
+
+// For the top of a desktop test: true when xvfb-run is there; otherwise prints why the test is
+// skipped (as requireSharedData does) and returns false.
+inline bool requireXvfb() {
+  if (haveXvfb()) return true;
+  std::printf("SKIPPED: xvfb-run is not installed\n");
+  return false;
+}
 
 struct DesktopOptions {
   std::string dataset = "phantom:128";

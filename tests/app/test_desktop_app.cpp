@@ -26,7 +26,6 @@ namespace {
 constexpr int kPanel = 320;  // the explore panel's width at UI scale 1 (the view lies right of it)
 
 using Run = at::test::DesktopRun;
-using at::test::haveXvfb;
 
 // Runs `script` on the 128³ phantom in an 800×480 window with the volume at 0.4 of the view's
 // resolution (software GL on two shared cores is slow).
@@ -78,10 +77,7 @@ double chromaDistance(const std::array<double, 3>& a, const std::array<double, 3
 }  // namespace
 
 TEST_CASE("the desktop app's default view under Xvfb shows the volume") {
-  if (!haveXvfb()) {
-    MESSAGE("SKIPPED: xvfb-run is not installed");
-    return;
-  }
+  if (!at::test::requireXvfb()) return;
   TempDir dir("desktop-default");
   const fs::path shot = dir / "default.png";
   const Run r = runScript(dir, json{{"actions", json::array()}}, shot.string());
@@ -99,10 +95,7 @@ TEST_CASE("the desktop app's default view under Xvfb shows the volume") {
 }
 
 TEST_CASE("hovering a structure's projected centroid shows its highlight there, and bare mode drops the context") {
-  if (!haveXvfb()) {
-    MESSAGE("SKIPPED: xvfb-run is not installed");
-    return;
-  }
+  if (!at::test::requireXvfb()) return;
   TempDir dir("desktop-hover");
   const fs::path before = dir / "before.png", after = dir / "after.png", bare = dir / "bare.png";
   // Select one structure, frame the view on it, then hover another one that the view shows.

@@ -43,10 +43,7 @@ double viewDifference(const at::RgbImage& a, const at::RgbImage& b) {
 }  // namespace
 
 TEST_CASE("editing the data TF in the expert panel changes the view, and Save as stores and exports a valid preset") {
-  if (!at::test::haveXvfb()) {
-    MESSAGE("SKIPPED: xvfb-run is not installed");
-    return;
-  }
+  if (!at::test::requireXvfb()) return;
   TempDir dir("desktop-expert");
   const fs::path before = dir / "before.png", after = dir / "after.png", exported = dir / "my_cochlea.json",
                  dbPath = dir / "presets.db";

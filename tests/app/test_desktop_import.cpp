@@ -26,7 +26,6 @@ namespace {
 
 using Run = at::test::DesktopRun;
 using at::test::eventsOf;
-using at::test::haveXvfb;
 
 // Runs the desktop app on `script` under xvfb-run with the database `db`, in a small window with a
 // coarse volume image (software GL on two shared cores is slow).
@@ -57,10 +56,7 @@ bool contains(const std::vector<std::string>& v, const std::string& s) {
 }  // namespace
 
 TEST_CASE("ImportInTheApp_AbdominalCt_StoresItReportsEachStageAndOpensItInTheExploreView") {
-  if (!haveXvfb()) {
-    MESSAGE("SKIPPED: xvfb-run is not installed");
-    return;
-  }
+  if (!at::test::requireXvfb()) return;
   if (!at::test::requireSharedData("desktop import")) return;
   TempDir dir("desktop-import");
   const fs::path db = dir / "t.db", shot = dir / "abdomen.png";
@@ -128,10 +124,7 @@ TEST_CASE("ImportInTheApp_AbdominalCt_StoresItReportsEachStageAndOpensItInTheExp
 }
 
 TEST_CASE("ImportInTheApp_FileThatDoesNotLoad_ShowsTheLoadersMessageStoresNothingAndTheAppKeepsWorking") {
-  if (!haveXvfb()) {
-    MESSAGE("SKIPPED: xvfb-run is not installed");
-    return;
-  }
+  if (!at::test::requireXvfb()) return;
   TempDir dir("desktop-import-broken");
   const fs::path db = dir / "t.db", broken = dir / "broken.nii";
   std::ofstream(broken) << "not a NIfTI image: a few bytes of plain text\n";
@@ -169,10 +162,7 @@ TEST_CASE("ImportInTheApp_FileThatDoesNotLoad_ShowsTheLoadersMessageStoresNothin
 }
 
 TEST_CASE("ImportInTheApp_Cancelled_StoresNothingAndTheNameStaysFree") {
-  if (!haveXvfb()) {
-    MESSAGE("SKIPPED: xvfb-run is not installed");
-    return;
-  }
+  if (!at::test::requireXvfb()) return;
   if (!at::test::requireSharedData("desktop import cancel")) return;
   TempDir dir("desktop-import-cancel");
   const fs::path db = dir / "t.db";
@@ -212,10 +202,7 @@ TEST_CASE("ImportInTheApp_Cancelled_StoresNothingAndTheNameStaysFree") {
 }
 
 TEST_CASE("StudyExport_CancelledPartWay_StopsAndLeavesNoPartialSetBehind") {
-  if (!haveXvfb()) {
-    MESSAGE("SKIPPED: xvfb-run is not installed");
-    return;
-  }
+  if (!at::test::requireXvfb()) return;
   TempDir dir("desktop-export-cancel");
   std::ifstream in(at::test::sourceDir() / "data" / "studies" / "paper_survey.json");
   const std::string studyId = json::parse(in).at("id");
@@ -242,10 +229,7 @@ TEST_CASE("StudyExport_CancelledPartWay_StopsAndLeavesNoPartialSetBehind") {
 }
 
 TEST_CASE("FullResolutionCpuField_CancelledFromTheApp_StopsAndIsNotAskedForAgain") {
-  if (!haveXvfb()) {
-    MESSAGE("SKIPPED: xvfb-run is not installed");
-    return;
-  }
+  if (!at::test::requireXvfb()) return;
   TempDir dir("desktop-field-cancel");
   // The 256³ phantom: its full-resolution field takes the CPU long enough (≈ 1 s on two cores) to
   // be seen running and cancelled; the coarse 1/4 field stays on screen.

@@ -26,7 +26,6 @@ namespace {
 
 using Run = at::test::DesktopRun;
 using at::test::eventsOf;
-using at::test::haveXvfb;
 
 // Runs `script` on the 128³ phantom in a small window, with lesson progress in `db` under the user
 // `user`.
@@ -52,10 +51,7 @@ void append(json& list, const json& more) {
 }  // namespace
 
 TEST_CASE("a desktop lesson grades clicks, choices and names, records them, resumes, and the terminal sees the same progress") {
-  if (!haveXvfb()) {
-    MESSAGE("SKIPPED: xvfb-run is not installed");
-    return;
-  }
+  if (!at::test::requireXvfb()) return;
   TempDir dir("desktop-lessons");
   const fs::path db = dir / "tutor.db";
   // inner_ear: four show steps, then locate the cochlea, identify the vestibule, name the lateral
@@ -200,10 +196,7 @@ TEST_CASE("a desktop lesson grades clicks, choices and names, records them, resu
 }
 
 TEST_CASE("a lesson whose prerequisites are unfinished cannot be started from a script, and says which they are") {
-  if (!haveXvfb()) {
-    MESSAGE("SKIPPED: xvfb-run is not installed");
-    return;
-  }
+  if (!at::test::requireXvfb()) return;
   TempDir dir("desktop-lessons-locked");
   const fs::path db = dir / "tutor.db";
   // The open first lesson starts (in quiz-only mode: its questions alone); the locked one refuses.
@@ -228,10 +221,7 @@ TEST_CASE("a lesson whose prerequisites are unfinished cannot be started from a 
 }
 
 TEST_CASE("the review button asks a question of the course and grades its answer without a lesson running") {
-  if (!haveXvfb()) {
-    MESSAGE("SKIPPED: xvfb-run is not installed");
-    return;
-  }
+  if (!at::test::requireXvfb()) return;
   TempDir dir("desktop-lessons-review");
   const fs::path db = dir / "tutor.db";
   // Nothing answered yet: every question's structure counts as due, so a review question exists.
@@ -285,10 +275,7 @@ bool lists(const std::vector<std::string>& due, const std::string& structure) {
 }  // namespace
 
 TEST_CASE("a review answer is recorded: a wrong one puts its structure in the queue, a right one takes it out") {
-  if (!haveXvfb()) {
-    MESSAGE("SKIPPED: xvfb-run is not installed");
-    return;
-  }
+  if (!at::test::requireXvfb()) return;
   TempDir dir("desktop-lessons-review-queue");
   const fs::path db = dir / "tutor.db";
   const Run first = runLessonScript(dir, {{"actions", {{{"do", "review"}}}}}, db, "reviewer");

@@ -27,7 +27,6 @@ namespace {
 
 using Run = at::test::DesktopRun;
 using at::test::eventsOf;
-using at::test::haveXvfb;
 
 Run runStudyScript(const TempDir& dir, const json& script, const fs::path& db, const std::string& screenshot) {
   at::test::DesktopOptions options;
@@ -74,10 +73,7 @@ void append(json& list, const json& more) {
 }  // namespace
 
 TEST_CASE("the study runner shows no structure names and its ratings land in the database") {
-  if (!haveXvfb()) {
-    MESSAGE("SKIPPED: xvfb-run is not installed");
-    return;
-  }
+  if (!at::test::requireXvfb()) return;
   TempDir dir("at-study-ui");
   const json study = shippedStudy();
   const std::string studyId = study["id"];
@@ -163,10 +159,7 @@ TEST_CASE("the study runner shows no structure names and its ratings land in the
 }
 
 TEST_CASE("the coordinator export writes the eight study files and shows the summary") {
-  if (!haveXvfb()) {
-    MESSAGE("SKIPPED: xvfb-run is not installed");
-    return;
-  }
+  if (!at::test::requireXvfb()) return;
   TempDir dir("at-study-ui");
   const json study = shippedStudy();
   const std::string studyId = study["id"];
