@@ -1,6 +1,7 @@
 // The CPU backend after N passes against the sweeps written out plainly (one voxel at a time, in
-// the order x+ x− y+ y− z+ z−, every voxel from its 9 neighbours in the previous plane): equal bit
-// for bit. The backend reorganises memory (transposed copies for the x sweeps, transposes folded
+// the order x+ x− y+ y− z+ z−, every voxel from its 9 neighbours in the previous plane through
+// wdt::relaxVoxel, the per-voxel update the row kernels must reproduce): equal bit for bit. The
+// backend reorganises memory (transposed copies for the x sweeps, transposes folded
 // into sweeps, initial state built directly in the transposed layout), vectorises and splits rows
 // among threads; none of that may change a single float. AT_WDT_NO_AVX2 switches the backend to
 // its baseline code so that both the AVX2 and the SSE2 kernels, transposes and set-up are checked.
@@ -25,26 +26,6 @@ using namespace at;
 namespace {
 
 constexpr float kInf = std::numeric_limits<float>::infinity();
-
-// One voxel's update under kernel K: the same float operations as the backend's row kernel.
-template <wdt::CostKernel K>
-float relax(float cur, const float nb[3][3], const std::uint8_t qn[3][3], std::uint8_t qb, wdt::SweepLengths l,
-            float base) {
-  if constexpr (K == wdt::CostKernel::EnterDensity) {
-    return wdt::enteringUpdate(cur, nb, wdt::densityWeight(qb, base), l);
-  } else if constexpr (K == wdt::CostKernel::EnterUniform) {
-    return wdt::enteringUpdate(cur, nb, 1.0f, l);
-  } else {
-    const float lens[3][3] = {{l.diagonal, l.alongC, l.diagonal},
-                              {l.alongB, l.straight, l.alongB},
-                              {l.diagonal, l.alongC, l.diagonal}};
-    float best = cur;
-    for (int dc = 0; dc < 3; ++dc)
-      for (int db = 0; db < 3; ++db)
-        best = wdt::minf(best, nb[dc][db] + wdt::stepCost<K>(qn[dc][db], qb, lens[dc][db], base));
-    return best;
-  }
-}
 
 // Sweep along grid axis `axis` in direction dir; the plane axes are (b, c) as in axisSweepLengths.
 template <wdt::CostKernel K>
@@ -74,7 +55,7 @@ void plainSweep(std::vector<float>& D, const std::vector<std::uint8_t>& q, Dims 
             qn[dc][db] = inside ? q[index(u)] : 0;
           }
         const std::size_t i = index(v);
-        D[i] = relax<K>(D[i], nb, qn, q[i], l, base);
+        D[i] = wdt::relaxVoxel<K>(D[i], nb, qn, q[i], l, base);
       }
   }
 }

@@ -64,26 +64,6 @@ struct RowArgs {
   float base;
 };
 
-// Update of one voxel from its 9 neighbours nb[dc][db] (db along the row, dc across rows).
-template <CostKernel K>
-AT_ALWAYS_INLINE float relaxVoxel(float cur, const float nb[3][3], const std::uint8_t qn[3][3], std::uint8_t qb,
-                                  SweepLengths l, float base) {
-  if constexpr (K == CostKernel::EnterDensity) {
-    return wdt::enteringUpdate(cur, nb, wdt::densityWeight(qb, base), l);
-  } else if constexpr (K == CostKernel::EnterUniform) {
-    return wdt::enteringUpdate(cur, nb, 1.0f, l);
-  } else {
-    const float lens[3][3] = {{l.diagonal, l.alongC, l.diagonal},
-                              {l.alongB, l.straight, l.alongB},
-                              {l.diagonal, l.alongC, l.diagonal}};
-    float best = cur;
-    for (int dc = 0; dc < 3; ++dc)
-      for (int db = 0; db < 3; ++db)
-        best = wdt::minf(best, nb[dc][db] + wdt::stepCost<K>(qn[dc][db], qb, lens[dc][db], base));
-    return best;
-  }
-}
-
 // Edge voxel of a row (i = 0 or n − 1): neighbours beyond the row's ends are +infinity.
 template <CostKernel K>
 AT_ALWAYS_INLINE int relaxEdge(const RowArgs& a, int i) {
@@ -98,7 +78,7 @@ AT_ALWAYS_INLINE int relaxEdge(const RowArgs& a, int i) {
       nb[dc][db] = inside ? rows[dc][j] : kInf;
       qn[dc][db] = inside ? qrows[dc][j] : 0;
     }
-  const float v = relaxVoxel<K>(a.cur[i], nb, qn, a.qc[i], a.l, a.base);
+  const float v = wdt::relaxVoxel<K>(a.cur[i], nb, qn, a.qc[i], a.l, a.base);
   const int changed = v < a.cur[i];
   a.cur[i] = v;
   return changed;
@@ -119,7 +99,7 @@ AT_ALWAYS_INLINE int rowInterior(float* __restrict cur, const float* __restrict 
     const std::uint8_t qn[3][3] = {
         {qm[i - 1], qm[i], qm[i + 1]}, {q0[i - 1], q0[i], q0[i + 1]}, {qp[i - 1], qp[i], qp[i + 1]}};
     const float c = cur[i];
-    const float v = relaxVoxel<K>(c, nb, qn, qc[i], l, base);
+    const float v = wdt::relaxVoxel<K>(c, nb, qn, qc[i], l, base);
     // v <= c always, so "lowered" is "bits differ"; an integer test keeps the loop branch-free
     // (a float compare here stops GCC 12 from vectorising the enteringUpdate kernels).
     changed |= __builtin_bit_cast(int, v) ^ __builtin_bit_cast(int, c);

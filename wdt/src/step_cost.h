@@ -43,6 +43,27 @@ inline __attribute__((always_inline)) float stepCost(std::uint8_t qa, std::uint8
   }
 }
 
+// Update of one voxel (current value cur, density byte qb) from its 9 neighbours nb[dc][db] in the
+// previous plane (db along the row, dc across rows; densities qn, read only by kernels that need
+// them): the CPU sweeps' per-voxel arithmetic.
+template <CostKernel K>
+inline __attribute__((always_inline)) float relaxVoxel(float cur, const float nb[3][3], const std::uint8_t qn[3][3],
+                                                       std::uint8_t qb, SweepLengths l, float base) {
+  if constexpr (K == CostKernel::EnterDensity) {
+    return enteringUpdate(cur, nb, densityWeight(qb, base), l);
+  } else if constexpr (K == CostKernel::EnterUniform) {
+    return enteringUpdate(cur, nb, 1.0f, l);
+  } else {
+    const float lens[3][3] = {{l.diagonal, l.alongC, l.diagonal},
+                              {l.alongB, l.straight, l.alongB},
+                              {l.diagonal, l.alongC, l.diagonal}};
+    float best = cur;
+    for (int dc = 0; dc < 3; ++dc)
+      for (int db = 0; db < 3; ++db) best = minf(best, nb[dc][db] + stepCost<K>(qn[dc][db], qb, lens[dc][db], base));
+    return best;
+  }
+}
+
 // Smallest and largest weight (cost per mm) a kernel can produce; the exact reference sizes its
 // buckets from them.
 inline void weightRange(CostKernel k, float base, float& lo, float& hi) {
