@@ -484,10 +484,6 @@ Status glStatus(const char* what) {
   }() + " during " + what);
 }
 
-}  // namespace
-
-namespace {
-
 // What the ray caster's program is specialised to: the render mode and whether shading and a
 // clipping plane are on are compile-time constants of the shader (RAY_MODE, RAY_SHADING,
 // RAY_CLIP), so their per-sample branches and the unused modes' code (the bare mode's six-fetch
@@ -503,44 +499,6 @@ struct RayVariant {
            "\n#define RAY_CLIP " + (clip ? "1" : "0") + "\n";
   }
 };
-
-}  // namespace
-
-struct VolumeRenderer::State {
-  // The ray casters, one per RayVariant, compiled on first use: fragment and compute entry points.
-  std::array<Program, RayVariant::kCount> fragmentRayCasters, computeRayCasters;
-  Program maskProgram, normalProgram;
-  VertexArray vao;
-  Texture hu, labels, field, table, mask, normals, occupancy;
-  // uploadFieldStep: the texture being filled, what it is filled from and the next z-slice.
-  Texture pendingField;
-  Dims pendingDims;   // of pendingField's storage (zero: none)
-  Dims fieldDims;     // of field's storage
-  const float* pendingSource = nullptr;
-  Geometry pendingGrid;
-  int pendingNextSlice = 0;
-  int maskLabel = -1;  // label the mask texture holds; -1 = stale
-  std::optional<Preset> tablePreset;  // the preset the table texture was built from …
-  double tableStepMm = 0, tableRefMm = 0;  // … and the step its opacities are corrected to
-  TransferFunction2D tableInfo;       // its axes (rgba dropped after upload)
-  std::vector<float> columnMaxAlpha;  // per table column: the largest corrected opacity
-  std::array<float, 2> visibleHu{};    // visibleHuRange of the table
-  BlockSummary blocks;
-  int occupancyFor = kOccupancyStale;  // kOccupancyTable, a bare-mode label, or stale
-  Framebuffer fbo;
-  Texture colour;  // RGBA8, the framebuffer's attachment and the compute path's image
-  RayCaster rayCaster = RayCaster::Compute;
-  Query timer;
-  int fboWidth = 0, fboHeight = 0;
-  Geometry volumeGrid, fieldGrid;
-  bool hasVolume = false, hasField = false;
-#if defined(AT_HAVE_CUDA)
-  std::optional<cuda::GlTextureTarget> interop;  // registered field texture storage
-  Dims interopDims;
-#endif
-};
-
-namespace {
 
 // The ray caster program of one variant, compiled and linked on first use, then kept.
 Result<GLuint> rayCasterProgram(std::array<Program, RayVariant::kCount>& fragmentRayCasters,
@@ -573,6 +531,39 @@ Result<GLuint> rayCasterProgram(std::array<Program, RayVariant::kCount>& fragmen
 }
 
 }  // namespace
+
+struct VolumeRenderer::State {
+  // The ray casters, one per RayVariant, compiled on first use: fragment and compute entry points.
+  std::array<Program, RayVariant::kCount> fragmentRayCasters, computeRayCasters;
+  Program maskProgram, normalProgram;
+  VertexArray vao;
+  Texture hu, labels, field, table, mask, normals, occupancy;
+  // uploadFieldStep: the texture being filled, what it is filled from and the next z-slice.
+  Texture pendingField;
+  Dims pendingDims;   // of pendingField's storage (zero: none)
+  Dims fieldDims;     // of field's storage
+  const float* pendingSource = nullptr;
+  Geometry pendingGrid;
+  int pendingNextSlice = 0;
+  int maskLabel = -1;  // label the mask texture holds; -1 = stale
+  std::optional<Preset> tablePreset;  // the preset the table texture was built from …
+  double tableStepMm = 0, tableRefMm = 0;  // … and the step its opacities are corrected to
+  TransferFunction2D tableInfo;       // its axes (rgba dropped after upload)
+  std::vector<float> columnMaxAlpha;  // per table column: the largest corrected opacity
+  BlockSummary blocks;
+  int occupancyFor = kOccupancyStale;  // kOccupancyTable, a bare-mode label, or stale
+  Framebuffer fbo;
+  Texture colour;  // RGBA8, the framebuffer's attachment and the compute path's image
+  RayCaster rayCaster = RayCaster::Compute;
+  Query timer;
+  int fboWidth = 0, fboHeight = 0;
+  Geometry volumeGrid, fieldGrid;
+  bool hasVolume = false, hasField = false;
+#if defined(AT_HAVE_CUDA)
+  std::optional<cuda::GlTextureTarget> interop;  // registered field texture storage
+  Dims interopDims;
+#endif
+};
 
 VolumeRenderer::VolumeRenderer(std::unique_ptr<State> s) : state_(std::move(s)) {}
 VolumeRenderer::~VolumeRenderer() = default;
@@ -817,7 +808,6 @@ Status VolumeRenderer::draw(const RenderSettings& s) {
         v[3] = v[3] > 0.0f ? correctedOpacity(v[3], stepMm, s.opacityRefMm) : 0.0f;
         st.columnMaxAlpha[std::size_t(i)] = std::max(st.columnMaxAlpha[std::size_t(i)], v[3]);
       }
-    st.visibleHu = visibleHuRange(table, st.columnMaxAlpha);
     glBindTexture(GL_TEXTURE_2D, st.table.id());
     glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
     glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
@@ -875,7 +865,8 @@ Status VolumeRenderer::draw(const RenderSettings& s) {
   glUniform1f(loc("uBareAlpha"), correctedOpacity(1.0f, stepMm, s.opacityRefMm));
   glUniform1f(loc("uLog2Alpha"), std::log2(s.preset.alpha));
   glUniform2f(loc("uDataRange"), float(table.dataMin), float(table.dataMax));
-  glUniform2f(loc("uVisibleHu"), st.visibleHu[0], st.visibleHu[1]);
+  const std::array<float, 2> visibleHu = visibleHuRange(table, st.columnMaxAlpha);
+  glUniform2f(loc("uVisibleHu"), visibleHu[0], visibleHu[1]);
   glUniform2f(loc("uTableSize"), float(table.dataSize), float(table.distanceSize));
   if (s.clip)
     glUniform4f(loc("uClip"), float(s.clip->normal[0]), float(s.clip->normal[1]), float(s.clip->normal[2]),
