@@ -50,12 +50,16 @@ struct Shape {
   static constexpr int PlaneFloats = RV * Pitch;
   static_assert(Core % T == 0, "the tile splits evenly among the threads");
 
-  // Ring of halo voxel number n (0 = first of ring 1; ring ρ = the voxels at Chebyshev distance ρ
-  // outside the tile), K + 1 past the halo.
+  // Halo ring ρ (the voxels at Chebyshev distance ρ outside the tile): its voxel count, and the
+  // halo number of its first voxel when the halo is numbered ring by ring from ring 1.
+  static constexpr int ringSize(int ring) { return 2 * (TU + 2 * ring) + 2 * (TV + 2 * ring) - 4; }
+  static constexpr int ringStart(int ring) {  // the sum of ringSize(1 … ring − 1)
+    return (ring - 1) * (2 * TU + 2 * TV - 4) + 4 * ring * (ring - 1);
+  }
+  // Ring of halo voxel number n, K + 1 past the halo.
   static constexpr int haloRing(int n) {
-    for (int ring = 1, first = 0; ring <= K; ++ring) {
-      first += 2 * (TU + 2 * ring) + 2 * (TV + 2 * ring) - 4;
-      if (n < first) return ring;
+    for (int ring = 1; ring <= K; ++ring) {
+      if (n < ringStart(ring + 1)) return ring;
     }
     return K + 1;
   }
@@ -68,6 +72,8 @@ struct Shape {
     return ring >= K ? 0 : K - ring;
   }
 };
+static_assert(Shape::ringStart(3) == Shape::ringSize(1) + Shape::ringSize(2), "ringStart sums the ring sizes");
+static_assert(Shape::ringStart(Shape::K + 1) == Shape::RN - Shape::Core, "the rings make up the halo");
 
 struct GroupArgs {
   const float* src;
@@ -93,12 +99,8 @@ __device__ __forceinline__ RegionVoxel regionVoxel(int n) {
   if (n < S::Core) return {S::K + n % S::TU, S::K + n / S::TU, 0};
   if (n >= S::RN) return {0, 0, S::K + 1};
   n -= S::Core;
-  int ring = 1, first = 0;
-  for (; ring < S::K; ++ring) {
-    const int perimeter = 2 * (S::TU + 2 * ring) + 2 * (S::TV + 2 * ring) - 4;
-    if (n < first + perimeter) break;
-    first += perimeter;
-  }
+  int ring = 1, first = 0;  // haloRing(n) and ringStart(ring), found in one walk
+  for (; ring < S::K && n >= first + S::ringSize(ring); ++ring) first += S::ringSize(ring);
   const int o = n - first, w = S::TU + 2 * ring, h = S::TV + 2 * ring, left = S::K - ring, top = S::K - ring;
   if (o < w) return {left + o, top, ring};
   if (o < 2 * w) return {left + o - w, top + h - 1, ring};
