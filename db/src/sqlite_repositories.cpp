@@ -23,6 +23,46 @@ Status forEachRow(Statement& s, F&& each) {
   }
 }
 
+// The graded-answer columns, in the order both answer tables (responses, review_responses) have
+// them after their own key columns.
+constexpr const char* kGradedAnswerColumns =
+    "question_id, structure, answer, correct, score, latency_ms, preset_id, mode, t, alpha, beta, answered_at";
+
+// Binds a graded answer's 12 columns to parameters first … first + 11.
+void bindGradedAnswer(Statement& s, int first, const GradedAnswer& g) {
+  s.bind(first, g.questionId)
+      .bind(first + 1, g.structureId)
+      .bind(first + 2, quiz::answerToJson(g.answer))
+      .bind(first + 3, g.correct ? 1 : 0)
+      .bind(first + 4, g.score)
+      .bind(first + 5, g.latencyMs)
+      .bind(first + 6, g.render.presetId)
+      .bind(first + 7, g.render.mode)
+      .bind(first + 8, g.render.t)
+      .bind(first + 9, g.render.alpha)
+      .bind(first + 10, g.render.beta)
+      .bind(first + 11, g.answeredAt);
+}
+
+// Reads a graded answer from result columns first … first + 11; `row` names the row in errors.
+Status readGradedAnswer(const Statement& r, int first, const std::string& row, GradedAnswer& g) {
+  g.questionId = r.text(first);
+  g.structureId = r.text(first + 1);
+  auto answer = quiz::answerFromJson(r.text(first + 2));
+  if (!answer) return fail(row + ": " + answer.error().message);
+  g.answer = std::move(*answer);
+  g.correct = r.integer(first + 3) != 0;
+  g.score = r.real(first + 4);
+  g.latencyMs = r.int64(first + 5);
+  g.render.presetId = r.text(first + 6);
+  g.render.mode = r.text(first + 7);
+  g.render.t = r.optionalReal(first + 8).value_or(0);
+  g.render.alpha = r.optionalReal(first + 9).value_or(0);
+  g.render.beta = r.optionalReal(first + 10).value_or(0);
+  g.answeredAt = r.int64(first + 11);
+  return {};
+}
+
 }  // namespace
 
 // ---------------------------------------------------------------------------------------------
@@ -330,9 +370,8 @@ Result<bool> SqliteProgressRepository::hasFinished(std::int64_t userId, const st
 }
 
 Result<std::vector<Response>> SqliteProgressRepository::responses(std::int64_t attemptId) {
-  auto s = db_.prepare(
-      "SELECT id, attempt_id, step_index, question_id, structure, answer, correct, score, latency_ms, preset_id,"
-      " mode, t, alpha, beta, answered_at FROM responses WHERE attempt_id = ?1 ORDER BY id");
+  auto s = db_.prepare(std::string("SELECT id, attempt_id, step_index, ") + kGradedAnswerColumns +
+                       " FROM responses WHERE attempt_id = ?1 ORDER BY id");
   if (!s) return tl::unexpected(s.error());
   s->bind(1, attemptId);
   std::vector<Response> out;
@@ -341,20 +380,7 @@ Result<std::vector<Response>> SqliteProgressRepository::responses(std::int64_t a
     x.id = r.int64(0);
     x.attemptId = r.int64(1);
     x.stepIndex = r.integer(2);
-    x.questionId = r.text(3);
-    x.structureId = r.text(4);
-    auto answer = quiz::answerFromJson(r.text(5));
-    if (!answer) return fail("response " + std::to_string(x.id) + ": " + answer.error().message);
-    x.answer = std::move(*answer);
-    x.correct = r.integer(6) != 0;
-    x.score = r.real(7);
-    x.latencyMs = r.int64(8);
-    x.render.presetId = r.text(9);
-    x.render.mode = r.text(10);
-    x.render.t = r.optionalReal(11).value_or(0);
-    x.render.alpha = r.optionalReal(12).value_or(0);
-    x.render.beta = r.optionalReal(13).value_or(0);
-    x.answeredAt = r.int64(14);
+    if (Status st = readGradedAnswer(r, 3, "response " + std::to_string(x.id), x); !st) return st;
     out.push_back(std::move(x));
     return {};
   });
@@ -405,25 +431,11 @@ Result<std::int64_t> SqliteProgressRepository::recordAnswer(const AnswerRecord& 
   const StructureProgress& p = record.progress;
   std::int64_t id = 0;
   auto status = db_.writeTransaction([&](Database& d) -> Status {
-    auto insert = d.prepare(
-        "INSERT INTO responses (attempt_id, step_index, question_id, structure, answer, correct, score, latency_ms,"
-        " preset_id, mode, t, alpha, beta, answered_at)"
-        " VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13, ?14)");
+    auto insert = d.prepare(std::string("INSERT INTO responses (attempt_id, step_index, ") + kGradedAnswerColumns +
+                            ") VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13, ?14)");
     if (!insert) return tl::unexpected(insert.error());
-    insert->bind(1, r.attemptId)
-        .bind(2, r.stepIndex)
-        .bind(3, r.questionId)
-        .bind(4, r.structureId)
-        .bind(5, quiz::answerToJson(r.answer))
-        .bind(6, r.correct ? 1 : 0)
-        .bind(7, r.score)
-        .bind(8, r.latencyMs)
-        .bind(9, r.render.presetId)
-        .bind(10, r.render.mode)
-        .bind(11, r.render.t)
-        .bind(12, r.render.alpha)
-        .bind(13, r.render.beta)
-        .bind(14, r.answeredAt);
+    insert->bind(1, r.attemptId).bind(2, r.stepIndex);
+    bindGradedAnswer(*insert, 3, r);
     if (auto s = insert->run(); !s) {
       if (s.error().message.find("UNIQUE") != std::string::npos)
         return fail("step " + std::to_string(r.stepIndex) + " of attempt " + std::to_string(r.attemptId) +
@@ -446,24 +458,11 @@ Result<std::int64_t> SqliteProgressRepository::recordReviewAnswer(const ReviewRe
     return fail("recording the review answer: its progress is for another user or structure");
   std::int64_t id = 0;
   auto status = db_.writeTransaction([&](Database& d) -> Status {
-    auto insert = d.prepare(
-        "INSERT INTO review_responses (user_id, question_id, structure, answer, correct, score, latency_ms,"
-        " preset_id, mode, t, alpha, beta, answered_at)"
-        " VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13)");
+    auto insert = d.prepare(std::string("INSERT INTO review_responses (user_id, ") + kGradedAnswerColumns +
+                            ") VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13)");
     if (!insert) return tl::unexpected(insert.error());
-    insert->bind(1, r.userId)
-        .bind(2, r.questionId)
-        .bind(3, r.structureId)
-        .bind(4, quiz::answerToJson(r.answer))
-        .bind(5, r.correct ? 1 : 0)
-        .bind(6, r.score)
-        .bind(7, r.latencyMs)
-        .bind(8, r.render.presetId)
-        .bind(9, r.render.mode)
-        .bind(10, r.render.t)
-        .bind(11, r.render.alpha)
-        .bind(12, r.render.beta)
-        .bind(13, r.answeredAt);
+    insert->bind(1, r.userId);
+    bindGradedAnswer(*insert, 2, r);
     if (auto s = insert->run(); !s) {
       if (s.error().message.find("FOREIGN KEY") != std::string::npos)
         return fail("unknown user id " + std::to_string(r.userId));
@@ -477,9 +476,8 @@ Result<std::int64_t> SqliteProgressRepository::recordReviewAnswer(const ReviewRe
 }
 
 Result<std::vector<ReviewResponse>> SqliteProgressRepository::reviewResponses(std::int64_t userId) {
-  auto s = db_.prepare(
-      "SELECT id, user_id, question_id, structure, answer, correct, score, latency_ms, preset_id, mode, t, alpha,"
-      " beta, answered_at FROM review_responses WHERE user_id = ?1 ORDER BY id");
+  auto s = db_.prepare(std::string("SELECT id, user_id, ") + kGradedAnswerColumns +
+                       " FROM review_responses WHERE user_id = ?1 ORDER BY id");
   if (!s) return tl::unexpected(s.error());
   s->bind(1, userId);
   std::vector<ReviewResponse> out;
@@ -487,20 +485,7 @@ Result<std::vector<ReviewResponse>> SqliteProgressRepository::reviewResponses(st
     ReviewResponse x;
     x.id = r.int64(0);
     x.userId = r.int64(1);
-    x.questionId = r.text(2);
-    x.structureId = r.text(3);
-    auto answer = quiz::answerFromJson(r.text(4));
-    if (!answer) return fail("review response " + std::to_string(x.id) + ": " + answer.error().message);
-    x.answer = std::move(*answer);
-    x.correct = r.integer(5) != 0;
-    x.score = r.real(6);
-    x.latencyMs = r.int64(7);
-    x.render.presetId = r.text(8);
-    x.render.mode = r.text(9);
-    x.render.t = r.optionalReal(10).value_or(0);
-    x.render.alpha = r.optionalReal(11).value_or(0);
-    x.render.beta = r.optionalReal(12).value_or(0);
-    x.answeredAt = r.int64(13);
+    if (Status st = readGradedAnswer(r, 2, "review response " + std::to_string(x.id), x); !st) return st;
     out.push_back(std::move(x));
     return {};
   });

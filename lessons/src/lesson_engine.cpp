@@ -42,6 +42,20 @@ Result<Outcome> outcomeOf(ProgressRepository& progress, std::int64_t userId, con
   return outcome;
 }
 
+GradedAnswer gradedAnswer(const quiz::Question& question, const quiz::Answer& answer, const quiz::Grade& grade,
+                          std::int64_t latencyMs, const RenderState& render, UnixSeconds at) {
+  GradedAnswer g;
+  g.questionId = question.id;
+  g.structureId = question.target;
+  g.answer = answer;
+  g.correct = grade.correct;
+  g.score = grade.score;
+  g.latencyMs = latencyMs;
+  g.render = render;
+  g.answeredAt = at;
+  return g;
+}
+
 }  // namespace
 
 quiz::GradingContext gradingContext(const std::vector<Structure>& structures, const Course& course) {
@@ -227,16 +241,9 @@ Result<quiz::Grade> LessonEngine::answer(const quiz::Answer& answer, const Rende
   if (!outcome) return tl::unexpected(outcome.error());
 
   AnswerRecord record;
+  static_cast<GradedAnswer&>(record.response) = gradedAnswer(question.question, answer, *grade, latencyMs, render, at);
   record.response.attemptId = attempt_->id;
   record.response.stepIndex = index;
-  record.response.questionId = question.question.id;
-  record.response.structureId = question.question.target;
-  record.response.answer = answer;
-  record.response.correct = grade->correct;
-  record.response.score = grade->score;
-  record.response.latencyMs = latencyMs;
-  record.response.render = render;
-  record.response.answeredAt = at;
   record.progress = outcome->progress;
   record.abilityAfter = outcome->elo.ability;
   record.difficultyAfter = outcome->elo.difficulty;
@@ -352,15 +359,9 @@ Result<quiz::Grade> answerReview(CurriculumRepository& curriculum, ProgressRepos
   if (!outcome) return tl::unexpected(outcome.error());
 
   ReviewRecord record;
+  static_cast<GradedAnswer&>(record.response) =
+      gradedAnswer(*stored, review.answer, *grade, review.latencyMs, review.render, at);
   record.response.userId = review.userId;
-  record.response.questionId = stored->id;
-  record.response.structureId = stored->target;
-  record.response.answer = review.answer;
-  record.response.correct = grade->correct;
-  record.response.score = grade->score;
-  record.response.latencyMs = review.latencyMs;
-  record.response.render = review.render;
-  record.response.answeredAt = at;
   record.progress = outcome->progress;
   record.abilityAfter = outcome->elo.ability;
   record.difficultyAfter = outcome->elo.difficulty;

@@ -85,10 +85,8 @@ struct RenderState {
   double beta = 1.0;
 };
 
-struct Response {
-  std::int64_t id = 0;        // set by the repository
-  std::int64_t attemptId = 0;
-  int stepIndex = 0;          // index in the lesson's steps
+// One graded answer, as a lesson step and a review question both record it.
+struct GradedAnswer {
   std::string questionId;
   std::string structureId;    // the question's target
   quiz::Answer answer;        // stored verbatim (quiz/answer_json.h gives a JSON form)
@@ -97,6 +95,13 @@ struct Response {
   std::int64_t latencyMs = 0; // from the question being shown to the answer
   RenderState render;
   UnixSeconds answeredAt = 0;
+};
+
+// An answer to a lesson step.
+struct Response : GradedAnswer {
+  std::int64_t id = 0;        // set by the repository
+  std::int64_t attemptId = 0;
+  int stepIndex = 0;          // index in the lesson's steps
 };
 
 // Leitner box and review time of one structure for one user.
@@ -119,17 +124,9 @@ struct AnswerRecord {
 };
 
 // One answer to a review question (asked outside any lesson attempt, lessons::answerReview).
-struct ReviewResponse {
+struct ReviewResponse : GradedAnswer {
   std::int64_t id = 0;        // set by the repository
   std::int64_t userId = 0;
-  std::string questionId;
-  std::string structureId;    // the question's target
-  quiz::Answer answer;        // stored verbatim (quiz/answer_json.h gives a JSON form)
-  bool correct = false;
-  double score = 0;
-  std::int64_t latencyMs = 0; // from the question being shown to the answer
-  RenderState render;
-  UnixSeconds answeredAt = 0;
 };
 
 // Everything one review answer changes, written in ONE transaction (as AnswerRecord).
