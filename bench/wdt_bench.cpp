@@ -1,6 +1,7 @@
 // wdt_bench: weighted distance transform timings and accuracy, one JSON line per configuration.
 //
 //   wdt_bench [--sizes 128,256,512] [--backends cpu,cuda] [--repeats 10] [--modes 1,2,converge]
+//             [--sweeps-before-bricks N]   (CUDA converge: whole-volume passes before brick rounds)
 //             [--data DIR] [--no-real] [--exact-max 256] [--threads N]
 //
 // Datasets: the phantom at each size (seeded at the cochlea) and, when DIR/totalsegmentator holds
@@ -85,6 +86,10 @@ std::optional<Options> parseOptions(int argc, char** argv) {
       o.dataDir = *v;
     } else if (a == "--exact-max") {
       o.exactMax = std::atoi(v->c_str());
+    } else if (a == "--sweeps-before-bricks") {
+#if defined(AT_HAVE_CUDA)
+      cuda::setConvergeSweepsBeforeBricks(std::atoi(v->c_str()));  // CUDA converge mode (cuda/wdt_cuda.h)
+#endif
     } else if (a == "--threads") {
       setenv("AT_WDT_THREADS", v->c_str(), 1);
     } else {
@@ -172,7 +177,7 @@ void runCase(const Case& c, const Options& o) {
                     jsonString(backendName).c_str(), jsonString(warm.error().message).c_str());
         break;
       }
-      std::vector<double> perPass, totals, cpuTotals;
+      std::vector<double> perPass, totals, cpuTotals, compute;
       WdtResult last = std::move(*warm);
       for (int r = 0; r < o.repeats; ++r) {
         const double cpu0 = processCpuMs();
@@ -181,6 +186,7 @@ void runCase(const Case& c, const Options& o) {
         cpuTotals.push_back(processCpuMs() - cpu0);
         perPass.insert(perPass.end(), run->stats.msPerPass.begin(), run->stats.msPerPass.end());
         totals.push_back(run->stats.msTotal);
+        compute.push_back(run->stats.msCompute);
         last = std::move(*run);
       }
       std::string accuracy;
@@ -205,12 +211,13 @@ void runCase(const Case& c, const Options& o) {
       }
       std::printf(
           "{\"bench\":\"wdt\",\"dataset\":%s,\"structure\":%s,\"dims\":[%d,%d,%d],\"backend\":%s,\"device\":%s,"
-          "\"mode\":%s,\"passes_run\":%d,\"converged\":%s,\"runs\":%zu,\"ms_per_pass\":%.3f,\"ms_total\":%.3f,"
+          "\"mode\":%s,\"scheme\":%s,\"passes_run\":%d,\"rounds\":%d,\"converged\":%s,\"runs\":%zu,"
+          "\"ms_per_pass\":%.3f,\"ms_compute\":%.3f,\"ms_total\":%.3f,"
           "\"ms_total_min\":%.3f,\"cpu_ms_total\":%.3f,\"load_avg\":%.2f%s}\n",
           jsonString(c.dataset).c_str(), jsonString(c.structure).c_str(), d.x, d.y, d.z,
           jsonString(toString(last.stats.backendUsed)).c_str(), jsonString(last.stats.device).c_str(),
-          jsonString(mode).c_str(), last.stats.passesRun, last.stats.converged ? "true" : "false", totals.size(),
-          median(perPass), median(totals), totals.empty() ? 0.0 : *std::min_element(totals.begin(), totals.end()),
+          jsonString(mode).c_str(), jsonString(last.stats.scheme).c_str(), last.stats.passesRun, last.stats.rounds,
+          last.stats.converged ? "true" : "false", totals.size(), median(perPass), median(compute), median(totals), totals.empty() ? 0.0 : *std::min_element(totals.begin(), totals.end()),
           median(cpuTotals), loadAverage(), accuracy.c_str());
       std::fflush(stdout);
     }

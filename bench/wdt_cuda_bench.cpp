@@ -6,7 +6,10 @@
 // Wall time is the whole runCudaBackend call; the warm-up call of each configuration allocates the
 // backend's cached workspace, the measured calls reuse it.
 //
-//   wdt_cuda_bench [--sizes 128,256,512] [--reps 10] [--check-max 256]
+//   wdt_cuda_bench [--sizes 128,256,512] [--reps 10] [--check-max 256] [--sweeps-before-bricks -1]
+//
+// Converge mode runs once per value of --sweeps-before-bricks (whole-volume passes before the
+// brick rounds; see cuda/wdt_cuda.h).
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -77,11 +80,13 @@ std::vector<int> parseList(const char* s) {
 int main(int argc, char** argv) {
   std::vector<int> sizes = {128, 256, 512};
   int reps = 10, checkMax = 256;
+  std::vector<int> sweepsBeforeBricks = {-1};  // the default
   for (int a = 1; a + 1 < argc; a += 2) {
     const std::string flag = argv[a];
     if (flag == "--sizes") sizes = parseList(argv[a + 1]);
     else if (flag == "--reps") reps = std::atoi(argv[a + 1]);
     else if (flag == "--check-max") checkMax = std::atoi(argv[a + 1]);
+    else if (flag == "--sweeps-before-bricks") sweepsBeforeBricks = parseList(argv[a + 1]);
     else {
       std::fprintf(stderr, "wdt_cuda_bench: unknown option %s\n", flag.c_str());
       return 2;
@@ -104,7 +109,11 @@ int main(int argc, char** argv) {
       }
       exact = std::move(*e);
     }
-    for (int mode : {1, 2, 0}) {  // passes; 0 = converge
+    // (passes, or 0 = converge; passes before brick rounds, -1 = the default; unused for fixed passes)
+    std::vector<std::pair<int, int>> runs = {{1, -1}, {2, -1}};
+    for (int k : sweepsBeforeBricks) runs.push_back({0, k});
+    for (const auto& [mode, sweepsFirst] : runs) {
+      if (mode == 0) at::cuda::setConvergeSweepsBeforeBricks(sweepsFirst);
       p.params.converge = mode == 0;
       p.params.passes = mode == 0 ? 2 : mode;
       p.params.maxPasses = 64;
@@ -117,19 +126,21 @@ int main(int argc, char** argv) {
           return 1;
         }
         if (r > 0) {
-          double sum = 0;
-          for (double ms : res->stats.msPerPass) perPass.push_back(ms), sum += ms;
-          device.push_back(sum);
+          for (double ms : res->stats.msPerPass) perPass.push_back(ms);
+          device.push_back(res->stats.msCompute);
           wall.push_back(res->stats.msTotal);
         }
         last = std::move(*res);
       }
-      std::printf("{\"bench\":\"wdt_cuda\",\"device\":\"%s\",\"size\":%d,\"mode\":\"%s\",\"passes_run\":%d,"
-                  "\"converged\":%s,\"ms_per_pass_median\":%.4f,\"ms_device_median\":%.4f,\"ms_wall_median\":%.3f,"
-                  "\"runs\":%d",
+      std::printf("{\"bench\":\"wdt_cuda\",\"device\":\"%s\",\"size\":%d,\"mode\":\"%s\",\"scheme\":\"%s\","
+                  "\"passes_run\":%d,\"rounds\":%d,\"converged\":%s,\"ms_per_pass_median\":%.4f,"
+                  "\"ms_device_median\":%.4f,\"ms_device_min\":%.4f,\"ms_device_max\":%.4f,\"ms_wall_median\":%.3f,"
+                  "\"sweeps_before_bricks\":%d,\"runs\":%d",
                   last.stats.device.c_str(), n, mode == 0 ? "converge" : (mode == 1 ? "1 pass" : "2 passes"),
-                  last.stats.passesRun, last.stats.converged ? "true" : "false", median(perPass), median(device),
-                  median(wall), reps);
+                  last.stats.scheme.c_str(), last.stats.passesRun, last.stats.rounds,
+                  last.stats.converged ? "true" : "false", median(perPass), median(device),
+                  *std::min_element(device.begin(), device.end()), *std::max_element(device.begin(), device.end()),
+                  median(wall), sweepsFirst, reps);
       if (check) {
         const at::WdtAccuracy acc = at::compareToExact(last.field.distances, exact);
         auto cpu = at::runCpuBackend(p, {});

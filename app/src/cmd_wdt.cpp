@@ -148,10 +148,14 @@ int runWdt(const Argv& argv) {
   out["rule"] = toString(params->rule);
   out["weight"] = toString(params->weight);
   out["downsample"] = params->downsample;
+  out["scheme"] = stats.scheme;
   out["passes_run"] = stats.passesRun;
+  if (stats.scheme != "sweeps") out["rounds"] = stats.rounds;
   out["converged"] = stats.converged;
   out["ms_total"] = stats.msTotal;
-  out["ms_per_pass"] = median(stats.msPerPass);
+  out["ms_compute"] = stats.msCompute;
+  // Brick rounds have no passes: null rather than a made-up time per pass.
+  out["ms_per_pass"] = stats.msPerPass.empty() ? nlohmann::json(nullptr) : nlohmann::json(median(stats.msPerPass));
   if (!stats.warning.empty()) out["warning"] = stats.warning;
 
   if (args.has("check")) {
@@ -181,10 +185,17 @@ int runWdt(const Argv& argv) {
   std::printf("%s / %s: %s rule, %s weights, %s on %s\n", dataset->id.c_str(), structure->id.c_str(),
               toString(params->rule), toString(params->weight), toString(stats.backendUsed), stats.device.c_str());
   const Dims fd = result->field.distances.dims();
-  std::printf("field %s (dataset %s), %d pass%s%s, %.1f ms total, %.2f ms per pass (median)\n",
-              fd.toString().c_str(), dataset->volume.dims().toString().c_str(), stats.passesRun,
-              stats.passesRun == 1 ? "" : "es", stats.converged ? ", converged" : "", stats.msTotal,
-              median(stats.msPerPass));
+  if (stats.scheme != "sweeps") {
+    std::printf("field %s (dataset %s), %d pass%s + %d brick round%s%s, %.1f ms total, %.2f ms computing\n",
+                fd.toString().c_str(), dataset->volume.dims().toString().c_str(), stats.passesRun,
+                stats.passesRun == 1 ? "" : "es", stats.rounds, stats.rounds == 1 ? "" : "s",
+                stats.converged ? ", converged" : "", stats.msTotal, stats.msCompute);
+  } else {
+    std::printf("field %s (dataset %s), %d pass%s%s, %.1f ms total, %.2f ms per pass (median)\n",
+                fd.toString().c_str(), dataset->volume.dims().toString().c_str(), stats.passesRun,
+                stats.passesRun == 1 ? "" : "es", stats.converged ? ", converged" : "", stats.msTotal,
+                median(stats.msPerPass));
+  }
   if (args.has("check"))
     std::printf("vs exact (%.0f ms): mean rel err %.3g, p99 %.3g, max %.3g, exact %.2f %%, below exact %zu of %zu\n",
                 out["exact_ms"].get<double>(), out["mean_rel_err"].get<double>(), out["p99_rel_err"].get<double>(),

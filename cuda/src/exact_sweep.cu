@@ -291,19 +291,7 @@ Status launchExactSweep(const ExactSweepArgs& a, cudaStream_t stream) {
     return fail("WDT CUDA backend: planes of " + std::to_string(a.nu) + "x" + std::to_string(a.nv) +
                 " lanes with stride " + std::to_string(a.strideV) + " exceed the kernels' 32-bit voxel offsets");
   }
-  if (a.rule == StepRule::Trapezoid && a.weight == WeightRule::Density) {
-    return launchGroups<StepRule::Trapezoid, WeightRule::Density>(a, stream);
-  }
-  // Only density weights tell the two step rules apart: uniform weights cost len under both
-  // (½(1 + 1)·len = len exactly), gradient and ascent weights belong to the edge a → b and both
-  // rules charge w(a→b)·len (as the CPU backend's step_cost.h does).
-  switch (a.weight) {
-    case WeightRule::Density: return launchGroups<StepRule::Entering, WeightRule::Density>(a, stream);
-    case WeightRule::Uniform: return launchGroups<StepRule::Entering, WeightRule::Uniform>(a, stream);
-    case WeightRule::Gradient: return launchGroups<StepRule::Entering, WeightRule::Gradient>(a, stream);
-    case WeightRule::Ascent: return launchGroups<StepRule::Entering, WeightRule::Ascent>(a, stream);
-  }
-  return fail("WDT CUDA backend: unknown weight rule");
+  return launchForRule(a.rule, a.weight, [&]<StepRule R, WeightRule W>() { return launchGroups<R, W>(a, stream); });
 }
 
 template <class T>

@@ -1,4 +1,5 @@
-// Per-voxel rules of the sweep kernels, shared by both schemes (sweep_kernels.cu, exact_sweep.cu):
+// Per-voxel rules of the sweep kernels, shared by the whole-volume sweeps (exact_sweep.cu) and the
+// brick rounds (brick_solver.cu):
 // the step costs of every (rule, weight) pair, built on wdt/stencil.h exactly as the CPU backend's
 // step_cost.h builds them. Private to cuda/src.
 #pragma once
@@ -54,6 +55,24 @@ __device__ __forceinline__ float relax(float cur, const float n[3][3], const std
     }
     return best;
   }
+}
+
+// Calls launch.template operator()<R, W>() with the kernel variant of (rule, weight). Only density
+// weights tell the two step rules apart: uniform weights cost len under both (½(1 + 1)·len = len
+// exactly), gradient and ascent weights belong to the edge a → b and both rules charge w(a→b)·len
+// (as the CPU backend's step_cost.h does).
+template <class Launch>
+Status launchForRule(StepRule rule, WeightRule weight, Launch&& launch) {
+  if (rule == StepRule::Trapezoid && weight == WeightRule::Density) {
+    return launch.template operator()<StepRule::Trapezoid, WeightRule::Density>();
+  }
+  switch (weight) {
+    case WeightRule::Density: return launch.template operator()<StepRule::Entering, WeightRule::Density>();
+    case WeightRule::Uniform: return launch.template operator()<StepRule::Entering, WeightRule::Uniform>();
+    case WeightRule::Gradient: return launch.template operator()<StepRule::Entering, WeightRule::Gradient>();
+    case WeightRule::Ascent: return launch.template operator()<StepRule::Entering, WeightRule::Ascent>();
+  }
+  return fail("WDT CUDA backend: unknown weight rule");
 }
 
 }  // namespace

@@ -5,6 +5,7 @@
 #include <cuda_runtime.h>
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cstdlib>
 #include <cstdint>
@@ -18,6 +19,7 @@
 #include <utility>
 #include <vector>
 
+#include "brick_solver.h"
 #include "cuda_util.h"
 #include "sweep_kernels.h"
 #include "wdt/huge_pages.h"
@@ -134,6 +136,27 @@ struct Workspace {
   Event start, end;
   GraphExec pass;
   std::optional<PassKey> passKey;
+  // Converge mode's brick solver (brick_solver.h), allocated on its first use: a second halo
+  // snapshot (`b` is the first), brick flags and lists, 3 counters then 2 result ints.
+  DeviceBuffer<float> shell1;
+  DeviceBuffer<int> brickFlags, brickLists, brickCounters;
+  PinnedBuffer<int> brickResultHost;
+
+  Status allocateBrickSolver() {
+    if (shell1.get()) return {};
+    const std::size_t bricks = brickCount(dims.x, dims.y, dims.z);
+    DeviceBuffer<float> s;
+    DeviceBuffer<int> f, l, c;
+    PinnedBuffer<int> r;
+    AT_ASSIGN(s, DeviceBuffer<float>::allocate(dims.count()));
+    AT_ASSIGN(f, DeviceBuffer<int>::allocate(2 * bricks));
+    AT_ASSIGN(l, DeviceBuffer<int>::allocate(2 * bricks));
+    AT_ASSIGN(c, DeviceBuffer<int>::allocate(5));
+    AT_ASSIGN(r, PinnedBuffer<int>::allocate(2));
+    shell1 = std::move(s), brickFlags = std::move(f), brickLists = std::move(l), brickCounters = std::move(c);
+    brickResultHost = std::move(r);
+    return {};
+  }
 
   static Result<std::unique_ptr<Workspace>> create(Dims dims) {
     const std::size_t n = dims.count();
@@ -316,13 +339,62 @@ Status loadHostProblem(Workspace& w, const WdtProblem& problem) {
   return finishLoading(w, problem.grid, problem.params);
 }
 
-// Runs the passes on a loaded workspace; the field ends in w.a.
+// Measured on an H100 (bench/RESULTS.md, fifth session): 3 beat 2 on the cochlea phantom and at
+// 512³, tied at 256³ and on the real CT, lost at 128³ (1.30 against 1.04 ms).
+constexpr int kDefaultSweepsBeforeBricks = 3;
+std::atomic<int> gSweepsBeforeBricks{kDefaultSweepsBeforeBricks};
+
+// Brick rounds (brick_solver.h) from the field in w.a, at most maxPasses × 2 × (bricks along the
+// longest axis) rounds. Cancellation is looked at before the rounds start (they take
+// milliseconds).
+Status runBrickRounds(Workspace& w, const WdtParams& params, const WdtControl& control, WdtStats& stats) {
+  const cudaStream_t s = w.stream.get();
+  const Dims d = w.dims;
+  if (control.cancel && control.cancel->load(std::memory_order_relaxed)) {
+    stats.cancelled = true;
+    return {};
+  }
+  stats.scheme = stats.passesRun > 0 ? "sweeps+bricks" : "bricks";
+  BrickSolveBuffers b;
+  b.field = w.a.get();
+  b.density = w.density.get();
+  b.shell[0] = w.b.get();
+  b.shell[1] = w.shell1.get();
+  b.flags = w.brickFlags.get();
+  b.lists = w.brickLists.get();
+  b.counters = w.brickCounters.get();
+  b.result = w.brickCounters.get() + 3;
+  BrickSolveParams bp;
+  for (int i = 0; i < 3; ++i) bp.spacing[i] = w.passKey->spacing[i];
+  bp.baseCost = params.baseCost;
+  bp.rule = params.rule;
+  bp.weight = params.weight;
+  const long longest = (std::max({d.x, d.y, d.z}) + 7) / 8;
+  bp.maxRounds = int(std::min<long>(long(params.maxPasses) * 2 * longest, 1L << 30));
+  AT_TRY(w.start.record(w.stream));
+  AT_TRY(launchBrickSolve(b, d.x, d.y, d.z, bp, s));
+  AT_TRY(w.end.record(w.stream));
+  AT_TRY(check(cudaMemcpyAsync(w.brickResultHost.get(), b.result, 2 * sizeof(int), cudaMemcpyDeviceToHost, s),
+               "cudaMemcpyAsync(brick solver result, device to host)"));
+  AT_TRY(w.stream.synchronize());
+  auto ms = w.end.millisecondsSince(w.start);
+  if (!ms) return tl::unexpected(ms.error());
+  stats.msCompute += *ms;
+  stats.rounds = w.brickResultHost.get()[0];
+  stats.converged = w.brickResultHost.get()[1] == 0;
+  return {};
+}
+
+// Runs the passes on a loaded workspace; the field ends in w.a. Converge mode, where the brick
+// solver's buffers can be allocated, runs gSweepsBeforeBricks passes and then brick rounds.
 Status runPasses(Workspace& w, const WdtParams& params, const WdtControl& control, WdtStats& stats) {
   const cudaStream_t s = w.stream.get();
 
   stats.backendUsed = WdtBackend::Cuda;
   stats.device = queryDevice().name;
-  const int planned = params.converge ? params.maxPasses : params.passes;
+  const bool bricks = params.converge && w.allocateBrickSolver();
+  const int planned = !params.converge ? params.passes : bricks ? std::min(params.maxPasses, gSweepsBeforeBricks.load())
+                                                                : params.maxPasses;
   bool lastChanged = true;
   for (int pass = 0; pass < planned; ++pass) {
     if (control.cancel && control.cancel->load(std::memory_order_relaxed)) {
@@ -339,6 +411,7 @@ Status runPasses(Workspace& w, const WdtParams& params, const WdtControl& contro
     auto ms = w.end.millisecondsSince(w.start);
     if (!ms) return tl::unexpected(ms.error());
     stats.msPerPass.push_back(*ms);
+    stats.msCompute += *ms;
     stats.passesRun = pass + 1;
     lastChanged = *w.flagHost.get() != 0;
     if (control.progress) control.progress(pass + 1, planned);
@@ -346,10 +419,13 @@ Status runPasses(Workspace& w, const WdtParams& params, const WdtControl& contro
   }
   AT_TRY(w.stream.synchronize());
   stats.converged = stats.passesRun > 0 && !lastChanged && !stats.cancelled;
+  if (bricks && !stats.converged && !stats.cancelled) AT_TRY(runBrickRounds(w, params, control, stats));
   return {};
 }
 
 }  // namespace
+
+void setConvergeSweepsBeforeBricks(int passes) { gSweepsBeforeBricks = passes < 0 ? kDefaultSweepsBeforeBricks : passes; }
 
 Result<DeviceField> makeDeviceField(const Geometry& grid, float fill) {
   if (!queryDevice().available) return fail("CUDA device field: " + queryDevice().reason);

@@ -189,6 +189,96 @@ TEST_CASE("converged GPU fields equal the CPU backend and the exact reference fo
   }
 }
 
+// A serpentine maze: dense walls across y every 4 rows, each open at alternating ends in x, so the
+// path from the seed corner doubles back nz·(ny / 4) times (many brick rounds, bricks re-queued).
+WdtProblem serpentine(at::Dims dims, StepRule rule, WeightRule weight) {
+  WdtProblem p;
+  p.grid.dims = dims;
+  p.grid.spacingMm = {0.8, 1.1, 1.7};
+  p.density.assign(dims.count(), 0);
+  p.seeds.assign(dims.count(), 0);
+  for (int k = 0; k < dims.z; ++k)
+    for (int j = 3; j < dims.y; j += 4)
+      for (int i = 0; i < dims.x; ++i) {
+        const bool gapRight = (j / 4) % 2 == 0;
+        if (gapRight ? i < dims.x - 2 : i >= 2) p.density[dims.index(i, j, k)] = 255;
+      }
+  p.seeds[dims.index(0, 0, 0)] = 1;
+  p.params.rule = rule;
+  p.params.weight = weight;
+  p.params.baseCost = 0.001f;  // air costs 1/1000 of a wall: going round is cheaper than through
+  return p;
+}
+
+TEST_CASE("converge mode runs brick rounds that equal the CPU and the exact reference on mazes and larger volumes, deterministically") {
+  if (!requireDevice()) return;
+  std::mt19937_64 rng(at::test::freshSeed("cuda brick rounds"));
+  std::vector<WdtProblem> problems;
+  problems.push_back(serpentine({45, 70, 11}, StepRule::Entering, WeightRule::Density));
+  problems.push_back(serpentine({64, 64, 9}, StepRule::Trapezoid, WeightRule::Density));
+  problems.push_back(randomProblem(rng, {97, 45, 38}, {0.7, 1.3, 2.5}, StepRule::Entering, WeightRule::Density));
+  problems.push_back(randomProblem(rng, {64, 64, 64}, {1, 1, 1}, StepRule::Entering, WeightRule::Gradient));
+  problems.push_back(randomProblem(rng, {24, 130, 17}, {1, 1, 1}, StepRule::Trapezoid, WeightRule::Density));
+  for (WdtProblem& p : problems) {
+    p.params.converge = true;
+    p.params.maxPasses = 64;
+    CAPTURE(p.grid.dims.toString());
+    const auto cpu = cpuField(p);
+    auto exact = at::exactWdtOnProblem(p);
+    REQUIRE(exact.has_value());
+    for (int sweepsFirst : {0, 2}) {  // rounds from the seeds, and after two whole-volume passes
+      CAPTURE(sweepsFirst);
+      at::cuda::setConvergeSweepsBeforeBricks(sweepsFirst);
+      at::WdtStats stats;
+      const auto gpu = gpuField(p, &stats);
+      CHECK(stats.converged);
+      CHECK(stats.msCompute > 0);
+      if (sweepsFirst == 0) {
+        CHECK(stats.scheme == "bricks");
+        CHECK(stats.passesRun == 0);
+        CHECK(stats.rounds > 0);
+      } else {
+        CHECK(stats.passesRun >= 1);
+        CHECK(stats.passesRun <= sweepsFirst);
+        // Converged within the passes ("sweeps"), or finished by rounds (perhaps none, when the
+        // start finds every voxel settled).
+        CHECK((stats.scheme == "sweeps+bricks" || (stats.scheme == "sweeps" && stats.rounds == 0)));
+      }
+      CHECK_MESSAGE(sameBits(gpu, cpu), describeDifference(gpu, cpu, p.grid.dims));
+      CHECK(maxRelDiff(gpu, exact->voxels) <= 1e-6);
+      for (int run = 0; run < 2; ++run) {
+        at::WdtStats again;
+        CHECK(sameBits(gpuField(p, &again), gpu));
+        CHECK(again.rounds == stats.rounds);
+      }
+      std::printf("brick rounds: %s, %d passes + %d rounds, %.3f ms\n", p.grid.dims.toString().c_str(), stats.passesRun,
+                  stats.rounds, stats.msCompute);
+    }
+  }
+  at::cuda::setConvergeSweepsBeforeBricks(-1);  // the default again
+  // The maze needs more rounds than the walls allow with a pass cap of 1: not converged, and the
+  // partial field is never below the exact distances.
+  WdtProblem capped = serpentine({45, 70, 11}, StepRule::Entering, WeightRule::Density);
+  capped.params.converge = true;
+  capped.params.maxPasses = 1;
+  at::WdtStats stats;
+  const auto partial = gpuField(capped, &stats);
+  CHECK_FALSE(stats.converged);
+  CHECK(stats.passesRun == 1);
+  CHECK(stats.rounds == 2 * ((70 + 7) / 8));
+  auto exact = at::exactWdtOnProblem(capped);
+  REQUIRE(exact.has_value());
+  CHECK(countBelow(partial, exact->voxels, 1e-6) == 0);
+  CHECK(maxRelDiff(partial, exact->voxels) > 0);
+
+  // Fixed passes stay whole-volume sweeps.
+  capped.params.converge = false;
+  capped.params.passes = 1;
+  gpuField(capped, &stats);
+  CHECK(stats.scheme == "sweeps");
+  CHECK(stats.passesRun == 1);
+}
+
 TEST_CASE("fixed-pass GPU fields equal the CPU backend's bit for bit for every rule, weight and size") {
   if (!requireDevice()) return;
   std::mt19937_64 rng(at::test::freshSeed("cuda exact passes"));

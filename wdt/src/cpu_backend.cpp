@@ -739,6 +739,7 @@ Result<WdtResult> runCpuBackend(const WdtProblem& problem, const WdtControl& con
   s.converged = run.passesRun > 0 && !run.lastChanged && !run.cancelled;
   s.cancelled = run.cancelled;
   s.msPerPass = std::move(run.msPerPass);
+  for (double ms : s.msPerPass) s.msCompute += ms;
   s.backendUsed = WdtBackend::Cpu;
   s.device = "CPU (" + std::to_string(threads) + (threads == 1 ? " thread)" : " threads)");
   s.msTotal = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();

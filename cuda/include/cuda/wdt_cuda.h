@@ -5,6 +5,8 @@
 // fields equal the CPU backend's bit for bit after any number of passes (and hence the exact
 // reference once converged). Deterministic: no thread reads data written in the same launch by
 // another block. A pass is replayed as one CUDA graph: progress and cancellation are per pass.
+// Converge mode runs three passes, then rounds over 8³ bricks that follow what still changes (see
+// setConvergeSweepsBeforeBricks); the rounds are one kernel, cancellable only before they start.
 // Device buffers, staging memory and the captured pass are kept for the next call on a grid of
 // the same size (the two most recent sizes: about 10 bytes of device memory per voxel each, held
 // until the process ends or an allocation needs the memory).
@@ -27,6 +29,11 @@ struct DeviceInfo {
 
 // Queries device 0 once per process (cached).
 const DeviceInfo& queryDevice();
+
+// Converge mode runs this many whole-volume passes (negative: the default, 3), then brick rounds
+// that finish the bricks still changing (cuda/src/brick_solver.h); the field is the same fixed
+// point either way. Process-wide, for tests and benchmarks.
+void setConvergeSweepsBeforeBricks(int passes);
 
 // Computes the field on the GPU and copies it back. Errors carry the failing CUDA call's name and
 // message; the caller (computeWdt with backend auto) then falls back to the CPU.

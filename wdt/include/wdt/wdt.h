@@ -58,10 +58,16 @@ struct DistanceField {
 };
 
 struct WdtStats {
+  // "sweeps": whole-volume passes (passesRun, msPerPass). "bricks": the CUDA backend's converge
+  // mode, rounds over 8³ bricks that follow the front (rounds; no passes, msPerPass empty); its
+  // field is the same fixed point the converged sweeps reach.
+  std::string scheme = "sweeps";
   int passesRun = 0;
-  bool converged = false;      // the last pass changed nothing
+  int rounds = 0;
+  bool converged = false;      // the last pass changed nothing (bricks: no brick left active)
   bool cancelled = false;
   std::vector<double> msPerPass;
+  double msCompute = 0;        // the passes or rounds alone (GPU: CUDA events), without set-up and transfers
   double msTotal = 0;          // including weight preparation and transfers
   WdtBackend backendUsed = WdtBackend::Cpu;
   std::string device;          // "CPU (2 threads)" or the GPU's name
