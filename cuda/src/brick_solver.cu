@@ -1,9 +1,10 @@
-// Converge mode on the GPU: brick rounds instead of whole-volume passes.
+// Converge mode on the GPU: brick rounds that finish a field after a few whole-volume passes.
 //
 // A whole-volume pass is 6 × (planes) dependent plane steps (1,536 at 256³), so a converged field
-// costs passes × that chain, and the last pass only confirms that nothing changes. Here the grid
-// is cut into bricks of 8³ voxels. One cooperative kernel runs rounds separated by grid-wide
-// barriers; in each round every active brick is handled by one warp, which loads the brick and a
+// costs passes × that chain, and the last pass only confirms that nothing changes, while after a
+// few passes only small parts of the field still change. Here the grid is cut into bricks of 8³
+// voxels; a start kernel queues the bricks that can still change, then one cooperative kernel runs
+// rounds separated by grid-wide barriers; in each round every active brick is handled by one warp, which loads the brick and a
 // one-voxel halo into shared memory, sweeps it x+ x− y+ y− z+ z− (the same 9-neighbour plane
 // updates and float operations as the whole-volume sweeps) until a local pass changes nothing,
 // writes the voxels that decreased, and activates the bricks whose halo holds a boundary voxel
@@ -34,12 +35,6 @@ namespace at::cuda {
 namespace {
 
 namespace cg = cooperative_groups;
-
-// Returns the failed call's Status from the enclosing function.
-#define AT_CUDA_TRY(call, what)                                     \
-  do {                                                              \
-    if (auto at_status_ = check((call), (what)); !at_status_) return at_status_; \
-  } while (0)
 
 constexpr int kBrick = 8;                             // brick edge in voxels
 constexpr int kSide = kBrick + 2;                     // with the halo
@@ -110,14 +105,7 @@ __device__ __forceinline__ bool sweepAxis(float* s, const std::uint8_t* sq, cons
             const int prev = idx - dir * sa;
             float n[3][3];
             std::uint8_t qn[3][3];
-#pragma unroll
-            for (int dc = 0; dc < 3; ++dc) {
-#pragma unroll
-              for (int db = 0; db < 3; ++db) {
-                n[dc][db] = s[prev + (dc - 1) * sc + (db - 1) * sb];
-                qn[dc][db] = kQn ? sq[prev + (dc - 1) * sc + (db - 1) * sb] : 0;
-              }
-            }
+            gatherNeighbours<kQn>(s, sq, prev, sb, sc, n, qn);
             const float cur = s[idx];
             const float v = relax<R, W>(cur, n, qn, sq[idx], l, base);
             if (v < cur) {
@@ -284,19 +272,17 @@ template <StepRule R, WeightRule W>
 Status launchSolve(const SolveArgs& a, cudaStream_t stream) {
   const std::size_t count = std::size_t(a.n[0]) * a.n[1] * a.n[2];
   if (count == 0) return {};
-  AT_CUDA_TRY(cudaMemsetAsync(a.buf.flags, 0, 2 * std::size_t(a.brickCount) * sizeof(int), stream),
-              "cudaMemsetAsync(brick flags)");
-  AT_CUDA_TRY(cudaMemsetAsync(a.buf.counters, 0, 3 * sizeof(int), stream), "cudaMemsetAsync(brick counters)");
+  AT_TRY(check(cudaMemsetAsync(a.buf.flags, 0, 2 * std::size_t(a.brickCount) * sizeof(int), stream), "cudaMemsetAsync(brick flags)"));
+  AT_TRY(check(cudaMemsetAsync(a.buf.counters, 0, 3 * sizeof(int), stream), "cudaMemsetAsync(brick counters)"));
   const std::size_t startBlocks = (count + 255) / 256;
   startBricks<R, W><<<unsigned(startBlocks < 8192 ? startBlocks : 8192), 256, 0, stream>>>(a);
-  AT_CUDA_TRY(cudaGetLastError(), "launch of the brick start kernel");
+  AT_TRY(check(cudaGetLastError(), "launch of the brick start kernel"));
 
   auto* kernel = solveBricks<R, W>;
   int device = 0, sms = 0, perSm = 0;
-  AT_CUDA_TRY(cudaGetDevice(&device), "cudaGetDevice");
-  AT_CUDA_TRY(cudaDeviceGetAttribute(&sms, cudaDevAttrMultiProcessorCount, device), "cudaDeviceGetAttribute(SM count)");
-  AT_CUDA_TRY(cudaOccupancyMaxActiveBlocksPerMultiprocessor(&perSm, kernel, kThreads, 0),
-              "cudaOccupancyMaxActiveBlocksPerMultiprocessor(brick solver)");
+  AT_TRY(check(cudaGetDevice(&device), "cudaGetDevice"));
+  AT_TRY(check(cudaDeviceGetAttribute(&sms, cudaDevAttrMultiProcessorCount, device), "cudaDeviceGetAttribute(SM count)"));
+  AT_TRY(check(cudaOccupancyMaxActiveBlocksPerMultiprocessor(&perSm, kernel, kThreads, 0), "cudaOccupancyMaxActiveBlocksPerMultiprocessor(brick solver)"));
   if (perSm < 1) return fail("WDT CUDA backend: the brick solver's blocks do not fit on a multiprocessor");
   // Every block must be resident for the grid barrier; no more blocks than the bricks can use.
   const int needed = (a.brickCount + kWarps - 1) / kWarps;

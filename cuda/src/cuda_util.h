@@ -20,6 +20,21 @@ inline Status check(cudaError_t code, const std::string& what) {
   return fail("CUDA " + what + ": " + cudaGetErrorString(code));
 }
 
+// In a function returning Status or Result<T>: return the error of `expr` (a Status or Result) if
+// it failed; AT_ASSIGN also moves its value into `var` otherwise.
+#define AT_TRY(expr)                                          \
+  do {                                                        \
+    if (auto at_status_ = (expr); !at_status_)                \
+      return tl::unexpected(std::move(at_status_).error());   \
+  } while (0)
+
+#define AT_ASSIGN(var, expr)                                  \
+  do {                                                        \
+    auto at_made_ = (expr);                                   \
+    if (!at_made_) return tl::unexpected(at_made_.error());   \
+    var = std::move(*at_made_);                               \
+  } while (0)
+
 // Typed, move-only device allocation of `count` elements (uninitialised).
 template <class T>
 class DeviceBuffer {

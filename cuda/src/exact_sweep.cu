@@ -209,14 +209,7 @@ __global__ void __launch_bounds__(Shape::T, Shape::MinBlocks) sweepGroup(GroupAr
         if (active(k, s)) {
           float n[3][3];
           std::uint8_t qn[3][3];
-#pragma unroll
-          for (int dc = 0; dc < 3; ++dc) {
-#pragma unroll
-            for (int db = 0; db < 3; ++db) {
-              n[dc][db] = prev[r[k] + (dc - 1) * Pitch + (db - 1)];
-              qn[dc][db] = kQn ? qPrev[r[k] + (dc - 1) * Pitch + (db - 1)] : 0;
-            }
-          }
+          gatherNeighbours<kQn>(prev, qPrev, r[k], 1, Pitch, n, qn);
           const float old = oldD[s - 1][k];
           const float v = relax<R, W>(old, n, qn, q[s - 1][k], p.lengths, p.base);
           cur[r[k]] = v;

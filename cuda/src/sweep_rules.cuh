@@ -34,6 +34,23 @@ __device__ __forceinline__ float stepCost(std::uint8_t qa, std::uint8_t qb, floa
   }
 }
 
+// The 9 previous-plane neighbours of the voxel whose previous-plane cell is `prev[at]`: distances
+// n[dc+1][db+1] = prev[at + dc·strideC + db·strideB], and their densities qn from `qPrev` when the
+// rule needs them (kNeighbourDensity; otherwise 0 and qPrev is not read).
+template <bool kNeighbourDensity>
+__device__ __forceinline__ void gatherNeighbours(const float* prev, const std::uint8_t* qPrev, int at, int strideB,
+                                                 int strideC, float n[3][3], std::uint8_t qn[3][3]) {
+#pragma unroll
+  for (int dc = 0; dc < 3; ++dc) {
+#pragma unroll
+    for (int db = 0; db < 3; ++db) {
+      const int i = at + (dc - 1) * strideC + (db - 1) * strideB;
+      n[dc][db] = prev[i];
+      qn[dc][db] = kNeighbourDensity ? qPrev[i] : 0;
+    }
+  }
+}
+
 // New value of voxel b (current value `cur`, density byte qb) from its previous-plane neighbours
 // n[dc+1][db+1] (densities qn, used only when the rule needs them).
 template <StepRule R, WeightRule W>

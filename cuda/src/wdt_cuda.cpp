@@ -92,19 +92,6 @@ Status validate(const WdtProblem& problem) {
   return check(cudaSetDevice(0), "cudaSetDevice(0)");
 }
 
-#define AT_TRY(expr)                                          \
-  do {                                                        \
-    if (auto at_status_ = (expr); !at_status_)                \
-      return tl::unexpected(std::move(at_status_).error());   \
-  } while (0)
-
-#define AT_ASSIGN(var, expr)                                  \
-  do {                                                        \
-    auto at_made_ = (expr);                                   \
-    if (!at_made_) return tl::unexpected(at_made_.error());   \
-    var = std::move(*at_made_);                               \
-  } while (0)
-
 // Host transfers go through two page-locked staging chunks, so that the copy between the caller's
 // (pageable) memory and one chunk overlaps the DMA of the other.
 constexpr std::size_t kStagingBytes = std::size_t(4) << 20;
