@@ -140,6 +140,22 @@ AT_AVX2_INLINE void enteringUpdate8(float* c, __m256 m00, __m256 m10, __m256 m01
   _mm256_storeu_ps(c, v);
 }
 
+// Voxel i of a row pair: c0[i] from its neighbours nbA, c1[i] from nbB (enteringUpdate). Returns
+// the bits that changed in either voxel (0 when neither changed).
+template <bool Uniform>
+AT_ALWAYS_INLINE int enteringPairVoxel(float* c0, float* c1, const float nbA[3][3], const float nbB[3][3],
+                                       const std::uint8_t* q0, const std::uint8_t* q1, int i, SweepLengths l,
+                                       float base) {
+  const float wa = Uniform ? 1.0f : wdt::densityWeight(q0[i], base);
+  const float wb = Uniform ? 1.0f : wdt::densityWeight(q1[i], base);
+  const float va = wdt::enteringUpdate(c0[i], nbA, wa, l), vb = wdt::enteringUpdate(c1[i], nbB, wb, l);
+  const int changed = (__builtin_bit_cast(int, va) ^ __builtin_bit_cast(int, c0[i])) |
+                      (__builtin_bit_cast(int, vb) ^ __builtin_bit_cast(int, c1[i]));
+  c0[i] = va;
+  c1[i] = vb;
+  return changed;
+}
+
 template <bool Uniform>
 __attribute__((target("avx2"), noinline)) int enteringPairAvx2(float* c0, float* c1, const float* p0,
                                                                const float* p1, const float* p2, const float* p3,
@@ -170,13 +186,7 @@ __attribute__((target("avx2"), noinline)) int enteringPairAvx2(float* c0, float*
         {p0[i - 1], p0[i], p0[i + 1]}, {p1[i - 1], p1[i], p1[i + 1]}, {p2[i - 1], p2[i], p2[i + 1]}};
     const float nbB[3][3] = {
         {p1[i - 1], p1[i], p1[i + 1]}, {p2[i - 1], p2[i], p2[i + 1]}, {p3[i - 1], p3[i], p3[i + 1]}};
-    const float wa = Uniform ? 1.0f : wdt::densityWeight(q0[i], base);
-    const float wb = Uniform ? 1.0f : wdt::densityWeight(q1[i], base);
-    const float va = wdt::enteringUpdate(c0[i], nbA, wa, l), vb = wdt::enteringUpdate(c1[i], nbB, wb, l);
-    tail |= (__builtin_bit_cast(int, va) ^ __builtin_bit_cast(int, c0[i])) |
-            (__builtin_bit_cast(int, vb) ^ __builtin_bit_cast(int, c1[i]));
-    c0[i] = va;
-    c1[i] = vb;
+    tail |= enteringPairVoxel<Uniform>(c0, c1, nbA, nbB, q0, q1, i, l, base);
   }
   return tail != 0 || !_mm256_testz_si256(changed, changed);
 }
@@ -198,13 +208,7 @@ __attribute__((noinline)) int enteringPairEnds(float* c0, float* c1, const float
     }
     const float nbA[3][3] = {{lo[0], mid[0], hi[0]}, {lo[1], mid[1], hi[1]}, {lo[2], mid[2], hi[2]}};
     const float nbB[3][3] = {{lo[1], mid[1], hi[1]}, {lo[2], mid[2], hi[2]}, {lo[3], mid[3], hi[3]}};
-    const float wa = Uniform ? 1.0f : wdt::densityWeight(q0[i], base);
-    const float wb = Uniform ? 1.0f : wdt::densityWeight(q1[i], base);
-    const float va = wdt::enteringUpdate(c0[i], nbA, wa, l), vb = wdt::enteringUpdate(c1[i], nbB, wb, l);
-    changed |= (__builtin_bit_cast(int, va) ^ __builtin_bit_cast(int, c0[i])) |
-               (__builtin_bit_cast(int, vb) ^ __builtin_bit_cast(int, c1[i]));
-    c0[i] = va;
-    c1[i] = vb;
+    changed |= enteringPairVoxel<Uniform>(c0, c1, nbA, nbB, q0, q1, i, l, base);
   }
   return changed != 0;
 }
