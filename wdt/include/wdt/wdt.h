@@ -58,9 +58,9 @@ struct DistanceField {
 };
 
 struct WdtStats {
-  // "sweeps": whole-volume passes (passesRun, msPerPass). "bricks": the CUDA backend's converge
-  // mode, rounds over 8³ bricks that follow the front (rounds; no passes, msPerPass empty); its
-  // field is the same fixed point the converged sweeps reach.
+  // "sweeps": whole-volume passes only (passesRun, msPerPass). "sweeps+bricks" (the CUDA backend's
+  // converge mode) or "bricks" (the same with no pass first): passes, then `rounds` over the 8³
+  // bricks that still change; the field is the same fixed point the converged sweeps reach.
   std::string scheme = "sweeps";
   int passesRun = 0;
   int rounds = 0;
