@@ -1,26 +1,32 @@
-// Converge mode on the GPU: brick rounds that finish a field after a few whole-volume passes.
+// Converge mode on the GPU: brick rounds that finish a field after a few whole-volume passes (or
+// from the seeds alone).
 //
 // A whole-volume pass is 6 × (planes) dependent plane steps (1,536 at 256³), so a converged field
 // costs passes × that chain, and the last pass only confirms that nothing changes, while after a
-// few passes only small parts of the field still change. Here the grid is cut into bricks of 8³
+// few passes only small parts of the field still change. Here the grid is cut into bricks of 16³
 // voxels; a start kernel queues the bricks that can still change, then one cooperative kernel runs
-// rounds separated by grid-wide barriers; in each round every active brick is handled by one warp, which loads the brick and a
-// one-voxel halo into shared memory, sweeps it x+ x− y+ y− z+ z− (the same 9-neighbour plane
-// updates and float operations as the whole-volume sweeps) until a local pass changes nothing,
-// writes the voxels that decreased, and activates the bricks whose halo holds a boundary voxel
-// that decreased. Work then follows the front: bricks far from it cost nothing.
+// rounds separated by grid-wide barriers. In each round every active brick is handled by one block
+// of 256 threads, which loads the brick and a one-voxel halo into shared memory, sweeps it once
+// x+ x− y+ y− z+ z− (the same 9-neighbour plane updates and float operations as the whole-volume
+// sweeps, one thread per plane cell), writes the voxels that decreased, activates the bricks
+// whose halo holds a boundary voxel that decreased, and queues itself again if anything decreased
+// (the next visit then also sees its neighbours' newer halo). Work follows the front: bricks far
+// from it cost nothing.
 //
 // Result: the fixed point of the step costs, D(v) = min over the 26 neighbours u of D(u) + c(u→v),
 // which is the minimum over all paths of the same float sums. Any order of relaxations that ends
 // only when no relaxation lowers a value reaches that one fixed point, so the field equals the
-// converged sweeps and the exact reference bit for bit (tests/cuda compares them).
+// converged sweeps and the exact reference bit for bit (tests/cuda compares them). A brick leaves
+// the lists only after a visit whose sweep lowered nothing; that sweep applied every relaxation
+// inside the brick and from its halo, since each of the 26 neighbours of a voxel lies in the
+// previous plane of one of the six directional sweeps.
 //
-// Deterministic round by round: a brick's own voxels are written only by the warp handling that
+// Deterministic round by round: a brick's own voxels are written only by the block handling that
 // brick, and halos are read from a snapshot of the boundary voxels (shell[round % 2]) that nobody
 // writes during the round; decreased boundary voxels go to the other snapshot. A snapshot can be
 // older than the field for voxels that changed two rounds ago, never newer: the brick that reads
 // them read the fresh value in the round after the change (the change activated it), and values
-// only decrease, so an older, larger halo value can no longer lower anything. Which warp handles
+// only decrease, so an older, larger halo value can no longer lower anything. Which block handles
 // which brick varies between runs; what each brick computes does not.
 #include "brick_solver.h"
 
@@ -36,15 +42,18 @@ namespace {
 
 namespace cg = cooperative_groups;
 
-constexpr int kBrick = 8;                             // brick edge in voxels
-constexpr int kSide = kBrick + 2;                     // with the halo
-constexpr int kCells = kSide * kSide * kSide;         // shared-memory cells per brick
-constexpr int kWarps = 8, kThreads = 32 * kWarps;     // one brick per warp at a time
-constexpr int kLocalPassCap = 4;                      // local passes per visit before re-queueing
-constexpr int kInteriorPerLane = kBrick * kBrick * kBrick / 32;
+constexpr int kEdge = kBrickEdge;      // brick edge in voxels
+constexpr int kSide = kEdge + 2;       // with the halo
+constexpr int kStrideY = kSide;        // shared-memory strides of the brick with its halo; the odd
+constexpr int kStrideZ = kSide * kSide + 1;  // z stride puts the two z rows a warp reads in an x
+constexpr int kCells = kStrideZ * kSide;     // sweep on different banks
+constexpr int kThreads = kEdge * kEdge;      // one thread per plane cell
+constexpr int kZPerThread = kEdge;           // voxels (x, y, 0..15) a thread writes back
 
-__host__ __device__ constexpr int cellStride(int axis) { return axis == 0 ? 1 : axis == 1 ? kSide : kSide * kSide; }
-__device__ __forceinline__ int cellIndex(int x, int y, int z) { return (x + 1) + kSide * ((y + 1) + kSide * (z + 1)); }
+static_assert(kThreads == 256, "the sweep maps thread t to plane cell (t & 15, t >> 4)");
+
+__host__ __device__ constexpr int cellStride(int axis) { return axis == 0 ? 1 : axis == 1 ? kStrideY : kStrideZ; }
+__device__ __forceinline__ int cellIndex(int x, int y, int z) { return (x + 1) + kStrideY * (y + 1) + kStrideZ * (z + 1); }
 
 struct SolveArgs {
   BrickSolveBuffers buf;
@@ -60,8 +69,8 @@ struct SolveArgs {
 // Bits (dx + 1) + 3·(dy + 1) + 9·(dz + 1) of the neighbour bricks whose halo holds the brick's
 // voxel (x, y, z): one per face, edge and corner the voxel lies on.
 __device__ __forceinline__ unsigned neighbourMask(int x, int y, int z) {
-  const int e[3] = {x == 0 ? -1 : (x == kBrick - 1 ? 1 : 0), y == 0 ? -1 : (y == kBrick - 1 ? 1 : 0),
-                    z == 0 ? -1 : (z == kBrick - 1 ? 1 : 0)};
+  const int e[3] = {x == 0 ? -1 : (x == kEdge - 1 ? 1 : 0), y == 0 ? -1 : (y == kEdge - 1 ? 1 : 0),
+                    z == 0 ? -1 : (z == kEdge - 1 ? 1 : 0)};
   unsigned mask = 0;
 #pragma unroll
   for (int s = 1; s < 8; ++s) {  // non-empty subsets of the axes
@@ -80,180 +89,192 @@ __device__ __forceinline__ void activate(const SolveArgs& a, int brick, int pari
   }
 }
 
-// One directional sweep pair (+ then −) along brick axis A over the brick in shared memory. Lane
-// owns plane cells (ub, uc) and (ub, uc + 4). Returns whether any of the lane's voxels decreased.
+// One directional sweep pair (+ then −) along brick axis A over the brick in shared memory; thread
+// t owns plane cell (t & 15, t >> 4) of the plane axes (B, C). Returns whether its voxels
+// decreased. Every thread of the block must call it (it holds the block's barriers).
 template <StepRule R, WeightRule W, int A>
-__device__ __forceinline__ bool sweepAxis(float* s, const std::uint8_t* sq, const int ext[3], int lane,
+__device__ __forceinline__ bool sweepAxis(float* s, const std::uint8_t* sq, const int ext[3], int t,
                                           const wdt::SweepLengths& l, float base) {
   constexpr bool kQn = kNeedsNeighbourDensity<R, W>;
   constexpr int BA = A == 0 ? 1 : 0, CA = A == 2 ? 1 : 2;  // plane axes: wdt::axisSweepLengths' order
   constexpr int sa = cellStride(A), sb = cellStride(BA), sc = cellStride(CA);
-  const int ub = lane & 7, uc = lane >> 3;
-  const bool valid[2] = {ub < ext[BA] && uc < ext[CA], ub < ext[BA] && uc + 4 < ext[CA]};
-  const int lateral[2] = {(ub + 1) * sb + (uc + 1) * sc, (ub + 1) * sb + (uc + 5) * sc};
+  const int ub = t & (kEdge - 1), uc = t / kEdge;
+  const bool valid = ub < ext[BA] && uc < ext[CA];
+  const int lateral = (ub + 1) * sb + (uc + 1) * sc;
   bool changed = false;
 #pragma unroll
   for (int dir = 1; dir >= -1; dir -= 2) {
-#pragma unroll
-    for (int step = 0; step < kBrick; ++step) {
-      const int pa = dir > 0 ? step : kBrick - 1 - step;
-      if (pa < ext[A]) {
-#pragma unroll
-        for (int k = 0; k < 2; ++k) {
-          if (valid[k]) {
-            const int idx = lateral[k] + (pa + 1) * sa;
-            const int prev = idx - dir * sa;
-            float n[3][3];
-            std::uint8_t qn[3][3];
-            gatherNeighbours<kQn>(s, sq, prev, sb, sc, n, qn);
-            const float cur = s[idx];
-            const float v = relax<R, W>(cur, n, qn, sq[idx], l, base);
-            if (v < cur) {
-              s[idx] = v;
-              changed = true;
-            }
-          }
+#pragma unroll 4
+    for (int step = 0; step < kEdge; ++step) {
+      const int pa = dir > 0 ? step : kEdge - 1 - step;
+      if (valid && pa < ext[A]) {
+        const int idx = lateral + (pa + 1) * sa;
+        float n[3][3];
+        std::uint8_t qn[3][3];
+        gatherNeighbours<kQn>(s, sq, idx - dir * sa, sb, sc, n, qn);
+        const float cur = s[idx];
+        const float v = relax<R, W>(cur, n, qn, sq[idx], l, base);
+        if (v < cur) {
+          s[idx] = v;
+          changed = true;
         }
       }
-      __syncwarp();
+      __syncthreads();
     }
   }
   return changed;
 }
 
-// One warp handles one brick for one round (see the file comment).
+// One block handles one brick for one round (see the file comment).
 template <StepRule R, WeightRule W>
-__device__ void visitBrick(const SolveArgs& a, int brick, int round, float* s, std::uint8_t* sq, int lane) {
+__device__ void visitBrick(const SolveArgs& a, int brick, int round, float* s, std::uint8_t* sq, unsigned* sMask,
+                           int t) {
   const int p = round & 1;
   const int b[3] = {brick % a.bricks[0], (brick / a.bricks[0]) % a.bricks[1], brick / (a.bricks[0] * a.bricks[1])};
-  const int o[3] = {b[0] * kBrick, b[1] * kBrick, b[2] * kBrick};
-  const int ext[3] = {min(kBrick, a.n[0] - o[0]), min(kBrick, a.n[1] - o[1]), min(kBrick, a.n[2] - o[2])};
+  const int o[3] = {b[0] * kEdge, b[1] * kEdge, b[2] * kEdge};
+  const int ext[3] = {min(kEdge, a.n[0] - o[0]), min(kEdge, a.n[1] - o[1]), min(kEdge, a.n[2] - o[2])};
   const std::size_t nx = std::size_t(a.n[0]), nxy = nx * std::size_t(a.n[1]);
   const float* shellIn = a.buf.shell[p];
   float* shellOut = a.buf.shell[1 - p];
 
   // Brick voxels from the field, halo voxels from this round's snapshot, +infinity off the grid.
   // Read through L2 only: other multiprocessors wrote them in earlier rounds of this kernel.
-#pragma unroll 8
-  for (int c = lane; c < kCells; c += 32) {
+  if (t == 0) *sMask = 0;
+#pragma unroll 2
+  for (int c = t; c < kSide * kSide * kSide; c += kThreads) {
     const int hx = c % kSide - 1, hy = (c / kSide) % kSide - 1, hz = c / (kSide * kSide) - 1;
     const int gx = o[0] + hx, gy = o[1] + hy, gz = o[2] + hz;
     float v = kInf;
     std::uint8_t q = 0;
     if (gx >= 0 && gx < a.n[0] && gy >= 0 && gy < a.n[1] && gz >= 0 && gz < a.n[2]) {
       const std::size_t g = std::size_t(gx) + nx * std::size_t(gy) + nxy * std::size_t(gz);
-      const bool own = unsigned(hx) < unsigned(kBrick) && unsigned(hy) < unsigned(kBrick) && unsigned(hz) < unsigned(kBrick);
+      const bool own = unsigned(hx) < unsigned(kEdge) && unsigned(hy) < unsigned(kEdge) && unsigned(hz) < unsigned(kEdge);
       v = __ldcg((own ? a.buf.field : shellIn) + g);
       q = __ldg(a.buf.density + g);
     }
-    s[c] = v;
-    sq[c] = q;
+    const int cell = (hx + 1) + kStrideY * (hy + 1) + kStrideZ * (hz + 1);
+    s[cell] = v;
+    sq[cell] = q;
   }
-  __syncwarp();
-  float before[kInteriorPerLane];  // the lane's brick voxels i = lane + 32k as loaded
-#pragma unroll
-  for (int k = 0; k < kInteriorPerLane; ++k) {
-    const int i = lane + 32 * k;
-    before[k] = s[cellIndex(i & 7, (i >> 3) & 7, i >> 6)];
-  }
+  __syncthreads();
 
-  bool changedLast = true;
-  for (int pass = 0; pass < kLocalPassCap && changedLast; ++pass) {
-    bool changed = sweepAxis<R, W, 0>(s, sq, ext, lane, a.lengths[0], a.base);
-    changed |= sweepAxis<R, W, 1>(s, sq, ext, lane, a.lengths[1], a.base);
-    changed |= sweepAxis<R, W, 2>(s, sq, ext, lane, a.lengths[2], a.base);
-    changedLast = __any_sync(0xffffffffu, changed);
-  }
+  bool changed = sweepAxis<R, W, 0>(s, sq, ext, t, a.lengths[0], a.base);
+  changed |= sweepAxis<R, W, 1>(s, sq, ext, t, a.lengths[1], a.base);
+  changed |= sweepAxis<R, W, 2>(s, sq, ext, t, a.lengths[2], a.base);
+  changed = __syncthreads_or(changed) != 0;
 
+  // Voxels that decreased. The field still holds the values this visit loaded (only this brick
+  // writes them), so compare against it instead of keeping 16 values per thread in registers.
+  const int tx = t % kEdge, ty = t / kEdge;
   unsigned mask = 0;
+  if (changed && tx < ext[0] && ty < ext[1]) {
+    const std::size_t g0 = std::size_t(o[0] + tx) + nx * std::size_t(o[1] + ty) + nxy * std::size_t(o[2]);
+    float before[kZPerThread];
 #pragma unroll
-  for (int k = 0; k < kInteriorPerLane; ++k) {
-    const int i = lane + 32 * k, x = i & 7, y = (i >> 3) & 7, z = i >> 6;
-    if (x < ext[0] && y < ext[1] && z < ext[2]) {
-      const float v = s[cellIndex(x, y, z)];
-      if (v < before[k]) {
-        const std::size_t g = std::size_t(o[0] + x) + nx * std::size_t(o[1] + y) + nxy * std::size_t(o[2] + z);
-        a.buf.field[g] = v;
-        const unsigned m = neighbourMask(x, y, z);
-        if (m) {
-          shellOut[g] = v;
-          mask |= m;
+    for (int k = 0; k < kZPerThread; ++k) before[k] = k < ext[2] ? __ldcg(a.buf.field + g0 + nxy * k) : 0.0f;
+#pragma unroll
+    for (int k = 0; k < kZPerThread; ++k) {
+      if (k < ext[2]) {
+        const float v = s[cellIndex(tx, ty, k)];
+        if (v < before[k]) {
+          const std::size_t g = g0 + nxy * std::size_t(k);
+          a.buf.field[g] = v;
+          const unsigned m = neighbourMask(tx, ty, k);
+          if (m) {
+            shellOut[g] = v;
+            mask |= m;
+          }
         }
       }
     }
   }
   mask = __reduce_or_sync(0xffffffffu, mask);
+  if ((t & 31) == 0 && mask) atomicOr(sMask, mask);
+  __syncthreads();
+  const unsigned all = *sMask;
   const int next = (round + 1) % 3;
-  if (lane < 27 && ((mask >> lane) & 1u)) {
-    const int nb[3] = {b[0] + lane % 3 - 1, b[1] + (lane / 3) % 3 - 1, b[2] + lane / 9 - 1};
+  if (t < 27 && ((all >> t) & 1u)) {
+    const int nb[3] = {b[0] + t % 3 - 1, b[1] + (t / 3) % 3 - 1, b[2] + t / 9 - 1};
     if (nb[0] >= 0 && nb[0] < a.bricks[0] && nb[1] >= 0 && nb[1] < a.bricks[1] && nb[2] >= 0 && nb[2] < a.bricks[2]) {
       activate(a, nb[0] + a.bricks[0] * (nb[1] + a.bricks[1] * nb[2]), 1 - p, next);
     }
   }
-  // Not settled within the cap: handle it again next round (its halo is unchanged or fresher).
-  if (changedLast && lane == 0) activate(a, brick, 1 - p, next);
-  __syncwarp();  // the shared memory is the next visit's
+  // Something decreased: sweep again next round (until a sweep lowers nothing).
+  if (changed && t == 0) activate(a, brick, 1 - p, next);
+  __syncthreads();  // shared memory and sMask are the next visit's
 }
 
 // Round r reads list r % 2 (counter r % 3), queues for round r + 1 into list (r + 1) % 2 (counter
 // (r + 1) % 3) and zeroes counter (r + 2) % 3, which every block read before the last barrier.
 template <StepRule R, WeightRule W>
-__global__ void __launch_bounds__(kThreads) solveBricks(SolveArgs a) {
-  __shared__ float sD[kWarps][kCells];
-  __shared__ std::uint8_t sQ[kWarps][kCells];
-  const int warp = int(threadIdx.x) >> 5, lane = int(threadIdx.x) & 31;
-  const int worker = int(blockIdx.x) * kWarps + warp, workers = int(gridDim.x) * kWarps;
+__global__ void __launch_bounds__(kThreads, 4) solveBricks(SolveArgs a) {
+  __shared__ float sD[kCells];
+  __shared__ std::uint8_t sQ[kCells];
+  __shared__ unsigned sMask;
+  const int t = int(threadIdx.x);
   cg::grid_group grid = cg::this_grid();
   int round = 0, active = 0;
   for (;; ++round) {
     active = __ldcg(a.buf.counters + round % 3);
     if (active == 0 || round == a.maxRounds) break;
     const int p = round & 1;
-    for (int j = worker; j < active; j += workers) {
+    for (int j = int(blockIdx.x); j < active; j += int(gridDim.x)) {
       const int brick = __ldcg(a.buf.lists + std::size_t(p) * a.brickCount + j);
-      if (lane == 0) a.buf.flags[std::size_t(p) * a.brickCount + brick] = 0;  // may be queued again in round + 2
-      visitBrick<R, W>(a, brick, round, sD[warp], sQ[warp], lane);
+      if (t == 0) a.buf.flags[std::size_t(p) * a.brickCount + brick] = 0;  // may be queued again in round + 2
+      visitBrick<R, W>(a, brick, round, sD, sQ, &sMask, t);
     }
-    if (blockIdx.x == 0 && threadIdx.x == 0) a.buf.counters[(round + 2) % 3] = 0;
+    if (blockIdx.x == 0 && t == 0) a.buf.counters[(round + 2) % 3] = 0;
     grid.sync();
   }
-  if (blockIdx.x == 0 && threadIdx.x == 0) {
+  if (blockIdx.x == 0 && t == 0) {
     a.buf.result[0] = round;
     a.buf.result[1] = active;
   }
 }
 
-// Start of the rounds from any field that is at or above the fixed point (the initial field, or
-// one after whole-volume passes): both snapshots become copies of the field, and every brick that
-// holds a voxel some neighbour can still lower (the same step costs and float operations as the
-// sweeps) is queued for round 0.
+// Start of the rounds from any field at or above the fixed point (the initial field, or one after
+// whole-volume passes). Both snapshots get the field's brick-boundary voxels (the only ones a halo
+// reads), and every brick holding a voxel that some neighbour can still lower (the same step
+// costs and float operations as the sweeps) is queued for round 0. Each finite voxel u looks at
+// its 26 neighbours v and queues v's brick if D(u) + c(u→v) < D(v); an infinite voxel lowers
+// nothing, so a field of seeds alone costs one read per voxel. Thread (x, y) of a 32 × 8 tile walks
+// kStartZ planes; the field is read through the read-only cache (nothing writes it here).
+constexpr int kStartZ = 8;
+
 template <StepRule R, WeightRule W>
-__global__ void startBricks(SolveArgs a) {
-  const std::size_t nx = std::size_t(a.n[0]), nxy = nx * std::size_t(a.n[1]), count = nxy * std::size_t(a.n[2]);
-  for (std::size_t i = blockIdx.x * std::size_t(blockDim.x) + threadIdx.x; i < count;
-       i += std::size_t(gridDim.x) * blockDim.x) {
-    const float v = a.buf.field[i];
-    a.buf.shell[0][i] = v;
-    a.buf.shell[1][i] = v;
-    const int x = int(i % nx), y = int((i / nx) % std::size_t(a.n[1])), z = int(i / nxy);
-    const std::uint8_t qb = a.buf.density[i];
-    float best = v;
+__global__ void __launch_bounds__(256) startBricks(SolveArgs a) {
+  const int x = int(blockIdx.x) * 32 + int(threadIdx.x), y = int(blockIdx.y) * 8 + int(threadIdx.y);
+  if (x >= a.n[0] || y >= a.n[1]) return;
+  const std::size_t nx = std::size_t(a.n[0]), nxy = nx * std::size_t(a.n[1]);
+  const int z0 = int(blockIdx.z) * kStartZ, z1 = min(z0 + kStartZ, a.n[2]);
+  const bool edgeXY = x % kEdge == 0 || x % kEdge == kEdge - 1 || y % kEdge == 0 || y % kEdge == kEdge - 1;
+  for (int z = z0; z < z1; ++z) {
+    const std::size_t i = std::size_t(x) + nx * std::size_t(y) + nxy * std::size_t(z);
+    const float u = __ldg(a.buf.field + i);
+    if (edgeXY || z % kEdge == 0 || z % kEdge == kEdge - 1) {
+      a.buf.shell[0][i] = u;
+      a.buf.shell[1][i] = u;
+    }
+    if (!(u < kInf)) continue;
+    const std::uint8_t qa = kNeedsNeighbourDensity<R, W> ? __ldg(a.buf.density + i) : 0;
+#pragma unroll
     for (int dz = -1; dz <= 1; ++dz) {
       if (z + dz < 0 || z + dz >= a.n[2]) continue;
+#pragma unroll
       for (int dy = -1; dy <= 1; ++dy) {
         if (y + dy < 0 || y + dy >= a.n[1]) continue;
+#pragma unroll
         for (int dx = -1; dx <= 1; ++dx) {
           if ((dx | dy | dz) == 0 || x + dx < 0 || x + dx >= a.n[0]) continue;
-          const std::size_t j = std::size_t(x + dx) + nx * std::size_t(y + dy) + nxy * std::size_t(z + dz);
+          const std::size_t j = i + std::ptrdiff_t(dx) + std::ptrdiff_t(dy) * std::ptrdiff_t(nx) + std::ptrdiff_t(dz) * std::ptrdiff_t(nxy);
           const float len = a.len27[(dx + 1) + 3 * (dy + 1) + 9 * (dz + 1)];
-          best = wdt::minf(best, a.buf.field[j] + stepCost<R, W>(a.buf.density[j], qb, len, a.base));
+          if (u + stepCost<R, W>(qa, __ldg(a.buf.density + j), len, a.base) < __ldg(a.buf.field + j)) {
+            const int brick = (x + dx) / kEdge + a.bricks[0] * ((y + dy) / kEdge + a.bricks[1] * ((z + dz) / kEdge));
+            // Many voxels share a brick: look before taking the atomic.
+            if (*static_cast<volatile int*>(a.buf.flags + brick) == 0) activate(a, brick, 0, 0);
+          }
         }
       }
-    }
-    if (best < v) {
-      const int brick = x / kBrick + a.bricks[0] * (y / kBrick + a.bricks[1] * (z / kBrick));
-      // Many voxels share a brick: look before taking the atomic.
-      if (*static_cast<volatile int*>(a.buf.flags + brick) == 0) activate(a, brick, 0, 0);
     }
   }
 }
@@ -262,8 +283,7 @@ SolveArgs makeArgs(const BrickSolveBuffers& b, int nx, int ny, int nz) {
   SolveArgs a{};
   a.buf = b;
   a.n[0] = nx, a.n[1] = ny, a.n[2] = nz;
-  a.bricks[0] = (nx + kBrick - 1) / kBrick, a.bricks[1] = (ny + kBrick - 1) / kBrick,
-  a.bricks[2] = (nz + kBrick - 1) / kBrick;
+  a.bricks[0] = (nx + kEdge - 1) / kEdge, a.bricks[1] = (ny + kEdge - 1) / kEdge, a.bricks[2] = (nz + kEdge - 1) / kEdge;
   a.brickCount = int(brickCount(nx, ny, nz));
   return a;
 }
@@ -274,8 +294,8 @@ Status launchSolve(const SolveArgs& a, cudaStream_t stream) {
   if (count == 0) return {};
   AT_TRY(check(cudaMemsetAsync(a.buf.flags, 0, 2 * std::size_t(a.brickCount) * sizeof(int), stream), "cudaMemsetAsync(brick flags)"));
   AT_TRY(check(cudaMemsetAsync(a.buf.counters, 0, 3 * sizeof(int), stream), "cudaMemsetAsync(brick counters)"));
-  const std::size_t startBlocks = (count + 255) / 256;
-  startBricks<R, W><<<unsigned(startBlocks < 8192 ? startBlocks : 8192), 256, 0, stream>>>(a);
+  const dim3 startGrid(unsigned((a.n[0] + 31) / 32), unsigned((a.n[1] + 7) / 8), unsigned((a.n[2] + kStartZ - 1) / kStartZ));
+  startBricks<R, W><<<startGrid, dim3(32, 8), 0, stream>>>(a);
   AT_TRY(check(cudaGetLastError(), "launch of the brick start kernel"));
 
   auto* kernel = solveBricks<R, W>;
@@ -284,9 +304,8 @@ Status launchSolve(const SolveArgs& a, cudaStream_t stream) {
   AT_TRY(check(cudaDeviceGetAttribute(&sms, cudaDevAttrMultiProcessorCount, device), "cudaDeviceGetAttribute(SM count)"));
   AT_TRY(check(cudaOccupancyMaxActiveBlocksPerMultiprocessor(&perSm, kernel, kThreads, 0), "cudaOccupancyMaxActiveBlocksPerMultiprocessor(brick solver)"));
   if (perSm < 1) return fail("WDT CUDA backend: the brick solver's blocks do not fit on a multiprocessor");
-  // Every block must be resident for the grid barrier; no more blocks than the bricks can use.
-  const int needed = (a.brickCount + kWarps - 1) / kWarps;
-  const int blocks = needed < perSm * sms ? needed : perSm * sms;
+  // Every block must be resident for the grid barrier; no more blocks than there are bricks.
+  const int blocks = a.brickCount < perSm * sms ? a.brickCount : perSm * sms;
   SolveArgs args = a;
   void* params[] = {&args};
   return check(cudaLaunchCooperativeKernel(reinterpret_cast<const void*>(kernel), dim3(unsigned(blocks)),
@@ -297,8 +316,8 @@ Status launchSolve(const SolveArgs& a, cudaStream_t stream) {
 }  // namespace
 
 std::size_t brickCount(int nx, int ny, int nz) {
-  return std::size_t((nx + kBrick - 1) / kBrick) * std::size_t((ny + kBrick - 1) / kBrick) *
-         std::size_t((nz + kBrick - 1) / kBrick);
+  return std::size_t((nx + kEdge - 1) / kEdge) * std::size_t((ny + kEdge - 1) / kEdge) *
+         std::size_t((nz + kEdge - 1) / kEdge);
 }
 
 Status launchBrickSolve(const BrickSolveBuffers& b, int nx, int ny, int nz, const BrickSolveParams& params,

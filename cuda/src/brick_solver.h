@@ -24,7 +24,10 @@ struct BrickSolveBuffers {
   int* result = nullptr;  // after launchBrickSolve: [0] rounds run, [1] bricks still active
 };
 
-// Bricks of 8³ voxels covering the grid.
+// Edge of the bricks, in voxels.
+constexpr int kBrickEdge = 16;
+
+// Bricks of kBrickEdge³ voxels covering the grid.
 std::size_t brickCount(int nx, int ny, int nz);
 
 struct BrickSolveParams {
@@ -37,12 +40,12 @@ struct BrickSolveParams {
 
 // Relaxes `field` (any field at or above the fixed point: the initial one, or one after some
 // whole-volume passes) to the fixed point of the 26-neighbour step costs, equal to the converged
-// sweeps and to the exact reference. A start kernel copies the field into both halo snapshots and
-// queues every brick holding a voxel that a neighbour can still lower; then one cooperative kernel
-// runs rounds: each active brick sweeps its voxels x+ x− y+ y− z+ z− (the sweeps' plane updates,
-// on the brick and a one-voxel halo) until a local pass changes nothing (at most 4 local passes),
-// and queues the bricks next to any boundary voxel that decreased. Stops when no brick is active
-// or after maxRounds rounds; writes rounds run and bricks still active to result.
+// sweeps and to the exact reference. A start kernel copies the field's brick-boundary voxels into
+// both halo snapshots and queues every brick holding a voxel that a neighbour can still lower;
+// then one cooperative kernel runs rounds: each active brick sweeps its voxels once x+ x− y+ y−
+// z+ z− (the sweeps' plane updates, on the brick and a one-voxel halo), queues the bricks next to
+// any boundary voxel that decreased, and queues itself again if anything decreased. Stops when no
+// brick is active or after maxRounds rounds; writes rounds run and bricks still active to result.
 Status launchBrickSolve(const BrickSolveBuffers& b, int nx, int ny, int nz, const BrickSolveParams& params,
                         cudaStream_t stream);
 

@@ -326,10 +326,18 @@ Status loadHostProblem(Workspace& w, const WdtProblem& problem) {
   return finishLoading(w, problem.grid, problem.params);
 }
 
-// Measured on an H100 (bench/RESULTS.md, fifth session): 3 beat 2 on the cochlea phantom and at
-// 512³, tied at 256³ and on the real CT, lost at 128³ (1.30 against 1.04 ms).
-constexpr int kDefaultSweepsBeforeBricks = 3;
-std::atomic<int> gSweepsBeforeBricks{kDefaultSweepsBeforeBricks};
+// Whole-volume passes before the brick rounds in converge mode; negative: sweepsBeforeBricks's
+// default. Measured on an H100 (bench/RESULTS.md, sixth session): up to 128³ voxels rounds from
+// the seeds were fastest on every input (synthetic head, cochlea phantom, both real-CT
+// structures); at 256³ and 512³ passes first won, 3 ahead of 2 on the cochlea phantom and behind
+// it on the synthetic head.
+std::atomic<int> gSweepsBeforeBricks{-1};
+
+int sweepsBeforeBricks(Dims d) {
+  const int forced = gSweepsBeforeBricks.load();
+  if (forced >= 0) return forced;
+  return d.count() <= std::size_t(128) * 128 * 128 ? 0 : 3;
+}
 
 // Brick rounds (brick_solver.h) from the field in w.a, at most maxPasses × 2 × (bricks along the
 // longest axis) rounds. Cancellation is looked at before the rounds start (they take
@@ -356,7 +364,7 @@ Status runBrickRounds(Workspace& w, const WdtParams& params, const WdtControl& c
   bp.baseCost = params.baseCost;
   bp.rule = params.rule;
   bp.weight = params.weight;
-  const long longest = (std::max({d.x, d.y, d.z}) + 7) / 8;
+  const long longest = (std::max({d.x, d.y, d.z}) + kBrickEdge - 1) / kBrickEdge;
   bp.maxRounds = int(std::min<long>(long(params.maxPasses) * 2 * longest, 1L << 30));
   AT_TRY(w.start.record(w.stream));
   AT_TRY(launchBrickSolve(b, d.x, d.y, d.z, bp, s));
@@ -373,14 +381,14 @@ Status runBrickRounds(Workspace& w, const WdtParams& params, const WdtControl& c
 }
 
 // Runs the passes on a loaded workspace; the field ends in w.a. Converge mode, where the brick
-// solver's buffers can be allocated, runs gSweepsBeforeBricks passes and then brick rounds.
+// solver's buffers can be allocated, runs sweepsBeforeBricks passes and then brick rounds.
 Status runPasses(Workspace& w, const WdtParams& params, const WdtControl& control, WdtStats& stats) {
   const cudaStream_t s = w.stream.get();
 
   stats.backendUsed = WdtBackend::Cuda;
   stats.device = queryDevice().name;
   const bool bricks = params.converge && w.allocateBrickSolver();
-  const int planned = !params.converge ? params.passes : bricks ? std::min(params.maxPasses, gSweepsBeforeBricks.load())
+  const int planned = !params.converge ? params.passes : bricks ? std::min(params.maxPasses, sweepsBeforeBricks(w.dims))
                                                                 : params.maxPasses;
   bool lastChanged = true;
   for (int pass = 0; pass < planned; ++pass) {
@@ -412,7 +420,7 @@ Status runPasses(Workspace& w, const WdtParams& params, const WdtControl& contro
 
 }  // namespace
 
-void setConvergeSweepsBeforeBricks(int passes) { gSweepsBeforeBricks = passes < 0 ? kDefaultSweepsBeforeBricks : passes; }
+void setConvergeSweepsBeforeBricks(int passes) { gSweepsBeforeBricks = passes < 0 ? -1 : passes; }
 
 Result<DeviceField> makeDeviceField(const Geometry& grid, float fill) {
   if (!queryDevice().available) return fail("CUDA device field: " + queryDevice().reason);

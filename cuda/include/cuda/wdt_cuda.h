@@ -5,8 +5,9 @@
 // fields equal the CPU backend's bit for bit after any number of passes (and hence the exact
 // reference once converged). Deterministic: no thread reads data written in the same launch by
 // another block. A pass is replayed as one CUDA graph: progress and cancellation are per pass.
-// Converge mode runs three passes, then rounds over 8³ bricks that follow what still changes (see
-// setConvergeSweepsBeforeBricks); the rounds are one kernel, cancellable only before they start,
+// Converge mode runs rounds over 16³ bricks that follow what still changes, from the seeds on grids
+// of up to 128³ voxels and after three passes on larger ones (see setConvergeSweepsBeforeBricks);
+// the rounds are one kernel, cancellable only before they start,
 // and need one more field-sized device buffer (if it cannot be allocated, converge mode runs
 // passes only).
 // Device buffers, staging memory and the captured pass are kept for the next call on a grid of
@@ -32,9 +33,10 @@ struct DeviceInfo {
 // Queries device 0 once per process (cached).
 const DeviceInfo& queryDevice();
 
-// Converge mode runs this many whole-volume passes (negative: the default, 3), then brick rounds
-// that finish the bricks still changing (cuda/src/brick_solver.h); the field is the same fixed
-// point either way. Process-wide, for tests and benchmarks.
+// Converge mode runs this many whole-volume passes, then brick rounds that finish the bricks still
+// changing (cuda/src/brick_solver.h); the field is the same fixed point either way. Negative: the
+// default, 0 on grids of up to 128³ voxels and 3 above (measured on an H100, bench/RESULTS.md).
+// Process-wide, for tests and benchmarks.
 void setConvergeSweepsBeforeBricks(int passes);
 
 // Computes the field on the GPU and copies it back. Errors carry the failing CUDA call's name and

@@ -59,8 +59,9 @@ struct DistanceField {
 
 struct WdtStats {
   // "sweeps": whole-volume passes only (passesRun, msPerPass). "sweeps+bricks" (the CUDA backend's
-  // converge mode) or "bricks" (the same with no pass first): passes, then `rounds` over the 8³
-  // bricks that still change; the field is the same fixed point the converged sweeps reach.
+  // converge mode on grids over 128³) or "bricks" (the same with no pass first, its default up to
+  // 128³): passes, then `rounds` over the 16³ bricks that still change; the field is the same
+  // fixed point the converged sweeps reach.
   std::string scheme = "sweeps";
   int passesRun = 0;
   int rounds = 0;
