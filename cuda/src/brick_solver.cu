@@ -50,7 +50,7 @@ constexpr int kCells = kStrideZ * kSide;     // sweep on different banks
 constexpr int kThreads = kEdge * kEdge;      // one thread per plane cell
 constexpr int kZPerThread = kEdge;           // voxels (x, y, 0..15) a thread writes back
 
-static_assert(kThreads == 256, "the sweep maps thread t to plane cell (t & 15, t >> 4)");
+static_assert(kThreads == 256 && kEdge == 16, "the sweep maps the 256 threads onto a 16 × 16 plane");
 
 __host__ __device__ constexpr int cellStride(int axis) { return axis == 0 ? 1 : axis == 1 ? kStrideY : kStrideZ; }
 __device__ __forceinline__ int cellIndex(int x, int y, int z) { return (x + 1) + kStrideY * (y + 1) + kStrideZ * (z + 1); }
@@ -90,34 +90,52 @@ __device__ __forceinline__ void activate(const SolveArgs& a, int brick, int pari
 }
 
 // One directional sweep pair (+ then −) along brick axis A over the brick in shared memory; thread
-// t owns plane cell (t & 15, t >> 4) of the plane axes (B, C). Returns whether its voxels
-// decreased. Every thread of the block must call it (it holds the block's barriers).
+// t owns one plane cell (ub, uc) of the plane axes (B, C). Returns whether its voxels decreased.
+// Every thread of the block must call it (it holds the block's barriers).
 template <StepRule R, WeightRule W, int A>
 __device__ __forceinline__ bool sweepAxis(float* s, const std::uint8_t* sq, const int ext[3], int t,
                                           const wdt::SweepLengths& l, float base) {
   constexpr bool kQn = kNeedsNeighbourDensity<R, W>;
   constexpr int BA = A == 0 ? 1 : 0, CA = A == 2 ? 1 : 2;  // plane axes: wdt::axisSweepLengths' order
   constexpr int sa = cellStride(A), sb = cellStride(BA), sc = cellStride(CA);
-  const int ub = t & (kEdge - 1), uc = t / kEdge;
+  // Which plane cell a thread owns, chosen so that a warp's 32 cells (and their neighbours at any
+  // one offset) fall on 32 different shared-memory banks: 16 b × 2 c in the x sweeps (y stride 18,
+  // odd z stride), 2 b × 16 c in the z sweeps (x, then y stride 18). The y sweeps (x and z) keep
+  // 16 × 2 and read with 2-way conflicts; no padding of the two strides avoids them on all axes.
+  const int ub = A == 2 ? 2 * (t / 32) + (t & 1) : t & (kEdge - 1);
+  const int uc = A == 2 ? (t & 31) >> 1 : t / kEdge;
   const bool valid = ub < ext[BA] && uc < ext[CA];
   const int lateral = (ub + 1) * sb + (uc + 1) * sc;
   bool changed = false;
 #pragma unroll
   for (int dir = 1; dir >= -1; dir -= 2) {
+    // The cell straight behind is the thread's own from the step before: kept in a register.
+    float own = kInf;
+    bool haveOwn = false;
 #pragma unroll 4
     for (int step = 0; step < kEdge; ++step) {
       const int pa = dir > 0 ? step : kEdge - 1 - step;
       if (valid && pa < ext[A]) {
-        const int idx = lateral + (pa + 1) * sa;
+        const int idx = lateral + (pa + 1) * sa, prev = idx - dir * sa;
         float n[3][3];
         std::uint8_t qn[3][3];
-        gatherNeighbours<kQn>(s, sq, idx - dir * sa, sb, sc, n, qn);
+#pragma unroll
+        for (int dc = 0; dc < 3; ++dc) {
+#pragma unroll
+          for (int db = 0; db < 3; ++db) {
+            const int i = prev + (dc - 1) * sc + (db - 1) * sb;
+            n[dc][db] = dc == 1 && db == 1 ? (haveOwn ? own : s[i]) : s[i];
+            qn[dc][db] = kQn ? sq[i] : 0;
+          }
+        }
         const float cur = s[idx];
         const float v = relax<R, W>(cur, n, qn, sq[idx], l, base);
         if (v < cur) {
           s[idx] = v;
           changed = true;
         }
+        own = wdt::minf(v, cur);
+        haveOwn = true;
       }
       __syncthreads();
     }
