@@ -32,8 +32,6 @@
 
 #include <cooperative_groups.h>
 
-#include <string>
-
 #include "cuda_util.h"
 #include "sweep_rules.cuh"
 
