@@ -35,8 +35,7 @@ struct Offset {
   float len;
 };
 
-// The 26 steps and their lengths, taken from the sweep that handles them (any sweep along an axis
-// in which the step moves gives the same float; axisSweepLengths guarantees it).
+// The 26 steps and their lengths (wdt::stepLength: the float every sweep that takes a step uses).
 std::vector<Offset> offsets(const Geometry& g) {
   const float sx = float(g.spacingMm[0]), sy = float(g.spacingMm[1]), sz = float(g.spacingMm[2]);
   const Dims d = g.dims;
@@ -45,18 +44,8 @@ std::vector<Offset> offsets(const Geometry& g) {
     for (int dy = -1; dy <= 1; ++dy)
       for (int dx = -1; dx <= 1; ++dx) {
         if (!dx && !dy && !dz) continue;
-        float len;
-        if (dx) {  // x sweep: b = y, c = z
-          const wdt::SweepLengths l = wdt::axisSweepLengths(0, sx, sy, sz);
-          len = dy ? (dz ? l.diagonal : l.alongB) : (dz ? l.alongC : l.straight);
-        } else if (dy) {  // y sweep: b = x (0 here), c = z
-          const wdt::SweepLengths l = wdt::axisSweepLengths(1, sx, sy, sz);
-          len = dz ? l.alongC : l.straight;
-        } else {
-          len = wdt::axisSweepLengths(2, sx, sy, sz).straight;
-        }
         const std::int64_t delta = dx + std::int64_t(d.x) * (dy + std::int64_t(d.y) * dz);
-        out.push_back({dx, dy, dz, delta, len});
+        out.push_back({dx, dy, dz, delta, wdt::stepLength(dx, dy, dz, sx, sy, sz)});
       }
   return out;
 }
@@ -72,7 +61,7 @@ void prefetchNeighbourhood(std::uint32_t v, Dims d, const float* dist, const std
       // Integer addresses: rows of border voxels may fall outside the arrays, which a prefetch
       // (a hint, never a fault) tolerates but pointer arithmetic would not.
       const std::int64_t r = std::int64_t(v) + dy * nx + dz * nxy;
-      __builtin_prefetch(reinterpret_cast<const void*>(std::uintptr_t(dist) + std::uintptr_t(r * 4)), 1);
+      __builtin_prefetch(reinterpret_cast<const void*>(std::uintptr_t(dist) + std::uintptr_t(r * std::int64_t(sizeof(float)))), 1);
       __builtin_prefetch(reinterpret_cast<const void*>(std::uintptr_t(q) + std::uintptr_t(r)), 0);
     }
 }

@@ -62,6 +62,20 @@ AT_HOST_DEVICE inline SweepLengths axisSweepLengths(int axis, float sx, float sy
   return {sz, sqrtf_portable(xx + zz), sqrtf_portable(yy + zz), diagonal};
 }
 
+// Length of the step (dx, dy, dz) ∈ {−1, 0, 1}³ \ {0} to one of the 26 neighbours: the length a
+// sweep along any axis the step moves in gives it (axisSweepLengths makes them one float).
+AT_HOST_DEVICE inline float stepLength(int dx, int dy, int dz, float sx, float sy, float sz) {
+  if (dx) {
+    const SweepLengths l = axisSweepLengths(0, sx, sy, sz);  // b = y, c = z
+    return dy ? (dz ? l.diagonal : l.alongB) : (dz ? l.alongC : l.straight);
+  }
+  if (dy) {
+    const SweepLengths l = axisSweepLengths(1, sx, sy, sz);  // b = x (no step), c = z
+    return dz ? l.alongC : l.straight;
+  }
+  return axisSweepLengths(2, sx, sy, sz).straight;
+}
+
 // The smaller of two distances. Distances are never NaN or −0 (sums of +0, positive costs and
 // +infinity), so the compare-select and the GPU's min instruction give the same bits; the GPU
 // uses its single min instruction (a compare and a select would be two).
