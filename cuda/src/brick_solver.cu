@@ -32,6 +32,8 @@
 
 #include <cooperative_groups.h>
 
+#include <algorithm>
+
 #include "cuda_util.h"
 #include "sweep_rules.cuh"
 
@@ -107,33 +109,20 @@ __device__ __forceinline__ bool sweepAxis(float* s, const std::uint8_t* sq, cons
   bool changed = false;
 #pragma unroll
   for (int dir = 1; dir >= -1; dir -= 2) {
-    // The cell straight behind is the thread's own from the step before: kept in a register.
-    float own = kInf;
-    bool haveOwn = false;
 #pragma unroll 4
     for (int step = 0; step < kEdge; ++step) {
       const int pa = dir > 0 ? step : kEdge - 1 - step;
       if (valid && pa < ext[A]) {
-        const int idx = lateral + (pa + 1) * sa, prev = idx - dir * sa;
+        const int idx = lateral + (pa + 1) * sa;
         float n[3][3];
         std::uint8_t qn[3][3];
-#pragma unroll
-        for (int dc = 0; dc < 3; ++dc) {
-#pragma unroll
-          for (int db = 0; db < 3; ++db) {
-            const int i = prev + (dc - 1) * sc + (db - 1) * sb;
-            n[dc][db] = dc == 1 && db == 1 ? (haveOwn ? own : s[i]) : s[i];
-            qn[dc][db] = kQn ? sq[i] : 0;
-          }
-        }
+        gatherNeighbours<kQn>(s, sq, idx - dir * sa, sb, sc, n, qn);
         const float cur = s[idx];
         const float v = relax<R, W>(cur, n, qn, sq[idx], l, base);
         if (v < cur) {
           s[idx] = v;
           changed = true;
         }
-        own = wdt::minf(v, cur);
-        haveOwn = true;
       }
       __syncthreads();
     }
@@ -300,7 +289,7 @@ SolveArgs makeArgs(const BrickSolveBuffers& b, int nx, int ny, int nz) {
   a.buf = b;
   a.n[0] = nx, a.n[1] = ny, a.n[2] = nz;
   a.bricks[0] = (nx + kEdge - 1) / kEdge, a.bricks[1] = (ny + kEdge - 1) / kEdge, a.bricks[2] = (nz + kEdge - 1) / kEdge;
-  a.brickCount = int(brickCount(nx, ny, nz));
+  a.brickCount = a.bricks[0] * a.bricks[1] * a.bricks[2];
   return a;
 }
 
@@ -315,13 +304,19 @@ Status launchSolve(const SolveArgs& a, cudaStream_t stream) {
   AT_TRY(check(cudaGetLastError(), "launch of the brick start kernel"));
 
   auto* kernel = solveBricks<R, W>;
-  int device = 0, sms = 0, perSm = 0;
-  AT_TRY(check(cudaGetDevice(&device), "cudaGetDevice"));
-  AT_TRY(check(cudaDeviceGetAttribute(&sms, cudaDevAttrMultiProcessorCount, device), "cudaDeviceGetAttribute(SM count)"));
-  AT_TRY(check(cudaOccupancyMaxActiveBlocksPerMultiprocessor(&perSm, kernel, kThreads, 0), "cudaOccupancyMaxActiveBlocksPerMultiprocessor(brick solver)"));
-  if (perSm < 1) return fail("WDT CUDA backend: the brick solver's blocks do not fit on a multiprocessor");
-  // Every block must be resident for the grid barrier; no more blocks than there are bricks.
-  const int blocks = a.brickCount < perSm * sms ? a.brickCount : perSm * sms;
+  // Every block must be resident for the grid barrier: at most the blocks that fit on the device
+  // (device 0, the only one the backend uses; asked once), and no more than there are bricks.
+  static const Result<int> resident = [kernel]() -> Result<int> {
+    int device = 0, sms = 0, perSm = 0;
+    AT_TRY(check(cudaGetDevice(&device), "cudaGetDevice"));
+    AT_TRY(check(cudaDeviceGetAttribute(&sms, cudaDevAttrMultiProcessorCount, device), "cudaDeviceGetAttribute(SM count)"));
+    AT_TRY(check(cudaOccupancyMaxActiveBlocksPerMultiprocessor(&perSm, kernel, kThreads, 0),
+                 "cudaOccupancyMaxActiveBlocksPerMultiprocessor(brick solver)"));
+    if (perSm < 1) return fail("WDT CUDA backend: the brick solver's blocks do not fit on a multiprocessor");
+    return perSm * sms;
+  }();
+  if (!resident) return tl::unexpected(resident.error());
+  const int blocks = std::min(a.brickCount, *resident);
   SolveArgs args = a;
   void* params[] = {&args};
   return check(cudaLaunchCooperativeKernel(reinterpret_cast<const void*>(kernel), dim3(unsigned(blocks)),
@@ -341,17 +336,10 @@ Status launchBrickSolve(const BrickSolveBuffers& b, int nx, int ny, int nz, cons
   SolveArgs a = makeArgs(b, nx, ny, nz);
   const float sx = params.spacing[0], sy = params.spacing[1], sz = params.spacing[2];
   for (int axis = 0; axis < 3; ++axis) a.lengths[axis] = wdt::axisSweepLengths(axis, sx, sy, sz);
-  const wdt::SweepLengths lx = a.lengths[0], ly = a.lengths[1], lz = a.lengths[2];
   for (int dz = -1; dz <= 1; ++dz)
     for (int dy = -1; dy <= 1; ++dy)
-      for (int dx = -1; dx <= 1; ++dx) {
-        const int axes = (dx != 0) + (dy != 0) + (dz != 0);
-        float len = 0;
-        if (axes == 3) len = lx.diagonal;
-        else if (axes == 1) len = dx ? lx.straight : dy ? ly.straight : lz.straight;
-        else if (axes == 2) len = !dz ? lx.alongB : !dy ? lx.alongC : ly.alongC;
-        a.len27[(dx + 1) + 3 * (dy + 1) + 9 * (dz + 1)] = len;
-      }
+      for (int dx = -1; dx <= 1; ++dx)
+        a.len27[(dx + 1) + 3 * (dy + 1) + 9 * (dz + 1)] = wdt::stepLength(dx, dy, dz, sx, sy, sz);
   a.base = params.baseCost;
   a.maxRounds = params.maxRounds;
   return launchForRule(params.rule, params.weight, [&]<StepRule R, WeightRule W>() { return launchSolve<R, W>(a, stream); });
