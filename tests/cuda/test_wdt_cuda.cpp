@@ -240,8 +240,8 @@ TEST_CASE("converge mode runs brick rounds that equal the CPU and the exact refe
       } else {
         CHECK(stats.passesRun >= 1);
         CHECK(stats.passesRun <= sweepsFirst);
-        // Converged within the passes ("sweeps"), or finished by rounds (perhaps none, when the
-        // start finds every voxel settled).
+        // Converged within the passes ("sweeps", no rounds), or finished by rounds (perhaps zero
+        // rounds, when the start kernel finds every voxel settled).
         CHECK((stats.scheme == "sweeps+bricks" || (stats.scheme == "sweeps" && stats.rounds == 0)));
       }
       CHECK_MESSAGE(sameBits(gpu, cpu), describeDifference(gpu, cpu, p.grid.dims));

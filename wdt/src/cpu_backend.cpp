@@ -648,10 +648,6 @@ void worker(Run& run, int tid) {
   if (tid == 0) run.cancelled = run.stop;
 }
 
-}  // namespace
-
-namespace {
-
 // The x sweeps' scratch arrays (dT, qT) of the most recent size, kept between calls: fresh ones
 // cost their page faults and zeroing in every call (80 MB at 256³: 10–12 ms of a 2-pass field's
 // ~120 ms, bench/RESULTS.md). One set, of at most kKeptScratchVoxels (80 MB stays allocated; a

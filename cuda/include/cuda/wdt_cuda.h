@@ -6,10 +6,9 @@
 // reference once converged). Deterministic: no thread reads data written in the same launch by
 // another block. A pass is replayed as one CUDA graph: progress and cancellation are per pass.
 // Converge mode runs rounds over 16³ bricks that follow what still changes, from the seeds on grids
-// of up to 128³ voxels and after three passes on larger ones (see setConvergeSweepsBeforeBricks);
-// the rounds are one kernel, cancellable only before they start,
-// and need one more field-sized device buffer (if it cannot be allocated, converge mode runs
-// passes only).
+// of up to 128³ voxels and after three passes on larger ones (see setConvergeSweepsBeforeBricks).
+// The rounds are one kernel, cancellable only before they start, and need one more field-sized
+// device buffer (if it cannot be allocated, converge mode runs passes only).
 // Device buffers, staging memory and the captured pass are kept for the next call on a grid of
 // the same size (the two most recent sizes: about 10 bytes of device memory per voxel each, held
 // until the process ends or an allocation needs the memory).
