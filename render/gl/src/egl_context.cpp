@@ -1,5 +1,7 @@
 #include "render/gl/egl_context.h"
 
+#include <dlfcn.h>
+
 #include <cstring>
 #include <vector>
 
@@ -87,6 +89,14 @@ EglContext::EglContext(EglContext&&) noexcept = default;
 EglContext& EglContext::operator=(EglContext&&) noexcept = default;
 
 Result<EglContext> EglContext::create() {
+  // libepoxy loads libEGL on the first EGL call and aborts the whole process when it cannot; look
+  // for it first so that a machine without EGL gets an error instead. The handle stays open (the
+  // library is then already loaded when libepoxy asks for it).
+  if (!dlopen("libEGL.so.1", RTLD_LAZY | RTLD_LOCAL)) {
+    const char* reason = dlerror();
+    return fail(std::string("EGL: libEGL.so.1 could not be loaded (") + (reason ? reason : "unknown reason") +
+                "); install the EGL library (Debian: libegl1)");
+  }
   auto state = std::make_unique<State>();
   std::string why;
   state->display = openDisplay(why);
