@@ -2,10 +2,11 @@
 //
 //   wdt_bench [--sizes 128,256,512] [--backends cpu,cuda] [--repeats 10] [--modes 1,2,converge]
 //             [--sweeps-before-bricks N]   (CUDA converge: whole-volume passes before brick rounds)
-//             [--data DIR] [--no-real] [--exact-max 256] [--threads N]
+//             [--structures cochlea,...] [--data DIR] [--no-real] [--exact-max 256] [--threads N]
 //
-// Datasets: the phantom at each size (seeded at the cochlea) and, when DIR/totalsegmentator holds
-// ct_small.nii.gz and seg_small.nii.gz, the real abdominal CT seeded at the left kidney and at L1.
+// Datasets: the phantom at each size (seeded at each of --structures, the cochlea by default)
+// and, when DIR/totalsegmentator holds ct_small.nii.gz and seg_small.nii.gz, the real abdominal CT
+// seeded at the left kidney and at L1.
 // Per configuration: one warm-up run, then `repeats` runs; ms_per_pass is the median over all
 // passes of all runs (the backends time each pass: CPU wall clock, CUDA events), ms_total the
 // median of the runs' totals. Accuracy against the exact reference (Dijkstra, timed once) where
@@ -45,6 +46,7 @@ struct Options {
   std::string dataDir = "../shared/data";
   bool real = true;
   int exactMax = 256;
+  std::vector<std::string> structures{"cochlea"};  // phantom structures to seed at, one case each
 };
 
 std::vector<std::string> split(const std::string& s) {
@@ -84,6 +86,8 @@ std::optional<Options> parseOptions(int argc, char** argv) {
       o.repeats = std::max(1, std::atoi(v->c_str()));
     } else if (a == "--data") {
       o.dataDir = *v;
+    } else if (a == "--structures") {
+      o.structures = split(*v);
     } else if (a == "--exact-max") {
       o.exactMax = std::atoi(v->c_str());
     } else if (a == "--sweeps-before-bricks") {
@@ -256,18 +260,25 @@ int main(int argc, char** argv) {
   if (!options) {
     std::fprintf(stderr,
                  "usage: wdt_bench [--sizes 128,256,512] [--backends cpu,cuda] [--repeats 10] "
-                 "[--modes 1,2,converge] [--data DIR] [--no-real] [--exact-max 256] [--threads N]\n");
+                 "[--modes 1,2,converge] [--structures cochlea,...] [--data DIR] [--no-real] [--exact-max 256] [--threads N]\n");
     return 2;
   }
   for (int size : options->sizes) {
     PhantomOptions po;
     po.size = size;
     Dataset ds = makePhantom(po);
-    const Structure* s = ds.findStructure("cochlea");
-    if (!s && !ds.structures.empty()) s = &ds.structures.front();
-    if (!s) continue;
-    Case c{"phantom:" + std::to_string(size), s->id, std::move(ds.volume), structureMask(ds.labels, s->label)};
-    runCase(c, *options);
+    for (const std::string& id : options->structures) {
+      const Structure* s = ds.findStructure(id);
+      if (!s) {
+        std::string known;
+        for (const Structure& k : ds.structures) known += (known.empty() ? "" : ", ") + k.id;
+        std::fprintf(stderr, "wdt_bench: --structures: the phantom has no structure '%s' (it has %s)\n", id.c_str(),
+                     known.c_str());
+        return 2;
+      }
+      Case c{"phantom:" + std::to_string(size), s->id, ds.volume, structureMask(ds.labels, s->label)};
+      runCase(c, *options);
+    }
   }
   if (options->real) {
     for (const char* label : {"kidney_left", "vertebrae_L1"})
