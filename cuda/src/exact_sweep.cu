@@ -85,7 +85,7 @@ struct GroupArgs {
   int first;                 // step index (0-based, in sweep order) of the group's first plane
   wdt::SweepLengths lengths; // B = u, C = v
   float base;
-  int* changed;
+  unsigned long long* lowered;
 };
 
 // Region voxel number n (the tile first, row by row; then the halo ring by ring outwards, each
@@ -196,7 +196,7 @@ __global__ void __launch_bounds__(Shape::T, Shape::MinBlocks) sweepGroup(GroupAr
   }
   __syncthreads();
 
-  bool changed = false;
+  int lowered = 0;  // tile voxels of this thread that the group lowered
 #pragma unroll
   for (int s = 1; s <= K; ++s) {
     if (s <= steps) {  // uniform across the block
@@ -215,7 +215,7 @@ __global__ void __launch_bounds__(Shape::T, Shape::MinBlocks) sweepGroup(GroupAr
           cur[r[k]] = v;
           if constexpr (kQn) sQ[s & 1][r[k]] = q[s - 1][k];
           if (k < S::CoreSlots) {
-            changed |= v < old;
+            lowered += v < old;
             dstPlane[g[k]] = v;
           }
         }
@@ -223,14 +223,25 @@ __global__ void __launch_bounds__(Shape::T, Shape::MinBlocks) sweepGroup(GroupAr
       __syncthreads();
     }
   }
-  if (__syncthreads_or(changed) && threadIdx.x == 0) *p.changed = 1;
+  // The block's count: each warp's sum into shared memory, one barrier, then one global add by
+  // thread 0.
+  __shared__ int warpLowered[S::T / 32];
+  lowered = __reduce_add_sync(0xffffffffu, lowered);
+  if ((threadIdx.x & 31) == 0) warpLowered[threadIdx.x / 32] = lowered;
+  __syncthreads();
+  if (threadIdx.x == 0) {
+    int sum = 0;
+#pragma unroll
+    for (int i = 0; i < S::T / 32; ++i) sum += warpLowered[i];
+    if (sum) atomicAdd(p.lowered, static_cast<unsigned long long>(sum));
+  }
 }
 
 template <StepRule R, WeightRule W>
 Status launchGroups(const ExactSweepArgs& a, cudaStream_t stream) {
   using S = Shape;
   GroupArgs p{a.src, a.dst, a.density, a.nu, a.nv, a.na, a.strideV, a.strideA, a.direction, 0, a.lengths,
-              a.baseCost, a.changed};
+              a.baseCost, a.lowered};
   cudaLaunchConfig_t config{};
   config.gridDim = dim3((a.nu + S::TU - 1) / S::TU, (a.nv + S::TV - 1) / S::TV);
   config.blockDim = dim3(S::T);

@@ -16,7 +16,8 @@ Status launchInitDistances(float* d, const std::uint8_t* seeds, std::size_t coun
 
 // One sweep: planes of nu × nv lanes (u contiguous, stride 1; v stride strideV), na planes of
 // stride strideA, visited in `direction`. Reads `src` (the field before the sweep) and writes
-// every voxel of `dst`, exactly as a serial sweep would; sets *changed to 1 if any voxel decreased.
+// every voxel of `dst`, exactly as a serial sweep would; adds the number of voxels it lowered to
+// *lowered.
 struct ExactSweepArgs {
   const float* src = nullptr;
   float* dst = nullptr;
@@ -28,7 +29,7 @@ struct ExactSweepArgs {
   float baseCost = 0;
   StepRule rule = StepRule::Entering;
   WeightRule weight = WeightRule::Density;
-  int* changed = nullptr;
+  unsigned long long* lowered = nullptr;
 };
 Status launchExactSweep(const ExactSweepArgs& args, cudaStream_t stream);
 

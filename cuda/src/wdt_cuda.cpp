@@ -118,6 +118,8 @@ struct Workspace {
   DeviceBuffer<float> a, b;  // the field (in `a` between passes) and the sweeps' second buffer
   DeviceBuffer<int> flag;
   PinnedBuffer<int> flagHost;
+  DeviceBuffer<unsigned long long> lowered;  // voxels a pass lowered (sweep kernels add to it)
+  PinnedBuffer<unsigned long long> loweredHost;
   PinnedBuffer<std::uint8_t> staging[2];
   Event chunkDone[2];
   Event start, end;
@@ -156,6 +158,8 @@ struct Workspace {
     AT_ASSIGN(w->b, DeviceBuffer<float>::allocate(n));
     AT_ASSIGN(w->flag, DeviceBuffer<int>::allocate(1));
     AT_ASSIGN(w->flagHost, PinnedBuffer<int>::allocate(1));
+    AT_ASSIGN(w->lowered, DeviceBuffer<unsigned long long>::allocate(1));
+    AT_ASSIGN(w->loweredHost, PinnedBuffer<unsigned long long>::allocate(1));
     for (int i = 0; i < 2; ++i) {
       AT_ASSIGN(w->staging[i], PinnedBuffer<std::uint8_t>::allocate(kStagingBytes));
       AT_ASSIGN(w->chunkDone[i], Event::create(cudaEventDisableTiming));
@@ -271,7 +275,7 @@ Status preparePass(Workspace& w, const Geometry& grid, const WdtParams& params) 
     e.baseCost = key.baseCost;
     e.rule = key.rule;
     e.weight = key.weight;
-    e.changed = w.flag.get();
+    e.lowered = w.lowered.get();
     const float sx = key.spacing[0], sy = key.spacing[1], sz = key.spacing[2];
     const std::size_t nxy = std::size_t(d.x) * d.y;
     float* a = w.a.get();
@@ -326,17 +330,27 @@ Status loadHostProblem(Workspace& w, const WdtProblem& problem) {
   return finishLoading(w, problem.grid, problem.params);
 }
 
-// Whole-volume passes before the brick rounds in converge mode; negative: sweepsBeforeBricks's
-// default. Measured on an H100 (bench/RESULTS.md, sixth session): up to 128³ voxels rounds from
-// the seeds were fastest on every input (synthetic head, cochlea phantom, both real-CT
-// structures); at 256³ and 512³ passes first won, 3 ahead of 2 on the cochlea phantom and behind
-// it on the synthetic head.
+// Whole-volume passes before the brick rounds in converge mode; negative: the default below.
 std::atomic<int> gSweepsBeforeBricks{-1};
 
-int sweepsBeforeBricks(Dims d) {
+// The default, measured on an H100 (bench/RESULTS.md, sixth and seventh sessions). Up to 128³
+// voxels, rounds from the seeds were fastest on every input (synthetic head, cochlea phantom, both
+// real-CT structures). Above, passes first: 2, and a third when the second lowered more than
+// kThirdPassLowered values per voxel (a sweep that still lowers many values means paths that
+// still wind: the rounds would need many more visits than one more pass costs). On seven phantom
+// structures and the synthetic head at 256³ and 512³, the second pass lowered 0.36–0.98 values
+// per voxel where 2 passes were fastest and 1.36–1.82 where 3 were (the cochlea, the sigmoid
+// sinus); a fourth pass was slower everywhere.
+constexpr double kThirdPassLowered = 1.15;
+
+// Whether converge mode runs another whole-volume pass before the brick rounds, after `done`
+// passes of which the last lowered `lastLowered` values.
+bool anotherPassBeforeBricks(Dims d, int done, unsigned long long lastLowered) {
   const int forced = gSweepsBeforeBricks.load();
-  if (forced >= 0) return forced;
-  return d.count() <= std::size_t(128) * 128 * 128 ? 0 : 3;
+  if (forced >= 0) return done < forced;
+  if (d.count() <= std::size_t(128) * 128 * 128) return false;
+  if (done < 2) return true;
+  return done == 2 && double(lastLowered) > kThirdPassLowered * double(d.count());
 }
 
 // Brick rounds (brick_solver.h) from the field in w.a, at most maxPasses × 2 × (bricks along the
@@ -381,34 +395,41 @@ Status runBrickRounds(Workspace& w, const WdtParams& params, const WdtControl& c
 }
 
 // Runs the passes on a loaded workspace; the field ends in w.a. Converge mode, where the brick
-// solver's buffers can be allocated, runs sweepsBeforeBricks passes and then brick rounds.
+// solver's buffers can be allocated, runs the passes anotherPassBeforeBricks asks for and then
+// brick rounds.
 Status runPasses(Workspace& w, const WdtParams& params, const WdtControl& control, WdtStats& stats) {
   const cudaStream_t s = w.stream.get();
 
   stats.backendUsed = WdtBackend::Cuda;
   stats.device = queryDevice().name;
   const bool bricks = params.converge && w.allocateBrickSolver();
-  const int planned = !params.converge ? params.passes : bricks ? std::min(params.maxPasses, sweepsBeforeBricks(w.dims))
-                                                                : params.maxPasses;
+  const int limit = !params.converge ? params.passes : params.maxPasses;
   bool lastChanged = true;
-  for (int pass = 0; pass < planned; ++pass) {
+  unsigned long long lastLowered = 0;
+  for (int pass = 0; pass < limit; ++pass) {
+    if (bricks && !anotherPassBeforeBricks(w.dims, pass, lastLowered)) break;
     if (control.cancel && control.cancel->load(std::memory_order_relaxed)) {
       stats.cancelled = true;
       break;
     }
-    AT_TRY(check(cudaMemsetAsync(w.flag.get(), 0, sizeof(int), s), "cudaMemsetAsync(changed flag)"));
+    AT_TRY(check(cudaMemsetAsync(w.lowered.get(), 0, sizeof(unsigned long long), s), "cudaMemsetAsync(lowered count)"));
     AT_TRY(w.start.record(w.stream));
     AT_TRY(w.pass.launch(w.stream));
     AT_TRY(w.end.record(w.stream));
-    AT_TRY(check(cudaMemcpyAsync(w.flagHost.get(), w.flag.get(), sizeof(int), cudaMemcpyDeviceToHost, s),
-                 "cudaMemcpyAsync(changed flag, device to host)"));
+    AT_TRY(check(cudaMemcpyAsync(w.loweredHost.get(), w.lowered.get(), sizeof(unsigned long long),
+                                 cudaMemcpyDeviceToHost, s),
+                 "cudaMemcpyAsync(lowered count, device to host)"));
     AT_TRY(w.stream.synchronize());
     auto ms = w.end.millisecondsSince(w.start);
     if (!ms) return tl::unexpected(ms.error());
     stats.msPerPass.push_back(*ms);
     stats.msCompute += *ms;
     stats.passesRun = pass + 1;
-    lastChanged = *w.flagHost.get() != 0;
+    lastLowered = *w.loweredHost.get();
+    lastChanged = lastLowered != 0;
+    // Passes planned, as far as known: with brick rounds, this one and the next if it will run.
+    const int next = anotherPassBeforeBricks(w.dims, pass + 1, lastLowered) ? pass + 2 : pass + 1;
+    const int planned = !bricks ? limit : std::min(limit, next);
     if (control.progress) control.progress(pass + 1, planned);
     if (params.converge && !lastChanged) break;
   }

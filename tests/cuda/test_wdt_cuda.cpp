@@ -274,6 +274,31 @@ TEST_CASE("converge mode runs brick rounds that equal the CPU and the exact refe
   CHECK(countBelow(partial, exact->voxels, 1e-6) == 0);
   CHECK(maxRelDiff(partial, exact->voxels) > 0);
 
+  // Above 128³ voxels the default runs 2 whole-volume passes, and a third when the second still
+  // lowered many values, before the rounds; the field is the same fixed point.
+  for (WdtProblem p : {serpentine({136, 136, 120}, StepRule::Entering, WeightRule::Density),
+                       randomProblem(rng, {136, 136, 120}, {0.8f, 0.8f, 1.1f}, StepRule::Entering,
+                                     WeightRule::Density)}) {
+    p.params.converge = true;
+    p.params.maxPasses = 64;
+    CAPTURE(p.grid.dims.toString());
+    std::vector<std::pair<int, int>> progress;
+    at::WdtControl control;
+    control.progress = [&](int done, int planned) { progress.emplace_back(done, planned); };
+    auto r = at::cuda::runCudaBackend(p, control);
+    REQUIRE_MESSAGE(r.has_value(), (r ? std::string() : r.error().message));
+    const at::WdtStats& large = r->stats;
+    const std::vector<float>& gpu = r->field.distances.voxels;
+    CHECK(large.converged);
+    CHECK(large.passesRun >= 2);
+    CHECK(large.passesRun <= 3);
+    REQUIRE(progress.size() == std::size_t(large.passesRun));
+    CHECK(progress.back() == std::make_pair(large.passesRun, large.passesRun));
+    CHECK_MESSAGE(sameBits(gpu, cpuField(p)), "large grid, default passes before the rounds");
+    std::printf("default passes before the rounds: %s, %d passes + %d rounds, %.3f ms\n",
+                p.grid.dims.toString().c_str(), large.passesRun, large.rounds, large.msCompute);
+  }
+
   // Fixed passes stay whole-volume sweeps.
   capped.params.converge = false;
   capped.params.passes = 1;

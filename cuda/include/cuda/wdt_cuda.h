@@ -6,7 +6,8 @@
 // reference once converged). Deterministic: no thread reads data written in the same launch by
 // another block. A pass is replayed as one CUDA graph: progress and cancellation are per pass.
 // Converge mode runs rounds over 16³ bricks that follow what still changes, from the seeds on grids
-// of up to 128³ voxels and after three passes on larger ones (see setConvergeSweepsBeforeBricks).
+// of up to 128³ voxels and after two or three passes on larger ones (see
+// setConvergeSweepsBeforeBricks).
 // The rounds are one kernel, cancellable only before they start, and need one more field-sized
 // device buffer (if it cannot be allocated, converge mode runs passes only).
 // Device buffers, staging memory and the captured pass are kept for the next call on a grid of
@@ -34,7 +35,8 @@ const DeviceInfo& queryDevice();
 
 // Converge mode runs this many whole-volume passes, then brick rounds that finish the bricks still
 // changing (cuda/src/brick_solver.h); the field is the same fixed point either way. Negative: the
-// default, 0 on grids of up to 128³ voxels and 3 above (measured on an H100, bench/RESULTS.md).
+// default, 0 on grids of up to 128³ voxels; above, 2, and a third when the second pass still
+// lowered more than 1.15 values per voxel (measured on an H100, bench/RESULTS.md).
 // Process-wide, for tests and benchmarks.
 void setConvergeSweepsBeforeBricks(int passes);
 
