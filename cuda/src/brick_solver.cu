@@ -160,7 +160,7 @@ template <bool kQn>
 __device__ __forceinline__ HaloVoxel loadHalo(const SolveArgs& a, const float* shellIn, const int o[3], int hx, int hy,
                                               int hz) {
   const int gx = o[0] + hx, gy = o[1] + hy, gz = o[2] + hz;
-  HaloVoxel h{kInf, 0, (hx + 1) + kStrideY * (hy + 1) + kStrideZ * (hz + 1)};
+  HaloVoxel h{kInf, 0, cellIndex(hx, hy, hz)};
   if (gx >= 0 && gx < a.n[0] && gy >= 0 && gy < a.n[1] && gz >= 0 && gz < a.n[2]) {
     const std::size_t g = std::size_t(gx) + std::size_t(a.n[0]) * (std::size_t(gy) + std::size_t(a.n[1]) * std::size_t(gz));
     h.d = __ldcg(shellIn + g);

@@ -116,7 +116,7 @@ struct Workspace {
   Stream stream;
   DeviceBuffer<std::uint8_t> density, densityT;  // densityT: y-contiguous copy for the x sweeps
   DeviceBuffer<float> a, b;  // the field (in `a` between passes) and the sweeps' second buffer
-  DeviceBuffer<int> flag;
+  DeviceBuffer<int> flag;  // whether a problem built on the GPU has any seed (launchBuildProblem)
   PinnedBuffer<int> flagHost;
   DeviceBuffer<unsigned long long> lowered;  // voxels a pass lowered (sweep kernels add to it)
   PinnedBuffer<unsigned long long> loweredHost;
