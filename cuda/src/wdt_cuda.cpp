@@ -406,8 +406,8 @@ Status runPasses(Workspace& w, const WdtParams& params, const WdtControl& contro
   const int limit = !params.converge ? params.passes : params.maxPasses;
   bool lastChanged = true;
   unsigned long long lastLowered = 0;
-  for (int pass = 0; pass < limit; ++pass) {
-    if (bricks && !anotherPassBeforeBricks(w.dims, pass, lastLowered)) break;
+  bool another = !bricks || anotherPassBeforeBricks(w.dims, 0, 0);  // whether pass `pass` runs
+  for (int pass = 0; pass < limit && another; ++pass) {
     if (control.cancel && control.cancel->load(std::memory_order_relaxed)) {
       stats.cancelled = true;
       break;
@@ -427,9 +427,9 @@ Status runPasses(Workspace& w, const WdtParams& params, const WdtControl& contro
     stats.passesRun = pass + 1;
     lastLowered = *w.loweredHost.get();
     lastChanged = lastLowered != 0;
+    another = !bricks || anotherPassBeforeBricks(w.dims, pass + 1, lastLowered);
     // Passes planned, as far as known: with brick rounds, this one and the next if it will run.
-    const int next = anotherPassBeforeBricks(w.dims, pass + 1, lastLowered) ? pass + 2 : pass + 1;
-    const int planned = !bricks ? limit : std::min(limit, next);
+    const int planned = !bricks ? limit : std::min(limit, another ? pass + 2 : pass + 1);
     if (control.progress) control.progress(pass + 1, planned);
     if (params.converge && !lastChanged) break;
   }
