@@ -24,8 +24,10 @@ namespace fs = std::filesystem;
 const char* kUsage =
     "usage: anatomy-tutor render DATASET STRUCTURE (--preset NAME | --mode MODE) [--t T] [--size WxH]\n"
     "                            [--view NAME] [--clip NX,NY,NZ,D] [--backend cpu|cuda|auto] [--passes N]\n"
-    "                            [--context F] [--presets DIR] [--labels FILE] [--db PATH] --out F.png\n"
-    "  DATASET     phantom, phantom:N, an imported dataset, or a volume file/folder (--labels: its labels)\n"
+    "                            [--context F] [--presets DIR] [--labels FILE [--names NAMES.json]] [--series UID]\n"
+    "                            [--db PATH] --out F.png\n"
+    "  DATASET     phantom, phantom:N, an imported dataset, or a volume file/folder (--labels: its label map,\n"
+    "              --names: its label names, --series: the DICOM series where a folder holds several)\n"
     "  MODE        wdt | bare | unweighted | fuzzy | outline | lighting (the structure's shipped preset)\n"
     "  --preset    a preset id from the presets folder, or a path to a .json preset\n"
     "  --t         context blend 0..1 (overrides the preset)\n"
@@ -64,9 +66,10 @@ Result<std::array<float, 4>> parseClip(const std::string& text) {
 }  // namespace
 
 int runRender(const Argv& argv) {
-  auto args = cli::Args::parse(
-      argv, {"preset", "mode", "t", "size", "view", "clip", "backend", "passes", "context", "presets", "labels", "out", "db"},
-      {});
+  auto args = cli::Args::parse(argv,
+                               {"preset", "mode", "t", "size", "view", "clip", "backend", "passes", "context", "presets",
+                                "labels", "names", "series", "out", "db"},
+                               {});
   if (!args) return reportError("render: " + args.error().message, 2);
   if (args->has("help")) {
     std::printf("%s", kUsage);
@@ -82,16 +85,13 @@ int runRender(const Argv& argv) {
   DatasetRequest datasetRequest;
   datasetRequest.name = args->positional()[0];
   datasetRequest.labelsPath = args->valueOr("labels", "");
+  datasetRequest.namesPath = args->valueOr("names", "");
+  datasetRequest.seriesUid = args->valueOr("series", "");
   datasetRequest.dbPath = args->value("db");
   auto dataset = openNamedDataset(datasetRequest);
   if (!dataset) return reportError("render: " + dataset.error().message);
   const Structure* structure = dataset->findStructure(args->positional()[1]);
-  if (!structure) {
-    std::string ids;
-    for (const Structure& s : dataset->structures) ids += (ids.empty() ? "" : ", ") + s.id;
-    return reportError("render: dataset '" + dataset->id + "' has no structure '" + args->positional()[1] +
-                       "' (it has: " + ids + ")");
-  }
+  if (!structure) return reportError("render: " + unknownStructureMessage(*dataset, args->positional()[1]));
 
   Result<render::Preset> preset = fail("no preset");
   if (auto name = args->value("preset")) {

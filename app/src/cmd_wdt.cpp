@@ -25,7 +25,10 @@ constexpr const char* kUsage =
     "usage: anatomy-tutor wdt DATASET STRUCTURE [options]\n"
     "  Weighted distance field of STRUCTURE (id or name) through the CT densities.\n"
     "  DATASET: phantom | phantom:N (the built-in phantom at N^3), an imported dataset (--db PATH),\n"
-    "           or a volume path\n"
+    "           or a volume file or DICOM folder, whose structures come from:\n"
+    "  --labels FILE               its label map (any volume format or DICOM SEG)\n"
+    "  --names NAMES.json          names of the label values ({\"1\": \"spleen\", ...})\n"
+    "  --series UID                the DICOM series to open, where a folder holds several\n"
     "  --backend auto|cpu|cuda     (default auto: CUDA when available, else CPU)\n"
     "  --passes N | --converge     fixed passes (default 2) or until a pass changes nothing\n"
     "  --rule entering|trapezoid   step cost w(b)|step| or (w(a)+w(b))/2 |step|\n"
@@ -90,20 +93,13 @@ Result<WdtParams> paramsFrom(const cli::Args& args) {
   return p;
 }
 
-std::string structureList(const Dataset& ds) {
-  std::string s;
-  const std::size_t shown = std::min<std::size_t>(ds.structures.size(), 6);
-  for (std::size_t i = 0; i < shown; ++i) s += (i ? ", " : "") + ds.structures[i].id;
-  if (ds.structures.size() > shown) s += ", …";
-  return s;
-}
-
 nlohmann::json dimsJson(const Dims& d) { return nlohmann::json::array({d.x, d.y, d.z}); }
 
 }  // namespace
 
 int runWdt(const Argv& argv) {
-  auto parsed = cli::Args::parse(argv, {"backend", "passes", "rule", "weight", "hu-window", "base", "downsample", "out", "db"},
+  auto parsed = cli::Args::parse(argv, {"backend", "passes", "rule", "weight", "hu-window", "base", "downsample", "out", "db", "labels", "names",
+                                  "series"},
                                  {"converge", "check", "json"});
   if (!parsed) return reportError("wdt: " + parsed.error().message);
   const cli::Args& args = *parsed;
@@ -118,13 +114,14 @@ int runWdt(const Argv& argv) {
   const std::string datasetName = args.positional()[0], structureName = args.positional()[1];
   DatasetRequest request;
   request.name = datasetName;
+  request.labelsPath = args.valueOr("labels", "");
+  request.namesPath = args.valueOr("names", "");
+  request.seriesUid = args.valueOr("series", "");
   request.dbPath = args.value("db");
   auto dataset = openNamedDataset(request);
   if (!dataset) return reportError("wdt: " + dataset.error().message);
   const Structure* structure = dataset->findStructure(structureName);
-  if (!structure)
-    return reportError("wdt: unknown structure '" + structureName + "' in " + dataset->id + " (valid: " +
-                       structureList(*dataset) + ")");
+  if (!structure) return reportError("wdt: " + unknownStructureMessage(*dataset, structureName));
   const Mask mask = structureMask(dataset->labels, structure->label);
 
   auto result = computeWdt(dataset->volume, mask, *params);

@@ -39,4 +39,17 @@ Result<Dataset> openNamedDataset(const DatasetRequest& request) {
               (known.empty() ? std::string() : " (imported: " + known + ")") + ", and no such file or folder");
 }
 
+std::string unknownStructureMessage(const Dataset& dataset, const std::string& name) {
+  if (dataset.structures.empty()) {
+    return "dataset '" + dataset.id + "' has no labelled structures, so it has no '" + name +
+           "' (a volume path takes its label map with --labels FILE [--names NAMES.json]; or import both)";
+  }
+  constexpr std::size_t kShown = 10;
+  std::string ids;
+  for (std::size_t i = 0; i < dataset.structures.size() && i < kShown; ++i) ids += (i ? ", " : "") + dataset.structures[i].id;
+  if (dataset.structures.size() > kShown)
+    ids += ", and " + std::to_string(dataset.structures.size() - kShown) + " more: anatomy-tutor structures lists them";
+  return "dataset '" + dataset.id + "' has no structure '" + name + "' (it has: " + ids + ")";
+}
+
 }  // namespace at::app

@@ -24,4 +24,8 @@ struct DatasetRequest {
 // <db> (imported: …), and no such file or folder").
 Result<Dataset> openNamedDataset(const DatasetRequest& request);
 
+// The one-line message for a structure `name` that `dataset` does not have: its structure ids (the
+// first ten, then how many more), or, for a dataset without labels, how to give it some.
+std::string unknownStructureMessage(const Dataset& dataset, const std::string& name);
+
 }  // namespace at::app

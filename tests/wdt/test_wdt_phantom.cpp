@@ -2,6 +2,7 @@
 // through the library and (when the app is built) through `anatomy-tutor wdt --check --json`.
 #include <doctest/doctest.h>
 
+#include <algorithm>
 #include <filesystem>
 
 #include <nlohmann/json.hpp>
@@ -91,4 +92,41 @@ TEST_CASE("wdt phantom:64 cochlea --check --json reports a converged field equal
   CHECK(bad.err.find("cochlea") != std::string::npos);
   const test::CommandResult conflict = test::runApp("wdt phantom:64 cochlea --passes 2 --converge");
   CHECK(conflict.exitCode != 0);
+}
+
+TEST_CASE("wdt on a real CT path takes its structures from --labels and --names") {
+  if (!std::filesystem::exists(test::appBinary())) {
+    std::printf("SKIPPED: anatomy-tutor is not built in this tree\n");
+    return;
+  }
+  if (!test::requireSharedData("wdt on a real CT path")) return;
+  auto quotedData = [](const char* relative) { return std::string("'").append(test::sharedData(relative).string()).append("'"); };
+  const std::string ct = quotedData("totalsegmentator/ct_small.nii.gz");
+  const std::string seg = quotedData("totalsegmentator/seg_small.nii.gz");
+  const std::string names = quotedData("totalsegmentator/labels.json");
+
+  const test::CommandResult r =
+      test::runApp("wdt " + ct + " kidney_left --labels " + seg + " --names " + names + " --backend cpu --converge --check --json");
+  REQUIRE_MESSAGE(r.exitCode == 0, r.err);
+  const auto j = nlohmann::json::parse(r.out);
+  CHECK(j["structure"] == "kidney_left");
+  CHECK(j["dims"] == nlohmann::json::array({122, 101, 30}));
+  CHECK(j["converged"] == true);
+  CHECK(j["below_exact"] == 0);
+  CHECK(j["max_rel_err"].get<double>() <= 1e-6);
+
+  // Without a label map a volume path has no structures: the one-line error says how to give it some.
+  const test::CommandResult bare = test::runApp("wdt " + ct + " kidney_left");
+  CHECK(bare.exitCode != 0);
+  CHECK(std::count(bare.err.begin(), bare.err.end(), '\n') == 1);
+  CHECK(bare.err.find("no labelled structures") != std::string::npos);
+  CHECK(bare.err.find("--labels") != std::string::npos);
+  // With labels but without names the structures are label_N; the error lists some and says how many more.
+  const test::CommandResult unnamed = test::runApp("wdt " + ct + " kidney_left --labels " + seg);
+  CHECK(unnamed.exitCode != 0);
+  CHECK(unnamed.err.find("label_1") != std::string::npos);
+  CHECK(unnamed.err.find("31 more") != std::string::npos);
+  const test::CommandResult missingLabels = test::runApp("wdt " + ct + " kidney_left --labels /no/such/seg.nii.gz");
+  CHECK(missingLabels.exitCode != 0);
+  CHECK(missingLabels.err.find("/no/such/seg.nii.gz") != std::string::npos);
 }
