@@ -67,8 +67,8 @@ Result<std::array<float, 4>> parseClip(const std::string& text) {
 
 int runRender(const Argv& argv) {
   auto args = cli::Args::parse(argv,
-                               {"preset", "mode", "t", "size", "view", "clip", "backend", "passes", "context", "presets",
-                                "labels", "names", "series", "out", "db"},
+                               withDatasetOptions({"preset", "mode", "t", "size", "view", "clip", "backend", "passes",
+                                                   "context", "presets", "out"}),
                                {});
   if (!args) return reportError("render: " + args.error().message, 2);
   if (args->has("help")) {
@@ -82,13 +82,7 @@ int runRender(const Argv& argv) {
   if (!out) return reportError("render: --out F.png is required", 2);
 
   const render::PresetLibrary library(args->has("presets") ? fs::path(*args->value("presets")) : defaultPresetsDir());
-  DatasetRequest datasetRequest;
-  datasetRequest.name = args->positional()[0];
-  datasetRequest.labelsPath = args->valueOr("labels", "");
-  datasetRequest.namesPath = args->valueOr("names", "");
-  datasetRequest.seriesUid = args->valueOr("series", "");
-  datasetRequest.dbPath = args->value("db");
-  auto dataset = openNamedDataset(datasetRequest);
+  auto dataset = openNamedDataset(datasetRequestFrom(*args, args->positional()[0]));
   if (!dataset) return reportError("render: " + dataset.error().message);
   const Structure* structure = dataset->findStructure(args->positional()[1]);
   if (!structure) return reportError("render: " + unknownStructureMessage(*dataset, args->positional()[1]));

@@ -30,8 +30,8 @@ using nlohmann::json;
 
 // --- shared helpers ----------------------------------------------------------------------------
 
-// Options every dataset-taking command accepts, besides the DATASET positional.
-const std::set<std::string> kDatasetOptions = {"volume", "labels", "names", "series", "db"};
+// The volume commands' dataset options: the shared ones and --volume PATH (instead of DATASET).
+const std::set<std::string> kDatasetOptions = withDatasetOptions({"volume"});
 
 std::set<std::string> with(std::set<std::string> a, const std::set<std::string>& b) {
   a.insert(b.begin(), b.end());
@@ -46,13 +46,7 @@ Result<Dataset> openDatasetArg(const cli::Args& args) {
   if (volume && !pos.empty()) return fail("give either DATASET or --volume PATH, not both");
   if (!volume && pos.empty()) return fail("missing DATASET (a built-in name such as 'phantom', or a path)");
   if (pos.size() > 1) return fail("unexpected argument '" + pos[1] + "' (one DATASET only)");
-  DatasetRequest request;
-  request.name = volume ? *volume : pos[0];
-  request.labelsPath = args.valueOr("labels", "");
-  request.namesPath = args.valueOr("names", "");
-  request.seriesUid = args.valueOr("series", "");
-  request.dbPath = args.value("db");
-  return openNamedDataset(request);
+  return openNamedDataset(datasetRequestFrom(args, volume ? *volume : pos[0]));
 }
 
 std::vector<std::size_t> labelHistogram(const LabelMap& labels) {

@@ -98,9 +98,9 @@ nlohmann::json dimsJson(const Dims& d) { return nlohmann::json::array({d.x, d.y,
 }  // namespace
 
 int runWdt(const Argv& argv) {
-  auto parsed = cli::Args::parse(argv, {"backend", "passes", "rule", "weight", "hu-window", "base", "downsample", "out", "db", "labels", "names",
-                                  "series"},
-                                 {"converge", "check", "json"});
+  auto parsed = cli::Args::parse(
+      argv, withDatasetOptions({"backend", "passes", "rule", "weight", "hu-window", "base", "downsample", "out"}),
+      {"converge", "check", "json"});
   if (!parsed) return reportError("wdt: " + parsed.error().message);
   const cli::Args& args = *parsed;
   if (args.has("help")) {
@@ -112,13 +112,7 @@ int runWdt(const Argv& argv) {
   if (!params) return reportError("wdt: " + params.error().message);
 
   const std::string datasetName = args.positional()[0], structureName = args.positional()[1];
-  DatasetRequest request;
-  request.name = datasetName;
-  request.labelsPath = args.valueOr("labels", "");
-  request.namesPath = args.valueOr("names", "");
-  request.seriesUid = args.valueOr("series", "");
-  request.dbPath = args.value("db");
-  auto dataset = openNamedDataset(request);
+  auto dataset = openNamedDataset(datasetRequestFrom(args, datasetName));
   if (!dataset) return reportError("wdt: " + dataset.error().message);
   const Structure* structure = dataset->findStructure(structureName);
   if (!structure) return reportError("wdt: " + unknownStructureMessage(*dataset, structureName));

@@ -9,6 +9,21 @@ namespace at::app {
 
 namespace fs = std::filesystem;
 
+std::set<std::string> withDatasetOptions(std::set<std::string> commandOptions) {
+  commandOptions.insert({"labels", "names", "series", "db"});
+  return commandOptions;
+}
+
+DatasetRequest datasetRequestFrom(const cli::Args& args, const std::string& name) {
+  DatasetRequest request;
+  request.name = name;
+  request.labelsPath = args.valueOr("labels", "");
+  request.namesPath = args.valueOr("names", "");
+  request.seriesUid = args.valueOr("series", "");
+  request.dbPath = args.value("db");
+  return request;
+}
+
 Result<Dataset> openNamedDataset(const DatasetRequest& request) {
   const bool fileOptions = !request.labelsPath.empty() || !request.namesPath.empty() || !request.seriesUid.empty();
   if (isBuiltinDatasetName(request.name)) {
@@ -42,7 +57,8 @@ Result<Dataset> openNamedDataset(const DatasetRequest& request) {
 std::string unknownStructureMessage(const Dataset& dataset, const std::string& name) {
   if (dataset.structures.empty()) {
     return "dataset '" + dataset.id + "' has no labelled structures, so it has no '" + name +
-           "' (a volume path takes its label map with --labels FILE [--names NAMES.json]; or import both)";
+           "' (a volume file or folder takes its label map with --labels FILE [--names NAMES.json], and "
+           "`anatomy-tutor import --labels` registers a dataset with one)";
   }
   constexpr std::size_t kShown = 10;
   std::string ids;

@@ -4,9 +4,11 @@
 #pragma once
 
 #include <optional>
+#include <set>
 #include <string>
 #include <vector>
 
+#include "cli_args.h"
 #include "volume/error.h"
 #include "volume/structure.h"
 
@@ -19,6 +21,13 @@ struct DatasetRequest {
   std::string seriesUid;              // paths only: DICOM series
   std::optional<std::string> dbPath;  // --db; the default database when absent
 };
+
+// A command's valued options plus the ones every dataset-taking command accepts beside its
+// DATASET: --labels, --names and --series (datasets from files only) and --db.
+std::set<std::string> withDatasetOptions(std::set<std::string> commandOptions);
+
+// The request for dataset `name` with the dataset options given in `args`.
+DatasetRequest datasetRequestFrom(const cli::Args& args, const std::string& name);
 
 // Errors name what was tried ("unknown dataset 'abdomen': not built in, not imported in
 // <db> (imported: …), and no such file or folder").
