@@ -65,6 +65,12 @@ fs::path appBinary() {
   return fs::path(AT_BINARY_DIR) / "app" / "anatomy-tutor";
 }
 
+bool requireAppBinary(const char* what) {
+  if (fs::exists(appBinary())) return true;
+  std::printf("SKIPPED: %s needs the anatomy-tutor binary, not built in this tree\n", what);
+  return false;
+}
+
 std::string readFile(const fs::path& p) {
   std::ifstream in(p, std::ios::binary);
   std::stringstream ss;

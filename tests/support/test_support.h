@@ -46,6 +46,9 @@ struct CommandResult {
   std::string err;
 };
 std::filesystem::path appBinary();
+// True and nothing printed if appBinary() exists; otherwise prints "SKIPPED: <what> needs the
+// anatomy-tutor binary, not built in this tree" (a build without the app, such as the GPU one).
+bool requireAppBinary(const char* what);
 CommandResult runApp(const std::string& args, const std::string& stdinText = "");
 
 }  // namespace at::test

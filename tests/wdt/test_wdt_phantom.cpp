@@ -3,7 +3,6 @@
 #include <doctest/doctest.h>
 
 #include <algorithm>
-#include <filesystem>
 
 #include <nlohmann/json.hpp>
 
@@ -66,10 +65,7 @@ TEST_CASE("Phantom cochlea field: never below exact, shrinking error, converged 
 }
 
 TEST_CASE("wdt phantom:64 cochlea --check --json reports a converged field equal to exact") {
-  if (!std::filesystem::exists(test::appBinary())) {
-    std::printf("SKIPPED: anatomy-tutor is not built in this tree\n");
-    return;
-  }
+  if (!test::requireAppBinary("anatomy-tutor wdt")) return;
   const test::CommandResult r = test::runApp("wdt phantom:64 cochlea --backend cpu --converge --check --json");
   REQUIRE_MESSAGE(r.exitCode == 0, r.err);
   const auto j = nlohmann::json::parse(r.out);
@@ -98,10 +94,7 @@ TEST_CASE("wdt phantom:64 cochlea --check --json reports a converged field equal
 // exact reference): converged, the field equals the exact one; with the default 2 passes it is never
 // below it (its mean error, 1.3e-2, is the sweep order's: see the test above).
 TEST_CASE("wdt phantom cochlea --check --json on the full 256³ phantom") {
-  if (!std::filesystem::exists(test::appBinary())) {
-    std::printf("SKIPPED: anatomy-tutor is not built in this tree\n");
-    return;
-  }
+  if (!test::requireAppBinary("anatomy-tutor wdt")) return;
   const test::CommandResult converged = test::runApp("wdt phantom cochlea --backend cpu --converge --check --json");
   REQUIRE_MESSAGE(converged.exitCode == 0, converged.err);
   const auto c = nlohmann::json::parse(converged.out);
@@ -121,10 +114,7 @@ TEST_CASE("wdt phantom cochlea --check --json on the full 256³ phantom") {
 }
 
 TEST_CASE("wdt on a real CT path takes its structures from --labels and --names") {
-  if (!std::filesystem::exists(test::appBinary())) {
-    std::printf("SKIPPED: anatomy-tutor is not built in this tree\n");
-    return;
-  }
+  if (!test::requireAppBinary("anatomy-tutor wdt")) return;
   if (!test::requireSharedData("wdt on a real CT path")) return;
   auto quotedData = [](const char* relative) { return std::string("'").append(test::sharedData(relative).string()).append("'"); };
   const std::string ct = quotedData("totalsegmentator/ct_small.nii.gz");
