@@ -221,8 +221,9 @@ void runCase(const Case& c, const Options& o) {
           jsonString(c.dataset).c_str(), jsonString(c.structure).c_str(), d.x, d.y, d.z,
           jsonString(toString(last.stats.backendUsed)).c_str(), jsonString(last.stats.device).c_str(),
           jsonString(mode).c_str(), jsonString(last.stats.scheme).c_str(), last.stats.passesRun, last.stats.rounds,
-          last.stats.converged ? "true" : "false", totals.size(), median(perPass), median(compute), median(totals), totals.empty() ? 0.0 : *std::min_element(totals.begin(), totals.end()),
-          median(cpuTotals), loadAverage(), accuracy.c_str());
+          last.stats.converged ? "true" : "false", totals.size(), median(perPass), median(compute), median(totals),
+          totals.empty() ? 0.0 : *std::min_element(totals.begin(), totals.end()), median(cpuTotals), loadAverage(),
+          accuracy.c_str());
       std::fflush(stdout);
     }
   }

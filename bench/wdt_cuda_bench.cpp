@@ -84,7 +84,7 @@ int main(int argc, char** argv) {
   for (int a = 1; a + 1 < argc; a += 2) {
     const std::string flag = argv[a];
     if (flag == "--sizes") sizes = parseList(argv[a + 1]);
-    else if (flag == "--reps") reps = std::atoi(argv[a + 1]);
+    else if (flag == "--reps") reps = std::max(1, std::atoi(argv[a + 1]));  // at least one measured run
     else if (flag == "--check-max") checkMax = std::atoi(argv[a + 1]);
     else if (flag == "--sweeps-before-bricks") sweepsBeforeBricks = parseList(argv[a + 1]);
     else {
