@@ -29,7 +29,7 @@
 #include "lessons/lesson_engine.h"
 #include "lessons/repositories.h"
 #include "quiz/question.h"
-#include "volume/error.h"
+#include "core/error.h"
 
 namespace at::app {
 

@@ -314,6 +314,7 @@ TEST_CASE("Registering a dataset under a name already used fails and writes noth
   auto again = registerDataset(*db, sampleRecord("abdomen"), {st});
   REQUIRE(!again);
   CHECK(again.error().message.find("'abdomen' is already imported") != std::string::npos);
+  CHECK((again.error().kind == ErrorKind::Conflict));
   CHECK(countRows(*db, "datasets") == 1);
   CHECK(countRows(*db, "structures") == 1);
   auto listed = listDatasets(*db);
@@ -394,4 +395,21 @@ TEST_CASE("checksumPath hashes a file's bytes and notices a changed file in a fo
   REQUIRE(changed);
   CHECK(*changed != *folder);
   CHECK(!checksumPath((dir / "nothing").string()));
+}
+
+TEST_CASE("SqlErrors_CarryTheirKind_UniqueIsConflict_MissingReferenceIsNotFound_CheckIsInvalid") {
+  test::TempDir dir;
+  auto db = Database::open((dir / "k.db").string());
+  REQUIRE(db);
+  REQUIRE(db->exec("INSERT INTO presets (id, mode, json) VALUES ('p', 'wdt', '{}')"));
+  auto clash = db->exec("INSERT INTO presets (id, mode, json) VALUES ('p', 'bare', '{}')");
+  REQUIRE(!clash);
+  CHECK((clash.error().kind == ErrorKind::Conflict));
+  auto orphan = db->exec("INSERT INTO attempts (user_id, lesson_id, mode, started_at) VALUES (424242, 'l', 'guided', 1)");
+  REQUIRE(!orphan);
+  CHECK((orphan.error().kind == ErrorKind::NotFound));
+  REQUIRE(db->exec("INSERT INTO users (name, role) VALUES ('u', 'student')"));
+  auto badMode = db->exec("INSERT INTO attempts (user_id, lesson_id, mode, started_at) VALUES (1, 'l', 'exam!', 1)");
+  REQUIRE(!badMode);
+  CHECK((badMode.error().kind == ErrorKind::Invalid));
 }

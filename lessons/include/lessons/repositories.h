@@ -10,7 +10,7 @@
 
 #include "lessons/curriculum.h"
 #include "quiz/question.h"
-#include "volume/error.h"
+#include "core/error.h"
 #include "volume/structure.h"
 
 namespace at::lessons {
