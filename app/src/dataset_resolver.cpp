@@ -1,5 +1,6 @@
 #include "dataset_resolver.h"
 
+#include <cstdio>
 #include <filesystem>
 
 #include "db/dataset_store.h"
@@ -10,7 +11,7 @@ namespace at::app {
 namespace fs = std::filesystem;
 
 std::set<std::string> withDatasetOptions(std::set<std::string> commandOptions) {
-  commandOptions.insert({"labels", "names", "series", "db"});
+  commandOptions.insert({"labels", "names", "series", "intensity", "db"});
   return commandOptions;
 }
 
@@ -20,14 +21,17 @@ DatasetRequest datasetRequestFrom(const cli::Args& args, const std::string& name
   request.labelsPath = args.valueOr("labels", "");
   request.namesPath = args.valueOr("names", "");
   request.seriesUid = args.valueOr("series", "");
+  request.intensity = args.valueOr("intensity", "");
   request.dbPath = args.value("db");
   return request;
 }
 
 Result<Dataset> openNamedDataset(const DatasetRequest& request) {
-  const bool fileOptions = !request.labelsPath.empty() || !request.namesPath.empty() || !request.seriesUid.empty();
+  const bool fileOptions = !request.labelsPath.empty() || !request.namesPath.empty() || !request.seriesUid.empty() ||
+                           !request.intensity.empty();
   if (isBuiltinDatasetName(request.name)) {
-    if (fileOptions) return fail("--labels, --names and --series apply to datasets from files, not to '" + request.name + "'");
+    if (fileOptions)
+      return fail("--labels, --names, --series and --intensity apply to datasets from files, not to '" + request.name + "'");
     return openBuiltinDataset(request.name);
   }
   std::error_code ec;
@@ -39,12 +43,19 @@ Result<Dataset> openNamedDataset(const DatasetRequest& request) {
     files.namesPath = request.namesPath;
     files.dicomSeriesUid = request.seriesUid;
     files.id = fs::path(request.name).filename().string();
+    if (!request.intensity.empty()) {
+      auto choice = parseIntensityChoice(request.intensity);
+      if (!choice) return fail("--intensity: " + choice.error().message);
+      files.intensity = *choice;
+    }
     return openDatasetFiles(files);
   }
   auto imported = db::findImportedDataset(request.dbPath, request.name);
   if (!imported) return tl::unexpected(imported.error());
   if (*imported) {
-    if (fileOptions) return fail("--labels, --names and --series apply to datasets from files, not to imported '" + request.name + "'");
+    if (fileOptions)
+      return fail("--labels, --names, --series and --intensity apply to datasets from files, not to imported '" +
+                  request.name + "'");
     return openDatasetFiles(**imported);
   }
   std::string known;
@@ -52,6 +63,23 @@ Result<Dataset> openNamedDataset(const DatasetRequest& request) {
     for (const auto& record : *all) known += (known.empty() ? "" : ", ") + record.name;
   return fail(ErrorKind::NotFound, "unknown dataset '" + request.name + "': not built in (phantom, phantom:N), not imported" +
               (known.empty() ? std::string() : " (imported: " + known + ")") + ", and no such file or folder");
+}
+
+void applyDatasetWindow(const Dataset& dataset, float& windowMin, float& windowMax, bool windowGiven,
+                        bool densityWeights) {
+  const IntensityModel& m = dataset.intensity;
+  if (!m.hounsfield() && !windowGiven) {
+    windowMin = m.window[0];
+    windowMax = m.window[1];
+  }
+  static bool noted = false;
+  if (densityWeights && !m.attenuationLike() && !noted) {
+    noted = true;
+    std::fprintf(stderr,
+                 "anatomy-tutor: note: '%s' is %s: its intensities are not attenuation, and density-weighted distances "
+                 "assume CT-like values (bright = dense)\n",
+                 dataset.id.c_str(), m.modality.c_str());
+  }
 }
 
 std::string unknownStructureMessage(const Dataset& dataset, const std::string& name) {

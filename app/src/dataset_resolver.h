@@ -19,11 +19,12 @@ struct DatasetRequest {
   std::string labelsPath;             // paths only: label map on any grid
   std::string namesPath;              // paths only: JSON { "value": "name" }
   std::string seriesUid;              // paths only: DICOM series
+  std::string intensity;              // paths only: auto | hu | plain (volume/intensity.h); empty = auto
   std::optional<std::string> dbPath;  // --db; the default database when absent
 };
 
 // A command's valued options plus the ones every dataset-taking command accepts beside its
-// DATASET: --labels, --names and --series (datasets from files only) and --db.
+// DATASET: --labels, --names, --series and --intensity (datasets from files only) and --db.
 std::set<std::string> withDatasetOptions(std::set<std::string> commandOptions);
 
 // The request for dataset `name` with the dataset options given in `args`.
@@ -32,6 +33,14 @@ DatasetRequest datasetRequestFrom(const cli::Args& args, const std::string& name
 // Errors name what was tried ("unknown dataset 'abdomen': not built in, not imported in
 // <db> (imported: …), and no such file or folder").
 Result<Dataset> openNamedDataset(const DatasetRequest& request);
+
+// The window that maps a dataset's stored values to density 0 … 1 for density weights: the HU
+// window the caller has (a preset's, --hu-window) for CT, the dataset's own window (from its
+// histogram) for plain intensities unless `windowGiven`. On a dataset whose intensities are not
+// attenuation (MR) with density-based weights, says once per process on stderr that
+// density-weighted distances assume CT-like values.
+void applyDatasetWindow(const Dataset& dataset, float& windowMin, float& windowMax, bool windowGiven,
+                        bool densityWeights);
 
 // The one-line message for a structure `name` that `dataset` does not have: its structure ids (the
 // first ten, then how many more), or, for a dataset without labels, how to give it some.

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "volume/grid.h"
+#include "volume/intensity.h"
 
 namespace at {
 
@@ -31,7 +32,8 @@ struct Dataset {
   std::string id;                   // "phantom" or an imported dataset's name
   std::string displayName;
   std::string species = "human";
-  Volume volume;                    // HU
+  Volume volume;                    // stored values: HU for CT, else plain intensities (see intensity)
+  IntensityModel intensity;         // what the stored values mean, their window
   LabelMap labels;                  // same Geometry as volume
   std::vector<Structure> structures;
   Provenance provenance;

@@ -122,13 +122,14 @@ Result<Dataset> openDatasetFiles(const DatasetFiles& files, const DatasetLoadCon
   volumeOptions.dicomSeriesUid = files.dicomSeriesUid;
   auto volumeImage = loadImageFile(files.volumePath, volumeOptions);
   if (!volumeImage) return tl::unexpected(volumeImage.error());
-  auto volume = toHuVolume(*volumeImage, files.volumePath);
+  auto volume = toStoredVolume(*volumeImage, files.volumePath, files.intensity);
   if (!volume) return tl::unexpected(volume.error());
 
   Dataset dataset;
   dataset.id = files.id.empty() ? datasetIdFromPath(files.volumePath) : files.id;
   dataset.displayName = dataset.id;
-  dataset.volume = std::move(*volume);
+  dataset.volume = std::move(volume->volume);
+  dataset.intensity = std::move(volume->intensity);
   dataset.provenance.source = files.volumePath;
   dataset.provenance.notes = volumeImage->notes;
   const Geometry& grid = dataset.volume.geometry;

@@ -294,6 +294,8 @@ Result<LoadedImage> loadNifti(const std::string& path, const ImageLoadOptions& o
     slope = 1.0;
     inter = 0.0;
   }
+  // A set scl_slope is the file's statement of the value scale (HU for CT, say), even 1 and 0.
+  loaded.rescaleGiven = nim->scl_slope != 0.0 && std::isfinite(nim->scl_slope);
   if (slope != 1.0 || inter != 0.0)
     loaded.notes.push_back("applied scl_slope " + std::to_string(slope) + ", scl_inter " + std::to_string(inter));
   std::vector<float>& out = loaded.image.voxels;
