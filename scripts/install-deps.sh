@@ -12,6 +12,7 @@ packages=(
   doctest-dev libexpected-dev
   xvfb xauth
   python3-skimage
+  libarchive-dev libplist-dev
 )
 
 missing=()

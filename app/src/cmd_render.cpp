@@ -26,7 +26,7 @@ const char* kUsage =
     "                            [--view NAME] [--clip NX,NY,NZ,D] [--backend cpu|cuda|auto] [--passes N]\n"
     "                            [--context F] [--presets DIR] [--labels FILE [--names NAMES.json]] [--series UID]\n"
     "                            [--db PATH] --out F.png\n"
-    "  DATASET     phantom, phantom:N, an imported dataset, or a volume file/folder (--labels: its label map,\n"
+    "  DATASET     phantom, phantom:N, skull, an imported dataset, or a volume file/folder (--labels: its label map,\n"
     "              --names: its label names, --series: the DICOM series where a folder holds several)\n"
     "  MODE        wdt | bare | unweighted | fuzzy | outline | lighting (the structure's shipped preset)\n"
     "  --preset    a preset id from the presets folder, or a path to a .json preset\n"

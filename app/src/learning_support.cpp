@@ -6,6 +6,7 @@
 #include "db/course_store.h"
 #include "db/dataset_store.h"
 #include "volume/dataset_source.h"
+#include "volume/known_scans.h"
 #include "volume/phantom.h"
 #include "wdt/wdt.h"
 
@@ -33,6 +34,7 @@ db::BuiltinStructures builtinStructures() {
 
 Result<Dataset> loadCourseDataset(db::Database& database, const std::string& datasetId) {
   if (isBuiltinDatasetName(datasetId)) return openBuiltinDataset(datasetId);
+  if (const KnownScan* scan = findKnownScan(datasetId)) return openKnownScan(*scan);
   auto record = db::findDataset(database, datasetId);
   if (!record) return tl::unexpected(record.error());
   if (!*record) return fail("unknown dataset '" + datasetId + "' (import it with `anatomy-tutor import`)");

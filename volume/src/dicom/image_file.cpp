@@ -8,6 +8,7 @@
 #include "dicom_support.h"
 #include "volume/dicom_seg.h"
 #include "volume/dicom_series.h"
+#include "volume/inv3_io.h"
 #include "volume/nifti_io.h"
 #include "volume/nrrd_io.h"
 
@@ -33,6 +34,7 @@ Result<LoadedImage> loadImageFile(const std::string& path, const ImageLoadOption
   std::transform(name.begin(), name.end(), name.begin(), [](unsigned char c) { return char(std::tolower(c)); });
   if (endsWith(name, ".nii") || endsWith(name, ".nii.gz")) return loadNifti(path, options);
   if (endsWith(name, ".nrrd") || endsWith(name, ".nhdr")) return loadNrrd(path, options);
+  if (endsWith(name, ".inv3")) return loadInv3(path, options);
 
   if (looksLikeDicomFile(path)) {
     if (isDicomSegFile(path)) return loadDicomSeg(path);
@@ -49,7 +51,7 @@ Result<LoadedImage> loadImageFile(const std::string& path, const ImageLoadOption
     loaded->notes.push_back("loaded the whole series of " + fs::path(path).filename().string() + " from its folder");
     return loaded;
   }
-  return fail(path + ": unrecognised format (expected a DICOM folder, .nii, .nii.gz, .nrrd or .nhdr)");
+  return fail(path + ": unrecognised format (expected a DICOM folder, .nii, .nii.gz, .nrrd, .nhdr or .inv3)");
 }
 
 }  // namespace at
