@@ -6,7 +6,7 @@
 #include <filesystem>
 #include <string>
 
-#include "volume/error.h"
+#include "core/error.h"
 
 namespace at::test {
 

@@ -10,7 +10,7 @@
 #include <vector>
 
 #include "volume/dataset_source.h"
-#include "volume/error.h"
+#include "core/error.h"
 #include "volume/structure.h"
 
 namespace at {

@@ -43,7 +43,7 @@ Result<fs::path> knownScanFile(const KnownScan& scan) {
   if (auto path = locateKnownScan(scan)) return *path;
   std::string looked;
   for (const fs::path& candidate : knownScanCandidates(scan)) looked += (looked.empty() ? "" : ", ") + candidate.string();
-  return fail("dataset '" + scan.name + "' is " + scan.fileName + " from Debian's " + scan.debianPackage +
+  return fail(ErrorKind::NotFound, "dataset '" + scan.name + "' is " + scan.fileName + " from Debian's " + scan.debianPackage +
               " package, which is not here (looked for " + looked + "): fetch it with `bash scripts/fetch-scans.sh` "
               "(also installed as share/anatomy-tutor/fetch-scans.sh) or `sudo apt-get install " + scan.debianPackage + "`");
 }

@@ -54,9 +54,9 @@ class MemberReader {
   explicit MemberReader(std::string path) : path_(std::move(path)) {}
 
   Status open() {
-    if (!std::ifstream(path_, std::ios::binary)) return fail(path_ + ": cannot open the file for reading");
+    if (!std::ifstream(path_, std::ios::binary)) return fail(ErrorKind::Io, path_ + ": cannot open the file for reading");
     reader_.reset(archive_read_new());
-    if (!reader_) return fail(path_ + ": out of memory opening the archive");
+    if (!reader_) return fail(ErrorKind::Io, path_ + ": out of memory opening the archive");
     archive_read_support_filter_all(reader_.get());
     archive_read_support_format_tar(reader_.get());
     // Opening reads ahead: an unknown format or a short gzip stream fails here.
@@ -277,7 +277,7 @@ Geometry projectGeometry(const ProjectHeader& h) {
 
 Result<LoadedImage> loadInv3(const std::string& path, const ImageLoadOptions& options) {
   std::error_code ec;
-  if (!fs::is_regular_file(path, ec)) return fail(path + ": no such file");
+  if (!fs::is_regular_file(path, ec)) return fail(ErrorKind::NotFound, path + ": no such file");
 
   // Pass 1: main.plist.
   MemberReader first(path);
