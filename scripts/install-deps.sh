@@ -13,6 +13,7 @@ packages=(
   xvfb xauth
   python3-skimage
   libarchive-dev libplist-dev
+  librsvg2-bin desktop-file-utils strace
 )
 
 missing=()

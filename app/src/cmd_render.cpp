@@ -6,6 +6,7 @@
 
 #include "cli_args.h"
 #include "commands.h"
+#include "data_paths.h"
 #include "dataset_resolver.h"
 #include "render/gl/egl_context.h"
 #include "render/gl/volume_renderer.h"
@@ -35,7 +36,7 @@ const char* kUsage =
     "  --view      anterior, posterior, lateral_left, lateral_right, superior, inferior\n"
     "  --clip      plane n·p = d in LPS mm; the side the normal points to is cut away\n"
     "  --context   view radius as a multiple of the structure's radius (default 2.5)\n"
-    "  --presets   presets folder (default: data/presets of the source tree or next to the binary)\n";
+    "  --presets   presets folder (default: the installed presets, or $AT_DATA_DIR/presets)\n";
 
 
 Result<std::pair<int, int>> parseSize(const std::string& text) {
@@ -164,18 +165,6 @@ int runRender(const Argv& argv) {
   return 0;
 }
 
-std::filesystem::path defaultPresetsDir() {
-  namespace fs = std::filesystem;
-  const fs::path source = fs::path(AT_SOURCE_DIR) / "data" / "presets";
-  if (fs::is_directory(source)) return source;
-  std::error_code ec;
-  const fs::path exe = fs::read_symlink("/proc/self/exe", ec);
-  if (!ec) {
-    for (const fs::path& p : {exe.parent_path() / "data" / "presets",
-                              exe.parent_path().parent_path() / "share" / "anatomy-tutor" / "presets"})
-      if (fs::is_directory(p)) return p;
-  }
-  return source;
-}
+std::filesystem::path defaultPresetsDir() { return dataSubdirectory("presets"); }
 
 }  // namespace at::app

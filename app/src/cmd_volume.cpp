@@ -263,8 +263,8 @@ int runInfo(const Argv& argv) {
   if (pos.empty()) return usageError("info", "missing FILE or DIR (see --help)");
   if (pos.size() > 1) return usageError("info", "unexpected argument '" + pos[1] + "' (one FILE or DIR only)");
   std::string path = pos[0];
-  std::error_code ec;
-  if (const KnownScan* scan = findKnownScan(path); scan && !fs::exists(path, ec)) {
+  // A scan's name wins over a file of that name, as built-in names do everywhere (./skull is the file).
+  if (const KnownScan* scan = findKnownScan(path)) {
     auto file = knownScanFile(*scan);
     if (!file) return reportError("info: " + file.error().message);
     path = file->string();

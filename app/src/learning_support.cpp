@@ -1,6 +1,7 @@
 #include "learning_support.h"
 
-#include <cstdlib>
+#include "data_paths.h"
+
 #include <filesystem>
 
 #include "db/course_store.h"
@@ -12,15 +13,17 @@
 
 namespace at::app {
 
-std::string courseDirectory() {
-  if (const char* dir = std::getenv("AT_DATA_DIR"); dir && *dir) return (std::filesystem::path(dir) / "courses").string();
-  return (std::filesystem::path(AT_SOURCE_DIR) / "data" / "courses").string();
-}
+std::string courseDirectory() { return dataSubdirectory("courses").string(); }
 
 Result<db::Database> openLearningDatabase(const std::optional<std::string>& dbPath) {
+  const std::string courses = courseDirectory();
+  std::error_code ec;
+  if (!std::filesystem::is_directory(courses, ec))
+    return fail(ErrorKind::NotFound, "no course folder at " + courses + " (the courses are installed in "
+                "share/anatomy-tutor/courses beside the program's bin/ folder; AT_DATA_DIR=DIR reads DIR/courses instead)");
   auto database = db::openDatabase(dbPath);
   if (!database) return tl::unexpected(database.error());
-  auto seeded = db::seedCourses(*database, courseDirectory());
+  auto seeded = db::seedCourses(*database, courses);
   if (!seeded) return tl::unexpected(withContext("seeding the default course", seeded.error()));
   return std::move(*database);
 }

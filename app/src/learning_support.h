@@ -17,7 +17,7 @@
 
 namespace at::app {
 
-// The course folder: $AT_DATA_DIR/courses when set, else the source tree's data/courses.
+// The course folder: dataSubdirectory("courses") (data_paths.h: $AT_DATA_DIR, else the installed data).
 std::string courseDirectory();
 
 // Opens `--db PATH` (or the default database) and seeds the courses of courseDirectory()

@@ -40,7 +40,8 @@ void printUsage() {
   std::printf("usage: anatomy-tutor [COMMAND] [ARGS…]    (no command: the desktop app on the default course;\n"
               "                                        desktop options such as --ui-script F.json also work alone)\n\n");
   for (const Command& c : commands()) std::printf("  %-12s %s\n", c.name, c.summary);
-  std::printf("\n`anatomy-tutor COMMAND --help` describes each command.\n");
+  std::printf("\n`anatomy-tutor COMMAND --help` describes each command. Courses, presets and studies are read from\n"
+              "../share/anatomy-tutor beside the executable; AT_DATA_DIR=DIR reads them from DIR instead.\n");
 }
 
 // The desktop app on the default course when a display exists; otherwise one line saying so and the

@@ -16,16 +16,6 @@ using namespace at::test;
 
 namespace {
 
-template <class T>
-void checkError(const Result<T>& result, const std::string& path, const std::string& expected) {
-  REQUIRE_FALSE(result.has_value());
-  const std::string& message = result.error().message;
-  CAPTURE(message);
-  CHECK(message.rfind(path, 0) == 0);
-  CHECK(message.find(expected) != std::string::npos);
-  CHECK(message.find('\n') == std::string::npos);
-}
-
 void checkTestImage(const LoadedImage& loaded) {
   const Geometry& g = loaded.image.geometry;
   CHECK(g.dims == Dims{kInv3X, kInv3Y, kInv3Z});
