@@ -184,8 +184,10 @@ Result<Asked> askQuestion(AnswerSource& source, const lessons::StepView& view,
     if (!line) return Asked::InputEnded;
     if (source.interactive() && str::lower(str::trim(*line)) == "quit") return Asked::Quit;
     auto answer = source.interactive() ? parseTerminalAnswer(*line, view, idByName) : quiz::answerFromJson(*line);
-    const auto latency =
-        std::chrono::duration_cast<std::chrono::milliseconds>(std::chrono::steady_clock::now() - shownAt);
+    // Answers read from a file have no response time: 0 records "not measured" (never rated Easy).
+    const auto latency = source.interactive() ? std::chrono::duration_cast<std::chrono::milliseconds>(
+                                                    std::chrono::steady_clock::now() - shownAt)
+                                              : std::chrono::milliseconds(0);
     Result<quiz::Grade> graded = answer ? grade(*answer, latency.count())
                                         : Result<quiz::Grade>(tl::unexpected(answer.error()));
     if (graded) {

@@ -11,7 +11,7 @@
 // namesHidden() tells the app to hide structure names.
 //
 // Review answers go through lessons::answerReview: graded as lesson answers and committed with the
-// structure's Leitner progress and Elo before their feedback shows, so the review queue moves.
+// structure's FSRS memory state, the review log and Elo before their feedback shows, so the review queue moves.
 #pragma once
 
 #include <chrono>
