@@ -1,6 +1,6 @@
 // The desktop application (issue 7): an SDL2 window with an OpenGL context, Dear ImGui panels and
 // the render/gl ray caster drawing the volume view. Explore level: structure browser, hover to
-// highlight (fields computed off the UI thread by FieldWorker), click to select, the structure's
+// highlight (fields computed off the UI thread by wdt::FieldService), click to select, the structure's
 // WDT or bare preset with the blend t, named views, orbit/zoom/pan and a clipping plane.
 //
 // Adaptive quality: while the view or the hovered structure changes, the volume is rendered into a
@@ -38,7 +38,6 @@
 #include "commands.h"
 #include "dataset_resolver.h"
 #include "desktop_support.h"
-#include "field_worker.h"
 #include "import_panel.h"
 #include "learning_support.h"
 #include "lesson_panel.h"
@@ -52,6 +51,8 @@
 #include "volume/dataset_source.h"
 #include "volume/mask.h"
 #include "volume/png_image.h"
+#include "wdt/answer_keys.h"
+#include "wdt/field_service.h"
 
 namespace at::app {
 
@@ -85,17 +86,9 @@ double percentile(std::vector<double> v, double p) {
   return v[lo] + (v[hi] - v[lo]) * (pos - double(lo));
 }
 
-// The weighted distance in mm of `pointMm` from the structure `label` (the distance field the
-// answer keys use, learning_support.h), at the voxel containing the point; -1 when unknown.
-double weightedDistanceAt(const Dataset& dataset, std::uint16_t label, const Vec3& pointMm) {
-  auto field = wdtDistanceField(dataset)(structureMask(dataset.labels, label));
-  if (!field) return -1;
-  const Vec3 ijk = field->geometry.patientToIndex(pointMm);
-  const int i = int(std::lround(ijk[0])), j = int(std::lround(ijk[1])), k = int(std::lround(ijk[2]));
-  if (!field->dims().contains(i, j, k)) return -1;
-  const double d = field->at(i, j, k);
-  return std::isfinite(d) ? d : -1;
-}
+using wdt::FieldRequest;
+using wdt::FieldService;
+using wdt::FinishedField;
 
 // RAII for SDL, the window with its GL context, and the ImGui context with its backends.
 struct SdlSession {
@@ -268,7 +261,7 @@ class DesktopApp {
   char search_[128] = "";
 
   // Fields
-  std::unique_ptr<FieldWorker> worker_;
+  std::unique_ptr<FieldService> worker_;
   std::shared_ptr<const DistanceField> field_;  // host copy of the field shown (picking); may lag a GPU field
   const void* fieldSource_ = nullptr;            // identity of the field in the texture; null = none
   std::uint16_t fieldLabel_ = 0;
@@ -295,6 +288,15 @@ class DesktopApp {
   bool leftDown_ = false, panDown_ = false, dragged_ = false;
   double downX_ = 0, downY_ = 0, lastX_ = 0, lastY_ = 0;
   std::optional<Vec3> lastPickMm_;  // where the last hover pick met the volume (LPS mm)
+  // A locate answer waiting for the answer-key field of its target (asked of the field service,
+  // never computed on this thread): graded with the click's weighted distance once it is there.
+  struct PendingClick {
+    std::string structure;  // clicked ("" for none)
+    Vec3 pointMm{0, 0, 0};
+    FieldRequest keyField;
+  };
+  std::optional<PendingClick> pendingClick_;
+  bool servePendingClick();  // true while the click still waits for its field
 
   // Script and measurements
   std::deque<json> actions_;
@@ -383,7 +385,8 @@ Status DesktopApp::showDataset(Dataset dataset, const std::string& startStructur
   } else {
     message(preset.error().message);
   }
-  worker_ = std::make_unique<FieldWorker>(dataset_, 8);
+  pendingClick_.reset();
+  worker_ = std::make_unique<FieldService>(dataset_.volume, dataset_.labels, 8);
   expert_ = std::make_unique<TfEditorPanel>(dataset_, options_.dbPath, [this](json j) { event(std::move(j)); });
   if (renderer_) {  // a dataset opened after start-up
     if (auto st = renderer_->setVolume(dataset_.volume, dataset_.labels); !st) {
@@ -668,10 +671,15 @@ void DesktopApp::clickAt(double x, double y) {
     const Structure* st = dataset_.findStructureByLabel(hovered_);
     const auto targetId = lesson_->questionTarget();
     const Structure* target = targetId ? dataset_.findStructure(*targetId) : nullptr;
-    double distanceMm = -1;
-    if (lesson_->wantsClickDistance() && target && st != target && lastPickMm_)
-      distanceMm = weightedDistanceAt(dataset_, target->label, *lastPickMm_);
-    lesson_->clicked(st ? st->id : "", distanceMm);
+    if (lesson_->wantsClickDistance() && target && st != target && lastPickMm_) {
+      FieldRequest key;
+      key.label = target->label;
+      key.params = wdt::answerKeyParams();
+      pendingClick_ = PendingClick{st ? st->id : "", *lastPickMm_, key};
+      servePendingClick();
+      return;
+    }
+    lesson_->clicked(st ? st->id : "", -1);
     return;
   }
   if (hovered_) select(hovered_);
@@ -732,12 +740,29 @@ void DesktopApp::handleEvent(const SDL_Event& e) {
 // ---------------------------------------------------------------------------------------------
 // Fields: what the shown structure needs, asked of the worker; the best that exists, uploaded.
 
+bool DesktopApp::servePendingClick() {
+  if (!pendingClick_) return false;
+  const FieldService::Cached key = worker_->cached(pendingClick_->keyField);
+  if (!key.host) {
+    worker_->request(pendingClick_->keyField);  // a GPU field's host copy follows shortly
+    return true;
+  }
+  const auto distance = wdt::answerKeyDistanceAt(*key.host, dataset_.labels.geometry, pendingClick_->pointMm);
+  const PendingClick click = *std::exchange(pendingClick_, std::nullopt);
+  lesson_->clicked(click.structure, distance.value_or(-1));
+  return false;
+}
+
 void DesktopApp::updateFields() {
   for (FinishedField& f : worker_->takeFinished()) {
     const Structure* st = dataset_.findStructureByLabel(f.request.label);
     const std::string id = st ? st->id : std::to_string(f.request.label);
     if (!f.field && !f.deviceField) {
       message("distance field of " + id + ": " + f.message);
+      if (pendingClick_ && pendingClick_->keyField.key() == f.request.key()) {  // graded as "distance unknown"
+        const PendingClick click = *std::exchange(pendingClick_, std::nullopt);
+        lesson_->clicked(click.structure, -1);
+      }
       continue;
     }
     if (f.device.find("CPU") == std::string::npos && !f.device.empty()) gpuFields_ = true;
@@ -757,6 +782,7 @@ void DesktopApp::updateFields() {
   // Set again below while the field wanted is still going up; every other way out leaves it off,
   // so that the loop can go idle.
   fieldUploading_ = false;
+  const bool clickWaiting = servePendingClick();  // its field goes first: requests are latest-wins
   if (bare_) return;
   const std::uint16_t label = shownLabel();
   if (!label) return;
@@ -765,12 +791,12 @@ void DesktopApp::updateFields() {
   if (!fine || !coarse) return;
   // A field is ready when its host copy or (computed on the GPU) its device copy exists; a GPU
   // field is shown from the device before its host copy (for picking) has arrived.
-  const FieldWorker::Cached fineCached = worker_->cached(*fine);
+  const FieldService::Cached fineCached = worker_->cached(*fine);
   const bool fineReady = fineCached.ready();
-  const FieldWorker::Cached coarseCached = fineReady ? FieldWorker::Cached{} : worker_->cached(*coarse);
+  const FieldService::Cached coarseCached = fineReady ? FieldService::Cached{} : worker_->cached(*coarse);
   const bool coarseReady = coarseCached.ready();
   const bool resting = msBetween(hoverSince_, Clock::now()) > kRefineFieldAfterMs;
-  if (!fineReady) {
+  if (!fineReady && !clickWaiting) {
     if (fine->key() == declinedFieldKey_ && (coarseReady || coarseDownsample() == 1))
       ;  // the user cancelled this full-resolution field: keep the coarse one
     else if (gpuFields_ || coarseDownsample() == 1 || (coarseReady && resting))
@@ -778,7 +804,7 @@ void DesktopApp::updateFields() {
     else if (!coarseReady)
       worker_->request(*coarse);
   }
-  const FieldWorker::Cached& chosen = fineReady ? fineCached : coarseCached;
+  const FieldService::Cached& chosen = fineReady ? fineCached : coarseCached;
   const auto& best = chosen.host;  // may still be missing for a GPU field
   const auto& bestDevice = chosen.device;
   const void* source = bestDevice ? static_cast<const void*>(bestDevice.get()) : static_cast<const void*>(best.get());
@@ -1233,7 +1259,12 @@ bool DesktopApp::stepScript() {
         hoverAt(a.at("x").get<double>(), a.at("y").get<double>());
         done();
       } else if (what == "click") {
-        clickAt(a.at("x").get<double>(), a.at("y").get<double>());
+        // A locate answer off its target is graded once its distance field is there.
+        if (!a.value("_clicked", false)) {
+          a["_clicked"] = true;
+          clickAt(a.at("x").get<double>(), a.at("y").get<double>());
+        }
+        if (pendingClick_) return false;
         done();
       } else if (what == "hover_structure") {
         const Structure* s = structureArg();
@@ -1258,9 +1289,13 @@ bool DesktopApp::stepScript() {
       } else if (what == "click_structure") {
         const Structure* s = structureArg();
         if (!s) return true;
-        auto p = projectStructure(s->label);
-        event({{"event", "click_structure"}, {"structure", s->id}, {"visible", p.has_value()}});
-        if (p) clickAt((*p)[0], (*p)[1]);
+        if (!a.value("_clicked", false)) {
+          a["_clicked"] = true;
+          auto p = projectStructure(s->label);
+          event({{"event", "click_structure"}, {"structure", s->id}, {"visible", p.has_value()}});
+          if (p) clickAt((*p)[0], (*p)[1]);
+        }
+        if (pendingClick_) return false;
         done();
       } else if (what == "orbit") {
         camera_.orbit(a.value("azimuth", 0.0), a.value("elevation", 0.0));

@@ -7,7 +7,7 @@
 #include "db/dataset_store.h"
 #include "volume/dataset_source.h"
 #include "volume/phantom.h"
-#include "wdt/wdt.h"
+#include "wdt/answer_keys.h"
 
 namespace at::app {
 
@@ -47,15 +47,7 @@ Result<Dataset> loadCourseDataset(db::Database& database, const std::string& dat
 }
 
 quiz::DistanceFieldFunction wdtDistanceField(const Dataset& dataset) {
-  return [&dataset](const Mask& seeds) -> Result<FloatVolume> {
-    WdtParams params;
-    params.converge = true;
-    params.downsample = 2;
-    auto result = computeWdt(dataset.volume, seeds, params);
-    if (!result) return tl::unexpected(result.error());
-    if (result->field.downsample == 1) return std::move(result->field.distances);
-    return upsampleField(result->field, dataset.labels.geometry);
-  };
+  return [&dataset](const Mask& seeds) { return wdt::answerKeyDistances(dataset.volume, dataset.labels.geometry, seeds); };
 }
 
 LazyKeyComputer::LazyKeyComputer(std::vector<Structure> structures, Loader loader)

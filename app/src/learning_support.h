@@ -30,11 +30,7 @@ db::BuiltinStructures builtinStructures();
 // Loads a course's dataset: a built-in one by name, else an imported one from the database.
 Result<Dataset> loadCourseDataset(db::Database& db, const std::string& datasetId);
 
-// Distance fields for key computation: the weighted distance transform (density weights, the
-// paper's entering rule, sweeps until converged) from a structure's voxels, computed on a grid
-// coarser by 2 per axis (as the paper does for interaction: 8x fewer voxels) and sampled back
-// trilinearly onto the label grid. Keys compare distances between structures millimetres apart,
-// and a relation key must win by kRelationMargin, so the coarser grid does not change them.
+// Distance fields for key computation: wdt/answer_keys.h's recipe on the dataset.
 quiz::DistanceFieldFunction wdtDistanceField(const Dataset& dataset);
 
 // A KeyComputer that answers hasStructure from a structure list and loads the dataset (and computes
