@@ -39,15 +39,6 @@ const char* kUsage =
     "  --presets   presets folder (default: the installed presets, or $AT_DATA_DIR/presets)\n";
 
 
-Result<std::pair<int, int>> parseSize(const std::string& text) {
-  int w = 0, h = 0;
-  char x = 0, extra = 0;
-  if (std::sscanf(text.c_str(), "%d%c%d%c", &w, &x, &h, &extra) != 3 || (x != 'x' && x != 'X') || w < 1 ||
-      h < 1 || w > 8192 || h > 8192)
-    return fail("option --size: '" + text + "' is not WxH with 1..8192 pixels per side");
-  return std::make_pair(w, h);
-}
-
 Result<std::array<float, 4>> parseClip(const std::string& text) {
   std::array<float, 4> c{};
   std::stringstream ss(text);
@@ -104,11 +95,9 @@ int runRender(const Argv& argv) {
   preset->t = float(*t);
 
   render::ViewRequest request;
-  if (auto size = args->value("size")) {
-    auto wh = parseSize(*size);
-    if (!wh) return reportError("render: " + wh.error().message, 2);
-    request.width = wh->first;
-    request.height = wh->second;
+  if (auto size = args->size()) {
+    request.width = size->width;
+    request.height = size->height;
   }
   if (auto v = args->value("view")) request.view = *v;
   if (auto c = args->value("clip")) {
