@@ -37,6 +37,18 @@ for f in /usr/share/anatomy-tutor/courses/temporal_bone.json /usr/share/anatomy-
 done
 desktop-file-validate /usr/share/applications/anatomy-tutor.desktop
 
+# strace needs ptrace; a container that forbids it still runs the checks below, without the trace.
+touch "$run/play.trace" "$run/default.trace"
+traced="under strace"
+play_trace=(strace -f -qq -e trace=%file -o "$run/play.trace")
+default_trace=(strace -f -qq -e trace=%file -o "$run/default.trace")
+if ! strace -qq -o /dev/null true 2>/dev/null; then
+  echo "test-package: SKIPPED the no-checkout-path check: strace cannot trace here (ptrace not permitted)"
+  traced="not traced"
+  play_trace=()
+  default_trace=()
+fi
+
 # A user's world with no trace of the checkout: own HOME, data and cache, no display, no override.
 mkdir -p "$run/home"
 cp scripts/play-lesson.py "$run/"
@@ -47,18 +59,18 @@ t=$(stamp)
 echo "test-package: --version ($(elapsed "$t"))"
 
 t=$(stamp)
-"${env_user[@]}" strace -f -qq -e trace=%file -o "$run/play.trace" \
+"${env_user[@]}" "${play_trace[@]}" \
   python3 "$run/play-lesson.py" -- anatomy-tutor play inner_ear --user ci --new-user -- \
   cochlea Vestibule "lateral semicircular canal" "superior semicircular canal" Vestibule "Posterior semicircular canal" \
   > "$run/play.log" || { cat "$run/play.log"; echo "test-package: the installed copy did not play inner_ear to a full score" >&2; exit 1; }
 tail -n 1 "$run/play.log"
-echo "test-package: played inner_ear from the installed copy ($(elapsed "$t"), under strace)"
+echo "test-package: played inner_ear from the installed copy ($(elapsed "$t"), $traced)"
 
 t=$(stamp)
-"${env_user[@]}" strace -f -qq -e trace=%file -o "$run/default.trace" anatomy-tutor > "$run/default.log"
+"${env_user[@]}" "${default_trace[@]}" anatomy-tutor > "$run/default.log"
 views=$(ls "$run"/anatomy-tutor-views/*.png | wc -l)
 [ "$views" -gt 0 ] || { cat "$run/default.log"; echo "test-package: the default command wrote no views" >&2; exit 1; }
-echo "test-package: the default command wrote $views views with no display ($(elapsed "$t"), under strace)"
+echo "test-package: the default command wrote $views views with no display ($(elapsed "$t"), $traced)"
 
 leaks=$(grep -h -F "$checkout" "$run/play.trace" "$run/default.trace" || true)
 if [ -n "$leaks" ]; then
@@ -66,4 +78,4 @@ if [ -n "$leaks" ]; then
   echo "test-package: the installed copy touched the checkout ($checkout)" >&2
   exit 1
 fi
-echo "test-package: no path of $checkout was opened or looked up by the installed copy"
+[ "$traced" = "not traced" ] || echo "test-package: no path of $checkout was opened or looked up by the installed copy"
