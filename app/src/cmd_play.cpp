@@ -17,7 +17,7 @@
 #include "cli_args.h"
 #include "core/strings.h"
 #include "commands.h"
-#include "learning_support.h"
+#include "learning_session.h"
 #include "lessons/lesson_engine.h"
 #include "quiz/answer_json.h"
 
@@ -210,21 +210,19 @@ lessons::RenderState terminalRender() {
 }
 
 // play --review COURSE: review questions until nothing is due or the answers end.
-int runReview(const std::string& courseId, std::int64_t userId, db::Database& database,
-              db::SqliteCurriculumRepository& curriculum, db::SqliteProgressRepository& progress,
-              AnswerSource& source) {
+int runReview(const std::string& courseId, std::int64_t userId, LearningSession& session, AnswerSource& source) {
+  lessons::CurriculumRepository& curriculum = session.curriculum();
+  lessons::ProgressRepository& progress = session.progress();
   auto course = curriculum.course(courseId);
   if (!course) return reportError("play: " + course.error().message + " (see `anatomy-tutor courses`)");
-  auto structures = curriculum.structures(course->datasetId);
+  auto structures = session.structures(course->datasetId);
   if (!structures) return reportError("play: " + structures.error().message);
-  std::map<std::string, std::string> idByName, nameById;
-  for (const Structure& s : *structures) {
-    idByName[str::lower(s.id)] = s.id;
-    idByName[str::lower(s.displayName)] = s.id;
-    nameById[s.id] = s.displayName.empty() ? s.id : s.displayName;
-  }
-  const std::string datasetId = course->datasetId;
-  LazyKeyComputer keys(*structures, [&database, datasetId] { return loadCourseDataset(database, datasetId); });
+  const std::map<std::string, std::string> idByName = structureIdsByName(*structures);
+  std::map<std::string, std::string> nameById;
+  for (const Structure& s : *structures) nameById[s.id] = s.displayName.empty() ? s.id : s.displayName;
+  auto keysFound = session.keysFor(course->datasetId);
+  if (!keysFound) return reportError("play: " + keysFound.error().message);
+  quiz::KeyComputer& keys = **keysFound;
 
   std::printf("Review: %s (%s)\n", course->title.c_str(), courseId.c_str());
   int asked = 0, right = 0;
@@ -278,7 +276,7 @@ int runReview(const std::string& courseId, std::int64_t userId, db::Database& da
 }  // namespace
 
 int runPlay(const Argv& argv) {
-  auto args = cli::Args::parse(argv, {"user", "answers", "db", "group", "review"}, {"quiz-only", "new-user"});
+  auto args = cli::Args::parse(argv, {"answers", "group", "review"}, {"quiz-only", "new-user"});
   if (!args) return reportError("play: " + args.error().message);
   if (args->has("help")) {
     std::printf("%s", kPlayHelp);
@@ -292,8 +290,8 @@ int runPlay(const Argv& argv) {
     return reportError("play: give exactly one LESSON (see `anatomy-tutor lessons`)");
   }
   const std::string lessonId = reviewCourse ? "" : args->positional()[0];
-  const auto userName = args->value("user");
-  if (!userName || userName->empty()) return reportError("play: --user NAME is required");
+  const auto userName = args->user();
+  if (!userName) return reportError("play: --user NAME is required");
 
   std::unique_ptr<AnswerSource> source;
   if (auto path = args->value("answers")) {
@@ -304,44 +302,31 @@ int runPlay(const Argv& argv) {
     source = std::make_unique<TerminalAnswers>();
   }
 
-  auto database = openLearningDatabase(args->value("db"));
-  if (!database) return reportError("play: " + database.error().message);
-  db::SqliteCurriculumRepository curriculum(*database, builtinStructures());
-  db::SqliteProgressRepository progress(*database);
-  db::SqliteUserRepository users(*database);
-
-  auto user = users.findUser(*userName);
+  auto session = LearningSession::open(args->db());
+  if (!session) return reportError("play: " + session.error().message);
+  bool created = false;
+  auto user = (*session)->user(*userName,
+                               args->has("new-user") ? LearningSession::NewUser::Create : LearningSession::NewUser::Refuse,
+                               args->valueOr("group", ""), &created);
   if (!user) return reportError("play: " + user.error().message);
-  if (!*user) {
-    if (!args->has("new-user"))
-      return reportError("play: unknown user '" + *userName + "' (first time? add --new-user to create it)");
-    auto created = users.createUser(*userName, lessons::Role::Student, args->valueOr("group", ""));
-    if (!created) return reportError("play: " + created.error().message);
-    std::printf("created user '%s'\n", created->name.c_str());
-    *user = *created;
-  }
+  if (created) std::printf("created user '%s'\n", user->name.c_str());
 
-  if (reviewCourse) return runReview(*reviewCourse, (*user)->id, *database, curriculum, progress, *source);
+  if (reviewCourse) return runReview(*reviewCourse, user->id, **session, *source);
 
+  lessons::CurriculumRepository& curriculum = (*session)->curriculum();
   auto lesson = curriculum.lesson(lessonId);
   if (!lesson) return reportError("play: " + lesson.error().message + " (see `anatomy-tutor lessons`)");
   auto course = curriculum.course(lesson->courseId);
   if (!course) return reportError("play: " + course.error().message);
-  auto structures = curriculum.structures(course->datasetId);
+  auto structures = (*session)->structures(course->datasetId);
   if (!structures) return reportError("play: " + structures.error().message);
-  std::map<std::string, std::string> idByName;
-  for (const Structure& s : *structures) {
-    idByName[str::lower(s.id)] = s.id;
-    idByName[str::lower(s.displayName)] = s.id;
-  }
+  const std::map<std::string, std::string> idByName = structureIdsByName(*structures);
 
-  db::Database& databaseRef = *database;
-  const std::string datasetId = course->datasetId;
-  LazyKeyComputer keys(*structures, [&databaseRef, datasetId] { return loadCourseDataset(databaseRef, datasetId); });
-
-  lessons::LessonEngine engine(curriculum, progress, keys);
+  auto madeEngine = (*session)->engineFor(lessonId);
+  if (!madeEngine) return reportError("play: " + madeEngine.error().message);
+  lessons::LessonEngine& engine = **madeEngine;
   const auto mode = args->has("quiz-only") ? lessons::LessonMode::QuizOnly : lessons::LessonMode::Guided;
-  if (auto started = engine.start((*user)->id, lessonId, mode); !started)
+  if (auto started = engine.start(user->id, lessonId, mode); !started)
     return reportError("play: " + started.error().message);
 
   std::printf("Lesson: %s (%s), course %s — %s attempt %lld%s\n", engine.lesson().title.c_str(), lessonId.c_str(),

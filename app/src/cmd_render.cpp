@@ -6,6 +6,7 @@
 
 #include "cli_args.h"
 #include "commands.h"
+#include "data_paths.h"
 #include "dataset_resolver.h"
 #include "render/gl/egl_context.h"
 #include "render/gl/volume_renderer.h"
@@ -28,7 +29,7 @@ const char* kUsage =
     "                            [--view NAME] [--clip NX,NY,NZ,D] [--backend cpu|cuda|auto] [--passes N]\n"
     "                            [--context F] [--presets DIR] [--labels FILE [--names NAMES.json]] [--series UID]\n"
     "                            [--db PATH] --out F.png\n"
-    "  DATASET     phantom, phantom:N, an imported dataset, or a volume file/folder (--labels: its label map,\n"
+    "  DATASET     phantom, phantom:N, skull, an imported dataset, or a volume file/folder (--labels: its label map,\n"
     "              --names: its label names, --series: the DICOM series where a folder holds several)\n"
     "  MODE        wdt | bare | unweighted | fuzzy | outline | lighting (the structure's shipped preset)\n"
     "  --preset    a preset id from the presets folder, or a path to a .json preset\n"
@@ -36,21 +37,12 @@ const char* kUsage =
     "  --view      anterior, posterior, lateral_left, lateral_right, superior, inferior\n"
     "  --clip      plane n·p = d in LPS mm; the side the normal points to is cut away\n"
     "  --context   view radius as a multiple of the structure's radius (default 2.5)\n"
-    "  --presets   presets folder (default: data/presets of the source tree or next to the binary)\n"
+    "  --presets   presets folder (default: the installed presets, or $AT_DATA_DIR/presets)\n"
     "  --intensity auto|hu|plain: how a volume file's values are read (CT in HU, or plain intensities)\n"
     "Without STRUCTURE the whole volume is rendered with a data transfer function derived from the\n"
     "data (CT: the default HU transfer function; plain intensities such as a µCT: a ramp over the\n"
     "window of their histogram), or the data TF of --preset; datasets with no labels render so.\n";
 
-
-Result<std::pair<int, int>> parseSize(const std::string& text) {
-  int w = 0, h = 0;
-  char x = 0, extra = 0;
-  if (std::sscanf(text.c_str(), "%d%c%d%c", &w, &x, &h, &extra) != 3 || (x != 'x' && x != 'X') || w < 1 ||
-      h < 1 || w > 8192 || h > 8192)
-    return fail("option --size: '" + text + "' is not WxH with 1..8192 pixels per side");
-  return std::make_pair(w, h);
-}
 
 Result<std::array<float, 4>> parseClip(const std::string& text) {
   std::array<float, 4> c{};
@@ -122,11 +114,9 @@ int runRender(const Argv& argv) {
   preset->t = float(*t);
 
   render::ViewRequest request;
-  if (auto size = args->value("size")) {
-    auto wh = parseSize(*size);
-    if (!wh) return reportError("render: " + wh.error().message, 2);
-    request.width = wh->first;
-    request.height = wh->second;
+  if (auto size = args->size()) {
+    request.width = size->width;
+    request.height = size->height;
   }
   if (auto v = args->value("view")) request.view = *v;
   if (auto c = args->value("clip")) {
@@ -189,18 +179,6 @@ int runRender(const Argv& argv) {
   return 0;
 }
 
-std::filesystem::path defaultPresetsDir() {
-  namespace fs = std::filesystem;
-  const fs::path source = fs::path(AT_SOURCE_DIR) / "data" / "presets";
-  if (fs::is_directory(source)) return source;
-  std::error_code ec;
-  const fs::path exe = fs::read_symlink("/proc/self/exe", ec);
-  if (!ec) {
-    for (const fs::path& p : {exe.parent_path() / "data" / "presets",
-                              exe.parent_path().parent_path() / "share" / "anatomy-tutor" / "presets"})
-      if (fs::is_directory(p)) return p;
-  }
-  return source;
-}
+std::filesystem::path defaultPresetsDir() { return dataSubdirectory("presets"); }
 
 }  // namespace at::app

@@ -171,10 +171,7 @@ DatasetFiles datasetFiles(const DatasetRecord& record) {
   return files;
 }
 
-namespace {
-
-// Opens an existing database only: listing must not create one as a side effect.
-Result<std::optional<Database>> openExisting(const std::optional<std::string>& dbPath) {
+Result<std::optional<Database>> openExistingDatabase(const std::optional<std::string>& dbPath) {
   std::string path;
   if (dbPath) {
     path = *dbPath;
@@ -190,26 +187,6 @@ Result<std::optional<Database>> openExisting(const std::optional<std::string>& d
   auto db = Database::open(path, options);
   if (!db) return tl::unexpected(db.error());
   return std::optional<Database>(std::move(*db));
-}
-
-}  // namespace
-
-Result<std::vector<DatasetRecord>> listImportedDatasets(const std::optional<std::string>& dbPath) {
-  auto db = openExisting(dbPath);
-  if (!db) return tl::unexpected(db.error());
-  if (!*db) return std::vector<DatasetRecord>{};
-  return listDatasets(**db);
-}
-
-Result<std::optional<DatasetFiles>> findImportedDataset(const std::optional<std::string>& dbPath,
-                                                        const std::string& name) {
-  auto db = openExisting(dbPath);
-  if (!db) return tl::unexpected(db.error());
-  if (!*db) return std::optional<DatasetFiles>{};
-  auto record = findDataset(**db, name);
-  if (!record) return tl::unexpected(record.error());
-  if (!*record) return std::optional<DatasetFiles>{};
-  return std::optional<DatasetFiles>(datasetFiles(**record));
 }
 
 }  // namespace at::db
