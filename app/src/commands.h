@@ -36,6 +36,9 @@ int runRender(const Argv& args);
 // The shipped presets: dataSubdirectory("presets") (data_paths.h).
 std::filesystem::path defaultPresetsDir();
 
+// Labelling from seed strokes (cmd_segment.cpp)
+int runSegment(const Argv& args);
+
 // The desktop application (desktop_app.cpp, desktop_support.cpp)
 int runDesktop(const Argv& args);
 
