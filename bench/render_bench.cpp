@@ -209,7 +209,7 @@ int main(int argc, char** argv) {
     render::ViewRequest req;
     req.width = o.width;
     req.height = o.height;
-    req.contextScale = 4;
+    req.margin = 4;  // a wide view: several structures to hover
     auto settings = render::settingsFor(*preset, *frame, req);
     if (!settings) return failWith(settings.error().message);
     settings->stepMm = stepFor(ds.volume.geometry);

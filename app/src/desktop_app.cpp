@@ -549,6 +549,9 @@ void DesktopApp::setView(const std::string& name) {
   if (it == frames_.end()) return;
   render::ViewRequest request;
   request.view = name;
+  request.margin = 2.5;  // the explore view: the structure with room around it to orbit and hover
+  request.width = std::max(1, fbW_);
+  request.height = std::max(1, fbH_);
   auto settings = render::settingsFor(presetOf(label, bare_), it->second, request);
   if (!settings) {
     message(settings.error().message);
