@@ -225,7 +225,7 @@ int main(int argc, char** argv) {
     for (const Structure& s : ds.structures) {
       auto f = render::structureFrame(ds.labels, s.label);
       if (!f) continue;
-      auto px = settings->camera.project(f->centroidMm, o.width, o.height);
+      auto px = settings->camera.project(f->anchorMm, o.width, o.height);
       if (!px || (*px)[0] < 0 || (*px)[1] < 0 || (*px)[0] >= o.width || (*px)[1] >= o.height) continue;
       targets.push_back({s.label, (*px)[0], (*px)[1]});
     }

@@ -23,7 +23,7 @@ void parallelSlabs(int n, int threads, F body) {
   for (std::thread& th : pool) th.join();
 }
 
-std::int8_t snorm(float v) { return std::int8_t(std::lround(std::clamp(v, -1.0f, 1.0f) * 127.0f)); }
+std::int16_t snorm16(float v) { return std::int16_t(std::lround(std::clamp(v, -1.0f, 1.0f) * 32767.0f)); }
 
 }  // namespace
 
@@ -61,6 +61,7 @@ GradientVolume computeGradientVolume(const Volume& volume, int threads) {
   out.texels.resize(d.count());
   const double sx = volume.geometry.spacingMm[0], sy = volume.geometry.spacingMm[1], sz = volume.geometry.spacingMm[2];
   const Mat3& dir = volume.geometry.direction;
+  const double voxelMm = std::cbrt(sx * sy * sz);
   parallelSlabs(d.z, threads, [&](int k0, int k1) {
     std::vector<float> window[3];
     const auto smoothZ = [&](int k, std::vector<float>& dst) {
@@ -91,19 +92,16 @@ GradientVolume computeGradientVolume(const Volume& volume, int threads) {
           const float gj = (here[std::size_t(jp) * std::size_t(d.x) + std::size_t(i)] -
                             here[std::size_t(jm) * std::size_t(d.x) + std::size_t(i)]) / float(jp - jm > 0 ? jp - jm : 1);
           const float gk = zSpan > 0 ? (above[v] - below[v]) / zSpan : 0.0f;
-          const float strength = std::sqrt(gi * gi + gj * gj + gk * gk);
-          // Patient-frame gradient: the index derivatives per mm, rotated by the direction cosines.
+          // Patient-frame gradient in HU per mm (the index derivatives per mm, rotated by the
+          // direction cosines), times the voxel size: HU per voxel.
           const double a = gi / sx, b = gj / sy, c = gk / sz;
-          double p[3];
-          for (int r = 0; r < 3; ++r) p[r] = dir.m[std::size_t(r)][0] * a + dir.m[std::size_t(r)][1] * b + dir.m[std::size_t(r)][2] * c;
-          const double len = std::sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]);
-          std::array<std::int8_t, 4>& t = out.texels[slice * std::size_t(k) + v];
-          if (len > 1e-6) {
-            t = {snorm(float(p[0] / len)), snorm(float(p[1] / len)), snorm(float(p[2] / len)), 0};
-          } else {
-            t = {0, 0, 0, 0};
+          std::array<std::int16_t, 4>& t = out.texels[slice * std::size_t(k) + v];
+          t[0] = std::int16_t(volume.voxels[slice * std::size_t(k) + v] == -32768 ? -32767
+                                                                                   : volume.voxels[slice * std::size_t(k) + v]);
+          for (int r = 0; r < 3; ++r) {
+            const double p = (dir.m[std::size_t(r)][0] * a + dir.m[std::size_t(r)][1] * b + dir.m[std::size_t(r)][2] * c) * voxelMm;
+            t[std::size_t(r + 1)] = snorm16(float(p / GradientVolume::kMaxHuPerVoxel));
           }
-          t[3] = snorm(std::sqrt(std::min(strength, GradientVolume::kMaxHuPerVoxel) / GradientVolume::kMaxHuPerVoxel));
         }
       }
       std::swap(window[0], window[1]);

@@ -37,7 +37,7 @@ double trilinear(const Grid<T>& g, const Vec3& ijk, F value) {
 }
 
 // The selected structure's mask as the GPU holds it: 1 where the label is `label`, smoothed by a
-// [1 2 1]³/64 binomial (edge-clamped), then sampled trilinearly.
+// [1 2 1]³/64 binomial (edge-clamped), at least 0.75 on the label's own voxels, sampled trilinearly.
 double smoothedMaskAt(const LabelMap& labels, std::uint16_t label, const Vec3& ijk) {
   const Dims& d = labels.dims();
   return trilinear(d, ijk, [&](std::size_t index) {
@@ -50,7 +50,8 @@ double smoothedMaskAt(const LabelMap& labels, std::uint16_t label, const Vec3& i
           const int x = std::clamp(i + di, 0, d.x - 1), y = std::clamp(j + dj, 0, d.y - 1), z = std::clamp(k + dk, 0, d.z - 1);
           if (labels.voxels[d.index(x, y, z)] == label) sum += (2 - std::abs(di)) * (2 - std::abs(dj)) * (2 - std::abs(dk));
         }
-    return double(sum) / 64.0;
+    const double smooth = double(sum) / 64.0;
+    return labels.voxels[index] == label ? std::max(smooth, 0.75) : smooth;
   });
 }
 
@@ -98,7 +99,7 @@ TransferFunction2D shadingTable(const Preset& preset) {
 
 double effectiveStepMm(const Geometry& g, const RenderSettings& s) {
   if (s.stepMm > 0) return s.stepMm;
-  return 0.5 * std::min({g.spacingMm[0], g.spacingMm[1], g.spacingMm[2]});
+  return kDefaultStepVoxels * std::min({g.spacingMm[0], g.spacingMm[1], g.spacingMm[2]});
 }
 
 double effectiveOpacityRefMm(const Geometry& g, const RenderSettings& s) {
@@ -191,8 +192,10 @@ PickResult pick(const SceneVolumes& scene, const RenderSettings& s, const Transf
     }
     float surface = 1;
     if (scene.gradients && !scene.gradients->empty()) {
-      const double w = trilinear(g.dims, ijk, [&](std::size_t i) { return double(scene.gradients->texels[i][3]) / 127.0; });
-      surface = surfaceFactor(s.preset, GradientVolume::decodeStrength(float(w)));
+      double gc[3];
+      for (std::size_t c = 0; c < 3; ++c)
+        gc[c] = trilinear(g.dims, ijk, [&](std::size_t i) { return double(scene.gradients->texels[i][c + 1]) / 32767.0; });
+      surface = surfaceFactor(s.preset, GradientVolume::strengthOf(float(gc[0]), float(gc[1]), float(gc[2])));
     }
     const float a = table.lookup(hu, n)[3];
     const float ac = a > 0 ? correctedOpacity(a, step, refMm) * surface : 0.0f;

@@ -26,14 +26,19 @@ Result<StructureFrame> structureFrame(const LabelMap& labels, std::uint16_t labe
   f.volumeMm3 = n * g.spacingMm[0] * g.spacingMm[1] * g.spacingMm[2];
   f.voxelMm = std::max({g.spacingMm[0], g.spacingMm[1], g.spacingMm[2]});
   const std::size_t every = (f.voxelCount + kMaxFramePoints - 1) / kMaxFramePoints;
-  double r2 = 0;
+  double r2 = 0, nearest2 = 1e300;
   std::size_t seen = 0;
   for (int k = 0; k < d.z; ++k)
     for (int j = 0; j < d.y; ++j)
       for (int i = 0; i < d.x; ++i)
         if (labels.voxels[d.index(i, j, k)] == label) {
           const Vec3 p = g.indexToPatient({double(i), double(j), double(k)});
-          r2 = std::max(r2, dot(p - f.centroidMm, p - f.centroidMm));
+          const double q2 = dot(p - f.centroidMm, p - f.centroidMm);
+          r2 = std::max(r2, q2);
+          if (q2 < nearest2) {
+            nearest2 = q2;
+            f.anchorMm = p;
+          }
           if (seen++ % every == 0) f.pointsMm.push_back(p);
         }
   f.radiusMm = std::sqrt(r2);

@@ -38,17 +38,6 @@ std::uint16_t labelOf(const Dataset& ds, const std::string& id) {
 
 MaskStats statsOf(const Dataset& ds, const std::string& id) { return measureLabel(ds.labels, labelOf(ds, id)); }
 
-double meanHu(const Dataset& ds, std::uint16_t label) {
-  double sum = 0;
-  std::size_t n = 0;
-  for (std::size_t v = 0; v < ds.labels.voxels.size(); ++v)
-    if (ds.labels.voxels[v] == label) {
-      sum += ds.volume.voxels[v];
-      ++n;
-    }
-  return n ? sum / double(n) : NAN;
-}
-
 Mask maskOf(const Dataset& ds, const std::set<std::string>& ids) {
   std::set<std::uint16_t> labels;
   for (const std::string& id : ids) labels.insert(labelOf(ds, id));

@@ -35,7 +35,7 @@ BlockSummary summariseBlocks(const Volume& volume, const LabelMap& labels, const
   const std::size_t n = b.blocks.count();
   std::vector<std::int16_t> ownMin(n, std::numeric_limits<std::int16_t>::max());
   std::vector<std::int16_t> ownMax(n, std::numeric_limits<std::int16_t>::min());
-  std::vector<std::int8_t> ownStrength(n, 0);
+  std::vector<float> ownStrength(n, 0.0f);
   b.labels.assign(n, {});
   const bool hasLabels = !labels.empty();
   const bool hasGradients = !gradients.empty();
@@ -50,7 +50,7 @@ BlockSummary summariseBlocks(const Volume& volume, const LabelMap& labels, const
         const std::int16_t v = volume.voxels[row + std::size_t(i)];
         ownMin[bi] = std::min(ownMin[bi], v);
         ownMax[bi] = std::max(ownMax[bi], v);
-        if (hasGradients) ownStrength[bi] = std::max(ownStrength[bi], gradients.texels[row + std::size_t(i)][3]);
+        if (hasGradients) ownStrength[bi] = std::max(ownStrength[bi], gradients.strengthAt(row + std::size_t(i)));
         if (!hasLabels) continue;
         const std::uint16_t l = labels.voxels[row + std::size_t(i)];
         if (l == 0 || (bi == lastBlock && l == lastLabel)) continue;
@@ -65,12 +65,8 @@ BlockSummary summariseBlocks(const Volume& volume, const LabelMap& labels, const
                                         [](std::int16_t a, std::int16_t c) { return std::min(a, c); });
   b.huMax = neighbourhood<std::int16_t>(b.blocks, ownMax, std::numeric_limits<std::int16_t>::min(),
                                         [](std::int16_t a, std::int16_t c) { return std::max(a, c); });
-  const std::vector<std::int8_t> strength =
-      neighbourhood<std::int8_t>(b.blocks, ownStrength, 0, [](std::int8_t a, std::int8_t c) { return std::max(a, c); });
-  b.strengthMax.resize(n);
-  for (std::size_t i = 0; i < n; ++i)
-    b.strengthMax[i] = hasGradients ? GradientVolume::decodeStrength(float(strength[i]) / 127.0f)
-                                    : std::numeric_limits<float>::max();
+  b.strengthMax = neighbourhood<float>(b.blocks, ownStrength, 0.0f, [](float a, float c) { return std::max(a, c); });
+  if (!hasGradients) b.strengthMax.assign(n, std::numeric_limits<float>::max());
   return b;
 }
 
@@ -102,23 +98,13 @@ void FieldBlockMinima::addAll(const FloatVolume& field) {
   for (int z = 0; z < field.dims().z; ++z) addSlice(field.voxels.data() + slice * std::size_t(z), z);
 }
 
-float FieldBlockMinima::minIn(const Vec3& loMm, const Vec3& hiMm) const {
-  // The box's corners in field index space; a trilinear sample reads the voxels around it.
-  double lo[3] = {1e30, 1e30, 1e30}, hi[3] = {-1e30, -1e30, -1e30};
-  for (int c = 0; c < 8; ++c) {
-    const Vec3 p{(c & 1) ? hiMm[0] : loMm[0], (c & 2) ? hiMm[1] : loMm[1], (c & 4) ? hiMm[2] : loMm[2]};
-    const Vec3 ijk = grid_.patientToIndex(p);
-    for (int a = 0; a < 3; ++a) {
-      lo[a] = std::min(lo[a], ijk[std::size_t(a)]);
-      hi[a] = std::max(hi[a], ijk[std::size_t(a)]);
-    }
-  }
+float FieldBlockMinima::minInIndexBox(const Vec3& lo, const Vec3& hi) const {
   const int dims[3] = {grid_.dims.x, grid_.dims.y, grid_.dims.z};
   const int nb[3] = {blocks_.x, blocks_.y, blocks_.z};
   int b0[3], b1[3];
   for (int a = 0; a < 3; ++a) {
-    const int i0 = std::clamp(int(std::floor(lo[a])), 0, dims[a] - 1);
-    const int i1 = std::clamp(int(std::floor(hi[a])) + 1, 0, dims[a] - 1);
+    const int i0 = std::clamp(int(std::floor(lo[std::size_t(a)])), 0, dims[a] - 1);
+    const int i1 = std::clamp(int(std::floor(hi[std::size_t(a)])) + 1, 0, dims[a] - 1);
     b0[a] = std::min(i0 / kBlockVoxels, nb[a] - 1);
     b1[a] = std::min(i1 / kBlockVoxels, nb[a] - 1);
   }
@@ -192,7 +178,20 @@ std::vector<std::uint8_t> computeOccupancy(const OccupancyInputs& in) {
   }
   if (!in.table) return occ;
   const bool useField = in.field && in.field->valid() && in.volumeGrid;
-  const Geometry* g = in.volumeGrid;
+  // Volume index → field index is affine: a block's index box maps to the box around its mapped
+  // centre with half-extents |linear part| · half-extents.
+  Vec3 origin{0, 0, 0};
+  Vec3 columns[3];
+  if (useField) {
+    const Geometry& fg = in.field->grid();
+    origin = fg.patientToIndex(in.volumeGrid->indexToPatient({0, 0, 0}));
+    for (int a = 0; a < 3; ++a) {
+      Vec3 unit{0, 0, 0};
+      unit[std::size_t(a)] = 1;
+      columns[a] = fg.patientToIndex(in.volumeGrid->indexToPatient(unit)) - origin;
+    }
+  }
+  const double half = 0.5 * (kBlockVoxels + 1);  // the block's voxels and the next one on each side
   for (int k = 0; k < nb.z; ++k)
     for (int j = 0; j < nb.y; ++j)
       for (int i = 0; i < nb.x; ++i) {
@@ -203,17 +202,14 @@ std::vector<std::uint8_t> computeOccupancy(const OccupancyInputs& in) {
         int r1 = in.table->rowOf(1.0);
         if (!in.table->anyVisible(c0, c1, r1)) continue;
         if (useField) {
-          // The block's box (voxel centres of it and the next voxel on each side), in mm.
-          const Vec3 lo = g->indexToPatient({double(i * kBlockVoxels - 1), double(j * kBlockVoxels - 1),
-                                             double(k * kBlockVoxels - 1)});
-          const Vec3 hi = g->indexToPatient({double((i + 1) * kBlockVoxels), double((j + 1) * kBlockVoxels),
-                                             double((k + 1) * kBlockVoxels)});
-          Vec3 boxLo, boxHi;
+          const double centre[3] = {(i + 0.5) * kBlockVoxels - 0.5, (j + 0.5) * kBlockVoxels - 0.5,
+                                    (k + 0.5) * kBlockVoxels - 0.5};
+          Vec3 c = origin, extent{0, 0, 0};
           for (int a = 0; a < 3; ++a) {
-            boxLo[std::size_t(a)] = std::min(lo[std::size_t(a)], hi[std::size_t(a)]);
-            boxHi[std::size_t(a)] = std::max(lo[std::size_t(a)], hi[std::size_t(a)]);
+            c = c + centre[a] * columns[a];
+            for (int r = 0; r < 3; ++r) extent[std::size_t(r)] += std::fabs(columns[a][std::size_t(r)]) * (half + 0.5);
           }
-          const float dMin = in.field->minIn(boxLo, boxHi);
+          const float dMin = in.field->minInIndexBox(c - extent, c + extent);
           const double x = double(dMin) * double(in.log2Alpha) / double(in.distanceUnit);
           const double nMax = std::isfinite(dMin) ? 2.0 / (1.0 + std::exp2(std::min(x, 126.0))) : 0.0;
           r1 = in.table->rowOf(nMax);

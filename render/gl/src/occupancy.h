@@ -19,10 +19,10 @@ constexpr int kBlockVoxels = 4;
 
 // Occupancy texel: bit 0 the context may draw in the block, bit 1 the structure's mask reaches
 // it; an empty block (neither) holds in bits 2..7 its Chebyshev distance in blocks to the nearest
-// non-empty one (1..63, 63 also meaning farther), so a ray may leap over the whole cube of empty
-// blocks around it.
+// non-empty one (1..kMaxLeapBlocks, the largest also meaning farther), so a ray may leap over the
+// whole cube of empty blocks around it.
 constexpr std::uint8_t kOccupiedContext = 1, kOccupiedStructure = 2;
-constexpr int kMaxLeapBlocks = 63;
+constexpr int kMaxLeapBlocks = 15;
 
 // Per block, computed once per volume. HU range and edge strength cover the 27 neighbouring
 // blocks (a sample in a block interpolates voxels of the next one); labels are the block's own.
@@ -45,8 +45,9 @@ class FieldBlockMinima {
   void addSlice(const float* slice, int z);  // dims.x · dims.y values of slice z
   void addAll(const FloatVolume& field);
   bool valid() const { return !minima_.empty(); }
-  // The smallest distance any trilinear sample inside the patient-space box [lo, hi] can read.
-  float minIn(const Vec3& loMm, const Vec3& hiMm) const;
+  // The smallest distance any trilinear sample inside the field-index box [lo, hi] can read.
+  float minInIndexBox(const Vec3& lo, const Vec3& hi) const;
+  const Geometry& grid() const { return grid_; }
 
  private:
   Geometry grid_;

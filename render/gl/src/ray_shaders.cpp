@@ -32,10 +32,9 @@ uniform mat4 uInvViewProj;
 uniform mat4 uPatientToTex;
 uniform mat4 uPatientToField;
 uniform vec2 uViewport;
-uniform sampler3D uHu;
+uniform sampler3D uVolume;     // HU / 32767 and the gradient in HU per voxel / max (RGBA16 snorm)
 uniform sampler3D uMask;
 uniform sampler3D uField;
-uniform sampler3D uGradient;   // xyz unit normal (patient frame), w = sqrt(strength / max) (RGBA8 snorm)
 uniform usampler3D uOccupancy;  // bit 1: context may draw, bit 2: near the structure
 uniform sampler2D uTable;       // RGBA, alpha corrected to the step
 uniform int uHasField;
@@ -59,7 +58,6 @@ uniform int uJitter;
 uniform int uSkip;
 uniform vec4 uBackground;
 
-float huAt(vec3 t) { return texture(uHu, t).r * 65535.0 - 32768.0; }
 float maskAt(vec3 t) { return texture(uMask, t).r; }
 
 float normalisedDistance(float d) {
@@ -158,9 +156,16 @@ vec4 castRay(vec2 pixel) {
         m = maskAt(pt);
         if (m >= 0.5) {
           if (prevMask < 0.5) {
-            // Entering the structure: one surface sample where the mask crosses 0.5.
-            float f = clamp((0.5 - prevMask) / max(m - prevMask, 1e-4), 0.0, 1.0);
-            vec3 hit = pt - (1.0 - f) * uStepMm * dT;
+            // Entering the structure: one surface sample where the mask crosses 0.5, found by
+            // two bisections of the step and a linear interpolation within the last half.
+            vec3 a0 = pt - uStepMm * dT, a1 = pt;
+            float m0 = prevMask, m1 = m;
+            for (int b = 0; b < 2; ++b) {
+              vec3 mid = 0.5 * (a0 + a1);
+              float mm = maskAt(mid);
+              if (mm >= 0.5) { a1 = mid; m1 = mm; } else { a0 = mid; m0 = mm; }
+            }
+            vec3 hit = mix(a0, a1, clamp((0.5 - m0) / max(m1 - m0, 1e-4), 0.0, 1.0));
             vec3 rgb = uHighlight;
             if (RAY_SHADING != 0) rgb = shade(rgb, maskNormal(hit), dir);
             acc.rgb += (1.0 - acc.a) * uStructureAlpha * clamp(rgb, 0.0, 1.0);
@@ -173,10 +178,11 @@ vec4 castRay(vec2 pixel) {
       }
       prevMask = m;
       if (RAY_MODE == 1 || (occ & 1u) == 0u || m > uMaskHalo) continue;
-      float hu = huAt(pt);
+      vec4 v = texture(uVolume, pt);
+      float hu = v.r * 32767.0;
       if (hu < uVisibleHu.x || hu > uVisibleHu.y) continue;
-      vec4 g = texture(uGradient, pt);
-      float strength = g.w * g.w * uMaxStrength;
+      vec3 g = v.gba;
+      float strength = length(g) * uMaxStrength;
       float ramp = uSurface.y > uSurface.x ? smoothstep(uSurface.x, uSurface.y, strength) : step(uSurface.x, strength);
       float surface = mix(uSurface.z, 1.0, ramp);
       if (surface <= 0.0) continue;
@@ -191,9 +197,7 @@ vec4 castRay(vec2 pixel) {
       if (alpha <= 0.0) continue;
       vec3 rgb = c.rgb;
       if (RAY_SHADING != 0) {
-        vec3 nrm = g.xyz;
-        float len = length(nrm);
-        nrm = len > 1e-3 ? nrm / len : vec3(0.0);
+        vec3 nrm = strength > 1e-3 ? g * (uMaxStrength / strength) : vec3(0.0);
         if (RAY_MODE == 2) {
           float ka = uLighting.y / pow(uLighting.x * min(d, 1e6) + 1.0, 2.0);
           rgb = rgb * (ka * uHighlight) + 0.2 * shade(rgb, nrm, dir);
@@ -264,7 +268,7 @@ void main() {
 )";
 
 // The selected structure's mask, smoothed by a [1 2 1]³/64 binomial so that its 0.5 level set is a
-// smooth surface rather than voxel steps: written inside the box [uBoxMin, uBoxMax) of voxels, or
+// smooth surface rather than voxel steps (at least 0.75 on the structure's own voxels): written inside the box [uBoxMin, uBoxMax) of voxels, or
 // cleared there (uClear) when the selection moves elsewhere.
 const char* const kMaskShader = R"(#version 430 core
 layout(local_size_x = 8, local_size_y = 8, local_size_z = 4) in;
@@ -288,6 +292,9 @@ void main() {
           if (texelFetch(uLabels, q, 0).r == uSelected) m += w;
         }
     m /= 64.0;
+    // A labelled voxel keeps at least 0.75, so structures one voxel thin (a nerve, a canal on a
+    // coarse grid) keep a surface instead of smoothing away below 0.5.
+    if (texelFetch(uLabels, p, 0).r == uSelected) m = max(m, 0.75);
   }
   imageStore(uMaskOut, p, vec4(m));
 }

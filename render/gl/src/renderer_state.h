@@ -61,7 +61,7 @@ struct VolumeRenderer::State {
   std::array<Program, RayVariant::kCount> fragmentRayCasters, computeRayCasters;
   Program maskProgram;
   VertexArray vao;
-  Texture hu, labels, field, table, mask, gradient, occupancy;
+  Texture labels, field, table, mask, volume, occupancy;
   // uploadFieldStep: the texture being filled, what it is filled from and the next z-slice.
   Texture pendingField;
   Dims pendingDims;   // of pendingField's storage (zero: none)

@@ -101,10 +101,13 @@ Mat4 patientToTexture(const Geometry& g) {
   return m;
 }
 
-// Distances as the field texture holds them: +infinity (unreachable) is stored as 1e30, which the
-// shader's normalisation treats as far.
+// A field uploaded from the host is held as half floats: half the memory and texture traffic of
+// float32, and f(D) needs no finer distances (relative precision 1/1024). Distances are clamped to
+// the largest half, which the shader's normalisation treats as far, like +infinity (unreachable).
+// (A field from CUDA stays float32: the interop copy writes float32.)
+constexpr GLenum kFieldFormat = GL_R16F;
 void copyFinite(const float* src, std::size_t count, float* dst) {
-  for (std::size_t i = 0; i < count; ++i) dst[i] = std::isfinite(src[i]) ? src[i] : 1e30f;
+  for (std::size_t i = 0; i < count; ++i) dst[i] = std::isfinite(src[i]) ? std::min(src[i], 65504.0f) : 65504.0f;
 }
 
 void setTextureParams(GLenum filter) {
@@ -192,7 +195,6 @@ Result<VolumeRenderer> VolumeRenderer::create() {
   if (!mask) return tl::unexpected(mask.error());
   s->maskProgram = std::move(*mask);
   s->vao = VertexArray::make();
-  s->hu = Texture::make();
   s->labels = Texture::make();
   s->field = Texture::make();
   s->table = Texture::make();
@@ -222,13 +224,6 @@ Status VolumeRenderer::setVolume(const Volume& volume, const LabelMap& labels, c
   st.pendingSource = nullptr;
   st.pendingGrid = Geometry{};
   glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
-  {
-    std::vector<std::uint16_t> shifted(volume.voxels.size());
-    for (std::size_t i = 0; i < shifted.size(); ++i) shifted[i] = std::uint16_t(int(volume.voxels[i]) + 32768);
-    glBindTexture(GL_TEXTURE_3D, st.hu.id());
-    setTextureParams(GL_LINEAR);
-    glTexImage3D(GL_TEXTURE_3D, 0, GL_R16, d.x, d.y, d.z, 0, GL_RED, GL_UNSIGNED_SHORT, shifted.data());
-  }
   glBindTexture(GL_TEXTURE_3D, st.labels.id());
   setTextureParams(GL_NEAREST);
   if (labels.empty()) {
@@ -248,11 +243,11 @@ Status VolumeRenderer::setVolume(const Volume& volume, const LabelMap& labels, c
   }
   st.maskLabel = -1;
   st.maskBox = {0, 0, 0, 0, 0, 0};
-  st.gradient = Texture::make();
-  glBindTexture(GL_TEXTURE_3D, st.gradient.id());
-  glTexStorage3D(GL_TEXTURE_3D, 1, GL_RGBA8_SNORM, d.x, d.y, d.z);
+  st.volume = Texture::make();
+  glBindTexture(GL_TEXTURE_3D, st.volume.id());
+  glTexStorage3D(GL_TEXTURE_3D, 1, GL_RGBA16_SNORM, d.x, d.y, d.z);
   setTextureParams(GL_LINEAR);
-  glTexSubImage3D(GL_TEXTURE_3D, 0, 0, 0, 0, d.x, d.y, d.z, GL_RGBA, GL_BYTE, gradients.texels.data());
+  glTexSubImage3D(GL_TEXTURE_3D, 0, 0, 0, 0, d.x, d.y, d.z, GL_RGBA, GL_SHORT, gradients.texels.data());
   st.blocks = summariseBlocks(volume, labels, gradients);
   const Dims& nb = st.blocks.blocks;
   st.occupancy = Texture::make();
@@ -316,7 +311,7 @@ Status VolumeRenderer::setField(const FloatVolume& field) {
   glBindTexture(GL_TEXTURE_3D, st.field.id());
   setTextureParams(GL_LINEAR);
   const Dims& d = field.dims();
-  glTexImage3D(GL_TEXTURE_3D, 0, GL_R32F, d.x, d.y, d.z, 0, GL_RED, GL_FLOAT, finite.data());
+  glTexImage3D(GL_TEXTURE_3D, 0, kFieldFormat, d.x, d.y, d.z, 0, GL_RED, GL_FLOAT, finite.data());
   st.fieldDims = d;
 #if defined(AT_HAVE_CUDA)
   st.interop.reset();  // the storage changed: a registration would be stale
@@ -350,7 +345,7 @@ Result<bool> VolumeRenderer::uploadFieldStep(const FloatVolume& field, double bu
       setTextureParams(GL_LINEAR);
       // Mutable storage, as setField's: the texture becomes the field texture, which setField and
       // setFieldFromDevice re-specify.
-      glTexImage3D(GL_TEXTURE_3D, 0, GL_R32F, d.x, d.y, d.z, 0, GL_RED, GL_FLOAT, nullptr);
+      glTexImage3D(GL_TEXTURE_3D, 0, kFieldFormat, d.x, d.y, d.z, 0, GL_RED, GL_FLOAT, nullptr);
       if (auto e = glStatus("allocating the distance field"); !e) return tl::unexpected(e.error());
       st.pendingDims = d;
       return false;
@@ -448,7 +443,9 @@ Status VolumeRenderer::prepare(const RenderSettings& s) {
     glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
     glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
     glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
-    glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA16F, table.dataSize, table.distanceSize, 0, GL_RGBA, GL_FLOAT,
+    // RGBA8: the software rasteriser filters 8-bit texels on its fast path, and 1/255 is finer than
+    // any opacity step a preset can show.
+    glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA8, table.dataSize, table.distanceSize, 0, GL_RGBA, GL_FLOAT,
                  table.rgba.data());
     table.rgba.clear();
     st.tableInfo = std::move(table);
@@ -538,9 +535,9 @@ Status VolumeRenderer::prepare(const RenderSettings& s) {
   glUniform1i(loc("uSkip"), s.skipEmptySpace ? 1 : 0);
   glUniform4f(loc("uBackground"), s.background[0], s.background[1], s.background[2], s.background[3]);
   const std::pair<const char*, std::pair<GLenum, GLuint>> textures[] = {
-      {"uHu", {GL_TEXTURE_3D, st.hu.id()}},           {"uMask", {GL_TEXTURE_3D, st.mask.id()}},
-      {"uField", {GL_TEXTURE_3D, st.field.id()}},     {"uTable", {GL_TEXTURE_2D, st.table.id()}},
-      {"uGradient", {GL_TEXTURE_3D, st.gradient.id()}}, {"uOccupancy", {GL_TEXTURE_3D, st.occupancy.id()}}};
+      {"uVolume", {GL_TEXTURE_3D, st.volume.id()}}, {"uMask", {GL_TEXTURE_3D, st.mask.id()}},
+      {"uField", {GL_TEXTURE_3D, st.field.id()}},   {"uTable", {GL_TEXTURE_2D, st.table.id()}},
+      {"uOccupancy", {GL_TEXTURE_3D, st.occupancy.id()}}};
   int unit = 0;
   for (const auto& [name, target] : textures) {
     glActiveTexture(GLenum(GL_TEXTURE0 + unit));

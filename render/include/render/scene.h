@@ -17,6 +17,8 @@ namespace at::render {
 
 struct StructureFrame {
   Vec3 centroidMm{0, 0, 0};   // LPS
+  Vec3 anchorMm{0, 0, 0};     // the structure's voxel nearest its centroid: a point on it (the
+                              // centroid of a curved structure, a spiral or a loop, lies outside it)
   double radiusMm = 0;        // farthest voxel centre from the centroid
   std::size_t voxelCount = 0;
   double volumeMm3 = 0;

@@ -8,15 +8,16 @@
 // thinner than about one voxel are widened to 0.9 voxel so that they stay connected on coarse grids.
 //
 // How it is built: a list of paint operations (shapes with a material and a label) applied in
-// order over a base of air, soft tissue and a rounded block of bone (cortical shell over
-// cancellous bone). Later operations win. Each worker thread owns a slab of z-slices and runs every
+// order over a base: a rounded block of bone (cortical shell over cancellous bone) in a layer of
+// soft tissue, outside air lateral to the skin and brain everywhere else around it. Later operations win. Each worker thread owns a slab of z-slices and runs every
 // operation clipped to its slab and to the shape's bounding box, so the result does not depend on
 // the number of threads. HU come last: each material's value, a smooth texture for cancellous bone
 // (fixed, part of the anatomy) and per-voxel noise from the seed (splitmix64 of seed and voxel
 // index; an Irwin–Hall sum keeps it independent of any standard library's distributions).
 //
 // Paint order (why it is this order):
-//   base → temporal line ridge → sigmoid sinus and carotid canal (cortical wall, then blood)
+//   base → temporal line ridge → petrous bone (dense, around the labyrinth and towards the apex)
+//   → sigmoid sinus and carotid canal (cortical wall, then blood)
 //   → mastoid antrum and aditus, then the air cells as a honeycomb (Voronoi cells of seeded points,
 //     separated by thin bony septa) → internal auditory canal (CSF)
 //   → otic capsule (dense bone within 1.3 mm of every labyrinth lumen; caps the IAC fundus)
@@ -69,7 +70,8 @@ constexpr std::uint64_t kAnatomySeed = 0x7E3B0C4A11D5F0A1ULL;
 // --- materials and HU ------------------------------------------------------------------------------
 
 enum Material : std::uint8_t {
-  kAir, kSoftTissue, kFluid, kCsf, kBlood, kCancellous, kCortical, kCapsule, kOssicle, kNerve, kMembrane
+  kAir, kSoftTissue, kFluid, kCsf, kBlood, kCancellous, kCortical, kCapsule, kOssicle, kNerve, kMembrane, kPetrous,
+  kBrain
 };
 
 constexpr double kNoiseSigmaHu = 20.0;   // after the point-spread function
@@ -85,6 +87,8 @@ double materialHu(Material m) {
     case kCancellous: return 600;  // ± 100 from the texture
     case kCortical: return 1850;
     case kCapsule: return 2000;
+    case kPetrous: return 1500;
+    case kBrain: return 35;
     case kOssicle: return 1350;
     case kNerve: return 35;
     case kMembrane: return 45;
@@ -232,6 +236,8 @@ const Vec3 kBlockHalf{14.5, 18.0, 14.0};  // x −13…16, y −17…19, z −15
 constexpr double kBlockRounding = 3.0;
 constexpr double kCortexMm = 1.5;
 constexpr double kSoftTissueMm = 3.5;
+// The lateral skin plane: outside air beyond it (x below), where the external auditory canal opens.
+const double kSkinX = kBlockCentre[0] - kBlockHalf[0] - kSoftTissueMm;
 
 double blockSd(const Vec3& p) {
   double outside = 0, inside = -1e9;
@@ -302,6 +308,19 @@ Anatomy buildAnatomy(double voxelMm) {
       pts.push_back({-13.0, y, 7.0 + 1.5 * (1 - (y / 12) * (y / 12))});
     }
     add(tube(pts, 1.1), kCortical, label::kTemporalLine);
+  }
+
+  // Petrous bone: the dense pyramid that holds the inner ear and the internal auditory canal,
+  // from around the vestibule anteromedially to the apex (medial face of the block), inside the
+  // cortex. The mastoid behind and lateral to it stays cancellous (and pneumatised).
+  {
+    Shape petrous;
+    petrous.kind = Shape::kCustom;
+    const Shape axis = segment({1.0, 2.0, 0.0}, {16.0, -14.0, -4.0}, 6.0, 4.5);
+    axis.bounds(petrous.boxLo, petrous.boxHi);
+    petrous.custom = std::make_shared<const std::function<double(const Vec3&)>>(
+        [axis](const Vec3& p) { return std::max(axis.sd(p), blockSd(p) + kCortexMm); });
+    add({petrous}, kPetrous, 0);
   }
 
   // Sigmoid sinus: an S-curved venous channel posterior-medial, behind the mastoid, descending
@@ -417,44 +436,56 @@ Anatomy buildAnatomy(double voxelMm) {
       if (clear) seeds->push_back({p, spacing});
     }
     const double halfSeptum = std::max(0.18, 0.87 * voxelMm);
-    Shape honeycomb;
-    honeycomb.kind = Shape::kCustom;
-    honeycomb.boxLo = regionCentre - regionRadii;
-    honeycomb.boxHi = regionCentre + regionRadii;
-    honeycomb.custom = std::make_shared<const std::function<double(const Vec3&)>>(
-        [seeds, keepOut, regionCentre, regionRadii, halfSeptum](const Vec3& p) {
-          const Vec3 q{(p[0] - regionCentre[0]) / regionRadii[0], (p[1] - regionCentre[1]) / regionRadii[1],
-                       (p[2] - regionCentre[2]) / regionRadii[2]};
-          double sd = (norm(q) - 1.0) * regionRadii[0];
-          if (sd > 0) return sd;
-          sd = std::max(sd, blockSd(p) + kCortexMm + 0.6);
-          if (sd > 0) return sd;
-          for (const auto& [shape, margin] : *keepOut) {
-            sd = std::max(sd, margin - shape.sd(p));
-            if (sd > 0) return sd;
-          }
-          // The two nearest seeds and the distance to the plane between them.
-          double d1 = 1e30, d2 = 1e30;
-          const Vec3* s1 = nullptr;
-          const Vec3* s2 = nullptr;
-          for (const auto& [c, spacing] : *seeds) {
-            const double d = dot(p - c, p - c);
-            if (d < d1) {
-              d2 = d1;
-              s2 = s1;
-              d1 = d;
-              s1 = &c;
-            } else if (d < d2) {
-              d2 = d;
-              s2 = &c;
-            }
-          }
-          if (!s2) return 1.0;
-          const double toPlane = (d2 - d1) / (2.0 * norm(*s2 - *s1));
-          return std::max(sd, halfSeptum - toPlane);
-        });
+    // The region the cells fill (inside the ellipsoid, inside the bone, clear of every keep-out),
+    // and the cells: the region less half a septum on either side of each Voronoi face.
+    const auto region = [keepOut, regionCentre, regionRadii](const Vec3& p) {
+      const Vec3 q{(p[0] - regionCentre[0]) / regionRadii[0], (p[1] - regionCentre[1]) / regionRadii[1],
+                   (p[2] - regionCentre[2]) / regionRadii[2]};
+      double sd = (norm(q) - 1.0) * regionRadii[0];
+      if (sd > 0) return sd;
+      sd = std::max(sd, blockSd(p) + kCortexMm + 0.6);
+      if (sd > 0) return sd;
+      for (const auto& [shape, margin] : *keepOut) {
+        sd = std::max(sd, margin - shape.sd(p));
+        if (sd > 0) return sd;
+      }
+      return sd;
+    };
+    const auto cells = [region, seeds, halfSeptum](const Vec3& p) {
+      const double sd = region(p);
+      if (sd > 0) return sd;
+      // The two nearest seeds and the distance to the plane between them.
+      double d1 = 1e30, d2 = 1e30;
+      const Vec3* s1 = nullptr;
+      const Vec3* s2 = nullptr;
+      for (const auto& [c, spacing] : *seeds) {
+        const double d = dot(p - c, p - c);
+        if (d < d1) {
+          d2 = d1;
+          s2 = s1;
+          d1 = d;
+          s1 = &c;
+        } else if (d < d2) {
+          d2 = d;
+          s2 = &c;
+        }
+      }
+      if (!s2) return 1.0;
+      const double toPlane = (d2 - d1) / (2.0 * norm(*s2 - *s1));
+      return std::max(sd, halfSeptum - toPlane);
+    };
+    const auto customShape = [&](std::function<double(const Vec3&)> sd) {
+      Shape shape;
+      shape.kind = Shape::kCustom;
+      shape.boxLo = regionCentre - regionRadii;
+      shape.boxHi = regionCentre + regionRadii;
+      shape.custom = std::make_shared<const std::function<double(const Vec3&)>>(std::move(sd));
+      return shape;
+    };
+    // The septa are thin compact bone, as in a real mastoid.
+    add({customShape(region)}, kCortical, 0, Where::kUnlabelled);
     add({antrum, aditus}, kAir, label::kMastoidAirCells);
-    add({honeycomb}, kAir, label::kMastoidAirCells, Where::kUnlabelled);
+    add({customShape(cells)}, kAir, label::kMastoidAirCells, Where::kUnlabelled);
   }
 
   // Internal auditory canal: CSF from its fundus next to the cochlea and vestibule to the medial
@@ -543,7 +574,9 @@ void paintBase(const Canvas& c, int k0, int k1) {
         const double qxv = rowQ[std::size_t(i)];
         const double outside = outsideYz + (qxv > 0 ? qxv * qxv : 0);
         const double d = std::sqrt(outside) + std::min(std::max(insideYz, qxv), 0.0) - kBlockRounding;
-        Material m = kAir;
+        // Beyond the soft tissue: outside air lateral to the skin, the brain (and the soft tissue
+        // of the neck) everywhere else, as around a temporal bone in a head.
+        Material m = c.coord(i) < kSkinX ? kAir : kBrain;
         if (d <= -kCortexMm) m = kCancellous;
         else if (d <= 0) m = kCortical;
         else if (d <= kSoftTissueMm) m = kSoftTissue;
