@@ -27,6 +27,7 @@
 #include "render/image.h"
 #include "render/preset.h"
 #include "render/scene.h"
+#include "volume/mask.h"
 #include "volume/phantom.h"
 #include "volume/png_image.h"
 #include "wdt/wdt.h"
@@ -106,7 +107,7 @@ int main(int argc, char** argv) {
     auto params = render::wdtParamsFor(*preset);
     if (!params) return failWith(params.error().message);
     params->backend = WdtBackend::Cpu;
-    auto wdt = computeWdt(ds.volume, render::structureMask(ds.labels, s->label), *params);
+    auto wdt = computeWdt(ds.volume, structureMask(ds.labels, s->label), *params);
     if (!wdt) return failWith(wdt.error().message);
     wdtMs = wdt->stats.msTotal;
     if (auto st = renderer->setField(wdt->field.distances); !st) return failWith(st.error().message);

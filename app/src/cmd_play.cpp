@@ -15,8 +15,9 @@
 #include <unistd.h>
 
 #include "cli_args.h"
+#include "core/strings.h"
 #include "commands.h"
-#include "learning_support.h"
+#include "learning_session.h"
 #include "lessons/lesson_engine.h"
 #include "quiz/answer_json.h"
 
@@ -62,18 +63,6 @@ void printWrapped(const std::string& text, int indent) {
   if (!line.empty()) std::printf("%s%s\n", pad.c_str(), line.c_str());
 }
 
-std::string lower(std::string s) {
-  for (char& c : s) c = char(std::tolower(static_cast<unsigned char>(c)));
-  return s;
-}
-
-std::string trim(const std::string& s) {
-  const auto b = s.find_first_not_of(" \t\r\n");
-  if (b == std::string::npos) return "";
-  const auto e = s.find_last_not_of(" \t\r\n");
-  return s.substr(b, e - b + 1);
-}
-
 // Where answers come from: a JSON-lines file (line numbers reported) or the terminal.
 class AnswerSource {
  public:
@@ -92,7 +81,7 @@ class FileAnswers final : public AnswerSource {
     std::string line;
     while (std::getline(in_, line)) {
       ++lineNumber_;
-      if (!trim(line).empty()) return line;
+      if (!str::trim(line).empty()) return line;
     }
     return std::nullopt;
   }
@@ -121,11 +110,11 @@ class TerminalAnswers final : public AnswerSource {
 // A terminal reply to an answer: the JSON forms, or the plain forms per question kind.
 Result<quiz::Answer> parseTerminalAnswer(const std::string& raw, const lessons::StepView& view,
                                          const std::map<std::string, std::string>& idByName) {
-  const std::string text = trim(raw);
+  const std::string text = str::trim(raw);
   if (!text.empty() && text[0] == '{') return quiz::answerFromJson(text);
   auto structureId = [&](const std::string& name) -> Result<std::string> {
-    auto it = idByName.find(lower(trim(name)));
-    if (it == idByName.end()) return fail("no structure called '" + trim(name) + "'");
+    auto it = idByName.find(str::lower(str::trim(name)));
+    if (it == idByName.end()) return fail("no structure called '" + str::trim(name) + "'");
     return it->second;
   };
   quiz::Answer answer;
@@ -152,9 +141,9 @@ Result<quiz::Answer> parseTerminalAnswer(const std::string& raw, const lessons::
       std::stringstream parts(text);
       std::string part;
       while (std::getline(parts, part, ',')) {
-        if (trim(part).empty()) continue;
+        if (str::trim(part).empty()) continue;
         auto id = structureId(part);
-        order.push_back(id ? *id : trim(part));
+        order.push_back(id ? *id : str::trim(part));
       }
       if (order.empty()) return fail("list the structures separated by commas");
       answer.order = std::move(order);
@@ -193,10 +182,12 @@ Result<Asked> askQuestion(AnswerSource& source, const lessons::StepView& view,
   while (true) {
     auto line = source.nextLine();
     if (!line) return Asked::InputEnded;
-    if (source.interactive() && lower(trim(*line)) == "quit") return Asked::Quit;
+    if (source.interactive() && str::lower(str::trim(*line)) == "quit") return Asked::Quit;
     auto answer = source.interactive() ? parseTerminalAnswer(*line, view, idByName) : quiz::answerFromJson(*line);
-    const auto latency =
-        std::chrono::duration_cast<std::chrono::milliseconds>(std::chrono::steady_clock::now() - shownAt);
+    // Answers read from a file have no response time: 0 records "not measured" (never rated Easy).
+    const auto latency = source.interactive() ? std::chrono::duration_cast<std::chrono::milliseconds>(
+                                                    std::chrono::steady_clock::now() - shownAt)
+                                              : std::chrono::milliseconds(0);
     Result<quiz::Grade> graded = answer ? grade(*answer, latency.count())
                                         : Result<quiz::Grade>(tl::unexpected(answer.error()));
     if (graded) {
@@ -206,7 +197,7 @@ Result<Asked> askQuestion(AnswerSource& source, const lessons::StepView& view,
       return Asked::Graded;
     }
     std::fflush(stdout);
-    if (!source.interactive()) return fail(source.where() + ": " + graded.error().message);
+    if (!source.interactive()) return tl::unexpected(withContext(source.where(), graded.error()));
     std::printf("  %s — try again\n", graded.error().message.c_str());
   }
 }
@@ -219,21 +210,19 @@ lessons::RenderState terminalRender() {
 }
 
 // play --review COURSE: review questions until nothing is due or the answers end.
-int runReview(const std::string& courseId, std::int64_t userId, db::Database& database,
-              db::SqliteCurriculumRepository& curriculum, db::SqliteProgressRepository& progress,
-              AnswerSource& source) {
+int runReview(const std::string& courseId, std::int64_t userId, LearningSession& session, AnswerSource& source) {
+  lessons::CurriculumRepository& curriculum = session.curriculum();
+  lessons::ProgressRepository& progress = session.progress();
   auto course = curriculum.course(courseId);
   if (!course) return reportError("play: " + course.error().message + " (see `anatomy-tutor courses`)");
-  auto structures = curriculum.structures(course->datasetId);
+  auto structures = session.structures(course->datasetId);
   if (!structures) return reportError("play: " + structures.error().message);
-  std::map<std::string, std::string> idByName, nameById;
-  for (const Structure& s : *structures) {
-    idByName[lower(s.id)] = s.id;
-    idByName[lower(s.displayName)] = s.id;
-    nameById[s.id] = s.displayName.empty() ? s.id : s.displayName;
-  }
-  const std::string datasetId = course->datasetId;
-  LazyKeyComputer keys(*structures, [&database, datasetId] { return loadCourseDataset(database, datasetId); });
+  const std::map<std::string, std::string> idByName = structureIdsByName(*structures);
+  std::map<std::string, std::string> nameById;
+  for (const Structure& s : *structures) nameById[s.id] = s.displayName.empty() ? s.id : s.displayName;
+  auto keysFound = session.keysFor(course->datasetId);
+  if (!keysFound) return reportError("play: " + keysFound.error().message);
+  quiz::KeyComputer& keys = **keysFound;
 
   std::printf("Review: %s (%s)\n", course->title.c_str(), courseId.c_str());
   int asked = 0, right = 0;
@@ -287,7 +276,7 @@ int runReview(const std::string& courseId, std::int64_t userId, db::Database& da
 }  // namespace
 
 int runPlay(const Argv& argv) {
-  auto args = cli::Args::parse(argv, {"user", "answers", "db", "group", "review"}, {"quiz-only", "new-user"});
+  auto args = cli::Args::parse(argv, {"answers", "group", "review"}, {"quiz-only", "new-user"});
   if (!args) return reportError("play: " + args.error().message);
   if (args->has("help")) {
     std::printf("%s", kPlayHelp);
@@ -301,8 +290,8 @@ int runPlay(const Argv& argv) {
     return reportError("play: give exactly one LESSON (see `anatomy-tutor lessons`)");
   }
   const std::string lessonId = reviewCourse ? "" : args->positional()[0];
-  const auto userName = args->value("user");
-  if (!userName || userName->empty()) return reportError("play: --user NAME is required");
+  const auto userName = args->user();
+  if (!userName) return reportError("play: --user NAME is required");
 
   std::unique_ptr<AnswerSource> source;
   if (auto path = args->value("answers")) {
@@ -313,44 +302,31 @@ int runPlay(const Argv& argv) {
     source = std::make_unique<TerminalAnswers>();
   }
 
-  auto database = openLearningDatabase(args->value("db"));
-  if (!database) return reportError("play: " + database.error().message);
-  db::SqliteCurriculumRepository curriculum(*database, builtinStructures());
-  db::SqliteProgressRepository progress(*database);
-  db::SqliteUserRepository users(*database);
-
-  auto user = users.findUser(*userName);
+  auto session = LearningSession::open(args->db());
+  if (!session) return reportError("play: " + session.error().message);
+  bool created = false;
+  auto user = (*session)->user(*userName,
+                               args->has("new-user") ? LearningSession::NewUser::Create : LearningSession::NewUser::Refuse,
+                               args->valueOr("group", ""), &created);
   if (!user) return reportError("play: " + user.error().message);
-  if (!*user) {
-    if (!args->has("new-user"))
-      return reportError("play: unknown user '" + *userName + "' (first time? add --new-user to create it)");
-    auto created = users.createUser(*userName, lessons::Role::Student, args->valueOr("group", ""));
-    if (!created) return reportError("play: " + created.error().message);
-    std::printf("created user '%s'\n", created->name.c_str());
-    *user = *created;
-  }
+  if (created) std::printf("created user '%s'\n", user->name.c_str());
 
-  if (reviewCourse) return runReview(*reviewCourse, (*user)->id, *database, curriculum, progress, *source);
+  if (reviewCourse) return runReview(*reviewCourse, user->id, **session, *source);
 
+  lessons::CurriculumRepository& curriculum = (*session)->curriculum();
   auto lesson = curriculum.lesson(lessonId);
   if (!lesson) return reportError("play: " + lesson.error().message + " (see `anatomy-tutor lessons`)");
   auto course = curriculum.course(lesson->courseId);
   if (!course) return reportError("play: " + course.error().message);
-  auto structures = curriculum.structures(course->datasetId);
+  auto structures = (*session)->structures(course->datasetId);
   if (!structures) return reportError("play: " + structures.error().message);
-  std::map<std::string, std::string> idByName;
-  for (const Structure& s : *structures) {
-    idByName[lower(s.id)] = s.id;
-    idByName[lower(s.displayName)] = s.id;
-  }
+  const std::map<std::string, std::string> idByName = structureIdsByName(*structures);
 
-  db::Database& databaseRef = *database;
-  const std::string datasetId = course->datasetId;
-  LazyKeyComputer keys(*structures, [&databaseRef, datasetId] { return loadCourseDataset(databaseRef, datasetId); });
-
-  lessons::LessonEngine engine(curriculum, progress, keys);
+  auto madeEngine = (*session)->engineFor(lessonId);
+  if (!madeEngine) return reportError("play: " + madeEngine.error().message);
+  lessons::LessonEngine& engine = **madeEngine;
   const auto mode = args->has("quiz-only") ? lessons::LessonMode::QuizOnly : lessons::LessonMode::Guided;
-  if (auto started = engine.start((*user)->id, lessonId, mode); !started)
+  if (auto started = engine.start(user->id, lessonId, mode); !started)
     return reportError("play: " + started.error().message);
 
   std::printf("Lesson: %s (%s), course %s — %s attempt %lld%s\n", engine.lesson().title.c_str(), lessonId.c_str(),

@@ -6,7 +6,7 @@
 
 #include "cli_args.h"
 #include "commands.h"
-#include "learning_support.h"
+#include "learning_session.h"
 #include "lessons/lesson_engine.h"
 #include "lessons/scheduling.h"
 
@@ -30,17 +30,16 @@ int questionCount(const lessons::Lesson& l) {
 }  // namespace
 
 int runCourses(const Argv& argv) {
-  auto args = cli::Args::parse(argv, {"db"}, {});
+  auto args = cli::Args::parse(argv, {}, {});
   if (!args) return reportError("courses: " + args.error().message);
   if (args->has("help")) {
     std::printf("usage: anatomy-tutor courses [--db PATH]\n\nLists the courses (the default course is added on first run).\n");
     return 0;
   }
   if (!args->positional().empty()) return reportError("courses: unexpected argument '" + args->positional()[0] + "'");
-  auto database = openLearningDatabase(args->value("db"));
-  if (!database) return reportError("courses: " + database.error().message);
-  db::SqliteCurriculumRepository curriculum(*database, builtinStructures());
-  auto courses = curriculum.courses();
+  auto session = LearningSession::open(args->db());
+  if (!session) return reportError("courses: " + session.error().message);
+  auto courses = (*session)->curriculum().courses();
   if (!courses) return reportError("courses: " + courses.error().message);
   for (const auto& c : *courses)
     std::printf("%-24s %-44s dataset %-12s %zu lessons (version %d)\n", c.id.c_str(), c.title.c_str(),
@@ -49,7 +48,7 @@ int runCourses(const Argv& argv) {
 }
 
 int runLessons(const Argv& argv) {
-  auto args = cli::Args::parse(argv, {"db"}, {});
+  auto args = cli::Args::parse(argv, {}, {});
   if (!args) return reportError("lessons: " + args.error().message);
   if (args->has("help")) {
     std::printf("usage: anatomy-tutor lessons [COURSE] [--db PATH]\n\n"
@@ -58,9 +57,9 @@ int runLessons(const Argv& argv) {
     return 0;
   }
   if (args->positional().size() > 1) return reportError("lessons: give at most one COURSE");
-  auto database = openLearningDatabase(args->value("db"));
-  if (!database) return reportError("lessons: " + database.error().message);
-  db::SqliteCurriculumRepository curriculum(*database, builtinStructures());
+  auto session = LearningSession::open(args->db());
+  if (!session) return reportError("lessons: " + session.error().message);
+  lessons::CurriculumRepository& curriculum = (*session)->curriculum();
   std::vector<lessons::Course> courses;
   if (args->positional().empty()) {
     auto all = curriculum.courses();
@@ -87,28 +86,28 @@ int runLessons(const Argv& argv) {
 }
 
 int runProgress(const Argv& argv) {
-  auto args = cli::Args::parse(argv, {"user", "db"}, {});
+  auto args = cli::Args::parse(argv, {}, {});
   if (!args) return reportError("progress: " + args.error().message);
   if (args->has("help")) {
     std::printf("usage: anatomy-tutor progress --user NAME [--db PATH]\n\n"
-                "Shows a user's lessons, per-structure progress (Leitner box, answers, next review;\n"
-                "answers to review questions count too, and are also totalled on their own)\n"
-                "and the structures due for review now.\n");
+                "Shows a user's lessons, per-structure progress and the structures due for review now.\n"
+                "Per structure: answers given (lesson and review answers alike), how many were right,\n"
+                "the predicted chance of recalling it now, and when it is next due. Reviews are\n"
+                "scheduled with FSRS-6 so that each structure comes back when that chance falls to 90%%.\n");
     return 0;
   }
   if (!args->positional().empty()) return reportError("progress: unexpected argument '" + args->positional()[0] + "'");
-  const auto userName = args->value("user");
-  if (!userName || userName->empty()) return reportError("progress: --user NAME is required");
-  auto database = openLearningDatabase(args->value("db"));
-  if (!database) return reportError("progress: " + database.error().message);
-  db::SqliteCurriculumRepository curriculum(*database, builtinStructures());
-  db::SqliteProgressRepository progress(*database);
-  db::SqliteUserRepository users(*database);
-
-  auto user = users.findUser(*userName);
-  if (!user) return reportError("progress: " + user.error().message);
-  if (!*user) return reportError("progress: unknown user '" + *userName + "'");
-  const std::int64_t userId = (*user)->id;
+  const auto userName = args->user();
+  if (!userName) return reportError("progress: --user NAME is required");
+  auto session = LearningSession::open(args->db());
+  if (!session) return reportError("progress: " + session.error().message);
+  lessons::CurriculumRepository& curriculum = (*session)->curriculum();
+  lessons::ProgressRepository& progress = (*session)->progress();
+  auto found = (*session)->users().findUser(*userName);
+  if (!found) return reportError("progress: " + found.error().message);
+  if (!*found) return reportError("progress: unknown user '" + *userName + "'");
+  const lessons::User* user = &**found;
+  const std::int64_t userId = user->id;
   const lessons::UnixSeconds now = std::time(nullptr);
 
   auto courses = curriculum.courses();
@@ -129,8 +128,8 @@ int runProgress(const Argv& argv) {
     answered += p.answered;
     correct += p.correct;
   }
-  std::printf("%s (%s%s%s): %d answers, %d correct", (*user)->name.c_str(), lessons::toString((*user)->role),
-              (*user)->group.empty() ? "" : ", group ", (*user)->group.c_str(), answered, correct);
+  std::printf("%s (%s%s%s): %d answers, %d correct", user->name.c_str(), lessons::toString(user->role),
+              user->group.empty() ? "" : ", group ", user->group.c_str(), answered, correct);
   if (!reviews->empty()) {
     const auto right = std::count_if(reviews->begin(), reviews->end(), [](const lessons::ReviewResponse& r) { return r.correct; });
     std::printf(" (%zu in review, %ld correct)", reviews->size(), long(right));
@@ -172,12 +171,13 @@ int runProgress(const Argv& argv) {
 
   std::printf("\nStructures\n");
   if (all->empty()) std::printf("  none answered yet\n");
-  else std::printf("  %-32s %4s %9s %8s  %s\n", "structure", "box", "answered", "correct", "next review");
+  else std::printf("  %-32s %9s %8s %11s  %s\n", "structure", "answered", "correct", "recall now", "next review");
+  const lessons::Fsrs fsrs;
   for (const auto& p : *all) {
     auto it = names.find(p.structureId);
     const std::string name = it == names.end() ? p.structureId : it->second;
-    std::printf("  %-32s %4d %9d %8d  %s\n", name.c_str(), p.box, p.answered, p.correct,
-                relativeTime(p.dueAt, now).c_str());
+    std::printf("  %-32s %9d %8d %10.0f%%  %s\n", name.c_str(), p.answered, p.correct,
+                100.0 * fsrs.retrievability(p.memory, now), relativeTime(p.memory.due, now).c_str());
   }
 
   auto due = lessons::reviewQueue(progress, userId, now);

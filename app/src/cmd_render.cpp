@@ -6,11 +6,13 @@
 
 #include "cli_args.h"
 #include "commands.h"
+#include "data_paths.h"
 #include "dataset_resolver.h"
 #include "render/gl/egl_context.h"
 #include "render/gl/volume_renderer.h"
 #include "render/preset.h"
 #include "render/scene.h"
+#include "volume/mask.h"
 #include "volume/dataset_source.h"
 #include "volume/png_image.h"
 #include "wdt/wdt.h"
@@ -26,7 +28,7 @@ const char* kUsage =
     "                            [--view NAME] [--clip NX,NY,NZ,D] [--backend cpu|cuda|auto] [--passes N]\n"
     "                            [--context F] [--margin F] [--presets DIR] [--labels FILE [--names NAMES.json]] [--series UID]\n"
     "                            [--db PATH] --out F.png\n"
-    "  DATASET     phantom, phantom:N, an imported dataset, or a volume file/folder (--labels: its label map,\n"
+    "  DATASET     phantom, phantom:N, skull, an imported dataset, or a volume file/folder (--labels: its label map,\n"
     "              --names: its label names, --series: the DICOM series where a folder holds several)\n"
     "  MODE        wdt | bare | unweighted | fuzzy | outline | lighting (the structure's shipped preset)\n"
     "  --preset    a preset id from the presets folder, or a path to a .json preset\n"
@@ -36,17 +38,8 @@ const char* kUsage =
     "  --context   how far the context reaches, as a multiple of the structure's own context radius\n"
     "              (from its size; default 1)\n"
     "  --margin    the structure's extent times this fills the view (default 1.6)\n"
-    "  --presets   presets folder (default: data/presets of the source tree or next to the binary)\n";
+    "  --presets   presets folder (default: the installed presets, or $AT_DATA_DIR/presets)\n";
 
-
-Result<std::pair<int, int>> parseSize(const std::string& text) {
-  int w = 0, h = 0;
-  char x = 0, extra = 0;
-  if (std::sscanf(text.c_str(), "%d%c%d%c", &w, &x, &h, &extra) != 3 || (x != 'x' && x != 'X') || w < 1 ||
-      h < 1 || w > 8192 || h > 8192)
-    return fail("option --size: '" + text + "' is not WxH with 1..8192 pixels per side");
-  return std::make_pair(w, h);
-}
 
 Result<std::array<float, 4>> parseClip(const std::string& text) {
   std::array<float, 4> c{};
@@ -104,11 +97,9 @@ int runRender(const Argv& argv) {
   preset->t = float(*t);
 
   render::ViewRequest request;
-  if (auto size = args->value("size")) {
-    auto wh = parseSize(*size);
-    if (!wh) return reportError("render: " + wh.error().message, 2);
-    request.width = wh->first;
-    request.height = wh->second;
+  if (auto size = args->size()) {
+    request.width = size->width;
+    request.height = size->height;
   }
   if (auto v = args->value("view")) request.view = *v;
   if (auto c = args->value("clip")) {
@@ -139,7 +130,7 @@ int runRender(const Argv& argv) {
     auto backend = parseBackend(args->valueOr("backend", "auto"));
     if (!backend) return reportError("render: --backend: " + backend.error().message, 2);
     params->backend = *backend;
-    auto wdt = computeWdt(dataset->volume, render::structureMask(dataset->labels, structure->label), *params);
+    auto wdt = computeWdt(dataset->volume, structureMask(dataset->labels, structure->label), *params);
     if (!wdt) return reportError("render: " + wdt.error().message);
     if (!wdt->stats.warning.empty()) std::fprintf(stderr, "anatomy-tutor: render: %s\n", wdt->stats.warning.c_str());
     wdtMs = wdt->stats.msTotal;
@@ -168,18 +159,6 @@ int runRender(const Argv& argv) {
   return 0;
 }
 
-std::filesystem::path defaultPresetsDir() {
-  namespace fs = std::filesystem;
-  const fs::path source = fs::path(AT_SOURCE_DIR) / "data" / "presets";
-  if (fs::is_directory(source)) return source;
-  std::error_code ec;
-  const fs::path exe = fs::read_symlink("/proc/self/exe", ec);
-  if (!ec) {
-    for (const fs::path& p : {exe.parent_path() / "data" / "presets",
-                              exe.parent_path().parent_path() / "share" / "anatomy-tutor" / "presets"})
-      if (fs::is_directory(p)) return p;
-  }
-  return source;
-}
+std::filesystem::path defaultPresetsDir() { return dataSubdirectory("presets"); }
 
 }  // namespace at::app

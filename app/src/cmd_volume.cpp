@@ -18,6 +18,7 @@
 #include "db/dataset_store.h"
 #include "volume/dataset_source.h"
 #include "volume/image_file.h"
+#include "volume/known_scans.h"
 #include "volume/phantom.h"
 #include "volume/png_image.h"
 
@@ -103,14 +104,23 @@ struct DatasetListing {
 
 std::vector<DatasetListing> builtinDatasets() {
   const PhantomOptions defaults;
-  return {{"phantom", "Temporal-bone phantom (synthetic)",
-           std::to_string(defaults.size) + "^3 over " + formatDouble(defaults.extentMm, 1) + " mm, " +
-               std::to_string(phantomStructures().size()) + " structures; phantom:N for N^3 (N = 16 … 1024)"}};
+  std::vector<DatasetListing> listing = {
+      {"phantom", "Temporal-bone phantom (synthetic)",
+       std::to_string(defaults.size) + "^3 over " + formatDouble(defaults.extentMm, 1) + " mm, " +
+           std::to_string(phantomStructures().size()) + " structures; phantom:N for N^3 (N = 16 … 1024)"}};
+  for (const KnownScan& scan : knownScans()) {
+    const auto path = locateKnownScan(scan);
+    listing.push_back({scan.name, scan.title,
+                       path ? path->string() + " (" + scan.licence + ")"
+                            : "not fetched: bash scripts/fetch-scans.sh, or apt-get install " + scan.debianPackage});
+  }
+  return listing;
 }
 
 const char* kDatasetsHelp =
     "usage: anatomy-tutor datasets [--json] [--db PATH]\n\n"
-    "Lists the datasets that can be opened by name: the built-in phantom and the datasets imported\n"
+    "Lists the datasets that can be opened by name: the built-in phantom, the real scans that\n"
+    "scripts/fetch-scans.sh fetches from Debian packages (skull: a head CT), and the datasets imported\n"
     "with `anatomy-tutor import` into the database (--db PATH, else the default database). Any\n"
     "supported file or folder can also be opened directly by its path.\n";
 
@@ -120,16 +130,17 @@ const char* kStructuresHelp =
     "usage: anatomy-tutor structures DATASET [--json]\n"
     "       anatomy-tutor structures --volume PATH --labels PATH [--names JSON] [--series UID] [--json]\n\n"
     "Lists a dataset's structures: label value, id, name, system and voxel count.\n"
-    "DATASET is a built-in name (phantom, phantom:N) or a volume path (DICOM folder, .nii[.gz],\n"
-    ".nrrd/.nhdr); --labels gives a label map on any grid (resampled onto the volume), --names a\n"
+    "DATASET is a built-in name (phantom, phantom:N, skull) or a volume path (DICOM folder, .nii[.gz],\n"
+    ".nrrd/.nhdr, .inv3); --labels gives a label map on any grid (resampled onto the volume), --names a\n"
     "JSON map { \"value\": \"name\" }, --series the DICOM series UID.\n";
 
 // --- info -------------------------------------------------------------------------------------
 
 const char* kInfoHelp =
-    "usage: anatomy-tutor info FILE|DIR [--json] [--labels PATH] [--names JSON] [--series UID]\n\n"
-    "Loads any supported input (DICOM series folder, DICOM SEG, NIfTI, NRRD) and prints its\n"
-    "dimensions, spacing, origin, orientation, stored type, value (HU) range and loader notes.\n"
+    "usage: anatomy-tutor info FILE|DIR|SCAN [--json] [--labels PATH] [--names JSON] [--series UID]\n\n"
+    "Loads any supported input (DICOM series folder, DICOM SEG, NIfTI, NRRD, InVesalius .inv3) and\n"
+    "prints its dimensions, spacing, origin, orientation, stored type, value (HU) range and loader notes.\n"
+    "SCAN is a real scan fetched by scripts/fetch-scans.sh (skull).\n"
     "Label maps (integer images with few values, or files that name segments) and --labels\n"
     "inputs also list each label with its name and voxel count; --names JSON ({ \"value\": \"name\" })\n"
     "names the labels of either.\n";
@@ -180,7 +191,7 @@ double srgbEncode(double linear) {
 }  // namespace
 
 int runDatasets(const Argv& argv) {
-  auto args = cli::Args::parse(argv, {"db"}, {"json"});
+  auto args = cli::Args::parse(argv, {}, {"json"});
   if (!args) return usageError("datasets", args.error().message);
   if (args->has("help")) {
     std::printf("%s", kDatasetsHelp);
@@ -189,7 +200,9 @@ int runDatasets(const Argv& argv) {
   if (!args->positional().empty()) return usageError("datasets", "unexpected argument '" + args->positional()[0] + "'");
   std::vector<DatasetListing> rows = builtinDatasets();
   std::vector<bool> builtin(rows.size(), true);
-  auto imported = db::listImportedDatasets(args->value("db"));
+  auto database = db::openExistingDatabase(args->db());
+  if (!database) return reportError("datasets: " + database.error().message);
+  auto imported = *database ? db::listDatasets(**database) : Result<std::vector<db::DatasetRecord>>(std::vector<db::DatasetRecord>{});
   if (!imported) return reportError("datasets: " + imported.error().message);
   for (const db::DatasetRecord& r : *imported) {
     rows.push_back({r.name, r.species + " dataset from " + r.volumePath,
@@ -251,7 +264,13 @@ int runInfo(const Argv& argv) {
   const auto& pos = args->positional();
   if (pos.empty()) return usageError("info", "missing FILE or DIR (see --help)");
   if (pos.size() > 1) return usageError("info", "unexpected argument '" + pos[1] + "' (one FILE or DIR only)");
-  const std::string path = pos[0];
+  std::string path = pos[0];
+  // A scan's name wins over a file of that name, as built-in names do everywhere (./skull is the file).
+  if (const KnownScan* scan = findKnownScan(path)) {
+    auto file = knownScanFile(*scan);
+    if (!file) return reportError("info: " + file.error().message);
+    path = file->string();
+  }
 
   ImageLoadOptions options;
   options.dicomSeriesUid = args->valueOr("series", "");

@@ -5,6 +5,7 @@
 #include <optional>
 
 #include "commands.h"
+#include "data_paths.h"
 #include "volume/png_image.h"
 
 namespace at::app {
@@ -13,7 +14,7 @@ namespace fs = std::filesystem;
 
 namespace {
 
-fs::path shippedStudiesDir() { return fs::path(AT_SOURCE_DIR) / "data" / "studies"; }
+fs::path shippedStudiesDir() { return dataSubdirectory("studies"); }
 
 std::vector<fs::path> shippedStudyFiles() {
   std::vector<fs::path> files;
@@ -66,7 +67,7 @@ Result<std::map<std::string, render::Preset>> loadStudyPresets(const render::Pre
     for (int condition = 0; condition < 2; ++condition) {
       const std::string id = protocol.presetFor(structure, condition);
       auto preset = library.load(id);
-      if (!preset) return fail("study " + protocol.id + ": " + preset.error().message);
+      if (!preset) return tl::unexpected(withContext("study " + protocol.id, preset.error()));
       presets[id] = *preset;
     }
   return presets;

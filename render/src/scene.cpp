@@ -85,12 +85,6 @@ Camera frameCamera(const StructureFrame& f, NamedView view, double aspect, doubl
   return c;
 }
 
-Mask structureMask(const LabelMap& labels, std::uint16_t label) {
-  Mask m(labels.geometry, 0);
-  for (std::size_t i = 0; i < labels.voxels.size(); ++i) m.voxels[i] = labels.voxels[i] == label ? 1 : 0;
-  return m;
-}
-
 Result<WdtParams> wdtParamsFor(const Preset& preset, int passes) {
   WdtParams p;
   auto rule = parseStepRule(preset.weightRule);

@@ -22,7 +22,7 @@
 #include "test_support.h"
 #include "volume/dataset_source.h"
 #include "volume/phantom.h"
-#include "wdt/wdt.h"
+#include "wdt/answer_keys.h"
 
 namespace fs = std::filesystem;
 using namespace at;
@@ -46,19 +46,9 @@ std::int64_t scalar(const std::string& dbPath, const std::string& sql) {
   return s->int64(0);
 }
 
-// The same distance fields as the app's key computer (app/src/learning_support.cpp,
-// wdtDistanceField): density weights, entering rule, converged, on a grid coarser by 2, sampled
-// back onto the label grid.
-quiz::DistanceFieldFunction distanceFieldLikeTheApp(const Dataset& dataset) {
-  return [&dataset](const Mask& seeds) -> Result<FloatVolume> {
-    WdtParams params;
-    params.converge = true;
-    params.downsample = 2;
-    auto result = computeWdt(dataset.volume, seeds, params);
-    if (!result) return tl::unexpected(result.error());
-    if (result->field.downsample == 1) return std::move(result->field.distances);
-    return upsampleField(result->field, dataset.labels.geometry);
-  };
+// The app's answer keys: the one recipe of wdt/answer_keys.h.
+quiz::DistanceFieldFunction answerKeyFields(const Dataset& dataset) {
+  return [&dataset](const Mask& seeds) { return wdt::answerKeyDistances(dataset.volume, dataset.labels.geometry, seeds); };
 }
 
 // The right answer to a resolved question, as an answers-file line.
@@ -79,7 +69,7 @@ std::string rightAnswerLine(const quiz::ResolvedQuestion& q, const std::vector<S
 
 // Answers files for every lesson of `course`, from keys computed on `dataset`.
 std::map<std::string, std::vector<std::string>> answersFor(const lessons::Course& course, const Dataset& dataset) {
-  quiz::DatasetKeyComputer keys(dataset, distanceFieldLikeTheApp(dataset));
+  quiz::DatasetKeyComputer keys(dataset, answerKeyFields(dataset));
   std::map<std::string, std::vector<std::string>> out;
   for (const auto& lesson : course.lessons) {
     auto& lines = out[lesson.id];
@@ -475,7 +465,9 @@ TEST_CASE("play --review asks the due questions, records each answer and empties
   CHECK(r.out.find("Review answers saved: 4, 4 correct.") != std::string::npos);
   CHECK(scalar(dbPath, "SELECT count(*) FROM review_responses WHERE correct = 1 AND mode = 'terminal'") == 4);
   CHECK(scalar(dbPath, "SELECT count(*) FROM responses") == 0);
-  CHECK(scalar(dbPath, "SELECT count(*) FROM progress WHERE box = 2") == 4);
+  // Right, untimed (from a file): Good, the second learning step (due in 10 minutes).
+  CHECK(scalar(dbPath, "SELECT count(*) FROM memory_states WHERE phase = 'learning' AND step = 1") == 4);
+  CHECK(scalar(dbPath, "SELECT count(*) FROM review_log WHERE source = 'review' AND rating = 3") == 4);
 
   auto report = test::runApp("progress --user hal --db '" + dbPath + "'");
   CHECK_MESSAGE(report.exitCode == 0, report.err);
@@ -488,7 +480,7 @@ TEST_CASE("play --review asks the due questions, records each answer and empties
   CHECK(again.out.find("Nothing is due for review") != std::string::npos);
   CHECK(scalar(dbPath, "SELECT count(*) FROM review_responses") == 4);
 
-  // Another user names the first structure wrongly: box 1; the answers then end, which ends the
+  // Another user names the first structure wrongly: Again, the first learning step; the answers then end, which ends the
   // review without an error.
   quiz::Answer wrong;
   wrong.text = structures[1].displayName;
@@ -497,7 +489,8 @@ TEST_CASE("play --review asks the due questions, records each answer and empties
   CHECK_MESSAGE(w.exitCode == 0, w.err);
   CHECK(w.out.find("wrong (score 0.00)") != std::string::npos);
   CHECK(w.out.find("Review answers saved: 1, 0 correct.") != std::string::npos);
-  CHECK(scalar(dbPath, "SELECT box FROM progress JOIN users ON users.id = progress.user_id WHERE users.name = 'ivy'") == 1);
+  CHECK(scalar(dbPath, "SELECT m.due_at - m.last_review_at FROM memory_states m JOIN users ON users.id = m.user_id"
+                       " WHERE users.name = 'ivy'") == 60);
 
   // A malformed line names its line and records nothing; a lesson and --review together are refused.
   const fs::path broken = writeLines(dir / "broken.jsonl", {"{\"text\": "});

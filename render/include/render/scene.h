@@ -1,5 +1,6 @@
-// From a dataset, a selected structure and a preset to what the ray caster needs: the seed mask,
-// the WDT parameters the preset asks for, and a camera framing the structure with its context.
+// From a dataset, a selected structure and a preset to what the ray caster needs: the WDT
+// parameters the preset asks for and a camera framing the structure with its context (the seed
+// mask is volume/mask.h's structureMask).
 // Shared by the `render` command, the benchmark, the figure script and the tests.
 #pragma once
 
@@ -9,7 +10,7 @@
 #include <vector>
 
 #include "render/render_settings.h"
-#include "volume/error.h"
+#include "core/error.h"
 #include "volume/grid.h"
 #include "wdt/wdt.h"
 
@@ -30,7 +31,6 @@ constexpr std::size_t kMaxFramePoints = 4096;
 
 // Error if no voxel carries `label`.
 Result<StructureFrame> structureFrame(const LabelMap& labels, std::uint16_t label);
-Mask structureMask(const LabelMap& labels, std::uint16_t label);
 
 // The context radius of a structure: the geometric mean of its equivalent-sphere radius (its
 // volume's) and its farthest-voxel radius, in mm. A compact structure gets about its radius; a long

@@ -24,7 +24,7 @@
 #include "render/gradient_volume.h"
 #include "render/image.h"
 #include "render/render_settings.h"
-#include "volume/error.h"
+#include "core/error.h"
 
 namespace at::cuda {
 class DeviceField;
