@@ -238,6 +238,21 @@ int runReview(const std::string& courseId, std::int64_t userId, db::Database& da
   LazyKeyComputer keys(*structures, [&database, datasetId] { return loadCourseDataset(database, datasetId); });
 
   std::printf("Review: %s (%s)\n", course->title.c_str(), courseId.c_str());
+  {
+    const auto now = lessons::UnixSeconds(std::time(nullptr));
+    auto taught = lessons::taughtStructures(curriculum, progress, userId, courseId);
+    if (!taught) return reportError("play: " + taught.error().message);
+    auto due = lessons::reviewQueue(curriculum, progress, userId, courseId, now);
+    if (!due) return reportError("play: " + due.error().message);
+    if (taught->empty()) {
+      std::printf("Review asks about what you have been taught; nothing of this course yet. Start with a lesson\n"
+                  "(`anatomy-tutor lessons %s`, then `anatomy-tutor play LESSON --user NAME`).\n", courseId.c_str());
+    } else if (!due->empty()) {
+      std::string list;
+      for (const auto& p : *due) list += (list.empty() ? "" : ", ") + (nameById.count(p.structureId) ? nameById[p.structureId] : p.structureId);
+      std::printf("Due now: %s (%s)\n", countOf(long(due->size()), "structure").c_str(), list.c_str());
+    }
+  }
   int asked = 0, right = 0;
   while (true) {
     const auto now = lessons::UnixSeconds(std::time(nullptr));

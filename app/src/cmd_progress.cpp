@@ -182,15 +182,23 @@ int runProgress(const Argv& argv) {
                 100.0 * fsrs.retrievability(p.memory, now), relativeTime(p.memory.due, now).c_str());
   }
 
-  auto due = lessons::reviewQueue(progress, userId, now);
-  if (!due) return reportError("progress: " + due.error().message);
-  std::printf("\nDue for review now: ");
-  if (due->empty()) std::printf("nothing\n");
-  for (std::size_t i = 0; i < due->size(); ++i) {
-    auto it = names.find((*due)[i].structureId);
-    std::printf("%s%s", i ? ", " : "", it == names.end() ? (*due)[i].structureId.c_str() : it->second.c_str());
-    if (i + 1 == due->size()) std::printf("\n");
+  // The one definition of what is due (lessons::reviewQueue): taught structures only, per course,
+  // exactly what `play --review COURSE` and the desktop's review ask about.
+  std::vector<std::string> dueLines;
+  for (const auto& c : *courses) {
+    auto due = lessons::reviewQueue(curriculum, progress, userId, c.id, now);
+    if (!due) return reportError("progress: " + due.error().message);
+    if (due->empty()) continue;
+    std::string list;
+    for (const auto& p : *due) {
+      auto it = names.find(p.structureId);
+      list += (list.empty() ? "" : ", ") + (it == names.end() ? p.structureId : it->second);
+    }
+    dueLines.push_back(c.id + ": " + countOf(int(due->size()), "structure") + " (" + list + ") — `anatomy-tutor play --review " +
+                       c.id + " --user " + (*user)->name + "`");
   }
+  std::printf("\nDue for review now:%s\n", dueLines.empty() ? " nothing" : "");
+  for (const auto& line : dueLines) std::printf("  %s\n", line.c_str());
   return 0;
 }
 

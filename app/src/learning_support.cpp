@@ -11,6 +11,10 @@
 
 namespace at::app {
 
+std::string countOf(long long n, const std::string& singular, const std::string& plural) {
+  return std::to_string(n) + " " + (n == 1 ? singular : plural.empty() ? singular + "s" : plural);
+}
+
 std::string courseDirectory() {
   if (const char* dir = std::getenv("AT_DATA_DIR"); dir && *dir) return (std::filesystem::path(dir) / "courses").string();
   return (std::filesystem::path(AT_SOURCE_DIR) / "data" / "courses").string();

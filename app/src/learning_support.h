@@ -17,6 +17,10 @@
 
 namespace at::app {
 
+// "1 lesson", "2 lessons", "0 lessons": a count with its noun in the right number (`plural`
+// defaults to `singular` + "s").
+std::string countOf(long long n, const std::string& singular, const std::string& plural = "");
+
 // The course folder: $AT_DATA_DIR/courses when set, else the source tree's data/courses.
 std::string courseDirectory();
 

@@ -294,11 +294,49 @@ Result<double> LessonEngine::ability() const {
   return ability->value_or(quiz::kDefaultAbility);
 }
 
-Result<std::vector<StructureProgress>> reviewQueue(ProgressRepository& progress, std::int64_t userId,
-                                                   UnixSeconds now) {
+namespace {
+
+// The questions of the lessons of `course` that the user has started, in course order.
+Result<std::vector<quiz::Question>> startedQuestions(ProgressRepository& progress, std::int64_t userId,
+                                                     const Course& course) {
+  auto attempts = progress.attempts(userId);
+  if (!attempts) return tl::unexpected(attempts.error());
+  std::set<std::string> started;
+  for (const Attempt& a : *attempts) started.insert(a.lessonId);
+  std::vector<quiz::Question> out;
+  for (const Lesson& lesson : course.lessons) {
+    if (!started.count(lesson.id)) continue;
+    for (const Step& step : lesson.steps)
+      if (step.kind == StepKind::Question) out.push_back(step.question);
+  }
+  return out;
+}
+
+}  // namespace
+
+Result<std::vector<StructureProgress>> taughtStructures(CurriculumRepository& curriculum, ProgressRepository& progress,
+                                                        std::int64_t userId, const std::string& courseId) {
+  auto course = curriculum.course(courseId);
+  if (!course) return tl::unexpected(course.error());
+  auto questions = startedQuestions(progress, userId, *course);
+  if (!questions) return tl::unexpected(questions.error());
+  std::set<std::string> asked;
+  for (const quiz::Question& q : *questions) asked.insert(q.target);
   auto all = progress.allProgress(userId);
   if (!all) return tl::unexpected(all.error());
-  return dueForReview(std::move(*all), now);
+  std::vector<StructureProgress> taught;
+  for (StructureProgress& p : *all)
+    if (p.answered > 0 && p.memory.phase != MemoryPhase::New && asked.count(p.structureId)) taught.push_back(std::move(p));
+  std::sort(taught.begin(), taught.end(),
+            [](const StructureProgress& a, const StructureProgress& b) { return a.structureId < b.structureId; });
+  return taught;
+}
+
+Result<std::vector<StructureProgress>> reviewQueue(CurriculumRepository& curriculum, ProgressRepository& progress,
+                                                   std::int64_t userId, const std::string& courseId, UnixSeconds now) {
+  auto taught = taughtStructures(curriculum, progress, userId, courseId);
+  if (!taught) return tl::unexpected(taught.error());
+  return dueForReview(std::move(*taught), now);
 }
 
 Result<std::optional<quiz::Question>> chooseReviewQuestion(CurriculumRepository& curriculum,
@@ -306,31 +344,25 @@ Result<std::optional<quiz::Question>> chooseReviewQuestion(CurriculumRepository&
                                                            const std::string& courseId, UnixSeconds now) {
   auto course = curriculum.course(courseId);
   if (!course) return tl::unexpected(course.error());
-  auto all = progress.allProgress(userId);
-  if (!all) return tl::unexpected(all.error());
-  std::set<std::string> answered, due;
-  for (const StructureProgress& p : *all) {
-    if (p.answered > 0) answered.insert(p.structureId);
-  }
-  for (const StructureProgress& p : dueForReview(*all, now)) due.insert(p.structureId);
+  auto queue = reviewQueue(curriculum, progress, userId, courseId, now);
+  if (!queue) return tl::unexpected(queue.error());
+  std::set<std::string> due;
+  for (const StructureProgress& p : *queue) due.insert(p.structureId);
+  if (due.empty()) return std::optional<quiz::Question>{};
+  auto questions = startedQuestions(progress, userId, *course);
+  if (!questions) return tl::unexpected(questions.error());
   auto ability = progress.ability(userId);
   if (!ability) return tl::unexpected(ability.error());
 
-  std::vector<quiz::Question> questions;
   std::vector<quiz::SelectionCandidate> candidates;
-  for (const Lesson& lesson : course->lessons) {
-    for (const Step& step : lesson.steps) {
-      if (step.kind != StepKind::Question) continue;
-      const quiz::Question& q = step.question;
-      auto difficulty = progress.questionDifficulty(q.id);
-      if (!difficulty) return tl::unexpected(difficulty.error());
-      candidates.push_back({q.id, difficulty->value_or(q.difficulty), due.count(q.target) > 0 || !answered.count(q.target)});
-      questions.push_back(q);
-    }
+  for (const quiz::Question& q : *questions) {
+    auto difficulty = progress.questionDifficulty(q.id);
+    if (!difficulty) return tl::unexpected(difficulty.error());
+    candidates.push_back({q.id, difficulty->value_or(q.difficulty), due.count(q.target) > 0});
   }
   const auto chosen = quiz::chooseAdaptive(candidates, ability->value_or(quiz::kDefaultAbility));
   if (!chosen) return std::optional<quiz::Question>{};
-  return std::optional<quiz::Question>(questions[*chosen]);
+  return std::optional<quiz::Question>((*questions)[*chosen]);
 }
 
 Result<quiz::Grade> answerReview(CurriculumRepository& curriculum, ProgressRepository& progress,

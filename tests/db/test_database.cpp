@@ -16,6 +16,7 @@
 #include "db/schema.h"
 #include "lessons/course_json.h"
 #include "lessons/lesson_engine.h"
+#include "lessons/scheduling.h"
 #include "test_support.h"
 #include "toy_course.h"
 
@@ -255,9 +256,9 @@ TEST_CASE("Leitner progress of a version-5 database becomes FSRS memory states k
   CHECK(maxCochlea.memory.difficulty == doctest::Approx(good));
   // A row never answered is not a memory.
   CHECK(!progress.progress(2, "vestibule")->has_value());
-  // The due queue is the one the Leitner boxes gave.
-  CHECK(lessons::reviewQueue(progress, 1, 715)->size() == 1);
-  CHECK(lessons::reviewQueue(progress, 1, 720)->size() == 2);
+  // The due times are the ones the Leitner boxes gave.
+  CHECK(lessons::dueForReview(*progress.allProgress(1), 715).size() == 1);
+  CHECK(lessons::dueForReview(*progress.allProgress(1), 720).size() == 2);
 
   // Every earlier answer is in the review log, in time order, rated from its grade.
   auto log = progress.reviewLog(1);

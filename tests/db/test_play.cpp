@@ -454,57 +454,84 @@ TEST_CASE("The TotalSegmentator sample imports with its 41 structures and carrie
   CHECK(progress.out.find("Kidney right") != std::string::npos);
 }
 
-TEST_CASE("play --review asks the due questions, records each answer and empties the queue") {
+TEST_CASE("play --review asks only about taught structures that are due, and progress counts the same") {
   if (!appAvailable()) return;
   test::TempDir dir;
   const std::string dbPath = (dir / "rv.db").string();
   storeQuickCourse(dbPath);
   const auto structures = phantomStructures();
   const auto answers = quickAnswers();
-  // Nothing answered: every structure is eligible, all questions equally hard, so the review asks
-  // in question-id order, one question per structure: q0 (name), q1 (locate), q2 (identify), q3
-  // (name); q4 and q5 train structures already reviewed.
-  const fs::path file = writeLines(dir / "review.jsonl", {answers[0], answers[1], answers[2], answers[3]});
-  const std::string review = "play --review quick --user hal --new-user --answers '" + file.string() + "' --db '" + dbPath + "'";
-  auto r = test::runApp(review);
+  const auto run = [&](const std::string& user, const std::vector<std::string>& lines, const std::string& name) {
+    const fs::path file = writeLines(dir / name, lines);
+    return test::runApp("play --review quick --user " + user + " --new-user --answers '" + file.string() + "' --db '" +
+                        dbPath + "'");
+  };
+  // Time passes for one user: every due time and last answer moves `days` into the past.
+  const auto daysPass = [&](const std::string& user, int days) {
+    auto db = db::Database::open(dbPath);
+    REQUIRE(db);
+    auto shift = db->prepare("UPDATE memory_states SET due_at = due_at - ?1, last_review_at = last_review_at - ?1"
+                             " WHERE user_id = (SELECT id FROM users WHERE name = ?2)");
+    REQUIRE(shift);
+    shift->bind(1, std::int64_t(days) * 86400).bind(2, user);
+    REQUIRE(shift->run());
+    // Equal Elo ratings for everyone, so the adaptive choice goes by question id (q0, q1, …).
+    REQUIRE(db->exec("DELETE FROM question_stats; DELETE FROM user_ability;"));
+  };
+
+  // Nothing taught yet: nothing is asked, and the student is told to start with a lesson.
+  auto fresh = run("hal", {answers[0]}, "unused.jsonl");
+  CHECK_MESSAGE(fresh.exitCode == 0, fresh.err);
+  CHECK(fresh.out.find("Review asks about what you have been taught") != std::string::npos);
+  CHECK(fresh.out.find("Nothing is due for review") != std::string::npos);
+  CHECK(scalar(dbPath, "SELECT count(*) FROM review_responses") == 0);
+
+  // The lesson teaches four structures; right after it nothing is due (learning steps of minutes,
+  // days for those answered twice).
+  const fs::path lessonFile = writeLines(dir / "lesson.jsonl", answers);
+  auto lesson = test::runApp(playArgs("quick.check", "hal", lessonFile, dbPath));
+  REQUIRE_MESSAGE(lesson.exitCode == 0, lesson.err);
+  CHECK(scalar(dbPath, "SELECT count(*) FROM memory_states") == 4);
+  CHECK(scalar(dbPath, "SELECT count(*) FROM review_log WHERE source = 'lesson' AND rating = 3") == 6);  // untimed: Good
+  auto early = run("hal", {answers[0]}, "early.jsonl");
+  CHECK(early.out.find("Nothing is due for review") != std::string::npos);
+  auto none = test::runApp("progress --user hal --db '" + dbPath + "'");
+  CHECK(none.out.find("Due for review now: nothing") != std::string::npos);
+
+  // Forty days later all four are due: `progress` and `play --review` agree on them.
+  daysPass("hal", 40);
+  auto due = test::runApp("progress --user hal --db '" + dbPath + "'");
+  CHECK_MESSAGE(due.exitCode == 0, due.err);
+  CHECK(due.out.find("quick: 4 structures (") != std::string::npos);
+  auto r = run("hal", {answers[0], answers[1], answers[2], answers[3]}, "review.jsonl");
   CHECK_MESSAGE(r.exitCode == 0, r.err);
+  CHECK(r.out.find("Due now: 4 structures") != std::string::npos);
   CHECK(r.out.find("[review 1] Question (name)") != std::string::npos);
   CHECK(r.out.find("[review 2] Question (locate)") != std::string::npos);
   CHECK(r.out.find("[review 4] Question (name)") != std::string::npos);
   CHECK(r.out.find("Nothing more is due for review") != std::string::npos);
   CHECK(r.out.find("Review answers saved: 4, 4 correct.") != std::string::npos);
   CHECK(scalar(dbPath, "SELECT count(*) FROM review_responses WHERE correct = 1 AND mode = 'terminal'") == 4);
-  CHECK(scalar(dbPath, "SELECT count(*) FROM responses") == 0);
-  // Right, untimed (from a file): Good, the second learning step (due in 10 minutes).
-  CHECK(scalar(dbPath, "SELECT count(*) FROM memory_states WHERE phase = 'learning' AND step = 1") == 4);
-  CHECK(scalar(dbPath, "SELECT count(*) FROM review_log WHERE source = 'review' AND rating = 3") == 4);
+  CHECK(scalar(dbPath, "SELECT count(*) FROM review_log WHERE source = 'review'") == 4);
+  auto after = test::runApp("progress --user hal --db '" + dbPath + "'");
+  CHECK(after.out.find("10 answers, 10 correct (4 in review, 4 correct)") != std::string::npos);
+  CHECK(after.out.find("Due for review now: nothing") != std::string::npos);
 
-  auto report = test::runApp("progress --user hal --db '" + dbPath + "'");
-  CHECK_MESSAGE(report.exitCode == 0, report.err);
-  CHECK(report.out.find("4 answers, 4 correct (4 in review, 4 correct)") != std::string::npos);
-  CHECK(report.out.find("Due for review now: nothing") != std::string::npos);
-
-  // Again: nothing is due, nothing is asked.
-  auto again = test::runApp(review);
-  CHECK_MESSAGE(again.exitCode == 0, again.err);
-  CHECK(again.out.find("Nothing is due for review") != std::string::npos);
-  CHECK(scalar(dbPath, "SELECT count(*) FROM review_responses") == 4);
-
-  // Another user names the first structure wrongly: Again, the first learning step; the answers then end, which ends the
-  // review without an error.
+  // Another student forgets: the first structure (answered twice in the lesson: in Review) named
+  // wrongly is a lapse, Relearning for 10 minutes; the answers then end, which ends the review.
+  const fs::path ivyLesson = writeLines(dir / "ivy.jsonl", answers);
+  REQUIRE(test::runApp(playArgs("quick.check", "ivy", ivyLesson, dbPath)).exitCode == 0);
+  daysPass("ivy", 40);
   quiz::Answer wrong;
   wrong.text = structures[1].displayName;
-  const fs::path wrongFile = writeLines(dir / "wrong.jsonl", {quiz::answerToJson(wrong)});
-  auto w = test::runApp("play --review quick --user ivy --new-user --answers '" + wrongFile.string() + "' --db '" + dbPath + "'");
+  auto w = run("ivy", {quiz::answerToJson(wrong)}, "wrong.jsonl");
   CHECK_MESSAGE(w.exitCode == 0, w.err);
-  CHECK(w.out.find("wrong (score 0.00)") != std::string::npos);
   CHECK(w.out.find("Review answers saved: 1, 0 correct.") != std::string::npos);
   CHECK(scalar(dbPath, "SELECT m.due_at - m.last_review_at FROM memory_states m JOIN users ON users.id = m.user_id"
-                       " WHERE users.name = 'ivy'") == 60);
+                       " WHERE users.name = 'ivy' AND m.structure = '" + structures[0].id + "' AND m.phase = 'relearning'") == 600);
 
   // A malformed line names its line and records nothing; a lesson and --review together are refused.
-  const fs::path broken = writeLines(dir / "broken.jsonl", {"{\"text\": "});
-  auto b = test::runApp("play --review quick --user jo --new-user --answers '" + broken.string() + "' --db '" + dbPath + "'");
+  auto b = run("ivy", {"{\"text\": "}, "broken.jsonl");
   CHECK(b.exitCode != 0);
   CHECK(b.err.find("broken.jsonl:1: ") != std::string::npos);
   CHECK(scalar(dbPath, "SELECT count(*) FROM review_responses") == 5);

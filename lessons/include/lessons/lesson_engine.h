@@ -116,13 +116,23 @@ class LessonEngine {
   std::size_t cursor_ = 0;                                 // into shown_
 };
 
-// Structures due for review for the user at `now`, earliest first.
-Result<std::vector<StructureProgress>> reviewQueue(ProgressRepository& progress, std::int64_t userId,
-                                                   UnixSeconds now);
+// Review (ARCHITECTURE.md §5) asks only about what the user has been taught. A structure is
+// TAUGHT in a course when the user has started (any attempt) a lesson of that course with a
+// question on it, and has answered about it at least once (it has an FSRS memory state). These
+// functions are the one definition of what is due: `progress`, `play --review` and the desktop
+// panels all count and ask through them.
 
-// Adaptive review: among the course's questions whose structure is due at `now` or never answered,
-// the one whose difficulty best matches the user's ability (quiz::chooseAdaptive). nullopt when
-// nothing is due.
+// The course's structures taught to the user, with their progress, ordered by id.
+Result<std::vector<StructureProgress>> taughtStructures(CurriculumRepository& curriculum, ProgressRepository& progress,
+                                                        std::int64_t userId, const std::string& courseId);
+
+// The taught structures due for review at `now` (memory.due <= now), earliest due first.
+Result<std::vector<StructureProgress>> reviewQueue(CurriculumRepository& curriculum, ProgressRepository& progress,
+                                                   std::int64_t userId, const std::string& courseId, UnixSeconds now);
+
+// Adaptive review: among the questions of the lessons the user has started in the course whose
+// structure is due at `now` (reviewQueue), the one whose difficulty best matches the user's ability
+// (quiz::chooseAdaptive). nullopt when nothing is due.
 Result<std::optional<quiz::Question>> chooseReviewQuestion(CurriculumRepository& curriculum,
                                                            ProgressRepository& progress, std::int64_t userId,
                                                            const std::string& courseId, UnixSeconds now);
