@@ -9,6 +9,7 @@
 #include "learning_support.h"
 #include "lessons/lesson_engine.h"
 #include "lessons/scheduling.h"
+#include "quiz/elo.h"
 
 namespace at::app {
 
@@ -43,8 +44,9 @@ int runCourses(const Argv& argv) {
   auto courses = curriculum.courses();
   if (!courses) return reportError("courses: " + courses.error().message);
   for (const auto& c : *courses)
-    std::printf("%-24s %-44s dataset %-12s %zu lessons (version %d)\n", c.id.c_str(), c.title.c_str(),
-                c.datasetId.c_str(), c.lessons.size(), c.version);
+    std::printf("%-24s %-44s dataset %-12s %s%s (version %d)\n", c.id.c_str(), c.title.c_str(), c.datasetId.c_str(),
+                countOf(long(c.lessons.size()), "lesson").c_str(),
+                c.exams.empty() ? "" : (", " + countOf(long(c.exams.size()), "exam")).c_str(), c.version);
   return 0;
 }
 
@@ -74,11 +76,20 @@ int runLessons(const Argv& argv) {
   for (const auto& c : courses) {
     std::printf("%s — %s\n", c.id.c_str(), c.title.c_str());
     for (const auto& l : c.lessons) {
-      std::printf("  %-28s %-40s %2zu steps, %d questions", l.id.c_str(), l.title.c_str(), l.steps.size(),
-                  questionCount(l));
+      std::printf("  %-28s %-40s %s, %s", l.id.c_str(), l.title.c_str(), countOf(long(l.steps.size()), "step").c_str(),
+                  countOf(questionCount(l), "question").c_str());
       if (!l.prerequisites.empty()) {
         std::printf("  after:");
         for (const auto& p : l.prerequisites) std::printf(" %s", p.c_str());
+      }
+      std::printf("\n");
+    }
+    for (const auto& e : c.exams) {
+      std::printf("  %-28s %-40s %s, %d min  (exam)", e.id.c_str(), e.title.c_str(), countOf(e.count, "item").c_str(),
+                  (e.timeLimitS + 59) / 60);
+      if (!e.prerequisites.empty()) {
+        std::printf("  after:");
+        for (const auto& p : e.prerequisites) std::printf(" %s", p.c_str());
       }
       std::printf("\n");
     }
@@ -130,13 +141,14 @@ int runProgress(const Argv& argv) {
     answered += p.answered;
     correct += p.correct;
   }
-  std::printf("%s (%s%s%s): %d answers, %d correct", (*user)->name.c_str(), lessons::toString((*user)->role),
-              (*user)->group.empty() ? "" : ", group ", (*user)->group.c_str(), answered, correct);
+  std::printf("%s (%s%s%s): %s, %d correct", (*user)->name.c_str(), lessons::toString((*user)->role),
+              (*user)->group.empty() ? "" : ", group ", (*user)->group.c_str(), countOf(answered, "answer").c_str(), correct);
   if (!reviews->empty()) {
     const auto right = std::count_if(reviews->begin(), reviews->end(), [](const lessons::ReviewResponse& r) { return r.correct; });
     std::printf(" (%zu in review, %ld correct)", reviews->size(), long(right));
   }
-  if (*ability) std::printf(", ability %.0f", **ability);
+  // The Elo ability as what it predicts: the chance of answering a question of average difficulty.
+  if (*ability) std::printf("; expected to get %.0f%% of average questions right", 100 * quiz::expectedScore(**ability, 1500));
   std::printf("\n");
 
   // Display names of every structure the courses use.

@@ -1,5 +1,6 @@
 #include "learning_support.h"
 
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 
@@ -26,6 +27,19 @@ Result<db::Database> openLearningDatabase(const std::optional<std::string>& dbPa
   auto seeded = db::seedCourses(*database, courseDirectory());
   if (!seeded) return fail("seeding the default course: " + seeded.error().message);
   return std::move(*database);
+}
+
+Result<lessons::User> findOrCreateUser(db::Database& database, const std::string& name, bool create,
+                                       const std::string& group) {
+  db::SqliteUserRepository users(database);
+  auto user = users.findUser(name);
+  if (!user) return tl::unexpected(user.error());
+  if (*user) return **user;
+  if (!create) return fail("unknown user '" + name + "' (first time? add --new-user to create it)");
+  auto created = users.createUser(name, lessons::Role::Student, group);
+  if (!created) return tl::unexpected(created.error());
+  std::printf("created user '%s'\n", created->name.c_str());
+  return *created;
 }
 
 db::BuiltinStructures builtinStructures() {

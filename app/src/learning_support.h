@@ -28,6 +28,10 @@ std::string courseDirectory();
 // (idempotent: a course already stored at the same version is left as it is).
 Result<db::Database> openLearningDatabase(const std::optional<std::string>& dbPath);
 
+// The user called `name`; when there is none and `create` is set, a new student of `group` (and
+// "created user 'NAME'" printed). Error: unknown and not created (saying how to create it).
+Result<lessons::User> findOrCreateUser(db::Database& db, const std::string& name, bool create, const std::string& group);
+
 // The built-in datasets' structures without building their volumes ("phantom", "phantom:N").
 db::BuiltinStructures builtinStructures();
 

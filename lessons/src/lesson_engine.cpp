@@ -14,6 +14,22 @@ bool isQuestion(const Lesson& lesson, int index) {
   return lesson.steps[std::size_t(index)].kind == StepKind::Question;
 }
 
+GradedAnswer gradedAnswer(const quiz::Question& question, const quiz::Answer& answer, const quiz::Grade& grade,
+                          std::int64_t latencyMs, const RenderState& render, UnixSeconds at) {
+  GradedAnswer g;
+  g.questionId = question.id;
+  g.structureId = question.target;
+  g.answer = answer;
+  g.correct = grade.correct;
+  g.score = grade.score;
+  g.latencyMs = latencyMs;
+  g.render = render;
+  g.answeredAt = at;
+  return g;
+}
+
+}  // namespace
+
 UnixSeconds clockNow(const EngineOptions& options) {
   if (options.clock) return options.clock();
   return std::chrono::duration_cast<std::chrono::seconds>(std::chrono::system_clock::now().time_since_epoch()).count();
@@ -43,21 +59,12 @@ Result<LearnerUpdate> learnerUpdate(ProgressRepository& progress, std::int64_t u
   return update;
 }
 
-GradedAnswer gradedAnswer(const quiz::Question& question, const quiz::Answer& answer, const quiz::Grade& grade,
-                          std::int64_t latencyMs, const RenderState& render, UnixSeconds at) {
-  GradedAnswer g;
-  g.questionId = question.id;
-  g.structureId = question.target;
-  g.answer = answer;
-  g.correct = grade.correct;
-  g.score = grade.score;
-  g.latencyMs = latencyMs;
-  g.render = render;
-  g.answeredAt = at;
-  return g;
+std::optional<QuestionScene> questionScene(const Course& course, const std::string& questionId) {
+  for (const Lesson& lesson : course.lessons)
+    for (const Step& step : lesson.steps)
+      if (step.kind == StepKind::Question && step.question.id == questionId) return sceneFor(step);
+  return std::nullopt;
 }
-
-}  // namespace
 
 quiz::GradingContext gradingContext(const std::vector<Structure>& structures, const Course& course) {
   quiz::GradingContext context;
@@ -196,7 +203,9 @@ Result<StepView> LessonEngine::current() const {
     view.view = step.show.view;
     view.title = step.show.title;
     view.text = step.show.text;
+    view.scene = QuestionScene{step.show.structure, step.show.presetId, step.show.view};
   } else {
+    view.scene = sceneFor(step);
     const quiz::ResolvedQuestion& q = *resolved_[std::size_t(index)];
     view.structure = q.question.target;
     view.structureName = view.labelsVisible && q.question.kind != quiz::QuestionKind::Identify &&
@@ -314,19 +323,31 @@ Result<std::vector<quiz::Question>> startedQuestions(ProgressRepository& progres
 
 }  // namespace
 
+std::vector<std::string> taughtStructureIds(const Course& course, const std::vector<Attempt>& userAttempts,
+                                            const std::vector<StructureProgress>& userMemories) {
+  std::set<std::string> started, asked, taught;
+  for (const Attempt& a : userAttempts) started.insert(a.lessonId);
+  for (const Lesson& lesson : course.lessons)
+    if (started.count(lesson.id))
+      for (const Step& step : lesson.steps)
+        if (step.kind == StepKind::Question) asked.insert(step.question.target);
+  for (const StructureProgress& p : userMemories)
+    if (p.answered > 0 && p.memory.phase != MemoryPhase::New && asked.count(p.structureId)) taught.insert(p.structureId);
+  return {taught.begin(), taught.end()};
+}
+
 Result<std::vector<StructureProgress>> taughtStructures(CurriculumRepository& curriculum, ProgressRepository& progress,
                                                         std::int64_t userId, const std::string& courseId) {
   auto course = curriculum.course(courseId);
   if (!course) return tl::unexpected(course.error());
-  auto questions = startedQuestions(progress, userId, *course);
-  if (!questions) return tl::unexpected(questions.error());
-  std::set<std::string> asked;
-  for (const quiz::Question& q : *questions) asked.insert(q.target);
+  auto attempts = progress.attempts(userId);
+  if (!attempts) return tl::unexpected(attempts.error());
   auto all = progress.allProgress(userId);
   if (!all) return tl::unexpected(all.error());
+  const std::vector<std::string> ids = taughtStructureIds(*course, *attempts, *all);
   std::vector<StructureProgress> taught;
   for (StructureProgress& p : *all)
-    if (p.answered > 0 && p.memory.phase != MemoryPhase::New && asked.count(p.structureId)) taught.push_back(std::move(p));
+    if (std::binary_search(ids.begin(), ids.end(), p.structureId)) taught.push_back(std::move(p));
   std::sort(taught.begin(), taught.end(),
             [](const StructureProgress& a, const StructureProgress& b) { return a.structureId < b.structureId; });
   return taught;

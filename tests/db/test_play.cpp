@@ -166,7 +166,8 @@ void storeQuickCourse(const std::string& dbPath) {
 
 std::string playArgs(const std::string& lesson, const std::string& user, const fs::path& answers,
                      const std::string& dbPath) {
-  return "play " + lesson + " --user " + user + " --new-user --answers '" + answers.string() + "' --db '" + dbPath + "'";
+  return "play " + lesson + " --user " + user + " --new-user --no-views --answers '" + answers.string() + "' --db '" +
+         dbPath + "'";
 }
 
 }  // namespace
@@ -194,7 +195,7 @@ TEST_CASE("Every shipped lesson plays to the end from answers computed from the 
       const fs::path answersFile = writeLines(dir / (lesson.id + ".jsonl"), answers.at(lesson.id));
       auto r = test::runApp(playArgs(lesson.id, "student", answersFile, dbPath));
       CHECK_MESSAGE(r.exitCode == 0, r.err);
-      CHECK(r.out.find("Lesson finished: score 1.00") != std::string::npos);
+      CHECK(r.out.find("right (score 1.00).") != std::string::npos);
       questions += int(answers.at(lesson.id).size());
       CHECK(scalar(dbPath, "SELECT count(*) FROM responses") == questions);
     }
@@ -224,7 +225,7 @@ TEST_CASE("play killed with SIGKILL mid-lesson keeps every answer and resumes at
     dup2(devnull, 1);
     dup2(devnull, 2);
     const std::string app = test::appBinary().string();
-    execl(app.c_str(), app.c_str(), "play", "quick.check", "--user", "eve", "--new-user", "--answers", fifo.c_str(),
+    execl(app.c_str(), app.c_str(), "play", "quick.check", "--user", "eve", "--new-user", "--no-views", "--answers", fifo.c_str(),
           "--db", dbPath.c_str(), static_cast<char*>(nullptr));
     _exit(127);
   }
@@ -258,7 +259,7 @@ TEST_CASE("play killed with SIGKILL mid-lesson keeps every answer and resumes at
   REQUIRE(firstStep != std::string::npos);
   CHECK(r.out.compare(firstStep, 7, "\n[6/7] ") == 0);
   CHECK(r.out.find("Question 0 about") == std::string::npos);
-  CHECK(r.out.find("Lesson finished: score 1.00") != std::string::npos);
+  CHECK(r.out.find("right (score 1.00).") != std::string::npos);
   CHECK(countResponses() == std::int64_t(answers.size()));
   CHECK(scalar(dbPath, "SELECT count(DISTINCT step_index) FROM responses") == std::int64_t(answers.size()));
   CHECK(scalar(dbPath, "SELECT count(*) FROM attempts") == 1);
@@ -333,17 +334,33 @@ TEST_CASE("Interactive play takes typed answers on stdin and stops cleanly at 'q
   storeQuickCourse(dbPath);
   const auto structures = phantomStructures();
   // Question 0 is a name question: type the display name; then quit at question 1.
-  auto r = test::runApp("play quick.check --user gus --new-user --db '" + dbPath + "'",
+  auto r = test::runApp("play quick.check --user gus --new-user --no-views --db '" + dbPath + "'",
                         structures[0].displayName + "\nquit\n");
   CHECK_MESSAGE(r.exitCode == 0, r.err);
-  CHECK(r.out.find("correct (score 1.00)") != std::string::npos);
+  CHECK(r.out.find("✓ Correct") != std::string::npos);
   CHECK(r.out.find("run the same command to resume") != std::string::npos);
   CHECK(scalar(dbPath, "SELECT count(*) FROM responses") == 1);
-  // A locate question typed as a structure's display name; nonsense is asked again, not recorded.
-  auto again = test::runApp("play quick.check --user gus --db '" + dbPath + "'",
-                            "no such thing\n" + structures[1].displayName + "\nquit\n");
+  // A locate question: a name is no answer (it would give the answer away), nonsense neither; a
+  // point in millimetres inside the structure is graded, without pictures too.
+  auto phantom = openBuiltinDataset("phantom:128");
+  REQUIRE(phantom);
+  const Structure* target = phantom->findStructure(structures[1].id);
+  REQUIRE(target);
+  std::optional<Vec3> inside;
+  const Dims& d = phantom->labels.dims();
+  for (int k = d.z / 4; k < d.z && !inside; ++k)
+    for (int j = 0; j < d.y && !inside; ++j)
+      for (int i = 0; i < d.x && !inside; ++i)
+        if (phantom->labels.at(i, j, k) == target->label)
+          inside = phantom->labels.geometry.indexToPatient({double(i), double(j), double(k)});
+  REQUIRE(inside);
+  char point[96];
+  std::snprintf(point, sizeof point, "mm %.3f %.3f %.3f", (*inside)[0], (*inside)[1], (*inside)[2]);
+  auto again = test::runApp("play quick.check --user gus --no-views --db '" + dbPath + "'",
+                            "no such thing\n" + structures[1].displayName + "\n" + point + "\nquit\n");
   CHECK_MESSAGE(again.exitCode == 0, again.err);
-  CHECK(again.out.find("try again") != std::string::npos);
+  CHECK(again.out.find("is not a pick") != std::string::npos);
+  CHECK(again.out.find("✓ Correct: that is the " + structures[1].displayName) != std::string::npos);
   CHECK(scalar(dbPath, "SELECT count(*) FROM responses") == 2);
 }
 
@@ -358,7 +375,7 @@ TEST_CASE("Quiz-only play skips the teaching steps and records the attempt's mod
   CHECK(r.out.find("quiz only") != std::string::npos);
   CHECK(r.out.find("Look at it.") == std::string::npos);
   CHECK(r.out.find("\n[1/6] Question") != std::string::npos);
-  CHECK(r.out.find("Lesson finished: score 1.00") != std::string::npos);
+  CHECK(r.out.find("right (score 1.00).") != std::string::npos);
   CHECK(scalar(dbPath, "SELECT count(*) FROM attempts WHERE mode = 'quiz_only' AND finished_at IS NOT NULL") == 1);
 }
 
@@ -415,7 +432,8 @@ TEST_CASE("The TotalSegmentator sample imports with its 41 structures and carrie
       "steps": [
         {"kind": "show", "structure": "liver", "preset": "default_wdt", "view": "anterior", "title": "The liver",
          "text": "The largest solid organ, under the right dome of the diaphragm."},
-        {"kind": "question", "question": {"id": "abdomen.upper.locate_liver", "kind": "locate",
+        {"kind": "question", "structure": "kidney_right", "view": "anterior",
+         "question": {"id": "abdomen.upper.locate_liver", "kind": "locate",
          "prompt": "Click the liver.", "target": "liver"}},
         {"kind": "question", "question": {"id": "abdomen.upper.identify_spleen", "kind": "identify",
          "prompt": "Which organ is highlighted?", "target": "spleen", "distractors": 3}},
@@ -448,7 +466,7 @@ TEST_CASE("The TotalSegmentator sample imports with its 41 structures and carrie
   auto progress = test::runApp("progress --user hal --db '" + dbPath + "'");
   ::unsetenv("AT_DATA_DIR");
   CHECK_MESSAGE(played.exitCode == 0, played.err);
-  CHECK(played.out.find("Lesson finished: score 1.00") != std::string::npos);
+  CHECK(played.out.find("right (score 1.00).") != std::string::npos);
   CHECK(scalar(dbPath, "SELECT count(*) FROM responses WHERE correct = 1") == 5);
   CHECK_MESSAGE(progress.exitCode == 0, progress.err);
   CHECK(progress.out.find("Kidney right") != std::string::npos);
@@ -463,8 +481,8 @@ TEST_CASE("play --review asks only about taught structures that are due, and pro
   const auto answers = quickAnswers();
   const auto run = [&](const std::string& user, const std::vector<std::string>& lines, const std::string& name) {
     const fs::path file = writeLines(dir / name, lines);
-    return test::runApp("play --review quick --user " + user + " --new-user --answers '" + file.string() + "' --db '" +
-                        dbPath + "'");
+    return test::runApp("play --review quick --user " + user + " --new-user --no-views --answers '" + file.string() +
+                        "' --db '" + dbPath + "'");
   };
   // Time passes for one user: every due time and last answer moves `days` into the past.
   const auto daysPass = [&](const std::string& user, int days) {
@@ -526,6 +544,7 @@ TEST_CASE("play --review asks only about taught structures that are due, and pro
   wrong.text = structures[1].displayName;
   auto w = run("ivy", {quiz::answerToJson(wrong)}, "wrong.jsonl");
   CHECK_MESSAGE(w.exitCode == 0, w.err);
+  CHECK(w.out.find("✗ Not quite") != std::string::npos);
   CHECK(w.out.find("Review answers saved: 1, 0 correct.") != std::string::npos);
   CHECK(scalar(dbPath, "SELECT m.due_at - m.last_review_at FROM memory_states m JOIN users ON users.id = m.user_id"
                        " WHERE users.name = 'ivy' AND m.structure = '" + structures[0].id + "' AND m.phase = 'relearning'") == 600);

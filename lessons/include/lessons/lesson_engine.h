@@ -33,6 +33,18 @@ struct EngineOptions {
   std::function<UnixSeconds()> clock;  // empty = the system clock
 };
 
+// The scene of the course's question `questionId` (sceneFor its step); nullopt if not in the course.
+std::optional<QuestionScene> questionScene(const Course& course, const std::string& questionId);
+
+// The options' clock, else the system clock.
+UnixSeconds clockNow(const EngineOptions& options);
+
+// What one graded answer to `question` at `at` does to the learner model (read from `progress`):
+// its FSRS rating, the target structure's next memory state, the Elo update. Nothing is written.
+Result<LearnerUpdate> learnerUpdate(ProgressRepository& progress, std::int64_t userId, const quiz::Question& question,
+                                    const quiz::Grade& grade, std::int64_t latencyMs, UnixSeconds at,
+                                    const EngineOptions& options);
+
 // What the UI (or `play`) shows for the current step.
 struct StepView {
   int index = 0;            // in the lesson's steps
@@ -54,6 +66,9 @@ struct StepView {
   std::vector<std::string> choiceIds;    // Identify/Relation/Order
   std::vector<std::string> choiceNames;  // display names of choiceIds
   std::optional<quiz::Grade> feedback;   // set once answered
+  // What the 3-D view shows (both kinds): a show step's structure, preset and view; a question's
+  // scene (sceneFor).
+  QuestionScene scene;
 };
 
 // The names a typed answer may use for each structure of a course's dataset: its display name,
@@ -121,6 +136,11 @@ class LessonEngine {
 // question on it, and has answered about it at least once (it has an FSRS memory state). These
 // functions are the one definition of what is due: `progress`, `play --review` and the desktop
 // panels all count and ask through them.
+
+// The rule itself, on plain records: the ids (sorted) of the course's structures that are targets of
+// questions in lessons the user has started and of which the user has a memory state.
+std::vector<std::string> taughtStructureIds(const Course& course, const std::vector<Attempt>& userAttempts,
+                                            const std::vector<StructureProgress>& userMemories);
 
 // The course's structures taught to the user, with their progress, ordered by id.
 Result<std::vector<StructureProgress>> taughtStructures(CurriculumRepository& curriculum, ProgressRepository& progress,
