@@ -7,12 +7,14 @@
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <map>
 #include <sstream>
 
 #include "cli_args.h"
 #include "commands.h"
 #include "db/analytics_store.h"
-#include "learning_support.h"
+#include "core/strings.h"
+#include "learning_session.h"
 
 namespace at::app {
 
@@ -31,7 +33,9 @@ constexpr const char* kAnalyticsHelp =
     "  exams       attempts, mean score, pass rate\n"
     "  --csv       CSV instead of text: one tidy table on stdout (table,id,name,metric,value), or with\n"
     "              --out DIR one wide file per table (lessons.csv, structures.csv, questions.csv,\n"
-    "              students.csv, exams.csv)\n";
+    "              students.csv, exams.csv) and the class's review log as revlog.csv in the form FSRS\n"
+    "              optimisers read (card_id = student/structure, review_time in ms, review_rating 1-4,\n"
+    "              review_state 0 new, 1 learning, 2 review, 3 relearning, review_duration in ms)\n";
 
 std::string bar(double share, int width = 20) {
   const int full = int(std::lround(std::clamp(share, 0.0, 1.0) * width));
@@ -116,6 +120,23 @@ void printLongCsv(const std::vector<Table>& all) {
   }
 }
 
+// The review log of the class, one row per answer, oldest first, for an FSRS optimiser.
+Table reviewLogTable(const lessons::AnalyticsInput& in) {
+  Table t{"revlog", {{"card_id", "student", "structure", "review_time", "review_rating", "review_state", "review_duration"}}};
+  std::map<std::int64_t, std::string> names;
+  for (const auto& u : in.students) names[u.id] = u.name;
+  std::vector<const lessons::ClassAnswer*> ordered;
+  for (const auto& a : in.answers) ordered.push_back(&a);
+  std::sort(ordered.begin(), ordered.end(), [](const auto* x, const auto* y) {
+    return x->answeredAt != y->answeredAt ? x->answeredAt < y->answeredAt : x->order < y->order;
+  });
+  for (const auto* a : ordered)
+    t.rows.push_back({names[a->userId] + "/" + a->structureId, names[a->userId], a->structureId,
+                      std::to_string(a->answeredAt * 1000), std::to_string(int(a->rating)),
+                      std::to_string(int(a->phaseBefore)), std::to_string(a->latencyMs)});
+  return t;
+}
+
 Status writeWideCsv(const std::vector<Table>& all, const std::filesystem::path& dir) {
   std::error_code ec;
   std::filesystem::create_directories(dir, ec);
@@ -128,14 +149,14 @@ Status writeWideCsv(const std::vector<Table>& all, const std::filesystem::path& 
       out << "\n";
     }
     if (!out) return fail(path.string() + ": cannot write");
-    std::printf("wrote %s (%s)\n", path.string().c_str(), countOf(long(t.rows.size() - 1), "row").c_str());
+    std::printf("wrote %s (%s)\n", path.string().c_str(), str::countOf(long(t.rows.size() - 1), "row").c_str());
   }
   return {};
 }
 
 void printText(const lessons::ClassAnalytics& a, const lessons::Course& course) {
   std::printf("Analytics: %s (%s) — class of %s, %s\n", course.title.c_str(), course.id.c_str(),
-              countOf(a.classSize, "student").c_str(), countOf(a.answers, "answer").c_str());
+              str::countOf(a.classSize, "student").c_str(), str::countOf(a.answers, "answer").c_str());
   std::printf("\nLesson completion (finished / class)\n");
   for (const auto& l : a.lessons)
     std::printf("  %-26s %s %4s  %3d started, %3d finished, mean best score %s\n", l.lessonId.c_str(),
@@ -146,7 +167,7 @@ void printText(const lessons::ClassAnalytics& a, const lessons::Course& course) 
     std::printf("  %-30s %s %4s right of %4d   difficulty %4.1f   recall %4s (%s)\n", s.name.c_str(),
                 bar(s.correctShare).c_str(), percent(s.correctShare).c_str(), s.answers, s.meanDifficulty,
                 percent(s.students ? std::optional<double>(s.meanRecall) : std::nullopt).c_str(),
-                countOf(s.students, "student").c_str());
+                str::countOf(s.students, "student").c_str());
   std::printf("\nQuestions by difficulty (Elo: 1500 = average, higher = harder)\n");
   for (const auto& q : a.questions)
     if (q.answers > 0)
@@ -158,21 +179,21 @@ void printText(const lessons::ClassAnalytics& a, const lessons::Course& course) 
                 percent(s.meanRecall).c_str(), s.taught, s.due);
     if (!s.weakestStructure.empty())
       std::printf(", weakest %s (%s)", s.weakestStructure.c_str(), percent(s.weakestRecall).c_str());
-    std::printf(", %s finished", countOf(s.lessonsFinished, "lesson").c_str());
+    std::printf(", %s finished", str::countOf(s.lessonsFinished, "lesson").c_str());
     if (s.examScore) std::printf(", exam %s", number(*s.examScore, 2).c_str());
     std::printf("\n");
   }
   if (!a.exams.empty()) std::printf("\nExams\n");
   for (const auto& e : a.exams)
     std::printf("  %-28s %s, %d finished, mean score %s, passed %s\n", e.examId.c_str(),
-                countOf(e.attempts, "attempt").c_str(), e.finished, e.meanScore ? number(*e.meanScore, 2).c_str() : "–",
+                str::countOf(e.attempts, "attempt").c_str(), e.finished, e.meanScore ? number(*e.meanScore, 2).c_str() : "–",
                 percent(e.passRate).c_str());
 }
 
 }  // namespace
 
 int runAnalytics(const Argv& argv) {
-  auto args = cli::Args::parse(argv, {"db", "group", "out"}, {"csv"});
+  auto args = cli::Args::parse(argv, {"group", "out"}, {"csv"});
   if (!args) return reportError("analytics: " + args.error().message);
   if (args->has("help")) {
     std::printf("%s", kAnalyticsHelp);
@@ -180,17 +201,19 @@ int runAnalytics(const Argv& argv) {
   }
   if (args->positional().size() != 1) return reportError("analytics: give exactly one COURSE (see `anatomy-tutor courses`)");
   if (args->has("out") && !args->has("csv")) return reportError("analytics: --out DIR writes CSV files: add --csv");
-  auto database = openLearningDatabase(args->value("db"));
-  if (!database) return reportError("analytics: " + database.error().message);
-  auto input = db::loadAnalyticsInput(*database, builtinStructures(), args->positional()[0], args->value("group"));
+  auto session = LearningSession::open(args->db());
+  if (!session) return reportError("analytics: " + session.error().message);
+  auto input = db::loadAnalyticsInput((*session)->database(), (*session)->curriculum(), args->positional()[0],
+                                      args->value("group"));
   if (!input) return reportError("analytics: " + input.error().message + " (see `anatomy-tutor courses`)");
   const auto analytics = lessons::computeAnalytics(*input, lessons::UnixSeconds(std::time(nullptr)));
   if (!args->has("csv")) {
     printText(analytics, input->course);
     return 0;
   }
-  const auto all = tables(analytics);
+  auto all = tables(analytics);
   if (auto out = args->value("out")) {
+    all.push_back(reviewLogTable(*input));
     if (auto st = writeWideCsv(all, *out); !st) return reportError("analytics: " + st.error().message);
     return 0;
   }

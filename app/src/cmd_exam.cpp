@@ -8,7 +8,8 @@
 #include "cli_args.h"
 #include "commands.h"
 #include "db/exam_store.h"
-#include "learning_support.h"
+#include "core/strings.h"
+#include "learning_session.h"
 #include "lessons/exam.h"
 #include "terminal_answers.h"
 #include "terminal_views.h"
@@ -83,7 +84,7 @@ Result<Asked> askItem(ExamRun& run, int position) {
 void printResults(const lessons::ExamResult& r, const lessons::ExamSpec& exam,
                   const std::map<std::string, std::string>& nameById) {
   std::printf("\n%s\n", r.timeRanOut ? "Time is up." : "Handed in.");
-  std::printf("Results: %d of %s right, score %.2f", r.correct, countOf(long(r.items.size()), "item").c_str(), r.score);
+  std::printf("Results: %d of %s right, score %.2f", r.correct, str::countOf(long(r.items.size()), "item").c_str(), r.score);
   if (r.passed) std::printf(" — %s (pass mark %.2f)", *r.passed ? "passed" : "not passed", exam.passScore.value_or(0));
   std::printf("\n");
   for (const lessons::ExamItemResult& x : r.items) {
@@ -97,7 +98,7 @@ void printResults(const lessons::ExamResult& r, const lessons::ExamSpec& exam,
 }  // namespace
 
 int runExam(const Argv& argv) {
-  auto args = cli::Args::parse(argv, {"user", "answers", "db", "group", "views"}, {"new-user", "no-views"});
+  auto args = cli::Args::parse(argv, {"answers", "group", "views"}, {"new-user", "no-views"});
   if (!args) return reportError("exam: " + args.error().message);
   if (args->has("help")) {
     std::printf("%s", kExamHelp);
@@ -105,40 +106,36 @@ int runExam(const Argv& argv) {
   }
   if (args->positional().size() != 1) return reportError("exam: give exactly one EXAM (see `anatomy-tutor lessons`)");
   if (args->has("views") && args->has("no-views")) return reportError("exam: give --views DIR or --no-views, not both");
-  const auto userName = args->value("user");
-  if (!userName || userName->empty()) return reportError("exam: --user NAME is required");
-  std::unique_ptr<AnswerSource> source;
-  if (auto path = args->value("answers")) {
-    auto file = std::make_unique<FileAnswers>(*path);
-    if (!file->ok()) return reportError("exam: --answers " + *path + ": cannot open");
-    source = std::move(file);
-  } else {
-    source = std::make_unique<TerminalAnswers>();
-  }
+  const auto userName = args->user();
+  if (!userName) return reportError("exam: --user NAME is required");
+  auto source = answerSource(args->value("answers"));
+  if (!source) return reportError("exam: " + source.error().message);
 
-  auto database = openLearningDatabase(args->value("db"));
-  if (!database) return reportError("exam: " + database.error().message);
-  db::SqliteCurriculumRepository curriculum(*database, builtinStructures());
-  db::SqliteProgressRepository progress(*database);
-  db::SqliteExamRepository exams(*database);
+  auto learning = LearningSession::open(args->db());
+  if (!learning) return reportError("exam: " + learning.error().message);
+  LearningSession& ls = **learning;
+  db::SqliteExamRepository exams(ls.database());
   const std::string examId = args->positional()[0];
-  auto found = lessons::findExam(curriculum, examId);
+  auto found = lessons::findExam(ls.curriculum(), examId);
   if (!found) return reportError("exam: " + found.error().message + " (see `anatomy-tutor lessons`)");
   const lessons::Course& course = found->first;
-  auto structures = curriculum.structures(course.datasetId);
+  auto structures = ls.structures(course.datasetId);
   if (!structures) return reportError("exam: " + structures.error().message);
-  auto user = findOrCreateUser(*database, *userName, args->has("new-user"), args->valueOr("group", ""));
+  bool created = false;
+  auto user = ls.user(*userName, args->has("new-user") ? LearningSession::NewUser::Create : LearningSession::NewUser::Refuse,
+                      args->valueOr("group", ""), &created);
   if (!user) return reportError("exam: " + user.error().message);
+  if (created) std::printf("created user '%s'\n", user->name.c_str());
 
   const std::string datasetId = course.datasetId;
-  db::Database& db = *database;
-  LazyKeyComputer keys(*structures, [&db, datasetId] { return loadCourseDataset(db, datasetId); });
-  lessons::ExamSession session(curriculum, progress, exams, keys);
+  auto keys = ls.keysFor(datasetId);
+  if (!keys) return reportError("exam: " + keys.error().message);
+  lessons::ExamSession session(ls.curriculum(), ls.progress(), exams, **keys);
   if (auto started = session.start(user->id, examId); !started) return reportError("exam: " + started.error().message);
   const lessons::ExamSpec& exam = session.exam();
 
   std::printf("Exam: %s (%s), course %s\n", exam.title.c_str(), exam.id.c_str(), course.title.c_str());
-  std::printf("  %s, %s", countOf(session.itemCount(), "item").c_str(), clock(exam.timeLimitS).c_str());
+  std::printf("  %s, %s", str::countOf(session.itemCount(), "item").c_str(), clock(exam.timeLimitS).c_str());
   if (exam.passScore) std::printf(", pass mark %.0f%%", 100 * *exam.passScore);
   std::printf(". Labels are hidden and no answer is marked until you finish.\n");
   if (!exam.instructions.empty()) printWrapped(exam.instructions, 2);
@@ -150,15 +147,9 @@ int runExam(const Argv& argv) {
   }
   std::fflush(stdout);
 
-  ExamRun run{session, *source, nullptr, {}, {}};
-  for (const Structure& s : *structures) {
-    run.nameById[s.id] = s.displayName.empty() ? s.id : s.displayName;
-    std::string id = s.id, name = s.displayName;
-    for (std::string* x : {&id, &name})
-      for (char& c : *x) c = char(std::tolower(static_cast<unsigned char>(c)));
-    run.idByName[id] = run.idByName[name] = s.id;
-  }
-  auto views = openTerminalViews(*database, datasetId, args->value("views"), args->has("no-views"));
+  ExamRun run{session, **source, nullptr, structureIdsByName(*structures), {}};
+  for (const Structure& s : *structures) run.nameById[s.id] = s.displayName.empty() ? s.id : s.displayName;
+  auto views = openTerminalViews(ls.database(), datasetId, args->value("views"), args->has("no-views"));
   run.views = views.get();
 
   // Unanswered items in order, again and again (skipped ones come back) until every item is
@@ -177,7 +168,7 @@ int runExam(const Argv& argv) {
       }
       if (*asked == Asked::Answered) answeredAny = true;
       if (*asked == Asked::Finish) handIn = true;
-      if (*asked == Asked::Quit || (*asked == Asked::InputEnded && source->interactive())) {
+      if (*asked == Asked::Quit || (*asked == Asked::InputEnded && (*source)->interactive())) {
         std::printf("\nleft the exam with %s to go; your answers are saved and the clock runs on — run the same "
                     "command to continue\n", clock(session.secondsLeft()).c_str());
         return 0;
@@ -185,7 +176,7 @@ int runExam(const Argv& argv) {
       if (*asked == Asked::InputEnded) handIn = true;  // the end of an answers file hands in
       if (handIn) break;
     }
-    if (!answeredAny && !handIn && source->interactive()) {
+    if (!answeredAny && !handIn && (*source)->interactive()) {
       std::printf("\nEvery item left is skipped; type 'finish' to hand in.\n");
     }
   }

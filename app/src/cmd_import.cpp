@@ -5,6 +5,7 @@
 #include "cli_args.h"
 #include "commands.h"
 #include "dataset_import.h"
+#include "db/database.h"
 
 namespace at::app {
 
@@ -24,7 +25,7 @@ constexpr const char* kImportHelp =
 }  // namespace
 
 int runImport(const Argv& argv) {
-  auto args = cli::Args::parse(argv, {"volume", "labels", "names", "name", "species", "db"}, {});
+  auto args = cli::Args::parse(argv, {"volume", "labels", "names", "name", "species"}, {});
   if (!args) return reportError("import: " + args.error().message);
   if (args->has("help")) {
     std::printf("%s", kImportHelp);
@@ -42,8 +43,9 @@ int runImport(const Argv& argv) {
   request.namesPath = args->valueOr("names", "");
   request.name = *name;
   request.species = args->valueOr("species", "human");
-  request.dbPath = args->value("db");
-  auto imported = importDataset(request);
+  auto database = db::openDatabase(args->db());
+  if (!database) return reportError("import: " + database.error().message);
+  auto imported = importDataset(*database, request);
   if (!imported) return reportError("import: " + imported.error().message);
 
   const db::DatasetRecord& record = imported->record;

@@ -11,7 +11,8 @@
 
 #include "cli_args.h"
 #include "commands.h"
-#include "learning_support.h"
+#include "core/strings.h"
+#include "learning_session.h"
 #include "lessons/lesson_engine.h"
 #include "terminal_answers.h"
 #include "terminal_views.h"
@@ -75,39 +76,27 @@ lessons::RenderState terminalRender(const lessons::QuestionScene& scene) {
 }
 
 struct PlayContext {
-  db::Database& database;
-  db::SqliteCurriculumRepository& curriculum;
-  db::SqliteProgressRepository& progress;
+  LearningSession& session;
+  lessons::CurriculumRepository& curriculum;
+  lessons::ProgressRepository& progress;
   AnswerSource& source;
   std::int64_t userId = 0;
   std::optional<std::string> viewsDir;
   bool noViews = false;
 };
 
-// Names, ids and display names of a course's structures for the answer readers.
-std::map<std::string, std::string> namesToIds(const std::vector<Structure>& structures) {
-  std::map<std::string, std::string> idByName;
-  for (const Structure& s : structures) {
-    std::string id = s.id, name = s.displayName;
-    for (std::string* x : {&id, &name})
-      for (char& c : *x) c = char(std::tolower(static_cast<unsigned char>(c)));
-    idByName[id] = s.id;
-    idByName[name] = s.id;
-  }
-  return idByName;
-}
-
 // play --review COURSE: review questions until nothing is due or the answers end.
 int runReview(const std::string& courseId, PlayContext& ctx) {
   auto course = ctx.curriculum.course(courseId);
   if (!course) return reportError("play: " + course.error().message + " (see `anatomy-tutor courses`)");
-  auto structures = ctx.curriculum.structures(course->datasetId);
+  auto structures = ctx.session.structures(course->datasetId);
   if (!structures) return reportError("play: " + structures.error().message);
   std::map<std::string, std::string> nameById;
   for (const Structure& s : *structures) nameById[s.id] = s.displayName.empty() ? s.id : s.displayName;
   const std::string datasetId = course->datasetId;
-  db::Database& database = ctx.database;
-  LazyKeyComputer keys(*structures, [&database, datasetId] { return loadCourseDataset(database, datasetId); });
+  auto keysFound = ctx.session.keysFor(datasetId);
+  if (!keysFound) return reportError("play: " + keysFound.error().message);
+  quiz::KeyComputer& keys = **keysFound;
 
   std::printf("Review: %s (%s)\n", course->title.c_str(), courseId.c_str());
   {
@@ -122,7 +111,7 @@ int runReview(const std::string& courseId, PlayContext& ctx) {
     } else if (!due->empty()) {
       std::string list;
       for (const auto& p : *due) list += (list.empty() ? "" : ", ") + nameById[p.structureId];
-      std::printf("Due now: %s (%s)\n", countOf(long(due->size()), "structure").c_str(), list.c_str());
+      std::printf("Due now: %s (%s)\n", str::countOf(long(due->size()), "structure").c_str(), list.c_str());
     }
   }
   std::unique_ptr<TerminalViews> views;
@@ -137,7 +126,7 @@ int runReview(const std::string& courseId, PlayContext& ctx) {
     }
     auto resolved = quiz::resolveQuestion(**question, keys);
     if (!resolved) return reportError("play: " + resolved.error().message);
-    if (!views) views = openTerminalViews(ctx.database, datasetId, ctx.viewsDir, ctx.noViews);
+    if (!views) views = openTerminalViews(ctx.session.database(), datasetId, ctx.viewsDir, ctx.noViews);
     std::vector<std::string> choiceNames;
     for (const std::string& id : resolved->choices) choiceNames.push_back(nameById.count(id) ? nameById[id] : id);
     const quiz::QuestionKind kind = resolved->question.kind;
@@ -147,7 +136,7 @@ int runReview(const std::string& courseId, PlayContext& ctx) {
     showPicture(views.get(), scene, "review-" + std::to_string(asked + 1), kind == quiz::QuestionKind::Locate);
     std::fflush(stdout);
 
-    AskedQuestion q{kind, resolved->question.target, resolved->choices, namesToIds(*structures), views.get()};
+    AskedQuestion q{kind, resolved->question.target, resolved->choices, structureIdsByName(*structures), views.get()};
     bool correct = false;
     auto result = askQuestion(ctx.source, q, [&](const quiz::Answer& answer, std::int64_t latencyMs)
                                                  -> Result<std::optional<quiz::Grade>> {
@@ -180,13 +169,12 @@ int runLesson(const std::string& lessonId, lessons::LessonMode mode, PlayContext
   if (!lesson) return reportError("play: " + lesson.error().message + " (see `anatomy-tutor lessons`)");
   auto course = ctx.curriculum.course(lesson->courseId);
   if (!course) return reportError("play: " + course.error().message);
-  auto structures = ctx.curriculum.structures(course->datasetId);
+  auto structures = ctx.session.structures(course->datasetId);
   if (!structures) return reportError("play: " + structures.error().message);
-  db::Database& database = ctx.database;
   const std::string datasetId = course->datasetId;
-  LazyKeyComputer keys(*structures, [&database, datasetId] { return loadCourseDataset(database, datasetId); });
-
-  lessons::LessonEngine engine(ctx.curriculum, ctx.progress, keys);
+  auto madeEngine = ctx.session.engineFor(lessonId);
+  if (!madeEngine) return reportError("play: " + madeEngine.error().message);
+  lessons::LessonEngine& engine = **madeEngine;
   if (auto started = engine.start(ctx.userId, lessonId, mode); !started)
     return reportError("play: " + started.error().message);
 
@@ -195,7 +183,7 @@ int runLesson(const std::string& lessonId, lessons::LessonMode mode, PlayContext
               engine.attempt().mode == lessons::LessonMode::QuizOnly ? ", quiz only" : "");
   if (!engine.lesson().summary.empty()) printWrapped(engine.lesson().summary, 2);
   std::fflush(stdout);
-  auto views = openTerminalViews(ctx.database, datasetId, ctx.viewsDir, ctx.noViews);
+  auto views = openTerminalViews(ctx.session.database(), datasetId, ctx.viewsDir, ctx.noViews);
 
   const bool waitOnShow = ctx.source.interactive() && isatty(0);
   while (!engine.atEnd()) {
@@ -225,7 +213,7 @@ int runLesson(const std::string& lessonId, lessons::LessonMode mode, PlayContext
                     view->prompt, view->choiceNames);
       showPicture(views.get(), view->scene, stem, view->questionKind == quiz::QuestionKind::Locate);
       std::fflush(stdout);
-      AskedQuestion q{view->questionKind, view->structure, view->choiceIds, namesToIds(*structures), views.get()};
+      AskedQuestion q{view->questionKind, view->structure, view->choiceIds, structureIdsByName(*structures), views.get()};
       auto asked = askQuestion(ctx.source, q, [&](const quiz::Answer& answer, std::int64_t latencyMs)
                                                   -> Result<std::optional<quiz::Grade>> {
         auto grade = engine.answer(answer, terminalRender(view->scene), latencyMs);
@@ -255,15 +243,15 @@ int runLesson(const std::string& lessonId, lessons::LessonMode mode, PlayContext
   auto responses = ctx.progress.responses(engine.attempt().id);
   if (responses)
     for (const auto& r : *responses) right += r.correct ? 1 : 0;
-  std::printf("\nLesson finished: %d of %s right (score %.2f).\n", right, countOf(questions, "question").c_str(), *score);
+  std::printf("\nLesson finished: %d of %s right (score %.2f).\n", right, str::countOf(questions, "question").c_str(),
+              *score);
   return 0;
 }
 
 }  // namespace
 
 int runPlay(const Argv& argv) {
-  auto args = cli::Args::parse(argv, {"user", "answers", "db", "group", "review", "views"},
-                               {"quiz-only", "new-user", "no-views"});
+  auto args = cli::Args::parse(argv, {"answers", "group", "review", "views"}, {"quiz-only", "new-user", "no-views"});
   if (!args) return reportError("play: " + args.error().message);
   if (args->has("help")) {
     std::printf("%s", kPlayHelp);
@@ -277,26 +265,23 @@ int runPlay(const Argv& argv) {
     return reportError("play: give exactly one LESSON (see `anatomy-tutor lessons`)");
   }
   if (args->has("views") && args->has("no-views")) return reportError("play: give --views DIR or --no-views, not both");
-  const auto userName = args->value("user");
-  if (!userName || userName->empty()) return reportError("play: --user NAME is required");
+  const auto userName = args->user();
+  if (!userName) return reportError("play: --user NAME is required");
 
-  std::unique_ptr<AnswerSource> source;
-  if (auto path = args->value("answers")) {
-    auto file = std::make_unique<FileAnswers>(*path);
-    if (!file->ok()) return reportError("play: --answers " + *path + ": cannot open");
-    source = std::move(file);
-  } else {
-    source = std::make_unique<TerminalAnswers>();
-  }
+  auto source = answerSource(args->value("answers"));
+  if (!source) return reportError("play: " + source.error().message);
 
-  auto database = openLearningDatabase(args->value("db"));
-  if (!database) return reportError("play: " + database.error().message);
-  db::SqliteCurriculumRepository curriculum(*database, builtinStructures());
-  db::SqliteProgressRepository progress(*database);
-  auto user = findOrCreateUser(*database, *userName, args->has("new-user"), args->valueOr("group", ""));
+  auto session = LearningSession::open(args->db());
+  if (!session) return reportError("play: " + session.error().message);
+  bool created = false;
+  auto user = (*session)->user(*userName,
+                               args->has("new-user") ? LearningSession::NewUser::Create : LearningSession::NewUser::Refuse,
+                               args->valueOr("group", ""), &created);
   if (!user) return reportError("play: " + user.error().message);
+  if (created) std::printf("created user '%s'\n", user->name.c_str());
 
-  PlayContext ctx{*database, curriculum, progress, *source, user->id, args->value("views"), args->has("no-views")};
+  PlayContext ctx{**session, (*session)->curriculum(), (*session)->progress(), **source, user->id, args->value("views"),
+                  args->has("no-views")};
   if (reviewCourse) return runReview(*reviewCourse, ctx);
   const auto mode = args->has("quiz-only") ? lessons::LessonMode::QuizOnly : lessons::LessonMode::Guided;
   return runLesson(args->positional()[0], mode, ctx);

@@ -11,6 +11,7 @@
 #include "render/gl/volume_renderer.h"
 #include "render/preset.h"
 #include "render/scene.h"
+#include "volume/mask.h"
 #include "volume/dataset_source.h"
 #include "volume/png_image.h"
 #include "wdt/wdt.h"
@@ -36,15 +37,6 @@ const char* kUsage =
     "  --context   view radius as a multiple of the structure's radius (default 2.5)\n"
     "  --presets   presets folder (default: data/presets of the source tree or next to the binary)\n";
 
-
-Result<std::pair<int, int>> parseSize(const std::string& text) {
-  int w = 0, h = 0;
-  char x = 0, extra = 0;
-  if (std::sscanf(text.c_str(), "%d%c%d%c", &w, &x, &h, &extra) != 3 || (x != 'x' && x != 'X') || w < 1 ||
-      h < 1 || w > 8192 || h > 8192)
-    return fail("option --size: '" + text + "' is not WxH with 1..8192 pixels per side");
-  return std::make_pair(w, h);
-}
 
 Result<std::array<float, 4>> parseClip(const std::string& text) {
   std::array<float, 4> c{};
@@ -102,11 +94,9 @@ int runRender(const Argv& argv) {
   preset->t = float(*t);
 
   render::ViewRequest request;
-  if (auto size = args->value("size")) {
-    auto wh = parseSize(*size);
-    if (!wh) return reportError("render: " + wh.error().message, 2);
-    request.width = wh->first;
-    request.height = wh->second;
+  if (auto size = args->size()) {
+    request.width = size->width;
+    request.height = size->height;
   }
   if (auto v = args->value("view")) request.view = *v;
   if (auto c = args->value("clip")) {
@@ -134,7 +124,7 @@ int runRender(const Argv& argv) {
     auto backend = parseBackend(args->valueOr("backend", "auto"));
     if (!backend) return reportError("render: --backend: " + backend.error().message, 2);
     params->backend = *backend;
-    auto wdt = computeWdt(dataset->volume, render::structureMask(dataset->labels, structure->label), *params);
+    auto wdt = computeWdt(dataset->volume, structureMask(dataset->labels, structure->label), *params);
     if (!wdt) return reportError("render: " + wdt.error().message);
     if (!wdt->stats.warning.empty()) std::fprintf(stderr, "anatomy-tutor: render: %s\n", wdt->stats.warning.c_str());
     wdtMs = wdt->stats.msTotal;

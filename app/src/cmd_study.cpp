@@ -49,7 +49,7 @@ const char* kStudyHelp =
     "   \"toggles\": 3, \"comment\": \"…\", \"response_ms\": 1200}   (ratings as shown: 1 = prefer A … 5 = prefer B)\n"
     "Without --answers the study runs interactively on the terminal.\n";
 
-Result<db::Database> openDb(const cli::Args& args) { return db::openDatabase(args.value("db")); }
+Result<db::Database> openDb(const cli::Args& args) { return db::openDatabase(args.db()); }
 
 int runRegister(const cli::Args& args) {
   if (args.positional().size() != 1) return reportError("study register: expected one study JSON file");
@@ -306,7 +306,7 @@ int runStudy(const Argv& argv) {
     return argv.empty() ? 2 : 0;
   }
   const std::string verb = argv[0];
-  auto args = cli::Args::parse(Argv(argv.begin() + 1, argv.end()), {"db", "participant", "group", "answers", "out"}, {});
+  auto args = cli::Args::parse(Argv(argv.begin() + 1, argv.end()), {"participant", "group", "answers", "out"}, {});
   if (!args) return reportError("study " + verb + ": " + args.error().message);
   if (args->has("help")) {
     std::printf("%s", kStudyHelp);

@@ -176,7 +176,7 @@ const char* kSliceHelp =
 }  // namespace
 
 int runDatasets(const Argv& argv) {
-  auto args = cli::Args::parse(argv, {"db"}, {"json"});
+  auto args = cli::Args::parse(argv, {}, {"json"});
   if (!args) return usageError("datasets", args.error().message);
   if (args->has("help")) {
     std::printf("%s", kDatasetsHelp);
@@ -185,7 +185,9 @@ int runDatasets(const Argv& argv) {
   if (!args->positional().empty()) return usageError("datasets", "unexpected argument '" + args->positional()[0] + "'");
   std::vector<DatasetListing> rows = builtinDatasets();
   std::vector<bool> builtin(rows.size(), true);
-  auto imported = db::listImportedDatasets(args->value("db"));
+  auto database = db::openExistingDatabase(args->db());
+  if (!database) return reportError("datasets: " + database.error().message);
+  auto imported = *database ? db::listDatasets(**database) : Result<std::vector<db::DatasetRecord>>(std::vector<db::DatasetRecord>{});
   if (!imported) return reportError("datasets: " + imported.error().message);
   for (const db::DatasetRecord& r : *imported) {
     rows.push_back({r.name, r.species + " dataset from " + r.volumePath,

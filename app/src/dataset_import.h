@@ -12,7 +12,7 @@
 #include <vector>
 
 #include "db/dataset_store.h"
-#include "volume/error.h"
+#include "core/error.h"
 #include "volume/structure.h"
 
 namespace at::app {
@@ -23,7 +23,6 @@ struct ImportRequest {
   std::string namesPath;              // optional JSON {"1": "spleen", …}
   std::string name;                   // what commands will take as DATASET
   std::string species = "human";      // lower-case letters, '-' and '_'
-  std::optional<std::string> dbPath;  // nullopt: the default database
 };
 
 // The stages in the order they run.
@@ -33,7 +32,7 @@ const char* toString(ImportStage stage);  // "loading volume", …
 // Optional progress and cancellation. `progress` is called on the importing thread as each stage
 // starts (done = total = 0) and, while the volume or labels load, with the loaders' units (DICOM
 // slices, NRRD data files, NIfTI bytes). Setting *cancel from any thread stops the import at its
-// next check: it then fails with kImportCancelled and has stored nothing. The last check is just
+// next check: it then fails with an ErrorKind::Cancelled error (message kImportCancelled) and has stored nothing. The last check is just
 // before storing; once storing begins the import completes.
 struct ImportControl {
   std::function<void(ImportStage, std::size_t done, std::size_t total)> progress;
@@ -48,8 +47,11 @@ struct ImportedDataset {
 };
 
 // Validates the request (name not built in and not taken, species, files exist), loads, checks
-// alignment, checksums the files and registers the dataset in one transaction. Errors are one
-// line naming the file or field and the problem; nothing is stored then.
-Result<ImportedDataset> importDataset(const ImportRequest& request, const ImportControl& control = {});
+// alignment, checksums the files and registers the dataset in `database` in one transaction.
+// Errors are one line naming the file or field and the problem (a taken name is a Conflict, a
+// cancelled import Cancelled); nothing is stored then. May run on another thread than the
+// connection's other users (db/database.h).
+Result<ImportedDataset> importDataset(db::Database& database, const ImportRequest& request,
+                                      const ImportControl& control = {});
 
 }  // namespace at::app

@@ -2,6 +2,7 @@
 
 #include <filesystem>
 
+#include "core/strings.h"
 #include "db/dataset_store.h"
 #include "volume/dataset_source.h"
 
@@ -10,7 +11,7 @@ namespace at::app {
 namespace fs = std::filesystem;
 
 std::set<std::string> withDatasetOptions(std::set<std::string> commandOptions) {
-  commandOptions.insert({"labels", "names", "series", "db"});
+  commandOptions.insert({"labels", "names", "series"});
   return commandOptions;
 }
 
@@ -20,7 +21,7 @@ DatasetRequest datasetRequestFrom(const cli::Args& args, const std::string& name
   request.labelsPath = args.valueOr("labels", "");
   request.namesPath = args.valueOr("names", "");
   request.seriesUid = args.valueOr("series", "");
-  request.dbPath = args.value("db");
+  request.dbPath = args.db();
   return request;
 }
 
@@ -41,17 +42,35 @@ Result<Dataset> openNamedDataset(const DatasetRequest& request) {
     files.id = fs::path(request.name).filename().string();
     return openDatasetFiles(files);
   }
-  auto imported = db::findImportedDataset(request.dbPath, request.name);
-  if (!imported) return tl::unexpected(imported.error());
-  if (*imported) {
-    if (fileOptions) return fail("--labels, --names and --series apply to datasets from files, not to imported '" + request.name + "'");
-    return openDatasetFiles(**imported);
+  std::optional<db::Database> opened;
+  db::Database* database = request.database;
+  if (!database) {
+    auto existing = db::openExistingDatabase(request.dbPath);
+    if (!existing) return tl::unexpected(existing.error());
+    if (*existing) database = &opened.emplace(std::move(**existing));
   }
-  std::string known;
-  if (auto all = db::listImportedDatasets(request.dbPath))
-    for (const auto& record : *all) known += (known.empty() ? "" : ", ") + record.name;
-  return fail("unknown dataset '" + request.name + "': not built in (phantom, phantom:N), not imported" +
-              (known.empty() ? std::string() : " (imported: " + known + ")") + ", and no such file or folder");
+  std::vector<std::string> known;
+  if (database) {
+    auto record = db::findDataset(*database, request.name);
+    if (!record) return tl::unexpected(record.error());
+    if (*record) {
+      if (fileOptions)
+        return fail("--labels, --names and --series apply to datasets from files, not to imported '" + request.name + "'");
+      auto dataset = openDatasetFiles(db::datasetFiles(**record));
+      if (!dataset) return tl::unexpected(dataset.error());
+      // Imported structures keep the names and descriptions stored at import time.
+      auto stored = db::datasetStructures(*database, (*record)->id);
+      if (!stored) return tl::unexpected(stored.error());
+      dataset->structures = std::move(*stored);
+      dataset->species = (*record)->species;
+      return dataset;
+    }
+    if (auto all = db::listDatasets(*database))
+      for (const auto& r : *all) known.push_back(r.name);
+  }
+  return fail(ErrorKind::NotFound, "unknown dataset '" + request.name + "': not built in (phantom, phantom:N), not imported" +
+                                       (known.empty() ? std::string() : " (imported: " + str::join(known, ", ") + ")") +
+                                       ", and no such file or folder");
 }
 
 std::string unknownStructureMessage(const Dataset& dataset, const std::string& name) {

@@ -66,8 +66,8 @@ struct ImportPanel::Job {
   std::optional<Result<ImportedDataset>> result;
 };
 
-ImportPanel::ImportPanel(std::optional<std::string> dbPath, EventSink events, MessageSink messages)
-    : dbPath_(std::move(dbPath)), events_(std::move(events)), messages_(std::move(messages)) {}
+ImportPanel::ImportPanel(db::Database& database, EventSink events, MessageSink messages)
+    : database_(database), events_(std::move(events)), messages_(std::move(messages)) {}
 
 ImportPanel::~ImportPanel() {
   if (job_) job_->cancel = true;
@@ -87,7 +87,6 @@ Status ImportPanel::launch(const ImportRequest& request, std::optional<ImportSta
   if (thread_.joinable()) thread_.join();
   auto job = std::make_shared<Job>();
   job->request = request;
-  job->request.dbPath = dbPath_;
   job->cancelAt = cancelAt;
   job_ = job;
   reported_ = false;
@@ -97,7 +96,8 @@ Status ImportPanel::launch(const ImportRequest& request, std::optional<ImportSta
   imported_.reset();
   openRequested_ = false;
   events_({{"event", "import_started"}, {"name", request.name}, {"volume", request.volumePath}});
-  thread_ = std::jthread([job] {
+  db::Database* database = &database_;
+  thread_ = std::jthread([job, database] {
     ImportControl control;
     control.cancel = &job->cancel;
     control.progress = [&job](ImportStage stage, std::size_t done, std::size_t total) {
@@ -112,7 +112,7 @@ Status ImportPanel::launch(const ImportRequest& request, std::optional<ImportSta
       job->done = done;
       job->total = total;
     };
-    auto result = importDataset(job->request, control);
+    auto result = importDataset(*database, job->request, control);
     std::lock_guard lock(job->mutex);
     job->result = std::move(result);
   });
@@ -163,7 +163,7 @@ void ImportPanel::poll() {
     events_({{"event", "import_done"}, {"name", name}, {"structures", result->dataset.structures.size()},
              {"dims", {g.dims.x, g.dims.y, g.dims.z}}, {"empty_structures", result->emptyStructures}});
     imported_ = std::move(result->dataset);
-  } else if (result.error().message == kImportCancelled) {
+  } else if (result.error().kind == ErrorKind::Cancelled) {
     status_ = "Import of '" + name + "' cancelled; nothing was stored.";
     events_({{"event", "import_cancelled"}, {"name", name}});
   } else {

@@ -76,6 +76,13 @@ std::optional<std::string> TerminalAnswers::nextLine() {
   return line;
 }
 
+Result<std::unique_ptr<AnswerSource>> answerSource(const std::optional<std::string>& answersFile) {
+  if (!answersFile) return std::unique_ptr<AnswerSource>(std::make_unique<TerminalAnswers>());
+  auto file = std::make_unique<FileAnswers>(*answersFile);
+  if (!file->ok()) return fail(ErrorKind::Io, "--answers " + *answersFile + ": cannot open");
+  return std::unique_ptr<AnswerSource>(std::move(file));
+}
+
 std::string answerHint(const AskedQuestion& q) {
   switch (q.kind) {
     case quiz::QuestionKind::Identify:

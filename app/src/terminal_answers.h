@@ -12,6 +12,7 @@
 #include <fstream>
 #include <functional>
 #include <map>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -56,6 +57,9 @@ class TerminalAnswers final : public AnswerSource {
   std::string where() const override { return "stdin"; }
   bool interactive() const override { return true; }
 };
+
+// The answers of --answers FILE when given, else the terminal. Error: the file cannot be opened.
+Result<std::unique_ptr<AnswerSource>> answerSource(const std::optional<std::string>& answersFile);
 
 // The question being answered, as the answer readers need it.
 struct AskedQuestion {

@@ -4,13 +4,14 @@
 #include <sstream>
 
 #include "commands.h"
-#include "learning_support.h"
+#include "dataset_resolver.h"
 #include "render/gl/egl_context.h"
 #include "render/gl/volume_renderer.h"
 #include "render/image.h"
 #include "render/scene.h"
 #include "render/structure_pick.h"
 #include "volume/dataset_source.h"
+#include "volume/mask.h"
 #include "volume/png_image.h"
 
 namespace at::app {
@@ -56,7 +57,10 @@ Result<std::unique_ptr<TerminalViews>> TerminalViews::create(db::Database& db, c
                                                              fs::path dir, bool pictures) {
   std::unique_ptr<TerminalViews> v(new TerminalViews());
   const std::string name = datasetId == "phantom" ? "phantom:128" : datasetId;
-  auto dataset = loadCourseDataset(db, name);
+  DatasetRequest request;
+  request.name = name;
+  request.database = &db;
+  auto dataset = openNamedDataset(request);
   if (!dataset) return tl::unexpected(dataset.error());
   v->dataset_ = std::move(*dataset);
   v->presets_ = std::make_unique<render::PresetLibrary>(defaultPresetsDir());
@@ -79,7 +83,7 @@ Result<const FloatVolume*> TerminalViews::fieldOf(const Structure& structure, co
   if (auto it = fields_.find(structure.id); it != fields_.end()) return &it->second;
   auto params = render::wdtParamsFor(preset);
   if (!params) return tl::unexpected(params.error());
-  auto wdt = computeWdt(dataset_.volume, render::structureMask(dataset_.labels, structure.label), *params);
+  auto wdt = computeWdt(dataset_.volume, structureMask(dataset_.labels, structure.label), *params);
   if (!wdt) return tl::unexpected(withContext(structure.id, wdt.error()));
   FloatVolume field = wdt->field.downsample == 1 ? std::move(wdt->field.distances)
                                                  : upsampleField(wdt->field, dataset_.labels.geometry);

@@ -1,5 +1,6 @@
 #include "db/analytics_store.h"
 
+#include <algorithm>
 #include <set>
 
 #include "db/exam_store.h"
@@ -8,10 +9,9 @@ namespace at::db {
 
 using namespace at::lessons;
 
-Result<AnalyticsInput> loadAnalyticsInput(Database& db, const BuiltinStructures& builtin, const std::string& courseId,
+Result<AnalyticsInput> loadAnalyticsInput(Database& db, CurriculumRepository& curriculum, const std::string& courseId,
                                           const std::optional<std::string>& group) {
   AnalyticsInput in;
-  SqliteCurriculumRepository curriculum(db, builtin);
   auto course = curriculum.course(courseId);
   if (!course) return tl::unexpected(course.error());
   in.course = std::move(*course);
@@ -38,7 +38,8 @@ Result<AnalyticsInput> loadAnalyticsInput(Database& db, const BuiltinStructures&
   SqliteProgressRepository progress(db);
   SqliteExamRepository exams(db);
   auto log = db.prepare(
-      "SELECT id, user_id, question_id, structure, source, score, correct, reviewed_at FROM review_log"
+      "SELECT id, user_id, question_id, structure, source, score, correct, reviewed_at, rating, latency_ms, phase_before"
+      " FROM review_log"
       " WHERE user_id = ?1 ORDER BY reviewed_at, id");
   if (!log) return tl::unexpected(log.error());
   for (const User& u : in.students) {
@@ -60,6 +61,11 @@ Result<AnalyticsInput> loadAnalyticsInput(Database& db, const BuiltinStructures&
       a.score = log->real(5);
       a.correct = log->integer(6) != 0;
       a.answeredAt = log->int64(7);
+      a.rating = Rating(std::clamp(log->integer(8), 1, 4));
+      a.latencyMs = log->int64(9);
+      auto phase = parseMemoryPhase(log->text(10));
+      if (!phase) return fail("review log entry " + std::to_string(a.order) + ": " + phase.error().message);
+      a.phaseBefore = *phase;
       in.answers.push_back(std::move(a));
     }
     auto attempts = progress.attempts(u.id);

@@ -55,7 +55,7 @@ Result<std::int64_t> registerDataset(Database& db, const DatasetRecord& record,
     exists->bind(1, record.name);
     auto row = exists->step();
     if (!row) return tl::unexpected(row.error());
-    if (*row) return fail("a dataset named '" + record.name + "' is already imported; choose another --name");
+    if (*row) return fail(ErrorKind::Conflict, "a dataset named '" + record.name + "' is already imported; choose another --name");
 
     auto insert = d.prepare(
         "INSERT INTO datasets (name, species, volume_path, volume_checksum, labels_path, labels_checksum,"
@@ -104,7 +104,7 @@ Result<std::int64_t> registerDataset(Database& db, const DatasetRecord& record,
           .bind(8, st.system)
           .bind(9, st.description);
       if (auto s = add->run(); !s)
-        return fail("structure " + std::to_string(st.label) + " '" + st.id + "': " + s.error().message);
+        return tl::unexpected(withContext("structure " + std::to_string(st.label) + " '" + st.id + "'", s.error()));
     }
     return {};
   });
@@ -171,10 +171,7 @@ DatasetFiles datasetFiles(const DatasetRecord& record) {
   return files;
 }
 
-namespace {
-
-// Opens an existing database only: listing must not create one as a side effect.
-Result<std::optional<Database>> openExisting(const std::optional<std::string>& dbPath) {
+Result<std::optional<Database>> openExistingDatabase(const std::optional<std::string>& dbPath) {
   std::string path;
   if (dbPath) {
     path = *dbPath;
@@ -190,26 +187,6 @@ Result<std::optional<Database>> openExisting(const std::optional<std::string>& d
   auto db = Database::open(path, options);
   if (!db) return tl::unexpected(db.error());
   return std::optional<Database>(std::move(*db));
-}
-
-}  // namespace
-
-Result<std::vector<DatasetRecord>> listImportedDatasets(const std::optional<std::string>& dbPath) {
-  auto db = openExisting(dbPath);
-  if (!db) return tl::unexpected(db.error());
-  if (!*db) return std::vector<DatasetRecord>{};
-  return listDatasets(**db);
-}
-
-Result<std::optional<DatasetFiles>> findImportedDataset(const std::optional<std::string>& dbPath,
-                                                        const std::string& name) {
-  auto db = openExisting(dbPath);
-  if (!db) return tl::unexpected(db.error());
-  if (!*db) return std::optional<DatasetFiles>{};
-  auto record = findDataset(**db, name);
-  if (!record) return tl::unexpected(record.error());
-  if (!*record) return std::optional<DatasetFiles>{};
-  return std::optional<DatasetFiles>(datasetFiles(**record));
 }
 
 }  // namespace at::db

@@ -50,7 +50,7 @@ Status readGradedAnswer(const Statement& r, int first, const std::string& row, G
   g.questionId = r.text(first);
   g.structureId = r.text(first + 1);
   auto answer = quiz::answerFromJson(r.text(first + 2));
-  if (!answer) return fail(row + ": " + answer.error().message);
+  if (!answer) return tl::unexpected(withContext(row, answer.error()));
   g.answer = std::move(*answer);
   g.correct = r.integer(first + 3) != 0;
   g.score = r.real(first + 4);
@@ -93,7 +93,7 @@ Result<Course> SqliteCurriculumRepository::course(const std::string& courseId) {
   s->bind(1, courseId);
   auto row = s->step();
   if (!row) return tl::unexpected(row.error());
-  if (!*row) return fail("unknown course '" + courseId + "'");
+  if (!*row) return fail(ErrorKind::NotFound, "unknown course '" + courseId + "'");
   Course c;
   c.id = s->text(0);
   c.title = s->text(1);
@@ -135,7 +135,7 @@ Result<Lesson> SqliteCurriculumRepository::lesson(const std::string& lessonId) {
   s->bind(1, lessonId);
   auto row = s->step();
   if (!row) return tl::unexpected(row.error());
-  if (!*row) return fail("unknown lesson '" + lessonId + "'");
+  if (!*row) return fail(ErrorKind::NotFound, "unknown lesson '" + lessonId + "'");
   Lesson l;
   l.id = s->text(0);
   l.courseId = s->text(1);
@@ -164,7 +164,7 @@ Result<Lesson> SqliteCurriculumRepository::lesson(const std::string& lessonId) {
         step.show.structure = r.text(1);
         step.show.presetId = r.text(2);
         auto view = parseCameraView(r.text(3));
-        if (!view) return fail(where + ": " + view.error().message);
+        if (!view) return tl::unexpected(withContext(where, view.error()));
         step.show.view = *view;
         step.show.title = r.text(4);
         step.show.text = r.text(5);
@@ -203,7 +203,7 @@ Result<quiz::Question> SqliteCurriculumRepository::question(const std::string& q
   s->bind(1, questionId);
   auto row = s->step();
   if (!row) return tl::unexpected(row.error());
-  if (!*row) return fail("unknown question '" + questionId + "'");
+  if (!*row) return fail(ErrorKind::NotFound, "unknown question '" + questionId + "'");
   return parseQuestionJson(s->text(0), "question '" + questionId + "'");
 }
 
@@ -213,7 +213,7 @@ Result<std::vector<Structure>> SqliteCurriculumRepository::structures(const std:
   }
   auto record = findDataset(db_, datasetId);
   if (!record) return tl::unexpected(record.error());
-  if (!*record) return fail("unknown dataset '" + datasetId + "' (import it with `anatomy-tutor import`)");
+  if (!*record) return fail(ErrorKind::NotFound, "unknown dataset '" + datasetId + "' (import it with `anatomy-tutor import`)");
   return datasetStructures(db_, (*record)->id);
 }
 
@@ -255,7 +255,7 @@ Result<User> SqliteUserRepository::user(std::int64_t userId) {
   s->bind(1, userId);
   auto row = s->step();
   if (!row) return tl::unexpected(row.error());
-  if (!*row) return fail("unknown user id " + std::to_string(userId));
+  if (!*row) return fail(ErrorKind::NotFound, "unknown user id " + std::to_string(userId));
   return readUser(*s);
 }
 
@@ -268,7 +268,7 @@ Result<User> SqliteUserRepository::createUser(const std::string& name, Role role
     taken->bind(1, name);
     auto row = taken->step();
     if (!row) return tl::unexpected(row.error());
-    if (*row) return fail("the user name '" + name + "' is already taken");
+    if (*row) return fail(ErrorKind::Conflict, "the user name '" + name + "' is already taken");
     auto insert = d.prepare("INSERT INTO users (name, role, group_name) VALUES (?1, ?2, ?3)");
     if (!insert) return tl::unexpected(insert.error());
     insert->bind(1, name).bind(2, toString(role)).bind(3, group);
@@ -368,7 +368,7 @@ Result<Attempt> SqliteProgressRepository::startAttempt(std::int64_t userId, cons
     a.id = d.lastInsertId();
     return {};
   });
-  if (!status) return fail("starting lesson '" + lessonId + "': " + status.error().message);
+  if (!status) return tl::unexpected(withContext("starting lesson '" + lessonId + "'", status.error()));
   return a;
 }
 
@@ -378,7 +378,7 @@ Status SqliteProgressRepository::finishAttempt(std::int64_t attemptId, UnixSecon
     if (!update) return tl::unexpected(update.error());
     update->bind(1, attemptId).bind(2, finishedAt).bind(3, score);
     if (auto s = update->run(); !s) return s;
-    if (d.changes() != 1) return fail("unknown attempt " + std::to_string(attemptId));
+    if (d.changes() != 1) return fail(ErrorKind::NotFound, "unknown attempt " + std::to_string(attemptId));
     return {};
   });
 }
@@ -429,17 +429,17 @@ Result<std::int64_t> SqliteProgressRepository::recordAnswer(const AnswerRecord& 
     insert->bind(1, r.attemptId).bind(2, r.stepIndex);
     bindGradedAnswer(*insert, 3, r);
     if (auto s = insert->run(); !s) {
-      if (s.error().message.find("UNIQUE") != std::string::npos)
-        return fail("step " + std::to_string(r.stepIndex) + " of attempt " + std::to_string(r.attemptId) +
+      if (s.error().kind == ErrorKind::Conflict)
+        return fail(ErrorKind::Conflict, "step " + std::to_string(r.stepIndex) + " of attempt " + std::to_string(r.attemptId) +
                     " is already answered");
-      if (s.error().message.find("FOREIGN KEY") != std::string::npos)
-        return fail("unknown attempt " + std::to_string(r.attemptId));
+      if (s.error().kind == ErrorKind::NotFound)
+        return fail(ErrorKind::NotFound, "unknown attempt " + std::to_string(r.attemptId));
       return s;
     }
     id = d.lastInsertId();
     return writeLearnerModel(d, record.update, r, AnswerSource::Lesson, id);
   });
-  if (!status) return fail("recording the answer: " + status.error().message);
+  if (!status) return tl::unexpected(withContext("recording the answer", status.error()));
   return id;
 }
 
@@ -456,14 +456,14 @@ Result<std::int64_t> SqliteProgressRepository::recordReviewAnswer(const ReviewRe
     insert->bind(1, r.userId);
     bindGradedAnswer(*insert, 2, r);
     if (auto s = insert->run(); !s) {
-      if (s.error().message.find("FOREIGN KEY") != std::string::npos)
-        return fail("unknown user id " + std::to_string(r.userId));
+      if (s.error().kind == ErrorKind::NotFound)
+        return fail(ErrorKind::NotFound, "unknown user id " + std::to_string(r.userId));
       return s;
     }
     id = d.lastInsertId();
     return writeLearnerModel(d, record.update, r, AnswerSource::Review, id);
   });
-  if (!status) return fail("recording the review answer: " + status.error().message);
+  if (!status) return tl::unexpected(withContext("recording the review answer", status.error()));
   return id;
 }
 

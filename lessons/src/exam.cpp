@@ -114,17 +114,10 @@ Status ExamSession::start(std::int64_t userId, const std::string& examId) {
   if (!found) return tl::unexpected(found.error());
   auto& [course, exam] = *found;
 
-  std::string missing;
-  for (const std::string& pre : exam.prerequisites) {
-    auto done = progress_.hasFinished(userId, pre);
-    if (!done) return tl::unexpected(done.error());
-    if (*done) continue;
-    auto lesson = curriculum_.lesson(pre);
-    missing += (missing.empty() ? "" : ", ") + std::string("'") + pre + "'" +
-               (lesson ? " (" + lesson->title + ")" : std::string());
-  }
-  if (!missing.empty())
-    return fail("exam '" + examId + "' (" + exam.title + ") needs " + missing + " finished first");
+  auto missing = unfinishedLessons(curriculum_, progress_, userId, exam.prerequisites);
+  if (!missing) return tl::unexpected(missing.error());
+  if (!missing->empty())
+    return fail("exam '" + examId + "' (" + exam.title + ") needs " + *missing + " finished first");
 
   auto structures = curriculum_.structures(course.datasetId);
   if (!structures) return tl::unexpected(structures.error());

@@ -59,6 +59,20 @@ Result<LearnerUpdate> learnerUpdate(ProgressRepository& progress, std::int64_t u
   return update;
 }
 
+Result<std::string> unfinishedLessons(CurriculumRepository& curriculum, ProgressRepository& progress,
+                                      std::int64_t userId, const std::vector<std::string>& lessonIds) {
+  std::string missing;
+  for (const std::string& id : lessonIds) {
+    auto done = progress.hasFinished(userId, id);
+    if (!done) return tl::unexpected(done.error());
+    if (*done) continue;
+    auto lesson = curriculum.lesson(id);
+    missing += (missing.empty() ? "" : ", ") + std::string("'") + id + "'" +
+               (lesson ? " (" + lesson->title + ")" : std::string());
+  }
+  return missing;
+}
+
 std::optional<QuestionScene> questionScene(const Course& course, const std::string& questionId) {
   for (const Lesson& lesson : course.lessons)
     for (const Step& step : lesson.steps)
@@ -99,17 +113,10 @@ Status LessonEngine::start(std::int64_t userId, const std::string& lessonId, Les
   auto lesson = curriculum_.lesson(lessonId);
   if (!lesson) return tl::unexpected(lesson.error());
 
-  std::string missing;
-  for (const std::string& pre : lesson->prerequisites) {
-    auto done = progress_.hasFinished(userId, pre);
-    if (!done) return tl::unexpected(done.error());
-    if (*done) continue;
-    auto preLesson = curriculum_.lesson(pre);
-    missing += (missing.empty() ? "" : ", ") + std::string("'") + pre + "'" +
-               (preLesson ? " (" + preLesson->title + ")" : std::string());
-  }
-  if (!missing.empty()) {
-    return fail("lesson '" + lessonId + "' (" + lesson->title + ") needs " + missing + " finished first");
+  auto missing = unfinishedLessons(curriculum_, progress_, userId, lesson->prerequisites);
+  if (!missing) return tl::unexpected(missing.error());
+  if (!missing->empty()) {
+    return fail("lesson '" + lessonId + "' (" + lesson->title + ") needs " + *missing + " finished first");
   }
   for (std::size_t i = 0; i < lesson->steps.size(); ++i) {
     if (lesson->steps[i].kind == StepKind::Study) {

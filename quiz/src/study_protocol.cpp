@@ -199,7 +199,7 @@ Result<StudyProtocol> parseStudyProtocol(const std::string& jsonText, const std:
 
 Result<StudyProtocol> loadStudyProtocol(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
-  if (!in) return fail(path + ": cannot open the study definition");
+  if (!in) return fail(ErrorKind::Io, path + ": cannot open the study definition");
   std::stringstream ss;
   ss << in.rdbuf();
   return parseStudyProtocol(ss.str(), path);

@@ -215,7 +215,7 @@ Result<Preset> parsePreset(const std::string& jsonText, const std::string& sourc
 
 Result<Preset> loadPreset(const std::filesystem::path& path) {
   std::ifstream in(path, std::ios::binary);
-  if (!in) return fail(path.string() + ": cannot open the preset file");
+  if (!in) return fail(ErrorKind::Io, path.string() + ": cannot open the preset file");
   std::stringstream ss;
   ss << in.rdbuf();
   auto p = parsePreset(ss.str(), path.filename().string());

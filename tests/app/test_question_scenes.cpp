@@ -14,6 +14,7 @@
 #include "render/structure_pick.h"
 #include "test_support.h"
 #include "volume/dataset_source.h"
+#include "volume/mask.h"
 #include "volume/png_image.h"
 
 using namespace at;
@@ -96,7 +97,7 @@ TEST_CASE("Every shipped question's view shows its target; locate questions pick
         if (!fields.count(selected->id)) {
           auto params = render::wdtParamsFor(*preset);
           REQUIRE(params);
-          auto wdt = computeWdt(dataset->volume, render::structureMask(dataset->labels, selected->label), *params);
+          auto wdt = computeWdt(dataset->volume, structureMask(dataset->labels, selected->label), *params);
           REQUIRE(wdt);
           fields[selected->id] = std::move(wdt->field.distances);
         }

@@ -217,7 +217,8 @@ TEST_CASE("Analytics of a synthetic class of 50 students match the figures recom
   buildClass(f, test::freshSeed("Analytics_SyntheticClass"));
   auto database = db::Database::open(f.path);
   REQUIRE(database);
-  auto input = db::loadAnalyticsInput(*database, test::toyBuiltin(), "toy", std::nullopt);
+  db::SqliteCurriculumRepository curriculum(*database, test::toyBuiltin());
+  auto input = db::loadAnalyticsInput(*database, curriculum, "toy", std::nullopt);
   REQUIRE_MESSAGE(input, (input ? "" : input.error().message));
   CHECK(input->students.size() == 50);
   CHECK(input->answers.size() == f.events.size());
@@ -326,10 +327,10 @@ TEST_CASE("Analytics of a synthetic class of 50 students match the figures recom
   }
 
   // A group is a smaller class.
-  auto groupA = db::loadAnalyticsInput(*database, test::toyBuiltin(), "toy", std::string("A"));
+  auto groupA = db::loadAnalyticsInput(*database, curriculum, "toy", std::string("A"));
   REQUIRE(groupA);
   CHECK(computeAnalytics(*groupA, f.now).classSize == 25);
-  CHECK_FALSE(db::loadAnalyticsInput(*database, test::toyBuiltin(), "nope", std::nullopt));
+  CHECK_FALSE(db::loadAnalyticsInput(*database, curriculum, "nope", std::nullopt));
 
   // The command prints the same figures as CSV (long form on stdout).
   if (!test::requireAppBinary("analytics --csv")) return;
@@ -349,6 +350,10 @@ TEST_CASE("Analytics of a synthetic class of 50 students match the figures recom
   const std::string students = test::readFile(f.dir / "csv" / "students.csv");
   CHECK(std::count(students.begin(), students.end(), '\n') == 51);
   CHECK(students.rfind("student,group,taught,due,mean_recall,", 0) == 0);
+  // The review log for an FSRS optimiser: one row per answer, ratings 1..4, times in ms.
+  const std::string revlog = test::readFile(f.dir / "csv" / "revlog.csv");
+  CHECK(std::count(revlog.begin(), revlog.end(), '\n') == long(f.events.size()) + 1);
+  CHECK(revlog.rfind("card_id,student,structure,review_time,review_rating,review_state,review_duration\n", 0) == 0);
   const auto text = test::runApp("analytics toy --db '" + f.path + "'");
   REQUIRE(text.exitCode == 0);
   CHECK(text.out.find("class of 50 students") != std::string::npos);

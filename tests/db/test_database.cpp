@@ -416,6 +416,7 @@ TEST_CASE("Registering a dataset under a name already used fails and writes noth
   auto again = registerDataset(*db, sampleRecord("abdomen"), {st});
   REQUIRE(!again);
   CHECK(again.error().message.find("'abdomen' is already imported") != std::string::npos);
+  CHECK((again.error().kind == ErrorKind::Conflict));
   CHECK(countRows(*db, "datasets") == 1);
   CHECK(countRows(*db, "structures") == 1);
   auto listed = listDatasets(*db);
@@ -426,16 +427,63 @@ TEST_CASE("Registering a dataset under a name already used fails and writes noth
   CHECK((*listed)[0].geometry.dims == Dims{4, 5, 6});
 }
 
-TEST_CASE("listImportedDatasets on a database that does not exist lists nothing and creates nothing") {
+TEST_CASE("openExistingDatabase on a database that does not exist gives none and creates nothing") {
   test::TempDir dir;
   const fs::path path = dir / "missing" / "x.db";
-  auto listed = listImportedDatasets(path.string());
-  REQUIRE(listed);
-  CHECK(listed->empty());
+  auto none = openExistingDatabase(path.string());
+  REQUIRE(none);
+  CHECK(!none->has_value());
   CHECK(!fs::exists(path));
-  auto found = findImportedDataset(path.string(), "abdomen");
-  REQUIRE(found);
-  CHECK(!found->has_value());
+  CHECK(!fs::exists(dir / "missing"));
+  const fs::path present = dir / "x.db";
+  REQUIRE(Database::open(present.string()));
+  auto opened = openExistingDatabase(present.string());
+  REQUIRE(opened);
+  REQUIRE(opened->has_value());
+  CHECK((*opened)->path() == present.string());
+}
+
+TEST_CASE("openDatabase with an explicit path refuses a folder that does not exist instead of creating it") {
+  test::TempDir dir;
+  const fs::path path = dir / "no" / "such" / "x.db";
+  auto refused = openDatabase(path.string());
+  REQUIRE(!refused);
+  CHECK((refused.error().kind == ErrorKind::NotFound));
+  CHECK(refused.error().message.find((dir / "no" / "such").string()) != std::string::npos);
+  CHECK(!fs::exists(dir / "no"));
+}
+
+TEST_CASE("One connection shared by threads: concurrent write transactions lose no row and never mix") {
+  test::TempDir dir;
+  auto db = Database::open((dir / "shared.db").string());
+  REQUIRE(db);
+  constexpr int kPerThread = 100;
+  std::vector<std::string> errors(3);
+  std::vector<std::thread> threads;
+  for (int t = 0; t < 3; ++t)
+    threads.emplace_back([&, t] {
+      for (int i = 0; i < kPerThread; ++i) {
+        // Two inserts per transaction: a transaction taking in another thread's insert, or a
+        // BEGIN inside another thread's transaction, would show as an error or a lost pair.
+        auto st = db->writeTransaction([&](Database& d) -> Status {
+          for (int half = 0; half < 2; ++half) {
+            auto insert = d.prepare("INSERT INTO presets (id, mode, json) VALUES (?1, 'wdt', '{}')");
+            if (!insert) return tl::unexpected(insert.error());
+            insert->bind(1, "t" + std::to_string(t) + "_" + std::to_string(i) + "_" + std::to_string(half));
+            if (auto s = insert->run(); !s) return s;
+          }
+          if (i % 7 == 3) return fail("rolled back on purpose");
+          return {};
+        });
+        if (!st && st.error().message != "rolled back on purpose" && errors[std::size_t(t)].empty())
+          errors[std::size_t(t)] = st.error().message;
+      }
+    });
+  for (auto& th : threads) th.join();
+  for (const auto& e : errors) CHECK_MESSAGE(e.empty(), e);
+  int rolledBack = 0;
+  for (int i = 0; i < kPerThread; ++i) rolledBack += i % 7 == 3 ? 1 : 0;
+  CHECK(countRows(*db, "presets") == 3 * 2 * (kPerThread - rolledBack));
 }
 
 TEST_CASE("Two connections writing at once through writeTransaction lose no row") {
@@ -496,4 +544,21 @@ TEST_CASE("checksumPath hashes a file's bytes and notices a changed file in a fo
   REQUIRE(changed);
   CHECK(*changed != *folder);
   CHECK(!checksumPath((dir / "nothing").string()));
+}
+
+TEST_CASE("SqlErrors_CarryTheirKind_UniqueIsConflict_MissingReferenceIsNotFound_CheckIsInvalid") {
+  test::TempDir dir;
+  auto db = Database::open((dir / "k.db").string());
+  REQUIRE(db);
+  REQUIRE(db->exec("INSERT INTO presets (id, mode, json) VALUES ('p', 'wdt', '{}')"));
+  auto clash = db->exec("INSERT INTO presets (id, mode, json) VALUES ('p', 'bare', '{}')");
+  REQUIRE(!clash);
+  CHECK((clash.error().kind == ErrorKind::Conflict));
+  auto orphan = db->exec("INSERT INTO attempts (user_id, lesson_id, mode, started_at) VALUES (424242, 'l', 'guided', 1)");
+  REQUIRE(!orphan);
+  CHECK((orphan.error().kind == ErrorKind::NotFound));
+  REQUIRE(db->exec("INSERT INTO users (name, role) VALUES ('u', 'student')"));
+  auto badMode = db->exec("INSERT INTO attempts (user_id, lesson_id, mode, started_at) VALUES (1, 'l', 'exam!', 1)");
+  REQUIRE(!badMode);
+  CHECK((badMode.error().kind == ErrorKind::Invalid));
 }

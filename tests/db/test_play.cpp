@@ -22,7 +22,7 @@
 #include "test_support.h"
 #include "volume/dataset_source.h"
 #include "volume/phantom.h"
-#include "wdt/wdt.h"
+#include "wdt/answer_keys.h"
 
 namespace fs = std::filesystem;
 using namespace at;
@@ -46,19 +46,9 @@ std::int64_t scalar(const std::string& dbPath, const std::string& sql) {
   return s->int64(0);
 }
 
-// The same distance fields as the app's key computer (app/src/learning_support.cpp,
-// wdtDistanceField): density weights, entering rule, converged, on a grid coarser by 2, sampled
-// back onto the label grid.
-quiz::DistanceFieldFunction distanceFieldLikeTheApp(const Dataset& dataset) {
-  return [&dataset](const Mask& seeds) -> Result<FloatVolume> {
-    WdtParams params;
-    params.converge = true;
-    params.downsample = 2;
-    auto result = computeWdt(dataset.volume, seeds, params);
-    if (!result) return tl::unexpected(result.error());
-    if (result->field.downsample == 1) return std::move(result->field.distances);
-    return upsampleField(result->field, dataset.labels.geometry);
-  };
+// The app's answer keys: the one recipe of wdt/answer_keys.h.
+quiz::DistanceFieldFunction answerKeyFields(const Dataset& dataset) {
+  return [&dataset](const Mask& seeds) { return wdt::answerKeyDistances(dataset.volume, dataset.labels.geometry, seeds); };
 }
 
 // The right answer to a resolved question, as an answers-file line.
@@ -79,7 +69,7 @@ std::string rightAnswerLine(const quiz::ResolvedQuestion& q, const std::vector<S
 
 // Answers files for every lesson of `course`, from keys computed on `dataset`.
 std::map<std::string, std::vector<std::string>> answersFor(const lessons::Course& course, const Dataset& dataset) {
-  quiz::DatasetKeyComputer keys(dataset, distanceFieldLikeTheApp(dataset));
+  quiz::DatasetKeyComputer keys(dataset, answerKeyFields(dataset));
   std::map<std::string, std::vector<std::string>> out;
   for (const auto& lesson : course.lessons) {
     auto& lines = out[lesson.id];

@@ -192,6 +192,7 @@ TEST_CASE("A course reusing another course's lesson id is refused and writes not
   auto refused = storeCourse(db, other, "b");
   REQUIRE(!refused);
   CHECK(refused.error().message.find("'toy.ossicles'") != std::string::npos);
+  CHECK((refused.error().kind == ErrorKind::Conflict));
   CHECK(countRows(db, "courses") == 1);
   CHECK(countRows(db, "lessons") == 2);
 }
@@ -224,6 +225,7 @@ TEST_CASE("Users are created once, found by pseudonym, and hostile names are kep
   auto taken = users.createUser(hostile, Role::Student, "");
   REQUIRE(!taken);
   CHECK(taken.error().message.find("already taken") != std::string::npos);
+  CHECK((taken.error().kind == ErrorKind::Conflict));
   CHECK(!users.createUser("", Role::Student, ""));
   CHECK(!users.findUser("nobody")->has_value());
   CHECK(!users.user(999));
@@ -307,6 +309,13 @@ TEST_CASE("An answer is stored with its progress, ability and difficulty in one 
   auto dup = progress.recordAnswer(again);
   REQUIRE(!dup);
   CHECK(dup.error().message.find("already answered") != std::string::npos);
+  CHECK((dup.error().kind == ErrorKind::Conflict));
+  AnswerRecord orphan = r;
+  orphan.response.attemptId = 987654;
+  auto noAttempt = progress.recordAnswer(orphan);
+  REQUIRE(!noAttempt);
+  CHECK((noAttempt.error().kind == ErrorKind::NotFound));
+  CHECK(noAttempt.error().message.find("unknown attempt 987654") != std::string::npos);
   CHECK(((*progress.progress(user->id, "malleus"))->memory.phase == MemoryPhase::Review));
   CHECK(countRows(db, "review_log") == 1);
   CHECK(*progress.ability(user->id) == std::optional<double>(1516));

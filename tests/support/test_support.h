@@ -6,7 +6,15 @@
 #include <filesystem>
 #include <string>
 
+namespace at {
+struct Dataset;
+}
+
 namespace at::test {
+
+// The synthetic phantom at size³ voxels, built once per size for the whole test run (256³ takes
+// about half a second).
+const Dataset& phantomOfSize(int size);
 
 // ../shared/data next to the checkout, or empty if it is absent (tests then report a skip).
 std::filesystem::path sharedDataDir();

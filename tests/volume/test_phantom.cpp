@@ -18,17 +18,7 @@ using namespace at;
 
 namespace {
 
-// Built once per size: 256³ takes about half a second.
-const Dataset& phantomOfSize(int size) {
-  static std::map<int, Dataset> cache;
-  auto it = cache.find(size);
-  if (it == cache.end()) {
-    PhantomOptions options;
-    options.size = size;
-    it = cache.emplace(size, makePhantom(options)).first;
-  }
-  return it->second;
-}
+using test::phantomOfSize;
 
 std::uint16_t labelOf(const Dataset& ds, const std::string& id) {
   const Structure* s = ds.findStructure(id);

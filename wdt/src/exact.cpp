@@ -1,7 +1,7 @@
 // The exact reference (Dijkstra on the 26-connected grid), field upsampling and accuracy.
 //
 // Candidates are D(a) + stepCost(a → b) with the lengths of wdt::axisSweepLengths and the costs of
-// step_cost.h: the very floats the sweeps add (the sweeps' grouped min-then-add equals add-then-min
+// wdt/step_cost.h: the very floats the sweeps add (the sweeps' grouped min-then-add equals add-then-min
 // because float addition is monotone). Converged sweeps therefore equal this reference bit for bit.
 //
 // Queue: Dial's buckets of width W = ½ · (smallest possible step cost). Every step costs at least
@@ -17,7 +17,8 @@
 #include <queue>
 #include <vector>
 
-#include "step_cost.h"
+#include "field_sampling.h"
+#include "wdt/step_cost.h"
 #include "wdt/problem.h"
 #include "wdt/stencil.h"
 
@@ -199,13 +200,7 @@ Result<FloatVolume> exactWdtOnProblem(const WdtProblem& problem) {
     return fail("WDT exact: problem arrays do not match the grid " + d.toString());
   if (d.count() >= (std::size_t(1) << 32)) return fail("WDT exact: grid " + d.toString() + " is too large");
   FloatVolume out(problem.grid, kInf);
-  switch (wdt::costKernel(problem.params)) {
-    case CostKernel::EnterDensity: exactWith<CostKernel::EnterDensity>(problem, out.voxels); break;
-    case CostKernel::EnterUniform: exactWith<CostKernel::EnterUniform>(problem, out.voxels); break;
-    case CostKernel::TrapezoidDensity: exactWith<CostKernel::TrapezoidDensity>(problem, out.voxels); break;
-    case CostKernel::EdgeGradient: exactWith<CostKernel::EdgeGradient>(problem, out.voxels); break;
-    case CostKernel::EdgeAscent: exactWith<CostKernel::EdgeAscent>(problem, out.voxels); break;
-  }
+  wdt::withCostKernel(wdt::costKernel(problem.params), [&]<CostKernel K>() { exactWith<K>(problem, out.voxels); });
   return out;
 }
 
@@ -224,54 +219,13 @@ Result<FloatVolume> exactWdt(const Volume& volume, const Mask& seeds, const WdtP
 // value of its nearest corner instead (finite or +infinity).
 FloatVolume upsampleField(const DistanceField& field, const Geometry& target) {
   const FloatVolume& src = field.distances;
-  const Geometry& sg = src.geometry;
-  const Dims sd = sg.dims;
   FloatVolume out(target, kInf);
-  if (sd.count() == 0) return out;
-  // index_src = A · index_target + b, affine: evaluate the origin and the three axis steps once.
-  const Vec3 b = sg.patientToIndex(target.indexToPatient({0, 0, 0}));
-  Vec3 cols[3];
-  for (int a = 0; a < 3; ++a) {
-    Vec3 e{0, 0, 0};
-    e[a] = 1;
-    cols[a] = sg.patientToIndex(target.indexToPatient(e)) - b;
-  }
-  const int n[3] = {sd.x, sd.y, sd.z};
+  if (src.geometry.dims.count() == 0) return out;
+  const wdt::detail::GridMap map(src.geometry, target);
   const Dims td = target.dims;
   for (int k = 0; k < td.z; ++k)
     for (int j = 0; j < td.y; ++j)
-      for (int i = 0; i < td.x; ++i) {
-        double p[3];
-        int i0[3], i1[3];
-        double t[3];
-        for (int a = 0; a < 3; ++a) {
-          p[a] = b[a] + cols[0][a] * i + cols[1][a] * j + cols[2][a] * k;
-          p[a] = std::clamp(p[a], 0.0, double(n[a] - 1));
-          i0[a] = std::min(int(p[a]), n[a] - 1);
-          i1[a] = std::min(i0[a] + 1, n[a] - 1);
-          t[a] = p[a] - i0[a];
-        }
-        double acc = 0;
-        bool finite = true;
-        for (int c = 0; c < 8 && finite; ++c) {
-          const int cx = c & 1 ? i1[0] : i0[0], cy = c & 2 ? i1[1] : i0[1], cz = c & 4 ? i1[2] : i0[2];
-          const float v = src.voxels[sd.index(cx, cy, cz)];
-          const double w = (c & 1 ? t[0] : 1 - t[0]) * (c & 2 ? t[1] : 1 - t[1]) * (c & 4 ? t[2] : 1 - t[2]);
-          if (!std::isfinite(v)) {
-            finite = false;
-          } else {
-            acc += w * v;
-          }
-        }
-        float value;
-        if (finite) {
-          value = float(acc);
-        } else {
-          value = src.voxels[sd.index(t[0] < 0.5 ? i0[0] : i1[0], t[1] < 0.5 ? i0[1] : i1[1],
-                                      t[2] < 0.5 ? i0[2] : i1[2])];
-        }
-        out.voxels[td.index(i, j, k)] = value;
-      }
+      for (int i = 0; i < td.x; ++i) out.voxels[td.index(i, j, k)] = wdt::detail::sampleMapped(src, map, i, j, k);
   return out;
 }
 

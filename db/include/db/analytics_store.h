@@ -13,7 +13,8 @@
 namespace at::db {
 
 // The class is every user with the student role (of `group` when given). Errors: unknown course.
-Result<lessons::AnalyticsInput> loadAnalyticsInput(Database& db, const BuiltinStructures& builtin,
+// `curriculum` gives the course and its dataset's structures (the app's knows the built-in ones).
+Result<lessons::AnalyticsInput> loadAnalyticsInput(Database& db, lessons::CurriculumRepository& curriculum,
                                                    const std::string& courseId, const std::optional<std::string>& group);
 
 }  // namespace at::db

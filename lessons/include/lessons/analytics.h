@@ -37,6 +37,10 @@ struct ClassAnswer {
   bool correct = false;
   UnixSeconds answeredAt = 0;
   std::int64_t order = 0;  // tie-break among answers given in the same second (the row order)
+  // As the review log keeps them, for exporting it to an FSRS optimiser:
+  Rating rating = Rating::Good;
+  std::int64_t latencyMs = 0;
+  MemoryPhase phaseBefore = MemoryPhase::New;
 };
 
 struct AnalyticsInput {

@@ -33,6 +33,10 @@ struct EngineOptions {
   std::function<UnixSeconds()> clock;  // empty = the system clock
 };
 
+// The lessons of `lessonIds` the user has not finished, as "'id' (title), …" ("" when none).
+Result<std::string> unfinishedLessons(CurriculumRepository& curriculum, ProgressRepository& progress,
+                                      std::int64_t userId, const std::vector<std::string>& lessonIds);
+
 // The scene of the course's question `questionId` (sceneFor its step); nullopt if not in the course.
 std::optional<QuestionScene> questionScene(const Course& course, const std::string& questionId);
 

@@ -11,7 +11,7 @@
 #include "lessons/curriculum.h"
 #include "lessons/fsrs.h"
 #include "quiz/question.h"
-#include "volume/error.h"
+#include "core/error.h"
 #include "volume/structure.h"
 
 namespace at::lessons {

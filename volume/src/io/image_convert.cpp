@@ -91,7 +91,7 @@ Result<LabelMap> toLabelMap(const LoadedImage& loaded, const std::string& pathFo
 
 Result<std::map<std::uint16_t, std::string>> loadLabelNames(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
-  if (!in) return fail(path + ": cannot open the label names file");
+  if (!in) return fail(ErrorKind::Io, path + ": cannot open the label names file");
   nlohmann::json json;
   try {
     json = nlohmann::json::parse(in);

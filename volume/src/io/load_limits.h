@@ -5,7 +5,7 @@
 #include <cstdio>
 #include <string>
 
-#include "volume/error.h"
+#include "core/error.h"
 #include "volume/image_file.h"
 
 namespace at::detail {
@@ -23,7 +23,7 @@ inline std::string byteCountText(double bytes) {
 inline bool loadCancelled(const ImageLoadOptions& options) {
   return options.cancel && options.cancel->load(std::memory_order_relaxed);
 }
-inline Error cancelledError(const std::string& path) { return Error{path + ": loading cancelled"}; }
+inline Error cancelledError(const std::string& path) { return Error{ErrorKind::Cancelled, path + ": loading cancelled"}; }
 
 // Fails if the image's float voxels exceed options.maxBytes (or availableImageBytes() when 0).
 inline Status checkImageFits(const std::string& path, const Dims& dims, const ImageLoadOptions& options) {

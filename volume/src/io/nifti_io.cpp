@@ -15,6 +15,7 @@
 #include <nifti2_io.h>
 #include <zlib.h>
 
+#include "core/strings.h"
 #include "load_limits.h"
 
 namespace at {
@@ -32,10 +33,6 @@ struct GzFileCloser {
   void operator()(gzFile_s* file) const { gzclose(file); }
 };
 using GzFilePtr = std::unique_ptr<gzFile_s, GzFileCloser>;
-
-bool endsWith(const std::string& s, const std::string& suffix) {
-  return s.size() >= suffix.size() && s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
-}
 
 // Quiet niftilib: its messages go to stderr; ours travel as values.
 void quietNiftilib() {
@@ -211,11 +208,11 @@ Result<Geometry> geometryFromAffine(const std::string& path, const nifti_dmat44&
 Result<LoadedImage> loadNifti(const std::string& path, const ImageLoadOptions& options) {
   quietNiftilib();
   std::error_code ec;
-  if (!fs::is_regular_file(path, ec)) return fail(path + ": no such file");
-  if (!endsWith(path, ".nii") && !endsWith(path, ".nii.gz"))
+  if (!fs::is_regular_file(path, ec)) return fail(ErrorKind::NotFound, path + ": no such file");
+  if (!str::endsWith(path, ".nii") && !str::endsWith(path, ".nii.gz"))
     return fail(path + ": a NIfTI file name must end in .nii or .nii.gz");
   GzFilePtr file(gzopen(path.c_str(), "rb"));
-  if (!file) return fail(path + ": cannot open the file");
+  if (!file) return fail(ErrorKind::Io, path + ": cannot open the file");
   auto header = readNiftiHeader(path, file.get());
   if (!header) return tl::unexpected(header.error());
   NiftiImagePtr nim = std::move(header->nim);
@@ -319,7 +316,7 @@ namespace {
 template <class T>
 Status writeNifti(const std::string& path, const Geometry& geometry, const std::vector<T>& voxels, int datatype) {
   quietNiftilib();
-  if (!endsWith(path, ".nii") && !endsWith(path, ".nii.gz"))
+  if (!str::endsWith(path, ".nii") && !str::endsWith(path, ".nii.gz"))
     return fail(path + ": a NIfTI file name must end in .nii or .nii.gz");
   const fs::path parent = fs::path(path).parent_path();
   std::error_code ec;

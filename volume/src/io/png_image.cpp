@@ -116,7 +116,7 @@ Status writePng(const std::string& path, const RgbImage& image) {
 
 Result<RgbImage> readPng(const std::string& path) {
   FileCloser file{std::fopen(path.c_str(), "rb")};
-  if (!file.file) return fail(path + ": cannot open file: " + std::strerror(errno));
+  if (!file.file) return fail(ErrorKind::Io, path + ": cannot open file: " + std::strerror(errno));
   png_byte signature[8] = {};
   if (std::fread(signature, 1, 8, file.file) != 8 || png_sig_cmp(signature, 0, 8) != 0)
     return fail(path + ": not a PNG file (wrong signature)");
