@@ -1,0 +1,27 @@
+// The default course and its first lesson's views, and a lesson step's preset: what the desktop
+// app, its no-display fallback and the explore state share.
+#pragma once
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "lessons/curriculum.h"
+#include "render/preset.h"
+#include "core/error.h"
+
+namespace at::app {
+
+// The default course: temporal_bone.json in the course folder (learning_session.h), else the
+// first course file there by name.
+Result<lessons::Course> loadDefaultCourse();
+
+// The show steps of the course's first lesson, in order (the default lesson's views).
+std::vector<lessons::ShowStep> firstLessonViews(const lessons::Course& course);
+
+// The step's preset: the library's `presetId` if it exists, else the structure's shipped preset for
+// the mode the id ends in ("_bare" → bare, otherwise wdt).
+Result<render::Preset> presetForStep(const render::PresetLibrary& library, const std::string& structureId,
+                                     const std::string& presetId);
+
+}  // namespace at::app
