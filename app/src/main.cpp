@@ -23,6 +23,8 @@ const std::vector<Command>& commands() {
       {"lessons", "list the lessons of the courses", runLessons},
       {"play", "run a lesson in the terminal (answers from a file or typed)", runPlay},
       {"progress", "show a user's progress and what is due for review", runProgress},
+      {"exam", "take a course's practical exam in the terminal (timed, labels hidden)", runExam},
+      {"analytics", "a class's lesson completion, hardest structures, question difficulty, recall (--csv)", runAnalytics},
       {"study", "preference studies: register, run, status, export", runStudy},
   };
   return table;
@@ -43,7 +45,8 @@ void printUsage() {
               "  --user (whose progress) and --size (window or image size) may stand before the\n"
               "  command or after it.\n\n");
   for (const Command& c : commands()) std::printf("  %-12s %s\n", c.name, c.summary);
-  std::printf("\n`anatomy-tutor COMMAND --help` describes each command.\n");
+  std::printf("\n`anatomy-tutor COMMAND --help` describes each command. Courses, presets and studies are read from\n"
+              "../share/anatomy-tutor beside the executable; AT_DATA_DIR=DIR reads them from DIR instead.\n");
 }
 
 // The desktop app on the default course when a display exists; otherwise one line saying so and the

@@ -112,10 +112,10 @@ TEST_CASE("ExploreState_ExpertOverride_DrivesModeAndTAndFieldParameters") {
 
 TEST_CASE("ExploreState_UnknownView_IsAnErrorAndKeepsTheCamera") {
   Fixture f;
-  REQUIRE(f.state.setView("superior"));
+  REQUIRE(f.state.setView("superior", 800, 600));
   const Vec3 eye = f.state.camera().eye();
   CHECK(f.state.viewName() == "superior");
-  CHECK_FALSE(f.state.setView("diagonal"));
+  CHECK_FALSE(f.state.setView("diagonal", 800, 600));
   CHECK(f.state.camera().eye()[0] == eye[0]);
   CHECK(f.state.viewName() == "superior");
 }

@@ -84,6 +84,7 @@ Status DesktopModel::showDataset(Dataset dataset, const std::string& startStruct
   if (auto st = explore_.setDataset(*next, startStructure, startPreset); !st) return st;
   fields_.reset();  // it refers to the dataset being replaced
   dataset_ = std::move(next);
+  gradients_ = render::computeGradientVolume(dataset_->volume);
   ++datasetRevision_;
   const auto sink = [this](json j) { event(std::move(j)); };
   fields_ = std::make_unique<FieldView>(
@@ -93,7 +94,7 @@ Status DesktopModel::showDataset(Dataset dataset, const std::string& startStruct
   recorder_.highlightNotWanted();
   lastPickMm_.reset();
   lessons_->setViewDataset(dataset_->id);
-  if (auto st = setView(explore_.viewName().empty() ? startView_ : explore_.viewName()); !st) message(st.error().message);
+  reframe();
   if (opened_)
     event({{"event", "dataset"}, {"dataset", dataset_->id}, {"structures", dataset_->structures.size()},
            {"selected", idOf(explore_.selected())}});
@@ -134,6 +135,7 @@ void DesktopModel::hoverAt(double x, double y) {
   scene.labels = &dataset_->labels;
   const DistanceField* field = fields_->pickField();
   scene.field = field ? &field->distances : nullptr;
+  scene.gradients = &gradients_;
   scene.selected = explore_.fieldLabel();
   const render::TransferFunction2D table = render::shadingTable(s.preset);
   const double left = layout_.panelWidth();
@@ -145,9 +147,9 @@ void DesktopModel::hoverAt(double x, double y) {
   const std::uint16_t label = hit.hit && explore_.hasStructure(hit.label) ? hit.label : 0;
   if (label != explore_.hovered()) {
     json e = {{"event", "hover"}, {"x", x}, {"y", y}, {"label", label}, {"structure", idOf(label)}};
-    if (label) {  // the colour its WDT preset gives the structure itself (distance TF at normalised 1)
-      const auto& tf = explore_.presetOf(label, false).distanceTf;
-      if (!tf.empty()) e["highlight_rgb"] = {tf.back().rgba[0], tf.back().rgba[1], tf.back().rgba[2]};
+    if (label) {  // the colour its WDT preset draws the structure itself in (render_settings.h)
+      const auto& rgb = explore_.presetOf(label, false).highlightRgb;
+      e["highlight_rgb"] = {rgb[0], rgb[1], rgb[2]};
     }
     event(e);
   }
@@ -179,7 +181,13 @@ bool DesktopModel::select(std::uint16_t label) {
   return true;
 }
 
-Status DesktopModel::setView(const std::string& name) { return explore_.setView(name); }
+Status DesktopModel::setView(const std::string& name) {
+  return explore_.setView(name, layout_.framebufferW, layout_.framebufferH);
+}
+
+void DesktopModel::reframe() {
+  if (auto st = setView(explore_.viewName().empty() ? startView_ : explore_.viewName()); !st) message(st.error().message);
+}
 
 void DesktopModel::setExpert(bool on) {
   if (!on) {
@@ -208,7 +216,7 @@ std::optional<std::array<double, 2>> DesktopModel::projectStructure(std::uint16_
   if (!frame) return std::nullopt;
   const double left = layout_.panelWidth();
   const int viewW = int(layout_.windowW - left), viewH = layout_.windowH;
-  auto p = explore_.camera().project(frame->centroidMm, viewW, viewH);
+  auto p = explore_.camera().project(frame->anchorMm, viewW, viewH);
   if (!p || (*p)[0] < 0 || (*p)[0] >= viewW || (*p)[1] < 0 || (*p)[1] >= viewH) return std::nullopt;
   return std::array<double, 2>{(*p)[0] + left, (*p)[1]};
 }

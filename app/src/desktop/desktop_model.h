@@ -23,6 +23,7 @@
 #include "import_controller.h"
 #include "learning_session.h"
 #include "lesson_controller.h"
+#include "render/gradient_volume.h"
 #include "render/render_settings.h"
 #include "study_controller.h"
 #include "tf_editor.h"
@@ -66,6 +67,8 @@ class DesktopModel {
   // when it has one; an error leaves the current dataset on screen.
   Status showDataset(Dataset dataset, const std::string& startStructure, const std::string& startPreset);
   const Dataset& dataset() const { return *dataset_; }
+  // The dataset's gradient volume: shading (the renderer) and picking share it.
+  const render::GradientVolume& gradients() const { return gradients_; }
   // Changes whenever another dataset is shown (the renderer uploads its volume then).
   std::uint64_t datasetRevision() const { return datasetRevision_; }
 
@@ -93,6 +96,8 @@ class DesktopModel {
   void clearHover() { setHovered(0); }
   bool select(std::uint16_t label);  // [select]
   Status setView(const std::string& name);
+  // The current named view again (the start view before any), framed for the layout now.
+  void reframe();
   void setExpert(bool on);           // opens the expert panel on the view's preset, or closes it
   void expertEdited();               // the expert's preset changed: the view follows it
   bool expertOn() const { return expert_->active(); }
@@ -139,6 +144,7 @@ class DesktopModel {
   MessageSink messageSink_;
   std::vector<std::string> messages_;
   std::unique_ptr<Dataset> dataset_;
+  render::GradientVolume gradients_;
   std::uint64_t datasetRevision_ = 0;
   std::string startView_ = "lateral_right";
   bool opened_ = false;

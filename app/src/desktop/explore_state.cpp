@@ -131,12 +131,15 @@ bool ExploreState::setT(float t) {
   return true;
 }
 
-Status ExploreState::setView(const std::string& name) {
+Status ExploreState::setView(const std::string& name, int width, int height) {
   const std::uint16_t label = shownLabel();
   const render::StructureFrame* frame = frameOf(label);
   if (!frame) return {};
   render::ViewRequest request;
   request.view = name;
+  request.margin = 2.5;
+  request.width = std::max(1, width);
+  request.height = std::max(1, height);
   auto settings = render::settingsFor(presetOf(label, bare_), *frame, request);
   if (!settings) return tl::unexpected(settings.error());
   camera_ = settings->camera;

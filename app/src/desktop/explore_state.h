@@ -83,7 +83,9 @@ class ExploreState {
   bool setHovered(std::uint16_t label);
   bool setBare(bool bare);
   bool setT(float t);
-  Status setView(const std::string& name);  // an unknown name is an error; the camera stays
+  // The named view framing the shown structure with room around it to orbit and hover, for an
+  // image of width × height pixels; an unknown name is an error and the camera stays.
+  Status setView(const std::string& name, int width, int height);
   void orbit(double azimuthDeg, double elevationDeg);
   void zoom(double factor);
   void pan(double dxPixels, double dyPixels, int viewHeightPixels);

@@ -95,6 +95,7 @@ int DesktopApp::run() {
   view_ = std::make_unique<VolumeView>([this](const std::string& m) { model_->message(m); });
   model_->event({{"event", "context"}, {"gl", window_->glDescription()}, {"note", window_->glNote()}, {"ui_scale", window_->uiScale()}});
   model_->setLayout(window_->layout());
+  model_->reframe();  // the start view framed for the window's size
   while (!quit_) frame();
   return script_ ? script_->exitStatus() : 0;
 }

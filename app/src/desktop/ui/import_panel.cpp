@@ -18,7 +18,7 @@ void ImportPanel::draw(ImportController& imports, float x, float y) {
   ImportRequest& form = imports.form;
   ImGui::BeginDisabled(progress.has_value());
   ImGui::PushItemWidth(-ImGui::GetFontSize() * 4.5f);
-  ImGui::InputTextWithHint("volume", "DICOM folder, .nii, .nii.gz, .nrrd or .nhdr", &form.volumePath);
+  ImGui::InputTextWithHint("volume", "DICOM folder, .nii, .nii.gz, .nrrd, .nhdr or .inv3", &form.volumePath);
   ImGui::InputTextWithHint("labels", "optional: label map (those formats or DICOM SEG)", &form.labelsPath);
   ImGui::InputTextWithHint("names", "optional: JSON {\"1\": \"spleen\", ...}", &form.namesPath);
   ImGui::InputTextWithHint("name", "what the dataset will be called", &form.name);

@@ -25,7 +25,7 @@ VolumeView::VolumeView(MessageSink messages) : messages_(std::move(messages)) {
 void VolumeView::frame(DesktopModel& model, Clock::time_point now) {
   if (renderer_ && datasetRevision_ != model.datasetRevision()) {
     datasetRevision_ = model.datasetRevision();
-    if (auto st = renderer_->setVolume(model.dataset().volume, model.dataset().labels); !st) {
+    if (auto st = renderer_->setVolume(model.dataset().volume, model.dataset().labels, model.gradients()); !st) {
       messages_("volume renderer: " + st.error().message);
       renderer_.reset();
     }
