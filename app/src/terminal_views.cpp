@@ -1,6 +1,7 @@
 #include "terminal_views.h"
 
 #include <cmath>
+#include <cstdint>
 #include <sstream>
 
 #include "commands.h"
@@ -47,6 +48,38 @@ std::optional<std::array<int, 3>> voxelOf(const Geometry& g, const Vec3& pointMm
   const int i = int(std::lround(ijk[0])), j = int(std::lround(ijk[1])), k = int(std::lround(ijk[2]));
   if (!g.dims.contains(i, j, k)) return std::nullopt;
   return std::array<int, 3>{i, j, k};
+}
+
+// Rulers along the top and left edges (a tick every 10 pixels, longer every 50, numbered every
+// 100) so that a student can read the pixel coordinates of a point with any image viewer.
+void drawPixelRulers(RgbImage& image) {
+  // 3×5 digits, one row per 3-bit line, top first.
+  static constexpr std::uint8_t kDigits[10][5] = {{7, 5, 5, 5, 7}, {2, 6, 2, 2, 7}, {7, 1, 7, 4, 7}, {7, 1, 7, 1, 7},
+                                                  {5, 5, 7, 1, 1}, {7, 4, 7, 1, 7}, {7, 4, 7, 5, 7}, {7, 1, 1, 1, 1},
+                                                  {7, 5, 7, 5, 7}, {7, 5, 7, 1, 7}};
+  const auto dot = [&](int x, int y) {
+    if (x < 0 || y < 0 || x >= image.width || y >= image.height) return;
+    std::uint8_t* p = image.pixel(x, y);
+    p[0] = 255, p[1] = 235, p[2] = 60;
+  };
+  const auto number = [&](int value, int x, int y) {  // digits 2× scaled, left edge at x
+    const std::string text = std::to_string(value);
+    for (std::size_t d = 0; d < text.size(); ++d)
+      for (int row = 0; row < 5; ++row)
+        for (int col = 0; col < 3; ++col)
+          if (kDigits[text[d] - '0'][row] & (4 >> col))
+            for (int k = 0; k < 4; ++k) dot(x + int(d) * 8 + col * 2 + k % 2, y + row * 2 + k / 2);
+  };
+  for (int x = 0; x < image.width; x += 10) {
+    const int length = x % 50 == 0 ? 6 : 3;
+    for (int y = 0; y < length; ++y) dot(x, y);
+    if (x % 100 == 0 && x > 0) number(x, x + 2, 7);
+  }
+  for (int y = 0; y < image.height; y += 10) {
+    const int length = y % 50 == 0 ? 6 : 3;
+    for (int x = 0; x < length; ++x) dot(x, y);
+    if (y % 100 == 0 && y > 0) number(y, 7, y + 2);
+  }
 }
 
 }  // namespace
@@ -158,7 +191,9 @@ Result<TerminalPicture> TerminalViews::show(const lessons::QuestionScene& scene,
   auto image = renderer_->render(*chosen);
   if (!image) return tl::unexpected(image.error());
   const fs::path path = dir_ / (stem + ".png");
-  if (auto st = writePng(path.string(), render::toRgb(*image)); !st) return tl::unexpected(st.error());
+  RgbImage picture = render::toRgb(*image);
+  drawPixelRulers(picture);
+  if (auto st = writePng(path.string(), picture); !st) return tl::unexpected(st.error());
   lastSettings_ = *chosen;
   lastSelected_ = selected->label;
   lastField_ = field;
@@ -179,6 +214,7 @@ Result<TerminalPicture> TerminalViews::showSlice(const std::string& targetId, co
   request.scale = kSliceScale;
   auto image = renderSlice(dataset_.volume, nullptr, dataset_.structures, request);  // no labels
   if (!image) return tl::unexpected(image.error());
+  drawPixelRulers(*image);
   const fs::path path = dir_ / (stem + ".png");
   if (auto st = writePng(path.string(), *image); !st) return tl::unexpected(st.error());
   lastSlice_ = request;

@@ -1,7 +1,8 @@
 // What `play` and `exam` show in a terminal: every view a step or question refers to is written as
 // a PNG through the offscreen renderer (as `render` does) and its path printed; a locate answer is a
 // pick on that picture — a pixel, turned into the structure under it by the same picking code the
-// desktop uses (render::pickStructure), or a point in millimetres — never a typed name.
+// desktop uses (render::pickStructure), or a point in millimetres — never a typed name. Pictures
+// carry pixel rulers along their top and left edges (ticks every 10 px, numbers every 100).
 #pragma once
 
 #include <filesystem>
