@@ -14,7 +14,7 @@ namespace {
 constexpr const char* kImportHelp =
     "usage: anatomy-tutor import --volume PATH --name NAME [--labels PATH] [--names NAMES.json]\n"
     "                            [--species SPECIES] [--db PATH]\n\n"
-    "Registers a dataset in the database: the volume (a DICOM folder, .nii, .nii.gz, .nrrd or .nhdr),\n"
+    "Registers a dataset in the database: the volume (a DICOM folder, .nii, .nii.gz, .nrrd, .nhdr, .inv3),\n"
     "an optional label map on the same anatomy (any of those formats or DICOM SEG) and an optional\n"
     "JSON of label names ({\"1\": \"spleen\", …}). Both are loaded first to check that they align.\n"
     "The database keeps absolute paths, SHA-256 checksums and the geometry, never pixels or patient\n"

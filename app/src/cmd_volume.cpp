@@ -18,6 +18,7 @@
 #include "db/dataset_store.h"
 #include "volume/dataset_source.h"
 #include "volume/image_file.h"
+#include "volume/known_scans.h"
 #include "volume/phantom.h"
 #include "volume/png_image.h"
 #include "volume/slice_image.h"
@@ -104,14 +105,23 @@ struct DatasetListing {
 
 std::vector<DatasetListing> builtinDatasets() {
   const PhantomOptions defaults;
-  return {{"phantom", "Temporal-bone phantom (synthetic)",
-           std::to_string(defaults.size) + "^3 over " + formatDouble(defaults.extentMm, 1) + " mm, " +
-               std::to_string(phantomStructures().size()) + " structures; phantom:N for N^3 (N = 16 … 1024)"}};
+  std::vector<DatasetListing> listing = {
+      {"phantom", "Temporal-bone phantom (synthetic)",
+       std::to_string(defaults.size) + "^3 over " + formatDouble(defaults.extentMm, 1) + " mm, " +
+           std::to_string(phantomStructures().size()) + " structures; phantom:N for N^3 (N = 16 … 1024)"}};
+  for (const KnownScan& scan : knownScans()) {
+    const auto path = locateKnownScan(scan);
+    listing.push_back({scan.name, scan.title,
+                       path ? path->string() + " (" + scan.licence + ")"
+                            : "not fetched: bash scripts/fetch-scans.sh, or apt-get install " + scan.debianPackage});
+  }
+  return listing;
 }
 
 const char* kDatasetsHelp =
     "usage: anatomy-tutor datasets [--json] [--db PATH]\n\n"
-    "Lists the datasets that can be opened by name: the built-in phantom and the datasets imported\n"
+    "Lists the datasets that can be opened by name: the built-in phantom, the real scans that\n"
+    "scripts/fetch-scans.sh fetches from Debian packages (skull: a head CT), and the datasets imported\n"
     "with `anatomy-tutor import` into the database (--db PATH, else the default database). Any\n"
     "supported file or folder can also be opened directly by its path.\n";
 
@@ -121,16 +131,17 @@ const char* kStructuresHelp =
     "usage: anatomy-tutor structures DATASET [--json]\n"
     "       anatomy-tutor structures --volume PATH --labels PATH [--names JSON] [--series UID] [--json]\n\n"
     "Lists a dataset's structures: label value, id, name, system and voxel count.\n"
-    "DATASET is a built-in name (phantom, phantom:N) or a volume path (DICOM folder, .nii[.gz],\n"
-    ".nrrd/.nhdr); --labels gives a label map on any grid (resampled onto the volume), --names a\n"
+    "DATASET is a built-in name (phantom, phantom:N, skull) or a volume path (DICOM folder, .nii[.gz],\n"
+    ".nrrd/.nhdr, .inv3); --labels gives a label map on any grid (resampled onto the volume), --names a\n"
     "JSON map { \"value\": \"name\" }, --series the DICOM series UID.\n";
 
 // --- info -------------------------------------------------------------------------------------
 
 const char* kInfoHelp =
-    "usage: anatomy-tutor info FILE|DIR [--json] [--labels PATH] [--names JSON] [--series UID]\n\n"
-    "Loads any supported input (DICOM series folder, DICOM SEG, NIfTI, NRRD) and prints its\n"
-    "dimensions, spacing, origin, orientation, stored type, value (HU) range and loader notes.\n"
+    "usage: anatomy-tutor info FILE|DIR|SCAN [--json] [--labels PATH] [--names JSON] [--series UID]\n\n"
+    "Loads any supported input (DICOM series folder, DICOM SEG, NIfTI, NRRD, InVesalius .inv3) and\n"
+    "prints its dimensions, spacing, origin, orientation, stored type, value (HU) range and loader notes.\n"
+    "SCAN is a real scan fetched by scripts/fetch-scans.sh (skull).\n"
     "Label maps (integer images with few values, or files that name segments) and --labels\n"
     "inputs also list each label with its name and voxel count; --names JSON ({ \"value\": \"name\" })\n"
     "names the labels of either.\n";
@@ -249,7 +260,13 @@ int runInfo(const Argv& argv) {
   const auto& pos = args->positional();
   if (pos.empty()) return usageError("info", "missing FILE or DIR (see --help)");
   if (pos.size() > 1) return usageError("info", "unexpected argument '" + pos[1] + "' (one FILE or DIR only)");
-  const std::string path = pos[0];
+  std::string path = pos[0];
+  // A scan's name wins over a file of that name, as built-in names do everywhere (./skull is the file).
+  if (const KnownScan* scan = findKnownScan(path)) {
+    auto file = knownScanFile(*scan);
+    if (!file) return reportError("info: " + file.error().message);
+    path = file->string();
+  }
 
   ImageLoadOptions options;
   options.dicomSeriesUid = args->valueOr("series", "");

@@ -33,7 +33,7 @@ int runWdt(const Argv& args);
 
 // Rendering (cmd_render.cpp)
 int runRender(const Argv& args);
-// The shipped presets: data/presets of the source tree, else next to the installed binary.
+// The shipped presets: dataSubdirectory("presets") (data_paths.h).
 std::filesystem::path defaultPresetsDir();
 
 // The desktop application (desktop_app.cpp, desktop_support.cpp)

@@ -47,7 +47,7 @@ Result<ImportedDataset> importDataset(db::Database& database, const ImportReques
     if (control.progress) control.progress(s, 0, 0);
   };
   stage(ImportStage::Checking);
-  if (request.volumePath.empty()) return fail("a volume (DICOM folder, .nii, .nii.gz, .nrrd or .nhdr) is required");
+  if (request.volumePath.empty()) return fail("a volume (DICOM folder, .nii, .nii.gz, .nrrd, .nhdr or .inv3) is required");
   if (request.name.empty()) return fail("a dataset name is required");
   if (isBuiltinDatasetName(request.name)) return fail("'" + request.name + "' is the built-in dataset's name; choose another name");
   if (!validSpecies(request.species))

@@ -5,6 +5,7 @@
 #include "core/strings.h"
 #include "db/dataset_store.h"
 #include "volume/dataset_source.h"
+#include "volume/known_scans.h"
 
 namespace at::app {
 
@@ -30,6 +31,11 @@ Result<Dataset> openNamedDataset(const DatasetRequest& request) {
   if (isBuiltinDatasetName(request.name)) {
     if (fileOptions) return fail("--labels, --names and --series apply to datasets from files, not to '" + request.name + "'");
     return openBuiltinDataset(request.name);
+  }
+  if (const KnownScan* scan = findKnownScan(request.name)) {
+    if (!request.seriesUid.empty()) return fail("--series applies to DICOM folders, not to '" + request.name + "'");
+    if (!request.namesPath.empty() && request.labelsPath.empty()) return fail("--names needs --labels PATH");
+    return openKnownScan(*scan, {request.labelsPath, request.namesPath});
   }
   std::error_code ec;
   if (fs::exists(request.name, ec)) {
@@ -68,7 +74,7 @@ Result<Dataset> openNamedDataset(const DatasetRequest& request) {
     if (auto all = db::listDatasets(*database))
       for (const auto& r : *all) known.push_back(r.name);
   }
-  return fail(ErrorKind::NotFound, "unknown dataset '" + request.name + "': not built in (phantom, phantom:N), not imported" +
+  return fail(ErrorKind::NotFound, "unknown dataset '" + request.name + "': not built in (phantom, phantom:N, skull), not imported" +
                                        (known.empty() ? std::string() : " (imported: " + str::join(known, ", ") + ")") +
                                        ", and no such file or folder");
 }

@@ -235,6 +235,7 @@ class DesktopApp {
   std::unique_ptr<LearningSession> session_;  // the process's one database connection
   render::PresetLibrary library_;
   Dataset dataset_;
+  render::GradientVolume gradients_;  // of dataset_'s volume
   std::vector<std::pair<std::string, std::vector<const Structure*>>> bySystem_;
   std::map<std::uint16_t, render::StructureFrame> frames_;
   std::map<std::pair<std::uint16_t, bool>, render::Preset> presets_;
@@ -355,6 +356,7 @@ Status DesktopApp::showDataset(Dataset dataset, const std::string& startStructur
   if (expert_ && expertOn()) setExpert(false);
   worker_.reset();  // it holds a reference to dataset_
   dataset_ = std::move(dataset);
+  gradients_ = render::computeGradientVolume(dataset_.volume);  // shading and picking share it
   frames_ = std::move(frames);
   bySystem_.clear();
   presets_.clear();
@@ -391,7 +393,7 @@ Status DesktopApp::showDataset(Dataset dataset, const std::string& startStructur
   worker_ = std::make_unique<FieldService>(dataset_.volume, dataset_.labels, 8);
   expert_ = std::make_unique<TfEditorPanel>(dataset_, session_->database(), [this](json j) { event(std::move(j)); });
   if (renderer_) {  // a dataset opened after start-up
-    if (auto st = renderer_->setVolume(dataset_.volume, dataset_.labels); !st) {
+    if (auto st = renderer_->setVolume(dataset_.volume, dataset_.labels, gradients_); !st) {
       message("volume renderer: " + st.error().message);
       renderer_.reset();
     }
@@ -443,7 +445,7 @@ Status DesktopApp::openGraphics() {
     auto renderer = render::gl::VolumeRenderer::create();
     if (!renderer) {
       message("volume renderer: " + renderer.error().message);
-    } else if (auto st = renderer->setVolume(dataset_.volume, dataset_.labels); !st) {
+    } else if (auto st = renderer->setVolume(dataset_.volume, dataset_.labels, gradients_); !st) {
       message("volume renderer: " + st.error().message);
     } else {
       renderer_ = std::move(*renderer);
@@ -550,6 +552,9 @@ void DesktopApp::setView(const std::string& name) {
   if (it == frames_.end()) return;
   render::ViewRequest request;
   request.view = name;
+  request.margin = 2.5;  // the explore view: the structure with room around it to orbit and hover
+  request.width = std::max(1, fbW_);
+  request.height = std::max(1, fbH_);
   auto settings = render::settingsFor(presetOf(label, bare_), it->second, request);
   if (!settings) {
     message(settings.error().message);
@@ -569,7 +574,7 @@ std::optional<std::array<double, 2>> DesktopApp::projectStructure(std::uint16_t 
   if (it == frames_.end()) return std::nullopt;
   const double left = 320 * uiScale_;
   const int viewW = int(winW_ - left), viewH = winH_;
-  auto p = camera_.project(it->second.centroidMm, viewW, viewH);
+  auto p = camera_.project(it->second.anchorMm, viewW, viewH);
   if (!p || (*p)[0] < 0 || (*p)[0] >= viewW || (*p)[1] < 0 || (*p)[1] >= viewH) return std::nullopt;
   return std::array<double, 2>{(*p)[0] + left, (*p)[1]};
 }
@@ -637,6 +642,7 @@ void DesktopApp::hoverAt(double x, double y) {
   scene.volume = &dataset_.volume;
   scene.labels = &dataset_.labels;
   scene.field = field_ ? &field_->distances : nullptr;
+  scene.gradients = &gradients_;
   scene.selected = fieldLabel_;
   const render::TransferFunction2D table = render::shadingTable(s.preset);
   const double px = (x - left) / std::max(1.0, winW_ - left) * s.width, py = y / std::max(1, winH_) * s.height;
@@ -647,9 +653,9 @@ void DesktopApp::hoverAt(double x, double y) {
   if (label != hovered_) {
     const Structure* st = dataset_.findStructureByLabel(label);
     json e = {{"event", "hover"}, {"x", x}, {"y", y}, {"label", label}, {"structure", st ? st->id : ""}};
-    if (st) {  // the colour its WDT preset gives the structure itself (distance TF at normalised 1)
-      const auto& tf = presetOf(label, false).distanceTf;
-      if (!tf.empty()) e["highlight_rgb"] = {tf.back().rgba[0], tf.back().rgba[1], tf.back().rgba[2]};
+    if (st) {  // the colour its WDT preset draws the structure itself in (render_settings.h)
+      const auto& rgb = presetOf(label, false).highlightRgb;
+      e["highlight_rgb"] = {rgb[0], rgb[1], rgb[2]};
     }
     event(e);
   }

@@ -190,7 +190,7 @@ void ImportPanel::drawWindow(float x, float y) {
   const bool busy = running();
   ImGui::BeginDisabled(busy);
   ImGui::PushItemWidth(-ImGui::GetFontSize() * 4.5f);
-  ImGui::InputTextWithHint("volume", "DICOM folder, .nii, .nii.gz, .nrrd or .nhdr", volume_, sizeof volume_);
+  ImGui::InputTextWithHint("volume", "DICOM folder, .nii, .nii.gz, .nrrd, .nhdr or .inv3", volume_, sizeof volume_);
   ImGui::InputTextWithHint("labels", "optional: label map (those formats or DICOM SEG)", labels_, sizeof labels_);
   ImGui::InputTextWithHint("names", "optional: JSON {\"1\": \"spleen\", ...}", names_, sizeof names_);
   ImGui::InputTextWithHint("name", "what the dataset will be called", name_, sizeof name_);

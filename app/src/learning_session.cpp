@@ -1,10 +1,10 @@
 #include "learning_session.h"
 
-#include <cstdlib>
 #include <filesystem>
 #include <functional>
 
 #include "core/strings.h"
+#include "data_paths.h"
 #include "dataset_resolver.h"
 #include "db/course_store.h"
 #include "db/sqlite_repositories.h"
@@ -74,10 +74,7 @@ db::BuiltinStructures builtinStructures() {
 
 }  // namespace
 
-std::string courseDirectory() {
-  if (const char* dir = std::getenv("AT_DATA_DIR"); dir && *dir) return (std::filesystem::path(dir) / "courses").string();
-  return (std::filesystem::path(AT_SOURCE_DIR) / "data" / "courses").string();
-}
+std::string courseDirectory() { return dataSubdirectory("courses").string(); }
 
 struct LearningSession::Repositories {
   db::SqliteCurriculumRepository curriculum;
@@ -93,9 +90,14 @@ LearningSession::LearningSession(db::Database database)
 LearningSession::~LearningSession() = default;
 
 Result<std::unique_ptr<LearningSession>> LearningSession::open(const std::optional<std::string>& dbPath) {
+  const std::string courses = courseDirectory();
+  std::error_code ec;
+  if (!std::filesystem::is_directory(courses, ec))
+    return fail(ErrorKind::NotFound, "no course folder at " + courses + " (the courses are installed in "
+                "share/anatomy-tutor/courses beside the program's bin/ folder; AT_DATA_DIR=DIR reads DIR/courses instead)");
   auto database = db::openDatabase(dbPath);
   if (!database) return tl::unexpected(database.error());
-  auto seeded = db::seedCourses(*database, courseDirectory());
+  auto seeded = db::seedCourses(*database, courses);
   if (!seeded) return tl::unexpected(withContext("seeding the default course", seeded.error()));
   return std::unique_ptr<LearningSession>(new LearningSession(std::move(*database)));
 }

@@ -29,7 +29,7 @@ namespace at::app {
 // `anatomy-tutor progress --user student` then see the same progress.
 inline constexpr const char* kDefaultLessonUser = "student";
 
-// The course folder: $AT_DATA_DIR/courses when set, else the source tree's data/courses.
+// The course folder: dataSubdirectory("courses") (data_paths.h: $AT_DATA_DIR, else the installed data).
 std::string courseDirectory();
 
 class LearningSession {

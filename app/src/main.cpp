@@ -46,7 +46,8 @@ void printUsage() {
               "  --user (whose progress) and --size (window or image size) may stand before the\n"
               "  command or after it.\n\n");
   for (const Command& c : commands()) std::printf("  %-12s %s\n", c.name, c.summary);
-  std::printf("\n`anatomy-tutor COMMAND --help` describes each command.\n");
+  std::printf("\n`anatomy-tutor COMMAND --help` describes each command. Courses, presets and studies are read from\n"
+              "../share/anatomy-tutor beside the executable; AT_DATA_DIR=DIR reads them from DIR instead.\n");
 }
 
 // The desktop app on the default course when a display exists; otherwise one line saying so and the

@@ -27,6 +27,7 @@
 
 #include "core/strings.h"
 #include "load_limits.h"
+#include "raw_values.h"
 
 namespace at {
 
@@ -179,20 +180,6 @@ std::optional<ScalarKind> parseType(const std::string& text) {
   const auto it = kinds.find(text);
   if (it == kinds.end()) return std::nullopt;
   return it->second;
-}
-
-std::size_t bytesOf(ScalarKind kind) {
-  switch (kind) {
-    case ScalarKind::Int8:
-    case ScalarKind::UInt8: return 1;
-    case ScalarKind::Int16:
-    case ScalarKind::UInt16: return 2;
-    case ScalarKind::Int32:
-    case ScalarKind::UInt32:
-    case ScalarKind::Float32: return 4;
-    case ScalarKind::Float64: return 8;
-  }
-  return 1;
 }
 
 const char* nrrdTypeName(ScalarKind kind) {
@@ -590,20 +577,6 @@ Status decodeChunk(const std::string& what, const std::string& bytes, std::size_
   return {};
 }
 
-template <class T>
-void convertValues(const std::string& bytes, bool swap, std::vector<float>& out) {
-  const std::size_t n = out.size();
-  for (std::size_t i = 0; i < n; ++i) {
-    unsigned char raw[sizeof(T)];
-    std::memcpy(raw, bytes.data() + i * sizeof(T), sizeof(T));
-    if (swap)
-      for (std::size_t b = 0; b < sizeof(T) / 2; ++b) std::swap(raw[b], raw[sizeof(T) - 1 - b]);
-    T v;
-    std::memcpy(&v, raw, sizeof(T));
-    out[i] = float(v);
-  }
-}
-
 std::vector<SegmentInfo> parseSegments(const NrrdHeader& h, std::vector<std::string>& notes) {
   std::vector<SegmentInfo> segments;
   for (int n = 0; n < 65536; ++n) {
@@ -666,7 +639,7 @@ Result<LoadedImage> loadNrrd(const std::string& path, const ImageLoadOptions& op
       return fail(path + ": 'byte skip' '" + it->second + "' is not -1 or a non-negative integer");
 
   bool swap = false;
-  if (bytesOf(*kind) > 1) {
+  if (detail::bytesOf(*kind) > 1) {
     const auto endianIt = h.fields.find("endian");
     if (endianIt == h.fields.end()) return fail(path + ": the NRRD header has no 'endian' field for multi-byte data");
     const std::string endian = str::lower(endianIt->second);
@@ -685,7 +658,7 @@ Result<LoadedImage> loadNrrd(const std::string& path, const ImageLoadOptions& op
 
   auto files = dataFiles(path, h);
   if (!files) return tl::unexpected(files.error());
-  const std::size_t totalBytes = layout->valueCount * bytesOf(*kind);
+  const std::size_t totalBytes = layout->valueCount * detail::bytesOf(*kind);
   const std::string typeText = std::string(toString(*kind));
   std::string data;
   data.reserve(totalBytes);
@@ -722,16 +695,7 @@ Result<LoadedImage> loadNrrd(const std::string& path, const ImageLoadOptions& op
   loaded.image.geometry = *geometry;
   loaded.image.voxels.resize(layout->valueCount);
   std::vector<float>& out = loaded.image.voxels;
-  switch (*kind) {
-    case ScalarKind::Int8: convertValues<std::int8_t>(data, swap, out); break;
-    case ScalarKind::UInt8: convertValues<std::uint8_t>(data, swap, out); break;
-    case ScalarKind::Int16: convertValues<std::int16_t>(data, swap, out); break;
-    case ScalarKind::UInt16: convertValues<std::uint16_t>(data, swap, out); break;
-    case ScalarKind::Int32: convertValues<std::int32_t>(data, swap, out); break;
-    case ScalarKind::UInt32: convertValues<std::uint32_t>(data, swap, out); break;
-    case ScalarKind::Float32: convertValues<float>(data, swap, out); break;
-    case ScalarKind::Float64: convertValues<double>(data, swap, out); break;
-  }
+  detail::decodeRawValues(data, *kind, swap, out);
   loaded.segments = parseSegments(h, loaded.notes);
   return loaded;
 }
