@@ -102,6 +102,7 @@ Result<std::unique_ptr<TerminalViews>> TerminalViews::create(db::Database& db, c
   fs::create_directories(dir, ec);
   if (ec) return fail(dir.string() + ": cannot create the folder for the pictures (" + ec.message() + ")");
   v->dir_ = std::move(dir);
+  v->gradients_ = std::make_unique<render::GradientVolume>(render::computeGradientVolume(v->dataset_.volume));
   auto context = render::gl::EglContext::create();
   if (!context) return fail("offscreen rendering: " + context.error().message);
   v->context_ = std::make_unique<render::gl::EglContext>(std::move(*context));
@@ -125,14 +126,14 @@ Result<const FloatVolume*> TerminalViews::fieldOf(const Structure& structure, co
 
 Result<render::RenderSettings> TerminalViews::settingsFor(const Structure& selected, const render::Preset& preset,
                                                           const std::string& view, int width, int height,
-                                                          double contextScale) {
+                                                          double margin) {
   auto frame = render::structureFrame(dataset_.labels, selected.label);
   if (!frame) return fail(selected.id + ": " + frame.error().message);
   render::ViewRequest request;
   request.width = width;
   request.height = height;
   request.view = view;
-  if (contextScale > 0) request.contextScale = contextScale;
+  if (margin > 0) request.margin = margin;
   auto settings = render::settingsFor(preset, *frame, request);
   if (!settings) return tl::unexpected(settings.error());
   settings->background = {0.04f, 0.04f, 0.05f, 1.0f};
@@ -157,7 +158,7 @@ Result<TerminalPicture> TerminalViews::show(const lessons::QuestionScene& scene,
     field = *f;
   }
   const render::TransferFunction2D table = render::shadingTable(*preset);
-  render::SceneVolumes volumes{&dataset_.volume, &dataset_.labels, field, selected->label};
+  render::SceneVolumes volumes{&dataset_.volume, &dataset_.labels, field, selected->label, gradients_.get()};
 
   std::vector<std::string> views = {lessons::toString(scene.view)};
   const Structure* target = visibleTarget ? dataset_.findStructure(*visibleTarget) : nullptr;
@@ -169,7 +170,7 @@ Result<TerminalPicture> TerminalViews::show(const lessons::QuestionScene& scene,
       if (v != scene.view) views.push_back(lessons::toString(v));
   std::optional<render::RenderSettings> chosen;
   for (const std::string& view : views) {
-    auto settings = settingsFor(*selected, *preset, view, kWidth, kHeight, region ? kRegionContext : 0);
+    auto settings = settingsFor(*selected, *preset, view, kWidth, kHeight, region ? kRegionMargin : 0);
     if (!settings) return tl::unexpected(settings.error());
     if (!chosen) chosen = *settings;  // the scene's own side unless another shows the target
     if (!targetCentre) break;
@@ -249,7 +250,7 @@ Result<quiz::Pick> TerminalViews::pickPixel(double x, double y, const std::strin
   if (x < 0 || y < 0 || x >= lastSettings_->width || y >= lastSettings_->height)
     return fail("the pixel (" + std::to_string(int(x)) + ", " + std::to_string(int(y)) + ") is outside the " +
                 std::to_string(lastSettings_->width) + "×" + std::to_string(lastSettings_->height) + " picture");
-  render::SceneVolumes volumes{&dataset_.volume, &dataset_.labels, lastField_, lastSelected_};
+  render::SceneVolumes volumes{&dataset_.volume, &dataset_.labels, lastField_, lastSelected_, gradients_.get()};
   const render::PickResult hit =
       render::pickStructure(volumes, *lastSettings_, render::shadingTable(lastSettings_->preset), x, y);
   return pickAt(hit.hit ? std::optional<Vec3>(hit.pointMm) : std::nullopt, hit.hit ? hit.label : 0, target);
