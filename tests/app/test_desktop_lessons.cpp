@@ -310,7 +310,17 @@ TEST_CASE("a review answer is recorded: a wrong one puts its structure in the qu
   vestibuleTaughtAndDue(db, "reviewer");
   const std::string question = "inner_ear.identify_vestibule", target = "vestibule";
   const json right = target;
-  const json wrong = "cochlea";
+  // The question and its choices (computed from the weighted distances: fixed for the dataset).
+  const Run first = runLessonScript(dir, {{"actions", {{{"do", "review"}}}}}, db, "reviewer");
+  INFO(first.err);
+  REQUIRE(first.exitCode == 0);
+  const auto shown = eventsOf(first, "review_question");
+  REQUIRE(shown.size() == 1);
+  REQUIRE(shown[0].value("question", "") == question);
+  json wrong;
+  for (const json& c : shown[0].at("choices"))
+    if (c != target) wrong = c;
+  REQUIRE(wrong.is_string());
 
   // Answered wrong: recorded, a lapse: the structure relearns, due again in 10 minutes.
   const Run missed = runLessonScript(dir, {{"actions", {{{"do", "review"}}, {{"do", "answer"}, {"value", wrong}}}}},
