@@ -35,6 +35,9 @@ Preset wholeVolumePreset(const IntensityModel& intensity, const Geometry& grid) 
   const double lo = intensity.window[0], width = intensity.window[1] - intensity.window[0];
   const auto at = [&](double f) { return lo + f * width; };
   p.huWindow = intensity.window;
+  // Context surfaces by edge strength: the CT defaults (40 … 300 HU per voxel, about 1 % … 10 % of
+  // the WDT's 3000 HU window) as the same fractions of this window, so a µCT's 0 … 255 edges show.
+  p.surfaceGradientHu = {float(0.013 * width), float(0.1 * width)};
   p.dataTf = {{at(0.0), clear}, {at(0.28), clear}, {at(0.35), flesh}, {at(0.42), flesh},
               {at(0.60), {0.95f, 0.9f, 0.82f, 0.5f * dense}}, {at(1.0), {1, 1, 1, dense}}};
   return p;

@@ -28,13 +28,16 @@ struct StrokeRule {
   int perStructure = 8;
   double spacingFraction = 0.15;
   double ringVoxels = 2.0;
-  double ringSpacingMm = 1.0;
+  double ringSpacingMm = 0.5;
   double backgroundCellMm = 6.0;
   double backgroundClearanceMm = 0.6;
-  double innerRingSpacingMm = 1.0;  // > 0: also dots inside the structure, ringVoxels deep, this far apart
+  double innerRingSpacingMm = 0.5;  // > 0: also dots inside the structure, ringVoxels deep, this far apart
 };
 
-inline segment::SeedSet strokesInsideLabels(const Dataset& dataset, const StrokeRule& rule = {}) {
+// `maxDepthMm` (optional) receives each structure's largest distance from its outside: its half
+// thickness (a tube's radius).
+inline segment::SeedSet strokesInsideLabels(const Dataset& dataset, const StrokeRule& rule = {},
+                                            std::map<std::uint16_t, double>* maxDepthMm = nullptr) {
   const Geometry& g = dataset.labels.geometry;
   const Dims d = g.dims;
   segment::SeedSet set;
@@ -71,6 +74,7 @@ inline segment::SeedSet strokesInsideLabels(const Dataset& dataset, const Stroke
     for (std::size_t v = 0; v < depth.voxels.size(); ++v)
       if (!outside.voxels[v]) order.push_back({depth.voxels[v], v});
     std::sort(order.begin(), order.end(), [](const auto& a, const auto& b) { return a.first > b.first; });
+    if (maxDepthMm && !order.empty()) (*maxDepthMm)[s.label] = order.front().first;
     const double extent = norm(box.extentMm());
     std::vector<Vec3> picked;
     for (const auto& [dist, v] : order) {

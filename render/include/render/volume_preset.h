@@ -12,7 +12,8 @@ namespace at::render {
 // A WDT-mode preset whose distance TF is transparent and t = 1, so that a sample shows the data TF
 // alone. CT: air and fat clear, soft tissue (0 … 100 HU) faint, bone white from ~200 HU. Plain
 // intensities, over their histogram window (volume/intensity.h): clear below 28 % of it (air,
-// background), faint tissue around 35–42 %, rising to white dense material at its top. Opacities
+// background), faint tissue around 35–42 %, rising to white dense material at its top, with context surfaces at edges of 1 % … 10 % of the
+// window per voxel (CT: the preset's default 40 … 300 HU). Opacities
 // are per kWholeVolumeRefMm of ray and scaled to the grid's size, so tissue stays a haze and bone
 // shows on any scan. TF points are in stored values, as the ray caster samples them.
 constexpr double kWholeVolumeRefMm = 0.25;
