@@ -7,7 +7,6 @@
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
-#include <ctime>
 #include <filesystem>
 #include <map>
 #include <string>
@@ -16,12 +15,10 @@
 #include "commands.h"
 #include "core/strings.h"
 #include "dataset_resolver.h"
-#include "db/checksum.h"
-#include "db/dataset_store.h"
+#include "label_output.h"
 #include "segment/label_editor.h"
 #include "segment/seeds.h"
 #include "volume/label_writers.h"
-#include "volume/nifti_io.h"
 #include "wdt/label_growth.h"
 
 namespace at::app {
@@ -103,52 +100,21 @@ std::vector<Structure> structuresOf(const segment::SeedSet& seeds) {
     Structure s;
     s.label = l.value;
     s.id = str::identifier(l.name);
-    s.displayName = l.name;
-    if (l.colour) s.colour = *l.colour;
-    else {
-      const double hue = std::fmod(l.value * 137.508, 360.0) / 360.0;
-      s.colour = {float(0.5 + 0.4 * std::cos(6.2832 * hue)), float(0.5 + 0.4 * std::cos(6.2832 * (hue - 1.0 / 3))),
-                  float(0.5 + 0.4 * std::cos(6.2832 * (hue - 2.0 / 3)))};
-    }
+    s.displayName = displayNameOf(l.name);
+    s.colour = l.colour.value_or(paletteColour(l.value));
     out.push_back(s);
   }
   return out;
 }
 
-Status writeLabels(const fs::path& out, const LabelMap& labels, const std::vector<Structure>& structures) {
-  const std::string name = out.filename().string();
-  if (str::endsWith(name, ".seg.nrrd")) return writeSegNrrd(out.string(), labels, structures);
-  if (str::endsWith(name, ".nii") || str::endsWith(name, ".nii.gz")) return writeNiftiLabels(out.string(), labels);
-  return fail("--out '" + out.string() + "': use a .nii, .nii.gz or .seg.nrrd file name");
-}
-
-// Writes the labels under <database folder>/labels and records them for the imported dataset.
+// --save: the labels into the dataset store (imported datasets).
 Result<std::string> saveToStore(const cli::Args& args, const std::string& datasetName, const LabelMap& labels,
                                 const std::vector<Structure>& structures) {
   auto database = db::openDatabase(args.db());
   if (!database) return tl::unexpected(database.error());
-  auto record = db::findDataset(*database, datasetName);
-  if (!record) return tl::unexpected(record.error());
-  if (!*record)
-    return fail(ErrorKind::NotFound, "--save: '" + datasetName +
-                                         "' is not an imported dataset (anatomy-tutor import registers one)");
-  const fs::path folder = fs::absolute(fs::path(database->path()).parent_path() / "labels");
-  std::error_code ec;
-  fs::create_directories(folder, ec);
-  if (ec) return fail(ErrorKind::Io, "--save: cannot create " + folder.string() + " (" + ec.message() + ")");
-  char stamp[32];
-  const std::time_t now = std::time(nullptr);
-  std::strftime(stamp, sizeof stamp, "%Y%m%dT%H%M%SZ", std::gmtime(&now));
-  const fs::path labelsPath = folder / (str::identifier(datasetName) + "-" + stamp + ".nii.gz");
-  const fs::path namesPath = folder / (str::identifier(datasetName) + "-" + stamp + ".names.json");
-  if (auto ok = writeNiftiLabels(labelsPath.string(), labels); !ok) return tl::unexpected(ok.error());
-  if (auto ok = writeLabelNames(namesPath.string(), structures); !ok) return tl::unexpected(ok.error());
-  auto checksum = db::checksumPath(labelsPath.string());
-  if (!checksum) return tl::unexpected(checksum.error());
-  if (auto ok = db::saveDatasetLabels(*database, datasetName, labelsPath.string(), *checksum, namesPath.string(), structures);
-      !ok)
-    return tl::unexpected(ok.error());
-  return labelsPath.string();
+  auto saved = storeDatasetLabels(*database, datasetName, labels, structures);
+  if (!saved) return tl::unexpected(withContext("--save", saved.error()));
+  return saved;
 }
 
 double dice(const LabelMap& a, const LabelMap& b, std::uint16_t label, std::size_t& inA, std::size_t& inB) {
@@ -177,6 +143,7 @@ int runSegment(const Argv& argv) {
   if (!seedsPath) return reportError("segment: --seeds SEEDS.json is required", 2);
   const auto out = args->value("out");
   if (!out) return reportError("segment: --out LABELS.nii.gz is required", 2);
+  if (auto ok = checkLabelsPath(*out); !ok) return reportError("segment: " + ok.error().message, 2);
   const std::string method = args->valueOr("method", "grow");
   if (method != "grow" && method != "threshold")
     return reportError("segment: --method must be grow or threshold, not '" + method + "'", 2);
@@ -224,7 +191,7 @@ int runSegment(const Argv& argv) {
   }
   const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
 
-  if (auto ok = writeLabels(*out, editor.labels(), editor.structures()); !ok) return reportError("segment: " + ok.error().message);
+  if (auto ok = writeLabelsFile(*out, editor.labels(), editor.structures()); !ok) return reportError("segment: " + ok.error().message);
   if (auto names = args->value("names"))
     if (auto ok = writeLabelNames(*names, editor.structures()); !ok) return reportError("segment: " + ok.error().message);
   std::string saved;

@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <deque>
 
+#include "core/strings.h"
 #include "segment/distance_map.h"
 #include "volume/mask.h"
 
@@ -135,12 +136,8 @@ Result<std::uint16_t> LabelEditor::addStructure(const std::string& name, std::op
   Structure s;
   s.label = label;
   s.displayName = name;
-  s.id = name;
-  for (char& c : s.id) c = (c == ' ' || c == '-') ? '_' : char(std::tolower(static_cast<unsigned char>(c)));
-  const double hue = std::fmod(label * 137.508, 360.0) / 360.0;  // golden-angle hues
-  s.colour = colour.value_or(std::array<float, 3>{float(0.5 + 0.4 * std::cos(6.2832 * hue)),
-                                                  float(0.5 + 0.4 * std::cos(6.2832 * (hue - 1.0 / 3))),
-                                                  float(0.5 + 0.4 * std::cos(6.2832 * (hue - 2.0 / 3)))});
+  s.id = str::identifier(name);
+  s.colour = colour.value_or(paletteColour(label));
   structures_.push_back(s);
   commit("add structure '" + name + "'", {}, before);
   return label;

@@ -8,6 +8,7 @@
 #include "course_views.h"
 #include "dataset_resolver.h"
 #include "render/structure_pick.h"
+#include "segment_controller.h"
 
 namespace at::app {
 
@@ -32,6 +33,7 @@ DesktopModel::DesktopModel(LearningSession& session, const render::PresetLibrary
       [this] { return renderState(); });
   study_ = std::make_unique<StudyController>(session_.database(), library_, sink);
   imports_ = std::make_unique<ImportController>(session_.database(), sink, [this](const std::string& m) { message(m); });
+  segment_ = std::make_unique<SegmentController>(session_.database(), sink);
   scheduler_.setViewPixels(layout_.viewPixelsW(), layout_.viewPixelsH());
 }
 
@@ -91,6 +93,7 @@ Status DesktopModel::showDataset(Dataset dataset, const std::string& startStruct
       *dataset_, explore_, sink, [this](const std::string& m) { message(m); },
       [this](const std::string& clicked, double distanceMm) { lessons_->clicked(clicked, distanceMm); });
   expert_ = std::make_unique<TfEditor>(*dataset_, session_.database(), sink);
+  segment_->attach(*dataset_);
   recorder_.highlightNotWanted();
   lastPickMm_.reset();
   lessons_->setViewDataset(dataset_->id);

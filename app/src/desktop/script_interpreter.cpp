@@ -48,6 +48,10 @@ const std::map<std::string, ScriptInterpreter::Handler>& ScriptInterpreter::hand
       {"coordinator_open", &S::coordinatorOpen}, {"coordinator_export", &S::coordinatorExport},
       {"coordinator_summary", &S::coordinatorSummary}, {"import", &S::importDataset},
       {"cancel_import", &S::cancelImport}, {"open_imported", &S::openImported},
+      {"segment_open", &S::segmentOpen}, {"segment_label", &S::segmentLabel},
+      {"segment_slice", &S::segmentSlice}, {"segment_seed", &S::segmentSeed},
+      {"segment_grow", &S::segmentGrow}, {"segment_undo", &S::segmentUndo},
+      {"segment_clear_seeds", &S::segmentClearSeeds}, {"segment_save", &S::segmentSave},
   };
   return table;
 }

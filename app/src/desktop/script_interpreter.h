@@ -12,6 +12,8 @@
 //   studies:  study_start, study_toggle, study_rate, study_comment, study_next, study_close,
 //             coordinator_open, coordinator_export, coordinator_summary
 //   import:   import, cancel_import, open_imported
+//   segment:  segment_open, segment_label, segment_slice, segment_seed, segment_grow, segment_undo,
+//             segment_clear_seeds, segment_save
 // An action that waits (a lesson being prepared, an import, an export, a locate answer's distance
 // field) is asked again next frame. A malformed or failing action ends the script with status 2,
 // something waited for that never came (a timeout) with status 1.
@@ -114,6 +116,15 @@ class ScriptInterpreter {
   Outcome importDataset(Context&);
   Outcome cancelImport(Context&);
   Outcome openImported(Context&);
+  // The segment editor (script_actions_segment.cpp)
+  Outcome segmentOpen(Context&);
+  Outcome segmentLabel(Context&);
+  Outcome segmentSlice(Context&);
+  Outcome segmentSeed(Context&);
+  Outcome segmentGrow(Context&);
+  Outcome segmentUndo(Context&);
+  Outcome segmentClearSeeds(Context&);
+  Outcome segmentSave(Context&);
 
   std::deque<nlohmann::json> actions_;
   std::optional<std::string> finalScreenshot_;

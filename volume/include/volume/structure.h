@@ -28,6 +28,12 @@ struct Provenance {
   std::vector<std::string> notes;   // loader remarks: chosen series, resampling, …
 };
 
+// How names given by users and label-name files are shown: "kidney_right" → "Kidney right";
+// names with spaces or capitals are kept as written.
+std::string displayNameOf(const std::string& name);
+// A distinct colour for a label that has none (linear RGB): hues spaced by the golden angle.
+std::array<float, 3> paletteColour(std::uint16_t label);
+
 struct Dataset {
   std::string id;                   // "phantom" or an imported dataset's name
   std::string displayName;

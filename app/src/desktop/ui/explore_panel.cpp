@@ -6,6 +6,7 @@
 
 #include "core/strings.h"
 #include "panels.h"
+#include "segment_controller.h"
 
 namespace at::app {
 
@@ -28,6 +29,8 @@ void ExplorePanel::draw(DesktopModel& model, const Status& status) {
   if (ImGui::SmallButton("Studies...")) model.study().coordinatorOpen = true;
   ImGui::SameLine();
   if (ImGui::SmallButton("Import...")) model.imports().windowOpen = true;
+  ImGui::SameLine();
+  if (ImGui::SmallButton("Segment...")) model.segmenter().windowOpen = true;
   ImGui::Separator();
   lessons_.draw(model.lessons(), float(layout.windowH) * 0.4f);
   ImGui::Separator();
