@@ -369,7 +369,12 @@ void StudyPanel::summaryChart() {
   if (!summary_ || studyIndex_ < 0) return;
   if (chartStale_) {
     chartStale_ = false;
-    const RgbImage chart = quiz::renderSummaryChart(studies_[std::size_t(studyIndex_)], *summary_);
+    auto rasterised = app::summaryChart(studies_[std::size_t(studyIndex_)], *summary_);
+    if (!rasterised) {
+      coordinatorMessage_ = rasterised.error().message;
+      return;
+    }
+    const RgbImage& chart = *rasterised;
     render::RgbaImage rgba(chart.width, chart.height);
     for (std::size_t i = 0; i < std::size_t(chart.width) * std::size_t(chart.height); ++i) {
       for (std::size_t c = 0; c < 3; ++c) rgba.rgba[i * 4 + c] = chart.rgb[i * 3 + c];

@@ -303,6 +303,19 @@ FROM (SELECT a.user_id, r.structure, r.question_id, 'lesson' AS source, r.id AS 
 ORDER BY answered_at, source, source_id;
 )SQL";
 
+// Study ratings remember the participant's session they were given in (before, every row showed
+// the participant's latest session). Ratings given when the participant had one session so far
+// are from session 1; for the others the session is not known (NULL, exported blank). Trials
+// remember whether their viewing times were measured (the desktop runner) or the two views were
+// shown as files outside the program (the terminal runner: times not known).
+constexpr std::string_view kStudySessions = R"SQL(
+ALTER TABLE study_ratings ADD COLUMN session INTEGER;
+UPDATE study_ratings SET session = 1
+WHERE (SELECT p.session FROM study_participants p
+       WHERE p.study_id = study_ratings.study_id AND p.participant_id = study_ratings.participant_id) = 1;
+ALTER TABLE study_trials ADD COLUMN viewing_measured INTEGER NOT NULL DEFAULT 1;
+)SQL";
+
 }  // namespace
 
 const std::vector<Migration>& migrations() {
@@ -313,6 +326,7 @@ const std::vector<Migration>& migrations() {
       {4, "preference studies: protocols, participants, blinded trials, ratings", kStudies},
       {5, "review responses: answers to review questions outside lesson attempts", kReviews},
       {6, "FSRS memory states (from the Leitner boxes) and the review log", kFsrs},
+      {7, "study ratings keep their session; trials say whether viewing was measured", kStudySessions},
   };
   return all;
 }

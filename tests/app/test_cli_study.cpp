@@ -8,6 +8,7 @@
 #include <nlohmann/json.hpp>
 
 #include "quiz/study_report.h"
+#include "redcap_rules.h"
 #include "test_support.h"
 #include "volume/png_image.h"
 
@@ -60,9 +61,10 @@ TEST_CASE("StudyCli_ScriptedParticipants_ExportIsCompleteDeterministicAndUnblind
   auto e2 = test::runApp("study export " + study + " --out '" + (dir / "e2").string() + "' " + db);
   REQUIRE(e1.exitCode == 0);
   REQUIRE(e2.exitCode == 0);
-  CHECK(e1.err.find("[8/8] summary.png") != std::string::npos);  // progress shown
-  for (const char* f : {"responses_long.csv", "responses_wide.csv", "data_dictionary.csv", "responses_long.json",
-                        "summary.csv", "summary.md", "summary.svg", "summary.png"}) {
+  CHECK(e1.err.find("[10/10] summary.png") != std::string::npos);  // progress shown
+  for (const char* f : {"responses_long.csv", "responses_wide.csv", "responses_long.json", "redcap_dictionary.csv",
+                        "redcap_records.csv", "redcap_repeating_forms.csv", "summary.csv", "summary.md", "summary.svg",
+                        "summary.png"}) {
     CAPTURE(f);
     REQUIRE(fs::exists(dir / "e1" / f));
     CHECK(test::readFile(dir / "e1" / f) == test::readFile(dir / "e2" / f));  // exporting twice gives identical bytes
@@ -92,9 +94,51 @@ TEST_CASE("StudyCli_ScriptedParticipants_ExportIsCompleteDeterministicAndUnblind
   CHECK(p3Rows.size() == 5);
   const std::string md = test::readFile(dir / "e1" / "summary.md");
   CHECK(md.find("3 participant(s), of whom 1 stopped before the end") != std::string::npos);
+  // The REDCap files import: checked against REDCap's rules.
+  const auto problems = test::checkRedcapImport(test::readFile(dir / "e1" / "redcap_dictionary.csv"),
+                                                test::readFile(dir / "e1" / "redcap_records.csv"),
+                                                test::readFile(dir / "e1" / "redcap_repeating_forms.csv"));
+  std::string listed;
+  for (const auto& problem : problems) listed += problem + "\n";
+  CHECK_MESSAGE(problems.empty(), listed);
+  CHECK(quiz::parseCsv(test::readFile(dir / "e1" / "redcap_records.csv")).size() == 1 + 3 + 13 * 4 * 2 + 5 * 4);
+
+  // The chart PNG is the SVG with its text: dark glyph pixels left of the axis on every item's row,
+  // under the axis (scale numbers) and in the legend; each group's marker at its mean.
   auto png = readPng((dir / "e1" / "summary.png").string());
   REQUIRE(png.has_value());
-  CHECK(png->width > 100);
+  const quiz::ChartLayout layout;
+  CHECK(png->width == layout.width);
+  CHECK(png->height == layout.height(4));
+  auto darkIn = [&](int x0, int y0, int x1, int y1) {
+    int n = 0;
+    for (int y = y0; y < y1; ++y)
+      for (int x = x0; x < x1; ++x) {
+        const std::uint8_t* q = png->pixel(x, y);
+        n += (q[0] < 110 && q[1] < 110 && q[2] < 110) ? 1 : 0;
+      }
+    return n;
+  };
+  for (int item = 0; item < 4; ++item) {
+    CAPTURE(item);
+    const int rowMiddle = layout.top + item * layout.rowHeight + layout.rowHeight / 2;
+    CHECK(darkIn(5, rowMiddle - 12, layout.left - 20, rowMiddle + 8) > 20);  // the item's name
+  }
+  const int axisBottom = layout.top + 4 * layout.rowHeight;
+  CHECK(darkIn(layout.left - 10, axisBottom + 5, png->width - 10, axisBottom + 24) > 20);  // scale numbers
+  CHECK(darkIn(0, 0, png->width, 30) > 50);                                              // the title
+  const auto summaryRows = quiz::parseCsv(test::readFile(dir / "e1" / "summary.csv"));
+  for (std::size_t i = 1; i < summaryRows.size(); ++i) {
+    const auto& r = summaryRows[i];  // item, group, n, mean, …
+    if (r[2] == "0") continue;
+    const std::size_t item = std::size_t(i - 1) / 3, column = std::size_t(i - 1) % 3;
+    const int x = layout.xOf(std::stod(r[3]), quiz::StudyScale{}), y = layout.yOf(item, column, 3);
+    CAPTURE(r[0]);
+    CAPTURE(r[1]);
+    const std::uint8_t* q = png->pixel(x, y);
+    const auto colour = quiz::chartColumnColour(column);
+    CHECK(std::abs(int(q[0]) - colour[0]) + std::abs(int(q[1]) - colour[1]) + std::abs(int(q[2]) - colour[2]) < 30);
+  }
 }
 
 TEST_CASE("StudyCli_EmptyStudyExport_WritesHeadersOnly") {

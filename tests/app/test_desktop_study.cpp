@@ -154,7 +154,7 @@ TEST_CASE("the study runner shows no structure names and its ratings land in the
   CHECK(diff / samples > 3.0);
 }
 
-TEST_CASE("the coordinator export writes the eight study files and shows the summary") {
+TEST_CASE("the coordinator export writes the ten study files and shows the summary") {
   if (!at::test::requireXvfb()) return;
   TempDir dir("at-study-ui");
   const json study = shippedStudy();
@@ -172,10 +172,10 @@ TEST_CASE("the coordinator export writes the eight study files and shows the sum
   REQUIRE(r.exitCode == 0);
 
   const auto progress = eventsOf(r, "export_progress");
-  REQUIRE(progress.size() == 8);
+  REQUIRE(progress.size() == 10);
   for (std::size_t k = 0; k < progress.size(); ++k) {
     CHECK(progress[k]["k"] == k + 1);
-    CHECK(progress[k]["n"] == 8);
+    CHECK(progress[k]["n"] == 10);
     const fs::path file = dir / "export" / progress[k]["file"].get<std::string>();
     CHECK_MESSAGE(fs::is_regular_file(file), file.string());
     CHECK(fs::file_size(file) > 0);

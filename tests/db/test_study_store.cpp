@@ -105,3 +105,77 @@ TEST_CASE("StudyStore_RatingsAreUnblindedOnExport") {
   CHECK((*completion)[0].complete);
   CHECK((*completion)[0].ratingsGiven == (*completion)[0].ratingsExpected);
 }
+
+TEST_CASE("StudyStore_ResumedParticipant_EachRatingKeepsTheSessionItWasGivenIn") {
+  test::TempDir dir;
+  auto db = db::Database::open((dir / "t.db").string());
+  REQUIRE(db.has_value());
+  const auto p = protocol();
+  REQUIRE(db::saveStudy(*db, p).has_value());
+  REQUIRE(db::enrolOrResume(*db, p, "P0", "medical").has_value());
+  db::RatingRecord r;
+  r.item = p.items[0].id;
+  r.ratingAsShown = 2;
+  REQUIRE(db::recordRating(*db, p.id, "P0", r).has_value());
+  REQUIRE(db::recordTrialViewing(*db, p.id, "P0", 0, 100, 200, 1, "", false).has_value());
+  REQUIRE(db::enrolOrResume(*db, p, "P0", "medical").has_value());  // session 2
+  r.item = p.items[1].id;
+  REQUIRE(db::recordRating(*db, p.id, "P0", r).has_value());
+  auto rows = db::studyResponseRows(*db, p);
+  REQUIRE(rows.has_value());
+  REQUIRE(rows->size() == 2);
+  CHECK((*rows)[0].session == 1);
+  CHECK((*rows)[1].session == 2);
+  CHECK_FALSE((*rows)[0].viewingMeasured);  // shown as files: the times are not known
+  auto participants = db::studyParticipantRows(*db, p.id);
+  REQUIRE(participants.has_value());
+  REQUIRE(participants->size() == 1);
+  CHECK((*participants)[0].sessions == 2);
+}
+
+TEST_CASE("StudyStore_RatingsFromBeforeSessionsWereKept_MigrateToSessionOneOrUnknown") {
+  test::TempDir dir;
+  const std::string path = (dir / "old.db").string();
+  const auto p = protocol();
+  {
+    db::OpenOptions options;
+    options.targetVersion = 6;
+    auto old = db::Database::open(path, options);
+    REQUIRE(old.has_value());
+    REQUIRE(db::saveStudy(*old, p).has_value());
+    for (const char* who : {"once", "twice"}) {
+      REQUIRE(old->exec(std::string("INSERT INTO study_participants (study_id, participant_id, group_name, enrolment_index,"
+                                    " session) VALUES ('") + p.id + "', '" + who + "', 'medical', " +
+                        (who[0] == 'o' ? "0, 1" : "1, 2") + ");"));
+      REQUIRE(old->exec(std::string("INSERT INTO study_trials (study_id, participant_id, position, structure, a_condition,"
+                                    " b_condition, preset_a, preset_b) VALUES ('") + p.id + "', '" + who +
+                        "', 0, 'cochlea', 'wdt', 'bare', 'cochlea_wdt', 'cochlea_bare');"));
+      REQUIRE(old->exec(std::string("INSERT INTO study_ratings (study_id, participant_id, position, item, rating_ab)"
+                                    " VALUES ('") + p.id + "', '" + who + "', 0, 'shape', 2);"));
+    }
+  }
+  auto db = db::Database::open(path);
+  REQUIRE(db.has_value());
+  auto rows = db::studyResponseRows(*db, p);
+  REQUIRE(rows.has_value());
+  REQUIRE(rows->size() == 2);
+  CHECK((*rows)[0].participantId == "once");
+  CHECK((*rows)[0].session == 1);
+  CHECK((*rows)[1].session == 0);  // resumed before the upgrade: which session is not known
+  CHECK((*rows)[1].viewingMeasured);
+}
+
+TEST_CASE("StudyStore_ParticipantIdsThatAreNoValidRecordNames_AreRefused") {
+  test::TempDir dir;
+  auto db = db::Database::open((dir / "t.db").string());
+  REQUIRE(db.has_value());
+  const auto p = protocol();
+  REQUIRE(db::saveStudy(*db, p).has_value());
+  for (const char* bad : {"", "=cmd|'calc'", "a b", "-P1", "P1,2"}) {
+    CAPTURE(bad);
+    auto e = db::enrolOrResume(*db, p, bad, "medical");
+    REQUIRE_FALSE(e.has_value());
+    CHECK(e.error().message.find("letters, digits") != std::string::npos);
+  }
+  CHECK(db::enrolOrResume(*db, p, "site-2_P07", "medical").has_value());
+}
