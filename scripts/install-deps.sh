@@ -15,6 +15,7 @@ packages=(
   libarchive-dev libplist-dev
   librsvg2-bin desktop-file-utils strace
   librsvg2-dev libcairo2-dev fonts-dejavu-core
+  postgresql libpq-dev
 )
 
 missing=()

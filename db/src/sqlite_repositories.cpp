@@ -253,11 +253,12 @@ Result<User> SqliteUserRepository::createUser(const std::string& name, Role role
     auto row = taken->step();
     if (!row) return tl::unexpected(row.error());
     if (*row) return fail(ErrorKind::Conflict, "the user name '" + name + "' is already taken");
-    auto insert = d.prepare("INSERT INTO users (name, role, group_name) VALUES (?1, ?2, ?3)");
+    auto insert = d.prepare("INSERT INTO users (name, role, group_name) VALUES (?1, ?2, ?3) RETURNING id");
     if (!insert) return tl::unexpected(insert.error());
     insert->bind(1, name).bind(2, toString(role)).bind(3, group);
-    if (auto s = insert->run(); !s) return s;
-    u.id = d.lastInsertId();
+    auto inserted = insert->insertReturningId();
+    if (!inserted) return tl::unexpected(inserted.error());
+    u.id = *inserted;
     return {};
   });
   if (!status) return tl::unexpected(status.error());
@@ -345,11 +346,12 @@ Result<Attempt> SqliteProgressRepository::startAttempt(std::int64_t userId, cons
   a.mode = mode;
   a.startedAt = startedAt;
   auto status = db_.writeTransaction([&](Database& d) -> Status {
-    auto insert = d.prepare("INSERT INTO attempts (user_id, lesson_id, mode, started_at) VALUES (?1, ?2, ?3, ?4)");
+    auto insert = d.prepare("INSERT INTO attempts (user_id, lesson_id, mode, started_at) VALUES (?1, ?2, ?3, ?4) RETURNING id");
     if (!insert) return tl::unexpected(insert.error());
     insert->bind(1, userId).bind(2, lessonId).bind(3, toString(mode)).bind(4, startedAt);
-    if (auto s = insert->run(); !s) return s;
-    a.id = d.lastInsertId();
+    auto inserted = insert->insertReturningId();
+    if (!inserted) return tl::unexpected(inserted.error());
+    a.id = *inserted;
     return {};
   });
   if (!status) return tl::unexpected(withContext("starting lesson '" + lessonId + "'", status.error()));
@@ -453,14 +455,14 @@ Status writeLearnerModel(Database& d, const LearnerUpdate& u, const GradedAnswer
 
   auto ability = d.prepare(
       "INSERT INTO user_ability (user_id, rating, answered) VALUES (?1, ?2, 1)"
-      " ON CONFLICT (user_id) DO UPDATE SET rating = excluded.rating, answered = answered + 1");
+      " ON CONFLICT (user_id) DO UPDATE SET rating = excluded.rating, answered = user_ability.answered + 1");
   if (!ability) return tl::unexpected(ability.error());
   ability->bind(1, p.userId).bind(2, u.abilityAfter);
   if (auto s = ability->run(); !s) return s;
 
   auto difficulty = d.prepare(
       "INSERT INTO question_stats (question_id, difficulty, answered) VALUES (?1, ?2, 1)"
-      " ON CONFLICT (question_id) DO UPDATE SET difficulty = excluded.difficulty, answered = answered + 1");
+      " ON CONFLICT (question_id) DO UPDATE SET difficulty = excluded.difficulty, answered = question_stats.answered + 1");
   if (!difficulty) return tl::unexpected(difficulty.error());
   difficulty->bind(1, answer.questionId).bind(2, u.difficultyAfter);
   return difficulty->run();
@@ -476,19 +478,20 @@ Result<std::int64_t> SqliteProgressRepository::recordAnswer(const AnswerRecord& 
   std::int64_t id = 0;
   auto status = db_.writeTransaction([&](Database& d) -> Status {
     auto insert = d.prepare(std::string("INSERT INTO responses (attempt_id, step_index, ") + kGradedAnswerColumns +
-                            ") VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13, ?14)");
+                            ") VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13, ?14) RETURNING id");
     if (!insert) return tl::unexpected(insert.error());
     insert->bind(1, r.attemptId).bind(2, r.stepIndex);
     bindGradedAnswer(*insert, 3, r);
-    if (auto s = insert->run(); !s) {
-      if (s.error().kind == ErrorKind::Conflict)
+    auto inserted = insert->insertReturningId();
+    if (!inserted) {
+      if (inserted.error().kind == ErrorKind::Conflict)
         return fail(ErrorKind::Conflict, "step " + std::to_string(r.stepIndex) + " of attempt " + std::to_string(r.attemptId) +
                     " is already answered");
-      if (s.error().kind == ErrorKind::NotFound)
+      if (inserted.error().kind == ErrorKind::NotFound)
         return fail(ErrorKind::NotFound, "unknown attempt " + std::to_string(r.attemptId));
-      return s;
+      return tl::unexpected(inserted.error());
     }
-    id = d.lastInsertId();
+    id = *inserted;
     return writeLearnerModel(d, record.update, r, AnswerSource::Lesson, id);
   });
   if (!status) return tl::unexpected(withContext("recording the answer", status.error()));
@@ -503,16 +506,17 @@ Result<std::int64_t> SqliteProgressRepository::recordReviewAnswer(const ReviewRe
   std::int64_t id = 0;
   auto status = db_.writeTransaction([&](Database& d) -> Status {
     auto insert = d.prepare(std::string("INSERT INTO review_responses (user_id, ") + kGradedAnswerColumns +
-                            ") VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13)");
+                            ") VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13) RETURNING id");
     if (!insert) return tl::unexpected(insert.error());
     insert->bind(1, r.userId);
     bindGradedAnswer(*insert, 2, r);
-    if (auto s = insert->run(); !s) {
-      if (s.error().kind == ErrorKind::NotFound)
+    auto inserted = insert->insertReturningId();
+    if (!inserted) {
+      if (inserted.error().kind == ErrorKind::NotFound)
         return fail(ErrorKind::NotFound, "unknown user id " + std::to_string(r.userId));
-      return s;
+      return tl::unexpected(inserted.error());
     }
-    id = d.lastInsertId();
+    id = *inserted;
     return writeLearnerModel(d, record.update, r, AnswerSource::Review, id);
   });
   if (!status) return tl::unexpected(withContext("recording the review answer", status.error()));

@@ -1,5 +1,6 @@
-// The SQLite layer: opening, migrations from every version, refusal of newer files, RAII
-// transactions, verbatim storage through bound parameters, concurrent writers, checksums.
+// The storage layer on SQLite and (AT_TEST_BACKEND=postgres) PostgreSQL: opening, migrations from
+// every version, refusal of newer databases, RAII transactions, verbatim storage through bound
+// parameters, concurrent writers, error kinds, checksums.
 #include <doctest/doctest.h>
 
 #include <cstdlib>
@@ -16,6 +17,7 @@
 #include "db/schema.h"
 #include "lessons/course_json.h"
 #include "lessons/lesson_engine.h"
+#include "test_databases.h"
 #include "test_support.h"
 #include "toy_course.h"
 
@@ -30,15 +32,7 @@ std::string readBytes(const fs::path& p) {
   return std::string(std::istreambuf_iterator<char>(in), {});
 }
 
-// Every table, index and their SQL: the schema as a comparable set.
-std::set<std::string> schemaOf(Database& db) {
-  auto s = db.prepare("SELECT type || ' ' || name || ': ' || coalesce(sql, '') FROM sqlite_master"
-                      " WHERE name NOT LIKE 'sqlite_%'");
-  REQUIRE(s);
-  std::set<std::string> out;
-  while (*s->step()) out.insert(s->text(0));
-  return out;
-}
+using test::schemaOf;
 
 std::int64_t countRows(Database& db, const std::string& table) {
   auto s = db.prepare("SELECT count(*) FROM " + table);
@@ -62,17 +56,19 @@ DatasetRecord sampleRecord(const std::string& name) {
 
 }  // namespace
 
-TEST_CASE("An empty file is migrated to the newest schema version in WAL mode with foreign keys on") {
+TEST_CASE("An empty database is migrated to the newest schema version (SQLite: WAL mode, foreign keys on)") {
   test::TempDir dir;
-  auto db = Database::open((dir / "a.db").string());
+  auto db = Database::open(test::freshDatabase(dir, "a.db"));
   REQUIRE_MESSAGE(db, (db ? "" : db.error().message));
   CHECK(*db->schemaVersion() == latestSchemaVersion());
-  auto mode = db->prepare("PRAGMA journal_mode");
-  REQUIRE(*mode->step());
-  CHECK(mode->text(0) == "wal");
-  auto fk = db->prepare("PRAGMA foreign_keys");
-  REQUIRE(*fk->step());
-  CHECK(fk->integer(0) == 1);
+  if (db->backend() == Backend::Sqlite) {
+    auto mode = db->prepare("PRAGMA journal_mode");
+    REQUIRE(*mode->step());
+    CHECK(mode->text(0) == "wal");
+    auto fk = db->prepare("PRAGMA foreign_keys");
+    REQUIRE(*fk->step());
+    CHECK(fk->integer(0) == 1);
+  }
   for (const char* table : {"datasets", "structures", "presets", "courses", "lessons", "lesson_prerequisites",
                             "steps", "questions", "users", "attempts", "responses", "leitner_progress", "user_ability",
                             "question_stats", "review_responses", "memory_states", "review_log"})
@@ -88,13 +84,13 @@ TEST_CASE("Migrations are numbered consecutively from 1") {
 
 TEST_CASE("A database at every earlier version migrates to the same schema as a fresh one and keeps its rows") {
   test::TempDir dir;
-  auto fresh = Database::open((dir / "fresh.db").string());
+  auto fresh = Database::open(test::freshDatabase(dir, "fresh.db"));
   REQUIRE(fresh);
   const auto reference = schemaOf(*fresh);
 
   for (int from = 0; from < latestSchemaVersion(); ++from) {
     CAPTURE(from);
-    const std::string path = (dir / "v").string().append(std::to_string(from)).append(".db");
+    const std::string path = test::freshDatabase(dir, "v" + std::to_string(from) + ".db");
     {
       OpenOptions options;
       options.targetVersion = from;
@@ -185,29 +181,25 @@ TEST_CASE("The newest migration adds the review responses table to a version-4 d
   REQUIRE(latestSchemaVersion() >= 5);
   CHECK(migrations()[4].summary.find("review") != std::string_view::npos);
   test::TempDir dir;
-  const std::string path = (dir / "v4.db").string();
+  const std::string path = test::freshDatabase(dir, "v4.db");
   {
     OpenOptions options;
     options.targetVersion = 4;
     auto old = Database::open(path, options);
     REQUIRE(old);
-    auto table = old->prepare("SELECT count(*) FROM sqlite_master WHERE name = 'review_responses'");
-    REQUIRE(*table->step());
-    CHECK(table->int64(0) == 0);
+    CHECK(!test::tableExists(*old, "review_responses"));
   }
   auto db = Database::open(path);
   REQUIRE(db);
   CHECK(*db->schemaVersion() == latestSchemaVersion());
-  auto table = db->prepare("SELECT count(*) FROM sqlite_master WHERE name = 'review_responses'");
-  REQUIRE(*table->step());
-  CHECK(table->int64(0) == 1);
+  CHECK(test::tableExists(*db, "review_responses"));
 }
 
 TEST_CASE("Leitner progress of a version-5 database becomes FSRS memory states keeping its schedule") {
   REQUIRE(latestSchemaVersion() >= 6);
   CHECK(migrations()[5].summary.find("FSRS") != std::string_view::npos);
   test::TempDir dir;
-  const std::string path = (dir / "v5.db").string();
+  const std::string path = test::freshDatabase(dir, "v5.db");
   {
     // What the Leitner program (schema 5) left: boxes 1 (never right, and right once before),
     // 2, 4 and 5, lesson answers and review answers.
@@ -288,7 +280,25 @@ TEST_CASE("Leitner progress of a version-5 database becomes FSRS memory states k
   CHECK(kept->int64(0) == 5);
 }
 
-TEST_CASE("A database from a newer program version is refused and left byte-identical") {
+TEST_CASE("A PostgreSQL database from a newer program version is refused and keeps its rows and version") {
+  test::TempDir dir;
+  const std::string location = test::freshDatabase(dir, "newer.db");
+  if (!isPostgresUrl(location)) return;  // the SQLite file's case is the next test
+  {
+    auto db = Database::open(location);
+    REQUIRE(db);
+    REQUIRE(registerDataset(*db, sampleRecord("x"), {}));
+    test::forceSchemaVersion(*db, latestSchemaVersion() + 1);
+  }
+  auto refused = Database::open(location);
+  REQUIRE(!refused);
+  CHECK(refused.error().message.find("newer version") != std::string::npos);
+  CHECK(test::postgresValue(location, "SELECT version FROM at_schema_version") ==
+        std::to_string(latestSchemaVersion() + 1));
+  CHECK(test::postgresValue(location, "SELECT name FROM datasets") == "x");
+}
+
+TEST_CASE("A database file from a newer program version is refused and left byte-identical") {
   test::TempDir dir;
   const fs::path path = dir / "newer.db";
   {
@@ -346,7 +356,7 @@ TEST_CASE("openDatabase creates the folder of the default path under XDG_DATA_HO
 
 TEST_CASE("A transaction that dies uncommitted is rolled back; a committed one persists") {
   test::TempDir dir;
-  auto db = Database::open((dir / "t.db").string());
+  auto db = Database::open(test::freshDatabase(dir, "t.db"));
   REQUIRE(db);
   {
     auto tx = Transaction::begin(*db);
@@ -371,7 +381,7 @@ TEST_CASE("A transaction that dies uncommitted is rolled back; a committed one p
 
 TEST_CASE("Names and free text with quotes, semicolons and SQL keywords are stored verbatim") {
   test::TempDir dir;
-  auto db = Database::open((dir / "h.db").string());
+  auto db = Database::open(test::freshDatabase(dir, "h.db"));
   REQUIRE(db);
   const std::vector<std::string> hostile = {
       "Robert'); DROP TABLE datasets;--",
@@ -380,6 +390,7 @@ TEST_CASE("Names and free text with quotes, semicolons and SQL keywords are stor
       "naïve façade ✓ \t tab\nnewline",
       std::string("embedded\0nul", 12),
   };
+  std::int64_t stored = 0;
   for (std::size_t i = 0; i < hostile.size(); ++i) {
     DatasetRecord r = sampleRecord(hostile[i]);
     r.species = hostile[(i + 1) % hostile.size()];
@@ -390,7 +401,18 @@ TEST_CASE("Names and free text with quotes, semicolons and SQL keywords are stor
     st.displayName = hostile[(i + 4) % hostile.size()];
     st.description = hostile[i];
     auto id = registerDataset(*db, r, {st});
+    const bool nul = r.name.find('\0') != std::string::npos || r.species.find('\0') != std::string::npos ||
+                     r.volumePath.find('\0') != std::string::npos || st.id.find('\0') != std::string::npos ||
+                     st.displayName.find('\0') != std::string::npos || st.description.find('\0') != std::string::npos;
+    if (nul && db->backend() == Backend::Postgres) {
+      // PostgreSQL text cannot hold a NUL byte: refused as invalid, nothing stored.
+      REQUIRE(!id);
+      CHECK((id.error().kind == ErrorKind::Invalid));
+      CHECK(id.error().message.find("NUL") != std::string::npos);
+      continue;
+    }
     REQUIRE_MESSAGE(id, (id ? "" : id.error().message));
+    ++stored;
     auto back = findDataset(*db, hostile[i]);
     REQUIRE(back);
     REQUIRE(back->has_value());
@@ -404,12 +426,12 @@ TEST_CASE("Names and free text with quotes, semicolons and SQL keywords are stor
     CHECK((*structures)[0].displayName == st.displayName);
     CHECK((*structures)[0].description == st.description);
   }
-  CHECK(countRows(*db, "datasets") == std::int64_t(hostile.size()));
+  CHECK(countRows(*db, "datasets") == stored);
 }
 
 TEST_CASE("Registering a dataset under a name already used fails and writes nothing") {
   test::TempDir dir;
-  auto db = Database::open((dir / "d.db").string());
+  auto db = Database::open(test::freshDatabase(dir, "d.db"));
   REQUIRE(db);
   Structure st;
   st.label = 1;
@@ -458,7 +480,7 @@ TEST_CASE("openDatabase with an explicit path refuses a folder that does not exi
 
 TEST_CASE("One connection shared by threads: concurrent write transactions lose no row and never mix") {
   test::TempDir dir;
-  auto db = Database::open((dir / "shared.db").string());
+  auto db = Database::open(test::freshDatabase(dir, "shared.db"));
   REQUIRE(db);
   constexpr int kPerThread = 100;
   std::vector<std::string> errors(3);
@@ -491,7 +513,7 @@ TEST_CASE("One connection shared by threads: concurrent write transactions lose 
 
 TEST_CASE("Two connections writing at once through writeTransaction lose no row") {
   test::TempDir dir;
-  const std::string path = (dir / "c.db").string();
+  const std::string path = test::freshDatabase(dir, "c.db");
   REQUIRE(Database::open(path));
   constexpr int kPerWriter = 150;
   auto writer = [&](int w, std::string* error) {
@@ -551,7 +573,7 @@ TEST_CASE("checksumPath hashes a file's bytes and notices a changed file in a fo
 
 TEST_CASE("SqlErrors_CarryTheirKind_UniqueIsConflict_MissingReferenceIsNotFound_CheckIsInvalid") {
   test::TempDir dir;
-  auto db = Database::open((dir / "k.db").string());
+  auto db = Database::open(test::freshDatabase(dir, "k.db"));
   REQUIRE(db);
   REQUIRE(db->exec("INSERT INTO presets (id, mode, json) VALUES ('p', 'wdt', '{}')"));
   auto clash = db->exec("INSERT INTO presets (id, mode, json) VALUES ('p', 'bare', '{}')");

@@ -5,6 +5,7 @@
 #include "db/database.h"
 #include "db/study_store.h"
 #include "quiz/study_protocol.h"
+#include "test_databases.h"
 #include "test_support.h"
 
 using namespace at;
@@ -20,7 +21,7 @@ quiz::StudyProtocol protocol(std::uint64_t seed = 5) {
 
 TEST_CASE("StudyStore_EnrolParticipants_StoresBlindedCounterbalancedTrials") {
   test::TempDir dir;
-  auto db = db::Database::open((dir / "t.db").string());
+  auto db = db::Database::open(test::freshDatabase(dir, "t.db"));
   REQUIRE(db.has_value());
   const auto p = protocol();
   REQUIRE(db::saveStudy(*db, p).has_value());
@@ -51,7 +52,7 @@ TEST_CASE("StudyStore_EnrolParticipants_StoresBlindedCounterbalancedTrials") {
 
 TEST_CASE("StudyStore_DesignChangeAfterParticipants_IsRefusedAndNothingChanges") {
   test::TempDir dir;
-  auto db = db::Database::open((dir / "t.db").string());
+  auto db = db::Database::open(test::freshDatabase(dir, "t.db"));
   REQUIRE(db.has_value());
   auto p = protocol();
   REQUIRE(db::saveStudy(*db, p).has_value());
@@ -73,7 +74,7 @@ TEST_CASE("StudyStore_DesignChangeAfterParticipants_IsRefusedAndNothingChanges")
 
 TEST_CASE("StudyStore_RatingsAreUnblindedOnExport") {
   test::TempDir dir;
-  auto db = db::Database::open((dir / "t.db").string());
+  auto db = db::Database::open(test::freshDatabase(dir, "t.db"));
   REQUIRE(db.has_value());
   const auto p = protocol();
   REQUIRE(db::saveStudy(*db, p).has_value());
@@ -108,7 +109,7 @@ TEST_CASE("StudyStore_RatingsAreUnblindedOnExport") {
 
 TEST_CASE("StudyStore_ResumedParticipant_EachRatingKeepsTheSessionItWasGivenIn") {
   test::TempDir dir;
-  auto db = db::Database::open((dir / "t.db").string());
+  auto db = db::Database::open(test::freshDatabase(dir, "t.db"));
   REQUIRE(db.has_value());
   const auto p = protocol();
   REQUIRE(db::saveStudy(*db, p).has_value());
@@ -135,7 +136,7 @@ TEST_CASE("StudyStore_ResumedParticipant_EachRatingKeepsTheSessionItWasGivenIn")
 
 TEST_CASE("StudyStore_RatingsFromBeforeSessionsWereKept_MigrateToSessionOneOrUnknown") {
   test::TempDir dir;
-  const std::string path = (dir / "old.db").string();
+  const std::string path = test::freshDatabase(dir, "old.db");
   const auto p = protocol();
   {
     db::OpenOptions options;
@@ -167,7 +168,7 @@ TEST_CASE("StudyStore_RatingsFromBeforeSessionsWereKept_MigrateToSessionOneOrUnk
 
 TEST_CASE("StudyStore_ParticipantIdsThatAreNoValidRecordNames_AreRefused") {
   test::TempDir dir;
-  auto db = db::Database::open((dir / "t.db").string());
+  auto db = db::Database::open(test::freshDatabase(dir, "t.db"));
   REQUIRE(db.has_value());
   const auto p = protocol();
   REQUIRE(db::saveStudy(*db, p).has_value());
