@@ -26,7 +26,7 @@ namespace fs = std::filesystem;
 const char* kUsage =
     "usage: anatomy-tutor render DATASET STRUCTURE (--preset NAME | --mode MODE) [--t T] [--size WxH]\n"
     "                            [--view NAME] [--clip NX,NY,NZ,D] [--backend cpu|cuda|auto] [--passes N]\n"
-    "                            [--context F] [--presets DIR] [--labels FILE [--names NAMES.json]] [--series UID]\n"
+    "                            [--context F] [--margin F] [--presets DIR] [--labels FILE [--names NAMES.json]] [--series UID]\n"
     "                            [--db PATH] --out F.png\n"
     "  DATASET     phantom, phantom:N, skull, an imported dataset, or a volume file/folder (--labels: its label map,\n"
     "              --names: its label names, --series: the DICOM series where a folder holds several)\n"
@@ -35,7 +35,9 @@ const char* kUsage =
     "  --t         context blend 0..1 (overrides the preset)\n"
     "  --view      anterior, posterior, lateral_left, lateral_right, superior, inferior\n"
     "  --clip      plane n·p = d in LPS mm; the side the normal points to is cut away\n"
-    "  --context   view radius as a multiple of the structure's radius (default 2.5)\n"
+    "  --context   how far the context reaches, as a multiple of the structure's own context radius\n"
+    "              (from its size; default 1)\n"
+    "  --margin    the structure's extent times this fills the view (default 1.6)\n"
     "  --presets   presets folder (default: the installed presets, or $AT_DATA_DIR/presets)\n";
 
 
@@ -61,7 +63,7 @@ Result<std::array<float, 4>> parseClip(const std::string& text) {
 int runRender(const Argv& argv) {
   auto args = cli::Args::parse(argv,
                                withDatasetOptions({"preset", "mode", "t", "size", "view", "clip", "backend", "passes",
-                                                   "context", "presets", "out"}),
+                                                   "context", "margin", "presets", "out"}),
                                {});
   if (!args) return reportError("render: " + args.error().message, 2);
   if (args->has("help")) {
@@ -108,6 +110,9 @@ int runRender(const Argv& argv) {
   auto context = args->number("context", request.contextScale);
   if (!context || *context <= 0) return reportError("render: option --context must be a positive number", 2);
   request.contextScale = *context;
+  auto margin = args->number("margin", request.margin);
+  if (!margin || *margin < 1 || *margin > 100) return reportError("render: option --margin must be a number in 1..100", 2);
+  request.margin = *margin;
   auto frame = render::structureFrame(dataset->labels, structure->label);
   if (!frame) return reportError("render: " + structure->id + ": " + frame.error().message);
   auto settings = render::settingsFor(*preset, *frame, request);

@@ -307,6 +307,48 @@ FROM (SELECT a.user_id, r.structure, r.question_id, 'lesson' AS source, r.id AS 
 ORDER BY answered_at, source, source_id;
 )SQL";
 
+// Practical exams: their definitions from the course (replaced on re-seeding like lessons), and
+// the students' attempts with every drawn item, its answer and grade (kept across re-seeding).
+constexpr std::string_view kExams = R"SQL(
+CREATE TABLE exams (
+  id         TEXT PRIMARY KEY,
+  course_id  TEXT NOT NULL REFERENCES courses(id) ON DELETE CASCADE,
+  position   INTEGER NOT NULL,
+  json       TEXT NOT NULL                  -- the exam as in the course JSON
+);
+CREATE TABLE exam_attempts (
+  id           INTEGER PRIMARY KEY,
+  user_id      INTEGER NOT NULL REFERENCES users(id) ON DELETE CASCADE,
+  exam_id      TEXT NOT NULL,
+  course_id    TEXT NOT NULL,
+  started_at   INTEGER NOT NULL,            -- Unix seconds
+  deadline_at  INTEGER NOT NULL,            -- started_at + the time limit
+  finished_at  INTEGER,                     -- NULL while in progress
+  score        REAL,                        -- mean item score, unanswered = 0
+  passed       INTEGER                      -- NULL when the exam has no pass score
+);
+CREATE INDEX exam_attempts_by_user ON exam_attempts(user_id, exam_id);
+CREATE TABLE exam_items (
+  id           INTEGER PRIMARY KEY,
+  attempt_id   INTEGER NOT NULL REFERENCES exam_attempts(id) ON DELETE CASCADE,
+  position     INTEGER NOT NULL,
+  question_id  TEXT NOT NULL,
+  kind         TEXT NOT NULL,
+  structure    TEXT NOT NULL,               -- the item's target
+  question     TEXT NOT NULL,               -- the generated question (course question JSON)
+  choices      TEXT NOT NULL DEFAULT '[]',  -- JSON: offered structure ids (identify), in display order
+  key_choice   INTEGER NOT NULL DEFAULT -1,
+  locate_view  TEXT NOT NULL DEFAULT '3d',
+  scene        TEXT NOT NULL,               -- JSON {structure, preset, view}
+  answer       TEXT,                        -- JSON as given; NULL = not answered
+  correct      INTEGER,
+  score        REAL,
+  latency_ms   INTEGER,
+  answered_at  INTEGER,
+  UNIQUE (attempt_id, position)
+);
+)SQL";
+
 // Study ratings remember the participant's session they were given in (before, every row showed
 // the participant's latest session). Ratings given when the participant had one session so far
 // are from session 1; for the others the session is not known (NULL, exported blank). Trials
@@ -333,7 +375,8 @@ const std::vector<Migration>& migrations() {
        {{"min(10.0, max(1.0, ", "LEAST(10.0, GREATEST(1.0, "},
         {"/ max(answered, 1.0)", "/ GREATEST(answered, 1.0)"},
         {"FROM review_responses)\nORDER BY", "FROM review_responses) AS earlier_answers\nORDER BY"}}},
-      {7, "study ratings keep their session; trials say whether viewing was measured", kStudySessions},
+      {7, "practical exams: definitions, attempts and their items", kExams},
+      {8, "study ratings keep their session; trials say whether viewing was measured", kStudySessions},
   };
   return all;
 }
