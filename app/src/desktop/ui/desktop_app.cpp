@@ -143,9 +143,11 @@ void DesktopApp::drawUi() {
   else explore_.draw(*model_, {window_->glDescription()});
   study_.drawCoordinator(study, panelW + 20, 20);
   if (!study.participantActive()) import_.draw(model_->imports(), panelW + 40, 40);
-  if (const std::uintptr_t texture = view_->texture())
-    ImGui::GetBackgroundDrawList()->AddImage(reinterpret_cast<ImTextureID>(texture), ImVec2(panelW, 0),
-                                             ImVec2(float(l.windowW), float(l.windowH)));
+  // The renderer's texture as it is (GL's rows bottom first: uv0 is the image's left/bottom).
+  if (const render::gl::DisplayImage& image = view_->image(); image.handle)
+    ImGui::GetBackgroundDrawList()->AddImage(reinterpret_cast<ImTextureID>(image.handle), ImVec2(panelW, 0),
+                                             ImVec2(float(l.windowW), float(l.windowH)), ImVec2(image.uv0[0], image.uv1[1]),
+                                             ImVec2(image.uv1[0], image.uv0[1]));
   if (!study.participantActive() && model_->expertOn() &&
       expert_.draw(model_->expert(), float(l.windowW) - 340 * l.uiScale, 340 * l.uiScale, float(l.windowH)))
     model_->expertEdited();

@@ -1,14 +1,10 @@
 #include "volume_view.h"
 
+#include "render/gl/window_target.h"
+
 namespace at::app {
 
 VolumeView::VolumeView(MessageSink messages) : messages_(std::move(messages)) {
-  auto texture = render::gl::ImageTexture::create();
-  if (!texture) {
-    messages_("volume view: " + texture.error().message);
-    return;
-  }
-  texture_ = std::move(*texture);
   const auto version = render::gl::currentContextVersion();
   if (version[0] * 10 + version[1] < 43) {
     messages_("the volume view needs OpenGL 4.3; this context is " + render::gl::currentContextDescription());
@@ -37,10 +33,14 @@ void VolumeView::frame(DesktopModel& model, Clock::time_point now) {
   const render::RenderSettings settings = model.renderSettings(*plan);
   renderer_->setSelected(model.explore().shown().label);
   const Clock::time_point start = Clock::now();
-  auto image = renderer_->render(settings);
-  if (!image) return model.renderFailed(image.error().message);
+  auto image = renderer_->renderToTexture(settings);
+  if (!image) {
+    image_ = {};
+    return model.renderFailed(image.error().message);
+  }
+  render::gl::finishGl();  // the cost model needs the draw's time, not its submission's
   model.rendered(*plan, msBetween(start, Clock::now()));
-  if (auto st = texture_->upload(*image); !st) messages_(st.error().message);
+  image_ = *image;
 }
 
 Result<bool> VolumeView::show(const wdt::FieldService::Cached& field, std::uint16_t label) {

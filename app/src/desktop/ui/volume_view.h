@@ -1,7 +1,8 @@
 // The volume view: render/gl's ray caster in the window's GL context. It takes the dataset's
 // volume when it changes, takes the field the model's FieldView wants (from CUDA device memory
 // through interop, else from host memory a few slices per frame) and renders what the scheduler
-// plans into a texture that the window shows behind the panels.
+// plans into the renderer's own texture, which the window draws behind the panels as it is (no
+// read-back to host memory and upload again).
 #pragma once
 
 #include <cstdint>
@@ -11,7 +12,6 @@
 
 #include "desktop_model.h"
 #include "render/gl/volume_renderer.h"
-#include "render/gl/window_target.h"
 
 namespace at::app {
 
@@ -27,15 +27,15 @@ class VolumeView final : public FieldTarget {
 
   // Each frame: uploads the model's volume when another dataset is shown, then renders the plan.
   void frame(DesktopModel& model, Clock::time_point now);
-  // The texture to draw (0 before the first image).
-  std::uintptr_t texture() const { return texture_ ? texture_->handle() : 0; }
+  // The image to draw (handle 0 before the first one).
+  const render::gl::DisplayImage& image() const { return image_; }
 
   Result<bool> show(const wdt::FieldService::Cached& field, std::uint16_t label) override;
 
  private:
   MessageSink messages_;
   std::optional<render::gl::VolumeRenderer> renderer_;
-  std::optional<render::gl::ImageTexture> texture_;
+  render::gl::DisplayImage image_;
   std::uint64_t datasetRevision_ = 0;
 };
 
