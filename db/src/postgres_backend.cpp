@@ -5,12 +5,14 @@
 // other as they do on SQLite and a repository's read-then-write never races another's.
 #include <libpq-fe.h>
 
+#include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <mutex>
 #include <optional>
+#include <string_view>
 #include <vector>
 
 #include "backend.h"
@@ -22,6 +24,21 @@ namespace {
 constexpr unsigned kInt8Oid = 20, kFloat8Oid = 701;
 // pg_advisory_xact_lock key of the program's writers ("AT" in ASCII).
 constexpr const char* kWriterLock = "SELECT pg_advisory_xact_lock(16724)";
+
+// True for a statement that cannot change data when sent twice: BEGIN, or a SELECT (this
+// program's SELECTs outside transactions only read).
+bool changesNothing(std::string_view sql) {
+  const auto start = sql.find_first_not_of(" \t\r\n");
+  if (start == std::string_view::npos) return true;
+  const auto word = sql.substr(start, 6);
+  const auto is = [&](std::string_view w) {
+    if (word.size() < w.size()) return false;
+    for (std::size_t i = 0; i < w.size(); ++i)
+      if (std::toupper(static_cast<unsigned char>(word[i])) != w[i]) return false;
+    return true;
+  };
+  return sql.substr(start) == "BEGIN" || is("SELECT");
+}
 
 // The URL without its password, for messages: postgresql://user:secret@host/db → postgresql://user@host/db.
 std::string withoutPassword(const std::string& url) {
@@ -196,7 +213,12 @@ class PostgresConnection final : public Connection {
   bool lastFailureWasContention() const override { return contentionState(lastState_); }
 
   Result<int> schemaVersion() override {
-    auto exists = run("SELECT to_regclass('at_schema_version') IS NOT NULL", nullptr);
+    // Read pg_class with the statement's snapshot rather than to_regclass: name lookups use the
+    // session's catalog cache, which still says "no such table" after another connection created
+    // it while this one waited for the writer lock (two programs migrating a fresh database).
+    auto exists = run("SELECT EXISTS (SELECT 1 FROM pg_catalog.pg_class c JOIN pg_catalog.pg_namespace n"
+                      " ON n.oid = c.relnamespace WHERE c.relname = 'at_schema_version'"
+                      " AND n.nspname = current_schema())", nullptr);
     if (!exists) return tl::unexpected(exists.error());
     if (std::strcmp(PQgetvalue(exists->get(), 0, 0), "t") != 0) return 0;
     auto version = run("SELECT max(version) FROM at_schema_version", nullptr);
@@ -229,9 +251,19 @@ class PostgresConnection final : public Connection {
       return fail(ErrorKind::Unavailable, "cannot reach the database server " + name_ + ": " +
                                               firstLine(PQerrorMessage(conn_)));
     }
-    ResultPtr r(params ? PQexecParams(conn_, sql.c_str(), params->count, params->types, params->values, nullptr,
-                                      nullptr, 0)
-                       : PQexec(conn_, sql.c_str()));
+    const auto send = [&] {
+      return ResultPtr(params ? PQexecParams(conn_, sql.c_str(), params->count, params->types, params->values,
+                                             nullptr, nullptr, 0)
+                              : PQexec(conn_, sql.c_str()));
+    };
+    ResultPtr r = send();
+    // A connection the server closed while idle (restart, idle timeout) is only noticed when a
+    // statement fails on it. Outside a transaction a statement that changes nothing (BEGIN, a
+    // SELECT) is sent once more on a new connection; a write is not, as it may have run.
+    if (PQstatus(conn_) == CONNECTION_BAD && !transactionOpen_ && changesNothing(sql)) {
+      PQreset(conn_);
+      if (PQstatus(conn_) == CONNECTION_OK) r = send();
+    }
     const auto status = r ? PQresultStatus(r.get()) : PGRES_FATAL_ERROR;
     if (status == PGRES_COMMAND_OK || status == PGRES_TUPLES_OK) {
       const char* tuples = PQcmdTuples(r.get());

@@ -1,13 +1,20 @@
 #include <doctest/doctest.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <set>
 #include <sstream>
+#include <thread>
+#include <tuple>
 
 #include <nlohmann/json.hpp>
 
+#include "quiz/study_design.h"
+#include "quiz/study_protocol.h"
 #include "quiz/study_report.h"
+#include "test_databases.h"
 #include "redcap_rules.h"
 #include "test_support.h"
 #include "volume/png_image.h"
@@ -177,4 +184,63 @@ TEST_CASE("StudyCli_BadArguments_OneLineErrors") {
   CHECK(badGroup.err.find("pilots") != std::string::npos);
   auto noOut = test::runApp("study export wdt_vs_bare_phantom" + db);
   CHECK(noOut.exitCode != 0);
+}
+
+TEST_CASE("StudyCli_ThreeLabMachinesOnOneClassServer_EachParticipantGetsTheirOwnCounterbalancingRow") {
+  // Three `study run` processes at once against one PostgreSQL server, two participants each (the
+  // shipped study is registered by whichever comes first); then one export from the server.
+  auto url = test::freshPostgresDatabase("the class-server study test");
+  if (!url) return;
+  test::TempDir dir;
+  const std::string study = "wdt_vs_bare_phantom", db = " --db '" + *url + "'";
+  writeAnswers(dir / "answers.jsonl", 13, [](int s) { return 1 + s % 5; });
+  std::vector<test::CommandResult> runs(6);
+  std::vector<std::thread> machines;
+  for (int m = 0; m < 3; ++m)
+    machines.emplace_back([&, m] {
+      for (int k = 0; k < 2; ++k)
+        runs[std::size_t(2 * m + k)] =
+            test::runApp("study run " + study + " --participant lab" + std::to_string(m) + "-p" + std::to_string(k) +
+                         " --group " + (k ? "medical" : "non-medical") + " --answers '" +
+                         (dir / "answers.jsonl").string() + "'" + db);
+    });
+  for (auto& t : machines) t.join();
+  for (const auto& r : runs) {
+    CAPTURE(r.err);
+    CHECK(r.exitCode == 0);
+    CHECK(r.out.find("all 13 structures rated") != std::string::npos);
+  }
+  auto status = test::runApp("study status " + study + db);
+  CHECK(status.exitCode == 0);
+  CHECK(status.out.find("6 participant(s)") != std::string::npos);
+
+  auto exported = test::runApp("study export " + study + " --out '" + (dir / "export").string() + "'" + db);
+  CAPTURE(exported.err);
+  REQUIRE(exported.exitCode == 0);
+  const auto rows = quiz::parseCsv(test::readFile(dir / "export" / "responses_long.csv"));
+  REQUIRE(rows.size() == 1 + 6 * 13 * 4);
+  const auto& header = rows[0];
+  auto col = [&](const std::string& name) {
+    return std::size_t(std::find(header.begin(), header.end(), name) - header.begin());
+  };
+  // Each participant's sequence (structure, order, condition shown as A) is a row of the design,
+  // and the six participants got the first six rows: none twice, none skipped.
+  using Plan = std::set<std::tuple<std::string, int, std::string>>;
+  std::map<std::string, Plan> seen;
+  for (std::size_t i = 1; i < rows.size(); ++i)
+    seen[rows[i][col("participant_id")]].insert(
+        {rows[i][col("structure")], std::stoi(rows[i][col("presentation_order")]), rows[i][col("a_condition")]});
+  REQUIRE(seen.size() == 6);
+  auto protocol = quiz::loadStudyProtocol((test::sourceDir() / "data/studies/paper_survey.json").string());
+  REQUIRE(protocol.has_value());
+  std::set<Plan> designRows, participantsRows;
+  for (std::size_t row = 0; row < 6; ++row) {
+    Plan plan;
+    for (const auto& t : quiz::planParticipant(protocol->structures.size(), row, protocol->seed))
+      plan.insert({protocol->structures[t.structureIndex], int(t.position) + 1,
+                   protocol->conditions[t.aIsFirstCondition ? 0 : 1].id});
+    designRows.insert(plan);
+  }
+  for (const auto& [who, plan] : seen) participantsRows.insert(plan);
+  CHECK(participantsRows == designRows);
 }

@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <latch>
 #include <set>
 #include <thread>
 
@@ -506,6 +507,67 @@ TEST_CASE("One connection shared by threads: concurrent write transactions lose 
   int rolledBack = 0;
   for (int i = 0; i < kPerThread; ++i) rolledBack += i % 7 == 3 ? 1 : 0;
   CHECK(countRows(*db, "presets") == 3 * 2 * (kPerThread - rolledBack));
+}
+
+TEST_CASE("Several programs opening one fresh database at once create its schema once, all succeed") {
+  // Lab machines starting together against a new class server: each Database::open migrates; the
+  // migrations must run exactly once, and the others must see them done (not "already exists").
+  test::TempDir dir;
+  const std::string location = test::freshDatabase(dir, "fresh.db");
+  constexpr int kPrograms = 6;
+  std::vector<std::string> errors(kPrograms);
+  std::latch start(kPrograms);
+  std::vector<std::thread> programs;
+  for (int p = 0; p < kPrograms; ++p)
+    programs.emplace_back([&, p] {
+      start.arrive_and_wait();
+      auto db = Database::open(location);
+      if (!db) errors[std::size_t(p)] = db.error().message;
+    });
+  for (auto& t : programs) t.join();
+  for (const auto& e : errors) CHECK_MESSAGE(e.empty(), e);
+  auto db = Database::open(location);
+  REQUIRE(db);
+  CHECK(*db->schemaVersion() == latestSchemaVersion());
+}
+
+TEST_CASE("A class server that closes the connection or restarts: the program goes on, nothing lost or doubled") {
+  if (!test::testingOnPostgres()) return;  // a server's behaviour
+  test::TempDir dir;
+  const std::string url = test::freshDatabase(dir, "server");
+  auto db = Database::open(url);
+  REQUIRE(db);
+  const auto insertPreset = [&](const std::string& id) {
+    return db->writeTransaction([&](Database& d) -> Status {
+      auto insert = d.prepare("INSERT INTO presets (id, mode, json) VALUES (?1, 'wdt', '{}')");
+      if (!insert) return tl::unexpected(insert.error());
+      insert->bind(1, id);
+      return insert->run();
+    });
+  };
+  REQUIRE(insertPreset("before"));
+  // The server ends this program's session while it is idle (an administrator, an idle timeout).
+  auto pid = db->prepare("SELECT pg_backend_pid()");
+  REQUIRE(pid);
+  REQUIRE(*pid->step());
+  REQUIRE(test::postgresValue(url, "SELECT pg_terminate_backend(" + std::to_string(pid->int64(0)) + ")") == "t");
+  CHECK(insertPreset("after terminate"));
+  CHECK(countRows(*db, "presets") == 2);
+
+  if (!test::stopTestPostgres()) return;  // a server this process did not start: not ours to stop
+  auto whileDown = insertPreset("while down");
+  bool restarted = test::restartTestPostgres();
+  REQUIRE(restarted);
+  REQUIRE_FALSE(whileDown);
+  CHECK((whileDown.error().kind == ErrorKind::Unavailable));
+  CHECK(whileDown.error().message.find("database server") != std::string::npos);
+  CHECK(whileDown.error().message.find('\n') == std::string::npos);
+  CHECK(insertPreset("after restart"));
+  auto ids = db->prepare("SELECT id FROM presets ORDER BY id");
+  REQUIRE(ids);
+  std::vector<std::string> stored;
+  while (*ids->step()) stored.push_back(ids->text(0));
+  CHECK(stored == std::vector<std::string>{"after restart", "after terminate", "before"});
 }
 
 TEST_CASE("Two connections writing at once through writeTransaction lose no row") {
