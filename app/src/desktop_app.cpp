@@ -236,6 +236,7 @@ class DesktopApp {
   render::PresetLibrary library_;
   Dataset dataset_;
   render::GradientVolume gradients_;  // of dataset_'s volume
+  render::IntensityLevels levels_;     // of dataset_'s volume
   std::vector<std::pair<std::string, std::vector<const Structure*>>> bySystem_;
   std::map<std::uint16_t, render::StructureFrame> frames_;
   std::map<std::pair<std::uint16_t, bool>, render::Preset> presets_;
@@ -357,6 +358,7 @@ Status DesktopApp::showDataset(Dataset dataset, const std::string& startStructur
   worker_.reset();  // it holds a reference to dataset_
   dataset_ = std::move(dataset);
   gradients_ = render::computeGradientVolume(dataset_.volume);  // shading and picking share it
+  levels_ = render::summariseIntensities(dataset_.volume);      // derived presets where none is shipped
   frames_ = std::move(frames);
   bySystem_.clear();
   presets_.clear();
@@ -381,7 +383,7 @@ Status DesktopApp::showDataset(Dataset dataset, const std::string& startStructur
   pendingHighlight_.reset();
   renderedKey_.clear();
   clipOffsetMm_ = 0;
-  auto preset = presetForStep(library_, start->id, startPreset);
+  auto preset = presetForStep(library_, start->id, startPreset, levels_);
   if (preset) {
     bare_ = preset->mode == render::RenderMode::Bare;
     t_ = preset->t;
@@ -476,7 +478,8 @@ const render::Preset& DesktopApp::presetOf(std::uint16_t label, bool bare) {
   if (it != presets_.end()) return it->second;
   render::Preset preset;
   const Structure* s = dataset_.findStructureByLabel(label);
-  auto loaded = s ? library_.forStructure(s->id, bare ? render::RenderMode::Bare : render::RenderMode::Wdt)
+  auto loaded = s ? render::presetOrDerived(library_, s->id, bare ? render::RenderMode::Bare : render::RenderMode::Wdt,
+                                           levels_)
                   : Result<render::Preset>(fail("no structure"));
   if (loaded) {
     preset = *loaded;
@@ -585,7 +588,7 @@ void DesktopApp::showLessonStructure(const LessonPanel::Shown& shown) {
     message("lesson step: no structure '" + shown.structure + "' in dataset '" + dataset_.id + "'");
     return;
   }
-  auto preset = presetForStep(library_, s->id, shown.presetId);
+  auto preset = presetForStep(library_, s->id, shown.presetId, levels_);
   if (!preset) {
     message(preset.error().message);
     return;

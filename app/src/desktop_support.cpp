@@ -46,10 +46,11 @@ std::vector<lessons::ShowStep> firstLessonViews(const lessons::Course& course) {
 }
 
 Result<render::Preset> presetForStep(const render::PresetLibrary& library, const std::string& structureId,
-                                     const std::string& presetId) {
+                                     const std::string& presetId, const render::IntensityLevels& levels) {
   if (!presetId.empty() && fs::is_regular_file(library.dir() / (presetId + ".json"))) return library.load(presetId);
   const bool bare = presetId.size() >= 5 && presetId.substr(presetId.size() - 5) == "_bare";
-  return library.forStructure(structureId, bare ? render::RenderMode::Bare : render::RenderMode::Wdt);
+  return render::presetOrDerived(library, structureId, bare ? render::RenderMode::Bare : render::RenderMode::Wdt,
+                                 levels);
 }
 
 bool displayAvailable() {
@@ -94,6 +95,7 @@ int writeDefaultViews(const fs::path& outDir) {
   auto renderer = render::gl::VolumeRenderer::create();
   if (!renderer) return reportError("offscreen rendering: " + renderer.error().message);
   if (auto st = renderer->setVolume(dataset->volume, dataset->labels); !st) return reportError(st.error().message);
+  const render::IntensityLevels levels = render::summariseIntensities(dataset->volume);
 
   std::error_code ec;
   fs::create_directories(outDir, ec);
@@ -105,7 +107,7 @@ int writeDefaultViews(const fs::path& outDir) {
     ++index;
     const Structure* structure = dataset->findStructure(step.structure);
     if (!structure) return reportError("course step " + std::to_string(index) + ": no structure '" + step.structure + "'");
-    auto preset = presetForStep(library, structure->id, step.presetId);
+    auto preset = presetForStep(library, structure->id, step.presetId, levels);
     if (!preset) return reportError(preset.error().message);
     auto frame = render::structureFrame(dataset->labels, structure->label);
     if (!frame) return reportError(structure->id + ": " + frame.error().message);

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "lessons/curriculum.h"
+#include "render/derived_preset.h"
 #include "render/preset.h"
 #include "core/error.h"
 
@@ -20,9 +21,9 @@ Result<lessons::Course> loadDefaultCourse();
 std::vector<lessons::ShowStep> firstLessonViews(const lessons::Course& course);
 
 // The step's preset: the library's `presetId` if it exists, else the structure's shipped preset for
-// the mode the id ends in ("_bare" → bare, otherwise wdt).
+// the mode the id ends in ("_bare" → bare, otherwise wdt), else one derived from the data's levels.
 Result<render::Preset> presetForStep(const render::PresetLibrary& library, const std::string& structureId,
-                                     const std::string& presetId);
+                                     const std::string& presetId, const render::IntensityLevels& levels);
 
 // A display server to open a window on: DISPLAY (X11) or WAYLAND_DISPLAY set and non-empty.
 // For measuring the app on a headless GPU machine, AT_DESKTOP_OFFSCREEN=1 with
