@@ -21,6 +21,7 @@
 #include "volume/known_scans.h"
 #include "volume/phantom.h"
 #include "volume/png_image.h"
+#include "volume/slice_image.h"
 
 namespace at::app {
 
@@ -182,11 +183,6 @@ const char* kSliceHelp =
     "--axis picks the voxel axis the slice is perpendicular to (z: axial for LPS data) and --index\n"
     "the slice (0-based). Image columns follow the i axis (j for --axis x); rows follow j for axial\n"
     "slices and run from the top (highest k) down otherwise.\n";
-
-double srgbEncode(double linear) {
-  linear = std::clamp(linear, 0.0, 1.0);
-  return linear <= 0.0031308 ? 12.92 * linear : 1.055 * std::pow(linear, 1.0 / 2.4) - 0.055;
-}
 
 }  // namespace
 
@@ -397,37 +393,16 @@ int runSlice(const Argv& argv) {
                        std::to_string(extent[axis] - 1) + " for axis " + *axisText + " of " + ds->id + " (" +
                        d.toString() + ")");
 
-  // Image axes: columns along u, rows along v (v reversed for the vertical k axis so that the
-  // highest k, superior in LPS data, is at the top).
-  const int uAxis = axis == 0 ? 1 : 0;
-  const int vAxis = axis == 2 ? 1 : 2;
-  const bool flipV = vAxis == 2;
-  RgbImage image(extent[uAxis], extent[vAxis]);
-  std::vector<std::array<std::uint8_t, 3>> colours(65536, {0, 0, 0});
-  std::vector<bool> known(65536, false);
-  for (const Structure& s : ds->structures) {
-    for (int c = 0; c < 3; ++c) colours[s.label][std::size_t(c)] = std::uint8_t(std::lround(255 * srgbEncode(s.colour[std::size_t(c)])));
-    known[s.label] = true;
-  }
-  const double lo = centre - width / 2;
-  for (int row = 0; row < image.height; ++row)
-    for (int col = 0; col < image.width; ++col) {
-      int ijk[3];
-      ijk[axis] = *index;
-      ijk[uAxis] = col;
-      ijk[vAxis] = flipV ? extent[vAxis] - 1 - row : row;
-      const double hu = ds->volume.at(ijk[0], ijk[1], ijk[2]);
-      const double grey = std::clamp((hu - lo) / width, 0.0, 1.0) * 255.0;
-      const std::uint16_t label = ds->labels.empty() ? 0 : ds->labels.at(ijk[0], ijk[1], ijk[2]);
-      std::uint8_t* px = image.pixel(col, row);
-      for (int c = 0; c < 3; ++c) {
-        double v = grey;
-        if (label != 0 && known[label]) v = (1 - *alpha) * grey + *alpha * colours[label][std::size_t(c)];
-        px[c] = std::uint8_t(std::lround(std::clamp(v, 0.0, 255.0)));
-      }
-    }
-  if (auto st = writePng(*out, image); !st) return reportError("slice: " + st.error().message);
-  std::printf("wrote %s (%dx%d, axis %s index %d of %s, window %s,%s)\n", out->c_str(), image.width, image.height,
+  SliceRequest request;
+  request.axis = axis;
+  request.index = *index;
+  request.windowCentreHu = centre;
+  request.windowWidthHu = width;
+  request.labelAlpha = *alpha;
+  auto image = renderSlice(ds->volume, &ds->labels, ds->structures, request);
+  if (!image) return reportError("slice: " + image.error().message);
+  if (auto st = writePng(*out, *image); !st) return reportError("slice: " + st.error().message);
+  std::printf("wrote %s (%dx%d, axis %s index %d of %s, window %s,%s)\n", out->c_str(), image->width, image->height,
               axisText->c_str(), *index, ds->id.c_str(), formatDouble(centre, 0).c_str(), formatDouble(width, 0).c_str());
   return 0;
 }

@@ -45,6 +45,8 @@ int runPlay(const Argv& args);
 int runProgress(const Argv& args);
 int runCourses(const Argv& args);
 int runLessons(const Argv& args);
+int runExam(const Argv& args);       // cmd_exam.cpp
+int runAnalytics(const Argv& args);  // cmd_analytics.cpp
 
 // Preference studies (cmd_study.cpp)
 int runStudy(const Argv& args);

@@ -134,9 +134,13 @@ Status LessonPanel::refresh() {
       rows_.push_back(std::move(row));
     }
   }
-  auto due = lessons::reviewQueue(s.progress, s.user.id, unixNow());
-  if (!due) return tl::unexpected(due.error());
-  due_ = std::move(*due);
+  due_.clear();
+  if (!courses_.empty()) {
+    // The course the review button asks about: the same due list `progress` and `play --review` show.
+    auto due = lessons::reviewQueue(s.curriculum, s.progress, s.user.id, courses_[std::size_t(courseIndex_)].id, unixNow());
+    if (!due) return tl::unexpected(due.error());
+    due_ = std::move(*due);
+  }
   return {};
 }
 

@@ -24,6 +24,8 @@ const std::vector<Command>& commands() {
       {"lessons", "list the lessons of the courses", runLessons},
       {"play", "run a lesson in the terminal (answers from a file or typed)", runPlay},
       {"progress", "show a user's progress and what is due for review", runProgress},
+      {"exam", "take a course's practical exam in the terminal (timed, labels hidden)", runExam},
+      {"analytics", "a class's lesson completion, hardest structures, question difficulty, recall (--csv)", runAnalytics},
       {"study", "preference studies: register, run, status, export", runStudy},
   };
   return table;
