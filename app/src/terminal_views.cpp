@@ -63,6 +63,7 @@ Result<std::unique_ptr<TerminalViews>> TerminalViews::create(db::Database& db, c
   auto dataset = openNamedDataset(request);
   if (!dataset) return tl::unexpected(dataset.error());
   v->dataset_ = std::move(*dataset);
+  v->levels_ = render::summariseIntensities(v->dataset_.volume);
   v->presets_ = std::make_unique<render::PresetLibrary>(defaultPresetsDir());
   if (!pictures) return v;
   std::error_code ec;
@@ -75,8 +76,16 @@ Result<std::unique_ptr<TerminalViews>> TerminalViews::create(db::Database& db, c
   auto renderer = render::gl::VolumeRenderer::create();
   if (!renderer) return fail("offscreen rendering: " + renderer.error().message);
   v->renderer_ = std::make_unique<render::gl::VolumeRenderer>(std::move(*renderer));
-  if (auto st = v->renderer_->setVolume(v->dataset_.volume, v->dataset_.labels); !st) return tl::unexpected(st.error());
+  v->gradients_ = render::computeGradientVolume(v->dataset_.volume);
+  if (auto st = v->renderer_->setVolume(v->dataset_.volume, v->dataset_.labels, v->gradients_); !st)
+    return tl::unexpected(st.error());
   return v;
+}
+
+Result<render::Preset> TerminalViews::presetOf(const Structure& structure, const std::string& presetId) const {
+  if (!presetId.empty())
+    if (auto preset = presets_->load(presetId)) return preset;
+  return render::presetOrDerived(*presets_, structure.id, render::RenderMode::Wdt, levels_);
 }
 
 Result<const FloatVolume*> TerminalViews::fieldOf(const Structure& structure, const render::Preset& preset) {
@@ -92,14 +101,14 @@ Result<const FloatVolume*> TerminalViews::fieldOf(const Structure& structure, co
 
 Result<render::RenderSettings> TerminalViews::settingsFor(const Structure& selected, const render::Preset& preset,
                                                           const std::string& view, int width, int height,
-                                                          double contextScale) {
+                                                          double margin) {
   auto frame = render::structureFrame(dataset_.labels, selected.label);
   if (!frame) return fail(selected.id + ": " + frame.error().message);
   render::ViewRequest request;
   request.width = width;
   request.height = height;
   request.view = view;
-  if (contextScale > 0) request.contextScale = contextScale;
+  request.margin = margin;
   auto settings = render::settingsFor(preset, *frame, request);
   if (!settings) return tl::unexpected(settings.error());
   settings->background = {0.04f, 0.04f, 0.05f, 1.0f};
@@ -111,11 +120,7 @@ Result<TerminalPicture> TerminalViews::show(const lessons::QuestionScene& scene,
   if (!renderer_) return fail("pictures are off");
   const Structure* selected = dataset_.findStructure(scene.structure);
   if (!selected) return fail("the view's structure '" + scene.structure + "' is not in dataset '" + dataset_.id + "'");
-  // The scene's preset, else the structure's shipped WDT preset (an imported dataset has none of
-  // the phantom's, and gets the default one).
-  auto preset = scene.presetId.empty() ? presets_->forStructure(selected->id, render::RenderMode::Wdt)
-                                       : presets_->load(scene.presetId);
-  if (!preset) preset = presets_->forStructure(selected->id, render::RenderMode::Wdt);
+  auto preset = presetOf(*selected, scene.presetId);
   if (!preset) return tl::unexpected(preset.error());
   const FloatVolume* field = nullptr;
   if (render::modeNeedsField(preset->mode)) {
@@ -124,7 +129,7 @@ Result<TerminalPicture> TerminalViews::show(const lessons::QuestionScene& scene,
     field = *f;
   }
   const render::TransferFunction2D table = render::shadingTable(*preset);
-  render::SceneVolumes volumes{&dataset_.volume, &dataset_.labels, field, selected->label};
+  render::SceneVolumes volumes{&dataset_.volume, &dataset_.labels, field, selected->label, &gradients_};
 
   std::vector<std::string> views = {lessons::toString(scene.view)};
   const Structure* target = visibleTarget ? dataset_.findStructure(*visibleTarget) : nullptr;
@@ -136,7 +141,7 @@ Result<TerminalPicture> TerminalViews::show(const lessons::QuestionScene& scene,
       if (v != scene.view) views.push_back(lessons::toString(v));
   std::optional<render::RenderSettings> chosen;
   for (const std::string& view : views) {
-    auto settings = settingsFor(*selected, *preset, view, kWidth, kHeight, region ? kRegionContext : 0);
+    auto settings = settingsFor(*selected, *preset, view, kWidth, kHeight, region ? kRegionMargin : kPictureMargin);
     if (!settings) return tl::unexpected(settings.error());
     if (!chosen) chosen = *settings;  // the scene's own side unless another shows the target
     if (!targetCentre) break;
@@ -192,7 +197,7 @@ Result<quiz::Pick> TerminalViews::pickAt(const std::optional<Vec3>& pointMm, std
   if (const Structure* s = dataset_.findStructureByLabel(label)) pick.structure = s->id;
   const Structure* t = dataset_.findStructure(target);
   if (pointMm && t) {
-    auto preset = presets_->forStructure(t->id, render::RenderMode::Wdt);
+    auto preset = presetOf(*t, "");
     if (preset) {
       auto field = fieldOf(*t, *preset);
       if (field)
@@ -213,7 +218,8 @@ Result<quiz::Pick> TerminalViews::pickPixel(double x, double y, const std::strin
   if (x < 0 || y < 0 || x >= lastSettings_->width || y >= lastSettings_->height)
     return fail("the pixel (" + std::to_string(int(x)) + ", " + std::to_string(int(y)) + ") is outside the " +
                 std::to_string(lastSettings_->width) + "×" + std::to_string(lastSettings_->height) + " picture");
-  render::SceneVolumes volumes{&dataset_.volume, &dataset_.labels, lastField_, lastSelected_};
+  render::SceneVolumes volumes{&dataset_.volume, &dataset_.labels, lastField_, lastSelected_,
+                               gradients_.empty() ? nullptr : &gradients_};
   const render::PickResult hit =
       render::pickStructure(volumes, *lastSettings_, render::shadingTable(lastSettings_->preset), x, y);
   return pickAt(hit.hit ? std::optional<Vec3>(hit.pointMm) : std::nullopt, hit.hit ? hit.label : 0, target);

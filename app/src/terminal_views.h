@@ -17,6 +17,8 @@
 #include "render/render_settings.h"
 #include "volume/slice_image.h"
 #include "volume/structure.h"
+#include "render/derived_preset.h"
+#include "render/gradient_volume.h"
 #include "wdt/wdt.h"
 
 namespace at::render::gl {
@@ -27,7 +29,9 @@ class VolumeRenderer;
 namespace at::app {
 
 inline constexpr int kPictureWidth = 400, kPictureHeight = 300;  // software GL: about 2 s a picture
-inline constexpr double kRegionContext = 4.0;
+// Framing (render::ViewRequest::margin): a picture shows its structure's extent times kPictureMargin,
+// a locate question's region times kRegionMargin.
+inline constexpr double kPictureMargin = 2.0, kRegionMargin = 4.0;
 
 // A picture written for the student, and how a pick on it is read.
 struct TerminalPicture {
@@ -50,8 +54,8 @@ class TerminalViews {
   TerminalViews& operator=(const TerminalViews&) = delete;
 
   // The 3-D view of `scene` (its structure selected and framed, its preset, its side) as
-  // dir/stem.png, kPictureWidth × kPictureHeight. `region`: frame a wider region (kRegionContext
-  // times the structure's radius instead of the default 2.5), as locate questions do. With
+  // dir/stem.png, kPictureWidth × kPictureHeight. `region`: frame a wider region (kRegionMargin
+  // instead of kPictureMargin), as locate questions do. With
   // `visibleTarget`, the side is the first of the scene's own and the other named views from which
   // a click on the target's centre picks the target.
   Result<TerminalPicture> show(const lessons::QuestionScene& scene, const std::string& stem, bool region = false,
@@ -71,10 +75,14 @@ class TerminalViews {
   TerminalViews() = default;
   Result<const FloatVolume*> fieldOf(const Structure& structure, const render::Preset& preset);
   Result<render::RenderSettings> settingsFor(const Structure& selected, const render::Preset& preset,
-                                             const std::string& view, int width, int height, double contextScale);
+                                             const std::string& view, int width, int height, double margin);
+  // The scene's preset, else the structure's shipped or derived WDT preset.
+  Result<render::Preset> presetOf(const Structure& structure, const std::string& presetId) const;
   Result<quiz::Pick> pickAt(const std::optional<Vec3>& pointMm, std::uint16_t label, const std::string& target);
 
   Dataset dataset_;
+  render::GradientVolume gradients_;  // shading and picking share it (with pictures)
+  render::IntensityLevels levels_;    // derived presets where none is shipped
   std::filesystem::path dir_;
   std::unique_ptr<render::PresetLibrary> presets_;
   std::unique_ptr<render::gl::EglContext> context_;

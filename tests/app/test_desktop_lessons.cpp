@@ -310,7 +310,20 @@ TEST_CASE("a review answer is recorded: a wrong one puts its structure in the qu
   vestibuleTaughtAndDue(db, "reviewer");
   const std::string question = "inner_ear.identify_vestibule", target = "vestibule";
   const json right = target;
-  const json wrong = "cochlea";
+  // A wrong answer among the question's choices (its distractors are the structures nearest the
+  // vestibule, which the phantom's anatomy decides): asked once on a copy of the database.
+  json wrong;
+  {
+    const fs::path probeDb = dir / "probe.db";
+    fs::copy_file(db, probeDb, fs::copy_options::overwrite_existing);
+    const Run probe = runLessonScript(dir, {{"actions", {{{"do", "review"}}}}}, probeDb, "reviewer");
+    REQUIRE(probe.exitCode == 0);
+    const auto asked = eventsOf(probe, "review_question");
+    REQUIRE(asked.size() == 1);
+    for (const json& choice : asked[0].at("choices"))
+      if (choice != right) wrong = choice;
+    REQUIRE(wrong.is_string());
+  }
 
   // Answered wrong: recorded, a lapse: the structure relearns, due again in 10 minutes.
   const Run missed = runLessonScript(dir, {{"actions", {{{"do", "review"}}, {{"do", "answer"}, {"value", wrong}}}}},

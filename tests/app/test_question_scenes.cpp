@@ -10,6 +10,7 @@
 #include <fstream>
 
 #include "lessons/course_json.h"
+#include "render/gradient_volume.h"
 #include "render/scene.h"
 #include "render/structure_pick.h"
 #include "test_support.h"
@@ -23,7 +24,7 @@ namespace {
 
 // As app/src/terminal_views.h draws them.
 constexpr int kWidth = 400, kHeight = 300;
-constexpr double kRegionContext = 4.0;
+constexpr double kPictureMargin = 2.0, kRegionMargin = 4.0;
 
 // The target voxel nearest the target's centroid (on the structure even when it is curved).
 Vec3 centreOf(const LabelMap& labels, std::uint16_t label) {
@@ -61,7 +62,7 @@ DrawnScene drawnScene(const Dataset& dataset, const lessons::Step& step, const F
   request.width = kWidth;
   request.height = kHeight;
   request.view = lessons::toString(scene.view);
-  if (step.question.kind == quiz::QuestionKind::Locate) request.contextScale = kRegionContext;
+  request.margin = step.question.kind == quiz::QuestionKind::Locate ? kRegionMargin : kPictureMargin;
   auto frame = render::structureFrame(dataset.labels, selected->label);
   REQUIRE(frame);
   auto settings = render::settingsFor(*preset, *frame, request);
@@ -75,6 +76,7 @@ TEST_CASE("Every shipped question's view shows its target; locate questions pick
   auto dataset = openBuiltinDataset("phantom:128");
   REQUIRE(dataset);
   const render::PresetLibrary presets(test::sourceDir() / "data" / "presets");
+  const render::GradientVolume gradients = render::computeGradientVolume(dataset->volume);
   std::map<std::string, FloatVolume> fields;
   int checked = 0;
   for (const auto& entry : std::filesystem::directory_iterator(test::sourceDir() / "data" / "courses")) {
@@ -106,12 +108,13 @@ TEST_CASE("Every shipped question's view shows its target; locate questions pick
         request.width = kWidth;
         request.height = kHeight;
         request.view = lessons::toString(scene.view);
-        if (locate) request.contextScale = kRegionContext;
+        request.margin = locate ? kRegionMargin : kPictureMargin;
         auto frame = render::structureFrame(dataset->labels, selected->label);
         REQUIRE(frame);
         auto settings = render::settingsFor(*preset, *frame, request);
         REQUIRE(settings);
-        const render::SceneVolumes volumes{&dataset->volume, &dataset->labels, &fields[selected->id], selected->label};
+        const render::SceneVolumes volumes{&dataset->volume, &dataset->labels, &fields[selected->id], selected->label,
+                                           &gradients};
         const render::TransferFunction2D table = render::shadingTable(settings->preset);
         const auto px = settings->camera.project(centreOf(dataset->labels, target->label), kWidth, kHeight);
         REQUIRE(px.has_value());
