@@ -59,7 +59,7 @@ void StudyController::beginTrial() {
   s.responseMs.clear();
   s.comment.clear();
   for (const auto& item : s.protocol.items) s.ratings[item.id] = 0;
-  newScreen_ = true;
+  newScreen_ = screenPending_ = true;
 }
 
 void StudyController::accountView() {
