@@ -202,7 +202,7 @@ TEST_CASE("every participant screen is on display before the script acts on the 
 }
 
 // Without a window: the coordinator's export and summary are the app's logic (at_app_core).
-TEST_CASE("the coordinator export writes the eight study files and shows the summary") {
+TEST_CASE("the coordinator export writes the ten study files and shows the summary") {
   TempDir dir("at-study-ui");
   const json study = shippedStudy();
   const std::string studyId = study["id"];
@@ -221,10 +221,10 @@ TEST_CASE("the coordinator export writes the eight study files and shows the sum
   REQUIRE(r.exitCode == 0);
 
   const auto progress = at::test::eventsOf(r, "export_progress");
-  REQUIRE(progress.size() == 8);
+  REQUIRE(progress.size() == 10);
   for (std::size_t k = 0; k < progress.size(); ++k) {
     CHECK(progress[k]["k"] == k + 1);
-    CHECK(progress[k]["n"] == 8);
+    CHECK(progress[k]["n"] == 10);
     const fs::path file = dir / "export" / progress[k]["file"].get<std::string>();
     CHECK_MESSAGE(fs::is_regular_file(file), file.string());
     CHECK(fs::file_size(file) > 0);

@@ -92,8 +92,11 @@ class StudyController {
   const quiz::StudyProtocol* selectedStudy() const;
   const std::vector<db::StudyCompletion>& completion() const { return completion_; }
   const std::optional<quiz::StudySummary>& summary() const { return summary_; }
-  // The Table-2 chart of the selected study; its revision changes when it does.
+  // The Table-2 chart of the selected study (its SVG rasterised, as the export's summary.png);
+  // its revision changes when it does. Null when there is none or it could not be drawn
+  // (chartError() says why).
   const RgbImage* chart();
+  const std::string& chartError() const { return chartError_; }
   std::uint64_t chartRevision() const { return chartRevision_; }
   const std::string& message() const { return message_; }
 
@@ -123,6 +126,7 @@ class StudyController {
   std::vector<db::StudyCompletion> completion_;
   std::optional<quiz::StudySummary> summary_;
   std::optional<RgbImage> chart_;
+  std::string chartError_;
   std::uint64_t chartRevision_ = 0;
   std::optional<StudyExport> export_;
   std::string exportStatus_;
