@@ -21,7 +21,7 @@
 
 #include "cli_args.h"
 #include "commands.h"
-#include "db/database.h"
+#include "db/connection.h"
 #include "db/study_store.h"
 #include "quiz/study_report.h"
 #include "render/preset.h"
@@ -49,7 +49,7 @@ const char* kStudyHelp =
     "   \"toggles\": 3, \"comment\": \"…\", \"response_ms\": 1200}   (ratings as shown: 1 = prefer A … 5 = prefer B)\n"
     "Without --answers the study runs interactively on the terminal.\n";
 
-Result<db::Database> openDb(const cli::Args& args) { return db::openDatabase(args.db()); }
+Result<db::Connection> openDb(const cli::Args& args) { return db::openDatabase(args.db()); }
 
 int runRegister(const cli::Args& args) {
   if (args.positional().size() != 1) return reportError("study register: expected one study JSON file");

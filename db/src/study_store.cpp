@@ -4,6 +4,7 @@
 #include <cctype>
 #include <map>
 
+#include "database.h"
 #include "quiz/study_design.h"
 #include "utc_time.h"
 
