@@ -249,6 +249,12 @@ Result<std::string> defaultDatabasePath() {
 }
 
 namespace {
+// `--db` when given, else the default database's path.
+Result<std::string> chosenLocation(const std::optional<std::string>& path) {
+  if (path) return *path;
+  return defaultDatabasePath();
+}
+
 Result<Connection> owned(Result<Database> database) {
   if (!database) return tl::unexpected(database.error());
   return Connection(std::make_unique<Database>(std::move(*database)));
@@ -266,14 +272,9 @@ Backend backendOf(const Database& database) { return database.backend(); }
 
 Result<Connection> openDatabase(const std::optional<std::string>& path, const OpenOptions& options) {
   if (path && isPostgresUrl(*path)) return owned(Database::open(*path, options));
-  std::string chosen;
-  if (path) {
-    chosen = *path;
-  } else {
-    auto def = defaultDatabasePath();
-    if (!def) return tl::unexpected(def.error());
-    chosen = *def;
-  }
+  auto location = chosenLocation(path);
+  if (!location) return tl::unexpected(location.error());
+  const std::string& chosen = *location;
   // The default database's folder is made on first use; a path given with --db must lie in a
   // folder that exists (a mistyped value must not leave folders named after it).
   const fs::path parent = fs::path(chosen).parent_path();
@@ -288,19 +289,13 @@ Result<Connection> openDatabase(const std::optional<std::string>& path, const Op
 }
 
 Result<std::optional<Connection>> openExistingDatabase(const std::optional<std::string>& dbPath) {
-  std::string path;
-  if (dbPath) {
-    path = *dbPath;
-  } else {
-    auto def = defaultDatabasePath();
-    if (!def) return tl::unexpected(def.error());
-    path = *def;
-  }
+  auto path = chosenLocation(dbPath);
+  if (!path) return tl::unexpected(path.error());
   std::error_code ec;
-  if (!isPostgresUrl(path) && !fs::exists(path, ec)) return std::optional<Connection>{};
+  if (!isPostgresUrl(*path) && !fs::exists(*path, ec)) return std::optional<Connection>{};
   OpenOptions options;
   options.create = false;
-  auto connection = owned(Database::open(path, options));
+  auto connection = owned(Database::open(*path, options));
   if (!connection) return tl::unexpected(connection.error());
   return std::optional<Connection>(std::move(*connection));
 }
