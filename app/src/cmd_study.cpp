@@ -22,7 +22,7 @@
 
 #include "cli_args.h"
 #include "commands.h"
-#include "db/database.h"
+#include "db/connection.h"
 #include "db/study_store.h"
 #include "quiz/study_report.h"
 #include "render/preset.h"
@@ -55,7 +55,7 @@ const char* kStudyHelp =
     "  changes nothing. It reports how the machines' counterbalancing rows add up; export the merged\n"
     "  study for the recomputed summary.\n";
 
-Result<db::Database> openDb(const cli::Args& args) { return db::openDatabase(args.db()); }
+Result<db::Connection> openDb(const cli::Args& args) { return db::openDatabase(args.db()); }
 
 int runRegister(const cli::Args& args) {
   if (args.positional().size() != 1) return reportError("study register: expected one study JSON file");
