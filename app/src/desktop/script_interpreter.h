@@ -8,12 +8,14 @@
 //   waiting:  wait {ms}, wait_field {timeout_ms} (the view settled: final quality, the field shown)
 //   output:   screenshot {path}, record {on}, report {out}, hover_sweep {dwell_ms, out}
 //   lessons:  lesson_user, lessons, lesson, lesson_next, answer, review, lesson_close
+//   exams:    exams, exam, exam_item, exam_answer, slice_click, slice_click_structure, exam_finish,
+//             exam_leave
 //   expert:   tf_add_point, tf_move_point, tf_delete_point, tf_colour, preset_set, preset_save
 //   studies:  study_start, study_toggle, study_rate, study_comment, study_next, study_close,
 //             coordinator_open, coordinator_export, coordinator_summary
 //   import:   import, cancel_import, open_imported
 // An action that waits (a lesson being prepared, an import, an export, a locate answer's distance
-// field) is asked again next frame. A malformed or failing action ends the script with status 2,
+// field, a new study screen until a window has shown it) is asked again next frame. A malformed or failing action ends the script with status 2,
 // something waited for that never came (a timeout) with status 1.
 #pragma once
 
@@ -41,6 +43,9 @@ class ScriptHost {
   // For the report: "800x480" and the GL context's description.
   virtual std::string windowText() const = 0;
   virtual std::string glText() const = 0;
+  // The host draws the panels (a window): an action that changes a panel's screen waits until
+  // the new screen is on display, whatever the frame rate (false: nothing is drawn, no wait).
+  virtual bool drawsPanels() const = 0;
 };
 
 class ScriptInterpreter {
@@ -103,11 +108,21 @@ class ScriptInterpreter {
   Outcome answer(Context&);
   Outcome review(Context&);
   Outcome lessonClose(Context&);
+  // Exams (script_actions_exam.cpp)
+  Outcome examList(Context&);
+  Outcome exam(Context&);
+  Outcome examItem(Context&);
+  Outcome examAnswer(Context&);
+  Outcome sliceClick(Context&);
+  Outcome sliceClickStructure(Context&);
+  Outcome examFinish(Context&);
+  Outcome examLeave(Context&);
   Outcome tfEdit(Context&);
   Outcome presetSet(Context&);
   Outcome presetSave(Context&);
   Outcome studyStart(Context&);
   Outcome study(Context&);
+  Outcome awaitStudyScreen(Context&);
   Outcome coordinatorOpen(Context&);
   Outcome coordinatorExport(Context&);
   Outcome coordinatorSummary(Context&);

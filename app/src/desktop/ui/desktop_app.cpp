@@ -48,6 +48,7 @@ class DesktopApp final : public ScriptHost {
     return std::to_string(l.windowW) + "x" + std::to_string(l.windowH);
   }
   std::string glText() const override { return window_->glDescription(); }
+  bool drawsPanels() const override { return true; }
 
  private:
   void handleEvent(const SDL_Event& e);
@@ -148,8 +149,11 @@ void DesktopApp::drawUi() {
     ImGui::GetBackgroundDrawList()->AddImage(reinterpret_cast<ImTextureID>(image.handle), ImVec2(panelW, 0),
                                              ImVec2(float(l.windowW), float(l.windowH)), ImVec2(image.uv0[0], image.uv1[1]),
                                              ImVec2(image.uv1[0], image.uv0[1]));
-  if (view_->available() && view_->image().handle)
+  const bool sliceShown = model_->examSlice() && model_->exams().running();  // drawn over the 3-D view below
+  if (view_->available() && view_->image().handle && !sliceShown)
     drawViewOverlay(model_->explore().camera(), panelW, 0, float(l.windowW) - panelW, float(l.windowH), l.uiScale);
+  if (!study.participantActive())  // a locate-on-slice exam item: the slice in place of the 3-D view
+    explore_.exams().drawSlice(*model_, panelW, 0, float(l.windowW) - panelW, float(l.windowH));
   if (!study.participantActive() && model_->expertOn() &&
       expert_.draw(model_->expert(), float(l.windowW) - 340 * l.uiScale, 340 * l.uiScale, float(l.windowH)))
     model_->expertEdited();
