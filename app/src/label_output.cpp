@@ -31,7 +31,10 @@ Result<std::string> storeDatasetLabels(db::Database& database, const std::string
   if (!*record)
     return fail(ErrorKind::NotFound,
                 "'" + datasetName + "' is not an imported dataset (anatomy-tutor import registers one)");
-  const fs::path folder = fs::absolute(fs::path(database.path()).parent_path() / "labels");
+  if (db::backendOf(database) != db::Backend::Sqlite)
+    return fail(ErrorKind::Unavailable, "labels are stored in a folder beside a SQLite database; on a class server, "
+                                        "export them to a file (--out) and import that on each machine");
+  const fs::path folder = fs::absolute(fs::path(db::pathOf(database)).parent_path() / "labels");
   std::error_code ec;
   fs::create_directories(folder, ec);
   if (ec) return fail(ErrorKind::Io, "cannot create " + folder.string() + " (" + ec.message() + ")");

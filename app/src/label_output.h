@@ -8,7 +8,7 @@
 #include <vector>
 
 #include "core/error.h"
-#include "db/database.h"
+#include "db/connection.h"
 #include "volume/structure.h"
 
 namespace at::app {
@@ -21,7 +21,8 @@ Status writeLabelsFile(const std::filesystem::path& out, const LabelMap& labels,
 // Stores the labels of the imported dataset `datasetName`: a NIfTI label map and names JSON under
 // <database folder>/labels/ (stamped with the time), recorded as the dataset's labels. Returns the
 // label map's path. Errors: NotFound when `datasetName` is not an imported dataset (nothing is
-// written then), Io for files that cannot be written.
+// written then), Unavailable on a PostgreSQL class server (the files need a folder), Io for files
+// that cannot be written.
 Result<std::string> storeDatasetLabels(db::Database& database, const std::string& datasetName, const LabelMap& labels,
                                        const std::vector<Structure>& structures);
 

@@ -8,7 +8,7 @@
 #include <algorithm>
 #include <map>
 
-#include "db/database.h"
+#include "db/connection.h"
 #include "headless_desktop.h"
 #include "segment/seeds.h"
 #include "segment_controller.h"

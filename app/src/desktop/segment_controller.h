@@ -21,7 +21,7 @@
 #include <nlohmann/json.hpp>
 
 #include "core/error.h"
-#include "db/database.h"
+#include "db/connection.h"
 #include "segment/label_editor.h"
 #include "volume/png_image.h"
 #include "volume/structure.h"
