@@ -307,14 +307,14 @@ int runExport(const cli::Args& args) {
 int runMerge(const cli::Args& args) {
   if (args.positional().size() < 2) return reportError("study merge: expected STUDY and one or more SOURCE databases");
   const std::string& studyId = args.positional()[0];
-  std::vector<db::Database> opened;
+  std::vector<db::Connection> opened;
   opened.reserve(args.positional().size() - 1);
   std::vector<db::StudyMergeSource> sources;
   for (std::size_t i = 1; i < args.positional().size(); ++i) {
     const std::string& location = args.positional()[i];
     db::OpenOptions options;
     options.create = false;  // a mistyped source must not become a new, empty database
-    auto source = db::Database::open(location, options);
+    auto source = db::openDatabase(location, options);
     if (!source) return reportError("study merge: " + source.error().message);
     opened.push_back(std::move(*source));
   }
@@ -323,7 +323,7 @@ int runMerge(const cli::Args& args) {
   if (!database) return reportError(database.error().message);
   for (const auto& source : opened)
     if (source.path() == database->path()) return reportError("study merge: " + source.path() + " is the --db database itself");
-  for (auto& source : opened) sources.push_back({source.path(), &source});
+  for (auto& source : opened) sources.push_back({source.path(), &source.get()});
   auto report = db::mergeStudy(*database, sources, studyId);
   if (!report) return reportError("study merge: " + report.error().message);
   for (const auto& from : report->sources)
