@@ -14,6 +14,7 @@ packages=(
   python3-skimage
   libarchive-dev libplist-dev
   librsvg2-bin desktop-file-utils strace
+  nettle-dev
 )
 
 missing=()
