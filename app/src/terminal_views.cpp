@@ -5,6 +5,7 @@
 #include <sstream>
 
 #include "commands.h"
+#include "course_views.h"
 #include "dataset_resolver.h"
 #include "render/gl/egl_context.h"
 #include "render/gl/volume_renderer.h"
@@ -97,6 +98,7 @@ Result<std::unique_ptr<TerminalViews>> TerminalViews::create(db::Database& db, c
   if (!dataset) return tl::unexpected(dataset.error());
   v->dataset_ = std::move(*dataset);
   v->presets_ = std::make_unique<render::PresetLibrary>(defaultPresetsDir());
+  v->database_ = &db;
   if (!pictures) return v;
   std::error_code ec;
   fs::create_directories(dir, ec);
@@ -148,7 +150,7 @@ Result<TerminalPicture> TerminalViews::show(const lessons::QuestionScene& scene,
   // The scene's preset, else the structure's shipped WDT preset (an imported dataset has none of
   // the phantom's, and gets the default one).
   auto preset = scene.presetId.empty() ? presets_->forStructure(selected->id, render::RenderMode::Wdt)
-                                       : presets_->load(scene.presetId);
+                                       : presetForStep(*presets_, selected->id, scene.presetId, database_);
   if (!preset) preset = presets_->forStructure(selected->id, render::RenderMode::Wdt);
   if (!preset) return tl::unexpected(preset.error());
   const FloatVolume* field = nullptr;
