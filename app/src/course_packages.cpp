@@ -94,6 +94,9 @@ Result<std::vector<package::PackagedPreset>> coursePresets(db::Database& databas
 Result<fs::path> courseAssetDirectory(const db::Database& database) {
   const fs::path file = database.path();
   if (file.empty() || database.path() == ":memory:") return fail("an in-memory database has no data folder for course assets");
+  if (database.path().find("://") != std::string::npos)
+    return fail(ErrorKind::Unavailable, "a class server's database keeps no files: import a package with a dataset into a local "
+                                        "database (--db FILE), or its dataset on each machine first");
   return fs::absolute(file).parent_path() / (file.stem().string() + "-data");
 }
 
@@ -242,8 +245,7 @@ Result<CourseImportReport> importCoursePackage(LearningSession& session, const C
   db::Database& database = session.database();
   const std::string name = request.package.string();
   auto assets = courseAssetDirectory(database);
-  if (!assets) return tl::unexpected(assets.error());
-  auto staging = ScratchFolder::make(*assets, "staging-");
+  auto staging = ScratchFolder::make(assets ? *assets : fs::temp_directory_path(), "staging-");
   if (!staging) return tl::unexpected(staging.error());
   package::ReadOptions options;
   options.extractTo = staging->path();
@@ -304,6 +306,7 @@ Result<CourseImportReport> importCoursePackage(LearningSession& session, const C
   }
 
   if (d.source != package::VolumeSource::Builtin && !existing) {
+    if (!assets) return tl::unexpected(withContext(name, assets.error()));
     report.datasetFolder = *assets / "datasets" / d.name;
     auto record = registerPackagedDataset(database, *pkg, report.datasetFolder, request, name);
     if (!record) {

@@ -17,7 +17,8 @@
 namespace at::app {
 
 // Where imported course assets live: beside the database, in "<db stem>-data/" (for the default
-// database $XDG_DATA_HOME/anatomy-tutor/anatomy-tutor-data/). Datasets go to datasets/<name>/.
+// database $XDG_DATA_HOME/anatomy-tutor/anatomy-tutor-data/). Datasets go to datasets/<name>/, and the
+// database records them relative to its own folder. A server database (postgresql://) has none.
 Result<std::filesystem::path> courseAssetDirectory(const db::Database& database);
 
 struct CourseExportRequest {

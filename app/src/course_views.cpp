@@ -34,7 +34,8 @@ std::vector<lessons::ShowStep> firstLessonViews(const lessons::Course& course) {
 }
 
 Result<render::Preset> presetForStep(const render::PresetLibrary& library, const std::string& structureId,
-                                     const std::string& presetId, db::Database* database) {
+                                     const std::string& presetId, const render::IntensityLevels& levels,
+                                     db::Database* database) {
   if (database && !presetId.empty()) {
     auto stored = db::findPreset(*database, presetId);
     if (!stored) return tl::unexpected(stored.error());
@@ -42,7 +43,8 @@ Result<render::Preset> presetForStep(const render::PresetLibrary& library, const
   }
   if (!presetId.empty() && fs::is_regular_file(library.dir() / (presetId + ".json"))) return library.load(presetId);
   const bool bare = presetId.size() >= 5 && presetId.substr(presetId.size() - 5) == "_bare";
-  return library.forStructure(structureId, bare ? render::RenderMode::Bare : render::RenderMode::Wdt);
+  return render::presetOrDerived(library, structureId, bare ? render::RenderMode::Bare : render::RenderMode::Wdt,
+                                 levels);
 }
 
 }  // namespace at::app

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "lessons/curriculum.h"
+#include "render/derived_preset.h"
 #include "render/preset.h"
 #include "core/error.h"
 
@@ -26,8 +27,9 @@ std::vector<lessons::ShowStep> firstLessonViews(const lessons::Course& course);
 // The step's preset: `presetId` from the database's presets when `database` is given and has it (an
 // imported course's, or one the course editor captured), else the library's `presetId` if it
 // exists, else the structure's shipped preset for the mode the id ends in ("_bare" → bare,
-// otherwise wdt).
+// otherwise wdt), else one derived from the data's levels.
 Result<render::Preset> presetForStep(const render::PresetLibrary& library, const std::string& structureId,
-                                     const std::string& presetId, db::Database* database = nullptr);
+                                     const std::string& presetId, const render::IntensityLevels& levels,
+                                     db::Database* database = nullptr);
 
 }  // namespace at::app

@@ -6,7 +6,6 @@
 
 #include "core/strings.h"
 #include "course_authoring.h"
-#include "course_views.h"
 #include "db/preset_store.h"
 #include "lessons/course_check.h"
 #include "lessons/course_json.h"
@@ -256,10 +255,8 @@ Status CourseEditor::previewStep(std::size_t index) {
                                            ? lessons::QuestionScene{step.show.structure, step.show.presetId, step.show.view}
                                            : lessons::sceneFor(step);
   auto it = captured_.find(scene.presetId);
-  auto preset = it != captured_.end() ? Result<render::Preset>(it->second)
-                                      : presetForStep(library_, scene.structure, scene.presetId, &session_.database());
-  if (!preset) return tl::unexpected(preset.error());
-  preview_(scene.structure, *preset, scene.view);
+  preview_(scene.structure, scene.presetId, it != captured_.end() ? std::optional<render::Preset>(it->second) : std::nullopt,
+           scene.view);
   return {};
 }
 

@@ -32,8 +32,10 @@ class CourseEditor {
     render::Preset preset;   // with the view's t
     lessons::CameraView view = lessons::CameraView::LateralRight;
   };
-  // Shows a step as a student sees it: its structure, the preset, the named view.
-  using Preview = std::function<void(const std::string& structure, const render::Preset& preset, lessons::CameraView view)>;
+  // Shows a step as a student sees it: its structure, its preset (`captured` when the draft holds
+  // it, else `presetId` as a lesson finds it), the named view.
+  using Preview = std::function<void(const std::string& structure, const std::string& presetId,
+                                     const std::optional<render::Preset>& captured, lessons::CameraView view)>;
 
   // `session` and `library` outlive the editor. `events` receives course_edited, course_saved,
   // course_exported and course_imported.

@@ -36,8 +36,10 @@ DesktopModel::DesktopModel(LearningSession& session, const render::PresetLibrary
   study_ = std::make_unique<StudyController>(session_.database(), library_, sink);
   imports_ = std::make_unique<ImportController>(session_.database(), sink, [this](const std::string& m) { message(m); });
   courses_ = std::make_unique<CourseEditor>(session_, library_, sink,
-                                            [this](const std::string& structure, const render::Preset& preset, lessons::CameraView view) {
-                                              showStructureWith(structure, preset, lessons::toString(view));
+                                            [this](const std::string& structure, const std::string& presetId,
+                                                   const std::optional<render::Preset>& captured, lessons::CameraView view) {
+                                              if (captured) showStructureWith(structure, *captured, lessons::toString(view));
+                                              else showLessonStructure({structure, presetId, view});
                                             });
   scheduler_.setViewPixels(layout_.viewPixelsW(), layout_.viewPixelsH());
 }
@@ -246,7 +248,7 @@ std::optional<std::array<double, 2>> DesktopModel::projectStructure(std::uint16_
 }
 
 void DesktopModel::showLessonStructure(const LessonController::Shown& shown) {
-  auto preset = presetForStep(library_, shown.structure, shown.presetId, &session_.database());
+  auto preset = presetForStep(library_, shown.structure, shown.presetId, explore_.levels(), &session_.database());
   if (!preset) {
     message(preset.error().message);
     return;
@@ -338,6 +340,8 @@ render::RenderSettings DesktopModel::renderSettings(const RenderPlan& plan) cons
   const ExploreState::Shown shown = explore_.shown();
   s.preset = shown.preset;
   s.camera = explore_.camera();
+  // The context radius from the shown structure's size, as the render command frames it.
+  if (const render::StructureFrame* frame = explore_.frameOf(shown.label)) s.distanceUnit = render::distanceUnitFor(*frame);
   s.width = plan.width;
   s.height = plan.height;
   s.stepMm = render::effectiveStepMm(dataset_->volume.geometry, render::RenderSettings{}) * plan.stepFactor;
