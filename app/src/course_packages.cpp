@@ -233,7 +233,12 @@ Result<db::DatasetRecord> registerPackagedDataset(db::Database& database, const 
   }
   record.geometry = loaded->volume.geometry;
   record.orientation = record.geometry.orientationCode();
-  auto id = db::registerDataset(database, record, pkg.structures);
+  // Stored relative to the database's folder, so that the database and its data folder move together.
+  db::DatasetRecord stored = record;
+  const fs::path base = fs::absolute(database.path()).parent_path();
+  stored.volumePath = fs::path(record.volumePath).lexically_relative(base).string();
+  if (!record.labelsPath.empty()) stored.labelsPath = fs::path(record.labelsPath).lexically_relative(base).string();
+  auto id = db::registerDataset(database, stored, pkg.structures);
   if (!id) return tl::unexpected(id.error());
   record.id = *id;
   return record;

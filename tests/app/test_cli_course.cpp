@@ -83,24 +83,27 @@ TEST_CASE("CourseCli_AuthoredCourse_TravelsAsAPackageToAnotherDatabaseAndPlaysTo
   fs::rename(author / "ear.atcourse", student / "ear.atcourse");
   for (const char* f : {"volume.nrrd", "labels.nrrd", "names.json", "a.db"}) fs::remove(author / f);
 
-  const fs::path db = student / "s.db";
-  auto imported = test::runApp("course import " + quoted(student / "ear.atcourse") + " --db " + quoted(db));
+  fs::create_directories(student / "class1");
+  const fs::path first = student / "class1" / "s.db";
+  auto imported = test::runApp("course import " + quoted(student / "ear.atcourse") + " --db " + quoted(first));
   REQUIRE_MESSAGE(imported.exitCode == 0, imported.err);
   CHECK(imported.out.find("course 'ear_tour' (Ear tour) version 2: added") != std::string::npos);
-  CHECK(imported.out.find("dataset 'ear_lab': imported into " + (student / "s-data" / "datasets" / "ear_lab").string()) !=
+  CHECK(imported.out.find("dataset 'ear_lab': imported into " + (student / "class1" / "s-data" / "datasets" / "ear_lab").string()) !=
         std::string::npos);
-  // Every stored path of the dataset lies in the student's data folder.
+  fs::remove(student / "ear.atcourse");
+  // The database and its data folder move together: the dataset's paths are kept relative to it.
+  fs::rename(student / "class1", student / "class2");
+  const fs::path db = student / "class2" / "s.db";
   {
     auto database = db::openDatabase(db.string());
     REQUIRE(database);
     auto record = db::findDataset(*database, "ear_lab");
     REQUIRE(record);
     REQUIRE(*record);
-    CHECK((*record)->volumePath.rfind((student / "s-data").string(), 0) == 0);
-    CHECK((*record)->labelsPath.rfind((student / "s-data").string(), 0) == 0);
+    CHECK((*record)->volumePath == (student / "class2" / "s-data" / "datasets" / "ear_lab" / "volume.nrrd").string());
+    CHECK((*record)->labelsPath == (student / "class2" / "s-data" / "datasets" / "ear_lab" / "labels.nrrd").string());
     CHECK((*record)->structureCount == int(test::phantomOfSize(32).structures.size()));
   }
-  fs::remove(student / "ear.atcourse");
   std::ofstream(student / "answers.jsonl") << nameAnswers(author / "ear_tour.json");
   auto played = test::runApp("play ear_tour.tour --user dana --new-user --no-views --answers " + quoted(student / "answers.jsonl") +
                              " --db " + quoted(db));
