@@ -17,16 +17,23 @@ constexpr const char* kSelectDataset =
     " (SELECT count(*) FROM structures s WHERE s.dataset_id = d.id)"
     " FROM datasets d";
 
-Result<DatasetRecord> readRecord(const Statement& s) {
+// A stored path as a usable one: relative paths (assets in the database's data folder) are
+// relative to the database file's folder.
+std::string resolvedPath(const std::string& stored, const Database& db) {
+  if (stored.empty() || std::filesystem::path(stored).is_absolute() || db.path().find("://") != std::string::npos) return stored;
+  return (std::filesystem::absolute(db.path()).parent_path() / stored).lexically_normal().string();
+}
+
+Result<DatasetRecord> readRecord(const Statement& s, const Database& db) {
   DatasetRecord r;
   r.id = s.int64(0);
   r.name = s.text(1);
   r.species = s.text(2);
-  r.volumePath = s.text(3);
+  r.volumePath = resolvedPath(s.text(3), db);
   r.volumeChecksum = s.text(4);
-  r.labelsPath = s.optionalText(5).value_or("");
+  r.labelsPath = resolvedPath(s.optionalText(5).value_or(""), db);
   r.labelsChecksum = s.optionalText(6).value_or("");
-  r.namesPath = s.optionalText(7).value_or("");
+  r.namesPath = resolvedPath(s.optionalText(7).value_or(""), db);
   r.geometry.dims = {s.integer(8), s.integer(9), s.integer(10)};
   r.geometry.spacingMm = {s.real(11), s.real(12), s.real(13)};
   r.geometry.originMm = {s.real(14), s.real(15), s.real(16)};
@@ -123,7 +130,7 @@ Result<std::vector<DatasetRecord>> listDatasets(Database& db) {
     auto row = s->step();
     if (!row) return tl::unexpected(row.error());
     if (!*row) break;
-    auto r = readRecord(*s);
+    auto r = readRecord(*s, db);
     if (!r) return tl::unexpected(r.error());
     out.push_back(std::move(*r));
   }
@@ -137,7 +144,7 @@ Result<std::optional<DatasetRecord>> findDataset(Database& db, const std::string
   auto row = s->step();
   if (!row) return tl::unexpected(row.error());
   if (!*row) return std::optional<DatasetRecord>{};
-  auto r = readRecord(*s);
+  auto r = readRecord(*s, db);
   if (!r) return tl::unexpected(r.error());
   return std::optional<DatasetRecord>(std::move(*r));
 }

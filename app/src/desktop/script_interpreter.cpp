@@ -52,6 +52,11 @@ const std::map<std::string, ScriptInterpreter::Handler>& ScriptInterpreter::hand
       {"coordinator_open", &S::coordinatorOpen}, {"coordinator_export", &S::coordinatorExport},
       {"coordinator_summary", &S::coordinatorSummary}, {"import", &S::importDataset},
       {"cancel_import", &S::cancelImport}, {"open_imported", &S::openImported},
+      {"course_new", &S::courseNew},    {"course_open", &S::courseOpen},
+      {"course_lesson", &S::courseLesson}, {"course_show", &S::courseShow},
+      {"course_question", &S::courseQuestion}, {"course_step", &S::courseStep},
+      {"course_save", &S::courseSave},  {"course_export", &S::courseSave},
+      {"course_open_package", &S::courseSave}, {"open_dataset", &S::openDataset},
   };
   return table;
 }

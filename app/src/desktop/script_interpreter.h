@@ -14,6 +14,8 @@
 //   studies:  study_start, study_toggle, study_rate, study_comment, study_next, study_close,
 //             coordinator_open, coordinator_export, coordinator_summary
 //   import:   import, cancel_import, open_imported
+//   courses:  course_new, course_open, course_lesson, course_show, course_question, course_step,
+//             course_save, course_export, course_open_package, open_dataset
 // An action that waits (a lesson being prepared, an import, an export, a locate answer's distance
 // field, a new study screen until a window has shown it) is asked again next frame. A malformed or failing action ends the script with status 2,
 // something waited for that never came (a timeout) with status 1.
@@ -129,6 +131,15 @@ class ScriptInterpreter {
   Outcome importDataset(Context&);
   Outcome cancelImport(Context&);
   Outcome openImported(Context&);
+  // The course editor (script_actions_course.cpp)
+  Outcome courseNew(Context&);
+  Outcome courseOpen(Context&);
+  Outcome courseLesson(Context&);
+  Outcome courseShow(Context&);
+  Outcome courseQuestion(Context&);
+  Outcome courseStep(Context&);
+  Outcome courseSave(Context&);
+  Outcome openDataset(Context&);
 
   std::deque<nlohmann::json> actions_;
   std::optional<std::string> finalScreenshot_;

@@ -18,7 +18,9 @@ struct DatasetRecord {
   std::int64_t id = 0;
   std::string name;                 // unique; what commands take as DATASET
   std::string species = "human";
-  std::string volumePath;           // absolute
+  // Paths are absolute, or stored relative to the database file's folder (a course package's
+  // dataset, kept in the database's data folder: the two move together) and read back absolute.
+  std::string volumePath;
   std::string volumeChecksum;       // "sha256:…"
   std::string labelsPath;           // absolute or empty
   std::string labelsChecksum;       // empty when no labels
