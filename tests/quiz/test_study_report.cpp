@@ -72,6 +72,10 @@ TEST_CASE("StudyProtocol_InvalidFields_AreRejectedByName") {
       {R"({"id": "s", "dataset": "phantom", "structures": ["cochlea"], "conditions": [{"id": "wdt"}, {"id": "bare"}],
           "items": [{"id": "shape", "wording": 3}], "groups": ["g"]})", "'items[0].wording' must be a string"},
       {"{not json", "not valid JSON"},
+      // A number beyond a double is reported with its line and field, like the checks above.
+      {"{" + base + ",\n \"t\": 1e309}", "bad.json: line 4, column 12, field 't': number 1e309 is out of range"},
+      // Scale ends far apart once overflowed int arithmetic (max − min).
+      {"{" + base + R"(, "scale": {"min": -2147483648, "max": 2147483647}})", "'scale.min' must lie in -1000..1000"},
   };
   for (const Case& c : cases) {
     auto p = parseStudyProtocol(c.json, "bad.json");

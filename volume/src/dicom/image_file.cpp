@@ -10,6 +10,7 @@
 #include "volume/dicom_series.h"
 #include "volume/nifti_io.h"
 #include "volume/nrrd_io.h"
+#include "volume/regular_file.h"
 
 namespace fs = std::filesystem;
 
@@ -28,6 +29,8 @@ Result<LoadedImage> loadImageFile(const std::string& path, const ImageLoadOption
   const fs::file_status status = fs::status(path, ec);
   if (!fs::exists(status)) return fail(path + ": no such file or folder");
   if (fs::is_directory(status)) return loadDicomSeries(path, options);
+  // FIFOs and devices are refused before anything opens them (opening a FIFO waits for a writer).
+  if (auto regular = checkRegularFile(path, path); !regular) return tl::unexpected(regular.error());
 
   std::string name = fs::path(path).filename().string();
   std::transform(name.begin(), name.end(), name.begin(), [](unsigned char c) { return char(std::tolower(c)); });
@@ -35,7 +38,7 @@ Result<LoadedImage> loadImageFile(const std::string& path, const ImageLoadOption
   if (endsWith(name, ".nrrd") || endsWith(name, ".nhdr")) return loadNrrd(path, options);
 
   if (looksLikeDicomFile(path)) {
-    if (isDicomSegFile(path)) return loadDicomSeg(path);
+    if (isDicomSegFile(path)) return loadDicomSeg(path, options);
     // One image of a series: load the whole series from its folder, restricted to the file's series.
     // (A file without SeriesInstanceUID gets the folder's largest series, as a folder would.)
     auto uid = dicom::readSeriesInstanceUid(path);

@@ -1,0 +1,15 @@
+// PNG through readPng (libpng with every transform to 8-bit RGB).
+#include "fuzz_support.h"
+#include "volume/png_image.h"
+
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+  using namespace at;
+  auto& scratch = fuzz::Scratch::instance();
+  scratch.fresh();
+  const auto path = scratch.write("image.png", std::string_view(reinterpret_cast<const char*>(data), size)).string();
+  auto image = readPng(path);
+  fuzz::checkResult(image, path);
+  if (!image) return 0;
+  fuzz::expect(image->rgb.size() == std::size_t(image->width) * std::size_t(image->height) * 3, "3 bytes per pixel");
+  return 0;
+}
