@@ -29,6 +29,7 @@
 #include "render/image.h"
 #include "render/preset.h"
 #include "render/scene.h"
+#include "volume/mask.h"
 #include "volume/phantom.h"
 #include "volume/png_image.h"
 #include "wdt/problem.h"
@@ -130,7 +131,7 @@ int main(int argc, char** argv) {
     auto params = render::wdtParamsFor(*preset);
     if (!params) return failWith(params.error().message);
     params->downsample = o.fieldDownsample;
-    auto wdt = computeWdt(ds.volume, render::structureMask(ds.labels, s->label), *params);
+    auto wdt = computeWdt(ds.volume, structureMask(ds.labels, s->label), *params);
     if (!wdt) return failWith(wdt.error().message);
     if (auto st = renderer->setVolume(ds.volume, ds.labels); !st) return failWith(st.error().message);
     if (auto st = renderer->setField(wdt->field.distances); !st) return failWith(st.error().message);
@@ -275,7 +276,7 @@ int main(int argc, char** argv) {
       }
 #endif
       if (!onDevice) {
-        auto wdt = computeWdt(ds.volume, render::structureMask(ds.labels, label), *params);
+        auto wdt = computeWdt(ds.volume, structureMask(ds.labels, label), *params);
         if (!wdt) return failWith(wdt.error().message);
         wdtMs = msSince(t1);
         wdtDevice = wdt->stats.device;

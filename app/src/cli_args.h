@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "volume/error.h"
+#include "core/error.h"
 
 namespace at::cli {
 

@@ -15,6 +15,7 @@
 #include <unistd.h>
 
 #include "cli_args.h"
+#include "core/strings.h"
 #include "commands.h"
 #include "learning_support.h"
 #include "lessons/lesson_engine.h"
@@ -62,18 +63,6 @@ void printWrapped(const std::string& text, int indent) {
   if (!line.empty()) std::printf("%s%s\n", pad.c_str(), line.c_str());
 }
 
-std::string lower(std::string s) {
-  for (char& c : s) c = char(std::tolower(static_cast<unsigned char>(c)));
-  return s;
-}
-
-std::string trim(const std::string& s) {
-  const auto b = s.find_first_not_of(" \t\r\n");
-  if (b == std::string::npos) return "";
-  const auto e = s.find_last_not_of(" \t\r\n");
-  return s.substr(b, e - b + 1);
-}
-
 // Where answers come from: a JSON-lines file (line numbers reported) or the terminal.
 class AnswerSource {
  public:
@@ -92,7 +81,7 @@ class FileAnswers final : public AnswerSource {
     std::string line;
     while (std::getline(in_, line)) {
       ++lineNumber_;
-      if (!trim(line).empty()) return line;
+      if (!str::trim(line).empty()) return line;
     }
     return std::nullopt;
   }
@@ -121,11 +110,11 @@ class TerminalAnswers final : public AnswerSource {
 // A terminal reply to an answer: the JSON forms, or the plain forms per question kind.
 Result<quiz::Answer> parseTerminalAnswer(const std::string& raw, const lessons::StepView& view,
                                          const std::map<std::string, std::string>& idByName) {
-  const std::string text = trim(raw);
+  const std::string text = str::trim(raw);
   if (!text.empty() && text[0] == '{') return quiz::answerFromJson(text);
   auto structureId = [&](const std::string& name) -> Result<std::string> {
-    auto it = idByName.find(lower(trim(name)));
-    if (it == idByName.end()) return fail("no structure called '" + trim(name) + "'");
+    auto it = idByName.find(str::lower(str::trim(name)));
+    if (it == idByName.end()) return fail("no structure called '" + str::trim(name) + "'");
     return it->second;
   };
   quiz::Answer answer;
@@ -152,9 +141,9 @@ Result<quiz::Answer> parseTerminalAnswer(const std::string& raw, const lessons::
       std::stringstream parts(text);
       std::string part;
       while (std::getline(parts, part, ',')) {
-        if (trim(part).empty()) continue;
+        if (str::trim(part).empty()) continue;
         auto id = structureId(part);
-        order.push_back(id ? *id : trim(part));
+        order.push_back(id ? *id : str::trim(part));
       }
       if (order.empty()) return fail("list the structures separated by commas");
       answer.order = std::move(order);
@@ -193,10 +182,12 @@ Result<Asked> askQuestion(AnswerSource& source, const lessons::StepView& view,
   while (true) {
     auto line = source.nextLine();
     if (!line) return Asked::InputEnded;
-    if (source.interactive() && lower(trim(*line)) == "quit") return Asked::Quit;
+    if (source.interactive() && str::lower(str::trim(*line)) == "quit") return Asked::Quit;
     auto answer = source.interactive() ? parseTerminalAnswer(*line, view, idByName) : quiz::answerFromJson(*line);
-    const auto latency =
-        std::chrono::duration_cast<std::chrono::milliseconds>(std::chrono::steady_clock::now() - shownAt);
+    // Answers read from a file have no response time: 0 records "not measured" (never rated Easy).
+    const auto latency = source.interactive() ? std::chrono::duration_cast<std::chrono::milliseconds>(
+                                                    std::chrono::steady_clock::now() - shownAt)
+                                              : std::chrono::milliseconds(0);
     Result<quiz::Grade> graded = answer ? grade(*answer, latency.count())
                                         : Result<quiz::Grade>(tl::unexpected(answer.error()));
     if (graded) {
@@ -206,7 +197,7 @@ Result<Asked> askQuestion(AnswerSource& source, const lessons::StepView& view,
       return Asked::Graded;
     }
     std::fflush(stdout);
-    if (!source.interactive()) return fail(source.where() + ": " + graded.error().message);
+    if (!source.interactive()) return tl::unexpected(withContext(source.where(), graded.error()));
     std::printf("  %s — try again\n", graded.error().message.c_str());
   }
 }
@@ -228,8 +219,8 @@ int runReview(const std::string& courseId, std::int64_t userId, db::Database& da
   if (!structures) return reportError("play: " + structures.error().message);
   std::map<std::string, std::string> idByName, nameById;
   for (const Structure& s : *structures) {
-    idByName[lower(s.id)] = s.id;
-    idByName[lower(s.displayName)] = s.id;
+    idByName[str::lower(s.id)] = s.id;
+    idByName[str::lower(s.displayName)] = s.id;
     nameById[s.id] = s.displayName.empty() ? s.id : s.displayName;
   }
   const std::string datasetId = course->datasetId;
@@ -340,8 +331,8 @@ int runPlay(const Argv& argv) {
   if (!structures) return reportError("play: " + structures.error().message);
   std::map<std::string, std::string> idByName;
   for (const Structure& s : *structures) {
-    idByName[lower(s.id)] = s.id;
-    idByName[lower(s.displayName)] = s.id;
+    idByName[str::lower(s.id)] = s.id;
+    idByName[str::lower(s.displayName)] = s.id;
   }
 
   db::Database& databaseRef = *database;

@@ -91,9 +91,10 @@ int runProgress(const Argv& argv) {
   if (!args) return reportError("progress: " + args.error().message);
   if (args->has("help")) {
     std::printf("usage: anatomy-tutor progress --user NAME [--db PATH]\n\n"
-                "Shows a user's lessons, per-structure progress (Leitner box, answers, next review;\n"
-                "answers to review questions count too, and are also totalled on their own)\n"
-                "and the structures due for review now.\n");
+                "Shows a user's lessons, per-structure progress and the structures due for review now.\n"
+                "Per structure: answers given (lesson and review answers alike), how many were right,\n"
+                "the predicted chance of recalling it now, and when it is next due. Reviews are\n"
+                "scheduled with FSRS-6 so that each structure comes back when that chance falls to 90%%.\n");
     return 0;
   }
   if (!args->positional().empty()) return reportError("progress: unexpected argument '" + args->positional()[0] + "'");
@@ -172,12 +173,13 @@ int runProgress(const Argv& argv) {
 
   std::printf("\nStructures\n");
   if (all->empty()) std::printf("  none answered yet\n");
-  else std::printf("  %-32s %4s %9s %8s  %s\n", "structure", "box", "answered", "correct", "next review");
+  else std::printf("  %-32s %9s %8s %11s  %s\n", "structure", "answered", "correct", "recall now", "next review");
+  const lessons::Fsrs fsrs;
   for (const auto& p : *all) {
     auto it = names.find(p.structureId);
     const std::string name = it == names.end() ? p.structureId : it->second;
-    std::printf("  %-32s %4d %9d %8d  %s\n", name.c_str(), p.box, p.answered, p.correct,
-                relativeTime(p.dueAt, now).c_str());
+    std::printf("  %-32s %9d %8d %10.0f%%  %s\n", name.c_str(), p.answered, p.correct,
+                100.0 * fsrs.retrievability(p.memory, now), relativeTime(p.memory.due, now).c_str());
   }
 
   auto due = lessons::reviewQueue(progress, userId, now);

@@ -11,6 +11,7 @@
 #include "render/gl/volume_renderer.h"
 #include "render/preset.h"
 #include "render/scene.h"
+#include "volume/mask.h"
 #include "volume/dataset_source.h"
 #include "volume/png_image.h"
 #include "wdt/wdt.h"
@@ -134,7 +135,7 @@ int runRender(const Argv& argv) {
     auto backend = parseBackend(args->valueOr("backend", "auto"));
     if (!backend) return reportError("render: --backend: " + backend.error().message, 2);
     params->backend = *backend;
-    auto wdt = computeWdt(dataset->volume, render::structureMask(dataset->labels, structure->label), *params);
+    auto wdt = computeWdt(dataset->volume, structureMask(dataset->labels, structure->label), *params);
     if (!wdt) return reportError("render: " + wdt.error().message);
     if (!wdt->stats.warning.empty()) std::fprintf(stderr, "anatomy-tutor: render: %s\n", wdt->stats.warning.c_str());
     wdtMs = wdt->stats.msTotal;

@@ -21,7 +21,7 @@ bool validSpecies(const std::string& s) {
 // `what` names the input in messages ("volume", "labels", "names").
 Result<std::string> absolutePath(const std::string& what, const std::string& path) {
   std::error_code ec;
-  if (!std::filesystem::exists(path, ec)) return fail(what + " " + path + ": no such file or folder");
+  if (!std::filesystem::exists(path, ec)) return fail(ErrorKind::NotFound, what + " " + path + ": no such file or folder");
   auto absolute = std::filesystem::weakly_canonical(std::filesystem::absolute(path), ec);
   if (ec) return fail(what + " " + path + ": " + ec.message());
   return absolute.string();
@@ -76,8 +76,8 @@ Result<ImportedDataset> importDataset(const ImportRequest& request, const Import
   // Fail fast on a taken name, before the (possibly long) load.
   auto existing = db::findDataset(*database, record.name);
   if (!existing) return tl::unexpected(existing.error());
-  if (*existing) return fail("a dataset named '" + record.name + "' is already imported; choose another name");
-  if (cancelled()) return fail(kImportCancelled);
+  if (*existing) return fail(ErrorKind::Conflict, "a dataset named '" + record.name + "' is already imported; choose another name");
+  if (cancelled()) return fail(ErrorKind::Cancelled, kImportCancelled);
 
   DatasetLoadControl load;
   load.cancel = control.cancel;
@@ -88,7 +88,7 @@ Result<ImportedDataset> importDataset(const ImportRequest& request, const Import
       if (part == DatasetLoadPart::Volume || part == DatasetLoadPart::Labels || done == 0) control.progress(s, done, total);
     };
   auto dataset = openDatasetFiles(db::datasetFiles(record), load);
-  if (cancelled()) return fail(kImportCancelled);
+  if (cancelled()) return fail(ErrorKind::Cancelled, kImportCancelled);
   if (!dataset) return tl::unexpected(dataset.error());
 
   // Alignment: every structure must keep voxels on the volume's grid.
@@ -101,21 +101,21 @@ Result<ImportedDataset> importDataset(const ImportRequest& request, const Import
                 " (the two do not overlap in patient space)");
   for (const Structure& s : dataset->structures)
     if (voxels.count(s.label) == 0) out.emptyStructures.push_back(s.id);
-  if (cancelled()) return fail(kImportCancelled);
+  if (cancelled()) return fail(ErrorKind::Cancelled, kImportCancelled);
 
   stage(ImportStage::Checksums);
   auto volumeSum = db::checksumPath(record.volumePath);
   if (!volumeSum) return tl::unexpected(volumeSum.error());
   record.volumeChecksum = *volumeSum;
   if (!record.labelsPath.empty()) {
-    if (cancelled()) return fail(kImportCancelled);
+    if (cancelled()) return fail(ErrorKind::Cancelled, kImportCancelled);
     auto labelsSum = db::checksumPath(record.labelsPath);
     if (!labelsSum) return tl::unexpected(labelsSum.error());
     record.labelsChecksum = *labelsSum;
   }
   record.geometry = dataset->volume.geometry;
   record.orientation = record.geometry.orientationCode();
-  if (cancelled()) return fail(kImportCancelled);
+  if (cancelled()) return fail(ErrorKind::Cancelled, kImportCancelled);
 
   stage(ImportStage::Storing);
   auto id = db::registerDataset(*database, record, dataset->structures);

@@ -12,7 +12,7 @@
 #include <vector>
 
 #include "db/dataset_store.h"
-#include "volume/error.h"
+#include "core/error.h"
 #include "volume/structure.h"
 
 namespace at::app {
@@ -33,7 +33,7 @@ const char* toString(ImportStage stage);  // "loading volume", …
 // Optional progress and cancellation. `progress` is called on the importing thread as each stage
 // starts (done = total = 0) and, while the volume or labels load, with the loaders' units (DICOM
 // slices, NRRD data files, NIfTI bytes). Setting *cancel from any thread stops the import at its
-// next check: it then fails with kImportCancelled and has stored nothing. The last check is just
+// next check: it then fails with an ErrorKind::Cancelled error (message kImportCancelled) and has stored nothing. The last check is just
 // before storing; once storing begins the import completes.
 struct ImportControl {
   std::function<void(ImportStage, std::size_t done, std::size_t total)> progress;

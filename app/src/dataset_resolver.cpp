@@ -50,7 +50,7 @@ Result<Dataset> openNamedDataset(const DatasetRequest& request) {
   std::string known;
   if (auto all = db::listImportedDatasets(request.dbPath))
     for (const auto& record : *all) known += (known.empty() ? "" : ", ") + record.name;
-  return fail("unknown dataset '" + request.name + "': not built in (phantom, phantom:N), not imported" +
+  return fail(ErrorKind::NotFound, "unknown dataset '" + request.name + "': not built in (phantom, phantom:N), not imported" +
               (known.empty() ? std::string() : " (imported: " + known + ")") + ", and no such file or folder");
 }
 

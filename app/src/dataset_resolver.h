@@ -9,7 +9,7 @@
 #include <vector>
 
 #include "cli_args.h"
-#include "volume/error.h"
+#include "core/error.h"
 #include "volume/structure.h"
 
 namespace at::app {

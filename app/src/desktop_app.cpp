@@ -34,6 +34,7 @@
 #include <backends/imgui_impl_sdl.h>
 #include <nlohmann/json.hpp>
 
+#include "core/strings.h"
 #include "commands.h"
 #include "dataset_resolver.h"
 #include "desktop_support.h"
@@ -94,11 +95,6 @@ double weightedDistanceAt(const Dataset& dataset, std::uint16_t label, const Vec
   if (!field->dims().contains(i, j, k)) return -1;
   const double d = field->at(i, j, k);
   return std::isfinite(d) ? d : -1;
-}
-
-std::string lower(std::string s) {
-  for (char& c : s) c = char(std::tolower(static_cast<unsigned char>(c)));
-  return s;
 }
 
 // RAII for SDL, the window with its GL context, and the ImGui context with its backends.
@@ -1015,7 +1011,7 @@ void DesktopApp::explorePanel(float panelW) {
   ImGui::Separator();
 
   if (!hideNames) ImGui::InputTextWithHint("##search", "search structures", search_, sizeof search_);
-  const std::string query = lower(search_);
+  const std::string query = str::lower(search_);
   ImGui::BeginChild("structures", ImVec2(0, -statusHeight()), true);
   if (hideNames) {
     ImGui::PushTextWrapPos(0);
@@ -1026,8 +1022,8 @@ void DesktopApp::explorePanel(float panelW) {
     if (hideNames) break;
     std::vector<const Structure*> shown;
     for (const Structure* s : list)
-      if (query.empty() || lower(s->displayName).find(query) != std::string::npos ||
-          lower(s->id).find(query) != std::string::npos || lower(s->description).find(query) != std::string::npos)
+      if (query.empty() || str::lower(s->displayName).find(query) != std::string::npos ||
+          str::lower(s->id).find(query) != std::string::npos || str::lower(s->description).find(query) != std::string::npos)
         shown.push_back(s);
     if (shown.empty()) continue;
     ImGui::SetNextItemOpen(true, ImGuiCond_Once);

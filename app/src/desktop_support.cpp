@@ -14,6 +14,7 @@
 #include "render/gl/egl_context.h"
 #include "render/gl/volume_renderer.h"
 #include "render/scene.h"
+#include "volume/mask.h"
 #include "volume/dataset_source.h"
 #include "volume/png_image.h"
 #include "wdt/wdt.h"
@@ -119,7 +120,7 @@ int writeDefaultViews(const fs::path& outDir) {
     if (render::modeNeedsField(preset->mode)) {
       auto params = render::wdtParamsFor(*preset);
       if (!params) return reportError(params.error().message);
-      auto field = computeWdt(dataset->volume, render::structureMask(dataset->labels, structure->label), *params);
+      auto field = computeWdt(dataset->volume, structureMask(dataset->labels, structure->label), *params);
       if (!field) return reportError(structure->id + ": " + field.error().message);
       if (auto st = renderer->setField(field->field.distances); !st) return reportError(st.error().message);
     } else {

@@ -8,7 +8,7 @@
 
 #include "lessons/curriculum.h"
 #include "render/preset.h"
-#include "volume/error.h"
+#include "core/error.h"
 
 namespace at::app {
 

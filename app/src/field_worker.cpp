@@ -4,6 +4,7 @@
 #include <cstdio>
 
 #include "render/scene.h"
+#include "volume/mask.h"
 
 #if defined(AT_HAVE_CUDA)
 #include "cuda/wdt_cuda.h"
@@ -142,7 +143,7 @@ void FieldWorker::run() {
       }
       WdtParams params = job.params;
       if (onDevice.kind == DeviceOutcome::GaveUp) params.backend = WdtBackend::Cpu;  // as the warning says
-      const Mask seeds = render::structureMask(dataset_.labels, job.label);
+      const Mask seeds = structureMask(dataset_.labels, job.label);
       auto result = computeWdt(dataset_.volume, seeds, params, control);
       if (result && !deviceWarning_.empty()) result->stats.warning = std::exchange(deviceWarning_, "");
       if (!result) {

@@ -163,7 +163,7 @@ void ImportPanel::poll() {
     events_({{"event", "import_done"}, {"name", name}, {"structures", result->dataset.structures.size()},
              {"dims", {g.dims.x, g.dims.y, g.dims.z}}, {"empty_structures", result->emptyStructures}});
     imported_ = std::move(result->dataset);
-  } else if (result.error().message == kImportCancelled) {
+  } else if (result.error().kind == ErrorKind::Cancelled) {
     status_ = "Import of '" + name + "' cancelled; nothing was stored.";
     events_({{"event", "import_cancelled"}, {"name", name}});
   } else {

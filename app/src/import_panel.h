@@ -16,7 +16,7 @@
 #include <nlohmann/json.hpp>
 
 #include "dataset_import.h"
-#include "volume/error.h"
+#include "core/error.h"
 #include "volume/structure.h"
 
 namespace at::app {

@@ -20,7 +20,7 @@ Result<db::Database> openLearningDatabase(const std::optional<std::string>& dbPa
   auto database = db::openDatabase(dbPath);
   if (!database) return tl::unexpected(database.error());
   auto seeded = db::seedCourses(*database, courseDirectory());
-  if (!seeded) return fail("seeding the default course: " + seeded.error().message);
+  if (!seeded) return tl::unexpected(withContext("seeding the default course", seeded.error()));
   return std::move(*database);
 }
 
@@ -37,7 +37,7 @@ Result<Dataset> loadCourseDataset(db::Database& database, const std::string& dat
   if (!record) return tl::unexpected(record.error());
   if (!*record) return fail("unknown dataset '" + datasetId + "' (import it with `anatomy-tutor import`)");
   auto dataset = openDatasetFiles(db::datasetFiles(**record));
-  if (!dataset) return fail("dataset '" + datasetId + "': " + dataset.error().message);
+  if (!dataset) return tl::unexpected(withContext("dataset '" + datasetId + "'", dataset.error()));
   // Imported structures keep the names and descriptions stored at import time.
   auto stored = db::datasetStructures(database, (*record)->id);
   if (!stored) return tl::unexpected(stored.error());

@@ -12,7 +12,7 @@
 #include "db/database.h"
 #include "db/sqlite_repositories.h"
 #include "quiz/keys.h"
-#include "volume/error.h"
+#include "core/error.h"
 #include "volume/structure.h"
 
 namespace at::app {

@@ -11,7 +11,7 @@
 // namesHidden() tells the app to hide structure names.
 //
 // Review answers go through lessons::answerReview: graded as lesson answers and committed with the
-// structure's Leitner progress and Elo before their feedback shows, so the review queue moves.
+// structure's FSRS memory state, the review log and Elo before their feedback shows, so the review queue moves.
 #pragma once
 
 #include <chrono>
@@ -29,7 +29,7 @@
 #include "lessons/lesson_engine.h"
 #include "lessons/repositories.h"
 #include "quiz/question.h"
-#include "volume/error.h"
+#include "core/error.h"
 
 namespace at::app {
 

@@ -66,7 +66,7 @@ Result<std::map<std::string, render::Preset>> loadStudyPresets(const render::Pre
     for (int condition = 0; condition < 2; ++condition) {
       const std::string id = protocol.presetFor(structure, condition);
       auto preset = library.load(id);
-      if (!preset) return fail("study " + protocol.id + ": " + preset.error().message);
+      if (!preset) return tl::unexpected(withContext("study " + protocol.id, preset.error()));
       presets[id] = *preset;
     }
   return presets;

@@ -14,7 +14,7 @@
 #include "db/study_store.h"
 #include "quiz/study_report.h"
 #include "render/preset.h"
-#include "volume/error.h"
+#include "core/error.h"
 
 namespace at::app {
 

@@ -7,6 +7,7 @@
 
 #include <imgui.h>
 
+#include "core/strings.h"
 #include "db/preset_store.h"
 
 namespace at::app {
@@ -17,18 +18,6 @@ namespace {
 
 ImU32 colourOf(const render::Rgba& c, float alpha = 1) {
   return ImGui::ColorConvertFloat4ToU32(ImVec4(c[0], c[1], c[2], alpha));
-}
-
-// Preset ids are file stems: lower-case letters, digits and '_'.
-std::string idFromName(const std::string& name) {
-  std::string id;
-  for (const char ch : name) {
-    const unsigned char c = static_cast<unsigned char>(ch);
-    if (std::isalnum(c)) id += char(std::tolower(c));
-    else if (!id.empty() && id.back() != '_') id += '_';
-  }
-  while (!id.empty() && id.back() == '_') id.pop_back();
-  return id;
 }
 
 render::Rgba rgbaArg(const json& a, const render::Rgba& fallback) {
@@ -207,7 +196,7 @@ bool TfEditorPanel::draw(float x, float width, float height) {
   if (ImGui::Button("Save as")) {
     const std::string path = exportPath_;
     const Status st = saveAs(saveName_, path.empty() ? std::nullopt : std::optional<std::string>(path));
-    saveStatus_ = st ? "saved '" + idFromName(saveName_) + "'" : st.error().message;
+    saveStatus_ = st ? "saved '" + str::identifier(saveName_) + "'" : st.error().message;
   }
   ImGui::PushTextWrapPos(0);
   ImGui::TextDisabled("%s", saveStatus_.c_str());
@@ -289,7 +278,7 @@ Status TfEditorPanel::scriptAction(const std::string& what, const json& a) {
 }
 
 Status TfEditorPanel::saveAs(const std::string& name, const std::optional<std::string>& exportPath) {
-  const std::string id = idFromName(name);
+  const std::string id = str::identifier(name);
   if (id.empty()) return fail("save preset: the name '" + name + "' has no letters or digits");
   render::Preset p = preset_;
   p.name = name;
@@ -297,7 +286,7 @@ Status TfEditorPanel::saveAs(const std::string& name, const std::optional<std::s
   if (!structure_.empty()) p.structure = structure_;
   const std::string text = render::presetToJson(p);
   auto valid = render::parsePreset(text, id);
-  if (!valid) return fail("save preset: " + valid.error().message);
+  if (!valid) return tl::unexpected(withContext("save preset", valid.error()));
   auto db = db::openDatabase(dbPath_);
   if (!db) return tl::unexpected(db.error());
   const db::StoredPreset stored{id, p.structure, render::toString(p.mode), text};

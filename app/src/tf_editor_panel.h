@@ -17,7 +17,7 @@
 
 #include "render/preset.h"
 #include "render/tf_edit.h"
-#include "volume/error.h"
+#include "core/error.h"
 #include "volume/structure.h"
 
 namespace at::app {

@@ -57,16 +57,16 @@ __device__ __forceinline__ int cellIndex(int x, int y, int z) { return (x + 1) +
 // Whether the sweeps read each voxel's weight as a float computed once at load time (the entering
 // rule with density weights: wdt::densityWeight, the float the per-step update would compute)
 // instead of its density byte. Saves three instructions of ~36 per plane step.
-template <StepRule R, WeightRule W>
-constexpr bool kFloatWeights = R == StepRule::Entering && W == WeightRule::Density;
+template <CostKernel K>
+constexpr bool kFloatWeights = K == CostKernel::EnterDensity;
 
 // A block's shared memory: the brick with its halo (distances; weights or density bytes, of the
 // brick's own voxels only unless the rule reads neighbours' densities) and the neighbour mask.
-template <StepRule R, WeightRule W>
+template <CostKernel K>
 struct BrickShared {
   float d[kCells];
-  float w[kFloatWeights<R, W> ? kCells : 1];
-  std::uint8_t q[kFloatWeights<R, W> ? 1 : kCells];
+  float w[kFloatWeights<K> ? kCells : 1];
+  std::uint8_t q[kFloatWeights<K> ? 1 : kCells];
   unsigned mask;
 };
 
@@ -107,10 +107,10 @@ __device__ __forceinline__ void activate(const SolveArgs& a, int brick, int pari
 // One directional sweep pair (+ then −) along brick axis A over the brick in shared memory; thread
 // t owns one plane cell (ub, uc) of the plane axes (B, C). Returns whether its voxels decreased.
 // Every thread of the block must call it (it holds the block's barriers).
-template <StepRule R, WeightRule W, int A>
-__device__ __forceinline__ bool sweepAxis(BrickShared<R, W>& sh, const int ext[3], int t, const wdt::SweepLengths& l,
+template <CostKernel K, int A>
+__device__ __forceinline__ bool sweepAxis(BrickShared<K>& sh, const int ext[3], int t, const wdt::SweepLengths& l,
                                           float base) {
-  constexpr bool kQn = kNeedsNeighbourDensity<R, W>;
+  constexpr bool kQn = wdt::needsNeighbourDensity(K);
   constexpr int BA = A == 0 ? 1 : 0, CA = A == 2 ? 1 : 2;  // plane axes: wdt::axisSweepLengths' order
   constexpr int sa = cellStride(A), sb = cellStride(BA), sc = cellStride(CA);
   // Which plane cell a thread owns, chosen so that a warp's 32 cells (and their neighbours at any
@@ -134,8 +134,8 @@ __device__ __forceinline__ bool sweepAxis(BrickShared<R, W>& sh, const int ext[3
         gatherNeighbours<kQn>(sh.d, sh.q, idx - dir * sa, sb, sc, n, qn);
         const float cur = sh.d[idx];
         float v;
-        if constexpr (kFloatWeights<R, W>) v = wdt::enteringUpdate(cur, n, sh.w[idx], l);
-        else v = relax<R, W>(cur, n, qn, sh.q[idx], l, base);
+        if constexpr (kFloatWeights<K>) v = wdt::enteringUpdate(cur, n, sh.w[idx], l);
+        else v = wdt::relaxVoxel<K>(cur, n, qn, sh.q[idx], l, base);
         if (v < cur) {
           sh.d[idx] = v;
           changed = true;
@@ -170,9 +170,9 @@ __device__ __forceinline__ HaloVoxel loadHalo(const SolveArgs& a, const float* s
 }
 
 // One block handles one brick for one round (see the file comment).
-template <StepRule R, WeightRule W>
-__device__ void visitBrick(const SolveArgs& a, int brick, int round, BrickShared<R, W>& sh, int t) {
-  constexpr bool kQn = kNeedsNeighbourDensity<R, W>;
+template <CostKernel K>
+__device__ void visitBrick(const SolveArgs& a, int brick, int round, BrickShared<K>& sh, int t) {
+  constexpr bool kQn = wdt::needsNeighbourDensity(K);
   const int p = round & 1;
   const int b[3] = {brick % a.bricks[0], (brick / a.bricks[0]) % a.bricks[1], brick / (a.bricks[0] * a.bricks[1])};
   const int o[3] = {b[0] * kEdge, b[1] * kEdge, b[2] * kEdge};
@@ -202,7 +202,7 @@ __device__ void visitBrick(const SolveArgs& a, int brick, int round, BrickShared
   for (int z = 0; z < kEdge; ++z) {
     const int cell = cellIndex(tx, ty, z);
     sh.d[cell] = d[z];
-    if constexpr (kFloatWeights<R, W>) sh.w[cell] = wdt::densityWeight(q[z], a.base);
+    if constexpr (kFloatWeights<K>) sh.w[cell] = wdt::densityWeight(q[z], a.base);
     else sh.q[cell] = q[z];
   }
   HaloVoxel halo[7];
@@ -231,9 +231,9 @@ __device__ void visitBrick(const SolveArgs& a, int brick, int round, BrickShared
   }
   __syncthreads();
 
-  bool changed = sweepAxis<R, W, 0>(sh, ext, t, a.lengths[0], a.base);
-  changed |= sweepAxis<R, W, 1>(sh, ext, t, a.lengths[1], a.base);
-  changed |= sweepAxis<R, W, 2>(sh, ext, t, a.lengths[2], a.base);
+  bool changed = sweepAxis<K, 0>(sh, ext, t, a.lengths[0], a.base);
+  changed |= sweepAxis<K, 1>(sh, ext, t, a.lengths[1], a.base);
+  changed |= sweepAxis<K, 2>(sh, ext, t, a.lengths[2], a.base);
   changed = __syncthreads_or(changed) != 0;
 
   // Voxels of the thread's column that decreased. The field still holds the values this visit
@@ -278,9 +278,9 @@ __device__ void visitBrick(const SolveArgs& a, int brick, int round, BrickShared
 
 // Round r reads list r % 2 (counter r % 3), queues for round r + 1 into list (r + 1) % 2 (counter
 // (r + 1) % 3) and zeroes counter (r + 2) % 3, which every block read before the last barrier.
-template <StepRule R, WeightRule W>
+template <CostKernel K>
 __global__ void __launch_bounds__(kThreads, 4) solveBricks(SolveArgs a) {
-  __shared__ BrickShared<R, W> sh;
+  __shared__ BrickShared<K> sh;
   const int t = int(threadIdx.x);
   cg::grid_group grid = cg::this_grid();
   int round = 0, active = 0;
@@ -291,7 +291,7 @@ __global__ void __launch_bounds__(kThreads, 4) solveBricks(SolveArgs a) {
     for (int j = int(blockIdx.x); j < active; j += int(gridDim.x)) {
       const int brick = __ldcg(a.buf.lists + std::size_t(p) * a.brickCount + j);
       if (t == 0) a.buf.flags[std::size_t(p) * a.brickCount + brick] = 0;  // may be queued again in round + 2
-      visitBrick<R, W>(a, brick, round, sh, t);
+      visitBrick<K>(a, brick, round, sh, t);
     }
     if (blockIdx.x == 0 && t == 0) a.buf.counters[(round + 2) % 3] = 0;
     grid.sync();
@@ -311,7 +311,7 @@ __global__ void __launch_bounds__(kThreads, 4) solveBricks(SolveArgs a) {
 // kStartZ planes; the field is read through the read-only cache (nothing writes it here).
 constexpr int kStartZ = 8;
 
-template <StepRule R, WeightRule W>
+template <CostKernel K>
 __global__ void __launch_bounds__(256) startBricks(SolveArgs a) {
   const int x = int(blockIdx.x) * 32 + int(threadIdx.x), y = int(blockIdx.y) * 8 + int(threadIdx.y);
   if (x >= a.n[0] || y >= a.n[1]) return;
@@ -326,7 +326,7 @@ __global__ void __launch_bounds__(256) startBricks(SolveArgs a) {
       a.buf.shell[1][i] = u;
     }
     if (!(u < kInf)) continue;
-    const std::uint8_t qa = kNeedsNeighbourDensity<R, W> ? __ldg(a.buf.density + i) : 0;
+    const std::uint8_t qa = wdt::needsNeighbourDensity(K) ? __ldg(a.buf.density + i) : 0;
 #pragma unroll
     for (int dz = -1; dz <= 1; ++dz) {
       if (z + dz < 0 || z + dz >= a.n[2]) continue;
@@ -338,7 +338,7 @@ __global__ void __launch_bounds__(256) startBricks(SolveArgs a) {
           if ((dx | dy | dz) == 0 || x + dx < 0 || x + dx >= a.n[0]) continue;
           const std::size_t j = i + std::ptrdiff_t(dx) + std::ptrdiff_t(dy) * std::ptrdiff_t(nx) + std::ptrdiff_t(dz) * std::ptrdiff_t(nxy);
           const float len = a.len27[(dx + 1) + 3 * (dy + 1) + 9 * (dz + 1)];
-          if (u + stepCost<R, W>(qa, __ldg(a.buf.density + j), len, a.base) < __ldg(a.buf.field + j)) {
+          if (u + wdt::stepCost<K>(qa, __ldg(a.buf.density + j), len, a.base) < __ldg(a.buf.field + j)) {
             const int brick = (x + dx) / kEdge + a.bricks[0] * ((y + dy) / kEdge + a.bricks[1] * ((z + dz) / kEdge));
             // Many voxels share a brick: look before taking the atomic.
             if (*static_cast<volatile int*>(a.buf.flags + brick) == 0) activate(a, brick, 0, 0);
@@ -358,17 +358,17 @@ SolveArgs makeArgs(const BrickSolveBuffers& b, int nx, int ny, int nz) {
   return a;
 }
 
-template <StepRule R, WeightRule W>
+template <CostKernel K>
 Status launchSolve(const SolveArgs& a, cudaStream_t stream) {
   const std::size_t count = std::size_t(a.n[0]) * a.n[1] * a.n[2];
   if (count == 0) return {};
   AT_TRY(check(cudaMemsetAsync(a.buf.flags, 0, 2 * std::size_t(a.brickCount) * sizeof(int), stream), "cudaMemsetAsync(brick flags)"));
   AT_TRY(check(cudaMemsetAsync(a.buf.counters, 0, 3 * sizeof(int), stream), "cudaMemsetAsync(brick counters)"));
   const dim3 startGrid(unsigned((a.n[0] + 31) / 32), unsigned((a.n[1] + 7) / 8), unsigned((a.n[2] + kStartZ - 1) / kStartZ));
-  startBricks<R, W><<<startGrid, dim3(32, 8), 0, stream>>>(a);
+  startBricks<K><<<startGrid, dim3(32, 8), 0, stream>>>(a);
   AT_TRY(check(cudaGetLastError(), "launch of the brick start kernel"));
 
-  auto* kernel = solveBricks<R, W>;
+  auto* kernel = solveBricks<K>;
   // Every block must be resident for the grid barrier: at most the blocks that fit on the device
   // (device 0, the only one the backend uses; asked once), and no more than there are bricks.
   static const Result<int> resident = [kernel]() -> Result<int> {
@@ -407,7 +407,7 @@ Status launchBrickSolve(const BrickSolveBuffers& b, int nx, int ny, int nz, cons
         a.len27[(dx + 1) + 3 * (dy + 1) + 9 * (dz + 1)] = wdt::stepLength(dx, dy, dz, sx, sy, sz);
   a.base = params.baseCost;
   a.maxRounds = params.maxRounds;
-  return launchForRule(params.rule, params.weight, [&]<StepRule R, WeightRule W>() { return launchSolve<R, W>(a, stream); });
+  return launchForRule(params.rule, params.weight, [&]<CostKernel K>() { return launchSolve<K>(a, stream); });
 }
 
 }  // namespace at::cuda

@@ -9,7 +9,7 @@
 #include <string>
 #include <utility>
 
-#include "volume/error.h"
+#include "core/error.h"
 
 namespace at::cuda {
 
@@ -17,7 +17,7 @@ namespace at::cuda {
 inline Status check(cudaError_t code, const std::string& what) {
   if (code == cudaSuccess) return {};
   (void)cudaGetLastError();
-  return fail("CUDA " + what + ": " + cudaGetErrorString(code));
+  return fail(ErrorKind::Unavailable, "CUDA " + what + ": " + cudaGetErrorString(code));
 }
 
 // In a function returning Status or Result<T>: return the error of `expr` (a Status or Result) if

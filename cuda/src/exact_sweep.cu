@@ -127,10 +127,10 @@ __device__ __forceinline__ void allowNextGrid() { asm volatile("griddepcontrol.l
 // older grid still running on the same multiprocessor can be stale (reading them through L1 gave
 // wrong fields on an H100). The first group of a sweep reads planes the previous sweep's last group
 // may still be writing, so it waits first.
-template <StepRule R, WeightRule W>
+template <CostKernel Cost>
 __global__ void __launch_bounds__(Shape::T, Shape::MinBlocks) sweepGroup(GroupArgs p) {
   using S = Shape;
-  constexpr bool kQn = kNeedsNeighbourDensity<R, W>;
+  constexpr bool kQn = wdt::needsNeighbourDensity(Cost);
   constexpr int K = S::K, Slots = S::Slots, Pitch = S::Pitch;
   __shared__ float sD[2][S::PlaneFloats];
   __shared__ std::uint8_t sQ[kQn ? 2 : 1][kQn ? S::PlaneFloats : 1];
@@ -211,7 +211,7 @@ __global__ void __launch_bounds__(Shape::T, Shape::MinBlocks) sweepGroup(GroupAr
           std::uint8_t qn[3][3];
           gatherNeighbours<kQn>(prev, qPrev, r[k], 1, Pitch, n, qn);
           const float old = oldD[s - 1][k];
-          const float v = relax<R, W>(old, n, qn, q[s - 1][k], p.lengths, p.base);
+          const float v = wdt::relaxVoxel<Cost>(old, n, qn, q[s - 1][k], p.lengths, p.base);
           cur[r[k]] = v;
           if constexpr (kQn) sQ[s & 1][r[k]] = q[s - 1][k];
           if (k < S::CoreSlots) {
@@ -237,7 +237,7 @@ __global__ void __launch_bounds__(Shape::T, Shape::MinBlocks) sweepGroup(GroupAr
   }
 }
 
-template <StepRule R, WeightRule W>
+template <CostKernel Cost>
 Status launchGroups(const ExactSweepArgs& a, cudaStream_t stream) {
   using S = Shape;
   GroupArgs p{a.src, a.dst, a.density, a.nu, a.nv, a.na, a.strideV, a.strideA, a.direction, 0, a.lengths,
@@ -252,7 +252,7 @@ Status launchGroups(const ExactSweepArgs& a, cudaStream_t stream) {
   config.attrs = &attribute;
   config.numAttrs = 1;
   for (p.first = 0; p.first < a.na; p.first += S::K) {
-    if (const cudaError_t e = cudaLaunchKernelEx(&config, sweepGroup<R, W>, p); e != cudaSuccess)
+    if (const cudaError_t e = cudaLaunchKernelEx(&config, sweepGroup<Cost>, p); e != cudaSuccess)
       return check(e, "launch of a sweep kernel");
   }
   return {};
@@ -295,7 +295,7 @@ Status launchExactSweep(const ExactSweepArgs& a, cudaStream_t stream) {
     return fail("WDT CUDA backend: planes of " + std::to_string(a.nu) + "x" + std::to_string(a.nv) +
                 " lanes with stride " + std::to_string(a.strideV) + " exceed the kernels' 32-bit voxel offsets");
   }
-  return launchForRule(a.rule, a.weight, [&]<StepRule R, WeightRule W>() { return launchGroups<R, W>(a, stream); });
+  return launchForRule(a.rule, a.weight, [&]<CostKernel Cost>() { return launchGroups<Cost>(a, stream); });
 }
 
 template <class T>

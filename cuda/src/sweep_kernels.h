@@ -5,7 +5,7 @@
 
 #include <cstdint>
 
-#include "volume/error.h"
+#include "core/error.h"
 #include "wdt/stencil.h"
 #include "wdt/wdt.h"
 

@@ -134,7 +134,7 @@ Result<std::string> checksumPath(const std::string& path) {
   } else if (fs::is_regular_file(path, ec)) {
     if (auto s = hashFile(sha, path); !s) return tl::unexpected(s.error());
   } else {
-    return fail(path + ": no such file or folder");
+    return fail(ErrorKind::NotFound, path + ": no such file or folder");
   }
   return "sha256:" + sha.hex();
 }

@@ -23,8 +23,8 @@ namespace {
 // Inserts one row; a primary-key clash means the id belongs to another course.
 Status insertOwned(Statement& s, const std::string& what, const std::string& id, const std::string& courseId) {
   auto status = s.run();
-  if (!status && status.error().message.find("UNIQUE") != std::string::npos)
-    return fail(what + " id '" + id + "' of course '" + courseId + "' is already used by another course");
+  if (!status && status.error().kind == ErrorKind::Conflict)
+    return fail(ErrorKind::Conflict, what + " id '" + id + "' of course '" + courseId + "' is already used by another course");
   return status;
 }
 
@@ -71,7 +71,7 @@ Status writeCourse(Database& d, const lessons::Course& course, const std::string
     for (std::size_t pi = 0; pi < l.prerequisites.size(); ++pi) {
       prereq->reset();
       prereq->bind(1, l.id).bind(2, l.prerequisites[pi]).bind(3, int(pi));
-      if (auto s = prereq->run(); !s) return fail("lesson '" + l.id + "' prerequisites: " + s.error().message);
+      if (auto s = prereq->run(); !s) return tl::unexpected(withContext("lesson '" + l.id + "' prerequisites", s.error()));
     }
     for (std::size_t si = 0; si < l.steps.size(); ++si) {
       const lessons::Step& st = l.steps[si];
@@ -107,7 +107,7 @@ Status writeCourse(Database& d, const lessons::Course& course, const std::string
           .bind(9, questionId)
           .bind(10, nlohmann::json(st.study.items).dump());
       if (auto s = step->run(); !s)
-        return fail("lesson '" + l.id + "' step " + std::to_string(si) + ": " + s.error().message);
+        return tl::unexpected(withContext("lesson '" + l.id + "' step " + std::to_string(si), s.error()));
     }
   }
   return {};
@@ -140,7 +140,7 @@ Result<SeedOutcome> storeCourse(Database& db, const lessons::Course& course, con
     stored->reset();
     return writeCourse(d, course, source);
   });
-  if (!status) return fail("course '" + course.id + "': " + status.error().message);
+  if (!status) return tl::unexpected(withContext("course '" + course.id + "'", status.error()));
   return outcome;
 }
 
@@ -157,7 +157,7 @@ Result<std::vector<SeedReport>> seedCourses(Database& db, const std::filesystem:
     auto course = lessons::loadCourseJson(file);
     if (!course) return tl::unexpected(course.error());
     auto outcome = storeCourse(db, *course, fs::absolute(file).string());
-    if (!outcome) return fail(file.string() + ": " + outcome.error().message);
+    if (!outcome) return tl::unexpected(withContext(file.string(), outcome.error()));
     reports.push_back({file.string(), course->id, *outcome});
   }
   return reports;

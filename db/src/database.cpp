@@ -27,6 +27,21 @@ bool isBusyCode(int rc) {
   return primary == SQLITE_BUSY || primary == SQLITE_LOCKED;
 }
 
+// The kind of a failed statement, from its extended result code: a uniqueness clash is a
+// Conflict, a reference to a row that does not exist NotFound, another constraint Invalid, a lock
+// held too long Unavailable, anything else (disk, corruption, SQL text) I/O.
+ErrorKind kindOf(int rc) {
+  switch (rc) {
+    case SQLITE_CONSTRAINT_UNIQUE:
+    case SQLITE_CONSTRAINT_PRIMARYKEY: return ErrorKind::Conflict;
+    case SQLITE_CONSTRAINT_FOREIGNKEY: return ErrorKind::NotFound;
+    default: break;
+  }
+  if ((rc & 0xff) == SQLITE_CONSTRAINT) return ErrorKind::Invalid;
+  if (isBusyCode(rc)) return ErrorKind::Unavailable;
+  return ErrorKind::Io;
+}
+
 }  // namespace
 
 // ---------------------------------------------------------------------------------------------
@@ -91,8 +106,9 @@ Result<bool> Statement::step() {
   if (rc == SQLITE_DONE) return false;
   std::string message = errorText(db_, rc);
   // Leave the statement reusable after an error (its error code stays with the connection).
+  const int code = sqlite3_extended_errcode(db_);
   sqlite3_reset(stmt_);
-  return fail("SQL error: " + message);
+  return fail(kindOf(code), "SQL error: " + message);
 }
 
 Status Statement::run() {
@@ -151,7 +167,7 @@ Database& Database::operator=(Database&& other) noexcept {
 Result<Statement> Database::prepare(std::string_view sql) {
   sqlite3_stmt* stmt = nullptr;
   const int rc = sqlite3_prepare_v2(db_, sql.data(), int(sql.size()), &stmt, nullptr);
-  if (rc != SQLITE_OK) return fail("SQL error: " + errorText(db_, rc) + " in: " + std::string(sql));
+  if (rc != SQLITE_OK) return fail(kindOf(sqlite3_extended_errcode(db_)), "SQL error: " + errorText(db_, rc) + " in: " + std::string(sql));
   return Statement(stmt, db_, std::string(sql));
 }
 
@@ -162,7 +178,7 @@ Status Database::exec(std::string_view sql) {
   if (rc != SQLITE_OK) {
     std::string m = message ? message : errorText(db_, rc);
     sqlite3_free(message);
-    return fail("SQL error: " + m);
+    return fail(kindOf(sqlite3_extended_errcode(db_)), "SQL error: " + m);
   }
   return {};
 }
@@ -180,7 +196,7 @@ int Database::changes() const { return sqlite3_changes(db_); }
 
 Status Database::writeTransaction(const std::function<Status(Database&)>& body, int maxAttempts) {
   std::minstd_rand jitter(std::random_device{}());
-  Error last{"no attempt made"};
+  Error last{ErrorKind::Io, "no attempt made"};
   for (int attempt = 0; attempt < maxAttempts; ++attempt) {
     auto tx = Transaction::begin(*this, Transaction::Kind::Immediate);
     if (tx) {
@@ -200,7 +216,7 @@ Status Database::writeTransaction(const std::function<Status(Database&)>& body, 
     }
     std::this_thread::sleep_for(std::chrono::milliseconds(5 + int(jitter() % 50)));
   }
-  return fail("still locked by another process after " + std::to_string(maxAttempts) +
+  return fail(ErrorKind::Unavailable, "still locked by another process after " + std::to_string(maxAttempts) +
               " attempts: " + last.message);
 }
 
@@ -248,7 +264,7 @@ Result<int> peekVersion(const std::string& path) {
   if (rc != SQLITE_OK) {
     std::string message = errorText(raw, rc);
     sqlite3_close_v2(raw);
-    return fail(path + ": cannot open: " + message);
+    return fail(ErrorKind::Io, path + ": cannot open: " + message);
   }
   sqlite3_busy_timeout(raw, 5000);
   sqlite3_stmt* stmt = nullptr;
@@ -290,7 +306,7 @@ Status migrate(Database& db, int target) {
                     "): " + s.error().message);
       return d.exec("PRAGMA user_version = " + std::to_string(m.version));
     });
-    if (!status) return fail(db.path() + ": " + status.error().message);
+    if (!status) return tl::unexpected(withContext(db.path(), status.error()));
     if (done) return {};
   }
 }
@@ -305,7 +321,7 @@ Result<Database> Database::open(const std::string& path, const OpenOptions& opti
 
   std::error_code ec;
   const bool exists = fs::exists(path, ec);
-  if (!exists && !options.create) return fail(path + ": no such database");
+  if (!exists && !options.create) return fail(ErrorKind::NotFound, path + ": no such database");
 
   // Refuse newer files before opening for writing: journal_mode=WAL would already change the file.
   auto existing = peekVersion(path);
@@ -318,7 +334,7 @@ Result<Database> Database::open(const std::string& path, const OpenOptions& opti
   const int flags = SQLITE_OPEN_READWRITE | (options.create ? SQLITE_OPEN_CREATE : 0) | SQLITE_OPEN_NOMUTEX;
   const int rc = sqlite3_open_v2(path.c_str(), &raw, flags, nullptr);
   Database db(raw, path);
-  if (rc != SQLITE_OK) return fail(path + ": cannot open: " + errorText(raw, rc));
+  if (rc != SQLITE_OK) return fail(ErrorKind::Io, path + ": cannot open: " + errorText(raw, rc));
   sqlite3_extended_result_codes(raw, 1);
   sqlite3_busy_timeout(raw, options.busyTimeoutMs);
 
@@ -327,10 +343,10 @@ Result<Database> Database::open(const std::string& path, const OpenOptions& opti
     auto mode = db.prepare("PRAGMA journal_mode = WAL");
     if (!mode) return tl::unexpected(mode.error());
     auto modeRow = mode->step();
-    if (!modeRow) return fail(path + ": cannot switch to WAL: " + modeRow.error().message);
+    if (!modeRow) return tl::unexpected(withContext(path + ": cannot switch to WAL", modeRow.error()));
   }
   if (auto s = db.exec("PRAGMA foreign_keys = ON; PRAGMA synchronous = FULL"); !s)
-    return fail(path + ": " + s.error().message);
+    return tl::unexpected(withContext(path, s.error()));
 
   if (auto s = migrate(db, target); !s) return tl::unexpected(s.error());
   return db;

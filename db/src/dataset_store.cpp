@@ -55,7 +55,7 @@ Result<std::int64_t> registerDataset(Database& db, const DatasetRecord& record,
     exists->bind(1, record.name);
     auto row = exists->step();
     if (!row) return tl::unexpected(row.error());
-    if (*row) return fail("a dataset named '" + record.name + "' is already imported; choose another --name");
+    if (*row) return fail(ErrorKind::Conflict, "a dataset named '" + record.name + "' is already imported; choose another --name");
 
     auto insert = d.prepare(
         "INSERT INTO datasets (name, species, volume_path, volume_checksum, labels_path, labels_checksum,"
@@ -104,7 +104,7 @@ Result<std::int64_t> registerDataset(Database& db, const DatasetRecord& record,
           .bind(8, st.system)
           .bind(9, st.description);
       if (auto s = add->run(); !s)
-        return fail("structure " + std::to_string(st.label) + " '" + st.id + "': " + s.error().message);
+        return tl::unexpected(withContext("structure " + std::to_string(st.label) + " '" + st.id + "'", s.error()));
     }
     return {};
   });

@@ -234,6 +234,75 @@ CREATE INDEX review_responses_by_user ON review_responses(user_id, id);
 CREATE INDEX review_responses_by_question ON review_responses(question_id);
 )SQL";
 
+// FSRS replaces the Leitner boxes (lessons/fsrs.h). Each structure's box becomes a memory state
+// that keeps the student's schedule: the due time stays; the stability is the interval the box
+// stood for (at 90 % desired retention FSRS's interval equals the stability), 1, 2, 4, 8 or 16
+// days, except box 1 (the last answer wrong) which takes w0 = 0.212 days, the stability of a
+// first Again, and is Relearning (Learning if never right); the difficulty goes from D0(Good) =
+// 2.1181 to D0(Again) = 6.4133 with the share of wrong answers. The Leitner table is kept, renamed,
+// as it was. Every earlier answer (lesson and review) is copied into the review log, rated from its
+// grade (right: Good, wrong with at least half credit: Hard, else Again) and marked rebuilt.
+constexpr std::string_view kFsrs = R"SQL(
+CREATE TABLE memory_states (
+  user_id         INTEGER NOT NULL REFERENCES users(id) ON DELETE CASCADE,
+  structure       TEXT NOT NULL,
+  phase           TEXT NOT NULL CHECK (phase IN ('learning', 'review', 'relearning')),
+  step            INTEGER NOT NULL DEFAULT 0,  -- index into the (re)learning steps
+  stability       REAL NOT NULL,               -- days
+  difficulty      REAL NOT NULL,               -- 1..10
+  due_at          INTEGER NOT NULL,            -- Unix seconds
+  last_review_at  INTEGER NOT NULL,            -- Unix seconds
+  reviews         INTEGER NOT NULL,
+  lapses          INTEGER NOT NULL DEFAULT 0,
+  answered        INTEGER NOT NULL,
+  correct         INTEGER NOT NULL,
+  PRIMARY KEY (user_id, structure)
+);
+INSERT INTO memory_states (user_id, structure, phase, step, stability, difficulty, due_at, last_review_at,
+                           reviews, lapses, answered, correct)
+SELECT user_id, structure,
+       CASE WHEN box >= 2 THEN 'review' WHEN correct > 0 THEN 'relearning' ELSE 'learning' END,
+       0,
+       CASE WHEN box <= 1 THEN 0.212 WHEN box = 2 THEN 2.0 WHEN box = 3 THEN 4.0 WHEN box = 4 THEN 8.0 ELSE 16.0 END,
+       min(10.0, max(1.0, 2.11810397 + (6.4133 - 2.11810397) * (answered - correct) / max(answered, 1.0))),
+       due_at, last_answered_at, answered, 0, answered, correct
+FROM progress WHERE answered > 0;
+ALTER TABLE progress RENAME TO leitner_progress;
+
+CREATE TABLE review_log (
+  id            INTEGER PRIMARY KEY,
+  user_id       INTEGER NOT NULL REFERENCES users(id) ON DELETE CASCADE,
+  structure     TEXT NOT NULL,
+  question_id   TEXT NOT NULL,
+  source        TEXT NOT NULL CHECK (source IN ('lesson', 'review', 'exam')),
+  source_id     INTEGER,                     -- the answer's row in responses / review_responses / exam_items
+  reviewed_at   INTEGER NOT NULL,            -- Unix seconds
+  rating        INTEGER NOT NULL CHECK (rating BETWEEN 1 AND 4),  -- again, hard, good, easy
+  correct       INTEGER NOT NULL,
+  score         REAL NOT NULL,
+  latency_ms    INTEGER NOT NULL,            -- 0 = not measured
+  phase_before  TEXT NOT NULL DEFAULT 'new', -- memory phase before the answer
+  elapsed_days  INTEGER,                     -- whole days since the previous answer; NULL for the first
+  phase_after   TEXT,                        -- memory state after the answer (NULL when rebuilt)
+  stability     REAL,
+  difficulty    REAL,
+  due_at        INTEGER,
+  rebuilt       INTEGER NOT NULL DEFAULT 0   -- 1: copied from an answer given before FSRS
+);
+CREATE INDEX review_log_by_user ON review_log(user_id, structure, reviewed_at);
+INSERT INTO review_log (user_id, structure, question_id, source, source_id, reviewed_at, rating, correct, score,
+                        latency_ms, rebuilt)
+SELECT user_id, structure, question_id, source, source_id, answered_at,
+       CASE WHEN correct <> 0 THEN 3 WHEN score >= 0.5 THEN 2 ELSE 1 END, correct, score, latency_ms, 1
+FROM (SELECT a.user_id, r.structure, r.question_id, 'lesson' AS source, r.id AS source_id, r.answered_at,
+             r.correct, r.score, r.latency_ms
+      FROM responses r JOIN attempts a ON a.id = r.attempt_id
+      UNION ALL
+      SELECT user_id, structure, question_id, 'review', id, answered_at, correct, score, latency_ms
+      FROM review_responses)
+ORDER BY answered_at, source, source_id;
+)SQL";
+
 }  // namespace
 
 const std::vector<Migration>& migrations() {
@@ -243,6 +312,7 @@ const std::vector<Migration>& migrations() {
       {3, "users, attempts, responses, progress, ability and question difficulty", kLearners},
       {4, "preference studies: protocols, participants, blinded trials, ratings", kStudies},
       {5, "review responses: answers to review questions outside lesson attempts", kReviews},
+      {6, "FSRS memory states (from the Leitner boxes) and the review log", kFsrs},
   };
   return all;
 }

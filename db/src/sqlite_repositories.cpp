@@ -49,7 +49,7 @@ Status readGradedAnswer(const Statement& r, int first, const std::string& row, G
   g.questionId = r.text(first);
   g.structureId = r.text(first + 1);
   auto answer = quiz::answerFromJson(r.text(first + 2));
-  if (!answer) return fail(row + ": " + answer.error().message);
+  if (!answer) return tl::unexpected(withContext(row, answer.error()));
   g.answer = std::move(*answer);
   g.correct = r.integer(first + 3) != 0;
   g.score = r.real(first + 4);
@@ -92,7 +92,7 @@ Result<Course> SqliteCurriculumRepository::course(const std::string& courseId) {
   s->bind(1, courseId);
   auto row = s->step();
   if (!row) return tl::unexpected(row.error());
-  if (!*row) return fail("unknown course '" + courseId + "'");
+  if (!*row) return fail(ErrorKind::NotFound, "unknown course '" + courseId + "'");
   Course c;
   c.id = s->text(0);
   c.title = s->text(1);
@@ -124,7 +124,7 @@ Result<Lesson> SqliteCurriculumRepository::lesson(const std::string& lessonId) {
   s->bind(1, lessonId);
   auto row = s->step();
   if (!row) return tl::unexpected(row.error());
-  if (!*row) return fail("unknown lesson '" + lessonId + "'");
+  if (!*row) return fail(ErrorKind::NotFound, "unknown lesson '" + lessonId + "'");
   Lesson l;
   l.id = s->text(0);
   l.courseId = s->text(1);
@@ -153,7 +153,7 @@ Result<Lesson> SqliteCurriculumRepository::lesson(const std::string& lessonId) {
         step.show.structure = r.text(1);
         step.show.presetId = r.text(2);
         auto view = parseCameraView(r.text(3));
-        if (!view) return fail(where + ": " + view.error().message);
+        if (!view) return tl::unexpected(withContext(where, view.error()));
         step.show.view = *view;
         step.show.title = r.text(4);
         step.show.text = r.text(5);
@@ -187,7 +187,7 @@ Result<quiz::Question> SqliteCurriculumRepository::question(const std::string& q
   s->bind(1, questionId);
   auto row = s->step();
   if (!row) return tl::unexpected(row.error());
-  if (!*row) return fail("unknown question '" + questionId + "'");
+  if (!*row) return fail(ErrorKind::NotFound, "unknown question '" + questionId + "'");
   return parseQuestionJson(s->text(0), "question '" + questionId + "'");
 }
 
@@ -197,7 +197,7 @@ Result<std::vector<Structure>> SqliteCurriculumRepository::structures(const std:
   }
   auto record = findDataset(db_, datasetId);
   if (!record) return tl::unexpected(record.error());
-  if (!*record) return fail("unknown dataset '" + datasetId + "' (import it with `anatomy-tutor import`)");
+  if (!*record) return fail(ErrorKind::NotFound, "unknown dataset '" + datasetId + "' (import it with `anatomy-tutor import`)");
   return datasetStructures(db_, (*record)->id);
 }
 
@@ -239,7 +239,7 @@ Result<User> SqliteUserRepository::user(std::int64_t userId) {
   s->bind(1, userId);
   auto row = s->step();
   if (!row) return tl::unexpected(row.error());
-  if (!*row) return fail("unknown user id " + std::to_string(userId));
+  if (!*row) return fail(ErrorKind::NotFound, "unknown user id " + std::to_string(userId));
   return readUser(*s);
 }
 
@@ -252,7 +252,7 @@ Result<User> SqliteUserRepository::createUser(const std::string& name, Role role
     taken->bind(1, name);
     auto row = taken->step();
     if (!row) return tl::unexpected(row.error());
-    if (*row) return fail("the user name '" + name + "' is already taken");
+    if (*row) return fail(ErrorKind::Conflict, "the user name '" + name + "' is already taken");
     auto insert = d.prepare("INSERT INTO users (name, role, group_name) VALUES (?1, ?2, ?3)");
     if (!insert) return tl::unexpected(insert.error());
     insert->bind(1, name).bind(2, toString(role)).bind(3, group);
@@ -300,17 +300,25 @@ Result<Attempt> readAttempt(const Statement& s) {
 }
 
 constexpr const char* kSelectProgress =
-    "SELECT user_id, structure, box, due_at, answered, correct, last_answered_at FROM progress";
+    "SELECT user_id, structure, phase, step, stability, difficulty, due_at, last_review_at, reviews, lapses,"
+    " answered, correct FROM memory_states";
 
-StructureProgress readProgress(const Statement& s) {
+Result<StructureProgress> readProgress(const Statement& s) {
   StructureProgress p;
   p.userId = s.int64(0);
   p.structureId = s.text(1);
-  p.box = s.integer(2);
-  p.dueAt = s.int64(3);
-  p.answered = s.integer(4);
-  p.correct = s.integer(5);
-  p.lastAnsweredAt = s.int64(6);
+  auto phase = parseMemoryPhase(s.text(2));
+  if (!phase) return fail("memory state of '" + p.structureId + "': " + phase.error().message);
+  p.memory.phase = *phase;
+  p.memory.step = s.integer(3);
+  p.memory.stability = s.real(4);
+  p.memory.difficulty = s.real(5);
+  p.memory.due = s.int64(6);
+  p.memory.lastReview = s.int64(7);
+  p.memory.reviews = s.integer(8);
+  p.memory.lapses = s.integer(9);
+  p.answered = s.integer(10);
+  p.correct = s.integer(11);
   return p;
 }
 
@@ -344,7 +352,7 @@ Result<Attempt> SqliteProgressRepository::startAttempt(std::int64_t userId, cons
     a.id = d.lastInsertId();
     return {};
   });
-  if (!status) return fail("starting lesson '" + lessonId + "': " + status.error().message);
+  if (!status) return tl::unexpected(withContext("starting lesson '" + lessonId + "'", status.error()));
   return a;
 }
 
@@ -354,7 +362,7 @@ Status SqliteProgressRepository::finishAttempt(std::int64_t attemptId, UnixSecon
     if (!update) return tl::unexpected(update.error());
     update->bind(1, attemptId).bind(2, finishedAt).bind(3, score);
     if (auto s = update->run(); !s) return s;
-    if (d.changes() != 1) return fail("unknown attempt " + std::to_string(attemptId));
+    if (d.changes() != 1) return fail(ErrorKind::NotFound, "unknown attempt " + std::to_string(attemptId));
     return {};
   });
 }
@@ -391,36 +399,70 @@ Result<std::vector<Response>> SqliteProgressRepository::responses(std::int64_t a
 namespace {
 
 // The learner-model half of recording an answer, inside the caller's transaction: the structure's
-// progress, the user's ability and the question's difficulty.
-Status writeLearnerModel(Database& d, const StructureProgress& p, const std::string& questionId, double abilityAfter,
-                         double difficultyAfter) {
+// memory state, its review-log entry, the user's ability and the question's difficulty.
+Status writeLearnerModel(Database& d, const LearnerUpdate& u, const GradedAnswer& answer, AnswerSource source,
+                         std::int64_t sourceId) {
+  const StructureProgress& p = u.progress;
+  if (p.memory.phase == MemoryPhase::New) return fail("a memory state after an answer cannot be new");
   auto progress = d.prepare(
-      "INSERT INTO progress (user_id, structure, box, due_at, answered, correct, last_answered_at)"
-      " VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7) ON CONFLICT (user_id, structure) DO UPDATE SET box = excluded.box,"
-      " due_at = excluded.due_at, answered = excluded.answered, correct = excluded.correct,"
-      " last_answered_at = excluded.last_answered_at");
+      "INSERT INTO memory_states (user_id, structure, phase, step, stability, difficulty, due_at, last_review_at,"
+      " reviews, lapses, answered, correct) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12)"
+      " ON CONFLICT (user_id, structure) DO UPDATE SET phase = excluded.phase, step = excluded.step,"
+      " stability = excluded.stability, difficulty = excluded.difficulty, due_at = excluded.due_at,"
+      " last_review_at = excluded.last_review_at, reviews = excluded.reviews, lapses = excluded.lapses,"
+      " answered = excluded.answered, correct = excluded.correct");
   if (!progress) return tl::unexpected(progress.error());
   progress->bind(1, p.userId)
       .bind(2, p.structureId)
-      .bind(3, p.box)
-      .bind(4, p.dueAt)
-      .bind(5, p.answered)
-      .bind(6, p.correct)
-      .bind(7, p.lastAnsweredAt);
+      .bind(3, toString(p.memory.phase))
+      .bind(4, p.memory.step)
+      .bind(5, p.memory.stability)
+      .bind(6, p.memory.difficulty)
+      .bind(7, p.memory.due)
+      .bind(8, p.memory.lastReview)
+      .bind(9, p.memory.reviews)
+      .bind(10, p.memory.lapses)
+      .bind(11, p.answered)
+      .bind(12, p.correct);
   if (auto s = progress->run(); !s) return s;
+
+  auto log = d.prepare(
+      "INSERT INTO review_log (user_id, structure, question_id, source, source_id, reviewed_at, rating, correct,"
+      " score, latency_ms, phase_before, elapsed_days, phase_after, stability, difficulty, due_at)"
+      " VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13, ?14, ?15, ?16)");
+  if (!log) return tl::unexpected(log.error());
+  const bool first = u.memoryBefore.phase == MemoryPhase::New;
+  log->bind(1, p.userId)
+      .bind(2, p.structureId)
+      .bind(3, answer.questionId)
+      .bind(4, toString(source))
+      .bind(5, sourceId)
+      .bind(6, answer.answeredAt)
+      .bind(7, int(u.rating))
+      .bind(8, answer.correct ? 1 : 0)
+      .bind(9, answer.score)
+      .bind(10, answer.latencyMs)
+      .bind(11, toString(u.memoryBefore.phase))
+      .bind(12, first ? std::optional<std::int64_t>() : std::optional<std::int64_t>(
+                                                              Fsrs::elapsedDays(u.memoryBefore.lastReview, answer.answeredAt)))
+      .bind(13, toString(p.memory.phase))
+      .bind(14, p.memory.stability)
+      .bind(15, p.memory.difficulty)
+      .bind(16, p.memory.due);
+  if (auto s = log->run(); !s) return s;
 
   auto ability = d.prepare(
       "INSERT INTO user_ability (user_id, rating, answered) VALUES (?1, ?2, 1)"
       " ON CONFLICT (user_id) DO UPDATE SET rating = excluded.rating, answered = answered + 1");
   if (!ability) return tl::unexpected(ability.error());
-  ability->bind(1, p.userId).bind(2, abilityAfter);
+  ability->bind(1, p.userId).bind(2, u.abilityAfter);
   if (auto s = ability->run(); !s) return s;
 
   auto difficulty = d.prepare(
       "INSERT INTO question_stats (question_id, difficulty, answered) VALUES (?1, ?2, 1)"
       " ON CONFLICT (question_id) DO UPDATE SET difficulty = excluded.difficulty, answered = answered + 1");
   if (!difficulty) return tl::unexpected(difficulty.error());
-  difficulty->bind(1, questionId).bind(2, difficultyAfter);
+  difficulty->bind(1, answer.questionId).bind(2, u.difficultyAfter);
   return difficulty->run();
 }
 
@@ -428,7 +470,9 @@ Status writeLearnerModel(Database& d, const StructureProgress& p, const std::str
 
 Result<std::int64_t> SqliteProgressRepository::recordAnswer(const AnswerRecord& record) {
   const Response& r = record.response;
-  const StructureProgress& p = record.progress;
+  const StructureProgress& p = record.update.progress;
+  if (p.structureId != r.structureId)
+    return fail("recording the answer: its progress is for another structure");
   std::int64_t id = 0;
   auto status = db_.writeTransaction([&](Database& d) -> Status {
     auto insert = d.prepare(std::string("INSERT INTO responses (attempt_id, step_index, ") + kGradedAnswerColumns +
@@ -437,23 +481,23 @@ Result<std::int64_t> SqliteProgressRepository::recordAnswer(const AnswerRecord& 
     insert->bind(1, r.attemptId).bind(2, r.stepIndex);
     bindGradedAnswer(*insert, 3, r);
     if (auto s = insert->run(); !s) {
-      if (s.error().message.find("UNIQUE") != std::string::npos)
-        return fail("step " + std::to_string(r.stepIndex) + " of attempt " + std::to_string(r.attemptId) +
+      if (s.error().kind == ErrorKind::Conflict)
+        return fail(ErrorKind::Conflict, "step " + std::to_string(r.stepIndex) + " of attempt " + std::to_string(r.attemptId) +
                     " is already answered");
-      if (s.error().message.find("FOREIGN KEY") != std::string::npos)
-        return fail("unknown attempt " + std::to_string(r.attemptId));
+      if (s.error().kind == ErrorKind::NotFound)
+        return fail(ErrorKind::NotFound, "unknown attempt " + std::to_string(r.attemptId));
       return s;
     }
     id = d.lastInsertId();
-    return writeLearnerModel(d, p, r.questionId, record.abilityAfter, record.difficultyAfter);
+    return writeLearnerModel(d, record.update, r, AnswerSource::Lesson, id);
   });
-  if (!status) return fail("recording the answer: " + status.error().message);
+  if (!status) return tl::unexpected(withContext("recording the answer", status.error()));
   return id;
 }
 
 Result<std::int64_t> SqliteProgressRepository::recordReviewAnswer(const ReviewRecord& record) {
   const ReviewResponse& r = record.response;
-  const StructureProgress& p = record.progress;
+  const StructureProgress& p = record.update.progress;
   if (p.userId != r.userId || p.structureId != r.structureId)
     return fail("recording the review answer: its progress is for another user or structure");
   std::int64_t id = 0;
@@ -464,14 +508,14 @@ Result<std::int64_t> SqliteProgressRepository::recordReviewAnswer(const ReviewRe
     insert->bind(1, r.userId);
     bindGradedAnswer(*insert, 2, r);
     if (auto s = insert->run(); !s) {
-      if (s.error().message.find("FOREIGN KEY") != std::string::npos)
-        return fail("unknown user id " + std::to_string(r.userId));
+      if (s.error().kind == ErrorKind::NotFound)
+        return fail(ErrorKind::NotFound, "unknown user id " + std::to_string(r.userId));
       return s;
     }
     id = d.lastInsertId();
-    return writeLearnerModel(d, p, r.questionId, record.abilityAfter, record.difficultyAfter);
+    return writeLearnerModel(d, record.update, r, AnswerSource::Review, id);
   });
-  if (!status) return fail("recording the review answer: " + status.error().message);
+  if (!status) return tl::unexpected(withContext("recording the review answer", status.error()));
   return id;
 }
 
@@ -493,6 +537,52 @@ Result<std::vector<ReviewResponse>> SqliteProgressRepository::reviewResponses(st
   return out;
 }
 
+Result<std::vector<ReviewLogEntry>> SqliteProgressRepository::reviewLog(std::int64_t userId) {
+  auto s = db_.prepare(
+      "SELECT id, user_id, structure, question_id, source, reviewed_at, rating, correct, score, latency_ms,"
+      " phase_before, elapsed_days, phase_after, stability, difficulty, due_at, rebuilt"
+      " FROM review_log WHERE user_id = ?1 ORDER BY reviewed_at, id");
+  if (!s) return tl::unexpected(s.error());
+  s->bind(1, userId);
+  std::vector<ReviewLogEntry> out;
+  auto status = forEachRow(*s, [&](Statement& r) -> Status {
+    ReviewLogEntry e;
+    e.id = r.int64(0);
+    const std::string row = "review log entry " + std::to_string(e.id);
+    e.userId = r.int64(1);
+    e.structureId = r.text(2);
+    e.questionId = r.text(3);
+    auto source = parseAnswerSource(r.text(4));
+    if (!source) return fail(row + ": " + source.error().message);
+    e.source = *source;
+    e.reviewedAt = r.int64(5);
+    const int rating = r.integer(6);
+    if (rating < 1 || rating > 4) return fail(row + ": rating " + std::to_string(rating) + " is not 1..4");
+    e.rating = Rating(rating);
+    e.correct = r.integer(7) != 0;
+    e.score = r.real(8);
+    e.latencyMs = r.int64(9);
+    auto phase = parseMemoryPhase(r.text(10));
+    if (!phase) return fail(row + ": " + phase.error().message);
+    e.phaseBefore = *phase;
+    e.elapsedDays = r.isNull(11) ? -1 : r.integer(11);
+    e.rebuilt = r.integer(16) != 0;
+    if (!r.isNull(12)) {
+      auto after = parseMemoryPhase(r.text(12));
+      if (!after) return fail(row + ": " + after.error().message);
+      e.after.phase = *after;
+      e.after.stability = r.optionalReal(13).value_or(0);
+      e.after.difficulty = r.optionalReal(14).value_or(0);
+      e.after.due = r.isNull(15) ? 0 : r.int64(15);
+      e.after.lastReview = e.reviewedAt;
+    }
+    out.push_back(std::move(e));
+    return {};
+  });
+  if (!status) return tl::unexpected(status.error());
+  return out;
+}
+
 Result<std::optional<StructureProgress>> SqliteProgressRepository::progress(std::int64_t userId,
                                                                             const std::string& structureId) {
   auto s = db_.prepare(std::string(kSelectProgress) + " WHERE user_id = ?1 AND structure = ?2");
@@ -501,7 +591,9 @@ Result<std::optional<StructureProgress>> SqliteProgressRepository::progress(std:
   auto row = s->step();
   if (!row) return tl::unexpected(row.error());
   if (!*row) return std::optional<StructureProgress>{};
-  return std::optional<StructureProgress>(readProgress(*s));
+  auto p = readProgress(*s);
+  if (!p) return tl::unexpected(p.error());
+  return std::optional<StructureProgress>(std::move(*p));
 }
 
 Result<std::vector<StructureProgress>> SqliteProgressRepository::allProgress(std::int64_t userId) {
@@ -509,7 +601,12 @@ Result<std::vector<StructureProgress>> SqliteProgressRepository::allProgress(std
   if (!s) return tl::unexpected(s.error());
   s->bind(1, userId);
   std::vector<StructureProgress> out;
-  auto status = forEachRow(*s, [&](Statement& r) -> Status { out.push_back(readProgress(r)); return {}; });
+  auto status = forEachRow(*s, [&](Statement& r) -> Status {
+    auto p = readProgress(r);
+    if (!p) return tl::unexpected(p.error());
+    out.push_back(std::move(*p));
+    return {};
+  });
   if (!status) return tl::unexpected(status.error());
   return out;
 }

@@ -249,7 +249,7 @@ Status markParticipantComplete(Database& db, const std::string& studyId, const s
 Result<std::vector<StudyCompletion>> studyCompletion(Database& db, const std::string& studyId) {
   auto study = findStudy(db, studyId);
   if (!study) return tl::unexpected(study.error());
-  if (!*study) return fail("no study '" + studyId + "' in " + db.path());
+  if (!*study) return fail(ErrorKind::NotFound, "no study '" + studyId + "' in " + db.path());
   auto st = db.prepare(
       "SELECT p.participant_id, p.group_name, p.completed_at IS NOT NULL, "
       " (SELECT count(*) FROM study_ratings r WHERE r.study_id = p.study_id AND r.participant_id = p.participant_id) "

@@ -8,9 +8,9 @@
 
 #include <nlohmann/json.hpp>
 
-#include "volume/json_document.h"
-#include "volume/printable_text.h"
-#include "volume/regular_file.h"
+#include "core/json_document.h"
+#include "core/printable_text.h"
+#include "core/regular_file.h"
 
 namespace at::lessons {
 namespace {
@@ -118,7 +118,7 @@ Result<quiz::Question> readQuestion(const json& j, const std::string& path) {
   AT_TRY(id, r.string("id", true));
   AT_TRY(kindText, r.string("kind", true));
   auto kind = quiz::parseQuestionKind(kindText);
-  if (!kind) return fail(r.field("kind") + ": " + kind.error().message);
+  if (!kind) return tl::unexpected(withContext(r.field("kind"), kind.error()));
   AT_TRY(prompt, r.string("prompt", true));
   AT_TRY(target, r.string("target", true));
   AT_TRY(tolerance, r.number("tolerance_mm", 0));
@@ -163,7 +163,7 @@ Result<quiz::Question> readQuestion(const json& j, const std::string& path) {
     AT_TRY(from, rel.string("from", true));
     AT_TRY(relKindText, rel.string("kind", true));
     auto relKind = quiz::parseRelationKind(relKindText);
-    if (!relKind) return fail(rel.field("kind") + ": " + relKind.error().message);
+    if (!relKind) return tl::unexpected(withContext(rel.field("kind"), relKind.error()));
     AT_TRY(candidates, rel.strings("candidates"));
     AT_TRY(threshold, rel.number("threshold_mm", 0));
     if (candidates.size() < 2) return fail(rel.field("candidates") + ": needs at least 2 structure ids");
@@ -203,7 +203,7 @@ Result<Step> readStep(const json& j, const std::string& path) {
   if (!j.is_object()) return fail(path + ": must be an object");
   AT_TRY(kindText, r.string("kind", true));
   auto kind = parseStepKind(kindText);
-  if (!kind) return fail(r.field("kind") + ": " + kind.error().message);
+  if (!kind) return tl::unexpected(withContext(r.field("kind"), kind.error()));
   Step step;
   step.kind = *kind;
   if (step.kind == StepKind::Show) {
@@ -214,7 +214,7 @@ Result<Step> readStep(const json& j, const std::string& path) {
     AT_TRY(preset, r.string("preset", true));
     AT_TRY(viewText, r.string("view", true));
     auto view = parseCameraView(viewText);
-    if (!view) return fail(r.field("view") + ": " + view.error().message);
+    if (!view) return tl::unexpected(withContext(r.field("view"), view.error()));
     AT_TRY(title, r.string("title", true));
     AT_TRY(text, r.string("text", true));
     step.show = ShowStep{structure, preset, *view, title, text};

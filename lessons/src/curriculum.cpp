@@ -64,4 +64,19 @@ Result<LessonMode> parseLessonMode(const std::string& text) {
   return fail("unknown lesson mode '" + text + "' (expected guided or quiz_only)");
 }
 
+const char* toString(AnswerSource source) {
+  switch (source) {
+    case AnswerSource::Lesson: return "lesson";
+    case AnswerSource::Review: return "review";
+    case AnswerSource::Exam: return "exam";
+  }
+  return "?";
+}
+
+Result<AnswerSource> parseAnswerSource(const std::string& text) {
+  for (AnswerSource s : {AnswerSource::Lesson, AnswerSource::Review, AnswerSource::Exam})
+    if (text == toString(s)) return s;
+  return fail("unknown answer source '" + text + "' (expected lesson, review or exam)");
+}
+
 }  // namespace at::lessons

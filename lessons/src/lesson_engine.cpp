@@ -19,15 +19,11 @@ UnixSeconds clockNow(const EngineOptions& options) {
   return std::chrono::duration_cast<std::chrono::seconds>(std::chrono::system_clock::now().time_since_epoch()).count();
 }
 
-// What one graded answer does to the learner model: the structure's next Leitner state and the
-// Elo update of the user's ability against the question's difficulty.
-struct Outcome {
-  StructureProgress progress;
-  quiz::EloUpdate elo;
-};
-
-Result<Outcome> outcomeOf(ProgressRepository& progress, std::int64_t userId, const quiz::Question& question,
-                          const quiz::Grade& grade, UnixSeconds at, const EngineOptions& options) {
+// What one graded answer does to the learner model: the FSRS rating and the structure's next memory
+// state, and the Elo update of the user's ability against the question's difficulty.
+Result<LearnerUpdate> learnerUpdate(ProgressRepository& progress, std::int64_t userId, const quiz::Question& question,
+                                    const quiz::Grade& grade, std::int64_t latencyMs, UnixSeconds at,
+                                    const EngineOptions& options) {
   auto before = progress.progress(userId, question.target);
   if (!before) return tl::unexpected(before.error());
   const StructureProgress previous = before->value_or(StructureProgress{userId, question.target});
@@ -35,11 +31,16 @@ Result<Outcome> outcomeOf(ProgressRepository& progress, std::int64_t userId, con
   if (!ability) return tl::unexpected(ability.error());
   auto difficulty = progress.questionDifficulty(question.id);
   if (!difficulty) return tl::unexpected(difficulty.error());
-  Outcome outcome;
-  outcome.elo = quiz::updateElo(ability->value_or(quiz::kDefaultAbility),
-                                difficulty->value_or(question.difficulty), grade.score, options.eloK);
-  outcome.progress = scheduleAnswer(previous, grade.correct, at, options.schedule);
-  return outcome;
+  if (auto valid = validate(options.fsrs); !valid) return tl::unexpected(valid.error());
+  LearnerUpdate update;
+  const quiz::EloUpdate elo = quiz::updateElo(ability->value_or(quiz::kDefaultAbility),
+                                              difficulty->value_or(question.difficulty), grade.score, options.eloK);
+  update.abilityAfter = elo.ability;
+  update.difficultyAfter = elo.difficulty;
+  update.rating = ratingFor(grade.correct, grade.score, question.kind, latencyMs);
+  update.memoryBefore = previous.memory;
+  update.progress = scheduleAnswer(previous, update.rating, grade.correct, at, Fsrs(options.fsrs));
+  return update;
 }
 
 GradedAnswer gradedAnswer(const quiz::Question& question, const quiz::Answer& answer, const quiz::Grade& grade,
@@ -237,16 +238,14 @@ Result<quiz::Grade> LessonEngine::answer(const quiz::Answer& answer, const Rende
   if (!grade) return tl::unexpected(grade.error());
 
   const UnixSeconds at = now();
-  auto outcome = outcomeOf(progress_, attempt_->userId, question.question, *grade, at, options_);
-  if (!outcome) return tl::unexpected(outcome.error());
+  auto update = learnerUpdate(progress_, attempt_->userId, question.question, *grade, latencyMs, at, options_);
+  if (!update) return tl::unexpected(update.error());
 
   AnswerRecord record;
   static_cast<GradedAnswer&>(record.response) = gradedAnswer(question.question, answer, *grade, latencyMs, render, at);
   record.response.attemptId = attempt_->id;
   record.response.stepIndex = index;
-  record.progress = outcome->progress;
-  record.abilityAfter = outcome->elo.ability;
-  record.difficultyAfter = outcome->elo.difficulty;
+  record.update = std::move(*update);
   auto stored = progress_.recordAnswer(record);
   if (!stored) return tl::unexpected(withContext("recording the answer", stored.error()));
 
@@ -355,16 +354,14 @@ Result<quiz::Grade> answerReview(CurriculumRepository& curriculum, ProgressRepos
   if (!grade) return tl::unexpected(grade.error());
 
   const UnixSeconds at = clockNow(options);
-  auto outcome = outcomeOf(progress, review.userId, *stored, *grade, at, options);
-  if (!outcome) return tl::unexpected(outcome.error());
+  auto update = learnerUpdate(progress, review.userId, *stored, *grade, review.latencyMs, at, options);
+  if (!update) return tl::unexpected(update.error());
 
   ReviewRecord record;
   static_cast<GradedAnswer&>(record.response) =
       gradedAnswer(*stored, review.answer, *grade, review.latencyMs, review.render, at);
   record.response.userId = review.userId;
-  record.progress = outcome->progress;
-  record.abilityAfter = outcome->elo.ability;
-  record.difficultyAfter = outcome->elo.difficulty;
+  record.update = std::move(*update);
   auto recorded = progress.recordReviewAnswer(record);
   if (!recorded) return tl::unexpected(withContext("review", recorded.error()));
   return *grade;

@@ -4,8 +4,8 @@
 
 #include <nlohmann/json.hpp>
 
-#include "volume/json_document.h"
-#include "volume/printable_text.h"
+#include "core/json_document.h"
+#include "core/printable_text.h"
 
 namespace at::quiz {
 
@@ -72,10 +72,15 @@ Result<Answer> readAnswer(const nlohmann::json& j) {
 }  // namespace
 
 Result<Answer> answerFromJson(const std::string& line) {
-  // The caller names the file and line ("answers.jsonl:3: …"); the parser's own position is the
-  // column within this line.
+  // The caller names the file and line ("answers.jsonl:3: column 5: not valid JSON: …"): of the
+  // parser's position only the column within this line is kept.
   auto j = parseJsonDocument(line, "answer");
-  if (!j) return tl::unexpected(j.error());
+  if (!j) {
+    Error e = j.error();
+    constexpr std::string_view kPrefix = "answer: line 1, ";
+    if (e.message.rfind(kPrefix, 0) == 0) e.message.erase(0, kPrefix.size());
+    return tl::unexpected(e);
+  }
   return withPrintableError(readAnswer(*j));
 }
 

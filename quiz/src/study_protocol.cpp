@@ -7,9 +7,9 @@
 
 #include <nlohmann/json.hpp>
 
-#include "volume/json_document.h"
-#include "volume/printable_text.h"
-#include "volume/regular_file.h"
+#include "core/json_document.h"
+#include "core/printable_text.h"
+#include "core/regular_file.h"
 
 namespace at::quiz {
 

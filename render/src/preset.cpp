@@ -9,9 +9,9 @@
 #include <nlohmann/json.hpp>
 
 #include "render/camera.h"
-#include "volume/json_document.h"
-#include "volume/printable_text.h"
-#include "volume/regular_file.h"
+#include "core/json_document.h"
+#include "core/printable_text.h"
+#include "core/regular_file.h"
 
 namespace at::render {
 
@@ -211,7 +211,7 @@ Result<Preset> parsePreset(const std::string& jsonText, const std::string& sourc
   auto root = parseJsonDocument(jsonText, source);
   if (!root) return tl::unexpected(root.error());
   Preset p;
-  if (auto e = readPreset(*root, p)) return tl::unexpected(printableError({source + ": field '" + e->field + "' " + e->problem}));
+  if (auto e = readPreset(*root, p)) return tl::unexpected(printableError(Error{ErrorKind::Invalid, source + ": field '" + e->field + "' " + e->problem}));
   return p;
 }
 

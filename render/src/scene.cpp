@@ -35,12 +35,6 @@ Result<StructureFrame> structureFrame(const LabelMap& labels, std::uint16_t labe
   return f;
 }
 
-Mask structureMask(const LabelMap& labels, std::uint16_t label) {
-  Mask m(labels.geometry, 0);
-  for (std::size_t i = 0; i < labels.voxels.size(); ++i) m.voxels[i] = labels.voxels[i] == label ? 1 : 0;
-  return m;
-}
-
 Result<WdtParams> wdtParamsFor(const Preset& preset, int passes) {
   WdtParams p;
   auto rule = parseStepRule(preset.weightRule);

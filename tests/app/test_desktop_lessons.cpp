@@ -121,14 +121,14 @@ TEST_CASE("a desktop lesson grades clicks, choices and names, records them, resu
     std::istringstream words(line);
     std::vector<std::string> w;
     for (std::string x; words >> x;) w.push_back(x);
-    // "  Cochlea   2   1   1  in 2 days": name, box, answered, correct, next review.
+    // "  Cochlea   1   1   100%  in 8 days": name, answered, correct, recall now, next review.
     const auto has = [&](const std::string& name) { return line.find("  " + name + " ") == 0; };
     if (has("Cochlea") || has("Vestibule")) {
       REQUIRE(w.size() >= 4);
       ++structureLines;
-      CHECK(w[1] == "2");  // box 2: a first right answer lands there
-      CHECK(w[2] == "1");  // answered
-      CHECK(w[3] == "1");  // correct
+      CHECK(w[1] == "1");  // answered
+      CHECK(w[2] == "1");  // correct
+      CHECK(w[3] == "100%");  // just answered: recalled for sure
     }
   }
   CHECK(structureLines == 2);
@@ -301,7 +301,7 @@ TEST_CASE("a review answer is recorded: a wrong one puts its structure in the qu
     wrong = "stapes";
   }
 
-  // Answered wrong: recorded, the structure in box 1 and due again in 10 minutes.
+  // Answered wrong: recorded, the structure back to its first learning step, due again in a minute.
   const Run missed = runLessonScript(dir, {{"actions", {{{"do", "review"}}, {{"do", "answer"}, {"value", wrong}}}}},
                                      db, "reviewer");
   INFO(missed.err);
@@ -330,15 +330,15 @@ TEST_CASE("a review answer is recorded: a wrong one puts its structure in the qu
     auto p = progress.progress((*user)->id, target);
     REQUIRE(p);
     REQUIRE(p->has_value());
-    CHECK((*p)->box == 1);
-    CHECK((*p)->dueAt == (*stored)[0].answeredAt + 600);
+    CHECK(((*p)->memory.phase == at::lessons::MemoryPhase::Learning));
+    CHECK((*p)->memory.due == (*stored)[0].answeredAt + 60);
     // Ten minutes pass (the structure is due now), and every other structure of the course was
     // answered and is not due: the review can only ask about this one.
-    REQUIRE(database->exec("UPDATE progress SET due_at = due_at - 600, last_answered_at = last_answered_at - 600"));
+    REQUIRE(database->exec("UPDATE memory_states SET due_at = due_at - 600, last_review_at = last_review_at - 600"));
     auto others = database->prepare(
-        "INSERT INTO progress (user_id, structure, box, due_at, answered, correct, last_answered_at)"
-        " SELECT ?1, target, 2, CAST(strftime('%s', 'now') AS INTEGER) + 86400, 1, 1,"
-        " CAST(strftime('%s', 'now') AS INTEGER) FROM (SELECT DISTINCT target FROM questions WHERE target != ?2)");
+        "INSERT INTO memory_states (user_id, structure, phase, stability, difficulty, due_at, last_review_at, reviews,"
+        " answered, correct) SELECT ?1, target, 'review', 2.3, 2.1, CAST(strftime('%s', 'now') AS INTEGER) + 86400,"
+        " CAST(strftime('%s', 'now') AS INTEGER), 1, 1, 1 FROM (SELECT DISTINCT target FROM questions WHERE target != ?2)");
     REQUIRE(others);
     others->bind(1, (*user)->id).bind(2, target);
     REQUIRE(others->run());
@@ -377,8 +377,8 @@ TEST_CASE("a review answer is recorded: a wrong one puts its structure in the qu
     CHECK((*stored)[1].questionId == reasked[0].value("question", ""));
     auto p = progress.progress(userId, target);
     REQUIRE(p->has_value());
-    CHECK((*p)->box == 2);
-    CHECK((*p)->dueAt >= (*stored)[1].answeredAt + 86400);
+    CHECK((*p)->memory.due > (*stored)[1].answeredAt);  // a later learning step or a day or more
+    CHECK((*p)->correct == 1);
   }
   const auto report = at::test::runApp("progress --user reviewer --db '" + db.string() + "'");
   INFO(report.out << report.err);

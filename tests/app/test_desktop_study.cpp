@@ -15,6 +15,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "core/strings.h"
 #include "desktop_script.h"
 #include "test_support.h"
 #include "volume/png_image.h"
@@ -34,11 +35,6 @@ Run runStudyScript(const TempDir& dir, const json& script, const fs::path& db, c
   options.db = db;
   options.screenshot = screenshot;
   return at::test::runDesktopScript(dir, script, options);
-}
-
-std::string lower(std::string s) {
-  for (char& c : s) c = char(std::tolower(static_cast<unsigned char>(c)));
-  return s;
 }
 
 json shippedStudy() {
@@ -108,12 +104,12 @@ TEST_CASE("the study runner shows no structure names and its ratings land in the
     const json& screen = screens[k];
     CHECK(screen["windows"] == json::array({"Preference study"}));
     std::string all;
-    for (const json& label : screen["labels"]) all += lower(label.get<std::string>()) + "\n";
+    for (const json& label : screen["labels"]) all += at::str::lower(label.get<std::string>()) + "\n";
     INFO("screen " << k << ": " << all);
     CHECK(all.find("structure " + std::to_string(k + 1) + " of " + std::to_string(n)) != std::string::npos);
-    CHECK(all.find(lower(study["items"][0]["wording"].get<std::string>())) != std::string::npos);
-    CHECK(all.find(lower(study["scale"]["anchors"]["1"].get<std::string>())) != std::string::npos);
-    for (const std::string& word : forbidden) CHECK_MESSAGE(all.find(lower(word)) == std::string::npos, word);
+    CHECK(all.find(at::str::lower(study["items"][0]["wording"].get<std::string>())) != std::string::npos);
+    CHECK(all.find(at::str::lower(study["scale"]["anchors"]["1"].get<std::string>())) != std::string::npos);
+    for (const std::string& word : forbidden) CHECK_MESSAGE(all.find(at::str::lower(word)) == std::string::npos, word);
   }
 
   const auto recorded = eventsOf(r, "study_recorded");

@@ -15,6 +15,7 @@
 #include "db/dataset_store.h"
 #include "db/schema.h"
 #include "lessons/course_json.h"
+#include "lessons/lesson_engine.h"
 #include "test_support.h"
 #include "toy_course.h"
 
@@ -73,8 +74,8 @@ TEST_CASE("An empty file is migrated to the newest schema version in WAL mode wi
   REQUIRE(*fk->step());
   CHECK(fk->integer(0) == 1);
   for (const char* table : {"datasets", "structures", "presets", "courses", "lessons", "lesson_prerequisites",
-                            "steps", "questions", "users", "attempts", "responses", "progress", "user_ability",
-                            "question_stats", "review_responses"})
+                            "steps", "questions", "users", "attempts", "responses", "leitner_progress", "user_ability",
+                            "question_stats", "review_responses", "memory_states", "review_log"})
     CHECK_MESSAGE(countRows(*db, table) == 0, table);
 }
 
@@ -135,7 +136,14 @@ TEST_CASE("A database at every earlier version migrates to the same schema as a 
       auto p = progress.progress(7, "stapes");
       REQUIRE(p);
       REQUIRE(p->has_value());
-      CHECK((*p)->box == 2);
+      // The Leitner box 2 became an FSRS memory state keeping its due time (migration 6).
+      CHECK(((*p)->memory.phase == lessons::MemoryPhase::Review));
+      CHECK((*p)->memory.stability == doctest::Approx(2.0));
+      CHECK((*p)->memory.due == 200000);
+      auto log = progress.reviewLog(7);
+      REQUIRE(log);
+      REQUIRE(log->size() == 1);
+      CHECK((*log)[0].rebuilt);
     }
     // The newest migration's table works on the migrated file: a review answer of the kept
     // learner (or a new one) is recorded and read back.
@@ -154,7 +162,10 @@ TEST_CASE("A database at every earlier version migrates to the same schema as a 
     review.response.answer.text = "stapes";
     review.response.correct = true;
     review.response.answeredAt = 300000;
-    review.progress = {learner, "stapes", 3, 300000 + 4 * 86400, 2, 2, 300000};
+    review.update.progress = {learner, "stapes"};
+    review.update.progress.memory = lessons::Fsrs().review({}, lessons::Rating::Good, 300000);
+    review.update.progress.answered = 1;
+    review.update.progress.correct = 1;
     auto recorded = progress.recordReviewAnswer(review);
     REQUIRE_MESSAGE(recorded, (recorded ? "" : recorded.error().message));
     CHECK(progress.reviewResponses(learner)->size() == 1);
@@ -181,6 +192,91 @@ TEST_CASE("The newest migration adds the review responses table to a version-4 d
   auto table = db->prepare("SELECT count(*) FROM sqlite_master WHERE name = 'review_responses'");
   REQUIRE(*table->step());
   CHECK(table->int64(0) == 1);
+}
+
+TEST_CASE("Leitner progress of a version-5 database becomes FSRS memory states keeping its schedule") {
+  REQUIRE(latestSchemaVersion() >= 6);
+  CHECK(migrations()[5].summary.find("FSRS") != std::string_view::npos);
+  test::TempDir dir;
+  const std::string path = (dir / "v5.db").string();
+  {
+    // What the Leitner program (schema 5) left: boxes 1 (never right, and right once before),
+    // 2, 4 and 5, lesson answers and review answers.
+    OpenOptions options;
+    options.targetVersion = 5;
+    auto old = Database::open(path, options);
+    REQUIRE(old);
+    REQUIRE(old->exec(
+        "INSERT INTO users (id, name) VALUES (1, 'lea'), (2, 'max');"
+        "INSERT INTO attempts (id, user_id, lesson_id, mode, started_at) VALUES (1, 1, 'l', 'guided', 100);"
+        "INSERT INTO responses (attempt_id, step_index, question_id, structure, answer, correct, score, latency_ms,"
+        " answered_at) VALUES (1, 0, 'q.a', 'cochlea', '{\"text\":\"x\"}', 0, 0, 900, 110),"
+        " (1, 1, 'q.b', 'stapes', '{\"order\":[\"a\"]}', 0, 0.5, 800, 120),"
+        " (1, 2, 'q.c', 'incus', '{\"choice\":1}', 1, 1, 700, 130);"
+        "INSERT INTO review_responses (user_id, question_id, structure, answer, correct, score, latency_ms, answered_at)"
+        " VALUES (1, 'q.c', 'incus', '{\"choice\":1}', 1, 1, 600, 115), (2, 'q.a', 'cochlea', '{\"text\":\"y\"}', 1, 1, 500, 140);"
+        "INSERT INTO progress VALUES (1, 'cochlea', 1, 710, 1, 0, 110), (1, 'stapes', 1, 720, 3, 1, 120),"
+        " (1, 'incus', 4, 130 + 8 * 86400, 5, 4, 130), (2, 'cochlea', 5, 140 + 16 * 86400, 6, 6, 140),"
+        " (2, 'vestibule', 2, 999, 0, 0, 0);"));
+  }
+  auto db = Database::open(path);
+  REQUIRE_MESSAGE(db, (db ? "" : db.error().message));
+  SqliteProgressRepository progress(*db);
+  const auto state = [&](std::int64_t user, const char* structure) {
+    auto p = progress.progress(user, structure);
+    REQUIRE(p);
+    REQUIRE(p->has_value());
+    return **p;
+  };
+  const lessons::Fsrs fsrs;
+  // Box 1, never right: Learning, the stability of a first Again, the difficulty of a first Again.
+  const auto cochlea = state(1, "cochlea");
+  CHECK((cochlea.memory.phase == lessons::MemoryPhase::Learning));
+  CHECK(cochlea.memory.stability == doctest::Approx(fsrs.initialStability(lessons::Rating::Again)));
+  CHECK(cochlea.memory.difficulty == doctest::Approx(fsrs.initialDifficulty(lessons::Rating::Again)));
+  CHECK(cochlea.memory.due == 710);
+  CHECK(cochlea.memory.lastReview == 110);
+  // Box 1 after a right answer: Relearning; two of three wrong: D two thirds of the way to D0(Again).
+  const auto stapes = state(1, "stapes");
+  CHECK((stapes.memory.phase == lessons::MemoryPhase::Relearning));
+  const double good = fsrs.initialDifficulty(lessons::Rating::Good), again = fsrs.initialDifficulty(lessons::Rating::Again);
+  CHECK(stapes.memory.difficulty == doctest::Approx(good + (again - good) * 2.0 / 3.0));
+  // Box 4: Review, stability 8 days, so FSRS schedules the next interval as the box did.
+  const auto incus = state(1, "incus");
+  CHECK((incus.memory.phase == lessons::MemoryPhase::Review));
+  CHECK(incus.memory.stability == doctest::Approx(8.0));
+  CHECK(fsrs.nextIntervalDays(incus.memory.stability) == 8);
+  CHECK(incus.memory.due == 130 + 8 * 86400);
+  CHECK(incus.answered == 5);
+  CHECK(incus.correct == 4);
+  CHECK(fsrs.retrievability(incus.memory, 130 + 8 * 86400) == doctest::Approx(0.9));
+  const auto maxCochlea = state(2, "cochlea");
+  CHECK(maxCochlea.memory.stability == doctest::Approx(16.0));
+  CHECK(maxCochlea.memory.difficulty == doctest::Approx(good));
+  // A row never answered is not a memory.
+  CHECK(!progress.progress(2, "vestibule")->has_value());
+  // The due queue is the one the Leitner boxes gave.
+  CHECK(lessons::reviewQueue(progress, 1, 715)->size() == 1);
+  CHECK(lessons::reviewQueue(progress, 1, 720)->size() == 2);
+
+  // Every earlier answer is in the review log, in time order, rated from its grade.
+  auto log = progress.reviewLog(1);
+  REQUIRE(log);
+  REQUIRE(log->size() == 4);
+  CHECK((*log)[0].reviewedAt == 110);
+  CHECK(((*log)[0].rating == lessons::Rating::Again));
+  CHECK(((*log)[1].source == lessons::AnswerSource::Review));
+  CHECK(((*log)[1].rating == lessons::Rating::Good));
+  CHECK(((*log)[2].rating == lessons::Rating::Hard));  // half credit
+  CHECK((*log)[2].latencyMs == 800);
+  CHECK((*log)[3].questionId == "q.c");
+  for (const auto& e : *log) CHECK(e.rebuilt);
+  CHECK(progress.reviewLog(2)->size() == 1);
+
+  // The Leitner rows are kept as they were.
+  auto kept = db->prepare("SELECT count(*) FROM leitner_progress");
+  REQUIRE(*kept->step());
+  CHECK(kept->int64(0) == 5);
 }
 
 TEST_CASE("A database from a newer program version is refused and left byte-identical") {
@@ -314,6 +410,7 @@ TEST_CASE("Registering a dataset under a name already used fails and writes noth
   auto again = registerDataset(*db, sampleRecord("abdomen"), {st});
   REQUIRE(!again);
   CHECK(again.error().message.find("'abdomen' is already imported") != std::string::npos);
+  CHECK((again.error().kind == ErrorKind::Conflict));
   CHECK(countRows(*db, "datasets") == 1);
   CHECK(countRows(*db, "structures") == 1);
   auto listed = listDatasets(*db);
@@ -394,4 +491,21 @@ TEST_CASE("checksumPath hashes a file's bytes and notices a changed file in a fo
   REQUIRE(changed);
   CHECK(*changed != *folder);
   CHECK(!checksumPath((dir / "nothing").string()));
+}
+
+TEST_CASE("SqlErrors_CarryTheirKind_UniqueIsConflict_MissingReferenceIsNotFound_CheckIsInvalid") {
+  test::TempDir dir;
+  auto db = Database::open((dir / "k.db").string());
+  REQUIRE(db);
+  REQUIRE(db->exec("INSERT INTO presets (id, mode, json) VALUES ('p', 'wdt', '{}')"));
+  auto clash = db->exec("INSERT INTO presets (id, mode, json) VALUES ('p', 'bare', '{}')");
+  REQUIRE(!clash);
+  CHECK((clash.error().kind == ErrorKind::Conflict));
+  auto orphan = db->exec("INSERT INTO attempts (user_id, lesson_id, mode, started_at) VALUES (424242, 'l', 'guided', 1)");
+  REQUIRE(!orphan);
+  CHECK((orphan.error().kind == ErrorKind::NotFound));
+  REQUIRE(db->exec("INSERT INTO users (name, role) VALUES ('u', 'student')"));
+  auto badMode = db->exec("INSERT INTO attempts (user_id, lesson_id, mode, started_at) VALUES (1, 'l', 'exam!', 1)");
+  REQUIRE(!badMode);
+  CHECK((badMode.error().kind == ErrorKind::Invalid));
 }

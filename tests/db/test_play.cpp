@@ -294,7 +294,7 @@ TEST_CASE("A malformed answers line is reported with its number and reason, earl
   const fs::path broken = writeLines(dir / "broken.jsonl", {answers[0], "", "{\"choice\": "});
   auto r = test::runApp(playArgs("quick.check", "fay", broken, dbPath));
   CHECK(r.exitCode != 0);
-  CHECK(r.err.find("broken.jsonl:3: not valid JSON") != std::string::npos);
+  CHECK(r.err.find("broken.jsonl:3: column 11: not valid JSON") != std::string::npos);
   CHECK(scalar(dbPath, "SELECT count(*) FROM responses") == 1);
 
   // An answer of the wrong kind for the question (a choice for a locate question) names its line.
@@ -475,7 +475,9 @@ TEST_CASE("play --review asks the due questions, records each answer and empties
   CHECK(r.out.find("Review answers saved: 4, 4 correct.") != std::string::npos);
   CHECK(scalar(dbPath, "SELECT count(*) FROM review_responses WHERE correct = 1 AND mode = 'terminal'") == 4);
   CHECK(scalar(dbPath, "SELECT count(*) FROM responses") == 0);
-  CHECK(scalar(dbPath, "SELECT count(*) FROM progress WHERE box = 2") == 4);
+  // Right, untimed (from a file): Good, the second learning step (due in 10 minutes).
+  CHECK(scalar(dbPath, "SELECT count(*) FROM memory_states WHERE phase = 'learning' AND step = 1") == 4);
+  CHECK(scalar(dbPath, "SELECT count(*) FROM review_log WHERE source = 'review' AND rating = 3") == 4);
 
   auto report = test::runApp("progress --user hal --db '" + dbPath + "'");
   CHECK_MESSAGE(report.exitCode == 0, report.err);
@@ -488,7 +490,7 @@ TEST_CASE("play --review asks the due questions, records each answer and empties
   CHECK(again.out.find("Nothing is due for review") != std::string::npos);
   CHECK(scalar(dbPath, "SELECT count(*) FROM review_responses") == 4);
 
-  // Another user names the first structure wrongly: box 1; the answers then end, which ends the
+  // Another user names the first structure wrongly: Again, the first learning step; the answers then end, which ends the
   // review without an error.
   quiz::Answer wrong;
   wrong.text = structures[1].displayName;
@@ -497,7 +499,8 @@ TEST_CASE("play --review asks the due questions, records each answer and empties
   CHECK_MESSAGE(w.exitCode == 0, w.err);
   CHECK(w.out.find("wrong (score 0.00)") != std::string::npos);
   CHECK(w.out.find("Review answers saved: 1, 0 correct.") != std::string::npos);
-  CHECK(scalar(dbPath, "SELECT box FROM progress JOIN users ON users.id = progress.user_id WHERE users.name = 'ivy'") == 1);
+  CHECK(scalar(dbPath, "SELECT m.due_at - m.last_review_at FROM memory_states m JOIN users ON users.id = m.user_id"
+                       " WHERE users.name = 'ivy'") == 60);
 
   // A malformed line names its line and records nothing; a lesson and --review together are refused.
   const fs::path broken = writeLines(dir / "broken.jsonl", {"{\"text\": "});

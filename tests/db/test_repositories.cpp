@@ -11,6 +11,7 @@
 #include "db/sqlite_repositories.h"
 #include "lessons/course_json.h"
 #include "lessons/lesson_engine.h"
+#include "lessons/scheduling.h"
 #include "quiz/answer_json.h"
 #include "test_support.h"
 #include "toy_course.h"
@@ -27,6 +28,17 @@ std::int64_t countRows(Database& db, const std::string& table) {
   REQUIRE(s);
   REQUIRE(*s->step());
   return s->int64(0);
+}
+
+// The learner update one answer with `rating` at `at` gives a structure never answered before.
+LearnerUpdate firstAnswer(std::int64_t userId, const std::string& structure, Rating rating, UnixSeconds at,
+                          double abilityAfter = 1500, double difficultyAfter = 1500) {
+  LearnerUpdate u;
+  u.progress = scheduleAnswer(StructureProgress{userId, structure}, rating, rating != Rating::Again, at, Fsrs());
+  u.rating = rating;
+  u.abilityAfter = abilityAfter;
+  u.difficultyAfter = difficultyAfter;
+  return u;
 }
 
 Database openFresh(const test::TempDir& dir, const std::string& name = "r.db") {
@@ -145,7 +157,7 @@ TEST_CASE("Seeding the same course files twice changes nothing; a newer version 
   record.response.questionId = "toy.ossicles.name_stapes";
   record.response.structureId = "stapes";
   record.response.answer.text = "stapes";
-  record.progress = {user->id, "stapes", 2, 200, 1, 1, 100};
+  record.update = firstAnswer(user->id, "stapes", Rating::Good, 100);
   REQUIRE(progress.recordAnswer(record));
 
   Course v2 = test::toyCourse(2);
@@ -179,6 +191,7 @@ TEST_CASE("A course reusing another course's lesson id is refused and writes not
   auto refused = storeCourse(db, other, "b");
   REQUIRE(!refused);
   CHECK(refused.error().message.find("'toy.ossicles'") != std::string::npos);
+  CHECK((refused.error().kind == ErrorKind::Conflict));
   CHECK(countRows(db, "courses") == 1);
   CHECK(countRows(db, "lessons") == 2);
 }
@@ -211,6 +224,7 @@ TEST_CASE("Users are created once, found by pseudonym, and hostile names are kep
   auto taken = users.createUser(hostile, Role::Student, "");
   REQUIRE(!taken);
   CHECK(taken.error().message.find("already taken") != std::string::npos);
+  CHECK((taken.error().kind == ErrorKind::Conflict));
   CHECK(!users.createUser("", Role::Student, ""));
   CHECK(!users.findUser("nobody")->has_value());
   CHECK(!users.user(999));
@@ -243,9 +257,7 @@ TEST_CASE("An answer is stored with its progress, ability and difficulty in one 
   r.response.latencyMs = 4321;
   r.response.render = {"malleus_wdt", "wdt", 0.3, 1.7, 0.9};
   r.response.answeredAt = 1010;
-  r.progress = {user->id, "malleus", 2, 1010 + 86400, 1, 1, 1010};
-  r.abilityAfter = 1516;
-  r.difficultyAfter = 1484;
+  r.update = firstAnswer(user->id, "malleus", Rating::Easy, 1010, 1516, 1484);
   auto id = progress.recordAnswer(r);
   REQUIRE_MESSAGE(id, (id ? "" : id.error().message));
 
@@ -265,20 +277,46 @@ TEST_CASE("An answer is stored with its progress, ability and difficulty in one 
   CHECK(back.answeredAt == 1010);
   auto p = progress.progress(user->id, "malleus");
   REQUIRE(p->has_value());
-  CHECK((*p)->box == 2);
-  CHECK((*p)->dueAt == 1010 + 86400);
+  CHECK(((*p)->memory.phase == MemoryPhase::Review));
+  CHECK((*p)->memory.stability == doctest::Approx(r.update.progress.memory.stability));
+  CHECK((*p)->memory.due == r.update.progress.memory.due);
+  CHECK((*p)->memory.lastReview == 1010);
+  CHECK((*p)->memory.reviews == 1);
   CHECK(*progress.ability(user->id) == std::optional<double>(1516));
   CHECK(*progress.questionDifficulty("toy.ossicles.locate_malleus") == std::optional<double>(1484));
   CHECK(!progress.questionDifficulty("never")->has_value());
 
-  // The same step again is refused, and nothing of it is written (progress keeps box 2).
+  // The review log holds the answer with its rating and the state it produced.
+  auto log = progress.reviewLog(user->id);
+  REQUIRE(log);
+  REQUIRE(log->size() == 1);
+  const ReviewLogEntry& e = (*log)[0];
+  CHECK((e.source == AnswerSource::Lesson));
+  CHECK((e.rating == Rating::Easy));
+  CHECK(e.questionId == "toy.ossicles.locate_malleus");
+  CHECK(e.latencyMs == 4321);
+  CHECK(e.reviewedAt == 1010);
+  CHECK((e.phaseBefore == MemoryPhase::New));
+  CHECK(e.elapsedDays == -1);
+  CHECK((e.after.phase == MemoryPhase::Review));
+  CHECK(e.after.due == r.update.progress.memory.due);
+  CHECK_FALSE(e.rebuilt);
+
+  // The same step again is refused, and nothing of it is written (the memory state stays).
   AnswerRecord again = r;
-  again.progress.box = 1;
-  again.abilityAfter = 1400;
+  again.update = firstAnswer(user->id, "malleus", Rating::Again, 1010, 1400);
   auto dup = progress.recordAnswer(again);
   REQUIRE(!dup);
   CHECK(dup.error().message.find("already answered") != std::string::npos);
-  CHECK((*progress.progress(user->id, "malleus"))->box == 2);
+  CHECK((dup.error().kind == ErrorKind::Conflict));
+  AnswerRecord orphan = r;
+  orphan.response.attemptId = 987654;
+  auto noAttempt = progress.recordAnswer(orphan);
+  REQUIRE(!noAttempt);
+  CHECK((noAttempt.error().kind == ErrorKind::NotFound));
+  CHECK(noAttempt.error().message.find("unknown attempt 987654") != std::string::npos);
+  CHECK(((*progress.progress(user->id, "malleus"))->memory.phase == MemoryPhase::Review));
+  CHECK(countRows(db, "review_log") == 1);
   CHECK(*progress.ability(user->id) == std::optional<double>(1516));
   CHECK(countRows(db, "responses") == 1);
 
@@ -373,7 +411,7 @@ TEST_CASE("Two connections recording answers for the same user at once lose noth
       r.response.questionId = std::string("q").append(std::to_string(i % 7));
       r.response.structureId = std::string("s").append(std::to_string(i % 5));
       r.response.answer.choice = i % 3;
-      r.progress = {userId, r.response.structureId, 1, 10, 1, 0, 5};
+      r.update = firstAnswer(userId, r.response.structureId, Rating::Again, 5);
       if (auto id = progress.recordAnswer(r); !id) {
         *error = id.error().message;
         return;
@@ -417,9 +455,7 @@ TEST_CASE("A review answer is stored with its progress, ability and difficulty i
   r.response.latencyMs = 6789;
   r.response.render = {"stapes_wdt", "bare", 0.15, 2.1, 0.6};
   r.response.answeredAt = 5000;
-  r.progress = {user->id, "stapes", 1, 5600, 3, 1, 5000};
-  r.abilityAfter = 1488;
-  r.difficultyAfter = 1512;
+  r.update = firstAnswer(user->id, "stapes", Rating::Again, 5000, 1488, 1512);
   auto id = progress.recordReviewAnswer(r);
   REQUIRE_MESSAGE(id, (id ? "" : id.error().message));
 
@@ -444,9 +480,10 @@ TEST_CASE("A review answer is stored with its progress, ability and difficulty i
   CHECK(x.answeredAt == 5000);
   auto p = progress.progress(user->id, "stapes");
   REQUIRE(p->has_value());
-  CHECK((*p)->box == 1);
-  CHECK((*p)->dueAt == 5600);
-  CHECK((*p)->answered == 3);
+  CHECK(((*p)->memory.phase == MemoryPhase::Learning));
+  CHECK((*p)->memory.due == 5000 + 60);
+  CHECK((*p)->answered == 1);
+  CHECK(((*progress.reviewLog(user->id))[0].source == AnswerSource::Review));
   CHECK(*progress.ability(user->id) == std::optional<double>(1488));
   CHECK(*progress.questionDifficulty("toy.ossicles.name_stapes") == std::optional<double>(1512));
   CHECK(countRows(db, "responses") == 0);
@@ -454,12 +491,13 @@ TEST_CASE("A review answer is stored with its progress, ability and difficulty i
 
   // A user that does not exist is refused by name, and nothing is written.
   ReviewRecord stranger = r;
-  stranger.response.userId = stranger.progress.userId = user->id + 100;
+  stranger.response.userId = stranger.update.progress.userId = user->id + 100;
   auto refused = progress.recordReviewAnswer(stranger);
   REQUIRE(!refused);
   CHECK(refused.error().message.find("unknown user") != std::string::npos);
   CHECK(countRows(db, "review_responses") == 1);
-  CHECK(countRows(db, "progress") == 1);
+  CHECK(countRows(db, "memory_states") == 1);
+  CHECK(countRows(db, "review_log") == 1);
 }
 
 TEST_CASE("A review answer that fails in its last write leaves no trace of its first ones") {
@@ -480,14 +518,13 @@ TEST_CASE("A review answer that fails in its last write leaves no trace of its f
   r.response.correct = true;
   r.response.score = 1;
   r.response.answeredAt = 7000;
-  r.progress = {user->id, "stapes", 2, 7000 + 2 * 86400, 1, 1, 7000};
-  r.abilityAfter = 1516;
-  r.difficultyAfter = 1484;
+  r.update = firstAnswer(user->id, "stapes", Rating::Good, 7000, 1516, 1484);
   auto failed = progress.recordReviewAnswer(r);
   REQUIRE(!failed);
   CHECK(failed.error().message.find("disk is full") != std::string::npos);
   CHECK(countRows(db, "review_responses") == 0);
-  CHECK(countRows(db, "progress") == 0);
+  CHECK(countRows(db, "memory_states") == 0);
+  CHECK(countRows(db, "review_log") == 0);
   CHECK(countRows(db, "user_ability") == 0);
   CHECK(!progress.ability(user->id)->has_value());
 
@@ -504,10 +541,10 @@ TEST_CASE("A review answer that fails in its last write leaves no trace of its f
   REQUIRE(!grade);
   CHECK(grade.error().message.find("disk is full") != std::string::npos);
   CHECK(countRows(db, "review_responses") == 0);
-  CHECK(countRows(db, "progress") == 0);
+  CHECK(countRows(db, "memory_states") == 0);
 }
 
-TEST_CASE("answerReview on SQLite moves the review queue: right answers up a box and out of it, a wrong one to box 1") {
+TEST_CASE("answerReview on SQLite moves the review queue by FSRS: right answers out of it for longer, a wrong one back") {
   test::TempDir dir;
   const std::string path = (dir / "q.db").string();
   {
@@ -550,43 +587,51 @@ TEST_CASE("answerReview on SQLite moves the review queue: right answers up a box
   REQUIRE(relation);
   rightRelation.choice = relation->keyChoice;
 
-  // Wrong: box 1, due after the relearn delay.
+  // Wrong on a first answer: Again, the first learning step (1 minute).
   CHECK_FALSE(review("toy.ossicles.name_stapes", wrongName).correct);
   auto p = *progress.progress(userId, "stapes");
   REQUIRE(p.has_value());
-  CHECK(p->box == 1);
-  CHECK(p->dueAt == clock + LeitnerSchedule{}.relearnDelay);
+  CHECK((p->memory.phase == MemoryPhase::Learning));
+  CHECK(p->memory.due == clock + 60);
   CHECK_FALSE(inQueue(clock));
-  clock += LeitnerSchedule{}.relearnDelay;
+  clock += 60;
   CHECK(inQueue(clock));
 
-  // Right: box 2, due in 2 days, out of the queue now; a stapes question is no longer chosen.
+  // Right in under 4 s, the same day: Easy graduates it to Review, due in days; out of the queue
+  // now, and a stapes question is no longer chosen.
   CHECK(review("toy.ossicles.name_stapes", rightName).correct);
   p = *progress.progress(userId, "stapes");
-  CHECK(p->box == 2);
-  CHECK(p->dueAt == clock + LeitnerSchedule{}.intervals[1]);
+  CHECK((p->memory.phase == MemoryPhase::Review));
+  CHECK(p->memory.due >= clock + 86400);
   CHECK_FALSE(inQueue(clock));
   auto chosen = chooseReviewQuestion(curriculum, progress, userId, "toy", clock);
   REQUIRE(chosen);
-  REQUIRE(chosen->has_value());
-  CHECK((*chosen)->target != "stapes");
+  if (chosen->has_value()) CHECK((*chosen)->target != "stapes");
 
-  // Due again after the interval; right again: box 3.
-  clock = p->dueAt;
+  // Due again after the interval; right again: a longer interval than the last.
+  const UnixSeconds lastInterval = p->memory.due - p->memory.lastReview;
+  clock = p->memory.due;
   CHECK(inQueue(clock));
   CHECK(review("toy.middle.nearest_to_stapes", rightRelation).correct);
   p = *progress.progress(userId, "stapes");
-  CHECK(p->box == 3);
-  CHECK(p->dueAt == clock + LeitnerSchedule{}.intervals[2]);
+  CHECK(p->memory.due - clock > lastInterval);
   CHECK(p->answered == 3);
   CHECK(p->correct == 2);
 
-  // Wrong from box 3: back to box 1.
-  clock = p->dueAt + 10;
+  // Wrong in Review: a lapse, Relearning for 10 minutes.
+  clock = p->memory.due + 10;
   CHECK_FALSE(review("toy.ossicles.name_stapes", wrongName).correct);
   p = *progress.progress(userId, "stapes");
-  CHECK(p->box == 1);
-  CHECK(p->dueAt == clock + LeitnerSchedule{}.relearnDelay);
+  CHECK((p->memory.phase == MemoryPhase::Relearning));
+  CHECK(p->memory.lapses == 1);
+  CHECK(p->memory.due == clock + 600);
+  auto log = progress.reviewLog(userId);
+  REQUIRE(log);
+  REQUIRE(log->size() == 4);
+  CHECK(((*log)[0].rating == Rating::Again));
+  CHECK(((*log)[1].rating == Rating::Easy));
+  CHECK(((*log)[3].rating == Rating::Again));
+  CHECK(((*log)[3].phaseBefore == MemoryPhase::Review));
 
   // Every review answer is stored in order, outside any attempt, and moved the Elo ratings.
   auto stored = progress.reviewResponses(userId);

@@ -15,7 +15,7 @@
 #include <string_view>
 #include <vector>
 
-#include "volume/error.h"
+#include "core/error.h"
 
 namespace at::fuzz {
 

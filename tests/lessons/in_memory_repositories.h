@@ -56,7 +56,35 @@ class InMemoryProgress final : public lessons::ProgressRepository {
   std::map<std::pair<std::int64_t, std::string>, lessons::StructureProgress> progressMap;
   std::map<std::int64_t, double> abilities;
   std::map<std::string, double> difficulties;
+  std::vector<lessons::ReviewLogEntry> log;
   bool failNextRecord = false;
+
+  // As db/ writes the review log: one entry per graded answer, before → after.
+  void logAnswer(std::int64_t userId, const lessons::GradedAnswer& answer, const lessons::LearnerUpdate& u,
+                 lessons::AnswerSource source) {
+    lessons::ReviewLogEntry e;
+    e.id = std::int64_t(log.size()) + 1;
+    e.userId = userId;
+    e.structureId = u.progress.structureId;
+    e.questionId = answer.questionId;
+    e.source = source;
+    e.reviewedAt = answer.answeredAt;
+    e.rating = u.rating;
+    e.correct = answer.correct;
+    e.score = answer.score;
+    e.latencyMs = answer.latencyMs;
+    e.phaseBefore = u.memoryBefore.phase;
+    e.elapsedDays = u.memoryBefore.phase == lessons::MemoryPhase::New
+                        ? -1
+                        : lessons::Fsrs::elapsedDays(u.memoryBefore.lastReview, answer.answeredAt);
+    e.after = u.progress.memory;
+    log.push_back(e);
+  }
+  void applyUpdate(std::int64_t userId, const std::string& questionId, const lessons::LearnerUpdate& u) {
+    progressMap[{u.progress.userId, u.progress.structureId}] = u.progress;
+    abilities[userId] = u.abilityAfter;
+    difficulties[questionId] = u.difficultyAfter;
+  }
 
   Result<std::optional<lessons::Attempt>> openAttempt(std::int64_t userId, const std::string& lessonId) override {
     std::optional<lessons::Attempt> open;
@@ -86,6 +114,12 @@ class InMemoryProgress final : public lessons::ProgressRepository {
     }
     return fail("unknown attempt " + std::to_string(attemptId));
   }
+  Result<std::vector<lessons::Attempt>> attempts(std::int64_t userId) override {
+    std::vector<lessons::Attempt> out;
+    for (auto it = attemptList.rbegin(); it != attemptList.rend(); ++it)
+      if (it->userId == userId) out.push_back(*it);
+    return out;
+  }
   Result<bool> hasFinished(std::int64_t userId, const std::string& lessonId) override {
     return std::any_of(attemptList.begin(), attemptList.end(), [&](const lessons::Attempt& a) {
       return a.userId == userId && a.lessonId == lessonId && a.finishedAt.has_value();
@@ -106,13 +140,12 @@ class InMemoryProgress final : public lessons::ProgressRepository {
     lessons::Response r = record.response;
     r.id = std::int64_t(responseList.size()) + 1;
     responseList.push_back(r);
-    progressMap[{record.progress.userId, record.progress.structureId}] = record.progress;
     std::int64_t userId = 0;
     for (const auto& a : attemptList) {
       if (a.id == r.attemptId) userId = a.userId;
     }
-    abilities[userId] = record.abilityAfter;
-    difficulties[r.questionId] = record.difficultyAfter;
+    applyUpdate(userId, r.questionId, record.update);
+    logAnswer(userId, r, record.update, lessons::AnswerSource::Lesson);
     return r.id;
   }
   Result<std::int64_t> recordReviewAnswer(const lessons::ReviewRecord& record) override {
@@ -123,9 +156,8 @@ class InMemoryProgress final : public lessons::ProgressRepository {
     lessons::ReviewResponse r = record.response;
     r.id = std::int64_t(reviewList.size()) + 1;
     reviewList.push_back(r);
-    progressMap[{record.progress.userId, record.progress.structureId}] = record.progress;
-    abilities[r.userId] = record.abilityAfter;
-    difficulties[r.questionId] = record.difficultyAfter;
+    applyUpdate(r.userId, r.questionId, record.update);
+    logAnswer(r.userId, r, record.update, lessons::AnswerSource::Review);
     return r.id;
   }
   Result<std::vector<lessons::ReviewResponse>> reviewResponses(std::int64_t userId) override {
@@ -133,6 +165,12 @@ class InMemoryProgress final : public lessons::ProgressRepository {
     for (const auto& r : reviewList) {
       if (r.userId == userId) out.push_back(r);
     }
+    return out;
+  }
+  Result<std::vector<lessons::ReviewLogEntry>> reviewLog(std::int64_t userId) override {
+    std::vector<lessons::ReviewLogEntry> out;
+    for (const auto& e : log)
+      if (e.userId == userId) out.push_back(e);
     return out;
   }
   Result<std::optional<lessons::StructureProgress>> progress(std::int64_t userId, const std::string& structureId) override {

@@ -140,7 +140,17 @@ TEST_CASE("LessonEngine_RunsALessonStartToFinishRecordingEveryAnswer") {
   CHECK(r.render.presetId == "cochlea_wdt");
   CHECK(r.render.t == 0.4);
   CHECK(*r.answer.text == "Cochlea");
-  CHECK(f.progress.progressMap[{1, "cochlea"}].box == 2);
+  // Right within 8 s on a name question: Easy, so the cochlea skips the learning steps.
+  const Fsrs fsrs;
+  const MemoryState easy = fsrs.review(MemoryState{}, Rating::Easy, f.clock);
+  const StructureProgress& cochlea = f.progress.progressMap[{1, "cochlea"}];
+  CHECK((cochlea.memory.phase == MemoryPhase::Review));
+  CHECK(cochlea.memory.stability == doctest::Approx(easy.stability));
+  CHECK(cochlea.memory.due == easy.due);
+  REQUIRE(f.progress.log.size() == 1);
+  CHECK((f.progress.log[0].rating == Rating::Easy));
+  CHECK((f.progress.log[0].phaseBefore == MemoryPhase::New));
+  CHECK(f.progress.log[0].questionId == "one.q1");
   const auto elo = quiz::updateElo(1500, 1400, 1.0);
   CHECK(f.progress.abilities[1] == doctest::Approx(elo.ability));
   CHECK(f.progress.difficulties["one.q1"] == doctest::Approx(elo.difficulty));
@@ -157,8 +167,10 @@ TEST_CASE("LessonEngine_RunsALessonStartToFinishRecordingEveryAnswer") {
   g = engine.answer(choice(wrong), {}, 500);
   REQUIRE(g);
   CHECK_FALSE(g->correct);
-  CHECK(f.progress.progressMap[{1, "stapes"}].box == 1);
-  CHECK(f.progress.progressMap[{1, "stapes"}].dueAt == f.clock + 600);
+  // Wrong: Again, the first learning step (1 minute).
+  CHECK((f.progress.progressMap[{1, "stapes"}].memory.phase == MemoryPhase::Learning));
+  CHECK(f.progress.progressMap[{1, "stapes"}].memory.due == f.clock + 60);
+  CHECK((f.progress.log.back().rating == Rating::Again));
   REQUIRE(engine.next());
 
   CHECK_FALSE(engine.finish());  // one question left
@@ -278,15 +290,16 @@ TEST_CASE("ReviewQueue_AndAdaptiveReview_FollowDueTimesAndAbility") {
   LessonEngine engine(f.curriculum, f.progress, f.keys, f.options());
   REQUIRE(engine.start(1, "one"));
   REQUIRE(engine.next());
-  REQUIRE(engine.answer(text("cochlea"), {}, 1));   // right: due in 2 days
+  REQUIRE(engine.answer(text("cochlea"), {}, 1));   // right and fast: Easy, due in 8 days
   REQUIRE(engine.next());
   REQUIRE(engine.next());
-  REQUIRE(engine.answer(choice(indexOf(engine.current()->choiceIds, "incus")), {}, 1));  // wrong: 10 min
+  REQUIRE(engine.answer(choice(indexOf(engine.current()->choiceIds, "incus")), {}, 1));  // wrong: 1 min
   auto queue = reviewQueue(f.progress, 1, f.clock + 3600);
   REQUIRE(queue);
   REQUIRE(queue->size() == 1);
   CHECK(queue->front().structureId == "stapes");
-  queue = reviewQueue(f.progress, 1, f.clock + 3 * 86400);
+  CHECK(reviewQueue(f.progress, 1, f.clock + 7 * 86400)->size() == 1);
+  queue = reviewQueue(f.progress, 1, f.clock + 8 * 86400);
   REQUIRE(queue->size() == 2);
   CHECK(queue->front().structureId == "stapes");  // due earlier
   CHECK(queue->back().structureId == "cochlea");
@@ -342,7 +355,7 @@ bool inQueue(Fixture& f, const std::string& structure, UnixSeconds at) {
 
 }  // namespace
 
-TEST_CASE("AnswerReview_RightAnswerMovesTheStructureUpABoxAndOutOfTheQueue") {
+TEST_CASE("AnswerReview_RightAnswerReschedulesTheStructureLaterAndOutOfTheQueue") {
   Fixture f;
   LessonEngine engine(f.curriculum, f.progress, f.keys, f.options());
   REQUIRE(engine.start(1, "one"));
@@ -350,7 +363,8 @@ TEST_CASE("AnswerReview_RightAnswerMovesTheStructureUpABoxAndOutOfTheQueue") {
   REQUIRE(engine.answer(text("cochlea"), {}, 1));
   REQUIRE(engine.next());
   REQUIRE(engine.next());
-  REQUIRE(engine.answer(choice(indexOf(engine.current()->choiceIds, "incus")), {}, 1));  // wrong: box 1
+  REQUIRE(engine.answer(choice(indexOf(engine.current()->choiceIds, "incus")), {}, 1));  // wrong: Again
+  const UnixSeconds wrongAt = f.clock;
   f.clock += 3600;
   REQUIRE(inQueue(f, "stapes", f.clock));
 
@@ -362,15 +376,24 @@ TEST_CASE("AnswerReview_RightAnswerMovesTheStructureUpABoxAndOutOfTheQueue") {
   CHECK(grade->correct);
   CHECK(grade->score == doctest::Approx(1.0));
 
-  // Box 1 → 2, due after box 2's interval: no longer in the queue now, back when that has passed.
+  // Again, then right within 4 s an hour later (Easy, the same day): graduates to Review with the
+  // FSRS same-day stability; no longer in the queue now, back when its interval has passed.
+  const Fsrs fsrs;
+  const MemoryState expected = fsrs.review(fsrs.review(MemoryState{}, Rating::Again, wrongAt), Rating::Easy, f.clock);
   const StructureProgress& p = f.progress.progressMap.at({1, "stapes"});
-  CHECK(p.box == 2);
-  CHECK(p.dueAt == f.clock + LeitnerSchedule{}.intervals[1]);
+  CHECK((p.memory.phase == MemoryPhase::Review));
+  CHECK(p.memory.stability == doctest::Approx(expected.stability));
+  CHECK(p.memory.due == expected.due);
+  CHECK(p.memory.due >= f.clock + 86400);
   CHECK(p.answered == 2);
   CHECK(p.correct == 1);
-  CHECK(p.lastAnsweredAt == f.clock);
+  CHECK(p.memory.lastReview == f.clock);
   CHECK_FALSE(inQueue(f, "stapes", f.clock));
-  CHECK(inQueue(f, "stapes", p.dueAt));
+  CHECK(inQueue(f, "stapes", p.memory.due));
+  REQUIRE(f.progress.log.size() == 3);
+  CHECK((f.progress.log.back().source == AnswerSource::Review));
+  CHECK((f.progress.log.back().phaseBefore == MemoryPhase::Learning));
+  CHECK(f.progress.log.back().elapsedDays == 0);
 
   // Elo moved from the values before the review, as for a lesson answer.
   const quiz::EloUpdate elo = quiz::updateElo(abilityBefore, difficultyBefore, 1.0);
@@ -392,13 +415,14 @@ TEST_CASE("AnswerReview_RightAnswerMovesTheStructureUpABoxAndOutOfTheQueue") {
   CHECK(r.answer.choice == std::optional<int>(indexOf(q.choices, "stapes")));
 }
 
-TEST_CASE("AnswerReview_WrongAnswerSendsTheStructureBackToBoxOne") {
+TEST_CASE("AnswerReview_WrongAnswerSendsTheStructureToRelearning") {
   Fixture f;
   LessonEngine engine(f.curriculum, f.progress, f.keys, f.options());
   REQUIRE(engine.start(1, "one"));
   REQUIRE(engine.next());
-  REQUIRE(engine.answer(text("cochlea"), {}, 1));  // right: box 2, due in 2 days
-  f.clock += 3 * 86400;
+  REQUIRE(engine.answer(text("cochlea"), {}, 1));  // right and fast: Easy, due in 8 days
+  const StructureProgress before = f.progress.progressMap.at({1, "cochlea"});
+  f.clock += 9 * 86400;
   REQUIRE(inQueue(f, "cochlea", f.clock));
 
   auto q = f.curriculum.question("one.q1");
@@ -407,12 +431,15 @@ TEST_CASE("AnswerReview_WrongAnswerSendsTheStructureBackToBoxOne") {
   REQUIRE(grade);
   CHECK_FALSE(grade->correct);
   const StructureProgress& p = f.progress.progressMap.at({1, "cochlea"});
-  CHECK(p.box == 1);
-  CHECK(p.dueAt == f.clock + LeitnerSchedule{}.relearnDelay);
+  CHECK((p.memory.phase == MemoryPhase::Relearning));
+  CHECK(p.memory.lapses == 1);
+  CHECK(p.memory.stability < before.memory.stability);
+  CHECK(p.memory.due == f.clock + 600);  // the relearning step
   CHECK(p.answered == 2);
   CHECK(p.correct == 1);
   CHECK_FALSE(inQueue(f, "cochlea", f.clock));
-  CHECK(inQueue(f, "cochlea", f.clock + LeitnerSchedule{}.relearnDelay));
+  CHECK(inQueue(f, "cochlea", f.clock + 600));
+  CHECK(f.progress.log.back().elapsedDays == 9);
   REQUIRE(f.progress.reviewList.size() == 1);
   CHECK_FALSE(f.progress.reviewList[0].correct);
 }
@@ -436,9 +463,10 @@ TEST_CASE("AnswerReview_GradesNamesWithTheCourseSynonymsAsLessonsDo") {
   // Another structure's name is not accepted.
   CHECK_FALSE(answerReview(f.curriculum, f.progress, f.keys, reviewOf(*q, text("incus")), f.options())->correct);
   // A first review answer starts the structure's progress as a first lesson answer would; the
-  // second (wrong) one sent it back to box 1.
+  // second (wrong) one sent it back to the first learning step.
   CHECK(f.progress.reviewList.size() == 2);
-  CHECK(f.progress.progressMap.at({1, "stapes"}).box == 1);
+  CHECK(f.progress.progressMap.at({1, "stapes"}).memory.step == 0);
+  CHECK((f.progress.log.back().rating == Rating::Again));
   CHECK(f.progress.progressMap.at({1, "stapes"}).answered == 2);
 }
 

@@ -4,49 +4,50 @@
 
 using namespace at::lessons;
 
-TEST_CASE("Leitner_RightAnswersClimbBoxesWithDoublingIntervals") {
-  const LeitnerSchedule s;
-  StructureProgress p{7, "cochlea"};
-  p = scheduleAnswer(p, true, 1000, s);  // first answer right: box 2, 2 days
-  CHECK(p.box == 2);
-  CHECK(p.dueAt == 1000 + 2 * 86400);
-  p = scheduleAnswer(p, true, 2000, s);
-  CHECK(p.box == 3);
-  CHECK(p.dueAt == 2000 + 4 * 86400);
-  p = scheduleAnswer(p, true, 3000, s);
-  p = scheduleAnswer(p, true, 4000, s);
-  CHECK(p.box == 5);
-  CHECK(p.dueAt == 4000 + 16 * 86400);
-  p = scheduleAnswer(p, true, 5000, s);  // stays in the last box
-  CHECK(p.box == 5);
-  CHECK(p.dueAt == 5000 + 16 * 86400);
-  CHECK(p.answered == 5);
-  CHECK(p.correct == 5);
-  CHECK(p.lastAnsweredAt == 5000);
+TEST_CASE("RatingFor_WrongIsAgainPartlyRightIsHardRightIsGoodFastIsEasy") {
+  using K = at::quiz::QuestionKind;
+  CHECK((ratingFor(false, 0, K::Locate, 2000) == Rating::Again));
+  CHECK((ratingFor(false, 0.4, K::Order, 2000) == Rating::Again));
+  CHECK((ratingFor(false, 0.5, K::Order, 2000) == Rating::Hard));
+  CHECK((ratingFor(true, 1, K::Locate, 4001) == Rating::Good));
+  CHECK((ratingFor(true, 1, K::Locate, 4000) == Rating::Easy));
+  CHECK((ratingFor(true, 1, K::Name, 7000) == Rating::Easy));  // typing takes longer
+  CHECK((ratingFor(true, 1, K::Order, 14000) == Rating::Easy));
+  // Not measured (answers from a file): never Easy.
+  CHECK((ratingFor(true, 1, K::Identify, 0) == Rating::Good));
 }
 
-TEST_CASE("Leitner_WrongAnswerSendsBackToBoxOneAndComesBackSooner") {
-  const LeitnerSchedule s;
-  StructureProgress p{7, "stapes"};
-  p.box = 4;
-  p.dueAt = 0;
-  p = scheduleAnswer(p, false, 10000, s);
-  CHECK(p.box == 1);
-  CHECK(p.dueAt == 10000 + 600);
-  CHECK(p.correct == 0);
+TEST_CASE("ScheduleAnswer_MovesTheMemoryStateByFsrsAndCountsAnswers") {
+  const Fsrs fsrs;
+  StructureProgress p{7, "cochlea"};
+  p = scheduleAnswer(p, Rating::Good, true, 1000, fsrs);
+  CHECK((p.memory.phase == MemoryPhase::Learning));
+  CHECK(p.memory.due == 1000 + 600);
   CHECK(p.answered == 1);
-  p = scheduleAnswer(p, true, 20000, s);  // relearned: box 2
-  CHECK(p.box == 2);
-  CHECK(p.dueAt == 20000 + 2 * 86400);
-  // a first answer that is wrong: box 1 as well, and due before a right first answer would be
-  StructureProgress fresh{7, "incus"};
-  CHECK(scheduleAnswer(fresh, false, 0, s).dueAt < scheduleAnswer(fresh, true, 0, s).dueAt);
+  CHECK(p.correct == 1);
+  p = scheduleAnswer(p, Rating::Again, false, 2000, fsrs);
+  CHECK(p.memory.due == 2000 + 60);
+  CHECK(p.answered == 2);
+  CHECK(p.correct == 1);
+  CHECK(p.memory.lastReview == 2000);
+  // The same history gives the same state (the fuzz is drawn from who, what and when).
+  StructureProgress q{7, "cochlea"};
+  q = scheduleAnswer(q, Rating::Good, true, 1000, fsrs);
+  q = scheduleAnswer(q, Rating::Again, false, 2000, fsrs);
+  CHECK(q.memory.due == p.memory.due);
+  CHECK(q.memory.stability == p.memory.stability);
 }
 
 TEST_CASE("DueForReview_OrdersByDueTimeThenIdAndSkipsFutureAndUnanswered") {
-  std::vector<StructureProgress> all = {
-      {1, "vestibule", 2, 500, 3, 2, 0}, {1, "cochlea", 1, 100, 1, 0, 0}, {1, "stapes", 3, 9999, 2, 2, 0},
-      {1, "incus", 2, 100, 1, 1, 0},     {1, "malleus", 0, 0, 0, 0, 0}};
+  const auto at = [](const char* id, at::lessons::UnixSeconds due, int answered) {
+    StructureProgress p{1, id};
+    p.memory.phase = answered ? MemoryPhase::Review : MemoryPhase::New;
+    p.memory.due = due;
+    p.answered = answered;
+    return p;
+  };
+  std::vector<StructureProgress> all = {at("vestibule", 500, 3), at("cochlea", 100, 1), at("stapes", 9999, 2),
+                                        at("incus", 100, 1), at("malleus", 0, 0)};
   const auto due = dueForReview(all, 1000);
   REQUIRE(due.size() == 3);
   CHECK(due[0].structureId == "cochlea");

@@ -5,6 +5,7 @@
 #include <functional>
 
 #include "render/scene.h"
+#include "volume/mask.h"
 #include "wdt/wdt.h"
 
 namespace at::test {
@@ -33,7 +34,7 @@ FloatVolume field(const Dataset& d, WeightRule weight) {
   p.weight = weight;
   p.converge = true;
   p.backend = WdtBackend::Cpu;
-  auto r = computeWdt(d.volume, render::structureMask(d.labels, 1), p);
+  auto r = computeWdt(d.volume, structureMask(d.labels, 1), p);
   if (!r) {
     std::fprintf(stderr, "render_scenes: computeWdt failed: %s\n", r.error().message.c_str());
     std::abort();

@@ -14,6 +14,7 @@
 #include "render_fixture.h"
 #include "test_support.h"
 #include "volume/dataset_source.h"
+#include "volume/mask.h"
 #include "volume/png_image.h"
 #include "wdt/wdt.h"
 

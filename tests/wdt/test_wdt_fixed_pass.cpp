@@ -15,10 +15,10 @@
 #include <random>
 #include <string>
 
-#include "../../wdt/src/step_cost.h"
 #include "test_support.h"
 #include "wdt/problem.h"
 #include "wdt/stencil.h"
+#include "wdt/step_cost.h"
 #include "wdt/wdt.h"
 
 using namespace at;
@@ -74,14 +74,8 @@ std::vector<float> plainPasses(const WdtProblem& pr, int passes) {
 }
 
 std::vector<float> plainPasses(const WdtProblem& pr, int passes) {
-  switch (wdt::costKernel(pr.params)) {
-    case wdt::CostKernel::EnterDensity: return plainPasses<wdt::CostKernel::EnterDensity>(pr, passes);
-    case wdt::CostKernel::EnterUniform: return plainPasses<wdt::CostKernel::EnterUniform>(pr, passes);
-    case wdt::CostKernel::TrapezoidDensity: return plainPasses<wdt::CostKernel::TrapezoidDensity>(pr, passes);
-    case wdt::CostKernel::EdgeGradient: return plainPasses<wdt::CostKernel::EdgeGradient>(pr, passes);
-    case wdt::CostKernel::EdgeAscent: return plainPasses<wdt::CostKernel::EdgeAscent>(pr, passes);
-  }
-  return {};
+  return wdt::withCostKernel(wdt::costKernel(pr.params),
+                              [&]<wdt::CostKernel K>() { return plainPasses<K>(pr, passes); });
 }
 
 // Random blocky HU, random spacing, a few seeds (some on the volume's faces), random weight rule.

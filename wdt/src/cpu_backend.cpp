@@ -29,7 +29,7 @@
 #include <vector>
 
 #include "wdt/huge_pages.h"
-#include "step_cost.h"
+#include "wdt/step_cost.h"
 #include "wdt/problem.h"
 #include "wdt/stencil.h"
 
@@ -304,20 +304,8 @@ __attribute__((noinline)) int planeBaseline(const PlaneArgs& a) {
 
 using PlaneFn = int (*)(const PlaneArgs&);
 
-template <CostKernel K>
-PlaneFn pickPlane(bool avx2) {
-  return avx2 ? &planeAvx2<K> : &planeBaseline<K>;
-}
-
 PlaneFn planeFunction(CostKernel k, bool avx2) {
-  switch (k) {
-    case CostKernel::EnterDensity: return pickPlane<CostKernel::EnterDensity>(avx2);
-    case CostKernel::EnterUniform: return pickPlane<CostKernel::EnterUniform>(avx2);
-    case CostKernel::TrapezoidDensity: return pickPlane<CostKernel::TrapezoidDensity>(avx2);
-    case CostKernel::EdgeGradient: return pickPlane<CostKernel::EdgeGradient>(avx2);
-    case CostKernel::EdgeAscent: return pickPlane<CostKernel::EdgeAscent>(avx2);
-  }
-  return nullptr;
+  return wdt::withCostKernel(k, [avx2]<CostKernel K>() -> PlaneFn { return avx2 ? &planeAvx2<K> : &planeBaseline<K>; });
 }
 
 // ─────────────────────────────────────────────────────────────────────────────────────────────

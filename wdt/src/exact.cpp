@@ -1,7 +1,7 @@
 // The exact reference (Dijkstra on the 26-connected grid), field upsampling and accuracy.
 //
 // Candidates are D(a) + stepCost(a → b) with the lengths of wdt::axisSweepLengths and the costs of
-// step_cost.h: the very floats the sweeps add (the sweeps' grouped min-then-add equals add-then-min
+// wdt/step_cost.h: the very floats the sweeps add (the sweeps' grouped min-then-add equals add-then-min
 // because float addition is monotone). Converged sweeps therefore equal this reference bit for bit.
 //
 // Queue: Dial's buckets of width W = ½ · (smallest possible step cost). Every step costs at least
@@ -17,7 +17,7 @@
 #include <queue>
 #include <vector>
 
-#include "step_cost.h"
+#include "wdt/step_cost.h"
 #include "wdt/problem.h"
 #include "wdt/stencil.h"
 
@@ -199,13 +199,7 @@ Result<FloatVolume> exactWdtOnProblem(const WdtProblem& problem) {
     return fail("WDT exact: problem arrays do not match the grid " + d.toString());
   if (d.count() >= (std::size_t(1) << 32)) return fail("WDT exact: grid " + d.toString() + " is too large");
   FloatVolume out(problem.grid, kInf);
-  switch (wdt::costKernel(problem.params)) {
-    case CostKernel::EnterDensity: exactWith<CostKernel::EnterDensity>(problem, out.voxels); break;
-    case CostKernel::EnterUniform: exactWith<CostKernel::EnterUniform>(problem, out.voxels); break;
-    case CostKernel::TrapezoidDensity: exactWith<CostKernel::TrapezoidDensity>(problem, out.voxels); break;
-    case CostKernel::EdgeGradient: exactWith<CostKernel::EdgeGradient>(problem, out.voxels); break;
-    case CostKernel::EdgeAscent: exactWith<CostKernel::EdgeAscent>(problem, out.voxels); break;
-  }
+  wdt::withCostKernel(wdt::costKernel(problem.params), [&]<CostKernel K>() { exactWith<K>(problem, out.voxels); });
   return out;
 }
 

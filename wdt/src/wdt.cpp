@@ -27,7 +27,7 @@ Result<WdtResult> computeWdt(const Volume& volume, const Mask& seeds, const WdtP
   const bool useCuda = params.backend == WdtBackend::Cuda ||
                        (params.backend == WdtBackend::Auto && cuda::queryDevice().available);
   if (params.backend == WdtBackend::Cuda && !cuda::queryDevice().available)
-    return fail("WDT: backend cuda requested but " +
+    return fail(ErrorKind::Unavailable, "WDT: backend cuda requested but " +
                 (cuda::queryDevice().reason.empty() ? std::string("no CUDA device is available")
                                                     : cuda::queryDevice().reason));
   if (useCuda) {
@@ -39,7 +39,7 @@ Result<WdtResult> computeWdt(const Volume& volume, const Mask& seeds, const WdtP
   }
   if (!useCuda || !result) result = runCpuBackend(*problem, control);
 #else
-  if (params.backend == WdtBackend::Cuda) return fail("WDT: this build has no CUDA backend");
+  if (params.backend == WdtBackend::Cuda) return fail(ErrorKind::Unavailable, "WDT: this build has no CUDA backend");
   result = runCpuBackend(*problem, control);
 #endif
   if (!result) return result;

@@ -5,7 +5,7 @@
 
 #include <memory>
 
-#include "volume/error.h"
+#include "core/error.h"
 
 namespace at::cuda {
 

@@ -19,7 +19,7 @@
 #include <memory>
 #include <string>
 
-#include "volume/error.h"
+#include "core/error.h"
 #include "wdt/problem.h"
 
 namespace at::cuda {

@@ -6,7 +6,7 @@
 #include <string>
 #include <string_view>
 
-#include "volume/error.h"
+#include "core/error.h"
 
 namespace at::db {
 

@@ -13,7 +13,7 @@
 #include <string>
 #include <string_view>
 
-#include "volume/error.h"
+#include "core/error.h"
 
 struct sqlite3;
 struct sqlite3_stmt;

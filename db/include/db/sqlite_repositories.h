@@ -55,14 +55,14 @@ class SqliteProgressRepository final : public lessons::ProgressRepository {
   Result<std::int64_t> recordAnswer(const lessons::AnswerRecord& record) override;
   Result<std::int64_t> recordReviewAnswer(const lessons::ReviewRecord& record) override;
   Result<std::vector<lessons::ReviewResponse>> reviewResponses(std::int64_t userId) override;
+  Result<std::vector<lessons::ReviewLogEntry>> reviewLog(std::int64_t userId) override;
   Result<std::optional<lessons::StructureProgress>> progress(std::int64_t userId,
                                                              const std::string& structureId) override;
   Result<std::vector<lessons::StructureProgress>> allProgress(std::int64_t userId) override;
   Result<std::optional<double>> ability(std::int64_t userId) override;
   Result<std::optional<double>> questionDifficulty(const std::string& questionId) override;
 
-  // Attempts of a user, newest first (for `progress`).
-  Result<std::vector<lessons::Attempt>> attempts(std::int64_t userId);
+  Result<std::vector<lessons::Attempt>> attempts(std::int64_t userId) override;
 
  private:
   Database& db_;

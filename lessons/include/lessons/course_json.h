@@ -9,7 +9,7 @@
 
 #include "lessons/curriculum.h"
 #include "quiz/question.h"
-#include "volume/error.h"
+#include "core/error.h"
 
 namespace at::lessons {
 

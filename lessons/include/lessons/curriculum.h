@@ -7,7 +7,7 @@
 #include <vector>
 
 #include "quiz/question.h"
-#include "volume/error.h"
+#include "core/error.h"
 
 namespace at::lessons {
 

@@ -3,9 +3,9 @@
 //   start(user, lesson) ──► [step shown] ──answer()──► [feedback] ──next()──► [step shown] … ──► finish()
 //          │ resumes an open attempt at its first unanswered step
 //
-// Show steps need only next(). Every answer is graded, then recorded through
-// ProgressRepository::recordAnswer (response + Leitner progress + Elo, one committed transaction)
-// BEFORE answer() returns its feedback. A lesson whose prerequisites are not finished cannot start.
+// Show steps need only next(). Every answer is graded, rated (lessons/scheduling.h) and recorded
+// through ProgressRepository::recordAnswer (response + FSRS memory state + review log + Elo, one
+// committed transaction) BEFORE answer() returns its feedback. A lesson whose prerequisites are not finished cannot start.
 // QuizOnly mode skips show steps and hides labels and structure names in step views.
 //
 // Review questions (chooseReviewQuestion) are asked outside any attempt; answerReview grades them
@@ -29,7 +29,7 @@ namespace at::lessons {
 
 struct EngineOptions {
   double eloK = quiz::kDefaultEloK;
-  LeitnerSchedule schedule;
+  FsrsParameters fsrs;  // must pass validate()
   std::function<UnixSeconds()> clock;  // empty = the system clock
 };
 
@@ -139,8 +139,8 @@ struct ReviewAnswer {
 };
 
 // Grades a review answer as LessonEngine::answer grades a lesson answer (the question's keys
-// resolved through `keys`, the course's gradingContext), schedules the structure's Leitner box
-// (scheduleAnswer), updates the Elo ability and question difficulty, and records all of it through
+// resolved through `keys`, the course's gradingContext), reschedules the structure (FSRS,
+// scheduleAnswer), updates the Elo ability and question difficulty, and records all of it through
 // ProgressRepository::recordReviewAnswer (one committed transaction) before returning the grade.
 // Errors: unknown course, a question not in the course, keys that cannot be computed, an answer
 // that does not fit the question, a storage failure — in every case nothing is recorded.

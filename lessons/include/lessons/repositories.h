@@ -9,13 +9,12 @@
 #include <vector>
 
 #include "lessons/curriculum.h"
+#include "lessons/fsrs.h"
 #include "quiz/question.h"
-#include "volume/error.h"
+#include "core/error.h"
 #include "volume/structure.h"
 
 namespace at::lessons {
-
-using UnixSeconds = std::int64_t;
 
 // ---------------------------------------------------------------------------------------------
 // Curriculum (read side; seeding is db/'s business)
@@ -104,23 +103,31 @@ struct Response : GradedAnswer {
   int stepIndex = 0;          // index in the lesson's steps
 };
 
-// Leitner box and review time of one structure for one user.
+// What one user remembers of one structure (FSRS memory state: phase, stability, difficulty,
+// next review) and how often they answered about it.
 struct StructureProgress {
   std::int64_t userId = 0;
   std::string structureId;
-  int box = 0;                // 0 = never answered; 1..kLeitnerBoxes
-  UnixSeconds dueAt = 0;      // due for review at or after this time
+  MemoryState memory;         // memory.phase == New: never answered
   int answered = 0;
   int correct = 0;
-  UnixSeconds lastAnsweredAt = 0;
 };
 
-// Everything one answer changes, written in ONE transaction.
+// What one graded answer changes in the learner model, written with the answer in ONE transaction:
+// the structure's memory state (and a review-log entry from before → after), the user's Elo
+// ability and the question's Elo difficulty.
+struct LearnerUpdate {
+  StructureProgress progress;     // the structure's state after this answer
+  MemoryState memoryBefore;       // its memory state before (the review log keeps both)
+  Rating rating = Rating::Good;   // the FSRS rating the answer was given (ratingFor)
+  double abilityAfter = 1500;     // the user's Elo ability after this answer
+  double difficultyAfter = 1500;  // the question's Elo difficulty after this answer
+};
+
+// Everything one lesson answer changes.
 struct AnswerRecord {
   Response response;
-  StructureProgress progress;   // the structure's state after this answer
-  double abilityAfter = 1500;   // the user's Elo ability after this answer
-  double difficultyAfter = 1500;// the question's Elo difficulty after this answer
+  LearnerUpdate update;
 };
 
 // One answer to a review question (asked outside any lesson attempt, lessons::answerReview).
@@ -129,12 +136,36 @@ struct ReviewResponse : GradedAnswer {
   std::int64_t userId = 0;
 };
 
-// Everything one review answer changes, written in ONE transaction (as AnswerRecord).
+// Everything one review answer changes.
 struct ReviewRecord {
   ReviewResponse response;
-  StructureProgress progress;   // the structure's state after this answer
-  double abilityAfter = 1500;   // the user's Elo ability after this answer
-  double difficultyAfter = 1500;// the question's Elo difficulty after this answer
+  LearnerUpdate update;
+};
+
+// Where a logged answer was given.
+enum class AnswerSource { Lesson, Review, Exam };
+const char* toString(AnswerSource source);  // "lesson", "review", "exam"
+Result<AnswerSource> parseAnswerSource(const std::string& text);
+
+// One row of the review log: every graded answer, with the FSRS rating it gave and the memory
+// state it produced, kept so that FSRS parameters can be optimised on the class's own history.
+// Rows rebuilt from answers given before FSRS (`rebuilt`) carry the rating only: phaseBefore is
+// New, elapsedDays −1 and `after` empty.
+struct ReviewLogEntry {
+  std::int64_t id = 0;
+  std::int64_t userId = 0;
+  std::string structureId;
+  std::string questionId;
+  AnswerSource source = AnswerSource::Lesson;
+  UnixSeconds reviewedAt = 0;
+  Rating rating = Rating::Good;
+  bool correct = false;
+  double score = 0;
+  std::int64_t latencyMs = 0;
+  MemoryPhase phaseBefore = MemoryPhase::New;
+  int elapsedDays = -1;        // whole days since the previous answer; −1 for the first
+  MemoryState after;
+  bool rebuilt = false;
 };
 
 class ProgressRepository {
@@ -146,19 +177,23 @@ class ProgressRepository {
   virtual Result<Attempt> startAttempt(std::int64_t userId, const std::string& lessonId, LessonMode mode,
                                        UnixSeconds startedAt) = 0;
   virtual Status finishAttempt(std::int64_t attemptId, UnixSeconds finishedAt, double score) = 0;
+  // The user's attempts at every lesson, newest first.
+  virtual Result<std::vector<Attempt>> attempts(std::int64_t userId) = 0;
   // True if the user has at least one finished attempt at the lesson.
   virtual Result<bool> hasFinished(std::int64_t userId, const std::string& lessonId) = 0;
   // Responses of an attempt in the order they were recorded.
   virtual Result<std::vector<Response>> responses(std::int64_t attemptId) = 0;
-  // Stores the response, the structure's progress, the ability and the question difficulty in one
-  // transaction, COMMITTED (durable) before returning. Returns the response id.
+  // Stores the response, the structure's progress, a review-log entry, the ability and the question
+  // difficulty in one transaction, COMMITTED (durable) before returning. Returns the response id.
   virtual Result<std::int64_t> recordAnswer(const AnswerRecord& record) = 0;
   // As recordAnswer, for an answer to a review question: the review response, the structure's
-  // progress, the ability and the question difficulty in one transaction, COMMITTED before
+  // progress, a review-log entry, the ability and the question difficulty in one transaction, COMMITTED before
   // returning; on failure nothing is stored. Returns the review response id.
   virtual Result<std::int64_t> recordReviewAnswer(const ReviewRecord& record) = 0;
   // The user's review responses in the order they were recorded.
   virtual Result<std::vector<ReviewResponse>> reviewResponses(std::int64_t userId) = 0;
+  // The user's review log (lesson, review and exam answers alike), oldest first.
+  virtual Result<std::vector<ReviewLogEntry>> reviewLog(std::int64_t userId) = 0;
   // nullopt = never answered.
   virtual Result<std::optional<StructureProgress>> progress(std::int64_t userId, const std::string& structureId) = 0;
   virtual Result<std::vector<StructureProgress>> allProgress(std::int64_t userId) = 0;

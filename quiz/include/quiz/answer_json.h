@@ -6,7 +6,7 @@
 #include <string>
 
 #include "quiz/question.h"
-#include "volume/error.h"
+#include "core/error.h"
 
 namespace at::quiz {
 

@@ -8,7 +8,7 @@
 
 #include "quiz/name_matching.h"
 #include "quiz/question.h"
-#include "volume/error.h"
+#include "core/error.h"
 
 namespace at::quiz {
 

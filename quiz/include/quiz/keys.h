@@ -14,7 +14,7 @@
 #include <vector>
 
 #include "quiz/question.h"
-#include "volume/error.h"
+#include "core/error.h"
 #include "volume/structure.h"
 
 namespace at::quiz {

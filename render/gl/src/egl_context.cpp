@@ -94,14 +94,14 @@ Result<EglContext> EglContext::create() {
   // library is then already loaded when libepoxy asks for it).
   if (!dlopen("libEGL.so.1", RTLD_LAZY | RTLD_LOCAL)) {
     const char* reason = dlerror();
-    return fail(std::string("EGL: libEGL.so.1 could not be loaded (") + (reason ? reason : "unknown reason") +
+    return fail(ErrorKind::Unavailable, std::string("EGL: libEGL.so.1 could not be loaded (") + (reason ? reason : "unknown reason") +
                 "); install the EGL library (Debian: libegl1)");
   }
   auto state = std::make_unique<State>();
   std::string why;
   state->display = openDisplay(why);
-  if (state->display == EGL_NO_DISPLAY) return fail("EGL: " + why);
-  if (!eglBindAPI(EGL_OPENGL_API)) return fail("EGL: eglBindAPI(OpenGL) failed (" + eglErrorName(eglGetError()) + ")");
+  if (state->display == EGL_NO_DISPLAY) return fail(ErrorKind::Unavailable, "EGL: " + why);
+  if (!eglBindAPI(EGL_OPENGL_API)) return fail(ErrorKind::Unavailable, "EGL: eglBindAPI(OpenGL) failed (" + eglErrorName(eglGetError()) + ")");
   // EGL_SURFACE_TYPE defaults to windows, which headless displays lack: ask for pbuffer configs
   // first, then any desktop-GL config, then none at all (EGL_KHR_no_config_context).
   const EGLint pbufferAttribs[] = {EGL_SURFACE_TYPE, EGL_PBUFFER_BIT, EGL_RENDERABLE_TYPE, EGL_OPENGL_BIT, EGL_NONE};
@@ -111,22 +111,22 @@ Result<EglContext> EglContext::create() {
   const bool noConfig = hasExtension(eglQueryString(state->display, EGL_EXTENSIONS), "EGL_KHR_no_config_context");
   if ((!eglChooseConfig(state->display, pbufferAttribs, &config, 1, &count) || count == 0) &&
       (!eglChooseConfig(state->display, anyAttribs, &config, 1, &count) || count == 0)) {
-    if (!noConfig) return fail("EGL: no config supports desktop OpenGL");
+    if (!noConfig) return fail(ErrorKind::Unavailable, "EGL: no config supports desktop OpenGL");
     config = EGL_NO_CONFIG_KHR;
   }
   const EGLint contextAttribs[] = {EGL_CONTEXT_MAJOR_VERSION, 4, EGL_CONTEXT_MINOR_VERSION, 3,
                                    EGL_CONTEXT_OPENGL_PROFILE_MASK, EGL_CONTEXT_OPENGL_CORE_PROFILE_BIT, EGL_NONE};
   state->context = eglCreateContext(state->display, config, EGL_NO_CONTEXT, contextAttribs);
   if (state->context == EGL_NO_CONTEXT)
-    return fail("EGL: cannot create an OpenGL 4.3 core context (" + eglErrorName(eglGetError()) + ")");
+    return fail(ErrorKind::Unavailable, "EGL: cannot create an OpenGL 4.3 core context (" + eglErrorName(eglGetError()) + ")");
   if (!eglMakeCurrent(state->display, EGL_NO_SURFACE, EGL_NO_SURFACE, state->context))
-    return fail("EGL: cannot make the context current without a surface (" + eglErrorName(eglGetError()) + ")");
+    return fail(ErrorKind::Unavailable, "EGL: cannot make the context current without a surface (" + eglErrorName(eglGetError()) + ")");
   return EglContext(std::move(state));
 }
 
 Status EglContext::makeCurrent() const {
   if (!eglMakeCurrent(state_->display, EGL_NO_SURFACE, EGL_NO_SURFACE, state_->context))
-    return fail("EGL: eglMakeCurrent failed (" + eglErrorName(eglGetError()) + ")");
+    return fail(ErrorKind::Unavailable, "EGL: eglMakeCurrent failed (" + eglErrorName(eglGetError()) + ")");
   return {};
 }
 

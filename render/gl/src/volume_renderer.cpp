@@ -688,7 +688,7 @@ Status VolumeRenderer::setFieldFromDevice(const cuda::DeviceField& field) {
   return {};
 #else
   (void)field;
-  return fail("render: this build has no CUDA, so a device field cannot be shown");
+  return fail(ErrorKind::Unavailable, "render: this build has no CUDA, so a device field cannot be shown");
 #endif
 }
 

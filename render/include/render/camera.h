@@ -7,7 +7,7 @@
 #include <optional>
 #include <string>
 
-#include "volume/error.h"
+#include "core/error.h"
 #include "volume/geometry.h"
 
 namespace at::render {

@@ -1,5 +1,6 @@
-// From a dataset, a selected structure and a preset to what the ray caster needs: the seed mask,
-// the WDT parameters the preset asks for, and a camera framing the structure with its context.
+// From a dataset, a selected structure and a preset to what the ray caster needs: the WDT
+// parameters the preset asks for and a camera framing the structure with its context (the seed
+// mask is volume/mask.h's structureMask).
 // Shared by the `render` command, the benchmark, the figure script and the tests.
 #pragma once
 
@@ -8,7 +9,7 @@
 #include <string>
 
 #include "render/render_settings.h"
-#include "volume/error.h"
+#include "core/error.h"
 #include "volume/grid.h"
 #include "wdt/wdt.h"
 
@@ -22,7 +23,6 @@ struct StructureFrame {
 
 // Error if no voxel carries `label`.
 Result<StructureFrame> structureFrame(const LabelMap& labels, std::uint16_t label);
-Mask structureMask(const LabelMap& labels, std::uint16_t label);
 
 // Step rule, HU window and base cost from the preset; uniform weights for the unweighted mode.
 Result<WdtParams> wdtParamsFor(const Preset& preset, int passes = 2);

@@ -10,7 +10,7 @@
 #include <vector>
 
 #include "render/transfer_function.h"
-#include "volume/error.h"
+#include "core/error.h"
 
 namespace at::render {
 

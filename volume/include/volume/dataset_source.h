@@ -8,7 +8,7 @@
 #include <functional>
 #include <string>
 
-#include "volume/error.h"
+#include "core/error.h"
 #include "volume/structure.h"
 
 namespace at {

@@ -5,7 +5,7 @@
 
 #include <string>
 
-#include "volume/error.h"
+#include "core/error.h"
 #include "volume/image_file.h"
 
 namespace at {

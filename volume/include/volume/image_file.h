@@ -12,7 +12,7 @@
 #include <string>
 #include <vector>
 
-#include "volume/error.h"
+#include "core/error.h"
 #include "volume/grid.h"
 
 namespace at {

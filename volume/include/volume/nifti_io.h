@@ -4,7 +4,7 @@
 
 #include <string>
 
-#include "volume/error.h"
+#include "core/error.h"
 #include "volume/grid.h"
 #include "volume/image_file.h"
 

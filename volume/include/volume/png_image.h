@@ -5,7 +5,7 @@
 #include <string>
 #include <vector>
 
-#include "volume/error.h"
+#include "core/error.h"
 
 namespace at {
 

@@ -1,7 +1,7 @@
 // Resampling label maps between grids through both patient frames (nearest neighbour).
 #pragma once
 
-#include "volume/error.h"
+#include "core/error.h"
 #include "volume/grid.h"
 
 namespace at {

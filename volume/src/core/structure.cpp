@@ -3,22 +3,16 @@
 #include <algorithm>
 #include <cctype>
 
-namespace at {
+#include "core/strings.h"
 
-namespace {
-std::string lowered(const std::string& s) {
-  std::string out = s;
-  std::transform(out.begin(), out.end(), out.begin(), [](unsigned char c) { return std::tolower(c); });
-  return out;
-}
-}  // namespace
+namespace at {
 
 const Structure* Dataset::findStructure(const std::string& idOrName) const {
   for (const Structure& s : structures)
     if (s.id == idOrName) return &s;
-  const std::string wanted = lowered(idOrName);
+  const std::string wanted = str::lower(idOrName);
   for (const Structure& s : structures)
-    if (lowered(s.displayName) == wanted || lowered(s.id) == wanted) return &s;
+    if (str::lower(s.displayName) == wanted || str::lower(s.id) == wanted) return &s;
   return nullptr;
 }
 

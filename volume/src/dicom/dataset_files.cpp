@@ -6,6 +6,7 @@
 #include <map>
 #include <set>
 
+#include "core/strings.h"
 #include "dicom_support.h"
 #include "volume/dataset_source.h"
 #include "volume/image_file.h"
@@ -18,17 +19,6 @@ namespace at {
 namespace {
 
 using dicom::formatNumber;
-
-// "Vertebrae L1" → "vertebrae_l1"; "kidney-left (2)" → "kidney_left_2".
-std::string snakeCase(const std::string& name) {
-  std::string id;
-  for (unsigned char c : name) {
-    if (std::isalnum(c)) id += char(std::tolower(c));
-    else if (!id.empty() && id.back() != '_') id += '_';
-  }
-  while (!id.empty() && id.back() == '_') id.pop_back();
-  return id;
-}
 
 // "kidney_right" → "Kidney right"; names with spaces or capitals are kept as written.
 std::string displayNameOf(const std::string& name) {
@@ -109,7 +99,7 @@ std::string datasetIdFromPath(const std::string& path) {
       break;
     }
   }
-  const std::string id = snakeCase(name);
+  const std::string id = str::identifier(name);
   return id.empty() ? "dataset" : id;
 }
 
@@ -203,7 +193,7 @@ Result<Dataset> openDatasetFiles(const DatasetFiles& files, const DatasetLoadCon
     } else if (auto it = names.find(s.label); it != names.end()) {
       name = it->second;
     }
-    s.id = snakeCase(name);
+    s.id = str::identifier(name);
     if (s.id.empty()) s.id = "label_" + std::to_string(label);
     if (usedIds.count(s.id)) s.id.append(1, '_').append(std::to_string(label));
     usedIds.insert(s.id);

@@ -23,8 +23,8 @@
 #include <dcmtk/dcmseg/segment.h>
 
 #include "../io/load_limits.h"
-#include "volume/printable_text.h"
-#include "volume/regular_file.h"
+#include "core/printable_text.h"
+#include "core/regular_file.h"
 #include "dicom_support.h"
 #include "volume/dicom_series.h"
 

@@ -40,8 +40,8 @@
 #include <openjpeg.h>
 
 #include "../io/load_limits.h"
-#include "volume/printable_text.h"
-#include "volume/regular_file.h"
+#include "core/printable_text.h"
+#include "core/regular_file.h"
 #include "dicom_support.h"
 
 namespace fs = std::filesystem;

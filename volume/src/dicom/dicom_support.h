@@ -5,7 +5,7 @@
 #include <string>
 #include <vector>
 
-#include "volume/error.h"
+#include "core/error.h"
 #include "volume/geometry.h"
 
 namespace at::dicom {

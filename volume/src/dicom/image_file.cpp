@@ -5,12 +5,13 @@
 #include <cctype>
 #include <filesystem>
 
+#include "core/strings.h"
 #include "dicom_support.h"
 #include "volume/dicom_seg.h"
 #include "volume/dicom_series.h"
 #include "volume/nifti_io.h"
 #include "volume/nrrd_io.h"
-#include "volume/regular_file.h"
+#include "core/regular_file.h"
 
 namespace fs = std::filesystem;
 
@@ -18,24 +19,20 @@ namespace at {
 
 namespace {
 
-bool endsWith(const std::string& s, const std::string& suffix) {
-  return s.size() >= suffix.size() && s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
-}
 
 }  // namespace
 
 Result<LoadedImage> loadImageFile(const std::string& path, const ImageLoadOptions& options) {
   std::error_code ec;
   const fs::file_status status = fs::status(path, ec);
-  if (!fs::exists(status)) return fail(path + ": no such file or folder");
+  if (!fs::exists(status)) return fail(ErrorKind::NotFound, path + ": no such file or folder");
   if (fs::is_directory(status)) return loadDicomSeries(path, options);
   // FIFOs and devices are refused before anything opens them (opening a FIFO waits for a writer).
   if (auto regular = checkRegularFile(path, path); !regular) return tl::unexpected(regular.error());
 
-  std::string name = fs::path(path).filename().string();
-  std::transform(name.begin(), name.end(), name.begin(), [](unsigned char c) { return char(std::tolower(c)); });
-  if (endsWith(name, ".nii") || endsWith(name, ".nii.gz")) return loadNifti(path, options);
-  if (endsWith(name, ".nrrd") || endsWith(name, ".nhdr")) return loadNrrd(path, options);
+  const std::string name = str::lower(fs::path(path).filename().string());
+  if (str::endsWith(name, ".nii") || str::endsWith(name, ".nii.gz")) return loadNifti(path, options);
+  if (str::endsWith(name, ".nrrd") || str::endsWith(name, ".nhdr")) return loadNrrd(path, options);
 
   if (looksLikeDicomFile(path)) {
     if (isDicomSegFile(path)) return loadDicomSeg(path, options);

@@ -14,8 +14,8 @@
 #include <nlohmann/json.hpp>
 
 #include "volume/image_file.h"
-#include "volume/json_document.h"
-#include "volume/printable_text.h"
+#include "core/json_document.h"
+#include "core/printable_text.h"
 
 namespace at {
 

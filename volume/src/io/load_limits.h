@@ -10,7 +10,7 @@
 #include <cstdio>
 #include <string>
 
-#include "volume/error.h"
+#include "core/error.h"
 #include "volume/image_file.h"
 
 namespace at::detail {
@@ -30,7 +30,7 @@ inline std::string byteCountText(double bytes) {
 inline bool loadCancelled(const ImageLoadOptions& options) {
   return options.cancel && options.cancel->load(std::memory_order_relaxed);
 }
-inline Error cancelledError(const std::string& path) { return Error{path + ": loading cancelled"}; }
+inline Error cancelledError(const std::string& path) { return Error{ErrorKind::Cancelled, path + ": loading cancelled"}; }
 
 // Bytes per voxel of a load's result: the float image and its 2-byte HU or label copy.
 inline constexpr double kResultBytesPerVoxel = sizeof(float) + 2;
@@ -50,7 +50,7 @@ inline Status checkImageFits(const std::string& path, const Dims& dims, double t
   const double voxels = double(dims.x) * double(dims.y) * double(dims.z);
   const double bytes = voxels * kResultBytesPerVoxel + transientBytes;
   if (bytes > double(budget.bytes))
-    return fail(path + ": image " + dims.toString() + " needs " + byteCountText(bytes) +
+    return fail(ErrorKind::Unavailable, path + ": image " + dims.toString() + " needs " + byteCountText(bytes) +
                 " (float voxels, their HU or label copy and read buffers) but only " +
                 byteCountText(double(budget.bytes)) + " may be used (memory limit: " + budget.source + ")");
   return {};

@@ -15,9 +15,10 @@
 #include <nifti2_io.h>
 #include <zlib.h>
 
+#include "core/strings.h"
 #include "load_limits.h"
-#include "volume/printable_text.h"
-#include "volume/regular_file.h"
+#include "core/printable_text.h"
+#include "core/regular_file.h"
 
 namespace at {
 
@@ -34,10 +35,6 @@ struct GzFileCloser {
   void operator()(gzFile_s* file) const { gzclose(file); }
 };
 using GzFilePtr = std::unique_ptr<gzFile_s, GzFileCloser>;
-
-bool endsWith(const std::string& s, const std::string& suffix) {
-  return s.size() >= suffix.size() && s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
-}
 
 // Quiet niftilib: its messages go to stderr; ours travel as values.
 void quietNiftilib() {
@@ -228,14 +225,14 @@ namespace {
 
 Result<LoadedImage> readNifti(const std::string& path, const ImageLoadOptions& options) {
   quietNiftilib();
-  if (!endsWith(path, ".nii") && !endsWith(path, ".nii.gz"))
+  if (!str::endsWith(path, ".nii") && !str::endsWith(path, ".nii.gz"))
     return fail(path + ": a NIfTI file name must end in .nii or .nii.gz");
   auto opened = openRegularFile(path, path);
   if (!opened) return tl::unexpected(opened.error());
   const std::uint64_t fileBytes = opened->sizeBytes;
   // zlib reads plain and gzip files alike through the descriptor (and closes it).
   GzFilePtr file(gzdopen(opened->fd.get(), "rb"));
-  if (!file) return fail(path + ": cannot open the file");
+  if (!file) return fail(ErrorKind::Io, path + ": cannot open the file");
   opened->fd.release();
   auto header = readNiftiHeader(path, file.get());
   if (!header) return tl::unexpected(header.error());
@@ -345,7 +342,7 @@ namespace {
 template <class T>
 Status writeNifti(const std::string& path, const Geometry& geometry, const std::vector<T>& voxels, int datatype) {
   quietNiftilib();
-  if (!endsWith(path, ".nii") && !endsWith(path, ".nii.gz"))
+  if (!str::endsWith(path, ".nii") && !str::endsWith(path, ".nii.gz"))
     return fail(path + ": a NIfTI file name must end in .nii or .nii.gz");
   const fs::path parent = fs::path(path).parent_path();
   std::error_code ec;

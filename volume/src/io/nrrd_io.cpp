@@ -25,9 +25,10 @@
 
 #include <zlib.h>
 
+#include "core/strings.h"
 #include "load_limits.h"
-#include "volume/printable_text.h"
-#include "volume/regular_file.h"
+#include "core/printable_text.h"
+#include "core/regular_file.h"
 
 namespace at {
 
@@ -64,24 +65,12 @@ Result<std::string> readHeaderBytes(const RegularFile& file, const std::string& 
   return fail(path + ": no end of the NRRD header within 16 MiB (a blank line must follow it)");
 }
 
-std::string trim(const std::string& s) {
-  const auto b = s.find_first_not_of(" \t\r");
-  if (b == std::string::npos) return {};
-  const auto e = s.find_last_not_of(" \t\r");
-  return s.substr(b, e - b + 1);
-}
-
 std::vector<std::string> splitWords(const std::string& s) {
   std::vector<std::string> words;
   std::istringstream in(s);
   std::string w;
   while (in >> w) words.push_back(w);
   return words;
-}
-
-std::string lower(std::string s) {
-  for (char& c : s) c = char(std::tolower(static_cast<unsigned char>(c)));
-  return s;
 }
 
 struct NrrdHeader {
@@ -116,7 +105,7 @@ Result<NrrdHeader> parseHeader(const std::string& path, const std::string& bytes
     }
     if (line[0] == '#') continue;
     if (inList) {
-      header.listFiles.push_back(trim(line));
+      header.listFiles.push_back(str::trim(line));
       continue;
     }
     const std::size_t field = line.find(": ");
@@ -127,8 +116,8 @@ Result<NrrdHeader> parseHeader(const std::string& path, const std::string& bytes
     }
     if (field == std::string::npos)
       return fail(path + ": header line " + std::to_string(lineNumber) + " is not a \"field: value\" line");
-    const std::string name = lower(trim(line.substr(0, field)));
-    const std::string value = trim(line.substr(field + 2));
+    const std::string name = str::lower(str::trim(line.substr(0, field)));
+    const std::string value = str::trim(line.substr(field + 2));
     header.fields[name] = value;
     if (name == "data file" || name == "datafile") {
       const auto words = splitWords(value);
@@ -190,7 +179,7 @@ const char* nrrdTypeName(ScalarKind kind) {
 }
 
 bool parseDouble(const std::string& text, double& out) {
-  const std::string t = lower(text);
+  const std::string t = str::lower(text);
   if (t == "nan") {
     out = std::numeric_limits<double>::quiet_NaN();
     return true;
@@ -214,7 +203,7 @@ bool parseVector(const std::string& text, Vec3& out) {
   std::size_t start = 0;
   while (true) {
     const std::size_t comma = inner.find(',', start);
-    parts.push_back(trim(inner.substr(start, comma == std::string::npos ? std::string::npos : comma - start)));
+    parts.push_back(str::trim(inner.substr(start, comma == std::string::npos ? std::string::npos : comma - start)));
     if (comma == std::string::npos) break;
     start = comma + 1;
   }
@@ -259,7 +248,7 @@ std::vector<std::string> splitVectors(const std::string& value) {
 // meaning; it is read as left, posterior, inferior (z flipped makes a right-handed LPS frame), which
 // is how the headsq sample matches its DICOM series (slice 1 of the NRRD is the top DICOM slice).
 Result<Vec3> spaceToLps(const std::string& path, const std::string& space, std::vector<std::string>& notes) {
-  const std::string s = lower(space);
+  const std::string s = str::lower(space);
   if (s == "left-posterior-superior" || s == "lps" || s == "3d-right-handed" || s == "scanner-xyz")
     return Vec3{1, 1, 1};
   if (s == "right-anterior-superior" || s == "ras") return Vec3{-1, -1, 1};
@@ -342,7 +331,7 @@ Result<Geometry> parseGeometry(const std::string& path, const NrrdHeader& h, con
     auto signs = spaceToLps(path, spaceIt->second, notes);
     if (!signs) return tl::unexpected(signs.error());
     toLps = *signs;
-  } else if (const auto sd = h.fields.find("space dimension"); sd != h.fields.end() && trim(sd->second) != "3") {
+  } else if (const auto sd = h.fields.find("space dimension"); sd != h.fields.end() && str::trim(sd->second) != "3") {
     return fail(path + ": space dimension " + sd->second + " is not supported (3 only)");
   }
 
@@ -388,7 +377,7 @@ Result<Geometry> parseGeometry(const std::string& path, const NrrdHeader& h, con
     return fail(path + ": 'space directions' are parallel (the grid is degenerate)");
   if (const auto it = h.fields.find("space origin"); it != h.fields.end()) {
     Vec3 o;
-    if (!parseVector(trim(it->second), o)) return fail(path + ": 'space origin' '" + it->second + "' is not (x,y,z)");
+    if (!parseVector(str::trim(it->second), o)) return fail(path + ": 'space origin' '" + it->second + "' is not (x,y,z)");
     g.originMm = {toLps[0] * o[0], toLps[1] * o[1], toLps[2] * o[2]};
   }
   return g;
@@ -679,10 +668,10 @@ std::vector<SegmentInfo> parseSegments(const NrrdHeader& h, std::vector<std::str
     const auto name = h.keyValues.find(prefix + "Name");
     if (name == h.keyValues.end()) break;
     SegmentInfo s;
-    s.name = trim(name->second);
+    s.name = str::trim(name->second);
     long long value = n + 1;
     if (const auto it = h.keyValues.find(prefix + "LabelValue"); it != h.keyValues.end()) {
-      if (!parseLong(trim(it->second), value) || value < 0 || value > 65535) {
+      if (!parseLong(str::trim(it->second), value) || value < 0 || value > 65535) {
         notes.push_back("segment " + printableText(s.name, 60) + " has an invalid label value '" +
                         printableText(it->second, 20) + "'; skipped");
         continue;
@@ -744,7 +733,7 @@ Result<LoadedImage> readNrrd(const std::string& path, const ImageLoadOptions& op
   Encoding enc;
   const auto encIt = h.fields.find("encoding");
   if (encIt == h.fields.end()) return fail(path + ": the NRRD header has no 'encoding' field");
-  const std::string encoding = lower(encIt->second);
+  const std::string encoding = str::lower(encIt->second);
   if (encoding == "gzip" || encoding == "gz")
     enc.gzip = true;
   else if (encoding != "raw")
@@ -760,7 +749,7 @@ Result<LoadedImage> readNrrd(const std::string& path, const ImageLoadOptions& op
   if (bytesOf(*kind) > 1) {
     const auto endianIt = h.fields.find("endian");
     if (endianIt == h.fields.end()) return fail(path + ": the NRRD header has no 'endian' field for multi-byte data");
-    const std::string endian = lower(endianIt->second);
+    const std::string endian = str::lower(endianIt->second);
     if (endian != "little" && endian != "big")
       return fail(path + ": 'endian' is '" + endianIt->second + "', not little or big");
     swap = endian == "big";

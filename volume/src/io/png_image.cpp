@@ -9,7 +9,7 @@
 #include <cstdio>
 #include <cstring>
 
-#include "volume/regular_file.h"
+#include "core/regular_file.h"
 
 namespace at {
 
@@ -122,7 +122,7 @@ Result<RgbImage> readPng(const std::string& path) {
   if (!regular) return tl::unexpected(regular.error());
   const std::uint64_t fileBytes = regular->sizeBytes;
   FileCloser file{fdopen(regular->fd.get(), "rb")};
-  if (!file.file) return fail(path + ": cannot open file: " + std::strerror(errno));
+  if (!file.file) return fail(ErrorKind::Io, path + ": cannot open file: " + std::strerror(errno));
   regular->fd.release();
   png_byte signature[8] = {};
   if (std::fread(signature, 1, 8, file.file) != 8 || png_sig_cmp(signature, 0, 8) != 0)

@@ -9,7 +9,7 @@
 #include <memory>
 #include <string>
 
-#include "volume/error.h"
+#include "core/error.h"
 
 namespace at::render::gl {
 

@@ -10,7 +10,7 @@
 
 #include "render/image.h"
 #include "render/render_settings.h"
-#include "volume/error.h"
+#include "core/error.h"
 
 namespace at::cuda {
 class DeviceField;

@@ -10,7 +10,7 @@
 #include <string>
 
 #include "render/image.h"
-#include "volume/error.h"
+#include "core/error.h"
 
 namespace at::render::gl {
 

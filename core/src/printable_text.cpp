@@ -1,4 +1,4 @@
-#include "volume/printable_text.h"
+#include "core/printable_text.h"
 
 #include <cstdint>
 #include <cstdio>

@@ -4,9 +4,7 @@
 // line, the column and the field it was reading ("course.json: line 12, column 22, field
 // 'lessons[0].steps[1].question.difficulty': number 1e309 is out of range"), exactly as the readers'
 // own validation errors name their fields. Nothing here throws.
-//
-// (Lives in volume/ because every module that reads JSON links at_volume; it belongs with the
-// shared helpers in core/ once that exists.)
+// Target at_core_json (at_core stays free of third-party headers).
 #pragma once
 
 #include <cstddef>
@@ -15,7 +13,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "volume/error.h"
+#include "core/error.h"
 
 namespace at {
 

@@ -8,7 +8,7 @@
 #include <cstdint>
 #include <string>
 
-#include "volume/error.h"
+#include "core/error.h"
 
 namespace at {
 

@@ -1,11 +1,11 @@
-#include "volume/json_document.h"
+#include "core/json_document.h"
 
 #include <algorithm>
 #include <optional>
 #include <vector>
 
-#include "volume/printable_text.h"
-#include "volume/regular_file.h"
+#include "core/printable_text.h"
+#include "core/regular_file.h"
 
 namespace at {
 

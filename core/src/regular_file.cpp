@@ -1,4 +1,4 @@
-#include "volume/regular_file.h"
+#include "core/regular_file.h"
 
 #include <fcntl.h>
 #include <sys/stat.h>
@@ -39,12 +39,13 @@ Result<RegularFile> openRegularFile(const std::string& path, const std::string& 
   const int fd = ::open(path.c_str(), O_RDONLY | O_NONBLOCK | O_CLOEXEC | O_NOCTTY);
   if (fd < 0) {
     const int error = errno;
-    if (error == ENOENT || error == ENOTDIR) return fail(source + ": no such file");
-    return fail(source + ": cannot open the file (" + std::strerror(error) + ")");
+    if (error == ENOENT || error == ENOTDIR) return fail(ErrorKind::NotFound, source + ": no such file");
+    return fail(ErrorKind::Io, source + ": cannot open the file (" + std::strerror(error) + ")");
   }
   RegularFile file{FileDescriptor(fd), 0};
   struct stat info {};
-  if (::fstat(fd, &info) != 0) return fail(source + ": cannot read the file's type (" + std::strerror(errno) + ")");
+  if (::fstat(fd, &info) != 0)
+    return fail(ErrorKind::Io, source + ": cannot read the file's type (" + std::strerror(errno) + ")");
   if (!S_ISREG(info.st_mode)) return fail(source + ": " + notRegularProblem(info.st_mode));
   // Back to blocking reads for the regular file.
   const int flags = ::fcntl(fd, F_GETFL);
@@ -68,7 +69,7 @@ Result<std::string> readFileRange(const RegularFile& file, std::uint64_t offset,
     const ssize_t got = ::pread(file.fd.get(), bytes.data() + done, size - done, off_t(offset + done));
     if (got < 0) {
       if (errno == EINTR) continue;
-      return fail(source + ": cannot read the file (" + std::strerror(errno) + ")");
+      return fail(ErrorKind::Io, source + ": cannot read the file (" + std::strerror(errno) + ")");
     }
     if (got == 0) break;
     done += std::size_t(got);

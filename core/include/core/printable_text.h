@@ -16,7 +16,7 @@ std::string printableText(std::string_view text, std::size_t maxChars = 120);
 
 }  // namespace at
 
-#include "volume/error.h"
+#include "core/error.h"
 
 namespace at {
 
