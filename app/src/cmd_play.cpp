@@ -197,7 +197,10 @@ Result<Asked> askQuestion(AnswerSource& source, const lessons::StepView& view,
       return Asked::Graded;
     }
     std::fflush(stdout);
-    if (!source.interactive()) return tl::unexpected(withContext(source.where(), graded.error()));
+    // A bad answer names its line; a storage failure (a full disk) is not the line's fault.
+    if (!source.interactive())
+      return tl::unexpected(graded.error().kind == ErrorKind::Io ? graded.error()
+                                                                 : withContext(source.where(), graded.error()));
     std::printf("  %s — try again\n", graded.error().message.c_str());
   }
 }
@@ -361,7 +364,9 @@ int runPlay(const Argv& argv) {
       });
       if (!asked)
         return reportError("play: " + asked.error().message +
-                           " (earlier answers are saved; fix the line and run again to resume)");
+                           (asked.error().kind == ErrorKind::Io
+                                ? " (earlier answers are saved; run the same command again to resume)"
+                                : " (earlier answers are saved; fix the line and run again to resume)"));
       if (*asked != Asked::Graded) {
         std::printf("\nstopped before step %d of %d; your answers are saved — run the same command to resume\n",
                     view->position, view->count);

@@ -37,7 +37,7 @@ int runCourses(const Argv& argv) {
     return 0;
   }
   if (!args->positional().empty()) return reportError("courses: unexpected argument '" + args->positional()[0] + "'");
-  auto database = openLearningDatabase(args->value("db"));
+  auto database = openLearningDatabase(args->value("db"), true);
   if (!database) return reportError("courses: " + database.error().message);
   db::SqliteCurriculumRepository curriculum(*database, builtinStructures());
   auto courses = curriculum.courses();
@@ -58,7 +58,7 @@ int runLessons(const Argv& argv) {
     return 0;
   }
   if (args->positional().size() > 1) return reportError("lessons: give at most one COURSE");
-  auto database = openLearningDatabase(args->value("db"));
+  auto database = openLearningDatabase(args->value("db"), true);
   if (!database) return reportError("lessons: " + database.error().message);
   db::SqliteCurriculumRepository curriculum(*database, builtinStructures());
   std::vector<lessons::Course> courses;
@@ -100,7 +100,7 @@ int runProgress(const Argv& argv) {
   if (!args->positional().empty()) return reportError("progress: unexpected argument '" + args->positional()[0] + "'");
   const auto userName = args->value("user");
   if (!userName || userName->empty()) return reportError("progress: --user NAME is required");
-  auto database = openLearningDatabase(args->value("db"));
+  auto database = openLearningDatabase(args->value("db"), true);
   if (!database) return reportError("progress: " + database.error().message);
   db::SqliteCurriculumRepository curriculum(*database, builtinStructures());
   db::SqliteProgressRepository progress(*database);

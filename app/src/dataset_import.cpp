@@ -76,7 +76,8 @@ Result<ImportedDataset> importDataset(const ImportRequest& request, const Import
   // Fail fast on a taken name, before the (possibly long) load.
   auto existing = db::findDataset(*database, record.name);
   if (!existing) return tl::unexpected(existing.error());
-  if (*existing) return fail(ErrorKind::Conflict, "a dataset named '" + record.name + "' is already imported; choose another name");
+  if (*existing && !request.replace)
+    return fail(ErrorKind::Conflict, "a dataset named '" + record.name + "' is already imported; choose another name");
   if (cancelled()) return fail(ErrorKind::Cancelled, kImportCancelled);
 
   DatasetLoadControl load;
@@ -118,7 +119,7 @@ Result<ImportedDataset> importDataset(const ImportRequest& request, const Import
   if (cancelled()) return fail(ErrorKind::Cancelled, kImportCancelled);
 
   stage(ImportStage::Storing);
-  auto id = db::registerDataset(*database, record, dataset->structures);
+  auto id = db::registerDataset(*database, record, dataset->structures, request.replace);
   if (!id) return tl::unexpected(id.error());
   record.id = *id;
   record.structureCount = int(dataset->structures.size());

@@ -24,6 +24,7 @@ struct ImportRequest {
   std::string name;                   // what commands will take as DATASET
   std::string species = "human";      // lower-case letters, '-' and '_'
   std::optional<std::string> dbPath;  // nullopt: the default database
+  bool replace = false;               // a dataset of that name is replaced (its files changed)
 };
 
 // The stages in the order they run.

@@ -16,9 +16,12 @@ std::string courseDirectory() {
   return (std::filesystem::path(AT_SOURCE_DIR) / "data" / "courses").string();
 }
 
-Result<db::Database> openLearningDatabase(const std::optional<std::string>& dbPath) {
-  auto database = db::openDatabase(dbPath);
+Result<db::Database> openLearningDatabase(const std::optional<std::string>& dbPath, bool readOnly) {
+  db::OpenOptions options;
+  options.readOnlyIfNotWritable = readOnly;
+  auto database = db::openDatabase(dbPath, options);
   if (!database) return tl::unexpected(database.error());
+  if (database->readOnly()) return std::move(*database);
   auto seeded = db::seedCourses(*database, courseDirectory());
   if (!seeded) return tl::unexpected(withContext("seeding the default course", seeded.error()));
   return std::move(*database);
@@ -36,7 +39,9 @@ Result<Dataset> loadCourseDataset(db::Database& database, const std::string& dat
   auto record = db::findDataset(database, datasetId);
   if (!record) return tl::unexpected(record.error());
   if (!*record) return fail("unknown dataset '" + datasetId + "' (import it with `anatomy-tutor import`)");
-  auto dataset = openDatasetFiles(db::datasetFiles(**record));
+  auto files = db::verifiedDatasetFiles(**record);
+  if (!files) return tl::unexpected(files.error());
+  auto dataset = openDatasetFiles(*files);
   if (!dataset) return tl::unexpected(withContext("dataset '" + datasetId + "'", dataset.error()));
   // Imported structures keep the names and descriptions stored at import time.
   auto stored = db::datasetStructures(database, (*record)->id);

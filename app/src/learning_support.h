@@ -21,8 +21,10 @@ namespace at::app {
 std::string courseDirectory();
 
 // Opens `--db PATH` (or the default database) and seeds the courses of courseDirectory()
-// (idempotent: a course already stored at the same version is left as it is).
-Result<db::Database> openLearningDatabase(const std::optional<std::string>& dbPath);
+// (idempotent: a course already stored at the same version is left as it is). With `readOnly`
+// (commands that only read), a database this process cannot write is opened read-only and not
+// seeded.
+Result<db::Database> openLearningDatabase(const std::optional<std::string>& dbPath, bool readOnly = false);
 
 // The built-in datasets' structures without building their volumes ("phantom", "phantom:N").
 db::BuiltinStructures builtinStructures();

@@ -126,10 +126,10 @@ Status StudyPanel::nextTrial() {
   for (const auto& item : s.protocol.items) {
     const db::RatingRecord r = makeRating(s.protocol, wdt, trial.position, item.id, s.ratings[item.id],
                                           s.responseMs.count(item.id) ? s.responseMs[item.id] : msSince(s.trialStart));
-    if (auto st = db::recordRating(**database, s.protocol.id, s.participant.participantId, r); !st) return st;
+    if (auto st = db::recordRating(**database, s.participant, r); !st) return st;
     trial.ratedItems.insert(item.id);
   }
-  if (auto st = db::recordTrialViewing(**database, s.protocol.id, s.participant.participantId, trial.position,
+  if (auto st = db::recordTrialViewing(**database, s.participant, trial.position,
                                        s.viewMs[0], s.viewMs[1], s.toggles, s.comment);
       !st)
     return st;
@@ -137,7 +137,7 @@ Status StudyPanel::nextTrial() {
            {"view_ms_b", s.viewMs[1]}, {"toggles", s.toggles}});
   beginTrial();
   if (!s.trial) {
-    if (auto st = db::markParticipantComplete(**database, s.protocol.id, s.participant.participantId); !st) return st;
+    if (auto st = db::markParticipantComplete(**database, s.participant); !st) return st;
     events_({{"event", "study_complete"}, {"trials", s.participant.trials.size()}});
   }
   return {};

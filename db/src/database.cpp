@@ -3,9 +3,14 @@
 
 #include <sqlite3.h>
 
+#include <unistd.h>
+
+#include <cerrno>
 #include <chrono>
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <memory>
 #include <random>
 #include <thread>
 
@@ -40,6 +45,37 @@ ErrorKind kindOf(int rc) {
   if ((rc & 0xff) == SQLITE_CONSTRAINT) return ErrorKind::Invalid;
   if (isBusyCode(rc)) return ErrorKind::Unavailable;
   return ErrorKind::Io;
+}
+
+// The error of a failed SQLite call. What a user can act on — a full disk, a read-only or damaged
+// database, a failing disk — is said in those words with the file named; anything else keeps
+// SQLite's message.
+Error sqliteError(sqlite3* db, int rc, const std::string& message) {
+  const char* name = db ? sqlite3_db_filename(db, "main") : nullptr;
+  const std::string file = name && *name ? std::string(name) + ": " : std::string();
+  const std::string sqlite = " (SQLite: " + message + ")";
+  // A disk I/O error is often a full or read-only disk underneath (the WAL index cannot grow).
+  int primary = rc & 0xff;
+  if (primary == SQLITE_IOERR || primary == SQLITE_CANTOPEN) {
+    const int os = db ? sqlite3_system_errno(db) : 0;
+    if (os == ENOSPC || os == EDQUOT) primary = SQLITE_FULL;
+    if (os == EROFS || os == EACCES || os == EPERM) primary = SQLITE_READONLY;
+  }
+  switch (primary) {
+    case SQLITE_FULL:
+      return {ErrorKind::Io, file + "the disk is full" + sqlite +
+                                 "; this step saved nothing — free some space and run the command again"};
+    case SQLITE_READONLY:
+      return {ErrorKind::Io, file + "the database is read-only" + sqlite +
+                                 "; this command writes to it — give it write access or use another --db"};
+    case SQLITE_CORRUPT:
+    case SQLITE_NOTADB:
+      return {ErrorKind::Io, file + "the database is damaged" + sqlite + "; restore a backup or use another --db"};
+    case SQLITE_IOERR:
+      return {ErrorKind::Io, file + "the disk failed to read or write the database" + sqlite};
+    default:
+      return {kindOf(rc), "SQL error: " + message};
+  }
 }
 
 }  // namespace
@@ -108,7 +144,7 @@ Result<bool> Statement::step() {
   // Leave the statement reusable after an error (its error code stays with the connection).
   const int code = sqlite3_extended_errcode(db_);
   sqlite3_reset(stmt_);
-  return fail(kindOf(code), "SQL error: " + message);
+  return tl::unexpected(sqliteError(db_, code, message));
 }
 
 Status Statement::run() {
@@ -152,13 +188,17 @@ Database::~Database() {
   if (db_) sqlite3_close_v2(db_);
 }
 
-Database::Database(Database&& other) noexcept : db_(other.db_), path_(std::move(other.path_)) { other.db_ = nullptr; }
+Database::Database(Database&& other) noexcept
+    : db_(other.db_), path_(std::move(other.path_)), readOnly_(other.readOnly_) {
+  other.db_ = nullptr;
+}
 
 Database& Database::operator=(Database&& other) noexcept {
   if (this != &other) {
     if (db_) sqlite3_close_v2(db_);
     db_ = other.db_;
     path_ = std::move(other.path_);
+    readOnly_ = other.readOnly_;
     other.db_ = nullptr;
   }
   return *this;
@@ -167,7 +207,11 @@ Database& Database::operator=(Database&& other) noexcept {
 Result<Statement> Database::prepare(std::string_view sql) {
   sqlite3_stmt* stmt = nullptr;
   const int rc = sqlite3_prepare_v2(db_, sql.data(), int(sql.size()), &stmt, nullptr);
-  if (rc != SQLITE_OK) return fail(kindOf(sqlite3_extended_errcode(db_)), "SQL error: " + errorText(db_, rc) + " in: " + std::string(sql));
+  if (rc != SQLITE_OK) {
+    Error e = sqliteError(db_, sqlite3_extended_errcode(db_), errorText(db_, rc));
+    if (e.message.rfind("SQL error: ", 0) == 0) e.message += " in: " + std::string(sql);
+    return tl::unexpected(e);
+  }
   return Statement(stmt, db_, std::string(sql));
 }
 
@@ -178,7 +222,7 @@ Status Database::exec(std::string_view sql) {
   if (rc != SQLITE_OK) {
     std::string m = message ? message : errorText(db_, rc);
     sqlite3_free(message);
-    return fail(kindOf(sqlite3_extended_errcode(db_)), "SQL error: " + m);
+    return tl::unexpected(sqliteError(db_, sqlite3_extended_errcode(db_), m));
   }
   return {};
 }
@@ -254,37 +298,139 @@ void Transaction::rollback() {
 
 namespace {
 
-// Reads user_version without writing anything: a read-only connection, no pragmas that write.
-// Returns 0 for a missing or empty file.
-Result<int> peekVersion(const std::string& path) {
-  std::error_code ec;
-  if (!fs::exists(path, ec) || fs::file_size(path, ec) == 0) return 0;
-  sqlite3* raw = nullptr;
-  int rc = sqlite3_open_v2(path.c_str(), &raw, SQLITE_OPEN_READONLY, nullptr);
-  if (rc != SQLITE_OK) {
-    std::string message = errorText(raw, rc);
-    sqlite3_close_v2(raw);
-    return fail(ErrorKind::Io, path + ": cannot open: " + message);
+// How a connection opens the file: read-write, or read-only (nothing is ever written, not even the
+// WAL index when `immutable`: then the file must not change while it is open).
+struct ConnectionMode {
+  bool readOnly = false;
+  bool immutable = false;
+};
+
+// "file:/path?mode=ro": a URI, so that read-only connections can ask for `immutable`.
+std::string uriOf(const std::string& path, const ConnectionMode& mode) {
+  std::string uri = "file:";
+  for (const char c : fs::absolute(path).string()) {
+    if (c == '%' || c == '?' || c == '#') {
+      char escaped[4];
+      std::snprintf(escaped, sizeof escaped, "%%%02X", static_cast<unsigned char>(c));
+      uri += escaped;
+    } else {
+      uri += c;
+    }
   }
-  sqlite3_busy_timeout(raw, 5000);
+  if (mode.readOnly) uri += mode.immutable ? "?mode=ro&immutable=1" : "?mode=ro";
+  return uri;
+}
+
+struct ConnectionCloser {
+  void operator()(sqlite3* db) const { sqlite3_close_v2(db); }
+};
+using Connection = std::unique_ptr<sqlite3, ConnectionCloser>;
+
+Result<Connection> openConnection(const std::string& path, const ConnectionMode& mode, bool create) {
+  sqlite3* raw = nullptr;
+  const int flags = (mode.readOnly ? SQLITE_OPEN_READONLY : SQLITE_OPEN_READWRITE | (create ? SQLITE_OPEN_CREATE : 0)) |
+                    SQLITE_OPEN_URI | SQLITE_OPEN_NOMUTEX;
+  const int rc = sqlite3_open_v2(uriOf(path, mode).c_str(), &raw, flags, nullptr);
+  Connection connection(raw);
+  if (rc != SQLITE_OK) return fail(ErrorKind::Io, path + ": cannot open: " + errorText(raw, rc));
+  sqlite3_extended_result_codes(raw, 1);
+  return connection;
+}
+
+// The first column of the first row of `sql`, as text; nullopt and `rc` set on failure.
+std::optional<std::string> queryText(sqlite3* db, const char* sql, int& rc) {
   sqlite3_stmt* stmt = nullptr;
-  rc = sqlite3_prepare_v2(raw, "PRAGMA user_version", -1, &stmt, nullptr);
-  int version = 0;
+  rc = sqlite3_prepare_v2(db, sql, -1, &stmt, nullptr);
+  std::optional<std::string> value;
   if (rc == SQLITE_OK) {
     rc = sqlite3_step(stmt);
     if (rc == SQLITE_ROW) {
-      version = sqlite3_column_int(stmt, 0);
+      const auto* text = reinterpret_cast<const char*>(sqlite3_column_text(stmt, 0));
+      value = text ? text : "";
       rc = SQLITE_OK;
     }
   }
-  std::string message = rc == SQLITE_OK ? "" : errorText(raw, rc);
+  if (rc != SQLITE_OK) rc = sqlite3_extended_errcode(db);
   sqlite3_finalize(stmt);
-  sqlite3_close_v2(raw);
-  if (rc != SQLITE_OK) {
-    if ((rc & 0xff) == SQLITE_NOTADB) return fail(path + ": not an Anatomy Tutor database (not a SQLite file)");
-    return fail(path + ": cannot read the schema version: " + message);
+  return value;
+}
+
+// True if the database has a write-ahead log holding changes (then an immutable reader would miss
+// them).
+bool hasWalContent(const std::string& path) {
+  std::error_code ec;
+  const auto size = fs::file_size(path + "-wal", ec);
+  return !ec && size > 0;
+}
+
+// True if this process may write the file and create files beside it (the WAL and its index).
+bool writable(const std::string& path) {
+  const fs::path folder = fs::absolute(path).parent_path();
+  return ::access(path.c_str(), W_OK) == 0 && ::access(folder.c_str(), W_OK) == 0;
+}
+
+struct FileState {
+  int version = 0;
+  ConnectionMode readMode;  // how a reader could open it
+};
+
+// Looks at an existing database without writing anything: its schema version and an integrity
+// check (PRAGMA quick_check), through a read-only connection. A reader needs the WAL index beside
+// the file; where it cannot be created (a read-only folder, a full disk) and no write-ahead log
+// holds changes, the file is read as immutable instead.
+Result<FileState> inspect(const std::string& path) {
+  FileState state;
+  state.readMode.readOnly = true;
+  int rc = SQLITE_OK;
+  std::optional<std::string> version;
+  for (const bool immutable : {false, true}) {
+    if (immutable && hasWalContent(path)) break;
+    state.readMode.immutable = immutable;
+    auto connection = openConnection(path, state.readMode, false);
+    if (!connection) return tl::unexpected(connection.error());
+    sqlite3_busy_timeout(connection->get(), 5000);
+    version = queryText(connection->get(), "PRAGMA user_version", rc);
+    if (!version) {
+      const int primary = rc & 0xff;
+      if (primary == SQLITE_NOTADB) return fail(path + ": not an Anatomy Tutor database (not a SQLite file)");
+      if (primary == SQLITE_CORRUPT)
+        return fail(ErrorKind::Io, path + ": the database is damaged (SQLite: " + errorText(connection->get(), rc) +
+                                       "); it was left untouched — restore a backup or use another --db");
+      const bool cannotIndex = primary == SQLITE_READONLY || primary == SQLITE_CANTOPEN || primary == SQLITE_IOERR;
+      if (cannotIndex && !immutable) continue;
+      return fail(ErrorKind::Io, path + ": cannot read the schema version: " + errorText(connection->get(), rc));
+    }
+    // quick_check: every page and index entry readable and consistent (O(size), not the full
+    // integrity_check's cross-checks). A damaged file is refused before anything is written to it.
+    auto check = queryText(connection->get(), "PRAGMA quick_check", rc);
+    if (!check || *check != "ok") {
+      const std::string problem = check ? *check : errorText(connection->get(), rc);
+      return fail(ErrorKind::Io, path + ": the database is damaged (SQLite's quick_check: " +
+                                     problem.substr(0, problem.find('\n')) +
+                                     "); it was left untouched — restore a backup or use another --db");
+    }
+    break;
   }
-  return version;
+  if (!version) return fail(ErrorKind::Io, path + ": cannot read the schema version");
+  try {
+    state.version = std::stoi(*version);
+  } catch (const std::exception&) {
+    return fail(ErrorKind::Io, path + ": unreadable schema version '" + *version + "'");
+  }
+  return state;
+}
+
+// A schema version this program can migrate from: 0 (a new file) up to the newest it knows.
+Status checkVersionKnown(const std::string& path, int version, int latest) {
+  if (version > latest)
+    return fail(ErrorKind::Conflict, path + ": written by a newer version of Anatomy Tutor (schema " + std::to_string(version) +
+                                         ", this program knows up to " + std::to_string(latest) +
+                                         "); update the program or use another --db");
+  if (version < 0)
+    return fail(ErrorKind::Invalid, path + ": schema version " + std::to_string(version) +
+                                        " is not one any Anatomy Tutor writes (the file is damaged or not ours); it was "
+                                        "left untouched — restore a backup or use another --db");
+  return {};
 }
 
 Status migrate(Database& db, int target) {
@@ -296,17 +442,23 @@ Status migrate(Database& db, int target) {
     auto status = db.writeTransaction([&](Database& d) -> Status {
       auto version = d.schemaVersion();
       if (!version) return tl::unexpected(version.error());
+      // Checked again here: another process may have written the version since the file was inspected.
+      if (auto known = checkVersionKnown(d.path(), *version, int(all.size())); !known) return known;
       if (*version >= target) {
         done = true;
         return {};
       }
       const Migration& m = all[std::size_t(*version)];
       if (auto s = d.exec(m.sql); !s)
-        return fail("migrating to schema version " + std::to_string(m.version) + " (" + std::string(m.summary) +
-                    "): " + s.error().message);
+        return fail(s.error().kind, "migrating to schema version " + std::to_string(m.version) + " (" +
+                                        std::string(m.summary) + "): " + s.error().message);
       return d.exec("PRAGMA user_version = " + std::to_string(m.version));
     });
-    if (!status) return tl::unexpected(withContext(db.path(), status.error()));
+    if (!status) {
+      // The version checks already name the file.
+      if (status.error().message.rfind(db.path() + ": ", 0) == 0) return tl::unexpected(status.error());
+      return tl::unexpected(withContext(db.path(), status.error()));
+    }
     if (done) return {};
   }
 }
@@ -322,21 +474,39 @@ Result<Database> Database::open(const std::string& path, const OpenOptions& opti
   std::error_code ec;
   const bool exists = fs::exists(path, ec);
   if (!exists && !options.create) return fail(ErrorKind::NotFound, path + ": no such database");
+  if (exists && !fs::is_regular_file(path, ec)) return fail(path + ": not a database file (a folder or a device)");
 
-  // Refuse newer files before opening for writing: journal_mode=WAL would already change the file.
-  auto existing = peekVersion(path);
-  if (!existing) return tl::unexpected(existing.error());
-  if (*existing > latest)
-    return fail(path + ": written by a newer version of Anatomy Tutor (schema " + std::to_string(*existing) +
-                ", this program knows up to " + std::to_string(latest) + "); update the program or use another --db");
+  // Everything that refuses a file happens before it is opened for writing: journal_mode=WAL and
+  // the migrations would already change it.
+  FileState state;
+  if (exists && fs::file_size(path, ec) > 0) {
+    auto inspected = inspect(path);
+    if (!inspected) return tl::unexpected(inspected.error());
+    state = *inspected;
+    if (auto known = checkVersionKnown(path, state.version, latest); !known) return tl::unexpected(known.error());
+  }
 
-  sqlite3* raw = nullptr;
-  const int flags = SQLITE_OPEN_READWRITE | (options.create ? SQLITE_OPEN_CREATE : 0) | SQLITE_OPEN_NOMUTEX;
-  const int rc = sqlite3_open_v2(path.c_str(), &raw, flags, nullptr);
-  Database db(raw, path);
-  if (rc != SQLITE_OK) return fail(ErrorKind::Io, path + ": cannot open: " + errorText(raw, rc));
-  sqlite3_extended_result_codes(raw, 1);
-  sqlite3_busy_timeout(raw, options.busyTimeoutMs);
+  // A command that only reads opens a file it cannot write (a read-only file, folder or disk, or a
+  // disk too full for the WAL index) read-only, as the inspection could.
+  const bool readOnly = options.readOnlyIfNotWritable && exists && (!writable(path) || state.readMode.immutable);
+  if (readOnly) {
+    if (state.version != target)
+      return fail(ErrorKind::Io, path + ": cannot be written and is at schema " + std::to_string(state.version) +
+                                     ", this program needs " + std::to_string(target) +
+                                     " — open it once with write access to upgrade it");
+    auto connection = openConnection(path, state.readMode, false);
+    if (!connection) return tl::unexpected(connection.error());
+    Database db(connection->release(), path);
+    db.readOnly_ = true;
+    sqlite3_busy_timeout(db.db_, options.busyTimeoutMs);
+    if (auto s = db.exec("PRAGMA foreign_keys = ON"); !s) return tl::unexpected(withContext(path, s.error()));
+    return db;
+  }
+
+  auto connection = openConnection(path, ConnectionMode{}, options.create);
+  if (!connection) return tl::unexpected(connection.error());
+  Database db(connection->release(), path);
+  sqlite3_busy_timeout(db.db_, options.busyTimeoutMs);
 
   // journal_mode needs the write lock briefly; busy_timeout covers a concurrent opener.
   {

@@ -1,8 +1,11 @@
 #include "db/dataset_store.h"
 
 #include <filesystem>
+#include <tuple>
 
 #include <nlohmann/json.hpp>
+
+#include "db/checksum.h"
 
 namespace at::db {
 
@@ -47,7 +50,7 @@ std::optional<std::string> nonEmpty(const std::string& s) {
 }  // namespace
 
 Result<std::int64_t> registerDataset(Database& db, const DatasetRecord& record,
-                                     const std::vector<Structure>& structures) {
+                                     const std::vector<Structure>& structures, bool replace) {
   std::int64_t id = 0;
   auto status = db.writeTransaction([&](Database& d) -> Status {
     auto exists = d.prepare("SELECT 1 FROM datasets WHERE name = ?1");
@@ -55,7 +58,16 @@ Result<std::int64_t> registerDataset(Database& db, const DatasetRecord& record,
     exists->bind(1, record.name);
     auto row = exists->step();
     if (!row) return tl::unexpected(row.error());
-    if (*row) return fail(ErrorKind::Conflict, "a dataset named '" + record.name + "' is already imported; choose another --name");
+    if (*row && !replace)
+      return fail(ErrorKind::Conflict, "a dataset named '" + record.name +
+                                           "' is already imported; choose another --name (or --replace it)");
+    if (*row) {
+      // The structures go with their dataset (ON DELETE CASCADE).
+      auto remove = d.prepare("DELETE FROM datasets WHERE name = ?1");
+      if (!remove) return tl::unexpected(remove.error());
+      remove->bind(1, record.name);
+      if (auto s = remove->run(); !s) return s;
+    }
 
     auto insert = d.prepare(
         "INSERT INTO datasets (name, species, volume_path, volume_checksum, labels_path, labels_checksum,"
@@ -171,6 +183,26 @@ DatasetFiles datasetFiles(const DatasetRecord& record) {
   return files;
 }
 
+Result<DatasetFiles> verifiedDatasetFiles(const DatasetRecord& record) {
+  const std::string reimport = "anatomy-tutor import --volume " + record.volumePath +
+                               (record.labelsPath.empty() ? "" : " --labels " + record.labelsPath) +
+                               (record.namesPath.empty() ? "" : " --names " + record.namesPath) + " --name " +
+                               record.name + " --replace";
+  for (const auto& [path, recorded, what] : {std::tuple{&record.volumePath, &record.volumeChecksum, "volume"},
+                                             std::tuple{&record.labelsPath, &record.labelsChecksum, "labels"}}) {
+    if (path->empty()) continue;
+    auto now = checksumPath(*path);
+    if (!now)
+      return tl::unexpected(withContext("dataset '" + record.name + "': its " + what + " cannot be read", now.error()));
+    if (*now != *recorded)
+      return fail(ErrorKind::Conflict,
+                  "dataset '" + record.name + "': its " + what + " " + *path +
+                      " has changed since it was imported (checksum now " + now->substr(0, 19) + "…, recorded " +
+                      recorded->substr(0, 19) + "…); if the new content is meant, register it again: " + reimport);
+  }
+  return datasetFiles(record);
+}
+
 namespace {
 
 // Opens an existing database only: listing must not create one as a side effect.
@@ -187,6 +219,7 @@ Result<std::optional<Database>> openExisting(const std::optional<std::string>& d
   if (!std::filesystem::exists(path, ec)) return std::optional<Database>{};
   OpenOptions options;
   options.create = false;
+  options.readOnlyIfNotWritable = true;
   auto db = Database::open(path, options);
   if (!db) return tl::unexpected(db.error());
   return std::optional<Database>(std::move(*db));
@@ -209,7 +242,9 @@ Result<std::optional<DatasetFiles>> findImportedDataset(const std::optional<std:
   auto record = findDataset(**db, name);
   if (!record) return tl::unexpected(record.error());
   if (!*record) return std::optional<DatasetFiles>{};
-  return std::optional<DatasetFiles>(datasetFiles(**record));
+  auto files = verifiedDatasetFiles(**record);
+  if (!files) return tl::unexpected(files.error());
+  return std::optional<DatasetFiles>(std::move(*files));
 }
 
 }  // namespace at::db

@@ -85,10 +85,10 @@ TEST_CASE("StudyStore_RatingsAreUnblindedOnExport") {
       r.position = t.position;
       r.item = item.id;
       r.ratingAsShown = t.aCondition == "wdt" ? 1 : 5;  // always prefers the WDT view
-      REQUIRE(db::recordRating(*db, p.id, "always-wdt", r).has_value());
+      REQUIRE(db::recordRating(*db, *part, r).has_value());
     }
   }
-  REQUIRE(db::markParticipantComplete(*db, p.id, "always-wdt").has_value());
+  REQUIRE(db::markParticipantComplete(*db, *part).has_value());
   auto rows = db::studyResponseRows(*db, p);
   REQUIRE(rows.has_value());
   CHECK(rows->size() == p.structures.size() * p.items.size());

@@ -79,6 +79,10 @@ struct OpenOptions {
   int busyTimeoutMs = 5000;
   // Create the file (and its folder) when missing.
   bool create = true;
+  // For commands that only read: a database this process cannot write (a read-only file, folder or
+  // disk, or a disk too full for the WAL index) is opened read-only instead of failing, if it is
+  // already at the target schema. Its writes then fail with "the database is read-only".
+  bool readOnlyIfNotWritable = false;
 };
 
 // An open connection. Move-only; closed when it dies.
@@ -98,6 +102,8 @@ class Database {
 
   const std::string& path() const { return path_; }
   bool isOpen() const { return db_ != nullptr; }
+  // True when opened read-only (OpenOptions::readOnlyIfNotWritable on a file it cannot write).
+  bool readOnly() const { return readOnly_; }
 
   Result<Statement> prepare(std::string_view sql);
   // Runs one or more statements without parameters (schema text, pragmas).
@@ -120,6 +126,7 @@ class Database {
   Database(sqlite3* db, std::string path) : db_(db), path_(std::move(path)) {}
   sqlite3* db_ = nullptr;
   std::string path_;
+  bool readOnly_ = false;
 };
 
 // BEGIN … COMMIT as an object: rolled back when it dies without commit().

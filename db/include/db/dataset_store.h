@@ -30,9 +30,11 @@ struct DatasetRecord {
 };
 
 // Stores a dataset and its structures in one transaction. A name already registered is an error
-// naming it; nothing is written then.
+// naming it (nothing is written then) unless `replace` is set: then the earlier record and its
+// structures are replaced in that same transaction (courses and progress refer to datasets and
+// structures by name and id, so they carry over).
 Result<std::int64_t> registerDataset(Database& db, const DatasetRecord& record,
-                                     const std::vector<Structure>& structures);
+                                     const std::vector<Structure>& structures, bool replace = false);
 
 // All imported datasets, ordered by name.
 Result<std::vector<DatasetRecord>> listDatasets(Database& db);
@@ -46,13 +48,18 @@ Result<std::vector<Structure>> datasetStructures(Database& db, std::int64_t data
 // The files to hand to openDatasetFiles for a registered dataset.
 DatasetFiles datasetFiles(const DatasetRecord& record);
 
+// The same, once the volume's and the labels' checksums are those recorded at import: a file
+// replaced or changed since (even by one on the same grid) is a Conflict naming the file, both
+// checksums, and the command that registers the new content (import … --replace).
+Result<DatasetFiles> verifiedDatasetFiles(const DatasetRecord& record);
+
 // For commands outside db/ (datasets, structures, wdt, render): the imported datasets of the
 // database at `dbPath` (default database when nullopt). A missing default database is not an
 // error: it lists nothing and creates nothing.
 Result<std::vector<DatasetRecord>> listImportedDatasets(const std::optional<std::string>& dbPath);
 
 // Resolves an imported dataset's name to its files (nullopt when no such dataset is registered),
-// without creating a database that does not exist yet.
+// without creating a database that does not exist yet; the files' checksums are verified.
 Result<std::optional<DatasetFiles>> findImportedDataset(const std::optional<std::string>& dbPath,
                                                         const std::string& name);
 
