@@ -70,7 +70,7 @@ int runRender(const Argv& argv) {
   auto args = cli::Args::parse(argv,
                                withDatasetOptions({"preset", "mode", "t", "size", "view", "clip", "backend", "passes",
                                                    "context", "presets", "out"}),
-                               {});
+                               withDatasetFlags({}));
   if (!args) return reportError("render: " + args.error().message, 2);
   if (args->has("help")) {
     std::printf("%s", kUsage);

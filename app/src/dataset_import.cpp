@@ -70,6 +70,12 @@ Result<ImportedDataset> importDataset(const ImportRequest& request, const Import
     if (!p) return tl::unexpected(p.error());
     record.namesPath = *p;
   }
+  record.skipUnreadableFiles = request.skipUnreadableFiles;
+  if (!request.dataFolder.empty()) {
+    auto p = absolutePath("NRRD data folder", request.dataFolder);
+    if (!p) return tl::unexpected(p.error());
+    record.dataFolder = *p;
+  }
 
   auto database = db::openDatabase(request.dbPath);
   if (!database) return tl::unexpected(database.error());

@@ -25,6 +25,8 @@ struct ImportRequest {
   std::string species = "human";      // lower-case letters, '-' and '_'
   std::optional<std::string> dbPath;  // nullopt: the default database
   bool replace = false;               // a dataset of that name is replaced (its files changed)
+  bool skipUnreadableFiles = false;   // a DICOM folder's unreadable files are skipped (kept for later opens)
+  std::string dataFolder;             // a detached NRRD header may read data files here (kept too)
 };
 
 // The stages in the order they run.

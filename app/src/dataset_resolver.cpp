@@ -10,8 +10,13 @@ namespace at::app {
 namespace fs = std::filesystem;
 
 std::set<std::string> withDatasetOptions(std::set<std::string> commandOptions) {
-  commandOptions.insert({"labels", "names", "series", "db"});
+  commandOptions.insert({"labels", "names", "series", "nrrd-data", "db"});
   return commandOptions;
+}
+
+std::set<std::string> withDatasetFlags(std::set<std::string> commandFlags) {
+  commandFlags.insert("skip-unreadable");
+  return commandFlags;
 }
 
 DatasetRequest datasetRequestFrom(const cli::Args& args, const std::string& name) {
@@ -21,13 +26,18 @@ DatasetRequest datasetRequestFrom(const cli::Args& args, const std::string& name
   request.namesPath = args.valueOr("names", "");
   request.seriesUid = args.valueOr("series", "");
   request.dbPath = args.value("db");
+  request.skipUnreadableFiles = args.has("skip-unreadable");
+  if (auto folder = args.value("nrrd-data")) request.dataFolder = fs::absolute(*folder).string();
   return request;
 }
 
 Result<Dataset> openNamedDataset(const DatasetRequest& request) {
-  const bool fileOptions = !request.labelsPath.empty() || !request.namesPath.empty() || !request.seriesUid.empty();
+  const bool fileOptions = !request.labelsPath.empty() || !request.namesPath.empty() || !request.seriesUid.empty() ||
+                           request.skipUnreadableFiles || !request.dataFolder.empty();
   if (isBuiltinDatasetName(request.name)) {
-    if (fileOptions) return fail("--labels, --names and --series apply to datasets from files, not to '" + request.name + "'");
+    if (fileOptions)
+      return fail("--labels, --names, --series, --skip-unreadable and --nrrd-data apply to datasets from files, not to '" +
+                  request.name + "'");
     return openBuiltinDataset(request.name);
   }
   std::error_code ec;
@@ -39,12 +49,16 @@ Result<Dataset> openNamedDataset(const DatasetRequest& request) {
     files.namesPath = request.namesPath;
     files.dicomSeriesUid = request.seriesUid;
     files.id = fs::path(request.name).filename().string();
+    files.skipUnreadableFiles = request.skipUnreadableFiles;
+    files.dataFolder = request.dataFolder;
     return openDatasetFiles(files);
   }
   auto imported = db::findImportedDataset(request.dbPath, request.name);
   if (!imported) return tl::unexpected(imported.error());
   if (*imported) {
-    if (fileOptions) return fail("--labels, --names and --series apply to datasets from files, not to imported '" + request.name + "'");
+    if (fileOptions)
+      return fail("--labels, --names, --series, --skip-unreadable and --nrrd-data apply to datasets from files, not to "
+                  "imported '" + request.name + "' (its files are read as at import)");
     return openDatasetFiles(**imported);
   }
   std::string known;

@@ -15,7 +15,7 @@ constexpr const char* kSelectDataset =
     "SELECT d.id, d.name, d.species, d.volume_path, d.volume_checksum, d.labels_path, d.labels_checksum,"
     " d.names_path, d.dim_x, d.dim_y, d.dim_z, d.spacing_x, d.spacing_y, d.spacing_z,"
     " d.origin_x, d.origin_y, d.origin_z, d.direction, d.orientation, d.created_at,"
-    " (SELECT count(*) FROM structures s WHERE s.dataset_id = d.id)"
+    " (SELECT count(*) FROM structures s WHERE s.dataset_id = d.id), d.load_options"
     " FROM datasets d";
 
 Result<DatasetRecord> readRecord(const Statement& s) {
@@ -39,6 +39,12 @@ Result<DatasetRecord> readRecord(const Statement& s) {
   r.orientation = s.text(18);
   r.createdAt = s.text(19);
   r.structureCount = s.integer(20);
+  if (const auto options = s.optionalText(21)) {
+    const auto json = nlohmann::json::parse(*options, nullptr, false);
+    if (!json.is_object()) return fail("dataset '" + r.name + "': stored load options are not a JSON object");
+    r.skipUnreadableFiles = json.value("skip_unreadable", false);
+    r.dataFolder = json.value("data_folder", "");
+  }
   return r;
 }
 
@@ -69,11 +75,17 @@ Result<std::int64_t> registerDataset(Database& db, const DatasetRecord& record,
       if (auto s = remove->run(); !s) return s;
     }
 
+    nlohmann::json loadOptions = nlohmann::json::object();
+    if (record.skipUnreadableFiles) loadOptions["skip_unreadable"] = true;
+    if (!record.dataFolder.empty()) loadOptions["data_folder"] = record.dataFolder;
+    // load_options only when there are some: the column exists from schema 7 on.
     auto insert = d.prepare(
-        "INSERT INTO datasets (name, species, volume_path, volume_checksum, labels_path, labels_checksum,"
-        " names_path, dim_x, dim_y, dim_z, spacing_x, spacing_y, spacing_z, origin_x, origin_y, origin_z,"
-        " direction, orientation) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13, ?14, ?15,"
-        " ?16, ?17, ?18)");
+        std::string("INSERT INTO datasets (name, species, volume_path, volume_checksum, labels_path, labels_checksum,"
+                    " names_path, dim_x, dim_y, dim_z, spacing_x, spacing_y, spacing_z, origin_x, origin_y, origin_z,"
+                    " direction, orientation") +
+        (loadOptions.empty() ? ") VALUES (" : ", load_options) VALUES (") +
+        "?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13, ?14, ?15, ?16, ?17, ?18" +
+        (loadOptions.empty() ? ")" : ", ?19)"));
     if (!insert) return tl::unexpected(insert.error());
     nlohmann::json direction = nlohmann::json::array();
     for (int row = 0; row < 3; ++row)
@@ -97,6 +109,7 @@ Result<std::int64_t> registerDataset(Database& db, const DatasetRecord& record,
         .bind(16, g.originMm[2])
         .bind(17, direction.dump())
         .bind(18, record.orientation);
+    if (!loadOptions.empty()) insert->bind(19, loadOptions.dump());
     if (auto s = insert->run(); !s) return s;
     id = d.lastInsertId();
 
@@ -180,13 +193,17 @@ DatasetFiles datasetFiles(const DatasetRecord& record) {
   files.labelsPath = record.labelsPath;
   files.namesPath = record.namesPath;
   files.id = record.name;
+  files.skipUnreadableFiles = record.skipUnreadableFiles;
+  files.dataFolder = record.dataFolder;
   return files;
 }
 
 Result<DatasetFiles> verifiedDatasetFiles(const DatasetRecord& record) {
   const std::string reimport = "anatomy-tutor import --volume " + record.volumePath +
                                (record.labelsPath.empty() ? "" : " --labels " + record.labelsPath) +
-                               (record.namesPath.empty() ? "" : " --names " + record.namesPath) + " --name " +
+                               (record.namesPath.empty() ? "" : " --names " + record.namesPath) +
+                               (record.skipUnreadableFiles ? " --skip-unreadable" : "") +
+                               (record.dataFolder.empty() ? "" : " --nrrd-data " + record.dataFolder) + " --name " +
                                record.name + " --replace";
   for (const auto& [path, recorded, what] : {std::tuple{&record.volumePath, &record.volumeChecksum, "volume"},
                                              std::tuple{&record.labelsPath, &record.labelsChecksum, "labels"}}) {

@@ -303,6 +303,12 @@ FROM (SELECT a.user_id, r.structure, r.question_id, 'lesson' AS source, r.id AS 
 ORDER BY answered_at, source, source_id;
 )SQL";
 
+// How an imported dataset's files are read (import --skip-unreadable, --nrrd-data), kept so that
+// every later open reads them the same way: JSON {"skip_unreadable": true, "data_folder": "/abs"}.
+constexpr std::string_view kDatasetLoadOptions = R"SQL(
+ALTER TABLE datasets ADD COLUMN load_options TEXT;
+)SQL";
+
 }  // namespace
 
 const std::vector<Migration>& migrations() {
@@ -313,6 +319,7 @@ const std::vector<Migration>& migrations() {
       {4, "preference studies: protocols, participants, blinded trials, ratings", kStudies},
       {5, "review responses: answers to review questions outside lesson attempts", kReviews},
       {6, "FSRS memory states (from the Leitner boxes) and the review log", kFsrs},
+      {7, "how an imported dataset's files are read (skip unreadable files, data folder)", kDatasetLoadOptions},
   };
   return all;
 }

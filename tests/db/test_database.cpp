@@ -107,8 +107,15 @@ TEST_CASE("A database at every earlier version migrates to the same schema as a 
         REQUIRE(old->exec("INSERT INTO users (id, name) VALUES (7, 'kept-learner');"
                           "INSERT INTO attempts (id, user_id, lesson_id, mode, started_at) VALUES (3, 7, 'toy.ossicles', 'guided', 100);"
                           "INSERT INTO responses (attempt_id, step_index, question_id, structure, answer, correct, score,"
-                          " latency_ms, answered_at) VALUES (3, 1, 'toy.ossicles.name_stapes', 'stapes', '{\"text\":\"stapes\"}', 1, 1, 500, 110);"
-                          "INSERT INTO progress VALUES (7, 'stapes', 2, 200000, 1, 1, 110);"));
+                          " latency_ms, answered_at) VALUES (3, 1, 'toy.ossicles.name_stapes', 'stapes', '{\"text\":\"stapes\"}', 1, 1, 500, 110);"));
+        if (from < 6) {  // a Leitner box (schemas 3 to 5)
+          REQUIRE(old->exec("INSERT INTO progress VALUES (7, 'stapes', 2, 200000, 1, 1, 110);"));
+        } else {  // as migration 6 leaves that box: an FSRS memory state and a rebuilt log entry
+          REQUIRE(old->exec("INSERT INTO memory_states VALUES (7, 'stapes', 'review', 0, 2.0, 2.1, 200000, 110, 1, 0, 1, 1);"
+                            "INSERT INTO review_log (user_id, structure, question_id, source, source_id, reviewed_at,"
+                            " rating, correct, score, latency_ms, rebuilt) VALUES (7, 'stapes', 'toy.ossicles.name_stapes',"
+                            " 'lesson', 1, 110, 3, 1, 1, 500, 1);"));
+        }
       }
     }
     auto db = Database::open(path);

@@ -220,3 +220,19 @@ TEST_CASE("StudySummary_OneParticipant_HasNoSpreadAndNoEvidence") {
   CHECK(cell.preferred == "none");
   CHECK(summaryCsv(s).find("shape,all,1,1,,,,") != std::string::npos);
 }
+
+TEST_CASE("SummaryMarkdown_HostileTitleAndIds_StayLiteralText") {
+  auto p = parseStudyProtocol(R"json({"id": "s|x", "title": "# Pwned <img src=x onerror=alert(1)>\n| a | b |",
+    "dataset": "phantom", "structures": ["cochlea"], "conditions": [{"id": "wdt"}, {"id": "bare"}],
+    "items": [{"id": "sh`ape", "wording": "**Shape?** [link](javascript:x)"}], "groups": ["g"]})json",
+                              "hostile.json");
+  REQUIRE_MESSAGE(p, p.error().message);
+  const StudySummary s = summariseStudy(*p, {});
+  const std::string md = summaryMarkdown(*p, s, 0, 0);
+  const std::string firstLine = md.substr(0, md.find('\n'));
+  CHECK(firstLine == "# \\# Pwned &lt;img src=x onerror=alert\\(1\\)&gt; \\| a \\| b \\|");
+  CHECK(md.find("<img") == std::string::npos);
+  CHECK(md.find("Study s\\|x on dataset phantom") != std::string::npos);
+  CHECK(md.find("- sh\\`ape: \\*\\*Shape?\\*\\* \\[link\\]\\(javascript:x\\)") != std::string::npos);
+  CHECK(markdownText("a\r\nb\x1b[2J") == "a  b\\[2J");
+}

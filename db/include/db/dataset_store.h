@@ -23,6 +23,8 @@ struct DatasetRecord {
   std::string labelsPath;           // absolute or empty
   std::string labelsChecksum;       // empty when no labels
   std::string namesPath;            // absolute or empty
+  bool skipUnreadableFiles = false; // how the files are read (DatasetFiles): as at import
+  std::string dataFolder;           // absolute or empty
   Geometry geometry;                // of the volume
   std::string orientation;          // e.g. "LPS"
   std::string createdAt;            // ISO-8601 UTC, set by the database
