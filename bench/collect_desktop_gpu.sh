@@ -20,5 +20,4 @@ ldd build/app/anatomy-tutor | awk '/=> \// {print $3}' | sort -u |
 rm -rf .desk && mkdir -p .desk
 tar -C "$staging" -cJf .desk/desk.tar.xz .
 cp bench/run_desktop_on_gpu.sh .desk/
-pwd > .desk/source_dir.txt  # AT_SOURCE_DIR of this build
 du -sh .desk

@@ -210,7 +210,7 @@ int main(int argc, char** argv) {
     render::ViewRequest req;
     req.width = o.width;
     req.height = o.height;
-    req.contextScale = 4;
+    req.margin = 4;  // a wide view: several structures to hover
     auto settings = render::settingsFor(*preset, *frame, req);
     if (!settings) return failWith(settings.error().message);
     settings->stepMm = stepFor(ds.volume.geometry);
@@ -226,7 +226,7 @@ int main(int argc, char** argv) {
     for (const Structure& s : ds.structures) {
       auto f = render::structureFrame(ds.labels, s.label);
       if (!f) continue;
-      auto px = settings->camera.project(f->centroidMm, o.width, o.height);
+      auto px = settings->camera.project(f->anchorMm, o.width, o.height);
       if (!px || (*px)[0] < 0 || (*px)[1] < 0 || (*px)[0] >= o.width || (*px)[1] >= o.height) continue;
       targets.push_back({s.label, (*px)[0], (*px)[1]});
     }

@@ -8,9 +8,8 @@ for f in .gl/*.deb; do dpkg -x "$f" /; done
 ldconfig
 export __EGL_VENDOR_LIBRARY_FILENAMES=/usr/local/nvidia/share/glvnd/egl_vendor.d/10_nvidia.json
 mkdir -p /tmp/desk && tar -C /tmp/desk -xJf .desk/desk.tar.xz
-# Presets and courses are read below the source directory compiled in: recreate it when missing.
-src=$(cat .desk/source_dir.txt)
-[ -e "$src" ] || { mkdir -p "$(dirname "$src")" && ln -s "$PWD" "$src"; }
+# Presets, courses and studies come from this checkout's data/ (the binary is not in an install prefix).
+export AT_DATA_DIR=$PWD/data
 export LD_LIBRARY_PATH=/tmp/desk/lib SDL_VIDEODRIVER=offscreen AT_DESKTOP_OFFSCREEN=1 XDG_DATA_HOME=/tmp/xdg
 script=$PWD/bench/desktop_hover_sweep.json
 for r in ${RUNS:-1 2}; do

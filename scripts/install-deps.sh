@@ -12,6 +12,8 @@ packages=(
   doctest-dev libexpected-dev
   xvfb xauth
   python3-skimage
+  libarchive-dev libplist-dev
+  librsvg2-bin desktop-file-utils strace
 )
 
 missing=()

@@ -5,6 +5,7 @@
 #include "cli_args.h"
 #include "commands.h"
 #include "dataset_import.h"
+#include "db/database.h"
 
 namespace at::app {
 
@@ -14,7 +15,7 @@ constexpr const char* kImportHelp =
     "usage: anatomy-tutor import --volume PATH --name NAME [--labels PATH] [--names NAMES.json]\n"
     "                            [--species SPECIES] [--replace] [--skip-unreadable] [--nrrd-data DIR]\n"
     "                            [--db PATH]\n\n"
-    "Registers a dataset in the database: the volume (a DICOM folder, .nii, .nii.gz, .nrrd or .nhdr),\n"
+    "Registers a dataset in the database: the volume (a DICOM folder, .nii, .nii.gz, .nrrd, .nhdr, .inv3),\n"
     "an optional label map on the same anatomy (any of those formats or DICOM SEG) and an optional\n"
     "JSON of label names ({\"1\": \"spleen\", …}). Both are loaded first to check that they align.\n"
     "The database keeps absolute paths, SHA-256 checksums and the geometry, never pixels or patient\n"
@@ -28,7 +29,7 @@ constexpr const char* kImportHelp =
 }  // namespace
 
 int runImport(const Argv& argv) {
-  auto args = cli::Args::parse(argv, {"volume", "labels", "names", "name", "species", "nrrd-data", "db"},
+  auto args = cli::Args::parse(argv, {"volume", "labels", "names", "name", "species", "nrrd-data"},
                                {"replace", "skip-unreadable"});
   if (!args) return reportError("import: " + args.error().message);
   if (args->has("help")) {
@@ -47,11 +48,12 @@ int runImport(const Argv& argv) {
   request.namesPath = args->valueOr("names", "");
   request.name = *name;
   request.species = args->valueOr("species", "human");
-  request.dbPath = args->value("db");
   request.replace = args->has("replace");
   request.skipUnreadableFiles = args->has("skip-unreadable");
   request.dataFolder = args->valueOr("nrrd-data", "");
-  auto imported = importDataset(request);
+  auto database = db::openDatabase(args->db());
+  if (!database) return reportError("import: " + database.error().message);
+  auto imported = importDataset(*database, request);
   if (!imported) return reportError("import: " + imported.error().message);
 
   const db::DatasetRecord& record = imported->record;

@@ -6,9 +6,11 @@
 
 #include "cli_args.h"
 #include "commands.h"
-#include "learning_support.h"
+#include "core/strings.h"
+#include "learning_session.h"
 #include "lessons/lesson_engine.h"
 #include "lessons/scheduling.h"
+#include "quiz/elo.h"
 
 namespace at::app {
 
@@ -30,26 +32,26 @@ int questionCount(const lessons::Lesson& l) {
 }  // namespace
 
 int runCourses(const Argv& argv) {
-  auto args = cli::Args::parse(argv, {"db"}, {});
+  auto args = cli::Args::parse(argv, {}, {});
   if (!args) return reportError("courses: " + args.error().message);
   if (args->has("help")) {
     std::printf("usage: anatomy-tutor courses [--db PATH]\n\nLists the courses (the default course is added on first run).\n");
     return 0;
   }
   if (!args->positional().empty()) return reportError("courses: unexpected argument '" + args->positional()[0] + "'");
-  auto database = openLearningDatabase(args->value("db"), true);
-  if (!database) return reportError("courses: " + database.error().message);
-  db::SqliteCurriculumRepository curriculum(*database, builtinStructures());
-  auto courses = curriculum.courses();
+  auto session = LearningSession::open(args->db(), true);
+  if (!session) return reportError("courses: " + session.error().message);
+  auto courses = (*session)->curriculum().courses();
   if (!courses) return reportError("courses: " + courses.error().message);
   for (const auto& c : *courses)
-    std::printf("%-24s %-44s dataset %-12s %zu lessons (version %d)\n", c.id.c_str(), c.title.c_str(),
-                c.datasetId.c_str(), c.lessons.size(), c.version);
+    std::printf("%-24s %-44s dataset %-12s %s%s (version %d)\n", c.id.c_str(), c.title.c_str(), c.datasetId.c_str(),
+                str::countOf(long(c.lessons.size()), "lesson").c_str(),
+                c.exams.empty() ? "" : (", " + str::countOf(long(c.exams.size()), "exam")).c_str(), c.version);
   return 0;
 }
 
 int runLessons(const Argv& argv) {
-  auto args = cli::Args::parse(argv, {"db"}, {});
+  auto args = cli::Args::parse(argv, {}, {});
   if (!args) return reportError("lessons: " + args.error().message);
   if (args->has("help")) {
     std::printf("usage: anatomy-tutor lessons [COURSE] [--db PATH]\n\n"
@@ -58,9 +60,9 @@ int runLessons(const Argv& argv) {
     return 0;
   }
   if (args->positional().size() > 1) return reportError("lessons: give at most one COURSE");
-  auto database = openLearningDatabase(args->value("db"), true);
-  if (!database) return reportError("lessons: " + database.error().message);
-  db::SqliteCurriculumRepository curriculum(*database, builtinStructures());
+  auto session = LearningSession::open(args->db(), true);
+  if (!session) return reportError("lessons: " + session.error().message);
+  lessons::CurriculumRepository& curriculum = (*session)->curriculum();
   std::vector<lessons::Course> courses;
   if (args->positional().empty()) {
     auto all = curriculum.courses();
@@ -74,11 +76,20 @@ int runLessons(const Argv& argv) {
   for (const auto& c : courses) {
     std::printf("%s — %s\n", c.id.c_str(), c.title.c_str());
     for (const auto& l : c.lessons) {
-      std::printf("  %-28s %-40s %2zu steps, %d questions", l.id.c_str(), l.title.c_str(), l.steps.size(),
-                  questionCount(l));
+      std::printf("  %-28s %-40s %s, %s", l.id.c_str(), l.title.c_str(), str::countOf(long(l.steps.size()), "step").c_str(),
+                  str::countOf(questionCount(l), "question").c_str());
       if (!l.prerequisites.empty()) {
         std::printf("  after:");
         for (const auto& p : l.prerequisites) std::printf(" %s", p.c_str());
+      }
+      std::printf("\n");
+    }
+    for (const auto& e : c.exams) {
+      std::printf("  %-28s %-40s %s, %d min  (exam)", e.id.c_str(), e.title.c_str(), str::countOf(e.count, "item").c_str(),
+                  (e.timeLimitS + 59) / 60);
+      if (!e.prerequisites.empty()) {
+        std::printf("  after:");
+        for (const auto& p : e.prerequisites) std::printf(" %s", p.c_str());
       }
       std::printf("\n");
     }
@@ -87,7 +98,7 @@ int runLessons(const Argv& argv) {
 }
 
 int runProgress(const Argv& argv) {
-  auto args = cli::Args::parse(argv, {"user", "db"}, {});
+  auto args = cli::Args::parse(argv, {}, {});
   if (!args) return reportError("progress: " + args.error().message);
   if (args->has("help")) {
     std::printf("usage: anatomy-tutor progress --user NAME [--db PATH]\n\n"
@@ -98,18 +109,17 @@ int runProgress(const Argv& argv) {
     return 0;
   }
   if (!args->positional().empty()) return reportError("progress: unexpected argument '" + args->positional()[0] + "'");
-  const auto userName = args->value("user");
-  if (!userName || userName->empty()) return reportError("progress: --user NAME is required");
-  auto database = openLearningDatabase(args->value("db"), true);
-  if (!database) return reportError("progress: " + database.error().message);
-  db::SqliteCurriculumRepository curriculum(*database, builtinStructures());
-  db::SqliteProgressRepository progress(*database);
-  db::SqliteUserRepository users(*database);
-
-  auto user = users.findUser(*userName);
-  if (!user) return reportError("progress: " + user.error().message);
-  if (!*user) return reportError("progress: unknown user '" + *userName + "'");
-  const std::int64_t userId = (*user)->id;
+  const auto userName = args->user();
+  if (!userName) return reportError("progress: --user NAME is required");
+  auto session = LearningSession::open(args->db(), true);
+  if (!session) return reportError("progress: " + session.error().message);
+  lessons::CurriculumRepository& curriculum = (*session)->curriculum();
+  lessons::ProgressRepository& progress = (*session)->progress();
+  auto found = (*session)->users().findUser(*userName);
+  if (!found) return reportError("progress: " + found.error().message);
+  if (!*found) return reportError("progress: unknown user '" + *userName + "'");
+  const lessons::User* user = &**found;
+  const std::int64_t userId = user->id;
   const lessons::UnixSeconds now = std::time(nullptr);
 
   auto courses = curriculum.courses();
@@ -130,13 +140,14 @@ int runProgress(const Argv& argv) {
     answered += p.answered;
     correct += p.correct;
   }
-  std::printf("%s (%s%s%s): %d answers, %d correct", (*user)->name.c_str(), lessons::toString((*user)->role),
-              (*user)->group.empty() ? "" : ", group ", (*user)->group.c_str(), answered, correct);
+  std::printf("%s (%s%s%s): %s, %d correct", user->name.c_str(), lessons::toString(user->role),
+              user->group.empty() ? "" : ", group ", user->group.c_str(), str::countOf(answered, "answer").c_str(), correct);
   if (!reviews->empty()) {
     const auto right = std::count_if(reviews->begin(), reviews->end(), [](const lessons::ReviewResponse& r) { return r.correct; });
     std::printf(" (%zu in review, %ld correct)", reviews->size(), long(right));
   }
-  if (*ability) std::printf(", ability %.0f", **ability);
+  // The Elo ability as what it predicts: the chance of answering a question of average difficulty.
+  if (*ability) std::printf("; expected to get %.0f%% of average questions right", 100 * quiz::expectedScore(**ability, 1500));
   std::printf("\n");
 
   // Display names of every structure the courses use.
@@ -182,15 +193,23 @@ int runProgress(const Argv& argv) {
                 100.0 * fsrs.retrievability(p.memory, now), relativeTime(p.memory.due, now).c_str());
   }
 
-  auto due = lessons::reviewQueue(progress, userId, now);
-  if (!due) return reportError("progress: " + due.error().message);
-  std::printf("\nDue for review now: ");
-  if (due->empty()) std::printf("nothing\n");
-  for (std::size_t i = 0; i < due->size(); ++i) {
-    auto it = names.find((*due)[i].structureId);
-    std::printf("%s%s", i ? ", " : "", it == names.end() ? (*due)[i].structureId.c_str() : it->second.c_str());
-    if (i + 1 == due->size()) std::printf("\n");
+  // The one definition of what is due (lessons::reviewQueue): taught structures only, per course,
+  // exactly what `play --review COURSE` and the desktop's review ask about.
+  std::vector<std::string> dueLines;
+  for (const auto& c : *courses) {
+    auto due = lessons::reviewQueue(curriculum, progress, userId, c.id, now);
+    if (!due) return reportError("progress: " + due.error().message);
+    if (due->empty()) continue;
+    std::string list;
+    for (const auto& p : *due) {
+      auto it = names.find(p.structureId);
+      list += (list.empty() ? "" : ", ") + (it == names.end() ? p.structureId : it->second);
+    }
+    dueLines.push_back(c.id + ": " + str::countOf(int(due->size()), "structure") + " (" + list + ") — `anatomy-tutor play --review " +
+                       c.id + " --user " + user->name + "`");
   }
+  std::printf("\nDue for review now:%s\n", dueLines.empty() ? " nothing" : "");
+  for (const auto& line : dueLines) std::printf("  %s\n", line.c_str());
   return 0;
 }
 

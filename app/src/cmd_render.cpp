@@ -6,6 +6,7 @@
 
 #include "cli_args.h"
 #include "commands.h"
+#include "data_paths.h"
 #include "dataset_resolver.h"
 #include "render/gl/egl_context.h"
 #include "render/gl/volume_renderer.h"
@@ -25,27 +26,20 @@ namespace fs = std::filesystem;
 const char* kUsage =
     "usage: anatomy-tutor render DATASET STRUCTURE (--preset NAME | --mode MODE) [--t T] [--size WxH]\n"
     "                            [--view NAME] [--clip NX,NY,NZ,D] [--backend cpu|cuda|auto] [--passes N]\n"
-    "                            [--context F] [--presets DIR] [--labels FILE [--names NAMES.json]] [--series UID]\n"
+    "                            [--context F] [--margin F] [--presets DIR] [--labels FILE [--names NAMES.json]] [--series UID]\n"
     "                            [--db PATH] --out F.png\n"
-    "  DATASET     phantom, phantom:N, an imported dataset, or a volume file/folder (--labels: its label map,\n"
+    "  DATASET     phantom, phantom:N, skull, an imported dataset, or a volume file/folder (--labels: its label map,\n"
     "              --names: its label names, --series: the DICOM series where a folder holds several)\n"
     "  MODE        wdt | bare | unweighted | fuzzy | outline | lighting (the structure's shipped preset)\n"
     "  --preset    a preset id from the presets folder, or a path to a .json preset\n"
     "  --t         context blend 0..1 (overrides the preset)\n"
     "  --view      anterior, posterior, lateral_left, lateral_right, superior, inferior\n"
     "  --clip      plane n·p = d in LPS mm; the side the normal points to is cut away\n"
-    "  --context   view radius as a multiple of the structure's radius (default 2.5)\n"
-    "  --presets   presets folder (default: data/presets of the source tree or next to the binary)\n";
+    "  --context   how far the context reaches, as a multiple of the structure's own context radius\n"
+    "              (from its size; default 1)\n"
+    "  --margin    the structure's extent times this fills the view (default 1.6)\n"
+    "  --presets   presets folder (default: the installed presets, or $AT_DATA_DIR/presets)\n";
 
-
-Result<std::pair<int, int>> parseSize(const std::string& text) {
-  int w = 0, h = 0;
-  char x = 0, extra = 0;
-  if (std::sscanf(text.c_str(), "%d%c%d%c", &w, &x, &h, &extra) != 3 || (x != 'x' && x != 'X') || w < 1 ||
-      h < 1 || w > 8192 || h > 8192)
-    return fail("option --size: '" + text + "' is not WxH with 1..8192 pixels per side");
-  return std::make_pair(w, h);
-}
 
 Result<std::array<float, 4>> parseClip(const std::string& text) {
   std::array<float, 4> c{};
@@ -69,7 +63,7 @@ Result<std::array<float, 4>> parseClip(const std::string& text) {
 int runRender(const Argv& argv) {
   auto args = cli::Args::parse(argv,
                                withDatasetOptions({"preset", "mode", "t", "size", "view", "clip", "backend", "passes",
-                                                   "context", "presets", "out"}),
+                                                   "context", "margin", "presets", "out"}),
                                withDatasetFlags({}));
   if (!args) return reportError("render: " + args.error().message, 2);
   if (args->has("help")) {
@@ -103,11 +97,9 @@ int runRender(const Argv& argv) {
   preset->t = float(*t);
 
   render::ViewRequest request;
-  if (auto size = args->value("size")) {
-    auto wh = parseSize(*size);
-    if (!wh) return reportError("render: " + wh.error().message, 2);
-    request.width = wh->first;
-    request.height = wh->second;
+  if (auto size = args->size()) {
+    request.width = size->width;
+    request.height = size->height;
   }
   if (auto v = args->value("view")) request.view = *v;
   if (auto c = args->value("clip")) {
@@ -118,6 +110,9 @@ int runRender(const Argv& argv) {
   auto context = args->number("context", request.contextScale);
   if (!context || *context <= 0) return reportError("render: option --context must be a positive number", 2);
   request.contextScale = *context;
+  auto margin = args->number("margin", request.margin);
+  if (!margin || *margin < 1 || *margin > 100) return reportError("render: option --margin must be a number in 1..100", 2);
+  request.margin = *margin;
   auto frame = render::structureFrame(dataset->labels, structure->label);
   if (!frame) return reportError("render: " + structure->id + ": " + frame.error().message);
   auto settings = render::settingsFor(*preset, *frame, request);
@@ -164,18 +159,6 @@ int runRender(const Argv& argv) {
   return 0;
 }
 
-std::filesystem::path defaultPresetsDir() {
-  namespace fs = std::filesystem;
-  const fs::path source = fs::path(AT_SOURCE_DIR) / "data" / "presets";
-  if (fs::is_directory(source)) return source;
-  std::error_code ec;
-  const fs::path exe = fs::read_symlink("/proc/self/exe", ec);
-  if (!ec) {
-    for (const fs::path& p : {exe.parent_path() / "data" / "presets",
-                              exe.parent_path().parent_path() / "share" / "anatomy-tutor" / "presets"})
-      if (fs::is_directory(p)) return p;
-  }
-  return source;
-}
+std::filesystem::path defaultPresetsDir() { return dataSubdirectory("presets"); }
 
 }  // namespace at::app

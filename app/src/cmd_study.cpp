@@ -49,13 +49,13 @@ const char* kStudyHelp =
     "   \"toggles\": 3, \"comment\": \"…\", \"response_ms\": 1200}   (ratings as shown: 1 = prefer A … 5 = prefer B)\n"
     "Without --answers the study runs interactively on the terminal.\n";
 
-Result<db::Database> openDb(const cli::Args& args) { return db::openDatabase(args.value("db")); }
+Result<db::Database> openDb(const cli::Args& args) { return db::openDatabase(args.db()); }
 
 // For the verbs that only read (list, status, export): a database that cannot be written is read.
 Result<db::Database> openDbToRead(const cli::Args& args) {
   db::OpenOptions options;
   options.readOnlyIfNotWritable = true;
-  return db::openDatabase(args.value("db"), options);
+  return db::openDatabase(args.db(), options);
 }
 
 int runRegister(const cli::Args& args) {
@@ -313,7 +313,7 @@ int runStudy(const Argv& argv) {
     return argv.empty() ? 2 : 0;
   }
   const std::string verb = argv[0];
-  auto args = cli::Args::parse(Argv(argv.begin() + 1, argv.end()), {"db", "participant", "group", "answers", "out"}, {});
+  auto args = cli::Args::parse(Argv(argv.begin() + 1, argv.end()), {"participant", "group", "answers", "out"}, {});
   if (!args) return reportError("study " + verb + ": " + args.error().message);
   if (args->has("help")) {
     std::printf("%s", kStudyHelp);

@@ -19,8 +19,10 @@
 #include "db/dataset_store.h"
 #include "volume/dataset_source.h"
 #include "volume/image_file.h"
+#include "volume/known_scans.h"
 #include "volume/phantom.h"
 #include "volume/png_image.h"
+#include "volume/slice_image.h"
 
 namespace at::app {
 
@@ -104,14 +106,23 @@ struct DatasetListing {
 
 std::vector<DatasetListing> builtinDatasets() {
   const PhantomOptions defaults;
-  return {{"phantom", "Temporal-bone phantom (synthetic)",
-           std::to_string(defaults.size) + "^3 over " + formatDouble(defaults.extentMm, 1) + " mm, " +
-               std::to_string(phantomStructures().size()) + " structures; phantom:N for N^3 (N = 16 … 1024)"}};
+  std::vector<DatasetListing> listing = {
+      {"phantom", "Temporal-bone phantom (synthetic)",
+       std::to_string(defaults.size) + "^3 over " + formatDouble(defaults.extentMm, 1) + " mm, " +
+           std::to_string(phantomStructures().size()) + " structures; phantom:N for N^3 (N = 16 … 1024)"}};
+  for (const KnownScan& scan : knownScans()) {
+    const auto path = locateKnownScan(scan);
+    listing.push_back({scan.name, scan.title,
+                       path ? path->string() + " (" + scan.licence + ")"
+                            : "not fetched: bash scripts/fetch-scans.sh, or apt-get install " + scan.debianPackage});
+  }
+  return listing;
 }
 
 const char* kDatasetsHelp =
     "usage: anatomy-tutor datasets [--json] [--db PATH]\n\n"
-    "Lists the datasets that can be opened by name: the built-in phantom and the datasets imported\n"
+    "Lists the datasets that can be opened by name: the built-in phantom, the real scans that\n"
+    "scripts/fetch-scans.sh fetches from Debian packages (skull: a head CT), and the datasets imported\n"
     "with `anatomy-tutor import` into the database (--db PATH, else the default database). Any\n"
     "supported file or folder can also be opened directly by its path.\n";
 
@@ -121,18 +132,19 @@ const char* kStructuresHelp =
     "usage: anatomy-tutor structures DATASET [--json]\n"
     "       anatomy-tutor structures --volume PATH --labels PATH [--names JSON] [--series UID] [--json]\n\n"
     "Lists a dataset's structures: label value, id, name, system and voxel count.\n"
-    "DATASET is a built-in name (phantom, phantom:N) or a volume path (DICOM folder, .nii[.gz],\n"
-    ".nrrd/.nhdr); --labels gives a label map on any grid (resampled onto the volume), --names a\n"
+    "DATASET is a built-in name (phantom, phantom:N, skull) or a volume path (DICOM folder, .nii[.gz],\n"
+    ".nrrd/.nhdr, .inv3); --labels gives a label map on any grid (resampled onto the volume), --names a\n"
     "JSON map { \"value\": \"name\" }, --series the DICOM series UID. Datasets from files also take\n"
     "(as do slice, wdt and render):\n";
 
 // --- info -------------------------------------------------------------------------------------
 
 const char* kInfoHelp =
-    "usage: anatomy-tutor info FILE|DIR [--json] [--labels PATH] [--names JSON] [--series UID]\n"
-    "                          [--skip-unreadable] [--nrrd-data DIR]\n\n"
-    "Loads any supported input (DICOM series folder, DICOM SEG, NIfTI, NRRD) and prints its\n"
-    "dimensions, spacing, origin, orientation, stored type, value (HU) range and loader notes.\n"
+    "usage: anatomy-tutor info FILE|DIR|SCAN [--json] [--labels PATH] [--names JSON] [--series UID]\n"
+    "                                [--skip-unreadable] [--nrrd-data DIR]\n\n"
+    "Loads any supported input (DICOM series folder, DICOM SEG, NIfTI, NRRD, InVesalius .inv3) and\n"
+    "prints its dimensions, spacing, origin, orientation, stored type, value (HU) range and loader notes.\n"
+    "SCAN is a real scan fetched by scripts/fetch-scans.sh (skull).\n"
     "Label maps (integer images with few values, or files that name segments) and --labels\n"
     "inputs also list each label with its name and voxel count; --names JSON ({ \"value\": \"name\" })\n"
     "names the labels of either. Only regular files are read (FIFOs and devices are refused).\n";
@@ -175,15 +187,10 @@ const char* kSliceHelp =
     "the slice (0-based). Image columns follow the i axis (j for --axis x); rows follow j for axial\n"
     "slices and run from the top (highest k) down otherwise.\n";
 
-double srgbEncode(double linear) {
-  linear = std::clamp(linear, 0.0, 1.0);
-  return linear <= 0.0031308 ? 12.92 * linear : 1.055 * std::pow(linear, 1.0 / 2.4) - 0.055;
-}
-
 }  // namespace
 
 int runDatasets(const Argv& argv) {
-  auto args = cli::Args::parse(argv, {"db"}, {"json"});
+  auto args = cli::Args::parse(argv, {}, {"json"});
   if (!args) return usageError("datasets", args.error().message);
   if (args->has("help")) {
     std::printf("%s", kDatasetsHelp);
@@ -192,7 +199,9 @@ int runDatasets(const Argv& argv) {
   if (!args->positional().empty()) return usageError("datasets", "unexpected argument '" + args->positional()[0] + "'");
   std::vector<DatasetListing> rows = builtinDatasets();
   std::vector<bool> builtin(rows.size(), true);
-  auto imported = db::listImportedDatasets(args->value("db"));
+  auto database = db::openExistingDatabase(args->db());
+  if (!database) return reportError("datasets: " + database.error().message);
+  auto imported = *database ? db::listDatasets(**database) : Result<std::vector<db::DatasetRecord>>(std::vector<db::DatasetRecord>{});
   if (!imported) return reportError("datasets: " + imported.error().message);
   for (const db::DatasetRecord& r : *imported) {
     rows.push_back({r.name, r.species + " dataset from " + r.volumePath,
@@ -254,7 +263,13 @@ int runInfo(const Argv& argv) {
   const auto& pos = args->positional();
   if (pos.empty()) return usageError("info", "missing FILE or DIR (see --help)");
   if (pos.size() > 1) return usageError("info", "unexpected argument '" + pos[1] + "' (one FILE or DIR only)");
-  const std::string path = pos[0];
+  std::string path = pos[0];
+  // A scan's name wins over a file of that name, as built-in names do everywhere (./skull is the file).
+  if (const KnownScan* scan = findKnownScan(path)) {
+    auto file = knownScanFile(*scan);
+    if (!file) return reportError("info: " + file.error().message);
+    path = file->string();
+  }
 
   ImageLoadOptions options;
   options.dicomSeriesUid = args->valueOr("series", "");
@@ -387,37 +402,16 @@ int runSlice(const Argv& argv) {
                        std::to_string(extent[axis] - 1) + " for axis " + *axisText + " of " + ds->id + " (" +
                        d.toString() + ")");
 
-  // Image axes: columns along u, rows along v (v reversed for the vertical k axis so that the
-  // highest k, superior in LPS data, is at the top).
-  const int uAxis = axis == 0 ? 1 : 0;
-  const int vAxis = axis == 2 ? 1 : 2;
-  const bool flipV = vAxis == 2;
-  RgbImage image(extent[uAxis], extent[vAxis]);
-  std::vector<std::array<std::uint8_t, 3>> colours(65536, {0, 0, 0});
-  std::vector<bool> known(65536, false);
-  for (const Structure& s : ds->structures) {
-    for (int c = 0; c < 3; ++c) colours[s.label][std::size_t(c)] = std::uint8_t(std::lround(255 * srgbEncode(s.colour[std::size_t(c)])));
-    known[s.label] = true;
-  }
-  const double lo = centre - width / 2;
-  for (int row = 0; row < image.height; ++row)
-    for (int col = 0; col < image.width; ++col) {
-      int ijk[3];
-      ijk[axis] = *index;
-      ijk[uAxis] = col;
-      ijk[vAxis] = flipV ? extent[vAxis] - 1 - row : row;
-      const double hu = ds->volume.at(ijk[0], ijk[1], ijk[2]);
-      const double grey = std::clamp((hu - lo) / width, 0.0, 1.0) * 255.0;
-      const std::uint16_t label = ds->labels.empty() ? 0 : ds->labels.at(ijk[0], ijk[1], ijk[2]);
-      std::uint8_t* px = image.pixel(col, row);
-      for (int c = 0; c < 3; ++c) {
-        double v = grey;
-        if (label != 0 && known[label]) v = (1 - *alpha) * grey + *alpha * colours[label][std::size_t(c)];
-        px[c] = std::uint8_t(std::lround(std::clamp(v, 0.0, 255.0)));
-      }
-    }
-  if (auto st = writePng(*out, image); !st) return reportError("slice: " + st.error().message);
-  std::printf("wrote %s (%dx%d, axis %s index %d of %s, window %s,%s)\n", out->c_str(), image.width, image.height,
+  SliceRequest request;
+  request.axis = axis;
+  request.index = *index;
+  request.windowCentreHu = centre;
+  request.windowWidthHu = width;
+  request.labelAlpha = *alpha;
+  auto image = renderSlice(ds->volume, &ds->labels, ds->structures, request);
+  if (!image) return reportError("slice: " + image.error().message);
+  if (auto st = writePng(*out, *image); !st) return reportError("slice: " + st.error().message);
+  std::printf("wrote %s (%dx%d, axis %s index %d of %s, window %s,%s)\n", out->c_str(), image->width, image->height,
               axisText->c_str(), *index, ds->id.c_str(), formatDouble(centre, 0).c_str(), formatDouble(width, 0).c_str());
   return 0;
 }

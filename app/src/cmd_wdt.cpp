@@ -24,8 +24,9 @@ namespace {
 constexpr const char* kUsage =
     "usage: anatomy-tutor wdt DATASET STRUCTURE [options]\n"
     "  Weighted distance field of STRUCTURE (id or name) through the CT densities.\n"
-    "  DATASET: phantom | phantom:N (the built-in phantom at N^3), an imported dataset (--db PATH),\n"
-    "           or a volume file or DICOM folder, whose structures come from:\n"
+    "  DATASET: phantom | phantom:N (the built-in phantom at N^3), skull (scripts/fetch-scans.sh), an\n"
+    "           imported dataset (--db PATH), or a volume file (.nii[.gz], .nrrd, .inv3) or DICOM folder,\n"
+    "           whose structures come from:\n"
     "  --labels FILE               its label map (any volume format or DICOM SEG)\n"
     "  --names NAMES.json          names of the label values ({\"1\": \"spleen\", ...})\n"
     "  --series UID                the DICOM series to open, where a folder holds several\n"

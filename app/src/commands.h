@@ -33,7 +33,7 @@ int runWdt(const Argv& args);
 
 // Rendering (cmd_render.cpp)
 int runRender(const Argv& args);
-// The shipped presets: data/presets of the source tree, else next to the installed binary.
+// The shipped presets: dataSubdirectory("presets") (data_paths.h).
 std::filesystem::path defaultPresetsDir();
 
 // The desktop application (desktop_app.cpp, desktop_support.cpp)
@@ -45,6 +45,8 @@ int runPlay(const Argv& args);
 int runProgress(const Argv& args);
 int runCourses(const Argv& args);
 int runLessons(const Argv& args);
+int runExam(const Argv& args);       // cmd_exam.cpp
+int runAnalytics(const Argv& args);  // cmd_analytics.cpp
 
 // Preference studies (cmd_study.cpp)
 int runStudy(const Argv& args);

@@ -41,13 +41,13 @@ const char* toString(ImportStage stage) {
   return "?";
 }
 
-Result<ImportedDataset> importDataset(const ImportRequest& request, const ImportControl& control) {
+Result<ImportedDataset> importDataset(db::Database& database, const ImportRequest& request, const ImportControl& control) {
   const auto cancelled = [&] { return control.cancel && control.cancel->load(); };
   const auto stage = [&](ImportStage s) {
     if (control.progress) control.progress(s, 0, 0);
   };
   stage(ImportStage::Checking);
-  if (request.volumePath.empty()) return fail("a volume (DICOM folder, .nii, .nii.gz, .nrrd or .nhdr) is required");
+  if (request.volumePath.empty()) return fail("a volume (DICOM folder, .nii, .nii.gz, .nrrd, .nhdr or .inv3) is required");
   if (request.name.empty()) return fail("a dataset name is required");
   if (isBuiltinDatasetName(request.name)) return fail("'" + request.name + "' is the built-in dataset's name; choose another name");
   if (!validSpecies(request.species))
@@ -77,10 +77,8 @@ Result<ImportedDataset> importDataset(const ImportRequest& request, const Import
     record.dataFolder = *p;
   }
 
-  auto database = db::openDatabase(request.dbPath);
-  if (!database) return tl::unexpected(database.error());
   // Fail fast on a taken name, before the (possibly long) load.
-  auto existing = db::findDataset(*database, record.name);
+  auto existing = db::findDataset(database, record.name);
   if (!existing) return tl::unexpected(existing.error());
   if (*existing && !request.replace)
     return fail(ErrorKind::Conflict, "a dataset named '" + record.name + "' is already imported; choose another name");
@@ -125,7 +123,7 @@ Result<ImportedDataset> importDataset(const ImportRequest& request, const Import
   if (cancelled()) return fail(ErrorKind::Cancelled, kImportCancelled);
 
   stage(ImportStage::Storing);
-  auto id = db::registerDataset(*database, record, dataset->structures, request.replace);
+  auto id = db::registerDataset(database, record, dataset->structures, request.replace);
   if (!id) return tl::unexpected(id.error());
   record.id = *id;
   record.structureCount = int(dataset->structures.size());

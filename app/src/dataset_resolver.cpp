@@ -2,15 +2,17 @@
 
 #include <filesystem>
 
+#include "core/strings.h"
 #include "db/dataset_store.h"
 #include "volume/dataset_source.h"
+#include "volume/known_scans.h"
 
 namespace at::app {
 
 namespace fs = std::filesystem;
 
 std::set<std::string> withDatasetOptions(std::set<std::string> commandOptions) {
-  commandOptions.insert({"labels", "names", "series", "nrrd-data", "db"});
+  commandOptions.insert({"labels", "names", "series", "nrrd-data"});
   return commandOptions;
 }
 
@@ -25,7 +27,7 @@ DatasetRequest datasetRequestFrom(const cli::Args& args, const std::string& name
   request.labelsPath = args.valueOr("labels", "");
   request.namesPath = args.valueOr("names", "");
   request.seriesUid = args.valueOr("series", "");
-  request.dbPath = args.value("db");
+  request.dbPath = args.db();
   request.skipUnreadableFiles = args.has("skip-unreadable");
   if (auto folder = args.value("nrrd-data")) request.dataFolder = fs::absolute(*folder).string();
   return request;
@@ -40,6 +42,13 @@ Result<Dataset> openNamedDataset(const DatasetRequest& request) {
                   request.name + "'");
     return openBuiltinDataset(request.name);
   }
+  if (const KnownScan* scan = findKnownScan(request.name)) {
+    if (!request.seriesUid.empty() || request.skipUnreadableFiles || !request.dataFolder.empty())
+      return fail("--series, --skip-unreadable and --nrrd-data apply to DICOM folders and NRRD files, not to '" +
+                  request.name + "'");
+    if (!request.namesPath.empty() && request.labelsPath.empty()) return fail("--names needs --labels PATH");
+    return openKnownScan(*scan, {request.labelsPath, request.namesPath});
+  }
   std::error_code ec;
   if (fs::exists(request.name, ec)) {
     if (!request.namesPath.empty() && request.labelsPath.empty()) return fail("--names needs --labels PATH");
@@ -53,19 +62,39 @@ Result<Dataset> openNamedDataset(const DatasetRequest& request) {
     files.dataFolder = request.dataFolder;
     return openDatasetFiles(files);
   }
-  auto imported = db::findImportedDataset(request.dbPath, request.name);
-  if (!imported) return tl::unexpected(imported.error());
-  if (*imported) {
-    if (fileOptions)
-      return fail("--labels, --names, --series, --skip-unreadable and --nrrd-data apply to datasets from files, not to "
-                  "imported '" + request.name + "' (its files are read as at import)");
-    return openDatasetFiles(**imported);
+  std::optional<db::Database> opened;
+  db::Database* database = request.database;
+  if (!database) {
+    auto existing = db::openExistingDatabase(request.dbPath);
+    if (!existing) return tl::unexpected(existing.error());
+    if (*existing) database = &opened.emplace(std::move(**existing));
   }
-  std::string known;
-  if (auto all = db::listImportedDatasets(request.dbPath))
-    for (const auto& record : *all) known += (known.empty() ? "" : ", ") + record.name;
-  return fail(ErrorKind::NotFound, "unknown dataset '" + request.name + "': not built in (phantom, phantom:N), not imported" +
-              (known.empty() ? std::string() : " (imported: " + known + ")") + ", and no such file or folder");
+  std::vector<std::string> known;
+  if (database) {
+    auto record = db::findDataset(*database, request.name);
+    if (!record) return tl::unexpected(record.error());
+    if (*record) {
+      if (fileOptions)
+        return fail("--labels, --names, --series, --skip-unreadable and --nrrd-data apply to datasets from files, not to "
+                    "imported '" + request.name + "' (its files are read as at import)");
+      // The files must be those imported: a file changed since is refused (checksums).
+      auto files = db::verifiedDatasetFiles(**record);
+      if (!files) return tl::unexpected(files.error());
+      auto dataset = openDatasetFiles(*files);
+      if (!dataset) return tl::unexpected(dataset.error());
+      // Imported structures keep the names and descriptions stored at import time.
+      auto stored = db::datasetStructures(*database, (*record)->id);
+      if (!stored) return tl::unexpected(stored.error());
+      dataset->structures = std::move(*stored);
+      dataset->species = (*record)->species;
+      return dataset;
+    }
+    if (auto all = db::listDatasets(*database))
+      for (const auto& r : *all) known.push_back(r.name);
+  }
+  return fail(ErrorKind::NotFound, "unknown dataset '" + request.name + "': not built in (phantom, phantom:N, skull), not imported" +
+                                       (known.empty() ? std::string() : " (imported: " + str::join(known, ", ") + ")") +
+                                       ", and no such file or folder");
 }
 
 std::string unknownStructureMessage(const Dataset& dataset, const std::string& name) {

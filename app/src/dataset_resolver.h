@@ -1,6 +1,7 @@
-// Opening a dataset named on the command line, the same way for every command: a built-in name
-// (phantom, phantom:N), a dataset imported into the database (`anatomy-tutor import`), or a path
-// to a volume file or DICOM folder with optional labels and names.
+// Opening a dataset named on the command line, in a lesson or in the desktop, the same way
+// everywhere: a built-in name (phantom, phantom:N), a dataset imported into the database
+// (`anatomy-tutor import`; its structures with the names stored at import), or a path to a volume
+// file or DICOM folder with optional labels and names.
 #pragma once
 
 #include <optional>
@@ -12,6 +13,10 @@
 #include "core/error.h"
 #include "volume/structure.h"
 
+namespace at::db {
+class Database;
+}
+
 namespace at::app {
 
 struct DatasetRequest {
@@ -19,13 +24,17 @@ struct DatasetRequest {
   std::string labelsPath;             // paths only: label map on any grid
   std::string namesPath;              // paths only: JSON { "value": "name" }
   std::string seriesUid;              // paths only: DICOM series
-  std::optional<std::string> dbPath;  // --db; the default database when absent
+  // Where imported datasets are registered: the process's open connection when it has one (the
+  // desktop, a lesson), else the database at dbPath (the default one when absent), opened only if
+  // it exists.
+  db::Database* database = nullptr;
+  std::optional<std::string> dbPath;
   bool skipUnreadableFiles = false;   // paths only: --skip-unreadable (DICOM folders)
   std::string dataFolder;             // paths only: --nrrd-data DIR (detached NRRD data files)
 };
 
 // A command's valued options plus the ones every dataset-taking command accepts beside its
-// DATASET: --labels, --names, --series and --nrrd-data (datasets from files only) and --db.
+// DATASET: --labels, --names, --series and --nrrd-data (datasets from files only; --db is global).
 std::set<std::string> withDatasetOptions(std::set<std::string> commandOptions);
 // A command's flags plus the dataset flag --skip-unreadable (datasets from files only).
 std::set<std::string> withDatasetFlags(std::set<std::string> commandFlags);
@@ -40,7 +49,7 @@ inline constexpr const char* kDatasetOptionsHelp =
 DatasetRequest datasetRequestFrom(const cli::Args& args, const std::string& name);
 
 // Errors name what was tried ("unknown dataset 'abdomen': not built in, not imported in
-// <db> (imported: …), and no such file or folder").
+// <db> (imported: …), and no such file or folder"); an unknown name is NotFound.
 Result<Dataset> openNamedDataset(const DatasetRequest& request);
 
 // The one-line message for a structure `name` that `dataset` does not have: its structure ids (the

@@ -1,6 +1,6 @@
 // The desktop application (issue 7): an SDL2 window with an OpenGL context, Dear ImGui panels and
 // the render/gl ray caster drawing the volume view. Explore level: structure browser, hover to
-// highlight (fields computed off the UI thread by FieldWorker), click to select, the structure's
+// highlight (fields computed off the UI thread by wdt::FieldService), click to select, the structure's
 // WDT or bare preset with the blend t, named views, orbit/zoom/pan and a clipping plane.
 //
 // Adaptive quality: while the view or the hovered structure changes, the volume is rendered into a
@@ -35,12 +35,12 @@
 #include <nlohmann/json.hpp>
 
 #include "core/strings.h"
+#include "cli_args.h"
 #include "commands.h"
 #include "dataset_resolver.h"
 #include "desktop_support.h"
-#include "field_worker.h"
 #include "import_panel.h"
-#include "learning_support.h"
+#include "learning_session.h"
 #include "lesson_panel.h"
 #include "lessons/curriculum.h"
 #include "render/gl/volume_renderer.h"
@@ -52,6 +52,8 @@
 #include "volume/dataset_source.h"
 #include "volume/mask.h"
 #include "volume/png_image.h"
+#include "wdt/answer_keys.h"
+#include "wdt/field_service.h"
 
 namespace at::app {
 
@@ -85,17 +87,9 @@ double percentile(std::vector<double> v, double p) {
   return v[lo] + (v[hi] - v[lo]) * (pos - double(lo));
 }
 
-// The weighted distance in mm of `pointMm` from the structure `label` (the distance field the
-// answer keys use, learning_support.h), at the voxel containing the point; -1 when unknown.
-double weightedDistanceAt(const Dataset& dataset, std::uint16_t label, const Vec3& pointMm) {
-  auto field = wdtDistanceField(dataset)(structureMask(dataset.labels, label));
-  if (!field) return -1;
-  const Vec3 ijk = field->geometry.patientToIndex(pointMm);
-  const int i = int(std::lround(ijk[0])), j = int(std::lround(ijk[1])), k = int(std::lround(ijk[2]));
-  if (!field->dims().contains(i, j, k)) return -1;
-  const double d = field->at(i, j, k);
-  return std::isfinite(d) ? d : -1;
-}
+using wdt::FieldRequest;
+using wdt::FieldService;
+using wdt::FinishedField;
 
 // RAII for SDL, the window with its GL context, and the ImGui context with its backends.
 struct SdlSession {
@@ -177,7 +171,7 @@ class DesktopApp {
     std::string dataset;            // empty: the default course's dataset; else as openNamedDataset takes it
     std::optional<std::string> script;
     std::optional<std::string> screenshot;
-    std::optional<std::string> dbPath;  // the database: presets saved in the expert panel, studies, lessons
+    std::optional<std::string> dbPath;  // the database: presets saved in the expert panel, studies, lessons, imports
     std::string userName = kDefaultLessonUser;  // whose lesson progress the lesson panel shows and records
     int width = 1280, height = 720;
     double renderScale = 1;         // resolution of the full-quality level (slow software GL: < 1)
@@ -238,8 +232,10 @@ class DesktopApp {
   bool expertOn() const { return expert_ && expert_->active(); }
 
   Options options_;
+  std::unique_ptr<LearningSession> session_;  // the process's one database connection
   render::PresetLibrary library_;
   Dataset dataset_;
+  render::GradientVolume gradients_;  // of dataset_'s volume
   std::vector<std::pair<std::string, std::vector<const Structure*>>> bySystem_;
   std::map<std::uint16_t, render::StructureFrame> frames_;
   std::map<std::pair<std::uint16_t, bool>, render::Preset> presets_;
@@ -268,7 +264,7 @@ class DesktopApp {
   char search_[128] = "";
 
   // Fields
-  std::unique_ptr<FieldWorker> worker_;
+  std::unique_ptr<FieldService> worker_;
   std::shared_ptr<const DistanceField> field_;  // host copy of the field shown (picking); may lag a GPU field
   const void* fieldSource_ = nullptr;            // identity of the field in the texture; null = none
   std::uint16_t fieldLabel_ = 0;
@@ -295,6 +291,15 @@ class DesktopApp {
   bool leftDown_ = false, panDown_ = false, dragged_ = false;
   double downX_ = 0, downY_ = 0, lastX_ = 0, lastY_ = 0;
   std::optional<Vec3> lastPickMm_;  // where the last hover pick met the volume (LPS mm)
+  // A locate answer waiting for the answer-key field of its target (asked of the field service,
+  // never computed on this thread): graded with the click's weighted distance once it is there.
+  struct PendingClick {
+    std::string structure;  // clicked ("" for none)
+    Vec3 pointMm{0, 0, 0};
+    FieldRequest keyField;
+  };
+  std::optional<PendingClick> pendingClick_;
+  bool servePendingClick();  // true while the click still waits for its field
 
   // Script and measurements
   std::deque<json> actions_;
@@ -336,7 +341,7 @@ Status DesktopApp::loadContent() {
   if (datasetName.empty()) datasetName = "phantom";
   DatasetRequest request;
   request.name = datasetName;
-  request.dbPath = options_.dbPath;
+  request.database = &session_->database();
   auto ds = openNamedDataset(request);
   if (!ds) return tl::unexpected(ds.error());
   return showDataset(std::move(*ds), startStructure, startPreset);
@@ -351,6 +356,7 @@ Status DesktopApp::showDataset(Dataset dataset, const std::string& startStructur
   if (expert_ && expertOn()) setExpert(false);
   worker_.reset();  // it holds a reference to dataset_
   dataset_ = std::move(dataset);
+  gradients_ = render::computeGradientVolume(dataset_.volume);  // shading and picking share it
   frames_ = std::move(frames);
   bySystem_.clear();
   presets_.clear();
@@ -383,10 +389,11 @@ Status DesktopApp::showDataset(Dataset dataset, const std::string& startStructur
   } else {
     message(preset.error().message);
   }
-  worker_ = std::make_unique<FieldWorker>(dataset_, 8);
-  expert_ = std::make_unique<TfEditorPanel>(dataset_, options_.dbPath, [this](json j) { event(std::move(j)); });
+  pendingClick_.reset();
+  worker_ = std::make_unique<FieldService>(dataset_.volume, dataset_.labels, 8);
+  expert_ = std::make_unique<TfEditorPanel>(dataset_, session_->database(), [this](json j) { event(std::move(j)); });
   if (renderer_) {  // a dataset opened after start-up
-    if (auto st = renderer_->setVolume(dataset_.volume, dataset_.labels); !st) {
+    if (auto st = renderer_->setVolume(dataset_.volume, dataset_.labels, gradients_); !st) {
       message("volume renderer: " + st.error().message);
       renderer_.reset();
     }
@@ -438,7 +445,7 @@ Status DesktopApp::openGraphics() {
     auto renderer = render::gl::VolumeRenderer::create();
     if (!renderer) {
       message("volume renderer: " + renderer.error().message);
-    } else if (auto st = renderer->setVolume(dataset_.volume, dataset_.labels); !st) {
+    } else if (auto st = renderer->setVolume(dataset_.volume, dataset_.labels, gradients_); !st) {
       message("volume renderer: " + st.error().message);
     } else {
       renderer_ = std::move(*renderer);
@@ -545,6 +552,9 @@ void DesktopApp::setView(const std::string& name) {
   if (it == frames_.end()) return;
   render::ViewRequest request;
   request.view = name;
+  request.margin = 2.5;  // the explore view: the structure with room around it to orbit and hover
+  request.width = std::max(1, fbW_);
+  request.height = std::max(1, fbH_);
   auto settings = render::settingsFor(presetOf(label, bare_), it->second, request);
   if (!settings) {
     message(settings.error().message);
@@ -564,7 +574,7 @@ std::optional<std::array<double, 2>> DesktopApp::projectStructure(std::uint16_t 
   if (it == frames_.end()) return std::nullopt;
   const double left = 320 * uiScale_;
   const int viewW = int(winW_ - left), viewH = winH_;
-  auto p = camera_.project(it->second.centroidMm, viewW, viewH);
+  auto p = camera_.project(it->second.anchorMm, viewW, viewH);
   if (!p || (*p)[0] < 0 || (*p)[0] >= viewW || (*p)[1] < 0 || (*p)[1] >= viewH) return std::nullopt;
   return std::array<double, 2>{(*p)[0] + left, (*p)[1]};
 }
@@ -632,6 +642,7 @@ void DesktopApp::hoverAt(double x, double y) {
   scene.volume = &dataset_.volume;
   scene.labels = &dataset_.labels;
   scene.field = field_ ? &field_->distances : nullptr;
+  scene.gradients = &gradients_;
   scene.selected = fieldLabel_;
   const render::TransferFunction2D table = render::shadingTable(s.preset);
   const double px = (x - left) / std::max(1.0, winW_ - left) * s.width, py = y / std::max(1, winH_) * s.height;
@@ -642,9 +653,9 @@ void DesktopApp::hoverAt(double x, double y) {
   if (label != hovered_) {
     const Structure* st = dataset_.findStructureByLabel(label);
     json e = {{"event", "hover"}, {"x", x}, {"y", y}, {"label", label}, {"structure", st ? st->id : ""}};
-    if (st) {  // the colour its WDT preset gives the structure itself (distance TF at normalised 1)
-      const auto& tf = presetOf(label, false).distanceTf;
-      if (!tf.empty()) e["highlight_rgb"] = {tf.back().rgba[0], tf.back().rgba[1], tf.back().rgba[2]};
+    if (st) {  // the colour its WDT preset draws the structure itself in (render_settings.h)
+      const auto& rgb = presetOf(label, false).highlightRgb;
+      e["highlight_rgb"] = {rgb[0], rgb[1], rgb[2]};
     }
     event(e);
   }
@@ -668,10 +679,15 @@ void DesktopApp::clickAt(double x, double y) {
     const Structure* st = dataset_.findStructureByLabel(hovered_);
     const auto targetId = lesson_->questionTarget();
     const Structure* target = targetId ? dataset_.findStructure(*targetId) : nullptr;
-    double distanceMm = -1;
-    if (lesson_->wantsClickDistance() && target && st != target && lastPickMm_)
-      distanceMm = weightedDistanceAt(dataset_, target->label, *lastPickMm_);
-    lesson_->clicked(st ? st->id : "", distanceMm);
+    if (lesson_->wantsClickDistance() && target && st != target && lastPickMm_) {
+      FieldRequest key;
+      key.label = target->label;
+      key.params = wdt::answerKeyParams();
+      pendingClick_ = PendingClick{st ? st->id : "", *lastPickMm_, key};
+      servePendingClick();
+      return;
+    }
+    lesson_->clicked(st ? st->id : "", -1);
     return;
   }
   if (hovered_) select(hovered_);
@@ -732,12 +748,29 @@ void DesktopApp::handleEvent(const SDL_Event& e) {
 // ---------------------------------------------------------------------------------------------
 // Fields: what the shown structure needs, asked of the worker; the best that exists, uploaded.
 
+bool DesktopApp::servePendingClick() {
+  if (!pendingClick_) return false;
+  const FieldService::Cached key = worker_->cached(pendingClick_->keyField);
+  if (!key.host) {
+    worker_->request(pendingClick_->keyField);  // a GPU field's host copy follows shortly
+    return true;
+  }
+  const auto distance = wdt::answerKeyDistanceAt(*key.host, dataset_.labels.geometry, pendingClick_->pointMm);
+  const PendingClick click = *std::exchange(pendingClick_, std::nullopt);
+  lesson_->clicked(click.structure, distance.value_or(-1));
+  return false;
+}
+
 void DesktopApp::updateFields() {
   for (FinishedField& f : worker_->takeFinished()) {
     const Structure* st = dataset_.findStructureByLabel(f.request.label);
     const std::string id = st ? st->id : std::to_string(f.request.label);
     if (!f.field && !f.deviceField) {
       message("distance field of " + id + ": " + f.message);
+      if (pendingClick_ && pendingClick_->keyField.key() == f.request.key()) {  // graded as "distance unknown"
+        const PendingClick click = *std::exchange(pendingClick_, std::nullopt);
+        lesson_->clicked(click.structure, -1);
+      }
       continue;
     }
     if (f.device.find("CPU") == std::string::npos && !f.device.empty()) gpuFields_ = true;
@@ -757,6 +790,7 @@ void DesktopApp::updateFields() {
   // Set again below while the field wanted is still going up; every other way out leaves it off,
   // so that the loop can go idle.
   fieldUploading_ = false;
+  const bool clickWaiting = servePendingClick();  // its field goes first: requests are latest-wins
   if (bare_) return;
   const std::uint16_t label = shownLabel();
   if (!label) return;
@@ -765,12 +799,12 @@ void DesktopApp::updateFields() {
   if (!fine || !coarse) return;
   // A field is ready when its host copy or (computed on the GPU) its device copy exists; a GPU
   // field is shown from the device before its host copy (for picking) has arrived.
-  const FieldWorker::Cached fineCached = worker_->cached(*fine);
+  const FieldService::Cached fineCached = worker_->cached(*fine);
   const bool fineReady = fineCached.ready();
-  const FieldWorker::Cached coarseCached = fineReady ? FieldWorker::Cached{} : worker_->cached(*coarse);
+  const FieldService::Cached coarseCached = fineReady ? FieldService::Cached{} : worker_->cached(*coarse);
   const bool coarseReady = coarseCached.ready();
   const bool resting = msBetween(hoverSince_, Clock::now()) > kRefineFieldAfterMs;
-  if (!fineReady) {
+  if (!fineReady && !clickWaiting) {
     if (fine->key() == declinedFieldKey_ && (coarseReady || coarseDownsample() == 1))
       ;  // the user cancelled this full-resolution field: keep the coarse one
     else if (gpuFields_ || coarseDownsample() == 1 || (coarseReady && resting))
@@ -778,7 +812,7 @@ void DesktopApp::updateFields() {
     else if (!coarseReady)
       worker_->request(*coarse);
   }
-  const FieldWorker::Cached& chosen = fineReady ? fineCached : coarseCached;
+  const FieldService::Cached& chosen = fineReady ? fineCached : coarseCached;
   const auto& best = chosen.host;  // may still be missing for a GPU field
   const auto& bestDevice = chosen.device;
   const void* source = bestDevice ? static_cast<const void*>(bestDevice.get()) : static_cast<const void*>(best.get());
@@ -1233,7 +1267,12 @@ bool DesktopApp::stepScript() {
         hoverAt(a.at("x").get<double>(), a.at("y").get<double>());
         done();
       } else if (what == "click") {
-        clickAt(a.at("x").get<double>(), a.at("y").get<double>());
+        // A locate answer off its target is graded once its distance field is there.
+        if (!a.value("_clicked", false)) {
+          a["_clicked"] = true;
+          clickAt(a.at("x").get<double>(), a.at("y").get<double>());
+        }
+        if (pendingClick_) return false;
         done();
       } else if (what == "hover_structure") {
         const Structure* s = structureArg();
@@ -1258,9 +1297,13 @@ bool DesktopApp::stepScript() {
       } else if (what == "click_structure") {
         const Structure* s = structureArg();
         if (!s) return true;
-        auto p = projectStructure(s->label);
-        event({{"event", "click_structure"}, {"structure", s->id}, {"visible", p.has_value()}});
-        if (p) clickAt((*p)[0], (*p)[1]);
+        if (!a.value("_clicked", false)) {
+          a["_clicked"] = true;
+          auto p = projectStructure(s->label);
+          event({{"event", "click_structure"}, {"structure", s->id}, {"visible", p.has_value()}});
+          if (p) clickAt((*p)[0], (*p)[1]);
+        }
+        if (pendingClick_) return false;
         done();
       } else if (what == "orbit") {
         camera_.orbit(a.value("azimuth", 0.0), a.value("elevation", 0.0));
@@ -1409,13 +1452,16 @@ int DesktopApp::run() {
       return reportError(*options_.script + ": a UI script is an object with an \"actions\" list");
     for (const json& a : script["actions"]) actions_.push_back(a);
   }
+  auto session = LearningSession::open(options_.dbPath);
+  if (!session) return reportError(session.error().message);
+  session_ = std::move(*session);
   if (auto st = loadContent(); !st) return reportError(st.error().message);
-  study_ = std::make_unique<StudyPanel>(options_.dbPath, library_, [this](json j) { event(std::move(j)); });
+  study_ = std::make_unique<StudyPanel>(session_->database(), library_, [this](json j) { event(std::move(j)); });
   lesson_ = std::make_unique<LessonPanel>(
-      options_.dbPath, options_.userName, dataset_.id, [this](json j) { event(std::move(j)); },
+      *session_, options_.userName, dataset_.id, [this](json j) { event(std::move(j)); },
       [this](const LessonPanel::Shown& shown) { showLessonStructure(shown); }, [this] { return renderState(); });
   import_ = std::make_unique<ImportPanel>(
-      options_.dbPath, [this](json j) { event(std::move(j)); }, [this](const std::string& m) { message(m); });
+      session_->database(), [this](json j) { event(std::move(j)); }, [this](const std::string& m) { message(m); });
   if (auto st = openGraphics(); !st) return reportError(st.error().message);
   SDL_GetWindowSize(window_->window, &winW_, &winH_);
   SDL_GL_GetDrawableSize(window_->window, &fbW_, &fbH_);
@@ -1480,82 +1526,62 @@ int DesktopApp::run() {
 
 }  // namespace
 
-int runDesktop(const std::vector<std::string>& args) {
-  DesktopApp::Options options;
-  for (std::size_t i = 0; i < args.size(); ++i) {
-    const std::string& a = args[i];
-    const auto next = [&]() -> std::optional<std::string> {
-      if (i + 1 >= args.size()) return std::nullopt;
-      return args[++i];
-    };
-    if (a == "--help" || a == "-h") {
-      std::printf(
-          "usage: anatomy-tutor [desktop] [--dataset D] [--ui-script FILE.json [--screenshot OUT.png]] [--size WxH]\n"
-          "                             [--render-scale S] [--frame-budget MS] [--max-fps N] [--db PATH] [--user NAME]\n"
-          "  Opens the desktop app on the default course (explore: hover to highlight, click to select).\n"
-          "  --dataset    phantom, phantom:N, a dataset imported into --db, or a volume file or DICOM folder\n"
-          "               (default: the default course's dataset)\n"
-          "  --ui-script  replay {\"actions\": [...]} (select, t, mode, view, hover, hover_structure, click,\n"
-          "               click_structure, orbit, zoom, clip, wait, wait_field, screenshot,\n"
-          "               hover_sweep, record, report; expert, tf_add_point, tf_move_point,\n"
-          "               tf_delete_point, tf_colour, preset_set, preset_save; study_start, study_toggle,\n"
-          "               study_rate, study_comment, study_next, study_close, coordinator_open,\n"
-          "               coordinator_export, coordinator_summary; lesson_user, lessons, lesson,\n"
-          "               lesson_next, answer, review, lesson_close; import, cancel_import,\n"
-          "               open_imported, cancel_field)\n"
-          "  --db         the database: imported datasets, presets saved in the expert panel, studies,\n"
-          "               lesson progress (default: the user's)\n"
-          "  --user       whose lesson progress to show and record (default: student; the same name as\n"
-          "               `anatomy-tutor play --user` shares the progress; created when new)\n"
-          "  --screenshot save the window as PNG once the script has run and the view has settled\n"
-          "  --size       window size in logical pixels (default 1280x720)\n"
-          "  --render-scale  resolution of the full-quality volume image, 0.1..1 (default 1; software GL: less)\n"
-          "  --frame-budget  at rest, finer images predicted to take longer are not rendered (default 100 ms;\n"
-          "               scripted screenshots and the 'Full quality at rest' box render full quality anyway)\n"
-          "  --max-fps    start frames at most N times a second (scripted runs swap without vsync and\n"
-          "               otherwise draw as fast as they can; 60 measures them as on a 60 Hz display)\n");
-      return 0;
-    }
-    std::optional<std::string> value;
-    if (a == "--dataset" || a == "--ui-script" || a == "--screenshot" || a == "--size" ||
-        a == "--render-scale" || a == "--frame-budget" || a == "--max-fps" || a == "--db" || a == "--user") {
-      value = next();
-      if (!value) return reportError("desktop: option " + a + " needs a value", 2);
-    }
-    if (a == "--dataset") {
-      options.dataset = *value;
-    } else if (a == "--ui-script") {
-      options.script = *value;
-    } else if (a == "--db") {
-      options.dbPath = *value;
-    } else if (a == "--user") {
-      if (value->empty()) return reportError("desktop: --user needs a name", 2);
-      options.userName = *value;
-    } else if (a == "--screenshot") {
-      options.screenshot = *value;
-    } else if (a == "--frame-budget") {
-      char* end = nullptr;
-      options.frameBudgetMs = std::strtod(value->c_str(), &end);
-      if (*end != '\0' || !(options.frameBudgetMs >= 10 && options.frameBudgetMs <= 100000))
-        return reportError("desktop: --frame-budget must be a number of milliseconds in 10..100000", 2);
-    } else if (a == "--max-fps") {
-      char* end = nullptr;
-      options.maxFps = std::strtod(value->c_str(), &end);
-      if (*end != '\0' || !(options.maxFps >= 1 && options.maxFps <= 1000))
-        return reportError("desktop: --max-fps must be a number in 1..1000", 2);
-    } else if (a == "--render-scale") {
-      char* end = nullptr;
-      options.renderScale = std::strtod(value->c_str(), &end);
-      if (*end != '\0' || !(options.renderScale >= 0.1 && options.renderScale <= 1))
-        return reportError("desktop: --render-scale must be a number in 0.1..1", 2);
-    } else if (a == "--size") {
-      if (std::sscanf(value->c_str(), "%dx%d", &options.width, &options.height) != 2 || options.width < 400 ||
-          options.height < 300 || options.width > 8192 || options.height > 8192)
-        return reportError("desktop: --size must be WxH, at least 400x300", 2);
-    } else {
-      return reportError("desktop: unknown option '" + a + "' (see --help)", 2);
-    }
+int runDesktop(const std::vector<std::string>& argv) {
+  auto args = cli::Args::parse(argv, {"dataset", "ui-script", "screenshot", "render-scale", "frame-budget", "max-fps"}, {});
+  if (!args) return reportError("desktop: " + args.error().message, 2);
+  if (args->has("help")) {
+    std::printf(
+        "usage: anatomy-tutor [desktop] [--dataset D] [--ui-script FILE.json [--screenshot OUT.png]] [--size WxH]\n"
+        "                             [--render-scale S] [--frame-budget MS] [--max-fps N] [--db PATH] [--user NAME]\n"
+        "  Opens the desktop app on the default course (explore: hover to highlight, click to select).\n"
+        "  --dataset    phantom, phantom:N, a dataset imported into --db, or a volume file or DICOM folder\n"
+        "               (default: the default course's dataset)\n"
+        "  --ui-script  replay {\"actions\": [...]} (select, t, mode, view, hover, hover_structure, click,\n"
+        "               click_structure, orbit, zoom, clip, wait, wait_field, screenshot,\n"
+        "               hover_sweep, record, report; expert, tf_add_point, tf_move_point,\n"
+        "               tf_delete_point, tf_colour, preset_set, preset_save; study_start, study_toggle,\n"
+        "               study_rate, study_comment, study_next, study_close, coordinator_open,\n"
+        "               coordinator_export, coordinator_summary; lesson_user, lessons, lesson,\n"
+        "               lesson_next, answer, review, lesson_close; import, cancel_import,\n"
+        "               open_imported, cancel_field)\n"
+        "  --db         the database: imported datasets, presets saved in the expert panel, studies,\n"
+        "               lesson progress (default: the user's)\n"
+        "  --user       whose lesson progress to show and record (default: student; the same name as\n"
+        "               `anatomy-tutor play --user` shares the progress; created when new)\n"
+        "  --screenshot save the window as PNG once the script has run and the view has settled\n"
+        "  --size       window size in logical pixels (default 1280x720)\n"
+        "  --render-scale  resolution of the full-quality volume image, 0.1..1 (default 1; software GL: less)\n"
+        "  --frame-budget  at rest, finer images predicted to take longer are not rendered (default 100 ms;\n"
+        "               scripted screenshots and the 'Full quality at rest' box render full quality anyway)\n"
+        "  --max-fps    start frames at most N times a second (scripted runs swap without vsync and\n"
+        "               otherwise draw as fast as they can; 60 measures them as on a 60 Hz display)\n"
+        "  --db, --user and --size may also stand before the command.\n");
+    return 0;
   }
+  if (!args->positional().empty()) return reportError("desktop: unexpected argument '" + args->positional()[0] + "' (see --help)", 2);
+  DesktopApp::Options options;
+  options.dataset = args->valueOr("dataset", "");
+  options.script = args->value("ui-script");
+  options.screenshot = args->value("screenshot");
+  options.dbPath = args->db();
+  if (auto user = args->user()) options.userName = *user;
+  if (auto size = args->size()) {
+    if (size->width < 400 || size->height < 300) return reportError("desktop: --size must be WxH, at least 400x300", 2);
+    options.width = size->width;
+    options.height = size->height;
+  }
+  auto frameBudget = args->number("frame-budget", options.frameBudgetMs);
+  if (!frameBudget || !(*frameBudget >= 10 && *frameBudget <= 100000))
+    return reportError("desktop: --frame-budget must be a number of milliseconds in 10..100000", 2);
+  options.frameBudgetMs = *frameBudget;
+  auto maxFps = args->number("max-fps", options.maxFps);
+  if (!maxFps || !(*maxFps == 0 || (*maxFps >= 1 && *maxFps <= 1000)))
+    return reportError("desktop: --max-fps must be a number in 1..1000", 2);
+  options.maxFps = *maxFps;
+  auto renderScale = args->number("render-scale", options.renderScale);
+  if (!renderScale || !(*renderScale >= 0.1 && *renderScale <= 1))
+    return reportError("desktop: --render-scale must be a number in 0.1..1", 2);
+  options.renderScale = *renderScale;
   if (options.screenshot && !options.script) options.script = std::string();  // the default view
   if (!displayAvailable()) return reportError("desktop: no display (none named in DISPLAY/WAYLAND_DISPLAY, or it cannot be opened)");
   return DesktopApp(options).run();

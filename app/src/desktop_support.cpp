@@ -9,7 +9,7 @@
 #include <string>
 
 #include "commands.h"
-#include "learning_support.h"
+#include "learning_session.h"
 #include "lessons/course_json.h"
 #include "render/gl/egl_context.h"
 #include "render/gl/volume_renderer.h"

@@ -12,7 +12,7 @@
 
 namespace at::app {
 
-// The default course: temporal_bone.json in the course folder (learning_support.h), else the
+// The default course: temporal_bone.json in the course folder (learning_session.h), else the
 // first course file there by name.
 Result<lessons::Course> loadDefaultCourse();
 

@@ -66,8 +66,8 @@ struct ImportPanel::Job {
   std::optional<Result<ImportedDataset>> result;
 };
 
-ImportPanel::ImportPanel(std::optional<std::string> dbPath, EventSink events, MessageSink messages)
-    : dbPath_(std::move(dbPath)), events_(std::move(events)), messages_(std::move(messages)) {}
+ImportPanel::ImportPanel(db::Database& database, EventSink events, MessageSink messages)
+    : database_(database), events_(std::move(events)), messages_(std::move(messages)) {}
 
 ImportPanel::~ImportPanel() {
   if (job_) job_->cancel = true;
@@ -87,7 +87,6 @@ Status ImportPanel::launch(const ImportRequest& request, std::optional<ImportSta
   if (thread_.joinable()) thread_.join();
   auto job = std::make_shared<Job>();
   job->request = request;
-  job->request.dbPath = dbPath_;
   job->cancelAt = cancelAt;
   job_ = job;
   reported_ = false;
@@ -97,7 +96,8 @@ Status ImportPanel::launch(const ImportRequest& request, std::optional<ImportSta
   imported_.reset();
   openRequested_ = false;
   events_({{"event", "import_started"}, {"name", request.name}, {"volume", request.volumePath}});
-  thread_ = std::jthread([job] {
+  db::Database* database = &database_;
+  thread_ = std::jthread([job, database] {
     ImportControl control;
     control.cancel = &job->cancel;
     control.progress = [&job](ImportStage stage, std::size_t done, std::size_t total) {
@@ -112,7 +112,7 @@ Status ImportPanel::launch(const ImportRequest& request, std::optional<ImportSta
       job->done = done;
       job->total = total;
     };
-    auto result = importDataset(job->request, control);
+    auto result = importDataset(*database, job->request, control);
     std::lock_guard lock(job->mutex);
     job->result = std::move(result);
   });
@@ -190,7 +190,7 @@ void ImportPanel::drawWindow(float x, float y) {
   const bool busy = running();
   ImGui::BeginDisabled(busy);
   ImGui::PushItemWidth(-ImGui::GetFontSize() * 4.5f);
-  ImGui::InputTextWithHint("volume", "DICOM folder, .nii, .nii.gz, .nrrd or .nhdr", volume_, sizeof volume_);
+  ImGui::InputTextWithHint("volume", "DICOM folder, .nii, .nii.gz, .nrrd, .nhdr or .inv3", volume_, sizeof volume_);
   ImGui::InputTextWithHint("labels", "optional: label map (those formats or DICOM SEG)", labels_, sizeof labels_);
   ImGui::InputTextWithHint("names", "optional: JSON {\"1\": \"spleen\", ...}", names_, sizeof names_);
   ImGui::InputTextWithHint("name", "what the dataset will be called", name_, sizeof name_);

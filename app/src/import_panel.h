@@ -25,10 +25,10 @@ class ImportPanel {
  public:
   using EventSink = std::function<void(nlohmann::json)>;
   using MessageSink = std::function<void(const std::string&)>;
-  // `dbPath`: where datasets are registered (nullopt: the default database). `events` receives the
-  // scripted-mode events (import_progress, import_done, import_failed, import_cancelled);
-  // `messages` the failures for the app's message list.
-  ImportPanel(std::optional<std::string> dbPath, EventSink events, MessageSink messages);
+  // `database`: where datasets are registered (the app's one connection; it outlives the panel).
+  // `events` receives the scripted-mode events (import_progress, import_done, import_failed,
+  // import_cancelled); `messages` the failures for the app's message list.
+  ImportPanel(db::Database& database, EventSink events, MessageSink messages);
   // Cancels a running import and waits for its thread.
   ~ImportPanel();
   ImportPanel(const ImportPanel&) = delete;
@@ -60,7 +60,7 @@ class ImportPanel {
   Status launch(const ImportRequest& request, std::optional<ImportStage> cancelAt);
   void drawWindow(float x, float y);
 
-  std::optional<std::string> dbPath_;
+  db::Database& database_;
   EventSink events_;
   MessageSink messages_;
   bool open_ = false;

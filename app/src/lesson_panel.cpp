@@ -9,8 +9,6 @@
 
 #include <imgui.h>
 
-#include "db/sqlite_repositories.h"
-#include "learning_support.h"
 #include "quiz/answer_json.h"
 #include "quiz/grading.h"
 #include "quiz/keys.h"
@@ -37,41 +35,31 @@ const ImVec4 kRight{0.5f, 1, 0.5f, 1}, kWrong{1, 0.5f, 0.4f, 1}, kHeading{1, 0.7
 // ---------------------------------------------------------------------------------------------
 // Store and lists
 
+// The panel's learner state over the session: the user, the running lesson's engine and the
+// structures of the course being taught (for display names).
 struct LessonPanel::Store {
-  db::Database db;
-  db::SqliteCurriculumRepository curriculum;
-  db::SqliteProgressRepository progress;
-  db::SqliteUserRepository users;
+  LearningSession& session;
+  lessons::CurriculumRepository& curriculum;
+  lessons::ProgressRepository& progress;
   lessons::User user;
-  std::string keysDataset;                  // the dataset `keys` answers for
-  std::unique_ptr<LazyKeyComputer> keys;
-  std::vector<Structure> structures;        // of keysDataset
+  std::vector<Structure> structures;        // of the course dataset last asked for
   std::unique_ptr<lessons::LessonEngine> engine;
   lessons::Course reviewCourse;             // the course of the review question (synonyms)
 
-  explicit Store(db::Database opened)
-      : db(std::move(opened)), curriculum(db, builtinStructures()), progress(db), users(db) {}
+  explicit Store(LearningSession& s) : session(s), curriculum(s.curriculum()), progress(s.progress()) {}
 
-  // The key computer of `datasetId` (the course's dataset, loaded only when a key needs it).
+  // The answer keys of `datasetId` (the course's dataset, loaded only when a key needs it).
   Result<quiz::KeyComputer*> keysFor(const std::string& datasetId) {
-    if (!keys || keysDataset != datasetId) {
-      auto list = curriculum.structures(datasetId);
-      if (!list) return tl::unexpected(list.error());
-      engine.reset();  // it refers to the old key computer
-      structures = *list;
-      db::Database& database = db;
-      keys = std::make_unique<LazyKeyComputer>(std::move(*list), [&database, datasetId] {
-        return loadCourseDataset(database, datasetId);
-      });
-      keysDataset = datasetId;
-    }
-    return keys.get();
+    auto list = session.structures(datasetId);
+    if (!list) return tl::unexpected(list.error());
+    structures = std::move(*list);
+    return session.keysFor(datasetId);
   }
 };
 
-LessonPanel::LessonPanel(std::optional<std::string> dbPath, std::string userName, std::string viewDataset,
+LessonPanel::LessonPanel(LearningSession& session, std::string userName, std::string viewDataset,
                          EventSink events, ShowStructure show, RenderStateSource renderState)
-    : dbPath_(std::move(dbPath)),
+    : session_(session),
       userName_(std::move(userName)),
       viewDataset_(std::move(viewDataset)),
       events_(std::move(events)),
@@ -83,13 +71,8 @@ LessonPanel::~LessonPanel() = default;
 Result<LessonPanel::Store*> LessonPanel::store() {
   if (store_) return store_.get();
   if (!storeError_.empty()) return at::fail(storeError_);  // opened once and failed: not retried per frame
-  auto opened = openLearningDatabase(dbPath_);
-  if (!opened) {
-    storeError_ = "lessons: " + opened.error().message;
-    return at::fail(storeError_);
-  }
-  auto s = std::make_unique<Store>(std::move(*opened));
-  auto user = findOrCreateUser(s->users, userName_);
+  auto s = std::make_unique<Store>(session_);
+  auto user = session_.user(userName_, LearningSession::NewUser::Create);
   if (!user) return at::fail(storeError_ = "lessons: " + user.error().message);
   s->user = *user;
   std::snprintf(userEdit_, sizeof userEdit_, "%s", s->user.name.c_str());
@@ -98,21 +81,12 @@ Result<LessonPanel::Store*> LessonPanel::store() {
   return store_.get();
 }
 
-Result<lessons::User> LessonPanel::findOrCreateUser(lessons::UserRepository& users, const std::string& name) {
-  auto user = users.findUser(name);
-  if (!user) return tl::unexpected(user.error());
-  if (*user) return **user;
-  auto created = users.createUser(name, lessons::Role::Student, "");
-  if (!created) return at::fail("user '" + name + "': " + created.error().message);
-  return *created;
-}
-
 Status LessonPanel::switchUser(const std::string& name) {
   if (step_) return at::fail("leave the running lesson before changing the user");
   if (name.empty()) return at::fail("type a user name (a pseudonym)");
   auto s = store();
   if (!s) return tl::unexpected(s.error());
-  auto user = findOrCreateUser((*s)->users, name);
+  auto user = session_.user(name, LearningSession::NewUser::Create);
   if (!user) return tl::unexpected(user.error());
   (*s)->user = *user;
   userName_ = name;
@@ -160,9 +134,13 @@ Status LessonPanel::refresh() {
       rows_.push_back(std::move(row));
     }
   }
-  auto due = lessons::reviewQueue(s.progress, s.user.id, unixNow());
-  if (!due) return tl::unexpected(due.error());
-  due_ = std::move(*due);
+  due_.clear();
+  if (!courses_.empty()) {
+    // The course the review button asks about: the same due list `progress` and `play --review` show.
+    auto due = lessons::reviewQueue(s.curriculum, s.progress, s.user.id, courses_[std::size_t(courseIndex_)].id, unixNow());
+    if (!due) return tl::unexpected(due.error());
+    due_ = std::move(*due);
+  }
   return {};
 }
 
@@ -190,12 +168,14 @@ Status LessonPanel::startLesson(const std::string& lessonId, lessons::LessonMode
   if (!lesson) return tl::unexpected(lesson.error());
   auto course = st.curriculum.course(lesson->courseId);
   if (!course) return tl::unexpected(course.error());
-  auto keys = st.keysFor(course->datasetId);
+  auto keys = st.keysFor(course->datasetId);  // and the structures' display names
   if (!keys) return tl::unexpected(keys.error());
+  auto madeEngine = session_.engineFor(lessonId);
+  if (!madeEngine) return tl::unexpected(madeEngine.error());
   // LessonEngine::start computes the answer keys (distance fields: seconds on a large dataset)
   // on a thread of its own; until it is done the panel does not touch the store.
   Pending pending;
-  pending.engine = std::make_unique<lessons::LessonEngine>(st.curriculum, st.progress, **keys);
+  pending.engine = std::move(*madeEngine);
   pending.lessonId = lessonId;
   pending.courseId = course->id;
   pending.title = lesson->title;

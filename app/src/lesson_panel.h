@@ -4,8 +4,9 @@
 // every question kind (locate: a click in the 3-D view, handed over by the app), the lesson's
 // score at the end, and a review section (the structures due, and an adaptive review question).
 //
-// The panel owns the database, the engine and the answer keys (learning_support.h: the same
-// wiring as `anatomy-tutor play`, so desktop and terminal progress are one). It never touches the
+// The panel works through the app's learning session (learning_session.h: the same database,
+// repositories, users and answer keys as `anatomy-tutor play`, so desktop and terminal progress
+// are one) and owns the running lesson's engine. It never touches the
 // view itself: what a step shows goes to the app through the `ShowStructure` callback, and while
 // a question must not give its answer away (identify/name questions, quiz-only lessons)
 // namesHidden() tells the app to hide structure names.
@@ -28,14 +29,11 @@
 #include "lessons/curriculum.h"
 #include "lessons/lesson_engine.h"
 #include "lessons/repositories.h"
+#include "learning_session.h"
 #include "quiz/question.h"
 #include "core/error.h"
 
 namespace at::app {
-
-// Used when the desktop is not given --user. `anatomy-tutor play --user student --new-user` and
-// `anatomy-tutor progress --user student` then see the same progress.
-inline constexpr const char* kDefaultLessonUser = "student";
 
 class LessonPanel {
  public:
@@ -51,10 +49,10 @@ class LessonPanel {
   // The render parameters on screen, stored with each answer.
   using RenderStateSource = std::function<lessons::RenderState()>;
 
-  // `dbPath`: the database (nullopt: the default one), opened and seeded with the default course
-  // on first use. `userName`: the pseudonymous user, created as a student when first needed.
-  // `viewDataset`: the id of the dataset the view shows (a course on another one gets a warning).
-  LessonPanel(std::optional<std::string> dbPath, std::string userName, std::string viewDataset, EventSink events,
+  // `session`: the app's learning session (it outlives the panel). `userName`: the pseudonymous
+  // user, created as a student when first needed. `viewDataset`: the id of the dataset the view
+  // shows (a course on another one gets a warning).
+  LessonPanel(LearningSession& session, std::string userName, std::string viewDataset, EventSink events,
               ShowStructure show, RenderStateSource renderState);
   ~LessonPanel();
   // The view now shows another dataset (an imported one was opened).
@@ -118,7 +116,6 @@ class LessonPanel {
   };
 
   Result<Store*> store();
-  static Result<lessons::User> findOrCreateUser(lessons::UserRepository& users, const std::string& name);
   Status switchUser(const std::string& name);             // no lesson may be running
   Status refresh();                                       // courses, lesson rows, review queue
   // Starts the engine on a thread; pollStart() (each frame, and scripts) completes the start.
@@ -142,7 +139,7 @@ class LessonPanel {
   void drawQuestion();
   void drawReview();
 
-  std::optional<std::string> dbPath_;
+  LearningSession& session_;
   std::string userName_;
   std::string viewDataset_;
   EventSink events_;

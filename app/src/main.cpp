@@ -4,6 +4,7 @@
 #include <exception>
 #include <string>
 
+#include "cli_args.h"
 #include "commands.h"
 #include "desktop_support.h"
 
@@ -23,6 +24,8 @@ const std::vector<Command>& commands() {
       {"lessons", "list the lessons of the courses", runLessons},
       {"play", "run a lesson in the terminal (answers from a file or typed)", runPlay},
       {"progress", "show a user's progress and what is due for review", runProgress},
+      {"exam", "take a course's practical exam in the terminal (timed, labels hidden)", runExam},
+      {"analytics", "a class's lesson completion, hardest structures, question difficulty, recall (--csv)", runAnalytics},
       {"study", "preference studies: register, run, status, export", runStudy},
   };
   return table;
@@ -37,16 +40,21 @@ namespace {
 
 void printUsage() {
   std::printf("Anatomy Tutor %s — regional anatomy on CT with weighted distance fields\n\n", AT_VERSION);
-  std::printf("usage: anatomy-tutor [COMMAND] [ARGS…]    (no command: the desktop app on the default course;\n"
-              "                                        desktop options such as --ui-script F.json also work alone)\n\n");
+  std::printf("usage: anatomy-tutor [--db PATH] [--user NAME] [--size WxH] [COMMAND] [ARGS…]\n"
+              "  no command: the desktop app on the default course (desktop options such as\n"
+              "  --ui-script F.json also work alone). The global options --db (the database file),\n"
+              "  --user (whose progress) and --size (window or image size) may stand before the\n"
+              "  command or after it.\n\n");
   for (const Command& c : commands()) std::printf("  %-12s %s\n", c.name, c.summary);
-  std::printf("\n`anatomy-tutor COMMAND --help` describes each command.\n");
+  std::printf("\n`anatomy-tutor COMMAND --help` describes each command. Courses, presets and studies are read from\n"
+              "../share/anatomy-tutor beside the executable; AT_DATA_DIR=DIR reads them from DIR instead.\n");
 }
 
 // The desktop app on the default course when a display exists; otherwise one line saying so and the
-// default lesson's first views written as PNG files through the offscreen renderer.
-int runDefault() {
-  if (displayAvailable()) return runDesktop({});
+// default lesson's first views written as PNG files through the offscreen renderer. `globals`:
+// global options given without a command (`anatomy-tutor --db X`).
+int runDefault(const Argv& globals) {
+  if (displayAvailable()) return runDesktop(globals);
   const std::string dir = "anatomy-tutor-views";
   std::printf("anatomy-tutor: no display (none named in DISPLAY/WAYLAND_DISPLAY, or it cannot be opened): writing the default lesson's "
               "first views to %s/ instead\n", dir.c_str());
@@ -59,8 +67,9 @@ int runDefault() {
 int main(int argc, char** argv) {
   using namespace at::app;
   try {
-    if (argc < 2) return runDefault();
-    const std::string name = argv[1];
+    auto line = at::cli::splitCommandLine(Argv(argv + 1, argv + argc));
+    if (!line) return reportError(line.error().message + " (see anatomy-tutor --help)", 2);
+    const std::string& name = line->command;
     if (name == "--help" || name == "-h" || name == "help") {
       printUsage();
       return 0;
@@ -69,12 +78,9 @@ int main(int argc, char** argv) {
       std::printf("anatomy-tutor %s\n", AT_VERSION);
       return 0;
     }
-    // Options without a command belong to the desktop app (`anatomy-tutor --ui-script F.json
-    // --screenshot OUT.png`, `anatomy-tutor --size 1600x900`).
-    if (name.rfind("--", 0) == 0) return runDesktop(Argv(argv + 1, argv + argc));
-    Argv rest(argv + 2, argv + argc);
+    if (name.empty()) return runDefault(line->args);
     for (const Command& c : commands())
-      if (name == c.name) return c.run(rest);
+      if (name == c.name) return c.run(line->args);
     return reportError("unknown command '" + name + "' (see anatomy-tutor --help)", 2);
   } catch (const std::bad_alloc&) {
     return reportError("out of memory", 2);

@@ -37,19 +37,12 @@ struct StudyPanel::Session {
   char comment[1024] = "";
 };
 
-StudyPanel::StudyPanel(std::optional<std::string> dbPath, const render::PresetLibrary& library, EventSink events)
-    : dbPath_(std::move(dbPath)), library_(library), events_(std::move(events)) {}
+StudyPanel::StudyPanel(db::Database& database, const render::PresetLibrary& library, EventSink events)
+    : db_(database), library_(library), events_(std::move(events)) {}
 
 StudyPanel::~StudyPanel() = default;
 
-Result<db::Database*> StudyPanel::database() {
-  if (!db_) {
-    auto opened = db::openDatabase(dbPath_);
-    if (!opened) return tl::unexpected(opened.error());
-    db_.emplace(std::move(*opened));
-  }
-  return &*db_;
-}
+Result<db::Database*> StudyPanel::database() { return &db_; }
 
 // ---------------------------------------------------------------------------------------------
 // Participant mode

@@ -31,9 +31,9 @@ namespace at::app {
 class StudyPanel {
  public:
   using EventSink = std::function<void(nlohmann::json)>;
-  // `dbPath`: the database (nullopt: the default one), opened on first use. `events` receives the
+  // `database`: the app's one connection (it outlives the panel). `events` receives the
   // scripted-mode events.
-  StudyPanel(std::optional<std::string> dbPath, const render::PresetLibrary& library, EventSink events);
+  StudyPanel(db::Database& database, const render::PresetLibrary& library, EventSink events);
   ~StudyPanel();
 
   bool participantActive() const { return session_ != nullptr; }
@@ -83,10 +83,9 @@ class StudyPanel {
   bool button(const std::string& label);
   bool radio(const std::string& label, int* value, int mine);
 
-  std::optional<std::string> dbPath_;
+  db::Database& db_;
   const render::PresetLibrary& library_;
   EventSink events_;
-  std::optional<db::Database> db_;
 
   std::unique_ptr<Session> session_;
   std::vector<std::string> labels_;   // texts drawn in the participant window this frame

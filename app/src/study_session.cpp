@@ -5,6 +5,7 @@
 #include <optional>
 
 #include "commands.h"
+#include "data_paths.h"
 #include "volume/png_image.h"
 
 namespace at::app {
@@ -13,7 +14,7 @@ namespace fs = std::filesystem;
 
 namespace {
 
-fs::path shippedStudiesDir() { return fs::path(AT_SOURCE_DIR) / "data" / "studies"; }
+fs::path shippedStudiesDir() { return dataSubdirectory("studies"); }
 
 std::vector<fs::path> shippedStudyFiles() {
   std::vector<fs::path> files;

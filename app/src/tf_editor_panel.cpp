@@ -29,8 +29,8 @@ render::Rgba rgbaArg(const json& a, const render::Rgba& fallback) {
 
 }  // namespace
 
-TfEditorPanel::TfEditorPanel(const Dataset& dataset, std::optional<std::string> dbPath, EventSink events)
-    : dbPath_(std::move(dbPath)), events_(std::move(events)) {
+TfEditorPanel::TfEditorPanel(const Dataset& dataset, db::Database& database, EventSink events)
+    : database_(database), events_(std::move(events)) {
   const auto& v = dataset.volume.voxels;
   if (!v.empty()) {
     const auto [lo, hi] = std::minmax_element(v.begin(), v.end());
@@ -287,11 +287,9 @@ Status TfEditorPanel::saveAs(const std::string& name, const std::optional<std::s
   const std::string text = render::presetToJson(p);
   auto valid = render::parsePreset(text, id);
   if (!valid) return tl::unexpected(withContext("save preset", valid.error()));
-  auto db = db::openDatabase(dbPath_);
-  if (!db) return tl::unexpected(db.error());
   const db::StoredPreset stored{id, p.structure, render::toString(p.mode), text};
-  if (auto st = db::savePreset(*db, stored); !st) return st;
-  json ev = {{"event", "preset_saved"}, {"id", id}, {"db", db->path()}};
+  if (auto st = db::savePreset(database_, stored); !st) return st;
+  json ev = {{"event", "preset_saved"}, {"id", id}, {"db", database_.path()}};
   if (exportPath) {
     if (auto st = render::savePreset(p, *exportPath); !st) return st;
     ev["export"] = *exportPath;

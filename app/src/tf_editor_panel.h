@@ -20,13 +20,17 @@
 #include "core/error.h"
 #include "volume/structure.h"
 
+namespace at::db {
+class Database;
+}
+
 namespace at::app {
 
 class TfEditorPanel {
  public:
   using EventSink = std::function<void(nlohmann::json)>;
-  // `dbPath`: where "Save as" stores presets (nullopt: the default database).
-  TfEditorPanel(const Dataset& dataset, std::optional<std::string> dbPath, EventSink events);
+  // `database`: where "Save as" stores presets (the app's one connection; it outlives the panel).
+  TfEditorPanel(const Dataset& dataset, db::Database& database, EventSink events);
 
   bool active() const { return active_; }
   void stop() { active_ = false; }
@@ -56,7 +60,7 @@ class TfEditorPanel {
   Result<bool> tfArg(const nlohmann::json& a) const;  // "tf": "data" | "distance"
   void changed() { ++revision_; }
 
-  std::optional<std::string> dbPath_;
+  db::Database& database_;
   EventSink events_;
   render::Preset preset_;
   std::string structure_;

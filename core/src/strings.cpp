@@ -49,4 +49,10 @@ std::string join(const std::vector<std::string>& items, std::string_view separat
   return out;
 }
 
+std::string countOf(long long n, std::string_view singular, std::string_view plural) {
+  std::string noun(n == 1 ? singular : plural.empty() ? singular : plural);
+  if (n != 1 && plural.empty()) noun += "s";
+  return std::to_string(n) + " " + noun;
+}
+
 }  // namespace at::str

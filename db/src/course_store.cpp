@@ -77,6 +77,7 @@ Status writeCourse(Database& d, const lessons::Course& course, const std::string
       const lessons::Step& st = l.steps[si];
       std::optional<std::string> questionId;
       std::string structure;
+      std::string scenePreset, sceneView;
       if (st.kind == lessons::StepKind::Question) {
         const quiz::Question& q = st.question;
         question->reset();
@@ -89,6 +90,11 @@ Status writeCourse(Database& d, const lessons::Course& course, const std::string
         if (auto s = insertOwned(*question, "question", q.id, course.id); !s) return s;
         questionId = q.id;
         structure = q.target;
+        if (st.scene) {  // stored in the show columns; an empty view means "no scene"
+          structure = st.scene->structure;
+          scenePreset = st.scene->presetId;
+          sceneView = lessons::toString(st.scene->view);
+        }
       } else if (st.kind == lessons::StepKind::Show) {
         structure = st.show.structure;
       } else {
@@ -100,8 +106,8 @@ Status writeCourse(Database& d, const lessons::Course& course, const std::string
           .bind(2, int(si))
           .bind(3, lessons::toString(st.kind))
           .bind(4, structure)
-          .bind(5, show ? st.show.presetId : std::string())
-          .bind(6, show ? std::string(lessons::toString(st.show.view)) : std::string())
+          .bind(5, show ? st.show.presetId : scenePreset)
+          .bind(6, show ? std::string(lessons::toString(st.show.view)) : sceneView)
           .bind(7, show ? st.show.title : std::string())
           .bind(8, show ? st.show.text : std::string())
           .bind(9, questionId)
@@ -109,6 +115,26 @@ Status writeCourse(Database& d, const lessons::Course& course, const std::string
       if (auto s = step->run(); !s)
         return tl::unexpected(withContext("lesson '" + l.id + "' step " + std::to_string(si), s.error()));
     }
+  }
+
+  // Exams came with schema 7 (a database is always migrated before courses are stored; tests build
+  // older versions with this code, which then has no exams to keep).
+  auto version = d.schemaVersion();
+  if (!version) return tl::unexpected(version.error());
+  if (*version < 7) {
+    if (!course.exams.empty()) return fail("exams need schema version 7; this database is at " + std::to_string(*version));
+    return {};
+  }
+  auto dropExams = d.prepare("DELETE FROM exams WHERE course_id = ?1");
+  if (!dropExams) return tl::unexpected(dropExams.error());
+  dropExams->bind(1, course.id);
+  if (auto s = dropExams->run(); !s) return s;
+  auto exam = d.prepare("INSERT INTO exams (id, course_id, position, json) VALUES (?1, ?2, ?3, ?4)");
+  if (!exam) return tl::unexpected(exam.error());
+  for (std::size_t ei = 0; ei < course.exams.size(); ++ei) {
+    exam->reset();
+    exam->bind(1, course.exams[ei].id).bind(2, course.id).bind(3, int(ei)).bind(4, lessons::examToJson(course.exams[ei]));
+    if (auto s = insertOwned(*exam, "exam", course.exams[ei].id, course.id); !s) return s;
   }
   return {};
 }

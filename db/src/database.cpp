@@ -189,7 +189,7 @@ Database::~Database() {
 }
 
 Database::Database(Database&& other) noexcept
-    : db_(other.db_), path_(std::move(other.path_)), readOnly_(other.readOnly_) {
+    : db_(other.db_), path_(std::move(other.path_)), readOnly_(other.readOnly_), writer_(std::move(other.writer_)) {
   other.db_ = nullptr;
 }
 
@@ -199,6 +199,7 @@ Database& Database::operator=(Database&& other) noexcept {
     db_ = other.db_;
     path_ = std::move(other.path_);
     readOnly_ = other.readOnly_;
+    writer_ = std::move(other.writer_);
     other.db_ = nullptr;
   }
   return *this;
@@ -239,6 +240,8 @@ std::int64_t Database::lastInsertId() const { return sqlite3_last_insert_rowid(d
 int Database::changes() const { return sqlite3_changes(db_); }
 
 Status Database::writeTransaction(const std::function<Status(Database&)>& body, int maxAttempts) {
+  // Held across the retries too: the error code read below must be this thread's.
+  std::unique_lock lock(*writer_);
   std::minstd_rand jitter(std::random_device{}());
   Error last{ErrorKind::Io, "no attempt made"};
   for (int attempt = 0; attempt < maxAttempts; ++attempt) {
@@ -268,20 +271,24 @@ Status Database::writeTransaction(const std::function<Status(Database&)>& body, 
 // Transaction
 
 Result<Transaction> Transaction::begin(Database& db, Kind kind) {
+  std::unique_lock lock(*db.writer_);
   auto status = db.exec(kind == Kind::Immediate ? "BEGIN IMMEDIATE" : "BEGIN");
   if (!status) return tl::unexpected(status.error());
-  return Transaction(&db);
+  return Transaction(&db, std::move(lock));
 }
 
 Transaction::~Transaction() { rollback(); }
 
-Transaction::Transaction(Transaction&& other) noexcept : db_(other.db_) { other.db_ = nullptr; }
+Transaction::Transaction(Transaction&& other) noexcept : db_(other.db_), lock_(std::move(other.lock_)) {
+  other.db_ = nullptr;
+}
 
 Status Transaction::commit() {
   if (!db_) return fail("transaction already finished");
   auto status = db_->exec("COMMIT");
   if (!status) return status;  // still open: the destructor or rollback() ends it
   db_ = nullptr;
+  if (lock_.owns_lock()) lock_.unlock();
   return {};
 }
 
@@ -291,6 +298,7 @@ void Transaction::rollback() {
     sqlite3_exec(db_->handle(), "ROLLBACK", nullptr, nullptr, nullptr);
   }
   db_ = nullptr;
+  if (lock_.owns_lock()) lock_.unlock();
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -329,7 +337,7 @@ using Connection = std::unique_ptr<sqlite3, ConnectionCloser>;
 Result<Connection> openConnection(const std::string& path, const ConnectionMode& mode, bool create) {
   sqlite3* raw = nullptr;
   const int flags = (mode.readOnly ? SQLITE_OPEN_READONLY : SQLITE_OPEN_READWRITE | (create ? SQLITE_OPEN_CREATE : 0)) |
-                    SQLITE_OPEN_URI | SQLITE_OPEN_NOMUTEX;
+                    SQLITE_OPEN_URI | SQLITE_OPEN_FULLMUTEX;
   const int rc = sqlite3_open_v2(uriOf(path, mode).c_str(), &raw, flags, nullptr);
   Connection connection(raw);
   if (rc != SQLITE_OK) return fail(ErrorKind::Io, path + ": cannot open: " + errorText(raw, rc));
@@ -543,11 +551,15 @@ Result<Database> openDatabase(const std::optional<std::string>& path, const Open
     if (!def) return tl::unexpected(def.error());
     chosen = *def;
   }
+  // The default database's folder is made on first use; a path given with --db must lie in a
+  // folder that exists (a mistyped value must not leave folders named after it).
   const fs::path parent = fs::path(chosen).parent_path();
-  if (!parent.empty() && options.create) {
-    std::error_code ec;
+  std::error_code ec;
+  if (!parent.empty() && options.create && !path) {
     fs::create_directories(parent, ec);
-    if (ec) return fail(parent.string() + ": cannot create the database folder: " + ec.message());
+    if (ec) return fail(ErrorKind::Io, parent.string() + ": cannot create the database folder: " + ec.message());
+  } else if (!parent.empty() && !fs::is_directory(parent, ec)) {
+    return fail(ErrorKind::NotFound, chosen + ": the folder " + parent.string() + " does not exist");
   }
   return Database::open(chosen, options);
 }

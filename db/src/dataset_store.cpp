@@ -78,7 +78,7 @@ Result<std::int64_t> registerDataset(Database& db, const DatasetRecord& record,
     nlohmann::json loadOptions = nlohmann::json::object();
     if (record.skipUnreadableFiles) loadOptions["skip_unreadable"] = true;
     if (!record.dataFolder.empty()) loadOptions["data_folder"] = record.dataFolder;
-    // load_options only when there are some: the column exists from schema 7 on.
+    // load_options only when there are some: the column exists from schema 8 on.
     auto insert = d.prepare(
         std::string("INSERT INTO datasets (name, species, volume_path, volume_checksum, labels_path, labels_checksum,"
                     " names_path, dim_x, dim_y, dim_z, spacing_x, spacing_y, spacing_z, origin_x, origin_y, origin_z,"
@@ -220,10 +220,7 @@ Result<DatasetFiles> verifiedDatasetFiles(const DatasetRecord& record) {
   return datasetFiles(record);
 }
 
-namespace {
-
-// Opens an existing database only: listing must not create one as a side effect.
-Result<std::optional<Database>> openExisting(const std::optional<std::string>& dbPath) {
+Result<std::optional<Database>> openExistingDatabase(const std::optional<std::string>& dbPath) {
   std::string path;
   if (dbPath) {
     path = *dbPath;
@@ -240,28 +237,6 @@ Result<std::optional<Database>> openExisting(const std::optional<std::string>& d
   auto db = Database::open(path, options);
   if (!db) return tl::unexpected(db.error());
   return std::optional<Database>(std::move(*db));
-}
-
-}  // namespace
-
-Result<std::vector<DatasetRecord>> listImportedDatasets(const std::optional<std::string>& dbPath) {
-  auto db = openExisting(dbPath);
-  if (!db) return tl::unexpected(db.error());
-  if (!*db) return std::vector<DatasetRecord>{};
-  return listDatasets(**db);
-}
-
-Result<std::optional<DatasetFiles>> findImportedDataset(const std::optional<std::string>& dbPath,
-                                                        const std::string& name) {
-  auto db = openExisting(dbPath);
-  if (!db) return tl::unexpected(db.error());
-  if (!*db) return std::optional<DatasetFiles>{};
-  auto record = findDataset(**db, name);
-  if (!record) return tl::unexpected(record.error());
-  if (!*record) return std::optional<DatasetFiles>{};
-  auto files = verifiedDatasetFiles(**record);
-  if (!files) return tl::unexpected(files.error());
-  return std::optional<DatasetFiles>(std::move(*files));
 }
 
 }  // namespace at::db

@@ -303,6 +303,48 @@ FROM (SELECT a.user_id, r.structure, r.question_id, 'lesson' AS source, r.id AS 
 ORDER BY answered_at, source, source_id;
 )SQL";
 
+// Practical exams: their definitions from the course (replaced on re-seeding like lessons), and
+// the students' attempts with every drawn item, its answer and grade (kept across re-seeding).
+constexpr std::string_view kExams = R"SQL(
+CREATE TABLE exams (
+  id         TEXT PRIMARY KEY,
+  course_id  TEXT NOT NULL REFERENCES courses(id) ON DELETE CASCADE,
+  position   INTEGER NOT NULL,
+  json       TEXT NOT NULL                  -- the exam as in the course JSON
+);
+CREATE TABLE exam_attempts (
+  id           INTEGER PRIMARY KEY,
+  user_id      INTEGER NOT NULL REFERENCES users(id) ON DELETE CASCADE,
+  exam_id      TEXT NOT NULL,
+  course_id    TEXT NOT NULL,
+  started_at   INTEGER NOT NULL,            -- Unix seconds
+  deadline_at  INTEGER NOT NULL,            -- started_at + the time limit
+  finished_at  INTEGER,                     -- NULL while in progress
+  score        REAL,                        -- mean item score, unanswered = 0
+  passed       INTEGER                      -- NULL when the exam has no pass score
+);
+CREATE INDEX exam_attempts_by_user ON exam_attempts(user_id, exam_id);
+CREATE TABLE exam_items (
+  id           INTEGER PRIMARY KEY,
+  attempt_id   INTEGER NOT NULL REFERENCES exam_attempts(id) ON DELETE CASCADE,
+  position     INTEGER NOT NULL,
+  question_id  TEXT NOT NULL,
+  kind         TEXT NOT NULL,
+  structure    TEXT NOT NULL,               -- the item's target
+  question     TEXT NOT NULL,               -- the generated question (course question JSON)
+  choices      TEXT NOT NULL DEFAULT '[]',  -- JSON: offered structure ids (identify), in display order
+  key_choice   INTEGER NOT NULL DEFAULT -1,
+  locate_view  TEXT NOT NULL DEFAULT '3d',
+  scene        TEXT NOT NULL,               -- JSON {structure, preset, view}
+  answer       TEXT,                        -- JSON as given; NULL = not answered
+  correct      INTEGER,
+  score        REAL,
+  latency_ms   INTEGER,
+  answered_at  INTEGER,
+  UNIQUE (attempt_id, position)
+);
+)SQL";
+
 // How an imported dataset's files are read (import --skip-unreadable, --nrrd-data), kept so that
 // every later open reads them the same way: JSON {"skip_unreadable": true, "data_folder": "/abs"}.
 constexpr std::string_view kDatasetLoadOptions = R"SQL(
@@ -319,7 +361,8 @@ const std::vector<Migration>& migrations() {
       {4, "preference studies: protocols, participants, blinded trials, ratings", kStudies},
       {5, "review responses: answers to review questions outside lesson attempts", kReviews},
       {6, "FSRS memory states (from the Leitner boxes) and the review log", kFsrs},
-      {7, "how an imported dataset's files are read (skip unreadable files, data folder)", kDatasetLoadOptions},
+      {7, "practical exams: definitions, attempts and their items", kExams},
+      {8, "how an imported dataset's files are read (skip unreadable files, data folder)", kDatasetLoadOptions},
   };
   return all;
 }

@@ -1,5 +1,6 @@
 #include "lessons/course_json.h"
 
+#include <algorithm>
 #include <cstdint>
 #include <fstream>
 #include <limits>
@@ -219,10 +220,31 @@ Result<Step> readStep(const json& j, const std::string& path) {
     AT_TRY(text, r.string("text", true));
     step.show = ShowStep{structure, preset, *view, title, text};
   } else if (step.kind == StepKind::Question) {
-    if (auto ok = r.expect({"kind", "question"}); !ok) return tl::unexpected(ok.error());
+    if (auto ok = r.expect({"kind", "question", "structure", "preset", "view"}); !ok) return tl::unexpected(ok.error());
     if (!r.has("question")) return fail(r.field("question") + ": missing");
     AT_TRY(question, readQuestion(r.raw("question"), r.field("question")));
     step.question = question;
+    // The scene shown while the question is asked (curriculum.h, QuestionScene).
+    if (r.has("structure") || r.has("preset") || r.has("view")) {
+      QuestionScene scene;
+      AT_TRY(structure, r.string("structure", false, question.target));
+      AT_TRY(preset, r.string("preset", false));
+      AT_TRY(viewText, r.string("view", false, toString(CameraView::LateralRight)));
+      auto view = parseCameraView(viewText);
+      if (!view) return fail(r.field("view") + ": " + view.error().message);
+      scene.structure = structure;
+      scene.presetId = preset;
+      scene.view = *view;
+      step.scene = scene;
+    }
+    if (question.kind == quiz::QuestionKind::Locate) {
+      if (!step.scene || !r.has("structure"))
+        return fail(r.field("structure") + ": a locate question needs the structure whose view shows the region "
+                                           "(a neighbour of '" + question.target + "'), with its view");
+      if (step.scene->structure == question.target)
+        return fail(r.field("structure") + ": a locate question must not select its target '" + question.target +
+                    "' (it would be highlighted); select a neighbour whose context shows it");
+    }
   } else {
     if (auto ok = r.expect({"kind", "structure", "items"}); !ok) return tl::unexpected(ok.error());
     AT_TRY(structure, r.string("structure", true));
@@ -254,6 +276,72 @@ Result<Lesson> readLesson(const json& j, const std::string& path, const std::str
     lesson.steps.push_back(std::move(step));
   }
   return lesson;
+}
+
+Result<ExamSpec> readExam(const json& j, const std::string& path) {
+  Reader r(j, path);
+  if (auto ok = r.expect({"id", "title", "instructions", "structures", "kinds", "count", "time_limit_s",
+                          "locate_views", "pass_score", "prerequisites"});
+      !ok) {
+    return tl::unexpected(ok.error());
+  }
+  ExamSpec exam;
+  AT_TRY(id, r.string("id", true));
+  AT_TRY(title, r.string("title", true));
+  AT_TRY(instructions, r.string("instructions", false));
+  AT_TRY(structures, r.strings("structures"));
+  AT_TRY(kindTexts, r.strings("kinds"));
+  AT_TRY(views, r.strings("locate_views"));
+  AT_TRY(prerequisites, r.strings("prerequisites"));
+  exam.id = id;
+  exam.title = title;
+  exam.instructions = instructions;
+  exam.prerequisites = prerequisites;
+  if (structures.empty()) return fail(r.field("structures") + ": needs at least one structure id");
+  for (std::size_t i = 0; i < structures.size(); ++i)
+    for (std::size_t k = 0; k < i; ++k)
+      if (structures[i] == structures[k])
+        return fail(r.field("structures") + "[" + std::to_string(i) + "]: '" + structures[i] + "' is listed twice");
+  exam.structures = structures;
+  if (kindTexts.empty()) return fail(r.field("kinds") + ": needs at least one of locate, identify, name");
+  for (std::size_t i = 0; i < kindTexts.size(); ++i) {
+    const std::string at = r.field("kinds") + "[" + std::to_string(i) + "]";
+    auto kind = quiz::parseQuestionKind(kindTexts[i]);
+    if (!kind) return fail(at + ": " + kind.error().message);
+    if (*kind != quiz::QuestionKind::Locate && *kind != quiz::QuestionKind::Identify && *kind != quiz::QuestionKind::Name)
+      return fail(at + ": exams draw locate, identify and name items only, not '" + kindTexts[i] + "'");
+    if (std::find(exam.kinds.begin(), exam.kinds.end(), *kind) != exam.kinds.end())
+      return fail(at + ": '" + kindTexts[i] + "' is listed twice");
+    exam.kinds.push_back(*kind);
+  }
+  if (!r.has("count")) return fail(r.field("count") + ": missing");
+  AT_TRY(count, r.integer("count", 0));
+  const int pairs = int(exam.structures.size() * exam.kinds.size());
+  if (count < 1 || count > pairs)
+    return fail(r.field("count") + ": must be 1.." + std::to_string(pairs) + " (structures × kinds), not " +
+                std::to_string(count));
+  exam.count = count;
+  if (!r.has("time_limit_s")) return fail(r.field("time_limit_s") + ": missing");
+  AT_TRY(limit, r.integer("time_limit_s", 0));
+  if (limit < 1 || limit > 86400) return fail(r.field("time_limit_s") + ": must be 1..86400 seconds");
+  exam.timeLimitS = limit;
+  if (r.has("locate_views")) {
+    if (std::find(exam.kinds.begin(), exam.kinds.end(), quiz::QuestionKind::Locate) == exam.kinds.end())
+      return fail(r.field("locate_views") + ": only used by locate items, and kinds has no locate");
+    if (views.empty()) return fail(r.field("locate_views") + ": needs at least one of 3d, slice");
+    exam.locateViews.clear();
+    for (std::size_t i = 0; i < views.size(); ++i) {
+      auto view = parseExamLocateView(views[i]);
+      if (!view) return fail(r.field("locate_views") + "[" + std::to_string(i) + "]: " + view.error().message);
+      exam.locateViews.push_back(*view);
+    }
+  }
+  if (r.has("pass_score")) {
+    AT_TRY(pass, r.number("pass_score", 0));
+    if (!(pass >= 0 && pass <= 1)) return fail(r.field("pass_score") + ": must be a share of 0..1");
+    exam.passScore = pass;
+  }
+  return exam;
 }
 
 json questionJson(const quiz::Question& q) {
@@ -291,6 +379,18 @@ json questionJson(const quiz::Question& q) {
   return j;
 }
 
+json examJson(const ExamSpec& e) {
+  json kinds = json::array(), views = json::array();
+  for (quiz::QuestionKind k : e.kinds) kinds.push_back(quiz::toString(k));
+  for (ExamLocateView v : e.locateViews) views.push_back(toString(v));
+  json x = {{"id", e.id}, {"title", e.title}, {"structures", e.structures}, {"kinds", kinds}, {"count", e.count},
+            {"time_limit_s", e.timeLimitS}, {"prerequisites", e.prerequisites}};
+  if (!e.instructions.empty()) x["instructions"] = e.instructions;
+  if (std::find(e.kinds.begin(), e.kinds.end(), quiz::QuestionKind::Locate) != e.kinds.end()) x["locate_views"] = views;
+  if (e.passScore) x["pass_score"] = *e.passScore;
+  return x;
+}
+
 }  // namespace
 
 namespace {
@@ -298,7 +398,7 @@ namespace {
 Result<Course> readCourse(const json& j, const std::string& sourceName) {
   const auto prefixed = [&](Error e) { return tl::unexpected(withContext(sourceName, std::move(e))); };
   Reader r(j, "");
-  if (auto ok = r.expect({"schema", "id", "title", "summary", "dataset", "version", "synonyms", "lessons"}); !ok) {
+  if (auto ok = r.expect({"schema", "id", "title", "summary", "dataset", "version", "synonyms", "lessons", "exams"}); !ok) {
     return prefixed(ok.error());
   }
   auto schema = r.integer("schema", -1);
@@ -361,6 +461,22 @@ Result<Course> readCourse(const json& j, const std::string& sourceName) {
     }
     course.lessons.push_back(std::move(*lesson));
   }
+  if (r.has("exams")) {
+    if (!r.raw("exams").is_array()) return fail(sourceName + ": exams: must be an array");
+    std::set<std::string> examIds;
+    for (std::size_t i = 0; i < r.raw("exams").size(); ++i) {
+      const std::string path = "exams[" + std::to_string(i) + "]";
+      auto exam = readExam(r.raw("exams")[i], path);
+      if (!exam) return prefixed(exam.error());
+      if (lessonIds.count(exam->id) || !examIds.insert(exam->id).second)
+        return fail(sourceName + ": " + path + ".id: '" + exam->id + "' is already a lesson or exam id");
+      for (std::size_t p = 0; p < exam->prerequisites.size(); ++p)
+        if (!lessonIds.count(exam->prerequisites[p]))
+          return fail(sourceName + ": " + path + ".prerequisites[" + std::to_string(p) + "]: '" + exam->prerequisites[p] +
+                      "' is not a lesson of this course");
+      course.exams.push_back(std::move(*exam));
+    }
+  }
   return course;
 }
 
@@ -388,9 +504,16 @@ std::string courseToJson(const Course& course) {
           steps.push_back({{"kind", "show"}, {"structure", step.show.structure}, {"preset", step.show.presetId},
                            {"view", toString(step.show.view)}, {"title", step.show.title}, {"text", step.show.text}});
           break;
-        case StepKind::Question:
-          steps.push_back({{"kind", "question"}, {"question", questionJson(step.question)}});
+        case StepKind::Question: {
+          json q = {{"kind", "question"}, {"question", questionJson(step.question)}};
+          if (step.scene) {
+            q["structure"] = step.scene->structure;
+            if (!step.scene->presetId.empty()) q["preset"] = step.scene->presetId;
+            q["view"] = toString(step.scene->view);
+          }
+          steps.push_back(q);
           break;
+        }
         case StepKind::Study:
           steps.push_back({{"kind", "study"}, {"structure", step.study.structure}, {"items", step.study.items}});
           break;
@@ -402,10 +525,25 @@ std::string courseToJson(const Course& course) {
   json j = {{"schema", kSchema}, {"id", course.id}, {"title", course.title}, {"summary", course.summary},
             {"dataset", course.datasetId}, {"version", course.version}, {"synonyms", course.synonyms},
             {"lessons", lessons}};
+  if (!course.exams.empty()) {
+    json exams = json::array();
+    for (const ExamSpec& e : course.exams) exams.push_back(examJson(e));
+    j["exams"] = exams;
+  }
   return j.dump(2);
 }
 
 std::string questionToJson(const quiz::Question& question) { return questionJson(question).dump(); }
+
+std::string examToJson(const ExamSpec& exam) { return examJson(exam).dump(); }
+
+Result<ExamSpec> parseExamJson(const std::string& text, const std::string& sourceName) {
+  auto j = parseJsonDocument(text, sourceName);
+  if (!j) return tl::unexpected(j.error());
+  auto exam = readExam(*j, "exam");
+  if (!exam) return tl::unexpected(printableError(withContext(sourceName, exam.error())));
+  return exam;
+}
 
 Result<quiz::Question> parseQuestionJson(const std::string& text, const std::string& sourceName) {
   auto j = parseJsonDocument(text, sourceName);

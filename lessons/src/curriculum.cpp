@@ -24,6 +24,37 @@ Result<CameraView> parseCameraView(const std::string& text) {
               "' (expected anterior, posterior, lateral_left, lateral_right, superior or inferior)");
 }
 
+QuestionScene sceneFor(const Step& step) {
+  if (step.scene) {
+    QuestionScene scene = *step.scene;
+    if (scene.presetId.empty()) scene.presetId = scene.structure + "_wdt";
+    return scene;
+  }
+  const quiz::Question& q = step.question;
+  QuestionScene scene;
+  scene.structure = q.target;
+  switch (q.kind) {
+    case quiz::QuestionKind::Relation:
+      if (!q.relation.from.empty()) scene.structure = q.relation.from;
+      break;
+    case quiz::QuestionKind::Order:
+      if (!q.order.targetStructure.empty()) scene.structure = q.order.targetStructure;
+      break;
+    default:
+      break;
+  }
+  scene.presetId = scene.structure + "_wdt";
+  return scene;
+}
+
+const char* toString(ExamLocateView view) { return view == ExamLocateView::ThreeD ? "3d" : "slice"; }
+
+Result<ExamLocateView> parseExamLocateView(const std::string& text) {
+  if (text == "3d") return ExamLocateView::ThreeD;
+  if (text == "slice") return ExamLocateView::Slice;
+  return fail("unknown locate view '" + text + "' (expected 3d or slice)");
+}
+
 const char* toString(StepKind kind) {
   switch (kind) {
     case StepKind::Show: return "show";

@@ -14,6 +14,22 @@ bool isQuestion(const Lesson& lesson, int index) {
   return lesson.steps[std::size_t(index)].kind == StepKind::Question;
 }
 
+GradedAnswer gradedAnswer(const quiz::Question& question, const quiz::Answer& answer, const quiz::Grade& grade,
+                          std::int64_t latencyMs, const RenderState& render, UnixSeconds at) {
+  GradedAnswer g;
+  g.questionId = question.id;
+  g.structureId = question.target;
+  g.answer = answer;
+  g.correct = grade.correct;
+  g.score = grade.score;
+  g.latencyMs = latencyMs;
+  g.render = render;
+  g.answeredAt = at;
+  return g;
+}
+
+}  // namespace
+
 UnixSeconds clockNow(const EngineOptions& options) {
   if (options.clock) return options.clock();
   return std::chrono::duration_cast<std::chrono::seconds>(std::chrono::system_clock::now().time_since_epoch()).count();
@@ -43,21 +59,26 @@ Result<LearnerUpdate> learnerUpdate(ProgressRepository& progress, std::int64_t u
   return update;
 }
 
-GradedAnswer gradedAnswer(const quiz::Question& question, const quiz::Answer& answer, const quiz::Grade& grade,
-                          std::int64_t latencyMs, const RenderState& render, UnixSeconds at) {
-  GradedAnswer g;
-  g.questionId = question.id;
-  g.structureId = question.target;
-  g.answer = answer;
-  g.correct = grade.correct;
-  g.score = grade.score;
-  g.latencyMs = latencyMs;
-  g.render = render;
-  g.answeredAt = at;
-  return g;
+Result<std::string> unfinishedLessons(CurriculumRepository& curriculum, ProgressRepository& progress,
+                                      std::int64_t userId, const std::vector<std::string>& lessonIds) {
+  std::string missing;
+  for (const std::string& id : lessonIds) {
+    auto done = progress.hasFinished(userId, id);
+    if (!done) return tl::unexpected(done.error());
+    if (*done) continue;
+    auto lesson = curriculum.lesson(id);
+    missing += (missing.empty() ? "" : ", ") + std::string("'") + id + "'" +
+               (lesson ? " (" + lesson->title + ")" : std::string());
+  }
+  return missing;
 }
 
-}  // namespace
+std::optional<QuestionScene> questionScene(const Course& course, const std::string& questionId) {
+  for (const Lesson& lesson : course.lessons)
+    for (const Step& step : lesson.steps)
+      if (step.kind == StepKind::Question && step.question.id == questionId) return sceneFor(step);
+  return std::nullopt;
+}
 
 quiz::GradingContext gradingContext(const std::vector<Structure>& structures, const Course& course) {
   quiz::GradingContext context;
@@ -92,17 +113,10 @@ Status LessonEngine::start(std::int64_t userId, const std::string& lessonId, Les
   auto lesson = curriculum_.lesson(lessonId);
   if (!lesson) return tl::unexpected(lesson.error());
 
-  std::string missing;
-  for (const std::string& pre : lesson->prerequisites) {
-    auto done = progress_.hasFinished(userId, pre);
-    if (!done) return tl::unexpected(done.error());
-    if (*done) continue;
-    auto preLesson = curriculum_.lesson(pre);
-    missing += (missing.empty() ? "" : ", ") + std::string("'") + pre + "'" +
-               (preLesson ? " (" + preLesson->title + ")" : std::string());
-  }
-  if (!missing.empty()) {
-    return fail("lesson '" + lessonId + "' (" + lesson->title + ") needs " + missing + " finished first");
+  auto missing = unfinishedLessons(curriculum_, progress_, userId, lesson->prerequisites);
+  if (!missing) return tl::unexpected(missing.error());
+  if (!missing->empty()) {
+    return fail("lesson '" + lessonId + "' (" + lesson->title + ") needs " + *missing + " finished first");
   }
   for (std::size_t i = 0; i < lesson->steps.size(); ++i) {
     if (lesson->steps[i].kind == StepKind::Study) {
@@ -196,7 +210,9 @@ Result<StepView> LessonEngine::current() const {
     view.view = step.show.view;
     view.title = step.show.title;
     view.text = step.show.text;
+    view.scene = QuestionScene{step.show.structure, step.show.presetId, step.show.view};
   } else {
+    view.scene = sceneFor(step);
     const quiz::ResolvedQuestion& q = *resolved_[std::size_t(index)];
     view.structure = q.question.target;
     view.structureName = view.labelsVisible && q.question.kind != quiz::QuestionKind::Identify &&
@@ -294,11 +310,61 @@ Result<double> LessonEngine::ability() const {
   return ability->value_or(quiz::kDefaultAbility);
 }
 
-Result<std::vector<StructureProgress>> reviewQueue(ProgressRepository& progress, std::int64_t userId,
-                                                   UnixSeconds now) {
+namespace {
+
+// The questions of the lessons of `course` that the user has started, in course order.
+Result<std::vector<quiz::Question>> startedQuestions(ProgressRepository& progress, std::int64_t userId,
+                                                     const Course& course) {
+  auto attempts = progress.attempts(userId);
+  if (!attempts) return tl::unexpected(attempts.error());
+  std::set<std::string> started;
+  for (const Attempt& a : *attempts) started.insert(a.lessonId);
+  std::vector<quiz::Question> out;
+  for (const Lesson& lesson : course.lessons) {
+    if (!started.count(lesson.id)) continue;
+    for (const Step& step : lesson.steps)
+      if (step.kind == StepKind::Question) out.push_back(step.question);
+  }
+  return out;
+}
+
+}  // namespace
+
+std::vector<std::string> taughtStructureIds(const Course& course, const std::vector<Attempt>& userAttempts,
+                                            const std::vector<StructureProgress>& userMemories) {
+  std::set<std::string> started, asked, taught;
+  for (const Attempt& a : userAttempts) started.insert(a.lessonId);
+  for (const Lesson& lesson : course.lessons)
+    if (started.count(lesson.id))
+      for (const Step& step : lesson.steps)
+        if (step.kind == StepKind::Question) asked.insert(step.question.target);
+  for (const StructureProgress& p : userMemories)
+    if (p.answered > 0 && p.memory.phase != MemoryPhase::New && asked.count(p.structureId)) taught.insert(p.structureId);
+  return {taught.begin(), taught.end()};
+}
+
+Result<std::vector<StructureProgress>> taughtStructures(CurriculumRepository& curriculum, ProgressRepository& progress,
+                                                        std::int64_t userId, const std::string& courseId) {
+  auto course = curriculum.course(courseId);
+  if (!course) return tl::unexpected(course.error());
+  auto attempts = progress.attempts(userId);
+  if (!attempts) return tl::unexpected(attempts.error());
   auto all = progress.allProgress(userId);
   if (!all) return tl::unexpected(all.error());
-  return dueForReview(std::move(*all), now);
+  const std::vector<std::string> ids = taughtStructureIds(*course, *attempts, *all);
+  std::vector<StructureProgress> taught;
+  for (StructureProgress& p : *all)
+    if (std::binary_search(ids.begin(), ids.end(), p.structureId)) taught.push_back(std::move(p));
+  std::sort(taught.begin(), taught.end(),
+            [](const StructureProgress& a, const StructureProgress& b) { return a.structureId < b.structureId; });
+  return taught;
+}
+
+Result<std::vector<StructureProgress>> reviewQueue(CurriculumRepository& curriculum, ProgressRepository& progress,
+                                                   std::int64_t userId, const std::string& courseId, UnixSeconds now) {
+  auto taught = taughtStructures(curriculum, progress, userId, courseId);
+  if (!taught) return tl::unexpected(taught.error());
+  return dueForReview(std::move(*taught), now);
 }
 
 Result<std::optional<quiz::Question>> chooseReviewQuestion(CurriculumRepository& curriculum,
@@ -306,31 +372,25 @@ Result<std::optional<quiz::Question>> chooseReviewQuestion(CurriculumRepository&
                                                            const std::string& courseId, UnixSeconds now) {
   auto course = curriculum.course(courseId);
   if (!course) return tl::unexpected(course.error());
-  auto all = progress.allProgress(userId);
-  if (!all) return tl::unexpected(all.error());
-  std::set<std::string> answered, due;
-  for (const StructureProgress& p : *all) {
-    if (p.answered > 0) answered.insert(p.structureId);
-  }
-  for (const StructureProgress& p : dueForReview(*all, now)) due.insert(p.structureId);
+  auto queue = reviewQueue(curriculum, progress, userId, courseId, now);
+  if (!queue) return tl::unexpected(queue.error());
+  std::set<std::string> due;
+  for (const StructureProgress& p : *queue) due.insert(p.structureId);
+  if (due.empty()) return std::optional<quiz::Question>{};
+  auto questions = startedQuestions(progress, userId, *course);
+  if (!questions) return tl::unexpected(questions.error());
   auto ability = progress.ability(userId);
   if (!ability) return tl::unexpected(ability.error());
 
-  std::vector<quiz::Question> questions;
   std::vector<quiz::SelectionCandidate> candidates;
-  for (const Lesson& lesson : course->lessons) {
-    for (const Step& step : lesson.steps) {
-      if (step.kind != StepKind::Question) continue;
-      const quiz::Question& q = step.question;
-      auto difficulty = progress.questionDifficulty(q.id);
-      if (!difficulty) return tl::unexpected(difficulty.error());
-      candidates.push_back({q.id, difficulty->value_or(q.difficulty), due.count(q.target) > 0 || !answered.count(q.target)});
-      questions.push_back(q);
-    }
+  for (const quiz::Question& q : *questions) {
+    auto difficulty = progress.questionDifficulty(q.id);
+    if (!difficulty) return tl::unexpected(difficulty.error());
+    candidates.push_back({q.id, difficulty->value_or(q.difficulty), due.count(q.target) > 0});
   }
   const auto chosen = quiz::chooseAdaptive(candidates, ability->value_or(quiz::kDefaultAbility));
   if (!chosen) return std::optional<quiz::Question>{};
-  return std::optional<quiz::Question>(questions[*chosen]);
+  return std::optional<quiz::Question>((*questions)[*chosen]);
 }
 
 Result<quiz::Grade> answerReview(CurriculumRepository& curriculum, ProgressRepository& progress,

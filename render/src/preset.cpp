@@ -120,7 +120,8 @@ Check readTf(const json& j, const std::string& field, bool distanceAxis, std::ve
 Check readPreset(const json& root, Preset& p) {
   if (!root.is_object()) return FieldError{"(top level)", "must be a JSON object"};
   if (auto e = unknownKeys(root, "", {"schema", "name", "mode", "data_tf", "distance_tf", "alpha", "t",
-                                      "highlight_rgb", "lighting", "weight", "id", "structure", "view", "clip"}))
+                                      "highlight_rgb", "lighting", "weight", "structure_opacity", "surface", "id",
+                                      "structure", "view", "clip"}))
     return e;
   if (root.contains("schema")) {
     if (!root["schema"].is_number_integer() || root["schema"].get<long long>() != 1)
@@ -171,6 +172,23 @@ Check readPreset(const json& root, Preset& p) {
     }
     if (w.contains("base"))
       if (auto e = readFloat(w["base"], "weight.base", 0, 1e6, p.weightBase, " ≥ 0")) return e;
+  }
+  if (root.contains("structure_opacity"))
+    if (auto e = readFloat(root["structure_opacity"], "structure_opacity", 0, 1, p.structureOpacity, " in 0..1"))
+      return e;
+  if (root.contains("surface")) {
+    const json& s = root["surface"];
+    if (!s.is_object()) return FieldError{"surface", "must be an object {\"gradient_hu\", \"interior\"}"};
+    if (auto e = unknownKeys(s, "surface.", {"gradient_hu", "interior"})) return e;
+    if (s.contains("gradient_hu")) {
+      if (auto e = readFloats(s["gradient_hu"], "surface.gradient_hu", 0, 1e6, p.surfaceGradientHu,
+                              "2 numbers of HU per voxel, 0 ≤ low ≤ high"))
+        return e;
+      if (!(p.surfaceGradientHu[0] <= p.surfaceGradientHu[1]))
+        return FieldError{"surface.gradient_hu", "must be 2 numbers of HU per voxel, 0 ≤ low ≤ high"};
+    }
+    if (s.contains("interior"))
+      if (auto e = readFloat(s["interior"], "surface.interior", 0, 1, p.surfaceInterior, " in 0..1")) return e;
   }
   if (root.contains("id")) {
     std::string s;
@@ -235,6 +253,8 @@ std::string presetToJson(const Preset& p) {
   j["highlight_rgb"] = {p.highlightRgb[0], p.highlightRgb[1], p.highlightRgb[2]};
   j["lighting"] = {{"alpha", p.lightingAlpha}, {"beta", p.lightingBeta}};
   j["weight"] = {{"rule", p.weightRule}, {"hu_window", {p.huWindow[0], p.huWindow[1]}}, {"base", p.weightBase}};
+  j["structure_opacity"] = p.structureOpacity;
+  j["surface"] = {{"gradient_hu", {p.surfaceGradientHu[0], p.surfaceGradientHu[1]}}, {"interior", p.surfaceInterior}};
   if (p.id) j["id"] = *p.id;
   if (p.structure) j["structure"] = *p.structure;
   if (p.view) j["view"] = *p.view;

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 
 namespace at::render {
 
@@ -13,21 +14,45 @@ float linearToSrgb(float c) {
   return c <= 0.0031308f ? 12.92f * c : 1.055f * std::pow(c, 1.0f / 2.4f) - 0.055f;
 }
 
-// Trilinear sample of a grid at continuous index coordinates, clamped to the edge (GL_CLAMP_TO_EDGE).
-template <class T, class F>
-double trilinear(const Grid<T>& g, const Vec3& ijk, F value) {
-  const Dims& d = g.dims();
+// Trilinear sample at continuous index coordinates, clamped to the edge (GL_CLAMP_TO_EDGE);
+// value(linear index) gives a voxel's value.
+template <class F>
+double trilinear(const Dims& d, const Vec3& ijk, F value) {
   double c[3] = {std::clamp(ijk[0], 0.0, double(d.x - 1)), std::clamp(ijk[1], 0.0, double(d.y - 1)),
                  std::clamp(ijk[2], 0.0, double(d.z - 1))};
   const int i0 = int(c[0]), j0 = int(c[1]), k0 = int(c[2]);
   const int i1 = std::min(i0 + 1, d.x - 1), j1 = std::min(j0 + 1, d.y - 1), k1 = std::min(k0 + 1, d.z - 1);
   const double fx = c[0] - i0, fy = c[1] - j0, fz = c[2] - k0;
-  const auto v = [&](int i, int j, int k) { return double(value(g.voxels[d.index(i, j, k)])); };
+  const auto v = [&](int i, int j, int k) { return double(value(d.index(i, j, k))); };
   const double x00 = v(i0, j0, k0) * (1 - fx) + v(i1, j0, k0) * fx;
   const double x10 = v(i0, j1, k0) * (1 - fx) + v(i1, j1, k0) * fx;
   const double x01 = v(i0, j0, k1) * (1 - fx) + v(i1, j0, k1) * fx;
   const double x11 = v(i0, j1, k1) * (1 - fx) + v(i1, j1, k1) * fx;
   return (x00 * (1 - fy) + x10 * fy) * (1 - fz) + (x01 * (1 - fy) + x11 * fy) * fz;
+}
+
+template <class T, class F>
+double trilinear(const Grid<T>& g, const Vec3& ijk, F value) {
+  return trilinear(g.dims(), ijk, [&](std::size_t i) { return value(g.voxels[i]); });
+}
+
+// The selected structure's mask as the GPU holds it: 1 where the label is `label`, smoothed by a
+// [1 2 1]³/64 binomial (edge-clamped), at least 0.75 on the label's own voxels, sampled trilinearly.
+double smoothedMaskAt(const LabelMap& labels, std::uint16_t label, const Vec3& ijk) {
+  const Dims& d = labels.dims();
+  return trilinear(d, ijk, [&](std::size_t index) {
+    const int i = int(index % std::size_t(d.x)), j = int((index / std::size_t(d.x)) % std::size_t(d.y)),
+              k = int(index / (std::size_t(d.x) * std::size_t(d.y)));
+    int sum = 0;
+    for (int dk = -1; dk <= 1; ++dk)
+      for (int dj = -1; dj <= 1; ++dj)
+        for (int di = -1; di <= 1; ++di) {
+          const int x = std::clamp(i + di, 0, d.x - 1), y = std::clamp(j + dj, 0, d.y - 1), z = std::clamp(k + dk, 0, d.z - 1);
+          if (labels.voxels[d.index(x, y, z)] == label) sum += (2 - std::abs(di)) * (2 - std::abs(dj)) * (2 - std::abs(dk));
+        }
+    const double smooth = double(sum) / 64.0;
+    return labels.voxels[index] == label ? std::max(smooth, 0.75) : smooth;
+  });
 }
 
 }  // namespace
@@ -74,7 +99,24 @@ TransferFunction2D shadingTable(const Preset& preset) {
 
 double effectiveStepMm(const Geometry& g, const RenderSettings& s) {
   if (s.stepMm > 0) return s.stepMm;
-  return 0.5 * std::min({g.spacingMm[0], g.spacingMm[1], g.spacingMm[2]});
+  return kDefaultStepVoxels * std::min({g.spacingMm[0], g.spacingMm[1], g.spacingMm[2]});
+}
+
+double effectiveOpacityRefMm(const Geometry& g, const RenderSettings& s) {
+  if (s.opacityRefMm > 0) return s.opacityRefMm;
+  return std::min({g.spacingMm[0], g.spacingMm[1], g.spacingMm[2]});
+}
+
+float surfaceFactor(const Preset& p, float strength) {
+  const float lo = p.surfaceGradientHu[0], hi = p.surfaceGradientHu[1];
+  float ramp = 1;
+  if (hi > lo) {
+    const float x = std::clamp((strength - lo) / (hi - lo), 0.0f, 1.0f);
+    ramp = x * x * (3 - 2 * x);
+  } else if (strength < lo) {
+    ramp = 0;
+  }
+  return p.surfaceInterior + (1 - p.surfaceInterior) * ramp;
 }
 
 float correctedOpacity(float alpha, double stepMm, double refMm) {
@@ -105,41 +147,60 @@ PickResult pick(const SceneVolumes& scene, const RenderSettings& s, const Transf
   }
   if (!(t0 < t1)) return result;
   const double step = effectiveStepMm(g, s);
+  const double refMm = effectiveOpacityRefMm(g, s);
   const bool bare = s.preset.mode == RenderMode::Bare;
+  const bool structure = scene.labels && scene.selected != 0;
+  const float structureAlpha = bare ? 1.0f : s.preset.structureOpacity;
   const float alphaF = s.preset.alpha;
   const Geometry* fg = scene.field ? &scene.field->geometry : nullptr;
-  double accumulated = 0;
+  double accumulated = 0, prevMask = 0;
+  const auto finish = [&](const Vec3& p, const Vec3& ijk, std::optional<std::uint16_t> label) {
+    result.hit = true;
+    result.pointMm = p;
+    result.accumulatedOpacity = accumulated;
+    if (label) {
+      result.label = *label;
+    } else if (scene.labels) {
+      const int i = int(std::lround(ijk[0])), j = int(std::lround(ijk[1])), k = int(std::lround(ijk[2]));
+      if (g.dims.contains(i, j, k)) result.label = scene.labels->at(i, j, k);
+    }
+    return result;
+  };
   for (double tm = t0 + 0.5 * step; tm < t1; tm += step) {
     const Vec3 p = ray.origin + tm * ray.direction;
-    if (s.clip && !s.clip->keeps(p)) continue;
+    if (s.clip && !s.clip->keeps(p)) {
+      prevMask = 0;
+      continue;
+    }
     const Vec3 ijk = g.patientToIndex(p);
-    float a = 0;
-    if (bare) {
-      if (!scene.labels || scene.selected == 0) continue;
-      const std::uint16_t sel = scene.selected;
-      const double mask = trilinear(*scene.labels, ijk, [sel](std::uint16_t l) { return l == sel ? 1.0 : 0.0; });
-      a = mask >= 0.5 ? 1.0f : 0.0f;
-    } else {
-      const double hu = trilinear(*scene.volume, ijk, [](std::int16_t v) { return double(v); });
-      float n = 0;
-      if (fg) {
-        const double d = trilinear(*scene.field, fg->patientToIndex(p), [](float v) { return std::isinf(v) ? 1e30 : double(v); });
-        n = normaliseDistance(float(d), alphaF);
+    const double m = structure ? smoothedMaskAt(*scene.labels, scene.selected, ijk) : 0.0;
+    if (m >= 0.5) {
+      if (prevMask < 0.5) {
+        accumulated += (1 - accumulated) * structureAlpha;
+        if (accumulated >= threshold) return finish(p, ijk, scene.selected);
       }
-      a = table.lookup(hu, n)[3];
+      prevMask = m;
+      continue;
     }
-    const float ac = correctedOpacity(a, step, s.opacityRefMm);
+    prevMask = m;
+    if (bare || m > kMaskHalo) continue;
+    const double hu = trilinear(*scene.volume, ijk, [](std::int16_t v) { return double(v); });
+    float n = 0;
+    if (fg) {
+      const double d = trilinear(*scene.field, fg->patientToIndex(p), [](float v) { return std::isinf(v) ? 1e30 : double(v); });
+      n = normaliseDistance(float(d / s.distanceUnit), alphaF);
+    }
+    float surface = 1;
+    if (scene.gradients && !scene.gradients->empty()) {
+      double gc[3];
+      for (std::size_t c = 0; c < 3; ++c)
+        gc[c] = trilinear(g.dims, ijk, [&](std::size_t i) { return double(scene.gradients->texels[i][c + 1]) / 32767.0; });
+      surface = surfaceFactor(s.preset, GradientVolume::strengthOf(float(gc[0]), float(gc[1]), float(gc[2])));
+    }
+    const float a = table.lookup(hu, n)[3];
+    const float ac = a > 0 ? correctedOpacity(a, step, refMm) * surface : 0.0f;
     accumulated += (1 - accumulated) * ac;
-    if (accumulated >= threshold) {
-      result.hit = true;
-      result.pointMm = p;
-      result.accumulatedOpacity = accumulated;
-      if (scene.labels) {
-        const int i = int(std::lround(ijk[0])), j = int(std::lround(ijk[1])), k = int(std::lround(ijk[2]));
-        if (g.dims.contains(i, j, k)) result.label = scene.labels->at(i, j, k);
-      }
-      return result;
-    }
+    if (accumulated >= threshold) return finish(p, ijk, std::nullopt);
   }
   result.accumulatedOpacity = accumulated;
   return result;

@@ -23,16 +23,66 @@ Result<StructureFrame> structureFrame(const LabelMap& labels, std::uint16_t labe
   const double n = double(f.voxelCount);
   const Vec3 cIdx{s[0] / n, s[1] / n, s[2] / n};
   f.centroidMm = g.indexToPatient(cIdx);
-  double r2 = 0;
+  f.volumeMm3 = n * g.spacingMm[0] * g.spacingMm[1] * g.spacingMm[2];
+  f.voxelMm = std::max({g.spacingMm[0], g.spacingMm[1], g.spacingMm[2]});
+  const std::size_t every = (f.voxelCount + kMaxFramePoints - 1) / kMaxFramePoints;
+  double r2 = 0, nearest2 = 1e300;
+  std::size_t seen = 0;
   for (int k = 0; k < d.z; ++k)
     for (int j = 0; j < d.y; ++j)
       for (int i = 0; i < d.x; ++i)
         if (labels.voxels[d.index(i, j, k)] == label) {
           const Vec3 p = g.indexToPatient({double(i), double(j), double(k)});
-          r2 = std::max(r2, dot(p - f.centroidMm, p - f.centroidMm));
+          const double q2 = dot(p - f.centroidMm, p - f.centroidMm);
+          r2 = std::max(r2, q2);
+          if (q2 < nearest2) {
+            nearest2 = q2;
+            f.anchorMm = p;
+          }
+          if (seen++ % every == 0) f.pointsMm.push_back(p);
         }
   f.radiusMm = std::sqrt(r2);
   return f;
+}
+
+double contextRadiusMm(const StructureFrame& f) {
+  const double equivalent = std::cbrt(3.0 * f.volumeMm3 / (4.0 * 3.14159265358979323846));
+  return std::sqrt(equivalent * std::max(f.radiusMm, equivalent));
+}
+
+double distanceUnitFor(const StructureFrame& f, double scale) {
+  return std::clamp(scale * contextRadiusMm(f) / kReferenceContextMm, 0.4, 40.0);
+}
+
+Camera frameCamera(const StructureFrame& f, NamedView view, double aspect, double margin, double minHalfHeightMm) {
+  Camera c = Camera::named(view, f.centroidMm, std::max(f.radiusMm, minHalfHeightMm));
+  const Vec3 right = cross(c.forward(), c.up());
+  // The extent in the view plane (voxel centres, widened by half a voxel).
+  double lo[2] = {1e30, 1e30}, hi[2] = {-1e30, -1e30};
+  const std::vector<Vec3> centre{f.centroidMm};
+  const std::vector<Vec3>& points = f.pointsMm.empty() ? centre : f.pointsMm;
+  for (const Vec3& p : points) {
+    const Vec3 q = p - f.centroidMm;
+    const double xy[2] = {dot(q, right), dot(q, c.up())};
+    for (int a = 0; a < 2; ++a) {
+      lo[a] = std::min(lo[a], xy[a]);
+      hi[a] = std::max(hi[a], xy[a]);
+    }
+  }
+  const double cx = 0.5 * (lo[0] + hi[0]), cy = 0.5 * (lo[1] + hi[1]);
+  c.target = f.centroidMm + cx * right + cy * c.up();
+  // Distance from the eye to the target plane such that every point, widened by the margin about
+  // the centre, lies inside the frustum: |x|·margin ≤ (d + z)·tan·aspect and |y|·margin ≤ (d + z)·tan.
+  const double tanHalf = std::tan(c.fovYDeg * 3.14159265358979323846 / 360.0);
+  const double pad = 0.5 * f.voxelMm;
+  double distance = minHalfHeightMm / tanHalf;
+  for (const Vec3& p : points) {
+    const Vec3 q = p - c.target;
+    const double x = std::fabs(dot(q, right)) + pad, y = std::fabs(dot(q, c.up())) + pad, z = dot(q, c.forward());
+    distance = std::max({distance, margin * y / tanHalf - z, margin * x / (tanHalf * aspect) - z});
+  }
+  c.distanceMm = distance;
+  return c;
 }
 
 Result<WdtParams> wdtParamsFor(const Preset& preset, int passes) {
@@ -56,10 +106,13 @@ Result<RenderSettings> settingsFor(const Preset& preset, const StructureFrame& f
   s.width = request.width;
   s.height = request.height;
   const std::string view = request.view ? *request.view : preset.view.value_or("lateral_left");
-  const double radius = std::max(request.contextScale * frame.radiusMm, request.minRadiusMm);
-  auto cam = Camera::named(view, frame.centroidMm, radius);
-  if (!cam) return tl::unexpected(cam.error());
-  s.camera = *cam;
+  const auto named = parseNamedView(view);
+  if (!named)
+    return fail("unknown view '" + view +
+                "' (expected anterior, posterior, lateral_left, lateral_right, superior or inferior)");
+  s.camera = frameCamera(frame, *named, double(request.width) / double(request.height), request.margin,
+                         request.minRadiusMm);
+  s.distanceUnit = distanceUnitFor(frame, request.contextScale);
   const auto clip = request.clip ? request.clip : preset.clip;
   if (clip) {
     auto plane = ClipPlane::fromCoefficients((*clip)[0], (*clip)[1], (*clip)[2], (*clip)[3]);

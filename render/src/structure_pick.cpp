@@ -7,7 +7,7 @@ namespace at::render {
 
 PickResult pickStructure(const SceneVolumes& scene, const RenderSettings& settings, const TransferFunction2D& table,
                          double x, double y, double beyondMm) {
-  PickResult opaque = pick(scene, settings, table, x, y);
+  PickResult opaque = pick(scene, settings, table, x, y, kSeenThroughOpacity);
   if (!scene.labels || scene.labels->empty()) return opaque;
   const LabelMap& labels = *scene.labels;
   const Geometry& g = labels.geometry;

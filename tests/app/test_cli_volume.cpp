@@ -7,6 +7,7 @@
 #include <cmath>
 #include <string>
 
+#include "cli_checks.h"
 #include "test_support.h"
 #include "volume/mask.h"
 #include "volume/phantom.h"
@@ -19,13 +20,7 @@ namespace {
 
 std::string quoted(const std::string& s) { return "'" + s + "'"; }
 
-// A failing command says what is wrong on exactly one line of stderr.
-void checkOneLineError(const test::CommandResult& r, const std::string& mustMention) {
-  CHECK(r.exitCode != 0);
-  CHECK(std::count(r.err.begin(), r.err.end(), '\n') == 1);
-  CHECK(r.err.find(mustMention) != std::string::npos);
-  CHECK(r.err.rfind("anatomy-tutor: ", 0) == 0);
-}
+using test::checkOneLineError;
 
 std::uint8_t srgb8(float linear) {
   const double c = std::clamp(double(linear), 0.0, 1.0);

@@ -220,39 +220,68 @@ TEST_CASE("a lesson whose prerequisites are unfinished cannot be started from a 
   CHECK(r.err.find("needs") != std::string::npos);
 }
 
-TEST_CASE("the review button asks a question of the course and grades its answer without a lesson running") {
+namespace {
+
+// `user` has been taught the vestibule in "The inner ear" (an attempt, one answer) and it is due
+// now: the state a student is in a few days after the lesson. The database is created and the
+// default course seeded first (by `anatomy-tutor courses`).
+void vestibuleTaughtAndDue(const fs::path& db, const std::string& user) {
+  REQUIRE(at::test::runApp("courses --db '" + db.string() + "'").exitCode == 0);
+  auto database = at::db::Database::open(db.string());
+  REQUIRE(database);
+  auto teach = database->prepare("INSERT INTO users (name) VALUES (?1)");
+  REQUIRE(teach);
+  teach->bind(1, user);
+  REQUIRE(teach->run());
+  auto attempt = database->prepare(
+      "INSERT INTO attempts (user_id, lesson_id, mode, started_at) SELECT id, 'inner_ear', 'guided',"
+      " CAST(strftime('%s', 'now') AS INTEGER) - 5 * 86400 FROM users WHERE name = ?1");
+  REQUIRE(attempt);
+  attempt->bind(1, user);
+  REQUIRE(attempt->run());
+  auto memory = database->prepare(
+      "INSERT INTO memory_states (user_id, structure, phase, stability, difficulty, due_at, last_review_at, reviews,"
+      " answered, correct) SELECT id, 'vestibule', 'review', 3.2, 2.1, CAST(strftime('%s', 'now') AS INTEGER) - 60,"
+      " CAST(strftime('%s', 'now') AS INTEGER) - 4 * 86400, 2, 2, 2 FROM users WHERE name = ?1");
+  REQUIRE(memory);
+  memory->bind(1, user);
+  REQUIRE(memory->run());
+}
+
+}  // namespace
+
+TEST_CASE("the review button asks about a taught structure that is due, and grades its answer without a lesson running") {
   if (!at::test::requireXvfb()) return;
   TempDir dir("desktop-lessons-review");
   const fs::path db = dir / "tutor.db";
-  // Nothing answered yet: every question's structure counts as due, so a review question exists.
-  const Run r = runLessonScript(dir, {{"actions", {{{"do", "review"}}}}}, db, "reviewer");
+  // Nothing taught yet: nothing is due and nothing is asked (no questions from unstarted lessons).
+  const Run r = runLessonScript(dir, {{"actions", {{{"do", "review"}}}}}, db, "newcomer");
   INFO(r.err);
   REQUIRE(r.exitCode == 0);
   const auto queue = eventsOf(r, "review_queue");
   REQUIRE(queue.size() == 1);
-  CHECK(queue[0].at("due").empty());  // nothing answered: nothing scheduled
+  CHECK(queue[0].at("due").empty());
   const auto asked = eventsOf(r, "review_question");
   REQUIRE(asked.size() == 1);
-  CHECK(asked[0].at("question").is_string());
-  CHECK(asked[0].value("course", "") == "temporal_bone");
+  CHECK(asked[0].at("question").is_null());
 
-  // The choice is deterministic (nothing changed in between): ask it again and answer it right
-  // when it asks for a structure's name or identity (the kinds whose right answer is its target).
-  const std::string kind = asked[0].value("question_kind", ""), target = asked[0].value("target", "");
-  if (kind != "name" && kind != "identify") {
-    MESSAGE("the review question is a " << kind << " question; its answer is not checked here");
-    return;
-  }
-  std::string spoken = target;
-  std::replace(spoken.begin(), spoken.end(), '_', ' ');
+  // Taught and due: the queue lists it and the review asks about it (its identify question, the
+  // one whose difficulty suits a new student best); answered right, it leaves the queue.
+  vestibuleTaughtAndDue(db, "reviewer");
   const Run answered = runLessonScript(
-      dir, {{"actions", {{{"do", "review"}}, {{"do", "answer"}, {"value", kind == "name" ? spoken : target}}}}}, db,
+      dir, {{"actions", {{{"do", "review"}}, {{"do", "answer"}, {"value", "vestibule"}}, {{"do", "review"}}}}}, db,
       "reviewer");
   INFO(answered.err);
   REQUIRE(answered.exitCode == 0);
+  const auto queues = eventsOf(answered, "review_queue");
+  REQUIRE(queues.size() == 2);
+  CHECK(queues[0].at("due") == json::array({"vestibule"}));
+  CHECK(queues[1].at("due").empty());
   const auto again = eventsOf(answered, "review_question");
-  REQUIRE(again.size() == 1);
-  CHECK(again[0].at("question") == asked[0].at("question"));
+  REQUIRE(again.size() == 2);
+  CHECK(again[0].value("question", "") == "inner_ear.identify_vestibule");
+  CHECK(again[0].value("course", "") == "temporal_bone");
+  CHECK(again[1].at("question").is_null());
   const auto graded = eventsOf(answered, "graded");
   REQUIRE(graded.size() == 1);
   CHECK(graded[0].value("review", false));
@@ -278,30 +307,12 @@ TEST_CASE("a review answer is recorded: a wrong one puts its structure in the qu
   if (!at::test::requireXvfb()) return;
   TempDir dir("desktop-lessons-review-queue");
   const fs::path db = dir / "tutor.db";
-  const Run first = runLessonScript(dir, {{"actions", {{{"do", "review"}}}}}, db, "reviewer");
-  INFO(first.err);
-  REQUIRE(first.exitCode == 0);
-  const auto asked = eventsOf(first, "review_question");
-  REQUIRE(asked.size() == 1);
-  REQUIRE(asked[0].at("question").is_string());
-  const std::string question = asked[0].value("question", ""), kind = asked[0].value("question_kind", ""),
-                    target = asked[0].value("target", "");
-  if (kind != "name" && kind != "identify") {
-    MESSAGE("the review question is a " << kind << " question; its answer is not checked here");
-    return;
-  }
-  std::string spoken = target;
-  std::replace(spoken.begin(), spoken.end(), '_', ' ');
-  const json right = kind == "name" ? json(spoken) : json(target);
-  json wrong = "cochlea";
-  if (kind == "identify") {
-    for (const json& c : asked[0].at("choices"))
-      if (c != target) wrong = c;
-  } else if (target == "cochlea") {
-    wrong = "stapes";
-  }
+  vestibuleTaughtAndDue(db, "reviewer");
+  const std::string question = "inner_ear.identify_vestibule", target = "vestibule";
+  const json right = target;
+  const json wrong = "cochlea";
 
-  // Answered wrong: recorded, the structure back to its first learning step, due again in a minute.
+  // Answered wrong: recorded, a lapse: the structure relearns, due again in 10 minutes.
   const Run missed = runLessonScript(dir, {{"actions", {{{"do", "review"}}, {{"do", "answer"}, {"value", wrong}}}}},
                                      db, "reviewer");
   INFO(missed.err);
@@ -330,18 +341,11 @@ TEST_CASE("a review answer is recorded: a wrong one puts its structure in the qu
     auto p = progress.progress((*user)->id, target);
     REQUIRE(p);
     REQUIRE(p->has_value());
-    CHECK(((*p)->memory.phase == at::lessons::MemoryPhase::Learning));
-    CHECK((*p)->memory.due == (*stored)[0].answeredAt + 60);
-    // Ten minutes pass (the structure is due now), and every other structure of the course was
-    // answered and is not due: the review can only ask about this one.
+    CHECK(((*p)->memory.phase == at::lessons::MemoryPhase::Relearning));
+    CHECK((*p)->memory.lapses == 1);
+    CHECK((*p)->memory.due == (*stored)[0].answeredAt + 600);
+    // Ten minutes pass: the structure is due again.
     REQUIRE(database->exec("UPDATE memory_states SET due_at = due_at - 600, last_review_at = last_review_at - 600"));
-    auto others = database->prepare(
-        "INSERT INTO memory_states (user_id, structure, phase, stability, difficulty, due_at, last_review_at, reviews,"
-        " answered, correct) SELECT ?1, target, 'review', 2.3, 2.1, CAST(strftime('%s', 'now') AS INTEGER) + 86400,"
-        " CAST(strftime('%s', 'now') AS INTEGER), 1, 1, 1 FROM (SELECT DISTINCT target FROM questions WHERE target != ?2)");
-    REQUIRE(others);
-    others->bind(1, (*user)->id).bind(2, target);
-    REQUIRE(others->run());
   }
 
   // In the queue now; answered right it leaves the queue at once, and nothing is left to review.
@@ -377,8 +381,8 @@ TEST_CASE("a review answer is recorded: a wrong one puts its structure in the qu
     CHECK((*stored)[1].questionId == reasked[0].value("question", ""));
     auto p = progress.progress(userId, target);
     REQUIRE(p->has_value());
-    CHECK((*p)->memory.due > (*stored)[1].answeredAt);  // a later learning step or a day or more
-    CHECK((*p)->correct == 1);
+    CHECK((*p)->memory.due >= (*stored)[1].answeredAt + 86400);  // relearned: back in Review, days away
+    CHECK((*p)->correct == 3);
   }
   const auto report = at::test::runApp("progress --user reviewer --db '" + db.string() + "'");
   INFO(report.out << report.err);

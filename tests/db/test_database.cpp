@@ -16,6 +16,7 @@
 #include "db/schema.h"
 #include "lessons/course_json.h"
 #include "lessons/lesson_engine.h"
+#include "lessons/scheduling.h"
 #include "test_support.h"
 #include "toy_course.h"
 
@@ -107,15 +108,13 @@ TEST_CASE("A database at every earlier version migrates to the same schema as a 
         REQUIRE(old->exec("INSERT INTO users (id, name) VALUES (7, 'kept-learner');"
                           "INSERT INTO attempts (id, user_id, lesson_id, mode, started_at) VALUES (3, 7, 'toy.ossicles', 'guided', 100);"
                           "INSERT INTO responses (attempt_id, step_index, question_id, structure, answer, correct, score,"
-                          " latency_ms, answered_at) VALUES (3, 1, 'toy.ossicles.name_stapes', 'stapes', '{\"text\":\"stapes\"}', 1, 1, 500, 110);"));
-        if (from < 6) {  // a Leitner box (schemas 3 to 5)
-          REQUIRE(old->exec("INSERT INTO progress VALUES (7, 'stapes', 2, 200000, 1, 1, 110);"));
-        } else {  // as migration 6 leaves that box: an FSRS memory state and a rebuilt log entry
-          REQUIRE(old->exec("INSERT INTO memory_states VALUES (7, 'stapes', 'review', 0, 2.0, 2.1, 200000, 110, 1, 0, 1, 1);"
-                            "INSERT INTO review_log (user_id, structure, question_id, source, source_id, reviewed_at,"
-                            " rating, correct, score, latency_ms, rebuilt) VALUES (7, 'stapes', 'toy.ossicles.name_stapes',"
-                            " 'lesson', 1, 110, 3, 1, 1, 500, 1);"));
-        }
+                          " latency_ms, answered_at) VALUES (3, 1, 'toy.ossicles.name_stapes', 'stapes', '{\"text\":\"stapes\"}', 1, 1, 500, 110);"
+                          ""));
+        // Its progress: a Leitner box before FSRS (schema 6), a memory state since.
+        REQUIRE(old->exec(from < 6 ? "INSERT INTO progress VALUES (7, 'stapes', 2, 200000, 1, 1, 110);"
+                                   : "INSERT INTO memory_states (user_id, structure, phase, stability, difficulty, due_at,"
+                                     " last_review_at, reviews, answered, correct)"
+                                     " VALUES (7, 'stapes', 'review', 2.0, 2.1, 200000, 110, 1, 1, 1);"));
       }
     }
     auto db = Database::open(path);
@@ -149,8 +148,8 @@ TEST_CASE("A database at every earlier version migrates to the same schema as a 
       CHECK((*p)->memory.due == 200000);
       auto log = progress.reviewLog(7);
       REQUIRE(log);
-      REQUIRE(log->size() == 1);
-      CHECK((*log)[0].rebuilt);
+      REQUIRE(log->size() == (from < 6 ? 1u : 0u));  // rebuilt from the answers by migration 6
+      if (from < 6) CHECK((*log)[0].rebuilt);
     }
     // The newest migration's table works on the migrated file: a review answer of the kept
     // learner (or a new one) is recorded and read back.
@@ -262,9 +261,9 @@ TEST_CASE("Leitner progress of a version-5 database becomes FSRS memory states k
   CHECK(maxCochlea.memory.difficulty == doctest::Approx(good));
   // A row never answered is not a memory.
   CHECK(!progress.progress(2, "vestibule")->has_value());
-  // The due queue is the one the Leitner boxes gave.
-  CHECK(lessons::reviewQueue(progress, 1, 715)->size() == 1);
-  CHECK(lessons::reviewQueue(progress, 1, 720)->size() == 2);
+  // The due times are the ones the Leitner boxes gave.
+  CHECK(lessons::dueForReview(*progress.allProgress(1), 715).size() == 1);
+  CHECK(lessons::dueForReview(*progress.allProgress(1), 720).size() == 2);
 
   // Every earlier answer is in the review log, in time order, rated from its grade.
   auto log = progress.reviewLog(1);
@@ -428,16 +427,63 @@ TEST_CASE("Registering a dataset under a name already used fails and writes noth
   CHECK((*listed)[0].geometry.dims == Dims{4, 5, 6});
 }
 
-TEST_CASE("listImportedDatasets on a database that does not exist lists nothing and creates nothing") {
+TEST_CASE("openExistingDatabase on a database that does not exist gives none and creates nothing") {
   test::TempDir dir;
   const fs::path path = dir / "missing" / "x.db";
-  auto listed = listImportedDatasets(path.string());
-  REQUIRE(listed);
-  CHECK(listed->empty());
+  auto none = openExistingDatabase(path.string());
+  REQUIRE(none);
+  CHECK(!none->has_value());
   CHECK(!fs::exists(path));
-  auto found = findImportedDataset(path.string(), "abdomen");
-  REQUIRE(found);
-  CHECK(!found->has_value());
+  CHECK(!fs::exists(dir / "missing"));
+  const fs::path present = dir / "x.db";
+  REQUIRE(Database::open(present.string()));
+  auto opened = openExistingDatabase(present.string());
+  REQUIRE(opened);
+  REQUIRE(opened->has_value());
+  CHECK((*opened)->path() == present.string());
+}
+
+TEST_CASE("openDatabase with an explicit path refuses a folder that does not exist instead of creating it") {
+  test::TempDir dir;
+  const fs::path path = dir / "no" / "such" / "x.db";
+  auto refused = openDatabase(path.string());
+  REQUIRE(!refused);
+  CHECK((refused.error().kind == ErrorKind::NotFound));
+  CHECK(refused.error().message.find((dir / "no" / "such").string()) != std::string::npos);
+  CHECK(!fs::exists(dir / "no"));
+}
+
+TEST_CASE("One connection shared by threads: concurrent write transactions lose no row and never mix") {
+  test::TempDir dir;
+  auto db = Database::open((dir / "shared.db").string());
+  REQUIRE(db);
+  constexpr int kPerThread = 100;
+  std::vector<std::string> errors(3);
+  std::vector<std::thread> threads;
+  for (int t = 0; t < 3; ++t)
+    threads.emplace_back([&, t] {
+      for (int i = 0; i < kPerThread; ++i) {
+        // Two inserts per transaction: a transaction taking in another thread's insert, or a
+        // BEGIN inside another thread's transaction, would show as an error or a lost pair.
+        auto st = db->writeTransaction([&](Database& d) -> Status {
+          for (int half = 0; half < 2; ++half) {
+            auto insert = d.prepare("INSERT INTO presets (id, mode, json) VALUES (?1, 'wdt', '{}')");
+            if (!insert) return tl::unexpected(insert.error());
+            insert->bind(1, "t" + std::to_string(t) + "_" + std::to_string(i) + "_" + std::to_string(half));
+            if (auto s = insert->run(); !s) return s;
+          }
+          if (i % 7 == 3) return fail("rolled back on purpose");
+          return {};
+        });
+        if (!st && st.error().message != "rolled back on purpose" && errors[std::size_t(t)].empty())
+          errors[std::size_t(t)] = st.error().message;
+      }
+    });
+  for (auto& th : threads) th.join();
+  for (const auto& e : errors) CHECK_MESSAGE(e.empty(), e);
+  int rolledBack = 0;
+  for (int i = 0; i < kPerThread; ++i) rolledBack += i % 7 == 3 ? 1 : 0;
+  CHECK(countRows(*db, "presets") == 3 * 2 * (kPerThread - rolledBack));
 }
 
 TEST_CASE("Two connections writing at once through writeTransaction lose no row") {

@@ -22,7 +22,7 @@
 #include "test_support.h"
 #include "volume/dataset_source.h"
 #include "volume/phantom.h"
-#include "wdt/wdt.h"
+#include "wdt/answer_keys.h"
 
 namespace fs = std::filesystem;
 using namespace at;
@@ -46,19 +46,9 @@ std::int64_t scalar(const std::string& dbPath, const std::string& sql) {
   return s->int64(0);
 }
 
-// The same distance fields as the app's key computer (app/src/learning_support.cpp,
-// wdtDistanceField): density weights, entering rule, converged, on a grid coarser by 2, sampled
-// back onto the label grid.
-quiz::DistanceFieldFunction distanceFieldLikeTheApp(const Dataset& dataset) {
-  return [&dataset](const Mask& seeds) -> Result<FloatVolume> {
-    WdtParams params;
-    params.converge = true;
-    params.downsample = 2;
-    auto result = computeWdt(dataset.volume, seeds, params);
-    if (!result) return tl::unexpected(result.error());
-    if (result->field.downsample == 1) return std::move(result->field.distances);
-    return upsampleField(result->field, dataset.labels.geometry);
-  };
+// The app's answer keys: the one recipe of wdt/answer_keys.h.
+quiz::DistanceFieldFunction answerKeyFields(const Dataset& dataset) {
+  return [&dataset](const Mask& seeds) { return wdt::answerKeyDistances(dataset.volume, dataset.labels.geometry, seeds); };
 }
 
 // The right answer to a resolved question, as an answers-file line.
@@ -79,7 +69,7 @@ std::string rightAnswerLine(const quiz::ResolvedQuestion& q, const std::vector<S
 
 // Answers files for every lesson of `course`, from keys computed on `dataset`.
 std::map<std::string, std::vector<std::string>> answersFor(const lessons::Course& course, const Dataset& dataset) {
-  quiz::DatasetKeyComputer keys(dataset, distanceFieldLikeTheApp(dataset));
+  quiz::DatasetKeyComputer keys(dataset, answerKeyFields(dataset));
   std::map<std::string, std::vector<std::string>> out;
   for (const auto& lesson : course.lessons) {
     auto& lines = out[lesson.id];
@@ -166,7 +156,8 @@ void storeQuickCourse(const std::string& dbPath) {
 
 std::string playArgs(const std::string& lesson, const std::string& user, const fs::path& answers,
                      const std::string& dbPath) {
-  return "play " + lesson + " --user " + user + " --new-user --answers '" + answers.string() + "' --db '" + dbPath + "'";
+  return "play " + lesson + " --user " + user + " --new-user --no-views --answers '" + answers.string() + "' --db '" +
+         dbPath + "'";
 }
 
 }  // namespace
@@ -194,7 +185,7 @@ TEST_CASE("Every shipped lesson plays to the end from answers computed from the 
       const fs::path answersFile = writeLines(dir / (lesson.id + ".jsonl"), answers.at(lesson.id));
       auto r = test::runApp(playArgs(lesson.id, "student", answersFile, dbPath));
       CHECK_MESSAGE(r.exitCode == 0, r.err);
-      CHECK(r.out.find("Lesson finished: score 1.00") != std::string::npos);
+      CHECK(r.out.find("right (score 1.00).") != std::string::npos);
       questions += int(answers.at(lesson.id).size());
       CHECK(scalar(dbPath, "SELECT count(*) FROM responses") == questions);
     }
@@ -224,7 +215,7 @@ TEST_CASE("play killed with SIGKILL mid-lesson keeps every answer and resumes at
     dup2(devnull, 1);
     dup2(devnull, 2);
     const std::string app = test::appBinary().string();
-    execl(app.c_str(), app.c_str(), "play", "quick.check", "--user", "eve", "--new-user", "--answers", fifo.c_str(),
+    execl(app.c_str(), app.c_str(), "play", "quick.check", "--user", "eve", "--new-user", "--no-views", "--answers", fifo.c_str(),
           "--db", dbPath.c_str(), static_cast<char*>(nullptr));
     _exit(127);
   }
@@ -258,7 +249,7 @@ TEST_CASE("play killed with SIGKILL mid-lesson keeps every answer and resumes at
   REQUIRE(firstStep != std::string::npos);
   CHECK(r.out.compare(firstStep, 7, "\n[6/7] ") == 0);
   CHECK(r.out.find("Question 0 about") == std::string::npos);
-  CHECK(r.out.find("Lesson finished: score 1.00") != std::string::npos);
+  CHECK(r.out.find("right (score 1.00).") != std::string::npos);
   CHECK(countResponses() == std::int64_t(answers.size()));
   CHECK(scalar(dbPath, "SELECT count(DISTINCT step_index) FROM responses") == std::int64_t(answers.size()));
   CHECK(scalar(dbPath, "SELECT count(*) FROM attempts") == 1);
@@ -334,17 +325,33 @@ TEST_CASE("Interactive play takes typed answers on stdin and stops cleanly at 'q
   storeQuickCourse(dbPath);
   const auto structures = phantomStructures();
   // Question 0 is a name question: type the display name; then quit at question 1.
-  auto r = test::runApp("play quick.check --user gus --new-user --db '" + dbPath + "'",
+  auto r = test::runApp("play quick.check --user gus --new-user --no-views --db '" + dbPath + "'",
                         structures[0].displayName + "\nquit\n");
   CHECK_MESSAGE(r.exitCode == 0, r.err);
-  CHECK(r.out.find("correct (score 1.00)") != std::string::npos);
+  CHECK(r.out.find("✓ Correct") != std::string::npos);
   CHECK(r.out.find("run the same command to resume") != std::string::npos);
   CHECK(scalar(dbPath, "SELECT count(*) FROM responses") == 1);
-  // A locate question typed as a structure's display name; nonsense is asked again, not recorded.
-  auto again = test::runApp("play quick.check --user gus --db '" + dbPath + "'",
-                            "no such thing\n" + structures[1].displayName + "\nquit\n");
+  // A locate question: a name is no answer (it would give the answer away), nonsense neither; a
+  // point in millimetres inside the structure is graded, without pictures too.
+  auto phantom = openBuiltinDataset("phantom:128");
+  REQUIRE(phantom);
+  const Structure* target = phantom->findStructure(structures[1].id);
+  REQUIRE(target);
+  std::optional<Vec3> inside;
+  const Dims& d = phantom->labels.dims();
+  for (int k = d.z / 4; k < d.z && !inside; ++k)
+    for (int j = 0; j < d.y && !inside; ++j)
+      for (int i = 0; i < d.x && !inside; ++i)
+        if (phantom->labels.at(i, j, k) == target->label)
+          inside = phantom->labels.geometry.indexToPatient({double(i), double(j), double(k)});
+  REQUIRE(inside);
+  char point[96];
+  std::snprintf(point, sizeof point, "mm %.3f %.3f %.3f", (*inside)[0], (*inside)[1], (*inside)[2]);
+  auto again = test::runApp("play quick.check --user gus --no-views --db '" + dbPath + "'",
+                            "no such thing\n" + structures[1].displayName + "\n" + point + "\nquit\n");
   CHECK_MESSAGE(again.exitCode == 0, again.err);
-  CHECK(again.out.find("try again") != std::string::npos);
+  CHECK(again.out.find("is not a pick") != std::string::npos);
+  CHECK(again.out.find("✓ Correct: that is the " + structures[1].displayName) != std::string::npos);
   CHECK(scalar(dbPath, "SELECT count(*) FROM responses") == 2);
 }
 
@@ -359,7 +366,7 @@ TEST_CASE("Quiz-only play skips the teaching steps and records the attempt's mod
   CHECK(r.out.find("quiz only") != std::string::npos);
   CHECK(r.out.find("Look at it.") == std::string::npos);
   CHECK(r.out.find("\n[1/6] Question") != std::string::npos);
-  CHECK(r.out.find("Lesson finished: score 1.00") != std::string::npos);
+  CHECK(r.out.find("right (score 1.00).") != std::string::npos);
   CHECK(scalar(dbPath, "SELECT count(*) FROM attempts WHERE mode = 'quiz_only' AND finished_at IS NOT NULL") == 1);
 }
 
@@ -416,7 +423,8 @@ TEST_CASE("The TotalSegmentator sample imports with its 41 structures and carrie
       "steps": [
         {"kind": "show", "structure": "liver", "preset": "default_wdt", "view": "anterior", "title": "The liver",
          "text": "The largest solid organ, under the right dome of the diaphragm."},
-        {"kind": "question", "question": {"id": "abdomen.upper.locate_liver", "kind": "locate",
+        {"kind": "question", "structure": "kidney_right", "view": "anterior",
+         "question": {"id": "abdomen.upper.locate_liver", "kind": "locate",
          "prompt": "Click the liver.", "target": "liver"}},
         {"kind": "question", "question": {"id": "abdomen.upper.identify_spleen", "kind": "identify",
          "prompt": "Which organ is highlighted?", "target": "spleen", "distractors": 3}},
@@ -449,63 +457,91 @@ TEST_CASE("The TotalSegmentator sample imports with its 41 structures and carrie
   auto progress = test::runApp("progress --user hal --db '" + dbPath + "'");
   ::unsetenv("AT_DATA_DIR");
   CHECK_MESSAGE(played.exitCode == 0, played.err);
-  CHECK(played.out.find("Lesson finished: score 1.00") != std::string::npos);
+  CHECK(played.out.find("right (score 1.00).") != std::string::npos);
   CHECK(scalar(dbPath, "SELECT count(*) FROM responses WHERE correct = 1") == 5);
   CHECK_MESSAGE(progress.exitCode == 0, progress.err);
   CHECK(progress.out.find("Kidney right") != std::string::npos);
 }
 
-TEST_CASE("play --review asks the due questions, records each answer and empties the queue") {
+TEST_CASE("play --review asks only about taught structures that are due, and progress counts the same") {
   if (!appAvailable()) return;
   test::TempDir dir;
   const std::string dbPath = (dir / "rv.db").string();
   storeQuickCourse(dbPath);
   const auto structures = phantomStructures();
   const auto answers = quickAnswers();
-  // Nothing answered: every structure is eligible, all questions equally hard, so the review asks
-  // in question-id order, one question per structure: q0 (name), q1 (locate), q2 (identify), q3
-  // (name); q4 and q5 train structures already reviewed.
-  const fs::path file = writeLines(dir / "review.jsonl", {answers[0], answers[1], answers[2], answers[3]});
-  const std::string review = "play --review quick --user hal --new-user --answers '" + file.string() + "' --db '" + dbPath + "'";
-  auto r = test::runApp(review);
+  const auto run = [&](const std::string& user, const std::vector<std::string>& lines, const std::string& name) {
+    const fs::path file = writeLines(dir / name, lines);
+    return test::runApp("play --review quick --user " + user + " --new-user --no-views --answers '" + file.string() +
+                        "' --db '" + dbPath + "'");
+  };
+  // Time passes for one user: every due time and last answer moves `days` into the past.
+  const auto daysPass = [&](const std::string& user, int days) {
+    auto db = db::Database::open(dbPath);
+    REQUIRE(db);
+    auto shift = db->prepare("UPDATE memory_states SET due_at = due_at - ?1, last_review_at = last_review_at - ?1"
+                             " WHERE user_id = (SELECT id FROM users WHERE name = ?2)");
+    REQUIRE(shift);
+    shift->bind(1, std::int64_t(days) * 86400).bind(2, user);
+    REQUIRE(shift->run());
+    // Equal Elo ratings for everyone, so the adaptive choice goes by question id (q0, q1, …).
+    REQUIRE(db->exec("DELETE FROM question_stats; DELETE FROM user_ability;"));
+  };
+
+  // Nothing taught yet: nothing is asked, and the student is told to start with a lesson.
+  auto fresh = run("hal", {answers[0]}, "unused.jsonl");
+  CHECK_MESSAGE(fresh.exitCode == 0, fresh.err);
+  CHECK(fresh.out.find("Review asks about what you have been taught") != std::string::npos);
+  CHECK(fresh.out.find("Nothing is due for review") != std::string::npos);
+  CHECK(scalar(dbPath, "SELECT count(*) FROM review_responses") == 0);
+
+  // The lesson teaches four structures; right after it nothing is due (learning steps of minutes,
+  // days for those answered twice).
+  const fs::path lessonFile = writeLines(dir / "lesson.jsonl", answers);
+  auto lesson = test::runApp(playArgs("quick.check", "hal", lessonFile, dbPath));
+  REQUIRE_MESSAGE(lesson.exitCode == 0, lesson.err);
+  CHECK(scalar(dbPath, "SELECT count(*) FROM memory_states") == 4);
+  CHECK(scalar(dbPath, "SELECT count(*) FROM review_log WHERE source = 'lesson' AND rating = 3") == 6);  // untimed: Good
+  auto early = run("hal", {answers[0]}, "early.jsonl");
+  CHECK(early.out.find("Nothing is due for review") != std::string::npos);
+  auto none = test::runApp("progress --user hal --db '" + dbPath + "'");
+  CHECK(none.out.find("Due for review now: nothing") != std::string::npos);
+
+  // Forty days later all four are due: `progress` and `play --review` agree on them.
+  daysPass("hal", 40);
+  auto due = test::runApp("progress --user hal --db '" + dbPath + "'");
+  CHECK_MESSAGE(due.exitCode == 0, due.err);
+  CHECK(due.out.find("quick: 4 structures (") != std::string::npos);
+  auto r = run("hal", {answers[0], answers[1], answers[2], answers[3]}, "review.jsonl");
   CHECK_MESSAGE(r.exitCode == 0, r.err);
+  CHECK(r.out.find("Due now: 4 structures") != std::string::npos);
   CHECK(r.out.find("[review 1] Question (name)") != std::string::npos);
   CHECK(r.out.find("[review 2] Question (locate)") != std::string::npos);
   CHECK(r.out.find("[review 4] Question (name)") != std::string::npos);
   CHECK(r.out.find("Nothing more is due for review") != std::string::npos);
   CHECK(r.out.find("Review answers saved: 4, 4 correct.") != std::string::npos);
   CHECK(scalar(dbPath, "SELECT count(*) FROM review_responses WHERE correct = 1 AND mode = 'terminal'") == 4);
-  CHECK(scalar(dbPath, "SELECT count(*) FROM responses") == 0);
-  // Right, untimed (from a file): Good, the second learning step (due in 10 minutes).
-  CHECK(scalar(dbPath, "SELECT count(*) FROM memory_states WHERE phase = 'learning' AND step = 1") == 4);
-  CHECK(scalar(dbPath, "SELECT count(*) FROM review_log WHERE source = 'review' AND rating = 3") == 4);
+  CHECK(scalar(dbPath, "SELECT count(*) FROM review_log WHERE source = 'review'") == 4);
+  auto after = test::runApp("progress --user hal --db '" + dbPath + "'");
+  CHECK(after.out.find("10 answers, 10 correct (4 in review, 4 correct)") != std::string::npos);
+  CHECK(after.out.find("Due for review now: nothing") != std::string::npos);
 
-  auto report = test::runApp("progress --user hal --db '" + dbPath + "'");
-  CHECK_MESSAGE(report.exitCode == 0, report.err);
-  CHECK(report.out.find("4 answers, 4 correct (4 in review, 4 correct)") != std::string::npos);
-  CHECK(report.out.find("Due for review now: nothing") != std::string::npos);
-
-  // Again: nothing is due, nothing is asked.
-  auto again = test::runApp(review);
-  CHECK_MESSAGE(again.exitCode == 0, again.err);
-  CHECK(again.out.find("Nothing is due for review") != std::string::npos);
-  CHECK(scalar(dbPath, "SELECT count(*) FROM review_responses") == 4);
-
-  // Another user names the first structure wrongly: Again, the first learning step; the answers then end, which ends the
-  // review without an error.
+  // Another student forgets: the first structure (answered twice in the lesson: in Review) named
+  // wrongly is a lapse, Relearning for 10 minutes; the answers then end, which ends the review.
+  const fs::path ivyLesson = writeLines(dir / "ivy.jsonl", answers);
+  REQUIRE(test::runApp(playArgs("quick.check", "ivy", ivyLesson, dbPath)).exitCode == 0);
+  daysPass("ivy", 40);
   quiz::Answer wrong;
   wrong.text = structures[1].displayName;
-  const fs::path wrongFile = writeLines(dir / "wrong.jsonl", {quiz::answerToJson(wrong)});
-  auto w = test::runApp("play --review quick --user ivy --new-user --answers '" + wrongFile.string() + "' --db '" + dbPath + "'");
+  auto w = run("ivy", {quiz::answerToJson(wrong)}, "wrong.jsonl");
   CHECK_MESSAGE(w.exitCode == 0, w.err);
-  CHECK(w.out.find("wrong (score 0.00)") != std::string::npos);
+  CHECK(w.out.find("✗ Not quite") != std::string::npos);
   CHECK(w.out.find("Review answers saved: 1, 0 correct.") != std::string::npos);
   CHECK(scalar(dbPath, "SELECT m.due_at - m.last_review_at FROM memory_states m JOIN users ON users.id = m.user_id"
-                       " WHERE users.name = 'ivy'") == 60);
+                       " WHERE users.name = 'ivy' AND m.structure = '" + structures[0].id + "' AND m.phase = 'relearning'") == 600);
 
   // A malformed line names its line and records nothing; a lesson and --review together are refused.
-  const fs::path broken = writeLines(dir / "broken.jsonl", {"{\"text\": "});
-  auto b = test::runApp("play --review quick --user jo --new-user --answers '" + broken.string() + "' --db '" + dbPath + "'");
+  auto b = run("ivy", {"{\"text\": "}, "broken.jsonl");
   CHECK(b.exitCode != 0);
   CHECK(b.err.find("broken.jsonl:1: ") != std::string::npos);
   CHECK(scalar(dbPath, "SELECT count(*) FROM review_responses") == 5);

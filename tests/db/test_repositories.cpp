@@ -8,6 +8,7 @@
 
 #include "db/course_store.h"
 #include "db/database.h"
+#include "db/exam_store.h"
 #include "db/sqlite_repositories.h"
 #include "lessons/course_json.h"
 #include "lessons/lesson_engine.h"
@@ -559,10 +560,13 @@ TEST_CASE("answerReview on SQLite moves the review queue by FSRS: right answers 
   test::ToyKeys keys;
   const std::int64_t userId = users.createUser("gil", Role::Student, "")->id;
   UnixSeconds clock = 2'000'000;
+  // Both lessons started: their structures are taught, so review may ask about them.
+  REQUIRE(progress.startAttempt(userId, "toy.ossicles", LessonMode::Guided, clock - 100));
+  REQUIRE(progress.startAttempt(userId, "toy.middle", LessonMode::Guided, clock - 100));
   EngineOptions options;
   options.clock = [&clock] { return clock; };
   const auto inQueue = [&](UnixSeconds at) {
-    auto queue = reviewQueue(progress, userId, at);
+    auto queue = reviewQueue(curriculum, progress, userId, "toy", at);
     REQUIRE(queue);
     return std::any_of(queue->begin(), queue->end(), [](const StructureProgress& p) { return p.structureId == "stapes"; });
   };
@@ -644,10 +648,90 @@ TEST_CASE("answerReview on SQLite moves the review queue by FSRS: right answers 
   CHECK((*stored)[1].render.mode == "wdt");
   CHECK((*stored)[3].answeredAt == clock);
   CHECK(countRows(*db, "responses") == 0);
-  CHECK(countRows(*db, "attempts") == 0);
   auto answered = db->prepare("SELECT answered FROM user_ability WHERE user_id = ?1");
   REQUIRE(answered);
   answered->bind(1, userId);
   REQUIRE(*answered->step());
   CHECK(answered->int64(0) == 4);
+}
+
+TEST_CASE("Exam attempts and their items round-trip; an item's answer is written once, with its learner update") {
+  test::TempDir dir;
+  Database db = openFresh(dir);
+  SqliteUserRepository users(db);
+  SqliteProgressRepository progress(db);
+  SqliteExamRepository exams(db);
+  const std::int64_t userId = users.createUser("ida", Role::Student, "")->id;
+  ExamAttempt attempt;
+  attempt.userId = userId;
+  attempt.examId = "toy.exam";
+  attempt.courseId = "toy";
+  attempt.startedAt = 1000;
+  attempt.deadline = 1600;
+  std::vector<ExamItem> items(2);
+  items[0].position = 0;
+  items[0].question.question.id = "toy.exam.identify.stapes";
+  items[0].question.question.kind = quiz::QuestionKind::Identify;
+  items[0].question.question.target = "stapes";
+  items[0].question.question.prompt = "Which structure is marked?";
+  items[0].question.choices = {"incus", "stapes", "malleus"};
+  items[0].question.keyChoice = 1;
+  items[0].scene = {"stapes", "stapes_wdt", CameraView::Inferior};
+  items[1].position = 1;
+  items[1].question.question.id = "toy.exam.locate.incus";
+  items[1].question.question.kind = quiz::QuestionKind::Locate;
+  items[1].question.question.target = "incus";
+  items[1].question.question.prompt = "Locate the Incus on the slice.";
+  items[1].locateView = ExamLocateView::Slice;
+  items[1].scene = {"malleus", "malleus_wdt", CameraView::LateralRight};
+  auto started = exams.startExamAttempt(attempt, items);
+  REQUIRE_MESSAGE(started, (started ? "" : started.error().message));
+  CHECK(started->id > 0);
+  CHECK(items[1].id > 0);
+  auto open = exams.openExamAttempt(userId, "toy.exam");
+  REQUIRE(open->has_value());
+  CHECK((*open)->deadline == 1600);
+  auto back = exams.examItems(started->id);
+  REQUIRE(back);
+  REQUIRE(back->size() == 2);
+  CHECK((*back)[0].question.choices == items[0].question.choices);
+  CHECK((*back)[0].question.keyChoice == 1);
+  CHECK(((*back)[0].scene.view == CameraView::Inferior));
+  CHECK(((*back)[1].locateView == ExamLocateView::Slice));
+  CHECK((*back)[1].scene.structure == "malleus");
+  CHECK_FALSE((*back)[1].answer.has_value());
+
+  ExamAnswerRecord record;
+  record.attemptId = started->id;
+  record.position = 1;
+  record.answer.questionId = "toy.exam.locate.incus";
+  record.answer.structureId = "incus";
+  record.answer.answer.pick = quiz::Pick{"incus", 0};
+  record.answer.correct = true;
+  record.answer.score = 1;
+  record.answer.latencyMs = 3000;
+  record.answer.answeredAt = 1100;
+  record.update = firstAnswer(userId, "incus", Rating::Easy, 1100, 1510, 1490);
+  REQUIRE(exams.recordExamAnswer(record));
+  auto again = exams.recordExamAnswer(record);
+  REQUIRE_FALSE(again);
+  CHECK(again.error().message.find("already answered") != std::string::npos);
+  back = exams.examItems(started->id);
+  REQUIRE((*back)[1].answer.has_value());
+  CHECK((*back)[1].correct);
+  CHECK((*back)[1].latencyMs == 3000);
+  auto log = progress.reviewLog(userId);
+  REQUIRE(log->size() == 1);
+  CHECK(((*log)[0].source == AnswerSource::Exam));
+  CHECK((*progress.progress(userId, "incus"))->answered == 1);
+  CHECK(*progress.ability(userId) == std::optional<double>(1510));
+
+  REQUIRE(exams.finishExamAttempt(started->id, 1200, 0.5, false));
+  CHECK_FALSE(exams.openExamAttempt(userId, "toy.exam")->has_value());
+  auto all = exams.examAttempts(userId);
+  REQUIRE(all->size() == 1);
+  CHECK((*all)[0].passed == std::optional<bool>(false));
+  CHECK((*all)[0].score == doctest::Approx(0.5));
+  CHECK(exams.courseExamAttempts("toy")->size() == 1);
+  CHECK_FALSE(exams.finishExamAttempt(999, 1, 0, std::nullopt));
 }

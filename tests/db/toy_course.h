@@ -123,6 +123,7 @@ inline lessons::Course toyCourse(int version = 1) {
   locate.target = "malleus";
   locate.toleranceMm = 0.5;
   a.steps.push_back(questionStep(locate));
+  a.steps.back().scene = lessons::QuestionScene{"incus", "incus_wdt", lessons::CameraView::LateralRight};
   c.lessons.push_back(a);
 
   lessons::Lesson b;

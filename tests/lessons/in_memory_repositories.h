@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <map>
 
+#include "lessons/exam.h"
 #include "lessons/repositories.h"
 #include "quiz/keys.h"
 
@@ -195,6 +196,72 @@ class InMemoryProgress final : public lessons::ProgressRepository {
     if (it == difficulties.end()) return std::optional<double>{};
     return std::optional<double>(it->second);
   }
+};
+
+class InMemoryExams final : public lessons::ExamRepository {
+ public:
+  explicit InMemoryExams(InMemoryProgress& progress) : progress_(progress) {}
+  std::vector<lessons::ExamAttempt> attemptList;
+  std::map<std::int64_t, std::vector<lessons::ExamItem>> itemsByAttempt;
+  bool failNextRecord = false;
+
+  Result<std::optional<lessons::ExamAttempt>> openExamAttempt(std::int64_t userId, const std::string& examId) override {
+    std::optional<lessons::ExamAttempt> open;
+    for (const auto& a : attemptList)
+      if (a.userId == userId && a.examId == examId && !a.finishedAt) open = a;
+    return open;
+  }
+  Result<lessons::ExamAttempt> startExamAttempt(const lessons::ExamAttempt& attempt,
+                                                std::vector<lessons::ExamItem>& items) override {
+    lessons::ExamAttempt a = attempt;
+    a.id = std::int64_t(attemptList.size()) + 1;
+    for (auto& item : items) item.id = a.id * 1000 + item.position;
+    attemptList.push_back(a);
+    itemsByAttempt[a.id] = items;
+    return a;
+  }
+  Result<std::vector<lessons::ExamItem>> examItems(std::int64_t attemptId) override { return itemsByAttempt[attemptId]; }
+  Status recordExamAnswer(const lessons::ExamAnswerRecord& r) override {
+    if (failNextRecord) {
+      failNextRecord = false;
+      return fail("disk full");
+    }
+    auto& items = itemsByAttempt[r.attemptId];
+    if (r.position < 0 || r.position >= int(items.size()) || items[std::size_t(r.position)].answer)
+      return fail("exam item already answered");
+    auto& item = items[std::size_t(r.position)];
+    item.answer = r.answer.answer;
+    item.correct = r.answer.correct;
+    item.score = r.answer.score;
+    item.latencyMs = r.answer.latencyMs;
+    item.answeredAt = r.answer.answeredAt;
+    std::int64_t userId = 0;
+    for (const auto& a : attemptList)
+      if (a.id == r.attemptId) userId = a.userId;
+    progress_.applyUpdate(userId, r.answer.questionId, r.update);
+    progress_.logAnswer(userId, r.answer, r.update, lessons::AnswerSource::Exam);
+    return {};
+  }
+  Status finishExamAttempt(std::int64_t attemptId, lessons::UnixSeconds finishedAt, double score,
+                           std::optional<bool> passed) override {
+    for (auto& a : attemptList)
+      if (a.id == attemptId) {
+        a.finishedAt = finishedAt;
+        a.score = score;
+        a.passed = passed;
+        return {};
+      }
+    return fail("unknown exam attempt");
+  }
+  Result<std::vector<lessons::ExamAttempt>> examAttempts(std::int64_t userId) override {
+    std::vector<lessons::ExamAttempt> out;
+    for (auto it = attemptList.rbegin(); it != attemptList.rend(); ++it)
+      if (it->userId == userId) out.push_back(*it);
+    return out;
+  }
+
+ private:
+  InMemoryProgress& progress_;
 };
 
 // Key facts given directly as tables: distances between structures, centroids, and a fixed list of

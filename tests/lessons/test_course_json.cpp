@@ -81,7 +81,7 @@ TEST_CASE("CourseJson_BadInputsAreErrorsNamingTheField") {
         "bad.json: colour: unknown field");
   const std::string lesson = R"([{"id": "a", "title": "A", "steps": [)";
   CHECK(errorOf(minimalCourse(lesson + R"({"kind": "show", "structure": "cochlea", "preset": "p", "view": "sideways", "title": "T", "text": "X"}]}])"))
-            .find("lessons[0].steps[0].view: unknown view 'sideways'") != std::string::npos);
+            .find("bad.json: lessons[0].steps[0].view: unknown view 'sideways'") != std::string::npos);
   CHECK(errorOf(minimalCourse(lesson + R"({"kind": "question", "question": {"id": "q", "kind": "pick", "prompt": "P", "target": "cochlea"}}]}])"))
             .find("lessons[0].steps[0].question.kind: unknown question kind 'pick'") != std::string::npos);
   CHECK(errorOf(minimalCourse(lesson + R"({"kind": "question", "question": {"id": "q", "kind": "name", "prompt": "P", "target": "cochlea", "tolerance_mm": 1}}]}])"))
@@ -131,4 +131,32 @@ TEST_CASE("CourseJson_KeysWithControlCharactersAreQuotedPrintably") {
   const std::string error = errorOf("{\"schema\": 1, \"id\": \"c\", \"ti\\u001b[31mtle\\n\": 1}");
   CHECK(error == "bad.json: ti\\x1b[31mtle\\n: unknown field");
   CHECK(error.find('\x1b') == std::string::npos);
+}
+
+TEST_CASE("CourseJson_QuestionScenes_LocateNeedsANeighbourNotItsTarget") {
+  const std::string lesson = R"([{"id": "a", "title": "A", "steps": [)";
+  const std::string locate = R"("question": {"id": "q", "kind": "locate", "prompt": "Click the cochlea.", "target": "cochlea"}})";
+  auto ok = parseCourseJson(minimalCourse(lesson + R"({"kind": "question", "structure": "vestibule", "view": "superior", )" +
+                                          locate + "]}]"),
+                            "c.json");
+  REQUIRE_MESSAGE(ok, (ok ? "" : ok.error().message));
+  const Step& step = ok->lessons[0].steps[0];
+  REQUIRE(step.scene.has_value());
+  CHECK(step.scene->structure == "vestibule");
+  CHECK((step.scene->view == CameraView::Superior));
+  CHECK(sceneFor(step).presetId == "vestibule_wdt");  // the default preset of the scene's structure
+  CHECK(errorOf(minimalCourse(lesson + R"({"kind": "question", )" + locate + "]}]")) ==
+        "bad.json: lessons[0].steps[0].structure: a locate question needs the structure whose view shows the region "
+        "(a neighbour of 'cochlea'), with its view");
+  CHECK(errorOf(minimalCourse(lesson + R"({"kind": "question", "structure": "cochlea", "view": "superior", )" + locate + "]}]"))
+            .find("bad.json: lessons[0].steps[0].structure: a locate question must not select its target 'cochlea'") == 0);
+  CHECK(errorOf(minimalCourse(lesson + R"({"kind": "question", "structure": "vestibule", "view": "above", )" + locate + "]}]"))
+            .find("bad.json: lessons[0].steps[0].view: unknown view 'above'") == 0);
+  // Identify and name questions default to their target, highlighted.
+  auto name = parseCourseJson(minimalCourse(lesson + R"({"kind": "question", "question": {"id": "n", "kind": "name", "prompt": "P", "target": "stapes"}}]}])"),
+                              "c.json");
+  REQUIRE(name);
+  CHECK_FALSE(name->lessons[0].steps[0].scene.has_value());
+  CHECK(sceneFor(name->lessons[0].steps[0]).structure == "stapes");
+  CHECK(sceneFor(name->lessons[0].steps[0]).presetId == "stapes_wdt");
 }

@@ -7,6 +7,7 @@
 
 #include "in_memory_repositories.h"
 #include "lessons/course_json.h"
+#include "lessons/exam.h"
 #include "lessons/lesson_engine.h"
 #include "test_support.h"
 #include "volume/phantom.h"
@@ -248,4 +249,30 @@ TEST_CASE("ShippedCourse_EveryLessonPlaysThroughInOrderWithPrerequisites") {
   }
   CHECK(progress.responseList.size() == answered);
   CHECK(answered >= 20);
+}
+
+TEST_CASE("ShippedCourse_ExamDrawsItsItemsOnThePhantomAndEveryQuestionHasAScene") {
+  PhantomKeys& p = phantomKeys();
+  REQUIRE_FALSE(p.course.exams.empty());
+  for (const ExamSpec& exam : p.course.exams) {
+    CAPTURE(exam.id);
+    auto items = drawExamItems(exam, p.dataset.structures, *p.keys, "phantom-test");
+    REQUIRE_MESSAGE(items, (items ? "" : items.error().message));
+    CHECK(int(items->size()) == exam.count);
+    for (const ExamItem& item : *items) {
+      CHECK(p.keys->hasStructure(item.scene.structure));
+      if (item.question.question.kind == quiz::QuestionKind::Locate) CHECK(item.scene.structure != item.question.question.target);
+    }
+    for (const std::string& pre : exam.prerequisites) {
+      const bool known = std::any_of(p.course.lessons.begin(), p.course.lessons.end(), [&](const Lesson& l) { return l.id == pre; });
+      CHECK_MESSAGE(known, pre);
+    }
+  }
+  // Every question of the shipped course says what the view shows while it is asked.
+  for (const Lesson& l : p.course.lessons)
+    for (const Step& s : l.steps)
+      if (s.kind == StepKind::Question) {
+        CHECK_MESSAGE(s.scene.has_value(), s.question.id);
+        CHECK_MESSAGE(p.keys->hasStructure(sceneFor(s).structure), s.question.id);
+      }
 }

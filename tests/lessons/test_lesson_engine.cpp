@@ -1,7 +1,10 @@
 #include <doctest/doctest.h>
 
+#include <set>
+
 #include "in_memory_repositories.h"
 #include "lessons/lesson_engine.h"
+#include "lessons/scheduling.h"
 #include "quiz/elo.h"
 
 using namespace at;
@@ -294,27 +297,31 @@ TEST_CASE("ReviewQueue_AndAdaptiveReview_FollowDueTimesAndAbility") {
   REQUIRE(engine.next());
   REQUIRE(engine.next());
   REQUIRE(engine.answer(choice(indexOf(engine.current()->choiceIds, "incus")), {}, 1));  // wrong: 1 min
-  auto queue = reviewQueue(f.progress, 1, f.clock + 3600);
+  auto queue = reviewQueue(f.curriculum, f.progress, 1, "toy", f.clock + 3600);
   REQUIRE(queue);
   REQUIRE(queue->size() == 1);
   CHECK(queue->front().structureId == "stapes");
-  CHECK(reviewQueue(f.progress, 1, f.clock + 7 * 86400)->size() == 1);
-  queue = reviewQueue(f.progress, 1, f.clock + 8 * 86400);
+  CHECK(reviewQueue(f.curriculum, f.progress, 1, "toy", f.clock + 7 * 86400)->size() == 1);
+  queue = reviewQueue(f.curriculum, f.progress, 1, "toy", f.clock + 8 * 86400);
   REQUIRE(queue->size() == 2);
   CHECK(queue->front().structureId == "stapes");  // due earlier
   CHECK(queue->back().structureId == "cochlea");
 
-  // Candidates 1 hour later: stapes (due), vestibule and incus (never answered); cochlea is not due.
+  // 1 hour later only the stapes is due: vestibule (taught in lesson one, never answered) and
+  // incus (lesson two, not started) are not reviewed, and cochlea is not due yet.
   auto chosen = chooseReviewQuestion(f.curriculum, f.progress, 1, "toy", f.clock + 3600);
   REQUIRE(chosen);
   REQUIRE(chosen->has_value());
-  CHECK((*chosen)->target != "cochlea");
-  // The choice is the eligible question whose expected success is nearest 0.7 (recomputed here).
+  CHECK((*chosen)->id == "one.q2");
+  // 8 days later both are due: the choice is the due question whose expected success is nearest
+  // 0.7 (recomputed here).
+  chosen = chooseReviewQuestion(f.curriculum, f.progress, 1, "toy", f.clock + 8 * 86400);
+  REQUIRE(chosen->has_value());
   const double ability = f.progress.abilities[1];
   double bestGap = 2;
   std::string best;
   for (const auto& [id, diff] : std::vector<std::pair<std::string, double>>{
-           {"one.q2", f.progress.difficulties["one.q2"]}, {"one.q3", 1600}, {"two.q1", 1500}}) {
+           {"one.q1", f.progress.difficulties["one.q1"]}, {"one.q2", f.progress.difficulties["one.q2"]}}) {
     const double gap = std::abs(quiz::expectedScore(ability, diff) - 0.7);
     if (gap < bestGap) bestGap = gap, best = id;
   }
@@ -347,7 +354,7 @@ ReviewAnswer reviewOf(const quiz::Question& question, quiz::Answer answer) {
 }
 
 bool inQueue(Fixture& f, const std::string& structure, UnixSeconds at) {
-  auto queue = reviewQueue(f.progress, 1, at);
+  auto queue = reviewQueue(f.curriculum, f.progress, 1, "toy", at);
   REQUIRE(queue);
   return std::any_of(queue->begin(), queue->end(),
                      [&](const StructureProgress& p) { return p.structureId == structure; });
@@ -501,4 +508,52 @@ TEST_CASE("AnswerReview_StorageFailureOrBadInputRecordsNothing") {
   // After the failure the same answer can be given and counts.
   CHECK(answerReview(f.curriculum, f.progress, f.keys, reviewOf(*q, text("cochlea")), f.options()));
   CHECK(f.progress.reviewList.size() == 1);
+}
+
+TEST_CASE("Review_AsksOnlyAboutTaughtStructures_NotLockedOrUnstartedLessons") {
+  Fixture f;
+  // Nothing taught: nothing to review, even though every structure is "never answered".
+  CHECK(taughtStructures(f.curriculum, f.progress, 1, "toy")->empty());
+  CHECK_FALSE(chooseReviewQuestion(f.curriculum, f.progress, 1, "toy", f.clock)->has_value());
+
+  // The user answers about the incus elsewhere (another course's lesson, an exam): a memory state,
+  // but lesson two, whose question asks about it, is not started, so it is not taught here.
+  StructureProgress incus{1, "incus"};
+  incus = scheduleAnswer(incus, Rating::Good, true, f.clock, Fsrs());
+  f.progress.progressMap[{1, "incus"}] = incus;
+  CHECK(reviewQueue(f.curriculum, f.progress, 1, "toy", f.clock + 30 * 86400)->empty());
+
+  // Lesson one answered throughout: its three structures are taught; a month later all three are
+  // due, and the review asks only lesson one's questions until the queue is empty.
+  LessonEngine engine(f.curriculum, f.progress, f.keys, f.options());
+  REQUIRE(engine.start(1, "one"));
+  while (!engine.atEnd()) {
+    auto step = engine.current();
+    if (step->kind == StepKind::Question) {
+      if (step->questionKind == quiz::QuestionKind::Identify)
+        REQUIRE(engine.answer(choice(indexOf(step->choiceIds, step->structure)), {}, 0));
+      else REQUIRE(engine.answer(text(step->structure), {}, 0));
+    }
+    REQUIRE(engine.next());
+  }
+  REQUIRE(engine.finish());
+  auto taught = taughtStructures(f.curriculum, f.progress, 1, "toy");
+  REQUIRE(taught->size() == 3);
+  CHECK((*taught)[0].structureId == "cochlea");
+  f.clock += 30 * 86400;
+  CHECK(reviewQueue(f.curriculum, f.progress, 1, "toy", f.clock)->size() == 3);
+  std::set<std::string> reviewed;
+  for (int i = 0; i < 10; ++i) {
+    auto q = chooseReviewQuestion(f.curriculum, f.progress, 1, "toy", f.clock);
+    REQUIRE(q);
+    if (!q->has_value()) break;
+    CHECK((*q)->id.rfind("one.", 0) == 0);
+    reviewed.insert((*q)->target);
+    auto resolved = quiz::resolveQuestion(**q, f.keys);
+    REQUIRE(resolved);
+    quiz::Answer a = (*q)->kind == quiz::QuestionKind::Identify ? choice(resolved->keyChoice) : text((*q)->target);
+    REQUIRE(answerReview(f.curriculum, f.progress, f.keys, reviewOf(**q, a), f.options()));
+  }
+  CHECK(reviewed == std::set<std::string>{"cochlea", "stapes", "vestibule"});
+  CHECK(reviewQueue(f.curriculum, f.progress, 1, "toy", f.clock)->empty());
 }

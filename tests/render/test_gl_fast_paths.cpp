@@ -126,6 +126,8 @@ TEST_CASE("A field uploaded slice by slice keeps the old field on screen until i
   s.height = 40;
   s.preset.mode = RenderMode::Wdt;
   s.preset.t = 0.0f;  // only what the field reaches shows: the two fields give different images
+  s.preset.surfaceGradientHu = {0, 0};  // every voxel the field reaches, not only edges: the blobs
+  s.preset.surfaceInterior = 1;         // are a few voxels wide
   // A view in which the two fields tell apart in the image. A random orbit of a random scene can
   // show none of the voxels where they differ (seed 25806670135292 did), so orbits are drawn until
   // one does.

@@ -25,6 +25,9 @@ Preset contextPreset(RenderMode mode, float t) {
               {300, {0.85f, 0.7f, 0.6f, 0.1f}}, {1200, {0.95f, 0.92f, 0.85f, 0.5f}}, {2000, {1, 1, 1, 0.7f}}};
   p.distanceTf = {{0, {1, 1, 1, 0}}, {0.4f, {1, 0.8f, 0.5f, 0.3f}}, {1, {1, 0.45f, 0.1f, 1}}};
   p.alpha = 1.6f;
+  // Algorithm 1 as the paper states it: no surface ramp (these scenes' context is soft tissue).
+  p.surfaceGradientHu = {0, 0};
+  p.surfaceInterior = 1;
   return p;
 }
 
@@ -39,6 +42,7 @@ View viewOf(const Preset& preset, NamedView named, const Vec3& centre, double ra
   v.settings.preset = preset;
   v.settings.width = v.settings.height = kSize;
   v.settings.jitter = false;
+  v.settings.opacityRefMm = 0.25;
   v.settings.camera = Camera::named(named, centre, radiusMm);
   const auto c = v.settings.camera.project(centre, kSize, kSize);
   const auto e = v.settings.camera.project(centre + structureRadiusMm * v.settings.camera.up(), kSize, kSize);

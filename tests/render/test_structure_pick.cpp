@@ -44,6 +44,7 @@ TEST_CASE("pickStructure finds a hollow canal that the opacity pick passes throu
   const CanalScene scene;
   RenderSettings s;
   s.width = s.height = 64;
+  s.opacityRefMm = 0.25;  // the default preset's bone opacity per quarter millimetre: an opaque floor
   s.camera = Camera::named(NamedView::Superior, {0, 0, 0}, 12);
   const SceneVolumes sv{&scene.volume, &scene.labels, &scene.field, 0};
   const TransferFunction2D table = shadingTable(s.preset);

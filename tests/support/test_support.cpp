@@ -1,6 +1,8 @@
 #include "test_support.h"
 
 #include <chrono>
+#include <map>
+#include <mutex>
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
@@ -9,9 +11,24 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include "volume/phantom.h"
+
 namespace at::test {
 
 namespace fs = std::filesystem;
+
+const Dataset& phantomOfSize(int size) {
+  static std::mutex mutex;
+  static std::map<int, Dataset> cache;
+  std::lock_guard lock(mutex);
+  auto it = cache.find(size);
+  if (it == cache.end()) {
+    PhantomOptions options;
+    options.size = size;
+    it = cache.emplace(size, makePhantom(options)).first;
+  }
+  return it->second;
+}
 
 fs::path sharedDataDir() {
   if (const char* env = std::getenv("AT_SHARED_DATA")) {

@@ -6,7 +6,17 @@
 #include <filesystem>
 #include <string>
 
+#include "core/error.h"
+
+namespace at {
+struct Dataset;
+}
+
 namespace at::test {
+
+// The synthetic phantom at size³ voxels, built once per size for the whole test run (256³ takes
+// about half a second).
+const Dataset& phantomOfSize(int size);
 
 // ../shared/data next to the checkout, or empty if it is absent (tests then report a skip).
 std::filesystem::path sharedDataDir();
@@ -14,6 +24,13 @@ std::filesystem::path sharedDataDir();
 std::filesystem::path sharedData(const std::string& relative);
 // True and nothing printed if present; otherwise prints "SKIPPED: <what> needs ../shared/data".
 bool requireSharedData(const char* what);
+
+// The message of a failed Result, or "" for a value: safe inside doctest's *_MESSAGE macros, which
+// `-s` stringifies on success too.
+template <class T>
+std::string errorText(const Result<T>& result) {
+  return result ? std::string() : result.error().message;
+}
 
 // The whole content of a file (empty if it cannot be read).
 std::string readFile(const std::filesystem::path& path);

@@ -11,6 +11,8 @@
 #include <random>
 #include <string>
 
+#include <doctest/doctest.h>
+
 #include "volume/geometry.h"
 #include "volume/image_file.h"
 
@@ -99,6 +101,17 @@ struct RawNifti {
 };
 
 // A random rotation (from a random unit quaternion), spacing 0.3..3 mm and origin within ±200 mm.
+// A loader's error for a broken input: one line that starts with the file's path and says `expected`.
+template <class T>
+void checkError(const Result<T>& result, const std::string& path, const std::string& expected) {
+  REQUIRE_FALSE(result.has_value());
+  const std::string& message = result.error().message;
+  CAPTURE(message);
+  CHECK(message.rfind(path, 0) == 0);
+  CHECK(message.find(expected) != std::string::npos);
+  CHECK(message.find('\n') == std::string::npos);
+}
+
 inline Geometry randomObliqueGeometry(std::mt19937_64& rng, Dims dims) {
   std::normal_distribution<double> normal;
   double q[4];

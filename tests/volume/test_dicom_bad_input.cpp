@@ -199,7 +199,7 @@ TEST_CASE("DICOM bad input: empty folders, folders without DICOM files, and miss
   auto unknown = loadImageFile((dir / "volume.xyz").string());
   REQUIRE(!unknown);
   CHECK(unknown.error().message ==
-        (dir / "volume.xyz").string() + ": unrecognised format (expected a DICOM folder, .nii, .nii.gz, .nrrd or .nhdr)");
+        (dir / "volume.xyz").string() + ": unrecognised format (expected a DICOM folder, .nii, .nii.gz, .nrrd, .nhdr or .inv3)");
   auto notSeg = loadDicomSeg((dir / "volume.xyz").string());
   REQUIRE(!notSeg);
   CHECK(notSeg.error().message.find("volume.xyz") != std::string::npos);

@@ -16,16 +16,6 @@ using namespace at::test;
 
 namespace {
 
-template <class T>
-void checkError(const Result<T>& result, const std::string& path, const std::string& expected) {
-  REQUIRE_FALSE(result.has_value());
-  const std::string& message = result.error().message;
-  CAPTURE(message);
-  CHECK(message.rfind(path, 0) == 0);
-  CHECK(message.find(expected) != std::string::npos);
-  CHECK(message.find('\n') == std::string::npos);
-}
-
 FloatVolume smallImage() {
   Geometry g;
   g.dims = {16, 12, 8};

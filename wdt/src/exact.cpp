@@ -17,6 +17,7 @@
 #include <queue>
 #include <vector>
 
+#include "field_sampling.h"
 #include "wdt/step_cost.h"
 #include "wdt/problem.h"
 #include "wdt/stencil.h"
@@ -218,54 +219,13 @@ Result<FloatVolume> exactWdt(const Volume& volume, const Mask& seeds, const WdtP
 // value of its nearest corner instead (finite or +infinity).
 FloatVolume upsampleField(const DistanceField& field, const Geometry& target) {
   const FloatVolume& src = field.distances;
-  const Geometry& sg = src.geometry;
-  const Dims sd = sg.dims;
   FloatVolume out(target, kInf);
-  if (sd.count() == 0) return out;
-  // index_src = A · index_target + b, affine: evaluate the origin and the three axis steps once.
-  const Vec3 b = sg.patientToIndex(target.indexToPatient({0, 0, 0}));
-  Vec3 cols[3];
-  for (int a = 0; a < 3; ++a) {
-    Vec3 e{0, 0, 0};
-    e[a] = 1;
-    cols[a] = sg.patientToIndex(target.indexToPatient(e)) - b;
-  }
-  const int n[3] = {sd.x, sd.y, sd.z};
+  if (src.geometry.dims.count() == 0) return out;
+  const wdt::detail::GridMap map(src.geometry, target);
   const Dims td = target.dims;
   for (int k = 0; k < td.z; ++k)
     for (int j = 0; j < td.y; ++j)
-      for (int i = 0; i < td.x; ++i) {
-        double p[3];
-        int i0[3], i1[3];
-        double t[3];
-        for (int a = 0; a < 3; ++a) {
-          p[a] = b[a] + cols[0][a] * i + cols[1][a] * j + cols[2][a] * k;
-          p[a] = std::clamp(p[a], 0.0, double(n[a] - 1));
-          i0[a] = std::min(int(p[a]), n[a] - 1);
-          i1[a] = std::min(i0[a] + 1, n[a] - 1);
-          t[a] = p[a] - i0[a];
-        }
-        double acc = 0;
-        bool finite = true;
-        for (int c = 0; c < 8 && finite; ++c) {
-          const int cx = c & 1 ? i1[0] : i0[0], cy = c & 2 ? i1[1] : i0[1], cz = c & 4 ? i1[2] : i0[2];
-          const float v = src.voxels[sd.index(cx, cy, cz)];
-          const double w = (c & 1 ? t[0] : 1 - t[0]) * (c & 2 ? t[1] : 1 - t[1]) * (c & 4 ? t[2] : 1 - t[2]);
-          if (!std::isfinite(v)) {
-            finite = false;
-          } else {
-            acc += w * v;
-          }
-        }
-        float value;
-        if (finite) {
-          value = float(acc);
-        } else {
-          value = src.voxels[sd.index(t[0] < 0.5 ? i0[0] : i1[0], t[1] < 0.5 ? i0[1] : i1[1],
-                                      t[2] < 0.5 ? i0[2] : i1[2])];
-        }
-        out.voxels[td.index(i, j, k)] = value;
-      }
+      for (int i = 0; i < td.x; ++i) out.voxels[td.index(i, j, k)] = wdt::detail::sampleMapped(src, map, i, j, k);
   return out;
 }
 

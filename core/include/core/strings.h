@@ -23,4 +23,8 @@ std::string identifier(std::string_view name);
 // The items joined with `separator` ({"a", "b"}, ", " → "a, b").
 std::string join(const std::vector<std::string>& items, std::string_view separator);
 
+// A count with its noun in the right number: "1 lesson", "2 lessons", "0 lessons" (`plural`
+// defaults to `singular` + "s").
+std::string countOf(long long n, std::string_view singular, std::string_view plural = {});
+
 }  // namespace at::str

@@ -5,10 +5,18 @@
 // by an RAII object: `Database` (the connection), `Statement` (a prepared statement), `Transaction`
 // (rolled back when it dies uncommitted). All values reach SQL through bound parameters, never by
 // pasting text into a statement.
+//
+// Threads: a process keeps one connection (the app's learning session). It may be used from
+// several threads: SQLite serialises each call on it, and write transactions (writeTransaction,
+// Transaction) take the connection's writer lock for their whole length, so one thread's
+// transaction never takes in another thread's writes. A thread reading while another writes sees
+// the uncommitted rows.
 #pragma once
 
 #include <cstdint>
 #include <functional>
+#include <memory>
+#include <mutex>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -123,10 +131,13 @@ class Database {
   sqlite3* handle() const { return db_; }
 
  private:
-  Database(sqlite3* db, std::string path) : db_(db), path_(std::move(path)) {}
+  friend class Transaction;
+  Database(sqlite3* db, std::string path)
+      : db_(db), path_(std::move(path)), writer_(std::make_unique<std::recursive_mutex>()) {}
   sqlite3* db_ = nullptr;
   std::string path_;
   bool readOnly_ = false;
+  std::unique_ptr<std::recursive_mutex> writer_;  // held by the thread inside a write transaction
 };
 
 // BEGIN … COMMIT as an object: rolled back when it dies without commit().
@@ -144,15 +155,16 @@ class Transaction {
   void rollback();
 
  private:
-  explicit Transaction(Database* db) : db_(db) {}
+  Transaction(Database* db, std::unique_lock<std::recursive_mutex> lock) : db_(db), lock_(std::move(lock)) {}
   Database* db_ = nullptr;  // null once committed or rolled back
+  std::unique_lock<std::recursive_mutex> lock_;  // the connection's writer lock, released when finished
 };
 
 // The database the program uses when no --db is given:
 // $XDG_DATA_HOME/anatomy-tutor/anatomy-tutor.db, else ~/.local/share/anatomy-tutor/anatomy-tutor.db.
 Result<std::string> defaultDatabasePath();
 
-// Opens `--db PATH` when given, else the default path (creating its folder).
+// Opens `--db PATH` when given (its folder must exist), else the default path (creating its folder).
 Result<Database> openDatabase(const std::optional<std::string>& path, const OpenOptions& options = {});
 
 }  // namespace at::db

@@ -55,14 +55,9 @@ DatasetFiles datasetFiles(const DatasetRecord& record);
 // checksums, and the command that registers the new content (import … --replace).
 Result<DatasetFiles> verifiedDatasetFiles(const DatasetRecord& record);
 
-// For commands outside db/ (datasets, structures, wdt, render): the imported datasets of the
-// database at `dbPath` (default database when nullopt). A missing default database is not an
-// error: it lists nothing and creates nothing.
-Result<std::vector<DatasetRecord>> listImportedDatasets(const std::optional<std::string>& dbPath);
-
-// Resolves an imported dataset's name to its files (nullopt when no such dataset is registered),
-// without creating a database that does not exist yet; the files' checksums are verified.
-Result<std::optional<DatasetFiles>> findImportedDataset(const std::optional<std::string>& dbPath,
-                                                        const std::string& name);
+// For commands that only read datasets (datasets, structures, wdt, render): the database at
+// `dbPath` (the default database when nullopt) if it exists, nullopt if it does not — reading must
+// not create a database as a side effect.
+Result<std::optional<Database>> openExistingDatabase(const std::optional<std::string>& dbPath);
 
 }  // namespace at::db

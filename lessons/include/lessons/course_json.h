@@ -23,4 +23,8 @@ std::string courseToJson(const Course& course);
 std::string questionToJson(const quiz::Question& question);
 Result<quiz::Question> parseQuestionJson(const std::string& text, const std::string& sourceName);
 
+// One exam in the course schema's "exams" form (db/ stores exams as text).
+std::string examToJson(const ExamSpec& exam);
+Result<ExamSpec> parseExamJson(const std::string& text, const std::string& sourceName);
+
 }  // namespace at::lessons

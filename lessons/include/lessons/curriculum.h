@@ -3,6 +3,7 @@
 #pragma once
 
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -38,12 +39,30 @@ struct StudyStep {
   std::vector<std::string> items;  // Likert items, e.g. "showing_shape"
 };
 
+// What the 3-D view shows while a question is asked: `structure` is selected (its weighted
+// distance field drives the context, the view is framed on it), drawn with `presetId` from `view`.
+// Identify and name questions select their target (highlighted, its name hidden); a locate
+// question selects a neighbouring landmark whose context shows the target without marking it.
+struct QuestionScene {
+  std::string structure;
+  std::string presetId;   // "" = "<structure>_wdt"
+  CameraView view = CameraView::LateralRight;
+};
+
 struct Step {
   StepKind kind = StepKind::Show;
   ShowStep show;              // Show only
   quiz::Question question;    // Question only
+  std::optional<QuestionScene> scene;  // Question only: as the course sets it (sceneFor fills the default)
   StudyStep study;            // Study only
 };
+
+// The scene a question step shows: the course's (its preset defaulting to "<structure>_wdt"), else
+// the default for its kind — identify, name and locate: the target; relation: the structure the
+// distances are measured from; order: the drilling target structure (or the question's target).
+// The course reader requires a scene on locate questions that does not select the target, since
+// the default would highlight the answer; only courses built in code can lack one.
+QuestionScene sceneFor(const Step& questionStep);
 
 struct Lesson {
   std::string id;                          // unique across courses: "inner_ear"
@@ -52,6 +71,26 @@ struct Lesson {
   std::string summary;
   std::vector<std::string> prerequisites;  // lesson ids that must be finished first
   std::vector<Step> steps;
+};
+
+// A practical exam (data/courses/README.md): `count` items drawn from every structure × kind pair,
+// each structure before any repeats, answered with labels hidden, no feedback until the end, within
+// the time limit.
+enum class ExamLocateView { ThreeD, Slice };
+const char* toString(ExamLocateView view);  // "3d", "slice"
+Result<ExamLocateView> parseExamLocateView(const std::string& text);
+
+struct ExamSpec {
+  std::string id;                          // unique across courses' lessons and exams: "temporal_bone.practical"
+  std::string title;
+  std::string instructions;                // shown before the first item
+  std::vector<std::string> structures;     // structure ids examined
+  std::vector<quiz::QuestionKind> kinds;   // locate, identify, name
+  int count = 0;                           // items per attempt, 1..structures × kinds
+  int timeLimitS = 0;                      // > 0
+  std::vector<ExamLocateView> locateViews{ExamLocateView::ThreeD};  // where locate items are answered
+  std::optional<double> passScore;         // 0..1: the mean item score needed to pass
+  std::vector<std::string> prerequisites;  // lesson ids to finish before the exam
 };
 
 struct Course {
@@ -64,6 +103,7 @@ struct Course {
   // for the target and to reject answers closer to another structure.
   std::map<std::string, std::vector<std::string>> synonyms;
   std::vector<Lesson> lessons;  // in teaching order
+  std::vector<ExamSpec> exams;
 };
 
 }  // namespace at::lessons

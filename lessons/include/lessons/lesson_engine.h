@@ -33,6 +33,22 @@ struct EngineOptions {
   std::function<UnixSeconds()> clock;  // empty = the system clock
 };
 
+// The lessons of `lessonIds` the user has not finished, as "'id' (title), …" ("" when none).
+Result<std::string> unfinishedLessons(CurriculumRepository& curriculum, ProgressRepository& progress,
+                                      std::int64_t userId, const std::vector<std::string>& lessonIds);
+
+// The scene of the course's question `questionId` (sceneFor its step); nullopt if not in the course.
+std::optional<QuestionScene> questionScene(const Course& course, const std::string& questionId);
+
+// The options' clock, else the system clock.
+UnixSeconds clockNow(const EngineOptions& options);
+
+// What one graded answer to `question` at `at` does to the learner model (read from `progress`):
+// its FSRS rating, the target structure's next memory state, the Elo update. Nothing is written.
+Result<LearnerUpdate> learnerUpdate(ProgressRepository& progress, std::int64_t userId, const quiz::Question& question,
+                                    const quiz::Grade& grade, std::int64_t latencyMs, UnixSeconds at,
+                                    const EngineOptions& options);
+
 // What the UI (or `play`) shows for the current step.
 struct StepView {
   int index = 0;            // in the lesson's steps
@@ -54,6 +70,9 @@ struct StepView {
   std::vector<std::string> choiceIds;    // Identify/Relation/Order
   std::vector<std::string> choiceNames;  // display names of choiceIds
   std::optional<quiz::Grade> feedback;   // set once answered
+  // What the 3-D view shows (both kinds): a show step's structure, preset and view; a question's
+  // scene (sceneFor).
+  QuestionScene scene;
 };
 
 // The names a typed answer may use for each structure of a course's dataset: its display name,
@@ -116,13 +135,28 @@ class LessonEngine {
   std::size_t cursor_ = 0;                                 // into shown_
 };
 
-// Structures due for review for the user at `now`, earliest first.
-Result<std::vector<StructureProgress>> reviewQueue(ProgressRepository& progress, std::int64_t userId,
-                                                   UnixSeconds now);
+// Review (ARCHITECTURE.md §5) asks only about what the user has been taught. A structure is
+// TAUGHT in a course when the user has started (any attempt) a lesson of that course with a
+// question on it, and has answered about it at least once (it has an FSRS memory state). These
+// functions are the one definition of what is due: `progress`, `play --review` and the desktop
+// panels all count and ask through them.
 
-// Adaptive review: among the course's questions whose structure is due at `now` or never answered,
-// the one whose difficulty best matches the user's ability (quiz::chooseAdaptive). nullopt when
-// nothing is due.
+// The rule itself, on plain records: the ids (sorted) of the course's structures that are targets of
+// questions in lessons the user has started and of which the user has a memory state.
+std::vector<std::string> taughtStructureIds(const Course& course, const std::vector<Attempt>& userAttempts,
+                                            const std::vector<StructureProgress>& userMemories);
+
+// The course's structures taught to the user, with their progress, ordered by id.
+Result<std::vector<StructureProgress>> taughtStructures(CurriculumRepository& curriculum, ProgressRepository& progress,
+                                                        std::int64_t userId, const std::string& courseId);
+
+// The taught structures due for review at `now` (memory.due <= now), earliest due first.
+Result<std::vector<StructureProgress>> reviewQueue(CurriculumRepository& curriculum, ProgressRepository& progress,
+                                                   std::int64_t userId, const std::string& courseId, UnixSeconds now);
+
+// Adaptive review: among the questions of the lessons the user has started in the course whose
+// structure is due at `now` (reviewQueue), the one whose difficulty best matches the user's ability
+// (quiz::chooseAdaptive). nullopt when nothing is due.
 Result<std::optional<quiz::Question>> chooseReviewQuestion(CurriculumRepository& curriculum,
                                                            ProgressRepository& progress, std::int64_t userId,
                                                            const std::string& courseId, UnixSeconds now);

@@ -68,6 +68,8 @@ class Camera {
   double nearMm() const;
   double farMm() const;
 
+  bool operator==(const Camera&) const = default;
+
  private:
   Vec3 forward_{0, 1, 0};
   Vec3 up_{0, 0, 1};
@@ -79,6 +81,7 @@ struct ClipPlane {
   Vec3 normal{1, 0, 0};  // unit
   double d = 0;
   bool keeps(const Vec3& p) const { return dot(normal, p) <= d; }
+  bool operator==(const ClipPlane&) const = default;
   // Normalises (nx, ny, nz) and scales d with it. Error for a zero normal.
   static Result<ClipPlane> fromCoefficients(double nx, double ny, double nz, double d);
 };

@@ -4,6 +4,7 @@
 //     "data_tf": [ {"x": HU, "rgba": [r,g,b,a]}, … ], "distance_tf": [ {"x": 0..1, "rgba": […]}, … ],
 //     "alpha": 1.6, "t": 0.5, "highlight_rgb": [1,0.5,0], "lighting": {"alpha": 0.1, "beta": 1.0},
 //     "weight": {"rule": "entering", "hu_window": [-1000, 2000], "base": 0.02},
+//     "structure_opacity": 0.9, "surface": {"gradient_hu": [40, 300], "interior": 0},
 //     "id": "…", "structure": "cochlea", "view": "lateral_left", "clip": [nx, ny, nz, d] }
 //
 // Loading is strict: an unknown field, a wrong type or an out-of-range value is an error naming the
@@ -48,6 +49,13 @@ struct Preset {
   std::string weightRule = "entering";  // step rule of the WDT: entering | trapezoid
   std::array<float, 2> huWindow{-1000, 2000};
   float weightBase = 0.02f;       // ≥ 0
+  // The selected structure's surface opacity in the context modes (bare draws it opaque), 0..1.
+  float structureOpacity = 0.9f;
+  // Context surfaces (render_settings.h): the table's opacity is scaled by
+  // lerp(surfaceInterior, 1, smoothstep(lo, hi, g)) for edge strength g in HU per voxel of the
+  // smoothed volume. interior = 1 and lo = hi = 0 give the unmodulated Algorithm 1.
+  std::array<float, 2> surfaceGradientHu{40, 300};  // lo ≤ hi, ≥ 0
+  float surfaceInterior = 0;      // 0..1
   std::optional<std::string> id;         // defaults to the file's stem when loaded from a file
   std::optional<std::string> structure;  // structure id the preset was made for
   std::optional<std::string> view;       // named view (camera.h)

@@ -2,13 +2,22 @@
 // preset, the camera and clipping plane. The GL ray caster (render/gl) and CPU picking read the same
 // settings and classify samples the same way, so a pick returns what the user sees.
 //
-// Sample classification per mode (s = HU, D = distance field, n = f(D) = 2/(1+α^D)):
-//   wdt, unweighted, outline, lighting: rgba = table(s, n), the 2-D TF of Algorithm 1.
-//   fuzzy (Eqs. 4–5): w = distTF(n).A; K'd = Kd(1−w) + Kh·w interpolated in CIE XYZ, Kd = dataTF(s).RGB,
-//       Kh = distTF(n).RGB (the highlight colour from a 1-D TF); A = lerp(t·dataTF(s).A, dataTF(s).A, w).
-//   bare: the selected structure's mask (trilinear, surface at 0.5) in highlight_rgb, opaque.
-// Opacity is per `opacityRefMm` of ray and corrected to the step: a' = 1 − (1 − a)^(step/ref).
-// lighting adds Eq. 6: ambient k_a = β/(α_l·D + 1)² in highlight colour, the structure as the light.
+// Sample classification per mode (s = HU, D = distance field, n = f(D / distanceUnit) = 2/(1+α^(D/unit))):
+//   context (every mode but bare):
+//     wdt, unweighted, outline, lighting: rgba = table(s, n), the 2-D TF of Algorithm 1.
+//     fuzzy (Eqs. 4–5): w = distTF(n).A; K'd = Kd(1−w) + Kh·w interpolated in CIE XYZ, Kd = dataTF(s).RGB,
+//         Kh = distTF(n).RGB (the highlight colour from a 1-D TF); A = lerp(t·dataTF(s).A, dataTF(s).A, w).
+//     The opacity is then scaled by the surface ramp of the edge strength g (HU per voxel of the
+//     smoothed volume, gradient_volume.h): A · lerp(interior, 1, smoothstep(lo, hi, g)), so edges
+//     are drawn as surfaces and homogeneous regions do not pile up into fog. Context within about a
+//     voxel of the selected structure (its smoothed mask > kMaskHalo) is not drawn.
+//   the selected structure (every mode): its mask, smoothed by a [1 2 1]³ binomial (at least 0.75
+//     on its own voxels, so one-voxel-thin parts stay) and sampled trilinearly, has a surface at 0.5; where a ray enters it one sample of highlight_rgb is
+//     composited with opacity structure_opacity (bare: 1), and its inside draws nothing else.
+//   bare: only the structure.
+// Context opacity is per `opacityRefMm` of ray (default: one voxel) and corrected to the step:
+// a' = 1 − (1 − a)^(step/ref). lighting adds Eq. 6: ambient k_a = β/(α_l·D + 1)² in highlight
+// colour, the structure as the light.
 #pragma once
 
 #include <array>
@@ -16,6 +25,7 @@
 #include <optional>
 
 #include "render/camera.h"
+#include "render/gradient_volume.h"
 #include "render/preset.h"
 #include "render/transfer_function.h"
 #include "volume/grid.h"
@@ -28,15 +38,27 @@ struct RenderSettings {
   Camera camera;
   std::optional<ClipPlane> clip;
   int width = 512, height = 512;
-  double stepMm = 0;                   // 0: half the volume's smallest spacing
-  double opacityRefMm = 0.25;          // TF opacity is per this length of ray
+  double stepMm = 0;                   // 0: kDefaultStepVoxels × the volume's smallest spacing
+  double opacityRefMm = 0;             // TF opacity is per this length of ray; 0: the smallest spacing
+  double distanceUnit = 1;             // weighted distances are divided by this before f(x); framing
+                                       // sets it from the structure's size (scene.h)
   std::array<float, 4> background{0, 0, 0, 0};  // composited under the volume (straight RGBA)
   bool jitter = true;                  // per-pixel ray start offsets (deterministic hash)
   bool shading = true;                 // Phong from gradients
   bool skipEmptySpace = true;          // GL: jump over blocks that cannot hold a visible sample
                                        // (same image; off marches every sample, for tests/benchmarks)
   int tableSize = 256;                 // entries per axis of the 2-D table
+
+  bool operator==(const RenderSettings&) const = default;
 };
+
+// The default sampling step in voxels: with jittered starts, opacity correction and the structure's
+// surface found by bisection, 0.75 voxel gives the image of 0.5 voxel (bench/RESULTS.md) at two
+// thirds of the samples.
+constexpr double kDefaultStepVoxels = 0.75;
+
+// Context samples where the selected structure's smoothed mask exceeds this are not drawn.
+constexpr float kMaskHalo = 0.02f;
 
 // What the ray caster samples. The field may lie on a coarser grid (downsampled); it is sampled
 // trilinearly in the patient frame. `selected` is the label of the structure (0 = none).
@@ -45,12 +67,16 @@ struct SceneVolumes {
   const LabelMap* labels = nullptr;     // same grid as volume
   const FloatVolume* field = nullptr;   // distance field on its own grid
   std::uint16_t selected = 0;
+  const GradientVolume* gradients = nullptr;  // volume's; null: no surface ramp (every edge full)
 };
 
 // The 2-D table the mode samples (see the classification above). For bare mode it is the wdt
 // table (unused by the shader but kept for picking consistency).
 TransferFunction2D shadingTable(const Preset& preset);
 double effectiveStepMm(const Geometry& volumeGrid, const RenderSettings& settings);
+double effectiveOpacityRefMm(const Geometry& volumeGrid, const RenderSettings& settings);
+// The surface ramp's factor for edge strength g (HU per voxel).
+float surfaceFactor(const Preset& preset, float strength);
 // The value the ray caster composites: opacity corrected from `opacityRefMm` to the step.
 float correctedOpacity(float alpha, double stepMm, double refMm);
 // sRGB display value ↔ CIE XYZ (D65), for the fuzzy mode's colour interpolation.

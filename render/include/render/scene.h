@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "render/render_settings.h"
 #include "core/error.h"
@@ -17,12 +18,36 @@ namespace at::render {
 
 struct StructureFrame {
   Vec3 centroidMm{0, 0, 0};   // LPS
+  Vec3 anchorMm{0, 0, 0};     // the structure's voxel nearest its centroid: a point on it (the
+                              // centroid of a curved structure, a spiral or a loop, lies outside it)
   double radiusMm = 0;        // farthest voxel centre from the centroid
   std::size_t voxelCount = 0;
+  double volumeMm3 = 0;
+  double voxelMm = 0;         // the grid's largest spacing
+  // Voxel centres of the structure (every k-th, at most kMaxFramePoints), for framing from any side.
+  std::vector<Vec3> pointsMm;
 };
+constexpr std::size_t kMaxFramePoints = 4096;
 
 // Error if no voxel carries `label`.
 Result<StructureFrame> structureFrame(const LabelMap& labels, std::uint16_t label);
+
+// The context radius of a structure: the geometric mean of its equivalent-sphere radius (its
+// volume's) and its farthest-voxel radius, in mm. A compact structure gets about its radius; a long
+// thin one (a nerve, a canal) less than its length, so its context hugs it rather than filling the
+// box around it. Phantom: cochlea ≈ 2.9 mm, a semicircular canal ≈ 2.2 mm; a vertebra ≈ 28 mm.
+double contextRadiusMm(const StructureFrame& frame);
+// The distance unit (RenderSettings::distanceUnit) for a structure: its context radius over
+// kReferenceContextMm (the radius presets are written for, a cochlea's), times `scale`, clamped to
+// 0.4..40 so that tiny or huge labels keep a usable context.
+constexpr double kReferenceContextMm = 3.0;
+double distanceUnitFor(const StructureFrame& frame, double scale = 1.0);
+
+// A camera looking from the named side at the structure: centred on its extent as seen from that
+// side and far enough (perspective included) that the extent times `margin` fills the view of the
+// given aspect (width / height), and at least a view of half-height `minHalfHeightMm`.
+Camera frameCamera(const StructureFrame& frame, NamedView view, double aspect, double margin = 1.6,
+                   double minHalfHeightMm = 3.0);
 
 // Step rule, HU window and base cost from the preset; uniform weights for the unweighted mode.
 Result<WdtParams> wdtParamsFor(const Preset& preset, int passes = 2);
@@ -34,11 +59,13 @@ struct ViewRequest {
   int width = 512, height = 512;
   std::optional<std::string> view;          // overrides preset.view; default lateral_left
   std::optional<std::array<float, 4>> clip; // overrides preset.clip
-  double contextScale = 2.5;                // view radius = max(contextScale · structure radius, minRadiusMm)
-  double minRadiusMm = 6;
+  double margin = 1.6;                      // the structure's extent times this fills the view
+  double contextScale = 1.0;                // multiplies the structure's distance unit
+  double minRadiusMm = 3;                   // smallest half-height of the view
 };
 
-// Settings for rendering `preset` around the structure; errors name a bad view or clip plane.
+// Settings for rendering `preset` around the structure (framed camera, distance unit from its
+// size); errors name a bad view or clip plane.
 Result<RenderSettings> settingsFor(const Preset& preset, const StructureFrame& frame, const ViewRequest& request);
 
 }  // namespace at::render

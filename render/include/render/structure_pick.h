@@ -9,6 +9,11 @@
 
 namespace at::render {
 
+// Context bone is drawn as medium-opacity surfaces that the user sees through, so "the first opaque
+// sample" is where the accumulated opacity reaches kSeenThroughOpacity, not one half: a structure
+// seen through one or two bone surfaces is still under the cursor.
+constexpr double kSeenThroughOpacity = 0.85;
+
 // `beyondMm`: how far past the first opaque sample a label still counts (the wall's thickness the
 // user perceives as the structure's boundary). With no opaque sample the whole ray is walked.
 PickResult pickStructure(const SceneVolumes& scene, const RenderSettings& settings, const TransferFunction2D& table,

@@ -1,6 +1,6 @@
 // Reading images from files: what every loader returns, and one entry point that picks the loader
 // from the path (a folder → DICOM series; .nii/.nii.gz → NIfTI; .nrrd/.nhdr/.seg.nrrd → NRRD;
-// a DICOM SEG file → segmentation). Only geometry and pixel data survive loading: no patient
+// .inv3 → InVesalius project; a DICOM SEG file → segmentation). Only geometry and pixel data survive loading: no patient
 // identifiers (name, ID, birth date, institution, accession, dates) are ever copied out.
 #pragma once
 

@@ -8,16 +8,18 @@
 // thinner than about one voxel are widened to 0.9 voxel so that they stay connected on coarse grids.
 //
 // How it is built: a list of paint operations (shapes with a material and a label) applied in
-// order over a base of air, soft tissue and a rounded block of bone (cortical shell over
-// cancellous bone). Later operations win. Each worker thread owns a slab of z-slices and runs every
+// order over a base: a rounded block of bone (cortical shell over cancellous bone) in a layer of
+// soft tissue, outside air lateral to the skin and brain everywhere else around it. Later operations win. Each worker thread owns a slab of z-slices and runs every
 // operation clipped to its slab and to the shape's bounding box, so the result does not depend on
 // the number of threads. HU come last: each material's value, a smooth texture for cancellous bone
 // (fixed, part of the anatomy) and per-voxel noise from the seed (splitmix64 of seed and voxel
 // index; an Irwin–Hall sum keeps it independent of any standard library's distributions).
 //
 // Paint order (why it is this order):
-//   base → temporal line ridge → sigmoid sinus and carotid canal (cortical wall, then blood)
-//   → mastoid antrum, aditus and air cells → internal auditory canal (CSF)
+//   base → temporal line ridge → petrous bone (dense, around the labyrinth and towards the apex)
+//   → sigmoid sinus and carotid canal (cortical wall, then blood)
+//   → mastoid antrum and aditus, then the air cells as a honeycomb (Voronoi cells of seeded points,
+//     separated by thin bony septa) → internal auditory canal (CSF)
 //   → otic capsule (dense bone within 1.3 mm of every labyrinth lumen; caps the IAC fundus)
 //   → labyrinth lumens (canals, cochlea, vestibule last so that canals open into it)
 //   → tympanic cavity and oval-window niche → external auditory canal → tympanic membrane
@@ -28,6 +30,8 @@
 #include <cassert>
 #include <cmath>
 #include <cstdio>
+#include <functional>
+#include <memory>
 #include <string>
 #include <thread>
 #include <vector>
@@ -66,10 +70,12 @@ constexpr std::uint64_t kAnatomySeed = 0x7E3B0C4A11D5F0A1ULL;
 // --- materials and HU ------------------------------------------------------------------------------
 
 enum Material : std::uint8_t {
-  kAir, kSoftTissue, kFluid, kCsf, kBlood, kCancellous, kCortical, kCapsule, kOssicle, kNerve, kMembrane
+  kAir, kSoftTissue, kFluid, kCsf, kBlood, kCancellous, kCortical, kCapsule, kOssicle, kNerve, kMembrane, kPetrous,
+  kBrain
 };
 
-constexpr double kNoiseSigmaHu = 15.0;
+constexpr double kNoiseSigmaHu = 20.0;   // after the point-spread function
+constexpr double kPsfSigmaMm = 0.2;      // Gaussian blur of the scanner (FWHM ≈ 0.47 mm)
 
 double materialHu(Material m) {
   switch (m) {
@@ -78,9 +84,11 @@ double materialHu(Material m) {
     case kFluid: return 8;
     case kCsf: return 10;
     case kBlood: return 50;
-    case kCancellous: return 600;  // ± 150 from the texture
+    case kCancellous: return 600;  // ± 100 from the texture
     case kCortical: return 1850;
     case kCapsule: return 2000;
+    case kPetrous: return 1500;
+    case kBrain: return 35;
     case kOssicle: return 1350;
     case kNerve: return 35;
     case kMembrane: return 45;
@@ -94,12 +102,14 @@ double clamp01(double t) { return t < 0 ? 0 : (t > 1 ? 1 : t); }
 Vec3 unit(const Vec3& v) { return (1.0 / norm(v)) * v; }
 
 struct Shape {
-  enum Kind { kSegment, kEllipsoid, kSuperEllipsoid, kCylinder, kTorus } kind = kSegment;
+  enum Kind { kSegment, kEllipsoid, kSuperEllipsoid, kCylinder, kTorus, kCustom } kind = kSegment;
   Vec3 a{0, 0, 0}, b{0, 0, 0};  // segment/cylinder ends; a = centre otherwise
   double ra = 0, rb = 0;        // segment radii at a and b; cylinder radius; torus minor radius
   Vec3 radii{1, 1, 1};          // ellipsoid semi-axes (axis-aligned)
   Vec3 normal{0, 0, 1};         // torus plane normal
   double majorR = 0;            // torus major radius
+  std::shared_ptr<const std::function<double(const Vec3&)>> custom;  // kCustom: its sd …
+  Vec3 boxLo{0, 0, 0}, boxHi{0, 0, 0};                               // … within this box
 
   double sd(const Vec3& p) const {
     switch (kind) {
@@ -141,6 +151,7 @@ struct Shape {
         const double rho = norm(q - z * normal) - majorR;
         return std::sqrt(rho * rho + z * z) - ra;
       }
+      case kCustom: return (*custom)(p);
     }
     return 1e9;
   }
@@ -167,6 +178,10 @@ struct Shape {
         hi = a + Vec3{r, r, r};
         return;
       }
+      case kCustom:
+        lo = boxLo;
+        hi = boxHi;
+        return;
     }
   }
 };
@@ -221,6 +236,8 @@ const Vec3 kBlockHalf{14.5, 18.0, 14.0};  // x −13…16, y −17…19, z −15
 constexpr double kBlockRounding = 3.0;
 constexpr double kCortexMm = 1.5;
 constexpr double kSoftTissueMm = 3.5;
+// The lateral skin plane: outside air beyond it (x below), where the external auditory canal opens.
+const double kSkinX = kBlockCentre[0] - kBlockHalf[0] - kSoftTissueMm;
 
 double blockSd(const Vec3& p) {
   double outside = 0, inside = -1e9;
@@ -266,7 +283,8 @@ struct Anatomy {
   std::vector<PaintOp> ops;
 };
 
-Anatomy buildAnatomy(double minTubeRadiusMm) {
+Anatomy buildAnatomy(double voxelMm) {
+  const double minTubeRadiusMm = 0.9 * voxelMm;
   const double r2 = std::sqrt(0.5);
   auto tubeR = [&](double r) { return std::max(r, minTubeRadiusMm); };
   Anatomy an;
@@ -290,6 +308,19 @@ Anatomy buildAnatomy(double minTubeRadiusMm) {
       pts.push_back({-13.0, y, 7.0 + 1.5 * (1 - (y / 12) * (y / 12))});
     }
     add(tube(pts, 1.1), kCortical, label::kTemporalLine);
+  }
+
+  // Petrous bone: the dense pyramid that holds the inner ear and the internal auditory canal,
+  // from around the vestibule anteromedially to the apex (medial face of the block), inside the
+  // cortex. The mastoid behind and lateral to it stays cancellous (and pneumatised).
+  {
+    Shape petrous;
+    petrous.kind = Shape::kCustom;
+    const Shape axis = segment({1.0, 2.0, 0.0}, {16.0, -14.0, -4.0}, 6.0, 4.5);
+    axis.bounds(petrous.boxLo, petrous.boxHi);
+    petrous.custom = std::make_shared<const std::function<double(const Vec3&)>>(
+        [axis](const Vec3& p) { return std::max(axis.sd(p), blockSd(p) + kCortexMm); });
+    add({petrous}, kPetrous, 0);
   }
 
   // Sigmoid sinus: an S-curved venous channel posterior-medial, behind the mastoid, descending
@@ -328,9 +359,11 @@ Anatomy buildAnatomy(double minTubeRadiusMm) {
   const Shape posteriorCanal = torus(posteriorCentre, {r2, r2, 0}, kCanalMajorMm, tubeR(kCanalLumenMm));
 
   // Cochlea: a 2.5-turn spiral tube around an axis pointing anterolaterally and down (the apex),
-  // base ring radius 3.4 mm (≈ 9 mm across with the lumen), 3.6 mm rise (≈ 5 mm high), lumen
-  // radius tapering 0.75 → 0.4 mm. The basal turn starts next to the vestibule and a short
-  // connection opens it into the vestibule (scala vestibuli), so fluid joins them.
+  // base ring radius 3.3 mm (≈ 8 mm across with the lumen), 4.2 mm rise (≈ 5.5 mm high), lumen
+  // radius tapering 0.7 → 0.35 mm: successive turns lie about 1.9 mm apart, so about half a
+  // millimetre of bone separates them and the spiral lumen reads as a spiral. The basal turn starts
+  // next to the vestibule and a short connection opens it into the vestibule (scala vestibuli), so
+  // fluid joins them.
   std::vector<Shape> cochlea;
   {
     const Vec3 axis = unit({-0.5, -0.75, -0.3});
@@ -338,15 +371,15 @@ Anatomy buildAnatomy(double minTubeRadiusMm) {
     u = unit(u - dot(u, axis) * axis);
     const Vec3 v = cross(axis, u);
     const int steps = 150;
-    const double turns = 2.5, rise = 3.6;
+    const double turns = 2.5, rise = 4.2;
     Vec3 prev{};
     double prevR = 0;
     for (int s = 0; s <= steps; ++s) {
       const double t = double(s) / steps;
       const double angle = t * turns * 2 * 3.14159265358979323846;
-      const double ringR = 3.4 - 2.6 * t;
+      const double ringR = 3.3 - 2.4 * t;
       const Vec3 p = kCochleaBase + ringR * std::cos(angle) * u + ringR * std::sin(angle) * v + (rise * t) * axis;
-      const double lumen = tubeR(0.75 - 0.35 * t);
+      const double lumen = tubeR(0.7 - 0.35 * t);
       if (s == 0) {
         cochlea.push_back(segment(p, kVestibule + Vec3{-0.2, -1.4, -0.6}, lumen, tubeR(0.7)));
       } else {
@@ -365,47 +398,94 @@ Anatomy buildAnatomy(double minTubeRadiusMm) {
   const Shape eac = cylinder({-16.4, -2.5, 0.0}, {-7.3, -2.5, 0.0}, 3.2);
   const Shape membrane = cylinder({-7.4, -2.5, 0.0}, {-6.2, -2.5, 0.0}, 3.2);
 
-  // Mastoid antrum (a large cell reached from the epitympanum through the aditus) and air cells:
-  // seeded spheres and ellipsoids in cancellous bone posterolaterally, kept inside the bone and
-  // away from the nerve, the sinus, the labyrinth, the cavity and the EAC.
+  // Mastoid antrum (a large cell reached from the epitympanum through the aditus) and the air
+  // cells: a honeycomb in cancellous bone posterolaterally — the Voronoi cells of seeded points
+  // 2.2–3.4 mm apart, air wherever a point is farther than half a septum from the plane between its
+  // two nearest seeds, so thin bony septa separate the cells — kept inside the bone and away from
+  // the nerve, the sinus, the labyrinth, the cavity and the EAC. A septum is at least √3 voxels
+  // thick (coarse grids widen it as they widen thin tubes), so no two cells touch even diagonally.
   {
-    std::vector<Shape> cells = {ellipsoid({-5.2, 5.8, 3.6}, {1.8, 1.8, 1.6}),
-                                segment({-5.0, 1.6, 4.2}, {-5.2, 5.0, 3.8}, 1.0)};
-    std::vector<std::pair<Shape, double>> keepOut;  // shape and margin in mm
-    for (const Shape& s : tube(facial, 0.55)) keepOut.push_back({s, 1.0});
-    for (const Shape& s : tube(sigmoid, 2.4)) keepOut.push_back({s, 1.4});
-    keepOut.push_back({lateralCanal, 1.6});
-    keepOut.push_back({posteriorCanal, 1.6});
-    keepOut.push_back({superiorCanal, 1.6});
-    keepOut.push_back({vestibule, 1.6});
-    keepOut.push_back({tympanic, 0.8});
-    keepOut.push_back({eac, 0.8});
-    keepOut.push_back({cells[0], 0.4});
-    SplitMix rng(kAnatomySeed);
+    const Shape antrum = ellipsoid({-5.2, 5.8, 3.6}, {1.8, 1.8, 1.6});
+    const Shape aditus = segment({-5.0, 1.6, 4.2}, {-5.2, 5.0, 3.8}, 1.0);
+    auto keepOut = std::make_shared<std::vector<std::pair<Shape, double>>>();  // shape and margin in mm
+    for (const Shape& s : tube(facial, 0.55)) keepOut->push_back({s, 1.0});
+    for (const Shape& s : tube(sigmoid, 2.4)) keepOut->push_back({s, 1.4});
+    keepOut->push_back({lateralCanal, 1.6});
+    keepOut->push_back({posteriorCanal, 1.6});
+    keepOut->push_back({superiorCanal, 1.6});
+    keepOut->push_back({vestibule, 1.6});
+    keepOut->push_back({tympanic, 0.8});
+    keepOut->push_back({eac, 0.8});
+    keepOut->push_back({antrum, 0.4});
+    keepOut->push_back({aditus, 0.4});
     const Vec3 regionCentre{-6.5, 10.0, -2.0}, regionRadii{4.8, 7.0, 8.5};
-    for (int attempt = 0; attempt < 2000 && cells.size() < 90; ++attempt) {
-      const Vec3 c{rng.uniform(-1, 1), rng.uniform(-1, 1), rng.uniform(-1, 1)};
-      const double r = rng.uniform(0.5, 1.6);
-      const double stretch = rng.uniform(0.8, 1.25);
-      if (dot(c, c) > 1) continue;
+    auto seeds = std::make_shared<std::vector<std::pair<Vec3, double>>>();  // point and spacing
+    SplitMix rng(kAnatomySeed);
+    for (int attempt = 0; attempt < 6000 && seeds->size() < 400; ++attempt) {
+      const Vec3 c{rng.uniform(-1.1, 1.1), rng.uniform(-1.1, 1.1), rng.uniform(-1.1, 1.1)};
+      const double spacing = rng.uniform(2.2, 3.4);
+      if (dot(c, c) > 1.21) continue;
       const Vec3 p{regionCentre[0] + c[0] * regionRadii[0], regionCentre[1] + c[1] * regionRadii[1],
                    regionCentre[2] + c[2] * regionRadii[2]};
-      const double reach = r * std::max(stretch, 1.0);
-      if (blockSd(p) > -(reach + kCortexMm + 0.6)) continue;
       bool clear = true;
-      for (const auto& [shape, margin] : keepOut)
-        if (shape.sd(p) < reach + margin) {
+      for (const auto& [q, qs] : *seeds)
+        if (norm(p - q) < std::max(spacing, qs)) {
           clear = false;
           break;
         }
-      for (std::size_t i = 2; clear && i < cells.size(); ++i)
-        if (norm(p - cells[i].a) < reach + std::max({cells[i].radii[0], cells[i].radii[1], cells[i].radii[2]}) + 0.4)
-          clear = false;
-      if (!clear) continue;
-      cells.push_back(ellipsoid(p, {r, r, r * stretch}));
+      if (clear) seeds->push_back({p, spacing});
     }
-    add({cells[0], cells[1]}, kAir, label::kMastoidAirCells);
-    add(std::vector<Shape>(cells.begin() + 2, cells.end()), kAir, label::kMastoidAirCells, Where::kUnlabelled);
+    const double halfSeptum = std::max(0.18, 0.87 * voxelMm);
+    // The region the cells fill (inside the ellipsoid, inside the bone, clear of every keep-out),
+    // and the cells: the region less half a septum on either side of each Voronoi face.
+    const auto region = [keepOut, regionCentre, regionRadii](const Vec3& p) {
+      const Vec3 q{(p[0] - regionCentre[0]) / regionRadii[0], (p[1] - regionCentre[1]) / regionRadii[1],
+                   (p[2] - regionCentre[2]) / regionRadii[2]};
+      double sd = (norm(q) - 1.0) * regionRadii[0];
+      if (sd > 0) return sd;
+      sd = std::max(sd, blockSd(p) + kCortexMm + 0.6);
+      if (sd > 0) return sd;
+      for (const auto& [shape, margin] : *keepOut) {
+        sd = std::max(sd, margin - shape.sd(p));
+        if (sd > 0) return sd;
+      }
+      return sd;
+    };
+    const auto cells = [region, seeds, halfSeptum](const Vec3& p) {
+      const double sd = region(p);
+      if (sd > 0) return sd;
+      // The two nearest seeds and the distance to the plane between them.
+      double d1 = 1e30, d2 = 1e30;
+      const Vec3* s1 = nullptr;
+      const Vec3* s2 = nullptr;
+      for (const auto& [c, spacing] : *seeds) {
+        const double d = dot(p - c, p - c);
+        if (d < d1) {
+          d2 = d1;
+          s2 = s1;
+          d1 = d;
+          s1 = &c;
+        } else if (d < d2) {
+          d2 = d;
+          s2 = &c;
+        }
+      }
+      if (!s2) return 1.0;
+      const double toPlane = (d2 - d1) / (2.0 * norm(*s2 - *s1));
+      return std::max(sd, halfSeptum - toPlane);
+    };
+    const auto customShape = [&](std::function<double(const Vec3&)> sd) {
+      Shape shape;
+      shape.kind = Shape::kCustom;
+      shape.boxLo = regionCentre - regionRadii;
+      shape.boxHi = regionCentre + regionRadii;
+      shape.custom = std::make_shared<const std::function<double(const Vec3&)>>(std::move(sd));
+      return shape;
+    };
+    // The septa are thin compact bone, as in a real mastoid.
+    add({customShape(region)}, kCortical, 0, Where::kUnlabelled);
+    add({antrum, aditus}, kAir, label::kMastoidAirCells);
+    add({customShape(cells)}, kAir, label::kMastoidAirCells, Where::kUnlabelled);
   }
 
   // Internal auditory canal: CSF from its fundus next to the cochlea and vestibule to the medial
@@ -494,7 +574,9 @@ void paintBase(const Canvas& c, int k0, int k1) {
         const double qxv = rowQ[std::size_t(i)];
         const double outside = outsideYz + (qxv > 0 ? qxv * qxv : 0);
         const double d = std::sqrt(outside) + std::min(std::max(insideYz, qxv), 0.0) - kBlockRounding;
-        Material m = kAir;
+        // Beyond the soft tissue: outside air lateral to the skin, the brain (and the soft tissue
+        // of the neck) everywhere else, as around a temporal bone in a head.
+        Material m = c.coord(i) < kSkinX ? kAir : kBrain;
         if (d <= -kCortexMm) m = kCancellous;
         else if (d <= 0) m = kCortical;
         else if (d <= kSoftTissueMm) m = kSoftTissue;
@@ -524,7 +606,7 @@ void paintOp(const Canvas& c, const PaintOp& op, int k0, int k1) {
   }
 }
 
-// Smooth texture in [0, 1] on a 1 mm lattice (fixed: part of the anatomy, not of the noise).
+// Smooth texture in [0, 1] on a 1.5 mm lattice (fixed: part of the anatomy, not of the noise).
 class BoneTexture {
  public:
   BoneTexture(double cornerMm, double extentMm) : corner_(cornerMm) {
@@ -563,14 +645,16 @@ class BoneTexture {
   }
 
  private:
-  static constexpr double kStepMm = 1.0;
+  static constexpr double kStepMm = 1.5;
   double corner_;
   int n_ = 0;
   std::vector<float> values_;
 };
 
-void paintHu(const Canvas& c, const BoneTexture& texture, std::uint64_t seed, std::vector<std::int16_t>& hu,
-             int k0, int k1) {
+// HU before the point-spread function: each material's value, the cancellous texture, and white
+// noise at the amplitude that leaves kNoiseSigmaHu after the blur.
+void paintHu(const Canvas& c, const BoneTexture& texture, std::uint64_t seed, double whiteSigmaHu,
+             std::vector<float>& hu, int k0, int k1) {
   const std::uint64_t seedMix = splitmix64(seed ^ 0xA0761D6478BD642FULL);
   std::vector<double> textureRow;
   for (int k = k0; k < k1; ++k)
@@ -580,16 +664,58 @@ void paintHu(const Canvas& c, const BoneTexture& texture, std::uint64_t seed, st
       for (int i = 0; i < c.n; ++i, ++idx) {
         const Material m = Material((*c.material)[idx]);
         double value = materialHu(m);
-        if (m == kCancellous) value += 300.0 * (texture.along(textureRow, c.coord(i)) - 0.5);
+        if (m == kCancellous) value += 200.0 * (texture.along(textureRow, c.coord(i)) - 0.5);
         // Irwin–Hall: four 16-bit uniforms, mean 2, variance 1/3 → unit normal-ish noise.
         const std::uint64_t h = splitmix64(seedMix + idx * 0x9E3779B97F4A7C15ULL);
         const double sum = double(h & 0xFFFF) + double((h >> 16) & 0xFFFF) + double((h >> 32) & 0xFFFF) +
                            double(h >> 48);
         const double z = (sum / 65536.0 - 2.0) * 1.7320508075688772;
-        value = std::clamp(value + kNoiseSigmaHu * z, -1024.0, 3071.0);
-        hu[idx] = std::int16_t(std::floor(value + 0.5));
+        hu[idx] = float(value + whiteSigmaHu * z);
       }
     }
+}
+
+// The point-spread function: a normalised Gaussian of kPsfSigmaMm, sampled at the voxel spacing
+// (a single tap on grids too coarse to resolve it).
+std::vector<float> psfKernel(double spacingMm) {
+  const double sigma = kPsfSigmaMm / spacingMm;
+  if (sigma < 0.25) return {1.0f};
+  const int radius = int(std::ceil(3.0 * sigma));
+  std::vector<float> w(std::size_t(2 * radius + 1));
+  double sum = 0;
+  for (int i = -radius; i <= radius; ++i) sum += w[std::size_t(i + radius)] = float(std::exp(-0.5 * i * i / (sigma * sigma)));
+  for (float& x : w) x = float(x / sum);
+  return w;
+}
+
+// Convolves one axis of an n³ cube with `kernel` (edge-clamped), lines split over threads.
+void blurAxis(std::vector<float>& v, int n, int axis, const std::vector<float>& kernel, int threads) {
+  const int radius = int(kernel.size() / 2);
+  const std::size_t strides[3] = {1, std::size_t(n), std::size_t(n) * std::size_t(n)};
+  const std::size_t along = strides[axis];
+  // Lines are indexed by the other two axes (a, b); threads take ranges of b.
+  const std::size_t sa = strides[axis == 0 ? 1 : 0], sb = strides[axis == 2 ? 1 : 2];
+  auto work = [&](int b0, int b1) {
+    std::vector<float> line(static_cast<std::size_t>(n));
+    for (int b = b0; b < b1; ++b)
+      for (int a = 0; a < n; ++a) {
+        const std::size_t base = std::size_t(a) * sa + std::size_t(b) * sb;
+        for (int t = 0; t < n; ++t) line[std::size_t(t)] = v[base + std::size_t(t) * along];
+        for (int t = 0; t < n; ++t) {
+          float sum = 0;
+          for (int o = -radius; o <= radius; ++o)
+            sum += kernel[std::size_t(o + radius)] * line[std::size_t(std::clamp(t + o, 0, n - 1))];
+          v[base + std::size_t(t) * along] = sum;
+        }
+      }
+  };
+  if (threads <= 1) {
+    work(0, n);
+    return;
+  }
+  std::vector<std::thread> pool;
+  for (int t = 0; t < threads; ++t) pool.emplace_back(work, n * t / threads, n * (t + 1) / threads);
+  for (std::thread& th : pool) th.join();
 }
 
 Structure makeStructure(const char* id, const char* name, std::array<float, 3> colour, const char* system,
@@ -691,7 +817,7 @@ Dataset makePhantom(const PhantomOptions& options) {
       "synthetic: analytic shapes at plausible positions of a right temporal bone (lateral = -x), "
       "not a scan of anyone");
 
-  const Anatomy anatomy = buildAnatomy(0.9 * spacing);
+  const Anatomy anatomy = buildAnatomy(spacing);
   const BoneTexture texture(-options.extentMm / 2, options.extentMm);
   std::vector<std::uint8_t> material(g.dims.count(), kAir);
   Canvas canvas;
@@ -701,10 +827,15 @@ Dataset makePhantom(const PhantomOptions& options) {
   canvas.material = &material;
   canvas.labels = &ds.labels.voxels;
 
+  const std::vector<float> kernel = psfKernel(spacing);
+  double kernelEnergy = 0;
+  for (float w : kernel) kernelEnergy += double(w) * double(w);
+  const double whiteSigmaHu = kNoiseSigmaHu / std::pow(kernelEnergy, 1.5);
+  std::vector<float> hu(g.dims.count());
   auto work = [&](int k0, int k1) {
     paintBase(canvas, k0, k1);
     for (const PaintOp& op : anatomy.ops) paintOp(canvas, op, k0, k1);
-    paintHu(canvas, texture, options.seed, ds.volume.voxels, k0, k1);
+    paintHu(canvas, texture, options.seed, whiteSigmaHu, hu, k0, k1);
   };
   const int threads = std::clamp(int(std::thread::hardware_concurrency()), 1, std::min(16, n));
   if (threads == 1) {
@@ -714,6 +845,10 @@ Dataset makePhantom(const PhantomOptions& options) {
     for (int t = 0; t < threads; ++t) pool.emplace_back(work, n * t / threads, n * (t + 1) / threads);
     for (std::thread& th : pool) th.join();
   }
+  if (kernel.size() > 1)
+    for (int axis = 0; axis < 3; ++axis) blurAxis(hu, n, axis, kernel, threads);
+  for (std::size_t v = 0; v < hu.size(); ++v)
+    ds.volume.voxels[v] = std::int16_t(std::floor(std::clamp(double(hu[v]), -1024.0, 3071.0) + 0.5));
   return ds;
 }
 

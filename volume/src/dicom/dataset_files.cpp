@@ -93,7 +93,7 @@ std::string datasetIdFromPath(const std::string& path) {
   fs::path p(path);
   if (p.filename().empty()) p = p.parent_path();  // "ct/" → "ct"
   std::string name = p.filename().string();
-  for (const char* suffix : {".nii.gz", ".nii", ".nrrd", ".nhdr", ".dcm"}) {
+  for (const char* suffix : {".nii.gz", ".nii", ".nrrd", ".nhdr", ".inv3", ".dcm"}) {
     const std::string s = suffix;
     if (name.size() > s.size() && name.compare(name.size() - s.size(), s.size(), s) == 0) {
       name.resize(name.size() - s.size());

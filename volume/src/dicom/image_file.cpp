@@ -9,6 +9,7 @@
 #include "dicom_support.h"
 #include "volume/dicom_seg.h"
 #include "volume/dicom_series.h"
+#include "volume/inv3_io.h"
 #include "volume/nifti_io.h"
 #include "volume/nrrd_io.h"
 #include "core/regular_file.h"
@@ -33,6 +34,7 @@ Result<LoadedImage> loadImageFile(const std::string& path, const ImageLoadOption
   const std::string name = str::lower(fs::path(path).filename().string());
   if (str::endsWith(name, ".nii") || str::endsWith(name, ".nii.gz")) return loadNifti(path, options);
   if (str::endsWith(name, ".nrrd") || str::endsWith(name, ".nhdr")) return loadNrrd(path, options);
+  if (str::endsWith(name, ".inv3")) return loadInv3(path, options);
 
   if (looksLikeDicomFile(path)) {
     if (isDicomSegFile(path)) return loadDicomSeg(path, options);
@@ -49,7 +51,7 @@ Result<LoadedImage> loadImageFile(const std::string& path, const ImageLoadOption
     loaded->notes.push_back("loaded the whole series of " + fs::path(path).filename().string() + " from its folder");
     return loaded;
   }
-  return fail(path + ": unrecognised format (expected a DICOM folder, .nii, .nii.gz, .nrrd or .nhdr)");
+  return fail(path + ": unrecognised format (expected a DICOM folder, .nii, .nii.gz, .nrrd, .nhdr or .inv3)");
 }
 
 }  // namespace at

@@ -29,6 +29,7 @@
 #include "load_limits.h"
 #include "core/printable_text.h"
 #include "core/regular_file.h"
+#include "raw_values.h"
 
 namespace at {
 
@@ -148,20 +149,6 @@ std::optional<ScalarKind> parseType(const std::string& text) {
   const auto it = kinds.find(text);
   if (it == kinds.end()) return std::nullopt;
   return it->second;
-}
-
-std::size_t bytesOf(ScalarKind kind) {
-  switch (kind) {
-    case ScalarKind::Int8:
-    case ScalarKind::UInt8: return 1;
-    case ScalarKind::Int16:
-    case ScalarKind::UInt16: return 2;
-    case ScalarKind::Int32:
-    case ScalarKind::UInt32:
-    case ScalarKind::Float32: return 4;
-    case ScalarKind::Float64: return 8;
-  }
-  return 1;
 }
 
 const char* nrrdTypeName(ScalarKind kind) {
@@ -493,33 +480,11 @@ class ValueSink {
   static constexpr std::size_t kStaging = std::size_t(1) << 20;
 
  private:
-  template <class T>
-  void convertAs(std::size_t count, float* to) {
-    for (std::size_t i = 0; i < count; ++i) {
-      unsigned char raw[sizeof(T)];
-      std::memcpy(raw, staging_.data() + i * sizeof(T), sizeof(T));
-      if (swap_)
-        for (std::size_t b = 0; b < sizeof(T) / 2; ++b) std::swap(raw[b], raw[sizeof(T) - 1 - b]);
-      T v;
-      std::memcpy(&v, raw, sizeof(T));
-      to[i] = float(v);
-    }
-  }
   void convert() {
     const std::size_t count = fill_ / valueBytes_;
     const std::size_t at = out_.size();
     out_.resize(at + count);
-    float* to = out_.data() + at;
-    switch (kind_) {
-      case ScalarKind::Int8: convertAs<std::int8_t>(count, to); break;
-      case ScalarKind::UInt8: convertAs<std::uint8_t>(count, to); break;
-      case ScalarKind::Int16: convertAs<std::int16_t>(count, to); break;
-      case ScalarKind::UInt16: convertAs<std::uint16_t>(count, to); break;
-      case ScalarKind::Int32: convertAs<std::int32_t>(count, to); break;
-      case ScalarKind::UInt32: convertAs<std::uint32_t>(count, to); break;
-      case ScalarKind::Float32: convertAs<float>(count, to); break;
-      case ScalarKind::Float64: convertAs<double>(count, to); break;
-    }
+    detail::decodeRawValues(staging_.data(), count, kind_, swap_, out_.data() + at);
     const std::size_t rest = fill_ - count * valueBytes_;
     std::memmove(staging_.data(), staging_.data() + count * valueBytes_, rest);
     fill_ = rest;
@@ -746,7 +711,7 @@ Result<LoadedImage> readNrrd(const std::string& path, const ImageLoadOptions& op
       return fail(path + ": 'byte skip' '" + it->second + "' is not -1 or a non-negative integer");
 
   bool swap = false;
-  if (bytesOf(*kind) > 1) {
+  if (detail::bytesOf(*kind) > 1) {
     const auto endianIt = h.fields.find("endian");
     if (endianIt == h.fields.end()) return fail(path + ": the NRRD header has no 'endian' field for multi-byte data");
     const std::string endian = str::lower(endianIt->second);
@@ -770,7 +735,7 @@ Result<LoadedImage> readNrrd(const std::string& path, const ImageLoadOptions& op
   if (!files) return tl::unexpected(files.error());
   for (const std::string& file : *files)
     if (auto inside = checkDataFileConfined(path, file, options); !inside) return tl::unexpected(inside.error());
-  const std::size_t valueBytes = bytesOf(*kind);
+  const std::size_t valueBytes = detail::bytesOf(*kind);
   const std::size_t totalBytes = layout->valueCount * valueBytes;
   const std::string typeText = std::string(toString(*kind));
   loaded.image.geometry = *geometry;

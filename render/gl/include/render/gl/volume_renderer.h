@@ -1,13 +1,27 @@
-// The GPU ray caster (ARCHITECTURE.md §4): HU, labels and the distance field as 3-D textures, the
-// mode's 2-D table as a texture, front-to-back compositing with early termination, jittered ray
-// starts, Phong shading from gradients and a clipping plane, into an offscreen framebuffer read
-// back as an RGBA8 image. Samples are classified as render_settings.h documents (the same rules
-// CPU picking uses). Needs a current OpenGL 4.3 core context (EglContext) for its whole life.
+// The GPU ray caster (ARCHITECTURE.md §4): HU, labels, the smoothed gradient volume and the
+// distance field as 3-D textures, the mode's 2-D table as a texture, front-to-back compositing with
+// empty-space skipping and early termination, jittered ray starts, context drawn as shaded
+// surfaces, the selected structure from its mask and a clipping plane (render_settings.h documents
+// the classification; CPU picking uses the same rules). Needs a current OpenGL 4.3 core context
+// (EglContext or the desktop window's) for its whole life.
+//
+// Two ways to get an image:
+//  - render(): the whole image in one draw, read back (the `render` command, tests, benchmarks);
+//  - refine(): progressive refinement for an interactive view. Each call casts the rays that fit
+//    in a time budget. Pixels are cast coarse-to-fine on lattices of stride 8, 4, 2, 1 (each
+//    finer level casts only the points no coarser level has), rows of a level in an interleaved
+//    order so that every call's rays spread over the image; every cast pixel is final (full
+//    quality, shading included), so the image converges to exactly what render() gives for the
+//    same settings. What to show (display()) is the finest complete lattice as a small texture,
+//    stretched over the view with linear filtering: no pass over the full image per call. On a
+//    GPU the whole image fits in one call's budget.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <memory>
 
+#include "render/gradient_volume.h"
 #include "render/image.h"
 #include "render/render_settings.h"
 #include "core/error.h"
@@ -20,8 +34,29 @@ namespace at::render::gl {
 
 // Where the rays are cast: a compute shader (one invocation per pixel, the default) or a
 // fragment shader over a full-screen triangle. Both run the same ray code and give the same
-// image; the choice is for benchmarks (on NVIDIA's headless EGL, compute ran faster).
+// image; the choice is for benchmarks. refine() always uses the compute shader.
 enum class RayCaster { Compute, Fragment };
+
+// Where a progressive image stands after a refine() call.
+struct RefineProgress {
+  bool restarted = false;   // this call began a new image (the settings or the scene changed)
+  bool complete = false;    // every pixel is cast: the display image equals render()'s
+  double fraction = 0;      // of the image's pixels cast so far
+  int level = 3;            // finest complete lattice level: stride 2^level (0 when complete)
+  double ms = 0;            // wall time this call took (GL finished)
+  double imageMs = 0;       // wall time spent on this image so far, over all calls
+  int calls = 0;            // refine() calls this image took so far
+};
+
+// The image to show for a progressive render: a texture of the finest complete lattice (an opaque
+// handle, ImTextureID; RGBA8, straight alpha, bottom row first as GL stores it) and the texture
+// coordinates to draw over the view's rectangle (its left/bottom and right/top edges), which put
+// each lattice point's texel centre on the centre of the pixel it was cast for.
+struct DisplayImage {
+  std::uintptr_t handle = 0;   // 0: nothing to show yet
+  int texelsWide = 0, texelsHigh = 0;
+  std::array<float, 2> uv0{0, 0}, uv1{1, 1};
+};
 
 class VolumeRenderer {
  public:
@@ -31,9 +66,11 @@ class VolumeRenderer {
   VolumeRenderer(VolumeRenderer&&) noexcept;
   VolumeRenderer& operator=(VolumeRenderer&&) noexcept;
 
-  // Uploads HU and labels (labels on the volume's grid). Replaces any previous volume and
-  // drops the field.
+  // Uploads HU, labels (on the volume's grid) and the gradient volume (computed here when not
+  // given; pass the one the caller keeps for picking to avoid computing it twice). Replaces any
+  // previous volume and drops the field.
   Status setVolume(const Volume& volume, const LabelMap& labels);
+  Status setVolume(const Volume& volume, const LabelMap& labels, const GradientVolume& gradients);
   // Uploads a distance field on its own grid (the volume's or a coarser one); +inf stays "far".
   Status setField(const FloatVolume& field);
   // Uploads `field` a few z-slices per call, for a frame loop that must not stall: software GL
@@ -46,26 +83,38 @@ class VolumeRenderer {
   // call that returns true. setVolume drops an upload in progress.
   Result<bool> uploadFieldStep(const FloatVolume& field, double budgetMs);
   // Copies a field that lives in CUDA device memory straight into the field texture (CUDA–GL
-  // interop, no host round trip). Error when built without CUDA or when a CUDA call fails.
+  // interop, no host round trip). Error when built without CUDA or when a CUDA call fails. Such
+  // a field is not seen by the CPU, so empty-space skipping does not use its distances.
   Status setFieldFromDevice(const cuda::DeviceField& field);
   // Whether this build has the interop path (AT_HAVE_CUDA).
   static bool hasCudaInterop();
   void clearField();
-  void setSelected(std::uint16_t label) { selected_ = label; }
+  // The structure drawn from its mask (0: none).
+  void setSelected(std::uint16_t label);
   void setRayCaster(RayCaster rayCaster);
 
-  // Renders one frame and reads it back.
+  // Renders one whole frame and reads it back.
   Result<RgbaImage> render(const RenderSettings& settings);
-  // Renders one frame without reading it back; returns the GPU time of the draw in ms
+  // Renders one whole frame without reading it back; returns the GPU time of the draw in ms
   // (GL_TIME_ELAPSED), for benchmarks.
   Result<double> renderTimed(const RenderSettings& settings);
 
+  // Progressive refinement (see the top of this file). A call whose settings, volume, field or
+  // selection differ from the previous call's starts a new image; `budgetMs` bounds the wall time
+  // of the rays it casts (the first call of an image always completes the coarsest lattice).
+  Result<RefineProgress> refine(const RenderSettings& settings, double budgetMs);
+  DisplayImage display() const;
+  // What display() shows, as the view would (linear filtering), at the view's size, top row first:
+  // for tests and screenshots.
+  Result<RgbaImage> readDisplay();
+
+  struct State;  // opaque: the GL objects, defined inside render/gl
+
  private:
-  struct State;
   explicit VolumeRenderer(std::unique_ptr<State> state);
+  Status prepare(const RenderSettings& settings);
   Status draw(const RenderSettings& settings);
   std::unique_ptr<State> state_;
-  std::uint16_t selected_ = 0;
 };
 
 }  // namespace at::render::gl

@@ -1,17 +1,18 @@
-// Distance fields for the desktop view, computed off the UI thread (issue 7, "hover to highlight").
+// Distance fields for an interactive view, computed off the caller's thread (the desktop's hover
+// highlight and its locate click; ARCHITECTURE.md §2).
 //
 // One worker thread; requests are latest-wins: a new request replaces the pending one, and the
 // running computation is cancelled through WdtControl::cancel unless it is for the same key. The
-// UI thread never waits: it asks `cached` for what exists and `takeFinished` for what arrived.
+// caller never waits: it asks `cached` for what exists and `takeFinished` for what arrived.
 // Finished fields go into a small LRU cache keyed by structure label, downsample factor and the
 // WDT parameters that shape the field.
 //
-// With a CUDA device (backend auto or cuda), the worker uploads the dataset's HU and labels to the
-// GPU once and computes each field there (cuda::DeviceVolume): nothing is uploaded per field, and
-// the field stays on the device as well, so the view can take it through CUDA–GL interop
-// (`cachedOnDevice`) instead of uploading the host copy. The host copy is still made (off the UI
-// thread) for picking. Any CUDA failure under `auto` falls back to computeWdt's CPU path with a
-// one-line message.
+// With a CUDA device (backend auto or cuda), the service uploads the HU volume and labels to the
+// GPU once and computes each field there: nothing is uploaded per field, and the field stays on
+// the device as well, so a renderer can take it through CUDA–GL interop (`Cached::device`) instead
+// of uploading the host copy. The host copy is still made (off the caller's thread) for picking.
+// The backend is chosen by the same rule as computeWdt (one auto→CPU fallback, cpu_fallback.h):
+// after a CUDA failure under `auto` the service stays on the CPU and says why once.
 #pragma once
 
 #include <atomic>
@@ -26,17 +27,17 @@
 #include <thread>
 #include <vector>
 
-#include "volume/structure.h"
+#include "volume/grid.h"
 #include "wdt/wdt.h"
 
 namespace at::cuda {
-class DeviceField;
+class DeviceField;  // opaque here: only a renderer with CUDA–GL interop looks inside
 }
 
-namespace at::app {
+namespace at::wdt {
 
 struct FieldRequest {
-  std::uint16_t label = 0;
+  std::uint16_t label = 0;   // the structure: its voxels are the seeds
   WdtParams params;          // params.downsample picks the resolution
   std::string key() const;   // label, downsample and every parameter that changes the field
 };
@@ -52,13 +53,14 @@ struct FinishedField {
   std::string message;  // error, or the backend's warning (e.g. why auto fell back to the CPU)
 };
 
-class FieldWorker {
+class FieldService {
  public:
-  // `dataset` must outlive the worker. `capacity`: fields kept in the LRU cache (≥ 1).
-  FieldWorker(const Dataset& dataset, std::size_t capacity);
-  ~FieldWorker();
-  FieldWorker(const FieldWorker&) = delete;
-  FieldWorker& operator=(const FieldWorker&) = delete;
+  // `volume` and `labels` (on the volume's grid) must outlive the service. `capacity`: fields kept
+  // in the LRU cache (≥ 1).
+  FieldService(const Volume& volume, const LabelMap& labels, std::size_t capacity);
+  ~FieldService();
+  FieldService(const FieldService&) = delete;
+  FieldService& operator=(const FieldService&) = delete;
 
   // Queues `request` unless it is cached or already running; replaces any queued request and
   // cancels a running one for another key.
@@ -88,24 +90,26 @@ class FieldWorker {
   int cancelledCount() const { return cancelled_.load(); }
 
  private:
-  void run();
   struct Entry {
     std::string key;
     std::shared_ptr<const DistanceField> field;
     std::shared_ptr<const cuda::DeviceField> deviceField;
   };
-  void insert(Entry entry);
-  // The field on the GPU (device-resident volume). Published: the entry (device field first, its
-  // host copy attached when made) and the finished record are in place. NotUsed: no device or
-  // backend cpu — use computeWdt. GaveUp: a CUDA failure under `auto`, now or before — compute
-  // on the CPU. Worker thread only.
-  struct DeviceOutcome {
-    enum Kind { NotUsed, GaveUp, Published, Cancelled, Failed } kind = NotUsed;
-    FinishedField failure;  // Failed (backend cuda): what to report
+  // What one computation came to: cancelled (stale), already published (a GPU field: its entry
+  // and finished record are in place), or a finished record to publish.
+  struct Outcome {
+    bool cancelled = false;
+    bool published = false;
+    FinishedField finished;
   };
-  DeviceOutcome computeOnDevice(const FieldRequest& job, WdtControl& control);
+  void run();
+  void insert(Entry entry);
+  void finishRunning();                 // clears the running state; caller holds mutex_
+  Result<Outcome> computeOnCpu(const FieldRequest& job, const WdtControl& control);
+  Result<Outcome> computeOnDevice(const FieldRequest& job, const WdtControl& control);  // worker thread
 
-  const Dataset& dataset_;
+  const Volume& volume_;
+  const LabelMap& labels_;
   const std::size_t capacity_;
   mutable std::mutex mutex_;
   std::condition_variable wake_;
@@ -120,9 +124,10 @@ class FieldWorker {
   std::list<Entry> lru_;  // front = newest
   struct DeviceState;
   std::unique_ptr<DeviceState> device_;  // worker thread only
-  std::string deviceWarning_;            // why the GPU path was given up, for the next result
+  bool deviceBroken_ = false;            // worker thread only: a CUDA failure under auto, stay on the CPU
+  std::string deviceWarning_;            // worker thread only: why, for the next result
   std::vector<FinishedField> finished_;
   std::thread thread_;
 };
 
-}  // namespace at::app
+}  // namespace at::wdt

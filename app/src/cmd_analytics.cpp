@@ -1,0 +1,224 @@
+// anatomy-tutor analytics COURSE: the instructor's view of a class (lessons/analytics.h) — lesson
+// completion, the hardest structures, question difficulty (Elo with an uncertainty factor), each
+// student's predicted recall (FSRS) and exam results — as text with bar charts, or as CSV.
+#include <cmath>
+#include <cstdio>
+#include <ctime>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <map>
+#include <sstream>
+
+#include "cli_args.h"
+#include "commands.h"
+#include "db/analytics_store.h"
+#include "core/strings.h"
+#include "learning_session.h"
+
+namespace at::app {
+
+namespace {
+
+constexpr const char* kAnalyticsHelp =
+    "usage: anatomy-tutor analytics COURSE [--group GROUP] [--csv [--out DIR]] [--db PATH]\n\n"
+    "The instructor's view of a class (every student, or the students of --group):\n"
+    "  lessons     how many students started and finished each lesson (completion = finished / class)\n"
+    "  structures  the structures the class finds hardest: share of right answers, the class's mean\n"
+    "              FSRS difficulty (1 easy … 10 hard) and mean predicted recall now\n"
+    "  questions   each question's difficulty on the Elo scale (1500 = average; higher = harder),\n"
+    "              replayed over the class's answers with the uncertainty factor U(n) = 1/(1 + 0.05 n)\n"
+    "  students    each student's predicted recall now (FSRS retrievability, mean over the structures\n"
+    "              taught), the weakest structure, how many are due, lessons finished, latest exam score\n"
+    "  exams       attempts, mean score, pass rate\n"
+    "  --csv       CSV instead of text: one tidy table on stdout (table,id,name,metric,value), or with\n"
+    "              --out DIR one wide file per table (lessons.csv, structures.csv, questions.csv,\n"
+    "              students.csv, exams.csv) and the class's review log as revlog.csv in the form FSRS\n"
+    "              optimisers read (card_id = student/structure, review_time in ms, review_rating 1-4,\n"
+    "              review_state 0 new, 1 learning, 2 review, 3 relearning, review_duration in ms)\n";
+
+std::string bar(double share, int width = 20) {
+  const int full = int(std::lround(std::clamp(share, 0.0, 1.0) * width));
+  std::string s;
+  for (int i = 0; i < width; ++i) s += i < full ? "█" : "·";
+  return s;
+}
+
+std::string percent(std::optional<double> share) {
+  if (!share) return "–";
+  char t[16];
+  std::snprintf(t, sizeof t, "%.0f%%", 100 * *share);
+  return t;
+}
+
+std::string number(double v, int decimals) {
+  char t[32];
+  std::snprintf(t, sizeof t, "%.*f", decimals, v);
+  return t;
+}
+
+std::string csvField(const std::string& v) {
+  if (v.find_first_of(",\"\n") == std::string::npos) return v;
+  std::string out = "\"";
+  for (char c : v) out += c == '"' ? std::string("\"\"") : std::string(1, c);
+  return out + "\"";
+}
+
+std::string optionalNumber(std::optional<double> v, int decimals) { return v ? number(*v, decimals) : ""; }
+
+// The tables as rows of fields (first row: the header), shared by both CSV forms.
+struct Table {
+  std::string name;
+  std::vector<std::vector<std::string>> rows;
+};
+
+std::vector<Table> tables(const lessons::ClassAnalytics& a) {
+  std::vector<Table> out;
+  Table lessons{"lessons", {{"lesson", "title", "started", "finished", "completion", "mean_best_score"}}};
+  for (const auto& l : a.lessons)
+    lessons.rows.push_back({l.lessonId, l.title, std::to_string(l.started), std::to_string(l.finished),
+                            number(l.completion, 4), optionalNumber(l.meanBestScore, 4)});
+  Table structures{"structures",
+                   {{"structure", "name", "answers", "correct", "correct_share", "students", "mean_fsrs_difficulty",
+                     "mean_recall"}}};
+  for (const auto& s : a.structures)
+    structures.rows.push_back({s.structureId, s.name, std::to_string(s.answers), std::to_string(s.correct),
+                               number(s.correctShare, 4), std::to_string(s.students), number(s.meanDifficulty, 4),
+                               number(s.meanRecall, 4)});
+  Table questions{"questions",
+                  {{"question", "lesson_or_exam", "structure", "kind", "answers", "correct", "correct_share",
+                    "initial_difficulty", "elo_difficulty"}}};
+  for (const auto& q : a.questions)
+    questions.rows.push_back({q.questionId, q.lessonId, q.structureId, q.kind, std::to_string(q.answers),
+                              std::to_string(q.correct), number(q.correctShare, 4), number(q.initialDifficulty, 1),
+                              number(q.difficulty, 2)});
+  Table students{"students",
+                 {{"student", "group", "taught", "due", "mean_recall", "weakest_structure", "weakest_recall",
+                   "lessons_finished", "exam_score"}}};
+  for (const auto& s : a.students)
+    students.rows.push_back({s.name, s.group, std::to_string(s.taught), std::to_string(s.due),
+                             optionalNumber(s.meanRecall, 4), s.weakestStructure,
+                             s.weakestStructure.empty() ? "" : number(s.weakestRecall, 4), std::to_string(s.lessonsFinished),
+                             optionalNumber(s.examScore, 4)});
+  Table exams{"exams", {{"exam", "title", "attempts", "finished", "mean_score", "pass_rate"}}};
+  for (const auto& e : a.exams)
+    exams.rows.push_back({e.examId, e.title, std::to_string(e.attempts), std::to_string(e.finished),
+                          optionalNumber(e.meanScore, 4), optionalNumber(e.passRate, 4)});
+  for (Table* t : {&lessons, &structures, &questions, &students, &exams}) out.push_back(std::move(*t));
+  return out;
+}
+
+// One tidy CSV: table, the row's id (its first field), its name (the second), metric, value.
+void printLongCsv(const std::vector<Table>& all) {
+  std::printf("table,id,name,metric,value\n");
+  for (const Table& t : all) {
+    const auto& header = t.rows.front();
+    for (std::size_t r = 1; r < t.rows.size(); ++r)
+      for (std::size_t c = 2; c < header.size(); ++c)
+        std::printf("%s,%s,%s,%s,%s\n", t.name.c_str(), csvField(t.rows[r][0]).c_str(), csvField(t.rows[r][1]).c_str(),
+                    header[c].c_str(), csvField(t.rows[r][c]).c_str());
+  }
+}
+
+// The review log of the class, one row per answer, oldest first, for an FSRS optimiser.
+Table reviewLogTable(const lessons::AnalyticsInput& in) {
+  Table t{"revlog", {{"card_id", "student", "structure", "review_time", "review_rating", "review_state", "review_duration"}}};
+  std::map<std::int64_t, std::string> names;
+  for (const auto& u : in.students) names[u.id] = u.name;
+  std::vector<const lessons::ClassAnswer*> ordered;
+  for (const auto& a : in.answers) ordered.push_back(&a);
+  std::sort(ordered.begin(), ordered.end(), [](const auto* x, const auto* y) {
+    return x->answeredAt != y->answeredAt ? x->answeredAt < y->answeredAt : x->order < y->order;
+  });
+  for (const auto* a : ordered)
+    t.rows.push_back({names[a->userId] + "/" + a->structureId, names[a->userId], a->structureId,
+                      std::to_string(a->answeredAt * 1000), std::to_string(int(a->rating)),
+                      std::to_string(int(a->phaseBefore)), std::to_string(a->latencyMs)});
+  return t;
+}
+
+Status writeWideCsv(const std::vector<Table>& all, const std::filesystem::path& dir) {
+  std::error_code ec;
+  std::filesystem::create_directories(dir, ec);
+  if (ec) return fail(dir.string() + ": cannot create the folder (" + ec.message() + ")");
+  for (const Table& t : all) {
+    const auto path = dir / (t.name + ".csv");
+    std::ofstream out(path);
+    for (const auto& row : t.rows) {
+      for (std::size_t c = 0; c < row.size(); ++c) out << (c ? "," : "") << csvField(row[c]);
+      out << "\n";
+    }
+    if (!out) return fail(path.string() + ": cannot write");
+    std::printf("wrote %s (%s)\n", path.string().c_str(), str::countOf(long(t.rows.size() - 1), "row").c_str());
+  }
+  return {};
+}
+
+void printText(const lessons::ClassAnalytics& a, const lessons::Course& course) {
+  std::printf("Analytics: %s (%s) — class of %s, %s\n", course.title.c_str(), course.id.c_str(),
+              str::countOf(a.classSize, "student").c_str(), str::countOf(a.answers, "answer").c_str());
+  std::printf("\nLesson completion (finished / class)\n");
+  for (const auto& l : a.lessons)
+    std::printf("  %-26s %s %4s  %3d started, %3d finished, mean best score %s\n", l.lessonId.c_str(),
+                bar(l.completion).c_str(), percent(l.completion).c_str(), l.started, l.finished,
+                l.meanBestScore ? number(*l.meanBestScore, 2).c_str() : "–");
+  std::printf("\nHardest structures (share of right answers; FSRS difficulty 1 easy … 10 hard; predicted recall now)\n");
+  for (const auto& s : a.structures)
+    std::printf("  %-30s %s %4s right of %4d   difficulty %4.1f   recall %4s (%s)\n", s.name.c_str(),
+                bar(s.correctShare).c_str(), percent(s.correctShare).c_str(), s.answers, s.meanDifficulty,
+                percent(s.students ? std::optional<double>(s.meanRecall) : std::nullopt).c_str(),
+                str::countOf(s.students, "student").c_str());
+  std::printf("\nQuestions by difficulty (Elo: 1500 = average, higher = harder)\n");
+  for (const auto& q : a.questions)
+    if (q.answers > 0)
+      std::printf("  %-48s %-8s %6.0f  (%4s right of %d)\n", q.questionId.c_str(), q.kind.c_str(), q.difficulty,
+                  percent(q.correctShare).c_str(), q.answers);
+  std::printf("\nStudents by predicted recall now (FSRS, mean over the structures taught)\n");
+  for (const auto& s : a.students) {
+    std::printf("  %-20s %s %4s  %2d taught, %2d due", s.name.c_str(), bar(s.meanRecall.value_or(0), 10).c_str(),
+                percent(s.meanRecall).c_str(), s.taught, s.due);
+    if (!s.weakestStructure.empty())
+      std::printf(", weakest %s (%s)", s.weakestStructure.c_str(), percent(s.weakestRecall).c_str());
+    std::printf(", %s finished", str::countOf(s.lessonsFinished, "lesson").c_str());
+    if (s.examScore) std::printf(", exam %s", number(*s.examScore, 2).c_str());
+    std::printf("\n");
+  }
+  if (!a.exams.empty()) std::printf("\nExams\n");
+  for (const auto& e : a.exams)
+    std::printf("  %-28s %s, %d finished, mean score %s, passed %s\n", e.examId.c_str(),
+                str::countOf(e.attempts, "attempt").c_str(), e.finished, e.meanScore ? number(*e.meanScore, 2).c_str() : "–",
+                percent(e.passRate).c_str());
+}
+
+}  // namespace
+
+int runAnalytics(const Argv& argv) {
+  auto args = cli::Args::parse(argv, {"group", "out"}, {"csv"});
+  if (!args) return reportError("analytics: " + args.error().message);
+  if (args->has("help")) {
+    std::printf("%s", kAnalyticsHelp);
+    return 0;
+  }
+  if (args->positional().size() != 1) return reportError("analytics: give exactly one COURSE (see `anatomy-tutor courses`)");
+  if (args->has("out") && !args->has("csv")) return reportError("analytics: --out DIR writes CSV files: add --csv");
+  auto session = LearningSession::open(args->db());
+  if (!session) return reportError("analytics: " + session.error().message);
+  auto input = db::loadAnalyticsInput((*session)->database(), (*session)->curriculum(), args->positional()[0],
+                                      args->value("group"));
+  if (!input) return reportError("analytics: " + input.error().message + " (see `anatomy-tutor courses`)");
+  const auto analytics = lessons::computeAnalytics(*input, lessons::UnixSeconds(std::time(nullptr)));
+  if (!args->has("csv")) {
+    printText(analytics, input->course);
+    return 0;
+  }
+  auto all = tables(analytics);
+  if (auto out = args->value("out")) {
+    all.push_back(reviewLogTable(*input));
+    if (auto st = writeWideCsv(all, *out); !st) return reportError("analytics: " + st.error().message);
+    return 0;
+  }
+  printLongCsv(all);
+  return 0;
+}
+
+}  // namespace at::app

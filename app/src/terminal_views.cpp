@@ -1,0 +1,274 @@
+#include "terminal_views.h"
+
+#include <cmath>
+#include <sstream>
+
+#include "commands.h"
+#include "dataset_resolver.h"
+#include "render/gl/egl_context.h"
+#include "render/gl/volume_renderer.h"
+#include "render/image.h"
+#include "render/scene.h"
+#include "render/structure_pick.h"
+#include "volume/dataset_source.h"
+#include "volume/mask.h"
+#include "volume/png_image.h"
+
+namespace at::app {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+constexpr int kWidth = kPictureWidth, kHeight = kPictureHeight;
+constexpr int kSliceScale = 3;               // pixels per voxel side on slices
+
+// The voxel of the structure nearest its centroid: its "centre", on the structure even when the
+// structure is curved (a nerve, a canal).
+std::optional<Vec3> structureCentre(const LabelMap& labels, std::uint16_t label) {
+  auto frame = render::structureFrame(labels, label);
+  if (!frame) return std::nullopt;
+  const Dims& d = labels.dims();
+  double best = 1e300;
+  std::optional<Vec3> centre;
+  for (int k = 0; k < d.z; ++k)
+    for (int j = 0; j < d.y; ++j)
+      for (int i = 0; i < d.x; ++i) {
+        if (labels.at(i, j, k) != label) continue;
+        const Vec3 p = labels.geometry.indexToPatient({double(i), double(j), double(k)});
+        const double dist = norm(p - frame->centroidMm);
+        if (dist < best) best = dist, centre = p;
+      }
+  return centre;
+}
+
+std::optional<std::array<int, 3>> voxelOf(const Geometry& g, const Vec3& pointMm) {
+  const Vec3 ijk = g.patientToIndex(pointMm);
+  const int i = int(std::lround(ijk[0])), j = int(std::lround(ijk[1])), k = int(std::lround(ijk[2]));
+  if (!g.dims.contains(i, j, k)) return std::nullopt;
+  return std::array<int, 3>{i, j, k};
+}
+
+}  // namespace
+
+TerminalViews::~TerminalViews() = default;
+
+Result<std::unique_ptr<TerminalViews>> TerminalViews::create(db::Database& db, const std::string& datasetId,
+                                                             fs::path dir, bool pictures) {
+  std::unique_ptr<TerminalViews> v(new TerminalViews());
+  const std::string name = datasetId == "phantom" ? "phantom:128" : datasetId;
+  DatasetRequest request;
+  request.name = name;
+  request.database = &db;
+  auto dataset = openNamedDataset(request);
+  if (!dataset) return tl::unexpected(dataset.error());
+  v->dataset_ = std::move(*dataset);
+  v->presets_ = std::make_unique<render::PresetLibrary>(defaultPresetsDir());
+  if (!pictures) return v;
+  std::error_code ec;
+  fs::create_directories(dir, ec);
+  if (ec) return fail(dir.string() + ": cannot create the folder for the pictures (" + ec.message() + ")");
+  v->dir_ = std::move(dir);
+  auto context = render::gl::EglContext::create();
+  if (!context) return fail("offscreen rendering: " + context.error().message);
+  v->context_ = std::make_unique<render::gl::EglContext>(std::move(*context));
+  auto renderer = render::gl::VolumeRenderer::create();
+  if (!renderer) return fail("offscreen rendering: " + renderer.error().message);
+  v->renderer_ = std::make_unique<render::gl::VolumeRenderer>(std::move(*renderer));
+  if (auto st = v->renderer_->setVolume(v->dataset_.volume, v->dataset_.labels); !st) return tl::unexpected(st.error());
+  return v;
+}
+
+Result<const FloatVolume*> TerminalViews::fieldOf(const Structure& structure, const render::Preset& preset) {
+  if (auto it = fields_.find(structure.id); it != fields_.end()) return &it->second;
+  auto params = render::wdtParamsFor(preset);
+  if (!params) return tl::unexpected(params.error());
+  auto wdt = computeWdt(dataset_.volume, structureMask(dataset_.labels, structure.label), *params);
+  if (!wdt) return tl::unexpected(withContext(structure.id, wdt.error()));
+  FloatVolume field = wdt->field.downsample == 1 ? std::move(wdt->field.distances)
+                                                 : upsampleField(wdt->field, dataset_.labels.geometry);
+  return &fields_.emplace(structure.id, std::move(field)).first->second;
+}
+
+Result<render::RenderSettings> TerminalViews::settingsFor(const Structure& selected, const render::Preset& preset,
+                                                          const std::string& view, int width, int height,
+                                                          double contextScale) {
+  auto frame = render::structureFrame(dataset_.labels, selected.label);
+  if (!frame) return fail(selected.id + ": " + frame.error().message);
+  render::ViewRequest request;
+  request.width = width;
+  request.height = height;
+  request.view = view;
+  if (contextScale > 0) request.contextScale = contextScale;
+  auto settings = render::settingsFor(preset, *frame, request);
+  if (!settings) return tl::unexpected(settings.error());
+  settings->background = {0.04f, 0.04f, 0.05f, 1.0f};
+  return settings;
+}
+
+Result<TerminalPicture> TerminalViews::show(const lessons::QuestionScene& scene, const std::string& stem, bool region,
+                                            const std::optional<std::string>& visibleTarget) {
+  if (!renderer_) return fail("pictures are off");
+  const Structure* selected = dataset_.findStructure(scene.structure);
+  if (!selected) return fail("the view's structure '" + scene.structure + "' is not in dataset '" + dataset_.id + "'");
+  // The scene's preset, else the structure's shipped WDT preset (an imported dataset has none of
+  // the phantom's, and gets the default one).
+  auto preset = scene.presetId.empty() ? presets_->forStructure(selected->id, render::RenderMode::Wdt)
+                                       : presets_->load(scene.presetId);
+  if (!preset) preset = presets_->forStructure(selected->id, render::RenderMode::Wdt);
+  if (!preset) return tl::unexpected(preset.error());
+  const FloatVolume* field = nullptr;
+  if (render::modeNeedsField(preset->mode)) {
+    auto f = fieldOf(*selected, *preset);
+    if (!f) return tl::unexpected(f.error());
+    field = *f;
+  }
+  const render::TransferFunction2D table = render::shadingTable(*preset);
+  render::SceneVolumes volumes{&dataset_.volume, &dataset_.labels, field, selected->label};
+
+  std::vector<std::string> views = {lessons::toString(scene.view)};
+  const Structure* target = visibleTarget ? dataset_.findStructure(*visibleTarget) : nullptr;
+  std::optional<Vec3> targetCentre = target ? structureCentre(dataset_.labels, target->label) : std::nullopt;
+  if (targetCentre)
+    for (lessons::CameraView v : {lessons::CameraView::LateralRight, lessons::CameraView::Superior,
+                                  lessons::CameraView::Anterior, lessons::CameraView::Posterior,
+                                  lessons::CameraView::Inferior, lessons::CameraView::LateralLeft})
+      if (v != scene.view) views.push_back(lessons::toString(v));
+  std::optional<render::RenderSettings> chosen;
+  for (const std::string& view : views) {
+    auto settings = settingsFor(*selected, *preset, view, kWidth, kHeight, region ? kRegionContext : 0);
+    if (!settings) return tl::unexpected(settings.error());
+    if (!chosen) chosen = *settings;  // the scene's own side unless another shows the target
+    if (!targetCentre) break;
+    const auto px = settings->camera.project(*targetCentre, kWidth, kHeight);
+    if (!px || (*px)[0] < 0 || (*px)[1] < 0 || (*px)[0] >= kWidth || (*px)[1] >= kHeight) continue;
+    const render::PickResult hit = render::pickStructure(volumes, *settings, table, (*px)[0], (*px)[1]);
+    if (hit.hit && hit.label == target->label) {
+      chosen = *settings;
+      break;
+    }
+  }
+
+  renderer_->setSelected(selected->label);
+  if (field) {
+    if (auto st = renderer_->setField(*field); !st) return tl::unexpected(st.error());
+  } else {
+    renderer_->clearField();
+  }
+  auto image = renderer_->render(*chosen);
+  if (!image) return tl::unexpected(image.error());
+  const fs::path path = dir_ / (stem + ".png");
+  if (auto st = writePng(path.string(), render::toRgb(*image)); !st) return tl::unexpected(st.error());
+  lastSettings_ = *chosen;
+  lastSelected_ = selected->label;
+  lastField_ = field;
+  lastSlice_.reset();
+  return TerminalPicture{path.string(), kWidth, kHeight, false};
+}
+
+Result<TerminalPicture> TerminalViews::showSlice(const std::string& targetId, const std::string& stem) {
+  if (!renderer_) return fail("pictures are off");
+  const Structure* target = dataset_.findStructure(targetId);
+  if (!target) return fail("structure '" + targetId + "' is not in dataset '" + dataset_.id + "'");
+  const auto centre = structureCentre(dataset_.labels, target->label);
+  if (!centre) return fail("structure '" + targetId + "' has no voxels in dataset '" + dataset_.id + "'");
+  const auto voxel = voxelOf(dataset_.labels.geometry, *centre);
+  SliceRequest request;
+  request.axis = 2;
+  request.index = voxel ? (*voxel)[2] : 0;
+  request.scale = kSliceScale;
+  auto image = renderSlice(dataset_.volume, nullptr, dataset_.structures, request);  // no labels
+  if (!image) return tl::unexpected(image.error());
+  const fs::path path = dir_ / (stem + ".png");
+  if (auto st = writePng(path.string(), *image); !st) return tl::unexpected(st.error());
+  lastSlice_ = request;
+  lastSettings_.reset();
+  return TerminalPicture{path.string(), image->width, image->height, true};
+}
+
+Result<quiz::Pick> TerminalViews::pickAt(const std::optional<Vec3>& pointMm, std::uint16_t label,
+                                         const std::string& target) {
+  quiz::Pick pick;
+  if (const Structure* s = dataset_.findStructureByLabel(label)) pick.structure = s->id;
+  const Structure* t = dataset_.findStructure(target);
+  if (pointMm && t) {
+    auto preset = presets_->forStructure(t->id, render::RenderMode::Wdt);
+    if (preset) {
+      auto field = fieldOf(*t, *preset);
+      if (field)
+        if (const auto v = voxelOf((*field)->geometry, *pointMm)) pick.distanceMm = (*field)->at((*v)[0], (*v)[1], (*v)[2]);
+    }
+  }
+  return pick;
+}
+
+Result<quiz::Pick> TerminalViews::pickPixel(double x, double y, const std::string& target) {
+  if (lastSlice_) {
+    const auto ijk = sliceVoxelAt(dataset_.labels.dims(), *lastSlice_, x, y);
+    if (!ijk) return fail("the pixel (" + std::to_string(int(x)) + ", " + std::to_string(int(y)) + ") is outside the slice");
+    const Vec3 p = dataset_.labels.geometry.indexToPatient({double((*ijk)[0]), double((*ijk)[1]), double((*ijk)[2])});
+    return pickAt(p, dataset_.labels.at((*ijk)[0], (*ijk)[1], (*ijk)[2]), target);
+  }
+  if (!lastSettings_) return fail("there is no picture to pick on (pictures are off); give a point as mm X Y Z");
+  if (x < 0 || y < 0 || x >= lastSettings_->width || y >= lastSettings_->height)
+    return fail("the pixel (" + std::to_string(int(x)) + ", " + std::to_string(int(y)) + ") is outside the " +
+                std::to_string(lastSettings_->width) + "×" + std::to_string(lastSettings_->height) + " picture");
+  render::SceneVolumes volumes{&dataset_.volume, &dataset_.labels, lastField_, lastSelected_};
+  const render::PickResult hit =
+      render::pickStructure(volumes, *lastSettings_, render::shadingTable(lastSettings_->preset), x, y);
+  return pickAt(hit.hit ? std::optional<Vec3>(hit.pointMm) : std::nullopt, hit.hit ? hit.label : 0, target);
+}
+
+Result<quiz::Pick> TerminalViews::pickPointMm(const Vec3& pointMm, const std::string& target) {
+  const auto v = voxelOf(dataset_.labels.geometry, pointMm);
+  return pickAt(pointMm, v ? dataset_.labels.at((*v)[0], (*v)[1], (*v)[2]) : 0, target);
+}
+
+std::unique_ptr<TerminalViews> openTerminalViews(db::Database& db, const std::string& datasetId,
+                                                 const std::optional<std::string>& dir, bool off) {
+  const fs::path folder = dir.value_or("anatomy-tutor-views");
+  if (!off) {
+    auto views = TerminalViews::create(db, datasetId, folder, true);
+    if (views) return std::move(*views);
+    std::printf("(no pictures: %s; locate answers take a point as mm X Y Z)\n", views.error().message.c_str());
+  }
+  auto views = TerminalViews::create(db, datasetId, folder, false);
+  if (!views) {
+    std::printf("(locate answers need dataset '%s', which does not load: %s)\n", datasetId.c_str(),
+                views.error().message.c_str());
+    return nullptr;
+  }
+  return std::move(*views);
+}
+
+Result<PickInput> parsePickInput(const std::string& raw) {
+  std::string text = raw;
+  for (char& c : text)
+    if (c == ',' || c == '(' || c == ')') c = ' ';
+  std::istringstream in(text);
+  std::string first;
+  in >> first;
+  const auto explain = [&] {
+    return fail("'" + raw + "' is not a pick: type the pixel where it is in the picture as x y (e.g. 180 135), "
+                "or a point in millimetres as mm X Y Z");
+  };
+  std::vector<double> numbers;
+  const bool mm = first == "mm";
+  if (!mm) {
+    in.clear();
+    in.str(text);
+  }
+  for (std::string word; in >> word;) {
+    char* end = nullptr;
+    const double v = std::strtod(word.c_str(), &end);
+    if (word.empty() || *end != '\0' || !std::isfinite(v)) return explain();
+    numbers.push_back(v);
+  }
+  PickInput input;
+  if (mm && numbers.size() == 3) input.pointMm = Vec3{numbers[0], numbers[1], numbers[2]};
+  else if (!mm && numbers.size() == 2) input.pixel = std::array<double, 2>{numbers[0], numbers[1]};
+  else return explain();
+  return input;
+}
+
+}  // namespace at::app

@@ -1,0 +1,105 @@
+// What `play` and `exam` show in a terminal: every view a step or question refers to is written as
+// a PNG through the offscreen renderer (as `render` does) and its path printed; a locate answer is a
+// pick on that picture — a pixel, turned into the structure under it by the same picking code the
+// desktop uses (render::pickStructure), or a point in millimetres — never a typed name.
+#pragma once
+
+#include <filesystem>
+#include <map>
+#include <memory>
+#include <optional>
+#include <string>
+
+#include "db/database.h"
+#include "lessons/curriculum.h"
+#include "quiz/question.h"
+#include "render/preset.h"
+#include "render/render_settings.h"
+#include "volume/slice_image.h"
+#include "volume/structure.h"
+#include "wdt/wdt.h"
+
+namespace at::render::gl {
+class EglContext;
+class VolumeRenderer;
+}  // namespace at::render::gl
+
+namespace at::app {
+
+inline constexpr int kPictureWidth = 400, kPictureHeight = 300;  // software GL: about 2 s a picture
+inline constexpr double kRegionContext = 4.0;
+
+// A picture written for the student, and how a pick on it is read.
+struct TerminalPicture {
+  std::string path;
+  int width = 0;
+  int height = 0;
+  bool slice = false;  // a CT slice (pixel → voxel) rather than a 3-D view (pixel → ray)
+};
+
+class TerminalViews {
+ public:
+  // Pictures of `datasetId` (the built-in phantom is drawn at 128³: the same anatomy, 0.4 mm
+  // voxels) written into `dir` (created). Without `pictures` only the dataset is loaded (points in
+  // mm can still be picked). Errors: the dataset does not load, no offscreen GL.
+  static Result<std::unique_ptr<TerminalViews>> create(db::Database& db, const std::string& datasetId,
+                                                       std::filesystem::path dir, bool pictures = true);
+  bool pictures() const { return renderer_ != nullptr; }
+  ~TerminalViews();
+  TerminalViews(const TerminalViews&) = delete;
+  TerminalViews& operator=(const TerminalViews&) = delete;
+
+  // The 3-D view of `scene` (its structure selected and framed, its preset, its side) as
+  // dir/stem.png, kPictureWidth × kPictureHeight. `region`: frame a wider region (kRegionContext
+  // times the structure's radius instead of the default 2.5), as locate questions do. With
+  // `visibleTarget`, the side is the first of the scene's own and the other named views from which
+  // a click on the target's centre picks the target.
+  Result<TerminalPicture> show(const lessons::QuestionScene& scene, const std::string& stem, bool region = false,
+                               const std::optional<std::string>& visibleTarget = std::nullopt);
+  // An axial CT slice through the target's centre, without labels, as dir/stem.png.
+  Result<TerminalPicture> showSlice(const std::string& target, const std::string& stem);
+
+  // The structure under pixel (x, y) of the last picture, with the weighted distance in mm from
+  // `target` to the picked point (for tolerance bands; −1 when it could not be measured).
+  Result<quiz::Pick> pickPixel(double x, double y, const std::string& target);
+  // The structure at a point in patient LPS millimetres.
+  Result<quiz::Pick> pickPointMm(const Vec3& pointMm, const std::string& target);
+
+  const Dataset& dataset() const { return dataset_; }
+
+ private:
+  TerminalViews() = default;
+  Result<const FloatVolume*> fieldOf(const Structure& structure, const render::Preset& preset);
+  Result<render::RenderSettings> settingsFor(const Structure& selected, const render::Preset& preset,
+                                             const std::string& view, int width, int height, double contextScale);
+  Result<quiz::Pick> pickAt(const std::optional<Vec3>& pointMm, std::uint16_t label, const std::string& target);
+
+  Dataset dataset_;
+  std::filesystem::path dir_;
+  std::unique_ptr<render::PresetLibrary> presets_;
+  std::unique_ptr<render::gl::EglContext> context_;
+  std::unique_ptr<render::gl::VolumeRenderer> renderer_;
+  std::map<std::string, FloatVolume> fields_;  // WDT per structure id, computed once
+
+  // What the last picture showed, for picks on it.
+  std::optional<render::RenderSettings> lastSettings_;
+  std::uint16_t lastSelected_ = 0;
+  const FloatVolume* lastField_ = nullptr;
+  std::optional<SliceRequest> lastSlice_;
+};
+
+// The pictures of a terminal run: none when `off` (--no-views), else written into `dir` (default
+// ./anatomy-tutor-views). When they cannot be made a one-line note says why and the run goes on
+// without them (locate answers are then points in mm). Null only when the dataset does not load.
+std::unique_ptr<TerminalViews> openTerminalViews(db::Database& db, const std::string& datasetId,
+                                                 const std::optional<std::string>& dir, bool off);
+
+// Where a terminal answer points: a pixel of the last picture or a point in mm.
+struct PickInput {
+  std::optional<std::array<double, 2>> pixel;
+  std::optional<Vec3> pointMm;
+};
+// Reads "x y" / "x,y" (a pixel) or "mm X Y Z" (a point in LPS mm). Errors explain both forms.
+Result<PickInput> parsePickInput(const std::string& text);
+
+}  // namespace at::app

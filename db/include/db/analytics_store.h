@@ -1,0 +1,20 @@
+// What instructor analytics read (lessons/analytics.h): one course's class — its students, their
+// answers (the review log: lesson, review and exam answers alike), lesson attempts, FSRS memory
+// states and exam attempts — loaded from the database.
+#pragma once
+
+#include <optional>
+#include <string>
+
+#include "db/database.h"
+#include "db/sqlite_repositories.h"
+#include "lessons/analytics.h"
+
+namespace at::db {
+
+// The class is every user with the student role (of `group` when given). Errors: unknown course.
+// `curriculum` gives the course and its dataset's structures (the app's knows the built-in ones).
+Result<lessons::AnalyticsInput> loadAnalyticsInput(Database& db, lessons::CurriculumRepository& curriculum,
+                                                   const std::string& courseId, const std::optional<std::string>& group);
+
+}  // namespace at::db

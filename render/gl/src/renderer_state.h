@@ -1,0 +1,109 @@
+// The ray caster's GL state, shared by volume_renderer.cpp (uploads, whole frames) and
+// progressive.cpp (refinement across frames). Internal to render/gl.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "gl_objects.h"
+#include "occupancy.h"
+#include "render/gl/volume_renderer.h"
+
+#if defined(AT_HAVE_CUDA)
+#include "cuda/gl_interop.h"
+#endif
+
+namespace at::render::gl {
+
+// What a ray caster program is specialised to (compile-time constants of the shader, so that
+// per-sample branches and the unused modes' code leave the program).
+struct RayVariant {
+  static constexpr int kCount = 24;
+  int mode = 0;  // 0 table, 1 bare, 2 lighting
+  bool shading = true, clip = false, structure = false;
+  int index() const { return mode + 3 * (shading ? 1 : 0) + 6 * (clip ? 1 : 0) + 12 * (structure ? 1 : 0); }
+  std::string defines() const;
+};
+
+// Everything the occupancy grid depends on besides the volume.
+struct OccupancyKey {
+  std::uint64_t tableGeneration = 0, fieldGeneration = 0;
+  std::uint16_t selected = 0;
+  bool context = true;
+  float surfaceLo = 0;
+  bool surfaceFloor = false;
+  float log2Alpha = 0, distanceUnit = 0;
+  bool operator==(const OccupancyKey&) const = default;
+};
+
+// Progressive refinement of one image (volume_renderer.h): lattice levels from kCoarsestLevel to
+// 0; the coarsest level in tiles of 8 × 8 lattice points, each finer one in two sub-lattices (the
+// points no coarser level holds) of such tiles, tiles in order (ray_shaders.cpp): neighbouring
+// tiles share the texels they read, which a software rasteriser's caches reward.
+struct ProgressiveImage {
+  static constexpr int kCoarsestLevel = 3;
+  bool active = false;
+  RenderSettings settings;
+  std::uint64_t sceneGeneration = 0;
+  int level = kCoarsestLevel;  // being cast; -1 when complete
+  int ranksDone = 0;           // tiles of `level` cast so far (over its sub-lattices)
+  double castPixels = 0;       // pixels cast so far (counting skipped lattice points of coarser levels)
+  double msPerPixel = 0;       // measured on this image …
+  double lastMsPerPixel = 0;   // … and on its last chunk
+  double imageMs = 0;
+  int calls = 0;
+};
+
+struct VolumeRenderer::State {
+  std::array<Program, RayVariant::kCount> fragmentRayCasters, computeRayCasters;
+  Program maskProgram;
+  VertexArray vao;
+  Texture labels, field, table, mask, volume, occupancy;
+  // uploadFieldStep: the texture being filled, what it is filled from and the next z-slice.
+  Texture pendingField;
+  Dims pendingDims;   // of pendingField's storage (zero: none)
+  Dims fieldDims;     // of field's storage
+  const float* pendingSource = nullptr;
+  Geometry pendingGrid;
+  int pendingNextSlice = 0;
+  FieldBlockMinima pendingMinima, fieldMinima;  // distance minima of the pending and shown fields
+  // The mask texture: which label it holds, in which box of voxels (min, max exclusive).
+  int maskLabel = -1;  // -1: stale
+  std::array<int, 6> maskBox{0, 0, 0, 0, 0, 0};
+  std::uint16_t selected = 0;
+  std::optional<Preset> tablePreset;       // the preset the table texture was built from …
+  double tableStepMm = 0, tableRefMm = 0;  // … and the step its opacities are corrected to
+  TransferFunction2D tableInfo;            // its axes (rgba dropped after upload)
+  TableVisibility tableVisibility;
+  std::uint64_t tableGeneration = 0;
+  BlockSummary blocks;
+  std::optional<OccupancyKey> occupancyKey;
+  // Bumped when the volume, the field or the selection changes (a progressive image of an older
+  // scene starts over); fieldGeneration only when the field does (the occupancy's distances).
+  std::uint64_t sceneGeneration = 0, fieldGeneration = 0;
+  Framebuffer fbo;
+  Texture colour;  // RGBA8, the framebuffer's attachment and the compute path's image
+  int fboWidth = 0, fboHeight = 0;
+  // Progressive refinement: one image per lattice level (level l: ceil(size / 2^l) texels).
+  std::array<Texture, ProgressiveImage::kCoarsestLevel + 1> levelImages;
+  int progressiveWidth = 0, progressiveHeight = 0;
+  ProgressiveImage progressive;
+  RayCaster rayCaster = RayCaster::Compute;
+  Query timer;
+  Geometry volumeGrid, fieldGrid;
+  bool hasVolume = false, hasField = false, fieldOnCpu = false;
+#if defined(AT_HAVE_CUDA)
+  std::optional<cuda::GlTextureTarget> interop;  // registered field texture storage
+  Dims interopDims;
+#endif
+};
+
+Status glStatus(const char* what);
+Result<Program> linkCompute(const char* source, const char* what);
+// (Re)allocates an RGBA8 2-D texture with immutable storage.
+void allocateImage(Texture& texture, int width, int height);
+
+}  // namespace at::render::gl

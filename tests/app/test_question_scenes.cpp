@@ -1,0 +1,194 @@
+// Every question of the shipped courses shows what it asks about: the view its step sets (scene:
+// selected structure, preset, side) makes the target visible, as the terminal draws it (the phantom
+// at 128³, 400×300 pictures, locate questions framed on a wider region). Checked on the CPU with the
+// picking code the desktop and the terminal use: a locate question's target is what a click on its
+// centre picks (without being the highlighted structure); an identify, name, relation or order
+// question's structure is highlighted and not hidden behind anything opaque at its centre.
+#include <doctest/doctest.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include "lessons/course_json.h"
+#include "render/scene.h"
+#include "render/structure_pick.h"
+#include "test_support.h"
+#include "volume/dataset_source.h"
+#include "volume/mask.h"
+#include "volume/png_image.h"
+
+using namespace at;
+
+namespace {
+
+// As app/src/terminal_views.h draws them.
+constexpr int kWidth = 400, kHeight = 300;
+constexpr double kRegionContext = 4.0;
+
+// The target voxel nearest the target's centroid (on the structure even when it is curved).
+Vec3 centreOf(const LabelMap& labels, std::uint16_t label) {
+  auto frame = render::structureFrame(labels, label);
+  REQUIRE(frame);
+  const Dims& d = labels.dims();
+  double best = 1e300;
+  Vec3 centre = frame->centroidMm;
+  for (int k = 0; k < d.z; ++k)
+    for (int j = 0; j < d.y; ++j)
+      for (int i = 0; i < d.x; ++i)
+        if (labels.at(i, j, k) == label) {
+          const Vec3 p = labels.geometry.indexToPatient({double(i), double(j), double(k)});
+          if (norm(p - frame->centroidMm) < best) best = norm(p - frame->centroidMm), centre = p;
+        }
+  return centre;
+}
+
+// A step's view as the terminal draws it, on the phantom at 128³.
+struct DrawnScene {
+  render::RenderSettings settings;
+  std::optional<std::array<double, 2>> targetPixel;  // the target's centre in the picture
+};
+
+DrawnScene drawnScene(const Dataset& dataset, const lessons::Step& step, const FloatVolume* field = nullptr) {
+  const lessons::QuestionScene scene = lessons::sceneFor(step);
+  const render::PresetLibrary presets(test::sourceDir() / "data" / "presets");
+  auto preset = presets.load(scene.presetId);
+  REQUIRE_MESSAGE(preset, (preset ? "" : preset.error().message));
+  const Structure* selected = dataset.findStructure(scene.structure);
+  const Structure* target = dataset.findStructure(step.question.target);
+  REQUIRE(selected);
+  REQUIRE(target);
+  render::ViewRequest request;
+  request.width = kWidth;
+  request.height = kHeight;
+  request.view = lessons::toString(scene.view);
+  if (step.question.kind == quiz::QuestionKind::Locate) request.contextScale = kRegionContext;
+  auto frame = render::structureFrame(dataset.labels, selected->label);
+  REQUIRE(frame);
+  auto settings = render::settingsFor(*preset, *frame, request);
+  REQUIRE(settings);
+  return DrawnScene{*settings, settings->camera.project(centreOf(dataset.labels, target->label), kWidth, kHeight)};
+}
+
+}  // namespace
+
+TEST_CASE("Every shipped question's view shows its target; locate questions pick it at its centre without marking it") {
+  auto dataset = openBuiltinDataset("phantom:128");
+  REQUIRE(dataset);
+  const render::PresetLibrary presets(test::sourceDir() / "data" / "presets");
+  std::map<std::string, FloatVolume> fields;
+  int checked = 0;
+  for (const auto& entry : std::filesystem::directory_iterator(test::sourceDir() / "data" / "courses")) {
+    if (entry.path().extension() != ".json") continue;
+    auto course = lessons::loadCourseJson(entry.path());
+    REQUIRE_MESSAGE(course, (course ? "" : course.error().message));
+    REQUIRE(course->datasetId == "phantom");
+    for (const lessons::Lesson& lesson : course->lessons)
+      for (const lessons::Step& step : lesson.steps) {
+        if (step.kind != lessons::StepKind::Question) continue;
+        const quiz::Question& q = step.question;
+        CAPTURE(q.id);
+        const lessons::QuestionScene scene = lessons::sceneFor(step);
+        const Structure* selected = dataset->findStructure(scene.structure);
+        const Structure* target = dataset->findStructure(q.target);
+        REQUIRE(selected);
+        REQUIRE(target);
+        auto preset = presets.load(scene.presetId);
+        REQUIRE_MESSAGE(preset, (preset ? "" : preset.error().message));
+        if (!fields.count(selected->id)) {
+          auto params = render::wdtParamsFor(*preset);
+          REQUIRE(params);
+          auto wdt = computeWdt(dataset->volume, structureMask(dataset->labels, selected->label), *params);
+          REQUIRE(wdt);
+          fields[selected->id] = std::move(wdt->field.distances);
+        }
+        const bool locate = q.kind == quiz::QuestionKind::Locate;
+        render::ViewRequest request;
+        request.width = kWidth;
+        request.height = kHeight;
+        request.view = lessons::toString(scene.view);
+        if (locate) request.contextScale = kRegionContext;
+        auto frame = render::structureFrame(dataset->labels, selected->label);
+        REQUIRE(frame);
+        auto settings = render::settingsFor(*preset, *frame, request);
+        REQUIRE(settings);
+        const render::SceneVolumes volumes{&dataset->volume, &dataset->labels, &fields[selected->id], selected->label};
+        const render::TransferFunction2D table = render::shadingTable(settings->preset);
+        const auto px = settings->camera.project(centreOf(dataset->labels, target->label), kWidth, kHeight);
+        REQUIRE(px.has_value());
+        CHECK((*px)[0] >= 0);
+        CHECK((*px)[0] < kWidth);
+        CHECK((*px)[1] >= 0);
+        CHECK((*px)[1] < kHeight);
+        const render::PickResult clicked = render::pickStructure(volumes, *settings, table, (*px)[0], (*px)[1]);
+        if (locate) {
+          CHECK(selected->id != target->id);  // the region, not the highlighted answer
+          CHECK_MESSAGE(clicked.label == target->label, "a click on its centre picks label " << clicked.label);
+        } else {
+          CHECK(selected->id == target->id);  // highlighted
+          const render::PickResult seen = render::pick(volumes, *settings, table, (*px)[0], (*px)[1], 0.9);
+          CHECK_MESSAGE((clicked.label == target->label || (seen.hit && seen.label == target->label)),
+                        "hidden behind label " << clicked.label);
+        }
+        ++checked;
+      }
+  }
+  CHECK(checked >= 20);
+}
+
+TEST_CASE("play writes each step's view as a PNG, takes a locate answer as a pixel of it, and hints at empty answers") {
+  if (!test::requireAppBinary("play with pictures")) return;
+  auto dataset = openBuiltinDataset("phantom:128");
+  REQUIRE(dataset);
+  auto course = lessons::loadCourseJson(test::sourceDir() / "data" / "courses" / "temporal_bone.json");
+  REQUIRE(course);
+  const lessons::Lesson& lesson = course->lessons[0];  // inner_ear: four show steps, then locate the cochlea
+  REQUIRE((lesson.steps[4].question.kind == quiz::QuestionKind::Locate));
+  const DrawnScene locate = drawnScene(*dataset, lesson.steps[4]);
+  REQUIRE(locate.targetPixel);
+  test::TempDir dir("terminal-play");
+  const auto views = dir / "views";
+  const auto db = dir / "t.db";
+  {
+    std::ofstream answers(dir / "a.jsonl");
+    answers << "{\"pixel\": [" << (*locate.targetPixel)[0] << ", " << (*locate.targetPixel)[1] << "]}\n";
+  }
+  const auto r = test::runApp("play inner_ear --user pia --new-user --answers '" + (dir / "a.jsonl").string() +
+                              "' --views '" + views.string() + "' --db '" + db.string() + "'");
+  INFO(r.out << r.err);
+  CHECK(r.out.find("✓ Correct: that is the Cochlea.") != std::string::npos);
+  CHECK(r.out.find("view: " + (views / "inner_ear-01.png").string()) != std::string::npos);
+  CHECK(r.out.find((views / "inner_ear-05.png").string() + "  — answer with the pixel x y") != std::string::npos);
+  for (int i = 1; i <= 6; ++i) {
+    const auto png = views / ("inner_ear-0" + std::to_string(i) + ".png");
+    CAPTURE(png);
+    auto image = readPng(png.string());
+    REQUIRE(image);
+    CHECK(image->width == kWidth);
+    CHECK(image->height == kHeight);
+  }
+  // The identify question's picture marks the vestibule in the highlight colour at its centre.
+  const DrawnScene identify = drawnScene(*dataset, lesson.steps[5]);
+  REQUIRE(identify.targetPixel);
+  auto marked = readPng((views / "inner_ear-06.png").string());
+  REQUIRE(marked);
+  int warm = 0;
+  for (int dy = -3; dy <= 3; ++dy)
+    for (int dx = -3; dx <= 3; ++dx) {
+      const std::uint8_t* p = marked->pixel(int((*identify.targetPixel)[0]) + dx, int((*identify.targetPixel)[1]) + dy);
+      if (p[0] > p[2] + 25) ++warm;  // orange: red well above blue
+    }
+  CHECK(warm > 25);
+
+  // Typed (quiz only, so the locate question comes first): an empty answer and a name get hints —
+  // a locate answer is a pick, never a name; a pixel off the picture is refused; 'quit' stops.
+  const auto typed = test::runApp("play inner_ear --quiz-only --user quo --new-user --views '" + views.string() +
+                                      "' --db '" + db.string() + "'",
+                                  "\ncochlea\n999 5\nquit\n");
+  INFO(typed.out << typed.err);
+  CHECK(typed.exitCode == 0);
+  CHECK(typed.out.find("  type the pixel where it is in the picture as x y (e.g. 180 135), or a point as mm X Y Z — try again") !=
+        std::string::npos);
+  CHECK(typed.out.find("'cochlea' is not a pick") != std::string::npos);
+  CHECK(typed.out.find("is outside the 400×300 picture") != std::string::npos);
+  CHECK(typed.out.find("no structure called") == std::string::npos);
+}
