@@ -7,6 +7,7 @@
 #include "cli_args.h"
 #include "commands.h"
 #include "core/strings.h"
+#include "db/exam_store.h"
 #include "learning_session.h"
 #include "lessons/lesson_engine.h"
 #include "lessons/scheduling.h"
@@ -177,10 +178,35 @@ int runProgress(const Argv& argv) {
         state = buffer;
       }
       if (open) state = best >= 0 ? state + "; another attempt in progress" : "in progress (play resumes it)";
-      std::printf("  %-28s %-40s %s (%d attempt%s)\n", l.id.c_str(), l.title.c_str(), state.c_str(), tries,
-                  tries == 1 ? "" : "s");
+      std::printf("  %-28s %-40s %s (%s)\n", l.id.c_str(), l.title.c_str(), state.c_str(),
+                  str::countOf(tries, "attempt").c_str());
     }
   }
+
+  // Exams: the latest attempt at each, with its score once handed in.
+  db::SqliteExamRepository exams((*session)->database());
+  auto examAttempts = exams.examAttempts(userId);
+  if (!examAttempts) return reportError("progress: " + examAttempts.error().message);
+  bool examHeading = false;
+  for (const auto& c : *courses)
+    for (const auto& e : c.exams) {
+      const auto latest = std::find_if(examAttempts->begin(), examAttempts->end(),
+                                       [&](const lessons::ExamAttempt& a) { return a.examId == e.id; });
+      if (latest == examAttempts->end()) continue;
+      if (!examHeading) std::printf("\nExams\n");
+      examHeading = true;
+      std::string state = "in progress (`anatomy-tutor exam " + e.id + "` continues it while time is left)";
+      if (latest->finishedAt) {
+        char buffer[96];
+        std::snprintf(buffer, sizeof buffer, "score %.2f%s", latest->score,
+                      latest->passed ? (*latest->passed ? ", passed" : ", not passed") : "");
+        state = buffer;
+      }
+      const auto tries = std::count_if(examAttempts->begin(), examAttempts->end(),
+                                       [&](const lessons::ExamAttempt& a) { return a.examId == e.id; });
+      std::printf("  %-28s %-40s %s (%s)\n", e.id.c_str(), e.title.c_str(), state.c_str(),
+                  str::countOf(tries, "attempt").c_str());
+    }
 
   std::printf("\nStructures\n");
   if (all->empty()) std::printf("  none answered yet\n");
@@ -189,8 +215,15 @@ int runProgress(const Argv& argv) {
   for (const auto& p : *all) {
     auto it = names.find(p.structureId);
     const std::string name = it == names.end() ? p.structureId : it->second;
-    std::printf("  %-32s %9d %8d %10.0f%%  %s\n", name.c_str(), p.answered, p.correct,
-                100.0 * fsrs.retrievability(p.memory, now), relativeTime(p.memory.due, now).c_str());
+    // In its (re)learning steps a structure comes back within minutes; a recall figure in whole
+    // days (FSRS's) would read 100% there, so the phase is shown instead.
+    char recall[16];
+    if (p.memory.phase == lessons::MemoryPhase::Review)
+      std::snprintf(recall, sizeof recall, "%.0f%%", 100.0 * fsrs.retrievability(p.memory, now));
+    else
+      std::snprintf(recall, sizeof recall, "learning");
+    std::printf("  %-32s %9d %8d %11s  %s\n", name.c_str(), p.answered, p.correct, recall,
+                relativeTime(p.memory.due, now).c_str());
   }
 
   // The one definition of what is due (lessons::reviewQueue): taught structures only, per course,

@@ -36,8 +36,17 @@ int runRender(const Argv& args);
 // The shipped presets: dataSubdirectory("presets") (data_paths.h).
 std::filesystem::path defaultPresetsDir();
 
-// The desktop application (desktop_app.cpp, desktop_support.cpp)
+// The desktop application (desktop/ui/desktop_app.cpp)
 int runDesktop(const Argv& args);
+// A display server to open a window on: DISPLAY (X11) or WAYLAND_DISPLAY set and non-empty, and a
+// windowing video driver coming up on it. For measuring the app on a headless GPU machine,
+// AT_DESKTOP_OFFSCREEN=1 with SDL_VIDEODRIVER=offscreen accepts SDL's offscreen driver (an EGL
+// pbuffer, no window shown). (desktop/ui/window.cpp)
+bool displayAvailable();
+// The no-display fallback of `anatomy-tutor` without arguments: renders the default lesson's first
+// three views (360×270) offscreen (EGL) into `outDir` as PNG files, printing one line per file. The
+// built-in phantom is opened at 128³ so that this stays quick on two CPU cores. (cmd_default_views.cpp)
+int writeDefaultViews(const std::filesystem::path& outDir);
 
 // Datasets and learning (cmd_import.cpp, cmd_play.cpp, cmd_progress.cpp)
 int runImport(const Argv& args);

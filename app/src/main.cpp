@@ -6,7 +6,6 @@
 
 #include "cli_args.h"
 #include "commands.h"
-#include "desktop_support.h"
 
 namespace at::app {
 

@@ -1,6 +1,7 @@
 #include "terminal_views.h"
 
 #include <cmath>
+#include <cstdint>
 #include <sstream>
 
 #include "commands.h"
@@ -49,6 +50,38 @@ std::optional<std::array<int, 3>> voxelOf(const Geometry& g, const Vec3& pointMm
   return std::array<int, 3>{i, j, k};
 }
 
+// Rulers along the top and left edges (a tick every 10 pixels, longer every 50, numbered every
+// 100) so that a student can read the pixel coordinates of a point with any image viewer.
+void drawPixelRulers(RgbImage& image) {
+  // 3×5 digits, one row per 3-bit line, top first.
+  static constexpr std::uint8_t kDigits[10][5] = {{7, 5, 5, 5, 7}, {2, 6, 2, 2, 7}, {7, 1, 7, 4, 7}, {7, 1, 7, 1, 7},
+                                                  {5, 5, 7, 1, 1}, {7, 4, 7, 1, 7}, {7, 4, 7, 5, 7}, {7, 1, 1, 1, 1},
+                                                  {7, 5, 7, 5, 7}, {7, 5, 7, 1, 7}};
+  const auto dot = [&](int x, int y) {
+    if (x < 0 || y < 0 || x >= image.width || y >= image.height) return;
+    std::uint8_t* p = image.pixel(x, y);
+    p[0] = 255, p[1] = 235, p[2] = 60;
+  };
+  const auto number = [&](int value, int x, int y) {  // digits 2× scaled, left edge at x
+    const std::string text = std::to_string(value);
+    for (std::size_t d = 0; d < text.size(); ++d)
+      for (int row = 0; row < 5; ++row)
+        for (int col = 0; col < 3; ++col)
+          if (kDigits[text[d] - '0'][row] & (4 >> col))
+            for (int k = 0; k < 4; ++k) dot(x + int(d) * 8 + col * 2 + k % 2, y + row * 2 + k / 2);
+  };
+  for (int x = 0; x < image.width; x += 10) {
+    const int length = x % 50 == 0 ? 6 : 3;
+    for (int y = 0; y < length; ++y) dot(x, y);
+    if (x % 100 == 0 && x > 0) number(x, x + 2, 7);
+  }
+  for (int y = 0; y < image.height; y += 10) {
+    const int length = y % 50 == 0 ? 6 : 3;
+    for (int x = 0; x < length; ++x) dot(x, y);
+    if (y % 100 == 0 && y > 0) number(y, 7, y + 2);
+  }
+}
+
 }  // namespace
 
 TerminalViews::~TerminalViews() = default;
@@ -69,6 +102,7 @@ Result<std::unique_ptr<TerminalViews>> TerminalViews::create(db::Database& db, c
   fs::create_directories(dir, ec);
   if (ec) return fail(dir.string() + ": cannot create the folder for the pictures (" + ec.message() + ")");
   v->dir_ = std::move(dir);
+  v->gradients_ = std::make_unique<render::GradientVolume>(render::computeGradientVolume(v->dataset_.volume));
   auto context = render::gl::EglContext::create();
   if (!context) return fail("offscreen rendering: " + context.error().message);
   v->context_ = std::make_unique<render::gl::EglContext>(std::move(*context));
@@ -92,14 +126,14 @@ Result<const FloatVolume*> TerminalViews::fieldOf(const Structure& structure, co
 
 Result<render::RenderSettings> TerminalViews::settingsFor(const Structure& selected, const render::Preset& preset,
                                                           const std::string& view, int width, int height,
-                                                          double contextScale) {
+                                                          double margin) {
   auto frame = render::structureFrame(dataset_.labels, selected.label);
   if (!frame) return fail(selected.id + ": " + frame.error().message);
   render::ViewRequest request;
   request.width = width;
   request.height = height;
   request.view = view;
-  if (contextScale > 0) request.contextScale = contextScale;
+  if (margin > 0) request.margin = margin;
   auto settings = render::settingsFor(preset, *frame, request);
   if (!settings) return tl::unexpected(settings.error());
   settings->background = {0.04f, 0.04f, 0.05f, 1.0f};
@@ -124,7 +158,7 @@ Result<TerminalPicture> TerminalViews::show(const lessons::QuestionScene& scene,
     field = *f;
   }
   const render::TransferFunction2D table = render::shadingTable(*preset);
-  render::SceneVolumes volumes{&dataset_.volume, &dataset_.labels, field, selected->label};
+  render::SceneVolumes volumes{&dataset_.volume, &dataset_.labels, field, selected->label, gradients_.get()};
 
   std::vector<std::string> views = {lessons::toString(scene.view)};
   const Structure* target = visibleTarget ? dataset_.findStructure(*visibleTarget) : nullptr;
@@ -136,7 +170,7 @@ Result<TerminalPicture> TerminalViews::show(const lessons::QuestionScene& scene,
       if (v != scene.view) views.push_back(lessons::toString(v));
   std::optional<render::RenderSettings> chosen;
   for (const std::string& view : views) {
-    auto settings = settingsFor(*selected, *preset, view, kWidth, kHeight, region ? kRegionContext : 0);
+    auto settings = settingsFor(*selected, *preset, view, kWidth, kHeight, region ? kRegionMargin : 0);
     if (!settings) return tl::unexpected(settings.error());
     if (!chosen) chosen = *settings;  // the scene's own side unless another shows the target
     if (!targetCentre) break;
@@ -158,7 +192,9 @@ Result<TerminalPicture> TerminalViews::show(const lessons::QuestionScene& scene,
   auto image = renderer_->render(*chosen);
   if (!image) return tl::unexpected(image.error());
   const fs::path path = dir_ / (stem + ".png");
-  if (auto st = writePng(path.string(), render::toRgb(*image)); !st) return tl::unexpected(st.error());
+  RgbImage picture = render::toRgb(*image);
+  drawPixelRulers(picture);
+  if (auto st = writePng(path.string(), picture); !st) return tl::unexpected(st.error());
   lastSettings_ = *chosen;
   lastSelected_ = selected->label;
   lastField_ = field;
@@ -179,6 +215,7 @@ Result<TerminalPicture> TerminalViews::showSlice(const std::string& targetId, co
   request.scale = kSliceScale;
   auto image = renderSlice(dataset_.volume, nullptr, dataset_.structures, request);  // no labels
   if (!image) return tl::unexpected(image.error());
+  drawPixelRulers(*image);
   const fs::path path = dir_ / (stem + ".png");
   if (auto st = writePng(path.string(), *image); !st) return tl::unexpected(st.error());
   lastSlice_ = request;
@@ -213,7 +250,7 @@ Result<quiz::Pick> TerminalViews::pickPixel(double x, double y, const std::strin
   if (x < 0 || y < 0 || x >= lastSettings_->width || y >= lastSettings_->height)
     return fail("the pixel (" + std::to_string(int(x)) + ", " + std::to_string(int(y)) + ") is outside the " +
                 std::to_string(lastSettings_->width) + "×" + std::to_string(lastSettings_->height) + " picture");
-  render::SceneVolumes volumes{&dataset_.volume, &dataset_.labels, lastField_, lastSelected_};
+  render::SceneVolumes volumes{&dataset_.volume, &dataset_.labels, lastField_, lastSelected_, gradients_.get()};
   const render::PickResult hit =
       render::pickStructure(volumes, *lastSettings_, render::shadingTable(lastSettings_->preset), x, y);
   return pickAt(hit.hit ? std::optional<Vec3>(hit.pointMm) : std::nullopt, hit.hit ? hit.label : 0, target);

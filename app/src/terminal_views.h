@@ -1,7 +1,8 @@
 // What `play` and `exam` show in a terminal: every view a step or question refers to is written as
 // a PNG through the offscreen renderer (as `render` does) and its path printed; a locate answer is a
 // pick on that picture — a pixel, turned into the structure under it by the same picking code the
-// desktop uses (render::pickStructure), or a point in millimetres — never a typed name.
+// desktop uses (render::pickStructure), or a point in millimetres — never a typed name. Pictures
+// carry pixel rulers along their top and left edges (ticks every 10 px, numbers every 100).
 #pragma once
 
 #include <filesystem>
@@ -13,6 +14,7 @@
 #include "db/database.h"
 #include "lessons/curriculum.h"
 #include "quiz/question.h"
+#include "render/gradient_volume.h"
 #include "render/preset.h"
 #include "render/render_settings.h"
 #include "volume/slice_image.h"
@@ -27,7 +29,7 @@ class VolumeRenderer;
 namespace at::app {
 
 inline constexpr int kPictureWidth = 400, kPictureHeight = 300;  // software GL: about 2 s a picture
-inline constexpr double kRegionContext = 4.0;
+inline constexpr double kRegionMargin = 2.5;
 
 // A picture written for the student, and how a pick on it is read.
 struct TerminalPicture {
@@ -50,8 +52,8 @@ class TerminalViews {
   TerminalViews& operator=(const TerminalViews&) = delete;
 
   // The 3-D view of `scene` (its structure selected and framed, its preset, its side) as
-  // dir/stem.png, kPictureWidth × kPictureHeight. `region`: frame a wider region (kRegionContext
-  // times the structure's radius instead of the default 2.5), as locate questions do. With
+  // dir/stem.png, kPictureWidth × kPictureHeight. `region`: frame a wider region (the structure's
+  // extent times kRegionMargin fills the view instead of render's default), as locate questions do. With
   // `visibleTarget`, the side is the first of the scene's own and the other named views from which
   // a click on the target's centre picks the target.
   Result<TerminalPicture> show(const lessons::QuestionScene& scene, const std::string& stem, bool region = false,
@@ -71,7 +73,7 @@ class TerminalViews {
   TerminalViews() = default;
   Result<const FloatVolume*> fieldOf(const Structure& structure, const render::Preset& preset);
   Result<render::RenderSettings> settingsFor(const Structure& selected, const render::Preset& preset,
-                                             const std::string& view, int width, int height, double contextScale);
+                                             const std::string& view, int width, int height, double margin);
   Result<quiz::Pick> pickAt(const std::optional<Vec3>& pointMm, std::uint16_t label, const std::string& target);
 
   Dataset dataset_;
@@ -80,6 +82,7 @@ class TerminalViews {
   std::unique_ptr<render::gl::EglContext> context_;
   std::unique_ptr<render::gl::VolumeRenderer> renderer_;
   std::map<std::string, FloatVolume> fields_;  // WDT per structure id, computed once
+  std::unique_ptr<render::GradientVolume> gradients_;  // of the volume, for picking as the desktop does
 
   // What the last picture showed, for picks on it.
   std::optional<render::RenderSettings> lastSettings_;

@@ -4,7 +4,11 @@
 #include <doctest/doctest.h>
 
 #include <algorithm>
+#include <filesystem>
 #include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
 
 #include "test_support.h"
 
@@ -16,6 +20,17 @@ inline void checkOneLineError(const CommandResult& r, const std::string& mustMen
   CHECK(std::count(r.err.begin(), r.err.end(), '\n') == 1);
   CHECK(r.err.find(mustMention) != std::string::npos);
   CHECK(r.err.rfind("anatomy-tutor: ", 0) == 0);
+}
+
+// The names of the imported datasets in `db`, through `anatomy-tutor datasets --json`.
+inline std::vector<std::string> importedDatasetNames(const std::filesystem::path& db) {
+  auto listed = runApp("datasets --json --db '" + db.string() + "'");
+  REQUIRE_MESSAGE(listed.exitCode == 0, listed.err);
+  const nlohmann::json all = nlohmann::json::parse(listed.out);
+  std::vector<std::string> names;
+  for (const nlohmann::json& d : all.at("datasets"))
+    if (!d.value("builtin", true)) names.push_back(d.at("id").get<std::string>());
+  return names;
 }
 
 }  // namespace at::test

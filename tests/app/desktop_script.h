@@ -72,11 +72,12 @@ inline DesktopRun runDesktopScript(const TempDir& dir, const nlohmann::json& scr
 }
 
 // The events of one kind ({"event": kind, …}), in order.
-inline std::vector<nlohmann::json> eventsOf(const DesktopRun& r, const std::string& kind) {
+inline std::vector<nlohmann::json> eventsOf(const std::vector<nlohmann::json>& events, const std::string& kind) {
   std::vector<nlohmann::json> found;
-  for (const nlohmann::json& e : r.events)
+  for (const nlohmann::json& e : events)
     if (e.is_object() && e.value("event", "") == kind) found.push_back(e);
   return found;
 }
+inline std::vector<nlohmann::json> eventsOf(const DesktopRun& r, const std::string& kind) { return eventsOf(r.events, kind); }
 
 }  // namespace at::test

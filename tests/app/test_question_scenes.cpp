@@ -1,15 +1,18 @@
 // Every question of the shipped courses shows what it asks about: the view its step sets (scene:
 // selected structure, preset, side) makes the target visible, as the terminal draws it (the phantom
-// at 128³, 400×300 pictures, locate questions framed on a wider region). Checked on the CPU with the
+// at 128³, 400×300 pictures, locate questions framed on a wider region, picking with the volume's
+// gradients as the desktop does). Checked on the CPU with the
 // picking code the desktop and the terminal use: a locate question's target is what a click on its
 // centre picks (without being the highlighted structure); an identify, name, relation or order
 // question's structure is highlighted and not hidden behind anything opaque at its centre.
 #include <doctest/doctest.h>
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 
 #include "lessons/course_json.h"
+#include "render/gradient_volume.h"
 #include "render/scene.h"
 #include "render/structure_pick.h"
 #include "test_support.h"
@@ -23,7 +26,7 @@ namespace {
 
 // As app/src/terminal_views.h draws them.
 constexpr int kWidth = 400, kHeight = 300;
-constexpr double kRegionContext = 4.0;
+constexpr double kRegionMargin = 2.5;
 
 // The target voxel nearest the target's centroid (on the structure even when it is curved).
 Vec3 centreOf(const LabelMap& labels, std::uint16_t label) {
@@ -61,7 +64,7 @@ DrawnScene drawnScene(const Dataset& dataset, const lessons::Step& step, const F
   request.width = kWidth;
   request.height = kHeight;
   request.view = lessons::toString(scene.view);
-  if (step.question.kind == quiz::QuestionKind::Locate) request.contextScale = kRegionContext;
+  if (step.question.kind == quiz::QuestionKind::Locate) request.margin = kRegionMargin;
   auto frame = render::structureFrame(dataset.labels, selected->label);
   REQUIRE(frame);
   auto settings = render::settingsFor(*preset, *frame, request);
@@ -75,6 +78,7 @@ TEST_CASE("Every shipped question's view shows its target; locate questions pick
   auto dataset = openBuiltinDataset("phantom:128");
   REQUIRE(dataset);
   const render::PresetLibrary presets(test::sourceDir() / "data" / "presets");
+  const render::GradientVolume gradients = render::computeGradientVolume(dataset->volume);
   std::map<std::string, FloatVolume> fields;
   int checked = 0;
   for (const auto& entry : std::filesystem::directory_iterator(test::sourceDir() / "data" / "courses")) {
@@ -106,12 +110,13 @@ TEST_CASE("Every shipped question's view shows its target; locate questions pick
         request.width = kWidth;
         request.height = kHeight;
         request.view = lessons::toString(scene.view);
-        if (locate) request.contextScale = kRegionContext;
+        if (locate) request.margin = kRegionMargin;
         auto frame = render::structureFrame(dataset->labels, selected->label);
         REQUIRE(frame);
         auto settings = render::settingsFor(*preset, *frame, request);
         REQUIRE(settings);
-        const render::SceneVolumes volumes{&dataset->volume, &dataset->labels, &fields[selected->id], selected->label};
+        const render::SceneVolumes volumes{&dataset->volume, &dataset->labels, &fields[selected->id], selected->label,
+                                           &gradients};
         const render::TransferFunction2D table = render::shadingTable(settings->preset);
         const auto px = settings->camera.project(centreOf(dataset->labels, target->label), kWidth, kHeight);
         REQUIRE(px.has_value());
@@ -123,6 +128,16 @@ TEST_CASE("Every shipped question's view shows its target; locate questions pick
         if (locate) {
           CHECK(selected->id != target->id);  // the region, not the highlighted answer
           CHECK_MESSAGE(clicked.label == target->label, "a click on its centre picks label " << clicked.label);
+          // Beside the highlighted landmark, not in front of or behind it: the ray through the
+          // target's centre meets no voxel of the landmark (a click on the landmark is not the answer).
+          const render::Ray ray = settings->camera.rayThroughPixel((*px)[0], (*px)[1], kWidth, kHeight);
+          bool overlaps = false;
+          for (double t = 0; t < 500 && !overlaps; t += 0.1) {
+            const Vec3 ijk = dataset->labels.geometry.patientToIndex(ray.origin + t * ray.direction);
+            const int i = int(std::lround(ijk[0])), j = int(std::lround(ijk[1])), k = int(std::lround(ijk[2]));
+            overlaps = dataset->labels.dims().contains(i, j, k) && dataset->labels.at(i, j, k) == selected->label;
+          }
+          CHECK_MESSAGE(!overlaps, "the target's centre lies over the highlighted " << selected->id);
         } else {
           CHECK(selected->id == target->id);  // highlighted
           const render::PickResult seen = render::pick(volumes, *settings, table, (*px)[0], (*px)[1], 0.9);

@@ -125,6 +125,10 @@ TEST_CASE("exam hides names and grades until the end, saves every answer, scores
   CHECK(scalar(db, "SELECT count(*) FROM exam_items WHERE answer IS NOT NULL") == 4);
   CHECK(scalar(db, "SELECT sum(correct) FROM exam_items") == 3);
   CHECK(scalar(db, "SELECT count(*) FROM review_log WHERE source = 'exam'") == 4);
+  // The student's own progress lists the exam with its score.
+  auto progress = test::runApp("progress --user kim --db '" + db + "'");
+  INFO(progress.out);
+  CHECK(progress.out.find("score 0.75, passed (1 attempt)") != std::string::npos);
 
   // A new attempt whose time runs out: answers are refused and the attempt ends with what it had.
   auto third = exam("", "quit\n");

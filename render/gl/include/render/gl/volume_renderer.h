@@ -95,6 +95,10 @@ class VolumeRenderer {
 
   // Renders one whole frame and reads it back.
   Result<RgbaImage> render(const RenderSettings& settings);
+  // Renders one whole frame into a texture of the renderer that a UI draws directly (the
+  // desktop's view: no read-back). The handle stays valid, showing this frame, until the next
+  // render or renderToTexture call; its uv0/uv1 are the image's left/bottom and right/top.
+  Result<DisplayImage> renderToTexture(const RenderSettings& settings);
   // Renders one whole frame without reading it back; returns the GPU time of the draw in ms
   // (GL_TIME_ELAPSED), for benchmarks.
   Result<double> renderTimed(const RenderSettings& settings);

@@ -1,5 +1,5 @@
-// What the desktop app and its no-display fallback share: where presets and the default course
-// live, a lesson step's preset, and whether a display exists.
+// The default course and its first lesson's views, and a lesson step's preset: what the desktop
+// app, its no-display fallback and the explore state share.
 #pragma once
 
 #include <filesystem>
@@ -23,16 +23,5 @@ std::vector<lessons::ShowStep> firstLessonViews(const lessons::Course& course);
 // the mode the id ends in ("_bare" → bare, otherwise wdt).
 Result<render::Preset> presetForStep(const render::PresetLibrary& library, const std::string& structureId,
                                      const std::string& presetId);
-
-// A display server to open a window on: DISPLAY (X11) or WAYLAND_DISPLAY set and non-empty.
-// For measuring the app on a headless GPU machine, AT_DESKTOP_OFFSCREEN=1 with
-// SDL_VIDEODRIVER=offscreen accepts SDL's offscreen driver (an EGL pbuffer, no window shown).
-bool displayAvailable();
-
-// The no-display fallback of `anatomy-tutor` without arguments: renders the default lesson's first
-// three views (360×270) offscreen (EGL) into `outDir` as PNG files, printing one line per file. The built-in
-// phantom is opened at 128³ so that this stays quick on two CPU cores.
-int writeDefaultViews(const std::filesystem::path& outDir);
-
 
 }  // namespace at::app

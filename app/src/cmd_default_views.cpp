@@ -1,77 +1,23 @@
-#include "desktop_support.h"
-
-#include <SDL.h>
-
-#include <algorithm>
+// `anatomy-tutor` with no display: the default lesson's first views written as PNG files through
+// the offscreen renderer (EGL), instead of the desktop app.
 #include <chrono>
 #include <cstdio>
-#include <cstdlib>
+#include <filesystem>
 #include <string>
 
 #include "commands.h"
-#include "learning_session.h"
-#include "lessons/course_json.h"
+#include "course_views.h"
 #include "render/gl/egl_context.h"
 #include "render/gl/volume_renderer.h"
 #include "render/scene.h"
-#include "volume/mask.h"
 #include "volume/dataset_source.h"
+#include "volume/mask.h"
 #include "volume/png_image.h"
 #include "wdt/wdt.h"
 
 namespace at::app {
 
 namespace fs = std::filesystem;
-
-Result<lessons::Course> loadDefaultCourse() {
-  const fs::path dir = courseDirectory();
-  const fs::path preferred = dir / "temporal_bone.json";
-  if (fs::is_regular_file(preferred)) return lessons::loadCourseJson(preferred);
-  std::error_code ec;
-  std::vector<fs::path> files;
-  for (const auto& entry : fs::directory_iterator(dir, ec))
-    if (entry.path().extension() == ".json") files.push_back(entry.path());
-  if (ec) return fail(dir.string() + ": cannot list the course folder (" + ec.message() + ")");
-  if (files.empty()) return fail(dir.string() + ": no course file (*.json) in the course folder");
-  std::sort(files.begin(), files.end());
-  return lessons::loadCourseJson(files.front());
-}
-
-std::vector<lessons::ShowStep> firstLessonViews(const lessons::Course& course) {
-  std::vector<lessons::ShowStep> views;
-  if (course.lessons.empty()) return views;
-  for (const lessons::Step& step : course.lessons.front().steps)
-    if (step.kind == lessons::StepKind::Show) views.push_back(step.show);
-  return views;
-}
-
-Result<render::Preset> presetForStep(const render::PresetLibrary& library, const std::string& structureId,
-                                     const std::string& presetId) {
-  if (!presetId.empty() && fs::is_regular_file(library.dir() / (presetId + ".json"))) return library.load(presetId);
-  const bool bare = presetId.size() >= 5 && presetId.substr(presetId.size() - 5) == "_bare";
-  return library.forStructure(structureId, bare ? render::RenderMode::Bare : render::RenderMode::Wdt);
-}
-
-bool displayAvailable() {
-  if (const char* offscreen = std::getenv("AT_DESKTOP_OFFSCREEN"); offscreen && std::string(offscreen) == "1") {
-    if (SDL_Init(SDL_INIT_VIDEO) != 0) return false;
-    SDL_QuitSubSystem(SDL_INIT_VIDEO);
-    return true;
-  }
-  bool named = false;
-  for (const char* name : {"DISPLAY", "WAYLAND_DISPLAY"})
-    if (const char* v = std::getenv(name); v && *v) named = true;
-  if (!named) return false;
-  // The variable may name a display that is gone (a closed SSH forwarding, a stopped Xvfb): only a
-  // video subsystem that initialises means a window can be opened.
-  // SDL falls back to its offscreen video driver when the named display fails, so the driver
-  // that came up must be a windowing one.
-  if (SDL_Init(SDL_INIT_VIDEO) != 0) return false;
-  const char* driver = SDL_GetCurrentVideoDriver();
-  const bool windowing = driver && (std::string(driver) == "x11" || std::string(driver) == "wayland");
-  SDL_QuitSubSystem(SDL_INIT_VIDEO);
-  return windowing;
-}
 
 // The first views only: each costs a field and a software-GL frame.
 constexpr int kFallbackViews = 3;

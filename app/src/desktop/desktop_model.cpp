@@ -1,0 +1,332 @@
+// [SECTIONS] opening datasets · commands · frames
+#include "desktop_model.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+
+#include "course_views.h"
+#include "dataset_resolver.h"
+#include "render/structure_pick.h"
+
+namespace at::app {
+
+using json = nlohmann::json;
+
+int ViewLayout::viewPixelsW() const {
+  return std::max(1, framebufferW - int(std::lround(panelWidth() * double(framebufferW) / std::max(1, windowW))));
+}
+
+DesktopModel::DesktopModel(LearningSession& session, const render::PresetLibrary& library, DesktopOptions options,
+                           EventSink events, MessageSink messages)
+    : session_(session),
+      library_(library),
+      options_(std::move(options)),
+      events_(std::move(events)),
+      messageSink_(std::move(messages)),
+      explore_(library, [this](const std::string& m) { message(m); }),
+      scheduler_(options_.frameBudgetMs, options_.renderScale) {
+  const auto sink = [this](json j) { event(std::move(j)); };
+  lessons_ = std::make_unique<LessonController>(
+      session_, options_.userName, "", sink, [this](const LessonController::Shown& shown) { showLessonStructure(shown); },
+      [this] { return renderState(); });
+  study_ = std::make_unique<StudyController>(session_.database(), library_, sink);
+  imports_ = std::make_unique<ImportController>(session_.database(), sink, [this](const std::string& m) { message(m); });
+  scheduler_.setViewPixels(layout_.viewPixelsW(), layout_.viewPixelsH());
+}
+
+DesktopModel::~DesktopModel() = default;
+
+std::string DesktopModel::idOf(std::uint16_t label) const {
+  const Structure* s = dataset_ ? dataset_->findStructureByLabel(label) : nullptr;
+  return s ? s->id : "";
+}
+
+void DesktopModel::message(const std::string& text) {
+  messages_.push_back(text);
+  if (messages_.size() > 6) messages_.erase(messages_.begin());
+  std::fprintf(stderr, "anatomy-tutor: %s\n", text.c_str());
+  if (messageSink_) messageSink_(text);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Opening datasets
+
+Status DesktopModel::open() {
+  auto course = loadDefaultCourse();
+  std::string datasetName = options_.dataset;
+  std::string startStructure, startPreset;
+  if (course) {
+    if (datasetName.empty()) datasetName = course->datasetId;
+    const auto views = firstLessonViews(*course);
+    if (!views.empty()) {
+      startStructure = views.front().structure;
+      startPreset = views.front().presetId;
+      startView_ = lessons::toString(views.front().view);
+    }
+  } else {
+    message("default course: " + course.error().message);
+  }
+  if (datasetName.empty()) datasetName = "phantom";
+  DatasetRequest request;
+  request.name = datasetName;
+  request.database = &session_.database();
+  auto ds = openNamedDataset(request);
+  if (!ds) return tl::unexpected(ds.error());
+  if (auto st = showDataset(std::move(*ds), startStructure, startPreset); !st) return st;
+  opened_ = true;
+  return {};
+}
+
+Status DesktopModel::showDataset(Dataset dataset, const std::string& startStructure, const std::string& startPreset) {
+  auto next = std::make_unique<Dataset>(std::move(dataset));
+  if (expert_ && expertOn()) setExpert(false);
+  if (auto st = explore_.setDataset(*next, startStructure, startPreset); !st) return st;
+  fields_.reset();  // it refers to the dataset being replaced
+  dataset_ = std::move(next);
+  gradients_ = render::computeGradientVolume(dataset_->volume);
+  ++datasetRevision_;
+  const auto sink = [this](json j) { event(std::move(j)); };
+  fields_ = std::make_unique<FieldView>(
+      *dataset_, explore_, sink, [this](const std::string& m) { message(m); },
+      [this](const std::string& clicked, double distanceMm) { lessons_->clicked(clicked, distanceMm); });
+  expert_ = std::make_unique<TfEditor>(*dataset_, session_.database(), sink);
+  recorder_.highlightNotWanted();
+  lastPickMm_.reset();
+  lessons_->setViewDataset(dataset_->id);
+  reframe();
+  if (opened_)
+    event({{"event", "dataset"}, {"dataset", dataset_->id}, {"structures", dataset_->structures.size()},
+           {"selected", idOf(explore_.selected())}});
+  return {};
+}
+
+// ---------------------------------------------------------------------------------------------
+// Commands
+
+void DesktopModel::setLayout(const ViewLayout& layout) {
+  if (layout == layout_) return;
+  layout_ = layout;
+  scheduler_.setViewPixels(layout.viewPixelsW(), layout.viewPixelsH());
+  explore_.touch();
+}
+
+void DesktopModel::setHovered(std::uint16_t label) {
+  if (!explore_.setHovered(label)) {
+    explore_.noteActivity();
+    return;
+  }
+  fields_->hoverChanged();
+  const std::uint16_t shown = explore_.shownLabel();
+  if (explore_.bare() || shown != explore_.fieldLabel()) recorder_.highlightWanted(shown, Clock::now());
+  else recorder_.highlightNotWanted();
+}
+
+void DesktopModel::hoverAt(double x, double y) {
+  if (study_->participantActive()) return;  // the view stays on the trial's structure
+  if (!layout_.inView(x, y)) {
+    setHovered(0);
+    return;
+  }
+  render::RenderSettings s = renderSettings(scheduler_.planFor(kFullLevel));
+  s.preset = explore_.pickPreset();
+  render::SceneVolumes scene;
+  scene.volume = &dataset_->volume;
+  scene.labels = &dataset_->labels;
+  const DistanceField* field = fields_->pickField();
+  scene.field = field ? &field->distances : nullptr;
+  scene.gradients = &gradients_;
+  scene.selected = explore_.fieldLabel();
+  const render::TransferFunction2D table = render::shadingTable(s.preset);
+  const double left = layout_.panelWidth();
+  const double px = (x - left) / std::max(1.0, layout_.windowW - left) * s.width;
+  const double py = y / std::max(1, layout_.windowH) * s.height;
+  const render::PickResult hit = render::pickStructure(scene, s, table, px, py);
+  if (hit.hit) lastPickMm_ = hit.pointMm;
+  else lastPickMm_.reset();
+  const std::uint16_t label = hit.hit && explore_.hasStructure(hit.label) ? hit.label : 0;
+  if (label != explore_.hovered()) {
+    json e = {{"event", "hover"}, {"x", x}, {"y", y}, {"label", label}, {"structure", idOf(label)}};
+    if (label) {  // the colour its WDT preset draws the structure itself in (render_settings.h)
+      const auto& rgb = explore_.presetOf(label, false).highlightRgb;
+      e["highlight_rgb"] = {rgb[0], rgb[1], rgb[2]};
+    }
+    event(e);
+  }
+  setHovered(label);
+}
+
+void DesktopModel::clickAt(double x, double y) {
+  if (study_->participantActive()) return;
+  hoverAt(x, y);
+  if (lessons_->wantsClick()) {
+    // A locate answer: the structure under the cursor, and for a question with a tolerance that
+    // was missed, the clicked point's weighted distance from the target (else unknown: -1).
+    const Structure* st = dataset_->findStructureByLabel(explore_.hovered());
+    const auto targetId = lessons_->questionTarget();
+    const Structure* target = targetId ? dataset_->findStructure(*targetId) : nullptr;
+    const std::string clicked = st ? st->id : "";
+    if (lessons_->wantsClickDistance() && target && st != target && lastPickMm_)
+      fields_->gradeClickDistance(clicked, target->label, *lastPickMm_);
+    else
+      lessons_->clicked(clicked, -1);
+    return;
+  }
+  if (explore_.hovered()) select(explore_.hovered());
+}
+
+bool DesktopModel::select(std::uint16_t label) {
+  if (!explore_.select(label)) return false;
+  event({{"event", "select"}, {"label", label}, {"structure", idOf(label)}});
+  return true;
+}
+
+Status DesktopModel::setView(const std::string& name) {
+  return explore_.setView(name, layout_.framebufferW, layout_.framebufferH);
+}
+
+void DesktopModel::reframe() {
+  if (auto st = setView(explore_.viewName().empty() ? startView_ : explore_.viewName()); !st) message(st.error().message);
+}
+
+void DesktopModel::setExpert(bool on) {
+  if (!on) {
+    expert_->stop();
+  } else {
+    const std::uint16_t label = explore_.shownLabel();
+    render::Preset p = explore_.presetOf(label, explore_.bare());
+    p.t = explore_.t();
+    expert_->start(p, idOf(label));
+  }
+  expertEdited();
+}
+
+void DesktopModel::expertEdited() {
+  explore_.setPresetOverride(expert_->active() ? std::optional<render::Preset>(expert_->preset()) : std::nullopt,
+                             expert_->revision());
+}
+
+void DesktopModel::setFullAtRest(bool on) {
+  fullAtRest_ = on;
+  explore_.noteActivity();
+}
+
+std::optional<std::array<double, 2>> DesktopModel::projectStructure(std::uint16_t label) const {
+  const render::StructureFrame* frame = explore_.frameOf(label);
+  if (!frame) return std::nullopt;
+  const double left = layout_.panelWidth();
+  const int viewW = int(layout_.windowW - left), viewH = layout_.windowH;
+  auto p = explore_.camera().project(frame->anchorMm, viewW, viewH);
+  if (!p || (*p)[0] < 0 || (*p)[0] >= viewW || (*p)[1] < 0 || (*p)[1] >= viewH) return std::nullopt;
+  return std::array<double, 2>{(*p)[0] + left, (*p)[1]};
+}
+
+void DesktopModel::showLessonStructure(const LessonController::Shown& shown) {
+  const Structure* s = dataset_->findStructure(shown.structure);
+  if (!s || !explore_.hasStructure(s->label)) {
+    message("lesson step: no structure '" + shown.structure + "' in dataset '" + dataset_->id + "'");
+    return;
+  }
+  auto preset = presetForStep(library_, s->id, shown.presetId);
+  if (!preset) {
+    message(preset.error().message);
+    return;
+  }
+  explore_.usePreset(s->label, *preset, preset->t);
+  setHovered(0);
+  select(s->label);
+  const std::string view = shown.view ? lessons::toString(*shown.view)
+                                      : (explore_.viewName().empty() ? startView_ : explore_.viewName());
+  if (auto st = setView(view); !st) message(st.error().message);
+}
+
+lessons::RenderState DesktopModel::renderState() const {
+  const render::Preset p = explore_.shown().preset;
+  lessons::RenderState r;
+  r.presetId = p.id.value_or(p.name);
+  r.mode = explore_.bare() ? "bare" : "wdt";
+  r.t = explore_.t();
+  r.alpha = p.alpha;
+  r.beta = p.lightingBeta;
+  return r;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Frames
+
+void DesktopModel::syncStudyView() {
+  const auto shown = study_->shown();
+  if (!shown) return;
+  if (expertOn()) setExpert(false);  // the trial's presets, not an edited one
+  const Structure* s = dataset_->findStructure(shown->structure);
+  if (!s || !explore_.hasStructure(s->label)) return;  // loadStudyPresets and the dataset disagree: view unchanged
+  explore_.usePreset(s->label, shown->preset, float(shown->t));
+  if (explore_.selected() != s->label || explore_.hovered()) {
+    setHovered(0);
+    explore_.select(s->label);
+    if (auto st = setView(shown->preset.view.value_or("lateral_left")); !st) message(st.error().message);
+  }
+}
+
+void DesktopModel::beginFrame(FieldTarget* target) {
+  recorder_.beginFrame();
+  syncStudyView();
+  lessons_->poll();
+  study_->stepExport();
+  imports_->poll();
+  if (!study_->participantActive())  // the participant's trial keeps its dataset
+    if (auto imported = imports_->takeDatasetToOpen()) {
+      const std::string id = imported->id;
+      if (auto st = showDataset(std::move(*imported), "", ""); !st) message("opening '" + id + "': " + st.error().message);
+    }
+  expertEdited();
+  fields_->update(target, recorder_);
+}
+
+std::optional<RenderPlan> DesktopModel::planFrame(Clock::time_point now) {
+  // Scripted screenshots outside a measured sweep render full quality at rest.
+  const bool full = fullAtRest_ || (options_.scripted && !recorder_.recording());
+  return scheduler_.plan(explore_.revision(), explore_.activity(), now, full);
+}
+
+render::RenderSettings DesktopModel::renderSettings(const RenderPlan& plan) const {
+  render::RenderSettings s;
+  const ExploreState::Shown shown = explore_.shown();
+  s.preset = shown.preset;
+  s.camera = explore_.camera();
+  s.width = plan.width;
+  s.height = plan.height;
+  s.stepMm = render::effectiveStepMm(dataset_->volume.geometry, render::RenderSettings{}) * plan.stepFactor;
+  s.shading = plan.shading;
+  s.jitter = plan.jitter;
+  s.background = {0.04f, 0.04f, 0.05f, 1.0f};
+  s.clip = explore_.clipPlane();
+  return s;
+}
+
+void DesktopModel::rendered(const RenderPlan& plan, double ms) {
+  scheduler_.rendered(plan, ms);
+  recorder_.noteRender(plan.level, ms);
+}
+
+void DesktopModel::renderFailed(const std::string& why) {
+  message("rendering: " + why);
+  scheduler_.failed();
+}
+
+void DesktopModel::endFrame(Clock::time_point end, double ms) {
+  const std::uint16_t onScreen = explore_.bare() ? explore_.shownLabel() : explore_.fieldLabel();
+  recorder_.frameShown(!viewAvailable_ || scheduler_.showing(explore_.revision()), onScreen, end);
+  recorder_.endFrame(ms, scheduler_.interacting());
+}
+
+bool DesktopModel::settled() const {
+  return (!viewAvailable_ || scheduler_.finished(explore_.revision())) && fields_->settled();
+}
+
+bool DesktopModel::idle() const {
+  return !options_.scripted && (!viewAvailable_ || scheduler_.finished(explore_.revision())) && !fields_->busy() &&
+         !fields_->uploading();
+}
+
+}  // namespace at::app

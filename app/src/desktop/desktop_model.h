@@ -1,0 +1,165 @@
+// The desktop app's logic, with no SDL, GL or ImGui in it: the dataset on screen, the explore
+// state, its distance fields, the frame scheduler and recorder, and the controllers of the lesson,
+// study, import and expert panels — and the commands that the widgets and the UI script both use
+// (hover, click, select, views, expert on/off, …). The window shell (ui/) feeds it input and a
+// layout, renders what it plans, and draws the panels from its state; tests drive it without any
+// window (no FieldTarget, no view: picking and fields still run on the CPU).
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "core/error.h"
+#include "explore_state.h"
+#include "field_view.h"
+#include "frame_scheduler.h"
+#include "import_controller.h"
+#include "learning_session.h"
+#include "lesson_controller.h"
+#include "render/gradient_volume.h"
+#include "render/render_settings.h"
+#include "study_controller.h"
+#include "tf_editor.h"
+
+namespace at::app {
+
+// Where the volume view lies in the window: right of the explore panel, full height.
+struct ViewLayout {
+  int windowW = 1280, windowH = 720;          // logical pixels (mouse coordinates)
+  int framebufferW = 1280, framebufferH = 720;  // drawable pixels
+  float uiScale = 1;
+  float panelWidth() const { return 320 * uiScale; }  // the explore panel, logical pixels
+  bool inView(double x, double y) const { return x >= panelWidth() && x < windowW && y >= 0 && y < windowH; }
+  // The view's size in framebuffer pixels.
+  int viewPixelsW() const;
+  int viewPixelsH() const { return framebufferH; }
+  bool operator==(const ViewLayout&) const = default;
+};
+
+struct DesktopOptions {
+  std::string dataset;              // empty: the default course's dataset; else as openNamedDataset takes it
+  std::string userName = kDefaultLessonUser;  // whose lesson progress the lesson panel shows and records
+  double renderScale = 1;           // resolution of the full-quality level (slow software GL: < 1)
+  double frameBudgetMs = 100;       // at rest, finer levels predicted to cost more are not rendered
+  bool scripted = false;            // a UI script drives the app: events are printed, screenshots at full quality
+};
+
+class DesktopModel {
+ public:
+  using EventSink = std::function<void(nlohmann::json)>;
+  using MessageSink = std::function<void(const std::string&)>;
+  // `session` and `library` outlive the model. `events`: scripted-mode events. Messages for the
+  // user go to stderr, to the explore panel (the last six) and to `messages` when given.
+  DesktopModel(LearningSession& session, const render::PresetLibrary& library, DesktopOptions options, EventSink events,
+               MessageSink messages = {});
+  ~DesktopModel();
+
+  // Opens the start dataset (options' or the default course's, on its first lesson's first view).
+  Status open();
+  // Shows `dataset` in the explore view (an imported one opened), starting on `startStructure`
+  // when it has one; an error leaves the current dataset on screen.
+  Status showDataset(Dataset dataset, const std::string& startStructure, const std::string& startPreset);
+  const Dataset& dataset() const { return *dataset_; }
+  // The dataset's gradient volume: shading (the renderer) and picking share it.
+  const render::GradientVolume& gradients() const { return gradients_; }
+  // Changes whenever another dataset is shown (the renderer uploads its volume then).
+  std::uint64_t datasetRevision() const { return datasetRevision_; }
+
+  ExploreState& explore() { return explore_; }
+  const ExploreState& explore() const { return explore_; }
+  FieldView& fields() { return *fields_; }
+  const FieldView& fields() const { return *fields_; }
+  FrameScheduler& scheduler() { return scheduler_; }
+  FrameRecorder& recorder() { return recorder_; }
+  LessonController& lessons() { return *lessons_; }
+  StudyController& study() { return *study_; }
+  ImportController& imports() { return *imports_; }
+  TfEditor& expert() { return *expert_; }
+  const DesktopOptions& options() const { return options_; }
+
+  // The window's layout (each frame); a new size re-renders the view.
+  void setLayout(const ViewLayout& layout);
+  const ViewLayout& layout() const { return layout_; }
+  // Whether a volume view exists (GL 4.3 and a renderer); without one nothing waits for renders.
+  void setViewAvailable(bool available) { viewAvailable_ = available; }
+
+  // --- Commands ------------------------------------------------------------------------------
+  void hoverAt(double x, double y);  // window coordinates; picks the structure under the cursor [hover]
+  void clickAt(double x, double y);  // a locate answer, else selects what is under the cursor
+  void clearHover() { setHovered(0); }
+  bool select(std::uint16_t label);  // [select]
+  Status setView(const std::string& name);
+  // The current named view again (the start view before any), framed for the layout now.
+  void reframe();
+  void setExpert(bool on);           // opens the expert panel on the view's preset, or closes it
+  void expertEdited();               // the expert's preset changed: the view follows it
+  bool expertOn() const { return expert_->active(); }
+  void setFullAtRest(bool on);
+  bool fullAtRest() const { return fullAtRest_; }
+  bool cancelFineField() { return fields_->cancelFineField(); }
+  // Where a structure's centroid appears in the window (nullopt: outside the view).
+  std::optional<std::array<double, 2>> projectStructure(std::uint16_t label) const;
+  // A lesson step's structure, preset and view.
+  void showLessonStructure(const LessonController::Shown& shown);
+  // The render parameters on screen, stored with each lesson answer.
+  lessons::RenderState renderState() const;
+
+  // --- Frames ---------------------------------------------------------------------------------
+  // Start of a frame: the study's trial view, an imported dataset to open, the controllers' work
+  // (a lesson starting, an export's next file, an import's progress) and the fields, handed to
+  // `target` (null: no view).
+  void beginFrame(FieldTarget* target);
+  // The image to render now, if any, and the settings to render it with.
+  std::optional<RenderPlan> planFrame(Clock::time_point now);
+  render::RenderSettings renderSettings(const RenderPlan& plan) const;
+  void rendered(const RenderPlan& plan, double ms);
+  void renderFailed(const std::string& why);
+  // End of a frame that took `ms` (for the recorder and the highlight latency).
+  void endFrame(Clock::time_point end, double ms);
+  // The image is final (full quality, or the budget's cap) and shows the field the view needs.
+  bool settled() const;
+  // Nothing changes until the user acts (the loop may wait for input).
+  bool idle() const;
+
+  void message(const std::string& text);
+  const std::vector<std::string>& messages() const { return messages_; }
+  void event(nlohmann::json e) { events_(std::move(e)); }
+
+ private:
+  void setHovered(std::uint16_t label);
+  void syncStudyView();  // participant mode: the trial's structure with the preset of the side shown
+  std::string idOf(std::uint16_t label) const;
+
+  LearningSession& session_;
+  const render::PresetLibrary& library_;
+  DesktopOptions options_;
+  EventSink events_;
+  MessageSink messageSink_;
+  std::vector<std::string> messages_;
+  std::unique_ptr<Dataset> dataset_;
+  render::GradientVolume gradients_;
+  std::uint64_t datasetRevision_ = 0;
+  std::string startView_ = "lateral_right";
+  bool opened_ = false;
+  ExploreState explore_;
+  std::unique_ptr<FieldView> fields_;
+  FrameScheduler scheduler_;
+  FrameRecorder recorder_;
+  std::unique_ptr<TfEditor> expert_;
+  std::unique_ptr<LessonController> lessons_;
+  std::unique_ptr<StudyController> study_;
+  std::unique_ptr<ImportController> imports_;
+  ViewLayout layout_;
+  bool viewAvailable_ = false;
+  bool fullAtRest_ = false;
+  std::optional<Vec3> lastPickMm_;  // where the last hover pick met the volume (LPS mm)
+};
+
+}  // namespace at::app

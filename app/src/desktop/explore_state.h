@@ -1,0 +1,138 @@
+// What the explore view shows, without SDL, GL or ImGui: the dataset's structures grouped by
+// system, the selected and hovered structure, WDT or bare preset, the blend t, the camera and its
+// named view, the clipping plane, the presets in use (the shipped ones, a lesson or study step's,
+// or the expert's edited copy) and the distance field on screen.
+//
+// shown() is the one place that decides what the image shows. revision() changes exactly when
+// that image would change (the renderer re-renders then); activity() changes on every user action
+// (a hover over the same structure included), which keeps the view "moving" for the scheduler.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <map>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "core/error.h"
+#include "render/camera.h"
+#include "render/preset.h"
+#include "render/scene.h"
+#include "volume/structure.h"
+#include "wdt/wdt.h"
+
+namespace at::app {
+
+// The clipping plane as the explore panel offers it: one of the three patient axes through the
+// camera's target, shifted by an offset, either side cut away.
+struct ClipSettings {
+  bool on = false;
+  int axis = 0;  // 0: left–right (x), 1: anterior–posterior (y), 2: inferior–superior (z)
+  bool flip = false;
+  float offsetMm = 0;
+  bool operator==(const ClipSettings&) const = default;
+};
+
+class ExploreState {
+ public:
+  using MessageSink = std::function<void(const std::string&)>;
+  // `library`: the shipped presets (outlives the state). `messages`: presets that fail to load.
+  ExploreState(const render::PresetLibrary& library, MessageSink messages);
+
+  // Shows `dataset` (kept by the caller, alive while shown), starting on `startStructure` (or its
+  // first structure with voxels) with the step preset `startPreset` ("" = its WDT preset). Errors:
+  // no labelled structure, or none with voxels; the state is unchanged then.
+  Status setDataset(const Dataset& dataset, const std::string& startStructure, const std::string& startPreset);
+  const Dataset& dataset() const { return *dataset_; }
+  bool hasStructure(std::uint16_t label) const { return frames_.count(label) > 0; }
+  const render::StructureFrame* frameOf(std::uint16_t label) const;
+  // Structures with voxels by system, in the dataset's order (the browser's tree).
+  const std::vector<std::pair<std::string, std::vector<const Structure*>>>& bySystem() const { return bySystem_; }
+
+  // What the image shows: the one place that decides it.
+  struct Shown {
+    std::uint16_t label = 0;  // highlighted: the structure whose field is on screen in field modes
+    render::Preset preset;    // t applied; mode Bare when bare or no field is on screen yet
+  };
+  Shown shown() const;
+  std::uint16_t selected() const { return selected_; }
+  std::uint16_t hovered() const { return hovered_; }
+  std::uint16_t shownLabel() const { return hovered_ ? hovered_ : selected_; }  // hovered, else selected
+  bool bare() const { return bare_; }
+  float t() const { return t_; }
+  const render::Camera& camera() const { return camera_; }
+  const std::string& viewName() const { return viewName_; }
+  const ClipSettings& clip() const { return clip_; }
+  std::optional<render::ClipPlane> clipPlane() const;
+
+  // The preset of a structure in a mode: a step's preset when one was set, else the shipped one
+  // (else a built-in default, with a message).
+  const render::Preset& presetOf(std::uint16_t label, bool bare) const;
+  // The WDT parameters of the field `label` needs (the expert's edited preset while editing).
+  std::optional<WdtParams> fieldParams(std::uint16_t label) const;
+  // The preset picking classifies with: the WDT view's, whatever the mode (the user points at the
+  // anatomy under the cursor even when bare mode shows one structure).
+  const render::Preset& pickPreset() const;
+  // The structure whose field is on screen (0 = none) and its key.
+  std::uint16_t fieldLabel() const { return fieldLabel_; }
+
+  // Changes. Each returns whether anything changed; revision() moves when the image would.
+  bool select(std::uint16_t label);
+  bool setHovered(std::uint16_t label);
+  bool setBare(bool bare);
+  bool setT(float t);
+  // The named view framing the shown structure with room around it to orbit and hover, for an
+  // image of width × height pixels; an unknown name is an error and the camera stays.
+  Status setView(const std::string& name, int width, int height);
+  void orbit(double azimuthDeg, double elevationDeg);
+  void zoom(double factor);
+  void pan(double dxPixels, double dyPixels, int viewHeightPixels);
+  bool setClip(const ClipSettings& clip);
+  // A lesson or study step: the structure's preset in that mode, the mode and the blend t.
+  bool usePreset(std::uint16_t label, const render::Preset& preset, float t);
+  // The field of `label` with `key` is on screen now (label 0: none).
+  void setFieldShown(std::uint16_t label, const std::string& key);
+  // The expert's edited preset replaces the view's while set (mode and t follow it); call again
+  // with the same preset after each edit (`editRevision` tells edits apart).
+  void setPresetOverride(const std::optional<render::Preset>& preset, std::uint64_t editRevision);
+  bool presetOverridden() const { return override_.has_value(); }
+  // Something outside the state changed the image (the viewport's size).
+  void touch() { ++revision_; }
+  // The user did something that does not change the image (hovering the same structure).
+  void noteActivity() { ++activity_; }
+
+  std::uint64_t revision() const { return revision_; }
+  std::uint64_t activity() const { return activity_; }
+
+ private:
+  std::uint16_t displayLabel() const;
+  void changed() {  // the image changes, and the user (or a script) caused it
+    ++revision_;
+    ++activity_;
+  }
+  template <class F>
+  bool changeShown(F&& change);  // runs `change`; bumps the revision when the shown label moves
+
+  const render::PresetLibrary& library_;
+  MessageSink messages_;
+  const Dataset* dataset_ = nullptr;
+  std::vector<std::pair<std::string, std::vector<const Structure*>>> bySystem_;
+  std::map<std::uint16_t, render::StructureFrame> frames_;
+  mutable std::map<std::pair<std::uint16_t, bool>, render::Preset> presets_;
+  std::optional<render::Preset> override_;
+  std::uint64_t overrideRevision_ = 0;
+
+  std::uint16_t selected_ = 0, hovered_ = 0;
+  bool bare_ = false;
+  float t_ = 0.5f;
+  render::Camera camera_;
+  std::string viewName_;
+  ClipSettings clip_;
+  std::uint16_t fieldLabel_ = 0;
+  std::string fieldKey_;
+  std::uint64_t revision_ = 1, activity_ = 1;
+};
+
+}  // namespace at::app

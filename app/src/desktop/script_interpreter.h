@@ -1,0 +1,126 @@
+// The one UI-script interpreter (--ui-script FILE.json): {"actions": [{"do": "select", "structure":
+// "cochlea"}, …]} replayed one action after another, each through the same DesktopModel commands
+// the widgets use; the events the commands emit are the script's output (one JSON line each).
+//
+// Actions (arguments in the README and `anatomy-tutor desktop --help`):
+//   view:     select, t, mode, view, hover, hover_structure, click, click_structure, orbit, zoom, clip,
+//             expert, cancel_field
+//   waiting:  wait {ms}, wait_field {timeout_ms} (the view settled: final quality, the field shown)
+//   output:   screenshot {path}, record {on}, report {out}, hover_sweep {dwell_ms, out}
+//   lessons:  lesson_user, lessons, lesson, lesson_next, answer, review, lesson_close
+//   expert:   tf_add_point, tf_move_point, tf_delete_point, tf_colour, preset_set, preset_save
+//   studies:  study_start, study_toggle, study_rate, study_comment, study_next, study_close,
+//             coordinator_open, coordinator_export, coordinator_summary
+//   import:   import, cancel_import, open_imported
+// An action that waits (a lesson being prepared, an import, an export, a locate answer's distance
+// field) is asked again next frame. A malformed or failing action ends the script with status 2,
+// something waited for that never came (a timeout) with status 1.
+#pragma once
+
+#include <deque>
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "core/error.h"
+#include "desktop_model.h"
+
+namespace at::app {
+
+// What the interpreter needs from the window it runs in.
+class ScriptHost {
+ public:
+  virtual ~ScriptHost() = default;
+  // Saves the window as PNG at `path` once the current frame is drawn.
+  virtual void requestScreenshot(const std::string& path) = 0;
+  // A requested screenshot has not been written yet.
+  virtual bool screenshotPending() const = 0;
+  // For the report: "800x480" and the GL context's description.
+  virtual std::string windowText() const = 0;
+  virtual std::string glText() const = 0;
+};
+
+class ScriptInterpreter {
+ public:
+  // Reads {"actions": [...]} from `path`; errors name the file and the problem.
+  static Result<ScriptInterpreter> load(const std::string& path, std::optional<std::string> finalScreenshot);
+  // `actions`: the list; `finalScreenshot`: saved once the actions are done and the view settled.
+  ScriptInterpreter(std::vector<nlohmann::json> actions, std::optional<std::string> finalScreenshot);
+
+  // Runs actions until one has to wait or the script ends; once per frame.
+  void step(DesktopModel& model, ScriptHost& host, Clock::time_point now);
+  bool finished() const { return finished_; }
+  // 0 when every action worked; 2 for a malformed or failing action; 1 for a timeout.
+  int exitStatus() const { return status_; }
+  // The screenshot failed to be written: the script ends with status 1.
+  void screenshotFailed(const std::string& why, DesktopModel& model);
+
+  // Every action's name, for --help and tests.
+  static std::vector<std::string> actionNames();
+
+ private:
+  enum class Progress { Done, Running };
+  using Outcome = Result<Progress>;
+  struct Context {
+    DesktopModel& model;
+    ScriptHost& host;
+    const nlohmann::json& action;
+    bool first;          // the action's first call
+    double elapsedMs;    // since its first call
+  };
+  using Handler = Outcome (ScriptInterpreter::*)(Context&);
+  static const std::map<std::string, Handler>& handlers();
+  void finish(int status);
+
+  // The view (script_interpreter.cpp)
+  Outcome select(Context&);
+  Outcome setT(Context&);
+  Outcome mode(Context&);
+  Outcome view(Context&);
+  Outcome hover(Context&);
+  Outcome click(Context&);
+  Outcome hoverStructure(Context&);
+  Outcome clickStructure(Context&);
+  Outcome orbit(Context&);
+  Outcome zoom(Context&);
+  Outcome clip(Context&);
+  Outcome expert(Context&);
+  Outcome cancelField(Context&);
+  Outcome wait(Context&);
+  Outcome waitField(Context&);
+  Outcome screenshot(Context&);
+  Outcome record(Context&);
+  Outcome report(Context&);
+  Outcome hoverSweep(Context&);
+  // The panels (script_actions_panels.cpp)
+  Outcome lessonUser(Context&);
+  Outcome lessonList(Context&);
+  Outcome lesson(Context&);
+  Outcome lessonNext(Context&);
+  Outcome answer(Context&);
+  Outcome review(Context&);
+  Outcome lessonClose(Context&);
+  Outcome tfEdit(Context&);
+  Outcome presetSet(Context&);
+  Outcome presetSave(Context&);
+  Outcome studyStart(Context&);
+  Outcome study(Context&);
+  Outcome coordinatorOpen(Context&);
+  Outcome coordinatorExport(Context&);
+  Outcome coordinatorSummary(Context&);
+  Outcome importDataset(Context&);
+  Outcome cancelImport(Context&);
+  Outcome openImported(Context&);
+
+  std::deque<nlohmann::json> actions_;
+  std::optional<std::string> finalScreenshot_;
+  bool begun_ = false;
+  Clock::time_point actionStart_;
+  bool finished_ = false;
+  int status_ = 0;
+};
+
+}  // namespace at::app

@@ -1,0 +1,124 @@
+// The desktop's preference studies without drawing (the study panels draw it; the UI script drives
+// the same commands): the participant mode of a study (blinded A/B renderings of each structure,
+// the protocol's items on its 1–5 scale, a comment, viewing times and toggles; every rating
+// committed when the participant goes on) and the coordinator's side (studies, participants and
+// completion, the export written one file per frame with a Cancel that removes what it wrote, the
+// Table-2 summary and its chart).
+//
+// Blinding: shown() is all the view learns of a trial (a structure and a preset); the participant
+// window draws only what the panel's label helpers record.
+#pragma once
+
+#include <chrono>
+#include <functional>
+#include <map>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "core/error.h"
+#include "db/study_store.h"
+#include "render/preset.h"
+#include "study_session.h"
+#include "volume/png_image.h"
+
+namespace at::db {
+class Database;
+}
+
+namespace at::app {
+
+class StudyController {
+ public:
+  using EventSink = std::function<void(nlohmann::json)>;
+  // `database` and `library` outlive the controller.
+  StudyController(db::Database& database, const render::PresetLibrary& library, EventSink events);
+  ~StudyController();
+
+  // --- Participant mode -----------------------------------------------------------------------
+  struct Participant {
+    quiz::StudyProtocol protocol;
+    db::StudyParticipant participant;
+    std::map<std::string, render::Preset> presets;  // by preset id
+    std::optional<std::size_t> trial;               // index into participant.trials; nullopt: finished
+    char side = 'A';
+    std::chrono::steady_clock::time_point since, trialStart;
+    double viewMs[2] = {0, 0};
+    int toggles = 0;
+    std::map<std::string, int> ratings;              // item → rating as shown (0: not yet)
+    std::map<std::string, double> responseMs;        // item → ms from the trial's start to its rating
+    std::string comment;
+    bool saveFailed = false;                         // the last Next could not be saved
+  };
+  bool participantActive() const { return participant_ != nullptr; }
+  Participant* participant() { return participant_.get(); }
+  // What the volume view shows: the current trial's structure and the preset of the side on
+  // screen (nullopt outside participant mode or after the last trial).
+  struct Shown {
+    std::string structure;
+    render::Preset preset;
+    double t = 0.5;
+  };
+  std::optional<Shown> shown() const;
+  // A new trial began since the last call (its participant window is yet to be announced).
+  bool takeNewScreen() { return std::exchange(newScreen_, false); }
+  // The participant window's labels as drawn ("study_screen"), for the scripted-mode log.
+  void announce(nlohmann::json screen) { events_(std::move(screen)); }
+
+  Status startParticipant(const std::string& study, const std::string& participant, const std::string& group);
+  void showSide(char side);             // 'A' or 'B' (another value: the other side) [study_toggle]
+  Status rate(const std::string& item, int rating);
+  void setComment(std::string comment);
+  bool allRated() const;
+  Status nextTrial();                   // records the trial's ratings and viewing [study_recorded, study_complete]
+  void closeParticipant();              // pause or close: answers up to the last Next are saved
+
+  // --- Coordinator ----------------------------------------------------------------------------
+  bool coordinatorOpen = false;
+  void refreshStudies();                // shipped studies registered on first sight
+  Status selectStudy(const std::string& id);
+  const std::vector<quiz::StudyProtocol>& studies() const { return studies_; }
+  const quiz::StudyProtocol* selectedStudy() const;
+  const std::vector<db::StudyCompletion>& completion() const { return completion_; }
+  const std::optional<quiz::StudySummary>& summary() const { return summary_; }
+  // The Table-2 chart of the selected study; its revision changes when it does.
+  const RgbImage* chart();
+  std::uint64_t chartRevision() const { return chartRevision_; }
+  const std::string& message() const { return message_; }
+
+  Status startExport(const std::string& outDir);
+  void stepExport();                    // one file per frame [export_progress, export_done, export_failed]
+  void cancelExport();                  // removes what it wrote [export_cancelled]
+  const StudyExport* runningExport() const { return export_ ? &*export_ : nullptr; }
+  void clearExport() { export_.reset(); }
+  bool exportFailed() const { return exportFailed_; }
+  const std::string& exportStatus() const { return exportStatus_; }
+  // Summary cells and completion as a "study_summary" event.
+  nlohmann::json summaryEvent() const;
+
+ private:
+  void beginTrial();      // resets the per-trial state for the next unrated trial
+  void accountView();     // adds the time since the last toggle to the side on screen
+
+  db::Database& database_;
+  const render::PresetLibrary& library_;
+  EventSink events_;
+  std::unique_ptr<Participant> participant_;
+  bool newScreen_ = false;
+
+  std::vector<quiz::StudyProtocol> studies_;
+  int studyIndex_ = -1;
+  std::vector<db::StudyCompletion> completion_;
+  std::optional<quiz::StudySummary> summary_;
+  std::optional<RgbImage> chart_;
+  std::uint64_t chartRevision_ = 0;
+  std::optional<StudyExport> export_;
+  std::string exportStatus_;
+  bool exportFailed_ = false;
+  std::string message_;
+};
+
+}  // namespace at::app

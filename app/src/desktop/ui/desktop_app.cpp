@@ -1,0 +1,265 @@
+// The desktop application: the frame loop and its wiring. The window (window.h), the volume view
+// (volume_view.h) and the panels (panels.h) on one side; the model with its explore state, fields,
+// scheduler and controllers (../desktop_model.h) on the other; the UI script
+// (../script_interpreter.h) drives the model as the widgets do.
+//
+// A frame: input → model commands; the script's next actions; the model's frame (study view,
+// controllers, fields handed to the view); the view renders what the scheduler plans; the panels
+// draw; the window swaps (and saves a requested screenshot). With nothing left to do the loop
+// waits for input.
+#include <SDL.h>
+#include <imgui.h>
+
+#include <cmath>
+#include <cstdio>
+#include <thread>
+
+#include "cli_args.h"
+#include "commands.h"
+#include "panels.h"
+#include "script_interpreter.h"
+#include "volume/png_image.h"
+#include "volume_view.h"
+#include "window.h"
+
+namespace at::app {
+
+namespace {
+
+using json = nlohmann::json;
+
+struct AppOptions {
+  DesktopOptions model;
+  std::optional<std::string> script, screenshot, dbPath;
+  int width = 1280, height = 720;
+  double maxFps = 0;  // > 0: frames start at most this often (a display's rate for scripted runs)
+};
+
+class DesktopApp final : public ScriptHost {
+ public:
+  explicit DesktopApp(AppOptions options) : options_(std::move(options)), library_(defaultPresetsDir()) {}
+  int run();
+
+  // ScriptHost
+  void requestScreenshot(const std::string& path) override { screenshotPath_ = path; }
+  bool screenshotPending() const override { return screenshotPath_.has_value(); }
+  std::string windowText() const override {
+    const ViewLayout l = window_->layout();
+    return std::to_string(l.windowW) + "x" + std::to_string(l.windowH);
+  }
+  std::string glText() const override { return window_->glDescription(); }
+
+ private:
+  void handleEvent(const SDL_Event& e);
+  void frame();
+  void drawUi();
+  void takeScreenshot(render::RgbaImage& image, const Status& read);
+
+  AppOptions options_;
+  render::PresetLibrary library_;
+  std::unique_ptr<LearningSession> session_;  // the process's one database connection
+  std::unique_ptr<DesktopModel> model_;
+  std::unique_ptr<DesktopWindow> window_;
+  std::unique_ptr<VolumeView> view_;
+  std::optional<ScriptInterpreter> script_;
+  std::optional<std::string> screenshotPath_;
+  ExplorePanel explore_;
+  StudyPanel study_;
+  ImportPanel import_;
+  ExpertPanel expert_;
+  bool quit_ = false;
+  // Mouse
+  bool leftDown_ = false, panDown_ = false, dragged_ = false;
+  double downX_ = 0, downY_ = 0, lastX_ = 0, lastY_ = 0;
+};
+
+int DesktopApp::run() {
+  if (options_.script) {
+    auto script = options_.script->empty() ? Result<ScriptInterpreter>(ScriptInterpreter({}, options_.screenshot))
+                                           : ScriptInterpreter::load(*options_.script, options_.screenshot);
+    if (!script) return reportError(script.error().message);
+    script_.emplace(std::move(*script));
+  }
+  auto session = LearningSession::open(options_.dbPath);
+  if (!session) return reportError(session.error().message);
+  session_ = std::move(*session);
+  model_ = std::make_unique<DesktopModel>(*session_, library_, options_.model, [this](json j) {
+    if (!script_) return;
+    std::printf("%s\n", j.dump().c_str());
+    std::fflush(stdout);
+  });
+  if (auto st = model_->open(); !st) return reportError(st.error().message);
+  auto window = DesktopWindow::open(options_.width, options_.height, script_.has_value());
+  if (!window) return reportError(window.error().message);
+  window_ = std::move(*window);
+  view_ = std::make_unique<VolumeView>([this](const std::string& m) { model_->message(m); });
+  model_->event({{"event", "context"}, {"gl", window_->glDescription()}, {"note", window_->glNote()}, {"ui_scale", window_->uiScale()}});
+  model_->setLayout(window_->layout());
+  model_->reframe();  // the start view framed for the window's size
+  while (!quit_) frame();
+  return script_ ? script_->exitStatus() : 0;
+}
+
+void DesktopApp::frame() {
+  const Clock::time_point start = Clock::now();
+  SDL_Event e;
+  if (model_->idle() && window_->waitEvent(e, 100)) handleEvent(e);
+  while (window_->pollEvent(e)) handleEvent(e);
+  if (quit_) return;
+  model_->setLayout(window_->layout());
+  if (script_) {
+    script_->step(*model_, *this, Clock::now());
+    if (script_->finished()) {
+      quit_ = true;
+      return;
+    }
+  }
+  model_->beginFrame(view_->available() ? view_.get() : nullptr);
+  view_->frame(*model_, Clock::now());
+  window_->beginFrame();
+  drawUi();
+  render::RgbaImage shot;
+  const Status read = window_->endFrame(screenshotPath_ ? &shot : nullptr);
+  if (screenshotPath_) takeScreenshot(shot, read);
+  const Clock::time_point end = Clock::now();
+  model_->endFrame(end, msBetween(start, end));
+  if (options_.maxFps > 0)
+    std::this_thread::sleep_until(start + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(1.0 / options_.maxFps)));
+}
+
+void DesktopApp::takeScreenshot(render::RgbaImage& image, const Status& read) {
+  const std::string path = *std::exchange(screenshotPath_, std::nullopt);
+  const Status st = read ? writePng(path, render::toRgb(image)) : read;
+  const ViewLayout l = window_->layout();
+  if (!st) script_->screenshotFailed(st.error().message, *model_);
+  else model_->event({{"event", "screenshot"}, {"path", path}, {"width", l.framebufferW}, {"height", l.framebufferH}});
+}
+
+void DesktopApp::drawUi() {
+  const ViewLayout& l = model_->layout();
+  const float panelW = l.panelWidth();
+  StudyController& study = model_->study();
+  if (study.participantActive()) study_.drawParticipant(study, panelW, float(l.windowH));  // no names shown
+  else explore_.draw(*model_, {window_->glDescription()});
+  study_.drawCoordinator(study, panelW + 20, 20);
+  if (!study.participantActive()) import_.draw(model_->imports(), panelW + 40, 40);
+  // The renderer's texture as it is (GL's rows bottom first: uv0 is the image's left/bottom).
+  if (const render::gl::DisplayImage& image = view_->image(); image.handle)
+    ImGui::GetBackgroundDrawList()->AddImage(reinterpret_cast<ImTextureID>(image.handle), ImVec2(panelW, 0),
+                                             ImVec2(float(l.windowW), float(l.windowH)), ImVec2(image.uv0[0], image.uv1[1]),
+                                             ImVec2(image.uv1[0], image.uv0[1]));
+  if (!study.participantActive() && model_->expertOn() &&
+      expert_.draw(model_->expert(), float(l.windowW) - 340 * l.uiScale, 340 * l.uiScale, float(l.windowH)))
+    model_->expertEdited();
+  if (!view_->available())
+    ImGui::GetBackgroundDrawList()->AddText(ImVec2(panelW + 20, 20), IM_COL32(255, 140, 120, 255),
+                                            "The volume view is unavailable (see the messages on the left).");
+}
+
+void DesktopApp::handleEvent(const SDL_Event& e) {
+  DesktopWindow::forwardToImGui(e);
+  if (e.type == SDL_QUIT) quit_ = true;
+  if (e.type == SDL_WINDOWEVENT && e.window.event == SDL_WINDOWEVENT_CLOSE) quit_ = true;
+  if (script_) return;  // scripted runs take no user input
+  StudyController& study = model_->study();
+  if (e.type == SDL_KEYDOWN && study.participantActive() && !DesktopWindow::imguiWantsText() &&
+      (e.key.keysym.sym == SDLK_a || e.key.keysym.sym == SDLK_b))
+    study.showSide(e.key.keysym.sym == SDLK_a ? 'A' : 'B');
+  const bool overUi = DesktopWindow::imguiWantsMouse();
+  const ViewLayout& layout = model_->layout();
+  switch (e.type) {
+    case SDL_MOUSEBUTTONDOWN:
+      if (overUi || !layout.inView(e.button.x, e.button.y)) break;
+      downX_ = lastX_ = e.button.x;
+      downY_ = lastY_ = e.button.y;
+      dragged_ = false;
+      if (e.button.button == SDL_BUTTON_LEFT) leftDown_ = true;
+      if (e.button.button == SDL_BUTTON_RIGHT || e.button.button == SDL_BUTTON_MIDDLE) panDown_ = true;
+      break;
+    case SDL_MOUSEBUTTONUP:
+      if (e.button.button == SDL_BUTTON_LEFT && leftDown_ && !dragged_) model_->clickAt(e.button.x, e.button.y);
+      if (e.button.button == SDL_BUTTON_LEFT) leftDown_ = false;
+      if (e.button.button != SDL_BUTTON_LEFT) panDown_ = false;
+      break;
+    case SDL_MOUSEMOTION: {
+      const double dx = e.motion.x - lastX_, dy = e.motion.y - lastY_;
+      if (leftDown_ || panDown_) {
+        if (std::abs(e.motion.x - downX_) + std::abs(e.motion.y - downY_) > 3) dragged_ = true;
+        if (leftDown_ && dragged_) model_->explore().orbit(-dx * 0.4, dy * 0.4);
+        if (panDown_) model_->explore().pan(dx, dy, layout.windowH);
+        if (!(leftDown_ && dragged_) && !panDown_) model_->explore().noteActivity();
+        lastX_ = e.motion.x;
+        lastY_ = e.motion.y;
+      } else if (!overUi) {
+        model_->hoverAt(e.motion.x, e.motion.y);
+      }
+      break;
+    }
+    case SDL_MOUSEWHEEL:
+      if (!overUi && e.wheel.y != 0) model_->explore().zoom(std::pow(1.1, double(e.wheel.y)));
+      break;
+    default:
+      break;
+  }
+}
+
+constexpr const char* kDesktopHelp =
+    "usage: anatomy-tutor [desktop] [--dataset D] [--ui-script FILE.json [--screenshot OUT.png]] [--size WxH]\n"
+    "                             [--render-scale S] [--frame-budget MS] [--max-fps N] [--db PATH] [--user NAME]\n"
+    "  Opens the desktop app on the default course (explore: hover to highlight, click to select).\n"
+    "  --dataset    phantom, phantom:N, a dataset imported into --db, or a volume file or DICOM folder\n"
+    "               (default: the default course's dataset)\n"
+    "  --ui-script  replay {\"actions\": [...]}; actions: %s\n"
+    "  --db         the database: imported datasets, presets saved in the expert panel, studies,\n"
+    "               lesson progress (default: the user's)\n"
+    "  --user       whose lesson progress to show and record (default: student; the same name as\n"
+    "               `anatomy-tutor play --user` shares the progress; created when new)\n"
+    "  --screenshot save the window as PNG once the script has run and the view has settled\n"
+    "  --size       window size in logical pixels (default 1280x720)\n"
+    "  --render-scale  resolution of the full-quality volume image, 0.1..1 (default 1; software GL: less)\n"
+    "  --frame-budget  at rest, finer images predicted to take longer are not rendered (default 100 ms;\n"
+    "               scripted screenshots and the 'Full quality at rest' box render full quality anyway)\n"
+    "  --max-fps    start frames at most N times a second (scripted runs swap without vsync and\n"
+    "               otherwise draw as fast as they can; 60 measures them as on a 60 Hz display)\n"
+    "  --db, --user and --size may also stand before the command.\n";
+
+}  // namespace
+
+int runDesktop(const std::vector<std::string>& argv) {
+  auto args = cli::Args::parse(argv, {"dataset", "ui-script", "screenshot", "render-scale", "frame-budget", "max-fps"}, {});
+  if (!args) return reportError("desktop: " + args.error().message, 2);
+  if (args->has("help")) {
+    std::string actions;
+    for (const std::string& name : ScriptInterpreter::actionNames()) actions += (actions.empty() ? "" : ", ") + name;
+    std::printf(kDesktopHelp, actions.c_str());
+    return 0;
+  }
+  if (!args->positional().empty()) return reportError("desktop: unexpected argument '" + args->positional()[0] + "' (see --help)", 2);
+  AppOptions options;
+  options.model.dataset = args->valueOr("dataset", "");
+  options.script = args->value("ui-script");
+  options.screenshot = args->value("screenshot");
+  options.dbPath = args->db();
+  if (auto user = args->user()) options.model.userName = *user;
+  if (auto size = args->size()) {
+    if (size->width < 400 || size->height < 300) return reportError("desktop: --size must be WxH, at least 400x300", 2);
+    options.width = size->width;
+    options.height = size->height;
+  }
+  auto frameBudget = args->number("frame-budget", options.model.frameBudgetMs);
+  if (!frameBudget || !(*frameBudget >= 10 && *frameBudget <= 100000))
+    return reportError("desktop: --frame-budget must be a number of milliseconds in 10..100000", 2);
+  options.model.frameBudgetMs = *frameBudget;
+  auto maxFps = args->number("max-fps", 0);
+  if (!maxFps || !(*maxFps == 0 || (*maxFps >= 1 && *maxFps <= 1000))) return reportError("desktop: --max-fps must be a number in 1..1000", 2);
+  options.maxFps = *maxFps;
+  auto renderScale = args->number("render-scale", options.model.renderScale);
+  if (!renderScale || !(*renderScale >= 0.1 && *renderScale <= 1)) return reportError("desktop: --render-scale must be a number in 0.1..1", 2);
+  options.model.renderScale = *renderScale;
+  if (options.screenshot && !options.script) options.script = std::string();  // the default view
+  options.model.scripted = options.script.has_value();
+  if (!displayAvailable()) return reportError("desktop: no display (none named in DISPLAY/WAYLAND_DISPLAY, or it cannot be opened)");
+  return DesktopApp(std::move(options)).run();
+}
+
+}  // namespace at::app

@@ -1,0 +1,167 @@
+#include <algorithm>
+#include <cstdio>
+
+#include <imgui.h>
+#include <imgui_stdlib.h>
+
+#include "core/strings.h"
+#include "panels.h"
+
+namespace at::app {
+
+namespace {
+const char* kViews[] = {"anterior", "posterior", "lateral_left", "lateral_right", "superior", "inferior"};
+const char* kViewButtons[] = {"Ant", "Post", "L", "R", "Sup", "Inf"};
+}  // namespace
+
+void ExplorePanel::draw(DesktopModel& model, const Status& status) {
+  const ViewLayout& layout = model.layout();
+  ExploreState& explore = model.explore();
+  const Dataset& dataset = model.dataset();
+  ImGui::SetNextWindowPos(ImVec2(0, 0));
+  ImGui::SetNextWindowSize(ImVec2(layout.panelWidth(), float(layout.windowH)));
+  ImGui::Begin("Explore", nullptr,
+               ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoResize | ImGuiWindowFlags_NoCollapse |
+                   ImGuiWindowFlags_NoTitleBar);
+  ImGui::TextUnformatted("Anatomy Tutor - Explore");
+  ImGui::TextDisabled("%s", dataset.displayName.empty() ? dataset.id.c_str() : dataset.displayName.c_str());
+  if (ImGui::SmallButton("Studies...")) model.study().coordinatorOpen = true;
+  ImGui::SameLine();
+  if (ImGui::SmallButton("Import...")) model.imports().windowOpen = true;
+  ImGui::Separator();
+  lessons_.draw(model.lessons(), float(layout.windowH) * 0.4f);
+  ImGui::Separator();
+
+  // While a question would be given away by a name (and throughout a quiz-only lesson), no
+  // structure name is shown: not the selected or hovered one, nor the browser.
+  const bool hideNames = model.lessons().namesHidden();
+  const Structure* selected = hideNames ? nullptr : dataset.findStructureByLabel(explore.selected());
+  const Structure* hovered = hideNames ? nullptr : dataset.findStructureByLabel(explore.hovered());
+  if (selected) {
+    ImGui::TextColored(ImVec4(1, 0.75f, 0.3f, 1), "%s", selected->displayName.c_str());
+    ImGui::TextDisabled("%s", selected->system.c_str());
+    ImGui::PushTextWrapPos(0);
+    ImGui::TextUnformatted(selected->description.c_str());
+    ImGui::PopTextWrapPos();
+  }
+  ImGui::Text("Hover: %s", hovered ? hovered->displayName.c_str() : "-");
+  ImGui::Separator();
+
+  int mode = explore.bare() ? 1 : 0;
+  if (ImGui::RadioButton("WDT preset", &mode, 0)) explore.setBare(false);
+  ImGui::SameLine();
+  if (ImGui::RadioButton("Bare preset", &mode, 1)) explore.setBare(true);
+  float t = explore.t();
+  if (ImGui::SliderFloat("t (context)", &t, 0, 1, "%.2f")) explore.setT(t);
+  if (bool full = model.fullAtRest(); ImGui::Checkbox("Full quality at rest", &full)) model.setFullAtRest(full);
+  ImGui::SameLine();
+  if (bool on = model.expertOn(); ImGui::Checkbox("Expert", &on)) model.setExpert(on);
+  if (ImGui::IsItemHovered())
+    ImGui::SetTooltip("Off: the view at rest stays within %.0f ms per frame (coarser on slow GL)", model.options().frameBudgetMs);
+
+  ImGui::TextUnformatted("View");
+  for (int i = 0; i < 6; ++i) {
+    if (i) ImGui::SameLine();
+    if (ImGui::SmallButton(kViewButtons[i]))
+      if (auto st = model.setView(kViews[i]); !st) model.message(st.error().message);
+    if (ImGui::IsItemHovered()) ImGui::SetTooltip("%s", kViews[i]);
+  }
+  ClipSettings clip = explore.clip();
+  bool clipChanged = ImGui::Checkbox("Clipping plane", &clip.on);
+  if (clip.on) {
+    const char* axes[] = {"left-right", "anterior-posterior", "inferior-superior"};
+    clipChanged |= ImGui::Combo("axis", &clip.axis, axes, 3);
+    clipChanged |= ImGui::Checkbox("flip side", &clip.flip);
+    const float range = float(std::max(5.0, explore.camera().distanceMm));
+    clipChanged |= ImGui::SliderFloat("offset mm", &clip.offsetMm, -range, range, "%.1f");
+  }
+  if (clipChanged) explore.setClip(clip);
+  ImGui::Separator();
+
+  if (!hideNames) ImGui::InputTextWithHint("##search", "search structures", &search_);
+  drawStructures(model, hideNames);
+
+  ImGui::TextDisabled("frame %.0f ms, level %d/%d%s", model.recorder().lastFrameMs(),
+                      std::max(0, model.scheduler().renderedLevel()), kFullLevel,
+                      model.scheduler().interacting() ? " (moving)" : "");
+  drawFieldProgress(model);
+  ImGui::PushTextWrapPos(0);
+  ImGui::TextDisabled("%s", status.glDescription.c_str());
+  for (const std::string& m : model.messages()) ImGui::TextColored(ImVec4(1, 0.5f, 0.4f, 1), "%s", m.c_str());
+  ImGui::PopTextWrapPos();
+  ImGui::End();
+}
+
+void ExplorePanel::drawStructures(DesktopModel& model, bool hideNames) {
+  const std::string query = str::lower(search_);
+  ImGui::BeginChild("structures", ImVec2(0, -statusHeight(model)), true);
+  if (hideNames) {
+    ImGui::PushTextWrapPos(0);
+    ImGui::TextDisabled("(structure names are hidden during the question)");
+    ImGui::PopTextWrapPos();
+  }
+  for (const auto& [system, list] : model.explore().bySystem()) {
+    if (hideNames) break;
+    std::vector<const Structure*> shown;
+    for (const Structure* s : list)
+      if (query.empty() || str::lower(s->displayName).find(query) != std::string::npos ||
+          str::lower(s->id).find(query) != std::string::npos || str::lower(s->description).find(query) != std::string::npos)
+        shown.push_back(s);
+    if (shown.empty()) continue;
+    ImGui::SetNextItemOpen(true, ImGuiCond_Once);
+    if (!query.empty()) ImGui::SetNextItemOpen(true);
+    if (ImGui::TreeNode(system.c_str())) {
+      for (const Structure* s : shown) {
+        if (ImGui::Selectable(s->displayName.c_str(), s->label == model.explore().selected())) model.select(s->label);
+        if (ImGui::IsItemHovered() && !s->description.empty()) {
+          ImGui::BeginTooltip();
+          ImGui::PushTextWrapPos(ImGui::GetFontSize() * 25);
+          ImGui::TextUnformatted(s->description.c_str());
+          ImGui::PopTextWrapPos();
+          ImGui::EndTooltip();
+        }
+      }
+      ImGui::TreePop();
+    }
+  }
+  ImGui::EndChild();
+}
+
+float ExplorePanel::statusHeight(const DesktopModel& model) const {
+  // The status lines, the GL description (two lines) and the messages as they wrap, so that the
+  // messages stay visible; at most half of what is left for the structure list and them.
+  float height = ImGui::GetTextLineHeightWithSpacing() * 5.5f;
+  const float wrap = ImGui::GetContentRegionAvail().x;
+  for (const std::string& m : model.messages())
+    height += ImGui::CalcTextSize(m.c_str(), nullptr, false, wrap).y + ImGui::GetStyle().ItemSpacing.y;
+  return std::min(height, std::max(ImGui::GetTextLineHeightWithSpacing() * 5.5f, ImGui::GetContentRegionAvail().y * 0.5f));
+}
+
+// The running field's progress; a full-resolution one can be cancelled (the coarse one stays).
+void ExplorePanel::drawFieldProgress(DesktopModel& model) {
+  FieldView& fields = model.fields();
+  const auto running = fields.running();
+  if (!running || running->elapsedMs < 250) {  // quick fields need no bar
+    if (fields.declined() && !running) {
+      ImGui::TextDisabled("full resolution cancelled");
+      ImGui::SameLine();
+      if (ImGui::SmallButton("Compute it")) fields.allowDeclined();
+    } else {
+      ImGui::TextDisabled("%s", fields.busy() ? "computing a distance field..." : fields.status().c_str());
+    }
+    return;
+  }
+  const int ds = running->request.params.downsample;
+  char text[200];
+  std::snprintf(text, sizeof text, "%s field: pass %d/%d, %.1f s", ds == 1 ? "full-res" : ("1/" + std::to_string(ds)).c_str(),
+                running->passesDone, running->passesPlanned, running->elapsedMs / 1000);
+  const float fraction = float(running->passesDone) / float(std::max(1, running->passesPlanned));
+  ImGui::ProgressBar(fraction, ImVec2(ds == 1 ? -60 * model.layout().uiScale : -1, 0), text);
+  if (ds == 1) {
+    ImGui::SameLine();
+    if (ImGui::SmallButton("Cancel##field")) model.cancelFineField();
+    if (ImGui::IsItemHovered()) ImGui::SetTooltip("Stop the full-resolution field; the coarse one stays on screen");
+  }
+}
+
+}  // namespace at::app

@@ -1,0 +1,220 @@
+#include <algorithm>
+#include <cstdio>
+
+#include <imgui.h>
+#include <imgui_stdlib.h>
+
+#include "lessons/repositories.h"
+#include "panels.h"
+#include "volume/dataset_source.h"
+
+namespace at::app {
+
+namespace {
+const ImVec4 kRight{0.5f, 1, 0.5f, 1}, kWrong{1, 0.5f, 0.4f, 1}, kHeading{1, 0.75f, 0.3f, 1}, kQuestion{0.6f, 0.8f, 1, 1};
+
+void wrappedColoured(const ImVec4& colour, const std::string& text) {
+  ImGui::PushTextWrapPos(0);
+  ImGui::TextColored(colour, "%s", text.c_str());
+  ImGui::PopTextWrapPos();
+}
+}  // namespace
+
+void LessonPanel::draw(LessonController& lessons, float height) {
+  if (!ImGui::CollapsingHeader("Lessons", ImGuiTreeNodeFlags_DefaultOpen)) return;
+  ImGui::BeginChild("lessons", ImVec2(0, height), false);
+  if (auto title = lessons.preparing()) {
+    ImGui::TextColored(kHeading, "%s", title->c_str());
+    ImGui::TextDisabled("Preparing the lesson: computing its answer keys...");
+  } else if (auto st = lessons.ready(); !st) {
+    wrappedColoured(kWrong, st.error().message);
+  } else {
+    if (lessons.step()) {
+      ImGui::TextDisabled("user: %s", lessons.user()->name.c_str());
+    } else {
+      if (!editingUser_) userEdit_ = lessons.user()->name;  // follows the user unless being typed
+      ImGui::SetNextItemWidth(ImGui::GetFontSize() * 9);
+      const bool entered = ImGui::InputText("##user", &userEdit_, ImGuiInputTextFlags_EnterReturnsTrue);
+      editingUser_ = ImGui::IsItemActive();
+      ImGui::SameLine();
+      if ((ImGui::SmallButton("switch user") || entered) && userEdit_ != lessons.user()->name)
+        if (auto s = lessons.switchUser(userEdit_); !s) lessons.report("user: " + s.error().message);
+      if (ImGui::IsItemHovered()) ImGui::SetTooltip("progress is per user; `anatomy-tutor play --user NAME` shares it");
+    }
+    const LessonController::Asked* asked = lessons.asked();
+    const bool reviewing = asked && asked->review;
+    if (lessons.step() || lessons.finishedScore()) drawLesson(lessons);
+    else if (reviewing) drawQuestion(lessons);
+    else drawLists(lessons);
+    if (!lessons.message().empty()) wrappedColoured(kWrong, lessons.message());
+    if (!lessons.step() && !lessons.finishedScore() && !reviewing) drawReview(lessons);
+  }
+  ImGui::EndChild();
+}
+
+void LessonPanel::drawLists(LessonController& lessons) {
+  const auto& courses = lessons.courses();
+  if (courses.empty()) {
+    ImGui::TextDisabled("No course in the database.");
+    return;
+  }
+  const lessons::Course& course = courses[std::size_t(lessons.courseIndex())];
+  if (ImGui::BeginCombo("course", course.title.c_str())) {
+    for (int i = 0; i < int(courses.size()); ++i)
+      if (ImGui::Selectable(courses[std::size_t(i)].title.c_str(), i == lessons.courseIndex()) && i != lessons.courseIndex())
+        if (auto st = lessons.selectCourse(i); !st) lessons.report(st.error().message);
+    ImGui::EndCombo();
+  }
+  // The built-in phantom at any size has the same structures; other datasets only their own.
+  const std::string& view = lessons.viewDataset();
+  if (course.datasetId != view && !(isBuiltinDatasetName(course.datasetId) && isBuiltinDatasetName(view)))
+    wrappedColoured(kWrong, "This course is on dataset '" + course.datasetId + "' but the view shows '" + view +
+                                "': open it with --dataset " + course.datasetId + ".");
+  ImGui::Checkbox("quiz only (no teaching steps, no names)", &lessons.quizOnly);
+  ImGui::PushTextWrapPos(0);
+  for (const LessonController::LessonRow& row : lessons.rows()) {
+    ImGui::PushID(row.id.c_str());
+    const bool locked = !row.missing.empty();
+    if (locked) ImGui::BeginDisabled();
+    const char* action = row.open ? "Resume" : row.bestScore ? "Again" : "Start";
+    if (ImGui::SmallButton(action))
+      if (auto st = lessons.startLesson(row.id, lessons.quizOnly ? lessons::LessonMode::QuizOnly : lessons::LessonMode::Guided); !st)
+        lessons.report(st.error().message);
+    if (locked) ImGui::EndDisabled();
+    ImGui::SameLine();
+    ImGui::TextColored(locked ? ImVec4(0.6f, 0.6f, 0.6f, 1) : kHeading, "%s", row.title.c_str());
+    if (ImGui::IsItemHovered() && !row.summary.empty()) ImGui::SetTooltip("%s", row.summary.c_str());
+    if (locked) {
+      std::string needs;
+      for (const std::string& m : row.missing) needs += (needs.empty() ? "" : ", ") + m;
+      ImGui::TextDisabled("  locked: finish %s first", needs.c_str());
+    } else if (row.bestScore) {
+      ImGui::TextColored(kRight, "  done, best score %.0f%%%s", 100 * *row.bestScore, row.open ? " (another attempt open)" : "");
+    } else if (row.open) {
+      ImGui::TextDisabled("  in progress");
+    } else {
+      ImGui::TextDisabled("  not started, %d questions", row.questions);
+    }
+    ImGui::PopID();
+  }
+  ImGui::PopTextWrapPos();
+}
+
+void LessonPanel::drawLesson(LessonController& lessons) {
+  if (!lessons.engine()) return;
+  ImGui::TextColored(kHeading, "%s", lessons.engine()->lesson().title.c_str());
+  if (auto score = lessons.finishedScore()) {
+    ImGui::Text("Lesson finished: score %.0f%%", 100 * *score);
+    if (ImGui::Button("Back to the lessons")) lessons.backToLessons();
+    return;
+  }
+  const lessons::StepView& v = *lessons.step();
+  ImGui::Text("step %d of %d", v.position, v.count);
+  ImGui::SameLine();
+  if (ImGui::SmallButton("Leave")) {  // answers are saved: Resume continues here
+    lessons.leave();
+    return;
+  }
+  if (v.kind == lessons::StepKind::Show) {
+    ImGui::PushTextWrapPos(0);
+    ImGui::TextColored(kHeading, "%s", v.title.c_str());
+    if (v.labelsVisible && !v.structureName.empty() && v.structureName != v.title) ImGui::TextDisabled("%s", v.structureName.c_str());
+    ImGui::TextUnformatted(v.text.c_str());
+    ImGui::PopTextWrapPos();
+  } else {
+    drawQuestion(lessons);
+  }
+  const LessonController::Asked* asked = lessons.asked();
+  const bool canGo = v.kind == lessons::StepKind::Show || (asked && asked->grade);
+  if (!canGo) ImGui::BeginDisabled();
+  if (ImGui::Button(v.position == v.count ? "Finish" : "Next"))
+    if (auto st = lessons.next(); !st) lessons.report(st.error().message);
+  if (!canGo) ImGui::EndDisabled();
+}
+
+void LessonPanel::drawQuestion(LessonController& lessons) {
+  LessonController::Asked* asked = lessons.asked();
+  if (!asked) return;
+  LessonController::Asked& a = *asked;
+  const quiz::Question& q = a.question.question;
+  ImGui::PushTextWrapPos(0);
+  ImGui::TextColored(kQuestion, a.review ? "Review question (%s)" : "Question (%s)", quiz::toString(q.kind));
+  ImGui::TextUnformatted(q.prompt.c_str());
+  const bool open = !a.grade;
+  if (!open) ImGui::BeginDisabled();
+  std::optional<quiz::Answer> answer;
+  switch (q.kind) {
+    case quiz::QuestionKind::Locate:
+      ImGui::TextDisabled("Click it in the 3-D view.");
+      break;
+    case quiz::QuestionKind::Identify:
+    case quiz::QuestionKind::Relation:
+      for (int i = 0; i < int(a.choiceNames.size()); ++i) {
+        ImGui::PushID(i);
+        if (ImGui::RadioButton(a.choiceNames[std::size_t(i)].c_str(), a.choice == i)) a.choice = i;
+        ImGui::PopID();
+      }
+      if (a.choice < 0) ImGui::BeginDisabled();
+      if (ImGui::Button("Answer")) (answer = quiz::Answer{})->choice = a.choice;
+      if (a.choice < 0) ImGui::EndDisabled();
+      break;
+    case quiz::QuestionKind::Name:
+      ImGui::InputTextWithHint("##name", "type the name", &a.text);
+      if (a.text.empty()) ImGui::BeginDisabled();
+      if (ImGui::Button("Answer")) (answer = quiz::Answer{})->text = a.text;
+      if (a.text.empty()) ImGui::EndDisabled();
+      break;
+    case quiz::QuestionKind::Order: {
+      ImGui::TextDisabled("Your path, first met first:");
+      for (int i = 0; i < int(a.order.size()); ++i) {
+        ImGui::PushID(i);
+        if (ImGui::ArrowButton("up", ImGuiDir_Up) && i > 0) std::swap(a.order[std::size_t(i)], a.order[std::size_t(i - 1)]);
+        ImGui::SameLine();
+        if (ImGui::SmallButton("x")) {
+          a.order.erase(a.order.begin() + i);
+          ImGui::PopID();
+          break;
+        }
+        ImGui::SameLine();
+        ImGui::Text("%d. %s", i + 1, lessons.displayName(a.order[std::size_t(i)]).c_str());
+        ImGui::PopID();
+      }
+      ImGui::TextDisabled("Offered (click to add):");
+      for (std::size_t i = 0; i < a.question.choices.size(); ++i) {
+        const std::string& id = a.question.choices[i];
+        if (std::find(a.order.begin(), a.order.end(), id) != a.order.end()) continue;
+        ImGui::PushID(int(i));
+        if (ImGui::SmallButton(a.choiceNames[i].c_str())) a.order.push_back(id);
+        ImGui::PopID();
+      }
+      if (a.order.empty()) ImGui::BeginDisabled();
+      if (ImGui::Button("Answer")) (answer = quiz::Answer{})->order = a.order;
+      if (a.order.empty()) ImGui::EndDisabled();
+      break;
+    }
+  }
+  if (!open) ImGui::EndDisabled();
+  if (answer)
+    if (auto grade = lessons.answer(*answer); !grade) lessons.report("answer: " + grade.error().message);
+  if (a.grade) {
+    ImGui::TextColored(a.grade->correct ? kRight : kWrong, "%s", a.grade->correct ? "Correct." : "Not quite.");
+    ImGui::TextUnformatted(a.grade->feedback.c_str());
+    if (a.review) ImGui::TextDisabled("Saved: the review queue is updated.");
+  }
+  if (a.review && ImGui::Button(a.grade ? "Done" : "Skip")) lessons.dismissReview();
+  ImGui::PopTextWrapPos();
+}
+
+void LessonPanel::drawReview(LessonController& lessons) {
+  ImGui::Separator();
+  ImGui::Text("Due for review: %zu", lessons.due().size());
+  ImGui::PushTextWrapPos(0);
+  std::string list;
+  for (const lessons::StructureProgress& p : lessons.due()) list += (list.empty() ? "" : ", ") + lessons.displayName(p.structureId);
+  if (!list.empty()) ImGui::TextDisabled("%s", list.c_str());
+  ImGui::PopTextWrapPos();
+  if (ImGui::SmallButton("Review"))
+    if (auto st = lessons.startReview(); !st) lessons.report("review: " + st.error().message);
+}
+
+}  // namespace at::app

@@ -1,0 +1,100 @@
+// The desktop's panels: they only draw, from the model's state, and call the model's and the
+// controllers' commands — the same commands the UI script drives (script_interpreter.h). What a
+// panel keeps is what only a widget needs: text being typed, a drag in progress, a GL texture.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "desktop_model.h"
+#include "render/gl/window_target.h"
+
+namespace at::app {
+
+// The lesson runner inside the explore panel (courses and lessons, steps, questions, review).
+class LessonPanel {
+ public:
+  void draw(LessonController& lessons, float height);
+
+ private:
+  void drawLists(LessonController& lessons);
+  void drawLesson(LessonController& lessons);
+  void drawQuestion(LessonController& lessons);
+  void drawReview(LessonController& lessons);
+  std::string userEdit_;
+  bool editingUser_ = false;
+};
+
+// The left panel: dataset, lessons, the selected and hovered structure, preset mode and t, views,
+// clipping plane, the structure browser, frame and field status and messages.
+class ExplorePanel {
+ public:
+  struct Status {
+    std::string glDescription;
+  };
+  void draw(DesktopModel& model, const Status& status);
+
+ private:
+  void drawStructures(DesktopModel& model, bool hideNames);
+  void drawFieldProgress(DesktopModel& model);
+  float statusHeight(const DesktopModel& model) const;
+  std::string search_;
+  LessonPanel lessons_;
+};
+
+// The preference study: the blinded participant window (in place of the explore panel) and the
+// coordinator window.
+class StudyPanel {
+ public:
+  // Every text of the participant window goes through the label helpers; in scripted mode the
+  // labels of each new participant screen (and the ImGui windows that were visible) are printed
+  // as a "study_screen" event once it is on screen.
+  void drawParticipant(StudyController& study, float width, float height);
+  void drawCoordinator(StudyController& study, float x, float y);
+
+ private:
+  void text(const std::string& s);
+  void textWrapped(const std::string& s);
+  bool button(const std::string& label);
+  bool radio(const std::string& label, int* value, int mine);
+  void summaryTable(const StudyController& study);
+  void summaryChart(StudyController& study);
+  std::vector<std::string> labels_;   // texts drawn in the participant window this frame
+  bool announce_ = false;             // print the next drawn participant screen
+  std::string participantId_, outDir_ = "study_export";
+  int groupIndex_ = 0;
+  std::optional<render::gl::ImageTexture> chart_;
+  std::uint64_t chartRevision_ = 0;
+  std::string chartError_;
+  std::string coordinatorError_;  // the last failed command of the coordinator window
+};
+
+// The import window.
+class ImportPanel {
+ public:
+  void draw(ImportController& imports, float x, float y);
+
+ private:
+  std::string error_;  // an import that could not start
+};
+
+// The expert panel at the window's right edge: spline editors for the data TF (over the HU
+// histogram) and the distance TF, the preset's other parameters and "Save as".
+class ExpertPanel {
+ public:
+  // True when the preset changed.
+  bool draw(TfEditor& editor, float x, float width, float height);
+
+ private:
+  struct Selection {
+    bool data = true;
+    std::size_t index = 0;
+  };
+  bool splineEditor(TfEditor& editor, const char* id, bool data, float width, float height);
+  std::optional<Selection> dragging_, menuFor_;
+  std::string saveName_ = "my_preset", exportPath_, saveStatus_;
+};
+
+}  // namespace at::app

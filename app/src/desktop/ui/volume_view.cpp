@@ -1,0 +1,65 @@
+#include "volume_view.h"
+
+#include "render/gl/window_target.h"
+
+namespace at::app {
+
+VolumeView::VolumeView(MessageSink messages) : messages_(std::move(messages)) {
+  const auto version = render::gl::currentContextVersion();
+  if (version[0] * 10 + version[1] < 43) {
+    messages_("the volume view needs OpenGL 4.3; this context is " + render::gl::currentContextDescription());
+    return;
+  }
+  auto renderer = render::gl::VolumeRenderer::create();
+  if (!renderer) {
+    messages_("volume renderer: " + renderer.error().message);
+    return;
+  }
+  renderer_ = std::move(*renderer);
+}
+
+void VolumeView::frame(DesktopModel& model, Clock::time_point now) {
+  if (renderer_ && datasetRevision_ != model.datasetRevision()) {
+    datasetRevision_ = model.datasetRevision();
+    if (auto st = renderer_->setVolume(model.dataset().volume, model.dataset().labels, model.gradients()); !st) {
+      messages_("volume renderer: " + st.error().message);
+      renderer_.reset();
+    }
+  }
+  model.setViewAvailable(available());
+  if (!renderer_) return;
+  const auto plan = model.planFrame(now);
+  if (!plan) return;
+  const render::RenderSettings settings = model.renderSettings(*plan);
+  renderer_->setSelected(model.explore().shown().label);
+  const Clock::time_point start = Clock::now();
+  auto image = renderer_->renderToTexture(settings);
+  if (!image) {
+    image_ = {};
+    return model.renderFailed(image.error().message);
+  }
+  render::gl::finishGl();  // the cost model needs the draw's time, not its submission's
+  model.rendered(*plan, msBetween(start, Clock::now()));
+  image_ = *image;
+}
+
+Result<bool> VolumeView::show(const wdt::FieldService::Cached& field, std::uint16_t label) {
+  if (!renderer_) return true;
+  // A field computed on the GPU goes into the texture there (CUDA–GL interop). A host field goes
+  // up a few slices per frame (software GL needs ~0.2 s for a 256³ field); the view keeps the
+  // previous field until the new one is complete.
+  if (field.device) {
+    if (auto st = renderer_->setFieldFromDevice(*field.device); st) {
+      renderer_->setSelected(label);
+      return true;
+    } else {
+      messages_("CUDA-GL interop failed, uploading the field from host memory: " + st.error().message);
+    }
+    if (!field.host) return false;  // tried again when the host copy is there
+  }
+  auto complete = renderer_->uploadFieldStep(field.host->distances, kFieldUploadStepMs);
+  if (complete && *complete) renderer_->setSelected(label);
+  return complete;
+}
+
+}  // namespace at::app

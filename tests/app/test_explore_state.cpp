@@ -1,0 +1,133 @@
+// The explore state without a window: what the image shows and when its revision moves.
+#include <doctest/doctest.h>
+
+#include "explore_state.h"
+#include "test_support.h"
+
+using namespace at;
+using app::ExploreState;
+
+namespace {
+
+struct Fixture {
+  const Dataset& dataset = test::phantomOfSize(48);
+  render::PresetLibrary library{test::sourceDir() / "data" / "presets"};
+  std::vector<std::string> messages;
+  ExploreState state{library, [this](const std::string& m) { messages.push_back(m); }};
+  Fixture() { REQUIRE(state.setDataset(dataset, "cochlea", "")); }
+  std::uint16_t label(const std::string& id) const { return dataset.findStructure(id)->label; }
+};
+
+}  // namespace
+
+TEST_CASE("ExploreState_StartsOnTheAskedStructure_WithItsWdtPresetShownBareUntilAFieldIsOnScreen") {
+  Fixture f;
+  CHECK(f.state.selected() == f.label("cochlea"));
+  CHECK(f.state.hovered() == 0);
+  CHECK_FALSE(f.state.bare());
+  const auto shown = f.state.shown();
+  CHECK(shown.label == f.label("cochlea"));
+  CHECK((shown.preset.mode == render::RenderMode::Bare));  // no field yet
+  f.state.setFieldShown(f.label("cochlea"), "key");
+  CHECK((f.state.shown().preset.mode == render::RenderMode::Wdt));
+  CHECK(f.state.shown().preset.t == doctest::Approx(f.state.t()));
+  CHECK(f.messages.empty());
+}
+
+TEST_CASE("ExploreState_HoverInAFieldMode_KeepsTheImageUntilTheHoveredFieldArrives") {
+  Fixture f;
+  f.state.setFieldShown(f.label("cochlea"), "k1");
+  const auto revision = f.state.revision(), activity = f.state.activity();
+  REQUIRE(f.state.setHovered(f.label("stapes")));
+  CHECK(f.state.revision() == revision);       // the cochlea's field is still what is shown
+  CHECK(f.state.activity() > activity);        // but the user moved: the scheduler waits for rest
+  CHECK(f.state.shown().label == f.label("cochlea"));
+  CHECK(f.state.shownLabel() == f.label("stapes"));
+  f.state.setFieldShown(f.label("stapes"), "k2");
+  CHECK(f.state.revision() > revision);
+  CHECK(f.state.shown().label == f.label("stapes"));
+  CHECK_FALSE(f.state.setHovered(f.label("stapes")));  // the same structure: nothing changes
+}
+
+TEST_CASE("ExploreState_HoverInBareMode_ChangesTheImageAtOnce") {
+  Fixture f;
+  REQUIRE(f.state.setBare(true));
+  const auto revision = f.state.revision();
+  f.state.setHovered(f.label("malleus"));
+  CHECK(f.state.revision() > revision);
+  CHECK(f.state.shown().label == f.label("malleus"));
+  CHECK((f.state.shown().preset.mode == render::RenderMode::Bare));
+}
+
+TEST_CASE("ExploreState_RevisionMovesOnlyWhenSomethingChanges") {
+  Fixture f;
+  auto r = f.state.revision();
+  CHECK_FALSE(f.state.setT(f.state.t()));
+  CHECK(f.state.revision() == r);
+  CHECK(f.state.setT(0.9f));
+  CHECK(f.state.revision() > r);
+  r = f.state.revision();
+  CHECK_FALSE(f.state.setT(2.0f) == false);  // clamped to 1: a change
+  CHECK(f.state.t() == 1.0f);
+  CHECK(f.state.revision() > r);
+  r = f.state.revision();
+  app::ClipSettings clip = f.state.clip();
+  CHECK_FALSE(f.state.setClip(clip));
+  clip.on = true;
+  clip.axis = 7;  // clamped
+  CHECK(f.state.setClip(clip));
+  CHECK(f.state.clip().axis == 2);
+  CHECK(f.state.clipPlane().has_value());
+  CHECK(f.state.revision() > r);
+  r = f.state.revision();
+  f.state.orbit(10, 0);
+  CHECK(f.state.revision() > r);
+  r = f.state.revision();
+  // A step preset equal to the one in use changes nothing (the study view sets it every frame).
+  const render::Preset p = f.state.presetOf(f.label("cochlea"), false);
+  f.state.usePreset(f.label("cochlea"), p, f.state.t());
+  r = f.state.revision();
+  CHECK_FALSE(f.state.usePreset(f.label("cochlea"), p, f.state.t()));
+  CHECK(f.state.revision() == r);
+}
+
+TEST_CASE("ExploreState_ExpertOverride_DrivesModeAndTAndFieldParameters") {
+  Fixture f;
+  render::Preset edited = f.state.presetOf(f.label("cochlea"), false);
+  edited.t = 0.25f;
+  edited.weightRule = "trapezoid";
+  f.state.setPresetOverride(edited, 1);
+  CHECK(f.state.t() == 0.25f);
+  CHECK(f.state.presetOverridden());
+  auto params = f.state.fieldParams(f.label("stapes"));
+  REQUIRE(params);
+  CHECK((params->rule == StepRule::Trapezoid));
+  const auto r = f.state.revision();
+  f.state.setPresetOverride(edited, 1);  // the same edit: nothing new
+  CHECK(f.state.revision() == r);
+  f.state.setPresetOverride(std::nullopt, 2);
+  CHECK_FALSE(f.state.presetOverridden());
+  CHECK(f.state.revision() > r);
+}
+
+TEST_CASE("ExploreState_UnknownView_IsAnErrorAndKeepsTheCamera") {
+  Fixture f;
+  REQUIRE(f.state.setView("superior", 800, 600));
+  const Vec3 eye = f.state.camera().eye();
+  CHECK(f.state.viewName() == "superior");
+  CHECK_FALSE(f.state.setView("diagonal", 800, 600));
+  CHECK(f.state.camera().eye()[0] == eye[0]);
+  CHECK(f.state.viewName() == "superior");
+}
+
+TEST_CASE("ExploreState_DatasetWithoutStructures_IsRefusedAndTheStateStays") {
+  Fixture f;
+  Dataset empty;
+  empty.id = "empty";
+  auto refused = f.state.setDataset(empty, "", "");
+  REQUIRE_FALSE(refused);
+  CHECK(refused.error().message.find("no labelled structures") != std::string::npos);
+  CHECK(f.state.dataset().id == f.dataset.id);
+  CHECK(f.state.selected() == f.label("cochlea"));
+  CHECK_FALSE(f.state.select(999));  // not a structure with voxels
+}
