@@ -6,7 +6,7 @@
 #   --seconds N   fuzz each harness for N seconds (default 25: what CI runs)
 #   --runs N      fuzz each harness for N executions instead (the long runs: --runs 1000000)
 #   --parallel P  run P harnesses at a time (default 1)
-#   HARNESS       nifti nrrd nrrd_detached dicom_series dicom_seg png label_names preset course
+#   HARNESS       nifti nrrd nrrd_detached dicom_series dicom_seg png inv3 label_names preset course
 #                 question answer study_protocol … (default: every harness that was built)
 #
 # Each harness first replays its past findings (tests/fuzz/regressions/<harness>/), then fuzzes from

@@ -14,6 +14,7 @@ packages=(
   python3-skimage
   libarchive-dev libplist-dev
   librsvg2-bin desktop-file-utils strace
+  clang-14 libclang-rt-14-dev
 )
 
 missing=()

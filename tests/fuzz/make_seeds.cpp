@@ -4,7 +4,11 @@
 // ../shared/data when it exists. Hand-made seeds and past findings live in tests/fuzz/corpus/ and
 // tests/fuzz/regressions/ and are added by scripts/fuzz.sh.
 //
-// Sections: [files] · [nifti] · [nrrd] · [dicom] · [seg] · [png] · [json] · main
+// Sections: [files] · [nifti] · [nrrd] · [dicom] · [seg] · [png] · [inv3] · [json] · main
+
+// The loader tests' file writers (io_test_files.h) come with doctest checks this program never
+// runs: compiled out, so that no doctest runtime is needed.
+#define DOCTEST_CONFIG_DISABLE
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
@@ -39,6 +43,7 @@
 #include <openjpeg.h>
 #include <png.h>
 
+#include "inv3_test_files.h"
 #include "io_test_files.h"
 #include "lessons/course_json.h"
 #include "quiz/answer_json.h"
@@ -570,6 +575,43 @@ void pngSeeds() {
 }
 
 // ---------------------------------------------------------------------------------------------
+// [inv3]
+
+// An InVesalius project's bytes, written with libarchive like the loader tests do.
+std::string inv3File(const std::vector<test::TarMember>& members, bool gzip) {
+  const fs::path path = outRoot / ".tmp-project.inv3";
+  test::writeTar(path, members, gzip);
+  std::string bytes = readAll(path);
+  std::error_code ec;
+  fs::remove(path, ec);
+  return bytes;
+}
+
+void inv3Seeds() {
+  const test::Inv3Plist plist;
+  const std::string matrix = test::inv3Matrix();
+  // Plain tars first: mutations of a gzip stream mostly stop at its checksum, those of a tar
+  // reach the property list and the matrix.
+  seed("inv3", "plain.inv3", inv3File({{"p/main.plist", plist.xml()}, {"p/matrix.dat", matrix}}, false));
+  seed("inv3", "matrix_first.inv3", inv3File({{"p/matrix.dat", matrix}, {"p/main.plist", plist.xml()}}, false));
+  seed("inv3", "gzip.inv3", inv3File({{"p/main.plist", plist.xml()}, {"p/matrix.dat", matrix}}, true));
+  test::Inv3Plist floats;
+  floats.matrix["dtype"] = "<string>float32</string>";
+  floats.matrix["shape"] = "<array><integer>2</integer><integer>2</integer><integer>3</integer></array>";
+  std::string floatMatrix;
+  for (int i = 0; i < 12; ++i) {
+    const float v = -1000.0F + 150.5F * float(i);
+    floatMatrix.append(reinterpret_cast<const char*>(&v), sizeof v);
+  }
+  seed("inv3", "float32.inv3", inv3File({{"p/main.plist", floats.xml()}, {"p/matrix.dat", floatMatrix}}, false));
+  // A mask member beside the image, as InVesalius writes it (the loader skips it).
+  seed("inv3", "with_mask.inv3",
+       inv3File({{"p/main.plist", plist.xml()}, {"p/mask_0.plist", "<plist version=\"1.0\"><dict/></plist>"},
+                 {"p/matrix.dat", matrix}},
+                false));
+}
+
+// ---------------------------------------------------------------------------------------------
 // [json]
 
 void jsonSeeds() {
@@ -616,6 +658,7 @@ int main(int argc, char** argv) {
   dicomSeriesSeeds();
   dicomSegSeeds();
   pngSeeds();
+  inv3Seeds();
   jsonSeeds();
   std::printf("at_fuzz_seeds: %d seeds in %s%s\n", written, outRoot.c_str(),
               sharedData().empty() ? " (../shared/data absent: generated seeds only)" : "");
