@@ -8,6 +8,7 @@
 #include <archive_entry.h>
 #include <plist/plist.h>
 
+#include <algorithm>
 #include <array>
 #include <bit>
 #include <cmath>
@@ -100,7 +101,13 @@ class MemberReader {
   Result<std::string> readCurrent(std::size_t maxBytes, const std::string& tooLarge,
                                   const std::function<Status(std::size_t)>& onChunk = {}) {
     std::string bytes;
-    std::string chunk(kReadChunkBytes, '\0');
+    // A chunk the size the member declares (one more byte to see the end), 4 KiB to 4 MiB: a
+    // small main.plist does not cost a zeroed 4 MiB buffer. A false declaration only changes how
+    // many chunks are read.
+    std::size_t chunkBytes = kReadChunkBytes;
+    if (declaredSize_ && *declaredSize_ >= 0 && std::uint64_t(*declaredSize_) < kReadChunkBytes)
+      chunkBytes = std::max<std::size_t>(std::size_t(*declaredSize_) + 1, std::size_t(4) << 10);
+    std::string chunk(chunkBytes, '\0');
     while (true) {
       const la_ssize_t got = archive_read_data(reader_.get(), chunk.data(), chunk.size());
       if (got < 0)
