@@ -1,19 +1,12 @@
 // DICOM SEG (binary Segmentation Storage) through loadDicomSeg: the input is one .dcm file.
-#include "fuzz_support.h"
+#include "fuzz_image.h"
 #include "volume/dicom_seg.h"
-#include "volume/image_file.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   using namespace at;
-  auto& scratch = fuzz::Scratch::instance();
-  scratch.fresh();
-  const auto path = scratch.write("seg.dcm", std::string_view(reinterpret_cast<const char*>(data), size)).string();
-  ImageLoadOptions options;
-  options.maxBytes = fuzz::kLoaderMaxBytes;
-  auto loaded = loadDicomSeg(path, options);
-  fuzz::checkResult(loaded, path);
-  if (!loaded) return 0;
-  fuzz::expect(loaded->image.voxels.size() == loaded->image.dims().count(), "voxel count matches the dimensions");
+  const std::string path = fuzz::inputAsFile(data, size, "seg.dcm");
+  auto loaded = loadDicomSeg(path, fuzz::loaderOptions());
+  if (!fuzz::checkLoaded(loaded, path)) return 0;
   fuzz::checkResult(toLabelMap(*loaded, path), path);
   return 0;
 }

@@ -1,7 +1,6 @@
 // A DICOM series: the input's parts are the files slice0.dcm, slice1.dcm, … of one folder, loaded
 // through loadImageFile as a folder (headers, grouping, stacking, every transfer syntax's decoder).
-#include "fuzz_support.h"
-#include "volume/image_file.h"
+#include "fuzz_image.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   using namespace at;
@@ -9,12 +8,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   const auto& folder = scratch.fresh();
   const auto parts = fuzz::splitParts(data, size, 4);
   for (std::size_t i = 0; i < parts.size(); ++i) scratch.write("slice" + std::to_string(i) + ".dcm", parts[i]);
-  ImageLoadOptions options;
-  options.maxBytes = fuzz::kLoaderMaxBytes;
-  auto loaded = loadImageFile(folder.string(), options);
-  fuzz::checkResult(loaded, folder.string());
-  if (!loaded) return 0;
-  fuzz::expect(loaded->image.voxels.size() == loaded->image.dims().count(), "voxel count matches the dimensions");
+  auto loaded = loadImageFile(folder.string(), fuzz::loaderOptions());
+  if (!fuzz::checkLoaded(loaded, folder.string())) return 0;
   fuzz::checkResult(toHuVolume(*loaded, folder.string()), folder.string());
   return 0;
 }

@@ -4,9 +4,7 @@
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   using namespace at;
-  auto& scratch = fuzz::Scratch::instance();
-  scratch.fresh();
-  const auto path = scratch.write("labels.json", std::string_view(reinterpret_cast<const char*>(data), size)).string();
+  const std::string path = fuzz::inputAsFile(data, size, "labels.json");
   fuzz::checkResult(loadLabelNames(path), path);
   return 0;
 }

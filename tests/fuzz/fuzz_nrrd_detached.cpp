@@ -1,8 +1,7 @@
 // NRRD with a detached header: part 1 of the input is image.nhdr, the following parts are the data
 // files data1.raw, data2.raw, … beside it, and part 2 is also data.raw (the seeds name them with
 // `data file: data.raw`, `data file: data%d.raw 1 N 1` and `data file: LIST`).
-#include "fuzz_support.h"
-#include "volume/image_file.h"
+#include "fuzz_image.h"
 #include "volume/nrrd_io.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
@@ -13,11 +12,6 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   const auto path = scratch.write("image.nhdr", parts[0]).string();
   for (std::size_t i = 1; i < parts.size(); ++i) scratch.write("data" + std::to_string(i) + ".raw", parts[i]);
   if (parts.size() > 1) scratch.write("data.raw", parts[1]);
-  ImageLoadOptions options;
-  options.maxBytes = fuzz::kLoaderMaxBytes;
-  auto loaded = loadNrrd(path, options);
-  fuzz::checkResult(loaded, path);
-  if (!loaded) return 0;
-  fuzz::expect(loaded->image.voxels.size() == loaded->image.dims().count(), "voxel count matches the dimensions");
+  fuzz::checkLoaded(loadNrrd(path, fuzz::loaderOptions()), path);
   return 0;
 }

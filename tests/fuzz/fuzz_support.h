@@ -79,6 +79,13 @@ class Scratch {
   std::filesystem::path root_;
 };
 
+// The input as the one file `name` of a fresh scratch folder; returns its path.
+inline std::string inputAsFile(const std::uint8_t* data, std::size_t size, const std::string& name) {
+  auto& scratch = Scratch::instance();
+  scratch.fresh();
+  return scratch.write(name, std::string_view(reinterpret_cast<const char*>(data), size)).string();
+}
+
 // Aborts (a finding) when a reader breaks its error contract: the message must be one non-empty
 // line that starts with the file or source it names.
 inline void checkError(const Error& error, std::string_view source) {
