@@ -78,14 +78,14 @@ Result<std::int64_t> registerDataset(Database& db, const DatasetRecord& record,
     nlohmann::json loadOptions = nlohmann::json::object();
     if (record.skipUnreadableFiles) loadOptions["skip_unreadable"] = true;
     if (!record.dataFolder.empty()) loadOptions["data_folder"] = record.dataFolder;
-    // load_options only when there are some: the column exists from schema 8 on.
+    // load_options only when there are some: the column exists from schema 9 on.
     auto insert = d.prepare(
         std::string("INSERT INTO datasets (name, species, volume_path, volume_checksum, labels_path, labels_checksum,"
                     " names_path, dim_x, dim_y, dim_z, spacing_x, spacing_y, spacing_z, origin_x, origin_y, origin_z,"
                     " direction, orientation") +
         (loadOptions.empty() ? ") VALUES (" : ", load_options) VALUES (") +
         "?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13, ?14, ?15, ?16, ?17, ?18" +
-        (loadOptions.empty() ? ")" : ", ?19)"));
+        (loadOptions.empty() ? ")" : ", ?19)") + " RETURNING id");
     if (!insert) return tl::unexpected(insert.error());
     nlohmann::json direction = nlohmann::json::array();
     for (int row = 0; row < 3; ++row)
@@ -110,8 +110,9 @@ Result<std::int64_t> registerDataset(Database& db, const DatasetRecord& record,
         .bind(17, direction.dump())
         .bind(18, record.orientation);
     if (!loadOptions.empty()) insert->bind(19, loadOptions.dump());
-    if (auto s = insert->run(); !s) return s;
-    id = d.lastInsertId();
+    auto inserted = insert->insertReturningId();
+    if (!inserted) return tl::unexpected(inserted.error());
+    id = *inserted;
 
     auto add = d.prepare(
         "INSERT INTO structures (dataset_id, label, structure_id, name, colour_r, colour_g, colour_b, system,"
@@ -230,7 +231,7 @@ Result<std::optional<Database>> openExistingDatabase(const std::optional<std::st
     path = *def;
   }
   std::error_code ec;
-  if (!std::filesystem::exists(path, ec)) return std::optional<Database>{};
+  if (!isPostgresUrl(path) && !std::filesystem::exists(path, ec)) return std::optional<Database>{};
   OpenOptions options;
   options.create = false;
   options.readOnlyIfNotWritable = true;

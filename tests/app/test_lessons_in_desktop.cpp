@@ -17,6 +17,7 @@
 #include "db/database.h"
 #include "db/sqlite_repositories.h"
 #include "headless_desktop.h"
+#include "lessons/course_json.h"
 #include "test_support.h"
 
 namespace fs = std::filesystem;
@@ -397,4 +398,73 @@ TEST_CASE("a review answer is recorded: a wrong one puts its structure in the qu
   REQUIRE(report.exitCode == 0);
   CHECK(report.out.find("(2 in review, 1 correct)") != std::string::npos);
   CHECK(report.out.find("Due for review now: nothing") != std::string::npos);
+}
+
+TEST_CASE("every locate question of the shipped courses shows its region, and a click on the target's centre is right the first time") {
+  // For each locate question: a student whose lesson prerequisites are finished and who answered
+  // the lesson's earlier questions (as the database keeps them) resumes the lesson, steps to the
+  // question, lets the view settle and clicks where the target appears. The step must show a view
+  // in which that click picks the target (not a view left over from the step before).
+  auto course = at::lessons::loadCourseJson(at::test::sourceDir() / "data" / "courses" / "temporal_bone.json");
+  REQUIRE(course);
+  int checked = 0;
+  for (const auto& lesson : course->lessons)
+    for (std::size_t stepIndex = 0; stepIndex < lesson.steps.size(); ++stepIndex) {
+      const auto& step = lesson.steps[stepIndex];
+      if (step.kind != at::lessons::StepKind::Question || step.question.kind != at::quiz::QuestionKind::Locate) continue;
+      const std::string qid = step.question.id;
+      CAPTURE(qid);
+      TempDir dir("desktop-locate");
+      const fs::path db = dir / "tutor.db";
+      int shows = 0;  // show steps between the resumed position and the question
+      {
+        auto database = at::db::Database::open(db.string());
+        REQUIRE(database);
+        REQUIRE(database->exec("INSERT INTO users (id, name) VALUES (1, 'clicker')"));
+        int attempt = 1;
+        for (const std::string& pre : lesson.prerequisites) {
+          auto done = database->prepare("INSERT INTO attempts (id, user_id, lesson_id, mode, started_at, finished_at, score)"
+                                        " VALUES (?1, 1, ?2, 'guided', 100, 200, 1)");
+          REQUIRE(done);
+          done->bind(1, attempt++).bind(2, pre);
+          REQUIRE(done->run());
+        }
+        auto open = database->prepare("INSERT INTO attempts (id, user_id, lesson_id, mode, started_at) VALUES (?1, 1, ?2, 'guided', 300)");
+        REQUIRE(open);
+        open->bind(1, attempt).bind(2, lesson.id);
+        REQUIRE(open->run());
+        for (std::size_t i = 0; i < stepIndex; ++i) {
+          const auto& before = lesson.steps[i];
+          if (before.kind != at::lessons::StepKind::Question) {
+            ++shows;
+            continue;
+          }
+          shows = 0;
+          auto answered = database->prepare(
+              "INSERT INTO responses (attempt_id, step_index, question_id, structure, answer, correct, score, latency_ms,"
+              " answered_at) VALUES (?1, ?2, ?3, ?4, '{\"pick\": \"\"}', 0, 0, 0, 310)");
+          REQUIRE(answered);
+          answered->bind(1, attempt).bind(2, int(i)).bind(3, before.question.id).bind(4, before.question.target);
+          REQUIRE(answered->run());
+        }
+      }
+      json actions = {{{"do", "lesson"}, {"course", course->id}, {"lesson", lesson.id}}};
+      append(actions, next(shows));
+      append(actions, {{{"do", "wait_field"}}, {{"do", "click_structure"}, {"structure", step.question.target}}});
+      const Run r = runLessonScript(dir, {{"actions", actions}}, db, "clicker");
+      INFO(r.messages);
+      REQUIRE(r.exitCode == 0);
+      const auto steps = eventsOf(r, "lesson_step");
+      REQUIRE_FALSE(steps.empty());
+      CHECK(steps.back().value("question", "") == qid);
+      const auto clicked = eventsOf(r, "click_structure");
+      REQUIRE(clicked.size() == 1);
+      CHECK(clicked[0].value("visible", false));
+      const auto graded = eventsOf(r, "graded");
+      REQUIRE(graded.size() == 1);
+      CHECK(graded[0].value("question", "") == qid);
+      CHECK_MESSAGE(graded[0].value("correct", false), "clicked " << graded[0].value("clicked", std::string("?")));
+      ++checked;
+    }
+  CHECK(checked == 6);
 }

@@ -25,12 +25,6 @@ bool namesGiveAway(quiz::QuestionKind kind) {
   return kind == quiz::QuestionKind::Locate || kind == quiz::QuestionKind::Identify || kind == quiz::QuestionKind::Name;
 }
 
-// Identify and name questions ask about a highlighted structure; a relation question about the
-// structure the distances are measured from. Locate and order questions keep the view.
-bool showsTarget(quiz::QuestionKind kind) {
-  return kind == quiz::QuestionKind::Identify || kind == quiz::QuestionKind::Name || kind == quiz::QuestionKind::Relation;
-}
-
 }  // namespace
 
 LessonController::LessonController(LearningSession& session, std::string userName, std::string viewDataset,
@@ -237,7 +231,9 @@ Status LessonController::showCurrent() {
     asked.question = std::move(*question);
     asked.choiceNames = view->choiceNames;
     asked.grade = view->feedback;  // resumed: answered before
-    if (showsTarget(view->questionKind)) show_({asked.question.question.target, "", std::nullopt});
+    // The question's scene (lessons::sceneFor): identify and name questions highlight their
+    // target; a locate question shows its region, a neighbouring landmark, without marking it.
+    show_({view->scene.structure, view->scene.presetId, view->scene.view});
     asked_ = std::move(asked);
     e["question"] = view->questionId;
     e["question_kind"] = quiz::toString(view->questionKind);
@@ -371,7 +367,8 @@ Status LessonController::startReview() {
   asked.review = true;
   for (const std::string& id : asked.question.choices) asked.choiceNames.push_back(displayName(id));
   const quiz::QuestionKind kind = asked.question.question.kind;
-  if (showsTarget(kind)) show_({asked.question.question.target, "", std::nullopt});
+  if (auto scene = lessons::questionScene(course, asked.question.question.id))
+    show_({scene->structure, scene->presetId, scene->view});
   events_({{"event", "review_question"}, {"course", course.id}, {"question", asked.question.question.id},
            {"question_kind", quiz::toString(kind)}, {"target", asked.question.question.target},
            {"choices", asked.question.choices}});
