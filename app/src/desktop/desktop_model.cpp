@@ -30,6 +30,9 @@ DesktopModel::DesktopModel(LearningSession& session, const render::PresetLibrary
   lessons_ = std::make_unique<LessonController>(
       session_, options_.userName, "", sink, [this](const LessonController::Shown& shown) { showLessonStructure(shown); },
       [this] { return renderState(); });
+  exams_ = std::make_unique<ExamController>(
+      session_, *lessons_, sink, [this](const std::optional<ExamController::ItemScene>& item) { showExamItem(item); },
+      [this] { return renderState(); });
   study_ = std::make_unique<StudyController>(session_.database(), library_, sink);
   imports_ = std::make_unique<ImportController>(session_.database(), sink, [this](const std::string& m) { message(m); });
   scheduler_.setViewPixels(layout_.viewPixelsW(), layout_.viewPixelsH());
@@ -89,7 +92,7 @@ Status DesktopModel::showDataset(Dataset dataset, const std::string& startStruct
   const auto sink = [this](json j) { event(std::move(j)); };
   fields_ = std::make_unique<FieldView>(
       *dataset_, explore_, sink, [this](const std::string& m) { message(m); },
-      [this](const std::string& clicked, double distanceMm) { lessons_->clicked(clicked, distanceMm); });
+      [this](const std::string& clicked, double distanceMm) { clickGraded(clicked, distanceMm); });
   expert_ = std::make_unique<TfEditor>(*dataset_, session_.database(), sink);
   recorder_.highlightNotWanted();
   lastPickMm_.reset();
@@ -122,12 +125,7 @@ void DesktopModel::setHovered(std::uint16_t label) {
   else recorder_.highlightNotWanted();
 }
 
-void DesktopModel::hoverAt(double x, double y) {
-  if (study_->participantActive()) return;  // the view stays on the trial's structure
-  if (!layout_.inView(x, y)) {
-    setHovered(0);
-    return;
-  }
+render::PickResult DesktopModel::pickAt(double x, double y) const {
   render::RenderSettings s = renderSettings(scheduler_.planFor(kFullLevel));
   s.preset = explore_.pickPreset();
   render::SceneVolumes scene;
@@ -141,7 +139,16 @@ void DesktopModel::hoverAt(double x, double y) {
   const double left = layout_.panelWidth();
   const double px = (x - left) / std::max(1.0, layout_.windowW - left) * s.width;
   const double py = y / std::max(1, layout_.windowH) * s.height;
-  const render::PickResult hit = render::pickStructure(scene, s, table, px, py);
+  return render::pickStructure(scene, s, table, px, py);
+}
+
+void DesktopModel::hoverAt(double x, double y) {
+  if (study_->participantActive()) return;  // the view stays on the trial's structure
+  if (!layout_.inView(x, y)) {
+    setHovered(0);
+    return;
+  }
+  const render::PickResult hit = pickAt(x, y);
   if (hit.hit) lastPickMm_ = hit.pointMm;
   else lastPickMm_.reset();
   const std::uint16_t label = hit.hit && explore_.hasStructure(hit.label) ? hit.label : 0;
@@ -159,20 +166,30 @@ void DesktopModel::hoverAt(double x, double y) {
 void DesktopModel::clickAt(double x, double y) {
   if (study_->participantActive()) return;
   hoverAt(x, y);
-  if (lessons_->wantsClick()) {
-    // A locate answer: the structure under the cursor, and for a question with a tolerance that
-    // was missed, the clicked point's weighted distance from the target (else unknown: -1).
-    const Structure* st = dataset_->findStructureByLabel(explore_.hovered());
-    const auto targetId = lessons_->questionTarget();
-    const Structure* target = targetId ? dataset_->findStructure(*targetId) : nullptr;
-    const std::string clicked = st ? st->id : "";
-    if (lessons_->wantsClickDistance() && target && st != target && lastPickMm_)
-      fields_->gradeClickDistance(clicked, target->label, *lastPickMm_);
-    else
-      lessons_->clicked(clicked, -1);
+  if (exams_->wantsClick() || lessons_->wantsClick()) {
+    answerLocate(dataset_->findStructureByLabel(explore_.hovered()), lastPickMm_);
     return;
   }
+  if (exams_->running()) return;  // the item's view stays
   if (explore_.hovered()) select(explore_.hovered());
+}
+
+void DesktopModel::answerLocate(const Structure* clicked, const std::optional<Vec3>& pointMm) {
+  // For a question with a tolerance that was missed, the clicked point's weighted distance from
+  // the target (else unknown: -1).
+  const bool exam = exams_->wantsClick() || exams_->wantsSliceClick();
+  const auto targetId = exam ? exams_->itemTarget() : lessons_->questionTarget();
+  const Structure* target = targetId ? dataset_->findStructure(*targetId) : nullptr;
+  const bool distance = exam ? exams_->acceptsClickDistance() : lessons_->wantsClickDistance();
+  const std::string id = clicked ? clicked->id : "";
+  if (distance && target && clicked != target && pointMm)
+    fields_->gradeClickDistance(id, target->label, *pointMm);
+  else
+    clickGraded(id, -1);
+}
+
+void DesktopModel::clickGraded(const std::string& clicked, double distanceMm) {
+  if (!exams_->clicked(clicked, distanceMm)) lessons_->clicked(clicked, distanceMm);
 }
 
 bool DesktopModel::select(std::uint16_t label) {
@@ -272,6 +289,7 @@ void DesktopModel::beginFrame(FieldTarget* target) {
   recorder_.beginFrame();
   syncStudyView();
   lessons_->poll();
+  exams_->poll();
   study_->stepExport();
   imports_->poll();
   if (!study_->participantActive())  // the participant's trial keeps its dataset
@@ -281,6 +299,7 @@ void DesktopModel::beginFrame(FieldTarget* target) {
     }
   expertEdited();
   fields_->update(target, recorder_);
+  turnTowardTarget();
 }
 
 std::optional<RenderPlan> DesktopModel::planFrame(Clock::time_point now) {
@@ -323,7 +342,7 @@ void DesktopModel::endFrame(Clock::time_point end, double ms) {
 }
 
 bool DesktopModel::settled() const {
-  return (!viewAvailable_ || scheduler_.finished(explore_.revision())) && fields_->settled();
+  return (!viewAvailable_ || scheduler_.finished(explore_.revision())) && fields_->settled() && !turnToward_;
 }
 
 bool DesktopModel::idle() const {

@@ -17,6 +17,7 @@
 #include <nlohmann/json.hpp>
 
 #include "core/error.h"
+#include "exam_controller.h"
 #include "explore_state.h"
 #include "field_view.h"
 #include "frame_scheduler.h"
@@ -25,8 +26,11 @@
 #include "lesson_controller.h"
 #include "render/gradient_volume.h"
 #include "render/render_settings.h"
+#include "render/structure_pick.h"
 #include "study_controller.h"
 #include "tf_editor.h"
+#include "volume/png_image.h"
+#include "volume/slice_image.h"
 
 namespace at::app {
 
@@ -79,6 +83,7 @@ class DesktopModel {
   FrameScheduler& scheduler() { return scheduler_; }
   FrameRecorder& recorder() { return recorder_; }
   LessonController& lessons() { return *lessons_; }
+  ExamController& exams() { return *exams_; }
   StudyController& study() { return *study_; }
   ImportController& imports() { return *imports_; }
   TfEditor& expert() { return *expert_; }
@@ -92,7 +97,7 @@ class DesktopModel {
 
   // --- Commands ------------------------------------------------------------------------------
   void hoverAt(double x, double y);  // window coordinates; picks the structure under the cursor [hover]
-  void clickAt(double x, double y);  // a locate answer, else selects what is under the cursor
+  void clickAt(double x, double y);  // a locate answer, else selects what is under the cursor (not during an exam)
   void clearHover() { setHovered(0); }
   bool select(std::uint16_t label);  // [select]
   Status setView(const std::string& name);
@@ -108,6 +113,26 @@ class DesktopModel {
   std::optional<std::array<double, 2>> projectStructure(std::uint16_t label) const;
   // A lesson step's structure, preset and view.
   void showLessonStructure(const LessonController::Shown& shown);
+  // Structure names must not be shown (a lesson question or an exam would be given away).
+  bool namesHidden() const { return lessons_->namesHidden() || exams_->namesHidden(); }
+
+  // --- Exams ----------------------------------------------------------------------------------
+  // An exam item's view: its scene; for a locate item in the 3-D view, once the scene's field is
+  // on screen, the first side (the scene's, then the other named views) from which a click on the
+  // target's centre picks the target [exam_view]; for a locate item on a slice, the axial CT
+  // slice through the target's centre (no labels). nullopt: the exam's view ends.
+  void showExamItem(const std::optional<ExamController::ItemScene>& item);
+  struct ExamSlice {
+    SliceRequest request;
+    RgbImage image;            // one pixel per voxel
+    std::uint64_t revision = 0;
+  };
+  const std::optional<ExamSlice>& examSlice() const { return examSlice_; }
+  // A click at pixel (x, y) of the exam slice's image: answers the slice item.
+  void clickSlice(double x, double y);
+  // The slice pixel nearest the in-slice centre of `label`'s voxels on the exam slice (nullopt:
+  // no slice, or the structure is not on it).
+  std::optional<std::array<double, 2>> slicePixelOf(std::uint16_t label) const;
   // The render parameters on screen, stored with each lesson answer.
   lessons::RenderState renderState() const;
 
@@ -134,6 +159,13 @@ class DesktopModel {
 
  private:
   void setHovered(std::uint16_t label);
+  // What a click at window (x, y) meets in the view as the image shows it.
+  render::PickResult pickAt(double x, double y) const;
+  // A locate answer clicked on `clicked` (null: nothing) at `pointMm` (if known): to the exam or
+  // the lesson; off a target with a tolerance, graded once its distance is known.
+  void answerLocate(const Structure* clicked, const std::optional<Vec3>& pointMm);
+  void clickGraded(const std::string& clicked, double distanceMm);
+  void turnTowardTarget();  // an exam locate item's view (showExamItem)
   void syncStudyView();  // participant mode: the trial's structure with the preset of the side shown
   std::string idOf(std::uint16_t label) const;
 
@@ -154,6 +186,14 @@ class DesktopModel {
   FrameRecorder recorder_;
   std::unique_ptr<TfEditor> expert_;
   std::unique_ptr<LessonController> lessons_;
+  std::unique_ptr<ExamController> exams_;
+  struct Turn {
+    std::uint16_t target = 0;
+    std::string view;  // the scene's own side, tried first
+  };
+  std::optional<Turn> turnToward_;
+  std::optional<ExamSlice> examSlice_;
+  std::uint64_t sliceRevision_ = 0;
   std::unique_ptr<StudyController> study_;
   std::unique_ptr<ImportController> imports_;
   ViewLayout layout_;

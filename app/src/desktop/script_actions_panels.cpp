@@ -3,32 +3,30 @@
 #include <cstdio>
 
 #include "quiz/answer_json.h"
+#include "script_answers.h"
 #include "script_interpreter.h"
 
 namespace at::app {
 
 using json = nlohmann::json;
 
-namespace {
-
 // A script's answer to the question asked: a choice (index, or a choice's id or name), a typed
 // name, a list of structures (order), or a `play --answers` object.
-Result<quiz::Answer> answerFrom(LessonController::Asked* asked, const json& value) {
-  if (!asked) return fail("no question is asked");
+Result<quiz::Answer> scriptAnswer(quiz::QuestionKind kind, const std::vector<std::string>& choiceIds,
+                                  const std::vector<std::string>& choiceNames, const json& value) {
   if (value.is_object()) return quiz::answerFromJson(value.dump());
-  const quiz::ResolvedQuestion& q = asked->question;
   quiz::Answer answer;
-  switch (q.question.kind) {
+  switch (kind) {
     case quiz::QuestionKind::Locate:
-      return fail("a locate question is answered by a click in the view (click, click_structure)");
+      return fail("a locate question is answered by a click in the view (click, click_structure, slice_click)");
     case quiz::QuestionKind::Identify:
     case quiz::QuestionKind::Relation:
       if (value.is_number_integer()) {
         answer.choice = value.get<int>();
       } else if (value.is_string()) {  // the choice labelled so (its id or display name)
         const std::string wanted = value.get<std::string>();
-        for (std::size_t i = 0; i < q.choices.size(); ++i)
-          if (q.choices[i] == wanted || asked->choiceNames[i] == wanted) answer.choice = int(i);
+        for (std::size_t i = 0; i < choiceIds.size(); ++i)
+          if (choiceIds[i] == wanted || (i < choiceNames.size() && choiceNames[i] == wanted)) answer.choice = int(i);
         if (!answer.choice) return fail("'" + wanted + "' is not one of the choices");
       } else {
         return fail("answer a choice question with a number or a choice's id or name");
@@ -46,12 +44,9 @@ Result<quiz::Answer> answerFrom(LessonController::Asked* asked, const json& valu
   return answer;
 }
 
-// The action's error, prefixed as the script's log shows it.
 tl::unexpected<Error> actionError(const json& action, const Error& e) {
   return tl::unexpected(withContext("ui script: action " + action.dump(), e));
 }
-
-}  // namespace
 
 // ---------------------------------------------------------------------------------------------
 // Lessons: every action but "lesson" waits while a lesson is being prepared.
@@ -89,6 +84,8 @@ ScriptInterpreter::Outcome ScriptInterpreter::lesson(Context& c) {
   LessonController& l = c.model.lessons();
   if (c.first) {
     const std::string lessonId = c.action.at("lesson").get<std::string>();
+    if (c.model.exams().running() || c.model.exams().preparing())
+      return actionError(c.action, Error{ErrorKind::Conflict, "an exam is running: finish or leave it first"});
     if (auto st = l.ready(); !st) return actionError(c.action, st.error());
     if (c.action.contains("course")) {
       const std::string course = c.action.at("course").get<std::string>();
@@ -117,7 +114,9 @@ ScriptInterpreter::Outcome ScriptInterpreter::lessonNext(Context& c) {
 ScriptInterpreter::Outcome ScriptInterpreter::answer(Context& c) {
   LessonController& l = c.model.lessons();
   if (l.preparing()) return Progress::Running;
-  auto answer = answerFrom(l.asked(), c.action.at("value"));
+  const LessonController::Asked* asked = l.asked();
+  if (!asked) return actionError(c.action, Error{ErrorKind::Invalid, "no question is asked"});
+  auto answer = scriptAnswer(asked->question.question.kind, asked->question.choices, asked->choiceNames, c.action.at("value"));
   if (!answer) return actionError(c.action, answer.error());
   if (auto grade = l.answer(*answer); !grade) return actionError(c.action, grade.error());
   return Progress::Done;

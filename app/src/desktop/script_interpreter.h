@@ -8,6 +8,8 @@
 //   waiting:  wait {ms}, wait_field {timeout_ms} (the view settled: final quality, the field shown)
 //   output:   screenshot {path}, record {on}, report {out}, hover_sweep {dwell_ms, out}
 //   lessons:  lesson_user, lessons, lesson, lesson_next, answer, review, lesson_close
+//   exams:    exams, exam, exam_item, exam_answer, slice_click, slice_click_structure, exam_finish,
+//             exam_leave
 //   expert:   tf_add_point, tf_move_point, tf_delete_point, tf_colour, preset_set, preset_save
 //   studies:  study_start, study_toggle, study_rate, study_comment, study_next, study_close,
 //             coordinator_open, coordinator_export, coordinator_summary
@@ -106,6 +108,15 @@ class ScriptInterpreter {
   Outcome answer(Context&);
   Outcome review(Context&);
   Outcome lessonClose(Context&);
+  // Exams (script_actions_exam.cpp)
+  Outcome examList(Context&);
+  Outcome exam(Context&);
+  Outcome examItem(Context&);
+  Outcome examAnswer(Context&);
+  Outcome sliceClick(Context&);
+  Outcome sliceClickStructure(Context&);
+  Outcome examFinish(Context&);
+  Outcome examLeave(Context&);
   Outcome tfEdit(Context&);
   Outcome presetSet(Context&);
   Outcome presetSave(Context&);

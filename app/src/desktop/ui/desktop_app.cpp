@@ -149,6 +149,8 @@ void DesktopApp::drawUi() {
     ImGui::GetBackgroundDrawList()->AddImage(reinterpret_cast<ImTextureID>(image.handle), ImVec2(panelW, 0),
                                              ImVec2(float(l.windowW), float(l.windowH)), ImVec2(image.uv0[0], image.uv1[1]),
                                              ImVec2(image.uv1[0], image.uv0[1]));
+  if (!study.participantActive())  // a locate-on-slice exam item: the slice in place of the 3-D view
+    explore_.exams().drawSlice(*model_, panelW, 0, float(l.windowW) - panelW, float(l.windowH));
   if (!study.participantActive() && model_->expertOn() &&
       expert_.draw(model_->expert(), float(l.windowW) - 340 * l.uiScale, 340 * l.uiScale, float(l.windowH)))
     model_->expertEdited();

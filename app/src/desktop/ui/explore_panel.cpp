@@ -29,12 +29,12 @@ void ExplorePanel::draw(DesktopModel& model, const Status& status) {
   ImGui::SameLine();
   if (ImGui::SmallButton("Import...")) model.imports().windowOpen = true;
   ImGui::Separator();
-  lessons_.draw(model.lessons(), float(layout.windowH) * 0.4f);
+  lessons_.draw(model.lessons(), model.exams(), float(layout.windowH) * 0.4f);
   ImGui::Separator();
 
-  // While a question would be given away by a name (and throughout a quiz-only lesson), no
-  // structure name is shown: not the selected or hovered one, nor the browser.
-  const bool hideNames = model.lessons().namesHidden();
+  // While a question would be given away by a name (throughout a quiz-only lesson and an exam),
+  // no structure name is shown: not the selected or hovered one, nor the browser.
+  const bool hideNames = model.namesHidden();
   const Structure* selected = hideNames ? nullptr : dataset.findStructureByLabel(explore.selected());
   const Structure* hovered = hideNames ? nullptr : dataset.findStructureByLabel(explore.hovered());
   if (selected) {
@@ -97,7 +97,7 @@ void ExplorePanel::drawStructures(DesktopModel& model, bool hideNames) {
   ImGui::BeginChild("structures", ImVec2(0, -statusHeight(model)), true);
   if (hideNames) {
     ImGui::PushTextWrapPos(0);
-    ImGui::TextDisabled("(structure names are hidden during the question)");
+    ImGui::TextDisabled("(structure names are hidden during the question or exam)");
     ImGui::PopTextWrapPos();
   }
   for (const auto& [system, list] : model.explore().bySystem()) {

@@ -20,10 +20,13 @@ void wrappedColoured(const ImVec4& colour, const std::string& text) {
 }
 }  // namespace
 
-void LessonPanel::draw(LessonController& lessons, float height) {
+void LessonPanel::draw(LessonController& lessons, ExamController& exams, float height) {
   if (!ImGui::CollapsingHeader("Lessons", ImGuiTreeNodeFlags_DefaultOpen)) return;
   ImGui::BeginChild("lessons", ImVec2(0, height), false);
-  if (auto title = lessons.preparing()) {
+  if (exams_.active(exams)) {
+    exams_.draw(exams);
+    if (!lessons.message().empty()) wrappedColoured(kWrong, lessons.message());
+  } else if (auto title = lessons.preparing()) {
     ImGui::TextColored(kHeading, "%s", title->c_str());
     ImGui::TextDisabled("Preparing the lesson: computing its answer keys...");
   } else if (auto st = lessons.ready(); !st) {
@@ -45,7 +48,10 @@ void LessonPanel::draw(LessonController& lessons, float height) {
     const bool reviewing = asked && asked->review;
     if (lessons.step() || lessons.finishedScore()) drawLesson(lessons);
     else if (reviewing) drawQuestion(lessons);
-    else drawLists(lessons);
+    else {
+      drawLists(lessons);
+      exams_.drawList(exams);
+    }
     if (!lessons.message().empty()) wrappedColoured(kWrong, lessons.message());
     if (!lessons.step() && !lessons.finishedScore() && !reviewing) drawReview(lessons);
   }

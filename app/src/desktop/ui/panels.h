@@ -13,10 +13,30 @@
 
 namespace at::app {
 
-// The lesson runner inside the explore panel (courses and lessons, steps, questions, review).
+// Practical exams inside the lesson runner: the course's exams, an attempt (items, the clock, no
+// names or grades), the results; and the CT slice of a locate-on-slice item over the volume view.
+class ExamPanel {
+ public:
+  void drawList(ExamController& exams);
+  // True while it takes the lesson runner's place (an exam preparing, running or its results).
+  bool active(const ExamController& exams) const;
+  void draw(ExamController& exams);
+  // Over the volume view (x, y, w, h in window coordinates) while a slice item is on screen.
+  void drawSlice(DesktopModel& model, float x, float y, float w, float h);
+
+ private:
+  void drawItem(ExamController& exams);
+  void drawResults(ExamController& exams);
+  std::optional<render::gl::ImageTexture> slice_;
+  std::uint64_t sliceRevision_ = 0;
+  std::string sliceError_;
+};
+
+// The lesson runner inside the explore panel (courses and lessons, steps, questions, review, exams).
 class LessonPanel {
  public:
-  void draw(LessonController& lessons, float height);
+  void draw(LessonController& lessons, ExamController& exams, float height);
+  ExamPanel& exams() { return exams_; }
 
  private:
   void drawLists(LessonController& lessons);
@@ -25,6 +45,7 @@ class LessonPanel {
   void drawReview(LessonController& lessons);
   std::string userEdit_;
   bool editingUser_ = false;
+  ExamPanel exams_;
 };
 
 // The left panel: dataset, lessons, the selected and hovered structure, preset mode and t, views,
@@ -35,6 +56,7 @@ class ExplorePanel {
     std::string glDescription;
   };
   void draw(DesktopModel& model, const Status& status);
+  ExamPanel& exams() { return lessons_.exams(); }
 
  private:
   void drawStructures(DesktopModel& model, bool hideNames);
