@@ -430,11 +430,12 @@ TEST_CASE("StudyStore_MergeConflicts_SameIdOtherRecordsOrOtherDesign_WriteNothin
   // … and another person enrolled as P4 on machine c, rating otherwise.
   db::Database c = open("c2.db");
   REQUIRE(db::saveStudy(c, p).has_value());
-  REQUIRE(db::enrolOrResume(c, p, "P4", p.groups[0]).has_value());
+  auto otherP4 = db::enrolOrResume(c, p, "P4", p.groups[0]);
+  REQUIRE(otherP4.has_value());
   db::RatingRecord r;
   r.item = p.items[0].id;
   r.ratingAsShown = 3;
-  REQUIRE(db::recordRating(c, p.id, "P4", r).has_value());
+  REQUIRE(db::recordRating(c, *otherP4, r).has_value());
 
   auto clash = db::mergeStudy(target, {{"a", &a}, {"b", &b}, {"c", &c}}, p.id);
   REQUIRE_FALSE(clash.has_value());
