@@ -11,6 +11,7 @@
 #include "db/dataset_store.h"
 #include "volume/known_scans.h"
 #include "render/structure_pick.h"
+#include "render/volume_preset.h"
 #include "segment_controller.h"
 
 namespace at::app {
@@ -337,10 +338,14 @@ void DesktopModel::beginFrame(FieldTarget* target) {
   exams_->poll();
   study_->stepExport();
   imports_->poll();
+  segment_->poll();
   if (!study_->participantActive())  // the participant's trial keeps its dataset
     if (auto imported = imports_->takeDatasetToOpen()) {
       const std::string id = imported->id;
-      if (auto st = showDataset(std::move(*imported), "", ""); !st) message("opening '" + id + "': " + st.error().message);
+      if (auto st = showDataset(std::move(*imported), "", ""); !st) {
+        message("opening '" + id + "': " + st.error().message);
+        imports_->openFailed("Opening '" + id + "' in the explore view failed: " + st.error().message);
+      }
     }
   expertEdited();
   fields_->update(target, recorder_);
@@ -367,6 +372,8 @@ render::RenderSettings DesktopModel::renderSettings(const RenderPlan& plan) cons
   s.jitter = plan.jitter;
   s.background = {0.04f, 0.04f, 0.05f, 1.0f};
   s.clip = explore_.clipPlane();
+  // The whole volume's data TF states its opacities per this length of ray (volume_preset.h).
+  if (explore_.wholeVolume()) s.opacityRefMm = render::kWholeVolumeRefMm;
   return s;
 }
 

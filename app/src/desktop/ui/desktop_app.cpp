@@ -96,6 +96,8 @@ int DesktopApp::run() {
   if (!window) return reportError(window.error().message);
   window_ = std::move(*window);
   view_ = std::make_unique<VolumeView>([this](const std::string& m) { model_->message(m); });
+  // Known before the script's first step: a view that has not rendered yet is not settled.
+  model_->setViewAvailable(view_->available());
   model_->event({{"event", "context"}, {"gl", window_->glDescription()}, {"note", window_->glNote()}, {"ui_scale", window_->uiScale()}});
   model_->setLayout(window_->layout());
   model_->reframe();  // the start view framed for the window's size

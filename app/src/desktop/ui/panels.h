@@ -117,6 +117,11 @@ class SegmentPanel {
   std::optional<render::gl::ImageTexture> texture_;
   std::uint64_t revision_ = 0;
   std::optional<std::array<int, 3>> lastPainted_;  // the voxel under a drag (one paint per voxel)
+  int tool_ = 0;                   // 0: paint seeds, 1: threshold island under a click
+  float range_[2] = {0, 0};        // the island's value range (dataset units), from its window
+  bool rangeSet_ = false;
+  float minDiameterMm_ = 0;
+  float marginMm_ = 1.0f;          // margin grow/shrink and hollow thickness
   std::string newLabel_, exportPath_, error_;
 };
 
