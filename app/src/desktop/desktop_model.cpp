@@ -107,6 +107,7 @@ Status DesktopModel::showDataset(Dataset dataset, const std::string& startStruct
       [this](const std::string& clicked, double distanceMm) { clickGraded(clicked, distanceMm); });
   expert_ = std::make_unique<TfEditor>(*dataset_, session_.database(), sink);
   segment_->attach(*dataset_);
+  slices_.attach(*dataset_);
   recorder_.highlightNotWanted();
   lastPickMm_.reset();
   lessons_->setViewDataset(dataset_->id);
@@ -196,6 +197,10 @@ void DesktopModel::hoverAt(double x, double y) {
 void DesktopModel::clickAt(double x, double y) {
   if (study_->participantActive()) return;
   hoverAt(x, y);
+  if (lastPickMm_ && !namesHidden() && slices_.moveToPoint(*lastPickMm_)) {
+    const auto& v = slices_.crosshair();
+    event({{"event", "crosshair"}, {"voxel", {v[0], v[1], v[2]}}});
+  }
   if (exams_->wantsClick() || lessons_->wantsClick()) {
     answerLocate(dataset_->findStructureByLabel(explore_.hovered()), lastPickMm_);
     return;

@@ -98,6 +98,20 @@ ScriptInterpreter::Outcome ScriptInterpreter::segmentHollow(Context& c) {
   return Progress::Done;
 }
 
+// {"do": "slices_open", "crosshair": [i, j, k], "label_alpha": 0.4}: shows the Slices window,
+// through that voxel when given.
+ScriptInterpreter::Outcome ScriptInterpreter::slicesOpen(Context& c) {
+  SliceViews& slices = c.model.slices();
+  slices.windowOpen = c.action.value("open", true);
+  if (c.action.contains("label_alpha")) slices.labelAlpha = c.action.at("label_alpha").get<double>();
+  if (c.action.contains("crosshair")) {
+    const auto v = c.action.at("crosshair").get<std::vector<int>>();
+    if (v.size() != 3) return fail("ui script: slices_open: \"crosshair\" must be [i, j, k]");
+    if (auto st = slices.setCrosshair({v[0], v[1], v[2]}); !st) return tl::unexpected(st.error());
+  }
+  return Progress::Done;
+}
+
 // {"do": "segment_undo"} and {"do": "segment_clear_seeds"}.
 ScriptInterpreter::Outcome ScriptInterpreter::segmentUndo(Context& c) {
   auto undone = c.model.segmenter().undo();

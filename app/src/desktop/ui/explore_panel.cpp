@@ -76,6 +76,8 @@ void ExplorePanel::draw(DesktopModel& model, const Status& status) {
     if (ImGui::SliderFloat("t (context)", &t, 0, 1, "%.2f")) explore.setT(t);
   }
   if (bool on = model.expertOn(); ImGui::Checkbox("Expert", &on)) model.setExpert(on);
+  ImGui::SameLine();
+  if (ImGui::Button("Slices...")) model.slices().windowOpen = true;  // axial, coronal, sagittal
 
   ImGui::TextUnformatted("View");
   for (int i = 0; i < 6; ++i) {

@@ -99,6 +99,22 @@ class StudyPanel {
   std::string coordinatorError_;  // the last failed command of the coordinator window
 };
 
+// An opaque RGBA copy of an RGB picture, for an ImageTexture.
+render::RgbaImage toRgba(const RgbImage& image);
+
+// The Slices window: sagittal, coronal and axial panes through the crosshair at their voxels'
+// aspect, the segment editor's labels over them at an opacity; a left click moves the crosshair,
+// a right drag sets the grey window.
+class SlicesPanel {
+ public:
+  void draw(DesktopModel& model, float x, float y);
+
+ private:
+  std::array<std::optional<render::gl::ImageTexture>, 3> textures_;
+  std::array<std::uint64_t, 3> drawn_{~0ull, ~0ull, ~0ull};  // the key of each pane's picture
+  std::string error_;
+};
+
 // The import window.
 class ImportPanel {
  public:

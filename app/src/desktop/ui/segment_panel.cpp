@@ -21,15 +21,6 @@ Status statusOf(const Result<T>& result) {
   return result ? Status{} : Status(tl::unexpected(result.error()));
 }
 
-render::RgbaImage toRgba(const RgbImage& image) {
-  render::RgbaImage rgba(image.width, image.height);
-  for (std::size_t i = 0; i < std::size_t(image.width) * std::size_t(image.height); ++i) {
-    for (std::size_t c = 0; c < 3; ++c) rgba.rgba[i * 4 + c] = image.rgb[i * 3 + c];
-    rgba.rgba[i * 4 + 3] = 255;
-  }
-  return rgba;
-}
-
 }  // namespace
 
 void SegmentPanel::draw(SegmentController& editor, float x, float y) {
