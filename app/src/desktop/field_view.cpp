@@ -154,7 +154,7 @@ void FieldView::update(FieldTarget* target, FrameRecorder& recorder) {
 }
 
 bool FieldView::settled() const {
-  if (state_.bare()) return true;
+  if (state_.bare() || state_.wholeVolume()) return true;  // no field is needed
   const std::uint16_t label = state_.shownLabel();
   auto fine = request(label, 1);
   if (fine && fine->key() == declinedKey_) {  // the user cancelled it: the coarse field is final
