@@ -14,12 +14,17 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 jobs=${AT_JOBS:-$(nproc)}
 dir=build-asan
-if [ ! -f "$dir/build.ninja" ]; then
-  cmake -S . -B "$dir" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DAT_SANITIZE=ON ${AT_SANITIZE_CMAKE_ARGS:-}
+# ccache when installed (shared with the other build folders; a fresh CI machine builds cold).
+launcher=()
+if command -v ccache >/dev/null; then
+  launcher=(-DCMAKE_C_COMPILER_LAUNCHER=ccache -DCMAKE_CXX_COMPILER_LAUNCHER=ccache)
+fi
+if [ ! -f "$dir/build.ninja" ] || ! grep -q "^CMAKE_CXX_COMPILER_LAUNCHER:STRING=${launcher:+ccache}\$" "$dir/CMakeCache.txt"; then
+  cmake -S . -B "$dir" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DAT_SANITIZE=ON "${launcher[@]}" ${AT_SANITIZE_CMAKE_ARGS:-}
 fi
 
 modules=()
-for m in core volume wdt render quiz lessons db segment; do
+for m in core volume wdt render quiz lessons db package segment; do
   if grep -q "build tests/test_$m:" "$dir/build.ninja"; then modules+=("$m"); fi
 done
 targets=("${modules[@]/#/test_}")

@@ -4,7 +4,7 @@
 // ../shared/data when it exists. Hand-made seeds and past findings live in tests/fuzz/corpus/ and
 // tests/fuzz/regressions/ and are added by scripts/fuzz.sh.
 //
-// Sections: [files] · [nifti] · [nrrd] · [dicom] · [seg] · [png] · [inv3] · [json] · main
+// Sections: [files] · [nifti] · [nrrd] · [dicom] · [seg] · [png] · [inv3] · [json] · [package] · main
 
 // The loader tests' file writers (io_test_files.h) come with doctest checks this program never
 // runs: compiled out, so that no doctest runtime is needed.
@@ -40,13 +40,18 @@
 #include <dcmtk/dcmseg/segdoc.h>
 #include <dcmtk/dcmseg/segment.h>
 #include <dcmtk/oflog/oflog.h>
+#include <archive.h>
+#include <archive_entry.h>
 #include <openjpeg.h>
 #include <png.h>
 
 #include "inv3_test_files.h"
 #include "io_test_files.h"
 #include "lessons/course_json.h"
+#include "package/course_package.h"
 #include "quiz/answer_json.h"
+#include "render/preset.h"
+#include "volume/dataset_source.h"
 #include "volume/nifti_io.h"
 #include "volume/nrrd_io.h"
 #include "volume/png_image.h"
@@ -643,6 +648,121 @@ void jsonSeeds() {
     seed("label_names", "totalsegmentator.json", readAll(shared / "totalsegmentator/labels.json"));
 }
 
+// ---------------------------------------------------------------------------------------------
+// [package]
+
+// The entries of a tar as fuzz_package's assembled input: the manifest first, then "NAME\nCONTENT"
+// for every other entry ("" when libarchive cannot read it).
+std::string assembledParts(const std::string& tar) {
+  std::unique_ptr<archive, int (*)(archive*)> a(archive_read_new(), archive_read_free);
+  archive_read_support_format_tar(a.get());
+  if (archive_read_open_memory(a.get(), tar.data(), tar.size()) != ARCHIVE_OK) return "";
+  std::string manifest;
+  std::vector<std::string> parts;
+  archive_entry* entry = nullptr;
+  while (archive_read_next_header(a.get(), &entry) == ARCHIVE_OK) {
+    const std::string name = archive_entry_pathname(entry);
+    std::string content(std::size_t(archive_entry_size(entry)), '\0');
+    if (archive_read_data(a.get(), content.data(), content.size()) != la_ssize_t(content.size())) return "";
+    if (name == "manifest.json") manifest = content;
+    else parts.push_back(name + "\n" + content);
+  }
+  if (manifest.empty()) return "";
+  parts.insert(parts.begin(), manifest);
+  return joinParts(parts);
+}
+
+// Writes a package with the project's writer; returns its bytes ("" on failure, reported).
+std::string packageFile(const package::PackageInput& input) {
+  const fs::path path = outRoot / ".tmp-course.atcourse";
+  auto ok = package::writePackage(path, input);
+  if (!ok) {
+    std::fprintf(stderr, "at_fuzz_seeds: %s\n", ok.error().message.c_str());
+    return "";
+  }
+  std::string bytes = readAll(path);
+  fs::remove(path);
+  return bytes;
+}
+
+void packageSeeds() {
+  const fs::path data = fs::path(AT_SOURCE_DIR) / "data";
+  // The shipped course on the built-in phantom with the presets it uses.
+  auto course = lessons::parseCourseJson(readAll(data / "courses" / "temporal_bone.json"), "temporal_bone.json");
+  if (!course) {
+    std::fprintf(stderr, "at_fuzz_seeds: %s\n", course.error().message.c_str());
+    failed = true;
+    return;
+  }
+  package::PackageInput builtin;
+  builtin.course = *course;
+  builtin.dataset.name = course->datasetId;
+  builtin.createdBy = "at_fuzz_seeds";
+  for (const char* id : {"cochlea_wdt", "vestibule_wdt"}) {
+    const fs::path file = data / "presets" / (std::string(id) + ".json");
+    auto preset = render::loadPreset(file);
+    if (!preset) {
+      std::fprintf(stderr, "at_fuzz_seeds: %s\n", preset.error().message.c_str());
+      failed = true;
+      return;
+    }
+    builtin.presets.push_back({id, *preset, readAll(file)});
+  }
+  const std::string builtinTar = packageFile(builtin);
+  seed("package", "builtin.atcourse", builtinTar);
+  seed("package", "builtin.parts", assembledParts(builtinTar));
+
+  // A small course on a 16³ phantom included in the package, with its structures and labels.
+  auto phantom = openBuiltinDataset("phantom:16");
+  auto small = lessons::parseCourseJson(
+      R"({"schema": 1, "id": "small", "title": "Small", "dataset": "small", "version": 2, "lessons": [{"id": "l",)"
+      R"( "title": "L", "steps": [{"kind": "show", "structure": "cochlea", "preset": "cochlea_wdt", "view": "superior",)"
+      R"( "title": "T", "text": "X"},)"
+      R"( {"kind": "question", "question": {"id": "q", "kind": "name", "prompt": "Name it", "target": "cochlea"}}]}]})",
+      "small.json");
+  if (!phantom || !small) {
+    std::fprintf(stderr, "at_fuzz_seeds: %s\n", (!phantom ? phantom.error() : small.error()).message.c_str());
+    failed = true;
+    return;
+  }
+  phantom->id = "small";
+  const fs::path files = outRoot / ".tmp-package-files";
+  fs::create_directories(files);
+  auto written = package::writeDatasetFiles(*phantom, files, true);
+  if (!written) {
+    std::fprintf(stderr, "at_fuzz_seeds: %s\n", written.error().message.c_str());
+    failed = true;
+    return;
+  }
+  package::PackageInput included;
+  included.course = *small;
+  included.presets.push_back(builtin.presets.front());
+  included.dataset.name = "small";
+  included.dataset.source = package::VolumeSource::Included;
+  included.dataset.geometry = phantom->volume.geometry;
+  included.dataset.sourceVolumeChecksum = "sha256:" + std::string(64, 'a');
+  // Three structures (the phantom's full list would make every execution parse a long document).
+  for (const Structure& s : phantom->structures)
+    if (s.id == "cochlea" || s.id == "vestibule" || s.id == "stapes") included.structures.push_back(s);
+  included.volumeFile = written->volume;
+  included.labelsFile = written->labels;
+  included.createdBy = "at_fuzz_seeds";
+  const std::string includedTar = packageFile(included);
+  seed("package", "included.atcourse", includedTar);
+  seed("package", "included.parts", assembledParts(includedTar));
+  // The same course by reference to a volume the importer supplies (no data files).
+  package::PackageInput reference = included;
+  reference.dataset.source = package::VolumeSource::Reference;
+  reference.dataset.referenceFileName = "Small.inv3";
+  reference.dataset.referenceNote = "from the fuzz seeds";
+  reference.volumeFile.clear();
+  reference.labelsFile.clear();
+  const std::string referenceTar = packageFile(reference);
+  seed("package", "reference.atcourse", referenceTar);
+  seed("package", "reference.parts", assembledParts(referenceTar));
+  fs::remove_all(files);
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -660,6 +780,7 @@ int main(int argc, char** argv) {
   pngSeeds();
   inv3Seeds();
   jsonSeeds();
+  packageSeeds();
   std::printf("at_fuzz_seeds: %d seeds in %s%s\n", written, outRoot.c_str(),
               sharedData().empty() ? " (../shared/data absent: generated seeds only)" : "");
   return failed ? 1 : 0;
