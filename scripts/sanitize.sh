@@ -1,13 +1,16 @@
 #!/usr/bin/env bash
 # Builds the module test suites with AddressSanitizer + UndefinedBehaviorSanitizer into build-asan/
-# (GCC, as the normal build) and runs each once. Every sanitizer report aborts its test binary, so
-# an out-of-bounds access, a use after free, undefined behaviour or a leak fails the run.
+# (GCC, as the normal build; ccache when installed) and runs each once. Every sanitizer report
+# aborts its test binary, so an out-of-bounds access, a use after free, undefined behaviour or a
+# leak (LeakSanitizer, at exit) fails the run. CI runs it (.ci/run).
 #
-# Built and run: core, volume, wdt, render, quiz, lessons, db, segment (when present): every reader
-# of outside data, the storage layer and the pure logic. Not built: the desktop app and test_app
-# (SDL2, ImGui and the GL window under Xvfb; its CLI commands are thin callers of the code tested
-# here, and an instrumented app would add about 10 minutes to CI for little coverage of our own
-# code), and the CUDA tests (no GPU in CI; nvcc code is not instrumented).
+# Built and run: volume, package, db, quiz, lessons, render, segment — every reader of outside data
+# (images, DICOM, label files, JSON documents, course packages, seeds files) and the storage layer —
+# and core and wdt (what they all stand on). Left out: test_app (the desktop window under Xvfb and
+# the CLI run as a child process; an instrumented app and its GL stack would add more CI time than
+# coverage, since the CLI's commands call the readers tested here), the CUDA tests (no GPU in CI;
+# nvcc's device code is not instrumented) and db_postgres (the db suite again on a PostgreSQL
+# server, which is not our code).
 #
 # usage: scripts/sanitize.sh [ctest arguments]     (AT_JOBS=N sets build parallelism)
 set -euo pipefail

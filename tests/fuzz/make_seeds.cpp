@@ -4,7 +4,8 @@
 // ../shared/data when it exists. Hand-made seeds and past findings live in tests/fuzz/corpus/ and
 // tests/fuzz/regressions/ and are added by scripts/fuzz.sh.
 //
-// Sections: [files] · [nifti] · [nrrd] · [dicom] · [seg] · [png] · [inv3] · [json] · [package] · main
+// Sections: [files] · [nifti] · [nrrd] · [seg.nrrd] · [dicom] · [seg] · [png] · [inv3] · [json] ·
+// [package] · main
 
 // The loader tests' file writers (io_test_files.h) come with doctest checks this program never
 // runs: compiled out, so that no doctest runtime is needed.
@@ -51,7 +52,9 @@
 #include "package/course_package.h"
 #include "quiz/answer_json.h"
 #include "render/preset.h"
+#include "segment/seeds.h"
 #include "volume/dataset_source.h"
+#include "volume/label_writers.h"
 #include "volume/nifti_io.h"
 #include "volume/nrrd_io.h"
 #include "volume/png_image.h"
@@ -649,6 +652,77 @@ void jsonSeeds() {
 }
 
 // ---------------------------------------------------------------------------------------------
+// [seg.nrrd]
+
+void segNrrdSeeds() {
+  // writeSegNrrd's output: uint8 labels, and uint16 when a label is 256 or more.
+  for (const bool wide : {false, true}) {
+    Geometry g;
+    g.dims = {4, 3, 2};
+    g.spacingMm = {0.8, 0.9, 2.5};
+    g.originMm = {-10, 20, 5};
+    LabelMap labels(g);
+    const std::uint16_t second = wide ? 300 : 2;
+    for (std::size_t n = 0; n < labels.voxels.size(); ++n) labels.voxels[n] = n % 3 == 0 ? 0 : n % 3 == 1 ? 1 : second;
+    std::vector<Structure> structures(2);
+    structures[0].label = 1;
+    structures[0].id = "liver";
+    structures[0].displayName = "Liver";
+    structures[0].colour = {0.8f, 0.3f, 0.2f};
+    structures[1].label = second;
+    structures[1].id = "spleen";
+    structures[1].displayName = "Spleen";
+    seed("seg_nrrd", wide ? "written_uint16.seg.nrrd" : "written_uint8.seg.nrrd",
+         bytesOfWritten("labels.seg.nrrd", [&](const std::string& p) { return writeSegNrrd(p, labels, structures); }));
+  }
+  // Two layers of overlapping segments, as Slicer writes them (values are per layer).
+  const std::string header =
+      "NRRD0004\ntype: unsigned char\ndimension: 4\nspace: left-posterior-superior\nsizes: 2 3 2 2\n"
+      "space directions: none (1,0,0) (0,1,0) (0,0,2)\nkinds: list domain domain domain\n"
+      "encoding: raw\nspace origin: (0,0,0)\n"
+      "Segment0_ID:=liver\nSegment0_Name:=liver\nSegment0_Color:=0.9 0.5 0.4\nSegment0_LabelValue:=1\n"
+      "Segment0_Layer:=0\nSegment0_Extent:=0 2 0 1 0 1\n"
+      "Segment1_ID:=tumour\nSegment1_Name:=tumour\nSegment1_Color:=0.9 0.9 0.1\nSegment1_LabelValue:=1\n"
+      "Segment1_Layer:=1\n\n";
+  const std::string layer0 = std::string("\1\1\0\0\0\0\1\0\0\0\0\0", 12);
+  const std::string layer1 = std::string("\0\1\1\0\0\0\0\0\0\0\0\1", 12);
+  std::string data;
+  for (std::size_t v = 0; v < layer0.size(); ++v) data += layer0[v], data += layer1[v];
+  seed("seg_nrrd", "two_layers.seg.nrrd", header + data);
+  if (const fs::path shared = sharedData(); !shared.empty())
+    for (const char* name : {"dcmqi/spine_seg_label5.nrrd", "dcmqi/heart_seg.nrrd"})
+      seed("seg_nrrd", fs::path(name).filename().string(), readAll(shared / name));
+}
+
+// Seeds files of the segment command: the schema's example, a RAS one with the threshold fields,
+// and what seedsToJson writes.
+void segmentSeedsSeeds() {
+  const std::string example = R"({"schema": 1, "space": "LPS",
+  "labels": [{"value": 0, "name": "background"},
+             {"value": 5, "name": "liver", "colour": [0.86, 0.55, 0.39], "range": [-50, 250], "min_diameter_mm": 3}],
+  "strokes": [{"label": "liver", "radius_mm": 2, "points": [[0, 0, 4], [5, 3, 8], [6, -4, 12]]},
+              {"label": 0, "points": [[-10, -12, 2]]}],
+  "grow": {"weight": "gradient", "window": [-160, 240], "base": 0.05}})";
+  seed("segment_seeds", "example.json", example);
+  seed("segment_seeds", "ras_dots.json",
+       R"({"space": "RAS", "labels": [{"value": 0, "name": "background"}, {"value": 1, "name": "a"}, {"value": 2, "name": "b"}],)"
+       R"( "strokes": [{"label": "a", "points": [[1, 1, 1]]}, {"label": 2, "points": [[-3, 2, 10]]}, {"label": 0, "points": [[8, 9, 14]]}],)"
+       R"( "grow": {"weight": "ascent"}})");
+  if (auto parsed = segment::parseSeeds(example, "example.json")) {
+    seed("segment_seeds", "written.json", segment::seedsToJson(*parsed));
+  } else {
+    std::fprintf(stderr, "at_fuzz_seeds: %s\n", parsed.error().message.c_str());
+    failed = true;
+  }
+  const fs::path data = fs::path(AT_SOURCE_DIR) / "data" / "segmentations";
+  std::error_code ec;
+  if (fs::is_directory(data, ec))
+    for (const auto& entry : fs::recursive_directory_iterator(data, ec))
+      if (entry.path().filename() == "seeds.json")
+        seed("segment_seeds", entry.path().parent_path().filename().string() + "_seeds.json", readAll(entry.path()));
+}
+
+// ---------------------------------------------------------------------------------------------
 // [package]
 
 // The entries of a tar as fuzz_package's assembled input: the manifest first, then "NAME\nCONTENT"
@@ -775,6 +849,8 @@ int main(int argc, char** argv) {
   fs::create_directories(outRoot);
   niftiSeeds();
   nrrdSeeds();
+  segNrrdSeeds();
+  segmentSeedsSeeds();
   dicomSeriesSeeds();
   dicomSegSeeds();
   pngSeeds();
