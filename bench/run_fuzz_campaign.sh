@@ -96,7 +96,7 @@ cost_us() {
   case "$1" in
     png|question) echo 80 ;;
     nifti|preset|study_protocol) echo 100 ;;
-    label_names) echo 150 ;;
+    label_names|segment_seeds) echo 150 ;;
     nrrd_detached) echo 200 ;;
     answer) echo 230 ;;
     nrrd|seg_nrrd|dicom_series) echo 420 ;;

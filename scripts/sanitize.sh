@@ -2,7 +2,7 @@
 # Builds the module test suites with AddressSanitizer + UndefinedBehaviorSanitizer into build-asan/
 # (GCC, as the normal build; ccache when installed) and runs each once. Every sanitizer report
 # aborts its test binary, so an out-of-bounds access, a use after free, undefined behaviour or a
-# leak (LeakSanitizer, at exit) fails the run. CI runs it (.ci/run).
+# leak (LeakSanitizer, at exit) fails the run. Not in CI until it has passed once (bench/RESULTS.md).
 #
 # Built and run: volume, package, db, quiz, lessons, render, segment — every reader of outside data
 # (images, DICOM, label files, JSON documents, course packages, seeds files) and the storage layer —
