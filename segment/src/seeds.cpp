@@ -30,7 +30,9 @@ struct Reader {
     return fail(source + ": " + field + " " + problem);
   }
   Status onlyKeys(const json& object, const std::string& field, std::initializer_list<const char*> keys) const {
-    for (const auto& [key, value] : object.items()) {
+    for (const auto& item : object.items()) {
+      // Not a structured binding: clang 14 (the fuzz build) cannot capture one in a lambda.
+      const std::string& key = item.key();
       if (std::none_of(keys.begin(), keys.end(), [&](const char* k) { return key == k; }))
         return error(field.empty() ? "field '" + key + "'" : field + "." + key, "is not a known field");
     }
