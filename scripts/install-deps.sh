@@ -14,6 +14,8 @@ packages=(
   python3-skimage
   libarchive-dev libplist-dev
   librsvg2-bin desktop-file-utils strace
+  librsvg2-dev libcairo2-dev fonts-dejavu-core
+  postgresql libpq-dev
 )
 
 missing=()

@@ -8,19 +8,23 @@
 
 #include "core/strings.h"
 
+#include "db/database.h"
+
 namespace at::cli {
 
 namespace fs = std::filesystem;
 
 namespace {
 
-// `--db VALUE`: a SQLite file, new or existing. Refused before anything is created.
+// `--db VALUE`: a SQLite file, new or existing, or a PostgreSQL server's database
+// (postgresql://…). Refused before anything is created.
 Status checkDatabasePath(const std::string& value) {
   if (value.empty()) return fail("option --db needs a database file");
   if (value[0] == '-') return fail("option --db: '" + value + "' is an option, not a database file");
+  if (db::isPostgresUrl(value)) return {};
   if (value.find("://") != std::string::npos)
-    return fail(ErrorKind::Unavailable, "option --db: '" + value +
-                                            "' is a server address; this build keeps its data in a SQLite file (give a file path)");
+    return fail("option --db: '" + value +
+                "' is not a database this program can use: give a SQLite file path or a postgresql:// address");
   std::error_code ec;
   if (fs::is_directory(value, ec))
     return fail("option --db: '" + value + "' is a folder; give a database file in it (e.g. " +

@@ -5,7 +5,7 @@
 // Global options — `--db PATH`, `--user NAME`, `--size WxH` — are accepted by every command and
 // may stand before the command's name as well as after it (`anatomy-tutor --db X lessons`); they
 // are checked here once: `--db` must name a database file that can be used (not a folder, not an
-// option, not a server address, in a folder that exists), `--user` must not be empty and `--size`
+// option, in a folder that exists) or a PostgreSQL server (postgresql://…), `--user` must not be empty and `--size`
 // must be WxH with 1..8192 pixels per side.
 #pragma once
 

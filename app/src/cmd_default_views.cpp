@@ -40,6 +40,7 @@ int writeDefaultViews(const fs::path& outDir) {
   auto renderer = render::gl::VolumeRenderer::create();
   if (!renderer) return reportError("offscreen rendering: " + renderer.error().message);
   if (auto st = renderer->setVolume(dataset->volume, dataset->labels); !st) return reportError(st.error().message);
+  const render::IntensityLevels levels = render::summariseIntensities(dataset->volume);
 
   std::error_code ec;
   fs::create_directories(outDir, ec);
@@ -51,7 +52,7 @@ int writeDefaultViews(const fs::path& outDir) {
     ++index;
     const Structure* structure = dataset->findStructure(step.structure);
     if (!structure) return reportError("course step " + std::to_string(index) + ": no structure '" + step.structure + "'");
-    auto preset = presetForStep(library, structure->id, step.presetId);
+    auto preset = presetForStep(library, structure->id, step.presetId, levels);
     if (!preset) return reportError(preset.error().message);
     auto frame = render::structureFrame(dataset->labels, structure->label);
     if (!frame) return reportError(structure->id + ": " + frame.error().message);

@@ -10,6 +10,8 @@
 #include "dataset_resolver.h"
 #include "render/gl/egl_context.h"
 #include "render/gl/volume_renderer.h"
+#include "render/derived_preset.h"
+#include "render/overlay.h"
 #include "render/preset.h"
 #include "render/scene.h"
 #include "volume/mask.h"
@@ -27,10 +29,11 @@ const char* kUsage =
     "usage: anatomy-tutor render DATASET STRUCTURE (--preset NAME | --mode MODE) [--t T] [--size WxH]\n"
     "                            [--view NAME] [--clip NX,NY,NZ,D] [--backend cpu|cuda|auto] [--passes N]\n"
     "                            [--context F] [--margin F] [--presets DIR] [--labels FILE [--names NAMES.json]] [--series UID]\n"
-    "                            [--db PATH] --out F.png\n"
+    "                            [--no-overlays] [--db PATH] --out F.png\n"
     "  DATASET     phantom, phantom:N, skull, an imported dataset, or a volume file/folder (--labels: its label map,\n"
     "              --names: its label names, --series: the DICOM series where a folder holds several)\n"
-    "  MODE        wdt | bare | unweighted | fuzzy | outline | lighting (the structure's shipped preset)\n"
+    "  MODE        wdt | bare | unweighted | fuzzy | outline | lighting: the structure's shipped preset of that\n"
+    "              mode, or one derived from the dataset's intensities where none is shipped\n"
     "  --preset    a preset id from the presets folder, or a path to a .json preset\n"
     "  --t         context blend 0..1 (overrides the preset)\n"
     "  --view      anterior, posterior, lateral_left, lateral_right, superior, inferior\n"
@@ -38,6 +41,8 @@ const char* kUsage =
     "  --context   how far the context reaches, as a multiple of the structure's own context radius\n"
     "              (from its size; default 1)\n"
     "  --margin    the structure's extent times this fills the view (default 1.6)\n"
+    "  --no-overlays  leave out the orientation marker (patient axes L/R, A/P, S/I, bottom left) and\n"
+    "              the scale bar in millimetres (bottom right)\n"
     "  --presets   presets folder (default: the installed presets, or $AT_DATA_DIR/presets)\n";
 
 
@@ -64,7 +69,7 @@ int runRender(const Argv& argv) {
   auto args = cli::Args::parse(argv,
                                withDatasetOptions({"preset", "mode", "t", "size", "view", "clip", "backend", "passes",
                                                    "context", "margin", "presets", "out"}),
-                               {});
+                               {"no-overlays"});
   if (!args) return reportError("render: " + args.error().message, 2);
   if (args->has("help")) {
     std::printf("%s", kUsage);
@@ -89,7 +94,7 @@ int runRender(const Argv& argv) {
   } else {
     auto mode = render::parseRenderMode(*args->value("mode"));
     if (!mode) return reportError("render: --mode: " + mode.error().message, 2);
-    preset = library.forStructure(structure->id, *mode);
+    preset = render::presetOrDerived(library, structure->id, *mode, render::summariseIntensities(dataset->volume));
   }
   if (!preset) return reportError("render: " + preset.error().message);
   auto t = args->number("t", preset->t);
@@ -151,7 +156,9 @@ int runRender(const Argv& argv) {
   auto image = renderer->render(*settings);
   if (!image) return reportError("render: " + image.error().message);
   const double renderMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
-  if (auto st = writePng(*out, render::toRgb(*image)); !st)
+  RgbImage rgb = render::toRgb(*image);
+  if (!args->has("no-overlays")) render::drawOverlays(rgb, settings->camera);
+  if (auto st = writePng(*out, rgb); !st)
     return reportError("render: " + st.error().message);
   std::printf("wrote %s (%s, %s, preset %s, %dx%d, t=%.2f; WDT %.0f ms on %s; render %.0f ms on %s)\n", out->c_str(),
               structure->id.c_str(), render::toString(preset->mode), preset->id.value_or("?").c_str(), image->width,

@@ -33,10 +33,11 @@ std::vector<lessons::ShowStep> firstLessonViews(const lessons::Course& course) {
 }
 
 Result<render::Preset> presetForStep(const render::PresetLibrary& library, const std::string& structureId,
-                                     const std::string& presetId) {
+                                     const std::string& presetId, const render::IntensityLevels& levels) {
   if (!presetId.empty() && fs::is_regular_file(library.dir() / (presetId + ".json"))) return library.load(presetId);
   const bool bare = presetId.size() >= 5 && presetId.substr(presetId.size() - 5) == "_bare";
-  return library.forStructure(structureId, bare ? render::RenderMode::Bare : render::RenderMode::Wdt);
+  return render::presetOrDerived(library, structureId, bare ? render::RenderMode::Bare : render::RenderMode::Wdt,
+                                 levels);
 }
 
 }  // namespace at::app

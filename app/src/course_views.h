@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "lessons/curriculum.h"
+#include "render/derived_preset.h"
 #include "render/preset.h"
 #include "core/error.h"
 
@@ -20,8 +21,8 @@ Result<lessons::Course> loadDefaultCourse();
 std::vector<lessons::ShowStep> firstLessonViews(const lessons::Course& course);
 
 // The step's preset: the library's `presetId` if it exists, else the structure's shipped preset for
-// the mode the id ends in ("_bare" → bare, otherwise wdt).
+// the mode the id ends in ("_bare" → bare, otherwise wdt), else one derived from the data's levels.
 Result<render::Preset> presetForStep(const render::PresetLibrary& library, const std::string& structureId,
-                                     const std::string& presetId);
+                                     const std::string& presetId, const render::IntensityLevels& levels);
 
 }  // namespace at::app

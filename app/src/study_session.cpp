@@ -6,6 +6,8 @@
 
 #include "commands.h"
 #include "data_paths.h"
+#include "quiz/redcap_export.h"
+#include "svg_raster.h"
 #include "volume/png_image.h"
 
 namespace at::app {
@@ -108,17 +110,20 @@ Result<StudyExport> StudyExport::prepare(db::Database& database, const quiz::Stu
   if (ec || !fs::is_directory(outDir)) return fail(outDir.string() + ": cannot create the output folder");
   auto rows = db::studyResponseRows(database, protocol);
   if (!rows) return tl::unexpected(rows.error());
-  auto completion = db::studyCompletion(database, protocol.id);
-  if (!completion) return tl::unexpected(completion.error());
+  auto participants = db::studyParticipantRows(database, protocol.id);
+  if (!participants) return tl::unexpected(participants.error());
   StudyExport e;
   e.protocol_ = protocol;
   e.rows_ = std::move(*rows);
-  e.participants_ = completion->size();
-  for (const auto& c : *completion) e.partial_ += c.complete ? 0 : 1;
+  e.participantRows_ = std::move(*participants);
+  e.participants_ = e.participantRows_.size();
+  for (const auto& p : e.participantRows_) e.partial_ += p.complete ? 0 : 1;
   e.summary_ = quiz::summariseStudy(protocol, e.rows_);
   e.dir_ = outDir;
-  e.names_ = {"responses_long.csv", "responses_wide.csv", "data_dictionary.csv", "responses_long.json",
-              "summary.csv",        "summary.md",         "summary.svg",         "summary.png"};
+  e.names_ = {"responses_long.csv",    "responses_wide.csv", "responses_long.json",
+              "redcap_dictionary.csv", "redcap_records.csv", "redcap_repeating_forms.csv",
+              "summary.csv",           "summary.md",         "summary.svg",
+              "summary.png"};
   return e;
 }
 
@@ -130,16 +135,26 @@ Status StudyExport::writeNext() {
   switch (next_) {
     case 0: st = writeFileAtomically(path, quiz::responsesLongCsv(rows_)); break;
     case 1: st = writeFileAtomically(path, quiz::responsesWideCsv(protocol_, rows_)); break;
-    case 2: st = writeFileAtomically(path, quiz::dataDictionaryCsv(protocol_)); break;
-    case 3: st = writeFileAtomically(path, quiz::responsesLongJsonSidecar(protocol_)); break;
-    case 4: st = writeFileAtomically(path, quiz::summaryCsv(summary_)); break;
-    case 5: st = writeFileAtomically(path, quiz::summaryMarkdown(protocol_, summary_, participants_, partial_)); break;
-    case 6: st = writeFileAtomically(path, quiz::summarySvg(protocol_, summary_)); break;
-    default: st = writePng(path.string(), quiz::renderSummaryChart(protocol_, summary_)); break;
+    case 2: st = writeFileAtomically(path, quiz::responsesLongJsonSidecar(protocol_)); break;
+    case 3: st = writeFileAtomically(path, quiz::redcapDictionaryCsv(protocol_)); break;
+    case 4: st = writeFileAtomically(path, quiz::redcapRecordsCsv(protocol_, participantRows_, rows_)); break;
+    case 5: st = writeFileAtomically(path, quiz::redcapRepeatingFormsCsv()); break;
+    case 6: st = writeFileAtomically(path, quiz::summaryCsv(summary_)); break;
+    case 7: st = writeFileAtomically(path, quiz::summaryMarkdown(protocol_, summary_, participants_, partial_)); break;
+    case 8: st = writeFileAtomically(path, quiz::summarySvg(protocol_, summary_)); break;
+    default: {
+      auto chart = summaryChart(protocol_, summary_);
+      st = chart ? writePng(path.string(), *chart) : Status(tl::unexpected(chart.error()));
+      break;
+    }
   }
   if (!st) return st;
   ++next_;
   return {};
+}
+
+Result<RgbImage> summaryChart(const quiz::StudyProtocol& protocol, const quiz::StudySummary& summary) {
+  return rasteriseSvg(quiz::summarySvg(protocol, summary));
 }
 
 Status StudyExport::discardWritten() {

@@ -15,6 +15,7 @@
 #include "quiz/study_report.h"
 #include "render/preset.h"
 #include "core/error.h"
+#include "volume/png_image.h"
 
 namespace at::app {
 
@@ -37,9 +38,13 @@ db::RatingRecord makeRating(const quiz::StudyProtocol& protocol, const render::P
 // Writes `content` to `path` through a temporary file renamed into place.
 Status writeFileAtomically(const std::filesystem::path& path, const std::string& content);
 
-// The coordinator's export of one study: 8 files (long and wide CSV, data dictionary, JSON
-// sidecar, summary CSV/Markdown/SVG/PNG). `prepare` reads the database once; `writeNext` writes
-// one file per call.
+// The summary chart as pixels: the SVG of quiz::summarySvg rasterised (the export's summary.png and
+// the coordinator panel show the same labelled chart).
+Result<RgbImage> summaryChart(const quiz::StudyProtocol& protocol, const quiz::StudySummary& summary);
+
+// The coordinator's export of one study: 10 files (long and wide CSV with the JSON sidecar of the
+// long one; the REDCap dictionary, records and repeating-form setting; summary CSV/Markdown/SVG/PNG).
+// `prepare` reads the database once; `writeNext` writes one file per call.
 class StudyExport {
  public:
   static Result<StudyExport> prepare(db::Database& database, const quiz::StudyProtocol& protocol,
@@ -60,6 +65,7 @@ class StudyExport {
  private:
   quiz::StudyProtocol protocol_;
   std::vector<quiz::StudyResponseRow> rows_;
+  std::vector<quiz::StudyParticipantRow> participantRows_;
   quiz::StudySummary summary_;
   std::size_t participants_ = 0, partial_ = 0;
   std::filesystem::path dir_;

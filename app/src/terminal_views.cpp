@@ -96,6 +96,7 @@ Result<std::unique_ptr<TerminalViews>> TerminalViews::create(db::Database& db, c
   auto dataset = openNamedDataset(request);
   if (!dataset) return tl::unexpected(dataset.error());
   v->dataset_ = std::move(*dataset);
+  v->levels_ = render::summariseIntensities(v->dataset_.volume);
   v->presets_ = std::make_unique<render::PresetLibrary>(defaultPresetsDir());
   if (!pictures) return v;
   std::error_code ec;
@@ -109,8 +110,15 @@ Result<std::unique_ptr<TerminalViews>> TerminalViews::create(db::Database& db, c
   auto renderer = render::gl::VolumeRenderer::create();
   if (!renderer) return fail("offscreen rendering: " + renderer.error().message);
   v->renderer_ = std::make_unique<render::gl::VolumeRenderer>(std::move(*renderer));
-  if (auto st = v->renderer_->setVolume(v->dataset_.volume, v->dataset_.labels); !st) return tl::unexpected(st.error());
+  if (auto st = v->renderer_->setVolume(v->dataset_.volume, v->dataset_.labels, *v->gradients_); !st)
+    return tl::unexpected(st.error());
   return v;
+}
+
+Result<render::Preset> TerminalViews::presetOf(const Structure& structure, const std::string& presetId) const {
+  if (!presetId.empty())
+    if (auto preset = presets_->load(presetId)) return preset;
+  return render::presetOrDerived(*presets_, structure.id, render::RenderMode::Wdt, levels_);
 }
 
 Result<const FloatVolume*> TerminalViews::fieldOf(const Structure& structure, const render::Preset& preset) {
@@ -145,11 +153,7 @@ Result<TerminalPicture> TerminalViews::show(const lessons::QuestionScene& scene,
   if (!renderer_) return fail("pictures are off");
   const Structure* selected = dataset_.findStructure(scene.structure);
   if (!selected) return fail("the view's structure '" + scene.structure + "' is not in dataset '" + dataset_.id + "'");
-  // The scene's preset, else the structure's shipped WDT preset (an imported dataset has none of
-  // the phantom's, and gets the default one).
-  auto preset = scene.presetId.empty() ? presets_->forStructure(selected->id, render::RenderMode::Wdt)
-                                       : presets_->load(scene.presetId);
-  if (!preset) preset = presets_->forStructure(selected->id, render::RenderMode::Wdt);
+  auto preset = presetOf(*selected, scene.presetId);
   if (!preset) return tl::unexpected(preset.error());
   const FloatVolume* field = nullptr;
   if (render::modeNeedsField(preset->mode)) {
@@ -229,7 +233,7 @@ Result<quiz::Pick> TerminalViews::pickAt(const std::optional<Vec3>& pointMm, std
   if (const Structure* s = dataset_.findStructureByLabel(label)) pick.structure = s->id;
   const Structure* t = dataset_.findStructure(target);
   if (pointMm && t) {
-    auto preset = presets_->forStructure(t->id, render::RenderMode::Wdt);
+    auto preset = presetOf(*t, "");
     if (preset) {
       auto field = fieldOf(*t, *preset);
       if (field)

@@ -19,6 +19,8 @@
 #include "render/render_settings.h"
 #include "volume/slice_image.h"
 #include "volume/structure.h"
+#include "render/derived_preset.h"
+#include "render/gradient_volume.h"
 #include "wdt/wdt.h"
 
 namespace at::render::gl {
@@ -74,9 +76,12 @@ class TerminalViews {
   Result<const FloatVolume*> fieldOf(const Structure& structure, const render::Preset& preset);
   Result<render::RenderSettings> settingsFor(const Structure& selected, const render::Preset& preset,
                                              const std::string& view, int width, int height, double margin);
+  // The scene's preset, else the structure's shipped or derived WDT preset.
+  Result<render::Preset> presetOf(const Structure& structure, const std::string& presetId) const;
   Result<quiz::Pick> pickAt(const std::optional<Vec3>& pointMm, std::uint16_t label, const std::string& target);
 
   Dataset dataset_;
+  render::IntensityLevels levels_;    // derived presets where none is shipped
   std::filesystem::path dir_;
   std::unique_ptr<render::PresetLibrary> presets_;
   std::unique_ptr<render::gl::EglContext> context_;

@@ -1,7 +1,5 @@
-// Database, Statement and Transaction over the SQLite C API; opening, pragmas and migrations.
+// Database, Statement and Transaction over the engines of backend.h; opening and migrating.
 #include "db/database.h"
-
-#include <sqlite3.h>
 
 #include <chrono>
 #include <cstdlib>
@@ -9,107 +7,50 @@
 #include <random>
 #include <thread>
 
+#include "backend.h"
 #include "db/schema.h"
 
 namespace at::db {
 
 namespace fs = std::filesystem;
 
-namespace {
+const char* toString(Backend backend) { return backend == Backend::Postgres ? "postgresql" : "sqlite"; }
 
-std::string errorText(sqlite3* db, int rc) {
-  if (db) return sqlite3_errmsg(db);
-  return sqlite3_errstr(rc);
+bool isPostgresUrl(std::string_view text) {
+  return text.rfind("postgresql://", 0) == 0 || text.rfind("postgres://", 0) == 0;
 }
-
-bool isBusyCode(int rc) {
-  const int primary = rc & 0xff;
-  return primary == SQLITE_BUSY || primary == SQLITE_LOCKED;
-}
-
-// The kind of a failed statement, from its extended result code: a uniqueness clash is a
-// Conflict, a reference to a row that does not exist NotFound, another constraint Invalid, a lock
-// held too long Unavailable, anything else (disk, corruption, SQL text) I/O.
-ErrorKind kindOf(int rc) {
-  switch (rc) {
-    case SQLITE_CONSTRAINT_UNIQUE:
-    case SQLITE_CONSTRAINT_PRIMARYKEY: return ErrorKind::Conflict;
-    case SQLITE_CONSTRAINT_FOREIGNKEY: return ErrorKind::NotFound;
-    default: break;
-  }
-  if ((rc & 0xff) == SQLITE_CONSTRAINT) return ErrorKind::Invalid;
-  if (isBusyCode(rc)) return ErrorKind::Unavailable;
-  return ErrorKind::Io;
-}
-
-}  // namespace
 
 // ---------------------------------------------------------------------------------------------
 // Statement
 
-Statement::Statement(sqlite3_stmt* stmt, sqlite3* db, std::string sql)
-    : stmt_(stmt), db_(db), sql_(std::move(sql)) {}
-
-Statement::~Statement() {
-  if (stmt_) sqlite3_finalize(stmt_);
-}
-
-Statement::Statement(Statement&& other) noexcept
-    : stmt_(other.stmt_), db_(other.db_), sql_(std::move(other.sql_)), bindError_(std::move(other.bindError_)) {
-  other.stmt_ = nullptr;
-  other.db_ = nullptr;
-}
-
-Statement& Statement::operator=(Statement&& other) noexcept {
-  if (this != &other) {
-    if (stmt_) sqlite3_finalize(stmt_);
-    stmt_ = other.stmt_;
-    db_ = other.db_;
-    sql_ = std::move(other.sql_);
-    bindError_ = std::move(other.bindError_);
-    other.stmt_ = nullptr;
-    other.db_ = nullptr;
-  }
-  return *this;
-}
-
-void Statement::noteBind(int rc, int index) {
-  if (rc != SQLITE_OK && bindError_.empty())
-    bindError_ = "binding parameter " + std::to_string(index) + ": " + errorText(db_, rc);
-}
+Statement::Statement() = default;
+Statement::~Statement() = default;
+Statement::Statement(Statement&& other) noexcept = default;
+Statement& Statement::operator=(Statement&& other) noexcept = default;
+Statement::Statement(std::unique_ptr<detail::Cursor> cursor, std::string sql)
+    : cursor_(std::move(cursor)), sql_(std::move(sql)) {}
 
 Statement& Statement::bind(int index, std::int64_t value) {
-  noteBind(sqlite3_bind_int64(stmt_, index, value), index);
+  cursor_->bindInt(index, value);
   return *this;
 }
 
 Statement& Statement::bind(int index, double value) {
-  noteBind(sqlite3_bind_double(stmt_, index, value), index);
+  cursor_->bindReal(index, value);
   return *this;
 }
 
 Statement& Statement::bind(int index, std::string_view text) {
-  // SQLITE_TRANSIENT: SQLite copies the bytes, so temporaries are safe to pass.
-  noteBind(sqlite3_bind_text64(stmt_, index, text.data(), text.size(), SQLITE_TRANSIENT, SQLITE_UTF8), index);
+  cursor_->bindText(index, text);
   return *this;
 }
 
 Statement& Statement::bindNull(int index) {
-  noteBind(sqlite3_bind_null(stmt_, index), index);
+  cursor_->bindNull(index);
   return *this;
 }
 
-Result<bool> Statement::step() {
-  if (!bindError_.empty()) return fail("SQL: " + bindError_ + " in: " + sql_);
-  const int rc = sqlite3_step(stmt_);
-  if (rc == SQLITE_ROW) return true;
-  if (rc == SQLITE_DONE) return false;
-  std::string message = errorText(db_, rc);
-  // Leave the statement reusable after an error (its error code stays with the connection).
-  const int code = sqlite3_extended_errcode(db_);
-  sqlite3_reset(stmt_);
-  return fail(kindOf(code), "SQL error: " + message);
-}
+Result<bool> Statement::step() { return cursor_->step(); }
 
 Status Statement::run() {
   while (true) {
@@ -119,21 +60,21 @@ Status Statement::run() {
   }
 }
 
-void Statement::reset() {
-  sqlite3_reset(stmt_);
-  sqlite3_clear_bindings(stmt_);
-  bindError_.clear();
+Result<std::int64_t> Statement::insertReturningId() {
+  auto row = step();
+  if (!row) return tl::unexpected(row.error());
+  if (!*row) return fail(ErrorKind::Io, "SQL: the insert returned no id: " + sql_);
+  const std::int64_t id = int64(0);
+  // Finish the statement so that it is complete before the transaction commits.
+  if (auto done = run(); !done) return tl::unexpected(done.error());
+  return id;
 }
 
-bool Statement::isNull(int column) const { return sqlite3_column_type(stmt_, column) == SQLITE_NULL; }
-std::int64_t Statement::int64(int column) const { return sqlite3_column_int64(stmt_, column); }
-double Statement::real(int column) const { return sqlite3_column_double(stmt_, column); }
-
-std::string Statement::text(int column) const {
-  const auto* p = reinterpret_cast<const char*>(sqlite3_column_text(stmt_, column));
-  const int n = sqlite3_column_bytes(stmt_, column);
-  return p ? std::string(p, std::size_t(n)) : std::string();
-}
+void Statement::reset() { cursor_->reset(); }
+bool Statement::isNull(int column) const { return cursor_->isNull(column); }
+std::int64_t Statement::int64(int column) const { return cursor_->int64(column); }
+double Statement::real(int column) const { return cursor_->real(column); }
+std::string Statement::text(int column) const { return cursor_->text(column); }
 
 std::optional<std::string> Statement::optionalText(int column) const {
   if (isNull(column)) return std::nullopt;
@@ -148,58 +89,32 @@ std::optional<double> Statement::optionalReal(int column) const {
 // ---------------------------------------------------------------------------------------------
 // Database
 
-Database::~Database() {
-  if (db_) sqlite3_close_v2(db_);
+Database::Database() = default;
+Database::~Database() = default;
+Database::Database(Database&& other) noexcept = default;
+Database& Database::operator=(Database&& other) noexcept = default;
+Database::Database(std::unique_ptr<detail::Connection> connection)
+    : connection_(std::move(connection)), writer_(std::make_unique<std::recursive_mutex>()) {}
+
+const std::string& Database::path() const {
+  static const std::string none;
+  return connection_ ? connection_->name() : none;
 }
 
-Database::Database(Database&& other) noexcept
-    : db_(other.db_), path_(std::move(other.path_)), writer_(std::move(other.writer_)) {
-  other.db_ = nullptr;
-}
-
-Database& Database::operator=(Database&& other) noexcept {
-  if (this != &other) {
-    if (db_) sqlite3_close_v2(db_);
-    db_ = other.db_;
-    path_ = std::move(other.path_);
-    writer_ = std::move(other.writer_);
-    other.db_ = nullptr;
-  }
-  return *this;
-}
+Backend Database::backend() const { return connection_->backend(); }
 
 Result<Statement> Database::prepare(std::string_view sql) {
-  sqlite3_stmt* stmt = nullptr;
-  const int rc = sqlite3_prepare_v2(db_, sql.data(), int(sql.size()), &stmt, nullptr);
-  if (rc != SQLITE_OK) return fail(kindOf(sqlite3_extended_errcode(db_)), "SQL error: " + errorText(db_, rc) + " in: " + std::string(sql));
-  return Statement(stmt, db_, std::string(sql));
+  auto cursor = connection_->prepare(sql);
+  if (!cursor) return tl::unexpected(cursor.error());
+  return Statement(std::move(*cursor), std::string(sql));
 }
 
-Status Database::exec(std::string_view sql) {
-  char* message = nullptr;
-  const std::string text(sql);
-  const int rc = sqlite3_exec(db_, text.c_str(), nullptr, nullptr, &message);
-  if (rc != SQLITE_OK) {
-    std::string m = message ? message : errorText(db_, rc);
-    sqlite3_free(message);
-    return fail(kindOf(sqlite3_extended_errcode(db_)), "SQL error: " + m);
-  }
-  return {};
-}
-
-Result<int> Database::schemaVersion() {
-  auto stmt = prepare("PRAGMA user_version");
-  if (!stmt) return tl::unexpected(stmt.error());
-  auto row = stmt->step();
-  if (!row) return tl::unexpected(row.error());
-  return *row ? stmt->integer(0) : 0;
-}
-
-std::int64_t Database::lastInsertId() const { return sqlite3_last_insert_rowid(db_); }
-int Database::changes() const { return sqlite3_changes(db_); }
+Status Database::exec(std::string_view sql) { return connection_->exec(sql); }
+Result<int> Database::schemaVersion() { return connection_->schemaVersion(); }
+int Database::changes() const { return connection_->changes(); }
 
 Status Database::writeTransaction(const std::function<Status(Database&)>& body, int maxAttempts) {
-  // Held across the retries too: the error code read below must be this thread's.
+  // Held across the retries too: the failure examined below must be this thread's.
   std::unique_lock lock(*writer_);
   std::minstd_rand jitter(std::random_device{}());
   Error last{ErrorKind::Io, "no attempt made"};
@@ -212,18 +127,18 @@ Status Database::writeTransaction(const std::function<Status(Database&)>& body, 
         if (done) return {};
       }
       last = done.error();
-      // The error code is the connection's most recent one: decide before rolling back.
-      const bool busy = isBusyCode(sqlite3_extended_errcode(db_));
+      // Decide from the connection's most recent failure, before rolling back.
+      const bool contention = connection_->lastFailureWasContention();
       tx->rollback();
-      if (!busy) return tl::unexpected(last);
+      if (!contention) return tl::unexpected(last);
     } else {
       last = tx.error();
-      if (!isBusyCode(sqlite3_extended_errcode(db_))) return tl::unexpected(last);
+      if (!connection_->lastFailureWasContention()) return tl::unexpected(last);
     }
     std::this_thread::sleep_for(std::chrono::milliseconds(5 + int(jitter() % 50)));
   }
-  return fail(ErrorKind::Unavailable, "still locked by another process after " + std::to_string(maxAttempts) +
-              " attempts: " + last.message);
+  return fail(ErrorKind::Unavailable, "still locked by another writer after " + std::to_string(maxAttempts) +
+                                          " attempts: " + last.message);
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -231,7 +146,7 @@ Status Database::writeTransaction(const std::function<Status(Database&)>& body, 
 
 Result<Transaction> Transaction::begin(Database& db, Kind kind) {
   std::unique_lock lock(*db.writer_);
-  auto status = db.exec(kind == Kind::Immediate ? "BEGIN IMMEDIATE" : "BEGIN");
+  auto status = db.connection_->begin(kind == Kind::Immediate);
   if (!status) return tl::unexpected(status.error());
   return Transaction(&db, std::move(lock));
 }
@@ -244,7 +159,7 @@ Transaction::Transaction(Transaction&& other) noexcept : db_(other.db_), lock_(s
 
 Status Transaction::commit() {
   if (!db_) return fail("transaction already finished");
-  auto status = db_->exec("COMMIT");
+  auto status = db_->connection_->commit();
   if (!status) return status;  // still open: the destructor or rollback() ends it
   db_ = nullptr;
   if (lock_.owns_lock()) lock_.unlock();
@@ -253,9 +168,7 @@ Status Transaction::commit() {
 
 void Transaction::rollback() {
   if (!db_) return;
-  if (!sqlite3_get_autocommit(db_->handle())) {
-    sqlite3_exec(db_->handle(), "ROLLBACK", nullptr, nullptr, nullptr);
-  }
+  if (db_->connection_->inTransaction()) db_->connection_->rollback();
   db_ = nullptr;
   if (lock_.owns_lock()) lock_.unlock();
 }
@@ -263,48 +176,14 @@ void Transaction::rollback() {
 // ---------------------------------------------------------------------------------------------
 // Opening and migrating
 
-namespace {
-
-// Reads user_version without writing anything: a read-only connection, no pragmas that write.
-// Returns 0 for a missing or empty file.
-Result<int> peekVersion(const std::string& path) {
-  std::error_code ec;
-  if (!fs::exists(path, ec) || fs::file_size(path, ec) == 0) return 0;
-  sqlite3* raw = nullptr;
-  int rc = sqlite3_open_v2(path.c_str(), &raw, SQLITE_OPEN_READONLY, nullptr);
-  if (rc != SQLITE_OK) {
-    std::string message = errorText(raw, rc);
-    sqlite3_close_v2(raw);
-    return fail(ErrorKind::Io, path + ": cannot open: " + message);
-  }
-  sqlite3_busy_timeout(raw, 5000);
-  sqlite3_stmt* stmt = nullptr;
-  rc = sqlite3_prepare_v2(raw, "PRAGMA user_version", -1, &stmt, nullptr);
-  int version = 0;
-  if (rc == SQLITE_OK) {
-    rc = sqlite3_step(stmt);
-    if (rc == SQLITE_ROW) {
-      version = sqlite3_column_int(stmt, 0);
-      rc = SQLITE_OK;
-    }
-  }
-  std::string message = rc == SQLITE_OK ? "" : errorText(raw, rc);
-  sqlite3_finalize(stmt);
-  sqlite3_close_v2(raw);
-  if (rc != SQLITE_OK) {
-    if ((rc & 0xff) == SQLITE_NOTADB) return fail(path + ": not an Anatomy Tutor database (not a SQLite file)");
-    return fail(path + ": cannot read the schema version: " + message);
-  }
-  return version;
-}
-
-Status migrate(Database& db, int target) {
+Status Database::migrate(int target) {
   const auto& all = migrations();
+  const Backend engine = backend();
   while (true) {
     // Each step re-reads the version inside its own write transaction, so two processes opening
-    // a fresh file at once apply every migration exactly once.
+    // a fresh database at once apply every migration exactly once.
     bool done = false;
-    auto status = db.writeTransaction([&](Database& d) -> Status {
+    auto status = writeTransaction([&](Database& d) -> Status {
       auto version = d.schemaVersion();
       if (!version) return tl::unexpected(version.error());
       if (*version >= target) {
@@ -312,54 +191,47 @@ Status migrate(Database& db, int target) {
         return {};
       }
       const Migration& m = all[std::size_t(*version)];
-      if (auto s = d.exec(m.sql); !s)
-        return fail("migrating to schema version " + std::to_string(m.version) + " (" + std::string(m.summary) +
-                    "): " + s.error().message);
-      return d.exec("PRAGMA user_version = " + std::to_string(m.version));
+      if (auto s = d.exec(migrationSql(m, engine)); !s)
+        return fail(s.error().kind, "migrating to schema version " + std::to_string(m.version) + " (" +
+                                        std::string(m.summary) + "): " + s.error().message);
+      return d.connection_->setSchemaVersion(m.version);
     });
-    if (!status) return tl::unexpected(withContext(db.path(), status.error()));
+    if (!status) return tl::unexpected(withContext(path(), status.error()));
     if (done) return {};
   }
 }
 
-}  // namespace
-
-Result<Database> Database::open(const std::string& path, const OpenOptions& options) {
+Result<Database> Database::open(const std::string& location, const OpenOptions& options) {
   const int latest = latestSchemaVersion();
   const int target = options.targetVersion.value_or(latest);
   if (target < 0 || target > latest)
     return fail("schema version " + std::to_string(target) + " is not known (newest: " + std::to_string(latest) + ")");
-
-  std::error_code ec;
-  const bool exists = fs::exists(path, ec);
-  if (!exists && !options.create) return fail(ErrorKind::NotFound, path + ": no such database");
-
-  // Refuse newer files before opening for writing: journal_mode=WAL would already change the file.
-  auto existing = peekVersion(path);
-  if (!existing) return tl::unexpected(existing.error());
-  if (*existing > latest)
-    return fail(path + ": written by a newer version of Anatomy Tutor (schema " + std::to_string(*existing) +
+  auto newer = [&](const std::string& name, int version) {
+    return fail(name + ": written by a newer version of Anatomy Tutor (schema " + std::to_string(version) +
                 ", this program knows up to " + std::to_string(latest) + "); update the program or use another --db");
+  };
 
-  sqlite3* raw = nullptr;
-  const int flags = SQLITE_OPEN_READWRITE | (options.create ? SQLITE_OPEN_CREATE : 0) | SQLITE_OPEN_FULLMUTEX;
-  const int rc = sqlite3_open_v2(path.c_str(), &raw, flags, nullptr);
-  Database db(raw, path);
-  if (rc != SQLITE_OK) return fail(ErrorKind::Io, path + ": cannot open: " + errorText(raw, rc));
-  sqlite3_extended_result_codes(raw, 1);
-  sqlite3_busy_timeout(raw, options.busyTimeoutMs);
-
-  // journal_mode needs the write lock briefly; busy_timeout covers a concurrent opener.
-  {
-    auto mode = db.prepare("PRAGMA journal_mode = WAL");
-    if (!mode) return tl::unexpected(mode.error());
-    auto modeRow = mode->step();
-    if (!modeRow) return tl::unexpected(withContext(path + ": cannot switch to WAL", modeRow.error()));
+  std::unique_ptr<detail::Connection> connection;
+  if (isPostgresUrl(location)) {
+    auto pg = detail::openPostgres(location, options);
+    if (!pg) return tl::unexpected(pg.error());
+    connection = std::move(*pg);
+    auto existing = connection->schemaVersion();
+    if (!existing) return tl::unexpected(withContext(connection->name(), existing.error()));
+    if (*existing > latest) return newer(connection->name(), *existing);
+  } else {
+    std::error_code ec;
+    if (!fs::exists(location, ec) && !options.create) return fail(ErrorKind::NotFound, location + ": no such database");
+    // Refuse newer files before opening for writing: journal_mode=WAL would already change the file.
+    auto existing = detail::peekSqliteVersion(location);
+    if (!existing) return tl::unexpected(existing.error());
+    if (*existing > latest) return newer(location, *existing);
+    auto sqlite = detail::openSqlite(location, options);
+    if (!sqlite) return tl::unexpected(sqlite.error());
+    connection = std::move(*sqlite);
   }
-  if (auto s = db.exec("PRAGMA foreign_keys = ON; PRAGMA synchronous = FULL"); !s)
-    return tl::unexpected(withContext(path, s.error()));
-
-  if (auto s = migrate(db, target); !s) return tl::unexpected(s.error());
+  Database db(std::move(connection));
+  if (auto s = db.migrate(target); !s) return tl::unexpected(s.error());
   return db;
 }
 
@@ -376,6 +248,7 @@ Result<std::string> defaultDatabasePath() {
 }
 
 Result<Database> openDatabase(const std::optional<std::string>& path, const OpenOptions& options) {
+  if (path && isPostgresUrl(*path)) return Database::open(*path, options);
   std::string chosen;
   if (path) {
     chosen = *path;

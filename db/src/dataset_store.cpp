@@ -61,7 +61,7 @@ Result<std::int64_t> registerDataset(Database& db, const DatasetRecord& record,
         "INSERT INTO datasets (name, species, volume_path, volume_checksum, labels_path, labels_checksum,"
         " names_path, dim_x, dim_y, dim_z, spacing_x, spacing_y, spacing_z, origin_x, origin_y, origin_z,"
         " direction, orientation) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13, ?14, ?15,"
-        " ?16, ?17, ?18)");
+        " ?16, ?17, ?18) RETURNING id");
     if (!insert) return tl::unexpected(insert.error());
     nlohmann::json direction = nlohmann::json::array();
     for (int row = 0; row < 3; ++row)
@@ -85,8 +85,9 @@ Result<std::int64_t> registerDataset(Database& db, const DatasetRecord& record,
         .bind(16, g.originMm[2])
         .bind(17, direction.dump())
         .bind(18, record.orientation);
-    if (auto s = insert->run(); !s) return s;
-    id = d.lastInsertId();
+    auto inserted = insert->insertReturningId();
+    if (!inserted) return tl::unexpected(inserted.error());
+    id = *inserted;
 
     auto add = d.prepare(
         "INSERT INTO structures (dataset_id, label, structure_id, name, colour_r, colour_g, colour_b, system,"
@@ -181,7 +182,7 @@ Result<std::optional<Database>> openExistingDatabase(const std::optional<std::st
     path = *def;
   }
   std::error_code ec;
-  if (!std::filesystem::exists(path, ec)) return std::optional<Database>{};
+  if (!isPostgresUrl(path) && !std::filesystem::exists(path, ec)) return std::optional<Database>{};
   OpenOptions options;
   options.create = false;
   auto db = Database::open(path, options);

@@ -71,18 +71,19 @@ Result<ExamAttempt> SqliteExamRepository::startExamAttempt(const ExamAttempt& at
   ExamAttempt a = attempt;
   auto status = db_.writeTransaction([&](Database& d) -> Status {
     auto insert = d.prepare(
-        "INSERT INTO exam_attempts (user_id, exam_id, course_id, started_at, deadline_at) VALUES (?1, ?2, ?3, ?4, ?5)");
+        "INSERT INTO exam_attempts (user_id, exam_id, course_id, started_at, deadline_at) VALUES (?1, ?2, ?3, ?4, ?5)"
+        " RETURNING id");
     if (!insert) return tl::unexpected(insert.error());
     insert->bind(1, a.userId).bind(2, a.examId).bind(3, a.courseId).bind(4, a.startedAt).bind(5, a.deadline);
-    if (auto s = insert->run(); !s) {
-      if (s.error().message.find("FOREIGN KEY") != std::string::npos)
-        return fail("unknown user id " + std::to_string(a.userId));
-      return s;
+    auto inserted = insert->insertReturningId();
+    if (!inserted) {
+      if (inserted.error().kind == ErrorKind::NotFound) return fail(ErrorKind::NotFound, "unknown user id " + std::to_string(a.userId));
+      return tl::unexpected(inserted.error());
     }
-    a.id = d.lastInsertId();
+    a.id = *inserted;
     auto item = d.prepare(
         "INSERT INTO exam_items (attempt_id, position, question_id, kind, structure, question, choices, key_choice,"
-        " locate_view, scene) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10)");
+        " locate_view, scene) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10) RETURNING id");
     if (!item) return tl::unexpected(item.error());
     for (ExamItem& x : items) {
       const quiz::Question& q = x.question.question;
@@ -97,8 +98,9 @@ Result<ExamAttempt> SqliteExamRepository::startExamAttempt(const ExamAttempt& at
           .bind(8, x.question.keyChoice)
           .bind(9, toString(x.locateView))
           .bind(10, sceneJson(x.scene));
-      if (auto s = item->run(); !s) return s;
-      x.id = d.lastInsertId();
+      auto itemId = item->insertReturningId();
+      if (!itemId) return tl::unexpected(itemId.error());
+      x.id = *itemId;
     }
     return {};
   });

@@ -59,14 +59,14 @@ Status writeLearnerModel(Database& d, const LearnerUpdate& u, const GradedAnswer
 
   auto ability = d.prepare(
       "INSERT INTO user_ability (user_id, rating, answered) VALUES (?1, ?2, 1)"
-      " ON CONFLICT (user_id) DO UPDATE SET rating = excluded.rating, answered = answered + 1");
+      " ON CONFLICT (user_id) DO UPDATE SET rating = excluded.rating, answered = user_ability.answered + 1");
   if (!ability) return tl::unexpected(ability.error());
   ability->bind(1, p.userId).bind(2, u.abilityAfter);
   if (auto s = ability->run(); !s) return s;
 
   auto difficulty = d.prepare(
       "INSERT INTO question_stats (question_id, difficulty, answered) VALUES (?1, ?2, 1)"
-      " ON CONFLICT (question_id) DO UPDATE SET difficulty = excluded.difficulty, answered = answered + 1");
+      " ON CONFLICT (question_id) DO UPDATE SET difficulty = excluded.difficulty, answered = question_stats.answered + 1");
   if (!difficulty) return tl::unexpected(difficulty.error());
   difficulty->bind(1, answer.questionId).bind(2, u.difficultyAfter);
   return difficulty->run();

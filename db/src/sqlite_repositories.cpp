@@ -269,11 +269,12 @@ Result<User> SqliteUserRepository::createUser(const std::string& name, Role role
     auto row = taken->step();
     if (!row) return tl::unexpected(row.error());
     if (*row) return fail(ErrorKind::Conflict, "the user name '" + name + "' is already taken");
-    auto insert = d.prepare("INSERT INTO users (name, role, group_name) VALUES (?1, ?2, ?3)");
+    auto insert = d.prepare("INSERT INTO users (name, role, group_name) VALUES (?1, ?2, ?3) RETURNING id");
     if (!insert) return tl::unexpected(insert.error());
     insert->bind(1, name).bind(2, toString(role)).bind(3, group);
-    if (auto s = insert->run(); !s) return s;
-    u.id = d.lastInsertId();
+    auto inserted = insert->insertReturningId();
+    if (!inserted) return tl::unexpected(inserted.error());
+    u.id = *inserted;
     return {};
   });
   if (!status) return tl::unexpected(status.error());
@@ -361,11 +362,12 @@ Result<Attempt> SqliteProgressRepository::startAttempt(std::int64_t userId, cons
   a.mode = mode;
   a.startedAt = startedAt;
   auto status = db_.writeTransaction([&](Database& d) -> Status {
-    auto insert = d.prepare("INSERT INTO attempts (user_id, lesson_id, mode, started_at) VALUES (?1, ?2, ?3, ?4)");
+    auto insert = d.prepare("INSERT INTO attempts (user_id, lesson_id, mode, started_at) VALUES (?1, ?2, ?3, ?4) RETURNING id");
     if (!insert) return tl::unexpected(insert.error());
     insert->bind(1, userId).bind(2, lessonId).bind(3, toString(mode)).bind(4, startedAt);
-    if (auto s = insert->run(); !s) return s;
-    a.id = d.lastInsertId();
+    auto inserted = insert->insertReturningId();
+    if (!inserted) return tl::unexpected(inserted.error());
+    a.id = *inserted;
     return {};
   });
   if (!status) return tl::unexpected(withContext("starting lesson '" + lessonId + "'", status.error()));
@@ -412,10 +414,6 @@ Result<std::vector<Response>> SqliteProgressRepository::responses(std::int64_t a
   return out;
 }
 
-namespace {
-
-}  // namespace
-
 Result<std::int64_t> SqliteProgressRepository::recordAnswer(const AnswerRecord& record) {
   const Response& r = record.response;
   const StructureProgress& p = record.update.progress;
@@ -424,19 +422,20 @@ Result<std::int64_t> SqliteProgressRepository::recordAnswer(const AnswerRecord& 
   std::int64_t id = 0;
   auto status = db_.writeTransaction([&](Database& d) -> Status {
     auto insert = d.prepare(std::string("INSERT INTO responses (attempt_id, step_index, ") + kGradedAnswerColumns +
-                            ") VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13, ?14)");
+                            ") VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13, ?14) RETURNING id");
     if (!insert) return tl::unexpected(insert.error());
     insert->bind(1, r.attemptId).bind(2, r.stepIndex);
     bindGradedAnswer(*insert, 3, r);
-    if (auto s = insert->run(); !s) {
-      if (s.error().kind == ErrorKind::Conflict)
+    auto inserted = insert->insertReturningId();
+    if (!inserted) {
+      if (inserted.error().kind == ErrorKind::Conflict)
         return fail(ErrorKind::Conflict, "step " + std::to_string(r.stepIndex) + " of attempt " + std::to_string(r.attemptId) +
                     " is already answered");
-      if (s.error().kind == ErrorKind::NotFound)
+      if (inserted.error().kind == ErrorKind::NotFound)
         return fail(ErrorKind::NotFound, "unknown attempt " + std::to_string(r.attemptId));
-      return s;
+      return tl::unexpected(inserted.error());
     }
-    id = d.lastInsertId();
+    id = *inserted;
     return writeLearnerModel(d, record.update, r, AnswerSource::Lesson, id);
   });
   if (!status) return tl::unexpected(withContext("recording the answer", status.error()));
@@ -451,16 +450,17 @@ Result<std::int64_t> SqliteProgressRepository::recordReviewAnswer(const ReviewRe
   std::int64_t id = 0;
   auto status = db_.writeTransaction([&](Database& d) -> Status {
     auto insert = d.prepare(std::string("INSERT INTO review_responses (user_id, ") + kGradedAnswerColumns +
-                            ") VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13)");
+                            ") VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13) RETURNING id");
     if (!insert) return tl::unexpected(insert.error());
     insert->bind(1, r.userId);
     bindGradedAnswer(*insert, 2, r);
-    if (auto s = insert->run(); !s) {
-      if (s.error().kind == ErrorKind::NotFound)
+    auto inserted = insert->insertReturningId();
+    if (!inserted) {
+      if (inserted.error().kind == ErrorKind::NotFound)
         return fail(ErrorKind::NotFound, "unknown user id " + std::to_string(r.userId));
-      return s;
+      return tl::unexpected(inserted.error());
     }
-    id = d.lastInsertId();
+    id = *inserted;
     return writeLearnerModel(d, record.update, r, AnswerSource::Review, id);
   });
   if (!status) return tl::unexpected(withContext("recording the review answer", status.error()));

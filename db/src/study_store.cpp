@@ -1,8 +1,11 @@
 #include "db/study_store.h"
 
+#include <algorithm>
+#include <cctype>
 #include <map>
 
 #include "quiz/study_design.h"
+#include "utc_time.h"
 
 namespace at::db {
 
@@ -43,7 +46,7 @@ Result<StudyParticipant> loadParticipant(Database& db, const std::string& studyI
 
   auto trials = db.prepare(
       "SELECT position, structure, a_condition, b_condition, preset_a, preset_b, view_ms_a, view_ms_b, toggles, "
-      "comment FROM study_trials WHERE study_id = ?1 AND participant_id = ?2 ORDER BY position");
+      "comment, viewing_measured FROM study_trials WHERE study_id = ?1 AND participant_id = ?2 ORDER BY position");
   if (!trials) return tl::unexpected(trials.error());
   trials->bind(1, studyId).bind(2, participantId);
   while (true) {
@@ -61,6 +64,7 @@ Result<StudyParticipant> loadParticipant(Database& db, const std::string& studyI
     t.viewMsB = trials->real(7);
     t.toggles = trials->integer(8);
     t.comment = trials->optionalText(9).value_or("");
+    t.viewingMeasured = trials->integer(10) != 0;
     p.trials.push_back(t);
   }
   auto rated = db.prepare("SELECT position, item FROM study_ratings WHERE study_id = ?1 AND participant_id = ?2");
@@ -77,6 +81,15 @@ Result<StudyParticipant> loadParticipant(Database& db, const std::string& studyI
 }
 
 }  // namespace
+
+Status validParticipantId(const std::string& id) {
+  const auto ok = [](char c) { return std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '-'; };
+  if (id.empty() || id.size() > 64 || !std::isalnum(static_cast<unsigned char>(id[0])) ||
+      !std::all_of(id.begin(), id.end(), ok))
+    return fail("participant id '" + id + "' must be 1 to 64 letters, digits, '_' or '-', starting with a letter or "
+                "digit (it becomes the REDCap record id)");
+  return {};
+}
 
 std::optional<std::size_t> StudyParticipant::nextTrial(std::size_t itemCount) const {
   for (std::size_t i = 0; i < trials.size(); ++i)
@@ -139,7 +152,7 @@ Result<std::vector<quiz::StudyProtocol>> listStudies(Database& db) {
 
 Result<StudyParticipant> enrolOrResume(Database& db, const quiz::StudyProtocol& protocol,
                                        const std::string& participantId, const std::string& group) {
-  if (participantId.empty()) return fail("participant id must not be empty");
+  if (auto valid = validParticipantId(participantId); !valid) return tl::unexpected(valid.error());
   bool knownGroup = false;
   for (const auto& g : protocol.groups) knownGroup = knownGroup || g == group;
   if (!knownGroup) {
@@ -199,10 +212,11 @@ Status recordRating(Database& db, const std::string& studyId, const std::string&
   return db.writeTransaction([&](Database& d) -> Status {
     auto st = d.prepare(
         "INSERT INTO study_ratings (study_id, participant_id, position, item, rating_ab, response_ms, t, alpha, beta, "
-        "app_version) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10) "
+        "app_version, session, created_at) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, "
+        "(SELECT session FROM study_participants WHERE study_id = ?1 AND participant_id = ?2), ?11) "
         "ON CONFLICT(study_id, participant_id, position, item) DO UPDATE SET rating_ab = excluded.rating_ab, "
         "response_ms = excluded.response_ms, t = excluded.t, alpha = excluded.alpha, beta = excluded.beta, "
-        "app_version = excluded.app_version, created_at = strftime('%Y-%m-%dT%H:%M:%fZ', 'now')");
+        "app_version = excluded.app_version, session = excluded.session, created_at = excluded.created_at");
     if (!st) return tl::unexpected(st.error());
     st->bind(1, studyId)
         .bind(2, participantId)
@@ -213,21 +227,26 @@ Status recordRating(Database& db, const std::string& studyId, const std::string&
         .bind(7, rating.t)
         .bind(8, rating.alpha)
         .bind(9, rating.beta)
-        .bind(10, rating.appVersion);
+        .bind(10, rating.appVersion)
+        .bind(11, utcTimestampNow());
     return st->run();
   });
 }
 
 Status recordTrialViewing(Database& db, const std::string& studyId, const std::string& participantId, int position,
-                          double viewMsA, double viewMsB, int toggles, const std::string& comment) {
+                          double viewMsA, double viewMsB, int toggles, const std::string& comment,
+                          bool viewingMeasured) {
   return db.writeTransaction([&](Database& d) -> Status {
     auto st = d.prepare(
-        "UPDATE study_trials SET view_ms_a = ?4, view_ms_b = ?5, toggles = ?6, comment = ?7 "
+        "UPDATE study_trials SET view_ms_a = ?4, view_ms_b = ?5, toggles = ?6, comment = ?7, viewing_measured = ?8 "
         "WHERE study_id = ?1 AND participant_id = ?2 AND position = ?3");
     if (!st) return tl::unexpected(st.error());
-    st->bind(1, studyId).bind(2, participantId).bind(3, position).bind(4, viewMsA).bind(5, viewMsB).bind(6, toggles);
+    st->bind(1, studyId).bind(2, participantId).bind(3, position);
+    if (viewingMeasured) st->bind(4, viewMsA).bind(5, viewMsB).bind(6, toggles);
+    else st->bind(4, 0.0).bind(5, 0.0).bind(6, 0);
     if (comment.empty()) st->bindNull(7);
     else st->bind(7, comment);
+    st->bind(8, viewingMeasured ? 1 : 0);
     if (auto s = st->run(); !s) return s;
     if (d.changes() != 1)
       return fail("study '" + studyId + "': participant '" + participantId + "' has no trial " + std::to_string(position));
@@ -238,10 +257,10 @@ Status recordTrialViewing(Database& db, const std::string& studyId, const std::s
 Status markParticipantComplete(Database& db, const std::string& studyId, const std::string& participantId) {
   return db.writeTransaction([&](Database& d) -> Status {
     auto st = d.prepare(
-        "UPDATE study_participants SET completed_at = strftime('%Y-%m-%dT%H:%M:%fZ', 'now') "
+        "UPDATE study_participants SET completed_at = ?3 "
         "WHERE study_id = ?1 AND participant_id = ?2 AND completed_at IS NULL");
     if (!st) return tl::unexpected(st.error());
-    st->bind(1, studyId).bind(2, participantId);
+    st->bind(1, studyId).bind(2, participantId).bind(3, utcTimestampNow());
     return st->run();
   });
 }
@@ -251,7 +270,7 @@ Result<std::vector<StudyCompletion>> studyCompletion(Database& db, const std::st
   if (!study) return tl::unexpected(study.error());
   if (!*study) return fail(ErrorKind::NotFound, "no study '" + studyId + "' in " + db.path());
   auto st = db.prepare(
-      "SELECT p.participant_id, p.group_name, p.completed_at IS NOT NULL, "
+      "SELECT p.participant_id, p.group_name, CASE WHEN p.completed_at IS NULL THEN 0 ELSE 1 END, "
       " (SELECT count(*) FROM study_ratings r WHERE r.study_id = p.study_id AND r.participant_id = p.participant_id) "
       "FROM study_participants p WHERE p.study_id = ?1 ORDER BY p.enrolment_index");
   if (!st) return tl::unexpected(st.error());
@@ -272,13 +291,36 @@ Result<std::vector<StudyCompletion>> studyCompletion(Database& db, const std::st
   return out;
 }
 
+Result<std::vector<quiz::StudyParticipantRow>> studyParticipantRows(Database& db, const std::string& studyId) {
+  auto st = db.prepare(
+      "SELECT participant_id, group_name, enrolment_index, session, CASE WHEN completed_at IS NULL THEN 0 ELSE 1 END "
+      "FROM study_participants WHERE study_id = ?1 ORDER BY enrolment_index");
+  if (!st) return tl::unexpected(st.error());
+  st->bind(1, studyId);
+  std::vector<quiz::StudyParticipantRow> out;
+  while (true) {
+    auto row = st->step();
+    if (!row) return tl::unexpected(row.error());
+    if (!*row) break;
+    quiz::StudyParticipantRow p;
+    p.participantId = st->text(0);
+    p.group = st->text(1);
+    p.enrolmentIndex = st->integer(2);
+    p.sessions = st->integer(3);
+    p.complete = st->integer(4) != 0;
+    out.push_back(p);
+  }
+  return out;
+}
+
 Result<std::vector<quiz::StudyResponseRow>> studyResponseRows(Database& db, const quiz::StudyProtocol& protocol) {
   std::map<std::string, int> itemOrder;
   for (std::size_t i = 0; i < protocol.items.size(); ++i) itemOrder[protocol.items[i].id] = int(i);
   auto st = db.prepare(
-      "SELECT p.participant_id, p.group_name, p.session, t.structure, r.item, r.rating_ab, t.a_condition, t.position, "
+      "SELECT p.participant_id, p.group_name, r.session, t.structure, r.item, r.rating_ab, t.a_condition, t.position, "
       " t.preset_a, t.preset_b, r.t, r.alpha, r.beta, t.view_ms_a, t.view_ms_b, t.toggles, r.response_ms, "
-      " r.created_at, r.app_version, t.comment, p.completed_at IS NOT NULL, p.enrolment_index "
+      " r.created_at, r.app_version, t.comment, CASE WHEN p.completed_at IS NULL THEN 0 ELSE 1 END, "
+      " p.enrolment_index, t.viewing_measured "
       "FROM study_ratings r "
       "JOIN study_trials t ON t.study_id = r.study_id AND t.participant_id = r.participant_id AND t.position = r.position "
       "JOIN study_participants p ON p.study_id = r.study_id AND p.participant_id = r.participant_id "
@@ -293,7 +335,7 @@ Result<std::vector<quiz::StudyResponseRow>> studyResponseRows(Database& db, cons
     quiz::StudyResponseRow r;
     r.participantId = st->text(0);
     r.group = st->text(1);
-    r.session = st->integer(2);
+    r.session = st->isNull(2) ? 0 : st->integer(2);
     r.structure = st->text(3);
     r.item = st->text(4);
     r.ratingAb = st->integer(5);
@@ -315,6 +357,7 @@ Result<std::vector<quiz::StudyResponseRow>> studyResponseRows(Database& db, cons
     r.appVersion = st->text(18);
     r.comment = st->optionalText(19).value_or("");
     r.participantComplete = st->integer(20) != 0;
+    r.viewingMeasured = st->integer(22) != 0;
     const bool aIsFirst = r.aCondition == protocol.conditions[0].id;
     r.rating = quiz::unblindRating(r.ratingAb, aIsFirst, protocol.scale);
     auto order = itemOrder.find(r.item);

@@ -19,6 +19,10 @@ std::string csvCell(const std::string& text) {
   if (!cell.empty() && (cell[0] == '=' || cell[0] == '+' || cell[0] == '-' || cell[0] == '@' || cell[0] == '\t' ||
                         cell[0] == '\r'))
     cell.insert(cell.begin(), '\'');
+  return csvQuoted(cell);
+}
+
+std::string csvQuoted(const std::string& cell) {
   const bool quote = cell.find_first_of(",\"\r\n") != std::string::npos;
   if (!quote) return cell;
   std::string out = "\"";
@@ -81,9 +85,7 @@ std::vector<std::vector<std::string>> parseCsv(const std::string& text) {
   return records;
 }
 
-namespace {
-
-std::string number(double v, int decimals = 3) {
+std::string csvNumber(double v, int decimals) {
   if (!std::isfinite(v)) return "";
   char buf[64];
   std::snprintf(buf, sizeof buf, "%.*f", decimals, v);
@@ -96,6 +98,10 @@ std::string number(double v, int decimals = 3) {
   if (s == "-0") s = "0";
   return s;
 }
+
+namespace {
+
+std::string number(double v, int decimals = 3) { return csvNumber(v, decimals); }
 
 std::string pValueText(double p) {
   char buf[32];
@@ -116,7 +122,7 @@ const std::vector<Column>& longColumns() {
   static const std::vector<Column> columns = {
       {"participant_id", "string", "Pseudonymous participant id", ""},
       {"group", "categorical", "Participant group", ""},
-      {"session", "integer", "Session number of the participant (1 = first)", ""},
+      {"session", "integer", "The participant's session in which the item was rated (1 = first; blank = not known)", ""},
       {"structure", "categorical", "Structure id rated", ""},
       {"item", "categorical", "Questionnaire item id", ""},
       {"rating_ab", "integer", "Rating as shown to the participant: 1 = prefer A ... 5 = prefer B", "scale points"},
@@ -128,9 +134,9 @@ const std::vector<Column>& longColumns() {
       {"t", "number", "Blend t between data and distance transfer functions on screen", ""},
       {"alpha", "number", "Distance normalisation alpha on screen", ""},
       {"beta", "number", "Distance lighting beta on screen", ""},
-      {"view_ms_a", "number", "Time condition A was on screen for this structure", "ms"},
-      {"view_ms_b", "number", "Time condition B was on screen for this structure", "ms"},
-      {"toggles", "integer", "Number of A/B toggles for this structure", ""},
+      {"view_ms_a", "number", "Time condition A was on screen for this structure (blank: shown as files, not measured)", "ms"},
+      {"view_ms_b", "number", "Time condition B was on screen for this structure (blank: shown as files, not measured)", "ms"},
+      {"toggles", "integer", "Number of A/B toggles for this structure (blank: not measured)", ""},
       {"response_ms", "number", "Time from showing the item to the rating", "ms"},
       {"timestamp", "datetime", "When the rating was recorded (ISO 8601, UTC)", ""},
       {"app_version", "string", "Anatomy Tutor version that recorded the rating", ""},
@@ -147,11 +153,13 @@ std::string responsesLongCsv(const std::vector<StudyResponseRow>& rows) {
   for (const Column& c : longColumns()) header.push_back(c.name);
   std::string out = csvRecord(header);
   for (const StudyResponseRow& r : rows) {
-    out += csvRecord({csvCell(r.participantId), csvCell(r.group), std::to_string(r.session), csvCell(r.structure),
-                      csvCell(r.item), std::to_string(r.ratingAb), std::to_string(r.rating), csvCell(r.aCondition),
-                      std::to_string(r.presentationOrder), csvCell(r.presetA), csvCell(r.presetB), number(r.t),
-                      number(r.alpha), number(r.beta), number(r.viewMsA, 0), number(r.viewMsB, 0),
-                      std::to_string(r.toggles), number(r.responseMs, 0), csvCell(r.timestampUtc),
+    const bool seen = r.viewingMeasured;
+    out += csvRecord({csvCell(r.participantId), csvCell(r.group), r.session > 0 ? std::to_string(r.session) : "",
+                      csvCell(r.structure), csvCell(r.item), std::to_string(r.ratingAb), std::to_string(r.rating),
+                      csvCell(r.aCondition), std::to_string(r.presentationOrder), csvCell(r.presetA),
+                      csvCell(r.presetB), number(r.t), number(r.alpha), number(r.beta),
+                      seen ? number(r.viewMsA, 0) : "", seen ? number(r.viewMsB, 0) : "",
+                      seen ? std::to_string(r.toggles) : "", number(r.responseMs, 0), csvCell(r.timestampUtc),
                       csvCell(r.appVersion), csvCell(r.comment), r.participantComplete ? "1" : "0"});
   }
   return out;
@@ -182,78 +190,6 @@ std::string responsesWideCsv(const StudyProtocol& protocol, const std::vector<St
       record.push_back(it == cells[p].end() ? "" : csvCell(it->second));
     }
     out += csvRecord(record);
-  }
-  return out;
-}
-
-std::string dataDictionaryCsv(const StudyProtocol& protocol) {
-  // REDCap data-dictionary columns, one row per long-table column.
-  std::string out = csvRecord({"Variable / Field Name", "Form Name", "Section Header", "Field Type", "Field Label",
-                               "\"Choices, Calculations, OR Slider Labels\"", "Field Note",
-                               "Text Validation Type OR Show Slider Number", "Text Validation Min",
-                               "Text Validation Max", "Identifier?", "Branching Logic (Show field only if...)",
-                               "Required Field?", "Custom Alignment", "Question Number (surveys only)",
-                               "Matrix Group Name", "Matrix Ranking?", "Field Annotation"});
-  auto choices = [](const std::vector<std::string>& values) {
-    std::string s;
-    for (std::size_t i = 0; i < values.size(); ++i) {
-      if (i) s += " | ";
-      s += std::to_string(i + 1) + ", " + values[i];
-    }
-    return s;
-  };
-  std::vector<std::string> items, conditions;
-  for (const auto& it : protocol.items) items.push_back(it.id);
-  for (const auto& c : protocol.conditions) conditions.push_back(c.id);
-  std::vector<std::string> ratingLabels;
-  for (int v = protocol.scale.min; v <= protocol.scale.max; ++v) ratingLabels.push_back(std::to_string(v));
-  const std::string form = "preference_study";
-  for (const Column& c : longColumns()) {
-    std::string fieldType = "text", validation, choiceText, vmin, vmax;
-    const std::string name = c.name;
-    if (name == "group") {
-      fieldType = "dropdown";
-      choiceText = choices(protocol.groups);
-    } else if (name == "structure") {
-      fieldType = "dropdown";
-      choiceText = choices(protocol.structures);
-    } else if (name == "item") {
-      fieldType = "dropdown";
-      choiceText = choices(items);
-    } else if (name == "a_condition") {
-      fieldType = "dropdown";
-      choiceText = choices(conditions);
-    } else if (name == "rating" || name == "rating_ab") {
-      fieldType = "radio";
-      std::string s;
-      for (int v = protocol.scale.min; v <= protocol.scale.max; ++v) {
-        if (v > protocol.scale.min) s += " | ";
-        std::string label = std::to_string(v);
-        if (name == "rating_ab") {
-          auto it = protocol.scale.anchors.find(v);
-          if (it != protocol.scale.anchors.end()) label = it->second;
-        } else {
-          label = v == protocol.scale.min ? "prefer " + protocol.conditions[0].id
-                  : v == protocol.scale.max ? "prefer " + protocol.conditions[1].id
-                  : v == protocol.scale.midpoint() ? "no preference" : std::to_string(v);
-        }
-        s += std::to_string(v) + ", " + label;
-      }
-      choiceText = s;
-    } else if (name == "participant_complete") {
-      fieldType = "yesno";
-    } else if (std::string(c.type) == "integer") {
-      validation = "integer";
-    } else if (std::string(c.type) == "number") {
-      validation = "number";
-    } else if (std::string(c.type) == "datetime") {
-      validation = "datetime_seconds_ymd";
-    } else if (name == "comment") {
-      fieldType = "notes";
-    }
-    std::string note = c.units[0] ? std::string("units: ") + c.units : "";
-    out += csvRecord({csvCell(name), form, "", fieldType, csvCell(c.description), csvCell(choiceText), csvCell(note),
-                      validation, vmin, vmax, name == "participant_id" ? "y" : "", "", "", "", "", "", "", ""});
   }
   return out;
 }
@@ -494,54 +430,6 @@ std::string summarySvg(const StudyProtocol& protocol, const StudySummary& summar
   }
   svg += "</svg>\n";
   return svg;
-}
-
-RgbImage renderSummaryChart(const StudyProtocol& protocol, const StudySummary& summary, const ChartLayout& L) {
-  RgbImage img(L.width, L.height(summary.items.size()));
-  std::fill(img.rgb.begin(), img.rgb.end(), std::uint8_t(255));
-  auto put = [&](int x, int y, std::array<std::uint8_t, 3> c) {
-    if (x < 0 || y < 0 || x >= img.width || y >= img.height) return;
-    std::uint8_t* p = &img.rgb[(std::size_t(y) * std::size_t(img.width) + std::size_t(x)) * 3];
-    p[0] = c[0];
-    p[1] = c[1];
-    p[2] = c[2];
-  };
-  auto fill = [&](int x0, int y0, int x1, int y1, std::array<std::uint8_t, 3> c) {
-    for (int y = y0; y <= y1; ++y)
-      for (int x = x0; x <= x1; ++x) put(x, y, c);
-  };
-  const int top = L.top, bottomY = L.top + int(summary.items.size()) * L.rowHeight;
-  for (int v = protocol.scale.min; v <= protocol.scale.max; ++v) {
-    const int x = L.xOf(v, protocol.scale);
-    const std::array<std::uint8_t, 3> grid = v == protocol.scale.midpoint() ? std::array<std::uint8_t, 3>{85, 85, 85}
-                                                                             : std::array<std::uint8_t, 3>{204, 204, 204};
-    fill(x, top, x, bottomY, grid);
-    fill(x - 3, bottomY + 2, x + 3, bottomY + 8, grid);  // tick
-  }
-  for (std::size_t i = 0; i + 1 < summary.items.size(); ++i) {
-    const int y = top + int(i + 1) * L.rowHeight;
-    fill(L.left - 10, y, img.width - L.right + 10, y, {235, 235, 235});
-  }
-  for (std::size_t i = 0; i < summary.items.size(); ++i)
-    for (std::size_t c = 0; c < summary.columns.size(); ++c) {
-      const SummaryCell& cell = summary.at(i, c);
-      if (cell.stats.n == 0) continue;
-      const int y = L.yOf(i, c, summary.columns.size());
-      const auto colour = chartColumnColour(c);
-      if (cell.stats.n > 1) {
-        const double lo = std::clamp(cell.stats.ciLow, double(protocol.scale.min), double(protocol.scale.max));
-        const double hi = std::clamp(cell.stats.ciHigh, double(protocol.scale.min), double(protocol.scale.max));
-        fill(L.xOf(lo, protocol.scale), y - 1, L.xOf(hi, protocol.scale), y + 1, colour);
-      }
-      const int x = L.xOf(cell.stats.mean, protocol.scale);
-      fill(x - 5, y - 5, x + 5, y + 5, colour);
-    }
-  // Legend swatches along the bottom, in column order.
-  for (std::size_t c = 0; c < summary.columns.size(); ++c) {
-    const int x = L.left + int(c) * 130;
-    fill(x, img.height - 14, x + 10, img.height - 4, chartColumnColour(c));
-  }
-  return img;
 }
 
 }  // namespace at::quiz

@@ -114,7 +114,7 @@ Check readTf(const json& j, const std::string& field, bool distanceAxis, std::ve
 Check readPreset(const json& root, Preset& p) {
   if (!root.is_object()) return FieldError{"(top level)", "must be a JSON object"};
   if (auto e = unknownKeys(root, "", {"schema", "name", "mode", "data_tf", "distance_tf", "alpha", "t",
-                                      "highlight_rgb", "lighting", "weight", "structure_opacity", "surface", "id",
+                                      "highlight_rgb", "lighting", "weight", "structure_opacity", "context_in_front", "surface", "id",
                                       "structure", "view", "clip"}))
     return e;
   if (root.contains("schema")) {
@@ -170,6 +170,8 @@ Check readPreset(const json& root, Preset& p) {
   if (root.contains("structure_opacity"))
     if (auto e = readFloat(root["structure_opacity"], "structure_opacity", 0, 1, p.structureOpacity, " in 0..1"))
       return e;
+  if (root.contains("context_in_front"))
+    if (auto e = readFloat(root["context_in_front"], "context_in_front", 0, 1, p.contextInFront, " in 0..1")) return e;
   if (root.contains("surface")) {
     const json& s = root["surface"];
     if (!s.is_object()) return FieldError{"surface", "must be an object {\"gradient_hu\", \"interior\"}"};
@@ -254,6 +256,7 @@ std::string presetToJson(const Preset& p) {
   j["lighting"] = {{"alpha", p.lightingAlpha}, {"beta", p.lightingBeta}};
   j["weight"] = {{"rule", p.weightRule}, {"hu_window", {p.huWindow[0], p.huWindow[1]}}, {"base", p.weightBase}};
   j["structure_opacity"] = p.structureOpacity;
+  j["context_in_front"] = p.contextInFront;
   j["surface"] = {{"gradient_hu", {p.surfaceGradientHu[0], p.surfaceGradientHu[1]}}, {"interior", p.surfaceInterior}};
   if (p.id) j["id"] = *p.id;
   if (p.structure) j["structure"] = *p.structure;

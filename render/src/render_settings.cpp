@@ -37,7 +37,8 @@ double trilinear(const Grid<T>& g, const Vec3& ijk, F value) {
 }
 
 // The selected structure's mask as the GPU holds it: 1 where the label is `label`, smoothed by a
-// [1 2 1]³/64 binomial (edge-clamped), at least 0.75 on the label's own voxels, sampled trilinearly.
+// [1 2 1]³/64 binomial (edge-clamped; a labelled voxel it would drop below 0.5 raised to 0.75),
+// sampled trilinearly.
 double smoothedMaskAt(const LabelMap& labels, std::uint16_t label, const Vec3& ijk) {
   const Dims& d = labels.dims();
   return trilinear(d, ijk, [&](std::size_t index) {
@@ -51,7 +52,7 @@ double smoothedMaskAt(const LabelMap& labels, std::uint16_t label, const Vec3& i
           if (labels.voxels[d.index(x, y, z)] == label) sum += (2 - std::abs(di)) * (2 - std::abs(dj)) * (2 - std::abs(dk));
         }
     const double smooth = double(sum) / 64.0;
-    return labels.voxels[index] == label ? std::max(smooth, 0.75) : smooth;
+    return smooth < 0.5 && labels.voxels[index] == label ? 0.75 : smooth;
   });
 }
 
@@ -166,6 +167,18 @@ PickResult pick(const SceneVolumes& scene, const RenderSettings& s, const Transf
     }
     return result;
   };
+  // Where the ray first enters the structure: context in front of it counts at contextInFront of
+  // its opacity (as the ray caster draws it; it marches at twice the step).
+  double frontT = -1e30;
+  if (structure && !bare && s.preset.contextInFront < 1)
+    for (double tm = t0; tm < t1; tm += 2 * step) {
+      const Vec3 p = ray.origin + tm * ray.direction;
+      if (s.clip && !s.clip->keeps(p)) continue;
+      if (smoothedMaskAt(*scene.labels, scene.selected, g.patientToIndex(p)) >= 0.5) {
+        frontT = tm;
+        break;
+      }
+    }
   for (double tm = t0 + 0.5 * step; tm < t1; tm += step) {
     const Vec3 p = ray.origin + tm * ray.direction;
     if (s.clip && !s.clip->keeps(p)) {
@@ -198,7 +211,8 @@ PickResult pick(const SceneVolumes& scene, const RenderSettings& s, const Transf
       surface = surfaceFactor(s.preset, GradientVolume::strengthOf(float(gc[0]), float(gc[1]), float(gc[2])));
     }
     const float a = table.lookup(hu, n)[3];
-    const float ac = a > 0 ? correctedOpacity(a, step, refMm) * surface : 0.0f;
+    const float front = tm < frontT ? s.preset.contextInFront : 1.0f;
+    const float ac = a > 0 ? correctedOpacity(a, step, refMm) * surface * front : 0.0f;
     accumulated += (1 - accumulated) * ac;
     if (accumulated >= threshold) return finish(p, ijk, std::nullopt);
   }

@@ -6,6 +6,7 @@
 
 #include <chrono>
 #include <filesystem>
+#include <functional>
 #include <string>
 #include <thread>
 #include <vector>
@@ -26,6 +27,9 @@ struct HeadlessOptions {
   std::filesystem::path db;          // required
   std::string user;                  // empty: the default user
   double timeoutSeconds = 600;
+  // Stands in for the window's panels: called once a frame after the model's frame began. Set,
+  // the host counts as one that draws panels (actions that change a screen wait for it).
+  std::function<void(app::DesktopModel&)> drawPanels;
 };
 
 struct HeadlessRun {
@@ -39,10 +43,12 @@ struct HeadlessRun {
 class NoWindow final : public app::ScriptHost {
  public:
   std::vector<std::string> requested;
+  bool panels = false;
   void requestScreenshot(const std::string& path) override { requested.push_back(path); }
   bool screenshotPending() const override { return false; }
   std::string windowText() const override { return "headless"; }
   std::string glText() const override { return "none"; }
+  bool drawsPanels() const override { return panels; }
 };
 
 inline app::ViewLayout headlessLayout(const HeadlessOptions& options) {
@@ -75,12 +81,14 @@ inline HeadlessRun runHeadless(const nlohmann::json& script, const HeadlessOptio
   }
   app::ScriptInterpreter interpreter(script.at("actions").get<std::vector<nlohmann::json>>(), std::nullopt);
   NoWindow host;
+  host.panels = bool(options.drawPanels);
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(options.timeoutSeconds);
   while (!interpreter.finished() && std::chrono::steady_clock::now() < deadline) {
     const auto start = app::Clock::now();
     interpreter.step(model, host, start);
     if (interpreter.finished()) break;
     model.beginFrame(nullptr);
+    if (options.drawPanels) options.drawPanels(model);
     const auto end = app::Clock::now();
     model.endFrame(end, app::msBetween(start, end));
     std::this_thread::sleep_for(std::chrono::milliseconds(2));

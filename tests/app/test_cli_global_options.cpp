@@ -62,9 +62,14 @@ TEST_CASE("GlobalDb_ValueItCannotUse_IsRefusedAndCreatesNothing") {
   CHECK(!fs::exists(dir / "nope"));
   // An existing folder is not a database file.
   test::checkOneLineError(test::runApp("--db " + quoted(dir.path()) + " courses"), "is a folder");
-  // A server address is not a file, and no folder named after it appears.
+  // An address of a server this program cannot use is refused, and no folder named after it appears.
   const fs::path cwd = fs::current_path();
-  test::checkOneLineError(test::runApp("--db postgresql://class.example/anatomy lessons"), "server address");
+  test::checkOneLineError(test::runApp("--db mysql://class.example/anatomy lessons"), "not a database this program can use");
+  CHECK(!fs::exists(cwd / "mysql:"));
+  // A PostgreSQL server that does not answer: one line naming it, without its password.
+  const auto unreachable = test::runApp("--db postgresql://ana:secret@127.0.0.1:1/anatomy lessons");
+  test::checkOneLineError(unreachable, "cannot reach the database server postgresql://ana@127.0.0.1:1/anatomy");
+  CHECK(unreachable.err.find("secret") == std::string::npos);
   CHECK(!fs::exists(cwd / "postgresql:"));
   // An option where the value should be.
   test::checkOneLineError(test::runApp("lessons --db --user"), "is an option");

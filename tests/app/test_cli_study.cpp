@@ -1,13 +1,21 @@
 #include <doctest/doctest.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <set>
 #include <sstream>
+#include <thread>
+#include <tuple>
 
 #include <nlohmann/json.hpp>
 
+#include "quiz/study_design.h"
+#include "quiz/study_protocol.h"
 #include "quiz/study_report.h"
+#include "test_databases.h"
+#include "redcap_rules.h"
 #include "test_support.h"
 #include "volume/png_image.h"
 
@@ -60,9 +68,10 @@ TEST_CASE("StudyCli_ScriptedParticipants_ExportIsCompleteDeterministicAndUnblind
   auto e2 = test::runApp("study export " + study + " --out '" + (dir / "e2").string() + "' " + db);
   REQUIRE(e1.exitCode == 0);
   REQUIRE(e2.exitCode == 0);
-  CHECK(e1.err.find("[8/8] summary.png") != std::string::npos);  // progress shown
-  for (const char* f : {"responses_long.csv", "responses_wide.csv", "data_dictionary.csv", "responses_long.json",
-                        "summary.csv", "summary.md", "summary.svg", "summary.png"}) {
+  CHECK(e1.err.find("[10/10] summary.png") != std::string::npos);  // progress shown
+  for (const char* f : {"responses_long.csv", "responses_wide.csv", "responses_long.json", "redcap_dictionary.csv",
+                        "redcap_records.csv", "redcap_repeating_forms.csv", "summary.csv", "summary.md", "summary.svg",
+                        "summary.png"}) {
     CAPTURE(f);
     REQUIRE(fs::exists(dir / "e1" / f));
     CHECK(test::readFile(dir / "e1" / f) == test::readFile(dir / "e2" / f));  // exporting twice gives identical bytes
@@ -92,9 +101,51 @@ TEST_CASE("StudyCli_ScriptedParticipants_ExportIsCompleteDeterministicAndUnblind
   CHECK(p3Rows.size() == 5);
   const std::string md = test::readFile(dir / "e1" / "summary.md");
   CHECK(md.find("3 participant(s), of whom 1 stopped before the end") != std::string::npos);
+  // The REDCap files import: checked against REDCap's rules.
+  const auto problems = test::checkRedcapImport(test::readFile(dir / "e1" / "redcap_dictionary.csv"),
+                                                test::readFile(dir / "e1" / "redcap_records.csv"),
+                                                test::readFile(dir / "e1" / "redcap_repeating_forms.csv"));
+  std::string listed;
+  for (const auto& problem : problems) listed += problem + "\n";
+  CHECK_MESSAGE(problems.empty(), listed);
+  CHECK(quiz::parseCsv(test::readFile(dir / "e1" / "redcap_records.csv")).size() == 1 + 3 + 13 * 4 * 2 + 5 * 4);
+
+  // The chart PNG is the SVG with its text: dark glyph pixels left of the axis on every item's row,
+  // under the axis (scale numbers) and in the legend; each group's marker at its mean.
   auto png = readPng((dir / "e1" / "summary.png").string());
   REQUIRE(png.has_value());
-  CHECK(png->width > 100);
+  const quiz::ChartLayout layout;
+  CHECK(png->width == layout.width);
+  CHECK(png->height == layout.height(4));
+  auto darkIn = [&](int x0, int y0, int x1, int y1) {
+    int n = 0;
+    for (int y = y0; y < y1; ++y)
+      for (int x = x0; x < x1; ++x) {
+        const std::uint8_t* q = png->pixel(x, y);
+        n += (q[0] < 110 && q[1] < 110 && q[2] < 110) ? 1 : 0;
+      }
+    return n;
+  };
+  for (int item = 0; item < 4; ++item) {
+    CAPTURE(item);
+    const int rowMiddle = layout.top + item * layout.rowHeight + layout.rowHeight / 2;
+    CHECK(darkIn(5, rowMiddle - 12, layout.left - 20, rowMiddle + 8) > 20);  // the item's name
+  }
+  const int axisBottom = layout.top + 4 * layout.rowHeight;
+  CHECK(darkIn(layout.left - 10, axisBottom + 5, png->width - 10, axisBottom + 24) > 20);  // scale numbers
+  CHECK(darkIn(0, 0, png->width, 30) > 50);                                              // the title
+  const auto summaryRows = quiz::parseCsv(test::readFile(dir / "e1" / "summary.csv"));
+  for (std::size_t i = 1; i < summaryRows.size(); ++i) {
+    const auto& r = summaryRows[i];  // item, group, n, mean, …
+    if (r[2] == "0") continue;
+    const std::size_t item = std::size_t(i - 1) / 3, column = std::size_t(i - 1) % 3;
+    const int x = layout.xOf(std::stod(r[3]), quiz::StudyScale{}), y = layout.yOf(item, column, 3);
+    CAPTURE(r[0]);
+    CAPTURE(r[1]);
+    const std::uint8_t* q = png->pixel(x, y);
+    const auto colour = quiz::chartColumnColour(column);
+    CHECK(std::abs(int(q[0]) - colour[0]) + std::abs(int(q[1]) - colour[1]) + std::abs(int(q[2]) - colour[2]) < 30);
+  }
 }
 
 TEST_CASE("StudyCli_EmptyStudyExport_WritesHeadersOnly") {
@@ -133,4 +184,63 @@ TEST_CASE("StudyCli_BadArguments_OneLineErrors") {
   CHECK(badGroup.err.find("pilots") != std::string::npos);
   auto noOut = test::runApp("study export wdt_vs_bare_phantom" + db);
   CHECK(noOut.exitCode != 0);
+}
+
+TEST_CASE("StudyCli_ThreeLabMachinesOnOneClassServer_EachParticipantGetsTheirOwnCounterbalancingRow") {
+  // Three `study run` processes at once against one PostgreSQL server, two participants each (the
+  // shipped study is registered by whichever comes first); then one export from the server.
+  auto url = test::freshPostgresDatabase("the class-server study test");
+  if (!url) return;
+  test::TempDir dir;
+  const std::string study = "wdt_vs_bare_phantom", db = " --db '" + *url + "'";
+  writeAnswers(dir / "answers.jsonl", 13, [](int s) { return 1 + s % 5; });
+  std::vector<test::CommandResult> runs(6);
+  std::vector<std::thread> machines;
+  for (int m = 0; m < 3; ++m)
+    machines.emplace_back([&, m] {
+      for (int k = 0; k < 2; ++k)
+        runs[std::size_t(2 * m + k)] =
+            test::runApp("study run " + study + " --participant lab" + std::to_string(m) + "-p" + std::to_string(k) +
+                         " --group " + (k ? "medical" : "non-medical") + " --answers '" +
+                         (dir / "answers.jsonl").string() + "'" + db);
+    });
+  for (auto& t : machines) t.join();
+  for (const auto& r : runs) {
+    CAPTURE(r.err);
+    CHECK(r.exitCode == 0);
+    CHECK(r.out.find("all 13 structures rated") != std::string::npos);
+  }
+  auto status = test::runApp("study status " + study + db);
+  CHECK(status.exitCode == 0);
+  CHECK(status.out.find("6 participant(s)") != std::string::npos);
+
+  auto exported = test::runApp("study export " + study + " --out '" + (dir / "export").string() + "'" + db);
+  CAPTURE(exported.err);
+  REQUIRE(exported.exitCode == 0);
+  const auto rows = quiz::parseCsv(test::readFile(dir / "export" / "responses_long.csv"));
+  REQUIRE(rows.size() == 1 + 6 * 13 * 4);
+  const auto& header = rows[0];
+  auto col = [&](const std::string& name) {
+    return std::size_t(std::find(header.begin(), header.end(), name) - header.begin());
+  };
+  // Each participant's sequence (structure, order, condition shown as A) is a row of the design,
+  // and the six participants got the first six rows: none twice, none skipped.
+  using Plan = std::set<std::tuple<std::string, int, std::string>>;
+  std::map<std::string, Plan> seen;
+  for (std::size_t i = 1; i < rows.size(); ++i)
+    seen[rows[i][col("participant_id")]].insert(
+        {rows[i][col("structure")], std::stoi(rows[i][col("presentation_order")]), rows[i][col("a_condition")]});
+  REQUIRE(seen.size() == 6);
+  auto protocol = quiz::loadStudyProtocol((test::sourceDir() / "data/studies/paper_survey.json").string());
+  REQUIRE(protocol.has_value());
+  std::set<Plan> designRows, participantsRows;
+  for (std::size_t row = 0; row < 6; ++row) {
+    Plan plan;
+    for (const auto& t : quiz::planParticipant(protocol->structures.size(), row, protocol->seed))
+      plan.insert({protocol->structures[t.structureIndex], int(t.position) + 1,
+                   protocol->conditions[t.aIsFirstCondition ? 0 : 1].id});
+    designRows.insert(plan);
+  }
+  for (const auto& [who, plan] : seen) participantsRows.insert(plan);
+  CHECK(participantsRows == designRows);
 }

@@ -129,7 +129,7 @@ TEST_CASE("StudyExport_CancelledPartWay_StopsAndLeavesNoPartialSetBehind") {
   const auto cancelled = eventsOf(r, "export_cancelled");
   REQUIRE(cancelled.size() == 1);
   CHECK(cancelled[0].at("written") == 3);
-  CHECK(cancelled[0].at("n") == 8);
+  CHECK(cancelled[0].at("n") == 10);
   CHECK(cancelled[0].at("removed") == true);
   // The three files written were removed again.
   for (const json& e : eventsOf(r, "export_progress")) CHECK(!fs::exists(out / e.at("file").get<std::string>()));

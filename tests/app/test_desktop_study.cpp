@@ -9,8 +9,10 @@
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <optional>
 #include <string>
 #include <sys/wait.h>
+#include <thread>
 #include <vector>
 
 #include <nlohmann/json.hpp>
@@ -155,8 +157,52 @@ TEST_CASE("the study runner shows no structure names and its ratings land in the
   CHECK(diff / samples > 3.0);
 }
 
+// The participant screen each study_next opens is shown before the script goes on, however slow
+// the frames: a stand-in for the participant window draws a new screen one frame and announces it
+// the next, as the panel does, with each frame slower than the script's waits.
+TEST_CASE("every participant screen is on display before the script acts on the next one") {
+  TempDir dir("at-study-ui");
+  const json study = shippedStudy();
+  json actions = json::array();
+  actions.push_back({{"do", "study_start"}, {"study", study["id"]}, {"participant", "P3"}, {"group", "medical"}});
+  for (int k = 0; k < 2; ++k) {
+    append(actions, rateAll(study, 3));
+    actions.push_back({{"do", "study_next"}});
+    actions.push_back({{"do", "wait"}, {"ms", 20}});
+    actions.push_back({{"do", "study_toggle"}});
+  }
+  actions.push_back({{"do", "study_close"}});
+  std::optional<int> drawn;  // the position drawn last frame, to announce (0: the closing screen)
+  at::test::HeadlessOptions options;
+  options.db = dir / "study.db";
+  options.dataset = "phantom:64";
+  options.drawPanels = [&](at::app::DesktopModel& model) {
+    at::app::StudyController& s = model.study();
+    if (!s.participantActive()) return;
+    if (s.takeNewScreen()) {
+      const auto& p = *s.participant();
+      drawn = p.trial ? int(p.participant.trials[*p.trial].position) + 1 : 0;
+    } else if (drawn) {
+      s.announce({{"event", "study_screen"}, {"position", *std::exchange(drawn, std::nullopt)}});
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(40));  // a frame slower than the waits
+  };
+  const at::test::HeadlessRun r = at::test::runHeadless({{"actions", actions}}, options);
+  INFO("messages: " << r.messages);
+  REQUIRE(r.exitCode == 0);
+  // In order: screen 1, recorded 1, screen 2, toggle, recorded 2, screen 3, toggle.
+  std::vector<std::string> seen;
+  for (const json& e : r.events) {
+    const std::string kind = e.value("event", "");
+    if (kind == "study_screen") seen.push_back("screen " + std::to_string(e["position"].get<int>()));
+    if (kind == "study_recorded") seen.push_back("recorded " + std::to_string(e["position"].get<int>()));
+    if (kind == "study_toggle") seen.push_back("toggle");
+  }
+  CHECK(seen == std::vector<std::string>{"screen 1", "recorded 1", "screen 2", "toggle", "recorded 2", "screen 3", "toggle"});
+}
+
 // Without a window: the coordinator's export and summary are the app's logic (at_app_core).
-TEST_CASE("the coordinator export writes the eight study files and shows the summary") {
+TEST_CASE("the coordinator export writes the ten study files and shows the summary") {
   TempDir dir("at-study-ui");
   const json study = shippedStudy();
   const std::string studyId = study["id"];
@@ -175,10 +221,10 @@ TEST_CASE("the coordinator export writes the eight study files and shows the sum
   REQUIRE(r.exitCode == 0);
 
   const auto progress = at::test::eventsOf(r, "export_progress");
-  REQUIRE(progress.size() == 8);
+  REQUIRE(progress.size() == 10);
   for (std::size_t k = 0; k < progress.size(); ++k) {
     CHECK(progress[k]["k"] == k + 1);
-    CHECK(progress[k]["n"] == 8);
+    CHECK(progress[k]["n"] == 10);
     const fs::path file = dir / "export" / progress[k]["file"].get<std::string>();
     CHECK_MESSAGE(fs::is_regular_file(file), file.string());
     CHECK(fs::file_size(file) > 0);

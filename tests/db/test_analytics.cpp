@@ -17,6 +17,7 @@
 #include "lessons/analytics.h"
 #include "lessons/scheduling.h"
 #include "quiz/elo.h"
+#include "test_databases.h"
 #include "test_support.h"
 #include "toy_course.h"
 
@@ -40,7 +41,7 @@ struct Event {
 
 struct ClassFixture {
   test::TempDir dir{"analytics"};
-  std::string path = (dir / "class.db").string();
+  std::string path = test::freshDatabase(dir, "class.db");
   Course course = test::toyCourse();
   std::vector<User> students;
   std::vector<Event> events;

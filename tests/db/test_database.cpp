@@ -1,11 +1,13 @@
-// The SQLite layer: opening, migrations from every version, refusal of newer files, RAII
-// transactions, verbatim storage through bound parameters, concurrent writers, checksums.
+// The storage layer on SQLite and (AT_TEST_BACKEND=postgres) PostgreSQL: opening, migrations from
+// every version, refusal of newer databases, RAII transactions, verbatim storage through bound
+// parameters, concurrent writers, error kinds, checksums.
 #include <doctest/doctest.h>
 
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <latch>
 #include <set>
 #include <thread>
 
@@ -17,6 +19,7 @@
 #include "lessons/course_json.h"
 #include "lessons/lesson_engine.h"
 #include "lessons/scheduling.h"
+#include "test_databases.h"
 #include "test_support.h"
 #include "toy_course.h"
 
@@ -31,15 +34,7 @@ std::string readBytes(const fs::path& p) {
   return std::string(std::istreambuf_iterator<char>(in), {});
 }
 
-// Every table, index and their SQL: the schema as a comparable set.
-std::set<std::string> schemaOf(Database& db) {
-  auto s = db.prepare("SELECT type || ' ' || name || ': ' || coalesce(sql, '') FROM sqlite_master"
-                      " WHERE name NOT LIKE 'sqlite_%'");
-  REQUIRE(s);
-  std::set<std::string> out;
-  while (*s->step()) out.insert(s->text(0));
-  return out;
-}
+using test::schemaOf;
 
 std::int64_t countRows(Database& db, const std::string& table) {
   auto s = db.prepare("SELECT count(*) FROM " + table);
@@ -63,17 +58,19 @@ DatasetRecord sampleRecord(const std::string& name) {
 
 }  // namespace
 
-TEST_CASE("An empty file is migrated to the newest schema version in WAL mode with foreign keys on") {
+TEST_CASE("An empty database is migrated to the newest schema version (SQLite: WAL mode, foreign keys on)") {
   test::TempDir dir;
-  auto db = Database::open((dir / "a.db").string());
+  auto db = Database::open(test::freshDatabase(dir, "a.db"));
   REQUIRE_MESSAGE(db, (db ? "" : db.error().message));
   CHECK(*db->schemaVersion() == latestSchemaVersion());
-  auto mode = db->prepare("PRAGMA journal_mode");
-  REQUIRE(*mode->step());
-  CHECK(mode->text(0) == "wal");
-  auto fk = db->prepare("PRAGMA foreign_keys");
-  REQUIRE(*fk->step());
-  CHECK(fk->integer(0) == 1);
+  if (db->backend() == Backend::Sqlite) {
+    auto mode = db->prepare("PRAGMA journal_mode");
+    REQUIRE(*mode->step());
+    CHECK(mode->text(0) == "wal");
+    auto fk = db->prepare("PRAGMA foreign_keys");
+    REQUIRE(*fk->step());
+    CHECK(fk->integer(0) == 1);
+  }
   for (const char* table : {"datasets", "structures", "presets", "courses", "lessons", "lesson_prerequisites",
                             "steps", "questions", "users", "attempts", "responses", "leitner_progress", "user_ability",
                             "question_stats", "review_responses", "memory_states", "review_log"})
@@ -89,13 +86,13 @@ TEST_CASE("Migrations are numbered consecutively from 1") {
 
 TEST_CASE("A database at every earlier version migrates to the same schema as a fresh one and keeps its rows") {
   test::TempDir dir;
-  auto fresh = Database::open((dir / "fresh.db").string());
+  auto fresh = Database::open(test::freshDatabase(dir, "fresh.db"));
   REQUIRE(fresh);
   const auto reference = schemaOf(*fresh);
 
   for (int from = 0; from < latestSchemaVersion(); ++from) {
     CAPTURE(from);
-    const std::string path = (dir / "v").string().append(std::to_string(from)).append(".db");
+    const std::string path = test::freshDatabase(dir, "v" + std::to_string(from) + ".db");
     {
       OpenOptions options;
       options.targetVersion = from;
@@ -182,29 +179,25 @@ TEST_CASE("The newest migration adds the review responses table to a version-4 d
   REQUIRE(latestSchemaVersion() >= 5);
   CHECK(migrations()[4].summary.find("review") != std::string_view::npos);
   test::TempDir dir;
-  const std::string path = (dir / "v4.db").string();
+  const std::string path = test::freshDatabase(dir, "v4.db");
   {
     OpenOptions options;
     options.targetVersion = 4;
     auto old = Database::open(path, options);
     REQUIRE(old);
-    auto table = old->prepare("SELECT count(*) FROM sqlite_master WHERE name = 'review_responses'");
-    REQUIRE(*table->step());
-    CHECK(table->int64(0) == 0);
+    CHECK(!test::tableExists(*old, "review_responses"));
   }
   auto db = Database::open(path);
   REQUIRE(db);
   CHECK(*db->schemaVersion() == latestSchemaVersion());
-  auto table = db->prepare("SELECT count(*) FROM sqlite_master WHERE name = 'review_responses'");
-  REQUIRE(*table->step());
-  CHECK(table->int64(0) == 1);
+  CHECK(test::tableExists(*db, "review_responses"));
 }
 
 TEST_CASE("Leitner progress of a version-5 database becomes FSRS memory states keeping its schedule") {
   REQUIRE(latestSchemaVersion() >= 6);
   CHECK(migrations()[5].summary.find("FSRS") != std::string_view::npos);
   test::TempDir dir;
-  const std::string path = (dir / "v5.db").string();
+  const std::string path = test::freshDatabase(dir, "v5.db");
   {
     // What the Leitner program (schema 5) left: boxes 1 (never right, and right once before),
     // 2, 4 and 5, lesson answers and review answers.
@@ -285,7 +278,25 @@ TEST_CASE("Leitner progress of a version-5 database becomes FSRS memory states k
   CHECK(kept->int64(0) == 5);
 }
 
-TEST_CASE("A database from a newer program version is refused and left byte-identical") {
+TEST_CASE("A PostgreSQL database from a newer program version is refused and keeps its rows and version") {
+  test::TempDir dir;
+  const std::string location = test::freshDatabase(dir, "newer.db");
+  if (!isPostgresUrl(location)) return;  // the SQLite file's case is the next test
+  {
+    auto db = Database::open(location);
+    REQUIRE(db);
+    REQUIRE(registerDataset(*db, sampleRecord("x"), {}));
+    test::forceSchemaVersion(*db, latestSchemaVersion() + 1);
+  }
+  auto refused = Database::open(location);
+  REQUIRE(!refused);
+  CHECK(refused.error().message.find("newer version") != std::string::npos);
+  CHECK(test::postgresValue(location, "SELECT version FROM at_schema_version") ==
+        std::to_string(latestSchemaVersion() + 1));
+  CHECK(test::postgresValue(location, "SELECT name FROM datasets") == "x");
+}
+
+TEST_CASE("A database file from a newer program version is refused and left byte-identical") {
   test::TempDir dir;
   const fs::path path = dir / "newer.db";
   {
@@ -343,7 +354,7 @@ TEST_CASE("openDatabase creates the folder of the default path under XDG_DATA_HO
 
 TEST_CASE("A transaction that dies uncommitted is rolled back; a committed one persists") {
   test::TempDir dir;
-  auto db = Database::open((dir / "t.db").string());
+  auto db = Database::open(test::freshDatabase(dir, "t.db"));
   REQUIRE(db);
   {
     auto tx = Transaction::begin(*db);
@@ -368,7 +379,7 @@ TEST_CASE("A transaction that dies uncommitted is rolled back; a committed one p
 
 TEST_CASE("Names and free text with quotes, semicolons and SQL keywords are stored verbatim") {
   test::TempDir dir;
-  auto db = Database::open((dir / "h.db").string());
+  auto db = Database::open(test::freshDatabase(dir, "h.db"));
   REQUIRE(db);
   const std::vector<std::string> hostile = {
       "Robert'); DROP TABLE datasets;--",
@@ -377,6 +388,7 @@ TEST_CASE("Names and free text with quotes, semicolons and SQL keywords are stor
       "naïve façade ✓ \t tab\nnewline",
       std::string("embedded\0nul", 12),
   };
+  std::int64_t stored = 0;
   for (std::size_t i = 0; i < hostile.size(); ++i) {
     DatasetRecord r = sampleRecord(hostile[i]);
     r.species = hostile[(i + 1) % hostile.size()];
@@ -387,7 +399,18 @@ TEST_CASE("Names and free text with quotes, semicolons and SQL keywords are stor
     st.displayName = hostile[(i + 4) % hostile.size()];
     st.description = hostile[i];
     auto id = registerDataset(*db, r, {st});
+    const bool nul = r.name.find('\0') != std::string::npos || r.species.find('\0') != std::string::npos ||
+                     r.volumePath.find('\0') != std::string::npos || st.id.find('\0') != std::string::npos ||
+                     st.displayName.find('\0') != std::string::npos || st.description.find('\0') != std::string::npos;
+    if (nul && db->backend() == Backend::Postgres) {
+      // PostgreSQL text cannot hold a NUL byte: refused as invalid, nothing stored.
+      REQUIRE(!id);
+      CHECK((id.error().kind == ErrorKind::Invalid));
+      CHECK(id.error().message.find("NUL") != std::string::npos);
+      continue;
+    }
     REQUIRE_MESSAGE(id, (id ? "" : id.error().message));
+    ++stored;
     auto back = findDataset(*db, hostile[i]);
     REQUIRE(back);
     REQUIRE(back->has_value());
@@ -401,12 +424,12 @@ TEST_CASE("Names and free text with quotes, semicolons and SQL keywords are stor
     CHECK((*structures)[0].displayName == st.displayName);
     CHECK((*structures)[0].description == st.description);
   }
-  CHECK(countRows(*db, "datasets") == std::int64_t(hostile.size()));
+  CHECK(countRows(*db, "datasets") == stored);
 }
 
 TEST_CASE("Registering a dataset under a name already used fails and writes nothing") {
   test::TempDir dir;
-  auto db = Database::open((dir / "d.db").string());
+  auto db = Database::open(test::freshDatabase(dir, "d.db"));
   REQUIRE(db);
   Structure st;
   st.label = 1;
@@ -455,7 +478,7 @@ TEST_CASE("openDatabase with an explicit path refuses a folder that does not exi
 
 TEST_CASE("One connection shared by threads: concurrent write transactions lose no row and never mix") {
   test::TempDir dir;
-  auto db = Database::open((dir / "shared.db").string());
+  auto db = Database::open(test::freshDatabase(dir, "shared.db"));
   REQUIRE(db);
   constexpr int kPerThread = 100;
   std::vector<std::string> errors(3);
@@ -486,9 +509,70 @@ TEST_CASE("One connection shared by threads: concurrent write transactions lose 
   CHECK(countRows(*db, "presets") == 3 * 2 * (kPerThread - rolledBack));
 }
 
+TEST_CASE("Several programs opening one fresh database at once create its schema once, all succeed") {
+  // Lab machines starting together against a new class server: each Database::open migrates; the
+  // migrations must run exactly once, and the others must see them done (not "already exists").
+  test::TempDir dir;
+  const std::string location = test::freshDatabase(dir, "fresh.db");
+  constexpr int kPrograms = 6;
+  std::vector<std::string> errors(kPrograms);
+  std::latch start(kPrograms);
+  std::vector<std::thread> programs;
+  for (int p = 0; p < kPrograms; ++p)
+    programs.emplace_back([&, p] {
+      start.arrive_and_wait();
+      auto db = Database::open(location);
+      if (!db) errors[std::size_t(p)] = db.error().message;
+    });
+  for (auto& t : programs) t.join();
+  for (const auto& e : errors) CHECK_MESSAGE(e.empty(), e);
+  auto db = Database::open(location);
+  REQUIRE(db);
+  CHECK(*db->schemaVersion() == latestSchemaVersion());
+}
+
+TEST_CASE("A class server that closes the connection or restarts: the program goes on, nothing lost or doubled") {
+  if (!test::testingOnPostgres()) return;  // a server's behaviour
+  test::TempDir dir;
+  const std::string url = test::freshDatabase(dir, "server");
+  auto db = Database::open(url);
+  REQUIRE(db);
+  const auto insertPreset = [&](const std::string& id) {
+    return db->writeTransaction([&](Database& d) -> Status {
+      auto insert = d.prepare("INSERT INTO presets (id, mode, json) VALUES (?1, 'wdt', '{}')");
+      if (!insert) return tl::unexpected(insert.error());
+      insert->bind(1, id);
+      return insert->run();
+    });
+  };
+  REQUIRE(insertPreset("before"));
+  // The server ends this program's session while it is idle (an administrator, an idle timeout).
+  auto pid = db->prepare("SELECT pg_backend_pid()");
+  REQUIRE(pid);
+  REQUIRE(*pid->step());
+  REQUIRE(test::postgresValue(url, "SELECT pg_terminate_backend(" + std::to_string(pid->int64(0)) + ")") == "t");
+  CHECK(insertPreset("after terminate"));
+  CHECK(countRows(*db, "presets") == 2);
+
+  if (!test::stopTestPostgres()) return;  // a server this process did not start: not ours to stop
+  auto whileDown = insertPreset("while down");
+  bool restarted = test::restartTestPostgres();
+  REQUIRE(restarted);
+  REQUIRE_FALSE(whileDown);
+  CHECK((whileDown.error().kind == ErrorKind::Unavailable));
+  CHECK(whileDown.error().message.find("database server") != std::string::npos);
+  CHECK(whileDown.error().message.find('\n') == std::string::npos);
+  CHECK(insertPreset("after restart"));
+  auto ids = db->prepare("SELECT id FROM presets ORDER BY id");
+  REQUIRE(ids);
+  std::vector<std::string> stored;
+  while (*ids->step()) stored.push_back(ids->text(0));
+  CHECK(stored == std::vector<std::string>{"after restart", "after terminate", "before"});
+}
+
 TEST_CASE("Two connections writing at once through writeTransaction lose no row") {
   test::TempDir dir;
-  const std::string path = (dir / "c.db").string();
+  const std::string path = test::freshDatabase(dir, "c.db");
   REQUIRE(Database::open(path));
   constexpr int kPerWriter = 150;
   auto writer = [&](int w, std::string* error) {
@@ -548,7 +632,7 @@ TEST_CASE("checksumPath hashes a file's bytes and notices a changed file in a fo
 
 TEST_CASE("SqlErrors_CarryTheirKind_UniqueIsConflict_MissingReferenceIsNotFound_CheckIsInvalid") {
   test::TempDir dir;
-  auto db = Database::open((dir / "k.db").string());
+  auto db = Database::open(test::freshDatabase(dir, "k.db"));
   REQUIRE(db);
   REQUIRE(db->exec("INSERT INTO presets (id, mode, json) VALUES ('p', 'wdt', '{}')"));
   auto clash = db->exec("INSERT INTO presets (id, mode, json) VALUES ('p', 'bare', '{}')");

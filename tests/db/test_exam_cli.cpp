@@ -6,6 +6,7 @@
 #include <fstream>
 
 #include "db/database.h"
+#include "test_databases.h"
 #include "test_support.h"
 #include "volume/dataset_source.h"
 #include "volume/phantom.h"
@@ -72,7 +73,7 @@ TEST_CASE("exam hides names and grades until the end, saves every answer, scores
            << R"("], "kinds": ["name", "locate"], "count": 4, "time_limit_s": 600, "pass_score": 0.7,
                  "locate_views": ["3d"]}]})";
   }
-  const std::string db = (dir / "t.db").string();
+  const std::string db = test::freshDatabase(dir, "t.db");
   ::setenv("AT_DATA_DIR", (dir / "data").c_str(), 1);
   const auto exam = [&](const std::string& args, const std::string& input = "") {
     return test::runApp("exam ex.exam --user kim --new-user --no-views --db '" + db + "' " + args, input);

@@ -19,6 +19,7 @@
 #include "lessons/course_json.h"
 #include "quiz/answer_json.h"
 #include "quiz/keys.h"
+#include "test_databases.h"
 #include "test_support.h"
 #include "volume/dataset_source.h"
 #include "volume/phantom.h"
@@ -165,7 +166,7 @@ std::string playArgs(const std::string& lesson, const std::string& user, const f
 TEST_CASE("Every shipped lesson plays to the end from answers computed from the course's keys") {
   if (!appAvailable()) return;
   test::TempDir dir;
-  const std::string dbPath = (dir / "shipped.db").string();
+  const std::string dbPath = test::freshDatabase(dir, "shipped.db");
   std::vector<fs::path> files;
   for (const auto& e : fs::directory_iterator(test::sourceDir() / "data" / "courses"))
     if (e.path().extension() == ".json") files.push_back(e.path());
@@ -201,7 +202,7 @@ TEST_CASE("Every shipped lesson plays to the end from answers computed from the 
 TEST_CASE("play killed with SIGKILL mid-lesson keeps every answer and resumes at the next step") {
   if (!appAvailable()) return;
   test::TempDir dir;
-  const std::string dbPath = (dir / "crash.db").string();
+  const std::string dbPath = test::freshDatabase(dir, "crash.db");
   storeQuickCourse(dbPath);
   const auto answers = quickAnswers();
   const int answeredBeforeKill = 4;
@@ -259,7 +260,7 @@ TEST_CASE("play killed with SIGKILL mid-lesson keeps every answer and resumes at
 TEST_CASE("Four play processes recording into one database at once lose nothing") {
   if (!appAvailable()) return;
   test::TempDir dir;
-  const std::string dbPath = (dir / "many.db").string();
+  const std::string dbPath = test::freshDatabase(dir, "many.db");
   storeQuickCourse(dbPath);
   const auto answers = quickAnswers();
   const fs::path file = writeLines(dir / "a.jsonl", answers);
@@ -278,7 +279,7 @@ TEST_CASE("Four play processes recording into one database at once lose nothing"
 TEST_CASE("A malformed answers line is reported with its number and reason, earlier answers kept") {
   if (!appAvailable()) return;
   test::TempDir dir;
-  const std::string dbPath = (dir / "bad.db").string();
+  const std::string dbPath = test::freshDatabase(dir, "bad.db");
   storeQuickCourse(dbPath);
   const auto answers = quickAnswers();
 
@@ -305,7 +306,7 @@ TEST_CASE("A malformed answers line is reported with its number and reason, earl
 TEST_CASE("Unknown lessons and users get a clear message") {
   if (!appAvailable()) return;
   test::TempDir dir;
-  const std::string dbPath = (dir / "u.db").string();
+  const std::string dbPath = test::freshDatabase(dir, "u.db");
   auto lesson = test::runApp("play no_such_lesson --user zoe --new-user --db '" + dbPath + "'");
   CHECK(lesson.exitCode != 0);
   CHECK(lesson.err.find("unknown lesson 'no_such_lesson'") != std::string::npos);
@@ -320,7 +321,7 @@ TEST_CASE("Unknown lessons and users get a clear message") {
 TEST_CASE("Interactive play takes typed answers on stdin and stops cleanly at 'quit'") {
   if (!appAvailable()) return;
   test::TempDir dir;
-  const std::string dbPath = (dir / "i.db").string();
+  const std::string dbPath = test::freshDatabase(dir, "i.db");
   storeQuickCourse(dbPath);
   const auto structures = phantomStructures();
   // Question 0 is a name question: type the display name; then quit at question 1.
@@ -357,7 +358,7 @@ TEST_CASE("Interactive play takes typed answers on stdin and stops cleanly at 'q
 TEST_CASE("Quiz-only play skips the teaching steps and records the attempt's mode") {
   if (!appAvailable()) return;
   test::TempDir dir;
-  const std::string dbPath = (dir / "q.db").string();
+  const std::string dbPath = test::freshDatabase(dir, "q.db");
   storeQuickCourse(dbPath);
   const fs::path file = writeLines(dir / "q.jsonl", quickAnswers());
   auto r = test::runApp(playArgs("quick.check", "ida", file, dbPath) + " --quiz-only");
@@ -372,7 +373,7 @@ TEST_CASE("Quiz-only play skips the teaching steps and records the attempt's mod
 TEST_CASE("courses and lessons list the seeded default course; seeding twice adds nothing") {
   if (!appAvailable()) return;
   test::TempDir dir;
-  const std::string dbPath = (dir / "l.db").string();
+  const std::string dbPath = test::freshDatabase(dir, "l.db");
   auto courses = test::runApp("courses --db '" + dbPath + "'");
   CHECK_MESSAGE(courses.exitCode == 0, courses.err);
   const auto lessonsBefore = scalar(dbPath, "SELECT count(*) FROM lessons");
@@ -390,7 +391,7 @@ TEST_CASE("The TotalSegmentator sample imports with its 41 structures and carrie
   if (!appAvailable()) return;
   if (!test::requireSharedData("abdominal course")) return;
   test::TempDir dir;
-  const std::string dbPath = (dir / "abdomen.db").string();
+  const std::string dbPath = test::freshDatabase(dir, "abdomen.db");
   const auto ct = test::sharedData("totalsegmentator/ct_small.nii.gz");
   const auto seg = test::sharedData("totalsegmentator/seg_small.nii.gz");
   const auto names = test::sharedData("totalsegmentator/labels.json");
@@ -465,7 +466,7 @@ TEST_CASE("The TotalSegmentator sample imports with its 41 structures and carrie
 TEST_CASE("play --review asks only about taught structures that are due, and progress counts the same") {
   if (!appAvailable()) return;
   test::TempDir dir;
-  const std::string dbPath = (dir / "rv.db").string();
+  const std::string dbPath = test::freshDatabase(dir, "rv.db");
   storeQuickCourse(dbPath);
   const auto structures = phantomStructures();
   const auto answers = quickAnswers();

@@ -2,13 +2,14 @@
 
 #include "db/database.h"
 #include "db/preset_store.h"
+#include "test_databases.h"
 #include "test_support.h"
 
 using namespace at;
 
 TEST_CASE("PresetStore_SaveThenFind_ReturnsTheSameRecordAndReplacesById") {
   test::TempDir dir;
-  auto db = db::Database::open((dir / "t.db").string());
+  auto db = db::Database::open(test::freshDatabase(dir, "t.db"));
   REQUIRE(db.has_value());
   const db::StoredPreset a{"my_cochlea", std::string("cochlea"), "wdt", R"({"name": "My cochlea"})"};
   REQUIRE(db::savePreset(*db, a).has_value());
@@ -32,7 +33,7 @@ TEST_CASE("PresetStore_SaveThenFind_ReturnsTheSameRecordAndReplacesById") {
 
 TEST_CASE("PresetStore_ListPresets_IsSortedByIdAndFiltersByStructure") {
   test::TempDir dir;
-  auto db = db::Database::open((dir / "t.db").string());
+  auto db = db::Database::open(test::freshDatabase(dir, "t.db"));
   REQUIRE(db.has_value());
   REQUIRE(db::savePreset(*db, {"z_any", std::nullopt, "bare", "{}"}).has_value());
   REQUIRE(db::savePreset(*db, {"b_cochlea", std::string("cochlea"), "wdt", "{}"}).has_value());
@@ -52,7 +53,7 @@ TEST_CASE("PresetStore_ListPresets_IsSortedByIdAndFiltersByStructure") {
 
 TEST_CASE("PresetStore_FindPreset_OfAnUnknownId_IsEmptyNotAnError") {
   test::TempDir dir;
-  auto db = db::Database::open((dir / "t.db").string());
+  auto db = db::Database::open(test::freshDatabase(dir, "t.db"));
   REQUIRE(db.has_value());
   auto none = db::findPreset(*db, "missing");
   REQUIRE(none.has_value());
@@ -61,7 +62,7 @@ TEST_CASE("PresetStore_FindPreset_OfAnUnknownId_IsEmptyNotAnError") {
 
 TEST_CASE("PresetStore_SavePreset_WithEmptyFields_IsRefusedNamingTheField") {
   test::TempDir dir;
-  auto db = db::Database::open((dir / "t.db").string());
+  auto db = db::Database::open(test::freshDatabase(dir, "t.db"));
   REQUIRE(db.has_value());
   auto noId = db::savePreset(*db, {"", std::nullopt, "wdt", "{}"});
   REQUIRE_FALSE(noId.has_value());

@@ -14,6 +14,7 @@
 #include "lessons/lesson_engine.h"
 #include "lessons/scheduling.h"
 #include "quiz/answer_json.h"
+#include "test_databases.h"
 #include "test_support.h"
 #include "toy_course.h"
 
@@ -42,10 +43,14 @@ LearnerUpdate firstAnswer(std::int64_t userId, const std::string& structure, Rat
   return u;
 }
 
-Database openFresh(const test::TempDir& dir, const std::string& name = "r.db") {
-  auto db = Database::open((dir / name).string());
+Database openAt(const std::string& location) {
+  auto db = Database::open(location);
   REQUIRE_MESSAGE(db, (db ? "" : db.error().message));
   return std::move(*db);
+}
+
+Database openFresh(const test::TempDir& dir, const std::string& name = "r.db") {
+  return openAt(test::freshDatabase(dir, name));
 }
 
 // The answer that is right for a resolved question (names from the toy structures).
@@ -333,12 +338,12 @@ TEST_CASE("An answer is stored with its progress, ability and difficulty in one 
   CHECK(progress.allProgress(user->id)->size() == 1);
 }
 
-TEST_CASE("The LessonEngine on SQLite resumes a lesson at the next step after the process is gone") {
+TEST_CASE("The LessonEngine on the store resumes a lesson at the next step after the process is gone") {
   test::TempDir dir;
-  const std::string path = (dir / "e.db").string();
+  const std::string path = test::freshDatabase(dir, "e.db");
   std::int64_t userId = 0;
   {
-    Database db = openFresh(dir, "e.db");
+    Database db = openAt(path);
     REQUIRE(storeCourse(db, test::toyCourse(), "toy"));
     SqliteUserRepository users(db);
     userId = users.createUser("cleo", Role::Student, "")->id;
@@ -387,10 +392,10 @@ TEST_CASE("The LessonEngine on SQLite resumes a lesson at the next step after th
 
 TEST_CASE("Two connections recording answers for the same user at once lose nothing") {
   test::TempDir dir;
-  const std::string path = (dir / "c.db").string();
+  const std::string path = test::freshDatabase(dir, "c.db");
   std::int64_t userId = 0, attemptA = 0, attemptB = 0;
   {
-    Database db = openFresh(dir, "c.db");
+    Database db = openAt(path);
     SqliteUserRepository users(db);
     SqliteProgressRepository progress(db);
     userId = users.createUser("dana", Role::Student, "")->id;
@@ -509,8 +514,14 @@ TEST_CASE("A review answer that fails in its last write leaves no trace of its f
   auto user = users.createUser("fay", Role::Student, "");
   REQUIRE(user);
   // The question's difficulty is the transaction's last write: make it fail as a full disk would.
-  REQUIRE(db.exec("CREATE TRIGGER stats_fail BEFORE INSERT ON question_stats"
-                  " BEGIN SELECT RAISE(ABORT, 'database or disk is full'); END"));
+  if (db.backend() == Backend::Sqlite) {
+    REQUIRE(db.exec("CREATE TRIGGER stats_fail BEFORE INSERT ON question_stats"
+                    " BEGIN SELECT RAISE(ABORT, 'database or disk is full'); END"));
+  } else {
+    REQUIRE(db.exec("CREATE FUNCTION stats_fail() RETURNS trigger LANGUAGE plpgsql AS"
+                    " $$ BEGIN RAISE EXCEPTION 'database or disk is full'; END $$;"
+                    "CREATE TRIGGER stats_fail BEFORE INSERT ON question_stats FOR EACH ROW EXECUTE FUNCTION stats_fail()"));
+  }
   ReviewRecord r;
   r.response.userId = user->id;
   r.response.questionId = "toy.ossicles.name_stapes";
@@ -545,11 +556,11 @@ TEST_CASE("A review answer that fails in its last write leaves no trace of its f
   CHECK(countRows(db, "memory_states") == 0);
 }
 
-TEST_CASE("answerReview on SQLite moves the review queue by FSRS: right answers out of it for longer, a wrong one back") {
+TEST_CASE("answerReview on the store moves the review queue by FSRS: right answers out of it for longer, a wrong one back") {
   test::TempDir dir;
-  const std::string path = (dir / "q.db").string();
+  const std::string path = test::freshDatabase(dir, "q.db");
   {
-    Database db = openFresh(dir, "q.db");
+    Database db = openAt(path);
     REQUIRE(storeCourse(db, test::toyCourse(), "toy"));
   }
   auto db = Database::open(path);

@@ -1,10 +1,18 @@
 #include <doctest/doctest.h>
 
+#include <algorithm>
+#include <latch>
+#include <map>
+#include <mutex>
 #include <set>
+#include <thread>
 
 #include "db/database.h"
 #include "db/study_store.h"
+#include "quiz/study_design.h"
 #include "quiz/study_protocol.h"
+#include "quiz/study_report.h"
+#include "test_databases.h"
 #include "test_support.h"
 
 using namespace at;
@@ -20,7 +28,7 @@ quiz::StudyProtocol protocol(std::uint64_t seed = 5) {
 
 TEST_CASE("StudyStore_EnrolParticipants_StoresBlindedCounterbalancedTrials") {
   test::TempDir dir;
-  auto db = db::Database::open((dir / "t.db").string());
+  auto db = db::Database::open(test::freshDatabase(dir, "t.db"));
   REQUIRE(db.has_value());
   const auto p = protocol();
   REQUIRE(db::saveStudy(*db, p).has_value());
@@ -51,7 +59,7 @@ TEST_CASE("StudyStore_EnrolParticipants_StoresBlindedCounterbalancedTrials") {
 
 TEST_CASE("StudyStore_DesignChangeAfterParticipants_IsRefusedAndNothingChanges") {
   test::TempDir dir;
-  auto db = db::Database::open((dir / "t.db").string());
+  auto db = db::Database::open(test::freshDatabase(dir, "t.db"));
   REQUIRE(db.has_value());
   auto p = protocol();
   REQUIRE(db::saveStudy(*db, p).has_value());
@@ -73,7 +81,7 @@ TEST_CASE("StudyStore_DesignChangeAfterParticipants_IsRefusedAndNothingChanges")
 
 TEST_CASE("StudyStore_RatingsAreUnblindedOnExport") {
   test::TempDir dir;
-  auto db = db::Database::open((dir / "t.db").string());
+  auto db = db::Database::open(test::freshDatabase(dir, "t.db"));
   REQUIRE(db.has_value());
   const auto p = protocol();
   REQUIRE(db::saveStudy(*db, p).has_value());
@@ -104,4 +112,213 @@ TEST_CASE("StudyStore_RatingsAreUnblindedOnExport") {
   REQUIRE(completion->size() == 1);
   CHECK((*completion)[0].complete);
   CHECK((*completion)[0].ratingsGiven == (*completion)[0].ratingsExpected);
+}
+
+TEST_CASE("StudyStore_ResumedParticipant_EachRatingKeepsTheSessionItWasGivenIn") {
+  test::TempDir dir;
+  auto db = db::Database::open(test::freshDatabase(dir, "t.db"));
+  REQUIRE(db.has_value());
+  const auto p = protocol();
+  REQUIRE(db::saveStudy(*db, p).has_value());
+  REQUIRE(db::enrolOrResume(*db, p, "P0", "medical").has_value());
+  db::RatingRecord r;
+  r.item = p.items[0].id;
+  r.ratingAsShown = 2;
+  REQUIRE(db::recordRating(*db, p.id, "P0", r).has_value());
+  REQUIRE(db::recordTrialViewing(*db, p.id, "P0", 0, 100, 200, 1, "", false).has_value());
+  REQUIRE(db::enrolOrResume(*db, p, "P0", "medical").has_value());  // session 2
+  r.item = p.items[1].id;
+  REQUIRE(db::recordRating(*db, p.id, "P0", r).has_value());
+  auto rows = db::studyResponseRows(*db, p);
+  REQUIRE(rows.has_value());
+  REQUIRE(rows->size() == 2);
+  CHECK((*rows)[0].session == 1);
+  CHECK((*rows)[1].session == 2);
+  CHECK_FALSE((*rows)[0].viewingMeasured);  // shown as files: the times are not known
+  auto participants = db::studyParticipantRows(*db, p.id);
+  REQUIRE(participants.has_value());
+  REQUIRE(participants->size() == 1);
+  CHECK((*participants)[0].sessions == 2);
+}
+
+TEST_CASE("StudyStore_RatingsFromBeforeSessionsWereKept_MigrateToSessionOneOrUnknown") {
+  test::TempDir dir;
+  const std::string path = test::freshDatabase(dir, "old.db");
+  const auto p = protocol();
+  {
+    db::OpenOptions options;
+    options.targetVersion = 6;
+    auto old = db::Database::open(path, options);
+    REQUIRE(old.has_value());
+    REQUIRE(db::saveStudy(*old, p).has_value());
+    for (const char* who : {"once", "twice"}) {
+      REQUIRE(old->exec(std::string("INSERT INTO study_participants (study_id, participant_id, group_name, enrolment_index,"
+                                    " session) VALUES ('") + p.id + "', '" + who + "', 'medical', " +
+                        (who[0] == 'o' ? "0, 1" : "1, 2") + ");"));
+      REQUIRE(old->exec(std::string("INSERT INTO study_trials (study_id, participant_id, position, structure, a_condition,"
+                                    " b_condition, preset_a, preset_b) VALUES ('") + p.id + "', '" + who +
+                        "', 0, 'cochlea', 'wdt', 'bare', 'cochlea_wdt', 'cochlea_bare');"));
+      REQUIRE(old->exec(std::string("INSERT INTO study_ratings (study_id, participant_id, position, item, rating_ab)"
+                                    " VALUES ('") + p.id + "', '" + who + "', 0, 'shape', 2);"));
+    }
+  }
+  auto db = db::Database::open(path);
+  REQUIRE(db.has_value());
+  auto rows = db::studyResponseRows(*db, p);
+  REQUIRE(rows.has_value());
+  REQUIRE(rows->size() == 2);
+  CHECK((*rows)[0].participantId == "once");
+  CHECK((*rows)[0].session == 1);
+  CHECK((*rows)[1].session == 0);  // resumed before the upgrade: which session is not known
+  CHECK((*rows)[1].viewingMeasured);
+}
+
+TEST_CASE("StudyStore_ParticipantIdsThatAreNoValidRecordNames_AreRefused") {
+  test::TempDir dir;
+  auto db = db::Database::open(test::freshDatabase(dir, "t.db"));
+  REQUIRE(db.has_value());
+  const auto p = protocol();
+  REQUIRE(db::saveStudy(*db, p).has_value());
+  for (const char* bad : {"", "=cmd|'calc'", "a b", "-P1", "P1,2"}) {
+    CAPTURE(bad);
+    auto e = db::enrolOrResume(*db, p, bad, "medical");
+    REQUIRE_FALSE(e.has_value());
+    CHECK(e.error().message.find("letters, digits") != std::string::npos);
+  }
+  CHECK(db::enrolOrResume(*db, p, "site-2_P07", "medical").has_value());
+}
+
+namespace {
+
+// A simulated participant's opinion on the paper's scale (1 = prefer WDT … 5 = prefer bare),
+// fixed by who they are, not by the order or the machine they happen to get.
+int opinion(int participant, std::size_t structure, std::size_t item) {
+  const int v = int((std::size_t(participant) * 7 + structure * 3 + item * 5) % 5) + 1;
+  return participant % 3 == 0 ? std::max(1, v - 2) : v;  // a third lean towards WDT
+}
+
+// Runs one participant from enrolment to completion on `db`, rating every item of every trial
+// with `opinion` (converted to the blinded A/B scale of the trial shown). Empty or an error.
+std::string runParticipant(db::Database& db, const quiz::StudyProtocol& p, int participant) {
+  const std::string id = "P" + std::to_string(participant);
+  auto part = db::enrolOrResume(db, p, id, p.groups[std::size_t(participant) % p.groups.size()]);
+  if (!part) return id + ": " + part.error().message;
+  for (const auto& t : part->trials) {
+    const std::size_t s = std::size_t(std::find(p.structures.begin(), p.structures.end(), t.structure) - p.structures.begin());
+    const bool aIsWdt = t.aCondition == p.conditions[0].id;
+    for (std::size_t i = 0; i < p.items.size(); ++i) {
+      db::RatingRecord r;
+      r.position = t.position;
+      r.item = p.items[i].id;
+      for (int shown = 1; shown <= 5; ++shown)
+        if (quiz::unblindRating(shown, aIsWdt, p.scale) == opinion(participant, s, i)) r.ratingAsShown = shown;
+      r.responseMs = 900;
+      if (auto st = db::recordRating(db, p.id, id, r); !st) return id + ": " + st.error().message;
+    }
+    if (auto st = db::recordTrialViewing(db, p.id, id, t.position, 3000, 2500, 2, ""); !st)
+      return id + ": " + st.error().message;
+  }
+  if (auto st = db::markParticipantComplete(db, p.id, id); !st) return id + ": " + st.error().message;
+  return {};
+}
+
+// Each participant's plan as the export shows it: structure → (1-based order, condition shown as A).
+using PlanSeen = std::map<std::string, std::pair<int, std::string>>;
+std::map<std::string, PlanSeen> plansSeen(const std::vector<quiz::StudyResponseRow>& rows) {
+  std::map<std::string, PlanSeen> out;
+  for (const auto& r : rows) out[r.participantId][r.structure] = {r.presentationOrder, r.aCondition};
+  return out;
+}
+
+}  // namespace
+
+TEST_CASE("StudyStore_ThreeLabMachinesAtOnce_EveryCounterbalancingRowOnce_SummaryAsOnOneMachine") {
+  // 19 participants × 13 structures, enrolled and rated from three connections at once (three lab
+  // machines on one class server; on SQLite three connections to one file). Enrolment draws the
+  // counterbalancing row from the shared store, so the study is as balanced as on one machine and
+  // its summary is the one machine's.
+  test::TempDir dir;
+  const auto p = protocol(11);
+  REQUIRE(p.structures.size() == 13);
+  const int participants = 19, machines = 3;
+  const std::string shared = test::freshDatabase(dir, "class.db");
+  {
+    auto db = db::Database::open(shared);
+    REQUIRE(db.has_value());
+    REQUIRE(db::saveStudy(*db, p).has_value());
+  }
+  std::vector<std::string> errors;
+  std::mutex errorsMutex;
+  std::latch start(machines);
+  std::vector<std::thread> lab;
+  for (int m = 0; m < machines; ++m) {
+    lab.emplace_back([&, m] {
+      auto db = db::Database::open(shared);
+      start.arrive_and_wait();
+      std::string error = db ? "" : db.error().message;
+      for (int who = m; who < participants && error.empty(); who += machines) error = runParticipant(*db, p, who);
+      if (!error.empty()) {
+        std::lock_guard lock(errorsMutex);
+        errors.push_back("machine " + std::to_string(m) + ": " + error);
+      }
+    });
+  }
+  for (auto& t : lab) t.join();
+  CHECK(errors.empty());
+  for (const auto& e : errors) MESSAGE(e);
+
+  auto server = db::Database::open(shared);
+  REQUIRE(server.has_value());
+  auto enrolled = db::studyParticipantRows(*server, p.id);
+  REQUIRE(enrolled.has_value());
+  REQUIRE(enrolled->size() == std::size_t(participants));
+  std::set<int> rows;
+  for (const auto& e : *enrolled) {
+    rows.insert(e.enrolmentIndex);
+    CHECK(e.complete);
+    CHECK(e.sessions == 1);
+  }
+  CHECK(rows.size() == std::size_t(participants));  // no counterbalancing row given twice …
+  CHECK(*rows.begin() == 0);
+  CHECK(*rows.rbegin() == participants - 1);        // … and none skipped
+  auto serverRows = db::studyResponseRows(*server, p);
+  REQUIRE(serverRows.has_value());
+  CHECK(serverRows->size() == std::size_t(participants) * p.structures.size() * p.items.size());
+  // Every participant got the plan of their enrolment row.
+  const auto seen = plansSeen(*serverRows);
+  for (const auto& e : *enrolled) {
+    CAPTURE(e.participantId);
+    PlanSeen planned;
+    for (const auto& t : quiz::planParticipant(p.structures.size(), std::size_t(e.enrolmentIndex), p.seed))
+      planned[p.structures[t.structureIndex]] = {int(t.position) + 1,
+                                                 p.conditions[t.aIsFirstCondition ? 0 : 1].id};
+    CHECK(seen.at(e.participantId) == planned);
+  }
+
+  // The same participants one after another on one machine.
+  test::TempDir alone;
+  auto single = db::Database::open(test::freshDatabase(alone, "one_machine.db"));
+  REQUIRE(single.has_value());
+  REQUIRE(db::saveStudy(*single, p).has_value());
+  for (int who = 0; who < participants; ++who) REQUIRE(runParticipant(*single, p, who).empty());
+  auto singleRows = db::studyResponseRows(*single, p);
+  REQUIRE(singleRows.has_value());
+  // Balance: the same rows of the design were used, so each structure was shown at each position
+  // and as A under WDT as often as on one machine.
+  std::map<std::pair<std::string, int>, int> atPosition[2];
+  std::map<std::string, int> wdtAsA[2];
+  for (int k = 0; k < 2; ++k)
+    for (const auto& [who, plan] : plansSeen(k == 0 ? *serverRows : *singleRows))
+      for (const auto& [structure, shown] : plan) {
+        ++atPosition[k][{structure, shown.first}];
+        wdtAsA[k][structure] += shown.second == p.conditions[0].id;
+      }
+  CHECK(atPosition[0] == atPosition[1]);
+  CHECK(wdtAsA[0] == wdtAsA[1]);
+  const auto summaryOf = [&](const std::vector<quiz::StudyResponseRow>& r) {
+    return quiz::summaryCsv(quiz::summariseStudy(p, r));
+  };
+  CHECK(summaryOf(*serverRows) == summaryOf(*singleRows));
+  const auto summary = quiz::summariseStudy(p, *serverRows);
+  CHECK(summary.at(0, summary.columns.size() - 1).stats.n == std::size_t(participants));
 }

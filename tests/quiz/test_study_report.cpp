@@ -155,30 +155,26 @@ TEST_CASE("StudySummary_EmptyStudy_HasEmptyCellsAndStillRenders") {
   const StudySummary s = summariseStudy(p, {});
   for (const auto& c : s.cells) CHECK(c.stats.n == 0);
   CHECK(summaryCsv(s).find("shape,all,0,") != std::string::npos);
-  const at::RgbImage img = renderSummaryChart(p, s);
-  CHECK(img.width > 0);
   CHECK(summarySvg(p, s).find("<svg") == 0);
 }
 
-TEST_CASE("SummaryChart_MarkersSitAtTheMeans") {
+TEST_CASE("SummarySvg_LabelsItemsAxisAndLegend") {
   const StudyProtocol p = smallProtocol();
   std::vector<StudyResponseRow> rows;
   for (const char* who : {"a", "b", "c"}) {
     rows.push_back(row(who, "medical", "cochlea", "shape", 1));
     rows.push_back(row(who, "medical", "cochlea", "context", 4));
   }
-  const StudySummary s = summariseStudy(p, rows);
+  const std::string svg = summarySvg(p, summariseStudy(p, rows));
+  for (const char* text : {">shape<", ">context<", ">prefer wdt<", ">prefer bare<", ">non-medical<", ">medical<", ">all<"}) {
+    CAPTURE(text);
+    CHECK(svg.find(text) != std::string::npos);
+  }
+  // The medical marker of "shape" sits at 1 on the axis.
   const ChartLayout layout;
-  const at::RgbImage img = renderSummaryChart(p, s, layout);
-  auto pixel = [&](int x, int y) {
-    const std::uint8_t* q = &img.rgb[(std::size_t(y) * img.width + x) * 3];
-    return std::array<std::uint8_t, 3>{q[0], q[1], q[2]};
-  };
-  const std::size_t medical = 1, all = 2;
-  CHECK(pixel(layout.xOf(1.0, p.scale), layout.yOf(0, medical, 3)) == chartColumnColour(medical));
-  CHECK(pixel(layout.xOf(4.0, p.scale), layout.yOf(1, all, 3)) == chartColumnColour(all));
-  // Nothing drawn for the empty non-medical column at those rows.
-  CHECK(pixel(layout.xOf(1.0, p.scale) + 30, layout.yOf(0, 0, 3)) == std::array<std::uint8_t, 3>{255, 255, 255});
+  const std::string marker = "<rect x=\"" + std::to_string(layout.xOf(1.0, p.scale) - 5) + "\" y=\"" +
+                             std::to_string(layout.yOf(0, 1, 3) - 5) + "\"";
+  CHECK(svg.find(marker) != std::string::npos);
 }
 
 TEST_CASE("LongAndWideCsv_PartialParticipantAndHostileComment_RoundTrip") {
@@ -197,7 +193,6 @@ TEST_CASE("LongAndWideCsv_PartialParticipantAndHostileComment_RoundTrip") {
   CHECK(wide[0].size() == wide[1].size());
   CHECK(wide[1][2] == "0");
   CHECK(responsesLongJsonSidecar(p).find("\"rating_ab\"") != std::string::npos);
-  CHECK(parseCsv(dataDictionaryCsv(p)).size() == 1 + 22);
 }
 
 TEST_CASE("StudySummary_OneParticipant_HasNoSpreadAndNoEvidence") {

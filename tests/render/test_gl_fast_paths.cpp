@@ -128,6 +128,10 @@ TEST_CASE("A field uploaded slice by slice keeps the old field on screen until i
   s.preset.t = 0.0f;  // only what the field reaches shows: the two fields give different images
   s.preset.surfaceGradientHu = {0, 0};  // every voxel the field reaches, not only edges: the blobs
   s.preset.surfaceInterior = 1;         // are a few voxels wide
+  // Context from far to near, so that every blob's look depends on the field's value there.
+  s.preset.distanceTf = {{0, {1, 1, 1, 0}}, {0.35, {1, 1, 1, 1}}, {1, {1, 0.5f, 0, 1}}};
+  s.preset.alpha = 1.2f;
+  s.preset.contextInFront = 1;
   // A view in which the two fields tell apart in the image. A random orbit of a random scene can
   // show none of the voxels where they differ (seed 25806670135292 did), so orbits are drawn until
   // one does.

@@ -244,7 +244,7 @@ void DesktopModel::showLessonStructure(const LessonController::Shown& shown) {
     message("lesson step: no structure '" + shown.structure + "' in dataset '" + dataset_->id + "'");
     return;
   }
-  auto preset = presetForStep(library_, s->id, shown.presetId);
+  auto preset = presetForStep(library_, s->id, shown.presetId, explore_.levels());
   if (!preset) {
     message(preset.error().message);
     return;
@@ -313,6 +313,8 @@ render::RenderSettings DesktopModel::renderSettings(const RenderPlan& plan) cons
   const ExploreState::Shown shown = explore_.shown();
   s.preset = shown.preset;
   s.camera = explore_.camera();
+  // The context radius from the shown structure's size, as the render command frames it.
+  if (const render::StructureFrame* frame = explore_.frameOf(shown.label)) s.distanceUnit = render::distanceUnitFor(*frame);
   s.width = plan.width;
   s.height = plan.height;
   s.stepMm = render::effectiveStepMm(dataset_->volume.geometry, render::RenderSettings{}) * plan.stepFactor;

@@ -17,6 +17,7 @@ Status ExploreState::setDataset(const Dataset& dataset, const std::string& start
     if (auto frame = render::structureFrame(dataset.labels, s.label)) frames[s.label] = *frame;
   if (frames.empty()) return fail("dataset '" + dataset.id + "': no structure has any voxel");
   dataset_ = &dataset;
+  levels_ = render::summariseIntensities(dataset.volume);
   frames_ = std::move(frames);
   bySystem_.clear();
   presets_.clear();
@@ -35,7 +36,7 @@ Status ExploreState::setDataset(const Dataset& dataset, const std::string& start
   fieldLabel_ = 0;
   fieldKey_.clear();
   clip_.offsetMm = 0;
-  if (auto preset = presetForStep(library_, start->id, startPreset)) usePreset(start->label, *preset, preset->t);
+  if (auto preset = presetForStep(library_, start->id, startPreset, levels_)) usePreset(start->label, *preset, preset->t);
   else messages_(preset.error().message);
   changed();
   return {};
@@ -52,7 +53,7 @@ const render::Preset& ExploreState::presetOf(std::uint16_t label, bool bare) con
   render::Preset preset;
   const Structure* s = dataset_ ? dataset_->findStructureByLabel(label) : nullptr;
   const render::RenderMode mode = bare ? render::RenderMode::Bare : render::RenderMode::Wdt;
-  auto loaded = s ? library_.forStructure(s->id, mode) : Result<render::Preset>(fail("no structure"));
+  auto loaded = s ? render::presetOrDerived(library_, s->id, mode, levels_) : Result<render::Preset>(fail("no structure"));
   if (loaded) {
     preset = *loaded;
   } else {

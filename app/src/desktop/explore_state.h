@@ -18,6 +18,7 @@
 
 #include "core/error.h"
 #include "render/camera.h"
+#include "render/derived_preset.h"
 #include "render/preset.h"
 #include "render/scene.h"
 #include "volume/structure.h"
@@ -67,8 +68,10 @@ class ExploreState {
   const ClipSettings& clip() const { return clip_; }
   std::optional<render::ClipPlane> clipPlane() const;
 
-  // The preset of a structure in a mode: a step's preset when one was set, else the shipped one
-  // (else a built-in default, with a message).
+  // The dataset's intensity levels, which derived presets are made from.
+  const render::IntensityLevels& levels() const { return levels_; }
+  // The preset of a structure in a mode: a step's preset when one was set, else the shipped one,
+  // else one derived from the dataset's levels (else a built-in default, with a message).
   const render::Preset& presetOf(std::uint16_t label, bool bare) const;
   // The WDT parameters of the field `label` needs (the expert's edited preset while editing).
   std::optional<WdtParams> fieldParams(std::uint16_t label) const;
@@ -118,6 +121,7 @@ class ExploreState {
   const render::PresetLibrary& library_;
   MessageSink messages_;
   const Dataset* dataset_ = nullptr;
+  render::IntensityLevels levels_;  // of dataset_'s volume
   std::vector<std::pair<std::string, std::vector<const Structure*>>> bySystem_;
   std::map<std::uint16_t, render::StructureFrame> frames_;
   mutable std::map<std::pair<std::uint16_t, bool>, render::Preset> presets_;

@@ -210,17 +210,29 @@ ScriptInterpreter::Outcome ScriptInterpreter::presetSave(Context& c) {
 // ---------------------------------------------------------------------------------------------
 // Studies
 
+// study_start and study_next are done once the participant screen they opened is on display, so
+// every screen is shown (and announced as "study_screen") before the script acts on the next one.
+ScriptInterpreter::Outcome ScriptInterpreter::awaitStudyScreen(Context& c) {
+  if (!c.host.drawsPanels() || !c.model.study().screenPending()) return Progress::Done;
+  if (c.elapsedMs > c.action.value("timeout_ms", 60000.0))
+    return fail(ErrorKind::Unavailable, "ui script: " + c.action.at("do").get<std::string>() + ": the participant screen was never drawn");
+  return Progress::Running;
+}
+
 ScriptInterpreter::Outcome ScriptInterpreter::studyStart(Context& c) {
-  auto st = c.model.study().startParticipant(c.action.at("study").get<std::string>(), c.action.at("participant").get<std::string>(),
-                                             c.action.at("group").get<std::string>());
-  if (!st) return tl::unexpected(st.error());
-  return Progress::Done;
+  if (c.first) {
+    auto st = c.model.study().startParticipant(c.action.at("study").get<std::string>(), c.action.at("participant").get<std::string>(),
+                                               c.action.at("group").get<std::string>());
+    if (!st) return tl::unexpected(st.error());
+  }
+  return awaitStudyScreen(c);
 }
 
 // study_toggle {side?}, study_rate {item, rating}, study_comment {text}, study_next, study_close
 ScriptInterpreter::Outcome ScriptInterpreter::study(Context& c) {
   StudyController& s = c.model.study();
   const std::string what = c.action.at("do");
+  if (!c.first) return awaitStudyScreen(c);  // study_next, waiting for its screen
   if (!s.participantActive()) return fail("ui script: " + what + " needs study_start first");
   Status st;
   if (what == "study_toggle") {
@@ -237,7 +249,7 @@ ScriptInterpreter::Outcome ScriptInterpreter::study(Context& c) {
     s.closeParticipant();
   }
   if (!st) return tl::unexpected(withContext("ui script", st.error()));
-  return Progress::Done;
+  return what == "study_next" ? awaitStudyScreen(c) : Progress::Done;
 }
 
 ScriptInterpreter::Outcome ScriptInterpreter::coordinatorOpen(Context& c) {

@@ -15,7 +15,7 @@
 //             coordinator_open, coordinator_export, coordinator_summary
 //   import:   import, cancel_import, open_imported
 // An action that waits (a lesson being prepared, an import, an export, a locate answer's distance
-// field) is asked again next frame. A malformed or failing action ends the script with status 2,
+// field, a new study screen until a window has shown it) is asked again next frame. A malformed or failing action ends the script with status 2,
 // something waited for that never came (a timeout) with status 1.
 #pragma once
 
@@ -43,6 +43,9 @@ class ScriptHost {
   // For the report: "800x480" and the GL context's description.
   virtual std::string windowText() const = 0;
   virtual std::string glText() const = 0;
+  // The host draws the panels (a window): an action that changes a panel's screen waits until
+  // the new screen is on display, whatever the frame rate (false: nothing is drawn, no wait).
+  virtual bool drawsPanels() const = 0;
 };
 
 class ScriptInterpreter {
@@ -119,6 +122,7 @@ class ScriptInterpreter {
   Outcome presetSave(Context&);
   Outcome studyStart(Context&);
   Outcome study(Context&);
+  Outcome awaitStudyScreen(Context&);
   Outcome coordinatorOpen(Context&);
   Outcome coordinatorExport(Context&);
   Outcome coordinatorSummary(Context&);

@@ -59,7 +59,7 @@ void StudyController::beginTrial() {
   s.responseMs.clear();
   s.comment.clear();
   for (const auto& item : s.protocol.items) s.ratings[item.id] = 0;
-  newScreen_ = true;
+  newScreen_ = screenPending_ = true;
 }
 
 void StudyController::accountView() {
@@ -172,14 +172,22 @@ Status StudyController::selectStudy(const std::string& id) {
   if (!rows) return tl::unexpected(rows.error());
   summary_ = quiz::summariseStudy(*it, *rows);
   chart_.reset();
+  chartError_.clear();
   ++chartRevision_;
   return {};
 }
 
 const RgbImage* StudyController::chart() {
   if (!summary_ || !selectedStudy()) return nullptr;
-  if (!chart_) chart_ = quiz::renderSummaryChart(*selectedStudy(), *summary_);
-  return &*chart_;
+  if (!chart_ && chartError_.empty()) {
+    auto rasterised = summaryChart(*selectedStudy(), *summary_);
+    if (!rasterised) {
+      chartError_ = rasterised.error().message;
+      return nullptr;
+    }
+    chart_ = std::move(*rasterised);
+  }
+  return chart_ ? &*chart_ : nullptr;
 }
 
 Status StudyController::startExport(const std::string& outDir) {

@@ -65,8 +65,16 @@ class StudyController {
   std::optional<Shown> shown() const;
   // A new trial began since the last call (its participant window is yet to be announced).
   bool takeNewScreen() { return std::exchange(newScreen_, false); }
-  // The participant window's labels as drawn ("study_screen"), for the scripted-mode log.
-  void announce(nlohmann::json screen) { events_(std::move(screen)); }
+  // The participant window's labels as drawn ("study_screen"), for the scripted-mode log: the
+  // screen of the current trial is now on display.
+  void announce(nlohmann::json screen) {
+    screenPending_ = false;
+    events_(std::move(screen));
+  }
+  // The current trial's participant screen (or the closing one) has not been announced yet: a
+  // window that draws the panels is still to show it. The UI script waits on this so that its
+  // next action acts on the screen the last one caused.
+  bool screenPending() const { return participant_ && screenPending_; }
 
   Status startParticipant(const std::string& study, const std::string& participant, const std::string& group);
   void showSide(char side);             // 'A' or 'B' (another value: the other side) [study_toggle]
@@ -84,8 +92,11 @@ class StudyController {
   const quiz::StudyProtocol* selectedStudy() const;
   const std::vector<db::StudyCompletion>& completion() const { return completion_; }
   const std::optional<quiz::StudySummary>& summary() const { return summary_; }
-  // The Table-2 chart of the selected study; its revision changes when it does.
+  // The Table-2 chart of the selected study (its SVG rasterised, as the export's summary.png);
+  // its revision changes when it does. Null when there is none or it could not be drawn
+  // (chartError() says why).
   const RgbImage* chart();
+  const std::string& chartError() const { return chartError_; }
   std::uint64_t chartRevision() const { return chartRevision_; }
   const std::string& message() const { return message_; }
 
@@ -107,13 +118,15 @@ class StudyController {
   const render::PresetLibrary& library_;
   EventSink events_;
   std::unique_ptr<Participant> participant_;
-  bool newScreen_ = false;
+  bool newScreen_ = false;      // a new screen the panel has not begun to draw
+  bool screenPending_ = false;  // a new screen not yet announced
 
   std::vector<quiz::StudyProtocol> studies_;
   int studyIndex_ = -1;
   std::vector<db::StudyCompletion> completion_;
   std::optional<quiz::StudySummary> summary_;
   std::optional<RgbImage> chart_;
+  std::string chartError_;
   std::uint64_t chartRevision_ = 0;
   std::optional<StudyExport> export_;
   std::string exportStatus_;

@@ -1,13 +1,14 @@
-// The SQLite store: one database file, opened in WAL mode with foreign keys on and a busy timeout,
-// its schema brought to the current version by forward-only migrations (schema.h).
+// The store: a SQLite file (the embedded default) or a PostgreSQL database (a class server,
+// `postgresql://…`), opened with its schema brought to the current version by forward-only
+// migrations (schema.h). Both engines run the same repositories and the same SQL.
 //
-// Only db/ includes sqlite3.h; this header forward-declares the handle types. Every handle is owned
-// by an RAII object: `Database` (the connection), `Statement` (a prepared statement), `Transaction`
-// (rolled back when it dies uncommitted). All values reach SQL through bound parameters, never by
-// pasting text into a statement.
+// Only db/ includes sqlite3.h or libpq-fe.h: the engines live behind private interfaces in
+// db/src/backend.h. Every handle is owned by an RAII object: `Database` (the connection),
+// `Statement` (a prepared statement), `Transaction` (rolled back when it dies uncommitted). All
+// values reach SQL through bound parameters, never by pasting text into a statement.
 //
 // Threads: a process keeps one connection (the app's learning session). It may be used from
-// several threads: SQLite serialises each call on it, and write transactions (writeTransaction,
+// several threads: each call is serialised on it, and write transactions (writeTransaction,
 // Transaction) take the connection's writer lock for their whole length, so one thread's
 // transaction never takes in another thread's writes. A thread reading while another writes sees
 // the uncommitted rows.
@@ -23,18 +24,25 @@
 
 #include "core/error.h"
 
-struct sqlite3;
-struct sqlite3_stmt;
-
 namespace at::db {
 
 class Database;
+namespace detail {
+class Cursor;
+class Connection;
+}  // namespace detail
 
-// A prepared statement. Parameters are numbered from 1, result columns from 0 (as in SQLite).
-// Move-only; finalized when it dies.
+enum class Backend { Sqlite, Postgres };
+const char* toString(Backend backend);  // "sqlite", "postgresql"
+
+// True for a PostgreSQL connection URL (postgresql://… or postgres://…).
+bool isPostgresUrl(std::string_view text);
+
+// A prepared statement. Parameters are numbered from 1 and written ?1, ?2, … in the SQL text;
+// result columns are numbered from 0. Move-only; finalized when it dies.
 class Statement {
  public:
-  Statement() = default;
+  Statement();
   ~Statement();
   Statement(Statement&& other) noexcept;
   Statement& operator=(Statement&& other) noexcept;
@@ -59,6 +67,8 @@ class Statement {
   Result<bool> step();
   // Steps to completion, ignoring rows (INSERT/UPDATE/DELETE).
   Status run();
+  // Runs an INSERT … RETURNING id and gives the id.
+  Result<std::int64_t> insertReturningId();
   // Resets to run again; bindings are cleared.
   void reset();
 
@@ -72,12 +82,9 @@ class Statement {
 
  private:
   friend class Database;
-  Statement(sqlite3_stmt* stmt, sqlite3* db, std::string sql);
-  void noteBind(int rc, int index);  // keeps the first bind error for step()
-  sqlite3_stmt* stmt_ = nullptr;
-  sqlite3* db_ = nullptr;
+  Statement(std::unique_ptr<detail::Cursor> cursor, std::string sql);
+  std::unique_ptr<detail::Cursor> cursor_;
   std::string sql_;
-  std::string bindError_;
 };
 
 struct OpenOptions {
@@ -85,51 +92,52 @@ struct OpenOptions {
   std::optional<int> targetVersion;
   // How long a statement waits for another connection's lock before SQLITE_BUSY.
   int busyTimeoutMs = 5000;
-  // Create the file (and its folder) when missing.
+  // Create the file (and its folder) when missing. (A PostgreSQL database must exist.)
   bool create = true;
+  // How long to wait for a PostgreSQL server to answer before giving up (libpq's minimum is 2 s).
+  int connectTimeoutSeconds = 5;
 };
 
 // An open connection. Move-only; closed when it dies.
 class Database {
  public:
-  // Opens (creating when allowed) the database at `path` and migrates it. A file written by a newer
-  // version of the program (user_version above the newest known) is refused and left untouched,
-  // as is a file that is not a SQLite database.
-  static Result<Database> open(const std::string& path, const OpenOptions& options = {});
+  // Opens the database `location` names and migrates it: a PostgreSQL URL connects to that
+  // server's database (which must exist; its tables are created), anything else is a SQLite file,
+  // created when allowed. A database written by a newer version of the program (schema above the
+  // newest known) is refused and left untouched, as is a file that is not a SQLite database.
+  static Result<Database> open(const std::string& location, const OpenOptions& options = {});
 
-  Database() = default;
+  Database();
   ~Database();
   Database(Database&& other) noexcept;
   Database& operator=(Database&& other) noexcept;
   Database(const Database&) = delete;
   Database& operator=(const Database&) = delete;
 
-  const std::string& path() const { return path_; }
-  bool isOpen() const { return db_ != nullptr; }
+  // The file path, or the server URL without its password (for messages).
+  const std::string& path() const;
+  bool isOpen() const { return connection_ != nullptr; }
+  Backend backend() const;
 
   Result<Statement> prepare(std::string_view sql);
-  // Runs one or more statements without parameters (schema text, pragmas).
+  // Runs one or more statements without parameters (schema text).
   Status exec(std::string_view sql);
-  // PRAGMA user_version.
+  // The schema version (SQLite: PRAGMA user_version; PostgreSQL: the at_schema_version table).
   Result<int> schemaVersion();
-  std::int64_t lastInsertId() const;
   // Rows changed by the last INSERT/UPDATE/DELETE.
   int changes() const;
 
-  // Runs `body` inside BEGIN IMMEDIATE … COMMIT. When another connection holds the write lock past
-  // the busy timeout (SQLITE_BUSY), the whole transaction is rolled back and retried, so concurrent
-  // writers lose nothing. Any other error from `body` rolls back and is returned.
+  // Runs `body` inside a write transaction (SQLite: BEGIN IMMEDIATE; PostgreSQL: BEGIN and the
+  // program's writer lock). When another connection holds the lock past the busy timeout, or the
+  // server reports a serialization failure, the whole transaction is rolled back and retried, so
+  // concurrent writers lose nothing. Any other error from `body` rolls back and is returned.
   Status writeTransaction(const std::function<Status(Database&)>& body, int maxAttempts = 20);
-
-  // The raw handle, for db/src only.
-  sqlite3* handle() const { return db_; }
 
  private:
   friend class Transaction;
-  Database(sqlite3* db, std::string path)
-      : db_(db), path_(std::move(path)), writer_(std::make_unique<std::recursive_mutex>()) {}
-  sqlite3* db_ = nullptr;
-  std::string path_;
+  Status migrate(int target);
+  explicit Database(std::unique_ptr<detail::Connection> connection);
+  std::unique_ptr<detail::Connection> connection_;
   std::unique_ptr<std::recursive_mutex> writer_;  // held by the thread inside a write transaction
 };
 
@@ -157,7 +165,8 @@ class Transaction {
 // $XDG_DATA_HOME/anatomy-tutor/anatomy-tutor.db, else ~/.local/share/anatomy-tutor/anatomy-tutor.db.
 Result<std::string> defaultDatabasePath();
 
-// Opens `--db PATH` when given (its folder must exist), else the default path (creating its folder).
+// Opens `--db PATH` when given (a PostgreSQL URL, or a file whose folder exists), else the default
+// path (creating its folder).
 Result<Database> openDatabase(const std::optional<std::string>& path, const OpenOptions& options = {});
 
 }  // namespace at::db

@@ -1,16 +1,28 @@
-// The schema as forward-only migrations. Migration N takes a database from user_version N-1 to N
+// The schema as forward-only migrations. Migration N takes a database from version N-1 to N
 // inside one transaction; versions are never edited once released — a change is a new migration.
+//
+// Each migration is written once, in SQLite's dialect. On PostgreSQL the same text runs after a
+// fixed set of rewrites (postgresDdl): INTEGER PRIMARY KEY becomes an identity column, INTEGER
+// BIGINT, REAL DOUBLE PRECISION, and SQLite's timestamp default the same text from PostgreSQL's
+// clock. A migration whose text uses other SQLite-only functions lists the exact replacements its
+// PostgreSQL text needs (`postgresEdits`).
 #pragma once
 
+#include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
+
+#include "db/database.h"
 
 namespace at::db {
 
 struct Migration {
-  int version;              // user_version after this migration
+  int version;              // schema version after this migration
   std::string_view summary; // what it adds, for messages and tests
-  std::string_view sql;     // statements run in one transaction
+  std::string_view sql;     // statements run in one transaction (SQLite's dialect)
+  // Exact text replacements (each must occur) for PostgreSQL, applied after postgresDdl.
+  std::vector<std::pair<std::string_view, std::string_view>> postgresEdits = {};
 };
 
 // All migrations in order; migrations()[i].version == i + 1.
@@ -18,5 +30,11 @@ const std::vector<Migration>& migrations();
 
 // The newest schema version this program knows.
 int latestSchemaVersion();
+
+// The type and default rewrites that make SQLite DDL PostgreSQL DDL (see above).
+std::string postgresDdl(std::string_view sqliteSql);
+
+// The text of `migration` for `backend`.
+std::string migrationSql(const Migration& migration, Backend backend);
 
 }  // namespace at::db

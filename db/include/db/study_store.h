@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "db/database.h"
+#include "quiz/redcap_export.h"
 #include "quiz/study_protocol.h"
 #include "quiz/study_report.h"
 
@@ -22,6 +23,7 @@ struct StudyTrial {
   std::string presetA, presetB;
   double viewMsA = 0, viewMsB = 0;
   int toggles = 0;
+  bool viewingMeasured = true;      // false: shown as files outside the program, times not known
   std::string comment;
   std::set<std::string> ratedItems;
 };
@@ -51,6 +53,10 @@ Status saveStudy(Database& db, const quiz::StudyProtocol& protocol);
 Result<std::optional<quiz::StudyProtocol>> findStudy(Database& db, const std::string& studyId);
 Result<std::vector<quiz::StudyProtocol>> listStudies(Database& db);
 
+// Participant ids are pseudonyms: 1 to 64 letters, digits, '_' or '-', starting with a letter or a
+// digit, so that they are valid REDCap record names and safe in every export.
+Status validParticipantId(const std::string& id);
+
 // Enrols a participant (plan from the Latin square row of their enrolment index and the study's
 // seed) or resumes one already enrolled (group must match; the session count goes up).
 Result<StudyParticipant> enrolOrResume(Database& db, const quiz::StudyProtocol& protocol,
@@ -64,15 +70,22 @@ struct RatingRecord {
   double t = 0, alpha = 0, beta = 0;  // render parameters on screen
   std::string appVersion;
 };
-// Records one rating at once (its own transaction). Re-rating the same item replaces it.
+// Records one rating at once (its own transaction), with the participant's current session.
+// Re-rating the same item replaces it.
 Status recordRating(Database& db, const std::string& studyId, const std::string& participantId,
                     const RatingRecord& rating);
-// Records viewing time, toggles and comment of a trial (replacing earlier values).
+// Records viewing time, toggles and comment of a trial (replacing earlier values). With
+// `viewingMeasured` false the times and toggles are not known (the views were shown as files) and
+// are stored as zero and exported blank.
 Status recordTrialViewing(Database& db, const std::string& studyId, const std::string& participantId,
-                          int position, double viewMsA, double viewMsB, int toggles, const std::string& comment);
+                          int position, double viewMsA, double viewMsB, int toggles, const std::string& comment,
+                          bool viewingMeasured = true);
 Status markParticipantComplete(Database& db, const std::string& studyId, const std::string& participantId);
 
 Result<std::vector<StudyCompletion>> studyCompletion(Database& db, const std::string& studyId);
+
+// Every enrolled participant in enrolment order (the records of a REDCap export).
+Result<std::vector<quiz::StudyParticipantRow>> studyParticipantRows(Database& db, const std::string& studyId);
 
 // Every rating as an export row, unblinded, ordered by enrolment, position, item order.
 Result<std::vector<quiz::StudyResponseRow>> studyResponseRows(Database& db, const quiz::StudyProtocol& protocol);

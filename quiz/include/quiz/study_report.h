@@ -1,7 +1,8 @@
-// Study exports for coordinators, as pure text and pixels (db/ gathers the rows; app/ writes files):
-// the tidy long table, the wide table, a REDCap data dictionary, a JSON sidecar describing every
-// column, and the paper's Table-2 summary (rows = items, columns = groups and all) as CSV, Markdown,
-// SVG and an RGB raster chart. All output is deterministic: the same rows give the same bytes.
+// Study exports for coordinators, as pure text (db/ gathers the rows; app/ writes the files and
+// rasterises the SVG): the tidy long table, the wide table, a JSON sidecar describing every column,
+// and the paper's Table-2 summary (rows = items, columns = groups and all) as CSV, Markdown and an
+// SVG chart. The REDCap files are quiz/redcap_export.h. All output is deterministic: the same rows
+// give the same bytes.
 //
 // Unit of analysis for the summary: the participant. For each participant and item the ratings
 // over the structures they rated are averaged (on the paper's scale, 1 = prefer WDT … 5 = prefer
@@ -16,7 +17,6 @@
 
 #include "quiz/likert_stats.h"
 #include "quiz/study_protocol.h"
-#include "volume/png_image.h"
 
 namespace at::quiz {
 
@@ -24,7 +24,7 @@ namespace at::quiz {
 struct StudyResponseRow {
   std::string participantId;
   std::string group;
-  int session = 1;
+  int session = 1;             // the participant's session in which this item was rated; 0 = not known
   std::string structure;
   std::string item;
   int ratingAb = 0;            // as shown: 1 = prefer A … 5 = prefer B
@@ -35,6 +35,7 @@ struct StudyResponseRow {
   double t = 0, alpha = 0, beta = 0;
   double viewMsA = 0, viewMsB = 0;
   int toggles = 0;
+  bool viewingMeasured = true; // false: the views were shown outside the program (files), times unknown
   double responseMs = 0;
   std::string timestampUtc;    // ISO 8601, e.g. 2026-11-22T05:01:02Z
   std::string appVersion;
@@ -46,6 +47,11 @@ struct StudyResponseRow {
 // begins with '=', '+', '-', '@', TAB or CR is prefixed with an apostrophe so spreadsheets do not
 // evaluate it as a formula.
 std::string csvCell(const std::string& text);
+// RFC 4180 cell without the formula guard, for files read by programs rather than spreadsheets
+// (REDCap's import keeps text as given).
+std::string csvQuoted(const std::string& text);
+// A number with at most `decimals` decimals, trailing zeros trimmed ("0.5", "12"); empty when not finite.
+std::string csvNumber(double value, int decimals = 3);
 // Joins cells with commas and ends the record with CRLF (RFC 4180).
 std::string csvRecord(const std::vector<std::string>& cells);
 // Parses RFC 4180 text back into records (used by tests and by re-imports).
@@ -53,7 +59,6 @@ std::vector<std::vector<std::string>> parseCsv(const std::string& text);
 
 std::string responsesLongCsv(const std::vector<StudyResponseRow>& rows);
 std::string responsesWideCsv(const StudyProtocol& protocol, const std::vector<StudyResponseRow>& rows);
-std::string dataDictionaryCsv(const StudyProtocol& protocol);
 std::string responsesLongJsonSidecar(const StudyProtocol& protocol);
 
 struct SummaryCell {
@@ -80,14 +85,13 @@ std::string summaryMarkdown(const StudyProtocol& protocol, const StudySummary& s
 std::string summarySvg(const StudyProtocol& protocol, const StudySummary& summary);
 
 struct ChartLayout {
-  int width = 900, rowHeight = 70, top = 40, bottom = 50, left = 220, right = 40;
+  int width = 900, rowHeight = 70, top = 40, bottom = 72, left = 220, right = 40;
   // x pixel of a scale value (1..5) and y pixel of the marker for (item, column).
   int xOf(double value, const StudyScale& scale) const;
   int yOf(std::size_t item, std::size_t column, std::size_t columns) const;
   int height(std::size_t items) const { return top + int(items) * rowHeight + bottom; }
 };
-// Colour of each column's markers (the SVG uses the same).
+// Colour of each column's markers.
 std::array<std::uint8_t, 3> chartColumnColour(std::size_t column);
-RgbImage renderSummaryChart(const StudyProtocol& protocol, const StudySummary& summary, const ChartLayout& layout = {});
 
 }  // namespace at::quiz

@@ -41,6 +41,9 @@ uniform int uHasField;
 uniform float uStepMm;
 uniform float uStructureAlpha;  // the structure surface's opacity (one sample, not per step)
 uniform float uMaskHalo;
+uniform float uFrontFactor;     // context opacity factor in front of the structure
+uniform vec3 uMaskBoxLo;        // the structure's box, texture coordinates
+uniform vec3 uMaskBoxHi;
 uniform float uDistanceScale;   // log2(alpha) / distance unit
 uniform vec2 uDataRange;
 uniform vec2 uVisibleHu;
@@ -123,6 +126,24 @@ vec4 castRay(vec2 pixel) {
     uint occ = 3u;
     float tBlockEnd = -1e30;
     float prevMask = 0.0;
+    // Where the ray first enters the structure: context in front of it is drawn at uFrontFactor of
+    // its opacity, so the structure stays the brightest thing where the user looks. Found by a
+    // march of the structure's box at a voxel and a half (a thinner part it misses leaves the
+    // context as it is there).
+    float frontT = -1e30;
+    if (RAY_STRUCTURE != 0 && uFrontFactor < 1.0) {
+      vec3 ba = (uMaskBoxLo - oT) * inv, bb = (uMaskBoxHi - oT) * inv;
+      vec3 bmin = min(ba, bb), bmax = max(ba, bb);
+      float b0 = max(max(bmin.x, bmin.y), max(bmin.z, t0)), b1 = min(min(bmax.x, bmax.y), min(bmax.z, t1));
+      for (float tb = b0; tb < b1; tb += 2.0 * uStepMm) {
+        vec3 pb = origin + tb * dir;
+        if (RAY_CLIP != 0 && dot(uClip.xyz, pb) > uClip.w) continue;
+        if (maskAt(oT + tb * dT) >= 0.5) {
+          frontT = tb;
+          break;
+        }
+      }
+    }
     while (i < count) {
       float tm = start + float(i) * uStepMm;
       vec3 pt = oT + tm * dT;
@@ -193,7 +214,7 @@ vec4 castRay(vec2 pixel) {
         n = normalisedDistance(d);
       }
       vec4 c = tableAt(hu, n);
-      float alpha = c.a * surface;
+      float alpha = c.a * surface * (tm < frontT ? uFrontFactor : 1.0);
       if (alpha <= 0.0) continue;
       vec3 rgb = c.rgb;
       if (RAY_SHADING != 0) {
@@ -268,7 +289,7 @@ void main() {
 )";
 
 // The selected structure's mask, smoothed by a [1 2 1]³/64 binomial so that its 0.5 level set is a
-// smooth surface rather than voxel steps (at least 0.75 on the structure's own voxels): written inside the box [uBoxMin, uBoxMax) of voxels, or
+// smooth surface rather than voxel steps (see below for parts one voxel thin): written inside the box [uBoxMin, uBoxMax) of voxels, or
 // cleared there (uClear) when the selection moves elsewhere.
 const char* const kMaskShader = R"(#version 430 core
 layout(local_size_x = 8, local_size_y = 8, local_size_z = 4) in;
@@ -292,9 +313,9 @@ void main() {
           if (texelFetch(uLabels, q, 0).r == uSelected) m += w;
         }
     m /= 64.0;
-    // A labelled voxel keeps at least 0.75, so structures one voxel thin (a nerve, a canal on a
-    // coarse grid) keep a surface instead of smoothing away below 0.5.
-    if (texelFetch(uLabels, p, 0).r == uSelected) m = max(m, 0.75);
+    // A labelled voxel the smoothing would drop below 0.5 (a part one voxel thin: a nerve, a canal
+    // on a coarse grid, a sharp corner) is raised to 0.75, so it keeps a surface.
+    if (m < 0.5 && texelFetch(uLabels, p, 0).r == uSelected) m = 0.75;
   }
   imageStore(uMaskOut, p, vec4(m));
 }

@@ -510,6 +510,13 @@ Status VolumeRenderer::prepare(const RenderSettings& s) {
   glUniform1f(loc("uStepMm"), float(stepMm));
   glUniform1f(loc("uStructureAlpha"), bare ? 1.0f : s.preset.structureOpacity);
   glUniform1f(loc("uMaskHalo"), kMaskHalo);
+  glUniform1f(loc("uFrontFactor"), s.preset.contextInFront);
+  {
+    // The structure's box in texture coordinates (empty: no structure).
+    const auto& box = st.maskBox;
+    glUniform3f(loc("uMaskBoxLo"), float(box[0]) / float(vd.x), float(box[1]) / float(vd.y), float(box[2]) / float(vd.z));
+    glUniform3f(loc("uMaskBoxHi"), float(box[3]) / float(vd.x), float(box[4]) / float(vd.y), float(box[5]) / float(vd.z));
+  }
   glUniform1f(loc("uDistanceScale"), float(std::log2(double(s.preset.alpha)) / s.distanceUnit));
   glUniform2f(loc("uDataRange"), float(table.dataMin), float(table.dataMax));
   const std::array<float, 2> visibleHu = st.tableVisibility.visibleHu();

@@ -4,7 +4,7 @@
 //     "data_tf": [ {"x": HU, "rgba": [r,g,b,a]}, … ], "distance_tf": [ {"x": 0..1, "rgba": […]}, … ],
 //     "alpha": 1.6, "t": 0.5, "highlight_rgb": [1,0.5,0], "lighting": {"alpha": 0.1, "beta": 1.0},
 //     "weight": {"rule": "entering", "hu_window": [-1000, 2000], "base": 0.02},
-//     "structure_opacity": 0.9, "surface": {"gradient_hu": [40, 300], "interior": 0},
+//     "structure_opacity": 0.9, "context_in_front": 0.4, "surface": {"gradient_hu": [40, 300], "interior": 0},
 //     "id": "…", "structure": "cochlea", "view": "lateral_left", "clip": [nx, ny, nz, d] }
 //
 // Loading is strict: an unknown field, a wrong type or an out-of-range value is an error naming the
@@ -51,6 +51,9 @@ struct Preset {
   float weightBase = 0.02f;       // ≥ 0
   // The selected structure's surface opacity in the context modes (bare draws it opaque), 0..1.
   float structureOpacity = 0.9f;
+  // Context between the eye and the structure is drawn at this share of its opacity (1: as the
+  // TFs say), so that medium-opacity bone in front does not veil the structure the user looks at.
+  float contextInFront = 0.4f;
   // Context surfaces (render_settings.h): the table's opacity is scaled by
   // lerp(surfaceInterior, 1, smoothstep(lo, hi, g)) for edge strength g in HU per voxel of the
   // smoothed volume. interior = 1 and lo = hi = 0 give the unmodulated Algorithm 1.

@@ -10,9 +10,12 @@
 //     The opacity is then scaled by the surface ramp of the edge strength g (HU per voxel of the
 //     smoothed volume, gradient_volume.h): A · lerp(interior, 1, smoothstep(lo, hi, g)), so edges
 //     are drawn as surfaces and homogeneous regions do not pile up into fog. Context within about a
-//     voxel of the selected structure (its smoothed mask > kMaskHalo) is not drawn.
-//   the selected structure (every mode): its mask, smoothed by a [1 2 1]³ binomial (at least 0.75
-//     on its own voxels, so one-voxel-thin parts stay) and sampled trilinearly, has a surface at 0.5; where a ray enters it one sample of highlight_rgb is
+//     voxel of the selected structure (its smoothed mask > kMaskHalo) is not drawn, and context
+//     between the eye and the structure's first surface along the ray counts at contextInFront of
+//     its opacity, so the structure stays visible through the bone around it.
+//   the selected structure (every mode): its mask, smoothed by a [1 2 1]³ binomial (a labelled voxel
+//     it would drop below 0.5 raised to 0.75, so one-voxel-thin parts stay) and sampled
+//     trilinearly, has a surface at 0.5; where a ray enters it one sample of highlight_rgb is
 //     composited with opacity structure_opacity (bare: 1), and its inside draws nothing else.
 //   bare: only the structure.
 // Context opacity is per `opacityRefMm` of ray (default: one voxel) and corrected to the step:

@@ -87,7 +87,7 @@ double materialHu(Material m) {
     case kCancellous: return 600;  // ± 100 from the texture
     case kCortical: return 1850;
     case kCapsule: return 2000;
-    case kPetrous: return 1500;
+    case kPetrous: return 1800;  // fused with the otic capsule (2000): no surface between them
     case kBrain: return 35;
     case kOssicle: return 1350;
     case kNerve: return 35;
@@ -310,13 +310,14 @@ Anatomy buildAnatomy(double voxelMm) {
     add(tube(pts, 1.1), kCortical, label::kTemporalLine);
   }
 
-  // Petrous bone: the dense pyramid that holds the inner ear and the internal auditory canal,
-  // from around the vestibule anteromedially to the apex (medial face of the block), inside the
-  // cortex. The mastoid behind and lateral to it stays cancellous (and pneumatised).
+  // Petrous bone: the dense pyramid medial to the labyrinth that holds the internal auditory canal
+  // and the carotid canal, from the cochlea anteromedially to the apex (medial face of the block),
+  // inside the cortex; nearly as dense as the otic capsule it fuses with. Lateral to it (the
+  // promontory side, seen from the middle ear) and behind it the bone stays cancellous.
   {
     Shape petrous;
     petrous.kind = Shape::kCustom;
-    const Shape axis = segment({1.0, 2.0, 0.0}, {16.0, -14.0, -4.0}, 6.0, 4.5);
+    const Shape axis = segment({6.5, -2.5, -1.0}, {16.0, -14.0, -4.0}, 5.0, 4.5);
     axis.bounds(petrous.boxLo, petrous.boxHi);
     petrous.custom = std::make_shared<const std::function<double(const Vec3&)>>(
         [axis](const Vec3& p) { return std::max(axis.sd(p), blockSd(p) + kCortexMm); });

@@ -48,6 +48,7 @@ class DesktopApp final : public ScriptHost {
     return std::to_string(l.windowW) + "x" + std::to_string(l.windowH);
   }
   std::string glText() const override { return window_->glDescription(); }
+  bool drawsPanels() const override { return true; }
 
  private:
   void handleEvent(const SDL_Event& e);

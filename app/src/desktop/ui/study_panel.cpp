@@ -155,7 +155,10 @@ void StudyPanel::summaryTable(const StudyController& study) {
 void StudyPanel::summaryChart(StudyController& study) {
   if (chartRevision_ != study.chartRevision() || !chart_) {
     const RgbImage* chart = study.chart();
-    if (!chart) return;
+    if (!chart) {
+      if (!study.chartError().empty()) ImGui::TextColored(kError, "%s", study.chartError().c_str());
+      return;
+    }
     chartRevision_ = study.chartRevision();
     render::RgbaImage rgba(chart->width, chart->height);
     for (std::size_t i = 0; i < std::size_t(chart->width) * std::size_t(chart->height); ++i) {

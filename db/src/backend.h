@@ -1,0 +1,72 @@
+// The two storage engines behind db::Database, private to db/: SQLite (an embedded file) and
+// PostgreSQL (a class server reached through libpq). Repositories write one SQL text for both,
+// with parameters numbered ?1, ?2, … (the PostgreSQL connection renumbers them $1, $2, …) and
+// without engine-only functions; the few differences (schema types, the schema version's home,
+// how a write transaction locks) live in the connections.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <string_view>
+
+#include "core/error.h"
+#include "db/database.h"
+
+namespace at::db::detail {
+
+// One prepared statement being bound, run and read. Parameters are numbered from 1, columns
+// from 0. A bind error is reported by the next step().
+class Cursor {
+ public:
+  virtual ~Cursor() = default;
+  virtual void bindInt(int index, std::int64_t value) = 0;
+  virtual void bindReal(int index, double value) = 0;
+  virtual void bindText(int index, std::string_view value) = 0;
+  virtual void bindNull(int index) = 0;
+  // True when a row is available, false when done.
+  virtual Result<bool> step() = 0;
+  // Ready to run again with no bindings.
+  virtual void reset() = 0;
+  virtual bool isNull(int column) const = 0;
+  virtual std::int64_t int64(int column) const = 0;
+  virtual double real(int column) const = 0;
+  virtual std::string text(int column) const = 0;
+};
+
+class Connection {
+ public:
+  virtual ~Connection() = default;
+  virtual Backend backend() const = 0;
+  // What messages call the database: the file path, or the server URL without its password.
+  virtual const std::string& name() const = 0;
+  virtual Result<std::unique_ptr<Cursor>> prepare(std::string_view sql) = 0;
+  // One or more statements without parameters.
+  virtual Status exec(std::string_view sql) = 0;
+  // Rows changed by the last INSERT/UPDATE/DELETE.
+  virtual int changes() const = 0;
+  // Starts a transaction. A write transaction is the only writer until it ends (SQLite: BEGIN
+  // IMMEDIATE; PostgreSQL: a transaction-scoped advisory lock all writers of the program take).
+  virtual Status begin(bool write) = 0;
+  virtual Status commit() = 0;
+  virtual void rollback() = 0;
+  virtual bool inTransaction() const = 0;
+  // True when the last failure was another writer holding a lock (SQLITE_BUSY, a PostgreSQL
+  // serialization failure or deadlock): the whole transaction may be retried.
+  virtual bool lastFailureWasContention() const = 0;
+  // The schema version (0 for an empty database) and setting it inside a migration.
+  virtual Result<int> schemaVersion() = 0;
+  virtual Status setSchemaVersion(int version) = 0;
+};
+
+// Opens the SQLite file at `path` (WAL, foreign keys on, FULL sync, busy timeout).
+Result<std::unique_ptr<Connection>> openSqlite(const std::string& path, const OpenOptions& options);
+// Reads a SQLite file's schema version without writing to it; 0 for a missing or empty file.
+Result<int> peekSqliteVersion(const std::string& path);
+// Connects to the PostgreSQL server at `url` (postgresql://… or postgres://…).
+Result<std::unique_ptr<Connection>> openPostgres(const std::string& url, const OpenOptions& options);
+
+// `?N` placeholders as PostgreSQL's `$N`, leaving quoted text alone.
+std::string postgresPlaceholders(std::string_view sql);
+
+}  // namespace at::db::detail

@@ -1,0 +1,219 @@
+#include "render/derived_preset.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <filesystem>
+#include <vector>
+
+namespace at::render {
+
+namespace {
+
+constexpr int kBins = 65536;  // one per int16 value
+
+struct Histogram {
+  std::vector<std::uint64_t> counts = std::vector<std::uint64_t>(kBins, 0);
+  std::uint64_t total = 0;
+
+  static int binOf(int value) { return value + 32768; }
+  static double valueOf(int bin) { return double(bin - 32768); }
+  // The value below which `fraction` of the voxels at or above `from` lie.
+  double percentile(double fraction, int from = -32768) const {
+    std::uint64_t n = 0;
+    for (int b = binOf(from); b < kBins; ++b) n += counts[std::size_t(b)];
+    if (n == 0) return double(from);
+    const auto target = std::uint64_t(std::ceil(fraction * double(n)));
+    std::uint64_t seen = 0;
+    for (int b = binOf(from); b < kBins; ++b) {
+      seen += counts[std::size_t(b)];
+      if (seen >= std::max<std::uint64_t>(target, 1)) return valueOf(b);
+    }
+    return valueOf(kBins - 1);
+  }
+  std::uint64_t countFrom(int from) const {
+    std::uint64_t n = 0;
+    for (int b = binOf(from); b < kBins; ++b) n += counts[std::size_t(b)];
+    return n;
+  }
+};
+
+// The most populated value band of `width` in [lo, hi], and the half-width at half of its count.
+struct Mode {
+  double centre = 0, halfWidth = 0;
+};
+Mode modeIn(const Histogram& h, double lo, double hi, int width) {
+  width = std::max(1, width);
+  std::uint64_t best = 0;
+  int bestStart = Histogram::binOf(int(lo));
+  std::uint64_t window = 0;
+  const int first = Histogram::binOf(int(std::floor(lo))), last = Histogram::binOf(int(std::ceil(hi)));
+  for (int b = first; b <= last && b < kBins; ++b) {
+    window += h.counts[std::size_t(b)];
+    if (b - first >= width) window -= h.counts[std::size_t(b - width)];
+    if (window > best) {
+      best = window;
+      bestStart = b - width + 1;
+    }
+  }
+  Mode m;
+  const int centreBin = bestStart + width / 2;
+  m.centre = Histogram::valueOf(centreBin);
+  // Half-width: how far the band's count stays above half its peak, in bands of `width`.
+  const auto bandCount = [&](int startBin) {
+    std::uint64_t n = 0;
+    for (int b = std::max(0, startBin); b < std::min(kBins, startBin + width); ++b) n += h.counts[std::size_t(b)];
+    return n;
+  };
+  int steps = 0;
+  while (steps < 200 && bandCount(bestStart + (steps + 1) * width) * 2 >= best &&
+         bandCount(bestStart - (steps + 1) * width) * 2 >= best)
+    ++steps;
+  m.halfWidth = double((steps + 1) * width);
+  return m;
+}
+
+TfPoint point(double x, float r, float g, float b, float a) { return {x, {r, g, b, a}}; }
+
+// A TF whose x must increase strictly: each point at least 1 past the previous one.
+std::vector<TfPoint> increasing(std::vector<TfPoint> points) {
+  for (std::size_t i = 1; i < points.size(); ++i)
+    points[i].x = std::max(points[i].x, points[i - 1].x + 1.0);
+  for (TfPoint& p : points) p.x = std::clamp(p.x, -32768.0, 32767.0);
+  return points;
+}
+
+constexpr std::array<float, 3> kBone{0.96f, 0.93f, 0.86f};
+constexpr std::array<float, 3> kOrange{1.0f, 0.5f, 0.12f};
+constexpr std::array<float, 3> kGreen{0.1f, 0.85f, 0.3f};
+constexpr std::array<float, 3> kWarm{1.0f, 0.75f, 0.45f};
+
+// The bone surfaces' data TF: zero below the dense band, `peak` opacity from its median, a little
+// less up to its 99th percentile (thin dense walls matter more than thick dense bone).
+std::vector<TfPoint> boneTf(const IntensityLevels& l, float peak, float high) {
+  const double rise = std::max(1.0, l.densePeak - l.denseLow);
+  return increasing({point(l.background, 0, 0, 0, 0), point(l.denseLow - 0.25 * rise, kBone[0], kBone[1], kBone[2], 0),
+                     point(l.densePeak, kBone[0], kBone[1], kBone[2], peak),
+                     point(l.denseHigh, 0.98f, 0.96f, 0.9f, high),
+                     point(l.denseHigh + rise, 1, 0.98f, 0.94f, high)});
+}
+
+std::vector<TfPoint> withColour(std::array<float, 3> c, std::initializer_list<std::pair<double, float>> xa) {
+  std::vector<TfPoint> out;
+  for (const auto& [x, a] : xa) out.push_back(point(x, c[0], c[1], c[2], a));
+  return out;
+}
+
+}  // namespace
+
+IntensityLevels summariseIntensities(const Volume& volume, IntensityScale scale) {
+  Histogram h;
+  for (std::int16_t v : volume.voxels) ++h.counts[std::size_t(Histogram::binOf(v))];
+  h.total = volume.voxels.size();
+  IntensityLevels l;
+  if (h.total == 0) {
+    l.reason = "empty volume";
+    return l;
+  }
+  const double p1 = h.percentile(0.01), p99 = h.percentile(0.995);
+  if (scale == IntensityScale::Unknown) {
+    // Hounsfield units: air at about −1000 and soft tissue near 0.
+    const Mode tissue = modeIn(h, -500, 500, 20);
+    const bool hu = p1 <= -900 && std::abs(tissue.centre) <= 200;
+    scale = hu ? IntensityScale::Hounsfield : IntensityScale::Plain;
+    l.reason = hu ? "histogram: air at " + std::to_string(int(p1)) + " and soft tissue at " +
+                        std::to_string(int(tissue.centre)) + ", read as Hounsfield units"
+                  : "histogram: lowest level " + std::to_string(int(p1)) + ", not air at −1000: plain intensities";
+  } else {
+    l.reason = scale == IntensityScale::Hounsfield ? "Hounsfield units (intensity model)"
+                                                   : "plain intensities (intensity model)";
+  }
+  l.scale = scale;
+  double denseFrom = 0;
+  if (scale == IntensityScale::Hounsfield) {
+    l.background = -1000;
+    l.tissue = 40;
+    denseFrom = 150;
+  } else {
+    l.background = p1;
+    const double range = std::max(1.0, p99 - p1);
+    const Mode tissue = modeIn(h, p1 + 0.05 * range, p99, std::max(1, int(range / 256)));
+    l.tissue = tissue.centre;
+    denseFrom = l.tissue + std::max(4.0 * tissue.halfWidth, 0.03 * range);
+  }
+  const std::uint64_t dense = h.countFrom(int(std::ceil(denseFrom)));
+  l.denseShare = double(dense) / double(h.total);
+  if (dense * 10000 < h.total) {  // (almost) nothing dense: surfaces just above the tissue level
+    const double step = std::max(1.0, denseFrom - l.tissue);
+    l.denseLow = denseFrom;
+    l.densePeak = denseFrom + step;
+    l.denseHigh = denseFrom + 3 * step;
+  } else {
+    const int from = int(std::ceil(denseFrom));
+    l.denseLow = h.percentile(0.10, from);
+    l.densePeak = std::max(l.denseLow + 1, h.percentile(0.50, from));
+    l.denseHigh = std::max(l.densePeak + 1, h.percentile(0.99, from));
+  }
+  return l;
+}
+
+Preset derivedPreset(const IntensityLevels& l, RenderMode mode, const std::string& structureId) {
+  Preset p;
+  p.mode = mode;
+  p.id = structureId + "_" + toString(mode);
+  p.name = structureId + " – " + toString(mode) + " (derived from the data)";
+  p.structure = structureId;
+  p.alpha = 1.6f;
+  p.t = 0;
+  p.highlightRgb = kOrange;
+  p.structureOpacity = 0.95f;
+  // A blurred step of height C peaks at about C/3.5 HU per voxel: the ramp spans its weaker half.
+  const double contrast = std::max(1.0, l.densePeak - l.tissue);
+  p.surfaceGradientHu = {float(0.06 * contrast), float(0.25 * contrast)};
+  p.surfaceInterior = 0;
+  if (l.scale == IntensityScale::Hounsfield) {
+    p.huWindow = {-600, 2000};
+  } else {
+    p.huWindow = {float(l.background), float(std::max(l.background + 1, l.denseHigh))};
+  }
+  p.dataTf = boneTf(l, 0.18f, 0.1f);
+  p.distanceTf = {point(0, 1, 1, 1, 0), point(0.12, 1, 1, 1, 0), point(0.4, 0.97f, 0.95f, 0.9f, 0.65f),
+                  point(0.7, 1, 0.93f, 0.82f, 1), point(1, 1, 0.78f, 0.55f, 1)};
+  switch (mode) {
+    case RenderMode::Wdt:
+    case RenderMode::Bare:
+    case RenderMode::Unweighted:
+      break;
+    case RenderMode::Fuzzy:  // Eqs. 4–5: the highlight fading over the bone
+      p.t = 0.12f;
+      p.distanceTf = withColour(kOrange, {{0, 0}, {0.35, 0}, {0.65, 0.5f}, {0.92, 1}, {1, 1}});
+      break;
+    case RenderMode::Outline:  // the bone surface everywhere, a thin band at one weighted distance
+      p.t = 1;
+      p.contextInFront = 1;  // the band is on the surface in front
+      p.dataTf = boneTf(l, 0.9f, 0.9f);
+      p.distanceTf = withColour(kGreen, {{0, 0}, {0.83, 0}, {0.865, 1}, {0.9, 0}, {1, 0}});
+      break;
+    case RenderMode::Lighting:  // Eq. 6: the structure lights the bone around it
+      p.t = 0.25f;
+      p.dataTf = boneTf(l, 0.3f, 0.3f);
+      p.distanceTf = withColour(kBone, {{0, 0}, {0.3, 0}, {0.6, 1}, {1, 1}});
+      p.highlightRgb = kWarm;
+      p.lightingAlpha = 0.8f;
+      p.lightingBeta = 1.8f;
+      break;
+  }
+  return p;
+}
+
+Result<Preset> presetOrDerived(const PresetLibrary& library, const std::string& structureId, RenderMode mode,
+                               const IntensityLevels& levels) {
+  const std::string id = structureId + "_" + toString(mode);
+  std::error_code ec;
+  if (std::filesystem::exists(library.dir() / (id + ".json"), ec)) return library.load(id);
+  if (ec) return fail(library.dir().string() + ": cannot read the presets folder (" + ec.message() + ")");
+  return derivedPreset(levels, mode, structureId);
+}
+
+}  // namespace at::render

@@ -1,0 +1,222 @@
+#include "test_databases.h"
+
+#include <libpq-fe.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <mutex>
+
+#include <doctest/doctest.h>
+
+namespace at::test {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+// The server the tests use, started once per process.
+struct TestServer {
+  std::string baseUrl;       // a database the tests make schemas in
+  std::string clusterDir;    // non-empty when this process started the cluster
+  std::string whyNot;        // why there is no server
+};
+
+std::string runScript(const std::string& command, int& status) {
+  std::string out;
+  FILE* pipe = ::popen(command.c_str(), "r");
+  if (!pipe) {
+    status = -1;
+    return out;
+  }
+  char buf[512];
+  while (std::fgets(buf, sizeof buf, pipe)) out += buf;
+  const int raw = ::pclose(pipe);
+  status = WIFEXITED(raw) ? WEXITSTATUS(raw) : -1;
+  while (!out.empty() && (out.back() == '\n' || out.back() == '\r')) out.pop_back();
+  return out;
+}
+
+std::string scriptPath() { return (sourceDir() / "scripts" / "pg-cluster.sh").string(); }
+
+// Runs one statement on `url`; empty on success, else libpq's message.
+std::string execOn(const std::string& url, const std::string& sql) {
+  PGconn* conn = PQconnectdb(url.c_str());
+  std::string error;
+  if (PQstatus(conn) != CONNECTION_OK) {
+    error = PQerrorMessage(conn);
+  } else {
+    PGresult* r = PQexec(conn, sql.c_str());
+    if (PQresultStatus(r) != PGRES_COMMAND_OK && PQresultStatus(r) != PGRES_TUPLES_OK) error = PQresultErrorMessage(r);
+    PQclear(r);
+  }
+  PQfinish(conn);
+  while (!error.empty() && error.back() == '\n') error.pop_back();
+  return error;
+}
+
+void stopAtExit();
+
+TestServer& server() {
+  static std::once_flag once;
+  static TestServer s;
+  std::call_once(once, [] {
+    if (const char* url = std::getenv("AT_TEST_POSTGRES_URL"); url && *url) {
+      s.baseUrl = url;
+      if (auto e = execOn(s.baseUrl, "SELECT 1"); !e.empty()) s.whyNot = "AT_TEST_POSTGRES_URL does not answer: " + e;
+      return;
+    }
+    std::string dir = (fs::temp_directory_path() / "at-pg-test-XXXXXX").string();
+    if (!::mkdtemp(dir.data())) {
+      s.whyNot = "cannot make a folder for the test cluster";
+      return;
+    }
+    int status = 0;
+    const std::string url = runScript("AT_PG_FAST=1 '" + scriptPath() + "' start '" + dir + "' 2>&1", status);
+    if (status != 0) {
+      s.whyNot = url.empty() ? "scripts/pg-cluster.sh failed" : url;
+      std::error_code ec;
+      fs::remove_all(dir, ec);
+      return;
+    }
+    s.clusterDir = dir;
+    std::atexit(stopAtExit);
+    // The tests' database beside the maintenance one.
+    if (auto e = execOn(url, "CREATE DATABASE attest"); !e.empty()) {
+      s.whyNot = "cannot create the test database: " + e;
+      return;
+    }
+    s.baseUrl = url.substr(0, url.rfind('/')) + "/attest";
+  });
+  return s;
+}
+
+void stopAtExit() {
+  TestServer& s = server();
+  if (s.clusterDir.empty()) return;
+  int status = 0;
+  runScript("'" + scriptPath() + "' stop '" + s.clusterDir + "' 2>&1", status);
+  std::error_code ec;
+  fs::remove_all(s.clusterDir, ec);
+}
+
+std::optional<std::string> newSchema(std::string& whyNot) {
+  TestServer& s = server();
+  if (!s.whyNot.empty()) {
+    whyNot = s.whyNot;
+    return std::nullopt;
+  }
+  static std::atomic<int> counter{0};
+  const std::string schema = "t" + std::to_string(::getpid()) + "_" + std::to_string(counter++);
+  if (auto e = execOn(s.baseUrl, "CREATE SCHEMA " + schema); !e.empty()) {
+    whyNot = "cannot create a schema on the test server: " + e;
+    return std::nullopt;
+  }
+  const char separator = s.baseUrl.find('?') == std::string::npos ? '?' : '&';
+  return s.baseUrl + separator + "options=-csearch_path%3D" + schema;
+}
+
+}  // namespace
+
+bool testingOnPostgres() {
+  const char* backend = std::getenv("AT_TEST_BACKEND");
+  return backend && std::string(backend) == "postgres";
+}
+
+std::string freshDatabase(const TempDir& dir, const std::string& name) {
+  if (!testingOnPostgres()) return (dir / name).string();
+  std::string whyNot;
+  auto url = newSchema(whyNot);
+  if (!url) {
+    std::printf("SKIPPED: the storage tests on PostgreSQL: %s\n", whyNot.c_str());
+    std::fflush(stdout);
+    std::_Exit(0);
+  }
+  return *url;
+}
+
+std::optional<std::string> freshPostgresDatabase(const char* what) {
+  std::string whyNot;
+  auto url = newSchema(whyNot);
+  if (!url) std::printf("SKIPPED: %s needs a PostgreSQL server: %s\n", what, whyNot.c_str());
+  return url;
+}
+
+bool stopTestPostgres() {
+  TestServer& s = server();
+  if (s.clusterDir.empty()) return false;
+  int status = 0;
+  runScript("'" + scriptPath() + "' stop '" + s.clusterDir + "' 2>&1", status);
+  return status == 0;
+}
+
+bool restartTestPostgres() {
+  TestServer& s = server();
+  if (s.clusterDir.empty()) return false;
+  int status = 0;
+  runScript("'" + scriptPath() + "' restart '" + s.clusterDir + "' 2>&1", status);
+  return status == 0;
+}
+
+std::set<std::string> schemaOf(db::Database& db) {
+  std::set<std::string> out;
+  if (db.backend() == db::Backend::Sqlite) {
+    auto s = db.prepare("SELECT type || ' ' || name || ': ' || coalesce(sql, '') FROM sqlite_master"
+                        " WHERE name NOT LIKE 'sqlite_%'");
+    REQUIRE(s);
+    while (*s->step()) out.insert(s->text(0));
+    return out;
+  }
+  auto columns = db.prepare(
+      "SELECT table_name || '.' || column_name || ' ' || data_type || ' ' || is_nullable || ' ' ||"
+      " coalesce(column_default, '') || ' #' || ordinal_position"
+      " FROM information_schema.columns WHERE table_schema = current_schema()");
+  REQUIRE(columns);
+  while (*columns->step()) out.insert(columns->text(0));
+  auto indexes = db.prepare("SELECT indexdef FROM pg_indexes WHERE schemaname = current_schema()");
+  REQUIRE(indexes);
+  while (*indexes->step()) {
+    // Index definitions name the schema; each test database has its own.
+    std::string def = indexes->text(0);
+    const std::string on = " ON ";
+    if (auto at = def.find(on); at != std::string::npos)
+      if (auto dot = def.find('.', at); dot != std::string::npos) def.erase(at + on.size(), dot + 1 - at - on.size());
+    out.insert(def);
+  }
+  return out;
+}
+
+bool tableExists(db::Database& db, const std::string& table) {
+  auto s = db.backend() == db::Backend::Sqlite
+               ? db.prepare("SELECT count(*) FROM sqlite_master WHERE type = 'table' AND name = ?1")
+               : db.prepare("SELECT count(*) FROM information_schema.tables WHERE table_schema = current_schema()"
+                            " AND table_name = ?1");
+  REQUIRE(s);
+  s->bind(1, table);
+  REQUIRE(*s->step());
+  return s->int64(0) > 0;
+}
+
+std::optional<std::string> postgresValue(const std::string& url, const std::string& sql) {
+  PGconn* conn = PQconnectdb(url.c_str());
+  std::optional<std::string> value;
+  if (PQstatus(conn) == CONNECTION_OK) {
+    PGresult* r = PQexec(conn, sql.c_str());
+    if (PQresultStatus(r) == PGRES_TUPLES_OK && PQntuples(r) > 0) value = std::string(PQgetvalue(r, 0, 0));
+    PQclear(r);
+  }
+  PQfinish(conn);
+  return value;
+}
+
+void forceSchemaVersion(db::Database& db, int version) {
+  if (db.backend() == db::Backend::Sqlite) {
+    REQUIRE(db.exec("PRAGMA user_version = " + std::to_string(version)));
+  } else {
+    REQUIRE(db.exec("UPDATE at_schema_version SET version = " + std::to_string(version)));
+  }
+}
+
+}  // namespace at::test

@@ -1,0 +1,46 @@
+// The engine storage tests run on. By default SQLite files in the test's temporary folder; with
+// AT_TEST_BACKEND=postgres the same tests run on a real PostgreSQL server: AT_TEST_POSTGRES_URL
+// when set (a server someone runs; the URL of a database the tests may create schemas in), else
+// a throwaway cluster this process starts with scripts/pg-cluster.sh (initdb + pg_ctl on a
+// loopback port, as an unprivileged user when run as root) and removes at exit. Each fresh
+// PostgreSQL database is a new schema of that server (the URL selects it with search_path), so a
+// test costs milliseconds, not a CREATE DATABASE.
+#pragma once
+
+#include <optional>
+#include <set>
+#include <string>
+
+#include "db/database.h"
+#include "test_support.h"
+
+namespace at::test {
+
+// True when AT_TEST_BACKEND=postgres.
+bool testingOnPostgres();
+
+// Where a fresh, empty database lives: `dir/name` on SQLite; on PostgreSQL the URL of a new,
+// empty schema (`name` only labels it). When the PostgreSQL server cannot start, prints
+// "SKIPPED: …" with the reason and ends the test run with status 0.
+std::string freshDatabase(const TempDir& dir, const std::string& name = "t.db");
+
+// A fresh PostgreSQL database whatever the mode (for the sync tests, which need a server beside
+// the clients' SQLite files); nullopt after printing "SKIPPED: <what> …" when no server starts.
+std::optional<std::string> freshPostgresDatabase(const char* what);
+
+// The test cluster's control: stops and starts the server this process started (for tests of
+// what clients do while the server is down). False when the server was not started here.
+bool stopTestPostgres();
+bool restartTestPostgres();
+
+// Tables (and on SQLite their SQL, on PostgreSQL their columns with types, nullability and
+// defaults, and their indexes): the schema as a comparable set.
+std::set<std::string> schemaOf(db::Database& db);
+bool tableExists(db::Database& db, const std::string& table);
+// The first column of the first row `sql` gives on the PostgreSQL database `url`, read with libpq
+// directly (not through db/, which refuses some databases); nullopt on error or no row.
+std::optional<std::string> postgresValue(const std::string& url, const std::string& sql);
+// Sets the stored schema version directly (to fake a database from a newer program).
+void forceSchemaVersion(db::Database& db, int version);
+
+}  // namespace at::test
