@@ -52,6 +52,13 @@ void DesktopModel::message(const std::string& text) {
   if (messageSink_) messageSink_(text);
 }
 
+void DesktopModel::note(const std::string& text) {
+  notes_.push_back(text);
+  if (notes_.size() > 3) notes_.erase(notes_.begin());
+  std::fprintf(stderr, "anatomy-tutor: %s\n", text.c_str());
+  if (messageSink_) messageSink_(text);
+}
+
 // ---------------------------------------------------------------------------------------------
 // Opening datasets
 
@@ -92,7 +99,8 @@ Status DesktopModel::showDataset(Dataset dataset, const std::string& startStruct
   const auto sink = [this](json j) { event(std::move(j)); };
   fields_ = std::make_unique<FieldView>(
       *dataset_, explore_, sink, [this](const std::string& m) { message(m); },
-      [this](const std::string& clicked, double distanceMm) { clickGraded(clicked, distanceMm); });
+      [this](const std::string& clicked, double distanceMm) { clickGraded(clicked, distanceMm); },
+      [this](const std::string& m) { note(m); });
   expert_ = std::make_unique<TfEditor>(*dataset_, session_.database(), sink);
   recorder_.highlightNotWanted();
   lastPickMm_.reset();

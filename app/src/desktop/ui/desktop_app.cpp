@@ -52,6 +52,12 @@ class DesktopApp final : public ScriptHost {
 
  private:
   void handleEvent(const SDL_Event& e);
+  // The window's layout with the explore panel as wide as it was last drawn.
+  ViewLayout layout() const {
+    ViewLayout l = window_->layout();
+    l.panelPx = explore_.width();
+    return l;
+  }
   void frame();
   void drawUi();
   void takeScreenshot(render::RgbaImage& image, const Status& read);
@@ -95,7 +101,7 @@ int DesktopApp::run() {
   window_ = std::move(*window);
   view_ = std::make_unique<VolumeView>([this](const std::string& m) { model_->message(m); });
   model_->event({{"event", "context"}, {"gl", window_->glDescription()}, {"note", window_->glNote()}, {"ui_scale", window_->uiScale()}});
-  model_->setLayout(window_->layout());
+  model_->setLayout(layout());
   model_->reframe();  // the start view framed for the window's size
   while (!quit_) frame();
   return script_ ? script_->exitStatus() : 0;
@@ -107,7 +113,7 @@ void DesktopApp::frame() {
   if (model_->idle() && window_->waitEvent(e, 100)) handleEvent(e);
   while (window_->pollEvent(e)) handleEvent(e);
   if (quit_) return;
-  model_->setLayout(window_->layout());
+  model_->setLayout(layout());
   if (script_) {
     script_->step(*model_, *this, Clock::now());
     if (script_->finished()) {

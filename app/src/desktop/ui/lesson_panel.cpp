@@ -1,4 +1,5 @@
 #include <algorithm>
+#include <cfloat>
 #include <cstdio>
 
 #include <imgui.h>
@@ -65,7 +66,8 @@ void LessonPanel::drawLists(LessonController& lessons) {
     return;
   }
   const lessons::Course& course = courses[std::size_t(lessons.courseIndex())];
-  if (ImGui::BeginCombo("course", course.title.c_str())) {
+  ImGui::SetNextItemWidth(-FLT_MIN);
+  if (ImGui::BeginCombo("##course", course.title.c_str())) {
     for (int i = 0; i < int(courses.size()); ++i)
       if (ImGui::Selectable(courses[std::size_t(i)].title.c_str(), i == lessons.courseIndex()) && i != lessons.courseIndex())
         if (auto st = lessons.selectCourse(i); !st) lessons.report(st.error().message);
@@ -76,7 +78,8 @@ void LessonPanel::drawLists(LessonController& lessons) {
   if (course.datasetId != view && !(isBuiltinDatasetName(course.datasetId) && isBuiltinDatasetName(view)))
     wrappedColoured(kWrong, "This course is on dataset '" + course.datasetId + "' but the view shows '" + view +
                                 "': open it with --dataset " + course.datasetId + ".");
-  ImGui::Checkbox("quiz only (no teaching steps, no names)", &lessons.quizOnly);
+  ImGui::Checkbox("quiz only", &lessons.quizOnly);
+  if (ImGui::IsItemHovered()) ImGui::SetTooltip("Start lessons as a quiz: no teaching steps, no structure names");
   ImGui::PushTextWrapPos(0);
   for (const LessonController::LessonRow& row : lessons.rows()) {
     ImGui::PushID(row.id.c_str());

@@ -57,6 +57,8 @@ class ExplorePanel {
   };
   void draw(DesktopModel& model, const Status& status);
   ExamPanel& exams() { return lessons_.exams(); }
+  // Its width as last drawn (the user may drag its edge); 0 before the first frame.
+  float width() const { return width_; }
 
  private:
   void drawStructures(DesktopModel& model, bool hideNames);
@@ -64,6 +66,7 @@ class ExplorePanel {
   float statusHeight(const DesktopModel& model) const;
   std::string search_;
   LessonPanel lessons_;
+  float width_ = 0;
 };
 
 // The preference study: the blinded participant window (in place of the explore panel) and the
