@@ -4,6 +4,7 @@
 //   study run STUDY --participant ID --group G [--answers FILE.jsonl]
 //   study status STUDY                         participants and their completion
 //   study export STUDY --out DIR               the coordinator's files (CSV, JSON, Markdown, SVG, PNG)
+//   study merge STUDY SOURCE...                 participants of other machines' databases into --db
 // STUDY is a stored study id, a shipped study id (data/studies/<file>.json, registered on first
 // use) or a path to a study JSON file.
 #include <algorithm>
@@ -40,6 +41,7 @@ const char* kStudyHelp =
     "       anatomy-tutor study run STUDY --participant ID --group G [--answers FILE.jsonl] [--db PATH]\n"
     "       anatomy-tutor study status STUDY [--db PATH]\n"
     "       anatomy-tutor study export STUDY --out DIR [--db PATH]\n"
+    "       anatomy-tutor study merge STUDY SOURCE... [--db PATH]\n"
     "\n"
     "Preference studies comparing the WDT rendering with the bare-structure rendering of each\n"
     "structure, blinded as A and B with counterbalanced order (the paper's Table 2 design).\n"
@@ -47,7 +49,11 @@ const char* kStudyHelp =
     "run --answers: one JSON line per structure, in the order presented:\n"
     "  {\"ratings\": {\"shape\": 2, \"context\": 1, …}, \"view_ms_a\": 4000, \"view_ms_b\": 3500,\n"
     "   \"toggles\": 3, \"comment\": \"…\", \"response_ms\": 1200}   (ratings as shown: 1 = prefer A … 5 = prefer B)\n"
-    "Without --answers the study runs interactively on the terminal.\n";
+    "Without --answers the study runs interactively on the terminal.\n"
+    "merge: copies every participant of STUDY from the SOURCE databases (lab machines' files or\n"
+    "  servers) into --db, all or nothing: the same id with other records is refused, merging again\n"
+    "  changes nothing. It reports how the machines' counterbalancing rows add up; export the merged\n"
+    "  study for the recomputed summary.\n";
 
 Result<db::Database> openDb(const cli::Args& args) { return db::openDatabase(args.db()); }
 
@@ -298,6 +304,49 @@ int runExport(const cli::Args& args) {
   return 0;
 }
 
+int runMerge(const cli::Args& args) {
+  if (args.positional().size() < 2) return reportError("study merge: expected STUDY and one or more SOURCE databases");
+  const std::string& studyId = args.positional()[0];
+  std::vector<db::Database> opened;
+  opened.reserve(args.positional().size() - 1);
+  std::vector<db::StudyMergeSource> sources;
+  for (std::size_t i = 1; i < args.positional().size(); ++i) {
+    const std::string& location = args.positional()[i];
+    db::OpenOptions options;
+    options.create = false;  // a mistyped source must not become a new, empty database
+    auto source = db::Database::open(location, options);
+    if (!source) return reportError("study merge: " + source.error().message);
+    opened.push_back(std::move(*source));
+  }
+  // Opened after the sources, so that a mistyped source leaves no new target behind.
+  auto database = openDb(args);
+  if (!database) return reportError(database.error().message);
+  for (const auto& source : opened)
+    if (source.path() == database->path()) return reportError("study merge: " + source.path() + " is the --db database itself");
+  for (auto& source : opened) sources.push_back({source.path(), &source});
+  auto report = db::mergeStudy(*database, sources, studyId);
+  if (!report) return reportError("study merge: " + report.error().message);
+  for (const auto& from : report->sources)
+    std::printf("%s: %d participant(s) added, %d already there\n", from.name.c_str(), from.added, from.alreadyThere);
+  std::printf("study %s in %s: %d participant(s)\n", studyId.c_str(), database->path().c_str(), report->participants);
+  std::printf("counterbalancing: %s over the %zu rows of one cycle; participants per row used:",
+              report->balanced() ? "balanced" : "NOT balanced", report->cycle);
+  const char* separator = " ";
+  for (const auto& [row, used] : report->designRows) {
+    std::printf("%srow %zu ×%d", separator, row, used);
+    separator = ", ";
+  }
+  std::printf("\n");
+  if (!report->offDesign.empty()) {
+    std::printf("trials following no row of the design:");
+    for (const auto& id : report->offDesign) std::printf(" %s", id.c_str());
+    std::printf("\n");
+  }
+  if (!report->balanced())
+    std::printf("(some rows are used more often than others, as when each machine starts at row 0: order effects are not cancelled as they are on one machine or a class server)\n");
+  return 0;
+}
+
 }  // namespace
 
 int runStudy(const Argv& argv) {
@@ -317,7 +366,8 @@ int runStudy(const Argv& argv) {
   if (verb == "run") return runRun(*args);
   if (verb == "status") return runStatus(*args);
   if (verb == "export") return runExport(*args);
-  return reportError("study: unknown action '" + verb + "' (register, list, run, status, export)", 2);
+  if (verb == "merge") return runMerge(*args);
+  return reportError("study: unknown action '" + verb + "' (register, list, run, status, export, merge)", 2);
 }
 
 }  // namespace at::app

@@ -5,14 +5,13 @@
 #include <map>
 
 #include "quiz/study_design.h"
+#include "study_rows.h"
 #include "utc_time.h"
 
 namespace at::db {
 
-namespace {
+namespace detail {
 
-// Fields of a stored study that participants' data depend on: changing them would make recorded
-// trials meaningless.
 bool sameDesign(const quiz::StudyProtocol& a, const quiz::StudyProtocol& b) {
   return a.structures == b.structures && a.conditions == b.conditions && a.items == b.items && a.seed == b.seed &&
          a.scale == b.scale && a.presets == b.presets;
@@ -26,6 +25,27 @@ Result<int> participantCount(Database& db, const std::string& studyId) {
   if (!row) return tl::unexpected(row.error());
   return st->integer(0);
 }
+
+Status storeStudyRow(Database& db, const quiz::StudyProtocol& protocol) {
+  auto st = db.prepare(
+      "INSERT INTO studies (id, title, dataset, seed, json) VALUES (?1, ?2, ?3, ?4, ?5) "
+      "ON CONFLICT(id) DO UPDATE SET title = excluded.title, dataset = excluded.dataset, seed = excluded.seed, "
+      "json = excluded.json");
+  if (!st) return tl::unexpected(st.error());
+  st->bind(1, protocol.id)
+      .bind(2, protocol.title)
+      .bind(3, protocol.dataset)
+      .bind(4, std::int64_t(protocol.seed))
+      .bind(5, quiz::serialiseStudyProtocol(protocol));
+  return st->run();
+}
+
+}  // namespace detail
+
+namespace {
+
+using detail::participantCount;
+using detail::sameDesign;
 
 Result<StudyParticipant> loadParticipant(Database& db, const std::string& studyId, const std::string& participantId) {
   auto st = db.prepare(
@@ -109,17 +129,7 @@ Status saveStudy(Database& db, const quiz::StudyProtocol& protocol) {
                     " participant(s); its structures, conditions, items, scale and seed cannot change (give the new "
                     "design another id)");
     }
-    auto st = d.prepare(
-        "INSERT INTO studies (id, title, dataset, seed, json) VALUES (?1, ?2, ?3, ?4, ?5) "
-        "ON CONFLICT(id) DO UPDATE SET title = excluded.title, dataset = excluded.dataset, seed = excluded.seed, "
-        "json = excluded.json");
-    if (!st) return tl::unexpected(st.error());
-    st->bind(1, protocol.id)
-        .bind(2, protocol.title)
-        .bind(3, protocol.dataset)
-        .bind(4, std::int64_t(protocol.seed))
-        .bind(5, quiz::serialiseStudyProtocol(protocol));
-    return st->run();
+    return detail::storeStudyRow(d, protocol);
   });
 }
 
