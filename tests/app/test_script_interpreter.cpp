@@ -124,10 +124,10 @@ TEST_CASE("ScriptInterpreter_ActionNames_AreTheDocumentedOnes") {
         "tf_delete_point", "tf_colour", "preset_set", "preset_save", "study_start", "study_toggle", "study_rate",
         "study_comment", "study_next", "study_close", "coordinator_open", "coordinator_export", "coordinator_summary",
         "lesson_user", "lessons", "lesson", "lesson_next", "answer", "review", "lesson_close", "exams", "exam",
-        "exam_item", "exam_answer", "slice_click", "slice_click_structure", "exam_finish", "exam_leave", "import",
+        "exam_item", "exam_answer", "slice_click", "slice_click_structure", "exam_finish", "exam_leave", "analytics", "import",
         "cancel_import", "open_imported", "cancel_field"})
     CHECK_MESSAGE(have.count(documented), documented);
-  CHECK(have.size() == 52);
+  CHECK(have.size() == 53);
 }
 
 TEST_CASE("ScriptInterpreter_ExpertEdits_ChangeTheViewsPresetAndItsFieldParameters") {

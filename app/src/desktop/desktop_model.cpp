@@ -33,6 +33,7 @@ DesktopModel::DesktopModel(LearningSession& session, const render::PresetLibrary
   exams_ = std::make_unique<ExamController>(
       session_, *lessons_, sink, [this](const std::optional<ExamController::ItemScene>& item) { showExamItem(item); },
       [this] { return renderState(); });
+  analytics_ = std::make_unique<AnalyticsController>(session_, sink);
   study_ = std::make_unique<StudyController>(session_.database(), library_, sink);
   imports_ = std::make_unique<ImportController>(session_.database(), sink, [this](const std::string& m) { message(m); });
   scheduler_.setViewPixels(layout_.viewPixelsW(), layout_.viewPixelsH());

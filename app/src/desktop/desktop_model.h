@@ -17,6 +17,7 @@
 #include <nlohmann/json.hpp>
 
 #include "core/error.h"
+#include "analytics_controller.h"
 #include "exam_controller.h"
 #include "explore_state.h"
 #include "field_view.h"
@@ -85,6 +86,7 @@ class DesktopModel {
   FrameRecorder& recorder() { return recorder_; }
   LessonController& lessons() { return *lessons_; }
   ExamController& exams() { return *exams_; }
+  AnalyticsController& analytics() { return *analytics_; }
   StudyController& study() { return *study_; }
   ImportController& imports() { return *imports_; }
   TfEditor& expert() { return *expert_; }
@@ -192,6 +194,7 @@ class DesktopModel {
   std::unique_ptr<TfEditor> expert_;
   std::unique_ptr<LessonController> lessons_;
   std::unique_ptr<ExamController> exams_;
+  std::unique_ptr<AnalyticsController> analytics_;
   struct Turn {
     std::uint16_t target = 0;
     std::string view;  // the scene's own side, tried first

@@ -10,6 +10,7 @@
 #include <SDL.h>
 #include <imgui.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <thread>
@@ -73,6 +74,7 @@ class DesktopApp final : public ScriptHost {
   ExplorePanel explore_;
   StudyPanel study_;
   ImportPanel import_;
+  AnalyticsPanel analytics_;
   ExpertPanel expert_;
   bool quit_ = false;
   // Mouse
@@ -150,6 +152,10 @@ void DesktopApp::drawUi() {
   else explore_.draw(*model_, {window_->glDescription()});
   study_.drawCoordinator(study, panelW + 20, 20);
   if (!study.participantActive()) import_.draw(model_->imports(), panelW + 40, 40);
+  if (!study.participantActive()) {  // over the view as the explore panel was drawn this frame, with a margin
+    const float left = std::max(panelW, explore_.width());
+    analytics_.draw(model_->analytics(), left + 16, 16, std::max(420.0f, float(l.windowW) - left - 32), float(l.windowH) - 32);
+  }
   // The renderer's texture as it is (GL's rows bottom first: uv0 is the image's left/bottom).
   if (const render::gl::DisplayImage& image = view_->image(); image.handle)
     ImGui::GetBackgroundDrawList()->AddImage(reinterpret_cast<ImTextureID>(image.handle), ImVec2(panelW, 0),

@@ -32,6 +32,8 @@ void ExplorePanel::draw(DesktopModel& model, const Status& status) {
   if (ImGui::SmallButton("Studies...")) model.study().coordinatorOpen = true;
   ImGui::SameLine();
   if (ImGui::SmallButton("Import...")) model.imports().windowOpen = true;
+  ImGui::SameLine();
+  if (ImGui::SmallButton("Analytics...")) model.analytics().windowOpen = true;
   ImGui::Separator();
   lessons_.draw(model.lessons(), model.exams(), float(layout.windowH) * 0.4f);
   ImGui::Separator();

@@ -5,6 +5,7 @@
 #include <imgui.h>
 #include <imgui_stdlib.h>
 
+#include "core/strings.h"
 #include "lessons/repositories.h"
 #include "panels.h"
 #include "volume/dataset_source.h"
@@ -12,7 +13,7 @@
 namespace at::app {
 
 namespace {
-const ImVec4 kRight{0.5f, 1, 0.5f, 1}, kWrong{1, 0.5f, 0.4f, 1}, kHeading{1, 0.75f, 0.3f, 1}, kQuestion{0.6f, 0.8f, 1, 1};
+const ImVec4 kRight{0.5f, 1, 0.5f, 1}, kPartly{1, 0.8f, 0.35f, 1}, kWrong{1, 0.5f, 0.4f, 1}, kHeading{1, 0.75f, 0.3f, 1}, kQuestion{0.6f, 0.8f, 1, 1};
 
 void wrappedColoured(const ImVec4& colour, const std::string& text) {
   ImGui::PushTextWrapPos(0);
@@ -102,7 +103,7 @@ void LessonPanel::drawLists(LessonController& lessons) {
     } else if (row.open) {
       ImGui::TextDisabled("  in progress");
     } else {
-      ImGui::TextDisabled("  not started, %d questions", row.questions);
+      ImGui::TextDisabled("  not started, %s", str::countOf(row.questions, "question").c_str());
     }
     ImGui::PopID();
   }
@@ -206,8 +207,10 @@ void LessonPanel::drawQuestion(LessonController& lessons) {
   if (answer)
     if (auto grade = lessons.answer(*answer); !grade) lessons.report("answer: " + grade.error().message);
   if (a.grade) {
-    ImGui::TextColored(a.grade->correct ? kRight : kWrong, "%s", a.grade->correct ? "Correct." : "Not quite.");
-    ImGui::TextUnformatted(a.grade->feedback.c_str());
+    // The feedback says it first ("Correct: …", "Partly right: …", "Not quite: …"); its colour
+    // agrees: green, amber for a partial score, red.
+    const ImVec4 colour = a.grade->correct ? kRight : a.grade->score > 0 ? kPartly : kWrong;
+    ImGui::TextColored(colour, "%s", a.grade->feedback.c_str());
     if (a.review) ImGui::TextDisabled("Saved: the review queue is updated.");
   }
   if (a.review && ImGui::Button(a.grade ? "Done" : "Skip")) lessons.dismissReview();
