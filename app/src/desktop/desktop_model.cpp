@@ -5,9 +5,13 @@
 #include <cmath>
 #include <cstdio>
 
+#include "core/strings.h"
 #include "course_views.h"
 #include "dataset_resolver.h"
+#include "db/dataset_store.h"
+#include "volume/known_scans.h"
 #include "render/structure_pick.h"
+#include "segment_controller.h"
 
 namespace at::app {
 
@@ -36,6 +40,13 @@ DesktopModel::DesktopModel(LearningSession& session, const render::PresetLibrary
   analytics_ = std::make_unique<AnalyticsController>(session_, sink);
   study_ = std::make_unique<StudyController>(session_.database(), library_, sink);
   imports_ = std::make_unique<ImportController>(session_.database(), sink, [this](const std::string& m) { message(m); });
+  segment_ = std::make_unique<SegmentController>(session_.database(), sink);
+  courses_ = std::make_unique<CourseEditor>(session_, library_, sink,
+                                            [this](const std::string& structure, const std::string& presetId,
+                                                   const std::optional<render::Preset>& captured, lessons::CameraView view) {
+                                              if (captured) showStructureWith(structure, *captured, lessons::toString(view));
+                                              else showLessonStructure({structure, presetId, view});
+                                            });
   scheduler_.setViewPixels(layout_.viewPixelsW(), layout_.viewPixelsH());
 }
 
@@ -103,6 +114,7 @@ Status DesktopModel::showDataset(Dataset dataset, const std::string& startStruct
       [this](const std::string& clicked, double distanceMm) { clickGraded(clicked, distanceMm); },
       [this](const std::string& m) { note(m); });
   expert_ = std::make_unique<TfEditor>(*dataset_, session_.database(), sink);
+  segment_->attach(*dataset_);
   recorder_.highlightNotWanted();
   lastPickMm_.reset();
   lessons_->setViewDataset(dataset_->id);
@@ -111,6 +123,23 @@ Status DesktopModel::showDataset(Dataset dataset, const std::string& startStruct
     event({{"event", "dataset"}, {"dataset", dataset_->id}, {"structures", dataset_->structures.size()},
            {"selected", idOf(explore_.selected())}});
   return {};
+}
+
+std::vector<std::string> DesktopModel::datasetChoices() {
+  std::vector<std::string> names{"phantom"};
+  if (const KnownScan* skull = findKnownScan("skull"); skull && knownScanFile(*skull)) names.push_back("skull");
+  if (auto imported = db::listDatasets(session_.database()))
+    for (const db::DatasetRecord& r : *imported) names.push_back(r.name);
+  return names;
+}
+
+Status DesktopModel::switchDataset(const std::string& name) {
+  DatasetRequest request;
+  request.name = name;
+  request.database = &session_.database();
+  auto dataset = openNamedDataset(request);
+  if (!dataset) return tl::unexpected(dataset.error());
+  return showDataset(std::move(*dataset), "", "");
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -232,11 +261,6 @@ void DesktopModel::expertEdited() {
                              expert_->revision());
 }
 
-void DesktopModel::setFullAtRest(bool on) {
-  fullAtRest_ = on;
-  explore_.noteActivity();
-}
-
 std::optional<std::array<double, 2>> DesktopModel::projectStructure(std::uint16_t label) const {
   const render::StructureFrame* frame = explore_.frameOf(label);
   if (!frame) return std::nullopt;
@@ -248,22 +272,42 @@ std::optional<std::array<double, 2>> DesktopModel::projectStructure(std::uint16_
 }
 
 void DesktopModel::showLessonStructure(const LessonController::Shown& shown) {
-  const Structure* s = dataset_->findStructure(shown.structure);
-  if (!s || !explore_.hasStructure(s->label)) {
-    message("lesson step: no structure '" + shown.structure + "' in dataset '" + dataset_->id + "'");
-    return;
-  }
-  auto preset = presetForStep(library_, s->id, shown.presetId, explore_.levels());
+  auto preset = presetForStep(library_, shown.structure, shown.presetId, explore_.levels(), &session_.database());
   if (!preset) {
     message(preset.error().message);
     return;
   }
-  explore_.usePreset(s->label, *preset, preset->t);
+  showStructureWith(shown.structure, *preset,
+                    shown.view ? lessons::toString(*shown.view) : (explore_.viewName().empty() ? startView_ : explore_.viewName()));
+}
+
+void DesktopModel::showStructureWith(const std::string& structure, const render::Preset& preset, const std::string& view) {
+  const Structure* s = dataset_->findStructure(structure);
+  if (!s || !explore_.hasStructure(s->label)) {
+    message("lesson step: no structure '" + structure + "' in dataset '" + dataset_->id + "'");
+    return;
+  }
+  explore_.usePreset(s->label, preset, preset.t);
   setHovered(0);
   select(s->label);
-  const std::string view = shown.view ? lessons::toString(*shown.view)
-                                      : (explore_.viewName().empty() ? startView_ : explore_.viewName());
   if (auto st = setView(view); !st) message(st.error().message);
+}
+
+std::string DesktopModel::courseDatasetId() const {
+  return str::startsWith(dataset_->id, "phantom:") ? std::string("phantom") : dataset_->id;
+}
+
+Result<CourseEditor::Capture> DesktopModel::captureView() const {
+  const std::uint16_t label = explore_.selected();
+  if (!label) return fail("select the structure to show first");
+  CourseEditor::Capture capture;
+  capture.structure = idOf(label);
+  capture.preset = explore_.presetOverridden() ? explore_.shown().preset : explore_.presetOf(label, explore_.bare());
+  capture.preset.t = explore_.t();
+  auto view = lessons::parseCameraView(explore_.viewName().empty() ? startView_ : explore_.viewName());
+  if (!view) return tl::unexpected(view.error());
+  capture.view = *view;
+  return capture;
 }
 
 lessons::RenderState DesktopModel::renderState() const {
@@ -296,6 +340,7 @@ void DesktopModel::syncStudyView() {
 
 void DesktopModel::beginFrame(FieldTarget* target) {
   recorder_.beginFrame();
+  frameRenderMs_ = 0;
   syncStudyView();
   lessons_->poll();
   exams_->poll();
@@ -312,8 +357,8 @@ void DesktopModel::beginFrame(FieldTarget* target) {
 }
 
 std::optional<RenderPlan> DesktopModel::planFrame(Clock::time_point now) {
-  // Scripted screenshots outside a measured sweep render full quality at rest.
-  const bool full = fullAtRest_ || (options_.scripted && !recorder_.recording());
+  // Scripted screenshots outside a measured sweep render full quality at the render scale.
+  const bool full = options_.scripted && !recorder_.recording();
   return scheduler_.plan(explore_.revision(), explore_.activity(), now, full);
 }
 
@@ -337,6 +382,15 @@ render::RenderSettings DesktopModel::renderSettings(const RenderPlan& plan) cons
 void DesktopModel::rendered(const RenderPlan& plan, double ms) {
   scheduler_.rendered(plan, ms);
   recorder_.noteRender(plan.level, ms);
+  frameRenderMs_ += ms;
+}
+
+bool DesktopModel::refined(const RenderPlan& plan, const RefineReport& report, double ms, Clock::time_point now) {
+  recorder_.noteRefine(ms);
+  frameRenderMs_ += ms;
+  const bool show = scheduler_.refined(plan, report, now);
+  if (report.complete && scheduler_.settledAfterMs()) recorder_.noteSettled(*scheduler_.settledAfterMs(), double(plan.width) / std::max(1, layout_.viewPixelsW()));
+  return show;
 }
 
 void DesktopModel::renderFailed(const std::string& why) {
@@ -348,6 +402,7 @@ void DesktopModel::endFrame(Clock::time_point end, double ms) {
   const std::uint16_t onScreen = explore_.bare() ? explore_.shownLabel() : explore_.fieldLabel();
   recorder_.frameShown(!viewAvailable_ || scheduler_.showing(explore_.revision()), onScreen, end);
   recorder_.endFrame(ms, scheduler_.interacting());
+  scheduler_.frameTook(ms, frameRenderMs_);
 }
 
 bool DesktopModel::settled() const {

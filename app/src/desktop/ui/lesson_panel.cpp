@@ -78,7 +78,7 @@ void LessonPanel::drawLists(LessonController& lessons) {
   const std::string& view = lessons.viewDataset();
   if (course.datasetId != view && !(isBuiltinDatasetName(course.datasetId) && isBuiltinDatasetName(view)))
     wrappedColoured(kWrong, "This course is on dataset '" + course.datasetId + "' but the view shows '" + view +
-                                "': open it with --dataset " + course.datasetId + ".");
+                                "': choose it in the Dataset menu above.");
   ImGui::Checkbox("quiz only", &lessons.quizOnly);
   if (ImGui::IsItemHovered()) ImGui::SetTooltip("Start lessons as a quiz: no teaching steps, no structure names");
   ImGui::PushTextWrapPos(0);

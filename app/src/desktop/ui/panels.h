@@ -3,6 +3,7 @@
 // panel keeps is what only a widget needs: text being typed, a drag in progress, a GL texture.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <optional>
 #include <string>
@@ -13,6 +14,10 @@
 #include "render/gl/window_target.h"
 
 namespace at::app {
+
+// The orientation marker and the scale bar over the volume view, whose rectangle in window
+// coordinates is (left, top, width, height) (view_overlay.cpp).
+void drawViewOverlay(const render::Camera& camera, float left, float top, float width, float height, float uiScale);
 
 // Practical exams inside the lesson runner: the course's exams, an attempt (items, the clock, no
 // names or grades), the results; and the CT slice of a locate-on-slice item over the volume view.
@@ -64,6 +69,7 @@ class ExplorePanel {
  private:
   void drawStructures(DesktopModel& model, bool hideNames);
   void drawFieldProgress(DesktopModel& model);
+  void drawQuality(DesktopModel& model);
   float statusHeight(const DesktopModel& model) const;
   std::string search_;
   LessonPanel lessons_;
@@ -104,6 +110,40 @@ class ImportPanel {
 
  private:
   std::string error_;  // an import that could not start
+};
+
+// The segment editor's window: labels, a slice to paint seeds in, grow, undo and save.
+class SegmentPanel {
+ public:
+  void draw(SegmentController& editor, float x, float y);
+
+ private:
+  std::optional<render::gl::ImageTexture> texture_;
+  std::uint64_t revision_ = 0;
+  std::optional<std::array<int, 3>> lastPainted_;  // the voxel under a drag (one paint per voxel)
+  std::string newLabel_, exportPath_, error_;
+};
+
+// The course editor window (instructors): a new course on the dataset on screen, a stored one to
+// edit, or Open course… (a package); lessons, steps captured from the view, questions, live
+// problems, save and export. Also the Dataset menu's list in the explore panel.
+class CourseEditorPanel {
+ public:
+  void draw(DesktopModel& model, float x, float y);
+
+ private:
+  void drawStart(DesktopModel& model);
+  void drawCourse(DesktopModel& model);
+  void drawSteps(DesktopModel& model);
+  void drawAddStep(DesktopModel& model);
+  void report(const Status& st, const std::string& done);
+  std::string newId_ = "my_course", newTitle_, openPath_, openVolume_, lessonTitle_;
+  std::string showTitle_, showText_, prompt_, synonyms_, candidates_, exportPath_ = "course.atcourse", note_;
+  int kind_ = 0, target_ = 0, other_ = 0, courseChoice_ = 0;
+  float toleranceMm_ = 0;
+  bool onView_ = false, reference_ = false;
+  std::string status_;
+  bool failed_ = false;
 };
 
 // The expert panel at the window's right edge: spline editors for the data TF (over the HU
