@@ -170,7 +170,7 @@ TEST_CASE("play writes each step's view as a PNG, takes a locate answer as a pix
   const auto r = test::runApp("play inner_ear --user pia --new-user --answers '" + (dir / "a.jsonl").string() +
                               "' --views '" + views.string() + "' --db '" + db.string() + "'");
   INFO(r.out << r.err);
-  CHECK(r.out.find("✓ Correct: that is the Cochlea.") != std::string::npos);
+  CHECK(r.out.find("✓ Correct: that is the cochlea.") != std::string::npos);
   CHECK(r.out.find("view: " + (views / "inner_ear-01.png").string()) != std::string::npos);
   CHECK(r.out.find((views / "inner_ear-05.png").string() + "  — answer with the pixel x y") != std::string::npos);
   for (int i = 1; i <= 6; ++i) {

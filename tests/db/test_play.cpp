@@ -20,6 +20,7 @@
 #include "lessons/course_json.h"
 #include "quiz/answer_json.h"
 #include "quiz/keys.h"
+#include "quiz/name_matching.h"
 #include "test_databases.h"
 #include "test_support.h"
 #include "toy_play.h"
@@ -343,7 +344,7 @@ TEST_CASE("Interactive play takes typed answers on stdin and stops cleanly at 'q
                             "no such thing\n" + structures[1].displayName + "\n" + point + "\nquit\n");
   CHECK_MESSAGE(again.exitCode == 0, again.err);
   CHECK(again.out.find("is not a pick") != std::string::npos);
-  CHECK(again.out.find("✓ Correct: that is the " + structures[1].displayName) != std::string::npos);
+  CHECK(again.out.find("✓ Correct: that is the " + quiz::nameInSentence(structures[1].displayName)) != std::string::npos);
   CHECK(scalar(dbPath, "SELECT count(*) FROM responses") == 2);
 }
 

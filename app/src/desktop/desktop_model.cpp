@@ -38,6 +38,7 @@ DesktopModel::DesktopModel(LearningSession& session, const render::PresetLibrary
   exams_ = std::make_unique<ExamController>(
       session_, *lessons_, sink, [this](const std::optional<ExamController::ItemScene>& item) { showExamItem(item); },
       [this] { return renderState(); });
+  analytics_ = std::make_unique<AnalyticsController>(session_, sink);
   study_ = std::make_unique<StudyController>(session_.database(), library_, sink);
   imports_ = std::make_unique<ImportController>(session_.database(), sink, [this](const std::string& m) { message(m); });
   segment_ = std::make_unique<SegmentController>(session_.database(), sink);
@@ -61,6 +62,13 @@ std::string DesktopModel::idOf(std::uint16_t label) const {
 void DesktopModel::message(const std::string& text) {
   messages_.push_back(text);
   if (messages_.size() > 6) messages_.erase(messages_.begin());
+  std::fprintf(stderr, "anatomy-tutor: %s\n", text.c_str());
+  if (messageSink_) messageSink_(text);
+}
+
+void DesktopModel::note(const std::string& text) {
+  notes_.push_back(text);
+  if (notes_.size() > 3) notes_.erase(notes_.begin());
   std::fprintf(stderr, "anatomy-tutor: %s\n", text.c_str());
   if (messageSink_) messageSink_(text);
 }
@@ -105,7 +113,8 @@ Status DesktopModel::showDataset(Dataset dataset, const std::string& startStruct
   const auto sink = [this](json j) { event(std::move(j)); };
   fields_ = std::make_unique<FieldView>(
       *dataset_, explore_, sink, [this](const std::string& m) { message(m); },
-      [this](const std::string& clicked, double distanceMm) { clickGraded(clicked, distanceMm); });
+      [this](const std::string& clicked, double distanceMm) { clickGraded(clicked, distanceMm); },
+      [this](const std::string& m) { note(m); });
   expert_ = std::make_unique<TfEditor>(*dataset_, session_.database(), sink);
   segment_->attach(*dataset_);
   slices_.attach(*dataset_);

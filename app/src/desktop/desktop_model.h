@@ -18,6 +18,7 @@
 
 #include "class_sync.h"
 #include "core/error.h"
+#include "analytics_controller.h"
 #include "exam_controller.h"
 #include "explore_state.h"
 #include "field_view.h"
@@ -42,7 +43,8 @@ struct ViewLayout {
   int windowW = 1280, windowH = 720;          // logical pixels (mouse coordinates)
   int framebufferW = 1280, framebufferH = 720;  // drawable pixels
   float uiScale = 1;
-  float panelWidth() const { return 320 * uiScale; }  // the explore panel, logical pixels
+  float panelPx = 0;                            // the explore panel's width as drawn (resizable); 0: the default
+  float panelWidth() const { return panelPx > 0 ? panelPx : 320 * uiScale; }  // logical pixels
   bool inView(double x, double y) const { return x >= panelWidth() && x < windowW && y >= 0 && y < windowH; }
   // The view's size in framebuffer pixels.
   int viewPixelsW() const;
@@ -94,6 +96,7 @@ class DesktopModel {
   FrameRecorder& recorder() { return recorder_; }
   LessonController& lessons() { return *lessons_; }
   ExamController& exams() { return *exams_; }
+  AnalyticsController& analytics() { return *analytics_; }
   StudyController& study() { return *study_; }
   ImportController& imports() { return *imports_; }
   TfEditor& expert() { return *expert_; }
@@ -178,6 +181,9 @@ class DesktopModel {
 
   void message(const std::string& text);
   const std::vector<std::string>& messages() const { return messages_; }
+  // Neutral information (not a problem): shown apart from the messages, also on stderr.
+  void note(const std::string& text);
+  const std::vector<std::string>& notes() const { return notes_; }
   void event(nlohmann::json e) { events_(std::move(e)); }
 
  private:
@@ -198,6 +204,7 @@ class DesktopModel {
   EventSink events_;
   MessageSink messageSink_;
   std::vector<std::string> messages_;
+  std::vector<std::string> notes_;
   std::unique_ptr<Dataset> dataset_;
   render::GradientVolume gradients_;
   std::uint64_t datasetRevision_ = 0;
@@ -211,6 +218,7 @@ class DesktopModel {
   std::unique_ptr<TfEditor> expert_;
   std::unique_ptr<LessonController> lessons_;
   std::unique_ptr<ExamController> exams_;
+  std::unique_ptr<AnalyticsController> analytics_;
   struct Turn {
     std::uint16_t target = 0;
     std::string view;  // the scene's own side, tried first
