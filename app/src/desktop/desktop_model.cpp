@@ -36,7 +36,8 @@ DesktopModel::DesktopModel(LearningSession& session, const render::PresetLibrary
   exams_ = std::make_unique<ExamController>(
       session_, *lessons_, sink, [this](const std::optional<ExamController::ItemScene>& item) { showExamItem(item); },
       [this] { return renderState(); });
-  study_ = std::make_unique<StudyController>(session_.database(), library_, sink);
+  study_ = std::make_unique<StudyController>(session_.database(), library_, sink,
+                                             [this]() -> Result<render::IntensityLevels> { return explore_.levels(); });
   imports_ = std::make_unique<ImportController>(session_.database(), sink, [this](const std::string& m) { message(m); });
   courses_ = std::make_unique<CourseEditor>(session_, library_, sink,
                                             [this](const std::string& structure, const std::string& presetId,
