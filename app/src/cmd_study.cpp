@@ -20,6 +20,7 @@
 #include "cli_args.h"
 #include "commands.h"
 #include "db/connection.h"
+#include "dataset_resolver.h"
 #include "db/study_store.h"
 #include "quiz/study_report.h"
 #include "render/preset.h"
@@ -169,9 +170,21 @@ int runRun(const cli::Args& args) {
   if (!database) return reportError(database.error().message);
   auto protocol = resolveStudy(*database, args.positional()[0]);
   if (!protocol) return reportError(protocol.error().message);
-  // Both presets of every structure must exist before anyone is enrolled; the WDT preset's α and
-  // β are recorded with each rating (the render parameters on screen).
-  auto presets = loadStudyPresets(render::PresetLibrary(defaultPresetsDir()), *protocol);
+  // Both presets of every structure must exist (written, or derived from the study's dataset)
+  // before anyone is enrolled; the WDT preset's α and β are recorded with each rating (the render
+  // parameters on screen).
+  const StudyLevels levels = [&]() -> Result<render::IntensityLevels> {
+    DatasetRequest request;
+    request.name = protocol->dataset;
+    request.database = &database->get();
+    auto dataset = openNamedDataset(request);
+    if (!dataset) return tl::unexpected(dataset.error());
+    for (const std::string& structure : protocol->structures)
+      if (!dataset->findStructure(structure))
+        return fail(ErrorKind::NotFound, "structure '" + structure + "': " + unknownStructureMessage(*dataset, structure));
+    return render::summariseIntensities(dataset->volume);
+  };
+  auto presets = loadStudyPresets(render::PresetLibrary(defaultPresetsDir()), *protocol, levels);
   if (!presets) return reportError(presets.error().message);
   auto state = db::enrolOrResume(*database, *protocol, *participant, *group);
   if (!state) return reportError(state.error().message);

@@ -67,5 +67,6 @@ int runStudy(const Argv& args);
 // Classes on a class server and sending the outbox (cmd_class.cpp)
 int runClass(const Argv& args);
 int runSync(const Argv& args);
+int runXapi(const Argv& args);  // cmd_xapi.cpp
 
 }  // namespace at::app

@@ -30,6 +30,7 @@ const std::vector<Command>& commands() {
       {"study", "preference studies: register, run, status, export", runStudy},
       {"class", "classes on a class server: create, join with a code, roles, the class's progress", runClass},
       {"sync", "send the answers waiting for the class server (offline first)", runSync},
+      {"xapi", "learning records or a study's ratings as xAPI statements (JSON) for an LMS", runXapi},
   };
   return table;
 }

@@ -62,15 +62,43 @@ std::vector<std::string> shippedStudyIds() {
   return ids;
 }
 
+namespace {
+
+// The render mode a study condition shows: its id, else its preset suffix without the '_'.
+Result<render::RenderMode> conditionMode(const quiz::StudyCondition& condition) {
+  if (auto mode = render::parseRenderMode(condition.id)) return *mode;
+  std::string suffix = condition.presetSuffix;
+  if (!suffix.empty() && suffix.front() == '_') suffix.erase(0, 1);
+  if (auto mode = render::parseRenderMode(suffix)) return *mode;
+  return fail("condition '" + condition.id + "' names no render mode (neither its id nor its preset suffix '" +
+              condition.presetSuffix + "' is wdt, bare, …), so its presets cannot be derived");
+}
+
+}  // namespace
+
 Result<std::map<std::string, render::Preset>> loadStudyPresets(const render::PresetLibrary& library,
-                                                               const quiz::StudyProtocol& protocol) {
+                                                               const quiz::StudyProtocol& protocol,
+                                                               const StudyLevels& levels) {
   std::map<std::string, render::Preset> presets;
+  std::optional<render::IntensityLevels> summary;  // computed at the first preset that is not written
   for (const std::string& structure : protocol.structures)
     for (int condition = 0; condition < 2; ++condition) {
       const std::string id = protocol.presetFor(structure, condition);
-      auto preset = library.load(id);
-      if (!preset) return tl::unexpected(withContext("study " + protocol.id, preset.error()));
-      presets[id] = *preset;
+      std::error_code ec;
+      if (fs::exists(library.dir() / (id + ".json"), ec) || !levels) {
+        auto preset = library.load(id);
+        if (!preset) return tl::unexpected(withContext("study " + protocol.id, preset.error()));
+        presets[id] = *preset;
+        continue;
+      }
+      auto mode = conditionMode(protocol.conditions.at(std::size_t(condition)));
+      if (!mode) return tl::unexpected(withContext("study " + protocol.id, mode.error()));
+      if (!summary) {
+        auto computed = levels();
+        if (!computed) return tl::unexpected(withContext("study " + protocol.id, computed.error()));
+        summary = *computed;
+      }
+      presets[id] = render::derivedPreset(*summary, *mode, structure);
     }
   return presets;
 }

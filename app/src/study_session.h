@@ -13,6 +13,7 @@
 #include "db/connection.h"
 #include "db/study_store.h"
 #include "quiz/study_report.h"
+#include "render/derived_preset.h"
 #include "render/preset.h"
 #include "core/error.h"
 #include "volume/png_image.h"
@@ -26,9 +27,18 @@ Result<quiz::StudyProtocol> resolveStudy(db::Database& database, const std::stri
 // Ids of the shipped studies (data/studies/*.json that parse), in file-name order.
 std::vector<std::string> shippedStudyIds();
 
-// Both presets of every structure of the study, by preset id; an error names the missing one.
+// The intensity levels of the dataset a study is shown on, asked for only when a preset has to be
+// derived (render/derived_preset.h).
+using StudyLevels = std::function<Result<render::IntensityLevels>()>;
+
+// Both presets of every structure of the study, by preset id: the library's preset of that id
+// where one is written, else — given `levels` — the preset derived from the dataset's intensities
+// for the condition's mode (the condition id, or its preset suffix without the '_', names a
+// render mode: "wdt", "bare", …), so that a study runs on any labelled dataset. Without `levels`
+// a missing preset is an error naming it.
 Result<std::map<std::string, render::Preset>> loadStudyPresets(const render::PresetLibrary& library,
-                                                               const quiz::StudyProtocol& protocol);
+                                                               const quiz::StudyProtocol& protocol,
+                                                               const StudyLevels& levels = {});
 
 // One rating as it is stored: the item's rating as shown with the WDT preset's render
 // parameters (α, β) and the study's t.

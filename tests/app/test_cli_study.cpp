@@ -148,6 +148,91 @@ TEST_CASE("StudyCli_ScriptedParticipants_ExportIsCompleteDeterministicAndUnblind
   }
 }
 
+TEST_CASE("StudyCli_XapiExport_EveryRatingALikertStatementOnTheStudyScale") {
+  test::TempDir dir;
+  const std::string db = " --db '" + (dir / "s.db").string() + "'";
+  writeAnswers(dir / "a.jsonl", 13, [](int s) { return 1 + s % 5; });
+  REQUIRE(test::runApp("study run wdt_vs_bare_phantom --participant p1 --group medical --answers '" +
+                       (dir / "a.jsonl").string() + "'" + db)
+              .exitCode == 0);
+  auto r = test::runApp("xapi --study wdt_vs_bare_phantom --homepage https://lms.example.edu --out '" +
+                        (dir / "study.json").string() + "'" + db);
+  CAPTURE(r.err);
+  REQUIRE(r.exitCode == 0);
+  CHECK(r.out.find("statements of 52 ratings") != std::string::npos);
+  const auto statements = nlohmann::json::parse(test::readFile(dir / "study.json"));
+  REQUIRE(statements.size() == 52);
+  std::set<std::string> ids;
+  for (const auto& s : statements) {
+    ids.insert(s.at("id").get<std::string>());
+    const auto& definition = s.at("object").at("definition");
+    CHECK(definition.at("interactionType") == "likert");
+    CHECK(definition.at("scale").size() == 5);
+    const int response = std::stoi(s.at("result").at("response").get<std::string>());
+    CHECK(response >= 1);
+    CHECK(response <= 5);
+    CHECK(s.at("actor").at("account").at("name") == "p1");
+    CHECK(s.at("actor").at("account").at("homePage") == "https://lms.example.edu");
+  }
+  CHECK(ids.size() == 52);
+  auto both = test::runApp("xapi --study wdt_vs_bare_phantom --user p1 --out '" + (dir / "x.json").string() + "'" + db);
+  CHECK(both.exitCode == 1);
+  auto badHome = test::runApp("xapi --homepage lms --out '" + (dir / "x.json").string() + "'" + db);
+  CHECK(badHome.exitCode == 1);
+  CHECK(badHome.err.find("xAPI home page 'lms'") != std::string::npos);
+  auto noStudy = test::runApp("xapi --study none --out '" + (dir / "x.json").string() + "'" + db);
+  CHECK(noStudy.exitCode == 1);
+  CHECK(noStudy.err.find("no study 'none'") != std::string::npos);
+}
+
+TEST_CASE("StudyCli_StudyOnARealCtWithoutWrittenPresets_RunsOnDerivedPresets") {
+  // The TotalSegmentator sample imported as 'abdomen': no preset is written for its structures,
+  // so the study's are derived from the CT's own intensities (render/derived_preset.h).
+  if (!test::requireSharedData("a study on the real CT")) return;
+  test::TempDir dir;
+  const std::string db = " --db '" + (dir / "s.db").string() + "'";
+  auto imported = test::runApp("import --volume '" + test::sharedData("totalsegmentator/ct_small.nii.gz").string() +
+                               "' --labels '" + test::sharedData("totalsegmentator/seg_small.nii.gz").string() +
+                               "' --names '" + test::sharedData("totalsegmentator/labels.json").string() +
+                               "' --name abdomen" + db);
+  REQUIRE_MESSAGE(imported.exitCode == 0, imported.err);
+  auto protocolWith = [&](const std::string& id, const std::vector<std::string>& structures) {
+    nlohmann::json p = {{"schema", 1}, {"id", id}, {"title", "Abdomen"}, {"dataset", "abdomen"},
+                        {"structures", structures},
+                        {"conditions", {{{"id", "wdt"}, {"label", "WDT"}, {"preset_suffix", "_wdt"}},
+                                        {{"id", "bare"}, {"label", "bare"}, {"preset_suffix", "_bare"}}}},
+                        {"items", {{{"id", "shape"}, {"wording", "Shape?"}}, {{"id", "context"}, {"wording", "Context?"}},
+                                   {{"id", "localization"}, {"wording", "Where?"}}, {{"id", "utility"}, {"wording", "Useful?"}}}},
+                        {"scale", {{"min", 1}, {"max", 5}, {"anchors", {{"1", "A"}, {"3", "same"}, {"5", "B"}}}}},
+                        {"groups", {"medical"}}, {"seed", 7}, {"t", 0.5}};
+    const fs::path file = dir / (id + ".json");
+    std::ofstream(file) << p.dump(2);
+    return file.string();
+  };
+  const std::vector<std::string> organs = {"liver", "spleen", "kidney_left"};
+  for (const auto& organ : organs) REQUIRE_FALSE(fs::exists(test::sourceDir() / "data" / "presets" / (organ + "_wdt.json")));
+  writeAnswers(dir / "a.jsonl", 3, [](int s) { return 1 + s; });
+  const std::string answers = " --answers '" + (dir / "a.jsonl").string() + "'";
+  auto run = test::runApp("study run '" + protocolWith("abdomen_study", organs) + "' --participant p1 --group medical" +
+                          answers + db);
+  CAPTURE(run.err);
+  REQUIRE(run.exitCode == 0);
+  CHECK(run.out.find("all 3 structures rated") != std::string::npos);
+  auto exported = test::runApp("study export abdomen_study --out '" + (dir / "export").string() + "'" + db);
+  REQUIRE(exported.exitCode == 0);
+  const auto rows = quiz::parseCsv(test::readFile(dir / "export" / "responses_long.csv"));
+  CHECK(rows.size() == 1 + 3 * 4);
+
+  // A structure the dataset does not have: refused before anyone is enrolled, naming it.
+  auto missing = test::runApp("study run '" + protocolWith("abdomen_brain", {"liver", "brain"}) +
+                              "' --participant p2 --group medical" + answers + db);
+  CHECK(missing.exitCode == 1);
+  CHECK(missing.err.find("structure 'brain'") != std::string::npos);
+  CHECK(std::count(missing.err.begin(), missing.err.end(), '\n') == 1);
+  auto status = test::runApp("study status abdomen_brain" + db);
+  CHECK(status.out.find("0 participant") != std::string::npos);
+}
+
 TEST_CASE("StudyCli_EmptyStudyExport_WritesHeadersOnly") {
   test::TempDir dir;
   auto r = test::runApp("study export wdt_vs_bare_phantom --out '" + (dir / "out").string() + "' --db '" +

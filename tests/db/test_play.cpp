@@ -15,6 +15,8 @@
 #include <thread>
 #include <unistd.h>
 
+#include <nlohmann/json.hpp>
+
 #include "db/course_store.h"
 #include "database.h"  // db/'s private SQL wrapper (at_db_sql_for_tests)
 #include "lessons/course_json.h"
@@ -605,6 +607,17 @@ TEST_CASE("A class through the CLI: join with the code, play while the server is
   CHECK(csv.out.find("\nsam,6,6,4,1,1,") != std::string::npos);
   auto table = test::runApp("class progress " + code + " --user dr_ada" + server);
   CHECK(table.out.find("2 students, 16 events received") != std::string::npos);
+
+  // The same records as xAPI statements: sam's attempt (attempted, completed) and six answers.
+  auto xapi = test::runApp("xapi --user sam --out '" + (dir.path() / "sam.json").string() + "' --db '" + local + "'");
+  CAPTURE(xapi.err);
+  REQUIRE(xapi.exitCode == 0);
+  CHECK(xapi.out.find("statements of 1 user, 7 attempts and answers") != std::string::npos);
+  const auto statements = nlohmann::json::parse(test::readFile(dir.path() / "sam.json"));
+  REQUIRE(statements.size() == 8);
+  int answered = 0;
+  for (const auto& st : statements) answered += st.at("verb").at("display").at("en-US") == "answered";
+  CHECK(answered == 6);
 
   // Refusals: one line naming what is wrong.
   auto student = test::runApp("class progress " + code + " --user sam" + server);

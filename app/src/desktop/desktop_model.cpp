@@ -39,7 +39,8 @@ DesktopModel::DesktopModel(LearningSession& session, const render::PresetLibrary
       session_, *lessons_, sink, [this](const std::optional<ExamController::ItemScene>& item) { showExamItem(item); },
       [this] { return renderState(); });
   analytics_ = std::make_unique<AnalyticsController>(session_, sink);
-  study_ = std::make_unique<StudyController>(session_.database(), library_, sink);
+  study_ = std::make_unique<StudyController>(session_.database(), library_, sink,
+                                             [this]() -> Result<render::IntensityLevels> { return explore_.levels(); });
   imports_ = std::make_unique<ImportController>(session_.database(), sink, [this](const std::string& m) { message(m); });
   segment_ = std::make_unique<SegmentController>(session_.database(), sink);
   courses_ = std::make_unique<CourseEditor>(session_, library_, sink,

@@ -15,8 +15,9 @@ using SteadyClock = std::chrono::steady_clock;
 double msSince(SteadyClock::time_point t) { return std::chrono::duration<double, std::milli>(SteadyClock::now() - t).count(); }
 }  // namespace
 
-StudyController::StudyController(db::Database& database, const render::PresetLibrary& library, EventSink events)
-    : database_(database), library_(library), events_(std::move(events)) {}
+StudyController::StudyController(db::Database& database, const render::PresetLibrary& library, EventSink events,
+                                 StudyLevels levels)
+    : database_(database), library_(library), levels_(std::move(levels)), events_(std::move(events)) {}
 
 StudyController::~StudyController() = default;
 
@@ -36,7 +37,7 @@ Status StudyController::startParticipant(const std::string& study, const std::st
   if (participant.empty()) return fail("study: enter a participant id");
   auto protocol = resolveStudy(database_, study);
   if (!protocol) return tl::unexpected(protocol.error());
-  auto presets = loadStudyPresets(library_, *protocol);
+  auto presets = loadStudyPresets(library_, *protocol, levels_);
   if (!presets) return tl::unexpected(presets.error());
   auto state = db::enrolOrResume(database_, *protocol, participant, group);
   if (!state) return tl::unexpected(state.error());

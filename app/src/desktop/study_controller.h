@@ -35,7 +35,9 @@ class StudyController {
  public:
   using EventSink = std::function<void(nlohmann::json)>;
   // `database` and `library` outlive the controller.
-  StudyController(db::Database& database, const render::PresetLibrary& library, EventSink events);
+  // `levels`: the shown dataset's intensity levels, for the presets a study does not have written.
+  StudyController(db::Database& database, const render::PresetLibrary& library, EventSink events,
+                  StudyLevels levels = {});
   ~StudyController();
 
   // --- Participant mode -----------------------------------------------------------------------
@@ -116,6 +118,7 @@ class StudyController {
 
   db::Database& database_;
   const render::PresetLibrary& library_;
+  StudyLevels levels_;
   EventSink events_;
   std::unique_ptr<Participant> participant_;
   bool newScreen_ = false;      // a new screen the panel has not begun to draw

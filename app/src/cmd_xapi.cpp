@@ -1,0 +1,111 @@
+// anatomy-tutor xapi: learning records (and a study's ratings) as xAPI statements for a learning
+// record store or an LMS (lessons/xapi.h).
+#include <cstdio>
+#include <fstream>
+
+#include "cli_args.h"
+#include "commands.h"
+#include "core/strings.h"
+#include "db/study_store.h"
+#include "learning_session.h"
+#include "lessons/xapi.h"
+
+namespace at::app {
+
+namespace {
+
+constexpr const char* kXapiHelp =
+    "usage: anatomy-tutor xapi --out FILE.json [--user NAME] [--homepage URL] [--activity-base URL] [--db PATH]\n"
+    "       anatomy-tutor xapi --out FILE.json --study STUDY [--homepage URL] [--activity-base URL] [--db PATH]\n\n"
+    "Writes learning records as xAPI 1.0.3 statements (a JSON array, as a learning record store\n"
+    "takes them on POST /statements): every lesson attempt (attempted; completed with its score),\n"
+    "every answer to a lesson or review question (answered, on a cmi.interaction: locate 'other',\n"
+    "identify 'choice', name 'fill-in', order 'sequencing', with success, score and time taken) —\n"
+    "of NAME, or of every user. With --study, the study's ratings instead: each an answered\n"
+    "statement on a 'likert' interaction with the study's scale, the participant's pseudonym as\n"
+    "actor and their enrolment as registration. Exporting the same records again gives the same\n"
+    "statement ids, so a record store keeps each once.\n"
+    "  --homepage       the system the pseudonyms are accounts of (default http://localhost/anatomy-tutor)\n"
+    "  --activity-base  prefix of activity ids (default <homepage>/xapi)\n";
+
+Result<lessons::LearnerRecords> recordsOf(LearningSession& session, const lessons::User& user) {
+  lessons::LearnerRecords r;
+  r.user = user;
+  auto attempts = session.progress().attempts(user.id);
+  if (!attempts) return tl::unexpected(attempts.error());
+  r.attempts.assign(attempts->rbegin(), attempts->rend());  // oldest first
+  for (const lessons::Attempt& a : r.attempts) {
+    auto responses = session.progress().responses(a.id);
+    if (!responses) return tl::unexpected(responses.error());
+    r.responses[a.id] = std::move(*responses);
+  }
+  auto reviews = session.progress().reviewResponses(user.id);
+  if (!reviews) return tl::unexpected(reviews.error());
+  r.reviews = std::move(*reviews);
+  return r;
+}
+
+}  // namespace
+
+int runXapi(const Argv& argv) {
+  auto args = cli::Args::parse(argv, {"out", "study", "homepage", "activity-base"}, {});
+  if (!args) return reportError("xapi: " + args.error().message);
+  if (args->has("help")) {
+    std::printf("%s", kXapiHelp);
+    return 0;
+  }
+  if (!args->positional().empty()) return reportError("xapi: unexpected argument '" + args->positional()[0] + "'");
+  const auto out = args->value("out");
+  if (!out) return reportError("xapi: --out FILE.json is required");
+  if (args->value("study") && args->user()) return reportError("xapi: give --study STUDY or --user NAME, not both");
+  lessons::XapiOptions options;
+  options.homePage = args->valueOr("homepage", options.homePage);
+  options.activityBase = args->valueOr("activity-base", options.homePage + "/xapi");
+  options.appVersion = AT_VERSION;
+  if (auto ok = lessons::checkXapiOptions(options); !ok) return reportError("xapi: " + ok.error().message);
+
+  auto session = LearningSession::open(args->db(), true);
+  if (!session) return reportError("xapi: " + session.error().message);
+  std::vector<lessons::LearnerRecords> learners;
+  std::vector<lessons::StudyRatings> studies;
+  std::size_t records = 0;
+  if (const auto studyId = args->value("study")) {
+    auto protocol = db::findStudy((*session)->database(), *studyId);
+    if (!protocol) return reportError("xapi: " + protocol.error().message);
+    if (!*protocol) return reportError("xapi: no study '" + *studyId + "' in " + db::pathOf((*session)->database()));
+    auto rows = db::studyResponseRows((*session)->database(), **protocol);
+    if (!rows) return reportError("xapi: " + rows.error().message);
+    records = rows->size();
+    studies.push_back({**protocol, std::move(*rows)});
+  } else {
+    std::vector<lessons::User> users;
+    if (const auto name = args->user()) {
+      auto user = (*session)->user(*name, LearningSession::NewUser::Refuse);
+      if (!user) return reportError("xapi: " + user.error().message);
+      users.push_back(*user);
+    } else {
+      auto all = (*session)->users().users();
+      if (!all) return reportError("xapi: " + all.error().message);
+      users = std::move(*all);
+    }
+    for (const lessons::User& u : users) {
+      auto r = recordsOf(**session, u);
+      if (!r) return reportError("xapi: " + r.error().message);
+      records += r->reviews.size() + r->attempts.size();
+      for (const auto& [attempt, responses] : r->responses) records += responses.size();
+      learners.push_back(std::move(*r));
+    }
+  }
+  const std::string text = lessons::xapiStatementsJson(learners, studies, options);
+  std::ofstream file(*out, std::ios::binary | std::ios::trunc);
+  if (!(file << text << "\n") || !(file.close(), file))
+    return reportError("xapi: " + *out + ": cannot write the file");
+  std::printf("wrote %s: statements of %s\n", out->c_str(),
+              args->value("study") ? str::countOf(long(records), "rating").c_str()
+                                   : (str::countOf(long(learners.size()), "user") + ", " +
+                                      str::countOf(long(records), "attempt or answer", "attempts and answers"))
+                                         .c_str());
+  return 0;
+}
+
+}  // namespace at::app
