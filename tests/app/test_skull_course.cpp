@@ -6,6 +6,8 @@
 #include <doctest/doctest.h>
 
 #include <cmath>
+#include <cstdlib>
+#include <sys/wait.h>
 #include <fstream>
 #include <functional>
 #include <map>
@@ -182,4 +184,35 @@ TEST_CASE("Every skull structure's context (WDT) and bare presets render it visi
       REQUIRE(image);
       CHECK(highlightPixels(*image) >= 60);  // of 10,800
     }
+}
+
+TEST_CASE("anatomy-tutor --course skull with no display writes the skull course's first views") {
+  const auto& cache = test::grownSkullCache();
+  if (!cache) return;
+  test::TempDir dir("skull-first-views");
+  const fs::path out = dir / "stdout", err = dir / "stderr";
+  const std::string cmd = "cd '" + dir.path().string() + "' && env -u DISPLAY -u WAYLAND_DISPLAY XDG_CACHE_HOME='" +
+                          cache->string() + "' '" + test::appBinary().string() + "' --course skull >'" + out.string() +
+                          "' 2>'" + err.string() + "'";
+  const int status = std::system(cmd.c_str());
+  const std::string text = test::readFile(out);
+  INFO(text << test::readFile(err));
+  REQUIRE(WIFEXITED(status));
+  if (WEXITSTATUS(status) != 0 && test::readFile(err).find("offscreen rendering") != std::string::npos) {
+    std::printf("SKIPPED: the skull course's first views need an EGL offscreen context\n");
+    return;
+  }
+  REQUIRE(WEXITSTATUS(status) == 0);
+  CHECK(text.rfind("anatomy-tutor: no display", 0) == 0);
+  CHECK(text.find("'skull' course") != std::string::npos);
+  // The first lesson's first three show steps: the maxilla, the upper teeth, the mandible.
+  for (const char* name : {"01_maxilla_wdt.png", "02_upper_teeth_bare.png", "03_mandible_wdt.png"}) {
+    CAPTURE(name);
+    auto image = readPng((dir / "anatomy-tutor-views" / name).string());
+    REQUIRE(image);
+    CHECK(highlightPixels(*image) > image->width * image->height / 50);
+  }
+  const auto unknown = test::runApp("--course no_such_course");
+  CHECK(unknown.exitCode != 0);
+  CHECK(unknown.err.find("no course 'no_such_course'") != std::string::npos);
 }
