@@ -75,7 +75,7 @@ int runRender(const Argv& argv) {
   auto args = cli::Args::parse(argv,
                                withDatasetOptions({"preset", "mode", "t", "size", "view", "clip", "backend", "passes",
                                                    "context", "margin", "presets", "out"}),
-                               {"no-overlays"});
+                               withDatasetFlags({"no-overlays"}));
   if (!args) return reportError("render: " + args.error().message, 2);
   if (args->has("help")) {
     std::printf("%s", kUsage);

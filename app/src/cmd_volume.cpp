@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "cli_args.h"
+#include "core/printable_text.h"
 #include "commands.h"
 #include "dataset_resolver.h"
 #include "db/dataset_store.h"
@@ -155,13 +156,14 @@ const char* kStructuresHelp =
     "Lists a dataset's structures: label value, id, name, system and voxel count.\n"
     "DATASET is a built-in name (phantom, phantom:N, skull) or a volume path (DICOM folder, .nii[.gz],\n"
     ".nrrd/.nhdr, .inv3); --labels gives a label map on any grid (resampled onto the volume), --names a\n"
-    "JSON map { \"value\": \"name\" }, --series the DICOM series UID.\n";
+    "JSON map { \"value\": \"name\" }, --series the DICOM series UID. Datasets from files also take\n"
+    "(as do slice, wdt and render):\n";
 
 // --- info -------------------------------------------------------------------------------------
 
 const char* kInfoHelp =
     "usage: anatomy-tutor info FILE|DIR|SCAN [--json] [--labels PATH] [--names JSON] [--series UID]\n"
-    "                          [--intensity auto|hu|plain]\n\n"
+    "                          [--intensity auto|hu|plain] [--skip-unreadable] [--nrrd-data DIR]\n\n"
     "Loads any supported input (DICOM series folder, DICOM SEG, NIfTI, NRRD, InVesalius .inv3) and\n"
     "prints its dimensions, spacing, origin, orientation, stored type, value range and loader notes.\n"
     "SCAN is a real scan fetched by scripts/fetch-scans.sh (skull).\n"
@@ -170,7 +172,8 @@ const char* kInfoHelp =
     "histogram; --intensity forces one. A file is listed as a label map when it names segments or\n"
     "holds at most 512 integer values that are piecewise constant (90 % of neighbouring non-zero\n"
     "voxels equal), so a noisy uint8 µCT is an image. Label maps and --labels inputs also list each\n"
-    "label with its name and voxel count; --names JSON ({ \"value\": \"name\" }) names them.\n";
+    "label with its name and voxel count; --names JSON ({ \"value\": \"name\" }) names them.\n"
+    "Only regular files are read (FIFOs and devices are refused).\n";
 
 bool isIntegerKind(ScalarKind k) { return k != ScalarKind::Float32 && k != ScalarKind::Float64; }
 
@@ -248,10 +251,10 @@ int runDatasets(const Argv& argv) {
 }
 
 int runStructures(const Argv& argv) {
-  auto args = cli::Args::parse(argv, kDatasetOptions, {"json"});
+  auto args = cli::Args::parse(argv, kDatasetOptions, withDatasetFlags({"json"}));
   if (!args) return usageError("structures", args.error().message);
   if (args->has("help")) {
-    std::printf("%s", kStructuresHelp);
+    std::printf("%s%s", kStructuresHelp, kDatasetOptionsHelp);
     return 0;
   }
   auto ds = openDatasetArg(*args);
@@ -278,10 +281,10 @@ int runStructures(const Argv& argv) {
 }
 
 int runInfo(const Argv& argv) {
-  auto args = cli::Args::parse(argv, {"labels", "names", "series", "intensity"}, {"json"});
+  auto args = cli::Args::parse(argv, {"labels", "names", "series", "intensity", "nrrd-data"}, withDatasetFlags({"json"}));
   if (!args) return usageError("info", args.error().message);
   if (args->has("help")) {
-    std::printf("%s", kInfoHelp);
+    std::printf("%s%s", kInfoHelp, kDatasetOptionsHelp);
     return 0;
   }
   const auto& pos = args->positional();
@@ -297,6 +300,8 @@ int runInfo(const Argv& argv) {
 
   ImageLoadOptions options;
   options.dicomSeriesUid = args->valueOr("series", "");
+  options.skipUnreadableFiles = args->has("skip-unreadable");
+  if (auto folder = args->value("nrrd-data")) options.dataFolder = fs::absolute(*folder).string();
   auto loaded = loadImageFile(path, options);
   if (!loaded) return reportError("info: " + loaded.error().message);
   const Geometry& g = loaded->image.geometry;
@@ -333,6 +338,8 @@ int runInfo(const Argv& argv) {
     files.dicomSeriesUid = options.dicomSeriesUid;
     files.intensity = *intensityChoice;
     files.id = fs::path(path).filename().string();
+    files.skipUnreadableFiles = options.skipUnreadableFiles;
+    files.dataFolder = options.dataFolder;
     auto ds = openDatasetFiles(files);
     if (!ds) return reportError("info: " + ds.error().message);
     const std::vector<std::size_t> counts = labelHistogram(ds->labels);
@@ -349,7 +356,7 @@ int runInfo(const Argv& argv) {
     for (const auto& [value, count] : values.counts) {
       if (value == 0) continue;
       auto it = names.find(value);
-      const std::string name = it != names.end() ? it->second : "label_" + std::to_string(value);
+      const std::string name = it != names.end() ? printableText(it->second, 120) : "label_" + std::to_string(value);
       labels.push_back({value, name, name, count});
     }
   }
@@ -361,7 +368,9 @@ int runInfo(const Argv& argv) {
     if (intensity) out["intensity"] = intensityJson(*intensity);
     out["stored_type"] = toString(loaded->storedKind);
     out["value_range"] = {values.min, values.max};
-    out["notes"] = loaded->notes;
+    json notes = json::array();
+    for (const std::string& note : loaded->notes) notes.push_back(printableText(note, 400));
+    out["notes"] = notes;
     json list = json::array();
     for (const auto& l : labels)
       list.push_back({{"label", l.value}, {"id", l.id}, {"name", l.name}, {"voxels", l.voxels}});
@@ -376,7 +385,7 @@ int runInfo(const Argv& argv) {
   std::printf("stored type: %s\n", toString(loaded->storedKind));
   std::printf("%s %s … %s\n", intensity && intensity->hounsfield() ? "HU range:   " : "value range:", formatDouble(values.min, 1).c_str(),
               formatDouble(values.max, 1).c_str());
-  for (const std::string& note : loaded->notes) std::printf("note:        %s\n", note.c_str());
+  for (const std::string& note : loaded->notes) std::printf("note:        %s\n", printableText(note, 400).c_str());
   if (!labels.empty()) {
     std::printf("labels:      %zu\n", labels.size());
     for (const auto& l : labels) {
@@ -390,7 +399,7 @@ int runInfo(const Argv& argv) {
 }
 
 int runSlice(const Argv& argv) {
-  auto args = cli::Args::parse(argv, with(kDatasetOptions, {"axis", "index", "out", "window", "alpha"}), {});
+  auto args = cli::Args::parse(argv, with(kDatasetOptions, {"axis", "index", "out", "window", "alpha"}), withDatasetFlags({}));
   if (!args) return usageError("slice", args.error().message);
   if (args->has("help")) {
     std::printf("%s", kSliceHelp);

@@ -102,7 +102,7 @@ nlohmann::json dimsJson(const Dims& d) { return nlohmann::json::array({d.x, d.y,
 int runWdt(const Argv& argv) {
   auto parsed = cli::Args::parse(
       argv, withDatasetOptions({"backend", "passes", "rule", "weight", "hu-window", "base", "downsample", "out"}),
-      {"converge", "check", "json"});
+      withDatasetFlags({"converge", "check", "json"}));
   if (!parsed) return reportError("wdt: " + parsed.error().message);
   const cli::Args& args = *parsed;
   if (args.has("help")) {

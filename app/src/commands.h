@@ -60,6 +60,7 @@ int runCourses(const Argv& args);
 int runLessons(const Argv& args);
 int runExam(const Argv& args);       // cmd_exam.cpp
 int runAnalytics(const Argv& args);  // cmd_analytics.cpp
+int runCourse(const Argv& args);     // cmd_course.cpp
 
 // Preference studies (cmd_study.cpp)
 int runStudy(const Argv& args);

@@ -14,8 +14,13 @@ namespace at::app {
 namespace fs = std::filesystem;
 
 std::set<std::string> withDatasetOptions(std::set<std::string> commandOptions) {
-  commandOptions.insert({"labels", "names", "series", "intensity"});
+  commandOptions.insert({"labels", "names", "series", "intensity", "nrrd-data"});
   return commandOptions;
+}
+
+std::set<std::string> withDatasetFlags(std::set<std::string> commandFlags) {
+  commandFlags.insert("skip-unreadable");
+  return commandFlags;
 }
 
 DatasetRequest datasetRequestFrom(const cli::Args& args, const std::string& name) {
@@ -26,19 +31,24 @@ DatasetRequest datasetRequestFrom(const cli::Args& args, const std::string& name
   request.seriesUid = args.valueOr("series", "");
   request.intensity = args.valueOr("intensity", "");
   request.dbPath = args.db();
+  request.skipUnreadableFiles = args.has("skip-unreadable");
+  if (auto folder = args.value("nrrd-data")) request.dataFolder = fs::absolute(*folder).string();
   return request;
 }
 
 Result<Dataset> openNamedDataset(const DatasetRequest& request) {
   const bool fileOptions = !request.labelsPath.empty() || !request.namesPath.empty() || !request.seriesUid.empty() ||
-                           !request.intensity.empty();
+                           !request.intensity.empty() || request.skipUnreadableFiles || !request.dataFolder.empty();
   if (isBuiltinDatasetName(request.name)) {
     if (fileOptions)
-      return fail("--labels, --names, --series and --intensity apply to datasets from files, not to '" + request.name + "'");
+      return fail("--labels, --names, --series, --intensity, --skip-unreadable and --nrrd-data apply to datasets from "
+                  "files, not to '" + request.name + "'");
     return openBuiltinDataset(request.name);
   }
   if (const KnownScan* scan = findKnownScan(request.name)) {
-    if (!request.seriesUid.empty()) return fail("--series applies to DICOM folders, not to '" + request.name + "'");
+    if (!request.seriesUid.empty() || request.skipUnreadableFiles || !request.dataFolder.empty())
+      return fail("--series, --skip-unreadable and --nrrd-data apply to DICOM folders and NRRD files, not to '" +
+                  request.name + "'");
     if (!request.namesPath.empty() && request.labelsPath.empty()) return fail("--names needs --labels PATH");
     auto dataset = openKnownScan(*scan, {request.labelsPath, request.namesPath});
     if (!dataset) return dataset;
@@ -64,6 +74,8 @@ Result<Dataset> openNamedDataset(const DatasetRequest& request) {
       if (!choice) return fail("--intensity: " + choice.error().message);
       files.intensity = *choice;
     }
+    files.skipUnreadableFiles = request.skipUnreadableFiles;
+    files.dataFolder = request.dataFolder;
     return openDatasetFiles(files);
   }
   std::optional<db::Connection> opened;
@@ -79,9 +91,12 @@ Result<Dataset> openNamedDataset(const DatasetRequest& request) {
     if (!record) return tl::unexpected(record.error());
     if (*record) {
       if (fileOptions)
-        return fail("--labels, --names, --series and --intensity apply to datasets from files, not to imported '" +
-                    request.name + "'");
-      auto dataset = openDatasetFiles(db::datasetFiles(**record));
+        return fail("--labels, --names, --series, --intensity, --skip-unreadable and --nrrd-data apply to datasets "
+                    "from files, not to imported '" + request.name + "' (its files are read as at import)");
+      // The files must be those imported: a file changed since is refused (checksums).
+      auto files = db::verifiedDatasetFiles(**record);
+      if (!files) return tl::unexpected(files.error());
+      auto dataset = openDatasetFiles(*files);
       if (!dataset) return tl::unexpected(dataset.error());
       // Imported structures keep the names and descriptions stored at import time.
       auto stored = db::datasetStructures(*database, (*record)->id);

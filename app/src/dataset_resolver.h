@@ -30,11 +30,21 @@ struct DatasetRequest {
   // it exists.
   db::Database* database = nullptr;
   std::optional<std::string> dbPath;
+  bool skipUnreadableFiles = false;   // paths only: --skip-unreadable (DICOM folders)
+  std::string dataFolder;             // paths only: --nrrd-data DIR (detached NRRD data files)
 };
 
 // A command's valued options plus the ones every dataset-taking command accepts beside its
-// DATASET: --labels, --names, --series and --intensity (datasets from files only; --db is global).
+// DATASET: --labels, --names, --series, --intensity and --nrrd-data (datasets from files only; --db is global).
 std::set<std::string> withDatasetOptions(std::set<std::string> commandOptions);
+// A command's flags plus the dataset flag --skip-unreadable (datasets from files only).
+std::set<std::string> withDatasetFlags(std::set<std::string> commandFlags);
+
+// The help text of those options, for each command's --help.
+inline constexpr const char* kDatasetOptionsHelp =
+    "  --skip-unreadable  a DICOM folder's unreadable or broken files are skipped (named in a note)\n"
+    "  --nrrd-data DIR    a detached NRRD header may read its data files under DIR (default: only\n"
+    "                     under the header's own folder)\n";
 
 // The request for dataset `name` with the dataset options given in `args`.
 DatasetRequest datasetRequestFrom(const cli::Args& args, const std::string& name);

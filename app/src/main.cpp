@@ -22,6 +22,7 @@ const std::vector<Command>& commands() {
       {"desktop", "open the desktop app (explore; --ui-script replays actions, --screenshot saves)", runDesktop},
       {"import", "register a dataset (volume, labels, names) in the database", runImport},
       {"courses", "list the courses", runCourses},
+      {"course", "author and share courses: new, validate, import, export (.atcourse packages), list", runCourse},
       {"lessons", "list the lessons of the courses", runLessons},
       {"play", "run a lesson in the terminal (answers from a file or typed)", runPlay},
       {"progress", "show a user's progress and what is due for review", runProgress},

@@ -46,11 +46,17 @@ Preset wholeVolumePreset(const IntensityModel& intensity, const Geometry& grid) 
 StructureFrame volumeFrame(const Geometry& grid) {
   StructureFrame f;
   f.centroidMm = grid.centreMm();
-  // Axis-aligned views see two sides of the box: frame the largest side (a sphere around the
-  // whole diagonal left the volume small in the picture).
+  f.anchorMm = f.centroidMm;
   const Vec3 e = grid.extentMm();
   f.radiusMm = 0.6 * std::max({e[0], e[1], e[2]});
   f.voxelCount = grid.dims.count();
+  f.volumeMm3 = e[0] * e[1] * e[2];
+  f.voxelMm = std::max({grid.spacingMm[0], grid.spacingMm[1], grid.spacingMm[2]});
+  // The grid's eight corner voxels: framing (render/scene.h) fits them from any side.
+  const int last[3] = {grid.dims.x - 1, grid.dims.y - 1, grid.dims.z - 1};
+  for (int corner = 0; corner < 8; ++corner)
+    f.pointsMm.push_back(grid.indexToPatient(
+        {double((corner & 1) ? last[0] : 0), double((corner & 2) ? last[1] : 0), double((corner & 4) ? last[2] : 0)}));
   return f;
 }
 

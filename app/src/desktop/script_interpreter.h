@@ -16,6 +16,8 @@
 //   import:   import, cancel_import, open_imported
 //   segment:  segment_open, segment_label, segment_slice, segment_seed, segment_grow, segment_undo,
 //             segment_clear_seeds, segment_save
+//   courses:  course_new, course_open, course_lesson, course_show, course_question, course_step,
+//             course_save, course_export, course_open_package, open_dataset
 // An action that waits (a lesson being prepared, an import, an export, a locate answer's distance
 // field, a new study screen until a window has shown it) is asked again next frame. A malformed or failing action ends the script with status 2,
 // something waited for that never came (a timeout) with status 1.
@@ -140,6 +142,15 @@ class ScriptInterpreter {
   Outcome segmentUndo(Context&);
   Outcome segmentClearSeeds(Context&);
   Outcome segmentSave(Context&);
+  // The course editor (script_actions_course.cpp)
+  Outcome courseNew(Context&);
+  Outcome courseOpen(Context&);
+  Outcome courseLesson(Context&);
+  Outcome courseShow(Context&);
+  Outcome courseQuestion(Context&);
+  Outcome courseStep(Context&);
+  Outcome courseSave(Context&);
+  Outcome openDataset(Context&);
 
   std::deque<nlohmann::json> actions_;
   std::optional<std::string> finalScreenshot_;

@@ -19,7 +19,8 @@ namespace at::render {
 constexpr double kWholeVolumeRefMm = 0.25;
 Preset wholeVolumePreset(const IntensityModel& intensity, const Geometry& grid);
 
-// The frame of the whole grid: its centre, and 0.6 × its largest side as the radius.
+// The frame of the whole grid: its centre, 0.6 × its largest side as the radius, and its corner
+// voxels as the points a view is framed around.
 StructureFrame volumeFrame(const Geometry& grid);
 
 // A field that puts every sample "at the structure" (distance 0), for modes that sample one: with

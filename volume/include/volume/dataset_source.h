@@ -21,6 +21,10 @@ struct DatasetFiles {
   std::string dicomSeriesUid;   // optional
   std::string id;               // dataset id to report
   IntensityChoice intensity = IntensityChoice::Auto;  // HU or plain intensities (volume/intensity.h)
+  // Passed to the loaders (ImageLoadOptions): skip a DICOM folder's unreadable files with a note;
+  // the folder a detached NRRD header may read data files from besides its own.
+  bool skipUnreadableFiles = false;
+  std::string dataFolder;
 };
 
 // "phantom" or "phantom:N" → the built-in phantom; anything else → error (the app resolves names).

@@ -7,6 +7,7 @@
 #include <set>
 
 #include "core/strings.h"
+#include "core/printable_text.h"
 #include "dicom_support.h"
 #include "volume/dataset_source.h"
 #include "volume/image_file.h"
@@ -87,6 +88,8 @@ Result<Dataset> openDatasetFiles(const DatasetFiles& files, const DatasetLoadCon
   const auto optionsFor = [&](DatasetLoadPart part) {
     ImageLoadOptions options;
     options.cancel = control.cancel;
+    options.skipUnreadableFiles = files.skipUnreadableFiles;
+    options.dataFolder = files.dataFolder;
     if (control.progress) {
       control.progress(part, 0, 0);
       options.progress = [&control, part](std::size_t done, std::size_t total) { control.progress(part, done, total); };
@@ -173,7 +176,8 @@ Result<Dataset> openDatasetFiles(const DatasetFiles& files, const DatasetLoadCon
     if (s.id.empty()) s.id = "label_" + std::to_string(label);
     if (usedIds.count(s.id)) s.id.append(1, '_').append(std::to_string(label));
     usedIds.insert(s.id);
-    s.displayName = name.empty() ? "Label " + std::to_string(label) : displayNameOf(name);
+    // Names come from the files: no line break or terminal escape may reach a listing or a message.
+    s.displayName = name.empty() ? "Label " + std::to_string(label) : displayNameOf(printableText(name, 120));
     dataset.structures.push_back(std::move(s));
   }
   return dataset;
