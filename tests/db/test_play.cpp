@@ -567,3 +567,46 @@ TEST_CASE("play --review asks only about taught structures that are due, and pro
   CHECK(unknown.exitCode != 0);
   CHECK(unknown.err.find("unknown course 'nope'") != std::string::npos);
 }
+
+TEST_CASE("The skull course travels as a package to a program without it and plays to 1.00 from the package") {
+  if (!appAvailable()) return;
+  const auto& cache = test::grownSkullCache();
+  if (!cache) return;
+  test::SkullCacheScope scope(*cache);
+  test::TempDir dir;
+  const fs::path courseFile = test::sourceDir() / "data" / "courses" / "skull.json";
+  auto valid = test::runApp("course validate '" + courseFile.string() + "'");
+  REQUIRE_MESSAGE(valid.exitCode == 0, valid.err);
+  CHECK(valid.out.find("structures checked against dataset 'skull'") != std::string::npos);
+  const fs::path package = dir / "skull.atcourse";
+  auto exported = test::runApp("course export skull --out '" + package.string() + "' --db '" + (dir / "author.db").string() + "'");
+  REQUIRE_MESSAGE(exported.exitCode == 0, exported.err);
+
+  // The student's program ships only the phantom's course; the skull CT and its labels are set-up's.
+  fs::create_directories(dir / "data" / "courses");
+  fs::copy_file(test::sourceDir() / "data" / "courses" / "temporal_bone.json", dir / "data" / "courses" / "temporal_bone.json");
+  test::ScopedEnvVar data("AT_DATA_DIR", (dir / "data").string());
+  const std::string dbPath = test::freshDatabase(dir, "student.db");
+  auto before = test::runApp("courses --db '" + dbPath + "'");
+  REQUIRE_MESSAGE(before.exitCode == 0, before.err);
+  CHECK(before.out.find("The skull on CT") == std::string::npos);
+  auto imported = test::runApp("course import '" + package.string() + "' --db '" + dbPath + "'");
+  REQUIRE_MESSAGE(imported.exitCode == 0, imported.err);
+  CHECK(imported.out.find("course 'skull' (The skull on CT) version 1: added") != std::string::npos);
+  CHECK(imported.out.find("dataset 'skull': built in") != std::string::npos);
+
+  auto course = lessons::loadCourseJson(courseFile);
+  REQUIRE_MESSAGE(course, test::errorText(course));
+  auto dataset = openKnownScan(*findKnownScan("skull"));
+  REQUIRE_MESSAGE(dataset, test::errorText(dataset));
+  const auto answers = answersFor(*course, *dataset);
+  for (const auto& lesson : course->lessons) {  // teaching order satisfies the prerequisites
+    CAPTURE(lesson.id);
+    const fs::path answersFile = writeLines(dir / (lesson.id + ".jsonl"), answers.at(lesson.id));
+    auto r = test::runApp(playArgs(lesson.id, "ana", answersFile, dbPath));
+    CHECK_MESSAGE(r.exitCode == 0, r.err);
+    CHECK(r.out.find("right (score 1.00).") != std::string::npos);
+  }
+  CHECK(scalar(dbPath, "SELECT count(*) FROM responses WHERE correct = 0") == 0);
+  CHECK(scalar(dbPath, "SELECT count(*) FROM responses") == 14);
+}
