@@ -164,6 +164,23 @@ std::string playArgs(const std::string& lesson, const std::string& user, const f
          dbPath + "'";
 }
 
+// Plays every lesson of `course` in teaching order (which satisfies the prerequisites) as `user`
+// with answers computed from its keys on `dataset`: each scores 1.00, and `answered` (the responses
+// stored in `dbPath` so far) grows by its questions.
+void playEveryLesson(const lessons::Course& course, const Dataset& dataset, const test::TempDir& dir, const std::string& user,
+                     const std::string& dbPath, int& answered) {
+  const auto answers = answersFor(course, dataset);
+  for (const auto& lesson : course.lessons) {
+    CAPTURE(lesson.id);
+    const fs::path answersFile = writeLines(dir / (lesson.id + ".jsonl"), answers.at(lesson.id));
+    auto r = test::runApp(playArgs(lesson.id, user, answersFile, dbPath));
+    CHECK_MESSAGE(r.exitCode == 0, r.err);
+    CHECK(r.out.find("right (score 1.00).") != std::string::npos);
+    answered += int(answers.at(lesson.id).size());
+    CHECK(scalar(dbPath, "SELECT count(*) FROM responses") == answered);
+  }
+}
+
 }  // namespace
 
 TEST_CASE("Every shipped lesson plays to the end from answers computed from the course's keys") {
@@ -194,16 +211,7 @@ TEST_CASE("Every shipped lesson plays to the end from answers computed from the 
       dataset = openBuiltinDataset(course->datasetId);
     }
     REQUIRE_MESSAGE(dataset, test::errorText(dataset));
-    const auto answers = answersFor(*course, *dataset);
-    for (const auto& lesson : course->lessons) {  // teaching order satisfies the prerequisites
-      CAPTURE(lesson.id);
-      const fs::path answersFile = writeLines(dir / (lesson.id + ".jsonl"), answers.at(lesson.id));
-      auto r = test::runApp(playArgs(lesson.id, "student", answersFile, dbPath));
-      CHECK_MESSAGE(r.exitCode == 0, r.err);
-      CHECK(r.out.find("right (score 1.00).") != std::string::npos);
-      questions += int(answers.at(lesson.id).size());
-      CHECK(scalar(dbPath, "SELECT count(*) FROM responses") == questions);
-    }
+    playEveryLesson(*course, *dataset, dir, "student", dbPath, questions);
     CHECK(scalar(dbPath, "SELECT count(*) FROM responses WHERE correct = 0") == 0);
     CHECK(scalar(dbPath, "SELECT count(*) FROM attempts WHERE finished_at IS NULL") == 0);
   }
@@ -599,14 +607,8 @@ TEST_CASE("The skull course travels as a package to a program without it and pla
   REQUIRE_MESSAGE(course, test::errorText(course));
   auto dataset = openKnownScan(*findKnownScan("skull"));
   REQUIRE_MESSAGE(dataset, test::errorText(dataset));
-  const auto answers = answersFor(*course, *dataset);
-  for (const auto& lesson : course->lessons) {  // teaching order satisfies the prerequisites
-    CAPTURE(lesson.id);
-    const fs::path answersFile = writeLines(dir / (lesson.id + ".jsonl"), answers.at(lesson.id));
-    auto r = test::runApp(playArgs(lesson.id, "ana", answersFile, dbPath));
-    CHECK_MESSAGE(r.exitCode == 0, r.err);
-    CHECK(r.out.find("right (score 1.00).") != std::string::npos);
-  }
+  int questions = 0;
+  playEveryLesson(*course, *dataset, dir, "ana", dbPath, questions);
+  CHECK(questions == 14);
   CHECK(scalar(dbPath, "SELECT count(*) FROM responses WHERE correct = 0") == 0);
-  CHECK(scalar(dbPath, "SELECT count(*) FROM responses") == 14);
 }
