@@ -77,7 +77,11 @@ int runValidate(const cli::Args& args) {
   }
   // Structures are checked when the dataset can be opened here without changing anything.
   std::string structures = "structures not checked: dataset '" + course->datasetId + "' is not here";
-  const bool builtin = isBuiltinDatasetName(course->datasetId);
+  // A known scan counts as here once fetched (scripts/fetch-scans.sh) and labelled (scripts/label-scans.sh).
+  const KnownScan* scan = findKnownScan(course->datasetId);
+  if (scan) structures += " (fetch it with scripts/fetch-scans.sh and label it with scripts/label-scans.sh)";
+  const bool builtin = isBuiltinDatasetName(course->datasetId) ||
+                       (scan && locateKnownScan(*scan) && cachedKnownScanLabels(*scan));
   std::optional<db::Connection> database;
   if (!builtin) {
     auto existing = db::openExistingDatabase(args.db());

@@ -25,6 +25,25 @@ Result<lessons::Course> loadDefaultCourse() {
   return lessons::loadCourseJson(files.front());
 }
 
+Result<lessons::Course> loadStartCourse(const std::string& courseId) {
+  if (courseId.empty()) return loadDefaultCourse();
+  const fs::path dir = courseDirectory();
+  std::error_code ec;
+  std::vector<fs::path> files;
+  for (const auto& entry : fs::directory_iterator(dir, ec))
+    if (entry.path().extension() == ".json") files.push_back(entry.path());
+  if (ec) return fail(dir.string() + ": cannot list the course folder (" + ec.message() + ")");
+  std::sort(files.begin(), files.end());
+  std::string ids;
+  for (const fs::path& file : files) {
+    auto course = lessons::loadCourseJson(file);
+    if (!course) continue;  // a broken file is reported where courses are listed
+    if (course->id == courseId) return course;
+    ids += (ids.empty() ? "" : ", ") + course->id;
+  }
+  return fail(ErrorKind::NotFound, "no course '" + courseId + "' in " + dir.string() + " (there: " + ids + ")");
+}
+
 std::vector<lessons::ShowStep> firstLessonViews(const lessons::Course& course) {
   std::vector<lessons::ShowStep> views;
   if (course.lessons.empty()) return views;

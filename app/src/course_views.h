@@ -20,6 +20,9 @@ namespace at::app {
 // The default course: temporal_bone.json in the course folder (learning_session.h), else the
 // first course file there by name.
 Result<lessons::Course> loadDefaultCourse();
+// The course the app starts on: `courseId`'s file in the course folder (an error naming the ids
+// there when none has it), or the default course when `courseId` is empty.
+Result<lessons::Course> loadStartCourse(const std::string& courseId);
 
 // The show steps of the course's first lesson, in order (the default lesson's views).
 std::vector<lessons::ShowStep> firstLessonViews(const lessons::Course& course);

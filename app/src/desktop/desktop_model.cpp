@@ -78,7 +78,8 @@ void DesktopModel::note(const std::string& text) {
 // Opening datasets
 
 Status DesktopModel::open() {
-  auto course = loadDefaultCourse();
+  auto course = loadStartCourse(options_.course);
+  if (!course && !options_.course.empty()) return tl::unexpected(course.error());
   std::string datasetName = options_.dataset;
   std::string startStructure, startPreset;
   if (course) {

@@ -53,7 +53,8 @@ struct ViewLayout {
 };
 
 struct DesktopOptions {
-  std::string dataset;              // empty: the default course's dataset; else as openNamedDataset takes it
+  std::string dataset;              // empty: the start course's dataset; else as openNamedDataset takes it
+  std::string course;               // the course to start on (its first lesson's first view); empty: the default
   std::string userName = kDefaultLessonUser;  // whose lesson progress the lesson panel shows and records
   double renderScale = 1;           // resolution of the full-quality level (slow software GL: < 1)
   double frameBudgetMs = 100;       // at rest, finer levels predicted to cost more are not rendered

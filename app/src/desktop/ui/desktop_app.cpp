@@ -230,11 +230,13 @@ void DesktopApp::handleEvent(const SDL_Event& e) {
 }
 
 constexpr const char* kDesktopHelp =
-    "usage: anatomy-tutor [desktop] [--dataset D] [--ui-script FILE.json [--screenshot OUT.png]] [--size WxH]\n"
+    "usage: anatomy-tutor [desktop] [--course ID] [--dataset D] [--ui-script FILE.json [--screenshot OUT.png]] [--size WxH]\n"
     "                             [--render-scale S] [--frame-budget MS] [--max-fps N] [--db PATH] [--user NAME]\n"
-    "  Opens the desktop app on the default course (explore: hover to highlight, click to select).\n"
-    "  --dataset    phantom, phantom:N, a dataset imported into --db, or a volume file or DICOM folder\n"
-    "               (default: the default course's dataset)\n"
+    "  Opens the desktop app on a course (explore: hover to highlight, click to select).\n"
+    "  --course     the course to start on, by id (`anatomy-tutor courses`; e.g. skull, the head CT's\n"
+    "               course): its dataset, on its first lesson's first view (default: temporal_bone)\n"
+    "  --dataset    phantom, phantom:N, skull, a dataset imported into --db, or a volume file or DICOM\n"
+    "               folder (default: the course's dataset)\n"
     "  --ui-script  replay {\"actions\": [...]}; actions: %s\n"
     "  --db         the database: imported datasets, presets saved in the expert panel, studies,\n"
     "               lesson progress (default: the user's)\n"
@@ -253,7 +255,7 @@ constexpr const char* kDesktopHelp =
 }  // namespace
 
 int runDesktop(const std::vector<std::string>& argv) {
-  auto args = cli::Args::parse(argv, {"dataset", "ui-script", "screenshot", "render-scale", "frame-budget", "max-fps"}, {});
+  auto args = cli::Args::parse(argv, {"dataset", "course", "ui-script", "screenshot", "render-scale", "frame-budget", "max-fps"}, {});
   if (!args) return reportError("desktop: " + args.error().message, 2);
   if (args->has("help")) {
     std::string actions;
@@ -264,6 +266,7 @@ int runDesktop(const std::vector<std::string>& argv) {
   if (!args->positional().empty()) return reportError("desktop: unexpected argument '" + args->positional()[0] + "' (see --help)", 2);
   AppOptions options;
   options.model.dataset = args->valueOr("dataset", "");
+  options.model.course = args->valueOr("course", "");
   options.script = args->value("ui-script");
   options.screenshot = args->value("screenshot");
   options.dbPath = args->db();
