@@ -100,6 +100,8 @@ Status DesktopModel::open() {
   auto ds = openNamedDataset(request);
   if (!ds) return tl::unexpected(ds.error());
   if (auto st = showDataset(std::move(*ds), startStructure, startPreset); !st) return st;
+  // The lessons panel starts on the course the view opened for, not on the first course stored.
+  if (course) lessons_->preferCourse(course->id);
   opened_ = true;
   return {};
 }

@@ -72,6 +72,11 @@ Status LessonController::selectCourse(int index) {
   return refresh();
 }
 
+void LessonController::preferCourse(const std::string& courseId) {
+  preferredCourse_ = courseId;
+  if (user_) (void)refresh();  // otherwise the first refresh (when the user is set) applies it
+}
+
 Status LessonController::selectCourse(const std::string& courseId) {
   if (auto st = ready(); !st) return st;
   auto it = std::find_if(courses_.begin(), courses_.end(), [&](const lessons::Course& c) { return c.id == courseId; });
@@ -84,6 +89,13 @@ Status LessonController::refresh() {
   auto courses = session_.curriculum().courses();
   if (!courses) return tl::unexpected(courses.error());
   courses_ = std::move(*courses);
+  if (!preferredCourse_.empty()) {
+    auto it = std::find_if(courses_.begin(), courses_.end(), [&](const lessons::Course& c) { return c.id == preferredCourse_; });
+    if (it != courses_.end()) {
+      courseIndex_ = int(it - courses_.begin());
+      preferredCourse_.clear();
+    }
+  }
   courseIndex_ = std::clamp(courseIndex_, 0, std::max(0, int(courses_.size()) - 1));
   auto attempts = session_.progress().attempts(user_->id);
   if (!attempts) return tl::unexpected(attempts.error());

@@ -104,6 +104,8 @@ class LessonController {
   Status switchUser(const std::string& name);  // no lesson may be running [lesson_user]
   Status selectCourse(const std::string& courseId);
   Status selectCourse(int index);
+  // The course to start on (the one the view opened for), applied when the courses are next read.
+  void preferCourse(const std::string& courseId);
   Status refresh();                            // courses, lesson rows, review queue
   // Starts (or resumes) a lesson; its answer keys are computed on a thread and poll() (each frame)
   // completes the start [lesson_started, lesson_step; lesson_refused when it cannot start].
@@ -151,6 +153,7 @@ class LessonController {
 
   std::vector<lessons::Course> courses_;
   int courseIndex_ = 0;
+  std::string preferredCourse_;  // preferCourse: chosen at the next refresh, then cleared
   std::vector<LessonRow> rows_;
   std::vector<lessons::StructureProgress> due_;
   std::optional<lessons::StepView> step_;     // the engine's current step (nullopt: no lesson running)
