@@ -70,7 +70,8 @@ Result<RgbImage> composeSheet(const std::string& title, const std::vector<SheetP
   }
   const int titleH = title.empty() ? 0 : lineHeight(scale + 1) + gap / 2;
   const int rowH = cellH + gap / 2 + int(captionLines) * lineHeight(scale);
-  RgbImage sheet(gap + columns * (cellW + gap), gap + titleH + rows * (rowH + gap));
+  const int titleW = title.empty() ? 0 : 2 * gap + textWidth(title, scale + 1);  // a title is never cut
+  RgbImage sheet(std::max(gap + columns * (cellW + gap), titleW), gap + titleH + rows * (rowH + gap));
   for (std::size_t i = 0; i < sheet.rgb.size(); i += 3) std::memcpy(&sheet.rgb[i], kSheet.data(), 3);
   if (!title.empty()) drawText(sheet, gap, gap, title, kTitle, scale + 1);
   for (std::size_t i = 0; i < panels.size(); ++i) {

@@ -68,6 +68,11 @@ TEST_CASE("FigureSheet_WrapsInRowsAndCutsWordsTooLongForALine") {
   REQUIRE(lines.size() >= 2);
   for (const std::string& l : lines) CHECK(textWidth(l, 1) <= 40);
   CHECK(wrapCaption("one\ntwo", 400, 1).size() == 2);
+  // A title wider than the panels widens the sheet rather than being cut.
+  const std::string title = "A title much wider than two small panels";
+  auto titled = composeSheet(title, panels, layout);
+  REQUIRE(titled);
+  CHECK(titled->width >= textWidth(title, layout.textScale + 1) + 2 * layout.gap);
 }
 
 TEST_CASE("FigureSheet_RefusesNoPanelsOrAnEmptyImage") {

@@ -27,7 +27,8 @@ struct SheetLayout {
 std::vector<std::string> wrapCaption(const std::string& caption, int widthPx, int textScale);
 
 // Lays out the panels (dark-grey sheet, white title, light-grey captions); panels of different
-// sizes are top-aligned in cells as wide as the widest panel. Error for no panels or an empty image.
+// sizes are top-aligned in cells as wide as the widest panel; the sheet is at least as wide as its
+// title. Error for no panels or an empty image.
 Result<RgbImage> composeSheet(const std::string& title, const std::vector<SheetPanel>& panels,
                               const SheetLayout& layout = {});
 
