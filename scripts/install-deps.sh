@@ -16,6 +16,8 @@ packages=(
   librsvg2-bin desktop-file-utils strace
   librsvg2-dev libcairo2-dev fonts-dejavu-core
   postgresql libpq-dev
+  nettle-dev
+  clang-14 libclang-rt-14-dev
 )
 
 missing=()

@@ -37,6 +37,9 @@ int runFigureSheet(const Argv& args);  // cmd_figure_sheet.cpp
 // The shipped presets: dataSubdirectory("presets") (data_paths.h).
 std::filesystem::path defaultPresetsDir();
 
+// Labelling from seed strokes (cmd_segment.cpp)
+int runSegment(const Argv& args);
+
 // The desktop application (desktop/ui/desktop_app.cpp)
 int runDesktop(const Argv& args);
 // A display server to open a window on: DISPLAY (X11) or WAYLAND_DISPLAY set and non-empty, and a
@@ -57,6 +60,7 @@ int runCourses(const Argv& args);
 int runLessons(const Argv& args);
 int runExam(const Argv& args);       // cmd_exam.cpp
 int runAnalytics(const Argv& args);  // cmd_analytics.cpp
+int runCourse(const Argv& args);     // cmd_course.cpp
 
 // Preference studies (cmd_study.cpp)
 int runStudy(const Argv& args);

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <filesystem>
 
+#include "db/preset_store.h"
 #include "learning_session.h"
 #include "lessons/course_json.h"
 
@@ -33,7 +34,13 @@ std::vector<lessons::ShowStep> firstLessonViews(const lessons::Course& course) {
 }
 
 Result<render::Preset> presetForStep(const render::PresetLibrary& library, const std::string& structureId,
-                                     const std::string& presetId, const render::IntensityLevels& levels) {
+                                     const std::string& presetId, const render::IntensityLevels& levels,
+                                     db::Database* database) {
+  if (database && !presetId.empty()) {
+    auto stored = db::findPreset(*database, presetId);
+    if (!stored) return tl::unexpected(stored.error());
+    if (*stored) return render::parsePreset((*stored)->json, "preset '" + presetId + "' (database)");
+  }
   if (!presetId.empty() && fs::is_regular_file(library.dir() / (presetId + ".json"))) return library.load(presetId);
   const bool bare = presetId.size() >= 5 && presetId.substr(presetId.size() - 5) == "_bare";
   return render::presetOrDerived(library, structureId, bare ? render::RenderMode::Bare : render::RenderMode::Wdt,

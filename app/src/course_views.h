@@ -11,6 +11,10 @@
 #include "render/preset.h"
 #include "core/error.h"
 
+namespace at::db {
+class Database;
+}
+
 namespace at::app {
 
 // The default course: temporal_bone.json in the course folder (learning_session.h), else the
@@ -20,9 +24,12 @@ Result<lessons::Course> loadDefaultCourse();
 // The show steps of the course's first lesson, in order (the default lesson's views).
 std::vector<lessons::ShowStep> firstLessonViews(const lessons::Course& course);
 
-// The step's preset: the library's `presetId` if it exists, else the structure's shipped preset for
-// the mode the id ends in ("_bare" → bare, otherwise wdt), else one derived from the data's levels.
+// The step's preset: `presetId` from the database's presets when `database` is given and has it (an
+// imported course's, or one the course editor captured), else the library's `presetId` if it
+// exists, else the structure's shipped preset for the mode the id ends in ("_bare" → bare,
+// otherwise wdt), else one derived from the data's levels.
 Result<render::Preset> presetForStep(const render::PresetLibrary& library, const std::string& structureId,
-                                     const std::string& presetId, const render::IntensityLevels& levels);
+                                     const std::string& presetId, const render::IntensityLevels& levels,
+                                     db::Database* database = nullptr);
 
 }  // namespace at::app

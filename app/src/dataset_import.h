@@ -23,6 +23,9 @@ struct ImportRequest {
   std::string namesPath;              // optional JSON {"1": "spleen", …}
   std::string name;                   // what commands will take as DATASET
   std::string species = "human";      // lower-case letters, '-' and '_'
+  bool replace = false;               // a dataset of that name is replaced (its files changed)
+  bool skipUnreadableFiles = false;   // a DICOM folder's unreadable files are skipped (kept for later opens)
+  std::string dataFolder;             // a detached NRRD header may read data files here (kept too)
 };
 
 // The stages in the order they run.
@@ -50,7 +53,7 @@ struct ImportedDataset {
 // alignment, checksums the files and registers the dataset in `database` in one transaction.
 // Errors are one line naming the file or field and the problem (a taken name is a Conflict, a
 // cancelled import Cancelled); nothing is stored then. May run on another thread than the
-// connection's other users (db/database.h).
+// connection's other users (db/connection.h).
 Result<ImportedDataset> importDataset(db::Database& database, const ImportRequest& request,
                                       const ImportControl& control = {});
 

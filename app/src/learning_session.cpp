@@ -84,19 +84,23 @@ struct LearningSession::Repositories {
       : curriculum(database, builtinStructures()), progress(database), users(database) {}
 };
 
-LearningSession::LearningSession(db::Database database)
-    : database_(std::move(database)), repositories_(std::make_unique<Repositories>(database_)) {}
+LearningSession::LearningSession(db::Connection connection)
+    : connection_(std::move(connection)), repositories_(std::make_unique<Repositories>(connection_)) {}
 
 LearningSession::~LearningSession() = default;
 
-Result<std::unique_ptr<LearningSession>> LearningSession::open(const std::optional<std::string>& dbPath) {
+Result<std::unique_ptr<LearningSession>> LearningSession::open(const std::optional<std::string>& dbPath,
+                                                               bool readOnly) {
   const std::string courses = courseDirectory();
   std::error_code ec;
   if (!std::filesystem::is_directory(courses, ec))
     return fail(ErrorKind::NotFound, "no course folder at " + courses + " (the courses are installed in "
                 "share/anatomy-tutor/courses beside the program's bin/ folder; AT_DATA_DIR=DIR reads DIR/courses instead)");
-  auto database = db::openDatabase(dbPath);
+  db::OpenOptions options;
+  options.readOnlyIfNotWritable = readOnly;
+  auto database = db::openDatabase(dbPath, options);
   if (!database) return tl::unexpected(database.error());
+  if (database->readOnly()) return std::unique_ptr<LearningSession>(new LearningSession(std::move(*database)));
   auto seeded = db::seedCourses(*database, courses);
   if (!seeded) return tl::unexpected(withContext("seeding the default course", seeded.error()));
   return std::unique_ptr<LearningSession>(new LearningSession(std::move(*database)));
@@ -132,7 +136,7 @@ Result<quiz::KeyComputer*> LearningSession::keysFor(const std::string& datasetId
   if (auto it = keys_.find(datasetId); it != keys_.end()) return it->second.get();
   auto list = structures(datasetId);
   if (!list) return tl::unexpected(list.error());
-  db::Database* database = &database_;
+  db::Database* database = &connection_.get();
   auto keys = std::make_unique<LazyKeyComputer>(std::move(*list), [database, datasetId]() -> Result<Dataset> {
     DatasetRequest request;
     request.name = datasetId;

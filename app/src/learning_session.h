@@ -17,7 +17,7 @@
 #include <vector>
 
 #include "core/error.h"
-#include "db/database.h"
+#include "db/connection.h"
 #include "lessons/lesson_engine.h"
 #include "lessons/repositories.h"
 #include "quiz/keys.h"
@@ -35,14 +35,16 @@ std::string courseDirectory();
 class LearningSession {
  public:
   // Opens `dbPath` (nullopt: the default database, its folder created when missing) and seeds the
-  // courses of courseDirectory() (idempotent).
-  static Result<std::unique_ptr<LearningSession>> open(const std::optional<std::string>& dbPath);
+  // courses of courseDirectory() (idempotent). With `readOnly` (commands that only read: courses,
+  // lessons, progress), a database this process cannot write is opened read-only and not seeded.
+  static Result<std::unique_ptr<LearningSession>> open(const std::optional<std::string>& dbPath,
+                                                        bool readOnly = false);
   ~LearningSession();
   LearningSession(const LearningSession&) = delete;
   LearningSession& operator=(const LearningSession&) = delete;
 
   // The connection, for the stores that take one (datasets, presets, studies).
-  db::Database& database() { return database_; }
+  db::Database& database() { return connection_; }
   lessons::CurriculumRepository& curriculum();
   lessons::ProgressRepository& progress();
   lessons::UserRepository& users();
@@ -63,8 +65,8 @@ class LearningSession {
 
  private:
   struct Repositories;
-  explicit LearningSession(db::Database database);
-  db::Database database_;
+  explicit LearningSession(db::Connection connection);
+  db::Connection connection_;
   std::unique_ptr<Repositories> repositories_;
   std::map<std::string, std::unique_ptr<quiz::KeyComputer>> keys_;  // by dataset id
 };

@@ -5,6 +5,8 @@
 #include <sstream>
 
 #include "commands.h"
+#include "course_views.h"
+#include "db/preset_store.h"
 #include "dataset_resolver.h"
 #include "render/gl/egl_context.h"
 #include "render/gl/volume_renderer.h"
@@ -98,6 +100,7 @@ Result<std::unique_ptr<TerminalViews>> TerminalViews::create(db::Database& db, c
   v->dataset_ = std::move(*dataset);
   v->levels_ = render::summariseIntensities(v->dataset_.volume);
   v->presets_ = std::make_unique<render::PresetLibrary>(defaultPresetsDir());
+  v->database_ = &db;
   if (!pictures) return v;
   std::error_code ec;
   fs::create_directories(dir, ec);
@@ -116,8 +119,12 @@ Result<std::unique_ptr<TerminalViews>> TerminalViews::create(db::Database& db, c
 }
 
 Result<render::Preset> TerminalViews::presetOf(const Structure& structure, const std::string& presetId) const {
-  if (!presetId.empty())
+  if (!presetId.empty()) {
+    // The database's (an imported course's, a captured one) before the shipped library's.
+    if (auto stored = db::findPreset(*database_, presetId); stored && *stored)
+      if (auto preset = render::parsePreset((*stored)->json, "preset '" + presetId + "' (database)")) return preset;
     if (auto preset = presets_->load(presetId)) return preset;
+  }
   return render::presetOrDerived(*presets_, structure.id, render::RenderMode::Wdt, levels_);
 }
 

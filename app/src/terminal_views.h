@@ -11,7 +11,7 @@
 #include <optional>
 #include <string>
 
-#include "db/database.h"
+#include "db/connection.h"
 #include "lessons/curriculum.h"
 #include "quiz/question.h"
 #include "render/gradient_volume.h"
@@ -84,6 +84,7 @@ class TerminalViews {
   render::IntensityLevels levels_;    // derived presets where none is shipped
   std::filesystem::path dir_;
   std::unique_ptr<render::PresetLibrary> presets_;
+  db::Database* database_ = nullptr;  // its presets come before the library's (course_views.h)
   std::unique_ptr<render::gl::EglContext> context_;
   std::unique_ptr<render::gl::VolumeRenderer> renderer_;
   std::map<std::string, FloatVolume> fields_;  // WDT per structure id, computed once

@@ -176,10 +176,23 @@ TEST_CASE("StudyCli_MalformedAnswerLine_ReportsLineAndKeepsEarlierRatings") {
 TEST_CASE("StudyCli_BadArguments_OneLineErrors") {
   test::TempDir dir;
   const std::string db = " --db '" + (dir / "s.db").string() + "'";
-  auto noStudy = test::runApp("study run nonexistent_study --participant a --group medical" + db);
+  writeAnswers(dir / "a.jsonl", 13, [](int) { return 3; });
+  // The terminal shows no renderings: without answers from elsewhere nobody is enrolled.
+  auto noAnswers = test::runApp("study run wdt_vs_bare_phantom --participant a --group medical" + db, "a\nb\n\n1\n");
+  CHECK(noAnswers.exitCode == 1);
+  CHECK(noAnswers.err.find("cannot show the renderings") != std::string::npos);
+  CHECK(noAnswers.err.find("desktop") != std::string::npos);
+  CHECK_FALSE(fs::exists(dir / "s.db"));
+  auto missingAnswers = test::runApp("study run wdt_vs_bare_phantom --participant a --group medical --answers '" +
+                                     (dir / "none.jsonl").string() + "'" + db);
+  CHECK(missingAnswers.exitCode == 1);
+  CHECK(missingAnswers.err.find("none.jsonl") != std::string::npos);
+  CHECK_FALSE(fs::exists(dir / "s.db"));
+  const std::string answers = " --answers '" + (dir / "a.jsonl").string() + "'";
+  auto noStudy = test::runApp("study run nonexistent_study --participant a --group medical" + answers + db);
   CHECK(noStudy.exitCode != 0);
   CHECK(noStudy.err.find("nonexistent_study") != std::string::npos);
-  auto badGroup = test::runApp("study run wdt_vs_bare_phantom --participant a --group pilots" + db);
+  auto badGroup = test::runApp("study run wdt_vs_bare_phantom --participant a --group pilots" + answers + db);
   CHECK(badGroup.exitCode != 0);
   CHECK(badGroup.err.find("pilots") != std::string::npos);
   auto noOut = test::runApp("study export wdt_vs_bare_phantom" + db);
@@ -243,4 +256,56 @@ TEST_CASE("StudyCli_ThreeLabMachinesOnOneClassServer_EachParticipantGetsTheirOwn
   }
   for (const auto& [who, plan] : seen) participantsRows.insert(plan);
   CHECK(participantsRows == designRows);
+}
+
+TEST_CASE("StudyCli_MergeLabMachinesFiles_OneStudyReportsBalanceRefusesConflictsAndMissingSources") {
+  test::TempDir dir;
+  const std::string study = "wdt_vs_bare_phantom";
+  writeAnswers(dir / "answers.jsonl", 13, [](int s) { return 1 + s % 5; });
+  const auto runOn = [&](const std::string& file, const std::string& who) {
+    auto r = test::runApp("study run " + study + " --participant " + who + " --group medical --answers '" +
+                          (dir / "answers.jsonl").string() + "' --db '" + (dir / file).string() + "'");
+    CAPTURE(r.err);
+    REQUIRE(r.exitCode == 0);
+  };
+  runOn("lab1.db", "a1");
+  runOn("lab1.db", "a2");
+  runOn("lab2.db", "b1");
+  const std::string sources = " '" + (dir / "lab1.db").string() + "' '" + (dir / "lab2.db").string() + "'";
+  const std::string into = " --db '" + (dir / "class.db").string() + "'";
+  auto merged = test::runApp("study merge " + study + sources + into);
+  CAPTURE(merged.err);
+  REQUIRE(merged.exitCode == 0);
+  CHECK(merged.out.find("lab1.db: 2 participant(s) added, 0 already there") != std::string::npos);
+  CHECK(merged.out.find("lab2.db: 1 participant(s) added") != std::string::npos);
+  CHECK(merged.out.find("3 participant(s)") != std::string::npos);
+  CHECK(merged.out.find("NOT balanced") != std::string::npos);  // both machines used design row 0
+  CHECK(merged.out.find("row 0 ×2") != std::string::npos);
+
+  auto exported = test::runApp("study export " + study + " --out '" + (dir / "export").string() + "'" + into);
+  REQUIRE(exported.exitCode == 0);
+  CHECK(quiz::parseCsv(test::readFile(dir / "export" / "responses_long.csv")).size() == 1 + 3 * 13 * 4);
+  CHECK(test::readFile(dir / "export" / "summary.csv").find("all") != std::string::npos);
+
+  auto again = test::runApp("study merge " + study + sources + into);
+  REQUIRE(again.exitCode == 0);
+  CHECK(again.out.find("lab1.db: 0 participant(s) added, 2 already there") != std::string::npos);
+
+  runOn("lab3.db", "a1");  // another person under an id lab 1 used
+  auto clash = test::runApp("study merge " + study + " '" + (dir / "lab3.db").string() + "'" + into);
+  CHECK(clash.exitCode == 1);
+  CHECK(clash.err.find("'a1'") != std::string::npos);
+  CHECK(clash.err.find("nothing was merged") != std::string::npos);
+  CHECK(std::count(clash.err.begin(), clash.err.end(), '\n') == 1);
+
+  auto missing = test::runApp("study merge " + study + " '" + (dir / "nowhere.db").string() + "'" + into);
+  CHECK(missing.exitCode == 1);
+  CHECK(missing.err.find("nowhere.db") != std::string::npos);
+  CHECK_FALSE(fs::exists(dir / "nowhere.db"));
+  auto noTarget = test::runApp("study merge " + study + " '" + (dir / "nowhere.db").string() + "' --db '" +
+                               (dir / "new.db").string() + "'");
+  CHECK(noTarget.exitCode == 1);
+  CHECK_FALSE(fs::exists(dir / "new.db"));  // a failed merge leaves no new database behind
+  auto status = test::runApp("study status " + study + into);
+  CHECK(status.out.find("3 participant(s)") != std::string::npos);
 }

@@ -111,8 +111,32 @@ TEST_CASE("ScriptInterpreter_HoverSweep_RecordsAndReportsEveryVisibleStructure")
   const auto hovered = eventsOf(r, "hover_structure");
   CHECK(hovered.size() == 16);  // every structure of the phantom, visible or not
   CHECK(report["frames"].get<int>() > 10);
-  CHECK(report["highlights"].get<int>() > 0);
   CHECK(report["window"] == "headless");
+  // (How many of the sweep's hovers get their field on screen within the dwell depends on the
+  // machine's load; the recorder's highlight count is checked below without timing.)
+}
+
+TEST_CASE("ScriptInterpreter_Report_CountsAHighlightOnceTheHoveredFieldIsShown") {
+  test::TempDir dir("script-highlight");
+  // The view of the ViewActions test, where hovering the temporal line picks it.
+  const json actions = {{{"do", "select"}, {"structure", "vestibule"}},
+                        {{"do", "view"}, {"value", "lateral_right"}},
+                        {{"do", "zoom"}, {"factor", 0.45}},
+                        {{"do", "wait_field"}},
+                        {{"do", "record"}, {"on", true}},
+                        {{"do", "hover_structure"}, {"structure", "temporal_line"}},
+                        {{"do", "wait_field"}},
+                        {{"do", "report"}}};
+  const auto r = run(dir, actions);
+  INFO(r.messages);
+  REQUIRE(r.exitCode == 0);
+  const auto hovers = eventsOf(r, "hover");
+  REQUIRE(!hovers.empty());
+  REQUIRE(hovers.back()["structure"] == "temporal_line");
+  const auto reports = eventsOf(r, "report");
+  REQUIRE(reports.size() == 1);
+  CHECK(reports[0]["highlights"] == 1);
+  CHECK(reports[0]["highlight_ms_max"].get<double>() > 0);
 }
 
 TEST_CASE("ScriptInterpreter_ActionNames_AreTheDocumentedOnes") {
@@ -125,9 +149,12 @@ TEST_CASE("ScriptInterpreter_ActionNames_AreTheDocumentedOnes") {
         "study_comment", "study_next", "study_close", "coordinator_open", "coordinator_export", "coordinator_summary",
         "lesson_user", "lessons", "lesson", "lesson_next", "answer", "review", "lesson_close", "exams", "exam",
         "exam_item", "exam_answer", "slice_click", "slice_click_structure", "exam_finish", "exam_leave", "import",
-        "cancel_import", "open_imported", "cancel_field"})
+        "cancel_import", "open_imported", "cancel_field", "segment_open", "segment_label", "segment_slice",
+        "segment_seed", "segment_grow", "segment_undo", "segment_clear_seeds", "segment_save", "course_new",
+        "course_open", "course_lesson", "course_show", "course_question", "course_step", "course_save",
+        "course_export", "course_open_package", "open_dataset"})
     CHECK_MESSAGE(have.count(documented), documented);
-  CHECK(have.size() == 52);
+  CHECK(have.size() == 70);
 }
 
 TEST_CASE("ScriptInterpreter_ExpertEdits_ChangeTheViewsPresetAndItsFieldParameters") {

@@ -15,7 +15,7 @@
 #include <unistd.h>
 
 #include "db/course_store.h"
-#include "db/database.h"
+#include "database.h"  // db/'s private SQL wrapper (at_db_sql_for_tests)
 #include "lessons/course_json.h"
 #include "quiz/answer_json.h"
 #include "quiz/keys.h"
@@ -286,7 +286,8 @@ TEST_CASE("A malformed answers line is reported with its number and reason, earl
   const fs::path broken = writeLines(dir / "broken.jsonl", {answers[0], "", "{\"choice\": "});
   auto r = test::runApp(playArgs("quick.check", "fay", broken, dbPath));
   CHECK(r.exitCode != 0);
-  CHECK(r.err.find("broken.jsonl:3: not valid JSON") != std::string::npos);
+  INFO(r.err);
+  CHECK(r.err.find("broken.jsonl:3: column 12, field 'choice': not valid JSON") != std::string::npos);
   CHECK(scalar(dbPath, "SELECT count(*) FROM responses") == 1);
 
   // An answer of the wrong kind for the question (a choice for a locate question) names its line.

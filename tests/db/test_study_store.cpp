@@ -5,9 +5,10 @@
 #include <map>
 #include <mutex>
 #include <set>
+#include <sstream>
 #include <thread>
 
-#include "db/database.h"
+#include "database.h"  // db/'s private SQL wrapper (at_db_sql_for_tests)
 #include "db/study_store.h"
 #include "quiz/study_design.h"
 #include "quiz/study_protocol.h"
@@ -93,10 +94,10 @@ TEST_CASE("StudyStore_RatingsAreUnblindedOnExport") {
       r.position = t.position;
       r.item = item.id;
       r.ratingAsShown = t.aCondition == "wdt" ? 1 : 5;  // always prefers the WDT view
-      REQUIRE(db::recordRating(*db, p.id, "always-wdt", r).has_value());
+      REQUIRE(db::recordRating(*db, *part, r).has_value());
     }
   }
-  REQUIRE(db::markParticipantComplete(*db, p.id, "always-wdt").has_value());
+  REQUIRE(db::markParticipantComplete(*db, *part).has_value());
   auto rows = db::studyResponseRows(*db, p);
   REQUIRE(rows.has_value());
   CHECK(rows->size() == p.structures.size() * p.items.size());
@@ -120,15 +121,17 @@ TEST_CASE("StudyStore_ResumedParticipant_EachRatingKeepsTheSessionItWasGivenIn")
   REQUIRE(db.has_value());
   const auto p = protocol();
   REQUIRE(db::saveStudy(*db, p).has_value());
-  REQUIRE(db::enrolOrResume(*db, p, "P0", "medical").has_value());
+  auto first = db::enrolOrResume(*db, p, "P0", "medical");
+  REQUIRE(first.has_value());
   db::RatingRecord r;
   r.item = p.items[0].id;
   r.ratingAsShown = 2;
-  REQUIRE(db::recordRating(*db, p.id, "P0", r).has_value());
-  REQUIRE(db::recordTrialViewing(*db, p.id, "P0", 0, 100, 200, 1, "", false).has_value());
-  REQUIRE(db::enrolOrResume(*db, p, "P0", "medical").has_value());  // session 2
+  REQUIRE(db::recordRating(*db, *first, r).has_value());
+  REQUIRE(db::recordTrialViewing(*db, *first, 0, 100, 200, 1, "", false).has_value());
+  auto second = db::enrolOrResume(*db, p, "P0", "medical");  // session 2
+  REQUIRE(second.has_value());
   r.item = p.items[1].id;
-  REQUIRE(db::recordRating(*db, p.id, "P0", r).has_value());
+  REQUIRE(db::recordRating(*db, *second, r).has_value());
   auto rows = db::studyResponseRows(*db, p);
   REQUIRE(rows.has_value());
   REQUIRE(rows->size() == 2);
@@ -213,13 +216,22 @@ std::string runParticipant(db::Database& db, const quiz::StudyProtocol& p, int p
       for (int shown = 1; shown <= 5; ++shown)
         if (quiz::unblindRating(shown, aIsWdt, p.scale) == opinion(participant, s, i)) r.ratingAsShown = shown;
       r.responseMs = 900;
-      if (auto st = db::recordRating(db, p.id, id, r); !st) return id + ": " + st.error().message;
+      if (auto st = db::recordRating(db, *part, r); !st) return id + ": " + st.error().message;
     }
-    if (auto st = db::recordTrialViewing(db, p.id, id, t.position, 3000, 2500, 2, ""); !st)
+    if (auto st = db::recordTrialViewing(db, *part, t.position, 3000, 2500, 2, ""); !st)
       return id + ": " + st.error().message;
   }
-  if (auto st = db::markParticipantComplete(db, p.id, id); !st) return id + ": " + st.error().message;
+  if (auto st = db::markParticipantComplete(db, *part); !st) return id + ": " + st.error().message;
   return {};
+}
+
+// Participants 0 … count−1 run one after another on one machine's fresh database.
+db::Database oneMachine(const test::TempDir& dir, const quiz::StudyProtocol& p, int count) {
+  auto db = db::Database::open(test::freshDatabase(dir, "one_machine.db"));
+  REQUIRE(db.has_value());
+  REQUIRE(db::saveStudy(*db, p).has_value());
+  for (int who = 0; who < count; ++who) REQUIRE(runParticipant(*db, p, who).empty());
+  return std::move(*db);
 }
 
 // Each participant's plan as the export shows it: structure → (1-based order, condition shown as A).
@@ -297,11 +309,8 @@ TEST_CASE("StudyStore_ThreeLabMachinesAtOnce_EveryCounterbalancingRowOnce_Summar
 
   // The same participants one after another on one machine.
   test::TempDir alone;
-  auto single = db::Database::open(test::freshDatabase(alone, "one_machine.db"));
-  REQUIRE(single.has_value());
-  REQUIRE(db::saveStudy(*single, p).has_value());
-  for (int who = 0; who < participants; ++who) REQUIRE(runParticipant(*single, p, who).empty());
-  auto singleRows = db::studyResponseRows(*single, p);
+  auto single = oneMachine(alone, p, participants);
+  auto singleRows = db::studyResponseRows(single, p);
   REQUIRE(singleRows.has_value());
   // Balance: the same rows of the design were used, so each structure was shown at each position
   // and as A under WDT as often as on one machine.
@@ -321,4 +330,129 @@ TEST_CASE("StudyStore_ThreeLabMachinesAtOnce_EveryCounterbalancingRowOnce_Summar
   CHECK(summaryOf(*serverRows) == summaryOf(*singleRows));
   const auto summary = quiz::summariseStudy(p, *serverRows);
   CHECK(summary.at(0, summary.columns.size() - 1).stats.n == std::size_t(participants));
+}
+
+namespace {
+
+// The long table's lines without its header, sorted: the same records whatever the order.
+std::vector<std::string> sortedRecords(const std::vector<quiz::StudyResponseRow>& rows) {
+  std::stringstream csv(quiz::responsesLongCsv(rows));
+  std::vector<std::string> lines;
+  std::string line;
+  std::getline(csv, line);  // header
+  while (std::getline(csv, line)) lines.push_back(line);
+  std::sort(lines.begin(), lines.end());
+  return lines;
+}
+
+}  // namespace
+
+TEST_CASE("StudyStore_MergeThreeMachinesWithoutServer_EveryRecordOnceSummaryAsOnOneMachineMergingAgainChangesNothing") {
+  test::TempDir dir;
+  const auto p = protocol(11);
+  const int participants = 19, machines = 3;
+  std::vector<db::Database> labs;
+  std::vector<quiz::StudyResponseRow> everyLabsRows;
+  for (int m = 0; m < machines; ++m) {
+    auto lab = db::Database::open(test::freshDatabase(dir, "lab" + std::to_string(m) + ".db"));
+    REQUIRE(lab.has_value());
+    REQUIRE(db::saveStudy(*lab, p).has_value());
+    for (int who = m; who < participants; who += machines) REQUIRE(runParticipant(*lab, p, who).empty());
+    auto rows = db::studyResponseRows(*lab, p);
+    REQUIRE(rows.has_value());
+    everyLabsRows.insert(everyLabsRows.end(), rows->begin(), rows->end());
+    labs.push_back(std::move(*lab));
+  }
+  std::vector<db::StudyMergeSource> sources;
+  for (int m = 0; m < machines; ++m) sources.push_back({"lab" + std::to_string(m), &labs[std::size_t(m)]});
+  auto merged = db::Database::open(test::freshDatabase(dir, "merged.db"));
+  REQUIRE(merged.has_value());
+
+  auto report = db::mergeStudy(*merged, sources, p.id);
+  REQUIRE_MESSAGE(report.has_value(), report.error().message);
+  REQUIRE(report->sources.size() == 3);
+  CHECK(report->sources[0].added == 7);
+  CHECK(report->sources[1].added == 6);
+  CHECK(report->sources[2].added == 6);
+  CHECK(report->participants == participants);
+  CHECK(report->offDesign.empty());
+  // Each machine started at design row 0: rows 0–5 three times, row 6 once, rows 7–25 never.
+  CHECK(report->cycle == 26);
+  CHECK(report->designRows == std::map<std::size_t, int>{{0, 3}, {1, 3}, {2, 3}, {3, 3}, {4, 3}, {5, 3}, {6, 1}});
+  CHECK_FALSE(report->balanced());
+
+  auto mergedRows = db::studyResponseRows(*merged, p);
+  REQUIRE(mergedRows.has_value());
+  CHECK(sortedRecords(*mergedRows) == sortedRecords(everyLabsRows));  // every record once, as recorded
+  auto enrolled = db::studyParticipantRows(*merged, p.id);
+  REQUIRE(enrolled.has_value());
+  std::set<int> indices;
+  for (const auto& e : *enrolled) indices.insert(e.enrolmentIndex);
+  CHECK(indices.size() == std::size_t(participants));
+  // The summary is the one machine's (each simulated participant's opinions are their own).
+  test::TempDir alone;
+  auto single = oneMachine(alone, p, participants);
+  auto singleRows = db::studyResponseRows(single, p);
+  REQUIRE(singleRows.has_value());
+  CHECK(quiz::summaryCsv(quiz::summariseStudy(p, *mergedRows)) == quiz::summaryCsv(quiz::summariseStudy(p, *singleRows)));
+  // A single machine's enrolment is balanced by the same report.
+  auto copy = db::Database::open(test::freshDatabase(alone, "copy.db"));
+  REQUIRE(copy.has_value());
+  auto one = db::mergeStudy(*copy, {{"one", &single}}, p.id);
+  REQUIRE(one.has_value());
+  CHECK(one->balanced());
+
+  auto again = db::mergeStudy(*merged, sources, p.id);
+  REQUIRE(again.has_value());
+  CHECK(again->sources[0].added + again->sources[1].added + again->sources[2].added == 0);
+  CHECK(again->sources[0].alreadyThere == 7);
+  CHECK(again->participants == participants);
+  auto rowsAgain = db::studyResponseRows(*merged, p);
+  REQUIRE(rowsAgain.has_value());
+  CHECK(rowsAgain->size() == mergedRows->size());
+}
+
+TEST_CASE("StudyStore_MergeConflicts_SameIdOtherRecordsOrOtherDesign_WriteNothing") {
+  test::TempDir dir;
+  const auto p = protocol(11);
+  auto open = [&](const std::string& name) {
+    auto db = db::Database::open(test::freshDatabase(dir, name));
+    REQUIRE(db.has_value());
+    return std::move(*db);
+  };
+  db::Database a = open("a.db"), b = open("b.db"), target = open("target.db");
+  REQUIRE(db::saveStudy(a, p).has_value());
+  REQUIRE(db::saveStudy(b, p).has_value());
+  REQUIRE(runParticipant(a, p, 0).empty());
+  REQUIRE(runParticipant(a, p, 1).empty());
+  REQUIRE(runParticipant(b, p, 2).empty());
+  REQUIRE(runParticipant(b, p, 4).empty());  // b's participant P4 …
+  // … and another person enrolled as P4 on machine c, rating otherwise.
+  db::Database c = open("c2.db");
+  REQUIRE(db::saveStudy(c, p).has_value());
+  auto otherP4 = db::enrolOrResume(c, p, "P4", p.groups[0]);
+  REQUIRE(otherP4.has_value());
+  db::RatingRecord r;
+  r.item = p.items[0].id;
+  r.ratingAsShown = 3;
+  REQUIRE(db::recordRating(c, *otherP4, r).has_value());
+
+  auto clash = db::mergeStudy(target, {{"a", &a}, {"b", &b}, {"c", &c}}, p.id);
+  REQUIRE_FALSE(clash.has_value());
+  CHECK((clash.error().kind == ErrorKind::Conflict));
+  CHECK(clash.error().message.find("'P4' of c is also in b") != std::string::npos);
+  auto nothing = db::studyParticipantRows(target, p.id);
+  REQUIRE(nothing.has_value());
+  CHECK(nothing->empty());  // all or nothing: a and b were not merged either
+
+  auto otherDesign = p;
+  otherDesign.seed = 12;
+  db::Database d = open("d.db");
+  REQUIRE(db::saveStudy(d, otherDesign).has_value());
+  auto mismatch = db::mergeStudy(target, {{"a", &a}, {"d", &d}}, p.id);
+  REQUIRE_FALSE(mismatch.has_value());
+  CHECK(mismatch.error().message.find("d: study") != std::string::npos);
+  auto missing = db::mergeStudy(target, {{"a", &a}}, "no_such_study");
+  REQUIRE_FALSE(missing.has_value());
+  CHECK((missing.error().kind == ErrorKind::NotFound));
 }

@@ -5,9 +5,13 @@
 #include <cmath>
 #include <cstdio>
 
+#include "core/strings.h"
 #include "course_views.h"
 #include "dataset_resolver.h"
+#include "db/dataset_store.h"
+#include "volume/known_scans.h"
 #include "render/structure_pick.h"
+#include "segment_controller.h"
 
 namespace at::app {
 
@@ -35,6 +39,13 @@ DesktopModel::DesktopModel(LearningSession& session, const render::PresetLibrary
       [this] { return renderState(); });
   study_ = std::make_unique<StudyController>(session_.database(), library_, sink);
   imports_ = std::make_unique<ImportController>(session_.database(), sink, [this](const std::string& m) { message(m); });
+  segment_ = std::make_unique<SegmentController>(session_.database(), sink);
+  courses_ = std::make_unique<CourseEditor>(session_, library_, sink,
+                                            [this](const std::string& structure, const std::string& presetId,
+                                                   const std::optional<render::Preset>& captured, lessons::CameraView view) {
+                                              if (captured) showStructureWith(structure, *captured, lessons::toString(view));
+                                              else showLessonStructure({structure, presetId, view});
+                                            });
   scheduler_.setViewPixels(layout_.viewPixelsW(), layout_.viewPixelsH());
 }
 
@@ -94,6 +105,7 @@ Status DesktopModel::showDataset(Dataset dataset, const std::string& startStruct
       *dataset_, explore_, sink, [this](const std::string& m) { message(m); },
       [this](const std::string& clicked, double distanceMm) { clickGraded(clicked, distanceMm); });
   expert_ = std::make_unique<TfEditor>(*dataset_, session_.database(), sink);
+  segment_->attach(*dataset_);
   recorder_.highlightNotWanted();
   lastPickMm_.reset();
   lessons_->setViewDataset(dataset_->id);
@@ -102,6 +114,23 @@ Status DesktopModel::showDataset(Dataset dataset, const std::string& startStruct
     event({{"event", "dataset"}, {"dataset", dataset_->id}, {"structures", dataset_->structures.size()},
            {"selected", idOf(explore_.selected())}});
   return {};
+}
+
+std::vector<std::string> DesktopModel::datasetChoices() {
+  std::vector<std::string> names{"phantom"};
+  if (const KnownScan* skull = findKnownScan("skull"); skull && knownScanFile(*skull)) names.push_back("skull");
+  if (auto imported = db::listDatasets(session_.database()))
+    for (const db::DatasetRecord& r : *imported) names.push_back(r.name);
+  return names;
+}
+
+Status DesktopModel::switchDataset(const std::string& name) {
+  DatasetRequest request;
+  request.name = name;
+  request.database = &session_.database();
+  auto dataset = openNamedDataset(request);
+  if (!dataset) return tl::unexpected(dataset.error());
+  return showDataset(std::move(*dataset), "", "");
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -234,22 +263,42 @@ std::optional<std::array<double, 2>> DesktopModel::projectStructure(std::uint16_
 }
 
 void DesktopModel::showLessonStructure(const LessonController::Shown& shown) {
-  const Structure* s = dataset_->findStructure(shown.structure);
-  if (!s || !explore_.hasStructure(s->label)) {
-    message("lesson step: no structure '" + shown.structure + "' in dataset '" + dataset_->id + "'");
-    return;
-  }
-  auto preset = presetForStep(library_, s->id, shown.presetId, explore_.levels());
+  auto preset = presetForStep(library_, shown.structure, shown.presetId, explore_.levels(), &session_.database());
   if (!preset) {
     message(preset.error().message);
     return;
   }
-  explore_.usePreset(s->label, *preset, preset->t);
+  showStructureWith(shown.structure, *preset,
+                    shown.view ? lessons::toString(*shown.view) : (explore_.viewName().empty() ? startView_ : explore_.viewName()));
+}
+
+void DesktopModel::showStructureWith(const std::string& structure, const render::Preset& preset, const std::string& view) {
+  const Structure* s = dataset_->findStructure(structure);
+  if (!s || !explore_.hasStructure(s->label)) {
+    message("lesson step: no structure '" + structure + "' in dataset '" + dataset_->id + "'");
+    return;
+  }
+  explore_.usePreset(s->label, preset, preset.t);
   setHovered(0);
   select(s->label);
-  const std::string view = shown.view ? lessons::toString(*shown.view)
-                                      : (explore_.viewName().empty() ? startView_ : explore_.viewName());
   if (auto st = setView(view); !st) message(st.error().message);
+}
+
+std::string DesktopModel::courseDatasetId() const {
+  return str::startsWith(dataset_->id, "phantom:") ? std::string("phantom") : dataset_->id;
+}
+
+Result<CourseEditor::Capture> DesktopModel::captureView() const {
+  const std::uint16_t label = explore_.selected();
+  if (!label) return fail("select the structure to show first");
+  CourseEditor::Capture capture;
+  capture.structure = idOf(label);
+  capture.preset = explore_.presetOverridden() ? explore_.shown().preset : explore_.presetOf(label, explore_.bare());
+  capture.preset.t = explore_.t();
+  auto view = lessons::parseCameraView(explore_.viewName().empty() ? startView_ : explore_.viewName());
+  if (!view) return tl::unexpected(view.error());
+  capture.view = *view;
+  return capture;
 }
 
 lessons::RenderState DesktopModel::renderState() const {

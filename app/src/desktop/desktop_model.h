@@ -1,6 +1,6 @@
 // The desktop app's logic, with no SDL, GL or ImGui in it: the dataset on screen, the explore
 // state, its distance fields, the frame scheduler and recorder, and the controllers of the lesson,
-// study, import and expert panels — and the commands that the widgets and the UI script both use
+// study, import, expert and segment panels — and the commands that the widgets and the UI script both use
 // (hover, click, select, views, expert on/off, …). The window shell (ui/) feeds it input and a
 // layout, renders what it plans, and draws the panels from its state; tests drive it without any
 // window (no FieldTarget, no view: picking and fields still run on the CPU).
@@ -21,6 +21,7 @@
 #include "explore_state.h"
 #include "field_view.h"
 #include "frame_scheduler.h"
+#include "course_editor.h"
 #include "import_controller.h"
 #include "learning_session.h"
 #include "lesson_controller.h"
@@ -55,6 +56,8 @@ struct DesktopOptions {
   bool scripted = false;            // a UI script drives the app: events are printed, screenshots at full quality
 };
 
+class SegmentController;
+
 class DesktopModel {
  public:
   using EventSink = std::function<void(nlohmann::json)>;
@@ -71,6 +74,11 @@ class DesktopModel {
   // when it has one; an error leaves the current dataset on screen.
   Status showDataset(Dataset dataset, const std::string& startStructure, const std::string& startPreset);
   const Dataset& dataset() const { return *dataset_; }
+  // The datasets the dataset menu offers: the phantom, the skull CT when its file is here, and
+  // every imported dataset (by name).
+  std::vector<std::string> datasetChoices();
+  // Opens the dataset called `name` (as openNamedDataset takes it) in the view [open_dataset].
+  Status switchDataset(const std::string& name);
   // The dataset's gradient volume: shading (the renderer) and picking share it.
   const render::GradientVolume& gradients() const { return gradients_; }
   // Changes whenever another dataset is shown (the renderer uploads its volume then).
@@ -87,6 +95,8 @@ class DesktopModel {
   StudyController& study() { return *study_; }
   ImportController& imports() { return *imports_; }
   TfEditor& expert() { return *expert_; }
+  SegmentController& segmenter() { return *segment_; }
+  CourseEditor& courseEditor() { return *courses_; }
   const DesktopOptions& options() const { return options_; }
 
   // The window's layout (each frame); a new size re-renders the view.
@@ -111,6 +121,14 @@ class DesktopModel {
   std::optional<std::array<double, 2>> projectStructure(std::uint16_t label) const;
   // A lesson step's structure, preset and view.
   void showLessonStructure(const LessonController::Shown& shown);
+  // `structure` drawn with `preset` (its t) from the named `view` (a step as a student sees it).
+  void showStructureWith(const std::string& structure, const render::Preset& preset, const std::string& view);
+  // What the view shows now, for the course editor: the selected structure, its preset with the
+  // view's t, and the named view (the last one chosen). An error when nothing is selected.
+  Result<CourseEditor::Capture> captureView() const;
+  // The dataset id a course made on screen names: the dataset's, with the phantom at any size
+  // ("phantom:128") named "phantom" (the same anatomy).
+  std::string courseDatasetId() const;
   // Structure names must not be shown (a lesson question or an exam would be given away).
   bool namesHidden() const { return lessons_->namesHidden() || exams_->namesHidden(); }
 
@@ -198,6 +216,8 @@ class DesktopModel {
   std::uint64_t sliceRevision_ = 0;
   std::unique_ptr<StudyController> study_;
   std::unique_ptr<ImportController> imports_;
+  std::unique_ptr<SegmentController> segment_;
+  std::unique_ptr<CourseEditor> courses_;
   ViewLayout layout_;
   bool viewAvailable_ = false;
   std::optional<Vec3> lastPickMm_;  // where the last hover pick met the volume (LPS mm)

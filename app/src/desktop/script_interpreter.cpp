@@ -52,6 +52,15 @@ const std::map<std::string, ScriptInterpreter::Handler>& ScriptInterpreter::hand
       {"coordinator_open", &S::coordinatorOpen}, {"coordinator_export", &S::coordinatorExport},
       {"coordinator_summary", &S::coordinatorSummary}, {"import", &S::importDataset},
       {"cancel_import", &S::cancelImport}, {"open_imported", &S::openImported},
+      {"segment_open", &S::segmentOpen}, {"segment_label", &S::segmentLabel},
+      {"segment_slice", &S::segmentSlice}, {"segment_seed", &S::segmentSeed},
+      {"segment_grow", &S::segmentGrow}, {"segment_undo", &S::segmentUndo},
+      {"segment_clear_seeds", &S::segmentClearSeeds}, {"segment_save", &S::segmentSave},
+      {"course_new", &S::courseNew},    {"course_open", &S::courseOpen},
+      {"course_lesson", &S::courseLesson}, {"course_show", &S::courseShow},
+      {"course_question", &S::courseQuestion}, {"course_step", &S::courseStep},
+      {"course_save", &S::courseSave},  {"course_export", &S::courseSave},
+      {"course_open_package", &S::courseSave}, {"open_dataset", &S::openDataset},
   };
   return table;
 }

@@ -7,11 +7,12 @@
 #include <string_view>
 
 #include "core/error.h"
+#include "core/sha256.h"
 
 namespace at::db {
 
-// SHA-256 (FIPS 180-4) of a byte string, as 64 lowercase hex digits.
-std::string sha256Hex(std::string_view bytes);
+// SHA-256 of a byte string, as 64 lowercase hex digits (core/sha256.h).
+using at::sha256Hex;
 
 // "sha256:<hex>" of a file's bytes, or for a folder (a DICOM series) of the sorted list of its
 // regular files' relative names and contents.

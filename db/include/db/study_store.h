@@ -4,12 +4,13 @@
 #pragma once
 
 #include <cstdint>
+#include <map>
 #include <optional>
 #include <set>
 #include <string>
 #include <vector>
 
-#include "db/database.h"
+#include "db/connection.h"
 #include "quiz/redcap_export.h"
 #include "quiz/study_protocol.h"
 #include "quiz/study_report.h"
@@ -70,17 +71,20 @@ struct RatingRecord {
   double t = 0, alpha = 0, beta = 0;  // render parameters on screen
   std::string appVersion;
 };
-// Records one rating at once (its own transaction), with the participant's current session.
-// Re-rating the same item replaces it.
-Status recordRating(Database& db, const std::string& studyId, const std::string& participantId,
-                    const RatingRecord& rating);
+// The writes of one participant's session (`participant` as enrolOrResume returned it). Only the
+// participant's latest session may write: once another run resumes the same participant (its
+// session number is higher), each write of the earlier one is refused with a Conflict naming both
+// sessions, so two runs never interleave or overwrite each other's ratings.
+//
+// Records one rating at once (its own transaction), with the participant's session. Re-rating the
+// same item replaces it.
+Status recordRating(Database& db, const StudyParticipant& participant, const RatingRecord& rating);
 // Records viewing time, toggles and comment of a trial (replacing earlier values). With
 // `viewingMeasured` false the times and toggles are not known (the views were shown as files) and
 // are stored as zero and exported blank.
-Status recordTrialViewing(Database& db, const std::string& studyId, const std::string& participantId,
-                          int position, double viewMsA, double viewMsB, int toggles, const std::string& comment,
-                          bool viewingMeasured = true);
-Status markParticipantComplete(Database& db, const std::string& studyId, const std::string& participantId);
+Status recordTrialViewing(Database& db, const StudyParticipant& participant, int position, double viewMsA,
+                          double viewMsB, int toggles, const std::string& comment, bool viewingMeasured = true);
+Status markParticipantComplete(Database& db, const StudyParticipant& participant);
 
 Result<std::vector<StudyCompletion>> studyCompletion(Database& db, const std::string& studyId);
 
@@ -89,5 +93,33 @@ Result<std::vector<quiz::StudyParticipantRow>> studyParticipantRows(Database& db
 
 // Every rating as an export row, unblinded, ordered by enrolment, position, item order.
 Result<std::vector<quiz::StudyResponseRow>> studyResponseRows(Database& db, const quiz::StudyProtocol& protocol);
+
+// Combining a study run on machines that had no class server: every participant of every source
+// (participant, trials and ratings as recorded: sessions, times, comments) is copied into `into`,
+// all sources in one transaction. A participant already in `into` (or in an earlier source) with
+// exactly the same records is left as it is, so merging again changes nothing; the same id with
+// other records is a Conflict naming both places, and nothing is written. The study must be in
+// every source with one design (structures, conditions, items, scale, seed); `into` gets it when
+// it has none. Merged participants are enrolled after those already in `into`; their trials keep
+// the counterbalancing row their machine gave them, which the report lists.
+struct StudyMergeSource {
+  std::string name;  // for messages: the file or server
+  Database* db = nullptr;
+};
+struct StudyMergeReport {
+  struct FromSource {
+    std::string name;
+    int added = 0, alreadyThere = 0;
+  };
+  std::vector<FromSource> sources;
+  int participants = 0;                     // in `into` after the merge
+  std::size_t cycle = 0;                    // design rows in one full counterbalancing cycle
+  std::map<std::size_t, int> designRows;    // design row → participants whose trials follow it
+  std::vector<std::string> offDesign;       // participants whose trials follow no row of the design
+  // Every row of the cycle used equally often, give or take one (as enrolling on one machine does).
+  bool balanced() const;
+};
+Result<StudyMergeReport> mergeStudy(Database& into, const std::vector<StudyMergeSource>& sources,
+                                    const std::string& studyId);
 
 }  // namespace at::db

@@ -7,6 +7,7 @@
 
 #include "core/strings.h"
 #include "panels.h"
+#include "segment_controller.h"
 
 namespace at::app {
 
@@ -25,10 +26,23 @@ void ExplorePanel::draw(DesktopModel& model, const Status& status) {
                ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoResize | ImGuiWindowFlags_NoCollapse |
                    ImGuiWindowFlags_NoTitleBar);
   ImGui::TextUnformatted("Anatomy Tutor - Explore");
+  // The Dataset menu: the datasets here, by name (imported ones, the phantom, the skull CT).
+  if (ImGui::SmallButton("Dataset")) ImGui::OpenPopup("dataset_menu");
+  if (ImGui::BeginPopup("dataset_menu")) {
+    for (const std::string& name : model.datasetChoices())
+      if (ImGui::MenuItem(name.c_str(), nullptr, name == model.courseDatasetId()))
+        if (auto st = model.switchDataset(name); !st) model.message(st.error().message);
+    ImGui::EndPopup();
+  }
+  ImGui::SameLine();
   ImGui::TextDisabled("%s", dataset.displayName.empty() ? dataset.id.c_str() : dataset.displayName.c_str());
   if (ImGui::SmallButton("Studies...")) model.study().coordinatorOpen = true;
   ImGui::SameLine();
   if (ImGui::SmallButton("Import...")) model.imports().windowOpen = true;
+  ImGui::SameLine();
+  if (ImGui::SmallButton("Segment...")) model.segmenter().windowOpen = true;
+  ImGui::SameLine();
+  if (ImGui::SmallButton("Courses...")) model.courseEditor().windowOpen = true;
   ImGui::Separator();
   lessons_.draw(model.lessons(), model.exams(), float(layout.windowH) * 0.4f);
   ImGui::Separator();

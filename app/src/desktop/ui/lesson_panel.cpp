@@ -75,7 +75,7 @@ void LessonPanel::drawLists(LessonController& lessons) {
   const std::string& view = lessons.viewDataset();
   if (course.datasetId != view && !(isBuiltinDatasetName(course.datasetId) && isBuiltinDatasetName(view)))
     wrappedColoured(kWrong, "This course is on dataset '" + course.datasetId + "' but the view shows '" + view +
-                                "': open it with --dataset " + course.datasetId + ".");
+                                "': choose it in the Dataset menu above.");
   ImGui::Checkbox("quiz only (no teaching steps, no names)", &lessons.quizOnly);
   ImGui::PushTextWrapPos(0);
   for (const LessonController::LessonRow& row : lessons.rows()) {

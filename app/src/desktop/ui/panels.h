@@ -3,6 +3,7 @@
 // panel keeps is what only a widget needs: text being typed, a drag in progress, a GL texture.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <optional>
 #include <string>
@@ -105,6 +106,40 @@ class ImportPanel {
 
  private:
   std::string error_;  // an import that could not start
+};
+
+// The segment editor's window: labels, a slice to paint seeds in, grow, undo and save.
+class SegmentPanel {
+ public:
+  void draw(SegmentController& editor, float x, float y);
+
+ private:
+  std::optional<render::gl::ImageTexture> texture_;
+  std::uint64_t revision_ = 0;
+  std::optional<std::array<int, 3>> lastPainted_;  // the voxel under a drag (one paint per voxel)
+  std::string newLabel_, exportPath_, error_;
+};
+
+// The course editor window (instructors): a new course on the dataset on screen, a stored one to
+// edit, or Open course… (a package); lessons, steps captured from the view, questions, live
+// problems, save and export. Also the Dataset menu's list in the explore panel.
+class CourseEditorPanel {
+ public:
+  void draw(DesktopModel& model, float x, float y);
+
+ private:
+  void drawStart(DesktopModel& model);
+  void drawCourse(DesktopModel& model);
+  void drawSteps(DesktopModel& model);
+  void drawAddStep(DesktopModel& model);
+  void report(const Status& st, const std::string& done);
+  std::string newId_ = "my_course", newTitle_, openPath_, openVolume_, lessonTitle_;
+  std::string showTitle_, showText_, prompt_, synonyms_, candidates_, exportPath_ = "course.atcourse", note_;
+  int kind_ = 0, target_ = 0, other_ = 0, courseChoice_ = 0;
+  float toleranceMm_ = 0;
+  bool onView_ = false, reference_ = false;
+  std::string status_;
+  bool failed_ = false;
 };
 
 // The expert panel at the window's right edge: spline editors for the data TF (over the HU

@@ -1,14 +1,10 @@
-// The store: a SQLite file (the embedded default) or a PostgreSQL database (a class server,
-// `postgresql://…`), opened with its schema brought to the current version by forward-only
-// migrations (schema.h). Both engines run the same repositories and the same SQL.
+// The SQL wrapper, private to db/: `Database` (one connection), `Statement` (a prepared
+// statement), `Transaction` (rolled back when it dies uncommitted) over the engines of backend.h
+// (SQLite and PostgreSQL; only db/ includes sqlite3.h or libpq-fe.h). Both engines run the same
+// repositories and the same SQL. Every value reaches SQL through bound parameters, never by
+// pasting text into a statement. Outside db/ (connection.h) a Database is opaque.
 //
-// Only db/ includes sqlite3.h or libpq-fe.h: the engines live behind private interfaces in
-// db/src/backend.h. Every handle is owned by an RAII object: `Database` (the connection),
-// `Statement` (a prepared statement), `Transaction` (rolled back when it dies uncommitted). All
-// values reach SQL through bound parameters, never by pasting text into a statement.
-//
-// Threads: a process keeps one connection (the app's learning session). It may be used from
-// several threads: each call is serialised on it, and write transactions (writeTransaction,
+// Threads: each call is serialised on the connection, and write transactions (writeTransaction,
 // Transaction) take the connection's writer lock for their whole length, so one thread's
 // transaction never takes in another thread's writes. A thread reading while another writes sees
 // the uncommitted rows.
@@ -23,20 +19,14 @@
 #include <string_view>
 
 #include "core/error.h"
+#include "db/connection.h"
 
 namespace at::db {
 
-class Database;
 namespace detail {
 class Cursor;
 class Connection;
 }  // namespace detail
-
-enum class Backend { Sqlite, Postgres };
-const char* toString(Backend backend);  // "sqlite", "postgresql"
-
-// True for a PostgreSQL connection URL (postgresql://… or postgres://…).
-bool isPostgresUrl(std::string_view text);
 
 // A prepared statement. Parameters are numbered from 1 and written ?1, ?2, … in the SQL text;
 // result columns are numbered from 0. Move-only; finalized when it dies.
@@ -87,17 +77,6 @@ class Statement {
   std::string sql_;
 };
 
-struct OpenOptions {
-  // Migrate to this schema version (tests build earlier versions with it); default: the newest.
-  std::optional<int> targetVersion;
-  // How long a statement waits for another connection's lock before SQLITE_BUSY.
-  int busyTimeoutMs = 5000;
-  // Create the file (and its folder) when missing. (A PostgreSQL database must exist.)
-  bool create = true;
-  // How long to wait for a PostgreSQL server to answer before giving up (libpq's minimum is 2 s).
-  int connectTimeoutSeconds = 5;
-};
-
 // An open connection. Move-only; closed when it dies.
 class Database {
  public:
@@ -118,6 +97,8 @@ class Database {
   const std::string& path() const;
   bool isOpen() const { return connection_ != nullptr; }
   Backend backend() const;
+  // True when opened read-only (OpenOptions::readOnlyIfNotWritable on a file it cannot write).
+  bool readOnly() const { return readOnly_; }
 
   Result<Statement> prepare(std::string_view sql);
   // Runs one or more statements without parameters (schema text).
@@ -138,6 +119,7 @@ class Database {
   Status migrate(int target);
   explicit Database(std::unique_ptr<detail::Connection> connection);
   std::unique_ptr<detail::Connection> connection_;
+  bool readOnly_ = false;
   std::unique_ptr<std::recursive_mutex> writer_;  // held by the thread inside a write transaction
 };
 
@@ -160,13 +142,5 @@ class Transaction {
   Database* db_ = nullptr;  // null once committed or rolled back
   std::unique_lock<std::recursive_mutex> lock_;  // the connection's writer lock, released when finished
 };
-
-// The database the program uses when no --db is given:
-// $XDG_DATA_HOME/anatomy-tutor/anatomy-tutor.db, else ~/.local/share/anatomy-tutor/anatomy-tutor.db.
-Result<std::string> defaultDatabasePath();
-
-// Opens `--db PATH` when given (a PostgreSQL URL, or a file whose folder exists), else the default
-// path (creating its folder).
-Result<Database> openDatabase(const std::optional<std::string>& path, const OpenOptions& options = {});
 
 }  // namespace at::db

@@ -1,0 +1,169 @@
+// anatomy-tutor course: authoring and sharing courses — new, validate, import (a course JSON or a
+// .atcourse package), export, list. The logic is in course_authoring.h and course_packages.h.
+#include <cstdio>
+
+#include "cli_args.h"
+#include "commands.h"
+#include "core/strings.h"
+#include "course_authoring.h"
+#include "course_packages.h"
+#include "db/connection.h"
+#include "db/dataset_store.h"
+#include "lessons/course_check.h"
+#include "lessons/course_json.h"
+#include "volume/dataset_source.h"
+#include "volume/known_scans.h"
+
+namespace at::app {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+constexpr const char* kCourseHelp =
+    "usage: anatomy-tutor course new ID --dataset DATASET [--title TEXT] [--out F.json]\n"
+    "       anatomy-tutor course validate F.json\n"
+    "       anatomy-tutor course import F.json|F.atcourse [--volume PATH]\n"
+    "       anatomy-tutor course export ID --out F.atcourse [--reference-volume [--note TEXT]]\n"
+    "       anatomy-tutor course list\n"
+    "       (each also takes --db PATH)\n\n"
+    "Courses are written as JSON (data/courses/README.md) or in the desktop's course editor, and\n"
+    "shared as course packages: one .atcourse file (a tar archive) holding the course, the presets\n"
+    "its steps name, the dataset's structures and label map and its volume, with a manifest of\n"
+    "SHA-256 checksums and a format version.\n\n"
+    "  new       stores a starter course on DATASET (a tour of its structures: show each, then name\n"
+    "            it) and, with --out, writes it as JSON to edit\n"
+    "  validate  checks a course file: its form (errors name the field by path) and, when its dataset\n"
+    "            is here, every structure it names\n"
+    "  import    stores a course file (a newer version replaces the stored one; an older one, other\n"
+    "            content under the same version, or ids another course uses are refused), or verifies\n"
+    "            and installs a package: its dataset's files go into the database's data folder\n"
+    "            (<db stem>-data/datasets/NAME), so moving or deleting the package breaks nothing.\n"
+    "            --volume gives the scan a package only references (checked by its checksum)\n"
+    "  export    writes a stored course as a package; --reference-volume leaves an imported volume\n"
+    "            out (for scans that may not be redistributed): the package records its checksum,\n"
+    "            file name and --note (where to get it), and import asks for it\n"
+    "  list      the stored courses\n";
+
+int runNew(const cli::Args& args) {
+  if (args.positional().size() != 2) return reportError("course new: give one course ID (see --help)");
+  const auto dataset = args.value("dataset");
+  if (!dataset) return reportError("course new: --dataset DATASET is required");
+  auto session = LearningSession::open(args.db());
+  if (!session) return reportError("course new: " + session.error().message);
+  auto course = starterCourse(**session, args.positional()[1], *dataset, args.valueOr("title", ""));
+  if (!course) return reportError("course new: " + course.error().message);
+  if (auto out = args.value("out")) {
+    if (auto ok = writeCourseJson(*course, *out); !ok) return reportError("course new: " + ok.error().message);
+  }
+  auto stored = saveCourse(**session, *course, "course new");
+  if (!stored) return reportError("course new: " + stored.error().message);
+  std::printf("course '%s' (%s) on '%s': %s, %zu steps%s\n", course->id.c_str(), course->title.c_str(),
+              course->datasetId.c_str(), str::countOf(long(course->lessons.size()), "lesson").c_str(),
+              course->lessons.front().steps.size(), args.has("out") ? (", written to " + *args.value("out")).c_str() : "");
+  return 0;
+}
+
+int runValidate(const cli::Args& args) {
+  if (args.positional().size() != 2) return reportError("course validate: give one course file");
+  const fs::path file = args.positional()[1];
+  auto course = lessons::loadCourseJson(file);
+  if (!course) return reportError(course.error().message);
+  std::size_t questions = 0, steps = 0;
+  for (const auto& lesson : course->lessons) {
+    steps += lesson.steps.size();
+    for (const auto& step : lesson.steps) questions += step.kind == lessons::StepKind::Question;
+  }
+  // Structures are checked when the dataset can be opened here without changing anything.
+  std::string structures = "structures not checked: dataset '" + course->datasetId + "' is not here";
+  const bool builtin = isBuiltinDatasetName(course->datasetId);
+  std::optional<db::Connection> database;
+  if (!builtin) {
+    auto existing = db::openExistingDatabase(args.db());
+    if (!existing) return reportError("course validate: " + existing.error().message);
+    if (*existing) database.emplace(std::move(**existing));
+  }
+  if (builtin || (database && db::findDataset(*database, course->datasetId).value_or(std::nullopt))) {
+    auto session = LearningSession::open(args.db());
+    if (!session) return reportError("course validate: " + session.error().message);
+    if (auto ok = checkCourseAgainstDataset(**session, *course, file.string()); !ok) return reportError(ok.error().message);
+    structures = "structures checked against dataset '" + course->datasetId + "'";
+  }
+  std::printf("%s: valid: course '%s' version %d on '%s': %s, %zu steps, %zu questions; %s\n", file.string().c_str(),
+              course->id.c_str(), course->version, course->datasetId.c_str(),
+              str::countOf(long(course->lessons.size()), "lesson").c_str(), steps, questions, structures.c_str());
+  return 0;
+}
+
+int runImportFile(const cli::Args& args) {
+  if (args.positional().size() != 2) return reportError("course import: give one course file (.json or .atcourse)");
+  const fs::path file = args.positional()[1];
+  auto session = LearningSession::open(args.db());
+  if (!session) return reportError("course import: " + session.error().message);
+  if (file.extension() == ".json") {
+    if (args.has("volume")) return reportError("course import: --volume applies to packages (.atcourse), not to course files");
+    auto course = lessons::loadCourseJson(file);
+    if (!course) return reportError(course.error().message);
+    auto stored = saveCourse(**session, *course, fs::absolute(file).string());
+    if (!stored) return reportError(stored.error().message);
+    std::printf("course '%s' version %d: %s\n", course->id.c_str(), course->version, db::toString(*stored));
+    return 0;
+  }
+  CourseImportRequest request;
+  request.package = file;
+  request.volumePath = args.valueOr("volume", "");
+  auto report = importCoursePackage(**session, request);
+  if (!report) return reportError(report.error().message);
+  std::printf("course '%s' (%s) version %d: %s\n", report->courseId.c_str(), report->courseTitle.c_str(), report->version,
+              db::toString(report->outcome));
+  std::printf("  dataset '%s': %s%s\n", report->datasetId.c_str(), toString(report->dataset),
+              report->datasetFolder.empty() ? "" : (" into " + report->datasetFolder.string()).c_str());
+  std::printf("  presets: %zu added%s\n", report->presetsAdded,
+              report->presetsKept ? (", " + std::to_string(report->presetsKept) + " kept as stored (same id, other content)").c_str() : "");
+  return 0;
+}
+
+int runExport(const cli::Args& args) {
+  if (args.positional().size() != 2) return reportError("course export: give one course ID (see `anatomy-tutor course list`)");
+  const auto out = args.value("out");
+  if (!out) return reportError("course export: --out F.atcourse is required");
+  if (args.has("note") && !args.has("reference-volume")) return reportError("course export: --note goes with --reference-volume");
+  auto session = LearningSession::open(args.db());
+  if (!session) return reportError("course export: " + session.error().message);
+  CourseExportRequest request;
+  request.courseId = args.positional()[1];
+  request.out = *out;
+  request.referenceVolume = args.has("reference-volume");
+  request.referenceNote = args.valueOr("note", "");
+  auto report = exportCourse(**session, render::PresetLibrary(defaultPresetsDir()), request);
+  if (!report) return reportError("course export: " + report.error().message);
+  std::printf("%s: course '%s' on '%s' (%s volume), %zu presets, %zu structures, %ju bytes\n", report->file.string().c_str(),
+              request.courseId.c_str(), report->datasetId.c_str(), package::toString(report->source), report->presets,
+              report->structures, report->bytes);
+  return 0;
+}
+
+}  // namespace
+
+int runCourse(const Argv& argv) {
+  auto args = cli::Args::parse(argv, {"dataset", "title", "out", "volume", "note"}, {"reference-volume"});
+  if (!args) return reportError("course: " + args.error().message);
+  if (args->has("help")) {
+    std::printf("%s", kCourseHelp);
+    return 0;
+  }
+  if (args->positional().empty()) return reportError("course: give a subcommand: new, validate, import, export or list (see --help)");
+  const std::string& verb = args->positional()[0];
+  if (verb == "new") return runNew(*args);
+  if (verb == "validate") return runValidate(*args);
+  if (verb == "import") return runImportFile(*args);
+  if (verb == "export") return runExport(*args);
+  if (verb == "list") {
+    Argv rest;
+    if (auto db = args->db()) rest = {"--db", *db};
+    return runCourses(rest);
+  }
+  return reportError("course: unknown subcommand '" + verb + "' (new, validate, import, export, list)");
+}
+
+}  // namespace at::app

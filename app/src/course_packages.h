@@ -1,0 +1,75 @@
+// Course packages on this machine (package/course_package.h holds the format): exporting a stored
+// course with its presets and dataset, and importing a package into the database with its assets
+// under the database's data folder, so that nothing refers to where the package or the author's
+// files were. `anatomy-tutor course export|import` and the desktop's Open course… run these.
+#pragma once
+
+#include <filesystem>
+#include <optional>
+#include <string>
+
+#include "core/error.h"
+#include "db/course_store.h"
+#include "learning_session.h"
+#include "package/course_package.h"
+#include "render/preset.h"
+
+namespace at::app {
+
+// Where imported course assets live: beside the database, in "<db stem>-data/" (for the default
+// database $XDG_DATA_HOME/anatomy-tutor/anatomy-tutor-data/). Datasets go to datasets/<name>/, and the
+// database records them relative to its own folder. A server database (postgresql://) has none.
+Result<std::filesystem::path> courseAssetDirectory(const db::Database& database);
+
+struct CourseExportRequest {
+  std::string courseId;
+  std::filesystem::path out;          // the .atcourse file to write
+  bool referenceVolume = false;       // leave the volume out: the importer supplies it by checksum
+  std::string referenceNote;          // with referenceVolume: where to get the scan, its licence
+};
+
+struct CourseExportReport {
+  std::filesystem::path file;
+  std::uintmax_t bytes = 0;
+  package::VolumeSource source = package::VolumeSource::Builtin;
+  std::string datasetId;
+  std::size_t presets = 0, structures = 0;
+};
+
+// Writes the stored course `courseId` as a package: its course JSON, the presets its steps name
+// (from the database's presets, else the shipped `library`), and for an imported dataset its
+// structures, label map and (unless referenceVolume) volume, written from the loaded voxels.
+// Errors: an unknown course, a structure the dataset lacks (by field path), an unwritable file.
+Result<CourseExportReport> exportCourse(LearningSession& session, const render::PresetLibrary& library,
+                                        const CourseExportRequest& request);
+
+struct CourseImportRequest {
+  std::filesystem::path package;
+  // For a package that references its volume: the scan the author named (file or DICOM folder),
+  // checked against the recorded checksum and copied into the data folder.
+  std::string volumePath;
+};
+
+enum class DatasetAction { Builtin, Imported, AlreadyPresent };
+const char* toString(DatasetAction action);  // "built in", "imported", "already present"
+
+struct CourseImportReport {
+  std::string courseId, courseTitle;
+  int version = 0;
+  db::SeedOutcome outcome = db::SeedOutcome::Added;
+  std::string datasetId;
+  DatasetAction dataset = DatasetAction::Builtin;
+  std::filesystem::path datasetFolder;   // Imported: where its files now are
+  std::size_t presetsAdded = 0, presetsKept = 0;
+};
+
+// Verifies and imports a package. Refused, with one line and nothing stored: any failed check of
+// the package; a course id stored with another dataset, a newer version, or different content
+// under the same version; lesson, question or exam ids another course uses; a dataset name
+// already imported with another volume; a referenced volume missing or with another checksum; a
+// structure the course names that the dataset lacks. The same package imported twice is
+// Unchanged. A preset id already stored with other content keeps the stored preset (counted in
+// presetsKept).
+Result<CourseImportReport> importCoursePackage(LearningSession& session, const CourseImportRequest& request);
+
+}  // namespace at::app

@@ -1,0 +1,103 @@
+// The desktop's course editor without drawing (the Course editor window draws it; the UI script
+// drives the same commands): an instructor's draft of a course on the dataset on screen — lessons
+// with prerequisites; show steps captured from the view (structure, preset with its t, named
+// view) with a title and text; questions of every kind; steps reordered, duplicated, deleted and
+// previewed as a student will see them; live validation naming each problem by its field path (as
+// the course reader does); saving into the database (the next version when it changes a stored
+// course), exporting a package, and Open course… (importing one).
+#pragma once
+
+#include <functional>
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "core/error.h"
+#include "course_packages.h"
+#include "learning_session.h"
+#include "lessons/curriculum.h"
+#include "render/preset.h"
+
+namespace at::app {
+
+class CourseEditor {
+ public:
+  using EventSink = std::function<void(nlohmann::json)>;
+  // What the view shows, for a show step or a question's scene.
+  struct Capture {
+    std::string structure;
+    render::Preset preset;   // with the view's t
+    lessons::CameraView view = lessons::CameraView::LateralRight;
+  };
+  // Shows a step as a student sees it: its structure, its preset (`captured` when the draft holds
+  // it, else `presetId` as a lesson finds it), the named view.
+  using Preview = std::function<void(const std::string& structure, const std::string& presetId,
+                                     const std::optional<render::Preset>& captured, lessons::CameraView view)>;
+
+  // `session` and `library` outlive the editor. `events` receives course_edited, course_saved,
+  // course_exported and course_imported.
+  CourseEditor(LearningSession& session, const render::PresetLibrary& library, EventSink events, Preview preview);
+
+  bool windowOpen = false;
+  bool editing() const { return draft_.has_value(); }
+  const lessons::Course& draft() const { return *draft_; }
+  std::size_t lessonIndex() const { return lesson_; }
+  // Bumped on every change of the draft.
+  std::uint64_t revision() const { return revision_; }
+
+  // A new course `id` on `datasetId` with one empty lesson "<id>.lesson_1" [course_new].
+  Status newCourse(const std::string& id, const std::string& title, const std::string& datasetId);
+  // A stored course, to edit; saving stores it as the next version [course_open].
+  Status openCourse(const std::string& courseId);
+  Status setTitle(const std::string& title, const std::string& summary);
+
+  // Lessons: added after the last (id "<course>.<identifier of the title>"), chosen for the step
+  // commands, and their prerequisites (lesson ids of this course) [course_lesson].
+  Status addLesson(const std::string& title);
+  Status selectLesson(std::size_t index);
+  Status setPrerequisites(const std::vector<std::string>& lessonIds);
+
+  // Steps of the chosen lesson, appended. A show step's preset is the captured one, stored with
+  // the course as "<lesson id>.show_<n>" [course_show, course_question].
+  Status addShow(const Capture& capture, const std::string& title, const std::string& text);
+  // `question.id` empty: "<lesson id>.q<n>". A locate question needs `scene` (a neighbour's view).
+  Status addQuestion(quiz::Question question, const std::optional<Capture>& scene);
+  Status moveStep(std::size_t from, std::size_t to);
+  Status duplicateStep(std::size_t index);  // the copy follows it; a question's copy gets a new id
+  Status deleteStep(std::size_t index);
+  Status previewStep(std::size_t index);
+
+  // Live validation: each problem as "<field path>: <what is wrong>"; empty when it can be saved.
+  const std::vector<std::string>& problems() const { return problems_; }
+  // Stores the draft (and its captured presets); a stored course with other content is replaced
+  // by the next version [course_saved].
+  Result<db::SeedOutcome> save();
+  // Saves, then writes the course as a package [course_exported].
+  Result<CourseExportReport> exportPackage(const std::string& path, bool referenceVolume, const std::string& note);
+  // Open course…: imports a package [course_imported]; its course can then be opened to edit.
+  Result<CourseImportReport> openPackage(const std::string& path, const std::string& volumePath);
+
+  // The draft as an event (steps in order: kind, structure or target, title or prompt).
+  nlohmann::json stateEvent() const;
+
+ private:
+  Result<lessons::Lesson*> lesson();
+  void changed();
+  std::string capturePreset(const Capture& capture);  // stores it in captured_, gives its id
+
+  LearningSession& session_;
+  const render::PresetLibrary& library_;
+  EventSink events_;
+  Preview preview_;
+  std::optional<lessons::Course> draft_;
+  std::optional<int> storedVersion_;                  // of the course opened, or saved
+  std::map<std::string, render::Preset> captured_;    // presets of this draft by id
+  std::size_t lesson_ = 0;
+  std::vector<std::string> problems_;
+  std::uint64_t revision_ = 0;
+};
+
+}  // namespace at::app

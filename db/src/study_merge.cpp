@@ -1,0 +1,252 @@
+// `mergeStudy`: a study's participants from several databases (lab machines without a class
+// server) copied into one, row by row with every recorded column, in one transaction.
+#include <algorithm>
+#include <map>
+
+#include "db/study_store.h"
+#include "quiz/study_design.h"
+#include "study_rows.h"
+
+namespace at::db {
+
+namespace {
+
+enum class Type { Int, Real, Text };
+struct Column {
+  const char* name;
+  Type type;
+};
+
+// One stored value; two cells are equal when type, nullness and value agree.
+struct Cell {
+  bool null = false;
+  std::int64_t integer = 0;
+  double real = 0;
+  std::string text;
+  bool operator==(const Cell&) const = default;
+};
+using Row = std::vector<Cell>;
+
+// The columns of a participant's records, besides study_id and participant_id. The enrolment
+// index is the participant's place in the target, not part of what they recorded: it is left out
+// of the comparison and given anew.
+const std::vector<Column> kParticipantColumns = {
+    {"group_name", Type::Text}, {"session", Type::Int}, {"started_at", Type::Text}, {"completed_at", Type::Text}};
+const std::vector<Column> kTrialColumns = {
+    {"position", Type::Int},   {"structure", Type::Text},  {"a_condition", Type::Text}, {"b_condition", Type::Text},
+    {"preset_a", Type::Text},  {"preset_b", Type::Text},   {"view_ms_a", Type::Real},   {"view_ms_b", Type::Real},
+    {"toggles", Type::Int},    {"comment", Type::Text},    {"viewing_measured", Type::Int}};
+const std::vector<Column> kRatingColumns = {
+    {"position", Type::Int}, {"item", Type::Text},      {"rating_ab", Type::Int},   {"response_ms", Type::Real},
+    {"t", Type::Real},       {"alpha", Type::Real},     {"beta", Type::Real},       {"app_version", Type::Text},
+    {"created_at", Type::Text}, {"session", Type::Int}};
+
+std::string columnList(const std::vector<Column>& columns) {
+  std::string out;
+  for (const Column& c : columns) out += (out.empty() ? "" : ", ") + std::string(c.name);
+  return out;
+}
+
+// Rows of `table` for one participant, ordered by its first column.
+Result<std::vector<Row>> readRows(Database& db, const char* table, const std::vector<Column>& columns,
+                                  const std::string& studyId, const std::string& participantId) {
+  auto st = db.prepare("SELECT " + columnList(columns) + " FROM " + table +
+                       " WHERE study_id = ?1 AND participant_id = ?2 ORDER BY " + columnList(columns));
+  if (!st) return tl::unexpected(st.error());
+  st->bind(1, studyId).bind(2, participantId);
+  std::vector<Row> rows;
+  while (true) {
+    auto more = st->step();
+    if (!more) return tl::unexpected(more.error());
+    if (!*more) break;
+    Row row(columns.size());
+    for (std::size_t i = 0; i < columns.size(); ++i) {
+      const int at = int(i);
+      row[i].null = st->isNull(at);
+      if (row[i].null) continue;
+      switch (columns[i].type) {
+        case Type::Int: row[i].integer = st->int64(at); break;
+        case Type::Real: row[i].real = st->real(at); break;
+        case Type::Text: row[i].text = st->text(at); break;
+      }
+    }
+    rows.push_back(std::move(row));
+  }
+  return rows;
+}
+
+Status insertRow(Database& db, const char* table, const std::vector<Column>& columns, const std::string& studyId,
+                 const std::string& participantId, const Row& row, std::optional<int> enrolmentIndex = std::nullopt) {
+  std::string names = "study_id, participant_id, " + columnList(columns), values = "?1, ?2";
+  for (std::size_t i = 0; i < columns.size(); ++i) values += ", ?" + std::to_string(i + 3);
+  if (enrolmentIndex) {
+    names += ", enrolment_index";
+    values += ", ?" + std::to_string(columns.size() + 3);
+  }
+  auto st = db.prepare(std::string("INSERT INTO ") + table + " (" + names + ") VALUES (" + values + ")");
+  if (!st) return tl::unexpected(st.error());
+  st->bind(1, studyId).bind(2, participantId);
+  for (std::size_t i = 0; i < columns.size(); ++i) {
+    const int at = int(i) + 3;
+    if (row[i].null) st->bindNull(at);
+    else if (columns[i].type == Type::Int) st->bind(at, row[i].integer);
+    else if (columns[i].type == Type::Real) st->bind(at, row[i].real);
+    else st->bind(at, row[i].text);
+  }
+  if (enrolmentIndex) st->bind(int(columns.size()) + 3, *enrolmentIndex);
+  return st->run();
+}
+
+// Everything one participant recorded.
+struct Records {
+  std::string id;
+  Row participant;
+  std::vector<Row> trials, ratings;
+  bool operator==(const Records&) const = default;
+};
+
+Result<std::optional<Records>> readRecords(Database& db, const std::string& studyId, const std::string& participantId) {
+  auto participant = readRows(db, "study_participants", kParticipantColumns, studyId, participantId);
+  if (!participant) return tl::unexpected(participant.error());
+  if (participant->empty()) return std::optional<Records>{};
+  Records r{participantId, participant->front(), {}, {}};
+  auto trials = readRows(db, "study_trials", kTrialColumns, studyId, participantId);
+  if (!trials) return tl::unexpected(trials.error());
+  auto ratings = readRows(db, "study_ratings", kRatingColumns, studyId, participantId);
+  if (!ratings) return tl::unexpected(ratings.error());
+  r.trials = std::move(*trials);
+  r.ratings = std::move(*ratings);
+  return std::optional<Records>{std::move(r)};
+}
+
+Result<std::vector<Records>> readAllRecords(Database& db, const std::string& studyId) {
+  auto ids = db.prepare("SELECT participant_id FROM study_participants WHERE study_id = ?1 ORDER BY enrolment_index");
+  if (!ids) return tl::unexpected(ids.error());
+  ids->bind(1, studyId);
+  std::vector<std::string> names;
+  while (true) {
+    auto more = ids->step();
+    if (!more) return tl::unexpected(more.error());
+    if (!*more) break;
+    names.push_back(ids->text(0));
+  }
+  std::vector<Records> out;
+  for (const auto& id : names) {
+    auto records = readRecords(db, studyId, id);
+    if (!records) return tl::unexpected(records.error());
+    if (*records) out.push_back(std::move(**records));
+  }
+  return out;
+}
+
+// The design row a participant's trials follow (position, structure, condition shown as A), if any.
+std::optional<std::size_t> designRowOf(const quiz::StudyProtocol& protocol, const std::vector<Row>& trials) {
+  const std::size_t cycle = quiz::counterbalancingCycle(protocol.structures.size());
+  for (std::size_t row = 0; row < cycle; ++row) {
+    const auto plan = quiz::planParticipant(protocol.structures.size(), row, protocol.seed);
+    bool same = plan.size() == trials.size();
+    for (std::size_t i = 0; same && i < plan.size(); ++i) {
+      const Row& t = trials[i];  // ordered by position
+      same = t[0].integer == std::int64_t(plan[i].position) &&
+             t[1].text == protocol.structures[plan[i].structureIndex] &&
+             t[2].text == protocol.conditions[plan[i].aIsFirstCondition ? 0 : 1].id;
+    }
+    if (same) return row;
+  }
+  return std::nullopt;
+}
+
+}  // namespace
+
+bool StudyMergeReport::balanced() const {
+  if (cycle == 0 || !offDesign.empty()) return false;
+  int least = participants, most = 0;
+  for (std::size_t row = 0; row < cycle; ++row) {
+    const auto it = designRows.find(row);
+    const int used = it == designRows.end() ? 0 : it->second;
+    least = std::min(least, used);
+    most = std::max(most, used);
+  }
+  return most - least <= 1;
+}
+
+Result<StudyMergeReport> mergeStudy(Database& into, const std::vector<StudyMergeSource>& sources,
+                                    const std::string& studyId) {
+  // Read every source first: the sources are other databases, outside the target's transaction.
+  std::optional<quiz::StudyProtocol> design;
+  std::vector<std::vector<Records>> fromSources;
+  for (const auto& source : sources) {
+    auto study = findStudy(*source.db, studyId);
+    if (!study) return tl::unexpected(withContext(source.name, study.error()));
+    if (!*study) return fail(ErrorKind::NotFound, source.name + ": has no study '" + studyId + "'");
+    if (design && !detail::sameDesign(*design, **study))
+      return fail(ErrorKind::Conflict, source.name + ": study '" + studyId +
+                                           "' has another design (structures, conditions, items, scale or seed) than in " +
+                                           sources.front().name);
+    if (!design) design = **study;
+    auto records = readAllRecords(*source.db, studyId);
+    if (!records) return tl::unexpected(withContext(source.name, records.error()));
+    fromSources.push_back(std::move(*records));
+  }
+  if (!design) return fail("study merge: no databases to merge from");
+
+  StudyMergeReport report;
+  auto written = into.writeTransaction([&](Database& d) -> Status {
+    report.sources.clear();
+    auto target = findStudy(d, studyId);
+    if (!target) return tl::unexpected(target.error());
+    if (*target && !detail::sameDesign(**target, *design))
+      return fail(ErrorKind::Conflict, d.path() + ": study '" + studyId + "' has another design than in " +
+                                           sources.front().name + "; nothing was merged");
+    if (!*target)
+      if (auto s = detail::storeStudyRow(d, *design); !s) return s;
+    auto count = detail::participantCount(d, studyId);
+    if (!count) return tl::unexpected(count.error());
+    int next = *count;
+    std::map<std::string, std::string> origin;  // participant → where the target's copy came from
+    for (std::size_t s = 0; s < sources.size(); ++s) {
+      StudyMergeReport::FromSource from{sources[s].name, 0, 0};
+      for (const Records& records : fromSources[s]) {
+        auto existing = readRecords(d, studyId, records.id);
+        if (!existing) return tl::unexpected(existing.error());
+        if (*existing) {
+          if (**existing == records) {
+            ++from.alreadyThere;
+            continue;
+          }
+          const auto o = origin.find(records.id);
+          return fail(ErrorKind::Conflict,
+                      "participant '" + records.id + "' of " + sources[s].name + " is also in " +
+                          (o == origin.end() ? d.path() : o->second) +
+                          " with other records (two people with one id, or one person run twice); nothing was merged: "
+                          "decide which to keep and merge the others");
+        }
+        if (auto st = insertRow(d, "study_participants", kParticipantColumns, studyId, records.id, records.participant,
+                                next++);
+            !st)
+          return st;
+        for (const Row& t : records.trials)
+          if (auto st = insertRow(d, "study_trials", kTrialColumns, studyId, records.id, t); !st) return st;
+        for (const Row& r : records.ratings)
+          if (auto st = insertRow(d, "study_ratings", kRatingColumns, studyId, records.id, r); !st) return st;
+        origin[records.id] = sources[s].name;
+        ++from.added;
+      }
+      report.sources.push_back(from);
+    }
+    return {};
+  });
+  if (!written) return tl::unexpected(written.error());
+
+  auto merged = readAllRecords(into, studyId);
+  if (!merged) return tl::unexpected(merged.error());
+  report.participants = int(merged->size());
+  report.cycle = quiz::counterbalancingCycle(design->structures.size());
+  for (const Records& r : *merged) {
+    if (auto row = designRowOf(*design, r.trials)) ++report.designRows[*row];
+    else report.offDesign.push_back(r.id);
+  }
+  return report;
+}
+
+}  // namespace at::db

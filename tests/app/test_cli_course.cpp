@@ -1,0 +1,227 @@
+// `anatomy-tutor course`: a course authored through the CLI on an imported dataset travels as a
+// package to a fresh database in another folder, under another user, and plays to the end with
+// the author's files and the package gone; tampered, conflicting and incomplete packages are
+// refused with one line and change nothing.
+#include <doctest/doctest.h>
+
+#include <fstream>
+
+#include <nlohmann/json.hpp>
+
+#include "../package/tar_files.h"
+#include "cli_checks.h"
+#include "db/connection.h"
+#include "db/dataset_store.h"
+#include "test_support.h"
+#include "package/course_package.h"
+
+using namespace at;
+namespace fs = std::filesystem;
+
+namespace {
+
+std::string quoted(const fs::path& p) { return "'" + p.string() + "'"; }
+
+// The 32³ phantom as an imported dataset "ear_lab" in `db` (files in `dir`, names by label).
+void importPhantom(const fs::path& dir, const fs::path& db, const std::string& name = "ear_lab", int size = 32) {
+  const Dataset& phantom = test::phantomOfSize(size);
+  auto files = package::writeDatasetFiles(phantom, dir, true);
+  REQUIRE_MESSAGE(files, test::errorText(files));
+  nlohmann::json names = nlohmann::json::object();
+  for (const Structure& s : phantom.structures) names[std::to_string(s.label)] = s.displayName;
+  std::ofstream(dir / "names.json") << names.dump();
+  auto r = test::runApp("import --volume " + quoted(dir / "volume.nrrd") + " --labels " + quoted(dir / "labels.nrrd") +
+                        " --names " + quoted(dir / "names.json") + " --name " + name + " --db " + quoted(db));
+  REQUIRE_MESSAGE(r.exitCode == 0, r.err);
+}
+
+// One typed answer per question of `courseFile`'s first lesson: the target's name as the course names it.
+std::string nameAnswers(const fs::path& courseFile) {
+  const auto course = nlohmann::json::parse(test::readFile(courseFile));
+  std::string lines;
+  for (const auto& step : course["lessons"][0]["steps"])
+    if (step["kind"] == "question") lines += nlohmann::json{{"text", step["question"]["target"]}}.dump() + "\n";
+  return lines;
+}
+
+std::string courseList(const fs::path& db) {
+  auto r = test::runApp("course list --db " + quoted(db));
+  REQUIRE_MESSAGE(r.exitCode == 0, r.err);
+  return r.out;
+}
+
+// The author's course "ear_tour" (version 2, edited as JSON) exported from `author` to `package`.
+void authorAndExport(const test::TempDir& author, const fs::path& package, const std::string& exportOptions = "") {
+  const fs::path db = author / "a.db";
+  importPhantom(author.path(), db);
+  auto made = test::runApp("course new ear_tour --dataset ear_lab --title 'Ear tour' --out " + quoted(author / "ear_tour.json") +
+                           " --db " + quoted(db));
+  REQUIRE_MESSAGE(made.exitCode == 0, made.err);
+  CHECK(made.out.find("course 'ear_tour' (Ear tour) on 'ear_lab'") != std::string::npos);
+  // The author edits the file: a better first text, a tolerance, version 2.
+  auto course = nlohmann::json::parse(test::readFile(author / "ear_tour.json"));
+  course["version"] = 2;
+  course["lessons"][0]["steps"][0]["text"] = "Edited by the author.";
+  std::ofstream(author / "ear_tour.json") << course.dump(2);
+  auto valid = test::runApp("course validate " + quoted(author / "ear_tour.json") + " --db " + quoted(db));
+  REQUIRE_MESSAGE(valid.exitCode == 0, valid.err);
+  CHECK(valid.out.find("structures checked against dataset 'ear_lab'") != std::string::npos);
+  auto stored = test::runApp("course import " + quoted(author / "ear_tour.json") + " --db " + quoted(db));
+  REQUIRE_MESSAGE(stored.exitCode == 0, stored.err);
+  CHECK(stored.out == "course 'ear_tour' version 2: updated\n");
+  auto exported = test::runApp("course export ear_tour --out " + quoted(package) + " --db " + quoted(db) + exportOptions);
+  REQUIRE_MESSAGE(exported.exitCode == 0, exported.err);
+}
+
+}  // namespace
+
+TEST_CASE("CourseCli_AuthoredCourse_TravelsAsAPackageToAnotherDatabaseAndPlaysToTheEnd") {
+  if (!test::requireAppBinary("course packages")) return;
+  test::TempDir author("at-author"), student("at-student");
+  authorAndExport(author, author / "ear.atcourse");
+  // The package moves to the student's folder; the author's files disappear.
+  fs::rename(author / "ear.atcourse", student / "ear.atcourse");
+  for (const char* f : {"volume.nrrd", "labels.nrrd", "names.json", "a.db"}) fs::remove(author / f);
+
+  fs::create_directories(student / "class1");
+  const fs::path first = student / "class1" / "s.db";
+  auto imported = test::runApp("course import " + quoted(student / "ear.atcourse") + " --db " + quoted(first));
+  REQUIRE_MESSAGE(imported.exitCode == 0, imported.err);
+  CHECK(imported.out.find("course 'ear_tour' (Ear tour) version 2: added") != std::string::npos);
+  CHECK(imported.out.find("dataset 'ear_lab': imported into " + (student / "class1" / "s-data" / "datasets" / "ear_lab").string()) !=
+        std::string::npos);
+  fs::remove(student / "ear.atcourse");
+  // The database and its data folder move together: the dataset's paths are kept relative to it.
+  fs::rename(student / "class1", student / "class2");
+  const fs::path db = student / "class2" / "s.db";
+  {
+    auto database = db::openDatabase(db.string());
+    REQUIRE(database);
+    auto record = db::findDataset(*database, "ear_lab");
+    REQUIRE(record);
+    REQUIRE(*record);
+    CHECK((*record)->volumePath == (student / "class2" / "s-data" / "datasets" / "ear_lab" / "volume.nrrd").string());
+    CHECK((*record)->labelsPath == (student / "class2" / "s-data" / "datasets" / "ear_lab" / "labels.nrrd").string());
+    CHECK((*record)->structureCount == int(test::phantomOfSize(32).structures.size()));
+  }
+  std::ofstream(student / "answers.jsonl") << nameAnswers(author / "ear_tour.json");
+  auto played = test::runApp("play ear_tour.tour --user dana --new-user --no-views --answers " + quoted(student / "answers.jsonl") +
+                             " --db " + quoted(db));
+  REQUIRE_MESSAGE(played.exitCode == 0, played.err);
+  CHECK(played.out.find("Edited by the author.") != std::string::npos);
+  const std::size_t questions = test::phantomOfSize(32).structures.size();
+  CHECK(played.out.find("Lesson finished: " + std::to_string(questions) + " of " + std::to_string(questions) + " questions right") !=
+        std::string::npos);
+}
+
+TEST_CASE("CourseCli_TamperedOrConflictingPackages_AreRefusedWithOneLineAndChangeNothing") {
+  if (!test::requireAppBinary("course packages")) return;
+  test::TempDir author("at-author"), student("at-student");
+  const fs::path package = author / "ear.atcourse";
+  authorAndExport(author, package);
+  const fs::path db = student / "s.db";
+  const std::string before = courseList(db);
+  const auto tampered = [&](const std::string& name, auto change) {
+    auto entries = test::readTar(package);
+    change(entries);
+    test::writeTar(student / name, entries);
+    return student / name;
+  };
+  const auto refused = [&](const fs::path& file, const std::string& mention, const std::string& extra = "") {
+    auto r = test::runApp("course import " + quoted(file) + " --db " + quoted(db) + extra);
+    test::checkOneLineError(r, mention);
+    CHECK(courseList(db) == before);
+    CHECK(test::importedDatasetNames(db).empty());
+    std::error_code ec;
+    CHECK((!fs::exists(student / "s-data" / "datasets", ec) || fs::is_empty(student / "s-data" / "datasets")));
+    return r.err;
+  };
+
+  SUBCASE("a changed volume byte") {
+    refused(tampered("byte.atcourse",
+                     [](auto& e) {
+                       std::string& v = test::findEntry(e, "dataset/volume.nrrd")->data;
+                       v[v.size() - 10] = char(v[v.size() - 10] ^ 0x20);
+                     }),
+            "dataset/volume.nrrd: checksum mismatch");
+  }
+  SUBCASE("a missing file") {
+    refused(tampered("missing.atcourse", [](auto& e) { e.pop_back(); }),
+            "dataset/volume.nrrd is listed in the manifest but missing from the package");
+  }
+  SUBCASE("a newer format version") {
+    refused(tampered("newer.atcourse",
+                     [](auto& e) {
+                       auto m = nlohmann::json::parse(test::findEntry(e, "manifest.json")->data);
+                       m["format_version"] = 2;
+                       test::findEntry(e, "manifest.json")->data = m.dump();
+                     }),
+            "format version 2");
+  }
+  SUBCASE("an older version, or other content under the same version, of a stored course") {
+    auto first = test::runApp("course import " + quoted(package) + " --db " + quoted(db));
+    REQUIRE_MESSAGE(first.exitCode == 0, first.err);
+    const std::string stored = courseList(db);
+    auto course = nlohmann::json::parse(test::readFile(author / "ear_tour.json"));
+    course["version"] = 1;
+    std::ofstream(author / "older.json") << course.dump();
+    auto older = test::runApp("course import " + quoted(author / "older.json") + " --db " + quoted(db));
+    test::checkOneLineError(older, "version 2 is stored, newer than this one's version 1");
+    course["version"] = 2;
+    course["title"] = "Another ear tour";
+    std::ofstream(author / "other.json") << course.dump();
+    auto other = test::runApp("course import " + quoted(author / "other.json") + " --db " + quoted(db));
+    test::checkOneLineError(other, "is stored with other content");
+    CHECK(courseList(db) == stored);
+    auto again = test::runApp("course import " + quoted(package) + " --db " + quoted(db));
+    CHECK(again.exitCode == 0);
+    CHECK(again.out.find("version 2: unchanged") != std::string::npos);
+    CHECK(again.out.find("dataset 'ear_lab': already present") != std::string::npos);
+  }
+  SUBCASE("a dataset name already imported with another volume") {
+    test::TempDir other("at-other");
+    importPhantom(other.path(), db, "ear_lab", 24);
+    auto r = test::runApp("course import " + quoted(package) + " --db " + quoted(db));
+    test::checkOneLineError(r, "a dataset named 'ear_lab' is already imported with another volume");
+    CHECK(courseList(db) == before);
+  }
+}
+
+TEST_CASE("CourseCli_ReferencedVolume_IsAskedForAndCheckedByItsChecksum") {
+  if (!test::requireAppBinary("course packages")) return;
+  test::TempDir author("at-author"), student("at-student");
+  const fs::path package = author / "ref.atcourse";
+  authorAndExport(author, package, " --reference-volume --note 'ask the anatomy office'");
+  std::vector<std::string> names;
+  for (const auto& e : test::readTar(package)) names.push_back(e.name);
+  CHECK(std::find(names.begin(), names.end(), "dataset/volume.nrrd") == names.end());
+  const fs::path db = student / "s.db";
+
+  auto without = test::runApp("course import " + quoted(package) + " --db " + quoted(db));
+  test::checkOneLineError(without, "give the scan with --volume PATH (volume.nrrd, sha256:");
+  CHECK(without.err.find("ask the anatomy office") != std::string::npos);
+  auto wrong = test::runApp("course import " + quoted(package) + " --volume " + quoted(author / "labels.nrrd") + " --db " + quoted(db));
+  test::checkOneLineError(wrong, "is not the course's volume: expected volume.nrrd, sha256:");
+  CHECK(test::importedDatasetNames(db).empty());
+
+  auto right = test::runApp("course import " + quoted(package) + " --volume " + quoted(author / "volume.nrrd") + " --db " + quoted(db));
+  REQUIRE_MESSAGE(right.exitCode == 0, right.err);
+  CHECK(fs::is_regular_file(student / "s-data" / "datasets" / "ear_lab" / "volume.nrrd"));
+  CHECK(test::importedDatasetNames(db) == std::vector<std::string>{"ear_lab"});
+}
+
+TEST_CASE("CourseCli_Validate_NamesTheFieldOfAStructureTheDatasetLacks") {
+  if (!test::requireAppBinary("course validate")) return;
+  test::TempDir dir;
+  auto course = nlohmann::json::parse(test::readFile(test::sourceDir() / "data" / "courses" / "temporal_bone.json"));
+  course["lessons"][0]["steps"][0]["structure"] = "pancreas";
+  std::ofstream(dir / "bad.json") << course.dump();
+  auto r = test::runApp("course validate " + quoted(dir / "bad.json") + " --db " + quoted(dir / "v.db"));
+  test::checkOneLineError(r, "bad.json: lessons[0].steps[0].structure: no structure 'pancreas' in dataset 'phantom'");
+  course["lessons"][0]["steps"][0]["kind"] = "lecture";
+  std::ofstream(dir / "bad.json") << course.dump();
+  test::checkOneLineError(test::runApp("course validate " + quoted(dir / "bad.json")), "lessons[0].steps[0].kind");
+  auto good = test::runApp("course validate " + quoted(test::sourceDir() / "data" / "courses" / "temporal_bone.json"));
+  CHECK_MESSAGE(good.exitCode == 0, good.err);
+  CHECK(good.out.find("valid: course 'temporal_bone'") != std::string::npos);
+}

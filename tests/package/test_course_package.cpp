@@ -1,0 +1,341 @@
+// Course packages: written and read back; every kind of altered package (a changed byte, a
+// missing or unlisted entry, a newer format, names that escape, links, sizes past the limits)
+// is refused with a message naming the package and the entry, and leaves nothing behind.
+#include <doctest/doctest.h>
+
+#include <fstream>
+
+#include <nlohmann/json.hpp>
+
+#include "core/sha256.h"
+#include "lessons/course_json.h"
+#include "package/course_package.h"
+#include "tar_files.h"
+#include "test_support.h"
+#include "volume/dataset_source.h"
+#include "volume/nrrd_io.h"
+
+using namespace at;
+using namespace at::package;
+namespace fs = std::filesystem;
+
+namespace {
+
+const char* kCourse = R"({"schema": 1, "id": "mini_course", "title": "Mini", "dataset": "mini", "version": 3,
+  "lessons": [{"id": "mini.one", "title": "One", "steps": [
+    {"kind": "show", "structure": "cochlea", "preset": "mini_cochlea", "view": "superior", "title": "T", "text": "X"},
+    {"kind": "question", "question": {"id": "mini.one.q", "kind": "name", "prompt": "Name it", "target": "cochlea"}}]}]})";
+
+lessons::Course miniCourse() {
+  auto c = lessons::parseCourseJson(kCourse, "mini");
+  REQUIRE(c);
+  return *c;
+}
+
+// A small dataset with the phantom's anatomy, called "mini".
+const Dataset& miniDataset() {
+  static const Dataset d = [] {
+    Dataset copy = test::phantomOfSize(32);
+    copy.id = "mini";
+    return copy;
+  }();
+  return d;
+}
+
+// An included-volume package of the mini dataset in `dir`.
+fs::path writeIncluded(const test::TempDir& dir) {
+  auto files = writeDatasetFiles(miniDataset(), dir.path(), true);
+  REQUIRE_MESSAGE(files, test::errorText(files));
+  PackageInput in;
+  in.course = miniCourse();
+  render::Preset preset;
+  preset.name = "Mini cochlea";
+  preset.t = 0.3f;
+  in.presets.push_back({"mini_cochlea", preset, render::presetToJson(preset)});
+  in.dataset.name = "mini";
+  in.dataset.source = VolumeSource::Included;
+  in.dataset.geometry = miniDataset().volume.geometry;
+  in.dataset.sourceVolumeChecksum = "sha256:" + std::string(64, 'a');
+  in.structures = miniDataset().structures;
+  in.volumeFile = files->volume;
+  in.labelsFile = files->labels;
+  in.createdBy = "test";
+  const fs::path out = dir / "mini.atcourse";
+  auto ok = writePackage(out, in);
+  REQUIRE_MESSAGE(ok, (ok ? "" : ok.error().message));
+  return out;
+}
+
+// Reads `file` into `extract`; expects an error containing every one of `parts`, and nothing left in
+// the extraction folder.
+void expectRefused(const fs::path& file, std::initializer_list<const char*> parts, const ReadOptions& base = {}) {
+  test::TempDir extract("at-extract");
+  ReadOptions options = base;
+  options.extractTo = extract.path();
+  auto read = readPackageFile(file, options);
+  REQUIRE_FALSE(read);
+  for (const char* part : parts) CHECK_MESSAGE(read.error().message.find(part) != std::string::npos, read.error().message);
+  CHECK(read.error().message.find('\n') == std::string::npos);
+  CHECK(fs::is_empty(extract.path()));
+}
+
+// The package with `change` applied to its entries, as `name` in `dir`.
+template <class Change>
+fs::path altered(const test::TempDir& dir, const fs::path& original, const std::string& name, Change&& change) {
+  auto entries = test::readTar(original);
+  REQUIRE(entries.size() >= 5);
+  change(entries);
+  const fs::path out = dir / name;
+  test::writeTar(out, entries);
+  return out;
+}
+
+}  // namespace
+
+TEST_CASE("CoursePackage_IncludedDataset_ReadsBackTheCourseePresetsStructuresAndIdenticalFiles") {
+  test::TempDir dir;
+  const fs::path file = writeIncluded(dir);
+  test::TempDir extract("at-extract");
+  ReadOptions options;
+  options.extractTo = extract.path();
+  auto read = readPackageFile(file, options);
+  REQUIRE_MESSAGE(read, test::errorText(read));
+  CHECK(lessons::courseToJson(read->course) == lessons::courseToJson(miniCourse()));
+  CHECK(read->manifest.courseVersion == 3);
+  CHECK((read->manifest.dataset.source == VolumeSource::Included));
+  CHECK(read->manifest.dataset.geometry->sameGridAs(miniDataset().volume.geometry));
+  REQUIRE(read->presets.size() == 1);
+  CHECK(read->presets[0].id == "mini_cochlea");
+  CHECK(read->presets[0].preset.t == doctest::Approx(0.3));
+  CHECK(read->structures.size() == miniDataset().structures.size());
+  CHECK(read->structures[0].id == miniDataset().structures[0].id);
+  CHECK(read->structures[0].displayName == miniDataset().structures[0].displayName);
+  REQUIRE(read->volumeFile == extract / "volume.nrrd");
+  CHECK(test::readFile(read->volumeFile) == test::readFile(dir / "volume.nrrd"));
+  CHECK(test::readFile(read->labelsFile) == test::readFile(dir / "labels.nrrd"));
+
+  // The extracted files load as the same voxels.
+  DatasetFiles files;
+  files.volumePath = read->volumeFile.string();
+  files.labelsPath = read->labelsFile.string();
+  auto loaded = openDatasetFiles(files);
+  REQUIRE_MESSAGE(loaded, test::errorText(loaded));
+  CHECK(loaded->volume.voxels == miniDataset().volume.voxels);
+  CHECK(loaded->labels.voxels == miniDataset().labels.voxels);
+
+  // The same input gives the same bytes; reading from memory gives the same package.
+  test::TempDir again;
+  const fs::path second = writeIncluded(again);
+  CHECK(test::readFile(second) == test::readFile(file));
+  auto fromBytes = readPackageBytes(test::readFile(file), "in-memory");
+  REQUIRE_MESSAGE(fromBytes, test::errorText(fromBytes));
+  CHECK(fromBytes->volumeFile.empty());
+  CHECK(fromBytes->hasLabels);
+}
+
+TEST_CASE("CoursePackage_BuiltinDataset_CarriesNoDatasetFiles") {
+  test::TempDir dir;
+  lessons::Course course = miniCourse();
+  course.datasetId = "phantom";
+  PackageInput in;
+  in.course = course;
+  in.dataset.name = "phantom";
+  in.dataset.source = VolumeSource::Builtin;
+  in.createdBy = "test";
+  REQUIRE(writePackage(dir / "p.atcourse", in));
+  auto read = readPackageFile(dir / "p.atcourse");
+  REQUIRE_MESSAGE(read, test::errorText(read));
+  CHECK(read->structures.empty());
+  CHECK_FALSE(read->hasLabels);
+  std::vector<std::string> names;
+  for (const auto& e : test::readTar(dir / "p.atcourse")) names.push_back(e.name);
+  CHECK(names == std::vector<std::string>{"manifest.json", "course.json"});
+
+  // Structures for a built-in dataset are refused by the writer.
+  in.structures = miniDataset().structures;
+  CHECK_FALSE(writePackage(dir / "q.atcourse", in));
+  CHECK_FALSE(fs::exists(dir / "q.atcourse"));
+}
+
+TEST_CASE("CoursePackage_AlteredPackages_AreRefusedWithOneLineNamingTheEntry") {
+  test::TempDir dir;
+  const fs::path file = writeIncluded(dir);
+
+  SUBCASE("a changed volume byte") {
+    expectRefused(altered(dir, file, "byte.atcourse",
+                          [](auto& e) {
+                            std::string& v = test::findEntry(e, "dataset/volume.nrrd")->data;
+                            v[v.size() / 2] = char(v[v.size() / 2] ^ 0x01);
+                          }),
+                  {"byte.atcourse", "dataset/volume.nrrd", "checksum mismatch"});
+  }
+  SUBCASE("a changed course") {
+    expectRefused(altered(dir, file, "course.atcourse",
+                          [](auto& e) {
+                            std::string& c = test::findEntry(e, "course.json")->data;
+                            c.replace(c.find("Name it"), 7, "Name me");
+                          }),
+                  {"course.json", "checksum mismatch"});
+  }
+  SUBCASE("a missing file") {
+    expectRefused(altered(dir, file, "missing.atcourse",
+                          [](auto& e) { e.erase(e.begin() + long(e.size()) - 2); }),  // the labels
+                  {"missing.atcourse", "dataset/labels.nrrd", "missing"});
+    expectRefused(altered(dir, file, "novolume.atcourse", [](auto& e) { e.pop_back(); }),
+                  {"dataset/volume.nrrd", "listed in the manifest but missing"});
+  }
+  SUBCASE("a newer format version") {
+    auto newer = altered(dir, file, "newer.atcourse", [](auto& e) {
+      auto m = nlohmann::json::parse(test::findEntry(e, "manifest.json")->data);
+      m["format_version"] = 2;
+      m["something_new"] = true;
+      test::findEntry(e, "manifest.json")->data = m.dump();
+    });
+    expectRefused(newer, {"format version 2", "newer than this program reads (1)"});
+    auto read = readPackageFile(newer);
+    REQUIRE_FALSE(read);
+    CHECK((read.error().kind == ErrorKind::Unavailable));
+  }
+  SUBCASE("names that escape the package") {
+    for (const char* name : {"../evil.json", "/tmp/evil.json", "presets/../../evil.json", "presets/./x.json", "a\\b.json",
+                             "presets//x.json", ".hidden"}) {
+      CAPTURE(name);
+      expectRefused(altered(dir, file, "escape.atcourse",
+                            [&](auto& e) { e.insert(e.begin() + 1, test::TarEntry{name, "{}"}); }),
+                    {"escape.atcourse", "is refused"});
+    }
+    // … also when the manifest lists such a name.
+    expectRefused(altered(dir, file, "listed.atcourse",
+                          [](auto& e) {
+                            auto m = nlohmann::json::parse(test::findEntry(e, "manifest.json")->data);
+                            m["files"].push_back({{"path", "../evil.json"}, {"size", 2}, {"sha256", sha256Hex("{}")}});
+                            test::findEntry(e, "manifest.json")->data = m.dump();
+                          }),
+                  {"manifest.json", "files[", "'../evil.json' is not a safe relative name"});
+  }
+  SUBCASE("links and other non-files") {
+    expectRefused(altered(dir, file, "symlink.atcourse",
+                          [](auto& e) {
+                            test::TarEntry link{"presets/mini_cochlea.json", "", AE_IFLNK, "/etc/passwd"};
+                            e.erase(e.begin() + 2);
+                            e.insert(e.begin() + 2, link);
+                          }),
+                  {"presets/mini_cochlea.json", "is a link"});
+    expectRefused(altered(dir, file, "hardlink.atcourse",
+                          [](auto& e) {
+                            test::TarEntry link{"presets/mini_cochlea.json"};
+                            link.hardlink = "course.json";
+                            e.erase(e.begin() + 2);
+                            e.insert(e.begin() + 2, link);
+                          }),
+                  {"presets/mini_cochlea.json", "is a link"});
+    expectRefused(altered(dir, file, "folder.atcourse",
+                          [](auto& e) { e.insert(e.begin() + 1, test::TarEntry{"presets", "", AE_IFDIR}); }),
+                  {"'presets/' is not a regular file"});
+  }
+  SUBCASE("unlisted, repeated and misplaced entries") {
+    expectRefused(altered(dir, file, "extra.atcourse", [](auto& e) { e.push_back({"presets/extra.json", "{}"}); }),
+                  {"'presets/extra.json' is not listed in the manifest"});
+    expectRefused(altered(dir, file, "twice.atcourse", [](auto& e) { e.push_back(e[1]); }), {"appears twice"});
+    expectRefused(altered(dir, file, "order.atcourse", [](auto& e) { std::swap(e[0], e[1]); }),
+                  {"the first entry must be manifest.json"});
+  }
+  SUBCASE("a manifest that disagrees with the course") {
+    expectRefused(altered(dir, file, "version.atcourse",
+                          [](auto& e) {
+                            auto m = nlohmann::json::parse(test::findEntry(e, "manifest.json")->data);
+                            m["course"]["version"] = 4;
+                            test::findEntry(e, "manifest.json")->data = m.dump();
+                          }),
+                  {"manifest.json: course", "version 4", "course.json is 'mini_course' version 3"});
+  }
+  SUBCASE("sizes beyond the limits") {
+    ReadOptions small;
+    small.limits.maxDataBytes = 1000;
+    expectRefused(file, {"dataset/volume.nrrd", "more than the 1000"}, small);  // the labels compress to less
+    ReadOptions few;
+    few.limits.maxEntries = 3;
+    expectRefused(file, {"more than 3 entries"}, few);
+  }
+  SUBCASE("a truncated package") {
+    std::string bytes = test::readFile(file);
+    const fs::path cut = dir / "cut.atcourse";
+    std::ofstream(cut, std::ios::binary) << bytes.substr(0, bytes.size() * 2 / 3);
+    expectRefused(cut, {"cut.atcourse"});
+  }
+}
+
+TEST_CASE("CoursePackage_GzipCompressedTar_IsReadToo") {
+  test::TempDir dir;
+  const fs::path file = writeIncluded(dir);
+  test::writeTar(dir / "gz.atcourse", test::readTar(file), true);
+  auto read = readPackageFile(dir / "gz.atcourse");
+  REQUIRE_MESSAGE(read, test::errorText(read));
+  CHECK(read->course.id == "mini_course");
+}
+
+TEST_CASE("CoursePackage_NotAPackage_IsAnErrorNotACrash") {
+  for (const std::string& bytes : {std::string(), std::string("hello"), std::string(1024, '\0'), std::string(4096, 'x')}) {
+    auto read = readPackageBytes(bytes, "junk");
+    REQUIRE_FALSE(read);
+    CHECK(read.error().message.rfind("junk: ", 0) == 0);
+  }
+  auto missing = readPackageFile("/nonexistent/x.atcourse");
+  REQUIRE_FALSE(missing);
+  CHECK((missing.error().kind == ErrorKind::NotFound));
+  CHECK_FALSE(readPackageFile("/"));
+}
+
+TEST_CASE("SafeEntryName_AcceptsPlainRelativeNamesOnly") {
+  for (const char* ok : {"course.json", "presets/a_b-c.1.json", "dataset/volume.nrrd"}) CHECK_MESSAGE(safeEntryName(ok), ok);
+  for (const char* bad : {"", "/a", "../a", "a/../b", "a/./b", "./a", "a//b", "a/", ".a", "a\\b", "a b", "a:b", "é"})
+    CHECK_MESSAGE(!safeEntryName(bad), bad);
+  CHECK_FALSE(safeEntryName(std::string(201, 'a')));
+}
+
+TEST_CASE("Structures_RoundTripAndStrictErrorsNameTheEntry") {
+  auto back = parseStructuresJson(structuresToJson(miniDataset().structures), "s.json");
+  REQUIRE_MESSAGE(back, test::errorText(back));
+  REQUIRE(back->size() == miniDataset().structures.size());
+  CHECK((*back)[3].description == miniDataset().structures[3].description);
+  const auto errorOf = [](const char* text) {
+    auto r = parseStructuresJson(text, "s.json");
+    return r ? std::string() : r.error().message;
+  };
+  CHECK(errorOf(R"([{"label": 0, "id": "a", "name": "A", "colour": [1,1,1]}])") == "s.json: [0].label: must be 1..65535");
+  CHECK(errorOf(R"([{"label": 1, "id": "a", "name": "A", "colour": [1,1,1], "x": 1}])") == "s.json: [0].x: unknown field");
+  CHECK(errorOf(R"([{"label": 1, "id": "a", "name": "A", "colour": [2,1,1]}])") == "s.json: [0].colour: must be 3 numbers in 0..1");
+  CHECK(errorOf(R"([{"label": 1, "id": "a", "name": "A", "colour": [1,1,1]}, {"label": 1, "id": "b", "name": "B", "colour": [1,1,1]}])") ==
+        "s.json: [1].label: label 1 is listed twice");
+  CHECK(errorOf(R"([{"label": 1e999}])").find("not valid JSON") != std::string::npos);
+}
+
+TEST_CASE("CoursePackage_RandomlyDamagedBytes_AreReadOrRefusedInOneLineNeverCrash") {
+  test::TempDir dir;
+  const std::string good = test::readFile(writeIncluded(dir));
+  std::uint64_t state = test::freshSeed("CoursePackage_RandomlyDamagedBytes");
+  const auto next = [&] {  // xorshift64*
+    state ^= state >> 12;
+    state ^= state << 25;
+    state ^= state >> 27;
+    return state * 2685821657736338717ull;
+  };
+  int refused = 0;
+  for (int round = 0; round < 300; ++round) {
+    std::string bytes = good;
+    const int changes = 1 + int(next() % 4);
+    for (int c = 0; c < changes; ++c) {
+      // Mostly the headers and documents at the front, where the parser's decisions are.
+      const std::size_t span = next() % 2 ? 4096 : bytes.size();
+      bytes[next() % std::min(span, bytes.size())] = char(next());
+    }
+    if (next() % 8 == 0) bytes.resize(next() % bytes.size());
+    auto read = readPackageBytes(bytes, "damaged");
+    if (!read) {
+      ++refused;
+      CHECK(read.error().message.rfind("damaged: ", 0) == 0);
+      CHECK(read.error().message.find('\n') == std::string::npos);
+    }
+  }
+  CHECK(refused > 250);  // a changed byte inside a checksummed entry or header is noticed
+}
