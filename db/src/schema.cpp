@@ -368,6 +368,17 @@ constexpr std::string_view kDatasetLoadOptions = R"SQL(
 ALTER TABLE datasets ADD COLUMN load_options TEXT;
 )SQL";
 
+// What a participant saw when rating (issue 19): the render quality level on screen (the full
+// level is quality_full_level; NULL: not known, e.g. rated without a view or before this version),
+// the full level's resolution as a share of the view, and the milliseconds from the rated side
+// being shown to the full level being on screen.
+constexpr std::string_view kStudyRatingQuality = R"SQL(
+ALTER TABLE study_ratings ADD COLUMN quality_level INTEGER;
+ALTER TABLE study_ratings ADD COLUMN quality_full_level INTEGER;
+ALTER TABLE study_ratings ADD COLUMN quality_scale REAL;
+ALTER TABLE study_ratings ADD COLUMN settle_ms REAL;
+)SQL";
+
 }  // namespace
 
 const std::vector<Migration>& migrations() {
@@ -384,6 +395,7 @@ const std::vector<Migration>& migrations() {
       {7, "practical exams: definitions, attempts and their items", kExams},
       {8, "study ratings keep their session; trials say whether viewing was measured", kStudySessions},
       {9, "how an imported dataset's files are read (skip unreadable files, data folder)", kDatasetLoadOptions},
+      {10, "study ratings record the render quality on screen and its settle time", kStudyRatingQuality},
   };
   return all;
 }
