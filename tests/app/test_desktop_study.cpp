@@ -312,14 +312,14 @@ TEST_CASE("study ratings wait for the full quality level and record it with each
     if (!s.participant()->trial) return;
     const auto shown = s.shown();
     REQUIRE(shown);
-    const std::string key = shown->structure + "/" + shown->preset.id;
+    const std::string key = shown->structure + "/" + shown->preset.id.value_or("");
     if (key != shownKey) {  // a new trial or side: its image starts coarse
       shownKey = key;
       coarseLeft = kCoarseFrames;
     }
     at::app::StudyController::ViewQuality q;
     q.structure = shown->structure;
-    q.presetId = shown->preset.id;
+    q.presetId = shown->preset.id.value_or("");
     q.mode = shown->preset.mode;
     q.fullLevel = 5;
     q.scale = 0.5;
@@ -336,7 +336,7 @@ TEST_CASE("study ratings wait for the full quality level and record it with each
       const std::string item = study["items"][0]["id"];
       auto st = s.rate(item, 3);
       (st ? acceptedWhileCoarse : refusedWhileCoarse) += 1;
-      if (!st) CHECK(st.error().kind == at::ErrorKind::Unavailable);
+      if (!st) CHECK((st.error().kind == at::ErrorKind::Unavailable));
     } else {
       q.level = 5;
       q.settledMs = 1234.0;

@@ -394,7 +394,7 @@ void DesktopModel::endFrame(Clock::time_point end, double ms) {
     const ExploreState::Shown shown = explore_.shown();
     StudyController::ViewQuality q;
     q.structure = idOf(shown.label);
-    q.presetId = shown.preset.id;
+    q.presetId = shown.preset.id.value_or("");
     q.mode = shown.preset.mode;
     q.level = scheduler_.showing(explore_.revision()) ? scheduler_.renderedLevel() : -1;
     q.fullLevel = kFullLevel;

@@ -86,7 +86,7 @@ void StudyController::showSide(char side) {
 void StudyController::noteViewQuality(const ViewQuality& quality) {
   viewQuality_ = quality;
   const auto now = shown();
-  if (!now || now->structure != quality.structure || now->preset.id != quality.presetId ||
+  if (!now || now->structure != quality.structure || now->preset.id.value_or("") != quality.presetId ||
       now->preset.mode != quality.mode) {
     viewQuality_->level = -1;  // the image on screen is not yet the current side's
     return;
