@@ -33,6 +33,7 @@ int runWdt(const Argv& args);
 
 // Rendering (cmd_render.cpp)
 int runRender(const Argv& args);
+int runFigureSheet(const Argv& args);  // cmd_figure_sheet.cpp
 // The shipped presets: dataSubdirectory("presets") (data_paths.h).
 std::filesystem::path defaultPresetsDir();
 

@@ -417,6 +417,18 @@ void DesktopModel::renderFailed(const std::string& why) {
 }
 
 void DesktopModel::endFrame(Clock::time_point end, double ms) {
+  if (viewAvailable_ && study_->participantActive()) {  // what the participant sees, for their ratings
+    const ExploreState::Shown shown = explore_.shown();
+    StudyController::ViewQuality q;
+    q.structure = idOf(shown.label);
+    q.presetId = shown.preset.id.value_or("");
+    q.mode = shown.preset.mode;
+    q.level = scheduler_.showing(explore_.revision()) ? scheduler_.renderedLevel() : -1;
+    q.fullLevel = kFullLevel;
+    q.scale = scheduler_.fullScale() * options_.renderScale;
+    q.settledMs = scheduler_.settledAfterMs();
+    study_->noteViewQuality(q);
+  }
   const std::uint16_t onScreen = explore_.bare() ? explore_.shownLabel() : explore_.fieldLabel();
   recorder_.frameShown(!viewAvailable_ || scheduler_.showing(explore_.revision()), onScreen, end);
   recorder_.endFrame(ms, scheduler_.interacting());

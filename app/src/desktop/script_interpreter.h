@@ -129,6 +129,7 @@ class ScriptInterpreter {
   Outcome presetSave(Context&);
   Outcome studyStart(Context&);
   Outcome study(Context&);
+  Outcome studyRate(Context&);  // waits for the side on screen at full quality
   Outcome awaitStudyScreen(Context&);
   Outcome coordinatorOpen(Context&);
   Outcome coordinatorExport(Context&);
