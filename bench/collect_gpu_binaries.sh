@@ -13,7 +13,7 @@ targets="test_cuda test_wdt wdt_bench"
 # The list is read whole first: `grep -q` on the pipe would stop early and, under pipefail, a
 # ninja killed by SIGPIPE made a present target look absent.
 all_targets=$(ninja -C build-gpu -t targets all 2>/dev/null)
-for t in wdt_cuda_bench render_bench test_render; do
+for t in wdt_cuda_bench render_bench progressive_bench test_render; do
   if grep -q "^$t:" <<<"$all_targets"; then targets="$targets $t"; fi
 done
 ninja -C build-gpu -j2 $targets

@@ -31,6 +31,14 @@ rb() { ./render_bench --size 1920x1080 --volume 512 --hover-volume 256 --presets
 rb --frames 30 --warmup 5 --cycles 16 --compare-step 1 --images "$OUT"
 rb --frames 30 --warmup 5 --cycles 6 --step-voxels 1
 rb --frames 5 --warmup 1 --cycles 3 --ray-caster fragment
+# 4K (issue 19: ≥ 60 fps at 3840×2160) and progressive refinement to full quality (one frame on a GPU).
+rb --frames 20 --warmup 3 --cycles 3 --size 3840x2160
+if [ -x ./progressive_bench ]; then
+  for size in 1280x720 1920x1080 3840x2160; do
+    ./progressive_bench --volume 512 --size $size --budget 16 --views 4 --presets "$PWD/presets" >> "$OUT/progressive_bench.jsonl" 2>> "$OUT/progressive_bench.err"
+  done
+  cat "$OUT/progressive_bench.jsonl"
+fi
 tail -n 3 "$OUT/tests.log"
 grep -v hover_cycle "$OUT/render_bench.jsonl"
 true

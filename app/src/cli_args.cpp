@@ -8,7 +8,7 @@
 
 #include "core/strings.h"
 
-#include "db/database.h"
+#include "db/connection.h"
 
 namespace at::cli {
 

@@ -5,7 +5,7 @@
 #include "cli_args.h"
 #include "commands.h"
 #include "dataset_import.h"
-#include "db/database.h"
+#include "db/connection.h"
 
 namespace at::app {
 

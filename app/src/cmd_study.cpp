@@ -1,19 +1,16 @@
 // `anatomy-tutor study …`: preference studies in the terminal (the paper's survey design).
 //   study register FILE.json                   store (or update) a study definition
 //   study list                                 studies in the database
-//   study run STUDY --participant ID --group G [--answers FILE.jsonl]
+//   study run STUDY --participant ID --group G --answers FILE.jsonl
 //   study status STUDY                         participants and their completion
 //   study export STUDY --out DIR               the coordinator's files (CSV, JSON, Markdown, SVG, PNG)
 //   study merge STUDY SOURCE...                 participants of other machines' databases into --db
 // STUDY is a stored study id, a shipped study id (data/studies/<file>.json, registered on first
 // use) or a path to a study JSON file.
 #include <algorithm>
-#include <cctype>
-#include <chrono>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
-#include <iostream>
 #include <map>
 #include <optional>
 #include <string>
@@ -22,7 +19,7 @@
 
 #include "cli_args.h"
 #include "commands.h"
-#include "db/database.h"
+#include "db/connection.h"
 #include "db/study_store.h"
 #include "quiz/study_report.h"
 #include "render/preset.h"
@@ -33,12 +30,11 @@ namespace at::app {
 namespace {
 
 namespace fs = std::filesystem;
-using Clock = std::chrono::steady_clock;
 
 const char* kStudyHelp =
     "usage: anatomy-tutor study register FILE.json [--db PATH]\n"
     "       anatomy-tutor study list [--db PATH]\n"
-    "       anatomy-tutor study run STUDY --participant ID --group G [--answers FILE.jsonl] [--db PATH]\n"
+    "       anatomy-tutor study run STUDY --participant ID --group G --answers FILE.jsonl [--db PATH]\n"
     "       anatomy-tutor study status STUDY [--db PATH]\n"
     "       anatomy-tutor study export STUDY --out DIR [--db PATH]\n"
     "       anatomy-tutor study merge STUDY SOURCE... [--db PATH]\n"
@@ -49,13 +45,14 @@ const char* kStudyHelp =
     "run --answers: one JSON line per structure, in the order presented:\n"
     "  {\"ratings\": {\"shape\": 2, \"context\": 1, …}, \"view_ms_a\": 4000, \"view_ms_b\": 3500,\n"
     "   \"toggles\": 3, \"comment\": \"…\", \"response_ms\": 1200}   (ratings as shown: 1 = prefer A … 5 = prefer B)\n"
-    "Without --answers the study runs interactively on the terminal.\n"
+    "Participants run in the desktop app (Studies…): the terminal cannot show the two renderings.\n"
+    "Here --answers records answers collected elsewhere (required).\n"
     "merge: copies every participant of STUDY from the SOURCE databases (lab machines' files or\n"
     "  servers) into --db, all or nothing: the same id with other records is refused, merging again\n"
     "  changes nothing. It reports how the machines' counterbalancing rows add up; export the merged\n"
     "  study for the recomputed summary.\n";
 
-Result<db::Database> openDb(const cli::Args& args) { return db::openDatabase(args.db()); }
+Result<db::Connection> openDb(const cli::Args& args) { return db::openDatabase(args.db()); }
 
 int runRegister(const cli::Args& args) {
   if (args.positional().size() != 1) return reportError("study register: expected one study JSON file");
@@ -147,74 +144,20 @@ Result<TrialAnswer> parseAnswerLine(const std::string& line, int lineNumber, con
   return a;
 }
 
-// Interactive trial on the terminal: toggle between A and B (the time each is "on screen" is
-// counted), rate each item, optional comment. Returns nullopt at end of input (the participant
-// stopped).
-std::optional<TrialAnswer> askTrial(const quiz::StudyProtocol& protocol) {
-  TrialAnswer a;
-  char showing = 'A';
-  auto since = Clock::now();
-  auto account = [&] {
-    const double ms = std::chrono::duration<double, std::milli>(Clock::now() - since).count();
-    (showing == 'A' ? a.viewMsA : a.viewMsB) += ms;
-    since = Clock::now();
-  };
-  std::printf("  Now showing view A. Type 'a' or 'b' to switch views, Enter to start rating.\n");
-  std::string line;
-  while (true) {
-    std::printf("  [view %c] > ", showing);
-    std::fflush(stdout);
-    if (!std::getline(std::cin, line)) return std::nullopt;
-    if (line == "a" || line == "A" || line == "b" || line == "B") {
-      const char next = char(std::toupper(line[0]));
-      if (next != showing) {
-        account();
-        showing = next;
-        ++a.toggles;
-      }
-      continue;
-    }
-    if (line.empty()) break;
-    std::printf("  please type a, b or press Enter\n");
-  }
-  account();
-  const auto started = Clock::now();
-  for (const auto& item : protocol.items) {
-    while (true) {
-      std::printf("  %s\n  ", item.wording.c_str());
-      for (int v = protocol.scale.min; v <= protocol.scale.max; ++v) {
-        auto anchor = protocol.scale.anchors.find(v);
-        std::printf("%d%s%s  ", v, anchor == protocol.scale.anchors.end() ? "" : " = ",
-                    anchor == protocol.scale.anchors.end() ? "" : anchor->second.c_str());
-      }
-      std::printf("\n  rating> ");
-      std::fflush(stdout);
-      if (!std::getline(std::cin, line)) return std::nullopt;
-      try {
-        std::size_t used = 0;
-        const int v = std::stoi(line, &used);
-        if (used == line.size() && v >= protocol.scale.min && v <= protocol.scale.max) {
-          a.ratings[item.id] = v;
-          break;
-        }
-      } catch (const std::exception&) {
-      }
-      std::printf("  please type a whole number from %d to %d\n", protocol.scale.min, protocol.scale.max);
-    }
-  }
-  a.responseMs = std::chrono::duration<double, std::milli>(Clock::now() - started).count();
-  std::printf("  Comment (optional, Enter to skip): ");
-  std::fflush(stdout);
-  if (std::getline(std::cin, line)) a.comment = line;
-  return a;
-}
-
 int runRun(const cli::Args& args) {
   if (args.positional().size() != 1) return reportError("study run: expected STUDY (see --help)");
   const auto participant = args.value("participant");
   const auto group = args.value("group");
   if (!participant || participant->empty()) return reportError("study run: --participant ID is required");
   if (!group) return reportError("study run: --group G is required");
+  // A participant must see the two renderings to rate them; the terminal cannot show them, and
+  // viewing times of images nobody saw would be made up.
+  if (!args.has("answers"))
+    return reportError("study run: the terminal cannot show the renderings A and B: run participants in the desktop "
+                       "app (Studies…), or give --answers FILE.jsonl with answers collected elsewhere");
+  const std::string answersPath = args.valueOr("answers", "");
+  std::ifstream answersFile(answersPath);
+  if (!answersFile) return reportError(answersPath + ": cannot open the answers file");
   auto database = openDb(args);
   if (!database) return reportError(database.error().message);
   auto protocol = resolveStudy(*database, args.positional()[0]);
@@ -226,12 +169,6 @@ int runRun(const cli::Args& args) {
   auto state = db::enrolOrResume(*database, *protocol, *participant, *group);
   if (!state) return reportError(state.error().message);
 
-  std::ifstream answersFile;
-  const std::string answersPath = args.valueOr("answers", "");
-  if (!answersPath.empty()) {
-    answersFile.open(answersPath);
-    if (!answersFile) return reportError(answersPath + ": cannot open the answers file");
-  }
   int lineNumber = 0;
   // Participants see neither the study's id nor its title: both may name the conditions.
   std::printf("Preference study — participant %s (%s), session %d\n", participant->c_str(), group->c_str(),
@@ -244,22 +181,15 @@ int runRun(const cli::Args& args) {
     db::StudyTrial& trial = state->trials[*next];
     // Blinded: the structure and the conditions are not named to the participant.
     std::printf("\nStructure %d of %zu\n", trial.position + 1, state->trials.size());
-    std::optional<TrialAnswer> answer;
-    if (answersFile.is_open()) {
-      std::string line;
-      while (std::getline(answersFile, line)) {
-        ++lineNumber;
-        if (line.find_first_not_of(" \t\r") != std::string::npos) break;
-        line.clear();
-      }
-      if (line.empty()) break;  // answers ran out: the participant stopped here
-      auto parsed = parseAnswerLine(line, lineNumber, answersPath, *protocol);
-      if (!parsed) return reportError(parsed.error().message);
-      answer = *parsed;
-    } else {
-      answer = askTrial(*protocol);
-      if (!answer) break;
+    std::string line;
+    while (std::getline(answersFile, line)) {
+      ++lineNumber;
+      if (line.find_first_not_of(" \t\r") != std::string::npos) break;
+      line.clear();
     }
+    if (line.empty()) break;  // answers ran out: the participant stopped here
+    auto answer = parseAnswerLine(line, lineNumber, answersPath, *protocol);
+    if (!answer) return reportError(answer.error().message);
     for (const auto& item : protocol->items) {
       if (trial.ratedItems.count(item.id)) continue;
       const db::RatingRecord r = makeRating(*protocol, presets->at(protocol->presetFor(trial.structure, 0)),
@@ -307,14 +237,14 @@ int runExport(const cli::Args& args) {
 int runMerge(const cli::Args& args) {
   if (args.positional().size() < 2) return reportError("study merge: expected STUDY and one or more SOURCE databases");
   const std::string& studyId = args.positional()[0];
-  std::vector<db::Database> opened;
+  std::vector<db::Connection> opened;
   opened.reserve(args.positional().size() - 1);
   std::vector<db::StudyMergeSource> sources;
   for (std::size_t i = 1; i < args.positional().size(); ++i) {
     const std::string& location = args.positional()[i];
     db::OpenOptions options;
     options.create = false;  // a mistyped source must not become a new, empty database
-    auto source = db::Database::open(location, options);
+    auto source = db::openDatabase(location, options);
     if (!source) return reportError("study merge: " + source.error().message);
     opened.push_back(std::move(*source));
   }
@@ -323,7 +253,7 @@ int runMerge(const cli::Args& args) {
   if (!database) return reportError(database.error().message);
   for (const auto& source : opened)
     if (source.path() == database->path()) return reportError("study merge: " + source.path() + " is the --db database itself");
-  for (auto& source : opened) sources.push_back({source.path(), &source});
+  for (auto& source : opened) sources.push_back({source.path(), &source.get()});
   auto report = db::mergeStudy(*database, sources, studyId);
   if (!report) return reportError("study merge: " + report.error().message);
   for (const auto& from : report->sources)

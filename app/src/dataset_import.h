@@ -50,7 +50,7 @@ struct ImportedDataset {
 // alignment, checksums the files and registers the dataset in `database` in one transaction.
 // Errors are one line naming the file or field and the problem (a taken name is a Conflict, a
 // cancelled import Cancelled); nothing is stored then. May run on another thread than the
-// connection's other users (db/database.h).
+// connection's other users (db/connection.h).
 Result<ImportedDataset> importDataset(db::Database& database, const ImportRequest& request,
                                       const ImportControl& control = {});
 

@@ -48,12 +48,12 @@ Result<Dataset> openNamedDataset(const DatasetRequest& request) {
     files.id = fs::path(request.name).filename().string();
     return openDatasetFiles(files);
   }
-  std::optional<db::Database> opened;
+  std::optional<db::Connection> opened;
   db::Database* database = request.database;
   if (!database) {
     auto existing = db::openExistingDatabase(request.dbPath);
     if (!existing) return tl::unexpected(existing.error());
-    if (*existing) database = &opened.emplace(std::move(**existing));
+    if (*existing) database = &opened.emplace(std::move(**existing)).get();
   }
   std::vector<std::string> known;
   if (database) {

@@ -84,8 +84,8 @@ struct LearningSession::Repositories {
       : curriculum(database, builtinStructures()), progress(database), users(database) {}
 };
 
-LearningSession::LearningSession(db::Database database)
-    : database_(std::move(database)), repositories_(std::make_unique<Repositories>(database_)) {}
+LearningSession::LearningSession(db::Connection connection)
+    : connection_(std::move(connection)), repositories_(std::make_unique<Repositories>(connection_)) {}
 
 LearningSession::~LearningSession() = default;
 
@@ -132,7 +132,7 @@ Result<quiz::KeyComputer*> LearningSession::keysFor(const std::string& datasetId
   if (auto it = keys_.find(datasetId); it != keys_.end()) return it->second.get();
   auto list = structures(datasetId);
   if (!list) return tl::unexpected(list.error());
-  db::Database* database = &database_;
+  db::Database* database = &connection_.get();
   auto keys = std::make_unique<LazyKeyComputer>(std::move(*list), [database, datasetId]() -> Result<Dataset> {
     DatasetRequest request;
     request.name = datasetId;

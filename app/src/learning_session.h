@@ -17,7 +17,7 @@
 #include <vector>
 
 #include "core/error.h"
-#include "db/database.h"
+#include "db/connection.h"
 #include "lessons/lesson_engine.h"
 #include "lessons/repositories.h"
 #include "quiz/keys.h"
@@ -42,7 +42,7 @@ class LearningSession {
   LearningSession& operator=(const LearningSession&) = delete;
 
   // The connection, for the stores that take one (datasets, presets, studies).
-  db::Database& database() { return database_; }
+  db::Database& database() { return connection_; }
   lessons::CurriculumRepository& curriculum();
   lessons::ProgressRepository& progress();
   lessons::UserRepository& users();
@@ -63,8 +63,8 @@ class LearningSession {
 
  private:
   struct Repositories;
-  explicit LearningSession(db::Database database);
-  db::Database database_;
+  explicit LearningSession(db::Connection connection);
+  db::Connection connection_;
   std::unique_ptr<Repositories> repositories_;
   std::map<std::string, std::unique_ptr<quiz::KeyComputer>> keys_;  // by dataset id
 };

@@ -48,7 +48,7 @@ Result<quiz::StudyProtocol> resolveStudy(db::Database& database, const std::stri
       }
     }
   }
-  if (!loaded) return fail("no study '" + spec + "' (not stored in " + database.path() + ", not a file, not shipped)");
+  if (!loaded) return fail("no study '" + spec + "' (not stored in " + db::pathOf(database) + ", not a file, not shipped)");
   // A file naming a stored study id resolves to the stored one when unchanged; saveStudy refuses
   // design changes once participants exist.
   if (auto s = db::saveStudy(database, *loaded); !s) return tl::unexpected(s.error());

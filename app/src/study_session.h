@@ -10,7 +10,7 @@
 #include <string>
 #include <vector>
 
-#include "db/database.h"
+#include "db/connection.h"
 #include "db/study_store.h"
 #include "quiz/study_report.h"
 #include "render/preset.h"

@@ -7,23 +7,15 @@
 
 #include <nlohmann/json.hpp>
 
+#include "core/strings.h"
 #include "quiz/answer_json.h"
 
 namespace at::app {
 
 namespace {
 
-std::string lower(std::string s) {
-  for (char& c : s) c = char(std::tolower(static_cast<unsigned char>(c)));
-  return s;
-}
-
-std::string trim(const std::string& s) {
-  const auto b = s.find_first_not_of(" \t\r\n");
-  if (b == std::string::npos) return "";
-  const auto e = s.find_last_not_of(" \t\r\n");
-  return s.substr(b, e - b + 1);
-}
+using str::lower;
+using str::trim;
 
 // A pick on the question's picture (or at a point) as a locate answer.
 Result<quiz::Answer> pickAnswer(const PickInput& input, const AskedQuestion& q) {

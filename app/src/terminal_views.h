@@ -11,7 +11,7 @@
 #include <optional>
 #include <string>
 
-#include "db/database.h"
+#include "db/connection.h"
 #include "lessons/curriculum.h"
 #include "quiz/question.h"
 #include "render/gradient_volume.h"

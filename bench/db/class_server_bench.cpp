@@ -20,7 +20,7 @@
 #include <thread>
 #include <vector>
 
-#include "db/database.h"
+#include "db/connection.h"
 #include "db/study_store.h"
 #include "quiz/study_protocol.h"
 
@@ -59,7 +59,7 @@ struct ClientResult {
 ClientResult runClient(const std::string& location, const quiz::StudyProtocol& p, int client, int participants,
                        std::latch& start) {
   ClientResult out;
-  auto db = db::Database::open(location);
+  auto db = db::openDatabase(location);
   start.arrive_and_wait();
   if (!db) {
     out.error = db.error().message;
@@ -124,7 +124,7 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "class_server_bench: --db LOCATION is required\n");
     return 2;
   }
-  auto setup = db::Database::open(location);
+  auto setup = db::openDatabase(location);
   if (!setup) {
     std::fprintf(stderr, "class_server_bench: %s\n", setup.error().message.c_str());
     return 1;

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <set>
 
+#include "database.h"
 #include "db/exam_store.h"
 
 namespace at::db {

@@ -11,7 +11,7 @@
 #include <string_view>
 
 #include "core/error.h"
-#include "db/database.h"
+#include "database.h"
 
 namespace at::db::detail {
 

@@ -4,6 +4,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "database.h"
 #include "lessons/course_json.h"
 
 namespace at::db {

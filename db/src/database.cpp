@@ -1,5 +1,6 @@
-// Database, Statement and Transaction over the engines of backend.h; opening and migrating.
-#include "db/database.h"
+// Database, Statement and Transaction over the engines of backend.h; opening and migrating; the
+// public Connection that owns a Database.
+#include "database.h"
 
 #include <chrono>
 #include <cstdlib>
@@ -8,7 +9,7 @@
 #include <thread>
 
 #include "backend.h"
-#include "db/schema.h"
+#include "schema.h"
 
 namespace at::db {
 
@@ -247,16 +248,33 @@ Result<std::string> defaultDatabasePath() {
   return (base / "anatomy-tutor" / "anatomy-tutor.db").string();
 }
 
-Result<Database> openDatabase(const std::optional<std::string>& path, const OpenOptions& options) {
-  if (path && isPostgresUrl(*path)) return Database::open(*path, options);
-  std::string chosen;
-  if (path) {
-    chosen = *path;
-  } else {
-    auto def = defaultDatabasePath();
-    if (!def) return tl::unexpected(def.error());
-    chosen = *def;
-  }
+namespace {
+// `--db` when given, else the default database's path.
+Result<std::string> chosenLocation(const std::optional<std::string>& path) {
+  if (path) return *path;
+  return defaultDatabasePath();
+}
+
+Result<Connection> owned(Result<Database> database) {
+  if (!database) return tl::unexpected(database.error());
+  return Connection(std::make_unique<Database>(std::move(*database)));
+}
+}  // namespace
+
+Connection::Connection(std::unique_ptr<Database> database) : database_(std::move(database)) {}
+Connection::~Connection() = default;
+Connection::Connection(Connection&&) noexcept = default;
+Connection& Connection::operator=(Connection&&) noexcept = default;
+const std::string& Connection::path() const { return database_->path(); }
+Backend Connection::backend() const { return database_->backend(); }
+const std::string& pathOf(const Database& database) { return database.path(); }
+Backend backendOf(const Database& database) { return database.backend(); }
+
+Result<Connection> openDatabase(const std::optional<std::string>& path, const OpenOptions& options) {
+  if (path && isPostgresUrl(*path)) return owned(Database::open(*path, options));
+  auto location = chosenLocation(path);
+  if (!location) return tl::unexpected(location.error());
+  const std::string& chosen = *location;
   // The default database's folder is made on first use; a path given with --db must lie in a
   // folder that exists (a mistyped value must not leave folders named after it).
   const fs::path parent = fs::path(chosen).parent_path();
@@ -267,7 +285,19 @@ Result<Database> openDatabase(const std::optional<std::string>& path, const Open
   } else if (!parent.empty() && !fs::is_directory(parent, ec)) {
     return fail(ErrorKind::NotFound, chosen + ": the folder " + parent.string() + " does not exist");
   }
-  return Database::open(chosen, options);
+  return owned(Database::open(chosen, options));
+}
+
+Result<std::optional<Connection>> openExistingDatabase(const std::optional<std::string>& dbPath) {
+  auto path = chosenLocation(dbPath);
+  if (!path) return tl::unexpected(path.error());
+  std::error_code ec;
+  if (!isPostgresUrl(*path) && !fs::exists(*path, ec)) return std::optional<Connection>{};
+  OpenOptions options;
+  options.create = false;
+  auto connection = owned(Database::open(*path, options));
+  if (!connection) return tl::unexpected(connection.error());
+  return std::optional<Connection>(std::move(*connection));
 }
 
 }  // namespace at::db

@@ -4,6 +4,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include "database.h"
+
 namespace at::db {
 
 namespace {
@@ -177,24 +179,6 @@ DatasetFiles datasetFiles(const DatasetRecord& record) {
   files.namesPath = record.namesPath;
   files.id = record.name;
   return files;
-}
-
-Result<std::optional<Database>> openExistingDatabase(const std::optional<std::string>& dbPath) {
-  std::string path;
-  if (dbPath) {
-    path = *dbPath;
-  } else {
-    auto def = defaultDatabasePath();
-    if (!def) return tl::unexpected(def.error());
-    path = *def;
-  }
-  std::error_code ec;
-  if (!isPostgresUrl(path) && !std::filesystem::exists(path, ec)) return std::optional<Database>{};
-  OpenOptions options;
-  options.create = false;
-  auto db = Database::open(path, options);
-  if (!db) return tl::unexpected(db.error());
-  return std::optional<Database>(std::move(*db));
 }
 
 }  // namespace at::db

@@ -2,6 +2,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "database.h"
 #include "learner_model.h"
 #include "lessons/course_json.h"
 #include "quiz/answer_json.h"

@@ -4,7 +4,7 @@
 
 #include <cstdint>
 
-#include "db/database.h"
+#include "database.h"
 #include "lessons/repositories.h"
 
 namespace at::db {

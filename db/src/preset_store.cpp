@@ -1,5 +1,7 @@
 #include "db/preset_store.h"
 
+#include "database.h"
+
 namespace at::db {
 
 namespace {

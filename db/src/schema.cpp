@@ -4,7 +4,7 @@
 // come from the course JSON, so re-seeding upserts instead of duplicating); integer ids for rows
 // the program creates (datasets, users, attempts, responses); times as ISO-8601 UTC text;
 // JSON documents as TEXT. No pixel data and no patient identifiers are ever stored.
-#include "db/schema.h"
+#include "schema.h"
 
 #include <algorithm>
 #include <cassert>

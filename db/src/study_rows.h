@@ -3,7 +3,7 @@
 
 #include <string>
 
-#include "db/database.h"
+#include "database.h"
 #include "quiz/study_protocol.h"
 
 namespace at::db::detail {

@@ -4,6 +4,7 @@
 #include <cctype>
 #include <map>
 
+#include "database.h"
 #include "quiz/study_design.h"
 #include "study_rows.h"
 #include "utc_time.h"

@@ -176,10 +176,23 @@ TEST_CASE("StudyCli_MalformedAnswerLine_ReportsLineAndKeepsEarlierRatings") {
 TEST_CASE("StudyCli_BadArguments_OneLineErrors") {
   test::TempDir dir;
   const std::string db = " --db '" + (dir / "s.db").string() + "'";
-  auto noStudy = test::runApp("study run nonexistent_study --participant a --group medical" + db);
+  writeAnswers(dir / "a.jsonl", 13, [](int) { return 3; });
+  // The terminal shows no renderings: without answers from elsewhere nobody is enrolled.
+  auto noAnswers = test::runApp("study run wdt_vs_bare_phantom --participant a --group medical" + db, "a\nb\n\n1\n");
+  CHECK(noAnswers.exitCode == 1);
+  CHECK(noAnswers.err.find("cannot show the renderings") != std::string::npos);
+  CHECK(noAnswers.err.find("desktop") != std::string::npos);
+  CHECK_FALSE(fs::exists(dir / "s.db"));
+  auto missingAnswers = test::runApp("study run wdt_vs_bare_phantom --participant a --group medical --answers '" +
+                                     (dir / "none.jsonl").string() + "'" + db);
+  CHECK(missingAnswers.exitCode == 1);
+  CHECK(missingAnswers.err.find("none.jsonl") != std::string::npos);
+  CHECK_FALSE(fs::exists(dir / "s.db"));
+  const std::string answers = " --answers '" + (dir / "a.jsonl").string() + "'";
+  auto noStudy = test::runApp("study run nonexistent_study --participant a --group medical" + answers + db);
   CHECK(noStudy.exitCode != 0);
   CHECK(noStudy.err.find("nonexistent_study") != std::string::npos);
-  auto badGroup = test::runApp("study run wdt_vs_bare_phantom --participant a --group pilots" + db);
+  auto badGroup = test::runApp("study run wdt_vs_bare_phantom --participant a --group pilots" + answers + db);
   CHECK(badGroup.exitCode != 0);
   CHECK(badGroup.err.find("pilots") != std::string::npos);
   auto noOut = test::runApp("study export wdt_vs_bare_phantom" + db);

@@ -76,7 +76,7 @@ double chromaDistance(const std::array<double, 3>& a, const std::array<double, 3
 
 }  // namespace
 
-TEST_CASE("the desktop app's default view under Xvfb shows the volume") {
+TEST_CASE("the desktop app's default view under Xvfb shows the volume, an orientation marker and a scale bar") {
   if (!at::test::requireXvfb()) return;
   TempDir dir("desktop-default");
   const fs::path shot = dir / "default.png";
@@ -92,6 +92,29 @@ TEST_CASE("the desktop app's default view under Xvfb shows the volume") {
   CHECK(img->height == 480);
   // A fifth of the view at least is the rendered volume, not background.
   CHECK(litPixels(*img) > (800 - kPanel) * 480 / 5);
+  // The orientation marker in the view's bottom-left corner: at least two of its three axes
+  // (L/R red, P/A green, S/I blue; one may point at the viewer) in colours the volume does not have.
+  int axesSeen = 0;
+  for (int axis = 0; axis < 3; ++axis) {
+    int n = 0;
+    for (int y = 480 - 110; y < 480; ++y)
+      for (int x = kPanel; x < kPanel + 110; ++x) {
+        const std::uint8_t* p = img->pixel(x, y);
+        const int c = p[axis], o1 = p[(axis + 1) % 3], o2 = p[(axis + 2) % 3];
+        n += c > 150 && c > o1 + 50 && c > o2 + 50 && std::abs(o1 - o2) < 60;  // not the orange highlight
+      }
+    axesSeen += n >= 10;
+  }
+  CHECK(axesSeen >= 2);
+  // The scale bar in the bottom-right corner: a white horizontal line at least 15 pixels long.
+  int longestRun = 0;
+  for (int y = 480 - 40; y < 480; ++y)
+    for (int x = 800 - 160, run = 0; x < 800; ++x) {
+      const std::uint8_t* p = img->pixel(x, y);
+      run = (p[0] > 200 && p[1] > 200 && p[2] > 200) ? run + 1 : 0;
+      longestRun = std::max(longestRun, run);
+    }
+  CHECK(longestRun >= 15);
 }
 
 TEST_CASE("hovering a structure's projected centroid shows its highlight there, and bare mode drops the context") {

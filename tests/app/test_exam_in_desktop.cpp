@@ -12,7 +12,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "db/database.h"
+#include "database.h"  // db/'s private SQL wrapper (at_db_sql_for_tests)
 #include "headless_desktop.h"
 #include "test_support.h"
 

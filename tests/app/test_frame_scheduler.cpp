@@ -1,5 +1,6 @@
 // The frame scheduler and recorder without a window: which quality level each frame renders, when
-// the view rests, the frame budget at rest, and the report's numbers.
+// the view rests, the full level refined progressively at rest at a size that converges in time,
+// and the report's numbers.
 #include <doctest/doctest.h>
 
 #include "frame_scheduler.h"
@@ -24,61 +25,109 @@ TEST_CASE("FrameScheduler_FullLevel_IsTheViewAtTheRenderScale_WithShading") {
   CHECK_FALSE(coarse.shading);
 }
 
-TEST_CASE("FrameScheduler_WithoutACostModel_StartsCoarse_RefinesOneLevelPerRestedFrame_ThenStops") {
-  FrameScheduler s(1e9, 1);
+TEST_CASE("FrameScheduler_WithoutACostModel_StartsCoarse_ThenRefinesTheFullLevelProgressivelyAtRest") {
+  FrameScheduler s(100, 1);
   s.setViewPixels(400, 300);
-  auto p = s.plan(1, 1, atMs(0), false);
+  auto p = s.plan(1, 1, atMs(0));
   REQUIRE(p);
   CHECK(p->level == 0);
+  CHECK_FALSE(p->progressive);
   CHECK(s.interacting());
-  s.rendered(*p, 0);
-  CHECK_FALSE(s.plan(1, 1, atMs(100), false));  // not rested yet: the image stays
-  int level = 0;
-  for (int frame = 0; frame < 20 && !s.finished(1); ++frame) {
-    auto q = s.plan(1, 1, atMs(300 + frame), false);
-    if (!q) continue;
-    CHECK(q->level == level + 1);
-    level = q->level;
-    s.rendered(*q, 0);
-  }
-  CHECK(level == kFullLevel);
+  s.rendered(*p, 0);  // 20 × 16 pixels on screen
+  CHECK_FALSE(s.plan(1, 1, atMs(100)));  // not rested yet: the image stays
+  auto r = s.plan(1, 1, atMs(300));
+  REQUIRE(r);
+  CHECK(r->progressive);
+  CHECK(r->level == kFullLevel);
+  CHECK(r->shading);
+  CHECK(r->width == 400);  // no refine cost known yet: the view's resolution
+  CHECK(r->budgetMs == doctest::Approx(kRefineShareOfFrame * 100));
+  CHECK_FALSE(s.interacting());
+  CHECK(s.refining());
+
+  // Not shown before its coarsest lattice exists, nor while coarser than the image on screen.
+  RefineReport report;
+  report.fraction = 0.001;
+  report.imageMs = 0.12;  // 1e-3 ms per pixel: 120 ms for the whole image, well within kConvergeMs
+  CHECK_FALSE(s.refined(*r, report, atMs(310)));
+  auto again = s.plan(1, 1, atMs(320));
+  REQUIRE(again);
+  CHECK(again->width == 400);  // the measured cost converges in time: no restart at a smaller size
+  report.displayable = true;
+  report.stride = 8;  // 50 pixels across ≥ the 20 shown
+  report.fraction = 0.02;
+  CHECK(s.refined(*again, report, atMs(330)));
+  CHECK_FALSE(s.finished(1));
+  CHECK_FALSE(s.settledAfterMs());
+  report.complete = true;
+  report.stride = 1;
+  report.fraction = 1;
+  CHECK(s.refined(*again, report, atMs(450)));
   CHECK(s.finished(1));
-  CHECK_FALSE(s.plan(1, 1, atMs(1000), false));
+  REQUIRE(s.settledAfterMs());
+  CHECK(*s.settledAfterMs() == doctest::Approx(450));
+  CHECK_FALSE(s.plan(1, 1, atMs(1000)));
   // A new revision starts over; activity alone (a hover over the same structure) only delays.
-  CHECK(s.plan(2, 1, atMs(1001), false));
+  CHECK(s.plan(2, 1, atMs(1001)));
+}
+
+TEST_CASE("FrameScheduler_SlowFullLevel_RestartsSmallerOnce_SoThatTheImageConvergesInTime") {
+  FrameScheduler s(100, 1);
+  s.setViewPixels(1000, 1000);
+  auto p = s.plan(1, 1, atMs(0));
+  REQUIRE(p);
+  s.rendered(*p, 1);
+  auto r = s.plan(1, 1, atMs(300));
+  REQUIRE(r);
+  REQUIRE(r->width == 1000);
+  RefineReport report;
+  report.fraction = 0.006;
+  report.imageMs = 60;  // 0.01 ms per pixel: 10 s for the whole image
+  CHECK_FALSE(s.refined(*r, report, atMs(360)));
+  auto smaller = s.plan(1, 1, atMs(370));
+  REQUIRE(smaller);
+  // √(1400 / 10000) of the view per axis: 374 pixels, 1.4 s.
+  CHECK(smaller->width == 374);
+  CHECK(s.fullScale() == doctest::Approx(0.374).epsilon(0.01));
+  // The next rest starts at the measured size at once; asked for full quality, at the view's.
+  report.complete = true;
+  report.fraction = 1;
+  report.imageMs = 1400;  // as predicted
+  CHECK(s.refined(*smaller, report, atMs(2000)));
+  REQUIRE(s.plan(2, 2, atMs(2001)));
+  auto next = s.plan(2, 2, atMs(2300));
+  REQUIRE(next);
+  CHECK(next->width < 1000);
+  REQUIRE(s.plan(3, 3, atMs(3000)));
+  auto full = s.plan(3, 3, atMs(3300), true);
+  REQUIRE(full);
+  CHECK(full->width == 1000);
+  CHECK(full->budgetMs >= 1e6);
 }
 
 TEST_CASE("FrameScheduler_WithACostModel_PicksTheFinestLevelFittingTheInteractionBudget") {
-  FrameScheduler s(1e9, 1);
+  FrameScheduler s(100, 1);
   s.setViewPixels(1000, 1000);
   RenderPlan full = s.planFor(kFullLevel);
   s.rendered(full, 1000.0);  // 1e-3 ms per pixel: full level 1000 ms, level 3 (350², /1.5) ≈ 82 ms, level 2 20 ms
-  auto p = s.plan(5, 1, atMs(0), false);
+  auto p = s.plan(5, 1, atMs(0));
   REQUIRE(p);
   CHECK(p->level == 2);
   s.rendered(*p, 20);
-  // At rest: levels predicted under 150 ms are skipped over, so the next render is level 3 or finer.
-  auto q = s.plan(5, 1, atMs(400), false);
+  auto q = s.plan(5, 1, atMs(400));  // at rest: the full level, progressively
   REQUIRE(q);
-  CHECK(q->level >= 3);
-}
-
-TEST_CASE("FrameScheduler_FrameBudgetAtRest_CapsTheLevel_UnlessFullQualityIsAsked") {
-  FrameScheduler s(100, 1);
-  s.setViewPixels(1000, 1000);
-  s.rendered(s.planFor(kFullLevel), 1000.0);  // full level costs 1000 ms: over the 100 ms budget
-  auto p = s.plan(7, 1, atMs(0), false);
-  REQUIRE(p);
-  s.rendered(*p, 1e-3 * p->width * p->height / p->stepFactor);
-  for (int frame = 0; frame < 10; ++frame)
-    if (auto q = s.plan(7, 1, atMs(400 + frame), false)) s.rendered(*q, 1e-3 * q->width * q->height / q->stepFactor);
-  CHECK(s.finished(7));
-  CHECK(s.renderedLevel() < kFullLevel);
-  auto full = s.plan(7, 2, atMs(1000), true);  // the box ticked (activity) and rested
-  CHECK_FALSE(full);
-  full = s.plan(7, 2, atMs(1300), true);
-  REQUIRE(full);
-  CHECK(full->level > s.renderedLevel());
+  CHECK(q->progressive);
+  // A GPU: the full level fits the interaction budget and is rendered whole at once.
+  FrameScheduler fast(100, 1);
+  fast.setViewPixels(1000, 1000);
+  fast.rendered(fast.planFor(kFullLevel), 5.0);
+  auto f = fast.plan(1, 1, atMs(0));
+  REQUIRE(f);
+  CHECK(f->level == kFullLevel);
+  CHECK_FALSE(f->progressive);
+  fast.rendered(*f, 5.0);
+  CHECK(fast.finished(1));
+  CHECK_FALSE(fast.plan(1, 1, atMs(400)));
 }
 
 TEST_CASE("FrameRecorder_Report_CountsFramesLevelsUploadsAndHighlightLatency") {
@@ -91,6 +140,7 @@ TEST_CASE("FrameRecorder_Report_CountsFramesLevelsUploadsAndHighlightLatency") {
   r.beginFrame();
   r.noteUpload(4);
   r.noteRender(2, 30);
+  r.noteSettled(1500, 0.5);
   r.frameShown(true, 2, atMs(40));  // another structure on screen: still waiting
   r.endFrame(40, true);
   r.beginFrame();
@@ -108,6 +158,9 @@ TEST_CASE("FrameRecorder_Report_CountsFramesLevelsUploadsAndHighlightLatency") {
   CHECK(report["highlights"] == 1);
   CHECK(report["highlight_ms_max"].get<double>() == doctest::Approx(90));
   CHECK(report["moving_frames"] == 1);
+  CHECK(report["settles"] == 1);
+  CHECK(report["settle_ms_max"].get<double>() == doctest::Approx(1500));
+  CHECK(report["full_scale_min"].get<double>() == doctest::Approx(0.5));
   CHECK(report["window"] == "800x480");
   CHECK(percentile({1, 2, 3, 4}, 50) == doctest::Approx(2.5));
 }

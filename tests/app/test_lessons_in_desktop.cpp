@@ -14,7 +14,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "db/database.h"
+#include "database.h"  // db/'s private SQL wrapper (at_db_sql_for_tests)
 #include "db/sqlite_repositories.h"
 #include "headless_desktop.h"
 #include "lessons/course_json.h"

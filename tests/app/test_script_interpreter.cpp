@@ -111,8 +111,32 @@ TEST_CASE("ScriptInterpreter_HoverSweep_RecordsAndReportsEveryVisibleStructure")
   const auto hovered = eventsOf(r, "hover_structure");
   CHECK(hovered.size() == 16);  // every structure of the phantom, visible or not
   CHECK(report["frames"].get<int>() > 10);
-  CHECK(report["highlights"].get<int>() > 0);
   CHECK(report["window"] == "headless");
+  // (How many of the sweep's hovers get their field on screen within the dwell depends on the
+  // machine's load; the recorder's highlight count is checked below without timing.)
+}
+
+TEST_CASE("ScriptInterpreter_Report_CountsAHighlightOnceTheHoveredFieldIsShown") {
+  test::TempDir dir("script-highlight");
+  // The view of the ViewActions test, where hovering the temporal line picks it.
+  const json actions = {{{"do", "select"}, {"structure", "vestibule"}},
+                        {{"do", "view"}, {"value", "lateral_right"}},
+                        {{"do", "zoom"}, {"factor", 0.45}},
+                        {{"do", "wait_field"}},
+                        {{"do", "record"}, {"on", true}},
+                        {{"do", "hover_structure"}, {"structure", "temporal_line"}},
+                        {{"do", "wait_field"}},
+                        {{"do", "report"}}};
+  const auto r = run(dir, actions);
+  INFO(r.messages);
+  REQUIRE(r.exitCode == 0);
+  const auto hovers = eventsOf(r, "hover");
+  REQUIRE(!hovers.empty());
+  REQUIRE(hovers.back()["structure"] == "temporal_line");
+  const auto reports = eventsOf(r, "report");
+  REQUIRE(reports.size() == 1);
+  CHECK(reports[0]["highlights"] == 1);
+  CHECK(reports[0]["highlight_ms_max"].get<double>() > 0);
 }
 
 TEST_CASE("ScriptInterpreter_ActionNames_AreTheDocumentedOnes") {

@@ -13,9 +13,9 @@
 
 #include "db/checksum.h"
 #include "db/course_store.h"
-#include "db/database.h"
+#include "database.h"  // db/'s private SQL wrapper (at_db_sql_for_tests)
 #include "db/dataset_store.h"
-#include "db/schema.h"
+#include "schema.h"
 #include "lessons/course_json.h"
 #include "lessons/lesson_engine.h"
 #include "lessons/scheduling.h"

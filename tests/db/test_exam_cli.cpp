@@ -5,7 +5,7 @@
 #include <filesystem>
 #include <fstream>
 
-#include "db/database.h"
+#include "database.h"  // db/'s private SQL wrapper (at_db_sql_for_tests)
 #include "test_databases.h"
 #include "test_support.h"
 #include "volume/dataset_source.h"

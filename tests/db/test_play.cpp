@@ -15,7 +15,7 @@
 #include <unistd.h>
 
 #include "db/course_store.h"
-#include "db/database.h"
+#include "database.h"  // db/'s private SQL wrapper (at_db_sql_for_tests)
 #include "lessons/course_json.h"
 #include "quiz/answer_json.h"
 #include "quiz/keys.h"

@@ -1,6 +1,6 @@
 #include <doctest/doctest.h>
 
-#include "db/database.h"
+#include "database.h"  // db/'s private SQL wrapper (at_db_sql_for_tests)
 #include "db/preset_store.h"
 #include "test_databases.h"
 #include "test_support.h"

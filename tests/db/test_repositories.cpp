@@ -7,7 +7,7 @@
 #include <thread>
 
 #include "db/course_store.h"
-#include "db/database.h"
+#include "database.h"  // db/'s private SQL wrapper (at_db_sql_for_tests)
 #include "db/exam_store.h"
 #include "db/sqlite_repositories.h"
 #include "lessons/course_json.h"

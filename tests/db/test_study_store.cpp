@@ -8,7 +8,7 @@
 #include <sstream>
 #include <thread>
 
-#include "db/database.h"
+#include "database.h"  // db/'s private SQL wrapper (at_db_sql_for_tests)
 #include "db/study_store.h"
 #include "quiz/study_design.h"
 #include "quiz/study_protocol.h"

@@ -185,3 +185,62 @@ TEST_CASE("A field uploaded slice by slice keeps the old field on screen until i
   REQUIRE(back);
   CHECK(maxChannelDiff(*back, *before) == 0);
 }
+
+TEST_CASE("Progressive refinement casts a bounded chunk per call, shows nothing before its coarsest lattice, and converges to render()'s image") {
+  auto* gl = test::glRenderer();
+  if (!gl) return;
+  std::mt19937_64 rng(test::freshSeed("gl_progressive"));
+  const RandomScene scene = randomScene(rng);
+  REQUIRE(gl->setVolume(scene.volume, scene.labels));
+  REQUIRE(gl->setField(scene.field));
+  gl->setSelected(7);
+  RenderSettings s;
+  s.width = 130;  // the coarsest lattice (stride 8) is 17 × 13 points: 6 tiles of 8 × 8
+  s.height = 100;
+  s.preset.mode = RenderMode::Wdt;
+  s.preset.t = 0.5f;
+  s.camera = Camera::named(NamedView::Anterior, {0, 0, 0}, 12);
+  s.camera.orbit(std::uniform_real_distribution<double>(-180, 180)(rng), 10);
+  auto whole = gl->render(s);
+  REQUIRE(whole);
+
+  // A zero budget: each call casts one tile (64 rays), the least a call does.
+  auto first = gl->refine(s, 0.0);
+  REQUIRE(first);
+  CHECK(first->restarted);
+  CHECK_FALSE(first->displayable);
+  CHECK_FALSE(first->complete);
+  CHECK(gl->display().handle == 0);
+  CHECK(first->fraction == doctest::Approx(64.0 / (130.0 * 100.0)));
+  int calls = 1, coarsestAfter = 0;
+  double fraction = first->fraction;
+  Result<gl::RefineProgress> p = first;
+  while (!p->complete && calls < 100000) {
+    p = gl->refine(s, 0.0);
+    REQUIRE(p);
+    ++calls;
+    CHECK_FALSE(p->restarted);
+    CHECK(p->fraction >= fraction);
+    fraction = p->fraction;
+    if (p->displayable && !coarsestAfter) {
+      coarsestAfter = calls;
+      CHECK(gl->display().handle != 0);
+    }
+  }
+  REQUIRE(p->complete);
+  CHECK(coarsestAfter == 6);
+  CHECK(calls >= (130 * 100) / 64);  // every call cast at most one tile
+  auto shown = gl->readDisplay();
+  REQUIRE(shown);
+  std::size_t drawn = 0;
+  for (std::size_t i = 3; i < whole->rgba.size(); i += 4) drawn += whole->rgba[i] > 0;
+  CHECK(drawn > 0);
+  CHECK(maxChannelDiff(*whole, *shown) <= 1);
+
+  // Another view starts a new image; a generous budget completes it in one call.
+  s.camera.orbit(30, 0);
+  auto again = gl->refine(s, 1e9);
+  REQUIRE(again);
+  CHECK(again->restarted);
+  CHECK(again->complete);
+}

@@ -236,6 +236,7 @@ TEST_CASE("WDT_RaysThroughSoftTissueOrFluidThatMeetNoBone_StayClear") {
     const Preset wdt = shipped("sigmoid_sinus_wdt");
     check(ds, s->label, wdt, framed(wdt, *frame, "posterior", 4.0), 300);
   }
+#if defined(AT_TEST_HAVE_DATASET_FILES)
   SUBCASE("the abdominal CT with its derived preset: the body is no fog cylinder") {
     if (!test::requireSharedData("totalsegmentator/ct_small.nii.gz")) return;
     const auto dir = test::sharedDataDir() / "totalsegmentator";
@@ -252,6 +253,7 @@ TEST_CASE("WDT_RaysThroughSoftTissueOrFluidThatMeetNoBone_StayClear") {
     const Preset wdt = derivedPreset(summariseIntensities(ds->volume), RenderMode::Wdt, s->id);
     check(*ds, s->label, wdt, framed(wdt, *frame, "anterior", 3.0), 150);
   }
+#endif
 }
 
 TEST_CASE("WDT_AndNonWeightedCochlea_DifferWhereThePaperSays") {

@@ -11,7 +11,7 @@
 #include <set>
 #include <string>
 
-#include "db/database.h"
+#include "database.h"  // db/'s private SQL wrapper (at_db_sql_for_tests)
 #include "test_support.h"
 
 namespace at::test {

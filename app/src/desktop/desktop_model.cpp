@@ -249,11 +249,6 @@ void DesktopModel::expertEdited() {
                              expert_->revision());
 }
 
-void DesktopModel::setFullAtRest(bool on) {
-  fullAtRest_ = on;
-  explore_.noteActivity();
-}
-
 std::optional<std::array<double, 2>> DesktopModel::projectStructure(std::uint16_t label) const {
   const render::StructureFrame* frame = explore_.frameOf(label);
   if (!frame) return std::nullopt;
@@ -333,6 +328,7 @@ void DesktopModel::syncStudyView() {
 
 void DesktopModel::beginFrame(FieldTarget* target) {
   recorder_.beginFrame();
+  frameRenderMs_ = 0;
   syncStudyView();
   lessons_->poll();
   exams_->poll();
@@ -349,8 +345,8 @@ void DesktopModel::beginFrame(FieldTarget* target) {
 }
 
 std::optional<RenderPlan> DesktopModel::planFrame(Clock::time_point now) {
-  // Scripted screenshots outside a measured sweep render full quality at rest.
-  const bool full = fullAtRest_ || (options_.scripted && !recorder_.recording());
+  // Scripted screenshots outside a measured sweep render full quality at the render scale.
+  const bool full = options_.scripted && !recorder_.recording();
   return scheduler_.plan(explore_.revision(), explore_.activity(), now, full);
 }
 
@@ -374,6 +370,15 @@ render::RenderSettings DesktopModel::renderSettings(const RenderPlan& plan) cons
 void DesktopModel::rendered(const RenderPlan& plan, double ms) {
   scheduler_.rendered(plan, ms);
   recorder_.noteRender(plan.level, ms);
+  frameRenderMs_ += ms;
+}
+
+bool DesktopModel::refined(const RenderPlan& plan, const RefineReport& report, double ms, Clock::time_point now) {
+  recorder_.noteRefine(ms);
+  frameRenderMs_ += ms;
+  const bool show = scheduler_.refined(plan, report, now);
+  if (report.complete && scheduler_.settledAfterMs()) recorder_.noteSettled(*scheduler_.settledAfterMs(), double(plan.width) / std::max(1, layout_.viewPixelsW()));
+  return show;
 }
 
 void DesktopModel::renderFailed(const std::string& why) {
@@ -385,6 +390,7 @@ void DesktopModel::endFrame(Clock::time_point end, double ms) {
   const std::uint16_t onScreen = explore_.bare() ? explore_.shownLabel() : explore_.fieldLabel();
   recorder_.frameShown(!viewAvailable_ || scheduler_.showing(explore_.revision()), onScreen, end);
   recorder_.endFrame(ms, scheduler_.interacting());
+  scheduler_.frameTook(ms, frameRenderMs_);
 }
 
 bool DesktopModel::settled() const {

@@ -113,8 +113,6 @@ class DesktopModel {
   void setExpert(bool on);           // opens the expert panel on the view's preset, or closes it
   void expertEdited();               // the expert's preset changed: the view follows it
   bool expertOn() const { return expert_->active(); }
-  void setFullAtRest(bool on);
-  bool fullAtRest() const { return fullAtRest_; }
   bool cancelFineField() { return fields_->cancelFineField(); }
   // Where a structure's centroid appears in the window (nullopt: outside the view).
   std::optional<std::array<double, 2>> projectStructure(std::uint16_t label) const;
@@ -160,10 +158,13 @@ class DesktopModel {
   std::optional<RenderPlan> planFrame(Clock::time_point now);
   render::RenderSettings renderSettings(const RenderPlan& plan) const;
   void rendered(const RenderPlan& plan, double ms);
+  // A progressive plan's refine call took `ms` and left the image as `report` says; whether the
+  // view is to show the refined image now.
+  bool refined(const RenderPlan& plan, const RefineReport& report, double ms, Clock::time_point now);
   void renderFailed(const std::string& why);
   // End of a frame that took `ms` (for the recorder and the highlight latency).
   void endFrame(Clock::time_point end, double ms);
-  // The image is final (full quality, or the budget's cap) and shows the field the view needs.
+  // The image is final (full quality) and shows the field the view needs.
   bool settled() const;
   // Nothing changes until the user acts (the loop may wait for input).
   bool idle() const;
@@ -198,6 +199,7 @@ class DesktopModel {
   ExploreState explore_;
   std::unique_ptr<FieldView> fields_;
   FrameScheduler scheduler_;
+  double frameRenderMs_ = 0;  // rendering in this frame
   FrameRecorder recorder_;
   std::unique_ptr<TfEditor> expert_;
   std::unique_ptr<LessonController> lessons_;
@@ -214,7 +216,6 @@ class DesktopModel {
   std::unique_ptr<CourseEditor> courses_;
   ViewLayout layout_;
   bool viewAvailable_ = false;
-  bool fullAtRest_ = false;
   std::optional<Vec3> lastPickMm_;  // where the last hover pick met the volume (LPS mm)
 };
 

@@ -40,21 +40,35 @@ RenderPlan FrameScheduler::planFor(int level) const {
   return p;
 }
 
+RenderPlan FrameScheduler::fullPlan(double scale) const {
+  RenderPlan p = planFor(kFullLevel);
+  p.width = std::max(16, int(std::lround(viewW_ * renderScale_ * scale)));
+  p.height = std::max(16, int(std::lround(viewH_ * renderScale_ * scale)));
+  return p;
+}
+
 double FrameScheduler::costMs(int level) const {
   const RenderPlan p = planFor(level);
   return msPerUnit_ * double(p.width) * double(p.height) / p.stepFactor;
 }
 
+double FrameScheduler::scaleForConvergence() const {
+  if (!(msPerFullPixel_ > 0)) return 1;
+  const RenderPlan full = planFor(kFullLevel);
+  const double ms = msPerFullPixel_ * double(full.width) * double(full.height);
+  return std::clamp(std::sqrt(kConvergeMs / ms), kMinFullScale, 1.0);
+}
+
 std::optional<RenderPlan> FrameScheduler::plan(std::uint64_t revision, std::uint64_t activity, Clock::time_point now,
-                                               bool fullAtRest) {
+                                               bool fullQuality) {
   if (activity != lastActivity_) {
     lastActivity_ = activity;
     lastChange_ = now;
   }
   if (!showing(revision)) {
-    // Something changed: start at the finest level whose predicted cost fits the interaction
-    // budget. A change that is not an interaction (a field arriving, a script action) after a
-    // rest still starts coarse and is refined over the next frames.
+    // Something changed: the finest whole-image level whose predicted cost fits the interaction
+    // budget (the coarsest before anything was measured). A change that is not an interaction (a
+    // field arriving, a script action) is handled alike and refined once the view rests.
     int level = 0;
     if (msPerUnit_ > 0)
       for (int l = kFullLevel; l >= 0; --l)
@@ -66,34 +80,85 @@ std::optional<RenderPlan> FrameScheduler::plan(std::uint64_t revision, std::uint
     lastChange_ = now;
     renderedRevision_ = revision;
     renderedLevel_ = level - 1;
-  } else if (renderedLevel_ >= kFullLevel || msBetween(lastChange_, now) < kRestAfterMs) {
-    interacting_ = renderedLevel_ < kFullLevel && msBetween(lastChange_, now) < kRestAfterMs;
-    return std::nullopt;  // nothing new to show, or the user is still moving: keep the image
-  } else {
-    interacting_ = false;
-    if (!fullAtRest && msPerUnit_ > 0 && costMs(renderedLevel_ + 1) > frameBudgetMs_) {
-      restCapped_ = true;
-      return std::nullopt;
-    }
+    refining_ = false;
+    refinedFraction_ = 0;
+    settledAfterMs_.reset();
+    return planFor(level);
   }
-  restCapped_ = false;
-  int level = std::min(kFullLevel, renderedLevel_ + 1);
-  if (!interacting_ && msPerUnit_ > 0)  // at rest: skip levels that would be cheap but still coarse
-    while (level < kFullLevel && costMs(level + 1) <= kRefineBudgetMs) ++level;
-  return planFor(level);
+  if (renderedLevel_ >= kFullLevel) {
+    interacting_ = false;
+    return std::nullopt;  // at full quality: nothing new to show
+  }
+  if (msBetween(lastChange_, now) < kRestAfterMs) {
+    interacting_ = true;
+    return std::nullopt;  // the user is still moving: keep the image
+  }
+  interacting_ = false;
+  if (!refining_) {
+    refining_ = true;
+    fullScale_ = fullQuality ? 1.0 : scaleForConvergence();
+    restarts_ = fullQuality ? 2 : 0;
+  }
+  RenderPlan p = fullPlan(fullScale_);
+  p.progressive = true;
+  p.budgetMs = fullQuality ? 1e9 : refineBudgetMs();
+  return p;
 }
 
 void FrameScheduler::rendered(const RenderPlan& plan, double ms) {
   const double units = double(plan.width) * double(plan.height) / plan.stepFactor;
   msPerUnit_ = msPerUnit_ > 0 ? 0.7 * msPerUnit_ + 0.3 * ms / units : ms / units;
   renderedLevel_ = plan.level;
+  shownWidth_ = plan.width;
+  if (plan.level >= kFullLevel) settledAfterMs_ = 0;  // the whole full level at once (a GPU)
+}
+
+bool FrameScheduler::refined(const RenderPlan& plan, const RefineReport& r, Clock::time_point now) {
+  const double pixels = double(plan.width) * double(plan.height);
+  if (r.fraction > 0 && r.imageMs > 0) msPerFullPixel_ = r.imageMs / (r.fraction * pixels);
+  refinedFraction_ = r.complete ? 1.0 : r.fraction;
+  if (plan.budgetMs > 0 && plan.budgetMs < 1e6) {
+    const double over = std::max(1.0, r.callMs / plan.budgetMs);
+    overshoot_ = 0.8 * overshoot_ + 0.2 * over;
+  }
+  if (restarts_ < 2 && !r.complete && r.fraction < 0.3 && msPerFullPixel_ > 0) {
+    // Early in the image, at the cost measured on it: an image that would take far longer than
+    // kConvergeMs starts over smaller (losing the rays cast so far, at most twice per rest).
+    const double scale = scaleForConvergence();
+    if (scale < 0.8 * fullScale_) {
+      fullScale_ = scale;
+      refinedFraction_ = 0;
+      ++restarts_;
+      return false;
+    }
+  }
+  if (r.complete) {
+    renderedLevel_ = kFullLevel;
+    shownWidth_ = plan.width;
+    settledAfterMs_ = msBetween(lastChange_, now);
+    return true;
+  }
+  const int sharpness = r.displayable ? (plan.width + r.stride - 1) / r.stride : 0;
+  if (!r.displayable || sharpness < shownWidth_) return false;
+  shownWidth_ = sharpness;
+  return true;
+}
+
+void FrameScheduler::frameTook(double frameMs, double renderMs) {
+  const double other = std::max(0.0, frameMs - renderMs);
+  otherMs_ = otherMs_ > 0 ? 0.8 * otherMs_ + 0.2 * other : other;
+}
+
+double FrameScheduler::refineBudgetMs() const {
+  // Calls overrun what they are given by a measured factor (chunks are whole tiles, and a loaded
+  // machine stretches them): ask for that much less.
+  return std::clamp((0.85 * frameBudgetMs_ - otherMs_) / overshoot_, 0.1 * frameBudgetMs_,
+                    kRefineShareOfFrame * frameBudgetMs_);
 }
 
 void FrameScheduler::failed() { renderedLevel_ = kFullLevel; }
 
-bool FrameScheduler::finished(std::uint64_t revision) const {
-  return showing(revision) && (renderedLevel_ >= kFullLevel || restCapped_);
-}
+bool FrameScheduler::finished(std::uint64_t revision) const { return showing(revision) && renderedLevel_ >= kFullLevel; }
 
 // ---------------------------------------------------------------------------------------------
 // FrameRecorder
@@ -102,6 +167,8 @@ void FrameRecorder::start() {
   recording_ = true;
   frames_.clear();
   latencies_.clear();
+  settles_.clear();
+  settleScales_.clear();
 }
 
 void FrameRecorder::beginFrame() {
@@ -117,6 +184,19 @@ void FrameRecorder::noteRender(int level, double ms) {
   if (!inFrame_ || frames_.empty()) return;
   frames_.back().level = level;
   frames_.back().renderMs = ms;
+}
+
+void FrameRecorder::noteRefine(double ms) {
+  if (!inFrame_ || frames_.empty()) return;
+  frames_.back().level = kFullLevel;
+  frames_.back().renderMs = ms;
+  frames_.back().refine = true;
+}
+
+void FrameRecorder::noteSettled(double ms, double scale) {
+  if (!recording_) return;
+  settles_.push_back(ms);
+  settleScales_.push_back(scale);
 }
 
 void FrameRecorder::endFrame(double ms, bool interacting) {
@@ -135,18 +215,20 @@ void FrameRecorder::frameShown(bool current, std::uint16_t label, Clock::time_po
 json FrameRecorder::report(const Context& context) const {
   std::vector<double> all, moving, rest, uploads, renders;
   std::map<int, int> perLevel;
-  int overBudget = 0;
+  int overBudget = 0, refines = 0;
   for (const Frame& f : frames_) {
     if (f.uploadMs > 0) uploads.push_back(f.uploadMs);
     if (f.level >= 0) renders.push_back(f.renderMs);
     if (f.ms > context.frameBudgetMs) ++overBudget;
     all.push_back(f.ms);
     (f.interacting ? moving : rest).push_back(f.ms);
-    perLevel[f.level]++;
+    if (f.refine) ++refines;
+    else perLevel[f.level]++;
   }
   const auto maxOf = [](const std::vector<double>& v) { return v.empty() ? 0.0 : *std::max_element(v.begin(), v.end()); };
   json levels = json::object();
   for (const auto& [l, n] : perLevel) levels[l < 0 ? "reused" : std::to_string(l)] = n;
+  if (refines) levels["refine"] = refines;
   return {{"event", "report"},
           {"frames", all.size()},
           {"frame_ms_p50", percentile(all, 50)},
@@ -164,6 +246,10 @@ json FrameRecorder::report(const Context& context) const {
           {"renders", renders.size()},
           {"render_ms_p50", percentile(renders, 50)},
           {"render_ms_max", maxOf(renders)},
+          {"settles", settles_.size()},
+          {"settle_ms_p50", percentile(settles_, 50)},
+          {"settle_ms_max", maxOf(settles_)},
+          {"full_scale_min", settleScales_.empty() ? 0.0 : *std::min_element(settleScales_.begin(), settleScales_.end())},
           {"highlights", latencies_.size()},
           {"highlight_ms_p50", percentile(latencies_, 50)},
           {"highlight_ms_p99", percentile(latencies_, 99)},

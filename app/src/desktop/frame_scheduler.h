@@ -2,12 +2,18 @@
 // frame, and the measurements a `report` prints.
 //
 // While the view changes (its revision moves, or the user acts: `activity`), the volume is
-// rendered into a smaller target with longer steps — the finest level whose predicted cost fits
-// the interaction budget. Once nothing has changed for kRestAfterMs, each frame renders one level
-// finer (skipping levels predicted cheaper than kRefineBudgetMs), up to full resolution or, unless
-// full quality is asked for, to the finest level predicted to fit the frame budget. An unchanged
-// view is not rendered again. The cost model is one number: measured milliseconds per
-// (pixel / step factor), an exponential moving average over the renders.
+// rendered whole into a smaller target with longer steps and no shading — the finest level whose
+// predicted cost fits the interaction budget (on a fast GPU that is the full level itself). Once
+// nothing has changed for kRestAfterMs, the full level (shading, jitter, the base step) is cast
+// progressively (render/gl VolumeRenderer::refine): each frame casts the rays that fit in what
+// the frame budget leaves besides the frame's other work (at most kRefineShareOfFrame), and the view shows the refined image as soon as it is at least as sharp
+// as the one on screen, until it is complete. The full level's resolution is the view's times
+// the render scale times a factor chosen when the rest begins, from the measured cost per ray of
+// the full level, so that the image converges within kConvergeMs of casting (slow software GL:
+// fewer, upsampled pixels; a GPU: the view's resolution). Asked for full quality (scripted
+// screenshots), the factor is 1 and one frame casts the whole image. An unchanged view is not
+// rendered again. The interaction cost model is one number: measured milliseconds per
+// (pixel / step factor), an exponential moving average over the whole-image renders.
 #pragma once
 
 #include <chrono>
@@ -33,54 +39,97 @@ struct QualityLevel {
 inline constexpr QualityLevel kQualityLevels[] = {{0.05, 4.0}, {0.1, 3.0}, {0.2, 2.0}, {0.35, 1.5}, {0.6, 1.0}, {1.0, 1.0}};
 inline constexpr int kFullLevel = 5;
 inline constexpr double kInteractionBudgetMs = 55;  // predicted render cost allowed while the user moves
-inline constexpr double kRefineBudgetMs = 150;      // at rest, levels predicted this cheap are skipped over
 inline constexpr double kRestAfterMs = 250;         // no change for this long = the user rests
+// Casting time the full level may take at rest: with the rest delay and the frames' UI share, the
+// view is at full quality about 2 s after the last change.
+inline constexpr double kConvergeMs = 1400;
+inline constexpr double kRefineShareOfFrame = 0.6;  // of the frame budget, at most, per frame at rest
+inline constexpr double kMinFullScale = 0.25;       // the full level never drops below this share of the view
 
 // The image to render this frame.
 struct RenderPlan {
   int level = kFullLevel;
   int width = 0, height = 0;  // pixels of the volume image
   double stepFactor = 1;      // times the volume's base step
-  bool shading = true;        // gradients cost six fetches per sample: only at full quality
+  bool shading = true;        // only at full quality
   bool jitter = true;
+  bool progressive = false;   // cast with VolumeRenderer::refine, `budgetMs` this frame
+  double budgetMs = 0;
+};
+
+// Where a progressive image stands after a frame's refine call (render/gl's RefineProgress).
+struct RefineReport {
+  bool complete = false;
+  bool displayable = false;  // its coarsest lattice is complete
+  int stride = 8;            // of its finest complete lattice (1 when complete)
+  double fraction = 0;       // of its pixels cast
+  double imageMs = 0;        // casting time spent on it so far
+  double callMs = 0;         // this call's
 };
 
 class FrameScheduler {
  public:
-  // `frameBudgetMs`: at rest, finer levels predicted to cost more are not rendered (unless full
-  // quality is asked for). `renderScale`: resolution of the full level relative to the view.
+  // `frameBudgetMs`: a frame at rest casts rays for kRefineShareOfFrame of it. `renderScale`:
+  // the largest resolution of the full level relative to the view.
   FrameScheduler(double frameBudgetMs, double renderScale);
 
   // The view's size in framebuffer pixels (the window minus the left panel).
   void setViewPixels(int width, int height);
+  // A level's image at the render scale (the full level: at the largest resolution).
   RenderPlan planFor(int level) const;
 
   // This frame's decision for the view at `revision`; nullopt keeps the image on screen.
   // `activity` changes whenever the user acts (hover, drag, …) even if the image does not;
-  // `fullAtRest` lifts the frame budget at rest (the checkbox; scripted screenshots).
-  std::optional<RenderPlan> plan(std::uint64_t revision, std::uint64_t activity, Clock::time_point now, bool fullAtRest);
-  // The plan was rendered in `ms`, or failed (then the view is not rendered again until it changes).
+  // `fullQuality`: the full level at the render scale, cast in one frame (scripted screenshots).
+  std::optional<RenderPlan> plan(std::uint64_t revision, std::uint64_t activity, Clock::time_point now,
+                                 bool fullQuality = false);
+  // A whole-image plan was rendered in `ms`, or a plan failed (then the view is not rendered
+  // again until it changes).
   void rendered(const RenderPlan& plan, double ms);
   void failed();
+  // A progressive plan's refine call ended as `report` says, at `now`. Returns whether the view
+  // is to show the refined image now (it is complete, or at least as sharp as the image shown).
+  bool refined(const RenderPlan& plan, const RefineReport& report, Clock::time_point now);
+  // A frame took `frameMs`, `renderMs` of it rendering: the rest (UI, field uploads, swap) is
+  // what a refine call must leave room for.
+  void frameTook(double frameMs, double renderMs);
+  double refineBudgetMs() const;
 
-  // The image on screen shows `revision` at its final quality (full, or the budget's cap).
+  // The image on screen shows `revision` at full quality.
   bool finished(std::uint64_t revision) const;
   bool showing(std::uint64_t revision) const { return renderedRevision_ && *renderedRevision_ == revision; }
   int renderedLevel() const { return renderedLevel_; }
   bool interacting() const { return interacting_; }
+  bool refining() const { return refining_ && renderedLevel_ < kFullLevel; }
+  double refinedFraction() const { return refinedFraction_; }
   double msPerUnit() const { return msPerUnit_; }
+  // The full level's resolution factor at rest (over the render scale) and the full level's
+  // measured casting cost per pixel (0 before any).
+  double fullScale() const { return fullScale_; }
+  double msPerFullPixel() const { return msPerFullPixel_; }
+  // Milliseconds from the last change of the view (or the user's last action) to the full level
+  // on screen, for the image shown now; nullopt while it is not there.
+  std::optional<double> settledAfterMs() const { return settledAfterMs_; }
 
  private:
-  double costMs(int level) const;  // predicted; 0 before the first render
+  double costMs(int level) const;     // predicted; 0 before the first render
+  double scaleForConvergence() const; // the full level's factor that converges in kConvergeMs
+  RenderPlan fullPlan(double scale) const;
   double frameBudgetMs_, renderScale_;
   int viewW_ = 1, viewH_ = 1;
   std::optional<std::uint64_t> renderedRevision_;
   std::uint64_t lastActivity_ = 0;
   int renderedLevel_ = -1;
+  int shownWidth_ = 0;  // pixels across of the image on screen
   double msPerUnit_ = 0;
   Clock::time_point lastChange_ = Clock::now();
   bool interacting_ = false;
-  bool restCapped_ = false;  // the image at rest stopped below full quality (frame budget)
+  bool refining_ = false;      // this rest's progressive image has begun
+  int restarts_ = 0;           // this rest's images started over smaller
+  double overshoot_ = 1;       // refine calls' time over their budget (moving average, ≥ 1)
+  double fullScale_ = 1, msPerFullPixel_ = 0, refinedFraction_ = 0;
+  double otherMs_ = 0;  // a frame's time besides rendering (moving average)
+  std::optional<double> settledAfterMs_;
 };
 
 // Frame times, render and upload costs and hover-to-highlight latencies while recording, and the
@@ -94,6 +143,9 @@ class FrameRecorder {
   void beginFrame();
   void noteUpload(double ms);
   void noteRender(int level, double ms);
+  void noteRefine(double ms);  // a refine call of the progressive full level
+  // The full level reached the screen `ms` after the view last changed, at `scale` of the view.
+  void noteSettled(double ms, double scale);
   void endFrame(double ms, bool interacting);
 
   // Highlight latency: from a hover onto a structure to the first frame showing its context.
@@ -118,11 +170,13 @@ class FrameRecorder {
     bool interacting = false;
     double uploadMs = 0;     // distance field uploaded to the GL in the frame
     double renderMs = 0;     // the volume render of the frame (0 when reused)
+    bool refine = false;     // the render was a refine call (level: the full level's)
   };
   bool recording_ = false;
   bool inFrame_ = false;
   std::vector<Frame> frames_;
   std::vector<double> latencies_;
+  std::vector<double> settles_, settleScales_;
   std::optional<std::pair<std::uint16_t, Clock::time_point>> pendingHighlight_;
 };
 

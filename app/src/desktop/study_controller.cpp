@@ -4,7 +4,7 @@
 #include <algorithm>
 #include <cstdio>
 
-#include "db/database.h"
+#include "db/connection.h"
 #include "quiz/study_report.h"
 
 namespace at::app {

@@ -3,7 +3,7 @@
 #include <algorithm>
 
 #include "core/strings.h"
-#include "db/database.h"
+#include "db/connection.h"
 #include "db/preset_store.h"
 
 namespace at::app {
@@ -91,7 +91,7 @@ Status TfEditor::saveAs(const std::string& name, const std::optional<std::string
   if (!valid) return tl::unexpected(withContext("save preset", valid.error()));
   const db::StoredPreset stored{id, p.structure, render::toString(p.mode), text};
   if (auto st = db::savePreset(database_, stored); !st) return st;
-  json ev = {{"event", "preset_saved"}, {"id", id}, {"db", database_.path()}};
+  json ev = {{"event", "preset_saved"}, {"id", id}, {"db", db::pathOf(database_)}};
   if (exportPath) {
     if (auto st = render::savePreset(p, *exportPath); !st) return st;
     ev["export"] = *exportPath;

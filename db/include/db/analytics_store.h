@@ -6,7 +6,7 @@
 #include <optional>
 #include <string>
 
-#include "db/database.h"
+#include "db/connection.h"
 #include "db/sqlite_repositories.h"
 #include "lessons/analytics.h"
 

@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "db/database.h"
+#include "db/connection.h"
 #include "lessons/curriculum.h"
 
 namespace at::db {

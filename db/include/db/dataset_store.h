@@ -7,7 +7,7 @@
 #include <string>
 #include <vector>
 
-#include "db/database.h"
+#include "db/connection.h"
 #include "volume/dataset_source.h"
 #include "volume/geometry.h"
 #include "volume/structure.h"
@@ -47,10 +47,5 @@ Result<std::vector<Structure>> datasetStructures(Database& db, std::int64_t data
 
 // The files to hand to openDatasetFiles for a registered dataset.
 DatasetFiles datasetFiles(const DatasetRecord& record);
-
-// For commands that only read datasets (datasets, structures, wdt, render): the database at
-// `dbPath` (the default database when nullopt) if it exists, nullopt if it does not — reading must
-// not create a database as a side effect.
-Result<std::optional<Database>> openExistingDatabase(const std::optional<std::string>& dbPath);
 
 }  // namespace at::db

@@ -2,7 +2,7 @@
 // outlive it; every write is one transaction committed before the call returns.
 #pragma once
 
-#include "db/database.h"
+#include "db/connection.h"
 #include "lessons/exam.h"
 
 namespace at::db {

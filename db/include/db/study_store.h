@@ -10,7 +10,7 @@
 #include <string>
 #include <vector>
 
-#include "db/database.h"
+#include "db/connection.h"
 #include "quiz/redcap_export.h"
 #include "quiz/study_protocol.h"
 #include "quiz/study_report.h"

@@ -64,6 +64,7 @@ Result<RefineProgress> VolumeRenderer::refine(const RenderSettings& s, double bu
   }
   const auto report = [&]() {
     out.complete = image.level < 0;
+    out.displayable = image.level < ProgressiveImage::kCoarsestLevel;
     out.level = std::max(0, image.level + 1);
     if (image.level == ProgressiveImage::kCoarsestLevel) out.level = ProgressiveImage::kCoarsestLevel;
     out.fraction = std::min(1.0, image.castPixels / (double(s.width) * double(s.height)));
@@ -92,7 +93,6 @@ Result<RefineProgress> VolumeRenderer::refine(const RenderSettings& s, double bu
   const auto loc = [program](const char* n) { return glGetUniformLocation(GLuint(program), n); };
   for (int l = 0; l <= ProgressiveImage::kCoarsestLevel; ++l)
     glBindImageTexture(GLuint(l), st.levelImages[std::size_t(l)].id(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA8);
-  const bool first = image.calls == 0;
   double castMs = 0;
   while (image.level >= 0) {
     const LevelTiles tiles = levelTiles(image.level, s.width, s.height);
@@ -101,16 +101,22 @@ Result<RefineProgress> VolumeRenderer::refine(const RenderSettings& s, double bu
     const int rankInSub = image.ranksDone - (sub == 0 ? 0 : tiles.tiles[0]);
     const int subTiles = tiles.tiles[std::size_t(sub)];
     int count = subTiles - rankInSub;
-    if (!(first && image.level == ProgressiveImage::kCoarsestLevel)) {
-      const double left = budgetMs - msSince(start);
-      if (left <= 0 && castMs > 0) break;
-      // Chunks of at most a third of the budget, sized by the dearer of the image's average cost
-      // per pixel and the last chunk's (tiles go in order, so neighbouring chunks cost alike and a
-      // chunk moving into a dearer region is caught by the next one).
-      const double perPixel = std::max(image.msPerPixel, image.lastMsPerPixel);
-      if (perPixel > 0)
-        count = std::clamp(int(std::floor(std::min(0.9 * left, budgetMs / 3.0) / (perPixel * 64.0))), 1, count);
-    }
+    const double left = budgetMs - msSince(start);
+    if (left <= 0 && castMs > 0) break;
+    // Chunks of at most a third of the budget, sized by the dearer of the image's average cost
+    // per pixel and the last chunk's (tiles go in order, so neighbouring chunks cost alike and a
+    // chunk moving into a dearer region is caught by the next one). A new image starts from the
+    // previous image's cost; with none known, one tile measures it and chunks at most double
+    // until their cost is known from enough rays (one tile may be all empty space).
+    const bool measured = image.castPixels >= 64.0 * 16;
+    const double perPixel = image.castPixels > 0 ? std::max(image.msPerPixel, image.lastMsPerPixel)
+                                                 : st.refineMsPerPixel;
+    if (perPixel > 0)
+      count = std::clamp(int(std::floor(std::min(0.9 * left, budgetMs / 3.0) / (perPixel * 64.0))), 1, count);
+    else
+      count = 1;
+    if (!measured && image.castPixels > 0) count = std::min(count, std::max(1, 2 * image.lastCount));
+    image.lastCount = count;
     const SubLattice& lattice = tiles.subs[std::size_t(sub)];
     glUniform1i(loc("uLevel"), image.level);
     glUniform2i(loc("uSubStep"), lattice.stepX, lattice.stepY);
@@ -130,6 +136,7 @@ Result<RefineProgress> VolumeRenderer::refine(const RenderSettings& s, double bu
     image.msPerPixel = (image.msPerPixel * before + ms) / image.castPixels;
     image.lastMsPerPixel = ms / (64.0 * count);
     image.ranksDone += count;
+    st.refineMsPerPixel = image.msPerPixel;
     if (image.ranksDone >= tiles.total()) {
       --image.level;
       image.ranksDone = 0;

@@ -55,6 +55,7 @@ struct ProgressiveImage {
   double lastMsPerPixel = 0;   // … and on its last chunk
   double imageMs = 0;
   int calls = 0;
+  int lastCount = 0;           // tiles in the last chunk
 };
 
 struct VolumeRenderer::State {
@@ -78,7 +79,7 @@ struct VolumeRenderer::State {
   double tableStepMm = 0, tableRefMm = 0;  // … and the step its opacities are corrected to
   TransferFunction2D tableInfo;            // its axes (rgba dropped after upload)
   TableVisibility tableVisibility;
-  std::uint64_t tableGeneration = 0;
+  std::uint64_t tableGeneration = 0;       // bumped when tableVisibility changes
   BlockSummary blocks;
   std::optional<OccupancyKey> occupancyKey;
   // Bumped when the volume, the field or the selection changes (a progressive image of an older
@@ -91,6 +92,7 @@ struct VolumeRenderer::State {
   std::array<Texture, ProgressiveImage::kCoarsestLevel + 1> levelImages;
   int progressiveWidth = 0, progressiveHeight = 0;
   ProgressiveImage progressive;
+  double refineMsPerPixel = 0;  // the last progressive image's cost, where the next one starts
   RayCaster rayCaster = RayCaster::Compute;
   Query timer;
   Geometry volumeGrid, fieldGrid;

@@ -437,7 +437,12 @@ Status VolumeRenderer::prepare(const RenderSettings& s) {
   if (!st.tablePreset || !(*st.tablePreset == s.preset) || st.tableStepMm != stepMm || st.tableRefMm != refMm) {
     TransferFunction2D table = shadingTable(s.preset);
     for (Rgba& v : table.rgba) v[3] = v[3] > 0.0f ? correctedOpacity(v[3], stepMm, refMm) : 0.0f;
-    st.tableVisibility = TableVisibility(table);
+    // What the context can draw (opacity > 0) does not depend on the step: the occupancy grid
+    // is kept when only the step changes (the desktop alternates coarse and full levels).
+    if (!st.tablePreset || !(*st.tablePreset == s.preset)) {
+      st.tableVisibility = TableVisibility(table);
+      ++st.tableGeneration;
+    }
     glBindTexture(GL_TEXTURE_2D, st.table.id());
     glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
     glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
@@ -452,7 +457,6 @@ Status VolumeRenderer::prepare(const RenderSettings& s) {
     st.tablePreset = s.preset;
     st.tableStepMm = stepMm;
     st.tableRefMm = refMm;
-    ++st.tableGeneration;
   }
   const TransferFunction2D& table = st.tableInfo;
   const bool bare = s.preset.mode == RenderMode::Bare;

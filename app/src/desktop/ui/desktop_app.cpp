@@ -151,6 +151,9 @@ void DesktopApp::drawUi() {
     ImGui::GetBackgroundDrawList()->AddImage(reinterpret_cast<ImTextureID>(image.handle), ImVec2(panelW, 0),
                                              ImVec2(float(l.windowW), float(l.windowH)), ImVec2(image.uv0[0], image.uv1[1]),
                                              ImVec2(image.uv1[0], image.uv0[1]));
+  const bool sliceShown = model_->examSlice() && model_->exams().running();  // drawn over the 3-D view below
+  if (view_->available() && view_->image().handle && !sliceShown)
+    drawViewOverlay(model_->explore().camera(), panelW, 0, float(l.windowW) - panelW, float(l.windowH), l.uiScale);
   if (!study.participantActive())  // a locate-on-slice exam item: the slice in place of the 3-D view
     explore_.exams().drawSlice(*model_, panelW, 0, float(l.windowW) - panelW, float(l.windowH));
   if (!study.participantActive() && model_->expertOn() &&
@@ -221,9 +224,10 @@ constexpr const char* kDesktopHelp =
     "               `anatomy-tutor play --user` shares the progress; created when new)\n"
     "  --screenshot save the window as PNG once the script has run and the view has settled\n"
     "  --size       window size in logical pixels (default 1280x720)\n"
-    "  --render-scale  resolution of the full-quality volume image, 0.1..1 (default 1; software GL: less)\n"
-    "  --frame-budget  at rest, finer images predicted to take longer are not rendered (default 100 ms;\n"
-    "               scripted screenshots and the 'Full quality at rest' box render full quality anyway)\n"
+    "  --render-scale  largest resolution of the full-quality volume image, 0.1..1 (default 1); at rest\n"
+    "               the full quality (shading included) is refined over frames, at a lower resolution\n"
+    "               where the GL is too slow to reach it within about 2 s (the panel says which)\n"
+    "  --frame-budget  frame time the refinement at rest stays within (default 100 ms)\n"
     "  --max-fps    start frames at most N times a second (scripted runs swap without vsync and\n"
     "               otherwise draw as fast as they can; 60 measures them as on a 60 Hz display)\n"
     "  --db, --user and --size may also stand before the command.\n";

@@ -1,4 +1,5 @@
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 
 #include <imgui.h>
@@ -64,11 +65,7 @@ void ExplorePanel::draw(DesktopModel& model, const Status& status) {
   if (ImGui::RadioButton("Bare preset", &mode, 1)) explore.setBare(true);
   float t = explore.t();
   if (ImGui::SliderFloat("t (context)", &t, 0, 1, "%.2f")) explore.setT(t);
-  if (bool full = model.fullAtRest(); ImGui::Checkbox("Full quality at rest", &full)) model.setFullAtRest(full);
-  ImGui::SameLine();
   if (bool on = model.expertOn(); ImGui::Checkbox("Expert", &on)) model.setExpert(on);
-  if (ImGui::IsItemHovered())
-    ImGui::SetTooltip("Off: the view at rest stays within %.0f ms per frame (coarser on slow GL)", model.options().frameBudgetMs);
 
   ImGui::TextUnformatted("View");
   for (int i = 0; i < 6; ++i) {
@@ -92,9 +89,7 @@ void ExplorePanel::draw(DesktopModel& model, const Status& status) {
   if (!hideNames) ImGui::InputTextWithHint("##search", "search structures", &search_);
   drawStructures(model, hideNames);
 
-  ImGui::TextDisabled("frame %.0f ms, level %d/%d%s", model.recorder().lastFrameMs(),
-                      std::max(0, model.scheduler().renderedLevel()), kFullLevel,
-                      model.scheduler().interacting() ? " (moving)" : "");
+  drawQuality(model);
   drawFieldProgress(model);
   ImGui::PushTextWrapPos(0);
   ImGui::TextDisabled("%s", status.glDescription.c_str());
@@ -146,6 +141,23 @@ float ExplorePanel::statusHeight(const DesktopModel& model) const {
   for (const std::string& m : model.messages())
     height += ImGui::CalcTextSize(m.c_str(), nullptr, false, wrap).y + ImGui::GetStyle().ItemSpacing.y;
   return std::min(height, std::max(ImGui::GetTextLineHeightWithSpacing() * 5.5f, ImGui::GetContentRegionAvail().y * 0.5f));
+}
+
+// What the view shows: a coarse level while moving, the full level being refined, or full quality
+// (with its resolution where slow GL renders it below the view's).
+void ExplorePanel::drawQuality(DesktopModel& model) {
+  const FrameScheduler& scheduler = model.scheduler();
+  const double frameMs = model.recorder().lastFrameMs();
+  const int scalePercent = int(std::lround(100 * scheduler.fullScale() * model.options().renderScale));
+  if (scheduler.renderedLevel() >= kFullLevel && scalePercent < 100)
+    ImGui::TextDisabled("full quality at %d%% resolution, frame %.0f ms", scalePercent, frameMs);
+  else if (scheduler.renderedLevel() >= kFullLevel)
+    ImGui::TextDisabled("full quality, frame %.0f ms", frameMs);
+  else if (scheduler.refining())
+    ImGui::TextDisabled("refining %.0f%%, frame %.0f ms", 100 * scheduler.refinedFraction(), frameMs);
+  else
+    ImGui::TextDisabled("level %d/%d%s, frame %.0f ms", std::max(0, scheduler.renderedLevel()), kFullLevel,
+                        scheduler.interacting() ? " (moving)" : "", frameMs);
 }
 
 // The running field's progress; a full-resolution one can be cancelled (the coarse one stays).

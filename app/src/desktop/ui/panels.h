@@ -13,6 +13,10 @@
 
 namespace at::app {
 
+// The orientation marker and the scale bar over the volume view, whose rectangle in window
+// coordinates is (left, top, width, height) (view_overlay.cpp).
+void drawViewOverlay(const render::Camera& camera, float left, float top, float width, float height, float uiScale);
+
 // Practical exams inside the lesson runner: the course's exams, an attempt (items, the clock, no
 // names or grades), the results; and the CT slice of a locate-on-slice item over the volume view.
 class ExamPanel {
@@ -61,6 +65,7 @@ class ExplorePanel {
  private:
   void drawStructures(DesktopModel& model, bool hideNames);
   void drawFieldProgress(DesktopModel& model);
+  void drawQuality(DesktopModel& model);
   float statusHeight(const DesktopModel& model) const;
   std::string search_;
   LessonPanel lessons_;

@@ -44,12 +44,10 @@ bool StudyPanel::radio(const std::string& label, int* value, int mine) {
 
 void StudyPanel::drawParticipant(StudyController& study, float width, float height) {
   if (!study.participantActive()) return;
-  if (study.takeNewScreen()) {
-    labels_.clear();  // the screen of the previous trial is not this one's
-    announce_ = true;
-  }
+  const bool newScreen = study.takeNewScreen();
   if (announce_ && !labels_.empty()) {
-    // The screen drawn last frame is now on screen: print its labels and the visible windows.
+    // The screen drawn last frame is now on screen: print its labels and the visible windows —
+    // before a trial that changed since (a script acting within one long frame) replaces it.
     json windows = json::array();
     for (ImGuiWindow* w : ImGui::GetCurrentContext()->Windows)
       if (w->WasActive && !(w->Flags & ImGuiWindowFlags_ChildWindow) && std::strncmp(w->Name, "Debug##", 7) != 0)
@@ -57,6 +55,7 @@ void StudyPanel::drawParticipant(StudyController& study, float width, float heig
     study.announce({{"event", "study_screen"}, {"labels", labels_}, {"windows", windows}});
     announce_ = false;
   }
+  if (newScreen) announce_ = true;  // announced once drawn
   labels_.clear();
   StudyController::Participant& s = *study.participant();
   ImGui::SetNextWindowPos(ImVec2(0, 0));

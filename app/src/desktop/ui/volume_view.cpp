@@ -33,6 +33,20 @@ void VolumeView::frame(DesktopModel& model, Clock::time_point now) {
   const render::RenderSettings settings = model.renderSettings(*plan);
   renderer_->setSelected(model.explore().shown().label);
   const Clock::time_point start = Clock::now();
+  if (plan->progressive) {
+    auto progress = renderer_->refine(settings, plan->budgetMs);
+    if (!progress) return model.renderFailed(progress.error().message);
+    RefineReport report;
+    report.complete = progress->complete;
+    report.displayable = progress->displayable;
+    report.stride = 1 << progress->level;
+    report.fraction = progress->fraction;
+    report.imageMs = progress->imageMs;
+    const Clock::time_point end = Clock::now();
+    report.callMs = msBetween(start, end);
+    if (model.refined(*plan, report, report.callMs, end)) image_ = renderer_->display();
+    return;
+  }
   auto image = renderer_->renderToTexture(settings);
   if (!image) {
     image_ = {};

@@ -42,6 +42,7 @@ struct RefineProgress {
   bool restarted = false;   // this call began a new image (the settings or the scene changed)
   bool complete = false;    // every pixel is cast: the display image equals render()'s
   double fraction = 0;      // of the image's pixels cast so far
+  bool displayable = false; // the coarsest lattice is complete: display() has an image
   int level = 3;            // finest complete lattice level: stride 2^level (0 when complete)
   double ms = 0;            // wall time this call took (GL finished)
   double imageMs = 0;       // wall time spent on this image so far, over all calls
@@ -105,8 +106,10 @@ class VolumeRenderer {
 
   // Progressive refinement (see the top of this file). A call whose settings, volume, field or
   // selection differ from the previous call's starts a new image; `budgetMs` bounds the wall time
-  // of the rays it casts (the first call of an image always completes the coarsest lattice).
+  // of the rays it casts, from the first call of an image on (each call casts at least one tile of
+  // 64 rays; chunks are sized from the cost measured so far, or the previous image's).
   Result<RefineProgress> refine(const RenderSettings& settings, double budgetMs);
+  // Nothing (handle 0) until the coarsest lattice is complete.
   DisplayImage display() const;
   // What display() shows, as the view would (linear filtering), at the view's size, top row first:
   // for tests and screenshots.

@@ -1,14 +1,10 @@
-// The store: a SQLite file (the embedded default) or a PostgreSQL database (a class server,
-// `postgresql://…`), opened with its schema brought to the current version by forward-only
-// migrations (schema.h). Both engines run the same repositories and the same SQL.
+// The SQL wrapper, private to db/: `Database` (one connection), `Statement` (a prepared
+// statement), `Transaction` (rolled back when it dies uncommitted) over the engines of backend.h
+// (SQLite and PostgreSQL; only db/ includes sqlite3.h or libpq-fe.h). Both engines run the same
+// repositories and the same SQL. Every value reaches SQL through bound parameters, never by
+// pasting text into a statement. Outside db/ (connection.h) a Database is opaque.
 //
-// Only db/ includes sqlite3.h or libpq-fe.h: the engines live behind private interfaces in
-// db/src/backend.h. Every handle is owned by an RAII object: `Database` (the connection),
-// `Statement` (a prepared statement), `Transaction` (rolled back when it dies uncommitted). All
-// values reach SQL through bound parameters, never by pasting text into a statement.
-//
-// Threads: a process keeps one connection (the app's learning session). It may be used from
-// several threads: each call is serialised on it, and write transactions (writeTransaction,
+// Threads: each call is serialised on the connection, and write transactions (writeTransaction,
 // Transaction) take the connection's writer lock for their whole length, so one thread's
 // transaction never takes in another thread's writes. A thread reading while another writes sees
 // the uncommitted rows.
@@ -23,20 +19,14 @@
 #include <string_view>
 
 #include "core/error.h"
+#include "db/connection.h"
 
 namespace at::db {
 
-class Database;
 namespace detail {
 class Cursor;
 class Connection;
 }  // namespace detail
-
-enum class Backend { Sqlite, Postgres };
-const char* toString(Backend backend);  // "sqlite", "postgresql"
-
-// True for a PostgreSQL connection URL (postgresql://… or postgres://…).
-bool isPostgresUrl(std::string_view text);
 
 // A prepared statement. Parameters are numbered from 1 and written ?1, ?2, … in the SQL text;
 // result columns are numbered from 0. Move-only; finalized when it dies.
@@ -85,17 +75,6 @@ class Statement {
   Statement(std::unique_ptr<detail::Cursor> cursor, std::string sql);
   std::unique_ptr<detail::Cursor> cursor_;
   std::string sql_;
-};
-
-struct OpenOptions {
-  // Migrate to this schema version (tests build earlier versions with it); default: the newest.
-  std::optional<int> targetVersion;
-  // How long a statement waits for another connection's lock before SQLITE_BUSY.
-  int busyTimeoutMs = 5000;
-  // Create the file (and its folder) when missing. (A PostgreSQL database must exist.)
-  bool create = true;
-  // How long to wait for a PostgreSQL server to answer before giving up (libpq's minimum is 2 s).
-  int connectTimeoutSeconds = 5;
 };
 
 // An open connection. Move-only; closed when it dies.
@@ -160,13 +139,5 @@ class Transaction {
   Database* db_ = nullptr;  // null once committed or rolled back
   std::unique_lock<std::recursive_mutex> lock_;  // the connection's writer lock, released when finished
 };
-
-// The database the program uses when no --db is given:
-// $XDG_DATA_HOME/anatomy-tutor/anatomy-tutor.db, else ~/.local/share/anatomy-tutor/anatomy-tutor.db.
-Result<std::string> defaultDatabasePath();
-
-// Opens `--db PATH` when given (a PostgreSQL URL, or a file whose folder exists), else the default
-// path (creating its folder).
-Result<Database> openDatabase(const std::optional<std::string>& path, const OpenOptions& options = {});
 
 }  // namespace at::db

@@ -13,7 +13,7 @@
 #include <utility>
 #include <vector>
 
-#include "db/database.h"
+#include "database.h"
 
 namespace at::db {
 
