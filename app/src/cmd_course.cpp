@@ -7,6 +7,7 @@
 #include "core/strings.h"
 #include "course_authoring.h"
 #include "course_packages.h"
+#include "db/connection.h"
 #include "db/dataset_store.h"
 #include "lessons/course_check.h"
 #include "lessons/course_json.h"
@@ -76,7 +77,7 @@ int runValidate(const cli::Args& args) {
   // Structures are checked when the dataset can be opened here without changing anything.
   std::string structures = "structures not checked: dataset '" + course->datasetId + "' is not here";
   const bool builtin = isBuiltinDatasetName(course->datasetId);
-  std::optional<db::Database> database;
+  std::optional<db::Connection> database;
   if (!builtin) {
     auto existing = db::openExistingDatabase(args.db());
     if (!existing) return reportError("course validate: " + existing.error().message);

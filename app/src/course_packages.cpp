@@ -5,6 +5,7 @@
 #include <set>
 
 #include "db/checksum.h"
+#include "db/connection.h"
 #include "db/dataset_store.h"
 #include "db/preset_store.h"
 #include "course_authoring.h"
@@ -92,9 +93,9 @@ Result<std::vector<package::PackagedPreset>> coursePresets(db::Database& databas
 }  // namespace
 
 Result<fs::path> courseAssetDirectory(const db::Database& database) {
-  const fs::path file = database.path();
-  if (file.empty() || database.path() == ":memory:") return fail("an in-memory database has no data folder for course assets");
-  if (database.path().find("://") != std::string::npos)
+  const fs::path file = db::pathOf(database);
+  if (file.empty() || db::pathOf(database) == ":memory:") return fail("an in-memory database has no data folder for course assets");
+  if (db::pathOf(database).find("://") != std::string::npos)
     return fail(ErrorKind::Unavailable, "a class server's database keeps no files: import a package with a dataset into a local "
                                         "database (--db FILE), or its dataset on each machine first");
   return fs::absolute(file).parent_path() / (file.stem().string() + "-data");
@@ -235,7 +236,7 @@ Result<db::DatasetRecord> registerPackagedDataset(db::Database& database, const 
   record.orientation = record.geometry.orientationCode();
   // Stored relative to the database's folder, so that the database and its data folder move together.
   db::DatasetRecord stored = record;
-  const fs::path base = fs::absolute(database.path()).parent_path();
+  const fs::path base = fs::absolute(db::pathOf(database)).parent_path();
   stored.volumePath = fs::path(record.volumePath).lexically_relative(base).string();
   if (!record.labelsPath.empty()) stored.labelsPath = fs::path(record.labelsPath).lexically_relative(base).string();
   auto id = db::registerDataset(database, stored, pkg.structures);

@@ -10,7 +10,7 @@
 
 #include "../package/tar_files.h"
 #include "cli_checks.h"
-#include "db/database.h"
+#include "db/connection.h"
 #include "db/dataset_store.h"
 #include "test_support.h"
 #include "package/course_package.h"
