@@ -17,6 +17,7 @@ packages=(
   librsvg2-dev libcairo2-dev fonts-dejavu-core
   postgresql libpq-dev
   nettle-dev
+  clang-14 libclang-rt-14-dev
 )
 
 missing=()

@@ -5,9 +5,15 @@ usage: play-lesson.py [--min-score S] -- COMMAND... -- ANSWER...
 
 COMMAND runs `anatomy-tutor play LESSON ...` without --answers (the questions come on stdin).
 Each ANSWER is typed at the next "answer>" prompt, except that for a question that lists numbered
-choices the ANSWER is the *name* of a choice and its number, as printed, is typed. Exits 0 when
-the lesson ends with every question answered and a mean score of at least S (default 1.0).
+choices the ANSWER is the *name* of a choice and its number, as printed, is typed, and that an
+ANSWER "pick:NAME" answers a locate question as a click on the structure NAME: the typed session
+is left ('quit', which saves), that one answer is given through `--answers` ({"pick": NAME}), and
+the lesson resumes typed. Exits 0 when the lesson ends with every question answered and the share
+of answers graded right (lines starting with a check mark) is at least S (default 1.0).
 """
+import json
+import os
+import tempfile
 import re
 import subprocess
 import sys
@@ -22,8 +28,31 @@ def main(argv):
     split = argv.index("--", 1)
     command, answers = argv[1:split], argv[split + 1:]
 
+    transcript = ""
+    while True:
+        output, status, pick = run_typed(command, answers)
+        transcript += output
+        if pick is None:
+            break
+        with tempfile.NamedTemporaryFile("w", suffix=".jsonl", delete=False) as f:
+            f.write(json.dumps({"pick": pick, "distance_mm": 0}) + "\n")
+        picked = subprocess.run(command + ["--answers", f.name], stdout=subprocess.PIPE, stderr=subprocess.STDOUT)
+        os.unlink(f.name)
+        transcript += picked.stdout.decode("utf-8", "replace")
+    right = len(re.findall(r"^\s*\u2713", transcript, re.M))
+    wrong = len(re.findall(r"^\s*\u2717", transcript, re.M))
+    graded = right + wrong
+    sys.stdout.write(transcript)
+    print(f"\nplay-lesson: exit {status}, {graded} answers graded, {right} right, {len(answers)} answers unused")
+    if status != 0 or not graded or answers or right / graded < min_score:
+        sys.exit(1)
+
+
+def run_typed(command, answers):
+    """Types answers until the lesson ends or the next answer is a pick; returns (output, exit
+    status, the structure to pick or None)."""
     proc = subprocess.Popen(command, stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.STDOUT)
-    transcript, pending, scores = "", "", []
+    transcript, pending, pick = "", "", None
     while True:
         byte = proc.stdout.read(1)
         if not byte:
@@ -47,6 +76,11 @@ def main(argv):
             if not answers:
                 proc.stdin.close()
                 break
+            if answers[0].startswith("pick:"):
+                pick = answers.pop(0)[len("pick:"):]
+                proc.stdin.write(b"quit\n")
+                proc.stdin.close()
+                break
             answer = answers.pop(0)
             choices = dict((name.strip(), number) for number, name in re.findall(r"^\s+(\d+)\) (.+)$", pending, re.M))
             typed = choices.get(answer, answer)
@@ -54,14 +88,9 @@ def main(argv):
             proc.stdin.flush()
             transcript += typed + "\n"
             pending = ""
+    transcript += proc.stdout.read().decode("utf-8", "replace")
     status = proc.wait()
-    sys.stdout.write(transcript)
-    scores = [float(s) for s in re.findall(r"\(score (\d+(?:\.\d+)?)\)", transcript)]
-    print(f"\nplay-lesson: exit {status}, {len(scores)} questions graded, "
-          f"mean score {sum(scores) / len(scores) if scores else 0:.2f}, {len(answers)} answers unused")
-    if status != 0 or not scores or answers or sum(scores) / len(scores) < min_score:
-        sys.exit(1)
-
+    return transcript, status, pick
 
 if __name__ == "__main__":
     main(sys.argv[1:])

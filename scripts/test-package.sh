@@ -61,7 +61,7 @@ echo "test-package: --version ($(elapsed "$t"))"
 t=$(stamp)
 "${env_user[@]}" "${play_trace[@]}" \
   python3 "$run/play-lesson.py" -- anatomy-tutor play inner_ear --user ci --new-user -- \
-  cochlea Vestibule "lateral semicircular canal" "superior semicircular canal" Vestibule "Posterior semicircular canal" \
+  "pick:cochlea" Vestibule "lateral semicircular canal" "pick:superior semicircular canal" Vestibule "Posterior semicircular canal" \
   > "$run/play.log" || { cat "$run/play.log"; echo "test-package: the installed copy did not play inner_ear to a full score" >&2; exit 1; }
 tail -n 1 "$run/play.log"
 echo "test-package: played inner_ear from the installed copy ($(elapsed "$t"), $traced)"

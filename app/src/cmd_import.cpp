@@ -13,19 +13,24 @@ namespace {
 
 constexpr const char* kImportHelp =
     "usage: anatomy-tutor import --volume PATH --name NAME [--labels PATH] [--names NAMES.json]\n"
-    "                            [--species SPECIES] [--db PATH]\n\n"
+    "                            [--species SPECIES] [--replace] [--skip-unreadable] [--nrrd-data DIR]\n"
+    "                            [--db PATH]\n\n"
     "Registers a dataset in the database: the volume (a DICOM folder, .nii, .nii.gz, .nrrd, .nhdr, .inv3),\n"
     "an optional label map on the same anatomy (any of those formats or DICOM SEG) and an optional\n"
     "JSON of label names ({\"1\": \"spleen\", …}). Both are loaded first to check that they align.\n"
     "The database keeps absolute paths, SHA-256 checksums and the geometry, never pixels or patient\n"
-    "identifiers. Afterwards the dataset's NAME works wherever a DATASET is asked for.\n\n"
+    "identifiers. Afterwards the dataset's NAME works wherever a DATASET is asked for. Every command\n"
+    "that opens it checks the files' checksums first: a file changed since the import is refused.\n\n"
+    "  --replace  register NAME again, replacing the dataset of that name (after its files changed)\n"
+    "  --skip-unreadable, --nrrd-data DIR: as for `structures`; kept with the dataset for later opens\n"
     "  --species  human (default), dog, cat, horse, … (lower-case letters, '-' and '_')\n"
     "  --db       database file (default: $XDG_DATA_HOME/anatomy-tutor/anatomy-tutor.db)\n";
 
 }  // namespace
 
 int runImport(const Argv& argv) {
-  auto args = cli::Args::parse(argv, {"volume", "labels", "names", "name", "species"}, {});
+  auto args = cli::Args::parse(argv, {"volume", "labels", "names", "name", "species", "nrrd-data"},
+                               {"replace", "skip-unreadable"});
   if (!args) return reportError("import: " + args.error().message);
   if (args->has("help")) {
     std::printf("%s", kImportHelp);
@@ -43,6 +48,9 @@ int runImport(const Argv& argv) {
   request.namesPath = args->valueOr("names", "");
   request.name = *name;
   request.species = args->valueOr("species", "human");
+  request.replace = args->has("replace");
+  request.skipUnreadableFiles = args->has("skip-unreadable");
+  request.dataFolder = args->valueOr("nrrd-data", "");
   auto database = db::openDatabase(args->db());
   if (!database) return reportError("import: " + database.error().message);
   auto imported = importDataset(*database, request);

@@ -222,7 +222,9 @@ int runLesson(const std::string& lessonId, lessons::LessonMode mode, PlayContext
       });
       if (!asked)
         return reportError("play: " + asked.error().message +
-                           " (earlier answers are saved; fix the line and run again to resume)");
+                           (asked.error().kind == ErrorKind::Io
+                                ? " (earlier answers are saved; run the same command again to resume)"
+                                : " (earlier answers are saved; fix the line and run again to resume)"));
       if (*asked != Asked::Answered) {
         std::printf("\nstopped before step %d of %d; your answers are saved — run the same command to resume\n",
                     view->position, view->count);

@@ -40,7 +40,7 @@ int runCourses(const Argv& argv) {
     return 0;
   }
   if (!args->positional().empty()) return reportError("courses: unexpected argument '" + args->positional()[0] + "'");
-  auto session = LearningSession::open(args->db());
+  auto session = LearningSession::open(args->db(), true);
   if (!session) return reportError("courses: " + session.error().message);
   auto courses = (*session)->curriculum().courses();
   if (!courses) return reportError("courses: " + courses.error().message);
@@ -61,7 +61,7 @@ int runLessons(const Argv& argv) {
     return 0;
   }
   if (args->positional().size() > 1) return reportError("lessons: give at most one COURSE");
-  auto session = LearningSession::open(args->db());
+  auto session = LearningSession::open(args->db(), true);
   if (!session) return reportError("lessons: " + session.error().message);
   lessons::CurriculumRepository& curriculum = (*session)->curriculum();
   std::vector<lessons::Course> courses;
@@ -112,7 +112,7 @@ int runProgress(const Argv& argv) {
   if (!args->positional().empty()) return reportError("progress: unexpected argument '" + args->positional()[0] + "'");
   const auto userName = args->user();
   if (!userName) return reportError("progress: --user NAME is required");
-  auto session = LearningSession::open(args->db());
+  auto session = LearningSession::open(args->db(), true);
   if (!session) return reportError("progress: " + session.error().message);
   lessons::CurriculumRepository& curriculum = (*session)->curriculum();
   lessons::ProgressRepository& progress = (*session)->progress();

@@ -54,6 +54,13 @@ const char* kStudyHelp =
 
 Result<db::Connection> openDb(const cli::Args& args) { return db::openDatabase(args.db()); }
 
+// For the verbs that only read (list, status, export): a database that cannot be written is read.
+Result<db::Connection> openDbToRead(const cli::Args& args) {
+  db::OpenOptions options;
+  options.readOnlyIfNotWritable = true;
+  return db::openDatabase(args.db(), options);
+}
+
 int runRegister(const cli::Args& args) {
   if (args.positional().size() != 1) return reportError("study register: expected one study JSON file");
   auto protocol = quiz::loadStudyProtocol(args.positional()[0]);
@@ -69,7 +76,7 @@ int runRegister(const cli::Args& args) {
 }
 
 int runList(const cli::Args& args) {
-  auto database = openDb(args);
+  auto database = openDbToRead(args);
   if (!database) return reportError(database.error().message);
   auto studies = db::listStudies(*database);
   if (!studies) return reportError(studies.error().message);
@@ -85,7 +92,7 @@ int runList(const cli::Args& args) {
 
 int runStatus(const cli::Args& args) {
   if (args.positional().size() != 1) return reportError("study status: expected STUDY");
-  auto database = openDb(args);
+  auto database = openDbToRead(args);
   if (!database) return reportError(database.error().message);
   auto protocol = resolveStudy(*database, args.positional()[0]);
   if (!protocol) return reportError(protocol.error().message);
@@ -195,17 +202,17 @@ int runRun(const cli::Args& args) {
       const db::RatingRecord r = makeRating(*protocol, presets->at(protocol->presetFor(trial.structure, 0)),
                                             trial.position, item.id, answer->ratings.at(item.id), answer->responseMs);
       // Each rating is committed before the next is taken.
-      if (auto s = db::recordRating(*database, protocol->id, *participant, r); !s) return reportError(s.error().message);
+      if (auto s = db::recordRating(*database, *state, r); !s) return reportError(s.error().message);
       trial.ratedItems.insert(item.id);
       std::printf("  %s: %d recorded\n", item.id.c_str(), r.ratingAsShown);
     }
-    if (auto s = db::recordTrialViewing(*database, protocol->id, *participant, trial.position, answer->viewMsA,
+    if (auto s = db::recordTrialViewing(*database, *state, trial.position, answer->viewMsA,
                                         answer->viewMsB, answer->toggles, answer->comment);
         !s)
       return reportError(s.error().message);
   }
   if (!state->nextTrial(protocol->items.size())) {
-    if (auto s = db::markParticipantComplete(*database, protocol->id, *participant); !s)
+    if (auto s = db::markParticipantComplete(*database, *state); !s)
       return reportError(s.error().message);
     std::printf("\nThank you: all %zu structures rated.\n", state->trials.size());
   } else {
@@ -218,7 +225,7 @@ int runExport(const cli::Args& args) {
   if (args.positional().size() != 1) return reportError("study export: expected STUDY (see --help)");
   const auto outDir = args.value("out");
   if (!outDir) return reportError("study export: --out DIR is required");
-  auto database = openDb(args);
+  auto database = openDbToRead(args);
   if (!database) return reportError(database.error().message);
   auto protocol = resolveStudy(*database, args.positional()[0]);
   if (!protocol) return reportError(protocol.error().message);

@@ -70,11 +70,18 @@ Result<ImportedDataset> importDataset(db::Database& database, const ImportReques
     if (!p) return tl::unexpected(p.error());
     record.namesPath = *p;
   }
+  record.skipUnreadableFiles = request.skipUnreadableFiles;
+  if (!request.dataFolder.empty()) {
+    auto p = absolutePath("NRRD data folder", request.dataFolder);
+    if (!p) return tl::unexpected(p.error());
+    record.dataFolder = *p;
+  }
 
   // Fail fast on a taken name, before the (possibly long) load.
   auto existing = db::findDataset(database, record.name);
   if (!existing) return tl::unexpected(existing.error());
-  if (*existing) return fail(ErrorKind::Conflict, "a dataset named '" + record.name + "' is already imported; choose another name");
+  if (*existing && !request.replace)
+    return fail(ErrorKind::Conflict, "a dataset named '" + record.name + "' is already imported; choose another name");
   if (cancelled()) return fail(ErrorKind::Cancelled, kImportCancelled);
 
   DatasetLoadControl load;
@@ -116,7 +123,7 @@ Result<ImportedDataset> importDataset(db::Database& database, const ImportReques
   if (cancelled()) return fail(ErrorKind::Cancelled, kImportCancelled);
 
   stage(ImportStage::Storing);
-  auto id = db::registerDataset(database, record, dataset->structures);
+  auto id = db::registerDataset(database, record, dataset->structures, request.replace);
   if (!id) return tl::unexpected(id.error());
   record.id = *id;
   record.structureCount = int(dataset->structures.size());

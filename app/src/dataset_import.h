@@ -23,6 +23,9 @@ struct ImportRequest {
   std::string namesPath;              // optional JSON {"1": "spleen", …}
   std::string name;                   // what commands will take as DATASET
   std::string species = "human";      // lower-case letters, '-' and '_'
+  bool replace = false;               // a dataset of that name is replaced (its files changed)
+  bool skipUnreadableFiles = false;   // a DICOM folder's unreadable files are skipped (kept for later opens)
+  std::string dataFolder;             // a detached NRRD header may read data files here (kept too)
 };
 
 // The stages in the order they run.

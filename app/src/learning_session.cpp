@@ -89,14 +89,18 @@ LearningSession::LearningSession(db::Connection connection)
 
 LearningSession::~LearningSession() = default;
 
-Result<std::unique_ptr<LearningSession>> LearningSession::open(const std::optional<std::string>& dbPath) {
+Result<std::unique_ptr<LearningSession>> LearningSession::open(const std::optional<std::string>& dbPath,
+                                                               bool readOnly) {
   const std::string courses = courseDirectory();
   std::error_code ec;
   if (!std::filesystem::is_directory(courses, ec))
     return fail(ErrorKind::NotFound, "no course folder at " + courses + " (the courses are installed in "
                 "share/anatomy-tutor/courses beside the program's bin/ folder; AT_DATA_DIR=DIR reads DIR/courses instead)");
-  auto database = db::openDatabase(dbPath);
+  db::OpenOptions options;
+  options.readOnlyIfNotWritable = readOnly;
+  auto database = db::openDatabase(dbPath, options);
   if (!database) return tl::unexpected(database.error());
+  if (database->readOnly()) return std::unique_ptr<LearningSession>(new LearningSession(std::move(*database)));
   auto seeded = db::seedCourses(*database, courses);
   if (!seeded) return tl::unexpected(withContext("seeding the default course", seeded.error()));
   return std::unique_ptr<LearningSession>(new LearningSession(std::move(*database)));

@@ -35,8 +35,10 @@ std::string courseDirectory();
 class LearningSession {
  public:
   // Opens `dbPath` (nullopt: the default database, its folder created when missing) and seeds the
-  // courses of courseDirectory() (idempotent).
-  static Result<std::unique_ptr<LearningSession>> open(const std::optional<std::string>& dbPath);
+  // courses of courseDirectory() (idempotent). With `readOnly` (commands that only read: courses,
+  // lessons, progress), a database this process cannot write is opened read-only and not seeded.
+  static Result<std::unique_ptr<LearningSession>> open(const std::optional<std::string>& dbPath,
+                                                        bool readOnly = false);
   ~LearningSession();
   LearningSession(const LearningSession&) = delete;
   LearningSession& operator=(const LearningSession&) = delete;

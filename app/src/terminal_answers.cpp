@@ -182,7 +182,10 @@ Result<Asked> askQuestion(AnswerSource& source, const AskedQuestion& question, c
       if (*given) printGrade(**given);
       return Asked::Answered;
     }
-    if (!source.interactive()) return fail(source.where() + ": " + given.error().message);
+    // A bad answer names its line; a storage failure (a full disk) is not the line's fault.
+    if (!source.interactive())
+      return tl::unexpected(given.error().kind == ErrorKind::Io ? given.error()
+                                                                : withContext(source.where(), given.error()));
     std::printf("  %s — try again%s\n", given.error().message.c_str(), allowSkip ? " (or 'skip', 'finish')" : "");
     std::fflush(stdout);
   }

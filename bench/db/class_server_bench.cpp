@@ -87,11 +87,11 @@ ClientResult runClient(const std::string& location, const quiz::StudyProtocol& p
         r.item = item.id;
         r.ratingAsShown = 1 + (client + k + t.position) % 5;
         r.responseMs = 1000;
-        if (!timed([&] { return db::recordRating(*db, p.id, id, r); })) break;
+        if (!timed([&] { return db::recordRating(*db, *part, r); })) break;
       }
-      if (!timed([&] { return db::recordTrialViewing(*db, p.id, id, t.position, 3000, 2000, 1, ""); })) break;
+      if (!timed([&] { return db::recordTrialViewing(*db, *part, t.position, 3000, 2000, 1, ""); })) break;
     }
-    if (out.error.empty()) timed([&] { return db::markParticipantComplete(*db, p.id, id); });
+    if (out.error.empty()) timed([&] { return db::markParticipantComplete(*db, *part); });
   }
   return out;
 }

@@ -61,8 +61,23 @@ class Connection {
 
 // Opens the SQLite file at `path` (WAL, foreign keys on, FULL sync, busy timeout).
 Result<std::unique_ptr<Connection>> openSqlite(const std::string& path, const OpenOptions& options);
-// Reads a SQLite file's schema version without writing to it; 0 for a missing or empty file.
-Result<int> peekSqliteVersion(const std::string& path);
+
+// What opening an existing SQLite file may rely on, learnt without writing to it.
+struct SqliteFileState {
+  int version = 0;         // PRAGMA user_version, as stored (may be anything in a hostile file)
+  bool immutable = false;  // readable only as immutable: no WAL index can be made beside it
+};
+// Reads an existing, non-empty SQLite file's schema version and checks every page (PRAGMA
+// quick_check) through a read-only connection. A reader needs the WAL index beside the file; where
+// it cannot be made (a read-only folder, a full disk) and no write-ahead log holds changes, the
+// file is read as immutable. A damaged file or one that is not SQLite is an error naming it.
+Result<SqliteFileState> inspectSqlite(const std::string& path);
+// Opens the SQLite file read-only (immutable as inspectSqlite found it), foreign keys on: for
+// commands that only read a file this process cannot write.
+Result<std::unique_ptr<Connection>> openSqliteReadOnly(const std::string& path, const OpenOptions& options,
+                                                       bool immutable);
+// True if this process may write the file and create files beside it (the WAL and its index).
+bool sqliteWritable(const std::string& path);
 // Connects to the PostgreSQL server at `url` (postgresql://… or postgres://…).
 Result<std::unique_ptr<Connection>> openPostgres(const std::string& url, const OpenOptions& options);
 

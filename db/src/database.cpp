@@ -177,6 +177,25 @@ void Transaction::rollback() {
 // ---------------------------------------------------------------------------------------------
 // Opening and migrating
 
+namespace {
+
+// A schema version this program can migrate from: 0 (a new database) up to the newest it knows.
+// Anything else — a newer program's database, or a negative version in a damaged or hostile file —
+// is refused before anything is written to it.
+Status checkVersionKnown(const std::string& name, int version, int latest) {
+  if (version > latest)
+    return fail(ErrorKind::Conflict, name + ": written by a newer version of Anatomy Tutor (schema " +
+                                         std::to_string(version) + ", this program knows up to " +
+                                         std::to_string(latest) + "); update the program or use another --db");
+  if (version < 0)
+    return fail(ErrorKind::Invalid, name + ": schema version " + std::to_string(version) +
+                                        " is not one any Anatomy Tutor writes (the database is damaged or not ours); "
+                                        "it was left untouched — restore a backup or use another --db");
+  return {};
+}
+
+}  // namespace
+
 Status Database::migrate(int target) {
   const auto& all = migrations();
   const Backend engine = backend();
@@ -187,6 +206,8 @@ Status Database::migrate(int target) {
     auto status = writeTransaction([&](Database& d) -> Status {
       auto version = d.schemaVersion();
       if (!version) return tl::unexpected(version.error());
+      // Checked again here: another process may have written the version since it was first read.
+      if (auto known = checkVersionKnown(d.path(), *version, int(all.size())); !known) return known;
       if (*version >= target) {
         done = true;
         return {};
@@ -197,7 +218,11 @@ Status Database::migrate(int target) {
                                         std::string(m.summary) + "): " + s.error().message);
       return d.connection_->setSchemaVersion(m.version);
     });
-    if (!status) return tl::unexpected(withContext(path(), status.error()));
+    if (!status) {
+      // The version checks already name the database.
+      if (status.error().message.rfind(path() + ": ", 0) == 0) return tl::unexpected(status.error());
+      return tl::unexpected(withContext(path(), status.error()));
+    }
     if (done) return {};
   }
 }
@@ -207,31 +232,47 @@ Result<Database> Database::open(const std::string& location, const OpenOptions& 
   const int target = options.targetVersion.value_or(latest);
   if (target < 0 || target > latest)
     return fail("schema version " + std::to_string(target) + " is not known (newest: " + std::to_string(latest) + ")");
-  auto newer = [&](const std::string& name, int version) {
-    return fail(name + ": written by a newer version of Anatomy Tutor (schema " + std::to_string(version) +
-                ", this program knows up to " + std::to_string(latest) + "); update the program or use another --db");
-  };
 
   std::unique_ptr<detail::Connection> connection;
+  bool readOnly = false;
   if (isPostgresUrl(location)) {
     auto pg = detail::openPostgres(location, options);
     if (!pg) return tl::unexpected(pg.error());
     connection = std::move(*pg);
     auto existing = connection->schemaVersion();
     if (!existing) return tl::unexpected(withContext(connection->name(), existing.error()));
-    if (*existing > latest) return newer(connection->name(), *existing);
+    if (auto known = checkVersionKnown(connection->name(), *existing, latest); !known)
+      return tl::unexpected(known.error());
   } else {
     std::error_code ec;
-    if (!fs::exists(location, ec) && !options.create) return fail(ErrorKind::NotFound, location + ": no such database");
-    // Refuse newer files before opening for writing: journal_mode=WAL would already change the file.
-    auto existing = detail::peekSqliteVersion(location);
-    if (!existing) return tl::unexpected(existing.error());
-    if (*existing > latest) return newer(location, *existing);
-    auto sqlite = detail::openSqlite(location, options);
+    const bool exists = fs::exists(location, ec);
+    if (!exists && !options.create) return fail(ErrorKind::NotFound, location + ": no such database");
+    if (exists && !fs::is_regular_file(location, ec))
+      return fail(location + ": not a database file (a folder or a device)");
+    // Everything that refuses a file happens before it is opened for writing: journal_mode=WAL and
+    // the migrations would already change it.
+    detail::SqliteFileState state;
+    if (exists && fs::file_size(location, ec) > 0) {
+      auto inspected = detail::inspectSqlite(location);
+      if (!inspected) return tl::unexpected(inspected.error());
+      state = *inspected;
+      if (auto known = checkVersionKnown(location, state.version, latest); !known) return tl::unexpected(known.error());
+    }
+    // A command that only reads opens a file it cannot write (a read-only file, folder or disk, or
+    // a disk too full for the WAL index) read-only, as the inspection could.
+    readOnly = options.readOnlyIfNotWritable && exists && (!detail::sqliteWritable(location) || state.immutable);
+    if (readOnly && state.version != target)
+      return fail(ErrorKind::Io, location + ": cannot be written and is at schema " + std::to_string(state.version) +
+                                     ", this program needs " + std::to_string(target) +
+                                     " — open it once with write access to upgrade it");
+    auto sqlite = readOnly ? detail::openSqliteReadOnly(location, options, state.immutable)
+                           : detail::openSqlite(location, options);
     if (!sqlite) return tl::unexpected(sqlite.error());
     connection = std::move(*sqlite);
   }
   Database db(std::move(connection));
+  db.readOnly_ = readOnly;
+  if (readOnly) return db;
   if (auto s = db.migrate(target); !s) return tl::unexpected(s.error());
   return db;
 }
@@ -267,6 +308,7 @@ Connection::Connection(Connection&&) noexcept = default;
 Connection& Connection::operator=(Connection&&) noexcept = default;
 const std::string& Connection::path() const { return database_->path(); }
 Backend Connection::backend() const { return database_->backend(); }
+bool Connection::readOnly() const { return database_->readOnly(); }
 const std::string& pathOf(const Database& database) { return database.path(); }
 Backend backendOf(const Database& database) { return database.backend(); }
 
@@ -295,6 +337,7 @@ Result<std::optional<Connection>> openExistingDatabase(const std::optional<std::
   if (!isPostgresUrl(*path) && !fs::exists(*path, ec)) return std::optional<Connection>{};
   OpenOptions options;
   options.create = false;
+  options.readOnlyIfNotWritable = true;
   auto connection = owned(Database::open(*path, options));
   if (!connection) return tl::unexpected(connection.error());
   return std::optional<Connection>(std::move(*connection));

@@ -97,6 +97,8 @@ class Database {
   const std::string& path() const;
   bool isOpen() const { return connection_ != nullptr; }
   Backend backend() const;
+  // True when opened read-only (OpenOptions::readOnlyIfNotWritable on a file it cannot write).
+  bool readOnly() const { return readOnly_; }
 
   Result<Statement> prepare(std::string_view sql);
   // Runs one or more statements without parameters (schema text).
@@ -117,6 +119,7 @@ class Database {
   Status migrate(int target);
   explicit Database(std::unique_ptr<detail::Connection> connection);
   std::unique_ptr<detail::Connection> connection_;
+  bool readOnly_ = false;
   std::unique_ptr<std::recursive_mutex> writer_;  // held by the thread inside a write transaction
 };
 

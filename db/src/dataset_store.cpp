@@ -1,10 +1,12 @@
 #include "db/dataset_store.h"
 
 #include <filesystem>
+#include <tuple>
 
 #include <nlohmann/json.hpp>
 
 #include "database.h"
+#include "db/checksum.h"
 
 namespace at::db {
 
@@ -14,7 +16,7 @@ constexpr const char* kSelectDataset =
     "SELECT d.id, d.name, d.species, d.volume_path, d.volume_checksum, d.labels_path, d.labels_checksum,"
     " d.names_path, d.dim_x, d.dim_y, d.dim_z, d.spacing_x, d.spacing_y, d.spacing_z,"
     " d.origin_x, d.origin_y, d.origin_z, d.direction, d.orientation, d.created_at,"
-    " (SELECT count(*) FROM structures s WHERE s.dataset_id = d.id)"
+    " (SELECT count(*) FROM structures s WHERE s.dataset_id = d.id), d.load_options"
     " FROM datasets d";
 
 // A stored path as a usable one: relative paths (assets in the database's data folder) are
@@ -45,6 +47,12 @@ Result<DatasetRecord> readRecord(const Statement& s, const Database& db) {
   r.orientation = s.text(18);
   r.createdAt = s.text(19);
   r.structureCount = s.integer(20);
+  if (const auto options = s.optionalText(21)) {
+    const auto json = nlohmann::json::parse(*options, nullptr, false);
+    if (!json.is_object()) return fail("dataset '" + r.name + "': stored load options are not a JSON object");
+    r.skipUnreadableFiles = json.value("skip_unreadable", false);
+    r.dataFolder = json.value("data_folder", "");
+  }
   return r;
 }
 
@@ -53,10 +61,33 @@ std::optional<std::string> nonEmpty(const std::string& s) {
   return s;
 }
 
+// The structures of dataset `id`, inside the caller's transaction.
+Status insertStructures(Database& d, std::int64_t id, const std::vector<Structure>& structures) {
+  auto add = d.prepare(
+      "INSERT INTO structures (dataset_id, label, structure_id, name, colour_r, colour_g, colour_b, system,"
+      " description) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9)");
+  if (!add) return tl::unexpected(add.error());
+  for (const Structure& st : structures) {
+    add->reset();
+    add->bind(1, id)
+        .bind(2, int(st.label))
+        .bind(3, st.id)
+        .bind(4, st.displayName)
+        .bind(5, double(st.colour[0]))
+        .bind(6, double(st.colour[1]))
+        .bind(7, double(st.colour[2]))
+        .bind(8, st.system)
+        .bind(9, st.description);
+    if (auto s = add->run(); !s)
+      return tl::unexpected(withContext("structure " + std::to_string(st.label) + " '" + st.id + "'", s.error()));
+  }
+  return {};
+}
+
 }  // namespace
 
 Result<std::int64_t> registerDataset(Database& db, const DatasetRecord& record,
-                                     const std::vector<Structure>& structures) {
+                                     const std::vector<Structure>& structures, bool replace) {
   std::int64_t id = 0;
   auto status = db.writeTransaction([&](Database& d) -> Status {
     auto exists = d.prepare("SELECT 1 FROM datasets WHERE name = ?1");
@@ -64,13 +95,28 @@ Result<std::int64_t> registerDataset(Database& db, const DatasetRecord& record,
     exists->bind(1, record.name);
     auto row = exists->step();
     if (!row) return tl::unexpected(row.error());
-    if (*row) return fail(ErrorKind::Conflict, "a dataset named '" + record.name + "' is already imported; choose another --name");
+    if (*row && !replace)
+      return fail(ErrorKind::Conflict, "a dataset named '" + record.name +
+                                           "' is already imported; choose another --name (or --replace it)");
+    if (*row) {
+      // The structures go with their dataset (ON DELETE CASCADE).
+      auto remove = d.prepare("DELETE FROM datasets WHERE name = ?1");
+      if (!remove) return tl::unexpected(remove.error());
+      remove->bind(1, record.name);
+      if (auto s = remove->run(); !s) return s;
+    }
 
+    nlohmann::json loadOptions = nlohmann::json::object();
+    if (record.skipUnreadableFiles) loadOptions["skip_unreadable"] = true;
+    if (!record.dataFolder.empty()) loadOptions["data_folder"] = record.dataFolder;
+    // load_options only when there are some: the column exists from schema 9 on.
     auto insert = d.prepare(
-        "INSERT INTO datasets (name, species, volume_path, volume_checksum, labels_path, labels_checksum,"
-        " names_path, dim_x, dim_y, dim_z, spacing_x, spacing_y, spacing_z, origin_x, origin_y, origin_z,"
-        " direction, orientation) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13, ?14, ?15,"
-        " ?16, ?17, ?18) RETURNING id");
+        std::string("INSERT INTO datasets (name, species, volume_path, volume_checksum, labels_path, labels_checksum,"
+                    " names_path, dim_x, dim_y, dim_z, spacing_x, spacing_y, spacing_z, origin_x, origin_y, origin_z,"
+                    " direction, orientation") +
+        (loadOptions.empty() ? ") VALUES (" : ", load_options) VALUES (") +
+        "?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13, ?14, ?15, ?16, ?17, ?18" +
+        (loadOptions.empty() ? ")" : ", ?19)") + " RETURNING id");
     if (!insert) return tl::unexpected(insert.error());
     nlohmann::json direction = nlohmann::json::array();
     for (int row = 0; row < 3; ++row)
@@ -94,32 +140,38 @@ Result<std::int64_t> registerDataset(Database& db, const DatasetRecord& record,
         .bind(16, g.originMm[2])
         .bind(17, direction.dump())
         .bind(18, record.orientation);
+    if (!loadOptions.empty()) insert->bind(19, loadOptions.dump());
     auto inserted = insert->insertReturningId();
     if (!inserted) return tl::unexpected(inserted.error());
     id = *inserted;
 
-    auto add = d.prepare(
-        "INSERT INTO structures (dataset_id, label, structure_id, name, colour_r, colour_g, colour_b, system,"
-        " description) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9)");
-    if (!add) return tl::unexpected(add.error());
-    for (const Structure& st : structures) {
-      add->reset();
-      add->bind(1, id)
-          .bind(2, int(st.label))
-          .bind(3, st.id)
-          .bind(4, st.displayName)
-          .bind(5, double(st.colour[0]))
-          .bind(6, double(st.colour[1]))
-          .bind(7, double(st.colour[2]))
-          .bind(8, st.system)
-          .bind(9, st.description);
-      if (auto s = add->run(); !s)
-        return tl::unexpected(withContext("structure " + std::to_string(st.label) + " '" + st.id + "'", s.error()));
-    }
-    return {};
+    return insertStructures(d, id, structures);
   });
   if (!status) return tl::unexpected(status.error());
   return id;
+}
+
+Status saveDatasetLabels(Database& db, const std::string& name, const std::string& labelsPath,
+                         const std::string& labelsChecksum, const std::string& namesPath,
+                         const std::vector<Structure>& structures) {
+  return db.writeTransaction([&](Database& d) -> Status {
+    auto find = d.prepare("SELECT id FROM datasets WHERE name = ?1");
+    if (!find) return tl::unexpected(find.error());
+    find->bind(1, name);
+    auto row = find->step();
+    if (!row) return tl::unexpected(row.error());
+    if (!*row) return fail(ErrorKind::NotFound, "no imported dataset is named '" + name + "'");
+    const std::int64_t id = find->int64(0);
+    auto update = d.prepare("UPDATE datasets SET labels_path = ?1, labels_checksum = ?2, names_path = ?3 WHERE id = ?4");
+    if (!update) return tl::unexpected(update.error());
+    update->bind(1, nonEmpty(labelsPath)).bind(2, nonEmpty(labelsChecksum)).bind(3, nonEmpty(namesPath)).bind(4, id);
+    if (auto s = update->run(); !s) return s;
+    auto clear = d.prepare("DELETE FROM structures WHERE dataset_id = ?1");
+    if (!clear) return tl::unexpected(clear.error());
+    clear->bind(1, id);
+    if (auto s = clear->run(); !s) return s;
+    return insertStructures(d, id, structures);
+  });
 }
 
 Result<std::vector<DatasetRecord>> listDatasets(Database& db) {
@@ -178,7 +230,31 @@ DatasetFiles datasetFiles(const DatasetRecord& record) {
   files.labelsPath = record.labelsPath;
   files.namesPath = record.namesPath;
   files.id = record.name;
+  files.skipUnreadableFiles = record.skipUnreadableFiles;
+  files.dataFolder = record.dataFolder;
   return files;
+}
+
+Result<DatasetFiles> verifiedDatasetFiles(const DatasetRecord& record) {
+  const std::string reimport = "anatomy-tutor import --volume " + record.volumePath +
+                               (record.labelsPath.empty() ? "" : " --labels " + record.labelsPath) +
+                               (record.namesPath.empty() ? "" : " --names " + record.namesPath) +
+                               (record.skipUnreadableFiles ? " --skip-unreadable" : "") +
+                               (record.dataFolder.empty() ? "" : " --nrrd-data " + record.dataFolder) + " --name " +
+                               record.name + " --replace";
+  for (const auto& [path, recorded, what] : {std::tuple{&record.volumePath, &record.volumeChecksum, "volume"},
+                                             std::tuple{&record.labelsPath, &record.labelsChecksum, "labels"}}) {
+    if (path->empty()) continue;
+    auto now = checksumPath(*path);
+    if (!now)
+      return tl::unexpected(withContext("dataset '" + record.name + "': its " + what + " cannot be read", now.error()));
+    if (*now != *recorded)
+      return fail(ErrorKind::Conflict,
+                  "dataset '" + record.name + "': its " + what + " " + *path +
+                      " has changed since it was imported (checksum now " + now->substr(0, 19) + "…, recorded " +
+                      recorded->substr(0, 19) + "…); if the new content is meant, register it again: " + reimport);
+  }
+  return datasetFiles(record);
 }
 
 }  // namespace at::db

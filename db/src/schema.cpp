@@ -362,6 +362,12 @@ WHERE (SELECT p.session FROM study_participants p
 ALTER TABLE study_trials ADD COLUMN viewing_measured INTEGER NOT NULL DEFAULT 1;
 )SQL";
 
+// How an imported dataset's files are read (import --skip-unreadable, --nrrd-data), kept so that
+// every later open reads them the same way: JSON {"skip_unreadable": true, "data_folder": "/abs"}.
+constexpr std::string_view kDatasetLoadOptions = R"SQL(
+ALTER TABLE datasets ADD COLUMN load_options TEXT;
+)SQL";
+
 }  // namespace
 
 const std::vector<Migration>& migrations() {
@@ -377,6 +383,7 @@ const std::vector<Migration>& migrations() {
         {"FROM review_responses)\nORDER BY", "FROM review_responses) AS earlier_answers\nORDER BY"}}},
       {7, "practical exams: definitions, attempts and their items", kExams},
       {8, "study ratings keep their session; trials say whether viewing was measured", kStudySessions},
+      {9, "how an imported dataset's files are read (skip unreadable files, data folder)", kDatasetLoadOptions},
   };
   return all;
 }

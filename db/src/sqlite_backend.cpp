@@ -1,8 +1,13 @@
 // The SQLite engine: one file, WAL mode, foreign keys on, FULL sync, a busy timeout; the schema
-// version in PRAGMA user_version.
+// version in PRAGMA user_version. Files are inspected read-only (version, quick_check) before they
+// are opened for writing; full disks, read-only and damaged files are said in those words.
 #include <sqlite3.h>
+#include <unistd.h>
 
+#include <cerrno>
+#include <cstdio>
 #include <filesystem>
+#include <optional>
 
 #include "backend.h"
 
@@ -37,6 +42,37 @@ ErrorKind kindOf(int rc) {
   return ErrorKind::Io;
 }
 
+// The error of a failed SQLite call. What a user can act on — a full disk, a read-only or damaged
+// database, a failing disk — is said in those words with the file named; anything else keeps
+// SQLite's message and the kind from its result code.
+Error sqliteError(sqlite3* db, int rc, const std::string& message) {
+  const char* name = db ? sqlite3_db_filename(db, "main") : nullptr;
+  const std::string file = name && *name ? std::string(name) + ": " : std::string();
+  const std::string sqlite = " (SQLite: " + message + ")";
+  // A disk I/O error is often a full or read-only disk underneath (the WAL index cannot grow).
+  int primary = rc & 0xff;
+  if (primary == SQLITE_IOERR || primary == SQLITE_CANTOPEN) {
+    const int os = db ? sqlite3_system_errno(db) : 0;
+    if (os == ENOSPC || os == EDQUOT) primary = SQLITE_FULL;
+    if (os == EROFS || os == EACCES || os == EPERM) primary = SQLITE_READONLY;
+  }
+  switch (primary) {
+    case SQLITE_FULL:
+      return {ErrorKind::Io, file + "the disk is full" + sqlite +
+                                 "; this step saved nothing — free some space and run the command again"};
+    case SQLITE_READONLY:
+      return {ErrorKind::Io, file + "the database is read-only" + sqlite +
+                                 "; this command writes to it — give it write access or use another --db"};
+    case SQLITE_CORRUPT:
+    case SQLITE_NOTADB:
+      return {ErrorKind::Io, file + "the database is damaged" + sqlite + "; restore a backup or use another --db"};
+    case SQLITE_IOERR:
+      return {ErrorKind::Io, file + "the disk failed to read or write the database" + sqlite};
+    default:
+      return {kindOf(rc), "SQL error: " + message};
+  }
+}
+
 class SqliteCursor final : public Cursor {
  public:
   SqliteCursor(sqlite3_stmt* stmt, sqlite3* db, std::string sql) : stmt_(stmt), db_(db), sql_(std::move(sql)) {}
@@ -61,7 +97,7 @@ class SqliteCursor final : public Cursor {
     // Leave the statement reusable after an error (its error code stays with the connection).
     const int code = sqlite3_extended_errcode(db_);
     sqlite3_reset(stmt_);
-    return fail(kindOf(code), "SQL error: " + message);
+    return tl::unexpected(sqliteError(db_, code, message));
   }
 
   void reset() override {
@@ -103,8 +139,11 @@ class SqliteConnection final : public Connection {
   Result<std::unique_ptr<Cursor>> prepare(std::string_view sql) override {
     sqlite3_stmt* stmt = nullptr;
     const int rc = sqlite3_prepare_v2(db_, sql.data(), int(sql.size()), &stmt, nullptr);
-    if (rc != SQLITE_OK)
-      return fail(kindOf(sqlite3_extended_errcode(db_)), "SQL error: " + errorText(db_, rc) + " in: " + std::string(sql));
+    if (rc != SQLITE_OK) {
+      Error e = sqliteError(db_, sqlite3_extended_errcode(db_), errorText(db_, rc));
+      if (e.message.rfind("SQL error: ", 0) == 0) e.message += " in: " + std::string(sql);
+      return tl::unexpected(e);
+    }
     return std::unique_ptr<Cursor>(new SqliteCursor(stmt, db_, std::string(sql)));
   }
 
@@ -115,7 +154,7 @@ class SqliteConnection final : public Connection {
     if (rc != SQLITE_OK) {
       std::string m = message ? message : errorText(db_, rc);
       sqlite3_free(message);
-      return fail(kindOf(sqlite3_extended_errcode(db_)), "SQL error: " + m);
+      return tl::unexpected(sqliteError(db_, sqlite3_extended_errcode(db_), m));
     }
     return {};
   }
@@ -141,37 +180,118 @@ class SqliteConnection final : public Connection {
   std::string path_;
 };
 
-}  // namespace
-
-Result<int> peekSqliteVersion(const std::string& path) {
-  std::error_code ec;
-  if (!fs::exists(path, ec) || fs::file_size(path, ec) == 0) return 0;
-  sqlite3* raw = nullptr;
-  int rc = sqlite3_open_v2(path.c_str(), &raw, SQLITE_OPEN_READONLY, nullptr);
-  if (rc != SQLITE_OK) {
-    std::string message = errorText(raw, rc);
-    sqlite3_close_v2(raw);
-    return fail(ErrorKind::Io, path + ": cannot open: " + message);
+// "file:/path?mode=ro[&immutable=1]": a URI, so that read-only connections can ask for `immutable`.
+std::string readOnlyUri(const std::string& path, bool immutable) {
+  std::string uri = "file:";
+  for (const char c : fs::absolute(path).string()) {
+    if (c == '%' || c == '?' || c == '#') {
+      char escaped[4];
+      std::snprintf(escaped, sizeof escaped, "%%%02X", static_cast<unsigned char>(c));
+      uri += escaped;
+    } else {
+      uri += c;
+    }
   }
-  sqlite3_busy_timeout(raw, 5000);
+  return uri + (immutable ? "?mode=ro&immutable=1" : "?mode=ro");
+}
+
+struct HandleCloser {
+  void operator()(sqlite3* db) const { sqlite3_close_v2(db); }
+};
+using Handle = std::unique_ptr<sqlite3, HandleCloser>;
+
+Result<Handle> openReadOnlyHandle(const std::string& path, bool immutable) {
+  sqlite3* raw = nullptr;
+  const int rc = sqlite3_open_v2(readOnlyUri(path, immutable).c_str(), &raw,
+                                 SQLITE_OPEN_READONLY | SQLITE_OPEN_URI | SQLITE_OPEN_FULLMUTEX, nullptr);
+  Handle handle(raw);
+  if (rc != SQLITE_OK) return fail(ErrorKind::Io, path + ": cannot open: " + errorText(raw, rc));
+  sqlite3_extended_result_codes(raw, 1);
+  return handle;
+}
+
+// The first column of the first row of `sql`, as text; nullopt and `rc` set on failure.
+std::optional<std::string> queryText(sqlite3* db, const char* sql, int& rc) {
   sqlite3_stmt* stmt = nullptr;
-  rc = sqlite3_prepare_v2(raw, "PRAGMA user_version", -1, &stmt, nullptr);
-  int version = 0;
+  rc = sqlite3_prepare_v2(db, sql, -1, &stmt, nullptr);
+  std::optional<std::string> value;
   if (rc == SQLITE_OK) {
     rc = sqlite3_step(stmt);
     if (rc == SQLITE_ROW) {
-      version = sqlite3_column_int(stmt, 0);
+      const auto* text = reinterpret_cast<const char*>(sqlite3_column_text(stmt, 0));
+      value = text ? text : "";
       rc = SQLITE_OK;
     }
   }
-  std::string message = rc == SQLITE_OK ? "" : errorText(raw, rc);
+  if (rc != SQLITE_OK) rc = sqlite3_extended_errcode(db);
   sqlite3_finalize(stmt);
-  sqlite3_close_v2(raw);
-  if (rc != SQLITE_OK) {
-    if ((rc & 0xff) == SQLITE_NOTADB) return fail(path + ": not an Anatomy Tutor database (not a SQLite file)");
-    return fail(path + ": cannot read the schema version: " + message);
+  return value;
+}
+
+// True if the database has a write-ahead log holding changes (then an immutable reader would miss
+// them).
+bool hasWalContent(const std::string& path) {
+  std::error_code ec;
+  const auto size = fs::file_size(path + "-wal", ec);
+  return !ec && size > 0;
+}
+
+}  // namespace
+
+bool sqliteWritable(const std::string& path) {
+  const fs::path folder = fs::absolute(path).parent_path();
+  return ::access(path.c_str(), W_OK) == 0 && ::access(folder.c_str(), W_OK) == 0;
+}
+
+Result<SqliteFileState> inspectSqlite(const std::string& path) {
+  SqliteFileState state;
+  int rc = SQLITE_OK;
+  std::optional<std::string> version;
+  for (const bool immutable : {false, true}) {
+    if (immutable && hasWalContent(path)) break;
+    state.immutable = immutable;
+    auto handle = openReadOnlyHandle(path, immutable);
+    if (!handle) return tl::unexpected(handle.error());
+    sqlite3_busy_timeout(handle->get(), 5000);
+    version = queryText(handle->get(), "PRAGMA user_version", rc);
+    if (!version) {
+      const int primary = rc & 0xff;
+      if (primary == SQLITE_NOTADB) return fail(path + ": not an Anatomy Tutor database (not a SQLite file)");
+      if (primary == SQLITE_CORRUPT)
+        return fail(ErrorKind::Io, path + ": the database is damaged (SQLite: " + errorText(handle->get(), rc) +
+                                       "); it was left untouched — restore a backup or use another --db");
+      const bool cannotIndex = primary == SQLITE_READONLY || primary == SQLITE_CANTOPEN || primary == SQLITE_IOERR;
+      if (cannotIndex && !immutable) continue;
+      return fail(ErrorKind::Io, path + ": cannot read the schema version: " + errorText(handle->get(), rc));
+    }
+    // quick_check: every page and index entry readable and consistent (O(size), not the full
+    // integrity_check's cross-checks). A damaged file is refused before anything is written to it.
+    auto check = queryText(handle->get(), "PRAGMA quick_check", rc);
+    if (!check || *check != "ok") {
+      const std::string problem = check ? *check : errorText(handle->get(), rc);
+      return fail(ErrorKind::Io, path + ": the database is damaged (SQLite's quick_check: " +
+                                     problem.substr(0, problem.find('\n')) +
+                                     "); it was left untouched — restore a backup or use another --db");
+    }
+    break;
   }
-  return version;
+  if (!version) return fail(ErrorKind::Io, path + ": cannot read the schema version");
+  try {
+    state.version = std::stoi(*version);
+  } catch (const std::exception&) {
+    return fail(ErrorKind::Io, path + ": unreadable schema version '" + *version + "'");
+  }
+  return state;
+}
+
+Result<std::unique_ptr<Connection>> openSqliteReadOnly(const std::string& path, const OpenOptions& options,
+                                                       bool immutable) {
+  auto handle = openReadOnlyHandle(path, immutable);
+  if (!handle) return tl::unexpected(handle.error());
+  sqlite3_busy_timeout(handle->get(), options.busyTimeoutMs);
+  auto connection = std::make_unique<SqliteConnection>(handle->release(), path);
+  if (auto s = connection->exec("PRAGMA foreign_keys = ON"); !s) return tl::unexpected(withContext(path, s.error()));
+  return std::unique_ptr<Connection>(std::move(connection));
 }
 
 Result<std::unique_ptr<Connection>> openSqlite(const std::string& path, const OpenOptions& options) {

@@ -218,9 +218,35 @@ Result<StudyParticipant> enrolOrResume(Database& db, const quiz::StudyProtocol& 
   return loadParticipant(db, protocol.id, participantId);
 }
 
-Status recordRating(Database& db, const std::string& studyId, const std::string& participantId,
-                    const RatingRecord& rating) {
+namespace {
+
+// Inside a write transaction: fails unless `participant`'s session is still the latest one.
+Status checkSessionCurrent(Database& d, const StudyParticipant& participant) {
+  auto st = d.prepare("SELECT session FROM study_participants WHERE study_id = ?1 AND participant_id = ?2");
+  if (!st) return tl::unexpected(st.error());
+  st->bind(1, participant.studyId).bind(2, participant.participantId);
+  auto row = st->step();
+  if (!row) return tl::unexpected(row.error());
+  if (!*row)
+    return fail(ErrorKind::NotFound, "study '" + participant.studyId + "' has no participant '" +
+                                         participant.participantId + "'");
+  const int latest = st->integer(0);
+  if (latest == participant.session) return {};
+  return fail(ErrorKind::Conflict,
+              "study '" + participant.studyId + "': participant '" + participant.participantId +
+                  "' was resumed by another session (session " + std::to_string(latest) + ") after this one (session " +
+                  std::to_string(participant.session) +
+                  ") began; this session stops here and keeps what it saved — finish in session " +
+                  std::to_string(latest) + ", or resume the participant again to take over");
+}
+
+}  // namespace
+
+Status recordRating(Database& db, const StudyParticipant& participant, const RatingRecord& rating) {
+  const std::string& studyId = participant.studyId;
+  const std::string& participantId = participant.participantId;
   return db.writeTransaction([&](Database& d) -> Status {
+    if (auto current = checkSessionCurrent(d, participant); !current) return current;
     auto st = d.prepare(
         "INSERT INTO study_ratings (study_id, participant_id, position, item, rating_ab, response_ms, t, alpha, beta, "
         "app_version, session, created_at) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, "
@@ -244,10 +270,12 @@ Status recordRating(Database& db, const std::string& studyId, const std::string&
   });
 }
 
-Status recordTrialViewing(Database& db, const std::string& studyId, const std::string& participantId, int position,
-                          double viewMsA, double viewMsB, int toggles, const std::string& comment,
-                          bool viewingMeasured) {
+Status recordTrialViewing(Database& db, const StudyParticipant& participant, int position, double viewMsA,
+                          double viewMsB, int toggles, const std::string& comment, bool viewingMeasured) {
+  const std::string& studyId = participant.studyId;
+  const std::string& participantId = participant.participantId;
   return db.writeTransaction([&](Database& d) -> Status {
+    if (auto current = checkSessionCurrent(d, participant); !current) return current;
     auto st = d.prepare(
         "UPDATE study_trials SET view_ms_a = ?4, view_ms_b = ?5, toggles = ?6, comment = ?7, viewing_measured = ?8 "
         "WHERE study_id = ?1 AND participant_id = ?2 AND position = ?3");
@@ -265,8 +293,11 @@ Status recordTrialViewing(Database& db, const std::string& studyId, const std::s
   });
 }
 
-Status markParticipantComplete(Database& db, const std::string& studyId, const std::string& participantId) {
+Status markParticipantComplete(Database& db, const StudyParticipant& participant) {
+  const std::string& studyId = participant.studyId;
+  const std::string& participantId = participant.participantId;
   return db.writeTransaction([&](Database& d) -> Status {
+    if (auto current = checkSessionCurrent(d, participant); !current) return current;
     auto st = d.prepare(
         "UPDATE study_participants SET completed_at = ?3 "
         "WHERE study_id = ?1 AND participant_id = ?2 AND completed_at IS NULL");

@@ -1,11 +1,17 @@
 #include "lessons/course_json.h"
 
 #include <algorithm>
+#include <cstdint>
 #include <fstream>
+#include <limits>
 #include <set>
 #include <sstream>
 
 #include <nlohmann/json.hpp>
+
+#include "core/json_document.h"
+#include "core/printable_text.h"
+#include "core/regular_file.h"
 
 namespace at::lessons {
 namespace {
@@ -13,6 +19,8 @@ namespace {
 using nlohmann::json;
 
 constexpr int kSchema = 1;
+// The default course is 26 KB; anything near this is not a course.
+constexpr std::size_t kMaxCourseBytes = std::size_t(64) << 20;
 
 // Reads one JSON object strictly: every key must be known, types checked, errors name the path.
 class Reader {
@@ -30,7 +38,11 @@ class Reader {
     return {};
   }
 
-  std::string field(const std::string& key) const { return path_.empty() ? key : path_ + "." + key; }
+  // Keys come from the file: quoted printably (a key may hold a newline or an escape sequence).
+  std::string field(const std::string& key) const {
+    const std::string shown = printableText(key, 60);
+    return path_.empty() ? shown : path_ + "." + shown;
+  }
   bool has(const char* key) const { return j_.contains(key); }
   const json& raw(const char* key) const { return j_.at(key); }
 
@@ -53,8 +65,14 @@ class Reader {
 
   Result<int> integer(const char* key, int fallback) const {
     if (!j_.contains(key)) return fallback;
-    if (!j_[key].is_number_integer()) return fail(field(key) + ": must be an integer");
-    return j_[key].get<int>();
+    const json& v = j_[key];
+    if (!v.is_number_integer()) return fail(field(key) + ": must be an integer");
+    // An unsigned value above INT64_MAX or a signed one outside int does not fit.
+    if (v.is_number_unsigned() ? v.get<std::uint64_t>() > std::uint64_t(std::numeric_limits<int>::max())
+                               : (v.get<std::int64_t>() < std::numeric_limits<int>::min() ||
+                                  v.get<std::int64_t>() > std::numeric_limits<int>::max()))
+      return fail(field(key) + ": must be an integer of at most 9 digits");
+    return v.get<int>();
   }
 
   Result<std::vector<std::string>> strings(const char* key) const {
@@ -375,13 +393,9 @@ json examJson(const ExamSpec& e) {
 
 }  // namespace
 
-Result<Course> parseCourseJson(const std::string& text, const std::string& sourceName) {
-  json j;
-  try {
-    j = json::parse(text);
-  } catch (const json::parse_error& e) {
-    return fail(sourceName + ": not valid JSON: " + e.what());
-  }
+namespace {
+
+Result<Course> readCourse(const json& j, const std::string& sourceName) {
   const auto prefixed = [&](Error e) { return tl::unexpected(withContext(sourceName, std::move(e))); };
   Reader r(j, "");
   if (auto ok = r.expect({"schema", "id", "title", "summary", "dataset", "version", "synonyms", "lessons", "exams"}); !ok) {
@@ -466,12 +480,18 @@ Result<Course> parseCourseJson(const std::string& text, const std::string& sourc
   return course;
 }
 
+}  // namespace
+
+Result<Course> parseCourseJson(const std::string& text, const std::string& sourceName) {
+  auto document = parseJsonDocument(text, sourceName);
+  if (!document) return tl::unexpected(document.error());
+  return withPrintableError(readCourse(*document, sourceName));
+}
+
 Result<Course> loadCourseJson(const std::filesystem::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) return fail(ErrorKind::Io, path.string() + ": cannot open the course file");
-  std::ostringstream text;
-  text << in.rdbuf();
-  return parseCourseJson(text.str(), path.filename().string());
+  auto text = readRegularFile(path.string(), path.filename().string(), kMaxCourseBytes);
+  if (!text) return tl::unexpected(text.error());
+  return parseCourseJson(*text, path.filename().string());
 }
 
 std::string courseToJson(const Course& course) {
@@ -518,26 +538,18 @@ std::string questionToJson(const quiz::Question& question) { return questionJson
 std::string examToJson(const ExamSpec& exam) { return examJson(exam).dump(); }
 
 Result<ExamSpec> parseExamJson(const std::string& text, const std::string& sourceName) {
-  json j;
-  try {
-    j = json::parse(text);
-  } catch (const json::parse_error& e) {
-    return fail(sourceName + ": not valid JSON: " + e.what());
-  }
-  auto exam = readExam(j, "exam");
-  if (!exam) return tl::unexpected(withContext(sourceName, exam.error()));
+  auto j = parseJsonDocument(text, sourceName);
+  if (!j) return tl::unexpected(j.error());
+  auto exam = readExam(*j, "exam");
+  if (!exam) return tl::unexpected(printableError(withContext(sourceName, exam.error())));
   return exam;
 }
 
 Result<quiz::Question> parseQuestionJson(const std::string& text, const std::string& sourceName) {
-  json j;
-  try {
-    j = json::parse(text);
-  } catch (const json::parse_error& e) {
-    return fail(sourceName + ": not valid JSON: " + e.what());
-  }
-  auto q = readQuestion(j, "question");
-  if (!q) return tl::unexpected(withContext(sourceName, q.error()));
+  auto j = parseJsonDocument(text, sourceName);
+  if (!j) return tl::unexpected(j.error());
+  auto q = readQuestion(*j, "question");
+  if (!q) return tl::unexpected(printableError(withContext(sourceName, q.error())));
   return q;
 }
 

@@ -4,6 +4,9 @@
 
 #include <nlohmann/json.hpp>
 
+#include "core/json_document.h"
+#include "core/printable_text.h"
+
 namespace at::quiz {
 
 std::string answerToJson(const Answer& answer) {
@@ -20,13 +23,9 @@ std::string answerToJson(const Answer& answer) {
   return j.dump();
 }
 
-Result<Answer> answerFromJson(const std::string& line) {
-  nlohmann::json j;
-  try {
-    j = nlohmann::json::parse(line);
-  } catch (const nlohmann::json::parse_error& e) {
-    return fail(std::string("not valid JSON: ") + e.what());
-  }
+namespace {
+
+Result<Answer> readAnswer(const nlohmann::json& j) {
   if (!j.is_object()) return fail("an answer must be a JSON object such as {\"choice\": 1}");
   Answer answer;
   int fields = 0;
@@ -62,12 +61,27 @@ Result<Answer> answerFromJson(const std::string& line) {
       answer.order = order;
       ++fields;
     } else {
-      return fail("unknown field '" + key + "' (expected choice, text, pick with distance_mm, or order)");
+      return fail("unknown field '" + printableText(key, 40) + "' (expected choice, text, pick with distance_mm, or order)");
     }
   }
   if (fields == 0) return fail("no answer: give one of choice, text, pick or order");
   if (fields > 1) return fail("more than one answer field: give exactly one of choice, text, pick or order");
   return answer;
+}
+
+}  // namespace
+
+Result<Answer> answerFromJson(const std::string& line) {
+  // The caller names the file and line ("answers.jsonl:3: column 5: not valid JSON: …"): of the
+  // parser's position only the column within this line is kept.
+  auto j = parseJsonDocument(line, "answer");
+  if (!j) {
+    Error e = j.error();
+    constexpr std::string_view kPrefix = "answer: line 1, ";
+    if (e.message.rfind(kPrefix, 0) == 0) e.message.erase(0, kPrefix.size());
+    return tl::unexpected(e);
+  }
+  return withPrintableError(readAnswer(*j));
 }
 
 }  // namespace at::quiz

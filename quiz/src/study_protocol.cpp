@@ -1,10 +1,15 @@
 #include "quiz/study_protocol.h"
 
+#include <algorithm>
 #include <fstream>
 #include <set>
 #include <sstream>
 
 #include <nlohmann/json.hpp>
+
+#include "core/json_document.h"
+#include "core/printable_text.h"
+#include "core/regular_file.h"
 
 namespace at::quiz {
 
@@ -67,13 +72,12 @@ class Reader {
 
 }  // namespace
 
-Result<StudyProtocol> parseStudyProtocol(const std::string& jsonText, const std::string& sourceName) {
-  json j;
-  try {
-    j = json::parse(jsonText);
-  } catch (const json::parse_error& e) {
-    return fail(sourceName + ": not valid JSON (" + std::string(e.what()) + ")");
-  }
+namespace {
+
+// Likert scales have a handful of points; this bound keeps their arithmetic far from overflow.
+constexpr int kScaleLimit = 1000;
+
+Result<StudyProtocol> readStudyProtocol(json& j, const std::string& sourceName) {
   Reader r(sourceName);
   StudyProtocol p;
   if (auto s = r.expectObject(j, "", {"schema", "id", "title", "dataset", "structures", "conditions", "presets",
@@ -150,12 +154,15 @@ Result<StudyProtocol> parseStudyProtocol(const std::string& jsonText, const std:
     long long v;
     if (s.contains("min")) {
       AT_TRY_ASSIGN(v, r.integer(s["min"], "scale.min"));
-      p.scale.min = int(v);
+      p.scale.min = int(std::clamp<long long>(v, -kScaleLimit - 1, kScaleLimit + 1));
     }
     if (s.contains("max")) {
       AT_TRY_ASSIGN(v, r.integer(s["max"], "scale.max"));
-      p.scale.max = int(v);
+      p.scale.max = int(std::clamp<long long>(v, -kScaleLimit - 1, kScaleLimit + 1));
     }
+    for (const auto& [name, value] : {std::pair{"scale.min", p.scale.min}, std::pair{"scale.max", p.scale.max}})
+      if (value < -kScaleLimit || value > kScaleLimit)
+        return fail(r.where(name) + " must lie in -" + std::to_string(kScaleLimit) + ".." + std::to_string(kScaleLimit));
     if (p.scale.max <= p.scale.min || (p.scale.max - p.scale.min) % 2 != 0)
       return fail(r.where("scale") + " must have max > min and an odd number of points (a midpoint)");
     if (s.contains("anchors")) {
@@ -197,12 +204,20 @@ Result<StudyProtocol> parseStudyProtocol(const std::string& jsonText, const std:
   return p;
 }
 
+}  // namespace
+
+Result<StudyProtocol> parseStudyProtocol(const std::string& jsonText, const std::string& sourceName) {
+  auto document = parseJsonDocument(jsonText, sourceName);
+  if (!document) return tl::unexpected(document.error());
+  return withPrintableError(readStudyProtocol(*document, sourceName));
+}
+
 Result<StudyProtocol> loadStudyProtocol(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) return fail(ErrorKind::Io, path + ": cannot open the study definition");
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return parseStudyProtocol(ss.str(), path);
+  // The paper's survey takes 1.5 KB; anything near this is not a study definition.
+  constexpr std::size_t kMaxBytes = std::size_t(16) << 20;
+  auto text = readRegularFile(path, path, kMaxBytes);
+  if (!text) return tl::unexpected(text.error());
+  return parseStudyProtocol(*text, path);
 }
 
 std::string serialiseStudyProtocol(const StudyProtocol& p) {

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <map>
 #include <set>
 
@@ -298,25 +299,51 @@ std::string summaryCsv(const StudySummary& summary) {
   return out;
 }
 
+std::string markdownText(const std::string& text) {
+  std::string out;
+  out.reserve(text.size());
+  for (const char c : text) {
+    const auto u = static_cast<unsigned char>(c);
+    if (c == '\n' || c == '\r' || c == '\t') {
+      out += ' ';
+    } else if (u < 0x20 || u == 0x7f) {
+      continue;
+    } else if (c == '&') {
+      out += "&amp;";
+    } else if (c == '<') {
+      out += "&lt;";
+    } else if (c == '>') {
+      out += "&gt;";
+    } else if (std::strchr("\\`*_{}[]()#+-.!|~", c)) {
+      out += '\\';
+      out += c;
+    } else {
+      out += c;
+    }
+  }
+  return out;
+}
+
 std::string summaryMarkdown(const StudyProtocol& protocol, const StudySummary& summary, std::size_t participants,
                             std::size_t partialParticipants) {
-  std::string md = "# " + (protocol.title.empty() ? protocol.id : protocol.title) + "\n\n";
-  md += "Study `" + protocol.id + "` on dataset `" + protocol.dataset + "`: " + std::to_string(participants) +
+  const auto text = [](const std::string& s) { return markdownText(s); };
+  std::string md = "# " + text(protocol.title.empty() ? protocol.id : protocol.title) + "\n\n";
+  md += "Study " + text(protocol.id) + " on dataset " + text(protocol.dataset) + ": " + std::to_string(participants) +
         " participant(s)";
   if (partialParticipants) md += ", of whom " + std::to_string(partialParticipants) + " stopped before the end (partial data included)";
   md += ".\n\n";
-  md += "Scale: " + std::to_string(protocol.scale.min) + " = prefer " + protocol.conditions[0].id + " … " +
+  md += "Scale: " + std::to_string(protocol.scale.min) + " = prefer " + text(protocol.conditions[0].id) + " … " +
         std::to_string(protocol.scale.midpoint()) + " = no preference … " + std::to_string(protocol.scale.max) +
-        " = prefer " + protocol.conditions[1].id + ". Each cell: mean (SD) [95 % CI], n participants, Wilcoxon " +
+        " = prefer " + text(protocol.conditions[1].id) + ". Each cell: mean (SD) [95 % CI], n participants, Wilcoxon " +
         "signed-rank p against " + std::to_string(protocol.scale.midpoint()) +
         " (each participant's mean over the structures they rated).\n\n";
   md += "| item |";
-  for (const auto& c : summary.columns) md += " " + c + " |";
+  for (const auto& c : summary.columns) md += " " + text(c) + " |";
   md += "\n|---|";
   for (std::size_t i = 0; i < summary.columns.size(); ++i) md += "---|";
   md += "\n";
   for (std::size_t i = 0; i < summary.items.size(); ++i) {
-    md += "| " + summary.items[i] + " |";
+    md += "| " + text(summary.items[i]) + " |";
     for (std::size_t c = 0; c < summary.columns.size(); ++c) {
       const SummaryCell& cell = summary.at(i, c);
       if (cell.stats.n == 0) {
@@ -327,13 +354,13 @@ std::string summaryMarkdown(const StudyProtocol& protocol, const StudySummary& s
       if (cell.stats.n > 1)
         md += " (" + number(cell.stats.sd, 2) + ") [" + number(cell.stats.ciLow, 2) + ", " + number(cell.stats.ciHigh, 2) + "]";
       md += ", n=" + std::to_string(cell.stats.n) + ", p=" + pValueText(cell.stats.pValue);
-      if (cell.preferred != "none") md += ", **prefers " + cell.preferred + "**";
+      if (cell.preferred != "none") md += ", **prefers " + text(cell.preferred) + "**";
       md += " |";
     }
     md += "\n";
   }
   md += "\nItems:\n\n";
-  for (const auto& it : protocol.items) md += "- `" + it.id + "`: " + it.wording + "\n";
+  for (const auto& it : protocol.items) md += "- " + text(it.id) + ": " + text(it.wording) + "\n";
   return md;
 }
 

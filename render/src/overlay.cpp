@@ -190,6 +190,20 @@ void drawLine(RgbImage& image, double x0, double y0, double x1, double y1, Rgb c
     }
 }
 
+namespace {
+
+// The pixels of [x0, x1] × [y0, y1] (clipped) at 45 % of their brightness.
+void darken(RgbImage& image, int x0, int y0, int x1, int y1) {
+  for (int y = std::max(0, y0); y <= std::min(image.height - 1, y1); ++y)
+    for (int x = std::max(0, x0); x <= std::min(image.width - 1, x1); ++x)
+      for (int c = 0; c < 3; ++c) {
+        std::uint8_t& v = image.rgb[(std::size_t(y) * std::size_t(image.width) + std::size_t(x)) * 3 + std::size_t(c)];
+        v = std::uint8_t(v * 45 / 100);
+      }
+}
+
+}  // namespace
+
 void drawOverlays(RgbImage& image, const Camera& camera) {
   const int unit = std::max(1, std::min(image.width, image.height) / 180);  // font scale and line width
   const Rgb text{235, 235, 235}, shadow{0, 0, 0};
@@ -197,6 +211,9 @@ void drawOverlays(RgbImage& image, const Camera& camera) {
   // Orientation marker: the three axes from a centre, the nearer ends drawn last.
   const double arm = 14.0 * unit;
   const double cx = margin + arm + 8 * unit, cy = image.height - margin - arm - 8 * unit;
+  // Dark backings, so that the marks read over white bone too.
+  const double reach = arm + 12 * unit;
+  darken(image, int(cx - reach), int(cy - reach), int(cx + reach), int(cy + reach));
   const Rgb axisColour[3] = {{230, 90, 80}, {110, 200, 110}, {100, 150, 240}};  // x, y, z
   struct End {
     double depth;
@@ -228,6 +245,9 @@ void drawOverlays(RgbImage& image, const Camera& camera) {
   // Scale bar: bottom right, with its length above it.
   const ScaleBar bar = scaleBar(camera, image.width, image.height);
   const double x1 = image.width - margin, x0 = x1 - bar.pixels, y = image.height - margin - 2.0 * unit;
+  const int labelWidth = textWidth(bar.label, unit);
+  darken(image, int(std::min(x0, 0.5 * (x0 + x1) - labelWidth / 2.0) - 4 * unit), int(y - 16 * unit), int(x1 + 4 * unit),
+         int(y + 5 * unit));
   drawLine(image, x0 + 1, y + 1, x1 + 1, y + 1, shadow, 2.0 * unit);
   drawLine(image, x0, y, x1, y, text, 2.0 * unit);
   for (double x : {x0, x1}) drawLine(image, x, y - 3.0 * unit, x, y + 1.0 * unit, text, 1.5 * unit);

@@ -9,6 +9,9 @@
 #include <nlohmann/json.hpp>
 
 #include "render/camera.h"
+#include "core/json_document.h"
+#include "core/printable_text.h"
+#include "core/regular_file.h"
 
 namespace at::render {
 
@@ -39,6 +42,9 @@ Result<RenderMode> parseRenderMode(const std::string& text) {
 }
 
 namespace {
+
+// Presets are a few kilobytes; anything near this is not a preset.
+constexpr std::size_t kMaxPresetBytes = std::size_t(16) << 20;
 
 struct FieldError {
   std::string field, problem;
@@ -83,7 +89,7 @@ Check readString(const json& j, const std::string& field, std::string& out) {
 
 Check unknownKeys(const json& obj, const std::string& prefix, const std::set<std::string>& known) {
   for (auto it = obj.begin(); it != obj.end(); ++it)
-    if (!known.count(it.key())) return FieldError{prefix + it.key(), "is not a known field"};
+    if (!known.count(it.key())) return FieldError{prefix + printableText(it.key(), 60), "is not a known field"};
   return std::nullopt;
 }
 
@@ -222,23 +228,17 @@ json tfToJson(const std::vector<TfPoint>& tf) {
 }  // namespace
 
 Result<Preset> parsePreset(const std::string& jsonText, const std::string& source) {
-  json root;
-  try {
-    root = json::parse(jsonText);
-  } catch (const json::parse_error& e) {
-    return fail(source + ": not valid JSON (" + std::string(e.what()) + ")");
-  }
+  auto root = parseJsonDocument(jsonText, source);
+  if (!root) return tl::unexpected(root.error());
   Preset p;
-  if (auto e = readPreset(root, p)) return fail(source + ": field '" + e->field + "' " + e->problem);
+  if (auto e = readPreset(*root, p)) return tl::unexpected(printableError(Error{ErrorKind::Invalid, source + ": field '" + e->field + "' " + e->problem}));
   return p;
 }
 
 Result<Preset> loadPreset(const std::filesystem::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) return fail(ErrorKind::Io, path.string() + ": cannot open the preset file");
-  std::stringstream ss;
-  ss << in.rdbuf();
-  auto p = parsePreset(ss.str(), path.filename().string());
+  auto text = readRegularFile(path.string(), path.string(), kMaxPresetBytes);
+  if (!text) return tl::unexpected(text.error());
+  auto p = parsePreset(*text, path.string());
   if (p && !p->id) p->id = path.stem().string();
   return p;
 }

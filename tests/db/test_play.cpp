@@ -286,7 +286,8 @@ TEST_CASE("A malformed answers line is reported with its number and reason, earl
   const fs::path broken = writeLines(dir / "broken.jsonl", {answers[0], "", "{\"choice\": "});
   auto r = test::runApp(playArgs("quick.check", "fay", broken, dbPath));
   CHECK(r.exitCode != 0);
-  CHECK(r.err.find("broken.jsonl:3: not valid JSON") != std::string::npos);
+  INFO(r.err);
+  CHECK(r.err.find("broken.jsonl:3: column 12, field 'choice': not valid JSON") != std::string::npos);
   CHECK(scalar(dbPath, "SELECT count(*) FROM responses") == 1);
 
   // An answer of the wrong kind for the question (a choice for a locate question) names its line.

@@ -94,10 +94,10 @@ TEST_CASE("StudyStore_RatingsAreUnblindedOnExport") {
       r.position = t.position;
       r.item = item.id;
       r.ratingAsShown = t.aCondition == "wdt" ? 1 : 5;  // always prefers the WDT view
-      REQUIRE(db::recordRating(*db, p.id, "always-wdt", r).has_value());
+      REQUIRE(db::recordRating(*db, *part, r).has_value());
     }
   }
-  REQUIRE(db::markParticipantComplete(*db, p.id, "always-wdt").has_value());
+  REQUIRE(db::markParticipantComplete(*db, *part).has_value());
   auto rows = db::studyResponseRows(*db, p);
   REQUIRE(rows.has_value());
   CHECK(rows->size() == p.structures.size() * p.items.size());
@@ -121,15 +121,17 @@ TEST_CASE("StudyStore_ResumedParticipant_EachRatingKeepsTheSessionItWasGivenIn")
   REQUIRE(db.has_value());
   const auto p = protocol();
   REQUIRE(db::saveStudy(*db, p).has_value());
-  REQUIRE(db::enrolOrResume(*db, p, "P0", "medical").has_value());
+  auto first = db::enrolOrResume(*db, p, "P0", "medical");
+  REQUIRE(first.has_value());
   db::RatingRecord r;
   r.item = p.items[0].id;
   r.ratingAsShown = 2;
-  REQUIRE(db::recordRating(*db, p.id, "P0", r).has_value());
-  REQUIRE(db::recordTrialViewing(*db, p.id, "P0", 0, 100, 200, 1, "", false).has_value());
-  REQUIRE(db::enrolOrResume(*db, p, "P0", "medical").has_value());  // session 2
+  REQUIRE(db::recordRating(*db, *first, r).has_value());
+  REQUIRE(db::recordTrialViewing(*db, *first, 0, 100, 200, 1, "", false).has_value());
+  auto second = db::enrolOrResume(*db, p, "P0", "medical");  // session 2
+  REQUIRE(second.has_value());
   r.item = p.items[1].id;
-  REQUIRE(db::recordRating(*db, p.id, "P0", r).has_value());
+  REQUIRE(db::recordRating(*db, *second, r).has_value());
   auto rows = db::studyResponseRows(*db, p);
   REQUIRE(rows.has_value());
   REQUIRE(rows->size() == 2);
@@ -214,12 +216,12 @@ std::string runParticipant(db::Database& db, const quiz::StudyProtocol& p, int p
       for (int shown = 1; shown <= 5; ++shown)
         if (quiz::unblindRating(shown, aIsWdt, p.scale) == opinion(participant, s, i)) r.ratingAsShown = shown;
       r.responseMs = 900;
-      if (auto st = db::recordRating(db, p.id, id, r); !st) return id + ": " + st.error().message;
+      if (auto st = db::recordRating(db, *part, r); !st) return id + ": " + st.error().message;
     }
-    if (auto st = db::recordTrialViewing(db, p.id, id, t.position, 3000, 2500, 2, ""); !st)
+    if (auto st = db::recordTrialViewing(db, *part, t.position, 3000, 2500, 2, ""); !st)
       return id + ": " + st.error().message;
   }
-  if (auto st = db::markParticipantComplete(db, p.id, id); !st) return id + ": " + st.error().message;
+  if (auto st = db::markParticipantComplete(db, *part); !st) return id + ": " + st.error().message;
   return {};
 }
 
@@ -428,11 +430,12 @@ TEST_CASE("StudyStore_MergeConflicts_SameIdOtherRecordsOrOtherDesign_WriteNothin
   // … and another person enrolled as P4 on machine c, rating otherwise.
   db::Database c = open("c2.db");
   REQUIRE(db::saveStudy(c, p).has_value());
-  REQUIRE(db::enrolOrResume(c, p, "P4", p.groups[0]).has_value());
+  auto otherP4 = db::enrolOrResume(c, p, "P4", p.groups[0]);
+  REQUIRE(otherP4.has_value());
   db::RatingRecord r;
   r.item = p.items[0].id;
   r.ratingAsShown = 3;
-  REQUIRE(db::recordRating(c, p.id, "P4", r).has_value());
+  REQUIRE(db::recordRating(c, *otherP4, r).has_value());
 
   auto clash = db::mergeStudy(target, {{"a", &a}, {"b", &b}, {"c", &c}}, p.id);
   REQUIRE_FALSE(clash.has_value());

@@ -72,7 +72,7 @@ TEST_CASE("CourseJson_RoundTripsThroughCourseToJson") {
 }
 
 TEST_CASE("CourseJson_BadInputsAreErrorsNamingTheField") {
-  CHECK(errorOf("{").find("bad.json: not valid JSON") == 0);
+  CHECK(errorOf("{").find("bad.json: line 1, column 2: not valid JSON") == 0);
   CHECK(errorOf("[1]") == "bad.json: the document: must be an object");
   CHECK(errorOf(R"({"schema": 2, "id": "c"})").find("schema: unsupported version 2") != std::string::npos);
   CHECK(errorOf(R"({"id": "c"})").find("schema: missing") != std::string::npos);
@@ -110,6 +110,27 @@ TEST_CASE("LoadCourseJson_MissingFileIsAnErrorNamingIt") {
   CHECK(r.error().message.find("nope.json") != std::string::npos);
   std::ofstream(dir / "empty.json") << "";
   CHECK_FALSE(loadCourseJson(dir / "empty.json"));
+}
+
+TEST_CASE("CourseJson_NumberBeyondDoubleIsAnErrorNamingLineAndField") {
+  // 1e309 overflows a double: nlohmann-json throws out_of_range from the parser, which the reader
+  // once let escape (the CLI said "internal error" with no file or line).
+  const std::string lesson = R"([{"id": "a", "title": "A", "steps": [{"kind": "question", "question": )";
+  const std::string text =
+      minimalCourse(lesson + "\n{\"id\": \"q\", \"kind\": \"name\", \"prompt\": \"P\", \"target\": \"cochlea\",\n"
+                             "\"difficulty\": 1e309}}]}])");
+  CHECK(errorOf(text) ==
+        "bad.json: line 3, column 20, field 'lessons[0].steps[0].question.difficulty': number 1e309 is out of range "
+        "(beyond ±1.8e308)");
+  auto question = parseQuestionJson(R"({"id": "q", "kind": "name", "prompt": "P", "target": "t", "difficulty": -1e400})", "q.json");
+  REQUIRE_FALSE(question);
+  CHECK(question.error().message == "q.json: line 1, column 79, field 'difficulty': number -1e400 is out of range (beyond ±1.8e308)");
+}
+
+TEST_CASE("CourseJson_KeysWithControlCharactersAreQuotedPrintably") {
+  const std::string error = errorOf("{\"schema\": 1, \"id\": \"c\", \"ti\\u001b[31mtle\\n\": 1}");
+  CHECK(error == "bad.json: ti\\x1b[31mtle\\n: unknown field");
+  CHECK(error.find('\x1b') == std::string::npos);
 }
 
 TEST_CASE("CourseJson_QuestionScenes_LocateNeedsANeighbourNotItsTarget") {

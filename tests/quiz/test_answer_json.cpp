@@ -45,4 +45,10 @@ TEST_CASE("AnswerJson_MalformedLinesAreErrorsSayingWhy") {
   CHECK(message(R"({"distance_mm": 0.3})").find("only allowed with pick") != std::string::npos);
   CHECK(message(R"({"pick": "stapes", "distance_mm": -1})").find("distance_mm") != std::string::npos);
   CHECK(message(R"({"order": ["a", 3]})").find("order") != std::string::npos);
+  // A number beyond a double: an error with the column and field, not an escaping exception.
+  CHECK(message(R"({"pick": "stapes", "distance_mm": 1e999})") ==
+        "column 40, field 'distance_mm': number 1e999 is out of range (beyond ±1.8e308)");
+  CHECK(message(R"({"choice": 1e309})").find("field 'choice': number 1e309 is out of range") != std::string::npos);
+  // Keys quoted printably: no escape sequence reaches the terminal.
+  CHECK(message("{\"\\u001b[2J\": 1}") == "unknown field '\\x1b[2J' (expected choice, text, pick with distance_mm, or order)");
 }

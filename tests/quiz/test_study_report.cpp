@@ -72,6 +72,10 @@ TEST_CASE("StudyProtocol_InvalidFields_AreRejectedByName") {
       {R"({"id": "s", "dataset": "phantom", "structures": ["cochlea"], "conditions": [{"id": "wdt"}, {"id": "bare"}],
           "items": [{"id": "shape", "wording": 3}], "groups": ["g"]})", "'items[0].wording' must be a string"},
       {"{not json", "not valid JSON"},
+      // A number beyond a double is reported with its line and field, like the checks above.
+      {"{" + base + ",\n \"t\": 1e309}", "bad.json: line 4, column 12, field 't': number 1e309 is out of range"},
+      // Scale ends far apart once overflowed int arithmetic (max − min).
+      {"{" + base + R"(, "scale": {"min": -2147483648, "max": 2147483647}})", "'scale.min' must lie in -1000..1000"},
   };
   for (const Case& c : cases) {
     auto p = parseStudyProtocol(c.json, "bad.json");
@@ -210,4 +214,20 @@ TEST_CASE("StudySummary_OneParticipant_HasNoSpreadAndNoEvidence") {
   CHECK(cell.stats.pValue == doctest::Approx(1.0));
   CHECK(cell.preferred == "none");
   CHECK(summaryCsv(s).find("shape,all,1,1,,,,") != std::string::npos);
+}
+
+TEST_CASE("SummaryMarkdown_HostileTitleAndIds_StayLiteralText") {
+  auto p = parseStudyProtocol(R"json({"id": "s|x", "title": "# Pwned <img src=x onerror=alert(1)>\n| a | b |",
+    "dataset": "phantom", "structures": ["cochlea"], "conditions": [{"id": "wdt"}, {"id": "bare"}],
+    "items": [{"id": "sh`ape", "wording": "**Shape?** [link](javascript:x)"}], "groups": ["g"]})json",
+                              "hostile.json");
+  REQUIRE_MESSAGE(p, p.error().message);
+  const StudySummary s = summariseStudy(*p, {});
+  const std::string md = summaryMarkdown(*p, s, 0, 0);
+  const std::string firstLine = md.substr(0, md.find('\n'));
+  CHECK(firstLine == "# \\# Pwned &lt;img src=x onerror=alert\\(1\\)&gt; \\| a \\| b \\|");
+  CHECK(md.find("<img") == std::string::npos);
+  CHECK(md.find("Study s\\|x on dataset phantom") != std::string::npos);
+  CHECK(md.find("- sh\\`ape: \\*\\*Shape?\\*\\* \\[link\\]\\(javascript:x\\)") != std::string::npos);
+  CHECK(markdownText("a\r\nb\x1b[2J") == "a  b\\[2J");
 }

@@ -153,3 +153,37 @@ TEST_CASE("Every phantom structure ships a WDT-context and a bare preset made fo
     CHECK(bare->structure == std::optional<std::string>(s.id));
   }
 }
+
+TEST_CASE("A number beyond the range of a double is an error naming the file, line and field") {
+  // nlohmann-json throws out_of_range for 1e309; the reader once caught only parse_error, so the
+  // exception escaped every caller (the desktop had no handler below main).
+  auto p = parsePreset("{\"mode\": \"wdt\",\n \"alpha\": 1e309}", "cochlea_wdt.json");
+  REQUIRE_FALSE(p);
+  CHECK(p.error().message ==
+        "cochlea_wdt.json: line 2, column 16, field 'alpha': number 1e309 is out of range (beyond ±1.8e308)");
+  auto deep = parsePreset("{\"data_tf\": [{\"x\": 0, \"rgba\": [0, 0, 0, 2e308]}]}", "deep.json");
+  REQUIRE_FALSE(deep);
+  CAPTURE(deep.error().message);
+  CHECK(deep.error().message.find("deep.json: line 1, column 46, field 'data_tf[0].rgba[3]': number 2e308") == 0);
+}
+
+TEST_CASE("One broken preset in a library affects only the structures that use it") {
+  at::test::TempDir dir;
+  Preset p;
+  p.mode = RenderMode::Wdt;
+  REQUIRE(savePreset(p, dir / "default_wdt.json"));
+  REQUIRE(savePreset(p, dir / "stapes_wdt.json"));
+  {
+    std::ofstream broken(dir / "cochlea_wdt.json");
+    broken << "{\"schema\": 1, \"alpha\": 1e309}\n";
+  }
+  PresetLibrary lib(dir.path());
+  auto cochlea = lib.forStructure("cochlea", RenderMode::Wdt);
+  REQUIRE_FALSE(cochlea);
+  CHECK(cochlea.error().message.find((dir / "cochlea_wdt.json").string() + ": line 1, column 29, field 'alpha'") == 0);
+  CHECK(lib.forStructure("stapes", RenderMode::Wdt));
+  CHECK(lib.forStructure("incus", RenderMode::Wdt));  // the default
+  auto ids = lib.list();
+  REQUIRE(ids);
+  CHECK(ids->size() == 3);
+}

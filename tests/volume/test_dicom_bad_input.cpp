@@ -284,7 +284,8 @@ TEST_CASE("DICOM bad input: a series larger than the memory limit is refused bef
   CHECK(loaded.error().message.rfind(folder + ": ", 0) == 0);
   CHECK(loaded.error().message.find("64x64x93") != std::string::npos);
   CHECK(loaded.error().message.find("memory limit") != std::string::npos);
-  options.maxBytes = 64 * 64 * 4 * 93;
+  // The float voxels, their HU copy, and per decoding thread (8 at most) a slice's buffers.
+  options.maxBytes = 64 * 64 * 93 * 6 + 8 * (64 * 64 * 12 + 16384);
   CHECK(loadDicomSeries(folder, options));
 }
 

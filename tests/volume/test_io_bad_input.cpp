@@ -162,7 +162,10 @@ TEST_CASE("NIfTI and NRRD: images over the memory limit are refused before alloc
   const std::string nii = validNifti(dir, "ct.nii.gz");
   ImageLoadOptions tight;
   tight.maxBytes = 1000;
-  checkError(loadNifti(nii, tight), nii, "needs 6144 bytes as float but only 1000 bytes may be used");
+  // 1536 voxels: 4 bytes as float, 2 for the HU copy, and the 6144-byte read piece of float32 data.
+  checkError(loadNifti(nii, tight), nii,
+             "needs 15360 bytes (float voxels, their HU or label copy and read buffers) but only 1000 bytes may be "
+             "used (memory limit: the limit this load was given)");
   const std::string nrrd = validNrrd(dir, "ct.nrrd");
   checkError(loadNrrd(nrrd, tight), nrrd, "memory limit");
 

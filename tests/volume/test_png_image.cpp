@@ -57,3 +57,41 @@ TEST_CASE("PNG errors name the file and the problem") {
   REQUIRE_FALSE(unwritable.has_value());
   CHECK(unwritable.error().message.find("no_such_dir") != std::string::npos);
 }
+
+namespace {
+
+std::uint32_t crc32Of(const std::string& bytes) {
+  std::uint32_t crc = 0xFFFFFFFFu;
+  for (unsigned char byte : bytes) {
+    crc ^= byte;
+    for (int bit = 0; bit < 8; ++bit) crc = (crc >> 1) ^ (0xEDB88320u & (0u - (crc & 1u)));
+  }
+  return crc ^ 0xFFFFFFFFu;
+}
+
+std::string bigEndian32(std::uint32_t value) {
+  return {char(value >> 24), char(value >> 16), char(value >> 8), char(value)};
+}
+
+std::string pngChunk(const std::string& type, const std::string& data) {
+  return bigEndian32(std::uint32_t(data.size())) + type + data + bigEndian32(crc32Of(type + data));
+}
+
+}  // namespace
+
+TEST_CASE("a PNG header claiming a huge image is refused before the image is allocated") {
+  // 16384x16384 1-bit grey: its 805 MB of RGB fit the deflate ratio of a 40 KB file, which a
+  // text chunk pads it to. The reader must refuse the size, not allocate it and fail later.
+  const std::string header = bigEndian32(16384) + bigEndian32(16384) + std::string{1, 0, 0, 0, 0};
+  const std::string bytes = std::string("\x89PNG\r\n\x1a\n", 8) + pngChunk("IHDR", header) +
+                            pngChunk("tEXt", "Comment" + std::string(1, '\0') + std::string(40000, 'x')) +
+                            pngChunk("IDAT", std::string("\x78\x9c", 2));
+  test::TempDir dir;
+  const std::string path = (dir / "huge.png").string();
+  std::ofstream(path, std::ios::binary) << bytes;
+  auto r = readPng(path);
+  REQUIRE_FALSE(r.has_value());
+  CHECK(r.error().message.find(path) != std::string::npos);
+  CHECK(r.error().message.find("16384x16384") != std::string::npos);
+  CHECK(r.error().message.find("pixels an image may have") != std::string::npos);
+}

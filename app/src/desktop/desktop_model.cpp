@@ -11,6 +11,7 @@
 #include "db/dataset_store.h"
 #include "volume/known_scans.h"
 #include "render/structure_pick.h"
+#include "segment_controller.h"
 
 namespace at::app {
 
@@ -38,6 +39,7 @@ DesktopModel::DesktopModel(LearningSession& session, const render::PresetLibrary
       [this] { return renderState(); });
   study_ = std::make_unique<StudyController>(session_.database(), library_, sink);
   imports_ = std::make_unique<ImportController>(session_.database(), sink, [this](const std::string& m) { message(m); });
+  segment_ = std::make_unique<SegmentController>(session_.database(), sink);
   courses_ = std::make_unique<CourseEditor>(session_, library_, sink,
                                             [this](const std::string& structure, const std::string& presetId,
                                                    const std::optional<render::Preset>& captured, lessons::CameraView view) {
@@ -103,6 +105,7 @@ Status DesktopModel::showDataset(Dataset dataset, const std::string& startStruct
       *dataset_, explore_, sink, [this](const std::string& m) { message(m); },
       [this](const std::string& clicked, double distanceMm) { clickGraded(clicked, distanceMm); });
   expert_ = std::make_unique<TfEditor>(*dataset_, session_.database(), sink);
+  segment_->attach(*dataset_);
   recorder_.highlightNotWanted();
   lastPickMm_.reset();
   lessons_->setViewDataset(dataset_->id);

@@ -1,6 +1,6 @@
 // The desktop app's logic, with no SDL, GL or ImGui in it: the dataset on screen, the explore
 // state, its distance fields, the frame scheduler and recorder, and the controllers of the lesson,
-// study, import and expert panels — and the commands that the widgets and the UI script both use
+// study, import, expert and segment panels — and the commands that the widgets and the UI script both use
 // (hover, click, select, views, expert on/off, …). The window shell (ui/) feeds it input and a
 // layout, renders what it plans, and draws the panels from its state; tests drive it without any
 // window (no FieldTarget, no view: picking and fields still run on the CPU).
@@ -56,6 +56,8 @@ struct DesktopOptions {
   bool scripted = false;            // a UI script drives the app: events are printed, screenshots at full quality
 };
 
+class SegmentController;
+
 class DesktopModel {
  public:
   using EventSink = std::function<void(nlohmann::json)>;
@@ -93,6 +95,7 @@ class DesktopModel {
   StudyController& study() { return *study_; }
   ImportController& imports() { return *imports_; }
   TfEditor& expert() { return *expert_; }
+  SegmentController& segmenter() { return *segment_; }
   CourseEditor& courseEditor() { return *courses_; }
   const DesktopOptions& options() const { return options_; }
 
@@ -213,6 +216,7 @@ class DesktopModel {
   std::uint64_t sliceRevision_ = 0;
   std::unique_ptr<StudyController> study_;
   std::unique_ptr<ImportController> imports_;
+  std::unique_ptr<SegmentController> segment_;
   std::unique_ptr<CourseEditor> courses_;
   ViewLayout layout_;
   bool viewAvailable_ = false;

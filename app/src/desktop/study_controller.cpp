@@ -111,18 +111,17 @@ Status StudyController::nextTrial() {
   for (const auto& item : s.protocol.items) {
     const db::RatingRecord r = makeRating(s.protocol, wdt, trial.position, item.id, s.ratings[item.id],
                                           s.responseMs.count(item.id) ? s.responseMs[item.id] : msSince(s.trialStart));
-    if (auto st = db::recordRating(database_, s.protocol.id, s.participant.participantId, r); !st) return st;
+    if (auto st = db::recordRating(database_, s.participant, r); !st) return st;
     trial.ratedItems.insert(item.id);
   }
-  if (auto st = db::recordTrialViewing(database_, s.protocol.id, s.participant.participantId, trial.position,
-                                       s.viewMs[0], s.viewMs[1], s.toggles, s.comment);
+  if (auto st = db::recordTrialViewing(database_, s.participant, trial.position, s.viewMs[0], s.viewMs[1], s.toggles, s.comment);
       !st)
     return st;
   events_({{"event", "study_recorded"}, {"position", trial.position + 1}, {"view_ms_a", s.viewMs[0]},
            {"view_ms_b", s.viewMs[1]}, {"toggles", s.toggles}});
   beginTrial();
   if (!s.trial) {
-    if (auto st = db::markParticipantComplete(database_, s.protocol.id, s.participant.participantId); !st) return st;
+    if (auto st = db::markParticipantComplete(database_, s.participant); !st) return st;
     events_({{"event", "study_complete"}, {"trials", s.participant.trials.size()}});
   }
   return {};

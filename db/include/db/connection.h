@@ -34,6 +34,10 @@ struct OpenOptions {
   int busyTimeoutMs = 5000;
   // Create the file (and its folder) when missing. (A PostgreSQL database must exist.)
   bool create = true;
+  // For commands that only read: a database this process cannot write (a read-only file, folder or
+  // disk, or a disk too full for the WAL index) is opened read-only instead of failing, if it is
+  // already at the target schema (SQLite files only). Its writes then fail with "the database is read-only".
+  bool readOnlyIfNotWritable = false;
   // How long to wait for a PostgreSQL server to answer before giving up (libpq's minimum is 2 s).
   int connectTimeoutSeconds = 5;
 };
@@ -54,6 +58,8 @@ class Connection {
   // The file path, or the server URL without its password (for messages).
   const std::string& path() const;
   Backend backend() const;
+  // True when opened read-only (OpenOptions::readOnlyIfNotWritable on a file it cannot write).
+  bool readOnly() const;
 
  private:
   std::unique_ptr<Database> database_;

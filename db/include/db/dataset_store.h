@@ -25,6 +25,8 @@ struct DatasetRecord {
   std::string labelsPath;           // absolute or empty
   std::string labelsChecksum;       // empty when no labels
   std::string namesPath;            // absolute or empty
+  bool skipUnreadableFiles = false; // how the files are read (DatasetFiles): as at import
+  std::string dataFolder;           // absolute or empty
   Geometry geometry;                // of the volume
   std::string orientation;          // e.g. "LPS"
   std::string createdAt;            // ISO-8601 UTC, set by the database
@@ -32,9 +34,19 @@ struct DatasetRecord {
 };
 
 // Stores a dataset and its structures in one transaction. A name already registered is an error
-// naming it; nothing is written then.
+// naming it (nothing is written then) unless `replace` is set: then the earlier record and its
+// structures are replaced in that same transaction (courses and progress refer to datasets and
+// structures by name and id, so they carry over).
 Result<std::int64_t> registerDataset(Database& db, const DatasetRecord& record,
-                                     const std::vector<Structure>& structures);
+                                     const std::vector<Structure>& structures, bool replace = false);
+
+// Replaces an imported dataset's labels after editing: the label map file and names file the
+// caller wrote (absolute paths; the checksum of the label file) and its structures, in one
+// transaction; the volume and the geometry stay. NotFound when no dataset has that name (nothing
+// is written then).
+Status saveDatasetLabels(Database& db, const std::string& name, const std::string& labelsPath,
+                         const std::string& labelsChecksum, const std::string& namesPath,
+                         const std::vector<Structure>& structures);
 
 // All imported datasets, ordered by name.
 Result<std::vector<DatasetRecord>> listDatasets(Database& db);
@@ -47,5 +59,10 @@ Result<std::vector<Structure>> datasetStructures(Database& db, std::int64_t data
 
 // The files to hand to openDatasetFiles for a registered dataset.
 DatasetFiles datasetFiles(const DatasetRecord& record);
+
+// The same, once the volume's and the labels' checksums are those recorded at import: a file
+// replaced or changed since (even by one on the same grid) is a Conflict naming the file, both
+// checksums, and the command that registers the new content (import … --replace).
+Result<DatasetFiles> verifiedDatasetFiles(const DatasetRecord& record);
 
 }  // namespace at::db

@@ -71,17 +71,20 @@ struct RatingRecord {
   double t = 0, alpha = 0, beta = 0;  // render parameters on screen
   std::string appVersion;
 };
-// Records one rating at once (its own transaction), with the participant's current session.
-// Re-rating the same item replaces it.
-Status recordRating(Database& db, const std::string& studyId, const std::string& participantId,
-                    const RatingRecord& rating);
+// The writes of one participant's session (`participant` as enrolOrResume returned it). Only the
+// participant's latest session may write: once another run resumes the same participant (its
+// session number is higher), each write of the earlier one is refused with a Conflict naming both
+// sessions, so two runs never interleave or overwrite each other's ratings.
+//
+// Records one rating at once (its own transaction), with the participant's session. Re-rating the
+// same item replaces it.
+Status recordRating(Database& db, const StudyParticipant& participant, const RatingRecord& rating);
 // Records viewing time, toggles and comment of a trial (replacing earlier values). With
 // `viewingMeasured` false the times and toggles are not known (the views were shown as files) and
 // are stored as zero and exported blank.
-Status recordTrialViewing(Database& db, const std::string& studyId, const std::string& participantId,
-                          int position, double viewMsA, double viewMsB, int toggles, const std::string& comment,
-                          bool viewingMeasured = true);
-Status markParticipantComplete(Database& db, const std::string& studyId, const std::string& participantId);
+Status recordTrialViewing(Database& db, const StudyParticipant& participant, int position, double viewMsA,
+                          double viewMsB, int toggles, const std::string& comment, bool viewingMeasured = true);
+Status markParticipantComplete(Database& db, const StudyParticipant& participant);
 
 Result<std::vector<StudyCompletion>> studyCompletion(Database& db, const std::string& studyId);
 

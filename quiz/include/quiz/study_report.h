@@ -77,8 +77,15 @@ struct StudySummary {
 
 StudySummary summariseStudy(const StudyProtocol& protocol, const std::vector<StudyResponseRow>& rows);
 std::string summaryCsv(const StudySummary& summary);
+// The Table-2 summary as Markdown. Every text from the study definition (title, ids, groups, item
+// wording) is written through markdownText, so a title such as "# <img src=x>" or "a | b" stays
+// text and cannot add headings, HTML or table cells.
 std::string summaryMarkdown(const StudyProtocol& protocol, const StudySummary& summary, std::size_t participants,
                             std::size_t partialParticipants);
+// Text as literal Markdown inline content: one line (line breaks become spaces, other control
+// characters are dropped), Markdown punctuation backslash-escaped, '&' and angle brackets written
+// as HTML entities.
+std::string markdownText(const std::string& text);
 
 // The chart: one row per item, a 1–5 axis from "prefer WDT" (left) to "prefer bare" (right), a
 // marker per column (group/all) at its mean with its 95 % interval as a bar.

@@ -10,8 +10,8 @@
 
 namespace at {
 
-// `image` holds label values; `segments` their names.
-Result<LoadedImage> loadDicomSeg(const std::string& path);
+// `image` holds label values; `segments` their names. Of `options`, the memory limit applies.
+Result<LoadedImage> loadDicomSeg(const std::string& path, const ImageLoadOptions& options = {});
 
 // True if the file is a DICOM Segmentation Storage object.
 bool isDicomSegFile(const std::string& path);

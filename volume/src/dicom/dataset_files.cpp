@@ -7,6 +7,7 @@
 #include <set>
 
 #include "core/strings.h"
+#include "core/printable_text.h"
 #include "dicom_support.h"
 #include "volume/dataset_source.h"
 #include "volume/image_file.h"
@@ -19,31 +20,6 @@ namespace at {
 namespace {
 
 using dicom::formatNumber;
-
-// "kidney_right" → "Kidney right"; names with spaces or capitals are kept as written.
-std::string displayNameOf(const std::string& name) {
-  std::string out = name;
-  std::replace(out.begin(), out.end(), '_', ' ');
-  if (!out.empty()) out[0] = char(std::toupper(static_cast<unsigned char>(out[0])));
-  return out;
-}
-
-// Distinct colours for labels without one: hues spaced by the golden angle, as linear RGB.
-std::array<float, 3> paletteColour(std::uint16_t label) {
-  const double hue = std::fmod(label * 137.508, 360.0) / 60.0;
-  const double x = 1 - std::abs(std::fmod(hue, 2.0) - 1);
-  double r = 0, g = 0, b = 0;
-  switch (int(hue)) {
-    case 0: r = 1, g = x; break;
-    case 1: r = x, g = 1; break;
-    case 2: g = 1, b = x; break;
-    case 3: g = x, b = 1; break;
-    case 4: r = x, b = 1; break;
-    default: r = 1, b = x; break;
-  }
-  auto mix = [](double c) { return float(std::pow(0.25 + 0.7 * c, 2.2)); };
-  return {mix(r), mix(g), mix(b)};
-}
 
 // The box spanned by a grid's voxel centres in LPS millimetres.
 struct BoxMm {
@@ -112,6 +88,8 @@ Result<Dataset> openDatasetFiles(const DatasetFiles& files, const DatasetLoadCon
   const auto optionsFor = [&](DatasetLoadPart part) {
     ImageLoadOptions options;
     options.cancel = control.cancel;
+    options.skipUnreadableFiles = files.skipUnreadableFiles;
+    options.dataFolder = files.dataFolder;
     if (control.progress) {
       control.progress(part, 0, 0);
       options.progress = [&control, part](std::size_t done, std::size_t total) { control.progress(part, done, total); };
@@ -122,13 +100,14 @@ Result<Dataset> openDatasetFiles(const DatasetFiles& files, const DatasetLoadCon
   volumeOptions.dicomSeriesUid = files.dicomSeriesUid;
   auto volumeImage = loadImageFile(files.volumePath, volumeOptions);
   if (!volumeImage) return tl::unexpected(volumeImage.error());
-  auto volume = toHuVolume(*volumeImage, files.volumePath);
+  auto volume = toStoredVolume(*volumeImage, files.volumePath, files.intensity);
   if (!volume) return tl::unexpected(volume.error());
 
   Dataset dataset;
   dataset.id = files.id.empty() ? datasetIdFromPath(files.volumePath) : files.id;
   dataset.displayName = dataset.id;
-  dataset.volume = std::move(*volume);
+  dataset.volume = std::move(volume->volume);
+  dataset.intensity = std::move(volume->intensity);
   dataset.provenance.source = files.volumePath;
   dataset.provenance.notes = volumeImage->notes;
   const Geometry& grid = dataset.volume.geometry;
@@ -197,7 +176,8 @@ Result<Dataset> openDatasetFiles(const DatasetFiles& files, const DatasetLoadCon
     if (s.id.empty()) s.id = "label_" + std::to_string(label);
     if (usedIds.count(s.id)) s.id.append(1, '_').append(std::to_string(label));
     usedIds.insert(s.id);
-    s.displayName = name.empty() ? "Label " + std::to_string(label) : displayNameOf(name);
+    // Names come from the files: no line break or terminal escape may reach a listing or a message.
+    s.displayName = name.empty() ? "Label " + std::to_string(label) : displayNameOf(printableText(name, 120));
     dataset.structures.push_back(std::move(s));
   }
   return dataset;

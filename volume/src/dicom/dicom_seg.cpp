@@ -12,6 +12,7 @@
 #include <dcmtk/dcmdata/dcfilefo.h>
 #include <dcmtk/dcmdata/dcmetinf.h>
 #include <dcmtk/dcmdata/dcuid.h>
+#include <dcmtk/dcmdata/dcxfer.h>
 #include <dcmtk/dcmfg/fginterface.h>
 #include <dcmtk/dcmfg/fgpixmsr.h>
 #include <dcmtk/dcmfg/fgplanor.h>
@@ -22,6 +23,8 @@
 #include <dcmtk/dcmseg/segment.h>
 
 #include "../io/load_limits.h"
+#include "core/printable_text.h"
+#include "core/regular_file.h"
 #include "dicom_support.h"
 #include "volume/dicom_series.h"
 
@@ -42,6 +45,28 @@ std::array<float, 3> linearRgbFromDicomLab(Uint16 l, Uint16 a, Uint16 b) {
   return {linear(r), linear(g), linear(bl)};
 }
 
+// DCMTK 3.6.7's DcmSegmentation::loadFile/loadDataset leak the segmentation they allocate when
+// reading it fails: on failure they delete the caller's still-null pointer instead of their own
+// object (docs/fuzzing.md has the reproducer). This subclass reaches the protected constructor and
+// read(), so the object is owned here from the start and freed on every path.
+class OwnedSegmentation : public DcmSegmentation {
+ public:
+  OwnedSegmentation() = default;
+  OFCondition readFrom(DcmItem& dataset) { return read(dataset); }
+};
+
+// What loadDataset does before reading: SEG pixel data must be native; RLE (lossless) is decoded,
+// other encapsulated syntaxes (possibly lossy) are refused.
+Status decompressSegmentation(DcmDataset& dataset) {
+  const DcmXfer xfer(dataset.getOriginalXfer());
+  if (!xfer.isEncapsulated() || dataset.hasRepresentation(EXS_LittleEndianExplicit, nullptr)) return {};
+  if (xfer.getXfer() != EXS_RLELossless)
+    return fail(std::string("transfer syntax ") + xfer.getXferName() + " is not supported for segmentations (possibly lossy)");
+  if (dataset.chooseRepresentation(EXS_LittleEndianExplicit, nullptr).bad())
+    return fail("the RLE-compressed frames cannot be decoded");
+  return {};
+}
+
 }  // namespace
 
 bool isDicomSegFile(const std::string& path) {
@@ -55,16 +80,22 @@ bool isDicomSegFile(const std::string& path) {
   return sopClass == UID_SegmentationStorage;
 }
 
-Result<LoadedImage> loadDicomSeg(const std::string& path) {
+namespace {
+
+Result<LoadedImage> readDicomSeg(const std::string& path, const ImageLoadOptions& options) {
   dicom::ensureDcmtkReady();
   auto error = [&](const std::string& problem) { return fail(path + ": " + problem); };
+  if (auto regular = checkRegularFile(path, path); !regular) return tl::unexpected(regular.error());
   if (!looksLikeDicomFile(path)) return error("not a DICOM file (no DICM preamble)");
   if (!isDicomSegFile(path)) return error("not a DICOM Segmentation Storage object");
 
-  DcmSegmentation* raw = nullptr;
-  const OFCondition status = DcmSegmentation::loadFile(OFString(path.c_str()), raw);
-  std::unique_ptr<DcmSegmentation> seg(raw);
-  if (status.bad() || !seg) return error(std::string("cannot read the segmentation (") + status.text() + ")");
+  DcmFileFormat file;
+  if (const OFCondition loaded = file.loadFile(OFFilename(path.c_str())); loaded.bad())
+    return error(std::string("cannot read the segmentation (") + loaded.text() + ")");
+  if (auto ok = decompressSegmentation(*file.getDataset()); !ok) return error(ok.error().message);
+  auto seg = std::make_unique<OwnedSegmentation>();
+  if (const OFCondition read = seg->readFrom(*file.getDataset()); read.bad())
+    return error(std::string("cannot read the segmentation (") + read.text() + ")");
   if (seg->getSegmentationType() != DcmSegTypes::ST_BINARY)
     return error("only BINARY segmentations are supported (this one is FRACTIONAL)");
 
@@ -164,7 +195,7 @@ Result<LoadedImage> loadDicomSeg(const std::string& path) {
     geometry.direction.m[r][2] = stack->normal[r];
   }
   // Frames far apart along the normal span many empty slices: check before allocating them.
-  if (auto fits = detail::checkImageFits(path, geometry.dims, ImageLoadOptions{}); !fits)
+  if (auto fits = detail::checkImageFits(path, geometry.dims, 0, options); !fits)
     return tl::unexpected(fits.error());
   loaded.image = FloatVolume(geometry, 0.0f);
 
@@ -193,6 +224,12 @@ Result<LoadedImage> loadDicomSeg(const std::string& path) {
     loaded.notes.push_back("segments overlap (" + std::to_string(overlapping) +
                            " voxel claims by a second segment); the higher segment number wins");
   return loaded;
+}
+
+}  // namespace
+
+Result<LoadedImage> loadDicomSeg(const std::string& path, const ImageLoadOptions& options) {
+  return withPrintableError(readDicomSeg(path, options));
 }
 
 }  // namespace at

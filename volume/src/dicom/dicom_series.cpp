@@ -40,6 +40,8 @@
 #include <openjpeg.h>
 
 #include "../io/load_limits.h"
+#include "core/printable_text.h"
+#include "core/regular_file.h"
 #include "dicom_support.h"
 
 namespace fs = std::filesystem;
@@ -87,13 +89,22 @@ Result<std::string> readSeriesInstanceUid(const std::string& path) {
 }  // namespace dicom
 
 bool looksLikeDicomFile(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  char header[132];
-  if (!in.read(header, sizeof header)) return false;
-  return std::memcmp(header + 128, "DICM", 4) == 0;
+  auto file = openRegularFile(path, path);
+  if (!file) return false;
+  auto header = readFileRange(*file, 0, 132, path);
+  return header && header->size() == 132 && header->compare(128, 4, "DICM") == 0;
 }
 
 namespace {
+
+// True if a regular file starts with the DICOM preamble; an error if it cannot be read at all.
+Result<bool> hasDicomPreamble(const fs::path& path) {
+  auto file = openRegularFile(path.string(), path.filename().string());
+  if (!file) return tl::unexpected(file.error());
+  auto header = readFileRange(*file, 0, 132, path.filename().string());
+  if (!header) return tl::unexpected(header.error());
+  return header->size() == 132 && header->compare(128, 4, "DICM") == 0;
+}
 
 using dicom::formatNumber;
 
@@ -137,16 +148,23 @@ struct SliceHeader {
   std::string photometric;
   int bitsAllocated = 16, bitsStored = 16, highBit = 15, pixelRepresentation = 0;
   double slope = 1, intercept = 0;
+  bool rescaleGiven = false;  // RescaleSlope or RescaleIntercept present
+  std::string modality;
   std::optional<std::array<double, 3>> position;
   std::optional<std::array<double, 6>> orientation;
   std::optional<std::array<double, 2>> pixelSpacing;  // row spacing (between rows), column spacing
   double sliceThickness = 0, spacingBetweenSlices = 0;
+  std::uint64_t fileBytes = 0;
+  std::uint32_t pixelDataLength = 0;  // as the PixelData element says (undefined length: encapsulated)
+  std::string pixelDataProblem;       // a PixelData element that is not OB/OW pixel data
 };
 
 enum class FileKind { Image, NotAnImage };
 
 // Reads one file's header without loading its pixel data.
 Result<std::pair<FileKind, SliceHeader>> readSliceHeader(const fs::path& file) {
+  auto regular = openRegularFile(file.string(), file.filename().string());
+  if (!regular) return tl::unexpected(regular.error());
   DcmFileFormat dicomFile;
   const OFCondition status = dicomFile.loadFile(OFFilename(file.c_str()), EXS_Unknown, EGL_noChange, 4096);
   if (status.bad()) return fail(file.filename().string() + ": cannot read DICOM file (" + status.text() + ")");
@@ -159,6 +177,16 @@ Result<std::pair<FileKind, SliceHeader>> readSliceHeader(const fs::path& file) {
   if (sopClass.empty()) sopClass = stringOf(*dicomFile.getMetaInfo(), DCM_MediaStorageSOPClassUID);
   if (!data.tagExists(DCM_PixelData) || sopClass == UID_SegmentationStorage) return std::pair{FileKind::NotAnImage, h};
 
+  h.fileBytes = regular->sizeBytes;
+  DcmElement* pixelElement = nullptr;
+  if (data.findAndGetElement(DCM_PixelData, pixelElement).good() && pixelElement) {
+    h.pixelDataLength = pixelElement->getLengthField();
+    // DCMTK reads (7FE0,0010) as DcmPixelData only with the VR OB or OW (or implicit VR); any
+    // other VR in the file gives another element class, which the pixel reader must not cast.
+    if (!dynamic_cast<DcmPixelData*>(pixelElement))
+      h.pixelDataProblem = std::string("PixelData has the value representation ") +
+                           DcmVR(pixelElement->getVR()).getVRName() + ", not OB or OW";
+  }
   h.seriesUid = stringOf(data, DCM_SeriesInstanceUID);
   h.transferSyntax = data.getOriginalXfer();
   h.transferSyntaxUid = DcmXfer(h.transferSyntax).getXferID();
@@ -171,8 +199,9 @@ Result<std::pair<FileKind, SliceHeader>> readSliceHeader(const fs::path& file) {
   h.bitsStored = int(integerOf(data, DCM_BitsStored).value_or(h.bitsAllocated));
   h.highBit = int(integerOf(data, DCM_HighBit).value_or(h.bitsStored - 1));
   h.pixelRepresentation = int(integerOf(data, DCM_PixelRepresentation).value_or(0));
-  if (auto v = numbersOf<1>(data, DCM_RescaleSlope)) h.slope = (*v)[0];
-  if (auto v = numbersOf<1>(data, DCM_RescaleIntercept)) h.intercept = (*v)[0];
+  if (auto v = numbersOf<1>(data, DCM_RescaleSlope)) h.slope = (*v)[0], h.rescaleGiven = true;
+  if (auto v = numbersOf<1>(data, DCM_RescaleIntercept)) h.intercept = (*v)[0], h.rescaleGiven = true;
+  h.modality = stringOf(data, DCM_Modality);
   h.position = numbersOf<3>(data, DCM_ImagePositionPatient);
   h.orientation = numbersOf<6>(data, DCM_ImageOrientationPatient);
   h.pixelSpacing = numbersOf<2>(data, DCM_PixelSpacing);
@@ -204,6 +233,21 @@ Status checkSliceHeader(const SliceHeader& h) {
     return fail(h.name + ": inconsistent BitsStored " + std::to_string(h.bitsStored) + " / HighBit " +
                 std::to_string(h.highBit) + " for BitsAllocated " + std::to_string(h.bitsAllocated));
   if (!std::isfinite(h.slope) || h.slope == 0) return fail(h.name + ": RescaleSlope must be non-zero");
+  if (!h.pixelDataProblem.empty()) return fail(h.name + ": " + h.pixelDataProblem);
+  // Native pixel data must exist before anything is allocated for them: the element's length must
+  // cover Rows × Columns samples and the file must hold that many bytes.
+  if (!DcmXfer(h.transferSyntax).isEncapsulated()) {
+    const std::uint64_t need = std::uint64_t(h.rows) * std::uint64_t(h.columns) * std::uint64_t(h.bitsAllocated / 8);
+    if (h.pixelDataLength == DCM_UndefinedLength || h.pixelDataLength < need)
+      return fail(h.name + ": PixelData holds " +
+                  (h.pixelDataLength == DCM_UndefinedLength ? std::string("encapsulated data")
+                                                            : std::to_string(h.pixelDataLength) + " bytes") +
+                  " but " + std::to_string(h.columns) + "x" + std::to_string(h.rows) + " × " +
+                  std::to_string(h.bitsAllocated) + " bits need " + std::to_string(need));
+    if (h.fileBytes < h.pixelDataLength)
+      return fail(h.name + ": PixelData claims " + std::to_string(h.pixelDataLength) + " bytes but the file holds only " +
+                  std::to_string(h.fileBytes) + " (file truncated?)");
+  }
   return {};
 }
 
@@ -381,7 +425,12 @@ Status readSlicePixels(const SliceHeader& h, float* out) {
   DcmElement* element = nullptr;
   if (data.findAndGetElement(DCM_PixelData, element).bad() || !element)
     return fail(h.name + ": no pixel data");
-  auto& pixelData = static_cast<DcmPixelData&>(*element);
+  // The header check refused other VRs, but the file may have changed since: check again.
+  auto* pixelElement = dynamic_cast<DcmPixelData*>(element);
+  if (!pixelElement)
+    return fail(h.name + ": PixelData has the value representation " + DcmVR(element->getVR()).getVRName() +
+                ", not OB or OW");
+  DcmPixelData& pixelData = *pixelElement;
   const std::size_t count = std::size_t(h.rows) * std::size_t(h.columns);
 
   if (isJpeg2000(h)) {
@@ -424,7 +473,9 @@ Status readSlicePixels(const SliceHeader& h, float* out) {
 
 // ─── 5. loadDicomSeries ─────────────────────────────────────────────────────────────────────────
 
-Result<LoadedImage> loadDicomSeries(const std::string& folder, const ImageLoadOptions& options) {
+namespace {
+
+Result<LoadedImage> readDicomSeries(const std::string& folder, const ImageLoadOptions& options) {
   dicom::ensureDcmtkReady();
   auto error = [&](const std::string& problem) { return fail(folder + ": " + problem); };
 
@@ -432,20 +483,39 @@ Result<LoadedImage> loadDicomSeries(const std::string& folder, const ImageLoadOp
   if (!fs::exists(folder, ec)) return error("no such folder");
   if (!fs::is_directory(folder, ec)) return error("not a folder");
 
-  // Scan: every file with the DICOM preamble; other files (READMEs, licences) are ignored.
+  // Files that cannot be read or whose own header is broken: an error naming the first, or, when
+  // the caller asked to skip them (ImageLoadOptions::skipUnreadableFiles), a note naming them.
+  std::vector<std::string> skipped;
+  const auto unreadable = [&](const std::string& message) -> Status {
+    if (!options.skipUnreadableFiles) return error(message + " (unreadable files can be skipped: --skip-unreadable)");
+    skipped.push_back(message);
+    return {};
+  };
+
+  // Scan: every regular file with the DICOM preamble; other files (READMEs, licences) are ignored.
   std::vector<fs::path> files;
-  for (fs::directory_iterator it(folder, ec), end; !ec && it != end; it.increment(ec))
-    if (it->is_regular_file(ec) && looksLikeDicomFile(it->path().string())) files.push_back(it->path());
+  for (fs::directory_iterator it(folder, ec), end; !ec && it != end; it.increment(ec)) {
+    if (!it->is_regular_file(ec)) continue;  // folders, FIFOs, devices, dangling links
+    auto dicom = hasDicomPreamble(it->path());
+    if (!dicom) {
+      if (auto ok = unreadable(dicom.error().message); !ok) return tl::unexpected(ok.error());
+    } else if (*dicom) {
+      files.push_back(it->path());
+    }
+  }
   if (ec) return error("cannot list the folder (" + ec.message() + ")");
   std::sort(files.begin(), files.end());
-  if (files.empty()) return error("no DICOM files in the folder");
+  if (files.empty()) return error("no DICOM files in the folder" + std::string(skipped.empty() ? "" : " that can be read"));
 
   std::map<std::string, std::vector<SliceHeader>> series;
   std::size_t notImages = 0;
   for (const fs::path& file : files) {
     if (detail::loadCancelled(options)) return tl::unexpected(detail::cancelledError(folder));
     auto header = readSliceHeader(file);
-    if (!header) return error(header.error().message);
+    if (!header) {
+      if (auto ok = unreadable(header.error().message); !ok) return tl::unexpected(ok.error());
+      continue;
+    }
     if (header->first == FileKind::NotAnImage) {
       ++notImages;
       continue;
@@ -474,6 +544,18 @@ Result<LoadedImage> loadDicomSeries(const std::string& folder, const ImageLoadOp
       }
   }
   std::vector<SliceHeader>& slices = series[chosen];
+  // Each slice's own header (of the chosen series only: a colour localizer beside it is no error).
+  for (auto it = slices.begin(); it != slices.end();) {
+    Status ok = checkSliceHeader(*it);
+    if (ok) ok = checkTransferSyntax(*it);
+    if (ok) {
+      ++it;
+      continue;
+    }
+    if (auto skip = unreadable(ok.error().message); !skip) return tl::unexpected(skip.error());
+    it = slices.erase(it);
+  }
+  if (slices.empty()) return error("no slice of series " + seriesLabel(chosen) + " can be read");
 
   LoadedImage loaded;
   {
@@ -488,13 +570,16 @@ Result<LoadedImage> loadDicomSeries(const std::string& folder, const ImageLoadOp
     }
     if (notImages) note += "; ignored " + std::to_string(notImages) + " DICOM files without images";
     loaded.notes.push_back(note);
+    if (!skipped.empty()) {
+      std::string list;
+      for (std::size_t i = 0; i < skipped.size() && i < 5; ++i) list += (i ? "; " : "") + skipped[i];
+      if (skipped.size() > 5) list += "; and " + std::to_string(skipped.size() - 5) + " more";
+      loaded.notes.push_back("skipped " + std::to_string(skipped.size()) + " unreadable file" +
+                             (skipped.size() == 1 ? "" : "s") + ": " + list);
+    }
   }
 
-  // Per-slice checks, then consistency across the series.
-  for (const SliceHeader& h : slices) {
-    if (auto ok = checkSliceHeader(h); !ok) return error(ok.error().message);
-    if (auto ok = checkTransferSyntax(h); !ok) return error(ok.error().message);
-  }
+  // Consistency across the series (each slice's own header was checked as it was read).
   const SliceHeader& ref = slices.front();
   {
     std::map<std::pair<int, int>, std::vector<std::string>> sizes;
@@ -552,10 +637,20 @@ Result<LoadedImage> loadDicomSeries(const std::string& folder, const ImageLoadOp
                            " mm from ImagePositionPatient (SliceThickness says " + formatNumber(ref.sliceThickness) +
                            " mm)");
 
-  if (auto fits = detail::checkImageFits(folder, geometry.dims, options); !fits) return tl::unexpected(fits.error());
+  // Each decoding thread holds one slice at a time: DCMTK's copy of the stored pixels, the decoded
+  // frame, and for JPEG 2000 the codestream and OpenJPEG's 32-bit samples.
+  const unsigned threads = std::clamp(std::thread::hardware_concurrency(), 1u, 8u);
+  const std::size_t workers = std::min<std::size_t>(threads, slices.size());
+  std::uint64_t largestFile = 0;
+  for (const SliceHeader& h : slices) largestFile = std::max(largestFile, h.fileBytes);
+  const double sliceBytes = double(ref.columns) * double(ref.rows) * (2.0 * (ref.bitsAllocated / 8) + 8.0) + double(largestFile);
+  if (auto fits = detail::checkImageFits(folder, geometry.dims, double(workers) * sliceBytes, options); !fits)
+    return tl::unexpected(fits.error());
 
   loaded.image = FloatVolume(geometry);
   loaded.storedKind = storedKindOf(ref);
+  loaded.modality = ref.modality;
+  loaded.rescaleGiven = ref.rescaleGiven;
 
   // Decode slices in parallel: each worker owns its DCMTK file objects and OpenJPEG codecs.
   const std::size_t sliceVoxels = std::size_t(ref.columns) * std::size_t(ref.rows);
@@ -574,14 +669,19 @@ Result<LoadedImage> loadDicomSeries(const std::string& folder, const ImageLoadOp
       if (ok && options.progress) options.progress(++decoded, slices.size());
     }
   };
-  const unsigned threads = std::clamp(std::thread::hardware_concurrency(), 1u, 8u);
-  std::vector<std::thread> workers;
-  for (unsigned t = 1; t < std::min<std::size_t>(threads, slices.size()); ++t) workers.emplace_back(work);
+  std::vector<std::thread> pool;
+  for (std::size_t t = 1; t < workers; ++t) pool.emplace_back(work);
   work();
-  for (std::thread& w : workers) w.join();
+  for (std::thread& w : pool) w.join();
   if (detail::loadCancelled(options)) return tl::unexpected(detail::cancelledError(folder));
   if (firstError) return error(firstError->second.message);
   return loaded;
+}
+
+}  // namespace
+
+Result<LoadedImage> loadDicomSeries(const std::string& folder, const ImageLoadOptions& options) {
+  return withPrintableError(readDicomSeries(folder, options));
 }
 
 }  // namespace at

@@ -12,6 +12,7 @@
 #include "volume/inv3_io.h"
 #include "volume/nifti_io.h"
 #include "volume/nrrd_io.h"
+#include "core/regular_file.h"
 
 namespace fs = std::filesystem;
 
@@ -27,6 +28,8 @@ Result<LoadedImage> loadImageFile(const std::string& path, const ImageLoadOption
   const fs::file_status status = fs::status(path, ec);
   if (!fs::exists(status)) return fail(ErrorKind::NotFound, path + ": no such file or folder");
   if (fs::is_directory(status)) return loadDicomSeries(path, options);
+  // FIFOs and devices are refused before anything opens them (opening a FIFO waits for a writer).
+  if (auto regular = checkRegularFile(path, path); !regular) return tl::unexpected(regular.error());
 
   const std::string name = str::lower(fs::path(path).filename().string());
   if (str::endsWith(name, ".nii") || str::endsWith(name, ".nii.gz")) return loadNifti(path, options);
@@ -34,7 +37,7 @@ Result<LoadedImage> loadImageFile(const std::string& path, const ImageLoadOption
   if (str::endsWith(name, ".inv3")) return loadInv3(path, options);
 
   if (looksLikeDicomFile(path)) {
-    if (isDicomSegFile(path)) return loadDicomSeg(path);
+    if (isDicomSegFile(path)) return loadDicomSeg(path, options);
     // One image of a series: load the whole series from its folder, restricted to the file's series.
     // (A file without SeriesInstanceUID gets the folder's largest series, as a folder would.)
     auto uid = dicom::readSeriesInstanceUid(path);

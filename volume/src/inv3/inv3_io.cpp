@@ -8,6 +8,7 @@
 #include <archive_entry.h>
 #include <plist/plist.h>
 
+#include <algorithm>
 #include <array>
 #include <bit>
 #include <cmath>
@@ -21,6 +22,7 @@
 #include <string>
 #include <vector>
 
+#include "core/regular_file.h"
 #include "load_limits.h"
 #include "raw_values.h"
 
@@ -99,7 +101,13 @@ class MemberReader {
   Result<std::string> readCurrent(std::size_t maxBytes, const std::string& tooLarge,
                                   const std::function<Status(std::size_t)>& onChunk = {}) {
     std::string bytes;
-    std::string chunk(kReadChunkBytes, '\0');
+    // A chunk the size the member declares (one more byte to see the end), 4 KiB to 4 MiB: a
+    // small main.plist does not cost a zeroed 4 MiB buffer. A false declaration only changes how
+    // many chunks are read.
+    std::size_t chunkBytes = kReadChunkBytes;
+    if (declaredSize_ && *declaredSize_ >= 0 && std::uint64_t(*declaredSize_) < kReadChunkBytes)
+      chunkBytes = std::max<std::size_t>(std::size_t(*declaredSize_) + 1, std::size_t(4) << 10);
+    std::string chunk(chunkBytes, '\0');
     while (true) {
       const la_ssize_t got = archive_read_data(reader_.get(), chunk.data(), chunk.size());
       if (got < 0)
@@ -276,8 +284,8 @@ Geometry projectGeometry(const ProjectHeader& h) {
 // [load]
 
 Result<LoadedImage> loadInv3(const std::string& path, const ImageLoadOptions& options) {
-  std::error_code ec;
-  if (!fs::is_regular_file(path, ec)) return fail(ErrorKind::NotFound, path + ": no such file");
+  // A FIFO would block the archive reader; a device would never end.
+  if (auto regular = checkRegularFile(path, path); !regular) return tl::unexpected(regular.error());
 
   // Pass 1: main.plist.
   MemberReader first(path);
@@ -298,11 +306,14 @@ Result<LoadedImage> loadInv3(const std::string& path, const ImageLoadOptions& op
   loaded.storedKind = h.kind;
   loaded.image.geometry = projectGeometry(h);
   const Dims dims = loaded.image.geometry.dims;
-  if (auto fits = detail::checkImageFits(path, dims, options); !fits) return tl::unexpected(fits.error());
+  // Pass 2 holds the stored matrix (its buffer may briefly double as it grows) and a read chunk
+  // beside the floats.
+  const std::size_t needBytes = dims.count() * detail::bytesOf(h.kind);
+  if (auto fits = detail::checkImageFits(path, dims, 2.0 * double(needBytes) + double(kReadChunkBytes), options); !fits)
+    return tl::unexpected(fits.error());
 
   // Pass 2: the matrix beside main.plist.
   const std::string matrixMember = folderOf(plistMember) + h.matrixFile;
-  const std::size_t needBytes = dims.count() * detail::bytesOf(h.kind);
   const std::string sizeText = "shape " + std::to_string(h.shapeZyx[0]) + "x" + std::to_string(h.shapeZyx[1]) + "x" +
                                std::to_string(h.shapeZyx[2]) + " (z,y,x) × " + toString(h.kind) + " needs " +
                                std::to_string(needBytes) + " bytes";

@@ -17,6 +17,8 @@
 
 #include "core/strings.h"
 #include "load_limits.h"
+#include "core/printable_text.h"
+#include "core/regular_file.h"
 
 namespace at {
 
@@ -169,13 +171,27 @@ bool kindOf(int datatype, ScalarKind& kind) {
   }
 }
 
+// Converts `count` stored values (native byte order; they may be unaligned in `data`) to floats.
 template <class T>
-void convertVoxels(const void* data, std::vector<float>& out, double slope, double inter) {
-  const T* in = static_cast<const T*>(data);
-  if (slope == 1.0 && inter == 0.0) {
-    for (std::size_t n = 0; n < out.size(); ++n) out[n] = float(in[n]);
-  } else {
-    for (std::size_t n = 0; n < out.size(); ++n) out[n] = float(double(in[n]) * slope + inter);
+void convertVoxels(const unsigned char* data, float* out, std::size_t count, double slope, double inter) {
+  for (std::size_t n = 0; n < count; ++n) {
+    T v;
+    std::memcpy(&v, data + n * sizeof(T), sizeof(T));
+    out[n] = slope == 1.0 && inter == 0.0 ? float(v) : float(double(v) * slope + inter);
+  }
+}
+
+void convertPiece(ScalarKind kind, const unsigned char* data, float* out, std::size_t count, double slope,
+                  double inter) {
+  switch (kind) {
+    case ScalarKind::Int8: convertVoxels<std::int8_t>(data, out, count, slope, inter); break;
+    case ScalarKind::UInt8: convertVoxels<std::uint8_t>(data, out, count, slope, inter); break;
+    case ScalarKind::Int16: convertVoxels<std::int16_t>(data, out, count, slope, inter); break;
+    case ScalarKind::UInt16: convertVoxels<std::uint16_t>(data, out, count, slope, inter); break;
+    case ScalarKind::Int32: convertVoxels<std::int32_t>(data, out, count, slope, inter); break;
+    case ScalarKind::UInt32: convertVoxels<std::uint32_t>(data, out, count, slope, inter); break;
+    case ScalarKind::Float32: convertVoxels<float>(data, out, count, slope, inter); break;
+    case ScalarKind::Float64: convertVoxels<double>(data, out, count, slope, inter); break;
   }
 }
 
@@ -205,14 +221,19 @@ Result<Geometry> geometryFromAffine(const std::string& path, const nifti_dmat44&
 
 }  // namespace
 
-Result<LoadedImage> loadNifti(const std::string& path, const ImageLoadOptions& options) {
+namespace {
+
+Result<LoadedImage> readNifti(const std::string& path, const ImageLoadOptions& options) {
   quietNiftilib();
-  std::error_code ec;
-  if (!fs::is_regular_file(path, ec)) return fail(ErrorKind::NotFound, path + ": no such file");
   if (!str::endsWith(path, ".nii") && !str::endsWith(path, ".nii.gz"))
     return fail(path + ": a NIfTI file name must end in .nii or .nii.gz");
-  GzFilePtr file(gzopen(path.c_str(), "rb"));
+  auto opened = openRegularFile(path, path);
+  if (!opened) return tl::unexpected(opened.error());
+  const std::uint64_t fileBytes = opened->sizeBytes;
+  // zlib reads plain and gzip files alike through the descriptor (and closes it).
+  GzFilePtr file(gzdopen(opened->fd.get(), "rb"));
   if (!file) return fail(ErrorKind::Io, path + ": cannot open the file");
+  opened->fd.release();
   auto header = readNiftiHeader(path, file.get());
   if (!header) return tl::unexpected(header.error());
   NiftiImagePtr nim = std::move(header->nim);
@@ -248,67 +269,74 @@ Result<LoadedImage> loadNifti(const std::string& path, const ImageLoadOptions& o
   }
   if (!geometry) return tl::unexpected(geometry.error());
 
-  if (auto fits = detail::checkImageFits(path, dims, options); !fits) return tl::unexpected(fits.error());
+  // Stored values are read and converted in pieces of this size: the only buffer besides the result.
+  constexpr std::size_t kPiece = std::size_t(16) << 20;
+  const std::size_t bytesPerVoxel = std::size_t(nim->nbyper);
+  const std::size_t needBytes = dims.count() * bytesPerVoxel;
+  const std::size_t pieceBytes = std::min(kPiece, needBytes);
+  if (auto fits = detail::checkImageFits(path, dims, double(pieceBytes), options); !fits)
+    return tl::unexpected(fits.error());
 
-  // The file must hold exactly the voxel data its header describes.
-  const std::size_t needBytes = dims.count() * std::size_t(nim->nbyper);
+  // The file must hold exactly the voxel data its header describes. An uncompressed file's size
+  // says so before anything is allocated; compressed data are checked as they arrive.
   const std::string sizeText =
       "dimensions " + dims.toString() + " × " + toString(kind) + " need " + std::to_string(needBytes) + " bytes";
   if (nim->iname_offset < 0) return fail(path + ": vox_offset is negative");
+  const auto voxOffset = std::uint64_t(nim->iname_offset);
+  if (gzdirect(file.get()) && fileBytes < voxOffset + needBytes)
+    return fail(path + ": " + sizeText + " but the file holds " +
+                std::to_string(fileBytes > voxOffset ? fileBytes - voxOffset : 0) + " after the header");
   if (gzrewind(file.get()) != 0 || gzseek(file.get(), z_off_t(nim->iname_offset), SEEK_SET) < 0)
     return fail(path + ": vox_offset " + std::to_string(nim->iname_offset) + " lies beyond the end of the file");
-  std::vector<unsigned char> raw(needBytes);
-  // Read in 16 MiB pieces so that a large (compressed) image reports progress and can be cancelled.
-  constexpr std::size_t kPiece = std::size_t(16) << 20;
-  long long got = 0;
-  if (options.progress) options.progress(0, needBytes);
-  while (std::size_t(got) < needBytes) {
-    if (detail::loadCancelled(options)) return tl::unexpected(detail::cancelledError(path));
-    const std::size_t want = std::min(kPiece, needBytes - std::size_t(got));
-    const long long piece = gzReadFully(file.get(), raw.data() + got, want);
-    if (piece < 0) {
-      got = -1;
-      break;
-    }
-    got += piece;
-    if (options.progress) options.progress(std::size_t(got), needBytes);
-    if (std::size_t(piece) < want) break;  // end of file
-  }
-  if (got < 0) return fail(path + ": the compressed data is corrupt (" + gzMessage(file.get()) + ")");
-  if (std::size_t(got) != needBytes)
-    return fail(path + ": " + sizeText + " but the file holds " + std::to_string(got) + " after the header");
-  unsigned char extra = 0;
-  const long long more = gzReadFully(file.get(), &extra, 1);
-  if (more < 0) return fail(path + ": the compressed data is corrupt (" + gzMessage(file.get()) + ")");
-  if (more > 0) return fail(path + ": " + sizeText + " but the file holds more data after the header");
-  if (nim->byteorder != nifti_short_order() && nim->swapsize > 1)
-    nifti_swap_Nbytes(int64_t(dims.count()), nim->swapsize, raw.data());
-  const void* data = raw.data();
 
-  LoadedImage loaded;
-  loaded.storedKind = kind;
-  loaded.image.geometry = *geometry;
-  loaded.image.voxels.resize(dims.count());
   double slope = nim->scl_slope, inter = nim->scl_inter;
   if (slope == 0.0 || !std::isfinite(slope) || !std::isfinite(inter)) {
     slope = 1.0;
     inter = 0.0;
   }
+  LoadedImage loaded;
+  loaded.storedKind = kind;
+  loaded.image.geometry = *geometry;
+  // A set scl_slope is the file's statement of the value scale (HU for CT, say), even 1 and 0.
+  loaded.rescaleGiven = nim->scl_slope != 0.0 && std::isfinite(nim->scl_slope);
+  std::vector<float>& out = loaded.image.voxels;
+  // Address space for the whole image, but pages are only touched as converted values arrive: a
+  // header claiming more than the file holds costs no memory.
+  out.reserve(dims.count());
+  std::vector<unsigned char> piece(pieceBytes);
+  const bool swap = nim->byteorder != nifti_short_order() && nim->swapsize > 1;
+  std::size_t got = 0;
+  if (options.progress) options.progress(0, needBytes);
+  while (got < needBytes) {
+    if (detail::loadCancelled(options)) return tl::unexpected(detail::cancelledError(path));
+    const std::size_t want = std::min(pieceBytes, needBytes - got);
+    const long long read = gzReadFully(file.get(), piece.data(), want);
+    if (read < 0) return fail(path + ": the compressed data is corrupt (" + gzMessage(file.get()) + ")");
+    const std::size_t values = std::size_t(read) / bytesPerVoxel;
+    if (swap) nifti_swap_Nbytes(int64_t(values), nim->swapsize, piece.data());
+    const std::size_t at = out.size();
+    out.resize(at + values);
+    convertPiece(kind, piece.data(), out.data() + at, values, slope, inter);
+    got += std::size_t(read);
+    if (options.progress) options.progress(got, needBytes);
+    if (std::size_t(read) < want)
+      return fail(path + ": " + sizeText + " but the file holds " + std::to_string(got) + " after the header");
+  }
+  unsigned char extra = 0;
+  const long long more = gzReadFully(file.get(), &extra, 1);
+  if (more < 0) return fail(path + ": the compressed data is corrupt (" + gzMessage(file.get()) + ")");
+  if (more > 0) return fail(path + ": " + sizeText + " but the file holds more data after the header");
+
   if (slope != 1.0 || inter != 0.0)
     loaded.notes.push_back("applied scl_slope " + std::to_string(slope) + ", scl_inter " + std::to_string(inter));
-  std::vector<float>& out = loaded.image.voxels;
-  switch (kind) {
-    case ScalarKind::Int8: convertVoxels<std::int8_t>(data, out, slope, inter); break;
-    case ScalarKind::UInt8: convertVoxels<std::uint8_t>(data, out, slope, inter); break;
-    case ScalarKind::Int16: convertVoxels<std::int16_t>(data, out, slope, inter); break;
-    case ScalarKind::UInt16: convertVoxels<std::uint16_t>(data, out, slope, inter); break;
-    case ScalarKind::Int32: convertVoxels<std::int32_t>(data, out, slope, inter); break;
-    case ScalarKind::UInt32: convertVoxels<std::uint32_t>(data, out, slope, inter); break;
-    case ScalarKind::Float32: convertVoxels<float>(data, out, slope, inter); break;
-    case ScalarKind::Float64: convertVoxels<double>(data, out, slope, inter); break;
-  }
   loaded.notes.push_back(geometryNote);
   return loaded;
+}
+
+}  // namespace
+
+Result<LoadedImage> loadNifti(const std::string& path, const ImageLoadOptions& options) {
+  return withPrintableError(readNifti(path, options));
 }
 
 namespace {

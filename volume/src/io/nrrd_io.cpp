@@ -20,6 +20,7 @@
 #include <map>
 #include <optional>
 #include <sstream>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -27,6 +28,8 @@
 
 #include "core/strings.h"
 #include "load_limits.h"
+#include "core/printable_text.h"
+#include "core/regular_file.h"
 #include "raw_values.h"
 
 namespace at {
@@ -38,36 +41,16 @@ namespace fs = std::filesystem;
 // ---------------------------------------------------------------------------------------------
 // [header]
 
-Result<std::string> readWholeFile(const std::string& path, const std::string& what) {
-  std::error_code ec;
-  if (!fs::is_regular_file(path, ec)) return fail(ErrorKind::NotFound, what + ": no such file");
-  std::ifstream in(path, std::ios::binary);
-  if (!in) return fail(ErrorKind::Io, what + ": cannot open the file");
-  std::string bytes;
-  in.seekg(0, std::ios::end);
-  const std::streamoff size = in.tellg();
-  in.seekg(0, std::ios::beg);
-  if (size < 0) return fail(what + ": cannot read the file");
-  bytes.resize(std::size_t(size));
-  if (size > 0 && !in.read(bytes.data(), size)) return fail(what + ": cannot read the file");
-  return bytes;
-}
-
 // The start of a NRRD file up to and including the blank line that ends its header (or the whole
 // file when there is none), so that the memory check comes before attached data are read.
-Result<std::string> readHeaderBytes(const std::string& path) {
-  std::error_code ec;
-  if (!fs::is_regular_file(path, ec)) return fail(ErrorKind::NotFound, path + ": no such file");
-  std::ifstream in(path, std::ios::binary);
-  if (!in) return fail(ErrorKind::Io, path + ": cannot open the file");
+Result<std::string> readHeaderBytes(const RegularFile& file, const std::string& path) {
   constexpr std::size_t kChunk = 1 << 16, kMaxHeader = std::size_t(16) << 20;
   std::string bytes;
   std::size_t searched = 0;
   while (bytes.size() < kMaxHeader) {
-    char buffer[kChunk];
-    in.read(buffer, kChunk);
-    const std::size_t got = std::size_t(in.gcount());
-    bytes.append(buffer, got);
+    auto chunk = readFileRange(file, bytes.size(), kChunk, path);
+    if (!chunk) return tl::unexpected(chunk.error());
+    bytes += *chunk;
     if (bytes.size() >= 8 && bytes.compare(0, 7, "NRRD000") != 0)
       return fail(path + ": not a NRRD file (it does not start with NRRD0001…NRRD0005)");
     const std::size_t from = searched > 2 ? searched - 2 : 0;
@@ -79,22 +62,9 @@ Result<std::string> readHeaderBytes(const std::string& path) {
       return bytes;
     }
     searched = bytes.size();
-    if (got < kChunk) return bytes;  // end of file: a detached header
+    if (chunk->size() < kChunk) return bytes;  // end of file: a detached header
   }
   return fail(path + ": no end of the NRRD header within 16 MiB (a blank line must follow it)");
-}
-
-// The bytes of `path` from `offset` to the end.
-Result<std::string> readFileFrom(const std::string& path, std::size_t offset, const std::string& what) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) return fail(ErrorKind::Io, what + ": cannot open the file");
-  in.seekg(0, std::ios::end);
-  const std::streamoff size = in.tellg();
-  if (size < 0 || std::size_t(size) < offset) return fail(what + ": cannot read the file");
-  std::string bytes(std::size_t(size) - offset, '\0');
-  in.seekg(std::streamoff(offset), std::ios::beg);
-  if (!bytes.empty() && !in.read(bytes.data(), std::streamsize(bytes.size()))) return fail(what + ": cannot read the file");
-  return bytes;
 }
 
 std::vector<std::string> splitWords(const std::string& s) {
@@ -284,6 +254,8 @@ struct Layout {
   Dims dims;
   std::size_t valueCount = 0;   // all values in the file, including a size-1 non-spatial axis
   std::vector<int> spatialAxes; // the three axes of the grid among the file's axes
+  int layerAxis = -1;           // a .seg.nrrd's list axis of several layers, or -1
+  int layers = 1;
 };
 
 Result<Layout> parseLayout(const std::string& path, const NrrdHeader& h) {
@@ -312,31 +284,39 @@ Result<Layout> parseLayout(const std::string& path, const NrrdHeader& h) {
     layout.spatialAxes = {0, 1, 2};
   } else {
     // The non-spatial axis: "none" in space directions, else a non-domain kind, else the first size-1 axis.
+    // Only the first `dimension` entries describe axes (a header may list more; they are ignored).
     int other = -1;
     if (const auto it = h.fields.find("space directions"); it != h.fields.end()) {
       const auto vectors = splitVectors(it->second);
-      for (std::size_t a = 0; a < vectors.size(); ++a)
+      for (std::size_t a = 0; a < vectors.size() && a < sizes.size(); ++a)
         if (vectors[a] == "none") other = int(a);
     }
     if (other < 0)
       if (const auto it = h.fields.find("kinds"); it != h.fields.end()) {
         const auto kinds = splitWords(it->second);
-        for (std::size_t a = 0; a < kinds.size(); ++a)
+        for (std::size_t a = 0; a < kinds.size() && a < sizes.size(); ++a)
           if (kinds[a] != "domain" && kinds[a] != "space") other = int(a);
       }
     if (other < 0)
       for (int a = 0; a < 4 && other < 0; ++a)
         if (sizes[std::size_t(a)] == 1) other = a;
     if (other < 0) return fail(path + ": 4-dimensional NRRD without a non-spatial axis is not supported");
-    if (sizes[std::size_t(other)] != 1)
-      return fail(path + ": axis " + std::to_string(other) + " holds " + std::to_string(sizes[std::size_t(other)]) +
-                  " layers or components; only single-layer images are supported");
+    // Several layers are a segmentation's (Slicer's .seg.nrrd with overlapping segments, its
+    // Segment<N>_Layer keys say which layer holds a segment); other multi-component images are not
+    // supported.
+    if (sizes[std::size_t(other)] != 1) {
+      if (h.keyValues.count("Segment0_Layer") == 0)
+        return fail(path + ": axis " + std::to_string(other) + " holds " + std::to_string(sizes[std::size_t(other)]) +
+                    " layers or components; only single-layer images and segmentations (.seg.nrrd) are supported");
+      layout.layerAxis = other;
+      layout.layers = int(sizes[std::size_t(other)]);
+    }
     for (int a = 0; a < 4; ++a)
       if (a != other) layout.spatialAxes.push_back(a);
   }
   layout.dims = {int(sizes[std::size_t(layout.spatialAxes[0])]), int(sizes[std::size_t(layout.spatialAxes[1])]),
                  int(sizes[std::size_t(layout.spatialAxes[2])])};
-  layout.valueCount = layout.dims.count();
+  layout.valueCount = layout.dims.count() * std::size_t(layout.layers);
   return layout;
 }
 
@@ -489,6 +469,45 @@ Result<std::vector<std::string>> dataFiles(const std::string& path, const NrrdHe
   return files;
 }
 
+// Converts decoded bytes to float voxels as they arrive, in pieces: values may straddle pieces
+// and data files. `out` has its capacity reserved and grows only with values that exist.
+class ValueSink {
+ public:
+  ValueSink(ScalarKind kind, std::size_t valueBytes, bool swap, std::vector<float>& out)
+      : kind_(kind), valueBytes_(valueBytes), swap_(swap), out_(out), staging_(kStaging / valueBytes * valueBytes) {}
+
+  void append(const unsigned char* data, std::size_t size) {
+    while (size > 0) {
+      const std::size_t n = std::min(size, staging_.size() - fill_);
+      std::memcpy(staging_.data() + fill_, data, n);
+      fill_ += n, data += n, size -= n;
+      if (fill_ == staging_.size()) convert();
+    }
+  }
+  // Converts what is left (a partial value cannot remain: the caller counts whole values).
+  void finish() { convert(); }
+
+  static constexpr std::size_t kStaging = std::size_t(1) << 20;
+
+ private:
+  void convert() {
+    const std::size_t count = fill_ / valueBytes_;
+    const std::size_t at = out_.size();
+    out_.resize(at + count);
+    detail::decodeRawValues(staging_.data(), count, kind_, swap_, out_.data() + at);
+    const std::size_t rest = fill_ - count * valueBytes_;
+    std::memmove(staging_.data(), staging_.data() + count * valueBytes_, rest);
+    fill_ = rest;
+  }
+
+  ScalarKind kind_;
+  std::size_t valueBytes_;
+  bool swap_;
+  std::vector<float>& out_;
+  std::vector<unsigned char> staging_;
+  std::size_t fill_ = 0;
+};
+
 struct InflateStream {
   z_stream zs{};
   bool ready = false;
@@ -500,80 +519,120 @@ struct InflateStream {
   InflateStream& operator=(const InflateStream&) = delete;
 };
 
-// Decompresses gzip (or zlib) data, possibly several members, stopping once `limit` bytes are out.
-// The output grows as data arrive, so a header's claims cannot make it allocate in advance.
-Result<std::string> gunzip(const std::string& what, const char* data, std::size_t size, std::size_t limit) {
-  InflateStream stream;
-  if (!stream.ready) return fail(what + ": zlib could not start decompressing");
-  z_stream& zs = stream.zs;
-  zs.next_in = reinterpret_cast<Bytef*>(const_cast<char*>(data));
-  std::size_t inLeft = size;
-  std::string out;
-  std::size_t produced = 0;
-  while (true) {
-    if (produced == out.size()) out.resize(std::min(limit, std::max<std::size_t>(out.size() * 2, 1 << 16)));
-    const uInt inChunk = uInt(std::min<std::size_t>(inLeft, 1u << 30));
-    zs.avail_in = inChunk;
-    const std::size_t outRoom = std::min<std::size_t>(out.size() - produced, 1u << 30);
-    zs.next_out = reinterpret_cast<Bytef*>(out.data() + produced);
-    zs.avail_out = uInt(outRoom);
-    const int rc = inflate(&zs, Z_NO_FLUSH);
-    inLeft -= inChunk - zs.avail_in;
-    produced += outRoom - zs.avail_out;
-    if (rc == Z_STREAM_END) {
-      if (inLeft == 0 || produced == limit) break;
-      // Another gzip member follows.
-      if (inflateReset(&zs) != Z_OK) return fail(what + ": zlib could not restart decompressing");
-      continue;
-    }
-    if (produced == limit) break;
-    if (rc == Z_OK && !(inLeft == 0 && zs.avail_out != 0)) continue;
-    if (rc == Z_BUF_ERROR && zs.avail_out == 0) continue;  // the output buffer was full: grow it
-    if (rc == Z_OK || rc == Z_BUF_ERROR) return fail(what + ": the gzip data ends early (the file is truncated)");
-    return fail(what + ": the gzip data is corrupt (" + std::string(zs.msg ? zs.msg : "zlib error") + ")");
-  }
-  out.resize(produced);
-  return out;
-}
-
 struct Encoding {
   bool gzip = false;
   long long lineSkip = 0;
   long long byteSkip = 0;
 };
 
-// Extracts exactly `need` bytes of decoded voxel data from one data file's bytes (from `offset`).
-Status decodeChunk(const std::string& what, const std::string& bytes, std::size_t offset, const Encoding& enc,
-                   std::size_t need, const std::string& sizeText, std::string& out) {
-  std::size_t pos = offset;
-  for (long long n = 0; n < enc.lineSkip; ++n) {
-    const std::size_t nl = bytes.find('\n', pos);
-    if (nl == std::string::npos) return fail(what + ": fewer lines than 'line skip' " + std::to_string(enc.lineSkip));
-    pos = nl + 1;
-  }
-  if (!enc.gzip) {
-    const std::size_t available = bytes.size() - pos;
-    if (enc.byteSkip == -1) {
-      if (available < need)
-        return fail(what + ": " + sizeText + " but the data holds " + std::to_string(available));
-      out.append(bytes, bytes.size() - need, need);
-      return {};
+// Bytes read from a file at a time (the raw read buffer and the inflate output buffer each).
+constexpr std::size_t kReadPiece = std::size_t(1) << 20;
+
+// Moves `pos` past `lines` lines of the file (NRRD's 'line skip', counted before decoding).
+Status skipLines(const RegularFile& file, std::uint64_t& pos, long long lines, const std::string& what) {
+  for (long long n = 0; n < lines;) {
+    auto piece = readFileRange(file, pos, kReadPiece, what);
+    if (!piece) return tl::unexpected(piece.error());
+    if (piece->empty()) return fail(what + ": fewer lines than 'line skip' " + std::to_string(lines));
+    std::size_t at = 0;
+    while (n < lines) {
+      const std::size_t nl = piece->find('\n', at);
+      if (nl == std::string::npos) break;
+      at = nl + 1;
+      ++n;
     }
-    const std::size_t skip = std::size_t(enc.byteSkip);
-    const std::size_t holds = available > skip ? available - skip : 0;
-    if (holds != need) return fail(what + ": " + sizeText + " but the data holds " + std::to_string(holds));
-    out.append(bytes, pos + skip, need);
-    return {};
+    pos += n < lines ? piece->size() : at;
   }
+  return {};
+}
+
+// Raw data: exactly `need` bytes after `byteSkip` (or the last `need` bytes of the file when
+// byteSkip is -1), read in pieces into `sink`. The file's size is checked before anything is read.
+Status readRaw(const RegularFile& file, std::uint64_t pos, const Encoding& enc, std::size_t need,
+               const std::string& sizeText, const std::string& what, ValueSink& sink,
+               const ImageLoadOptions& options, const std::string& path) {
+  const std::uint64_t available = file.sizeBytes > pos ? file.sizeBytes - pos : 0;
+  if (enc.byteSkip == -1) {
+    if (available < need) return fail(what + ": " + sizeText + " but the data holds " + std::to_string(available));
+    pos = file.sizeBytes - need;
+  } else {
+    const auto skip = std::uint64_t(enc.byteSkip);
+    const std::uint64_t holds = available > skip ? available - skip : 0;
+    if (holds != need) return fail(what + ": " + sizeText + " but the data holds " + std::to_string(holds));
+    pos += skip;
+  }
+  for (std::size_t done = 0; done < need;) {
+    if (detail::loadCancelled(options)) return tl::unexpected(detail::cancelledError(path));
+    auto piece = readFileRange(file, pos + done, std::min(kReadPiece, need - done), what);
+    if (!piece) return tl::unexpected(piece.error());
+    if (piece->empty()) return fail(what + ": the file became shorter while it was read");
+    sink.append(reinterpret_cast<const unsigned char*>(piece->data()), piece->size());
+    done += piece->size();
+  }
+  return {};
+}
+
+// Gzip (or zlib) data, possibly several members: `byteSkip` decompressed bytes are dropped, then
+// exactly `need` bytes go to `sink`. Decompression stops one byte past `need`, so data that inflate
+// to more than the header says (a gzip bomb) are refused after that byte, never inflated whole.
+Status readGzip(const RegularFile& file, std::uint64_t pos, const Encoding& enc, std::size_t need,
+                const std::string& sizeText, const std::string& what, ValueSink& sink,
+                const ImageLoadOptions& options, const std::string& path) {
   if (enc.byteSkip < 0) return fail(what + ": 'byte skip: -1' is only allowed with raw encoding");
-  const std::size_t skip = std::size_t(enc.byteSkip);
-  auto plain = gunzip(what, bytes.data() + pos, bytes.size() - pos, skip + need + 1);
-  if (!plain) return tl::unexpected(plain.error());
-  const std::size_t holds = plain->size() > skip ? plain->size() - skip : 0;
-  if (holds != need)
-    return fail(what + ": " + sizeText + " but the decompressed data holds " +
-                (holds > need ? "more" : std::to_string(holds)));
-  out.append(*plain, skip, need);
+  InflateStream stream;
+  if (!stream.ready) return fail(what + ": zlib could not start decompressing");
+  z_stream& zs = stream.zs;
+  const auto skip = std::uint64_t(enc.byteSkip);
+  const std::uint64_t wanted = skip + need;  // decompressed bytes that matter
+  std::uint64_t produced = 0;
+  std::vector<unsigned char> output(kReadPiece);
+  std::string input;
+  bool inputEnded = false;
+  bool streamEnded = false;
+  while (true) {
+    if (detail::loadCancelled(options)) return tl::unexpected(detail::cancelledError(path));
+    if (zs.avail_in == 0 && !inputEnded) {
+      auto piece = readFileRange(file, pos, kReadPiece, what);
+      if (!piece) return tl::unexpected(piece.error());
+      input = std::move(*piece);
+      pos += input.size();
+      inputEnded = input.size() < kReadPiece;
+      zs.next_in = reinterpret_cast<Bytef*>(input.data());
+      zs.avail_in = uInt(input.size());
+    }
+    if (streamEnded) {
+      // Another gzip member may follow; anything else after the data is ignored, as gzip does.
+      if (zs.avail_in == 0 && inputEnded) break;
+      if (inflateReset(&zs) != Z_OK) return fail(what + ": zlib could not restart decompressing");
+      streamEnded = false;
+    }
+    // Never ask for more than one byte beyond the data that matter.
+    const std::uint64_t room = wanted + 1 - produced;
+    zs.next_out = output.data();
+    zs.avail_out = uInt(std::min<std::uint64_t>(output.size(), room));
+    const uInt asked = zs.avail_out;
+    const int rc = inflate(&zs, Z_NO_FLUSH);
+    const std::size_t got = asked - zs.avail_out;
+    // Hand over the part of this output that lies in [skip, skip + need).
+    const std::uint64_t begin = std::max(produced, skip), end = std::min(produced + got, wanted);
+    if (end > begin) sink.append(output.data() + (begin - produced), std::size_t(end - begin));
+    produced += got;
+    if (produced > wanted)
+      return fail(what + ": " + sizeText + " but the decompressed data holds more");
+    if (rc == Z_STREAM_END) {
+      streamEnded = true;
+      continue;
+    }
+    if (rc == Z_OK) continue;
+    if (rc == Z_BUF_ERROR && zs.avail_in == 0 && inputEnded) break;  // input ended mid-stream
+    if (rc == Z_BUF_ERROR) continue;
+    return fail(what + ": the gzip data is corrupt (" + std::string(zs.msg ? zs.msg : "zlib error") + ")");
+  }
+  const std::uint64_t holds = produced > skip ? produced - skip : 0;
+  if (!streamEnded)
+    return fail(what + ": the gzip data ends early (the file is truncated) after " + std::to_string(holds) +
+                " of the " + std::to_string(need) + " bytes of data");
+  if (produced < wanted) return fail(what + ": " + sizeText + " but the decompressed data holds " + std::to_string(holds));
   return {};
 }
 
@@ -588,7 +647,8 @@ std::vector<SegmentInfo> parseSegments(const NrrdHeader& h, std::vector<std::str
     long long value = n + 1;
     if (const auto it = h.keyValues.find(prefix + "LabelValue"); it != h.keyValues.end()) {
       if (!parseLong(str::trim(it->second), value) || value < 0 || value > 65535) {
-        notes.push_back("segment " + s.name + " has an invalid label value '" + it->second + "'; skipped");
+        notes.push_back("segment " + printableText(s.name, 60) + " has an invalid label value '" +
+                        printableText(it->second, 20) + "'; skipped");
         continue;
       }
     }
@@ -604,13 +664,113 @@ std::vector<SegmentInfo> parseSegments(const NrrdHeader& h, std::vector<std::str
   return segments;
 }
 
+// A multi-layer segmentation (Slicer writes overlapping segments into layers, each segment a label
+// value in one layer) as one label map: each segment keeps its label value where no other segment
+// has it, else takes the next free value (noted); where segments of several layers overlap, the
+// later layer wins (the count is noted). `loaded` holds all layers' values in file order and the
+// segments as parseSegments read them; on return, one value per voxel and the segments' labels.
+void mergeLayers(const NrrdHeader& h, const Layout& layout, LoadedImage& loaded) {
+  struct Placed {
+    std::size_t segment;
+    int layer;
+    long long value;
+  };
+  std::vector<Placed> placed;
+  std::set<std::uint16_t> taken;
+  std::uint16_t next = 1;
+  for (std::size_t k = 0; k < loaded.segments.size(); ++k) {
+    long long layer = 0;
+    for (int n = 0; n < 65536; ++n) {  // the segment's key index: the n whose name and value match
+      const std::string prefix = "Segment" + std::to_string(n) + "_";
+      const auto name = h.keyValues.find(prefix + "Name");
+      if (name == h.keyValues.end()) break;
+      long long value = n + 1;
+      if (const auto it = h.keyValues.find(prefix + "LabelValue"); it != h.keyValues.end()) parseLong(str::trim(it->second), value);
+      if (str::trim(name->second) != loaded.segments[k].name || value != loaded.segments[k].label) continue;
+      if (const auto it = h.keyValues.find(prefix + "Layer"); it != h.keyValues.end()) parseLong(str::trim(it->second), layer);
+      break;
+    }
+    placed.push_back({k, int(layer), loaded.segments[k].label});
+  }
+  std::vector<std::map<long long, std::uint16_t>> lookup(std::size_t(layout.layers));
+  for (Placed& p : placed) {
+    std::uint16_t out = std::uint16_t(p.value);
+    if (taken.count(out)) {
+      while (taken.count(next)) ++next;
+      loaded.notes.push_back("segment " + loaded.segments[p.segment].name + " (layer " + std::to_string(p.layer) +
+                             ", value " + std::to_string(p.value) + ") became label " + std::to_string(next) +
+                             ": its value is another layer's");
+      out = next;
+    }
+    taken.insert(out);
+    loaded.segments[p.segment].label = out;
+    if (p.layer >= 0 && p.layer < layout.layers) lookup[std::size_t(p.layer)][p.value] = out;
+  }
+  // File strides: axis a advances by the product of the earlier axes' sizes.
+  std::size_t stride[4] = {1, 1, 1, 1};
+  std::size_t size[4];
+  for (int a = 0, s = 0; a < 4; ++a) {
+    if (a == layout.layerAxis) {
+      size[a] = std::size_t(layout.layers);
+    } else {
+      const int spatial = s++;
+      size[a] = std::size_t(spatial == 0 ? layout.dims.x : spatial == 1 ? layout.dims.y : layout.dims.z);
+    }
+  }
+  for (int a = 1; a < 4; ++a) stride[a] = stride[a - 1] * size[a - 1];
+  const std::size_t layerStride = stride[layout.layerAxis];
+  const std::size_t sx = stride[layout.spatialAxes[0]], sy = stride[layout.spatialAxes[1]], sz = stride[layout.spatialAxes[2]];
+  const Dims d = layout.dims;
+  std::vector<float> merged(d.count(), 0.0f);
+  std::size_t overlaps = 0;
+  for (int k = 0; k < d.z; ++k)
+    for (int j = 0; j < d.y; ++j)
+      for (int i = 0; i < d.x; ++i) {
+        const std::size_t base = std::size_t(i) * sx + std::size_t(j) * sy + std::size_t(k) * sz;
+        float& out = merged[d.index(i, j, k)];
+        for (int layer = 0; layer < layout.layers; ++layer) {
+          const float v = loaded.image.voxels[base + std::size_t(layer) * layerStride];
+          if (v == 0) continue;
+          const auto it = lookup[std::size_t(layer)].find((long long)(v));
+          if (it == lookup[std::size_t(layer)].end()) continue;  // a value no segment names
+          overlaps += out != 0;
+          out = float(it->second);
+        }
+      }
+  loaded.image.voxels = std::move(merged);
+  loaded.notes.push_back("merged " + std::to_string(layout.layers) + " segmentation layers into one label map" +
+                         (overlaps ? " (" + std::to_string(overlaps) + " voxels in several segments: the later layer's)" : ""));
+}
+
+// Checks that a data file lies in the folder its header may read from: the header's own folder, or
+// the one the user named (ImageLoadOptions::dataFolder). Symbolic links are resolved first, so a
+// link inside the folder cannot lead out of it.
+Status checkDataFileConfined(const std::string& path, const std::string& file, const ImageLoadOptions& options) {
+  std::error_code ec;
+  fs::path allowed = fs::weakly_canonical(
+      options.dataFolder.empty() ? fs::absolute(fs::path(path), ec).parent_path() : fs::path(options.dataFolder), ec);
+  const fs::path resolved = fs::weakly_canonical(fs::absolute(fs::path(file), ec), ec);
+  if (!allowed.empty() && allowed.filename().empty()) allowed = allowed.parent_path();  // "dir/" → "dir"
+  if (ec) return fail(path + ": data file " + file + " cannot be resolved (" + ec.message() + ")");
+  const auto mismatch = std::mismatch(allowed.begin(), allowed.end(), resolved.begin(), resolved.end());
+  if (mismatch.first == allowed.end() && resolved != allowed) return {};
+  return fail(path + ": data file " + file + " lies outside " +
+              (options.dataFolder.empty() ? "the header's folder " + allowed.string() +
+                                                " (name a folder that may be read with --nrrd-data DIR)"
+                                          : "the folder allowed for data files, " + allowed.string()));
+}
+
 }  // namespace
 
 // ---------------------------------------------------------------------------------------------
 // [load]
 
-Result<LoadedImage> loadNrrd(const std::string& path, const ImageLoadOptions& options) {
-  auto headerBytes = readHeaderBytes(path);
+namespace {
+
+Result<LoadedImage> readNrrd(const std::string& path, const ImageLoadOptions& options) {
+  auto headerFile = openRegularFile(path, path);
+  if (!headerFile) return tl::unexpected(headerFile.error());
+  auto headerBytes = readHeaderBytes(*headerFile, path);
   if (!headerBytes) return tl::unexpected(headerBytes.error());
   auto header = parseHeader(path, *headerBytes);
   if (!header) return tl::unexpected(header.error());
@@ -654,22 +814,34 @@ Result<LoadedImage> loadNrrd(const std::string& path, const ImageLoadOptions& op
   if (!layout) return tl::unexpected(layout.error());
   auto geometry = parseGeometry(path, h, *layout, loaded.notes);
   if (!geometry) return tl::unexpected(geometry.error());
-  if (auto fits = detail::checkImageFits(path, layout->dims, options); !fits) return tl::unexpected(fits.error());
+  // Transient buffers: the raw read piece, the inflate output piece and the conversion staging.
+  const double transient = double(kReadPiece) * 2 + double(ValueSink::kStaging);
+  if (auto fits = detail::checkImageFits(path, layout->dims, transient, options); !fits)
+    return tl::unexpected(fits.error());
 
   auto files = dataFiles(path, h);
   if (!files) return tl::unexpected(files.error());
-  const std::size_t totalBytes = layout->valueCount * detail::bytesOf(*kind);
+  for (const std::string& file : *files)
+    if (auto inside = checkDataFileConfined(path, file, options); !inside) return tl::unexpected(inside.error());
+  const std::size_t valueBytes = detail::bytesOf(*kind);
+  const std::size_t totalBytes = layout->valueCount * valueBytes;
   const std::string typeText = std::string(toString(*kind));
-  std::string data;
-  data.reserve(totalBytes);
+  loaded.image.geometry = *geometry;
+  std::vector<float>& out = loaded.image.voxels;
+  // Address space for the whole image; pages are only touched as decoded values arrive.
+  out.reserve(layout->valueCount);
+  ValueSink sink(*kind, valueBytes, swap, out);
+  const auto readData = [&](const RegularFile& file, std::uint64_t pos, std::size_t need, const std::string& sizeText,
+                            const std::string& what) -> Status {
+    if (auto ok = skipLines(file, pos, enc.lineSkip, what); !ok) return ok;
+    return enc.gzip ? readGzip(file, pos, enc, need, sizeText, what, sink, options, path)
+                    : readRaw(file, pos, enc, need, sizeText, what, sink, options, path);
+  };
   if (files->empty()) {
     if (!h.hasAttachedData) return fail(path + ": the NRRD header names no data file and holds no data");
     const std::string sizeText =
         "dimensions " + layout->dims.toString() + " × " + typeText + " need " + std::to_string(totalBytes) + " bytes";
-    auto bytes = readFileFrom(path, h.dataOffset, path);
-    if (!bytes) return tl::unexpected(bytes.error());
-    if (auto ok = decodeChunk(path, *bytes, 0, enc, totalBytes, sizeText, data); !ok)
-      return tl::unexpected(ok.error());
+    if (auto ok = readData(*headerFile, h.dataOffset, totalBytes, sizeText, path); !ok) return tl::unexpected(ok.error());
   } else {
     const std::size_t n = files->size();
     if (totalBytes % n != 0)
@@ -681,23 +853,28 @@ Result<LoadedImage> loadNrrd(const std::string& path, const ImageLoadOptions& op
     if (options.progress) options.progress(0, n);
     for (std::size_t i = 0; i < n; ++i) {
       if (detail::loadCancelled(options)) return tl::unexpected(detail::cancelledError(path));
-      const std::string& file = (*files)[i];
-      const std::string what = path + ": data file " + file;
-      auto fileBytes = readWholeFile(file, what);
-      if (!fileBytes) return tl::unexpected(fileBytes.error());
-      if (auto ok = decodeChunk(what, *fileBytes, 0, enc, perFile, sizeText, data); !ok)
-        return tl::unexpected(ok.error());
+      const std::string& name = (*files)[i];
+      const std::string what = path + ": data file " + name;
+      auto dataFile = openRegularFile(name, what);
+      if (!dataFile) return tl::unexpected(dataFile.error());
+      if (auto ok = readData(*dataFile, 0, perFile, sizeText, what); !ok) return tl::unexpected(ok.error());
       if (options.progress) options.progress(i + 1, n);
     }
     if (n > 1) loaded.notes.push_back("read " + std::to_string(n) + " data files");
   }
-
-  loaded.image.geometry = *geometry;
-  loaded.image.voxels.resize(layout->valueCount);
-  std::vector<float>& out = loaded.image.voxels;
-  detail::decodeRawValues(data, *kind, swap, out);
+  sink.finish();
+  if (out.size() != layout->valueCount)
+    return fail(path + ": decoded " + std::to_string(out.size()) + " values but the header describes " +
+                std::to_string(layout->valueCount));
   loaded.segments = parseSegments(h, loaded.notes);
+  if (layout->layers > 1) mergeLayers(h, *layout, loaded);
   return loaded;
+}
+
+}  // namespace
+
+Result<LoadedImage> loadNrrd(const std::string& path, const ImageLoadOptions& options) {
+  return withPrintableError(readNrrd(path, options));
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -758,13 +935,14 @@ Status packValues(const std::string& path, const std::vector<float>& values, con
 
 std::string numberText(double v) {
   char buffer[64];
-  std::snprintf(buffer, sizeof buffer, "%.17g", v);
+  std::snprintf(buffer, sizeof buffer, "%.17g", v == 0 ? 0.0 : v);  // no "-0"
   return buffer;
 }
 
 }  // namespace
 
-Status writeNrrd(const std::string& path, const FloatVolume& image, ScalarKind storedKind) {
+Status writeNrrd(const std::string& path, const FloatVolume& image, ScalarKind storedKind,
+                 const std::vector<std::pair<std::string, std::string>>& keyValues) {
   const Geometry& g = image.geometry;
   if (g.dims.count() == 0 || image.voxels.size() != g.dims.count()) return fail(path + ": image to write is empty");
   static_assert(std::endian::native == std::endian::little, "writeNrrd writes native byte order as little endian");
@@ -801,7 +979,13 @@ Status writeNrrd(const std::string& path, const FloatVolume& image, ScalarKind s
   header << "endian: little\n";
   header << "encoding: gzip\n";
   header << "space origin: (" << numberText(g.originMm[0]) << "," << numberText(g.originMm[1]) << ","
-         << numberText(g.originMm[2]) << ")\n\n";
+         << numberText(g.originMm[2]) << ")\n";
+  for (const auto& [key, value] : keyValues) {
+    if (key.find(":=") != std::string::npos || key.find('\n') != std::string::npos || value.find('\n') != std::string::npos)
+      return fail(path + ": NRRD key '" + key + "' or its value holds ':=' or a line break");
+    header << key << ":=" << value << "\n";
+  }
+  header << "\n";
 
   std::ofstream out(path, std::ios::binary | std::ios::trunc);
   if (!out) return fail(path + ": cannot create the file");

@@ -5,8 +5,11 @@
 
 #include <png.h>
 
+#include <cstdint>
 #include <cstdio>
 #include <cstring>
+
+#include "core/regular_file.h"
 
 namespace at {
 
@@ -115,8 +118,12 @@ Status writePng(const std::string& path, const RgbImage& image) {
 }
 
 Result<RgbImage> readPng(const std::string& path) {
-  FileCloser file{std::fopen(path.c_str(), "rb")};
+  auto regular = openRegularFile(path, path);
+  if (!regular) return tl::unexpected(regular.error());
+  const std::uint64_t fileBytes = regular->sizeBytes;
+  FileCloser file{fdopen(regular->fd.get(), "rb")};
   if (!file.file) return fail(ErrorKind::Io, path + ": cannot open file: " + std::strerror(errno));
+  regular->fd.release();
   png_byte signature[8] = {};
   if (std::fread(signature, 1, 8, file.file) != 8 || png_sig_cmp(signature, 0, 8) != 0)
     return fail(path + ": not a PNG file (wrong signature)");
@@ -131,6 +138,18 @@ Result<RgbImage> readPng(const std::string& path) {
   constexpr png_uint_32 kMaxSide = 1u << 15;
   if (width == 0 || height == 0 || width > kMaxSide || height > kMaxSide)
     return fail(path + ": PNG size " + std::to_string(width) + "x" + std::to_string(height) + " is not supported");
+  // Screenshots, figures and stimuli are at most a few 4K frames; a header claiming more than
+  // kMaxPixels (192 MiB of RGB) is refused before anything is allocated.
+  constexpr std::uint64_t kMaxPixels = std::uint64_t(1) << 26;
+  if (std::uint64_t(width) * std::uint64_t(height) > kMaxPixels)
+    return fail(path + ": PNG size " + std::to_string(width) + "x" + std::to_string(height) + " is more than the " +
+                std::to_string(kMaxPixels) + " pixels an image may have");
+  // Deflate inflates at most 1032:1, and a 1-bit grey pixel becomes 24 bits of RGB: a header claiming
+  // more pixels than that is refused before the image is allocated.
+  const double outputBytes = double(width) * double(height) * 3.0;
+  if (outputBytes > double(fileBytes) * 1032.0 * 24.0)
+    return fail(path + ": PNG size " + std::to_string(width) + "x" + std::to_string(height) +
+                " is more than its " + std::to_string(fileBytes) + " bytes can hold");
   RgbImage image{int(width), int(height)};
   std::vector<png_bytep> rows(height);
   for (png_uint_32 y = 0; y < height; ++y) rows[y] = image.pixel(0, int(y));

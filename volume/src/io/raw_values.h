@@ -28,11 +28,10 @@ inline std::size_t bytesOf(ScalarKind kind) {
 }
 
 template <class T>
-void convertValues(const std::string& bytes, bool swap, std::vector<float>& out) {
-  const std::size_t n = out.size();
-  for (std::size_t i = 0; i < n; ++i) {
+void convertValues(const unsigned char* bytes, std::size_t count, bool swap, float* out) {
+  for (std::size_t i = 0; i < count; ++i) {
     unsigned char raw[sizeof(T)];
-    std::memcpy(raw, bytes.data() + i * sizeof(T), sizeof(T));
+    std::memcpy(raw, bytes + i * sizeof(T), sizeof(T));
     if (swap)
       for (std::size_t b = 0; b < sizeof(T) / 2; ++b) std::swap(raw[b], raw[sizeof(T) - 1 - b]);
     T v;
@@ -41,19 +40,25 @@ void convertValues(const std::string& bytes, bool swap, std::vector<float>& out)
   }
 }
 
-// Fills `out` (already sized) from `bytes`, which hold out.size() values of `kind`; `swap` reverses
-// each value's bytes (big-endian data on this little-endian machine, or the other way round).
-inline void decodeRawValues(const std::string& bytes, ScalarKind kind, bool swap, std::vector<float>& out) {
+// Writes `count` values of `kind`, stored in `bytes` (count · bytesOf(kind) of them, any
+// alignment), to `out` as floats; `swap` reverses each value's bytes (big-endian data on this
+// little-endian machine, or the other way round).
+inline void decodeRawValues(const unsigned char* bytes, std::size_t count, ScalarKind kind, bool swap, float* out) {
   switch (kind) {
-    case ScalarKind::Int8: convertValues<std::int8_t>(bytes, swap, out); break;
-    case ScalarKind::UInt8: convertValues<std::uint8_t>(bytes, swap, out); break;
-    case ScalarKind::Int16: convertValues<std::int16_t>(bytes, swap, out); break;
-    case ScalarKind::UInt16: convertValues<std::uint16_t>(bytes, swap, out); break;
-    case ScalarKind::Int32: convertValues<std::int32_t>(bytes, swap, out); break;
-    case ScalarKind::UInt32: convertValues<std::uint32_t>(bytes, swap, out); break;
-    case ScalarKind::Float32: convertValues<float>(bytes, swap, out); break;
-    case ScalarKind::Float64: convertValues<double>(bytes, swap, out); break;
+    case ScalarKind::Int8: convertValues<std::int8_t>(bytes, count, swap, out); break;
+    case ScalarKind::UInt8: convertValues<std::uint8_t>(bytes, count, swap, out); break;
+    case ScalarKind::Int16: convertValues<std::int16_t>(bytes, count, swap, out); break;
+    case ScalarKind::UInt16: convertValues<std::uint16_t>(bytes, count, swap, out); break;
+    case ScalarKind::Int32: convertValues<std::int32_t>(bytes, count, swap, out); break;
+    case ScalarKind::UInt32: convertValues<std::uint32_t>(bytes, count, swap, out); break;
+    case ScalarKind::Float32: convertValues<float>(bytes, count, swap, out); break;
+    case ScalarKind::Float64: convertValues<double>(bytes, count, swap, out); break;
   }
+}
+
+// Fills `out` (already sized) from `bytes`, which hold out.size() values of `kind`.
+inline void decodeRawValues(const std::string& bytes, ScalarKind kind, bool swap, std::vector<float>& out) {
+  decodeRawValues(reinterpret_cast<const unsigned char*>(bytes.data()), out.size(), kind, swap, out.data());
 }
 
 }  // namespace at::detail

@@ -67,6 +67,7 @@ class DesktopApp final : public ScriptHost {
   ExplorePanel explore_;
   StudyPanel study_;
   ImportPanel import_;
+  SegmentPanel segment_;
   ExpertPanel expert_;
   CourseEditorPanel courses_;
   bool quit_ = false;
@@ -145,6 +146,7 @@ void DesktopApp::drawUi() {
   else explore_.draw(*model_, {window_->glDescription()});
   study_.drawCoordinator(study, panelW + 20, 20);
   if (!study.participantActive()) import_.draw(model_->imports(), panelW + 40, 40);
+  if (!study.participantActive()) segment_.draw(model_->segmenter(), panelW + 60, 60);
   if (!study.participantActive()) courses_.draw(*model_, panelW + 60, 60);
   // The renderer's texture as it is (GL's rows bottom first: uv0 is the image's left/bottom).
   if (const render::gl::DisplayImage& image = view_->image(); image.handle)

@@ -7,6 +7,7 @@
 
 #include "core/strings.h"
 #include "panels.h"
+#include "segment_controller.h"
 
 namespace at::app {
 
@@ -38,6 +39,8 @@ void ExplorePanel::draw(DesktopModel& model, const Status& status) {
   if (ImGui::SmallButton("Studies...")) model.study().coordinatorOpen = true;
   ImGui::SameLine();
   if (ImGui::SmallButton("Import...")) model.imports().windowOpen = true;
+  ImGui::SameLine();
+  if (ImGui::SmallButton("Segment...")) model.segmenter().windowOpen = true;
   ImGui::SameLine();
   if (ImGui::SmallButton("Courses...")) model.courseEditor().windowOpen = true;
   ImGui::Separator();

@@ -3,6 +3,7 @@
 // panel keeps is what only a widget needs: text being typed, a drag in progress, a GL texture.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <optional>
 #include <string>
@@ -105,6 +106,18 @@ class ImportPanel {
 
  private:
   std::string error_;  // an import that could not start
+};
+
+// The segment editor's window: labels, a slice to paint seeds in, grow, undo and save.
+class SegmentPanel {
+ public:
+  void draw(SegmentController& editor, float x, float y);
+
+ private:
+  std::optional<render::gl::ImageTexture> texture_;
+  std::uint64_t revision_ = 0;
+  std::optional<std::array<int, 3>> lastPainted_;  // the voxel under a drag (one paint per voxel)
+  std::string newLabel_, exportPath_, error_;
 };
 
 // The course editor window (instructors): a new course on the dataset on screen, a stored one to

@@ -22,6 +22,10 @@ void drawViewOverlay(const render::Camera& camera, float left, float top, float 
   const std::array<std::array<int, 3>, 3> colours{{{230, 90, 80}, {110, 200, 110}, {100, 150, 240}}};
 
   const ImVec2 centre(left + margin + arm + 12 * unit, top + height - margin - arm - 12 * unit);
+  const ImU32 backing = IM_COL32(0, 0, 0, 140);  // so that the marks read over white bone too
+  const float reach = arm + 18 * unit;
+  draw->AddRectFilled(ImVec2(centre.x - reach, centre.y - reach), ImVec2(centre.x + reach, centre.y + reach), backing,
+                      6 * unit);
   struct End {
     double depth;
     int axis, sign;
@@ -50,11 +54,13 @@ void drawViewOverlay(const render::Camera& camera, float left, float top, float 
 
   const render::ScaleBar bar = render::scaleBar(camera, int(width), int(height));
   const float x1 = left + width - margin, x0 = x1 - float(bar.pixels), y = top + height - margin - 4 * unit;
+  const ImVec2 size = ImGui::CalcTextSize(bar.label.c_str());
+  const ImVec2 at(0.5f * (x0 + x1) - size.x / 2, y - 6 * unit - size.y);
+  draw->AddRectFilled(ImVec2(std::min(x0, at.x) - 6 * unit, at.y - 4 * unit), ImVec2(x1 + 6 * unit, y + 6 * unit),
+                      backing, 4 * unit);
   draw->AddLine(ImVec2(x0 + 1, y + 1), ImVec2(x1 + 1, y + 1), shadow, 3 * unit);
   draw->AddLine(ImVec2(x0, y), ImVec2(x1, y), text, 3 * unit);
   for (float x : {x0, x1}) draw->AddLine(ImVec2(x, y - 5 * unit), ImVec2(x, y + 2 * unit), text, 2 * unit);
-  const ImVec2 size = ImGui::CalcTextSize(bar.label.c_str());
-  const ImVec2 at(0.5f * (x0 + x1) - size.x / 2, y - 6 * unit - size.y);
   draw->AddText(ImVec2(at.x + 1, at.y + 1), shadow, bar.label.c_str());
   draw->AddText(at, text, bar.label.c_str());
 }
