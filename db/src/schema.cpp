@@ -368,6 +368,12 @@ constexpr std::string_view kDatasetLoadOptions = R"SQL(
 ALTER TABLE datasets ADD COLUMN load_options TEXT;
 )SQL";
 
+// A course step's free camera and clipping plane (course JSON's "camera" and "clip" as one JSON
+// object, lessons::placementToJson); NULL: the step frames its named view, unclipped.
+constexpr std::string_view kStepPlacement = R"SQL(
+ALTER TABLE steps ADD COLUMN placement TEXT;
+)SQL";
+
 }  // namespace
 
 const std::vector<Migration>& migrations() {
@@ -384,6 +390,7 @@ const std::vector<Migration>& migrations() {
       {7, "practical exams: definitions, attempts and their items", kExams},
       {8, "study ratings keep their session; trials say whether viewing was measured", kStudySessions},
       {9, "how an imported dataset's files are read (skip unreadable files, data folder)", kDatasetLoadOptions},
+      {10, "course steps keep a free camera and a clipping plane", kStepPlacement},
   };
   return all;
 }
