@@ -58,10 +58,10 @@ Status writeCourse(Database& d, const lessons::Course& course, const std::string
   auto prereq = d.prepare("INSERT INTO lesson_prerequisites (lesson_id, requires_id, position) VALUES (?1, ?2, ?3)");
   auto question = d.prepare(
       "INSERT INTO questions (id, lesson_id, kind, target, difficulty, json) VALUES (?1, ?2, ?3, ?4, ?5, ?6)");
-  // Steps keep a camera and clip from schema 10 (tests build older versions with this code).
+  // Steps keep a camera and clip from schema 11 (tests build older versions with this code).
   auto version = d.schemaVersion();
   if (!version) return tl::unexpected(version.error());
-  const bool placements = *version >= 10;
+  const bool placements = *version >= 11;
   auto step = d.prepare(placements ? "INSERT INTO steps (lesson_id, position, kind, structure, preset_id, view, title, text,"
                                      " question_id, study_items, placement) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11)"
                                    : "INSERT INTO steps (lesson_id, position, kind, structure, preset_id, view, title, text,"
@@ -122,7 +122,7 @@ Status writeCourse(Database& d, const lessons::Course& course, const std::string
           .bind(10, nlohmann::json(st.study.items).dump());
       if (placements) step->bind(11, placement.empty() ? std::optional<std::string>() : std::optional<std::string>(placement));
       else if (!placement.empty())
-        return fail("lesson '" + l.id + "' step " + std::to_string(si) + ": a camera or clip needs schema version 10; this database is at " +
+        return fail("lesson '" + l.id + "' step " + std::to_string(si) + ": a camera or clip needs schema version 11; this database is at " +
                     std::to_string(*version));
       if (auto s = step->run(); !s)
         return tl::unexpected(withContext("lesson '" + l.id + "' step " + std::to_string(si), s.error()));

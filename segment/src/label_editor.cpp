@@ -273,6 +273,14 @@ Result<EditSummary> LabelEditor::thresholdIsland(const Volume& volume, const Int
 
 Result<EditSummary> LabelEditor::growFromSeeds(const Volume& volume, const std::vector<GrowthSeed>& seeds,
                                                const GrowthParams& params, GrowthStats* statsOut) {
+  auto stats = computeGrowth(volume, seeds, params);
+  if (!stats) return tl::unexpected(stats.error());
+  if (statsOut) *statsOut = *stats;
+  return commitGrowth(seeds.size());
+}
+
+Result<GrowthStats> LabelEditor::computeGrowth(const Volume& volume, const std::vector<GrowthSeed>& seeds,
+                                               const GrowthParams& params, const WdtControl& control) {
   if (!volume.geometry.sameGridAs(labels_.geometry)) return fail("grow from seeds: the volume is not on the label map's grid");
   if (!growth_) growth_ = std::make_unique<Growth>();
   Growth& g = *growth_;
@@ -287,14 +295,16 @@ Result<EditSummary> LabelEditor::growFromSeeds(const Volume& volume, const std::
     g.dims = volume.dims();
     g.params = params;
   }
-  auto stats = g.growth->update(seeds);
-  if (!stats) return tl::unexpected(stats.error());
-  if (statsOut) *statsOut = *stats;
-  const LabelMap& grown = g.growth->labels();
+  return g.growth->update(seeds, control);
+}
+
+Result<EditSummary> LabelEditor::commitGrowth(std::size_t seedCount) {
+  if (!growth_ || !growth_->growth) return fail("grow from seeds: nothing has been grown");
+  const LabelMap& grown = growth_->growth->labels();
   Changes changes;
   for (std::size_t i = 0; i < grown.voxels.size(); ++i)
     if (grown.voxels[i] != labels_.voxels[i]) changes.push_back({i, grown.voxels[i]});
-  return commit("grow from seeds (" + std::to_string(seeds.size()) + " seed voxels)", changes);
+  return commit("grow from seeds (" + std::to_string(seedCount) + " seed voxels)", changes);
 }
 
 Result<EditSummary> LabelEditor::margin(std::uint16_t label, double marginMm) {
@@ -311,7 +321,11 @@ Result<EditSummary> LabelEditor::margin(std::uint16_t label, double marginMm) {
 Result<EditSummary> LabelEditor::hollow(std::uint16_t label, double thicknessMm) {
   if (auto ok = requireStructure(label); !ok) return tl::unexpected(ok.error());
   if (!(thicknessMm > 0)) return fail("hollow: the shell thickness must be > 0 mm");
-  const Mask inside = erode(maskOf(labels_, label), thicknessMm);
+  // The boundary voxels lie one spacing from the outside: a shell thinner than the grid's largest
+  // spacing would take them too and leave nothing, so the shell is at least one voxel thick.
+  const Vec3& sp = labels_.geometry.spacingMm;
+  // (Distances are floats: a relative 1e-6 keeps float(spacing) > spacing from counting.)
+  const Mask inside = erode(maskOf(labels_, label), std::max({thicknessMm, sp[0], sp[1], sp[2]}) * (1 + 1e-6));
   return commitMask("hollow '" + find(label)->displayName + "' to " + mm(thicknessMm), inside, 0, label);
 }
 

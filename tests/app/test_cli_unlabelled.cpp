@@ -1,17 +1,19 @@
-// Scans nobody has labelled, opened from the command line as a new user would: a uint8 animal-skull
-// µCT export (synthetic: the shared data has none) and an MR. info reads their intensities as
-// such, structures/slice/render work on them without labels, and the WDT says once that
-// density-weighted distances on MR assume CT-like values.
+// Scans nobody has labelled, opened as a new user would: a uint8 animal-skull µCT export
+// (synthetic: the shared data has none) and an MR. info reads their intensities as such,
+// structures/slice/render work on them without labels, the WDT says once that density-weighted
+// distances on MR assume CT-like values, and the desktop shows the µCT whole and labels it.
 #include <doctest/doctest.h>
 
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <filesystem>
 #include <string>
 
 #include "../volume/dicom_test_files.h"
+#include "desktop_script.h"
 #include "synthetic_scans.h"
 #include "test_support.h"
 #include "volume/dataset_source.h"
@@ -25,6 +27,8 @@ using nlohmann::json;
 namespace fs = std::filesystem;
 
 namespace {
+
+constexpr int kDesktopPanel = 320;  // the desktop's explore panel at UI scale 1 (the view lies right of it)
 
 std::string quoted(const fs::path& p) { return "'" + p.string() + "'"; }
 
@@ -161,4 +165,72 @@ TEST_CASE("wdt on an MR says once that density-weighted distances assume CT-like
   r = test::runApp(wdt + " --weight uniform --json");
   REQUIRE(r.exitCode == 0);
   CHECK(r.err.find("assume CT-like") == std::string::npos);
+}
+
+TEST_CASE("the desktop opens an unlabelled µCT whole, with a data TF, and its segment editor grows labels on it") {
+  if (!test::requireXvfb()) return;
+  test::TempDir dir("desktop-unlabelled");
+  const Dims dims{72, 64, 56};
+  const fs::path uct = writeMicroCt(dir, dims);
+  const test::MicroCtLayout layout = test::microCtLayout(dims);
+  const json brainVoxel = {int(layout.centre[0]), int(layout.centre[1]), int(layout.centre[2])};
+  // In the shell, on each axis both ways: half its thickness inside the outer surface.
+  json skullSeeds = json::array();
+  for (int axis = 0; axis < 3; ++axis)
+    for (int side : {-1, 1}) {
+      std::array<double, 3> v{layout.centre[0], layout.centre[1], layout.centre[2]};
+      v[std::size_t(axis)] += side * (layout.radius[axis] - 0.5 * layout.shell);
+      skullSeeds.push_back({{"do", "segment_seed"}, {"voxel", {int(std::lround(v[0])), int(std::lround(v[1])), int(std::lround(v[2]))}},
+                            {"brush_mm", 0.05}});
+    }
+
+  const fs::path shot = dir / "whole.png";
+  json script = {{"actions",
+                        {{{"do", "view"}, {"value", "anterior"}},
+                         {{"do", "wait_field"}},
+                         {{"do", "segment_open"}},
+                         {{"do", "segment_label"}, {"name", "brain"}},
+                         {{"do", "segment_seed"}, {"voxel", brainVoxel}, {"brush_mm", 0.1}},
+                         {{"do", "segment_label"}, {"name", "skull"}},
+                         {{"do", "segment_label"}, {"name", "background"}},
+                         {{"do", "segment_seed"}, {"voxel", {1, 1, 1}}, {"brush_mm", 0.15}},
+                         {{"do", "segment_seed"}, {"voxel", {dims.x - 2, dims.y - 2, dims.z - 2}}},
+                         {{"do", "segment_seed"}, {"voxel", {dims.x - 2, 1, dims.z - 2}}},
+                         {{"do", "segment_seed"}, {"voxel", {1, dims.y - 2, 1}}},
+                         {{"do", "segment_grow"}},
+                         {{"do", "segment_open"}, {"open", false}}}}};  // the view uncovered for the screenshot
+  // The skull's seeds right after its label is chosen.
+  json& actions = script["actions"];
+  const auto skull = std::find_if(actions.begin(), actions.end(), [](const json& a) { return a.value("name", "") == "skull"; });
+  actions.insert(skull + 1, skullSeeds.begin(), skullSeeds.end());
+  test::DesktopOptions options;
+  options.dataset = uct.string();
+  options.screenshot = shot.string();
+  const auto run = test::runDesktopScript(dir, script, options);
+  INFO(run.err);
+  REQUIRE(run.exitCode == 0);
+  CHECK(run.err.find("no labelled structures") == std::string::npos);
+
+  // The whole volume fills the middle of the view; the corners are background.
+  auto image = readPng(shot.string());
+  REQUIRE(image);
+  REQUIRE(image->width == 800);
+  const int cx = kDesktopPanel + (800 - kDesktopPanel) / 2, cy = 240;
+  int lit = 0;
+  for (int y = 0; y < image->height; ++y)
+    for (int x = kDesktopPanel; x < image->width; ++x) lit += image->pixel(x, y)[0] > 40;
+  CHECK(lit > (800 - kDesktopPanel) * 480 / 10);
+  CHECK(meanGrey(*image, cx - 30, cy - 30, cx + 30, cy + 30) > meanGrey(*image, kDesktopPanel + 4, 4, kDesktopPanel + 40, 40) + 40);
+
+  // The editor labelled it: the brain seed grew to the inside of the shell (its ellipsoid's volume
+  // within a quarter), not over the whole volume.
+  const auto grown = test::eventsOf(run.events, "segment_grown");
+  REQUIRE(grown.size() == 1);
+  const double inner = 4.0 / 3.0 * M_PI * (layout.radius[0] - layout.shell) * (layout.radius[1] - layout.shell) *
+                       (layout.radius[2] - layout.shell);
+  const double brain = grown[0]["voxels"]["brain"].get<double>();
+  CAPTURE(inner);
+  CHECK(brain > 0.75 * inner);
+  CHECK(brain < 1.25 * inner);
+  CHECK(grown[0]["voxels"]["skull"].get<double>() > 0);
 }

@@ -6,7 +6,9 @@
 #include <doctest/doctest.h>
 
 #include <algorithm>
+#include <chrono>
 #include <map>
+#include <thread>
 
 #include "db/connection.h"
 #include "headless_desktop.h"
@@ -44,20 +46,58 @@ std::array<int, 3> insideVoxel(const Dataset& ds, std::uint16_t label) {
   return voxelOf(d, best);
 }
 
+// Frames until the controller's growth is applied (at most a minute).
+void waitForGrowth(app::SegmentController& editor) {
+  for (int i = 0; i < 6000 && editor.growing(); ++i) {
+    editor.poll();
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  REQUIRE_FALSE(editor.growing());
+}
+
+std::vector<json> eventsNamed(const std::vector<json>& events, const std::string& name) {
+  std::vector<json> out;
+  for (const json& e : events)
+    if (e.value("event", "") == name) out.push_back(e);
+  return out;
+}
+
+// The phantom of `size` with its labels hidden (they are the reference), in a segment controller
+// whose events are kept.
+struct EditorOnPhantom {
+  test::TempDir dir;
+  db::Connection database;
+  const Dataset& reference;
+  Dataset unlabelled;
+  std::vector<json> events;
+  app::SegmentController editor;
+  explicit EditorOnPhantom(int size)
+      : database(openDatabase(dir)),
+        reference(test::phantomOfSize(size)),
+        unlabelled(withoutLabels(reference)),
+        editor(database, [this](json e) { events.push_back(std::move(e)); }) {
+    editor.attach(unlabelled);
+  }
+  static db::Connection openDatabase(const test::TempDir& dir) {
+    auto opened = db::openDatabase((dir / "t.db").string());
+    REQUIRE_MESSAGE(opened, test::errorText(opened));
+    return std::move(*opened);
+  }
+  static Dataset withoutLabels(const Dataset& dataset) {
+    Dataset out = dataset;
+    out.labels = LabelMap();
+    out.structures.clear();
+    return out;
+  }
+};
+
 }  // namespace
 
 TEST_CASE("the segment controller grows seeds painted in slices into the phantom's structures") {
-  test::TempDir dir;
-  auto database = db::openDatabase((dir / "t.db").string());
-  REQUIRE(database);
-  const Dataset& reference = test::phantomOfSize(128);
-  // The editor sees the volume with no labels; the phantom's labels are the reference.
-  Dataset unlabelled = reference;
-  unlabelled.labels = LabelMap();
-  unlabelled.structures.clear();
-  std::vector<json> events;
-  app::SegmentController editor(*database, [&](json e) { events.push_back(std::move(e)); });
-  editor.attach(unlabelled);
+  EditorOnPhantom f(128);
+  const Dataset& reference = f.reference;
+  app::SegmentController& editor = f.editor;
+  std::vector<json>& events = f.events;
   CHECK(editor.structures().empty());
   CHECK(editor.index() == 64);
 
@@ -81,8 +121,11 @@ TEST_CASE("the segment controller grows seeds painted in slices into the phantom
   CHECK(editor.seedCount() == raster->seeds.size());
   auto grown = editor.grow();
   REQUIRE_MESSAGE(grown, test::errorText(grown));
+  CHECK(editor.growing());  // grow() returned; the growth runs on the editor's worker
+  waitForGrowth(editor);
+  REQUIRE_FALSE(editor.growError());
+  events = eventsNamed(events, "segment_grown");
   REQUIRE(events.size() == 1);
-  CHECK(events[0]["event"] == "segment_grown");
 
   std::map<std::uint16_t, std::size_t> inReference, inGrown, inBoth;
   for (std::size_t i = 0; i < reference.labels.voxels.size(); ++i) {
@@ -105,6 +148,79 @@ TEST_CASE("the segment controller grows seeds painted in slices into the phantom
   REQUIRE(undone);
   CHECK(editor.revision() != before);
   CHECK(std::all_of(editor.labels().voxels.begin(), editor.labels().voxels.end(), [](std::uint16_t v) { return v == 0; }));
+}
+
+TEST_CASE("grow asked again while a growth runs: only the growth with the latest seeds is applied") {
+  EditorOnPhantom f(96);
+  const Dataset& reference = f.reference;
+  app::SegmentController& editor = f.editor;
+  std::vector<json>& events = f.events;
+  const Dims d = reference.volume.dims();
+  editor.brushMm = 0;
+  REQUIRE(editor.paintSeeds({1, 1, 1}));  // background
+  REQUIRE(editor.addLabel("first"));
+  const std::uint16_t cochlea = reference.findStructure("cochlea")->label;
+  REQUIRE(editor.paintSeeds(insideVoxel(reference, cochlea)));
+  REQUIRE(editor.grow());
+  // Before any frame takes the first growth: a third label's seed, and grow again.
+  REQUIRE(editor.growing());
+  auto second = editor.addLabel("second");
+  REQUIRE(second);
+  REQUIRE(editor.paintSeeds({d.x - 2, d.y - 2, d.z - 2}));
+  REQUIRE(editor.grow());
+  waitForGrowth(editor);
+  REQUIRE_FALSE(editor.growError());
+  CHECK(eventsNamed(events, "segment_growing").size() == 2);
+  const auto grown = eventsNamed(events, "segment_grown");
+  REQUIRE(grown.size() == 1);  // the first growth was not applied
+  CHECK(grown[0]["voxels"]["second"].get<std::size_t>() > 0);
+  CHECK(std::count(editor.labels().voxels.begin(), editor.labels().voxels.end(), *second) > 0);
+  // One edit: a single undo returns to the unlabelled map.
+  REQUIRE(editor.undo());
+  CHECK(std::all_of(editor.labels().voxels.begin(), editor.labels().voxels.end(), [](std::uint16_t v) { return v == 0; }));
+}
+
+TEST_CASE("the segment editor's threshold island, margin and hollow work on the current structure") {
+  EditorOnPhantom f(64);
+  const Dataset& reference = f.reference;
+  app::SegmentController& editor = f.editor;
+  std::vector<json>& events = f.events;
+  const auto count = [&](std::uint16_t label) {
+    return std::size_t(std::count(editor.labels().voxels.begin(), editor.labels().voxels.end(), label));
+  };
+  // The background is not a structure for these tools.
+  auto refused = editor.margin(1.0);
+  REQUIRE_FALSE(refused);
+  CHECK(refused.error().message.find("not the background") != std::string::npos);
+  auto bone = editor.addLabel("bone");
+  REQUIRE(bone);
+  // Bone of the phantom: the island above 300 HU under its densest voxel.
+  const auto densest = std::max_element(reference.volume.voxels.begin(), reference.volume.voxels.end());
+  const auto inside = voxelOf(reference.volume.dims(), std::size_t(densest - reference.volume.voxels.begin()));
+  REQUIRE(reference.intensity.valueOf(*densest) > 300);
+  auto island = editor.thresholdIsland(inside, 300, 4000, 0);
+  REQUIRE_MESSAGE(island, test::errorText(island));
+  const std::size_t islandVoxels = count(*bone);
+  CHECK(islandVoxels > 100);
+  CHECK(eventsNamed(events, "segment_edited").back()["tool"] == "threshold");
+  // Outside the range: one message naming the value.
+  auto air = editor.thresholdIsland({0, 0, 0}, 300, 4000, 0);
+  REQUIRE_FALSE(air);
+  CHECK(air.error().message.find("outside") != std::string::npos);
+  // Margin: grown by 1 mm there are more voxels, shrunk back fewer; hollow keeps a shell.
+  REQUIRE(editor.margin(1.0));
+  const std::size_t grownVoxels = count(*bone);
+  CHECK(grownVoxels > islandVoxels);
+  REQUIRE(editor.margin(-1.0));
+  const std::size_t shrunkVoxels = count(*bone);
+  CAPTURE(islandVoxels);
+  CAPTURE(grownVoxels);
+  CAPTURE(shrunkVoxels);
+  CHECK(shrunkVoxels < grownVoxels);
+  REQUIRE(editor.hollow(0.5));
+  CHECK(count(*bone) < shrunkVoxels);
+  CHECK(count(*bone) > 0);
+  CHECK(eventsNamed(events, "segment_edited").back()["tool"] == "hollow");
 }
 
 TEST_CASE("the segment editor's slice is shown at the voxels' aspect, with seeds drawn where they were painted") {

@@ -17,6 +17,7 @@
 #include "test_databases.h"
 #include "test_support.h"
 #include "toy_course.h"
+#include "toy_play.h"
 
 namespace fs = std::filesystem;
 using namespace at;
@@ -53,43 +54,6 @@ Database openFresh(const test::TempDir& dir, const std::string& name = "r.db") {
   return openAt(test::freshDatabase(dir, name));
 }
 
-// The answer that is right for a resolved question (names from the toy structures).
-quiz::Answer rightAnswer(const quiz::ResolvedQuestion& q) {
-  quiz::Answer a;
-  switch (q.question.kind) {
-    case quiz::QuestionKind::Locate: a.pick = quiz::Pick{q.question.target, 0.0}; break;
-    case quiz::QuestionKind::Identify:
-    case quiz::QuestionKind::Relation: a.choice = q.keyChoice; break;
-    case quiz::QuestionKind::Order: a.order = q.keyOrder; break;
-    case quiz::QuestionKind::Name:
-      for (const auto& s : test::toyStructures())
-        if (s.id == q.question.target) a.text = s.displayName;
-      break;
-  }
-  return a;
-}
-
-// Plays the current lesson to the end (or `stopAfter` answers), answering right.
-int playRight(LessonEngine& engine, int stopAfter = 1 << 30) {
-  int answered = 0;
-  while (!engine.atEnd()) {
-    auto view = engine.current();
-    REQUIRE(view);
-    if (view->kind == StepKind::Question) {
-      if (answered == stopAfter) return answered;
-      auto q = engine.currentQuestion();
-      REQUIRE(q);
-      RenderState render{"p", "wdt", 0.25, 1.5, 0.75};
-      auto grade = engine.answer(rightAnswer(*q), render, 1200);
-      REQUIRE_MESSAGE(grade, (grade ? "" : grade.error().message));
-      CHECK(grade->correct);
-      ++answered;
-    }
-    REQUIRE(engine.next());
-  }
-  return answered;
-}
-
 }  // namespace
 
 TEST_CASE("A stored course reads back identical, including texts with quotes and SQL") {
@@ -98,7 +62,7 @@ TEST_CASE("A stored course reads back identical, including texts with quotes and
   Course course = test::toyCourse();
   course.lessons[0].steps[0].show.text = "It's the \"stirrup\"; DROP TABLE lessons; -- really";
   course.synonyms["incus"] = {"anvil", "l'enclume"};
-  // A free camera and a clipping plane on a show step and on a question's scene (schema 10).
+  // A free camera and a clipping plane on a show step and on a question's scene (schema 11).
   course.lessons[0].steps[0].show.camera = StepCamera{{1.5, -2, 3}, {0, 0.6, -0.8}, {0, 0.8, 0.6}, 42.25};
   course.lessons[0].steps[0].show.clip = StepClip{{0, 0, -1}, -3.5};
   for (Step& step : course.lessons[0].steps)
@@ -373,7 +337,7 @@ TEST_CASE("The LessonEngine on the store resumes a lesson at the next step after
     CHECK(locked.error().message.find("toy.ossicles") != std::string::npos);
     LessonEngine first(curriculum, progress, keys);
     REQUIRE(first.start(userId, "toy.ossicles"));
-    CHECK(playRight(first, 2) == 2);  // then the "process" goes away
+    CHECK(test::playRight(first, 2) == 2);  // then the "process" goes away
   }
   auto db = Database::open(path);
   REQUIRE(db);
@@ -386,7 +350,7 @@ TEST_CASE("The LessonEngine on the store resumes a lesson at the next step after
   auto view = engine.current();
   REQUIRE(view);
   CHECK(view->questionId == "toy.ossicles.locate_malleus");
-  CHECK(playRight(engine) == 1);
+  CHECK(test::playRight(engine) == 1);
   auto score = engine.finish();
   REQUIRE(score);
   CHECK(*score == doctest::Approx(1.0));
@@ -394,7 +358,7 @@ TEST_CASE("The LessonEngine on the store resumes a lesson at the next step after
 
   LessonEngine next(curriculum, progress, keys);
   REQUIRE(next.start(userId, "toy.middle"));
-  CHECK(playRight(next) == 3);
+  CHECK(test::playRight(next) == 3);
   REQUIRE(next.finish());
   CHECK(countRows(*db, "responses") == 6);
   auto ability = progress.ability(userId);

@@ -11,6 +11,7 @@
 #include "db/dataset_store.h"
 #include "volume/known_scans.h"
 #include "render/structure_pick.h"
+#include "render/volume_preset.h"
 #include "segment_controller.h"
 
 namespace at::app {
@@ -48,6 +49,7 @@ DesktopModel::DesktopModel(LearningSession& session, const render::PresetLibrary
                                               else showLessonStructure(shown);
                                             });
   scheduler_.setViewPixels(layout_.viewPixelsW(), layout_.viewPixelsH());
+  classEvents_ = std::make_unique<BackgroundOutboxSender>(session_.database(), std::chrono::seconds(5));
 }
 
 DesktopModel::~DesktopModel() = default;
@@ -107,6 +109,7 @@ Status DesktopModel::showDataset(Dataset dataset, const std::string& startStruct
       [this](const std::string& clicked, double distanceMm) { clickGraded(clicked, distanceMm); });
   expert_ = std::make_unique<TfEditor>(*dataset_, session_.database(), sink);
   segment_->attach(*dataset_);
+  slices_.attach(*dataset_);
   recorder_.highlightNotWanted();
   lastPickMm_.reset();
   lessons_->setViewDataset(dataset_->id);
@@ -196,6 +199,10 @@ void DesktopModel::hoverAt(double x, double y) {
 void DesktopModel::clickAt(double x, double y) {
   if (study_->participantActive()) return;
   hoverAt(x, y);
+  if (lastPickMm_ && !namesHidden() && slices_.moveToPoint(*lastPickMm_)) {
+    const auto& v = slices_.crosshair();
+    event({{"event", "crosshair"}, {"voxel", {v[0], v[1], v[2]}}});
+  }
   if (exams_->wantsClick() || lessons_->wantsClick()) {
     answerLocate(dataset_->findStructureByLabel(explore_.hovered()), lastPickMm_);
     return;
@@ -363,10 +370,15 @@ void DesktopModel::beginFrame(FieldTarget* target) {
   exams_->poll();
   study_->stepExport();
   imports_->poll();
+  for (const std::string& line : classEvents_->takeLines()) message(line);
+  segment_->poll();
   if (!study_->participantActive())  // the participant's trial keeps its dataset
     if (auto imported = imports_->takeDatasetToOpen()) {
       const std::string id = imported->id;
-      if (auto st = showDataset(std::move(*imported), "", ""); !st) message("opening '" + id + "': " + st.error().message);
+      if (auto st = showDataset(std::move(*imported), "", ""); !st) {
+        message("opening '" + id + "': " + st.error().message);
+        imports_->openFailed("Opening '" + id + "' in the explore view failed: " + st.error().message);
+      }
     }
   expertEdited();
   fields_->update(target, recorder_);
@@ -393,6 +405,8 @@ render::RenderSettings DesktopModel::renderSettings(const RenderPlan& plan) cons
   s.jitter = plan.jitter;
   s.background = {0.04f, 0.04f, 0.05f, 1.0f};
   s.clip = explore_.clipPlane();
+  // The whole volume's data TF states its opacities per this length of ray (volume_preset.h).
+  if (explore_.wholeVolume()) s.opacityRefMm = render::kWholeVolumeRefMm;
   return s;
 }
 

@@ -16,6 +16,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "class_sync.h"
 #include "core/error.h"
 #include "exam_controller.h"
 #include "explore_state.h"
@@ -28,6 +29,7 @@
 #include "render/gradient_volume.h"
 #include "render/render_settings.h"
 #include "render/structure_pick.h"
+#include "slice_views.h"
 #include "study_controller.h"
 #include "tf_editor.h"
 #include "volume/png_image.h"
@@ -97,6 +99,8 @@ class DesktopModel {
   TfEditor& expert() { return *expert_; }
   SegmentController& segmenter() { return *segment_; }
   CourseEditor& courseEditor() { return *courses_; }
+  // The three slice panes; a click in the 3-D view that meets the volume moves their crosshair.
+  SliceViews& slices() { return slices_; }
   const DesktopOptions& options() const { return options_; }
 
   // The window's layout (each frame); a new size re-renders the view.
@@ -223,6 +227,8 @@ class DesktopModel {
   std::unique_ptr<ImportController> imports_;
   std::unique_ptr<SegmentController> segment_;
   std::unique_ptr<CourseEditor> courses_;
+  std::unique_ptr<BackgroundOutboxSender> classEvents_;  // the user's answers to their class server
+  SliceViews slices_;
   ViewLayout layout_;
   bool viewAvailable_ = false;
   std::optional<Vec3> lastPickMm_;  // where the last hover pick met the volume (LPS mm)

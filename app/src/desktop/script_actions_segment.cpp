@@ -56,10 +56,59 @@ ScriptInterpreter::Outcome ScriptInterpreter::segmentSeed(Context& c) {
   return Progress::Done;
 }
 
-// {"do": "segment_grow"}: grow from seeds; the segment_grown event reports the voxels per label.
+// {"do": "segment_grow", "wait": true}: grow from seeds (on the editor's worker); with "wait" the
+// script goes on once the growth is applied (the segment_grown event reports the voxels per label)
+// and fails with the growth's error.
 ScriptInterpreter::Outcome ScriptInterpreter::segmentGrow(Context& c) {
-  auto grown = c.model.segmenter().grow();
-  if (!grown) return tl::unexpected(grown.error());
+  SegmentController& s = c.model.segmenter();
+  if (c.first) {
+    if (auto st = s.grow(); !st) return tl::unexpected(st.error());
+    if (!c.action.value("wait", true)) return Progress::Done;
+  }
+  if (s.growing()) return Progress::Running;
+  if (s.growError()) return tl::unexpected(*s.growError());
+  return Progress::Done;
+}
+
+// {"do": "segment_threshold", "voxel": [i, j, k], "low": 150, "high": 255, "min_diameter_mm": 0}:
+// the connected region of values in the range under the voxel takes the current label (low and
+// high default to the dataset's window).
+ScriptInterpreter::Outcome ScriptInterpreter::segmentThreshold(Context& c) {
+  SegmentController& s = c.model.segmenter();
+  const auto v = c.action.at("voxel").get<std::vector<int>>();
+  if (v.size() != 3) return fail("ui script: segment_threshold: \"voxel\" must be [i, j, k]");
+  const auto window = s.valueWindow();
+  auto done = s.thresholdIsland({v[0], v[1], v[2]}, c.action.value("low", window[0]), c.action.value("high", window[1]),
+                                c.action.value("min_diameter_mm", 0.0));
+  if (!done) return tl::unexpected(done.error());
+  return Progress::Done;
+}
+
+// {"do": "segment_margin", "mm": 1.0} (negative: shrink) and {"do": "segment_hollow", "mm": 0.5}:
+// the current structure.
+ScriptInterpreter::Outcome ScriptInterpreter::segmentMargin(Context& c) {
+  auto done = c.model.segmenter().margin(c.action.at("mm").get<double>());
+  if (!done) return tl::unexpected(done.error());
+  return Progress::Done;
+}
+
+ScriptInterpreter::Outcome ScriptInterpreter::segmentHollow(Context& c) {
+  auto done = c.model.segmenter().hollow(c.action.at("mm").get<double>());
+  if (!done) return tl::unexpected(done.error());
+  return Progress::Done;
+}
+
+// {"do": "slices_open", "crosshair": [i, j, k], "label_alpha": 0.4}: shows the Slices window,
+// through that voxel when given.
+ScriptInterpreter::Outcome ScriptInterpreter::slicesOpen(Context& c) {
+  SliceViews& slices = c.model.slices();
+  slices.windowOpen = c.action.value("open", true);
+  if (c.action.contains("label_alpha")) slices.labelAlpha = c.action.at("label_alpha").get<double>();
+  if (c.action.contains("crosshair")) {
+    const auto v = c.action.at("crosshair").get<std::vector<int>>();
+    if (v.size() != 3) return fail("ui script: slices_open: \"crosshair\" must be [i, j, k]");
+    if (auto st = slices.setCrosshair({v[0], v[1], v[2]}); !st) return tl::unexpected(st.error());
+  }
   return Progress::Done;
 }
 

@@ -56,6 +56,8 @@ const std::map<std::string, ScriptInterpreter::Handler>& ScriptInterpreter::hand
       {"segment_slice", &S::segmentSlice}, {"segment_seed", &S::segmentSeed},
       {"segment_grow", &S::segmentGrow}, {"segment_undo", &S::segmentUndo},
       {"segment_clear_seeds", &S::segmentClearSeeds}, {"segment_save", &S::segmentSave},
+      {"segment_threshold", &S::segmentThreshold}, {"segment_margin", &S::segmentMargin},
+      {"segment_hollow", &S::segmentHollow}, {"slices_open", &S::slicesOpen},
       {"course_new", &S::courseNew},    {"course_open", &S::courseOpen},
       {"course_lesson", &S::courseLesson}, {"course_show", &S::courseShow},
       {"course_question", &S::courseQuestion}, {"course_step", &S::courseStep},

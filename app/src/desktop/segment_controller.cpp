@@ -1,7 +1,9 @@
 #include "segment_controller.h"
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
+#include <thread>
 #include <cmath>
 
 #include "core/strings.h"
@@ -22,12 +24,23 @@ std::uint8_t toByte(double linear) {
 
 }  // namespace
 
+struct SegmentController::GrowJob {
+  std::atomic<bool> cancel{false};
+  std::atomic<bool> finished{false};
+  std::optional<Result<GrowthStats>> result;  // written by the worker before `finished`
+  std::size_t seedCount = 0;
+  std::chrono::steady_clock::time_point start;
+  std::jthread thread;  // last: joined before the members above go
+};
+
 SegmentController::SegmentController(db::Database& database, EventSink events)
     : database_(database), events_(std::move(events)) {}
 
-SegmentController::~SegmentController() = default;
+SegmentController::~SegmentController() { stopGrowth(); }
 
 void SegmentController::attach(const Dataset& dataset) {
+  stopGrowth();  // it grows the editor and volume being replaced
+  growError_.reset();
   dataset_ = &dataset;
   const LabelMap start = dataset.labels.empty() ? LabelMap(dataset.volume.geometry, 0) : dataset.labels;
   editor_ = std::make_unique<segment::LabelEditor>(start, dataset.structures);
@@ -194,33 +207,137 @@ std::map<std::uint16_t, std::size_t> SegmentController::seedsPerLabel() const {
   return out;
 }
 
-Result<segment::EditSummary> SegmentController::grow() {
-  if (auto ok = requireDataset(); !ok) return tl::unexpected(ok.error());
+Status SegmentController::grow() {
+  if (auto ok = requireDataset(); !ok) return ok;
   const auto perLabel = seedsPerLabel();
   if (perLabel.size() < 2) {
     const std::string only = perLabel.empty() ? "no label has seeds"
                                               : "only label " + std::to_string(perLabel.begin()->first) + " has seeds";
     return fail("segment editor: " + only + "; grow from seeds needs seeds of two or more labels (background included)");
   }
+  growError_.reset();
+  if (job_) {  // latest wins: the running growth stops between rounds, then these seeds grow
+    job_->cancel = true;
+    growAgain_ = true;
+    status_ = "growing again with the latest seeds...";
+    return {};
+  }
+  return startGrowth();
+}
+
+Status SegmentController::startGrowth() {
+  growAgain_ = false;
+  if (seedsPerLabel().size() < 2) return fail("segment editor: grow from seeds needs seeds of two or more labels");
   std::vector<GrowthSeed> seeds;
   seeds.reserve(seeds_.size());
   for (const auto& [index, label] : seeds_) seeds.push_back({index, label});
   GrowthParams params;  // gradient weights over the dataset's window
   params.windowMin = dataset_->intensity.window[0];
   params.windowMax = dataset_->intensity.window[1];
-  GrowthStats stats;
-  const auto t0 = std::chrono::steady_clock::now();
-  auto summary = editor_->growFromSeeds(dataset_->volume, seeds, params, &stats);
-  if (!summary) return summary;
-  const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  auto job = std::make_unique<GrowJob>();
+  job->seedCount = seeds.size();
+  job->start = std::chrono::steady_clock::now();
+  GrowJob* j = job.get();
+  segment::LabelEditor* editor = editor_.get();
+  const Volume* volume = &dataset_->volume;
+  job->thread = std::jthread([j, editor, volume, seeds = std::move(seeds), params] {
+    WdtControl control;
+    control.cancel = &j->cancel;
+    j->result = editor->computeGrowth(*volume, seeds, params, control);
+    j->finished.store(true, std::memory_order_release);
+  });
+  job_ = std::move(job);
+  status_ = "growing from seeds...";
+  events_({{"event", "segment_growing"}, {"seeds", job_->seedCount}});
+  return {};
+}
+
+void SegmentController::stopGrowth() {
+  if (!job_) return;
+  job_->cancel = true;
+  job_.reset();  // joins the worker
+  growAgain_ = false;
+}
+
+void SegmentController::poll() {
+  if (!job_ || !job_->finished.load(std::memory_order_acquire)) return;
+  std::unique_ptr<GrowJob> job = std::move(job_);
+  job->thread.join();
+  if (growAgain_) {  // the seeds changed meanwhile: only the latest growth is applied
+    if (auto st = startGrowth(); !st) growError_ = st.error();
+    return;
+  }
+  const Result<GrowthStats>& stats = *job->result;
+  if (!stats) {
+    growError_ = stats.error();
+    status_.clear();
+    events_({{"event", "segment_grow_failed"}, {"message", stats.error().message}});
+    return;
+  }
+  auto summary = editor_->commitGrowth(job->seedCount);
+  if (!summary) {
+    growError_ = summary.error();
+    return;
+  }
+  const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - job->start).count();
+  edited("segment_grown", "grow", *summary, {{"ms", ms}, {"device", stats->device}, {"incremental", stats->incremental}});
+  status_ = summary->description + " (" + std::to_string(int(std::lround(ms))) + " ms on " + stats->device + ")";
+}
+
+void SegmentController::edited(const std::string& kind, const std::string& tool, const segment::EditSummary& summary,
+                               nlohmann::json extra) {
   ++revision_;
   std::vector<std::size_t> perValue(65536, 0);
   for (std::uint16_t v : editor_->labels().voxels) ++perValue[v];
   nlohmann::json counts = nlohmann::json::object();
   for (const Structure& s : editor_->structures()) counts[s.id] = perValue[s.label];
-  status_ = summary->description + " (" + std::to_string(int(std::lround(ms))) + " ms on " + stats.device + ")";
-  events_({{"event", "segment_grown"}, {"changed", summary->changed}, {"voxels", counts}, {"ms", ms},
-           {"device", stats.device}, {"incremental", stats.incremental}});
+  status_ = summary.description;
+  nlohmann::json e = {{"event", kind}, {"tool", tool}, {"changed", summary.changed}, {"voxels", counts}};
+  e.update(extra);
+  events_(std::move(e));
+}
+
+Status SegmentController::requireStructureCurrent(const std::string& tool) const {
+  if (auto ok = requireDataset(); !ok) return ok;
+  if (current_ == 0) return fail("segment editor: " + tool + " works on a structure; choose one (not the background) first");
+  return {};
+}
+
+std::array<double, 2> SegmentController::valueWindow() const {
+  if (!dataset_) return {0, 1};
+  const IntensityModel& m = dataset_->intensity;
+  return {m.valueOf(m.window[0]), m.valueOf(m.window[1])};
+}
+
+Result<segment::EditSummary> SegmentController::thresholdIsland(const std::array<int, 3>& voxel, double low, double high,
+                                                                 double minDiameterMm) {
+  if (auto ok = requireStructureCurrent("threshold island"); !ok) return tl::unexpected(ok.error());
+  const Geometry& g = dataset_->volume.geometry;
+  if (!g.dims.contains(voxel[0], voxel[1], voxel[2]))
+    return fail("segment editor: voxel (" + std::to_string(voxel[0]) + ", " + std::to_string(voxel[1]) + ", " +
+                std::to_string(voxel[2]) + ") is outside the volume (" + g.dims.toString() + ")");
+  segment::ThresholdOptions options;
+  options.minDiameterMm = std::max(0.0, minDiameterMm);
+  const Vec3 point = g.indexToPatient({double(voxel[0]), double(voxel[1]), double(voxel[2])});
+  auto summary = editor_->thresholdIsland(dataset_->volume, dataset_->intensity, point, low, high, current_, options);
+  if (!summary) return summary;
+  edited("segment_edited", "threshold", *summary);
+  return summary;
+}
+
+Result<segment::EditSummary> SegmentController::margin(double mm) {
+  if (auto ok = requireStructureCurrent("margin"); !ok) return tl::unexpected(ok.error());
+  auto summary = editor_->margin(current_, mm);
+  if (!summary) return summary;
+  edited("segment_edited", "margin", *summary);
+  return summary;
+}
+
+Result<segment::EditSummary> SegmentController::hollow(double thicknessMm) {
+  if (auto ok = requireStructureCurrent("hollow"); !ok) return tl::unexpected(ok.error());
+  auto summary = editor_->hollow(current_, thicknessMm);
+  if (!summary) return summary;
+  edited("segment_edited", "hollow", *summary);
   return summary;
 }
 

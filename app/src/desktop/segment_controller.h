@@ -2,12 +2,14 @@
 // the same commands): an instructor labels the dataset on screen by painting seeds of two or more
 // labels (background included) in a slice, growing every voxel to the label of its cheapest seed
 // (segment::LabelEditor::growFromSeeds, the WDT's multi-label growth: CUDA where a GPU exists, else
-// the CPU), checking the result in the slice, undoing, and saving the labels — into the dataset
+// the CPU), a threshold island under a click, margins and hollowing of a structure, checking the
+// result in the slice, undoing, and saving the labels — into the dataset
 // store for an imported dataset, or as a label map file (NIfTI + names JSON, or Slicer .seg.nrrd).
 //
-// The editor starts from the dataset's own labels and structures. The growth runs on the UI thread
-// (seconds at 256³ on two CPU cores; milliseconds on a GPU); the 3-D view keeps the labels the
-// dataset was opened with until it is opened again.
+// The editor starts from the dataset's own labels and structures. The growth runs on a worker
+// thread (seconds at 256³ on two CPU cores; milliseconds on a GPU) that uses only the editor's kept
+// growth (LabelEditor::computeGrowth), so the slice, the seeds and the other tools stay usable
+// meanwhile; the 3-D view keeps the labels the dataset was opened with until it is opened again.
 #pragma once
 
 #include <array>
@@ -82,11 +84,35 @@ class SegmentController {
   std::size_t seedCount() const { return seeds_.size(); }
   // Seed voxels per label.
   std::map<std::uint16_t, std::size_t> seedsPerLabel() const;
-  // Every voxel to the label of its cheapest seed. Errors: seeds of fewer than two labels (naming
-  // the one seeded), the growth's own errors. Incremental after the first call.
-  Result<segment::EditSummary> grow();
+  // Every voxel to the label of its cheapest seed, grown on a worker thread so that the window
+  // stays responsive: starts a growth with the seeds painted now and returns. Asked again while
+  // one runs, that one is cancelled between rounds and a growth with the latest seeds follows
+  // (latest wins: only its result is applied). poll() applies a finished growth as one edit
+  // (event segment_grown; the slice shows it). Incremental after the first growth. Errors, at
+  // once: seeds of fewer than two labels (naming the one seeded); the growth's own errors come
+  // through growError() once it ends.
+  Status grow();
+  bool growing() const { return job_ != nullptr; }
+  // The last growth's error, if it failed (cleared by the next grow()).
+  const std::optional<Error>& growError() const { return growError_; }
+  // Each frame: applies a finished growth, or starts the one asked for since.
+  void poll();
   Result<std::string> undo();
   const LabelMap& labels() const;
+
+  // --- Tools on the current label (a structure: the background is not grown or hollowed) -----
+  // The connected region under `voxel` of values in [low, high] (the dataset's units: HU or plain
+  // intensities) takes the current label (labelled voxels of other structures are kept);
+  // minDiameterMm > 0 cuts bridges thinner than it. Errors: background current, an empty range,
+  // a voxel outside the grid or outside the range.
+  Result<segment::EditSummary> thresholdIsland(const std::array<int, 3>& voxel, double low, double high,
+                                               double minDiameterMm);
+  // The current structure grown (mm > 0, onto unlabelled voxels) or shrunk (mm < 0).
+  Result<segment::EditSummary> margin(double mm);
+  // The current structure keeps a shell of `thicknessMm` inside its surface.
+  Result<segment::EditSummary> hollow(double thicknessMm);
+  // The range a threshold starts from: the dataset's window, in its units.
+  std::array<double, 2> valueWindow() const;
 
   // --- Saving ---------------------------------------------------------------------------------
   // Into the dataset store (the dataset must be an imported one); returns the stored file.
@@ -98,6 +124,13 @@ class SegmentController {
 
  private:
   Status requireDataset() const;
+  Status startGrowth();  // with the seeds painted now, on a worker thread
+  void stopGrowth();     // cancels a running growth and waits for it (another dataset, closing)
+  Status requireStructureCurrent(const std::string& tool) const;
+  // After an edit: the slice is redrawn, the status says what changed, and an event
+  // {"event": kind, "tool": tool, "changed": n, "voxels": {structure: count}} is sent.
+  void edited(const std::string& kind, const std::string& tool, const segment::EditSummary& summary,
+              nlohmann::json extra = nlohmann::json::object());
   db::Database& database_;
   EventSink events_;
   const Dataset* dataset_ = nullptr;  // the dataset being labelled (its volume and intensity)
@@ -107,6 +140,10 @@ class SegmentController {
   int axis_ = 2, index_ = 0;
   std::uint64_t revision_ = 0;
   std::string status_;
+  struct GrowJob;
+  std::unique_ptr<GrowJob> job_;  // the growth running on its worker, until poll() takes it
+  bool growAgain_ = false;        // seeds changed and grow was asked while job_ ran
+  std::optional<Error> growError_;
 };
 
 }  // namespace at::app

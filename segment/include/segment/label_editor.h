@@ -9,7 +9,8 @@
 //   growFromSeeds           every voxel takes the label of its cheapest seed (wdt/label_growth.h);
 //                           the growth is kept, so re-running it after seed edits is incremental
 //   margin                  grow (mm > 0, onto unlabelled voxels) or shrink (mm < 0) a structure
-//   hollow                  keep a shell of a thickness inside a structure's surface
+//   hollow                  keep a shell of a thickness inside a structure's surface (at least
+//                           one voxel: the grid's largest spacing)
 //   smooth                  opening (removes specks and spurs) or closing (fills gaps and holes)
 //   structures              add, rename, colour, delete (the last clears its voxels)
 // Edits that change nothing are not recorded. Values of a threshold range are the dataset's (HU or
@@ -73,6 +74,15 @@ class LabelEditor {
   // only what the seed changes affect. `stats` (optional) receives the growth's statistics.
   Result<EditSummary> growFromSeeds(const Volume& volume, const std::vector<GrowthSeed>& seeds,
                                     const GrowthParams& params, GrowthStats* stats = nullptr);
+  // growFromSeeds in two halves, for a caller that grows on a worker thread: computeGrowth uses
+  // only the kept growth (not the labels, structures or history), so another thread may read and
+  // edit the labels meanwhile; commitGrowth then applies the grown labels as one edit (on the
+  // labels' thread). No two computeGrowth at once, and no commitGrowth while one runs.
+  // `control.cancel` stops it between rounds (stats.cancelled; commit nothing then: the next
+  // computeGrowth finishes the work left).
+  Result<GrowthStats> computeGrowth(const Volume& volume, const std::vector<GrowthSeed>& seeds, const GrowthParams& params,
+                                    const WdtControl& control = {});
+  Result<EditSummary> commitGrowth(std::size_t seedCount);
   Result<EditSummary> margin(std::uint16_t label, double mm);
   Result<EditSummary> hollow(std::uint16_t label, double thicknessMm);
   Result<EditSummary> smooth(std::uint16_t label, Smoothing operation, double radiusMm);

@@ -1,5 +1,5 @@
-// The Segment window: labels, the slice with seeds painted by clicking and dragging, the brush,
-// Grow / Undo / Clear seeds, and saving — each widget calling the SegmentController command the UI
+// The Segment window: labels, the slice with seeds painted by clicking and dragging (or a
+// threshold island under a click), the brush, margin / hollow, Grow / Undo / Clear seeds, and saving — each widget calling the SegmentController command the UI
 // script's segment_* actions call.
 #include <imgui.h>
 #include <imgui_stdlib.h>
@@ -16,13 +16,9 @@ namespace {
 
 const ImVec4 kError{1, 0.5f, 0.4f, 1};
 
-render::RgbaImage toRgba(const RgbImage& image) {
-  render::RgbaImage rgba(image.width, image.height);
-  for (std::size_t i = 0; i < std::size_t(image.width) * std::size_t(image.height); ++i) {
-    for (std::size_t c = 0; c < 3; ++c) rgba.rgba[i * 4 + c] = image.rgb[i * 3 + c];
-    rgba.rgba[i * 4 + 3] = 255;
-  }
-  return rgba;
+template <class T>
+Status statusOf(const Result<T>& result) {
+  return result ? Status{} : Status(tl::unexpected(result.error()));
 }
 
 }  // namespace
@@ -83,10 +79,32 @@ void SegmentPanel::draw(SegmentController& editor, float x, float y) {
   ImGui::SetNextItemWidth(ImGui::GetFontSize() * 14);
   if (ImGui::SliderFloat("brush (mm)", &brush, 0.0f, 10.0f, "%.1f")) editor.brushMm = brush;
 
-  if (ImGui::Button("Grow from seeds")) {
-    auto grown = editor.grow();
-    report(grown ? Status{} : Status(tl::unexpected(grown.error())));
+  // The click's tool: seeds, or the threshold island under the click (the current structure).
+  ImGui::RadioButton("paint seeds", &tool_, 0);
+  ImGui::SameLine();
+  ImGui::RadioButton("threshold island", &tool_, 1);
+  if (tool_ == 1) {
+    if (!rangeSet_) {
+      const auto window = editor.valueWindow();
+      range_[0] = float(window[0] + 0.5 * (window[1] - window[0]));
+      range_[1] = float(window[1]);
+      rangeSet_ = true;
+    }
+    ImGui::SetNextItemWidth(ImGui::GetFontSize() * 14);
+    ImGui::InputFloat2("range", range_, "%.0f");
+    ImGui::SetNextItemWidth(ImGui::GetFontSize() * 14);
+    ImGui::SliderFloat("cut bridges (mm)", &minDiameterMm_, 0.0f, 5.0f, "%.2f");
   }
+  ImGui::SetNextItemWidth(ImGui::GetFontSize() * 6);
+  ImGui::InputFloat("mm##margin", &marginMm_, 0, 0, "%.2f");
+  ImGui::SameLine();
+  if (ImGui::Button("Grow label")) report(statusOf(editor.margin(std::fabs(marginMm_))));
+  ImGui::SameLine();
+  if (ImGui::Button("Shrink")) report(statusOf(editor.margin(-std::fabs(marginMm_))));
+  ImGui::SameLine();
+  if (ImGui::Button("Hollow")) report(statusOf(editor.hollow(std::fabs(marginMm_))));
+
+  if (ImGui::Button(editor.growing() ? "Grow again" : "Grow from seeds")) report(editor.grow());
   ImGui::SameLine();
   if (ImGui::Button("Undo")) {
     auto undone = editor.undo();
@@ -109,6 +127,7 @@ void SegmentPanel::draw(SegmentController& editor, float x, float y) {
   ImGui::PushTextWrapPos(ImGui::GetCursorPosX() + line * 22);
   if (!editor.status().empty()) ImGui::TextWrapped("%s", editor.status().c_str());
   if (!error_.empty()) ImGui::TextColored(kError, "%s", error_.c_str());
+  if (editor.growError()) ImGui::TextColored(kError, "%s", editor.growError()->message.c_str());
   ImGui::PopTextWrapPos();
   ImGui::EndGroup();
   ImGui::SameLine();
@@ -144,8 +163,12 @@ void SegmentPanel::draw(SegmentController& editor, float x, float y) {
       if (auto voxel = editor.voxelAtPixel(scale, (m.x - origin.x) / zoomX, (m.y - origin.y) / zoomY);
           voxel && voxel != lastPainted_) {
         lastPainted_ = voxel;
-        auto painted = editor.paintSeeds(*voxel);
-        report(painted ? Status{} : Status(tl::unexpected(painted.error())));
+        if (tool_ == 1) {  // one island per click
+          if (ImGui::IsMouseClicked(ImGuiMouseButton_Left))
+            report(statusOf(editor.thresholdIsland(*voxel, range_[0], range_[1], minDiameterMm_)));
+        } else {
+          report(statusOf(editor.paintSeeds(*voxel)));
+        }
       }
     }
     if (!ImGui::IsMouseDown(ImGuiMouseButton_Left)) lastPainted_.reset();
