@@ -67,6 +67,7 @@ int writeDefaultViews(const fs::path& outDir, const std::string& courseId) {
     auto settings = render::settingsFor(*preset, *frame, request);
     if (!settings) return reportError(settings.error().message);
     settings->background = {0.04f, 0.04f, 0.05f, 1.0f};
+    applyStepPlacement(*settings, step.camera, step.clip);
     renderer->setSelected(structure->label);
     if (render::modeNeedsField(preset->mode)) {
       auto params = render::wdtParamsFor(*preset);

@@ -440,6 +440,11 @@ ALTER TABLE study_ratings ADD COLUMN quality_scale REAL;
 ALTER TABLE study_ratings ADD COLUMN settle_ms REAL;
 )SQL";
 
+// A course step's free camera and clipping plane (course JSON's "camera" and "clip" as one JSON
+// object, lessons::placementToJson); NULL: the step frames its named view, unclipped.
+constexpr std::string_view kStepPlacement = R"SQL(
+ALTER TABLE steps ADD COLUMN placement TEXT;
+)SQL";
 }  // namespace
 
 const std::vector<Migration>& migrations() {
@@ -458,6 +463,7 @@ const std::vector<Migration>& migrations() {
       {9, "how an imported dataset's files are read (skip unreadable files, data folder)", kDatasetLoadOptions},
       {10, "class server: classes, members and roles, learning events; a learner's class membership and outbox", kClasses},
       {11, "study ratings record the render quality on screen and its settle time", kStudyRatingQuality},
+      {12, "course steps keep a free camera and a clipping plane", kStepPlacement},
   };
   return all;
 }

@@ -44,10 +44,11 @@ DesktopModel::DesktopModel(LearningSession& session, const render::PresetLibrary
   imports_ = std::make_unique<ImportController>(session_.database(), sink, [this](const std::string& m) { message(m); });
   segment_ = std::make_unique<SegmentController>(session_.database(), sink);
   courses_ = std::make_unique<CourseEditor>(session_, library_, sink,
-                                            [this](const std::string& structure, const std::string& presetId,
-                                                   const std::optional<render::Preset>& captured, lessons::CameraView view) {
-                                              if (captured) showStructureWith(structure, *captured, lessons::toString(view));
-                                              else showLessonStructure({structure, presetId, view});
+                                            [this](const lessons::QuestionScene& scene, const std::optional<render::Preset>& captured) {
+                                              const LessonController::Shown shown{scene.structure, scene.presetId, scene.view,
+                                                                                  scene.camera, scene.clip};
+                                              if (captured) showStructureWith(shown, *captured);
+                                              else showLessonStructure(shown);
                                             });
   scheduler_.setViewPixels(layout_.viewPixelsW(), layout_.viewPixelsH());
   classEvents_ = std::make_unique<BackgroundOutboxSender>(session_.database(), std::chrono::seconds(5));
@@ -288,20 +289,39 @@ void DesktopModel::showLessonStructure(const LessonController::Shown& shown) {
     message(preset.error().message);
     return;
   }
-  showStructureWith(shown.structure, *preset,
-                    shown.view ? lessons::toString(*shown.view) : (explore_.viewName().empty() ? startView_ : explore_.viewName()));
+  showStructureWith(shown, *preset);
 }
 
-void DesktopModel::showStructureWith(const std::string& structure, const render::Preset& preset, const std::string& view) {
-  const Structure* s = dataset_->findStructure(structure);
+void DesktopModel::showStructureWith(const LessonController::Shown& shown, const render::Preset& preset) {
+  const Structure* s = dataset_->findStructure(shown.structure);
   if (!s || !explore_.hasStructure(s->label)) {
-    message("lesson step: no structure '" + structure + "' in dataset '" + dataset_->id + "'");
+    message("lesson step: no structure '" + shown.structure + "' in dataset '" + dataset_->id + "'");
     return;
   }
   explore_.usePreset(s->label, preset, preset.t);
   setHovered(0);
   select(s->label);
+  const std::string view =
+      shown.view ? lessons::toString(*shown.view) : (explore_.viewName().empty() ? startView_ : explore_.viewName());
   if (auto st = setView(view); !st) message(st.error().message);
+  if (shown.camera) explore_.setCamera(cameraOf(*shown.camera));
+  // The step's plane, else none: the student sees what the author captured.
+  ClipSettings clip;
+  if (shown.clip) {
+    const render::ClipPlane plane = clipOf(*shown.clip);
+    for (int axis = 0; axis < 3; ++axis)
+      if (plane.normal[std::size_t(axis)] != 0) clip.axis = axis;
+    clip.on = true;
+    clip.flip = plane.normal[std::size_t(clip.axis)] < 0;
+    clip.offsetMm = float(plane.d - dot(plane.normal, explore_.camera().target));
+  }
+  explore_.setClip(clip);
+}
+
+bool DesktopModel::previewHidesNames() const {
+  const auto& preview = courses_->previewing();
+  // Selecting another structure (or closing the editor) ends what the student would see.
+  return courses_->windowOpen && preview && preview->namesHidden && idOf(explore_.selected()) == preview->structure;
 }
 
 std::string DesktopModel::courseDatasetId() const {
@@ -318,6 +338,12 @@ Result<CourseEditor::Capture> DesktopModel::captureView() const {
   auto view = lessons::parseCameraView(explore_.viewName().empty() ? startView_ : explore_.viewName());
   if (!view) return tl::unexpected(view.error());
   capture.view = *view;
+  capture.camera = stepCameraOf(explore_.camera());
+  if (auto plane = explore_.clipPlane()) {
+    auto clip = stepClipOf(*plane);
+    if (!clip) return tl::unexpected(clip.error());
+    capture.clip = *clip;
+  }
   return capture;
 }
 

@@ -129,16 +129,21 @@ class DesktopModel {
   std::optional<std::array<double, 2>> projectStructure(std::uint16_t label) const;
   // A lesson step's structure, preset and view.
   void showLessonStructure(const LessonController::Shown& shown);
-  // `structure` drawn with `preset` (its t) from the named `view` (a step as a student sees it).
-  void showStructureWith(const std::string& structure, const render::Preset& preset, const std::string& view);
+  // The step's structure drawn with `preset` (its t) from its named view, or its free camera, with
+  // its clipping plane or none (a step as a student sees it).
+  void showStructureWith(const LessonController::Shown& shown, const render::Preset& preset);
   // What the view shows now, for the course editor: the selected structure, its preset with the
-  // view's t, and the named view (the last one chosen). An error when nothing is selected.
+  // view's t, the named view (the last one chosen), the camera and the clipping plane. An error
+  // when nothing is selected.
   Result<CourseEditor::Capture> captureView() const;
   // The dataset id a course made on screen names: the dataset's, with the phantom at any size
   // ("phantom:128") named "phantom" (the same anatomy).
   std::string courseDatasetId() const;
   // Structure names must not be shown (a lesson question or an exam would be given away).
-  bool namesHidden() const { return lessons_->namesHidden() || exams_->namesHidden(); }
+  bool namesHidden() const { return lessons_->namesHidden() || exams_->namesHidden() || previewHidesNames(); }
+  // The course editor previews a question step as a student sees it (its structure still selected,
+  // the editor open): names hidden as in the lesson.
+  bool previewHidesNames() const;
 
   // --- Exams ----------------------------------------------------------------------------------
   // An exam item's view: its scene; for a locate item in the 3-D view, once the scene's field is

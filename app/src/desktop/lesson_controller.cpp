@@ -20,12 +20,11 @@ using SteadyClock = std::chrono::steady_clock;
 
 lessons::UnixSeconds unixNow() { return lessons::UnixSeconds(std::time(nullptr)); }
 
-// Questions whose answer a visible structure name would give away while unanswered.
+}  // namespace
+
 bool namesGiveAway(quiz::QuestionKind kind) {
   return kind == quiz::QuestionKind::Locate || kind == quiz::QuestionKind::Identify || kind == quiz::QuestionKind::Name;
 }
-
-}  // namespace
 
 LessonController::LessonController(LearningSession& session, std::string userName, std::string viewDataset,
                                    EventSink events, ShowStructure show, RenderStateSource renderState)
@@ -234,7 +233,7 @@ Status LessonController::showCurrent() {
   json e = {{"event", "lesson_step"}, {"lesson", runningLesson_}, {"position", view->position},
             {"count", view->count}, {"kind", lessons::toString(view->kind)}};
   if (view->kind == lessons::StepKind::Show) {
-    show_({view->structure, view->presetId, view->view});
+    show_({view->structure, view->presetId, view->view, view->scene.camera, view->scene.clip});
     e["structure"] = view->structure;
   } else {
     auto question = engine_->currentQuestion();
@@ -245,7 +244,7 @@ Status LessonController::showCurrent() {
     asked.grade = view->feedback;  // resumed: answered before
     // The question's scene (lessons::sceneFor): identify and name questions highlight their
     // target; a locate question shows its region, a neighbouring landmark, without marking it.
-    show_({view->scene.structure, view->scene.presetId, view->scene.view});
+    show_({view->scene.structure, view->scene.presetId, view->scene.view, view->scene.camera, view->scene.clip});
     asked_ = std::move(asked);
     e["question"] = view->questionId;
     e["question_kind"] = quiz::toString(view->questionKind);
@@ -380,7 +379,7 @@ Status LessonController::startReview() {
   for (const std::string& id : asked.question.choices) asked.choiceNames.push_back(displayName(id));
   const quiz::QuestionKind kind = asked.question.question.kind;
   if (auto scene = lessons::questionScene(course, asked.question.question.id))
-    show_({scene->structure, scene->presetId, scene->view});
+    show_({scene->structure, scene->presetId, scene->view, scene->camera, scene->clip});
   events_({{"event", "review_question"}, {"course", course.id}, {"question", asked.question.question.id},
            {"question_kind", quiz::toString(kind)}, {"target", asked.question.question.target},
            {"choices", asked.question.choices}});

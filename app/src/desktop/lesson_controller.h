@@ -30,6 +30,10 @@
 
 namespace at::app {
 
+// Questions whose answer a visible structure name would give away while unanswered (locate,
+// identify, name): a lesson hides names while one is asked, the course editor's preview too.
+bool namesGiveAway(quiz::QuestionKind kind);
+
 class LessonController {
  public:
   using EventSink = std::function<void(nlohmann::json)>;
@@ -39,6 +43,8 @@ class LessonController {
     std::string structure;
     std::string presetId;
     std::optional<lessons::CameraView> view;
+    std::optional<lessons::StepCamera> camera;  // replaces the view's framing
+    std::optional<lessons::StepClip> clip;      // none: unclipped
   };
   using ShowStructure = std::function<void(const Shown&)>;
   // The render parameters on screen, stored with each answer.

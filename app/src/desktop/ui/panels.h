@@ -156,6 +156,7 @@ class CourseEditorPanel {
   void drawStart(DesktopModel& model);
   void drawCourse(DesktopModel& model);
   void drawSteps(DesktopModel& model);
+  void drawPreview(DesktopModel& model);
   void drawAddStep(DesktopModel& model);
   void report(const Status& st, const std::string& done);
   std::string newId_ = "my_course", newTitle_, openPath_, openVolume_, lessonTitle_;
