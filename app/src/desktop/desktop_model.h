@@ -16,6 +16,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "class_sync.h"
 #include "core/error.h"
 #include "analytics_controller.h"
 #include "exam_controller.h"
@@ -226,6 +227,7 @@ class DesktopModel {
   std::unique_ptr<ImportController> imports_;
   std::unique_ptr<SegmentController> segment_;
   std::unique_ptr<CourseEditor> courses_;
+  std::unique_ptr<BackgroundOutboxSender> classEvents_;  // the user's answers to their class server
   ViewLayout layout_;
   bool viewAvailable_ = false;
   std::optional<Vec3> lastPickMm_;  // where the last hover pick met the volume (LPS mm)
