@@ -132,6 +132,8 @@ Status LessonController::refresh() {
                                     courses_[std::size_t(courseIndex_)].id, unixNow());
     if (!due) return tl::unexpected(due.error());
     due_ = std::move(*due);
+    // The due list names its structures: the course's dataset's names (its ids where it is not here).
+    if (auto list = session_.structures(courses_[std::size_t(courseIndex_)].datasetId)) structures_ = std::move(*list);
   }
   return {};
 }

@@ -127,9 +127,12 @@ ScriptInterpreter::Outcome ScriptInterpreter::review(Context& c) {
   LessonController& l = c.model.lessons();
   if (l.preparing()) return Progress::Running;
   if (auto st = l.ready(); !st) return actionError(c.action, st.error());
-  json due = json::array();
-  for (const lessons::StructureProgress& p : l.due()) due.push_back(p.structureId);
-  c.model.event({{"event", "review_queue"}, {"due", due}});
+  json due = json::array(), names = json::array();  // ids, and the names the panel's due list shows
+  for (const lessons::StructureProgress& p : l.due()) {
+    due.push_back(p.structureId);
+    names.push_back(l.displayName(p.structureId));
+  }
+  c.model.event({{"event", "review_queue"}, {"due", due}, {"names", names}});
   if (auto st = l.startReview(); !st) return actionError(c.action, st.error());
   return Progress::Done;
 }
