@@ -9,6 +9,7 @@
 #include <map>
 #include <unistd.h>
 
+#include "class_sync.h"
 #include "cli_args.h"
 #include "commands.h"
 #include "core/strings.h"
@@ -27,7 +28,9 @@ constexpr const char* kPlayHelp =
     "       anatomy-tutor play --review COURSE --user NAME [--answers FILE.jsonl] [--views DIR | --no-views] [--db PATH]\n\n"
     "Runs a lesson in the terminal: prints each step, writes the view it refers to as a PNG (and\n"
     "prints its path), asks its questions and grades the answers. Every answer is saved before the\n"
-    "next step is shown; running the same command again after an interruption resumes there.\n\n"
+    "next step is shown; running the same command again after an interruption resumes there.\n"
+    "For a user who joined a class (`anatomy-tutor class join`), answers are also sent to the class\n"
+    "server; while it cannot be reached they wait in the database and go when it is back.\n\n"
     "With --review, asks the course's review questions instead: the structures you have been taught\n"
     "in lessons you started that are due again (scheduled by FSRS so that each comes back when your\n"
     "predicted recall falls to 90%), until none is due or the answers end.\n\n"
@@ -83,7 +86,16 @@ struct PlayContext {
   std::int64_t userId = 0;
   std::optional<std::string> viewsDir;
   bool noViews = false;
+  OutboxSender* classEvents = nullptr;  // sends the user's answers to their class server
 };
+
+// Sends what waits for the class server (`now`: whatever the last failure), printing a line when
+// the server went away or came back.
+void sendClassEvents(PlayContext& ctx, bool now = false) {
+  if (!ctx.classEvents) return;
+  const std::string line = now ? ctx.classEvents->sendNow() : ctx.classEvents->sendWaiting();
+  if (!line.empty()) std::printf("  (%s)\n", line.c_str());
+}
 
 // play --review COURSE: review questions until nothing is due or the answers end.
 int runReview(const std::string& courseId, PlayContext& ctx) {
@@ -159,6 +171,7 @@ int runReview(const std::string& courseId, PlayContext& ctx) {
     }
     ++asked;
     right += correct ? 1 : 0;
+    sendClassEvents(ctx);
   }
   std::printf("Review answers saved: %d, %d correct.\n", asked, right);
   return 0;
@@ -225,6 +238,7 @@ int runLesson(const std::string& lessonId, lessons::LessonMode mode, PlayContext
                            (asked.error().kind == ErrorKind::Io
                                 ? " (earlier answers are saved; run the same command again to resume)"
                                 : " (earlier answers are saved; fix the line and run again to resume)"));
+      sendClassEvents(ctx);
       if (*asked != Asked::Answered) {
         std::printf("\nstopped before step %d of %d; your answers are saved — run the same command to resume\n",
                     view->position, view->count);
@@ -282,11 +296,13 @@ int runPlay(const Argv& argv) {
   if (!user) return reportError("play: " + user.error().message);
   if (created) std::printf("created user '%s'\n", user->name.c_str());
 
+  OutboxSender classEvents((*session)->database());
   PlayContext ctx{**session, (*session)->curriculum(), (*session)->progress(), **source, user->id, args->value("views"),
-                  args->has("no-views")};
-  if (reviewCourse) return runReview(*reviewCourse, ctx);
+                  args->has("no-views"), &classEvents};
   const auto mode = args->has("quiz-only") ? lessons::LessonMode::QuizOnly : lessons::LessonMode::Guided;
-  return runLesson(args->positional()[0], mode, ctx);
+  const int status = reviewCourse ? runReview(*reviewCourse, ctx) : runLesson(args->positional()[0], mode, ctx);
+  sendClassEvents(ctx, true);  // however it ended: what was saved goes to the class too
+  return status;
 }
 
 }  // namespace at::app

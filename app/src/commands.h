@@ -64,4 +64,8 @@ int runCourse(const Argv& args);     // cmd_course.cpp
 // Preference studies (cmd_study.cpp)
 int runStudy(const Argv& args);
 
+// Classes on a class server and sending the outbox (cmd_class.cpp)
+int runClass(const Argv& args);
+int runSync(const Argv& args);
+
 }  // namespace at::app

@@ -28,6 +28,8 @@ const std::vector<Command>& commands() {
       {"exam", "take a course's practical exam in the terminal (timed, labels hidden)", runExam},
       {"analytics", "a class's lesson completion, hardest structures, question difficulty, recall (--csv)", runAnalytics},
       {"study", "preference studies: register, run, status, export", runStudy},
+      {"class", "classes on a class server: create, join with a code, roles, the class's progress", runClass},
+      {"sync", "send the answers waiting for the class server (offline first)", runSync},
   };
   return table;
 }

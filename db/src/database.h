@@ -123,6 +123,18 @@ class Database {
   std::unique_ptr<std::recursive_mutex> writer_;  // held by the thread inside a write transaction
 };
 
+// Runs `each` (Status(Statement&)) for every row of a prepared, bound statement; stops at the
+// first error, its own or the statement's.
+template <class F>
+Status forEachRow(Statement& s, F&& each) {
+  while (true) {
+    auto row = s.step();
+    if (!row) return tl::unexpected(row.error());
+    if (!*row) return {};
+    if (Status st = each(s); !st) return st;
+  }
+}
+
 // BEGIN … COMMIT as an object: rolled back when it dies without commit().
 class Transaction {
  public:

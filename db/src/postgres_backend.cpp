@@ -40,17 +40,6 @@ bool changesNothing(std::string_view sql) {
   return sql.substr(start) == "BEGIN" || is("SELECT");
 }
 
-// The URL without its password, for messages: postgresql://user:secret@host/db → postgresql://user@host/db.
-std::string withoutPassword(const std::string& url) {
-  const auto scheme = url.find("://");
-  if (scheme == std::string::npos) return url;
-  const auto at = url.find('@', scheme + 3);
-  if (at == std::string::npos) return url;
-  const auto colon = url.find(':', scheme + 3);
-  if (colon == std::string::npos || colon > at) return url;
-  return url.substr(0, colon) + url.substr(at);
-}
-
 std::string firstLine(const char* message) {
   std::string s = message ? message : "";
   while (!s.empty() && (s.back() == '\n' || s.back() == ' ')) s.pop_back();
@@ -328,10 +317,10 @@ Result<std::unique_ptr<Connection>> openPostgres(const std::string& url, const O
   const char* keywords[] = {"dbname", "connect_timeout", "application_name", "client_encoding", nullptr};
   const char* values[] = {url.c_str(), timeout.c_str(), "anatomy-tutor", "UTF8", nullptr};
   PGconn* raw = PQconnectdbParams(keywords, values, 1);
-  if (!raw) return fail(ErrorKind::Io, "out of memory connecting to " + withoutPassword(url));
-  auto connection = std::make_unique<PostgresConnection>(raw, withoutPassword(url));
+  if (!raw) return fail(ErrorKind::Io, "out of memory connecting to " + db::withoutPassword(url));
+  auto connection = std::make_unique<PostgresConnection>(raw, db::withoutPassword(url));
   if (PQstatus(raw) != CONNECTION_OK)
-    return fail(ErrorKind::Unavailable, "cannot reach the database server " + withoutPassword(url) + ": " +
+    return fail(ErrorKind::Unavailable, "cannot reach the database server " + db::withoutPassword(url) + ": " +
                                             firstLine(PQerrorMessage(raw)));
   // Quiet, UTC, and the same text for numbers whatever the server's locale.
   if (auto s = connection->exec("SET client_min_messages = warning; SET TIME ZONE 'UTC'; SET extra_float_digits = 3");
@@ -341,3 +330,17 @@ Result<std::unique_ptr<Connection>> openPostgres(const std::string& url, const O
 }
 
 }  // namespace at::db::detail
+
+namespace at::db {
+
+std::string withoutPassword(const std::string& url) {
+  const auto scheme = url.find("://");
+  if (scheme == std::string::npos) return url;
+  const auto at = url.find('@', scheme + 3);
+  if (at == std::string::npos) return url;
+  const auto colon = url.find(':', scheme + 3);
+  if (colon == std::string::npos || colon > at) return url;
+  return url.substr(0, colon) + url.substr(at);
+}
+
+}  // namespace at::db

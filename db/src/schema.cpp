@@ -368,6 +368,67 @@ constexpr std::string_view kDatasetLoadOptions = R"SQL(
 ALTER TABLE datasets ADD COLUMN load_options TEXT;
 )SQL";
 
+
+// A class on a class server, and the learning records its students' machines send there.
+// On the server: classes (joined with their code), their members with a role, and class_events —
+// every answer, lesson start and lesson end any member's machine sent, once (its UUID is the key;
+// append-only: what the instructor sees is computed from them). On a learner's machine: the
+// class each local user joined (class_memberships) and the outbox — the same events, written in
+// the transaction that records them locally and marked sent once the server has them.
+constexpr std::string_view kClasses = R"SQL(
+CREATE TABLE classes (
+  code        TEXT PRIMARY KEY,          -- what members type to join (8 letters and digits)
+  title       TEXT NOT NULL,
+  created_by  TEXT NOT NULL,
+  created_at  TEXT NOT NULL DEFAULT (strftime('%Y-%m-%dT%H:%M:%fZ', 'now'))
+);
+CREATE TABLE class_members (
+  class_code  TEXT NOT NULL REFERENCES classes(code) ON DELETE CASCADE,
+  user_name   TEXT NOT NULL,
+  role        TEXT NOT NULL CHECK (role IN ('student', 'instructor', 'coordinator')),
+  joined_at   INTEGER NOT NULL,          -- Unix seconds
+  PRIMARY KEY (class_code, user_name)
+);
+CREATE TABLE class_events (
+  uuid        TEXT PRIMARY KEY,          -- minted by the learner's machine when the event happened
+  class_code  TEXT NOT NULL REFERENCES classes(code) ON DELETE CASCADE,
+  user_name   TEXT NOT NULL,
+  kind        TEXT NOT NULL CHECK (kind IN ('answer', 'lesson_started', 'lesson_finished')),
+  occurred_at INTEGER NOT NULL,          -- Unix seconds on the learner's machine
+  lesson_id   TEXT NOT NULL DEFAULT '',
+  question_id TEXT NOT NULL DEFAULT '',
+  structure   TEXT NOT NULL DEFAULT '',
+  correct     INTEGER,                   -- answers: 1 right, 0 wrong
+  score       REAL,                      -- answers: the grade; lesson_finished: the lesson's score
+  payload     TEXT NOT NULL DEFAULT '{}',-- the whole record as JSON (outbox.h)
+  received_at INTEGER NOT NULL
+);
+CREATE INDEX class_events_by_member ON class_events(class_code, user_name, occurred_at);
+CREATE TABLE class_memberships (
+  user_name   TEXT PRIMARY KEY,          -- a local user; one class at a time
+  class_code  TEXT NOT NULL,
+  server      TEXT NOT NULL,             -- the class server's URL, as given to `class join`
+  role        TEXT NOT NULL,
+  joined_at   INTEGER NOT NULL
+);
+CREATE TABLE outbox (
+  seq         INTEGER PRIMARY KEY,       -- the order events happened in on this machine
+  uuid        TEXT NOT NULL UNIQUE,
+  server      TEXT NOT NULL,
+  class_code  TEXT NOT NULL,
+  user_name   TEXT NOT NULL,
+  kind        TEXT NOT NULL,
+  occurred_at INTEGER NOT NULL,
+  lesson_id   TEXT NOT NULL DEFAULT '',
+  question_id TEXT NOT NULL DEFAULT '',
+  structure   TEXT NOT NULL DEFAULT '',
+  correct     INTEGER,
+  score       REAL,
+  payload     TEXT NOT NULL DEFAULT '{}',
+  sent_at     INTEGER                    -- NULL until the server has it
+);
+CREATE INDEX outbox_unsent ON outbox(server, sent_at, seq);
+)SQL";
 }  // namespace
 
 const std::vector<Migration>& migrations() {
@@ -384,6 +445,7 @@ const std::vector<Migration>& migrations() {
       {7, "practical exams: definitions, attempts and their items", kExams},
       {8, "study ratings keep their session; trials say whether viewing was measured", kStudySessions},
       {9, "how an imported dataset's files are read (skip unreadable files, data folder)", kDatasetLoadOptions},
+      {10, "class server: classes, members and roles, learning events; a learner's class membership and outbox", kClasses},
   };
   return all;
 }

@@ -2,6 +2,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "class_events.h"
 #include "database.h"
 #include "db/dataset_store.h"
 #include "learner_model.h"
@@ -13,17 +14,6 @@ namespace at::db {
 using namespace at::lessons;
 
 namespace {
-
-// Runs `each` for every row of a prepared, bound statement.
-template <class F>
-Status forEachRow(Statement& s, F&& each) {
-  while (true) {
-    auto row = s.step();
-    if (!row) return tl::unexpected(row.error());
-    if (!*row) return {};
-    if (Status st = each(s); !st) return st;
-  }
-}
 
 // The graded-answer columns, in the order both answer tables (responses, review_responses) have
 // them after their own key columns.
@@ -63,6 +53,37 @@ Status readGradedAnswer(const Statement& r, int first, const std::string& row, G
   g.render.beta = r.optionalReal(first + 10).value_or(0);
   g.answeredAt = r.int64(first + 11);
   return {};
+}
+
+
+// The outbox event of a graded answer (class_server.h): the answer with everything graded and
+// shown, its FSRS rating, and where it was given (a lesson step, or a review).
+ClassEvent answerEvent(const GradedAnswer& g, const LearnerUpdate& u, AnswerSource source, const std::string& lessonId,
+                       std::optional<int> stepIndex) {
+  nlohmann::json payload = {
+      {"source", toString(source)},
+      {"lesson", lessonId},
+      {"question", g.questionId},
+      {"structure", g.structureId},
+      {"answer", nlohmann::json::parse(quiz::answerToJson(g.answer), nullptr, false)},
+      {"correct", g.correct},
+      {"score", g.score},
+      {"latency_ms", g.latencyMs},
+      {"render", {{"preset", g.render.presetId}, {"mode", g.render.mode}, {"t", g.render.t},
+                  {"alpha", g.render.alpha}, {"beta", g.render.beta}}},
+      {"fsrs_rating", int(u.rating)},
+      {"answered_at", g.answeredAt}};
+  if (stepIndex) payload["step"] = *stepIndex;
+  ClassEvent e;
+  e.kind = "answer";
+  e.occurredAt = g.answeredAt;
+  e.lessonId = lessonId;
+  e.questionId = g.questionId;
+  e.structure = g.structureId;
+  e.correct = g.correct ? 1 : 0;
+  e.score = g.score;
+  e.payload = payload.dump();
+  return e;
 }
 
 }  // namespace
@@ -369,7 +390,12 @@ Result<Attempt> SqliteProgressRepository::startAttempt(std::int64_t userId, cons
     auto inserted = insert->insertReturningId();
     if (!inserted) return tl::unexpected(inserted.error());
     a.id = *inserted;
-    return {};
+    ClassEvent started;
+    started.kind = "lesson_started";
+    started.occurredAt = startedAt;
+    started.lessonId = lessonId;
+    started.payload = nlohmann::json{{"lesson", lessonId}, {"mode", toString(mode)}, {"started_at", startedAt}}.dump();
+    return enqueueClassEvent(d, userId, started);
   });
   if (!status) return tl::unexpected(withContext("starting lesson '" + lessonId + "'", status.error()));
   return a;
@@ -382,7 +408,21 @@ Status SqliteProgressRepository::finishAttempt(std::int64_t attemptId, UnixSecon
     update->bind(1, attemptId).bind(2, finishedAt).bind(3, score);
     if (auto s = update->run(); !s) return s;
     if (d.changes() != 1) return fail(ErrorKind::NotFound, "unknown attempt " + std::to_string(attemptId));
-    return {};
+    auto attempt = d.prepare("SELECT user_id, lesson_id, mode, started_at FROM attempts WHERE id = ?1");
+    if (!attempt) return tl::unexpected(attempt.error());
+    attempt->bind(1, attemptId);
+    auto row = attempt->step();
+    if (!row) return tl::unexpected(row.error());
+    if (!*row) return fail(ErrorKind::NotFound, "unknown attempt " + std::to_string(attemptId));
+    ClassEvent finished;
+    finished.kind = "lesson_finished";
+    finished.occurredAt = finishedAt;
+    finished.lessonId = attempt->text(1);
+    finished.score = score;
+    finished.payload = nlohmann::json{{"lesson", finished.lessonId}, {"mode", attempt->text(2)},
+                                      {"started_at", attempt->int64(3)}, {"finished_at", finishedAt}, {"score", score}}
+                           .dump();
+    return enqueueClassEvent(d, attempt->int64(0), finished);
   });
 }
 
@@ -437,7 +477,14 @@ Result<std::int64_t> SqliteProgressRepository::recordAnswer(const AnswerRecord& 
       return tl::unexpected(inserted.error());
     }
     id = *inserted;
-    return writeLearnerModel(d, record.update, r, AnswerSource::Lesson, id);
+    if (auto st = writeLearnerModel(d, record.update, r, AnswerSource::Lesson, id); !st) return st;
+    auto attempt = d.prepare("SELECT lesson_id FROM attempts WHERE id = ?1");
+    if (!attempt) return tl::unexpected(attempt.error());
+    attempt->bind(1, r.attemptId);
+    auto row = attempt->step();
+    if (!row) return tl::unexpected(row.error());
+    if (!*row) return fail(ErrorKind::NotFound, "unknown attempt " + std::to_string(r.attemptId));
+    return enqueueClassEvent(d, p.userId, answerEvent(r, record.update, AnswerSource::Lesson, attempt->text(0), r.stepIndex));
   });
   if (!status) return tl::unexpected(withContext("recording the answer", status.error()));
   return id;
@@ -462,7 +509,8 @@ Result<std::int64_t> SqliteProgressRepository::recordReviewAnswer(const ReviewRe
       return tl::unexpected(inserted.error());
     }
     id = *inserted;
-    return writeLearnerModel(d, record.update, r, AnswerSource::Review, id);
+    if (auto st = writeLearnerModel(d, record.update, r, AnswerSource::Review, id); !st) return st;
+    return enqueueClassEvent(d, r.userId, answerEvent(r, record.update, AnswerSource::Review, "", std::nullopt));
   });
   if (!status) return tl::unexpected(withContext("recording the review answer", status.error()));
   return id;

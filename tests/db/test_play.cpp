@@ -3,6 +3,7 @@
 // players, malformed answer lines, and a real abdominal course on the TotalSegmentator sample.
 #include <doctest/doctest.h>
 
+#include <algorithm>
 #include <chrono>
 #include <csignal>
 #include <fcntl.h>
@@ -21,6 +22,7 @@
 #include "quiz/keys.h"
 #include "test_databases.h"
 #include "test_support.h"
+#include "toy_play.h"
 #include "volume/dataset_source.h"
 #include "volume/phantom.h"
 #include "wdt/answer_keys.h"
@@ -54,18 +56,7 @@ quiz::DistanceFieldFunction answerKeyFields(const Dataset& dataset) {
 
 // The right answer to a resolved question, as an answers-file line.
 std::string rightAnswerLine(const quiz::ResolvedQuestion& q, const std::vector<Structure>& structures) {
-  quiz::Answer a;
-  switch (q.question.kind) {
-    case quiz::QuestionKind::Locate: a.pick = quiz::Pick{q.question.target, 0.0}; break;
-    case quiz::QuestionKind::Identify:
-    case quiz::QuestionKind::Relation: a.choice = q.keyChoice; break;
-    case quiz::QuestionKind::Order: a.order = q.keyOrder; break;
-    case quiz::QuestionKind::Name:
-      for (const auto& s : structures)
-        if (s.id == q.question.target) a.text = s.displayName;
-      break;
-  }
-  return quiz::answerToJson(a);
+  return quiz::answerToJson(test::rightAnswer(q, structures));
 }
 
 // Answers files for every lesson of `course`, from keys computed on `dataset`.
@@ -552,4 +543,84 @@ TEST_CASE("play --review asks only about taught structures that are due, and pro
   auto unknown = test::runApp("play --review nope --user hal --db '" + dbPath + "'");
   CHECK(unknown.exitCode != 0);
   CHECK(unknown.err.find("unknown course 'nope'") != std::string::npos);
+}
+
+TEST_CASE("A class through the CLI: join with the code, play while the server is down, sync, the instructor's view") {
+  if (!appAvailable()) return;
+  auto url = test::freshPostgresDatabase("the class-server CLI test");
+  if (!url) return;
+  test::TempDir dir;
+  const std::string server = " --db '" + *url + "'", local = (dir.path() / "laptop.db").string();
+  storeQuickCourse(local);
+  const fs::path answers = writeLines(dir.path() / "answers.jsonl", quickAnswers());
+
+  auto made = test::runApp("class create 'Ear anatomy' --user dr_ada" + server);
+  CAPTURE(made.err);
+  REQUIRE(made.exitCode == 0);
+  const auto codeAt = made.out.find("code ");
+  REQUIRE(codeAt != std::string::npos);
+  const std::string code = made.out.substr(codeAt + 5, 8);
+  CHECK(made.out.find("students join with: anatomy-tutor class join " + code) != std::string::npos);
+  CHECK(made.out.find(":" + std::string("@")) == std::string::npos);
+
+  for (const char* name : {"sam", "kim"}) {
+    auto joined = test::runApp("class join " + code + " --server '" + *url + "' --user " + name + " --db '" + local + "'");
+    CAPTURE(joined.err);
+    CHECK(joined.exitCode == 0);
+    CHECK(joined.out.find(std::string(name) + " joined class " + code + " (Ear anatomy) as student") != std::string::npos);
+  }
+  // Online: play sends each answer as it goes.
+  auto online = test::runApp(playArgs("quick.check", "sam", answers, local));
+  CAPTURE(online.err);
+  REQUIRE(online.exitCode == 0);
+  CHECK(scalar(local, "SELECT COUNT(*) FROM outbox WHERE sent_at IS NULL") == 0);
+  CHECK(scalar(local, "SELECT COUNT(*) FROM outbox") == 8);  // start, 6 answers, finish
+
+  // Offline: the lesson goes on, the answers wait, sync says why and fails; back: they go, once.
+  if (!test::stopTestPostgres()) return;
+  auto offline = test::runApp(playArgs("quick.check", "kim", answers, local));
+  auto syncDown = test::runApp("sync --db '" + local + "'");
+  const bool restarted = test::restartTestPostgres();
+  REQUIRE(restarted);
+  CAPTURE(offline.err);
+  CHECK(offline.exitCode == 0);
+  CHECK(offline.out.find("Lesson finished: 6 of 6 questions right") != std::string::npos);
+  CHECK(offline.out.find("wait in the outbox") != std::string::npos);
+  CHECK(syncDown.exitCode == 1);
+  CHECK(syncDown.err.find("8 events wait in the outbox (cannot reach the database server") != std::string::npos);
+  CHECK(std::count(syncDown.err.begin(), syncDown.err.end(), '\n') == 1);
+  auto syncUp = test::runApp("sync --db '" + local + "'");
+  CAPTURE(syncUp.err);
+  CHECK(syncUp.exitCode == 0);
+  CHECK(syncUp.out.find("8 events sent") != std::string::npos);
+  auto again = test::runApp("sync --db '" + local + "'");
+  CHECK(again.exitCode == 0);
+  CHECK(again.out.find("nothing to send") != std::string::npos);
+
+  auto csv = test::runApp("class progress " + code + " --user dr_ada --csv" + server);
+  CAPTURE(csv.err);
+  REQUIRE(csv.exitCode == 0);
+  CHECK(csv.out.find("\nkim,6,6,4,1,1,") != std::string::npos);
+  CHECK(csv.out.find("\nsam,6,6,4,1,1,") != std::string::npos);
+  auto table = test::runApp("class progress " + code + " --user dr_ada" + server);
+  CHECK(table.out.find("2 students, 16 events received") != std::string::npos);
+
+  // Refusals: one line naming what is wrong.
+  auto student = test::runApp("class progress " + code + " --user sam" + server);
+  CHECK(student.exitCode == 1);
+  CHECK(student.err.find("'sam' is a student of class " + code) != std::string::npos);
+  auto badCode = test::runApp("class join K7M2-P9Q --server '" + *url + "' --user ann --db '" + local + "'");
+  CHECK(badCode.exitCode == 1);
+  CHECK(badCode.err.find("class code 'K7M2-P9Q'") != std::string::npos);
+  auto unknown = test::runApp("class join ZZZZZZZZ --server '" + *url + "' --user ann --db '" + local + "'");
+  CHECK(unknown.exitCode == 1);
+  CHECK(unknown.err.find("no class has the code ZZZZZZZZ") != std::string::npos);
+  auto notServer = test::runApp("class join " + code + " --server '" + local + "' --user ann");
+  CHECK(notServer.exitCode == 1);
+  CHECK(notServer.err.find("is not a class server") != std::string::npos);
+  auto role = test::runApp("class role " + code + " kim instructor --user sam" + server);
+  CHECK(role.exitCode == 1);
+  CHECK(role.err.find("only its coordinators give roles") != std::string::npos);
+  CHECK(test::runApp("class role " + code + " kim instructor --user dr_ada" + server).exitCode == 0);
+  CHECK(test::runApp("class progress " + code + " --user kim" + server).exitCode == 0);
 }

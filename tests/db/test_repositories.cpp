@@ -17,6 +17,7 @@
 #include "test_databases.h"
 #include "test_support.h"
 #include "toy_course.h"
+#include "toy_play.h"
 
 namespace fs = std::filesystem;
 using namespace at;
@@ -51,43 +52,6 @@ Database openAt(const std::string& location) {
 
 Database openFresh(const test::TempDir& dir, const std::string& name = "r.db") {
   return openAt(test::freshDatabase(dir, name));
-}
-
-// The answer that is right for a resolved question (names from the toy structures).
-quiz::Answer rightAnswer(const quiz::ResolvedQuestion& q) {
-  quiz::Answer a;
-  switch (q.question.kind) {
-    case quiz::QuestionKind::Locate: a.pick = quiz::Pick{q.question.target, 0.0}; break;
-    case quiz::QuestionKind::Identify:
-    case quiz::QuestionKind::Relation: a.choice = q.keyChoice; break;
-    case quiz::QuestionKind::Order: a.order = q.keyOrder; break;
-    case quiz::QuestionKind::Name:
-      for (const auto& s : test::toyStructures())
-        if (s.id == q.question.target) a.text = s.displayName;
-      break;
-  }
-  return a;
-}
-
-// Plays the current lesson to the end (or `stopAfter` answers), answering right.
-int playRight(LessonEngine& engine, int stopAfter = 1 << 30) {
-  int answered = 0;
-  while (!engine.atEnd()) {
-    auto view = engine.current();
-    REQUIRE(view);
-    if (view->kind == StepKind::Question) {
-      if (answered == stopAfter) return answered;
-      auto q = engine.currentQuestion();
-      REQUIRE(q);
-      RenderState render{"p", "wdt", 0.25, 1.5, 0.75};
-      auto grade = engine.answer(rightAnswer(*q), render, 1200);
-      REQUIRE_MESSAGE(grade, (grade ? "" : grade.error().message));
-      CHECK(grade->correct);
-      ++answered;
-    }
-    REQUIRE(engine.next());
-  }
-  return answered;
 }
 
 }  // namespace
@@ -361,7 +325,7 @@ TEST_CASE("The LessonEngine on the store resumes a lesson at the next step after
     CHECK(locked.error().message.find("toy.ossicles") != std::string::npos);
     LessonEngine first(curriculum, progress, keys);
     REQUIRE(first.start(userId, "toy.ossicles"));
-    CHECK(playRight(first, 2) == 2);  // then the "process" goes away
+    CHECK(test::playRight(first, 2) == 2);  // then the "process" goes away
   }
   auto db = Database::open(path);
   REQUIRE(db);
@@ -374,7 +338,7 @@ TEST_CASE("The LessonEngine on the store resumes a lesson at the next step after
   auto view = engine.current();
   REQUIRE(view);
   CHECK(view->questionId == "toy.ossicles.locate_malleus");
-  CHECK(playRight(engine) == 1);
+  CHECK(test::playRight(engine) == 1);
   auto score = engine.finish();
   REQUIRE(score);
   CHECK(*score == doctest::Approx(1.0));
@@ -382,7 +346,7 @@ TEST_CASE("The LessonEngine on the store resumes a lesson at the next step after
 
   LessonEngine next(curriculum, progress, keys);
   REQUIRE(next.start(userId, "toy.middle"));
-  CHECK(playRight(next) == 3);
+  CHECK(test::playRight(next) == 3);
   REQUIRE(next.finish());
   CHECK(countRows(*db, "responses") == 6);
   auto ability = progress.ability(userId);

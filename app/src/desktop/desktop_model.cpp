@@ -48,6 +48,7 @@ DesktopModel::DesktopModel(LearningSession& session, const render::PresetLibrary
                                               else showLessonStructure({structure, presetId, view});
                                             });
   scheduler_.setViewPixels(layout_.viewPixelsW(), layout_.viewPixelsH());
+  classEvents_ = std::make_unique<BackgroundOutboxSender>(session_.database(), std::chrono::seconds(5));
 }
 
 DesktopModel::~DesktopModel() = default;
@@ -344,6 +345,7 @@ void DesktopModel::beginFrame(FieldTarget* target) {
   study_->stepExport();
   imports_->poll();
   segment_->poll();
+  for (const std::string& line : classEvents_->takeLines()) message(line);
   if (!study_->participantActive())  // the participant's trial keeps its dataset
     if (auto imported = imports_->takeDatasetToOpen()) {
       const std::string id = imported->id;

@@ -16,6 +16,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "class_sync.h"
 #include "core/error.h"
 #include "exam_controller.h"
 #include "explore_state.h"
@@ -222,6 +223,7 @@ class DesktopModel {
   std::unique_ptr<SegmentController> segment_;
   std::unique_ptr<CourseEditor> courses_;
   SliceViews slices_;
+  std::unique_ptr<BackgroundOutboxSender> classEvents_;  // the user's answers to their class server
   ViewLayout layout_;
   bool viewAvailable_ = false;
   std::optional<Vec3> lastPickMm_;  // where the last hover pick met the volume (LPS mm)

@@ -26,6 +26,9 @@ const char* toString(Backend backend);  // "sqlite", "postgresql"
 
 // True for a PostgreSQL connection URL (postgresql://… or postgres://…).
 bool isPostgresUrl(std::string_view text);
+// A PostgreSQL URL without its password (postgresql://user:secret@host/db → postgresql://user@host/db),
+// for messages; anything else as it is.
+std::string withoutPassword(const std::string& url);
 
 struct OpenOptions {
   // Migrate to this schema version (tests build earlier versions with it); default: the newest.
