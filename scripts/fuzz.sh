@@ -106,6 +106,9 @@ fuzz_one() {
   local result="ok"
   if [ "$status" -ne 0 ]; then
     result="FAILED (exit $status; $(grep -m1 -E 'ERROR|runtime error|at-fuzz:|timeout' "$log" | cut -c1-160); log $log)"
+    # The finding's own lines (the message a reader produced, the sanitizer's first frames), so a
+    # CI log shows what broke without the log file.
+    grep -m1 -A6 -E 'ERROR|runtime error|at-fuzz:|timeout' "$log" | sed "s/^/  $name| /" >&2 || true
   fi
   printf 'fuzz %-15s %10s runs %6s/s %5s corpus files %5s MB peak %6ss  %s\n' "$name" "${executed:-0}" \
     "${rate:-0}" "$units" "${peak:-?}" "$((SECONDS - started))" "$result" | tee -a "$dir/fuzz-summary.txt"
