@@ -25,7 +25,7 @@ Status writeLabelsFile(const fs::path& out, const LabelMap& labels, const std::v
 }
 
 Result<std::string> storeDatasetLabels(db::Database& database, const std::string& datasetName, const LabelMap& labels,
-                                       const std::vector<Structure>& structures) {
+                                       const std::vector<Structure>& structures, const db::ReviewStates* review) {
   auto record = db::findDataset(database, datasetName);
   if (!record) return tl::unexpected(record.error());
   if (!*record)
@@ -47,7 +47,8 @@ Result<std::string> storeDatasetLabels(db::Database& database, const std::string
   if (auto ok = writeLabelNames(namesPath.string(), structures); !ok) return tl::unexpected(ok.error());
   auto checksum = db::checksumPath(labelsPath.string());
   if (!checksum) return tl::unexpected(checksum.error());
-  if (auto ok = db::saveDatasetLabels(database, datasetName, labelsPath.string(), *checksum, namesPath.string(), structures);
+  if (auto ok = db::saveDatasetLabels(database, datasetName, labelsPath.string(), *checksum, namesPath.string(), structures,
+                                      review);
       !ok)
     return tl::unexpected(ok.error());
   return labelsPath.string();

@@ -9,6 +9,7 @@
 
 #include "core/error.h"
 #include "db/connection.h"
+#include "db/dataset_store.h"
 #include "volume/structure.h"
 
 namespace at::app {
@@ -20,10 +21,12 @@ Status writeLabelsFile(const std::filesystem::path& out, const LabelMap& labels,
 
 // Stores the labels of the imported dataset `datasetName`: a NIfTI label map and names JSON under
 // <database folder>/labels/ (stamped with the time), recorded as the dataset's labels. Returns the
-// label map's path. Errors: NotFound when `datasetName` is not an imported dataset (nothing is
-// written then), Unavailable on a PostgreSQL class server (the files need a folder), Io for files
-// that cannot be written.
+// label map's path. `review`: the structures' review states (null: each keeps the stored one,
+// db::saveDatasetLabels). Errors: NotFound when `datasetName` is not an imported dataset (nothing
+// is written then), Unavailable on a PostgreSQL class server (the files need a folder), Io for
+// files that cannot be written.
 Result<std::string> storeDatasetLabels(db::Database& database, const std::string& datasetName, const LabelMap& labels,
-                                       const std::vector<Structure>& structures);
+                                       const std::vector<Structure>& structures,
+                                       const db::ReviewStates* review = nullptr);
 
 }  // namespace at::app

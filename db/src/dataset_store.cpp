@@ -61,14 +61,18 @@ std::optional<std::string> nonEmpty(const std::string& s) {
   return s;
 }
 
-// The structures of dataset `id`, inside the caller's transaction.
-Status insertStructures(Database& d, std::int64_t id, const std::vector<Structure>& structures) {
+// The structures of dataset `id` (with their review states; absent: not started), inside the
+// caller's transaction.
+Status insertStructures(Database& d, std::int64_t id, const std::vector<Structure>& structures,
+                        const ReviewStates& review = {}) {
   auto add = d.prepare(
       "INSERT INTO structures (dataset_id, label, structure_id, name, colour_r, colour_g, colour_b, system,"
-      " description) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9)");
+      " description, review_state) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10)");
   if (!add) return tl::unexpected(add.error());
   for (const Structure& st : structures) {
     add->reset();
+    const auto state = review.find(st.id);
+    add->bind(10, reviewStateId(state == review.end() ? ReviewState::NotStarted : state->second));
     add->bind(1, id)
         .bind(2, int(st.label))
         .bind(3, st.id)
@@ -153,7 +157,7 @@ Result<std::int64_t> registerDataset(Database& db, const DatasetRecord& record,
 
 Status saveDatasetLabels(Database& db, const std::string& name, const std::string& labelsPath,
                          const std::string& labelsChecksum, const std::string& namesPath,
-                         const std::vector<Structure>& structures) {
+                         const std::vector<Structure>& structures, const ReviewStates* review) {
   return db.writeTransaction([&](Database& d) -> Status {
     auto find = d.prepare("SELECT id FROM datasets WHERE name = ?1");
     if (!find) return tl::unexpected(find.error());
@@ -166,12 +170,62 @@ Status saveDatasetLabels(Database& db, const std::string& name, const std::strin
     if (!update) return tl::unexpected(update.error());
     update->bind(1, nonEmpty(labelsPath)).bind(2, nonEmpty(labelsChecksum)).bind(3, nonEmpty(namesPath)).bind(4, id);
     if (auto s = update->run(); !s) return s;
+    ReviewStates kept;
+    if (!review) {
+      auto stored = datasetReviewStates(d, id);
+      if (!stored) return tl::unexpected(stored.error());
+      kept = std::move(*stored);
+    }
     auto clear = d.prepare("DELETE FROM structures WHERE dataset_id = ?1");
     if (!clear) return tl::unexpected(clear.error());
     clear->bind(1, id);
     if (auto s = clear->run(); !s) return s;
-    return insertStructures(d, id, structures);
+    return insertStructures(d, id, structures, review ? *review : kept);
   });
+}
+
+const char* reviewStateId(ReviewState state) {
+  switch (state) {
+    case ReviewState::InProgress: return "in_progress";
+    case ReviewState::Completed: return "completed";
+    case ReviewState::Flagged: return "flagged";
+    case ReviewState::NotStarted: break;
+  }
+  return "not_started";
+}
+
+const char* reviewStateText(ReviewState state) {
+  switch (state) {
+    case ReviewState::InProgress: return "in progress";
+    case ReviewState::Completed: return "completed";
+    case ReviewState::Flagged: return "flagged";
+    case ReviewState::NotStarted: break;
+  }
+  return "not started";
+}
+
+std::optional<ReviewState> reviewStateNamed(const std::string& name) {
+  for (ReviewState s : kReviewStates)
+    if (name == reviewStateId(s) || name == reviewStateText(s)) return s;
+  return std::nullopt;
+}
+
+Result<ReviewStates> datasetReviewStates(Database& db, std::int64_t datasetId) {
+  auto s = db.prepare("SELECT structure_id, review_state FROM structures WHERE dataset_id = ?1");
+  if (!s) return tl::unexpected(s.error());
+  s->bind(1, datasetId);
+  ReviewStates out;
+  while (true) {
+    auto row = s->step();
+    if (!row) return tl::unexpected(row.error());
+    if (!*row) break;
+    const std::string state = s->text(1);
+    const auto parsed = reviewStateNamed(state);
+    if (!parsed)
+      return fail(ErrorKind::Invalid, "structure '" + s->text(0) + "': unknown review state '" + state + "'");
+    out[s->text(0)] = *parsed;
+  }
+  return out;
 }
 
 Result<std::vector<DatasetRecord>> listDatasets(Database& db) {

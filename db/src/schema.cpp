@@ -445,6 +445,13 @@ ALTER TABLE study_ratings ADD COLUMN settle_ms REAL;
 constexpr std::string_view kStepPlacement = R"SQL(
 ALTER TABLE steps ADD COLUMN placement TEXT;
 )SQL";
+
+// An instructor's review of each structure's labels (the segment editor's structures list):
+// db::ReviewState's names. Instructor metadata: never part of what students are shown.
+constexpr std::string_view kStructureReview = R"SQL(
+ALTER TABLE structures ADD COLUMN review_state TEXT NOT NULL DEFAULT 'not_started'
+  CHECK (review_state IN ('not_started', 'in_progress', 'completed', 'flagged'));
+)SQL";
 }  // namespace
 
 const std::vector<Migration>& migrations() {
@@ -464,6 +471,7 @@ const std::vector<Migration>& migrations() {
       {10, "class server: classes, members and roles, learning events; a learner's class membership and outbox", kClasses},
       {11, "study ratings record the render quality on screen and its settle time", kStudyRatingQuality},
       {12, "course steps keep a free camera and a clipping plane", kStepPlacement},
+      {13, "structures keep their review state (not started, in progress, completed, flagged)", kStructureReview},
   };
   return all;
 }

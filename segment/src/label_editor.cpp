@@ -102,7 +102,9 @@ EditSummary LabelEditor::commit(const std::string& description, const Changes& c
   EditSummary summary;
   summary.changed = delta.size();
   summary.description = description + ": " + count(delta.size());
+  if (structuresBefore && stroke_) endStroke();
   if (!delta.empty() || structuresBefore) {
+    if (stroke_ && stroke_->edits++ == 0) stroke_->tool = description;
     LabelHistory::Entry entry;
     entry.description = summary.description;
     entry.delta = LabelDelta::fromSortedChanges(delta);
@@ -343,7 +345,36 @@ Result<EditSummary> LabelEditor::smooth(std::uint16_t label, Smoothing operation
   return commitMask("closing of '" + name + "' (" + mm(radiusMm) + ")", close(mask, radiusMm), label, 0);
 }
 
-Result<std::string> LabelEditor::undo() { return history_.undo(labels_, structures_); }
-Result<std::string> LabelEditor::redo() { return history_.redo(labels_, structures_); }
+void LabelEditor::beginStroke() {
+  if (stroke_) endStroke();
+  stroke_.emplace();
+}
+
+std::optional<EditSummary> LabelEditor::endStroke() {
+  if (!stroke_) return std::nullopt;
+  const Stroke stroke = std::move(*stroke_);
+  stroke_.reset();
+  if (stroke.edits == 0) return std::nullopt;
+  const std::string description =
+      stroke.tool + (stroke.edits > 1 ? ", a stroke of " + std::to_string(stroke.edits) + " dabs" : std::string());
+  EditSummary summary;
+  summary.changed = history_.joinNewest(stroke.edits, [&](std::size_t voxels) {
+    summary.description = description + ": " + count(voxels);
+    return summary.description;
+  });
+  summary.historyBytes = history_.bytes();
+  if (summary.changed == 0) return std::nullopt;
+  return summary;
+}
+
+Result<std::string> LabelEditor::undo() {
+  endStroke();  // a stroke's dabs are undone together
+  return history_.undo(labels_, structures_);
+}
+
+Result<std::string> LabelEditor::redo() {
+  endStroke();
+  return history_.redo(labels_, structures_);
+}
 
 }  // namespace at::segment

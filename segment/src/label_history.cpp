@@ -6,7 +6,9 @@
 
 #include <zlib.h>
 
+#include <algorithm>
 #include <cassert>
+#include <map>
 #include <stdexcept>
 
 namespace at::segment {
@@ -130,7 +132,25 @@ LabelDelta LabelDelta::fromSortedChanges(const std::vector<LabelChange>& changes
   return d;
 }
 
+std::vector<LabelChange> LabelDelta::changes() const {
+  std::vector<LabelChange> out;
+  out.reserve(voxels_);
+  forEachRun([&](std::size_t start, std::size_t length, std::uint16_t before, std::uint16_t after) {
+    for (std::size_t i = start; i < start + length; ++i) out.push_back({i, before, after});
+  });
+  return out;
+}
+
 void LabelDelta::apply(LabelMap& labels, bool forward) const {
+  forEachRun([&](std::size_t start, std::size_t length, std::uint16_t before, std::uint16_t after) {
+    assert(start + length <= labels.voxels.size() && "LabelDelta: applied to a smaller label map");
+    std::fill(labels.voxels.begin() + std::ptrdiff_t(start), labels.voxels.begin() + std::ptrdiff_t(start + length),
+              forward ? after : before);
+  });
+}
+
+void LabelDelta::forEachRun(
+    const std::function<void(std::size_t start, std::size_t length, std::uint16_t before, std::uint16_t after)>& run) const {
   if (voxels_ == 0) return;
   const std::string plain = inflateRuns(packed_);
   std::size_t at = 0, end = 0;
@@ -138,9 +158,7 @@ void LabelDelta::apply(LabelMap& labels, bool forward) const {
     const std::size_t start = end + std::size_t(getVarint(plain, at));
     const std::size_t length = std::size_t(getVarint(plain, at)) + 1;
     const std::uint16_t before = getLabel(plain, at), after = getLabel(plain, at);
-    assert(start + length <= labels.voxels.size() && "LabelDelta: applied to a smaller label map");
-    std::fill(labels.voxels.begin() + std::ptrdiff_t(start), labels.voxels.begin() + std::ptrdiff_t(start + length),
-              forward ? after : before);
+    run(start, length, before, after);
     end = start + length;
   }
 }
@@ -153,6 +171,37 @@ void LabelHistory::record(Entry entry) {
     entries_.erase(entries_.begin());
     --done_;
   }
+}
+
+std::size_t LabelHistory::joinNewest(std::size_t count, const std::function<std::string(std::size_t)>& describe) {
+  assert(done_ == entries_.size() && "LabelHistory::joinNewest: entries are undone");
+  count = std::min(count, done_);  // the oldest may have been forgotten (maxBytes)
+  if (count == 0) return 0;
+  if (count == 1) {
+    entries_.back().description = describe(entries_.back().delta.voxels());
+    return entries_.back().delta.voxels();
+  }
+  // Per voxel: the label before the first entry that changed it, after the last one.
+  std::map<std::size_t, LabelChange> joined;
+  const std::size_t first = entries_.size() - count;
+  for (std::size_t e = first; e < entries_.size(); ++e) {
+    assert(!entries_[e].structuresBefore && "LabelHistory::joinNewest: an entry changes the structures");
+    for (const LabelChange& c : entries_[e].delta.changes()) {
+      auto [it, inserted] = joined.try_emplace(c.index, c);
+      if (!inserted) it->second.after = c.after;
+    }
+  }
+  std::vector<LabelChange> changes;
+  changes.reserve(joined.size());
+  for (const auto& [index, change] : joined) changes.push_back(change);
+  Entry entry;
+  entry.delta = LabelDelta::fromSortedChanges(changes);
+  const std::size_t voxels = entry.delta.voxels();
+  entry.description = describe(voxels);
+  entries_.resize(first);
+  if (voxels) entries_.push_back(std::move(entry));  // a stroke that undid itself: nothing
+  done_ = entries_.size();
+  return voxels;
 }
 
 Result<std::string> LabelHistory::undo(LabelMap& labels, std::vector<Structure>& structures) {

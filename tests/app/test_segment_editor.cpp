@@ -1,7 +1,7 @@
 // The desktop's segment editor: its controller on the phantom with the labels hidden (seeds painted
 // voxel by voxel as clicks in slices paint them, grown, compared with the phantom's labels), the
 // slice picture at the voxels' aspect with seeds drawn, and the UI-script actions driving the same
-// commands headless (label, slice, seed, grow, undo, save; bad seeds ending the script with one
+// commands headless (label, slice, seed, grow, undo, redo, save; bad seeds ending the script with one
 // message).
 #include <doctest/doctest.h>
 
@@ -223,6 +223,60 @@ TEST_CASE("the segment editor's threshold island, margin and hollow work on the 
   CHECK(eventsNamed(events, "segment_edited").back()["tool"] == "hollow");
 }
 
+TEST_CASE("undo then redo gives the same labels and structures bit for bit; a new edit clears what could be redone") {
+  EditorOnPhantom f(64);
+  const Dataset& reference = f.reference;
+  app::SegmentController& editor = f.editor;
+  CHECK_FALSE(editor.canUndo());
+  CHECK_FALSE(editor.canRedo());
+  auto nothing = editor.redo();
+  REQUIRE_FALSE(nothing);
+  CHECK(nothing.error().message == "nothing to redo");
+  auto bone = editor.addLabel("bone");  // an edit of the structure list
+  REQUIRE(bone);
+  const auto densest = std::max_element(reference.volume.voxels.begin(), reference.volume.voxels.end());
+  const auto inside = voxelOf(reference.volume.dims(), std::size_t(densest - reference.volume.voxels.begin()));
+  REQUIRE(editor.thresholdIsland(inside, 300, 4000, 0));
+  REQUIRE(editor.margin(1.0));
+  const LabelMap edited = editor.labels();
+  const std::vector<Structure> structures = editor.structures();
+  REQUIRE(std::count(edited.voxels.begin(), edited.voxels.end(), *bone) > 100);
+
+  // All the way back: the unlabelled map, no structures (the current label falls back to 0).
+  for (int i = 0; i < 3; ++i) REQUIRE(editor.undo());
+  CHECK_FALSE(editor.canUndo());
+  CHECK(editor.canRedo());
+  CHECK(editor.structures().empty());
+  CHECK(editor.currentLabel() == 0);
+  CHECK(std::all_of(editor.labels().voxels.begin(), editor.labels().voxels.end(), [](std::uint16_t v) { return v == 0; }));
+  // And forward again: the very same voxels and structures.
+  for (int i = 0; i < 3; ++i) {
+    const std::uint64_t before = editor.revision();
+    auto redone = editor.redo();
+    REQUIRE_MESSAGE(redone, test::errorText(redone));
+    CHECK(editor.revision() != before);
+  }
+  CHECK_FALSE(editor.canRedo());
+  CHECK(editor.labels().voxels == edited.voxels);
+  REQUIRE(editor.structures().size() == structures.size());
+  CHECK(editor.structures()[0].id == structures[0].id);
+  CHECK(eventsNamed(f.events, "segment_undone").size() == 3);
+  const auto redoneEvents = eventsNamed(f.events, "segment_redone");
+  REQUIRE(redoneEvents.size() == 3);
+  CHECK(redoneEvents.back()["edit"].get<std::string>().find("grow 'bone' by 1 mm") == 0);
+
+  // Undo the margin, then a new edit (hollow): the margin can no longer be redone.
+  REQUIRE(editor.undo());
+  CHECK(editor.canRedo());
+  REQUIRE(editor.setCurrentLabel(*bone));
+  REQUIRE(editor.hollow(0.5));
+  CHECK_FALSE(editor.canRedo());
+  auto refused = editor.redo();
+  REQUIRE_FALSE(refused);
+  CHECK((refused.error().kind == ErrorKind::NotFound));
+  CHECK(editor.labels().voxels != edited.voxels);
+}
+
 TEST_CASE("the segment editor's slice is shown at the voxels' aspect, with seeds drawn where they were painted") {
   test::TempDir dir;
   auto database = db::openDatabase((dir / "t.db").string());
@@ -277,6 +331,8 @@ TEST_CASE("UI script: segment_* actions label the phantom, undo, export, and ref
       {{"do", "segment_grow"}},
       {{"do", "segment_undo"}},
       {{"do", "segment_grow"}},
+      {{"do", "segment_undo"}},
+      {{"do", "segment_redo"}},
       {{"do", "segment_save"}, {"out", out.string()}, {"names", (dir / "names.json").string()}},
   });
   test::HeadlessOptions options;
@@ -289,7 +345,8 @@ TEST_CASE("UI script: segment_* actions label the phantom, undo, export, and ref
   REQUIRE(grown.size() == 2);
   // The phantom's own structures are in the editor too; the new label grew from its seed.
   CHECK(grown[1]["voxels"]["middle_ear_space"].get<std::size_t>() > 100);
-  CHECK(test::eventsOf(run, "segment_undone").size() == 1);
+  CHECK(test::eventsOf(run, "segment_undone").size() == 2);
+  CHECK(test::eventsOf(run, "segment_redone").size() == 1);  // the file below holds the redone growth
   REQUIRE(test::eventsOf(run, "segment_saved").size() == 1);
   auto written = loadNifti(out.string());
   REQUIRE_MESSAGE(written, test::errorText(written));
@@ -307,6 +364,11 @@ TEST_CASE("UI script: segment_* actions label the phantom, undo, export, and ref
   run = test::runHeadless({{"actions", bad}}, options);
   CHECK(run.exitCode == 2);
   CHECK(run.messages.find("voxel (64, 0, 0) is outside the volume") != std::string::npos);
+  // Redo with nothing undone: one message.
+  bad = json::array({{{"do", "segment_redo"}}});
+  run = test::runHeadless({{"actions", bad}}, options);
+  CHECK(run.exitCode == 2);
+  CHECK(run.messages.find("nothing to redo") != std::string::npos);
   // Storing needs an imported dataset.
   bad = json::array({{{"do", "segment_save"}}});
   run = test::runHeadless({{"actions", bad}}, options);

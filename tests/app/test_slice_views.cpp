@@ -5,7 +5,9 @@
 
 #include <cmath>
 
+#include "db/connection.h"
 #include "headless_desktop.h"
+#include "segment_controller.h"
 #include "slice_views.h"
 #include "test_support.h"
 #include "volume/slice_image.h"
@@ -86,6 +88,45 @@ TEST_CASE("slice panes: aspect from the spacing, a click in one pane moves the o
   slices.dragWindow(100, 0);
   CHECK(slices.window()[1] > width);
   CHECK_FALSE(slices.setCrosshair({20, 0, 0}));
+}
+
+TEST_CASE("the segment editor's slice drags the grey window as the Slices window does") {
+  const Dataset ds = smallDataset();  // HU: the default window 400 ± 1000
+  test::TempDir dir;
+  auto database = db::openDatabase((dir / "t.db").string());
+  REQUIRE(database);
+  app::SegmentController editor(*database, [](json) {});
+  editor.attach(ds);
+  app::SliceViews slices;
+  slices.attach(ds);
+  CHECK(editor.greyWindow() == slices.window());
+  REQUIRE(editor.setSlice(2, 7));  // through the bright voxel (1000 HU)
+  const int scale = 2;
+  const auto grey = [&](const RgbImage& image, int i, int j) { return image.pixel(i * scale, j * scale)[0]; };
+  auto before = editor.sliceImage(scale, 0.0);
+  REQUIRE(before);
+  // 0 HU and 1000 HU inside 400 ± 1000: two mid greys.
+  const int air = grey(*before, 0, 0), bright = grey(*before, 5, 6);
+  CHECK(air > 0);
+  CHECK(bright < 255);
+  CHECK(bright > air);
+  // Narrower (drag left) and centred higher (drag up): 0 HU goes black, 1000 HU white.
+  const std::uint64_t revision = editor.revision();
+  editor.dragWindow(-300, -60);
+  slices.dragWindow(-300, -60);
+  CHECK(editor.revision() != revision);
+  CHECK(editor.greyWindow() == slices.window());  // one model of the drag, the same numbers
+  CHECK(editor.greyWindow()[1] < 2000);
+  auto after = editor.sliceImage(scale, 0.0);
+  REQUIRE(after);
+  CHECK(grey(*after, 0, 0) < air);
+  CHECK(grey(*after, 5, 6) > bright);
+  // A drag of nothing changes nothing; another dataset starts from its default again.
+  const std::uint64_t still = editor.revision();
+  editor.dragWindow(0, 0);
+  CHECK(editor.revision() == still);
+  editor.attach(ds);
+  CHECK(editor.greyWindow() == std::array<double, 2>{400, 2000});
 }
 
 TEST_CASE("a click in the 3-D view moves the slices' crosshair onto the structure it picked") {

@@ -501,6 +501,44 @@ TEST_CASE("Saving edited labels replaces the files and structures of that datase
   CHECK((*after)->structureCount == 2);
 }
 
+TEST_CASE("Structures keep their review states through saves; a save without states keeps the stored ones") {
+  test::TempDir dir;
+  auto db = Database::open((dir / "r.db").string());
+  REQUIRE(db);
+  Structure liver, spleen;
+  liver.label = 1, liver.id = "liver", liver.displayName = "Liver";
+  spleen.label = 2, spleen.id = "spleen", spleen.displayName = "Spleen";
+  auto id = registerDataset(*db, sampleRecord("abdomen"), {liver, spleen});
+  REQUIRE(id);
+  const auto states = [&] {
+    auto read = datasetReviewStates(*db, *id);
+    REQUIRE_MESSAGE(read, read.error().message);
+    return *read;
+  };
+  // Imported structures start not started.
+  CHECK(states() == ReviewStates{{"liver", ReviewState::NotStarted}, {"spleen", ReviewState::NotStarted}});
+  const ReviewStates set{{"liver", ReviewState::Completed}, {"spleen", ReviewState::Flagged}};
+  REQUIRE(saveDatasetLabels(*db, "abdomen", "/l1.nii.gz", "sha256:01", "", {liver, spleen}, &set));
+  CHECK(states() == set);
+  // The `segment --save` path gives no states: each structure keeps its own; a new one starts.
+  Structure kidney = liver;
+  kidney.label = 3, kidney.id = "kidney", kidney.displayName = "Kidney";
+  REQUIRE(saveDatasetLabels(*db, "abdomen", "/l2.nii.gz", "sha256:02", "", {liver, spleen, kidney}));
+  CHECK(states() == ReviewStates{{"liver", ReviewState::Completed}, {"spleen", ReviewState::Flagged},
+                                 {"kidney", ReviewState::NotStarted}});
+  const ReviewStates inProgress{{"kidney", ReviewState::InProgress}};
+  REQUIRE(saveDatasetLabels(*db, "abdomen", "/l3.nii.gz", "sha256:03", "", {spleen, kidney}, &inProgress));
+  CHECK(states() == ReviewStates{{"spleen", ReviewState::NotStarted}, {"kidney", ReviewState::InProgress}});
+  // The stored names, both ways; anything else is refused by the table.
+  for (ReviewState s : kReviewStates) {
+    CHECK(reviewStateNamed(reviewStateId(s)) == s);
+    CHECK(reviewStateNamed(reviewStateText(s)) == s);
+  }
+  CHECK_FALSE(reviewStateNamed("done"));
+  CHECK_FALSE(db->exec("UPDATE structures SET review_state = 'done'"));
+  CHECK(states().at("kidney") == ReviewState::InProgress);
+}
+
 TEST_CASE("openExistingDatabase on a database that does not exist gives none and creates nothing") {
   test::TempDir dir;
   const fs::path path = dir / "missing" / "x.db";

@@ -36,6 +36,54 @@ LabelEditor editorWith(const Geometry& g, const std::vector<std::string>& names)
 
 }  // namespace
 
+TEST_CASE("A brush stroke's dabs are one edit: one undo reverts the stroke, redo gives it back voxel for voxel") {
+  const Geometry g = anisotropicGrid();
+  LabelEditor editor = editorWith(g, {"liver", "spleen"});
+  REQUIRE(editor.paint(g.indexToPatient({10, 10, 10}), 1.5, 2));  // before the stroke
+  const LabelMap before = editor.labels();
+  const std::size_t entries = editor.history().size();
+  editor.beginStroke();
+  CHECK(editor.inStroke());
+  std::size_t dabbed = 0;
+  for (int i = 14; i <= 26; i += 2) {  // a drag along x, the dabs overlapping
+    auto dab = editor.paint(g.indexToPatient({double(i), 18, 12}), 2.0, 1);
+    REQUIRE(dab);
+    dabbed += dab->changed;
+  }
+  REQUIRE(editor.erase(g.indexToPatient({20, 18, 12}), 0.6));  // an erase dab in the same stroke
+  auto stroke = editor.endStroke();
+  REQUIRE(stroke);
+  CHECK_FALSE(editor.inStroke());
+  CHECK(editor.history().size() == entries + 1);
+  const LabelMap after = editor.labels();
+  std::size_t changed = 0;
+  for (std::size_t i = 0; i < after.voxels.size(); ++i) changed += after.voxels[i] != before.voxels[i];
+  CHECK(stroke->changed == changed);  // the voxels the stroke changed, each once
+  CHECK(changed < dabbed);            // overlapping dabs counted the overlap again
+  CHECK(stroke->description.find("a stroke of 8 dabs") != std::string::npos);
+  REQUIRE(editor.undo());
+  CHECK(editor.labels().voxels == before.voxels);
+  REQUIRE(editor.undo());  // the paint before the stroke
+  CHECK(countLabel(editor.labels(), 2) == 0);
+  REQUIRE(editor.redo());
+  REQUIRE(editor.redo());
+  CHECK(editor.labels().voxels == after.voxels);
+  // A stroke that puts back what it painted leaves no edit; an empty stroke none either.
+  editor.beginStroke();
+  REQUIRE(editor.paint(g.indexToPatient({30, 30, 5}), 1.0, 2));
+  REQUIRE(editor.erase(g.indexToPatient({30, 30, 5}), 1.0, std::uint16_t(2)));
+  CHECK_FALSE(editor.endStroke());
+  editor.beginStroke();
+  CHECK_FALSE(editor.endStroke());
+  CHECK(editor.history().size() == entries + 1);
+  // A structure edit during a stroke ends it first: the dab before it stays its own edit.
+  editor.beginStroke();
+  REQUIRE(editor.paint(g.indexToPatient({5, 5, 5}), 1.0, 1));
+  REQUIRE(editor.addStructure("kidney"));
+  CHECK_FALSE(editor.inStroke());
+  CHECK(editor.history().size() == entries + 3);
+}
+
 TEST_CASE("The brush paints a sphere in mm on an anisotropic grid, erases it, and undo/redo restore each step") {
   const Geometry g = anisotropicGrid();
   LabelEditor editor = editorWith(g, {"liver", "spleen"});

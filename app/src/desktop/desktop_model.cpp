@@ -171,7 +171,7 @@ void DesktopModel::setHovered(std::uint16_t label) {
   else recorder_.highlightNotWanted();
 }
 
-render::PickResult DesktopModel::pickAt(double x, double y) const {
+render::PickResult DesktopModel::pickAt(double x, double y, std::optional<double> surfaceOpacity) const {
   render::RenderSettings s = renderSettings(scheduler_.planFor(kFullLevel));
   s.preset = explore_.pickPreset();
   render::SceneVolumes scene;
@@ -185,6 +185,7 @@ render::PickResult DesktopModel::pickAt(double x, double y) const {
   const double left = layout_.panelWidth();
   const double px = (x - left) / std::max(1.0, layout_.windowW - left) * s.width;
   const double py = y / std::max(1, layout_.windowH) * s.height;
+  if (surfaceOpacity) return render::pick(scene, s, table, px, py, *surfaceOpacity);
   return render::pickStructure(scene, s, table, px, py);
 }
 
@@ -211,6 +212,12 @@ void DesktopModel::hoverAt(double x, double y) {
 
 void DesktopModel::clickAt(double x, double y) {
   if (study_->participantActive()) return;
+  if (segment_->brushesInView()) {  // the click paints (or erases) instead of selecting
+    segment_->beginStroke();
+    brushAt(x, y);
+    segment_->endStroke();
+    return;
+  }
   hoverAt(x, y);
   if (lastPickMm_ && !namesHidden() && slices_.moveToPoint(*lastPickMm_)) {
     const auto& v = slices_.crosshair();

@@ -116,6 +116,10 @@ class DesktopModel {
   // --- Commands ------------------------------------------------------------------------------
   void hoverAt(double x, double y);  // window coordinates; picks the structure under the cursor [hover]
   void clickAt(double x, double y);  // a locate answer, else selects what is under the cursor (not during an exam)
+  // With the segment editor's paint or erase tool (SegmentController::brushesInView): one dab of
+  // its brush where the ray through (x, y) meets the volume (nothing off it). clickAt is a stroke
+  // of one dab; a drag brackets its dabs with the editor's beginStroke / endStroke.
+  void brushAt(double x, double y);
   void clearHover() { setHovered(0); }
   bool select(std::uint16_t label);  // [select]
   Status setView(const std::string& name);
@@ -195,7 +199,9 @@ class DesktopModel {
  private:
   void setHovered(std::uint16_t label);
   // What a click at window (x, y) meets in the view as the image shows it.
-  render::PickResult pickAt(double x, double y) const;
+  // surfaceOpacity: where the ray's accumulated opacity first reaches it (the surface a brush
+  // paints on) instead of the structure under the cursor (render::pickStructure).
+  render::PickResult pickAt(double x, double y, std::optional<double> surfaceOpacity = std::nullopt) const;
   // A locate answer clicked on `clicked` (null: nothing) at `pointMm` (if known): to the exam or
   // the lesson; off a target with a tolerance, graded once its distance is known.
   void answerLocate(const Structure* clicked, const std::optional<Vec3>& pointMm);

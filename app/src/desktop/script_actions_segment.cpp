@@ -1,5 +1,8 @@
 // The segment editor's UI-script actions: each calls the SegmentController command the Segment
 // window's widgets call.
+#include <algorithm>
+#include <iterator>
+
 #include <nlohmann/json.hpp>
 
 #include "script_interpreter.h"
@@ -26,6 +29,38 @@ ScriptInterpreter::Outcome ScriptInterpreter::segmentLabel(Context& c) {
     return tl::unexpected(added.error());
   }
   c.model.event({{"event", "segment_label"}, {"name", name}, {"label", s.currentLabel()}});
+  return Progress::Done;
+}
+
+// {"do": "segment_review", "name": "liver", "state": "completed"}: a structure's review state
+// (not_started, in_progress, completed, flagged), as its list entry in the Segment window sets it.
+ScriptInterpreter::Outcome ScriptInterpreter::segmentReview(Context& c) {
+  SegmentController& s = c.model.segmenter();
+  auto label = s.labelNamed(c.action.at("name").get<std::string>());
+  if (!label) return tl::unexpected(label.error());
+  const std::string name = c.action.at("state").get<std::string>();
+  const auto state = db::reviewStateNamed(name);
+  if (!state)
+    return fail("ui script: segment_review: \"state\" must be not_started, in_progress, completed or flagged, not '" +
+                name + "'");
+  if (auto st = s.setReviewState(*label, *state); !st) return tl::unexpected(st.error());
+  return Progress::Done;
+}
+
+// {"do": "segment_tool", "tool": "paint", "brush_mm": 3}: the click's tool — seeds, threshold,
+// paint (the current structure) or erase — as the Segment window's radio buttons choose it; with
+// paint or erase, a "click" in the 3-D view paints where the ray meets the volume.
+ScriptInterpreter::Outcome ScriptInterpreter::segmentTool(Context& c) {
+  using Tool = SegmentController::Tool;
+  SegmentController& s = c.model.segmenter();
+  const std::string name = c.action.at("tool").get<std::string>();
+  const std::pair<const char*, Tool> tools[] = {
+      {"seeds", Tool::Seeds}, {"threshold", Tool::Threshold}, {"paint", Tool::Paint}, {"erase", Tool::Erase}};
+  const auto it = std::find_if(std::begin(tools), std::end(tools), [&](const auto& t) { return name == t.first; });
+  if (it == std::end(tools))
+    return fail("ui script: segment_tool: \"tool\" must be seeds, threshold, paint or erase, not '" + name + "'");
+  s.tool = it->second;
+  if (c.action.contains("brush_mm")) s.brushMm = c.action.at("brush_mm").get<double>();
   return Progress::Done;
 }
 
@@ -112,10 +147,17 @@ ScriptInterpreter::Outcome ScriptInterpreter::slicesOpen(Context& c) {
   return Progress::Done;
 }
 
-// {"do": "segment_undo"} and {"do": "segment_clear_seeds"}.
+// {"do": "segment_undo"}, {"do": "segment_redo"} (as Ctrl+Z and Ctrl+Shift+Z / Ctrl+Y in the
+// Segment window) and {"do": "segment_clear_seeds"}.
 ScriptInterpreter::Outcome ScriptInterpreter::segmentUndo(Context& c) {
   auto undone = c.model.segmenter().undo();
   if (!undone) return tl::unexpected(undone.error());
+  return Progress::Done;
+}
+
+ScriptInterpreter::Outcome ScriptInterpreter::segmentRedo(Context& c) {
+  auto redone = c.model.segmenter().redo();
+  if (!redone) return tl::unexpected(redone.error());
   return Progress::Done;
 }
 

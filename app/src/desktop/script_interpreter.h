@@ -16,7 +16,8 @@
 //             coordinator_open, coordinator_export, coordinator_summary
 //   import:   import, cancel_import, open_imported
 //   segment:  segment_open, segment_label, segment_slice, segment_seed, segment_grow, segment_undo,
-//             segment_clear_seeds, segment_save, segment_threshold, segment_margin, segment_hollow
+//             segment_redo, segment_review, segment_tool, segment_clear_seeds, segment_save,
+//             segment_threshold, segment_margin, segment_hollow
 //   slices:   slices_open
 //   courses:  course_new, course_open, course_lesson, course_show, course_question, course_step,
 //             course_save, course_export, course_open_package, open_dataset
@@ -144,6 +145,9 @@ class ScriptInterpreter {
   Outcome segmentSeed(Context&);
   Outcome segmentGrow(Context&);
   Outcome segmentUndo(Context&);
+  Outcome segmentRedo(Context&);
+  Outcome segmentReview(Context&);
+  Outcome segmentTool(Context&);
   Outcome segmentClearSeeds(Context&);
   Outcome segmentSave(Context&);
   Outcome segmentThreshold(Context&);

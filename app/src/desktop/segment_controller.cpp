@@ -48,8 +48,17 @@ void SegmentController::attach(const Dataset& dataset) {
   current_ = 0;
   axis_ = 2;
   index_ = dataset.volume.dims().z / 2;
+  grey_.reset(dataset.intensity);
   status_.clear();
   ++revision_;
+  // An imported dataset's review states (a failed read is said; the states start as not started).
+  review_.clear();
+  auto record = db::findDataset(database_, dataset.id);
+  if (record && *record) {
+    if (auto stored = db::datasetReviewStates(database_, (*record)->id)) review_ = std::move(*stored);
+    else record = tl::unexpected(stored.error());
+  }
+  if (!record) status_ = "review states: " + record.error().message;
 }
 
 Status SegmentController::requireDataset() const {
@@ -130,19 +139,12 @@ Status SegmentController::setSlice(int axis, int index) {
 
 Result<RgbImage> SegmentController::sliceImage(int scale, double labelAlpha) const {
   if (auto ok = requireDataset(); !ok) return tl::unexpected(ok.error());
-  const IntensityModel& intensity = dataset_->intensity;
   SliceRequest request;
   request.axis = axis_;
   request.index = index_;
   request.scale = scale;
   request.labelAlpha = labelAlpha;
-  if (intensity.hounsfield()) {  // the slice command's default window (400 ± 1000 HU): bone and soft tissue
-    request.windowCentreHu = (400 - intensity.intercept) / intensity.slope;
-    request.windowWidthHu = 2000 / intensity.slope;
-  } else {
-    request.windowCentreHu = 0.5 * (intensity.window[0] + intensity.window[1]);
-    request.windowWidthHu = std::max(1e-3, double(intensity.window[1] - intensity.window[0]));
-  }
+  grey_.applyTo(request);
   auto image = renderSlice(dataset_->volume, &editor_->labels(), editor_->structures(), request);
   if (!image || seeds_.empty()) return image;
   // Seeds on this slice, opaque.
@@ -161,6 +163,10 @@ Result<RgbImage> SegmentController::sliceImage(int scale, double labelAlpha) con
       for (int dx = 0; dx < scale; ++dx) std::copy(colour.begin(), colour.end(), image->pixel(col * scale + dx, row * scale + dy));
   }
   return image;
+}
+
+void SegmentController::dragWindow(double dx, double dy) {
+  if (grey_.drag(dx, dy)) ++revision_;
 }
 
 std::optional<std::array<int, 3>> SegmentController::voxelAtPixel(int scale, double x, double y) const {
@@ -297,63 +303,27 @@ void SegmentController::edited(const std::string& kind, const std::string& tool,
   events_(std::move(e));
 }
 
-Status SegmentController::requireStructureCurrent(const std::string& tool) const {
-  if (auto ok = requireDataset(); !ok) return ok;
-  if (current_ == 0) return fail("segment editor: " + tool + " works on a structure; choose one (not the background) first");
-  return {};
-}
+Result<std::string> SegmentController::undo() { return stepHistory(false); }
+Result<std::string> SegmentController::redo() { return stepHistory(true); }
 
-std::array<double, 2> SegmentController::valueWindow() const {
-  if (!dataset_) return {0, 1};
-  const IntensityModel& m = dataset_->intensity;
-  return {m.valueOf(m.window[0]), m.valueOf(m.window[1])};
-}
-
-Result<segment::EditSummary> SegmentController::thresholdIsland(const std::array<int, 3>& voxel, double low, double high,
-                                                                 double minDiameterMm) {
-  if (auto ok = requireStructureCurrent("threshold island"); !ok) return tl::unexpected(ok.error());
-  const Geometry& g = dataset_->volume.geometry;
-  if (!g.dims.contains(voxel[0], voxel[1], voxel[2]))
-    return fail("segment editor: voxel (" + std::to_string(voxel[0]) + ", " + std::to_string(voxel[1]) + ", " +
-                std::to_string(voxel[2]) + ") is outside the volume (" + g.dims.toString() + ")");
-  segment::ThresholdOptions options;
-  options.minDiameterMm = std::max(0.0, minDiameterMm);
-  const Vec3 point = g.indexToPatient({double(voxel[0]), double(voxel[1]), double(voxel[2])});
-  auto summary = editor_->thresholdIsland(dataset_->volume, dataset_->intensity, point, low, high, current_, options);
-  if (!summary) return summary;
-  edited("segment_edited", "threshold", *summary);
-  return summary;
-}
-
-Result<segment::EditSummary> SegmentController::margin(double mm) {
-  if (auto ok = requireStructureCurrent("margin"); !ok) return tl::unexpected(ok.error());
-  auto summary = editor_->margin(current_, mm);
-  if (!summary) return summary;
-  edited("segment_edited", "margin", *summary);
-  return summary;
-}
-
-Result<segment::EditSummary> SegmentController::hollow(double thicknessMm) {
-  if (auto ok = requireStructureCurrent("hollow"); !ok) return tl::unexpected(ok.error());
-  auto summary = editor_->hollow(current_, thicknessMm);
-  if (!summary) return summary;
-  edited("segment_edited", "hollow", *summary);
-  return summary;
-}
-
-Result<std::string> SegmentController::undo() {
+Result<std::string> SegmentController::stepHistory(bool forward) {
   if (auto ok = requireDataset(); !ok) return tl::unexpected(ok.error());
-  auto undone = editor_->undo();
-  if (!undone) return undone;
+  auto stepped = forward ? editor_->redo() : editor_->undo();
+  if (!stepped) return stepped;
   ++revision_;
-  status_ = "undone: " + *undone;
-  events_({{"event", "segment_undone"}, {"edit", *undone}});
-  return undone;
+  // A structure the step removed (an undone "add") is no longer a label to paint.
+  if (std::none_of(structures().begin(), structures().end(), [&](const Structure& s) { return s.label == current_; }))
+    current_ = 0;
+  status_ = (forward ? "redone: " : "undone: ") + *stepped;
+  events_({{"event", forward ? "segment_redone" : "segment_undone"}, {"edit", *stepped}});
+  return stepped;
 }
 
 Result<std::string> SegmentController::saveToStore() {
   if (auto ok = requireDataset(); !ok) return tl::unexpected(ok.error());
-  auto saved = storeDatasetLabels(database_, dataset_->id, editor_->labels(), editor_->structures());
+  db::ReviewStates review;  // of the structures saved
+  for (const Structure& s : editor_->structures()) review[s.id] = reviewState(s.label);
+  auto saved = storeDatasetLabels(database_, dataset_->id, editor_->labels(), editor_->structures(), &review);
   if (!saved) return saved;
   status_ = "saved into the dataset store: " + *saved;
   events_({{"event", "segment_saved"}, {"store", true}, {"path", *saved}});

@@ -24,6 +24,8 @@
 
 #include "core/error.h"
 #include "db/connection.h"
+#include "db/dataset_store.h"
+#include "grey_window.h"
 #include "segment/label_editor.h"
 #include "volume/png_image.h"
 #include "volume/structure.h"
@@ -34,7 +36,7 @@ class SegmentController {
  public:
   using EventSink = std::function<void(nlohmann::json)>;
   // `database`: where imported datasets' labels are stored (outlives the controller). `events`
-  // receives segment_grown, segment_saved and segment_undone.
+  // receives segment_grown, segment_edited, segment_saved, segment_undone and segment_redone.
   SegmentController(db::Database& database, EventSink events);
   ~SegmentController();
   SegmentController(const SegmentController&) = delete;
@@ -55,6 +57,12 @@ class SegmentController {
   std::uint16_t currentLabel() const { return current_; }
   // A label by structure id or display name, "background" for 0.
   Result<std::uint16_t> labelNamed(const std::string& name) const;
+  // The instructor's review of a structure's labels (not started, in progress, completed,
+  // flagged): read from the dataset store on attach for an imported dataset, set here, stored by
+  // saveToStore with the structures. Never shown to students. Event segment_review {"structure",
+  // "state"}. Errors: the background or an unknown label.
+  db::ReviewState reviewState(std::uint16_t label) const;
+  Status setReviewState(std::uint16_t label, db::ReviewState state);
 
   // --- The slice ------------------------------------------------------------------------------
   // axis 0, 1, 2 (x, y, z) and an index on it; errors name the range.
@@ -67,7 +75,11 @@ class SegmentController {
   // The size in mm of one voxel of the slice picture (columns, rows): the picture is shown at this
   // aspect, so anisotropic voxels look as they are.
   std::array<double, 2> slicePixelMm() const;
-  // The slice: grey in the dataset's window, labels at `labelAlpha`, seeds opaque in their label's
+  // A right-drag of (dx, dy) pixels on the slice: the grey window as in the Slices window
+  // (GreyWindow::drag); it starts at the dataset's default on attach.
+  void dragWindow(double dx, double dy);
+  std::array<double, 2> greyWindow() const { return grey_.centreWidth(); }
+  // The slice: grey in the dragged window, labels at `labelAlpha`, seeds opaque in their label's
   // colour (background seeds white); `scale` pixels per voxel. Its pixel → voxel map is sliceVoxelAt
   // (volume/slice_image.h) with the same axis, index and scale.
   Result<RgbImage> sliceImage(int scale, double labelAlpha = 0.45) const;
@@ -76,7 +88,7 @@ class SegmentController {
   std::uint64_t revision() const { return revision_; }
 
   // --- Seeds and tools ------------------------------------------------------------------------
-  double brushMm = 1.5;  // seed brush radius; 0: the voxel alone
+  double brushMm = 1.5;  // the brush's radius (seeds, paint, erase); 0: the voxel alone
   // Seeds of the current label in the ball of brushMm around the voxel's centre (later seeds
   // replace earlier ones). Returns the number of voxels seeded. Errors: a voxel outside the grid.
   Result<std::size_t> paintSeeds(const std::array<int, 3>& voxel);
@@ -97,8 +109,29 @@ class SegmentController {
   const std::optional<Error>& growError() const { return growError_; }
   // Each frame: applies a finished growth, or starts the one asked for since.
   void poll();
+  // Undo reverts the newest edit, redo re-applies the newest undone one (the editor's history of
+  // compressed label changes); a new edit drops what could be redone. Errors (NotFound): nothing
+  // to undo / redo. Events segment_undone / segment_redone {"edit": description}.
   Result<std::string> undo();
+  Result<std::string> redo();
+  bool canUndo() const { return editor_ && editor_->history().canUndo(); }
+  bool canRedo() const { return editor_ && editor_->history().canRedo(); }
   const LabelMap& labels() const;
+
+  // --- The click's tool: in the slice, and for paint / erase also on the 3-D view's surface ----
+  enum class Tool { Seeds, Threshold, Paint, Erase };
+  Tool tool = Tool::Seeds;
+  // Whether a click or drag in the 3-D view paints: the window is open with paint or erase.
+  bool brushesInView() const { return windowOpen && attached() && (tool == Tool::Paint || tool == Tool::Erase); }
+  // One dab of the tool's sphere brush (brushMm) around a point in LPS mm — a slice voxel's
+  // centre, or where a 3-D pick met the volume: paint the current structure (not the background)
+  // or erase every label. Event segment_edited {"tool": "paint"/"erase", "point_mm", "radius_mm"}.
+  // Errors: another tool, painting the background, a point outside the grid.
+  Result<segment::EditSummary> brushAt(const Vec3& pointMm);
+  Result<segment::EditSummary> brushAtVoxel(const std::array<int, 3>& voxel);
+  // A drag's dabs between these are one edit (one undo): the window's mouse down and up.
+  void beginStroke();
+  void endStroke();
 
   // --- Tools on the current label (a structure: the background is not grown or hollowed) -----
   // The connected region under `voxel` of values in [low, high] (the dataset's units: HU or plain
@@ -124,6 +157,7 @@ class SegmentController {
 
  private:
   Status requireDataset() const;
+  Result<std::string> stepHistory(bool forward);  // undo (false) or redo (true)
   Status startGrowth();  // with the seeds painted now, on a worker thread
   void stopGrowth();     // cancels a running growth and waits for it (another dataset, closing)
   Status requireStructureCurrent(const std::string& tool) const;
@@ -136,8 +170,10 @@ class SegmentController {
   const Dataset* dataset_ = nullptr;  // the dataset being labelled (its volume and intensity)
   std::unique_ptr<segment::LabelEditor> editor_;
   std::map<std::size_t, std::uint16_t> seeds_;  // voxel index → label
+  db::ReviewStates review_;                     // by structure id
   std::uint16_t current_ = 0;
   int axis_ = 2, index_ = 0;
+  GreyWindow grey_;
   std::uint64_t revision_ = 0;
   std::string status_;
   struct GrowJob;

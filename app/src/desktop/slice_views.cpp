@@ -18,14 +18,7 @@ void SliceViews::attach(const Dataset& dataset) {
   dataset_ = &dataset;
   const Dims d = dataset.volume.dims();
   crosshair_ = {d.x / 2, d.y / 2, d.z / 2};
-  const IntensityModel& m = dataset.intensity;
-  if (m.hounsfield()) {  // the slice command's default: 400 ± 1000 HU, bone and soft tissue
-    centre_ = (400 - m.intercept) / m.slope;
-    width_ = 2000 / m.slope;
-  } else {
-    centre_ = 0.5 * (m.window[0] + m.window[1]);
-    width_ = std::max(1e-3, double(m.window[1] - m.window[0]));
-  }
+  grey_.reset(dataset.intensity);
   ++revision_;
 }
 
@@ -58,10 +51,7 @@ bool SliceViews::clickPane(int axis, int scale, double x, double y) {
 }
 
 void SliceViews::dragWindow(double dx, double dy) {
-  if (dx == 0 && dy == 0) return;
-  width_ = std::clamp(width_ * std::exp(dx / 200.0), 1e-3, 1e7);
-  centre_ -= dy * width_ / 256.0;
-  ++revision_;
+  if (grey_.drag(dx, dy)) ++revision_;
 }
 
 std::array<double, 2> SliceViews::pixelMm(int axis) const {
@@ -77,8 +67,7 @@ Result<RgbImage> SliceViews::pane(int axis, int scale, const LabelMap* labels, c
   request.axis = axis;
   request.index = axis >= 0 && axis <= 2 ? crosshair_[std::size_t(axis)] : 0;
   request.scale = scale;
-  request.windowCentreHu = centre_;
-  request.windowWidthHu = width_;
+  grey_.applyTo(request);
   request.labelAlpha = labels && !labels->empty() ? labelAlpha : 0.0;
   auto image = renderSlice(dataset_->volume, labels && !labels->empty() ? labels : nullptr, structures, request);
   if (!image) return image;

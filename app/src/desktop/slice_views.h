@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "core/error.h"
+#include "grey_window.h"
 #include "volume/png_image.h"
 #include "volume/structure.h"
 
@@ -32,9 +33,10 @@ class SliceViews {
   // A click at pixel (x, y) of pane `axis` drawn at `scale` pixels per voxel: the crosshair moves
   // to that voxel of the pane's slice. False outside the picture.
   bool clickPane(int axis, int scale, double x, double y);
-  // A drag of (dx, dy) pixels: right/left widens/narrows the window, down/up lowers/raises its centre.
+  // A drag of (dx, dy) pixels: right/left widens/narrows the window, down/up lowers/raises its
+  // centre (GreyWindow::drag).
   void dragWindow(double dx, double dy);
-  std::array<double, 2> window() const { return {centre_, width_}; }  // stored values
+  std::array<double, 2> window() const { return grey_.centreWidth(); }  // stored values
 
   // Pane `axis` (0 x, 1 y, 2 z) through the crosshair, `scale` pixels per voxel, with `labels`
   // (null: none) in their structures' colours and the crosshair's lines. Its pixel → voxel map is
@@ -48,7 +50,7 @@ class SliceViews {
  private:
   const Dataset* dataset_ = nullptr;
   std::array<int, 3> crosshair_{0, 0, 0};
-  double centre_ = 400, width_ = 2000;
+  GreyWindow grey_;
   std::uint64_t revision_ = 0;
 };
 

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cstdint>
+#include <map>
 #include <optional>
 #include <string>
 #include <vector>
@@ -13,6 +14,20 @@
 #include "volume/structure.h"
 
 namespace at::db {
+
+// An instructor's review of a structure's labels, set in the segment editor and stored with the
+// structure (structures.review_state). Instructor metadata: never shown to students as content.
+enum class ReviewState { NotStarted, InProgress, Completed, Flagged };
+inline constexpr ReviewState kReviewStates[] = {ReviewState::NotStarted, ReviewState::InProgress, ReviewState::Completed,
+                                                ReviewState::Flagged};
+// "not_started", "in_progress", "completed", "flagged" (stored and in UI scripts).
+const char* reviewStateId(ReviewState state);
+// "not started", "in progress", "completed", "flagged" (the editor's list).
+const char* reviewStateText(ReviewState state);
+// From an id or a text above; nullopt for anything else.
+std::optional<ReviewState> reviewStateNamed(const std::string& name);
+// Structure id → review state; a structure not in the map is not started.
+using ReviewStates = std::map<std::string, ReviewState>;
 
 struct DatasetRecord {
   std::int64_t id = 0;
@@ -42,11 +57,15 @@ Result<std::int64_t> registerDataset(Database& db, const DatasetRecord& record,
 
 // Replaces an imported dataset's labels after editing: the label map file and names file the
 // caller wrote (absolute paths; the checksum of the label file) and its structures, in one
-// transaction; the volume and the geometry stay. NotFound when no dataset has that name (nothing
-// is written then).
+// transaction; the volume and the geometry stay. Review states: `review` when given (structures
+// not in it: not started), else each structure keeps the state stored under its id. NotFound when
+// no dataset has that name (nothing is written then).
 Status saveDatasetLabels(Database& db, const std::string& name, const std::string& labelsPath,
                          const std::string& labelsChecksum, const std::string& namesPath,
-                         const std::vector<Structure>& structures);
+                         const std::vector<Structure>& structures, const ReviewStates* review = nullptr);
+
+// The review states stored for dataset `datasetId`'s structures (every structure, by id).
+Result<ReviewStates> datasetReviewStates(Database& db, std::int64_t datasetId);
 
 // All imported datasets, ordered by name.
 Result<std::vector<DatasetRecord>> listDatasets(Database& db);

@@ -3,7 +3,7 @@
 // included — and undo/redo of every edit as compressed changes (label_history.h).
 //
 // Tools:
-//   paint / erase           a sphere brush around a point in mm
+//   paint / erase           a sphere brush around a point in mm (a stroke of dabs: one edit)
 //   thresholdIsland         the connected region of voxels in a value range under a point; with a
 //                           minimum diameter, bridges thinner than it are cut (opening by a ball)
 //   growFromSeeds           every voxel takes the label of its cheapest seed (wdt/label_growth.h);
@@ -87,6 +87,13 @@ class LabelEditor {
   Result<EditSummary> hollow(std::uint16_t label, double thicknessMm);
   Result<EditSummary> smooth(std::uint16_t label, Smoothing operation, double radiusMm);
 
+  // A brush stroke: the edits between beginStroke and endStroke (paint and erase dabs along a
+  // drag) become one edit, one undo. endStroke returns its summary (nullopt: nothing changed).
+  // An edit of the structure list ends a stroke first. A second beginStroke ends the first.
+  void beginStroke();
+  std::optional<EditSummary> endStroke();
+  bool inStroke() const { return stroke_.has_value(); }
+
   // Undo/redo the newest edit; returns its description. Error (NotFound) when there is none.
   Result<std::string> undo();
   Result<std::string> redo();
@@ -106,6 +113,11 @@ class LabelEditor {
   LabelHistory history_;
   struct Growth;
   std::unique_ptr<Growth> growth_;
+  struct Stroke {
+    std::size_t edits = 0;
+    std::string tool;  // the first dab's description, without its count
+  };
+  std::optional<Stroke> stroke_;
 };
 
 }  // namespace at::segment

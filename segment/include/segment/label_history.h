@@ -8,6 +8,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
@@ -34,12 +35,17 @@ class LabelDelta {
   // Writes every changed voxel's old (undo) or new (redo) label.
   void undo(LabelMap& labels) const { apply(labels, false); }
   void redo(LabelMap& labels) const { apply(labels, true); }
+  // The changes, sorted by voxel index.
+  std::vector<LabelChange> changes() const;
   std::size_t voxels() const { return voxels_; }
   std::size_t bytes() const { return packed_.size(); }
   bool empty() const { return voxels_ == 0; }
 
  private:
   void apply(LabelMap& labels, bool forward) const;
+  // Each run of consecutive voxels sharing one (before, after) pair, in index order.
+  void forEachRun(
+      const std::function<void(std::size_t start, std::size_t length, std::uint16_t before, std::uint16_t after)>& run) const;
   std::string packed_;  // deflated runs
   std::size_t voxels_ = 0;
 };
@@ -57,6 +63,12 @@ class LabelHistory {
   // Records an edit already applied; drops what could be redone. Oldest edits are forgotten when
   // the history holds more than maxBytes() of deltas.
   void record(Entry entry);
+  // Joins the newest `count` entries (all applied; label changes only: none may change the
+  // structures, an assertion) into one, described as describe(voxels it changes): one undo then
+  // reverts them all, as for the dabs of one brush stroke. Voxels changed back to their first
+  // label drop out (an entry that changes nothing is not kept); entries already forgotten are not
+  // joined. Returns the voxels the joined entry changes.
+  std::size_t joinNewest(std::size_t count, const std::function<std::string(std::size_t)>& describe);
   bool canUndo() const { return done_ > 0; }
   bool canRedo() const { return done_ < entries_.size(); }
   // Reverts the newest edit (labels and, if it changed them, structures); returns its description,

@@ -19,6 +19,7 @@
 #include "commands.h"
 #include "panels.h"
 #include "script_interpreter.h"
+#include "segment_controller.h"
 #include "volume/png_image.h"
 #include "volume_view.h"
 #include "window.h"
@@ -82,6 +83,7 @@ class DesktopApp final : public ScriptHost {
   bool quit_ = false;
   // Mouse
   bool leftDown_ = false, panDown_ = false, dragged_ = false;
+  bool brushing_ = false;  // a segment-editor paint stroke on the view (left button down)
   double downX_ = 0, downY_ = 0, lastX_ = 0, lastY_ = 0;
 };
 
@@ -200,16 +202,28 @@ void DesktopApp::handleEvent(const SDL_Event& e) {
       downY_ = lastY_ = e.button.y;
       dragged_ = false;
       if (e.button.button == SDL_BUTTON_LEFT) leftDown_ = true;
+      if (e.button.button == SDL_BUTTON_LEFT && model_->segmenter().brushesInView()) {  // a paint stroke, not an orbit
+        brushing_ = true;
+        model_->segmenter().beginStroke();
+        model_->brushAt(e.button.x, e.button.y);
+      }
       if (e.button.button == SDL_BUTTON_RIGHT || e.button.button == SDL_BUTTON_MIDDLE) panDown_ = true;
       break;
     case SDL_MOUSEBUTTONUP:
+      if (e.button.button == SDL_BUTTON_LEFT && brushing_) {
+        model_->segmenter().endStroke();
+        brushing_ = leftDown_ = false;
+        break;
+      }
       if (e.button.button == SDL_BUTTON_LEFT && leftDown_ && !dragged_) model_->clickAt(e.button.x, e.button.y);
       if (e.button.button == SDL_BUTTON_LEFT) leftDown_ = false;
       if (e.button.button != SDL_BUTTON_LEFT) panDown_ = false;
       break;
     case SDL_MOUSEMOTION: {
       const double dx = e.motion.x - lastX_, dy = e.motion.y - lastY_;
-      if (leftDown_ || panDown_) {
+      if (brushing_) {
+        model_->brushAt(e.motion.x, e.motion.y);
+      } else if (leftDown_ || panDown_) {
         if (std::abs(e.motion.x - downX_) + std::abs(e.motion.y - downY_) > 3) dragged_ = true;
         if (leftDown_ && dragged_) model_->explore().orbit(-dx * 0.4, dy * 0.4);
         if (panDown_) model_->explore().pan(dx, dy, layout.windowH);

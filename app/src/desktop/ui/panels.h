@@ -5,6 +5,7 @@
 
 #include <array>
 #include <cstdint>
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
@@ -106,6 +107,17 @@ class StudyPanel {
 // An opaque RGBA copy of an RGB picture, for an ImageTexture.
 render::RgbaImage toRgba(const RgbImage& image);
 
+// A slice picture in a pane (the Slices window's and the segment editor's): `texture` drawn at
+// its voxels' aspect (`pixelMm`: mm of one picture pixel along columns and rows), its longer side
+// `side` pixels, under an invisible button `id` that takes its clicks; a right drag over it is a
+// grey-window drag given to `grey` (GreyWindow::drag's dx, dy). Returns the mouse in picture
+// pixels while it hovers the picture.
+struct PaneMouse {
+  double x = 0, y = 0;
+};
+std::optional<PaneMouse> drawSlicePane(const char* id, const render::gl::ImageTexture& texture, std::array<double, 2> pixelMm,
+                                       float side, const std::function<void(double, double)>& grey);
+
 // The Slices window: sagittal, coronal and axial panes through the crosshair at their voxels'
 // aspect, the segment editor's labels over them at an opacity; a left click moves the crosshair,
 // a right drag sets the grey window.
@@ -128,7 +140,8 @@ class ImportPanel {
   std::string error_;  // an import that could not start
 };
 
-// The segment editor's window: labels, a slice to paint seeds in, grow, undo and save.
+// The segment editor's window: labels, a slice to paint seeds in (right drag: grey window), grow,
+// undo / redo and save.
 class SegmentPanel {
  public:
   void draw(SegmentController& editor, float x, float y);
@@ -137,7 +150,7 @@ class SegmentPanel {
   std::optional<render::gl::ImageTexture> texture_;
   std::uint64_t revision_ = 0;
   std::optional<std::array<int, 3>> lastPainted_;  // the voxel under a drag (one paint per voxel)
-  int tool_ = 0;                   // 0: paint seeds, 1: threshold island under a click
+  bool stroking_ = false;          // a paint / erase drag in the slice is under way
   float range_[2] = {0, 0};        // the island's value range (dataset units), from its window
   bool rangeSet_ = false;
   float minDiameterMm_ = 0;

@@ -1,6 +1,7 @@
 // The Segment window: labels, the slice with seeds painted by clicking and dragging (or a
-// threshold island under a click), the brush, margin / hollow, Grow / Undo / Clear seeds, and saving — each widget calling the SegmentController command the UI
-// script's segment_* actions call.
+// threshold island under a click), the brush, margin / hollow, Grow / Undo / Redo / Clear seeds,
+// and saving — each widget calling the SegmentController command the UI script's segment_*
+// actions call.
 #include <imgui.h>
 #include <imgui_stdlib.h>
 
@@ -19,6 +20,14 @@ const ImVec4 kError{1, 0.5f, 0.4f, 1};
 template <class T>
 Status statusOf(const Result<T>& result) {
   return result ? Status{} : Status(tl::unexpected(result.error()));
+}
+
+// A button drawn disabled (greyed, not clickable) when `enabled` is false.
+bool historyButton(const char* label, bool enabled) {
+  ImGui::BeginDisabled(!enabled);
+  const bool clicked = ImGui::Button(label);
+  ImGui::EndDisabled();
+  return clicked && enabled;
 }
 
 }  // namespace
@@ -40,12 +49,21 @@ void SegmentPanel::draw(SegmentController& editor, float x, float y) {
   };
   const float line = ImGui::GetFontSize();
   ImGui::BeginGroup();  // the controls, left of the slice
-  ImGui::TextUnformatted("Paint seeds of");
-  ImGui::BeginChild("labels", ImVec2(line * 22, line * 12), true);
+  ImGui::TextUnformatted("Paint seeds of (review state, label)");
+  ImGui::BeginChild("labels", ImVec2(line * 26, line * 12), true);
   if (ImGui::RadioButton(("background (" + std::to_string(seeded(0)) + ")").c_str(), editor.currentLabel() == 0))
     report(editor.setCurrentLabel(0));
   for (const Structure& s : editor.structures()) {
     ImGui::PushID(s.label);
+    // Its review state first (instructors only; a fixed column, whatever the name's length).
+    const db::ReviewState state = editor.reviewState(s.label);
+    ImGui::SetNextItemWidth(line * 7);
+    if (ImGui::BeginCombo("##review", db::reviewStateText(state))) {
+      for (db::ReviewState option : db::kReviewStates)
+        if (ImGui::Selectable(db::reviewStateText(option), option == state)) report(editor.setReviewState(s.label, option));
+      ImGui::EndCombo();
+    }
+    ImGui::SameLine();
     ImGui::ColorButton("##colour", ImVec4(s.colour[0], s.colour[1], s.colour[2], 1), ImGuiColorEditFlags_NoTooltip,
                        ImVec2(ImGui::GetFontSize(), ImGui::GetFontSize()));
     ImGui::SameLine();
@@ -64,7 +82,7 @@ void SegmentPanel::draw(SegmentController& editor, float x, float y) {
   }
 
   // The slice.
-  ImGui::TextUnformatted("Slice (x sagittal, y coronal, z axial)");
+  ImGui::TextUnformatted("Slice (x sagittal, y coronal, z axial); right-drag: grey window");
   ImGui::TextUnformatted("  axis");
   for (int a = 0; a < 3; ++a) {
     ImGui::SameLine();
@@ -79,11 +97,20 @@ void SegmentPanel::draw(SegmentController& editor, float x, float y) {
   ImGui::SetNextItemWidth(ImGui::GetFontSize() * 14);
   if (ImGui::SliderFloat("brush (mm)", &brush, 0.0f, 10.0f, "%.1f")) editor.brushMm = brush;
 
-  // The click's tool: seeds, or the threshold island under the click (the current structure).
-  ImGui::RadioButton("paint seeds", &tool_, 0);
+  // The click's tool: seeds, the threshold island under the click (the current structure), or
+  // the brush painting the current structure / erasing labels (also on the 3-D view's surface).
+  using Tool = SegmentController::Tool;
+  const auto toolButton = [&](const char* text, Tool tool) {
+    if (ImGui::RadioButton(text, editor.tool == tool)) editor.tool = tool;
+  };
+  toolButton("paint seeds", Tool::Seeds);
   ImGui::SameLine();
-  ImGui::RadioButton("threshold island", &tool_, 1);
-  if (tool_ == 1) {
+  toolButton("threshold island", Tool::Threshold);
+  toolButton("paint label", Tool::Paint);
+  ImGui::SameLine();
+  toolButton("erase", Tool::Erase);
+  if (editor.brushesInView()) ImGui::TextDisabled("  also on the 3-D view: click or drag (no orbit)");
+  if (editor.tool == Tool::Threshold) {
     if (!rangeSet_) {
       const auto window = editor.valueWindow();
       range_[0] = float(window[0] + 0.5 * (window[1] - window[0]));
@@ -105,11 +132,16 @@ void SegmentPanel::draw(SegmentController& editor, float x, float y) {
   if (ImGui::Button("Hollow")) report(statusOf(editor.hollow(std::fabs(marginMm_))));
 
   if (ImGui::Button(editor.growing() ? "Grow again" : "Grow from seeds")) report(editor.grow());
+  // Undo / redo: the buttons, and Ctrl+Z, Ctrl+Shift+Z or Ctrl+Y while this window has the
+  // focus and no text field takes the keys (a field's own Ctrl+Z edits its text).
+  const ImGuiIO& io = ImGui::GetIO();
+  const bool keys = ImGui::IsWindowFocused(ImGuiFocusedFlags_RootAndChildWindows) && !io.WantTextInput && io.KeyCtrl;
+  const bool zKey = keys && ImGui::IsKeyPressed(ImGui::GetKeyIndex(ImGuiKey_Z), false);
+  const bool yKey = keys && ImGui::IsKeyPressed(ImGui::GetKeyIndex(ImGuiKey_Y), false);
   ImGui::SameLine();
-  if (ImGui::Button("Undo")) {
-    auto undone = editor.undo();
-    report(undone ? Status{} : Status(tl::unexpected(undone.error())));
-  }
+  if (historyButton("Undo", editor.canUndo()) || (zKey && !io.KeyShift)) report(statusOf(editor.undo()));
+  ImGui::SameLine();
+  if (historyButton("Redo", editor.canRedo()) || (zKey && io.KeyShift) || yKey) report(statusOf(editor.redo()));
   ImGui::SameLine();
   if (ImGui::Button("Clear seeds")) editor.clearSeeds();
   if (ImGui::Button("Save into the dataset")) {
@@ -150,28 +182,29 @@ void SegmentPanel::draw(SegmentController& editor, float x, float y) {
     }
   }
   if (texture_ && texture_->handle() && texture_->width() > 0) {
-    // At the voxels' aspect (mm per picture pixel along each side), the longer side 30 lines long.
-    const auto pixelMm = editor.slicePixelMm();
-    const double widthMm = texture_->width() * pixelMm[0], heightMm = texture_->height() * pixelMm[1];
-    const double perMm = ImGui::GetFontSize() * 30 / std::max(widthMm, heightMm);
-    const float zoomX = float(perMm * pixelMm[0]), zoomY = float(perMm * pixelMm[1]);
-    const ImVec2 size(float(texture_->width()) * zoomX, float(texture_->height()) * zoomY);
-    const ImVec2 origin = ImGui::GetCursorScreenPos();
-    ImGui::Image(reinterpret_cast<ImTextureID>(texture_->handle()), size);
-    if (ImGui::IsItemHovered() && ImGui::IsMouseDown(ImGuiMouseButton_Left)) {
-      const ImVec2 m = ImGui::GetMousePos();
-      if (auto voxel = editor.voxelAtPixel(scale, (m.x - origin.x) / zoomX, (m.y - origin.y) / zoomY);
-          voxel && voxel != lastPainted_) {
+    // At the voxels' aspect, the longer side 30 lines long; a right drag sets the grey window.
+    const auto mouse = drawSlicePane("##slice", *texture_, editor.slicePixelMm(), ImGui::GetFontSize() * 30,
+                                     [&](double dx, double dy) { editor.dragWindow(dx, dy); });
+    if (mouse && ImGui::IsMouseDown(ImGuiMouseButton_Left)) {
+      if (auto voxel = editor.voxelAtPixel(scale, mouse->x, mouse->y); voxel && voxel != lastPainted_) {
         lastPainted_ = voxel;
-        if (tool_ == 1) {  // one island per click
+        if (editor.tool == Tool::Threshold) {  // one island per click
           if (ImGui::IsMouseClicked(ImGuiMouseButton_Left))
             report(statusOf(editor.thresholdIsland(*voxel, range_[0], range_[1], minDiameterMm_)));
-        } else {
+        } else if (editor.tool == Tool::Seeds) {
           report(statusOf(editor.paintSeeds(*voxel)));
+        } else {  // a drag's dabs: one edit
+          if (!stroking_) editor.beginStroke();
+          stroking_ = true;
+          report(statusOf(editor.brushAtVoxel(*voxel)));
         }
       }
     }
-    if (!ImGui::IsMouseDown(ImGuiMouseButton_Left)) lastPainted_.reset();
+  }
+  if (!ImGui::IsMouseDown(ImGuiMouseButton_Left)) {
+    lastPainted_.reset();
+    if (stroking_) editor.endStroke();
+    stroking_ = false;
   }
 
   ImGui::EndGroup();

@@ -24,6 +24,26 @@ render::RgbaImage toRgba(const RgbImage& image) {
   return rgba;
 }
 
+std::optional<PaneMouse> drawSlicePane(const char* id, const render::gl::ImageTexture& texture, std::array<double, 2> pixelMm,
+                                       float side, const std::function<void(double, double)>& grey) {
+  const double widthMm = texture.width() * pixelMm[0], heightMm = texture.height() * pixelMm[1];
+  const double perMm = side / std::max(widthMm, heightMm);
+  const float zoomX = float(perMm * pixelMm[0]), zoomY = float(perMm * pixelMm[1]);
+  const ImVec2 origin = ImGui::GetCursorScreenPos();
+  const ImVec2 size(float(texture.width()) * zoomX, float(texture.height()) * zoomY);
+  ImGui::Image(reinterpret_cast<ImTextureID>(texture.handle()), size);
+  // A button over the picture takes its clicks and drags (else a drag would move the window).
+  ImGui::SetCursorScreenPos(origin);
+  ImGui::InvisibleButton(id, size, ImGuiButtonFlags_MouseButtonLeft | ImGuiButtonFlags_MouseButtonRight);
+  if (ImGui::IsItemActive() && ImGui::IsMouseDragging(ImGuiMouseButton_Right)) {
+    const ImVec2 d = ImGui::GetIO().MouseDelta;
+    grey(d.x, d.y);
+  }
+  if (!ImGui::IsItemHovered()) return std::nullopt;
+  const ImVec2 m = ImGui::GetMousePos();
+  return PaneMouse{(m.x - origin.x) / zoomX, (m.y - origin.y) / zoomY};
+}
+
 void SlicesPanel::draw(DesktopModel& model, float x, float y) {
   SliceViews& slices = model.slices();
   if (!slices.windowOpen || !slices.attached()) return;
@@ -61,22 +81,9 @@ void SlicesPanel::draw(DesktopModel& model, float x, float y) {
       }
     }
     if (texture && texture->handle() && texture->width() > 0) {
-      const auto mm = slices.pixelMm(axis);
-      const double widthMm = texture->width() * mm[0], heightMm = texture->height() * mm[1];
-      const double perMm = side / std::max(widthMm, heightMm);
-      const float zoomX = float(perMm * mm[0]), zoomY = float(perMm * mm[1]);
-      const ImVec2 origin = ImGui::GetCursorScreenPos();
-      ImGui::Image(reinterpret_cast<ImTextureID>(texture->handle()),
-                   ImVec2(float(texture->width()) * zoomX, float(texture->height()) * zoomY));
-      if (ImGui::IsItemHovered()) {
-        const ImVec2 m = ImGui::GetMousePos();
-        if (ImGui::IsMouseDown(ImGuiMouseButton_Left))
-          slices.clickPane(axis, scale, (m.x - origin.x) / zoomX, (m.y - origin.y) / zoomY);
-        if (ImGui::IsMouseDragging(ImGuiMouseButton_Right)) {
-          const ImVec2 d = ImGui::GetIO().MouseDelta;
-          slices.dragWindow(d.x, d.y);
-        }
-      }
+      const auto mouse = drawSlicePane(kPaneNames[axis], *texture, slices.pixelMm(axis), side,
+                                       [&](double dx, double dy) { slices.dragWindow(dx, dy); });
+      if (mouse && ImGui::IsMouseDown(ImGuiMouseButton_Left)) slices.clickPane(axis, scale, mouse->x, mouse->y);
     }
     ImGui::EndGroup();
   }
