@@ -48,8 +48,9 @@ const char* kUsage =
     "  --presets   presets folder (default: the installed presets, or $AT_DATA_DIR/presets)\n"
     "  --intensity auto|hu|plain: how a volume file's values are read (CT in HU, or plain intensities)\n"
     "Without STRUCTURE the whole volume is rendered with a data transfer function derived from the\n"
-    "data (CT: the default HU transfer function; plain intensities such as a µCT: a ramp over the\n"
-    "window of their histogram), or the data TF of --preset; datasets with no labels render so.\n";
+    "data (CT: its edges, skin and organ walls as translucent flesh and bone white; plain intensities\n"
+    "such as a µCT: a ramp over the window of their histogram), or the data TF of --preset; datasets\n"
+    "with no labels render so.\n";
 
 
 Result<std::array<float, 4>> parseClip(const std::string& text) {

@@ -1,5 +1,6 @@
 #include "db/dataset_store.h"
 
+#include <algorithm>
 #include <filesystem>
 #include <tuple>
 
@@ -65,14 +66,21 @@ std::optional<std::string> nonEmpty(const std::string& s) {
 // caller's transaction.
 Status insertStructures(Database& d, std::int64_t id, const std::vector<Structure>& structures,
                         const ReviewStates& review = {}) {
-  auto add = d.prepare(
-      "INSERT INTO structures (dataset_id, label, structure_id, name, colour_r, colour_g, colour_b, system,"
-      " description, review_state) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10)");
+  // review_state only when a structure has one other than the column's default: the column
+  // exists from schema 13 on.
+  const bool states = std::any_of(structures.begin(), structures.end(), [&](const Structure& st) {
+    const auto state = review.find(st.id);
+    return state != review.end() && state->second != ReviewState::NotStarted;
+  });
+  auto add = d.prepare(std::string("INSERT INTO structures (dataset_id, label, structure_id, name, colour_r, colour_g,"
+                                   " colour_b, system, description") +
+                       (states ? ", review_state) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10)"
+                               : ") VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9)"));
   if (!add) return tl::unexpected(add.error());
   for (const Structure& st : structures) {
     add->reset();
     const auto state = review.find(st.id);
-    add->bind(10, reviewStateId(state == review.end() ? ReviewState::NotStarted : state->second));
+    if (states) add->bind(10, reviewStateId(state == review.end() ? ReviewState::NotStarted : state->second));
     add->bind(1, id)
         .bind(2, int(st.label))
         .bind(3, st.id)

@@ -63,6 +63,26 @@ Mask connectedRegion(const Mask& mask, std::size_t start) {
 
 Mask maskOf(const LabelMap& labels, std::uint16_t label) { return structureMask(labels, label); }
 
+// The brush's ball: the voxels whose centres lie within radiusMm of centreMm (in mm, so on an
+// anisotropic grid it spans more voxels along the finer axes), and always the voxel under the
+// centre; sorted by index. Only the ball's bounding box is visited. Errors: a centre outside the grid.
+Result<std::vector<std::size_t>> ballAround(const Geometry& g, const Vec3& centreMm, double radiusMm, const char* what) {
+  auto centre = voxelAt(g, centreMm, what);
+  if (!centre) return tl::unexpected(centre.error());
+  const Vec3 c = g.patientToIndex(centreMm);
+  int reach[3];
+  for (int a = 0; a < 3; ++a) reach[a] = int(std::ceil(radiusMm / g.spacingMm[std::size_t(a)])) + 1;
+  std::vector<std::size_t> ball{*centre};
+  for (int k = int(std::lround(c[2])) - reach[2]; k <= int(std::lround(c[2])) + reach[2]; ++k)
+    for (int j = int(std::lround(c[1])) - reach[1]; j <= int(std::lround(c[1])) + reach[1]; ++j)
+      for (int i = int(std::lround(c[0])) - reach[0]; i <= int(std::lround(c[0])) + reach[0]; ++i)
+        if (g.dims.contains(i, j, k) && norm(g.indexToPatient({double(i), double(j), double(k)}) - centreMm) <= radiusMm)
+          ball.push_back(g.dims.index(i, j, k));
+  std::sort(ball.begin(), ball.end());
+  ball.erase(std::unique(ball.begin(), ball.end()), ball.end());
+  return ball;
+}
+
 }  // namespace
 
 struct LabelEditor::Growth {
@@ -184,41 +204,21 @@ Result<EditSummary> LabelEditor::deleteStructure(std::uint16_t label) {
 Result<EditSummary> LabelEditor::paint(const Vec3& centreMm, double radiusMm, std::uint16_t label) {
   if (auto ok = requireStructure(label); !ok) return tl::unexpected(ok.error());
   if (!(radiusMm >= 0)) return fail("the brush radius must be >= 0 mm");
-  const Geometry& g = labels_.geometry;
-  auto centre = voxelAt(g, centreMm, "the brush centre");
-  if (!centre) return tl::unexpected(centre.error());
-  const Vec3 c = g.patientToIndex(centreMm);
-  int reach[3];
-  for (int a = 0; a < 3; ++a) reach[a] = int(std::ceil(radiusMm / g.spacingMm[std::size_t(a)])) + 1;
-  Changes changes{{*centre, label}};  // at least the voxel under the brush
-  for (int k = int(std::lround(c[2])) - reach[2]; k <= int(std::lround(c[2])) + reach[2]; ++k)
-    for (int j = int(std::lround(c[1])) - reach[1]; j <= int(std::lround(c[1])) + reach[1]; ++j)
-      for (int i = int(std::lround(c[0])) - reach[0]; i <= int(std::lround(c[0])) + reach[0]; ++i)
-        if (g.dims.contains(i, j, k) && norm(g.indexToPatient({double(i), double(j), double(k)}) - centreMm) <= radiusMm)
-          changes.push_back({g.dims.index(i, j, k), label});
-  std::sort(changes.begin(), changes.end());
-  changes.erase(std::unique(changes.begin(), changes.end()), changes.end());
+  auto ball = ballAround(labels_.geometry, centreMm, radiusMm, "the brush centre");
+  if (!ball) return tl::unexpected(ball.error());
+  Changes changes;
+  changes.reserve(ball->size());
+  for (std::size_t v : *ball) changes.push_back({v, label});
   return commit("paint '" + find(label)->displayName + "' (" + mm(radiusMm) + ")", changes);
 }
 
 Result<EditSummary> LabelEditor::erase(const Vec3& centreMm, double radiusMm, std::optional<std::uint16_t> only) {
   if (!(radiusMm >= 0)) return fail("the eraser radius must be >= 0 mm");
-  const Geometry& g = labels_.geometry;
-  auto centre = voxelAt(g, centreMm, "the eraser centre");
-  if (!centre) return tl::unexpected(centre.error());
-  Mask sphere(g, 0);
-  sphere.voxels[*centre] = 1;
-  const Vec3 c = g.patientToIndex(centreMm);
-  int reach[3];
-  for (int a = 0; a < 3; ++a) reach[a] = int(std::ceil(radiusMm / g.spacingMm[std::size_t(a)])) + 1;
-  for (int k = int(std::lround(c[2])) - reach[2]; k <= int(std::lround(c[2])) + reach[2]; ++k)
-    for (int j = int(std::lround(c[1])) - reach[1]; j <= int(std::lround(c[1])) + reach[1]; ++j)
-      for (int i = int(std::lround(c[0])) - reach[0]; i <= int(std::lround(c[0])) + reach[0]; ++i)
-        if (g.dims.contains(i, j, k) && norm(g.indexToPatient({double(i), double(j), double(k)}) - centreMm) <= radiusMm)
-          sphere.voxels[g.dims.index(i, j, k)] = 1;
+  auto ball = ballAround(labels_.geometry, centreMm, radiusMm, "the eraser centre");
+  if (!ball) return tl::unexpected(ball.error());
   Changes changes;
-  for (std::size_t i = 0; i < sphere.voxels.size(); ++i)
-    if (sphere.voxels[i] && labels_.voxels[i] != 0 && (!only || labels_.voxels[i] == *only)) changes.push_back({i, 0});
+  for (std::size_t v : *ball)
+    if (labels_.voxels[v] != 0 && (!only || labels_.voxels[v] == *only)) changes.push_back({v, 0});
   return commit("erase (" + mm(radiusMm) + ")", changes);
 }
 

@@ -115,6 +115,36 @@ TEST_CASE("structures, slice and render open an unlabelled µCT; the slice uses 
   CHECK(r.err.find("no labelled structures") != std::string::npos);
 }
 
+TEST_CASE("the real 3 mm abdominal CT without labels renders its body and its bones, not a dark frame") {
+  if (!test::requireSharedData("whole-volume render of ct_small")) return;
+  test::TempDir dir;
+  const fs::path ct = test::sharedData("totalsegmentator/ct_small.nii.gz"), out = dir / "abdomen.png";
+  // From above: the body's cross-section, the spine and the ribs (30 slices of 3 mm).
+  auto r = test::runApp("render " + quoted(ct) + " --view superior --size 200x200 --no-overlays --backend cpu --out " +
+                        quoted(out));
+  if (r.exitCode != 0 && r.err.find("EGL") != std::string::npos) {
+    std::printf("SKIPPED: render needs EGL (%s)", r.err.c_str());
+    return;
+  }
+  REQUIRE_MESSAGE(r.exitCode == 0, r.err);
+  CHECK(r.out.find("whole volume") != std::string::npos);
+  auto png = readPng(out.string());
+  REQUIRE(png);
+  // Pixels brighter than the background (the body's outline and organs: the earlier data TF, with
+  // its opacity spread over the whole volume, lit 0.1 % of them), and white ones (bone).
+  int lit = 0, white = 0;
+  for (int y = 0; y < png->height; ++y)
+    for (int x = 0; x < png->width; ++x) {
+      const std::uint8_t* p = png->pixel(x, y);
+      lit += std::max({p[0], p[1], p[2]}) > 40;
+      white += std::min({p[0], p[1], p[2]}) > 150;
+    }
+  const double litShare = double(lit) / (png->width * png->height);
+  MESSAGE("ct_small whole volume from above: lit " << litShare << ", white pixels " << white);
+  CHECK(litShare > 0.03);
+  CHECK(white >= 8);
+}
+
 TEST_CASE("render DATASET --out without a structure draws the whole phantom, and rejects --mode") {
   test::TempDir dir;
   const fs::path out = dir / "phantom.png";

@@ -117,7 +117,8 @@ class DesktopModel {
   void hoverAt(double x, double y);  // window coordinates; picks the structure under the cursor [hover]
   void clickAt(double x, double y);  // a locate answer, else selects what is under the cursor (not during an exam)
   // With the segment editor's paint or erase tool (SegmentController::brushesInView): one dab of
-  // its brush where the ray through (x, y) meets the volume (nothing off it). clickAt is a stroke
+  // its brush where the ray through (x, y) meets the volume's first visible surface (nothing off
+  // it); the slices' crosshair and the editor's slice move there. clickAt is a stroke
   // of one dab; a drag brackets its dabs with the editor's beginStroke / endStroke.
   void brushAt(double x, double y);
   void clearHover() { setHovered(0); }

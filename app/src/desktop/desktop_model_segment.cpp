@@ -5,9 +5,10 @@
 namespace at::app {
 
 namespace {
-// The brush's centre: where the ray's accumulated opacity reaches one half — the surface the user
-// sees, not the sample behind it where a hover's pick (kSeenThroughOpacity) looks through bone.
-constexpr double kBrushSurfaceOpacity = 0.5;
+// The brush's centre: where the ray's accumulated opacity reaches a quarter — the first surface
+// the user sees (a translucent CT shows its skin as a shell of about that), not the sample behind
+// it where a hover's pick (kSeenThroughOpacity) looks through bone.
+constexpr double kBrushSurfaceOpacity = 0.25;
 }  // namespace
 
 void DesktopModel::brushAt(double x, double y) {

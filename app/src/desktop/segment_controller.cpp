@@ -291,14 +291,17 @@ void SegmentController::poll() {
 }
 
 void SegmentController::edited(const std::string& kind, const std::string& tool, const segment::EditSummary& summary,
-                               nlohmann::json extra) {
+                               nlohmann::json extra, bool countVoxels) {
   ++revision_;
-  std::vector<std::size_t> perValue(65536, 0);
-  for (std::uint16_t v : editor_->labels().voxels) ++perValue[v];
-  nlohmann::json counts = nlohmann::json::object();
-  for (const Structure& s : editor_->structures()) counts[s.id] = perValue[s.label];
   status_ = summary.description;
-  nlohmann::json e = {{"event", kind}, {"tool", tool}, {"changed", summary.changed}, {"voxels", counts}};
+  nlohmann::json e = {{"event", kind}, {"tool", tool}, {"changed", summary.changed}};
+  if (countVoxels) {
+    std::vector<std::size_t> perValue(65536, 0);
+    for (std::uint16_t v : editor_->labels().voxels) ++perValue[v];
+    nlohmann::json counts = nlohmann::json::object();
+    for (const Structure& s : editor_->structures()) counts[s.id] = perValue[s.label];
+    e["voxels"] = std::move(counts);
+  }
   e.update(extra);
   events_(std::move(e));
 }

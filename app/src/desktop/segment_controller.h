@@ -163,8 +163,9 @@ class SegmentController {
   Status requireStructureCurrent(const std::string& tool) const;
   // After an edit: the slice is redrawn, the status says what changed, and an event
   // {"event": kind, "tool": tool, "changed": n, "voxels": {structure: count}} is sent.
+  // A brush dab leaves the voxel counts out (a pass over the whole map for each dab of a drag).
   void edited(const std::string& kind, const std::string& tool, const segment::EditSummary& summary,
-              nlohmann::json extra = nlohmann::json::object());
+              nlohmann::json extra = nlohmann::json::object(), bool countVoxels = true);
   db::Database& database_;
   EventSink events_;
   const Dataset* dataset_ = nullptr;  // the dataset being labelled (its volume and intensity)

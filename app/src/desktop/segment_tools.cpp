@@ -66,7 +66,7 @@ Result<segment::EditSummary> SegmentController::brushAt(const Vec3& pointMm) {
   auto summary = tool == Tool::Paint ? editor_->paint(pointMm, radius, current_) : editor_->erase(pointMm, radius);
   if (!summary) return summary;
   edited("segment_edited", tool == Tool::Paint ? "paint" : "erase", *summary,
-         {{"point_mm", {pointMm[0], pointMm[1], pointMm[2]}}, {"radius_mm", radius}});
+         {{"point_mm", {pointMm[0], pointMm[1], pointMm[2]}}, {"radius_mm", radius}}, false);
   return summary;
 }
 

@@ -10,12 +10,14 @@
 namespace at::render {
 
 // A WDT-mode preset whose distance TF is transparent and t = 1, so that a sample shows the data TF
-// alone. CT: air and fat clear, soft tissue (0 … 100 HU) faint, bone white from ~200 HU. Plain
-// intensities, over their histogram window (volume/intensity.h): clear below 28 % of it (air,
-// background), faint tissue around 35–42 %, rising to white dense material at its top, with context surfaces at edges of 1 % … 10 % of the
-// window per voxel (CT: the preset's default 40 … 300 HU). Opacities
-// are per kWholeVolumeRefMm of ray and scaled to the grid's size, so tissue stays a haze and bone
-// shows on any scan. TF points are in stored values, as the ray caster samples them.
+// alone. CT: drawn at its edges (context surfaces from 30 … 200 HU per voxel): air and lung clear,
+// soft tissue (−100 … 100 HU) a translucent flesh shell of 15 % per voxel, bone white from 160 HU,
+// opaque from 350 HU — opacities per voxel of the grid, so the look does not depend on its size.
+// Plain intensities, over their histogram window (volume/intensity.h): clear below 28 % of it
+// (air, background), faint tissue around 35–42 %, rising to white dense material at its top, with
+// context surfaces at edges of 1 % … 10 % of the window per voxel, opacities scaled to the grid's
+// size so tissue stays a haze. Opacities are given per kWholeVolumeRefMm of ray; TF points are in
+// stored values, as the ray caster samples them.
 constexpr double kWholeVolumeRefMm = 0.25;
 Preset wholeVolumePreset(const IntensityModel& intensity, const Geometry& grid);
 

@@ -49,7 +49,7 @@ void SegmentPanel::draw(SegmentController& editor, float x, float y) {
   };
   const float line = ImGui::GetFontSize();
   ImGui::BeginGroup();  // the controls, left of the slice
-  ImGui::TextUnformatted("Paint seeds of (review state, label)");
+  ImGui::TextUnformatted("Labels: review state, name (seed voxels)");
   ImGui::BeginChild("labels", ImVec2(line * 26, line * 12), true);
   if (ImGui::RadioButton(("background (" + std::to_string(seeded(0)) + ")").c_str(), editor.currentLabel() == 0))
     report(editor.setCurrentLabel(0));
