@@ -5,14 +5,15 @@
 # structure's name and its review state. Needs the scan and its labels (scripts/fetch-scans.sh,
 # scripts/label-scans.sh) and python3 (to read the review states).
 #   scripts/skull-review-sheet.sh [BUILD_DIR]   (default: build)
-# Environment: OUT (default docs/skull_labels_review.png), SIZE (default 240x180 per render),
-# KEEP (a folder to keep the single renders in; default: a temporary folder, removed).
+# Environment: OUT (default docs/skull_labels_review.png), SIZE (default 192x144 per render),
+# KEEP (a folder to keep the single renders in; default: a temporary folder, removed), REUSE=1 (with
+# KEEP: lay out the renders already in KEEP instead of rendering again).
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 build="${1:-$root/build}"
 app="$build/app/anatomy-tutor"
 out="${OUT:-$root/docs/skull_labels_review.png}"
-size="${SIZE:-240x180}"
+size="${SIZE:-192x144}"
 catalogue="$root/data/segmentations/skull/structures.json"
 [ -x "$app" ] || { echo "skull-review-sheet: $app not built (ninja -C $build anatomy-tutor)" >&2; exit 1; }
 "$app" info skull >/dev/null 2>&1 || { echo "skull-review-sheet: the skull CT is not here (run scripts/fetch-scans.sh, then scripts/label-scans.sh)" >&2; exit 1; }
@@ -44,7 +45,8 @@ axis_c2 inferior"
 
 args=()
 while read -r id view; do
-  "$app" render skull "$id" --mode wdt --view "$view" --size "$size" --out "$panels/$id.png" </dev/null >/dev/null
+  [ "${REUSE:-0}" = 1 ] && [ -f "$panels/$id.png" ] ||
+    "$app" render skull "$id" --mode wdt --view "$view" --size "$size" --out "$panels/$id.png" </dev/null >/dev/null
   caption="$(python3 - "$catalogue" "$root/data/segmentations/skull/seeds.json" "$id" "$view" <<'EOF'
 import json, re, sys
 entries = {e["id"]: e for e in json.load(open(sys.argv[1]))["structures"]}
@@ -57,6 +59,6 @@ EOF
   echo "skull-review-sheet: $id ($view)"
 done <<<"$views"
 "$app" figure-sheet --out "$out" --columns 7 \
-  --title "Skull CT labels, reviewed in 3-D (context view of each label; COMPLETED or FLAGGED as in data/segmentations/skull/structures.json)" \
+  --title "Skull CT labels in 3-D, each in context, with its review state" \
   "${args[@]}"
 echo "skull-review-sheet: wrote $out"
