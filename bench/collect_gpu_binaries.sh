@@ -13,7 +13,7 @@ targets="test_cuda test_wdt wdt_bench"
 # The list is read whole first: `grep -q` on the pipe would stop early and, under pipefail, a
 # ninja killed by SIGPIPE made a present target look absent.
 all_targets=$(ninja -C build-gpu -t targets all 2>/dev/null)
-for t in wdt_cuda_bench render_bench progressive_bench test_render; do
+for t in wdt_cuda_bench growth_bench render_bench progressive_bench test_render test_segment; do
   if grep -q "^$t:" <<<"$all_targets"; then targets="$targets $t"; fi
 done
 ninja -C build-gpu -j2 $targets
@@ -31,7 +31,7 @@ done
 if [ -d ../shared/data/totalsegmentator ]; then
   cp ../shared/data/totalsegmentator/{ct_small.nii.gz,seg_small.nii.gz,labels.json} .gpu/data/
 fi
-cp bench/run_on_gpu.sh .gpu/
+cp bench/run_on_gpu.sh bench/run_growth_on_gpu.sh .gpu/
 cp -r data/presets .gpu/presets 2>/dev/null || true
 # The render tests read presets and golden images below the source directory compiled into them;
 # run_on_gpu.sh recreates that path from these copies when the machine lacks it.

@@ -27,6 +27,11 @@ log ./test_wdt
 log ./test_render
 # wdt_bench reads DIR/totalsegmentator/ (--data DIR).
 ./wdt_bench --sizes 128,256,512 --backends cuda --repeats 10 --data "$PWD/shared/data" > "$OUT/wdt_bench_cuda.jsonl" 2> "$OUT/wdt_bench.err"
+# Grow from seeds (8 labels on the phantom): the GPU at 128³–512³, the CPU engine beside it at 256³.
+if [ -x ./growth_bench ]; then
+  ./growth_bench --sizes 128,256,512 --backends cuda --reps 5 --check-max 256 > "$OUT/growth_bench_cuda.jsonl" 2> "$OUT/growth_bench.err"
+  ./growth_bench --sizes 256 --backends cpu --reps 1 --check-max 0 > "$OUT/growth_bench_cpu.jsonl" 2>> "$OUT/growth_bench.err"
+fi
 rb() { ./render_bench --size 1920x1080 --volume 512 --hover-volume 256 --presets "$PWD/presets" "$@" >> "$OUT/render_bench.jsonl" 2>> "$OUT/render_bench.err"; }
 rb --frames 30 --warmup 5 --cycles 16 --compare-step 1 --images "$OUT"
 rb --frames 30 --warmup 5 --cycles 6 --step-voxels 1

@@ -14,6 +14,7 @@
 #include "render/overlay.h"
 #include "render/preset.h"
 #include "render/scene.h"
+#include "render/volume_preset.h"
 #include "volume/mask.h"
 #include "volume/dataset_source.h"
 #include "volume/png_image.h"
@@ -26,7 +27,7 @@ namespace {
 namespace fs = std::filesystem;
 
 const char* kUsage =
-    "usage: anatomy-tutor render DATASET STRUCTURE (--preset NAME | --mode MODE) [--t T] [--size WxH]\n"
+    "usage: anatomy-tutor render DATASET [STRUCTURE (--preset NAME | --mode MODE)] [--t T] [--size WxH]\n"
     "                            [--view NAME] [--clip NX,NY,NZ,D] [--backend cpu|cuda|auto] [--passes N]\n"
     "                            [--context F] [--margin F] [--presets DIR] [--labels FILE [--names NAMES.json]] [--series UID]\n"
     "                            [--no-overlays] [--db PATH] --out F.png\n"
@@ -40,10 +41,15 @@ const char* kUsage =
     "  --clip      plane n·p = d in LPS mm; the side the normal points to is cut away\n"
     "  --context   how far the context reaches, as a multiple of the structure's own context radius\n"
     "              (from its size; default 1)\n"
-    "  --margin    the structure's extent times this fills the view (default 1.6)\n"
+    "  --margin    the structure's extent (the volume's without STRUCTURE) times this fills the view\n"
+    "              (default 1.6)\n"
     "  --no-overlays  leave out the orientation marker (patient axes L/R, A/P, S/I, bottom left) and\n"
     "              the scale bar in millimetres (bottom right)\n"
-    "  --presets   presets folder (default: the installed presets, or $AT_DATA_DIR/presets)\n";
+    "  --presets   presets folder (default: the installed presets, or $AT_DATA_DIR/presets)\n"
+    "  --intensity auto|hu|plain: how a volume file's values are read (CT in HU, or plain intensities)\n"
+    "Without STRUCTURE the whole volume is rendered with a data transfer function derived from the\n"
+    "data (CT: the default HU transfer function; plain intensities such as a µCT: a ramp over the\n"
+    "window of their histogram), or the data TF of --preset; datasets with no labels render so.\n";
 
 
 Result<std::array<float, 4>> parseClip(const std::string& text) {
@@ -75,8 +81,12 @@ int runRender(const Argv& argv) {
     std::printf("%s", kUsage);
     return 0;
   }
-  if (args->positional().size() != 2) return reportError("render: expected DATASET STRUCTURE (see --help)", 2);
-  if (args->has("preset") == args->has("mode"))
+  const bool wholeVolume = args->positional().size() == 1;
+  if (args->positional().empty() || args->positional().size() > 2)
+    return reportError("render: expected DATASET [STRUCTURE] (see --help)", 2);
+  if (wholeVolume && args->has("mode"))
+    return reportError("render: --mode needs a STRUCTURE (the whole volume is drawn with its data TF)", 2);
+  if (!wholeVolume && args->has("preset") == args->has("mode"))
     return reportError("render: give exactly one of --preset NAME or --mode MODE", 2);
   const auto out = args->value("out");
   if (!out) return reportError("render: --out F.png is required", 2);
@@ -84,11 +94,21 @@ int runRender(const Argv& argv) {
   const render::PresetLibrary library(args->has("presets") ? fs::path(*args->value("presets")) : defaultPresetsDir());
   auto dataset = openNamedDataset(datasetRequestFrom(*args, args->positional()[0]));
   if (!dataset) return reportError("render: " + dataset.error().message);
-  const Structure* structure = dataset->findStructure(args->positional()[1]);
-  if (!structure) return reportError("render: " + unknownStructureMessage(*dataset, args->positional()[1]));
+  const Structure* structure = wholeVolume ? nullptr : dataset->findStructure(args->positional()[1]);
+  if (!wholeVolume && !structure) return reportError("render: " + unknownStructureMessage(*dataset, args->positional()[1]));
 
   Result<render::Preset> preset = fail("no preset");
-  if (auto name = args->value("preset")) {
+  if (wholeVolume) {
+    preset = render::wholeVolumePreset(dataset->intensity, dataset->volume.geometry);
+    if (auto name = args->value("preset")) {  // its data TF over the whole volume
+      auto chosen = (name->size() > 5 && name->substr(name->size() - 5) == ".json") ? render::loadPreset(*name)
+                                                                                    : library.load(*name);
+      if (!chosen) return reportError("render: " + chosen.error().message);
+      preset->dataTf = chosen->dataTf;
+      preset->name = chosen->name;
+      preset->id = chosen->id;
+    }
+  } else if (auto name = args->value("preset")) {
     preset = (name->size() > 5 && name->substr(name->size() - 5) == ".json") ? render::loadPreset(*name)
                                                                               : library.load(*name);
   } else {
@@ -115,23 +135,29 @@ int runRender(const Argv& argv) {
   auto context = args->number("context", request.contextScale);
   if (!context || *context <= 0) return reportError("render: option --context must be a positive number", 2);
   request.contextScale = *context;
+  if (wholeVolume) request.contextScale = 1.0;
   auto margin = args->number("margin", request.margin);
   if (!margin || *margin < 1 || *margin > 100) return reportError("render: option --margin must be a number in 1..100", 2);
   request.margin = *margin;
-  auto frame = render::structureFrame(dataset->labels, structure->label);
+  auto frame = wholeVolume ? Result<render::StructureFrame>(render::volumeFrame(dataset->volume.geometry))
+                           : render::structureFrame(dataset->labels, structure->label);
   if (!frame) return reportError("render: " + structure->id + ": " + frame.error().message);
   auto settings = render::settingsFor(*preset, *frame, request);
   if (!settings) return reportError("render: " + settings.error().message, 2);
   settings->background = {0.04f, 0.04f, 0.05f, 1.0f};
+  if (wholeVolume && !args->has("preset")) settings->opacityRefMm = render::kWholeVolumeRefMm;
 
   std::optional<DistanceField> field;
   double wdtMs = 0;
   std::string wdtDevice = "none";
-  if (render::modeNeedsField(preset->mode)) {
+  if (wholeVolume) {
+    field = DistanceField{render::neutralField(dataset->volume.geometry), 1};
+  } else if (render::modeNeedsField(preset->mode)) {
     auto passes = args->integer("passes", 2);
     if (!passes || *passes < 1) return reportError("render: option --passes must be a positive integer", 2);
     auto params = render::wdtParamsFor(*preset, *passes);
     if (!params) return reportError("render: " + params.error().message);
+    applyDatasetWindow(*dataset, params->huMin, params->huMax, false, params->weight != WeightRule::Uniform);
     auto backend = parseBackend(args->valueOr("backend", "auto"));
     if (!backend) return reportError("render: --backend: " + backend.error().message, 2);
     params->backend = *backend;
@@ -151,7 +177,7 @@ int runRender(const Argv& argv) {
     return reportError("render: " + st.error().message);
   if (field)
     if (auto st = renderer->setField(field->distances); !st) return reportError("render: " + st.error().message);
-  renderer->setSelected(structure->label);
+  renderer->setSelected(structure ? structure->label : 0);
   const auto start = std::chrono::steady_clock::now();
   auto image = renderer->render(*settings);
   if (!image) return reportError("render: " + image.error().message);
@@ -161,7 +187,7 @@ int runRender(const Argv& argv) {
   if (auto st = writePng(*out, rgb); !st)
     return reportError("render: " + st.error().message);
   std::printf("wrote %s (%s, %s, preset %s, %dx%d, t=%.2f; WDT %.0f ms on %s; render %.0f ms on %s)\n", out->c_str(),
-              structure->id.c_str(), render::toString(preset->mode), preset->id.value_or("?").c_str(), image->width,
+              structure ? structure->id.c_str() : "whole volume", render::toString(preset->mode), preset->id.value_or("?").c_str(), image->width,
               image->height, double(preset->t), wdtMs, wdtDevice.c_str(), renderMs, context3d->description().c_str());
   return 0;
 }

@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <map>
+#include <optional>
 #include <set>
 #include <string>
 #include <vector>
@@ -19,6 +20,7 @@
 #include "db/dataset_store.h"
 #include "volume/dataset_source.h"
 #include "volume/image_file.h"
+#include "volume/intensity.h"
 #include "volume/known_scans.h"
 #include "volume/phantom.h"
 #include "volume/png_image.h"
@@ -81,6 +83,26 @@ json geometryJson(const Geometry& g) {
           {"orientation", g.orientationCode()}};
 }
 
+json intensityJson(const IntensityModel& m) {
+  return {{"unit", m.hounsfield() ? "HU" : "plain"},
+          {"modality", m.modality},
+          {"reason", m.reason},
+          {"window", {m.valueOf(m.window[0]), m.valueOf(m.window[1])}},
+          {"stored_window", {m.window[0], m.window[1]}},
+          {"slope", m.slope},
+          {"intercept", m.intercept}};
+}
+
+void printIntensity(const IntensityModel& m) {
+  std::printf("intensity:   %s (%s)\n", m.hounsfield() ? "Hounsfield units" : "plain intensities", m.reason.c_str());
+  std::printf("window:      %s … %s %s%s\n", formatDouble(m.valueOf(m.window[0]), 1).c_str(),
+              formatDouble(m.valueOf(m.window[1]), 1).c_str(), m.unitName(),
+              m.hounsfield() ? " (density 0 … 1 of the WDT)" : " (0.5th … 99.5th percentile; density 0 … 1 of the WDT)");
+  if (!m.attenuationLike())
+    std::printf("note:        %s intensities are not attenuation: density-weighted distances assume CT-like values\n",
+                m.modality.c_str());
+}
+
 void printGeometry(const Geometry& g) {
   std::printf("dimensions:  %s\n", g.dims.toString().c_str());
   std::printf("spacing:     %s mm\n", formatVec(g.spacingMm, " x ").c_str());
@@ -141,13 +163,17 @@ const char* kStructuresHelp =
 
 const char* kInfoHelp =
     "usage: anatomy-tutor info FILE|DIR|SCAN [--json] [--labels PATH] [--names JSON] [--series UID]\n"
-    "                                [--skip-unreadable] [--nrrd-data DIR]\n\n"
+    "                          [--intensity auto|hu|plain] [--skip-unreadable] [--nrrd-data DIR]\n\n"
     "Loads any supported input (DICOM series folder, DICOM SEG, NIfTI, NRRD, InVesalius .inv3) and\n"
-    "prints its dimensions, spacing, origin, orientation, stored type, value (HU) range and loader notes.\n"
+    "prints its dimensions, spacing, origin, orientation, stored type, value range and loader notes.\n"
     "SCAN is a real scan fetched by scripts/fetch-scans.sh (skull).\n"
-    "Label maps (integer images with few values, or files that name segments) and --labels\n"
-    "inputs also list each label with its name and voxel count; --names JSON ({ \"value\": \"name\" })\n"
-    "names the labels of either. Only regular files are read (FIFOs and devices are refused).\n";
+    "An image's intensity model: CT in Hounsfield units (DICOM Modality CT, or values down to air\n"
+    "at -1000), or plain intensities (unsigned µCT exports, MR, ...) with a window from the\n"
+    "histogram; --intensity forces one. A file is listed as a label map when it names segments or\n"
+    "holds at most 512 integer values that are piecewise constant (90 % of neighbouring non-zero\n"
+    "voxels equal), so a noisy uint8 µCT is an image. Label maps and --labels inputs also list each\n"
+    "label with its name and voxel count; --names JSON ({ \"value\": \"name\" }) names them.\n"
+    "Only regular files are read (FIFOs and devices are refused).\n";
 
 bool isIntegerKind(ScalarKind k) { return k != ScalarKind::Float32 && k != ScalarKind::Float64; }
 
@@ -181,7 +207,8 @@ ValueSummary summarise(const FloatVolume& image) {
 const char* kSliceHelp =
     "usage: anatomy-tutor slice DATASET --axis x|y|z --index N --out FILE.png\n"
     "                           [--window C,W] [--alpha A] [--volume PATH --labels PATH ...]\n\n"
-    "Writes one slice as a grey PNG (window centre C and width W in HU; default 400,2000) with\n"
+    "Writes one slice as a grey PNG (window centre C and width W in the dataset's values: HU for CT,\n"
+    "default 400,2000; plain intensities default to the window from their histogram) with\n"
     "each labelled structure overlaid in its colour at opacity A (default 0.5; 0 = no overlay).\n"
     "--axis picks the voxel axis the slice is perpendicular to (z: axial for LPS data) and --index\n"
     "the slice (0-based). Image columns follow the i axis (j for --axis x); rows follow j for axial\n"
@@ -254,7 +281,7 @@ int runStructures(const Argv& argv) {
 }
 
 int runInfo(const Argv& argv) {
-  auto args = cli::Args::parse(argv, {"labels", "names", "series", "nrrd-data"}, withDatasetFlags({"json"}));
+  auto args = cli::Args::parse(argv, {"labels", "names", "series", "intensity", "nrrd-data"}, withDatasetFlags({"json"}));
   if (!args) return usageError("info", args.error().message);
   if (args->has("help")) {
     std::printf("%s%s", kInfoHelp, kDatasetOptionsHelp);
@@ -279,8 +306,18 @@ int runInfo(const Argv& argv) {
   if (!loaded) return reportError("info: " + loaded.error().message);
   const Geometry& g = loaded->image.geometry;
   const ValueSummary values = summarise(loaded->image);
+  // A file given alone is a label map when it names its segments or passes the documented test
+  // (volume/intensity.h: few integer values, piecewise constant); a µCT's uint8 data is not one.
   const bool labelMap = !loaded->segments.empty() ||
-                        (isIntegerKind(loaded->storedKind) && values.allInteger && values.fewValues && values.min >= 0);
+                        (isIntegerKind(loaded->storedKind) && values.fewValues && looksLikeLabelMap(loaded->image));
+  auto intensityChoice = parseIntensityChoice(args->valueOr("intensity", "auto"));
+  if (!intensityChoice) return usageError("info", "--intensity: " + intensityChoice.error().message);
+  std::optional<IntensityModel> intensity;
+  if (!labelMap) {
+    auto stored = toStoredVolume(*loaded, path, *intensityChoice);
+    if (!stored) return reportError("info: " + stored.error().message);
+    intensity = std::move(stored->intensity);
+  }
   if (args->has("names") && !args->has("labels") && !labelMap)
     return usageError("info", "--names applies to a label map, or to the label map given with --labels");
 
@@ -299,6 +336,7 @@ int runInfo(const Argv& argv) {
     files.labelsPath = *args->value("labels");
     files.namesPath = args->valueOr("names", "");
     files.dicomSeriesUid = options.dicomSeriesUid;
+    files.intensity = *intensityChoice;
     files.id = fs::path(path).filename().string();
     files.skipUnreadableFiles = options.skipUnreadableFiles;
     files.dataFolder = options.dataFolder;
@@ -327,6 +365,7 @@ int runInfo(const Argv& argv) {
     json out = geometryJson(g);
     out["path"] = path;
     out["kind"] = labelMap ? "label map" : "image";
+    if (intensity) out["intensity"] = intensityJson(*intensity);
     out["stored_type"] = toString(loaded->storedKind);
     out["value_range"] = {values.min, values.max};
     json notes = json::array();
@@ -340,10 +379,11 @@ int runInfo(const Argv& argv) {
     return 0;
   }
   std::printf("path:        %s\n", path.c_str());
-  std::printf("kind:        %s\n", labelMap ? "label map" : "image (values after rescale; HU for CT)");
+  std::printf("kind:        %s\n", labelMap ? "label map" : "image");
+  if (intensity) printIntensity(*intensity);
   printGeometry(g);
   std::printf("stored type: %s\n", toString(loaded->storedKind));
-  std::printf("%s %s … %s\n", labelMap ? "value range:" : "HU range:   ", formatDouble(values.min, 1).c_str(),
+  std::printf("%s %s … %s\n", intensity && intensity->hounsfield() ? "HU range:   " : "value range:", formatDouble(values.min, 1).c_str(),
               formatDouble(values.max, 1).c_str());
   for (const std::string& note : loaded->notes) std::printf("note:        %s\n", printableText(note, 400).c_str());
   if (!labels.empty()) {
@@ -376,7 +416,8 @@ int runSlice(const Argv& argv) {
   const auto out = args->value("out");
   if (!out || out->empty()) return usageError("slice", "missing --out FILE.png");
   double centre = 400, width = 2000;
-  if (auto w = args->value("window")) {
+  const auto windowText = args->value("window");
+  if (auto w = windowText) {
     const auto comma = w->find(',');
     char* end = nullptr;
     bool ok = comma != std::string::npos;
@@ -387,7 +428,7 @@ int runSlice(const Argv& argv) {
       width = std::strtod(wd.c_str(), &end);
       ok = ok && !wd.empty() && *end == '\0' && std::isfinite(centre) && std::isfinite(width) && width > 0;
     }
-    if (!ok) return usageError("slice", "--window must be CENTRE,WIDTH in HU with WIDTH > 0 (e.g. 400,2000), not '" + *w + "'");
+    if (!ok) return usageError("slice", "--window must be CENTRE,WIDTH with WIDTH > 0 (e.g. 400,2000), not '" + *w + "'");
   }
   auto alpha = args->number("alpha", 0.5);
   if (!alpha) return usageError("slice", alpha.error().message);
@@ -395,6 +436,12 @@ int runSlice(const Argv& argv) {
 
   auto ds = openDatasetArg(*args);
   if (!ds) return reportError("slice: " + ds.error().message);
+  const IntensityModel& intensity = ds->intensity;
+  if (!windowText && !intensity.hounsfield()) {  // plain intensities: the dataset's window
+    const double lo = intensity.valueOf(intensity.window[0]), hi = intensity.valueOf(intensity.window[1]);
+    centre = 0.5 * (lo + hi);
+    width = hi - lo;
+  }
   const Dims& d = ds->volume.dims();
   const int extent[3] = {d.x, d.y, d.z};
   if (*index < 0 || *index >= extent[axis])
@@ -405,8 +452,9 @@ int runSlice(const Argv& argv) {
   SliceRequest request;
   request.axis = axis;
   request.index = *index;
-  request.windowCentreHu = centre;
-  request.windowWidthHu = width;
+  // The window is in the dataset's values; renderSlice maps stored ones.
+  request.windowCentreHu = (centre - intensity.intercept) / intensity.slope;
+  request.windowWidthHu = width / intensity.slope;
   request.labelAlpha = *alpha;
   auto image = renderSlice(ds->volume, &ds->labels, ds->structures, request);
   if (!image) return reportError("slice: " + image.error().message);

@@ -34,7 +34,8 @@ constexpr const char* kUsage =
     "  --passes N | --converge     fixed passes (default 2) or until a pass changes nothing\n"
     "  --rule entering|trapezoid   step cost w(b)|step| or (w(a)+w(b))/2 |step|\n"
     "  --weight density|uniform|gradient|ascent\n"
-    "  --hu-window LO,HI           HU mapped to density 0..1 (default -1000,2000)\n"
+    "  --hu-window LO,HI           values mapped to density 0..1 (default -1000,2000 HU for CT; the\n"
+    "                              dataset's histogram window for plain intensities, e.g. µCT, MR)\n"
     "  --base B                    base cost added to every weight (default 0.02)\n"
     "  --downsample F              compute on a grid F times coarser per axis\n"
     "  --check                     compare with the exact reference (Dijkstra) on the full grid;\n"
@@ -118,6 +119,8 @@ int runWdt(const Argv& argv) {
   const Structure* structure = dataset->findStructure(structureName);
   if (!structure) return reportError("wdt: " + unknownStructureMessage(*dataset, structureName));
   const Mask mask = structureMask(dataset->labels, structure->label);
+  applyDatasetWindow(*dataset, params->huMin, params->huMax, args.has("hu-window"),
+                     params->weight != WeightRule::Uniform);
 
   auto result = computeWdt(dataset->volume, mask, *params);
   if (!result) return reportError("wdt: " + result.error().message);

@@ -36,6 +36,9 @@ int runRender(const Argv& args);
 // The shipped presets: dataSubdirectory("presets") (data_paths.h).
 std::filesystem::path defaultPresetsDir();
 
+// Labelling from seed strokes (cmd_segment.cpp)
+int runSegment(const Argv& args);
+
 // The desktop application (desktop/ui/desktop_app.cpp)
 int runDesktop(const Argv& args);
 // A display server to open a window on: DISPLAY (X11) or WAYLAND_DISPLAY set and non-empty, and a

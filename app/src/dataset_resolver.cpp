@@ -1,5 +1,6 @@
 #include "dataset_resolver.h"
 
+#include <cstdio>
 #include <filesystem>
 
 #include "core/strings.h"
@@ -12,7 +13,7 @@ namespace at::app {
 namespace fs = std::filesystem;
 
 std::set<std::string> withDatasetOptions(std::set<std::string> commandOptions) {
-  commandOptions.insert({"labels", "names", "series", "nrrd-data"});
+  commandOptions.insert({"labels", "names", "series", "intensity", "nrrd-data"});
   return commandOptions;
 }
 
@@ -27,6 +28,7 @@ DatasetRequest datasetRequestFrom(const cli::Args& args, const std::string& name
   request.labelsPath = args.valueOr("labels", "");
   request.namesPath = args.valueOr("names", "");
   request.seriesUid = args.valueOr("series", "");
+  request.intensity = args.valueOr("intensity", "");
   request.dbPath = args.db();
   request.skipUnreadableFiles = args.has("skip-unreadable");
   if (auto folder = args.value("nrrd-data")) request.dataFolder = fs::absolute(*folder).string();
@@ -35,11 +37,11 @@ DatasetRequest datasetRequestFrom(const cli::Args& args, const std::string& name
 
 Result<Dataset> openNamedDataset(const DatasetRequest& request) {
   const bool fileOptions = !request.labelsPath.empty() || !request.namesPath.empty() || !request.seriesUid.empty() ||
-                           request.skipUnreadableFiles || !request.dataFolder.empty();
+                           !request.intensity.empty() || request.skipUnreadableFiles || !request.dataFolder.empty();
   if (isBuiltinDatasetName(request.name)) {
     if (fileOptions)
-      return fail("--labels, --names, --series, --skip-unreadable and --nrrd-data apply to datasets from files, not to '" +
-                  request.name + "'");
+      return fail("--labels, --names, --series, --intensity, --skip-unreadable and --nrrd-data apply to datasets from "
+                  "files, not to '" + request.name + "'");
     return openBuiltinDataset(request.name);
   }
   if (const KnownScan* scan = findKnownScan(request.name)) {
@@ -58,6 +60,11 @@ Result<Dataset> openNamedDataset(const DatasetRequest& request) {
     files.namesPath = request.namesPath;
     files.dicomSeriesUid = request.seriesUid;
     files.id = fs::path(request.name).filename().string();
+    if (!request.intensity.empty()) {
+      auto choice = parseIntensityChoice(request.intensity);
+      if (!choice) return fail("--intensity: " + choice.error().message);
+      files.intensity = *choice;
+    }
     files.skipUnreadableFiles = request.skipUnreadableFiles;
     files.dataFolder = request.dataFolder;
     return openDatasetFiles(files);
@@ -75,8 +82,8 @@ Result<Dataset> openNamedDataset(const DatasetRequest& request) {
     if (!record) return tl::unexpected(record.error());
     if (*record) {
       if (fileOptions)
-        return fail("--labels, --names, --series, --skip-unreadable and --nrrd-data apply to datasets from files, not to "
-                    "imported '" + request.name + "' (its files are read as at import)");
+        return fail("--labels, --names, --series, --intensity, --skip-unreadable and --nrrd-data apply to datasets "
+                    "from files, not to imported '" + request.name + "' (its files are read as at import)");
       // The files must be those imported: a file changed since is refused (checksums).
       auto files = db::verifiedDatasetFiles(**record);
       if (!files) return tl::unexpected(files.error());
@@ -95,6 +102,23 @@ Result<Dataset> openNamedDataset(const DatasetRequest& request) {
   return fail(ErrorKind::NotFound, "unknown dataset '" + request.name + "': not built in (phantom, phantom:N, skull), not imported" +
                                        (known.empty() ? std::string() : " (imported: " + str::join(known, ", ") + ")") +
                                        ", and no such file or folder");
+}
+
+void applyDatasetWindow(const Dataset& dataset, float& windowMin, float& windowMax, bool windowGiven,
+                        bool densityWeights) {
+  const IntensityModel& m = dataset.intensity;
+  if (!m.hounsfield() && !windowGiven) {
+    windowMin = m.window[0];
+    windowMax = m.window[1];
+  }
+  static bool noted = false;
+  if (densityWeights && !m.attenuationLike() && !noted) {
+    noted = true;
+    std::fprintf(stderr,
+                 "anatomy-tutor: note: '%s' is %s: its intensities are not attenuation, and density-weighted distances "
+                 "assume CT-like values (bright = dense)\n",
+                 dataset.id.c_str(), m.modality.c_str());
+  }
 }
 
 std::string unknownStructureMessage(const Dataset& dataset, const std::string& name) {

@@ -24,6 +24,7 @@ struct DatasetRequest {
   std::string labelsPath;             // paths only: label map on any grid
   std::string namesPath;              // paths only: JSON { "value": "name" }
   std::string seriesUid;              // paths only: DICOM series
+  std::string intensity;              // paths only: auto | hu | plain (volume/intensity.h); empty = auto
   // Where imported datasets are registered: the process's open connection when it has one (the
   // desktop, a lesson), else the database at dbPath (the default one when absent), opened only if
   // it exists.
@@ -34,7 +35,7 @@ struct DatasetRequest {
 };
 
 // A command's valued options plus the ones every dataset-taking command accepts beside its
-// DATASET: --labels, --names, --series and --nrrd-data (datasets from files only; --db is global).
+// DATASET: --labels, --names, --series, --intensity and --nrrd-data (datasets from files only; --db is global).
 std::set<std::string> withDatasetOptions(std::set<std::string> commandOptions);
 // A command's flags plus the dataset flag --skip-unreadable (datasets from files only).
 std::set<std::string> withDatasetFlags(std::set<std::string> commandFlags);
@@ -51,6 +52,14 @@ DatasetRequest datasetRequestFrom(const cli::Args& args, const std::string& name
 // Errors name what was tried ("unknown dataset 'abdomen': not built in, not imported in
 // <db> (imported: …), and no such file or folder"); an unknown name is NotFound.
 Result<Dataset> openNamedDataset(const DatasetRequest& request);
+
+// The window that maps a dataset's stored values to density 0 … 1 for density weights: the HU
+// window the caller has (a preset's, --hu-window) for CT, the dataset's own window (from its
+// histogram) for plain intensities unless `windowGiven`. On a dataset whose intensities are not
+// attenuation (MR) with density-based weights, says once per process on stderr that
+// density-weighted distances assume CT-like values.
+void applyDatasetWindow(const Dataset& dataset, float& windowMin, float& windowMax, bool windowGiven,
+                        bool densityWeights);
 
 // The one-line message for a structure `name` that `dataset` does not have: its structure ids (the
 // first ten, then how many more), or, for a dataset without labels, how to give it some.

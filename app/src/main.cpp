@@ -17,6 +17,7 @@ const std::vector<Command>& commands() {
       {"slice", "write a grey slice with label overlay as PNG", runSlice},
       {"wdt", "weighted distance field of a structure (CPU or CUDA), with --check against exact", runWdt},
       {"render", "render a structure in one of the paper's modes to PNG (offscreen)", runRender},
+      {"segment", "label a dataset from seed strokes (grow from seeds, threshold islands) to NIfTI or .seg.nrrd", runSegment},
       {"desktop", "open the desktop app (explore; --ui-script replays actions, --screenshot saves)", runDesktop},
       {"import", "register a dataset (volume, labels, names) in the database", runImport},
       {"courses", "list the courses", runCourses},

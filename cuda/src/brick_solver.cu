@@ -34,25 +34,15 @@
 
 #include <algorithm>
 
+#include "brick_box.cuh"
 #include "cuda_util.h"
 #include "sweep_rules.cuh"
+#include "wdt/brick_neighbours.h"
 
 namespace at::cuda {
 namespace {
 
 namespace cg = cooperative_groups;
-
-constexpr int kEdge = kBrickEdge;      // brick edge in voxels
-constexpr int kSide = kEdge + 2;       // with the halo
-constexpr int kStrideY = kSide;        // shared-memory strides of the brick with its halo; the odd
-constexpr int kStrideZ = kSide * kSide + 1;  // z stride puts the two z rows a warp reads in an x
-constexpr int kCells = kStrideZ * kSide;     // sweep on different banks
-constexpr int kThreads = kEdge * kEdge;      // one thread per plane cell
-
-static_assert(kThreads == 256 && kEdge == 16, "the sweep maps the 256 threads onto a 16 × 16 plane");
-
-__host__ __device__ constexpr int cellStride(int axis) { return axis == 0 ? 1 : axis == 1 ? kStrideY : kStrideZ; }
-__device__ __forceinline__ int cellIndex(int x, int y, int z) { return (x + 1) + kStrideY * (y + 1) + kStrideZ * (z + 1); }
 
 // Whether the sweeps read each voxel's weight as a float computed once at load time (the entering
 // rule with density weights: wdt::densityWeight, the float the per-step update would compute)
@@ -81,70 +71,34 @@ struct SolveArgs {
   int maxRounds;
 };
 
-// Bits (dx + 1) + 3·(dy + 1) + 9·(dz + 1) of the neighbour bricks whose halo holds the brick's
-// voxel (x, y, z): one per face, edge and corner the voxel lies on.
-__device__ __forceinline__ unsigned neighbourMask(int x, int y, int z) {
-  const int e[3] = {x == 0 ? -1 : (x == kEdge - 1 ? 1 : 0), y == 0 ? -1 : (y == kEdge - 1 ? 1 : 0),
-                    z == 0 ? -1 : (z == kEdge - 1 ? 1 : 0)};
-  unsigned mask = 0;
-#pragma unroll
-  for (int s = 1; s < 8; ++s) {  // non-empty subsets of the axes
-    const int dx = (s & 1) ? e[0] : 0, dy = (s & 2) ? e[1] : 0, dz = (s & 4) ? e[2] : 0;
-    if (((s & 1) && !e[0]) || ((s & 2) && !e[1]) || ((s & 4) && !e[2])) continue;
-    mask |= 1u << ((dx + 1) + 3 * (dy + 1) + 9 * (dz + 1));
-  }
-  return mask;
-}
+// Bits of the neighbour bricks whose halo holds the brick's voxel (x, y, z).
+__device__ __forceinline__ unsigned neighbourMask(int x, int y, int z) { return wdt::brickNeighbourMask(x, y, z, kEdge); }
 
 // Queues `brick` for the round whose list has parity `parity`, once.
 __device__ __forceinline__ void activate(const SolveArgs& a, int brick, int parity, int counter) {
-  if (atomicExch(a.buf.flags + std::size_t(parity) * a.brickCount + brick, 1) == 0) {
-    const int slot = atomicAdd(a.buf.counters + counter, 1);
-    a.buf.lists[std::size_t(parity) * a.brickCount + slot] = brick;
-  }
+  activateBrick(a.buf.flags, a.buf.counters, a.buf.lists, a.brickCount, brick, parity, counter);
 }
 
-// One directional sweep pair (+ then −) along brick axis A over the brick in shared memory; thread
-// t owns one plane cell (ub, uc) of the plane axes (B, C). Returns whether its voxels decreased.
-// Every thread of the block must call it (it holds the block's barriers).
+// One directional sweep pair (+ then −) along brick axis A over the brick in shared memory
+// (sweepPlanes). Returns whether the thread's voxels decreased. Every thread of the block must call
+// it (it holds the block's barriers).
 template <CostKernel K, int A>
 __device__ __forceinline__ bool sweepAxis(BrickShared<K>& sh, const int ext[3], int t, const wdt::SweepLengths& l,
                                           float base) {
   constexpr bool kQn = wdt::needsNeighbourDensity(K);
-  constexpr int BA = A == 0 ? 1 : 0, CA = A == 2 ? 1 : 2;  // plane axes: wdt::axisSweepLengths' order
-  constexpr int sa = cellStride(A), sb = cellStride(BA), sc = cellStride(CA);
-  // Which plane cell a thread owns, chosen so that a warp's 32 cells (and their neighbours at any
-  // one offset) fall on 32 different shared-memory banks: 16 b × 2 c in the x sweeps (y stride 18,
-  // odd z stride), 2 b × 16 c in the z sweeps (x, then y stride 18). The y sweeps (x and z) keep
-  // 16 × 2 and read with 2-way conflicts; no padding of the two strides avoids them on all axes.
-  const int ub = A == 2 ? 2 * (t / 32) + (t & 1) : t & (kEdge - 1);
-  const int uc = A == 2 ? (t & 31) >> 1 : t / kEdge;
-  const bool valid = ub < ext[BA] && uc < ext[CA];
-  const int lateral = (ub + 1) * sb + (uc + 1) * sc;
-  bool changed = false;
-#pragma unroll
-  for (int dir = 1; dir >= -1; dir -= 2) {
-#pragma unroll 4
-    for (int step = 0; step < kEdge; ++step) {
-      const int pa = dir > 0 ? step : kEdge - 1 - step;
-      if (valid && pa < ext[A]) {
-        const int idx = lateral + (pa + 1) * sa;
-        float n[3][3];
-        std::uint8_t qn[3][3];
-        gatherNeighbours<kQn>(sh.d, sh.q, idx - dir * sa, sb, sc, n, qn);
-        const float cur = sh.d[idx];
-        float v;
-        if constexpr (kFloatWeights<K>) v = wdt::enteringUpdate(cur, n, sh.w[idx], l);
-        else v = wdt::relaxVoxel<K>(cur, n, qn, sh.q[idx], l, base);
-        if (v < cur) {
-          sh.d[idx] = v;
-          changed = true;
-        }
-      }
-      __syncthreads();
-    }
-  }
-  return changed;
+  constexpr int sb = cellStride(A == 0 ? 1 : 0), sc = cellStride(A == 2 ? 1 : 2);
+  return sweepPlanes<A, 4>(ext, t, [&](int idx, int prev) {
+    float n[3][3];
+    std::uint8_t qn[3][3];
+    gatherNeighbours<kQn>(sh.d, sh.q, prev, sb, sc, n, qn);
+    const float cur = sh.d[idx];
+    float v;
+    if constexpr (kFloatWeights<K>) v = wdt::enteringUpdate(cur, n, sh.w[idx], l);
+    else v = wdt::relaxVoxel<K>(cur, n, qn, sh.q[idx], l, base);
+    if (!(v < cur)) return false;
+    sh.d[idx] = v;
+    return true;
+  });
 }
 
 // One halo voxel (hx, hy, hz) of the brick at origin o (coordinates relative to o, one of them
@@ -260,19 +214,8 @@ __device__ void visitBrick(const SolveArgs& a, int brick, int round, BrickShared
       }
     }
   }
-  mask = __reduce_or_sync(0xffffffffu, mask);
-  if ((t & 31) == 0 && mask) atomicOr(&sh.mask, mask);
-  __syncthreads();
-  const unsigned all = sh.mask;
   const int next = (round + 1) % 3;
-  if (t < 27 && ((all >> t) & 1u)) {
-    const int nb[3] = {b[0] + t % 3 - 1, b[1] + (t / 3) % 3 - 1, b[2] + t / 9 - 1};
-    if (nb[0] >= 0 && nb[0] < a.bricks[0] && nb[1] >= 0 && nb[1] < a.bricks[1] && nb[2] >= 0 && nb[2] < a.bricks[2]) {
-      activate(a, nb[0] + a.bricks[0] * (nb[1] + a.bricks[1] * nb[2]), 1 - p, next);
-    }
-  }
-  // Something decreased: sweep again next round (until a sweep lowers nothing).
-  if (changed && t == 0) activate(a, brick, 1 - p, next);
+  queueAfterVisit(mask, changed, t, brick, b, a.bricks, &sh.mask, [&](int n) { activate(a, n, 1 - p, next); });
   __syncthreads();  // shared memory is the next visit's
 }
 

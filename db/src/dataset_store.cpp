@@ -61,6 +61,29 @@ std::optional<std::string> nonEmpty(const std::string& s) {
   return s;
 }
 
+// The structures of dataset `id`, inside the caller's transaction.
+Status insertStructures(Database& d, std::int64_t id, const std::vector<Structure>& structures) {
+  auto add = d.prepare(
+      "INSERT INTO structures (dataset_id, label, structure_id, name, colour_r, colour_g, colour_b, system,"
+      " description) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9)");
+  if (!add) return tl::unexpected(add.error());
+  for (const Structure& st : structures) {
+    add->reset();
+    add->bind(1, id)
+        .bind(2, int(st.label))
+        .bind(3, st.id)
+        .bind(4, st.displayName)
+        .bind(5, double(st.colour[0]))
+        .bind(6, double(st.colour[1]))
+        .bind(7, double(st.colour[2]))
+        .bind(8, st.system)
+        .bind(9, st.description);
+    if (auto s = add->run(); !s)
+      return tl::unexpected(withContext("structure " + std::to_string(st.label) + " '" + st.id + "'", s.error()));
+  }
+  return {};
+}
+
 }  // namespace
 
 Result<std::int64_t> registerDataset(Database& db, const DatasetRecord& record,
@@ -122,28 +145,33 @@ Result<std::int64_t> registerDataset(Database& db, const DatasetRecord& record,
     if (!inserted) return tl::unexpected(inserted.error());
     id = *inserted;
 
-    auto add = d.prepare(
-        "INSERT INTO structures (dataset_id, label, structure_id, name, colour_r, colour_g, colour_b, system,"
-        " description) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9)");
-    if (!add) return tl::unexpected(add.error());
-    for (const Structure& st : structures) {
-      add->reset();
-      add->bind(1, id)
-          .bind(2, int(st.label))
-          .bind(3, st.id)
-          .bind(4, st.displayName)
-          .bind(5, double(st.colour[0]))
-          .bind(6, double(st.colour[1]))
-          .bind(7, double(st.colour[2]))
-          .bind(8, st.system)
-          .bind(9, st.description);
-      if (auto s = add->run(); !s)
-        return tl::unexpected(withContext("structure " + std::to_string(st.label) + " '" + st.id + "'", s.error()));
-    }
-    return {};
+    return insertStructures(d, id, structures);
   });
   if (!status) return tl::unexpected(status.error());
   return id;
+}
+
+Status saveDatasetLabels(Database& db, const std::string& name, const std::string& labelsPath,
+                         const std::string& labelsChecksum, const std::string& namesPath,
+                         const std::vector<Structure>& structures) {
+  return db.writeTransaction([&](Database& d) -> Status {
+    auto find = d.prepare("SELECT id FROM datasets WHERE name = ?1");
+    if (!find) return tl::unexpected(find.error());
+    find->bind(1, name);
+    auto row = find->step();
+    if (!row) return tl::unexpected(row.error());
+    if (!*row) return fail(ErrorKind::NotFound, "no imported dataset is named '" + name + "'");
+    const std::int64_t id = find->int64(0);
+    auto update = d.prepare("UPDATE datasets SET labels_path = ?1, labels_checksum = ?2, names_path = ?3 WHERE id = ?4");
+    if (!update) return tl::unexpected(update.error());
+    update->bind(1, nonEmpty(labelsPath)).bind(2, nonEmpty(labelsChecksum)).bind(3, nonEmpty(namesPath)).bind(4, id);
+    if (auto s = update->run(); !s) return s;
+    auto clear = d.prepare("DELETE FROM structures WHERE dataset_id = ?1");
+    if (!clear) return tl::unexpected(clear.error());
+    clear->bind(1, id);
+    if (auto s = clear->run(); !s) return s;
+    return insertStructures(d, id, structures);
+  });
 }
 
 Result<std::vector<DatasetRecord>> listDatasets(Database& db) {

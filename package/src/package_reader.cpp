@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "archive_handles.h"
+#include "core/printable_text.h"
 #include "core/sha256.h"
 #include "lessons/course_json.h"
 #include "package/course_package.h"
@@ -264,7 +265,8 @@ Result<CoursePackage> readPackageFile(const fs::path& file, const ReadOptions& o
   if (!a) return fail(ErrorKind::Io, file.string() + ": out of memory opening the package");
   if (archive_read_open_filename(a.get(), file.c_str(), std::size_t(1) << 16) != ARCHIVE_OK)
     return fail(ErrorKind::Io, file.string() + ": cannot read (" + archiveMessage(a.get()) + ")");
-  return PackageReader(file.string(), options).read(a.get());
+  // Entry names, ids and parser messages quote the package's own bytes: one printable line.
+  return withPrintableError(PackageReader(file.string(), options).read(a.get()));
 }
 
 Result<CoursePackage> readPackageBytes(std::string_view bytes, const std::string& name, const ReadOptions& options) {
@@ -272,7 +274,7 @@ Result<CoursePackage> readPackageBytes(std::string_view bytes, const std::string
   if (!a) return fail(ErrorKind::Io, name + ": out of memory opening the package");
   if (archive_read_open_memory(a.get(), bytes.data(), bytes.size()) != ARCHIVE_OK)
     return fail(name + ": not a course package (" + archiveMessage(a.get()) + ")");
-  return PackageReader(name, options).read(a.get());
+  return withPrintableError(PackageReader(name, options).read(a.get()));
 }
 
 }  // namespace at::package

@@ -120,14 +120,34 @@ TEST_CASE("ExploreState_UnknownView_IsAnErrorAndKeepsTheCamera") {
   CHECK(f.state.viewName() == "superior");
 }
 
-TEST_CASE("ExploreState_DatasetWithoutStructures_IsRefusedAndTheStateStays") {
+TEST_CASE("ExploreState_DatasetWithoutStructures_IsShownWholeWithItsDataTfFramedAroundTheGrid") {
   Fixture f;
-  Dataset empty;
-  empty.id = "empty";
-  auto refused = f.state.setDataset(empty, "", "");
-  REQUIRE_FALSE(refused);
-  CHECK(refused.error().message.find("no labelled structures") != std::string::npos);
-  CHECK(f.state.dataset().id == f.dataset.id);
+  Dataset unlabelled;
+  unlabelled.id = "unlabelled";
+  unlabelled.volume = f.dataset.volume;  // the phantom's CT without its labels
+  unlabelled.intensity = f.dataset.intensity;
+  REQUIRE(f.state.setDataset(unlabelled, "cochlea", ""));
+  CHECK(f.state.wholeVolume());
+  CHECK(f.state.dataset().id == "unlabelled");
+  CHECK(f.state.selected() == 0);
+  CHECK(f.state.bySystem().empty());
+  CHECK_FALSE(f.state.select(f.label("cochlea")));  // no structure to select
+  // WDT mode at t = 1 with the whole-volume data TF, without waiting for any field.
+  const auto shown = f.state.shown();
+  CHECK(shown.label == 0);
+  CHECK((shown.preset.mode == render::RenderMode::Wdt));
+  CHECK(shown.preset.t == doctest::Approx(1.0));
+  CHECK(shown.preset.id == std::optional<std::string>("whole_volume"));
+  CHECK_FALSE(f.state.setBare(true));  // bare mode shows a structure alone: there is none
+  // Framed around the grid's centre.
+  REQUIRE(f.state.setView("anterior", 800, 600));
+  const Vec3 centre = f.dataset.volume.geometry.centreMm();
+  for (std::size_t a = 0; a < 3; ++a) CHECK(f.state.camera().target[a] == doctest::Approx(centre[a]).epsilon(1e-6));
+  REQUIRE(f.state.frameOf(0) != nullptr);
+  CHECK(f.state.frameOf(0)->radiusMm > 0);
+  // A labelled dataset again: structures, no whole-volume mode.
+  REQUIRE(f.state.setDataset(f.dataset, "cochlea", ""));
+  CHECK_FALSE(f.state.wholeVolume());
   CHECK(f.state.selected() == f.label("cochlea"));
-  CHECK_FALSE(f.state.select(999));  // not a structure with voxels
+  CHECK(f.state.frameOf(0) == nullptr);
 }

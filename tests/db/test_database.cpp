@@ -450,6 +450,57 @@ TEST_CASE("Registering a dataset under a name already used fails and writes noth
   CHECK((*listed)[0].geometry.dims == Dims{4, 5, 6});
 }
 
+TEST_CASE("Saving edited labels replaces the files and structures of that dataset only; an unknown name writes nothing") {
+  test::TempDir dir;
+  auto db = Database::open((dir / "s.db").string());
+  REQUIRE(db);
+  Structure liver;
+  liver.label = 1;
+  liver.id = "liver";
+  liver.displayName = "Liver";
+  REQUIRE(registerDataset(*db, sampleRecord("abdomen"), {liver}));
+  auto otherId = registerDataset(*db, sampleRecord("thorax"), {liver});
+  REQUIRE(otherId);
+
+  Structure spleen = liver, kidney = liver;
+  spleen.label = 3, spleen.id = "spleen", spleen.displayName = "Spleen", spleen.colour = {0.1f, 0.2f, 0.9f};
+  kidney.label = 4, kidney.id = "kidney", kidney.displayName = "Kidney";
+  auto saved = saveDatasetLabels(*db, "abdomen", "/data/labels/abdomen.nii.gz", "sha256:ab", "/data/labels/abdomen.json",
+                                 {spleen, kidney});
+  REQUIRE_MESSAGE(saved, saved.error().message);
+  auto record = findDataset(*db, "abdomen");
+  REQUIRE(record);
+  REQUIRE(record->has_value());
+  CHECK((*record)->labelsPath == "/data/labels/abdomen.nii.gz");
+  CHECK((*record)->labelsChecksum == "sha256:ab");
+  CHECK((*record)->namesPath == "/data/labels/abdomen.json");
+  CHECK((*record)->volumePath == sampleRecord("abdomen").volumePath);  // the volume stays
+  CHECK((*record)->structureCount == 2);
+  auto structures = datasetStructures(*db, (*record)->id);
+  REQUIRE(structures);
+  REQUIRE(structures->size() == 2);
+  CHECK((*structures)[0].id == "spleen");
+  CHECK((*structures)[0].colour[2] == doctest::Approx(0.9));
+  CHECK((*structures)[1].id == "kidney");
+  auto untouched = datasetStructures(*db, *otherId);
+  REQUIRE(untouched);
+  REQUIRE(untouched->size() == 1);
+  CHECK((*untouched)[0].id == "liver");
+
+  auto unknown = saveDatasetLabels(*db, "pelvis", "/x.nii.gz", "sha256:00", "", {liver});
+  REQUIRE(!unknown);
+  CHECK((unknown.error().kind == ErrorKind::NotFound));
+  CHECK(unknown.error().message.find("'pelvis'") != std::string::npos);
+  CHECK(countRows(*db, "structures") == 3);
+  // A structure list that breaks a constraint (the same label twice) rolls the whole save back.
+  auto broken = saveDatasetLabels(*db, "abdomen", "/y.nii.gz", "sha256:cd", "", {spleen, spleen});
+  CHECK(!broken);
+  auto after = findDataset(*db, "abdomen");
+  REQUIRE(after);
+  CHECK((*after)->labelsPath == "/data/labels/abdomen.nii.gz");
+  CHECK((*after)->structureCount == 2);
+}
+
 TEST_CASE("openExistingDatabase on a database that does not exist gives none and creates nothing") {
   test::TempDir dir;
   const fs::path path = dir / "missing" / "x.db";

@@ -204,6 +204,16 @@ TEST_CASE("CoursePackage_AlteredPackages_AreRefusedWithOneLineNamingTheEntry") {
                             [&](auto& e) { e.insert(e.begin() + 1, test::TarEntry{name, "{}"}); }),
                     {"escape.atcourse", "is refused"});
     }
+    // Control characters in a name (found by fuzz_package): refused, and quoted as one printable line.
+    for (const char* name : {"course.js\r", "presets/x\ny.json", "\x1b[31mred.json"}) {
+      CAPTURE(name);
+      const fs::path bad = altered(dir, file, "control.atcourse",
+                                   [&](auto& e) { e.insert(e.begin() + 1, test::TarEntry{name, "{}"}); });
+      expectRefused(bad, {"control.atcourse", "is refused"});
+      auto read = readPackageFile(bad);
+      REQUIRE_FALSE(read);
+      for (char c : read.error().message) CHECK((static_cast<unsigned char>(c) >= 0x20 && c != 0x7f));
+    }
     // … also when the manifest lists such a name.
     expectRefused(altered(dir, file, "listed.atcourse",
                           [](auto& e) {

@@ -156,3 +156,31 @@ TEST_CASE("AnswerKeyDistanceAt_EqualsTheUpsampledFieldAtTheNearestLabelVoxel") {
   }
   CHECK(inside > 100);
 }
+
+TEST_CASE("FieldService_WaitFor_ReturnsTheFieldOnceCached_AndNeverWaitsPastItsLimitOrForNothing") {
+  const Dataset& ds = test::phantomOfSize(96);
+  FieldService service(ds.volume, ds.labels, 4);
+  using std::chrono::milliseconds;
+  using Clock = std::chrono::steady_clock;
+  // Nothing asked: returns at once, empty, even with a long limit.
+  const FieldRequest never = requestFor(ds, "malleus", 4);
+  auto t0 = Clock::now();
+  CHECK_FALSE(service.waitFor(never, milliseconds(20000)).ready());
+  CHECK(Clock::now() - t0 < milliseconds(2000));
+  // A long computation: the wait ends at its limit, not ready.
+  FieldRequest slow = requestFor(ds, "cochlea", 1);
+  slow.params.converge = true;
+  service.request(slow);
+  t0 = Clock::now();
+  const auto early = service.waitFor(slow, milliseconds(1));
+  const auto waited = Clock::now() - t0;
+  if (!early.ready()) CHECK(waited < milliseconds(2000));
+  // Asked and waited for long enough: the field, equal to what `cached` then holds.
+  const auto done = service.waitFor(slow, milliseconds(120000));
+  REQUIRE(done.ready());
+  CHECK(done.host == service.cached(slow).host);
+  // A cached field: returned at once.
+  t0 = Clock::now();
+  CHECK(service.waitFor(slow, milliseconds(20000)).ready());
+  CHECK(Clock::now() - t0 < milliseconds(2000));
+}

@@ -46,6 +46,7 @@ FieldService::~FieldService() {
     cancelRunning_ = true;
   }
   wake_.notify_all();
+  changed_.notify_all();
   thread_.join();
 }
 
@@ -82,6 +83,24 @@ FieldService::Cached FieldService::cached(const FieldRequest& request) {
   return {};
 }
 
+FieldService::Cached FieldService::waitFor(const FieldRequest& request, std::chrono::milliseconds limit) {
+  const std::string key = request.key();
+  std::unique_lock lock(mutex_);
+  const auto cachedReady = [&] {
+    for (const auto& entry : lru_)
+      if (entry.key == key) return entry.field || entry.deviceField;
+    return false;
+  };
+  const auto pending = [&] { return (queued_ && queued_->key() == key) || (runningKey_ && *runningKey_ == key); };
+  changed_.wait_for(lock, limit, [&] { return stop_ || cachedReady() || !pending(); });
+  for (auto it = lru_.begin(); it != lru_.end(); ++it)
+    if (it->key == key) {
+      lru_.splice(lru_.begin(), lru_, it);
+      return {lru_.front().field, lru_.front().deviceField};
+    }
+  return {};
+}
+
 std::vector<FinishedField> FieldService::takeFinished() {
   std::lock_guard lock(mutex_);
   return std::exchange(finished_, {});
@@ -107,11 +126,13 @@ std::optional<FieldService::Running> FieldService::running() const {
 void FieldService::insert(Entry entry) {
   lru_.push_front(std::move(entry));
   while (lru_.size() > capacity_) lru_.pop_back();
+  changed_.notify_all();
 }
 
 void FieldService::finishRunning() {
   runningKey_.reset();
   runningRequest_.reset();
+  changed_.notify_all();
 }
 
 void FieldService::run() {

@@ -11,6 +11,8 @@
 #include "db/dataset_store.h"
 #include "volume/known_scans.h"
 #include "render/structure_pick.h"
+#include "render/volume_preset.h"
+#include "segment_controller.h"
 
 namespace at::app {
 
@@ -39,6 +41,7 @@ DesktopModel::DesktopModel(LearningSession& session, const render::PresetLibrary
   study_ = std::make_unique<StudyController>(session_.database(), library_, sink,
                                              [this]() -> Result<render::IntensityLevels> { return explore_.levels(); });
   imports_ = std::make_unique<ImportController>(session_.database(), sink, [this](const std::string& m) { message(m); });
+  segment_ = std::make_unique<SegmentController>(session_.database(), sink);
   courses_ = std::make_unique<CourseEditor>(session_, library_, sink,
                                             [this](const std::string& structure, const std::string& presetId,
                                                    const std::optional<render::Preset>& captured, lessons::CameraView view) {
@@ -105,6 +108,8 @@ Status DesktopModel::showDataset(Dataset dataset, const std::string& startStruct
       *dataset_, explore_, sink, [this](const std::string& m) { message(m); },
       [this](const std::string& clicked, double distanceMm) { clickGraded(clicked, distanceMm); });
   expert_ = std::make_unique<TfEditor>(*dataset_, session_.database(), sink);
+  segment_->attach(*dataset_);
+  slices_.attach(*dataset_);
   recorder_.highlightNotWanted();
   lastPickMm_.reset();
   lessons_->setViewDataset(dataset_->id);
@@ -194,6 +199,10 @@ void DesktopModel::hoverAt(double x, double y) {
 void DesktopModel::clickAt(double x, double y) {
   if (study_->participantActive()) return;
   hoverAt(x, y);
+  if (lastPickMm_ && !namesHidden() && slices_.moveToPoint(*lastPickMm_)) {
+    const auto& v = slices_.crosshair();
+    event({{"event", "crosshair"}, {"voxel", {v[0], v[1], v[2]}}});
+  }
   if (exams_->wantsClick() || lessons_->wantsClick()) {
     answerLocate(dataset_->findStructureByLabel(explore_.hovered()), lastPickMm_);
     return;
@@ -337,10 +346,14 @@ void DesktopModel::beginFrame(FieldTarget* target) {
   study_->stepExport();
   imports_->poll();
   for (const std::string& line : classEvents_->takeLines()) message(line);
+  segment_->poll();
   if (!study_->participantActive())  // the participant's trial keeps its dataset
     if (auto imported = imports_->takeDatasetToOpen()) {
       const std::string id = imported->id;
-      if (auto st = showDataset(std::move(*imported), "", ""); !st) message("opening '" + id + "': " + st.error().message);
+      if (auto st = showDataset(std::move(*imported), "", ""); !st) {
+        message("opening '" + id + "': " + st.error().message);
+        imports_->openFailed("Opening '" + id + "' in the explore view failed: " + st.error().message);
+      }
     }
   expertEdited();
   fields_->update(target, recorder_);
@@ -367,6 +380,8 @@ render::RenderSettings DesktopModel::renderSettings(const RenderPlan& plan) cons
   s.jitter = plan.jitter;
   s.background = {0.04f, 0.04f, 0.05f, 1.0f};
   s.clip = explore_.clipPlane();
+  // The whole volume's data TF states its opacities per this length of ray (volume_preset.h).
+  if (explore_.wholeVolume()) s.opacityRefMm = render::kWholeVolumeRefMm;
   return s;
 }
 

@@ -1,6 +1,6 @@
 // The desktop app's logic, with no SDL, GL or ImGui in it: the dataset on screen, the explore
 // state, its distance fields, the frame scheduler and recorder, and the controllers of the lesson,
-// study, import and expert panels — and the commands that the widgets and the UI script both use
+// study, import, expert and segment panels — and the commands that the widgets and the UI script both use
 // (hover, click, select, views, expert on/off, …). The window shell (ui/) feeds it input and a
 // layout, renders what it plans, and draws the panels from its state; tests drive it without any
 // window (no FieldTarget, no view: picking and fields still run on the CPU).
@@ -29,6 +29,7 @@
 #include "render/gradient_volume.h"
 #include "render/render_settings.h"
 #include "render/structure_pick.h"
+#include "slice_views.h"
 #include "study_controller.h"
 #include "tf_editor.h"
 #include "volume/png_image.h"
@@ -56,6 +57,8 @@ struct DesktopOptions {
   double frameBudgetMs = 100;       // at rest, finer levels predicted to cost more are not rendered
   bool scripted = false;            // a UI script drives the app: events are printed, screenshots at full quality
 };
+
+class SegmentController;
 
 class DesktopModel {
  public:
@@ -94,7 +97,10 @@ class DesktopModel {
   StudyController& study() { return *study_; }
   ImportController& imports() { return *imports_; }
   TfEditor& expert() { return *expert_; }
+  SegmentController& segmenter() { return *segment_; }
   CourseEditor& courseEditor() { return *courses_; }
+  // The three slice panes; a click in the 3-D view that meets the volume moves their crosshair.
+  SliceViews& slices() { return slices_; }
   const DesktopOptions& options() const { return options_; }
 
   // The window's layout (each frame); a new size re-renders the view.
@@ -214,8 +220,10 @@ class DesktopModel {
   std::uint64_t sliceRevision_ = 0;
   std::unique_ptr<StudyController> study_;
   std::unique_ptr<ImportController> imports_;
+  std::unique_ptr<SegmentController> segment_;
   std::unique_ptr<CourseEditor> courses_;
   std::unique_ptr<BackgroundOutboxSender> classEvents_;  // the user's answers to their class server
+  SliceViews slices_;
   ViewLayout layout_;
   bool viewAvailable_ = false;
   std::optional<Vec3> lastPickMm_;  // where the last hover pick met the volume (LPS mm)

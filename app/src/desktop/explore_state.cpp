@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "course_views.h"
+#include "render/volume_preset.h"
 
 namespace at::app {
 
@@ -11,17 +12,28 @@ ExploreState::ExploreState(const render::PresetLibrary& library, MessageSink mes
     : library_(library), messages_(std::move(messages)) {}
 
 Status ExploreState::setDataset(const Dataset& dataset, const std::string& startStructure, const std::string& startPreset) {
-  if (dataset.structures.empty()) return fail("dataset '" + dataset.id + "' has no labelled structures");
   std::map<std::uint16_t, render::StructureFrame> frames;
   for (const Structure& s : dataset.structures)
     if (auto frame = render::structureFrame(dataset.labels, s.label)) frames[s.label] = *frame;
-  if (frames.empty()) return fail("dataset '" + dataset.id + "': no structure has any voxel");
   dataset_ = &dataset;
   levels_ = render::summariseIntensities(dataset.volume);
   frames_ = std::move(frames);
+  wholeVolume_ = frames_.empty();
+  volumeFrame_ = render::volumeFrame(dataset.volume.geometry);
   bySystem_.clear();
   presets_.clear();
   override_.reset();
+  hovered_ = 0;
+  selected_ = 0;
+  fieldLabel_ = 0;
+  fieldKey_.clear();
+  clip_.offsetMm = 0;
+  if (wholeVolume_) {  // the data TF alone: WDT mode at t = 1 over a neutral field
+    bare_ = false;
+    t_ = 1.0f;
+    changed();
+    return {};
+  }
   for (const Structure& s : dataset.structures) {
     if (!frames_.count(s.label)) continue;  // a named label with no voxels: not shown in the browser
     const std::string system = s.system.empty() ? std::string("other") : s.system;
@@ -31,11 +43,7 @@ Status ExploreState::setDataset(const Dataset& dataset, const std::string& start
   }
   const Structure* start = startStructure.empty() ? nullptr : dataset.findStructure(startStructure);
   if (!start || !frames_.count(start->label)) start = dataset.findStructureByLabel(frames_.begin()->first);
-  hovered_ = 0;
   selected_ = start->label;
-  fieldLabel_ = 0;
-  fieldKey_.clear();
-  clip_.offsetMm = 0;
   if (auto preset = presetForStep(library_, start->id, startPreset, levels_)) usePreset(start->label, *preset, preset->t);
   else messages_(preset.error().message);
   changed();
@@ -43,6 +51,7 @@ Status ExploreState::setDataset(const Dataset& dataset, const std::string& start
 }
 
 const render::StructureFrame* ExploreState::frameOf(std::uint16_t label) const {
+  if (wholeVolume_) return label == 0 ? &volumeFrame_ : nullptr;
   auto it = frames_.find(label);
   return it == frames_.end() ? nullptr : &it->second;
 }
@@ -50,6 +59,8 @@ const render::StructureFrame* ExploreState::frameOf(std::uint16_t label) const {
 const render::Preset& ExploreState::presetOf(std::uint16_t label, bool bare) const {
   const auto key = std::make_pair(label, bare);
   if (auto it = presets_.find(key); it != presets_.end()) return it->second;
+  if (wholeVolume_)
+    return presets_.emplace(key, render::wholeVolumePreset(dataset_->intensity, dataset_->volume.geometry)).first->second;
   render::Preset preset;
   const Structure* s = dataset_ ? dataset_->findStructureByLabel(label) : nullptr;
   const render::RenderMode mode = bare ? render::RenderMode::Bare : render::RenderMode::Wdt;
@@ -71,7 +82,7 @@ std::uint16_t ExploreState::displayLabel() const {
 ExploreState::Shown ExploreState::shown() const {
   Shown s;
   s.label = displayLabel();
-  const bool noField = bare_ || fieldLabel_ == 0;
+  const bool noField = !wholeVolume_ && (bare_ || fieldLabel_ == 0);  // whole volume: its neutral field
   if (override_) {
     s.preset = *override_;
   } else {
@@ -118,7 +129,7 @@ bool ExploreState::setHovered(std::uint16_t label) {
 }
 
 bool ExploreState::setBare(bool bare) {
-  if (bare == bare_) return false;
+  if (bare == bare_ || (bare && wholeVolume_)) return false;  // bare shows a structure alone
   bare_ = bare;
   changed();
   return true;
@@ -138,7 +149,7 @@ Status ExploreState::setView(const std::string& name, int width, int height) {
   if (!frame) return {};
   render::ViewRequest request;
   request.view = name;
-  request.margin = 2.5;
+  request.margin = wholeVolume_ ? 1.6 : 2.5;  // the whole grid as the render command frames it
   request.width = std::max(1, width);
   request.height = std::max(1, height);
   auto settings = render::settingsFor(presetOf(label, bare_), *frame, request);

@@ -43,12 +43,17 @@ class ExploreState {
   ExploreState(const render::PresetLibrary& library, MessageSink messages);
 
   // Shows `dataset` (kept by the caller, alive while shown), starting on `startStructure` (or its
-  // first structure with voxels) with the step preset `startPreset` ("" = its WDT preset). Errors:
-  // no labelled structure, or none with voxels; the state is unchanged then.
+  // first structure with voxels) with the step preset `startPreset` ("" = its WDT preset). A
+  // dataset with no structure that has voxels (an unlabelled scan) is shown whole: see wholeVolume().
   Status setDataset(const Dataset& dataset, const std::string& startStructure, const std::string& startPreset);
   const Dataset& dataset() const { return *dataset_; }
   bool hasStructure(std::uint16_t label) const { return frames_.count(label) > 0; }
+  // The frame of a structure with voxels; in whole-volume mode label 0's is the grid's.
   const render::StructureFrame* frameOf(std::uint16_t label) const;
+  // The dataset has no structure with voxels: the whole volume is drawn with a data TF derived
+  // from its intensities (render/volume_preset.h: WDT mode at t = 1 over a neutral field, so no
+  // distance field is ever computed), framed around the grid; nothing is selected or hovered.
+  bool wholeVolume() const { return wholeVolume_; }
   // Structures with voxels by system, in the dataset's order (the browser's tree).
   const std::vector<std::pair<std::string, std::vector<const Structure*>>>& bySystem() const { return bySystem_; }
 
@@ -124,6 +129,8 @@ class ExploreState {
   render::IntensityLevels levels_;  // of dataset_'s volume
   std::vector<std::pair<std::string, std::vector<const Structure*>>> bySystem_;
   std::map<std::uint16_t, render::StructureFrame> frames_;
+  bool wholeVolume_ = false;
+  render::StructureFrame volumeFrame_;  // the grid's (whole-volume mode)
   mutable std::map<std::pair<std::uint16_t, bool>, render::Preset> presets_;
   std::optional<render::Preset> override_;
   std::uint64_t overrideRevision_ = 0;

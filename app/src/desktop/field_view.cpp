@@ -109,18 +109,24 @@ void FieldView::update(FieldTarget* target, FrameRecorder& recorder) {
   auto coarse = request(label, coarseDownsample());
   if (!fine || !coarse) return;
   // A field is ready when its host copy or (computed on the GPU) its device copy exists.
-  const FieldService::Cached fineCached = service_->cached(*fine);
-  const bool fineReady = fineCached.ready();
-  const FieldService::Cached coarseCached = fineReady ? FieldService::Cached{} : service_->cached(*coarse);
+  FieldService::Cached fineCached = service_->cached(*fine);
+  bool fineReady = fineCached.ready();
+  FieldService::Cached coarseCached = fineReady ? FieldService::Cached{} : service_->cached(*coarse);
   const bool coarseReady = coarseCached.ready();
   const bool resting = msBetween(hoverSince_, Clock::now()) > kRefineFieldAfterMs;
   if (!fineReady && !clickWaiting) {
-    if (fine->key() == declinedKey_ && (coarseReady || coarseDownsample() == 1))
-      ;  // the user cancelled this full-resolution field: keep the coarse one
-    else if (gpuFields_ || coarseDownsample() == 1 || (coarseReady && resting))
+    if (fine->key() == declinedKey_ && (coarseReady || coarseDownsample() == 1)) {
+      // the user cancelled this full-resolution field: keep the coarse one
+    } else if (gpuFields_ || coarseDownsample() == 1 || (coarseReady && resting)) {
       service_->request(*fine);
-    else if (!coarseReady)
+      if (gpuFields_) {  // a few ms on the GPU: shown in this frame rather than the next
+        fineCached = service_->waitFor(*fine, std::chrono::milliseconds(kGpuFieldWaitMs));
+        fineReady = fineCached.ready();
+        if (fineReady) coarseCached = {};
+      }
+    } else if (!coarseReady) {
       service_->request(*coarse);
+    }
   }
   const FieldService::Cached& chosen = fineReady ? fineCached : coarseCached;
   const void* source = chosen.device ? static_cast<const void*>(chosen.device.get()) : static_cast<const void*>(chosen.host.get());
@@ -148,7 +154,7 @@ void FieldView::update(FieldTarget* target, FrameRecorder& recorder) {
 }
 
 bool FieldView::settled() const {
-  if (state_.bare()) return true;
+  if (state_.bare() || state_.wholeVolume()) return true;  // no field is needed
   const std::uint16_t label = state_.shownLabel();
   auto fine = request(label, 1);
   if (fine && fine->key() == declinedKey_) {  // the user cancelled it: the coarse field is final

@@ -6,8 +6,10 @@
 // full-resolution field once the mouse has rested kRefineFieldAfterMs on a structure (at once with
 // a GPU, or when the coarse grid is the full one). A full-resolution field the user cancelled is not
 // asked for again until the hover moves or "Compute it" is pressed. A field computed on the GPU is
-// shown from the device before its host copy (for picking) arrives. The frame never waits: until
-// the wanted field is complete on screen, the previous one stays.
+// shown from the device before its host copy (for picking) arrives. Until the wanted field is
+// complete on screen, the previous one stays; the frame waits for a field only with GPU fields,
+// and at most kGpuFieldWaitMs, so that a hover's highlight shows in the frame of the hover
+// rather than the next.
 #pragma once
 
 #include <cstdint>
@@ -26,6 +28,7 @@
 namespace at::app {
 
 inline constexpr double kRefineFieldAfterMs = 400;  // mouse resting this long on a structure → full-res field
+inline constexpr int kGpuFieldWaitMs = 6;           // a GPU field at 256³ takes 3–4 ms (H100, bench/RESULTS.md)
 
 // Where fields are shown. show() is called each frame with the wanted field until it returns true
 // (complete); a target may take several frames (a host field goes up a few slices per frame).

@@ -148,6 +148,12 @@ std::optional<Dataset> ImportController::takeDatasetToOpen() {
   return out;
 }
 
+void ImportController::openFailed(const std::string& why) {
+  failed_ = true;
+  status_ = why;
+  events_({{"event", "import_open_failed"}, {"message", why}});
+}
+
 void ImportController::poll() {
   if (!job_ || reported_) return;
   std::unique_lock lock(job_->mutex);

@@ -64,6 +64,9 @@ class ImportController {
   void requestOpen() { openRequested_ = imported_.has_value(); }
   bool openRequested() const { return openRequested_; }
   std::optional<Dataset> takeDatasetToOpen();
+  // The dataset handed over could not be shown: the Import window says why (in red) and the
+  // explore view keeps what it showed [event import_open_failed].
+  void openFailed(const std::string& why);
 
  private:
   struct Job;

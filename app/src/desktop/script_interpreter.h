@@ -14,6 +14,9 @@
 //   studies:  study_start, study_toggle, study_rate, study_comment, study_next, study_close,
 //             coordinator_open, coordinator_export, coordinator_summary
 //   import:   import, cancel_import, open_imported
+//   segment:  segment_open, segment_label, segment_slice, segment_seed, segment_grow, segment_undo,
+//             segment_clear_seeds, segment_save, segment_threshold, segment_margin, segment_hollow
+//   slices:   slices_open
 //   courses:  course_new, course_open, course_lesson, course_show, course_question, course_step,
 //             course_save, course_export, course_open_package, open_dataset
 // An action that waits (a lesson being prepared, an import, an export, a locate answer's distance
@@ -131,6 +134,19 @@ class ScriptInterpreter {
   Outcome importDataset(Context&);
   Outcome cancelImport(Context&);
   Outcome openImported(Context&);
+  // The segment editor (script_actions_segment.cpp)
+  Outcome segmentOpen(Context&);
+  Outcome segmentLabel(Context&);
+  Outcome segmentSlice(Context&);
+  Outcome segmentSeed(Context&);
+  Outcome segmentGrow(Context&);
+  Outcome segmentUndo(Context&);
+  Outcome segmentClearSeeds(Context&);
+  Outcome segmentSave(Context&);
+  Outcome segmentThreshold(Context&);
+  Outcome segmentMargin(Context&);
+  Outcome segmentHollow(Context&);
+  Outcome slicesOpen(Context&);
   // The course editor (script_actions_course.cpp)
   Outcome courseNew(Context&);
   Outcome courseOpen(Context&);

@@ -40,6 +40,14 @@ struct DatasetRecord {
 Result<std::int64_t> registerDataset(Database& db, const DatasetRecord& record,
                                      const std::vector<Structure>& structures, bool replace = false);
 
+// Replaces an imported dataset's labels after editing: the label map file and names file the
+// caller wrote (absolute paths; the checksum of the label file) and its structures, in one
+// transaction; the volume and the geometry stay. NotFound when no dataset has that name (nothing
+// is written then).
+Status saveDatasetLabels(Database& db, const std::string& name, const std::string& labelsPath,
+                         const std::string& labelsChecksum, const std::string& namesPath,
+                         const std::vector<Structure>& structures);
+
 // All imported datasets, ordered by name.
 Result<std::vector<DatasetRecord>> listDatasets(Database& db);
 

@@ -61,6 +61,8 @@ BlockSummary summariseBlocks(const Volume& volume, const LabelMap& labels, const
         if (at == set.end() || *at != l) set.insert(at, l);
       }
     }
+  for (std::size_t bi = 0; bi < n; ++bi)
+    for (std::uint16_t l : b.labels[bi]) b.blocksOfLabel[l].push_back(std::uint32_t(bi));
   b.huMin = neighbourhood<std::int16_t>(b.blocks, ownMin, std::numeric_limits<std::int16_t>::max(),
                                         [](std::int16_t a, std::int16_t c) { return std::min(a, c); });
   b.huMax = neighbourhood<std::int16_t>(b.blocks, ownMax, std::numeric_limits<std::int16_t>::min(),
@@ -219,30 +221,45 @@ std::vector<std::uint8_t> computeOccupancy(const OccupancyInputs& in) {
   return occ;
 }
 
-void addLeapDistances(const Dims& nb, std::vector<std::uint8_t>& occ) {
-  // Chebyshev distance to the nearest occupied block, by separable passes: the distance along x,
-  // then the max-norm combination along y and z (min over offsets of max(|offset|, d)).
+namespace {
+
+// Blocks [lo, hi) of the block grid, per axis.
+struct BlockBox {
+  int lo[3], hi[3];
+  int size(int a) const { return hi[a] - lo[a]; }
+  std::size_t count() const { return std::size_t(size(0)) * std::size_t(size(1)) * std::size_t(size(2)); }
+  std::size_t local(int i, int j, int k) const {
+    return (std::size_t(k - lo[2]) * std::size_t(size(1)) + std::size_t(j - lo[1])) * std::size_t(size(0)) +
+           std::size_t(i - lo[0]);
+  }
+};
+
+// Chebyshev distance in blocks, capped at kMaxLeapBlocks, from every block of `box` to the nearest
+// block of `box` that `occupied(global index)` holds; box-local order. Separable: the distance along
+// x, then the max-norm combination along y and z (min over offsets o of max(|o|, d)).
+template <class Occupied>
+std::vector<int> cappedChebyshev(const Dims& nb, const BlockBox& box, Occupied occupied) {
   constexpr int kFar = kMaxLeapBlocks;
-  std::vector<int> d(occ.size());
-  for (int k = 0; k < nb.z; ++k)
-    for (int j = 0; j < nb.y; ++j) {
+  std::vector<int> d(box.count());
+  for (int k = box.lo[2]; k < box.hi[2]; ++k)
+    for (int j = box.lo[1]; j < box.hi[1]; ++j) {
       int last = -1000000;
-      for (int i = 0; i < nb.x; ++i) {
-        if (occ[nb.index(i, j, k)] & 3) last = i;
-        d[nb.index(i, j, k)] = std::min(kFar, i - last);
+      for (int i = box.lo[0]; i < box.hi[0]; ++i) {
+        if (occupied(nb.index(i, j, k))) last = i;
+        d[box.local(i, j, k)] = std::min(kFar, i - last);
       }
       last = 1000000;
-      for (int i = nb.x - 1; i >= 0; --i) {
-        if (occ[nb.index(i, j, k)] & 3) last = i;
-        d[nb.index(i, j, k)] = std::min(d[nb.index(i, j, k)], std::min(kFar, last - i));
+      for (int i = box.hi[0] - 1; i >= box.lo[0]; --i) {
+        if (occupied(nb.index(i, j, k))) last = i;
+        d[box.local(i, j, k)] = std::min(d[box.local(i, j, k)], std::min(kFar, last - i));
       }
     }
-  // One line of the max-norm combination: out[t] = min over offsets o of max(|o|, line[t + o]).
   std::vector<int> line, out;
-  const auto combine = [&](int n, auto indexOf) {
+  const auto combine = [&](int lo, int hi, auto indexOf) {
+    const int n = hi - lo;
     line.resize(std::size_t(n));
     out.resize(std::size_t(n));
-    for (int t = 0; t < n; ++t) line[std::size_t(t)] = d[indexOf(t)];
+    for (int t = 0; t < n; ++t) line[std::size_t(t)] = d[indexOf(lo + t)];
     for (int t = 0; t < n; ++t) {
       int best = line[std::size_t(t)];
       for (int o = 1; o < best; ++o) {
@@ -251,14 +268,65 @@ void addLeapDistances(const Dims& nb, std::vector<std::uint8_t>& occ) {
       }
       out[std::size_t(t)] = best;
     }
-    for (int t = 0; t < n; ++t) d[indexOf(t)] = out[std::size_t(t)];
+    for (int t = 0; t < n; ++t) d[indexOf(lo + t)] = out[std::size_t(t)];
   };
-  for (int k = 0; k < nb.z; ++k)
-    for (int i = 0; i < nb.x; ++i) combine(nb.y, [&](int j) { return nb.index(i, j, k); });
-  for (int j = 0; j < nb.y; ++j)
-    for (int i = 0; i < nb.x; ++i) combine(nb.z, [&](int k) { return nb.index(i, j, k); });
+  for (int k = box.lo[2]; k < box.hi[2]; ++k)
+    for (int i = box.lo[0]; i < box.hi[0]; ++i) combine(box.lo[1], box.hi[1], [&](int j) { return box.local(i, j, k); });
+  for (int j = box.lo[1]; j < box.hi[1]; ++j)
+    for (int i = box.lo[0]; i < box.hi[0]; ++i) combine(box.lo[2], box.hi[2], [&](int k) { return box.local(i, j, k); });
+  return d;
+}
+
+}  // namespace
+
+void addLeapDistances(const Dims& nb, std::vector<std::uint8_t>& occ) {
+  const BlockBox all{{0, 0, 0}, {nb.x, nb.y, nb.z}};
+  const std::vector<int> d = cappedChebyshev(nb, all, [&](std::size_t b) { return (occ[b] & 3) != 0; });
   for (std::size_t b = 0; b < occ.size(); ++b)
-    if (!(occ[b] & 3)) occ[b] = std::uint8_t(std::clamp(d[b], 1, kFar) << 2);
+    if (!(occ[b] & 3)) occ[b] = std::uint8_t(std::clamp(d[b], 1, kMaxLeapBlocks) << 2);
+}
+
+std::vector<std::uint8_t> withStructure(const BlockSummary& b, std::vector<std::uint8_t> occ, std::uint16_t selected) {
+  const auto found = selected != 0 ? b.blocksOfLabel.find(selected) : b.blocksOfLabel.end();
+  if (found == b.blocksOfLabel.end() || found->second.empty()) return occ;
+  const Dims& nb = b.blocks;
+  // The structure bit: the label's blocks and their 26 neighbours (as computeOccupancy).
+  BlockBox near{{nb.x, nb.y, nb.z}, {0, 0, 0}};
+  for (std::uint32_t own : found->second) {
+    const int i = int(own % std::uint32_t(nb.x)), j = int(own / std::uint32_t(nb.x) % std::uint32_t(nb.y)),
+              k = int(own / (std::uint32_t(nb.x) * std::uint32_t(nb.y)));
+    for (int dk = std::max(k - 1, 0); dk <= std::min(k + 1, nb.z - 1); ++dk)
+      for (int dj = std::max(j - 1, 0); dj <= std::min(j + 1, nb.y - 1); ++dj)
+        for (int di = std::max(i - 1, 0); di <= std::min(i + 1, nb.x - 1); ++di) {
+          const std::size_t bi = nb.index(di, dj, dk);
+          if (occ[bi] & kOccupiedStructure) continue;
+          // An empty block's leap bits go: it is occupied now.
+          occ[bi] = std::uint8_t((occ[bi] & kOccupiedContext) | kOccupiedStructure);
+          const int c[3] = {di, dj, dk};
+          for (int a = 0; a < 3; ++a) {
+            near.lo[a] = std::min(near.lo[a], c[a]);
+            near.hi[a] = std::max(near.hi[a], c[a] + 1);
+          }
+        }
+  }
+  // Leaps can only shorten within kMaxLeapBlocks of the structure's blocks.
+  const int limits[3] = {nb.x, nb.y, nb.z};
+  BlockBox reach = near;
+  for (int a = 0; a < 3; ++a) {
+    reach.lo[a] = std::max(0, near.lo[a] - kMaxLeapBlocks);
+    reach.hi[a] = std::min(limits[a], near.hi[a] + kMaxLeapBlocks);
+  }
+  const std::vector<int> d =
+      cappedChebyshev(nb, reach, [&](std::size_t bi) { return (occ[bi] & kOccupiedStructure) != 0; });
+  for (int k = reach.lo[2]; k < reach.hi[2]; ++k)
+    for (int j = reach.lo[1]; j < reach.hi[1]; ++j)
+      for (int i = reach.lo[0]; i < reach.hi[0]; ++i) {
+        std::uint8_t& v = occ[nb.index(i, j, k)];
+        if (v & 3) continue;
+        const int leap = std::min(int(v >> 2), d[reach.local(i, j, k)]);
+        v = std::uint8_t(std::clamp(leap, 1, kMaxLeapBlocks) << 2);
+      }
+  return occ;
 }
 
 }  // namespace at::render::gl

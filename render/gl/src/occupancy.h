@@ -7,6 +7,7 @@
 #pragma once
 
 #include <cstdint>
+#include <unordered_map>
 #include <vector>
 
 #include "render/gradient_volume.h"
@@ -31,6 +32,9 @@ struct BlockSummary {
   std::vector<std::int16_t> huMin, huMax;
   std::vector<float> strengthMax;                  // HU per voxel
   std::vector<std::vector<std::uint16_t>> labels;  // sorted
+  // The inverse of `labels`: per label, the blocks holding it (ascending indices), so that a
+  // selection change touches only the selected structure's blocks.
+  std::unordered_map<std::uint16_t, std::vector<std::uint32_t>> blocksOfLabel;
 
   std::size_t index(int i, int j, int k) const { return blocks.index(i, j, k); }
 };
@@ -90,5 +94,13 @@ std::vector<std::uint8_t> computeOccupancy(const OccupancyInputs& in);
 
 // Writes the leap distances into the empty blocks of an occupancy grid (see kMaxLeapBlocks).
 void addLeapDistances(const Dims& blocks, std::vector<std::uint8_t>& occupancy);
+
+// The grid for `selected` from the grid of the same inputs with no structure (selected = 0, leap
+// distances added): sets the structure bit around the label's blocks and lowers the leap
+// distances within kMaxLeapBlocks of them. Equal to computeOccupancy + addLeapDistances with
+// `selected`, at a cost that grows with the structure's size, not the volume's (a hover changes
+// only the selection).
+std::vector<std::uint8_t> withStructure(const BlockSummary& blocks, std::vector<std::uint8_t> contextWithLeaps,
+                                        std::uint16_t selected);
 
 }  // namespace at::render::gl

@@ -82,6 +82,9 @@ struct VolumeRenderer::State {
   std::uint64_t tableGeneration = 0;       // bumped when tableVisibility changes
   BlockSummary blocks;
   std::optional<OccupancyKey> occupancyKey;
+  // The grid of occupancyKey's inputs with no structure (leaps added): a selection change (a
+  // hover) only adds the structure to it (withStructure) instead of recomputing the whole grid.
+  std::vector<std::uint8_t> contextOccupancy;
   // Bumped when the volume, the field or the selection changes (a progressive image of an older
   // scene starts over); fieldGeneration only when the field does (the occupancy's distances).
   std::uint64_t sceneGeneration = 0, fieldGeneration = 0;

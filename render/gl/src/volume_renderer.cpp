@@ -150,18 +150,16 @@ Result<GLuint> rayCasterProgram(VolumeRenderer::State& st, RayCaster kind, RayVa
 // blocks holding it (the smoothed mask reaches one voxel out); empty when no block holds it.
 std::array<int, 6> labelBox(const BlockSummary& b, const Dims& dims, std::uint16_t label) {
   int lo[3] = {b.blocks.x, b.blocks.y, b.blocks.z}, hi[3] = {-1, -1, -1};
-  if (label != 0)
-    for (int k = 0; k < b.blocks.z; ++k)
-      for (int j = 0; j < b.blocks.y; ++j)
-        for (int i = 0; i < b.blocks.x; ++i) {
-          const auto& set = b.labels[b.index(i, j, k)];
-          if (!std::binary_search(set.begin(), set.end(), label)) continue;
-          const int c[3] = {i, j, k};
-          for (int a = 0; a < 3; ++a) {
-            lo[a] = std::min(lo[a], c[a]);
-            hi[a] = std::max(hi[a], c[a]);
-          }
-        }
+  const auto found = label != 0 ? b.blocksOfLabel.find(label) : b.blocksOfLabel.end();
+  if (found != b.blocksOfLabel.end())
+    for (std::uint32_t block : found->second) {
+      const std::uint32_t nx = std::uint32_t(b.blocks.x), ny = std::uint32_t(b.blocks.y);
+      const int c[3] = {int(block % nx), int(block / nx % ny), int(block / (nx * ny))};
+      for (int a = 0; a < 3; ++a) {
+        lo[a] = std::min(lo[a], c[a]);
+        hi[a] = std::max(hi[a], c[a]);
+      }
+    }
   if (hi[0] < 0) return {0, 0, 0, 0, 0, 0};
   const int d[3] = {dims.x, dims.y, dims.z};
   std::array<int, 6> box{};
@@ -470,7 +468,20 @@ Status VolumeRenderer::prepare(const RenderSettings& s) {
   key.surfaceFloor = s.preset.surfaceInterior > 0 || !(s.preset.surfaceGradientHu[1] > 0);
   key.log2Alpha = std::log2(s.preset.alpha);
   key.distanceUnit = float(s.distanceUnit);
-  if (!st.occupancyKey || !(*st.occupancyKey == key)) {
+  OccupancyKey contextKey = key;
+  contextKey.selected = 0;
+  OccupancyKey cachedContextKey = st.occupancyKey.value_or(OccupancyKey{});
+  cachedContextKey.selected = 0;
+  if (st.occupancyKey && !(*st.occupancyKey == key) && cachedContextKey == contextKey) {
+    // Only the selection changed.
+    std::vector<std::uint8_t> occ = withStructure(st.blocks, st.contextOccupancy, st.selected);
+    const Dims& nb = st.blocks.blocks;
+    glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
+    glBindTexture(GL_TEXTURE_3D, st.occupancy.id());
+    glTexSubImage3D(GL_TEXTURE_3D, 0, 0, 0, 0, nb.x, nb.y, nb.z, GL_RED_INTEGER, GL_UNSIGNED_BYTE, occ.data());
+    st.occupancyKey = key;
+    if (auto e = glStatus("uploading the occupancy grid"); !e) return e;
+  } else if (!st.occupancyKey || !(*st.occupancyKey == key)) {
     OccupancyInputs in;
     in.blocks = &st.blocks;
     in.volumeGrid = &st.volumeGrid;
@@ -480,9 +491,10 @@ Status VolumeRenderer::prepare(const RenderSettings& s) {
     in.field = st.hasField && st.fieldOnCpu ? &st.fieldMinima : nullptr;
     in.log2Alpha = key.log2Alpha;
     in.distanceUnit = key.distanceUnit;
-    in.selected = st.selected;
-    std::vector<std::uint8_t> occ = computeOccupancy(in);
-    addLeapDistances(st.blocks.blocks, occ);
+    in.selected = 0;
+    st.contextOccupancy = computeOccupancy(in);
+    addLeapDistances(st.blocks.blocks, st.contextOccupancy);
+    std::vector<std::uint8_t> occ = withStructure(st.blocks, st.contextOccupancy, st.selected);
     const Dims& nb = st.blocks.blocks;
     glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
     glBindTexture(GL_TEXTURE_3D, st.occupancy.id());

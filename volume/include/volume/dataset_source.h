@@ -9,6 +9,7 @@
 #include <string>
 
 #include "core/error.h"
+#include "volume/intensity.h"
 #include "volume/structure.h"
 
 namespace at {
@@ -19,6 +20,7 @@ struct DatasetFiles {
   std::string namesPath;        // optional: JSON { "value": "name" }
   std::string dicomSeriesUid;   // optional
   std::string id;               // dataset id to report
+  IntensityChoice intensity = IntensityChoice::Auto;  // HU or plain intensities (volume/intensity.h)
   // Passed to the loaders (ImageLoadOptions): skip a DICOM folder's unreadable files with a note;
   // the folder a detached NRRD header may read data files from besides its own.
   bool skipUnreadableFiles = false;

@@ -14,6 +14,7 @@
 
 #include "core/error.h"
 #include "volume/grid.h"
+#include "volume/intensity.h"
 
 namespace at {
 
@@ -33,6 +34,8 @@ struct LoadedImage {
   ScalarKind storedKind = ScalarKind::Int16;  // how the file stored them
   std::vector<SegmentInfo> segments; // segment names found in the file (may be empty)
   std::vector<std::string> notes;    // e.g. "chose series 1.2.3 (20 of 23 files)"
+  std::string modality;              // DICOM Modality ("CT", "MR", …); empty where the format has none
+  bool rescaleGiven = false;         // DICOM RescaleSlope/Intercept or NIfTI scl_slope were in the file
 };
 
 struct ImageLoadOptions {
@@ -59,6 +62,18 @@ Result<LoadedImage> loadImageFile(const std::string& path, const ImageLoadOption
 
 // Converts a loaded image to HU int16; errors if values are not finite or lie outside int16.
 Result<Volume> toHuVolume(const LoadedImage& loaded, const std::string& pathForMessages);
+
+// A loaded image as a dataset's int16 volume with its intensity model (volume/intensity.h): the
+// unit decided by decideIntensity (or forced by `choice`); HU stored as they are; plain
+// intensities stored as they are where they fit int16 as integers, else shifted (uint16 above
+// 32767) or scaled (fractional values, wider ranges) to fit, the model's slope and intercept
+// giving the file's values back. Errors name the voxel: non-finite values, HU outside int16.
+struct StoredVolume {
+  Volume volume;
+  IntensityModel intensity;
+};
+Result<StoredVolume> toStoredVolume(const LoadedImage& loaded, const std::string& pathForMessages,
+                                    IntensityChoice choice = IntensityChoice::Auto);
 // Converts a loaded image to labels; errors if values are negative, non-integer or > 65535.
 Result<LabelMap> toLabelMap(const LoadedImage& loaded, const std::string& pathForMessages);
 

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "volume/grid.h"
+#include "volume/intensity.h"
 
 namespace at {
 
@@ -27,11 +28,18 @@ struct Provenance {
   std::vector<std::string> notes;   // loader remarks: chosen series, resampling, …
 };
 
+// How names given by users and label-name files are shown: "kidney_right" → "Kidney right";
+// names with spaces or capitals are kept as written.
+std::string displayNameOf(const std::string& name);
+// A distinct colour for a label that has none (linear RGB): hues spaced by the golden angle.
+std::array<float, 3> paletteColour(std::uint16_t label);
+
 struct Dataset {
   std::string id;                   // "phantom" or an imported dataset's name
   std::string displayName;
   std::string species = "human";
-  Volume volume;                    // HU
+  Volume volume;                    // stored values: HU for CT, else plain intensities (see intensity)
+  IntensityModel intensity;         // what the stored values mean, their window
   LabelMap labels;                  // same Geometry as volume
   std::vector<Structure> structures;
   Provenance provenance;

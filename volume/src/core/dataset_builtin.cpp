@@ -32,7 +32,9 @@ Result<Dataset> openBuiltinDataset(const std::string& name) {
                   " (e.g. phantom:128)");
     options.size = size;
   }
-  return makePhantom(options);
+  Dataset phantom = makePhantom(options);
+  phantom.intensity.reason = "synthetic phantom in HU";
+  return phantom;
 }
 
 }  // namespace at

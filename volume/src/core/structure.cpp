@@ -2,10 +2,34 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cmath>
 
 #include "core/strings.h"
 
 namespace at {
+
+std::string displayNameOf(const std::string& name) {
+  std::string out = name;
+  std::replace(out.begin(), out.end(), '_', ' ');
+  if (!out.empty()) out[0] = char(std::toupper(static_cast<unsigned char>(out[0])));
+  return out;
+}
+
+std::array<float, 3> paletteColour(std::uint16_t label) {
+  const double hue = std::fmod(label * 137.508, 360.0) / 60.0;
+  const double x = 1 - std::abs(std::fmod(hue, 2.0) - 1);
+  double r = 0, g = 0, b = 0;
+  switch (int(hue)) {
+    case 0: r = 1, g = x; break;
+    case 1: r = x, g = 1; break;
+    case 2: g = 1, b = x; break;
+    case 3: g = x, b = 1; break;
+    case 4: r = x, b = 1; break;
+    default: r = 1, b = x; break;
+  }
+  auto mix = [](double c) { return float(std::pow(0.25 + 0.7 * c, 2.2)); };
+  return {mix(r), mix(g), mix(b)};
+}
 
 const Structure* Dataset::findStructure(const std::string& idOrName) const {
   for (const Structure& s : structures)

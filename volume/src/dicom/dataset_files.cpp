@@ -21,31 +21,6 @@ namespace {
 
 using dicom::formatNumber;
 
-// "kidney_right" → "Kidney right"; names with spaces or capitals are kept as written.
-std::string displayNameOf(const std::string& name) {
-  std::string out = name;
-  std::replace(out.begin(), out.end(), '_', ' ');
-  if (!out.empty()) out[0] = char(std::toupper(static_cast<unsigned char>(out[0])));
-  return out;
-}
-
-// Distinct colours for labels without one: hues spaced by the golden angle, as linear RGB.
-std::array<float, 3> paletteColour(std::uint16_t label) {
-  const double hue = std::fmod(label * 137.508, 360.0) / 60.0;
-  const double x = 1 - std::abs(std::fmod(hue, 2.0) - 1);
-  double r = 0, g = 0, b = 0;
-  switch (int(hue)) {
-    case 0: r = 1, g = x; break;
-    case 1: r = x, g = 1; break;
-    case 2: g = 1, b = x; break;
-    case 3: g = x, b = 1; break;
-    case 4: r = x, b = 1; break;
-    default: r = 1, b = x; break;
-  }
-  auto mix = [](double c) { return float(std::pow(0.25 + 0.7 * c, 2.2)); };
-  return {mix(r), mix(g), mix(b)};
-}
-
 // The box spanned by a grid's voxel centres in LPS millimetres.
 struct BoxMm {
   Vec3 lo{0, 0, 0}, hi{0, 0, 0};
@@ -125,13 +100,14 @@ Result<Dataset> openDatasetFiles(const DatasetFiles& files, const DatasetLoadCon
   volumeOptions.dicomSeriesUid = files.dicomSeriesUid;
   auto volumeImage = loadImageFile(files.volumePath, volumeOptions);
   if (!volumeImage) return tl::unexpected(volumeImage.error());
-  auto volume = toHuVolume(*volumeImage, files.volumePath);
+  auto volume = toStoredVolume(*volumeImage, files.volumePath, files.intensity);
   if (!volume) return tl::unexpected(volume.error());
 
   Dataset dataset;
   dataset.id = files.id.empty() ? datasetIdFromPath(files.volumePath) : files.id;
   dataset.displayName = dataset.id;
-  dataset.volume = std::move(*volume);
+  dataset.volume = std::move(volume->volume);
+  dataset.intensity = std::move(volume->intensity);
   dataset.provenance.source = files.volumePath;
   dataset.provenance.notes = volumeImage->notes;
   const Geometry& grid = dataset.volume.geometry;

@@ -148,6 +148,8 @@ struct SliceHeader {
   std::string photometric;
   int bitsAllocated = 16, bitsStored = 16, highBit = 15, pixelRepresentation = 0;
   double slope = 1, intercept = 0;
+  bool rescaleGiven = false;  // RescaleSlope or RescaleIntercept present
+  std::string modality;
   std::optional<std::array<double, 3>> position;
   std::optional<std::array<double, 6>> orientation;
   std::optional<std::array<double, 2>> pixelSpacing;  // row spacing (between rows), column spacing
@@ -197,8 +199,9 @@ Result<std::pair<FileKind, SliceHeader>> readSliceHeader(const fs::path& file) {
   h.bitsStored = int(integerOf(data, DCM_BitsStored).value_or(h.bitsAllocated));
   h.highBit = int(integerOf(data, DCM_HighBit).value_or(h.bitsStored - 1));
   h.pixelRepresentation = int(integerOf(data, DCM_PixelRepresentation).value_or(0));
-  if (auto v = numbersOf<1>(data, DCM_RescaleSlope)) h.slope = (*v)[0];
-  if (auto v = numbersOf<1>(data, DCM_RescaleIntercept)) h.intercept = (*v)[0];
+  if (auto v = numbersOf<1>(data, DCM_RescaleSlope)) h.slope = (*v)[0], h.rescaleGiven = true;
+  if (auto v = numbersOf<1>(data, DCM_RescaleIntercept)) h.intercept = (*v)[0], h.rescaleGiven = true;
+  h.modality = stringOf(data, DCM_Modality);
   h.position = numbersOf<3>(data, DCM_ImagePositionPatient);
   h.orientation = numbersOf<6>(data, DCM_ImageOrientationPatient);
   h.pixelSpacing = numbersOf<2>(data, DCM_PixelSpacing);
@@ -646,6 +649,8 @@ Result<LoadedImage> readDicomSeries(const std::string& folder, const ImageLoadOp
 
   loaded.image = FloatVolume(geometry);
   loaded.storedKind = storedKindOf(ref);
+  loaded.modality = ref.modality;
+  loaded.rescaleGiven = ref.rescaleGiven;
 
   // Decode slices in parallel: each worker owns its DCMTK file objects and OpenJPEG codecs.
   const std::size_t sliceVoxels = std::size_t(ref.columns) * std::size_t(ref.rows);

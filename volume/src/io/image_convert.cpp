@@ -71,6 +71,59 @@ Result<Volume> toHuVolume(const LoadedImage& loaded, const std::string& pathForM
   return out;
 }
 
+Result<StoredVolume> toStoredVolume(const LoadedImage& loaded, const std::string& pathForMessages,
+                                    IntensityChoice choice) {
+  const FloatVolume& image = loaded.image;
+  IntensityEvidence evidence;
+  evidence.modality = loaded.modality;
+  evidence.rescaleGiven = loaded.rescaleGiven;
+  evidence.unsignedStorage = loaded.storedKind == ScalarKind::UInt8 || loaded.storedKind == ScalarKind::UInt16 ||
+                             loaded.storedKind == ScalarKind::UInt32;
+  bool integers = true, first = true;
+  for (std::size_t n = 0; n < image.voxels.size(); ++n) {
+    const float v = image.voxels[n];
+    if (!std::isfinite(v))
+      return fail(pathForMessages + ": " + voxelName(image.dims(), n) + " is " + valueText(v) +
+                  "; a volume needs finite values");
+    if (first || v < evidence.minValue) evidence.minValue = v;
+    if (first || v > evidence.maxValue) evidence.maxValue = v;
+    first = false;
+    integers = integers && v == std::floor(v);
+  }
+  StoredVolume out;
+  IntensityModel& model = out.intensity;
+  auto [unit, reason] = decideIntensity(evidence, choice);
+  model.unit = unit;
+  model.reason = reason;
+  model.modality = loaded.modality;
+  if (model.hounsfield()) {
+    auto hu = toHuVolume(loaded, pathForMessages);
+    if (!hu) return tl::unexpected(hu.error());
+    out.volume = std::move(*hu);
+    return out;
+  }
+  // Plain intensities: as they are where they fit; shifted by a whole number into int16 where
+  // integers span at most 65536 values; scaled otherwise.
+  constexpr double kLow = std::numeric_limits<std::int16_t>::min(), kHigh = std::numeric_limits<std::int16_t>::max();
+  const double lo = evidence.minValue, hi = evidence.maxValue;
+  if (integers && lo >= kLow && hi <= kHigh) {
+    model.intercept = 0;
+  } else if (integers && hi - lo <= kHigh - kLow) {
+    model.intercept = lo - kLow;
+  } else {
+    model.slope = hi > lo ? (hi - lo) / (kHigh - kLow) : 1.0;
+    model.intercept = lo - kLow * model.slope;
+  }
+  out.volume.geometry = image.geometry;
+  out.volume.voxels.resize(image.voxels.size());
+  for (std::size_t n = 0; n < image.voxels.size(); ++n) {
+    const double s = std::nearbyint((double(image.voxels[n]) - model.intercept) / model.slope);
+    out.volume.voxels[n] = std::int16_t(std::clamp(s, kLow, kHigh));
+  }
+  model.window = histogramWindow(out.volume.voxels);
+  return out;
+}
+
 Result<LabelMap> toLabelMap(const LoadedImage& loaded, const std::string& pathForMessages) {
   const FloatVolume& image = loaded.image;
   LabelMap out;

@@ -297,6 +297,8 @@ Result<LoadedImage> readNifti(const std::string& path, const ImageLoadOptions& o
   LoadedImage loaded;
   loaded.storedKind = kind;
   loaded.image.geometry = *geometry;
+  // A set scl_slope is the file's statement of the value scale (HU for CT, say), even 1 and 0.
+  loaded.rescaleGiven = nim->scl_slope != 0.0 && std::isfinite(nim->scl_slope);
   std::vector<float>& out = loaded.image.voxels;
   // Address space for the whole image, but pages are only touched as converted values arrive: a
   // header claiming more than the file holds costs no memory.

@@ -20,6 +20,7 @@
 #include <map>
 #include <optional>
 #include <sstream>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -253,6 +254,8 @@ struct Layout {
   Dims dims;
   std::size_t valueCount = 0;   // all values in the file, including a size-1 non-spatial axis
   std::vector<int> spatialAxes; // the three axes of the grid among the file's axes
+  int layerAxis = -1;           // a .seg.nrrd's list axis of several layers, or -1
+  int layers = 1;
 };
 
 Result<Layout> parseLayout(const std::string& path, const NrrdHeader& h) {
@@ -298,15 +301,22 @@ Result<Layout> parseLayout(const std::string& path, const NrrdHeader& h) {
       for (int a = 0; a < 4 && other < 0; ++a)
         if (sizes[std::size_t(a)] == 1) other = a;
     if (other < 0) return fail(path + ": 4-dimensional NRRD without a non-spatial axis is not supported");
-    if (sizes[std::size_t(other)] != 1)
-      return fail(path + ": axis " + std::to_string(other) + " holds " + std::to_string(sizes[std::size_t(other)]) +
-                  " layers or components; only single-layer images are supported");
+    // Several layers are a segmentation's (Slicer's .seg.nrrd with overlapping segments, its
+    // Segment<N>_Layer keys say which layer holds a segment); other multi-component images are not
+    // supported.
+    if (sizes[std::size_t(other)] != 1) {
+      if (h.keyValues.count("Segment0_Layer") == 0)
+        return fail(path + ": axis " + std::to_string(other) + " holds " + std::to_string(sizes[std::size_t(other)]) +
+                    " layers or components; only single-layer images and segmentations (.seg.nrrd) are supported");
+      layout.layerAxis = other;
+      layout.layers = int(sizes[std::size_t(other)]);
+    }
     for (int a = 0; a < 4; ++a)
       if (a != other) layout.spatialAxes.push_back(a);
   }
   layout.dims = {int(sizes[std::size_t(layout.spatialAxes[0])]), int(sizes[std::size_t(layout.spatialAxes[1])]),
                  int(sizes[std::size_t(layout.spatialAxes[2])])};
-  layout.valueCount = layout.dims.count();
+  layout.valueCount = layout.dims.count() * std::size_t(layout.layers);
   return layout;
 }
 
@@ -654,6 +664,84 @@ std::vector<SegmentInfo> parseSegments(const NrrdHeader& h, std::vector<std::str
   return segments;
 }
 
+// A multi-layer segmentation (Slicer writes overlapping segments into layers, each segment a label
+// value in one layer) as one label map: each segment keeps its label value where no other segment
+// has it, else takes the next free value (noted); where segments of several layers overlap, the
+// later layer wins (the count is noted). `loaded` holds all layers' values in file order and the
+// segments as parseSegments read them; on return, one value per voxel and the segments' labels.
+void mergeLayers(const NrrdHeader& h, const Layout& layout, LoadedImage& loaded) {
+  struct Placed {
+    std::size_t segment;
+    int layer;
+    long long value;
+  };
+  std::vector<Placed> placed;
+  std::set<std::uint16_t> taken;
+  std::uint16_t next = 1;
+  for (std::size_t k = 0; k < loaded.segments.size(); ++k) {
+    long long layer = 0;
+    for (int n = 0; n < 65536; ++n) {  // the segment's key index: the n whose name and value match
+      const std::string prefix = "Segment" + std::to_string(n) + "_";
+      const auto name = h.keyValues.find(prefix + "Name");
+      if (name == h.keyValues.end()) break;
+      long long value = n + 1;
+      if (const auto it = h.keyValues.find(prefix + "LabelValue"); it != h.keyValues.end()) parseLong(str::trim(it->second), value);
+      if (str::trim(name->second) != loaded.segments[k].name || value != loaded.segments[k].label) continue;
+      if (const auto it = h.keyValues.find(prefix + "Layer"); it != h.keyValues.end()) parseLong(str::trim(it->second), layer);
+      break;
+    }
+    placed.push_back({k, int(layer), loaded.segments[k].label});
+  }
+  std::vector<std::map<long long, std::uint16_t>> lookup(std::size_t(layout.layers));
+  for (Placed& p : placed) {
+    std::uint16_t out = std::uint16_t(p.value);
+    if (taken.count(out)) {
+      while (taken.count(next)) ++next;
+      loaded.notes.push_back("segment " + loaded.segments[p.segment].name + " (layer " + std::to_string(p.layer) +
+                             ", value " + std::to_string(p.value) + ") became label " + std::to_string(next) +
+                             ": its value is another layer's");
+      out = next;
+    }
+    taken.insert(out);
+    loaded.segments[p.segment].label = out;
+    if (p.layer >= 0 && p.layer < layout.layers) lookup[std::size_t(p.layer)][p.value] = out;
+  }
+  // File strides: axis a advances by the product of the earlier axes' sizes.
+  std::size_t stride[4] = {1, 1, 1, 1};
+  std::size_t size[4];
+  for (int a = 0, s = 0; a < 4; ++a) {
+    if (a == layout.layerAxis) {
+      size[a] = std::size_t(layout.layers);
+    } else {
+      const int spatial = s++;
+      size[a] = std::size_t(spatial == 0 ? layout.dims.x : spatial == 1 ? layout.dims.y : layout.dims.z);
+    }
+  }
+  for (int a = 1; a < 4; ++a) stride[a] = stride[a - 1] * size[a - 1];
+  const std::size_t layerStride = stride[layout.layerAxis];
+  const std::size_t sx = stride[layout.spatialAxes[0]], sy = stride[layout.spatialAxes[1]], sz = stride[layout.spatialAxes[2]];
+  const Dims d = layout.dims;
+  std::vector<float> merged(d.count(), 0.0f);
+  std::size_t overlaps = 0;
+  for (int k = 0; k < d.z; ++k)
+    for (int j = 0; j < d.y; ++j)
+      for (int i = 0; i < d.x; ++i) {
+        const std::size_t base = std::size_t(i) * sx + std::size_t(j) * sy + std::size_t(k) * sz;
+        float& out = merged[d.index(i, j, k)];
+        for (int layer = 0; layer < layout.layers; ++layer) {
+          const float v = loaded.image.voxels[base + std::size_t(layer) * layerStride];
+          if (v == 0) continue;
+          const auto it = lookup[std::size_t(layer)].find((long long)(v));
+          if (it == lookup[std::size_t(layer)].end()) continue;  // a value no segment names
+          overlaps += out != 0;
+          out = float(it->second);
+        }
+      }
+  loaded.image.voxels = std::move(merged);
+  loaded.notes.push_back("merged " + std::to_string(layout.layers) + " segmentation layers into one label map" +
+                         (overlaps ? " (" + std::to_string(overlaps) + " voxels in several segments: the later layer's)" : ""));
+}
+
 // Checks that a data file lies in the folder its header may read from: the header's own folder, or
 // the one the user named (ImageLoadOptions::dataFolder). Symbolic links are resolved first, so a
 // link inside the folder cannot lead out of it.
@@ -779,6 +867,7 @@ Result<LoadedImage> readNrrd(const std::string& path, const ImageLoadOptions& op
     return fail(path + ": decoded " + std::to_string(out.size()) + " values but the header describes " +
                 std::to_string(layout->valueCount));
   loaded.segments = parseSegments(h, loaded.notes);
+  if (layout->layers > 1) mergeLayers(h, *layout, loaded);
   return loaded;
 }
 
@@ -846,13 +935,14 @@ Status packValues(const std::string& path, const std::vector<float>& values, con
 
 std::string numberText(double v) {
   char buffer[64];
-  std::snprintf(buffer, sizeof buffer, "%.17g", v);
+  std::snprintf(buffer, sizeof buffer, "%.17g", v == 0 ? 0.0 : v);  // no "-0"
   return buffer;
 }
 
 }  // namespace
 
-Status writeNrrd(const std::string& path, const FloatVolume& image, ScalarKind storedKind) {
+Status writeNrrd(const std::string& path, const FloatVolume& image, ScalarKind storedKind,
+                 const std::vector<std::pair<std::string, std::string>>& keyValues) {
   const Geometry& g = image.geometry;
   if (g.dims.count() == 0 || image.voxels.size() != g.dims.count()) return fail(path + ": image to write is empty");
   static_assert(std::endian::native == std::endian::little, "writeNrrd writes native byte order as little endian");
@@ -889,7 +979,13 @@ Status writeNrrd(const std::string& path, const FloatVolume& image, ScalarKind s
   header << "endian: little\n";
   header << "encoding: gzip\n";
   header << "space origin: (" << numberText(g.originMm[0]) << "," << numberText(g.originMm[1]) << ","
-         << numberText(g.originMm[2]) << ")\n\n";
+         << numberText(g.originMm[2]) << ")\n";
+  for (const auto& [key, value] : keyValues) {
+    if (key.find(":=") != std::string::npos || key.find('\n') != std::string::npos || value.find('\n') != std::string::npos)
+      return fail(path + ": NRRD key '" + key + "' or its value holds ':=' or a line break");
+    header << key << ":=" << value << "\n";
+  }
+  header << "\n";
 
   std::ofstream out(path, std::ios::binary | std::ios::trunc);
   if (!out) return fail(path + ": cannot create the file");

@@ -3,7 +3,8 @@
 //
 // One worker thread; requests are latest-wins: a new request replaces the pending one, and the
 // running computation is cancelled through WdtControl::cancel unless it is for the same key. The
-// caller never waits: it asks `cached` for what exists and `takeFinished` for what arrived.
+// caller asks `cached` for what exists and `takeFinished` for what arrived; it waits only where it
+// asks to, for a bounded time (`waitFor`).
 // Finished fields go into a small LRU cache keyed by structure label, downsample factor and the
 // WDT parameters that shape the field.
 //
@@ -75,6 +76,10 @@ class FieldService {
     bool ready() const { return host || device; }
   };
   Cached cached(const FieldRequest& request);
+  // Waits at most `limit` while the field of `request` is queued or running and not yet cached,
+  // then returns what `cached` returns. For a caller that can afford a short wait: a frame that
+  // would otherwise show the new field one frame later (a GPU field takes a few ms).
+  Cached waitFor(const FieldRequest& request, std::chrono::milliseconds limit);
   // Fields (and failures) finished since the last call, oldest first.
   std::vector<FinishedField> takeFinished();
   bool busy() const;
@@ -113,6 +118,7 @@ class FieldService {
   const std::size_t capacity_;
   mutable std::mutex mutex_;
   std::condition_variable wake_;
+  std::condition_variable changed_;  // an entry was cached or a computation ended (waitFor)
   std::optional<FieldRequest> queued_;
   std::optional<std::string> runningKey_;
   std::optional<FieldRequest> runningRequest_;

@@ -58,22 +58,30 @@ AT_FORCE_INLINE float absf_portable(float x) {
 #endif
 }
 
-// Cost of the step a → b (density bytes qa, qb) of length `len`.
+// Cost of the step a → b of length `len` from the two voxels' densities fa = densityFromByte(qa)
+// and fb (engines that keep densities as floats pass them; the byte form below converts first, so
+// both give the same float).
 template <CostKernel K>
-AT_FORCE_INLINE float stepCost(std::uint8_t qa, std::uint8_t qb, float len, float base) {
+AT_FORCE_INLINE float stepCostFromDensity(float fa, float fb, float len, float base) {
   if constexpr (K == CostKernel::EnterDensity) {
-    return enteringStepCost(densityWeight(qb, base), len);
+    return enteringStepCost(base + fb, len);
   } else if constexpr (K == CostKernel::EnterUniform) {
     return enteringStepCost(1.0f, len);
   } else if constexpr (K == CostKernel::TrapezoidDensity) {
-    return trapezoidStepCost(densityWeight(qa, base), densityWeight(qb, base), len);
+    return trapezoidStepCost(base + fa, base + fb, len);
   } else if constexpr (K == CostKernel::EdgeGradient) {
-    const float diff = densityFromByte(qb) - densityFromByte(qa);
-    return enteringStepCost(base + absf_portable(diff), len);
+    return enteringStepCost(base + absf_portable(fb - fa), len);
   } else {
-    const float rise = densityFromByte(qb) - densityFromByte(qa);
+    const float rise = fb - fa;
     return enteringStepCost(base + (rise > 0.0f ? rise : 0.0f), len);
   }
+}
+
+// Cost of the step a → b (density bytes qa, qb) of length `len`. (densityWeight(q, base) is
+// base + densityFromByte(q): the same float as above.)
+template <CostKernel K>
+AT_FORCE_INLINE float stepCost(std::uint8_t qa, std::uint8_t qb, float len, float base) {
+  return stepCostFromDensity<K>(densityFromByte(qa), densityFromByte(qb), len, base);
 }
 
 // Length of the step from the previous-plane neighbour n[dc][db] (db along the plane's B axis, dc
@@ -100,6 +108,71 @@ AT_FORCE_INLINE float relaxVoxel(float cur, const float nb[3][3], const std::uin
     return best;
   }
 }
+
+// ─── Multi-label growth (label_growth.h) ───
+// Every voxel carries a distance and the label of the seed it is reached from. Pairs are ordered
+// lexicographically: the smaller distance wins, and among equal distances the smaller label value
+// — the documented tie rule of the growth.
+//
+// The growth's distances are fixed-point integers: each step costs the WDT's step cost (above)
+// times `scale`, rounded to the nearest integer (at least 1), and costs add exactly. With float
+// sums a tie could depend on the order of the relaxations — two paths whose costs differ can round
+// to the same sum at one voxel, and which label reaches it first would decide — so the sweeps, the
+// GPU's rounds and Dijkstra could disagree on labels. Exact sums make every order end at the same
+// fixed point: D(v) the smallest path cost, L(v) the smallest label with a path of that cost.
+// The front end picks `scale` so that no distance reaches kGrowthInf (label_growth.cpp).
+constexpr std::int32_t kGrowthInf = 0x7FFFFFFF;  // not reached (yet)
+// kNoLabel marks voxels no seed has reached; it loses every tie. Labels are ints (values 0..65535
+// and kNoLabel), so that vector units compare them with their signed compares.
+constexpr std::int32_t kNoLabel = 0x7FFFFFFF;
+
+// The fixed-point cost of the step a → b (densities fa, fb as in stepCostFromDensity).
+template <CostKernel K>
+AT_FORCE_INLINE std::int32_t growthStepCost(float fa, float fb, float len, float base, float scale) {
+  const std::int32_t c = std::int32_t(stepCostFromDensity<K>(fa, fb, len, base) * scale + 0.5f);
+  return c < 1 ? 1 : c;
+}
+
+// d + cost, staying at kGrowthInf for d = kGrowthInf (no overflow: finite distances stay far below).
+AT_FORCE_INLINE std::int32_t addGrowthCost(std::int32_t d, std::int32_t cost) {
+  const std::int32_t capped = kGrowthInf - cost;
+  return (d < capped ? d : capped) + cost;
+}
+
+// The growth's update of one voxel (distance d, label l, density fb) from its 9 neighbours in the
+// previous plane: distances nb, labels nl, densities fn (densityFromByte of the bytes; read only by
+// kernels that need them). The voxel keeps the smallest (distance, label) pair among its own and
+// the candidates (nb + growthStepCost, nl): the smallest distance first, then the smallest label
+// among the pairs that reach it (the lexicographic minimum in fewer vector operations).
+template <CostKernel K>
+AT_FORCE_INLINE void relaxLabelledVoxel(std::int32_t& d, std::int32_t& l, const std::int32_t nb[3][3],
+                                        const std::int32_t nl[3][3], const float fn[3][3], float fb, SweepLengths len,
+                                        float base, float scale) {
+  std::int32_t c[3][3];
+  std::int32_t best = d;
+  AT_UNROLL for (int dc = 0; dc < 3; ++dc)
+    AT_UNROLL for (int db = 0; db < 3; ++db) {
+      c[dc][db] = addGrowthCost(nb[dc][db], growthStepCost<K>(fn[dc][db], fb, neighbourLength(dc, db, len), base, scale));
+      best = c[dc][db] < best ? c[dc][db] : best;
+    }
+  std::int32_t label = d == best ? l : kNoLabel;
+  AT_UNROLL for (int dc = 0; dc < 3; ++dc)
+    AT_UNROLL for (int db = 0; db < 3; ++db) {
+      const std::int32_t candidate = c[dc][db] == best ? nl[dc][db] : kNoLabel;
+      label = candidate < label ? candidate : label;
+    }
+  d = best;
+  l = label;
+}
+
+// A (distance, label) pair packed into one 64-bit key, distance above label: keys order like the
+// pairs, and one 64-bit load or store moves a consistent pair (the growth engines rely on that when
+// threads or blocks read voxels another one is writing).
+AT_FORCE_INLINE std::uint64_t packGrowthKey(std::int32_t d, std::int32_t l) {
+  return (std::uint64_t(std::uint32_t(d)) << 32) | std::uint32_t(l);
+}
+AT_FORCE_INLINE std::int32_t growthKeyDistance(std::uint64_t key) { return std::int32_t(std::uint32_t(key >> 32)); }
+AT_FORCE_INLINE std::int32_t growthKeyLabel(std::uint64_t key) { return std::int32_t(std::uint32_t(key)); }
 
 // Smallest and largest weight (cost per mm) a kernel can produce; the exact reference sizes its
 // buckets from them.

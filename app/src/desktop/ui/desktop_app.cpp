@@ -67,6 +67,8 @@ class DesktopApp final : public ScriptHost {
   ExplorePanel explore_;
   StudyPanel study_;
   ImportPanel import_;
+  SegmentPanel segment_;
+  SlicesPanel slices_;
   ExpertPanel expert_;
   CourseEditorPanel courses_;
   bool quit_ = false;
@@ -95,6 +97,8 @@ int DesktopApp::run() {
   if (!window) return reportError(window.error().message);
   window_ = std::move(*window);
   view_ = std::make_unique<VolumeView>([this](const std::string& m) { model_->message(m); });
+  // Known before the script's first step: a view that has not rendered yet is not settled.
+  model_->setViewAvailable(view_->available());
   model_->event({{"event", "context"}, {"gl", window_->glDescription()}, {"note", window_->glNote()}, {"ui_scale", window_->uiScale()}});
   model_->setLayout(window_->layout());
   model_->reframe();  // the start view framed for the window's size
@@ -145,6 +149,8 @@ void DesktopApp::drawUi() {
   else explore_.draw(*model_, {window_->glDescription()});
   study_.drawCoordinator(study, panelW + 20, 20);
   if (!study.participantActive()) import_.draw(model_->imports(), panelW + 40, 40);
+  if (!study.participantActive()) segment_.draw(model_->segmenter(), panelW + 60, 60);
+  if (!study.participantActive()) slices_.draw(*model_, panelW + 80, float(l.windowH) * 0.45f);
   if (!study.participantActive()) courses_.draw(*model_, panelW + 60, 60);
   // The renderer's texture as it is (GL's rows bottom first: uv0 is the image's left/bottom).
   if (const render::gl::DisplayImage& image = view_->image(); image.handle)

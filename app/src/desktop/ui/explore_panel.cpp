@@ -7,6 +7,7 @@
 
 #include "core/strings.h"
 #include "panels.h"
+#include "segment_controller.h"
 
 namespace at::app {
 
@@ -39,6 +40,8 @@ void ExplorePanel::draw(DesktopModel& model, const Status& status) {
   ImGui::SameLine();
   if (ImGui::SmallButton("Import...")) model.imports().windowOpen = true;
   ImGui::SameLine();
+  if (ImGui::SmallButton("Segment...")) model.segmenter().windowOpen = true;
+  ImGui::SameLine();
   if (ImGui::SmallButton("Courses...")) model.courseEditor().windowOpen = true;
   ImGui::Separator();
   lessons_.draw(model.lessons(), model.exams(), float(layout.windowH) * 0.4f);
@@ -59,13 +62,22 @@ void ExplorePanel::draw(DesktopModel& model, const Status& status) {
   ImGui::Text("Hover: %s", hovered ? hovered->displayName.c_str() : "-");
   ImGui::Separator();
 
-  int mode = explore.bare() ? 1 : 0;
-  if (ImGui::RadioButton("WDT preset", &mode, 0)) explore.setBare(false);
-  ImGui::SameLine();
-  if (ImGui::RadioButton("Bare preset", &mode, 1)) explore.setBare(true);
-  float t = explore.t();
-  if (ImGui::SliderFloat("t (context)", &t, 0, 1, "%.2f")) explore.setT(t);
+  if (explore.wholeVolume()) {  // an unlabelled scan: no structure to select, field or bare mode
+    ImGui::PushTextWrapPos(0);
+    ImGui::TextDisabled("No labelled structures: the whole volume is shown with a transfer function "
+                        "derived from its intensities. Label it with Segment...");
+    ImGui::PopTextWrapPos();
+  } else {
+    int mode = explore.bare() ? 1 : 0;
+    if (ImGui::RadioButton("WDT preset", &mode, 0)) explore.setBare(false);
+    ImGui::SameLine();
+    if (ImGui::RadioButton("Bare preset", &mode, 1)) explore.setBare(true);
+    float t = explore.t();
+    if (ImGui::SliderFloat("t (context)", &t, 0, 1, "%.2f")) explore.setT(t);
+  }
   if (bool on = model.expertOn(); ImGui::Checkbox("Expert", &on)) model.setExpert(on);
+  ImGui::SameLine();
+  if (ImGui::Button("Slices...")) model.slices().windowOpen = true;  // axial, coronal, sagittal
 
   ImGui::TextUnformatted("View");
   for (int i = 0; i < 6; ++i) {

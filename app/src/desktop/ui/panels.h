@@ -3,6 +3,7 @@
 // panel keeps is what only a widget needs: text being typed, a drag in progress, a GL texture.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <optional>
 #include <string>
@@ -98,6 +99,22 @@ class StudyPanel {
   std::string coordinatorError_;  // the last failed command of the coordinator window
 };
 
+// An opaque RGBA copy of an RGB picture, for an ImageTexture.
+render::RgbaImage toRgba(const RgbImage& image);
+
+// The Slices window: sagittal, coronal and axial panes through the crosshair at their voxels'
+// aspect, the segment editor's labels over them at an opacity; a left click moves the crosshair,
+// a right drag sets the grey window.
+class SlicesPanel {
+ public:
+  void draw(DesktopModel& model, float x, float y);
+
+ private:
+  std::array<std::optional<render::gl::ImageTexture>, 3> textures_;
+  std::array<std::uint64_t, 3> drawn_{~0ull, ~0ull, ~0ull};  // the key of each pane's picture
+  std::string error_;
+};
+
 // The import window.
 class ImportPanel {
  public:
@@ -105,6 +122,23 @@ class ImportPanel {
 
  private:
   std::string error_;  // an import that could not start
+};
+
+// The segment editor's window: labels, a slice to paint seeds in, grow, undo and save.
+class SegmentPanel {
+ public:
+  void draw(SegmentController& editor, float x, float y);
+
+ private:
+  std::optional<render::gl::ImageTexture> texture_;
+  std::uint64_t revision_ = 0;
+  std::optional<std::array<int, 3>> lastPainted_;  // the voxel under a drag (one paint per voxel)
+  int tool_ = 0;                   // 0: paint seeds, 1: threshold island under a click
+  float range_[2] = {0, 0};        // the island's value range (dataset units), from its window
+  bool rangeSet_ = false;
+  float minDiameterMm_ = 0;
+  float marginMm_ = 1.0f;          // margin grow/shrink and hollow thickness
+  std::string newLabel_, exportPath_, error_;
 };
 
 // The course editor window (instructors): a new course on the dataset on screen, a stored one to

@@ -1,6 +1,7 @@
 #include "volume_view.h"
 
 #include "render/gl/window_target.h"
+#include "render/volume_preset.h"
 
 namespace at::app {
 
@@ -24,6 +25,9 @@ void VolumeView::frame(DesktopModel& model, Clock::time_point now) {
     if (auto st = renderer_->setVolume(model.dataset().volume, model.dataset().labels, model.gradients()); !st) {
       messages_("volume renderer: " + st.error().message);
       renderer_.reset();
+    } else if (model.explore().wholeVolume()) {  // its data TF over a field that changes nothing
+      if (auto field = renderer_->setField(render::neutralField(model.dataset().volume.geometry)); !field)
+        messages_("volume renderer: " + field.error().message);
     }
   }
   model.setViewAvailable(available());

@@ -1,0 +1,142 @@
+// The segment editor's UI-script actions: each calls the SegmentController command the Segment
+// window's widgets call.
+#include <nlohmann/json.hpp>
+
+#include "script_interpreter.h"
+#include "segment_controller.h"
+
+namespace at::app {
+
+using nlohmann::json;
+
+// {"do": "segment_open"}: shows the Segment window (the editor of the dataset on screen).
+ScriptInterpreter::Outcome ScriptInterpreter::segmentOpen(Context& c) {
+  c.model.segmenter().windowOpen = c.action.value("open", true);
+  return Progress::Done;
+}
+
+// {"do": "segment_label", "name": "liver"}: paints that label next, adding it when the editor has
+// no label of that name ("background" is label 0).
+ScriptInterpreter::Outcome ScriptInterpreter::segmentLabel(Context& c) {
+  SegmentController& s = c.model.segmenter();
+  const std::string name = c.action.at("name").get<std::string>();
+  if (auto existing = s.labelNamed(name)) {
+    if (auto st = s.setCurrentLabel(*existing); !st) return tl::unexpected(st.error());
+  } else if (auto added = s.addLabel(name); !added) {
+    return tl::unexpected(added.error());
+  }
+  c.model.event({{"event", "segment_label"}, {"name", name}, {"label", s.currentLabel()}});
+  return Progress::Done;
+}
+
+// {"do": "segment_slice", "axis": "z", "index": 40} (axis x, y, z or 0, 1, 2).
+ScriptInterpreter::Outcome ScriptInterpreter::segmentSlice(Context& c) {
+  const json& a = c.action.at("axis");
+  int axis = -1;
+  if (a.is_string()) {
+    const std::string text = a.get<std::string>();
+    axis = text == "x" ? 0 : text == "y" ? 1 : text == "z" ? 2 : -1;
+    if (axis < 0) return fail("ui script: segment_slice: \"axis\" must be x, y or z, not '" + text + "'");
+  } else {
+    axis = a.get<int>();
+  }
+  if (auto st = c.model.segmenter().setSlice(axis, c.action.at("index").get<int>()); !st) return tl::unexpected(st.error());
+  return Progress::Done;
+}
+
+// {"do": "segment_seed", "voxel": [i, j, k], "brush_mm": 1.5}: seeds of the current label in the
+// brush around the voxel, as a click in the slice paints them.
+ScriptInterpreter::Outcome ScriptInterpreter::segmentSeed(Context& c) {
+  SegmentController& s = c.model.segmenter();
+  if (c.action.contains("brush_mm")) s.brushMm = c.action.at("brush_mm").get<double>();
+  const auto v = c.action.at("voxel").get<std::vector<int>>();
+  if (v.size() != 3) return fail("ui script: segment_seed: \"voxel\" must be [i, j, k]");
+  auto painted = s.paintSeeds({v[0], v[1], v[2]});
+  if (!painted) return tl::unexpected(painted.error());
+  return Progress::Done;
+}
+
+// {"do": "segment_grow", "wait": true}: grow from seeds (on the editor's worker); with "wait" the
+// script goes on once the growth is applied (the segment_grown event reports the voxels per label)
+// and fails with the growth's error.
+ScriptInterpreter::Outcome ScriptInterpreter::segmentGrow(Context& c) {
+  SegmentController& s = c.model.segmenter();
+  if (c.first) {
+    if (auto st = s.grow(); !st) return tl::unexpected(st.error());
+    if (!c.action.value("wait", true)) return Progress::Done;
+  }
+  if (s.growing()) return Progress::Running;
+  if (s.growError()) return tl::unexpected(*s.growError());
+  return Progress::Done;
+}
+
+// {"do": "segment_threshold", "voxel": [i, j, k], "low": 150, "high": 255, "min_diameter_mm": 0}:
+// the connected region of values in the range under the voxel takes the current label (low and
+// high default to the dataset's window).
+ScriptInterpreter::Outcome ScriptInterpreter::segmentThreshold(Context& c) {
+  SegmentController& s = c.model.segmenter();
+  const auto v = c.action.at("voxel").get<std::vector<int>>();
+  if (v.size() != 3) return fail("ui script: segment_threshold: \"voxel\" must be [i, j, k]");
+  const auto window = s.valueWindow();
+  auto done = s.thresholdIsland({v[0], v[1], v[2]}, c.action.value("low", window[0]), c.action.value("high", window[1]),
+                                c.action.value("min_diameter_mm", 0.0));
+  if (!done) return tl::unexpected(done.error());
+  return Progress::Done;
+}
+
+// {"do": "segment_margin", "mm": 1.0} (negative: shrink) and {"do": "segment_hollow", "mm": 0.5}:
+// the current structure.
+ScriptInterpreter::Outcome ScriptInterpreter::segmentMargin(Context& c) {
+  auto done = c.model.segmenter().margin(c.action.at("mm").get<double>());
+  if (!done) return tl::unexpected(done.error());
+  return Progress::Done;
+}
+
+ScriptInterpreter::Outcome ScriptInterpreter::segmentHollow(Context& c) {
+  auto done = c.model.segmenter().hollow(c.action.at("mm").get<double>());
+  if (!done) return tl::unexpected(done.error());
+  return Progress::Done;
+}
+
+// {"do": "slices_open", "crosshair": [i, j, k], "label_alpha": 0.4}: shows the Slices window,
+// through that voxel when given.
+ScriptInterpreter::Outcome ScriptInterpreter::slicesOpen(Context& c) {
+  SliceViews& slices = c.model.slices();
+  slices.windowOpen = c.action.value("open", true);
+  if (c.action.contains("label_alpha")) slices.labelAlpha = c.action.at("label_alpha").get<double>();
+  if (c.action.contains("crosshair")) {
+    const auto v = c.action.at("crosshair").get<std::vector<int>>();
+    if (v.size() != 3) return fail("ui script: slices_open: \"crosshair\" must be [i, j, k]");
+    if (auto st = slices.setCrosshair({v[0], v[1], v[2]}); !st) return tl::unexpected(st.error());
+  }
+  return Progress::Done;
+}
+
+// {"do": "segment_undo"} and {"do": "segment_clear_seeds"}.
+ScriptInterpreter::Outcome ScriptInterpreter::segmentUndo(Context& c) {
+  auto undone = c.model.segmenter().undo();
+  if (!undone) return tl::unexpected(undone.error());
+  return Progress::Done;
+}
+
+ScriptInterpreter::Outcome ScriptInterpreter::segmentClearSeeds(Context& c) {
+  c.model.segmenter().clearSeeds();
+  return Progress::Done;
+}
+
+// {"do": "segment_save"} stores the labels into the dataset store (an imported dataset);
+// {"do": "segment_save", "out": "labels.nii.gz", "names": "names.json"} exports them as a file
+// (.nii, .nii.gz or .seg.nrrd).
+ScriptInterpreter::Outcome ScriptInterpreter::segmentSave(Context& c) {
+  SegmentController& s = c.model.segmenter();
+  if (!c.action.contains("out")) {
+    auto saved = s.saveToStore();
+    if (!saved) return tl::unexpected(saved.error());
+    return Progress::Done;
+  }
+  if (auto st = s.exportLabels(c.action.at("out").get<std::string>(), c.action.value("names", "")); !st)
+    return tl::unexpected(st.error());
+  return Progress::Done;
+}
+
+}  // namespace at::app

@@ -1,0 +1,109 @@
+// The seeds file: parsing (strict, errors naming the field), writing, rasterising strokes in mm.
+#include <doctest/doctest.h>
+
+#include <algorithm>
+
+#include "segment/seeds.h"
+#include "test_support.h"
+
+using namespace at;
+using namespace at::segment;
+
+namespace {
+
+const char* kGood = R"({
+  "schema": 1,
+  "labels": [{"value": 0, "name": "background"}, {"value": 5, "name": "liver", "colour": [0.9, 0.2, 0.3]},
+             {"value": 7, "name": "bone", "range": [300, 3000], "min_diameter_mm": 2}],
+  "strokes": [{"label": "liver", "radius_mm": 1, "points": [[1, 2, 3], [4, 2, 3]]},
+              {"label": 0, "points": [[-5, -5, 0]]},
+              {"label": 7, "points": [[0, 0, 0]]}],
+  "grow": {"weight": "gradient", "window": [-100, 400], "base": 0.01}
+})";
+
+Geometry grid() {
+  Geometry g;
+  g.dims = {30, 30, 20};
+  g.spacingMm = {0.5, 0.5, 1.0};
+  g.originMm = {-7, -7, -5};
+  return g;
+}
+
+void checkError(const std::string& json, const std::string& mustMention) {
+  auto r = parseSeeds(json, "s.json");
+  REQUIRE(!r);
+  CAPTURE(r.error().message);
+  CHECK(r.error().message.rfind("s.json: ", 0) == 0);
+  CHECK(r.error().message.find(mustMention) != std::string::npos);
+}
+
+}  // namespace
+
+TEST_CASE("A seeds file parses, writes back the same, and rasterises its strokes in mm") {
+  auto seeds = parseSeeds(kGood, "s.json");
+  REQUIRE(seeds);
+  REQUIRE(seeds->labels.size() == 3);
+  CHECK(seeds->labels[1].colour.has_value());
+  CHECK(seeds->labels[2].range == std::array<double, 2>{300, 3000});
+  CHECK(seeds->strokes[1].label == 0);
+  CHECK(*seeds->grow.window == std::array<double, 2>{-100, 400});
+  auto again = parseSeeds(seedsToJson(*seeds), "again.json");
+  REQUIRE(again);
+  CHECK(again->strokes.size() == 3);
+  CHECK(again->strokes[0].pointsMm == seeds->strokes[0].pointsMm);
+  CHECK(again->strokes[0].radiusMm == 1);
+
+  auto raster = rasteriseSeeds(*seeds, grid());
+  REQUIRE(raster);
+  // The liver stroke: a 3 mm line with a 1 mm brush on 0.5 mm voxels: more voxels than the line.
+  CHECK(raster->perLabel[1] > 7);
+  CHECK(raster->perLabel[0] == 1);
+  CHECK(std::is_sorted(raster->seeds.begin(), raster->seeds.end(),
+                       [](const GrowthSeed& a, const GrowthSeed& b) { return a.index < b.index; }));
+  CHECK(requireTwoSeededLabels(*seeds, *raster));
+}
+
+TEST_CASE("RAS coordinates are turned into LPS") {
+  auto seeds = parseSeeds(R"({"space": "RAS", "labels": [{"value": 1, "name": "a"}],
+                              "strokes": [{"label": "a", "points": [[10, 20, 30]]}]})",
+                          "ras.json");
+  REQUIRE(seeds);
+  CHECK((seeds->strokes[0].pointsMm[0] == Vec3{-10, -20, 30}));
+}
+
+TEST_CASE("Bad seeds files and seeds are one-line errors naming the field, the label or the point") {
+  checkError("[1, 2]", "expected a JSON object");
+  checkError("{\"labels\": [{\"value\": 1, \"name\": \"a\"}], \"strokes\": [], \"colour\": 3}", "field 'colour' is not a known field");
+  checkError("{\"labels\": [], \"strokes\": []}", "labels must be a non-empty list");
+  checkError("{\"labels\": [{\"value\": 70000, \"name\": \"a\"}], \"strokes\": []}", "labels[0].value must be a label value");
+  checkError("{\"labels\": [{\"value\": 1, \"name\": \"a\"}, {\"value\": 1, \"name\": \"b\"}], \"strokes\": []}",
+             "labels[1].value 1 is listed twice");
+  checkError("{\"labels\": [{\"value\": 1, \"name\": \"a\"}], \"strokes\": [{\"label\": \"kidney\", \"points\": [[0,0,0]]}]}",
+             "strokes[0].label 'kidney' is not one of the labels (a)");
+  checkError("{\"labels\": [{\"value\": 1, \"name\": \"a\"}], \"strokes\": [{\"label\": \"a\", \"points\": [[0,0]]}]}",
+             "strokes[0].points[0] must be 3 numbers");
+  checkError("{\"labels\": [{\"value\": 1, \"name\": \"a\"}], \"strokes\": [{\"label\": \"a\", \"points\": [[0,0,0]], "
+             "\"radius_mm\": -1}]}",
+             "strokes[0].radius_mm");
+  checkError("{\"labels\": [{\"value\": 1, \"name\": \"a\"}], \"strokes\": [], \"grow\": {\"base\": 0}}", "grow.base must be");
+  checkError("{\"labels\": [{\"value\": 1, \"name\": \"a\"}], \"strokes\": [] ", "not valid JSON");
+
+  auto outside = parseSeeds(R"({"labels": [{"value": 0, "name": "background"}, {"value": 1, "name": "a"}],
+                                "strokes": [{"label": "a", "points": [[0, 0, 0], [0, 0, 400]]}]})",
+                            "o.json");
+  REQUIRE(outside);
+  auto raster = rasteriseSeeds(*outside, grid());
+  REQUIRE(!raster);
+  CHECK(raster.error().message.find("strokes[0].points[1] (0.0, 0.0, 400.0) mm of label 'a' lies outside the volume") !=
+        std::string::npos);
+
+  auto single = parseSeeds(R"({"labels": [{"value": 0, "name": "background"}, {"value": 1, "name": "a"}],
+                               "strokes": [{"label": "a", "points": [[0, 0, 0]]}]})",
+                           "one.json");
+  REQUIRE(single);
+  auto oneRaster = rasteriseSeeds(*single, grid());
+  REQUIRE(oneRaster);
+  auto two = requireTwoSeededLabels(*single, *oneRaster);
+  REQUIRE(!two);
+  CHECK(two.error().message.find("only label 'a' has strokes") != std::string::npos);
+}

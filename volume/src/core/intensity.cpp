@@ -1,0 +1,79 @@
+// The intensity model: the unit of a loaded image, the window of plain intensities, and the
+// label-map test of `info` (volume/intensity.h).
+#include "volume/intensity.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace at {
+
+Result<IntensityChoice> parseIntensityChoice(const std::string& text) {
+  if (text == "auto") return IntensityChoice::Auto;
+  if (text == "hu") return IntensityChoice::Hounsfield;
+  if (text == "plain") return IntensityChoice::Plain;
+  return fail("intensity: unknown '" + text + "' (use auto, hu or plain)");
+}
+
+std::pair<IntensityUnit, std::string> decideIntensity(const IntensityEvidence& e, IntensityChoice choice) {
+  if (choice == IntensityChoice::Hounsfield) return {IntensityUnit::Hounsfield, "HU as asked (--intensity hu)"};
+  if (choice == IntensityChoice::Plain) return {IntensityUnit::Plain, "plain intensities as asked (--intensity plain)"};
+  const bool airInHu = e.minValue <= -500;
+  if (e.modality == "CT") {
+    if (airInHu) return {IntensityUnit::Hounsfield, "DICOM Modality CT, values down to air"};
+    return {IntensityUnit::Plain, "DICOM Modality CT but no value at or below -500 (air is -1000 HU): CT numbers not in HU"};
+  }
+  if (!e.modality.empty()) return {IntensityUnit::Plain, "DICOM Modality " + e.modality + ": plain intensities"};
+  if (e.unsignedStorage && !e.rescaleGiven)
+    return {IntensityUnit::Plain, "unsigned integer data without rescale (µCT or MR export): plain intensities"};
+  if (airInHu) return {IntensityUnit::Hounsfield, "values down to air (<= -500): CT in HU"};
+  return {IntensityUnit::Plain, "no value at or below -500 (no air in HU): plain intensities"};
+}
+
+std::array<float, 2> histogramWindow(const std::vector<std::int16_t>& stored) {
+  if (stored.empty()) return {0, 1};
+  std::vector<std::size_t> counts(65536, 0);
+  for (std::int16_t v : stored) ++counts[std::size_t(v + 32768)];
+  const auto percentile = [&](double q) {
+    const std::size_t wanted = std::size_t(q * double(stored.size() - 1));
+    std::size_t seen = 0;
+    for (std::size_t b = 0; b < counts.size(); ++b) {
+      seen += counts[b];
+      if (seen > wanted) return float(int(b) - 32768);
+    }
+    return 32767.0f;
+  };
+  float lo = percentile(0.005), hi = percentile(0.995);
+  if (!(hi > lo)) hi = lo + 1;
+  return {lo, hi};
+}
+
+bool looksLikeLabelMap(const FloatVolume& image) {
+  std::vector<char> seen(65536, 0);
+  std::size_t distinct = 0;
+  for (float v : image.voxels) {
+    if (!(v >= 0) || v > 65535 || v != std::floor(v)) return false;
+    char& s = seen[std::size_t(v)];
+    distinct += s == 0;
+    s = 1;
+  }
+  if (distinct > 512) return false;
+  const Dims d = image.dims();
+  std::size_t pairs = 0, equal = 0;
+  const std::size_t step[3] = {1, std::size_t(d.x), std::size_t(d.x) * d.y};
+  for (int k = 0; k < d.z; ++k)
+    for (int j = 0; j < d.y; ++j)
+      for (int i = 0; i < d.x; ++i) {
+        const std::size_t n = d.index(i, j, k);
+        const bool next[3] = {i + 1 < d.x, j + 1 < d.y, k + 1 < d.z};
+        for (int a = 0; a < 3; ++a) {
+          if (!next[a]) continue;
+          const float u = image.voxels[n], v = image.voxels[n + step[a]];
+          if (u == 0 || v == 0) continue;
+          ++pairs;
+          equal += u == v;
+        }
+      }
+  return pairs == 0 || double(equal) >= 0.9 * double(pairs);
+}
+
+}  // namespace at
