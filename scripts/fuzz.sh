@@ -7,7 +7,8 @@
 #   --runs N      fuzz each harness for N executions instead (the long runs: --runs 1000000)
 #   --parallel P  run P harnesses at a time (default 1)
 #   HARNESS       nifti nrrd nrrd_detached dicom_series dicom_seg png inv3 label_names preset course
-#                 question answer study_protocol … (default: every harness that was built)
+#                 question answer study_protocol package … (default: every harness that was built)
+#   --print-dict H  print the dictionary file harness H uses (bench/collect_fuzz_binaries.sh)
 #
 # Each harness first replays its past findings (tests/fuzz/regressions/<harness>/), then fuzzes from
 # its corpus: the generated seeds (at_fuzz_seeds: small valid files of each kind, the repository's
@@ -18,6 +19,16 @@
 # runs per second, corpus size, result) goes to stdout and to build-fuzz/fuzz-summary.txt.
 set -euo pipefail
 cd "$(dirname "$0")/.."
+# The dictionary a harness uses (harnesses of one format share one).
+dictionary() {
+  case "$1" in
+    nrrd|nrrd_detached|seg_nrrd) echo tests/fuzz/dict/nrrd.dict ;;
+    dicom_series|dicom_seg) echo tests/fuzz/dict/dicom.dict ;;
+    course|question) echo tests/fuzz/dict/course.dict ;;
+    *) [ -f "tests/fuzz/dict/$1.dict" ] && echo "tests/fuzz/dict/$1.dict" || true ;;
+  esac
+}
+
 seconds=25
 runs=""
 parallel=1
@@ -27,7 +38,8 @@ while [ $# -gt 0 ]; do
     --seconds) seconds="$2"; shift 2 ;;
     --runs) runs="$2"; shift 2 ;;
     --parallel) parallel="$2"; shift 2 ;;
-    -h|--help) sed -n '2,19p' "$0"; exit 0 ;;
+    --print-dict) dictionary "$2"; exit 0 ;;
+    -h|--help) sed -n '2,20p' "$0"; exit 0 ;;
     -*) echo "fuzz.sh: unknown option $1" >&2; exit 2 ;;
     *) harnesses+=("$1"); shift ;;
   esac
@@ -35,9 +47,13 @@ done
 
 dir=build-fuzz
 jobs=${AT_JOBS:-$(nproc)}
+launcher=()
+if command -v ccache >/dev/null; then
+  launcher=(-DCMAKE_C_COMPILER_LAUNCHER=ccache -DCMAKE_CXX_COMPILER_LAUNCHER=ccache)
+fi
 if [ ! -f "$dir/build.ninja" ]; then
   cmake -S . -B "$dir" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_C_COMPILER=clang-14 \
-    -DCMAKE_CXX_COMPILER=clang++-14 -DAT_FUZZ=ON -DAT_BUILD_TESTS=OFF ${AT_FUZZ_CMAKE_ARGS:-}
+    -DCMAKE_CXX_COMPILER=clang++-14 -DAT_FUZZ=ON -DAT_BUILD_TESTS=OFF "${launcher[@]}" ${AT_FUZZ_CMAKE_ARGS:-}
 fi
 cmake --build "$dir" -j "$jobs" --target fuzz_all
 
@@ -53,16 +69,6 @@ mkdir -p "$dir/fuzz-corpus" "$dir/fuzz-findings" "$dir/fuzz-logs"
 export ASAN_OPTIONS="abort_on_error=1:detect_leaks=1${ASAN_OPTIONS:+:$ASAN_OPTIONS}"
 export UBSAN_OPTIONS="halt_on_error=1:print_stacktrace=1${UBSAN_OPTIONS:+:$UBSAN_OPTIONS}"
 export LSAN_OPTIONS="suppressions=$PWD/tests/fuzz/lsan.supp:print_suppressions=0${LSAN_OPTIONS:+:$LSAN_OPTIONS}"
-
-# The dictionary a harness uses (harnesses of one format share one).
-dictionary() {
-  case "$1" in
-    nrrd|nrrd_detached|seg_nrrd) echo tests/fuzz/dict/nrrd.dict ;;
-    dicom_series|dicom_seg) echo tests/fuzz/dict/dicom.dict ;;
-    course|question) echo tests/fuzz/dict/course.dict ;;
-    *) [ -f "tests/fuzz/dict/$1.dict" ] && echo "tests/fuzz/dict/$1.dict" || true ;;
-  esac
-}
 
 # Fuzzes one harness; prints its summary line; returns non-zero on a finding.
 fuzz_one() {
@@ -100,6 +106,9 @@ fuzz_one() {
   local result="ok"
   if [ "$status" -ne 0 ]; then
     result="FAILED (exit $status; $(grep -m1 -E 'ERROR|runtime error|at-fuzz:|timeout' "$log" | cut -c1-160); log $log)"
+    # The finding's own lines (the message a reader produced, the sanitizer's first frames), so a
+    # CI log shows what broke without the log file.
+    grep -m1 -A6 -E 'ERROR|runtime error|at-fuzz:|timeout' "$log" | sed "s/^/  $name| /" >&2 || true
   fi
   printf 'fuzz %-15s %10s runs %6s/s %5s corpus files %5s MB peak %6ss  %s\n' "$name" "${executed:-0}" \
     "${rate:-0}" "$units" "${peak:-?}" "$((SECONDS - started))" "$result" | tee -a "$dir/fuzz-summary.txt"

@@ -1,8 +1,12 @@
 #!/usr/bin/env bash
-# Regenerates the paper's figures on the built-in phantom into docs/figures/ with the shipped
-# presets (data/presets). Each panel is one PNG; docs/figures/README.md says what each shows.
+# Regenerates the paper's figures into docs/figures/: panels on the built-in phantom with the shipped
+# presets (data/presets), panels on the real abdominal CT in ../shared/data (read from there, never
+# copied; presets derived from its intensities, skipped with a note when the folder is absent), and
+# one captioned sheet per paper figure (sheet_fig*.png) built from them. docs/figures/README.md says
+# what each shows.
 #   scripts/make_figures.sh [BUILD_DIR]        (default: build; needs build/app/anatomy-tutor)
-# Environment: DATASET (default phantom, i.e. 256³), SIZE (default 448x448: panels stay under 300 KB), OUT (default docs/figures).
+# Environment: DATASET (default phantom, i.e. 256³), SIZE (default 448x448: panels stay under 300 KB),
+# OUT (default docs/figures), SHARED_DATA (default ../shared/data beside the repository).
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 build="${1:-$root/build}"
@@ -13,21 +17,40 @@ out="${OUT:-$root/docs/figures}"
 mkdir -p "$out"
 [ -x "$app" ] || { echo "make_figures: $app not built (ninja -C $build anatomy-tutor)" >&2; exit 1; }
 
+shared="${SHARED_DATA:-$root/../shared/data}"
+ct="$shared/totalsegmentator"
+
 render() {  # render FILE STRUCTURE ARGS...
   local file="$1" structure="$2"
   shift 2
   "$app" render "$dataset" "$structure" --size "$size" --presets "$root/data/presets" --out "$out/$file" "$@"
+}
+render_ct() {  # render_ct FILE STRUCTURE ARGS...: the real abdominal CT, presets derived from its HU
+  local file="$1" structure="$2"
+  shift 2
+  "$app" render "$ct/ct_small.nii.gz" "$structure" --labels "$ct/seg_small.nii.gz" --names "$ct/labels.json" \
+    --size "$size" --presets "$root/data/presets" --out "$out/$file" "$@"
+}
+sheet() {  # sheet FILE TITLE PANEL CAPTION ...: panels missing (no real CT here) are left out
+  local file="$1" title="$2"
+  shift 2
+  local args=()
+  while [ $# -ge 2 ]; do
+    [ -f "$out/$1" ] && args+=("$out/$1" "$2")
+    shift 2
+  done
+  "$app" figure-sheet --out "$out/$file" --title "$title" "${args[@]}"
 }
 
 # Fig. 1: the lateral and the posterior semicircular canal, each in its WDT context.
 render fig1_lateral_canal_wdt.png lateral_semicircular_canal --preset lateral_semicircular_canal_wdt
 render fig1_posterior_canal_wdt.png posterior_semicircular_canal --preset posterior_semicircular_canal_wdt
 # Fig. 2: the posterior canal and the facial nerve with more context (higher t).
-render fig2_posterior_canal_wdt.png posterior_semicircular_canal --preset posterior_semicircular_canal_wdt --t 0.15
+render fig2_posterior_canal_wdt.png posterior_semicircular_canal --preset posterior_semicircular_canal_wdt --t 0.3
 render fig2_facial_nerve_wdt.png facial_nerve --preset facial_nerve_wdt --context 1.1
 # Fig. 4: the cochlea, weighted distance vs non-weighted distance, same transfer functions.
-render fig4_cochlea_wdt.png cochlea --preset cochlea_wdt
-render fig4_cochlea_unweighted.png cochlea --preset cochlea_unweighted
+render fig4_cochlea_wdt.png cochlea --preset cochlea_wdt --margin 2.6
+render fig4_cochlea_unweighted.png cochlea --preset cochlea_unweighted --margin 2.6
 # Fig. 5: fuzzy boundary (Eqs. 4–5) vs hard edge.
 render fig5_cochlea_fuzzy.png cochlea --preset cochlea_fuzzy
 render fig5_cochlea_hard_edge.png cochlea --preset cochlea_hard_edge
@@ -36,3 +59,44 @@ render fig6_temporal_line_outline.png temporal_line --preset temporal_line_outli
 # Fig. 7: distance lighting, the structure as the light source (Eq. 6).
 render fig7_cochlea_lighting.png cochlea --preset cochlea_lighting
 render fig7_lateral_canal_lighting.png lateral_semicircular_canal --preset lateral_semicircular_canal_lighting
+
+# The same looks on the real abdominal CT (3 mm voxels): the L1 vertebra and the right kidney.
+if [ -f "$ct/ct_small.nii.gz" ]; then
+  render_ct ct_fig1_l1_wdt.png vertebrae_l1 --mode wdt --view anterior
+  render_ct ct_fig2_l1_wdt_t03.png vertebrae_l1 --mode wdt --view anterior --t 0.3
+  render_ct ct_fig2_spinal_cord_wdt.png spinal_cord --mode wdt --view posterior
+  render_ct ct_fig4_kidney_wdt.png kidney_right --mode wdt --view anterior
+  render_ct ct_fig4_kidney_unweighted.png kidney_right --mode unweighted --view anterior
+  render_ct ct_fig5_l1_fuzzy.png vertebrae_l1 --mode fuzzy --view anterior
+  render_ct ct_fig6_l1_outline.png vertebrae_l1 --mode outline --view anterior
+  render_ct ct_fig7_l1_lighting.png vertebrae_l1 --mode lighting --view anterior
+else
+  echo "make_figures: $ct/ct_small.nii.gz not found: real-CT panels left out" >&2
+fi
+
+# One sheet per paper figure.
+sheet sheet_fig1.png "Fig. 1 - WDT context around the structure" \
+  fig1_lateral_canal_wdt.png "Phantom: lateral semicircular canal from above" \
+  fig1_posterior_canal_wdt.png "Phantom: posterior canal from the side (lateral mastoid cut away)" \
+  ct_fig1_l1_wdt.png "Real CT: L1 vertebra from the front, derived preset"
+sheet sheet_fig2.png "Fig. 2 - more context: t = 0.3, and a long structure" \
+  fig2_posterior_canal_wdt.png "Phantom: posterior canal, t = 0.3" \
+  fig2_facial_nerve_wdt.png "Phantom: facial nerve with air cells and canals (lateral mastoid cut away)" \
+  ct_fig2_l1_wdt_t03.png "Real CT: L1 vertebra, t = 0.3" \
+  ct_fig2_spinal_cord_wdt.png "Real CT: spinal cord from behind"
+sheet sheet_fig4.png "Fig. 4 - weighted vs non-weighted distance, same TFs" \
+  fig4_cochlea_wdt.png "Phantom: cochlea, WDT" \
+  fig4_cochlea_unweighted.png "Phantom: cochlea, non-weighted" \
+  ct_fig4_kidney_wdt.png "Real CT: right kidney, WDT" \
+  ct_fig4_kidney_unweighted.png "Real CT: right kidney, non-weighted"
+sheet sheet_fig5.png "Fig. 5 - fuzzy boundary vs hard edge" \
+  fig5_cochlea_fuzzy.png "Phantom: cochlea, fuzzy" \
+  fig5_cochlea_hard_edge.png "Phantom: cochlea, hard edge" \
+  ct_fig5_l1_fuzzy.png "Real CT: L1 vertebra, fuzzy"
+sheet sheet_fig6.png "Fig. 6 - a band of constant weighted distance on the bone" \
+  fig6_temporal_line_outline.png "Phantom: temporal line outlined" \
+  ct_fig6_l1_outline.png "Real CT: L1 vertebra from the front; the band falls on the neighbouring vertebrae and ribs"
+sheet sheet_fig7.png "Fig. 7 - the structure lights the bone (Eq. 6)" \
+  fig7_cochlea_lighting.png "Phantom: cochlea as the light" \
+  fig7_lateral_canal_lighting.png "Phantom: lateral canal as the light" \
+  ct_fig7_l1_lighting.png "Real CT: L1 vertebra as the light"

@@ -15,6 +15,7 @@
 #include "db/analytics_store.h"
 #include "core/strings.h"
 #include "learning_session.h"
+#include "quiz/study_report.h"
 
 namespace at::app {
 
@@ -35,7 +36,10 @@ constexpr const char* kAnalyticsHelp =
     "              --out DIR one wide file per table (lessons.csv, structures.csv, questions.csv,\n"
     "              students.csv, exams.csv) and the class's review log as revlog.csv in the form FSRS\n"
     "              optimisers read (card_id = student/structure, review_time in ms, review_rating 1-4,\n"
-    "              review_state 0 new, 1 learning, 2 review, 3 relearning, review_duration in ms)\n";
+    "              review_state 0 new, 1 learning, 2 review, 3 relearning, review_duration in ms).\n"
+    "              Text cells that begin with =, +, -, @, a tab or CR (a name such as \"=SUM(A1)\") get a\n"
+    "              leading apostrophe so that spreadsheets do not run them as formulas; numbers, negative\n"
+    "              ones included, are written as plain numbers\n";
 
 std::string bar(double share, int width = 20) {
   const int full = int(std::lround(std::clamp(share, 0.0, 1.0) * width));
@@ -57,53 +61,63 @@ std::string number(double v, int decimals) {
   return t;
 }
 
-std::string csvField(const std::string& v) {
-  if (v.find_first_of(",\"\n") == std::string::npos) return v;
-  std::string out = "\"";
-  for (char c : v) out += c == '"' ? std::string("\"\"") : std::string(1, c);
-  return out + "\"";
-}
+// One CSV field: text (names, ids, titles: what students and instructors typed) or a number this
+// program formatted. Text gets quiz::csvCell's formula guard (a leading apostrophe before = + - @
+// TAB CR) and quoting; a number is written as it is, so a negative one stays a number.
+struct Cell {
+  std::string value;
+  bool text = true;
+  Cell(std::string v) : value(std::move(v)) {}  // NOLINT: text by default
+  Cell(const char* v) : value(v) {}             // NOLINT
+  static Cell num(std::string v) {
+    Cell c(std::move(v));
+    c.text = false;
+    return c;
+  }
+};
 
-std::string optionalNumber(std::optional<double> v, int decimals) { return v ? number(*v, decimals) : ""; }
+std::string csvField(const Cell& cell) { return cell.text ? quiz::csvCell(cell.value) : quiz::csvQuoted(cell.value); }
+
+Cell count(long long n) { return Cell::num(std::to_string(n)); }
+Cell decimal(double v, int decimals) { return Cell::num(number(v, decimals)); }
+Cell optionalNumber(std::optional<double> v, int decimals) { return Cell::num(v ? number(*v, decimals) : ""); }
 
 // The tables as rows of fields (first row: the header), shared by both CSV forms.
 struct Table {
   std::string name;
-  std::vector<std::vector<std::string>> rows;
+  std::vector<std::vector<Cell>> rows;
 };
 
 std::vector<Table> tables(const lessons::ClassAnalytics& a) {
   std::vector<Table> out;
   Table lessons{"lessons", {{"lesson", "title", "started", "finished", "completion", "mean_best_score"}}};
   for (const auto& l : a.lessons)
-    lessons.rows.push_back({l.lessonId, l.title, std::to_string(l.started), std::to_string(l.finished),
-                            number(l.completion, 4), optionalNumber(l.meanBestScore, 4)});
+    lessons.rows.push_back({l.lessonId, l.title, count(l.started), count(l.finished), decimal(l.completion, 4),
+                            optionalNumber(l.meanBestScore, 4)});
   Table structures{"structures",
                    {{"structure", "name", "answers", "correct", "correct_share", "students", "mean_fsrs_difficulty",
                      "mean_recall"}}};
   for (const auto& s : a.structures)
-    structures.rows.push_back({s.structureId, s.name, std::to_string(s.answers), std::to_string(s.correct),
-                               number(s.correctShare, 4), std::to_string(s.students), number(s.meanDifficulty, 4),
-                               number(s.meanRecall, 4)});
+    structures.rows.push_back({s.structureId, s.name, count(s.answers), count(s.correct), decimal(s.correctShare, 4),
+                               count(s.students), decimal(s.meanDifficulty, 4), decimal(s.meanRecall, 4)});
   Table questions{"questions",
                   {{"question", "lesson_or_exam", "structure", "kind", "answers", "correct", "correct_share",
                     "initial_difficulty", "elo_difficulty"}}};
   for (const auto& q : a.questions)
-    questions.rows.push_back({q.questionId, q.lessonId, q.structureId, q.kind, std::to_string(q.answers),
-                              std::to_string(q.correct), number(q.correctShare, 4), number(q.initialDifficulty, 1),
-                              number(q.difficulty, 2)});
+    questions.rows.push_back({q.questionId, q.lessonId, q.structureId, q.kind, count(q.answers), count(q.correct),
+                              decimal(q.correctShare, 4), decimal(q.initialDifficulty, 1), decimal(q.difficulty, 2)});
   Table students{"students",
                  {{"student", "group", "taught", "due", "mean_recall", "weakest_structure", "weakest_recall",
                    "lessons_finished", "exam_score"}}};
   for (const auto& s : a.students)
-    students.rows.push_back({s.name, s.group, std::to_string(s.taught), std::to_string(s.due),
-                             optionalNumber(s.meanRecall, 4), s.weakestStructure,
-                             s.weakestStructure.empty() ? "" : number(s.weakestRecall, 4), std::to_string(s.lessonsFinished),
-                             optionalNumber(s.examScore, 4)});
+    students.rows.push_back({s.name, s.group, count(s.taught), count(s.due), optionalNumber(s.meanRecall, 4),
+                             s.weakestStructure,
+                             optionalNumber(s.weakestStructure.empty() ? std::nullopt : std::optional(s.weakestRecall), 4),
+                             count(s.lessonsFinished), optionalNumber(s.examScore, 4)});
   Table exams{"exams", {{"exam", "title", "attempts", "finished", "mean_score", "pass_rate"}}};
   for (const auto& e : a.exams)
-    exams.rows.push_back({e.examId, e.title, std::to_string(e.attempts), std::to_string(e.finished),
-                          optionalNumber(e.meanScore, 4), optionalNumber(e.passRate, 4)});
+    exams.rows.push_back({e.examId, e.title, count(e.attempts), count(e.finished), optionalNumber(e.meanScore, 4),
+                          optionalNumber(e.passRate, 4)});
   for (Table* t : {&lessons, &structures, &questions, &students, &exams}) out.push_back(std::move(*t));
   return out;
 }
@@ -116,7 +130,7 @@ void printLongCsv(const std::vector<Table>& all) {
     for (std::size_t r = 1; r < t.rows.size(); ++r)
       for (std::size_t c = 2; c < header.size(); ++c)
         std::printf("%s,%s,%s,%s,%s\n", t.name.c_str(), csvField(t.rows[r][0]).c_str(), csvField(t.rows[r][1]).c_str(),
-                    header[c].c_str(), csvField(t.rows[r][c]).c_str());
+                    header[c].value.c_str(), csvField(t.rows[r][c]).c_str());
   }
 }
 
@@ -131,9 +145,8 @@ Table reviewLogTable(const lessons::AnalyticsInput& in) {
     return x->answeredAt != y->answeredAt ? x->answeredAt < y->answeredAt : x->order < y->order;
   });
   for (const auto* a : ordered)
-    t.rows.push_back({names[a->userId] + "/" + a->structureId, names[a->userId], a->structureId,
-                      std::to_string(a->answeredAt * 1000), std::to_string(int(a->rating)),
-                      std::to_string(int(a->phaseBefore)), std::to_string(a->latencyMs)});
+    t.rows.push_back({names[a->userId] + "/" + a->structureId, names[a->userId], a->structureId, count(a->answeredAt * 1000),
+                      count(int(a->rating)), count(int(a->phaseBefore)), count(a->latencyMs)});
   return t;
 }
 

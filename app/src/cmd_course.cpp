@@ -58,9 +58,10 @@ int runNew(const cli::Args& args) {
   }
   auto stored = saveCourse(**session, *course, "course new");
   if (!stored) return reportError("course new: " + stored.error().message);
-  std::printf("course '%s' (%s) on '%s': %s, %zu steps%s\n", course->id.c_str(), course->title.c_str(),
+  std::printf("course '%s' (%s) on '%s': %s, %s%s\n", course->id.c_str(), course->title.c_str(),
               course->datasetId.c_str(), str::countOf(long(course->lessons.size()), "lesson").c_str(),
-              course->lessons.front().steps.size(), args.has("out") ? (", written to " + *args.value("out")).c_str() : "");
+              str::countOf(long(course->lessons.front().steps.size()), "step").c_str(),
+              args.has("out") ? (", written to " + *args.value("out")).c_str() : "");
   return 0;
 }
 
@@ -76,7 +77,11 @@ int runValidate(const cli::Args& args) {
   }
   // Structures are checked when the dataset can be opened here without changing anything.
   std::string structures = "structures not checked: dataset '" + course->datasetId + "' is not here";
-  const bool builtin = isBuiltinDatasetName(course->datasetId);
+  // A known scan counts as here once fetched (scripts/fetch-scans.sh) and labelled (scripts/label-scans.sh).
+  const KnownScan* scan = findKnownScan(course->datasetId);
+  if (scan) structures += " (fetch it with scripts/fetch-scans.sh and label it with scripts/label-scans.sh)";
+  const bool builtin = isBuiltinDatasetName(course->datasetId) ||
+                       (scan && locateKnownScan(*scan) && cachedKnownScanLabels(*scan));
   std::optional<db::Connection> database;
   if (!builtin) {
     auto existing = db::openExistingDatabase(args.db());
@@ -89,9 +94,10 @@ int runValidate(const cli::Args& args) {
     if (auto ok = checkCourseAgainstDataset(**session, *course, file.string()); !ok) return reportError(ok.error().message);
     structures = "structures checked against dataset '" + course->datasetId + "'";
   }
-  std::printf("%s: valid: course '%s' version %d on '%s': %s, %zu steps, %zu questions; %s\n", file.string().c_str(),
+  std::printf("%s: valid: course '%s' version %d on '%s': %s, %s, %s; %s\n", file.string().c_str(),
               course->id.c_str(), course->version, course->datasetId.c_str(),
-              str::countOf(long(course->lessons.size()), "lesson").c_str(), steps, questions, structures.c_str());
+              str::countOf(long(course->lessons.size()), "lesson").c_str(), str::countOf(long(steps), "step").c_str(),
+              str::countOf(long(questions), "question").c_str(), structures.c_str());
   return 0;
 }
 

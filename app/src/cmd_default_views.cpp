@@ -7,10 +7,12 @@
 
 #include "commands.h"
 #include "course_views.h"
+#include "dataset_resolver.h"
 #include "render/gl/egl_context.h"
 #include "render/gl/volume_renderer.h"
 #include "render/scene.h"
 #include "volume/dataset_source.h"
+#include "volume/known_scans.h"
 #include "volume/mask.h"
 #include "volume/png_image.h"
 #include "wdt/wdt.h"
@@ -22,18 +24,20 @@ namespace fs = std::filesystem;
 // The first views only: each costs a field and a software-GL frame.
 constexpr int kFallbackViews = 3;
 
-int writeDefaultViews(const fs::path& outDir) {
+int writeDefaultViews(const fs::path& outDir, const std::string& courseId) {
   const auto start = std::chrono::steady_clock::now();
-  auto course = loadDefaultCourse();
+  auto course = loadStartCourse(courseId);
   if (!course) return reportError(course.error().message);
   const auto views = firstLessonViews(*course);
   if (views.empty()) return reportError("course '" + course->id + "': its first lesson has no views to show");
   // The phantom at 128³ (0.4 mm voxels): same anatomy, an eighth of the voxels.
   const std::string datasetName = course->datasetId == "phantom" ? "phantom:128" : course->datasetId;
-  if (!isBuiltinDatasetName(datasetName))
+  if (!isBuiltinDatasetName(datasetName) && !findKnownScan(datasetName))
     return reportError("course '" + course->id + "': dataset '" + course->datasetId +
                        "' is not built in; open it on a display with `anatomy-tutor desktop`");
-  auto dataset = openBuiltinDataset(datasetName);
+  DatasetRequest request;  // a built-in name, or a known scan with the labels set-up grew for it
+  request.name = datasetName;
+  auto dataset = openNamedDataset(request);
   if (!dataset) return reportError(dataset.error().message);
   auto context = render::gl::EglContext::create();
   if (!context) return reportError("offscreen rendering: " + context.error().message);
@@ -63,6 +67,7 @@ int writeDefaultViews(const fs::path& outDir) {
     auto settings = render::settingsFor(*preset, *frame, request);
     if (!settings) return reportError(settings.error().message);
     settings->background = {0.04f, 0.04f, 0.05f, 1.0f};
+    applyStepPlacement(*settings, step.camera, step.clip);
     renderer->setSelected(structure->label);
     if (render::modeNeedsField(preset->mode)) {
       auto params = render::wdtParamsFor(*preset);

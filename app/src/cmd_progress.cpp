@@ -177,9 +177,9 @@ int runProgress(const Argv& argv) {
         std::snprintf(buffer, sizeof buffer, "finished, best score %.2f", best);
         state = buffer;
       }
-      if (open) state = best >= 0 ? state + "; another attempt in progress" : "in progress (play resumes it)";
-      std::printf("  %-28s %-40s %s (%s)\n", l.id.c_str(), l.title.c_str(), state.c_str(),
-                  str::countOf(tries, "attempt").c_str());
+      if (open) state = best >= 0 ? state + "; another attempt in progress" : "in progress, play resumes it";
+      if (tries > 0) state += " (" + str::countOf(tries, "attempt") + ")";
+      std::printf("  %-28s %-40s %s\n", l.id.c_str(), l.title.c_str(), state.c_str());
     }
   }
 

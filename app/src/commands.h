@@ -33,6 +33,7 @@ int runWdt(const Argv& args);
 
 // Rendering (cmd_render.cpp)
 int runRender(const Argv& args);
+int runFigureSheet(const Argv& args);  // cmd_figure_sheet.cpp
 // The shipped presets: dataSubdirectory("presets") (data_paths.h).
 std::filesystem::path defaultPresetsDir();
 
@@ -46,10 +47,11 @@ int runDesktop(const Argv& args);
 // AT_DESKTOP_OFFSCREEN=1 with SDL_VIDEODRIVER=offscreen accepts SDL's offscreen driver (an EGL
 // pbuffer, no window shown). (desktop/ui/window.cpp)
 bool displayAvailable();
-// The no-display fallback of `anatomy-tutor` without arguments: renders the default lesson's first
-// three views (360×270) offscreen (EGL) into `outDir` as PNG files, printing one line per file. The
-// built-in phantom is opened at 128³ so that this stays quick on two CPU cores. (cmd_default_views.cpp)
-int writeDefaultViews(const std::filesystem::path& outDir);
+// The no-display fallback of `anatomy-tutor` without arguments: renders the first lesson's first
+// three views (360×270) of course `courseId` (empty: the default course) offscreen (EGL) into
+// `outDir` as PNG files, printing one line per file. The built-in phantom is opened at 128³ so that
+// this stays quick on two CPU cores. (cmd_default_views.cpp)
+int writeDefaultViews(const std::filesystem::path& outDir, const std::string& courseId = {});
 
 // Datasets and learning (cmd_import.cpp, cmd_play.cpp, cmd_progress.cpp)
 int runImport(const Argv& args);

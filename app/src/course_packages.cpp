@@ -5,6 +5,7 @@
 #include <set>
 
 #include "db/checksum.h"
+#include "db/connection.h"
 #include "db/dataset_store.h"
 #include "db/preset_store.h"
 #include "course_authoring.h"

@@ -1,6 +1,7 @@
 #include "course_views.h"
 
 #include <algorithm>
+#include <cmath>
 #include <filesystem>
 
 #include "db/preset_store.h"
@@ -25,6 +26,25 @@ Result<lessons::Course> loadDefaultCourse() {
   return lessons::loadCourseJson(files.front());
 }
 
+Result<lessons::Course> loadStartCourse(const std::string& courseId) {
+  if (courseId.empty()) return loadDefaultCourse();
+  const fs::path dir = courseDirectory();
+  std::error_code ec;
+  std::vector<fs::path> files;
+  for (const auto& entry : fs::directory_iterator(dir, ec))
+    if (entry.path().extension() == ".json") files.push_back(entry.path());
+  if (ec) return fail(dir.string() + ": cannot list the course folder (" + ec.message() + ")");
+  std::sort(files.begin(), files.end());
+  std::string ids;
+  for (const fs::path& file : files) {
+    auto course = lessons::loadCourseJson(file);
+    if (!course) continue;  // a broken file is reported where courses are listed
+    if (course->id == courseId) return course;
+    ids += (ids.empty() ? "" : ", ") + course->id;
+  }
+  return fail(ErrorKind::NotFound, "no course '" + courseId + "' in " + dir.string() + " (there: " + ids + ")");
+}
+
 std::vector<lessons::ShowStep> firstLessonViews(const lessons::Course& course) {
   std::vector<lessons::ShowStep> views;
   if (course.lessons.empty()) return views;
@@ -45,6 +65,43 @@ Result<render::Preset> presetForStep(const render::PresetLibrary& library, const
   const bool bare = presetId.size() >= 5 && presetId.substr(presetId.size() - 5) == "_bare";
   return render::presetOrDerived(library, structureId, bare ? render::RenderMode::Bare : render::RenderMode::Wdt,
                                  levels);
+}
+
+render::Camera cameraOf(const lessons::StepCamera& camera) {
+  auto c = render::Camera::looking(camera.targetMm, camera.look, camera.up, camera.distanceMm);
+  return c ? *c : render::Camera{};  // the course reader refused anything `looking` would
+}
+
+render::ClipPlane clipOf(const lessons::StepClip& clip) { return render::ClipPlane{clip.normal, clip.d}; }
+
+void applyStepPlacement(render::RenderSettings& settings, const std::optional<lessons::StepCamera>& camera,
+                        const std::optional<lessons::StepClip>& clip) {
+  if (camera) {
+    const render::Camera framed = settings.camera;
+    settings.camera = cameraOf(*camera);
+    settings.camera.fovYDeg = framed.fovYDeg;
+    settings.camera.orthographic = framed.orthographic;
+  }
+  if (clip) settings.clip = clipOf(*clip);
+}
+
+lessons::StepCamera stepCameraOf(const render::Camera& camera) {
+  return lessons::StepCamera{camera.target, camera.forward(), camera.up(), camera.distanceMm};
+}
+
+Result<lessons::StepClip> stepClipOf(const render::ClipPlane& plane) {
+  int axis = -1;
+  for (int i = 0; i < 3; ++i)
+    if (std::abs(plane.normal[std::size_t(i)]) > 1e-9) {
+      if (axis >= 0) return fail("the clipping plane is not along one patient axis, which a course step cannot keep");
+      axis = i;
+    }
+  if (axis < 0) return fail("the clipping plane has no normal");
+  lessons::StepClip clip;
+  clip.normal = {0, 0, 0};
+  clip.normal[std::size_t(axis)] = plane.normal[std::size_t(axis)] > 0 ? 1 : -1;
+  clip.d = plane.d / std::abs(plane.normal[std::size_t(axis)]);
+  return clip;
 }
 
 }  // namespace at::app

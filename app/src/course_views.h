@@ -7,6 +7,8 @@
 #include <vector>
 
 #include "lessons/curriculum.h"
+#include "render/camera.h"
+#include "render/render_settings.h"
 #include "render/derived_preset.h"
 #include "render/preset.h"
 #include "core/error.h"
@@ -20,6 +22,9 @@ namespace at::app {
 // The default course: temporal_bone.json in the course folder (learning_session.h), else the
 // first course file there by name.
 Result<lessons::Course> loadDefaultCourse();
+// The course the app starts on: `courseId`'s file in the course folder (an error naming the ids
+// there when none has it), or the default course when `courseId` is empty.
+Result<lessons::Course> loadStartCourse(const std::string& courseId);
 
 // The show steps of the course's first lesson, in order (the default lesson's views).
 std::vector<lessons::ShowStep> firstLessonViews(const lessons::Course& course);
@@ -31,5 +36,17 @@ std::vector<lessons::ShowStep> firstLessonViews(const lessons::Course& course);
 Result<render::Preset> presetForStep(const render::PresetLibrary& library, const std::string& structureId,
                                      const std::string& presetId, const render::IntensityLevels& levels,
                                      db::Database* database = nullptr);
+
+// A step's free camera and clipping plane as the renderer takes them (the course reader checked
+// both, so these conversions cannot fail for a stored step), and back from what a view shows.
+render::Camera cameraOf(const lessons::StepCamera& camera);
+render::ClipPlane clipOf(const lessons::StepClip& clip);
+lessons::StepCamera stepCameraOf(const render::Camera& camera);
+// Error when the plane's normal is not along one patient axis (the course schema's rule).
+Result<lessons::StepClip> stepClipOf(const render::ClipPlane& plane);
+// Settings framed on a step's named view, with its free camera (when it has one) and plane (when
+// it has one) put in: what `play` and the default views render.
+void applyStepPlacement(render::RenderSettings& settings, const std::optional<lessons::StepCamera>& camera,
+                        const std::optional<lessons::StepClip>& clip);
 
 }  // namespace at::app

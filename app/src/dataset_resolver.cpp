@@ -5,6 +5,7 @@
 
 #include "core/strings.h"
 #include "db/dataset_store.h"
+#include "scan_catalogue.h"
 #include "volume/dataset_source.h"
 #include "volume/known_scans.h"
 
@@ -49,7 +50,15 @@ Result<Dataset> openNamedDataset(const DatasetRequest& request) {
       return fail("--series, --skip-unreadable and --nrrd-data apply to DICOM folders and NRRD files, not to '" +
                   request.name + "'");
     if (!request.namesPath.empty() && request.labelsPath.empty()) return fail("--names needs --labels PATH");
-    return openKnownScan(*scan, {request.labelsPath, request.namesPath});
+    auto dataset = openKnownScan(*scan, {request.labelsPath, request.namesPath});
+    if (!dataset) return dataset;
+    // The labels scripts/label-scans.sh grew: their structures described by the shipped catalogue.
+    if (request.labelsPath.empty() && !dataset->structures.empty()) {
+      auto catalogue = loadStructureCatalogue(catalogueFileFor(scan->name));
+      if (!catalogue) return tl::unexpected(catalogue.error());
+      applyCatalogue(*dataset, *catalogue);
+    }
+    return dataset;
   }
   std::error_code ec;
   if (fs::exists(request.name, ec)) {

@@ -2,6 +2,8 @@
 
 #include <filesystem>
 #include <functional>
+#include <map>
+#include <mutex>
 
 #include "core/strings.h"
 #include "data_paths.h"
@@ -9,6 +11,7 @@
 #include "db/course_store.h"
 #include "db/sqlite_repositories.h"
 #include "volume/dataset_source.h"
+#include "volume/known_scans.h"
 #include "volume/phantom.h"
 #include "wdt/answer_keys.h"
 
@@ -64,11 +67,31 @@ class LazyKeyComputer final : public quiz::KeyComputer {
   std::unique_ptr<quiz::DatasetKeyComputer> keys_;
 };
 
-// The built-in datasets' structures without building their volumes ("phantom", "phantom:N").
+// A known scan's structures (skull): those of the labels scripts/label-scans.sh grew, read once
+// per process (the scan and its labels are loaded for it).
+Result<std::vector<Structure>> knownScanStructures(const std::string& datasetId) {
+  static std::mutex mutex;
+  static std::map<std::string, std::vector<Structure>> cache;
+  std::lock_guard lock(mutex);
+  if (auto it = cache.find(datasetId); it != cache.end()) return it->second;
+  DatasetRequest request;
+  request.name = datasetId;
+  auto dataset = openNamedDataset(request);
+  if (!dataset) return tl::unexpected(withContext("dataset '" + datasetId + "'", dataset.error()));
+  if (dataset->structures.empty())
+    return fail(ErrorKind::NotFound, "dataset '" + datasetId + "' has no labels yet: run `bash scripts/label-scans.sh` "
+                "(it grows them with `anatomy-tutor segment` from the seeds in data/segmentations/" + datasetId + "/)");
+  return cache.emplace(datasetId, std::move(dataset->structures)).first->second;
+}
+
+// The built-in datasets' structures without building their volumes ("phantom", "phantom:N"), and
+// the known scans' when they can be opened with their labels.
 db::BuiltinStructures builtinStructures() {
   return [](const std::string& datasetId) -> std::optional<std::vector<Structure>> {
-    if (!isBuiltinDatasetName(datasetId)) return std::nullopt;
-    return phantomStructures();
+    if (isBuiltinDatasetName(datasetId)) return phantomStructures();
+    if (findKnownScan(datasetId))
+      if (auto structures = knownScanStructures(datasetId)) return std::move(*structures);
+    return std::nullopt;
   };
 }
 
@@ -129,6 +152,7 @@ Result<lessons::User> LearningSession::user(const std::string& name, NewUser new
 }
 
 Result<std::vector<Structure>> LearningSession::structures(const std::string& datasetId) {
+  if (findKnownScan(datasetId)) return knownScanStructures(datasetId);
   return curriculum().structures(datasetId);
 }
 

@@ -1,5 +1,6 @@
 // anatomy-tutor: entry point. Dispatches to a subcommand; with none, runs the default course.
 // `main` catches at the top: anything unexpected becomes a one-line error and exit status 2.
+#include <algorithm>
 #include <cstdio>
 #include <exception>
 #include <string>
@@ -17,6 +18,7 @@ const std::vector<Command>& commands() {
       {"slice", "write a grey slice with label overlay as PNG", runSlice},
       {"wdt", "weighted distance field of a structure (CPU or CUDA), with --check against exact", runWdt},
       {"render", "render a structure in one of the paper's modes to PNG (offscreen)", runRender},
+      {"figure-sheet", "lay rendered panels side by side with captions into one PNG (figure sheets)", runFigureSheet},
       {"segment", "label a dataset from seed strokes (grow from seeds, threshold islands) to NIfTI or .seg.nrrd", runSegment},
       {"desktop", "open the desktop app (explore; --ui-script replays actions, --screenshot saves)", runDesktop},
       {"import", "register a dataset (volume, labels, names) in the database", runImport},
@@ -54,15 +56,32 @@ void printUsage() {
               "../share/anatomy-tutor beside the executable; AT_DATA_DIR=DIR reads them from DIR instead.\n");
 }
 
-// The desktop app on the default course when a display exists; otherwise one line saying so and the
-// default lesson's first views written as PNG files through the offscreen renderer. `globals`:
-// global options given without a command (`anatomy-tutor --db X`).
+// The desktop app on the default course (or --course ID's) when a display exists; otherwise one line
+// saying so and that course's first lesson's first views written as PNG files through the offscreen
+// renderer. `globals`: global and desktop options given without a command (`anatomy-tutor --db X`).
 int runDefault(const Argv& globals) {
   if (displayAvailable()) return runDesktop(globals);
+  std::string course;
+  for (std::size_t i = 0; i + 1 < globals.size(); ++i)
+    if (globals[i] == "--course") course = globals[i + 1];
   const std::string dir = "anatomy-tutor-views";
-  std::printf("anatomy-tutor: no display (none named in DISPLAY/WAYLAND_DISPLAY, or it cannot be opened): writing the default lesson's "
-              "first views to %s/ instead\n", dir.c_str());
-  return writeDefaultViews(dir);
+  std::printf("anatomy-tutor: no display (none named in DISPLAY/WAYLAND_DISPLAY, or it cannot be opened): writing the %s lesson's "
+              "first views to %s/ instead\n", course.empty() ? "default" : ("'" + course + "' course's first").c_str(), dir.c_str());
+  return writeDefaultViews(dir, course);
+}
+
+// `anatomy-tutor --course ID` with nothing else but global options starts as `anatomy-tutor` does
+// (the desktop, or the course's first views where there is no display); other desktop options
+// without a command, and the explicit `desktop` command, open the desktop.
+bool startsOnCourse(const Argv& argv, const Argv& args) {
+  if (std::find(argv.begin(), argv.end(), "desktop") != argv.end()) return false;
+  bool course = false;
+  for (std::size_t i = 0; i < args.size(); i += 2) {
+    const std::string& word = args[i];
+    if (word == "--course" && i + 1 < args.size()) course = true;
+    else if (word != "--db" && word != "--user" && word != "--size") return false;
+  }
+  return course;
 }
 
 }  // namespace
@@ -82,7 +101,8 @@ int main(int argc, char** argv) {
       std::printf("anatomy-tutor %s\n", AT_VERSION);
       return 0;
     }
-    if (name.empty()) return runDefault(line->args);
+    if (name.empty() || (name == "desktop" && startsOnCourse(Argv(argv + 1, argv + argc), line->args)))
+      return runDefault(line->args);
     for (const Command& c : commands())
       if (name == c.name) return c.run(line->args);
     return reportError("unknown command '" + name + "' (see anatomy-tutor --help)", 2);

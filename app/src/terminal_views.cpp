@@ -172,7 +172,8 @@ Result<TerminalPicture> TerminalViews::show(const lessons::QuestionScene& scene,
   render::SceneVolumes volumes{&dataset_.volume, &dataset_.labels, field, selected->label, gradients_.get()};
 
   std::vector<std::string> views = {lessons::toString(scene.view)};
-  const Structure* target = visibleTarget ? dataset_.findStructure(*visibleTarget) : nullptr;
+  // A step's free camera is the author's choice: kept even when the target does not show.
+  const Structure* target = visibleTarget && !scene.camera ? dataset_.findStructure(*visibleTarget) : nullptr;
   std::optional<Vec3> targetCentre = target ? structureCentre(dataset_.labels, target->label) : std::nullopt;
   if (targetCentre)
     for (lessons::CameraView v : {lessons::CameraView::LateralRight, lessons::CameraView::Superior,
@@ -183,6 +184,7 @@ Result<TerminalPicture> TerminalViews::show(const lessons::QuestionScene& scene,
   for (const std::string& view : views) {
     auto settings = settingsFor(*selected, *preset, view, kWidth, kHeight, region ? kRegionMargin : 0);
     if (!settings) return tl::unexpected(settings.error());
+    applyStepPlacement(*settings, scene.camera, scene.clip);
     if (!chosen) chosen = *settings;  // the scene's own side unless another shows the target
     if (!targetCentre) break;
     const auto px = settings->camera.project(*targetCentre, kWidth, kHeight);

@@ -58,9 +58,14 @@ Status writeCourse(Database& d, const lessons::Course& course, const std::string
   auto prereq = d.prepare("INSERT INTO lesson_prerequisites (lesson_id, requires_id, position) VALUES (?1, ?2, ?3)");
   auto question = d.prepare(
       "INSERT INTO questions (id, lesson_id, kind, target, difficulty, json) VALUES (?1, ?2, ?3, ?4, ?5, ?6)");
-  auto step = d.prepare(
-      "INSERT INTO steps (lesson_id, position, kind, structure, preset_id, view, title, text, question_id, study_items)"
-      " VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10)");
+  // Steps keep a camera and clip from schema 11 (tests build older versions with this code).
+  auto version = d.schemaVersion();
+  if (!version) return tl::unexpected(version.error());
+  const bool placements = *version >= 12;
+  auto step = d.prepare(placements ? "INSERT INTO steps (lesson_id, position, kind, structure, preset_id, view, title, text,"
+                                     " question_id, study_items, placement) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11)"
+                                   : "INSERT INTO steps (lesson_id, position, kind, structure, preset_id, view, title, text,"
+                                     " question_id, study_items) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10)");
   for (auto* s : {&lesson, &prereq, &question, &step})
     if (!*s) return tl::unexpected(s->error());
 
@@ -78,7 +83,7 @@ Status writeCourse(Database& d, const lessons::Course& course, const std::string
       const lessons::Step& st = l.steps[si];
       std::optional<std::string> questionId;
       std::string structure;
-      std::string scenePreset, sceneView;
+      std::string scenePreset, sceneView, placement;
       if (st.kind == lessons::StepKind::Question) {
         const quiz::Question& q = st.question;
         question->reset();
@@ -95,9 +100,11 @@ Status writeCourse(Database& d, const lessons::Course& course, const std::string
           structure = st.scene->structure;
           scenePreset = st.scene->presetId;
           sceneView = lessons::toString(st.scene->view);
+          placement = lessons::placementToJson(st.scene->camera, st.scene->clip);
         }
       } else if (st.kind == lessons::StepKind::Show) {
         structure = st.show.structure;
+        placement = lessons::placementToJson(st.show.camera, st.show.clip);
       } else {
         structure = st.study.structure;
       }
@@ -113,6 +120,10 @@ Status writeCourse(Database& d, const lessons::Course& course, const std::string
           .bind(8, show ? st.show.text : std::string())
           .bind(9, questionId)
           .bind(10, nlohmann::json(st.study.items).dump());
+      if (placements) step->bind(11, placement.empty() ? std::optional<std::string>() : std::optional<std::string>(placement));
+      else if (!placement.empty())
+        return fail("lesson '" + l.id + "' step " + std::to_string(si) + ": a camera or clip needs schema version 12; this database is at " +
+                    std::to_string(*version));
       if (auto s = step->run(); !s)
         return tl::unexpected(withContext("lesson '" + l.id + "' step " + std::to_string(si), s.error()));
     }
@@ -120,8 +131,6 @@ Status writeCourse(Database& d, const lessons::Course& course, const std::string
 
   // Exams came with schema 7 (a database is always migrated before courses are stored; tests build
   // older versions with this code, which then has no exams to keep).
-  auto version = d.schemaVersion();
-  if (!version) return tl::unexpected(version.error());
   if (*version < 7) {
     if (!course.exams.empty()) return fail("exams need schema version 7; this database is at " + std::to_string(*version));
     return {};

@@ -368,7 +368,6 @@ constexpr std::string_view kDatasetLoadOptions = R"SQL(
 ALTER TABLE datasets ADD COLUMN load_options TEXT;
 )SQL";
 
-
 // A class on a class server, and the learning records its students' machines send there.
 // On the server: classes (joined with their code), their members with a role, and class_events —
 // every answer, lesson start and lesson end any member's machine sent, once (its UUID is the key;
@@ -429,6 +428,23 @@ CREATE TABLE outbox (
 );
 CREATE INDEX outbox_unsent ON outbox(server, sent_at, seq);
 )SQL";
+
+// What a participant saw when rating (issue 19): the render quality level on screen (the full
+// level is quality_full_level; NULL: not known, e.g. rated without a view or before this version),
+// the full level's resolution as a share of the view, and the milliseconds from the rated side
+// being shown to the full level being on screen.
+constexpr std::string_view kStudyRatingQuality = R"SQL(
+ALTER TABLE study_ratings ADD COLUMN quality_level INTEGER;
+ALTER TABLE study_ratings ADD COLUMN quality_full_level INTEGER;
+ALTER TABLE study_ratings ADD COLUMN quality_scale REAL;
+ALTER TABLE study_ratings ADD COLUMN settle_ms REAL;
+)SQL";
+
+// A course step's free camera and clipping plane (course JSON's "camera" and "clip" as one JSON
+// object, lessons::placementToJson); NULL: the step frames its named view, unclipped.
+constexpr std::string_view kStepPlacement = R"SQL(
+ALTER TABLE steps ADD COLUMN placement TEXT;
+)SQL";
 }  // namespace
 
 const std::vector<Migration>& migrations() {
@@ -446,6 +462,8 @@ const std::vector<Migration>& migrations() {
       {8, "study ratings keep their session; trials say whether viewing was measured", kStudySessions},
       {9, "how an imported dataset's files are read (skip unreadable files, data folder)", kDatasetLoadOptions},
       {10, "class server: classes, members and roles, learning events; a learner's class membership and outbox", kClasses},
+      {11, "study ratings record the render quality on screen and its settle time", kStudyRatingQuality},
+      {12, "course steps keep a free camera and a clipping plane", kStepPlacement},
   };
   return all;
 }

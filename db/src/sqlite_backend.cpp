@@ -2,6 +2,9 @@
 // version in PRAGMA user_version. Files are inspected read-only (version, quick_check) before they
 // are opened for writing; full disks, read-only and damaged files are said in those words.
 #include <sqlite3.h>
+
+#include <chrono>
+#include <thread>
 #include <unistd.h>
 
 #include <cerrno>
@@ -303,12 +306,21 @@ Result<std::unique_ptr<Connection>> openSqlite(const std::string& path, const Op
   sqlite3_extended_result_codes(raw, 1);
   sqlite3_busy_timeout(raw, options.busyTimeoutMs);
 
-  // journal_mode needs the write lock briefly; busy_timeout covers a concurrent opener.
+  // journal_mode needs the write lock briefly. SQLite returns SQLITE_BUSY at once, without the busy
+  // handler, where waiting could deadlock (several programs opening one fresh file together), so
+  // the switch is retried until the busy timeout has passed.
   {
-    auto mode = connection->prepare("PRAGMA journal_mode = WAL");
-    if (!mode) return tl::unexpected(mode.error());
-    auto modeRow = (*mode)->step();
-    if (!modeRow) return tl::unexpected(withContext(path + ": cannot switch to WAL", modeRow.error()));
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::milliseconds(options.busyTimeoutMs);
+    for (int attempt = 0;; ++attempt) {
+      auto mode = connection->prepare("PRAGMA journal_mode = WAL");
+      if (!mode) return tl::unexpected(mode.error());
+      auto modeRow = (*mode)->step();
+      if (modeRow) break;
+      const int code = sqlite3_errcode(raw) & 0xFF;
+      if ((code != SQLITE_BUSY && code != SQLITE_LOCKED) || std::chrono::steady_clock::now() >= deadline)
+        return tl::unexpected(withContext(path + ": cannot switch to WAL", modeRow.error()));
+      std::this_thread::sleep_for(std::chrono::milliseconds(5 + 5 * std::min(attempt, 9)));
+    }
   }
   if (auto s = connection->exec("PRAGMA foreign_keys = ON; PRAGMA synchronous = FULL"); !s)
     return tl::unexpected(withContext(path, s.error()));

@@ -171,7 +171,7 @@ Result<Lesson> SqliteCurriculumRepository::lesson(const std::string& lessonId) {
     return tl::unexpected(st.error());
 
   auto steps = db_.prepare(
-      "SELECT s.kind, s.structure, s.preset_id, s.view, s.title, s.text, s.study_items, q.json"
+      "SELECT s.kind, s.structure, s.preset_id, s.view, s.title, s.text, s.study_items, q.json, s.placement"
       " FROM steps s LEFT JOIN questions q ON q.id = s.question_id WHERE s.lesson_id = ?1 ORDER BY s.position");
   if (!steps) return tl::unexpected(steps.error());
   steps->bind(1, lessonId);
@@ -190,6 +190,8 @@ Result<Lesson> SqliteCurriculumRepository::lesson(const std::string& lessonId) {
         step.show.view = *view;
         step.show.title = r.text(4);
         step.show.text = r.text(5);
+        if (auto ok = parsePlacementJson(r.isNull(8) ? "" : r.text(8), where, step.show.camera, step.show.clip); !ok)
+          return tl::unexpected(ok.error());
         break;
       }
       case StepKind::Question: {
@@ -200,7 +202,9 @@ Result<Lesson> SqliteCurriculumRepository::lesson(const std::string& lessonId) {
         if (!r.text(3).empty()) {  // the scene the course set (course_store.cpp)
           auto view = parseCameraView(r.text(3));
           if (!view) return fail(where + ": " + view.error().message);
-          step.scene = QuestionScene{r.text(1), r.text(2), *view};
+          step.scene = QuestionScene{r.text(1), r.text(2), *view, std::nullopt, std::nullopt};
+          if (auto ok = parsePlacementJson(r.isNull(8) ? "" : r.text(8), where, step.scene->camera, step.scene->clip); !ok)
+            return tl::unexpected(ok.error());
         }
         break;
       }

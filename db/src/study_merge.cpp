@@ -39,7 +39,9 @@ const std::vector<Column> kTrialColumns = {
 const std::vector<Column> kRatingColumns = {
     {"position", Type::Int}, {"item", Type::Text},      {"rating_ab", Type::Int},   {"response_ms", Type::Real},
     {"t", Type::Real},       {"alpha", Type::Real},     {"beta", Type::Real},       {"app_version", Type::Text},
-    {"created_at", Type::Text}, {"session", Type::Int}};
+    {"created_at", Type::Text}, {"session", Type::Int},
+    {"quality_level", Type::Int}, {"quality_full_level", Type::Int}, {"quality_scale", Type::Real},
+    {"settle_ms", Type::Real}};
 
 std::string columnList(const std::vector<Column>& columns) {
   std::string out;

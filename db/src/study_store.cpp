@@ -249,11 +249,14 @@ Status recordRating(Database& db, const StudyParticipant& participant, const Rat
     if (auto current = checkSessionCurrent(d, participant); !current) return current;
     auto st = d.prepare(
         "INSERT INTO study_ratings (study_id, participant_id, position, item, rating_ab, response_ms, t, alpha, beta, "
-        "app_version, session, created_at) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, "
-        "(SELECT session FROM study_participants WHERE study_id = ?1 AND participant_id = ?2), ?11) "
+        "app_version, session, created_at, quality_level, quality_full_level, quality_scale, settle_ms) "
+        "VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, "
+        "(SELECT session FROM study_participants WHERE study_id = ?1 AND participant_id = ?2), ?11, ?12, ?13, ?14, ?15) "
         "ON CONFLICT(study_id, participant_id, position, item) DO UPDATE SET rating_ab = excluded.rating_ab, "
         "response_ms = excluded.response_ms, t = excluded.t, alpha = excluded.alpha, beta = excluded.beta, "
-        "app_version = excluded.app_version, session = excluded.session, created_at = excluded.created_at");
+        "app_version = excluded.app_version, session = excluded.session, created_at = excluded.created_at, "
+        "quality_level = excluded.quality_level, quality_full_level = excluded.quality_full_level, "
+        "quality_scale = excluded.quality_scale, settle_ms = excluded.settle_ms");
     if (!st) return tl::unexpected(st.error());
     st->bind(1, studyId)
         .bind(2, participantId)
@@ -265,7 +268,11 @@ Status recordRating(Database& db, const StudyParticipant& participant, const Rat
         .bind(8, rating.alpha)
         .bind(9, rating.beta)
         .bind(10, rating.appVersion)
-        .bind(11, utcTimestampNow());
+        .bind(11, utcTimestampNow())
+        .bind(12, rating.qualityLevel)
+        .bind(13, rating.qualityFullLevel)
+        .bind(14, rating.qualityScale)
+        .bind(15, rating.settleMs);
     return st->run();
   });
 }
@@ -362,7 +369,7 @@ Result<std::vector<quiz::StudyResponseRow>> studyResponseRows(Database& db, cons
       "SELECT p.participant_id, p.group_name, r.session, t.structure, r.item, r.rating_ab, t.a_condition, t.position, "
       " t.preset_a, t.preset_b, r.t, r.alpha, r.beta, t.view_ms_a, t.view_ms_b, t.toggles, r.response_ms, "
       " r.created_at, r.app_version, t.comment, CASE WHEN p.completed_at IS NULL THEN 0 ELSE 1 END, "
-      " p.enrolment_index, t.viewing_measured "
+      " p.enrolment_index, t.viewing_measured, r.quality_level, r.quality_full_level, r.quality_scale, r.settle_ms "
       "FROM study_ratings r "
       "JOIN study_trials t ON t.study_id = r.study_id AND t.participant_id = r.participant_id AND t.position = r.position "
       "JOIN study_participants p ON p.study_id = r.study_id AND p.participant_id = r.participant_id "
@@ -400,6 +407,10 @@ Result<std::vector<quiz::StudyResponseRow>> studyResponseRows(Database& db, cons
     r.comment = st->optionalText(19).value_or("");
     r.participantComplete = st->integer(20) != 0;
     r.viewingMeasured = st->integer(22) != 0;
+    if (!st->isNull(23)) r.qualityLevel = st->integer(23);
+    if (!st->isNull(24)) r.qualityFullLevel = st->integer(24);
+    if (!st->isNull(25)) r.qualityScale = st->real(25);
+    if (!st->isNull(26)) r.settleMs = st->real(26);
     const bool aIsFirst = r.aCondition == protocol.conditions[0].id;
     r.rating = quiz::unblindRating(r.ratingAb, aIsFirst, protocol.scale);
     auto order = itemOrder.find(r.item);

@@ -217,4 +217,18 @@ ClassAnalytics computeAnalytics(const AnalyticsInput& in, UnixSeconds now, const
   return r;
 }
 
+std::vector<QuestionStats> mostMissed(const ClassAnalytics& analytics, std::size_t limit) {
+  std::vector<QuestionStats> missed;
+  for (const QuestionStats& q : analytics.questions)
+    if (q.answers > q.correct) missed.push_back(q);
+  std::sort(missed.begin(), missed.end(), [](const QuestionStats& a, const QuestionStats& b) {
+    const int ma = a.answers - a.correct, mb = b.answers - b.correct;
+    if (ma != mb) return ma > mb;
+    if (a.correctShare != b.correctShare) return a.correctShare < b.correctShare;
+    return a.questionId < b.questionId;
+  });
+  if (missed.size() > limit) missed.resize(limit);
+  return missed;
+}
+
 }  // namespace at::lessons

@@ -1,6 +1,7 @@
 #include "lessons/course_json.h"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <fstream>
 #include <limits>
@@ -199,6 +200,89 @@ Result<quiz::Question> readQuestion(const json& j, const std::string& path) {
   return q;
 }
 
+// [x, y, z] of finite numbers at `path`.
+Result<Vec3> readVector(const json& v, const std::string& path, const char* what) {
+  if (!v.is_array() || v.size() != 3) return fail(path + ": must be " + what);
+  Vec3 out{};
+  for (std::size_t i = 0; i < 3; ++i) {
+    if (!v[i].is_number() || !std::isfinite(v[i].get<double>())) return fail(path + ": must be " + what);
+    out[i] = v[i].get<double>();
+  }
+  return out;
+}
+
+// "camera": {"target_mm": [x, y, z], "look": [x, y, z], "up": [x, y, z], "distance_mm": D}
+// (curriculum.h, StepCamera); look and up are normalised, up made orthogonal to look.
+Result<StepCamera> readCamera(const json& j, const std::string& path) {
+  Reader r(j, path);
+  if (auto ok = r.expect({"target_mm", "look", "up", "distance_mm"}); !ok) return tl::unexpected(ok.error());
+  for (const char* key : {"target_mm", "look", "up", "distance_mm"})
+    if (!r.has(key)) return fail(r.field(key) + ": missing");
+  StepCamera c;
+  AT_TRY(target, readVector(r.raw("target_mm"), r.field("target_mm"), "[x, y, z] in millimetres"));
+  AT_TRY(look, readVector(r.raw("look"), r.field("look"), "a direction [x, y, z]"));
+  AT_TRY(up, readVector(r.raw("up"), r.field("up"), "a direction [x, y, z]"));
+  AT_TRY(distance, r.number("distance_mm", 0));
+  if (!std::isfinite(distance) || distance <= 0 || distance > 1e5)
+    return fail(r.field("distance_mm") + ": must be a distance in millimetres above 0 (at most 100000)");
+  // Directions already unit and square (as written back) are kept bit for bit.
+  const double lookLength = std::sqrt(dot(look, look));
+  if (lookLength < 1e-9) return fail(r.field("look") + ": must not be zero");
+  if (std::abs(lookLength - 1) > 1e-12) look = (1.0 / lookLength) * look;
+  if (std::abs(dot(up, look)) > 1e-12) up = up - dot(up, look) * look;  // the part of `up` across the line of sight
+  const double upLength = std::sqrt(dot(up, up));
+  if (upLength < 1e-6) return fail(r.field("up") + ": must not be zero or along 'look'");
+  if (std::abs(upLength - 1) > 1e-12) up = (1.0 / upLength) * up;
+  c.targetMm = target;
+  c.look = look;
+  c.up = up;
+  c.distanceMm = distance;
+  return c;
+}
+
+// "clip": [nx, ny, nz, d] (curriculum.h, StepClip): the normal along one patient axis.
+Result<StepClip> readClip(const json& v, const std::string& path) {
+  const char* shape = "[nx, ny, nz, d]: a plane whose normal is one patient axis (e.g. [0, -1, 0, 12.5])";
+  if (!v.is_array() || v.size() != 4) return fail(path + ": must be " + shape);
+  std::array<double, 4> n{};
+  for (std::size_t i = 0; i < 4; ++i) {
+    if (!v[i].is_number() || !std::isfinite(v[i].get<double>())) return fail(path + ": must be " + shape);
+    n[i] = v[i].get<double>();
+  }
+  int axis = -1;
+  for (int i = 0; i < 3; ++i) {
+    if (n[std::size_t(i)] == 0) continue;
+    if (axis >= 0) return fail(path + ": the normal must lie along one patient axis (x, y or z), as the desktop's clip control offers");
+    axis = i;
+  }
+  if (axis < 0) return fail(path + ": the normal must not be zero");
+  StepClip c;
+  const double length = std::abs(n[std::size_t(axis)]);
+  c.normal = {0, 0, 0};
+  c.normal[std::size_t(axis)] = n[std::size_t(axis)] > 0 ? 1 : -1;
+  c.d = n[3] / length;
+  return c;
+}
+
+// A step's optional "camera" and "clip".
+Status readPlacement(const Reader& r, std::optional<StepCamera>& camera, std::optional<StepClip>& clip) {
+  if (r.has("camera")) {
+    AT_TRY(c, readCamera(r.raw("camera"), r.field("camera")));
+    camera = c;
+  }
+  if (r.has("clip")) {
+    AT_TRY(c, readClip(r.raw("clip"), r.field("clip")));
+    clip = c;
+  }
+  return {};
+}
+
+void writePlacement(json& j, const std::optional<StepCamera>& camera, const std::optional<StepClip>& clip) {
+  if (camera)
+    j["camera"] = {{"target_mm", camera->targetMm}, {"look", camera->look}, {"up", camera->up}, {"distance_mm", camera->distanceMm}};
+  if (clip) j["clip"] = {clip->normal[0], clip->normal[1], clip->normal[2], clip->d};
+}
+
 Result<Step> readStep(const json& j, const std::string& path) {
   Reader r(j, path);
   if (!j.is_object()) return fail(path + ": must be an object");
@@ -208,7 +292,7 @@ Result<Step> readStep(const json& j, const std::string& path) {
   Step step;
   step.kind = *kind;
   if (step.kind == StepKind::Show) {
-    if (auto ok = r.expect({"kind", "structure", "preset", "view", "title", "text"}); !ok) {
+    if (auto ok = r.expect({"kind", "structure", "preset", "view", "title", "text", "camera", "clip"}); !ok) {
       return tl::unexpected(ok.error());
     }
     AT_TRY(structure, r.string("structure", true));
@@ -218,14 +302,16 @@ Result<Step> readStep(const json& j, const std::string& path) {
     if (!view) return tl::unexpected(withContext(r.field("view"), view.error()));
     AT_TRY(title, r.string("title", true));
     AT_TRY(text, r.string("text", true));
-    step.show = ShowStep{structure, preset, *view, title, text};
+    step.show = ShowStep{structure, preset, *view, title, text, std::nullopt, std::nullopt};
+    if (auto ok = readPlacement(r, step.show.camera, step.show.clip); !ok) return tl::unexpected(ok.error());
   } else if (step.kind == StepKind::Question) {
-    if (auto ok = r.expect({"kind", "question", "structure", "preset", "view"}); !ok) return tl::unexpected(ok.error());
+    if (auto ok = r.expect({"kind", "question", "structure", "preset", "view", "camera", "clip"}); !ok)
+      return tl::unexpected(ok.error());
     if (!r.has("question")) return fail(r.field("question") + ": missing");
     AT_TRY(question, readQuestion(r.raw("question"), r.field("question")));
     step.question = question;
     // The scene shown while the question is asked (curriculum.h, QuestionScene).
-    if (r.has("structure") || r.has("preset") || r.has("view")) {
+    if (r.has("structure") || r.has("preset") || r.has("view") || r.has("camera") || r.has("clip")) {
       QuestionScene scene;
       AT_TRY(structure, r.string("structure", false, question.target));
       AT_TRY(preset, r.string("preset", false));
@@ -235,6 +321,7 @@ Result<Step> readStep(const json& j, const std::string& path) {
       scene.structure = structure;
       scene.presetId = preset;
       scene.view = *view;
+      if (auto ok = readPlacement(r, scene.camera, scene.clip); !ok) return tl::unexpected(ok.error());
       step.scene = scene;
     }
     if (question.kind == quiz::QuestionKind::Locate) {
@@ -494,22 +581,45 @@ Result<Course> loadCourseJson(const std::filesystem::path& path) {
   return parseCourseJson(*text, path.filename().string());
 }
 
+std::string placementToJson(const std::optional<StepCamera>& camera, const std::optional<StepClip>& clip) {
+  if (!camera && !clip) return "";
+  json j = json::object();
+  writePlacement(j, camera, clip);
+  return j.dump();
+}
+
+Status parsePlacementJson(const std::string& text, const std::string& sourceName, std::optional<StepCamera>& camera,
+                          std::optional<StepClip>& clip) {
+  camera.reset();
+  clip.reset();
+  if (text.empty()) return {};
+  const json j = json::parse(text, nullptr, false);
+  if (j.is_discarded()) return fail(sourceName + ": the step's camera and clip are not JSON");
+  Reader r(j, sourceName);
+  if (auto ok = r.expect({"camera", "clip"}); !ok) return ok;
+  return readPlacement(r, camera, clip);
+}
+
 std::string courseToJson(const Course& course) {
   json lessons = json::array();
   for (const Lesson& lesson : course.lessons) {
     json steps = json::array();
     for (const Step& step : lesson.steps) {
       switch (step.kind) {
-        case StepKind::Show:
-          steps.push_back({{"kind", "show"}, {"structure", step.show.structure}, {"preset", step.show.presetId},
-                           {"view", toString(step.show.view)}, {"title", step.show.title}, {"text", step.show.text}});
+        case StepKind::Show: {
+          json s = {{"kind", "show"}, {"structure", step.show.structure}, {"preset", step.show.presetId},
+                    {"view", toString(step.show.view)}, {"title", step.show.title}, {"text", step.show.text}};
+          writePlacement(s, step.show.camera, step.show.clip);
+          steps.push_back(s);
           break;
+        }
         case StepKind::Question: {
           json q = {{"kind", "question"}, {"question", questionJson(step.question)}};
           if (step.scene) {
             q["structure"] = step.scene->structure;
             if (!step.scene->presetId.empty()) q["preset"] = step.scene->presetId;
             q["view"] = toString(step.scene->view);
+            writePlacement(q, step.scene->camera, step.scene->clip);
           }
           steps.push_back(q);
           break;

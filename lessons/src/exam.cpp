@@ -16,7 +16,7 @@ quiz::Question itemQuestion(const ExamSpec& exam, const Structure& target, quiz:
   q.id = exam.id + "." + kindWord(kind) + "." + target.id;
   q.kind = kind;
   q.target = target.id;
-  const std::string name = target.displayName.empty() ? target.id : target.displayName;
+  const std::string name = quiz::nameInSentence(target.displayName.empty() ? target.id : target.displayName);
   switch (kind) {
     case quiz::QuestionKind::Locate:
       q.prompt = "Locate the " + name + (view == ExamLocateView::Slice ? " on the slice." : " in the view.");
@@ -245,7 +245,7 @@ Result<ExamResult> ExamSession::results() const {
       x.feedback = grade->feedback;
       ++r.answered;
     } else {
-      x.feedback = "Not answered: this is the " + context_.displayName(x.structure) + ".";
+      x.feedback = "Not answered: this is the " + quiz::nameInSentence(context_.displayName(x.structure)) + ".";
     }
     if (x.correct) ++r.correct;
     total += x.score;

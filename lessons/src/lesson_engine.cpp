@@ -210,7 +210,7 @@ Result<StepView> LessonEngine::current() const {
     view.view = step.show.view;
     view.title = step.show.title;
     view.text = step.show.text;
-    view.scene = QuestionScene{step.show.structure, step.show.presetId, step.show.view};
+    view.scene = QuestionScene{step.show.structure, step.show.presetId, step.show.view, step.show.camera, step.show.clip};
   } else {
     view.scene = sceneFor(step);
     const quiz::ResolvedQuestion& q = *resolved_[std::size_t(index)];

@@ -41,7 +41,7 @@ std::string joinNames(const std::vector<std::string>& ids, const GradingContext&
   std::string out;
   for (const std::string& id : ids) {
     if (!out.empty()) out += " → ";
-    out += context.displayName(id);
+    out += context.nameInSentence(id);
   }
   return out;
 }
@@ -53,6 +53,10 @@ std::string GradingContext::displayName(const std::string& structureId) const {
     if (entry.structureId == structureId && !entry.names.empty()) return entry.names.front();
   }
   return structureId;
+}
+
+std::string GradingContext::nameInSentence(const std::string& structureId) const {
+  return quiz::nameInSentence(displayName(structureId));
 }
 
 Result<Grade> grade(const ResolvedQuestion& question, const Answer& answer, const GradingContext& context) {
@@ -85,7 +89,7 @@ Result<Grade> grade(const ResolvedQuestion& question, const Answer& answer, cons
 
 Result<Grade> gradeLocate(const ResolvedQuestion& question, const Pick& pick, const GradingContext& context) {
   const Question& q = question.question;
-  const std::string target = context.displayName(q.target);
+  const std::string target = context.nameInSentence(q.target);
   if (pick.structure == q.target) {
     return makeGrade(true, 1, "Correct: that is the " + target + ".", q);
   }
@@ -98,7 +102,7 @@ Result<Grade> gradeLocate(const ResolvedQuestion& question, const Pick& pick, co
   }
   std::string feedback = pick.structure.empty()
                              ? "Not quite: you clicked on no labelled structure."
-                             : "Not quite: you clicked the " + context.displayName(pick.structure) + ".";
+                             : "Not quite: you clicked the " + context.nameInSentence(pick.structure) + ".";
   if (distanceKnown) feedback += " The " + target + " was " + formatMm(pick.distanceMm) + " away.";
   return makeGrade(false, 0, feedback, q);
 }
@@ -115,8 +119,8 @@ Result<Grade> gradeChoice(const ResolvedQuestion& question, int choice, const Gr
   const std::string key = context.displayName(question.choices[question.keyChoice]);
   if (choice == question.keyChoice) return makeGrade(true, 1, "Correct: " + key + ".", q);
   return makeGrade(false, 0,
-                   "Not quite: you chose " + context.displayName(question.choices[choice]) + "; the answer is " +
-                       key + ".",
+                   "Not quite: you chose the " + context.nameInSentence(question.choices[choice]) +
+                       "; the answer is the " + context.nameInSentence(question.choices[question.keyChoice]) + ".",
                    q);
 }
 
@@ -129,6 +133,7 @@ Result<Grade> gradeName(const ResolvedQuestion& question, const std::string& tex
   if (names.empty()) names.push_back(q.target);
   names.insert(names.end(), q.synonyms.begin(), q.synonyms.end());
   const std::string target = context.displayName(q.target);
+  const std::string targetInSentence = context.nameInSentence(q.target);
   const NameMatch match = matchName(text, q.target, names, context.names);
   if (match.accepted && match.distance == 0) return makeGrade(true, 1, "Correct: " + target + ".", q);
   if (match.accepted) {
@@ -136,11 +141,11 @@ Result<Grade> gradeName(const ResolvedQuestion& question, const std::string& tex
   }
   if (!match.closerStructure.empty()) {
     return makeGrade(false, 0,
-                     "Not quite: \"" + text + "\" reads as " + context.displayName(match.closerStructure) +
-                         "; this is the " + target + ".",
+                     "Not quite: \"" + text + "\" reads as the " + context.nameInSentence(match.closerStructure) +
+                         "; this is the " + targetInSentence + ".",
                      q);
   }
-  return makeGrade(false, 0, "Not quite: this is the " + target + ".", q);
+  return makeGrade(false, 0, "Not quite: this is the " + targetInSentence + ".", q);
 }
 
 std::size_t longestCommonSubsequence(const std::vector<std::string>& a, const std::vector<std::string>& b) {

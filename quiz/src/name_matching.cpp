@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <cstring>
 #include <sstream>
 
 namespace at::quiz {
@@ -163,6 +164,38 @@ NameMatch matchName(const std::string& typed, const std::string& targetId,
   }
   match.accepted = closest < 0;
   return match;
+}
+
+namespace {
+
+// Proper names that begin anatomical terms without a possessive: proper adjectives and eponyms
+// used attributively (compared case-sensitively, as written in a name).
+constexpr const char* kEponymousWords[] = {
+    "Achilles", "Alcock",    "Arnold",   "Auerbach", "Bartholin", "Bowman",   "Broca",     "Brunner",
+    "Calot",    "Corti",     "Cowper",   "Dorello",  "Eustachian", "Fallopian", "Glisson",  "Golgi",
+    "Haversian", "Henle",    "Heschl",   "His",      "Hunter",    "Jacobson", "Kupffer",   "Langerhans",
+    "Leydig",   "Luschka",   "Magendie", "Meckel",   "Meissner",  "Monro",    "Morison",   "Oddi",
+    "Peyer",    "Purkinje",  "Reissner", "Rolandic", "Rosenthal", "Scarpa",   "Schlemm",   "Schwann",
+    "Sertoli",  "Stensen",   "Sylvian",  "Treitz",   "Vater",     "Volkmann", "Wernicke",  "Wharton",
+    "Willis",   "Wormian"};
+
+bool isAsciiUpper(char c) { return c >= 'A' && c <= 'Z'; }
+
+}  // namespace
+
+std::string nameInSentence(const std::string& displayName) {
+  if (displayName.empty() || !isAsciiUpper(displayName[0])) return displayName;
+  const std::size_t end = std::min(displayName.find_first_of(" -/,("), displayName.size());
+  const std::string first = displayName.substr(0, end);
+  for (std::size_t i = 1; i < first.size(); ++i)
+    if (isAsciiUpper(first[i]) || (first[i] >= '0' && first[i] <= '9')) return displayName;  // C1, IAC, CNVII
+  for (const char* possessive : {"'s", "\xe2\x80\x99s", "s'", "s\xe2\x80\x99"})
+    if (first.size() > std::strlen(possessive) && first.ends_with(possessive)) return displayName;
+  for (const char* eponym : kEponymousWords)
+    if (first == eponym) return displayName;
+  std::string out = displayName;
+  out[0] = char(out[0] - 'A' + 'a');
+  return out;
 }
 
 }  // namespace at::quiz

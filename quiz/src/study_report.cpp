@@ -143,6 +143,10 @@ const std::vector<Column>& longColumns() {
       {"app_version", "string", "Anatomy Tutor version that recorded the rating", ""},
       {"comment", "string", "Participant's optional free-text comment on the structure", ""},
       {"participant_complete", "integer", "1 if the participant finished the study, 0 if partial data", ""},
+      {"quality_level", "integer", "Render quality level on screen when the item was rated (blank: not known)", ""},
+      {"quality_full_level", "integer", "The full quality level (quality_level equal to it: rated at full quality)", ""},
+      {"quality_scale", "number", "Resolution of the full level as a share of the view (1 = every pixel cast)", ""},
+      {"settle_ms", "number", "Time from the rated side being shown to the full level on screen", "ms"},
   };
   return columns;
 }
@@ -161,7 +165,10 @@ std::string responsesLongCsv(const std::vector<StudyResponseRow>& rows) {
                       csvCell(r.presetB), number(r.t), number(r.alpha), number(r.beta),
                       seen ? number(r.viewMsA, 0) : "", seen ? number(r.viewMsB, 0) : "",
                       seen ? std::to_string(r.toggles) : "", number(r.responseMs, 0), csvCell(r.timestampUtc),
-                      csvCell(r.appVersion), csvCell(r.comment), r.participantComplete ? "1" : "0"});
+                      csvCell(r.appVersion), csvCell(r.comment), r.participantComplete ? "1" : "0",
+                      r.qualityLevel ? std::to_string(*r.qualityLevel) : "",
+                      r.qualityFullLevel ? std::to_string(*r.qualityFullLevel) : "",
+                      r.qualityScale ? number(*r.qualityScale) : "", r.settleMs ? number(*r.settleMs, 0) : ""});
   }
   return out;
 }

@@ -118,6 +118,21 @@ Result<Camera> Camera::named(const std::string& view, const Vec3& target, double
   return named(*v, target, radiusMm);
 }
 
+Result<Camera> Camera::looking(const Vec3& target, const Vec3& forward, const Vec3& up, double distanceMm) {
+  if (!(distanceMm > 0) || !std::isfinite(distanceMm)) return fail("a camera's distance must be above 0 mm");
+  const double f = std::sqrt(dot(forward, forward));
+  if (!(f > 1e-9) || !std::isfinite(f)) return fail("a camera's viewing direction must not be zero");
+  Camera c;
+  c.target = target;
+  c.distanceMm = distanceMm;
+  c.forward_ = (1.0 / f) * forward;
+  const Vec3 across = up - dot(up, c.forward_) * c.forward_;
+  const double u = std::sqrt(dot(across, across));
+  if (!(u > 1e-6) || !std::isfinite(u)) return fail("a camera's up direction must not be zero or along its viewing direction");
+  c.up_ = (1.0 / u) * across;
+  return c;
+}
+
 Vec3 Camera::eye() const { return target - distanceMm * forward_; }
 
 void Camera::orbit(double azimuthDeg, double elevationDeg) {

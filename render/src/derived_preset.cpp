@@ -177,9 +177,16 @@ Preset derivedPreset(const IntensityLevels& l, RenderMode mode, const std::strin
   } else {
     p.huWindow = {float(l.background), float(std::max(l.background + 1, l.denseHigh))};
   }
-  p.dataTf = boneTf(l, 0.18f, 0.1f);
-  p.distanceTf = {point(0, 1, 1, 1, 0), point(0.12, 1, 1, 1, 0), point(0.4, 0.97f, 0.95f, 0.9f, 0.65f),
-                  point(0.7, 1, 0.93f, 0.82f, 1), point(1, 1, 0.78f, 0.55f, 1)};
+  // Medium-opacity bone surfaces (the paper's white context): about 0.3 per voxel of surface, so an
+  // edge of two or three samples covers about half of what lies behind it.
+  p.dataTf = boneTf(l, 0.3f, 0.25f);
+  // Context between the eye and the structure at a small fraction, so bone in front of it does not
+  // veil it.
+  p.contextInFront = 0.12f;
+  // Full context within about one distance unit, fading out by about 4.7 units (f = 0.2), so the fade
+  // shows inside the framed view and the slider t has far context to bring in.
+  p.distanceTf = {point(0, 1, 1, 1, 0), point(0.2, 1, 1, 1, 0), point(0.45, 0.97f, 0.95f, 0.9f, 0.55f),
+                  point(0.75, 1, 0.93f, 0.82f, 1), point(1, 1, 0.78f, 0.55f, 1)};
   switch (mode) {
     case RenderMode::Wdt:
     case RenderMode::Bare:

@@ -1,6 +1,8 @@
 // The seeds file (segment/seeds.h): strict parsing, writing, and rasterisation onto a grid.
 #include "segment/seeds.h"
 
+#include "core/printable_text.h"
+
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
@@ -30,7 +32,9 @@ struct Reader {
     return fail(source + ": " + field + " " + problem);
   }
   Status onlyKeys(const json& object, const std::string& field, std::initializer_list<const char*> keys) const {
-    for (const auto& [key, value] : object.items()) {
+    for (const auto& item : object.items()) {
+      // Not a structured binding: clang 14 (the fuzz build) cannot capture one in a lambda.
+      const std::string& key = item.key();
       if (std::none_of(keys.begin(), keys.end(), [&](const char* k) { return key == k; }))
         return error(field.empty() ? "field '" + key + "'" : field + "." + key, "is not a known field");
     }
@@ -52,7 +56,9 @@ struct Reader {
 
 }  // namespace
 
-Result<SeedSet> parseSeeds(const std::string& jsonText, const std::string& source) {
+namespace {
+
+Result<SeedSet> readSeeds(const std::string& jsonText, const std::string& source) {
   const Reader r{source};
   json doc;
   try {
@@ -171,6 +177,13 @@ Result<SeedSet> parseSeeds(const std::string& jsonText, const std::string& sourc
   return set;
 }
 
+}  // namespace
+
+// Label names and keys quoted from the file may hold any bytes.
+Result<SeedSet> parseSeeds(const std::string& jsonText, const std::string& source) {
+  return withPrintableError(readSeeds(jsonText, source));
+}
+
 Result<SeedSet> loadSeeds(const std::filesystem::path& path) {
   std::ifstream in(path, std::ios::binary);
   if (!in) return fail(ErrorKind::NotFound, path.string() + ": cannot open the seeds file");
@@ -270,7 +283,7 @@ Status requireTwoSeededLabels(const SeedSet& seeds, const RasterisedSeeds& raste
     if (raster.perLabel[i] > 0) seeded.push_back(seeds.labels[i].name);
   if (seeded.size() >= 2) return {};
   if (seeded.empty()) return fail("seeds: no label has a stroke; grow from seeds needs strokes of two or more labels");
-  return fail("seeds: only label '" + seeded.front() +
+  return fail("seeds: only label '" + printableText(seeded.front()) +
               "' has strokes; grow from seeds needs two or more labels (add strokes of the background or of a "
               "neighbouring structure)");
 }

@@ -4,6 +4,7 @@
 // refused with one line and change nothing.
 #include <doctest/doctest.h>
 
+#include <cmath>
 #include <fstream>
 
 #include <nlohmann/json.hpp>
@@ -14,6 +15,8 @@
 #include "db/dataset_store.h"
 #include "test_support.h"
 #include "package/course_package.h"
+#include "render/scene.h"
+#include "volume/png_image.h"
 
 using namespace at;
 namespace fs = std::filesystem;
@@ -224,4 +227,66 @@ TEST_CASE("CourseCli_Validate_NamesTheFieldOfAStructureTheDatasetLacks") {
   auto good = test::runApp("course validate " + quoted(test::sourceDir() / "data" / "courses" / "temporal_bone.json"));
   CHECK_MESSAGE(good.exitCode == 0, good.err);
   CHECK(good.out.find("valid: course 'temporal_bone'") != std::string::npos);
+}
+
+// A step's free camera and clipping plane (course JSON "camera", "clip"): checked by `course
+// validate` with the field's path, stored by `course import`, and what `play` draws.
+TEST_CASE("CourseCli_StepCameraAndClip_AreValidatedStoredAndDrawnByPlay") {
+  if (!test::requireAppBinary("course validate")) return;
+  test::TempDir dir;
+  const fs::path db = dir / "p.db";
+  const Dataset& phantom = test::phantomOfSize(128);  // "phantom" as play opens it
+  const Structure* cochlea = phantom.findStructure("cochlea");
+  REQUIRE(cochlea);
+  auto frame = render::structureFrame(phantom.labels, cochlea->label);
+  REQUIRE(frame);
+  const Vec3 c = frame->centroidMm;
+  const nlohmann::json show = {{"kind", "show"}, {"structure", "cochlea"}, {"preset", "cochlea_wdt"}, {"view", "superior"},
+                               {"title", "The cochlea"}, {"text", "Coiled."}};
+  nlohmann::json placed = show;
+  // From the patient's front, a little from the left and below, close; the part in front of the
+  // cochlea's centre cut away.
+  placed["camera"] = {{"target_mm", c}, {"look", {-0.3, 1, 0.2}}, {"up", {0, 0, 1}}, {"distance_mm", 25}};
+  placed["clip"] = {0, -1, 0, -c[1]};
+  const nlohmann::json course = {
+      {"schema", 1}, {"id", "placed"}, {"title", "Placed"}, {"dataset", "phantom"},
+      {"lessons", {{{"id", "placed.free"}, {"title", "Free"}, {"steps", {placed}}},
+                   {{"id", "placed.named"}, {"title", "Named"}, {"steps", {show}}}}}};
+  std::ofstream(dir / "placed.json") << course.dump(2);
+  auto valid = test::runApp("course validate " + quoted(dir / "placed.json") + " --db " + quoted(db));
+  CHECK_MESSAGE(valid.exitCode == 0, valid.err);
+
+  nlohmann::json bad = course;
+  bad["lessons"][0]["steps"][0]["clip"] = {0.5, -1, 0, 2};
+  std::ofstream(dir / "bad.json") << bad.dump();
+  test::checkOneLineError(test::runApp("course validate " + quoted(dir / "bad.json")),
+                          "bad.json: lessons[0].steps[0].clip: the normal must lie along one patient axis");
+  bad = course;
+  bad["lessons"][0]["steps"][0]["camera"]["up"] = {0, 2, 0};
+  bad["lessons"][0]["steps"][0]["camera"]["look"] = {0, -1, 0};
+  std::ofstream(dir / "bad.json") << bad.dump();
+  test::checkOneLineError(test::runApp("course validate " + quoted(dir / "bad.json")),
+                          "bad.json: lessons[0].steps[0].camera.up: must not be zero or along 'look'");
+
+  auto imported = test::runApp("course import " + quoted(dir / "placed.json") + " --db " + quoted(db));
+  REQUIRE_MESSAGE(imported.exitCode == 0, imported.err);
+  for (const char* lesson : {"placed.free", "placed.named"}) {
+    auto played = test::runApp(std::string("play ") + lesson + " --user pat --views " + quoted(dir / lesson) + " --db " +
+                               quoted(db) + (std::string(lesson) == "placed.free" ? " --new-user" : ""));
+    REQUIRE_MESSAGE(played.exitCode == 0, played.err);
+  }
+  auto free = readPng((dir / "placed.free" / "placed.free-01.png").string());
+  auto named = readPng((dir / "placed.named" / "placed.named-01.png").string());
+  REQUIRE(free);
+  REQUIRE(named);
+  REQUIRE(free->width == named->width);
+  REQUIRE(free->height == named->height);
+  // The free camera is close (25 mm) and the front is cut away: not the framed superior view.
+  double diff = 0;
+  for (int y = 0; y < free->height; ++y)
+    for (int x = 0; x < free->width; ++x)
+      for (int ch = 0; ch < 3; ++ch) diff += std::abs(int(free->pixel(x, y)[ch]) - int(named->pixel(x, y)[ch]));
+  diff /= double(free->width) * free->height * 3;
+  MESSAGE("mean absolute difference free camera vs named view: " << diff);
+  CHECK(diff > 8);
 }

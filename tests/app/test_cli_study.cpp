@@ -91,7 +91,7 @@ TEST_CASE("StudyCli_ScriptedParticipants_ExportIsCompleteDeterministicAndUnblind
     const bool aIsWdt = r[col("a_condition")] == "wdt";
     CHECK(paper == (aIsWdt ? shown : 6 - shown));
     CHECK(std::stod(r[col("alpha")]) > 1.0);  // the WDT preset's distance normalisation (> 1)
-    CHECK(r[col("t")] == "0.5");
+    CHECK(r[col("t")] == "0.15");
     if (who == "p3") {
       ++p3Rows[r[col("structure")]];
       CHECK(r[col("participant_complete")] == "0");

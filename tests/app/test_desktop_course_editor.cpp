@@ -5,8 +5,10 @@
 #include <doctest/doctest.h>
 
 #include <algorithm>
+#include <cmath>
 
 #include "cli_checks.h"
+#include "course_views.h"
 #include "db/preset_store.h"
 #include "headless_desktop.h"
 #include "render/preset.h"
@@ -150,4 +152,136 @@ TEST_CASE("CourseEditor_SavingAChangedStoredCourse_StoresTheNextVersion") {
   auto refused = test::runHeadless(bad, on(dir / "t.db"));
   CHECK(refused.exitCode == 2);
   CHECK(refused.messages.find("course 'empty_one' cannot be saved: lessons[0].steps") != std::string::npos);
+}
+
+// "Capture current view" keeps where the author left the camera (orbited and zoomed away from the
+// named view) and the clipping plane; the editor's preview and a student's lesson replay both.
+TEST_CASE("CourseEditor_ShowStep_CapturesAndReplaysAFreeCameraAndTheClippingPlane") {
+  test::TempDir dir;
+  struct Seen {
+    render::Camera camera;
+    app::ClipSettings clip;
+  };
+  std::vector<Seen> frames;
+  test::HeadlessOptions options = on(dir / "c.db");
+  options.drawPanels = [&](app::DesktopModel& model) { frames.push_back({model.explore().camera(), model.explore().clip()}); };
+  const json wait = {{"do", "wait"}, {"ms", 20}};
+  const json script = {{"actions", json::array({
+      {{"do", "course_new"}, {"id", "clip_tour"}, {"title", "Clip tour"}},
+      {{"do", "select"}, {"structure", "cochlea"}},
+      {{"do", "view"}, {"value", "superior"}},
+      {{"do", "orbit"}, {"azimuth", 35}, {"elevation", -20}},
+      {{"do", "zoom"}, {"factor", 1.6}},
+      {{"do", "clip"}, {"on", true}, {"axis", 1}, {"flip", true}, {"offset", 1.5}},
+      wait,
+      {{"do", "course_show"}, {"title", "Cut open"}, {"text", "The cochlea from above and behind, cut."}},
+      // The author looks elsewhere, unclipped …
+      {{"do", "view"}, {"value", "lateral_left"}},
+      {{"do", "clip"}, {"on", false}},
+      wait,
+      // … and previews the step: the captured camera and plane come back.
+      {{"do", "course_step"}, {"op", "preview"}, {"index", 0}},
+      wait,
+      {{"do", "course_save"}},
+  })}};
+  auto run = test::runHeadless(script, options);
+  CAPTURE(run.messages);
+  REQUIRE(run.exitCode == 0);
+  REQUIRE(frames.size() >= 3);
+
+  // The authored view (the last frame before course_show) …
+  auto session = app::LearningSession::open((dir / "c.db").string());
+  REQUIRE(session);
+  auto course = (*session)->curriculum().course("clip_tour");
+  REQUIRE_MESSAGE(course, (course ? "" : course.error().message));
+  const lessons::ShowStep& show = course->lessons[0].steps[0].show;
+  REQUIRE(show.camera.has_value());
+  REQUIRE(show.clip.has_value());
+  CHECK((show.view == lessons::CameraView::Superior));
+  CHECK(show.clip->normal == Vec3{0, -1, 0});
+  // … is not the named view's framing: orbited away from straight down, closer.
+  CHECK(std::abs(show.camera->look[2] + 1) > 0.05);
+  const render::Camera replayed = frames.back().camera;
+  CHECK(replayed.eye()[0] == doctest::Approx(app::cameraOf(*show.camera).eye()[0]).epsilon(1e-6));
+  CHECK(replayed.eye()[1] == doctest::Approx(app::cameraOf(*show.camera).eye()[1]).epsilon(1e-6));
+  CHECK(replayed.eye()[2] == doctest::Approx(app::cameraOf(*show.camera).eye()[2]).epsilon(1e-6));
+  CHECK(replayed.up()[2] == doctest::Approx(show.camera->up[2]).epsilon(1e-6));
+  CHECK(replayed.distanceMm == doctest::Approx(show.camera->distanceMm));
+  const app::ClipSettings clip = frames.back().clip;
+  CHECK(clip.on);
+  CHECK(clip.axis == 1);
+  CHECK(clip.flip);
+  CHECK(clip.offsetMm == doctest::Approx(1.5));
+  // The lateral_left frames between differ (the replay is not the state left over).
+  const auto elsewhere = std::find_if(frames.begin(), frames.end(), [](const Seen& f) { return !f.clip.on && f.camera.forward()[0] < -0.99; });
+  CHECK(elsewhere != frames.end());
+
+  // A student's lesson in the desktop starts on the same camera and plane.
+  frames.clear();
+  const json play = {{"actions", json::array({{{"do", "view"}, {"value", "anterior"}},
+                                              {{"do", "lessons"}, {"course", "clip_tour"}},
+                                              {{"do", "lesson"}, {"course", "clip_tour"}, {"lesson", "clip_tour.lesson_1"}},
+                                              wait})}};
+  auto student = test::runHeadless(play, options);
+  CAPTURE(student.messages);
+  REQUIRE(student.exitCode == 0);
+  REQUIRE_FALSE(frames.empty());
+  CHECK(frames.back().camera.distanceMm == doctest::Approx(show.camera->distanceMm));
+  CHECK(frames.back().camera.forward()[2] == doctest::Approx(show.camera->look[2]).epsilon(1e-6));
+  CHECK(frames.back().clip.on);
+  CHECK(frames.back().clip.flip);
+}
+
+// The preview of a question step hides structure names as the lesson does (the explore panel draws
+// none while DesktopModel::namesHidden()), until the author selects another structure; a show
+// step's preview keeps them.
+TEST_CASE("CourseEditor_PreviewOfAQuestion_HidesNamesAsTheStudentSeesIt") {
+  test::TempDir dir;
+  struct Seen {
+    std::string selected;
+    std::optional<std::size_t> previewing;
+    bool namesHidden = false;
+  };
+  std::vector<Seen> frames;
+  test::HeadlessOptions options = on(dir / "c.db");
+  options.drawPanels = [&](app::DesktopModel& model) {
+    const auto& p = model.courseEditor().previewing();
+    const Structure* selected = model.dataset().findStructureByLabel(model.explore().selected());
+    frames.push_back({selected ? selected->id : "", p ? std::optional<std::size_t>(p->step) : std::nullopt, model.namesHidden()});
+  };
+  const json wait = {{"do", "wait"}, {"ms", 20}};
+  const json script = {{"actions", json::array({
+      {{"do", "course_new"}, {"id", "names"}},
+      {{"do", "select"}, {"structure", "cochlea"}},
+      {{"do", "course_show"}, {"title", "The cochlea"}, {"text", "Coiled."}},
+      {{"do", "course_question"}, {"question", {{"kind", "name"}, {"prompt", "Name it."}, {"target", "stapes"}}}},
+      {{"do", "course_step"}, {"op", "preview"}, {"index", 1}},
+      wait,
+      {{"do", "select"}, {"structure", "vestibule"}},
+      wait,
+      {{"do", "course_step"}, {"op", "preview"}, {"index", 1}},
+      wait,
+      {{"do", "course_step"}, {"op", "preview"}, {"index", 0}},
+      wait,
+  })}};
+  auto run = test::runHeadless(script, options);
+  CAPTURE(run.messages);
+  REQUIRE(run.exitCode == 0);
+  const auto previews = test::eventsOf(run, "course_preview");
+  REQUIRE(previews.size() == 3);
+  CHECK(previews[0]["names_hidden"] == true);
+  CHECK(previews[0]["structure"] == "stapes");
+  CHECK(previews[2]["names_hidden"] == false);
+
+  // Frames of the question's preview hide names; once vestibule is selected they show again; the
+  // second preview hides them again; the show step's does not.
+  std::vector<std::string> phases;
+  for (const Seen& f : frames) {
+    const std::string phase = f.selected + (f.namesHidden ? ":hidden" : ":shown");
+    if (phases.empty() || phases.back() != phase) phases.push_back(phase);
+  }
+  CAPTURE(phases);
+  const std::vector<std::string> tail(phases.end() - std::min<std::ptrdiff_t>(4, std::ptrdiff_t(phases.size())), phases.end());
+  CHECK(tail == std::vector<std::string>{"stapes:hidden", "vestibule:shown", "stapes:hidden", "cochlea:shown"});
+  CHECK(frames.back().previewing == std::optional<std::size_t>(0));
 }

@@ -18,6 +18,7 @@
 #include <nlohmann/json.hpp>
 
 #include "core/strings.h"
+#include "quiz/study_report.h"
 #include "desktop_script.h"
 #include "headless_desktop.h"
 #include "test_support.h"
@@ -129,6 +130,29 @@ TEST_CASE("the study runner shows no structure names and its ratings land in the
   CHECK(status.exitCode == 0);
   CHECK(status.out.find("P1") != std::string::npos);
   CHECK(status.out.find(std::to_string(2 * items) + "/" + std::to_string(n * items) + " ratings") != std::string::npos);
+
+  // Each rating records the quality the participant saw: the full level (ratings wait for it) and
+  // the time it took to get there; the export carries them.
+  const auto exported = at::test::runApp("study export " + studyId + " --out '" + (dir / "export").string() + "' --db '" +
+                                         db.string() + "'");
+  INFO(exported.out << exported.err);
+  REQUIRE(exported.exitCode == 0);
+  std::ifstream longCsv(dir / "export" / "responses_long.csv");
+  std::stringstream csvText;
+  csvText << longCsv.rdbuf();
+  const auto rows = at::quiz::parseCsv(csvText.str());
+  REQUIRE(rows.size() == 1 + 2 * items);
+  const auto col = [&](const std::string& name) {
+    const auto it = std::find(rows[0].begin(), rows[0].end(), name);
+    REQUIRE(it != rows[0].end());
+    return std::size_t(it - rows[0].begin());
+  };
+  for (std::size_t i = 1; i < rows.size(); ++i) {
+    CHECK(rows[i][col("quality_full_level")] == "5");
+    CHECK(rows[i][col("quality_level")] == rows[i][col("quality_full_level")]);
+    CHECK_FALSE(rows[i][col("settle_ms")].empty());
+    CHECK_FALSE(rows[i][col("quality_scale")].empty());
+  }
 
   // The screenshot shows the volume view beside the participant panel (not an empty view).
   auto image = at::readPng(shot.string());
@@ -249,4 +273,95 @@ TEST_CASE("the coordinator export writes the ten study files and shows the summa
   REQUIRE(summary[0]["completion"].size() == 1);
   CHECK(summary[0]["completion"][0]["participant"] == "P2");
   CHECK(summary[0]["completion"][0]["given"] == items);
+}
+
+// Ratings wait for the full quality level of the side on screen (issue 19), and each records the
+// level, the full level's resolution and the settle time. A stand-in view reports a coarse image
+// for the first frames of each side, then the full level; headless, without a window.
+TEST_CASE("study ratings wait for the full quality level and record it with each rating") {
+  TempDir dir("at-study-ui");
+  const json study = shippedStudy();
+  const std::string studyId = study["id"];
+  json actions = json::array();
+  actions.push_back({{"do", "study_start"}, {"study", studyId}, {"participant", "P4"}, {"group", "medical"}});
+  append(actions, rateAll(study, 2));
+  actions.push_back({{"do", "study_next"}});
+  actions.push_back({{"do", "study_toggle"}, {"side", "B"}});
+  append(actions, rateAll(study, 4));
+  actions.push_back({{"do", "study_next"}});
+  actions.push_back({{"do", "study_close"}});
+  actions.push_back({{"do", "coordinator_open"}, {"study", studyId}});
+  actions.push_back({{"do", "coordinator_export"}, {"out", (dir / "export").string()}});
+
+  constexpr int kCoarseFrames = 4;
+  int coarseLeft = kCoarseFrames;
+  std::string shownKey;
+  int refusedWhileCoarse = 0, acceptedWhileCoarse = 0, wrongImageReady = 0;
+  at::test::HeadlessOptions options;
+  options.db = dir / "study.db";
+  options.dataset = "phantom:64";
+  bool toAnnounce = false;
+  options.drawPanels = [&](at::app::DesktopModel& model) {
+    at::app::StudyController& s = model.study();
+    if (!s.participantActive()) return;
+    if (s.takeNewScreen()) {  // drawn this frame, announced the next (as the panel does)
+      toAnnounce = true;
+    } else if (std::exchange(toAnnounce, false)) {
+      s.announce({{"event", "study_screen"}});
+    }
+    if (!s.participant()->trial) return;
+    const auto shown = s.shown();
+    REQUIRE(shown);
+    const std::string key = shown->structure + "/" + shown->preset.id.value_or("");
+    if (key != shownKey) {  // a new trial or side: its image starts coarse
+      shownKey = key;
+      coarseLeft = kCoarseFrames;
+    }
+    at::app::StudyController::ViewQuality q;
+    q.structure = shown->structure;
+    q.presetId = shown->preset.id.value_or("");
+    q.mode = shown->preset.mode;
+    q.fullLevel = 5;
+    q.scale = 0.5;
+    if (coarseLeft > 0) {
+      // An image of another preset at full quality does not count for this side.
+      at::app::StudyController::ViewQuality other = q;
+      other.presetId += "_other";
+      other.level = 5;
+      s.noteViewQuality(other);
+      wrongImageReady += s.readyToRate();
+      --coarseLeft;
+      q.level = 0;
+      s.noteViewQuality(q);
+      const std::string item = study["items"][0]["id"];
+      auto st = s.rate(item, 3);
+      (st ? acceptedWhileCoarse : refusedWhileCoarse) += 1;
+      if (!st) CHECK((st.error().kind == at::ErrorKind::Unavailable));
+    } else {
+      q.level = 5;
+      q.settledMs = 1234.0;
+      s.noteViewQuality(q);
+    }
+  };
+  const at::test::HeadlessRun r = at::test::runHeadless({{"actions", actions}}, options);
+  INFO("messages: " << r.messages);
+  REQUIRE(r.exitCode == 0);
+  CHECK(acceptedWhileCoarse == 0);
+  CHECK(wrongImageReady == 0);
+  CHECK(refusedWhileCoarse >= 2 * kCoarseFrames);  // two trials' first side (the second also after its toggle)
+
+  const auto rows = at::quiz::parseCsv(at::test::readFile(dir / "export" / "responses_long.csv"));
+  const std::size_t items = study["items"].size();
+  REQUIRE(rows.size() == 1 + 2 * items);
+  const auto col = [&](const std::string& name) {
+    const auto it = std::find(rows[0].begin(), rows[0].end(), name);
+    REQUIRE(it != rows[0].end());
+    return std::size_t(it - rows[0].begin());
+  };
+  for (std::size_t i = 1; i < rows.size(); ++i) {
+    CHECK(rows[i][col("quality_level")] == "5");
+    CHECK(rows[i][col("quality_full_level")] == "5");
+    CHECK(rows[i][col("quality_scale")] == "0.5");
+    CHECK(rows[i][col("settle_ms")] == "1234");
+  }
 }

@@ -276,6 +276,7 @@ TEST_CASE("the review button asks about a taught structure that is due, and grad
   const auto queues = eventsOf(answered, "review_queue");
   REQUIRE(queues.size() == 2);
   CHECK(queues[0].at("due") == json::array({"vestibule"}));
+  CHECK(queues[0].at("names") == json::array({"Vestibule"}));  // named as the dataset names it, before any lesson ran
   CHECK(queues[1].at("due").empty());
   const auto again = eventsOf(answered, "review_question");
   REQUIRE(again.size() == 2);

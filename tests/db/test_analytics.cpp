@@ -10,6 +10,7 @@
 #include <random>
 #include <set>
 #include <sstream>
+#include <tuple>
 
 #include "db/analytics_store.h"
 #include "db/course_store.h"
@@ -273,6 +274,20 @@ TEST_CASE("Analytics of a synthetic class of 50 students match the figures recom
   }
   for (std::size_t i = 1; i < a.questions.size(); ++i) CHECK(a.questions[i - 1].difficulty >= a.questions[i].difficulty);
 
+  // The items most missed: by answers not right (most first), then by their share, then by id.
+  std::vector<std::tuple<int, double, std::string>> missedHere;
+  for (const auto& [id, n] : nQuestion)
+    if (n > nRight[id]) missedHere.emplace_back(-(n - nRight[id]), double(nRight[id]) / n, id);
+  std::sort(missedHere.begin(), missedHere.end());
+  const auto missed = mostMissed(a, 4);
+  REQUIRE(missed.size() == std::min<std::size_t>(4, missedHere.size()));
+  REQUIRE_FALSE(missed.empty());
+  for (std::size_t i = 0; i < missed.size(); ++i) {
+    CHECK(missed[i].questionId == std::get<2>(missedHere[i]));
+    CHECK(missed[i].answers - missed[i].correct == -std::get<0>(missedHere[i]));
+  }
+  CHECK(mostMissed(a, 1000).size() == missedHere.size());
+
   // Hardest structures: share of right answers, lowest first, and the class's mean FSRS state.
   const Fsrs fsrs;
   for (const StructureStats& s : a.structures) {
@@ -355,9 +370,34 @@ TEST_CASE("Analytics of a synthetic class of 50 students match the figures recom
   const std::string revlog = test::readFile(f.dir / "csv" / "revlog.csv");
   CHECK(std::count(revlog.begin(), revlog.end(), '\n') == long(f.events.size()) + 1);
   CHECK(revlog.rfind("card_id,student,structure,review_time,review_rating,review_state,review_duration\n", 0) == 0);
+  // Text people typed is guarded against spreadsheet formulas (quiz::csvCell); numbers, negative
+  // ones included, stay numbers: a student named like a formula in a group "-A", and one review
+  // logged before 1970 (a negative review_time).
+  {
+    db::SqliteUserRepository users(*database);
+    REQUIRE(users.createUser("=HYPERLINK(\"http://example.org\",\"x\")", Role::Student, "-A"));
+    REQUIRE(database->exec("UPDATE review_log SET reviewed_at = -86400 WHERE id = (SELECT min(id) FROM review_log)"));
+  }
+  const auto guarded = test::runApp("analytics toy --csv --out '" + (f.dir / "guarded").string() + "' --db '" + f.path + "'");
+  REQUIRE_MESSAGE(guarded.exitCode == 0, guarded.err);
+  const std::string guardedStudents = test::readFile(f.dir / "guarded" / "students.csv");
+  CHECK(guardedStudents.find("\"'=HYPERLINK(\"\"http://example.org\"\",\"\"x\"\")\",'-A,0,0,,,,0,\n") != std::string::npos);
+  const std::string guardedLog = test::readFile(f.dir / "guarded" / "revlog.csv");
+  CHECK(guardedLog.find(",-86400000,") != std::string::npos);
+  CHECK(guardedLog.find("'-") == std::string::npos);
+  const auto guardedLong = test::runApp("analytics toy --csv --db '" + f.path + "'");
+  REQUIRE(guardedLong.exitCode == 0);
+  CHECK(guardedLong.out.find("students,\"'=HYPERLINK(\"\"http://example.org\"\",\"\"x\"\")\",'-A,taught,0\n") != std::string::npos);
+  const auto occurrences = [](const std::string& text, const std::string& what) {
+    std::size_t n = 0;
+    for (std::size_t at = text.find(what); at != std::string::npos; at = text.find(what, at + 1)) ++n;
+    return n;
+  };
+  CHECK(occurrences(guardedLong.out, "'-") == occurrences(guardedLong.out, ",'-A,"));  // the group only, no number
+  CHECK(occurrences(guardedLong.out, ",'-A,") == 7);  // one per metric of the students table
   const auto text = test::runApp("analytics toy --db '" + f.path + "'");
   REQUIRE(text.exitCode == 0);
-  CHECK(text.out.find("class of 50 students") != std::string::npos);
+  CHECK(text.out.find("class of 51 students") != std::string::npos);  // with the one named like a formula
   CHECK(text.out.find("Hardest structures") != std::string::npos);
   CHECK(test::runApp("analytics nope --db '" + f.path + "'").exitCode != 0);
 }

@@ -62,6 +62,11 @@ TEST_CASE("A stored course reads back identical, including texts with quotes and
   Course course = test::toyCourse();
   course.lessons[0].steps[0].show.text = "It's the \"stirrup\"; DROP TABLE lessons; -- really";
   course.synonyms["incus"] = {"anvil", "l'enclume"};
+  // A free camera and a clipping plane on a show step and on a question's scene (schema 11).
+  course.lessons[0].steps[0].show.camera = StepCamera{{1.5, -2, 3}, {0, 0.6, -0.8}, {0, 0.8, 0.6}, 42.25};
+  course.lessons[0].steps[0].show.clip = StepClip{{0, 0, -1}, -3.5};
+  for (Step& step : course.lessons[0].steps)
+    if (step.scene) step.scene->clip = StepClip{{1, 0, 0}, 0.75};
   auto stored = storeCourse(db, course, "memory");
   REQUIRE_MESSAGE(stored, (stored ? "" : stored.error().message));
   CHECK(bool(*stored == SeedOutcome::Added));
@@ -70,6 +75,13 @@ TEST_CASE("A stored course reads back identical, including texts with quotes and
   auto back = repo.course("toy");
   REQUIRE_MESSAGE(back, (back ? "" : back.error().message));
   CHECK(courseToJson(*back) == courseToJson(course));
+  CHECK(back->lessons[0].steps[0].show.camera == course.lessons[0].steps[0].show.camera);
+  CHECK(back->lessons[0].steps[0].show.clip == course.lessons[0].steps[0].show.clip);
+  for (std::size_t i = 0; i < course.lessons[0].steps.size(); ++i)
+    if (course.lessons[0].steps[i].scene) {
+      REQUIRE(back->lessons[0].steps[i].scene.has_value());
+      CHECK(back->lessons[0].steps[i].scene->clip == StepClip{{1, 0, 0}, 0.75});
+    }
   auto lesson = repo.lesson("toy.middle");
   REQUIRE(lesson);
   CHECK(lesson->prerequisites == std::vector<std::string>{"toy.ossicles"});

@@ -115,6 +115,64 @@ TEST_CASE("StudyStore_RatingsAreUnblindedOnExport") {
   CHECK((*completion)[0].ratingsGiven == (*completion)[0].ratingsExpected);
 }
 
+TEST_CASE("StudyStore_RatingQuality_IsStoredExportedAndReplacedWithTheRating") {
+  // The render quality a participant saw (issue 19): stored with each rating, blank when not known,
+  // replaced when the item is rated again.
+  test::TempDir dir;
+  auto db = db::Database::open(test::freshDatabase(dir, "t.db"));
+  REQUIRE(db.has_value());
+  const auto p = protocol();
+  REQUIRE(db::saveStudy(*db, p).has_value());
+  auto part = db::enrolOrResume(*db, p, "P0", "medical");
+  REQUIRE(part.has_value());
+  const auto& trial = part->trials.front();
+  db::RatingRecord seen;
+  seen.position = trial.position;
+  seen.item = p.items[0].id;
+  seen.ratingAsShown = 2;
+  seen.qualityLevel = 3;
+  seen.qualityFullLevel = 5;
+  seen.qualityScale = 0.25;
+  seen.settleMs = 2100;
+  REQUIRE(db::recordRating(*db, *part, seen).has_value());
+  db::RatingRecord unknown;
+  unknown.position = trial.position;
+  unknown.item = p.items[1].id;
+  unknown.ratingAsShown = 4;
+  REQUIRE(db::recordRating(*db, *part, unknown).has_value());
+  auto rows = db::studyResponseRows(*db, p);
+  REQUIRE(rows.has_value());
+  REQUIRE(rows->size() == 2);
+  CHECK((*rows)[0].qualityLevel == 3);
+  CHECK((*rows)[0].qualityFullLevel == 5);
+  CHECK((*rows)[0].qualityScale == doctest::Approx(0.25));
+  CHECK((*rows)[0].settleMs == doctest::Approx(2100));
+  CHECK_FALSE((*rows)[1].qualityLevel.has_value());
+  CHECK_FALSE((*rows)[1].settleMs.has_value());
+  // The long table carries them; unknown ones are blank.
+  const auto csv = quiz::parseCsv(quiz::responsesLongCsv(*rows));
+  REQUIRE(csv.size() == 3);
+  const auto col = [&](const std::string& name) {
+    const auto it = std::find(csv[0].begin(), csv[0].end(), name);
+    REQUIRE(it != csv[0].end());
+    return std::size_t(it - csv[0].begin());
+  };
+  CHECK(csv[1][col("quality_level")] == "3");
+  CHECK(csv[1][col("quality_full_level")] == "5");
+  CHECK(csv[1][col("quality_scale")] == "0.25");
+  CHECK(csv[1][col("settle_ms")] == "2100");
+  CHECK(csv[2][col("quality_level")].empty());
+  CHECK(csv[2][col("settle_ms")].empty());
+  // Rated again at full quality: the new quality replaces the old.
+  seen.qualityLevel = 5;
+  seen.settleMs = 900;
+  REQUIRE(db::recordRating(*db, *part, seen).has_value());
+  rows = db::studyResponseRows(*db, p);
+  REQUIRE(rows.has_value());
+  CHECK((*rows)[0].qualityLevel == 5);
+  CHECK((*rows)[0].settleMs == doctest::Approx(900));
+}
+
 TEST_CASE("StudyStore_ResumedParticipant_EachRatingKeepsTheSessionItWasGivenIn") {
   test::TempDir dir;
   auto db = db::Database::open(test::freshDatabase(dir, "t.db"));

@@ -4,7 +4,8 @@
 // ../shared/data when it exists. Hand-made seeds and past findings live in tests/fuzz/corpus/ and
 // tests/fuzz/regressions/ and are added by scripts/fuzz.sh.
 //
-// Sections: [files] · [nifti] · [nrrd] · [dicom] · [seg] · [png] · [inv3] · [json] · main
+// Sections: [files] · [nifti] · [nrrd] · [seg.nrrd] · [dicom] · [seg] · [png] · [inv3] · [json] ·
+// [package] · main
 
 // The loader tests' file writers (io_test_files.h) come with doctest checks this program never
 // runs: compiled out, so that no doctest runtime is needed.
@@ -40,13 +41,20 @@
 #include <dcmtk/dcmseg/segdoc.h>
 #include <dcmtk/dcmseg/segment.h>
 #include <dcmtk/oflog/oflog.h>
+#include <archive.h>
+#include <archive_entry.h>
 #include <openjpeg.h>
 #include <png.h>
 
 #include "inv3_test_files.h"
 #include "io_test_files.h"
 #include "lessons/course_json.h"
+#include "package/course_package.h"
 #include "quiz/answer_json.h"
+#include "render/preset.h"
+#include "segment/seeds.h"
+#include "volume/dataset_source.h"
+#include "volume/label_writers.h"
 #include "volume/nifti_io.h"
 #include "volume/nrrd_io.h"
 #include "volume/png_image.h"
@@ -643,6 +651,192 @@ void jsonSeeds() {
     seed("label_names", "totalsegmentator.json", readAll(shared / "totalsegmentator/labels.json"));
 }
 
+// ---------------------------------------------------------------------------------------------
+// [seg.nrrd]
+
+void segNrrdSeeds() {
+  // writeSegNrrd's output: uint8 labels, and uint16 when a label is 256 or more.
+  for (const bool wide : {false, true}) {
+    Geometry g;
+    g.dims = {4, 3, 2};
+    g.spacingMm = {0.8, 0.9, 2.5};
+    g.originMm = {-10, 20, 5};
+    LabelMap labels(g);
+    const std::uint16_t second = wide ? 300 : 2;
+    for (std::size_t n = 0; n < labels.voxels.size(); ++n) labels.voxels[n] = n % 3 == 0 ? 0 : n % 3 == 1 ? 1 : second;
+    std::vector<Structure> structures(2);
+    structures[0].label = 1;
+    structures[0].id = "liver";
+    structures[0].displayName = "Liver";
+    structures[0].colour = {0.8f, 0.3f, 0.2f};
+    structures[1].label = second;
+    structures[1].id = "spleen";
+    structures[1].displayName = "Spleen";
+    seed("seg_nrrd", wide ? "written_uint16.seg.nrrd" : "written_uint8.seg.nrrd",
+         bytesOfWritten("labels.seg.nrrd", [&](const std::string& p) { return writeSegNrrd(p, labels, structures); }));
+  }
+  // Two layers of overlapping segments, as Slicer writes them (values are per layer).
+  const std::string header =
+      "NRRD0004\ntype: unsigned char\ndimension: 4\nspace: left-posterior-superior\nsizes: 2 3 2 2\n"
+      "space directions: none (1,0,0) (0,1,0) (0,0,2)\nkinds: list domain domain domain\n"
+      "encoding: raw\nspace origin: (0,0,0)\n"
+      "Segment0_ID:=liver\nSegment0_Name:=liver\nSegment0_Color:=0.9 0.5 0.4\nSegment0_LabelValue:=1\n"
+      "Segment0_Layer:=0\nSegment0_Extent:=0 2 0 1 0 1\n"
+      "Segment1_ID:=tumour\nSegment1_Name:=tumour\nSegment1_Color:=0.9 0.9 0.1\nSegment1_LabelValue:=1\n"
+      "Segment1_Layer:=1\n\n";
+  const std::string layer0 = std::string("\1\1\0\0\0\0\1\0\0\0\0\0", 12);
+  const std::string layer1 = std::string("\0\1\1\0\0\0\0\0\0\0\0\1", 12);
+  std::string data;
+  for (std::size_t v = 0; v < layer0.size(); ++v) data += layer0[v], data += layer1[v];
+  seed("seg_nrrd", "two_layers.seg.nrrd", header + data);
+  if (const fs::path shared = sharedData(); !shared.empty())
+    for (const char* name : {"dcmqi/spine_seg_label5.nrrd", "dcmqi/heart_seg.nrrd"})
+      seed("seg_nrrd", fs::path(name).filename().string(), readAll(shared / name));
+}
+
+// Seeds files of the segment command: the schema's example, a RAS one with the threshold fields,
+// and what seedsToJson writes.
+void segmentSeedsSeeds() {
+  const std::string example = R"({"schema": 1, "space": "LPS",
+  "labels": [{"value": 0, "name": "background"},
+             {"value": 5, "name": "liver", "colour": [0.86, 0.55, 0.39], "range": [-50, 250], "min_diameter_mm": 3}],
+  "strokes": [{"label": "liver", "radius_mm": 2, "points": [[0, 0, 4], [5, 3, 8], [6, -4, 12]]},
+              {"label": 0, "points": [[-10, -12, 2]]}],
+  "grow": {"weight": "gradient", "window": [-160, 240], "base": 0.05}})";
+  seed("segment_seeds", "example.json", example);
+  seed("segment_seeds", "ras_dots.json",
+       R"({"space": "RAS", "labels": [{"value": 0, "name": "background"}, {"value": 1, "name": "a"}, {"value": 2, "name": "b"}],)"
+       R"( "strokes": [{"label": "a", "points": [[1, 1, 1]]}, {"label": 2, "points": [[-3, 2, 10]]}, {"label": 0, "points": [[8, 9, 14]]}],)"
+       R"( "grow": {"weight": "ascent"}})");
+  if (auto parsed = segment::parseSeeds(example, "example.json")) {
+    seed("segment_seeds", "written.json", segment::seedsToJson(*parsed));
+  } else {
+    std::fprintf(stderr, "at_fuzz_seeds: %s\n", parsed.error().message.c_str());
+    failed = true;
+  }
+  const fs::path data = fs::path(AT_SOURCE_DIR) / "data" / "segmentations";
+  std::error_code ec;
+  if (fs::is_directory(data, ec))
+    for (const auto& entry : fs::recursive_directory_iterator(data, ec))
+      if (entry.path().filename() == "seeds.json")
+        seed("segment_seeds", entry.path().parent_path().filename().string() + "_seeds.json", readAll(entry.path()));
+}
+
+// ---------------------------------------------------------------------------------------------
+// [package]
+
+// The entries of a tar as fuzz_package's assembled input: the manifest first, then "NAME\nCONTENT"
+// for every other entry ("" when libarchive cannot read it).
+std::string assembledParts(const std::string& tar) {
+  std::unique_ptr<archive, int (*)(archive*)> a(archive_read_new(), archive_read_free);
+  archive_read_support_format_tar(a.get());
+  if (archive_read_open_memory(a.get(), tar.data(), tar.size()) != ARCHIVE_OK) return "";
+  std::string manifest;
+  std::vector<std::string> parts;
+  archive_entry* entry = nullptr;
+  while (archive_read_next_header(a.get(), &entry) == ARCHIVE_OK) {
+    const std::string name = archive_entry_pathname(entry);
+    std::string content(std::size_t(archive_entry_size(entry)), '\0');
+    if (archive_read_data(a.get(), content.data(), content.size()) != la_ssize_t(content.size())) return "";
+    if (name == "manifest.json") manifest = content;
+    else parts.push_back(name + "\n" + content);
+  }
+  if (manifest.empty()) return "";
+  parts.insert(parts.begin(), manifest);
+  return joinParts(parts);
+}
+
+// Writes a package with the project's writer; returns its bytes ("" on failure, reported).
+std::string packageFile(const package::PackageInput& input) {
+  const fs::path path = outRoot / ".tmp-course.atcourse";
+  auto ok = package::writePackage(path, input);
+  if (!ok) {
+    std::fprintf(stderr, "at_fuzz_seeds: %s\n", ok.error().message.c_str());
+    return "";
+  }
+  std::string bytes = readAll(path);
+  fs::remove(path);
+  return bytes;
+}
+
+void packageSeeds() {
+  const fs::path data = fs::path(AT_SOURCE_DIR) / "data";
+  // The shipped course on the built-in phantom with the presets it uses.
+  auto course = lessons::parseCourseJson(readAll(data / "courses" / "temporal_bone.json"), "temporal_bone.json");
+  if (!course) {
+    std::fprintf(stderr, "at_fuzz_seeds: %s\n", course.error().message.c_str());
+    failed = true;
+    return;
+  }
+  package::PackageInput builtin;
+  builtin.course = *course;
+  builtin.dataset.name = course->datasetId;
+  builtin.createdBy = "at_fuzz_seeds";
+  for (const char* id : {"cochlea_wdt", "vestibule_wdt"}) {
+    const fs::path file = data / "presets" / (std::string(id) + ".json");
+    auto preset = render::loadPreset(file);
+    if (!preset) {
+      std::fprintf(stderr, "at_fuzz_seeds: %s\n", preset.error().message.c_str());
+      failed = true;
+      return;
+    }
+    builtin.presets.push_back({id, *preset, readAll(file)});
+  }
+  const std::string builtinTar = packageFile(builtin);
+  seed("package", "builtin.atcourse", builtinTar);
+  seed("package", "builtin.parts", assembledParts(builtinTar));
+
+  // A small course on a 16³ phantom included in the package, with its structures and labels.
+  auto phantom = openBuiltinDataset("phantom:16");
+  auto small = lessons::parseCourseJson(
+      R"({"schema": 1, "id": "small", "title": "Small", "dataset": "small", "version": 2, "lessons": [{"id": "l",)"
+      R"( "title": "L", "steps": [{"kind": "show", "structure": "cochlea", "preset": "cochlea_wdt", "view": "superior",)"
+      R"( "title": "T", "text": "X"},)"
+      R"( {"kind": "question", "question": {"id": "q", "kind": "name", "prompt": "Name it", "target": "cochlea"}}]}]})",
+      "small.json");
+  if (!phantom || !small) {
+    std::fprintf(stderr, "at_fuzz_seeds: %s\n", (!phantom ? phantom.error() : small.error()).message.c_str());
+    failed = true;
+    return;
+  }
+  phantom->id = "small";
+  const fs::path files = outRoot / ".tmp-package-files";
+  fs::create_directories(files);
+  auto written = package::writeDatasetFiles(*phantom, files, true);
+  if (!written) {
+    std::fprintf(stderr, "at_fuzz_seeds: %s\n", written.error().message.c_str());
+    failed = true;
+    return;
+  }
+  package::PackageInput included;
+  included.course = *small;
+  included.presets.push_back(builtin.presets.front());
+  included.dataset.name = "small";
+  included.dataset.source = package::VolumeSource::Included;
+  included.dataset.geometry = phantom->volume.geometry;
+  included.dataset.sourceVolumeChecksum = "sha256:" + std::string(64, 'a');
+  // Three structures (the phantom's full list would make every execution parse a long document).
+  for (const Structure& s : phantom->structures)
+    if (s.id == "cochlea" || s.id == "vestibule" || s.id == "stapes") included.structures.push_back(s);
+  included.volumeFile = written->volume;
+  included.labelsFile = written->labels;
+  included.createdBy = "at_fuzz_seeds";
+  const std::string includedTar = packageFile(included);
+  seed("package", "included.atcourse", includedTar);
+  seed("package", "included.parts", assembledParts(includedTar));
+  // The same course by reference to a volume the importer supplies (no data files).
+  package::PackageInput reference = included;
+  reference.dataset.source = package::VolumeSource::Reference;
+  reference.dataset.referenceFileName = "Small.inv3";
+  reference.dataset.referenceNote = "from the fuzz seeds";
+  reference.volumeFile.clear();
+  reference.labelsFile.clear();
+  const std::string referenceTar = packageFile(reference);
+  seed("package", "reference.atcourse", referenceTar);
+  seed("package", "reference.parts", assembledParts(referenceTar));
+  fs::remove_all(files);
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -655,11 +849,14 @@ int main(int argc, char** argv) {
   fs::create_directories(outRoot);
   niftiSeeds();
   nrrdSeeds();
+  segNrrdSeeds();
+  segmentSeedsSeeds();
   dicomSeriesSeeds();
   dicomSegSeeds();
   pngSeeds();
   inv3Seeds();
   jsonSeeds();
+  packageSeeds();
   std::printf("at_fuzz_seeds: %d seeds in %s%s\n", written, outRoot.c_str(),
               sharedData().empty() ? " (../shared/data absent: generated seeds only)" : "");
   return failed ? 1 : 0;

@@ -1,5 +1,6 @@
 #include <doctest/doctest.h>
 
+#include <cmath>
 #include <fstream>
 #include <set>
 
@@ -159,4 +160,56 @@ TEST_CASE("CourseJson_QuestionScenes_LocateNeedsANeighbourNotItsTarget") {
   CHECK_FALSE(name->lessons[0].steps[0].scene.has_value());
   CHECK(sceneFor(name->lessons[0].steps[0]).structure == "stapes");
   CHECK(sceneFor(name->lessons[0].steps[0]).presetId == "stapes_wdt");
+}
+
+TEST_CASE("CourseJson_StepCameraAndClip_ReadNormalisedRoundTripAndBadOnesNameTheField") {
+  const std::string lesson = R"([{"id": "a", "title": "A", "steps": [)";
+  const std::string show = R"({"kind": "show", "structure": "cochlea", "preset": "cochlea_wdt", "view": "superior", "title": "T", "text": "X", )";
+  const std::string camera = R"("camera": {"target_mm": [1, 2, 3], "look": [0, 0, -2], "up": [0.5, -1, 0.2], "distance_mm": 40})";
+  auto ok = parseCourseJson(minimalCourse(lesson + show + camera + R"(, "clip": [0, -2, 0, 5]},)" +
+                                          R"({"kind": "question", "structure": "vestibule", "clip": [0, 0, 1, -1.5], )" +
+                                          R"("question": {"id": "q", "kind": "locate", "prompt": "P", "target": "cochlea"}}]}])"),
+                            "c.json");
+  REQUIRE_MESSAGE(ok, (ok ? "" : ok.error().message));
+  const Step& s = ok->lessons[0].steps[0];
+  REQUIRE(s.show.camera.has_value());
+  CHECK(s.show.camera->targetMm == at::Vec3{1, 2, 3});
+  CHECK(s.show.camera->look == at::Vec3{0, 0, -1});  // normalised
+  CHECK(s.show.camera->up[2] == doctest::Approx(0));  // made orthogonal to look
+  CHECK(s.show.camera->up[0] == doctest::Approx(0.5 / std::sqrt(1.25)));
+  CHECK(s.show.camera->distanceMm == 40);
+  REQUIRE(s.show.clip.has_value());
+  CHECK(s.show.clip->normal == at::Vec3{0, -1, 0});
+  CHECK(s.show.clip->d == doctest::Approx(2.5));  // scaled with the normal
+  const Step& q = ok->lessons[0].steps[1];
+  REQUIRE(q.scene.has_value());
+  CHECK_FALSE(q.scene->camera.has_value());
+  REQUIRE(q.scene->clip.has_value());
+  CHECK(sceneFor(q).clip == q.scene->clip);
+  auto again = parseCourseJson(courseToJson(*ok), "round-trip");
+  REQUIRE_MESSAGE(again, (again ? "" : again.error().message));
+  CHECK(courseToJson(*again) == courseToJson(*ok));
+  CHECK(again->lessons[0].steps[0].show.camera == s.show.camera);
+  CHECK(again->lessons[0].steps[1].scene->clip == q.scene->clip);
+  // A course without them (every course written before) has none.
+  auto plain = parseCourseJson(minimalCourse(lesson + kShow + "]}]"), "c.json");
+  REQUIRE(plain);
+  CHECK_FALSE(plain->lessons[0].steps[0].show.camera.has_value());
+  CHECK_FALSE(plain->lessons[0].steps[0].show.clip.has_value());
+
+  const auto showWith = [&](const std::string& extra) { return errorOf(minimalCourse(lesson + show + extra + "}]}]")); };
+  CHECK(showWith(R"("clip": [1, 1, 0, 3])") ==
+        "bad.json: lessons[0].steps[0].clip: the normal must lie along one patient axis (x, y or z), as the desktop's clip control offers");
+  CHECK(showWith(R"("clip": [0, 0, 0, 3])") == "bad.json: lessons[0].steps[0].clip: the normal must not be zero");
+  CHECK(showWith(R"("clip": [0, 0, 1])").find("bad.json: lessons[0].steps[0].clip: must be [nx, ny, nz, d]") == 0);
+  CHECK(showWith(R"("camera": {"target_mm": [0, 0, 0], "up": [0, 0, 1], "distance_mm": 4})") ==
+        "bad.json: lessons[0].steps[0].camera.look: missing");
+  CHECK(showWith(R"("camera": {"target_mm": [0, 0, 0], "look": [0, 0, 1], "up": [0, 0, 3], "distance_mm": 4})") ==
+        "bad.json: lessons[0].steps[0].camera.up: must not be zero or along 'look'");
+  CHECK(showWith(R"("camera": {"target_mm": [0, 0], "look": [0, 0, 1], "up": [0, 1, 0], "distance_mm": 4})") ==
+        "bad.json: lessons[0].steps[0].camera.target_mm: must be [x, y, z] in millimetres");
+  CHECK(showWith(R"("camera": {"target_mm": [0, 0, 0], "look": [0, 0, 1], "up": [0, 1, 0], "distance_mm": 0})")
+            .find("bad.json: lessons[0].steps[0].camera.distance_mm: must be a distance in millimetres above 0") == 0);
+  CHECK(showWith(R"("camera": {"target_mm": [0, 0, 0], "look": [0, 0, 1], "up": [0, 1, 0], "distance_mm": 4, "roll": 1})") ==
+        "bad.json: lessons[0].steps[0].camera.roll: unknown field");
 }

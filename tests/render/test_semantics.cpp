@@ -304,3 +304,101 @@ TEST_CASE("WDT_AndNonWeightedCochlea_DifferWhereThePaperSays") {
   // the WDT gains far less there than along the fluid.
   CHECK(carotidWdt / std::max(carotidUnweighted, 1e-3) < 0.6 * iacWdt / std::max(iacUnweighted, 1e-3));
 }
+
+TEST_CASE("WDT_BlendSlider_ChangesTheImageAcrossItsRange") {
+  // Algorithm 1's slider t: far context is drawn at t times the data TF's opacity. Each step of
+  // the student's slider (0 → 0.15 → 0.3 → 0.6 → 1) must change what is seen, the first step
+  // included: the mean change of the image (premultiplied RGB over black, 0..255) between
+  // neighbouring steps is at least 4 levels, the first step's (0 → 0.15) at least 10, and more
+  // context is drawn as t grows. (Presets whose near context filled the whole view left the first
+  // step at about 6 on the cochlea.)
+  if (!test::glRenderer()) return;
+  const Dataset& ds = test::phantomOfSize(256);
+  for (const std::string id : {"posterior_semicircular_canal", "cochlea"}) {
+    CAPTURE(id);
+    const Structure* s = ds.findStructure(id);
+    REQUIRE(s);
+    auto frame = structureFrame(ds.labels, s->label);
+    REQUIRE(frame);
+    Preset wdt = shipped(id + "_wdt");
+    const FloatVolume field = fieldFor(ds, s->label, wdt);
+    const auto renderAt = [&](float t) {
+      wdt.t = t;
+      return toRgb(renderWith(ds, s->label, &field, framed(wdt, *frame, wdt.view.value_or("lateral_right"), 1.6)));
+    };
+    const auto meanOf = [](const RgbImage& img) {
+      double sum = 0;
+      for (std::uint8_t v : img.rgb) sum += v;
+      return sum / double(img.rgb.size());
+    };
+    const auto meanChange = [](const RgbImage& a, const RgbImage& b) {
+      double sum = 0;
+      for (std::size_t i = 0; i < a.rgb.size(); ++i) sum += std::abs(int(a.rgb[i]) - int(b.rgb[i]));
+      return sum / double(a.rgb.size());
+    };
+    RgbImage previous = renderAt(0);
+    float previousT = 0;
+    for (const float t : {0.15f, 0.3f, 0.6f, 1.0f}) {
+      const RgbImage image = renderAt(t);
+      const double change = meanChange(previous, image);
+      INFO("t " << previousT << " -> " << t << ": mean change " << change << ", mean level " << meanOf(previous)
+                << " -> " << meanOf(image));
+      CHECK(change >= (previousT == 0 ? 10.0 : 4.0));
+      CHECK(meanOf(image) > meanOf(previous));
+      previous = image;
+      previousT = t;
+    }
+  }
+}
+
+TEST_CASE("WDT_ContextBoneNearTheStructure_IsAWhiteSurfaceOfMediumOpacity") {
+  // The paper's context: bone near the structure as shaded white surfaces of medium opacity, not a
+  // grey veil. A bone plate (1800 HU) 1.5 mm behind a fluid structure, seen through nothing but
+  // soft tissue: its pixels away from the structure are drawn at opacity 0.35..0.9 (something
+  // behind would still show; the plate is no faint haze) in near-white, unsaturated colour.
+  if (!test::glRenderer()) return;
+  Geometry g;
+  g.dims = {64, 64, 64};
+  g.spacingMm = {0.25, 0.25, 0.25};
+  g.originMm = {-7.875, -7.875, -7.875};
+  Dataset ds;
+  ds.volume = Volume(g, 40);
+  ds.labels = LabelMap(g, 0);
+  for (int k = 0; k < 64; ++k)
+    for (int j = 0; j < 64; ++j)
+      for (int i = 0; i < 64; ++i) {
+        const Vec3 p = g.indexToPatient({double(i), double(j), double(k)});
+        if (p[1] >= 1.5 && p[1] <= 3.0 && std::fabs(p[0]) <= 6 && std::fabs(p[2]) <= 6) ds.volume.at(i, j, k) = 1800;
+        if (norm(p) <= 1.0) {
+          ds.volume.at(i, j, k) = 10;
+          ds.labels.at(i, j, k) = 1;
+        }
+      }
+  const Preset wdt = shipped("default_wdt");
+  const FloatVolume field = fieldFor(ds, 1, wdt);
+  RenderSettings s;
+  s.preset = wdt;
+  s.width = s.height = 96;
+  s.camera = Camera::named(NamedView::Anterior, {0, 0, 0}, 4.0);  // looking along +y at the plate
+  const RgbaImage image = renderWith(ds, 1, &field, s);
+  double alphaSum = 0, lumSum = 0, satSum = 0;
+  int n = 0;
+  for (int y = 0; y < 96; ++y)
+    for (int x = 0; x < 96; ++x) {
+      const double r = std::hypot(x + 0.5 - 48, y + 0.5 - 48);
+      if (r < 22 || r > 34) continue;  // off the structure (radius about 12 px), on the plate
+      const auto p = image.pixel(x, y);
+      const double mx = std::max({p[0], p[1], p[2]}), mn = std::min({p[0], p[1], p[2]});
+      alphaSum += p[3] / 255.0;
+      lumSum += luminance(p);
+      satSum += mx > 0 ? (mx - mn) / mx : 0;
+      ++n;
+    }
+  REQUIRE(n > 100);
+  const double alpha = alphaSum / n, lum = lumSum / n, sat = satSum / n;
+  INFO("plate: mean opacity " << alpha << ", mean luminance " << lum << " (straight colour), saturation " << sat);
+  CHECK(alpha >= 0.35);
+  CHECK(alpha <= 0.9);
+  CHECK(lum >= 170);
+  CHECK(sat <= 0.25);
+}

@@ -6,6 +6,7 @@
 
 #include "core/strings.h"
 #include "course_authoring.h"
+#include "lesson_controller.h"
 #include "db/preset_store.h"
 #include "lessons/course_check.h"
 #include "lessons/course_json.h"
@@ -49,6 +50,7 @@ Result<lessons::Lesson*> CourseEditor::lesson() {
 
 void CourseEditor::changed() {
   ++revision_;
+  previewing_.reset();
   problems_.clear();
   // The form, as the course reader sees it (the first problem, by field path) …
   auto parsed = lessons::parseCourseJson(lessons::courseToJson(*draft_), draft_->id);
@@ -145,6 +147,7 @@ Status CourseEditor::addLesson(const std::string& title) {
 Status CourseEditor::selectLesson(std::size_t index) {
   if (!draft_ || index >= draft_->lessons.size()) return fail("no lesson " + std::to_string(index));
   lesson_ = index;
+  previewing_.reset();
   events_(stateEvent());
   return {};
 }
@@ -181,6 +184,8 @@ Status CourseEditor::addShow(const Capture& capture, const std::string& title, c
   step.show.structure = capture.structure;
   step.show.presetId = capturePreset(capture);
   step.show.view = capture.view;
+  step.show.camera = capture.camera;
+  step.show.clip = capture.clip;
   step.show.title = title;
   step.show.text = text;
   l->steps.push_back(step);
@@ -203,6 +208,8 @@ Status CourseEditor::addQuestion(quiz::Question question, const std::optional<Ca
     s.structure = scene->structure;
     s.presetId = capturePreset(*scene);
     s.view = scene->view;
+    s.camera = scene->camera;
+    s.clip = scene->clip;
     step.scene = s;
   }
   l->steps.push_back(std::move(step));
@@ -252,11 +259,26 @@ Status CourseEditor::previewStep(std::size_t index) {
   const lessons::Step& step = l->steps[index];
   if (step.kind == lessons::StepKind::Study) return fail("a study step has no view");
   const lessons::QuestionScene scene = step.kind == lessons::StepKind::Show
-                                           ? lessons::QuestionScene{step.show.structure, step.show.presetId, step.show.view}
+                                           ? lessons::QuestionScene{step.show.structure, step.show.presetId, step.show.view,
+                                                                     step.show.camera, step.show.clip}
                                            : lessons::sceneFor(step);
   auto it = captured_.find(scene.presetId);
-  preview_(scene.structure, scene.presetId, it != captured_.end() ? std::optional<render::Preset>(it->second) : std::nullopt,
-           scene.view);
+  preview_(scene, it != captured_.end() ? std::optional<render::Preset>(it->second) : std::nullopt);
+  Previewing p;
+  p.step = index;
+  p.kind = step.kind;
+  p.structure = scene.structure;
+  if (step.kind == lessons::StepKind::Show) {
+    p.heading = step.show.title;
+    p.text = step.show.text;
+  } else {
+    p.heading = std::string("Question (") + quiz::toString(step.question.kind) + ")";
+    p.text = step.question.prompt;
+    p.namesHidden = namesGiveAway(step.question.kind);
+  }
+  previewing_ = p;
+  events_({{"event", "course_preview"}, {"step", index}, {"kind", p.kind == lessons::StepKind::Show ? "show" : quiz::toString(step.question.kind)},
+           {"structure", p.structure}, {"names_hidden", p.namesHidden}});
   return {};
 }
 

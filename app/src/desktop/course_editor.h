@@ -1,7 +1,7 @@
 // The desktop's course editor without drawing (the Course editor window draws it; the UI script
 // drives the same commands): an instructor's draft of a course on the dataset on screen — lessons
 // with prerequisites; show steps captured from the view (structure, preset with its t, named
-// view) with a title and text; questions of every kind; steps reordered, duplicated, deleted and
+// view, the camera as the author left it and the clipping plane) with a title and text; questions of every kind; steps reordered, duplicated, deleted and
 // previewed as a student will see them; live validation naming each problem by its field path (as
 // the course reader does); saving into the database (the next version when it changes a stored
 // course), exporting a package, and Open course… (importing one).
@@ -30,12 +30,13 @@ class CourseEditor {
   struct Capture {
     std::string structure;
     render::Preset preset;   // with the view's t
-    lessons::CameraView view = lessons::CameraView::LateralRight;
+    lessons::CameraView view = lessons::CameraView::LateralRight;  // the last named view chosen
+    std::optional<lessons::StepCamera> camera;  // where the camera is now (orbited, zoomed, panned)
+    std::optional<lessons::StepClip> clip;      // the clipping plane, when one is on
   };
-  // Shows a step as a student sees it: its structure, its preset (`captured` when the draft holds
-  // it, else `presetId` as a lesson finds it), the named view.
-  using Preview = std::function<void(const std::string& structure, const std::string& presetId,
-                                     const std::optional<render::Preset>& captured, lessons::CameraView view)>;
+  // Shows a step as a student sees it: its scene (structure, preset id, named view, camera, clip),
+  // with the preset `captured` when the draft holds it, else the preset id as a lesson finds it.
+  using Preview = std::function<void(const lessons::QuestionScene& scene, const std::optional<render::Preset>& captured)>;
 
   // `session` and `library` outlive the editor. `events` receives course_edited, course_saved,
   // course_exported and course_imported.
@@ -68,7 +69,19 @@ class CourseEditor {
   Status moveStep(std::size_t from, std::size_t to);
   Status duplicateStep(std::size_t index);  // the copy follows it; a question's copy gets a new id
   Status deleteStep(std::size_t index);
+  // Shows the step as a student sees it [course_preview]: its view, and while the preview lasts
+  // its heading and text or prompt; names hidden for a question a name would give away.
   Status previewStep(std::size_t index);
+  struct Previewing {
+    std::size_t step = 0;           // in the chosen lesson
+    lessons::StepKind kind = lessons::StepKind::Show;
+    std::string structure;          // selected by the preview
+    std::string heading, text;      // show: title and text; question: its kind and prompt
+    bool namesHidden = false;       // a student sees no structure name (namesGiveAway)
+  };
+  // The preview on screen; it ends with any change of the draft or another lesson chosen.
+  const std::optional<Previewing>& previewing() const { return previewing_; }
+  void endPreview() { previewing_.reset(); }
 
   // Live validation: each problem as "<field path>: <what is wrong>"; empty when it can be saved.
   const std::vector<std::string>& problems() const { return problems_; }
@@ -97,6 +110,7 @@ class CourseEditor {
   std::map<std::string, render::Preset> captured_;    // presets of this draft by id
   std::size_t lesson_ = 0;
   std::vector<std::string> problems_;
+  std::optional<Previewing> previewing_;
   std::uint64_t revision_ = 0;
 };
 

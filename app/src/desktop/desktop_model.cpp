@@ -38,15 +38,17 @@ DesktopModel::DesktopModel(LearningSession& session, const render::PresetLibrary
   exams_ = std::make_unique<ExamController>(
       session_, *lessons_, sink, [this](const std::optional<ExamController::ItemScene>& item) { showExamItem(item); },
       [this] { return renderState(); });
+  analytics_ = std::make_unique<AnalyticsController>(session_, sink);
   study_ = std::make_unique<StudyController>(session_.database(), library_, sink,
                                              [this]() -> Result<render::IntensityLevels> { return explore_.levels(); });
   imports_ = std::make_unique<ImportController>(session_.database(), sink, [this](const std::string& m) { message(m); });
   segment_ = std::make_unique<SegmentController>(session_.database(), sink);
   courses_ = std::make_unique<CourseEditor>(session_, library_, sink,
-                                            [this](const std::string& structure, const std::string& presetId,
-                                                   const std::optional<render::Preset>& captured, lessons::CameraView view) {
-                                              if (captured) showStructureWith(structure, *captured, lessons::toString(view));
-                                              else showLessonStructure({structure, presetId, view});
+                                            [this](const lessons::QuestionScene& scene, const std::optional<render::Preset>& captured) {
+                                              const LessonController::Shown shown{scene.structure, scene.presetId, scene.view,
+                                                                                  scene.camera, scene.clip};
+                                              if (captured) showStructureWith(shown, *captured);
+                                              else showLessonStructure(shown);
                                             });
   scheduler_.setViewPixels(layout_.viewPixelsW(), layout_.viewPixelsH());
   classEvents_ = std::make_unique<BackgroundOutboxSender>(session_.database(), std::chrono::seconds(5));
@@ -66,11 +68,19 @@ void DesktopModel::message(const std::string& text) {
   if (messageSink_) messageSink_(text);
 }
 
+void DesktopModel::note(const std::string& text) {
+  notes_.push_back(text);
+  if (notes_.size() > 3) notes_.erase(notes_.begin());
+  std::fprintf(stderr, "anatomy-tutor: %s\n", text.c_str());
+  if (messageSink_) messageSink_(text);
+}
+
 // ---------------------------------------------------------------------------------------------
 // Opening datasets
 
 Status DesktopModel::open() {
-  auto course = loadDefaultCourse();
+  auto course = loadStartCourse(options_.course);
+  if (!course && !options_.course.empty()) return tl::unexpected(course.error());
   std::string datasetName = options_.dataset;
   std::string startStructure, startPreset;
   if (course) {
@@ -91,6 +101,8 @@ Status DesktopModel::open() {
   auto ds = openNamedDataset(request);
   if (!ds) return tl::unexpected(ds.error());
   if (auto st = showDataset(std::move(*ds), startStructure, startPreset); !st) return st;
+  // The lessons panel starts on the course the view opened for, not on the first course stored.
+  if (course) lessons_->preferCourse(course->id);
   opened_ = true;
   return {};
 }
@@ -106,7 +118,8 @@ Status DesktopModel::showDataset(Dataset dataset, const std::string& startStruct
   const auto sink = [this](json j) { event(std::move(j)); };
   fields_ = std::make_unique<FieldView>(
       *dataset_, explore_, sink, [this](const std::string& m) { message(m); },
-      [this](const std::string& clicked, double distanceMm) { clickGraded(clicked, distanceMm); });
+      [this](const std::string& clicked, double distanceMm) { clickGraded(clicked, distanceMm); },
+      [this](const std::string& m) { note(m); });
   expert_ = std::make_unique<TfEditor>(*dataset_, session_.database(), sink);
   segment_->attach(*dataset_);
   slices_.attach(*dataset_);
@@ -276,20 +289,39 @@ void DesktopModel::showLessonStructure(const LessonController::Shown& shown) {
     message(preset.error().message);
     return;
   }
-  showStructureWith(shown.structure, *preset,
-                    shown.view ? lessons::toString(*shown.view) : (explore_.viewName().empty() ? startView_ : explore_.viewName()));
+  showStructureWith(shown, *preset);
 }
 
-void DesktopModel::showStructureWith(const std::string& structure, const render::Preset& preset, const std::string& view) {
-  const Structure* s = dataset_->findStructure(structure);
+void DesktopModel::showStructureWith(const LessonController::Shown& shown, const render::Preset& preset) {
+  const Structure* s = dataset_->findStructure(shown.structure);
   if (!s || !explore_.hasStructure(s->label)) {
-    message("lesson step: no structure '" + structure + "' in dataset '" + dataset_->id + "'");
+    message("lesson step: no structure '" + shown.structure + "' in dataset '" + dataset_->id + "'");
     return;
   }
   explore_.usePreset(s->label, preset, preset.t);
   setHovered(0);
   select(s->label);
+  const std::string view =
+      shown.view ? lessons::toString(*shown.view) : (explore_.viewName().empty() ? startView_ : explore_.viewName());
   if (auto st = setView(view); !st) message(st.error().message);
+  if (shown.camera) explore_.setCamera(cameraOf(*shown.camera));
+  // The step's plane, else none: the student sees what the author captured.
+  ClipSettings clip;
+  if (shown.clip) {
+    const render::ClipPlane plane = clipOf(*shown.clip);
+    for (int axis = 0; axis < 3; ++axis)
+      if (plane.normal[std::size_t(axis)] != 0) clip.axis = axis;
+    clip.on = true;
+    clip.flip = plane.normal[std::size_t(clip.axis)] < 0;
+    clip.offsetMm = float(plane.d - dot(plane.normal, explore_.camera().target));
+  }
+  explore_.setClip(clip);
+}
+
+bool DesktopModel::previewHidesNames() const {
+  const auto& preview = courses_->previewing();
+  // Selecting another structure (or closing the editor) ends what the student would see.
+  return courses_->windowOpen && preview && preview->namesHidden && idOf(explore_.selected()) == preview->structure;
 }
 
 std::string DesktopModel::courseDatasetId() const {
@@ -306,6 +338,12 @@ Result<CourseEditor::Capture> DesktopModel::captureView() const {
   auto view = lessons::parseCameraView(explore_.viewName().empty() ? startView_ : explore_.viewName());
   if (!view) return tl::unexpected(view.error());
   capture.view = *view;
+  capture.camera = stepCameraOf(explore_.camera());
+  if (auto plane = explore_.clipPlane()) {
+    auto clip = stepClipOf(*plane);
+    if (!clip) return tl::unexpected(clip.error());
+    capture.clip = *clip;
+  }
   return capture;
 }
 
@@ -405,6 +443,18 @@ void DesktopModel::renderFailed(const std::string& why) {
 }
 
 void DesktopModel::endFrame(Clock::time_point end, double ms) {
+  if (viewAvailable_ && study_->participantActive()) {  // what the participant sees, for their ratings
+    const ExploreState::Shown shown = explore_.shown();
+    StudyController::ViewQuality q;
+    q.structure = idOf(shown.label);
+    q.presetId = shown.preset.id.value_or("");
+    q.mode = shown.preset.mode;
+    q.level = scheduler_.showing(explore_.revision()) ? scheduler_.renderedLevel() : -1;
+    q.fullLevel = kFullLevel;
+    q.scale = scheduler_.fullScale() * options_.renderScale;
+    q.settledMs = scheduler_.settledAfterMs();
+    study_->noteViewQuality(q);
+  }
   const std::uint16_t onScreen = explore_.bare() ? explore_.shownLabel() : explore_.fieldLabel();
   recorder_.frameShown(!viewAvailable_ || scheduler_.showing(explore_.revision()), onScreen, end);
   recorder_.endFrame(ms, scheduler_.interacting());

@@ -18,6 +18,7 @@
 
 #include "class_sync.h"
 #include "core/error.h"
+#include "analytics_controller.h"
 #include "exam_controller.h"
 #include "explore_state.h"
 #include "field_view.h"
@@ -42,7 +43,8 @@ struct ViewLayout {
   int windowW = 1280, windowH = 720;          // logical pixels (mouse coordinates)
   int framebufferW = 1280, framebufferH = 720;  // drawable pixels
   float uiScale = 1;
-  float panelWidth() const { return 320 * uiScale; }  // the explore panel, logical pixels
+  float panelPx = 0;                            // the explore panel's width as drawn (resizable); 0: the default
+  float panelWidth() const { return panelPx > 0 ? panelPx : 320 * uiScale; }  // logical pixels
   bool inView(double x, double y) const { return x >= panelWidth() && x < windowW && y >= 0 && y < windowH; }
   // The view's size in framebuffer pixels.
   int viewPixelsW() const;
@@ -51,7 +53,8 @@ struct ViewLayout {
 };
 
 struct DesktopOptions {
-  std::string dataset;              // empty: the default course's dataset; else as openNamedDataset takes it
+  std::string dataset;              // empty: the start course's dataset; else as openNamedDataset takes it
+  std::string course;               // the course to start on (its first lesson's first view); empty: the default
   std::string userName = kDefaultLessonUser;  // whose lesson progress the lesson panel shows and records
   double renderScale = 1;           // resolution of the full-quality level (slow software GL: < 1)
   double frameBudgetMs = 100;       // at rest, finer levels predicted to cost more are not rendered
@@ -94,6 +97,7 @@ class DesktopModel {
   FrameRecorder& recorder() { return recorder_; }
   LessonController& lessons() { return *lessons_; }
   ExamController& exams() { return *exams_; }
+  AnalyticsController& analytics() { return *analytics_; }
   StudyController& study() { return *study_; }
   ImportController& imports() { return *imports_; }
   TfEditor& expert() { return *expert_; }
@@ -125,16 +129,21 @@ class DesktopModel {
   std::optional<std::array<double, 2>> projectStructure(std::uint16_t label) const;
   // A lesson step's structure, preset and view.
   void showLessonStructure(const LessonController::Shown& shown);
-  // `structure` drawn with `preset` (its t) from the named `view` (a step as a student sees it).
-  void showStructureWith(const std::string& structure, const render::Preset& preset, const std::string& view);
+  // The step's structure drawn with `preset` (its t) from its named view, or its free camera, with
+  // its clipping plane or none (a step as a student sees it).
+  void showStructureWith(const LessonController::Shown& shown, const render::Preset& preset);
   // What the view shows now, for the course editor: the selected structure, its preset with the
-  // view's t, and the named view (the last one chosen). An error when nothing is selected.
+  // view's t, the named view (the last one chosen), the camera and the clipping plane. An error
+  // when nothing is selected.
   Result<CourseEditor::Capture> captureView() const;
   // The dataset id a course made on screen names: the dataset's, with the phantom at any size
   // ("phantom:128") named "phantom" (the same anatomy).
   std::string courseDatasetId() const;
   // Structure names must not be shown (a lesson question or an exam would be given away).
-  bool namesHidden() const { return lessons_->namesHidden() || exams_->namesHidden(); }
+  bool namesHidden() const { return lessons_->namesHidden() || exams_->namesHidden() || previewHidesNames(); }
+  // The course editor previews a question step as a student sees it (its structure still selected,
+  // the editor open): names hidden as in the lesson.
+  bool previewHidesNames() const;
 
   // --- Exams ----------------------------------------------------------------------------------
   // An exam item's view: its scene; for a locate item in the 3-D view, once the scene's field is
@@ -178,6 +187,9 @@ class DesktopModel {
 
   void message(const std::string& text);
   const std::vector<std::string>& messages() const { return messages_; }
+  // Neutral information (not a problem): shown apart from the messages, also on stderr.
+  void note(const std::string& text);
+  const std::vector<std::string>& notes() const { return notes_; }
   void event(nlohmann::json e) { events_(std::move(e)); }
 
  private:
@@ -198,6 +210,7 @@ class DesktopModel {
   EventSink events_;
   MessageSink messageSink_;
   std::vector<std::string> messages_;
+  std::vector<std::string> notes_;
   std::unique_ptr<Dataset> dataset_;
   render::GradientVolume gradients_;
   std::uint64_t datasetRevision_ = 0;
@@ -211,6 +224,7 @@ class DesktopModel {
   std::unique_ptr<TfEditor> expert_;
   std::unique_ptr<LessonController> lessons_;
   std::unique_ptr<ExamController> exams_;
+  std::unique_ptr<AnalyticsController> analytics_;
   struct Turn {
     std::uint16_t target = 0;
     std::string view;  // the scene's own side, tried first

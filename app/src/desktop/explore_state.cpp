@@ -160,6 +160,11 @@ Status ExploreState::setView(const std::string& name, int width, int height) {
   return {};
 }
 
+void ExploreState::setCamera(const render::Camera& camera) {
+  camera_ = camera;
+  changed();
+}
+
 void ExploreState::orbit(double azimuthDeg, double elevationDeg) {
   camera_.orbit(azimuthDeg, elevationDeg);
   changed();

@@ -94,6 +94,8 @@ class ExploreState {
   // The named view framing the shown structure with room around it to orbit and hover, for an
   // image of width × height pixels; an unknown name is an error and the camera stays.
   Status setView(const std::string& name, int width, int height);
+  // A step's free camera replaces the view's framing (the named view stays the view's name).
+  void setCamera(const render::Camera& camera);
   void orbit(double azimuthDeg, double elevationDeg);
   void zoom(double factor);
   void pan(double dxPixels, double dyPixels, int viewHeightPixels);

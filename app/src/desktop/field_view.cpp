@@ -11,11 +11,12 @@ using wdt::FieldRequest;
 using wdt::FieldService;
 
 FieldView::FieldView(const Dataset& dataset, ExploreState& state, EventSink events, MessageSink messages,
-                     ClickGraded clickGraded)
+                     ClickGraded clickGraded, MessageSink notes)
     : dataset_(dataset),
       state_(state),
       events_(std::move(events)),
       messages_(std::move(messages)),
+      notes_(std::move(notes)),
       clickGraded_(std::move(clickGraded)),
       service_(std::make_unique<FieldService>(dataset.volume, dataset.labels, 8)) {}
 
@@ -85,7 +86,8 @@ void FieldView::takeFinished() {
     lastWarning_ = f.message;
     if (!gpuFields_ && !cpuNotice_ && f.message.empty()) {
       cpuNotice_ = true;
-      messages_("No CUDA GPU: distance fields run on the " + f.device + ", coarse while hovering, full resolution at rest.");
+      (notes_ ? notes_ : messages_)("No CUDA GPU: distance fields run on the " + f.device +
+                                    ", coarse while hovering, full resolution at rest.");
     }
     char buf[200];
     std::snprintf(buf, sizeof buf, "%s: field 1/%d in %.0f ms on %s", id.c_str(), f.request.params.downsample, f.ms,

@@ -46,7 +46,9 @@ class FieldView {
   // A locate answer's weighted distance became known (negative: unknown).
   using ClickGraded = std::function<void(const std::string& clicked, double distanceMm)>;
   // `dataset` (its volume and labels) outlives the view; `state` is the explore state showing it.
-  FieldView(const Dataset& dataset, ExploreState& state, EventSink events, MessageSink messages, ClickGraded clickGraded);
+  // `notes`: neutral information for the user (fields computed on the CPU), else to `messages`.
+  FieldView(const Dataset& dataset, ExploreState& state, EventSink events, MessageSink messages, ClickGraded clickGraded,
+            MessageSink notes = {});
   ~FieldView();
 
   // Each frame: takes finished fields, serves a pending click, asks for what the shown structure
@@ -89,6 +91,7 @@ class FieldView {
   ExploreState& state_;
   EventSink events_;
   MessageSink messages_;
+  MessageSink notes_;
   ClickGraded clickGraded_;
   std::unique_ptr<wdt::FieldService> service_;
   std::shared_ptr<const DistanceField> field_;

@@ -20,12 +20,11 @@ using SteadyClock = std::chrono::steady_clock;
 
 lessons::UnixSeconds unixNow() { return lessons::UnixSeconds(std::time(nullptr)); }
 
-// Questions whose answer a visible structure name would give away while unanswered.
+}  // namespace
+
 bool namesGiveAway(quiz::QuestionKind kind) {
   return kind == quiz::QuestionKind::Locate || kind == quiz::QuestionKind::Identify || kind == quiz::QuestionKind::Name;
 }
-
-}  // namespace
 
 LessonController::LessonController(LearningSession& session, std::string userName, std::string viewDataset,
                                    EventSink events, ShowStructure show, RenderStateSource renderState)
@@ -72,6 +71,11 @@ Status LessonController::selectCourse(int index) {
   return refresh();
 }
 
+void LessonController::preferCourse(const std::string& courseId) {
+  preferredCourse_ = courseId;
+  if (user_) (void)refresh();  // otherwise the first refresh (when the user is set) applies it
+}
+
 Status LessonController::selectCourse(const std::string& courseId) {
   if (auto st = ready(); !st) return st;
   auto it = std::find_if(courses_.begin(), courses_.end(), [&](const lessons::Course& c) { return c.id == courseId; });
@@ -84,6 +88,13 @@ Status LessonController::refresh() {
   auto courses = session_.curriculum().courses();
   if (!courses) return tl::unexpected(courses.error());
   courses_ = std::move(*courses);
+  if (!preferredCourse_.empty()) {
+    auto it = std::find_if(courses_.begin(), courses_.end(), [&](const lessons::Course& c) { return c.id == preferredCourse_; });
+    if (it != courses_.end()) {
+      courseIndex_ = int(it - courses_.begin());
+      preferredCourse_.clear();
+    }
+  }
   courseIndex_ = std::clamp(courseIndex_, 0, std::max(0, int(courses_.size()) - 1));
   auto attempts = session_.progress().attempts(user_->id);
   if (!attempts) return tl::unexpected(attempts.error());
@@ -121,6 +132,8 @@ Status LessonController::refresh() {
                                     courses_[std::size_t(courseIndex_)].id, unixNow());
     if (!due) return tl::unexpected(due.error());
     due_ = std::move(*due);
+    // The due list names its structures: the course's dataset's names (its ids where it is not here).
+    if (auto list = session_.structures(courses_[std::size_t(courseIndex_)].datasetId)) structures_ = std::move(*list);
   }
   return {};
 }
@@ -222,7 +235,7 @@ Status LessonController::showCurrent() {
   json e = {{"event", "lesson_step"}, {"lesson", runningLesson_}, {"position", view->position},
             {"count", view->count}, {"kind", lessons::toString(view->kind)}};
   if (view->kind == lessons::StepKind::Show) {
-    show_({view->structure, view->presetId, view->view});
+    show_({view->structure, view->presetId, view->view, view->scene.camera, view->scene.clip});
     e["structure"] = view->structure;
   } else {
     auto question = engine_->currentQuestion();
@@ -233,7 +246,7 @@ Status LessonController::showCurrent() {
     asked.grade = view->feedback;  // resumed: answered before
     // The question's scene (lessons::sceneFor): identify and name questions highlight their
     // target; a locate question shows its region, a neighbouring landmark, without marking it.
-    show_({view->scene.structure, view->scene.presetId, view->scene.view});
+    show_({view->scene.structure, view->scene.presetId, view->scene.view, view->scene.camera, view->scene.clip});
     asked_ = std::move(asked);
     e["question"] = view->questionId;
     e["question_kind"] = quiz::toString(view->questionKind);
@@ -368,7 +381,7 @@ Status LessonController::startReview() {
   for (const std::string& id : asked.question.choices) asked.choiceNames.push_back(displayName(id));
   const quiz::QuestionKind kind = asked.question.question.kind;
   if (auto scene = lessons::questionScene(course, asked.question.question.id))
-    show_({scene->structure, scene->presetId, scene->view});
+    show_({scene->structure, scene->presetId, scene->view, scene->camera, scene->clip});
   events_({{"event", "review_question"}, {"course", course.id}, {"question", asked.question.question.id},
            {"question_kind", quiz::toString(kind)}, {"target", asked.question.question.target},
            {"choices", asked.question.choices}});

@@ -30,6 +30,10 @@
 
 namespace at::app {
 
+// Questions whose answer a visible structure name would give away while unanswered (locate,
+// identify, name): a lesson hides names while one is asked, the course editor's preview too.
+bool namesGiveAway(quiz::QuestionKind kind);
+
 class LessonController {
  public:
   using EventSink = std::function<void(nlohmann::json)>;
@@ -39,6 +43,8 @@ class LessonController {
     std::string structure;
     std::string presetId;
     std::optional<lessons::CameraView> view;
+    std::optional<lessons::StepCamera> camera;  // replaces the view's framing
+    std::optional<lessons::StepClip> clip;      // none: unclipped
   };
   using ShowStructure = std::function<void(const Shown&)>;
   // The render parameters on screen, stored with each answer.
@@ -104,6 +110,8 @@ class LessonController {
   Status switchUser(const std::string& name);  // no lesson may be running [lesson_user]
   Status selectCourse(const std::string& courseId);
   Status selectCourse(int index);
+  // The course to start on (the one the view opened for), applied when the courses are next read.
+  void preferCourse(const std::string& courseId);
   Status refresh();                            // courses, lesson rows, review queue
   // Starts (or resumes) a lesson; its answer keys are computed on a thread and poll() (each frame)
   // completes the start [lesson_started, lesson_step; lesson_refused when it cannot start].
@@ -151,6 +159,7 @@ class LessonController {
 
   std::vector<lessons::Course> courses_;
   int courseIndex_ = 0;
+  std::string preferredCourse_;  // preferCourse: chosen at the next refresh, then cleared
   std::vector<LessonRow> rows_;
   std::vector<lessons::StructureProgress> due_;
   std::optional<lessons::StepView> step_;     // the engine's current step (nullopt: no lesson running)

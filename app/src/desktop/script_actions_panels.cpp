@@ -127,9 +127,12 @@ ScriptInterpreter::Outcome ScriptInterpreter::review(Context& c) {
   LessonController& l = c.model.lessons();
   if (l.preparing()) return Progress::Running;
   if (auto st = l.ready(); !st) return actionError(c.action, st.error());
-  json due = json::array();
-  for (const lessons::StructureProgress& p : l.due()) due.push_back(p.structureId);
-  c.model.event({{"event", "review_queue"}, {"due", due}});
+  json due = json::array(), names = json::array();  // ids, and the names the panel's due list shows
+  for (const lessons::StructureProgress& p : l.due()) {
+    due.push_back(p.structureId);
+    names.push_back(l.displayName(p.structureId));
+  }
+  c.model.event({{"event", "review_queue"}, {"due", due}, {"names", names}});
   if (auto st = l.startReview(); !st) return actionError(c.action, st.error());
   return Progress::Done;
 }
@@ -232,6 +235,7 @@ ScriptInterpreter::Outcome ScriptInterpreter::studyStart(Context& c) {
 ScriptInterpreter::Outcome ScriptInterpreter::study(Context& c) {
   StudyController& s = c.model.study();
   const std::string what = c.action.at("do");
+  if (!c.first && what == "study_rate") return studyRate(c);  // waiting for full quality
   if (!c.first) return awaitStudyScreen(c);  // study_next, waiting for its screen
   if (!s.participantActive()) return fail("ui script: " + what + " needs study_start first");
   Status st;
@@ -240,7 +244,7 @@ ScriptInterpreter::Outcome ScriptInterpreter::study(Context& c) {
     s.showSide(side.empty() ? '?' : side[0]);
   } else if (what == "study_rate") {
     if (!s.participant()->trial) return fail("ui script: study_rate after the last trial");
-    st = s.rate(c.action.at("item").get<std::string>(), c.action.at("rating").get<int>());
+    return studyRate(c);
   } else if (what == "study_comment") {
     s.setComment(c.action.at("text").get<std::string>());
   } else if (what == "study_next") {
@@ -250,6 +254,19 @@ ScriptInterpreter::Outcome ScriptInterpreter::study(Context& c) {
   }
   if (!st) return tl::unexpected(withContext("ui script", st.error()));
   return what == "study_next" ? awaitStudyScreen(c) : Progress::Done;
+}
+
+// study_rate waits (as a participant must) until the side on screen has been drawn at full quality.
+ScriptInterpreter::Outcome ScriptInterpreter::studyRate(Context& c) {
+  StudyController& s = c.model.study();
+  if (!s.readyToRate()) {
+    if (c.elapsedMs > c.action.value("timeout_ms", 60000.0))
+      return fail(ErrorKind::Unavailable, "ui script: study_rate: the view never reached full quality");
+    return Progress::Running;
+  }
+  if (auto st = s.rate(c.action.at("item").get<std::string>(), c.action.at("rating").get<int>()); !st)
+    return tl::unexpected(withContext("ui script", st.error()));
+  return Progress::Done;
 }
 
 ScriptInterpreter::Outcome ScriptInterpreter::coordinatorOpen(Context& c) {

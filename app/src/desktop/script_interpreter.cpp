@@ -43,6 +43,7 @@ const std::map<std::string, ScriptInterpreter::Handler>& ScriptInterpreter::hand
       {"exam_item", &S::examItem},      {"exam_answer", &S::examAnswer},
       {"slice_click", &S::sliceClick},  {"slice_click_structure", &S::sliceClickStructure},
       {"exam_finish", &S::examFinish},  {"exam_leave", &S::examLeave},
+      {"analytics", &S::analytics},
       {"tf_add_point", &S::tfEdit},     {"tf_move_point", &S::tfEdit},
       {"tf_delete_point", &S::tfEdit},  {"tf_colour", &S::tfEdit},
       {"preset_set", &S::presetSet},    {"preset_save", &S::presetSave},

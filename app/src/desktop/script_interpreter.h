@@ -10,6 +10,7 @@
 //   lessons:  lesson_user, lessons, lesson, lesson_next, answer, review, lesson_close
 //   exams:    exams, exam, exam_item, exam_answer, slice_click, slice_click_structure, exam_finish,
 //             exam_leave
+//   analytics: analytics {course, group, tab} (the Class analytics window on that class), analytics {close}
 //   expert:   tf_add_point, tf_move_point, tf_delete_point, tf_colour, preset_set, preset_save
 //   studies:  study_start, study_toggle, study_rate, study_comment, study_next, study_close,
 //             coordinator_open, coordinator_export, coordinator_summary
@@ -122,11 +123,13 @@ class ScriptInterpreter {
   Outcome sliceClickStructure(Context&);
   Outcome examFinish(Context&);
   Outcome examLeave(Context&);
+  Outcome analytics(Context&);  // script_actions_analytics.cpp
   Outcome tfEdit(Context&);
   Outcome presetSet(Context&);
   Outcome presetSave(Context&);
   Outcome studyStart(Context&);
   Outcome study(Context&);
+  Outcome studyRate(Context&);  // waits for the side on screen at full quality
   Outcome awaitStudyScreen(Context&);
   Outcome coordinatorOpen(Context&);
   Outcome coordinatorExport(Context&);

@@ -59,6 +59,9 @@ void StudyController::beginTrial() {
   s.ratings.clear();
   s.responseMs.clear();
   s.comment.clear();
+  s.quality.clear();
+  s.sideAtFull = false;
+  s.sideSettleMs.reset();
   for (const auto& item : s.protocol.items) s.ratings[item.id] = 0;
   newScreen_ = screenPending_ = true;
 }
@@ -75,8 +78,30 @@ void StudyController::showSide(char side) {
   if (side == participant_->side) return;
   accountView();
   participant_->side = side;
+  participant_->sideAtFull = false;  // the other side's image is still to converge
+  participant_->sideSettleMs.reset();
   ++participant_->toggles;
   events_({{"event", "study_toggle"}, {"showing", std::string(1, side)}, {"toggles", participant_->toggles}});
+}
+
+void StudyController::noteViewQuality(const ViewQuality& quality) {
+  viewQuality_ = quality;
+  const auto now = shown();
+  if (!now || now->structure != quality.structure || now->preset.id.value_or("") != quality.presetId ||
+      now->preset.mode != quality.mode) {
+    viewQuality_->level = -1;  // the image on screen is not yet the current side's
+    return;
+  }
+  Participant& s = *participant_;
+  if (quality.level >= quality.fullLevel && !s.sideAtFull) {
+    s.sideAtFull = true;
+    // The scheduler counts from the view's last change, which is at or after the side was shown.
+    s.sideSettleMs = quality.settledMs;
+  }
+}
+
+bool StudyController::readyToRate() const {
+  return !viewQuality_ || (participant_ && participant_->sideAtFull);
 }
 
 Status StudyController::rate(const std::string& item, int rating) {
@@ -85,8 +110,21 @@ Status StudyController::rate(const std::string& item, int rating) {
   if (!s.ratings.count(item)) return fail("study: the study has no item '" + item + "'");
   if (rating < s.protocol.scale.min || rating > s.protocol.scale.max)
     return fail("study: rating " + std::to_string(rating) + " is off the scale");
+  if (!readyToRate())
+    return fail(ErrorKind::Unavailable, "study: wait until view " + std::string(1, s.side) +
+                                            " is drawn at full quality before rating (level " +
+                                            std::to_string(viewQuality_->level) + " of " +
+                                            std::to_string(viewQuality_->fullLevel) + " on screen)");
   s.ratings[item] = rating;
   s.responseMs[item] = msSince(s.trialStart);
+  db::RatingRecord& q = s.quality[item];
+  q = {};
+  if (viewQuality_) {
+    q.qualityLevel = viewQuality_->level;  // as on screen now (lower if the participant moves the view)
+    q.qualityFullLevel = viewQuality_->fullLevel;
+    q.qualityScale = viewQuality_->scale;
+    q.settleMs = s.sideSettleMs;
+  }
   return {};
 }
 
@@ -110,8 +148,14 @@ Status StudyController::nextTrial() {
   const render::Preset& wdt = s.presets.at(s.protocol.presetFor(trial.structure, 0));
   // Each rating is its own transaction, committed before the next.
   for (const auto& item : s.protocol.items) {
-    const db::RatingRecord r = makeRating(s.protocol, wdt, trial.position, item.id, s.ratings[item.id],
-                                          s.responseMs.count(item.id) ? s.responseMs[item.id] : msSince(s.trialStart));
+    db::RatingRecord r = makeRating(s.protocol, wdt, trial.position, item.id, s.ratings[item.id],
+                                    s.responseMs.count(item.id) ? s.responseMs[item.id] : msSince(s.trialStart));
+    if (auto q = s.quality.find(item.id); q != s.quality.end()) {
+      r.qualityLevel = q->second.qualityLevel;
+      r.qualityFullLevel = q->second.qualityFullLevel;
+      r.qualityScale = q->second.qualityScale;
+      r.settleMs = q->second.settleMs;
+    }
     if (auto st = db::recordRating(database_, s.participant, r); !st) return st;
     trial.ratedItems.insert(item.id);
   }

@@ -54,6 +54,11 @@ class StudyController {
     std::map<std::string, double> responseMs;        // item → ms from the trial's start to its rating
     std::string comment;
     bool saveFailed = false;                         // the last Next could not be saved
+    // The side on screen reached the full quality level (since it was last shown), and how long
+    // that took; reset when a trial begins or the side changes.
+    bool sideAtFull = false;
+    std::optional<double> sideSettleMs;
+    std::map<std::string, db::RatingRecord> quality;  // item → the quality on screen when rated
   };
   bool participantActive() const { return participant_ != nullptr; }
   Participant* participant() { return participant_.get(); }
@@ -77,6 +82,26 @@ class StudyController {
   // window that draws the panels is still to show it. The UI script waits on this so that its
   // next action acts on the screen the last one caused.
   bool screenPending() const { return participant_ && screenPending_; }
+
+  // What the volume view has on screen, each frame (DesktopModel): the structure and preset id of
+  // the image shown and its mode (a report for another than the current side's is an image not yet
+  // replaced, or a field mode still drawn bare for want of its field),
+  // its quality level (fullLevel: the full level; -1: an image of an older view), the full
+  // level's resolution as a share of the view, and the ms from the view's last change to the full
+  // level (FrameScheduler::settledAfterMs). Without calls (no view draws: headless) the quality
+  // is not known and ratings are taken as they come, with no quality recorded.
+  struct ViewQuality {
+    std::string structure, presetId;
+    render::RenderMode mode = render::RenderMode::Wdt;  // bare while a field mode's field is not on screen yet
+    int level = -1;
+    int fullLevel = 0;
+    double scale = 1;
+    std::optional<double> settledMs;
+  };
+  void noteViewQuality(const ViewQuality& quality);
+  // A rating may be given now: no view reports quality, or the side on screen is at full quality
+  // (issue 19: stimuli are rated only once shown at full quality).
+  bool readyToRate() const;
 
   Status startParticipant(const std::string& study, const std::string& participant, const std::string& group);
   void showSide(char side);             // 'A' or 'B' (another value: the other side) [study_toggle]
@@ -121,6 +146,7 @@ class StudyController {
   StudyLevels levels_;
   EventSink events_;
   std::unique_ptr<Participant> participant_;
+  std::optional<ViewQuality> viewQuality_;  // the latest from the view; nullopt: no view reports
   bool newScreen_ = false;      // a new screen the panel has not begun to draw
   bool screenPending_ = false;  // a new screen not yet announced
 

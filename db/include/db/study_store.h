@@ -70,6 +70,11 @@ struct RatingRecord {
   double responseMs = 0;
   double t = 0, alpha = 0, beta = 0;  // render parameters on screen
   std::string appVersion;
+  // The render quality on screen when the item was rated: the level (qualityFullLevel = full),
+  // the full level's resolution as a share of the view, and ms from the rated side being shown
+  // to the full level on screen. Unset: not known (no view drew the trial).
+  std::optional<int> qualityLevel, qualityFullLevel;
+  std::optional<double> qualityScale, settleMs;
 };
 // The writes of one participant's session (`participant` as enrolOrResume returned it). Only the
 // participant's latest session may write: once another run resumes the same participant (its

@@ -123,4 +123,9 @@ struct ClassAnalytics {
 
 ClassAnalytics computeAnalytics(const AnalyticsInput& input, UnixSeconds now, const Fsrs& fsrs = Fsrs());
 
+// The items the class missed most: questions (and exam items) with at least one answer that was
+// not right, by the number of such answers (most first), then by their share of the question's
+// answers, then by id; at most `limit`.
+std::vector<QuestionStats> mostMissed(const ClassAnalytics& analytics, std::size_t limit);
+
 }  // namespace at::lessons

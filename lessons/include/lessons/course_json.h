@@ -27,4 +27,10 @@ Result<quiz::Question> parseQuestionJson(const std::string& text, const std::str
 std::string examToJson(const ExamSpec& exam);
 Result<ExamSpec> parseExamJson(const std::string& text, const std::string& sourceName);
 
+// A step's free camera and clipping plane in the schema's form ({"camera": {…}, "clip": […]}; ""
+// when it has neither), for db/ to store them as text; parsing fills what the text holds.
+std::string placementToJson(const std::optional<StepCamera>& camera, const std::optional<StepClip>& clip);
+Status parsePlacementJson(const std::string& text, const std::string& sourceName, std::optional<StepCamera>& camera,
+                          std::optional<StepClip>& clip);
+
 }  // namespace at::lessons

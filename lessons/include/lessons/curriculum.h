@@ -25,12 +25,34 @@ enum class StepKind {
 const char* toString(StepKind kind);  // "show", "question", "study"
 Result<StepKind> parseStepKind(const std::string& text);
 
+// A free camera a step replays instead of framing its named view (the course's dataset, LPS mm):
+// the eye is `distanceMm` from `targetMm`, looking along `look` (unit, eye → target) with `up`
+// (unit, orthogonal to `look`) the screen's up. The view's height at the target is fixed by the
+// distance, so a wider window shows more at the sides.
+struct StepCamera {
+  Vec3 targetMm{0, 0, 0};
+  Vec3 look{1, 0, 0};
+  Vec3 up{0, 0, 1};
+  double distanceMm = 100;
+  bool operator==(const StepCamera&) const = default;
+};
+
+// A clipping plane a step replays (LPS mm): what lies where dot(normal, p) > d is cut away. The
+// normal is one patient axis, either way (±x, ±y or ±z), as the desktop's clip control offers.
+struct StepClip {
+  Vec3 normal{1, 0, 0};
+  double d = 0;
+  bool operator==(const StepClip&) const = default;
+};
+
 struct ShowStep {
   std::string structure;  // structure id in the course's dataset
   std::string presetId;   // e.g. "cochlea_wdt" (WDT context) or "cochlea_bare" (bare structure)
   CameraView view = CameraView::LateralRight;
   std::string title;      // short heading
   std::string text;       // what it is, where, why it matters (first-year students)
+  std::optional<StepCamera> camera;  // replaces the named view's framing when set
+  std::optional<StepClip> clip;      // none: the step shows the volume unclipped
 };
 
 // Reserved for the preference study (issue: studies). Stored but not run by LessonEngine.
@@ -47,6 +69,8 @@ struct QuestionScene {
   std::string structure;
   std::string presetId;   // "" = "<structure>_wdt"
   CameraView view = CameraView::LateralRight;
+  std::optional<StepCamera> camera;  // as ShowStep's
+  std::optional<StepClip> clip;
 };
 
 struct Step {

@@ -18,6 +18,8 @@ struct GradingContext {
   NameCatalog names;
   // Display name of a structure id (the first entry of its NameEntry), or the id itself.
   std::string displayName(const std::string& structureId) const;
+  // The display name as it reads inside a sentence (nameInSentence: "the cochlea", "the C1").
+  std::string nameInSentence(const std::string& structureId) const;
 };
 
 // Dispatches on question.question.kind.

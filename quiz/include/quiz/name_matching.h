@@ -14,6 +14,14 @@ namespace at::quiz {
 // "the", "a", "an" dropped: "The Semicircular-Canal, LEFT lateral" → "semicircular canal lateral left".
 std::string normalizeName(const std::string& text);
 
+// A structure's display name as it reads inside a sentence ("Click the cochlea."): names are
+// stored in label case, their first letter capitalised ("Cochlea", "Superior semicircular canal"),
+// so the first letter is lower-cased — unless the first word is an abbreviation or a proper name:
+// it has a digit or another capital ("C1", "CN VII", "IAC"), ends in a possessive ("Meckel's
+// cave", "Prussak’s space"), or is an eponym of kEponymousWords ("Eustachian tube", "Sylvian
+// fissure"). The rest of the name is kept as written.
+std::string nameInSentence(const std::string& displayName);
+
 // Optimal string alignment (restricted Damerau–Levenshtein) distance on bytes: insertions,
 // deletions, substitutions and transpositions of adjacent characters each cost 1.
 int damerauLevenshtein(const std::string& a, const std::string& b);

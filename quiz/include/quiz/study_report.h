@@ -12,6 +12,7 @@
 
 #include <array>
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -41,6 +42,9 @@ struct StudyResponseRow {
   std::string appVersion;
   std::string comment;         // the participant's free-text comment on this structure (may be empty)
   bool participantComplete = true;  // false: the participant stopped before the end (partial data)
+  // The render quality on screen at the rating (db::RatingRecord); unset: not known.
+  std::optional<int> qualityLevel, qualityFullLevel;
+  std::optional<double> qualityScale, settleMs;
 };
 
 // RFC 4180 cell: quoted when it holds a comma, quote, CR or LF (quotes doubled); a text cell that

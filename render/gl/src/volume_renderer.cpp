@@ -468,32 +468,25 @@ Status VolumeRenderer::prepare(const RenderSettings& s) {
   key.surfaceFloor = s.preset.surfaceInterior > 0 || !(s.preset.surfaceGradientHu[1] > 0);
   key.log2Alpha = std::log2(s.preset.alpha);
   key.distanceUnit = float(s.distanceUnit);
-  OccupancyKey contextKey = key;
-  contextKey.selected = 0;
-  OccupancyKey cachedContextKey = st.occupancyKey.value_or(OccupancyKey{});
-  cachedContextKey.selected = 0;
-  if (st.occupancyKey && !(*st.occupancyKey == key) && cachedContextKey == contextKey) {
-    // Only the selection changed.
-    std::vector<std::uint8_t> occ = withStructure(st.blocks, st.contextOccupancy, st.selected);
-    const Dims& nb = st.blocks.blocks;
-    glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
-    glBindTexture(GL_TEXTURE_3D, st.occupancy.id());
-    glTexSubImage3D(GL_TEXTURE_3D, 0, 0, 0, 0, nb.x, nb.y, nb.z, GL_RED_INTEGER, GL_UNSIGNED_BYTE, occ.data());
-    st.occupancyKey = key;
-    if (auto e = glStatus("uploading the occupancy grid"); !e) return e;
-  } else if (!st.occupancyKey || !(*st.occupancyKey == key)) {
-    OccupancyInputs in;
-    in.blocks = &st.blocks;
-    in.volumeGrid = &st.volumeGrid;
-    in.table = bare ? nullptr : &st.tableVisibility;
-    in.surfaceLo = key.surfaceLo;
-    in.surfaceFloor = key.surfaceFloor;
-    in.field = st.hasField && st.fieldOnCpu ? &st.fieldMinima : nullptr;
-    in.log2Alpha = key.log2Alpha;
-    in.distanceUnit = key.distanceUnit;
-    in.selected = 0;
-    st.contextOccupancy = computeOccupancy(in);
-    addLeapDistances(st.blocks.blocks, st.contextOccupancy);
+  if (!st.occupancyKey || !(*st.occupancyKey == key)) {
+    OccupancyKey contextKey = key, cachedContextKey = st.occupancyKey.value_or(OccupancyKey{});
+    contextKey.selected = cachedContextKey.selected = 0;
+    // The structure-free grid is recomputed only when more than the selection changed (a hover
+    // changes only the selection: withStructure adds it to the cached grid).
+    if (!st.occupancyKey || !(cachedContextKey == contextKey)) {
+      OccupancyInputs in;
+      in.blocks = &st.blocks;
+      in.volumeGrid = &st.volumeGrid;
+      in.table = bare ? nullptr : &st.tableVisibility;
+      in.surfaceLo = key.surfaceLo;
+      in.surfaceFloor = key.surfaceFloor;
+      in.field = st.hasField && st.fieldOnCpu ? &st.fieldMinima : nullptr;
+      in.log2Alpha = key.log2Alpha;
+      in.distanceUnit = key.distanceUnit;
+      in.selected = 0;
+      st.contextOccupancy = computeOccupancy(in);
+      addLeapDistances(st.blocks.blocks, st.contextOccupancy);
+    }
     std::vector<std::uint8_t> occ = withStructure(st.blocks, st.contextOccupancy, st.selected);
     const Dims& nb = st.blocks.blocks;
     glPixelStorei(GL_UNPACK_ALIGNMENT, 1);

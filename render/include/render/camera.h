@@ -48,6 +48,10 @@ class Camera {
   // around the target fills the view.
   static Camera named(NamedView view, const Vec3& target, double radiusMm);
   static Result<Camera> named(const std::string& view, const Vec3& target, double radiusMm);
+  // A camera `distanceMm` (> 0) from `target` looking along `forward` with `up` the screen's up
+  // (both normalised here, `up` made orthogonal to `forward`). Error for a zero `forward` or an
+  // `up` along it.
+  static Result<Camera> looking(const Vec3& target, const Vec3& forward, const Vec3& up, double distanceMm);
 
   Vec3 eye() const;
   const Vec3& forward() const { return forward_; }  // unit, from eye towards target

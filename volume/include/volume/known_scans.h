@@ -46,8 +46,13 @@ struct KnownScanLabels {
   std::string namesPath;
 };
 
-// Opens the scan as a dataset named scan.name, with `labels` when given (none ship yet); fails as
-// knownScanFile does when the file is absent.
+// The labels scripts/label-scans.sh writes beside the scan in the cache folder
+// (<name>.labels.nii.gz and <name>.labels.names.json, grown by `anatomy-tutor segment` from the
+// seeds in data/segmentations/<name>/), when both files are there.
+std::optional<KnownScanLabels> cachedKnownScanLabels(const KnownScan& scan);
+
+// Opens the scan as a dataset named scan.name, with `labels` when given, else with its cached
+// labels when there are some; fails as knownScanFile does when the scan's file is absent.
 Result<Dataset> openKnownScan(const KnownScan& scan, const KnownScanLabels& labels = {},
                               const DatasetLoadControl& control = {});
 

@@ -27,8 +27,8 @@ struct RgbImage {
 Status writePng(const std::string& path, const RgbImage& image);
 
 // Reads any PNG (grey, palette, RGB, with or without alpha, 8 or 16 bit) as 8-bit RGB; alpha is
-// dropped. Images over 2^26 pixels (e.g. 8192x8192) or 32768 pixels a side are refused before
-// allocation. Errors name the file and the problem.
+// dropped. Images over 2^24 pixels (4096x4096; a 4K frame has 8.3 million) or 32768 pixels a
+// side are refused before allocation. Errors name the file and the problem.
 Result<RgbImage> readPng(const std::string& path);
 
 }  // namespace at

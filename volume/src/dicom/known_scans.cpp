@@ -48,9 +48,20 @@ Result<fs::path> knownScanFile(const KnownScan& scan) {
               "(also installed as share/anatomy-tutor/fetch-scans.sh) or `sudo apt-get install " + scan.debianPackage + "`");
 }
 
-Result<Dataset> openKnownScan(const KnownScan& scan, const KnownScanLabels& labels, const DatasetLoadControl& control) {
+std::optional<KnownScanLabels> cachedKnownScanLabels(const KnownScan& scan) {
+  const fs::path dir = knownScanCacheDir() / scan.debianPackage;
+  KnownScanLabels labels{(dir / (scan.name + ".labels.nii.gz")).string(), (dir / (scan.name + ".labels.names.json")).string()};
+  std::error_code ec;
+  if (!fs::is_regular_file(labels.labelsPath, ec) || !fs::is_regular_file(labels.namesPath, ec)) return std::nullopt;
+  return labels;
+}
+
+Result<Dataset> openKnownScan(const KnownScan& scan, const KnownScanLabels& given, const DatasetLoadControl& control) {
   auto path = knownScanFile(scan);
   if (!path) return tl::unexpected(path.error());
+  KnownScanLabels labels = given;
+  if (labels.labelsPath.empty())
+    if (auto cached = cachedKnownScanLabels(scan)) labels = *cached;
   DatasetFiles files;
   files.volumePath = path->string();
   files.id = scan.name;

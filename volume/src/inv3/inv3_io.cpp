@@ -22,6 +22,7 @@
 #include <string>
 #include <vector>
 
+#include "core/printable_text.h"
 #include "core/regular_file.h"
 #include "load_limits.h"
 #include "raw_values.h"
@@ -283,7 +284,9 @@ Geometry projectGeometry(const ProjectHeader& h) {
 // ---------------------------------------------------------------------------------------------
 // [load]
 
-Result<LoadedImage> loadInv3(const std::string& path, const ImageLoadOptions& options) {
+namespace {
+
+Result<LoadedImage> readInv3(const std::string& path, const ImageLoadOptions& options) {
   // A FIFO would block the archive reader; a device would never end.
   if (auto regular = checkRegularFile(path, path); !regular) return tl::unexpected(regular.error());
 
@@ -350,6 +353,13 @@ Result<LoadedImage> loadInv3(const std::string& path, const ImageLoadOptions& op
                          "y → anterior, z → superior), the grid centred on (0,0,0) mm");
   if (h.hasAffine) loaded.notes.push_back("the project's 'affine' (from a NIfTI import) is not applied");
   return loaded;
+}
+
+}  // namespace
+
+// Names and values quoted from the project (member names, plist strings) may hold any bytes.
+Result<LoadedImage> loadInv3(const std::string& path, const ImageLoadOptions& options) {
+  return withPrintableError(readInv3(path, options));
 }
 
 }  // namespace at

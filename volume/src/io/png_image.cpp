@@ -138,9 +138,9 @@ Result<RgbImage> readPng(const std::string& path) {
   constexpr png_uint_32 kMaxSide = 1u << 15;
   if (width == 0 || height == 0 || width > kMaxSide || height > kMaxSide)
     return fail(path + ": PNG size " + std::to_string(width) + "x" + std::to_string(height) + " is not supported");
-  // Screenshots, figures and stimuli are at most a few 4K frames; a header claiming more than
-  // kMaxPixels (192 MiB of RGB) is refused before anything is allocated.
-  constexpr std::uint64_t kMaxPixels = std::uint64_t(1) << 26;
+  // Screenshots, figures and stimuli are at most a 4K frame (8.3 million pixels); a header claiming
+  // more than kMaxPixels (48 MiB of RGB) is refused before anything is allocated.
+  constexpr std::uint64_t kMaxPixels = std::uint64_t(1) << 24;
   if (std::uint64_t(width) * std::uint64_t(height) > kMaxPixels)
     return fail(path + ": PNG size " + std::to_string(width) + "x" + std::to_string(height) + " is more than the " +
                 std::to_string(kMaxPixels) + " pixels an image may have");

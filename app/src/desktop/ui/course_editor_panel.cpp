@@ -162,6 +162,11 @@ void CourseEditorPanel::drawSteps(DesktopModel& model) {
   CourseEditor& editor = model.courseEditor();
   const lessons::Course& course = editor.draft();
   if (editor.lessonIndex() >= course.lessons.size()) return;
+  // A running lesson's or exam's question would be answered by the step list (its targets).
+  if (model.lessons().namesHidden() || model.exams().namesHidden()) {
+    ImGui::TextDisabled("The steps are hidden while a lesson or exam question is asked.");
+    return;
+  }
   const auto& steps = course.lessons[editor.lessonIndex()].steps;
   if (steps.empty()) ImGui::TextDisabled("No step yet: add one below.");
   for (std::size_t i = 0; i < steps.size(); ++i) {
@@ -184,6 +189,22 @@ void CourseEditorPanel::drawSteps(DesktopModel& model) {
     ImGui::TextUnformatted(text.c_str());
     ImGui::PopID();
   }
+  drawPreview(model);
+}
+
+// What a student reads with the previewed step (the view shows its scene).
+void CourseEditorPanel::drawPreview(DesktopModel& model) {
+  const auto& preview = model.courseEditor().previewing();
+  if (!preview) return;
+  ImGui::Separator();
+  ImGui::Text("Preview of step %zu, as a student sees it:", preview->step + 1);
+  ImGui::TextColored(ImVec4(1, 0.75f, 0.3f, 1), "%s", preview->heading.c_str());
+  ImGui::PushTextWrapPos(0);
+  ImGui::TextUnformatted(preview->text.c_str());
+  ImGui::PopTextWrapPos();
+  if (model.previewHidesNames()) ImGui::TextDisabled("Structure names are hidden, as in the lesson.");
+  else if (preview->namesHidden) ImGui::TextDisabled("Preview ended: another structure is selected.");
+  if (ImGui::SmallButton("End preview")) model.courseEditor().endPreview();
 }
 
 void CourseEditorPanel::drawAddStep(DesktopModel& model) {

@@ -10,6 +10,7 @@
 #include <SDL.h>
 #include <imgui.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <thread>
@@ -52,6 +53,12 @@ class DesktopApp final : public ScriptHost {
 
  private:
   void handleEvent(const SDL_Event& e);
+  // The window's layout with the explore panel as wide as it was last drawn.
+  ViewLayout layout() const {
+    ViewLayout l = window_->layout();
+    l.panelPx = explore_.width();
+    return l;
+  }
   void frame();
   void drawUi();
   void takeScreenshot(render::RgbaImage& image, const Status& read);
@@ -67,6 +74,7 @@ class DesktopApp final : public ScriptHost {
   ExplorePanel explore_;
   StudyPanel study_;
   ImportPanel import_;
+  AnalyticsPanel analytics_;
   SegmentPanel segment_;
   SlicesPanel slices_;
   ExpertPanel expert_;
@@ -100,7 +108,7 @@ int DesktopApp::run() {
   // Known before the script's first step: a view that has not rendered yet is not settled.
   model_->setViewAvailable(view_->available());
   model_->event({{"event", "context"}, {"gl", window_->glDescription()}, {"note", window_->glNote()}, {"ui_scale", window_->uiScale()}});
-  model_->setLayout(window_->layout());
+  model_->setLayout(layout());
   model_->reframe();  // the start view framed for the window's size
   while (!quit_) frame();
   return script_ ? script_->exitStatus() : 0;
@@ -112,7 +120,7 @@ void DesktopApp::frame() {
   if (model_->idle() && window_->waitEvent(e, 100)) handleEvent(e);
   while (window_->pollEvent(e)) handleEvent(e);
   if (quit_) return;
-  model_->setLayout(window_->layout());
+  model_->setLayout(layout());
   if (script_) {
     script_->step(*model_, *this, Clock::now());
     if (script_->finished()) {
@@ -149,6 +157,10 @@ void DesktopApp::drawUi() {
   else explore_.draw(*model_, {window_->glDescription()});
   study_.drawCoordinator(study, panelW + 20, 20);
   if (!study.participantActive()) import_.draw(model_->imports(), panelW + 40, 40);
+  if (!study.participantActive()) {  // over the view as the explore panel was drawn this frame, with a margin
+    const float left = std::max(panelW, explore_.width());
+    analytics_.draw(model_->analytics(), left + 16, 16, std::max(420.0f, float(l.windowW) - left - 32), float(l.windowH) - 32);
+  }
   if (!study.participantActive()) segment_.draw(model_->segmenter(), panelW + 60, 60);
   if (!study.participantActive()) slices_.draw(*model_, panelW + 80, float(l.windowH) * 0.45f);
   if (!study.participantActive()) courses_.draw(*model_, panelW + 60, 60);
@@ -218,11 +230,13 @@ void DesktopApp::handleEvent(const SDL_Event& e) {
 }
 
 constexpr const char* kDesktopHelp =
-    "usage: anatomy-tutor [desktop] [--dataset D] [--ui-script FILE.json [--screenshot OUT.png]] [--size WxH]\n"
+    "usage: anatomy-tutor [desktop] [--course ID] [--dataset D] [--ui-script FILE.json [--screenshot OUT.png]] [--size WxH]\n"
     "                             [--render-scale S] [--frame-budget MS] [--max-fps N] [--db PATH] [--user NAME]\n"
-    "  Opens the desktop app on the default course (explore: hover to highlight, click to select).\n"
-    "  --dataset    phantom, phantom:N, a dataset imported into --db, or a volume file or DICOM folder\n"
-    "               (default: the default course's dataset)\n"
+    "  Opens the desktop app on a course (explore: hover to highlight, click to select).\n"
+    "  --course     the course to start on, by id (`anatomy-tutor courses`; e.g. skull, the head CT's\n"
+    "               course): its dataset, on its first lesson's first view (default: temporal_bone)\n"
+    "  --dataset    phantom, phantom:N, skull, a dataset imported into --db, or a volume file or DICOM\n"
+    "               folder (default: the course's dataset)\n"
     "  --ui-script  replay {\"actions\": [...]}; actions: %s\n"
     "  --db         the database: imported datasets, presets saved in the expert panel, studies,\n"
     "               lesson progress (default: the user's)\n"
@@ -241,7 +255,7 @@ constexpr const char* kDesktopHelp =
 }  // namespace
 
 int runDesktop(const std::vector<std::string>& argv) {
-  auto args = cli::Args::parse(argv, {"dataset", "ui-script", "screenshot", "render-scale", "frame-budget", "max-fps"}, {});
+  auto args = cli::Args::parse(argv, {"dataset", "course", "ui-script", "screenshot", "render-scale", "frame-budget", "max-fps"}, {});
   if (!args) return reportError("desktop: " + args.error().message, 2);
   if (args->has("help")) {
     std::string actions;
@@ -252,6 +266,7 @@ int runDesktop(const std::vector<std::string>& argv) {
   if (!args->positional().empty()) return reportError("desktop: unexpected argument '" + args->positional()[0] + "' (see --help)", 2);
   AppOptions options;
   options.model.dataset = args->valueOr("dataset", "");
+  options.model.course = args->valueOr("course", "");
   options.script = args->value("ui-script");
   options.screenshot = args->value("screenshot");
   options.dbPath = args->db();

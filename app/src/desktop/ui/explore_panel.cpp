@@ -20,11 +20,15 @@ void ExplorePanel::draw(DesktopModel& model, const Status& status) {
   const ViewLayout& layout = model.layout();
   ExploreState& explore = model.explore();
   const Dataset& dataset = model.dataset();
+  // Full height at the left edge; its right edge may be dragged (the view takes the rest). Wider
+  // on a window of 1200 pixels or more, where the view keeps enough room.
+  const float scale = layout.uiScale, windowH = float(layout.windowH);
   ImGui::SetNextWindowPos(ImVec2(0, 0));
-  ImGui::SetNextWindowSize(ImVec2(layout.panelWidth(), float(layout.windowH)));
-  ImGui::Begin("Explore", nullptr,
-               ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoResize | ImGuiWindowFlags_NoCollapse |
-                   ImGuiWindowFlags_NoTitleBar);
+  ImGui::SetNextWindowSize(ImVec2((layout.windowW >= 1200 ? 380.0f : 320.0f) * scale, windowH), ImGuiCond_FirstUseEver);
+  const float widest = std::max(260 * scale, float(layout.windowW) * 0.6f);
+  ImGui::SetNextWindowSizeConstraints(ImVec2(260 * scale, windowH), ImVec2(widest, windowH));
+  ImGui::Begin("Explore", nullptr, ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoCollapse | ImGuiWindowFlags_NoTitleBar);
+  width_ = ImGui::GetWindowWidth();
   ImGui::TextUnformatted("Anatomy Tutor - Explore");
   // The Dataset menu: the datasets here, by name (imported ones, the phantom, the skull CT).
   if (ImGui::SmallButton("Dataset")) ImGui::OpenPopup("dataset_menu");
@@ -41,8 +45,10 @@ void ExplorePanel::draw(DesktopModel& model, const Status& status) {
   if (ImGui::SmallButton("Import...")) model.imports().windowOpen = true;
   ImGui::SameLine();
   if (ImGui::SmallButton("Segment...")) model.segmenter().windowOpen = true;
-  ImGui::SameLine();
+  // The instructor's windows on a line of their own (the panel's narrowest width keeps them whole).
   if (ImGui::SmallButton("Courses...")) model.courseEditor().windowOpen = true;
+  ImGui::SameLine();
+  if (ImGui::SmallButton("Analytics...")) model.analytics().windowOpen = true;
   ImGui::Separator();
   lessons_.draw(model.lessons(), model.exams(), float(layout.windowH) * 0.4f);
   ImGui::Separator();
@@ -105,6 +111,7 @@ void ExplorePanel::draw(DesktopModel& model, const Status& status) {
   drawFieldProgress(model);
   ImGui::PushTextWrapPos(0);
   ImGui::TextDisabled("%s", status.glDescription.c_str());
+  for (const std::string& n : model.notes()) ImGui::TextDisabled("%s", n.c_str());  // information, not a problem
   for (const std::string& m : model.messages()) ImGui::TextColored(ImVec4(1, 0.5f, 0.4f, 1), "%s", m.c_str());
   ImGui::PopTextWrapPos();
   ImGui::End();
@@ -112,7 +119,9 @@ void ExplorePanel::draw(DesktopModel& model, const Status& status) {
 
 void ExplorePanel::drawStructures(DesktopModel& model, bool hideNames) {
   const std::string query = str::lower(search_);
-  ImGui::BeginChild("structures", ImVec2(0, -statusHeight(model)), true);
+  // What is left above the status lines, but never less than eight rows: the panel scrolls then.
+  const float rows = ImGui::GetTextLineHeightWithSpacing() * 8;
+  ImGui::BeginChild("structures", ImVec2(0, std::max(rows, ImGui::GetContentRegionAvail().y - statusHeight(model))), true);
   if (hideNames) {
     ImGui::PushTextWrapPos(0);
     ImGui::TextDisabled("(structure names are hidden during the question or exam)");
@@ -150,8 +159,9 @@ float ExplorePanel::statusHeight(const DesktopModel& model) const {
   // messages stay visible; at most half of what is left for the structure list and them.
   float height = ImGui::GetTextLineHeightWithSpacing() * 5.5f;
   const float wrap = ImGui::GetContentRegionAvail().x;
-  for (const std::string& m : model.messages())
-    height += ImGui::CalcTextSize(m.c_str(), nullptr, false, wrap).y + ImGui::GetStyle().ItemSpacing.y;
+  for (const auto* list : {&model.notes(), &model.messages()})
+    for (const std::string& m : *list)
+      height += ImGui::CalcTextSize(m.c_str(), nullptr, false, wrap).y + ImGui::GetStyle().ItemSpacing.y;
   return std::min(height, std::max(ImGui::GetTextLineHeightWithSpacing() * 5.5f, ImGui::GetContentRegionAvail().y * 0.5f));
 }
 
@@ -182,7 +192,9 @@ void ExplorePanel::drawFieldProgress(DesktopModel& model) {
       ImGui::SameLine();
       if (ImGui::SmallButton("Compute it")) fields.allowDeclined();
     } else {
+      ImGui::PushTextWrapPos(0);
       ImGui::TextDisabled("%s", fields.busy() ? "computing a distance field..." : fields.status().c_str());
+      ImGui::PopTextWrapPos();
     }
     return;
   }

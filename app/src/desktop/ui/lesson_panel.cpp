@@ -1,9 +1,11 @@
 #include <algorithm>
+#include <cfloat>
 #include <cstdio>
 
 #include <imgui.h>
 #include <imgui_stdlib.h>
 
+#include "core/strings.h"
 #include "lessons/repositories.h"
 #include "panels.h"
 #include "volume/dataset_source.h"
@@ -11,7 +13,7 @@
 namespace at::app {
 
 namespace {
-const ImVec4 kRight{0.5f, 1, 0.5f, 1}, kWrong{1, 0.5f, 0.4f, 1}, kHeading{1, 0.75f, 0.3f, 1}, kQuestion{0.6f, 0.8f, 1, 1};
+const ImVec4 kRight{0.5f, 1, 0.5f, 1}, kPartly{1, 0.8f, 0.35f, 1}, kWrong{1, 0.5f, 0.4f, 1}, kHeading{1, 0.75f, 0.3f, 1}, kQuestion{0.6f, 0.8f, 1, 1};
 
 void wrappedColoured(const ImVec4& colour, const std::string& text) {
   ImGui::PushTextWrapPos(0);
@@ -65,7 +67,8 @@ void LessonPanel::drawLists(LessonController& lessons) {
     return;
   }
   const lessons::Course& course = courses[std::size_t(lessons.courseIndex())];
-  if (ImGui::BeginCombo("course", course.title.c_str())) {
+  ImGui::SetNextItemWidth(-FLT_MIN);
+  if (ImGui::BeginCombo("##course", course.title.c_str())) {
     for (int i = 0; i < int(courses.size()); ++i)
       if (ImGui::Selectable(courses[std::size_t(i)].title.c_str(), i == lessons.courseIndex()) && i != lessons.courseIndex())
         if (auto st = lessons.selectCourse(i); !st) lessons.report(st.error().message);
@@ -76,7 +79,8 @@ void LessonPanel::drawLists(LessonController& lessons) {
   if (course.datasetId != view && !(isBuiltinDatasetName(course.datasetId) && isBuiltinDatasetName(view)))
     wrappedColoured(kWrong, "This course is on dataset '" + course.datasetId + "' but the view shows '" + view +
                                 "': choose it in the Dataset menu above.");
-  ImGui::Checkbox("quiz only (no teaching steps, no names)", &lessons.quizOnly);
+  ImGui::Checkbox("quiz only", &lessons.quizOnly);
+  if (ImGui::IsItemHovered()) ImGui::SetTooltip("Start lessons as a quiz: no teaching steps, no structure names");
   ImGui::PushTextWrapPos(0);
   for (const LessonController::LessonRow& row : lessons.rows()) {
     ImGui::PushID(row.id.c_str());
@@ -99,7 +103,7 @@ void LessonPanel::drawLists(LessonController& lessons) {
     } else if (row.open) {
       ImGui::TextDisabled("  in progress");
     } else {
-      ImGui::TextDisabled("  not started, %d questions", row.questions);
+      ImGui::TextDisabled("  not started, %s", str::countOf(row.questions, "question").c_str());
     }
     ImGui::PopID();
   }
@@ -203,8 +207,10 @@ void LessonPanel::drawQuestion(LessonController& lessons) {
   if (answer)
     if (auto grade = lessons.answer(*answer); !grade) lessons.report("answer: " + grade.error().message);
   if (a.grade) {
-    ImGui::TextColored(a.grade->correct ? kRight : kWrong, "%s", a.grade->correct ? "Correct." : "Not quite.");
-    ImGui::TextUnformatted(a.grade->feedback.c_str());
+    // The feedback says it first ("Correct: …", "Partly right: …", "Not quite: …"); its colour
+    // agrees: green, amber for a partial score, red.
+    const ImVec4 colour = a.grade->correct ? kRight : a.grade->score > 0 ? kPartly : kWrong;
+    ImGui::TextColored(colour, "%s", a.grade->feedback.c_str());
     if (a.review) ImGui::TextDisabled("Saved: the review queue is updated.");
   }
   if (a.review && ImGui::Button(a.grade ? "Done" : "Skip")) lessons.dismissReview();

@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "analytics_controller.h"
 #include "desktop_model.h"
 #include "render/gl/window_target.h"
 
@@ -62,6 +63,8 @@ class ExplorePanel {
   };
   void draw(DesktopModel& model, const Status& status);
   ExamPanel& exams() { return lessons_.exams(); }
+  // Its width as last drawn (the user may drag its edge); 0 before the first frame.
+  float width() const { return width_; }
 
  private:
   void drawStructures(DesktopModel& model, bool hideNames);
@@ -70,6 +73,7 @@ class ExplorePanel {
   float statusHeight(const DesktopModel& model) const;
   std::string search_;
   LessonPanel lessons_;
+  float width_ = 0;
 };
 
 // The preference study: the blinded participant window (in place of the explore panel) and the
@@ -152,6 +156,7 @@ class CourseEditorPanel {
   void drawStart(DesktopModel& model);
   void drawCourse(DesktopModel& model);
   void drawSteps(DesktopModel& model);
+  void drawPreview(DesktopModel& model);
   void drawAddStep(DesktopModel& model);
   void report(const Status& st, const std::string& done);
   std::string newId_ = "my_course", newTitle_, openPath_, openVolume_, lessonTitle_;
@@ -178,6 +183,21 @@ class ExpertPanel {
   bool splineEditor(TfEditor& editor, const char* id, bool data, float width, float height);
   std::optional<Selection> dragging_, menuFor_;
   std::string saveName_ = "my_preset", exportPath_, saveStatus_;
+};
+
+// The Class analytics window (instructors), placed at (x, y) with (width, height) when it opens.
+class AnalyticsPanel {
+ public:
+  void draw(AnalyticsController& analytics, float x, float y, float width, float height);
+
+ private:
+  void drawStructures(const AnalyticsController& analytics);
+  void drawMissed(const AnalyticsController& analytics);
+  void drawStudents(const AnalyticsController& analytics);
+  void drawLessons(const AnalyticsController& analytics);
+  void report(const Status& st);
+  std::optional<std::vector<AnalyticsController::CourseChoice>> courses_;  // while the window is open
+  std::string error_;  // the last failed load
 };
 
 }  // namespace at::app

@@ -87,13 +87,19 @@ void StudyPanel::drawParticipant(StudyController& study, float width, float heig
   // The protocol's anchors once, then each item on the scale.
   for (const auto& [value, anchor] : s.protocol.scale.anchors) text(std::to_string(value) + " = " + anchor);
   ImGui::Separator();
+  // Ratings open once the side on screen has been drawn at full quality (not a coarse image still
+  // refining); the note is not one of the screen's recorded labels (it changes frame by frame).
+  const bool ready = study.readyToRate();
+  if (!ready) ImGui::TextDisabled("Drawing view %c at full quality...", s.side);
   for (const auto& item : s.protocol.items) {
     textWrapped(item.wording);
     int rating = s.ratings[item.id];
+    if (!ready) ImGui::BeginDisabled();
     for (int v = s.protocol.scale.min; v <= s.protocol.scale.max; ++v) {
       if (v > s.protocol.scale.min) ImGui::SameLine();
       if (radio(std::to_string(v) + "##" + item.id, &rating, v)) (void)study.rate(item.id, v);
     }
+    if (!ready) ImGui::EndDisabled();
     ImGui::Spacing();
   }
   text("Comment (optional)");

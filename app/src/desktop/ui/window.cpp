@@ -6,6 +6,7 @@
 #include <backends/imgui_impl_sdl.h>
 
 #include <algorithm>
+#include <filesystem>
 #include <cstdlib>
 
 #include "commands.h"
@@ -58,6 +59,25 @@ DesktopWindow::DesktopWindow(std::unique_ptr<State> state) : state_(std::move(st
 DesktopWindow::~DesktopWindow() = default;
 
 namespace {
+
+// The UI font: DejaVu Sans (Debian's fonts-dejavu-core) has the glyphs of the course texts and the
+// app's messages (Latin-1, dashes, quotes, ellipsis, arrows, ×, ³, −, ≈, ≤, check marks). Where it
+// is missing, ImGui's built-in font (ASCII only) is used.
+const char* const kFontFiles[] = {"/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf",
+                                  "/usr/share/fonts/dejavu/DejaVuSans.ttf"};
+constexpr float kFontPixels = 15;
+const ImWchar kFontRanges[] = {0x0020, 0x00FF, 0x2010, 0x205E, 0x2190, 0x21FF, 0x2200, 0x22FF,
+                               0x25A0, 0x25FF, 0x2700, 0x27BF, 0};
+
+// True when the UI font was loaded (else ImGui's default font stays).
+bool loadUiFont(float uiScale) {
+  for (const char* path : kFontFiles) {
+    std::error_code ec;
+    if (!std::filesystem::is_regular_file(path, ec)) continue;
+    if (ImGui::GetIO().Fonts->AddFontFromFileTTF(path, kFontPixels * uiScale, nullptr, kFontRanges)) return true;
+  }
+  return false;
+}
 
 // ImGui's built-in font has no em dash.
 std::string ascii(const std::string& text) {
@@ -121,13 +141,14 @@ Result<std::unique_ptr<DesktopWindow>> DesktopWindow::open(int width, int height
   ImGui::GetIO().IniFilename = nullptr;  // the layout is the app's, not a file beside the binary
   ImGui::StyleColorsDark();
   ImGui::GetStyle().ScaleAllSizes(uiScale);
-  ImGui::GetIO().FontGlobalScale = uiScale;
+  const bool uiFont = loadUiFont(uiScale);  // loaded at the scaled size: crisp
+  ImGui::GetIO().FontGlobalScale = uiFont ? 1.0f : uiScale;
   s->imguiSdl = ImGui_ImplSDL2_InitForOpenGL(s->window, s->context);
   s->imguiGl = ImGui_ImplOpenGL3_Init("#version 150");
   if (!s->imguiSdl || !s->imguiGl) return fail(ErrorKind::Unavailable, "Dear ImGui could not start its SDL2/OpenGL3 backends");
 
   std::unique_ptr<DesktopWindow> window(new DesktopWindow(std::move(s)));
-  window->glDescription_ = ascii(render::gl::currentContextDescription());
+  window->glDescription_ = uiFont ? render::gl::currentContextDescription() : ascii(render::gl::currentContextDescription());
   window->glNote_ = note;
   window->uiScale_ = uiScale;
   return window;

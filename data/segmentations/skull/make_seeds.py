@@ -1,0 +1,135 @@
+#!/usr/bin/env python3
+"""Writes seeds.json, the seeds of the skull CT's labels, from the boxes below.
+
+usage: make_seeds.py CRANIUM.inv3 OUT.json
+
+Not run at set-up: set-up runs `anatomy-tutor segment skull --seeds seeds.json` on the kept file
+(scripts/label-scans.sh). This is how that file was made, kept so the seeds can be changed and
+remade (about a minute, pure Python). Each structure is a tissue range (HU), a box of voxels
+(i, j, k inclusive, found on `anatomy-tutor slice skull` images; docs/skull_landmarks.md) and a
+voxel inside it: the voxels of that range connected to the voxel inside the box (or all of them
+in the box where no voxel is given; orbits also inside a cone from the apex to the opening) are
+the structure's core. Seeds are runs along i of core voxels on every 3rd row and 2nd slice; the
+background gets runs on every 4th row and 2nd slice of the voxels at least 3 voxels in-plane from
+every core. `anatomy-tutor segment --method grow` then gives every voxel the label of the seed it
+reaches most cheaply (gradient weights), which fills the gaps and sets the boundaries.
+"""
+import array, json, sys, tarfile
+from collections import deque
+
+with tarfile.open(sys.argv[1]) as tar:
+    member = next(m for m in tar.getmembers() if m.name.endswith('matrix.dat'))
+    a = array.array('h'); a.frombytes(tar.extractfile(member).read())
+if sys.byteorder != 'little': a.byteswap()
+NI, NJ, NK = 256, 256, 108
+assert len(a) == NI * NJ * NK, 'not the 256x256x108 Cranium.inv3'
+SP = 0.95703119999999997
+def v(i, j, k): return a[(k * NJ + j) * NI + i]
+# The loader's LPS millimetres (docs/skull_landmarks.md), rounded to 0.01 mm.
+def mm(i, j, k): return (round((i - 127.5) * SP, 2), round(-(j - 127.5) * SP, 2), round((k - 53.5) * 1.5, 2))
+
+AIR = (-1100, -400); BONE = (300, 1800); DENSE = (1000, 4000); SOFT = (-150, 100); ANYBONE = (300, 4000); ENAMEL = (1800, 4000)
+# value, id, colour, [(range, box (i0,i1,j0,j1,k0,k1), start voxel or None = all in box)]
+S = [
+ (1, 'Upper teeth', [0.95,0.93,0.80], [(ENAMEL, (80,179,150,224,0,13), None)]),
+ (2, 'Mandible', [0.85,0.70,0.45], [(BONE, (68,95,128,169,0,17), (84,148,8)), (BONE, (158,187,128,169,0,17), (179,150,8))]),
+ (3, 'Maxilla', [0.90,0.55,0.35], [(BONE, (90,164,165,221,4,23), (132,192,12))]),
+ (4, 'Zygomatic arch (right)', [0.75,0.55,0.85], [(ANYBONE, (52,73,125,167,14,25), (71,142,23))]),
+ (5, 'Zygomatic arch (left)', [0.55,0.45,0.90], [(ANYBONE, (182,203,125,167,14,25), (189,137,20))]),
+ (6, 'Nasal cavity', [0.30,0.75,0.95], [(AIR, (113,139,150,214,8,29), None)]),
+ (7, 'Maxillary sinus (right)', [0.20,0.85,0.55], [(AIR, (80,112,150,209,0,39), (108,176,21))]),
+ (8, 'Maxillary sinus (left)', [0.55,0.90,0.20], [(AIR, (140,174,150,209,0,39), (155,181,23))]),
+ (9, 'Frontal sinus', [0.95,0.85,0.25], [(AIR, (105,149,175,214,42,69), (128,199,55))]),
+ (10, 'Sphenoid sinus', [0.95,0.45,0.65], [(AIR, (110,149,128,155,20,39), (130,148,31))]),
+ (11, 'Ethmoid air cells', [0.40,0.55,0.95], [(AIR, (110,144,150,194,30,43), None)]),
+ (12, 'Orbit (right)', [0.95,0.35,0.30], [(SOFT, (72,112,150,206,26,52), (93,179,39), ((112,158,38),(91,205,40),4,19))]),
+ (13, 'Orbit (left)', [0.30,0.35,0.95], [(SOFT, (143,183,150,206,26,52), (163,182,40), ((143,158,38),(164,205,40),4,19))]),
+ (14, 'External acoustic meatus (right)', [0.95,0.60,0.10], [(AIR, (62,94,108,129,15,27), (78,118,22))]),
+ (15, 'External acoustic meatus (left)', [0.10,0.60,0.95], [(AIR, (160,199,108,125,15,27), (182,116,22))]),
+ (16, 'Mastoid air cells (right)', [0.85,0.30,0.60], [(AIR, (62,99,85,115,8,33), None)]),
+ (17, 'Mastoid air cells (left)', [0.60,0.30,0.85], [(AIR, (155,193,85,115,8,33), None)]),
+ (18, 'Petrous temporal bone (right)', [0.95,0.90,0.55], [(DENSE, (80,117,100,134,14,27), (94,112,23))]),
+ (19, 'Petrous temporal bone (left)', [0.75,0.90,0.55], [(DENSE, (140,177,100,134,14,27), (167,113,23))]),
+ (20, 'Atlas (C1)', [0.60,0.80,0.70], [(ANYBONE, (98,116,100,127,0,2), None), (ANYBONE, (140,159,100,127,0,2), None), (ANYBONE, (118,138,122,130,0,3), None)]),
+ (21, 'Axis (C2)', [0.70,0.65,0.95], [(ANYBONE, (122,135,108,124,0,7), (129,119,3))]),
+]
+
+def inside(b, i, j, k): return b[0] <= i <= b[1] and b[2] <= j <= b[3] and b[4] <= k <= b[5]
+def cone(apex, front, r0, r1):
+    A = (apex[0]*0.957, apex[1]*0.957, apex[2]*1.5); F = (front[0]*0.957, front[1]*0.957, front[2]*1.5)
+    ax = [F[n]-A[n] for n in range(3)]; L2 = sum(c*c for c in ax)
+    def inside(i, j, k):
+        p = (i*0.957 - A[0], j*0.957 - A[1], k*1.5 - A[2])
+        t = sum(p[n]*ax[n] for n in range(3)) / L2
+        if t < 0 or t > 1.05: return False
+        d2 = sum((p[n] - t*ax[n])**2 for n in range(3))
+        r = r0 + (r1 - r0) * min(t, 1.0)
+        return d2 <= r*r
+    return inside
+def comp(rng, b, start, keep=lambda i, j, k: True):
+    ok = lambda i, j, k: rng[0] <= v(i, j, k) <= rng[1] and keep(i, j, k)
+    out = set()
+    if start is None:
+        for k in range(b[4], b[5]+1):
+            for j in range(b[2], b[3]+1):
+                for i in range(b[0], b[1]+1):
+                    if ok(i, j, k): out.add((i, j, k))
+        return out
+    assert ok(*start), (start, v(*start))
+    q = deque([start]); out.add(start)
+    while q:
+        i, j, k = q.popleft()
+        for d in ((1,0,0),(-1,0,0),(0,1,0),(0,-1,0),(0,0,1),(0,0,-1)):
+            n = (i+d[0], j+d[1], k+d[2])
+            if n not in out and inside(b, *n) and ok(*n): out.add(n); q.append(n)
+    return out
+
+owner = {}   # voxel -> label id (first listed wins)
+for value, name, colour, parts in S:
+    for part in parts:
+        rng, b, start = part[:3]
+        keep = cone(*part[3]) if len(part) > 3 else (lambda i, j, k: True)
+        for p in comp(rng, b, start, keep): owner.setdefault(p, name)
+
+def near_structure(i, j, k, r=2):
+    for dk in range(-1, 2):
+        for dj in range(-r, r+1):
+            for di in range(-r, r+1):
+                if (i+di, j+dj, k+dk) in owner: return True
+    return False
+
+strokes = {s[1]: [] for s in S}; strokes['background'] = []
+def runs(name, pred, jstep, kstep, joff=0):
+    # segments along i of voxels satisfying pred, on every jstep-th row and kstep-th slice
+    for k in range(0, NK, kstep):
+        for j in range(joff, NJ, jstep):
+            i = 0
+            while i < NI:
+                if pred(i, j, k):
+                    i0 = i
+                    while i + 1 < NI and pred(i + 1, j, k): i += 1
+                    strokes[name].append([mm(i0, j, k), mm(i, j, k)] if i > i0 else [mm(i0, j, k)])
+                i += 1
+for value, name, colour, parts in S:
+    runs(name, lambda i, j, k, n=name: owner.get((i, j, k)) == n, 3, 2)
+    for part in parts:
+        start = part[2]
+        if start: strokes[name].append([mm(*start)])
+boxes = [p[1] for s in S for p in s[3]]
+def nearbox(i, j, k, m):
+    return any(b[0]-m <= i <= b[1]+m and b[2]-m <= j <= b[3]+m and b[4]-m//2 <= k <= b[5]+m//2 for b in boxes)
+def bg(i, j, k):
+    return not near_structure(i, j, k)
+runs('background', bg, 4, 2, 1)
+value_of = {s[1]: s[0] for s in S}; value_of["background"] = 0
+labels = [{"value": 0, "name": "background"}] + [{"value": s[0], "name": s[1], "colour": s[2]} for s in S]
+lines = ['{', '  "schema": 1,', '  "space": "LPS",', '  "labels": [']
+lines += ['    ' + json.dumps(l) + (',' if n + 1 < len(labels) else '') for n, l in enumerate(labels)]
+lines += ['  ],', '  "strokes": [']
+out = []
+for name, pts in strokes.items():
+    for p in pts:
+        out.append('    ' + json.dumps({"label": value_of[name], "points": [list(q) for q in p]}, separators=(',', ':')))
+lines += [',\n'.join(out), '  ]', '}']
+open(sys.argv[2], 'w').write('\n'.join(lines) + '\n')
+print('seeds: ' + ', '.join('%s %d' % (k, len(p)) for k, p in strokes.items()), file=sys.stderr)

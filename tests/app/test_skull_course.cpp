@@ -1,0 +1,218 @@
+// The skull course on the real head CT (scripts/fetch-scans.sh), with its labels grown from the
+// seeds kept in data/segmentations/skull/ (tests/support/skull_scan.h): the labels come out bit for
+// bit as reviewed, every structure is big enough and lies where the anatomy puts it, and every
+// structure's context and bare presets render it visibly. Skipped, with a line saying so, where the
+// Debian package could not be fetched.
+#include <doctest/doctest.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <sys/wait.h>
+#include <fstream>
+#include <functional>
+#include <map>
+
+#include <nlohmann/json.hpp>
+
+#include "dataset_resolver.h"
+#include "render/scene.h"
+#include "scan_catalogue.h"
+#include "skull_scan.h"
+#include "test_support.h"
+#include "volume/png_image.h"
+
+using namespace at;
+namespace fs = std::filesystem;
+
+namespace {
+
+Dataset openSkull() {
+  app::DatasetRequest request;
+  request.name = "skull";
+  auto dataset = app::openNamedDataset(request);
+  REQUIRE_MESSAGE(dataset, test::errorText(dataset));
+  return std::move(*dataset);
+}
+
+std::uint64_t fnv1a64(const std::vector<std::uint16_t>& voxels) {
+  std::uint64_t h = 0xcbf29ce484222325ull;
+  for (std::uint16_t v : voxels)
+    for (std::uint8_t byte : {std::uint8_t(v & 0xff), std::uint8_t(v >> 8)}) {
+      h ^= byte;
+      h *= 0x100000001b3ull;
+    }
+  return h;
+}
+
+struct Centroid {
+  Vec3 mm{0, 0, 0};
+  std::size_t voxels = 0;
+};
+
+std::map<std::uint16_t, Centroid> centroids(const LabelMap& labels) {
+  std::map<std::uint16_t, Centroid> out;
+  const Dims& d = labels.dims();
+  for (int k = 0; k < d.z; ++k)
+    for (int j = 0; j < d.y; ++j)
+      for (int i = 0; i < d.x; ++i)
+        if (const std::uint16_t l = labels.at(i, j, k)) {
+          Centroid& c = out[l];
+          c.mm = c.mm + labels.geometry.indexToPatient({double(i), double(j), double(k)});
+          ++c.voxels;
+        }
+  for (auto& [label, c] : out) c.mm = (1.0 / double(c.voxels)) * c.mm;
+  return out;
+}
+
+// Where each structure lies, in the loader's LPS millimetres centred on the scan (x toward the
+// patient's left, y toward posterior, z toward superior; the ear canals at z ≈ -47): first-year
+// anatomy, with margins of a centimetre or more.
+const std::map<std::string, std::function<bool(const Vec3&)>>& expectedPlaces() {
+  static const std::map<std::string, std::function<bool(const Vec3&)>> places = {
+      {"upper_teeth", [](const Vec3& p) { return p[2] < -65 && p[1] < -40; }},             // lowest, in front
+      {"mandible", [](const Vec3& p) { return p[2] < -55 && p[1] < 0; }},                  // inferior, anterior
+      {"maxilla", [](const Vec3& p) { return p[2] < -45 && p[1] < -40; }},
+      {"zygomatic_arch_right", [](const Vec3& p) { return p[0] < -45 && p[2] > -60 && p[2] < -30; }},
+      {"zygomatic_arch_left", [](const Vec3& p) { return p[0] > 45 && p[2] > -60 && p[2] < -30; }},
+      {"nasal_cavity", [](const Vec3& p) { return p[1] < -25 && p[2] < -30; }},
+      {"maxillary_sinus_right", [](const Vec3& p) { return p[0] < -12 && p[1] < -30 && p[2] < -25; }},
+      {"maxillary_sinus_left", [](const Vec3& p) { return p[0] > 12 && p[1] < -30 && p[2] < -25; }},
+      {"frontal_sinus", [](const Vec3& p) { return p[1] < -55 && p[2] > -10; }},          // highest sinus, in front
+      {"sphenoid_sinus", [](const Vec3& p) { return p[1] > -35 && p[1] < 0 && p[2] < -20; }},  // behind the nose
+      {"ethmoid_air_cells", [](const Vec3& p) { return p[1] < -25 && p[2] > -40 && p[2] < -10; }},  // between the orbits
+      {"orbit_right", [](const Vec3& p) { return p[0] < -20 && p[1] < -35 && p[2] > -40 && p[2] < 0; }},
+      {"orbit_left", [](const Vec3& p) { return p[0] > 20 && p[1] < -35 && p[2] > -40 && p[2] < 0; }},
+      {"external_acoustic_meatus_right", [](const Vec3& p) { return p[0] < -40 && p[1] > -5 && p[1] < 25; }},
+      {"external_acoustic_meatus_left", [](const Vec3& p) { return p[0] > 40 && p[1] > -5 && p[1] < 25; }},
+      {"mastoid_air_cells_right", [](const Vec3& p) { return p[0] < -35 && p[1] > 10; }},  // posterior-lateral
+      {"mastoid_air_cells_left", [](const Vec3& p) { return p[0] > 35 && p[1] > 10; }},
+      {"petrous_temporal_bone_right", [](const Vec3& p) { return p[0] < -20 && p[0] > -55 && p[1] > 0; }},
+      {"petrous_temporal_bone_left", [](const Vec3& p) { return p[0] > 20 && p[0] < 55 && p[1] > 0; }},
+      {"atlas_c1", [](const Vec3& p) { return p[1] > 0 && p[2] < -65; }},                  // behind the teeth, lowest
+      {"axis_c2", [](const Vec3& p) { return p[1] > 0 && p[2] < -65; }},
+  };
+  return places;
+}
+
+// Pixels in the highlight's orange (red well above blue; the bone context is grey-beige).
+int highlightPixels(const RgbImage& image) {
+  int n = 0;
+  for (int y = 0; y < image.height; ++y)
+    for (int x = 0; x < image.width; ++x) {
+      const std::uint8_t* p = image.pixel(x, y);
+      if (p[0] > 150 && p[0] > p[2] + 90) ++n;
+    }
+  return n;
+}
+
+}  // namespace
+
+TEST_CASE("The skull's labels grow bit for bit from the kept seeds, as reviewed") {
+  const auto& cache = test::grownSkullCache();
+  if (!cache) return;
+  test::SkullCacheScope scope(*cache);
+  const Dataset skull = openSkull();
+  const auto reference = nlohmann::json::parse(test::readFile(test::sourceDir() / "data" / "segmentations" / "skull" /
+                                                              "labels.reference.json"));
+  char hash[17];
+  std::snprintf(hash, sizeof hash, "%016llx", static_cast<unsigned long long>(fnv1a64(skull.labels.voxels)));
+  CHECK(std::string(hash) == reference.at("fnv1a64").get<std::string>());
+  const auto found = centroids(skull.labels);
+  CHECK(skull.structures.size() == reference.at("voxels").size());
+  for (const Structure& s : skull.structures) {
+    CAPTURE(s.displayName);
+    REQUIRE(reference.at("voxels").contains(s.displayName));
+    CHECK(found.at(s.label).voxels == reference.at("voxels").at(s.displayName).get<std::size_t>());
+  }
+}
+
+TEST_CASE("Every skull structure is described, has at least 100 voxels and lies where the anatomy puts it") {
+  const auto& cache = test::grownSkullCache();
+  if (!cache) return;
+  test::SkullCacheScope scope(*cache);
+  const Dataset skull = openSkull();
+  auto catalogue = app::loadStructureCatalogue(test::sourceDir() / "data" / "segmentations" / "skull" / "structures.json");
+  REQUIRE_MESSAGE(catalogue, test::errorText(catalogue));
+  CHECK(skull.structures.size() >= 16);
+  CHECK(skull.structures.size() == catalogue->structures.size());
+  const auto found = centroids(skull.labels);
+  for (const Structure& s : skull.structures) {
+    CAPTURE(s.id);
+    const Centroid& c = found.at(s.label);
+    const std::string where = "(" + std::to_string(c.mm[0]) + ", " + std::to_string(c.mm[1]) + ", " + std::to_string(c.mm[2]) + ") mm";
+    CAPTURE(where);
+    CHECK(c.voxels >= 100);
+    CHECK(!s.description.empty());
+    CHECK(!s.system.empty());
+    auto entry = std::find_if(catalogue->structures.begin(), catalogue->structures.end(),
+                              [&](const app::CatalogueEntry& e) { return e.id == s.id; });
+    REQUIRE(entry != catalogue->structures.end());
+    // Sides: the loader's +x is the patient's left (docs/skull_landmarks.md).
+    if (entry->side == "left") CHECK(c.mm[0] > 10);
+    if (entry->side == "right") CHECK(c.mm[0] < -10);
+    if (entry->side == "midline") CHECK(std::abs(c.mm[0]) < 10);
+    CHECK((s.id.find("_left") != std::string::npos) == (entry->side == "left"));
+    CHECK((s.id.find("_right") != std::string::npos) == (entry->side == "right"));
+    REQUIRE(expectedPlaces().count(s.id));
+    CHECK(expectedPlaces().at(s.id)(c.mm));
+  }
+  // Relative places: the mandible below and in front of the mastoids, the teeth below the orbits.
+  const auto centre = [&](const std::string& id) { return found.at(skull.findStructure(id)->label).mm; };
+  CHECK(centre("mandible")[2] < centre("mastoid_air_cells_right")[2]);
+  CHECK(centre("mandible")[1] < centre("mastoid_air_cells_left")[1] - 20);
+  CHECK(centre("upper_teeth")[2] < centre("orbit_left")[2] - 30);
+  CHECK(centre("frontal_sinus")[2] > centre("ethmoid_air_cells")[2]);
+  CHECK(centre("ethmoid_air_cells")[1] < centre("sphenoid_sinus")[1]);
+}
+
+TEST_CASE("Every skull structure's context (WDT) and bare presets render it visibly") {
+  const auto& cache = test::grownSkullCache();
+  if (!cache) return;
+  if (!test::requireAppBinary("rendering the skull's presets")) return;
+  test::SkullCacheScope scope(*cache);
+  const Dataset skull = openSkull();
+  test::TempDir dir("skull-presets");
+  for (const Structure& s : skull.structures)
+    for (const char* mode : {"wdt", "bare"}) {
+      CAPTURE(s.id);
+      CAPTURE(mode);
+      const fs::path png = dir / (s.id + "_" + mode + ".png");
+      const auto r = test::runApp("render skull " + s.id + " --mode " + mode + " --size 120x90 --no-overlays --out '" +
+                                  png.string() + "'");
+      REQUIRE_MESSAGE(r.exitCode == 0, r.err);
+      auto image = readPng(png.string());
+      REQUIRE(image);
+      CHECK(highlightPixels(*image) >= 60);  // of 10,800
+    }
+}
+
+TEST_CASE("anatomy-tutor --course skull with no display writes the skull course's first views") {
+  const auto& cache = test::grownSkullCache();
+  if (!cache) return;
+  test::TempDir dir("skull-first-views");
+  const fs::path out = dir / "stdout", err = dir / "stderr";
+  const std::string cmd = "cd '" + dir.path().string() + "' && env -u DISPLAY -u WAYLAND_DISPLAY XDG_CACHE_HOME='" +
+                          cache->string() + "' '" + test::appBinary().string() + "' --course skull >'" + out.string() +
+                          "' 2>'" + err.string() + "'";
+  const int status = std::system(cmd.c_str());
+  const std::string text = test::readFile(out);
+  INFO(text << test::readFile(err));
+  REQUIRE(WIFEXITED(status));
+  if (WEXITSTATUS(status) != 0 && test::readFile(err).find("offscreen rendering") != std::string::npos) {
+    std::printf("SKIPPED: the skull course's first views need an EGL offscreen context\n");
+    return;
+  }
+  REQUIRE(WEXITSTATUS(status) == 0);
+  CHECK(text.rfind("anatomy-tutor: no display", 0) == 0);
+  CHECK(text.find("'skull' course") != std::string::npos);
+  // The first lesson's first three show steps: the maxilla, the upper teeth, the mandible.
+  for (const char* name : {"01_maxilla_wdt.png", "02_upper_teeth_bare.png", "03_mandible_wdt.png"}) {
+    CAPTURE(name);
+    auto image = readPng((dir / "anatomy-tutor-views" / name).string());
+    REQUIRE(image);
+    CHECK(highlightPixels(*image) > image->width * image->height / 50);
+  }
+  const auto unknown = test::runApp("--course no_such_course");
+  CHECK(unknown.exitCode != 0);
+  CHECK(unknown.err.find("no course 'no_such_course'") != std::string::npos);
+}

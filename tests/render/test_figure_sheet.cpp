@@ -1,0 +1,84 @@
+// Figure sheets (render/figure_sheet.h): panels side by side with their captions under a title.
+#include <doctest/doctest.h>
+
+#include "render/figure_sheet.h"
+#include "render/overlay.h"
+
+using namespace at;
+using namespace at::render;
+
+namespace {
+
+RgbImage filled(int w, int h, std::uint8_t r, std::uint8_t g, std::uint8_t b) {
+  RgbImage im(w, h);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      im.pixel(x, y)[0] = r;
+      im.pixel(x, y)[1] = g;
+      im.pixel(x, y)[2] = b;
+    }
+  return im;
+}
+
+bool hasLightPixels(const RgbImage& im, int x0, int y0, int x1, int y1) {
+  for (int y = y0; y < y1; ++y)
+    for (int x = x0; x < x1; ++x)
+      if (im.pixel(x, y)[0] > 150) return true;
+  return false;
+}
+
+}  // namespace
+
+TEST_CASE("FigureSheet_PlacesPanelsSideBySideWithCaptionsBelow") {
+  std::vector<SheetPanel> panels{{filled(100, 80, 200, 0, 0), "Red panel"},
+                                 {filled(60, 80, 0, 200, 0), "A much longer caption that must wrap"}};
+  SheetLayout layout;
+  layout.gap = 10;
+  layout.textScale = 1;
+  auto sheet = composeSheet("Fig. 9", panels, layout);
+  REQUIRE(sheet);
+  // Two cells as wide as the widest panel, with gaps.
+  CHECK(sheet->width == 10 + 2 * (100 + 10));
+  const int titleH = (kGlyphHeight + 3) * 2 + 5;
+  const int top = 10 + titleH;
+  // Panel pixels where they belong: the first at the left, the second in the second cell.
+  CHECK(sheet->pixel(10 + 50, top + 40)[0] == 200);
+  CHECK(sheet->pixel(120 + 30, top + 40)[1] == 200);
+  // The narrower panel's cell is sheet colour right of it.
+  CHECK(sheet->pixel(120 + 80, top + 40)[1] < 50);
+  // The title is drawn above the panels, captions under them, and the long caption wraps to more
+  // lines than the short one.
+  CHECK(hasLightPixels(*sheet, 10, 10, 110, top));
+  CHECK(hasLightPixels(*sheet, 10, top + 85, 110, top + 95));
+  CHECK(wrapCaption("A much longer caption that must wrap", 100, 1).size() >= 2);
+  CHECK(wrapCaption("Red panel", 100, 1).size() == 1);
+  for (const std::string& line : wrapCaption("A much longer caption that must wrap", 100, 1))
+    CHECK(textWidth(line, 1) <= 100);
+}
+
+TEST_CASE("FigureSheet_WrapsInRowsAndCutsWordsTooLongForALine") {
+  std::vector<SheetPanel> panels(3, SheetPanel{filled(40, 30, 90, 90, 90), "x"});
+  SheetLayout layout;
+  layout.columns = 2;
+  layout.gap = 4;
+  auto sheet = composeSheet("", panels, layout);
+  REQUIRE(sheet);
+  CHECK(sheet->width == 4 + 2 * (40 + 4));
+  const auto lines = wrapCaption("abcdefghijklmnopqrstuvwxyz", 40, 1);
+  REQUIRE(lines.size() >= 2);
+  for (const std::string& l : lines) CHECK(textWidth(l, 1) <= 40);
+  CHECK(wrapCaption("one\ntwo", 400, 1).size() == 2);
+  // A title wider than the panels widens the sheet rather than being cut.
+  const std::string title = "A title much wider than two small panels";
+  auto titled = composeSheet(title, panels, layout);
+  REQUIRE(titled);
+  CHECK(titled->width >= textWidth(title, layout.textScale + 1) + 2 * layout.gap);
+}
+
+TEST_CASE("FigureSheet_RefusesNoPanelsOrAnEmptyImage") {
+  CHECK_FALSE(composeSheet("t", {}));
+  std::vector<SheetPanel> panels{{RgbImage(), "empty"}};
+  auto sheet = composeSheet("t", panels);
+  REQUIRE_FALSE(sheet);
+  CHECK(sheet.error().message.find("panel 1") != std::string::npos);
+}
