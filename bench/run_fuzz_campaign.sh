@@ -173,6 +173,11 @@ for name in "${order[@]}"; do
     done
   done
   left=$((deadline - SECONDS - 10))
+  # A harness gets twice its estimated time (at least 60 s), not the whole budget: otherwise the
+  # first ones started hold their cores to the end and the rest never start.
+  estimate=$(( $(cost_us "$name") * runs / 1000000 / w ))
+  cap=$(( 2 * estimate > 60 ? 2 * estimate : 60 ))
+  [ "$cap" -lt "$left" ] && left=$cap
   if [ "$left" -lt 30 ]; then
     echo "run_fuzz_campaign: $name not started (budget spent)"
     mkdir -p "$work/run/$name" && echo "not started: budget spent" >"$work/run/$name/skipped"
