@@ -173,3 +173,18 @@ TEST_CASE("ResponsesLongReader_BadInput_OneLineErrorNamingFileRowAndColumn") {
   // Control characters from the file are quoted printably.
   CHECK(errorOf(withCell(1, "structure", "\x1b[31mred")).find("\\x1b[31mred") != std::string::npos);
 }
+
+TEST_CASE("ResponsesLongReader_HugeNumbers_WrittenWholeAndRefusedOnReading") {
+  // csvNumber once cut numbers of more than 63 characters (the fuzz harness's first finding); every
+  // double is now written whole, and the reader refuses times beyond a year.
+  const double huge = 5.555555555555555e70;
+  const std::string text = csvNumber(huge, 0);
+  CHECK(text.size() == 71);
+  CHECK(std::stod(text) == huge);
+  CHECK(csvNumber(-1.7976931348623157e308, 3).size() == 310);
+  auto rows = bundleRows();
+  rows[0].responseMs = huge;
+  auto read = readResponsesLongCsv(responsesLongCsv(rows), "responses_long.csv", at::test::smallStudyProtocol());
+  REQUIRE_FALSE(read.has_value());
+  CHECK(read.error().message.find("row 2, column 'response_ms'") != std::string::npos);
+}
