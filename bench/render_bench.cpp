@@ -245,6 +245,7 @@ int main(int argc, char** argv) {
                   msSince(tu));
     }
 #endif
+    renderer->takeCosts();
     for (int c = 0; c < o.cycles; ++c) {
       const Target& tg = targets[std::size_t(c) % targets.size()];
       const auto t0 = Clock::now();
@@ -291,14 +292,18 @@ int main(int argc, char** argv) {
       if (!gpu) return failWith(gpu.error().message);
       const double frameMs = msSince(t3);
       const double total = msSince(t0);
+      // The frame's CPU side: the renderer's preparation (mask, table, occupancy, uniforms).
+      const render::gl::PrepareCosts costs = renderer->takeCosts();
       totals.push_back(total);
       frameGpu.push_back(*gpu);
       std::printf(
           "{\"bench\":\"hover_cycle\",\"volume\":%d,\"cycle\":%d,\"picked_label\":%u,\"pick_hit\":%s,\"pick_ms\":%.3f,"
           "\"wdt_ms\":%.2f,\"wdt_device\":\"%s\",\"wdt_passes\":%d,\"field_path\":\"%s\",\"field_upload_ms\":%.2f,\"frame_ms\":%.2f,"
-          "\"frame_gpu_ms\":%.3f,\"total_ms\":%.2f}\n",
+          "\"frame_gpu_ms\":%.3f,\"prepare_ms\":%.3f,\"mask_ms\":%.3f,\"occupancy_ms\":%.3f,\"table_ms\":%.3f,"
+          "\"total_ms\":%.2f}\n",
           o.hoverVolume, c, unsigned(label), hit.hit ? "true" : "false", pickMs, wdtMs, wdtDevice.c_str(), passesRun,
-          onDevice ? "cuda-gl interop" : "host upload", uploadMs, frameMs, *gpu, total);
+          onDevice ? "cuda-gl interop" : "host upload", uploadMs, frameMs, *gpu, costs.prepareMs, costs.maskMs,
+          costs.occupancyMs, costs.tableMs, total);
       std::fflush(stdout);
     }
     std::printf("{\"bench\":\"hover_summary\",\"volume\":%d,\"width\":%d,\"height\":%d,\"cycles\":%d,"

@@ -117,7 +117,9 @@ for name in "${harnesses[@]}"; do
   total_work=$((total_work + work_s))
   w=$(( (work_s + half - 1) / half ))
   [ "$w" -lt 1 ] && w=1
-  [ "$w" -gt $((cores / 2 > 0 ? cores / 2 : 1)) ] && w=$((cores / 2 > 0 ? cores / 2 : 1))
+  # At most half the cores each, unless the campaign is this one harness.
+  most=$(( ${#harnesses[@]} == 1 ? cores : (cores / 2 > 0 ? cores / 2 : 1) ))
+  [ "$w" -gt "$most" ] && w=$most
   workers[$name]=$w
 done
 # Longest first.
@@ -173,6 +175,12 @@ for name in "${order[@]}"; do
     done
   done
   left=$((deadline - SECONDS - 10))
+  # A harness gets three times its estimated time (at least 120 s), not the whole budget: otherwise
+  # the first ones started hold their cores to the end and the rest never start. (The calibration
+  # is optimistic: executions slow down as the corpus grows.)
+  estimate=$(( $(cost_us "$name") * runs / 1000000 / w ))
+  cap=$(( 3 * estimate > 120 ? 3 * estimate : 120 ))
+  [ "$cap" -lt "$left" ] && left=$cap
   if [ "$left" -lt 30 ]; then
     echo "run_fuzz_campaign: $name not started (budget spent)"
     mkdir -p "$work/run/$name" && echo "not started: budget spent" >"$work/run/$name/skipped"

@@ -4,7 +4,8 @@
 //   study run STUDY --participant ID --group G --answers FILE.jsonl
 //   study status STUDY                         participants and their completion
 //   study export STUDY --out DIR               the coordinator's files (CSV, JSON, Markdown, SVG, PNG)
-//   study merge STUDY SOURCE...                 participants of other machines' databases into --db
+//   study merge STUDY SOURCE...                 participants of other machines' databases or export
+//                                               folders into --db
 // STUDY is a stored study id, a shipped study id (data/studies/<file>.json, registered on first
 // use) or a path to a study JSON file.
 #include <algorithm>
@@ -38,7 +39,7 @@ const char* kStudyHelp =
     "       anatomy-tutor study run STUDY --participant ID --group G --answers FILE.jsonl [--db PATH]\n"
     "       anatomy-tutor study status STUDY [--db PATH]\n"
     "       anatomy-tutor study export STUDY --out DIR [--db PATH]\n"
-    "       anatomy-tutor study merge STUDY SOURCE... [--db PATH]\n"
+    "       anatomy-tutor study merge STUDY SOURCE... [--db PATH]   (SOURCE: a database or an export folder)\n"
     "\n"
     "Preference studies comparing the WDT rendering with the bare-structure rendering of each\n"
     "structure, blinded as A and B with counterbalanced order (the paper's Table 2 design).\n"
@@ -49,7 +50,8 @@ const char* kStudyHelp =
     "Participants run in the desktop app (Studies…): the terminal cannot show the two renderings.\n"
     "Here --answers records answers collected elsewhere (required).\n"
     "merge: copies every participant of STUDY from the SOURCE databases (lab machines' files or\n"
-    "  servers) into --db, all or nothing: the same id with other records is refused, merging again\n"
+    "  servers) or export folders (what 'study export --out' wrote: its responses_long.csv is read\n"
+    "  back) into --db, all or nothing: the same id with other records is refused, merging again\n"
     "  changes nothing. It reports how the machines' counterbalancing rows add up; export the merged\n"
     "  study for the recomputed summary.\n";
 
@@ -254,27 +256,88 @@ int runExport(const cli::Args& args) {
   return 0;
 }
 
+// The study's design for reading bundles: stored in the target or a source database, else STUDY
+// as a study file or shipped study.
+Result<quiz::StudyProtocol> mergeDesign(db::Database* target, std::vector<db::Connection>& databases,
+                                        const std::string& spec) {
+  if (target) {
+    auto stored = db::findStudy(*target, spec);
+    if (!stored) return tl::unexpected(stored.error());
+    if (*stored) return **stored;
+  }
+  for (auto& source : databases) {
+    auto there = db::findStudy(source.get(), spec);
+    if (!there) return tl::unexpected(withContext(source.path(), there.error()));
+    if (*there) return **there;
+  }
+  auto defined = findStudyDefinition(spec);
+  if (!defined) return tl::unexpected(defined.error());
+  if (!*defined)
+    return fail(ErrorKind::NotFound, "no study '" + spec + "' to read the bundles against (not stored in --db " +
+                                         "or a source database, not a file, not shipped)");
+  return **defined;
+}
+
 int runMerge(const cli::Args& args) {
-  if (args.positional().size() < 2) return reportError("study merge: expected STUDY and one or more SOURCE databases");
-  const std::string& studyId = args.positional()[0];
+  if (args.positional().size() < 2)
+    return reportError("study merge: expected STUDY and one or more SOURCE databases or export folders");
+  std::string studyId = args.positional()[0];
   std::vector<db::Connection> opened;
   opened.reserve(args.positional().size() - 1);
-  std::vector<db::StudyMergeSource> sources;
+  std::vector<std::string> bundleFolders;
+  std::vector<bool> isBundle;  // per SOURCE, in the order given
   for (std::size_t i = 1; i < args.positional().size(); ++i) {
     const std::string& location = args.positional()[i];
+    std::error_code ec;
+    if (fs::is_directory(location, ec)) {  // an export bundle (study export --out)
+      bundleFolders.push_back(location);
+      isBundle.push_back(true);
+      continue;
+    }
     db::OpenOptions options;
     options.create = false;  // a mistyped source must not become a new, empty database
     auto source = db::openDatabase(location, options);
     if (!source) return reportError("study merge: " + source.error().message);
     opened.push_back(std::move(*source));
+    isBundle.push_back(false);
   }
-  // Opened after the sources, so that a mistyped source leaves no new target behind.
-  auto database = openDb(args);
-  if (!database) return reportError(database.error().message);
+  // The target is created only once every source has been opened and read, so that a mistyped
+  // source or a bad bundle leaves no new database behind.
+  auto existing = db::openExistingDatabase(args.db());
+  if (!existing) return reportError(existing.error().message);
+  std::optional<db::Connection> database = std::move(*existing);
+  std::optional<quiz::StudyProtocol> design;
+  std::vector<std::vector<quiz::StudyResponseRow>> bundles;
+  bundles.reserve(bundleFolders.size());
+  if (!bundleFolders.empty()) {
+    auto found = mergeDesign(database ? &database->get() : nullptr, opened, studyId);
+    if (!found) return reportError("study merge: " + found.error().message);
+    design = std::move(*found);
+    studyId = design->id;
+    for (const auto& folder : bundleFolders) {
+      auto rows = readStudyBundle(folder, *design);
+      if (!rows) return reportError("study merge: " + rows.error().message);
+      bundles.push_back(std::move(*rows));
+    }
+  }
+  if (!database) {
+    auto created = openDb(args);
+    if (!created) return reportError(created.error().message);
+    database = std::move(*created);
+  }
   for (const auto& source : opened)
     if (source.path() == database->path()) return reportError("study merge: " + source.path() + " is the --db database itself");
-  for (auto& source : opened) sources.push_back({source.path(), &source.get()});
-  auto report = db::mergeStudy(*database, sources, studyId);
+  std::vector<db::StudyMergeSource> sources;
+  for (std::size_t i = 0, nextDb = 0, nextBundle = 0; i < isBundle.size(); ++i) {
+    if (isBundle[i]) {
+      sources.push_back({bundleFolders[nextBundle], nullptr, &bundles[nextBundle]});
+      ++nextBundle;
+    } else {
+      sources.push_back({opened[nextDb].path(), &opened[nextDb].get(), nullptr});
+      ++nextDb;
+    }
+  }
+  auto report = db::mergeStudy(*database, sources, studyId, design ? &*design : nullptr);
   if (!report) return reportError("study merge: " + report.error().message);
   for (const auto& from : report->sources)
     std::printf("%s: %d participant(s) added, %d already there\n", from.name.c_str(), from.added, from.alreadyThere);

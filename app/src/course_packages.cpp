@@ -94,10 +94,12 @@ Result<std::vector<package::PackagedPreset>> coursePresets(db::Database& databas
 
 Result<fs::path> courseAssetDirectory(const db::Database& database) {
   const fs::path file = db::pathOf(database);
+  if (db::isPostgresUrl(file.string())) {
+    auto base = db::datasetPathBase(database);
+    if (!base) return tl::unexpected(base.error());
+    return fs::path(*base);
+  }
   if (file.empty() || db::pathOf(database) == ":memory:") return fail("an in-memory database has no data folder for course assets");
-  if (db::pathOf(database).find("://") != std::string::npos)
-    return fail(ErrorKind::Unavailable, "a class server's database keeps no files: import a package with a dataset into a local "
-                                        "database (--db FILE), or its dataset on each machine first");
   return fs::absolute(file).parent_path() / (file.stem().string() + "-data");
 }
 
@@ -171,6 +173,7 @@ const char* toString(DatasetAction action) {
     case DatasetAction::Builtin: return "built in";
     case DatasetAction::Imported: return "imported";
     case DatasetAction::AlreadyPresent: return "already present";
+    case DatasetAction::PlacedHere: return "on the server already; its files placed on this machine";
   }
   return "?";
 }
@@ -234,15 +237,66 @@ Result<db::DatasetRecord> registerPackagedDataset(db::Database& database, const 
   }
   record.geometry = loaded->volume.geometry;
   record.orientation = record.geometry.orientationCode();
-  // Stored relative to the database's folder, so that the database and its data folder move together.
+  // Stored relative to the database's folder, so that the database and its data folder move
+  // together (on a class server: to each machine's folder for it, where every machine that
+  // imports the package puts the files).
   db::DatasetRecord stored = record;
-  const fs::path base = fs::absolute(db::pathOf(database)).parent_path();
+  auto pathBase = db::datasetPathBase(database);
+  if (!pathBase) return tl::unexpected(pathBase.error());
+  const fs::path base = *pathBase;
   stored.volumePath = fs::path(record.volumePath).lexically_relative(base).string();
   if (!record.labelsPath.empty()) stored.labelsPath = fs::path(record.labelsPath).lexically_relative(base).string();
   auto id = db::registerDataset(database, stored, pkg.structures);
   if (!id) return tl::unexpected(id.error());
   record.id = *id;
   return record;
+}
+
+// Whether this machine has the files of a dataset registered with relative paths (a class
+// server's dataset, imported on another machine), with the recorded checksums.
+Result<bool> filesHere(const db::DatasetRecord& record) {
+  std::error_code ec;
+  if (!fs::exists(record.volumePath, ec) || (!record.labelsPath.empty() && !fs::exists(record.labelsPath, ec))) return false;
+  auto volume = db::checksumPath(record.volumePath);
+  if (!volume) return tl::unexpected(volume.error());
+  if (*volume != record.volumeChecksum) return false;
+  if (record.labelsPath.empty()) return true;
+  auto labels = db::checksumPath(record.labelsPath);
+  if (!labels) return tl::unexpected(labels.error());
+  return *labels == record.labelsChecksum;
+}
+
+// Puts the package's files (or the user's referenced volume) where the server's record of the
+// dataset says they are on this machine, checked against the record's checksums.
+Status placeFilesHere(const db::DatasetRecord& record, const package::CoursePackage& pkg, const CourseImportRequest& request,
+                      const std::string& name) {
+  const package::DatasetEntry& d = pkg.manifest.dataset;
+  std::error_code ec;
+  fs::create_directories(fs::path(record.volumePath).parent_path(), ec);
+  if (ec) return fail(ErrorKind::Io, fs::path(record.volumePath).parent_path().string() + ": cannot create (" + ec.message() + ")");
+  fs::remove_all(record.volumePath, ec);
+  if (d.source == package::VolumeSource::Included) {
+    fs::rename(pkg.volumeFile, record.volumePath, ec);
+    if (ec) return fail(ErrorKind::Io, record.volumePath + ": cannot move into place (" + ec.message() + ")");
+  } else if (request.volumePath.empty()) {
+    return fail(ErrorKind::NotFound, name + ": the package does not include its volume: give the scan with --volume PATH (" +
+                                         d.referenceFileName + ", " + shortChecksum(record.volumeChecksum) + ")");
+  } else if (auto copied = copyVolume(request.volumePath, record.volumePath); !copied) {
+    return copied;
+  }
+  if (!record.labelsPath.empty()) {
+    if (!pkg.hasLabels) return fail(name + ": dataset '" + d.name + "' has a label map on the server; the package has none");
+    fs::create_directories(fs::path(record.labelsPath).parent_path(), ec);
+    fs::remove(record.labelsPath, ec);
+    fs::rename(pkg.labelsFile, record.labelsPath, ec);
+    if (ec) return fail(ErrorKind::Io, record.labelsPath + ": cannot move into place (" + ec.message() + ")");
+  }
+  auto here = filesHere(record);
+  if (!here) return tl::unexpected(here.error());
+  if (!*here)
+    return fail(ErrorKind::Conflict, name + ": dataset '" + d.name + "': the files are not those the server recorded (" +
+                                         shortChecksum(record.volumeChecksum) + ")");
+  return {};
 }
 
 }  // namespace
@@ -309,6 +363,27 @@ Result<CourseImportReport> importCoursePackage(LearningSession& session, const C
     if (!have) return tl::unexpected(have.error());
     if (auto ok = lessons::checkStructureReferences(pkg->course, idsOf(*have), name + ": course.json (on the dataset already here)"); !ok)
       return tl::unexpected(ok.error());
+  }
+
+  // On a class server the dataset's row may come from another machine's import: its files go
+  // under this machine's folder for the server, at the paths the row records.
+  const bool server = db::isPostgresUrl(db::pathOf(database));
+  if (server && existing) {
+    auto here = filesHere(*existing);
+    if (!here) return tl::unexpected(withContext(name, here.error()));
+    if (!*here) {
+      // Only files a package import put in the machines' folders are placed; a dataset someone
+      // registered from their own files elsewhere is left alone.
+      if (!assets) return tl::unexpected(withContext(name, assets.error()));
+      const std::string under = fs::path(existing->volumePath).lexically_relative(*assets).string();
+      if (under.empty() || under.rfind("..", 0) == 0)
+        return fail(ErrorKind::Conflict, name + ": dataset '" + d.name + "' on the server is read from " + existing->volumePath +
+                                             ", which this machine lacks or has with other content (registered from files, not "
+                                             "from a course package)");
+      if (auto placed = placeFilesHere(*existing, *pkg, request, name); !placed) return tl::unexpected(placed.error());
+      report.dataset = DatasetAction::PlacedHere;
+      report.datasetFolder = fs::path(existing->volumePath).parent_path();
+    }
   }
 
   if (d.source != package::VolumeSource::Builtin && !existing) {

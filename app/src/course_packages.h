@@ -18,7 +18,9 @@ namespace at::app {
 
 // Where imported course assets live: beside the database, in "<db stem>-data/" (for the default
 // database $XDG_DATA_HOME/anatomy-tutor/anatomy-tutor-data/). Datasets go to datasets/<name>/, and the
-// database records them relative to its own folder. A server database (postgresql://) has none.
+// database records them relative to its own folder. For a class server (postgresql://): this
+// machine's folder for the server (db::datasetPathBase), so that the server holds the course's rows
+// once and each lab machine that imports the package has the files.
 Result<std::filesystem::path> courseAssetDirectory(const db::Database& database);
 
 struct CourseExportRequest {
@@ -50,8 +52,10 @@ struct CourseImportRequest {
   std::string volumePath;
 };
 
-enum class DatasetAction { Builtin, Imported, AlreadyPresent };
-const char* toString(DatasetAction action);  // "built in", "imported", "already present"
+// PlacedHere: a class server already had the dataset (another machine imported the package);
+// this import put its files on this machine.
+enum class DatasetAction { Builtin, Imported, AlreadyPresent, PlacedHere };
+const char* toString(DatasetAction action);  // "built in", "imported", "already present", …
 
 struct CourseImportReport {
   std::string courseId, courseTitle;

@@ -57,10 +57,10 @@ Result<StructureCatalogue> loadStructureCatalogue(const fs::path& path) {
     const json& s = j["structures"][n];
     const std::string where = file + ": structures[" + std::to_string(n) + "]";
     if (!s.is_object()) return fail(where + ": must be an object");
-    if (auto ok = onlyKeys(s, where, {"id", "system", "side", "description", "review"}); !ok) return tl::unexpected(ok.error());
+    if (auto ok = onlyKeys(s, where, {"id", "system", "side", "description", "review_state", "review"}); !ok) return tl::unexpected(ok.error());
     CatalogueEntry e;
     for (auto [key, field] : {std::pair{"id", &e.id}, {"system", &e.system}, {"side", &e.side},
-                              {"description", &e.description}, {"review", &e.review}}) {
+                              {"description", &e.description}, {"review_state", &e.reviewState}, {"review", &e.review}}) {
       auto value = text(s, key, where, true);
       if (!value) return tl::unexpected(value.error());
       if (value->empty()) return fail(where + "." + key + ": must not be empty");
@@ -68,6 +68,8 @@ Result<StructureCatalogue> loadStructureCatalogue(const fs::path& path) {
     }
     if (e.side != "left" && e.side != "right" && e.side != "midline")
       return fail(where + ".side: must be left, right or midline, not '" + e.side + "'");
+    if (e.reviewState != "completed" && e.reviewState != "flagged")
+      return fail(where + ".review_state: must be completed or flagged, not '" + e.reviewState + "'");
     if (!ids.insert(e.id).second) return fail(where + ".id: '" + e.id + "' is listed twice");
     catalogue.structures.push_back(std::move(e));
   }

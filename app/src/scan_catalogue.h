@@ -1,11 +1,13 @@
 // What the structures of a known scan's labels are, for students: the catalogue
 // data/segmentations/<scan>/structures.json gives each structure id its system, side, first-year
-// description and review state (how the label was checked). The label map itself comes from
+// description and review (what was checked on slices and in 3-D, and its state: "completed" when a
+// first-year student would find nothing wrong, "flagged" with the reason in the text where the
+// label is known to be off). The label map itself comes from
 // scripts/label-scans.sh (`anatomy-tutor segment` from the kept seeds).
 //
 //   { "schema": 1, "dataset": "skull", "about": "...",
 //     "structures": [ {"id": "mandible", "system": "teeth and jaws", "side": "midline",
-//                      "description": "...", "review": "..."} ] }
+//                      "description": "...", "review_state": "completed", "review": "..."} ] }
 #pragma once
 
 #include <filesystem>
@@ -22,7 +24,8 @@ struct CatalogueEntry {
   std::string system;
   std::string side;         // left | right | midline
   std::string description;
-  std::string review;
+  std::string reviewState;  // completed | flagged
+  std::string review;       // what was checked; for a flagged label, what is off
 };
 
 struct StructureCatalogue {
@@ -31,7 +34,8 @@ struct StructureCatalogue {
   std::vector<CatalogueEntry> structures;
 };
 
-// Strict: unknown fields, wrong types, a side other than left/right/midline or a repeated id are
+// Strict: unknown fields, wrong types, a side other than left/right/midline, a review_state other
+// than completed/flagged or a repeated id are
 // errors naming the file and the field.
 Result<StructureCatalogue> loadStructureCatalogue(const std::filesystem::path& path);
 

@@ -4,9 +4,14 @@
 #include <fstream>
 #include <optional>
 
+#include <nlohmann/json.hpp>
+
 #include "commands.h"
+#include "core/printable_text.h"
+#include "core/regular_file.h"
 #include "data_paths.h"
 #include "quiz/redcap_export.h"
+#include "quiz/responses_long_reader.h"
 #include "svg_raster.h"
 #include "volume/png_image.h"
 
@@ -30,29 +35,76 @@ std::vector<fs::path> shippedStudyFiles() {
 
 }  // namespace
 
+Result<std::optional<quiz::StudyProtocol>> findStudyDefinition(const std::string& spec) {
+  if (fs::is_regular_file(spec)) {
+    auto p = quiz::loadStudyProtocol(spec);
+    if (!p) return tl::unexpected(p.error());
+    return std::optional<quiz::StudyProtocol>(std::move(*p));
+  }
+  for (const fs::path& f : shippedStudyFiles()) {
+    auto p = quiz::loadStudyProtocol(f.string());
+    if (p && p->id == spec) return std::optional<quiz::StudyProtocol>(std::move(*p));
+  }
+  return std::optional<quiz::StudyProtocol>();
+}
+
 Result<quiz::StudyProtocol> resolveStudy(db::Database& database, const std::string& spec) {
   auto stored = db::findStudy(database, spec);
   if (!stored) return tl::unexpected(stored.error());
   if (*stored) return **stored;
-  std::optional<quiz::StudyProtocol> loaded;
-  if (fs::is_regular_file(spec)) {
-    auto p = quiz::loadStudyProtocol(spec);
-    if (!p) return tl::unexpected(p.error());
-    loaded = *p;
-  } else {
-    for (const fs::path& f : shippedStudyFiles()) {
-      auto p = quiz::loadStudyProtocol(f.string());
-      if (p && p->id == spec) {
-        loaded = *p;
-        break;
-      }
-    }
-  }
-  if (!loaded) return fail("no study '" + spec + "' (not stored in " + db::pathOf(database) + ", not a file, not shipped)");
+  auto loaded = findStudyDefinition(spec);
+  if (!loaded) return tl::unexpected(loaded.error());
+  if (!*loaded) return fail("no study '" + spec + "' (not stored in " + db::pathOf(database) + ", not a file, not shipped)");
   // A file naming a stored study id resolves to the stored one when unchanged; saveStudy refuses
   // design changes once participants exist.
-  if (auto s = db::saveStudy(database, *loaded); !s) return tl::unexpected(s.error());
-  return *loaded;
+  if (auto s = db::saveStudy(database, **loaded); !s) return tl::unexpected(s.error());
+  return **loaded;
+}
+
+Result<std::vector<quiz::StudyResponseRow>> readStudyBundle(const fs::path& folder, const quiz::StudyProtocol& design) {
+  const std::string where = printableText(folder.string(), 200);
+  const fs::path sidecarPath = folder / "responses_long.json", tablePath = folder / "responses_long.csv";
+  auto sidecarText = readRegularFile(sidecarPath.string(), where + "/responses_long.json", std::size_t(4) << 20);
+  if (!sidecarText) return tl::unexpected(sidecarText.error());
+  const auto sidecar = nlohmann::json::parse(*sidecarText, nullptr, false);
+  const std::string sidecarName = where + "/responses_long.json";
+  if (sidecar.is_discarded() || !sidecar.is_object()) return fail(sidecarName + ": not a JSON object");
+  const auto field = [&](const char* key) {
+    const auto it = sidecar.find(key);
+    return it != sidecar.end() && it->is_string() ? it->get<std::string>() : std::string();
+  };
+  if (field("file") != "responses_long.csv")
+    return fail(sidecarName + ": field 'file' is not \"responses_long.csv\" (not a study export's sidecar)");
+  if (field("study") != design.id)
+    return fail(ErrorKind::Conflict, sidecarName + ": the bundle is of study '" + printableText(field("study"), 80) +
+                                         "', not '" + design.id + "'");
+  // The levels the export listed must be the study's (an export of another version of the study).
+  std::vector<std::string> structures, items, conditions;
+  if (sidecar.contains("columns") && sidecar["columns"].is_array())
+    for (const auto& column : sidecar["columns"]) {
+      if (!column.is_object() || !column.contains("levels")) continue;
+      const auto nameIt = column.find("name");
+      const std::string name = nameIt != column.end() && nameIt->is_string() ? nameIt->get<std::string>() : "";
+      const auto& levels = column["levels"];
+      if (name == "structure" && levels.is_array())
+        for (const auto& v : levels) structures.push_back(v.is_string() ? v.get<std::string>() : "");
+      if ((name == "item" || name == "a_condition") && levels.is_object())
+        for (auto it = levels.begin(); it != levels.end(); ++it) (name == "item" ? items : conditions).push_back(it.key());
+    }
+  std::vector<std::string> designItems, designConditions;
+  for (const auto& item : design.items) designItems.push_back(item.id);
+  for (const auto& condition : design.conditions) designConditions.push_back(condition.id);
+  // nlohmann's objects are sorted by key: compare the item and condition ids as sets.
+  std::sort(items.begin(), items.end());
+  std::sort(designItems.begin(), designItems.end());
+  std::sort(conditions.begin(), conditions.end());
+  std::sort(designConditions.begin(), designConditions.end());
+  if (structures != design.structures || items != designItems || conditions != designConditions)
+    return fail(ErrorKind::Conflict, sidecarName + ": the bundle's structures, items or conditions are not those of "
+                                                   "study '" + design.id + "' (exported from another version of it)");
+  auto table = readRegularFile(tablePath.string(), where + "/responses_long.csv", std::size_t(1) << 30);
+  if (!table) return tl::unexpected(table.error());
+  return quiz::readResponsesLongCsv(*table, where + "/responses_long.csv", design);
 }
 
 std::vector<std::string> shippedStudyIds() {

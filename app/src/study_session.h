@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <functional>
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -23,6 +24,14 @@ namespace at::app {
 // The study: a stored id, else a study JSON file, else a shipped study (data/studies) with that
 // id. Files and shipped studies are stored (saveStudy) before they are returned.
 Result<quiz::StudyProtocol> resolveStudy(db::Database& database, const std::string& spec);
+// A study JSON file, else a shipped study with that id (nothing stored); nullopt when neither.
+Result<std::optional<quiz::StudyProtocol>> findStudyDefinition(const std::string& spec);
+
+// The long table of an export bundle (the folder `study export --out` wrote) of `design`'s study,
+// read strictly (quiz/responses_long_reader.h). Its sidecar responses_long.json must name the
+// study and list its structures, items and conditions (Conflict otherwise).
+Result<std::vector<quiz::StudyResponseRow>> readStudyBundle(const std::filesystem::path& folder,
+                                                            const quiz::StudyProtocol& design);
 
 // Ids of the shipped studies (data/studies/*.json that parse), in file-name order.
 std::vector<std::string> shippedStudyIds();

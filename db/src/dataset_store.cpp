@@ -1,12 +1,14 @@
 #include "db/dataset_store.h"
 
 #include <algorithm>
+#include <cctype>
 #include <filesystem>
 #include <tuple>
 
 #include <nlohmann/json.hpp>
 
 #include "database.h"
+#include "core/sha256.h"
 #include "db/checksum.h"
 
 namespace at::db {
@@ -21,10 +23,25 @@ constexpr const char* kSelectDataset =
     " FROM datasets d";
 
 // A stored path as a usable one: relative paths (assets in the database's data folder) are
-// relative to the database file's folder.
+// relative to datasetPathBase (kept as stored when there is none: no HOME for a server's folder).
 std::string resolvedPath(const std::string& stored, const Database& db) {
-  if (stored.empty() || std::filesystem::path(stored).is_absolute() || db.path().find("://") != std::string::npos) return stored;
-  return (std::filesystem::absolute(db.path()).parent_path() / stored).lexically_normal().string();
+  if (stored.empty() || std::filesystem::path(stored).is_absolute()) return stored;
+  auto base = datasetPathBase(db);
+  if (!base) return stored;
+  return (std::filesystem::path(*base) / stored).lexically_normal().string();
+}
+
+// A server's URL as one file name: scheme, user and password dropped, every other character
+// but letters, digits, '.', '-' and '_' made '_'; a long one cut and told apart by its hash.
+std::string serverFolderName(const std::string& url) {
+  std::string rest = url.substr(url.find("://") + 3);
+  const std::size_t slash = rest.find('/'), at = rest.rfind('@', slash);
+  if (at != std::string::npos) rest = rest.substr(at + 1);
+  std::string name;
+  for (char c : rest)
+    name += std::isalnum(static_cast<unsigned char>(c)) || c == '.' || c == '-' || c == '_' ? c : '_';
+  if (name.size() > 80) name = name.substr(0, 60) + "-" + sha256Hex(url).substr(0, 16);
+  return name;
 }
 
 Result<DatasetRecord> readRecord(const Statement& s, const Database& db) {
@@ -97,6 +114,13 @@ Status insertStructures(Database& d, std::int64_t id, const std::vector<Structur
 }
 
 }  // namespace
+
+Result<std::string> datasetPathBase(const Database& db) {
+  if (!isPostgresUrl(db.path())) return std::filesystem::absolute(db.path()).parent_path().string();
+  auto defaultDatabase = defaultDatabasePath();
+  if (!defaultDatabase) return tl::unexpected(defaultDatabase.error());
+  return (std::filesystem::path(*defaultDatabase).parent_path() / "servers" / serverFolderName(db.path())).string();
+}
 
 Result<std::int64_t> registerDataset(Database& db, const DatasetRecord& record,
                                      const std::vector<Structure>& structures, bool replace) {

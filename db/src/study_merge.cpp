@@ -2,6 +2,8 @@
 // server) copied into one, row by row with every recorded column, in one transaction.
 #include <algorithm>
 #include <map>
+#include <set>
+#include <type_traits>
 
 #include "db/study_store.h"
 #include "quiz/study_design.h"
@@ -141,22 +143,99 @@ Result<std::vector<Records>> readAllRecords(Database& db, const std::string& stu
   return out;
 }
 
-// The design row a participant's trials follow (position, structure, condition shown as A), if any.
+// The first design row a participant's trials follow (position, structure, condition shown as A),
+// if any. A database participant has every trial of their plan; a bundle's has the rated ones.
 std::optional<std::size_t> designRowOf(const quiz::StudyProtocol& protocol, const std::vector<Row>& trials) {
   const std::size_t cycle = quiz::counterbalancingCycle(protocol.structures.size());
+  if (trials.empty()) return std::nullopt;
   for (std::size_t row = 0; row < cycle; ++row) {
-    const auto plan = quiz::planParticipant(protocol.structures.size(), row, protocol.seed);
-    bool same = plan.size() == trials.size();
-    for (std::size_t i = 0; same && i < plan.size(); ++i) {
-      const Row& t = trials[i];  // ordered by position
-      same = t[0].integer == std::int64_t(plan[i].position) &&
-             t[1].text == protocol.structures[plan[i].structureIndex] &&
-             t[2].text == protocol.conditions[plan[i].aIsFirstCondition ? 0 : 1].id;
+    std::map<std::int64_t, quiz::TrialPlan> byPosition;
+    for (const auto& planned : quiz::planParticipant(protocol.structures.size(), row, protocol.seed))
+      byPosition[std::int64_t(planned.position)] = planned;
+    bool same = trials.size() <= byPosition.size();
+    for (std::size_t i = 0; same && i < trials.size(); ++i) {
+      const Row& t = trials[i];
+      const auto planned = byPosition.find(t[0].integer);
+      same = planned != byPosition.end() && t[1].text == protocol.structures[planned->second.structureIndex] &&
+             t[2].text == protocol.conditions[planned->second.aIsFirstCondition ? 0 : 1].id;
     }
     if (same) return row;
   }
   return std::nullopt;
 }
+
+// The long table's records of some rows, sorted: what an export shows of a participant, in any order.
+std::vector<std::string> exportLines(const std::vector<quiz::StudyResponseRow>& rows) {
+  std::vector<std::string> lines;
+  for (const auto& row : rows) lines.push_back(quiz::responsesLongCsv({row}));
+  std::sort(lines.begin(), lines.end());
+  return lines;
+}
+
+Result<std::vector<std::string>> exportLinesOf(Database& db, const quiz::StudyProtocol& design,
+                                               const std::string& participantId) {
+  auto rows = detail::responseRows(db, design, participantId);
+  if (!rows) return tl::unexpected(rows.error());
+  return exportLines(*rows);
+}
+
+Cell textCell(std::string text) { return Cell{false, 0, 0, std::move(text)}; }
+Cell intCell(std::int64_t value) { return Cell{false, value, 0, {}}; }
+Cell realCell(double value) { return Cell{false, 0, value, {}}; }
+Cell nullCell() { return Cell{true, 0, 0, {}}; }
+template <class T>
+Cell optionalCell(const std::optional<T>& value) {
+  if (!value) return nullCell();
+  if constexpr (std::is_integral_v<T>) return intCell(*value);
+  else return realCell(*value);
+}
+
+// A bundle's rows as records in the stored layout (participants in the order they first appear).
+// Timestamps exported to the second are stored with .000 milliseconds.
+std::vector<Records> recordsFromRows(const quiz::StudyProtocol& design, const std::vector<quiz::StudyResponseRow>& rows) {
+  std::vector<Records> out;
+  std::map<std::string, std::size_t> at;
+  std::map<std::string, std::set<std::int64_t>> trialsOf;
+  std::map<std::string, std::pair<std::string, std::string>> firstLast;  // participant → first, last rating time
+  for (const auto& r : rows) {
+    auto [it, isNew] = at.try_emplace(r.participantId, out.size());
+    if (isNew) out.push_back(Records{r.participantId, {}, {}, {}});
+    Records& records = out[it->second];
+    const std::string stored = r.timestampUtc.substr(0, r.timestampUtc.size() - 1) + ".000Z";
+    auto [times, firstTime] = firstLast.try_emplace(r.participantId, stored, stored);
+    if (!firstTime) {
+      times->second.first = std::min(times->second.first, stored);
+      times->second.second = std::max(times->second.second, stored);
+    }
+    const std::int64_t position = r.presentationOrder - 1;
+    if (trialsOf[r.participantId].insert(position).second) {
+      const std::string& b = design.conditions[r.aCondition == design.conditions[0].id ? 1 : 0].id;
+      records.trials.push_back({intCell(position), textCell(r.structure), textCell(r.aCondition), textCell(b),
+                                textCell(r.presetA), textCell(r.presetB), realCell(r.viewMsA), realCell(r.viewMsB),
+                                intCell(r.toggles), r.comment.empty() ? nullCell() : textCell(r.comment),
+                                intCell(r.viewingMeasured ? 1 : 0)});
+    }
+    records.ratings.push_back({intCell(position), textCell(r.item), intCell(r.ratingAb), realCell(r.responseMs),
+                               realCell(r.t), realCell(r.alpha), realCell(r.beta), textCell(r.appVersion),
+                               textCell(stored), r.session > 0 ? intCell(r.session) : nullCell(),
+                               optionalCell(r.qualityLevel), optionalCell(r.qualityFullLevel),
+                               optionalCell(r.qualityScale), optionalCell(r.settleMs)});
+    // The participant's session count: the latest session any rating names (1 when none does).
+    const std::int64_t session = std::max<std::int64_t>(1, r.session);
+    if (records.participant.empty())
+      records.participant = {textCell(r.group), intCell(session), nullCell(), nullCell()};
+    records.participant[1].integer = std::max(records.participant[1].integer, session);
+    records.participant[2] = textCell(times->second.first);
+    records.participant[3] = r.participantComplete ? textCell(times->second.second) : nullCell();
+  }
+  return out;
+}
+
+// Everything one source holds of the study; `lines` (bundles only): each participant's export lines.
+struct SourceRecords {
+  std::vector<Records> records;
+  std::map<std::string, std::vector<std::string>> lines;
+};
 
 }  // namespace
 
@@ -173,22 +252,41 @@ bool StudyMergeReport::balanced() const {
 }
 
 Result<StudyMergeReport> mergeStudy(Database& into, const std::vector<StudyMergeSource>& sources,
-                                    const std::string& studyId) {
+                                    const std::string& studyId, const quiz::StudyProtocol* givenDesign) {
   // Read every source first: the sources are other databases, outside the target's transaction.
   std::optional<quiz::StudyProtocol> design;
-  std::vector<std::vector<Records>> fromSources;
+  std::string designFrom = "the study given";
+  if (givenDesign) {
+    if (givenDesign->id != studyId)
+      return fail(ErrorKind::Conflict, "study merge: the study given is '" + givenDesign->id + "', not '" + studyId + "'");
+    design = *givenDesign;
+  }
+  std::vector<SourceRecords> fromSources;
   for (const auto& source : sources) {
+    if (!source.db) {
+      if (!source.rows || !givenDesign)
+        return fail(source.name + ": an export bundle is merged against the study's design, which was not given");
+      SourceRecords bundle{recordsFromRows(*design, *source.rows), {}};
+      std::map<std::string, std::vector<quiz::StudyResponseRow>> byParticipant;
+      for (const auto& row : *source.rows) byParticipant[row.participantId].push_back(row);
+      for (const auto& [id, rows] : byParticipant) bundle.lines[id] = exportLines(rows);
+      fromSources.push_back(std::move(bundle));
+      continue;
+    }
     auto study = findStudy(*source.db, studyId);
     if (!study) return tl::unexpected(withContext(source.name, study.error()));
     if (!*study) return fail(ErrorKind::NotFound, source.name + ": has no study '" + studyId + "'");
     if (design && !detail::sameDesign(*design, **study))
       return fail(ErrorKind::Conflict, source.name + ": study '" + studyId +
-                                           "' has another design (structures, conditions, items, scale or seed) than in " +
-                                           sources.front().name);
-    if (!design) design = **study;
+                                           "' has another design (structures, conditions, items, scale or seed) than " +
+                                           designFrom);
+    if (!design) {
+      design = **study;
+      designFrom = "in " + source.name;
+    }
     auto records = readAllRecords(*source.db, studyId);
     if (!records) return tl::unexpected(withContext(source.name, records.error()));
-    fromSources.push_back(std::move(*records));
+    fromSources.push_back(SourceRecords{std::move(*records), {}});
   }
   if (!design) return fail("study merge: no databases to merge from");
 
@@ -198,8 +296,8 @@ Result<StudyMergeReport> mergeStudy(Database& into, const std::vector<StudyMerge
     auto target = findStudy(d, studyId);
     if (!target) return tl::unexpected(target.error());
     if (*target && !detail::sameDesign(**target, *design))
-      return fail(ErrorKind::Conflict, d.path() + ": study '" + studyId + "' has another design than in " +
-                                           sources.front().name + "; nothing was merged");
+      return fail(ErrorKind::Conflict, d.path() + ": study '" + studyId + "' has another design than " +
+                                           designFrom + "; nothing was merged");
     if (!*target)
       if (auto s = detail::storeStudyRow(d, *design); !s) return s;
     auto count = detail::participantCount(d, studyId);
@@ -208,11 +306,25 @@ Result<StudyMergeReport> mergeStudy(Database& into, const std::vector<StudyMerge
     std::map<std::string, std::string> origin;  // participant → where the target's copy came from
     for (std::size_t s = 0; s < sources.size(); ++s) {
       StudyMergeReport::FromSource from{sources[s].name, 0, 0};
-      for (const Records& records : fromSources[s]) {
+      const SourceRecords& source = fromSources[s];
+      for (const Records& records : source.records) {
         auto existing = readRecords(d, studyId, records.id);
         if (!existing) return tl::unexpected(existing.error());
         if (*existing) {
-          if (**existing == records) {
+          bool same = !sources[s].rows && **existing == records;
+          if (!same) {  // the same export: a bundle, or a database and a bundle of it
+            auto stored = exportLinesOf(d, *design, records.id);
+            if (!stored) return tl::unexpected(stored.error());
+            const auto bundled = source.lines.find(records.id);
+            if (bundled != source.lines.end()) {
+              same = *stored == bundled->second;
+            } else {
+              auto theirs = exportLinesOf(*sources[s].db, *design, records.id);
+              if (!theirs) return tl::unexpected(withContext(sources[s].name, theirs.error()));
+              same = *stored == *theirs;
+            }
+          }
+          if (same) {
             ++from.alreadyThere;
             continue;
           }

@@ -103,15 +103,6 @@ Result<StudyParticipant> loadParticipant(Database& db, const std::string& studyI
 
 }  // namespace
 
-Status validParticipantId(const std::string& id) {
-  const auto ok = [](char c) { return std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '-'; };
-  if (id.empty() || id.size() > 64 || !std::isalnum(static_cast<unsigned char>(id[0])) ||
-      !std::all_of(id.begin(), id.end(), ok))
-    return fail("participant id '" + id + "' must be 1 to 64 letters, digits, '_' or '-', starting with a letter or "
-                "digit (it becomes the REDCap record id)");
-  return {};
-}
-
 std::optional<std::size_t> StudyParticipant::nextTrial(std::size_t itemCount) const {
   for (std::size_t i = 0; i < trials.size(); ++i)
     if (trials[i].ratedItems.size() < itemCount) return i;
@@ -363,6 +354,13 @@ Result<std::vector<quiz::StudyParticipantRow>> studyParticipantRows(Database& db
 }
 
 Result<std::vector<quiz::StudyResponseRow>> studyResponseRows(Database& db, const quiz::StudyProtocol& protocol) {
+  return detail::responseRows(db, protocol, std::nullopt);
+}
+
+namespace detail {
+
+Result<std::vector<quiz::StudyResponseRow>> responseRows(Database& db, const quiz::StudyProtocol& protocol,
+                                                         const std::optional<std::string>& participantId) {
   std::map<std::string, int> itemOrder;
   for (std::size_t i = 0; i < protocol.items.size(); ++i) itemOrder[protocol.items[i].id] = int(i);
   auto st = db.prepare(
@@ -373,9 +371,11 @@ Result<std::vector<quiz::StudyResponseRow>> studyResponseRows(Database& db, cons
       "FROM study_ratings r "
       "JOIN study_trials t ON t.study_id = r.study_id AND t.participant_id = r.participant_id AND t.position = r.position "
       "JOIN study_participants p ON p.study_id = r.study_id AND p.participant_id = r.participant_id "
-      "WHERE r.study_id = ?1 ORDER BY p.enrolment_index, t.position");
+      "WHERE r.study_id = ?1" + std::string(participantId ? " AND r.participant_id = ?2" : "") +
+      " ORDER BY p.enrolment_index, t.position");
   if (!st) return tl::unexpected(st.error());
   st->bind(1, protocol.id);
+  if (participantId) st->bind(2, *participantId);
   std::vector<std::pair<std::tuple<int, int, int>, quiz::StudyResponseRow>> keyed;
   while (true) {
     auto row = st->step();
@@ -421,5 +421,7 @@ Result<std::vector<quiz::StudyResponseRow>> studyResponseRows(Database& db, cons
   for (auto& k : keyed) rows.push_back(std::move(k.second));
   return rows;
 }
+
+}  // namespace detail
 
 }  // namespace at::db

@@ -1,6 +1,7 @@
 #include "quiz/study_protocol.h"
 
 #include <algorithm>
+#include <cctype>
 #include <fstream>
 #include <set>
 #include <sstream>
@@ -23,6 +24,15 @@ std::string StudyProtocol::presetFor(const std::string& structure, int condition
 
 int unblindRating(int ratingAsShown, bool aIsFirstCondition, const StudyScale& scale) {
   return aIsFirstCondition ? ratingAsShown : scale.min + scale.max - ratingAsShown;
+}
+
+Status validParticipantId(const std::string& id) {
+  const auto ok = [](char c) { return std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '-'; };
+  if (id.empty() || id.size() > 64 || !std::isalnum(static_cast<unsigned char>(id[0])) ||
+      !std::all_of(id.begin(), id.end(), ok))
+    return fail("participant id '" + id + "' must be 1 to 64 letters, digits, '_' or '-', starting with a letter or "
+                "digit (it becomes the REDCap record id)");
+  return {};
 }
 
 namespace {

@@ -88,7 +88,7 @@ std::vector<std::vector<std::string>> parseCsv(const std::string& text) {
 
 std::string csvNumber(double v, int decimals) {
   if (!std::isfinite(v)) return "";
-  char buf[64];
+  char buf[400];  // the largest double has 309 digits before the point
   std::snprintf(buf, sizeof buf, "%.*f", decimals, v);
   std::string s = buf;
   // Trim trailing zeros for stable, compact numbers ("0.500" → "0.5", "12.000" → "12").
@@ -152,6 +152,15 @@ const std::vector<Column>& longColumns() {
 }
 
 }  // namespace
+
+const std::vector<std::string>& responsesLongColumnNames() {
+  static const std::vector<std::string> names = [] {
+    std::vector<std::string> out;
+    for (const Column& c : longColumns()) out.push_back(c.name);
+    return out;
+  }();
+  return names;
+}
 
 std::string responsesLongCsv(const std::vector<StudyResponseRow>& rows) {
   std::vector<std::string> header;

@@ -98,6 +98,19 @@ TransferFunction2D shadingTable(const Preset& preset) {
   return table;
 }
 
+bool sameShadingTable(const Preset& a, const Preset& b) {
+  return a.dataTf == b.dataTf && a.distanceTf == b.distanceTf && a.t == b.t &&
+         (a.mode == RenderMode::Fuzzy) == (b.mode == RenderMode::Fuzzy);
+}
+
+const TransferFunction2D& ShadingTableCache::tableFor(const Preset& preset) {
+  if (!preset_ || !sameShadingTable(*preset_, preset)) {
+    table_ = shadingTable(preset);
+    preset_ = preset;
+  }
+  return table_;
+}
+
 double effectiveStepMm(const Geometry& g, const RenderSettings& s) {
   if (s.stepMm > 0) return s.stepMm;
   return kDefaultStepVoxels * std::min({g.spacingMm[0], g.spacingMm[1], g.spacingMm[2]});

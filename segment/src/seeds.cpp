@@ -235,8 +235,11 @@ Result<RasterisedSeeds> rasteriseSeeds(const SeedSet& seeds, const Geometry& gri
   for (std::size_t s = 0; s < seeds.strokes.size(); ++s) {
     const SeedStroke& stroke = seeds.strokes[s];
     for (std::size_t p = 0; p < stroke.pointsMm.size(); ++p) {
+      // Tested in continuous index space, before any cast: a point millions of mm away has an
+      // index no int holds (casting it is undefined behaviour, and it could wrap onto the grid).
       const Vec3 ijk = grid.patientToIndex(stroke.pointsMm[p]);
-      if (!d.contains(int(std::lround(ijk[0])), int(std::lround(ijk[1])), int(std::lround(ijk[2]))))
+      const auto inside = [](double index, int size) { return index > -0.5 && index < size - 0.5; };
+      if (!inside(ijk[0], d.x) || !inside(ijk[1], d.y) || !inside(ijk[2], d.z))
         return fail("seeds: strokes[" + std::to_string(s) + "].points[" + std::to_string(p) + "] (" +
                     number(stroke.pointsMm[p][0]) + ", " + number(stroke.pointsMm[p][1]) + ", " +
                     number(stroke.pointsMm[p][2]) + ") mm of label '" + seeds.labels[stroke.label].name +

@@ -117,6 +117,17 @@ RecordedClass recordClass(const std::filesystem::path& db, std::uint64_t seed) {
 
 std::vector<json> analyticsEvents(const test::HeadlessRun& run) { return test::eventsOf(run, "analytics"); }
 
+// The users stored in the class's database, by name.
+std::set<std::string> storedUsers(const std::filesystem::path& db) {
+  auto session = app::LearningSession::open(db.string());
+  REQUIRE_MESSAGE(session, (session ? "" : session.error().message));
+  auto users = (*session)->users().users();
+  REQUIRE(users);
+  std::set<std::string> names;
+  for (const lessons::User& u : *users) names.insert(u.name);
+  return names;
+}
+
 }  // namespace
 
 TEST_CASE("Class analytics in the desktop: error rates, most missed items and each student's progress match the class") {
@@ -137,8 +148,13 @@ TEST_CASE("Class analytics in the desktop: error rates, most missed items and ea
       missed = a.mostMissed(10);
     }
   };
+  const auto before = storedUsers(db);
+  REQUIRE(before.size() == 12);
+  // The instructor looks at the lesson list and the review queue first (as the Lessons panel does
+  // in every frame): looking makes no student.
   const auto run = test::runHeadless(
-      {{"actions", {{{"do", "analytics"}, {"course", kCourse}}, {{"do", "wait"}, {"ms", 50}},
+      {{"actions", {{{"do", "lessons"}, {"course", kCourse}}, {{"do", "review"}},
+                    {{"do", "analytics"}, {"course", kCourse}}, {{"do", "wait"}, {"ms", 50}},
                     {{"do", "analytics"}, {"course", kCourse}, {"group", "B"}}, {{"do", "analytics"}, {"close", true}}}}},
       options);
   INFO(run.messages);
@@ -197,6 +213,8 @@ TEST_CASE("Class analytics in the desktop: error rates, most missed items and ea
     CHECK(s["error_rate"].get<double>() == doctest::Approx(double(wrong) / n));
   }
 
+  CHECK(storedUsers(db) == before);  // viewing created no user and no progress
+
   // Wrong input: an unknown course or group fails the script with a message naming it; the
   // groups there are are listed.
   const auto unknownCourse = test::runHeadless({{"actions", {{{"do", "analytics"}, {"course", "nope"}}}}}, options);
@@ -232,6 +250,13 @@ TEST_CASE("the Class analytics window under Xvfb at 1280x720: tables of the clas
   INFO(run.err);
   REQUIRE(run.exitCode == 0);
   CHECK(test::eventsOf(run.events, "screenshot").size() == 4);
+  // The window's Lessons panel drew the instructor's (empty) lesson list in every frame: the class
+  // is still its twelve students, in the window and in the database.
+  const auto shown = test::eventsOf(run.events, "analytics");
+  REQUIRE(shown.size() == 4);
+  for (const json& e : shown) CHECK(e["class_size"] == 12);
+  CHECK(storedUsers(db).size() == 12);
+  CHECK_FALSE(storedUsers(db).count("instructor"));
   auto image = readPng(shot.string());
   REQUIRE_MESSAGE(image, (image ? "" : image.error().message));
   CHECK(image->width == 1280);

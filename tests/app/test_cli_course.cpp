@@ -4,8 +4,11 @@
 // refused with one line and change nothing.
 #include <doctest/doctest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <fstream>
+#include <optional>
 
 #include <nlohmann/json.hpp>
 
@@ -13,6 +16,7 @@
 #include "cli_checks.h"
 #include "db/connection.h"
 #include "db/dataset_store.h"
+#include "test_databases.h"
 #include "test_support.h"
 #include "package/course_package.h"
 #include "render/scene.h"
@@ -211,6 +215,123 @@ TEST_CASE("CourseCli_ReferencedVolume_IsAskedForAndCheckedByItsChecksum") {
   REQUIRE_MESSAGE(right.exitCode == 0, right.err);
   CHECK(fs::is_regular_file(student / "s-data" / "datasets" / "ear_lab" / "volume.nrrd"));
   CHECK(test::importedDatasetNames(db) == std::vector<std::string>{"ear_lab"});
+}
+
+namespace {
+
+// One lab machine: its own data folder (XDG_DATA_HOME) while in scope.
+class OnMachine {
+ public:
+  explicit OnMachine(const fs::path& dataHome) {
+    if (const char* old = std::getenv("XDG_DATA_HOME")) previous_ = old;
+    ::setenv("XDG_DATA_HOME", dataHome.c_str(), 1);
+  }
+  ~OnMachine() {
+    if (previous_) ::setenv("XDG_DATA_HOME", previous_->c_str(), 1);
+    else ::unsetenv("XDG_DATA_HOME");
+  }
+  OnMachine(const OnMachine&) = delete;
+  OnMachine& operator=(const OnMachine&) = delete;
+
+ private:
+  std::optional<std::string> previous_;
+};
+
+// The files under `dir`, relative to it.
+std::vector<std::string> filesUnder(const fs::path& dir) {
+  std::vector<std::string> out;
+  std::error_code ec;
+  if (!fs::exists(dir, ec)) return out;
+  for (const auto& e : fs::recursive_directory_iterator(dir))
+    if (e.is_regular_file()) out.push_back(fs::relative(e.path(), dir).string());
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+}  // namespace
+
+TEST_CASE("CourseCli_PackageOnAClassServer_RowsOnceFilesOnEachLabMachineThatImportsIt") {
+  if (!test::requireAppBinary("course packages")) return;
+  auto url = test::freshPostgresDatabase("the class-server course import test");
+  if (!url) return;
+  test::TempDir author("at-author"), labA("at-lab-a"), labB("at-lab-b");
+  const fs::path package = author / "ear.atcourse";
+  authorAndExport(author, package);
+  // The same course under version 2 with other content, packaged by another author's database.
+  test::TempDir author2("at-author2");
+  importPhantom(author2.path(), author2 / "b.db");
+  auto edited = nlohmann::json::parse(test::readFile(author / "ear_tour.json"));
+  edited["title"] = "Another ear tour";
+  std::ofstream(author2 / "other.json") << edited.dump();
+  REQUIRE(test::runApp("course import " + quoted(author2 / "other.json") + " --db " + quoted(author2 / "b.db")).exitCode == 0);
+  REQUIRE(test::runApp("course export ear_tour --out " + quoted(author2 / "other.atcourse") + " --db " +
+                       quoted(author2 / "b.db")).exitCode == 0);
+  std::ofstream(labA / "answers.jsonl") << nameAnswers(author / "ear_tour.json");
+  const std::string server = " --db '" + *url + "'";
+  const std::string play = "play ear_tour.tour --user dana --new-user --no-views --answers " + quoted(labA / "answers.jsonl") + server;
+  const std::size_t questions = test::phantomOfSize(32).structures.size();
+  const std::string finished =
+      "Lesson finished: " + std::to_string(questions) + " of " + std::to_string(questions) + " questions right";
+
+  fs::path folderA;
+  {
+    OnMachine machine(labA.path());
+    auto imported = test::runApp("course import " + quoted(package) + server);
+    REQUIRE_MESSAGE(imported.exitCode == 0, imported.err);
+    CHECK(imported.out.find("course 'ear_tour' (Ear tour) version 2: added") != std::string::npos);
+    CHECK(imported.out.find("dataset 'ear_lab': imported into " + (labA / "anatomy-tutor" / "servers").string()) != std::string::npos);
+    const auto servers = filesUnder(labA / "anatomy-tutor" / "servers");
+    REQUIRE(servers.size() == 2);  // one folder for this server: the dataset's volume and label map
+    folderA = labA / "anatomy-tutor" / "servers" / fs::path(servers[0]).begin()->string();
+    CHECK(filesUnder(folderA) == std::vector<std::string>{"datasets/ear_lab/labels.nrrd", "datasets/ear_lab/volume.nrrd"});
+    auto played = test::runApp(play);
+    REQUIRE_MESSAGE(played.exitCode == 0, played.err);
+    CHECK(played.out.find(finished) != std::string::npos);
+  }
+  {
+    OnMachine machine(labB.path());
+    // Before its import, machine B has the course's rows (from the server) but not the scan its
+    // pictures are drawn from.
+    const std::string playWithViews = "play ear_tour.tour --user erin --new-user --views " + quoted(labB / "views") +
+                                      " --answers " + quoted(labA / "answers.jsonl") + server;
+    auto early = test::runApp(playWithViews);
+    CAPTURE(early.err);
+    REQUIRE(early.exitCode == 0);  // the lesson's text and name questions go on without pictures
+    CHECK(early.out.find("(no pictures: dataset 'ear_lab': its volume cannot be read: " +
+                         (labB / "anatomy-tutor" / "servers").string()) != std::string::npos);
+    CHECK(filesUnder(labB / "views").empty());
+    // Other content under the stored version: refused as on SQLite, no file placed.
+    auto other = test::runApp("course import " + quoted(author2 / "other.atcourse") + server);
+    test::checkOneLineError(other, "is stored with other content");
+    CHECK(filesUnder(labB / "anatomy-tutor").empty());
+
+    auto imported = test::runApp("course import " + quoted(package) + server);
+    REQUIRE_MESSAGE(imported.exitCode == 0, imported.err);
+    CHECK(imported.out.find("version 2: unchanged") != std::string::npos);
+    const fs::path folderB = labB / "anatomy-tutor" / "servers" / folderA.filename();
+    CHECK(imported.out.find("dataset 'ear_lab': on the server already; its files placed on this machine into " +
+                            (folderB / "datasets" / "ear_lab").string()) != std::string::npos);
+    CHECK(filesUnder(folderB) == filesUnder(folderA));
+    CHECK(test::readFile(folderB / "datasets/ear_lab/volume.nrrd") == test::readFile(folderA / "datasets/ear_lab/volume.nrrd"));
+    auto played = test::runApp(playWithViews);
+    REQUIRE_MESSAGE(played.exitCode == 0, played.err);
+    CHECK(played.out.find(finished) != std::string::npos);
+    CHECK(played.out.find("no pictures") == std::string::npos);
+    CHECK(filesUnder(labB / "views").size() == 32);  // every step's picture, drawn from this machine's copy of the scan
+    if (const char* keep = std::getenv("AT_KEEP_SCREENSHOTS"))
+      for (const auto& f : filesUnder(labB / "views"))
+        fs::copy_file(labB / "views" / f, fs::path(keep) / ("server_course_" + fs::path(f).filename().string()),
+                      fs::copy_options::overwrite_existing);
+    auto again = test::runApp("course import " + quoted(package) + server);
+    REQUIRE_MESSAGE(again.exitCode == 0, again.err);
+    CHECK(again.out.find("version 2: unchanged") != std::string::npos);
+    CHECK(again.out.find("dataset 'ear_lab': already present") != std::string::npos);
+  }
+  // The server holds the course and its dataset once, whatever the number of machines.
+  CHECK(test::postgresValue(*url, "SELECT COUNT(*) FROM courses WHERE id = 'ear_tour'") == "1");
+  CHECK(test::postgresValue(*url, "SELECT COUNT(*) FROM datasets WHERE name = 'ear_lab'") == "1");
+  CHECK(test::postgresValue(*url, "SELECT volume_path FROM datasets WHERE name = 'ear_lab'") == "datasets/ear_lab/volume.nrrd");
+  CHECK(test::postgresValue(*url, "SELECT title FROM courses WHERE id = 'ear_tour'") == "Ear tour");
 }
 
 TEST_CASE("CourseCli_Validate_NamesTheFieldOfAStructureTheDatasetLacks") {

@@ -394,3 +394,79 @@ TEST_CASE("StudyCli_MergeLabMachinesFiles_OneStudyReportsBalanceRefusesConflicts
   auto status = test::runApp("study status " + study + into);
   CHECK(status.out.find("3 participant(s)") != std::string::npos);
 }
+
+TEST_CASE("StudyCli_MergeExportFolders_SameSummaryAsMergedDatabasesBadBundleRefusedWithRowAndColumn") {
+  test::TempDir dir;
+  const std::string study = "wdt_vs_bare_phantom";
+  writeAnswers(dir / "answers.jsonl", 13, [](int s) { return 1 + s % 5; });
+  writeAnswers(dir / "other.jsonl", 13, [](int s) { return 5 - s % 3; });
+  const auto runOn = [&](const std::string& file, const std::string& who, const std::string& answers) {
+    auto r = test::runApp("study run " + study + " --participant " + who + " --group medical --answers '" +
+                          (dir / answers).string() + "' --db '" + (dir / file).string() + "'");
+    CAPTURE(r.err);
+    REQUIRE(r.exitCode == 0);
+  };
+  runOn("lab1.db", "a1", "answers.jsonl");
+  runOn("lab1.db", "a2", "other.jsonl");
+  runOn("lab2.db", "b1", "other.jsonl");
+  runOn("lab3.db", "c1", "answers.jsonl");
+  for (const char* lab : {"lab1", "lab2", "lab3"}) {
+    auto exported = test::runApp("study export " + study + " --out '" + (dir / lab).string() + "' --db '" +
+                                 (dir / (std::string(lab) + ".db")).string() + "'");
+    REQUIRE(exported.exitCode == 0);
+  }
+  const auto quotedPath = [&](const std::string& name) { return " '" + (dir / name).string() + "'"; };
+  // The databases merged, for comparison.
+  auto viaDatabases = test::runApp("study merge " + study + quotedPath("lab1.db") + quotedPath("lab2.db") +
+                                   quotedPath("lab3.db") + " --db" + quotedPath("class.db"));
+  REQUIRE(viaDatabases.exitCode == 0);
+  REQUIRE(test::runApp("study export " + study + " --out" + quotedPath("from_databases") + " --db" +
+                       quotedPath("class.db")).exitCode == 0);
+
+  const std::string folders = quotedPath("lab1") + quotedPath("lab2") + quotedPath("lab3");
+  auto merged = test::runApp("study merge " + study + folders + " --db" + quotedPath("bundles.db"));
+  CAPTURE(merged.err);
+  REQUIRE(merged.exitCode == 0);
+  CHECK(merged.out.find("lab1: 2 participant(s) added, 0 already there") != std::string::npos);
+  CHECK(merged.out.find("4 participant(s)") != std::string::npos);
+  REQUIRE(test::runApp("study export " + study + " --out" + quotedPath("from_bundles") + " --db" +
+                       quotedPath("bundles.db")).exitCode == 0);
+  for (const char* file : {"summary.csv", "summary.md", "responses_long.csv", "responses_wide.csv", "redcap_records.csv"})
+    CHECK_MESSAGE(test::readFile(dir / "from_bundles" / file) == test::readFile(dir / "from_databases" / file), file);
+  auto again = test::runApp("study merge " + study + folders + quotedPath("lab2.db") + " --db" + quotedPath("bundles.db"));
+  REQUIRE(again.exitCode == 0);
+  CHECK(again.out.find("lab1: 0 participant(s) added, 2 already there") != std::string::npos);
+  CHECK(again.out.find("lab2.db: 0 participant(s) added, 1 already there") != std::string::npos);
+
+  // A bundle edited by hand: one bad cell names the file, the row and the column; nothing merged.
+  fs::create_directories(dir / "edited");
+  for (const char* file : {"responses_long.csv", "responses_long.json"})
+    fs::copy_file(dir / "lab3" / file, dir / "edited" / file);
+  std::string table = test::readFile(dir / "edited" / "responses_long.csv");
+  const std::size_t third = table.find("\r\n", table.find("\r\n", table.find("\r\n") + 2) + 2) + 2;  // row 4
+  const std::size_t ratingAt = [&] {
+    std::size_t at = third;
+    for (int comma = 0; comma < 5; ++comma) at = table.find(',', at) + 1;
+    return at;
+  }();
+  table[ratingAt] = '9';
+  { std::ofstream(dir / "edited" / "responses_long.csv", std::ios::binary) << table; }
+  auto bad = test::runApp("study merge " + study + quotedPath("lab1") + quotedPath("edited") + " --db" +
+                          quotedPath("fresh.db"));
+  CHECK(bad.exitCode == 1);
+  CHECK(bad.err.find("edited/responses_long.csv: row 4, column 'rating_ab': 9 is outside 1–5") != std::string::npos);
+  CHECK(std::count(bad.err.begin(), bad.err.end(), '\n') == 1);
+  auto none = test::runApp("study status " + study + " --db" + quotedPath("fresh.db"));
+  CHECK(none.out.find("0 participant(s)") != std::string::npos);
+  // A folder that is no export, and a bundle of another study.
+  fs::create_directories(dir / "empty");
+  auto notBundle = test::runApp("study merge " + study + quotedPath("empty") + " --db" + quotedPath("fresh.db"));
+  CHECK(notBundle.exitCode == 1);
+  CHECK(notBundle.err.find("empty/responses_long.json") != std::string::npos);
+  std::string sidecar = test::readFile(dir / "edited" / "responses_long.json");
+  sidecar.replace(sidecar.find(study), study.size(), "another_study");
+  { std::ofstream(dir / "edited" / "responses_long.json", std::ios::binary) << sidecar; }
+  auto otherStudy = test::runApp("study merge " + study + quotedPath("edited") + " --db" + quotedPath("fresh.db"));
+  CHECK(otherStudy.exitCode == 1);
+  CHECK(otherStudy.err.find("is of study 'another_study'") != std::string::npos);
+}

@@ -14,12 +14,15 @@
 
 #include <nlohmann/json.hpp>
 
+#include "course_wording.h"
 #include "dataset_resolver.h"
+#include "lessons/course_json.h"
 #include "render/scene.h"
 #include "scan_catalogue.h"
 #include "skull_scan.h"
 #include "test_support.h"
 #include "volume/png_image.h"
+#include "wdt/answer_keys.h"
 
 using namespace at;
 namespace fs = std::filesystem;
@@ -215,4 +218,47 @@ TEST_CASE("anatomy-tutor --course skull with no display writes the skull course'
   const auto unknown = test::runApp("--course no_such_course");
   CHECK(unknown.exitCode != 0);
   CHECK(unknown.err.find("no course 'no_such_course'") != std::string::npos);
+}
+
+TEST_CASE("The skull course's texts pass the phantom course's wording checks: names mid-sentence, no program jargon") {
+  const auto& cache = test::grownSkullCache();
+  if (!cache) return;
+  test::SkullCacheScope scope(*cache);
+  const Dataset skull = openSkull();
+  auto course = lessons::loadCourseJson(test::sourceDir() / "data" / "courses" / "skull.json");
+  REQUIRE_MESSAGE(course, (course ? "" : course.error().message));
+  quiz::DatasetKeyComputer keys(skull, [&skull](const Mask& seeds) {
+    return wdt::answerKeyDistances(skull.volume, skull.labels.geometry, seeds);
+  });
+  const int texts = test::checkCourseWording(*course, skull.structures, keys);
+  CHECK(texts > 60);
+  MESSAGE(texts << " texts of the skull course read");
+}
+
+TEST_CASE("Every skull label's review is recorded: completed, or flagged with what is off") {
+  auto catalogue = app::loadStructureCatalogue(test::sourceDir() / "data" / "segmentations" / "skull" / "structures.json");
+  REQUIRE_MESSAGE(catalogue, test::errorText(catalogue));
+  int completed = 0, flagged = 0;
+  for (const app::CatalogueEntry& e : catalogue->structures) {
+    CAPTURE(e.id);
+    // What was looked at: slices and the 3-D render (docs/skull_labels_review.png).
+    CHECK(e.review.find("slices") != std::string::npos);
+    CHECK(e.review.find("3-D") != std::string::npos);
+    if (e.reviewState == "completed") ++completed;
+    if (e.reviewState == "flagged") ++flagged;
+  }
+  CHECK(completed + flagged == int(catalogue->structures.size()));
+  // A catalogue with another state is refused, naming the file and the field.
+  test::TempDir dir("skull-catalogue");
+  auto text = test::readFile(test::sourceDir() / "data" / "segmentations" / "skull" / "structures.json");
+  const std::string state = "\"review_state\": \"completed\"";
+  const auto at = text.find(state);
+  REQUIRE(at != std::string::npos);
+  text.replace(at, state.size(), "\"review_state\": \"looks fine\"");
+  const fs::path bad = dir / "structures.json";
+  std::ofstream(bad) << text;
+  auto refused = app::loadStructureCatalogue(bad);
+  REQUIRE_FALSE(refused);
+  CHECK(refused.error().message.find(bad.string()) != std::string::npos);
+  CHECK(refused.error().message.find("review_state: must be completed or flagged, not 'looks fine'") != std::string::npos);
 }

@@ -12,6 +12,7 @@
 #include "db/study_store.h"
 #include "quiz/study_design.h"
 #include "quiz/study_protocol.h"
+#include "quiz/responses_long_reader.h"
 #include "quiz/study_report.h"
 #include "test_databases.h"
 #include "test_support.h"
@@ -403,14 +404,14 @@ std::vector<std::string> sortedRecords(const std::vector<quiz::StudyResponseRow>
   return lines;
 }
 
-}  // namespace
-
-TEST_CASE("StudyStore_MergeThreeMachinesWithoutServer_EveryRecordOnceSummaryAsOnOneMachineMergingAgainChangesNothing") {
-  test::TempDir dir;
-  const auto p = protocol(11);
-  const int participants = 19, machines = 3;
+// `machines` lab databases, participant k on machine k mod machines (each machine enrolling from
+// design row 0), and every lab's rows as exported.
+struct LabMachines {
   std::vector<db::Database> labs;
   std::vector<quiz::StudyResponseRow> everyLabsRows;
+};
+LabMachines runOnLabs(const test::TempDir& dir, const quiz::StudyProtocol& p, int participants, int machines) {
+  LabMachines out;
   for (int m = 0; m < machines; ++m) {
     auto lab = db::Database::open(test::freshDatabase(dir, "lab" + std::to_string(m) + ".db"));
     REQUIRE(lab.has_value());
@@ -418,9 +419,19 @@ TEST_CASE("StudyStore_MergeThreeMachinesWithoutServer_EveryRecordOnceSummaryAsOn
     for (int who = m; who < participants; who += machines) REQUIRE(runParticipant(*lab, p, who).empty());
     auto rows = db::studyResponseRows(*lab, p);
     REQUIRE(rows.has_value());
-    everyLabsRows.insert(everyLabsRows.end(), rows->begin(), rows->end());
-    labs.push_back(std::move(*lab));
+    out.everyLabsRows.insert(out.everyLabsRows.end(), rows->begin(), rows->end());
+    out.labs.push_back(std::move(*lab));
   }
+  return out;
+}
+
+}  // namespace
+
+TEST_CASE("StudyStore_MergeThreeMachinesWithoutServer_EveryRecordOnceSummaryAsOnOneMachineMergingAgainChangesNothing") {
+  test::TempDir dir;
+  const auto p = protocol(11);
+  const int participants = 19, machines = 3;
+  auto [labs, everyLabsRows] = runOnLabs(dir, p, participants, machines);
   std::vector<db::StudyMergeSource> sources;
   for (int m = 0; m < machines; ++m) sources.push_back({"lab" + std::to_string(m), &labs[std::size_t(m)]});
   auto merged = db::Database::open(test::freshDatabase(dir, "merged.db"));
@@ -468,6 +479,118 @@ TEST_CASE("StudyStore_MergeThreeMachinesWithoutServer_EveryRecordOnceSummaryAsOn
   auto rowsAgain = db::studyResponseRows(*merged, p);
   REQUIRE(rowsAgain.has_value());
   CHECK(rowsAgain->size() == mergedRows->size());
+}
+
+namespace {
+
+// A lab machine's export bundle as `study merge` reads it: the long table written and read back.
+std::vector<quiz::StudyResponseRow> exportedRows(db::Database& lab, const quiz::StudyProtocol& p) {
+  auto rows = db::studyResponseRows(lab, p);
+  REQUIRE(rows.has_value());
+  auto read = quiz::readResponsesLongCsv(quiz::responsesLongCsv(*rows), "responses_long.csv", p);
+  REQUIRE_MESSAGE(read.has_value(), read.error().message);
+  return std::move(*read);
+}
+
+}  // namespace
+
+TEST_CASE("StudyStore_MergeThreeMachinesExportBundles_SummaryAsOnOneMachineAgainNothingConflictsWriteNothing") {
+  test::TempDir dir;
+  const auto p = protocol(11);
+  REQUIRE(p.structures.size() == 13);
+  const int participants = 19, machines = 3;
+  auto [labs, everyLabsRows] = runOnLabs(dir, p, participants, machines);
+  std::vector<std::vector<quiz::StudyResponseRow>> bundles;
+  for (auto& lab : labs) bundles.push_back(exportedRows(lab, p));
+  std::vector<db::StudyMergeSource> sources;
+  for (int m = 0; m < machines; ++m)
+    sources.push_back({"lab" + std::to_string(m) + "/", nullptr, &bundles[std::size_t(m)]});
+  auto merged = db::Database::open(test::freshDatabase(dir, "merged.db"));
+  REQUIRE(merged.has_value());
+
+  auto withoutDesign = db::mergeStudy(*merged, sources, p.id);
+  REQUIRE_FALSE(withoutDesign.has_value());  // a bundle is read against the study's design
+  auto report = db::mergeStudy(*merged, sources, p.id, &p);
+  REQUIRE_MESSAGE(report.has_value(), report.error().message);
+  CHECK(report->sources[0].added == 7);
+  CHECK(report->sources[1].added == 6);
+  CHECK(report->sources[2].added == 6);
+  CHECK(report->participants == participants);
+  CHECK(report->offDesign.empty());
+  CHECK(report->designRows == std::map<std::size_t, int>{{0, 3}, {1, 3}, {2, 3}, {3, 3}, {4, 3}, {5, 3}, {6, 1}});
+  auto mergedRows = db::studyResponseRows(*merged, p);
+  REQUIRE(mergedRows.has_value());
+  CHECK(mergedRows->size() == std::size_t(participants) * 13 * p.items.size());
+  CHECK(sortedRecords(*mergedRows) == sortedRecords(everyLabsRows));  // the export of the merge: every record once
+  test::TempDir alone;
+  auto single = oneMachine(alone, p, participants);
+  auto singleRows = db::studyResponseRows(single, p);
+  REQUIRE(singleRows.has_value());
+  CHECK(quiz::summaryCsv(quiz::summariseStudy(p, *mergedRows)) == quiz::summaryCsv(quiz::summariseStudy(p, *singleRows)));
+  const auto completion = db::studyCompletion(*merged, p.id);
+  REQUIRE(completion.has_value());
+  for (const auto& c : *completion) CHECK(c.complete);
+
+  // Again, and the lab databases the bundles came from: nothing changes.
+  auto again = db::mergeStudy(*merged, sources, p.id, &p);
+  REQUIRE_MESSAGE(again.has_value(), again.error().message);
+  CHECK(again->sources[0].added + again->sources[1].added + again->sources[2].added == 0);
+  CHECK(again->sources[0].alreadyThere + again->sources[1].alreadyThere + again->sources[2].alreadyThere == participants);
+  std::vector<db::StudyMergeSource> databases;
+  for (int m = 0; m < machines; ++m) databases.push_back({"lab" + std::to_string(m) + ".db", &labs[std::size_t(m)]});
+  auto fromDatabases = db::mergeStudy(*merged, databases, p.id);
+  REQUIRE_MESSAGE(fromDatabases.has_value(), fromDatabases.error().message);
+  CHECK(fromDatabases->sources[0].added + fromDatabases->sources[1].added + fromDatabases->sources[2].added == 0);
+  auto rowsAgain = db::studyResponseRows(*merged, p);
+  REQUIRE(rowsAgain.has_value());
+  CHECK(quiz::responsesLongCsv(*rowsAgain) == quiz::responsesLongCsv(*mergedRows));
+
+  // A bundle whose P4 rated otherwise (another person under that id): refused, nothing written,
+  // although two good bundles come first.
+  auto clashing = bundles[1];
+  auto changed = std::find_if(clashing.begin(), clashing.end(), [](const auto& r) { return r.participantId == "P4"; });
+  REQUIRE(changed != clashing.end());
+  changed->ratingAb = changed->ratingAb == 1 ? 2 : 1;
+  changed->rating = quiz::unblindRating(changed->ratingAb, changed->aCondition == p.conditions[0].id, p.scale);
+  auto fresh = db::Database::open(test::freshDatabase(dir, "fresh.db"));
+  REQUIRE(fresh.has_value());
+  auto clash = db::mergeStudy(*fresh, {sources[0], sources[1], {"other/", nullptr, &clashing}}, p.id, &p);
+  REQUIRE_FALSE(clash.has_value());
+  CHECK((clash.error().kind == ErrorKind::Conflict));
+  CHECK(clash.error().message.find("'P4' of other/ is also in lab1/") != std::string::npos);
+  auto nothing = db::studyParticipantRows(*fresh, p.id);
+  REQUIRE(nothing.has_value());
+  CHECK(nothing->empty());
+  auto clashMerged = db::mergeStudy(*merged, {{"other/", nullptr, &clashing}}, p.id, &p);
+  REQUIRE_FALSE(clashMerged.has_value());
+  auto unchanged = db::studyResponseRows(*merged, p);
+  REQUIRE(unchanged.has_value());
+  CHECK(quiz::responsesLongCsv(*unchanged) == quiz::responsesLongCsv(*mergedRows));
+
+  // A partial participant's bundle (some trials rated) merges and counts for their design row.
+  auto partial = db::Database::open(test::freshDatabase(dir, "partial.db"));
+  REQUIRE(partial.has_value());
+  REQUIRE(db::saveStudy(*partial, p).has_value());
+  auto q = db::enrolOrResume(*partial, p, "Q1", p.groups[0]);
+  REQUIRE(q.has_value());
+  for (int position : {0, 1})
+    for (const auto& item : p.items) {
+      db::RatingRecord r;
+      r.position = position;
+      r.item = item.id;
+      r.ratingAsShown = 4;
+      REQUIRE(db::recordRating(*partial, *q, r).has_value());
+    }
+  auto partialRows = exportedRows(*partial, p);
+  auto withPartial = db::mergeStudy(*merged, {{"partial/", nullptr, &partialRows}}, p.id, &p);
+  REQUIRE_MESSAGE(withPartial.has_value(), withPartial.error().message);
+  CHECK(withPartial->sources[0].added == 1);
+  CHECK(withPartial->offDesign.empty());
+  CHECK(withPartial->designRows.at(0) == 4);
+  auto status = db::studyCompletion(*merged, p.id);
+  REQUIRE(status.has_value());
+  CHECK_FALSE(status->back().complete);
+  CHECK(status->back().ratingsGiven == 2 * int(p.items.size()));
 }
 
 TEST_CASE("StudyStore_MergeConflicts_SameIdOtherRecordsOrOtherDesign_WriteNothing") {

@@ -51,6 +51,8 @@
 #include "lessons/course_json.h"
 #include "package/course_package.h"
 #include "quiz/answer_json.h"
+#include "quiz/study_report.h"
+#include "study_long_csv_study.h"
 #include "render/preset.h"
 #include "segment/seeds.h"
 #include "volume/dataset_source.h"
@@ -622,6 +624,59 @@ void inv3Seeds() {
 // ---------------------------------------------------------------------------------------------
 // [json]
 
+// Long tables of fuzz::kLongCsvStudy as `study export` writes them: two participants, one with
+// unmeasured viewing, a comment with quotes, a comma, a line break and a formula character, and
+// render quality on some rows; the same without the quality columns (older exports).
+void studyLongCsvSeeds() {
+  std::vector<quiz::StudyResponseRow> rows;
+  const char* structures[] = {"incus", "cochlea", "stapes"};
+  for (int p = 0; p < 2; ++p)
+    for (int s = 0; s < 3; ++s)
+      for (const char* item : {"shape", "context"}) {
+        quiz::StudyResponseRow r;
+        r.participantId = p == 0 ? "P1" : "lab2-p_7";
+        r.group = p == 0 ? "medical" : "non-medical";
+        r.session = p + 1;
+        r.structure = structures[(s + p) % 3];
+        r.item = item;
+        r.aCondition = (s + p) % 2 == 0 ? "wdt" : "bare";
+        r.ratingAb = 1 + (s * 2 + p) % 5;
+        r.rating = r.aCondition == "wdt" ? r.ratingAb : 6 - r.ratingAb;
+        r.presentationOrder = s + 1;
+        r.presetA = r.structure + (r.aCondition == "wdt" ? "_wdt" : "_bare");
+        r.presetB = r.structure + (r.aCondition == "wdt" ? "_bare" : "_wdt");
+        r.t = 0.5;
+        r.alpha = 1.25;
+        r.beta = -0.5;
+        r.viewingMeasured = p == 0;
+        r.viewMsA = p == 0 ? 3120 : 0;
+        r.viewMsB = p == 0 ? 2875 : 0;
+        r.toggles = p == 0 ? 4 : 0;
+        r.responseMs = 850 + s;
+        r.timestampUtc = "2026-11-22T05:0" + std::to_string(s) + ":1" + std::to_string(p) + "Z";
+        r.appVersion = "0.9.0";
+        r.comment = s == 1 ? "=clearer, \"sharper\"\nthan B" : "";
+        r.participantComplete = p == 0;
+        if (p == 0) {
+          r.qualityLevel = 2;
+          r.qualityFullLevel = 2;
+          r.qualityScale = 0.5;
+          r.settleMs = 1690;
+        }
+        rows.push_back(r);
+      }
+  const std::string table = quiz::responsesLongCsv(rows);
+  seed("study_long_csv", "two_participants.csv", table);
+  std::string older;
+  for (auto record : quiz::parseCsv(table)) {
+    record.resize(22);
+    std::vector<std::string> cells;
+    for (const auto& cell : record) cells.push_back(quiz::csvQuoted(cell));
+    older += quiz::csvRecord(cells);
+  }
+  seed("study_long_csv", "without_quality.csv", older);
+}
+
 void jsonSeeds() {
   const fs::path data = fs::path(AT_SOURCE_DIR) / "data";
   for (const auto& entry : fs::directory_iterator(data / "presets"))
@@ -632,6 +687,7 @@ void jsonSeeds() {
        R"({"schema": 1, "id": "c", "title": "C", "dataset": "phantom", "lessons": [{"id": "l", "title": "L",)"
        R"( "steps": [{"kind": "show", "structure": "cochlea"}]}]})");
   seed("study_protocol", "paper_survey.json", readAll(data / "studies" / "paper_survey.json"));
+  studyLongCsvSeeds();
 
   // Every question of the default course, as questionToJson stores it.
   if (auto parsed = lessons::parseCourseJson(course, "temporal_bone.json")) {

@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <memory>
 
+#include "course_wording.h"
 #include "in_memory_repositories.h"
 #include "lessons/course_json.h"
 #include "lessons/exam.h"
@@ -63,61 +64,15 @@ std::ptrdiff_t position(const std::vector<std::string>& v, const std::string& x)
   return it == v.end() ? -1 : it - v.begin();
 }
 
-// The right answer to a resolved question, as a student would give it.
-quiz::Answer rightAnswer(const quiz::ResolvedQuestion& q, const Dataset& d) {
-  quiz::Answer a;
-  switch (q.question.kind) {
-    case quiz::QuestionKind::Locate: a.pick = quiz::Pick{q.question.target, 0}; break;
-    case quiz::QuestionKind::Identify:
-    case quiz::QuestionKind::Relation: a.choice = q.keyChoice; break;
-    case quiz::QuestionKind::Name: a.text = d.findStructure(q.question.target)->displayName; break;
-    case quiz::QuestionKind::Order: a.order = q.keyOrder; break;
-  }
-  return a;
-}
-
-// Where `text` writes a structure's display name capitalised in the middle of a sentence (the
-// name as written where nameInSentence would lower-case it, not at the start of the text or after
-// '.', '!', '?' or ':'): "Locate the Cochlea in the view." → "Cochlea".
-std::vector<std::string> capitalisedMidSentence(const std::string& text, const std::vector<Structure>& structures) {
-  std::vector<std::string> found;
-  for (const Structure& s : structures) {
-    const std::string& name = s.displayName;
-    if (name.empty() || quiz::nameInSentence(name) == name) continue;
-    for (std::size_t at = text.find(name); at != std::string::npos; at = text.find(name, at + 1)) {
-      const std::size_t after = at + name.size();
-      if (after < text.size() && std::isalpha(static_cast<unsigned char>(text[after]))) continue;  // a longer word
-      std::size_t before = at;
-      while (before > 0 && (text[before - 1] == ' ' || text[before - 1] == '"' || text[before - 1] == '(')) --before;
-      if (before > 0 && std::isalpha(static_cast<unsigned char>(text[at - 1]))) continue;  // inside a word
-      if (before == 0 || std::string(".!?:").find(text[before - 1]) != std::string::npos) continue;
-      found.push_back(name);
-    }
-  }
-  return found;
-}
-
-// A wrong answer to a resolved question: another structure, another choice, an unknown name.
-quiz::Answer wrongAnswer(const quiz::ResolvedQuestion& q, const std::vector<Structure>& structures) {
-  quiz::Answer a;
-  switch (q.question.kind) {
-    case quiz::QuestionKind::Locate:
-      a.pick = quiz::Pick{q.question.target == structures.front().id ? structures.back().id : structures.front().id, 7.5};
-      break;
-    case quiz::QuestionKind::Identify:
-    case quiz::QuestionKind::Relation: a.choice = (q.keyChoice + 1) % int(q.choices.size()); break;
-    case quiz::QuestionKind::Name: a.text = "no such structure"; break;
-    case quiz::QuestionKind::Order: a.order = {q.keyOrder.rbegin(), q.keyOrder.rend()}; break;
-  }
-  return a;
-}
-
 }  // namespace
 
-TEST_CASE("ShippedCourses_StructureNamesInsideSentencesAreLowerCase_PromptsExamsAndFeedback") {
+TEST_CASE("ShippedCourses_StructureNamesInsideSentencesAreLowerCaseAndNoProgramJargon_PromptsExamsAndFeedback") {
   PhantomKeys& p = phantomKeys();
-  CHECK(capitalisedMidSentence("Locate the Cochlea in the view.", p.dataset.structures) == std::vector<std::string>{"Cochlea"});
-  CHECK(capitalisedMidSentence("Cochlea. The Vestibule: Incus", p.dataset.structures) == std::vector<std::string>{"Vestibule"});
+  CHECK(test::capitalisedMidSentence("Locate the Cochlea in the view.", p.dataset.structures) == std::vector<std::string>{"Cochlea"});
+  CHECK(test::capitalisedMidSentence("Cochlea. The Vestibule: Incus", p.dataset.structures) == std::vector<std::string>{"Vestibule"});
+  CHECK(test::jargonIn("The WDT from the seeds, on a preset.") == std::vector<std::string>{"wdt", "preset", "seeds"});
+  CHECK(test::jargonIn("Enamel is above 1800 HU.") == std::vector<std::string>{"hu"});
+  CHECK(test::jargonIn("Enamel is above 1800 Hounsfield units (HU); the hub of a shuttle.").empty());
   int courses = 0, texts = 0;
   for (const auto& entry : std::filesystem::directory_iterator(test::sourceDir() / "data/courses")) {
     if (entry.path().extension() != ".json") continue;
@@ -126,40 +81,12 @@ TEST_CASE("ShippedCourses_StructureNamesInsideSentencesAreLowerCase_PromptsExams
     CAPTURE(course->id);
     ++courses;
     // Courses on a scan (the skull CT) need the scan for their keys and names: tests/app's
-    // test_skull_course reads them where the scan could be fetched. Here: the phantom's courses.
+    // test_skull_course checks them where the scan could be fetched. Here: the phantom's courses.
     if (course->datasetId != "phantom") {
       MESSAGE(entry.path().filename().string() << " is on dataset " << course->datasetId << ": not read here");
       continue;
     }
-    const quiz::GradingContext context = gradingContext(p.dataset.structures, *course);
-    const auto check = [&](const std::string& where, const std::string& text) {
-      ++texts;
-      CHECK_MESSAGE(capitalisedMidSentence(text, p.dataset.structures).empty(), where << ": " << text);
-    };
-    for (const Lesson& lesson : course->lessons)
-      for (const Step& step : lesson.steps) {
-        if (step.kind == StepKind::Show) {
-          check(lesson.id + " show", step.show.text);
-          continue;
-        }
-        if (step.kind != StepKind::Question) continue;
-        check(step.question.id, step.question.prompt);
-        auto resolved = quiz::resolveQuestion(step.question, *p.keys);
-        REQUIRE_MESSAGE(resolved, (resolved ? "" : resolved.error().message));
-        for (const quiz::Answer& answer : {rightAnswer(*resolved, p.dataset), wrongAnswer(*resolved, p.dataset.structures)}) {
-          auto graded = quiz::grade(*resolved, answer, context);
-          REQUIRE_MESSAGE(graded, (graded ? "" : graded.error().message));
-          check(step.question.id + " feedback", graded->feedback);
-        }
-      }
-    for (ExamSpec exam : course->exams) {
-      exam.count = int(exam.structures.size() * exam.kinds.size());  // every structure × kind
-      for (const char* seed : {"wording-a", "wording-b"}) {
-        auto items = drawExamItems(exam, p.dataset.structures, *p.keys, seed);
-        REQUIRE_MESSAGE(items, (items ? "" : items.error().message));
-        for (const ExamItem& item : *items) check(item.question.question.id, item.question.question.prompt);
-      }
-    }
+    texts += test::checkCourseWording(*course, p.dataset.structures, *p.keys);
   }
   CHECK(courses >= 1);
   MESSAGE(courses << " course(s), " << texts << " texts read");
@@ -275,7 +202,7 @@ TEST_CASE("ShippedCourse_NameQuestionsAcceptSynonymsButNotTheNeighbouringCanal")
   while (engine.current()->questionId != "inner_ear.name_lateral_canal") {
     auto q = engine.currentQuestion();
     REQUIRE(q);
-    REQUIRE(engine.answer(rightAnswer(*q, p.dataset), {}, 1));
+    REQUIRE(engine.answer(test::rightAnswerTo(*q, p.dataset.structures), {}, 1));
     REQUIRE(engine.next());
   }
   quiz::Answer a;
@@ -325,7 +252,7 @@ TEST_CASE("ShippedCourse_EveryLessonPlaysThroughInOrderWithPrerequisites") {
       if (step->kind == StepKind::Question) {
         auto q = engine.currentQuestion();
         REQUIRE(q);
-        auto g = engine.answer(rightAnswer(*q, p.dataset), {}, 100);
+        auto g = engine.answer(test::rightAnswerTo(*q, p.dataset.structures), {}, 100);
         REQUIRE(g);
         CHECK_MESSAGE(g->correct, q->question.id);
         ++answered;

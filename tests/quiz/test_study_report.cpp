@@ -8,24 +8,14 @@
 #include "quiz/study_design.h"
 #include "quiz/study_protocol.h"
 #include "quiz/study_report.h"
+#include "small_study.h"
 #include "test_support.h"
 
 using namespace at::quiz;
 
 namespace {
 
-StudyProtocol smallProtocol() {
-  auto p = parseStudyProtocol(R"({
-    "id": "s1", "title": "Small study", "dataset": "phantom",
-    "structures": ["cochlea", "stapes"],
-    "conditions": [{"id": "wdt", "label": "WDT", "preset_suffix": "_wdt"},
-                   {"id": "bare", "label": "Bare", "preset_suffix": "_bare"}],
-    "items": [{"id": "shape", "wording": "Shape?"}, {"id": "context", "wording": "Context?"}],
-    "scale": {"min": 1, "max": 5, "anchors": {"1": "A much better", "5": "B much better"}},
-    "groups": ["non-medical", "medical"], "seed": 9 })", "small.json");
-  REQUIRE(p.has_value());
-  return *p;
-}
+StudyProtocol smallProtocol() { return at::test::smallStudyProtocol(); }
 
 StudyResponseRow row(const std::string& participant, const std::string& group, const std::string& structure,
                      const std::string& item, int rating) {

@@ -3,6 +3,8 @@
 // skipping with it must keep the image of marching every sample.
 #include <doctest/doctest.h>
 
+#include <algorithm>
+#include <cstdlib>
 #include <random>
 
 #include "occupancy.h"
@@ -46,6 +48,36 @@ TEST_CASE("Adding a structure to the structure-free occupancy grid equals comput
       CHECK(gl::withStructure(blocks, free, label) == reference);
     }
   }
+}
+
+TEST_CASE("Leap distances are the capped Chebyshev distances to the nearest occupied block") {
+  // Brute force over every block of random grids: sparse, clustered and empty ones, cubes and
+  // odd shapes (the leap code pads and scans in raster order; the reference knows none of that).
+  std::mt19937_64 rng(test::freshSeed("leap distances"));
+  const Dims shapes[] = {{1, 1, 1}, {7, 5, 3}, {16, 16, 16}, {33, 9, 20}, {40, 1, 40}};
+  for (const Dims& nb : shapes)
+    for (double density : {0.0, 0.002, 0.02, 0.3}) {
+      CAPTURE(nb.toString());
+      CAPTURE(density);
+      std::bernoulli_distribution occupied(density);
+      std::vector<std::uint8_t> occ(nb.count(), 0);
+      for (auto& v : occ) v = occupied(rng) ? (occupied(rng) ? gl::kOccupiedContext : gl::kOccupiedStructure) : 0;
+      std::vector<std::uint8_t> expected = occ;
+      for (int k = 0; k < nb.z; ++k)
+        for (int j = 0; j < nb.y; ++j)
+          for (int i = 0; i < nb.x; ++i) {
+            std::uint8_t& e = expected[nb.index(i, j, k)];
+            if (e & 3) continue;
+            int best = gl::kMaxLeapBlocks;
+            for (int c = 0; c < nb.z; ++c)
+              for (int b = 0; b < nb.y; ++b)
+                for (int a = 0; a < nb.x; ++a)
+                  if (occ[nb.index(a, b, c)] & 3) best = std::min(best, std::max({std::abs(a - i), std::abs(b - j), std::abs(c - k)}));
+            e = std::uint8_t(std::max(best, 1) << 2);
+          }
+      gl::addLeapDistances(nb, occ);
+      CHECK(occ == expected);
+    }
 }
 
 TEST_CASE("Skipping keeps the image when the selection moves from structure to structure") {

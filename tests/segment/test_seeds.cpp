@@ -97,6 +97,17 @@ TEST_CASE("Bad seeds files and seeds are one-line errors naming the field, the l
   CHECK(raster.error().message.find("strokes[0].points[1] (0.0, 0.0, 400.0) mm of label 'a' lies outside the volume") !=
         std::string::npos);
 
+  // A point whose voxel index no int holds (the fuzz campaign's finding: the cast was undefined
+  // and could wrap onto the grid) is refused like any other point outside.
+  auto far = parseSeeds(R"({"labels": [{"value": 0, "name": "background"}, {"value": 1, "name": "a"}],
+                            "strokes": [{"label": "a", "points": [[0, 0, 0], [0, -4.4e63, 0]]}]})",
+                        "far.json");
+  REQUIRE(far);
+  auto farRaster = rasteriseSeeds(*far, grid());
+  REQUIRE(!farRaster);
+  CHECK(farRaster.error().message.find("strokes[0].points[1]") != std::string::npos);
+  CHECK(farRaster.error().message.find("lies outside the volume") != std::string::npos);
+
   auto single = parseSeeds(R"({"labels": [{"value": 0, "name": "background"}, {"value": 1, "name": "a"}],
                                "strokes": [{"label": "a", "points": [[0, 0, 0]]}]})",
                            "one.json");

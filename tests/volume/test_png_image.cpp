@@ -2,6 +2,10 @@
 #include <doctest/doctest.h>
 
 #include <fstream>
+
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
 #include <random>
 
 #include "test_support.h"
@@ -94,4 +98,29 @@ TEST_CASE("a PNG header claiming a huge image is refused before the image is all
   CHECK(r.error().message.find(path) != std::string::npos);
   CHECK(r.error().message.find("16384x16384") != std::string::npos);
   CHECK(r.error().message.find("pixels an image may have") != std::string::npos);
+}
+
+TEST_CASE("text chunks are skipped unread: 300 compressed comments do not inflate into memory") {
+  // tests/fuzz/regressions/png/many-inflating-text-chunks.png: a 4x3 RGB image with 300 zTXt chunks
+  // of 7.7 KB, each inflating to 7.9 MB (under libpng's 8 MB default per chunk). libpng kept every
+  // inflated text until the read ended: a 2.3 GB peak from a 2.3 MB file (the fuzz campaign's
+  // out-of-memory). Read in a child process, so its peak resident size is its own.
+  const std::string path = std::string(AT_SOURCE_DIR) + "/tests/fuzz/regressions/png/many-inflating-text-chunks.png";
+  const pid_t child = fork();
+  REQUIRE(child >= 0);
+  if (child == 0) {
+    rusage before{}, after{};
+    getrusage(RUSAGE_SELF, &before);
+    auto image = readPng(path);
+    getrusage(RUSAGE_SELF, &after);
+    const long grownMb = (after.ru_maxrss - before.ru_maxrss) / 1024;
+    const bool pixelsRight = image && image->width == 4 && image->height == 3 && image->pixel(1, 2)[0] == 100;
+    _exit(!pixelsRight ? 2 : grownMb > 200 ? 3 : 0);
+  }
+  int status = 0;
+  REQUIRE(waitpid(child, &status, 0) == child);
+  REQUIRE(WIFEXITED(status));
+  CHECK_MESSAGE(WEXITSTATUS(status) != 2, "the pixels were not read right");
+  CHECK_MESSAGE(WEXITSTATUS(status) != 3, "reading the file grew the peak resident size by more than 200 MB");
+  CHECK(WEXITSTATUS(status) == 0);
 }

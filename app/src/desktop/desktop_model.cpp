@@ -181,7 +181,7 @@ render::PickResult DesktopModel::pickAt(double x, double y, std::optional<double
   scene.field = field ? &field->distances : nullptr;
   scene.gradients = &gradients_;
   scene.selected = explore_.fieldLabel();
-  const render::TransferFunction2D table = render::shadingTable(s.preset);
+  const render::TransferFunction2D& table = pickTables_.tableFor(s.preset);
   const double left = layout_.panelWidth();
   const double px = (x - left) / std::max(1.0, layout_.windowW - left) * s.width;
   const double py = y / std::max(1, layout_.windowH) * s.height;

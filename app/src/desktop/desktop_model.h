@@ -220,6 +220,7 @@ class DesktopModel {
   std::vector<std::string> notes_;
   std::unique_ptr<Dataset> dataset_;
   render::GradientVolume gradients_;
+  mutable render::ShadingTableCache pickTables_;  // pickAt is const; the cache only saves work
   std::uint64_t datasetRevision_ = 0;
   std::string startView_ = "lateral_right";
   bool opened_ = false;

@@ -112,7 +112,9 @@ Status ExamController::start(const std::string& examId) {
   // ExamSession::start draws the items from the answer keys (distance fields: seconds on a large
   // dataset) on a thread of its own; until it is done nothing else touches the session.
   lessons::ExamSession* started = session_.get();
-  const std::int64_t userId = lessons_.user()->id;
+  auto stored = lessons_.storedUserId();
+  if (!stored) return tl::unexpected(stored.error());
+  const std::int64_t userId = *stored;
   Pending pending;
   pending.examId = examId;
   pending.title = found->second.title;

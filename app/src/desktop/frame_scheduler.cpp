@@ -165,6 +165,7 @@ bool FrameScheduler::finished(std::uint64_t revision) const { return showing(rev
 
 void FrameRecorder::start() {
   recording_ = true;
+  recordingStart_ = Clock::now();
   frames_.clear();
   latencies_.clear();
   settles_.clear();
@@ -173,7 +174,23 @@ void FrameRecorder::start() {
 
 void FrameRecorder::beginFrame() {
   inFrame_ = recording_;
-  if (inFrame_) frames_.push_back({});
+  if (!inFrame_) return;
+  frames_.push_back({});
+  frames_.back().atMs = msBetween(recordingStart_, Clock::now());
+}
+
+void FrameRecorder::notePrepare(double prepareMs, double maskMs, double tableMs, double occupancyMs, int firstUses) {
+  if (!inFrame_ || frames_.empty()) return;
+  Frame& f = frames_.back();
+  f.prepareMs += prepareMs;
+  f.maskMs += maskMs;
+  f.tableMs += tableMs;
+  f.occupancyMs += occupancyMs;
+  f.firstUses += firstUses;
+}
+
+void FrameRecorder::notePhases(const FramePhases& phases) {
+  if (inFrame_ && !frames_.empty()) frames_.back().phases = phases;
 }
 
 void FrameRecorder::noteUpload(double ms) {
@@ -214,11 +231,30 @@ void FrameRecorder::frameShown(bool current, std::uint16_t label, Clock::time_po
 
 json FrameRecorder::report(const Context& context) const {
   std::vector<double> all, moving, rest, uploads, renders;
+  std::vector<double> input, model, view, ui, prepare;
   std::map<int, int> perLevel;
   int overBudget = 0, refines = 0;
-  for (const Frame& f : frames_) {
+  json slow = json::array();
+  constexpr std::size_t kSlowFramesListed = 24;
+  const auto r1 = [](double v) { return std::round(v * 10) / 10; };
+  for (std::size_t i = 0; i < frames_.size(); ++i) {
+    const Frame& f = frames_[i];
     if (f.uploadMs > 0) uploads.push_back(f.uploadMs);
     if (f.level >= 0) renders.push_back(f.renderMs);
+    input.push_back(f.phases.inputMs);
+    model.push_back(f.phases.modelMs);
+    view.push_back(f.phases.viewMs);
+    ui.push_back(f.phases.uiMs);
+    prepare.push_back(f.prepareMs);
+    if (f.ms > context.frameBudgetMs && slow.size() < kSlowFramesListed)
+      slow.push_back({{"frame", i},         {"at_ms", r1(f.atMs)},          {"ms", r1(f.ms)},
+                      {"input_ms", r1(f.phases.inputMs)}, {"model_ms", r1(f.phases.modelMs)},
+                      {"upload_ms", r1(f.uploadMs)},     {"view_ms", r1(f.phases.viewMs)},
+                      {"render_ms", r1(f.renderMs)},     {"prepare_ms", r1(f.prepareMs)},
+                      {"mask_ms", r1(f.maskMs)},
+                      {"table_ms", r1(f.tableMs)},       {"occupancy_ms", r1(f.occupancyMs)},
+                      {"first_variant_uses", f.firstUses}, {"ui_ms", r1(f.phases.uiMs)},
+                      {"level", f.level},                {"refine", f.refine}});
     if (f.ms > context.frameBudgetMs) ++overBudget;
     all.push_back(f.ms);
     (f.interacting ? moving : rest).push_back(f.ms);
@@ -243,6 +279,12 @@ json FrameRecorder::report(const Context& context) const {
           {"field_upload_ms_max", maxOf(uploads)},
           {"frame_budget_ms", context.frameBudgetMs},
           {"frames_over_budget", overBudget},
+          {"phase_ms_p99", {{"input", percentile(input, 99)}, {"model", percentile(model, 99)},
+                            {"view", percentile(view, 99)}, {"prepare", percentile(prepare, 99)},
+                            {"ui", percentile(ui, 99)}}},
+          {"phase_ms_max", {{"input", maxOf(input)}, {"model", maxOf(model)}, {"view", maxOf(view)},
+                            {"prepare", maxOf(prepare)}, {"ui", maxOf(ui)}}},
+          {"slow_frames", slow},
           {"renders", renders.size()},
           {"render_ms_p50", percentile(renders, 50)},
           {"render_ms_max", maxOf(renders)},

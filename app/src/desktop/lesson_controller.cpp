@@ -40,20 +40,42 @@ LessonController::~LessonController() = default;
 // ---------------------------------------------------------------------------------------------
 // User and lists
 
+namespace {
+// The user named `name` as stored, or one not stored yet (id 0: no records can name it).
+Result<lessons::User> userOrUnstored(LearningSession& session, const std::string& name) {
+  auto found = session.users().findUser(name);
+  if (!found) return tl::unexpected(found.error());
+  if (*found) return **found;
+  lessons::User unstored;
+  unstored.name = name;
+  unstored.role = lessons::Role::Student;
+  return unstored;
+}
+}  // namespace
+
 Status LessonController::ready() {
   if (user_) return {};
   if (!readyError_.empty()) return fail(readyError_);  // failed once: not retried every frame
-  auto user = session_.user(userName_, LearningSession::NewUser::Create);
+  auto user = userOrUnstored(session_, userName_);
   if (!user) return fail(readyError_ = "lessons: " + user.error().message);
   user_ = *user;
   return refresh();
+}
+
+Result<std::int64_t> LessonController::storedUserId() {
+  if (auto st = ready(); !st) return tl::unexpected(st.error());
+  if (user_->id != 0) return user_->id;
+  auto user = session_.user(user_->name, LearningSession::NewUser::Create);
+  if (!user) return tl::unexpected(withContext("lessons", user.error()));
+  user_ = *user;
+  return user_->id;
 }
 
 Status LessonController::switchUser(const std::string& name) {
   if (step_) return fail("leave the running lesson before changing the user");
   if (name.empty()) return fail("type a user name (a pseudonym)");
   if (auto st = ready(); !st) return st;
-  auto user = session_.user(name, LearningSession::NewUser::Create);
+  auto user = userOrUnstored(session_, name);
   if (!user) return tl::unexpected(user.error());
   user_ = *user;
   userName_ = name;
@@ -182,7 +204,9 @@ Status LessonController::startLesson(const std::string& lessonId, lessons::Lesso
   pending.courseId = course->id;
   pending.title = lesson->title;
   lessons::LessonEngine* started = pending.engine.get();
-  const std::int64_t userId = user_->id;
+  auto stored = storedUserId();
+  if (!stored) return tl::unexpected(stored.error());
+  const std::int64_t userId = *stored;
   pending.started = std::async(std::launch::async, [started, userId, lessonId, mode] {
     return started->start(userId, lessonId, mode);
   });
@@ -316,8 +340,10 @@ Result<quiz::Grade> LessonController::answer(const quiz::Answer& answer) {
     // review queue moves.
     auto keys = keysFor(reviewCourse_.datasetId);
     if (!keys) return tl::unexpected(keys.error());
+    auto userId = storedUserId();
+    if (!userId) return tl::unexpected(userId.error());
     lessons::ReviewAnswer review;
-    review.userId = user_->id;
+    review.userId = *userId;
     review.courseId = reviewCourse_.id;
     review.question = asked_->question.question;
     review.answer = answer;

@@ -51,15 +51,20 @@ class LessonController {
   using RenderStateSource = std::function<lessons::RenderState()>;
 
   // `session` outlives the controller. `userName`: the pseudonymous user, created as a student
-  // when first needed. `viewDataset`: the id of the dataset the view shows.
+  // when they first record something (a lesson, a review answer, an exam), never by looking: an
+  // instructor who opens the desktop to read the class's analytics is not made a student of it.
+  // `viewDataset`: the id of the dataset the view shows.
   LessonController(LearningSession& session, std::string userName, std::string viewDataset, EventSink events,
                    ShowStructure show, RenderStateSource renderState);
   ~LessonController();
 
   // --- State, for the panel -------------------------------------------------------------------
-  // Opens the user and the lists on first use; an error is kept (not retried every frame).
+  // Opens the user and the lists on first use; an error is kept (not retried every frame). A user
+  // not in the database yet is shown with id 0 (no records) and stored by storedUserId.
   Status ready();
   const lessons::User* user() const { return user_ ? &*user_ : nullptr; }
+  // The user's id, creating their row (a student) if they have none yet: for what records.
+  Result<std::int64_t> storedUserId();
   const std::string& viewDataset() const { return viewDataset_; }
   void setViewDataset(std::string id) { viewDataset_ = std::move(id); }
   const std::vector<lessons::Course>& courses() const { return courses_; }

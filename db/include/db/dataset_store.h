@@ -33,8 +33,8 @@ struct DatasetRecord {
   std::int64_t id = 0;
   std::string name;                 // unique; what commands take as DATASET
   std::string species = "human";
-  // Paths are absolute, or stored relative to the database file's folder (a course package's
-  // dataset, kept in the database's data folder: the two move together) and read back absolute.
+  // Paths are absolute, or stored relative to datasetPathBase (a course package's dataset, kept in
+  // the database's data folder: the two move together) and read back absolute.
   std::string volumePath;
   std::string volumeChecksum;       // "sha256:…"
   std::string labelsPath;           // absolute or empty
@@ -47,6 +47,13 @@ struct DatasetRecord {
   std::string createdAt;            // ISO-8601 UTC, set by the database
   int structureCount = 0;           // filled by listDatasets/findDataset
 };
+
+// The folder relative dataset paths are stored against, on this machine: a database file's
+// folder; for a class server (postgresql://) this machine's own folder for that server,
+// $XDG_DATA_HOME/anatomy-tutor/servers/<server>/ (<server>: the URL without its user and password
+// as a file name). A course package imported into a server keeps the dataset's row there once and
+// its files on each lab machine that imports it, at the same relative paths.
+Result<std::string> datasetPathBase(const Database& db);
 
 // Stores a dataset and its structures in one transaction. A name already registered is an error
 // naming it (nothing is written then) unless `replace` is set: then the earlier record and its

@@ -54,9 +54,8 @@ Status saveStudy(Database& db, const quiz::StudyProtocol& protocol);
 Result<std::optional<quiz::StudyProtocol>> findStudy(Database& db, const std::string& studyId);
 Result<std::vector<quiz::StudyProtocol>> listStudies(Database& db);
 
-// Participant ids are pseudonyms: 1 to 64 letters, digits, '_' or '-', starting with a letter or a
-// digit, so that they are valid REDCap record names and safe in every export.
-Status validParticipantId(const std::string& id);
+// Participant ids: quiz::validParticipantId (pseudonyms that are valid REDCap record names).
+using quiz::validParticipantId;
 
 // Enrols a participant (plan from the Latin square row of their enrolment index and the study's
 // seed) or resumes one already enrolled (group must match; the session count goes up).
@@ -104,12 +103,21 @@ Result<std::vector<quiz::StudyResponseRow>> studyResponseRows(Database& db, cons
 // all sources in one transaction. A participant already in `into` (or in an earlier source) with
 // exactly the same records is left as it is, so merging again changes nothing; the same id with
 // other records is a Conflict naming both places, and nothing is written. The study must be in
-// every source with one design (structures, conditions, items, scale, seed); `into` gets it when
-// it has none. Merged participants are enrolled after those already in `into`; their trials keep
-// the counterbalancing row their machine gave them, which the report lists.
+// every database source with one design (structures, conditions, items, scale, seed); `into` gets
+// it when it has none. Merged participants are enrolled after those already in `into`; their
+// trials keep the counterbalancing row their machine gave them, which the report lists.
+//
+// A source may instead be an export bundle's long table (quiz::readResponsesLongCsv, read against
+// `design`, which must then be given). It holds what the export holds: the rated trials, times to
+// the ms, timestamps to the second (stored as .000), started_at/completed_at as the first and last
+// rating. Such a participant counts as already there when the long table `into` would export for
+// them is the bundle's, whichever way their records came; a database participant whose records
+// differ from the stored ones is compared that way too (a bundle and the database it came from
+// agree).
 struct StudyMergeSource {
-  std::string name;  // for messages: the file or server
+  std::string name;  // for messages: the file, server or bundle folder
   Database* db = nullptr;
+  const std::vector<quiz::StudyResponseRow>* rows = nullptr;  // a bundle's long table when db is null
 };
 struct StudyMergeReport {
   struct FromSource {
@@ -122,9 +130,12 @@ struct StudyMergeReport {
   std::map<std::size_t, int> designRows;    // design row → participants whose trials follow it
   std::vector<std::string> offDesign;       // participants whose trials follow no row of the design
   // Every row of the cycle used equally often, give or take one (as enrolling on one machine does).
+  // A bundle's partial participant counts for the first row their rated trials agree with.
   bool balanced() const;
 };
+// `design`: the study as the bundles were read (required when a source is a bundle); database
+// sources must agree with it.
 Result<StudyMergeReport> mergeStudy(Database& into, const std::vector<StudyMergeSource>& sources,
-                                    const std::string& studyId);
+                                    const std::string& studyId, const quiz::StudyProtocol* design = nullptr);
 
 }  // namespace at::db

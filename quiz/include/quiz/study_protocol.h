@@ -64,4 +64,8 @@ std::string serialiseStudyProtocol(const StudyProtocol& protocol);
 // condition 0 / WDT … 5 = prefer condition 1 / bare), given whether condition 0 was shown as A.
 int unblindRating(int ratingAsShown, bool aIsFirstCondition, const StudyScale& scale);
 
+// Participant ids are pseudonyms: 1 to 64 letters, digits, '_' or '-', starting with a letter or a
+// digit, so that they are valid REDCap record names and safe in every export.
+Status validParticipantId(const std::string& id);
+
 }  // namespace at::quiz

@@ -62,6 +62,8 @@ std::string csvRecord(const std::vector<std::string>& cells);
 std::vector<std::vector<std::string>> parseCsv(const std::string& text);
 
 std::string responsesLongCsv(const std::vector<StudyResponseRow>& rows);
+// The long table's column names in order (its header); quiz/responses_long_reader.h reads it back.
+const std::vector<std::string>& responsesLongColumnNames();
 std::string responsesWideCsv(const StudyProtocol& protocol, const std::vector<StudyResponseRow>& rows);
 std::string responsesLongJsonSidecar(const StudyProtocol& protocol);
 

@@ -1,6 +1,9 @@
 #include "occupancy.h"
 
 #include <algorithm>
+#include <array>
+#include <cstddef>
+#include <cstdint>
 #include <cmath>
 #include <limits>
 
@@ -178,7 +181,14 @@ std::vector<std::uint8_t> computeOccupancy(const OccupancyInputs& in) {
     for (std::size_t i = 0; i < occ.size(); ++i)
       if (near[i]) occ[i] |= kOccupiedStructure;
   }
-  if (!in.table) return occ;
+  computeContextLayers(in, 0, nb.z, occ);
+  return occ;
+}
+
+void computeContextLayers(const OccupancyInputs& in, int kLo, int kHi, std::vector<std::uint8_t>& occ) {
+  if (!in.table) return;
+  const BlockSummary& b = *in.blocks;
+  const Dims& nb = b.blocks;
   const bool useField = in.field && in.field->valid() && in.volumeGrid;
   // Volume index → field index is affine: a block's index box maps to the box around its mapped
   // centre with half-extents |linear part| · half-extents.
@@ -194,7 +204,7 @@ std::vector<std::uint8_t> computeOccupancy(const OccupancyInputs& in) {
     }
   }
   const double half = 0.5 * (kBlockVoxels + 1);  // the block's voxels and the next one on each side
-  for (int k = 0; k < nb.z; ++k)
+  for (int k = std::max(kLo, 0); k < std::min(kHi, nb.z); ++k)
     for (int j = 0; j < nb.y; ++j)
       for (int i = 0; i < nb.x; ++i) {
         const std::size_t bi = b.index(i, j, k);
@@ -218,7 +228,6 @@ std::vector<std::uint8_t> computeOccupancy(const OccupancyInputs& in) {
         }
         if (in.table->anyVisible(c0, c1, r1)) occ[bi] |= kOccupiedContext;
       }
-  return occ;
 }
 
 namespace {
@@ -235,46 +244,57 @@ struct BlockBox {
 };
 
 // Chebyshev distance in blocks, capped at kMaxLeapBlocks, from every block of `box` to the nearest
-// block of `box` that `occupied(global index)` holds; box-local order. Separable: the distance along
-// x, then the max-norm combination along y and z (min over offsets o of max(|o|, d)).
+// block of `box` that `occupied(global index)` holds; box-local order. The Chebyshev distance is
+// the length of the shortest path through 26-connected neighbours, so two raster passes give it
+// exactly (Rosenfeld and Pfaltz's chamfer transform with unit weights): forwards, each block
+// takes one more than the least of its 13 neighbours already passed; backwards, the other 13.
+// The box is padded by a block of kFar on every side, so the passes need no bounds tests. (The
+// previous separable form took O(kMaxLeapBlocks) per block and axis: 25–70 ms for a 64³ grid on
+// the 2-core machine, in the frame that changed the field or the selection.)
 template <class Occupied>
 std::vector<int> cappedChebyshev(const Dims& nb, const BlockBox& box, Occupied occupied) {
-  constexpr int kFar = kMaxLeapBlocks;
-  std::vector<int> d(box.count());
-  for (int k = box.lo[2]; k < box.hi[2]; ++k)
-    for (int j = box.lo[1]; j < box.hi[1]; ++j) {
-      int last = -1000000;
-      for (int i = box.lo[0]; i < box.hi[0]; ++i) {
-        if (occupied(nb.index(i, j, k))) last = i;
-        d[box.local(i, j, k)] = std::min(kFar, i - last);
-      }
-      last = 1000000;
-      for (int i = box.hi[0] - 1; i >= box.lo[0]; --i) {
-        if (occupied(nb.index(i, j, k))) last = i;
-        d[box.local(i, j, k)] = std::min(d[box.local(i, j, k)], std::min(kFar, last - i));
+  constexpr std::uint8_t kFar = kMaxLeapBlocks;
+  const int sx = box.size(0), sy = box.size(1), sz = box.size(2);
+  const std::ptrdiff_t px = sx + 2, pxy = px * (sy + 2);
+  std::vector<std::uint8_t> d(std::size_t(pxy * (sz + 2)), kFar);
+  const auto at = [&](int i, int j, int k) { return std::ptrdiff_t(k + 1) * pxy + std::ptrdiff_t(j + 1) * px + (i + 1); };
+  for (int k = 0; k < sz; ++k)
+    for (int j = 0; j < sy; ++j)
+      for (int i = 0; i < sx; ++i)
+        if (occupied(nb.index(box.lo[0] + i, box.lo[1] + j, box.lo[2] + k))) d[std::size_t(at(i, j, k))] = 0;
+  // The 13 neighbours before a block in raster order (x fastest), as offsets in the padded box.
+  std::array<std::ptrdiff_t, 13> before{};
+  int n = 0;
+  for (int dk = -1; dk <= 0; ++dk)
+    for (int dj = -1; dj <= 1; ++dj)
+      for (int di = -1; di <= 1; ++di)
+        if (dk < 0 || dj < 0 || (dj == 0 && di < 0)) before[std::size_t(n++)] = dk * pxy + dj * px + di;
+  std::uint8_t* v = d.data();
+  for (int k = 0; k < sz; ++k)
+    for (int j = 0; j < sy; ++j) {
+      std::uint8_t* row = v + at(0, j, k);
+      for (int i = 0; i < sx; ++i) {
+        std::uint8_t best = row[i];
+        if (best == 0) continue;
+        for (std::ptrdiff_t o : before) best = std::min<std::uint8_t>(best, std::uint8_t(row[std::ptrdiff_t(i) + o] + 1));
+        row[i] = std::min(best, kFar);
       }
     }
-  std::vector<int> line, out;
-  const auto combine = [&](int lo, int hi, auto indexOf) {
-    const int n = hi - lo;
-    line.resize(std::size_t(n));
-    out.resize(std::size_t(n));
-    for (int t = 0; t < n; ++t) line[std::size_t(t)] = d[indexOf(lo + t)];
-    for (int t = 0; t < n; ++t) {
-      int best = line[std::size_t(t)];
-      for (int o = 1; o < best; ++o) {
-        if (t - o >= 0) best = std::min(best, std::max(o, line[std::size_t(t - o)]));
-        if (t + o < n) best = std::min(best, std::max(o, line[std::size_t(t + o)]));
+  for (int k = sz - 1; k >= 0; --k)
+    for (int j = sy - 1; j >= 0; --j) {
+      std::uint8_t* row = v + at(0, j, k);
+      for (int i = sx - 1; i >= 0; --i) {
+        std::uint8_t best = row[i];
+        if (best <= 1) continue;
+        for (std::ptrdiff_t o : before) best = std::min<std::uint8_t>(best, std::uint8_t(row[std::ptrdiff_t(i) - o] + 1));
+        row[i] = best;
       }
-      out[std::size_t(t)] = best;
     }
-    for (int t = 0; t < n; ++t) d[indexOf(lo + t)] = out[std::size_t(t)];
-  };
-  for (int k = box.lo[2]; k < box.hi[2]; ++k)
-    for (int i = box.lo[0]; i < box.hi[0]; ++i) combine(box.lo[1], box.hi[1], [&](int j) { return box.local(i, j, k); });
-  for (int j = box.lo[1]; j < box.hi[1]; ++j)
-    for (int i = box.lo[0]; i < box.hi[0]; ++i) combine(box.lo[2], box.hi[2], [&](int k) { return box.local(i, j, k); });
-  return d;
+  std::vector<int> out(box.count());
+  for (int k = 0; k < sz; ++k)
+    for (int j = 0; j < sy; ++j)
+      for (int i = 0; i < sx; ++i) out[box.local(box.lo[0] + i, box.lo[1] + j, box.lo[2] + k)] = d[std::size_t(at(i, j, k))];
+  return out;
 }
 
 }  // namespace

@@ -91,6 +91,9 @@ struct OccupancyInputs {
 };
 
 std::vector<std::uint8_t> computeOccupancy(const OccupancyInputs& in);
+// The context bit of computeOccupancy for the blocks of z-layers [kLo, kHi) of `occupancy` (the
+// grid's size; other layers untouched), so that a grid can be computed a few layers at a time.
+void computeContextLayers(const OccupancyInputs& in, int kLo, int kHi, std::vector<std::uint8_t>& occupancy);
 
 // Writes the leap distances into the empty blocks of an occupancy grid (see kMaxLeapBlocks).
 void addLeapDistances(const Dims& blocks, std::vector<std::uint8_t>& occupancy);

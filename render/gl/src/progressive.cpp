@@ -79,7 +79,7 @@ Result<RefineProgress> VolumeRenderer::refine(const RenderSettings& s, double bu
   }
   const RayCaster kind = st.rayCaster;
   st.rayCaster = RayCaster::Compute;
-  const Status prepared = prepare(s);
+  const Status prepared = prepare(s, true);
   st.rayCaster = kind;
   if (!prepared) return tl::unexpected(prepared.error());
   if (st.progressiveWidth != s.width || st.progressiveHeight != s.height) {

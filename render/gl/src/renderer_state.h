@@ -60,12 +60,19 @@ struct ProgressiveImage {
 
 struct VolumeRenderer::State {
   std::array<Program, RayVariant::kCount> fragmentRayCasters, computeRayCasters;
+  std::array<bool, RayVariant::kCount> computeUsed{}, fragmentUsed{};  // dispatched at least once
+  PrepareCosts costs;  // since the last takeCosts()
+  int warmStructure = -1;  // warmUp: the structure flag of the variant to run (-1: from the selection)
   Program maskProgram;
   VertexArray vao;
   Texture labels, field, table, mask, volume, occupancy;
   // uploadFieldStep: the texture being filled, what it is filled from and the next z-slice.
   Texture pendingField;
   Dims pendingDims;   // of pendingField's storage (zero: none)
+  // Field textures of other dims kept for later uploads (the desktop alternates a coarse and the
+  // full-resolution field), at most kSpareFields, the oldest dropped first.
+  static constexpr std::size_t kSpareFields = 2;
+  std::vector<std::pair<Dims, Texture>> spareFields;
   Dims fieldDims;     // of field's storage
   const float* pendingSource = nullptr;
   Geometry pendingGrid;
@@ -75,16 +82,30 @@ struct VolumeRenderer::State {
   int maskLabel = -1;  // -1: stale
   std::array<int, 6> maskBox{0, 0, 0, 0, 0, 0};
   std::uint16_t selected = 0;
-  std::optional<Preset> tablePreset;       // the preset the table texture was built from …
+  std::optional<Preset> tablePreset;       // a preset with the table texture's shadingTable …
   double tableStepMm = 0, tableRefMm = 0;  // … and the step its opacities are corrected to
   TransferFunction2D tableInfo;            // its axes (rgba dropped after upload)
   TableVisibility tableVisibility;
   std::uint64_t tableGeneration = 0;       // bumped when tableVisibility changes
   BlockSummary blocks;
-  std::optional<OccupancyKey> occupancyKey;
+  std::optional<OccupancyKey> occupancyKey;  // of the grid in the occupancy texture
+  std::optional<OccupancyKey> contextKey;    // of contextOccupancy (selected 0)
   // The grid of occupancyKey's inputs with no structure (leaps added): a selection change (a
   // hover) only adds the structure to it (withStructure) instead of recomputing the whole grid.
   std::vector<std::uint8_t> contextOccupancy;
+  // Interactive draws (refine, renderToTexture) do not compute the grid with a CPU field's
+  // distances in the call that changed them (25–80 ms for a 64³ grid on the 2-core machine): they
+  // use the grid without distances, which skips less but never wrongly, and compute the field's
+  // grid kOccupancyLayersMs per call, a few z-layers at a time, then swap it in.
+  static constexpr double kOccupancyLayersMs = 4;
+  struct OccupancyJob {
+    OccupancyKey key;  // selected 0
+    int nextLayer = 0;
+    std::vector<std::uint8_t> grid;
+  };
+  std::optional<OccupancyJob> occupancyJob;
+  std::optional<OccupancyKey> fieldFreeKey;  // the grid without distances (leaps added), kept
+  std::vector<std::uint8_t> fieldFreeOccupancy;
   // Bumped when the volume, the field or the selection changes (a progressive image of an older
   // scene starts over); fieldGeneration only when the field does (the occupancy's distances).
   std::uint64_t sceneGeneration = 0, fieldGeneration = 0;

@@ -7,7 +7,7 @@
 namespace at::render::gl {
 
 Result<DisplayImage> VolumeRenderer::renderToTexture(const RenderSettings& s) {
-  if (auto st = draw(s); !st) return tl::unexpected(st.error());
+  if (auto st = draw(s, true); !st) return tl::unexpected(st.error());
   DisplayImage out;
   out.handle = std::uintptr_t(state_->colour.id());
   out.texelsWide = s.width;

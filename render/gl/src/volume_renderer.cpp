@@ -11,6 +11,7 @@
 #include <limits>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "ray_shaders.h"
@@ -118,6 +119,35 @@ void setTextureParams(GLenum filter) {
   glTexParameteri(GL_TEXTURE_3D, GL_TEXTURE_WRAP_R, GL_CLAMP_TO_EDGE);
 }
 
+// A field texture of `d` texels (contents undefined). Mutable storage, as setField's: the
+// texture may become the field texture, which setField and setFieldFromDevice re-specify.
+void allocateField(Texture& texture, const Dims& d) {
+  texture = Texture::make();
+  glBindTexture(GL_TEXTURE_3D, texture.id());
+  setTextureParams(GL_LINEAR);
+  glTexImage3D(GL_TEXTURE_3D, 0, kFieldFormat, d.x, d.y, d.z, 0, GL_RED, GL_FLOAT, nullptr);
+}
+
+// The pending texture goes to the spares (none pending afterwards).
+void keepSpareField(VolumeRenderer::State& st) {
+  if (st.pendingField) {
+    st.spareFields.emplace_back(st.pendingDims, std::move(st.pendingField));
+    if (st.spareFields.size() > VolumeRenderer::State::kSpareFields) st.spareFields.erase(st.spareFields.begin());
+  }
+  st.pendingField = Texture();
+  st.pendingDims = Dims{};
+}
+
+// Makes a spare of dims `d` the pending texture; false when there is none.
+bool takeSpareField(VolumeRenderer::State& st, const Dims& d) {
+  const auto found = std::find_if(st.spareFields.begin(), st.spareFields.end(), [&](const auto& s) { return s.first == d; });
+  if (found == st.spareFields.end()) return false;
+  st.pendingField = std::move(found->second);
+  st.pendingDims = d;
+  st.spareFields.erase(found);
+  return true;
+}
+
 // The ray caster program of one variant, compiled and linked on first use, then kept.
 Result<GLuint> rayCasterProgram(VolumeRenderer::State& st, RayCaster kind, RayVariant variant) {
   Program& slot = kind == RayCaster::Compute ? st.computeRayCasters[std::size_t(variant.index())]
@@ -195,6 +225,16 @@ Result<VolumeRenderer> VolumeRenderer::create() {
   s->vao = VertexArray::make();
   s->labels = Texture::make();
   s->field = Texture::make();
+  {
+    // A far field of one texel in the format host fields take, so that the texture is complete
+    // and alike before and after the first field (a software rasteriser's compiled shaders depend
+    // on the formats of the textures bound).
+    const float far = 65504.0f;
+    glBindTexture(GL_TEXTURE_3D, s->field.id());
+    setTextureParams(GL_LINEAR);
+    glTexImage3D(GL_TEXTURE_3D, 0, kFieldFormat, 1, 1, 1, 0, GL_RED, GL_FLOAT, &far);
+    s->fieldDims = {1, 1, 1};
+  }
   s->table = Texture::make();
   s->fbo = Framebuffer::make();
   s->timer = Query::make();
@@ -216,11 +256,16 @@ Status VolumeRenderer::setVolume(const Volume& volume, const LabelMap& labels, c
     return fail("render: the gradient volume is not on the volume's grid");
   State& st = *state_;
   const Dims& d = volume.dims();
-  // A field upload in progress, and its spare texture, belong to the previous volume.
-  st.pendingField = Texture();
-  st.pendingDims = Dims{};
+  // A field upload in progress belongs to the previous volume; its texture is kept as a spare,
+  // and one on this volume's grid is made now (software GL: tens of ms at 256³, which the first
+  // full-resolution field would otherwise spend in a frame).
+  keepSpareField(st);
   st.pendingSource = nullptr;
   st.pendingGrid = Geometry{};
+  if (!takeSpareField(st, d)) {
+    allocateField(st.pendingField, d);
+    st.pendingDims = d;
+  }
   glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
   glBindTexture(GL_TEXTURE_3D, st.labels.id());
   setTextureParams(GL_NEAREST);
@@ -253,6 +298,9 @@ Status VolumeRenderer::setVolume(const Volume& volume, const LabelMap& labels, c
   glTexStorage3D(GL_TEXTURE_3D, 1, GL_R8UI, nb.x, nb.y, nb.z);
   setTextureParams(GL_NEAREST);
   st.occupancyKey.reset();
+  st.contextKey.reset();
+  st.fieldFreeKey.reset();
+  st.occupancyJob.reset();
   st.volumeGrid = volume.geometry;
   st.hasVolume = true;
   st.hasField = false;
@@ -338,15 +386,13 @@ Result<bool> VolumeRenderer::uploadFieldStep(const FloatVolume& field, double bu
     st.pendingNextSlice = 0;
     st.pendingMinima.reset(g);
     if (!st.pendingField || !(st.pendingDims == d)) {
-      st.pendingField = Texture::make();
-      glBindTexture(GL_TEXTURE_3D, st.pendingField.id());
-      setTextureParams(GL_LINEAR);
-      // Mutable storage, as setField's: the texture becomes the field texture, which setField and
-      // setFieldFromDevice re-specify.
-      glTexImage3D(GL_TEXTURE_3D, 0, kFieldFormat, d.x, d.y, d.z, 0, GL_RED, GL_FLOAT, nullptr);
-      if (auto e = glStatus("allocating the distance field"); !e) return tl::unexpected(e.error());
-      st.pendingDims = d;
-      return false;
+      keepSpareField(st);
+      if (!takeSpareField(st, d)) {
+        allocateField(st.pendingField, d);
+        st.pendingDims = d;
+        if (auto e = glStatus("allocating the distance field"); !e) return tl::unexpected(e.error());
+        return false;
+      }
     }
   }
   const auto start = std::chrono::steady_clock::now();
@@ -396,9 +442,38 @@ void VolumeRenderer::setSelected(std::uint16_t label) {
 
 void VolumeRenderer::setRayCaster(RayCaster r) { state_->rayCaster = r; }
 
+Status VolumeRenderer::warmUp(const RenderSettings& settings) {
+  RenderSettings s = settings;
+  s.width = s.height = 8;
+  // The shader's three modes (a table mode stands for all of them), with and without a structure
+  // (selecting and hovering switch between the two) and shading (coarse and full levels).
+  for (RenderMode mode : {RenderMode::Wdt, RenderMode::Bare, RenderMode::Lighting})
+    for (int structure : {0, 1})
+      for (bool shading : {false, true}) {
+        s.preset.mode = mode;
+        s.shading = s.jitter = shading;
+        state_->warmStructure = structure;
+        const Status drawn = draw(s, true);
+        state_->warmStructure = -1;
+        if (!drawn) return drawn;
+      }
+  takeCosts();  // what a frame reports is its own
+  glFinish();
+  return glStatus("warming the ray caster up");
+}
+
+PrepareCosts VolumeRenderer::takeCosts() { return std::exchange(state_->costs, PrepareCosts{}); }
+
 // Brings the mask, the table and the occupancy grid up to date for `s` and binds the ray caster
 // program with its uniforms and textures (the compute image binding is the caller's).
-Status VolumeRenderer::prepare(const RenderSettings& s) {
+Status VolumeRenderer::prepare(const RenderSettings& s, bool interactive) {
+  const auto start = std::chrono::steady_clock::now();
+  const Status prepared = prepareState(s, interactive);
+  state_->costs.prepareMs += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  return prepared;
+}
+
+Status VolumeRenderer::prepareState(const RenderSettings& s, bool interactive) {
   if (!state_->hasVolume) return fail("render: no volume uploaded");
   if (s.width <= 0 || s.height <= 0 || s.width > 16384 || s.height > 16384)
     return fail("render: image size " + std::to_string(s.width) + "x" + std::to_string(s.height) + " is out of range");
@@ -406,7 +481,10 @@ Status VolumeRenderer::prepare(const RenderSettings& s) {
     return fail("render: the distance unit must be a positive number");
   State& st = *state_;
   const Dims& vd = st.volumeGrid.dims;
+  using Clock = std::chrono::steady_clock;
+  const auto msSince = [](Clock::time_point t) { return std::chrono::duration<double, std::milli>(Clock::now() - t).count(); };
   if (st.maskLabel != int(st.selected)) {
+    const Clock::time_point maskStart = Clock::now();
     glUseProgram(st.maskProgram.id());
     glActiveTexture(GL_TEXTURE0);
     glBindTexture(GL_TEXTURE_3D, st.labels.id());
@@ -428,16 +506,19 @@ Status VolumeRenderer::prepare(const RenderSettings& s) {
     run(st.maskBox, 0);
     st.maskLabel = int(st.selected);
     if (auto e = glStatus("building the structure mask"); !e) return e;
+    st.costs.maskMs += msSince(maskStart);
   }
   // The 2-D table of the mode, its opacities corrected to the step.
   const double stepMm = effectiveStepMm(st.volumeGrid, s);
   const double refMm = effectiveOpacityRefMm(st.volumeGrid, s);
-  if (!st.tablePreset || !(*st.tablePreset == s.preset) || st.tableStepMm != stepMm || st.tableRefMm != refMm) {
+  if (!st.tablePreset || !sameShadingTable(*st.tablePreset, s.preset) || st.tableStepMm != stepMm ||
+      st.tableRefMm != refMm) {
+    const Clock::time_point tableStart = Clock::now();
     TransferFunction2D table = shadingTable(s.preset);
     for (Rgba& v : table.rgba) v[3] = v[3] > 0.0f ? correctedOpacity(v[3], stepMm, refMm) : 0.0f;
     // What the context can draw (opacity > 0) does not depend on the step: the occupancy grid
     // is kept when only the step changes (the desktop alternates coarse and full levels).
-    if (!st.tablePreset || !(*st.tablePreset == s.preset)) {
+    if (!st.tablePreset || !sameShadingTable(*st.tablePreset, s.preset)) {
       st.tableVisibility = TableVisibility(table);
       ++st.tableGeneration;
     }
@@ -455,39 +536,88 @@ Status VolumeRenderer::prepare(const RenderSettings& s) {
     st.tablePreset = s.preset;
     st.tableStepMm = stepMm;
     st.tableRefMm = refMm;
+    st.costs.tableMs += msSince(tableStart);
   }
   const TransferFunction2D& table = st.tableInfo;
   const bool bare = s.preset.mode == RenderMode::Bare;
-  // Which blocks rays may skip.
+  // Which blocks rays may skip. The key holds only what the grid depends on: with no context
+  // (bare) no table, and with no field the CPU has seen (none, or one from CUDA) no distances, so
+  // that a hover, which changes the context radius with the structure, keeps the structure-free
+  // grid and only adds the structure to it.
+  const bool fieldUsed = !bare && st.hasField && st.fieldOnCpu;
   OccupancyKey key;
-  key.tableGeneration = st.tableGeneration;
-  key.fieldGeneration = st.hasField && st.fieldOnCpu ? st.fieldGeneration : 0;
   key.selected = st.selected;
   key.context = !bare;
-  key.surfaceLo = s.preset.surfaceGradientHu[0];
-  key.surfaceFloor = s.preset.surfaceInterior > 0 || !(s.preset.surfaceGradientHu[1] > 0);
-  key.log2Alpha = std::log2(s.preset.alpha);
-  key.distanceUnit = float(s.distanceUnit);
-  if (!st.occupancyKey || !(*st.occupancyKey == key)) {
-    OccupancyKey contextKey = key, cachedContextKey = st.occupancyKey.value_or(OccupancyKey{});
-    contextKey.selected = cachedContextKey.selected = 0;
-    // The structure-free grid is recomputed only when more than the selection changed (a hover
-    // changes only the selection: withStructure adds it to the cached grid).
-    if (!st.occupancyKey || !(cachedContextKey == contextKey)) {
-      OccupancyInputs in;
-      in.blocks = &st.blocks;
-      in.volumeGrid = &st.volumeGrid;
-      in.table = bare ? nullptr : &st.tableVisibility;
-      in.surfaceLo = key.surfaceLo;
-      in.surfaceFloor = key.surfaceFloor;
-      in.field = st.hasField && st.fieldOnCpu ? &st.fieldMinima : nullptr;
-      in.log2Alpha = key.log2Alpha;
-      in.distanceUnit = key.distanceUnit;
-      in.selected = 0;
-      st.contextOccupancy = computeOccupancy(in);
-      addLeapDistances(st.blocks.blocks, st.contextOccupancy);
+  if (!bare) {
+    key.tableGeneration = st.tableGeneration;
+    key.surfaceLo = s.preset.surfaceGradientHu[0];
+    key.surfaceFloor = s.preset.surfaceInterior > 0 || !(s.preset.surfaceGradientHu[1] > 0);
+  }
+  if (fieldUsed) {
+    key.fieldGeneration = st.fieldGeneration;
+    key.log2Alpha = std::log2(s.preset.alpha);
+    key.distanceUnit = float(s.distanceUnit);
+  }
+  const Clock::time_point occupancyStart = Clock::now();
+  const auto inputsFor = [&](const OccupancyKey& k) {
+    OccupancyInputs in;
+    in.blocks = &st.blocks;
+    in.volumeGrid = &st.volumeGrid;
+    in.table = k.context ? &st.tableVisibility : nullptr;
+    in.surfaceLo = k.surfaceLo;
+    in.surfaceFloor = k.surfaceFloor;
+    in.field = k.fieldGeneration != 0 ? &st.fieldMinima : nullptr;
+    in.log2Alpha = k.log2Alpha;
+    in.distanceUnit = k.distanceUnit;
+    return in;
+  };
+  const auto contextGrid = [&](const OccupancyKey& k) {
+    std::vector<std::uint8_t> grid = computeOccupancy(inputsFor(k));
+    addLeapDistances(st.blocks.blocks, grid);
+    return grid;
+  };
+  OccupancyKey contextKey = key;  // the structure-free grid's: a hover only adds the structure
+  contextKey.selected = 0;
+  bool upload = !st.occupancyKey || !(*st.occupancyKey == key);
+  const bool contextCurrent = st.contextKey && *st.contextKey == contextKey;
+  const bool jobCurrent = st.occupancyJob && st.occupancyJob->key == contextKey;
+  if (upload && !contextCurrent && !jobCurrent) {
+    if (fieldUsed && interactive) {
+      OccupancyKey freeKey = contextKey;
+      freeKey.fieldGeneration = 0;
+      freeKey.log2Alpha = freeKey.distanceUnit = 0;
+      if (!st.fieldFreeKey || !(*st.fieldFreeKey == freeKey)) {
+        st.fieldFreeOccupancy = contextGrid(freeKey);
+        st.fieldFreeKey = freeKey;
+      }
+      st.contextOccupancy = st.fieldFreeOccupancy;
+      st.contextKey = freeKey;
+      st.occupancyJob = State::OccupancyJob{contextKey, 0, std::vector<std::uint8_t>(st.blocks.blocks.count(), 0)};
+    } else {
+      st.contextOccupancy = contextGrid(contextKey);
+      st.contextKey = contextKey;
+      st.occupancyJob.reset();
     }
-    std::vector<std::uint8_t> occ = withStructure(st.blocks, st.contextOccupancy, st.selected);
+  }
+  if (st.occupancyJob && !(st.occupancyJob->key == contextKey)) st.occupancyJob.reset();  // stale
+  if (st.occupancyJob) {
+    State::OccupancyJob& job = *st.occupancyJob;
+    const OccupancyInputs in = inputsFor(job.key);
+    const int layers = st.blocks.blocks.z;
+    while (job.nextLayer < layers && (!interactive || msSince(occupancyStart) < State::kOccupancyLayersMs)) {
+      computeContextLayers(in, job.nextLayer, job.nextLayer + 1, job.grid);
+      ++job.nextLayer;
+    }
+    if (job.nextLayer >= layers) {
+      addLeapDistances(st.blocks.blocks, job.grid);
+      st.contextOccupancy = std::move(job.grid);
+      st.contextKey = job.key;
+      st.occupancyJob.reset();
+      upload = true;
+    }
+  }
+  if (upload) {
+    const std::vector<std::uint8_t> occ = withStructure(st.blocks, st.contextOccupancy, st.selected);
     const Dims& nb = st.blocks.blocks;
     glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
     glBindTexture(GL_TEXTURE_3D, st.occupancy.id());
@@ -495,14 +625,18 @@ Status VolumeRenderer::prepare(const RenderSettings& s) {
     st.occupancyKey = key;
     if (auto e = glStatus("uploading the occupancy grid"); !e) return e;
   }
+  st.costs.occupancyMs += msSince(occupancyStart);
 
   RayVariant variant;
   variant.mode = bare ? 1 : (s.preset.mode == RenderMode::Lighting ? 2 : 0);
   variant.shading = s.shading;
   variant.clip = s.clip.has_value();
-  variant.structure = st.selected != 0;
+  variant.structure = st.warmStructure >= 0 ? st.warmStructure == 1 : st.selected != 0;
   auto program = rayCasterProgram(st, st.rayCaster, variant);
   if (!program) return tl::unexpected(program.error());
+  bool& used = (st.rayCaster == RayCaster::Compute ? st.computeUsed : st.fragmentUsed)[std::size_t(variant.index())];
+  if (!used) ++st.costs.firstUses;
+  used = true;
   const GLuint p = *program;
   glUseProgram(p);
   const auto loc = [p](const char* n) { return glGetUniformLocation(p, n); };
@@ -565,8 +699,8 @@ Status VolumeRenderer::prepare(const RenderSettings& s) {
   return glStatus("preparing the ray caster");
 }
 
-Status VolumeRenderer::draw(const RenderSettings& s) {
-  if (auto e = prepare(s); !e) return e;
+Status VolumeRenderer::draw(const RenderSettings& s, bool interactive) {
+  if (auto e = prepare(s, interactive); !e) return e;
   State& st = *state_;
   if (st.fboWidth != s.width || st.fboHeight != s.height) {
     allocateImage(st.colour, s.width, s.height);
@@ -605,7 +739,7 @@ Status VolumeRenderer::draw(const RenderSettings& s) {
 }
 
 Result<RgbaImage> VolumeRenderer::render(const RenderSettings& s) {
-  if (auto st = draw(s); !st) return tl::unexpected(st.error());
+  if (auto st = draw(s, false); !st) return tl::unexpected(st.error());
   RgbaImage image(s.width, s.height);
   std::vector<std::uint8_t> rows(image.rgba.size());
   glBindFramebuffer(GL_FRAMEBUFFER, state_->fbo.id());
@@ -620,7 +754,7 @@ Result<RgbaImage> VolumeRenderer::render(const RenderSettings& s) {
 
 Result<double> VolumeRenderer::renderTimed(const RenderSettings& s) {
   glBeginQuery(GL_TIME_ELAPSED, state_->timer.id());
-  const Status st = draw(s);
+  const Status st = draw(s, false);
   glEndQuery(GL_TIME_ELAPSED);
   if (!st) return tl::unexpected(st.error());
   GLuint64 ns = 0;

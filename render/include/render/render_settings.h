@@ -76,6 +76,20 @@ struct SceneVolumes {
 // The 2-D table the mode samples (see the classification above). For bare mode it is the wdt
 // table (unused by the shader but kept for picking consistency).
 TransferFunction2D shadingTable(const Preset& preset);
+// Whether two presets give the same shadingTable (their TFs, t and whether the mode is fuzzy):
+// structures' presets that differ only in name, view or highlight share one table, so that a
+// hover from one to another rebuilds neither the table nor what depends on it.
+bool sameShadingTable(const Preset& a, const Preset& b);
+// The last shadingTable asked for, kept while the presets asked for share it (a 256 × 256 table
+// costs about a millisecond: too much to build again on every mouse move of a hover).
+class ShadingTableCache {
+ public:
+  const TransferFunction2D& tableFor(const Preset& preset);
+
+ private:
+  std::optional<Preset> preset_;
+  TransferFunction2D table_;
+};
 double effectiveStepMm(const Geometry& volumeGrid, const RenderSettings& settings);
 double effectiveOpacityRefMm(const Geometry& volumeGrid, const RenderSettings& settings);
 // The surface ramp's factor for edge strength g (HU per voxel).

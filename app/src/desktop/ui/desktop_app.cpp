@@ -112,6 +112,7 @@ int DesktopApp::run() {
   model_->event({{"event", "context"}, {"gl", window_->glDescription()}, {"note", window_->glNote()}, {"ui_scale", window_->uiScale()}});
   model_->setLayout(layout());
   model_->reframe();  // the start view framed for the window's size
+  view_->prepare(*model_);
   while (!quit_) frame();
   return script_ ? script_->exitStatus() : 0;
 }
@@ -130,14 +131,23 @@ void DesktopApp::frame() {
       return;
     }
   }
+  FramePhases phases;
+  const Clock::time_point modelStart = Clock::now();
+  phases.inputMs = msBetween(start, modelStart);
   model_->beginFrame(view_->available() ? view_.get() : nullptr);
-  view_->frame(*model_, Clock::now());
+  const Clock::time_point viewStart = Clock::now();
+  phases.modelMs = msBetween(modelStart, viewStart);
+  view_->frame(*model_, viewStart);
+  const Clock::time_point uiStart = Clock::now();
+  phases.viewMs = msBetween(viewStart, uiStart);
   window_->beginFrame();
   drawUi();
   render::RgbaImage shot;
   const Status read = window_->endFrame(screenshotPath_ ? &shot : nullptr);
   if (screenshotPath_) takeScreenshot(shot, read);
   const Clock::time_point end = Clock::now();
+  phases.uiMs = msBetween(uiStart, end);
+  model_->recorder().notePhases(phases);
   model_->endFrame(end, msBetween(start, end));
   if (options_.maxFps > 0)
     std::this_thread::sleep_until(start + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(1.0 / options_.maxFps)));

@@ -19,7 +19,15 @@ VolumeView::VolumeView(MessageSink messages) : messages_(std::move(messages)) {
   renderer_ = std::move(*renderer);
 }
 
-void VolumeView::frame(DesktopModel& model, Clock::time_point now) {
+void VolumeView::prepare(DesktopModel& model) {
+  takeDataset(model);
+  if (!renderer_) return;
+  renderer_->setSelected(model.explore().shown().label);
+  if (auto st = renderer_->warmUp(model.renderSettings(model.scheduler().planFor(kFullLevel))); !st)
+    messages_("volume renderer: " + st.error().message);
+}
+
+void VolumeView::takeDataset(DesktopModel& model) {
   if (renderer_ && datasetRevision_ != model.datasetRevision()) {
     datasetRevision_ = model.datasetRevision();
     if (auto st = renderer_->setVolume(model.dataset().volume, model.dataset().labels, model.gradients()); !st) {
@@ -30,6 +38,10 @@ void VolumeView::frame(DesktopModel& model, Clock::time_point now) {
         messages_("volume renderer: " + field.error().message);
     }
   }
+}
+
+void VolumeView::frame(DesktopModel& model, Clock::time_point now) {
+  takeDataset(model);
   model.setViewAvailable(available());
   if (!renderer_) return;
   const auto plan = model.planFrame(now);
@@ -37,6 +49,14 @@ void VolumeView::frame(DesktopModel& model, Clock::time_point now) {
   const render::RenderSettings settings = model.renderSettings(*plan);
   renderer_->setSelected(model.explore().shown().label);
   const Clock::time_point start = Clock::now();
+  struct NoteCosts {  // the preparation's share of this frame's render, however it ends
+    render::gl::VolumeRenderer& renderer;
+    FrameRecorder& recorder;
+    ~NoteCosts() {
+      const render::gl::PrepareCosts c = renderer.takeCosts();
+      recorder.notePrepare(c.prepareMs, c.maskMs, c.tableMs, c.occupancyMs, c.firstUses);
+    }
+  } noteCosts{*renderer_, model.recorder()};
   if (plan->progressive) {
     auto progress = renderer_->refine(settings, plan->budgetMs);
     if (!progress) return model.renderFailed(progress.error().message);

@@ -25,6 +25,10 @@ class VolumeView final : public FieldTarget {
   explicit VolumeView(MessageSink messages);
   bool available() const { return renderer_.has_value(); }
 
+  // Before the first frame: uploads the model's volume and compiles the ray-caster variants its
+  // view draws (on a software rasteriser each takes 0.1–1 s at its first use), so that no frame
+  // pays for either.
+  void prepare(DesktopModel& model);
   // Each frame: uploads the model's volume when another dataset is shown, then renders the plan.
   void frame(DesktopModel& model, Clock::time_point now);
   // The image to draw (handle 0 before the first one).
@@ -33,6 +37,7 @@ class VolumeView final : public FieldTarget {
   Result<bool> show(const wdt::FieldService::Cached& field, std::uint16_t label) override;
 
  private:
+  void takeDataset(DesktopModel& model);  // uploads the volume when another dataset is shown
   MessageSink messages_;
   std::optional<render::gl::VolumeRenderer> renderer_;
   render::gl::DisplayImage image_;

@@ -59,6 +59,16 @@ struct DisplayImage {
   std::array<float, 2> uv0{0, 0}, uv1{1, 1};
 };
 
+// What the preparation of the renderer's draws cost since the last takeCosts() (wall ms on the
+// calling thread): the structure mask rebuilt on a selection change, the table texture, the
+// empty-space grid, and whether a ray-caster variant was used for the first time (compiled, and
+// on a software rasteriser translated to machine code at its first dispatch).
+struct PrepareCosts {
+  double prepareMs = 0;  // the whole preparation: the three below, the program and its uniforms
+  double maskMs = 0, tableMs = 0, occupancyMs = 0;
+  int firstUses = 0;  // variants dispatched for the first time
+};
+
 class VolumeRenderer {
  public:
   // Compiles the shaders. Errors carry the GLSL log.
@@ -109,6 +119,14 @@ class VolumeRenderer {
   // of the rays it casts, from the first call of an image on (each call casts at least one tile of
   // 64 rays; chunks are sized from the cost measured so far, or the previous image's).
   Result<RefineProgress> refine(const RenderSettings& settings, double budgetMs);
+  // Runs every ray-caster variant an interactive view of `settings` may use (each of the shader's
+  // modes, with and without a structure and shading, at the settings' clip) once on a few pixels, with the textures as they are: a
+  // software rasteriser translates a variant to machine code at its first dispatch (0.1–1 s), which
+  // a view wants done before its first frame. Leaves no image.
+  Status warmUp(const RenderSettings& settings);
+  // The preparation costs since the previous call (for the desktop's frame report).
+  PrepareCosts takeCosts();
+
   // Nothing (handle 0) until the coarsest lattice is complete.
   DisplayImage display() const;
   // What display() shows, as the view would (linear filtering), at the view's size, top row first:
@@ -119,8 +137,10 @@ class VolumeRenderer {
 
  private:
   explicit VolumeRenderer(std::unique_ptr<State> state);
-  Status prepare(const RenderSettings& settings);
-  Status draw(const RenderSettings& settings);
+  // `interactive`: the refine/renderToTexture paths of a frame loop (renderer_state.h: OccupancyJob).
+  Status prepare(const RenderSettings& settings, bool interactive);  // prepareState, timed into the costs
+  Status prepareState(const RenderSettings& settings, bool interactive);
+  Status draw(const RenderSettings& settings, bool interactive);
   std::unique_ptr<State> state_;
 };
 
