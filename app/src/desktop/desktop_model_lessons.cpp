@@ -1,0 +1,84 @@
+// DesktopModel: what lessons, the course editor's preview and its capture put on the view
+// (declared in desktop_model.h under "Commands"; the lesson and course-editor callbacks).
+#include "core/strings.h"
+#include "course_views.h"
+#include "desktop_model.h"
+
+namespace at::app {
+
+void DesktopModel::showLessonStructure(const LessonController::Shown& shown) {
+  auto preset = presetForStep(library_, shown.structure, shown.presetId, explore_.levels(), &session_.database());
+  if (!preset) {
+    message(preset.error().message);
+    return;
+  }
+  showStructureWith(shown, *preset);
+}
+
+void DesktopModel::showStructureWith(const LessonController::Shown& shown, const render::Preset& preset) {
+  const Structure* s = dataset_->findStructure(shown.structure);
+  if (!s || !explore_.hasStructure(s->label)) {
+    message("lesson step: no structure '" + shown.structure + "' in dataset '" + dataset_->id + "'");
+    return;
+  }
+  explore_.usePreset(s->label, preset, preset.t);
+  setHovered(0);
+  select(s->label);
+  const std::string view =
+      shown.view ? lessons::toString(*shown.view) : (explore_.viewName().empty() ? startView_ : explore_.viewName());
+  if (auto st = setView(view); !st) message(st.error().message);
+  if (shown.camera) explore_.setCamera(cameraOf(*shown.camera));
+  // The step's plane, else none: the student sees what the author captured.
+  ClipSettings clip;
+  if (shown.clip) {
+    const render::ClipPlane plane = clipOf(*shown.clip);
+    for (int axis = 0; axis < 3; ++axis)
+      if (plane.normal[std::size_t(axis)] != 0) clip.axis = axis;
+    clip.on = true;
+    clip.flip = plane.normal[std::size_t(clip.axis)] < 0;
+    clip.offsetMm = float(plane.d - dot(plane.normal, explore_.camera().target));
+  }
+  explore_.setClip(clip);
+}
+
+bool DesktopModel::previewHidesNames() const {
+  const auto& preview = courses_->previewing();
+  // Selecting another structure (or closing the editor) ends what the student would see.
+  return courses_->windowOpen && preview && preview->namesHidden && idOf(explore_.selected()) == preview->structure;
+}
+
+std::string DesktopModel::courseDatasetId() const {
+  return str::startsWith(dataset_->id, "phantom:") ? std::string("phantom") : dataset_->id;
+}
+
+Result<CourseEditor::Capture> DesktopModel::captureView() const {
+  const std::uint16_t label = explore_.selected();
+  if (!label) return fail("select the structure to show first");
+  CourseEditor::Capture capture;
+  capture.structure = idOf(label);
+  capture.preset = explore_.presetOverridden() ? explore_.shown().preset : explore_.presetOf(label, explore_.bare());
+  capture.preset.t = explore_.t();
+  auto view = lessons::parseCameraView(explore_.viewName().empty() ? startView_ : explore_.viewName());
+  if (!view) return tl::unexpected(view.error());
+  capture.view = *view;
+  capture.camera = stepCameraOf(explore_.camera());
+  if (auto plane = explore_.clipPlane()) {
+    auto clip = stepClipOf(*plane);
+    if (!clip) return tl::unexpected(clip.error());
+    capture.clip = *clip;
+  }
+  return capture;
+}
+
+lessons::RenderState DesktopModel::renderState() const {
+  const render::Preset p = explore_.shown().preset;
+  lessons::RenderState r;
+  r.presetId = p.id.value_or(p.name);
+  r.mode = explore_.bare() ? "bare" : "wdt";
+  r.t = explore_.t();
+  r.alpha = p.alpha;
+  r.beta = p.lightingBeta;
+  return r;
+}
+
+}  // namespace at::app
