@@ -119,3 +119,24 @@ TEST_CASE("UI script: segment_review sets a structure's state; a bad state or na
   CHECK(run.exitCode == 2);
   CHECK(run.messages.find("a review state is for a structure") != std::string::npos);
 }
+
+TEST_CASE("the skull's structures open in the editor with the review states its shipped catalogue records") {
+  // The built-in skull is not in the dataset store: its review (data/segmentations/skull/
+  // structures.json) is what the editor shows until an instructor saves the labels as their own.
+  test::TempDir dir;
+  auto database = db::openDatabase((dir / "t.db").string());
+  REQUIRE(database);
+  Dataset ds = tinyDataset();
+  ds.id = "skull";
+  ds.structures[0].id = "mandible";
+  ds.structures[1].id = "maxilla";
+  app::SegmentController editor(*database, [](json) {});
+  editor.attach(ds);
+  CHECK(editor.reviewState(1) == db::ReviewState::Completed);
+  CHECK(editor.reviewState(2) == db::ReviewState::Flagged);
+  // Any other dataset not in the store starts every structure as not started.
+  ds.id = "tiny_unstored";
+  editor.attach(ds);
+  CHECK(editor.reviewState(1) == db::ReviewState::NotStarted);
+  CHECK(editor.reviewState(2) == db::ReviewState::NotStarted);
+}

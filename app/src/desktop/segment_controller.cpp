@@ -3,11 +3,13 @@
 #include <algorithm>
 #include <atomic>
 #include <chrono>
+#include <filesystem>
 #include <thread>
 #include <cmath>
 
 #include "core/strings.h"
 #include "label_output.h"
+#include "scan_catalogue.h"
 #include "volume/label_writers.h"
 #include "volume/slice_image.h"
 #include "wdt/label_growth.h"
@@ -51,12 +53,24 @@ void SegmentController::attach(const Dataset& dataset) {
   grey_.reset(dataset.intensity);
   status_.clear();
   ++revision_;
-  // An imported dataset's review states (a failed read is said; the states start as not started).
+  // An imported dataset's review states (a failed read is said; the states start as not started);
+  // a built-in scan's (the skull) are the ones its shipped catalogue records.
   review_.clear();
   auto record = db::findDataset(database_, dataset.id);
   if (record && *record) {
     if (auto stored = db::datasetReviewStates(database_, (*record)->id)) review_ = std::move(*stored);
     else record = tl::unexpected(stored.error());
+  } else if (record) {
+    const auto catalogueFile = catalogueFileFor(dataset.id);
+    std::error_code missing;
+    if (std::filesystem::exists(catalogueFile, missing)) {
+      if (auto catalogue = loadStructureCatalogue(catalogueFile)) {
+        for (const CatalogueEntry& entry : catalogue->structures)
+          if (auto state = db::reviewStateNamed(entry.reviewState)) review_[entry.id] = *state;
+      } else {
+        status_ = "review states: " + catalogue.error().message;
+      }
+    }
   }
   if (!record) status_ = "review states: " + record.error().message;
 }
