@@ -376,7 +376,16 @@ TEST_CASE("StudyCli_MergeLabMachinesFiles_OneStudyReportsBalanceRefusesConflicts
   REQUIRE(again.exitCode == 0);
   CHECK(again.out.find("lab1.db: 0 participant(s) added, 2 already there") != std::string::npos);
 
-  runOn("lab3.db", "a1");  // another person under an id lab 1 used
+  // Another person under an id lab 1 used, with other answers. (Identical answers run within the
+  // same second export identically, and are then taken for the same records: the merge compares a
+  // database's participant with the stored one by their exported lines when the raw rows differ.)
+  writeAnswers(dir / "answers_other.jsonl", 13, [](int s) { return 5 - s % 5; });
+  {
+    auto r = test::runApp("study run " + study + " --participant a1 --group medical --answers '" +
+                          (dir / "answers_other.jsonl").string() + "' --db '" + (dir / "lab3.db").string() + "'");
+    CAPTURE(r.err);
+    REQUIRE(r.exitCode == 0);
+  }
   auto clash = test::runApp("study merge " + study + " '" + (dir / "lab3.db").string() + "'" + into);
   CHECK(clash.exitCode == 1);
   CHECK(clash.err.find("'a1'") != std::string::npos);
