@@ -347,7 +347,7 @@ Result<EditSummary> LabelEditor::smooth(std::uint16_t label, Smoothing operation
 
 void LabelEditor::beginStroke() {
   if (stroke_) endStroke();
-  stroke_.emplace();
+  stroke_ = Stroke{};  // not emplace(): clang 14 (the fuzz build) takes a nested struct with member initialisers as not default-constructible here
 }
 
 std::optional<EditSummary> LabelEditor::endStroke() {
