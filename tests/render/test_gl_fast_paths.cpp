@@ -1,6 +1,7 @@
 // The ray caster's fast paths keep the image: jumping over empty blocks skips only samples that
 // would have classified to zero opacity, and the compute and fragment shader stages run the same rays.
 #include <doctest/doctest.h>
+#include <epoxy/gl.h>
 
 #include <cmath>
 #include <cstdlib>
@@ -178,6 +179,25 @@ TEST_CASE("A field uploaded slice by slice keeps the old field on screen until i
   auto again = gl->render(s);
   REQUIRE(again);
   CHECK(maxChannelDiff(*again, *atOnce) == 0);
+
+  // A call that fails (here a GL error the test raises just before it) leaves no upload half-done:
+  // the next call sends the field again from its first slice and never reads past its last (it
+  // once went on one slice past the end: a heap overflow under sanitize.sh, a crash in the desktop).
+  REQUIRE(gl->setField(first));
+  glBindTexture(GLenum(0x1234), 0);  // GL_INVALID_ENUM, seen by the upload's status check
+  auto failed = gl->uploadFieldStep(second, 1e6);
+  CHECK_FALSE(failed.has_value());
+  // The failed call's texture is not reused: one call allocates a fresh one, the next uploads all.
+  int retries = 0;
+  for (bool done = false; !done && retries < 3; ++retries) {
+    auto retried = gl->uploadFieldStep(second, 1e6);
+    REQUIRE_MESSAGE(retried, retried.error().message);
+    done = *retried;
+  }
+  CHECK(retries == 2);
+  auto afterRetry = gl->render(s);
+  REQUIRE(afterRetry);
+  CHECK(maxChannelDiff(*afterRetry, *atOnce) == 0);
 
   // The whole-field upload still works on the swapped-in texture.
   REQUIRE(gl->setField(first));

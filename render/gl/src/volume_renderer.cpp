@@ -400,15 +400,23 @@ Result<bool> VolumeRenderer::uploadFieldStep(const FloatVolume& field, double bu
   std::vector<float> finite(slice);
   glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
   glBindTexture(GL_TEXTURE_3D, st.pendingField.id());
-  do {
+  // At least one slice a call, never past the last: a call after a failed one may find every
+  // slice sent (the loop once ran a slice past the field's end there: a heap overflow).
+  while (st.pendingNextSlice < d.z) {
     const float* src = field.voxels.data() + slice * std::size_t(st.pendingNextSlice);
     copyFinite(src, slice, finite.data());
     st.pendingMinima.addSlice(src, st.pendingNextSlice);
     glTexSubImage3D(GL_TEXTURE_3D, 0, 0, 0, st.pendingNextSlice, d.x, d.y, 1, GL_RED, GL_FLOAT, finite.data());
     ++st.pendingNextSlice;
-  } while (st.pendingNextSlice < d.z &&
-           std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count() < budgetMs);
-  if (auto e = glStatus("uploading the distance field"); !e) return tl::unexpected(e.error());
+    if (std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count() >= budgetMs) break;
+  }
+  if (auto e = glStatus("uploading the distance field"); !e) {
+    st.pendingSource = nullptr;  // the next call starts this field again, on a fresh texture
+    st.pendingGrid = Geometry{};
+    st.pendingField = Texture();
+    st.pendingDims = Dims{};
+    return tl::unexpected(e.error());
+  }
   if (st.pendingNextSlice < d.z) return false;
   // The filled texture becomes the field; the previous field texture is the spare for the next.
   std::swap(st.field, st.pendingField);
