@@ -122,6 +122,7 @@ Status DesktopModel::showDataset(Dataset dataset, const std::string& startStruct
       [this](const std::string& m) { note(m); });
   expert_ = std::make_unique<TfEditor>(*dataset_, session_.database(), sink);
   segment_->attach(*dataset_);
+  editorLabelsRevision_ = segment_->labelsRevision();
   slices_.attach(*dataset_);
   recorder_.highlightNotWanted();
   lastPickMm_.reset();
@@ -317,6 +318,7 @@ void DesktopModel::beginFrame(FieldTarget* target) {
   imports_->poll();
   for (const std::string& line : classEvents_->takeLines()) message(line);
   segment_->poll();
+  showEditedLabels();
   if (!study_->participantActive())  // the participant's trial keeps its dataset
     if (auto imported = imports_->takeDatasetToOpen()) {
       const std::string id = imported->id;

@@ -88,6 +88,14 @@ class DesktopModel {
   const render::GradientVolume& gradients() const { return gradients_; }
   // Changes whenever another dataset is shown (the renderer uploads its volume then).
   std::uint64_t datasetRevision() const { return datasetRevision_; }
+  // The segment editor's labels reach the dataset on screen at the start of each frame after an
+  // edit, undo or redo (showEditedLabels): `revision` moves then and `box` bounds the voxels
+  // that changed ({x0, y0, z0, x1, y1, z1}, max exclusive), for the renderer to upload only those.
+  struct LabelEdit {
+    std::uint64_t revision = 0;
+    std::array<int, 6> box{0, 0, 0, 0, 0, 0};
+  };
+  const LabelEdit& labelEdit() const { return labelEdit_; }
 
   ExploreState& explore() { return explore_; }
   const ExploreState& explore() const { return explore_; }
@@ -199,6 +207,11 @@ class DesktopModel {
 
  private:
   void setHovered(std::uint16_t label);
+  // The editor's labels and structures into the dataset on screen when they changed: the voxels
+  // that differ (the field service's labels, written while no field reads them), the structure
+  // list, the explore state (frames, browser, selection of the edited structure) and the fields
+  // of the labels that changed (desktop_model_segment.cpp).
+  void showEditedLabels();
   // What a click at window (x, y) meets in the view as the image shows it.
   // surfaceOpacity: where the ray's accumulated opacity first reaches it (the surface a brush
   // paints on) instead of the structure under the cursor (render::pickStructure).
@@ -222,6 +235,8 @@ class DesktopModel {
   render::GradientVolume gradients_;
   mutable render::ShadingTableCache pickTables_;  // pickAt is const; the cache only saves work
   std::uint64_t datasetRevision_ = 0;
+  std::uint64_t editorLabelsRevision_ = 0;  // the editor's labelsRevision() last shown
+  LabelEdit labelEdit_;
   std::string startView_ = "lateral_right";
   bool opened_ = false;
   ExploreState explore_;
