@@ -6,6 +6,7 @@
 // window (no FieldTarget, no view: picking and fields still run on the CPU).
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <cstdint>
 #include <functional>
@@ -38,19 +39,35 @@
 
 namespace at::app {
 
-// Where the volume view lies in the window: right of the explore panel, full height.
+// Where the volume view lies in the window: right of the explore panel, left of a docked column
+// (the segment editor) and above a docked strip (the slice panes), when those are docked.
 struct ViewLayout {
   int windowW = 1280, windowH = 720;          // logical pixels (mouse coordinates)
   int framebufferW = 1280, framebufferH = 720;  // drawable pixels
   float uiScale = 1;
   float panelPx = 0;                            // the explore panel's width as drawn (resizable); 0: the default
+  float rightPx = 0;                            // a column docked at the right edge (logical pixels)
+  float bottomPx = 0;                           // a strip docked under the view, left of that column
   float panelWidth() const { return panelPx > 0 ? panelPx : 320 * uiScale; }  // logical pixels
-  bool inView(double x, double y) const { return x >= panelWidth() && x < windowW && y >= 0 && y < windowH; }
+  // The view's rectangle in logical pixels.
+  float viewLeft() const { return panelWidth(); }
+  float viewWidth() const { return std::max(1.0f, float(windowW) - panelWidth() - rightPx); }
+  float viewHeight() const { return std::max(1.0f, float(windowH) - bottomPx); }
+  bool inView(double x, double y) const {
+    return x >= viewLeft() && x < viewLeft() + viewWidth() && y >= 0 && y < viewHeight();
+  }
   // The view's size in framebuffer pixels.
   int viewPixelsW() const;
-  int viewPixelsH() const { return framebufferH; }
+  int viewPixelsH() const;
   bool operator==(const ViewLayout&) const = default;
 };
+
+// Docks the segment editor (`editor` open) as a column at the window's right edge, and the slice
+// panes (`slices` open too) as a strip under the view, when the window is wide enough for the view
+// to keep kMinDockedViewPx beside them (1280 × 720 and larger at UI scale 1); otherwise they stay
+// floating windows over the view and the layout keeps the view whole.
+inline constexpr float kMinDockedViewPx = 400;
+void dockPanels(ViewLayout& layout, bool editor, bool slices);
 
 struct DesktopOptions {
   std::string dataset;              // empty: the start course's dataset; else as openNamedDataset takes it
@@ -193,7 +210,8 @@ class DesktopModel {
   void renderFailed(const std::string& why);
   // End of a frame that took `ms` (for the recorder and the highlight latency).
   void endFrame(Clock::time_point end, double ms);
-  // The image is final (full quality) and shows the field the view needs.
+  // The image is final (full quality), shows the field the view needs and the segment editor's
+  // latest labels.
   bool settled() const;
   // Nothing changes until the user acts (the loop may wait for input).
   bool idle() const;
