@@ -119,6 +119,10 @@ struct PanelRect {
   bool docked() const { return w > 0 && h > 0; }
 };
 
+// ImGui::Begin of a panel window at `where`: docked (fixed, neither moved nor resized) or floating
+// (placed when it appears, sized to fit). False when collapsed: the caller still calls End().
+bool beginPanel(const char* title, bool* open, const PanelRect& where);
+
 struct PaneMouse {
   double x = 0, y = 0;
 };

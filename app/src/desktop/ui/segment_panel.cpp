@@ -39,15 +39,7 @@ void SegmentPanel::draw(SegmentController& editor, const PanelRect& where) {
   // Docked: a column at the window's right edge, its sections stacked (the slice as wide as the
   // column) and scrolled; floating: the controls left of the slice, sized to fit.
   const bool docked = where.docked();
-  if (docked) {
-    ImGui::SetNextWindowPos(ImVec2(where.x, where.y));
-    ImGui::SetNextWindowSize(ImVec2(where.w, where.h));
-  } else {
-    ImGui::SetNextWindowPos(ImVec2(where.x, where.y), ImGuiCond_Appearing);
-  }
-  const ImGuiWindowFlags flags = docked ? ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoResize | ImGuiWindowFlags_NoCollapse
-                                        : ImGuiWindowFlags_AlwaysAutoResize;
-  if (!ImGui::Begin("Segment editor", &editor.windowOpen, flags)) {
+  if (!beginPanel("Segment editor", &editor.windowOpen, where)) {
     ImGui::End();
     return;
   }

@@ -24,6 +24,16 @@ render::RgbaImage toRgba(const RgbImage& image) {
   return rgba;
 }
 
+bool beginPanel(const char* title, bool* open, const PanelRect& where) {
+  if (where.docked()) {
+    ImGui::SetNextWindowPos(ImVec2(where.x, where.y));
+    ImGui::SetNextWindowSize(ImVec2(where.w, where.h));
+    return ImGui::Begin(title, open, ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoResize | ImGuiWindowFlags_NoCollapse);
+  }
+  ImGui::SetNextWindowPos(ImVec2(where.x, where.y), ImGuiCond_Appearing);
+  return ImGui::Begin(title, open, ImGuiWindowFlags_AlwaysAutoResize);
+}
+
 std::optional<PaneMouse> drawSlicePane(const char* id, const render::gl::ImageTexture& texture, std::array<double, 2> pixelMm,
                                        float side, const std::function<void(double, double)>& grey) {
   const double widthMm = texture.width() * pixelMm[0], heightMm = texture.height() * pixelMm[1];
@@ -49,15 +59,7 @@ void SlicesPanel::draw(DesktopModel& model, const PanelRect& where) {
   if (!slices.windowOpen || !slices.attached()) return;
   // Docked: a strip under the view (the segment editor docked beside it), the panes filling it.
   const bool docked = where.docked();
-  if (docked) {
-    ImGui::SetNextWindowPos(ImVec2(where.x, where.y));
-    ImGui::SetNextWindowSize(ImVec2(where.w, where.h));
-  } else {
-    ImGui::SetNextWindowPos(ImVec2(where.x, where.y), ImGuiCond_Appearing);
-  }
-  const ImGuiWindowFlags flags = docked ? ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoResize | ImGuiWindowFlags_NoCollapse
-                                        : ImGuiWindowFlags_AlwaysAutoResize;
-  if (!ImGui::Begin("Slices", &slices.windowOpen, flags)) {
+  if (!beginPanel("Slices", &slices.windowOpen, where)) {
     ImGui::End();
     return;
   }
