@@ -39,6 +39,12 @@ void VolumeView::takeDataset(DesktopModel& model) {
       renderer_.reset();
       return;
     }
+    if (!model.explore().wholeVolume())
+      if (auto reserved = renderer_->reserveDeviceField(dataset.volume.dims()); !reserved)
+        // Fields computed on a GPU arrive on the volume's grid; registering their texture now keeps
+        // ~0.1 s out of the first hover (an unlabelled scan's first label pays it in its first
+        // field). A failure here only moves that cost (and its error) there.
+        messages_("volume renderer: " + reserved.error().message);
   }
   if (labelRevision_ != model.labelEdit().revision) {  // the segment editor changed labels
     const Dims& d = dataset.volume.dims();
