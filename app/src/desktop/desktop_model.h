@@ -228,7 +228,8 @@ class DesktopModel {
   // The editor's labels and structures into the dataset on screen when they changed: the voxels
   // that differ (the field service's labels, written while no field reads them), the structure
   // list, the explore state (frames, browser, selection of the edited structure) and the fields
-  // of the labels that changed (desktop_model_segment.cpp).
+  // of the labels that changed (desktop_model_segment.cpp). Event labels_shown {"changed": labels,
+  // "box", "whole_volume", "selected", "ms": the time this took on the UI thread}.
   void showEditedLabels();
   // What a click at window (x, y) meets in the view as the image shows it.
   // surfaceOpacity: where the ray's accumulated opacity first reaches it (the surface a brush

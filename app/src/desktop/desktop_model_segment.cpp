@@ -53,6 +53,7 @@ LabelDiff diffLabels(const LabelMap& before, const LabelMap& after, std::vector<
 void DesktopModel::showEditedLabels() {
   if (!segment_->attached() || segment_->labelsRevision() == editorLabelsRevision_) return;
   editorLabelsRevision_ = segment_->labelsRevision();
+  const Clock::time_point start = Clock::now();
   const LabelMap& edited = segment_->labels();
   std::vector<bool> marked(65536, false);
   const LabelDiff diff = diffLabels(dataset_->labels, edited, marked);
@@ -90,7 +91,7 @@ void DesktopModel::showEditedLabels() {
   if (std::find(changed.begin(), changed.end(), explore_.shownLabel()) != changed.end()) fields_->hoverChanged();
   if (diff.any()) labelEdit_ = {labelEdit_.revision + 1, diff.box};
   nlohmann::json e = {{"event", "labels_shown"}, {"changed", changed}, {"whole_volume", explore_.wholeVolume()},
-            {"selected", idOf(explore_.selected())}};
+            {"selected", idOf(explore_.selected())}, {"ms", msBetween(start, Clock::now())}};
   if (diff.any()) e["box"] = diff.box;
   event(e);
   if (explore_.selected() != selectedBefore && explore_.selected())
