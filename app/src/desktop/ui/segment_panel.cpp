@@ -45,10 +45,11 @@ void SegmentPanel::draw(SegmentController& editor, const PanelRect& where) {
   }
   const float line = ImGui::GetFontSize();
   if (!docked) ImGui::BeginGroup();  // the controls, left of the slice
-  if (ImGui::CollapsingHeader("Labels", ImGuiTreeNodeFlags_DefaultOpen)) drawLabels(editor, docked ? 8 : 12);
+  if (ImGui::CollapsingHeader("Labels", ImGuiTreeNodeFlags_DefaultOpen)) drawLabels(editor, docked ? 6 : 12);
   const bool sliceOpen = ImGui::CollapsingHeader("Slice", ImGuiTreeNodeFlags_DefaultOpen);
   if (sliceOpen) drawSliceControls(editor);
-  if (sliceOpen && docked) drawSlice(editor, ImGui::GetContentRegionAvail().x);
+  // Docked, the slice is as wide as the column but leaves room for the tools below it.
+  if (sliceOpen && docked) drawSlice(editor, std::min(ImGui::GetContentRegionAvail().x, 0.42f * where.h));
   if (ImGui::CollapsingHeader("Tools", ImGuiTreeNodeFlags_DefaultOpen)) drawTools(editor);
   if (ImGui::CollapsingHeader("Save and export", docked ? 0 : ImGuiTreeNodeFlags_DefaultOpen)) drawSaving(editor);
   ImGui::PushTextWrapPos(docked ? 0.0f : ImGui::GetCursorPosX() + line * 22);
