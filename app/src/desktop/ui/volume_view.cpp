@@ -32,6 +32,7 @@ void VolumeView::takeDataset(DesktopModel& model) {
     datasetRevision_ = model.datasetRevision();
     if (auto st = renderer_->setVolume(model.dataset().volume, model.dataset().labels, model.gradients()); !st) {
       messages_("volume renderer: " + st.error().message);
+      image_ = {};  // its textures go with it
       renderer_.reset();
     } else if (model.explore().wholeVolume()) {  // its data TF over a field that changes nothing
       if (auto field = renderer_->setField(render::neutralField(model.dataset().volume.geometry)); !field)
