@@ -343,23 +343,46 @@ bool VolumeRenderer::hasCudaInterop() {
 #endif
 }
 
+#if defined(AT_HAVE_CUDA)
+namespace {
+// Gives the field texture storage of `dims` registered with CUDA, unless it has it already. The
+// registration costs ~70-170 ms once per storage (driver work), so it is kept until the storage
+// changes (setField, uploads).
+Status ensureInteropStorage(VolumeRenderer::State& st, const Dims& dims) {
+  if (st.interop && st.interopDims == dims) return {};
+  st.interop.reset();
+  glBindTexture(GL_TEXTURE_3D, st.field.id());
+  setTextureParams(GL_LINEAR);
+  glTexImage3D(GL_TEXTURE_3D, 0, GL_R32F, dims.x, dims.y, dims.z, 0, GL_RED, GL_FLOAT, nullptr);
+  st.fieldDims = dims;
+  if (auto s = glStatus("allocating the distance field"); !s) return s;
+  auto target = cuda::GlTextureTarget::registerTexture(st.field.id(), dims.x, dims.y, dims.z);
+  if (!target) return tl::unexpected(target.error());
+  st.interop.emplace(std::move(*target));
+  st.interopDims = dims;
+  return {};
+}
+}  // namespace
+#endif
+
+Result<bool> VolumeRenderer::reserveDeviceField(const Dims& dims) {
+#if defined(AT_HAVE_CUDA)
+  if (!cuda::queryDevice().available) return false;
+  State& st = *state_;
+  if (st.hasField) return false;  // never replaces a field being shown
+  if (auto s = ensureInteropStorage(st, dims); !s) return tl::unexpected(s.error());
+  return true;
+#else
+  (void)dims;
+  return false;
+#endif
+}
+
 Status VolumeRenderer::setFieldFromDevice(const cuda::DeviceField& field) {
 #if defined(AT_HAVE_CUDA)
   State& st = *state_;
   const Geometry& grid = field.grid();
-  if (!st.interop || !(st.interopDims == grid.dims)) {
-    // New storage: allocate the texture and register it with CUDA once for this size.
-    st.interop.reset();
-    glBindTexture(GL_TEXTURE_3D, st.field.id());
-    setTextureParams(GL_LINEAR);
-    glTexImage3D(GL_TEXTURE_3D, 0, GL_R32F, grid.dims.x, grid.dims.y, grid.dims.z, 0, GL_RED, GL_FLOAT, nullptr);
-    st.fieldDims = grid.dims;
-    if (auto s = glStatus("allocating the distance field"); !s) return s;
-    auto target = cuda::GlTextureTarget::registerTexture(st.field.id(), grid.dims.x, grid.dims.y, grid.dims.z);
-    if (!target) return tl::unexpected(target.error());
-    st.interop.emplace(std::move(*target));
-    st.interopDims = grid.dims;
-  }
+  if (auto s = ensureInteropStorage(st, grid.dims); !s) return s;
   if (auto s = st.interop->copyFrom(field); !s) return s;
   st.fieldGrid = grid;
   st.hasField = true;

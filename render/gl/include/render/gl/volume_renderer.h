@@ -101,6 +101,11 @@ class VolumeRenderer {
   // interop, no host round trip). Error when built without CUDA or when a CUDA call fails. Such
   // a field is not seen by the CPU, so empty-space skipping does not use its distances.
   Status setFieldFromDevice(const cuda::DeviceField& field);
+  // Gives the field texture storage of `dims` registered with CUDA now, which the first device
+  // field of those dims would otherwise do in its frame (~70-170 ms once). For a view that opens a
+  // dataset whose fields will come from the GPU. True when done; false (nothing done) without
+  // CUDA interop or a CUDA device, or while a field is shown.
+  Result<bool> reserveDeviceField(const Dims& dims);
   // Whether this build has the interop path (AT_HAVE_CUDA).
   static bool hasCudaInterop();
   void clearField();
