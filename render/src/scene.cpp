@@ -45,6 +45,21 @@ Result<StructureFrame> structureFrame(const LabelMap& labels, std::uint16_t labe
   return f;
 }
 
+StructureFrame unionFrame(const StructureFrame& a, const StructureFrame& b) {
+  StructureFrame u;
+  const double wa = std::max(a.volumeMm3, 1e-9), wb = std::max(b.volumeMm3, 1e-9);
+  u.centroidMm = (1.0 / (wa + wb)) * (wa * a.centroidMm + wb * b.centroidMm);
+  u.anchorMm = a.anchorMm;
+  const Vec3 da = a.centroidMm - u.centroidMm, db = b.centroidMm - u.centroidMm;
+  u.radiusMm = std::max(std::sqrt(dot(da, da)) + a.radiusMm, std::sqrt(dot(db, db)) + b.radiusMm);
+  u.voxelCount = a.voxelCount + b.voxelCount;
+  u.volumeMm3 = a.volumeMm3 + b.volumeMm3;
+  u.voxelMm = std::max(a.voxelMm, b.voxelMm);
+  u.pointsMm = a.pointsMm;
+  u.pointsMm.insert(u.pointsMm.end(), b.pointsMm.begin(), b.pointsMm.end());
+  return u;
+}
+
 double contextRadiusMm(const StructureFrame& f) {
   const double equivalent = std::cbrt(3.0 * f.volumeMm3 / (4.0 * 3.14159265358979323846));
   return std::sqrt(equivalent * std::max(f.radiusMm, equivalent));

@@ -46,7 +46,7 @@ DesktopModel::DesktopModel(LearningSession& session, const render::PresetLibrary
   courses_ = std::make_unique<CourseEditor>(session_, library_, sink,
                                             [this](const lessons::QuestionScene& scene, const std::optional<render::Preset>& captured) {
                                               const LessonController::Shown shown{scene.structure, scene.presetId, scene.view,
-                                                                                  scene.camera, scene.clip};
+                                                                                  scene.camera, scene.clip, {}};
                                               if (captured) showStructureWith(shown, *captured);
                                               else showLessonStructure(shown);
                                             });
@@ -256,7 +256,7 @@ bool DesktopModel::select(std::uint16_t label) {
 }
 
 Status DesktopModel::setView(const std::string& name) {
-  return explore_.setView(name, layout_.framebufferW, layout_.framebufferH);
+  return explore_.setView(name, layout_.viewPixelsW(), layout_.viewPixelsH());  // the view beside the panel
 }
 
 void DesktopModel::reframe() {

@@ -17,7 +17,7 @@ void DesktopModel::showExamItem(const std::optional<ExamController::ItemScene>& 
   turnToward_.reset();
   examSlice_.reset();
   if (!item) return;
-  showLessonStructure({item->scene.structure, item->scene.presetId, item->scene.view, std::nullopt, std::nullopt});
+  showLessonStructure({item->scene.structure, item->scene.presetId, item->scene.view, std::nullopt, std::nullopt, {}});
   if (!item->locate) return;
   const Structure* target = dataset_->findStructure(item->target);
   if (!target) {

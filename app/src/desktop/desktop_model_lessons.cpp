@@ -26,7 +26,9 @@ void DesktopModel::showStructureWith(const LessonController::Shown& shown, const
   select(s->label);
   const std::string view =
       shown.view ? lessons::toString(*shown.view) : (explore_.viewName().empty() ? startView_ : explore_.viewName());
-  if (auto st = setView(view); !st) message(st.error().message);
+  const Structure* alsoInView = shown.alsoInView.empty() ? nullptr : dataset_->findStructure(shown.alsoInView);
+  if (auto st = explore_.setView(view, layout_.viewPixelsW(), layout_.viewPixelsH(), alsoInView ? alsoInView->label : 0); !st)
+    message(st.error().message);
   if (shown.camera) explore_.setCamera(cameraOf(*shown.camera));
   // The step's plane, else none: the student sees what the author captured.
   ClipSettings clip;

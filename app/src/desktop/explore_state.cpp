@@ -143,10 +143,15 @@ bool ExploreState::setT(float t) {
   return true;
 }
 
-Status ExploreState::setView(const std::string& name, int width, int height) {
+Status ExploreState::setView(const std::string& name, int width, int height, std::uint16_t alsoInView) {
   const std::uint16_t label = shownLabel();
   const render::StructureFrame* frame = frameOf(label);
   if (!frame) return {};
+  std::optional<render::StructureFrame> both;
+  if (const render::StructureFrame* other = alsoInView != label ? frameOf(alsoInView) : nullptr) {
+    both = render::unionFrame(*frame, *other);
+    frame = &*both;
+  }
   render::ViewRequest request;
   request.view = name;
   request.margin = wholeVolume_ ? 1.6 : 2.5;  // the whole grid as the render command frames it

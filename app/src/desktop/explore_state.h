@@ -92,8 +92,10 @@ class ExploreState {
   bool setBare(bool bare);
   bool setT(float t);
   // The named view framing the shown structure with room around it to orbit and hover, for an
-  // image of width × height pixels; an unknown name is an error and the camera stays.
-  Status setView(const std::string& name, int width, int height);
+  // image of width × height pixels; an unknown name is an error and the camera stays. A non-zero
+  // `alsoInView` (a structure of the dataset) is framed with it, unmarked: a locate question's
+  // target beside the region it is asked in.
+  Status setView(const std::string& name, int width, int height, std::uint16_t alsoInView = 0);
   // A step's free camera replaces the view's framing (the named view stays the view's name).
   void setCamera(const render::Camera& camera);
   void orbit(double azimuthDeg, double elevationDeg);

@@ -20,6 +20,12 @@ using SteadyClock = std::chrono::steady_clock;
 
 lessons::UnixSeconds unixNow() { return lessons::UnixSeconds(std::time(nullptr)); }
 
+// The structure a question's view must also show: a locate question's target (its scene is a
+// neighbouring region, which alone may leave the target outside the view).
+std::string locateTarget(const quiz::ResolvedQuestion& q) {
+  return q.question.kind == quiz::QuestionKind::Locate ? q.question.target : std::string();
+}
+
 }  // namespace
 
 bool namesGiveAway(quiz::QuestionKind kind) {
@@ -259,7 +265,7 @@ Status LessonController::showCurrent() {
   json e = {{"event", "lesson_step"}, {"lesson", runningLesson_}, {"position", view->position},
             {"count", view->count}, {"kind", lessons::toString(view->kind)}};
   if (view->kind == lessons::StepKind::Show) {
-    show_({view->structure, view->presetId, view->view, view->scene.camera, view->scene.clip});
+    show_({view->structure, view->presetId, view->view, view->scene.camera, view->scene.clip, {}});
     e["structure"] = view->structure;
   } else {
     auto question = engine_->currentQuestion();
@@ -270,7 +276,8 @@ Status LessonController::showCurrent() {
     asked.grade = view->feedback;  // resumed: answered before
     // The question's scene (lessons::sceneFor): identify and name questions highlight their
     // target; a locate question shows its region, a neighbouring landmark, without marking it.
-    show_({view->scene.structure, view->scene.presetId, view->scene.view, view->scene.camera, view->scene.clip});
+    show_({view->scene.structure, view->scene.presetId, view->scene.view, view->scene.camera, view->scene.clip,
+           locateTarget(asked.question)});
     asked_ = std::move(asked);
     e["question"] = view->questionId;
     e["question_kind"] = quiz::toString(view->questionKind);
@@ -407,7 +414,7 @@ Status LessonController::startReview() {
   for (const std::string& id : asked.question.choices) asked.choiceNames.push_back(displayName(id));
   const quiz::QuestionKind kind = asked.question.question.kind;
   if (auto scene = lessons::questionScene(course, asked.question.question.id))
-    show_({scene->structure, scene->presetId, scene->view, scene->camera, scene->clip});
+    show_({scene->structure, scene->presetId, scene->view, scene->camera, scene->clip, locateTarget(asked.question)});
   events_({{"event", "review_question"}, {"course", course.id}, {"question", asked.question.question.id},
            {"question_kind", quiz::toString(kind)}, {"target", asked.question.question.target},
            {"choices", asked.question.choices}});

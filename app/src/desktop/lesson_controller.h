@@ -45,6 +45,7 @@ class LessonController {
     std::optional<lessons::CameraView> view;
     std::optional<lessons::StepCamera> camera;  // replaces the view's framing
     std::optional<lessons::StepClip> clip;      // none: unclipped
+    std::string alsoInView;  // a locate question's target: framed with the structure, not marked
   };
   using ShowStructure = std::function<void(const Shown&)>;
   // The render parameters on screen, stored with each answer.

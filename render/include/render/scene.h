@@ -32,6 +32,11 @@ constexpr std::size_t kMaxFramePoints = 4096;
 // Error if no voxel carries `label`.
 Result<StructureFrame> structureFrame(const LabelMap& labels, std::uint16_t label);
 
+// One frame holding both structures (for framing: a view that must show `b` beside `a`, e.g. a
+// locate question's target beside the region it is asked in): their points, the volume-weighted
+// centroid, a radius reaching both, `a`'s anchor.
+StructureFrame unionFrame(const StructureFrame& a, const StructureFrame& b);
+
 // The context radius of a structure: the geometric mean of its equivalent-sphere radius (its
 // volume's) and its farthest-voxel radius, in mm. A compact structure gets about its radius; a long
 // thin one (a nerve, a canal) less than its length, so its context hugs it rather than filling the
