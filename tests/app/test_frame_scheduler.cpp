@@ -71,6 +71,37 @@ TEST_CASE("FrameScheduler_WithoutACostModel_StartsCoarse_ThenRefinesTheFullLevel
   CHECK(s.plan(2, 1, atMs(1001)));
 }
 
+TEST_CASE("FrameScheduler_AFailedPlan_IsPlannedAgainTwice_ThenLeftUntilTheViewChanges") {
+  // A GL error costs one frame (the renderer rebuilds its state): the view is not left on an
+  // older image. A failure that repeats is not retried every frame.
+  FrameScheduler s(100, 1);
+  s.setViewPixels(400, 300);
+  auto p = s.plan(1, 1, atMs(0));
+  REQUIRE(p);
+  s.failed();
+  auto retry = s.plan(1, 1, atMs(10));
+  REQUIRE(retry);
+  CHECK_FALSE(retry->progressive);
+  s.rendered(*retry, 5);
+  auto rest = s.plan(1, 1, atMs(400));
+  REQUIRE(rest);
+  REQUIRE(rest->progressive);
+  s.failed();  // a refine that failed: the rest starts over, as after a change
+  CHECK_FALSE(s.finished(1));
+  auto again = s.plan(1, 1, atMs(410));
+  REQUIRE(again);
+  CHECK_FALSE(again->progressive);
+  s.failed();
+  REQUIRE(s.plan(1, 1, atMs(420)));  // the second retry in a row
+  s.failed();
+  CHECK_FALSE(s.plan(1, 1, atMs(430)));  // the third failure in a row: left alone …
+  CHECK_FALSE(s.plan(1, 1, atMs(900)));
+  auto changed = s.plan(2, 1, atMs(910));  // … until the view changes, which has its own retries
+  REQUIRE(changed);
+  s.failed();
+  CHECK(s.plan(2, 1, atMs(920)));
+}
+
 TEST_CASE("FrameScheduler_SlowFullLevel_RestartsSmallerOnce_SoThatTheImageConvergesInTime") {
   FrameScheduler s(100, 1);
   s.setViewPixels(1000, 1000);

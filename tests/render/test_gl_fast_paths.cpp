@@ -56,6 +56,30 @@ RandomScene randomScene(std::mt19937_64& rng) {
   return s;
 }
 
+// Uploads `scene` (its field too) and selects its structure (label 7).
+void upload(gl::VolumeRenderer& gl, const RandomScene& scene) {
+  REQUIRE(gl.setVolume(scene.volume, scene.labels));
+  REQUIRE(gl.setField(scene.field));
+  gl.setSelected(7);
+}
+
+// A pixel-unpack buffer of 16 bytes, bound while it lives: a texture upload from client memory
+// then reads past its end, so the renderer's own upload call raises GL_INVALID_OPERATION.
+struct TooSmallUnpackBuffer {
+  GLuint id = 0;
+  TooSmallUnpackBuffer() {
+    glGenBuffers(1, &id);
+    glBindBuffer(GL_PIXEL_UNPACK_BUFFER, id);
+    glBufferData(GL_PIXEL_UNPACK_BUFFER, 16, nullptr, GL_STATIC_DRAW);
+  }
+  ~TooSmallUnpackBuffer() {
+    glBindBuffer(GL_PIXEL_UNPACK_BUFFER, 0);
+    glDeleteBuffers(1, &id);
+  }
+  TooSmallUnpackBuffer(const TooSmallUnpackBuffer&) = delete;
+  TooSmallUnpackBuffer& operator=(const TooSmallUnpackBuffer&) = delete;
+};
+
 int maxChannelDiff(const RgbaImage& a, const RgbaImage& b) {
   int worst = 0;
   for (std::size_t i = 0; i < a.rgba.size(); ++i) worst = std::max(worst, std::abs(int(a.rgba[i]) - int(b.rgba[i])));
@@ -69,9 +93,7 @@ TEST_CASE("Skipping empty blocks and the fragment stage give the image of marchi
   if (!gl) return;
   std::mt19937_64 rng(test::freshSeed("gl_fast_paths"));
   const RandomScene scene = randomScene(rng);
-  REQUIRE(gl->setVolume(scene.volume, scene.labels));
-  REQUIRE(gl->setField(scene.field));
-  gl->setSelected(7);
+  upload(*gl, scene);
   std::uniform_real_distribution<double> angle(-180, 180);
   for (RenderMode mode : {RenderMode::Wdt, RenderMode::Bare, RenderMode::Lighting}) {
     for (int view = 0; view < 3; ++view) {
@@ -180,13 +202,31 @@ TEST_CASE("A field uploaded slice by slice keeps the old field on screen until i
   REQUIRE(again);
   CHECK(maxChannelDiff(*again, *atOnce) == 0);
 
-  // A call that fails (here a GL error the test raises just before it) leaves no upload half-done:
-  // the next call sends the field again from its first slice and never reads past its last (it
-  // once went on one slice past the end: a heap overflow under sanitize.sh, a crash in the desktop).
+  // An error other GL code left pending is reported as not the upload's, and the upload is not
+  // touched: the next call sends the whole field.
   REQUIRE(gl->setField(first));
-  glBindTexture(GLenum(0x1234), 0);  // GL_INVALID_ENUM, seen by the upload's status check
-  auto failed = gl->uploadFieldStep(second, 1e6);
-  CHECK_FALSE(failed.has_value());
+  glBindTexture(GLenum(0x1234), 0);  // GL_INVALID_ENUM
+  auto notOurs = gl->uploadFieldStep(second, 1e6);
+  REQUIRE_FALSE(notOurs.has_value());
+  CHECK(notOurs.error().message.find("raised before the field upload") != std::string::npos);
+  auto sent = gl->uploadFieldStep(second, 1e6);
+  REQUIRE_MESSAGE(sent, sent.error().message);
+  CHECK(*sent);
+  auto afterPending = gl->render(s);
+  REQUIRE(afterPending);
+  CHECK(maxChannelDiff(*afterPending, *atOnce) == 0);
+
+  // A call that fails in its own GL calls (here a too small pixel-unpack buffer the test leaves
+  // bound) leaves no upload half-done: the next call sends the field again from its first slice
+  // and never reads past its last (it once went on one slice past the end: a heap overflow under
+  // sanitize.sh, a crash in the desktop).
+  REQUIRE(gl->setField(first));
+  auto failed = [&] {
+    const TooSmallUnpackBuffer tooSmall;
+    return gl->uploadFieldStep(second, 1e6);
+  }();
+  REQUIRE_FALSE(failed.has_value());
+  CHECK(failed.error().message.find("during uploading the distance field") != std::string::npos);
   // The failed call's texture is not reused: one call allocates a fresh one, the next uploads all.
   int retries = 0;
   for (bool done = false; !done && retries < 3; ++retries) {
@@ -211,9 +251,7 @@ TEST_CASE("Progressive refinement casts a bounded chunk per call, shows nothing 
   if (!gl) return;
   std::mt19937_64 rng(test::freshSeed("gl_progressive"));
   const RandomScene scene = randomScene(rng);
-  REQUIRE(gl->setVolume(scene.volume, scene.labels));
-  REQUIRE(gl->setField(scene.field));
-  gl->setSelected(7);
+  upload(*gl, scene);
   RenderSettings s;
   s.width = 130;  // the coarsest lattice (stride 8) is 17 × 13 points: 6 tiles of 8 × 8
   s.height = 100;
@@ -263,4 +301,113 @@ TEST_CASE("Progressive refinement casts a bounded chunk per call, shows nothing 
   REQUIRE(again);
   CHECK(again->restarted);
   CHECK(again->complete);
+}
+
+TEST_CASE("The image a view was handed stays a live texture while a new image of another size is not displayable yet") {
+  // The desktop draws the last image display() or renderToTexture() handed it until refine()
+  // gives a sharper one. refine() at another size (a rest that restarts smaller, a resized
+  // window) used to delete the level textures at once: the view then bound a deleted name
+  // (GL_INVALID_OPERATION in the UI's draw, every frame, which every later renderer call reported
+  // as its own error: the CPU desktop's hover sweep, about 1 run in 3).
+  auto* gl = test::glRenderer();
+  if (!gl) return;
+  std::mt19937_64 rng(test::freshSeed("gl_handed_out"));
+  const RandomScene scene = randomScene(rng);
+  upload(*gl, scene);
+  RenderSettings s;
+  s.width = 130;
+  s.height = 100;
+  s.preset.mode = RenderMode::Wdt;
+  s.camera = Camera::named(NamedView::Anterior, {0, 0, 0}, 12);
+  const auto isLiveTexture = [](std::uintptr_t handle) {
+    glGetError();
+    glBindTexture(GL_TEXTURE_2D, GLuint(handle));
+    const GLenum bound = glGetError();
+    glBindTexture(GL_TEXTURE_2D, 0);
+    return bound == GL_NO_ERROR && glIsTexture(GLuint(handle)) == GL_TRUE;
+  };
+  for (int round = 0; round < 3; ++round) {
+    auto complete = gl->refine(s, 1e9);
+    REQUIRE(complete);
+    REQUIRE(complete->complete);
+    const gl::DisplayImage shown = gl->display();
+    REQUIRE(shown.handle != 0);
+    auto before = gl->readDisplay();
+    REQUIRE(before);
+    // Smaller, then larger again: each new size casts one tile, not yet a displayable image.
+    s.width = round == 1 ? 130 : 70 + 10 * round;
+    s.height = round == 1 ? 100 : 50 + 10 * round;
+    auto started = gl->refine(s, 0.0);
+    REQUIRE_MESSAGE(started, started.error().message);
+    CHECK(started->restarted);
+    CHECK_FALSE(started->displayable);
+    CHECK(isLiveTexture(shown.handle));
+    // A whole frame into the renderer's texture at yet another size keeps it too.
+    RenderSettings other = s;
+    other.width += 3;
+    auto frame = gl->renderToTexture(other);
+    REQUIRE_MESSAGE(frame, frame.error().message);
+    CHECK(isLiveTexture(frame->handle));
+    CHECK(isLiveTexture(shown.handle) == (frame->handle == shown.handle));  // released once another is handed out
+    auto next = gl->refine(s, 0.0);
+    REQUIRE(next);
+    CHECK(isLiveTexture(frame->handle));  // the frame's texture is what the view shows now
+  }
+}
+
+TEST_CASE("A frame that meets a GL error fails alone: the next frame rebuilds what it touched and equals a fresh render") {
+  auto* gl = test::glRenderer();
+  if (!gl) return;
+  std::mt19937_64 rng(test::freshSeed("gl_recovery"));
+  const RandomScene scene = randomScene(rng);
+  upload(*gl, scene);
+  RenderSettings a;
+  a.width = 64;
+  a.height = 48;
+  a.preset.mode = RenderMode::Wdt;
+  a.preset.t = 0.5f;
+  a.camera = Camera::named(NamedView::Anterior, {0, 0, 0}, 12);
+  a.camera.orbit(std::uniform_real_distribution<double>(-180, 180)(rng), 10);
+  RenderSettings b = a;  // another table: context far out, in another colour
+  b.preset.t = 1.0f;
+  b.preset.distanceTf = {{0, {0.2f, 0.9f, 0.3f, 1}}, {1, {0.2f, 0.9f, 0.3f, 1}}};
+  b.preset.surfaceGradientHu = {0, 0};
+  b.preset.surfaceInterior = 1;
+  auto expectedB = gl->render(b);
+  REQUIRE(expectedB);
+  auto expectedA = gl->render(a);
+  REQUIRE(expectedA);
+  REQUIRE(maxChannelDiff(*expectedA, *expectedB) > 8);
+
+  // An error other GL code left pending fails the next call, named as not the renderer's; the
+  // call after it renders as before.
+  glBindTexture(GLenum(0x1234), 0);  // GL_INVALID_ENUM
+  auto notOurs = gl->refine(a, 1e9);
+  REQUIRE_FALSE(notOurs.has_value());
+  CHECK(notOurs.error().message.find("raised before this frame's render") != std::string::npos);
+  auto refined = gl->refine(a, 1e9);
+  REQUIRE_MESSAGE(refined, refined.error().message);
+  CHECK(refined->complete);
+  auto shownA = gl->readDisplay();
+  REQUIRE(shownA);
+  CHECK(maxChannelDiff(*shownA, *expectedA) <= 1);
+
+  // A frame whose own uploads fail (the table and occupancy grid of b, with a too small
+  // pixel-unpack buffer left bound): the next frame builds them again rather than taking the
+  // failed upload for b's (which drew b with a's table: the old code).
+  auto failed = [&] {
+    const TooSmallUnpackBuffer tooSmall;
+    return gl->refine(b, 1e9);
+  }();
+  REQUIRE_FALSE(failed.has_value());
+  CHECK(failed.error().message.find("GL: error GL_INVALID_OPERATION during") != std::string::npos);
+  auto recovered = gl->refine(b, 1e9);
+  REQUIRE_MESSAGE(recovered, recovered.error().message);
+  CHECK(recovered->complete);
+  auto shownB = gl->readDisplay();
+  REQUIRE(shownB);
+  CHECK(maxChannelDiff(*shownB, *expectedB) <= 1);
+  auto whole = gl->render(b);
+  REQUIRE(whole);
+  CHECK(maxChannelDiff(*whole, *expectedB) == 0);
 }

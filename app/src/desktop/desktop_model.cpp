@@ -374,6 +374,7 @@ render::RenderSettings DesktopModel::renderSettings(const RenderPlan& plan) cons
 }
 
 void DesktopModel::rendered(const RenderPlan& plan, double ms) {
+  lastRenderFailure_.clear();
   scheduler_.rendered(plan, ms);
   recorder_.noteRender(plan.level, ms);
   frameRenderMs_ += ms;
@@ -381,6 +382,7 @@ void DesktopModel::rendered(const RenderPlan& plan, double ms) {
 
 bool DesktopModel::refined(const RenderPlan& plan, const RefineReport& report, double ms, Clock::time_point now) {
   recorder_.noteRefine(ms);
+  lastRenderFailure_.clear();
   frameRenderMs_ += ms;
   const bool show = scheduler_.refined(plan, report, now);
   if (report.complete && scheduler_.settledAfterMs()) recorder_.noteSettled(*scheduler_.settledAfterMs(), double(plan.width) / std::max(1, layout_.viewPixelsW()));
@@ -388,7 +390,10 @@ bool DesktopModel::refined(const RenderPlan& plan, const RefineReport& report, d
 }
 
 void DesktopModel::renderFailed(const std::string& why) {
-  message("rendering: " + why);
+  if (why != lastRenderFailure_)
+    message("the 3-D view could not draw a frame (" + why +
+            "); it starts over. If this keeps coming back, run with AT_GL_DEBUG=1 to see which GL call fails.");
+  lastRenderFailure_ = why;
   scheduler_.failed();
 }
 

@@ -262,6 +262,7 @@ class DesktopModel {
   std::unique_ptr<FieldView> fields_;
   FrameScheduler scheduler_;
   double frameRenderMs_ = 0;  // rendering in this frame
+  std::string lastRenderFailure_;  // reported once until a render succeeds
   FrameRecorder recorder_;
   std::unique_ptr<TfEditor> expert_;
   std::unique_ptr<LessonController> lessons_;

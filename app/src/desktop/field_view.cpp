@@ -150,9 +150,11 @@ void FieldView::update(FieldTarget* target, FrameRecorder& recorder) {
     auto complete = target->show(chosen, label);
     recorder.noteUpload(msBetween(start, Clock::now()));
     if (!complete) {
-      messages_("uploading the field: " + complete.error().message);
+      if (complete.error().message != lastUploadError_) messages_("uploading the field: " + complete.error().message);
+      lastUploadError_ = complete.error().message;
       return;
     }
+    lastUploadError_.clear();
     uploading_ = !*complete;
     if (!*complete) return;
   }

@@ -103,6 +103,7 @@ class FieldView {
   std::shared_ptr<const DistanceField> field_;
   const void* source_ = nullptr;  // identity of the field on screen; null = none
   std::string key_;
+  std::string lastUploadError_;  // reported once until an upload call succeeds
   bool gpuFields_ = false;
   bool uploading_ = false;
   std::string status_;

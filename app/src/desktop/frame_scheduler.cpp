@@ -108,6 +108,7 @@ std::optional<RenderPlan> FrameScheduler::plan(std::uint64_t revision, std::uint
 void FrameScheduler::rendered(const RenderPlan& plan, double ms) {
   const double units = double(plan.width) * double(plan.height) / plan.stepFactor;
   msPerUnit_ = msPerUnit_ > 0 ? 0.7 * msPerUnit_ + 0.3 * ms / units : ms / units;
+  failures_ = 0;
   renderedLevel_ = plan.level;
   shownWidth_ = plan.width;
   if (plan.level >= kFullLevel) settledAfterMs_ = 0;  // the whole full level at once (a GPU)
@@ -115,6 +116,7 @@ void FrameScheduler::rendered(const RenderPlan& plan, double ms) {
 
 bool FrameScheduler::refined(const RenderPlan& plan, const RefineReport& r, Clock::time_point now) {
   const double pixels = double(plan.width) * double(plan.height);
+  failures_ = 0;
   if (r.fraction > 0 && r.imageMs > 0) msPerFullPixel_ = r.imageMs / (r.fraction * pixels);
   refinedFraction_ = r.complete ? 1.0 : r.fraction;
   if (plan.budgetMs > 0 && plan.budgetMs < 1e6) {
@@ -156,7 +158,14 @@ double FrameScheduler::refineBudgetMs() const {
                     kRefineShareOfFrame * frameBudgetMs_);
 }
 
-void FrameScheduler::failed() { renderedLevel_ = kFullLevel; }
+void FrameScheduler::failed() {
+  if (renderedRevision_ != failedRevision_) {  // another view: its own retries
+    failedRevision_ = renderedRevision_;
+    failures_ = 0;
+  }
+  if (++failures_ <= kRetriesAfterFailure) renderedRevision_.reset();  // planned again from the start
+  else renderedLevel_ = kFullLevel;
+}
 
 bool FrameScheduler::finished(std::uint64_t revision) const { return showing(revision) && renderedLevel_ >= kFullLevel; }
 

@@ -85,8 +85,10 @@ class FrameScheduler {
   // `fullQuality`: the full level at the render scale, cast in one frame (scripted screenshots).
   std::optional<RenderPlan> plan(std::uint64_t revision, std::uint64_t activity, Clock::time_point now,
                                  bool fullQuality = false);
-  // A whole-image plan was rendered in `ms`, or a plan failed (then the view is not rendered
-  // again until it changes).
+  // A whole-image plan was rendered in `ms`, or a plan failed: the next frame starts the view
+  // over (a GL error costs a frame, the renderer rebuilds its state), up to kRetriesAfterFailure
+  // times in a row; after that the view is not rendered again until it changes.
+  static constexpr int kRetriesAfterFailure = 2;
   void rendered(const RenderPlan& plan, double ms);
   void failed();
   // A progressive plan's refine call ended as `report` says, at `now`. Returns whether the view
@@ -128,6 +130,8 @@ class FrameScheduler {
   bool interacting_ = false;
   bool refining_ = false;      // this rest's progressive image has begun
   int restarts_ = 0;           // this rest's images started over smaller
+  int failures_ = 0;           // plans of failedRevision_ failed since the last one that rendered
+  std::optional<std::uint64_t> failedRevision_;
   double overshoot_ = 1;       // refine calls' time over their budget (moving average, ≥ 1)
   double fullScale_ = 1, msPerFullPixel_ = 0, refinedFraction_ = 0;
   double otherMs_ = 0;  // a frame's time besides rendering (moving average)

@@ -84,7 +84,7 @@ Result<RefineProgress> VolumeRenderer::refine(const RenderSettings& s, double bu
   if (!prepared) return tl::unexpected(prepared.error());
   if (st.progressiveWidth != s.width || st.progressiveHeight != s.height) {
     for (int l = 0; l <= ProgressiveImage::kCoarsestLevel; ++l)
-      allocateImage(st.levelImages[std::size_t(l)], ceilDiv(s.width, 1 << l), ceilDiv(s.height, 1 << l));
+      allocateImage(st, st.levelImages[std::size_t(l)], ceilDiv(s.width, 1 << l), ceilDiv(s.height, 1 << l));
     st.progressiveWidth = s.width;
     st.progressiveHeight = s.height;
   }
@@ -143,15 +143,18 @@ Result<RefineProgress> VolumeRenderer::refine(const RenderSettings& s, double bu
     }
   }
   glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT | GL_TEXTURE_FETCH_BARRIER_BIT | GL_TEXTURE_UPDATE_BARRIER_BIT);
-  if (auto e = glStatus("refining the progressive image"); !e) return tl::unexpected(e.error());
+  if (auto e = glStatus("refining the progressive image"); !e) {
+    forgetPrepared();  // the image starts over, on state built again
+    return tl::unexpected(e.error());
+  }
   ++image.calls;
   out.ms = msSince(start);
   image.imageMs += out.ms;
   return report();
 }
 
-DisplayImage VolumeRenderer::display() const {
-  const State& st = *state_;
+DisplayImage VolumeRenderer::display() {
+  State& st = *state_;
   const ProgressiveImage& image = st.progressive;
   DisplayImage out;
   if (!image.active || image.level >= ProgressiveImage::kCoarsestLevel) return out;
@@ -159,6 +162,7 @@ DisplayImage VolumeRenderer::display() const {
   const int stride = 1 << level;
   const int w = st.progressiveWidth, h = st.progressiveHeight;
   out.handle = std::uintptr_t(st.levelImages[std::size_t(level)].id());
+  handOut(st, st.levelImages[std::size_t(level)].id());
   out.texelsWide = ceilDiv(w, stride);
   out.texelsHigh = ceilDiv(h, stride);
   // Texel u's centre on the centre of pixel u · stride: tex(x) = ((x − 0.5) / stride + 0.5) / texels.

@@ -117,6 +117,11 @@ struct VolumeRenderer::State {
   int progressiveWidth = 0, progressiveHeight = 0;
   ProgressiveImage progressive;
   double refineMsPerPixel = 0;  // the last progressive image's cost, where the next one starts
+  // The texture last handed out by display() or renderToTexture(): a UI draws it until another is
+  // handed out, so a reallocation (another image size) moves it to `retired` instead of deleting it
+  // (a UI binding a deleted name raises GL_INVALID_OPERATION in its own draw, every frame).
+  GLuint handedOut = 0;
+  Texture retired;
   RayCaster rayCaster = RayCaster::Compute;
   Query timer;
   Geometry volumeGrid, fieldGrid;
@@ -127,9 +132,19 @@ struct VolumeRenderer::State {
 #endif
 };
 
+// "GL_INVALID_OPERATION", or the code in hex for one without a name here.
+std::string glErrorName(GLenum error);
+// Reads the GL error flag before the renderer's own calls: an error raised by other GL code in
+// the context (a UI's draw), named as such rather than reported as the renderer's.
+Status pendingGlError(const char* what);
+// Reads the GL error flag: an error naming `what` when one is set.
 Status glStatus(const char* what);
 Result<Program> linkCompute(const char* source, const char* what);
-// (Re)allocates an RGBA8 2-D texture with immutable storage.
-void allocateImage(Texture& texture, int width, int height);
+// (Re)allocates one of the renderer's RGBA8 image textures with immutable storage; the one it
+// replaces is kept alive (as `retired`) when it is the one handed out.
+void allocateImage(VolumeRenderer::State& st, Texture& texture, int width, int height);
+// Records that `texture` is handed out to the caller (what it shows now); a retired texture
+// other than it is released.
+void handOut(VolumeRenderer::State& st, GLuint texture);
 
 }  // namespace at::render::gl

@@ -10,6 +10,7 @@ Result<DisplayImage> VolumeRenderer::renderToTexture(const RenderSettings& s) {
   if (auto st = draw(s, true); !st) return tl::unexpected(st.error());
   DisplayImage out;
   out.handle = std::uintptr_t(state_->colour.id());
+  handOut(*state_, state_->colour.id());
   out.texelsWide = s.width;
   out.texelsHigh = s.height;
   out.uv0 = {0, 0};

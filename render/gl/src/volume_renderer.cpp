@@ -28,16 +28,36 @@ std::string RayVariant::defines() const {
          "\n#define RAY_CLIP " + (clip ? "1" : "0") + "\n#define RAY_STRUCTURE " + (structure ? "1" : "0") + "\n";
 }
 
+std::string glErrorName(GLenum e) {
+  switch (e) {
+    case GL_INVALID_ENUM: return "GL_INVALID_ENUM";
+    case GL_INVALID_VALUE: return "GL_INVALID_VALUE";
+    case GL_INVALID_OPERATION: return "GL_INVALID_OPERATION";
+    case GL_INVALID_FRAMEBUFFER_OPERATION: return "GL_INVALID_FRAMEBUFFER_OPERATION";
+    case GL_OUT_OF_MEMORY: return "GL_OUT_OF_MEMORY";
+    default: {
+      char buf[16];
+      std::snprintf(buf, sizeof buf, "0x%04x", unsigned(e));
+      return buf;
+    }
+  }
+}
+
+Status pendingGlError(const char* what) {
+  const GLenum e = glGetError();
+  if (e == GL_NO_ERROR) return {};
+  return fail("GL: error " + glErrorName(e) + " raised before " + what + " (by other GL code in the context)");
+}
+
 Status glStatus(const char* what) {
   const GLenum e = glGetError();
   if (e == GL_NO_ERROR) return {};
   if (e == GL_OUT_OF_MEMORY) return fail(std::string("GL: out of GPU memory during ") + what);
-  char buf[16];
-  std::snprintf(buf, sizeof buf, "%04x", unsigned(e));
-  return fail(std::string("GL: error 0x") + buf + " during " + what);
+  return fail("GL: error " + glErrorName(e) + " during " + what);
 }
 
-void allocateImage(Texture& texture, int width, int height) {
+void allocateImage(VolumeRenderer::State& st, Texture& texture, int width, int height) {
+  if (texture && texture.id() == st.handedOut) st.retired = std::move(texture);
   texture = Texture::make();
   glBindTexture(GL_TEXTURE_2D, texture.id());
   glTexStorage2D(GL_TEXTURE_2D, 1, GL_RGBA8, width, height);
@@ -45,6 +65,11 @@ void allocateImage(Texture& texture, int width, int height) {
   glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
   glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
   glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+}
+
+void handOut(VolumeRenderer::State& st, GLuint texture) {
+  st.handedOut = texture;
+  if (st.retired.id() != texture) st.retired = Texture();
 }
 
 namespace {
@@ -404,6 +429,7 @@ Status VolumeRenderer::setFieldFromDevice(const cuda::DeviceField& field) {
 
 Status VolumeRenderer::setField(const FloatVolume& field) {
   if (field.empty()) return fail("render: the distance field is empty");
+  if (auto pending = pendingGlError("the field upload"); !pending) return pending;
   State& st = *state_;
   std::vector<float> finite(field.voxels.size());
   copyFinite(field.voxels.data(), finite.size(), finite.data());
@@ -427,6 +453,7 @@ Status VolumeRenderer::setField(const FloatVolume& field) {
 
 Result<bool> VolumeRenderer::uploadFieldStep(const FloatVolume& field, double budgetMs) {
   if (field.empty()) return fail("render: the distance field is empty");
+  if (auto pending = pendingGlError("the field upload"); !pending) return tl::unexpected(pending.error());
   State& st = *state_;
   const Dims& d = field.dims();
   const Geometry& g = field.geometry;
@@ -529,10 +556,25 @@ PrepareCosts VolumeRenderer::takeCosts() { return std::exchange(state_->costs, P
 // Brings the mask, the table and the occupancy grid up to date for `s` and binds the ray caster
 // program with its uniforms and textures (the compute image binding is the caller's).
 Status VolumeRenderer::prepare(const RenderSettings& s, bool interactive) {
+  if (auto pending = pendingGlError("this frame's render"); !pending) return pending;
   const auto start = std::chrono::steady_clock::now();
   const Status prepared = prepareState(s, interactive);
   state_->costs.prepareMs += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  if (!prepared) forgetPrepared();
   return prepared;
+}
+
+void VolumeRenderer::forgetPrepared() {
+  // A failed call may have left any of these half-made (a texture upload that raised the error, a
+  // key recorded for it): the next call builds all of them again instead of trusting them.
+  State& st = *state_;
+  st.maskLabel = -1;
+  st.tablePreset.reset();
+  st.occupancyKey.reset();
+  st.contextKey.reset();
+  st.fieldFreeKey.reset();
+  st.occupancyJob.reset();
+  st.progressive.active = false;
 }
 
 Status VolumeRenderer::prepareState(const RenderSettings& s, bool interactive) {
@@ -765,7 +807,7 @@ Status VolumeRenderer::draw(const RenderSettings& s, bool interactive) {
   if (auto e = prepare(s, interactive); !e) return e;
   State& st = *state_;
   if (st.fboWidth != s.width || st.fboHeight != s.height) {
-    allocateImage(st.colour, s.width, s.height);
+    allocateImage(st, st.colour, s.width, s.height);
     glBindFramebuffer(GL_FRAMEBUFFER, st.fbo.id());
     glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, st.colour.id(), 0);
     if (glCheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
@@ -797,7 +839,9 @@ Status VolumeRenderer::draw(const RenderSettings& s, bool interactive) {
     glBindVertexArray(st.vao.id());
     glDrawArrays(GL_TRIANGLES, 0, 3);
   }
-  return glStatus("drawing");
+  const Status drawn = glStatus("drawing");
+  if (!drawn) forgetPrepared();
+  return drawn;
 }
 
 Result<RgbaImage> VolumeRenderer::render(const RenderSettings& s) {

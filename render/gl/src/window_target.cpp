@@ -1,9 +1,12 @@
 #include "render/gl/window_target.h"
 
 #include <algorithm>
+#include <cstdio>
+#include <cstring>
 #include <vector>
 
 #include "gl_objects.h"
+#include "renderer_state.h"
 
 namespace at::render::gl {
 
@@ -89,6 +92,30 @@ Result<RgbaImage> readWindow(int width, int height) {
     std::copy_n(rows.data() + std::size_t(height - 1 - y) * stride, stride, image.rgba.data() + std::size_t(y) * stride);
   for (std::size_t i = 3; i < image.rgba.size(); i += 4) image.rgba[i] = 255;  // the window is opaque
   return image;
+}
+
+namespace {
+void GLAPIENTRY printDebugMessage(GLenum source, GLenum type, GLuint id, GLenum severity, GLsizei length,
+                                  const GLchar* message, const void*) {
+  if (type != GL_DEBUG_TYPE_ERROR && severity != GL_DEBUG_SEVERITY_HIGH) return;
+  std::fprintf(stderr, "GL debug: source 0x%x type 0x%x id %u: %.*s\n", unsigned(source), unsigned(type), unsigned(id),
+               int(length < 0 ? std::strlen(message) : std::size_t(length)), message);
+}
+}  // namespace
+
+std::string takeGlError() {
+  const GLenum e = glGetError();
+  return e == GL_NO_ERROR ? std::string() : glErrorName(e);
+}
+
+bool enableDebugOutput() {
+  GLint flags = 0;
+  glGetIntegerv(GL_CONTEXT_FLAGS, &flags);
+  if (!(flags & GL_CONTEXT_FLAG_DEBUG_BIT)) return false;
+  glEnable(GL_DEBUG_OUTPUT);
+  glEnable(GL_DEBUG_OUTPUT_SYNCHRONOUS);
+  glDebugMessageCallback(printDebugMessage, nullptr);
+  return true;
 }
 
 void finishGl() { glFinish(); }

@@ -75,6 +75,7 @@ class DesktopApp final : public ScriptHost {
   std::unique_ptr<VolumeView> view_;
   std::optional<ScriptInterpreter> script_;
   std::optional<std::string> screenshotPath_;
+  std::string lastDrawError_;  // the UI drawing's GL error, reported once until a frame has none
   ExplorePanel explore_;
   StudyPanel study_;
   ImportPanel import_;
@@ -147,6 +148,12 @@ void DesktopApp::frame() {
   drawUi();
   render::RgbaImage shot;
   const Status read = window_->endFrame(screenshotPath_ ? &shot : nullptr);
+  if (std::string drawError = window_->takeDrawError(); drawError != lastDrawError_) {
+    if (!drawError.empty())
+      model_->message("drawing the window raised the GL error " + drawError +
+                      ". If this keeps coming back, run with AT_GL_DEBUG=1 to see which GL call fails.");
+    lastDrawError_ = std::move(drawError);
+  }
   if (screenshotPath_) takeScreenshot(shot, read);
   const Clock::time_point end = Clock::now();
   phases.uiMs = msBetween(uiStart, end);
@@ -284,7 +291,9 @@ constexpr const char* kDesktopHelp =
     "  --frame-budget  frame time the refinement at rest stays within (default 100 ms)\n"
     "  --max-fps    start frames at most N times a second (scripted runs swap without vsync and\n"
     "               otherwise draw as fast as they can; 60 measures them as on a 60 Hz display)\n"
-    "  --db, --user and --size may also stand before the command.\n";
+    "  --db, --user and --size may also stand before the command.\n"
+    "  AT_GL_DEBUG=1 (environment): a debug GL context; each GL error is printed with the call that\n"
+    "               raised it (for a bug report when the view says it met a GL error)\n";
 
 }  // namespace
 

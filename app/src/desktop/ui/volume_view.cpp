@@ -36,6 +36,7 @@ void VolumeView::takeDataset(DesktopModel& model) {
     wholeVolume_ = false;
     if (auto st = renderer_->setVolume(dataset.volume, dataset.labels, model.gradients()); !st) {
       messages_("volume renderer: " + st.error().message);
+      image_ = {};  // its textures go with it
       renderer_.reset();
       return;
     }

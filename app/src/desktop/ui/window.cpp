@@ -101,6 +101,9 @@ Result<std::unique_ptr<DesktopWindow>> DesktopWindow::open(int width, int height
   if (!s->sdl) return fail(ErrorKind::Unavailable, std::string("SDL cannot start its video subsystem: ") + SDL_GetError());
   // OpenGL 4.5, then 4.3 core, then whatever the driver gives; `note` says which was taken.
   std::string note;
+  // AT_GL_DEBUG=1: a debug context whose errors are printed inside the GL call that raised them.
+  const char* debugEnv = std::getenv("AT_GL_DEBUG");
+  const bool debugGl = debugEnv && *debugEnv && std::string(debugEnv) != "0";
   struct Attempt {
     int major, minor;
     bool core;
@@ -112,6 +115,7 @@ Result<std::unique_ptr<DesktopWindow>> DesktopWindow::open(int width, int height
       SDL_GL_SetAttribute(SDL_GL_CONTEXT_MAJOR_VERSION, a.major);
       SDL_GL_SetAttribute(SDL_GL_CONTEXT_MINOR_VERSION, a.minor);
     }
+    if (debugGl) SDL_GL_SetAttribute(SDL_GL_CONTEXT_FLAGS, SDL_GL_CONTEXT_DEBUG_FLAG);
     SDL_GL_SetAttribute(SDL_GL_DOUBLEBUFFER, 1);
     SDL_GL_SetAttribute(SDL_GL_DEPTH_SIZE, 0);
     Uint32 flags = SDL_WINDOW_OPENGL | SDL_WINDOW_ALLOW_HIGHDPI | SDL_WINDOW_SHOWN;
@@ -130,6 +134,7 @@ Result<std::unique_ptr<DesktopWindow>> DesktopWindow::open(int width, int height
   }
   if (!s->context) return fail(ErrorKind::Unavailable, "cannot create an OpenGL context: " + note);
   SDL_GL_MakeCurrent(s->window, s->context);
+  if (debugGl && !render::gl::enableDebugOutput()) note += "; AT_GL_DEBUG: the driver gave no debug context";
   SDL_GL_SetSwapInterval(scripted ? 0 : 1);
   float ddpi = 96;
   if (SDL_GetDisplayDPI(0, &ddpi, nullptr, nullptr) != 0 || !(ddpi > 0)) ddpi = 96;
@@ -179,6 +184,7 @@ Status DesktopWindow::endFrame(render::RgbaImage* screenshot) {
   const ViewLayout l = layout();
   render::gl::beginWindowFrame(l.framebufferW, l.framebufferH, {0.04f, 0.04f, 0.05f, 1.0f});
   ImGui_ImplOpenGL3_RenderDrawData(ImGui::GetDrawData());
+  drawError_ = render::gl::takeGlError();
   Status read;
   if (screenshot) {
     auto image = render::gl::readWindow(l.framebufferW, l.framebufferH);

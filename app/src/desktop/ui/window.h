@@ -4,6 +4,7 @@
 
 #include <memory>
 #include <string>
+#include <utility>
 
 #include "core/error.h"
 #include "desktop_model.h"
@@ -40,14 +41,18 @@ class DesktopWindow {
 
   void beginFrame();  // a new ImGui frame
   // Renders ImGui over the cleared window; `screenshot` (not empty): then reads the window back
-  // into it. Swaps and waits for the GL to finish (frame timing).
+  // into it. Swaps and waits for the GL to finish (frame timing). A GL error the UI's drawing
+  // raised is read here (so that the volume renderer's next call does not take it for its own)
+  // and kept for takeDrawError().
   Status endFrame(render::RgbaImage* screenshot);
+  // The GL error the last endFrame's UI drawing raised ("GL_INVALID_OPERATION"), once; empty: none.
+  std::string takeDrawError() { return std::exchange(drawError_, {}); }
 
  private:
   struct State;
   explicit DesktopWindow(std::unique_ptr<State> state);
   std::unique_ptr<State> state_;
-  std::string glDescription_, glNote_;
+  std::string glDescription_, glNote_, drawError_;
   float uiScale_ = 1;
 };
 

@@ -5,6 +5,10 @@
 // the classification; CPU picking uses the same rules). Needs a current OpenGL 4.3 core context
 // (EglContext or the desktop window's) for its whole life.
 //
+// Errors: a call that meets a GL error returns it (naming the step, or saying that the error was
+// already pending from other GL code in the context) and leaves nothing half-made: the next call
+// rebuilds what the failed one touched, so one error costs one frame, not every later one.
+//
 // Two ways to get an image:
 //  - render(): the whole image in one draw, read back (the `render` command, tests, benchmarks);
 //  - refine(): progressive refinement for an interactive view. Each call casts the rays that fit
@@ -119,8 +123,10 @@ class VolumeRenderer {
   // Renders one whole frame and reads it back.
   Result<RgbaImage> render(const RenderSettings& settings);
   // Renders one whole frame into a texture of the renderer that a UI draws directly (the
-  // desktop's view: no read-back). The handle stays valid, showing this frame, until the next
-  // render or renderToTexture call; its uv0/uv1 are the image's left/bottom and right/top.
+  // desktop's view: no read-back). The handle shows this frame until the next render or
+  // renderToTexture call and stays a live texture until display() or renderToTexture() hands out
+  // another (a UI may keep drawing it meanwhile); its uv0/uv1 are the image's left/bottom and
+  // right/top.
   Result<DisplayImage> renderToTexture(const RenderSettings& settings);
   // Renders one whole frame without reading it back; returns the GPU time of the draw in ms
   // (GL_TIME_ELAPSED), for benchmarks.
@@ -139,8 +145,11 @@ class VolumeRenderer {
   // The preparation costs since the previous call (for the desktop's frame report).
   PrepareCosts takeCosts();
 
-  // Nothing (handle 0) until the coarsest lattice is complete.
-  DisplayImage display() const;
+  // Nothing (handle 0) until the coarsest lattice is complete. The texture handed out stays live
+  // (its contents may be refined further) until display() or renderToTexture() hands out another,
+  // whatever the renderer reallocates meanwhile: a view can keep drawing what it was last given
+  // while a new image of another size is not displayable yet.
+  DisplayImage display();
   // What display() shows, as the view would (linear filtering), at the view's size, top row first:
   // for tests and screenshots.
   Result<RgbaImage> readDisplay();
@@ -153,6 +162,8 @@ class VolumeRenderer {
   Status prepare(const RenderSettings& settings, bool interactive);  // prepareState, timed into the costs
   Status prepareState(const RenderSettings& settings, bool interactive);
   Status draw(const RenderSettings& settings, bool interactive);
+  // After a failed call: the mask, table, occupancy grid and progressive image are built again.
+  void forgetPrepared();
   std::unique_ptr<State> state_;
 };
 

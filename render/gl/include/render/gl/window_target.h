@@ -44,6 +44,12 @@ std::array<int, 2> currentContextVersion();
 void beginWindowFrame(int width, int height, const std::array<float, 4>& rgba);
 // Reads the window's framebuffer (the back buffer, before the swap) as an image, top row first.
 Result<RgbaImage> readWindow(int width, int height);
+// KHR_debug output for the current context (it needs a debug context: SDL_GL_CONTEXT_DEBUG_FLAG):
+// synchronous, so that the message comes inside the call that raised it; errors go to stderr as
+// "GL debug: …" lines. Returns false when the context offers no debug output.
+bool enableDebugOutput();
+// Reads the GL error flag: the error's name ("GL_INVALID_OPERATION"), empty when none is set.
+std::string takeGlError();
 // Waits until the GL has finished every command issued so far (frame timing).
 void finishGl();
 
