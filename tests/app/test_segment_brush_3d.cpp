@@ -7,33 +7,20 @@
 #include <cmath>
 #include <set>
 
+#include "box_volume.h"
 #include "desktop_script.h"
 #include "test_support.h"
 #include "volume/nifti_io.h"
-#include "volume/nrrd_io.h"
 
 using namespace at;
+using test::kBoxHi;
+using test::kBoxLo;
 using nlohmann::json;
 namespace fs = std::filesystem;
 
 namespace {
 
 constexpr int kDesktopPanel = 320;  // the explore panel at UI scale 1 (the view lies right of it)
-
-// A bright box in a dark volume on a grid of 0.8 × 0.8 × 2 mm voxels (plain intensities).
-constexpr int kBoxLo[3] = {14, 14, 5}, kBoxHi[3] = {34, 34, 15};  // voxel ranges, inclusive
-fs::path writeBox(const test::TempDir& dir) {
-  Geometry g;
-  g.dims = {48, 48, 20};
-  g.spacingMm = {0.8, 0.8, 2.0};
-  FloatVolume image(g, 10.0f);
-  for (int k = kBoxLo[2]; k <= kBoxHi[2]; ++k)
-    for (int j = kBoxLo[1]; j <= kBoxHi[1]; ++j)
-      for (int i = kBoxLo[0]; i <= kBoxHi[0]; ++i) image.at(i, j, k) = 220.0f;
-  const fs::path path = dir / "box.nrrd";
-  REQUIRE(writeNrrd(path.string(), image, ScalarKind::UInt8));
-  return path;
-}
 
 Vec3 pointOf(const json& event) {
   const auto p = event.at("point_mm").get<std::vector<double>>();
@@ -82,7 +69,7 @@ void checkSameVoxels(const std::set<std::size_t>& got, const std::set<std::size_
 TEST_CASE("desktop: the paint brush on the 3-D surface labels the voxels within its radius in mm, and only those") {
   if (!test::requireXvfb()) return;
   test::TempDir dir;
-  const fs::path box = writeBox(dir);
+  const fs::path box = test::writeBox(dir);
   const fs::path painted = dir / "painted.nii.gz", erased = dir / "erased.nii.gz", undone = dir / "undone.nii.gz",
                  redone = dir / "redone.nii.gz";
   const int cx = kDesktopPanel + (800 - kDesktopPanel) / 2, cy = 240;

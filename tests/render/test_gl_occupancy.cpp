@@ -112,3 +112,74 @@ TEST_CASE("Skipping keeps the image when the selection moves from structure to s
   }
   CHECK(compared >= 8);
 }
+
+TEST_CASE("Labels edited in a box and uploaded by that box give the blocks and the image of labels uploaded whole") {
+  const Dataset ds = makePhantom({64, 51.2, 1});
+  const Structure& moved = ds.structures.front();
+  const Structure& other = ds.structures.back();
+  // The edit: `moved` loses its voxels in one corner region and gains a slab elsewhere, over
+  // `other`'s voxels too; the changed voxels lie in the box.
+  LabelMap edited = ds.labels;
+  const Dims& d = edited.dims();
+  std::array<int, 6> box{d.x, d.y, d.z, 0, 0, 0};
+  const auto change = [&](int i, int j, int k, std::uint16_t label) {
+    std::uint16_t& v = edited.voxels[d.index(i, j, k)];
+    if (v == label) return;
+    v = label;
+    const int at[3] = {i, j, k};
+    for (std::size_t a = 0; a < 3; ++a) {
+      box[a] = std::min(box[a], at[a]);
+      box[a + 3] = std::max(box[a + 3], at[a] + 1);
+    }
+  };
+  for (int k = 0; k < d.z; ++k)
+    for (int j = 0; j < d.y; ++j)
+      for (int i = 0; i < d.x; ++i) {
+        const std::uint16_t v = ds.labels.voxels[d.index(i, j, k)];
+        if (v == moved.label && i < d.x / 2) change(i, j, k, 0);
+        if (i >= 40 && i < 46 && j >= 20 && j < 44 && k >= 22 && k < 30) change(i, j, k, moved.label);
+        if (v == other.label && k < d.z / 3) change(i, j, k, moved.label);
+      }
+  REQUIRE(box[3] > box[0]);
+  const GradientVolume gradients = computeGradientVolume(ds.volume);
+  gl::BlockSummary updated = gl::summariseBlocks(ds.volume, ds.labels, gradients);
+  gl::updateBlockLabels(updated, edited, box);
+  const gl::BlockSummary whole = gl::summariseBlocks(ds.volume, edited, gradients);
+  CHECK(updated.labels == whole.labels);
+  CHECK(updated.blocksOfLabel == whole.blocksOfLabel);
+
+  auto* renderer = test::glRenderer();
+  if (!renderer) return;
+  RenderSettings settings;
+  settings.width = 48;
+  settings.height = 40;
+  settings.camera = Camera::named(NamedView::Anterior, {0, 0, 0}, 30);
+  for (RenderMode mode : {RenderMode::Bare, RenderMode::Wdt}) {
+    CAPTURE(int(mode));
+    settings.preset.mode = mode;
+    // Edited after a first image (mask and grid built for the old labels) …
+    REQUIRE(renderer->setVolume(ds.volume, ds.labels, gradients));
+    REQUIRE(renderer->setField(FloatVolume(ds.volume.geometry, 0.0f)));
+    renderer->setSelected(moved.label);
+    REQUIRE(renderer->render(settings));
+    REQUIRE(renderer->updateLabels(edited, box));
+    auto byBox = renderer->render(settings);
+    REQUIRE_MESSAGE(byBox, byBox.error().message);
+    // … equals the edited labels uploaded whole.
+    REQUIRE(renderer->setVolume(ds.volume, edited, gradients));
+    REQUIRE(renderer->setField(FloatVolume(ds.volume.geometry, 0.0f)));
+    renderer->setSelected(moved.label);
+    auto fresh = renderer->render(settings);
+    REQUIRE(fresh);
+    CHECK(byBox->rgba == fresh->rgba);
+    // And the edit shows: the image differs from the unedited one.
+    REQUIRE(renderer->setVolume(ds.volume, ds.labels, gradients));
+    REQUIRE(renderer->setField(FloatVolume(ds.volume.geometry, 0.0f)));
+    renderer->setSelected(moved.label);
+    auto before = renderer->render(settings);
+    REQUIRE(before);
+    CHECK(before->rgba != fresh->rgba);
+  }
+  // Labels on another grid are refused.
+  CHECK_FALSE(renderer->updateLabels(LabelMap(Geometry{{8, 8, 8}, {1, 1, 1}}, 0), {0, 0, 0, 8, 8, 8}));
+}

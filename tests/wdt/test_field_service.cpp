@@ -184,3 +184,43 @@ TEST_CASE("FieldService_WaitFor_ReturnsTheFieldOnceCached_AndNeverWaitsPastItsLi
   CHECK(service.waitFor(slow, milliseconds(20000)).ready());
   CHECK(Clock::now() - t0 < milliseconds(2000));
 }
+
+TEST_CASE("FieldService_UpdateLabels_DropsTheEditedLabelsFields_AndComputesTheNextOnTheNewLabels") {
+  Dataset ds = test::phantomOfSize(48);  // a copy: its labels are edited below
+  FieldService service(ds.volume, ds.labels, 4);
+  const FieldRequest edited = requestFor(ds, "cochlea", 2), kept = requestFor(ds, "stapes", 2);
+  for (const FieldRequest& r : {edited, kept}) {
+    service.request(r);
+    REQUIRE(waitFor(service, r));
+  }
+  // A slow full-resolution field is running while the labels are edited: it is cancelled and
+  // waited for, so that nothing reads the labels while they change.
+  FieldRequest running = requestFor(ds, "facial_nerve", 1);
+  running.params.passes = 64;
+  running.params.converge = false;
+  service.request(running);
+  const Structure* cochlea = ds.findStructure("cochlea");
+  std::size_t relabelled = 0;
+  service.updateLabels(
+      [&] {
+        for (std::uint16_t& v : ds.labels.voxels)  // the cochlea's voxels become the stapes'
+          if (v == cochlea->label) {
+            v = kept.label;
+            ++relabelled;
+          }
+        // and a block of new cochlea voxels elsewhere
+        for (int k = 4; k < 10; ++k)
+          for (int j = 4; j < 10; ++j)
+            for (int i = 4; i < 10; ++i) ds.labels.at(i, j, k) = cochlea->label;
+      },
+      {cochlea->label, kept.label});
+  CHECK(relabelled > 0);
+  CHECK_FALSE(service.cached(edited).ready());  // dropped
+  CHECK_FALSE(service.cached(kept).ready());
+  service.request(edited);
+  auto field = waitFor(service, edited);
+  REQUIRE(field);
+  auto direct = computeWdt(ds.volume, structureMask(ds.labels, edited.label), edited.params);
+  REQUIRE(direct);
+  CHECK(field->distances.voxels == direct->field.distances.voxels);  // on the edited labels
+}

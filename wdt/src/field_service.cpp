@@ -1,5 +1,6 @@
 #include "wdt/field_service.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 
@@ -70,6 +71,18 @@ void FieldService::cancelAll() {
   std::lock_guard lock(mutex_);
   queued_.reset();
   if (runningKey_) cancelRunning_ = true;
+}
+
+void FieldService::updateLabels(const std::function<void()>& write, const std::vector<std::uint16_t>& changed) {
+  std::unique_lock lock(mutex_);
+  if (runningKey_) {
+    cancelRunning_ = true;
+    // The worker takes its next job under the mutex, so none starts until `write` is done.
+    changed_.wait(lock, [&] { return !runningKey_.has_value(); });
+  }
+  write();
+  lru_.remove_if([&](const Entry& e) { return std::find(changed.begin(), changed.end(), e.label) != changed.end(); });
+  deviceLabelsStale_ = true;
 }
 
 FieldService::Cached FieldService::cached(const FieldRequest& request) {
@@ -169,7 +182,7 @@ void FieldService::run() {
       done.request = job;
       if (!outcome) done.message = outcome.error().message;
       else if (!warning.empty()) done.message = warning;
-      if (done.field) insert({*runningKey_, done.field, nullptr});
+      if (done.field) insert({job.label, *runningKey_, done.field, nullptr});
       finished_.push_back(std::move(done));
     }
     finishRunning();
@@ -198,6 +211,10 @@ Result<FieldService::Outcome> FieldService::computeOnDevice(const FieldRequest& 
   if (!device_) device_ = std::make_unique<DeviceState>();
   DeviceState& d = *device_;
   const auto t0 = std::chrono::steady_clock::now();
+  {
+    std::lock_guard lock(mutex_);
+    if (std::exchange(deviceLabelsStale_, false)) d.volume.reset();  // edited labels: uploaded again
+  }
   if (!d.volume) {
     auto uploaded = cuda::uploadVolume(volume_, labels_);
     if (!uploaded) return tl::unexpected(uploaded.error());
@@ -225,7 +242,7 @@ Result<FieldService::Outcome> FieldService::computeOnDevice(const FieldRequest& 
   done.device = stats.device;
   {
     std::lock_guard lock(mutex_);
-    insert({key, nullptr, device});
+    insert({job.label, key, nullptr, device});
     finished_.push_back(std::move(done));
   }
   auto host = std::make_shared<DistanceField>();

@@ -19,7 +19,22 @@ namespace at::app {
 using json = nlohmann::json;
 
 int ViewLayout::viewPixelsW() const {
-  return std::max(1, framebufferW - int(std::lround(panelWidth() * double(framebufferW) / std::max(1, windowW))));
+  return std::max(1, int(std::lround(viewWidth() * double(framebufferW) / std::max(1, windowW))));
+}
+
+int ViewLayout::viewPixelsH() const {
+  return std::max(1, int(std::lround(viewHeight() * double(framebufferH) / std::max(1, windowH))));
+}
+
+void dockPanels(ViewLayout& layout, bool editor, bool slices) {
+  layout.rightPx = layout.bottomPx = 0;
+  if (!editor) return;
+  const float s = layout.uiScale, w = float(layout.windowW);
+  const float column = std::clamp(0.3f * w, 340 * s, 520 * s);
+  if (w - layout.panelWidth() - column < kMinDockedViewPx * s) return;  // too narrow: floating windows
+  layout.rightPx = column;
+  // The three panes side by side under the view, each about a third of its width square.
+  if (slices) layout.bottomPx = std::min(0.36f * float(layout.windowH), (w - layout.panelWidth() - column) / 3 + 56 * s);
 }
 
 DesktopModel::DesktopModel(LearningSession& session, const render::PresetLibrary& library, DesktopOptions options,
@@ -122,6 +137,7 @@ Status DesktopModel::showDataset(Dataset dataset, const std::string& startStruct
       [this](const std::string& m) { note(m); });
   expert_ = std::make_unique<TfEditor>(*dataset_, session_.database(), sink);
   segment_->attach(*dataset_);
+  editorLabelsRevision_ = segment_->labelsRevision();
   slices_.attach(*dataset_);
   recorder_.highlightNotWanted();
   lastPickMm_.reset();
@@ -155,9 +171,11 @@ Status DesktopModel::switchDataset(const std::string& name) {
 
 void DesktopModel::setLayout(const ViewLayout& layout) {
   if (layout == layout_) return;
+  const bool docking = layout.rightPx != layout_.rightPx || layout.bottomPx != layout_.bottomPx;
   layout_ = layout;
   scheduler_.setViewPixels(layout.viewPixelsW(), layout.viewPixelsH());
   explore_.touch();
+  if (docking && opened_) reframe();  // the editor docked or undocked: the view's shape changed
 }
 
 void DesktopModel::setHovered(std::uint16_t label) {
@@ -182,9 +200,8 @@ render::PickResult DesktopModel::pickAt(double x, double y, std::optional<double
   scene.gradients = &gradients_;
   scene.selected = explore_.fieldLabel();
   const render::TransferFunction2D& table = pickTables_.tableFor(s.preset);
-  const double left = layout_.panelWidth();
-  const double px = (x - left) / std::max(1.0, layout_.windowW - left) * s.width;
-  const double py = y / std::max(1, layout_.windowH) * s.height;
+  const double px = (x - layout_.viewLeft()) / layout_.viewWidth() * s.width;
+  const double py = y / layout_.viewHeight() * s.height;
   if (surfaceOpacity) return render::pick(scene, s, table, px, py, *surfaceOpacity);
   return render::pickStructure(scene, s, table, px, py);
 }
@@ -283,8 +300,8 @@ void DesktopModel::expertEdited() {
 std::optional<std::array<double, 2>> DesktopModel::projectStructure(std::uint16_t label) const {
   const render::StructureFrame* frame = explore_.frameOf(label);
   if (!frame) return std::nullopt;
-  const double left = layout_.panelWidth();
-  const int viewW = int(layout_.windowW - left), viewH = layout_.windowH;
+  const double left = layout_.viewLeft();
+  const int viewW = int(layout_.viewWidth()), viewH = int(layout_.viewHeight());
   auto p = explore_.camera().project(frame->anchorMm, viewW, viewH);
   if (!p || (*p)[0] < 0 || (*p)[0] >= viewW || (*p)[1] < 0 || (*p)[1] >= viewH) return std::nullopt;
   return std::array<double, 2>{(*p)[0] + left, (*p)[1]};
@@ -317,6 +334,7 @@ void DesktopModel::beginFrame(FieldTarget* target) {
   imports_->poll();
   for (const std::string& line : classEvents_->takeLines()) message(line);
   segment_->poll();
+  showEditedLabels();
   if (!study_->participantActive())  // the participant's trial keeps its dataset
     if (auto imported = imports_->takeDatasetToOpen()) {
       const std::string id = imported->id;
@@ -399,7 +417,8 @@ void DesktopModel::endFrame(Clock::time_point end, double ms) {
 }
 
 bool DesktopModel::settled() const {
-  return (!viewAvailable_ || scheduler_.finished(explore_.revision())) && fields_->settled() && !turnToward_;
+  const bool labelsShown = !segment_->attached() || segment_->labelsRevision() == editorLabelsRevision_;
+  return labelsShown && (!viewAvailable_ || scheduler_.finished(explore_.revision())) && fields_->settled() && !turnToward_;
 }
 
 bool DesktopModel::idle() const {

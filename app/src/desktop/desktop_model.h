@@ -6,6 +6,7 @@
 // window (no FieldTarget, no view: picking and fields still run on the CPU).
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <cstdint>
 #include <functional>
@@ -38,19 +39,35 @@
 
 namespace at::app {
 
-// Where the volume view lies in the window: right of the explore panel, full height.
+// Where the volume view lies in the window: right of the explore panel, left of a docked column
+// (the segment editor) and above a docked strip (the slice panes), when those are docked.
 struct ViewLayout {
   int windowW = 1280, windowH = 720;          // logical pixels (mouse coordinates)
   int framebufferW = 1280, framebufferH = 720;  // drawable pixels
   float uiScale = 1;
   float panelPx = 0;                            // the explore panel's width as drawn (resizable); 0: the default
+  float rightPx = 0;                            // a column docked at the right edge (logical pixels)
+  float bottomPx = 0;                           // a strip docked under the view, left of that column
   float panelWidth() const { return panelPx > 0 ? panelPx : 320 * uiScale; }  // logical pixels
-  bool inView(double x, double y) const { return x >= panelWidth() && x < windowW && y >= 0 && y < windowH; }
+  // The view's rectangle in logical pixels.
+  float viewLeft() const { return panelWidth(); }
+  float viewWidth() const { return std::max(1.0f, float(windowW) - panelWidth() - rightPx); }
+  float viewHeight() const { return std::max(1.0f, float(windowH) - bottomPx); }
+  bool inView(double x, double y) const {
+    return x >= viewLeft() && x < viewLeft() + viewWidth() && y >= 0 && y < viewHeight();
+  }
   // The view's size in framebuffer pixels.
   int viewPixelsW() const;
-  int viewPixelsH() const { return framebufferH; }
+  int viewPixelsH() const;
   bool operator==(const ViewLayout&) const = default;
 };
+
+// Docks the segment editor (`editor` open) as a column at the window's right edge, and the slice
+// panes (`slices` open too) as a strip under the view, when the window is wide enough for the view
+// to keep kMinDockedViewPx beside them (1280 × 720 and larger at UI scale 1); otherwise they stay
+// floating windows over the view and the layout keeps the view whole.
+inline constexpr float kMinDockedViewPx = 400;
+void dockPanels(ViewLayout& layout, bool editor, bool slices);
 
 struct DesktopOptions {
   std::string dataset;              // empty: the start course's dataset; else as openNamedDataset takes it
@@ -88,6 +105,14 @@ class DesktopModel {
   const render::GradientVolume& gradients() const { return gradients_; }
   // Changes whenever another dataset is shown (the renderer uploads its volume then).
   std::uint64_t datasetRevision() const { return datasetRevision_; }
+  // The segment editor's labels reach the dataset on screen at the start of each frame after an
+  // edit, undo or redo (showEditedLabels): `revision` moves then and `box` bounds the voxels
+  // that changed ({x0, y0, z0, x1, y1, z1}, max exclusive), for the renderer to upload only those.
+  struct LabelEdit {
+    std::uint64_t revision = 0;
+    std::array<int, 6> box{0, 0, 0, 0, 0, 0};
+  };
+  const LabelEdit& labelEdit() const { return labelEdit_; }
 
   ExploreState& explore() { return explore_; }
   const ExploreState& explore() const { return explore_; }
@@ -185,7 +210,8 @@ class DesktopModel {
   void renderFailed(const std::string& why);
   // End of a frame that took `ms` (for the recorder and the highlight latency).
   void endFrame(Clock::time_point end, double ms);
-  // The image is final (full quality) and shows the field the view needs.
+  // The image is final (full quality), shows the field the view needs and the segment editor's
+  // latest labels.
   bool settled() const;
   // Nothing changes until the user acts (the loop may wait for input).
   bool idle() const;
@@ -199,6 +225,12 @@ class DesktopModel {
 
  private:
   void setHovered(std::uint16_t label);
+  // The editor's labels and structures into the dataset on screen when they changed: the voxels
+  // that differ (the field service's labels, written while no field reads them), the structure
+  // list, the explore state (frames, browser, selection of the edited structure) and the fields
+  // of the labels that changed (desktop_model_segment.cpp). Event labels_shown {"changed": labels,
+  // "box", "whole_volume", "selected", "ms": the time this took on the UI thread}.
+  void showEditedLabels();
   // What a click at window (x, y) meets in the view as the image shows it.
   // surfaceOpacity: where the ray's accumulated opacity first reaches it (the surface a brush
   // paints on) instead of the structure under the cursor (render::pickStructure).
@@ -222,6 +254,8 @@ class DesktopModel {
   render::GradientVolume gradients_;
   mutable render::ShadingTableCache pickTables_;  // pickAt is const; the cache only saves work
   std::uint64_t datasetRevision_ = 0;
+  std::uint64_t editorLabelsRevision_ = 0;  // the editor's labelsRevision() last shown
+  LabelEdit labelEdit_;
   std::string startView_ = "lateral_right";
   bool opened_ = false;
   ExploreState explore_;

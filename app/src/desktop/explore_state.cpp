@@ -34,20 +34,65 @@ Status ExploreState::setDataset(const Dataset& dataset, const std::string& start
     changed();
     return {};
   }
-  for (const Structure& s : dataset.structures) {
+  rebuildBrowser();
+  const Structure* start = startStructure.empty() ? nullptr : dataset.findStructure(startStructure);
+  if (!start || !frames_.count(start->label)) start = dataset.findStructureByLabel(frames_.begin()->first);
+  startOn(*start, startPreset);
+  changed();
+  return {};
+}
+
+void ExploreState::rebuildBrowser() {
+  bySystem_.clear();
+  for (const Structure& s : dataset_->structures) {
     if (!frames_.count(s.label)) continue;  // a named label with no voxels: not shown in the browser
     const std::string system = s.system.empty() ? std::string("other") : s.system;
     auto it = std::find_if(bySystem_.begin(), bySystem_.end(), [&](const auto& g) { return g.first == system; });
     if (it == bySystem_.end()) it = bySystem_.insert(bySystem_.end(), {system, {}});
     it->second.push_back(&s);
   }
-  const Structure* start = startStructure.empty() ? nullptr : dataset.findStructure(startStructure);
-  if (!start || !frames_.count(start->label)) start = dataset.findStructureByLabel(frames_.begin()->first);
-  selected_ = start->label;
-  if (auto preset = presetForStep(library_, start->id, startPreset, levels_)) usePreset(start->label, *preset, preset->t);
+}
+
+void ExploreState::startOn(const Structure& structure, const std::string& presetId) {
+  selected_ = structure.label;
+  if (auto preset = presetForStep(library_, structure.id, presetId, levels_)) usePreset(structure.label, *preset, preset->t);
   else messages_(preset.error().message);
+}
+
+void ExploreState::labelsEdited(const std::vector<std::uint16_t>& edited, std::uint16_t current) {
+  const Dataset& dataset = *dataset_;
+  for (std::uint16_t label : edited) {
+    frames_.erase(label);
+    presets_.erase({label, false});
+    presets_.erase({label, true});
+    if (label != 0 && dataset.findStructureByLabel(label))
+      if (auto frame = render::structureFrame(dataset.labels, label)) frames_[label] = *frame;
+  }
+  for (auto it = frames_.begin(); it != frames_.end();)  // deleted structures
+    it = dataset.findStructureByLabel(it->first) ? std::next(it) : frames_.erase(it);
+  const bool wasWhole = std::exchange(wholeVolume_, frames_.empty());
+  rebuildBrowser();
+  if (wholeVolume_ != wasWhole) {  // the other mode's presets
+    presets_.clear();
+    override_.reset();
+  }
+  if (hovered_ && !frames_.count(hovered_)) hovered_ = 0;
+  if (fieldLabel_ && !frames_.count(fieldLabel_)) {
+    fieldLabel_ = 0;
+    fieldKey_.clear();
+  }
+  if (wholeVolume_) {
+    selected_ = 0;
+    bare_ = false;
+    t_ = 1.0f;
+  } else {
+    const bool currentEdited = std::find(edited.begin(), edited.end(), current) != edited.end();
+    std::uint16_t next = currentEdited && frames_.count(current) ? current : selected_;
+    if (!frames_.count(next)) next = frames_.begin()->first;
+    if (wasWhole) startOn(*dataset.findStructureByLabel(next), "");
+    else selected_ = next;
+  }
   changed();
-  return {};
 }
 
 const render::StructureFrame* ExploreState::frameOf(std::uint16_t label) const {

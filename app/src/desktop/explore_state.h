@@ -47,6 +47,13 @@ class ExploreState {
   // dataset with no structure that has voxels (an unlabelled scan) is shown whole: see wholeVolume().
   Status setDataset(const Dataset& dataset, const std::string& startStructure, const std::string& startPreset);
   const Dataset& dataset() const { return *dataset_; }
+  // The shown dataset's labels or structures were edited in place (the segment editor): the
+  // frames of the `edited` labels are measured again and the browser is rebuilt from its
+  // structures. An unlabelled dataset whose first structure gets voxels leaves whole-volume mode
+  // for the structures' WDT view (and returns to it when the last one loses them). `current` (the
+  // editor's structure) is selected when it is among the edited labels and has voxels; a
+  // selected or hovered structure left without voxels is let go. The camera stays.
+  void labelsEdited(const std::vector<std::uint16_t>& edited, std::uint16_t current);
   bool hasStructure(std::uint16_t label) const { return frames_.count(label) > 0; }
   // The frame of a structure with voxels; in whole-volume mode label 0's is the grid's.
   const render::StructureFrame* frameOf(std::uint16_t label) const;
@@ -120,6 +127,8 @@ class ExploreState {
 
  private:
   std::uint16_t displayLabel() const;
+  void rebuildBrowser();  // bySystem_ from the dataset's structures with frames
+  void startOn(const Structure& structure, const std::string& presetId);  // selected, with its step preset
   void changed() {  // the image changes, and the user (or a script) caused it
     ++revision_;
     ++activity_;

@@ -49,6 +49,13 @@ void FieldView::hoverChanged() {
   hoverSince_ = Clock::now();
 }
 
+void FieldView::labelsChanged(const std::function<void()>& write, const std::vector<std::uint16_t>& changed) {
+  service_->updateLabels(write, changed);
+  if (std::find(changed.begin(), changed.end(), state_.fieldLabel()) == changed.end()) return;
+  source_ = nullptr;  // the field shown is stale: update() shows the new one once it is there
+  key_.clear();
+}
+
 void FieldView::gradeClickDistance(const std::string& clicked, std::uint16_t target, const Vec3& pointMm) {
   FieldRequest key;
   key.label = target;

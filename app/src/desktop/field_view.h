@@ -17,6 +17,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 
@@ -58,6 +59,11 @@ class FieldView {
 
   // The hovered structure changed: the rest timer starts over and a cancelled field may be asked again.
   void hoverChanged();
+  // The dataset's labels are edited (the segment editor): `write` changes them while no field
+  // computation reads them (wdt::FieldService::updateLabels); fields of the `changed` labels are
+  // dropped, and the field on screen, if it is of one of them, is asked for again (it stays on
+  // screen until the new one is there).
+  void labelsChanged(const std::function<void()>& write, const std::vector<std::uint16_t>& changed);
   // A locate click off its target: graded once the target's answer-key field (wdt/answer_keys.h)
   // is there, through the service (never on this thread).
   void gradeClickDistance(const std::string& clicked, std::uint16_t target, const Vec3& pointMm);

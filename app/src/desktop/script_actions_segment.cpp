@@ -12,9 +12,12 @@ namespace at::app {
 
 using nlohmann::json;
 
-// {"do": "segment_open"}: shows the Segment window (the editor of the dataset on screen).
+// {"do": "segment_open"}: shows the Segment window (the editor of the dataset on screen) with the
+// Slices window, as the explore panel's Segment... button does ({"open": false} closes the editor).
 ScriptInterpreter::Outcome ScriptInterpreter::segmentOpen(Context& c) {
-  c.model.segmenter().windowOpen = c.action.value("open", true);
+  const bool open = c.action.value("open", true);
+  c.model.segmenter().windowOpen = open;
+  if (open) c.model.slices().windowOpen = true;
   return Progress::Done;
 }
 

@@ -34,6 +34,7 @@ const std::map<std::string, ScriptInterpreter::Handler>& ScriptInterpreter::hand
       {"clip", &S::clip},               {"expert", &S::expert},
       {"cancel_field", &S::cancelField}, {"wait", &S::wait},
       {"wait_field", &S::waitField},    {"screenshot", &S::screenshot},
+      {"layout", &S::layout},
       {"record", &S::record},           {"report", &S::report},
       {"hover_sweep", &S::hoverSweep},  {"lesson_user", &S::lessonUser},
       {"lessons", &S::lessonList},      {"lesson", &S::lesson},
@@ -184,15 +185,39 @@ ScriptInterpreter::Outcome ScriptInterpreter::view(Context& c) {
   return Progress::Done;
 }
 
+namespace {
+// A hover's or click's point in window pixels: "x", "y", or "view_at": [fx, fy], fractions of
+// the view's rectangle (0.5, 0.5: its centre, wherever docked panels put it).
+std::array<double, 2> pointOf(const json& action, const ViewLayout& layout) {
+  if (!action.contains("view_at")) return {action.at("x").get<double>(), action.at("y").get<double>()};
+  const auto f = action.at("view_at").get<std::array<double, 2>>();
+  return {layout.viewLeft() + f[0] * layout.viewWidth(), f[1] * layout.viewHeight()};
+}
+}  // namespace
+
 ScriptInterpreter::Outcome ScriptInterpreter::hover(Context& c) {
-  c.model.hoverAt(c.action.at("x").get<double>(), c.action.at("y").get<double>());
+  const auto p = pointOf(c.action, c.model.layout());
+  c.model.hoverAt(p[0], p[1]);
   return Progress::Done;
 }
 
 // A locate answer off its target is graded once its distance field is there: the click waits.
 ScriptInterpreter::Outcome ScriptInterpreter::click(Context& c) {
-  if (c.first) c.model.clickAt(c.action.at("x").get<double>(), c.action.at("y").get<double>());
+  const auto p = pointOf(c.action, c.model.layout());
+  if (c.first) c.model.clickAt(p[0], p[1]);
   return c.model.fields().clickPending() ? Progress::Running : Progress::Done;
+}
+
+// {"do": "layout"}: an event with the window's size and the view's rectangle (window pixels), and
+// whether the segment editor and the slice panes are docked beside it.
+ScriptInterpreter::Outcome ScriptInterpreter::layout(Context& c) {
+  const ViewLayout& l = c.model.layout();
+  c.model.event({{"event", "layout"},
+                 {"window", {l.windowW, l.windowH}},
+                 {"view", {{"x", l.viewLeft()}, {"y", 0}, {"width", l.viewWidth()}, {"height", l.viewHeight()}}},
+                 {"editor_docked", l.rightPx > 0},
+                 {"slices_docked", l.bottomPx > 0}});
+  return Progress::Done;
 }
 
 ScriptInterpreter::Outcome ScriptInterpreter::hoverStructure(Context& c) {

@@ -4,9 +4,9 @@
 //
 // Actions (arguments in the README and `anatomy-tutor desktop --help`):
 //   view:     select, t, mode, view, hover, hover_structure, click, click_structure, orbit, zoom, clip,
-//             expert, cancel_field
+//             expert, cancel_field (hover and click at {x, y} or at {view_at: [fx, fy]} of the view)
 //   waiting:  wait {ms}, wait_field {timeout_ms} (the view settled: final quality, the field shown)
-//   output:   screenshot {path}, record {on}, report {out}, hover_sweep {dwell_ms, out}
+//   output:   screenshot {path}, record {on}, report {out}, hover_sweep {dwell_ms, out}, layout
 //   lessons:  lesson_user, lessons, lesson, lesson_next, answer, review, lesson_close
 //   exams:    exams, exam, exam_item, exam_answer, slice_click, slice_click_structure, exam_finish,
 //             exam_leave
@@ -93,6 +93,7 @@ class ScriptInterpreter {
   Outcome mode(Context&);
   Outcome view(Context&);
   Outcome hover(Context&);
+  Outcome layout(Context&);
   Outcome click(Context&);
   Outcome hoverStructure(Context&);
   Outcome clickStructure(Context&);

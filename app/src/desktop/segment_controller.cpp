@@ -97,6 +97,7 @@ Result<std::uint16_t> SegmentController::addLabel(const std::string& name) {
   if (!label) return label;
   current_ = *label;
   ++revision_;
+  ++labelsRevision_;
   return label;
 }
 
@@ -307,6 +308,7 @@ void SegmentController::poll() {
 void SegmentController::edited(const std::string& kind, const std::string& tool, const segment::EditSummary& summary,
                                nlohmann::json extra, bool countVoxels) {
   ++revision_;
+  ++labelsRevision_;
   status_ = summary.description;
   nlohmann::json e = {{"event", kind}, {"tool", tool}, {"changed", summary.changed}};
   if (countVoxels) {
@@ -328,6 +330,7 @@ Result<std::string> SegmentController::stepHistory(bool forward) {
   auto stepped = forward ? editor_->redo() : editor_->undo();
   if (!stepped) return stepped;
   ++revision_;
+  ++labelsRevision_;
   // A structure the step removed (an undone "add") is no longer a label to paint.
   if (std::none_of(structures().begin(), structures().end(), [&](const Structure& s) { return s.label == current_; }))
     current_ = 0;

@@ -9,7 +9,7 @@
 // The editor starts from the dataset's own labels and structures. The growth runs on a worker
 // thread (seconds at 256³ on two CPU cores; milliseconds on a GPU) that uses only the editor's kept
 // growth (LabelEditor::computeGrowth), so the slice, the seeds and the other tools stay usable
-// meanwhile; the 3-D view keeps the labels the dataset was opened with until it is opened again.
+// meanwhile; the 3-D view follows each edit, undo and redo (DesktopModel::showEditedLabels).
 #pragma once
 
 #include <array>
@@ -86,6 +86,9 @@ class SegmentController {
   std::optional<std::array<int, 3>> voxelAtPixel(int scale, double x, double y) const;
   // Changes whenever the slice picture would (labels, seeds, slice).
   std::uint64_t revision() const { return revision_; }
+  // Changes whenever the labels or the structures may have changed (an edit, a growth applied,
+  // undo, redo, a structure added).
+  std::uint64_t labelsRevision() const { return labelsRevision_; }
 
   // --- Seeds and tools ------------------------------------------------------------------------
   double brushMm = 1.5;  // the brush's radius (seeds, paint, erase); 0: the voxel alone
@@ -176,6 +179,7 @@ class SegmentController {
   int axis_ = 2, index_ = 0;
   GreyWindow grey_;
   std::uint64_t revision_ = 0;
+  std::uint64_t labelsRevision_ = 0;
   std::string status_;
   struct GrowJob;
   std::unique_ptr<GrowJob> job_;  // the growth running on its worker, until poll() takes it

@@ -28,6 +28,12 @@ std::vector<T> neighbourhood(const Dims& nb, const std::vector<T>& own, T init, 
   return out;
 }
 
+void indexBlocksOfLabel(BlockSummary& b) {
+  b.blocksOfLabel.clear();
+  for (std::size_t bi = 0; bi < b.labels.size(); ++bi)
+    for (std::uint16_t l : b.labels[bi]) b.blocksOfLabel[l].push_back(std::uint32_t(bi));
+}
+
 }  // namespace
 
 BlockSummary summariseBlocks(const Volume& volume, const LabelMap& labels, const GradientVolume& gradients) {
@@ -64,8 +70,7 @@ BlockSummary summariseBlocks(const Volume& volume, const LabelMap& labels, const
         if (at == set.end() || *at != l) set.insert(at, l);
       }
     }
-  for (std::size_t bi = 0; bi < n; ++bi)
-    for (std::uint16_t l : b.labels[bi]) b.blocksOfLabel[l].push_back(std::uint32_t(bi));
+  indexBlocksOfLabel(b);
   b.huMin = neighbourhood<std::int16_t>(b.blocks, ownMin, std::numeric_limits<std::int16_t>::max(),
                                         [](std::int16_t a, std::int16_t c) { return std::min(a, c); });
   b.huMax = neighbourhood<std::int16_t>(b.blocks, ownMax, std::numeric_limits<std::int16_t>::min(),
@@ -73,6 +78,27 @@ BlockSummary summariseBlocks(const Volume& volume, const LabelMap& labels, const
   b.strengthMax = neighbourhood<float>(b.blocks, ownStrength, 0.0f, [](float a, float c) { return std::max(a, c); });
   if (!hasGradients) b.strengthMax.assign(n, std::numeric_limits<float>::max());
   return b;
+}
+
+void updateBlockLabels(BlockSummary& b, const LabelMap& labels, const std::array<int, 6>& box) {
+  const Dims& d = labels.dims();
+  const int lo[3] = {std::max(0, box[0]) / kBlockVoxels, std::max(0, box[1]) / kBlockVoxels, std::max(0, box[2]) / kBlockVoxels};
+  const int hi[3] = {(std::min(d.x, box[3]) + kBlockVoxels - 1) / kBlockVoxels,
+                     (std::min(d.y, box[4]) + kBlockVoxels - 1) / kBlockVoxels,
+                     (std::min(d.z, box[5]) + kBlockVoxels - 1) / kBlockVoxels};
+  for (int bk = lo[2]; bk < hi[2]; ++bk)
+    for (int bj = lo[1]; bj < hi[1]; ++bj)
+      for (int bi = lo[0]; bi < hi[0]; ++bi) {
+        std::vector<std::uint16_t>& set = b.labels[b.index(bi, bj, bk)];
+        set.clear();
+        for (int k = bk * kBlockVoxels, ke = std::min(d.z, k + kBlockVoxels); k < ke; ++k)
+          for (int j = bj * kBlockVoxels, je = std::min(d.y, j + kBlockVoxels); j < je; ++j)
+            for (int i = bi * kBlockVoxels, ie = std::min(d.x, i + kBlockVoxels); i < ie; ++i)
+              if (const std::uint16_t l = labels.voxels[d.index(i, j, k)]; l != 0) set.push_back(l);
+        std::sort(set.begin(), set.end());
+        set.erase(std::unique(set.begin(), set.end()), set.end());
+      }
+  indexBlocksOfLabel(b);
 }
 
 void FieldBlockMinima::reset(const Geometry& fieldGrid) {

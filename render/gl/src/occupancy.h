@@ -6,6 +6,7 @@
 // over blocks that are neither, so skipping keeps the image.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <unordered_map>
 #include <vector>
@@ -40,6 +41,9 @@ struct BlockSummary {
 };
 
 BlockSummary summariseBlocks(const Volume& volume, const LabelMap& labels, const GradientVolume& gradients);
+// The labels of the blocks that meet the voxel box {x0, y0, z0, x1, y1, z1} (min inclusive, max
+// exclusive) read again from `labels` (an edit changed voxels there), blocksOfLabel with them.
+void updateBlockLabels(BlockSummary& b, const LabelMap& labels, const std::array<int, 6>& box);
 
 // The smallest distance per block of kBlockVoxels³ voxels of a field on its own grid, built slice
 // by slice (a field uploaded in steps) or at once.

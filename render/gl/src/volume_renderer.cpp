@@ -335,6 +335,37 @@ Status VolumeRenderer::setVolume(const Volume& volume, const LabelMap& labels, c
   return glStatus("uploading the volume");
 }
 
+Status VolumeRenderer::updateLabels(const LabelMap& labels, const std::array<int, 6>& box) {
+  State& st = *state_;
+  if (!st.hasVolume) return fail("render: no volume uploaded");
+  const Dims& d = st.volumeGrid.dims;
+  if (!(labels.dims() == d))
+    return fail("render: labels " + labels.dims().toString() + " are not on the volume's grid " + d.toString());
+  const int x0 = std::max(0, box[0]), y0 = std::max(0, box[1]), z0 = std::max(0, box[2]);
+  const int x1 = std::min(d.x, box[3]), y1 = std::min(d.y, box[4]), z1 = std::min(d.z, box[5]);
+  if (x1 <= x0 || y1 <= y0 || z1 <= z0) return {};
+  // The box's rows, packed (a sub-image upload reads a contiguous block).
+  const std::size_t w = std::size_t(x1 - x0);
+  std::vector<std::uint16_t> packed(w * std::size_t(y1 - y0) * std::size_t(z1 - z0));
+  auto out = packed.begin();
+  for (int k = z0; k < z1; ++k)
+    for (int j = y0; j < y1; ++j) {
+      const auto row = labels.voxels.begin() + std::ptrdiff_t(d.index(x0, j, k));
+      out = std::copy(row, row + std::ptrdiff_t(w), out);
+    }
+  glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
+  glBindTexture(GL_TEXTURE_3D, st.labels.id());
+  glTexSubImage3D(GL_TEXTURE_3D, 0, x0, y0, z0, x1 - x0, y1 - y0, z1 - z0, GL_RED_INTEGER, GL_UNSIGNED_SHORT,
+                  packed.data());
+  updateBlockLabels(st.blocks, labels, {x0, y0, z0, x1, y1, z1});
+  // The mask clears its old box and fills the new one at the next draw; the empty-space grid adds
+  // the structure's blocks again to the kept context grid.
+  st.maskLabel = -1;
+  st.occupancyKey.reset();
+  ++st.sceneGeneration;
+  return glStatus("uploading edited labels");
+}
+
 bool VolumeRenderer::hasCudaInterop() {
 #if defined(AT_HAVE_CUDA)
   return true;

@@ -20,6 +20,7 @@
 #include <chrono>
 #include <condition_variable>
 #include <cstdint>
+#include <functional>
 #include <list>
 #include <memory>
 #include <mutex>
@@ -68,6 +69,11 @@ class FieldService {
   void request(const FieldRequest& request);
   // Drops the queued request and cancels the running one (e.g. the user left the structure).
   void cancelAll();
+  // The labels the service reads are edited (the segment editor): the running computation is
+  // cancelled and waited for (at most one WDT pass), then `write` changes the labels while no
+  // computation reads them; cached fields of the `changed` labels are dropped, and a device copy
+  // of the labels is made again before the next field. A queued request stays queued.
+  void updateLabels(const std::function<void()>& write, const std::vector<std::uint16_t>& changed);
   // The cached field for `request`, marking it most recently used. `host` is null while a GPU
   // field's host copy is still being made; `device` is set only for fields computed on the GPU.
   struct Cached {
@@ -96,6 +102,7 @@ class FieldService {
 
  private:
   struct Entry {
+    std::uint16_t label = 0;
     std::string key;
     std::shared_ptr<const DistanceField> field;
     std::shared_ptr<const cuda::DeviceField> deviceField;
@@ -130,6 +137,7 @@ class FieldService {
   std::list<Entry> lru_;  // front = newest
   struct DeviceState;
   std::unique_ptr<DeviceState> device_;  // worker thread only
+  bool deviceLabelsStale_ = false;       // under mutex_: updateLabels ran since the device copy was made
   bool deviceBroken_ = false;            // worker thread only: a CUDA failure under auto, stay on the CPU
   std::string deviceWarning_;            // worker thread only: why, for the next result
   std::vector<FinishedField> finished_;

@@ -58,6 +58,9 @@ class DesktopApp final : public ScriptHost {
   ViewLayout layout() const {
     ViewLayout l = window_->layout();
     l.panelPx = explore_.width();
+    const bool editing = !model_->study().participantActive() && model_->segmenter().windowOpen &&
+                         model_->segmenter().attached();
+    dockPanels(l, editing, model_->slices().windowOpen && model_->slices().attached());
     return l;
   }
   void frame();
@@ -180,19 +183,26 @@ void DesktopApp::drawUi() {
     const float left = std::max(panelW, explore_.width());
     analytics_.draw(model_->analytics(), left + 16, 16, std::max(420.0f, float(l.windowW) - left - 32), float(l.windowH) - 32);
   }
-  if (!study.participantActive()) segment_.draw(model_->segmenter(), panelW + 60, 60);
-  if (!study.participantActive()) slices_.draw(*model_, panelW + 80, float(l.windowH) * 0.45f);
+  // The segment editor and the slice panes: docked beside and under the view when the layout
+  // has room for them (dockPanels), else floating windows over it.
+  const float viewW = l.viewWidth(), viewH = l.viewHeight();
+  if (!study.participantActive()) {
+    if (l.rightPx > 0) segment_.draw(model_->segmenter(), PanelRect{panelW + viewW, 0, l.rightPx, float(l.windowH)});
+    else segment_.draw(model_->segmenter(), PanelRect{panelW + 60, 60, 0, 0});
+    if (l.bottomPx > 0) slices_.draw(*model_, PanelRect{panelW, viewH, viewW, l.bottomPx});
+    else slices_.draw(*model_, PanelRect{panelW + 80, float(l.windowH) * 0.45f, 0, 0});
+  }
   if (!study.participantActive()) courses_.draw(*model_, panelW + 60, 60);
   // The renderer's texture as it is (GL's rows bottom first: uv0 is the image's left/bottom).
   if (const render::gl::DisplayImage& image = view_->image(); image.handle)
     ImGui::GetBackgroundDrawList()->AddImage(reinterpret_cast<ImTextureID>(image.handle), ImVec2(panelW, 0),
-                                             ImVec2(float(l.windowW), float(l.windowH)), ImVec2(image.uv0[0], image.uv1[1]),
+                                             ImVec2(panelW + viewW, viewH), ImVec2(image.uv0[0], image.uv1[1]),
                                              ImVec2(image.uv1[0], image.uv0[1]));
   const bool sliceShown = model_->examSlice() && model_->exams().running();  // drawn over the 3-D view below
   if (view_->available() && view_->image().handle && !sliceShown)
-    drawViewOverlay(model_->explore().camera(), panelW, 0, float(l.windowW) - panelW, float(l.windowH), l.uiScale);
+    drawViewOverlay(model_->explore().camera(), panelW, 0, viewW, viewH, l.uiScale);
   if (!study.participantActive())  // a locate-on-slice exam item: the slice in place of the 3-D view
-    explore_.exams().drawSlice(*model_, panelW, 0, float(l.windowW) - panelW, float(l.windowH));
+    explore_.exams().drawSlice(*model_, panelW, 0, viewW, viewH);
   if (!study.participantActive() && model_->expertOn() &&
       expert_.draw(model_->expert(), float(l.windowW) - 340 * l.uiScale, 340 * l.uiScale, float(l.windowH)))
     model_->expertEdited();
@@ -243,7 +253,7 @@ void DesktopApp::handleEvent(const SDL_Event& e) {
       } else if (leftDown_ || panDown_) {
         if (std::abs(e.motion.x - downX_) + std::abs(e.motion.y - downY_) > 3) dragged_ = true;
         if (leftDown_ && dragged_) model_->explore().orbit(-dx * 0.4, dy * 0.4);
-        if (panDown_) model_->explore().pan(dx, dy, layout.windowH);
+        if (panDown_) model_->explore().pan(dx, dy, int(layout.viewHeight()));
         if (!(leftDown_ && dragged_) && !panDown_) model_->explore().noteActivity();
         lastX_ = e.motion.x;
         lastY_ = e.motion.y;

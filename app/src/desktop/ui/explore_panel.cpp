@@ -44,7 +44,7 @@ void ExplorePanel::draw(DesktopModel& model, const Status& status) {
   ImGui::SameLine();
   if (ImGui::SmallButton("Import...")) model.imports().windowOpen = true;
   ImGui::SameLine();
-  if (ImGui::SmallButton("Segment...")) model.segmenter().windowOpen = true;
+  if (ImGui::SmallButton("Segment...")) model.segmenter().windowOpen = model.slices().windowOpen = true;
   // The instructor's windows on a line of their own (the panel's narrowest width keeps them whole).
   if (ImGui::SmallButton("Courses...")) model.courseEditor().windowOpen = true;
   ImGui::SameLine();

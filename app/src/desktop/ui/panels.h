@@ -112,6 +112,17 @@ render::RgbaImage toRgba(const RgbImage& image);
 // `side` pixels, under an invisible button `id` that takes its clicks; a right drag over it is a
 // grey-window drag given to `grey` (GreyWindow::drag's dx, dy). Returns the mouse in picture
 // pixels while it hovers the picture.
+// Where a panel is drawn, in logical pixels: docked (w, h > 0: that rectangle, fixed) or floating
+// (w = h = 0: first placed at x, y, then moved and sized by the user).
+struct PanelRect {
+  float x = 0, y = 0, w = 0, h = 0;
+  bool docked() const { return w > 0 && h > 0; }
+};
+
+// ImGui::Begin of a panel window at `where`: docked (fixed, neither moved nor resized) or floating
+// (placed when it appears, sized to fit). False when collapsed: the caller still calls End().
+bool beginPanel(const char* title, bool* open, const PanelRect& where);
+
 struct PaneMouse {
   double x = 0, y = 0;
 };
@@ -123,7 +134,7 @@ std::optional<PaneMouse> drawSlicePane(const char* id, const render::gl::ImageTe
 // a right drag sets the grey window.
 class SlicesPanel {
  public:
-  void draw(DesktopModel& model, float x, float y);
+  void draw(DesktopModel& model, const PanelRect& where);
 
  private:
   std::array<std::optional<render::gl::ImageTexture>, 3> textures_;
@@ -141,12 +152,19 @@ class ImportPanel {
 };
 
 // The segment editor's window: labels, a slice to paint seeds in (right drag: grey window), grow,
-// undo / redo and save.
+// undo / redo and save, in collapsible sections; docked as a column at the window's right edge
+// when the layout has one (dockPanels), else floating.
 class SegmentPanel {
  public:
-  void draw(SegmentController& editor, float x, float y);
+  void draw(SegmentController& editor, const PanelRect& where);
 
  private:
+  void report(const Status& st);  // the error shown under the controls, or none
+  void drawLabels(SegmentController& editor, int listLines);
+  void drawSliceControls(SegmentController& editor);
+  void drawSlice(SegmentController& editor, float side);  // the picture, its longer side `side` px
+  void drawTools(SegmentController& editor);
+  void drawSaving(SegmentController& editor);
   std::optional<render::gl::ImageTexture> texture_;
   std::uint64_t revision_ = 0;
   std::optional<std::array<int, 3>> lastPainted_;  // the voxel under a drag (one paint per voxel)

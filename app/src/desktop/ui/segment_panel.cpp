@@ -32,25 +32,56 @@ bool historyButton(const char* label, bool enabled) {
 
 }  // namespace
 
-void SegmentPanel::draw(SegmentController& editor, float x, float y) {
+void SegmentPanel::report(const Status& st) { error_ = st ? "" : st.error().message; }
+
+void SegmentPanel::draw(SegmentController& editor, const PanelRect& where) {
   if (!editor.windowOpen || !editor.attached()) return;
-  ImGui::SetNextWindowPos(ImVec2(x, y), ImGuiCond_Appearing);
-  if (!ImGui::Begin("Segment editor", &editor.windowOpen, ImGuiWindowFlags_AlwaysAutoResize)) {
+  // Docked: a column at the window's right edge, its sections stacked (the slice as wide as the
+  // column) and scrolled; floating: the controls left of the slice, sized to fit.
+  const bool docked = where.docked();
+  if (!beginPanel("Segment editor", &editor.windowOpen, where)) {
     ImGui::End();
     return;
   }
-  const auto report = [this](const Status& st) { error_ = st ? "" : st.error().message; };
+  const float line = ImGui::GetFontSize();
+  if (!docked) ImGui::BeginGroup();  // the controls, left of the slice
+  if (ImGui::CollapsingHeader("Labels", ImGuiTreeNodeFlags_DefaultOpen)) drawLabels(editor, docked ? 8 : 12);
+  const bool sliceOpen = ImGui::CollapsingHeader("Slice", ImGuiTreeNodeFlags_DefaultOpen);
+  if (sliceOpen) drawSliceControls(editor);
+  if (sliceOpen && docked) drawSlice(editor, ImGui::GetContentRegionAvail().x);
+  if (ImGui::CollapsingHeader("Tools", ImGuiTreeNodeFlags_DefaultOpen)) drawTools(editor);
+  if (ImGui::CollapsingHeader("Save and export", docked ? 0 : ImGuiTreeNodeFlags_DefaultOpen)) drawSaving(editor);
+  ImGui::PushTextWrapPos(docked ? 0.0f : ImGui::GetCursorPosX() + line * 22);
+  if (!editor.status().empty()) ImGui::TextWrapped("%s", editor.status().c_str());
+  if (!error_.empty()) ImGui::TextColored(kError, "%s", error_.c_str());
+  if (editor.growError()) ImGui::TextColored(kError, "%s", editor.growError()->message.c_str());
+  ImGui::PopTextWrapPos();
+  if (!docked) {
+    ImGui::EndGroup();
+    ImGui::SameLine();
+    ImGui::BeginGroup();
+    drawSlice(editor, line * 30);
+    ImGui::EndGroup();
+  }
+  // Painting in the slice ends when the button is let go, wherever the mouse is.
+  if (!ImGui::IsMouseDown(ImGuiMouseButton_Left)) {
+    lastPainted_.reset();
+    if (stroking_) editor.endStroke();
+    stroking_ = false;
+  }
+  ImGui::End();
+}
 
-  // Labels: background and the structures; a new one by name.
+void SegmentPanel::drawLabels(SegmentController& editor, int listLines) {
   const auto perLabel = editor.seedsPerLabel();
   const auto seeded = [&](std::uint16_t label) {
     const auto it = perLabel.find(label);
     return it == perLabel.end() ? std::size_t(0) : it->second;
   };
   const float line = ImGui::GetFontSize();
-  ImGui::BeginGroup();  // the controls, left of the slice
-  ImGui::TextUnformatted("Labels: review state, name (seed voxels)");
-  ImGui::BeginChild("labels", ImVec2(line * 26, line * 12), true);
+  ImGui::TextUnformatted("Review state, name (seed voxels)");
+  const float width = std::min(line * 26, ImGui::GetContentRegionAvail().x);
+  ImGui::BeginChild("labels", ImVec2(width, line * float(listLines)), true);
   if (ImGui::RadioButton(("background (" + std::to_string(seeded(0)) + ")").c_str(), editor.currentLabel() == 0))
     report(editor.setCurrentLabel(0));
   for (const Structure& s : editor.structures()) {
@@ -65,29 +96,29 @@ void SegmentPanel::draw(SegmentController& editor, float x, float y) {
     }
     ImGui::SameLine();
     ImGui::ColorButton("##colour", ImVec4(s.colour[0], s.colour[1], s.colour[2], 1), ImGuiColorEditFlags_NoTooltip,
-                       ImVec2(ImGui::GetFontSize(), ImGui::GetFontSize()));
+                       ImVec2(line, line));
     ImGui::SameLine();
     const std::string text = s.displayName + " (" + std::to_string(seeded(s.label)) + ")";
     if (ImGui::RadioButton(text.c_str(), editor.currentLabel() == s.label)) report(editor.setCurrentLabel(s.label));
     ImGui::PopID();
   }
   ImGui::EndChild();
-  ImGui::SetNextItemWidth(ImGui::GetFontSize() * 12);
+  ImGui::SetNextItemWidth(line * 12);
   ImGui::InputTextWithHint("##new", "new label name", &newLabel_);
   ImGui::SameLine();
   if (ImGui::Button("Add label") && !newLabel_.empty()) {
     auto added = editor.addLabel(newLabel_);
-    report(added ? Status{} : Status(tl::unexpected(added.error())));
+    report(statusOf(added));
     if (added) newLabel_.clear();
   }
+}
 
-  // The slice.
-  ImGui::TextUnformatted("Slice (x sagittal, y coronal, z axial); right-drag: grey window");
+void SegmentPanel::drawSliceControls(SegmentController& editor) {
+  ImGui::TextUnformatted("x sagittal, y coronal, z axial; right-drag: grey window");
   ImGui::TextUnformatted("  axis");
   for (int a = 0; a < 3; ++a) {
     ImGui::SameLine();
-    if (ImGui::RadioButton(a == 0 ? "x" : a == 1 ? "y" : "z", editor.axis() == a) &&
-        a != editor.axis())
+    if (ImGui::RadioButton(a == 0 ? "x" : a == 1 ? "y" : "z", editor.axis() == a) && a != editor.axis())
       report(editor.showAxis(a));
   }
   int index = editor.index();
@@ -96,7 +127,9 @@ void SegmentPanel::draw(SegmentController& editor, float x, float y) {
   float brush = float(editor.brushMm);
   ImGui::SetNextItemWidth(ImGui::GetFontSize() * 14);
   if (ImGui::SliderFloat("brush (mm)", &brush, 0.0f, 10.0f, "%.1f")) editor.brushMm = brush;
+}
 
+void SegmentPanel::drawTools(SegmentController& editor) {
   // The click's tool: seeds, the threshold island under the click (the current structure), or
   // the brush painting the current structure / erasing labels (also on the 3-D view's surface).
   using Tool = SegmentController::Tool;
@@ -144,10 +177,10 @@ void SegmentPanel::draw(SegmentController& editor, float x, float y) {
   if (historyButton("Redo", editor.canRedo()) || (zKey && io.KeyShift) || yKey) report(statusOf(editor.redo()));
   ImGui::SameLine();
   if (ImGui::Button("Clear seeds")) editor.clearSeeds();
-  if (ImGui::Button("Save into the dataset")) {
-    auto saved = editor.saveToStore();
-    report(saved ? Status{} : Status(tl::unexpected(saved.error())));
-  }
+}
+
+void SegmentPanel::drawSaving(SegmentController& editor) {
+  if (ImGui::Button("Save into the dataset")) report(statusOf(editor.saveToStore()));
   ImGui::SetNextItemWidth(ImGui::GetFontSize() * 16);
   ImGui::InputTextWithHint("##export", "labels.nii.gz or .seg.nrrd", &exportPath_);
   ImGui::SameLine();
@@ -156,14 +189,10 @@ void SegmentPanel::draw(SegmentController& editor, float x, float y) {
     if (exportPath_.size() > 7 && exportPath_.ends_with(".nii.gz")) names = exportPath_.substr(0, exportPath_.size() - 7) + ".names.json";
     report(editor.exportLabels(exportPath_, names));
   }
-  ImGui::PushTextWrapPos(ImGui::GetCursorPosX() + line * 22);
-  if (!editor.status().empty()) ImGui::TextWrapped("%s", editor.status().c_str());
-  if (!error_.empty()) ImGui::TextColored(kError, "%s", error_.c_str());
-  if (editor.growError()) ImGui::TextColored(kError, "%s", editor.growError()->message.c_str());
-  ImGui::PopTextWrapPos();
-  ImGui::EndGroup();
-  ImGui::SameLine();
-  ImGui::BeginGroup();
+}
+
+void SegmentPanel::drawSlice(SegmentController& editor, float side) {
+  using Tool = SegmentController::Tool;
   // The picture: each voxel a block of 3 × 3 texels (the texture is filtered linearly: blocks keep
   // voxel edges sharp when it is magnified).
   const int scale = 3;
@@ -181,34 +210,24 @@ void SegmentPanel::draw(SegmentController& editor, float x, float y) {
       if (texture_) report(texture_->upload(toRgba(*image)));
     }
   }
-  if (texture_ && texture_->handle() && texture_->width() > 0) {
-    // At the voxels' aspect, the longer side 30 lines long; a right drag sets the grey window.
-    const auto mouse = drawSlicePane("##slice", *texture_, editor.slicePixelMm(), ImGui::GetFontSize() * 30,
-                                     [&](double dx, double dy) { editor.dragWindow(dx, dy); });
-    if (mouse && ImGui::IsMouseDown(ImGuiMouseButton_Left)) {
-      if (auto voxel = editor.voxelAtPixel(scale, mouse->x, mouse->y); voxel && voxel != lastPainted_) {
-        lastPainted_ = voxel;
-        if (editor.tool == Tool::Threshold) {  // one island per click
-          if (ImGui::IsMouseClicked(ImGuiMouseButton_Left))
-            report(statusOf(editor.thresholdIsland(*voxel, range_[0], range_[1], minDiameterMm_)));
-        } else if (editor.tool == Tool::Seeds) {
-          report(statusOf(editor.paintSeeds(*voxel)));
-        } else {  // a drag's dabs: one edit
-          if (!stroking_) editor.beginStroke();
-          stroking_ = true;
-          report(statusOf(editor.brushAtVoxel(*voxel)));
-        }
-      }
-    }
+  if (!texture_ || !texture_->handle() || texture_->width() <= 0) return;
+  // At the voxels' aspect, the longer side `side` long; a right drag sets the grey window.
+  const auto mouse = drawSlicePane("##slice", *texture_, editor.slicePixelMm(), side,
+                                   [&](double dx, double dy) { editor.dragWindow(dx, dy); });
+  if (!mouse || !ImGui::IsMouseDown(ImGuiMouseButton_Left)) return;
+  const auto voxel = editor.voxelAtPixel(scale, mouse->x, mouse->y);
+  if (!voxel || voxel == lastPainted_) return;
+  lastPainted_ = voxel;
+  if (editor.tool == Tool::Threshold) {  // one island per click
+    if (ImGui::IsMouseClicked(ImGuiMouseButton_Left))
+      report(statusOf(editor.thresholdIsland(*voxel, range_[0], range_[1], minDiameterMm_)));
+  } else if (editor.tool == Tool::Seeds) {
+    report(statusOf(editor.paintSeeds(*voxel)));
+  } else {  // a drag's dabs: one edit
+    if (!stroking_) editor.beginStroke();
+    stroking_ = true;
+    report(statusOf(editor.brushAtVoxel(*voxel)));
   }
-  if (!ImGui::IsMouseDown(ImGuiMouseButton_Left)) {
-    lastPainted_.reset();
-    if (stroking_) editor.endStroke();
-    stroking_ = false;
-  }
-
-  ImGui::EndGroup();
-  ImGui::End();
 }
 
 }  // namespace at::app

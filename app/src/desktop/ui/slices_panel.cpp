@@ -24,6 +24,16 @@ render::RgbaImage toRgba(const RgbImage& image) {
   return rgba;
 }
 
+bool beginPanel(const char* title, bool* open, const PanelRect& where) {
+  if (where.docked()) {
+    ImGui::SetNextWindowPos(ImVec2(where.x, where.y));
+    ImGui::SetNextWindowSize(ImVec2(where.w, where.h));
+    return ImGui::Begin(title, open, ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoResize | ImGuiWindowFlags_NoCollapse);
+  }
+  ImGui::SetNextWindowPos(ImVec2(where.x, where.y), ImGuiCond_Appearing);
+  return ImGui::Begin(title, open, ImGuiWindowFlags_AlwaysAutoResize);
+}
+
 std::optional<PaneMouse> drawSlicePane(const char* id, const render::gl::ImageTexture& texture, std::array<double, 2> pixelMm,
                                        float side, const std::function<void(double, double)>& grey) {
   const double widthMm = texture.width() * pixelMm[0], heightMm = texture.height() * pixelMm[1];
@@ -44,11 +54,12 @@ std::optional<PaneMouse> drawSlicePane(const char* id, const render::gl::ImageTe
   return PaneMouse{(m.x - origin.x) / zoomX, (m.y - origin.y) / zoomY};
 }
 
-void SlicesPanel::draw(DesktopModel& model, float x, float y) {
+void SlicesPanel::draw(DesktopModel& model, const PanelRect& where) {
   SliceViews& slices = model.slices();
   if (!slices.windowOpen || !slices.attached()) return;
-  ImGui::SetNextWindowPos(ImVec2(x, y), ImGuiCond_Appearing);
-  if (!ImGui::Begin("Slices", &slices.windowOpen, ImGuiWindowFlags_AlwaysAutoResize)) {
+  // Docked: a strip under the view (the segment editor docked beside it), the panes filling it.
+  const bool docked = where.docked();
+  if (!beginPanel("Slices", &slices.windowOpen, where)) {
     ImGui::End();
     return;
   }
@@ -61,7 +72,12 @@ void SlicesPanel::draw(DesktopModel& model, float x, float y) {
   ImGui::Text("crosshair (%d, %d, %d); right-drag: window", c[0], c[1], c[2]);
   // Each voxel a block of 2 × 2 texels (linear filtering keeps voxel edges sharp when magnified).
   const int scale = 2;
-  const float side = ImGui::GetFontSize() * 16;  // the longer side of each pane
+  // The longer side of each pane: three side by side in a docked strip, under a line of names.
+  const ImGuiStyle& style = ImGui::GetStyle();
+  const float side = docked ? std::max(32.0f, std::min((ImGui::GetContentRegionAvail().x - 2 * style.ItemSpacing.x) / 3,
+                                                       ImGui::GetContentRegionAvail().y - ImGui::GetTextLineHeightWithSpacing() -
+                                                           style.ItemSpacing.y))
+                            : ImGui::GetFontSize() * 16;
   const std::uint64_t key = slices.revision() * 1000003ull + editor.revision() * 131ull + std::uint64_t(alpha * 1000);
   for (int axis = 0; axis < 3; ++axis) {
     if (axis) ImGui::SameLine();

@@ -28,21 +28,37 @@ void VolumeView::prepare(DesktopModel& model) {
 }
 
 void VolumeView::takeDataset(DesktopModel& model) {
-  if (renderer_ && datasetRevision_ != model.datasetRevision()) {
+  if (!renderer_) return;
+  const Dataset& dataset = model.dataset();
+  if (datasetRevision_ != model.datasetRevision()) {
     datasetRevision_ = model.datasetRevision();
-    if (auto st = renderer_->setVolume(model.dataset().volume, model.dataset().labels, model.gradients()); !st) {
+    labelRevision_ = model.labelEdit().revision;
+    wholeVolume_ = false;
+    if (auto st = renderer_->setVolume(dataset.volume, dataset.labels, model.gradients()); !st) {
       messages_("volume renderer: " + st.error().message);
       image_ = {};  // its textures go with it
       renderer_.reset();
-    } else if (model.explore().wholeVolume()) {  // its data TF over a field that changes nothing
-      if (auto field = renderer_->setField(render::neutralField(model.dataset().volume.geometry)); !field)
-        messages_("volume renderer: " + field.error().message);
-    } else if (auto reserved = renderer_->reserveDeviceField(model.dataset().volume.dims()); !reserved) {
-      // Fields computed on a GPU arrive on the volume's grid; registering their texture now keeps
-      // ~0.1 s out of the first hover. A failure here only moves that cost (and its error) there.
-      messages_("volume renderer: " + reserved.error().message);
+      return;
     }
+    if (!model.explore().wholeVolume())
+      if (auto reserved = renderer_->reserveDeviceField(dataset.volume.dims()); !reserved)
+        // Fields computed on a GPU arrive on the volume's grid; registering their texture now keeps
+        // ~0.1 s out of the first hover (an unlabelled scan's first label pays it in its first
+        // field). A failure here only moves that cost (and its error) there.
+        messages_("volume renderer: " + reserved.error().message);
   }
+  if (labelRevision_ != model.labelEdit().revision) {  // the segment editor changed labels
+    const Dims& d = dataset.volume.dims();
+    const bool next = model.labelEdit().revision == labelRevision_ + 1;  // else the whole grid
+    const std::array<int, 6> box = next ? model.labelEdit().box : std::array<int, 6>{0, 0, 0, d.x, d.y, d.z};
+    labelRevision_ = model.labelEdit().revision;
+    if (auto st = renderer_->updateLabels(dataset.labels, box); !st) messages_("volume renderer: " + st.error().message);
+  }
+  if (model.explore().wholeVolume() && !wholeVolume_) {  // its data TF over a field that changes nothing
+    if (auto field = renderer_->setField(render::neutralField(dataset.volume.geometry)); !field)
+      messages_("volume renderer: " + field.error().message);
+  }
+  wholeVolume_ = model.explore().wholeVolume();
 }
 
 void VolumeView::frame(DesktopModel& model, Clock::time_point now) {

@@ -29,7 +29,8 @@ class VolumeView final : public FieldTarget {
   // view draws (on a software rasteriser each takes 0.1–1 s at its first use), so that no frame
   // pays for either.
   void prepare(DesktopModel& model);
-  // Each frame: uploads the model's volume when another dataset is shown, then renders the plan.
+  // Each frame: uploads the model's volume when another dataset is shown (its labels after an
+  // edit in the segment editor), then renders the plan.
   void frame(DesktopModel& model, Clock::time_point now);
   // The image to draw (handle 0 before the first one).
   const render::gl::DisplayImage& image() const { return image_; }
@@ -37,11 +38,15 @@ class VolumeView final : public FieldTarget {
   Result<bool> show(const wdt::FieldService::Cached& field, std::uint16_t label) override;
 
  private:
-  void takeDataset(DesktopModel& model);  // uploads the volume when another dataset is shown
+  // Uploads the volume when another dataset is shown, the edited labels' box after an edit, and
+  // the neutral field when the view turns to the whole volume.
+  void takeDataset(DesktopModel& model);
   MessageSink messages_;
   std::optional<render::gl::VolumeRenderer> renderer_;
   render::gl::DisplayImage image_;
   std::uint64_t datasetRevision_ = 0;
+  std::uint64_t labelRevision_ = 0;  // the model's labelEdit() uploaded
+  bool wholeVolume_ = false;         // the neutral field is set (whole-volume mode)
 };
 
 }  // namespace at::app

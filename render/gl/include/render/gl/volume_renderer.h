@@ -86,6 +86,13 @@ class VolumeRenderer {
   // previous volume and drops the field.
   Status setVolume(const Volume& volume, const LabelMap& labels);
   Status setVolume(const Volume& volume, const LabelMap& labels, const GradientVolume& gradients);
+  // The labels changed inside the voxel box {x0, y0, z0, x1, y1, z1} (min inclusive, max
+  // exclusive; an edit of the label map on the volume's grid): that box of the label texture is
+  // uploaded again, and the structure mask and the structure's blocks of the empty-space grid are
+  // rebuilt at the next draw (the context's grid is kept: it does not depend on labels). The
+  // field stays (the caller replaces a field the edit made stale). Errors: no volume, labels on
+  // another grid.
+  Status updateLabels(const LabelMap& labels, const std::array<int, 6>& box);
   // Uploads a distance field on its own grid (the volume's or a coarser one); +inf stays "far".
   Status setField(const FloatVolume& field);
   // Uploads `field` a few z-slices per call, for a frame loop that must not stall: software GL
