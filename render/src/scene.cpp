@@ -6,18 +6,31 @@
 namespace at::render {
 
 Result<StructureFrame> structureFrame(const LabelMap& labels, std::uint16_t label) {
+  const Dims& d = labels.geometry.dims;
+  return structureFrame(labels, label, {0, 0, 0, d.x, d.y, d.z});
+}
+
+Result<StructureFrame> structureFrame(const LabelMap& labels, std::uint16_t label, const std::array<int, 6>& box) {
   const Geometry& g = labels.geometry;
   const Dims& d = g.dims;
+  const int x0 = std::max(0, box[0]), y0 = std::max(0, box[1]), z0 = std::max(0, box[2]);
+  const int x1 = std::min(d.x, box[3]), y1 = std::min(d.y, box[4]), z1 = std::min(d.z, box[5]);
   StructureFrame f;
+  f.voxelBox = {x1, y1, z1, x0, y0, z0};  // grows to the voxels found
   double s[3] = {0, 0, 0};
-  for (int k = 0; k < d.z; ++k)
-    for (int j = 0; j < d.y; ++j)
-      for (int i = 0; i < d.x; ++i)
+  for (int k = z0; k < z1; ++k)
+    for (int j = y0; j < y1; ++j)
+      for (int i = x0; i < x1; ++i)
         if (labels.voxels[d.index(i, j, k)] == label) {
           s[0] += i;
           s[1] += j;
           s[2] += k;
           ++f.voxelCount;
+          const int at[3] = {i, j, k};
+          for (std::size_t a = 0; a < 3; ++a) {
+            f.voxelBox[a] = std::min(f.voxelBox[a], at[a]);
+            f.voxelBox[a + 3] = std::max(f.voxelBox[a + 3], at[a] + 1);
+          }
         }
   if (f.voxelCount == 0) return fail("structure label " + std::to_string(label) + " has no voxels");
   const double n = double(f.voxelCount);
@@ -28,9 +41,10 @@ Result<StructureFrame> structureFrame(const LabelMap& labels, std::uint16_t labe
   const std::size_t every = (f.voxelCount + kMaxFramePoints - 1) / kMaxFramePoints;
   double r2 = 0, nearest2 = 1e300;
   std::size_t seen = 0;
-  for (int k = 0; k < d.z; ++k)
-    for (int j = 0; j < d.y; ++j)
-      for (int i = 0; i < d.x; ++i)
+  const std::array<int, 6>& b = f.voxelBox;  // the second pass reads only the structure's own box
+  for (int k = b[2]; k < b[5]; ++k)
+    for (int j = b[1]; j < b[4]; ++j)
+      for (int i = b[0]; i < b[3]; ++i)
         if (labels.voxels[d.index(i, j, k)] == label) {
           const Vec3 p = g.indexToPatient({double(i), double(j), double(k)});
           const double q2 = dot(p - f.centroidMm, p - f.centroidMm);

@@ -1,8 +1,12 @@
 #include <doctest/doctest.h>
 
+#include <algorithm>
+#include <array>
 #include <cmath>
 
 #include "render/camera.h"
+#include "render/scene.h"
+#include "volume/phantom.h"
 
 using namespace at;
 using namespace at::render;
@@ -73,4 +77,41 @@ TEST_CASE("A clipping plane keeps the side opposite its normal") {
   CHECK(plane->keeps({0, 0, 1.9}));
   CHECK_FALSE(plane->keeps({0, 0, 2.1}));
   CHECK_FALSE(ClipPlane::fromCoefficients(0, 0, 0, 1));
+}
+
+TEST_CASE("A structure's frame read inside a box holding its voxels equals the whole map's; the box it reports is tight") {
+  const Dataset ds = makePhantom({64, 51.2, 1});
+  const Structure* cochlea = ds.findStructure("cochlea");
+  REQUIRE(cochlea);
+  auto whole = structureFrame(ds.labels, cochlea->label);
+  REQUIRE(whole);
+  const std::array<int, 6> b = whole->voxelBox;
+  CHECK(b[0] < b[3]);
+  // Tight: every face of the box touches a voxel of the structure.
+  for (std::size_t a = 0; a < 3; ++a)
+    for (int face : {b[a], b[a + 3] - 1}) {
+      std::array<int, 6> slab = b;
+      slab[a] = face;
+      slab[a + 3] = face + 1;
+      CHECK(structureFrame(ds.labels, cochlea->label, slab));
+    }
+  // An edit's box joined with it (here: a box around a corner of the grid) reads fewer voxels and
+  // gives the same frame, point for point.
+  const std::array<int, 6> joined{std::min(b[0], 0), std::min(b[1], 0), std::min(b[2], 0), b[3], b[4], b[5]};
+  auto boxed = structureFrame(ds.labels, cochlea->label, joined);
+  REQUIRE(boxed);
+  CHECK(boxed->voxelCount == whole->voxelCount);
+  CHECK(boxed->voxelBox == whole->voxelBox);
+  CHECK(boxed->centroidMm == whole->centroidMm);
+  CHECK(boxed->anchorMm == whole->anchorMm);
+  CHECK(boxed->radiusMm == whole->radiusMm);
+  CHECK(boxed->pointsMm == whole->pointsMm);
+  // A box that misses part of it sees less (the caller's contract matters).
+  std::array<int, 6> cut = b;
+  cut[3] = b[0] + (b[3] - b[0]) / 2;
+  auto part = structureFrame(ds.labels, cochlea->label, cut);
+  REQUIRE(part);
+  CHECK(part->voxelCount < whole->voxelCount);
+  // A box without it: the usual error.
+  CHECK_FALSE(structureFrame(ds.labels, cochlea->label, {0, 0, 0, 1, 1, 1}));
 }

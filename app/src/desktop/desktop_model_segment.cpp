@@ -86,7 +86,7 @@ void DesktopModel::showEditedLabels() {
       changed);
   dataset_->structures = after;
   const std::uint16_t selectedBefore = explore_.selected();
-  explore_.labelsEdited(changed, segment_->currentLabel());
+  explore_.labelsEdited(changed, segment_->currentLabel(), diff.any() ? std::optional(diff.box) : std::nullopt);
   // An edited structure's full-resolution field waits until the edits pause (as a hover rests).
   if (std::find(changed.begin(), changed.end(), explore_.shownLabel()) != changed.end()) fields_->hoverChanged();
   if (diff.any()) labelEdit_ = {labelEdit_.revision + 1, diff.box};

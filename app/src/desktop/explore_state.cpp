@@ -59,14 +59,25 @@ void ExploreState::startOn(const Structure& structure, const std::string& preset
   else messages_(preset.error().message);
 }
 
-void ExploreState::labelsEdited(const std::vector<std::uint16_t>& edited, std::uint16_t current) {
+void ExploreState::labelsEdited(const std::vector<std::uint16_t>& edited, std::uint16_t current,
+                                const std::optional<std::array<int, 6>>& editBox) {
   const Dataset& dataset = *dataset_;
   for (std::uint16_t label : edited) {
-    frames_.erase(label);
     presets_.erase({label, false});
     presets_.erase({label, true});
+    const auto old = frames_.find(label);
+    if (!editBox) continue;  // no voxel changed (a rename, a colour): the frame stands
+    // The label's voxels now lie in its old box or in the edited one: only those are read (a
+    // brush stroke costs its own box, not the whole map, on the UI thread).
+    std::array<int, 6> box = *editBox;
+    if (old != frames_.end())
+      for (std::size_t a = 0; a < 3; ++a) {
+        box[a] = std::min(box[a], old->second.voxelBox[a]);
+        box[a + 3] = std::max(box[a + 3], old->second.voxelBox[a + 3]);
+      }
+    frames_.erase(label);
     if (label != 0 && dataset.findStructureByLabel(label))
-      if (auto frame = render::structureFrame(dataset.labels, label)) frames_[label] = *frame;
+      if (auto frame = render::structureFrame(dataset.labels, label, box)) frames_[label] = *frame;
   }
   for (auto it = frames_.begin(); it != frames_.end();)  // deleted structures
     it = dataset.findStructureByLabel(it->first) ? std::next(it) : frames_.erase(it);

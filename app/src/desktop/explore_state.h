@@ -8,6 +8,7 @@
 // (a hover over the same structure included), which keeps the view "moving" for the scheduler.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <functional>
 #include <map>
@@ -52,8 +53,11 @@ class ExploreState {
   // structures. An unlabelled dataset whose first structure gets voxels leaves whole-volume mode
   // for the structures' WDT view (and returns to it when the last one loses them). `current` (the
   // editor's structure) is selected when it is among the edited labels and has voxels; a
-  // selected or hovered structure left without voxels is let go. The camera stays.
-  void labelsEdited(const std::vector<std::uint16_t>& edited, std::uint16_t current);
+  // selected or hovered structure left without voxels is let go. The camera stays. `editBox`: the
+  // box holding every voxel that changed (as StructureFrame::voxelBox); none when only names,
+  // colours or the list of structures changed.
+  void labelsEdited(const std::vector<std::uint16_t>& edited, std::uint16_t current,
+                    const std::optional<std::array<int, 6>>& editBox);
   bool hasStructure(std::uint16_t label) const { return frames_.count(label) > 0; }
   // The frame of a structure with voxels; in whole-volume mode label 0's is the grid's.
   const render::StructureFrame* frameOf(std::uint16_t label) const;

@@ -4,6 +4,7 @@
 // Shared by the `render` command, the benchmark, the figure script and the tests.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <optional>
 #include <string>
@@ -24,6 +25,7 @@ struct StructureFrame {
   std::size_t voxelCount = 0;
   double volumeMm3 = 0;
   double voxelMm = 0;         // the grid's largest spacing
+  std::array<int, 6> voxelBox{0, 0, 0, 0, 0, 0};  // its voxels' index box: x0 y0 z0 (inclusive) x1 y1 z1 (exclusive)
   // Voxel centres of the structure (every k-th, at most kMaxFramePoints), for framing from any side.
   std::vector<Vec3> pointsMm;
 };
@@ -31,6 +33,10 @@ constexpr std::size_t kMaxFramePoints = 4096;
 
 // Error if no voxel carries `label`.
 Result<StructureFrame> structureFrame(const LabelMap& labels, std::uint16_t label);
+// The same, reading only the voxels inside `box` (as voxelBox; clamped to the grid): equal to the
+// whole map's frame when every voxel of `label` lies inside it (after an edit: the structure's
+// previous voxelBox joined with the edited box), at the cost of the box alone.
+Result<StructureFrame> structureFrame(const LabelMap& labels, std::uint16_t label, const std::array<int, 6>& box);
 
 // One frame holding both structures (for framing: a view that must show `b` beside `a`, e.g. a
 // locate question's target beside the region it is asked in): their points, the volume-weighted
