@@ -61,6 +61,36 @@ float fixedPointScale(const Geometry& g, wdt::CostKernel kernel, float base) {
   return float(budget / (double(hi) * extentMm * 1.01));
 }
 
+// The values blurred by a Gaussian of `sigmaVoxels` voxels along each axis (separable, taps out to
+// 2.5 sigma, the border value repeated).
+std::vector<float> smoothedValues(const Volume& volume, float sigmaVoxels) {
+  const Dims d = volume.dims();
+  std::vector<float> a(volume.voxels.begin(), volume.voxels.end()), b(a.size());
+  const int radius = std::max(1, int(std::ceil(2.5f * sigmaVoxels)));
+  std::vector<float> taps(std::size_t(2 * radius + 1));
+  float sum = 0;
+  for (int t = -radius; t <= radius; ++t) sum += taps[std::size_t(t + radius)] = std::exp(-0.5f * float(t * t) / (sigmaVoxels * sigmaVoxels));
+  for (float& t : taps) t /= sum;
+  const int n[3] = {d.x, d.y, d.z};
+  const std::size_t stride[3] = {1, std::size_t(d.x), std::size_t(d.x) * std::size_t(d.y)};
+  for (int axis = 0; axis < 3; ++axis) {
+    const int len = n[axis];
+    if (len < 2) continue;
+    for (std::size_t v = 0; v < a.size(); ++v) {
+      const int along = int(v / stride[axis] % std::size_t(len));
+      const std::size_t start = v - std::size_t(along) * stride[axis];
+      float acc = 0;
+      for (int t = -radius; t <= radius; ++t) {
+        const int at = std::clamp(along + t, 0, len - 1);
+        acc += taps[std::size_t(t + radius)] * a[start + std::size_t(at) * stride[axis]];
+      }
+      b[v] = acc;
+    }
+    std::swap(a, b);
+  }
+  return a;
+}
+
 Result<GrowthProblem> makeProblem(const Volume& volume, const GrowthParams& params) {
   if (auto ok = validateGrowthParams(params); !ok) return tl::unexpected(ok.error());
   const Dims d = volume.dims();
@@ -75,7 +105,13 @@ Result<GrowthProblem> makeProblem(const Volume& volume, const GrowthParams& para
   GrowthProblem problem;
   problem.grid = volume.geometry;
   problem.density.resize(d.count());
-  for (std::size_t i = 0; i < d.count(); ++i) problem.density[i] = lut[std::size_t(volume.voxels[i] + 32768)];
+  if (params.smoothingVoxels > 0) {
+    const std::vector<float> values = smoothedValues(volume, params.smoothingVoxels);
+    for (std::size_t i = 0; i < d.count(); ++i)
+      problem.density[i] = wdt::densityByte(values[i], params.windowMin, params.windowMax);
+  } else {
+    for (std::size_t i = 0; i < d.count(); ++i) problem.density[i] = lut[std::size_t(volume.voxels[i] + 32768)];
+  }
   problem.kernel = wdt::costKernel(params.rule, params.weight);
   problem.baseCost = params.baseCost;
   problem.scale = fixedPointScale(problem.grid, problem.kernel, params.baseCost);
@@ -88,6 +124,8 @@ Status validateGrowthParams(const GrowthParams& p) {
   if (!std::isfinite(p.windowMin) || !std::isfinite(p.windowMax) || !(p.windowMax > p.windowMin))
     return fail("growth params: the window must have max > min, got " + std::to_string(p.windowMin) + ".." +
                 std::to_string(p.windowMax));
+  if (!std::isfinite(p.smoothingVoxels) || p.smoothingVoxels < 0 || p.smoothingVoxels > 8)
+    return fail("growth params: smoothingVoxels must be 0 … 8, got " + std::to_string(p.smoothingVoxels));
   if (!std::isfinite(p.baseCost) || !(p.baseCost > 0))
     return fail("growth params: baseCost must be > 0 (a step that costs nothing lets labels cross freely), got " +
                 std::to_string(p.baseCost));

@@ -50,6 +50,11 @@ struct GrowthParams {
   float windowMin = -1000.0f;  // stored value (HU for CT) mapped to 0 …
   float windowMax = 2000.0f;   // … and to 1 (the WDT's HU window, wdt.h)
   float baseCost = 0.05f;      // added to every weight; must be > 0 (a free step lets labels cross freely)
+  // Gaussian blur (sigma in voxels, 0 … 8; 0: none) of the values before the window. Blurring a
+  // monotone edge keeps the summed |Δf| of a path across it (its contrast) while noise's summed
+  // |Δf| along a path falls several-fold, so noisy data (µCT) no longer makes travel as dear as
+  // edges. segment/growth_settings.h picks it from the data.
+  float smoothingVoxels = 0;
   WdtBackend backend = WdtBackend::Auto;
 };
 

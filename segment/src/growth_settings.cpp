@@ -1,0 +1,81 @@
+// Grow-from-seeds defaults from the data (growth_settings.h).
+#include "segment/growth_settings.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <vector>
+
+#include "wdt/problem.h"
+#include "wdt/wdt.h"
+
+namespace at::segment {
+
+namespace {
+
+// The median |Δ density byte| between face neighbours where either voxel is denser than 5 % of the
+// window (air saturated at 0 on both sides says nothing about the tissue's noise), in window units.
+double medianStepNoise(const Volume& volume, const std::array<float, 2>& window) {
+  WdtParams p;
+  p.huMin = window[0];
+  p.huMax = window[1];
+  const std::vector<std::uint8_t> lut = densityTable(p);
+  const Dims d = volume.dims();
+  std::vector<std::uint64_t> histogram(256, 0);
+  std::uint64_t total = 0;
+  const auto byteAt = [&](std::size_t v) { return lut[std::size_t(volume.voxels[v] + 32768)]; };
+  const std::size_t strides[3] = {1, std::size_t(d.x), std::size_t(d.x) * std::size_t(d.y)};
+  for (int k = 0; k < d.z; ++k)
+    for (int j = 0; j < d.y; ++j)
+      for (int i = 0; i < d.x; ++i) {
+        const std::size_t v = d.index(i, j, k);
+        const int a = byteAt(v);
+        const bool inside[3] = {i + 1 < d.x, j + 1 < d.y, k + 1 < d.z};
+        for (int axis = 0; axis < 3; ++axis) {
+          if (!inside[axis]) continue;
+          const int b = byteAt(v + strides[axis]);
+          if (std::max(a, b) <= 12) continue;
+          ++histogram[std::size_t(std::abs(a - b))];
+          ++total;
+        }
+      }
+  if (total == 0) return 0;
+  std::uint64_t seen = 0;
+  for (std::size_t level = 0; level < histogram.size(); ++level) {
+    seen += histogram[level];
+    if (2 * seen >= total) return double(level) / 255.0;
+  }
+  return 1;
+}
+
+}  // namespace
+
+double basePerMm(double basePerVoxel, double voxelMm) { return basePerVoxel / voxelMm; }
+double basePerVoxelOf(double basePerMmValue, double voxelMm) { return basePerMmValue * voxelMm; }
+
+std::array<float, 2> storedWindow(const IntensityModel& m, const std::array<double, 2>& values) {
+  return {float((values[0] - m.intercept) / m.slope), float((values[1] - m.intercept) / m.slope)};
+}
+
+GrowthDefaults defaultGrowthSettings(const Volume& volume, const IntensityModel& intensity) {
+  GrowthDefaults out;
+  const auto& s = volume.geometry.spacingMm;
+  out.voxelMm = std::cbrt(s[0] * s[1] * s[2]);
+  if (!(out.voxelMm > 0)) out.voxelMm = 1;
+  std::array<float, 2> window = intensity.window;  // stored values: −1000 … 2000 HU, or the histogram's
+  if (!(window[1] > window[0])) window[1] = window[0] + 1;
+  out.params.windowMin = window[0];
+  out.params.windowMax = window[1];
+  out.windowValues = {intensity.valueOf(window[0]), intensity.valueOf(window[1])};
+  out.stepNoise = medianStepNoise(volume, window);
+  const double perVoxel = std::max(kBaseNoiseMultiple * out.stepNoise, kMinBasePerVoxel);
+  out.params.baseCost = float(basePerMm(perVoxel, out.voxelMm));
+  char text[200];
+  std::snprintf(text, sizeof text, "base %.4g/mm (%.4g per %.3g mm voxel; step noise %.4g), window %g … %g %s",
+                out.params.baseCost, perVoxel, out.voxelMm, out.stepNoise, out.windowValues[0], out.windowValues[1],
+                intensity.unitName());
+  out.summary = text;
+  return out;
+}
+
+}  // namespace at::segment
