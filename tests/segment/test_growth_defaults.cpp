@@ -119,9 +119,9 @@ TEST_CASE("Grow at defaults on a uCT-like volume: bone labels are mostly bone, n
 }
 
 // The issue's target is Dice >= 0.85 for each organ; measured at these defaults the organs reach
-// 0.63 … 0.75 (bench/RESULTS.md), so the test holds each to >= 0.60 and their mean to no worse
-// than the old fixed base's (0.05 per mm, which is better for the spleen and the right kidney and
-// worse for the liver) minus 0.02: a floor, not the target.
+// 0.74 (liver), 0.84 (spleen), 0.91 (left kidney), 0.80 (right kidney) (bench/RESULTS.md), so the
+// test holds each to >= 0.70 and their mean to at least the old fixed base's (0.05 per mm: 0.53,
+// 0.78, 0.72, 0.73) + 0.05: a floor, not the target.
 TEST_CASE("Grow at defaults on the abdominal CT: liver, spleen and kidneys from <= 5 seeds each") {
   const std::filesystem::path root = test::sharedDataDir() / "totalsegmentator";
   if (!std::filesystem::exists(root / "ct_small.nii.gz")) {
@@ -138,13 +138,15 @@ TEST_CASE("Grow at defaults on the abdominal CT: liver, spleen and kidneys from 
   std::vector<GrowthSeed> seeds;
   std::map<std::size_t, std::uint16_t> unique;
   // Organs: 5 deepest points each. Every other structure of the reference and the unlabelled
-  // voxels: background, 5 deepest points each (a user clicks around the organ).
+  // voxels: background, 5 deepest points each (a user clicks around the organ), and one
+  // background dab per 30 mm lattice cell of the unlabelled voxels (fat, bowel, air).
   for (const Structure& s : ds->structures) {
     const bool organ = std::find(organs.begin(), organs.end(), s.id) != organs.end();
     for (const GrowthSeed& g : test::deepestSeeds(test::labelRegion(ds->labels, s.label), 5, 0.2, organ ? s.label : 0))
       unique.emplace(g.index, g.label);
   }
   for (const GrowthSeed& g : test::deepestSeeds(test::labelRegion(ds->labels, 0), 5, 0.2, 0)) unique.emplace(g.index, g.label);
+  for (const GrowthSeed& g : test::latticeSeeds(test::labelRegion(ds->labels, 0), 30.0, 0)) unique.emplace(g.index, g.label);
   for (const auto& [index, label] : unique) seeds.push_back({index, label});
   const segment::GrowthDefaults defaults = segment::defaultGrowthSettings(ds->volume, ds->intensity);
   std::printf("defaults: %s; %zu seed voxels\n", defaults.summary.c_str(), seeds.size());
@@ -164,9 +166,9 @@ TEST_CASE("Grow at defaults on the abdominal CT: liver, spleen and kidneys from 
     const double d = test::dice(now, l, ds->labels, l), d0 = test::dice(before, l, ds->labels, l);
     std::printf("  %-14s Dice %.3f at the defaults, %.3f with base 0.05/mm\n", organ.c_str(), d, d0);
     CAPTURE(organ);
-    CHECK(d >= 0.60);
+    CHECK(d >= 0.70);
     mean += d / double(organs.size());
     mean0 += d0 / double(organs.size());
   }
-  CHECK(mean >= mean0 - 0.02);
+  CHECK(mean >= mean0 + 0.05);
 }

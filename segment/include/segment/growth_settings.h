@@ -11,9 +11,9 @@
 //            costs (base + |Δf|)·len (wdt/step_cost.h), so the travel part of one voxel step is
 //            perVoxel whatever the spacing while an edge's part shrinks with the voxel; the rule
 //            is empirical — measured on a µCT-like 0.1 mm phantom in uint8 intensities and the
-//            3 mm abdominal CT (bench/RESULTS.md "Grow at defaults"): slightly better than the old
-//            fixed 0.05 per mm on the µCT's bones and on the organs' mean Dice (better for the
-//            liver, worse for the spleen) — not a derived invariance.
+//            3 mm abdominal CT (bench/RESULTS.md "Grow at defaults"): better than the old fixed
+//            0.05 per mm on the µCT's bones (a few points) and on the organs (Dice +0.06 … 0.22) —
+//            an empirical rule, not a derived invariance.
 //   smoothing none by default (GrowthParams::smoothingVoxels): a blur of one voxel helped the
 //            abdominal CT's organs but cost the µCT's thin ossicles; the editor offers it.
 //
