@@ -16,6 +16,7 @@
 #include "core/strings.h"
 #include "dataset_resolver.h"
 #include "label_output.h"
+#include "segment/growth_settings.h"
 #include "segment/label_editor.h"
 #include "segment/seeds.h"
 #include "volume/label_writers.h"
@@ -43,7 +44,8 @@ const char* kUsage =
     "  --weight            step cost of the growth: gradient (intensity difference, default), density,\n"
     "                      uniform or ascent; --window LO,HI the values mapped to 0..1 (default: the\n"
     "                      dataset's window: -1000,2000 HU for CT, the histogram window for plain\n"
-    "                      intensities); --base B the cost per mm added to every step (default 0.05)\n"
+    "                      intensities); --base B the cost per mm added to every step (default: from the\n"
+    "                      data's step noise and voxel size, segment/growth_settings.h; printed)\n"
     "  --out               .nii/.nii.gz: uint16 label map; .seg.nrrd: a 3D Slicer segmentation\n"
     "  --names             also write { \"value\": \"name\" } for the labels\n"
     "  --compare           Dice of each label against the dataset's own labels (the built-in phantom's,\n"
@@ -65,7 +67,8 @@ Result<std::array<double, 2>> parsePair(const std::string& option, const std::st
 
 // The growth's parameters: command line over the seeds file over the defaults.
 Result<GrowthParams> growthParams(const cli::Args& args, const segment::SeedSet& seeds, const Dataset& dataset) {
-  GrowthParams p;
+  const segment::GrowthDefaults defaults = segment::defaultGrowthSettings(dataset.volume, dataset.intensity);
+  GrowthParams p = defaults.params;
   auto backend = parseBackend(args.valueOr("backend", "auto"));
   if (!backend) return tl::unexpected(backend.error());
   p.backend = *backend;
@@ -174,7 +177,9 @@ int runSegment(const Argv& argv) {
     auto grown = editor.growFromSeeds(dataset->volume, raster->seeds, *params, &stats);
     if (!grown) return reportError("segment: " + grown.error().message);
     if (!stats.warning.empty()) std::fprintf(stderr, "anatomy-tutor: segment: %s\n", stats.warning.c_str());
-    how = std::string("grow from seeds, ") + toString(params->weight) + " weights, " + stats.device;
+    char base[64];
+    std::snprintf(base, sizeof base, ", base %.4g/mm", double(params->baseCost));
+    how = std::string("grow from seeds, ") + toString(params->weight) + " weights" + base + ", " + stats.device;
   } else {
     how = "threshold islands";
     for (const segment::SeedStroke& stroke : seeds->strokes) {

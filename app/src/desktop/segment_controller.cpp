@@ -52,6 +52,10 @@ void SegmentController::attach(const Dataset& dataset) {
   index_ = dataset.volume.dims().z / 2;
   grey_.reset(dataset.intensity);
   status_.clear();
+  grownOnce_ = false;
+  defaults_ = segment::defaultGrowthSettings(dataset.volume, dataset.intensity);
+  settings_ = {segment::basePerVoxelOf(defaults_.params.baseCost, defaults_.voxelMm), defaults_.windowValues,
+               defaults_.params.smoothingVoxels};
   ++revision_;
   // An imported dataset's review states (a failed read is said; the states start as not started);
   // a built-in scan's (the skull) are the ones its shipped catalogue records.
@@ -252,9 +256,8 @@ Status SegmentController::startGrowth() {
   std::vector<GrowthSeed> seeds;
   seeds.reserve(seeds_.size());
   for (const auto& [index, label] : seeds_) seeds.push_back({index, label});
-  GrowthParams params;  // gradient weights over the dataset's window
-  params.windowMin = dataset_->intensity.window[0];
-  params.windowMax = dataset_->intensity.window[1];
+  const GrowthParams params = growthParams();
+  grownOnce_ = true;
   auto job = std::make_unique<GrowJob>();
   job->seedCount = seeds.size();
   job->start = std::chrono::steady_clock::now();

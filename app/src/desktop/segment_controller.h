@@ -26,6 +26,7 @@
 #include "db/connection.h"
 #include "db/dataset_store.h"
 #include "grey_window.h"
+#include "segment/growth_settings.h"
 #include "segment/label_editor.h"
 #include "volume/png_image.h"
 #include "volume/structure.h"
@@ -108,6 +109,30 @@ class SegmentController {
   // through growError() once it ends.
   Status grow();
   bool growing() const { return job_ != nullptr; }
+
+  // The growth's settings, from segment::defaultGrowthSettings on attach (the data's window and a
+  // base from its step noise and voxel size). The base is shown per voxel (the same meaning on
+  // every grid); the window in the dataset's values (HU or intensities). setGrowthSettings checks
+  // them (errors name the field) and, when a growth has been grown or is running, grows again
+  // with them at once: the slice previews the new settings (latest wins, as for seeds).
+  struct GrowthSettings {
+    double basePerVoxel = 0;
+    std::array<double, 2> window{0, 1};
+    double smoothingVoxels = 0;
+  };
+  const GrowthSettings& growthSettings() const { return settings_; }
+  const segment::GrowthDefaults& growthDefaults() const { return defaults_; }
+  Status setGrowthSettings(const GrowthSettings& settings);
+  void resetGrowthSettings();  // back to the data's defaults (grows again like setGrowthSettings)
+  GrowthParams growthParams() const;  // what the next growth runs with
+
+  // Seeds as a seeds file (segment/seeds.h): one dot per seed voxel at its centre (LPS mm), the
+  // labels by name (the background and the structures seeded), and the growth settings — what
+  // `anatomy-tutor segment --seeds` grows the same labels from. loadSeeds replaces the painted
+  // seeds with a file's (strokes rasterised on this grid), adds the structures it names that the
+  // editor lacks, and takes its grow settings; returns the seed voxels. Errors name the file.
+  Status saveSeeds(const std::string& path) const;
+  Result<std::size_t> loadSeeds(const std::string& path);
   // The last growth's error, if it failed (cleared by the next grow()).
   const std::optional<Error>& growError() const { return growError_; }
   // Each frame: applies a finished growth, or starts the one asked for since.
@@ -185,6 +210,9 @@ class SegmentController {
   std::unique_ptr<GrowJob> job_;  // the growth running on its worker, until poll() takes it
   bool growAgain_ = false;        // seeds changed and grow was asked while job_ ran
   std::optional<Error> growError_;
+  segment::GrowthDefaults defaults_;
+  GrowthSettings settings_;
+  bool grownOnce_ = false;  // a growth was started since attach (settings changes preview)
 };
 
 }  // namespace at::app

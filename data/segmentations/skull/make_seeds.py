@@ -130,6 +130,7 @@ out = []
 for name, pts in strokes.items():
     for p in pts:
         out.append('    ' + json.dumps({"label": value_of[name], "points": [list(q) for q in p]}, separators=(',', ':')))
-lines += [',\n'.join(out), '  ]', '}']
+# The base these strokes were drawn and reviewed with (the growth's data-derived default differs).
+lines += [',\n'.join(out), '  ],', '  "grow": {"base": 0.05}', '}']
 open(sys.argv[2], 'w').write('\n'.join(lines) + '\n')
 print('seeds: ' + ', '.join('%s %d' % (k, len(p)) for k, p in strokes.items()), file=sys.stderr)

@@ -164,6 +164,7 @@ class SegmentPanel {
   void drawSliceControls(SegmentController& editor);
   void drawSlice(SegmentController& editor, float side);  // the picture, its longer side `side` px
   void drawTools(SegmentController& editor);
+  void drawGrowthSettings(SegmentController& editor);
   void drawSaving(SegmentController& editor);
   std::optional<render::gl::ImageTexture> texture_;
   std::uint64_t revision_ = 0;
@@ -173,7 +174,7 @@ class SegmentPanel {
   bool rangeSet_ = false;
   float minDiameterMm_ = 0;
   float marginMm_ = 1.0f;          // margin grow/shrink and hollow thickness
-  std::string newLabel_, exportPath_, error_;
+  std::string newLabel_, exportPath_, error_, seedsPath_ = "seeds.json";
 };
 
 // The course editor window (instructors): a new course on the dataset on screen, a stored one to

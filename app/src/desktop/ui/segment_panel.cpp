@@ -51,6 +51,7 @@ void SegmentPanel::draw(SegmentController& editor, const PanelRect& where) {
   // Docked, the slice is as wide as the column but leaves room for the tools below it.
   if (sliceOpen && docked) drawSlice(editor, std::min(ImGui::GetContentRegionAvail().x, 0.42f * where.h));
   if (ImGui::CollapsingHeader("Tools", ImGuiTreeNodeFlags_DefaultOpen)) drawTools(editor);
+  if (ImGui::CollapsingHeader("Growth settings")) drawGrowthSettings(editor);
   if (ImGui::CollapsingHeader("Save and export", docked ? 0 : ImGuiTreeNodeFlags_DefaultOpen)) drawSaving(editor);
   ImGui::PushTextWrapPos(docked ? 0.0f : ImGui::GetCursorPosX() + line * 22);
   if (!editor.status().empty()) ImGui::TextWrapped("%s", editor.status().c_str());
@@ -180,7 +181,38 @@ void SegmentPanel::drawTools(SegmentController& editor) {
   if (ImGui::Button("Clear seeds")) editor.clearSeeds();
 }
 
+void SegmentPanel::drawGrowthSettings(SegmentController& editor) {
+  // The growth's step cost: (base + |intensity difference in the window|) per mm. Defaults come
+  // from the data; a change grows again at once when a growth is on screen (the live preview).
+  SegmentController::GrowthSettings s = editor.growthSettings();
+  ImGui::TextWrapped("defaults from the data: %s", editor.growthDefaults().summary.c_str());
+  float base = float(s.basePerVoxel);
+  float window[2] = {float(s.window[0]), float(s.window[1])};
+  float smoothing = float(s.smoothingVoxels);
+  bool changed = false;
+  ImGui::SetNextItemWidth(ImGui::GetFontSize() * 14);
+  changed |= ImGui::SliderFloat("base per voxel", &base, 0.0005f, 0.2f, "%.4f", ImGuiSliderFlags_Logarithmic);
+  ImGui::SetNextItemWidth(ImGui::GetFontSize() * 14);
+  changed |= ImGui::InputFloat2("window", window, "%.0f", ImGuiInputTextFlags_EnterReturnsTrue);
+  ImGui::SetNextItemWidth(ImGui::GetFontSize() * 14);
+  changed |= ImGui::SliderFloat("smoothing (voxels)", &smoothing, 0.0f, 3.0f, "%.1f");
+  ImGui::TextDisabled("  lower base: labels follow edges further; window: the values that matter");
+  if (changed) {  // latest wins: a drag regrows with the newest value, cancelling the one before
+    s.basePerVoxel = base;
+    s.window = {window[0], window[1]};
+    s.smoothingVoxels = smoothing;
+    report(editor.setGrowthSettings(s));
+  }
+  if (ImGui::Button("Data defaults")) editor.resetGrowthSettings();
+}
+
 void SegmentPanel::drawSaving(SegmentController& editor) {
+  ImGui::SetNextItemWidth(ImGui::GetFontSize() * 16);
+  ImGui::InputTextWithHint("##seeds", "seeds.json", &seedsPath_);
+  ImGui::SameLine();
+  if (ImGui::Button("Save seeds")) report(editor.saveSeeds(seedsPath_));
+  ImGui::SameLine();
+  if (ImGui::Button("Load seeds")) report(statusOf(editor.loadSeeds(seedsPath_)));
   if (ImGui::Button("Save into the dataset")) report(statusOf(editor.saveToStore()));
   ImGui::SetNextItemWidth(ImGui::GetFontSize() * 16);
   ImGui::InputTextWithHint("##export", "labels.nii.gz or .seg.nrrd", &exportPath_);

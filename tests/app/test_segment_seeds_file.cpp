@@ -1,0 +1,151 @@
+// The desktop's segment editor (its controller, headless): seeds painted in slices, grown, saved as
+// a seeds file and loaded into a fresh editor grow the same labels bit for bit; the growth's
+// settings start from the data (a plain-intensity scan gets its histogram window, not the HU
+// one), are checked, and a change after a growth grows again (the live preview).
+#include <doctest/doctest.h>
+
+#include <algorithm>
+#include <chrono>
+#include <fstream>
+#include <thread>
+
+#include "db/connection.h"
+#include "growth_measures.h"
+#include "segment/seeds.h"
+#include "segment_controller.h"
+#include "test_support.h"
+
+using namespace at;
+using nlohmann::json;
+
+namespace {
+
+void waitForGrowth(app::SegmentController& editor) {
+  for (int i = 0; i < 6000 && editor.growing(); ++i) {
+    editor.poll();
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  REQUIRE_FALSE(editor.growing());
+  REQUIRE_FALSE(editor.growError());
+}
+
+db::Connection openDatabase(const test::TempDir& dir) {
+  auto opened = db::openDatabase((dir / "t.db").string());
+  REQUIRE_MESSAGE(opened, test::errorText(opened));
+  return std::move(*opened);
+}
+
+// The µCT-like volume (uint8 plain intensities, 0.1 mm) without its labels.
+Dataset unlabelledMicroCt() {
+  Dataset ds = test::makeMicroCt(64, 0.1, 4.0, 7).dataset;
+  ds.labels = LabelMap();
+  ds.structures.clear();
+  return ds;
+}
+
+// Seeds as an instructor paints them: brush dabs of two structures and the background.
+void paintSeeds(app::SegmentController& editor, const Dims& d) {
+  editor.brushMm = 0.25;
+  REQUIRE(editor.paintSeeds({2, 2, d.z / 2}));
+  REQUIRE(editor.paintSeeds({d.x - 3, d.y - 3, d.z / 2}));
+  REQUIRE(editor.addLabel("upper"));
+  REQUIRE(editor.paintSeeds({d.x / 2, d.y / 2, d.z / 2}));
+  REQUIRE(editor.paintSeeds({d.x / 2 + 4, d.y / 2, d.z / 2}));
+  REQUIRE(editor.addLabel("lower"));
+  REQUIRE(editor.paintSeeds({d.x / 2, d.y / 2, d.z / 4}));
+}
+
+}  // namespace
+
+TEST_CASE("seeds painted in the segment editor, saved and loaded into a fresh editor, grow the same labels") {
+  test::TempDir dir;
+  db::Connection database = openDatabase(dir);
+  const Dataset ds = unlabelledMicroCt();
+  const Dims d = ds.volume.dims();
+  app::SegmentController first(database, [](json) {});
+  first.attach(ds);
+  paintSeeds(first, d);
+  REQUIRE(first.grow());
+  waitForGrowth(first);
+  const LabelMap grown = first.labels();
+  CHECK(std::count(grown.voxels.begin(), grown.voxels.end(), std::uint16_t(1)) > 0);
+  const std::string path = (dir / "seeds.json").string();
+  REQUIRE(first.saveSeeds(path));
+
+  // The file is an ordinary seeds file: it parses, names the labels, and rasterises onto the same
+  // seed voxels.
+  auto set = segment::loadSeeds(path);
+  REQUIRE_MESSAGE(set, test::errorText(set));
+  CHECK(set->labels.size() == 3);
+  REQUIRE(set->grow.base);
+  auto raster = segment::rasteriseSeeds(*set, ds.volume.geometry);
+  REQUIRE(raster);
+  CHECK(raster->seeds.size() == first.seedCount());
+
+  std::vector<json> events;
+  app::SegmentController second(database, [&](json e) { events.push_back(std::move(e)); });
+  second.attach(ds);
+  auto loaded = second.loadSeeds(path);
+  REQUIRE_MESSAGE(loaded, test::errorText(loaded));
+  CHECK(*loaded == first.seedCount());
+  CHECK(second.seedsPerLabel() == first.seedsPerLabel());
+  REQUIRE(second.structures().size() == 2);
+  CHECK(second.growthSettings().basePerVoxel == doctest::Approx(first.growthSettings().basePerVoxel));
+  REQUIRE(second.grow());
+  waitForGrowth(second);
+  CHECK(second.labels().voxels == grown.voxels);
+
+  // A file that is not a seeds file: one error naming it, the painted seeds kept.
+  const std::string bad = (dir / "bad.json").string();
+  {
+    std::ofstream out(bad);
+    out << "{\"schema\": 1, \"labels\": 3}";
+  }
+  auto refused = second.loadSeeds(bad);
+  REQUIRE_FALSE(refused);
+  CHECK(refused.error().message.find("bad.json") != std::string::npos);
+  CHECK(second.seedCount() == first.seedCount());
+}
+
+TEST_CASE("the segment editor's growth settings come from the data, are checked, and a change grows again") {
+  test::TempDir dir;
+  db::Connection database = openDatabase(dir);
+  const Dataset ds = unlabelledMicroCt();
+  std::vector<json> events;
+  app::SegmentController editor(database, [&](json e) { events.push_back(std::move(e)); });
+  editor.attach(ds);
+  // Plain intensities: the histogram window (uint8 values), not −1000 … 2000 HU; a base per voxel.
+  const auto settings = editor.growthSettings();
+  CHECK(settings.window[0] >= 0);
+  CHECK(settings.window[1] <= 255);
+  CHECK(settings.basePerVoxel > 0);
+  CHECK(editor.growthParams().baseCost == doctest::Approx(settings.basePerVoxel / 0.1));
+
+  auto bad = settings;
+  bad.basePerVoxel = 0;
+  auto refused = editor.setGrowthSettings(bad);
+  REQUIRE_FALSE(refused);
+  CHECK(refused.error().message.find("base") != std::string::npos);
+  bad = settings;
+  bad.window = {200, 100};
+  CHECK_FALSE(editor.setGrowthSettings(bad));
+  CHECK(editor.growthSettings().basePerVoxel == settings.basePerVoxel);  // unchanged
+
+  // Before any growth a change only sets; after one it grows again with the new settings.
+  paintSeeds(editor, ds.volume.dims());
+  auto changed = settings;
+  changed.basePerVoxel = settings.basePerVoxel * 4;
+  REQUIRE(editor.setGrowthSettings(changed));
+  CHECK_FALSE(editor.growing());
+  REQUIRE(editor.grow());
+  waitForGrowth(editor);
+  const LabelMap atFour = editor.labels();
+  changed.basePerVoxel = settings.basePerVoxel / 4;
+  REQUIRE(editor.setGrowthSettings(changed));
+  CHECK(editor.growing());
+  waitForGrowth(editor);
+  CHECK(editor.labels().voxels != atFour.voxels);  // the preview shows the new settings' labels
+  const auto grownEvents = std::count_if(events.begin(), events.end(),
+                                         [](const json& e) { return e.value("event", "") == "segment_grown"; });
+  CHECK(grownEvents == 2);
+}
