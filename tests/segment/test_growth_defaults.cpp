@@ -77,6 +77,7 @@ std::vector<double> boneFractions(const test::MicroCt& ct, const std::vector<Gro
   REQUIRE(growth);
   auto stats = growth->update(seeds);
   REQUIRE(stats);
+  std::printf("  grown in %.0f ms on %s (base %.4g/mm)\n", stats->msTotal, stats->device.c_str(), double(params.baseCost));
   std::vector<double> out;
   for (std::uint16_t b : bones) {
     std::size_t voxels = 0, bony = 0;
@@ -100,6 +101,11 @@ TEST_CASE("Grow at defaults on a uCT-like volume: bone labels are mostly bone, n
                                       labelOf(ds, "temporal_line")};
   const std::vector<GrowthSeed> seeds = microCtSeeds(ct, bones, 3.0);
   bones.push_back(kPetrousBone);
+  for (std::uint16_t b : bones)
+    std::printf("  label %2u: %zu seed clicks\n", unsigned(b),
+                std::size_t(std::count_if(seeds.begin(), seeds.end(), [&](const GrowthSeed& s) { return s.label == b; })));
+  std::printf("  background: %zu seed clicks\n",
+              std::size_t(std::count_if(seeds.begin(), seeds.end(), [](const GrowthSeed& s) { return s.label == 0; })));
   const segment::GrowthDefaults defaults = segment::defaultGrowthSettings(ds.volume, ds.intensity);
   std::printf("defaults: %s; %zu seed voxels\n", defaults.summary.c_str(), seeds.size());
   GrowthParams fixed = defaults.params;
