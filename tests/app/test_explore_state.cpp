@@ -151,3 +151,21 @@ TEST_CASE("ExploreState_DatasetWithoutStructures_IsShownWholeWithItsDataTfFramed
   CHECK(f.state.selected() == f.label("cochlea"));
   CHECK(f.state.frameOf(0) == nullptr);
 }
+
+TEST_CASE("ExploreState_CourseStartPresetOnADatasetWithoutItsStructure_IsNotGivenToTheFirstStructure") {
+  Fixture f;
+  // The course's start (cochlea with its shipped preset) on the phantom: that preset.
+  REQUIRE(f.state.setDataset(f.dataset, "cochlea", "cochlea_wdt"));
+  f.state.setFieldShown(f.label("cochlea"), "key");
+  CHECK(f.state.shown().preset.id == std::optional<std::string>("cochlea_wdt"));
+  // A uint8 µCT-like scan whose structures have other names: its first structure gets its own
+  // (derived) preset, not the cochlea's HU window.
+  Dataset other = f.dataset;
+  other.id = "other";
+  for (Structure& s : other.structures) s.id = "scan_" + s.id, s.displayName = "Scan " + s.displayName;
+  REQUIRE(f.state.setDataset(other, "cochlea", "cochlea_wdt"));
+  const std::uint16_t first = f.state.selected();
+  REQUIRE(first != 0);
+  f.state.setFieldShown(first, "key");
+  CHECK(f.state.shown().preset.id != std::optional<std::string>("cochlea_wdt"));
+}

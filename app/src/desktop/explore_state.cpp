@@ -36,8 +36,15 @@ Status ExploreState::setDataset(const Dataset& dataset, const std::string& start
   }
   rebuildBrowser();
   const Structure* start = startStructure.empty() ? nullptr : dataset.findStructure(startStructure);
-  if (!start || !frames_.count(start->label)) start = dataset.findStructureByLabel(frames_.begin()->first);
-  startOn(*start, startPreset);
+  // The start preset belongs to the start structure (a course's first view): another dataset's
+  // first structure gets its own preset — shipped for its id, else derived from this data — never
+  // the course structure's (the phantom's cochlea window on a µCT or MR shows nothing).
+  std::string preset = startPreset;
+  if (!start || !frames_.count(start->label)) {
+    start = dataset.findStructureByLabel(frames_.begin()->first);
+    preset.clear();
+  }
+  startOn(*start, preset);
   changed();
   return {};
 }
