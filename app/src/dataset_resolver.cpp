@@ -1,7 +1,11 @@
 #include "dataset_resolver.h"
 
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
+#include <limits>
 
 #include "core/strings.h"
 #include "db/dataset_store.h"
@@ -14,7 +18,7 @@ namespace at::app {
 namespace fs = std::filesystem;
 
 std::set<std::string> withDatasetOptions(std::set<std::string> commandOptions) {
-  commandOptions.insert({"labels", "names", "series", "intensity", "nrrd-data"});
+  commandOptions.insert({"labels", "names", "series", "intensity", "nrrd-data", "intercept", "slope"});
   return commandOptions;
 }
 
@@ -33,16 +37,68 @@ DatasetRequest datasetRequestFrom(const cli::Args& args, const std::string& name
   request.dbPath = args.db();
   request.skipUnreadableFiles = args.has("skip-unreadable");
   if (auto folder = args.value("nrrd-data")) request.dataFolder = fs::absolute(*folder).string();
+  request.intercept = args.valueOr("intercept", "");
+  request.slope = args.valueOr("slope", "");
   return request;
 }
 
+namespace {
+
+Result<double> numberOption(const std::string& option, const std::string& text) {
+  char* end = nullptr;
+  const double value = std::strtod(text.c_str(), &end);
+  if (text.empty() || *end != '\0' || !std::isfinite(value))
+    return fail("--" + option + ": '" + text + "' is not a number");
+  return value;
+}
+
+// --intercept/--slope on a dataset from files: its values v become v·slope + intercept; reaching
+// air (≤ −500) makes it CT in HU (stored as HU, the HU window) unless --intensity plain was given.
+Status applyRescale(Dataset& dataset, const DatasetRequest& request) {
+  double intercept = 0, slope = 1;
+  if (!request.intercept.empty()) {
+    auto v = numberOption("intercept", request.intercept);
+    if (!v) return tl::unexpected(v.error());
+    intercept = *v;
+  }
+  if (!request.slope.empty()) {
+    auto v = numberOption("slope", request.slope);
+    if (!v) return tl::unexpected(v.error());
+    if (*v == 0) return fail("--slope: must not be 0");
+    slope = *v;
+  }
+  IntensityModel& m = dataset.intensity;
+  const double newSlope = m.slope * slope, newIntercept = m.intercept * slope + intercept;
+  double lowest = std::numeric_limits<double>::infinity();
+  for (std::int16_t v : dataset.volume.voxels) lowest = std::min(lowest, v * newSlope + newIntercept);
+  const bool plainForced = request.intensity == "plain";
+  char given[96];
+  std::snprintf(given, sizeof given, "--intercept %g --slope %g", intercept, slope);
+  if (!plainForced && (request.intensity == "hu" || lowest <= -500)) {
+    for (std::int16_t& v : dataset.volume.voxels)
+      v = std::int16_t(std::clamp(std::nearbyint(v * newSlope + newIntercept), -32768.0, 32767.0));
+    IntensityModel hu;
+    hu.modality = m.modality;
+    hu.reason = std::string(given) + ": values down to air (<= -500): CT in HU";
+    m = hu;
+    return {};
+  }
+  m.slope = newSlope;
+  m.intercept = newIntercept;
+  m.reason += std::string("; ") + given;
+  return {};
+}
+
+}  // namespace
+
 Result<Dataset> openNamedDataset(const DatasetRequest& request) {
   const bool fileOptions = !request.labelsPath.empty() || !request.namesPath.empty() || !request.seriesUid.empty() ||
-                           !request.intensity.empty() || request.skipUnreadableFiles || !request.dataFolder.empty();
+                           !request.intensity.empty() || request.skipUnreadableFiles || !request.dataFolder.empty() ||
+                           !request.intercept.empty() || !request.slope.empty();
   if (isBuiltinDatasetName(request.name)) {
     if (fileOptions)
-      return fail("--labels, --names, --series, --intensity, --skip-unreadable and --nrrd-data apply to datasets from "
-                  "files, not to '" + request.name + "'");
+      return fail("--labels, --names, --series, --intensity, --skip-unreadable, --nrrd-data, --intercept and --slope "
+                  "apply to datasets from files, not to '" + request.name + "'");
     return openBuiltinDataset(request.name);
   }
   if (const KnownScan* scan = findKnownScan(request.name)) {
@@ -76,7 +132,10 @@ Result<Dataset> openNamedDataset(const DatasetRequest& request) {
     }
     files.skipUnreadableFiles = request.skipUnreadableFiles;
     files.dataFolder = request.dataFolder;
-    return openDatasetFiles(files);
+    auto dataset = openDatasetFiles(files);
+    if (!dataset || (request.intercept.empty() && request.slope.empty())) return dataset;
+    if (auto ok = applyRescale(*dataset, request); !ok) return tl::unexpected(ok.error());
+    return dataset;
   }
   std::optional<db::Connection> opened;
   db::Database* database = request.database;

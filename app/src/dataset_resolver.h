@@ -32,10 +32,15 @@ struct DatasetRequest {
   std::optional<std::string> dbPath;
   bool skipUnreadableFiles = false;   // paths only: --skip-unreadable (DICOM folders)
   std::string dataFolder;             // paths only: --nrrd-data DIR (detached NRRD data files)
+  // paths only: --intercept B --slope M: the file's values v become v·M + B (a raw or NRRD CT
+  // stored without its rescale, e.g. int16 with air at 0 and B = −1024). Values reaching air
+  // (≤ −500) then make the volume CT in HU, unless --intensity plain says otherwise.
+  std::string intercept, slope;
 };
 
 // A command's valued options plus the ones every dataset-taking command accepts beside its
-// DATASET: --labels, --names, --series, --intensity and --nrrd-data (datasets from files only; --db is global).
+// DATASET: --labels, --names, --series, --intensity, --nrrd-data, --intercept and --slope (datasets from files only;
+// --db is global).
 std::set<std::string> withDatasetOptions(std::set<std::string> commandOptions);
 // A command's flags plus the dataset flag --skip-unreadable (datasets from files only).
 std::set<std::string> withDatasetFlags(std::set<std::string> commandFlags);
@@ -44,7 +49,10 @@ std::set<std::string> withDatasetFlags(std::set<std::string> commandFlags);
 inline constexpr const char* kDatasetOptionsHelp =
     "  --skip-unreadable  a DICOM folder's unreadable or broken files are skipped (named in a note)\n"
     "  --nrrd-data DIR    a detached NRRD header may read its data files under DIR (default: only\n"
-    "                     under the header's own folder)\n";
+    "                     under the header's own folder)\n"
+    "  --intercept B --slope M  a volume file's values v read as v*M + B (a raw/NRRD CT stored without its\n"
+    "                     rescale: --intercept -1024); values reaching air (<= -500) make it CT in HU\n"
+    "                     (not for info, which describes the file as stored)\n";
 
 // The request for dataset `name` with the dataset options given in `args`.
 DatasetRequest datasetRequestFrom(const cli::Args& args, const std::string& name);
