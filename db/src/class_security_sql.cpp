@@ -13,8 +13,9 @@
 //    role change, withdrawal and correction in class_audit, which nobody can update or delete.
 //  - at_record_event decides what counts: an outbox event is stored only when its UUID is well
 //    formed, its sender is the login, a current member of the class, its question and lesson exist
-//    on the server and the lesson is unlocked for that person (prerequisites finished, started
-//    before its answers and its end); otherwise it answers 'refused: <why>' and stores nothing.
+//    on the server and the lesson is unlocked for that person (prerequisites finished; started
+//    before its answers and its end, finished only with every question answered; a review answer
+//    needs its question's lesson unlocked); otherwise it answers 'refused: <why>' and stores nothing.
 //
 // A connection that is not a person's login (the administrator: the database's owner or a
 // superuser) may still act on a member's behalf, naming them — it owns the tables anyway.
@@ -222,6 +223,7 @@ DECLARE
   sender text := session_user;
   q_lesson text;
   lesson text := coalesce(p_lesson, '');
+  lesson_of_answer text := coalesce(p_lesson, '');
   missing text;
   earlier text;
 BEGIN
@@ -272,7 +274,8 @@ BEGIN
   IF missing IS NOT NULL THEN
     RETURN format('refused: lesson %s is locked for %s until %s is finished', lesson, sender, missing);
   END IF;
-  IF p_kind <> 'lesson_started' AND NOT EXISTS (
+  -- A review answer (no lesson) needs its lesson unlocked, not an attempt at it.
+  IF p_kind <> 'lesson_started' AND lesson_of_answer <> '' AND NOT EXISTS (
       SELECT 1 FROM class_events e WHERE e.class_code = p_class AND e.user_name = sender
         AND e.kind = 'lesson_started' AND e.lesson_id = lesson) THEN
     RETURN format('refused: %s never started lesson %s', sender, lesson);
