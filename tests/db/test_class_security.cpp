@@ -5,7 +5,9 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <array>
+#include <filesystem>
 #include <atomic>
 #include <ctime>
 #include <set>
@@ -25,6 +27,8 @@
 #include "toy_course.h"
 #include "toy_play.h"
 #include "uuid.h"  // db/src
+
+namespace fs = std::filesystem;
 
 using namespace at;
 using namespace at::db;
@@ -487,4 +491,92 @@ TEST_CASE("Accounts: a password is shown once, existing logins keep theirs, othe
   }
   CHECK(count(c.admin, "SELECT COUNT(*) FROM classes") == 1);
   CHECK_FALSE(createClassAccount(c.admin, "ZZZZZZZZ", uniqueLogin("zed"), ClassRole::Student, std::nullopt));
+}
+
+namespace {
+
+// The text after `marker` up to the end of its line.
+std::string after(const std::string& text, const std::string& marker) {
+  const auto at = text.find(marker);
+  if (at == std::string::npos) return "";
+  const auto from = at + marker.size();
+  return text.substr(from, text.find('\n', from) - from);
+}
+
+}  // namespace
+
+TEST_CASE("Through the command line: accounts print a password once or write a pgpass line; --user never impersonates") {
+  if (!test::requireAppBinary("the class-server CLI security test")) return;
+  auto url = test::freshPostgresDatabase("the class-server CLI security test");
+  if (!url) return;
+  test::TempDir dir;
+  const std::string ada = uniqueLogin("ada"), sam = uniqueLogin("sam"), eve = uniqueLogin("eve");
+  auto made = test::runApp("class create 'Ear anatomy' --user " + ada + " --db '" + *url + "'");
+  CAPTURE(made.err);
+  REQUIRE(made.exitCode == 0);
+  const std::string code = after(made.out, "code ").substr(0, 8);
+  REQUIRE(normalizeClassCode(code) == code);
+
+  auto adaAccount = test::runApp("class account " + code + " " + ada + " --role coordinator --db '" + *url + "'");
+  CAPTURE(adaAccount.err);
+  REQUIRE(adaAccount.exitCode == 0);
+  const std::string adaPassword = after(adaAccount.out, "password (shown once, not stored; hand it to " + ada + "): ");
+  REQUIRE(adaPassword.size() == 24);
+  const std::string adaUrl = loginUrl(*url, ada, adaPassword);
+
+  const fs::path pgpass = dir.path() / "sam.pgpass";
+  auto samAccount = test::runApp("class account " + code + " " + sam + " --role student --db '" + adaUrl + "' --pgpass '" +
+                                 pgpass.string() + "'");
+  CAPTURE(samAccount.err);
+  REQUIRE(samAccount.exitCode == 0);
+  CHECK(samAccount.out.find("password (shown once") == std::string::npos);  // only in the file
+  CHECK((fs::status(pgpass).permissions() & fs::perms::group_all) == fs::perms::none);
+  CHECK((fs::status(pgpass).permissions() & fs::perms::others_all) == fs::perms::none);
+  const std::string line = test::readFile(pgpass);
+  CHECK(line.find(":" + sam + ":") != std::string::npos);
+  const std::string samPassword = line.substr(line.rfind(':') + 1, 24);
+  const std::string samUrl = loginUrl(*url, sam, samPassword);
+  REQUIRE(test::runApp("class account " + code + " " + eve + " --role student --db '" + adaUrl + "'").exitCode == 0);
+  auto twice = test::runApp("class account " + code + " " + sam + " --role student --db '" + adaUrl + "'");
+  CHECK(twice.exitCode == 0);
+  CHECK(twice.out.find("existed already and keeps its password") != std::string::npos);
+
+  // sam, as himself: no promotion, no impersonation, no class view; each refusal is one line.
+  for (const std::string& args :
+       {"class role " + code + " " + sam + " coordinator --user " + ada, "class role " + code + " " + sam + " coordinator",
+        "class role " + code + " " + ada + " student", "class progress " + code, "class progress " + code + " --user " + ada,
+        "class account " + code + " " + uniqueLogin("mallory") + " --role coordinator",
+        "class withdraw " + code + " " + eve + " --reason spite"}) {
+    CAPTURE(args);
+    auto refused = test::runApp(args + " --db '" + samUrl + "'");
+    CHECK(refused.exitCode == 1);
+    CHECK(std::count(refused.err.begin(), refused.err.end(), '\n') == 1);
+  }
+  CHECK(test::runApp("class role " + code + " " + sam + " coordinator --user " + ada + " --db '" + samUrl + "'")
+            .err.find("you are logged in to the class server as " + sam) != std::string::npos);
+
+  // sam's laptop: joins as himself; a forged event under eve's name is refused, with the reason shown.
+  const std::string local = (dir.path() / "laptop.db").string();
+  auto joined = test::runApp("class join " + code + " --server '" + samUrl + "' --db '" + local + "'");
+  CAPTURE(joined.err);
+  REQUIRE(joined.exitCode == 0);
+  CHECK(joined.out.find(sam + " joined class " + code) != std::string::npos);
+  {
+    Database laptop = openAt(local);
+    auto s = laptop.prepare(
+        "INSERT INTO outbox (uuid, server, class_code, user_name, kind, occurred_at, lesson_id, question_id, correct, score)"
+        " SELECT ?1, server, class_code, ?2, 'lesson_started', ?3, 'inner_ear', '', NULL, NULL FROM class_memberships");
+    REQUIRE(s);
+    s->bind(1, newUuid()).bind(2, eve).bind(3, std::int64_t(std::time(nullptr)));
+    REQUIRE(s->run());
+  }
+  auto sync = test::runApp("sync --db '" + local + "'");
+  CHECK(sync.exitCode == 1);
+  CHECK(sync.err.find("1 event refused: event ") != std::string::npos);
+  CHECK(sync.err.find("names " + eve + " but was sent by the login " + sam) != std::string::npos);
+
+  auto audit = test::runApp("class audit " + code + " --db '" + adaUrl + "'");
+  CAPTURE(audit.err);
+  REQUIRE(audit.exitCode == 0);
+  CHECK(audit.out.find("," + ada + "," + ada + ",account," + sam + ",") != std::string::npos);
 }
