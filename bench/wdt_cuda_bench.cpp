@@ -6,7 +6,13 @@
 // Wall time is the whole runCudaBackend call; the warm-up call of each configuration allocates the
 // backend's cached workspace, the measured calls reuse it.
 //
-//   wdt_cuda_bench [--sizes 128,256,512] [--reps 10] [--check-max 256] [--sweeps-before-bricks -1]
+//   wdt_cuda_bench [--sizes 128,256,512] [--reps 10] [--check-max 256] [--cpu-check-max 0]
+//                  [--sweeps-before-bricks -1]
+//
+// --check-max: sizes up to this get the exact reference and the CPU backend beside the GPU;
+// --cpu-check-max: sizes up to this (above --check-max) get the CPU backend only, for the
+// bit-for-bit comparison on volumes where the exact reference takes too long. Each line states the
+// device memory the workspace held (device_mib_used: cudaMemGetInfo's used memory after the runs).
 //
 // Converge mode runs once per value of --sweeps-before-bricks (whole-volume passes before the
 // brick rounds; see cuda/wdt_cuda.h).
@@ -14,6 +20,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <random>
 #include <sstream>
 #include <string>
@@ -79,13 +86,14 @@ std::vector<int> parseList(const char* s) {
 
 int main(int argc, char** argv) {
   std::vector<int> sizes = {128, 256, 512};
-  int reps = 10, checkMax = 256;
+  int reps = 10, checkMax = 256, cpuCheckMax = 0;
   std::vector<int> sweepsBeforeBricks = {-1};  // the default
   for (int a = 1; a + 1 < argc; a += 2) {
     const std::string flag = argv[a];
     if (flag == "--sizes") sizes = parseList(argv[a + 1]);
     else if (flag == "--reps") reps = std::max(1, std::atoi(argv[a + 1]));  // at least one measured run
     else if (flag == "--check-max") checkMax = std::atoi(argv[a + 1]);
+    else if (flag == "--cpu-check-max") cpuCheckMax = std::atoi(argv[a + 1]);
     else if (flag == "--sweeps-before-bricks") sweepsBeforeBricks = parseList(argv[a + 1]);
     else {
       std::fprintf(stderr, "wdt_cuda_bench: unknown option %s\n", flag.c_str());
@@ -141,6 +149,8 @@ int main(int argc, char** argv) {
                   last.stats.converged ? "true" : "false", median(perPass), median(device),
                   *std::min_element(device.begin(), device.end()), *std::max_element(device.begin(), device.end()),
                   median(wall), sweepsFirst, reps);
+      const double usedMiB = at::cuda::deviceMemoryUsedMiB();
+      if (usedMiB >= 0) std::printf(",\"device_mib_used\":%.0f", usedMiB);
       if (check) {
         const at::WdtAccuracy acc = at::compareToExact(last.field.distances, exact);
         auto cpu = at::runCpuBackend(p, {});
@@ -149,6 +159,18 @@ int main(int argc, char** argv) {
                     "\"cpu_mean_rel_err\":%.3g,\"cpu_p99_rel_err\":%.3g,\"cpu_passes_run\":%d,\"max_rel_diff_gpu_cpu\":%.3g",
                     acc.meanRelErr, acc.p99RelErr, acc.maxRelErr, acc.belowExact, cacc.meanRelErr, cacc.p99RelErr,
                     cpu->stats.passesRun, maxRelDiff(last.field.distances.voxels, cpu->field.distances.voxels));
+      }
+      else if (n <= cpuCheckMax) {
+        auto cpu = at::runCpuBackend(p, {});
+        if (!cpu) {
+          std::fprintf(stderr, "%s\n", cpu.error().message.c_str());
+          return 1;
+        }
+        const auto& g = last.field.distances.voxels;
+        const auto& c = cpu->field.distances.voxels;
+        const bool same = g.size() == c.size() && std::memcmp(g.data(), c.data(), g.size() * sizeof(float)) == 0;
+        std::printf(",\"cpu_passes_run\":%d,\"gpu_equals_cpu_bitwise\":%s,\"max_rel_diff_gpu_cpu\":%.3g",
+                    cpu->stats.passesRun, same ? "true" : "false", maxRelDiff(g, c));
       }
       std::printf("}\n");
       std::fflush(stdout);
