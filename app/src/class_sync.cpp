@@ -1,5 +1,6 @@
 #include "class_sync.h"
 
+#include <algorithm>
 #include <utility>
 
 #include "core/strings.h"
@@ -21,6 +22,12 @@ std::string OutboxSender::sendNow() {
   if (!report) return "class events not sent: " + report.error().message;
   const bool wasOffline = offline_;
   offline_ = !report->complete();
+  const bool refused = std::any_of(report->servers.begin(), report->servers.end(),
+                                   [](const db::ServerSync& s) { return s.refused > 0; });
+  if (refused) {  // the learner always hears what the server did not count, and why
+    if (offline_) lastFailure_ = std::chrono::steady_clock::now();
+    return describeSync(*report);
+  }
   if (offline_) {
     lastFailure_ = std::chrono::steady_clock::now();
     return wasOffline ? "" : describeSync(*report);
@@ -75,6 +82,11 @@ std::string describeSync(const db::SyncReport& report) {
     if (!line.empty()) line += "; ";
     line += "class server " + s.server + ": " + str::countOf(long(s.pushed), "event") + " sent";
     if (s.repeated) line += " (" + std::to_string(s.repeated) + " it already had)";
+    if (s.refused) {
+      line += ", " + str::countOf(long(s.refused), "event") + " refused:";
+      for (std::size_t i = 0; i < s.refusals.size(); ++i) line += (i ? "; " : " ") + s.refusals[i];
+      if (s.refused > std::int64_t(s.refusals.size())) line += "; …";
+    }
     if (s.error) {
       line += ", " + str::countOf(long(s.pending), "event") + (s.pending == 1 ? " waits" : " wait") + " in the outbox (" +
               s.error->message + ")";

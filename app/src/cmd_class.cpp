@@ -1,14 +1,22 @@
 // anatomy-tutor class …: classes on a class server (create, join with a code, give roles, the
 // instructor's view of the class's progress) and `anatomy-tutor sync`, which sends a learner's
 // waiting class events (db/class_server.h).
+#include <sys/stat.h>
+
+#include <algorithm>
 #include <cstdio>
+#include <cstdlib>
 #include <ctime>
+#include <fstream>
 
 #include "class_sync.h"
 #include "cli_args.h"
 #include "commands.h"
 #include "core/strings.h"
+#include "db/class_accounts.h"
 #include "db/class_server.h"
+#include "db/course_store.h"
+#include "learning_session.h"
 #include "quiz/study_report.h"
 
 namespace at::app {
@@ -19,10 +27,17 @@ constexpr const char* kClassHelp =
     "usage: anatomy-tutor class create TITLE --db SERVER --user NAME\n"
     "       anatomy-tutor class join CODE --server SERVER --user NAME [--db PATH]\n"
     "       anatomy-tutor class role CODE MEMBER ROLE --db SERVER --user NAME\n"
-    "       anatomy-tutor class progress CODE --db SERVER --user NAME [--csv]\n\n"
+    "       anatomy-tutor class progress CODE --db SERVER --user NAME [--csv]\n"
+    "       anatomy-tutor class account CODE NAME --role ROLE --db SERVER [--pgpass FILE]\n"
+    "       anatomy-tutor class withdraw CODE MEMBER --reason TEXT --db SERVER\n"
+    "       anatomy-tutor class correct EVENT_ID --correct 0|1 --score S --reason TEXT --db SERVER\n"
+    "       anatomy-tutor class audit CODE --db SERVER [--csv]\n\n"
     "A class lives on a class server, a PostgreSQL database every member's machine can reach\n"
-    "(SERVER: postgresql://user:password@host/database; see the README).\n"
-    "  create    makes a class and prints its code; NAME becomes its coordinator\n"
+    "(SERVER: postgresql://LOGIN@host/database, the password in ~/.pgpass; see the README).\n"
+    "Each person has their own login (`class account`); on the server a login is who you are, and\n"
+    "--user can only repeat it (the administrator's login names the member it acts for).\n"
+    "  create    (the administrator) makes a class, prints its code and puts the installed courses\n"
+    "            on the server; NAME becomes its coordinator\n"
     "  join      joins NAME to the class with CODE as a student, on the server and in the local\n"
     "            database (--db, default: the usual one): from then on NAME's answers, lesson\n"
     "            starts and ends in `play` and the desktop are sent to the class. While the server\n"
@@ -31,7 +46,14 @@ constexpr const char* kClassHelp =
     "  role      a coordinator (NAME) makes MEMBER a student, instructor or coordinator\n"
     "  progress  for instructors and coordinators: each student's answers, share right,\n"
     "            structures, lessons started and finished and last activity, and each structure's\n"
-    "            answers, computed from the events the server has (--csv: the students as CSV)\n";
+    "            answers, computed from the events the server has (--csv: the students as CSV)\n"
+    "  account   a coordinator makes NAME's login (ROLE: student, instructor or coordinator) and\n"
+    "            prints its password once (--pgpass FILE: appends a ~/.pgpass line to FILE instead);\n"
+    "            a login that exists keeps its password and gets the role in this class\n"
+    "  withdraw  a coordinator excludes MEMBER, or a member withdraws (consent withdrawn); the\n"
+    "            reason is kept and shown in `class progress`\n"
+    "  correct   a coordinator corrects one answer's grade on the server\n"
+    "  audit     role changes, accounts, withdrawals and corrections: who, when, old, new, why\n";
 
 constexpr const char* kSyncHelp =
     "usage: anatomy-tutor sync [--db PATH]\n\n"
@@ -72,12 +94,15 @@ int runCreate(const cli::Args& args) {
   if (!server) return reportError("class create: " + server.error().message);
   auto made = db::createClass(*server, args.positional()[1], *args.user());
   if (!made) return reportError("class create: " + made.error().message);
+  // The server judges events against the course (its questions, lessons and prerequisites).
+  if (auto seeded = db::seedCourses(*server, courseDirectory()); !seeded)
+    return reportError("class create: putting the courses on the server: " + seeded.error().message);
   std::printf("class '%s': code %s (%s is its coordinator)\n", made->title.c_str(), made->code.c_str(),
               args.user()->c_str());
   std::string shown = db::withoutPassword(*args.db());  // the password is not printed
   if (shown != *args.db()) shown.insert(shown.find('@'), ":PASSWORD");
-  std::printf("students join with: anatomy-tutor class join %s --server '%s' --user NAME\n", made->code.c_str(),
-              shown.c_str());
+  std::printf("make each person's login with: anatomy-tutor class account %s NAME --role student --db '%s'\n",
+              made->code.c_str(), shown.c_str());
   return 0;
 }
 
@@ -87,18 +112,19 @@ int runJoin(const cli::Args& args) {
   if (!code) return reportError("class join: " + code.error().message);
   const auto url = args.value("server");
   if (!url) return reportError("class join: --server SERVER (the class server's postgresql:// URL) is required");
-  if (!args.user()) return reportError("class join: --user NAME is required");
   auto server = openServer(*url);
   if (!server) return reportError("class join: " + server.error().message);
+  auto name = db::actingName(*server, args.user());
+  if (!name) return reportError("class join: " + name.error().message);
   auto info = db::findClass(*server, *code);
   if (!info) return reportError("class join: " + info.error().message);
-  auto role = db::joinClass(*server, *code, *args.user());
+  auto role = db::joinClass(*server, *code, *name);
   if (!role) return reportError("class join: " + role.error().message);
   auto local = db::openDatabase(args.db());
   if (!local) return reportError("class join: " + local.error().message);
-  if (auto kept = db::rememberMembership(*local, {*args.user(), *code, *url, *role}); !kept)
+  if (auto kept = db::rememberMembership(*local, {*name, *code, *url, *role}); !kept)
     return reportError("class join: " + kept.error().message);
-  std::printf("%s joined class %s (%s) as %s; answers in %s are sent to %s\n", args.user()->c_str(), code->c_str(),
+  std::printf("%s joined class %s (%s) as %s; answers in %s are sent to %s\n", name->c_str(), code->c_str(),
               info->title.c_str(), db::toString(*role), local->path().c_str(), server->path().c_str());
   return 0;
 }
@@ -110,10 +136,11 @@ int runRole(const cli::Args& args) {
   auto role = db::parseClassRole(args.positional()[3]);
   if (!role) return reportError("class role: " + role.error().message);
   if (!args.db()) return reportError("class role: --db SERVER (the class server) is required");
-  if (!args.user()) return reportError("class role: --user NAME (a coordinator of the class) is required");
   auto server = openServer(*args.db());
   if (!server) return reportError("class role: " + server.error().message);
-  if (auto set = db::setMemberRole(*server, *code, *args.user(), args.positional()[2], *role); !set)
+  auto by = db::actingName(*server, args.user());
+  if (!by) return reportError("class role: " + by.error().message);
+  if (auto set = db::setMemberRole(*server, *code, *by, args.positional()[2], *role); !set)
     return reportError("class role: " + set.error().message);
   std::printf("%s is %s of class %s\n", args.positional()[2].c_str(), db::toString(*role), code->c_str());
   return 0;
@@ -124,16 +151,16 @@ int runClassProgress(const cli::Args& args) {
   auto code = db::normalizeClassCode(args.positional()[1]);
   if (!code) return reportError("class progress: " + code.error().message);
   if (!args.db()) return reportError("class progress: --db SERVER (the class server) is required");
-  if (!args.user()) return reportError("class progress: --user NAME (an instructor of the class) is required");
   auto server = openServer(*args.db());
   if (!server) return reportError("class progress: " + server.error().message);
-  auto progress = db::classProgress(*server, *code, *args.user());
+  auto progress = db::classProgress(*server, *code, args.user().value_or(""));
   if (!progress) return reportError("class progress: " + progress.error().message);
   if (args.has("csv")) {
-    std::printf("student,answers,correct,structures,lessons_started,lessons_finished,last_active_unix\n");
+    std::printf("student,answers,correct,structures,lessons_started,lessons_finished,last_active_unix,withdrawn\n");
     for (const auto& s : progress->students)
-      std::printf("%s,%d,%d,%d,%d,%d,%s\n", quiz::csvQuoted(s.userName).c_str(), s.answers, s.correct, s.structures,
-                  s.lessonsStarted, s.lessonsFinished, s.lastActive ? std::to_string(*s.lastActive).c_str() : "");
+      std::printf("%s,%d,%d,%d,%d,%d,%s,%s\n", quiz::csvQuoted(s.userName).c_str(), s.answers, s.correct, s.structures,
+                  s.lessonsStarted, s.lessonsFinished, s.lastActive ? std::to_string(*s.lastActive).c_str() : "",
+                  quiz::csvQuoted(s.withdrawal.value_or("")).c_str());
     return 0;
   }
   std::printf("Class %s — %s: %s, %s received\n\n", progress->info.code.c_str(), progress->info.title.c_str(),
@@ -142,8 +169,9 @@ int runClassProgress(const cli::Args& args) {
   std::printf("%-20s %8s %6s %11s %8s %9s  %s\n", "student", "answers", "right", "structures", "lessons", "finished",
               "last active");
   for (const auto& s : progress->students)
-    std::printf("%-20s %8d %6s %11d %8d %9d  %s\n", s.userName.c_str(), s.answers, share(s.correct, s.answers).c_str(),
-                s.structures, s.lessonsStarted, s.lessonsFinished, when(s.lastActive).c_str());
+    std::printf("%-20s %8d %6s %11d %8d %9d  %s%s\n", s.userName.c_str(), s.answers, share(s.correct, s.answers).c_str(),
+                s.structures, s.lessonsStarted, s.lessonsFinished, when(s.lastActive).c_str(),
+                s.withdrawal ? ("  (withdrawn: " + *s.withdrawal + ")").c_str() : "");
   if (!progress->structures.empty()) {
     std::printf("\n%-24s %9s %8s %6s\n", "structure", "students", "answers", "right");
     for (const auto& s : progress->structures)
@@ -152,10 +180,140 @@ int runClassProgress(const cli::Args& args) {
   return 0;
 }
 
+// The parts of a postgresql:// URL a ~/.pgpass line needs; nullopt when it has no host or database.
+struct ServerAddress {
+  std::string host, port = "5432", database;
+};
+std::optional<ServerAddress> addressOf(const std::string& url) {
+  std::string rest = url.substr(url.find("://") + 3);
+  if (auto query = rest.find('?'); query != std::string::npos) rest.erase(query);
+  if (auto at = rest.rfind('@'); at != std::string::npos) rest.erase(0, at + 1);
+  const auto slash = rest.find('/');
+  if (slash == std::string::npos || slash + 1 >= rest.size()) return std::nullopt;
+  ServerAddress a;
+  a.database = rest.substr(slash + 1);
+  std::string hostPort = rest.substr(0, slash);
+  if (auto colon = hostPort.rfind(':'); colon != std::string::npos && hostPort.find(']') == std::string::npos) {
+    a.port = hostPort.substr(colon + 1);
+    hostPort.erase(colon);
+  }
+  a.host = hostPort.empty() ? "localhost" : hostPort;
+  return a;
+}
+
+// A ~/.pgpass field: colons and backslashes escaped with a backslash.
+std::string pgpassField(const std::string& text) {
+  std::string out;
+  for (char c : text) {
+    if (c == ':' || c == '\\') out += '\\';
+    out += c;
+  }
+  return out;
+}
+
+int runAccount(const cli::Args& args) {
+  if (args.positional().size() != 3) return reportError("class account: give CODE NAME");
+  auto code = db::normalizeClassCode(args.positional()[1]);
+  if (!code) return reportError("class account: " + code.error().message);
+  const auto roleText = args.value("role");
+  if (!roleText) return reportError("class account: --role student|instructor|coordinator is required");
+  auto role = db::parseClassRole(*roleText);
+  if (!role) return reportError("class account: " + role.error().message);
+  if (!args.db()) return reportError("class account: --db SERVER (the class server) is required");
+  auto server = openServer(*args.db());
+  if (!server) return reportError("class account: " + server.error().message);
+  const std::string& name = args.positional()[2];
+  auto account = db::createClassAccount(*server, *code, name, *role, args.user());
+  if (!account) return reportError("class account: " + account.error().message);
+  const auto address = addressOf(*args.db());
+  std::printf("%s is %s of class %s\n", name.c_str(), db::toString(*role), code->c_str());
+  if (!account->password) {
+    std::printf("the login %s existed already and keeps its password\n", name.c_str());
+    return 0;
+  }
+  if (const auto pgpass = args.value("pgpass")) {
+    if (!address) return reportError("class account: --pgpass needs a SERVER URL with host and database");
+    const bool existed = std::ifstream(*pgpass).good();
+    std::ofstream out(*pgpass, std::ios::app);
+    if (!out) return reportError("class account: cannot write " + *pgpass + " (the login was made: run it again after "
+                                 "fixing the file, or reset the password on the server)");
+    out << pgpassField(address->host) << ':' << address->port << ':' << pgpassField(address->database) << ':'
+        << pgpassField(name) << ':' << pgpassField(*account->password) << '\n';
+    out.close();
+    if (!existed) ::chmod(pgpass->c_str(), 0600);
+    std::printf("its password is in %s (a ~/.pgpass line for %s, mode 600)\n", pgpass->c_str(), name.c_str());
+  } else {
+    std::printf("password (shown once, not stored; hand it to %s): %s\n", name.c_str(), account->password->c_str());
+  }
+  if (address)
+    std::printf("%s connects as: postgresql://%s@%s:%s/%s (the password in ~/.pgpass: %s:%s:%s:%s:PASSWORD)\n",
+                name.c_str(), name.c_str(), address->host.c_str(), address->port.c_str(), address->database.c_str(),
+                address->host.c_str(), address->port.c_str(), address->database.c_str(), name.c_str());
+  return 0;
+}
+
+int runWithdraw(const cli::Args& args) {
+  if (args.positional().size() != 3) return reportError("class withdraw: give CODE MEMBER");
+  auto code = db::normalizeClassCode(args.positional()[1]);
+  if (!code) return reportError("class withdraw: " + code.error().message);
+  const auto reason = args.value("reason");
+  if (!reason || reason->empty()) return reportError("class withdraw: --reason TEXT is required (it is kept)");
+  if (!args.db()) return reportError("class withdraw: --db SERVER (the class server) is required");
+  auto server = openServer(*args.db());
+  if (!server) return reportError("class withdraw: " + server.error().message);
+  auto by = db::actingName(*server, args.user());
+  if (!by) return reportError("class withdraw: " + by.error().message);
+  if (auto done = db::withdrawMember(*server, *code, args.positional()[2], *reason, *by); !done)
+    return reportError("class withdraw: " + done.error().message);
+  std::printf("%s withdrawn from class %s (%s)\n", args.positional()[2].c_str(), code->c_str(), reason->c_str());
+  return 0;
+}
+
+int runCorrect(const cli::Args& args) {
+  if (args.positional().size() != 2) return reportError("class correct: give the EVENT_ID");
+  const auto correct = args.value("correct"), score = args.value("score"), reason = args.value("reason");
+  if (!correct || (*correct != "0" && *correct != "1")) return reportError("class correct: --correct 0|1 is required");
+  if (!reason || reason->empty()) return reportError("class correct: --reason TEXT is required (it is kept)");
+  double scoreValue = *correct == "1" ? 1.0 : 0.0;
+  if (score) {
+    char* end = nullptr;
+    scoreValue = std::strtod(score->c_str(), &end);
+    if (end == score->c_str() || *end || !(scoreValue >= 0 && scoreValue <= 1))
+      return reportError("class correct: --score '" + *score + "' is not a number from 0 to 1");
+  }
+  if (!args.db()) return reportError("class correct: --db SERVER (the class server) is required");
+  auto server = openServer(*args.db());
+  if (!server) return reportError("class correct: " + server.error().message);
+  auto by = db::actingName(*server, args.user());
+  if (!by) return reportError("class correct: " + by.error().message);
+  if (auto done = db::correctClassEvent(*server, args.positional()[1], *correct == "1", scoreValue, *reason, *by); !done)
+    return reportError("class correct: " + done.error().message);
+  std::printf("event %s corrected (kept in the class audit)\n", args.positional()[1].c_str());
+  return 0;
+}
+
+int runAudit(const cli::Args& args) {
+  if (args.positional().size() != 2) return reportError("class audit: give the class CODE");
+  auto code = db::normalizeClassCode(args.positional()[1]);
+  if (!code) return reportError("class audit: " + code.error().message);
+  if (!args.db()) return reportError("class audit: --db SERVER (the class server) is required");
+  auto server = openServer(*args.db());
+  if (!server) return reportError("class audit: " + server.error().message);
+  auto entries = db::classAudit(*server, *code);
+  if (!entries) return reportError("class audit: " + entries.error().message);
+  std::printf("recorded_at,actor,login,action,target,old,new,reason\n");
+  for (const auto& e : *entries)
+    std::printf("%s,%s,%s,%s,%s,%s,%s,%s\n", e.recordedAt.c_str(), quiz::csvQuoted(e.actor).c_str(),
+                quiz::csvQuoted(e.login).c_str(), e.action.c_str(), quiz::csvQuoted(e.target).c_str(),
+                quiz::csvQuoted(e.oldValue.value_or("")).c_str(), quiz::csvQuoted(e.newValue.value_or("")).c_str(),
+                quiz::csvQuoted(e.reason).c_str());
+  return 0;
+}
+
 }  // namespace
 
 int runClass(const Argv& argv) {
-  auto args = cli::Args::parse(argv, {"server"}, {"csv"});
+  auto args = cli::Args::parse(argv, {"server", "role", "pgpass", "reason", "correct", "score"}, {"csv"});
   if (!args) return reportError("class: " + args.error().message);
   if (args->has("help") || args->positional().empty()) {
     std::printf("%s", kClassHelp);
@@ -166,7 +324,11 @@ int runClass(const Argv& argv) {
   if (action == "join") return runJoin(*args);
   if (action == "role") return runRole(*args);
   if (action == "progress") return runClassProgress(*args);
-  return reportError("class: unknown action '" + action + "' (create, join, role, progress)", 2);
+  if (action == "account") return runAccount(*args);
+  if (action == "withdraw") return runWithdraw(*args);
+  if (action == "correct") return runCorrect(*args);
+  if (action == "audit") return runAudit(*args);
+  return reportError("class: unknown action '" + action + "' (create, join, role, progress, account, withdraw, correct, audit)", 2);
 }
 
 int runSync(const Argv& argv) {
@@ -182,6 +344,9 @@ int runSync(const Argv& argv) {
   auto report = db::syncOutbox(*local);
   if (!report) return reportError("sync: " + report.error().message);
   if (!report->complete()) return reportError("sync: " + describeSync(*report));
+  const bool refused = std::any_of(report->servers.begin(), report->servers.end(),
+                                   [](const db::ServerSync& s) { return s.refused > 0; });
+  if (refused) return reportError("sync: " + describeSync(*report));  // the server's reasons, status 1
   std::printf("%s\n", describeSync(*report).c_str());
   return 0;
 }

@@ -7,6 +7,7 @@
 
 #include "cli_args.h"
 #include "commands.h"
+#include "db/class_server.h"
 #include "db/exam_store.h"
 #include "core/strings.h"
 #include "learning_session.h"
@@ -138,6 +139,11 @@ int runExam(const Argv& argv) {
   std::printf("  %s, %s", str::countOf(session.itemCount(), "item").c_str(), clock(exam.timeLimitS).c_str());
   if (exam.passScore) std::printf(", pass mark %.0f%%", 100 * *exam.passScore);
   std::printf(". Labels are hidden and no answer is marked until you finish.\n");
+  // On a laptop the items and their keys are in the learner's own file: for a class, practice.
+  if (db::backendOf(ls.database()) == db::Backend::Sqlite)
+    if (auto joined = db::membershipOf(ls.database(), user->name); joined && *joined)
+      std::printf("  Practice: graded on this machine and not sent to class %s; only an exam on the class server counts.\n",
+                  (*joined)->classCode.c_str());
   if (!exam.instructions.empty()) printWrapped(exam.instructions, 2);
   if (session.resumed()) {
     int answered = 0;

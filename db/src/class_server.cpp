@@ -9,6 +9,8 @@
 
 #include "class_events.h"
 #include "database.h"
+#include "db/class_accounts.h"
+#include "server_refusal.h"
 #include "uuid.h"
 
 namespace at::db {
@@ -92,6 +94,13 @@ Result<std::string> normalizeClassCode(const std::string& text) {
 Result<ClassInfo> createClass(Database& server, const std::string& title, const std::string& creator) {
   if (title.empty()) return fail("a class title must not be empty");
   if (auto ok = requireUserName(creator); !ok) return tl::unexpected(ok.error());
+  if (server.backend() == Backend::Postgres) {
+    auto identity = serverIdentity(server);
+    if (!identity) return tl::unexpected(identity.error());
+    if (identity->account)
+      return fail(ErrorKind::Conflict, "classes are made by the class server's administrator login, not by " +
+                                           identity->login + " (a person's login)");
+  }
   ClassInfo info{"", title, creator};
   auto status = server.writeTransaction([&](Database& d) -> Status {
     for (int tries = 0; tries < 16; ++tries) {
@@ -118,6 +127,20 @@ Result<ClassInfo> findClass(Database& server, const std::string& code) { return 
 
 Result<ClassRole> joinClass(Database& server, const std::string& code, const std::string& userName) {
   if (auto ok = requireUserName(userName); !ok) return tl::unexpected(ok.error());
+  if (server.backend() == Backend::Postgres) {
+    auto identity = serverIdentity(server);
+    if (!identity) return tl::unexpected(identity.error());
+    if (identity->account) {  // a person's login joins nothing: a coordinator made them a member
+      if (userName != identity->login)
+        return fail(ErrorKind::Conflict, "you are logged in to the class server as " + identity->login + "; you cannot join as " + userName);
+      auto role = memberRole(server, code, userName);
+      if (!role && role.error().kind == ErrorKind::NotFound)
+        return fail(ErrorKind::NotFound, identity->login + " is not a member of class " + code +
+                                             " (ask its coordinator: `anatomy-tutor class account " + code + " " +
+                                             identity->login + " --role student`)");
+      return role;
+    }
+  }
   ClassRole role = ClassRole::Student;
   auto status = server.writeTransaction([&](Database& d) -> Status {
     if (auto found = readClass(d, code); !found) return tl::unexpected(found.error());
@@ -147,6 +170,15 @@ Result<ClassRole> memberRole(Database& server, const std::string& code, const st
 Status setMemberRole(Database& server, const std::string& code, const std::string& by, const std::string& userName,
                      ClassRole role) {
   if (auto ok = requireUserName(userName); !ok) return ok;
+  if (server.backend() == Backend::Postgres)  // audited, and the acting name is the login's
+    return server.writeTransaction([&](Database& d) -> Status {
+      auto call = d.prepare("SELECT at_set_role(?1, ?2, ?3, ?4)");
+      if (!call) return tl::unexpected(call.error());
+      call->bind(1, code).bind(2, userName).bind(3, toString(role)).bind(4, by);
+      auto row = call->step();
+      if (!row) return tl::unexpected(serverRefusal(row.error()));
+      return {};
+    });
   return server.writeTransaction([&](Database& d) -> Status {
     auto byRole = memberRole(d, code, by);
     if (!byRole) return tl::unexpected(byRole.error());
@@ -161,7 +193,10 @@ Status setMemberRole(Database& server, const std::string& code, const std::strin
   });
 }
 
-Result<ClassProgress> classProgress(Database& server, const std::string& code, const std::string& viewer) {
+Result<ClassProgress> classProgress(Database& server, const std::string& code, const std::string& claimedViewer) {
+  auto acting = actingName(server, claimedViewer);
+  if (!acting) return tl::unexpected(acting.error());
+  const std::string& viewer = *acting;
   auto role = memberRole(server, code, viewer);
   if (!role) return tl::unexpected(role.error());
   if (*role == ClassRole::Student)
@@ -180,7 +215,7 @@ Result<ClassProgress> classProgress(Database& server, const std::string& code, c
       " COUNT(DISTINCT CASE WHEN e.kind = 'answer' THEN e.structure END),"
       " COUNT(DISTINCT CASE WHEN e.kind = 'lesson_started' THEN e.lesson_id END),"
       " COUNT(DISTINCT CASE WHEN e.kind = 'lesson_finished' THEN e.lesson_id END),"
-      " MAX(e.occurred_at)"
+      " MAX(e.occurred_at), MAX(m.withdrawal_reason)"
       " FROM class_members m LEFT JOIN class_events e ON e.class_code = m.class_code AND e.user_name = m.user_name"
       " WHERE m.class_code = ?1 AND m.role = 'student' GROUP BY m.user_name ORDER BY m.user_name");
   if (!students) return tl::unexpected(students.error());
@@ -194,6 +229,7 @@ Result<ClassProgress> classProgress(Database& server, const std::string& code, c
     p.lessonsStarted = r.integer(4);
     p.lessonsFinished = r.integer(5);
     if (!r.isNull(6)) p.lastActive = r.int64(6);
+    p.withdrawal = r.optionalText(7);
     out.students.push_back(std::move(p));
     return {};
   });
@@ -269,7 +305,8 @@ Status enqueueClassEvent(Database& d, std::int64_t userId, const ClassEvent& e) 
 
 Result<OutboxCounts> outboxCounts(Database& local) {
   auto s = local.prepare(
-      "SELECT SUM(CASE WHEN sent_at IS NULL THEN 1 ELSE 0 END), SUM(CASE WHEN sent_at IS NULL THEN 0 ELSE 1 END) FROM outbox");
+      "SELECT SUM(CASE WHEN sent_at IS NULL THEN 1 ELSE 0 END), SUM(CASE WHEN sent_at IS NULL THEN 0 ELSE 1 END),"
+      " SUM(CASE WHEN refused IS NULL THEN 0 ELSE 1 END) FROM outbox");
   if (!s) return tl::unexpected(s.error());
   auto row = s->step();
   if (!row) return tl::unexpected(row.error());
@@ -277,6 +314,7 @@ Result<OutboxCounts> outboxCounts(Database& local) {
   if (*row && !s->isNull(0)) {
     counts.pending = s->int64(0);
     counts.sent = s->int64(1);
+    counts.refused = s->int64(2);
   }
   return counts;
 }
@@ -330,21 +368,21 @@ Result<std::int64_t> pendingFor(Database& local, const std::string& server) {
   return *row ? s->int64(0) : 0;
 }
 
-// One batch into the server's class events, in one transaction. Appends keyed by UUID need no
-// program-wide writer order, so this takes no writer lock (Deferred): clients push in parallel,
-// and a UUID the server has is skipped (counted in `repeated`).
-Status pushBatch(Database& server, const std::vector<PendingEvent>& batch, ServerSync& report) {
+// One batch into the server's class events, in one transaction, through the server's
+// at_record_event: the server decides what counts (class_security_sql.cpp) and answers each event
+// 'stored', 'repeated' (a UUID it has from this sender) or 'refused: <why>'. Appends keyed by UUID
+// need no program-wide writer order, so this takes no writer lock (Deferred): clients push in
+// parallel. `refusals` gets the refused events' sequence numbers and reasons.
+Status pushBatch(Database& server, const std::vector<PendingEvent>& batch, ServerSync& report,
+                 std::vector<std::pair<std::int64_t, std::string>>& refusals) {
   auto tx = Transaction::begin(server, Transaction::Kind::Deferred);
   if (!tx) return tl::unexpected(tx.error());
-  const std::int64_t receivedAt = nowSeconds();
-  std::int64_t pushed = 0;
+  std::int64_t pushed = 0, repeated = 0;
+  std::vector<std::pair<std::int64_t, std::string>> refused;
   for (const PendingEvent& p : batch) {
-    auto insert = server.prepare(
-        "INSERT INTO class_events (uuid, class_code, user_name, kind, occurred_at, lesson_id, question_id, structure,"
-        " correct, score, payload, received_at) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12)"
-        " ON CONFLICT (uuid) DO NOTHING");
-    if (!insert) return tl::unexpected(insert.error());
-    insert->bind(1, p.uuid)
+    auto record = server.prepare("SELECT at_record_event(?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11)");
+    if (!record) return tl::unexpected(record.error());
+    record->bind(1, p.uuid)
         .bind(2, p.classCode)
         .bind(3, p.userName)
         .bind(4, p.event.kind)
@@ -354,24 +392,45 @@ Status pushBatch(Database& server, const std::vector<PendingEvent>& batch, Serve
         .bind(8, p.event.structure)
         .bind(9, p.event.correct ? std::optional<std::int64_t>(*p.event.correct) : std::nullopt)
         .bind(10, p.event.score)
-        .bind(11, p.event.payload)
-        .bind(12, receivedAt);
-    if (auto s = insert->run(); !s) return tl::unexpected(withContext("event " + p.uuid, s.error()));
-    pushed += server.changes();
+        .bind(11, p.event.payload);
+    auto row = record->step();
+    if (!row) return tl::unexpected(withContext("event " + p.uuid, serverRefusal(row.error())));
+    const std::string outcome = *row ? record->text(0) : "refused: the server gave no answer";
+    if (outcome == "stored") {
+      ++pushed;
+    } else if (outcome == "repeated") {
+      ++repeated;
+    } else {
+      const std::string prefix = "refused: ";
+      refused.emplace_back(p.seq, outcome.rfind(prefix, 0) == 0 ? outcome.substr(prefix.size()) : outcome);
+    }
   }
   if (auto s = tx->commit(); !s) return s;
   report.pushed += pushed;
-  report.repeated += std::int64_t(batch.size()) - pushed;
+  report.repeated += repeated;
+  report.refused += std::int64_t(refused.size());
+  for (const auto& r : refused)
+    if (report.refusals.size() < 5) report.refusals.push_back(r.second);
+  refusals.insert(refusals.end(), refused.begin(), refused.end());
   return {};
 }
 
-Status markSent(Database& local, const std::string& server, std::int64_t firstSeq, std::int64_t lastSeq) {
+// Marks the batch sent; a refused event keeps the server's reason and is not sent again.
+Status markSent(Database& local, const std::string& server, std::int64_t firstSeq, std::int64_t lastSeq,
+                const std::vector<std::pair<std::int64_t, std::string>>& refusals) {
   return local.writeTransaction([&](Database& d) -> Status {
     auto update = d.prepare(
         "UPDATE outbox SET sent_at = ?1 WHERE server = ?2 AND seq BETWEEN ?3 AND ?4 AND sent_at IS NULL");
     if (!update) return tl::unexpected(update.error());
     update->bind(1, nowSeconds()).bind(2, server).bind(3, firstSeq).bind(4, lastSeq);
-    return update->run();
+    if (auto s = update->run(); !s) return s;
+    for (const auto& [seq, reason] : refusals) {
+      auto refuse = d.prepare("UPDATE outbox SET refused = ?1 WHERE seq = ?2");
+      if (!refuse) return tl::unexpected(refuse.error());
+      refuse->bind(1, reason).bind(2, seq);
+      if (auto s = refuse->run(); !s) return s;
+    }
+    return {};
   });
 }
 
@@ -426,12 +485,20 @@ Result<SyncReport> syncOutbox(Database& local, const SyncOptions& options, Serve
       entry.error = server.error();
     } else {
       std::set<std::pair<std::string, std::string>> members;  // (class, user) checked on this server
+      // A person's login sends through the server's checks alone (it refuses events of others
+      // one by one); the administrator's connection first checks that the sender is a member.
+      bool account = false;
+      if ((*server)->backend() == Backend::Postgres) {
+        auto identity = serverIdentity(**server);
+        if (!identity) entry.error = identity.error();
+        else account = identity->account;
+      }
       while (!entry.error) {
         auto batch = pendingBatch(local, url, std::max(1, options.batchSize));
         if (!batch) return tl::unexpected(batch.error());
         if (batch->empty()) break;
         for (const PendingEvent& p : *batch) {
-          if (!members.insert({p.classCode, p.userName}).second) continue;
+          if (account || !members.insert({p.classCode, p.userName}).second) continue;
           auto role = memberRole(**server, p.classCode, p.userName);
           if (!role) {
             entry.error = role.error();
@@ -444,12 +511,13 @@ Result<SyncReport> syncOutbox(Database& local, const SyncOptions& options, Serve
         }
         if (entry.error) break;
         const auto start = std::chrono::steady_clock::now();
-        if (auto pushed = pushBatch(**server, *batch, entry); !pushed) {
+        std::vector<std::pair<std::int64_t, std::string>> refusals;
+        if (auto pushed = pushBatch(**server, *batch, entry, refusals); !pushed) {
           entry.error = pushed.error();
           break;
         }
         report.commitMs.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count());
-        if (auto marked = markSent(local, url, batch->front().seq, batch->back().seq); !marked)
+        if (auto marked = markSent(local, url, batch->front().seq, batch->back().seq, refusals); !marked)
           return tl::unexpected(withContext("marking pushed events sent", marked.error()));
       }
     }

@@ -54,6 +54,10 @@ bool contentionState(const std::string& state) {
 // The kind of a failed statement from its SQLSTATE (PostgreSQL appendix A).
 ErrorKind kindOf(const std::string& state) {
   if (state == "23505") return ErrorKind::Conflict;
+  // Refusals of a class server's functions and grants (class_security_sql.cpp).
+  if (state == "42501" || state == "42710") return ErrorKind::Conflict;
+  if (state == "P0002") return ErrorKind::NotFound;
+  if (state == "22023") return ErrorKind::Invalid;
   if (state == "23503") return ErrorKind::NotFound;
   if (state.rfind("23", 0) == 0) return ErrorKind::Invalid;
   if (contentionState(state) || state.rfind("08", 0) == 0 || state.rfind("57P", 0) == 0) return ErrorKind::Unavailable;

@@ -6,6 +6,8 @@
 // JSON documents as TEXT. No pixel data and no patient identifiers are ever stored.
 #include "schema.h"
 
+#include "class_security_sql.h"
+
 #include <algorithm>
 #include <cassert>
 #include <cctype>
@@ -452,6 +454,28 @@ constexpr std::string_view kStructureReview = R"SQL(
 ALTER TABLE structures ADD COLUMN review_state TEXT NOT NULL DEFAULT 'not_started'
   CHECK (review_state IN ('not_started', 'in_progress', 'completed', 'flagged'));
 )SQL";
+
+// Withdrawal and exclusion of class members (the reason kept; their events stay), the audit of
+// every role change, withdrawal and correction on a class server (who: the acting name and the
+// login; when; old and new value), and the outbox's refusals: the server's reason for an event it
+// did not count (the event is not sent again).
+constexpr std::string_view kClassAudit = R"SQL(
+ALTER TABLE class_members ADD COLUMN withdrawn_at INTEGER;
+ALTER TABLE class_members ADD COLUMN withdrawal_reason TEXT;
+ALTER TABLE outbox ADD COLUMN refused TEXT;
+CREATE TABLE class_audit (
+  id           INTEGER PRIMARY KEY,
+  recorded_at  TEXT NOT NULL DEFAULT (strftime('%Y-%m-%dT%H:%M:%fZ', 'now')),
+  actor        TEXT NOT NULL,             -- the member who acted
+  login        TEXT NOT NULL,             -- the server login it came through
+  action       TEXT NOT NULL,             -- account, member, role, withdraw, correct
+  class_code   TEXT NOT NULL DEFAULT '',
+  target       TEXT NOT NULL DEFAULT '',  -- the member (and event) it changed
+  old_value    TEXT,
+  new_value    TEXT,
+  reason       TEXT NOT NULL DEFAULT ''
+);
+)SQL";
 }  // namespace
 
 const std::vector<Migration>& migrations() {
@@ -472,6 +496,9 @@ const std::vector<Migration>& migrations() {
       {11, "study ratings record the render quality on screen and its settle time", kStudyRatingQuality},
       {12, "course steps keep a free camera and a clipping plane", kStepPlacement},
       {13, "structures keep their review state (not started, in progress, completed, flagged)", kStructureReview},
+      {14, "class members can be withdrawn; an audit of class changes; the outbox keeps refusals", kClassAudit},
+      {15, "class server security: owner role, one login per person, row-level security, audited functions",
+       classSecuritySql(), {}, true},
   };
   return all;
 }
@@ -526,6 +553,7 @@ std::string postgresDdl(std::string_view sqliteSql) {
 }
 
 std::string migrationSql(const Migration& migration, Backend backend) {
+  if (migration.postgresOnly) return backend == Backend::Postgres ? std::string(migration.sql) : std::string();
   if (backend == Backend::Sqlite) return std::string(migration.sql);
   std::string s = postgresDdl(migration.sql);
   for (const auto& [from, to] : migration.postgresEdits) {

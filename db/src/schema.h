@@ -23,6 +23,9 @@ struct Migration {
   std::string_view sql;     // statements run in one transaction (SQLite's dialect)
   // Exact text replacements (each must occur) for PostgreSQL, applied after postgresDdl.
   std::vector<std::pair<std::string_view, std::string_view>> postgresEdits = {};
+  // PostgreSQL's text, run there as it is; on SQLite the step only moves the version (server-only
+  // objects: roles, grants, row-level security, functions).
+  bool postgresOnly = false;
 };
 
 // All migrations in order; migrations()[i].version == i + 1.

@@ -5,6 +5,7 @@
 #include <nlohmann/json.hpp>
 
 #include "db/class_server.h"
+#include "db/course_store.h"
 #include "headless_desktop.h"
 #include "test_databases.h"
 #include "test_support.h"
@@ -21,6 +22,7 @@ TEST_CASE("A lesson started in the desktop by a class member reaches the class s
   {
     auto server = db::openDatabase(*url);
     REQUIRE(server);
+    REQUIRE(db::seedCourses(*server, test::sourceDir() / "data" / "courses"));  // the server judges events by it
     auto made = db::createClass(*server, "Ear anatomy", "dr_ada");
     REQUIRE(made);
     code = made->code;

@@ -65,8 +65,10 @@ struct LearnerMachine {
   }
 };
 
-// A class "Ear anatomy" coordinated by dr_ada.
+// A class "Ear anatomy" coordinated by dr_ada, on a server that has the toy course (it judges
+// the events against it).
 ClassInfo newClass(Database& server) {
+  REQUIRE(storeCourse(server, test::toyCourse(), "toy"));
   auto made = createClass(server, "Ear anatomy", "dr_ada");
   REQUIRE_MESSAGE(made, (made ? "" : made.error().message));
   return *made;

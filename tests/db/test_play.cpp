@@ -617,6 +617,7 @@ TEST_CASE("A class through the CLI: join with the code, play while the server is
   test::TempDir dir;
   const std::string server = " --db '" + *url + "'", local = (dir.path() / "laptop.db").string();
   storeQuickCourse(local);
+  storeQuickCourse(*url);  // the server judges events against the course
   const fs::path answers = writeLines(dir.path() / "answers.jsonl", quickAnswers());
 
   auto made = test::runApp("class create 'Ear anatomy' --user dr_ada" + server);
@@ -625,7 +626,7 @@ TEST_CASE("A class through the CLI: join with the code, play while the server is
   const auto codeAt = made.out.find("code ");
   REQUIRE(codeAt != std::string::npos);
   const std::string code = made.out.substr(codeAt + 5, 8);
-  CHECK(made.out.find("students join with: anatomy-tutor class join " + code) != std::string::npos);
+  CHECK(made.out.find("make each person's login with: anatomy-tutor class account " + code) != std::string::npos);
   CHECK(made.out.find(":" + std::string("@")) == std::string::npos);
 
   for (const char* name : {"sam", "kim"}) {

@@ -65,6 +65,7 @@ struct StudentClassProgress {
   int lessonsStarted = 0;   // distinct lessons
   int lessonsFinished = 0;  // distinct lessons finished at least once
   std::optional<std::int64_t> lastActive;  // Unix seconds of the newest event; none yet: nullopt
+  std::optional<std::string> withdrawal;   // withdrawn or excluded: the reason given
 };
 // How the class did on one structure.
 struct StructureClassProgress {
@@ -98,7 +99,8 @@ Result<std::optional<ClassMembership>> membershipOf(Database& local, const std::
 
 struct OutboxCounts {
   std::int64_t pending = 0;  // not yet on the server
-  std::int64_t sent = 0;
+  std::int64_t sent = 0;     // on the server, or refused by it
+  std::int64_t refused = 0;  // answered by the server with a reason it did not count them (kept in the outbox)
 };
 Result<OutboxCounts> outboxCounts(Database& local);
 
@@ -110,6 +112,8 @@ struct ServerSync {
   std::string server;        // without its password
   std::int64_t pushed = 0;   // events the server did not have
   std::int64_t repeated = 0; // events it already had (an earlier push whose answer was lost)
+  std::int64_t refused = 0;  // events the server did not count (not from this login, lesson locked, …)
+  std::vector<std::string> refusals;  // the server's reasons, the first five
   std::int64_t pending = 0;  // still waiting afterwards
   std::optional<Error> error;  // why it stopped (Unavailable: not reachable now)
 };
