@@ -124,8 +124,10 @@ int runImportFile(const cli::Args& args) {
               db::toString(report->outcome));
   std::printf("  dataset '%s': %s%s\n", report->datasetId.c_str(), toString(report->dataset),
               report->datasetFolder.empty() ? "" : (" into " + report->datasetFolder.string()).c_str());
-  std::printf("  presets: %zu added%s\n", report->presetsAdded,
-              report->presetsKept ? (", " + std::to_string(report->presetsKept) + " kept as stored (same id, other content)").c_str() : "");
+  std::string presets;
+  for (const std::string& key : report->presetsStored) presets += (presets.empty() ? " (" : ", ") + key;
+  std::printf("  presets: %zu stored for this course only%s\n", report->presetsStored.size(),
+              presets.empty() ? "" : (presets + ")").c_str());
   return 0;
 }
 

@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "core/error.h"
 #include "db/course_store.h"
@@ -64,16 +65,24 @@ struct CourseImportReport {
   std::string datasetId;
   DatasetAction dataset = DatasetAction::Builtin;
   std::filesystem::path datasetFolder;   // Imported: where its files now are
-  std::size_t presetsAdded = 0, presetsKept = 0;
+  // The package's presets as stored, under the course's keys ("<course>/<id>", course_presets.h);
+  // empty when the course was Unchanged (nothing written).
+  std::vector<std::string> presetsStored;
 };
 
-// Verifies and imports a package. Refused, with one line and nothing stored: any failed check of
-// the package; a course id stored with another dataset, a newer version, or different content
-// under the same version; lesson, question or exam ids another course uses; a dataset name
-// already imported with another volume; a referenced volume missing or with another checksum; a
-// structure the course names that the dataset lacks. The same package imported twice is
-// Unchanged. A preset id already stored with other content keeps the stored preset (counted in
-// presetsKept).
+// Verifies and imports a package, all or nothing: the files are extracted into a staging folder
+// of the data folder and checked there, the dataset, the presets and the course are stored in one
+// database transaction, and the files are moved into datasets/<name> after it commits; a crash
+// at any point leaves the old state or the new one (import_staging.h finishes or removes what a
+// crash left). Names from the package (dataset, course, presets) follow core/safe_name.h and every
+// path is built with confinedPath. The package's presets are stored for its course only
+// (course_presets.h): never in place of a shipped preset or another course's.
+// Refused, with one line and nothing stored: any failed check of the package; a course id stored
+// with another dataset, a newer version, or different content under the same version; lesson,
+// question or exam ids another course uses; a dataset name already imported with another volume
+// (or a datasets/<name> folder no stored dataset owns); a referenced volume missing or with
+// another checksum; a structure the course names that the dataset lacks; a failed write (a full
+// disk). The same package imported twice is Unchanged.
 Result<CourseImportReport> importCoursePackage(LearningSession& session, const CourseImportRequest& request);
 
 }  // namespace at::app

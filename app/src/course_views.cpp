@@ -1,5 +1,7 @@
 #include "course_views.h"
 
+#include "core/safe_name.h"
+
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
@@ -61,7 +63,8 @@ Result<render::Preset> presetForStep(const render::PresetLibrary& library, const
     if (!stored) return tl::unexpected(stored.error());
     if (*stored) return render::parsePreset((*stored)->json, "preset '" + presetId + "' (database)");
   }
-  if (!presetId.empty() && fs::is_regular_file(library.dir() / (presetId + ".json"))) return library.load(presetId);
+  if (!presetId.empty() && isSafeName(presetId) && fs::is_regular_file(library.dir() / (presetId + ".json")))
+    return library.load(presetId);
   const bool bare = presetId.size() >= 5 && presetId.substr(presetId.size() - 5) == "_bare";
   return render::presetOrDerived(library, structureId, bare ? render::RenderMode::Bare : render::RenderMode::Wdt,
                                  levels);

@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <map>
 
+#include "core/safe_name.h"
 #include "db/checksum.h"
 #include "volume/dataset_source.h"
 
@@ -50,6 +51,8 @@ Result<ImportedDataset> importDataset(db::Database& database, const ImportReques
   if (request.volumePath.empty()) return fail("a volume (DICOM folder, .nii, .nii.gz, .nrrd, .nhdr or .inv3) is required");
   if (request.name.empty()) return fail("a dataset name is required");
   if (isBuiltinDatasetName(request.name)) return fail("'" + request.name + "' is the built-in dataset's name; choose another name");
+  // Dataset names become folder names (a course export, the data folder, the segmentations).
+  if (auto ok = checkSafeName("dataset name", request.name); !ok) return tl::unexpected(ok.error());
   if (!validSpecies(request.species))
     return fail("species '" + request.species + "': use lower-case letters, '-' and '_' (human, dog, …)");
 

@@ -1,5 +1,8 @@
 #include "learning_session.h"
 
+#include "course_packages.h"
+#include "import_staging.h"
+
 #include <filesystem>
 #include <functional>
 #include <map>
@@ -126,6 +129,9 @@ Result<std::unique_ptr<LearningSession>> LearningSession::open(const std::option
   if (database->readOnly()) return std::unique_ptr<LearningSession>(new LearningSession(std::move(*database)));
   auto seeded = db::seedCourses(*database, courses);
   if (!seeded) return tl::unexpected(withContext("seeding the default course", seeded.error()));
+  // A course import killed midway is finished or cleaned up at the next start (import_staging.h);
+  // a failure here leaves the folders for the next import and does not stop the session.
+  if (auto assets = courseAssetDirectory(*database)) (void)recoverStaging(*database, *assets);
   return std::unique_ptr<LearningSession>(new LearningSession(std::move(*database)));
 }
 

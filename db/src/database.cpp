@@ -1,6 +1,7 @@
 // Database, Statement and Transaction over the engines of backend.h; opening and migrating; the
 // public Connection that owns a Database.
 #include "database.h"
+#include "db/all_or_nothing.h"
 
 #include <chrono>
 #include <cstdlib>
@@ -117,12 +118,22 @@ int Database::changes() const { return connection_->changes(); }
 Status Database::writeTransaction(const std::function<Status(Database&)>& body, int maxAttempts) {
   // Held across the retries too: the failure examined below must be this thread's.
   std::unique_lock lock(*writer_);
+  // Inside this thread's own write transaction (the lock is recursive; another thread's would
+  // have kept us waiting above): join it, so that its caller commits or rolls back everything.
+  if (writeDepth_ > 0) return body(*this);
   std::minstd_rand jitter(std::random_device{}());
   Error last{ErrorKind::Io, "no attempt made"};
   for (int attempt = 0; attempt < maxAttempts; ++attempt) {
     auto tx = Transaction::begin(*this, Transaction::Kind::Immediate);
     if (tx) {
-      Status done = body(*this);
+      ++writeDepth_;
+      Status done = [&] {
+        struct Leave {
+          int& depth;
+          ~Leave() { --depth; }
+        } leave{writeDepth_};
+        return body(*this);
+      }();
       if (done) {
         done = tx->commit();
         if (done) return {};
@@ -311,6 +322,10 @@ Backend Connection::backend() const { return database_->backend(); }
 bool Connection::readOnly() const { return database_->readOnly(); }
 const std::string& pathOf(const Database& database) { return database.path(); }
 Backend backendOf(const Database& database) { return database.backend(); }
+
+Status writeAllOrNothing(Database& database, const std::function<Status()>& body) {
+  return database.writeTransaction([&](Database&) { return body(); });
+}
 
 Result<Connection> openDatabase(const std::optional<std::string>& path, const OpenOptions& options) {
   if (path && isPostgresUrl(*path)) return owned(Database::open(*path, options));

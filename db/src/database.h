@@ -112,6 +112,7 @@ class Database {
   // program's writer lock). When another connection holds the lock past the busy timeout, or the
   // server reports a serialization failure, the whole transaction is rolled back and retried, so
   // concurrent writers lose nothing. Any other error from `body` rolls back and is returned.
+  // Called from inside another writeTransaction's body on the same thread, it joins that one.
   Status writeTransaction(const std::function<Status(Database&)>& body, int maxAttempts = 20);
 
  private:
@@ -121,6 +122,7 @@ class Database {
   std::unique_ptr<detail::Connection> connection_;
   bool readOnly_ = false;
   std::unique_ptr<std::recursive_mutex> writer_;  // held by the thread inside a write transaction
+  int writeDepth_ = 0;  // > 0 while that thread runs a writeTransaction's body (nested ones join it)
 };
 
 // Runs `each` (Status(Statement&)) for every row of a prepared, bound statement; stops at the

@@ -8,6 +8,7 @@
 #include <nlohmann/json.hpp>
 
 #include "package/course_package.h"
+#include "core/safe_name.h"
 
 namespace at::package {
 
@@ -141,6 +142,10 @@ Result<DatasetEntry> readDataset(const json& j, const std::string& source) {
   else if (kind == "reference") d.source = VolumeSource::Reference;
   else return fail(f.where("source") + "must be builtin, included or reference, not '" + kind + "'");
   const bool builtin = d.source == VolumeSource::Builtin;
+  // A package's own dataset becomes a folder of the data folder: one safe name (core/safe_name.h).
+  // A built-in's name ("phantom:64") is checked against the built-in names by the importer.
+  if (!builtin)
+    if (auto ok = checkSafeName(source + ": " + f.field("name"), name); !ok) return tl::unexpected(ok.error());
   for (const char* key : {"geometry", "source_volume_checksum"})
     if (builtin == f.has(key))
       return fail(f.where(key) + (builtin ? "not allowed for a built-in dataset" : "missing"));
@@ -242,6 +247,8 @@ Result<Manifest> parseManifest(std::string_view text, const std::string& source)
   AT_TAKE(courseId, c.text("id", true));
   AT_TAKE(courseVersion, c.integer("version", 1, 1000000000));
   AT_TAKE(courseTitle, c.text("title", false));
+  // The course id keys the course's presets in the database (app/src/course_presets.h).
+  if (auto ok = checkSafeName(source + ": " + c.field("id"), courseId); !ok) return tl::unexpected(ok.error());
   m.courseId = courseId;
   m.courseVersion = int(courseVersion);
   m.courseTitle = courseTitle;

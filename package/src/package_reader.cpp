@@ -4,6 +4,7 @@
 #include <archive.h>
 #include <archive_entry.h>
 
+#include <algorithm>
 #include <fstream>
 #include <map>
 #include <memory>
@@ -12,6 +13,7 @@
 
 #include "archive_handles.h"
 #include "core/printable_text.h"
+#include "core/safe_name.h"
 #include "core/sha256.h"
 #include "lessons/course_json.h"
 #include "package/course_package.h"
@@ -51,9 +53,12 @@ std::string unsafeNameReason(const std::string& name) {
 Status checkListing(const Manifest& m, const std::string& name) {
   const auto listed = [&](const char* path) { return m.find(path) != nullptr; };
   if (!listed(kCourse)) return fail(name + ": manifest.json: files: course.json is not listed");
-  for (const PackagedFile& f : m.files)
+  for (const PackagedFile& f : m.files) {
     if (f.path != kCourse && f.path != kStructures && !dataFile(f.path) && presetIdOf(f.path).empty())
       return fail(name + ": manifest.json: files: '" + f.path + "' is not a file format version 1 holds");
+    if (const std::string id = presetIdOf(f.path); !id.empty())
+      if (auto ok = checkSafeName(name + ": manifest.json: files: " + f.path + ": preset id", id); !ok) return ok;
+  }
   const bool builtin = m.dataset.source == VolumeSource::Builtin;
   if (builtin && (listed(kStructures) || listed(kLabels)))
     return fail(name + ": manifest.json: a built-in dataset's package holds no structures or labels");
@@ -171,7 +176,16 @@ class PackageReader {
   }
 
   Result<std::string> readDocument(archive* a, archive_entry* entry, const std::string& path, const PackagedFile* listed) {
-    if (auto ok = checkSize(entry, path, listed, options_.limits.maxDocumentBytes); !ok) return tl::unexpected(ok.error());
+    const ReadLimits& l = options_.limits;
+    const std::uint64_t limit = path == kManifest ? l.maxManifestBytes
+                                : path == kCourse ? l.maxCourseBytes
+                                : path == kStructures ? l.maxStructuresBytes
+                                                     : l.maxPresetBytes;
+    if (auto ok = checkSize(entry, path, listed, limit); !ok) return tl::unexpected(ok.error());
+    documentBytes_ += std::uint64_t(archive_entry_size(entry));
+    if (documentBytes_ > l.maxDocumentsBytes)
+      return fail(name_ + ": the documents (manifest, course, presets, structures) hold more than " +
+                  std::to_string(l.maxDocumentsBytes) + " bytes together");
     std::string text;
     text.reserve(std::size_t(archive_entry_size(entry)));
     auto ok = stream(a, path, std::uint64_t(archive_entry_size(entry)), listed, [&](const char* data, std::size_t n) -> Status {
@@ -183,7 +197,12 @@ class PackageReader {
   }
 
   Status readData(archive* a, archive_entry* entry, const PackagedFile& listed, CoursePackage& out) {
-    if (auto ok = checkSize(entry, listed.path, &listed, options_.limits.maxDataBytes); !ok) return ok;
+    // A data file holds at most the recorded grid's voxels at 2 bytes (int16 volume, uint16
+    // labels) and an NRRD header: a package cannot make the importer write more than its content.
+    std::uint64_t limit = options_.limits.maxDataBytes;
+    if (const auto& g = out.manifest.dataset.geometry)
+      limit = std::min<std::uint64_t>(limit, std::uint64_t(g->dims.count()) * 2 + (std::uint64_t(1) << 20));
+    if (auto ok = checkSize(entry, listed.path, &listed, limit); !ok) return ok;
     const bool volume = listed.path == kVolume;
     std::ofstream file;
     fs::path target;
@@ -238,7 +257,7 @@ class PackageReader {
 
   std::string name_;
   const ReadOptions& options_;
-  std::uint64_t total_ = 0;
+  std::uint64_t total_ = 0, documentBytes_ = 0;
   std::string lastEntry_ = kManifest;
   std::vector<fs::path> written_;
   bool done_ = false;

@@ -1,5 +1,7 @@
 #include "render/preset.h"
 
+#include "core/safe_name.h"
+
 #include <algorithm>
 #include <cmath>
 #include <fstream>
@@ -285,6 +287,9 @@ Result<std::vector<std::string>> PresetLibrary::list() const {
 }
 
 Result<Preset> PresetLibrary::load(const std::string& id) const {
+  // Ids come from courses (outside text): only a safe name is a file of the library, so a course's
+  // "<course>/<id>" preset or "../x" never reads a file.
+  if (!isSafeName(id)) return fail(ErrorKind::NotFound, "no preset '" + printableText(id, 80) + "' in " + dir_.string());
   const std::filesystem::path path = dir_ / (id + ".json");
   if (!std::filesystem::exists(path)) return fail("no preset '" + id + "' in " + dir_.string());
   return loadPreset(path);

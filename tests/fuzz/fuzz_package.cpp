@@ -100,7 +100,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   const std::filesystem::path& extract = fuzz::Scratch::instance().fresh();
   package::ReadOptions options;
   options.extractTo = extract;
-  options.limits.maxDocumentBytes = std::uint64_t(1) << 20;
+  options.limits.maxCourseBytes = options.limits.maxStructuresBytes = std::uint64_t(1) << 20;
   options.limits.maxDataBytes = fuzz::kLoaderMaxBytes;
   options.limits.maxTotalBytes = 2 * fuzz::kLoaderMaxBytes;
   const std::string name = "fuzz.atcourse";

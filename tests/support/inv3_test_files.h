@@ -106,4 +106,43 @@ inline void writeInv3(const std::filesystem::path& path, const Inv3Plist& plist 
   writeTar(path, {{folder + "/main.plist", plist.xml()}, {folder + "/matrix.dat", matrix}});
 }
 
+// Property lists nested `depth` levels (the stack-overflow inputs of libplist).
+// A main.plist whose 'matrix' holds `depth` nested arrays.
+inline std::string deepXmlPlist(int depth) {
+  std::string s = "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n<plist version=\"1.0\">\n<dict><key>matrix</key>";
+  s.reserve(s.size() + std::size_t(depth) * 15);
+  for (int i = 0; i < depth; ++i) s += "<array>";
+  for (int i = 0; i < depth; ++i) s += "</array>";
+  return s + "</dict>\n</plist>\n";
+}
+
+// A binary plist ("bplist00") of `depth` arrays, each holding the next (the last one holding the
+// first when `cycle`).
+inline std::string deepBinaryPlist(std::uint32_t depth, bool cycle = false) {
+  std::string s = "bplist00";
+  std::vector<std::uint32_t> offsets;
+  const auto be32 = [&](std::uint32_t v) {
+    for (int b = 3; b >= 0; --b) s.push_back(char((v >> (8 * b)) & 0xff));
+  };
+  for (std::uint32_t i = 0; i < depth; ++i) {
+    offsets.push_back(std::uint32_t(s.size()));
+    if (i + 1 < depth || cycle) {
+      s.push_back(char(0xA1));
+      be32(i + 1 < depth ? i + 1 : 0);
+    } else {
+      s.push_back(char(0xA0));
+    }
+  }
+  const std::uint64_t table = s.size();
+  for (std::uint32_t o : offsets) be32(o);
+  std::string trailer(32, '\0');
+  trailer[6] = 4;
+  trailer[7] = 4;
+  for (int b = 0; b < 8; ++b) {
+    trailer[std::size_t(8 + b)] = char((std::uint64_t(depth) >> (8 * (7 - b))) & 0xff);
+    trailer[std::size_t(24 + b)] = char((table >> (8 * (7 - b))) & 0xff);
+  }
+  return s + trailer;
+}
+
 }  // namespace at::test

@@ -17,7 +17,8 @@
 // listed in the manifest at one of the names above, of the listed size and SHA-256; at the end
 // every listed file must have come. Names are relative, without "..", "." or empty components,
 // absolute paths or backslashes; links, devices and folders are refused. Sizes are bounded by
-// ReadLimits before anything is allocated. Nothing is written outside `extractTo`, and there only
+// ReadLimits before anything is allocated. The course id, a non-built-in dataset's name and
+// every preset id must be safe names (core/safe_name.h): they become keys and folder names. Nothing is written outside `extractTo`, and there only
 // under fixed names (volume.nrrd, labels.nrrd): entry names never become file paths.
 //
 // This module knows no database: the app stores what it reads (app/src/course_import.h).
@@ -101,12 +102,19 @@ struct CoursePackage {
   bool hasLabels = false;
 };
 
-// Bounds on what a package may make the reader allocate or write.
+// Bounds on what a package may make the reader allocate or write, fitted to real content (a
+// preset is a few KB, a course with its questions a few hundred KB, the skull's structures
+// 20 KB). Declared sizes are checked before a byte of the entry is read, and the bytes read are
+// counted as they stream: a bomb is refused after at most one limit's worth of memory.
 struct ReadLimits {
-  std::uint64_t maxEntries = 4096;
-  std::uint64_t maxDocumentBytes = std::uint64_t(16) << 20;  // manifest, course, one preset, structures
-  std::uint64_t maxDataBytes = std::uint64_t(8) << 30;       // the volume or the label map
-  std::uint64_t maxTotalBytes = std::uint64_t(12) << 30;     // all entries together
+  std::uint64_t maxEntries = 1024;
+  std::uint64_t maxManifestBytes = std::uint64_t(1) << 20;
+  std::uint64_t maxCourseBytes = std::uint64_t(4) << 20;
+  std::uint64_t maxPresetBytes = std::uint64_t(64) << 10;    // one presets/<id>.json
+  std::uint64_t maxStructuresBytes = std::uint64_t(4) << 20;
+  std::uint64_t maxDocumentsBytes = std::uint64_t(16) << 20;  // every document above together
+  std::uint64_t maxDataBytes = std::uint64_t(8) << 30;        // the volume or the label map
+  std::uint64_t maxTotalBytes = std::uint64_t(12) << 30;      // all entries together
 };
 
 struct ReadOptions {

@@ -20,11 +20,13 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "core/printable_text.h"
 #include "core/regular_file.h"
 #include "load_limits.h"
+#include "plist_depth.h"
 #include "raw_values.h"
 
 namespace at {
@@ -41,8 +43,13 @@ struct ArchiveReadFree {
 };
 using ArchiveReader = std::unique_ptr<archive, ArchiveReadFree>;
 
-constexpr std::size_t kMaxPlistBytes = std::size_t(16) << 20;
+constexpr std::size_t kMaxPlistBytes = std::size_t(1) << 20;  // InVesalius writes about 2 KB
 constexpr std::size_t kReadChunkBytes = std::size_t(4) << 20;
+// A project holds main.plist, the matrix and a few files per mask, surface and measurement:
+// tens of members with short names. More, or longer names, are refused before they cost time or
+// memory.
+constexpr std::size_t kMaxMembers = 4096;
+constexpr std::size_t kMaxMemberNameBytes = 1024;
 const std::string kMainPlist = "main.plist";
 
 std::string archiveMessage(archive* a) {
@@ -76,13 +83,20 @@ class MemberReader {
       if (status == ARCHIVE_EOF) return false;
       if (status < ARCHIVE_WARN) {
         if (!readAny_) return fail(notAProject());
-        return fail(path_ + ": the archive is damaged or truncated after member '" + seen_.back() + "' (" +
+        return fail(path_ + ": the archive is damaged or truncated after member '" + lastSeen_ + "' (" +
                     archiveMessage(reader_.get()) + ")");
       }
       readAny_ = true;
+      if (++members_ > kMaxMembers)
+        return fail(path_ + ": more than " + std::to_string(kMaxMembers) + " members: not an InVesalius project");
       const char* name = archive_entry_pathname(entry);
-      const std::string member = name ? name : "";
-      seen_.push_back(member);
+      const std::string_view raw = name ? std::string_view(name) : std::string_view();
+      if (raw.size() > kMaxMemberNameBytes)
+        return fail(path_ + ": member " + std::to_string(members_) + " has a name of " + std::to_string(raw.size()) +
+                    " bytes (at most " + std::to_string(kMaxMemberNameBytes) + "): not an InVesalius project");
+      const std::string member(raw);
+      lastSeen_ = member;
+      if (seen_.size() < 8) seen_.push_back(member);
       if (archive_entry_filetype(entry) == AE_IFREG && wanted(member)) {
         current_ = member;
         declaredSize_ = archive_entry_size_is_set(entry) ? std::optional<std::int64_t>(archive_entry_size(entry)) : std::nullopt;
@@ -127,8 +141,8 @@ class MemberReader {
   std::string seenList() const {
     if (seen_.empty()) return "none";
     std::string list;
-    for (std::size_t n = 0; n < seen_.size() && n < 8; ++n) list += (n ? ", " : "") + seen_[n];
-    if (seen_.size() > 8) list += ", and " + std::to_string(seen_.size() - 8) + " more";
+    for (std::size_t n = 0; n < seen_.size(); ++n) list += (n ? ", " : "") + seen_[n];
+    if (members_ > seen_.size()) list += ", and " + std::to_string(members_ - seen_.size()) + " more";
     return list;
   }
 
@@ -141,7 +155,9 @@ class MemberReader {
   std::string path_;
   ArchiveReader reader_;
   bool readAny_ = false;
-  std::vector<std::string> seen_;
+  std::vector<std::string> seen_;  // the first 8 members' names, for messages
+  std::size_t members_ = 0;
+  std::string lastSeen_;
   std::string current_;
   std::optional<std::int64_t> declaredSize_;
 };
@@ -214,6 +230,8 @@ std::optional<ScalarKind> kindOfDtype(const std::string& dtype) {
 Result<ProjectHeader> parseMainPlist(const std::string& path, const std::string& member, const std::string& bytes) {
   const std::string where = path + ": " + member;
   if (bytes.size() > std::numeric_limits<std::uint32_t>::max()) return fail(where + " is too large");
+  // libplist recurses once per level: a deeply nested plist would overflow the stack.
+  if (auto ok = inv3::checkPlistDepth(bytes, where); !ok) return tl::unexpected(ok.error());
   plist_t raw = nullptr;
   plist_from_memory(bytes.data(), std::uint32_t(bytes.size()), &raw);
   PlistRoot root(raw);
