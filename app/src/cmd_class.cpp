@@ -10,6 +10,7 @@
 #include "core/strings.h"
 #include "db/class_server.h"
 #include "quiz/study_report.h"
+#include "printable_output.h"
 
 namespace at::app {
 
@@ -72,11 +73,11 @@ int runCreate(const cli::Args& args) {
   if (!server) return reportError("class create: " + server.error().message);
   auto made = db::createClass(*server, args.positional()[1], *args.user());
   if (!made) return reportError("class create: " + made.error().message);
-  std::printf("class '%s': code %s (%s is its coordinator)\n", made->title.c_str(), made->code.c_str(),
+  terminalPrintf("class '%s': code %s (%s is its coordinator)\n", made->title.c_str(), made->code.c_str(),
               args.user()->c_str());
   std::string shown = db::withoutPassword(*args.db());  // the password is not printed
   if (shown != *args.db()) shown.insert(shown.find('@'), ":PASSWORD");
-  std::printf("students join with: anatomy-tutor class join %s --server '%s' --user NAME\n", made->code.c_str(),
+  terminalPrintf("students join with: anatomy-tutor class join %s --server '%s' --user NAME\n", made->code.c_str(),
               shown.c_str());
   return 0;
 }
@@ -98,7 +99,7 @@ int runJoin(const cli::Args& args) {
   if (!local) return reportError("class join: " + local.error().message);
   if (auto kept = db::rememberMembership(*local, {*args.user(), *code, *url, *role}); !kept)
     return reportError("class join: " + kept.error().message);
-  std::printf("%s joined class %s (%s) as %s; answers in %s are sent to %s\n", args.user()->c_str(), code->c_str(),
+  terminalPrintf("%s joined class %s (%s) as %s; answers in %s are sent to %s\n", args.user()->c_str(), code->c_str(),
               info->title.c_str(), db::toString(*role), local->path().c_str(), server->path().c_str());
   return 0;
 }
@@ -115,7 +116,7 @@ int runRole(const cli::Args& args) {
   if (!server) return reportError("class role: " + server.error().message);
   if (auto set = db::setMemberRole(*server, *code, *args.user(), args.positional()[2], *role); !set)
     return reportError("class role: " + set.error().message);
-  std::printf("%s is %s of class %s\n", args.positional()[2].c_str(), db::toString(*role), code->c_str());
+  terminalPrintf("%s is %s of class %s\n", args.positional()[2].c_str(), db::toString(*role), code->c_str());
   return 0;
 }
 
@@ -130,24 +131,24 @@ int runClassProgress(const cli::Args& args) {
   auto progress = db::classProgress(*server, *code, *args.user());
   if (!progress) return reportError("class progress: " + progress.error().message);
   if (args.has("csv")) {
-    std::printf("student,answers,correct,structures,lessons_started,lessons_finished,last_active_unix\n");
+    terminalPrintf("student,answers,correct,structures,lessons_started,lessons_finished,last_active_unix\n");
     for (const auto& s : progress->students)
-      std::printf("%s,%d,%d,%d,%d,%d,%s\n", quiz::csvQuoted(s.userName).c_str(), s.answers, s.correct, s.structures,
+      terminalPrintf("%s,%d,%d,%d,%d,%d,%s\n", quiz::csvQuoted(s.userName).c_str(), s.answers, s.correct, s.structures,
                   s.lessonsStarted, s.lessonsFinished, s.lastActive ? std::to_string(*s.lastActive).c_str() : "");
     return 0;
   }
-  std::printf("Class %s — %s: %s, %s received\n\n", progress->info.code.c_str(), progress->info.title.c_str(),
+  terminalPrintf("Class %s — %s: %s, %s received\n\n", progress->info.code.c_str(), progress->info.title.c_str(),
               str::countOf(long(progress->students.size()), "student").c_str(),
               str::countOf(long(progress->events), "event").c_str());
-  std::printf("%-20s %8s %6s %11s %8s %9s  %s\n", "student", "answers", "right", "structures", "lessons", "finished",
+  terminalPrintf("%-20s %8s %6s %11s %8s %9s  %s\n", "student", "answers", "right", "structures", "lessons", "finished",
               "last active");
   for (const auto& s : progress->students)
-    std::printf("%-20s %8d %6s %11d %8d %9d  %s\n", s.userName.c_str(), s.answers, share(s.correct, s.answers).c_str(),
+    terminalPrintf("%-20s %8d %6s %11d %8d %9d  %s\n", s.userName.c_str(), s.answers, share(s.correct, s.answers).c_str(),
                 s.structures, s.lessonsStarted, s.lessonsFinished, when(s.lastActive).c_str());
   if (!progress->structures.empty()) {
-    std::printf("\n%-24s %9s %8s %6s\n", "structure", "students", "answers", "right");
+    terminalPrintf("\n%-24s %9s %8s %6s\n", "structure", "students", "answers", "right");
     for (const auto& s : progress->structures)
-      std::printf("%-24s %9d %8d %6s\n", s.structureId.c_str(), s.students, s.answers, share(s.correct, s.answers).c_str());
+      terminalPrintf("%-24s %9d %8d %6s\n", s.structureId.c_str(), s.students, s.answers, share(s.correct, s.answers).c_str());
   }
   return 0;
 }
@@ -158,7 +159,7 @@ int runClass(const Argv& argv) {
   auto args = cli::Args::parse(argv, {"server"}, {"csv"});
   if (!args) return reportError("class: " + args.error().message);
   if (args->has("help") || args->positional().empty()) {
-    std::printf("%s", kClassHelp);
+    terminalPrintf("%s", kClassHelp);
     return args->has("help") ? 0 : 2;
   }
   const std::string& action = args->positional()[0];
@@ -173,7 +174,7 @@ int runSync(const Argv& argv) {
   auto args = cli::Args::parse(argv, {}, {});
   if (!args) return reportError("sync: " + args.error().message);
   if (args->has("help")) {
-    std::printf("%s", kSyncHelp);
+    terminalPrintf("%s", kSyncHelp);
     return 0;
   }
   if (!args->positional().empty()) return reportError("sync: unexpected argument '" + args->positional()[0] + "'");
@@ -182,7 +183,7 @@ int runSync(const Argv& argv) {
   auto report = db::syncOutbox(*local);
   if (!report) return reportError("sync: " + report.error().message);
   if (!report->complete()) return reportError("sync: " + describeSync(*report));
-  std::printf("%s\n", describeSync(*report).c_str());
+  terminalPrintf("%s\n", describeSync(*report).c_str());
   return 0;
 }
 
