@@ -12,10 +12,12 @@
 
 #include "cli_args.h"
 #include "commands.h"
+#include "core/atomic_file.h"
 #include "db/analytics_store.h"
 #include "core/strings.h"
 #include "learning_session.h"
 #include "quiz/study_report.h"
+#include "printable_output.h"
 
 namespace at::app {
 
@@ -124,12 +126,12 @@ std::vector<Table> tables(const lessons::ClassAnalytics& a) {
 
 // One tidy CSV: table, the row's id (its first field), its name (the second), metric, value.
 void printLongCsv(const std::vector<Table>& all) {
-  std::printf("table,id,name,metric,value\n");
+  terminalPrintf("table,id,name,metric,value\n");
   for (const Table& t : all) {
     const auto& header = t.rows.front();
     for (std::size_t r = 1; r < t.rows.size(); ++r)
       for (std::size_t c = 2; c < header.size(); ++c)
-        std::printf("%s,%s,%s,%s,%s\n", t.name.c_str(), csvField(t.rows[r][0]).c_str(), csvField(t.rows[r][1]).c_str(),
+        terminalPrintf("%s,%s,%s,%s,%s\n", t.name.c_str(), csvField(t.rows[r][0]).c_str(), csvField(t.rows[r][1]).c_str(),
                     header[c].value.c_str(), csvField(t.rows[r][c]).c_str());
   }
 }
@@ -156,49 +158,49 @@ Status writeWideCsv(const std::vector<Table>& all, const std::filesystem::path& 
   if (ec) return fail(dir.string() + ": cannot create the folder (" + ec.message() + ")");
   for (const Table& t : all) {
     const auto path = dir / (t.name + ".csv");
-    std::ofstream out(path);
+    std::string text;
     for (const auto& row : t.rows) {
-      for (std::size_t c = 0; c < row.size(); ++c) out << (c ? "," : "") << csvField(row[c]);
-      out << "\n";
+      for (std::size_t c = 0; c < row.size(); ++c) text += (c ? "," : "") + csvField(row[c]);
+      text += "\n";
     }
-    if (!out) return fail(path.string() + ": cannot write");
-    std::printf("wrote %s (%s)\n", path.string().c_str(), str::countOf(long(t.rows.size() - 1), "row").c_str());
+    if (auto ok = writeFileAtomically(path.string(), text); !ok) return ok;
+    terminalPrintf("wrote %s (%s)\n", path.string().c_str(), str::countOf(long(t.rows.size() - 1), "row").c_str());
   }
   return {};
 }
 
 void printText(const lessons::ClassAnalytics& a, const lessons::Course& course) {
-  std::printf("Analytics: %s (%s) — class of %s, %s\n", course.title.c_str(), course.id.c_str(),
+  terminalPrintf("Analytics: %s (%s) — class of %s, %s\n", course.title.c_str(), course.id.c_str(),
               str::countOf(a.classSize, "student").c_str(), str::countOf(a.answers, "answer").c_str());
-  std::printf("\nLesson completion (finished / class)\n");
+  terminalPrintf("\nLesson completion (finished / class)\n");
   for (const auto& l : a.lessons)
-    std::printf("  %-26s %s %4s  %3d started, %3d finished, mean best score %s\n", l.lessonId.c_str(),
+    terminalPrintf("  %-26s %s %4s  %3d started, %3d finished, mean best score %s\n", l.lessonId.c_str(),
                 bar(l.completion).c_str(), percent(l.completion).c_str(), l.started, l.finished,
                 l.meanBestScore ? number(*l.meanBestScore, 2).c_str() : "–");
-  std::printf("\nHardest structures (share of right answers; FSRS difficulty 1 easy … 10 hard; predicted recall now)\n");
+  terminalPrintf("\nHardest structures (share of right answers; FSRS difficulty 1 easy … 10 hard; predicted recall now)\n");
   for (const auto& s : a.structures)
-    std::printf("  %-30s %s %4s right of %4d   difficulty %4.1f   recall %4s (%s)\n", s.name.c_str(),
+    terminalPrintf("  %-30s %s %4s right of %4d   difficulty %4.1f   recall %4s (%s)\n", s.name.c_str(),
                 bar(s.correctShare).c_str(), percent(s.correctShare).c_str(), s.answers, s.meanDifficulty,
                 percent(s.students ? std::optional<double>(s.meanRecall) : std::nullopt).c_str(),
                 str::countOf(s.students, "student").c_str());
-  std::printf("\nQuestions by difficulty (Elo: 1500 = average, higher = harder)\n");
+  terminalPrintf("\nQuestions by difficulty (Elo: 1500 = average, higher = harder)\n");
   for (const auto& q : a.questions)
     if (q.answers > 0)
-      std::printf("  %-48s %-8s %6.0f  (%4s right of %d)\n", q.questionId.c_str(), q.kind.c_str(), q.difficulty,
+      terminalPrintf("  %-48s %-8s %6.0f  (%4s right of %d)\n", q.questionId.c_str(), q.kind.c_str(), q.difficulty,
                   percent(q.correctShare).c_str(), q.answers);
-  std::printf("\nStudents by predicted recall now (FSRS, mean over the structures taught)\n");
+  terminalPrintf("\nStudents by predicted recall now (FSRS, mean over the structures taught)\n");
   for (const auto& s : a.students) {
-    std::printf("  %-20s %s %4s  %2d taught, %2d due", s.name.c_str(), bar(s.meanRecall.value_or(0), 10).c_str(),
+    terminalPrintf("  %-20s %s %4s  %2d taught, %2d due", s.name.c_str(), bar(s.meanRecall.value_or(0), 10).c_str(),
                 percent(s.meanRecall).c_str(), s.taught, s.due);
     if (!s.weakestStructure.empty())
-      std::printf(", weakest %s (%s)", s.weakestStructure.c_str(), percent(s.weakestRecall).c_str());
-    std::printf(", %s finished", str::countOf(s.lessonsFinished, "lesson").c_str());
-    if (s.examScore) std::printf(", exam %s", number(*s.examScore, 2).c_str());
-    std::printf("\n");
+      terminalPrintf(", weakest %s (%s)", s.weakestStructure.c_str(), percent(s.weakestRecall).c_str());
+    terminalPrintf(", %s finished", str::countOf(s.lessonsFinished, "lesson").c_str());
+    if (s.examScore) terminalPrintf(", exam %s", number(*s.examScore, 2).c_str());
+    terminalPrintf("\n");
   }
-  if (!a.exams.empty()) std::printf("\nExams\n");
+  if (!a.exams.empty()) terminalPrintf("\nExams\n");
   for (const auto& e : a.exams)
-    std::printf("  %-28s %s, %d finished, mean score %s, passed %s\n", e.examId.c_str(),
+    terminalPrintf("  %-28s %s, %d finished, mean score %s, passed %s\n", e.examId.c_str(),
                 str::countOf(e.attempts, "attempt").c_str(), e.finished, e.meanScore ? number(*e.meanScore, 2).c_str() : "–",
                 percent(e.passRate).c_str());
 }
@@ -209,7 +211,7 @@ int runAnalytics(const Argv& argv) {
   auto args = cli::Args::parse(argv, {"group", "out"}, {"csv"});
   if (!args) return reportError("analytics: " + args.error().message);
   if (args->has("help")) {
-    std::printf("%s", kAnalyticsHelp);
+    terminalPrintf("%s", kAnalyticsHelp);
     return 0;
   }
   if (args->positional().size() != 1) return reportError("analytics: give exactly one COURSE (see `anatomy-tutor courses`)");

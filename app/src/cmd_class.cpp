@@ -18,6 +18,7 @@
 #include "db/course_store.h"
 #include "learning_session.h"
 #include "quiz/study_report.h"
+#include "printable_output.h"
 
 namespace at::app {
 
@@ -97,11 +98,11 @@ int runCreate(const cli::Args& args) {
   // The server judges events against the course (its questions, lessons and prerequisites).
   if (auto seeded = db::seedCourses(*server, courseDirectory()); !seeded)
     return reportError("class create: putting the courses on the server: " + seeded.error().message);
-  std::printf("class '%s': code %s (%s is its coordinator)\n", made->title.c_str(), made->code.c_str(),
+  terminalPrintf("class '%s': code %s (%s is its coordinator)\n", made->title.c_str(), made->code.c_str(),
               args.user()->c_str());
   std::string shown = db::withoutPassword(*args.db());  // the password is not printed
   if (shown != *args.db()) shown.insert(shown.find('@'), ":PASSWORD");
-  std::printf("make each person's login with: anatomy-tutor class account %s NAME --role student --db '%s'\n",
+  terminalPrintf("make each person's login with: anatomy-tutor class account %s NAME --role student --db '%s'\n",
               made->code.c_str(), shown.c_str());
   return 0;
 }
@@ -124,7 +125,7 @@ int runJoin(const cli::Args& args) {
   if (!local) return reportError("class join: " + local.error().message);
   if (auto kept = db::rememberMembership(*local, {*name, *code, *url, *role}); !kept)
     return reportError("class join: " + kept.error().message);
-  std::printf("%s joined class %s (%s) as %s; answers in %s are sent to %s\n", name->c_str(), code->c_str(),
+  terminalPrintf("%s joined class %s (%s) as %s; answers in %s are sent to %s\n", name->c_str(), code->c_str(),
               info->title.c_str(), db::toString(*role), local->path().c_str(), server->path().c_str());
   return 0;
 }
@@ -142,7 +143,7 @@ int runRole(const cli::Args& args) {
   if (!by) return reportError("class role: " + by.error().message);
   if (auto set = db::setMemberRole(*server, *code, *by, args.positional()[2], *role); !set)
     return reportError("class role: " + set.error().message);
-  std::printf("%s is %s of class %s\n", args.positional()[2].c_str(), db::toString(*role), code->c_str());
+  terminalPrintf("%s is %s of class %s\n", args.positional()[2].c_str(), db::toString(*role), code->c_str());
   return 0;
 }
 
@@ -156,26 +157,26 @@ int runClassProgress(const cli::Args& args) {
   auto progress = db::classProgress(*server, *code, args.user().value_or(""));
   if (!progress) return reportError("class progress: " + progress.error().message);
   if (args.has("csv")) {
-    std::printf("student,answers,correct,structures,lessons_started,lessons_finished,last_active_unix,withdrawn\n");
+    terminalPrintf("student,answers,correct,structures,lessons_started,lessons_finished,last_active_unix,withdrawn\n");
     for (const auto& s : progress->students)
-      std::printf("%s,%d,%d,%d,%d,%d,%s,%s\n", quiz::csvQuoted(s.userName).c_str(), s.answers, s.correct, s.structures,
+      terminalPrintf("%s,%d,%d,%d,%d,%d,%s,%s\n", quiz::csvQuoted(s.userName).c_str(), s.answers, s.correct, s.structures,
                   s.lessonsStarted, s.lessonsFinished, s.lastActive ? std::to_string(*s.lastActive).c_str() : "",
                   quiz::csvQuoted(s.withdrawal.value_or("")).c_str());
     return 0;
   }
-  std::printf("Class %s — %s: %s, %s received\n\n", progress->info.code.c_str(), progress->info.title.c_str(),
+  terminalPrintf("Class %s — %s: %s, %s received\n\n", progress->info.code.c_str(), progress->info.title.c_str(),
               str::countOf(long(progress->students.size()), "student").c_str(),
               str::countOf(long(progress->events), "event").c_str());
-  std::printf("%-20s %8s %6s %11s %8s %9s  %s\n", "student", "answers", "right", "structures", "lessons", "finished",
+  terminalPrintf("%-20s %8s %6s %11s %8s %9s  %s\n", "student", "answers", "right", "structures", "lessons", "finished",
               "last active");
   for (const auto& s : progress->students)
-    std::printf("%-20s %8d %6s %11d %8d %9d  %s%s\n", s.userName.c_str(), s.answers, share(s.correct, s.answers).c_str(),
+    terminalPrintf("%-20s %8d %6s %11d %8d %9d  %s%s\n", s.userName.c_str(), s.answers, share(s.correct, s.answers).c_str(),
                 s.structures, s.lessonsStarted, s.lessonsFinished, when(s.lastActive).c_str(),
                 s.withdrawal ? ("  (withdrawn: " + *s.withdrawal + ")").c_str() : "");
   if (!progress->structures.empty()) {
-    std::printf("\n%-24s %9s %8s %6s\n", "structure", "students", "answers", "right");
+    terminalPrintf("\n%-24s %9s %8s %6s\n", "structure", "students", "answers", "right");
     for (const auto& s : progress->structures)
-      std::printf("%-24s %9d %8d %6s\n", s.structureId.c_str(), s.students, s.answers, share(s.correct, s.answers).c_str());
+      terminalPrintf("%-24s %9d %8d %6s\n", s.structureId.c_str(), s.students, s.answers, share(s.correct, s.answers).c_str());
   }
   return 0;
 }
@@ -226,9 +227,9 @@ int runAccount(const cli::Args& args) {
   auto account = db::createClassAccount(*server, *code, name, *role, args.user());
   if (!account) return reportError("class account: " + account.error().message);
   const auto address = addressOf(*args.db());
-  std::printf("%s is %s of class %s\n", name.c_str(), db::toString(*role), code->c_str());
+  terminalPrintf("%s is %s of class %s\n", name.c_str(), db::toString(*role), code->c_str());
   if (!account->password) {
-    std::printf("the login %s existed already and keeps its password\n", name.c_str());
+    terminalPrintf("the login %s existed already and keeps its password\n", name.c_str());
     return 0;
   }
   if (const auto pgpass = args.value("pgpass")) {
@@ -241,12 +242,12 @@ int runAccount(const cli::Args& args) {
         << pgpassField(name) << ':' << pgpassField(*account->password) << '\n';
     out.close();
     if (!existed) ::chmod(pgpass->c_str(), 0600);
-    std::printf("its password is in %s (a ~/.pgpass line for %s, mode 600)\n", pgpass->c_str(), name.c_str());
+    terminalPrintf("its password is in %s (a ~/.pgpass line for %s, mode 600)\n", pgpass->c_str(), name.c_str());
   } else {
-    std::printf("password (shown once, not stored; hand it to %s): %s\n", name.c_str(), account->password->c_str());
+    terminalPrintf("password (shown once, not stored; hand it to %s): %s\n", name.c_str(), account->password->c_str());
   }
   if (address)
-    std::printf("%s connects as: postgresql://%s@%s:%s/%s (the password in ~/.pgpass: %s:%s:%s:%s:PASSWORD)\n",
+    terminalPrintf("%s connects as: postgresql://%s@%s:%s/%s (the password in ~/.pgpass: %s:%s:%s:%s:PASSWORD)\n",
                 name.c_str(), name.c_str(), address->host.c_str(), address->port.c_str(), address->database.c_str(),
                 address->host.c_str(), address->port.c_str(), address->database.c_str(), name.c_str());
   return 0;
@@ -265,7 +266,7 @@ int runWithdraw(const cli::Args& args) {
   if (!by) return reportError("class withdraw: " + by.error().message);
   if (auto done = db::withdrawMember(*server, *code, args.positional()[2], *reason, *by); !done)
     return reportError("class withdraw: " + done.error().message);
-  std::printf("%s withdrawn from class %s (%s)\n", args.positional()[2].c_str(), code->c_str(), reason->c_str());
+  terminalPrintf("%s withdrawn from class %s (%s)\n", args.positional()[2].c_str(), code->c_str(), reason->c_str());
   return 0;
 }
 
@@ -288,7 +289,7 @@ int runCorrect(const cli::Args& args) {
   if (!by) return reportError("class correct: " + by.error().message);
   if (auto done = db::correctClassEvent(*server, args.positional()[1], *correct == "1", scoreValue, *reason, *by); !done)
     return reportError("class correct: " + done.error().message);
-  std::printf("event %s corrected (kept in the class audit)\n", args.positional()[1].c_str());
+  terminalPrintf("event %s corrected (kept in the class audit)\n", args.positional()[1].c_str());
   return 0;
 }
 
@@ -301,9 +302,9 @@ int runAudit(const cli::Args& args) {
   if (!server) return reportError("class audit: " + server.error().message);
   auto entries = db::classAudit(*server, *code);
   if (!entries) return reportError("class audit: " + entries.error().message);
-  std::printf("recorded_at,actor,login,action,target,old,new,reason\n");
+  terminalPrintf("recorded_at,actor,login,action,target,old,new,reason\n");
   for (const auto& e : *entries)
-    std::printf("%s,%s,%s,%s,%s,%s,%s,%s\n", e.recordedAt.c_str(), quiz::csvQuoted(e.actor).c_str(),
+    terminalPrintf("%s,%s,%s,%s,%s,%s,%s,%s\n", e.recordedAt.c_str(), quiz::csvQuoted(e.actor).c_str(),
                 quiz::csvQuoted(e.login).c_str(), e.action.c_str(), quiz::csvQuoted(e.target).c_str(),
                 quiz::csvQuoted(e.oldValue.value_or("")).c_str(), quiz::csvQuoted(e.newValue.value_or("")).c_str(),
                 quiz::csvQuoted(e.reason).c_str());
@@ -316,7 +317,7 @@ int runClass(const Argv& argv) {
   auto args = cli::Args::parse(argv, {"server", "role", "pgpass", "reason", "correct", "score"}, {"csv"});
   if (!args) return reportError("class: " + args.error().message);
   if (args->has("help") || args->positional().empty()) {
-    std::printf("%s", kClassHelp);
+    terminalPrintf("%s", kClassHelp);
     return args->has("help") ? 0 : 2;
   }
   const std::string& action = args->positional()[0];
@@ -335,7 +336,7 @@ int runSync(const Argv& argv) {
   auto args = cli::Args::parse(argv, {}, {});
   if (!args) return reportError("sync: " + args.error().message);
   if (args->has("help")) {
-    std::printf("%s", kSyncHelp);
+    terminalPrintf("%s", kSyncHelp);
     return 0;
   }
   if (!args->positional().empty()) return reportError("sync: unexpected argument '" + args->positional()[0] + "'");
@@ -347,7 +348,7 @@ int runSync(const Argv& argv) {
   const bool refused = std::any_of(report->servers.begin(), report->servers.end(),
                                    [](const db::ServerSync& s) { return s.refused > 0; });
   if (refused) return reportError("sync: " + describeSync(*report));  // the server's reasons, status 1
-  std::printf("%s\n", describeSync(*report).c_str());
+  terminalPrintf("%s\n", describeSync(*report).c_str());
   return 0;
 }
 

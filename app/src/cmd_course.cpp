@@ -13,6 +13,7 @@
 #include "lessons/course_json.h"
 #include "volume/dataset_source.h"
 #include "volume/known_scans.h"
+#include "printable_output.h"
 
 namespace at::app {
 
@@ -58,7 +59,7 @@ int runNew(const cli::Args& args) {
   }
   auto stored = saveCourse(**session, *course, "course new");
   if (!stored) return reportError("course new: " + stored.error().message);
-  std::printf("course '%s' (%s) on '%s': %s, %s%s\n", course->id.c_str(), course->title.c_str(),
+  terminalPrintf("course '%s' (%s) on '%s': %s, %s%s\n", course->id.c_str(), course->title.c_str(),
               course->datasetId.c_str(), str::countOf(long(course->lessons.size()), "lesson").c_str(),
               str::countOf(long(course->lessons.front().steps.size()), "step").c_str(),
               args.has("out") ? (", written to " + *args.value("out")).c_str() : "");
@@ -94,7 +95,7 @@ int runValidate(const cli::Args& args) {
     if (auto ok = checkCourseAgainstDataset(**session, *course, file.string()); !ok) return reportError(ok.error().message);
     structures = "structures checked against dataset '" + course->datasetId + "'";
   }
-  std::printf("%s: valid: course '%s' version %d on '%s': %s, %s, %s; %s\n", file.string().c_str(),
+  terminalPrintf("%s: valid: course '%s' version %d on '%s': %s, %s, %s; %s\n", file.string().c_str(),
               course->id.c_str(), course->version, course->datasetId.c_str(),
               str::countOf(long(course->lessons.size()), "lesson").c_str(), str::countOf(long(steps), "step").c_str(),
               str::countOf(long(questions), "question").c_str(), structures.c_str());
@@ -112,7 +113,7 @@ int runImportFile(const cli::Args& args) {
     if (!course) return reportError(course.error().message);
     auto stored = saveCourse(**session, *course, fs::absolute(file).string());
     if (!stored) return reportError(stored.error().message);
-    std::printf("course '%s' version %d: %s\n", course->id.c_str(), course->version, db::toString(*stored));
+    terminalPrintf("course '%s' version %d: %s\n", course->id.c_str(), course->version, db::toString(*stored));
     return 0;
   }
   CourseImportRequest request;
@@ -120,13 +121,13 @@ int runImportFile(const cli::Args& args) {
   request.volumePath = args.valueOr("volume", "");
   auto report = importCoursePackage(**session, request);
   if (!report) return reportError(report.error().message);
-  std::printf("course '%s' (%s) version %d: %s\n", report->courseId.c_str(), report->courseTitle.c_str(), report->version,
+  terminalPrintf("course '%s' (%s) version %d: %s\n", report->courseId.c_str(), report->courseTitle.c_str(), report->version,
               db::toString(report->outcome));
-  std::printf("  dataset '%s': %s%s\n", report->datasetId.c_str(), toString(report->dataset),
+  terminalPrintf("  dataset '%s': %s%s\n", report->datasetId.c_str(), toString(report->dataset),
               report->datasetFolder.empty() ? "" : (" into " + report->datasetFolder.string()).c_str());
   std::string presets;
   for (const std::string& key : report->presetsStored) presets += (presets.empty() ? " (" : ", ") + key;
-  std::printf("  presets: %zu stored for this course only%s\n", report->presetsStored.size(),
+  terminalPrintf("  presets: %zu stored for this course only%s\n", report->presetsStored.size(),
               presets.empty() ? "" : (presets + ")").c_str());
   return 0;
 }
@@ -145,7 +146,7 @@ int runExport(const cli::Args& args) {
   request.referenceNote = args.valueOr("note", "");
   auto report = exportCourse(**session, render::PresetLibrary(defaultPresetsDir()), request);
   if (!report) return reportError("course export: " + report.error().message);
-  std::printf("%s: course '%s' on '%s' (%s volume), %zu presets, %zu structures, %ju bytes\n", report->file.string().c_str(),
+  terminalPrintf("%s: course '%s' on '%s' (%s volume), %zu presets, %zu structures, %ju bytes\n", report->file.string().c_str(),
               request.courseId.c_str(), report->datasetId.c_str(), package::toString(report->source), report->presets,
               report->structures, report->bytes);
   return 0;
@@ -157,7 +158,7 @@ int runCourse(const Argv& argv) {
   auto args = cli::Args::parse(argv, {"dataset", "title", "out", "volume", "note"}, {"reference-volume"});
   if (!args) return reportError("course: " + args.error().message);
   if (args->has("help")) {
-    std::printf("%s", kCourseHelp);
+    terminalPrintf("%s", kCourseHelp);
     return 0;
   }
   if (args->positional().empty()) return reportError("course: give a subcommand: new, validate, import, export or list (see --help)");

@@ -14,6 +14,7 @@
 #include "lessons/exam.h"
 #include "terminal_answers.h"
 #include "terminal_views.h"
+#include "printable_output.h"
 
 namespace at::app {
 
@@ -50,9 +51,9 @@ struct ExamRun {
 Result<Asked> askItem(ExamRun& run, int position) {
   auto item = run.session.item(position);
   if (!item) return tl::unexpected(item.error());
-  std::printf("\n[%d/%d] %s left — %s\n", position + 1, item->count, clock(run.session.secondsLeft()).c_str(),
+  terminalPrintf("\n[%d/%d] %s left — %s\n", position + 1, item->count, clock(run.session.secondsLeft()).c_str(),
               item->prompt.c_str());
-  for (std::size_t i = 0; i < item->choiceNames.size(); ++i) std::printf("    %zu) %s\n", i, item->choiceNames[i].c_str());
+  for (std::size_t i = 0; i < item->choiceNames.size(); ++i) terminalPrintf("    %zu) %s\n", i, item->choiceNames[i].c_str());
   const bool locate = item->kind == quiz::QuestionKind::Locate;
   if (run.views && run.views->pictures()) {
     char stem[200];
@@ -62,10 +63,10 @@ Result<Asked> askItem(ExamRun& run, int position) {
                        : run.views->show(item->scene, stem, locate, locate ? std::optional<std::string>(item->target)
                                                                            : std::nullopt);
     if (picture)
-      std::printf("  %s: %s%s\n", picture->slice ? "slice" : "view", picture->path.c_str(),
+      terminalPrintf("  %s: %s%s\n", picture->slice ? "slice" : "view", picture->path.c_str(),
                   locate ? "  — answer with the pixel x y where it is" : "");
     else
-      std::printf("  (no picture: %s)\n", picture.error().message.c_str());
+      terminalPrintf("  (no picture: %s)\n", picture.error().message.c_str());
   }
   std::fflush(stdout);
   AskedQuestion q{item->kind, item->target, item->choiceIds, run.idByName, run.views};
@@ -76,7 +77,7 @@ Result<Asked> askItem(ExamRun& run, int position) {
                        render.mode = "terminal";
                        if (auto st = run.session.answer(position, answer, latencyMs, render); !st)
                          return tl::unexpected(st.error());
-                       std::printf("  (saved)\n");
+                       terminalPrintf("  (saved)\n");
                        return std::optional<quiz::Grade>();
                      },
                      true);
@@ -84,13 +85,13 @@ Result<Asked> askItem(ExamRun& run, int position) {
 
 void printResults(const lessons::ExamResult& r, const lessons::ExamSpec& exam,
                   const std::map<std::string, std::string>& nameById) {
-  std::printf("\n%s\n", r.timeRanOut ? "Time is up." : "Handed in.");
-  std::printf("Results: %d of %s right, score %.2f", r.correct, str::countOf(long(r.items.size()), "item").c_str(), r.score);
-  if (r.passed) std::printf(" — %s (pass mark %.2f)", *r.passed ? "passed" : "not passed", exam.passScore.value_or(0));
-  std::printf("\n");
+  terminalPrintf("\n%s\n", r.timeRanOut ? "Time is up." : "Handed in.");
+  terminalPrintf("Results: %d of %s right, score %.2f", r.correct, str::countOf(long(r.items.size()), "item").c_str(), r.score);
+  if (r.passed) terminalPrintf(" — %s (pass mark %.2f)", *r.passed ? "passed" : "not passed", exam.passScore.value_or(0));
+  terminalPrintf("\n");
   for (const lessons::ExamItemResult& x : r.items) {
     const auto name = nameById.count(x.structure) ? nameById.at(x.structure) : x.structure;
-    std::printf("  %2d. %s (%s): ", x.position + 1, name.c_str(), quiz::toString(x.kind));
+    terminalPrintf("  %2d. %s (%s): ", x.position + 1, name.c_str(), quiz::toString(x.kind));
     const std::string mark = !x.answered ? "– " : x.correct ? "✓ " : x.score > 0 ? "◑ " : "✗ ";
     printWrapped(mark + x.feedback, 0);
   }
@@ -102,7 +103,7 @@ int runExam(const Argv& argv) {
   auto args = cli::Args::parse(argv, {"answers", "group", "views"}, {"new-user", "no-views"});
   if (!args) return reportError("exam: " + args.error().message);
   if (args->has("help")) {
-    std::printf("%s", kExamHelp);
+    terminalPrintf("%s", kExamHelp);
     return 0;
   }
   if (args->positional().size() != 1) return reportError("exam: give exactly one EXAM (see `anatomy-tutor lessons`)");
@@ -126,7 +127,7 @@ int runExam(const Argv& argv) {
   auto user = ls.user(*userName, args->has("new-user") ? LearningSession::NewUser::Create : LearningSession::NewUser::Refuse,
                       args->valueOr("group", ""), &created);
   if (!user) return reportError("exam: " + user.error().message);
-  if (created) std::printf("created user '%s'\n", user->name.c_str());
+  if (created) terminalPrintf("created user '%s'\n", user->name.c_str());
 
   const std::string datasetId = course.datasetId;
   auto keys = ls.keysFor(datasetId);
@@ -135,20 +136,20 @@ int runExam(const Argv& argv) {
   if (auto started = session.start(user->id, examId); !started) return reportError("exam: " + started.error().message);
   const lessons::ExamSpec& exam = session.exam();
 
-  std::printf("Exam: %s (%s), course %s\n", exam.title.c_str(), exam.id.c_str(), course.title.c_str());
-  std::printf("  %s, %s", str::countOf(session.itemCount(), "item").c_str(), clock(exam.timeLimitS).c_str());
-  if (exam.passScore) std::printf(", pass mark %.0f%%", 100 * *exam.passScore);
-  std::printf(". Labels are hidden and no answer is marked until you finish.\n");
+  terminalPrintf("Exam: %s (%s), course %s\n", exam.title.c_str(), exam.id.c_str(), course.title.c_str());
+  terminalPrintf("  %s, %s", str::countOf(session.itemCount(), "item").c_str(), clock(exam.timeLimitS).c_str());
+  if (exam.passScore) terminalPrintf(", pass mark %.0f%%", 100 * *exam.passScore);
+  terminalPrintf(". Labels are hidden and no answer is marked until you finish.\n");
   // On a laptop the items and their keys are in the learner's own file: for a class, practice.
   if (db::backendOf(ls.database()) == db::Backend::Sqlite)
     if (auto joined = db::membershipOf(ls.database(), user->name); joined && *joined)
-      std::printf("  Practice: graded on this machine and not sent to class %s; only an exam on the class server counts.\n",
+      terminalPrintf("  Practice: graded on this machine and not sent to class %s; only an exam on the class server counts.\n",
                   (*joined)->classCode.c_str());
   if (!exam.instructions.empty()) printWrapped(exam.instructions, 2);
   if (session.resumed()) {
     int answered = 0;
     for (int i = 0; i < session.itemCount(); ++i) answered += session.item(i)->answered ? 1 : 0;
-    std::printf("  Continuing: %d of %d answered, %s left.\n", answered, session.itemCount(),
+    terminalPrintf("  Continuing: %d of %d answered, %s left.\n", answered, session.itemCount(),
                 clock(session.secondsLeft()).c_str());
   }
   std::fflush(stdout);
@@ -175,7 +176,7 @@ int runExam(const Argv& argv) {
       if (*asked == Asked::Answered) answeredAny = true;
       if (*asked == Asked::Finish) handIn = true;
       if (*asked == Asked::Quit || (*asked == Asked::InputEnded && (*source)->interactive())) {
-        std::printf("\nleft the exam with %s to go; your answers are saved and the clock runs on — run the same "
+        terminalPrintf("\nleft the exam with %s to go; your answers are saved and the clock runs on — run the same "
                     "command to continue\n", clock(session.secondsLeft()).c_str());
         return 0;
       }
@@ -183,7 +184,7 @@ int runExam(const Argv& argv) {
       if (handIn) break;
     }
     if (!answeredAny && !handIn && (*source)->interactive()) {
-      std::printf("\nEvery item left is skipped; type 'finish' to hand in.\n");
+      terminalPrintf("\nEvery item left is skipped; type 'finish' to hand in.\n");
     }
   }
   auto results = session.finish();

@@ -8,6 +8,7 @@
 #include "commands.h"
 #include "render/figure_sheet.h"
 #include "volume/png_image.h"
+#include "printable_output.h"
 
 namespace at::app {
 
@@ -25,7 +26,7 @@ int runFigureSheet(const Argv& argv) {
   auto args = cli::Args::parse(argv, {"out", "title", "columns"}, {});
   if (!args) return reportError("figure-sheet: " + args.error().message, 2);
   if (args->has("help")) {
-    std::printf("%s", kUsage);
+    terminalPrintf("%s", kUsage);
     return 0;
   }
   const auto out = args->value("out");
@@ -55,7 +56,7 @@ int runFigureSheet(const Argv& argv) {
   auto sheet = render::composeSheet(args->valueOr("title", ""), panels, layout);
   if (!sheet) return reportError(sheet.error().message);
   if (auto written = writePng(*out, *sheet); !written) return reportError("figure-sheet: " + written.error().message);
-  std::printf("wrote %s (%d panels, %dx%d)\n", out->c_str(), int(panels.size()), sheet->width, sheet->height);
+  terminalPrintf("wrote %s (%d panels, %dx%d)\n", out->c_str(), int(panels.size()), sheet->width, sheet->height);
   return 0;
 }
 

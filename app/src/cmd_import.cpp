@@ -6,6 +6,7 @@
 #include "commands.h"
 #include "dataset_import.h"
 #include "db/connection.h"
+#include "printable_output.h"
 
 namespace at::app {
 
@@ -33,7 +34,7 @@ int runImport(const Argv& argv) {
                                {"replace", "skip-unreadable"});
   if (!args) return reportError("import: " + args.error().message);
   if (args->has("help")) {
-    std::printf("%s", kImportHelp);
+    terminalPrintf("%s", kImportHelp);
     return 0;
   }
   if (!args->positional().empty()) return reportError("import: unexpected argument '" + args->positional()[0] + "'");
@@ -58,16 +59,16 @@ int runImport(const Argv& argv) {
 
   const db::DatasetRecord& record = imported->record;
   const Geometry& g = record.geometry;
-  std::printf("imported '%s' (%s): %s voxels, spacing %.3g x %.3g x %.3g mm, %s; %zu structures\n",
+  terminalPrintf("imported '%s' (%s): %s voxels, spacing %.3g x %.3g x %.3g mm, %s; %zu structures\n",
               record.name.c_str(), record.species.c_str(), g.dims.toString().c_str(), g.spacingMm[0], g.spacingMm[1],
               g.spacingMm[2], record.orientation.c_str(), imported->dataset.structures.size());
-  std::printf("  volume  %s  %s\n", record.volumePath.c_str(), record.volumeChecksum.c_str());
-  if (!record.labelsPath.empty()) std::printf("  labels  %s  %s\n", record.labelsPath.c_str(), record.labelsChecksum.c_str());
-  for (const auto& note : imported->dataset.provenance.notes) std::printf("  note: %s\n", note.c_str());
+  terminalPrintf("  volume  %s  %s\n", record.volumePath.c_str(), record.volumeChecksum.c_str());
+  if (!record.labelsPath.empty()) terminalPrintf("  labels  %s  %s\n", record.labelsPath.c_str(), record.labelsChecksum.c_str());
+  for (const auto& note : imported->dataset.provenance.notes) terminalPrintf("  note: %s\n", note.c_str());
   if (!imported->emptyStructures.empty()) {
-    std::printf("  warning: %zu structures have no voxel on the volume grid:", imported->emptyStructures.size());
-    for (const auto& s : imported->emptyStructures) std::printf(" %s", s.c_str());
-    std::printf("\n");
+    terminalPrintf("  warning: %zu structures have no voxel on the volume grid:", imported->emptyStructures.size());
+    for (const auto& s : imported->emptyStructures) terminalPrintf(" %s", s.c_str());
+    terminalPrintf("\n");
   }
   return 0;
 }

@@ -17,6 +17,7 @@
 #include "lessons/lesson_engine.h"
 #include "terminal_answers.h"
 #include "terminal_views.h"
+#include "printable_output.h"
 
 namespace at::app {
 
@@ -56,18 +57,18 @@ void showPicture(TerminalViews* views, const lessons::QuestionScene& scene, cons
   if (!views || !views->pictures()) return;
   auto picture = views->show(scene, stem, locate);
   if (!picture) {
-    std::printf("  (no picture: %s)\n", picture.error().message.c_str());
+    terminalPrintf("  (no picture: %s)\n", picture.error().message.c_str());
     return;
   }
-  std::printf("  view: %s%s\n", picture->path.c_str(),
+  terminalPrintf("  view: %s%s\n", picture->path.c_str(),
               locate ? "  — answer with the pixel x y where it is in this picture" : "");
 }
 
 void printQuestion(const std::string& heading, quiz::QuestionKind kind, const std::string& prompt,
                    const std::vector<std::string>& choiceNames) {
-  std::printf("\n%s Question (%s)\n", heading.c_str(), quiz::toString(kind));
+  terminalPrintf("\n%s Question (%s)\n", heading.c_str(), quiz::toString(kind));
   printWrapped(prompt, 2);
-  for (std::size_t i = 0; i < choiceNames.size(); ++i) std::printf("    %zu) %s\n", i, choiceNames[i].c_str());
+  for (std::size_t i = 0; i < choiceNames.size(); ++i) terminalPrintf("    %zu) %s\n", i, choiceNames[i].c_str());
 }
 
 // What `play` shows on a terminal: its pictures use the step's preset at the default t, α, β.
@@ -94,7 +95,7 @@ struct PlayContext {
 void sendClassEvents(PlayContext& ctx, bool now = false) {
   if (!ctx.classEvents) return;
   const std::string line = now ? ctx.classEvents->sendNow() : ctx.classEvents->sendWaiting();
-  if (!line.empty()) std::printf("  (%s)\n", line.c_str());
+  if (!line.empty()) terminalPrintf("  (%s)\n", line.c_str());
 }
 
 // play --review COURSE: review questions until nothing is due or the answers end.
@@ -110,7 +111,7 @@ int runReview(const std::string& courseId, PlayContext& ctx) {
   if (!keysFound) return reportError("play: " + keysFound.error().message);
   quiz::KeyComputer& keys = **keysFound;
 
-  std::printf("Review: %s (%s)\n", course->title.c_str(), courseId.c_str());
+  terminalPrintf("Review: %s (%s)\n", course->title.c_str(), courseId.c_str());
   {
     const auto now = lessons::UnixSeconds(std::time(nullptr));
     auto taught = lessons::taughtStructures(ctx.curriculum, ctx.progress, ctx.userId, courseId);
@@ -118,12 +119,12 @@ int runReview(const std::string& courseId, PlayContext& ctx) {
     auto due = lessons::reviewQueue(ctx.curriculum, ctx.progress, ctx.userId, courseId, now);
     if (!due) return reportError("play: " + due.error().message);
     if (taught->empty()) {
-      std::printf("Review asks about what you have been taught; nothing of this course yet. Start with a lesson\n"
+      terminalPrintf("Review asks about what you have been taught; nothing of this course yet. Start with a lesson\n"
                   "(`anatomy-tutor lessons %s`, then `anatomy-tutor play LESSON --user NAME`).\n", courseId.c_str());
     } else if (!due->empty()) {
       std::string list;
       for (const auto& p : *due) list += (list.empty() ? "" : ", ") + nameById[p.structureId];
-      std::printf("Due now: %s (%s)\n", str::countOf(long(due->size()), "structure").c_str(), list.c_str());
+      terminalPrintf("Due now: %s (%s)\n", str::countOf(long(due->size()), "structure").c_str(), list.c_str());
     }
   }
   std::unique_ptr<TerminalViews> views;
@@ -133,7 +134,7 @@ int runReview(const std::string& courseId, PlayContext& ctx) {
     auto question = lessons::chooseReviewQuestion(ctx.curriculum, ctx.progress, ctx.userId, courseId, now);
     if (!question) return reportError("play: " + question.error().message);
     if (!*question) {
-      std::printf("\nNothing %sis due for review in this course now.\n", asked ? "more " : "");
+      terminalPrintf("\nNothing %sis due for review in this course now.\n", asked ? "more " : "");
       break;
     }
     auto resolved = quiz::resolveQuestion(**question, keys);
@@ -166,14 +167,14 @@ int runReview(const std::string& courseId, PlayContext& ctx) {
     });
     if (!result) return reportError("play: " + result.error().message + " (earlier answers are saved)");
     if (*result != Asked::Answered) {  // a review has nothing to resume: stopping is fine
-      std::printf("\n%s\n", *result == Asked::Quit ? "stopped" : "no more answers");
+      terminalPrintf("\n%s\n", *result == Asked::Quit ? "stopped" : "no more answers");
       break;
     }
     ++asked;
     right += correct ? 1 : 0;
     sendClassEvents(ctx);
   }
-  std::printf("Review answers saved: %d, %d correct.\n", asked, right);
+  terminalPrintf("Review answers saved: %d, %d correct.\n", asked, right);
   return 0;
 }
 
@@ -191,7 +192,7 @@ int runLesson(const std::string& lessonId, lessons::LessonMode mode, PlayContext
   if (auto started = engine.start(ctx.userId, lessonId, mode); !started)
     return reportError("play: " + started.error().message);
 
-  std::printf("Lesson: %s (%s), course %s — %s attempt %lld%s\n", engine.lesson().title.c_str(), lessonId.c_str(),
+  terminalPrintf("Lesson: %s (%s), course %s — %s attempt %lld%s\n", engine.lesson().title.c_str(), lessonId.c_str(),
               course->title.c_str(), engine.resumed() ? "resuming" : "new", (long long)engine.attempt().id,
               engine.attempt().mode == lessons::LessonMode::QuizOnly ? ", quiz only" : "");
   if (!engine.lesson().summary.empty()) printWrapped(engine.lesson().summary, 2);
@@ -206,18 +207,18 @@ int runLesson(const std::string& lessonId, lessons::LessonMode mode, PlayContext
     std::snprintf(stem, sizeof stem, "%s-%02d", lessonId.c_str(), view->position);
     if (view->kind == lessons::StepKind::Show) {
       const std::string heading = view->title.empty() ? view->structureName : view->title;
-      std::printf("\n[%d/%d] %s\n", view->position, view->count, heading.c_str());
+      terminalPrintf("\n[%d/%d] %s\n", view->position, view->count, heading.c_str());
       if (view->labelsVisible && !view->structureName.empty() && view->structureName != heading)
-        std::printf("  structure: %s\n", view->structureName.c_str());
+        terminalPrintf("  structure: %s\n", view->structureName.c_str());
       showPicture(views.get(), view->scene, stem, false);
       printWrapped(view->text, 2);
       std::fflush(stdout);
       if (waitOnShow) {
-        std::printf("  (Enter to continue) ");
+        terminalPrintf("  (Enter to continue) ");
         std::fflush(stdout);
         std::string ignored;
         if (!std::getline(std::cin, ignored)) {
-          std::printf("\nstopped; run the same command to resume\n");
+          terminalPrintf("\nstopped; run the same command to resume\n");
           return 0;
         }
       }
@@ -240,7 +241,7 @@ int runLesson(const std::string& lessonId, lessons::LessonMode mode, PlayContext
                                 : " (earlier answers are saved; fix the line and run again to resume)"));
       sendClassEvents(ctx);
       if (*asked != Asked::Answered) {
-        std::printf("\nstopped before step %d of %d; your answers are saved — run the same command to resume\n",
+        terminalPrintf("\nstopped before step %d of %d; your answers are saved — run the same command to resume\n",
                     view->position, view->count);
         std::fflush(stdout);
         return *asked == Asked::Quit
@@ -259,7 +260,7 @@ int runLesson(const std::string& lessonId, lessons::LessonMode mode, PlayContext
   auto responses = ctx.progress.responses(engine.attempt().id);
   if (responses)
     for (const auto& r : *responses) right += r.correct ? 1 : 0;
-  std::printf("\nLesson finished: %d of %s right (score %.2f).\n", right, str::countOf(questions, "question").c_str(),
+  terminalPrintf("\nLesson finished: %d of %s right (score %.2f).\n", right, str::countOf(questions, "question").c_str(),
               *score);
   return 0;
 }
@@ -270,7 +271,7 @@ int runPlay(const Argv& argv) {
   auto args = cli::Args::parse(argv, {"answers", "group", "review", "views"}, {"quiz-only", "new-user", "no-views"});
   if (!args) return reportError("play: " + args.error().message);
   if (args->has("help")) {
-    std::printf("%s", kPlayHelp);
+    terminalPrintf("%s", kPlayHelp);
     return 0;
   }
   const auto reviewCourse = args->value("review");
@@ -294,7 +295,7 @@ int runPlay(const Argv& argv) {
                                args->has("new-user") ? LearningSession::NewUser::Create : LearningSession::NewUser::Refuse,
                                args->valueOr("group", ""), &created);
   if (!user) return reportError("play: " + user.error().message);
-  if (created) std::printf("created user '%s'\n", user->name.c_str());
+  if (created) terminalPrintf("created user '%s'\n", user->name.c_str());
 
   OutboxSender classEvents((*session)->database());
   PlayContext ctx{**session, (*session)->curriculum(), (*session)->progress(), **source, user->id, args->value("views"),

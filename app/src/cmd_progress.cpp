@@ -12,6 +12,7 @@
 #include "lessons/lesson_engine.h"
 #include "lessons/scheduling.h"
 #include "quiz/elo.h"
+#include "printable_output.h"
 
 namespace at::app {
 
@@ -36,7 +37,7 @@ int runCourses(const Argv& argv) {
   auto args = cli::Args::parse(argv, {}, {});
   if (!args) return reportError("courses: " + args.error().message);
   if (args->has("help")) {
-    std::printf("usage: anatomy-tutor courses [--db PATH]\n\nLists the courses (the default course is added on first run).\n");
+    terminalPrintf("usage: anatomy-tutor courses [--db PATH]\n\nLists the courses (the default course is added on first run).\n");
     return 0;
   }
   if (!args->positional().empty()) return reportError("courses: unexpected argument '" + args->positional()[0] + "'");
@@ -45,7 +46,7 @@ int runCourses(const Argv& argv) {
   auto courses = (*session)->curriculum().courses();
   if (!courses) return reportError("courses: " + courses.error().message);
   for (const auto& c : *courses)
-    std::printf("%-24s %-44s dataset %-12s %s%s (version %d)\n", c.id.c_str(), c.title.c_str(), c.datasetId.c_str(),
+    terminalPrintf("%-24s %-44s dataset %-12s %s%s (version %d)\n", c.id.c_str(), c.title.c_str(), c.datasetId.c_str(),
                 str::countOf(long(c.lessons.size()), "lesson").c_str(),
                 c.exams.empty() ? "" : (", " + str::countOf(long(c.exams.size()), "exam")).c_str(), c.version);
   return 0;
@@ -55,7 +56,7 @@ int runLessons(const Argv& argv) {
   auto args = cli::Args::parse(argv, {}, {});
   if (!args) return reportError("lessons: " + args.error().message);
   if (args->has("help")) {
-    std::printf("usage: anatomy-tutor lessons [COURSE] [--db PATH]\n\n"
+    terminalPrintf("usage: anatomy-tutor lessons [COURSE] [--db PATH]\n\n"
                 "Lists the lessons of every course (or of COURSE) in teaching order, with their\n"
                 "prerequisites. `anatomy-tutor play LESSON --user NAME` runs one.\n");
     return 0;
@@ -75,24 +76,24 @@ int runLessons(const Argv& argv) {
     courses.push_back(std::move(*one));
   }
   for (const auto& c : courses) {
-    std::printf("%s — %s\n", c.id.c_str(), c.title.c_str());
+    terminalPrintf("%s — %s\n", c.id.c_str(), c.title.c_str());
     for (const auto& l : c.lessons) {
-      std::printf("  %-28s %-40s %s, %s", l.id.c_str(), l.title.c_str(), str::countOf(long(l.steps.size()), "step").c_str(),
+      terminalPrintf("  %-28s %-40s %s, %s", l.id.c_str(), l.title.c_str(), str::countOf(long(l.steps.size()), "step").c_str(),
                   str::countOf(questionCount(l), "question").c_str());
       if (!l.prerequisites.empty()) {
-        std::printf("  after:");
-        for (const auto& p : l.prerequisites) std::printf(" %s", p.c_str());
+        terminalPrintf("  after:");
+        for (const auto& p : l.prerequisites) terminalPrintf(" %s", p.c_str());
       }
-      std::printf("\n");
+      terminalPrintf("\n");
     }
     for (const auto& e : c.exams) {
-      std::printf("  %-28s %-40s %s, %d min  (exam)", e.id.c_str(), e.title.c_str(), str::countOf(e.count, "item").c_str(),
+      terminalPrintf("  %-28s %-40s %s, %d min  (exam)", e.id.c_str(), e.title.c_str(), str::countOf(e.count, "item").c_str(),
                   (e.timeLimitS + 59) / 60);
       if (!e.prerequisites.empty()) {
-        std::printf("  after:");
-        for (const auto& p : e.prerequisites) std::printf(" %s", p.c_str());
+        terminalPrintf("  after:");
+        for (const auto& p : e.prerequisites) terminalPrintf(" %s", p.c_str());
       }
-      std::printf("\n");
+      terminalPrintf("\n");
     }
   }
   return 0;
@@ -102,7 +103,7 @@ int runProgress(const Argv& argv) {
   auto args = cli::Args::parse(argv, {}, {});
   if (!args) return reportError("progress: " + args.error().message);
   if (args->has("help")) {
-    std::printf("usage: anatomy-tutor progress --user NAME [--db PATH]\n\n"
+    terminalPrintf("usage: anatomy-tutor progress --user NAME [--db PATH]\n\n"
                 "Shows a user's lessons, per-structure progress and the structures due for review now.\n"
                 "Per structure: answers given (lesson and review answers alike), how many were right,\n"
                 "the predicted chance of recalling it now, and when it is next due. Reviews are\n"
@@ -141,15 +142,15 @@ int runProgress(const Argv& argv) {
     answered += p.answered;
     correct += p.correct;
   }
-  std::printf("%s (%s%s%s): %s, %d correct", user->name.c_str(), lessons::toString(user->role),
+  terminalPrintf("%s (%s%s%s): %s, %d correct", user->name.c_str(), lessons::toString(user->role),
               user->group.empty() ? "" : ", group ", user->group.c_str(), str::countOf(answered, "answer").c_str(), correct);
   if (!reviews->empty()) {
     const auto right = std::count_if(reviews->begin(), reviews->end(), [](const lessons::ReviewResponse& r) { return r.correct; });
-    std::printf(" (%zu in review, %ld correct)", reviews->size(), long(right));
+    terminalPrintf(" (%zu in review, %ld correct)", reviews->size(), long(right));
   }
   // The Elo ability as what it predicts: the chance of answering a question of average difficulty.
-  if (*ability) std::printf("; expected to get %.0f%% of average questions right", 100 * quiz::expectedScore(**ability, 1500));
-  std::printf("\n");
+  if (*ability) terminalPrintf("; expected to get %.0f%% of average questions right", 100 * quiz::expectedScore(**ability, 1500));
+  terminalPrintf("\n");
 
   // Display names of every structure the courses use.
   std::map<std::string, std::string> names;
@@ -159,7 +160,7 @@ int runProgress(const Argv& argv) {
     for (const auto& s : *structures) names.emplace(s.id, s.displayName);
   }
 
-  std::printf("\nLessons\n");
+  terminalPrintf("\nLessons\n");
   for (const auto& c : *courses) {
     for (const auto& l : c.lessons) {
       int tries = 0;
@@ -179,7 +180,7 @@ int runProgress(const Argv& argv) {
       }
       if (open) state = best >= 0 ? state + "; another attempt in progress" : "in progress, play resumes it";
       if (tries > 0) state += " (" + str::countOf(tries, "attempt") + ")";
-      std::printf("  %-28s %-40s %s\n", l.id.c_str(), l.title.c_str(), state.c_str());
+      terminalPrintf("  %-28s %-40s %s\n", l.id.c_str(), l.title.c_str(), state.c_str());
     }
   }
 
@@ -193,7 +194,7 @@ int runProgress(const Argv& argv) {
       const auto latest = std::find_if(examAttempts->begin(), examAttempts->end(),
                                        [&](const lessons::ExamAttempt& a) { return a.examId == e.id; });
       if (latest == examAttempts->end()) continue;
-      if (!examHeading) std::printf("\nExams\n");
+      if (!examHeading) terminalPrintf("\nExams\n");
       examHeading = true;
       std::string state = "in progress (`anatomy-tutor exam " + e.id + "` continues it while time is left)";
       if (latest->finishedAt) {
@@ -204,13 +205,13 @@ int runProgress(const Argv& argv) {
       }
       const auto tries = std::count_if(examAttempts->begin(), examAttempts->end(),
                                        [&](const lessons::ExamAttempt& a) { return a.examId == e.id; });
-      std::printf("  %-28s %-40s %s (%s)\n", e.id.c_str(), e.title.c_str(), state.c_str(),
+      terminalPrintf("  %-28s %-40s %s (%s)\n", e.id.c_str(), e.title.c_str(), state.c_str(),
                   str::countOf(tries, "attempt").c_str());
     }
 
-  std::printf("\nStructures\n");
-  if (all->empty()) std::printf("  none answered yet\n");
-  else std::printf("  %-32s %9s %8s %11s  %s\n", "structure", "answered", "correct", "recall now", "next review");
+  terminalPrintf("\nStructures\n");
+  if (all->empty()) terminalPrintf("  none answered yet\n");
+  else terminalPrintf("  %-32s %9s %8s %11s  %s\n", "structure", "answered", "correct", "recall now", "next review");
   const lessons::Fsrs fsrs;
   for (const auto& p : *all) {
     auto it = names.find(p.structureId);
@@ -222,7 +223,7 @@ int runProgress(const Argv& argv) {
       std::snprintf(recall, sizeof recall, "%.0f%%", 100.0 * fsrs.retrievability(p.memory, now));
     else
       std::snprintf(recall, sizeof recall, "learning");
-    std::printf("  %-32s %9d %8d %11s  %s\n", name.c_str(), p.answered, p.correct, recall,
+    terminalPrintf("  %-32s %9d %8d %11s  %s\n", name.c_str(), p.answered, p.correct, recall,
                 relativeTime(p.memory.due, now).c_str());
   }
 
@@ -241,8 +242,8 @@ int runProgress(const Argv& argv) {
     dueLines.push_back(c.id + ": " + str::countOf(int(due->size()), "structure") + " (" + list + ") — `anatomy-tutor play --review " +
                        c.id + " --user " + user->name + "`");
   }
-  std::printf("\nDue for review now:%s\n", dueLines.empty() ? " nothing" : "");
-  for (const auto& line : dueLines) std::printf("  %s\n", line.c_str());
+  terminalPrintf("\nDue for review now:%s\n", dueLines.empty() ? " nothing" : "");
+  for (const auto& line : dueLines) terminalPrintf("  %s\n", line.c_str());
   return 0;
 }
 

@@ -19,6 +19,7 @@
 #include "volume/dataset_source.h"
 #include "volume/png_image.h"
 #include "wdt/wdt.h"
+#include "printable_output.h"
 
 namespace at::app {
 
@@ -79,7 +80,7 @@ int runRender(const Argv& argv) {
                                withDatasetFlags({"no-overlays"}));
   if (!args) return reportError("render: " + args.error().message, 2);
   if (args->has("help")) {
-    std::printf("%s", kUsage);
+    terminalPrintf("%s", kUsage);
     return 0;
   }
   const bool wholeVolume = args->positional().size() == 1;
@@ -164,7 +165,7 @@ int runRender(const Argv& argv) {
     params->backend = *backend;
     auto wdt = computeWdt(dataset->volume, structureMask(dataset->labels, structure->label), *params);
     if (!wdt) return reportError("render: " + wdt.error().message);
-    if (!wdt->stats.warning.empty()) std::fprintf(stderr, "anatomy-tutor: render: %s\n", wdt->stats.warning.c_str());
+    if (!wdt->stats.warning.empty()) terminalFprintf(stderr, "anatomy-tutor: render: %s\n", wdt->stats.warning.c_str());
     wdtMs = wdt->stats.msTotal;
     wdtDevice = wdt->stats.device;
     field = std::move(wdt->field);
@@ -187,7 +188,7 @@ int runRender(const Argv& argv) {
   if (!args->has("no-overlays")) render::drawOverlays(rgb, settings->camera);
   if (auto st = writePng(*out, rgb); !st)
     return reportError("render: " + st.error().message);
-  std::printf("wrote %s (%s, %s, preset %s, %dx%d, t=%.2f; WDT %.0f ms on %s; render %.0f ms on %s)\n", out->c_str(),
+  terminalPrintf("wrote %s (%s, %s, preset %s, %dx%d, t=%.2f; WDT %.0f ms on %s; render %.0f ms on %s)\n", out->c_str(),
               structure ? structure->id.c_str() : "whole volume", render::toString(preset->mode), preset->id.value_or("?").c_str(), image->width,
               image->height, double(preset->t), wdtMs, wdtDevice.c_str(), renderMs, context3d->description().c_str());
   return 0;

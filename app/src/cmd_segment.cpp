@@ -21,6 +21,7 @@
 #include "segment/seeds.h"
 #include "volume/label_writers.h"
 #include "wdt/label_growth.h"
+#include "printable_output.h"
 
 namespace at::app {
 
@@ -138,7 +139,7 @@ int runSegment(const Argv& argv) {
       {"compare", "save", "json"});
   if (!args) return reportError("segment: " + args.error().message, 2);
   if (args->has("help")) {
-    std::printf("%s", kUsage);
+    terminalPrintf("%s", kUsage);
     return 0;
   }
   if (args->positional().size() != 1) return reportError("segment: expected one DATASET (see --help)", 2);
@@ -176,7 +177,7 @@ int runSegment(const Argv& argv) {
     applyDatasetWindow(*dataset, params->windowMin, params->windowMax, true, params->weight == WeightRule::Density);
     auto grown = editor.growFromSeeds(dataset->volume, raster->seeds, *params, &stats);
     if (!grown) return reportError("segment: " + grown.error().message);
-    if (!stats.warning.empty()) std::fprintf(stderr, "anatomy-tutor: segment: %s\n", stats.warning.c_str());
+    if (!stats.warning.empty()) terminalFprintf(stderr, "anatomy-tutor: segment: %s\n", stats.warning.c_str());
     char base[64];
     std::snprintf(base, sizeof base, ", base %.4g/mm", double(params->baseCost));
     how = std::string("grow from seeds, ") + toString(params->weight) + " weights" + base + ", " + stats.device;
@@ -232,20 +233,20 @@ int runSegment(const Argv& argv) {
                         {"brick_visits", stats.brickVisits}, {"ms_compute", stats.msCompute}};
   if (!saved.empty()) report["saved"] = saved;
   if (args->has("json")) {
-    std::printf("%s\n", report.dump().c_str());
+    std::printf("%s\n", report.dump(-1, ' ', true, nlohmann::json::error_handler_t::replace).c_str());
     return 0;
   }
-  std::printf("%s: %s, %zu seed voxels (%.4f %% of %zu), %.0f ms\n", dataset->id.c_str(), how.c_str(),
+  terminalPrintf("%s: %s, %zu seed voxels (%.4f %% of %zu), %.0f ms\n", dataset->id.c_str(), how.c_str(),
               raster->seeds.size(), 100.0 * double(raster->seeds.size()) / double(total), total, ms);
-  std::printf("%6s  %-28s %10s %10s%s\n", "label", "name", "seeds", "voxels", args->has("compare") ? "  reference    Dice" : "");
+  terminalPrintf("%6s  %-28s %10s %10s%s\n", "label", "name", "seeds", "voxels", args->has("compare") ? "  reference    Dice" : "");
   for (const json& row : rows) {
-    std::printf("%6d  %-28s %10zu %10zu", row["value"].get<int>(), row["name"].get<std::string>().c_str(),
+    terminalPrintf("%6d  %-28s %10zu %10zu", row["value"].get<int>(), row["name"].get<std::string>().c_str(),
                 row["seed_voxels"].get<std::size_t>(), row["voxels"].get<std::size_t>());
     if (args->has("compare"))
-      std::printf(" %10zu  %6.3f", row["reference_voxels"].get<std::size_t>(), row["dice"].get<double>());
-    std::printf("\n");
+      terminalPrintf(" %10zu  %6.3f", row["reference_voxels"].get<std::size_t>(), row["dice"].get<double>());
+    terminalPrintf("\n");
   }
-  std::printf("wrote %s%s%s\n", out->c_str(), args->has("names") ? (" and " + *args->value("names")).c_str() : "",
+  terminalPrintf("wrote %s%s%s\n", out->c_str(), args->has("names") ? (" and " + *args->value("names")).c_str() : "",
               saved.empty() ? "" : (", saved " + saved).c_str());
   return 0;
 }

@@ -26,6 +26,7 @@
 #include "quiz/study_report.h"
 #include "render/preset.h"
 #include "study_session.h"
+#include "printable_output.h"
 
 namespace at::app {
 
@@ -71,10 +72,10 @@ int runRegister(const cli::Args& args) {
   auto database = openDb(args);
   if (!database) return reportError(database.error().message);
   if (auto s = db::saveStudy(*database, *protocol); !s) return reportError(s.error().message);
-  std::printf("stored study '%s' (%zu structures, %zu items, groups:", protocol->id.c_str(),
+  terminalPrintf("stored study '%s' (%zu structures, %zu items, groups:", protocol->id.c_str(),
               protocol->structures.size(), protocol->items.size());
-  for (const auto& g : protocol->groups) std::printf(" %s", g.c_str());
-  std::printf(")\n");
+  for (const auto& g : protocol->groups) terminalPrintf(" %s", g.c_str());
+  terminalPrintf(")\n");
   return 0;
 }
 
@@ -88,7 +89,7 @@ int runList(const cli::Args& args) {
     std::size_t done = 0, total = completion ? completion->size() : 0;
     if (completion)
       for (const auto& c : *completion) done += c.complete ? 1 : 0;
-    std::printf("%-28s %zu/%zu participants complete  %s\n", s.id.c_str(), done, total, s.title.c_str());
+    terminalPrintf("%-28s %zu/%zu participants complete  %s\n", s.id.c_str(), done, total, s.title.c_str());
   }
   return 0;
 }
@@ -101,9 +102,9 @@ int runStatus(const cli::Args& args) {
   if (!protocol) return reportError(protocol.error().message);
   auto completion = db::studyCompletion(*database, protocol->id);
   if (!completion) return reportError(completion.error().message);
-  std::printf("study %s: %zu participant(s)\n", protocol->id.c_str(), completion->size());
+  terminalPrintf("study %s: %zu participant(s)\n", protocol->id.c_str(), completion->size());
   for (const auto& c : *completion)
-    std::printf("  %-20s %-14s %3d/%d ratings  %s\n", c.participantId.c_str(), c.group.c_str(), c.ratingsGiven,
+    terminalPrintf("  %-20s %-14s %3d/%d ratings  %s\n", c.participantId.c_str(), c.group.c_str(), c.ratingsGiven,
                 c.ratingsExpected, c.complete ? "complete" : "in progress");
   return 0;
 }
@@ -166,6 +167,7 @@ int runRun(const cli::Args& args) {
     return reportError("study run: the terminal cannot show the renderings A and B: run participants in the desktop "
                        "app (Studies…), or give --answers FILE.jsonl with answers collected elsewhere");
   const std::string answersPath = args.valueOr("answers", "");
+  // A stream by design (answers piped in as a participant gives them, /dev/stdin): not refused as a FIFO.
   std::ifstream answersFile(answersPath);
   if (!answersFile) return reportError(answersPath + ": cannot open the answers file");
   auto database = openDb(args);
@@ -193,16 +195,16 @@ int runRun(const cli::Args& args) {
 
   int lineNumber = 0;
   // Participants see neither the study's id nor its title: both may name the conditions.
-  std::printf("Preference study — participant %s (%s), session %d\n", participant->c_str(), group->c_str(),
+  terminalPrintf("Preference study — participant %s (%s), session %d\n", participant->c_str(), group->c_str(),
               state->session);
-  std::printf("For each of %zu structures you will see two renderings, A and B. Rate each item from %d (prefer A) "
+  terminalPrintf("For each of %zu structures you will see two renderings, A and B. Rate each item from %d (prefer A) "
               "to %d (prefer B).\n",
               protocol->structures.size(), protocol->scale.min, protocol->scale.max);
 
   while (auto next = state->nextTrial(protocol->items.size())) {
     db::StudyTrial& trial = state->trials[*next];
     // Blinded: the structure and the conditions are not named to the participant.
-    std::printf("\nStructure %d of %zu\n", trial.position + 1, state->trials.size());
+    terminalPrintf("\nStructure %d of %zu\n", trial.position + 1, state->trials.size());
     std::string line;
     while (std::getline(answersFile, line)) {
       ++lineNumber;
@@ -219,7 +221,7 @@ int runRun(const cli::Args& args) {
       // Each rating is committed before the next is taken.
       if (auto s = db::recordRating(*database, *state, r); !s) return reportError(s.error().message);
       trial.ratedItems.insert(item.id);
-      std::printf("  %s: %d recorded\n", item.id.c_str(), r.ratingAsShown);
+      terminalPrintf("  %s: %d recorded\n", item.id.c_str(), r.ratingAsShown);
     }
     if (auto s = db::recordTrialViewing(*database, *state, trial.position, answer->viewMsA,
                                         answer->viewMsB, answer->toggles, answer->comment);
@@ -229,9 +231,9 @@ int runRun(const cli::Args& args) {
   if (!state->nextTrial(protocol->items.size())) {
     if (auto s = db::markParticipantComplete(*database, *state); !s)
       return reportError(s.error().message);
-    std::printf("\nThank you: all %zu structures rated.\n", state->trials.size());
+    terminalPrintf("\nThank you: all %zu structures rated.\n", state->trials.size());
   } else {
-    std::printf("\nStopped before the end; run the same command again to continue where you left off.\n");
+    terminalPrintf("\nStopped before the end; run the same command again to continue where you left off.\n");
   }
   return 0;
 }
@@ -246,13 +248,13 @@ int runExport(const cli::Args& args) {
   if (!protocol) return reportError(protocol.error().message);
   auto exporter = StudyExport::prepare(*database, *protocol, *outDir);
   if (!exporter) return reportError(exporter.error().message);
-  std::fprintf(stderr, "exporting study %s: %zu rows from %zu participant(s)\n", protocol->id.c_str(),
+  terminalFprintf(stderr, "exporting study %s: %zu rows from %zu participant(s)\n", protocol->id.c_str(),
                exporter->rowCount(), exporter->participantCount());
   while (!exporter->done()) {
-    std::fprintf(stderr, "[%zu/%zu] %s\n", exporter->written() + 1, exporter->fileCount(), exporter->nextName().c_str());
+    terminalFprintf(stderr, "[%zu/%zu] %s\n", exporter->written() + 1, exporter->fileCount(), exporter->nextName().c_str());
     if (auto s = exporter->writeNext(); !s) return reportError(s.error().message);
   }
-  std::printf("wrote %zu files to %s\n", exporter->fileCount(), outDir->c_str());
+  terminalPrintf("wrote %zu files to %s\n", exporter->fileCount(), outDir->c_str());
   return 0;
 }
 
@@ -340,23 +342,23 @@ int runMerge(const cli::Args& args) {
   auto report = db::mergeStudy(*database, sources, studyId, design ? &*design : nullptr);
   if (!report) return reportError("study merge: " + report.error().message);
   for (const auto& from : report->sources)
-    std::printf("%s: %d participant(s) added, %d already there\n", from.name.c_str(), from.added, from.alreadyThere);
-  std::printf("study %s in %s: %d participant(s)\n", studyId.c_str(), database->path().c_str(), report->participants);
-  std::printf("counterbalancing: %s over the %zu rows of one cycle; participants per row used:",
+    terminalPrintf("%s: %d participant(s) added, %d already there\n", from.name.c_str(), from.added, from.alreadyThere);
+  terminalPrintf("study %s in %s: %d participant(s)\n", studyId.c_str(), database->path().c_str(), report->participants);
+  terminalPrintf("counterbalancing: %s over the %zu rows of one cycle; participants per row used:",
               report->balanced() ? "balanced" : "NOT balanced", report->cycle);
   const char* separator = " ";
   for (const auto& [row, used] : report->designRows) {
-    std::printf("%srow %zu ×%d", separator, row, used);
+    terminalPrintf("%srow %zu ×%d", separator, row, used);
     separator = ", ";
   }
-  std::printf("\n");
+  terminalPrintf("\n");
   if (!report->offDesign.empty()) {
-    std::printf("trials following no row of the design:");
-    for (const auto& id : report->offDesign) std::printf(" %s", id.c_str());
-    std::printf("\n");
+    terminalPrintf("trials following no row of the design:");
+    for (const auto& id : report->offDesign) terminalPrintf(" %s", id.c_str());
+    terminalPrintf("\n");
   }
   if (!report->balanced())
-    std::printf("(some rows are used more often than others, as when each machine starts at row 0: order effects are not cancelled as they are on one machine or a class server)\n");
+    terminalPrintf("(some rows are used more often than others, as when each machine starts at row 0: order effects are not cancelled as they are on one machine or a class server)\n");
   return 0;
 }
 
@@ -364,14 +366,14 @@ int runMerge(const cli::Args& args) {
 
 int runStudy(const Argv& argv) {
   if (argv.empty() || argv[0] == "--help" || argv[0] == "-h") {
-    std::printf("%s", kStudyHelp);
+    terminalPrintf("%s", kStudyHelp);
     return argv.empty() ? 2 : 0;
   }
   const std::string verb = argv[0];
   auto args = cli::Args::parse(Argv(argv.begin() + 1, argv.end()), {"participant", "group", "answers", "out"}, {});
   if (!args) return reportError("study " + verb + ": " + args.error().message);
   if (args->has("help")) {
-    std::printf("%s", kStudyHelp);
+    terminalPrintf("%s", kStudyHelp);
     return 0;
   }
   if (verb == "register") return runRegister(*args);

@@ -25,6 +25,7 @@
 #include "volume/phantom.h"
 #include "volume/png_image.h"
 #include "volume/slice_image.h"
+#include "printable_output.h"
 
 namespace at::app {
 
@@ -94,20 +95,20 @@ json intensityJson(const IntensityModel& m) {
 }
 
 void printIntensity(const IntensityModel& m) {
-  std::printf("intensity:   %s (%s)\n", m.hounsfield() ? "Hounsfield units" : "plain intensities", m.reason.c_str());
-  std::printf("window:      %s … %s %s%s\n", formatDouble(m.valueOf(m.window[0]), 1).c_str(),
+  terminalPrintf("intensity:   %s (%s)\n", m.hounsfield() ? "Hounsfield units" : "plain intensities", m.reason.c_str());
+  terminalPrintf("window:      %s … %s %s%s\n", formatDouble(m.valueOf(m.window[0]), 1).c_str(),
               formatDouble(m.valueOf(m.window[1]), 1).c_str(), m.unitName(),
               m.hounsfield() ? " (density 0 … 1 of the WDT)" : " (0.5th … 99.5th percentile; density 0 … 1 of the WDT)");
   if (!m.attenuationLike())
-    std::printf("note:        %s intensities are not attenuation: density-weighted distances assume CT-like values\n",
+    terminalPrintf("note:        %s intensities are not attenuation: density-weighted distances assume CT-like values\n",
                 m.modality.c_str());
 }
 
 void printGeometry(const Geometry& g) {
-  std::printf("dimensions:  %s\n", g.dims.toString().c_str());
-  std::printf("spacing:     %s mm\n", formatVec(g.spacingMm, " x ").c_str());
-  std::printf("origin:      (%s) mm, LPS\n", formatVec(g.originMm, ", ").c_str());
-  std::printf("orientation: %s (axis directions in LPS: i (%s), j (%s), k (%s))\n", g.orientationCode().c_str(),
+  terminalPrintf("dimensions:  %s\n", g.dims.toString().c_str());
+  terminalPrintf("spacing:     %s mm\n", formatVec(g.spacingMm, " x ").c_str());
+  terminalPrintf("origin:      (%s) mm, LPS\n", formatVec(g.originMm, ", ").c_str());
+  terminalPrintf("orientation: %s (axis directions in LPS: i (%s), j (%s), k (%s))\n", g.orientationCode().c_str(),
               formatVec(g.direction.column(0), ", ", 3).c_str(), formatVec(g.direction.column(1), ", ", 3).c_str(),
               formatVec(g.direction.column(2), ", ", 3).c_str());
 }
@@ -220,7 +221,7 @@ int runDatasets(const Argv& argv) {
   auto args = cli::Args::parse(argv, {}, {"json"});
   if (!args) return usageError("datasets", args.error().message);
   if (args->has("help")) {
-    std::printf("%s", kDatasetsHelp);
+    terminalPrintf("%s", kDatasetsHelp);
     return 0;
   }
   if (!args->positional().empty()) return usageError("datasets", "unexpected argument '" + args->positional()[0] + "'");
@@ -240,12 +241,12 @@ int runDatasets(const Argv& argv) {
     json list = json::array();
     for (std::size_t i = 0; i < rows.size(); ++i)
       list.push_back({{"id", rows[i].id}, {"name", rows[i].name}, {"detail", rows[i].detail}, {"builtin", bool(builtin[i])}});
-    std::printf("%s\n", json{{"datasets", list}}.dump().c_str());
+    std::printf("%s\n", json{{"datasets", list}}.dump(-1, ' ', true, nlohmann::json::error_handler_t::replace).c_str());
     return 0;
   }
-  for (const auto& r : rows) std::printf("%-10s %s — %s\n", r.id.c_str(), r.name.c_str(), r.detail.c_str());
+  for (const auto& r : rows) terminalPrintf("%-10s %s — %s\n", r.id.c_str(), r.name.c_str(), r.detail.c_str());
   if (imported->empty())
-    std::printf("(no imported datasets yet: `anatomy-tutor import` adds them; any supported file or folder can\n"
+    terminalPrintf("(no imported datasets yet: `anatomy-tutor import` adds them; any supported file or folder can\n"
                 " also be opened by its path)\n");
   return 0;
 }
@@ -254,7 +255,7 @@ int runStructures(const Argv& argv) {
   auto args = cli::Args::parse(argv, kDatasetOptions, withDatasetFlags({"json"}));
   if (!args) return usageError("structures", args.error().message);
   if (args->has("help")) {
-    std::printf("%s%s", kStructuresHelp, kDatasetOptionsHelp);
+    terminalPrintf("%s%s", kStructuresHelp, kDatasetOptionsHelp);
     return 0;
   }
   auto ds = openDatasetArg(*args);
@@ -269,13 +270,13 @@ int runStructures(const Argv& argv) {
                       {"system", s.system},
                       {"voxels", counts[s.label]},
                       {"colour", {s.colour[0], s.colour[1], s.colour[2]}}});
-    std::printf("%s\n", json{{"dataset", ds->id}, {"name", ds->displayName}, {"structures", list}}.dump().c_str());
+    std::printf("%s\n", json{{"dataset", ds->id}, {"name", ds->displayName}, {"structures", list}}.dump(-1, ' ', true, nlohmann::json::error_handler_t::replace).c_str());
     return 0;
   }
-  std::printf("%s — %s (%s)\n", ds->id.c_str(), ds->displayName.c_str(), ds->volume.dims().toString().c_str());
-  std::printf("%5s  %-30s %-30s %-13s %10s\n", "label", "id", "name", "system", "voxels");
+  terminalPrintf("%s — %s (%s)\n", ds->id.c_str(), ds->displayName.c_str(), ds->volume.dims().toString().c_str());
+  terminalPrintf("%5s  %-30s %-30s %-13s %10s\n", "label", "id", "name", "system", "voxels");
   for (const Structure& s : ds->structures)
-    std::printf("%5u  %-30s %-30s %-13s %10zu\n", unsigned(s.label), s.id.c_str(), s.displayName.c_str(),
+    terminalPrintf("%5u  %-30s %-30s %-13s %10zu\n", unsigned(s.label), s.id.c_str(), s.displayName.c_str(),
                 s.system.c_str(), counts[s.label]);
   return 0;
 }
@@ -284,7 +285,7 @@ int runInfo(const Argv& argv) {
   auto args = cli::Args::parse(argv, {"labels", "names", "series", "intensity", "nrrd-data"}, withDatasetFlags({"json"}));
   if (!args) return usageError("info", args.error().message);
   if (args->has("help")) {
-    std::printf("%s%s", kInfoHelp, kDatasetOptionsHelp);
+    terminalPrintf("%s%s", kInfoHelp, kDatasetOptionsHelp);
     return 0;
   }
   const auto& pos = args->positional();
@@ -375,24 +376,24 @@ int runInfo(const Argv& argv) {
     for (const auto& l : labels)
       list.push_back({{"label", l.value}, {"id", l.id}, {"name", l.name}, {"voxels", l.voxels}});
     out["labels"] = list;
-    std::printf("%s\n", out.dump().c_str());
+    std::printf("%s\n", out.dump(-1, ' ', true, nlohmann::json::error_handler_t::replace).c_str());
     return 0;
   }
-  std::printf("path:        %s\n", path.c_str());
-  std::printf("kind:        %s\n", labelMap ? "label map" : "image");
+  terminalPrintf("path:        %s\n", path.c_str());
+  terminalPrintf("kind:        %s\n", labelMap ? "label map" : "image");
   if (intensity) printIntensity(*intensity);
   printGeometry(g);
-  std::printf("stored type: %s\n", toString(loaded->storedKind));
-  std::printf("%s %s … %s\n", intensity && intensity->hounsfield() ? "HU range:   " : "value range:", formatDouble(values.min, 1).c_str(),
+  terminalPrintf("stored type: %s\n", toString(loaded->storedKind));
+  terminalPrintf("%s %s … %s\n", intensity && intensity->hounsfield() ? "HU range:   " : "value range:", formatDouble(values.min, 1).c_str(),
               formatDouble(values.max, 1).c_str());
-  for (const std::string& note : loaded->notes) std::printf("note:        %s\n", printableText(note, 400).c_str());
+  for (const std::string& note : loaded->notes) terminalPrintf("note:        %s\n", printableText(note, 400).c_str());
   if (!labels.empty()) {
-    std::printf("labels:      %zu\n", labels.size());
+    terminalPrintf("labels:      %zu\n", labels.size());
     for (const auto& l : labels) {
       if (l.id == l.name)
-        std::printf("  %5ld  %-64s %10zu voxels\n", l.value, l.name.c_str(), l.voxels);
+        terminalPrintf("  %5ld  %-64s %10zu voxels\n", l.value, l.name.c_str(), l.voxels);
       else
-        std::printf("  %5ld  %-31s  %-31s %10zu voxels\n", l.value, l.id.c_str(), l.name.c_str(), l.voxels);
+        terminalPrintf("  %5ld  %-31s  %-31s %10zu voxels\n", l.value, l.id.c_str(), l.name.c_str(), l.voxels);
     }
   }
   return 0;
@@ -402,7 +403,7 @@ int runSlice(const Argv& argv) {
   auto args = cli::Args::parse(argv, with(kDatasetOptions, {"axis", "index", "out", "window", "alpha"}), withDatasetFlags({}));
   if (!args) return usageError("slice", args.error().message);
   if (args->has("help")) {
-    std::printf("%s", kSliceHelp);
+    terminalPrintf("%s", kSliceHelp);
     return 0;
   }
   const auto axisText = args->value("axis");
@@ -459,7 +460,7 @@ int runSlice(const Argv& argv) {
   auto image = renderSlice(ds->volume, &ds->labels, ds->structures, request);
   if (!image) return reportError("slice: " + image.error().message);
   if (auto st = writePng(*out, *image); !st) return reportError("slice: " + st.error().message);
-  std::printf("wrote %s (%dx%d, axis %s index %d of %s, window %s,%s)\n", out->c_str(), image->width, image->height,
+  terminalPrintf("wrote %s (%dx%d, axis %s index %d of %s, window %s,%s)\n", out->c_str(), image->width, image->height,
               axisText->c_str(), *index, ds->id.c_str(), formatDouble(centre, 0).c_str(), formatDouble(width, 0).c_str());
   return 0;
 }

@@ -16,6 +16,7 @@
 #include "volume/mask.h"
 #include "volume/nifti_io.h"
 #include "wdt/wdt.h"
+#include "printable_output.h"
 
 namespace at::app {
 
@@ -106,7 +107,7 @@ int runWdt(const Argv& argv) {
   if (!parsed) return reportError("wdt: " + parsed.error().message);
   const cli::Args& args = *parsed;
   if (args.has("help")) {
-    std::printf("%s", kUsage);
+    terminalPrintf("%s", kUsage);
     return 0;
   }
   if (args.positional().size() != 2) return reportError("wdt: expected DATASET STRUCTURE (see wdt --help)");
@@ -125,7 +126,7 @@ int runWdt(const Argv& argv) {
   auto result = computeWdt(dataset->volume, mask, *params);
   if (!result) return reportError("wdt: " + result.error().message);
   const WdtStats& stats = result->stats;
-  if (!stats.warning.empty()) std::fprintf(stderr, "anatomy-tutor: warning: %s\n", stats.warning.c_str());
+  if (!stats.warning.empty()) terminalFprintf(stderr, "anatomy-tutor: warning: %s\n", stats.warning.c_str());
 
   const bool downsampled = result->field.downsample > 1;
   FloatVolume onDatasetGrid;
@@ -174,29 +175,29 @@ int runWdt(const Argv& argv) {
   }
 
   if (args.has("json")) {
-    std::printf("%s\n", out.dump().c_str());
+    std::printf("%s\n", out.dump(-1, ' ', true, nlohmann::json::error_handler_t::replace).c_str());
     return 0;
   }
-  std::printf("%s / %s: %s rule, %s weights, %s on %s\n", dataset->id.c_str(), structure->id.c_str(),
+  terminalPrintf("%s / %s: %s rule, %s weights, %s on %s\n", dataset->id.c_str(), structure->id.c_str(),
               toString(params->rule), toString(params->weight), toString(stats.backendUsed), stats.device.c_str());
   const Dims fd = result->field.distances.dims();
   if (stats.scheme != "sweeps") {
-    std::printf("field %s (dataset %s), %d pass%s + %d brick round%s%s, %.1f ms total, %.2f ms computing\n",
+    terminalPrintf("field %s (dataset %s), %d pass%s + %d brick round%s%s, %.1f ms total, %.2f ms computing\n",
                 fd.toString().c_str(), dataset->volume.dims().toString().c_str(), stats.passesRun,
                 stats.passesRun == 1 ? "" : "es", stats.rounds, stats.rounds == 1 ? "" : "s",
                 stats.converged ? ", converged" : "", stats.msTotal, stats.msCompute);
   } else {
-    std::printf("field %s (dataset %s), %d pass%s%s, %.1f ms total, %.2f ms per pass (median)\n",
+    terminalPrintf("field %s (dataset %s), %d pass%s%s, %.1f ms total, %.2f ms per pass (median)\n",
                 fd.toString().c_str(), dataset->volume.dims().toString().c_str(), stats.passesRun,
                 stats.passesRun == 1 ? "" : "es", stats.converged ? ", converged" : "", stats.msTotal,
                 median(stats.msPerPass));
   }
   if (args.has("check"))
-    std::printf("vs exact (%.0f ms): mean rel err %.3g, p99 %.3g, max %.3g, exact %.2f %%, below exact %zu of %zu\n",
+    terminalPrintf("vs exact (%.0f ms): mean rel err %.3g, p99 %.3g, max %.3g, exact %.2f %%, below exact %zu of %zu\n",
                 out["exact_ms"].get<double>(), out["mean_rel_err"].get<double>(), out["p99_rel_err"].get<double>(),
                 out["max_rel_err"].get<double>(), 100 * out["exact_fraction"].get<double>(),
                 out["below_exact"].get<std::size_t>(), out["compared"].get<std::size_t>());
-  if (args.has("out")) std::printf("wrote %s\n", args.value("out")->c_str());
+  if (args.has("out")) terminalPrintf("wrote %s\n", args.value("out")->c_str());
   return 0;
 }
 

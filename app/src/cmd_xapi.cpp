@@ -5,10 +5,12 @@
 
 #include "cli_args.h"
 #include "commands.h"
+#include "core/atomic_file.h"
 #include "core/strings.h"
 #include "db/study_store.h"
 #include "learning_session.h"
 #include "lessons/xapi.h"
+#include "printable_output.h"
 
 namespace at::app {
 
@@ -51,7 +53,7 @@ int runXapi(const Argv& argv) {
   auto args = cli::Args::parse(argv, {"out", "study", "homepage", "activity-base"}, {});
   if (!args) return reportError("xapi: " + args.error().message);
   if (args->has("help")) {
-    std::printf("%s", kXapiHelp);
+    terminalPrintf("%s", kXapiHelp);
     return 0;
   }
   if (!args->positional().empty()) return reportError("xapi: unexpected argument '" + args->positional()[0] + "'");
@@ -97,10 +99,8 @@ int runXapi(const Argv& argv) {
     }
   }
   const std::string text = lessons::xapiStatementsJson(learners, studies, options);
-  std::ofstream file(*out, std::ios::binary | std::ios::trunc);
-  if (!(file << text << "\n") || !(file.close(), file))
-    return reportError("xapi: " + *out + ": cannot write the file");
-  std::printf("wrote %s: statements of %s\n", out->c_str(),
+  if (auto ok = writeFileAtomically(*out, text + "\n"); !ok) return reportError("xapi: " + ok.error().message);
+  terminalPrintf("wrote %s: statements of %s\n", out->c_str(),
               args->value("study") ? str::countOf(long(records), "rating").c_str()
                                    : (str::countOf(long(learners.size()), "user") + ", " +
                                       str::countOf(long(records), "attempt or answer", "attempts and answers"))

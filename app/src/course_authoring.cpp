@@ -6,6 +6,7 @@
 #include <map>
 #include <set>
 
+#include "core/atomic_file.h"
 #include "lessons/course_check.h"
 #include "lessons/course_json.h"
 
@@ -121,19 +122,7 @@ Result<lessons::Course> starterCourse(LearningSession& session, const std::strin
 }
 
 Status writeCourseJson(const lessons::Course& course, const std::filesystem::path& file) {
-  const std::filesystem::path partial = file.string() + ".partial";
-  {
-    std::ofstream out(partial, std::ios::binary | std::ios::trunc);
-    out << lessons::courseToJson(course) << "\n";
-    if (!out.flush()) return fail(ErrorKind::Io, file.string() + ": cannot write");
-  }
-  std::error_code ec;
-  std::filesystem::rename(partial, file, ec);
-  if (ec) {
-    std::filesystem::remove(partial, ec);
-    return fail(ErrorKind::Io, file.string() + ": cannot write (" + ec.message() + ")");
-  }
-  return {};
+  return writeFileAtomically(file.string(), lessons::courseToJson(course) + "\n");
 }
 
 }  // namespace at::app

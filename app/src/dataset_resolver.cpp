@@ -12,6 +12,7 @@
 #include "scan_catalogue.h"
 #include "volume/dataset_source.h"
 #include "volume/known_scans.h"
+#include "printable_output.h"
 
 namespace at::app {
 
@@ -182,7 +183,7 @@ void applyDatasetWindow(const Dataset& dataset, float& windowMin, float& windowM
   static bool noted = false;
   if (densityWeights && !m.attenuationLike() && !noted) {
     noted = true;
-    std::fprintf(stderr,
+    terminalFprintf(stderr,
                  "anatomy-tutor: note: '%s' is %s: its intensities are not attenuation, and density-weighted distances "
                  "assume CT-like values (bright = dense)\n",
                  dataset.id.c_str(), m.modality.c_str());

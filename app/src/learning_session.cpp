@@ -3,11 +3,13 @@
 #include "course_packages.h"
 #include "import_staging.h"
 
+#include <cstdio>
 #include <filesystem>
 #include <functional>
 #include <map>
 #include <mutex>
 
+#include "core/printable_text.h"
 #include "core/strings.h"
 #include "data_paths.h"
 #include "dataset_resolver.h"
@@ -113,7 +115,12 @@ struct LearningSession::Repositories {
 LearningSession::LearningSession(db::Connection connection)
     : connection_(std::move(connection)), repositories_(std::make_unique<Repositories>(connection_)) {}
 
-LearningSession::~LearningSession() = default;
+LearningSession::~LearningSession() {
+  // Damaged stored rows were left out rather than failing the command: say which, once each.
+  if (repositories_)
+    for (const std::string& line : repositories_->curriculum.takeSkipped())
+      std::fprintf(stderr, "anatomy-tutor: warning: %s\n", printableText(line, 2000).c_str());
+}
 
 Result<std::unique_ptr<LearningSession>> LearningSession::open(const std::optional<std::string>& dbPath,
                                                                bool readOnly) {

@@ -7,6 +7,7 @@
 
 #include "cli_args.h"
 #include "commands.h"
+#include "core/printable_text.h"
 
 namespace at::app {
 
@@ -38,7 +39,8 @@ const std::vector<Command>& commands() {
 }
 
 int reportError(const std::string& message, int status) {
-  std::fprintf(stderr, "anatomy-tutor: %s\n", message.c_str());
+  // Error messages quote outside text (names, file contents): one printable line.
+  std::fprintf(stderr, "anatomy-tutor: %s\n", printableText(message, 4000).c_str());
   return status;
 }
 

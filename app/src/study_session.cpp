@@ -7,6 +7,7 @@
 #include <nlohmann/json.hpp>
 
 #include "commands.h"
+#include "core/atomic_file.h"
 #include "core/printable_text.h"
 #include "core/regular_file.h"
 #include "data_paths.h"
@@ -169,20 +170,6 @@ db::RatingRecord makeRating(const quiz::StudyProtocol& protocol, const render::P
   return r;
 }
 
-Status writeFileAtomically(const fs::path& path, const std::string& content) {
-  const fs::path temp = path.string() + ".part";
-  {
-    std::ofstream out(temp, std::ios::binary | std::ios::trunc);
-    if (!out) return fail(temp.string() + ": cannot write");
-    out.write(content.data(), std::streamsize(content.size()));
-    if (!out) return fail(temp.string() + ": write failed (disk full?)");
-  }
-  std::error_code ec;
-  fs::rename(temp, path, ec);
-  if (ec) return fail(path.string() + ": cannot replace (" + ec.message() + ")");
-  return {};
-}
-
 Result<StudyExport> StudyExport::prepare(db::Database& database, const quiz::StudyProtocol& protocol,
                                          const fs::path& outDir) {
   std::error_code ec;
@@ -213,15 +200,15 @@ Status StudyExport::writeNext() {
   const fs::path path = dir_ / name;
   Status st;
   switch (next_) {
-    case 0: st = writeFileAtomically(path, quiz::responsesLongCsv(rows_)); break;
-    case 1: st = writeFileAtomically(path, quiz::responsesWideCsv(protocol_, rows_)); break;
-    case 2: st = writeFileAtomically(path, quiz::responsesLongJsonSidecar(protocol_)); break;
-    case 3: st = writeFileAtomically(path, quiz::redcapDictionaryCsv(protocol_)); break;
-    case 4: st = writeFileAtomically(path, quiz::redcapRecordsCsv(protocol_, participantRows_, rows_)); break;
-    case 5: st = writeFileAtomically(path, quiz::redcapRepeatingFormsCsv()); break;
-    case 6: st = writeFileAtomically(path, quiz::summaryCsv(summary_)); break;
-    case 7: st = writeFileAtomically(path, quiz::summaryMarkdown(protocol_, summary_, participants_, partial_)); break;
-    case 8: st = writeFileAtomically(path, quiz::summarySvg(protocol_, summary_)); break;
+    case 0: st = writeFileAtomically(path.string(), quiz::responsesLongCsv(rows_)); break;
+    case 1: st = writeFileAtomically(path.string(), quiz::responsesWideCsv(protocol_, rows_)); break;
+    case 2: st = writeFileAtomically(path.string(), quiz::responsesLongJsonSidecar(protocol_)); break;
+    case 3: st = writeFileAtomically(path.string(), quiz::redcapDictionaryCsv(protocol_)); break;
+    case 4: st = writeFileAtomically(path.string(), quiz::redcapRecordsCsv(protocol_, participantRows_, rows_)); break;
+    case 5: st = writeFileAtomically(path.string(), quiz::redcapRepeatingFormsCsv()); break;
+    case 6: st = writeFileAtomically(path.string(), quiz::summaryCsv(summary_)); break;
+    case 7: st = writeFileAtomically(path.string(), quiz::summaryMarkdown(protocol_, summary_, participants_, partial_)); break;
+    case 8: st = writeFileAtomically(path.string(), quiz::summarySvg(protocol_, summary_)); break;
     default: {
       auto chart = summaryChart(protocol_, summary_);
       st = chart ? writePng(path.string(), *chart) : Status(tl::unexpected(chart.error()));

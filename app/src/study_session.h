@@ -54,9 +54,6 @@ Result<std::map<std::string, render::Preset>> loadStudyPresets(const render::Pre
 db::RatingRecord makeRating(const quiz::StudyProtocol& protocol, const render::Preset& wdtPreset, int position,
                             const std::string& item, int ratingAsShown, double responseMs);
 
-// Writes `content` to `path` through a temporary file renamed into place.
-Status writeFileAtomically(const std::filesystem::path& path, const std::string& content);
-
 // The summary chart as pixels: the SVG of quiz::summarySvg rasterised (the export's summary.png and
 // the coordinator panel show the same labelled chart).
 Result<RgbImage> summaryChart(const quiz::StudyProtocol& protocol, const quiz::StudySummary& summary);

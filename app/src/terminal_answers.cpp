@@ -9,6 +9,7 @@
 
 #include "core/strings.h"
 #include "quiz/answer_json.h"
+#include "printable_output.h"
 
 namespace at::app {
 
@@ -39,12 +40,12 @@ void printWrapped(const std::string& text, int indent) {
   const std::string pad(std::size_t(indent), ' ');
   while (words >> word) {
     if (!line.empty() && line.size() + 1 + word.size() > std::size_t(96 - indent)) {
-      std::printf("%s%s\n", pad.c_str(), line.c_str());
+      terminalPrintf("%s%s\n", pad.c_str(), line.c_str());
       line.clear();
     }
     line += (line.empty() ? "" : " ") + word;
   }
-  if (!line.empty()) std::printf("%s%s\n", pad.c_str(), line.c_str());
+  if (!line.empty()) terminalPrintf("%s%s\n", pad.c_str(), line.c_str());
 }
 
 FileAnswers::FileAnswers(std::string path) : path_(std::move(path)), in_(path_) {}
@@ -61,7 +62,7 @@ std::optional<std::string> FileAnswers::nextLine() {
 std::string FileAnswers::where() const { return path_ + ":" + std::to_string(lineNumber_); }
 
 std::optional<std::string> TerminalAnswers::nextLine() {
-  std::printf("  answer> ");
+  terminalPrintf("  answer> ");
   std::fflush(stdout);
   std::string line;
   if (!std::getline(std::cin, line)) return std::nullopt;
@@ -186,7 +187,7 @@ Result<Asked> askQuestion(AnswerSource& source, const AskedQuestion& question, c
     if (!source.interactive())
       return tl::unexpected(given.error().kind == ErrorKind::Io ? given.error()
                                                                 : withContext(source.where(), given.error()));
-    std::printf("  %s — try again%s\n", given.error().message.c_str(), allowSkip ? " (or 'skip', 'finish')" : "");
+    terminalPrintf("  %s — try again%s\n", given.error().message.c_str(), allowSkip ? " (or 'skip', 'finish')" : "");
     std::fflush(stdout);
   }
 }

@@ -16,6 +16,7 @@
 #include "volume/dataset_source.h"
 #include "volume/mask.h"
 #include "volume/png_image.h"
+#include "printable_output.h"
 
 namespace at::app {
 
@@ -280,11 +281,11 @@ std::unique_ptr<TerminalViews> openTerminalViews(db::Database& db, const std::st
   if (!off) {
     auto views = TerminalViews::create(db, datasetId, folder, true);
     if (views) return std::move(*views);
-    std::printf("(no pictures: %s; locate answers take a point as mm X Y Z)\n", views.error().message.c_str());
+    terminalPrintf("(no pictures: %s; locate answers take a point as mm X Y Z)\n", views.error().message.c_str());
   }
   auto views = TerminalViews::create(db, datasetId, folder, false);
   if (!views) {
-    std::printf("(locate answers need dataset '%s', which does not load: %s)\n", datasetId.c_str(),
+    terminalPrintf("(locate answers need dataset '%s', which does not load: %s)\n", datasetId.c_str(),
                 views.error().message.c_str());
     return nullptr;
   }

@@ -42,7 +42,9 @@ bool isControl(std::uint32_t c) {
 
 }  // namespace
 
-std::string printableText(std::string_view text, std::size_t maxChars) {
+namespace {
+
+std::string escaped(std::string_view text, std::size_t maxChars, bool keepLines) {
   std::string out;
   out.reserve(text.size() < maxChars ? text.size() : maxChars);
   std::size_t chars = 0;
@@ -58,6 +60,9 @@ std::string printableText(std::string_view text, std::size_t maxChars) {
       std::snprintf(escape, sizeof escape, "\\x%02x", unsigned(static_cast<unsigned char>(text[i])));
       out += escape;
       i += 1;
+    } else if (keepLines && (c == '\n' || c == '\t')) {
+      out += char(c);
+      i += length;
     } else if (isControl(c)) {
       if (c == '\n')
         out += "\\n";
@@ -76,6 +81,18 @@ std::string printableText(std::string_view text, std::size_t maxChars) {
     }
     ++chars;
   }
+  return out;
+}
+
+}  // namespace
+
+std::string printableText(std::string_view text, std::size_t maxChars) { return escaped(text, maxChars, false); }
+
+std::string printableLines(std::string_view text) { return escaped(text, std::string_view::npos, true); }
+
+std::string printableUiText(std::string_view text) {
+  std::string out = printableLines(text);
+  for (std::size_t at = out.find("##"); at != std::string::npos; at = out.find("##", at + 2)) out.insert(at + 1, " ");
   return out;
 }
 

@@ -66,11 +66,17 @@ Result<std::unique_ptr<Connection>> openSqlite(const std::string& path, const Op
 struct SqliteFileState {
   int version = 0;         // PRAGMA user_version, as stored (may be anything in a hostile file)
   bool immutable = false;  // readable only as immutable: no WAL index can be made beside it
+  bool marked = false;     // PRAGMA application_id is ours (kSqliteApplicationId)
 };
+// PRAGMA application_id of every Anatomy Tutor SQLite file ("ATut"), set on the first open that
+// may write. Files from before it are recognised by their tables.
+inline constexpr int kSqliteApplicationId = 0x41547574;
 // Reads an existing, non-empty SQLite file's schema version and checks every page (PRAGMA
 // quick_check) through a read-only connection. A reader needs the WAL index beside the file; where
 // it cannot be made (a read-only folder, a full disk) and no write-ahead log holds changes, the
-// file is read as immutable. A damaged file or one that is not SQLite is an error naming it.
+// file is read as immutable. A damaged file or one that is not SQLite is an error naming it, and so
+// is a SQLite file of another program (another application_id, or unmarked with tables that are not
+// ours): those are refused before anything is written, so they stay byte-identical.
 Result<SqliteFileState> inspectSqlite(const std::string& path);
 // Opens the SQLite file read-only (immutable as inspectSqlite found it), foreign keys on: for
 // commands that only read a file this process cannot write.

@@ -1,6 +1,7 @@
 // File and folder checksums over core/sha256.h (streaming: large volumes need no full copy in memory).
 #include "db/checksum.h"
 
+#include "core/regular_file.h"
 #include "core/sha256.h"
 
 #include <algorithm>
@@ -15,6 +16,7 @@ namespace at::db {
 namespace {
 
 Status hashFile(Sha256& sha, const std::filesystem::path& file) {
+  if (auto ok = checkRegularFile(file.string(), file.string()); !ok) return ok;
   std::ifstream in(file, std::ios::binary);
   if (!in) return fail(file.string() + ": cannot read");
   std::vector<char> buffer(1 << 20);

@@ -246,6 +246,7 @@ Result<Database> Database::open(const std::string& location, const OpenOptions& 
 
   std::unique_ptr<detail::Connection> connection;
   bool readOnly = false;
+  bool sqliteMarked = false;
   if (isPostgresUrl(location)) {
     auto pg = detail::openPostgres(location, options);
     if (!pg) return tl::unexpected(pg.error());
@@ -267,6 +268,7 @@ Result<Database> Database::open(const std::string& location, const OpenOptions& 
       auto inspected = detail::inspectSqlite(location);
       if (!inspected) return tl::unexpected(inspected.error());
       state = *inspected;
+      sqliteMarked = state.marked;
       if (auto known = checkVersionKnown(location, state.version, latest); !known) return tl::unexpected(known.error());
     }
     // A command that only reads opens a file it cannot write (a read-only file, folder or disk, or
@@ -285,6 +287,11 @@ Result<Database> Database::open(const std::string& location, const OpenOptions& 
   db.readOnly_ = readOnly;
   if (readOnly) return db;
   if (auto s = db.migrate(target); !s) return tl::unexpected(s.error());
+  // Mark the file as ours once (new files, and ours from before the mark), so that it is never
+  // mistaken for another program's and another program's never for ours.
+  if (db.backend() == Backend::Sqlite && !sqliteMarked)
+    if (auto s = db.exec("PRAGMA application_id = " + std::to_string(detail::kSqliteApplicationId)); !s)
+      return tl::unexpected(withContext(location, s.error()));
   return db;
 }
 

@@ -276,6 +276,36 @@ Result<SqliteFileState> inspectSqlite(const std::string& path) {
                                      problem.substr(0, problem.find('\n')) +
                                      "); it was left untouched — restore a backup or use another --db");
     }
+    // Whose file it is: our mark, or (files from before the mark) our tables; an empty schema is a
+    // new file anyone may claim.
+    auto application = queryText(handle->get(), "PRAGMA application_id", rc);
+    auto tables = queryText(handle->get(),
+                            "SELECT count(*) || ' ' || coalesce(sum(name IN ('datasets', 'courses', 'lessons')), 0) || ' ' || "
+                            "coalesce(group_concat(name, ', '), '') FROM sqlite_master WHERE type = 'table' AND "
+                            "name NOT LIKE 'sqlite_%'",
+                            rc);
+    if (!application || !tables)
+      return fail(ErrorKind::Io, path + ": cannot read whose database it is: " + errorText(handle->get(), rc));
+    long applicationId = 0;
+    int tableCount = 0, oursCount = 0, names = 0;
+    try {
+      applicationId = std::stol(*application);
+    } catch (const std::exception&) {
+    }
+    std::sscanf(tables->c_str(), "%d %d %n", &tableCount, &oursCount, &names);
+    const std::string tableNames = tables->substr(std::min(std::size_t(names), tables->size()));
+    state.marked = applicationId == kSqliteApplicationId;
+    if (!state.marked) {
+      const bool foreignMark = applicationId != 0;
+      if (foreignMark || (tableCount > 0 && oursCount < 3)) {
+        char id[32];
+        std::snprintf(id, sizeof id, "0x%08lx", static_cast<unsigned long>(applicationId) & 0xffffffffUL);
+        const std::string shown = tableNames.size() > 80 ? tableNames.substr(0, 80) + "…" : tableNames;
+        return fail(path + ": not an Anatomy Tutor database (a SQLite file of another program: " +
+                    (foreignMark ? "application id " + std::string(id) : "tables " + shown) +
+                    "); it was left untouched — use another --db");
+      }
+    }
     break;
   }
   if (!version) return fail(ErrorKind::Io, path + ": cannot read the schema version");

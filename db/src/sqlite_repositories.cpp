@@ -103,9 +103,23 @@ Result<std::vector<Course>> SqliteCurriculumRepository::courses() {
   std::vector<Course> out;
   for (const auto& id : ids) {
     auto c = course(id);
-    if (!c) return tl::unexpected(c.error());
+    if (!c && c.error().kind == ErrorKind::Io) return tl::unexpected(c.error());  // the database itself fails
+    if (!c) {
+      skip("course '" + id + "' is damaged in the database and was left out: " + c.error().message);
+      continue;
+    }
     out.push_back(std::move(*c));
   }
+  return out;
+}
+
+void SqliteCurriculumRepository::skip(const std::string& what) {
+  if (skippedEver_.insert(what).second) skippedNew_.push_back(what);
+}
+
+std::vector<std::string> SqliteCurriculumRepository::takeSkipped() {
+  std::vector<std::string> out;
+  out.swap(skippedNew_);
   return out;
 }
 
@@ -124,8 +138,13 @@ Result<Course> SqliteCurriculumRepository::course(const std::string& courseId) {
   c.version = s->integer(4);
   const auto synonyms = nlohmann::json::parse(s->text(5), nullptr, false);
   if (!synonyms.is_object()) return fail("course '" + courseId + "': stored synonyms are not a JSON object");
-  for (const auto& [structure, names] : synonyms.items())
-    for (const auto& n : names) c.synonyms[structure].push_back(n.get<std::string>());
+  for (const auto& [structure, names] : synonyms.items()) {
+    if (!names.is_array()) return fail("course '" + courseId + "': stored synonyms of '" + structure + "' are not a list");
+    for (const auto& n : names) {
+      if (!n.is_string()) return fail("course '" + courseId + "': a stored synonym of '" + structure + "' is not text");
+      c.synonyms[structure].push_back(n.get<std::string>());
+    }
+  }
 
   auto ls = db_.prepare("SELECT id FROM lessons WHERE course_id = ?1 ORDER BY position");
   if (!ls) return tl::unexpected(ls.error());
@@ -135,7 +154,12 @@ Result<Course> SqliteCurriculumRepository::course(const std::string& courseId) {
     return tl::unexpected(st.error());
   for (const auto& id : ids) {
     auto l = lesson(id);
-    if (!l) return tl::unexpected(l.error());
+    if (!l && l.error().kind == ErrorKind::Io) return tl::unexpected(l.error());  // the database itself fails
+    if (!l) {
+      skip("lesson '" + id + "' of course '" + courseId + "' is damaged in the database and was left out: " +
+           l.error().message);
+      continue;
+    }
     c.lessons.push_back(std::move(*l));
   }
   auto exams = db_.prepare("SELECT id, json FROM exams WHERE course_id = ?1 ORDER BY position");
@@ -212,7 +236,10 @@ Result<Lesson> SqliteCurriculumRepository::lesson(const std::string& lessonId) {
         step.study.structure = r.text(1);
         const auto items = nlohmann::json::parse(r.text(6), nullptr, false);
         if (!items.is_array()) return fail(where + ": stored study items are not a JSON list");
-        for (const auto& item : items) step.study.items.push_back(item.get<std::string>());
+        for (const auto& item : items) {
+          if (!item.is_string()) return fail(where + ": a stored study item is not text");
+          step.study.items.push_back(item.get<std::string>());
+        }
         break;
       }
     }

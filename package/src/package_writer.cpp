@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "archive_handles.h"
+#include "core/atomic_file.h"
 #include "core/sha256.h"
 #include "lessons/course_json.h"
 #include "package/course_package.h"
@@ -28,6 +29,7 @@ struct Entry {
 };
 
 Status hashFile(const fs::path& file, Entry& entry) {
+  if (auto ok = checkRegularFile(file.string(), file.string()); !ok) return ok;
   std::ifstream in(file, std::ios::binary);
   if (!in) return fail(ErrorKind::Io, file.string() + ": cannot read");
   Sha256 sha;
@@ -140,32 +142,30 @@ Status writePackage(const fs::path& out, const PackageInput& input) {
   for (const Entry& e : entries) manifest.files.push_back({e.path, e.size, e.sha256});
   entries.insert(entries.begin(), document("manifest.json", manifestToJson(manifest)));
 
-  const fs::path partial = out.string() + ".partial";
+  // libarchive writes into an AtomicFile: the old package stays until the new one is complete.
+  auto file = AtomicFile::create(out.string());
+  if (!file) return tl::unexpected(file.error());
+  struct Sink {
+    AtomicFile* file;
+    Status status;
+  } sink{&*file, {}};
+  const auto writeBlock = [](archive*, void* data, const void* buffer, size_t length) -> la_ssize_t {
+    auto* s = static_cast<Sink*>(data);
+    s->status = s->file->write(std::string_view(static_cast<const char*>(buffer), length));
+    return s->status ? la_ssize_t(length) : la_ssize_t(-1);
+  };
   ArchiveWriter a(archive_write_new());
   if (!a) return fail(ErrorKind::Io, out.string() + ": out of memory");
   archive_write_set_format_pax_restricted(a.get());
-  if (archive_write_open_filename(a.get(), partial.c_str()) != ARCHIVE_OK)
+  if (archive_write_open(a.get(), &sink, nullptr, writeBlock, nullptr) != ARCHIVE_OK)
     return fail(ErrorKind::Io, out.string() + ": cannot create (" + archiveMessage(a.get()) + ")");
-  std::error_code ec;
   for (const Entry& e : entries)
-    if (auto ok = writeEntry(a.get(), e, out.string()); !ok) {
-      a.reset();
-      fs::remove(partial, ec);
-      return ok;
-    }
+    if (auto ok = writeEntry(a.get(), e, out.string()); !ok) return sink.status ? ok : sink.status;
   const bool closed = archive_write_close(a.get()) == ARCHIVE_OK;
-  const std::string closeMessage = closed ? "" : archiveMessage(a.get());
+  if (!sink.status) return sink.status;
+  if (!closed) return fail(ErrorKind::Io, out.string() + ": " + archiveMessage(a.get()));
   a.reset();
-  if (!closed) {
-    fs::remove(partial, ec);
-    return fail(ErrorKind::Io, out.string() + ": " + closeMessage);
-  }
-  fs::rename(partial, out, ec);
-  if (ec) {
-    fs::remove(partial, ec);
-    return fail(ErrorKind::Io, out.string() + ": cannot move the finished package into place");
-  }
-  return {};
+  return file->commit();
 }
 
 Result<DatasetFilesWritten> writeDatasetFiles(const Dataset& dataset, const fs::path& dir, bool withLabels) {

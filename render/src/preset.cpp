@@ -11,6 +11,7 @@
 #include <nlohmann/json.hpp>
 
 #include "render/camera.h"
+#include "core/atomic_file.h"
 #include "core/json_document.h"
 #include "core/printable_text.h"
 #include "core/regular_file.h"
@@ -268,12 +269,7 @@ std::string presetToJson(const Preset& p) {
 }
 
 Status savePreset(const Preset& preset, const std::filesystem::path& path) {
-  std::ofstream out(path, std::ios::binary | std::ios::trunc);
-  if (!out) return fail(path.string() + ": cannot write the preset file");
-  out << presetToJson(preset);
-  out.flush();
-  if (!out) return fail(path.string() + ": writing the preset failed (disk full?)");
-  return {};
+  return writeFileAtomically(path.string(), presetToJson(preset));
 }
 
 Result<std::vector<std::string>> PresetLibrary::list() const {

@@ -2,6 +2,7 @@
 #include "segment/seeds.h"
 
 #include "core/printable_text.h"
+#include "core/regular_file.h"
 
 #include <nlohmann/json.hpp>
 
@@ -185,11 +186,10 @@ Result<SeedSet> parseSeeds(const std::string& jsonText, const std::string& sourc
 }
 
 Result<SeedSet> loadSeeds(const std::filesystem::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) return fail(ErrorKind::NotFound, path.string() + ": cannot open the seeds file");
-  std::stringstream text;
-  text << in.rdbuf();
-  return parseSeeds(text.str(), path.string());
+  // A seeds file of a hundred thousand dots is a few MB; a FIFO or device is refused, never read.
+  auto text = readRegularFile(path.string(), path.string(), std::size_t(64) << 20);
+  if (!text) return tl::unexpected(text.error());
+  return parseSeeds(*text, path.string());
 }
 
 std::string seedsToJson(const SeedSet& seeds) {
@@ -221,10 +221,10 @@ std::string seedsToJson(const SeedSet& seeds) {
   return out + "\n}\n";
 }
 
+std::size_t seedVisitBudget(const Dims& dims) { return std::max(dims.count(), kMinSeedVisitBudget); }
+
 Result<RasterisedSeeds> rasteriseSeeds(const SeedSet& seeds, const Geometry& grid) {
   const Dims d = grid.dims;
-  std::map<std::size_t, std::uint16_t> byVoxel;
-  std::map<std::size_t, std::size_t> labelOf;  // voxel → index of its SeedSet label
   const double step = 0.5 * std::min({grid.spacingMm[0], grid.spacingMm[1], grid.spacingMm[2]});
   const auto extent = [&] {
     const Vec3 a = grid.indexToPatient({-0.5, -0.5, -0.5}), b = grid.indexToPatient({d.x - 0.5, d.y - 0.5, d.z - 0.5});
@@ -242,41 +242,92 @@ Result<RasterisedSeeds> rasteriseSeeds(const SeedSet& seeds, const Geometry& gri
       if (!inside(ijk[0], d.x) || !inside(ijk[1], d.y) || !inside(ijk[2], d.z))
         return fail("seeds: strokes[" + std::to_string(s) + "].points[" + std::to_string(p) + "] (" +
                     number(stroke.pointsMm[p][0]) + ", " + number(stroke.pointsMm[p][1]) + ", " +
-                    number(stroke.pointsMm[p][2]) + ") mm of label '" + seeds.labels[stroke.label].name +
+                    number(stroke.pointsMm[p][2]) + ") mm of label '" + printableText(seeds.labels[stroke.label].name) +
                     "' lies outside the volume (" + extent() + ")");
-    }
-    const auto mark = [&](const Vec3& centreMm) {
-      const Vec3 c = grid.patientToIndex(centreMm);
-      const int ci = int(std::lround(c[0])), cj = int(std::lround(c[1])), ck = int(std::lround(c[2]));
-      if (d.contains(ci, cj, ck)) {
-        byVoxel[d.index(ci, cj, ck)] = seeds.labels[stroke.label].value;
-        labelOf[d.index(ci, cj, ck)] = stroke.label;
-      }
-      if (stroke.radiusMm <= 0) return;
-      int reach[3];
-      for (int a = 0; a < 3; ++a) reach[a] = int(std::ceil(stroke.radiusMm / grid.spacingMm[std::size_t(a)])) + 1;
-      for (int k = ck - reach[2]; k <= ck + reach[2]; ++k)
-        for (int j = cj - reach[1]; j <= cj + reach[1]; ++j)
-          for (int i = ci - reach[0]; i <= ci + reach[0]; ++i) {
-            if (!d.contains(i, j, k)) continue;
-            if (norm(grid.indexToPatient({double(i), double(j), double(k)}) - centreMm) > stroke.radiusMm) continue;
-            byVoxel[d.index(i, j, k)] = seeds.labels[stroke.label].value;
-            labelOf[d.index(i, j, k)] = stroke.label;
-          }
-    };
-    mark(stroke.pointsMm.front());
-    for (std::size_t p = 1; p < stroke.pointsMm.size(); ++p) {
-      const Vec3 a = stroke.pointsMm[p - 1], b = stroke.pointsMm[p];
-      const int samples = std::max(1, int(std::ceil(norm(b - a) / step)));
-      for (int t = 1; t <= samples; ++t) mark(a + (double(t) / samples) * (b - a));
+      if (!std::isfinite(stroke.radiusMm)) return fail("seeds: strokes[" + std::to_string(s) + "].radius_mm is not finite");
     }
   }
+
+  // Every dot of every stroke (the points, and samples every half voxel between them) visits the
+  // voxels of its radius' box, clipped to the grid. `visit(stroke, centre, box)` returns false to stop.
+  struct Box {
+    int lo[3], hi[3];
+    int centre[3];
+    std::size_t count() const {
+      return std::size_t(hi[0] - lo[0] + 1) * std::size_t(hi[1] - lo[1] + 1) * std::size_t(hi[2] - lo[2] + 1);
+    }
+  };
+  const auto forEachDot = [&](const auto& visit) {
+    for (std::size_t s = 0; s < seeds.strokes.size(); ++s) {
+      const SeedStroke& stroke = seeds.strokes[s];
+      int reach[3] = {0, 0, 0};
+      if (stroke.radiusMm > 0)
+        for (int a = 0; a < 3; ++a) {
+          const double r = std::ceil(stroke.radiusMm / grid.spacingMm[std::size_t(a)]) + 1;
+          reach[a] = int(std::min(r, double(std::max({d.x, d.y, d.z}))));
+        }
+      const int size[3] = {d.x, d.y, d.z};
+      const auto dot = [&](const Vec3& centreMm) {
+        const Vec3 c = grid.patientToIndex(centreMm);
+        Box box;
+        for (int a = 0; a < 3; ++a) {
+          box.centre[a] = std::clamp(int(std::lround(c[std::size_t(a)])), 0, size[a] - 1);
+          box.lo[a] = std::max(0, box.centre[a] - reach[a]);
+          box.hi[a] = std::min(size[a] - 1, box.centre[a] + reach[a]);
+        }
+        return visit(stroke, centreMm, box);
+      };
+      if (!dot(stroke.pointsMm.front())) return;
+      for (std::size_t p = 1; p < stroke.pointsMm.size(); ++p) {
+        const Vec3 a = stroke.pointsMm[p - 1], b = stroke.pointsMm[p];
+        const int samples = std::max(1, int(std::ceil(norm(b - a) / step)));
+        for (int t = 1; t <= samples; ++t)
+          if (!dot(a + (double(t) / samples) * (b - a))) return;
+      }
+    }
+  };
+
+  // First the work is counted (stopping as soon as it is over the budget), so that a small file of
+  // large radii is refused at once instead of running for minutes.
+  const std::size_t budget = seedVisitBudget(d);
+  std::size_t visits = 0;
+  int lo[3] = {d.x, d.y, d.z}, hi[3] = {-1, -1, -1};
+  forEachDot([&](const SeedStroke&, const Vec3&, const Box& box) {
+    visits += box.count();
+    for (int a = 0; a < 3; ++a) lo[a] = std::min(lo[a], box.lo[a]), hi[a] = std::max(hi[a], box.hi[a]);
+    return visits <= budget;
+  });
+  if (visits > budget)
+    return fail("seeds: the strokes' dots would visit more than " + std::to_string(budget) +
+                " voxels (this volume's voxel count), a limit set against runaway work; use a smaller radius_mm "
+                "or fewer points");
+
+  // Then painted into the box they cover: each voxel keeps the index + 1 of the last stroke label.
   RasterisedSeeds out;
   out.perLabel.assign(seeds.labels.size(), 0);
-  for (const auto& [index, value] : byVoxel) {
-    out.seeds.push_back({index, value});
-    ++out.perLabel[labelOf[index]];
-  }
+  if (hi[0] < 0) return out;
+  const int bx = hi[0] - lo[0] + 1, by = hi[1] - lo[1] + 1, bz = hi[2] - lo[2] + 1;
+  std::vector<std::uint32_t> painted(std::size_t(bx) * std::size_t(by) * std::size_t(bz), 0);
+  const auto at = [&](int i, int j, int k) -> std::uint32_t& {
+    return painted[std::size_t(i - lo[0]) + std::size_t(bx) * (std::size_t(j - lo[1]) + std::size_t(by) * std::size_t(k - lo[2]))];
+  };
+  forEachDot([&](const SeedStroke& stroke, const Vec3& centreMm, const Box& box) {
+    const std::uint32_t value = std::uint32_t(stroke.label) + 1;
+    at(box.centre[0], box.centre[1], box.centre[2]) = value;  // the nearest voxel in any case
+    if (stroke.radiusMm <= 0) return true;
+    for (int k = box.lo[2]; k <= box.hi[2]; ++k)
+      for (int j = box.lo[1]; j <= box.hi[1]; ++j)
+        for (int i = box.lo[0]; i <= box.hi[0]; ++i)
+          if (norm(grid.indexToPatient({double(i), double(j), double(k)}) - centreMm) <= stroke.radiusMm) at(i, j, k) = value;
+    return true;
+  });
+  for (int k = lo[2]; k <= hi[2]; ++k)
+    for (int j = lo[1]; j <= hi[1]; ++j)
+      for (int i = lo[0]; i <= hi[0]; ++i)
+        if (const std::uint32_t v = at(i, j, k)) {
+          out.seeds.push_back({d.index(i, j, k), seeds.labels[v - 1].value});
+          ++out.perLabel[v - 1];
+        }
   return out;
 }
 

@@ -2,6 +2,7 @@
 #include <doctest/doctest.h>
 
 #include <algorithm>
+#include <random>
 
 #include "segment/seeds.h"
 #include "test_support.h"
@@ -117,4 +118,40 @@ TEST_CASE("Bad seeds files and seeds are one-line errors naming the field, the l
   auto two = requireTwoSeededLabels(*single, *oneRaster);
   REQUIRE(!two);
   CHECK(two.error().message.find("only label 'a' has strokes") != std::string::npos);
+}
+
+TEST_CASE("Seeds_LargeRadiiOnManyPoints_RefusedBeforeAnyPainting_SmallBrushesStillWork") {
+  // 200 points of radius 100 mm (a 5.5 KB file) once ran for minutes: every point's box is the
+  // whole volume. The visits are counted first and refused over the volume's voxel count.
+  Geometry g;
+  g.dims = {160, 160, 120};
+  g.spacingMm = {0.5, 0.5, 0.5};
+  const std::uint64_t seed = test::freshSeed("seeds cap");
+  std::mt19937_64 random(seed);
+  std::uniform_real_distribution<double> x(1, 79), z(1, 59);
+  const auto seedsWith = [&](int points, double radiusMm) {
+    std::string json = R"({"schema": 1, "labels": [{"value": 0, "name": "background"}, {"value": 1, "name": "a"}],
+                          "strokes": [)";
+    for (int p = 0; p < points; ++p) {
+      json += std::string(p ? "," : "") + R"({"label": )" + std::to_string(p % 2) + R"(, "radius_mm": )" +
+              std::to_string(radiusMm) + R"(, "points": [[)" + std::to_string(x(random)) + "," + std::to_string(x(random)) +
+              "," + std::to_string(z(random)) + "]]}";
+    }
+    auto parsed = parseSeeds(json + "]}", "big.json");
+    REQUIRE(parsed);
+    return *parsed;
+  };
+  auto refused = rasteriseSeeds(seedsWith(200, 100), g);
+  REQUIRE_FALSE(refused);
+  CHECK(refused.error().message.find("radius_mm") != std::string::npos);
+  CHECK(refused.error().message.find(std::to_string(seedVisitBudget(g.dims))) != std::string::npos);
+
+  // Many small dots, as the desktop's brush writes them, stay well inside the budget.
+  auto brushed = rasteriseSeeds(seedsWith(2000, 1.5), g);
+  REQUIRE_MESSAGE(brushed, (brushed ? "" : brushed.error().message));
+  CHECK(brushed->seeds.size() > 2000);
+  CHECK(std::is_sorted(brushed->seeds.begin(), brushed->seeds.end(),
+                       [](const GrowthSeed& a, const GrowthSeed& b) { return a.index < b.index; }));
+  // Each seed voxel lies within its brush of some point of its label: spot-checked by count.
+  CHECK(brushed->perLabel[0] + brushed->perLabel[1] == brushed->seeds.size());
 }

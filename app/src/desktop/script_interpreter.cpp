@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <fstream>
 
+#include "core/atomic_file.h"
 #include "render/camera.h"
 
 namespace at::app {
@@ -81,6 +82,7 @@ std::vector<std::string> ScriptInterpreter::actionNames() {
 // The loop
 
 Result<ScriptInterpreter> ScriptInterpreter::load(const std::string& path, std::optional<std::string> finalScreenshot) {
+  if (auto ok = checkRegularFile(path, path); !ok) return tl::unexpected(ok.error());
   std::ifstream in(path);
   if (!in) return fail(ErrorKind::NotFound, path + ": cannot open the UI script");
   json script;
@@ -309,8 +311,9 @@ ScriptInterpreter::Outcome ScriptInterpreter::report(Context& c) {
   const json r = c.model.recorder().report(context);
   c.model.event(r);
   const std::string out = c.action.value("out", "");
-  if (!out.empty()) std::ofstream(out) << r.dump(2) << "\n";
   c.model.recorder().stop();
+  if (!out.empty())
+    if (auto ok = writeFileAtomically(out, r.dump(2) + "\n"); !ok) return fail(ErrorKind::Io, "ui script: report: " + ok.error().message);
   return Progress::Done;
 }
 

@@ -14,6 +14,17 @@ namespace at {
 // (accents, CJK) is kept. Longer text is cut after `maxChars` characters with "…".
 std::string printableText(std::string_view text, std::size_t maxChars = 120);
 
+// Text of several lines for a terminal or a UI text block (a lesson's text, a course listing, a
+// command's whole output): as printableText, but line breaks (\n) and tabs are kept, and nothing is
+// cut. What it returns can reach a terminal raw: it holds no escape sequence, no cursor control, no
+// bidirectional override.
+std::string printableLines(std::string_view text);
+
+// Outside text for the desktop's widgets (Dear ImGui): printableLines, and "##" shown as "# #",
+// because ImGui takes what follows "##" in a widget's label as its hidden id (a title "A##B" would
+// show as "A"). Draw with a "%s" format (or TextUnformatted), never as the format itself.
+std::string printableUiText(std::string_view text);
+
 }  // namespace at
 
 #include "core/error.h"

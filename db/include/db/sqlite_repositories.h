@@ -4,6 +4,7 @@
 #pragma once
 
 #include <functional>
+#include <set>
 #include <optional>
 #include <string>
 #include <vector>
@@ -25,10 +26,16 @@ class SqliteCurriculumRepository final : public lessons::CurriculumRepository {
   Result<lessons::Lesson> lesson(const std::string& lessonId) override;
   Result<quiz::Question> question(const std::string& questionId) override;
   Result<std::vector<Structure>> structures(const std::string& datasetId) override;
+  std::vector<std::string> takeSkipped() override;
 
  private:
+  // Records a damaged row left out (once per message).
+  void skip(const std::string& what);
+
   Database& db_;
   BuiltinStructures builtin_;
+  std::set<std::string> skippedEver_;
+  std::vector<std::string> skippedNew_;
 };
 
 class SqliteUserRepository final : public lessons::UserRepository {

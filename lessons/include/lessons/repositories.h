@@ -31,6 +31,11 @@ class CurriculumRepository {
   virtual Result<quiz::Question> question(const std::string& questionId) = 0;
   // The structures of a dataset (ids and display names); error if the dataset is unknown.
   virtual Result<std::vector<Structure>> structures(const std::string& datasetId) = 0;
+  // A stored course or lesson that cannot be read back (a damaged row: broken JSON, an unknown
+  // kind) is left out of courses() and course() instead of failing them, so that every other
+  // course and lesson still works. This returns one line per row left out since the last call,
+  // naming the row and the problem (each row once per repository).
+  virtual std::vector<std::string> takeSkipped() { return {}; }
 };
 
 // ---------------------------------------------------------------------------------------------

@@ -72,7 +72,13 @@ struct RasterisedSeeds {
 // smallest spacing; every voxel whose centre lies within radius_mm of a sample is seeded, and the
 // voxel nearest to it in any case. Where strokes overlap the later one wins. Errors: a stroke
 // point outside the grid (naming the stroke, the point, its coordinates and the grid's extent).
+// Work is bounded: the dots' radius boxes together may visit at most seedVisitBudget(grid.dims)
+// voxels (the volume's voxel count, at least kMinSeedVisitBudget); more is refused before any is
+// painted ("seeds: the strokes' dots would visit more than …").
 Result<RasterisedSeeds> rasteriseSeeds(const SeedSet& seeds, const Geometry& grid);
+
+inline constexpr std::size_t kMinSeedVisitBudget = std::size_t(1) << 22;
+std::size_t seedVisitBudget(const Dims& dims);
 
 // Checks that at least two labels have seed voxels (grow from seeds needs something to grow
 // against); the error names the label that has them.

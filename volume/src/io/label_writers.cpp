@@ -5,8 +5,8 @@
 
 #include <algorithm>
 #include <cstdio>
-#include <fstream>
 
+#include "core/atomic_file.h"
 #include "volume/nrrd_io.h"
 
 namespace at {
@@ -17,12 +17,7 @@ Status writeLabelNames(const std::string& path, const std::vector<Structure>& st
   for (const Structure& s : structures) sorted.push_back(&s);
   std::sort(sorted.begin(), sorted.end(), [](const Structure* a, const Structure* b) { return a->label < b->label; });
   for (const Structure* s : sorted) names[std::to_string(s->label)] = s->displayName.empty() ? s->id : s->displayName;
-  std::ofstream out(path, std::ios::binary | std::ios::trunc);
-  if (!out) return fail(ErrorKind::Io, path + ": cannot create the names file");
-  out << names.dump(2) << "\n";
-  out.close();
-  if (!out) return fail(ErrorKind::Io, path + ": writing the names file failed");
-  return {};
+  return writeFileAtomically(path, names.dump(2) + "\n");
 }
 
 Status writeSegNrrd(const std::string& path, const LabelMap& labels, const std::vector<Structure>& structures) {

@@ -18,7 +18,9 @@
 #include "core/strings.h"
 #include "load_limits.h"
 #include "core/printable_text.h"
+#include "core/atomic_file.h"
 #include "core/regular_file.h"
+#include "gzip_bytes.h"
 
 namespace at {
 
@@ -346,9 +348,7 @@ Status writeNifti(const std::string& path, const Geometry& geometry, const std::
   quietNiftilib();
   if (!str::endsWith(path, ".nii") && !str::endsWith(path, ".nii.gz"))
     return fail(path + ": a NIfTI file name must end in .nii or .nii.gz");
-  const fs::path parent = fs::path(path).parent_path();
-  std::error_code ec;
-  if (!parent.empty() && !fs::is_directory(parent, ec)) return fail(path + ": folder does not exist");
+  if (auto ok = checkOutputPath(path, path); !ok) return ok;
   const Dims& dims = geometry.dims;
   if (dims.count() == 0 || voxels.size() != dims.count()) return fail(path + ": image to write is empty");
 
@@ -383,16 +383,24 @@ Status writeNifti(const std::string& path, const Geometry& geometry, const std::
                                          nim->qoffset_y, nim->qoffset_z, nim->dx, nim->dy, nim->dz, nim->qfac);
   nim->qto_ijk = nifti_dmat44_inverse(nim->qto_xyz);
 
-  if (nifti_set_filenames(nim.get(), path.c_str(), 0, 1) != 0)
-    return fail(path + ": niftilib does not accept this file name");
-  // The data pointer is borrowed for the write and released before the image is freed.
-  nim->data = const_cast<T*>(voxels.data());
-  fs::remove(path, ec);
-  nifti_image_write(nim.get());
-  nim->data = nullptr;
-  if (!fs::is_regular_file(path, ec) || fs::file_size(path, ec) == 0)
-    return fail(path + ": writing the NIfTI file failed");
-  return {};
+  // The file is built here (header, empty extension flag, voxels) and written through AtomicFile,
+  // not by nifti_image_write, which reports a full disk only on stderr and truncates the old file
+  // before writing the new one.
+  static_assert(sizeof(nifti_1_header) == 348, "a NIfTI-1 header is 348 bytes");
+  nim->iname_offset = 352;
+  nifti_1_header header{};
+  if (nifti_convert_nim2n1hdr(nim.get(), &header) != 0) return fail(path + ": niftilib could not make the header");
+  header.vox_offset = 352.0f;
+  std::memcpy(header.magic, "n+1\0", 4);
+  std::string bytes(reinterpret_cast<const char*>(&header), sizeof header);
+  bytes.append(4, '\0');  // no extensions
+  bytes.append(reinterpret_cast<const char*>(voxels.data()), voxels.size() * sizeof(T));
+  if (str::endsWith(path, ".gz")) {
+    auto compressed = gzipBytes(path, bytes);
+    if (!compressed) return tl::unexpected(compressed.error());
+    bytes = std::move(*compressed);
+  }
+  return writeFileAtomically(path, bytes);
 }
 
 }  // namespace

@@ -29,7 +29,9 @@
 #include "core/strings.h"
 #include "load_limits.h"
 #include "core/printable_text.h"
+#include "core/atomic_file.h"
 #include "core/regular_file.h"
+#include "gzip_bytes.h"
 #include "raw_values.h"
 
 namespace at {
@@ -882,32 +884,6 @@ Result<LoadedImage> loadNrrd(const std::string& path, const ImageLoadOptions& op
 
 namespace {
 
-struct DeflateStream {
-  z_stream zs{};
-  bool ready = false;
-  DeflateStream() { ready = deflateInit2(&zs, Z_DEFAULT_COMPRESSION, Z_DEFLATED, 15 + 16, 8, Z_DEFAULT_STRATEGY) == Z_OK; }
-  ~DeflateStream() {
-    if (ready) deflateEnd(&zs);
-  }
-  DeflateStream(const DeflateStream&) = delete;
-  DeflateStream& operator=(const DeflateStream&) = delete;
-};
-
-Result<std::string> gzipBytes(const std::string& path, const std::string& plain) {
-  DeflateStream stream;
-  if (!stream.ready) return fail(path + ": zlib could not start compressing");
-  z_stream& zs = stream.zs;
-  std::string out;
-  out.resize(deflateBound(&zs, uLong(plain.size())) + 64);
-  zs.next_in = reinterpret_cast<Bytef*>(const_cast<char*>(plain.data()));
-  zs.avail_in = uInt(plain.size());
-  zs.next_out = reinterpret_cast<Bytef*>(out.data());
-  zs.avail_out = uInt(out.size());
-  if (deflate(&zs, Z_FINISH) != Z_STREAM_END) return fail(path + ": zlib could not compress the data");
-  out.resize(zs.total_out);
-  return out;
-}
-
 template <class T>
 Status packValues(const std::string& path, const std::vector<float>& values, const Dims& dims, std::string& out) {
   out.resize(values.size() * sizeof(T));
@@ -943,6 +919,7 @@ std::string numberText(double v) {
 
 Status writeNrrd(const std::string& path, const FloatVolume& image, ScalarKind storedKind,
                  const std::vector<std::pair<std::string, std::string>>& keyValues) {
+  if (auto ok = checkOutputPath(path, path); !ok) return ok;
   const Geometry& g = image.geometry;
   if (g.dims.count() == 0 || image.voxels.size() != g.dims.count()) return fail(path + ": image to write is empty");
   static_assert(std::endian::native == std::endian::little, "writeNrrd writes native byte order as little endian");
@@ -987,14 +964,11 @@ Status writeNrrd(const std::string& path, const FloatVolume& image, ScalarKind s
   }
   header << "\n";
 
-  std::ofstream out(path, std::ios::binary | std::ios::trunc);
-  if (!out) return fail(path + ": cannot create the file");
-  const std::string text = header.str();
-  out.write(text.data(), std::streamsize(text.size()));
-  out.write(compressed->data(), std::streamsize(compressed->size()));
-  out.close();
-  if (!out) return fail(path + ": writing the file failed");
-  return {};
+  auto out = AtomicFile::create(path);
+  if (!out) return tl::unexpected(out.error());
+  if (auto ok = out->write(header.str()); !ok) return ok;
+  if (auto ok = out->write(*compressed); !ok) return ok;
+  return out->commit();
 }
 
 }  // namespace at

@@ -8,7 +8,9 @@
 #include <cstdint>
 #include <cstdio>
 #include <cstring>
+#include <string>
 
+#include "core/atomic_file.h"
 #include "core/regular_file.h"
 
 namespace at {
@@ -53,11 +55,19 @@ struct ReadGuard {
   }
 };
 
+// The encoded PNG is built in memory and written in one go (AtomicFile): libpng's own FILE* output
+// would leave half a file behind on a full disk.
+void appendToString(png_structp png, png_bytep data, png_size_t length) {
+  static_cast<std::string*>(png_get_io_ptr(png))->append(reinterpret_cast<const char*>(data), length);
+}
+
+void flushNothing(png_structp) {}
+
 // Returns false after a libpng error (message in sink). No C++ objects with destructors live in
-// this frame; `rows` is owned by the caller.
-bool writeRows(WriteGuard& g, std::FILE* file, int width, int height, png_bytep* rows) {
+// this frame; `rows` and `out` are owned by the caller.
+bool writeRows(WriteGuard& g, std::string* out, int width, int height, png_bytep* rows) {
   if (setjmp(png_jmpbuf(g.png))) return false;
-  png_init_io(g.png, file);
+  png_set_write_fn(g.png, out, appendToString, flushNothing);
   png_set_IHDR(g.png, g.info, png_uint_32(width), png_uint_32(height), 8, PNG_COLOR_TYPE_RGB, PNG_INTERLACE_NONE,
                PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
   png_write_info(g.png, g.info);
@@ -109,8 +119,7 @@ Status writePng(const std::string& path, const RgbImage& image) {
       image.rgb.size() != std::size_t(image.width) * std::size_t(image.height) * 3)
     return fail(path + ": cannot write an empty or inconsistent image (" + std::to_string(image.width) + "x" +
                 std::to_string(image.height) + ")");
-  FileCloser file{std::fopen(path.c_str(), "wb")};
-  if (!file.file) return fail(path + ": cannot create file: " + std::strerror(errno));
+  if (auto ok = checkOutputPath(path, path); !ok) return ok;
   ErrorSink sink;
   WriteGuard g;
   g.png = png_create_write_struct(PNG_LIBPNG_VER_STRING, &sink, onPngError, onPngWarning);
@@ -120,10 +129,10 @@ Status writePng(const std::string& path, const RgbImage& image) {
   std::vector<png_bytep> rows(std::size_t(image.height));
   for (int y = 0; y < image.height; ++y)
     rows[std::size_t(y)] = const_cast<png_bytep>(image.pixel(0, y));
-  if (!writeRows(g, file.file, image.width, image.height, rows.data()))
+  std::string encoded;
+  if (!writeRows(g, &encoded, image.width, image.height, rows.data()))
     return fail(path + ": cannot write PNG: " + sink.message);
-  if (std::fflush(file.file) != 0) return fail(path + ": cannot write PNG: " + std::strerror(errno));
-  return {};
+  return writeFileAtomically(path, encoded);
 }
 
 Result<RgbImage> readPng(const std::string& path) {

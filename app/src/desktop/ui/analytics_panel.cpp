@@ -9,6 +9,7 @@
 
 #include "core/strings.h"
 #include "panels.h"
+#include "core/printable_text.h"
 
 namespace at::app {
 
@@ -32,7 +33,7 @@ void bar(double share, const ImVec4& colour, const std::string& label) {
 // Wrapped text of a table cell.
 void cellText(const std::string& text) {
   ImGui::PushTextWrapPos(0);
-  ImGui::TextUnformatted(text.c_str());
+  ImGui::TextUnformatted(printableUiText(text).c_str());
   ImGui::PopTextWrapPos();
 }
 
@@ -72,9 +73,9 @@ void AnalyticsPanel::draw(AnalyticsController& analytics, float x, float y, floa
   // Course and group.
   const std::string current = analytics.loaded() ? analytics.course().title : "(choose a course)";
   ImGui::SetNextItemWidth(em * 26);
-  if (ImGui::BeginCombo("Course", current.c_str())) {
+  if (ImGui::BeginCombo("Course", printableUiText(current).c_str())) {
     for (const auto& c : *courses_)
-      if (ImGui::Selectable(c.title.c_str(), analytics.loaded() && analytics.course().id == c.id))
+      if (ImGui::Selectable(printableUiText(c.title).c_str(), analytics.loaded() && analytics.course().id == c.id))
         report(analytics.load(c.id));
     ImGui::EndCombo();
   }
@@ -82,10 +83,10 @@ void AnalyticsPanel::draw(AnalyticsController& analytics, float x, float y, floa
     ImGui::SameLine();
     ImGui::SetNextItemWidth(em * 10);
     const std::string group = analytics.group().value_or("All students");
-    if (ImGui::BeginCombo("Group", group.c_str())) {
+    if (ImGui::BeginCombo("Group", printableUiText(group).c_str())) {
       if (ImGui::Selectable("All students", !analytics.group())) report(analytics.load(analytics.course().id));
       for (const std::string& g : analytics.groups())
-        if (ImGui::Selectable(g.c_str(), analytics.group() == g)) report(analytics.load(analytics.course().id, g));
+        if (ImGui::Selectable(printableUiText(g).c_str(), analytics.group() == g)) report(analytics.load(analytics.course().id, g));
       ImGui::EndCombo();
     }
   }
@@ -235,7 +236,7 @@ void AnalyticsPanel::drawLessons(const AnalyticsController& analytics) {
   ImGui::Spacing();
   ImGui::TextUnformatted("Exams");
   for (const lessons::ExamStats& e : a.exams) {
-    ImGui::BulletText("%s: %s, %d finished", e.title.c_str(), str::countOf(e.attempts, "attempt").c_str(), e.finished);
+    ImGui::BulletText("%s: %s, %d finished", printableUiText(e.title).c_str(), str::countOf(e.attempts, "attempt").c_str(), e.finished);
     if (e.meanScore) {
       ImGui::SameLine();
       ImGui::Text("- mean score %s", percent(*e.meanScore).c_str());

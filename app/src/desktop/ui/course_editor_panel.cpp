@@ -5,6 +5,7 @@
 
 #include "core/strings.h"
 #include "panels.h"
+#include "core/printable_text.h"
 
 namespace at::app {
 
@@ -24,9 +25,9 @@ bool structureCombo(const char* label, const std::vector<std::string>& ids, int*
   if (ids.empty()) return false;
   *index = std::clamp(*index, 0, int(ids.size()) - 1);
   bool changed = false;
-  if (ImGui::BeginCombo(label, ids[std::size_t(*index)].c_str())) {
+  if (ImGui::BeginCombo(label, printableUiText(ids[std::size_t(*index)]).c_str())) {
     for (int i = 0; i < int(ids.size()); ++i)
-      if (ImGui::Selectable(ids[std::size_t(i)].c_str(), i == *index)) changed = (*index = i, true);
+      if (ImGui::Selectable(printableUiText(ids[std::size_t(i)]).c_str(), i == *index)) changed = (*index = i, true);
     ImGui::EndCombo();
   }
   return changed;
@@ -71,7 +72,7 @@ void CourseEditorPanel::draw(DesktopModel& model, float x, float y) {
 
 void CourseEditorPanel::drawStart(DesktopModel& model) {
   CourseEditor& editor = model.courseEditor();
-  ImGui::Text("New course on '%s'", model.courseDatasetId().c_str());
+  ImGui::Text("New course on '%s'", printableUiText(model.courseDatasetId()).c_str());
   ImGui::InputText("id", &newId_);
   ImGui::InputText("title", &newTitle_);
   if (ImGui::Button("Create")) report(editor.newCourse(newId_, newTitle_, model.courseDatasetId()), "");
@@ -79,9 +80,9 @@ void CourseEditorPanel::drawStart(DesktopModel& model) {
   const auto& courses = model.lessons().courses();
   if (!courses.empty()) {
     courseChoice_ = std::clamp(courseChoice_, 0, int(courses.size()) - 1);
-    if (ImGui::BeginCombo("stored course", courses[std::size_t(courseChoice_)].id.c_str())) {
+    if (ImGui::BeginCombo("stored course", printableUiText(courses[std::size_t(courseChoice_)].id).c_str())) {
       for (int i = 0; i < int(courses.size()); ++i)
-        if (ImGui::Selectable(courses[std::size_t(i)].id.c_str(), i == courseChoice_)) courseChoice_ = i;
+        if (ImGui::Selectable(printableUiText(courses[std::size_t(i)].id).c_str(), i == courseChoice_)) courseChoice_ = i;
       ImGui::EndCombo();
     }
     if (ImGui::Button("Edit")) report(editor.openCourse(courses[std::size_t(courseChoice_)].id), "");
@@ -103,13 +104,13 @@ void CourseEditorPanel::drawStart(DesktopModel& model) {
 void CourseEditorPanel::drawCourse(DesktopModel& model) {
   CourseEditor& editor = model.courseEditor();
   const lessons::Course& course = editor.draft();
-  ImGui::Text("%s (version %d) on '%s'", course.id.c_str(), course.version, course.datasetId.c_str());
+  ImGui::Text("%s (version %d) on '%s'", printableUiText(course.id).c_str(), course.version, printableUiText(course.datasetId).c_str());
   std::string title = course.title, summary = course.summary;
   if (ImGui::InputText("title", &title) | ImGui::InputText("summary", &summary)) report(editor.setTitle(title, summary), "");
   const std::size_t li = editor.lessonIndex();
-  if (!course.lessons.empty() && ImGui::BeginCombo("lesson", course.lessons[li].title.c_str())) {
+  if (!course.lessons.empty() && ImGui::BeginCombo("lesson", printableUiText(course.lessons[li].title).c_str())) {
     for (std::size_t i = 0; i < course.lessons.size(); ++i)
-      if (ImGui::Selectable(course.lessons[i].title.c_str(), i == li)) report(editor.selectLesson(i), "");
+      if (ImGui::Selectable(printableUiText(course.lessons[i].title).c_str(), i == li)) report(editor.selectLesson(i), "");
     ImGui::EndCombo();
   }
   ImGui::InputTextWithHint("##lesson_title", "new lesson's title", &lessonTitle_);
@@ -122,7 +123,7 @@ void CourseEditorPanel::drawCourse(DesktopModel& model) {
       const std::string& id = course.lessons[i].id;
       bool on = std::find(prerequisites.begin(), prerequisites.end(), id) != prerequisites.end();
       ImGui::SameLine();
-      if (ImGui::Checkbox(course.lessons[i].title.c_str(), &on)) {
+      if (ImGui::Checkbox(printableUiText(course.lessons[i].title).c_str(), &on)) {
         if (on) prerequisites.push_back(id);
         else prerequisites.erase(std::remove(prerequisites.begin(), prerequisites.end(), id), prerequisites.end());
         report(editor.setPrerequisites(prerequisites), "");
@@ -136,7 +137,7 @@ void CourseEditorPanel::drawCourse(DesktopModel& model) {
   ImGui::Separator();
   for (const std::string& problem : editor.problems()) {
     ImGui::PushTextWrapPos(0);
-    ImGui::TextColored(kProblem, "%s", problem.c_str());
+    ImGui::TextColored(kProblem, "%s", printableUiText(problem).c_str());
     ImGui::PopTextWrapPos();
   }
   ImGui::BeginDisabled(!editor.problems().empty());
@@ -186,7 +187,7 @@ void CourseEditorPanel::drawSteps(DesktopModel& model) {
     ImGui::SameLine();
     if (ImGui::SmallButton("x")) report(editor.deleteStep(i), "");
     ImGui::SameLine();
-    ImGui::TextUnformatted(text.c_str());
+    ImGui::TextUnformatted(printableUiText(text).c_str());
     ImGui::PopID();
   }
   drawPreview(model);
@@ -198,9 +199,9 @@ void CourseEditorPanel::drawPreview(DesktopModel& model) {
   if (!preview) return;
   ImGui::Separator();
   ImGui::Text("Preview of step %zu, as a student sees it:", preview->step + 1);
-  ImGui::TextColored(ImVec4(1, 0.75f, 0.3f, 1), "%s", preview->heading.c_str());
+  ImGui::TextColored(ImVec4(1, 0.75f, 0.3f, 1), "%s", printableUiText(preview->heading).c_str());
   ImGui::PushTextWrapPos(0);
-  ImGui::TextUnformatted(preview->text.c_str());
+  ImGui::TextUnformatted(printableUiText(preview->text).c_str());
   ImGui::PopTextWrapPos();
   if (model.previewHidesNames()) ImGui::TextDisabled("Structure names are hidden, as in the lesson.");
   else if (preview->namesHidden) ImGui::TextDisabled("Preview ended: another structure is selected.");

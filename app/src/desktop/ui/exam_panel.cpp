@@ -7,6 +7,7 @@
 
 #include "core/strings.h"
 #include "panels.h"
+#include "core/printable_text.h"
 
 namespace at::app {
 
@@ -44,12 +45,12 @@ void ExamPanel::drawList(ExamController& exams) {
       if (auto st = exams.start(row.id); !st) exams.report(st.error().message);
     if (locked) ImGui::EndDisabled();
     ImGui::SameLine();
-    ImGui::TextColored(locked ? ImVec4(0.6f, 0.6f, 0.6f, 1) : kHeading, "%s", row.title.c_str());
+    ImGui::TextColored(locked ? ImVec4(0.6f, 0.6f, 0.6f, 1) : kHeading, "%s", printableUiText(row.title).c_str());
     std::string facts = "  " + str::countOf(row.count, "item") + ", " + std::to_string(row.timeLimitS / 60) + " min";
     if (row.passScore) facts += ", pass mark " + percent(*row.passScore);
-    ImGui::TextDisabled("%s", facts.c_str());
+    ImGui::TextDisabled("%s", printableUiText(facts).c_str());
     if (locked) {
-      ImGui::TextDisabled("  locked: finish %s first", str::join(row.missing, ", ").c_str());
+      ImGui::TextDisabled("  locked: finish %s first", printableUiText(str::join(row.missing, ", ")).c_str());
     } else if (open) {
       ImGui::TextDisabled("  in progress: the clock runs on");
     } else if (row.latest) {
@@ -80,7 +81,7 @@ void ExamPanel::drawItem(ExamController& exams) {
   const auto& item = exams.item();
   if (!exam || !item) return;
   ImGui::PushTextWrapPos(0);
-  ImGui::TextColored(kHeading, "%s", exam->title.c_str());
+  ImGui::TextColored(kHeading, "%s", printableUiText(exam->title).c_str());
   const lessons::UnixSeconds left = exams.secondsLeft();
   ImGui::TextColored(left < 60 ? kWrong : ImVec4(1, 1, 1, 1), "%s left", minutes(left).c_str());
   ImGui::SameLine();
@@ -100,7 +101,7 @@ void ExamPanel::drawItem(ExamController& exams) {
   ImGui::TextDisabled("* answered (saved; marked only at the end)");
   ImGui::Separator();
   ImGui::TextColored(kQuestion, "Item %d", item->position + 1);
-  ImGui::TextUnformatted(item->prompt.c_str());
+  ImGui::TextUnformatted(printableUiText(item->prompt).c_str());
   std::optional<quiz::Answer> answer;
   if (item->answered) {
     ImGui::TextDisabled("Answer saved.");
@@ -115,7 +116,7 @@ void ExamPanel::drawItem(ExamController& exams) {
       case quiz::QuestionKind::Relation:
         for (int i = 0; i < int(item->choiceNames.size()); ++i) {
           ImGui::PushID(i);
-          if (ImGui::RadioButton(item->choiceNames[std::size_t(i)].c_str(), exams.choice == i)) exams.choice = i;
+          if (ImGui::RadioButton(printableUiText(item->choiceNames[std::size_t(i)]).c_str(), exams.choice == i)) exams.choice = i;
           ImGui::PopID();
         }
         if (exams.choice < 0) ImGui::BeginDisabled();
@@ -148,7 +149,7 @@ void ExamPanel::drawResults(ExamController& exams) {
   const lessons::ExamResult& r = *exams.result();
   const lessons::ExamSpec* exam = exams.exam();
   ImGui::PushTextWrapPos(0);
-  if (exam) ImGui::TextColored(kHeading, "%s", exam->title.c_str());
+  if (exam) ImGui::TextColored(kHeading, "%s", printableUiText(exam->title).c_str());
   ImGui::TextUnformatted(r.timeRanOut ? "Time is up." : "Handed in.");
   ImGui::Text("%d of %s right, score %s", r.correct, str::countOf(long(r.items.size()), "item").c_str(),
               percent(r.score).c_str());
@@ -159,9 +160,9 @@ void ExamPanel::drawResults(ExamController& exams) {
   for (const lessons::ExamItemResult& x : r.items) {
     const ImVec4 colour = !x.answered ? ImVec4(0.6f, 0.6f, 0.6f, 1) : x.correct ? kRight : kWrong;
     const char* mark = !x.answered ? "not answered" : x.correct ? "right" : x.score > 0 ? "partly right" : "wrong";
-    ImGui::TextColored(colour, "%d. %s (%s): %s", x.position + 1, exams.displayName(x.structure).c_str(),
+    ImGui::TextColored(colour, "%d. %s (%s): %s", x.position + 1, printableUiText(exams.displayName(x.structure)).c_str(),
                        quiz::toString(x.kind), mark);
-    if (x.answered && !x.correct) ImGui::TextDisabled("   %s", x.feedback.c_str());
+    if (x.answered && !x.correct) ImGui::TextDisabled("   %s", printableUiText(x.feedback).c_str());
   }
   ImGui::PopTextWrapPos();
   if (ImGui::Button("Back to the lessons")) exams.closeResults();

@@ -8,6 +8,7 @@
 #include "core/strings.h"
 #include "panels.h"
 #include "segment_controller.h"
+#include "core/printable_text.h"
 
 namespace at::app {
 
@@ -34,12 +35,12 @@ void ExplorePanel::draw(DesktopModel& model, const Status& status) {
   if (ImGui::SmallButton("Dataset")) ImGui::OpenPopup("dataset_menu");
   if (ImGui::BeginPopup("dataset_menu")) {
     for (const std::string& name : model.datasetChoices())
-      if (ImGui::MenuItem(name.c_str(), nullptr, name == model.courseDatasetId()))
+      if (ImGui::MenuItem(printableUiText(name).c_str(), nullptr, name == model.courseDatasetId()))
         if (auto st = model.switchDataset(name); !st) model.message(st.error().message);
     ImGui::EndPopup();
   }
   ImGui::SameLine();
-  ImGui::TextDisabled("%s", dataset.displayName.empty() ? dataset.id.c_str() : dataset.displayName.c_str());
+  ImGui::TextDisabled("%s", dataset.displayName.empty() ? printableUiText(dataset.id).c_str() : printableUiText(dataset.displayName).c_str());
   if (ImGui::SmallButton("Studies...")) model.study().coordinatorOpen = true;
   ImGui::SameLine();
   if (ImGui::SmallButton("Import...")) model.imports().windowOpen = true;
@@ -59,13 +60,13 @@ void ExplorePanel::draw(DesktopModel& model, const Status& status) {
   const Structure* selected = hideNames ? nullptr : dataset.findStructureByLabel(explore.selected());
   const Structure* hovered = hideNames ? nullptr : dataset.findStructureByLabel(explore.hovered());
   if (selected) {
-    ImGui::TextColored(ImVec4(1, 0.75f, 0.3f, 1), "%s", selected->displayName.c_str());
-    ImGui::TextDisabled("%s", selected->system.c_str());
+    ImGui::TextColored(ImVec4(1, 0.75f, 0.3f, 1), "%s", printableUiText(selected->displayName).c_str());
+    ImGui::TextDisabled("%s", printableUiText(selected->system).c_str());
     ImGui::PushTextWrapPos(0);
-    ImGui::TextUnformatted(selected->description.c_str());
+    ImGui::TextUnformatted(printableUiText(selected->description).c_str());
     ImGui::PopTextWrapPos();
   }
-  ImGui::Text("Hover: %s", hovered ? hovered->displayName.c_str() : "-");
+  ImGui::Text("Hover: %s", hovered ? printableUiText(hovered->displayName).c_str() : "-");
   ImGui::Separator();
 
   if (explore.wholeVolume()) {  // an unlabelled scan: no structure to select, field or bare mode
@@ -111,8 +112,8 @@ void ExplorePanel::draw(DesktopModel& model, const Status& status) {
   drawFieldProgress(model);
   ImGui::PushTextWrapPos(0);
   ImGui::TextDisabled("%s", status.glDescription.c_str());
-  for (const std::string& n : model.notes()) ImGui::TextDisabled("%s", n.c_str());  // information, not a problem
-  for (const std::string& m : model.messages()) ImGui::TextColored(ImVec4(1, 0.5f, 0.4f, 1), "%s", m.c_str());
+  for (const std::string& n : model.notes()) ImGui::TextDisabled("%s", printableUiText(n).c_str());  // information, not a problem
+  for (const std::string& m : model.messages()) ImGui::TextColored(ImVec4(1, 0.5f, 0.4f, 1), "%s", printableUiText(m).c_str());
   ImGui::PopTextWrapPos();
   ImGui::End();
 }
@@ -137,13 +138,13 @@ void ExplorePanel::drawStructures(DesktopModel& model, bool hideNames) {
     if (shown.empty()) continue;
     ImGui::SetNextItemOpen(true, ImGuiCond_Once);
     if (!query.empty()) ImGui::SetNextItemOpen(true);
-    if (ImGui::TreeNode(system.c_str())) {
+    if (ImGui::TreeNode(printableUiText(system).c_str())) {
       for (const Structure* s : shown) {
-        if (ImGui::Selectable(s->displayName.c_str(), s->label == model.explore().selected())) model.select(s->label);
+        if (ImGui::Selectable(printableUiText(s->displayName).c_str(), s->label == model.explore().selected())) model.select(s->label);
         if (ImGui::IsItemHovered() && !s->description.empty()) {
           ImGui::BeginTooltip();
           ImGui::PushTextWrapPos(ImGui::GetFontSize() * 25);
-          ImGui::TextUnformatted(s->description.c_str());
+          ImGui::TextUnformatted(printableUiText(s->description).c_str());
           ImGui::PopTextWrapPos();
           ImGui::EndTooltip();
         }

@@ -9,6 +9,7 @@
 #include "lessons/repositories.h"
 #include "panels.h"
 #include "volume/dataset_source.h"
+#include "core/printable_text.h"
 
 namespace at::app {
 
@@ -17,7 +18,7 @@ const ImVec4 kRight{0.5f, 1, 0.5f, 1}, kPartly{1, 0.8f, 0.35f, 1}, kWrong{1, 0.5
 
 void wrappedColoured(const ImVec4& colour, const std::string& text) {
   ImGui::PushTextWrapPos(0);
-  ImGui::TextColored(colour, "%s", text.c_str());
+  ImGui::TextColored(colour, "%s", printableUiText(text).c_str());
   ImGui::PopTextWrapPos();
 }
 }  // namespace
@@ -35,7 +36,7 @@ void LessonPanel::draw(LessonController& lessons, ExamController& exams, float h
     wrappedColoured(kWrong, st.error().message);
   } else {
     if (lessons.step()) {
-      ImGui::TextDisabled("user: %s", lessons.user()->name.c_str());
+      ImGui::TextDisabled("user: %s", printableUiText(lessons.user()->name).c_str());
     } else {
       if (!editingUser_) userEdit_ = lessons.user()->name;  // follows the user unless being typed
       ImGui::SetNextItemWidth(ImGui::GetFontSize() * 9);
@@ -68,9 +69,9 @@ void LessonPanel::drawLists(LessonController& lessons) {
   }
   const lessons::Course& course = courses[std::size_t(lessons.courseIndex())];
   ImGui::SetNextItemWidth(-FLT_MIN);
-  if (ImGui::BeginCombo("##course", course.title.c_str())) {
+  if (ImGui::BeginCombo("##course", printableUiText(course.title).c_str())) {
     for (int i = 0; i < int(courses.size()); ++i)
-      if (ImGui::Selectable(courses[std::size_t(i)].title.c_str(), i == lessons.courseIndex()) && i != lessons.courseIndex())
+      if (ImGui::Selectable(printableUiText(courses[std::size_t(i)].title).c_str(), i == lessons.courseIndex()) && i != lessons.courseIndex())
         if (auto st = lessons.selectCourse(i); !st) lessons.report(st.error().message);
     ImGui::EndCombo();
   }
@@ -92,12 +93,12 @@ void LessonPanel::drawLists(LessonController& lessons) {
         lessons.report(st.error().message);
     if (locked) ImGui::EndDisabled();
     ImGui::SameLine();
-    ImGui::TextColored(locked ? ImVec4(0.6f, 0.6f, 0.6f, 1) : kHeading, "%s", row.title.c_str());
-    if (ImGui::IsItemHovered() && !row.summary.empty()) ImGui::SetTooltip("%s", row.summary.c_str());
+    ImGui::TextColored(locked ? ImVec4(0.6f, 0.6f, 0.6f, 1) : kHeading, "%s", printableUiText(row.title).c_str());
+    if (ImGui::IsItemHovered() && !row.summary.empty()) ImGui::SetTooltip("%s", printableUiText(row.summary).c_str());
     if (locked) {
       std::string needs;
       for (const std::string& m : row.missing) needs += (needs.empty() ? "" : ", ") + m;
-      ImGui::TextDisabled("  locked: finish %s first", needs.c_str());
+      ImGui::TextDisabled("  locked: finish %s first", printableUiText(needs).c_str());
     } else if (row.bestScore) {
       ImGui::TextColored(kRight, "  done, best score %.0f%%%s", 100 * *row.bestScore, row.open ? " (another attempt open)" : "");
     } else if (row.open) {
@@ -112,7 +113,7 @@ void LessonPanel::drawLists(LessonController& lessons) {
 
 void LessonPanel::drawLesson(LessonController& lessons) {
   if (!lessons.engine()) return;
-  ImGui::TextColored(kHeading, "%s", lessons.engine()->lesson().title.c_str());
+  ImGui::TextColored(kHeading, "%s", printableUiText(lessons.engine()->lesson().title).c_str());
   if (auto score = lessons.finishedScore()) {
     ImGui::Text("Lesson finished: score %.0f%%", 100 * *score);
     if (ImGui::Button("Back to the lessons")) lessons.backToLessons();
@@ -127,9 +128,9 @@ void LessonPanel::drawLesson(LessonController& lessons) {
   }
   if (v.kind == lessons::StepKind::Show) {
     ImGui::PushTextWrapPos(0);
-    ImGui::TextColored(kHeading, "%s", v.title.c_str());
-    if (v.labelsVisible && !v.structureName.empty() && v.structureName != v.title) ImGui::TextDisabled("%s", v.structureName.c_str());
-    ImGui::TextUnformatted(v.text.c_str());
+    ImGui::TextColored(kHeading, "%s", printableUiText(v.title).c_str());
+    if (v.labelsVisible && !v.structureName.empty() && v.structureName != v.title) ImGui::TextDisabled("%s", printableUiText(v.structureName).c_str());
+    ImGui::TextUnformatted(printableUiText(v.text).c_str());
     ImGui::PopTextWrapPos();
   } else {
     drawQuestion(lessons);
@@ -149,7 +150,7 @@ void LessonPanel::drawQuestion(LessonController& lessons) {
   const quiz::Question& q = a.question.question;
   ImGui::PushTextWrapPos(0);
   ImGui::TextColored(kQuestion, a.review ? "Review question (%s)" : "Question (%s)", quiz::toString(q.kind));
-  ImGui::TextUnformatted(q.prompt.c_str());
+  ImGui::TextUnformatted(printableUiText(q.prompt).c_str());
   const bool open = !a.grade;
   if (!open) ImGui::BeginDisabled();
   std::optional<quiz::Answer> answer;
@@ -161,7 +162,7 @@ void LessonPanel::drawQuestion(LessonController& lessons) {
     case quiz::QuestionKind::Relation:
       for (int i = 0; i < int(a.choiceNames.size()); ++i) {
         ImGui::PushID(i);
-        if (ImGui::RadioButton(a.choiceNames[std::size_t(i)].c_str(), a.choice == i)) a.choice = i;
+        if (ImGui::RadioButton(printableUiText(a.choiceNames[std::size_t(i)]).c_str(), a.choice == i)) a.choice = i;
         ImGui::PopID();
       }
       if (a.choice < 0) ImGui::BeginDisabled();
@@ -186,7 +187,7 @@ void LessonPanel::drawQuestion(LessonController& lessons) {
           break;
         }
         ImGui::SameLine();
-        ImGui::Text("%d. %s", i + 1, lessons.displayName(a.order[std::size_t(i)]).c_str());
+        ImGui::Text("%d. %s", i + 1, printableUiText(lessons.displayName(a.order[std::size_t(i)])).c_str());
         ImGui::PopID();
       }
       ImGui::TextDisabled("Offered (click to add):");
@@ -194,7 +195,7 @@ void LessonPanel::drawQuestion(LessonController& lessons) {
         const std::string& id = a.question.choices[i];
         if (std::find(a.order.begin(), a.order.end(), id) != a.order.end()) continue;
         ImGui::PushID(int(i));
-        if (ImGui::SmallButton(a.choiceNames[i].c_str())) a.order.push_back(id);
+        if (ImGui::SmallButton(printableUiText(a.choiceNames[i]).c_str())) a.order.push_back(id);
         ImGui::PopID();
       }
       if (a.order.empty()) ImGui::BeginDisabled();
@@ -210,7 +211,7 @@ void LessonPanel::drawQuestion(LessonController& lessons) {
     // The feedback says it first ("Correct: …", "Partly right: …", "Not quite: …"); its colour
     // agrees: green, amber for a partial score, red.
     const ImVec4 colour = a.grade->correct ? kRight : a.grade->score > 0 ? kPartly : kWrong;
-    ImGui::TextColored(colour, "%s", a.grade->feedback.c_str());
+    ImGui::TextColored(colour, "%s", printableUiText(a.grade->feedback).c_str());
     if (a.review) ImGui::TextDisabled("Saved: the review queue is updated.");
   }
   if (a.review && ImGui::Button(a.grade ? "Done" : "Skip")) lessons.dismissReview();
@@ -223,7 +224,7 @@ void LessonPanel::drawReview(LessonController& lessons) {
   ImGui::PushTextWrapPos(0);
   std::string list;
   for (const lessons::StructureProgress& p : lessons.due()) list += (list.empty() ? "" : ", ") + lessons.displayName(p.structureId);
-  if (!list.empty()) ImGui::TextDisabled("%s", list.c_str());
+  if (!list.empty()) ImGui::TextDisabled("%s", printableUiText(list).c_str());
   ImGui::PopTextWrapPos();
   if (ImGui::SmallButton("Review"))
     if (auto st = lessons.startReview(); !st) lessons.report("review: " + st.error().message);

@@ -10,6 +10,7 @@
 
 #include "panels.h"
 #include "segment_controller.h"
+#include "core/printable_text.h"
 
 namespace at::app {
 
@@ -101,7 +102,7 @@ void SegmentPanel::drawLabels(SegmentController& editor, int listLines) {
                        ImVec2(line, line));
     ImGui::SameLine();
     const std::string text = s.displayName + " (" + std::to_string(seeded(s.label)) + ")";
-    if (ImGui::RadioButton(text.c_str(), editor.currentLabel() == s.label)) report(editor.setCurrentLabel(s.label));
+    if (ImGui::RadioButton(printableUiText(text).c_str(), editor.currentLabel() == s.label)) report(editor.setCurrentLabel(s.label));
     ImGui::PopID();
   }
   ImGui::EndChild();

@@ -7,6 +7,7 @@
 
 #include "panels.h"
 #include "render/image.h"
+#include "core/printable_text.h"
 
 namespace at::app {
 
@@ -22,13 +23,13 @@ const ImVec4 kError{1, 0.5f, 0.4f, 1};
 
 void StudyPanel::text(const std::string& s) {
   labels_.push_back(s);
-  ImGui::TextUnformatted(s.c_str());
+  ImGui::TextUnformatted(printableUiText(s).c_str());
 }
 
 void StudyPanel::textWrapped(const std::string& s) {
   labels_.push_back(s);
   ImGui::PushTextWrapPos(0);
-  ImGui::TextUnformatted(s.c_str());
+  ImGui::TextUnformatted(printableUiText(s).c_str());
   ImGui::PopTextWrapPos();
 }
 
@@ -140,7 +141,7 @@ void StudyPanel::summaryTable(const StudyController& study) {
   for (std::size_t i = 0; i < sum.items.size(); ++i) {
     ImGui::TableNextRow();
     ImGui::TableNextColumn();
-    ImGui::TextUnformatted(sum.items[i].c_str());
+    ImGui::TextUnformatted(printableUiText(sum.items[i]).c_str());
     for (std::size_t c = 0; c < sum.columns.size(); ++c) {
       ImGui::TableNextColumn();
       const quiz::SummaryCell& cell = sum.at(i, c);
@@ -203,9 +204,9 @@ void StudyPanel::drawCoordinator(StudyController& study, float x, float y) {
   ImGui::SameLine();
   const quiz::StudyProtocol* selected = study.selectedStudy();
   ImGui::SetNextItemWidth(320);
-  if (ImGui::BeginCombo("study", selected ? selected->id.c_str() : "(no study)")) {
+  if (ImGui::BeginCombo("study", selected ? printableUiText(selected->id).c_str() : "(no study)")) {
     for (const quiz::StudyProtocol& p : study.studies())
-      if (ImGui::Selectable(p.id.c_str(), &p == selected))
+      if (ImGui::Selectable(printableUiText(p.id).c_str(), &p == selected))
         if (auto st = study.selectStudy(p.id); !st) error = st.error().message;
     ImGui::EndCombo();
   }
@@ -218,14 +219,14 @@ void StudyPanel::drawCoordinator(StudyController& study, float x, float y) {
   }
   const quiz::StudyProtocol& p = *selected;
   ImGui::PushTextWrapPos(0);
-  ImGui::TextDisabled("%s", p.title.c_str());
+  ImGui::TextDisabled("%s", printableUiText(p.title).c_str());
   ImGui::PopTextWrapPos();
-  ImGui::Text("%zu structures, %zu items, dataset %s", p.structures.size(), p.items.size(), p.dataset.c_str());
+  ImGui::Text("%zu structures, %zu items, dataset %s", p.structures.size(), p.items.size(), printableUiText(p.dataset).c_str());
 
   if (ImGui::CollapsingHeader("Participants", ImGuiTreeNodeFlags_DefaultOpen)) {
     if (study.completion().empty()) ImGui::TextDisabled("nobody enrolled yet");
     for (const db::StudyCompletion& c : study.completion())
-      ImGui::Text("%-16s %-12s %3d/%d ratings  %s", c.participantId.c_str(), c.group.c_str(), c.ratingsGiven,
+      ImGui::Text("%-16s %-12s %3d/%d ratings  %s", printableUiText(c.participantId).c_str(), printableUiText(c.group).c_str(), c.ratingsGiven,
                   c.ratingsExpected, c.complete ? "complete" : "in progress");
     ImGui::SetNextItemWidth(160);
     ImGui::InputTextWithHint("##pid", "participant id", &participantId_);
@@ -233,9 +234,9 @@ void StudyPanel::drawCoordinator(StudyController& study, float x, float y) {
       groupIndex_ = std::clamp(groupIndex_, 0, int(p.groups.size()) - 1);
       ImGui::SameLine();
       ImGui::SetNextItemWidth(140);
-      if (ImGui::BeginCombo("##group", p.groups[std::size_t(groupIndex_)].c_str())) {
+      if (ImGui::BeginCombo("##group", printableUiText(p.groups[std::size_t(groupIndex_)]).c_str())) {
         for (int i = 0; i < int(p.groups.size()); ++i)
-          if (ImGui::Selectable(p.groups[std::size_t(i)].c_str(), i == groupIndex_)) groupIndex_ = i;
+          if (ImGui::Selectable(printableUiText(p.groups[std::size_t(i)]).c_str(), i == groupIndex_)) groupIndex_ = i;
         ImGui::EndCombo();
       }
       ImGui::SameLine();
