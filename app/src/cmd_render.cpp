@@ -180,13 +180,17 @@ int runRender(const Argv& argv) {
     wdtDevice = wdt->stats.device;
     field = std::move(wdt->field);
     // The distance unit from the field and the data (render/field_scale.h), times --context.
+    const auto scaleStart = std::chrono::steady_clock::now();
     const render::FieldScale scale = render::fieldScale(field->distances, dataset->volume, nullptr, *frame,
                                                         render::denseLevel(*preset), request.margin, request.minRadiusMm);
     settings->distanceUnit = scale.distanceUnit * request.contextScale;
+    const double scaleMs =
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - scaleStart).count();
     unitNote = "; distance unit " + formatUnit(settings->distanceUnit) +
                (scale.derived ? " (median bone D " + formatUnit(scale.quantileD) + "; by size " +
                                    formatUnit(render::distanceUnitFor(*frame, request.contextScale)) + ")"
-                              : " (from its size)");
+                              : " (from its size)") +
+               ", " + formatUnit(scaleMs) + " ms";
   }
 
   auto context3d = render::gl::EglContext::create();
