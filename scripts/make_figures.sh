@@ -31,6 +31,11 @@ render_ct() {  # render_ct FILE STRUCTURE ARGS...: the real abdominal CT, preset
   "$app" render "$ct/ct_small.nii.gz" "$structure" --labels "$ct/seg_small.nii.gz" --names "$ct/labels.json" \
     --size "$size" --presets "$root/data/presets" --out "$out/$file" "$@"
 }
+render_skull() {  # render_skull FILE STRUCTURE ARGS...: the skull CT (scripts/fetch-scans.sh), derived presets
+  local file="$1" structure="$2"
+  shift 2
+  "$app" render skull "$structure" --size "$size" --presets "$root/data/presets" --out "$out/$file" "$@"
+}
 sheet() {  # sheet FILE TITLE PANEL CAPTION ...: panels missing (no real CT here) are left out
   local file="$1" title="$2"
   shift 2
@@ -74,6 +79,23 @@ else
   echo "make_figures: $ct/ct_small.nii.gz not found: real-CT panels left out" >&2
 fi
 
+# The skull CT (1 mm head CT, labels from scripts/label-scans.sh), presets derived from its HU; the
+# distance unit from each field (render/field_scale.h), the headrest left out (derived_preset.h).
+if "$app" structures skull >/dev/null 2>&1; then
+  render_skull skull_fig1_ear_canal_wdt.png external_acoustic_meatus_right --mode wdt --view lateral_right
+  render_skull skull_fig1_frontal_sinus_wdt.png frontal_sinus --mode wdt --view anterior
+  render_skull skull_fig2_ear_canal_wdt_t03.png external_acoustic_meatus_right --mode wdt --view lateral_right --t 0.3
+  render_skull skull_fig2_frontal_sinus_wdt_t1.png frontal_sinus --mode wdt --view anterior --t 1
+  render_skull skull_fig4_ear_canal_wdt.png external_acoustic_meatus_right --mode wdt --view lateral_right --margin 2.6
+  render_skull skull_fig4_ear_canal_unweighted.png external_acoustic_meatus_right --mode unweighted --view lateral_right --margin 2.6
+  render_skull skull_fig5_mandible_fuzzy.png mandible --mode fuzzy --view anterior
+  render_skull skull_fig5_mandible_bare.png mandible --mode bare --view anterior
+  render_skull skull_fig6_zygomatic_arch_outline.png zygomatic_arch_left --mode outline --view lateral_left --margin 2.6
+  render_skull skull_fig7_zygomatic_arch_lighting.png zygomatic_arch_left --mode lighting --view lateral_left --margin 2.6
+else
+  echo "make_figures: the skull CT is not fetched (scripts/fetch-scans.sh): skull sheets left out" >&2
+fi
+
 # One sheet per paper figure.
 sheet sheet_fig1.png "Fig. 1 - WDT context around the structure" \
   fig1_lateral_canal_wdt.png "Phantom: lateral semicircular canal from above" \
@@ -100,3 +122,21 @@ sheet sheet_fig7.png "Fig. 7 - the structure lights the bone (Eq. 6)" \
   fig7_cochlea_lighting.png "Phantom: cochlea as the light" \
   fig7_lateral_canal_lighting.png "Phantom: lateral canal as the light" \
   ct_fig7_l1_lighting.png "Real CT: L1 vertebra as the light"
+
+# The same figures on the skull CT, one sheet each.
+sheet sheet_skull_fig1.png "Fig. 1 on the skull CT - context near the structure, fading with weighted distance" \
+  skull_fig1_ear_canal_wdt.png "Right ear canal from the side: the temporal bone around it, the rest fades" \
+  skull_fig1_frontal_sinus_wdt.png "Frontal sinus from the front: its bony walls, the face fades"
+sheet sheet_skull_fig2.png "Fig. 2 on the skull CT - more context with the slider t" \
+  skull_fig2_ear_canal_wdt_t03.png "Right ear canal, t = 0.3: more of the skull as faint context" \
+  skull_fig2_frontal_sinus_wdt_t1.png "Frontal sinus, t = 1: all bone in view"
+sheet sheet_skull_fig4.png "Fig. 4 on the skull CT - weighted vs non-weighted distance, same TFs" \
+  skull_fig4_ear_canal_wdt.png "Right ear canal, WDT: reaches along the bone connected to it" \
+  skull_fig4_ear_canal_unweighted.png "Right ear canal, non-weighted: a ball around it"
+sheet sheet_skull_fig5.png "Fig. 5 on the skull CT - fuzzy boundary vs the hard edge" \
+  skull_fig5_mandible_fuzzy.png "Mandible, fuzzy: its colour fades into the neighbouring bone" \
+  skull_fig5_mandible_bare.png "Mandible, hard edge (the segment alone)"
+sheet sheet_skull_fig6.png "Fig. 6 on the skull CT - a band of constant weighted distance on the bone" \
+  skull_fig6_zygomatic_arch_outline.png "Left zygomatic arch: a band on the lateral skull around it"
+sheet sheet_skull_fig7.png "Fig. 7 on the skull CT - a small bone lights the bone near it (Eq. 6)" \
+  skull_fig7_zygomatic_arch_lighting.png "Left zygomatic arch as the light"

@@ -18,6 +18,7 @@
 #include "volume/mask.h"
 #include "volume/dataset_source.h"
 #include "volume/png_image.h"
+#include "render/field_scale.h"
 #include "wdt/wdt.h"
 #include "printable_output.h"
 
@@ -26,6 +27,12 @@ namespace at::app {
 namespace {
 
 namespace fs = std::filesystem;
+
+std::string formatUnit(double value) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.3g", value);
+  return text;
+}
 
 const char* kUsage =
     "usage: anatomy-tutor render DATASET [STRUCTURE (--preset NAME | --mode MODE)] [--t T] [--size WxH]\n"
@@ -99,6 +106,7 @@ int runRender(const Argv& argv) {
   const Structure* structure = wholeVolume ? nullptr : dataset->findStructure(args->positional()[1]);
   if (!wholeVolume && !structure) return reportError("render: " + unknownStructureMessage(*dataset, args->positional()[1]));
 
+  const render::IntensityLevels levels = render::summariseIntensities(dataset->volume);
   Result<render::Preset> preset = fail("no preset");
   if (wholeVolume) {
     preset = render::wholeVolumePreset(dataset->intensity, dataset->volume.geometry);
@@ -116,7 +124,7 @@ int runRender(const Argv& argv) {
   } else {
     auto mode = render::parseRenderMode(*args->value("mode"));
     if (!mode) return reportError("render: --mode: " + mode.error().message, 2);
-    preset = render::presetOrDerived(library, structure->id, *mode, render::summariseIntensities(dataset->volume));
+    preset = render::presetOrDerived(library, structure->id, *mode, levels);
   }
   if (!preset) return reportError("render: " + preset.error().message);
   auto t = args->number("t", preset->t);
@@ -141,6 +149,8 @@ int runRender(const Argv& argv) {
   auto margin = args->number("margin", request.margin);
   if (!margin || *margin < 1 || *margin > 100) return reportError("render: option --margin must be a number in 1..100", 2);
   request.margin = *margin;
+  // The CT table, headrest and other objects outside the body are no context (derived_preset.h).
+  render::leaveOutNonAnatomy(dataset->volume, dataset->labels, levels);
   auto frame = wholeVolume ? Result<render::StructureFrame>(render::volumeFrame(dataset->volume.geometry))
                            : render::structureFrame(dataset->labels, structure->label);
   if (!frame) return reportError("render: " + structure->id + ": " + frame.error().message);
@@ -150,6 +160,7 @@ int runRender(const Argv& argv) {
   if (wholeVolume && !args->has("preset")) settings->opacityRefMm = render::kWholeVolumeRefMm;
 
   std::optional<DistanceField> field;
+  std::string unitNote;
   double wdtMs = 0;
   std::string wdtDevice = "none";
   if (wholeVolume) {
@@ -169,6 +180,18 @@ int runRender(const Argv& argv) {
     wdtMs = wdt->stats.msTotal;
     wdtDevice = wdt->stats.device;
     field = std::move(wdt->field);
+    // The distance unit from the field and the data (render/field_scale.h), times --context.
+    const auto scaleStart = std::chrono::steady_clock::now();
+    const render::FieldScale scale = render::fieldScale(field->distances, dataset->volume, nullptr, *frame,
+                                                        render::denseLevel(*preset), request.margin, request.minRadiusMm);
+    settings->distanceUnit = scale.distanceUnit * request.contextScale;
+    const double scaleMs =
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - scaleStart).count();
+    unitNote = "; distance unit " + formatUnit(settings->distanceUnit) +
+               (scale.derived ? " (median bone D " + formatUnit(scale.quantileD) + "; by size " +
+                                   formatUnit(render::distanceUnitFor(*frame, request.contextScale)) + ")"
+                              : " (from its size)") +
+               ", " + formatUnit(scaleMs) + " ms";
   }
 
   auto context3d = render::gl::EglContext::create();
@@ -188,9 +211,9 @@ int runRender(const Argv& argv) {
   if (!args->has("no-overlays")) render::drawOverlays(rgb, settings->camera);
   if (auto st = writePng(*out, rgb); !st)
     return reportError("render: " + st.error().message);
-  terminalPrintf("wrote %s (%s, %s, preset %s, %dx%d, t=%.2f; WDT %.0f ms on %s; render %.0f ms on %s)\n", out->c_str(),
+  terminalPrintf("wrote %s (%s, %s, preset %s, %dx%d, t=%.2f%s; WDT %.0f ms on %s; render %.0f ms on %s)\n", out->c_str(),
               structure ? structure->id.c_str() : "whole volume", render::toString(preset->mode), preset->id.value_or("?").c_str(), image->width,
-              image->height, double(preset->t), wdtMs, wdtDevice.c_str(), renderMs, context3d->description().c_str());
+              image->height, double(preset->t), unitNote.c_str(), wdtMs, wdtDevice.c_str(), renderMs, context3d->description().c_str());
   return 0;
 }
 

@@ -1,5 +1,7 @@
 #include "render/derived_preset.h"
 
+#include "volume/body_mask.h"
+
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -156,6 +158,24 @@ IntensityLevels summariseIntensities(const Volume& volume, IntensityScale scale)
     l.denseHigh = std::max(l.densePeak + 1, h.percentile(0.99, from));
   }
   return l;
+}
+
+double bodyLevel(const IntensityLevels& l) {
+  return l.scale == IntensityScale::Hounsfield ? -300.0 : l.background + 0.5 * (l.tissue - l.background);
+}
+
+Mask anatomyMask(const Volume& volume, const LabelMap& labels, const IntensityLevels& levels) {
+  Mask body = bodyMask(volume, bodyLevel(levels));
+  if (labels.voxels.size() == body.voxels.size())
+    for (std::size_t p = 0; p < body.voxels.size(); ++p)
+      if (labels.voxels[p] != 0) body.voxels[p] = 1;
+  return body;
+}
+
+std::size_t leaveOutNonAnatomy(Volume& volume, const LabelMap& labels, const IntensityLevels& levels) {
+  const Mask body = anatomyMask(volume, labels, levels);
+  const double bg = std::clamp(std::round(levels.background), -32768.0, 32767.0);
+  return clearOutsideBody(volume, body, std::int16_t(bg));
 }
 
 Preset derivedPreset(const IntensityLevels& l, RenderMode mode, const std::string& structureId) {

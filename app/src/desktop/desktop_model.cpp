@@ -10,6 +10,7 @@
 #include "dataset_resolver.h"
 #include "db/dataset_store.h"
 #include "volume/known_scans.h"
+#include "render/field_scale.h"
 #include "render/structure_pick.h"
 #include "render/volume_preset.h"
 #include "segment_controller.h"
@@ -354,13 +355,26 @@ std::optional<RenderPlan> DesktopModel::planFrame(Clock::time_point now) {
   return scheduler_.plan(explore_.revision(), explore_.activity(), now, full);
 }
 
+double DesktopModel::distanceUnitOf(const ExploreState::Shown& shown, const render::StructureFrame& frame) const {
+  const DistanceField* field = fields_ ? fields_->pickField() : nullptr;
+  if (!field || explore_.fieldLabel() != shown.label) return render::distanceUnitFor(frame);
+  const double dense = render::denseLevel(shown.preset);
+  // Once per field (and data TF): one pass over a subsample of the field near the structure.
+  if (fieldUnit_.field != field || fieldUnit_.label != shown.label || fieldUnit_.denseLevel != dense) {
+    fieldUnit_ = {field, shown.label, dense,
+                  render::fieldScale(field->distances, dataset_->volume, nullptr, frame, dense).distanceUnit};
+  }
+  return fieldUnit_.unit;
+}
+
 render::RenderSettings DesktopModel::renderSettings(const RenderPlan& plan) const {
   render::RenderSettings s;
   const ExploreState::Shown shown = explore_.shown();
   s.preset = shown.preset;
   s.camera = explore_.camera();
-  // The context radius from the shown structure's size, as the render command frames it.
-  if (const render::StructureFrame* frame = explore_.frameOf(shown.label)) s.distanceUnit = render::distanceUnitFor(*frame);
+  // The distance unit from the shown field (render/field_scale.h), as the render command sets it;
+  // until the field is there, from the structure's size.
+  if (const render::StructureFrame* frame = explore_.frameOf(shown.label)) s.distanceUnit = distanceUnitOf(shown, *frame);
   s.width = plan.width;
   s.height = plan.height;
   s.stepMm = render::effectiveStepMm(dataset_->volume.geometry, render::RenderSettings{}) * plan.stepFactor;

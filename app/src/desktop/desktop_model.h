@@ -251,6 +251,15 @@ class DesktopModel {
   std::vector<std::string> messages_;
   std::vector<std::string> notes_;
   std::unique_ptr<Dataset> dataset_;
+  // The shown field's distance unit (render/field_scale.h), computed once per field.
+  struct FieldUnit {
+    const DistanceField* field = nullptr;
+    std::uint16_t label = 0;
+    double denseLevel = 0;
+    double unit = 1;
+  };
+  mutable FieldUnit fieldUnit_;
+  double distanceUnitOf(const ExploreState::Shown& shown, const render::StructureFrame& frame) const;
   render::GradientVolume gradients_;
   mutable render::ShadingTableCache pickTables_;  // pickAt is const; the cache only saves work
   std::uint64_t datasetRevision_ = 0;

@@ -52,7 +52,7 @@ uniform vec3 uSurface;          // edge strength ramp lo, hi (HU per voxel), int
 uniform float uMaxStrength;
 uniform vec4 uClip;
 uniform vec3 uHighlight;
-uniform vec2 uLighting;         // alpha, beta of Eq. 6
+uniform vec2 uLighting;         // alpha / distance unit, beta of Eq. 6
 uniform vec3 uLightDir;         // towards the key light, patient frame
 uniform vec3 uDims;
 uniform int uBlock;

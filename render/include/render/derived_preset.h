@@ -40,6 +40,16 @@ struct IntensityLevels {
 
 IntensityLevels summariseIntensities(const Volume& volume, IntensityScale scale = IntensityScale::Unknown);
 
+// The level from which a voxel may be body (volume/body_mask.h): −300 HU for CT (fat is about
+// −100), else half way from the background to the soft-tissue level.
+double bodyLevel(const IntensityLevels& levels);
+// The body (volume/body_mask.h at bodyLevel) joined with every labelled voxel: what is anatomy.
+// The rest (a CT table, a headrest) is left out of the context by clearing it to the background
+// before the WDT and the rendering. Once per dataset.
+Mask anatomyMask(const Volume& volume, const LabelMap& labels, const IntensityLevels& levels);
+// Clears the voxels outside anatomyMask to the background level; the number cleared.
+std::size_t leaveOutNonAnatomy(Volume& volume, const LabelMap& labels, const IntensityLevels& levels);
+
 // The derived preset of a mode for a structure; id "<structure>_<mode>" and name saying it is
 // derived. The highlight is the shipped orange; views are left to the caller's default.
 Preset derivedPreset(const IntensityLevels& levels, RenderMode mode, const std::string& structureId);

@@ -19,8 +19,8 @@
 //     composited with opacity structure_opacity (bare: 1), and its inside draws nothing else.
 //   bare: only the structure.
 // Context opacity is per `opacityRefMm` of ray (default: one voxel) and corrected to the step:
-// a' = 1 − (1 − a)^(step/ref). lighting adds Eq. 6: ambient k_a = β/(α_l·D + 1)² in highlight
-// colour, the structure as the light.
+// a' = 1 − (1 − a)^(step/ref). lighting adds Eq. 6: ambient k_a = β/(α_l·D/unit + 1)² in highlight
+// colour, the structure as the light (α_l in the distance unit, as the distance TF's x).
 #pragma once
 
 #include <array>
@@ -43,8 +43,9 @@ struct RenderSettings {
   int width = 512, height = 512;
   double stepMm = 0;                   // 0: kDefaultStepVoxels × the volume's smallest spacing
   double opacityRefMm = 0;             // TF opacity is per this length of ray; 0: the smallest spacing
-  double distanceUnit = 1;             // weighted distances are divided by this before f(x); framing
-                                       // sets it from the structure's size (scene.h)
+  double distanceUnit = 1;             // weighted distances are divided by this before f(x) and Eq. 6;
+                                       // framing sets it from the structure's size (scene.h), and once
+                                       // the field is known from the field (field_scale.h)
   std::array<float, 4> background{0, 0, 0, 0};  // composited under the volume (straight RGBA)
   bool jitter = true;                  // per-pixel ray start offsets (deterministic hash)
   bool shading = true;                 // Phong from gradients
