@@ -8,9 +8,12 @@
 #include "course_authoring.h"
 #include "course_packages.h"
 #include "db/connection.h"
+#include "dataset_resolver.h"
 #include "db/dataset_store.h"
 #include "lessons/course_check.h"
 #include "lessons/course_json.h"
+#include "question_visibility.h"
+#include "render/preset.h"
 #include "volume/dataset_source.h"
 #include "volume/known_scans.h"
 #include "printable_output.h"
@@ -23,7 +26,7 @@ namespace fs = std::filesystem;
 
 constexpr const char* kCourseHelp =
     "usage: anatomy-tutor course new ID --dataset DATASET [--title TEXT] [--out F.json]\n"
-    "       anatomy-tutor course validate F.json\n"
+    "       anatomy-tutor course validate F.json [--skip-view-check]\n"
     "       anatomy-tutor course import F.json|F.atcourse [--volume PATH]\n"
     "       anatomy-tutor course export ID --out F.atcourse [--reference-volume [--note TEXT]]\n"
     "       anatomy-tutor course list\n"
@@ -35,7 +38,9 @@ constexpr const char* kCourseHelp =
     "  new       stores a starter course on DATASET (a tour of its structures: show each, then name\n"
     "            it) and, with --out, writes it as JSON to edit\n"
     "  validate  checks a course file: its form (errors name the field by path) and, when its dataset\n"
-    "            is here, every structure it names\n"
+    "            is here, every structure it names and that every locate question can be answered in\n"
+    "            its own view (a click on the target's centre picks it; one WDT per region on the\n"
+    "            CPU: --skip-view-check leaves that out)\n"
     "  import    stores a course file (a newer version replaces the stored one; an older one, other\n"
     "            content under the same version, or ids another course uses are refused), or verifies\n"
     "            and installs a package: its dataset's files go into the database's data folder\n"
@@ -94,6 +99,27 @@ int runValidate(const cli::Args& args) {
     if (!session) return reportError("course validate: " + session.error().message);
     if (auto ok = checkCourseAgainstDataset(**session, *course, file.string()); !ok) return reportError(ok.error().message);
     structures = "structures checked against dataset '" + course->datasetId + "'";
+    if (!args.has("skip-view-check")) {
+      DatasetRequest request;
+      request.name = course->datasetId;
+      request.database = &(*session)->database();
+      auto dataset = openNamedDataset(request);
+      if (!dataset) return reportError("course validate: " + dataset.error().message);
+      auto checks = checkLocateQuestions(*dataset, *course, render::PresetLibrary(defaultPresetsDir()));
+      if (!checks) return reportError(file.string() + ": " + checks.error().message);
+      int answerable = 0;
+      for (const LocateCheck& c : *checks) {
+        if (c.answerable) ++answerable;
+        else std::fprintf(stderr, "%s: %s (%s): not answerable: %s\n", file.string().c_str(), c.path.c_str(),
+                          c.questionId.c_str(), c.problem.c_str());
+      }
+      if (answerable != int(checks->size())) {
+        return reportError(file.string() + ": " + std::to_string(checks->size() - std::size_t(answerable)) + " of " +
+                           str::countOf(long(checks->size()), "locate question") +
+                           " cannot be answered in their views (move the view or the region; see above)");
+      }
+      structures += "; " + str::countOf(long(checks->size()), "locate question") + " answerable in its view";
+    }
   }
   terminalPrintf("%s: valid: course '%s' version %d on '%s': %s, %s, %s; %s\n", file.string().c_str(),
               course->id.c_str(), course->version, course->datasetId.c_str(),
@@ -155,7 +181,7 @@ int runExport(const cli::Args& args) {
 }  // namespace
 
 int runCourse(const Argv& argv) {
-  auto args = cli::Args::parse(argv, {"dataset", "title", "out", "volume", "note"}, {"reference-volume"});
+  auto args = cli::Args::parse(argv, {"dataset", "title", "out", "volume", "note"}, {"reference-volume", "skip-view-check"});
   if (!args) return reportError("course: " + args.error().message);
   if (args->has("help")) {
     terminalPrintf("%s", kCourseHelp);

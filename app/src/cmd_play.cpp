@@ -64,6 +64,34 @@ void showPicture(TerminalViews* views, const lessons::QuestionScene& scene, cons
               locate ? "  — answer with the pixel x y where it is in this picture" : "");
 }
 
+// "Show me" after a wrong answer: the answer highlighted in its own view (lessons::showMeScene).
+void showAnswerIfWrong(const lessons::LessonEngine& engine, TerminalViews* views, const std::string& questionId,
+                       const std::string& stem) {
+  for (const lessons::QuestionOutcome& o : engine.outcomes()) {
+    if (o.questionId != questionId || !o.grade || o.grade->correct) continue;
+    std::printf("  the answer: %s\n", o.rightAnswer.c_str());
+    showPicture(views, o.scene, stem + "-answer", false);
+  }
+}
+
+// The end-of-lesson review: each question, the answer given and the right one (with its picture).
+void printLessonReview(const lessons::LessonEngine& engine, TerminalViews* views, const std::string& lessonId) {
+  const std::vector<lessons::QuestionOutcome> outcomes = engine.outcomes();
+  if (outcomes.empty()) return;
+  std::printf("\nReview:\n");
+  for (const lessons::QuestionOutcome& o : outcomes) {
+    const char* mark = !o.grade ? "-" : o.grade->correct ? "right" : o.grade->score > 0 ? "partly" : "wrong";
+    std::printf("  [%d] %s  (%s)\n", o.position, o.prompt.c_str(), mark);
+    std::printf("      you: %s   answer: %s\n", o.yourAnswer.empty() ? "(none)" : o.yourAnswer.c_str(),
+                o.rightAnswer.c_str());
+    if (o.grade && !o.grade->correct) {
+      char stem[160];
+      std::snprintf(stem, sizeof stem, "%s-review-%02d", lessonId.c_str(), o.position);
+      showPicture(views, o.scene, stem, false);
+    }
+  }
+}
+
 void printQuestion(const std::string& heading, quiz::QuestionKind kind, const std::string& prompt,
                    const std::vector<std::string>& choiceNames) {
   terminalPrintf("\n%s Question (%s)\n", heading.c_str(), quiz::toString(kind));
@@ -240,6 +268,7 @@ int runLesson(const std::string& lessonId, lessons::LessonMode mode, PlayContext
                                 ? " (earlier answers are saved; run the same command again to resume)"
                                 : " (earlier answers are saved; fix the line and run again to resume)"));
       sendClassEvents(ctx);
+      if (*asked == Asked::Answered) showAnswerIfWrong(engine, views.get(), view->questionId, stem);
       if (*asked != Asked::Answered) {
         terminalPrintf("\nstopped before step %d of %d; your answers are saved — run the same command to resume\n",
                     view->position, view->count);
@@ -262,6 +291,7 @@ int runLesson(const std::string& lessonId, lessons::LessonMode mode, PlayContext
     for (const auto& r : *responses) right += r.correct ? 1 : 0;
   terminalPrintf("\nLesson finished: %d of %s right (score %.2f).\n", right, str::countOf(questions, "question").c_str(),
               *score);
+  printLessonReview(engine, views.get(), lessonId);
   return 0;
 }
 

@@ -1,5 +1,6 @@
 #include "terminal_answers.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <iostream>
@@ -87,7 +88,7 @@ std::string answerHint(const AskedQuestion& q) {
       return q.views ? "type the pixel where it is in the picture as x y (e.g. 180 135), or a point as mm X Y Z"
                      : "type a point where it is as mm X Y Z (LPS millimetres)";
     case quiz::QuestionKind::Order:
-      return "list the structures in the order met, separated by commas";
+      return "list the structures in the order met, by number or name, separated by commas (e.g. 2, 0, 1)";
   }
   return "type an answer";
 }
@@ -115,13 +116,28 @@ Result<quiz::Answer> parseTypedAnswer(const std::string& raw, const AskedQuestio
       return pickAnswer(*input, q);
     }
     case quiz::QuestionKind::Order: {
+      // Numbers of the listed choices or names, separated by commas; numbers alone may also be
+      // separated by spaces ("2 0 1").
+      const bool numbersOnly = text.find_first_not_of("0123456789, ") == std::string::npos;
+      std::string list = text;
+      if (numbersOnly) std::replace(list.begin(), list.end(), ' ', ',');
       std::vector<std::string> order;
-      std::stringstream parts(text);
+      std::stringstream parts(list);
       std::string part;
       while (std::getline(parts, part, ',')) {
-        if (trim(part).empty()) continue;
-        const auto it = q.idByName.find(lower(trim(part)));
-        order.push_back(it == q.idByName.end() ? trim(part) : it->second);
+        const std::string entry = trim(part);
+        if (entry.empty()) continue;
+        if (entry.find_first_not_of("0123456789") == std::string::npos) {
+          const unsigned long n = std::strtoul(entry.c_str(), nullptr, 10);
+          if (n >= q.choiceIds.size()) {
+            return fail("choice " + entry + " is not listed (0 to " +
+                        std::to_string(q.choiceIds.empty() ? 0 : q.choiceIds.size() - 1) + ")");
+          }
+          order.push_back(q.choiceIds[n]);
+          continue;
+        }
+        const auto it = q.idByName.find(lower(entry));
+        order.push_back(it == q.idByName.end() ? entry : it->second);
       }
       if (order.empty()) return fail(answerHint(q));
       answer.order = std::move(order);

@@ -2,9 +2,9 @@
 // come from (a JSON-lines file or typed lines), how a typed line or a file line becomes a
 // quiz::Answer for the question asked, and how the grade is printed.
 //
-// Typed forms: a choice's number; a name; structures separated by commas (order questions); for
-// locate questions a pick on the question's picture — "x y" (a pixel) or "mm X Y Z" (a point in
-// LPS millimetres) — never a name. Every JSON form of quiz/answer_json.h is accepted too, and two
+// Typed forms: a choice's number; a name; structures by number or name separated by commas (order
+// questions; numbers alone also by spaces: "2 0 1"); for locate questions a pick on the question's
+// picture — "x y" (a pixel) or "mm X Y Z" (a point in LPS millimetres) — never a name. Every JSON form of quiz/answer_json.h is accepted too, and two
 // more for locate questions: {"pixel": [x, y]} and {"point_mm": [x, y, z]}.
 #pragma once
 

@@ -11,6 +11,7 @@
 #include "render/gl/egl_context.h"
 #include "render/gl/volume_renderer.h"
 #include "render/image.h"
+#include "render/overlay.h"
 #include "render/scene.h"
 #include "render/structure_pick.h"
 #include "volume/dataset_source.h"
@@ -207,6 +208,7 @@ Result<TerminalPicture> TerminalViews::show(const lessons::QuestionScene& scene,
   if (!image) return tl::unexpected(image.error());
   const fs::path path = dir_ / (stem + ".png");
   RgbImage picture = render::toRgb(*image);
+  render::drawOverlays(picture, chosen->camera);  // orientation marker and scale bar
   drawPixelRulers(picture);
   if (auto st = writePng(path.string(), picture); !st) return tl::unexpected(st.error());
   lastSettings_ = *chosen;

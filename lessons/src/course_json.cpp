@@ -64,6 +64,12 @@ class Reader {
     return j_[key].get<double>();
   }
 
+  Result<bool> boolean(const char* key, bool fallback) const {
+    if (!j_.contains(key)) return fallback;
+    if (!j_[key].is_boolean()) return fail(field(key) + ": must be true or false");
+    return j_[key].get<bool>();
+  }
+
   Result<int> integer(const char* key, int fallback) const {
     if (!j_.contains(key)) return fallback;
     const json& v = j_[key];
@@ -112,7 +118,7 @@ class Reader {
 Result<quiz::Question> readQuestion(const json& j, const std::string& path) {
   Reader r(j, path);
   if (auto ok = r.expect({"id", "kind", "prompt", "target", "tolerance_mm", "choices", "distractors", "synonyms",
-                          "relation", "order", "difficulty", "explanation"});
+                          "ask_side", "relation", "order", "difficulty", "explanation"});
       !ok) {
     return tl::unexpected(ok.error());
   }
@@ -127,6 +133,7 @@ Result<quiz::Question> readQuestion(const json& j, const std::string& path) {
   AT_TRY(choices, r.strings("choices"));
   AT_TRY(distractors, r.integer("distractors", 3));
   AT_TRY(synonyms, r.strings("synonyms"));
+  AT_TRY(askSide, r.boolean("ask_side", false));
   AT_TRY(difficulty, r.number("difficulty", 1500));
   AT_TRY(explanation, r.string("explanation", false));
   q.id = id;
@@ -137,6 +144,7 @@ Result<quiz::Question> readQuestion(const json& j, const std::string& path) {
   q.choices = choices;
   q.distractors = distractors;
   q.synonyms = synonyms;
+  q.askSide = askSide;
   q.difficulty = difficulty;
   q.explanation = explanation;
 
@@ -150,6 +158,7 @@ Result<quiz::Question> readQuestion(const json& j, const std::string& path) {
                         std::pair{"choices", quiz::QuestionKind::Identify},
                         std::pair{"distractors", quiz::QuestionKind::Identify},
                         std::pair{"synonyms", quiz::QuestionKind::Name},
+                        std::pair{"ask_side", quiz::QuestionKind::Name},
                         std::pair{"relation", quiz::QuestionKind::Relation},
                         std::pair{"order", quiz::QuestionKind::Order}}) {
     if (auto ok = onlyFor(key, k); !ok) return tl::unexpected(ok.error());
@@ -445,6 +454,7 @@ json questionJson(const quiz::Question& q) {
       break;
     case quiz::QuestionKind::Name:
       if (!q.synonyms.empty()) j["synonyms"] = q.synonyms;
+      if (q.askSide) j["ask_side"] = true;
       break;
     case quiz::QuestionKind::Relation: {
       json rel = {{"from", q.relation.from}, {"kind", quiz::toString(q.relation.kind)},

@@ -46,8 +46,17 @@ Result<std::pair<Course, ExamSpec>> findExam(CurriculumRepository& curriculum, c
   return fail("unknown exam '" + examId + "'");
 }
 
+const Step* lessonLocateStep(const Course& course, const std::string& structureId) {
+  for (const Lesson& lesson : course.lessons)
+    for (const Step& step : lesson.steps)
+      if (step.kind == StepKind::Question && step.question.kind == quiz::QuestionKind::Locate &&
+          step.question.target == structureId)
+        return &step;
+  return nullptr;
+}
+
 Result<std::vector<ExamItem>> drawExamItems(const ExamSpec& exam, const std::vector<Structure>& structures,
-                                            quiz::KeyComputer& keys, const std::string& seed) {
+                                            quiz::KeyComputer& keys, const std::string& seed, const Course* course) {
   const auto find = [&](const std::string& id) -> const Structure* {
     for (const Structure& s : structures)
       if (s.id == id) return &s;
@@ -71,14 +80,32 @@ Result<std::vector<ExamItem>> drawExamItems(const ExamSpec& exam, const std::vec
       const Structure& target = *find(order[i]);
       auto kind = quiz::parseQuestionKind(kindOrder[i][round]);
       if (!kind) return tl::unexpected(kind.error());
+      // A locate item needs a lesson view that shows its target answerable (see the header).
+      const Step* lessonStep = course ? lessonLocateStep(*course, target.id) : nullptr;
+      if (*kind == quiz::QuestionKind::Locate && course && !lessonStep) {
+        for (std::size_t k = 1; k < kindOrder[i].size(); ++k) {
+          auto other = quiz::parseQuestionKind(kindOrder[i][(round + k) % kindOrder[i].size()]);
+          if (other && *other != quiz::QuestionKind::Locate) {
+            kind = other;
+            break;
+          }
+        }
+      }
       ExamItem item;
       item.position = int(items.size());
       if (*kind == quiz::QuestionKind::Locate)
         item.locateView = exam.locateViews[std::size_t(locateItems++) % exam.locateViews.size()];
-      auto resolved = quiz::resolveQuestion(itemQuestion(exam, target, *kind, item.locateView), keys);
+      quiz::Question question = itemQuestion(exam, target, *kind, item.locateView);
+      if (*kind == quiz::QuestionKind::Locate && lessonStep) question.toleranceMm = lessonStep->question.toleranceMm;
+      auto resolved = quiz::resolveQuestion(question, keys);
       if (!resolved) return tl::unexpected(withContext("exam '" + exam.id + "'", resolved.error()));
       item.question = std::move(*resolved);
       item.scene.structure = target.id;
+      if (*kind == quiz::QuestionKind::Locate && lessonStep) {
+        item.scene = sceneFor(*lessonStep);
+        items.push_back(std::move(item));
+        continue;
+      }
       if (*kind == quiz::QuestionKind::Locate) {
         // The region without marking the target: the view of its nearest neighbour.
         auto distances = keys.distancesFrom(target.id);
@@ -137,7 +164,7 @@ Status ExamSession::start(std::int64_t userId, const std::string& examId) {
     const auto tries = std::count_if(previous->begin(), previous->end(),
                                      [&](const ExamAttempt& a) { return a.examId == examId; });
     const std::string seed = examId + "/" + std::to_string(userId) + "/" + std::to_string(tries);
-    auto items = drawExamItems(exam, *structures, keys_, seed);
+    auto items = drawExamItems(exam, *structures, keys_, seed, &course);
     if (!items) return tl::unexpected(items.error());
     ExamAttempt a;
     a.userId = userId;

@@ -5,7 +5,9 @@
 #include <chrono>
 #include <set>
 
+#include "lessons/structure_catalogue.h"
 #include "quiz/elo.h"
+#include "quiz/sided_names.h"
 
 namespace at::lessons {
 namespace {
@@ -82,15 +84,31 @@ std::optional<QuestionScene> questionScene(const Course& course, const std::stri
 
 quiz::GradingContext gradingContext(const std::vector<Structure>& structures, const Course& course) {
   quiz::GradingContext context;
+  const StructureCatalogue* catalogue = shippedCatalogue(course.datasetId);
   for (const Structure& s : structures) {
-    quiz::NameEntry entry{s.id, {}};
+    quiz::NameEntry entry;
+    entry.structureId = s.id;
     if (!s.displayName.empty()) entry.names.push_back(s.displayName);
     std::string spaced = s.id;
     std::replace(spaced.begin(), spaced.end(), '_', ' ');
     entry.names.push_back(spaced);
+    entry.side = quiz::sideOfName(s.displayName.empty() ? spaced : s.displayName);
+    entry.baseName = quiz::withoutSide(s.displayName.empty() ? spaced : s.displayName);
+    if (const CatalogueEntry* known = catalogue ? catalogue->find(s.id) : nullptr) {
+      entry.names.push_back(known->name);
+      entry.names.insert(entry.names.end(), known->synonyms.begin(), known->synonyms.end());
+      entry.names.insert(entry.names.end(), known->latin.begin(), known->latin.end());
+      entry.side = known->side;
+      entry.baseName = known->name;
+    }
     if (const auto it = course.synonyms.find(s.id); it != course.synonyms.end()) {
       entry.names.insert(entry.names.end(), it->second.begin(), it->second.end());
     }
+    // Each spelling once, in the order above (the display name first).
+    std::vector<std::string> unique;
+    for (std::string& name : entry.names)
+      if (std::find(unique.begin(), unique.end(), name) == unique.end()) unique.push_back(std::move(name));
+    entry.names = std::move(unique);
     context.names.push_back(std::move(entry));
   }
   return context;
@@ -154,6 +172,7 @@ Status LessonEngine::start(std::int64_t userId, const std::string& lessonId, Les
   structures_ = std::move(*structures);
   resolved_ = std::move(resolved);
   grades_.assign(lesson_.steps.size(), std::nullopt);
+  answers_.assign(lesson_.steps.size(), std::nullopt);
   shown_.clear();
   for (int i = 0; i < int(lesson_.steps.size()); ++i) {
     if (attempt.mode == LessonMode::Guided || isQuestion(lesson_, i)) shown_.push_back(i);
@@ -173,6 +192,7 @@ Status LessonEngine::start(std::int64_t userId, const std::string& lessonId, Les
         grade.feedback = regraded->feedback;
       }
       grades_[std::size_t(response.stepIndex)] = grade;
+      answers_[std::size_t(response.stepIndex)] = response.answer;
     }
   }
   // Resume after the last answered step, or at an earlier question left unanswered.
@@ -266,7 +286,15 @@ Result<quiz::Grade> LessonEngine::answer(const quiz::Answer& answer, const Rende
   if (!stored) return tl::unexpected(withContext("recording the answer", stored.error()));
 
   grades_[std::size_t(index)] = *grade;
+  answers_[std::size_t(index)] = answer;
   return *grade;
+}
+
+Status LessonEngine::back() {
+  if (!attempt_) return fail("no lesson started");
+  if (cursor_ == 0) return fail("lesson '" + lesson_.id + "': this is the first step");
+  --cursor_;
+  return {};
 }
 
 Status LessonEngine::next() {

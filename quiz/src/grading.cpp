@@ -4,6 +4,8 @@
 #include <cmath>
 #include <sstream>
 
+#include "quiz/sided_names.h"
+
 namespace at::quiz {
 namespace {
 
@@ -57,6 +59,24 @@ std::string GradingContext::displayName(const std::string& structureId) const {
 
 std::string GradingContext::nameInSentence(const std::string& structureId) const {
   return quiz::nameInSentence(displayName(structureId));
+}
+
+const NameEntry* GradingContext::entry(const std::string& structureId) const {
+  for (const NameEntry& e : names)
+    if (e.structureId == structureId) return &e;
+  return nullptr;
+}
+
+std::string GradingContext::baseName(const std::string& structureId) const {
+  const NameEntry* e = entry(structureId);
+  if (e && !e->baseName.empty()) return e->baseName;
+  return withoutSide(displayName(structureId));
+}
+
+Side GradingContext::side(const std::string& structureId) const {
+  const NameEntry* e = entry(structureId);
+  if (e && e->side != Side::None) return e->side;
+  return sideOfName(displayName(structureId));
 }
 
 Result<Grade> grade(const ResolvedQuestion& question, const Answer& answer, const GradingContext& context) {
@@ -126,26 +146,52 @@ Result<Grade> gradeChoice(const ResolvedQuestion& question, int choice, const Gr
 
 Result<Grade> gradeName(const ResolvedQuestion& question, const std::string& text, const GradingContext& context) {
   const Question& q = question.question;
-  std::vector<std::string> names;
-  for (const NameEntry& entry : context.names) {
-    if (entry.structureId == q.target) names = entry.names;
+  NameEntry target;
+  target.structureId = q.target;
+  if (const NameEntry* e = context.entry(q.target)) target = *e;
+  if (target.names.empty()) target.names.push_back(q.target);
+  target.names.insert(target.names.end(), q.synonyms.begin(), q.synonyms.end());
+  const Side targetSide = context.side(q.target);
+  const bool sideAsked = q.askSide && targetSide != Side::None;
+  const std::string base = context.baseName(q.target);
+  const std::string baseInSentence = quiz::nameInSentence(base);
+  // The name feedback shows: with the side only when the question asks for it.
+  const auto shown = [&](const std::string& id) {
+    return sideAsked ? context.nameInSentence(id) : quiz::nameInSentence(context.baseName(id));
+  };
+  const std::string sideWord = toString(targetSide);
+
+  const SidedMatch match = matchSidedName(text, target, context.names);
+  if (!match.nameAccepted) {
+    if (!match.closerStructure.empty()) {
+      return makeGrade(false, 0,
+                       "Not quite: \"" + text + "\" reads as the " + shown(match.closerStructure) + "; this is the " +
+                           shown(q.target) + ".",
+                       q);
+    }
+    return makeGrade(false, 0, "Not quite: this is the " + shown(q.target) + ".", q);
   }
-  if (names.empty()) names.push_back(q.target);
-  names.insert(names.end(), q.synonyms.begin(), q.synonyms.end());
-  const std::string target = context.displayName(q.target);
-  const std::string targetInSentence = context.nameInSentence(q.target);
-  const NameMatch match = matchName(text, q.target, names, context.names);
-  if (match.accepted && match.distance == 0) return makeGrade(true, 1, "Correct: " + target + ".", q);
-  if (match.accepted) {
-    return makeGrade(true, 1, "Correct (mind the spelling): " + match.matchedName + ".", q);
+  const std::string spelling = match.distance > 0 ? " (mind the spelling: " + match.matchedName + ")" : "";
+  if (!sideAsked) {
+    std::string feedback = "Correct: " + base + spelling + ".";
+    if (targetSide != Side::None && match.typedSide != Side::None && match.typedSide != targetSide) {
+      feedback += " (This one is the patient's " + sideWord + ".)";
+    }
+    return makeGrade(true, 1, feedback, q);
   }
-  if (!match.closerStructure.empty()) {
-    return makeGrade(false, 0,
-                     "Not quite: \"" + text + "\" reads as the " + context.nameInSentence(match.closerStructure) +
-                         "; this is the " + targetInSentence + ".",
+  if (match.typedSide == targetSide && !match.sideConflicting) {
+    return makeGrade(true, 1, "Correct: " + context.displayName(q.target) + spelling + ".", q);
+  }
+  const std::string hint = " Left and right are the patient's, not the screen's.";
+  if (match.typedSide == Side::None) {
+    return makeGrade(false, 0.5,
+                     "Which side? You named the " + baseInSentence + spelling +
+                         ", but the question asks for the side: this is the patient's " + sideWord + " one." + hint,
                      q);
   }
-  return makeGrade(false, 0, "Not quite: this is the " + targetInSentence + ".", q);
+  return makeGrade(false, 0.25,
+                   "Right structure, wrong side: this is the patient's " + sideWord + " " + baseInSentence + "." + hint,
+                   q);
 }
 
 std::size_t longestCommonSubsequence(const std::vector<std::string>& a, const std::vector<std::string>& b) {

@@ -1,6 +1,7 @@
 #include "quiz/keys.h"
 
 #include <algorithm>
+#include <tuple>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -115,6 +116,24 @@ std::vector<std::string> nearestStructures(const std::string& targetId, const St
   return out;
 }
 
+Result<std::vector<std::string>> neighbourhoodDistractors(const std::string& targetId,
+                                                          const StructureDistances& distances, int count,
+                                                          KeyComputer& keys) {
+  auto centre = keys.centroidMm(targetId);
+  if (!centre) return tl::unexpected(centre.error());
+  std::vector<std::tuple<double, double, std::string>> ranked;
+  for (const auto& [id, d] : distances) {
+    if (id == targetId || !std::isfinite(d)) continue;
+    auto other = keys.centroidMm(id);
+    if (!other) return tl::unexpected(other.error());
+    ranked.emplace_back(norm(*other - *centre), d, id);
+  }
+  std::sort(ranked.begin(), ranked.end());
+  std::vector<std::string> out;
+  for (std::size_t i = 0; i < ranked.size() && int(out.size()) < count; ++i) out.push_back(std::get<2>(ranked[i]));
+  return out;
+}
+
 std::vector<std::string> stableShuffle(std::vector<std::string> items, const std::string& seed) {
   std::uint64_t state = fnv1a(seed);
   for (std::size_t i = items.size(); i > 1; --i) {
@@ -213,7 +232,9 @@ Result<ResolvedQuestion> resolveQuestion(const Question& question, KeyComputer& 
         if (question.distractors < 1) return bad("distractors", "must be >= 1");
         auto distances = keys.distancesFrom(question.target);
         if (!distances) return tl::unexpected(withContext(where, distances.error()));
-        std::vector<std::string> choices = nearestStructures(question.target, *distances, question.distractors);
+        auto neighbours = neighbourhoodDistractors(question.target, *distances, question.distractors, keys);
+        if (!neighbours) return tl::unexpected(withContext(where, neighbours.error()));
+        std::vector<std::string> choices = std::move(*neighbours);
         if (choices.empty()) return bad("distractors", "no other structure is reachable from the target");
         choices.push_back(question.target);
         resolved.choices = stableShuffle(std::move(choices), question.id);

@@ -7,14 +7,20 @@
 // question's structure is highlighted and not hidden behind anything opaque at its centre.
 #include <doctest/doctest.h>
 
+#include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <map>
 
 #include "course_views.h"
+#include "question_visibility.h"
 #include "dataset_resolver.h"
 #include "lessons/course_json.h"
+#include "lessons/exam.h"
+#include "lessons/lesson_engine.h"
+#include "quiz/grading.h"
 #include "render/derived_preset.h"
 #include "render/gradient_volume.h"
 #include "render/scene.h"
@@ -77,7 +83,8 @@ DrawnScene drawnScene(const Dataset& dataset, const lessons::Step& step, const F
   return DrawnScene{*settings, settings->camera.project(centreOf(dataset.labels, target->label), kWidth, kHeight)};
 }
 
-// Checks every question of the shipped courses on `datasetId` against `dataset`; returns how many.
+// Checks every question of the shipped courses on `datasetId` against `dataset`, and every exam
+// locate item they can draw; prints a table per course and returns how many questions.
 int checkQuestionScenes(const Dataset& dataset, const std::string& datasetId) {
   const render::PresetLibrary presets(test::sourceDir() / "data" / "presets");
   const render::IntensityLevels levels = render::summariseIntensities(dataset.volume);
@@ -89,6 +96,9 @@ int checkQuestionScenes(const Dataset& dataset, const std::string& datasetId) {
     auto course = lessons::loadCourseJson(entry.path());
     REQUIRE_MESSAGE(course, (course ? "" : course.error().message));
     if (course->datasetId != datasetId) continue;
+    const quiz::GradingContext names = lessons::gradingContext(dataset.structures, *course);
+    int located = 0, shown = 0, examLocate = 0, examOther = 0;
+    const int before = checked;
     for (const lessons::Lesson& lesson : course->lessons)
       for (const lessons::Step& step : lesson.steps) {
         if (step.kind != lessons::StepKind::Question) continue;
@@ -142,14 +152,38 @@ int checkQuestionScenes(const Dataset& dataset, const std::string& datasetId) {
             overlaps = dataset.labels.dims().contains(i, j, k) && dataset.labels.at(i, j, k) == selected->label;
           }
           CHECK_MESSAGE(!overlaps, "the target's centre lies over the highlighted " << selected->id);
+          // Graded as the lesson grades the click: right the first time.
+          const Structure* picked = dataset.findStructureByLabel(clicked.label);
+          quiz::ResolvedQuestion asked;
+          asked.question = q;
+          auto grade = quiz::gradeLocate(asked, quiz::Pick{picked ? picked->id : "", -1}, names);
+          REQUIRE(grade);
+          CHECK_MESSAGE(grade->correct, grade->feedback);
+          located += grade->correct;
         } else {
           CHECK(selected->id == target->id);  // highlighted
           const render::PickResult seen = render::pick(volumes, *settings, table, (*px)[0], (*px)[1], 0.9);
           CHECK_MESSAGE((clicked.label == target->label || (seen.hit && seen.label == target->label)),
                         "hidden behind label " << clicked.label);
+          shown += clicked.label == target->label || (seen.hit && seen.label == target->label);
         }
         ++checked;
       }
+    // `course validate`'s check agrees: every locate question answerable in its view.
+    auto checks = app::checkLocateQuestions(dataset, *course, presets);
+    REQUIRE_MESSAGE(checks, (checks ? "" : checks.error().message));
+    for (const app::LocateCheck& c : *checks) CHECK_MESSAGE(c.answerable, c.path << " " << c.problem);
+    // Exam locate items take their scene from these lesson questions (lessons::drawExamItems), so
+    // each one checked above is answerable in the exam too; the others are asked by name or choice.
+    for (const lessons::ExamSpec& exam : course->exams)
+      for (const std::string& id : exam.structures) {
+        if (lessons::lessonLocateStep(*course, id)) ++examLocate;
+        else ++examOther;
+      }
+    MESSAGE("course " << course->id << ": " << course->lessons.size() << " lessons, questions checked " << checked - before
+                      << " (locate clicked right first time " << located << ", highlighted targets seen " << shown
+                      << "); exam structures locatable in a checked lesson view " << examLocate
+                      << ", asked by name/choice " << examOther);
   }
   return checked;
 }
@@ -160,6 +194,98 @@ TEST_CASE("Every shipped question's view shows its target; locate questions pick
   auto dataset = openBuiltinDataset("phantom:128");
   REQUIRE(dataset);
   CHECK(checkQuestionScenes(*dataset, "phantom") >= 20);
+}
+
+namespace {
+
+// The name of a colour's hue as a student would say it ("" for greys).
+std::string hueName(const std::array<float, 3>& rgb) {
+  const float hi = std::max({rgb[0], rgb[1], rgb[2]}), lo = std::min({rgb[0], rgb[1], rgb[2]});
+  if (hi - lo < 0.15f) return "";
+  double h = hi == rgb[0] ? 60.0 * (rgb[1] - rgb[2]) / (hi - lo)
+             : hi == rgb[1] ? 60.0 * (2 + (rgb[2] - rgb[0]) / (hi - lo))
+                            : 60.0 * (4 + (rgb[0] - rgb[1]) / (hi - lo));
+  if (h < 0) h += 360;
+  if (h < 15 || h >= 340) return "red";
+  if (h < 45) return "orange";
+  if (h < 70) return "yellow";
+  if (h < 170) return "green";
+  if (h < 260) return "blue";
+  return h < 300 ? "purple" : "pink";
+}
+
+}  // namespace
+
+TEST_CASE("Colours named in the shipped courses' texts are the colours the named step draws its structure in") {
+  // A colour word in a show step's text, or in a question's prompt or explanation, describes the
+  // highlighted structure: the show step's own, or the answer as "show me" draws it
+  // (lessons::showMeScene). The highlighted surface is drawn in the preset's highlight colour.
+  const render::PresetLibrary presets(test::sourceDir() / "data" / "presets");
+  const render::IntensityLevels levels{};
+  const std::vector<std::string> colours = {"red", "orange", "yellow", "green", "blue", "purple", "pink"};
+  int named = 0;
+  for (const auto& entry : std::filesystem::directory_iterator(test::sourceDir() / "data" / "courses")) {
+    if (entry.path().extension() != ".json") continue;
+    auto course = lessons::loadCourseJson(entry.path());
+    REQUIRE(course);
+    for (const lessons::Lesson& lesson : course->lessons)
+      for (const lessons::Step& step : lesson.steps) {
+        const bool show = step.kind == lessons::StepKind::Show;
+        if (!show && step.kind != lessons::StepKind::Question) continue;
+        const std::string text = show ? step.show.text : step.question.prompt + " " + step.question.explanation;
+        const lessons::QuestionScene scene = show ? lessons::QuestionScene{step.show.structure, step.show.presetId,
+                                                                          step.show.view, std::nullopt, std::nullopt}
+                                                  : lessons::showMeScene(step);
+        for (const std::string& colour : colours) {
+          // Whole words only ("yellowish bone" describes the bone, not the picture).
+          std::size_t at = 0;
+          bool found = false;
+          while ((at = text.find(colour, at)) != std::string::npos) {
+            const bool startOk = at == 0 || !std::isalpha(static_cast<unsigned char>(text[at - 1]));
+            const std::size_t end = at + colour.size();
+            const bool endOk = end >= text.size() || !std::isalpha(static_cast<unsigned char>(text[end]));
+            found = found || (startOk && endOk);
+            at = end;
+          }
+          if (!found) continue;
+          auto preset = app::presetForStep(presets, scene.structure, scene.presetId, levels);
+          REQUIRE(preset);
+          CAPTURE(lesson.id);
+          CAPTURE(text);
+          CHECK(hueName(preset->highlightRgb) == colour);
+          ++named;
+        }
+      }
+  }
+  MESSAGE("colour words checked against drawn colours: " << named);
+}
+
+TEST_CASE("checkLocateQuestions refuses a locate question whose target is hidden in its view") {
+  auto dataset = openBuiltinDataset("phantom:128");
+  REQUIRE(dataset);
+  auto course = lessons::loadCourseJson(test::sourceDir() / "data" / "courses" / "temporal_bone.json");
+  REQUIRE(course);
+  // The incus asked in the context of the tympanic cavity around it: the highlighted cavity is
+  // what a click on the incus picks.
+  lessons::Lesson& lesson = course->lessons.front();
+  lessons::Step hidden;
+  hidden.kind = lessons::StepKind::Question;
+  hidden.question.id = "inner_ear.locate_incus_hidden";
+  hidden.question.kind = quiz::QuestionKind::Locate;
+  hidden.question.prompt = "Click the incus.";
+  hidden.question.target = "incus";
+  hidden.scene = lessons::QuestionScene{"tympanic_cavity", "tympanic_cavity_wdt", lessons::CameraView::LateralRight,
+                                        std::nullopt, std::nullopt};
+  lesson.steps.push_back(hidden);
+  const render::PresetLibrary presets(test::sourceDir() / "data" / "presets");
+  auto checks = app::checkLocateQuestions(*dataset, *course, presets);
+  REQUIRE_MESSAGE(checks, (checks ? "" : checks.error().message));
+  REQUIRE_FALSE(checks->empty());
+  const app::LocateCheck& last = checks->back();
+  CHECK(last.questionId == "inner_ear.locate_incus_hidden");
+  MESSAGE(last.problem);
+  CHECK_FALSE(last.answerable);
+  CHECK(last.problem.find("incus") != std::string::npos);
 }
 
 TEST_CASE("The skull course's question views show their targets; locate questions pick them at their centres") {

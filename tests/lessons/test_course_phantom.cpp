@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cmath>
 #include <filesystem>
 #include <memory>
 
@@ -172,21 +173,45 @@ TEST_CASE("PhantomKeys_SoundPathAndFacialNervePathMeetStructuresInAnatomicalOrde
   CHECK(position(n, "facial_nerve") > 0);
 }
 
-TEST_CASE("PhantomKeys_IdentifyDistractorsAreTheStructuresNearestTheTarget") {
+TEST_CASE("PhantomKeys_IdentifyDistractorsComeFromTheTargetsNeighbourhood") {
+  // Locality, for every structure as an identify target (lesson questions and exam items alike):
+  // no structure left out lies nearer the target in space than a distractor offered, and every
+  // distractor lies nearer than the median structure, so a choice cannot be ruled out by region.
   PhantomKeys& p = phantomKeys();
-  const quiz::Question& q = findQuestion(p.course, "inner_ear.identify_vestibule");
-  auto r = quiz::resolveQuestion(q, *p.keys);
-  REQUIRE(r);
-  auto d = p.keys->distancesFrom("vestibule");
-  REQUIRE(d);
-  double farthestChoice = 0;
-  for (const std::string& id : r->choices) {
-    if (id != "vestibule") farthestChoice = std::max(farthestChoice, (*d)[id]);
+  int checked = 0;
+  for (const Structure& target : p.dataset.structures) {
+    CAPTURE(target.id);
+    quiz::Question q;
+    q.id = "locality." + target.id;
+    q.kind = quiz::QuestionKind::Identify;
+    q.target = target.id;
+    q.distractors = 3;
+    auto r = quiz::resolveQuestion(q, *p.keys);
+    REQUIRE_MESSAGE(r, (r ? "" : r.error().message));
+    auto centre = p.keys->centroidMm(target.id);
+    REQUIRE(centre);
+    std::vector<double> all;
+    double farthestChoice = 0;
+    for (const Structure& other : p.dataset.structures) {
+      if (other.id == target.id) continue;
+      auto c = p.keys->centroidMm(other.id);
+      REQUIRE(c);
+      all.push_back(norm(*c - *centre));
+      if (position(r->choices, other.id) >= 0) farthestChoice = std::max(farthestChoice, all.back());
+    }
+    std::sort(all.begin(), all.end());
+    CHECK(farthestChoice <= all[all.size() / 2]);
+    auto d = p.keys->distancesFrom(target.id);
+    REQUIRE(d);
+    for (const Structure& other : p.dataset.structures) {
+      if (other.id == target.id || position(r->choices, other.id) >= 0 || !std::isfinite((*d)[other.id])) continue;
+      auto c = p.keys->centroidMm(other.id);
+      CHECK_MESSAGE(norm(*c - *centre) >= farthestChoice, other.id);
+    }
+    ++checked;
   }
-  for (const auto& [id, dist] : *d) {
-    if (id != "vestibule" && position(r->choices, id) < 0) CHECK_MESSAGE(dist >= farthestChoice, id);
-  }
-  CHECK(position(r->choices, "sigmoid_sinus") == -1);
+  MESSAGE("identify targets checked for neighbourhood distractors: " << checked);
+  CHECK(checked == int(p.dataset.structures.size()));
 }
 
 TEST_CASE("ShippedCourse_NameQuestionsAcceptSynonymsButNotTheNeighbouringCanal") {
@@ -272,13 +297,24 @@ TEST_CASE("ShippedCourse_ExamDrawsItsItemsOnThePhantomAndEveryQuestionHasAScene"
   REQUIRE_FALSE(p.course.exams.empty());
   for (const ExamSpec& exam : p.course.exams) {
     CAPTURE(exam.id);
-    auto items = drawExamItems(exam, p.dataset.structures, *p.keys, "phantom-test");
+    auto items = drawExamItems(exam, p.dataset.structures, *p.keys, "phantom-test", &p.course);
     REQUIRE_MESSAGE(items, (items ? "" : items.error().message));
     CHECK(int(items->size()) == exam.count);
+    int locate = 0;
     for (const ExamItem& item : *items) {
       CHECK(p.keys->hasStructure(item.scene.structure));
-      if (item.question.question.kind == quiz::QuestionKind::Locate) CHECK(item.scene.structure != item.question.question.target);
+      const quiz::Question& q = item.question.question;
+      if (q.kind != quiz::QuestionKind::Locate) continue;
+      ++locate;
+      CHECK(item.scene.structure != q.target);
+      // Chosen like a lesson view: the scene and tolerance of the lesson question locating it.
+      const Step* lesson = lessonLocateStep(p.course, q.target);
+      REQUIRE_MESSAGE(lesson != nullptr, q.id);
+      CHECK(item.scene.structure == sceneFor(*lesson).structure);
+      CHECK((item.scene.view == sceneFor(*lesson).view));
+      CHECK(q.toleranceMm == lesson->question.toleranceMm);
     }
+    MESSAGE("exam " << exam.id << ": " << items->size() << " items, " << locate << " locate items in lesson views");
     for (const std::string& pre : exam.prerequisites) {
       const bool known = std::any_of(p.course.lessons.begin(), p.course.lessons.end(), [&](const Lesson& l) { return l.id == pre; });
       CHECK_MESSAGE(known, pre);

@@ -557,3 +557,81 @@ TEST_CASE("Review_AsksOnlyAboutTaughtStructures_NotLockedOrUnstartedLessons") {
   CHECK(reviewed == std::set<std::string>{"cochlea", "stapes", "vestibule"});
   CHECK(reviewQueue(f.curriculum, f.progress, 1, "toy", f.clock)->empty());
 }
+
+TEST_CASE("LessonEngine_BackShowsThePreviousStepWithItsFeedback_AndOutcomesReviewEveryQuestion") {
+  Fixture f;
+  LessonEngine engine(f.curriculum, f.progress, f.keys, f.options());
+  REQUIRE(engine.start(1, "one"));
+  CHECK_FALSE(engine.back());  // the first step has nothing before it
+  REQUIRE(engine.next());
+  REQUIRE(engine.answer(text("vestibule"), {}, 100));  // wrong: the cochlea is asked
+  REQUIRE(engine.next());
+  CHECK(engine.current()->position == 3);
+  REQUIRE(engine.back());
+  auto step = engine.current();
+  REQUIRE(step);
+  CHECK(step->position == 2);
+  REQUIRE(step->feedback.has_value());  // the answered question comes back with its feedback
+  CHECK_FALSE(step->feedback->correct);
+  CHECK_FALSE(engine.answer(text("cochlea"), {}, 10));  // and its answer stands
+  REQUIRE(engine.back());
+  CHECK(engine.current()->position == 1);
+  // Forward again to the end, answering the rest.
+  for (int i = 0; i < 3; ++i) REQUIRE(engine.next());
+  const int right = indexOf(engine.current()->choiceIds, "stapes");
+  REQUIRE(engine.answer(choice(right), {}, 100));
+  REQUIRE(engine.next());
+  REQUIRE(engine.answer(text("Vestibule"), {}, 100));
+  REQUIRE(engine.next());
+  CHECK(engine.atEnd());
+  REQUIRE(engine.back());  // from the end: the last step again
+  CHECK(engine.current()->position == 5);
+  REQUIRE(engine.next());
+
+  const std::vector<QuestionOutcome> outcomes = engine.outcomes();
+  REQUIRE(outcomes.size() == 3);
+  CHECK(outcomes[0].questionId == "one.q1");
+  CHECK(outcomes[0].yourAnswer == "\"vestibule\"");
+  CHECK(outcomes[0].rightAnswer == "Cochlea");
+  REQUIRE(outcomes[0].grade.has_value());
+  CHECK_FALSE(outcomes[0].grade->correct);
+  CHECK(outcomes[0].scene.structure == "cochlea");  // the answer highlighted
+  CHECK(outcomes[1].yourAnswer == "Stapes");
+  CHECK(outcomes[1].rightAnswer == "Stapes");
+  CHECK(outcomes[1].grade->correct);
+  CHECK(outcomes[2].grade->correct);
+}
+
+TEST_CASE("LessonEngine_SideAskedWithoutASide_IsPartialAndRatedHard_SideNotAskedIsRight") {
+  Fixture f;
+  Course& c = f.curriculum.courseList[0];
+  quiz::Question asked = nameQ("three.q1", "orbit_left");
+  asked.askSide = true;
+  Lesson three;
+  three.id = "three";
+  three.courseId = "toy";
+  three.title = "Lesson three";
+  three.steps = {questionStep(asked), questionStep(nameQ("three.q2", "orbit_right"))};
+  c.lessons.push_back(three);
+  Structure left, right;
+  left.label = 6, left.id = "orbit_left", left.displayName = "Orbit (left)";
+  right.label = 7, right.id = "orbit_right", right.displayName = "Orbit (right)";
+  f.curriculum.datasets["phantom"].push_back(left);
+  f.curriculum.datasets["phantom"].push_back(right);
+  f.keys.structureIds.push_back("orbit_left");
+  f.keys.structureIds.push_back("orbit_right");
+  LessonEngine engine(f.curriculum, f.progress, f.keys, f.options());
+  REQUIRE(engine.start(1, "three"));
+  auto g = engine.answer(text("orbit"), {}, 60'000);
+  REQUIRE(g);
+  CHECK_FALSE(g->correct);
+  CHECK(g->score == 0.5);
+  CHECK(g->feedback.find("Which side?") == 0);
+  CHECK((f.progress.log.back().rating == Rating::Hard));  // FSRS follows the partial grade
+  REQUIRE(engine.next());
+  g = engine.answer(text("orbit"), {}, 60'000);
+  REQUIRE(g);
+  CHECK(g->correct);
+  CHECK(g->feedback.find("right") == std::string::npos);
+  CHECK((f.progress.log.back().rating == Rating::Good));
+}

@@ -171,8 +171,16 @@ TEST_CASE("Name_LeftRightWordOrderDoesNotMatter") {
   CHECK(grade(q, textAnswer("kidney left"), c)->correct);
   CHECK(grade(q, textAnswer("Kidney (L)"), c)->correct);
   CHECK(grade(q, textAnswer("left kidney"), c)->correct);
+  // The other side is wrong when the question asks for the side; otherwise the name is right and
+  // the feedback notes the side (quiz/sided_names.h).
+  q.question.askSide = true;
+  CHECK(grade(q, textAnswer("Kidney (L)"), c)->correct);
   CHECK_FALSE(grade(q, textAnswer("right kidney"), c)->correct);
   CHECK_FALSE(grade(q, textAnswer("kidney right"), c)->correct);
+  q.question.askSide = false;
+  const auto unasked = grade(q, textAnswer("right kidney"), c);
+  CHECK(unasked->correct);
+  CHECK(unasked->feedback.find("patient's left") != std::string::npos);
 }
 
 TEST_CASE("Order_FullCreditInOrderAndLcsPartialCreditOtherwise") {

@@ -249,6 +249,7 @@ Status LessonController::completeStart() {
       if (auto r = selectCourse(i); !r) return r;
   runningLesson_ = pending.lessonId;
   finishedScore_.reset();
+  review_.clear();
   message_.clear();
   const lessons::Attempt& attempt = engine_->attempt();
   events_({{"event", "lesson_started"}, {"lesson", pending.lessonId}, {"course", pending.courseId}, {"user", user_->name},
@@ -298,6 +299,7 @@ Status LessonController::finishLesson() {
   auto score = engine_->finish();
   if (!score) return tl::unexpected(score.error());
   finishedScore_ = *score;
+  review_ = engine_->outcomes();
   step_.reset();
   asked_.reset();
   events_({{"event", "lesson_finished"}, {"lesson", runningLesson_}, {"score", *score}});
@@ -308,6 +310,7 @@ void LessonController::leave() {
   step_.reset();
   asked_.reset();
   finishedScore_.reset();
+  review_.clear();
   engine_.reset();
   if (user_)
     if (auto st = refresh(); !st) report(st.error().message);
@@ -315,6 +318,7 @@ void LessonController::leave() {
 
 void LessonController::backToLessons() {
   finishedScore_.reset();
+  review_.clear();
   engine_.reset();
 }
 

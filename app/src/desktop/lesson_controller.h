@@ -126,6 +126,17 @@ class LessonController {
   // How the last start ended, once (for a script waiting on it).
   std::optional<Status> takeStartResult();
   Status next();                               // past the current step [lesson_step | lesson_finished]
+  // The previous step of the running lesson; an answered question shows with its feedback and
+  // cannot be answered again [lesson_step]. (lesson_controller_review.cpp)
+  Status back();
+  // "Show me", once the question asked is answered: its target highlighted in its own WDT view
+  // from the question's side (lessons::showMeScene), the explanation staying in the feedback
+  // [show_me]. Back at the question with back()/next().
+  Status showMe();
+  // The lesson just finished, question by question (lessons::LessonEngine::outcomes); empty
+  // while a lesson runs. showReviewItem shows one of them in its show-me view [review_item].
+  const std::vector<lessons::QuestionOutcome>& lessonReview() const { return review_; }
+  Status showReviewItem(int index);
   void leave();                                // answers are saved: Resume continues the attempt
   void backToLessons();                        // after the score
   Result<quiz::Grade> answer(const quiz::Answer& answer);  // grades and records [graded]
@@ -171,6 +182,7 @@ class LessonController {
   std::optional<lessons::StepView> step_;     // the engine's current step (nullopt: no lesson running)
   std::optional<Asked> asked_;
   std::optional<double> finishedScore_;       // the lesson just finished
+  std::vector<lessons::QuestionOutcome> review_;  // ... question by question
   std::string runningLesson_;
   std::string message_;
 };

@@ -111,6 +111,19 @@ ScriptInterpreter::Outcome ScriptInterpreter::lessonNext(Context& c) {
   return Progress::Done;
 }
 
+// {"do": "lesson_back"}, {"do": "show_me"}, {"do": "lesson_review_item", "index": i}: the
+// Lessons panel's Back, Show me and review rows.
+ScriptInterpreter::Outcome ScriptInterpreter::lessonReview(Context& c) {
+  LessonController& l = c.model.lessons();
+  if (l.preparing()) return Progress::Running;
+  const std::string verb = c.action.at("do").get<std::string>();
+  Status st = verb == "lesson_back" ? l.back()
+              : verb == "show_me"   ? l.showMe()
+                                    : l.showReviewItem(c.action.value("index", -1));
+  if (!st) return actionError(c.action, st.error());
+  return Progress::Done;
+}
+
 ScriptInterpreter::Outcome ScriptInterpreter::answer(Context& c) {
   LessonController& l = c.model.lessons();
   if (l.preparing()) return Progress::Running;

@@ -40,6 +40,8 @@ const std::map<std::string, ScriptInterpreter::Handler>& ScriptInterpreter::hand
       {"hover_sweep", &S::hoverSweep},  {"lesson_user", &S::lessonUser},
       {"lessons", &S::lessonList},      {"lesson", &S::lesson},
       {"lesson_next", &S::lessonNext},  {"answer", &S::answer},
+      {"lesson_back", &S::lessonReview}, {"show_me", &S::lessonReview},
+      {"lesson_review_item", &S::lessonReview},
       {"review", &S::review},           {"lesson_close", &S::lessonClose},
       {"exams", &S::examList},          {"exam", &S::exam},
       {"exam_item", &S::examItem},      {"exam_answer", &S::examAnswer},

@@ -113,6 +113,7 @@ class ScriptInterpreter {
   Outcome lessonList(Context&);
   Outcome lesson(Context&);
   Outcome lessonNext(Context&);
+  Outcome lessonReview(Context&);  // lesson_back, show_me, lesson_review_item {"index": i}
   Outcome answer(Context&);
   Outcome review(Context&);
   Outcome lessonClose(Context&);

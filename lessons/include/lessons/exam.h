@@ -120,8 +120,22 @@ struct ExamResult {
 Result<std::pair<Course, ExamSpec>> findExam(CurriculumRepository& curriculum, const std::string& examId);
 
 // The items of one attempt, drawn as the header describes; `seed` fixes the order.
+//
+// Locate items are chosen like lesson views, so that every one can be answered: given the exam's
+// `course`, a locate item on a structure takes the scene (region structure, preset, side, camera,
+// clip) and the tolerance of the first lesson question of the course that asks to locate that
+// structure — views the course checks are answerable (a click on the target's centre picks it:
+// tests/app/test_question_scenes.cpp, `course validate`). A structure that no lesson asks to locate
+// is asked in its next kind instead (identify or name, in its drawn order of kinds); only when
+// locate is the exam's one kind, or without a course, does its region fall back to the target's
+// nearest neighbour by WDT distance with no tolerance (the app then turns the view to a side from
+// which the target can be clicked).
 Result<std::vector<ExamItem>> drawExamItems(const ExamSpec& exam, const std::vector<Structure>& structures,
-                                            quiz::KeyComputer& keys, const std::string& seed);
+                                            quiz::KeyComputer& keys, const std::string& seed,
+                                            const Course* course = nullptr);
+
+// The first lesson question of `course` that asks to locate `structureId`, or nullptr.
+const Step* lessonLocateStep(const Course& course, const std::string& structureId);
 
 class ExamSession {
  public:

@@ -75,9 +75,34 @@ struct StepView {
   QuestionScene scene;
 };
 
+// One question of a lesson or exam as the review after it shows it.
+struct QuestionOutcome {
+  int position = 0;                  // 1-based among the steps shown
+  std::string questionId;
+  quiz::QuestionKind kind = quiz::QuestionKind::Locate;
+  std::string prompt;
+  std::string target;                // structure id the question is about
+  std::string yourAnswer;            // in words: the choice's or clicked structure's name, the typed text
+  std::string rightAnswer;           // in words: the key
+  std::optional<quiz::Grade> grade;  // nullopt = not answered
+  QuestionScene scene;               // showMeScene of the question
+};
+
+// "Show me": the scene that shows a question's answer — its target highlighted in its own WDT
+// context (preset "<target>_wdt"), seen from the side the question was asked from, with the
+// question's camera and clip. For relation and order questions the target is the structure the
+// question trains (Question::target).
+QuestionScene showMeScene(const Step& questionStep);
+
+// The key of a resolved question and an answer to it, in words (display names of `context`).
+std::string rightAnswerText(const quiz::ResolvedQuestion& question, const quiz::GradingContext& context);
+std::string answerText(const quiz::ResolvedQuestion& question, const quiz::Answer& answer,
+                       const quiz::GradingContext& context);
+
 // The names a typed answer may use for each structure of a course's dataset: its display name,
-// its id with spaces for underscores, and the course's synonyms. Lesson and review answers are
-// graded with this context.
+// its id with spaces for underscores, the dataset's structure catalogue (name, synonyms, Latin
+// names, side: lessons/structure_catalogue.h) and the course's synonyms. Without a catalogue entry
+// the side is read off the display name. Lesson, review and exam answers are graded with this.
 quiz::GradingContext gradingContext(const std::vector<Structure>& structures, const Course& course);
 
 class LessonEngine {
@@ -109,6 +134,14 @@ class LessonEngine {
 
   // Moves past the current step. Error on an unanswered question step or at the end.
   Status next();
+  // Moves back to the previous step shown (from the end too: to the last one). An answered
+  // question shows again with its feedback; answers are never changed. Error at the first step.
+  Status back();
+
+  // Every question step of the lesson shown so far or answered, in order: what was asked, the
+  // student's answer, the right one, the grade and the scene to show it in (the end-of-lesson
+  // review). Unanswered questions have no grade and an empty `yourAnswer`.
+  std::vector<QuestionOutcome> outcomes() const;
 
   // Finishes the attempt (all question steps answered), storing the mean score; returns it.
   Result<double> finish();
@@ -132,6 +165,7 @@ class LessonEngine {
   std::vector<int> shown_;                                 // step indices this mode shows
   std::vector<std::optional<quiz::ResolvedQuestion>> resolved_;  // per step
   std::vector<std::optional<quiz::Grade>> grades_;         // per step
+  std::vector<std::optional<quiz::Answer>> answers_;       // per step, as given (or as stored)
   std::size_t cursor_ = 0;                                 // into shown_
 };
 

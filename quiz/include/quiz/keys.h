@@ -1,7 +1,7 @@
 // Answer keys computed from the dataset, never written by hand (ARCHITECTURE.md §5):
 //   relation — from weighted distances of candidate structures from a structure;
 //   order    — by marching the label volume along a straight drilling path;
-//   identify — distractors are the structures nearest the target by weighted distance.
+//   identify — distractors are the target's neighbours: reachable structures nearest it in space.
 // The functions take plain inputs; `KeyComputer` supplies them for one dataset, and
 // `DatasetKeyComputer` implements it over a Dataset with a caller-supplied WDT (the app passes
 // computeWdt; quiz/ itself does not link the WDT library).
@@ -43,6 +43,15 @@ std::vector<std::string> marchLabels(const LabelMap& labels, const std::vector<S
 // unreachable ones), nearest first; ties by id.
 std::vector<std::string> nearestStructures(const std::string& targetId, const StructureDistances& distances,
                                            int count, const std::vector<std::string>& exclude = {});
+
+class KeyComputer;
+
+// Identify distractors from the target's neighbourhood, so that they cannot be ruled out by region:
+// among the structures reachable from `targetId` (finite weighted distance), the `count` whose
+// centroids lie nearest the target's centroid; ties by weighted distance, then by id.
+Result<std::vector<std::string>> neighbourhoodDistractors(const std::string& targetId,
+                                                          const StructureDistances& distances, int count,
+                                                          KeyComputer& keys);
 
 // Deterministic permutation of `items` seeded by `seed` (a question id): the same question always
 // shows its choices in the same order, also after resuming.

@@ -30,10 +30,19 @@ int damerauLevenshtein(const std::string& a, const std::string& b);
 // 1 up to 8, 2 up to 16, 3 beyond.
 int typoAllowance(std::size_t normalizedLength);
 
+// The patient's side a structure belongs to; None for midline or unpaired structures.
+enum class Side { None, Left, Right };
+const char* toString(Side side);  // "", "left", "right"
+
 // Every accepted spelling of one structure.
 struct NameEntry {
   std::string structureId;
   std::vector<std::string> names;  // display name, the id with '_' as spaces, synonyms
+  // From the dataset's structure catalogue (lessons/structure_catalogue.h), or read off the
+  // display name ("Orbit (right)" → Right, "Orbit") when the dataset has none. Names in `names`
+  // may carry the side as a word; grading compares them without it (quiz/sided_names.h).
+  Side side = Side::None;
+  std::string baseName;            // the display name without its side; "" = names.front()
 };
 
 // All structures a student could mean (the dataset's structures with course synonyms).

@@ -64,6 +64,8 @@ struct Question {
                                     // empty = computed: target + the `distractors` nearest by WDT
   int distractors = 3;              // Identify with computed choices
   std::vector<std::string> synonyms;  // Name: accepted besides the display name and course synonyms
+  bool askSide = false;             // Name: the prompt asks for the patient's side of a paired
+                                    // structure; a name without it earns partial credit
   RelationSpec relation;            // Relation only
   OrderSpec order;                  // Order only
   double difficulty = 1500;         // initial Elo difficulty (same scale as ability, 1500 = average)
@@ -97,7 +99,8 @@ struct Answer {
 
 struct Grade {
   bool correct = false;
-  double score = 0;      // 0..1; partial credit only for Order
+  double score = 0;      // 0..1; partial credit for Order, and for Name questions that ask for
+                         // the side (0.5 without a side, 0.25 with the wrong one)
   std::string feedback;  // one or two sentences for the student
 };
 

@@ -116,7 +116,27 @@ void LessonPanel::drawLesson(LessonController& lessons) {
   ImGui::TextColored(kHeading, "%s", printableUiText(lessons.engine()->lesson().title).c_str());
   if (auto score = lessons.finishedScore()) {
     ImGui::Text("Lesson finished: score %.0f%%", 100 * *score);
-    if (ImGui::Button("Back to the lessons")) lessons.backToLessons();
+    if (ImGui::Button("Back to the lessons")) {
+      lessons.backToLessons();
+      return;
+    }
+    // The review: each question, the answer given and the right one; "show" puts its picture up.
+    ImGui::PushTextWrapPos(0);
+    const auto& review = lessons.lessonReview();
+    for (int i = 0; i < int(review.size()); ++i) {
+      const lessons::QuestionOutcome& o = review[std::size_t(i)];
+      const bool right = o.grade && o.grade->correct;
+      ImGui::PushID(i);
+      ImGui::TextColored(right ? kRight : o.grade && o.grade->score > 0 ? kPartly : kWrong, "%d. %s", o.position,
+                         o.prompt.c_str());
+      ImGui::TextDisabled("you: %s  -  answer: %s", o.yourAnswer.empty() ? "(none)" : o.yourAnswer.c_str(),
+                          o.rightAnswer.c_str());
+      ImGui::SameLine();
+      if (ImGui::SmallButton("show"))
+        if (auto st = lessons.showReviewItem(i); !st) lessons.report(st.error().message);
+      ImGui::PopID();
+    }
+    ImGui::PopTextWrapPos();
     return;
   }
   const lessons::StepView& v = *lessons.step();
@@ -137,10 +157,20 @@ void LessonPanel::drawLesson(LessonController& lessons) {
   }
   const LessonController::Asked* asked = lessons.asked();
   const bool canGo = v.kind == lessons::StepKind::Show || (asked && asked->grade);
+  if (v.position == 1) ImGui::BeginDisabled();
+  if (ImGui::Button("Back"))
+    if (auto st = lessons.back(); !st) lessons.report(st.error().message);
+  if (v.position == 1) ImGui::EndDisabled();
+  ImGui::SameLine();
   if (!canGo) ImGui::BeginDisabled();
   if (ImGui::Button(v.position == v.count ? "Finish" : "Next"))
     if (auto st = lessons.next(); !st) lessons.report(st.error().message);
   if (!canGo) ImGui::EndDisabled();
+  // Once an answer is graded, its feedback and Next are scrolled into view (a small window, a
+  // long question): once per question, so the student may scroll back up.
+  const std::string graded = asked && asked->grade ? asked->question.question.id : "";
+  if (!graded.empty() && graded != scrolledTo_) ImGui::SetScrollHereY(1.0f);
+  scrolledTo_ = graded;
 }
 
 void LessonPanel::drawQuestion(LessonController& lessons) {
@@ -213,6 +243,8 @@ void LessonPanel::drawQuestion(LessonController& lessons) {
     const ImVec4 colour = a.grade->correct ? kRight : a.grade->score > 0 ? kPartly : kWrong;
     ImGui::TextColored(colour, "%s", printableUiText(a.grade->feedback).c_str());
     if (a.review) ImGui::TextDisabled("Saved: the review queue is updated.");
+    if (!a.grade->correct && ImGui::Button("Show me"))  // the answer in its own view
+      if (auto st = lessons.showMe(); !st) lessons.report(st.error().message);
   }
   if (a.review && ImGui::Button(a.grade ? "Done" : "Skip")) lessons.dismissReview();
   ImGui::PopTextWrapPos();

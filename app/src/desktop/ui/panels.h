@@ -52,6 +52,7 @@ class LessonPanel {
   void drawReview(LessonController& lessons);
   std::string userEdit_;
   bool editingUser_ = false;
+  std::string scrolledTo_;  // the graded question the panel last scrolled down to (its feedback, Next)
   ExamPanel exams_;
 };
 

@@ -1,0 +1,96 @@
+#include "question_visibility.h"
+
+#include <cmath>
+#include <map>
+
+#include "course_views.h"
+#include "render/derived_preset.h"
+#include "render/gradient_volume.h"
+#include "render/scene.h"
+#include "render/structure_pick.h"
+#include "volume/mask.h"
+#include "wdt/wdt.h"
+
+namespace at::app {
+namespace {
+
+// The target voxel nearest the target's centroid (on the structure even when it is curved).
+std::optional<Vec3> centreOf(const LabelMap& labels, std::uint16_t label) {
+  auto frame = render::structureFrame(labels, label);
+  if (!frame) return std::nullopt;
+  return frame->anchorMm;
+}
+
+}  // namespace
+
+Result<std::vector<LocateCheck>> checkLocateQuestions(const Dataset& dataset, const lessons::Course& course,
+                                                      const render::PresetLibrary& presets) {
+  std::vector<LocateCheck> out;
+  std::optional<render::IntensityLevels> levels;
+  std::optional<render::GradientVolume> gradients;
+  std::map<std::string, FloatVolume> fields;
+  for (std::size_t li = 0; li < course.lessons.size(); ++li) {
+    const lessons::Lesson& lesson = course.lessons[li];
+    for (std::size_t si = 0; si < lesson.steps.size(); ++si) {
+      const lessons::Step& step = lesson.steps[si];
+      if (step.kind != lessons::StepKind::Question || step.question.kind != quiz::QuestionKind::Locate) continue;
+      if (!levels) levels = render::summariseIntensities(dataset.volume);
+      if (!gradients) gradients = render::computeGradientVolume(dataset.volume);
+      LocateCheck check;
+      check.path = "lessons[" + std::to_string(li) + "].steps[" + std::to_string(si) + "].question";
+      check.questionId = step.question.id;
+      const lessons::QuestionScene scene = lessons::sceneFor(step);
+      const Structure* region = dataset.findStructure(scene.structure);
+      const Structure* target = dataset.findStructure(step.question.target);
+      if (!region || !target) {
+        return fail(check.path + ": no structure '" + (region ? step.question.target : scene.structure) +
+                    "' in dataset '" + dataset.id + "'");
+      }
+      auto preset = presetForStep(presets, region->id, scene.presetId, *levels);
+      if (!preset) return tl::unexpected(withContext(check.path, preset.error()));
+      if (!fields.count(region->id)) {
+        auto params = render::wdtParamsFor(*preset);
+        if (!params) return tl::unexpected(withContext(check.path, params.error()));
+        auto wdt = computeWdt(dataset.volume, structureMask(dataset.labels, region->label), *params);
+        if (!wdt) return tl::unexpected(withContext(check.path + ": field of '" + region->id + "'", wdt.error()));
+        fields[region->id] = std::move(wdt->field.distances);
+      }
+      auto frame = render::structureFrame(dataset.labels, region->label);
+      const auto centre = centreOf(dataset.labels, target->label);
+      if (!frame || !centre) {
+        check.problem = "the target or its region has no voxels";
+        out.push_back(check);
+        continue;
+      }
+      render::ViewRequest request;
+      request.width = kCheckViewWidth;
+      request.height = kCheckViewHeight;
+      const std::string viewName = lessons::toString(scene.view);
+      request.view = viewName;
+      request.margin = kLocateRegionMargin;
+      auto settings = render::settingsFor(*preset, *frame, request);
+      if (!settings) return tl::unexpected(withContext(check.path, settings.error()));
+      applyStepPlacement(*settings, scene.camera, scene.clip);
+      const auto px = settings->camera.project(*centre, kCheckViewWidth, kCheckViewHeight);
+      if (!px || (*px)[0] < 0 || (*px)[0] >= kCheckViewWidth || (*px)[1] < 0 || (*px)[1] >= kCheckViewHeight) {
+        check.problem = "the " + target->id + "'s centre is outside the view (" + viewName + ")";
+        out.push_back(check);
+        continue;
+      }
+      const render::SceneVolumes volumes{&dataset.volume, &dataset.labels, &fields[region->id], region->label,
+                                         &*gradients};
+      const render::TransferFunction2D table = render::shadingTable(settings->preset);
+      const render::PickResult clicked = render::pickStructure(volumes, *settings, table, (*px)[0], (*px)[1]);
+      check.answerable = clicked.label == target->label;
+      if (!check.answerable) {
+        const Structure* picked = clicked.hit ? dataset.findStructureByLabel(clicked.label) : nullptr;
+        check.problem = "a click on the " + target->id + "'s centre in its view (" + viewName + ", region " +
+                        region->id + ") picks " + (picked ? "the " + picked->id : std::string("nothing"));
+      }
+      out.push_back(check);
+    }
+  }
+  return out;
+}
+
+}  // namespace at::app
