@@ -110,7 +110,7 @@ int runValidate(const cli::Args& args) {
       int answerable = 0;
       for (const LocateCheck& c : *checks) {
         if (c.answerable) ++answerable;
-        else std::fprintf(stderr, "%s: %s (%s): not answerable: %s\n", file.string().c_str(), c.path.c_str(),
+        else terminalFprintf(stderr, "%s: %s (%s): not answerable: %s\n", file.string().c_str(), c.path.c_str(),
                           c.questionId.c_str(), c.problem.c_str());
       }
       if (answerable != int(checks->size())) {

@@ -69,7 +69,7 @@ void showAnswerIfWrong(const lessons::LessonEngine& engine, TerminalViews* views
                        const std::string& stem) {
   for (const lessons::QuestionOutcome& o : engine.outcomes()) {
     if (o.questionId != questionId || !o.grade || o.grade->correct) continue;
-    std::printf("  the answer: %s\n", o.rightAnswer.c_str());
+    terminalPrintf("  the answer: %s\n", o.rightAnswer.c_str());
     showPicture(views, o.scene, stem + "-answer", false);
   }
 }
@@ -78,11 +78,11 @@ void showAnswerIfWrong(const lessons::LessonEngine& engine, TerminalViews* views
 void printLessonReview(const lessons::LessonEngine& engine, TerminalViews* views, const std::string& lessonId) {
   const std::vector<lessons::QuestionOutcome> outcomes = engine.outcomes();
   if (outcomes.empty()) return;
-  std::printf("\nReview:\n");
+  terminalPrintf("\nReview:\n");
   for (const lessons::QuestionOutcome& o : outcomes) {
     const char* mark = !o.grade ? "-" : o.grade->correct ? "right" : o.grade->score > 0 ? "partly" : "wrong";
-    std::printf("  [%d] %s  (%s)\n", o.position, o.prompt.c_str(), mark);
-    std::printf("      you: %s   answer: %s\n", o.yourAnswer.empty() ? "(none)" : o.yourAnswer.c_str(),
+    terminalPrintf("  [%d] %s  (%s)\n", o.position, o.prompt.c_str(), mark);
+    terminalPrintf("      you: %s   answer: %s\n", o.yourAnswer.empty() ? "(none)" : o.yourAnswer.c_str(),
                 o.rightAnswer.c_str());
     if (o.grade && !o.grade->correct) {
       char stem[160];
