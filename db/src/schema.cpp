@@ -452,6 +452,18 @@ constexpr std::string_view kStructureReview = R"SQL(
 ALTER TABLE structures ADD COLUMN review_state TEXT NOT NULL DEFAULT 'not_started'
   CHECK (review_state IN ('not_started', 'in_progress', 'completed', 'flagged'));
 )SQL";
+// A trial's viewing times are blank (NULL) when they were not measured (the views were shown as
+// files outside the program), not 0: a reader cannot mistake them for a participant who looked
+// for no time at all. Rebuilt as nullable columns (SQLite cannot drop NOT NULL in place).
+constexpr std::string_view kUnmeasuredViewingBlank = R"SQL(
+ALTER TABLE study_trials ADD COLUMN view_ms_a_measured REAL;
+ALTER TABLE study_trials ADD COLUMN view_ms_b_measured REAL;
+UPDATE study_trials SET view_ms_a_measured = view_ms_a, view_ms_b_measured = view_ms_b WHERE viewing_measured = 1;
+ALTER TABLE study_trials DROP COLUMN view_ms_a;
+ALTER TABLE study_trials DROP COLUMN view_ms_b;
+ALTER TABLE study_trials RENAME COLUMN view_ms_a_measured TO view_ms_a;
+ALTER TABLE study_trials RENAME COLUMN view_ms_b_measured TO view_ms_b;
+)SQL";
 }  // namespace
 
 const std::vector<Migration>& migrations() {
@@ -472,6 +484,7 @@ const std::vector<Migration>& migrations() {
       {11, "study ratings record the render quality on screen and its settle time", kStudyRatingQuality},
       {12, "course steps keep a free camera and a clipping plane", kStepPlacement},
       {13, "structures keep their review state (not started, in progress, completed, flagged)", kStructureReview},
+      {14, "study trials: viewing times not measured are blank (NULL), not 0", kUnmeasuredViewingBlank},
   };
   return all;
 }
