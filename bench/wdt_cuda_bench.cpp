@@ -6,7 +6,14 @@
 // Wall time is the whole runCudaBackend call; the warm-up call of each configuration allocates the
 // backend's cached workspace, the measured calls reuse it.
 //
-//   wdt_cuda_bench [--sizes 128,256,512] [--reps 10] [--check-max 256] [--sweeps-before-bricks -1]
+//   wdt_cuda_bench [--sizes 128,256,512] [--reps 10] [--check-max 256] [--cpu-check-max 0]
+//                  [--sweeps-before-bricks -1] [--z-planes Z]
+//
+// --check-max: sizes up to this get the exact reference and the CPU backend beside the GPU;
+// --cpu-check-max: sizes up to this (above --check-max) get the CPU backend only, for the
+// bit-for-bit comparison on volumes where the exact reference takes too long. --z-planes Z: the
+// central Z planes of each size's head only (n × n × Z voxels), e.g. just past 2³² voxels. Each line states the
+// device memory the workspace held (device_mib_used: cudaMemGetInfo's used memory after the runs).
 //
 // Converge mode runs once per value of --sweeps-before-bricks (whole-volume passes before the
 // brick rounds; see cuda/wdt_cuda.h).
@@ -14,6 +21,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <random>
 #include <sstream>
 #include <string>
@@ -24,9 +32,12 @@
 
 namespace {
 
-at::WdtProblem syntheticHead(int n) {
+// The head on an n³ grid, or its central nz planes along z (nz < n: a slab, the same voxels as
+// those planes of the n³ head).
+at::WdtProblem syntheticHead(int n, int nz) {
   at::WdtProblem p;
-  p.grid.dims = {n, n, n};
+  p.grid.dims = {n, n, nz};
+  const int z0 = (n - nz) / 2;
   p.grid.spacingMm = {51.2 / n, 51.2 / n, 51.2 / n};
   p.density.resize(p.grid.dims.count());
   p.seeds.assign(p.grid.dims.count(), 0);
@@ -34,9 +45,10 @@ at::WdtProblem syntheticHead(int n) {
   std::uniform_int_distribution<int> noise(0, 12);
   const double c = (n - 1) / 2.0;
   const double blobs[4][4] = {{0.3, 0.5, 0.5, 0.08}, {0.7, 0.45, 0.4, 0.06}, {0.5, 0.3, 0.65, 0.07}, {0.55, 0.7, 0.35, 0.05}};
-  for (int k = 0; k < n; ++k)
+  for (int kz = 0; kz < nz; ++kz)
     for (int j = 0; j < n; ++j)
       for (int i = 0; i < n; ++i) {
+        const int k = kz + z0;
         const double r = std::sqrt((i - c) * (i - c) + (j - c) * (j - c) + (k - c) * (k - c)) / n;
         int q = 0;
         if (r < 0.40) q = 40 + noise(rng);
@@ -45,7 +57,7 @@ at::WdtProblem syntheticHead(int n) {
           const double dx = double(i) / n - b[0], dy = double(j) / n - b[1], dz = double(k) / n - b[2];
           if (dx * dx + dy * dy + dz * dz < b[3] * b[3]) q = 250;
         }
-        const std::size_t idx = p.grid.dims.index(i, j, k);
+        const std::size_t idx = p.grid.dims.index(i, j, kz);
         p.density[idx] = std::uint8_t(std::min(255, q));
         if (r < 3.0 / n + 1e-9) p.seeds[idx] = 1;
       }
@@ -79,13 +91,15 @@ std::vector<int> parseList(const char* s) {
 
 int main(int argc, char** argv) {
   std::vector<int> sizes = {128, 256, 512};
-  int reps = 10, checkMax = 256;
+  int reps = 10, checkMax = 256, cpuCheckMax = 0, zPlanes = 0;
   std::vector<int> sweepsBeforeBricks = {-1};  // the default
   for (int a = 1; a + 1 < argc; a += 2) {
     const std::string flag = argv[a];
     if (flag == "--sizes") sizes = parseList(argv[a + 1]);
     else if (flag == "--reps") reps = std::max(1, std::atoi(argv[a + 1]));  // at least one measured run
     else if (flag == "--check-max") checkMax = std::atoi(argv[a + 1]);
+    else if (flag == "--cpu-check-max") cpuCheckMax = std::atoi(argv[a + 1]);
+    else if (flag == "--z-planes") zPlanes = std::atoi(argv[a + 1]);
     else if (flag == "--sweeps-before-bricks") sweepsBeforeBricks = parseList(argv[a + 1]);
     else {
       std::fprintf(stderr, "wdt_cuda_bench: unknown option %s\n", flag.c_str());
@@ -98,7 +112,8 @@ int main(int argc, char** argv) {
     return 0;
   }
   for (int n : sizes) {
-    at::WdtProblem p = syntheticHead(n);
+    const int nz = zPlanes > 0 && zPlanes < n ? zPlanes : n;
+    at::WdtProblem p = syntheticHead(n, nz);
     const bool check = n <= checkMax;
     at::FloatVolume exact;
     if (check) {
@@ -120,6 +135,7 @@ int main(int argc, char** argv) {
       std::vector<double> perPass, wall, device;
       at::WdtResult last;
       for (int r = 0; r < reps + 1; ++r) {  // the first run warms up
+        last = {};  // one field on the host at a time (13.5 GiB at 1536³)
         auto res = at::cuda::runCudaBackend(p, {});
         if (!res) {
           std::fprintf(stderr, "%s\n", res.error().message.c_str());
@@ -132,15 +148,17 @@ int main(int argc, char** argv) {
         }
         last = std::move(*res);
       }
-      std::printf("{\"bench\":\"wdt_cuda\",\"device\":\"%s\",\"size\":%d,\"mode\":\"%s\",\"scheme\":\"%s\","
+      std::printf("{\"bench\":\"wdt_cuda\",\"device\":\"%s\",\"size\":%d,\"z_planes\":%d,\"mode\":\"%s\",\"scheme\":\"%s\","
                   "\"passes_run\":%d,\"rounds\":%d,\"converged\":%s,\"ms_per_pass_median\":%.4f,"
                   "\"ms_device_median\":%.4f,\"ms_device_min\":%.4f,\"ms_device_max\":%.4f,\"ms_wall_median\":%.3f,"
                   "\"sweeps_before_bricks\":%d,\"runs\":%d",
-                  last.stats.device.c_str(), n, mode == 0 ? "converge" : (mode == 1 ? "1 pass" : "2 passes"),
+                  last.stats.device.c_str(), n, nz, mode == 0 ? "converge" : (mode == 1 ? "1 pass" : "2 passes"),
                   last.stats.scheme.c_str(), last.stats.passesRun, last.stats.rounds,
                   last.stats.converged ? "true" : "false", median(perPass), median(device),
                   *std::min_element(device.begin(), device.end()), *std::max_element(device.begin(), device.end()),
                   median(wall), sweepsFirst, reps);
+      const double usedMiB = at::cuda::deviceMemoryUsedMiB();
+      if (usedMiB >= 0) std::printf(",\"device_mib_used\":%.0f", usedMiB);
       if (check) {
         const at::WdtAccuracy acc = at::compareToExact(last.field.distances, exact);
         auto cpu = at::runCpuBackend(p, {});
@@ -149,6 +167,18 @@ int main(int argc, char** argv) {
                     "\"cpu_mean_rel_err\":%.3g,\"cpu_p99_rel_err\":%.3g,\"cpu_passes_run\":%d,\"max_rel_diff_gpu_cpu\":%.3g",
                     acc.meanRelErr, acc.p99RelErr, acc.maxRelErr, acc.belowExact, cacc.meanRelErr, cacc.p99RelErr,
                     cpu->stats.passesRun, maxRelDiff(last.field.distances.voxels, cpu->field.distances.voxels));
+      }
+      else if (n <= cpuCheckMax) {
+        auto cpu = at::runCpuBackend(p, {});
+        if (!cpu) {
+          std::fprintf(stderr, "%s\n", cpu.error().message.c_str());
+          return 1;
+        }
+        const auto& g = last.field.distances.voxels;
+        const auto& c = cpu->field.distances.voxels;
+        const bool same = g.size() == c.size() && std::memcmp(g.data(), c.data(), g.size() * sizeof(float)) == 0;
+        std::printf(",\"cpu_passes_run\":%d,\"gpu_equals_cpu_bitwise\":%s,\"max_rel_diff_gpu_cpu\":%.3g",
+                    cpu->stats.passesRun, same ? "true" : "false", maxRelDiff(g, c));
       }
       std::printf("}\n");
       std::fflush(stdout);

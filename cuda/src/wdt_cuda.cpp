@@ -441,6 +441,16 @@ Status runPasses(Workspace& w, const WdtParams& params, const WdtControl& contro
 
 }  // namespace
 
+double deviceMemoryUsedMiB() {
+  if (!queryDevice().available) return -1;
+  std::size_t freeBytes = 0, totalBytes = 0;
+  if (cudaMemGetInfo(&freeBytes, &totalBytes) != cudaSuccess) {
+    (void)cudaGetLastError();
+    return -1;
+  }
+  return double(totalBytes - freeBytes) / (1024.0 * 1024.0);
+}
+
 void setConvergeSweepsBeforeBricks(int passes) { gSweepsBeforeBricks = passes < 0 ? -1 : passes; }
 
 Result<DeviceField> makeDeviceField(const Geometry& grid, float fill) {

@@ -338,6 +338,38 @@ TEST_CASE("fixed-pass GPU fields equal the CPU's bit for bit over many tiles and
   }
 }
 
+// Single lanes and one-voxel-thin slabs along every axis, and sizes one past the multiples of the
+// sweep tile (32 × 16 lanes), the plane group (8 planes) and the brick (16³): every pass equals the
+// CPU's bit for bit, and converged fields (passes, then brick rounds) equal the exact reference.
+TEST_CASE("thin volumes and sizes off the tile, group and brick multiples equal the CPU and the exact reference") {
+  if (!requireDevice()) return;
+  std::mt19937_64 rng(at::test::freshSeed("cuda thin and odd sizes"));
+  const at::Dims sizes[] = {{1, 1, 300}, {300, 1, 1}, {1, 300, 1}, {17, 1, 70}, {1, 65, 33},
+                            {49, 17, 9}, {129, 2, 17}, {3, 257, 2}, {33, 33, 1}};
+  for (const at::Dims& dims : sizes) {
+    for (StepRule rule : kRules) {
+      for (WeightRule weight : kWeights) {
+        WdtProblem p = randomProblem(rng, dims, {0.9, 0.7, 1.3}, rule, weight);
+        checkFixedPassesMatchCpu(p);
+        p.params.converge = true;
+        p.params.maxPasses = 400;
+        for (const int passesFirst : {0, 2}) {
+          at::cuda::setConvergeSweepsBeforeBricks(passesFirst);
+          at::WdtStats stats;
+          const auto gpu = gpuField(p, &stats);
+          auto exact = at::exactWdtOnProblem(p);
+          REQUIRE(exact.has_value());
+          CAPTURE(dims.toString());
+          CAPTURE(passesFirst);
+          CHECK(stats.converged);
+          CHECK_MESSAGE(sameBits(gpu, exact->voxels), describeDifference(gpu, exact->voxels, dims));
+        }
+        at::cuda::setConvergeSweepsBeforeBricks(-1);
+      }
+    }
+  }
+}
+
 TEST_CASE("two GPU runs give bitwise identical fields") {
   if (!requireDevice()) return;
   std::mt19937_64 rng(at::test::freshSeed("cuda determinism"));

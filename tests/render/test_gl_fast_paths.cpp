@@ -24,6 +24,7 @@ struct RandomScene {
   Volume volume;
   LabelMap labels;
   FloatVolume field;
+  Vec3 structureCentreMm;  // the centre of label 7's blob, wholly inside the volume
 };
 
 RandomScene randomScene(std::mt19937_64& rng) {
@@ -31,12 +32,19 @@ RandomScene randomScene(std::mt19937_64& rng) {
   g.dims = {61, 53, 67};  // not multiples of the block edge
   g.spacingMm = {0.3, 0.35, 0.27};
   g.originMm = {-9, -9.1, -8.9};
-  RandomScene s{Volume(g, -1000), LabelMap(g, 0), FloatVolume(g, 0.0f)};
+  RandomScene s{Volume(g, -1000), LabelMap(g, 0), FloatVolume(g, 0.0f), {}};
   std::uniform_int_distribution<int> ix(0, g.dims.x - 1), iy(0, g.dims.y - 1), iz(0, g.dims.z - 1);
   std::uniform_int_distribution<int> radius(0, 3), hu(-50, 1800);
+  // Blob 0 is the structure: large enough for bare mode's mask to cross 0.5, and wholly inside the
+  // volume so that every camera aimed at its centre sees it.
+  constexpr int structureRadius = 3;
+  std::uniform_int_distribution<int> sx(structureRadius, g.dims.x - 1 - structureRadius),
+      sy(structureRadius, g.dims.y - 1 - structureRadius), sz(structureRadius, g.dims.z - 1 - structureRadius);
   for (int b = 0; b < 6; ++b) {
-    // Blob 0 is the structure: large enough for bare mode's mask to cross 0.5.
-    const int cx = ix(rng), cy = iy(rng), cz = iz(rng), r = b == 0 ? 3 : radius(rng);
+    const bool structure = b == 0;
+    const int cx = structure ? sx(rng) : ix(rng), cy = structure ? sy(rng) : iy(rng), cz = structure ? sz(rng) : iz(rng);
+    const int r = structure ? structureRadius : radius(rng);
+    if (structure) s.structureCentreMm = g.indexToPatient({double(cx), double(cy), double(cz)});
     const auto v = std::int16_t(b == 0 ? 40 : hu(rng));
     for (int k = std::max(0, cz - r); k <= std::min(g.dims.z - 1, cz + r); ++k)
       for (int j = std::max(0, cy - r); j <= std::min(g.dims.y - 1, cy + r); ++j)
@@ -102,7 +110,8 @@ TEST_CASE("Skipping empty blocks and the fragment stage give the image of marchi
       s.height = 40;
       s.preset.mode = mode;
       s.preset.t = 0.5f;
-      s.camera = Camera::named(NamedView::Anterior, {0, 0, 0}, 12);
+      // Aimed at the structure, so that bare mode (the structure alone) always has something to draw.
+      s.camera = Camera::named(NamedView::Anterior, scene.structureCentreMm, 12);
       s.camera.orbit(angle(rng), angle(rng) / 4);
       CAPTURE(int(mode));
       CAPTURE(view);

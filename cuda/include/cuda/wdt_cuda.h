@@ -33,6 +33,10 @@ struct DeviceInfo {
 // Queries device 0 once per process (cached).
 const DeviceInfo& queryDevice();
 
+// Memory in use on device 0 (MiB: cudaMemGetInfo's total minus free, every process's), or −1 when
+// there is no device or the query fails. For benchmarks that state what a size needs.
+double deviceMemoryUsedMiB();
+
 // Converge mode runs this many whole-volume passes, then brick rounds that finish the bricks still
 // changing (cuda/src/brick_solver.h); the field is the same fixed point either way. Negative: the
 // default, 0 on grids of up to 128³ voxels; above, 2, and a third when the second pass still
