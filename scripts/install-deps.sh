@@ -15,7 +15,7 @@ packages=(
   libarchive-dev libplist-dev
   librsvg2-bin desktop-file-utils strace
   librsvg2-dev libcairo2-dev fonts-dejavu-core
-  postgresql libpq-dev
+  postgresql libpq-dev pgbouncer
   nettle-dev
   clang-14 libclang-rt-14-dev
 )
@@ -26,6 +26,13 @@ for p in "${packages[@]}"; do
     missing+=("$p")
   fi
 done
+# Node.js and npm (scripts/xapi-validator.sh installs the xAPI validator the tests run with them);
+# a Node.js that brings its own npm (NodeSource's) is kept.
+if ! command -v node > /dev/null 2>&1 || ! command -v npm > /dev/null 2>&1; then
+  for p in nodejs npm; do
+    dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+  done
+fi
 
 if [ ${#missing[@]} -eq 0 ]; then
   echo "install-deps: all ${#packages[@]} packages present"

@@ -11,7 +11,8 @@
 # no Unix socket outside DIR). PostgreSQL refuses to run as root: called as root, the cluster is
 # made and run as the unprivileged user $AT_PG_USER (default `nobody`). With PORT omitted a free
 # port in 20000..39999 is chosen. Durability settings are PostgreSQL's defaults unless
-# AT_PG_FAST=1 at `start` (fsync off: for tests only; `restart` keeps the choice). Exit status 0 on success; on failure one line on
+# AT_PG_FAST=1 at `start` (fsync off: for tests only; `restart` keeps the choice). The server takes
+# AT_PG_MAX_CONNECTIONS clients at once (default 300; Debian's own default is 100). Exit status 0 on success; on failure one line on
 # stderr says why (e.g. no PostgreSQL installed) and the status is 2, so callers can skip.
 set -euo pipefail
 
@@ -43,7 +44,7 @@ url_of() { echo "postgresql://at:$(cat "$dir/password")@127.0.0.1:$(cat "$dir/po
 
 start_on() {  # start_on PORT: 0 when the server runs
   local port=$1
-  local options="-c listen_addresses=127.0.0.1 -p $port -c unix_socket_directories=$dir -c max_connections=300"
+  local options="-c listen_addresses=127.0.0.1 -p $port -c unix_socket_directories=$dir -c max_connections=$(cat "$dir/max_connections" 2>/dev/null || echo 300)"
   if [ "$(cat "$dir/fast" 2>/dev/null)" = 1 ]; then
     options="$options -c fsync=off -c synchronous_commit=off -c full_page_writes=off"
   fi
@@ -54,6 +55,7 @@ case "$action" in
   start)
     mkdir -p "$dir"
     echo "${AT_PG_FAST:-0}" > "$dir/fast"
+    echo "${AT_PG_MAX_CONNECTIONS:-300}" > "$dir/max_connections"
     if [ ! -d "$data" ]; then
       head -c 18 /dev/urandom | base64 | tr -dc 'A-Za-z0-9' > "$dir/password"
       if [ "$(id -u)" -eq 0 ]; then chown -R "$owner" "$dir"; fi

@@ -14,6 +14,7 @@
 #include <fstream>
 #include <map>
 #include <optional>
+#include <set>
 #include <string>
 
 #include <nlohmann/json.hpp>
@@ -45,9 +46,12 @@ const char* kStudyHelp =
     "Preference studies comparing the WDT rendering with the bare-structure rendering of each\n"
     "structure, blinded as A and B with counterbalanced order (the paper's Table 2 design).\n"
     "STUDY: a stored study id, a shipped study (data/studies) or a study JSON file.\n"
-    "run --answers: one JSON line per structure, in the order presented:\n"
-    "  {\"ratings\": {\"shape\": 2, \"context\": 1, …}, \"view_ms_a\": 4000, \"view_ms_b\": 3500,\n"
+    "run --answers: one JSON line per structure, naming the structure by its number as presented:\n"
+    "  {\"trial\": 1, \"ratings\": {\"shape\": 2, \"context\": 1, …}, \"view_ms_a\": 4000, \"view_ms_b\": 3500,\n"
     "   \"toggles\": 3, \"comment\": \"…\", \"response_ms\": 1200}   (ratings as shown: 1 = prefer A … 5 = prefer B)\n"
+    "  Running again (after a stop or a server drop) with the same file records only the structures\n"
+    "  not yet rated, each from the line naming it. Lines without \"trial\" are taken in order, and\n"
+    "  only for a participant with no ratings yet: a resumed file must name its trials.\n"
     "Participants run in the desktop app (Studies…): the terminal cannot show the two renderings.\n"
     "Here --answers records answers collected elsewhere (required).\n"
     "merge: copies every participant of STUDY from the SOURCE databases (lab machines' files or\n"
@@ -110,6 +114,7 @@ int runStatus(const cli::Args& args) {
 }
 
 struct TrialAnswer {
+  std::optional<int> trial;            // 1-based presentation number the line names, if it names one
   std::map<std::string, int> ratings;  // item → rating as shown
   double viewMsA = 0, viewMsB = 0, responseMs = 0;
   int toggles = 0;
@@ -118,7 +123,7 @@ struct TrialAnswer {
 
 // Reads one answers line strictly; errors name the line number and the field.
 Result<TrialAnswer> parseAnswerLine(const std::string& line, int lineNumber, const std::string& file,
-                                    const quiz::StudyProtocol& protocol) {
+                                    const quiz::StudyProtocol& protocol, std::size_t trialCount) {
   const std::string where = file + ":" + std::to_string(lineNumber);
   nlohmann::json j = nlohmann::json::parse(line, nullptr, false);
   if (j.is_discarded() || !j.is_object()) return fail(where + ": not a JSON object");
@@ -139,6 +144,11 @@ Result<TrialAnswer> parseAnswerLine(const std::string& line, int lineNumber, con
     } else if (key == "view_ms_a" || key == "view_ms_b" || key == "response_ms") {
       if (!it->is_number() || it->get<double>() < 0) return fail(where + ": '" + key + "' must be a number ≥ 0");
       (key == "view_ms_a" ? a.viewMsA : key == "view_ms_b" ? a.viewMsB : a.responseMs) = it->get<double>();
+    } else if (key == "trial") {
+      if (!it->is_number_integer() || it->get<long long>() < 1 || it->get<long long>() > (long long)trialCount)
+        return fail(where + ": 'trial' must be the structure's number as presented, an integer 1.." +
+                    std::to_string(trialCount));
+      a.trial = it->get<int>();
     } else if (key == "toggles") {
       if (!it->is_number_integer() || it->get<int>() < 0) return fail(where + ": 'toggles' must be an integer ≥ 0");
       a.toggles = it->get<int>();
@@ -153,6 +163,71 @@ Result<TrialAnswer> parseAnswerLine(const std::string& line, int lineNumber, con
     return fail(where + ": 'ratings' must rate every item (" + std::to_string(protocol.items.size()) + "), got " +
                 std::to_string(a.ratings.size()));
   return a;
+}
+
+// Records the answers file's lines into the participant's trials. A line naming its trial
+// ("trial": N, the structure's number as presented) is that trial's answer, whatever its place in
+// the file; a trial already fully rated is left as recorded, so running again with the same file
+// after a stop or a server drop records only what is missing. Lines naming no trial are taken in
+// presentation order, which is only sound for a participant with no ratings yet: for one being
+// resumed such a file is refused before anything is written (else its first line would land on the
+// first structure not yet rated). Each rating is committed before the next is taken.
+Status recordAnswers(db::Database& database, const quiz::StudyProtocol& protocol,
+                     const std::map<std::string, render::Preset>& presets, db::StudyParticipant& state,
+                     std::istream& answersFile, const std::string& answersPath) {
+  const std::size_t itemCount = protocol.items.size(), trialCount = state.trials.size();
+  std::size_t alreadyRated = 0;
+  for (const auto& trial : state.trials) alreadyRated += trial.ratedItems.size();
+  std::set<int> named;            // trials named by lines read so far
+  std::size_t unnamedLines = 0;   // lines naming no trial, read so far
+  int lineNumber = 0;
+  std::string line;
+  while (std::getline(answersFile, line)) {
+    ++lineNumber;
+    if (line.find_first_not_of(" \t\r") == std::string::npos) continue;
+    const std::string where = answersPath + ":" + std::to_string(lineNumber);
+    auto answer = parseAnswerLine(line, lineNumber, answersPath, protocol, trialCount);
+    if (!answer) return tl::unexpected(answer.error());
+    std::size_t index = 0;
+    if (answer->trial) {
+      if (unnamedLines > 0)
+        return fail(where + ": names a trial but earlier lines do not: name the trial (\"trial\": N) on every line");
+      if (!named.insert(*answer->trial).second)
+        return fail(where + ": trial " + std::to_string(*answer->trial) + " is answered twice in the file");
+      index = std::size_t(*answer->trial - 1);
+    } else {
+      if (!named.empty())
+        return fail(where + ": names no trial but earlier lines do: name the trial (\"trial\": N) on every line");
+      if (alreadyRated > 0)
+        return fail(ErrorKind::Conflict,
+                    where + ": participant " + state.participantId + " already has " + std::to_string(alreadyRated) +
+                        " rating(s), so this run resumes: each answers line must name its structure (\"trial\": N, "
+                        "its number as presented) or the answers would land on other structures; nothing was recorded");
+      if (unnamedLines >= trialCount)
+        return fail(where + ": more answer lines than the study's " + std::to_string(trialCount) + " structures");
+      index = unnamedLines++;
+    }
+    db::StudyTrial& trial = state.trials[index];
+    // Blinded: the structure and the conditions are not named to the participant.
+    terminalPrintf("\nStructure %d of %zu\n", trial.position + 1, trialCount);
+    if (trial.ratedItems.size() >= itemCount) {
+      terminalPrintf("  already rated: kept as recorded\n");
+      continue;
+    }
+    for (const auto& item : protocol.items) {
+      if (trial.ratedItems.count(item.id)) continue;
+      const db::RatingRecord r = makeRating(protocol, presets.at(protocol.presetFor(trial.structure, 0)),
+                                            trial.position, item.id, answer->ratings.at(item.id), answer->responseMs);
+      if (auto s = db::recordRating(database, state, r); !s) return s;
+      trial.ratedItems.insert(item.id);
+      terminalPrintf("  %s: %d recorded\n", item.id.c_str(), r.ratingAsShown);
+    }
+    if (auto s = db::recordTrialViewing(database, state, trial.position, answer->viewMsA, answer->viewMsB,
+                                        answer->toggles, answer->comment);
+        !s)
+      return s;
+  }
+  return {};
 }
 
 int runRun(const cli::Args& args) {
@@ -193,47 +268,23 @@ int runRun(const cli::Args& args) {
   auto state = db::enrolOrResume(*database, *protocol, *participant, *group);
   if (!state) return reportError(state.error().message);
 
-  int lineNumber = 0;
   // Participants see neither the study's id nor its title: both may name the conditions.
   terminalPrintf("Preference study — participant %s (%s), session %d\n", participant->c_str(), group->c_str(),
               state->session);
   terminalPrintf("For each of %zu structures you will see two renderings, A and B. Rate each item from %d (prefer A) "
               "to %d (prefer B).\n",
               protocol->structures.size(), protocol->scale.min, protocol->scale.max);
-
-  while (auto next = state->nextTrial(protocol->items.size())) {
-    db::StudyTrial& trial = state->trials[*next];
-    // Blinded: the structure and the conditions are not named to the participant.
-    terminalPrintf("\nStructure %d of %zu\n", trial.position + 1, state->trials.size());
-    std::string line;
-    while (std::getline(answersFile, line)) {
-      ++lineNumber;
-      if (line.find_first_not_of(" \t\r") != std::string::npos) break;
-      line.clear();
-    }
-    if (line.empty()) break;  // answers ran out: the participant stopped here
-    auto answer = parseAnswerLine(line, lineNumber, answersPath, *protocol);
-    if (!answer) return reportError(answer.error().message);
-    for (const auto& item : protocol->items) {
-      if (trial.ratedItems.count(item.id)) continue;
-      const db::RatingRecord r = makeRating(*protocol, presets->at(protocol->presetFor(trial.structure, 0)),
-                                            trial.position, item.id, answer->ratings.at(item.id), answer->responseMs);
-      // Each rating is committed before the next is taken.
-      if (auto s = db::recordRating(*database, *state, r); !s) return reportError(s.error().message);
-      trial.ratedItems.insert(item.id);
-      terminalPrintf("  %s: %d recorded\n", item.id.c_str(), r.ratingAsShown);
-    }
-    if (auto s = db::recordTrialViewing(*database, *state, trial.position, answer->viewMsA,
-                                        answer->viewMsB, answer->toggles, answer->comment);
-        !s)
-      return reportError(s.error().message);
-  }
+  if (auto s = recordAnswers(*database, *protocol, *presets, *state, answersFile, answersPath); !s)
+    return reportError(s.error().message);
   if (!state->nextTrial(protocol->items.size())) {
     if (auto s = db::markParticipantComplete(*database, *state); !s)
       return reportError(s.error().message);
     terminalPrintf("\nThank you: all %zu structures rated.\n", state->trials.size());
   } else {
-    terminalPrintf("\nStopped before the end; run the same command again to continue where you left off.\n");
+    terminalPrintf("\nStopped before the end (structures not rated:");
+    for (const auto& trial : state->trials)
+      if (trial.ratedItems.size() < protocol->items.size()) terminalPrintf(" %d", trial.position + 1);
+    terminalPrintf("); run the same command again to continue where you left off.\n");
   }
   return 0;
 }

@@ -2,11 +2,13 @@
 // record store or an LMS (lessons/xapi.h).
 #include <cstdio>
 #include <fstream>
+#include <set>
 
 #include "cli_args.h"
 #include "commands.h"
 #include "core/atomic_file.h"
 #include "core/strings.h"
+#include "db/exam_store.h"
 #include "db/study_store.h"
 #include "learning_session.h"
 #include "lessons/xapi.h"
@@ -22,8 +24,10 @@ constexpr const char* kXapiHelp =
     "Writes learning records as xAPI 1.0.3 statements (a JSON array, as a learning record store\n"
     "takes them on POST /statements): every lesson attempt (attempted; completed with its score),\n"
     "every answer to a lesson or review question (answered, on a cmi.interaction: locate 'other',\n"
-    "identify 'choice', name 'fill-in', order 'sequencing', with success, score and time taken) —\n"
-    "of NAME, or of every user. With --study, the study's ratings instead: each an answered\n"
+    "identify 'choice', name 'fill-in', order 'sequencing', with success, score and time taken;\n"
+    "choice and sequencing with the choices offered and the correct response), every exam attempt\n"
+    "(attempted; each answered item; completed with its score and pass) — of NAME, or of every\n"
+    "user. With --study, the study's ratings instead: each an answered\n"
     "statement on a 'likert' interaction with the study's scale, the participant's pseudonym as\n"
     "actor and their enrolment as registration. Exporting the same records again gives the same\n"
     "statement ids, so a record store keeps each once.\n"
@@ -44,7 +48,49 @@ Result<lessons::LearnerRecords> recordsOf(LearningSession& session, const lesson
   auto reviews = session.progress().reviewResponses(user.id);
   if (!reviews) return tl::unexpected(reviews.error());
   r.reviews = std::move(*reviews);
+  db::SqliteExamRepository exams(session.database());
+  auto examAttempts = exams.examAttempts(user.id);
+  if (!examAttempts) return tl::unexpected(examAttempts.error());
+  for (const lessons::ExamAttempt& a : *examAttempts) {
+    auto items = exams.examItems(a.id);
+    if (!items) return tl::unexpected(items.error());
+    r.exams.push_back({a, std::move(*items)});
+  }
   return r;
+}
+
+// The choice and order questions `learners` answered in lessons and reviews, resolved on their
+// courses' datasets as they were asked (choices in the order shown, keys), with the structures'
+// names. A question whose course or dataset is not here is left out (exported as "other").
+lessons::XapiQuestions answeredQuestions(LearningSession& session, const std::vector<lessons::LearnerRecords>& learners) {
+  std::set<std::string> wanted;
+  const auto want = [&](const lessons::GradedAnswer& g) {
+    if (g.answer.choice || g.answer.order) wanted.insert(g.questionId);
+  };
+  for (const auto& r : learners) {
+    for (const auto& [attempt, responses] : r.responses)
+      for (const auto& x : responses) want(x);
+    for (const auto& x : r.reviews) want(x);
+  }
+  lessons::XapiQuestions out;
+  if (wanted.empty()) return out;
+  auto courses = session.curriculum().courses();
+  if (!courses) return out;
+  for (const lessons::Course& course : *courses) {
+    std::map<std::string, std::string> names;
+    if (auto structures = session.structures(course.datasetId))
+      for (const Structure& s : *structures) names[s.id] = s.displayName;
+    for (const lessons::Lesson& lesson : course.lessons)
+      for (const lessons::Step& step : lesson.steps) {
+        if (step.kind != lessons::StepKind::Question || !wanted.count(step.question.id) || out.count(step.question.id))
+          continue;
+        auto keys = session.keysFor(course.datasetId);
+        if (!keys) continue;
+        auto resolved = quiz::resolveQuestion(step.question, **keys);
+        if (resolved) out[step.question.id] = {std::move(*resolved), names};
+      }
+  }
+  return out;
 }
 
 }  // namespace
@@ -93,14 +139,17 @@ int runXapi(const Argv& argv) {
     for (const lessons::User& u : users) {
       auto r = recordsOf(**session, u);
       if (!r) return reportError("xapi: " + r.error().message);
-      records += r->reviews.size() + r->attempts.size();
+      records += r->reviews.size() + r->attempts.size() + r->exams.size();
+      for (const auto& e : r->exams) records += e.items.size();
       for (const auto& [attempt, responses] : r->responses) records += responses.size();
       learners.push_back(std::move(*r));
     }
   }
-  const std::string text = lessons::xapiStatementsJson(learners, studies, options);
-  if (auto ok = writeFileAtomically(*out, text + "\n"); !ok) return reportError("xapi: " + ok.error().message);
-  terminalPrintf("wrote %s: statements of %s\n", out->c_str(),
+  const std::string text = lessons::xapiStatementsJson(learners, studies, options, answeredQuestions(**session, learners));
+  if (auto ok = writeFileAtomically(*out, text + "
+"); !ok) return reportError("xapi: " + ok.error().message);
+  terminalPrintf("wrote %s: statements of %s
+", out->c_str(),
               args->value("study") ? str::countOf(long(records), "rating").c_str()
                                    : (str::countOf(long(learners.size()), "user") + ", " +
                                       str::countOf(long(records), "attempt or answer", "attempts and answers"))

@@ -3,18 +3,24 @@
 // enrols its participants and records every rating and trial as the study runner does, one
 // transaction each. One JSON line per client count.
 //
-//   class_server_bench --db LOCATION [--clients 1,3,10] [--participants-per-client 2]
+//   class_server_bench --db LOCATION [--clients 1,3,10] [--participants-per-client 2] [--think-ms 0]
 //
 // LOCATION is a postgresql:// URL (a class server; bench/class_server_bench.sh starts a throwaway
 // one with PostgreSQL's default durability) or a SQLite file path (every client on one file, for
 // comparison). Each client count gets a fresh study id, so runs do not disturb each other.
 // Reported: commits (transactions) per second over the whole run, and the latency of each commit
-// as the client sees it (median, p99, max, in ms); lost = ratings written but not read back.
+// as the client sees it (median, p99, max, in ms); lost = ratings written but not read back;
+// refused = clients whose connection the server (or pooler) refused.
+//
+// --think-ms T: a lab machine's pace, a person answering — each client waits a random 0.5 T to
+// 1.5 T before each commit (and up to T before its first), instead of committing back to back.
+// Without it every client writes as fast as it can (the store's ceiling, not a class).
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <latch>
 #include <mutex>
+#include <random>
 #include <sstream>
 #include <string>
 #include <thread>
@@ -53,19 +59,30 @@ quiz::StudyProtocol benchStudy(const std::string& id) {
 
 struct ClientResult {
   std::vector<double> commitMs;
+  std::vector<double> enrolMs;  // the enrolment commits alone (program-wide lock: the study's next row)
   std::string error;
+  bool refused = false;
 };
 
 ClientResult runClient(const std::string& location, const quiz::StudyProtocol& p, int client, int participants,
-                       std::latch& start) {
+                       double thinkMs, std::latch& start) {
   ClientResult out;
   auto db = db::openDatabase(location);
   start.arrive_and_wait();
   if (!db) {
     out.error = db.error().message;
+    out.refused = true;
     return out;
   }
+  std::mt19937 random(std::uint32_t(client) * 2654435761u + 1);
+  const auto think = [&](double from, double to) {
+    if (thinkMs <= 0) return;
+    std::uniform_real_distribution<double> pause(from * thinkMs, to * thinkMs);
+    std::this_thread::sleep_for(std::chrono::duration<double, std::milli>(pause(random)));
+  };
+  think(0, 1);
   const auto timed = [&](auto&& write) {
+    think(0.5, 1.5);
     const auto t0 = Clock::now();
     auto st = write();
     out.commitMs.push_back(msSince(t0));
@@ -80,6 +97,7 @@ ClientResult runClient(const std::string& location, const quiz::StudyProtocol& p
           return part ? Status{} : tl::unexpected(part.error());
         }))
       break;
+    out.enrolMs.push_back(out.commitMs.back());
     for (const auto& t : part->trials) {
       for (const auto& item : p.items) {
         db::RatingRecord r;
@@ -109,14 +127,16 @@ int main(int argc, char** argv) {
   std::string location;
   std::vector<int> clientCounts = {1, 3, 10};
   int perClient = 2;
+  double thinkMs = 0;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     const bool hasValue = i + 1 < argc;
     if (a == "--db" && hasValue) location = argv[++i];
     else if (a == "--clients" && hasValue) clientCounts = parseList(argv[++i]);
     else if (a == "--participants-per-client" && hasValue) perClient = std::stoi(argv[++i]);
+    else if (a == "--think-ms" && hasValue) thinkMs = std::stod(argv[++i]);
     else {
-      std::fprintf(stderr, "usage: class_server_bench --db LOCATION [--clients 1,3,10] [--participants-per-client 2]\n");
+      std::fprintf(stderr, "usage: class_server_bench --db LOCATION [--clients 1,3,10] [--participants-per-client 2] [--think-ms 0]\n");
       return 2;
     }
   }
@@ -140,16 +160,19 @@ int main(int argc, char** argv) {
     std::latch start(clients + 1);
     std::vector<std::thread> threads;
     for (int c = 0; c < clients; ++c)
-      threads.emplace_back([&, c] { results[std::size_t(c)] = runClient(location, p, c, perClient, start); });
+      threads.emplace_back([&, c] { results[std::size_t(c)] = runClient(location, p, c, perClient, thinkMs, start); });
     start.arrive_and_wait();
     const auto t0 = Clock::now();
     for (auto& t : threads) t.join();
     const double wallMs = msSince(t0);
-    std::vector<double> all;
+    std::vector<double> all, enrol;
     std::string error;
+    int refused = 0;
     for (const auto& r : results) {
       all.insert(all.end(), r.commitMs.begin(), r.commitMs.end());
+      enrol.insert(enrol.end(), r.enrolMs.begin(), r.enrolMs.end());
       if (error.empty()) error = r.error;
+      refused += r.refused ? 1 : 0;
     }
     std::replace(error.begin(), error.end(), '"', '\'');
     auto rows = db::studyResponseRows(*setup, p);
@@ -157,10 +180,11 @@ int main(int argc, char** argv) {
     const std::size_t stored = rows ? rows->size() : 0;
     std::printf("{\"engine\":\"%s\",\"clients\":%d,\"participants\":%d,\"commits\":%zu,\"wall_s\":%.2f,"
                 "\"commits_per_s\":%.1f,\"commit_ms_p50\":%.2f,\"commit_ms_p99\":%.2f,\"commit_ms_max\":%.2f,"
-                "\"ratings_expected\":%zu,\"ratings_stored\":%zu,\"error\":\"%s\"}\n",
+                "\"enrol_ms_p50\":%.2f,\"enrol_ms_p99\":%.2f,"
+                "\"think_ms\":%.0f,\"refused\":%d,\"ratings_expected\":%zu,\"ratings_stored\":%zu,\"error\":\"%s\"}\n",
                 db::toString(setup->backend()), clients, clients * perClient, all.size(), wallMs / 1000,
                 double(all.size()) / (wallMs / 1000), percentile(all, 0.5), percentile(all, 0.99),
-                percentile(all, 1.0), expected, stored, error.c_str());
+                percentile(all, 1.0), percentile(enrol, 0.5), percentile(enrol, 0.99), thinkMs, refused, expected, stored, error.c_str());
     std::fflush(stdout);
     if (!error.empty() || stored != expected) return 1;
   }

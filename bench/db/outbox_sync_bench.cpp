@@ -28,6 +28,7 @@
 
 #include "db/class_server.h"
 #include "db/connection.h"
+#include "db/course_store.h"
 #include "db/sqlite_repositories.h"
 #include "lessons/scheduling.h"
 
@@ -68,14 +69,44 @@ struct Student {
   lessons::StructureProgress progress;
 };
 
+constexpr int kQuestions = 13;  // the bench course's questions, answered round-robin
+
+std::string questionId(int n) { return "bench.q" + std::to_string(n % kQuestions); }
+std::string structureId(int n) { return "structure_" + std::to_string(n % kQuestions); }
+
+// The course the answers belong to: the class server judges every event against the courses it
+// holds (a review answer counts only for a question it has, in a lesson open to the student), so
+// the bench puts it there first. One lesson without prerequisites, one name question per structure.
+lessons::Course benchCourse() {
+  lessons::Course c;
+  c.id = "outbox_sync_bench";
+  c.title = "Outbox sync bench";
+  c.datasetId = "outbox_sync_bench";
+  lessons::Lesson lesson;
+  lesson.id = "outbox_sync_bench.names";
+  lesson.courseId = c.id;
+  lesson.title = "Names";
+  for (int n = 0; n < kQuestions; ++n) {
+    lessons::Step step;
+    step.kind = lessons::StepKind::Question;
+    step.question.id = questionId(n);
+    step.question.kind = quiz::QuestionKind::Name;
+    step.question.prompt = "Name the highlighted structure.";
+    step.question.target = structureId(n);
+    lesson.steps.push_back(step);
+  }
+  c.lessons.push_back(lesson);
+  return c;
+}
+
 // One review answer as play --review records it: the graded answer and its learner update.
 lessons::ReviewRecord answerOf(Student& s, int n) {
   const auto now = lessons::UnixSeconds(1'790'000'000 + n * 60);
   const bool right = (n * 7 + int(s.userId)) % 3 != 0;
   lessons::ReviewRecord r;
   r.response.userId = s.userId;
-  r.response.questionId = "bench.q" + std::to_string(n % 13);
-  r.response.structureId = "structure_" + std::to_string(n % 13);
+  r.response.questionId = questionId(n);
+  r.response.structureId = structureId(n);
   r.response.answer.text = right ? r.response.structureId : "other";
   r.response.correct = right;
   r.response.score = right ? 1 : 0;
@@ -111,10 +142,11 @@ int main(int argc, char** argv) {
   if (o.server.empty() || o.dir.empty()) die("--server URL and --dir DIR are required");
   if (o.students < 1 || o.answers < 1 || o.workers < 1) die("--students, --answers and --workers must be positive");
 
-  // The class, and every student joined on the server and on their own machine.
+  // The course, the class, and every student joined on the server and on their own machine.
   db::OpenOptions serverOptions;
   serverOptions.create = false;
   auto server = ok(db::openDatabase(o.server, serverOptions), "opening the server");
+  ok(db::storeCourse(server.get(), benchCourse(), "outbox_sync_bench"), "putting the bench course on the server");
   const std::string code = ok(db::createClass(server, "outbox sync bench", "coordinator"), "creating the class").code;
   std::vector<Student> students;
   students.reserve(std::size_t(o.students));

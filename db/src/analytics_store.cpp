@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <set>
 
+#include "class_event_analytics.h"
 #include "database.h"
 #include "db/exam_store.h"
 
@@ -22,6 +23,8 @@ Result<AnalyticsInput> loadAnalyticsInput(Database& db, CurriculumRepository& cu
   SqliteUserRepository users(db);
   auto all = users.users();
   if (!all) return tl::unexpected(all.error());
+  std::set<std::string> localNames;  // every user here, whatever their role
+  for (const User& u : *all) localNames.insert(u.name);
   for (User& u : *all)
     if (u.role == Role::Student && (!group || u.group == *group)) in.students.push_back(std::move(u));
 
@@ -76,6 +79,9 @@ Result<AnalyticsInput> loadAnalyticsInput(Database& db, CurriculumRepository& cu
     if (!memories) return tl::unexpected(memories.error());
     in.memories.insert(in.memories.end(), memories->begin(), memories->end());
   }
+  // On a class server: the students whose work came through the outbox, from their class events.
+  if (auto added = addClassEventStudents(db, in, localNames, questionIds, group); !added)
+    return tl::unexpected(withContext("reading the class events", added.error()));
   auto examAttempts = exams.courseExamAttempts(courseId);
   if (!examAttempts) return tl::unexpected(examAttempts.error());
   in.examAttempts = std::move(*examAttempts);

@@ -116,6 +116,13 @@ Result<int> Database::schemaVersion() { return connection_->schemaVersion(); }
 int Database::changes() const { return connection_->changes(); }
 
 Status Database::writeTransaction(const std::function<Status(Database&)>& body, int maxAttempts) {
+  return keyedWriteTransaction("", body, true, maxAttempts);
+}
+
+Status Database::keyedWriteTransaction(const std::string& key, const std::function<Status(Database&)>& body,
+                                       bool programWide, int maxAttempts) {
+  const bool keyed = !key.empty() && backend() == Backend::Postgres;
+  const auto kind = keyed && !programWide ? Transaction::Kind::Deferred : Transaction::Kind::Immediate;
   // Held across the retries too: the failure examined below must be this thread's.
   std::unique_lock lock(*writer_);
   // Inside this thread's own write transaction (the lock is recursive; another thread's would
@@ -124,7 +131,24 @@ Status Database::writeTransaction(const std::function<Status(Database&)>& body, 
   std::minstd_rand jitter(std::random_device{}());
   Error last{ErrorKind::Io, "no attempt made"};
   for (int attempt = 0; attempt < maxAttempts; ++attempt) {
-    auto tx = Transaction::begin(*this, Transaction::Kind::Immediate);
+    auto tx = Transaction::begin(*this, kind);
+    if (tx && keyed) {
+      // Transaction-scoped, in the two-key space (apart from the writer lock's one key).
+      auto keyLock = prepare("SELECT pg_advisory_xact_lock(1, hashtext(?1))");
+      Status locked = keyLock ? Status{} : Status(tl::unexpected(keyLock.error()));
+      if (keyLock) {
+        keyLock->bind(1, key);
+        if (auto row = keyLock->step(); !row) locked = tl::unexpected(row.error());
+      }
+      if (!locked) {
+        last = locked.error();
+        const bool contention = connection_->lastFailureWasContention();
+        tx->rollback();
+        if (!contention) return tl::unexpected(last);
+        std::this_thread::sleep_for(std::chrono::milliseconds(5 + int(jitter() % 50)));
+        continue;
+      }
+    }
     if (tx) {
       ++writeDepth_;
       Status done = [&] {

@@ -114,6 +114,14 @@ class Database {
   // concurrent writers lose nothing. Any other error from `body` rolls back and is returned.
   // Called from inside another writeTransaction's body on the same thread, it joins that one.
   Status writeTransaction(const std::function<Status(Database&)>& body, int maxAttempts = 20);
+  // The same for writes confined to what `key` names (one study participant's rows): on
+  // PostgreSQL the transaction takes a lock on `key` alone instead of the program's writer lock,
+  // so writers of different keys commit side by side (and the server flushes their commits
+  // together) while writers of one key follow each other. With `programWide` it takes both (the
+  // writer lock first): for a write that also reads or changes what all writers share, such as
+  // enrolling a participant. SQLite has one writer anyway: there it is writeTransaction.
+  Status keyedWriteTransaction(const std::string& key, const std::function<Status(Database&)>& body,
+                               bool programWide = false, int maxAttempts = 20);
 
  private:
   friend class Transaction;

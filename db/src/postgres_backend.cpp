@@ -47,6 +47,19 @@ std::string firstLine(const char* message) {
   return s;
 }
 
+// Why a connection could not be made, in one line. A server (or pooler) that is full says so in
+// its text only (libpq gives no SQLSTATE before the connection exists): PostgreSQL's "too many
+// clients already" / "remaining connection slots are reserved", PgBouncer's "no more connections
+// allowed (max_client_conn)". Those get what to do instead of the raw error.
+std::string connectFailure(const std::string& name, PGconn* conn) {
+  const std::string raw = firstLine(PQerrorMessage(conn));
+  const auto says = [&](const char* text) { return raw.find(text) != std::string::npos; };
+  if (says("too many clients") || says("remaining connection slots") || says("max_client_conn"))
+    return "the database server " + name + " is full (" + raw + "): connect the lab machines through PgBouncer " +
+           "(scripts/pgbouncer.sh, README \"Many lab machines\") or raise the server's max_connections";
+  return "cannot reach the database server " + name + ": " + raw;
+}
+
 bool contentionState(const std::string& state) {
   return state == "40001" || state == "40P01" || state == "55P03";
 }
@@ -241,8 +254,7 @@ class PostgresConnection final : public Connection {
     if (PQstatus(conn_) == CONNECTION_BAD && !transactionOpen_) PQreset(conn_);
     if (PQstatus(conn_) == CONNECTION_BAD) {
       lastState_ = "08006";
-      return fail(ErrorKind::Unavailable, "cannot reach the database server " + name_ + ": " +
-                                              firstLine(PQerrorMessage(conn_)));
+      return fail(ErrorKind::Unavailable, connectFailure(name_, conn_));
     }
     const auto send = [&] {
       return ResultPtr(params ? PQexecParams(conn_, sql.c_str(), params->count, params->types, params->values,
@@ -324,12 +336,15 @@ Result<std::unique_ptr<Connection>> openPostgres(const std::string& url, const O
   if (!raw) return fail(ErrorKind::Io, "out of memory connecting to " + db::withoutPassword(url));
   auto connection = std::make_unique<PostgresConnection>(raw, db::withoutPassword(url));
   if (PQstatus(raw) != CONNECTION_OK)
-    return fail(ErrorKind::Unavailable, "cannot reach the database server " + db::withoutPassword(url) + ": " +
-                                            firstLine(PQerrorMessage(raw)));
-  // Quiet, UTC, and the same text for numbers whatever the server's locale.
-  if (auto s = connection->exec("SET client_min_messages = warning; SET TIME ZONE 'UTC'; SET extra_float_digits = 3");
-      !s)
-    return tl::unexpected(s.error());
+    return fail(ErrorKind::Unavailable, connectFailure(db::withoutPassword(url), raw));
+  // No session state: behind a pooler in transaction mode (PgBouncer, scripts/pgbouncer.sh) each
+  // transaction may run on another server connection, so a SET here would apply to some other
+  // client's transactions and not to ours. Nothing needs one: notices are ignored above, times are
+  // written AT TIME ZONE 'UTC' (schema.cpp), statements are unnamed (PQexecParams) and the writers'
+  // advisory lock is transaction-scoped. Reals come back exact from PostgreSQL 12 on (shortest
+  // round-trip output by default); an older server needs the session setting.
+  if (PQserverVersion(raw) > 0 && PQserverVersion(raw) < 120000)
+    if (auto s = connection->exec("SET extra_float_digits = 3"); !s) return tl::unexpected(s.error());
   return std::unique_ptr<Connection>(std::move(connection));
 }
 

@@ -476,6 +476,25 @@ CREATE TABLE class_audit (
   reason       TEXT NOT NULL DEFAULT ''
 );
 )SQL";
+
+// A trial's viewing times are blank (NULL) when they were not measured (the views were shown as
+// files outside the program), not 0: a reader cannot mistake them for a participant who looked
+// for no time at all. SQLite cannot drop NOT NULL in place, so there the columns are rebuilt as
+// nullable ones; PostgreSQL drops the constraint in place, which keeps the table's owner
+// (at_class_owner after the class server's security), its grants and its row-level security.
+constexpr std::string_view kUnmeasuredViewingBlank = R"SQL(
+ALTER TABLE study_trials ADD COLUMN view_ms_a_measured REAL;
+ALTER TABLE study_trials ADD COLUMN view_ms_b_measured REAL;
+UPDATE study_trials SET view_ms_a_measured = view_ms_a, view_ms_b_measured = view_ms_b WHERE viewing_measured = 1;
+ALTER TABLE study_trials DROP COLUMN view_ms_a;
+ALTER TABLE study_trials DROP COLUMN view_ms_b;
+ALTER TABLE study_trials RENAME COLUMN view_ms_a_measured TO view_ms_a;
+ALTER TABLE study_trials RENAME COLUMN view_ms_b_measured TO view_ms_b;
+)SQL";
+constexpr std::string_view kUnmeasuredViewingBlankPostgres = R"SQL(
+ALTER TABLE study_trials ALTER COLUMN view_ms_a DROP NOT NULL, ALTER COLUMN view_ms_b DROP NOT NULL;
+UPDATE study_trials SET view_ms_a = NULL, view_ms_b = NULL WHERE viewing_measured <> 1;
+)SQL";
 }  // namespace
 
 const std::vector<Migration>& migrations() {
@@ -499,6 +518,8 @@ const std::vector<Migration>& migrations() {
       {14, "class members can be withdrawn; an audit of class changes; the outbox keeps refusals", kClassAudit},
       {15, "class server security: owner role, one login per person, row-level security, audited functions",
        classSecuritySql(), {}, true},
+      {16, "study trials: viewing times not measured are blank (NULL), not 0", kUnmeasuredViewingBlank, {}, false,
+       kUnmeasuredViewingBlankPostgres},
   };
   return all;
 }
@@ -553,6 +574,7 @@ std::string postgresDdl(std::string_view sqliteSql) {
 }
 
 std::string migrationSql(const Migration& migration, Backend backend) {
+  if (backend == Backend::Postgres && !migration.postgresSql.empty()) return std::string(migration.postgresSql);
   if (migration.postgresOnly) return backend == Backend::Postgres ? std::string(migration.sql) : std::string();
   if (backend == Backend::Sqlite) return std::string(migration.sql);
   std::string s = postgresDdl(migration.sql);

@@ -26,6 +26,9 @@ struct Migration {
   // PostgreSQL's text, run there as it is; on SQLite the step only moves the version (server-only
   // objects: roles, grants, row-level security, functions).
   bool postgresOnly = false;
+  // PostgreSQL's own text for a step whose dialects differ beyond edits (run there as it is, in
+  // place of `sql`); empty: `sql` through postgresDdl and postgresEdits.
+  std::string_view postgresSql = {};
 };
 
 // All migrations in order; migrations()[i].version == i + 1.

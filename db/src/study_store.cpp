@@ -152,6 +152,16 @@ Result<std::vector<quiz::StudyProtocol>> listStudies(Database& db) {
   return out;
 }
 
+namespace {
+
+// What one participant's writes lock on a server (Database::keyedWriteTransaction): their rows
+// only, so lab machines recording different participants do not wait for each other.
+std::string participantKey(const std::string& studyId, const std::string& participantId) {
+  return "study participant|" + studyId + "|" + participantId;
+}
+
+}  // namespace
+
 Result<StudyParticipant> enrolOrResume(Database& db, const quiz::StudyProtocol& protocol,
                                        const std::string& participantId, const std::string& group) {
   if (auto valid = validParticipantId(participantId); !valid) return tl::unexpected(valid.error());
@@ -162,7 +172,9 @@ Result<StudyParticipant> enrolOrResume(Database& db, const quiz::StudyProtocol& 
     for (const auto& g : protocol.groups) groups += (groups.empty() ? "" : ", ") + g;
     return fail("group '" + group + "' is not one of study '" + protocol.id + "''s groups (" + groups + ")");
   }
-  auto written = db.writeTransaction([&](Database& d) -> Status {
+  // The enrolment index is the study's next one (program-wide); the participant's key orders the
+  // new session after that participant's writes in flight (recordRating and the rest check it).
+  auto written = db.keyedWriteTransaction(participantKey(protocol.id, participantId), [&](Database& d) -> Status {
     auto existing = d.prepare("SELECT group_name FROM study_participants WHERE study_id = ?1 AND participant_id = ?2");
     if (!existing) return tl::unexpected(existing.error());
     existing->bind(1, protocol.id).bind(2, participantId);
@@ -204,7 +216,7 @@ Result<StudyParticipant> enrolOrResume(Database& db, const quiz::StudyProtocol& 
       if (auto s = trial->run(); !s) return s;
     }
     return {};
-  });
+  }, true);
   if (!written) return tl::unexpected(written.error());
   return loadParticipant(db, protocol.id, participantId);
 }
@@ -236,7 +248,7 @@ Status checkSessionCurrent(Database& d, const StudyParticipant& participant) {
 Status recordRating(Database& db, const StudyParticipant& participant, const RatingRecord& rating) {
   const std::string& studyId = participant.studyId;
   const std::string& participantId = participant.participantId;
-  return db.writeTransaction([&](Database& d) -> Status {
+  return db.keyedWriteTransaction(participantKey(studyId, participantId), [&](Database& d) -> Status {
     if (auto current = checkSessionCurrent(d, participant); !current) return current;
     auto st = d.prepare(
         "INSERT INTO study_ratings (study_id, participant_id, position, item, rating_ab, response_ms, t, alpha, beta, "
@@ -272,7 +284,7 @@ Status recordTrialViewing(Database& db, const StudyParticipant& participant, int
                           double viewMsB, int toggles, const std::string& comment, bool viewingMeasured) {
   const std::string& studyId = participant.studyId;
   const std::string& participantId = participant.participantId;
-  return db.writeTransaction([&](Database& d) -> Status {
+  return db.keyedWriteTransaction(participantKey(studyId, participantId), [&](Database& d) -> Status {
     if (auto current = checkSessionCurrent(d, participant); !current) return current;
     auto st = d.prepare(
         "UPDATE study_trials SET view_ms_a = ?4, view_ms_b = ?5, toggles = ?6, comment = ?7, viewing_measured = ?8 "
@@ -280,7 +292,7 @@ Status recordTrialViewing(Database& db, const StudyParticipant& participant, int
     if (!st) return tl::unexpected(st.error());
     st->bind(1, studyId).bind(2, participantId).bind(3, position);
     if (viewingMeasured) st->bind(4, viewMsA).bind(5, viewMsB).bind(6, toggles);
-    else st->bind(4, 0.0).bind(5, 0.0).bind(6, 0);
+    else st->bindNull(4).bindNull(5).bind(6, 0);
     if (comment.empty()) st->bindNull(7);
     else st->bind(7, comment);
     st->bind(8, viewingMeasured ? 1 : 0);
@@ -294,7 +306,7 @@ Status recordTrialViewing(Database& db, const StudyParticipant& participant, int
 Status markParticipantComplete(Database& db, const StudyParticipant& participant) {
   const std::string& studyId = participant.studyId;
   const std::string& participantId = participant.participantId;
-  return db.writeTransaction([&](Database& d) -> Status {
+  return db.keyedWriteTransaction(participantKey(studyId, participantId), [&](Database& d) -> Status {
     if (auto current = checkSessionCurrent(d, participant); !current) return current;
     auto st = d.prepare(
         "UPDATE study_participants SET completed_at = ?3 "

@@ -5,7 +5,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "core/sha256.h"
+#include "core/name_uuid.h"
 
 namespace at::lessons {
 
@@ -65,23 +65,84 @@ json context(const XapiOptions& o, json extensions = json::object()) {
   return c;
 }
 
-// The interaction type and the response (xAPI's response formats) of an answer as given.
-std::pair<const char*, std::string> interactionOf(const quiz::Answer& a) {
-  if (a.choice) return {"choice", std::to_string(*a.choice)};
-  if (a.text) return {"fill-in", *a.text};
-  if (a.order) {
-    std::string joined;
-    for (const std::string& s : *a.order) joined += (joined.empty() ? "" : "[,]") + s;
-    return {"sequencing", joined};
-  }
-  if (a.pick) return {"other", a.pick->structure.empty() ? std::string("nothing") : a.pick->structure};
-  return {"other", ""};
+// An answer as an interaction: its type, the response in xAPI's format for that type and, for
+// choice and sequencing, the choices offered and the correct response pattern.
+struct Interaction {
+  const char* type = "other";
+  std::string response;
+  json choices;   // null: none
+  json correct;   // null: none
+};
+
+std::string joinedIds(const std::vector<std::string>& ids) {
+  std::string joined;
+  for (const std::string& s : ids) joined += (joined.empty() ? "" : "[,]") + s;
+  return joined;
 }
 
-json answered(const User& user, const GradedAnswer& g, const std::string& lessonId, const std::string& key,
-              const XapiOptions& o) {
-  const auto [type, response] = interactionOf(g.answer);
-  json definition = {{"type", kInteraction}, {"interactionType", type}, {"name", {{"en-US", g.questionId}}}};
+json choiceList(const std::vector<std::string>& ids, const XapiQuestion& q) {
+  json list = json::array();
+  for (const std::string& id : ids) {
+    const auto name = q.names.find(id);
+    list.push_back({{"id", id}, {"description", {{"en-US", name != q.names.end() ? name->second : id}}}});
+  }
+  return list;
+}
+
+// An ordered item as its choice id: the id itself, else the structure whose shown name it is
+// (answers may give names), else as given.
+std::string choiceIdOf(const std::string& item, const XapiQuestion& q) {
+  for (const std::string& id : q.resolved.choices)
+    if (id == item) return id;
+  for (const auto& [id, name] : q.names)
+    if (name == item) return id;
+  return item;
+}
+
+Interaction interactionOf(const quiz::Answer& a, const XapiQuestion* q) {
+  Interaction out;
+  if (a.choice) {
+    const auto& offered = q ? q->resolved.choices : std::vector<std::string>{};
+    if (*a.choice < 0 || std::size_t(*a.choice) >= offered.size()) {
+      out.response = std::to_string(*a.choice);  // choices not known: no choice interaction
+      return out;
+    }
+    out.type = "choice";
+    out.response = offered[std::size_t(*a.choice)];
+    out.choices = choiceList(offered, *q);
+    if (q->resolved.keyChoice >= 0 && std::size_t(q->resolved.keyChoice) < offered.size())
+      out.correct = json::array({offered[std::size_t(q->resolved.keyChoice)]});
+    return out;
+  }
+  if (a.text) {
+    out.type = "fill-in";
+    out.response = *a.text;
+    return out;
+  }
+  if (a.order) {
+    if (!q || q->resolved.choices.empty()) {
+      out.response = joinedIds(*a.order);
+      return out;
+    }
+    std::vector<std::string> ids;
+    for (const std::string& item : *a.order) ids.push_back(choiceIdOf(item, *q));
+    out.type = "sequencing";
+    out.response = joinedIds(ids);
+    out.choices = choiceList(q->resolved.choices, *q);
+    if (!q->resolved.keyOrder.empty()) out.correct = json::array({joinedIds(q->resolved.keyOrder)});
+    return out;
+  }
+  if (a.pick) out.response = a.pick->structure.empty() ? std::string("nothing") : a.pick->structure;
+  return out;
+}
+
+// `parentId`: the activity the question was asked in (a lesson, an exam; empty: none).
+json answered(const User& user, const GradedAnswer& g, const std::string& parentId, const std::string& key,
+              const XapiOptions& o, const XapiQuestion* question) {
+  const Interaction interaction = interactionOf(g.answer, question);
+  json definition = {{"type", kInteraction}, {"interactionType", interaction.type}, {"name", {{"en-US", g.questionId}}}};
+  if (!interaction.choices.is_null()) definition["choices"] = interaction.choices;
+  if (!interaction.correct.is_null()) definition["correctResponsesPattern"] = interaction.correct;
   json extensions = {{o.activityBase + "/extensions/structure", g.structureId},
                      {o.activityBase + "/extensions/render",
                       {{"preset", g.render.presetId}, {"mode", g.render.mode}, {"t", g.render.t},
@@ -89,12 +150,11 @@ json answered(const User& user, const GradedAnswer& g, const std::string& lesson
   if (g.answer.pick && g.answer.pick->distanceMm >= 0)
     extensions[o.activityBase + "/extensions/pick-distance-mm"] = g.answer.pick->distanceMm;
   json ctx = context(o, std::move(extensions));
-  if (!lessonId.empty())
-    ctx["contextActivities"] = {{"parent", json::array({{{"objectType", "Activity"},
-                                                          {"id", o.activityBase + "/lessons/" + pathSegment(lessonId)}}})}};
+  if (!parentId.empty())
+    ctx["contextActivities"] = {{"parent", json::array({{{"objectType", "Activity"}, {"id", parentId}}})}};
   json result = {{"success", g.correct},
                  {"score", {{"scaled", g.score}, {"raw", g.score}, {"min", 0}, {"max", 1}}},
-                 {"response", response}};
+                 {"response", interaction.response}};
   if (g.latencyMs > 0) result["duration"] = duration(double(g.latencyMs));
   return {{"id", nameBasedUuid(key)},
           {"actor", actor(user.name, o)},
@@ -105,12 +165,63 @@ json answered(const User& user, const GradedAnswer& g, const std::string& lesson
           {"timestamp", isoTime(g.answeredAt)}};
 }
 
+const XapiQuestion* questionOf(const XapiQuestions& questions, const std::string& id) {
+  const auto found = questions.find(id);
+  return found != questions.end() ? &found->second : nullptr;
+}
+
+std::string lessonId(const std::string& lesson, const XapiOptions& o) {
+  return o.activityBase + "/lessons/" + pathSegment(lesson);
+}
+
 json lessonActivity(const std::string& lessonId, const XapiOptions& o) {
   return activity(o.activityBase + "/lessons/" + pathSegment(lessonId),
                   {{"type", "http://adlnet.gov/expapi/activities/lesson"}, {"name", {{"en-US", lessonId}}}});
 }
 
-void learnerStatements(const LearnerRecords& r, const XapiOptions& o, json& out) {
+// An exam attempt: attempted, each answered item (a question carrying its own choices and keys),
+// completed with the score and, when the exam has a pass mark, success.
+void examStatements(const User& user, const ExamRecord& e, const std::string& who, const XapiOptions& o, json& out) {
+  const ExamAttempt& a = e.attempt;
+  const std::string examId = o.activityBase + "/exams/" + pathSegment(a.examId);
+  const json exam = activity(examId, {{"type", "http://adlnet.gov/expapi/activities/assessment"},
+                                      {"name", {{"en-US", a.examId}}}});
+  const std::string attemptKey = who + "exam|" + a.examId + "|" + std::to_string(a.startedAt) + "|" + std::to_string(a.id);
+  out.push_back({{"id", nameBasedUuid(attemptKey + "|attempted")},
+                 {"actor", actor(user.name, o)},
+                 {"verb", verb("attempted")},
+                 {"object", exam},
+                 {"context", context(o, {{o.activityBase + "/extensions/course", a.courseId}})},
+                 {"timestamp", isoTime(a.startedAt)}});
+  for (const ExamItem& item : e.items) {
+    if (!item.answer) continue;
+    GradedAnswer g;
+    g.questionId = item.question.question.id;
+    g.structureId = item.question.question.target;
+    g.answer = *item.answer;
+    g.correct = item.correct;
+    g.score = item.score;
+    g.latencyMs = item.latencyMs;
+    g.answeredAt = item.answeredAt;
+    const XapiQuestion asked{item.question, {}};
+    out.push_back(answered(user, g, examId, attemptKey + "|item|" + std::to_string(item.position), o, &asked));
+  }
+  if (a.finishedAt) {
+    json result = {{"completion", true},
+                   {"score", {{"scaled", a.score}, {"raw", a.score}, {"min", 0}, {"max", 1}}},
+                   {"duration", duration(1000.0 * double(*a.finishedAt - a.startedAt))}};
+    if (a.passed) result["success"] = *a.passed;
+    out.push_back({{"id", nameBasedUuid(attemptKey + "|completed")},
+                   {"actor", actor(user.name, o)},
+                   {"verb", verb("completed")},
+                   {"object", exam},
+                   {"result", std::move(result)},
+                   {"context", context(o, {{o.activityBase + "/extensions/course", a.courseId}})},
+                   {"timestamp", isoTime(*a.finishedAt)}});
+  }
+}
+
+void learnerStatements(const LearnerRecords& r, const XapiOptions& o, const XapiQuestions& questions, json& out) {
   const std::string who = "user|" + o.homePage + "|" + r.user.name + "|";
   for (const Attempt& a : r.attempts) {
     const std::string attemptKey = who + "attempt|" + a.lessonId + "|" + std::to_string(a.startedAt) + "|" + std::to_string(a.id);
@@ -122,7 +233,8 @@ void learnerStatements(const LearnerRecords& r, const XapiOptions& o, json& out)
                    {"timestamp", isoTime(a.startedAt)}});
     if (auto found = r.responses.find(a.id); found != r.responses.end())
       for (const Response& x : found->second)
-        out.push_back(answered(r.user, x, a.lessonId, attemptKey + "|step|" + std::to_string(x.stepIndex), o));
+        out.push_back(answered(r.user, x, lessonId(a.lessonId, o), attemptKey + "|step|" + std::to_string(x.stepIndex), o,
+                               questionOf(questions, x.questionId)));
     if (a.finishedAt) {
       json result = {{"completion", true},
                      {"score", {{"scaled", a.score}, {"raw", a.score}, {"min", 0}, {"max", 1}}},
@@ -139,7 +251,8 @@ void learnerStatements(const LearnerRecords& r, const XapiOptions& o, json& out)
   for (const ReviewResponse& x : r.reviews)
     out.push_back(answered(r.user, x, "",
                            who + "review|" + x.questionId + "|" + std::to_string(x.answeredAt) + "|" + std::to_string(x.id),
-                           o));
+                           o, questionOf(questions, x.questionId)));
+  for (const ExamRecord& e : r.exams) examStatements(r.user, e, who, o, out);
 }
 
 void ratingStatements(const StudyRatings& s, const XapiOptions& o, json& out) {
@@ -166,6 +279,11 @@ void ratingStatements(const StudyRatings& s, const XapiOptions& o, json& out) {
                        {o.activityBase + "/extensions/rating-unblinded", r.rating},
                        {o.activityBase + "/extensions/group", r.group},
                        {o.activityBase + "/extensions/session", r.session}};
+    // Viewing times only where they were measured: absent, never 0, for views shown as files.
+    if (r.viewingMeasured) {
+      extensions[o.activityBase + "/extensions/view-ms-a"] = r.viewMsA;
+      extensions[o.activityBase + "/extensions/view-ms-b"] = r.viewMsB;
+    }
     json ctx = context(o, std::move(extensions));
     ctx["registration"] = nameBasedUuid("study|" + o.homePage + "|" + p.id + "|" + r.participantId);
     ctx["contextActivities"] = {{"parent", json::array({{{"objectType", "Activity"}, {"id", studyBase}}})}};
@@ -196,21 +314,13 @@ Status checkXapiOptions(const XapiOptions& o) {
 }
 
 std::string xapiStatementsJson(const std::vector<LearnerRecords>& learners, const std::vector<StudyRatings>& studies,
-                               const XapiOptions& options) {
+                               const XapiOptions& options, const XapiQuestions& questions) {
   json out = json::array();
-  for (const LearnerRecords& r : learners) learnerStatements(r, options, out);
+  for (const LearnerRecords& r : learners) learnerStatements(r, options, questions, out);
   for (const StudyRatings& s : studies) ratingStatements(s, options, out);
   return out.dump(2);
 }
 
-std::string nameBasedUuid(std::string_view name) {
-  Sha256 hash;
-  hash.update(name);
-  std::string hex = hash.hex().substr(0, 32);
-  hex[12] = '8';                                                   // version 8
-  hex[16] = "89ab"[std::stoi(hex.substr(16, 1), nullptr, 16) & 3];  // variant 10xx
-  return hex.substr(0, 8) + "-" + hex.substr(8, 4) + "-" + hex.substr(12, 4) + "-" + hex.substr(16, 4) + "-" +
-         hex.substr(20, 12);
-}
+std::string nameBasedUuid(std::string_view name) { return *uuidV5(kUrlNamespaceUuid, name); }
 
 }  // namespace at::lessons

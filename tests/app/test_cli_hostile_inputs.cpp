@@ -179,6 +179,7 @@ TEST_CASE("Two study runs for one participant: the earlier is refused once the l
     std::ofstream out(path);
     for (int s = 0; s < 13; ++s) {
       nlohmann::json j;
+      j["trial"] = s + 1;  // a resumed participant's answers must name their structure
       j["ratings"] = {{"shape", rating}, {"context", rating}, {"localization", rating}, {"utility", rating}};
       out << j.dump() << "\n";
     }

@@ -25,11 +25,13 @@ namespace fs = std::filesystem;
 namespace {
 
 // Writes an answers file: for every structure, each item rated `rating(position)` as shown.
+// With `nameTrials`, each line names its structure ("trial": s + 1).
 void writeAnswers(const fs::path& path, int structures, const std::function<int(int)>& rating, const std::string& comment = "",
-                  int stopAfter = -1) {
+                  int stopAfter = -1, bool nameTrials = false) {
   std::ofstream out(path);
   for (int s = 0; s < structures && (stopAfter < 0 || s < stopAfter); ++s) {
     nlohmann::json j;
+    if (nameTrials) j["trial"] = s + 1;
     const int r = rating(s);
     j["ratings"] = {{"shape", r}, {"context", r}, {"localization", r}, {"utility", r}};
     j["view_ms_a"] = 1000 + s;
@@ -256,6 +258,92 @@ TEST_CASE("StudyCli_MalformedAnswerLine_ReportsLineAndKeepsEarlierRatings") {
   CHECK(r.err.find("ratings.shape") != std::string::npos);
   auto status = test::runApp("study status wdt_vs_bare_phantom " + db);
   CHECK(status.out.find("4/52") != std::string::npos);
+}
+
+// Every exported rating of `who` carries the answers line written for its presentation position
+// (writeAnswers: view_ms_a = 1000 + position - 1, rating as shown = 1 + (position - 1) % 5);
+// returns how many rows `who` has.
+std::size_t checkAnswersOnTheirTrials(const fs::path& exportDir, const std::string& who) {
+  const auto rows = quiz::parseCsv(test::readFile(exportDir / "responses_long.csv"));
+  REQUIRE(!rows.empty());
+  const auto& header = rows[0];
+  auto col = [&](const std::string& name) {
+    return std::size_t(std::find(header.begin(), header.end(), name) - header.begin());
+  };
+  std::size_t mine = 0;
+  for (std::size_t i = 1; i < rows.size(); ++i) {
+    if (rows[i][col("participant_id")] != who) continue;
+    ++mine;
+    const int position = std::stoi(rows[i][col("presentation_order")]);
+    CAPTURE(position);
+    CHECK(std::stod(rows[i][col("view_ms_a")]) == 1000 + position - 1);
+    CHECK(std::stoi(rows[i][col("rating_ab")]) == 1 + (position - 1) % 5);
+  }
+  return mine;
+}
+
+TEST_CASE("StudyCli_ResumeAfterAStop_AnswersStayOnTheTrialsTheyName") {
+  // A run stops after 5 structures (a server drop, answers ran out); the same command is run again
+  // with the whole file. Answers must stay on their structures: an unnamed file is refused for a
+  // resumed participant (it used to put lines 1–8 on structures 6–13 and call the study complete),
+  // a file naming its trials completes the participant, each answer where its line says.
+  test::TempDir dir;
+  const std::string db = " --db '" + (dir / "s.db").string() + "'", study = "wdt_vs_bare_phantom";
+  const auto rating = [](int s) { return 1 + s % 5; };
+  const auto run = [&](const std::string& who, const std::string& file) {
+    return test::runApp("study run " + study + " --participant " + who + " --group medical --answers '" +
+                        (dir / file).string() + "'" + db);
+  };
+  writeAnswers(dir / "first5.jsonl", 13, rating, "", 5);
+  writeAnswers(dir / "all.jsonl", 13, rating);
+  REQUIRE(run("unnamed", "first5.jsonl").exitCode == 0);
+  auto resumed = run("unnamed", "all.jsonl");
+  CHECK(resumed.exitCode != 0);
+  CHECK(resumed.err.find("all.jsonl:1") != std::string::npos);
+  CHECK(resumed.err.find("\"trial\"") != std::string::npos);
+  CHECK(std::count(resumed.err.begin(), resumed.err.end(), '\n') == 1);
+  CHECK(resumed.out.find("all 13 structures rated") == std::string::npos);
+
+  // Named trials: the resumed file, lines shuffled, fills exactly the 8 structures left.
+  writeAnswers(dir / "named5.jsonl", 13, rating, "", 5, true);
+  writeAnswers(dir / "named.jsonl", 13, rating, "", -1, true);
+  {
+    std::vector<std::string> lines;
+    std::istringstream in(test::readFile(dir / "named.jsonl"));
+    for (std::string line; std::getline(in, line);) lines.push_back(line);
+    std::reverse(lines.begin(), lines.end());
+    std::ofstream out(dir / "named_reversed.jsonl");
+    for (const auto& line : lines) out << line << "\n";
+  }
+  REQUIRE(run("named", "named5.jsonl").exitCode == 0);
+  auto completed = run("named", "named_reversed.jsonl");
+  CAPTURE(completed.err);
+  CHECK(completed.exitCode == 0);
+  CHECK(completed.out.find("all 13 structures rated") != std::string::npos);
+  auto again = run("named", "named.jsonl");  // a third run changes nothing
+  CHECK(again.exitCode == 0);
+
+  auto exported = test::runApp("study export " + study + " --out '" + (dir / "export").string() + "'" + db);
+  REQUIRE(exported.exitCode == 0);
+  CHECK(checkAnswersOnTheirTrials(dir / "export", "unnamed") == 5 * 4);
+  CHECK(checkAnswersOnTheirTrials(dir / "export", "named") == 13 * 4);
+
+  // A named file with a trial twice or out of range: one line naming it.
+  {
+    std::ofstream out(dir / "twice.jsonl");
+    const std::string line = R"({"trial": 2, "ratings": {"shape": 1, "context": 1, "localization": 1, "utility": 1}})";
+    out << line << "\n" << line << "\n";
+  }
+  auto twice = run("twice", "twice.jsonl");
+  CHECK(twice.exitCode != 0);
+  CHECK(twice.err.find("twice.jsonl:2: trial 2 is answered twice") != std::string::npos);
+  {
+    std::ofstream out(dir / "range.jsonl");
+    out << R"({"trial": 14, "ratings": {"shape": 1, "context": 1, "localization": 1, "utility": 1}})" << "\n";
+  }
+  auto range = run("range", "range.jsonl");
+  CHECK(range.exitCode != 0);
+  CHECK(range.err.find("range.jsonl:1: 'trial' must be") != std::string::npos);
 }
 
 TEST_CASE("StudyCli_BadArguments_OneLineErrors") {

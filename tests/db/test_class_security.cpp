@@ -241,6 +241,14 @@ TEST_CASE("A student login holds no write on any table: update, delete, truncate
   CHECK(eve.play("toy.ossicles") == 3);
   REQUIRE(syncNow(eve.db).complete());
   Database sam = openAt(c.samUrl);
+  // Every table, including those changed by later migrations (study trials' nullable viewing
+  // times), stays the owner role's, with row-level security on the class tables.
+  CHECK(count(c.admin, "SELECT COUNT(*) FROM pg_tables WHERE schemaname = current_schema()"
+                       " AND tableowner <> 'at_class_owner'") == 0);
+  CHECK(count(c.admin, "SELECT COUNT(*) FROM pg_tables WHERE schemaname = current_schema() AND rowsecurity") == 4);
+  CHECK(count(c.admin, "SELECT COUNT(*) FROM information_schema.columns WHERE table_schema = current_schema()"
+                       " AND table_name = 'study_trials' AND column_name IN ('view_ms_a', 'view_ms_b')"
+                       " AND is_nullable = 'YES'") == 2);
 
   for (const std::string& table : serverTables(c.admin)) {
     CAPTURE(table);

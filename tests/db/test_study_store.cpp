@@ -637,3 +637,45 @@ TEST_CASE("StudyStore_MergeConflicts_SameIdOtherRecordsOrOtherDesign_WriteNothin
   REQUIRE_FALSE(missing.has_value());
   CHECK((missing.error().kind == ErrorKind::NotFound));
 }
+
+TEST_CASE("StudyStore_UnmeasuredViewingTimes_StoredBlankNotZero_OldZerosMigrateToBlank") {
+  test::TempDir dir;
+  const std::string path = test::freshDatabase(dir, "views.db");
+  const auto p = protocol();
+  const auto blankTrials = [](db::Database& d) {
+    auto s = d.prepare("SELECT COUNT(*) FROM study_trials WHERE view_ms_a IS NULL AND view_ms_b IS NULL");
+    REQUIRE(s.has_value());
+    REQUIRE(*s->step());
+    return s->int64(0);
+  };
+  {
+    db::OpenOptions options;
+    options.targetVersion = 13;  // before blank viewing times: unmeasured ones were stored as 0
+    auto old = db::Database::open(path, options);
+    REQUIRE(old.has_value());
+    REQUIRE(db::saveStudy(*old, p).has_value());
+    auto part = db::enrolOrResume(*old, p, "P0", "medical");
+    REQUIRE(part.has_value());
+    // As the program before it wrote them: trial 0 unmeasured as 0, trial 1 measured, looked 0 ms.
+    REQUIRE(old->exec("UPDATE study_trials SET view_ms_a = 0, view_ms_b = 0, toggles = 0, viewing_measured = 0"
+                      " WHERE position = 0").has_value());
+    REQUIRE(old->exec("UPDATE study_trials SET view_ms_a = 0, view_ms_b = 0, viewing_measured = 1"
+                      " WHERE position = 1").has_value());
+    CHECK(blankTrials(*old) == 0);
+  }
+  auto db = db::Database::open(path);
+  REQUIRE(db.has_value());
+  // The migrated unmeasured trial is blank; the measured 0 stays 0; untouched trials keep 0.
+  CHECK(blankTrials(*db) == 1);
+  auto part = db::enrolOrResume(*db, p, "P0", "medical");
+  REQUIRE(part.has_value());
+  CHECK_FALSE(part->trials[0].viewingMeasured);
+  CHECK(part->trials[1].viewingMeasured);
+  REQUIRE(db::recordTrialViewing(*db, *part, 2, 100, 200, 1, "", false).has_value());
+  CHECK(blankTrials(*db) == 2);
+  REQUIRE(db::recordTrialViewing(*db, *part, 2, 150, 250, 2, "", true).has_value());
+  CHECK(blankTrials(*db) == 1);
+  auto trials = db::enrolOrResume(*db, p, "P0", "medical");
+  REQUIRE(trials.has_value());
+  CHECK(trials->trials[2].viewMsA == 150);
+}

@@ -3,20 +3,29 @@
 // times and durations) rather than against a copy of the output.
 #include <doctest/doctest.h>
 
+#include <sys/wait.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
 #include <regex>
 #include <set>
 
 #include <nlohmann/json.hpp>
 
+#include "core/name_uuid.h"
 #include "lessons/xapi.h"
+#include "test_support.h"
 
 using namespace at;
 using namespace at::lessons;
 using json = nlohmann::json;
+namespace fs = std::filesystem;
 
 namespace {
 
-const std::regex kUuid("^[0-9a-f]{8}-[0-9a-f]{4}-[1-8][0-9a-f]{3}-[89ab][0-9a-f]{3}-[0-9a-f]{12}$");
+// RFC 4122: versions 1-5, variant 10xx (what the ADL conformance suite requires of an LRS).
+const std::regex kUuid("^[0-9a-f]{8}-[0-9a-f]{4}-[1-5][0-9a-f]{3}-[89ab][0-9a-f]{3}-[0-9a-f]{12}$");
 const std::regex kTimestamp(R"(^\d{4}-\d{2}-\d{2}T\d{2}:\d{2}:\d{2}(\.\d+)?Z$)");
 const std::regex kDuration(R"(^PT(\d+(\.\d+)?S)$)");
 const std::regex kAbsoluteIri(R"(^[a-z][a-z0-9+.-]*:[^\s]+$)");
@@ -63,6 +72,75 @@ std::vector<LearnerRecords> learners() {
   review.userId = 7;
   r.reviews = {review};
   return {r};
+}
+
+// Runs `command` in a shell: its stdout, and its exit status in `status`.
+std::string runShell(const std::string& command, int& status) {
+  std::string out;
+  FILE* pipe = ::popen(command.c_str(), "r");
+  if (!pipe) {
+    status = -1;
+    return out;
+  }
+  char buf[512];
+  while (std::fgets(buf, sizeof buf, pipe)) out += buf;
+  const int raw = ::pclose(pipe);
+  status = WIFEXITED(raw) ? WEXITSTATUS(raw) : -1;
+  return out;
+}
+
+// The choice and order questions of learners() as they were asked.
+XapiQuestions questions() {
+  XapiQuestions q;
+  XapiQuestion identify;
+  identify.resolved.question.id = "inner_ear.identify_vestibule";
+  identify.resolved.question.kind = quiz::QuestionKind::Identify;
+  identify.resolved.choices = {"cochlea", "vestibule", "stapes"};
+  identify.resolved.keyChoice = 1;
+  identify.names = {{"cochlea", "Cochlea"}, {"vestibule", "Vestibule"}, {"stapes", "Stapes"},
+                    {"malleus", "Malleus"}, {"incus", "Incus"}};
+  q["inner_ear.identify_vestibule"] = identify;
+  XapiQuestion order = identify;
+  order.resolved.question.id = "inner_ear.order_ossicles";
+  order.resolved.question.kind = quiz::QuestionKind::Order;
+  order.resolved.choices = {"stapes", "malleus", "incus"};
+  order.resolved.keyChoice = -1;
+  order.resolved.keyOrder = {"malleus", "incus", "stapes"};
+  q["inner_ear.order_ossicles"] = order;
+  return q;
+}
+
+// A finished exam attempt of learners()'s user: an identify item answered right, a locate item
+// answered wrong, one item not answered.
+ExamRecord exam() {
+  ExamRecord e;
+  e.attempt = {21, 7, "temporal_bone.practical", "temporal_bone", 1'790'002'000, 1'790'002'900, 1'790'002'500, 0.5, false};
+  ExamItem identify;
+  identify.position = 0;
+  identify.question.question.id = "temporal_bone.practical.identify.cochlea";
+  identify.question.question.kind = quiz::QuestionKind::Identify;
+  identify.question.question.target = "cochlea";
+  identify.question.choices = {"stapes", "cochlea", "incus", "malleus"};
+  identify.question.keyChoice = 1;
+  identify.answer = quiz::Answer{};
+  identify.answer->choice = 1;
+  identify.correct = true;
+  identify.score = 1;
+  identify.latencyMs = 4000;
+  identify.answeredAt = 1'790'002'100;
+  ExamItem locate;
+  locate.position = 1;
+  locate.question.question.id = "temporal_bone.practical.locate.stapes";
+  locate.question.question.kind = quiz::QuestionKind::Locate;
+  locate.question.question.target = "stapes";
+  locate.answer = quiz::Answer{};
+  locate.answer->pick = quiz::Pick{"incus", 2.5};
+  locate.answeredAt = 1'790'002'200;
+  ExamItem unanswered;
+  unanswered.position = 2;
+  unanswered.question.question.id = "temporal_bone.practical.name.incus";
+  e.items = {identify, locate, unanswered};
+  return e;
 }
 
 std::vector<StudyRatings> studies() {
@@ -142,7 +220,7 @@ TEST_CASE("Answers, attempts and study ratings become valid xAPI statements; a r
   options.homePage = "https://lms.example.edu";
   options.activityBase = "https://lms.example.edu/anatomy";
   options.appVersion = "0.1.0";
-  const json statements = json::parse(xapiStatementsJson(learners(), studies(), options));
+  const json statements = json::parse(xapiStatementsJson(learners(), studies(), options, questions()));
   REQUIRE(statements.is_array());
   // 2 attempted + 1 completed + 4 lesson answers + 1 review answer + 4 ratings.
   REQUIRE(statements.size() == 12);
@@ -165,7 +243,17 @@ TEST_CASE("Answers, attempts and study ratings become valid xAPI statements; a r
   // Answers: success, score, response in xAPI's formats, the time taken, the lesson as parent.
   for (const json& s : statements) {
     const json& d = s.at("object").at("definition");
+    if (d.value("interactionType", "") == "choice") {
+      // The choices offered (ids with the names shown), the key, and the chosen choice's id.
+      REQUIRE(d.at("choices").size() == 3);
+      CHECK(d.at("choices")[2].at("id") == "stapes");
+      CHECK(d.at("choices")[2].at("description").at("en-US") == "Stapes");
+      CHECK(d.at("correctResponsesPattern") == json::array({"vestibule"}));
+      CHECK(s.at("result").at("response") == "stapes");
+    }
     if (d.value("interactionType", "") == "sequencing") {
+      CHECK(d.at("choices").size() == 3);
+      CHECK(d.at("correctResponsesPattern") == json::array({"malleus[,]incus[,]stapes"}));
       CHECK(s.at("result").at("response") == "malleus[,]incus[,]stapes");
       CHECK(s.at("result").at("success") == false);
       CHECK(s.at("result").at("score").at("scaled") == 0.5);
@@ -199,11 +287,11 @@ TEST_CASE("Answers, attempts and study ratings become valid xAPI statements; a r
   CHECK(statements[8].at("context").at("registration") != statements[10].at("context").at("registration"));
 
   // Exported again: the same ids (a record store keeps each statement once).
-  const json again = json::parse(xapiStatementsJson(learners(), studies(), options));
+  const json again = json::parse(xapiStatementsJson(learners(), studies(), options, questions()));
   for (std::size_t i = 0; i < statements.size(); ++i) CHECK(again[i].at("id") == statements[i].at("id"));
 }
 
-TEST_CASE("xAPI options must be web addresses, and name-based UUIDs are stable version-8 UUIDs") {
+TEST_CASE("xAPI options must be web addresses, and name-based UUIDs are stable RFC 4122 version-5 UUIDs") {
   XapiOptions options;
   CHECK(checkXapiOptions(options));
   options.homePage = "lms.example.edu";
@@ -213,5 +301,68 @@ TEST_CASE("xAPI options must be web addresses, and name-based UUIDs are stable v
   CHECK(nameBasedUuid("a") == nameBasedUuid("a"));
   CHECK(nameBasedUuid("a") != nameBasedUuid("b"));
   CHECK(std::regex_match(nameBasedUuid("a"), kUuid));
-  CHECK(nameBasedUuid("a")[14] == '8');
+  CHECK(nameBasedUuid("a")[14] == '5');
+  // Python's uuid.uuid5(uuid.NAMESPACE_URL, …) and uuid5(NAMESPACE_DNS, "python.org").
+  CHECK(nameBasedUuid("http://localhost/anatomy-tutor") == "86b277b0-b0cd-5252-b60e-23cacf6f77bd");
+  CHECK(nameBasedUuid("") == "1b4db7eb-4057-5ddf-91e0-36dec72071f5");
+  CHECK(uuidV5("6ba7b810-9dad-11d1-80b4-00c04fd430c8", "python.org") == "886313e1-3b8a-5372-9b90-0c9aee199e5d");
+  CHECK_FALSE(uuidV5("not a uuid", "x"));
+}
+
+TEST_CASE("An exam attempt becomes attempted, one answered statement per answered item, and completed with its pass") {
+  XapiOptions options;
+  std::vector<LearnerRecords> records = learners();
+  records[0].attempts.clear();
+  records[0].responses.clear();
+  records[0].reviews.clear();
+  records[0].exams = {exam()};
+  const json statements = json::parse(xapiStatementsJson(records, {}, options));
+  REQUIRE(statements.size() == 4);
+  for (const json& s : statements) checkStatement(s);
+  CHECK(statements[0].at("verb").at("display").at("en-US") == "attempted");
+  CHECK(statements[0].at("object").at("definition").at("type") == "http://adlnet.gov/expapi/activities/assessment");
+  const json& identify = statements[1];
+  CHECK(identify.at("object").at("definition").at("interactionType") == "choice");
+  CHECK(identify.at("object").at("definition").at("correctResponsesPattern") == json::array({"cochlea"}));
+  CHECK(identify.at("result").at("response") == "cochlea");
+  CHECK(identify.at("context").at("contextActivities").at("parent")[0].at("id") == statements[0].at("object").at("id"));
+  CHECK(statements[2].at("result").at("response") == "incus");
+  CHECK(statements[2].at("result").at("success") == false);
+  CHECK(statements[3].at("verb").at("display").at("en-US") == "completed");
+  CHECK(statements[3].at("result").at("score").at("scaled") == 0.5);
+  CHECK(statements[3].at("result").at("success") == false);
+}
+
+TEST_CASE("Every statement passes Learning Locker's xAPI validator (npm @learninglocker/xapi-validation under Node.js)") {
+  int status = 0;
+  runShell("command -v node", status);
+  if (status != 0) {
+    std::printf("SKIPPED: the xAPI validator needs Node.js (Debian package 'nodejs'; scripts/install-deps.sh)\n");
+    return;
+  }
+  test::TempDir dir;
+  XapiOptions options;
+  options.appVersion = "0.1.0";
+  std::vector<LearnerRecords> records = learners();
+  records[0].exams = {exam()};
+  const fs::path file = dir / "statements.json";
+  std::ofstream(file) << xapiStatementsJson(records, studies(), options, questions());
+  const std::string out = runShell("bash '" + (test::sourceDir() / "scripts/xapi-validator.sh").string() +
+                                             "' validate '" + file.string() + "' 2>&1",
+                                         status);
+  INFO(out);
+  CHECK(status == 0);
+  CHECK(out.find("16 statement(s), 0 problem(s)") != std::string::npos);
+  // The validator does refuse: a version-8 id and a choice without its id list are reported.
+  json broken = json::parse(test::readFile(file));
+  broken[0]["id"] = "0f3ad5e4-9b1c-8d2e-a3f4-5b6c7d8e9f00";
+  broken[1]["verb"].erase("id");
+  std::ofstream(dir / "broken.json") << broken.dump();
+  const std::string refused = runShell("bash '" + (test::sourceDir() / "scripts/xapi-validator.sh").string() +
+                                                 "' validate '" + (dir / "broken.json").string() + "' 2>&1",
+                                             status);
+  INFO(refused);
+  CHECK(status == 1);
+  CHECK(refused.find("[0]: id 0f3ad5e4") != std::string::npos);
+  CHECK(refused.find("[1]: statement.verb.id") != std::string::npos);
 }

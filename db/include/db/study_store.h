@@ -85,7 +85,7 @@ struct RatingRecord {
 Status recordRating(Database& db, const StudyParticipant& participant, const RatingRecord& rating);
 // Records viewing time, toggles and comment of a trial (replacing earlier values). With
 // `viewingMeasured` false the times and toggles are not known (the views were shown as files) and
-// are stored as zero and exported blank.
+// are stored blank (NULL; toggles 0), read back as 0 with viewingMeasured false, and exported blank.
 Status recordTrialViewing(Database& db, const StudyParticipant& participant, int position, double viewMsA,
                           double viewMsB, int toggles, const std::string& comment, bool viewingMeasured = true);
 Status markParticipantComplete(Database& db, const StudyParticipant& participant);

@@ -1,0 +1,161 @@
+// One class view: instructor analytics on a class server counts what `class progress` counts —
+// the students who learnt on their own machines and reached the server through the outbox
+// included — read through PgBouncer, as the lab machines reach the server.
+#include <doctest/doctest.h>
+
+#include <ctime>
+#include <map>
+#include <random>
+#include <set>
+
+#include "database.h"  // db/'s private SQL wrapper (at_db_sql_for_tests)
+#include "db/analytics_store.h"
+#include "db/class_server.h"
+#include "db/course_store.h"
+#include "db/sqlite_repositories.h"
+#include "lessons/analytics.h"
+#include "lessons/lesson_engine.h"
+#include "pooled_postgres.h"
+#include "test_databases.h"
+#include "test_support.h"
+#include "toy_course.h"
+#include "toy_play.h"
+
+using namespace at;
+using namespace at::db;
+using namespace at::lessons;
+
+namespace {
+
+Database openAt(const std::string& location) {
+  auto db = Database::open(location);
+  REQUIRE_MESSAGE(db, (db ? "" : db.error().message));
+  return std::move(*db);
+}
+
+// A student's laptop: its own SQLite file with the toy course, joined to the class.
+struct Laptop {
+  Database db;
+  std::int64_t userId = 0;
+  SqliteCurriculumRepository curriculum;
+  SqliteProgressRepository progress;
+  test::ToyKeys keys;
+
+  Laptop(const std::string& path, const std::string& name) : db(openAt(path)), curriculum(db, test::toyBuiltin()), progress(db) {
+    REQUIRE(storeCourse(db, test::toyCourse(), "toy"));
+    SqliteUserRepository users(db);
+    auto user = users.createUser(name, Role::Student, "");
+    REQUIRE(user);
+    userId = user->id;
+  }
+
+  // Plays `lessonId`, answering right where `right(n)` says, stopping after `stopAfter` answers.
+  void play(const std::string& lessonId, const std::function<bool(int)>& right, int stopAfter) {
+    LessonEngine engine(curriculum, progress, keys);
+    auto started = engine.start(userId, lessonId);
+    REQUIRE_MESSAGE(started, (started ? "" : started.error().message));
+    test::playAnswering(engine, right, stopAfter);
+    if (engine.atEnd()) REQUIRE(engine.finish());
+  }
+};
+
+}  // namespace
+
+TEST_CASE("ClassView_AnalyticsOnTheServerCountsWhatClassProgressCounts_OutboxStudentsIncluded") {
+  if (test::testingOnPostgres()) return;  // runs its own server: once is enough
+  test::PooledPostgres pooler(20, 5);
+  auto urls = test::pooledDatabase(pooler, "the class view test");
+  if (!urls) return;
+  const std::uint32_t seed = std::random_device{}();
+  INFO("seed " << seed);
+  std::printf("ClassView seed %u\n", seed);
+  std::mt19937 random(seed);
+  test::TempDir dir;
+  Database server = openAt(urls->pooled);
+  REQUIRE(storeCourse(server, test::toyCourse(), "toy"));
+  auto made = createClass(server, "Ear anatomy", "dr_ada");
+  REQUIRE(made);
+  auto other = createClass(server, "Another class", "dr_ada");
+  REQUIRE(other);
+
+  // Five laptop students of the class (one never plays) and one of another class; each plays the
+  // first lesson and, at random, part of the second, with a random pattern of right answers.
+  const std::vector<std::string> names = {"ann", "ben", "cat", "dan", "eve"};
+  std::vector<std::unique_ptr<Laptop>> laptops;
+  for (std::size_t i = 0; i <= names.size(); ++i) {
+    const bool elsewhere = i == names.size();
+    const std::string name = elsewhere ? "zed" : names[i];
+    const std::string code = elsewhere ? other->code : made->code;
+    laptops.push_back(std::make_unique<Laptop>((dir.path() / (name + ".db")).string(), name));
+    REQUIRE(joinClass(server, code, name));
+    REQUIRE(rememberMembership(laptops.back()->db, {name, code, urls->pooled, ClassRole::Student}));
+    if (name == "dan") continue;
+    // Right and wrong alternating from a right first answer, or all right (the patterns toy_play.h
+    // is written for: a toy question answered wrong first may not be graded wrong).
+    const bool allRight = random() % 2 == 0;
+    const auto right = [allRight](int n) { return allRight || n % 2 == 0; };
+    laptops.back()->play("toy.ossicles", right, 1 << 30);
+    if (random() % 2) laptops.back()->play("toy.middle", right, int(random() % 4));
+    auto sent = syncOutbox(laptops.back()->db);
+    REQUIRE(sent);
+    CHECK(sent->complete());
+  }
+  // A lab machine's user on the server itself, in no class: analytics' class, not class progress'.
+  SqliteUserRepository serverUsers(server);
+  REQUIRE(serverUsers.createUser("lab_user", Role::Student, ""));
+
+  auto progress = classProgress(server, made->code, "dr_ada");
+  REQUIRE_MESSAGE(progress, (progress ? "" : progress.error().message));
+  SqliteCurriculumRepository curriculum(server, test::toyBuiltin());
+  auto input = loadAnalyticsInput(server, curriculum, test::toyCourse().id, made->code);
+  REQUIRE_MESSAGE(input, (input ? "" : input.error().message));
+  const ClassAnalytics analytics = computeAnalytics(*input, std::int64_t(std::time(nullptr)));
+
+  // The same students, answers, right answers, structures and lessons, student by student.
+  REQUIRE(progress->students.size() == names.size());
+  CHECK(analytics.classSize == int(names.size()));
+  std::map<std::int64_t, std::string> nameOf;
+  for (const User& u : input->students) nameOf[u.id] = u.name;
+  struct Counts {
+    int answers = 0, correct = 0;
+    std::set<std::string> structures, started, finished;
+  };
+  std::map<std::string, Counts> fromAnalytics;
+  for (const ClassAnswer& a : input->answers) {
+    Counts& c = fromAnalytics[nameOf.at(a.userId)];
+    ++c.answers;
+    c.correct += a.correct ? 1 : 0;
+    c.structures.insert(a.structureId);
+  }
+  for (const Attempt& a : input->attempts) {
+    fromAnalytics[nameOf.at(a.userId)].started.insert(a.lessonId);
+    if (a.finishedAt) fromAnalytics[nameOf.at(a.userId)].finished.insert(a.lessonId);
+  }
+  int total = 0;
+  for (const StudentClassProgress& p : progress->students) {
+    CAPTURE(p.userName);
+    const Counts& c = fromAnalytics[p.userName];
+    CHECK(c.answers == p.answers);
+    CHECK(c.correct == p.correct);
+    CHECK(int(c.structures.size()) == p.structures);
+    CHECK(int(c.started.size()) == p.lessonsStarted);
+    CHECK(int(c.finished.size()) == p.lessonsFinished);
+    total += p.answers;
+  }
+  CHECK(total > 0);
+  CHECK(analytics.answers == total);
+  // Per structure too.
+  std::map<std::string, std::pair<int, int>> byStructure;
+  for (const StructureStats& s : analytics.structures) byStructure[s.structureId] = {s.answers, s.correct};
+  for (const StructureClassProgress& s : progress->structures) {
+    CAPTURE(s.structureId);
+    CHECK(byStructure[s.structureId] == std::make_pair(s.answers, s.correct));
+  }
+
+  // Without a class named: every class's outbox students and the server's own users.
+  auto everyone = loadAnalyticsInput(server, curriculum, test::toyCourse().id, std::nullopt);
+  REQUIRE(everyone);
+  std::set<std::string> all;
+  for (const User& u : everyone->students) all.insert(u.name);
+  CHECK(all == std::set<std::string>{"ann", "ben", "cat", "dan", "eve", "lab_user", "zed"});
+}
