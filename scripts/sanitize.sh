@@ -49,8 +49,8 @@ for m in "${modules[@]}"; do [ "$m" != render ] && without_render+=("$m"); done
 regex="^($(IFS='|'; echo "${without_render[*]}"))\$"
 cd "$dir"
 status=0
-ctest --output-on-failure --timeout 2400 -R "$regex" "$@" || status=1
+ctest --output-on-failure --timeout 2400 -L "$regex" "$@" || status=1
 if [[ " ${modules[*]} " == *" render "* ]]; then
-  ASAN_OPTIONS="$ASAN_OPTIONS:detect_leaks=0" ctest --output-on-failure --timeout 2400 -R '^render$' "$@" || status=1
+  ASAN_OPTIONS="$ASAN_OPTIONS:detect_leaks=0" ctest --output-on-failure --timeout 2400 -L '^render$' "$@" || status=1
 fi
 exit "$status"

@@ -7,6 +7,7 @@
 #   AT_CHROOT=DIR  reuse (or keep) the chroot in DIR instead of a temporary one
 set -euo pipefail
 cd "$(dirname "$0")/.."
+source scripts/inner-ear-answers.sh
 [ "$(id -u)" -eq 0 ] || { echo "test-package-fresh-debian: needs root" >&2; exit 1; }
 command -v debootstrap >/dev/null || { echo "test-package-fresh-debian: needs debootstrap (apt-get install debootstrap)" >&2; exit 1; }
 stamp() { date +%s.%N; }
@@ -39,7 +40,7 @@ mkdir -p "$root/tmp/user"
 "${in_root[@]}" anatomy-tutor --version
 t=$(stamp)
 python3 scripts/play-lesson.py -- "${in_root[@]}" anatomy-tutor play inner_ear --user fresh --new-user -- \
-  cochlea Vestibule "lateral semicircular canal" "superior semicircular canal" Vestibule "Posterior semicircular canal" | tail -n 1
+  "${inner_ear_answers[@]}" | tail -n 1
 echo "test-package-fresh-debian: played inner_ear ($(elapsed "$t"))"
 t=$(stamp)
 chroot "$root" bash -c 'cd /tmp/user && env -i PATH=/usr/bin:/bin HOME=/tmp/user anatomy-tutor >/dev/null && ls anatomy-tutor-views/*.png | wc -l' |

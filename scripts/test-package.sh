@@ -8,6 +8,7 @@
 #   the check. Prints how long each part took. AT_KEEP_PACKAGE=1 leaves the package installed.
 set -euo pipefail
 cd "$(dirname "$0")/.."
+source scripts/inner-ear-answers.sh
 checkout=$(pwd -P)
 [ "$(id -u)" -eq 0 ] || { echo "test-package: needs root (dpkg -i)" >&2; exit 1; }
 stamp() { date +%s.%N; }
@@ -60,8 +61,7 @@ echo "test-package: --version ($(elapsed "$t"))"
 
 t=$(stamp)
 "${env_user[@]}" "${play_trace[@]}" \
-  python3 "$run/play-lesson.py" -- anatomy-tutor play inner_ear --user ci --new-user -- \
-  "pick:cochlea" Vestibule "lateral semicircular canal" "pick:superior semicircular canal" Vestibule "Posterior semicircular canal" \
+  python3 "$run/play-lesson.py" -- anatomy-tutor play inner_ear --user ci --new-user -- "${inner_ear_answers[@]}" \
   > "$run/play.log" || { cat "$run/play.log"; echo "test-package: the installed copy did not play inner_ear to a full score" >&2; exit 1; }
 tail -n 1 "$run/play.log"
 echo "test-package: played inner_ear from the installed copy ($(elapsed "$t"), $traced)"

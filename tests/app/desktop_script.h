@@ -21,7 +21,7 @@ inline bool haveXvfb() { return std::system("command -v xvfb-run >/dev/null 2>&1
 // skipped (as requireSharedData does) and returns false.
 inline bool requireXvfb() {
   if (haveXvfb()) return true;
-  std::printf("SKIPPED: xvfb-run is not installed\n");
+  at::test::skipf("xvfb-run is not installed");
   return false;
 }
 

@@ -90,7 +90,7 @@ TEST_CASE("A read-only database serves the commands that only read, and a write 
   if (!test::requireAppBinary("read-only database")) return;
   const auto prefix = asUnprivileged();
   if (!prefix) {
-    MESSAGE("SKIPPED: running as root without setpriv: no user for whom the database is read-only");
+    at::test::skipf("running as root without setpriv: no user for whom the database is read-only");
     return;
   }
   test::TempDir dir;
@@ -131,7 +131,7 @@ TEST_CASE("A full disk: reading commands still work, a write says the disk is fu
   const fs::path disk = dir / "disk";
   fs::create_directories(disk);
   if (::mount("tmpfs", disk.c_str(), "tmpfs", 0, "size=1m") != 0) {
-    MESSAGE("SKIPPED: cannot mount a 1 MiB tmpfs here (needs root and mount permission) to fill a disk");
+    at::test::skipf("cannot mount a 1 MiB tmpfs here (needs root and mount permission) to fill a disk");
     return;
   }
   struct Unmount {

@@ -114,7 +114,7 @@ TEST_CASE("info, slice, wdt and render open an InVesalius .inv3 like any volume 
   const auto render = dir / "render.png";
   r = test::runApp("render " + quoted(project) + " brain" + withLabels + " --mode bare --size 48x32 --out " + quoted(render));
   if (r.exitCode != 0 && r.err.find("EGL") != std::string::npos) {
-    std::printf("SKIPPED: rendering the .inv3 needs EGL (%s)", r.err.c_str());
+    at::test::skipf("rendering the .inv3 needs EGL (%s)", r.err.c_str());
     return;
   }
   REQUIRE_MESSAGE(r.exitCode == 0, r.err);
@@ -142,7 +142,7 @@ TEST_CASE("the dataset name skull opens the fetched head CT, and says how to fet
     // An empty cache: only an installed invesalius-examples package could still provide the file.
     ScopedEnv cache("XDG_CACHE_HOME", dir.path().string());
     if (locateKnownScan(*scan)) {
-      std::printf("SKIPPED: the absent-skull messages (invesalius-examples is installed at %s)\n", scan->packagePath.c_str());
+      at::test::skipf("the absent-skull messages (invesalius-examples is installed at %s)", scan->packagePath.c_str());
     } else {
       const auto r = test::runApp("slice skull --axis z --index 1 --out " + quoted(dir / "x.png"));
       checkOneLineError(r, "dataset 'skull' is Cranium.inv3 from Debian's invesalius-examples package, which is not here");
@@ -156,7 +156,7 @@ TEST_CASE("the dataset name skull opens the fetched head CT, and says how to fet
   }
   const auto path = locateKnownScan(*scan);
   if (!path) {
-    std::printf("SKIPPED: opening skull needs Cranium.inv3 from Debian's invesalius-examples (run scripts/fetch-scans.sh)\n");
+    at::test::skipf("opening skull needs Cranium.inv3 from Debian's invesalius-examples (run scripts/fetch-scans.sh)");
     return;
   }
   auto r = test::runApp("info skull");

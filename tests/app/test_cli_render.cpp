@@ -26,7 +26,7 @@ TEST_CASE("render writes a PNG of the requested size in bare and WDT mode, unles
     const std::string out = (dir / (mode + ".png")).string();
     const auto r = test::runApp("render phantom:64 cochlea --mode " + mode + " --size 48x32 --out '" + out + "'");
     if (r.exitCode != 0 && r.err.find("EGL") != std::string::npos) {
-      std::printf("SKIPPED: render command needs EGL (%s)", r.err.c_str());
+      at::test::skipf("render command needs EGL (%s)", r.err.c_str());
       return;
     }
     REQUIRE_MESSAGE(r.exitCode == 0, r.err);

@@ -100,7 +100,7 @@ TEST_CASE("structures, slice and render open an unlabelled µCT; the slice uses 
   const fs::path render = dir / "whole.png";
   r = test::runApp("render " + quoted(uct) + " --size 96x96 --view anterior --out " + quoted(render));
   if (r.exitCode != 0 && r.err.find("EGL") != std::string::npos) {
-    std::printf("SKIPPED: render needs EGL (%s)", r.err.c_str());
+    at::test::skipf("render needs EGL (%s)", r.err.c_str());
     return;
   }
   REQUIRE_MESSAGE(r.exitCode == 0, r.err);
@@ -123,7 +123,7 @@ TEST_CASE("the real 3 mm abdominal CT without labels renders its body and its bo
   auto r = test::runApp("render " + quoted(ct) + " --view superior --size 200x200 --no-overlays --backend cpu --out " +
                         quoted(out));
   if (r.exitCode != 0 && r.err.find("EGL") != std::string::npos) {
-    std::printf("SKIPPED: render needs EGL (%s)", r.err.c_str());
+    at::test::skipf("render needs EGL (%s)", r.err.c_str());
     return;
   }
   REQUIRE_MESSAGE(r.exitCode == 0, r.err);
@@ -150,7 +150,7 @@ TEST_CASE("render DATASET --out without a structure draws the whole phantom, and
   const fs::path out = dir / "phantom.png";
   auto r = test::runApp("render phantom:64 --size 64x64 --out " + quoted(out));
   if (r.exitCode != 0 && r.err.find("EGL") != std::string::npos) {
-    std::printf("SKIPPED: render needs EGL (%s)", r.err.c_str());
+    at::test::skipf("render needs EGL (%s)", r.err.c_str());
     return;
   }
   REQUIRE_MESSAGE(r.exitCode == 0, r.err);

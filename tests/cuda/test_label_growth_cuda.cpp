@@ -21,7 +21,7 @@ namespace {
 bool requireGrowthDevice() {
   const auto& info = cuda::queryDevice();
   if (!info.available) {
-    std::printf("SKIPPED: no CUDA device (%s)\n", info.reason.c_str());
+    at::test::skipf("no CUDA device (%s)", info.reason.c_str());
     return false;
   }
   return true;

@@ -30,7 +30,7 @@ using at::WeightRule;
 bool requireDevice() {
   const auto& info = at::cuda::queryDevice();
   if (!info.available) {
-    std::printf("SKIPPED: no CUDA device (%s)\n", info.reason.c_str());
+    at::test::skipf("no CUDA device (%s)", info.reason.c_str());
     return false;
   }
   return true;
@@ -155,7 +155,7 @@ TEST_CASE("queryDevice answers without a GPU instead of crashing, and the backen
   auto r = at::cuda::runCudaBackend(p, {});
   REQUIRE_FALSE(r.has_value());
   CHECK(r.error().message.find(info.reason) != std::string::npos);
-  std::printf("SKIPPED: no CUDA device (%s)\n", info.reason.c_str());
+  at::test::skipf("no CUDA device (%s)", info.reason.c_str());
 }
 
 TEST_CASE("converged GPU fields equal the CPU backend and the exact reference for every rule, weight and edge size") {
@@ -484,7 +484,7 @@ TEST_CASE("a resident device volume gives the host path's fields bit for bit, do
   auto uploaded = at::cuda::uploadVolume(ct, labels);
   if (!at::cuda::queryDevice().available) {
     REQUIRE_FALSE(uploaded.has_value());
-    std::printf("SKIPPED: no CUDA device (%s)\n", uploaded.error().message.c_str());
+    at::test::skipf("no CUDA device (%s)", uploaded.error().message.c_str());
     return;
   }
   REQUIRE_MESSAGE(uploaded.has_value(), (uploaded ? std::string() : uploaded.error().message));

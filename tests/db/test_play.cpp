@@ -42,7 +42,7 @@ namespace {
 
 bool appAvailable() {
   if (fs::exists(test::appBinary())) return true;
-  std::printf("SKIPPED: %s is not built\n", test::appBinary().c_str());
+  at::test::skipf("%s is not built", test::appBinary().c_str());
   return false;
 }
 

@@ -8,6 +8,7 @@
 #include <string>
 
 #include "render/gl/egl_context.h"
+#include "test_support.h"
 
 namespace at::test {
 
@@ -83,7 +84,7 @@ render::gl::VolumeRenderer* glRenderer() {
   }
   GlFixture* f = fixture().get();
   if (!f || !f->renderer) {
-    std::printf("SKIPPED: GL render test needs an EGL OpenGL 4.3 context (%s)\n", f ? f->why.c_str() : "released");
+    at::test::skipf("GL render test needs an EGL OpenGL 4.3 context (%s)", f ? f->why.c_str() : "released");
     return nullptr;
   }
   return &*f->renderer;

@@ -12,6 +12,7 @@
 #include "render/scene.h"
 #include "render_fixture.h"
 #include "render_scenes.h"
+#include "test_support.h"
 #include "volume/mask.h"
 #include "wdt/problem.h"
 #include "wdt/wdt.h"
@@ -87,7 +88,7 @@ TEST_CASE("DeviceField_ReservedWhenTheDatasetOpens_ShowsWhatTheHostFieldShows_An
 
 #if defined(AT_TEST_HAVE_CUDA)
   if (!cuda::queryDevice().available) {
-    MESSAGE("SKIPPED: no CUDA device; the interop half of this test runs on a GPU machine");
+    at::test::skipf("no CUDA device; the interop half of this test runs on a GPU machine");
     return;
   }
   auto problem = prepareWdtProblem(scene.dataset.volume, seeds, params);
@@ -118,6 +119,6 @@ TEST_CASE("DeviceField_ReservedWhenTheDatasetOpens_ShowsWhatTheHostFieldShows_An
   CAPTURE(d.maxOff);
   CHECK(d.channelsOff <= int(fromHost->rgba.size() / 200));
 #else
-  MESSAGE("SKIPPED: built without CUDA; the interop half of this test needs it");
+  MESSAGE("partly skipped: built without CUDA; the interop half of this test needs it");
 #endif
 }

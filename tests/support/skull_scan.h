@@ -47,7 +47,7 @@ inline const std::optional<std::filesystem::path>& grownSkullCache() {
     const KnownScan* scan = findKnownScan("skull");
     const auto file = scan ? locateKnownScan(*scan) : std::nullopt;
     if (!file) {
-      std::printf("SKIPPED: the skull course needs Cranium.inv3 from Debian's invesalius-examples (run scripts/fetch-scans.sh)\n");
+      at::test::skipf("the skull course needs Cranium.inv3 from Debian's invesalius-examples (run scripts/fetch-scans.sh)");
       return std::nullopt;
     }
     if (!requireAppBinary("growing the skull's labels")) return std::nullopt;

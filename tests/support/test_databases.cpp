@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
 #include <mutex>
 
 #include <doctest/doctest.h>
@@ -20,7 +21,8 @@ namespace {
 // The server the tests use, started once per process.
 struct TestServer {
   std::string baseUrl;       // a database the tests make schemas in
-  std::string clusterDir;    // non-empty when this process started the cluster
+  std::string clusterDir;    // the cluster's folder when the tests may stop and restart it
+  bool ownCluster = false;   // this process started the cluster (and stops it at exit)
   std::string whyNot;        // why there is no server
 };
 
@@ -68,6 +70,25 @@ TestServer& server() {
       if (auto e = execOn(s.baseUrl, "SELECT 1"); !e.empty()) s.whyNot = "AT_TEST_POSTGRES_URL does not answer: " + e;
       return;
     }
+    // A cluster CTest's fixture started for all tests: AT_TEST_POSTGRES_CLUSTER names the file
+    // that holds its folder (tests/support/test_postgres.sh).
+    std::string shared;
+    if (const char* listed = std::getenv("AT_TEST_POSTGRES_CLUSTER"); listed && *listed) {
+      std::ifstream in(listed);
+      std::getline(in, shared);
+    }
+    if (!shared.empty() && fs::exists(shared)) {
+      int status = 0;
+      const std::string url = runScript("'" + scriptPath() + "' url '" + shared + "' 2>&1", status);
+      if (status != 0) {
+        s.whyNot = "the tests' cluster in " + shared + " has no URL: " + url;
+        return;
+      }
+      s.clusterDir = shared;
+      s.baseUrl = url.substr(0, url.rfind('/')) + "/attest";
+      if (auto e = execOn(s.baseUrl, "SELECT 1"); !e.empty()) s.whyNot = "the tests' cluster does not answer: " + e;
+      return;
+    }
     std::string dir = (fs::temp_directory_path() / "at-pg-test-XXXXXX").string();
     if (!::mkdtemp(dir.data())) {
       s.whyNot = "cannot make a folder for the test cluster";
@@ -82,6 +103,7 @@ TestServer& server() {
       return;
     }
     s.clusterDir = dir;
+    s.ownCluster = true;
     std::atexit(stopAtExit);
     // The tests' database beside the maintenance one.
     if (auto e = execOn(url, "CREATE DATABASE attest"); !e.empty()) {
@@ -95,7 +117,7 @@ TestServer& server() {
 
 void stopAtExit() {
   TestServer& s = server();
-  if (s.clusterDir.empty()) return;
+  if (!s.ownCluster) return;
   int status = 0;
   runScript("'" + scriptPath() + "' stop '" + s.clusterDir + "' 2>&1", status);
   std::error_code ec;
@@ -130,9 +152,9 @@ std::string freshDatabase(const TempDir& dir, const std::string& name) {
   std::string whyNot;
   auto url = newSchema(whyNot);
   if (!url) {
-    std::printf("SKIPPED: the storage tests on PostgreSQL: %s\n", whyNot.c_str());
+    at::test::skipf("the storage tests on PostgreSQL: %s", whyNot.c_str());
     std::fflush(stdout);
-    std::_Exit(0);
+    std::_Exit(exitStatusWithSkips(0));
   }
   return *url;
 }
@@ -140,7 +162,7 @@ std::string freshDatabase(const TempDir& dir, const std::string& name) {
 std::optional<std::string> freshPostgresDatabase(const char* what) {
   std::string whyNot;
   auto url = newSchema(whyNot);
-  if (!url) std::printf("SKIPPED: %s needs a PostgreSQL server: %s\n", what, whyNot.c_str());
+  if (!url) at::test::skipf("%s needs a PostgreSQL server: %s", what, whyNot.c_str());
   return url;
 }
 

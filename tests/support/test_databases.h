@@ -1,8 +1,10 @@
 // The engine storage tests run on. By default SQLite files in the test's temporary folder; with
 // AT_TEST_BACKEND=postgres the same tests run on a real PostgreSQL server: AT_TEST_POSTGRES_URL
 // when set (a server someone runs; the URL of a database the tests may create schemas in), else
-// a throwaway cluster this process starts with scripts/pg-cluster.sh (initdb + pg_ctl on a
-// loopback port, as an unprivileged user when run as root) and removes at exit. Each fresh
+// the cluster CTest's `postgres` fixture started for all tests (AT_TEST_POSTGRES_CLUSTER names the
+// file that holds its folder: tests/support/test_postgres.sh), else a throwaway cluster this
+// process starts with scripts/pg-cluster.sh (initdb + pg_ctl on a loopback port, as an
+// unprivileged user when run as root) and removes at exit. Each fresh
 // PostgreSQL database is a new schema of that server (the URL selects it with search_path), so a
 // test costs milliseconds, not a CREATE DATABASE.
 #pragma once
@@ -21,15 +23,15 @@ bool testingOnPostgres();
 
 // Where a fresh, empty database lives: `dir/name` on SQLite; on PostgreSQL the URL of a new,
 // empty schema (`name` only labels it). When the PostgreSQL server cannot start, prints
-// "SKIPPED: …" with the reason and ends the test run with status 0.
+// "SKIPPED: …" with the reason and ends the test run as a skip (status 0, or 77 for one case).
 std::string freshDatabase(const TempDir& dir, const std::string& name = "t.db");
 
 // A fresh PostgreSQL database whatever the mode (for the sync tests, which need a server beside
 // the clients' SQLite files); nullopt after printing "SKIPPED: <what> …" when no server starts.
 std::optional<std::string> freshPostgresDatabase(const char* what);
 
-// The test cluster's control: stops and starts the server this process started (for tests of
-// what clients do while the server is down). False when the server was not started here.
+// The test cluster's control: stops and starts the test cluster, the fixture's or this process's
+// (for tests of what clients do while the server is down). False for a server given by URL.
 bool stopTestPostgres();
 bool restartTestPostgres();
 

@@ -2,7 +2,9 @@
 // running the anatomy-tutor binary.
 #pragma once
 
+#include <atomic>
 #include <cstdint>
+#include <cstdio>
 #include <filesystem>
 #include <string>
 
@@ -13,6 +15,16 @@ struct Dataset;
 }
 
 namespace at::test {
+
+// A skip: prints "SKIPPED: <message>" (printf-style) and records it. A test process that ran one
+// test case, skipped in it and failed nothing exits with kSkippedExitCode, which CTest (which runs
+// each case on its own) reports as a skip; a failure still fails. Every skip goes through here.
+void skipf(const char* format, ...) __attribute__((format(printf, 1, 2)));
+// What the process should return: `status` (doctest's) unless it is 0, one case ran and it skipped.
+int exitStatusWithSkips(int status);
+inline constexpr int kSkippedExitCode = 77;
+// Test cases this process started (counted by doctest_main's listener).
+std::atomic<int>& testCasesStarted();
 
 // The synthetic phantom at size³ voxels, built once per size for the whole test run (256³ takes
 // about half a second).

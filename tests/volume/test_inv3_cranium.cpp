@@ -29,7 +29,7 @@ const Dataset* skull() { return loadedSkull() ? &*loadedSkull() : nullptr; }
 bool requireSkull(const char* what) {
   const KnownScan* scan = findKnownScan("skull");
   if (!scan || !locateKnownScan(*scan)) {
-    std::printf("SKIPPED: %s needs Cranium.inv3 from Debian's invesalius-examples (run scripts/fetch-scans.sh)\n", what);
+    at::test::skipf("%s needs Cranium.inv3 from Debian's invesalius-examples (run scripts/fetch-scans.sh)", what);
     return false;
   }
   REQUIRE_MESSAGE(skull(), test::errorText(loadedSkull()));

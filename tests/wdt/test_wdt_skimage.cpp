@@ -33,7 +33,7 @@ std::string pythonWithSkimage() {
 TEST_CASE("Trapezoid converged field equals skimage MCP_Geometric (fully connected)") {
   const std::string python = pythonWithSkimage();
   if (python.empty()) {
-    std::printf("SKIPPED: python3 with scikit-image (skimage) is not installed\n");
+    at::test::skipf("python3 with scikit-image (skimage) is not installed");
     return;
   }
   std::mt19937_64 rng(test::freshSeed("skimage MCP_Geometric"));
