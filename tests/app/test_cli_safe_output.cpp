@@ -71,7 +71,7 @@ TEST_CASE("SafeOutput_FullDisk_SegmentAndWdtOutFailAndKeepTheOldFile") {
   const fs::path disk = dir / "disk";
   fs::create_directories(disk);
   if (::geteuid() != 0 || ::mount("tmpfs", disk.c_str(), "tmpfs", 0, "size=64k") != 0) {
-    MESSAGE("SKIPPED: mounting a 64 KiB tmpfs needs root (CI runs the tests as root)");
+    at::test::skipf("mounting a 64 KiB tmpfs needs root (CI runs the tests as root)");
     return;
   }
   struct Unmount {

@@ -13,6 +13,7 @@
 #include <cstring>
 
 #include "cli_checks.h"
+#include "test_support.h"
 #include "course_import_fixtures.h"
 #include "data_paths.h"
 #include "db/connection.h"
@@ -105,7 +106,7 @@ TEST_CASE("CourseImport_KilledAtAnyPoint_LeavesTheOldStateOrTheNewOne") {
 
 TEST_CASE("CourseImport_OnAFullDisk_IsRefusedAndKeepsNothing") {
   if (::geteuid() != 0) {
-    MESSAGE("SKIPPED: a full disk is made with a small tmpfs, which only root may mount");
+    at::test::skipf("a full disk is made with a small tmpfs, which only root may mount");
     return;
   }
   if (!test::requireAppBinary("course packages")) return;
@@ -115,7 +116,7 @@ TEST_CASE("CourseImport_OnAFullDisk_IsRefusedAndKeepsNothing") {
   const fs::path disk = student / "disk";
   fs::create_directories(disk);
   if (::mount("tmpfs", disk.c_str(), "tmpfs", 0, "size=1m") != 0) {
-    MESSAGE("SKIPPED: mounting a tmpfs failed here (" << std::strerror(errno) << ")");
+    at::test::skipf("mounting a tmpfs failed here (%s)", std::strerror(errno));
     return;
   }
   struct Unmount {

@@ -337,7 +337,7 @@ TEST_CASE("Every statement passes Learning Locker's xAPI validator (npm @learnin
   int status = 0;
   runShell("command -v node", status);
   if (status != 0) {
-    std::printf("SKIPPED: the xAPI validator needs Node.js (Debian package 'nodejs'; scripts/install-deps.sh)\n");
+    at::test::skipf("the xAPI validator needs Node.js (Debian package 'nodejs'; scripts/install-deps.sh)");
     return;
   }
   test::TempDir dir;

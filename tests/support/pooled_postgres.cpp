@@ -106,7 +106,7 @@ std::optional<PooledPostgres::Urls> PooledPostgres::freshDatabase() {
 
 std::optional<PooledPostgres::Urls> pooledDatabase(PooledPostgres& server, const char* what) {
   auto urls = server.freshDatabase();
-  if (!urls) std::printf("SKIPPED: %s needs PostgreSQL and PgBouncer: %s\n", what, server.whyNot().c_str());
+  if (!urls) at::test::skipf("%s needs PostgreSQL and PgBouncer: %s", what, server.whyNot().c_str());
   return urls;
 }
 
