@@ -146,10 +146,8 @@ int runXapi(const Argv& argv) {
     }
   }
   const std::string text = lessons::xapiStatementsJson(learners, studies, options, answeredQuestions(**session, learners));
-  if (auto ok = writeFileAtomically(*out, text + "
-"); !ok) return reportError("xapi: " + ok.error().message);
-  terminalPrintf("wrote %s: statements of %s
-", out->c_str(),
+  if (auto ok = writeFileAtomically(*out, text + "\n"); !ok) return reportError("xapi: " + ok.error().message);
+  terminalPrintf("wrote %s: statements of %s\n", out->c_str(),
               args->value("study") ? str::countOf(long(records), "rating").c_str()
                                    : (str::countOf(long(learners.size()), "user") + ", " +
                                       str::countOf(long(records), "attempt or answer", "attempts and answers"))
