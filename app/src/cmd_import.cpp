@@ -64,6 +64,7 @@ int runImport(const Argv& argv) {
   std::printf("  volume  %s  %s\n", record.volumePath.c_str(), record.volumeChecksum.c_str());
   if (!record.labelsPath.empty()) std::printf("  labels  %s  %s\n", record.labelsPath.c_str(), record.labelsChecksum.c_str());
   for (const auto& note : imported->dataset.provenance.notes) std::printf("  note: %s\n", note.c_str());
+  for (const auto& warning : imported->dataset.provenance.warnings) std::printf("  warning: %s\n", warning.c_str());
   if (!imported->emptyStructures.empty()) {
     std::printf("  warning: %zu structures have no voxel on the volume grid:", imported->emptyStructures.size());
     for (const auto& s : imported->emptyStructures) std::printf(" %s", s.c_str());
