@@ -310,4 +310,18 @@ TEST_CASE("CourseEditor_AnEmptyDefaultLesson_DoesNotBlockSave") {
   REQUIRE(course->lessons.size() == 1);
   CHECK(course->lessons[0].title == "Cochlea");
   CHECK(course->lessons[0].steps.size() == 1);
+
+  // `desktop --course inner_ear` opens the stored course (not a file of the course folder) on its
+  // dataset; an id no one has is still refused, naming it.
+  test::HeadlessOptions start = on(dir / "t.db");
+  start.dataset.clear();
+  start.course = "inner_ear";
+  const json nothing = {{"actions", json::array()}};
+  auto opened = test::runHeadless(nothing, start);
+  CAPTURE(opened.messages);
+  CHECK(opened.exitCode == 0);
+  start.course = "no_such_course";
+  auto refused = test::runHeadless(nothing, start);
+  CHECK(refused.exitCode != 0);
+  CHECK(refused.messages.find("no_such_course") != std::string::npos);
 }
