@@ -35,8 +35,8 @@ constexpr const char* kCourseHelp =
     "shared as course packages: one .atcourse file (a tar archive) holding the course, the presets\n"
     "its steps name, the dataset's structures and label map and its volume, with a manifest of\n"
     "SHA-256 checksums and a format version.\n\n"
-    "  new       stores a starter course on DATASET (a tour of its structures: show each, then name\n"
-    "            it) and, with --out, writes it as JSON to edit\n"
+    "  new       a starter course on DATASET (a tour of its structures: show each, then name it):\n"
+    "            stored, or with --out only written as JSON to edit and then `course import`\n"
     "  validate  checks a course file: its form (errors name the field by path) and, when its dataset\n"
     "            is here, every structure it names and that every locate question can be answered in\n"
     "            its own view (a click on the target's centre picks it; one WDT per region on the\n"
@@ -59,15 +59,18 @@ int runNew(const cli::Args& args) {
   if (!session) return reportError("course new: " + session.error().message);
   auto course = starterCourse(**session, args.positional()[1], *dataset, args.valueOr("title", ""));
   if (!course) return reportError("course new: " + course.error().message);
+  // With --out the starter is a draft to edit: written, not stored, so `course import FILE` of the
+  // edited file adds it (storing it here would make that import a conflict at version 1).
   if (auto out = args.value("out")) {
     if (auto ok = writeCourseJson(*course, *out); !ok) return reportError("course new: " + ok.error().message);
+  } else if (auto stored = saveCourse(**session, *course, "course new"); !stored) {
+    return reportError("course new: " + stored.error().message);
   }
-  auto stored = saveCourse(**session, *course, "course new");
-  if (!stored) return reportError("course new: " + stored.error().message);
   terminalPrintf("course '%s' (%s) on '%s': %s, %s%s\n", course->id.c_str(), course->title.c_str(),
               course->datasetId.c_str(), str::countOf(long(course->lessons.size()), "lesson").c_str(),
               str::countOf(long(course->lessons.front().steps.size()), "step").c_str(),
-              args.has("out") ? (", written to " + *args.value("out")).c_str() : "");
+              args.has("out") ? (", written to " + *args.value("out") + " (not stored: edit it, then `course import` it)").c_str()
+                              : ", stored");
   return 0;
 }
 

@@ -65,6 +65,7 @@ int runImport(const Argv& argv) {
   terminalPrintf("  volume  %s  %s\n", record.volumePath.c_str(), record.volumeChecksum.c_str());
   if (!record.labelsPath.empty()) terminalPrintf("  labels  %s  %s\n", record.labelsPath.c_str(), record.labelsChecksum.c_str());
   for (const auto& note : imported->dataset.provenance.notes) terminalPrintf("  note: %s\n", note.c_str());
+  for (const auto& warning : imported->dataset.provenance.warnings) terminalPrintf("  warning: %s\n", warning.c_str());
   if (!imported->emptyStructures.empty()) {
     terminalPrintf("  warning: %zu structures have no voxel on the volume grid:", imported->emptyStructures.size());
     for (const auto& s : imported->emptyStructures) terminalPrintf(" %s", s.c_str());

@@ -206,14 +206,18 @@ ValueSummary summarise(const FloatVolume& image) {
 // --- slice ------------------------------------------------------------------------------------
 
 const char* kSliceHelp =
-    "usage: anatomy-tutor slice DATASET --axis x|y|z --index N --out FILE.png\n"
+    "usage: anatomy-tutor slice DATASET (--plane axial|coronal|sagittal | --axis x|y|z) --index N --out FILE.png\n"
     "                           [--window C,W] [--alpha A] [--volume PATH --labels PATH ...]\n\n"
     "Writes one slice as a grey PNG (window centre C and width W in the dataset's values: HU for CT,\n"
     "default 400,2000; plain intensities default to the window from their histogram) with\n"
     "each labelled structure overlaid in its colour at opacity A (default 0.5; 0 = no overlay).\n"
     "--axis picks the voxel axis the slice is perpendicular to (z: axial for LPS data) and --index\n"
     "the slice (0-based). Image columns follow the i axis (j for --axis x); rows follow j for axial\n"
-    "slices and run from the top (highest k) down otherwise.\n";
+    "slices and run from the top (highest k) down otherwise.\n"
+    "--plane instead shows the slice in patient orientation, whatever the file's voxel order, in the\n"
+    "radiological convention: the patient's left on the image's right (axial, coronal), anterior up\n"
+    "(axial) or superior up (coronal, sagittal; sagittal has anterior on the left); --index then\n"
+    "counts along the voxel axis that crosses the plane. The edge letters (L R A P S I) are printed.\n";
 
 }  // namespace
 
@@ -400,17 +404,21 @@ int runInfo(const Argv& argv) {
 }
 
 int runSlice(const Argv& argv) {
-  auto args = cli::Args::parse(argv, with(kDatasetOptions, {"axis", "index", "out", "window", "alpha"}), withDatasetFlags({}));
+  auto args = cli::Args::parse(argv, with(kDatasetOptions, {"axis", "plane", "index", "out", "window", "alpha"}), withDatasetFlags({}));
   if (!args) return usageError("slice", args.error().message);
   if (args->has("help")) {
     terminalPrintf("%s", kSliceHelp);
     return 0;
   }
-  const auto axisText = args->value("axis");
-  if (!axisText) return usageError("slice", "missing --axis x|y|z");
-  if (*axisText != "x" && *axisText != "y" && *axisText != "z")
+  const auto axisText = args->value("axis"), planeText = args->value("plane");
+  if (!axisText && !planeText) return usageError("slice", "missing --plane axial|coronal|sagittal or --axis x|y|z");
+  if (axisText && planeText) return usageError("slice", "give --plane or --axis, not both");
+  if (axisText && *axisText != "x" && *axisText != "y" && *axisText != "z")
     return usageError("slice", "--axis must be x, y or z, not '" + *axisText + "'");
-  const int axis = (*axisText)[0] - 'x';
+  std::optional<PatientPlane> plane;
+  for (PatientPlane p : {PatientPlane::Sagittal, PatientPlane::Coronal, PatientPlane::Axial})
+    if (planeText && *planeText == planeName(p)) plane = p;
+  if (planeText && !plane) return usageError("slice", "--plane must be axial, coronal or sagittal, not '" + *planeText + "'");
   if (!args->value("index")) return usageError("slice", "missing --index N");
   auto index = args->integer("index", 0);
   if (!index) return usageError("slice", index.error().message);
@@ -443,15 +451,19 @@ int runSlice(const Argv& argv) {
     centre = 0.5 * (lo + hi);
     width = hi - lo;
   }
+  const Mat3& direction = ds->volume.geometry.direction;
+  const SliceLayout layout = plane ? patientSliceLayout(direction, *plane) : voxelSliceLayout((*axisText)[0] - 'x', direction);
+  const int axis = layout.sliceAxis;
+  const std::string across = plane ? std::string(planeName(*plane)) + " (voxel axis " + char('x' + axis) + ")" : "axis " + *axisText;
   const Dims& d = ds->volume.dims();
   const int extent[3] = {d.x, d.y, d.z};
   if (*index < 0 || *index >= extent[axis])
     return reportError("slice: --index " + std::to_string(*index) + " is outside 0 … " +
-                       std::to_string(extent[axis] - 1) + " for axis " + *axisText + " of " + ds->id + " (" +
+                       std::to_string(extent[axis] - 1) + " for " + across + " of " + ds->id + " (" +
                        d.toString() + ")");
 
   SliceRequest request;
-  request.axis = axis;
+  request.layout = layout;
   request.index = *index;
   // The window is in the dataset's values; renderSlice maps stored ones.
   request.windowCentreHu = (centre - intensity.intercept) / intensity.slope;
@@ -460,8 +472,9 @@ int runSlice(const Argv& argv) {
   auto image = renderSlice(ds->volume, &ds->labels, ds->structures, request);
   if (!image) return reportError("slice: " + image.error().message);
   if (auto st = writePng(*out, *image); !st) return reportError("slice: " + st.error().message);
-  terminalPrintf("wrote %s (%dx%d, axis %s index %d of %s, window %s,%s)\n", out->c_str(), image->width, image->height,
-              axisText->c_str(), *index, ds->id.c_str(), formatDouble(centre, 0).c_str(), formatDouble(width, 0).c_str());
+  terminalPrintf("wrote %s (%dx%d, %s index %d of %s, window %s,%s; %s)\n", out->c_str(), image->width, image->height,
+              across.c_str(), *index, ds->id.c_str(), formatDouble(centre, 0).c_str(), formatDouble(width, 0).c_str(),
+              layout.edgeLetters().c_str());
   return 0;
 }
 

@@ -22,6 +22,7 @@ namespace at::test {
 
 struct HeadlessOptions {
   std::string dataset = "phantom:128";
+  std::string course;                // --course: empty for the default course
   int width = 800, height = 480;     // the window's layout, as the Xvfb tests' windows
   double renderScale = 0.4;
   std::filesystem::path db;          // required
@@ -68,6 +69,7 @@ inline HeadlessRun runHeadless(const nlohmann::json& script, const HeadlessOptio
   const render::PresetLibrary library(sourceDir() / "data" / "presets");
   app::DesktopOptions modelOptions;
   modelOptions.dataset = options.dataset;
+  modelOptions.course = options.course;
   modelOptions.renderScale = options.renderScale;
   modelOptions.scripted = true;
   if (!options.user.empty()) modelOptions.userName = options.user;

@@ -65,8 +65,16 @@ void authorAndExport(const test::TempDir& author, const fs::path& package, const
                            " --db " + quoted(db));
   REQUIRE_MESSAGE(made.exitCode == 0, made.err);
   CHECK(made.out.find("course 'ear_tour' (Ear tour) on 'ear_lab'") != std::string::npos);
-  // The author edits the file: a better first text, a tolerance, version 2.
+  CHECK(made.out.find("not stored") != std::string::npos);
+  CHECK(courseList(db).find("ear_tour") == std::string::npos);  // a draft until imported
+  // The author edits the file (version unchanged) and imports it: added, no version to raise.
   auto course = nlohmann::json::parse(test::readFile(author / "ear_tour.json"));
+  course["lessons"][0]["steps"][0]["text"] = "Draft edit.";
+  std::ofstream(author / "ear_tour.json") << course.dump(2);
+  auto first = test::runApp("course import " + quoted(author / "ear_tour.json") + " --db " + quoted(db));
+  REQUIRE_MESSAGE(first.exitCode == 0, first.err);
+  CHECK(first.out == "course 'ear_tour' version 1: added\n");
+  // A later edit: a better first text, version 2.
   course["version"] = 2;
   course["lessons"][0]["steps"][0]["text"] = "Edited by the author.";
   std::ofstream(author / "ear_tour.json") << course.dump(2);

@@ -128,6 +128,36 @@ TEST_CASE("slice writes a PNG of the right size with the cochlea in its colour w
   CHECK(c->height == 32);
 }
 
+TEST_CASE("slice --plane draws patient orientation and prints the edge letters, for LPS and RAS files alike") {
+  test::TempDir dir;
+  // LPS data: --plane axial is the voxel order of --axis z, with the radiological letters.
+  const std::string planeOut = (dir / "plane.png").string(), axisOut = (dir / "axis.png").string();
+  auto r = test::runApp("slice phantom:32 --plane axial --index 12 --out " + quoted(planeOut));
+  REQUIRE(r.exitCode == 0);
+  CHECK(r.out.find("left R, right L, top A, bottom P") != std::string::npos);
+  REQUIRE(test::runApp("slice phantom:32 --axis z --index 12 --out " + quoted(axisOut)).exitCode == 0);
+  auto a = readPng(planeOut), b = readPng(axisOut);
+  REQUIRE(a.has_value());
+  REQUIRE(b.has_value());
+  CHECK(a->rgb == b->rgb);
+  r = test::runApp("slice phantom:32 --plane sagittal --index 3 --out " + quoted(planeOut));
+  REQUIRE(r.exitCode == 0);
+  CHECK(r.out.find("left A, right P, top S, bottom I") != std::string::npos);
+  // The RAS-affine NIfTI: raw voxel order puts anterior at the bottom; --plane puts it on top.
+  if (test::requireSharedData("seg_dicom.nii.gz")) {
+    const std::string nifti = quoted(test::sharedData("totalsegmentator/seg_dicom.nii.gz").string());
+    r = test::runApp("slice --volume " + nifti + " --axis z --index 10 --out " + quoted(axisOut));
+    REQUIRE(r.exitCode == 0);
+    CHECK(r.out.find("top P, bottom A") != std::string::npos);
+    r = test::runApp("slice --volume " + nifti + " --plane coronal --index 300 --out " + quoted(planeOut));
+    REQUIRE(r.exitCode == 0);
+    CHECK(r.out.find("left R, right L, top S, bottom I") != std::string::npos);
+  }
+  checkOneLineError(test::runApp("slice phantom:32 --plane oblique --index 3 --out " + quoted(planeOut)), "--plane");
+  checkOneLineError(test::runApp("slice phantom:32 --plane axial --axis z --index 3 --out " + quoted(planeOut)), "not both");
+  checkOneLineError(test::runApp("slice phantom:32 --index 3 --out " + quoted(planeOut)), "--plane");
+}
+
 TEST_CASE("bad arguments to the volume commands fail with one line naming the problem") {
   test::TempDir dir;
   const std::string out = quoted((dir / "x.png").string());

@@ -285,3 +285,43 @@ TEST_CASE("CourseEditor_PreviewOfAQuestion_HidesNamesAsTheStudentSeesIt") {
   CHECK(tail == std::vector<std::string>{"stapes:hidden", "vestibule:shown", "stapes:hidden", "cochlea:shown"});
   CHECK(frames.back().previewing == std::optional<std::size_t>(0));
 }
+
+// The default "Lesson 1" an author leaves empty (working in a lesson added after it) does not
+// block Save: it is left out of the stored course; a course with no step at all still cannot be saved.
+TEST_CASE("CourseEditor_AnEmptyDefaultLesson_DoesNotBlockSave") {
+  test::TempDir dir;
+  const json script = {{"actions", json::array({
+      {{"do", "course_new"}, {"id", "inner_ear"}, {"title", "Inner ear"}},
+      {{"do", "course_lesson"}, {"title", "Cochlea"}},
+      {{"do", "select"}, {"structure", "cochlea"}},
+      {{"do", "course_show"}, {"title", "The cochlea"}, {"text", "The coiled part of the inner ear."}},
+      {{"do", "course_save"}},
+  })}};
+  auto run = test::runHeadless(script, on(dir / "t.db"));
+  CAPTURE(run.messages);
+  REQUIRE(run.exitCode == 0);
+  const auto saved = test::eventsOf(run, "course_saved");
+  REQUIRE(saved.size() == 1);
+  CHECK(saved[0]["outcome"] == "added");
+  auto session = app::LearningSession::open((dir / "t.db").string());
+  REQUIRE(session);
+  auto course = (*session)->curriculum().course("inner_ear");
+  REQUIRE(course);
+  REQUIRE(course->lessons.size() == 1);
+  CHECK(course->lessons[0].title == "Cochlea");
+  CHECK(course->lessons[0].steps.size() == 1);
+
+  // `desktop --course inner_ear` opens the stored course (not a file of the course folder) on its
+  // dataset; an id no one has is still refused, naming it.
+  test::HeadlessOptions start = on(dir / "t.db");
+  start.dataset.clear();
+  start.course = "inner_ear";
+  const json nothing = {{"actions", json::array()}};
+  auto opened = test::runHeadless(nothing, start);
+  CAPTURE(opened.messages);
+  CHECK(opened.exitCode == 0);
+  start.course = "no_such_course";
+  auto refused = test::runHeadless(nothing, start);
+  CHECK(refused.exitCode != 0);
+  CHECK(refused.messages.find("no_such_course") != std::string::npos);
+}

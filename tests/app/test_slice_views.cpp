@@ -158,3 +158,49 @@ TEST_CASE("a click in the 3-D view moves the slices' crosshair onto the structur
           near |= phantom.labels.at(v[0] + di, v[1] + dj, v[2] + dk) == picked;
   CHECK(near);
 }
+
+TEST_CASE("slice panes are in patient orientation: the same anatomy stored RAS shows the same panes and letters") {
+  const Dataset lps = smallDataset();
+  // The same voxels stored with i and j reversed (patient right → left becomes left → right …).
+  Dataset ras = lps;
+  Geometry g = lps.volume.geometry;
+  g.direction.m = {{{-1, 0, 0}, {0, -1, 0}, {0, 0, 1}}};
+  g.originMm = lps.volume.geometry.indexToPatient({double(g.dims.x - 1), double(g.dims.y - 1), 0});
+  ras.volume = Volume(g, std::int16_t(0));
+  ras.labels = LabelMap(g, 0);
+  for (int k = 0; k < g.dims.z; ++k)
+    for (int j = 0; j < g.dims.y; ++j)
+      for (int i = 0; i < g.dims.x; ++i) {
+        ras.volume.at(g.dims.x - 1 - i, g.dims.y - 1 - j, k) = lps.volume.at(i, j, k);
+        ras.labels.at(g.dims.x - 1 - i, g.dims.y - 1 - j, k) = lps.labels.at(i, j, k);
+      }
+  REQUIRE(ras.volume.geometry.orientationCode() == "RAS");
+  app::SliceViews a, b;
+  a.attach(lps);
+  b.attach(ras);
+  REQUIRE(a.setCrosshair({5, 6, 7}));
+  REQUIRE(b.setCrosshair({g.dims.x - 1 - 5, g.dims.y - 1 - 6, 7}));  // the same patient voxel
+  const char* letters[3] = {"APSI", "RLSI", "RLAP"};
+  for (int plane = 0; plane < 3; ++plane) {
+    CAPTURE(plane);
+    const SliceLayout la = a.layout(plane), lb = b.layout(plane);
+    CHECK(std::string{la.left, la.right, la.top, la.bottom} == letters[plane]);
+    CHECK(std::string{lb.left, lb.right, lb.top, lb.bottom} == letters[plane]);
+    CHECK(a.pixelMm(plane) == b.pixelMm(plane));
+    auto pa = a.pane(plane, 2, &lps.labels, lps.structures);
+    auto pb = b.pane(plane, 2, &ras.labels, ras.structures);
+    REQUIRE(pa);
+    REQUIRE(pb);
+    REQUIRE(pa->width == pb->width);
+    REQUIRE(pa->height == pb->height);
+    CHECK(pa->rgb == pb->rgb);  // pixel for pixel, crosshair lines included
+  }
+  // A click at the same pixel moves both crosshairs to the same patient point.
+  REQUIRE(a.clickPane(2, 2, 3 * 2 + 1, 4 * 2 + 1));
+  REQUIRE(b.clickPane(2, 2, 3 * 2 + 1, 4 * 2 + 1));
+  const auto& ca = a.crosshair();
+  const auto& cb = b.crosshair();
+  const Vec3 pa = lps.volume.geometry.indexToPatient({double(ca[0]), double(ca[1]), double(ca[2])});
+  const Vec3 pb = g.indexToPatient({double(cb[0]), double(cb[1]), double(cb[2])});
+  CHECK(norm(pa - pb) < 1e-6);
+}

@@ -37,6 +37,17 @@ std::string freeId(const std::string& base, const std::set<std::string>& taken) 
     if (!taken.count(base + "_" + std::to_string(n))) return base + "_" + std::to_string(n);
 }
 
+// The course as it is stored: lessons still without a step (the default "Lesson 1" an author
+// did not use) are left out when another lesson has steps, so they do not block saving.
+lessons::Course storedForm(const lessons::Course& draft) {
+  const bool anySteps = std::any_of(draft.lessons.begin(), draft.lessons.end(), [](const lessons::Lesson& l) { return !l.steps.empty(); });
+  if (!anySteps) return draft;
+  lessons::Course course = draft;
+  course.lessons.erase(std::remove_if(course.lessons.begin(), course.lessons.end(), [](const lessons::Lesson& l) { return l.steps.empty(); }),
+                       course.lessons.end());
+  return course;
+}
+
 }  // namespace
 
 CourseEditor::CourseEditor(LearningSession& session, const render::PresetLibrary& library, EventSink events, Preview preview)
@@ -53,7 +64,7 @@ void CourseEditor::changed() {
   previewing_.reset();
   problems_.clear();
   // The form, as the course reader sees it (the first problem, by field path) …
-  auto parsed = lessons::parseCourseJson(lessons::courseToJson(*draft_), draft_->id);
+  auto parsed = lessons::parseCourseJson(lessons::courseToJson(storedForm(*draft_)), draft_->id);
   if (!parsed) problems_.push_back(parsed.error().message.substr(std::min(parsed.error().message.size(), draft_->id.size() + 2)));
   // … and every structure it names against the dataset.
   auto structures = session_.structures(draft_->datasetId);
@@ -286,13 +297,14 @@ Result<db::SeedOutcome> CourseEditor::save() {
   if (!draft_) return fail("no course is being edited");
   if (!problems_.empty()) return fail("course '" + draft_->id + "' cannot be saved: " + problems_.front());
   if (auto stored = session_.curriculum().course(draft_->id)) {
-    if (lessons::courseToJson(*stored) != lessons::courseToJson(*draft_)) draft_->version = std::max(draft_->version, stored->version + 1);
+    if (lessons::courseToJson(*stored) != lessons::courseToJson(storedForm(*draft_)))
+      draft_->version = std::max(draft_->version, stored->version + 1);
   }
   for (const auto& [id, preset] : captured_) {
     db::StoredPreset stored{id, preset.structure, render::toString(preset.mode), render::presetToJson(preset)};
     if (auto ok = db::savePreset(session_.database(), stored); !ok) return tl::unexpected(ok.error());
   }
-  auto outcome = saveCourse(session_, *draft_, "desktop course editor");
+  auto outcome = saveCourse(session_, storedForm(*draft_), "desktop course editor");
   if (!outcome) return tl::unexpected(outcome.error());
   storedVersion_ = draft_->version;
   events_({{"event", "course_saved"}, {"course", draft_->id}, {"version", draft_->version}, {"outcome", db::toString(*outcome)}});

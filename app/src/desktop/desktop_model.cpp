@@ -95,7 +95,11 @@ void DesktopModel::note(const std::string& text) {
 // Opening datasets
 
 Status DesktopModel::open() {
+  // A course by id: a file of the course folder, else any course stored in the database (imported
+  // with `course import`, saved by the course editor), as `courses` lists them.
   auto course = loadStartCourse(options_.course);
+  if (!course && !options_.course.empty() && course.error().kind == ErrorKind::NotFound)
+    if (auto stored = session_.curriculum().course(options_.course)) course = std::move(*stored);
   if (!course && !options_.course.empty()) return tl::unexpected(course.error());
   std::string datasetName = options_.dataset;
   std::string startStructure, startPreset;

@@ -181,10 +181,12 @@ void ImportController::poll() {
                   name.c_str(), g.dims.toString().c_str(), g.spacingMm[0], g.spacingMm[1], g.spacingMm[2],
                   result->record.orientation.c_str(), result->dataset.structures.size());
     status_ = text;
+    for (const std::string& warning : result->dataset.provenance.warnings) status_ += " Warning: " + warning + ".";
     if (!result->emptyStructures.empty())
       status_ += " " + std::to_string(result->emptyStructures.size()) + " named structures have no voxel on the grid.";
     events_({{"event", "import_done"}, {"name", name}, {"structures", result->dataset.structures.size()},
-             {"dims", {g.dims.x, g.dims.y, g.dims.z}}, {"empty_structures", result->emptyStructures}});
+             {"dims", {g.dims.x, g.dims.y, g.dims.z}}, {"empty_structures", result->emptyStructures},
+             {"warnings", result->dataset.provenance.warnings}});
     imported_ = std::move(result->dataset);
   } else if (result.error().kind == ErrorKind::Cancelled) {
     status_ = "Import of '" + name + "' cancelled; nothing was stored.";

@@ -7,12 +7,10 @@
 
 namespace at::app {
 
-namespace {
-
-// The picture's (column, row) axes of a slice across `axis` (volume/slice_image.h).
-std::array<int, 2> pictureAxes(int axis) { return {axis == 0 ? 1 : 0, axis == 2 ? 1 : 2}; }
-
-}  // namespace
+SliceLayout SliceViews::layout(int plane) const {
+  const Mat3 direction = dataset_ ? dataset_->volume.geometry.direction : Mat3::identity();
+  return patientSliceLayout(direction, PatientPlane(std::clamp(plane, 0, 2)));
+}
 
 void SliceViews::attach(const Dataset& dataset) {
   dataset_ = &dataset;
@@ -43,8 +41,8 @@ bool SliceViews::moveToPoint(const Vec3& pointMm) {
 bool SliceViews::clickPane(int axis, int scale, double x, double y) {
   if (!dataset_ || axis < 0 || axis > 2) return false;
   SliceRequest request;
-  request.axis = axis;
-  request.index = crosshair_[std::size_t(axis)];
+  request.layout = layout(axis);
+  request.index = crosshair_[std::size_t(request.layout->sliceAxis)];
   request.scale = scale;
   const auto voxel = sliceVoxelAt(dataset_->volume.dims(), request, x, y);
   return voxel && setCrosshair(*voxel);
@@ -57,27 +55,28 @@ void SliceViews::dragWindow(double dx, double dy) {
 std::array<double, 2> SliceViews::pixelMm(int axis) const {
   if (!dataset_ || axis < 0 || axis > 2) return {1, 1};
   const auto& sp = dataset_->volume.geometry.spacingMm;
-  const auto uv = pictureAxes(axis);
-  return {sp[std::size_t(uv[0])], sp[std::size_t(uv[1])]};
+  const SliceLayout l = layout(axis);
+  return {sp[std::size_t(l.columnAxis)], sp[std::size_t(l.rowAxis)]};
 }
 
 Result<RgbImage> SliceViews::pane(int axis, int scale, const LabelMap* labels, const std::vector<Structure>& structures) const {
   if (!dataset_) return fail(ErrorKind::Unavailable, "slices: no dataset is open");
+  if (axis < 0 || axis > 2) return fail("slices: pane " + std::to_string(axis) + " is not 0, 1 or 2");
   SliceRequest request;
-  request.axis = axis;
-  request.index = axis >= 0 && axis <= 2 ? crosshair_[std::size_t(axis)] : 0;
+  request.layout = layout(axis);
+  request.index = crosshair_[std::size_t(request.layout->sliceAxis)];
   request.scale = scale;
   grey_.applyTo(request);
   request.labelAlpha = labels && !labels->empty() ? labelAlpha : 0.0;
   auto image = renderSlice(dataset_->volume, labels && !labels->empty() ? labels : nullptr, structures, request);
   if (!image) return image;
-  // The crosshair: the column of its u coordinate and the row of its v coordinate, through the
-  // middle of their voxels (rows run down from the highest k on x and y slices).
+  // The crosshair: the column and row showing its voxel, through the middle of their blocks.
   const Dims d = dataset_->volume.dims();
-  const auto uv = pictureAxes(axis);
-  const int extentV = uv[1] == 1 ? d.y : d.z;
-  const int col = crosshair_[std::size_t(uv[0])];
-  const int row = uv[1] == 2 ? extentV - 1 - crosshair_[2] : crosshair_[std::size_t(uv[1])];
+  const int extent[3] = {d.x, d.y, d.z};
+  const SliceLayout& l = *request.layout;
+  const int u = crosshair_[std::size_t(l.columnAxis)], v = crosshair_[std::size_t(l.rowAxis)];
+  const int col = l.columnReversed ? extent[l.columnAxis] - 1 - u : u;
+  const int row = l.rowReversed ? extent[l.rowAxis] - 1 - v : v;
   const std::uint8_t yellow[3] = {255, 220, 40};
   const int x = col * scale + scale / 2, y = row * scale + scale / 2;
   for (int py = 0; py < image->height; ++py) std::copy(yellow, yellow + 3, image->pixel(x, py));

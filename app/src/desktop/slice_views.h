@@ -1,5 +1,6 @@
-// The desktop's three slice panes — sagittal (x), coronal (y) and axial (z) — through one
-// crosshair voxel, without drawing (the Slices window draws them): each pane's picture shown at its
+// The desktop's three slice panes — sagittal, coronal and axial in patient orientation
+// (radiological convention, volume/slice_orientation.h: patient's left on the screen's right) —
+// through one crosshair voxel, without drawing (the Slices window draws them): each pane's picture shown at its
 // voxels' aspect (pixelMm), grey in a window the user drags, labels overlaid at an opacity, the
 // crosshair's two lines. A click in a pane moves the crosshair there, so the other two panes show
 // the slices through the clicked voxel; a pick in the 3-D view moves it to the picked point.
@@ -12,6 +13,7 @@
 #include "core/error.h"
 #include "grey_window.h"
 #include "volume/png_image.h"
+#include "volume/slice_orientation.h"
 #include "volume/structure.h"
 
 namespace at::app {
@@ -30,7 +32,10 @@ class SliceViews {
   Status setCrosshair(const std::array<int, 3>& voxel);
   // The voxel nearest a point in LPS mm (a 3-D pick); false (nothing moves) outside the grid.
   bool moveToPoint(const Vec3& pointMm);
-  // A click at pixel (x, y) of pane `axis` drawn at `scale` pixels per voxel: the crosshair moves
+  // Pane `plane` (PatientPlane: 0 sagittal, 1 coronal, 2 axial) laid out over the dataset's voxel
+  // axes by patientSliceLayout, with its edge letters (L R A P S I).
+  SliceLayout layout(int plane) const;
+  // A click at pixel (x, y) of pane `axis` (a plane as above) drawn at `scale` pixels per voxel: the crosshair moves
   // to that voxel of the pane's slice. False outside the picture.
   bool clickPane(int axis, int scale, double x, double y);
   // A drag of (dx, dy) pixels: right/left widens/narrows the window, down/up lowers/raises its
@@ -38,9 +43,9 @@ class SliceViews {
   void dragWindow(double dx, double dy);
   std::array<double, 2> window() const { return grey_.centreWidth(); }  // stored values
 
-  // Pane `axis` (0 x, 1 y, 2 z) through the crosshair, `scale` pixels per voxel, with `labels`
+  // Pane `axis` (a plane as above) through the crosshair, `scale` pixels per voxel, with `labels`
   // (null: none) in their structures' colours and the crosshair's lines. Its pixel → voxel map is
-  // sliceVoxelAt (volume/slice_image.h) with the same axis, crosshair index and scale.
+  // sliceVoxelAt (volume/slice_image.h) with layout(axis), the crosshair's index and scale.
   Result<RgbImage> pane(int axis, int scale, const LabelMap* labels, const std::vector<Structure>& structures) const;
   // mm of one picture pixel along its columns and rows (the pane is shown at this aspect).
   std::array<double, 2> pixelMm(int axis) const;

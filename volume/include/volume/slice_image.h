@@ -3,7 +3,8 @@
 //
 // Image axes: columns along u, rows along v, where (u, v) = (j, k) for an x slice, (i, k) for y and
 // (i, j) for z; v runs downwards from the highest k for x and y slices (superior at the top in LPS
-// data). Each voxel is `scale` × `scale` pixels.
+// data). Each voxel is `scale` × `scale` pixels. With a `layout` (volume/slice_orientation.h,
+// e.g. patientSliceLayout) the picture follows it instead and `axis` is ignored.
 #pragma once
 
 #include <array>
@@ -12,6 +13,7 @@
 
 #include "volume/grid.h"
 #include "volume/png_image.h"
+#include "volume/slice_orientation.h"
 #include "volume/structure.h"
 
 namespace at {
@@ -23,6 +25,7 @@ struct SliceRequest {
   double windowWidthHu = 2000;   // > 0
   double labelAlpha = 0;         // 0 = no label overlay … 1 = labels opaque
   int scale = 1;                 // pixels per voxel side, >= 1
+  std::optional<SliceLayout> layout;  // null: voxel order across `axis` (voxelSliceLayout)
 };
 
 // Errors: an axis other than 0..2, an index outside the volume, a window width <= 0, scale < 1.

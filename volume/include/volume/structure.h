@@ -26,6 +26,7 @@ struct Provenance {
   std::string source;               // "synthetic phantom (seed 1, 256^3)" or a file path
   std::string labelsSource;         // label file path, or empty
   std::vector<std::string> notes;   // loader remarks: chosen series, resampling, …
+  std::vector<std::string> warnings;  // one line each, naming the file: what the user should check
 };
 
 // How names given by users and label-name files are shown: "kidney_right" → "Kidney right";

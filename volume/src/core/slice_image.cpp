@@ -7,16 +7,13 @@ namespace at {
 namespace {
 
 struct SliceAxes {
-  int u = 0, v = 1;
-  bool flipV = false;
+  int axis = 2, u = 0, v = 1;
+  bool flipU = false, flipV = false;
 };
 
-SliceAxes axesOf(int axis) {
-  SliceAxes a;
-  a.u = axis == 0 ? 1 : 0;
-  a.v = axis == 2 ? 1 : 2;
-  a.flipV = a.v == 2;
-  return a;
+SliceAxes axesOf(const SliceRequest& r) {
+  const SliceLayout l = r.layout ? *r.layout : voxelSliceLayout(r.axis);
+  return {l.sliceAxis, l.columnAxis, l.rowAxis, l.columnReversed, l.rowReversed};
 }
 
 double srgbEncode(double linear) {
@@ -30,12 +27,13 @@ Result<RgbImage> renderSlice(const Volume& volume, const LabelMap* labels, const
                              const SliceRequest& r) {
   const Dims& d = volume.dims();
   const int extent[3] = {d.x, d.y, d.z};
-  if (r.axis < 0 || r.axis > 2) return fail("slice axis must be 0, 1 or 2 (x, y, z)");
-  if (r.index < 0 || r.index >= extent[r.axis])
-    return fail("slice index " + std::to_string(r.index) + " is outside 0 … " + std::to_string(extent[r.axis] - 1));
+  const int axis = r.layout ? r.layout->sliceAxis : r.axis;
+  if (axis < 0 || axis > 2) return fail("slice axis must be 0, 1 or 2 (x, y, z)");
+  if (r.index < 0 || r.index >= extent[axis])
+    return fail("slice index " + std::to_string(r.index) + " is outside 0 … " + std::to_string(extent[axis] - 1));
   if (!(r.windowWidthHu > 0)) return fail("slice window width must be > 0 HU");
   if (r.scale < 1) return fail("slice scale must be at least 1");
-  const SliceAxes a = axesOf(r.axis);
+  const SliceAxes a = axesOf(r);
   std::vector<std::array<std::uint8_t, 3>> colours(65536, {0, 0, 0});
   std::vector<bool> known(65536, false);
   for (const Structure& s : structures) {
@@ -49,8 +47,8 @@ Result<RgbImage> renderSlice(const Volume& volume, const LabelMap* labels, const
   for (int row = 0; row < extent[a.v]; ++row)
     for (int col = 0; col < extent[a.u]; ++col) {
       int ijk[3];
-      ijk[r.axis] = r.index;
-      ijk[a.u] = col;
+      ijk[a.axis] = r.index;
+      ijk[a.u] = a.flipU ? extent[a.u] - 1 - col : col;
       ijk[a.v] = a.flipV ? extent[a.v] - 1 - row : row;
       const double hu = volume.at(ijk[0], ijk[1], ijk[2]);
       const double grey = std::clamp((hu - lo) / r.windowWidthHu, 0.0, 1.0) * 255.0;
@@ -69,13 +67,14 @@ Result<RgbImage> renderSlice(const Volume& volume, const LabelMap* labels, const
 
 std::optional<std::array<int, 3>> sliceVoxelAt(const Dims& d, const SliceRequest& r, double x, double y) {
   const int extent[3] = {d.x, d.y, d.z};
-  if (r.axis < 0 || r.axis > 2 || r.scale < 1 || x < 0 || y < 0) return std::nullopt;
-  const SliceAxes a = axesOf(r.axis);
+  const int axis = r.layout ? r.layout->sliceAxis : r.axis;
+  if (axis < 0 || axis > 2 || r.scale < 1 || x < 0 || y < 0) return std::nullopt;
+  const SliceAxes a = axesOf(r);
   const int col = int(x) / r.scale, row = int(y) / r.scale;
   if (col >= extent[a.u] || row >= extent[a.v]) return std::nullopt;
   std::array<int, 3> ijk{};
-  ijk[std::size_t(r.axis)] = r.index;
-  ijk[std::size_t(a.u)] = col;
+  ijk[std::size_t(a.axis)] = r.index;
+  ijk[std::size_t(a.u)] = a.flipU ? extent[a.u] - 1 - col : col;
   ijk[std::size_t(a.v)] = a.flipV ? extent[a.v] - 1 - row : row;
   return ijk;
 }

@@ -10,6 +10,7 @@
 #include "core/printable_text.h"
 #include "dicom_support.h"
 #include "volume/dataset_source.h"
+#include "volume/label_fit.h"
 #include "volume/image_file.h"
 #include "volume/resample.h"
 
@@ -144,6 +145,8 @@ Result<Dataset> openDatasetFiles(const DatasetFiles& files, const DatasetLoadCon
           grid.orientationCode() + " grid through both patient frames");
       dataset.labels = std::move(*resampled);
     }
+    if (auto warning = labelFitWarning(dataset.volume, dataset.intensity, dataset.labels, files.labelsPath); !warning.empty())
+      dataset.provenance.warnings.push_back(warning);
   }
 
   if (cancelled()) return fail((files.labelsPath.empty() ? files.volumePath : files.labelsPath) + ": loading cancelled");

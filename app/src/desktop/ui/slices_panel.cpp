@@ -11,7 +11,24 @@ namespace at::app {
 
 namespace {
 
-const char* kPaneNames[3] = {"sagittal (x)", "coronal (y)", "axial (z)"};
+const char* kPaneNames[3] = {"sagittal", "coronal", "axial"};
+
+// The pane's patient direction letters at the middle of its four edges, inside the picture.
+void drawEdgeLetters(const SliceLayout& layout) {
+  const ImVec2 lo = ImGui::GetItemRectMin(), hi = ImGui::GetItemRectMax();
+  ImDrawList* draw = ImGui::GetWindowDrawList();
+  const ImU32 colour = IM_COL32(255, 220, 40, 255);
+  const float pad = 3, h = ImGui::GetTextLineHeight(), w = ImGui::CalcTextSize("M").x;
+  const float midX = (lo.x + hi.x - w) / 2, midY = (lo.y + hi.y - h) / 2;
+  const auto put = [&](float x, float y, char c) {
+    const char text[2] = {c, 0};
+    draw->AddText(ImVec2(x, y), colour, text);
+  };
+  put(lo.x + pad, midY, layout.left);
+  put(hi.x - pad - w, midY, layout.right);
+  put(midX, lo.y + pad, layout.top);
+  put(midX, hi.y - pad - h, layout.bottom);
+}
 
 }  // namespace
 
@@ -70,6 +87,8 @@ void SlicesPanel::draw(DesktopModel& model, const PanelRect& where) {
   const auto& c = slices.crosshair();
   ImGui::SameLine(0, ImGui::GetFontSize() * 2);
   ImGui::Text("crosshair (%d, %d, %d); right-drag: window", c[0], c[1], c[2]);
+  ImGui::SameLine(0, ImGui::GetFontSize() * 2);
+  ImGui::TextDisabled("radiological: patient's left on the screen's right");
   // Each voxel a block of 2 × 2 texels (linear filtering keeps voxel edges sharp when magnified).
   const int scale = 2;
   // The longer side of each pane: three side by side in a docked strip, under a line of names.
@@ -99,6 +118,7 @@ void SlicesPanel::draw(DesktopModel& model, const PanelRect& where) {
     if (texture && texture->handle() && texture->width() > 0) {
       const auto mouse = drawSlicePane(kPaneNames[axis], *texture, slices.pixelMm(axis), side,
                                        [&](double dx, double dy) { slices.dragWindow(dx, dy); });
+      drawEdgeLetters(slices.layout(axis));
       if (mouse && ImGui::IsMouseDown(ImGuiMouseButton_Left)) slices.clickPane(axis, scale, mouse->x, mouse->y);
     }
     ImGui::EndGroup();
