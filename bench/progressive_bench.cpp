@@ -1,5 +1,5 @@
 // progressive_bench: how fast the ray caster's progressive refinement reaches full quality at rest
-// (issue 19: within 2 s at 1280×720 on a 2-core CPU with Mesa llvmpipe, no call over 100 ms; on a
+// (within 2 s at 1280×720 on a 2-core CPU with Mesa llvmpipe, no call over 100 ms; on a
 // GPU within one frame), as JSON lines.
 //
 //   progressive_bench [--volume N] [--structure ID] [--mode MODE] [--size WxH] [--budget MS]

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The long fuzzing runs of issue #25 (≥ 10^6 executions per harness, nothing found) on a machine
+# The long fuzzing runs (≥ 10^6 executions per harness, nothing found) on a machine
 # with many cores and none of our Debian libraries: the 16-core GPU host of the device tool.
 # bench/collect_fuzz_binaries.sh puts this script beside payload.tar.xz (the libFuzzer harnesses
 # with ASan + UBSan + LeakSanitizer, the shared libraries they need, seeds, earlier corpora,

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Grow from seeds on the GPU machine (issue #20): the CUDA growth tests (GPU equals CPU and the exact
+# Grow from seeds on the GPU machine: the CUDA growth tests (GPU equals CPU and the exact
 # reference bit for bit, incremental updates), the segment module's tests, and growth_bench on the
 # GPU at 128³–512³ (8 labels) with the CPU engine beside it at 256³. Run from the repository root
 # with .gpu/ carried, after `bash bench/collect_gpu_binaries.sh` here (no SDL2, DCMTK, SQLite or

@@ -36,7 +36,7 @@ rb() { ./render_bench --size 1920x1080 --volume 512 --hover-volume 256 --presets
 rb --frames 30 --warmup 5 --cycles 16 --compare-step 1 --images "$OUT"
 rb --frames 30 --warmup 5 --cycles 6 --step-voxels 1
 rb --frames 5 --warmup 1 --cycles 3 --ray-caster fragment
-# 4K (issue 19: ≥ 60 fps at 3840×2160) and progressive refinement to full quality (one frame on a GPU).
+# 4K (≥ 60 fps at 3840×2160) and progressive refinement to full quality (one frame on a GPU).
 rb --frames 20 --warmup 3 --cycles 3 --size 3840x2160
 if [ -x ./progressive_bench ]; then
   for size in 1280x720 1920x1080 3840x2160; do

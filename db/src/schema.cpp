@@ -431,7 +431,7 @@ CREATE TABLE outbox (
 CREATE INDEX outbox_unsent ON outbox(server, sent_at, seq);
 )SQL";
 
-// What a participant saw when rating (issue 19): the render quality level on screen (the full
+// What a participant saw when rating: the render quality level on screen (the full
 // level is quality_full_level; NULL: not known, e.g. rated without a view or before this version),
 // the full level's resolution as a share of the view, and the milliseconds from the rated side
 // being shown to the full level being on screen.

@@ -1,4 +1,4 @@
-// The command line facing hostile inputs and broken storage (issue #25): every case is a one-line
+// The command line facing hostile inputs and broken storage: every case is a one-line
 // error naming the file and the problem, a non-zero exit status, and no lost data — or, for the
 // commands that only read, a result despite a read-only database or a full disk.
 #include <doctest/doctest.h>

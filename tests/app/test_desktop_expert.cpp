@@ -1,4 +1,4 @@
-// The desktop app's expert panel (issue 7): scripted spline edits change the rendered view, and
+// The desktop app's expert panel: scripted spline edits change the rendered view, and
 // "Save as" stores a valid preset in the database and exports it as JSON.
 #include <doctest/doctest.h>
 

@@ -1,4 +1,4 @@
-// Long work and failures in the desktop (issue 7), without a window (the logic is at_app_core's):
+// Long work and failures in the desktop, without a window (the logic is at_app_core's):
 // importing from the app with progress and cancel, a file that does not load, cancelling a study
 // export part way, and cancelling a full-resolution CPU field. Each run has its own database.
 #include <doctest/doctest.h>

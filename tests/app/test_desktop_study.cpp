@@ -275,7 +275,7 @@ TEST_CASE("the coordinator export writes the ten study files and shows the summa
   CHECK(summary[0]["completion"][0]["given"] == items);
 }
 
-// Ratings wait for the full quality level of the side on screen (issue 19), and each records the
+// Ratings wait for the full quality level of the side on screen, and each records the
 // level, the full level's resolution and the settle time. A stand-in view reports a coarse image
 // for the first frames of each side, then the full level; headless, without a window.
 TEST_CASE("study ratings wait for the full quality level and record it with each rating") {

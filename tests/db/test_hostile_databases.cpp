@@ -1,4 +1,4 @@
-// Broken and hostile databases (issue #25): a file the program did not write as it is — a schema
+// Broken and hostile databases: a file the program did not write as it is — a schema
 // version outside 0..current, a damaged page — is refused before anything writes to it; two runs
 // for one study participant cannot interleave; imported files changed since their import are
 // refused by checksum.

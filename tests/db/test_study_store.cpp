@@ -117,7 +117,7 @@ TEST_CASE("StudyStore_RatingsAreUnblindedOnExport") {
 }
 
 TEST_CASE("StudyStore_RatingQuality_IsStoredExportedAndReplacedWithTheRating") {
-  // The render quality a participant saw (issue 19): stored with each rating, blank when not known,
+  // The render quality a participant saw: stored with each rating, blank when not known,
   // replaced when the item is rated again.
   test::TempDir dir;
   auto db = db::Database::open(test::freshDatabase(dir, "t.db"));

@@ -1,4 +1,4 @@
-// What the paper's figures show, checked on rendered images with their alpha (issue 19), on the
+// What the paper's figures show, checked on rendered images with their alpha, on the
 // full phantom with the shipped presets and on the real abdominal CT with the derived ones:
 //   - the selected structure's projected pixels are covered by the highlight hue at opacity ≥ 0.8;
 //   - bone surfaces near the structure are shaded: their luminance follows the surface normal;

@@ -1,4 +1,4 @@
-// Hostile files (issue #25): what the fuzzers and a set of hand-made files found, each pinned by a
+// Hostile files: what the fuzzers and a set of hand-made files found, each pinned by a
 // test that failed before its fix. Headers that claim more than their files hold must cost no
 // memory; FIFOs and devices are refused without blocking; data files stay where they may be read;
 // the memory limit follows the process's cgroup.

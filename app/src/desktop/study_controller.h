@@ -100,7 +100,7 @@ class StudyController {
   };
   void noteViewQuality(const ViewQuality& quality);
   // A rating may be given now: no view reports quality, or the side on screen is at full quality
-  // (issue 19: stimuli are rated only once shown at full quality).
+  // (stimuli are rated only once shown at full quality).
   bool readyToRate() const;
 
   Status startParticipant(const std::string& study, const std::string& participant, const std::string& group);

@@ -1,4 +1,4 @@
-// One sheet per paper figure (issue 19): the panels of a figure side by side, each captioned
+// One sheet per paper figure: the panels of a figure side by side, each captioned
 // underneath, under a title line, so a reader can compare a whole figure with the paper at once.
 // Pure raster work on RgbImage (the captions use overlay.h's bitmap font); `anatomy-tutor
 // figure-sheet` and scripts/make_figures.sh build the sheets in docs/figures from rendered panels.

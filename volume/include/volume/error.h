@@ -1,4 +1,4 @@
-// Moved to core/error.h (issue 18): Error now carries a kind. This header only forwards, for
+// Moved to core/error.h, where Error carries a kind. This header only forwards, for
 // branches that still include it; new code includes "core/error.h".
 #pragma once
 
