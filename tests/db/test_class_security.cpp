@@ -36,20 +36,8 @@ using namespace at::lessons;
 
 namespace {
 
-Database openAt(const std::string& location) {
-  auto db = Database::open(location);
-  REQUIRE_MESSAGE(db, (db ? "" : db.error().message));
-  return std::move(*db);
-}
-
-std::int64_t count(Database& db, const std::string& sql) {
-  auto s = db.prepare(sql);
-  REQUIRE_MESSAGE(s, (s ? "" : s.error().message));
-  auto row = s->step();
-  REQUIRE_MESSAGE(row, (row ? "" : row.error().message));
-  REQUIRE(*row);
-  return s->int64(0);
-}
+using test::openAt;
+std::int64_t count(Database& db, const std::string& sql) { return test::scalarCount(db, sql); }
 
 // Login names are cluster-wide; each test makes its own.
 std::string uniqueLogin(const std::string& stem) {

@@ -24,18 +24,8 @@ using namespace at::lessons;
 
 namespace {
 
-Database openAt(const std::string& location) {
-  auto db = Database::open(location);
-  REQUIRE_MESSAGE(db, (db ? "" : db.error().message));
-  return std::move(*db);
-}
-
-std::int64_t count(Database& db, const std::string& sql) {
-  auto s = db.prepare(sql);
-  REQUIRE_MESSAGE(s, (s ? "" : s.error().message));
-  REQUIRE(*s->step());
-  return s->int64(0);
-}
+using test::openAt;
+std::int64_t count(Database& db, const std::string& sql) { return test::scalarCount(db, sql); }
 
 // A learner's machine: its own SQLite file with the toy course and the user `name`.
 struct LearnerMachine {

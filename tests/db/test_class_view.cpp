@@ -27,11 +27,7 @@ using namespace at::lessons;
 
 namespace {
 
-Database openAt(const std::string& location) {
-  auto db = Database::open(location);
-  REQUIRE_MESSAGE(db, (db ? "" : db.error().message));
-  return std::move(*db);
-}
+using test::openAt;
 
 // A student's laptop: its own SQLite file with the toy course, joined to the class.
 struct Laptop {

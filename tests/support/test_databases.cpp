@@ -142,6 +142,21 @@ std::optional<std::string> newSchema(std::string& whyNot) {
 
 }  // namespace
 
+db::Database openAt(const std::string& location) {
+  auto db = db::Database::open(location);
+  REQUIRE_MESSAGE(db, (db ? "" : db.error().message));
+  return std::move(*db);
+}
+
+std::int64_t scalarCount(db::Database& db, const std::string& sql) {
+  auto s = db.prepare(sql);
+  REQUIRE_MESSAGE(s, (s ? "" : s.error().message));
+  auto row = s->step();
+  REQUIRE_MESSAGE(row, (row ? "" : row.error().message));
+  REQUIRE(*row);
+  return s->int64(0);
+}
+
 bool testingOnPostgres() {
   const char* backend = std::getenv("AT_TEST_BACKEND");
   return backend && std::string(backend) == "postgres";

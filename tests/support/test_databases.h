@@ -9,6 +9,7 @@
 // test costs milliseconds, not a CREATE DATABASE.
 #pragma once
 
+#include <cstdint>
 #include <optional>
 #include <set>
 #include <string>
@@ -20,6 +21,11 @@ namespace at::test {
 
 // True when AT_TEST_BACKEND=postgres.
 bool testingOnPostgres();
+
+// Opens (and migrates) the database at `location`, failing the test with the error otherwise.
+db::Database openAt(const std::string& location);
+// The integer in the first column of the first row of `sql` (a count), failing the test on error.
+std::int64_t scalarCount(db::Database& db, const std::string& sql);
 
 // Where a fresh, empty database lives: `dir/name` on SQLite; on PostgreSQL the URL of a new,
 // empty schema (`name` only labels it). When the PostgreSQL server cannot start, prints
