@@ -147,6 +147,9 @@ TEST_CASE("SafeOutput_HostileCourseTitles_NeverReachTheTerminalRaw") {
   const std::string evil = "Ear\x1b]0;owned\x07\x1b[2J\xe2\x80\xae" "all answers correct\xc2\x9b" "31m";
   auto r = test::runApp("course new evil --dataset phantom --title '" + evil + "' --out " + quoted(dir / "evil.json") + db);
   REQUIRE_MESSAGE(r.exitCode == 0, r.err);
+  r = test::runApp("course import " + quoted(dir / "evil.json") + db);  // `new --out` writes a draft only
+  REQUIRE_MESSAGE(r.exitCode == 0, r.err);
+  CHECK(r.out.find('\x1b') == std::string::npos);
   for (const std::string& command : {std::string("courses"), std::string("lessons evil"), std::string("course list")}) {
     CAPTURE(command);
     r = test::runApp(command + db);
