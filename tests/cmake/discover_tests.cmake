@@ -58,7 +58,7 @@ function(xml_unescape out value)
 endfunction()
 
 set(script "")
-# Case names may hold ';', CMake's list separator: carried as a placeholder until written out.
+# Case names may hold ';', CMake's list separator: it travels as the token @SEMICOLON@ until written out.
 string(REPLACE ";" "@SEMICOLON@" listing "${listing}")
 string(REGEX MATCHALL "<TestCase name=\"[^\"]*\" filename=\"[^\"]*\"" cases "${listing}")
 foreach(entry IN LISTS cases)
