@@ -74,21 +74,6 @@ std::vector<LearnerRecords> learners() {
   return {r};
 }
 
-// Runs `command` in a shell: its stdout, and its exit status in `status`.
-std::string runShell(const std::string& command, int& status) {
-  std::string out;
-  FILE* pipe = ::popen(command.c_str(), "r");
-  if (!pipe) {
-    status = -1;
-    return out;
-  }
-  char buf[512];
-  while (std::fgets(buf, sizeof buf, pipe)) out += buf;
-  const int raw = ::pclose(pipe);
-  status = WIFEXITED(raw) ? WEXITSTATUS(raw) : -1;
-  return out;
-}
-
 // The choice and order questions of learners() as they were asked.
 XapiQuestions questions() {
   XapiQuestions q;
@@ -335,7 +320,7 @@ TEST_CASE("An exam attempt becomes attempted, one answered statement per answere
 
 TEST_CASE("Every statement passes Learning Locker's xAPI validator (npm @learninglocker/xapi-validation under Node.js)") {
   int status = 0;
-  runShell("command -v node", status);
+  test::runCommand("command -v node", status);
   if (status != 0) {
     at::test::skipf("the xAPI validator needs Node.js (Debian package 'nodejs'; scripts/install-deps.sh)");
     return;
@@ -347,7 +332,7 @@ TEST_CASE("Every statement passes Learning Locker's xAPI validator (npm @learnin
   records[0].exams = {exam()};
   const fs::path file = dir / "statements.json";
   std::ofstream(file) << xapiStatementsJson(records, studies(), options, questions());
-  const std::string out = runShell("bash '" + (test::sourceDir() / "scripts/xapi-validator.sh").string() +
+  const std::string out = test::runCommand("bash '" + (test::sourceDir() / "scripts/xapi-validator.sh").string() +
                                              "' validate '" + file.string() + "' 2>&1",
                                          status);
   INFO(out);
@@ -358,7 +343,7 @@ TEST_CASE("Every statement passes Learning Locker's xAPI validator (npm @learnin
   broken[0]["id"] = "0f3ad5e4-9b1c-8d2e-a3f4-5b6c7d8e9f00";
   broken[1]["verb"].erase("id");
   std::ofstream(dir / "broken.json") << broken.dump();
-  const std::string refused = runShell("bash '" + (test::sourceDir() / "scripts/xapi-validator.sh").string() +
+  const std::string refused = test::runCommand("bash '" + (test::sourceDir() / "scripts/xapi-validator.sh").string() +
                                                  "' validate '" + (dir / "broken.json").string() + "' 2>&1",
                                              status);
   INFO(refused);

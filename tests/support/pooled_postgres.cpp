@@ -1,6 +1,5 @@
 #include "pooled_postgres.h"
 
-#include <libpq-fe.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -8,6 +7,7 @@
 #include <cstdlib>
 #include <filesystem>
 
+#include "test_databases.h"
 #include "test_support.h"
 
 namespace at::test {
@@ -37,20 +37,6 @@ std::string script(const char* name) { return "'" + (sourceDir() / "scripts" / n
 std::string tempFolder(const char* prefix) {
   std::string dir = (fs::temp_directory_path() / (std::string(prefix) + "XXXXXX")).string();
   return ::mkdtemp(dir.data()) ? dir : std::string();
-}
-
-std::string execOn(const std::string& url, const std::string& sql) {
-  PGconn* conn = PQconnectdb(url.c_str());
-  std::string error;
-  if (PQstatus(conn) != CONNECTION_OK) {
-    error = PQerrorMessage(conn);
-  } else {
-    PGresult* r = PQexec(conn, sql.c_str());
-    if (PQresultStatus(r) != PGRES_COMMAND_OK && PQresultStatus(r) != PGRES_TUPLES_OK) error = PQresultErrorMessage(r);
-    PQclear(r);
-  }
-  PQfinish(conn);
-  return error;
 }
 
 std::string withDatabase(const std::string& url, const std::string& database) {
@@ -97,7 +83,7 @@ PooledPostgres::~PooledPostgres() {
 std::optional<PooledPostgres::Urls> PooledPostgres::freshDatabase() {
   if (!ok()) return std::nullopt;
   const std::string name = "pooled" + std::to_string(::getpid()) + "_" + std::to_string(databases_++);
-  if (auto e = execOn(serverUrl_, "CREATE DATABASE " + name); !e.empty()) {
+  if (auto e = execOnServer(serverUrl_, "CREATE DATABASE " + name); !e.empty()) {
     whyNot_ = "cannot create a database: " + e;
     return std::nullopt;
   }

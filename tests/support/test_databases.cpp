@@ -26,38 +26,15 @@ struct TestServer {
   std::string whyNot;        // why there is no server
 };
 
+// A script's output without its trailing newlines.
 std::string runScript(const std::string& command, int& status) {
-  std::string out;
-  FILE* pipe = ::popen(command.c_str(), "r");
-  if (!pipe) {
-    status = -1;
-    return out;
-  }
-  char buf[512];
-  while (std::fgets(buf, sizeof buf, pipe)) out += buf;
-  const int raw = ::pclose(pipe);
-  status = WIFEXITED(raw) ? WEXITSTATUS(raw) : -1;
+  std::string out = runCommand(command, status);
   while (!out.empty() && (out.back() == '\n' || out.back() == '\r')) out.pop_back();
   return out;
 }
 
 std::string scriptPath() { return (sourceDir() / "scripts" / "pg-cluster.sh").string(); }
 
-// Runs one statement on `url`; empty on success, else libpq's message.
-std::string execOn(const std::string& url, const std::string& sql) {
-  PGconn* conn = PQconnectdb(url.c_str());
-  std::string error;
-  if (PQstatus(conn) != CONNECTION_OK) {
-    error = PQerrorMessage(conn);
-  } else {
-    PGresult* r = PQexec(conn, sql.c_str());
-    if (PQresultStatus(r) != PGRES_COMMAND_OK && PQresultStatus(r) != PGRES_TUPLES_OK) error = PQresultErrorMessage(r);
-    PQclear(r);
-  }
-  PQfinish(conn);
-  while (!error.empty() && error.back() == '\n') error.pop_back();
-  return error;
-}
 
 void stopAtExit();
 
@@ -67,7 +44,7 @@ TestServer& server() {
   std::call_once(once, [] {
     if (const char* url = std::getenv("AT_TEST_POSTGRES_URL"); url && *url) {
       s.baseUrl = url;
-      if (auto e = execOn(s.baseUrl, "SELECT 1"); !e.empty()) s.whyNot = "AT_TEST_POSTGRES_URL does not answer: " + e;
+      if (auto e = execOnServer(s.baseUrl, "SELECT 1"); !e.empty()) s.whyNot = "AT_TEST_POSTGRES_URL does not answer: " + e;
       return;
     }
     // A cluster CTest's fixture started for all tests: AT_TEST_POSTGRES_CLUSTER names the file
@@ -86,7 +63,7 @@ TestServer& server() {
       }
       s.clusterDir = shared;
       s.baseUrl = url.substr(0, url.rfind('/')) + "/attest";
-      if (auto e = execOn(s.baseUrl, "SELECT 1"); !e.empty()) s.whyNot = "the tests' cluster does not answer: " + e;
+      if (auto e = execOnServer(s.baseUrl, "SELECT 1"); !e.empty()) s.whyNot = "the tests' cluster does not answer: " + e;
       return;
     }
     std::string dir = (fs::temp_directory_path() / "at-pg-test-XXXXXX").string();
@@ -106,7 +83,7 @@ TestServer& server() {
     s.ownCluster = true;
     std::atexit(stopAtExit);
     // The tests' database beside the maintenance one.
-    if (auto e = execOn(url, "CREATE DATABASE attest"); !e.empty()) {
+    if (auto e = execOnServer(url, "CREATE DATABASE attest"); !e.empty()) {
       s.whyNot = "cannot create the test database: " + e;
       return;
     }
@@ -132,7 +109,7 @@ std::optional<std::string> newSchema(std::string& whyNot) {
   }
   static std::atomic<int> counter{0};
   const std::string schema = "t" + std::to_string(::getpid()) + "_" + std::to_string(counter++);
-  if (auto e = execOn(s.baseUrl, "CREATE SCHEMA " + schema); !e.empty()) {
+  if (auto e = execOnServer(s.baseUrl, "CREATE SCHEMA " + schema); !e.empty()) {
     whyNot = "cannot create a schema on the test server: " + e;
     return std::nullopt;
   }
@@ -141,6 +118,21 @@ std::optional<std::string> newSchema(std::string& whyNot) {
 }
 
 }  // namespace
+
+std::string execOnServer(const std::string& url, const std::string& sql) {
+  PGconn* conn = PQconnectdb(url.c_str());
+  std::string error;
+  if (PQstatus(conn) != CONNECTION_OK) {
+    error = PQerrorMessage(conn);
+  } else {
+    PGresult* r = PQexec(conn, sql.c_str());
+    if (PQresultStatus(r) != PGRES_COMMAND_OK && PQresultStatus(r) != PGRES_TUPLES_OK) error = PQresultErrorMessage(r);
+    PQclear(r);
+  }
+  PQfinish(conn);
+  while (!error.empty() && error.back() == '\n') error.pop_back();
+  return error;
+}
 
 db::Database openAt(const std::string& location) {
   auto db = db::Database::open(location);

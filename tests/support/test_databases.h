@@ -22,6 +22,9 @@ namespace at::test {
 // True when AT_TEST_BACKEND=postgres.
 bool testingOnPostgres();
 
+// Runs one SQL statement on the server at `url`: empty on success, else libpq's message.
+std::string execOnServer(const std::string& url, const std::string& sql);
+
 // Opens (and migrates) the database at `location`, failing the test with the error otherwise.
 db::Database openAt(const std::string& location);
 // The integer in the first column of the first row of `sql` (a count), failing the test on error.

@@ -39,6 +39,20 @@ std::atomic<int>& testCasesStarted() {
   return count;
 }
 
+std::string runCommand(const std::string& command, int& status) {
+  std::string out;
+  FILE* pipe = ::popen(command.c_str(), "r");
+  if (!pipe) {
+    status = -1;
+    return out;
+  }
+  char buf[512];
+  while (std::fgets(buf, sizeof buf, pipe)) out += buf;
+  const int raw = ::pclose(pipe);
+  status = WIFEXITED(raw) ? WEXITSTATUS(raw) : -1;
+  return out;
+}
+
 int exitStatusWithSkips(int status) {
   return status == 0 && skipped && testCasesStarted() == 1 ? kSkippedExitCode : status;
 }

@@ -44,6 +44,10 @@ std::string errorText(const Result<T>& result) {
   return result ? std::string() : result.error().message;
 }
 
+// Runs `command` in a shell: its standard output, and its exit status in `status` (-1 when it
+// could not run or did not exit).
+std::string runCommand(const std::string& command, int& status);
+
 // The whole content of a file (empty if it cannot be read).
 std::string readFile(const std::filesystem::path& path);
 
