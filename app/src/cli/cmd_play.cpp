@@ -15,6 +15,7 @@
 #include "core/strings.h"
 #include "learning_session.h"
 #include "lessons/lesson_engine.h"
+#include "lessons/review_session.h"
 #include "terminal_answers.h"
 #include "terminal_views.h"
 #include "printable_output.h"
@@ -156,41 +157,30 @@ int runReview(const std::string& courseId, PlayContext& ctx) {
     }
   }
   std::unique_ptr<TerminalViews> views;
-  int asked = 0, right = 0;
+  lessons::ReviewSession review(ctx.curriculum, ctx.progress, keys, *course, ctx.userId);
   while (true) {
-    const auto now = lessons::UnixSeconds(std::time(nullptr));
-    auto question = lessons::chooseReviewQuestion(ctx.curriculum, ctx.progress, ctx.userId, courseId, now);
-    if (!question) return reportError("play: " + question.error().message);
-    if (!*question) {
-      terminalPrintf("\nNothing %sis due for review in this course now.\n", asked ? "more " : "");
+    auto next = review.next();
+    if (!next) return reportError("play: " + next.error().message);
+    if (!*next) {
+      terminalPrintf("\nNothing %sis due for review in this course now.\n", review.answered() ? "more " : "");
       break;
     }
-    auto resolved = quiz::resolveQuestion(**question, keys);
-    if (!resolved) return reportError("play: " + resolved.error().message);
+    const quiz::ResolvedQuestion& resolved = (*next)->question;
+    const lessons::QuestionScene& scene = (*next)->scene;
+    const int number = review.answered() + 1;
     if (!views) views = openTerminalViews(ctx.session.database(), datasetId, ctx.viewsDir, ctx.noViews);
     std::vector<std::string> choiceNames;
-    for (const std::string& id : resolved->choices) choiceNames.push_back(nameById.count(id) ? nameById[id] : id);
-    const quiz::QuestionKind kind = resolved->question.kind;
-    printQuestion("[review " + std::to_string(asked + 1) + "]", kind, resolved->question.prompt, choiceNames);
-    const lessons::QuestionScene scene =
-        lessons::questionScene(*course, resolved->question.id).value_or(lessons::QuestionScene{resolved->question.target});
-    showPicture(views.get(), scene, "review-" + std::to_string(asked + 1), kind == quiz::QuestionKind::Locate);
+    for (const std::string& id : resolved.choices) choiceNames.push_back(nameById.count(id) ? nameById[id] : id);
+    const quiz::QuestionKind kind = resolved.question.kind;
+    printQuestion("[review " + std::to_string(number) + "]", kind, resolved.question.prompt, choiceNames);
+    showPicture(views.get(), scene, "review-" + std::to_string(number), kind == quiz::QuestionKind::Locate);
     std::fflush(stdout);
 
-    AskedQuestion q{kind, resolved->question.target, resolved->choices, structureIdsByName(*structures), views.get()};
-    bool correct = false;
+    AskedQuestion q{kind, resolved.question.target, resolved.choices, structureIdsByName(*structures), views.get()};
     auto result = askQuestion(ctx.source, q, [&](const quiz::Answer& answer, std::int64_t latencyMs)
                                                  -> Result<std::optional<quiz::Grade>> {
-      lessons::ReviewAnswer review;
-      review.userId = ctx.userId;
-      review.courseId = courseId;
-      review.question = resolved->question;
-      review.answer = answer;
-      review.render = terminalRender(scene);
-      review.latencyMs = latencyMs;
-      auto grade = lessons::answerReview(ctx.curriculum, ctx.progress, keys, review);
+      auto grade = review.answer(answer, terminalRender(scene), latencyMs);
       if (!grade) return tl::unexpected(grade.error());
-      correct = grade->correct;
       return std::optional<quiz::Grade>(*grade);
     });
     if (!result) return reportError("play: " + result.error().message + " (earlier answers are saved)");
@@ -198,11 +188,9 @@ int runReview(const std::string& courseId, PlayContext& ctx) {
       terminalPrintf("\n%s\n", *result == Asked::Quit ? "stopped" : "no more answers");
       break;
     }
-    ++asked;
-    right += correct ? 1 : 0;
     sendClassEvents(ctx);
   }
-  terminalPrintf("Review answers saved: %d, %d correct.\n", asked, right);
+  terminalPrintf("Review answers saved: %d, %d correct.\n", review.answered(), review.right());
   return 0;
 }
 

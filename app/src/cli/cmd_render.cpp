@@ -7,7 +7,7 @@
 #include "cli_args.h"
 #include "commands.h"
 #include "data_paths.h"
-#include "dataset_resolver.h"
+#include "dataset_options.h"
 #include "render/gl/egl_context.h"
 #include "render/gl/volume_renderer.h"
 #include "render/derived_preset.h"

@@ -14,7 +14,7 @@
 #include "cli_args.h"
 #include "commands.h"
 #include "core/strings.h"
-#include "dataset_resolver.h"
+#include "dataset_options.h"
 #include "label_output.h"
 #include "segment/growth_settings.h"
 #include "segment/label_editor.h"

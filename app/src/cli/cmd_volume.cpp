@@ -16,7 +16,7 @@
 #include "cli_args.h"
 #include "core/printable_text.h"
 #include "commands.h"
-#include "dataset_resolver.h"
+#include "dataset_options.h"
 #include "db/dataset_store.h"
 #include "volume/dataset_source.h"
 #include "volume/image_file.h"

@@ -11,7 +11,7 @@
 
 #include "cli_args.h"
 #include "commands.h"
-#include "dataset_resolver.h"
+#include "dataset_options.h"
 #include "volume/dataset_source.h"
 #include "volume/mask.h"
 #include "volume/nifti_io.h"

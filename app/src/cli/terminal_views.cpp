@@ -14,6 +14,7 @@
 #include "render/overlay.h"
 #include "render/scene.h"
 #include "render/structure_pick.h"
+#include "render/target_side.h"
 #include "volume/dataset_source.h"
 #include "volume/mask.h"
 #include "volume/png_image.h"
@@ -27,25 +28,6 @@ namespace {
 
 constexpr int kWidth = kPictureWidth, kHeight = kPictureHeight;
 constexpr int kSliceScale = 3;               // pixels per voxel side on slices
-
-// The voxel of the structure nearest its centroid: its "centre", on the structure even when the
-// structure is curved (a nerve, a canal).
-std::optional<Vec3> structureCentre(const LabelMap& labels, std::uint16_t label) {
-  auto frame = render::structureFrame(labels, label);
-  if (!frame) return std::nullopt;
-  const Dims& d = labels.dims();
-  double best = 1e300;
-  std::optional<Vec3> centre;
-  for (int k = 0; k < d.z; ++k)
-    for (int j = 0; j < d.y; ++j)
-      for (int i = 0; i < d.x; ++i) {
-        if (labels.at(i, j, k) != label) continue;
-        const Vec3 p = labels.geometry.indexToPatient({double(i), double(j), double(k)});
-        const double dist = norm(p - frame->centroidMm);
-        if (dist < best) best = dist, centre = p;
-      }
-  return centre;
-}
 
 std::optional<std::array<int, 3>> voxelOf(const Geometry& g, const Vec3& pointMm) {
   const Vec3 ijk = g.patientToIndex(pointMm);
@@ -173,29 +155,35 @@ Result<TerminalPicture> TerminalViews::show(const lessons::QuestionScene& scene,
   const render::TransferFunction2D table = render::shadingTable(*preset);
   render::SceneVolumes volumes{&dataset_.volume, &dataset_.labels, field, selected->label, gradients_.get()};
 
-  std::vector<std::string> views = {lessons::toString(scene.view)};
-  // A step's free camera is the author's choice: kept even when the target does not show.
-  const Structure* target = visibleTarget && !scene.camera ? dataset_.findStructure(*visibleTarget) : nullptr;
-  std::optional<Vec3> targetCentre = target ? structureCentre(dataset_.labels, target->label) : std::nullopt;
-  if (targetCentre)
-    for (lessons::CameraView v : {lessons::CameraView::LateralRight, lessons::CameraView::Superior,
-                                  lessons::CameraView::Anterior, lessons::CameraView::Posterior,
-                                  lessons::CameraView::Inferior, lessons::CameraView::LateralLeft})
-      if (v != scene.view) views.push_back(lessons::toString(v));
-  std::optional<render::RenderSettings> chosen;
-  for (const std::string& view : views) {
+  const std::string ownView = lessons::toString(scene.view);
+  auto sideSettings = [&](const std::string& view) -> Result<render::RenderSettings> {
     auto settings = settingsFor(*selected, *preset, view, kWidth, kHeight, region ? kRegionMargin : 0);
     if (!settings) return tl::unexpected(settings.error());
     applyStepPlacement(*settings, scene.camera, scene.clip);
-    if (!chosen) chosen = *settings;  // the scene's own side unless another shows the target
-    if (!targetCentre) break;
-    const auto px = settings->camera.project(*targetCentre, kWidth, kHeight);
-    if (!px || (*px)[0] < 0 || (*px)[1] < 0 || (*px)[0] >= kWidth || (*px)[1] >= kHeight) continue;
-    const render::PickResult hit = render::pickStructure(volumes, *settings, table, (*px)[0], (*px)[1]);
-    if (hit.hit && hit.label == target->label) {
-      chosen = *settings;
-      break;
-    }
+    return settings;
+  };
+  // A step's free camera is the author's choice: kept even when the target does not show.
+  const Structure* target = visibleTarget && !scene.camera ? dataset_.findStructure(*visibleTarget) : nullptr;
+  auto targetFrame = target ? render::structureFrame(dataset_.labels, target->label)
+                            : Result<render::StructureFrame>(fail("no target to show"));
+  std::optional<render::RenderSettings> chosen;  // the scene's own side unless another shows the target
+  if (targetFrame) {
+    auto side = render::firstSideShowingTarget(ownView, [&](const std::string& view) -> Result<bool> {
+      auto settings = sideSettings(view);
+      if (!settings) return tl::unexpected(settings.error());
+      const bool shows = render::targetClickableAt(settings->camera, kWidth, kHeight, targetFrame->anchorMm, target->label,
+                                                   [&](double x, double y) {
+                                                     return render::pickStructure(volumes, *settings, table, x, y);
+                                                   });
+      if (shows) chosen = *settings;
+      return shows;
+    });
+    if (!side) return tl::unexpected(side.error());
+  }
+  if (!chosen) {
+    auto own = sideSettings(ownView);
+    if (!own) return tl::unexpected(own.error());
+    chosen = *own;
   }
 
   renderer_->setSelected(selected->label);
@@ -222,9 +210,9 @@ Result<TerminalPicture> TerminalViews::showSlice(const std::string& targetId, co
   if (!renderer_) return fail("pictures are off");
   const Structure* target = dataset_.findStructure(targetId);
   if (!target) return fail("structure '" + targetId + "' is not in dataset '" + dataset_.id + "'");
-  const auto centre = structureCentre(dataset_.labels, target->label);
-  if (!centre) return fail("structure '" + targetId + "' has no voxels in dataset '" + dataset_.id + "'");
-  const auto voxel = voxelOf(dataset_.labels.geometry, *centre);
+  const auto frame = render::structureFrame(dataset_.labels, target->label);
+  if (!frame) return fail("structure '" + targetId + "' has no voxels in dataset '" + dataset_.id + "'");
+  const auto voxel = voxelOf(dataset_.labels.geometry, frame->anchorMm);
   SliceRequest request;
   request.axis = 2;
   request.index = voxel ? (*voxel)[2] : 0;

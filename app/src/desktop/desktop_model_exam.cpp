@@ -3,15 +3,11 @@
 #include <limits>
 
 #include "desktop_model.h"
+#include "render/target_side.h"
 
 namespace at::app {
 
 using json = nlohmann::json;
-
-namespace {
-// The sides an exam locate item may be seen from, after the scene's own (as `play` and `exam` try them).
-const char* kTurnViews[] = {"lateral_right", "superior", "anterior", "posterior", "inferior", "lateral_left"};
-}  // namespace
 
 void DesktopModel::showExamItem(const std::optional<ExamController::ItemScene>& item) {
   turnToward_.reset();
@@ -52,20 +48,16 @@ void DesktopModel::showExamItem(const std::optional<ExamController::ItemScene>& 
 void DesktopModel::turnTowardTarget() {
   if (!turnToward_ || !fields_->settled() || (!explore_.bare() && !fields_->pickField())) return;
   const Turn turn = *std::exchange(turnToward_, std::nullopt);
-  std::vector<std::string> views{turn.view};
-  for (const char* v : kTurnViews)
-    if (v != turn.view) views.emplace_back(v);
-  std::optional<std::string> chosen;
-  for (const std::string& view : views) {
-    if (auto st = setView(view); !st) continue;
-    const auto p = projectStructure(turn.target);
-    if (!p) continue;
-    const render::PickResult hit = pickAt((*p)[0], (*p)[1]);
-    if (hit.hit && hit.label == turn.target) {
-      chosen = view;
-      break;
-    }
-  }
+  // The sides as `play` and `exam` try them (render/target_side.h), each set and picked here.
+  const double left = layout_.viewLeft();
+  const int viewW = int(layout_.viewWidth()), viewH = int(layout_.viewHeight());
+  const auto side = render::firstSideShowingTarget(turn.view, [&](const std::string& view) -> Result<bool> {
+    const render::StructureFrame* frame = explore_.frameOf(turn.target);
+    if (!frame || !setView(view)) return false;
+    return render::targetClickableAt(explore_.camera(), viewW, viewH, frame->anchorMm, turn.target,
+                                     [&](double x, double y) { return pickAt(x + left, y); });
+  });
+  const std::optional<std::string> chosen = side ? *side : std::nullopt;  // the search itself cannot fail here
   if (!chosen)
     if (auto st = setView(turn.view); !st) message(st.error().message);
   event({{"event", "exam_view"}, {"view", chosen.value_or(turn.view)}, {"target_visible", chosen.has_value()}});

@@ -346,21 +346,10 @@ Result<quiz::Grade> LessonController::answer(const quiz::Answer& answer) {
   if (asked_->grade) return fail("this question is already answered");
   Result<quiz::Grade> grade = fail("no lesson is running");
   const auto latency = std::chrono::duration_cast<std::chrono::milliseconds>(SteadyClock::now() - asked_->shownAt);
-  if (asked_->review && user_) {
+  if (asked_->review && reviewSession_) {
     // Graded as a lesson answer and recorded with the structure's progress and Elo, so the
     // review queue moves.
-    auto keys = keysFor(reviewCourse_.datasetId);
-    if (!keys) return tl::unexpected(keys.error());
-    auto userId = storedUserId();
-    if (!userId) return tl::unexpected(userId.error());
-    lessons::ReviewAnswer review;
-    review.userId = *userId;
-    review.courseId = reviewCourse_.id;
-    review.question = asked_->question.question;
-    review.answer = answer;
-    review.render = renderState_();
-    review.latencyMs = latency.count();
-    grade = lessons::answerReview(session_.curriculum(), session_.progress(), **keys, review);
+    grade = reviewSession_->answer(answer, renderState_(), latency.count());
   } else if (engine_) {
     grade = engine_->answer(answer, renderState_(), latency.count());
   }
@@ -399,36 +388,37 @@ Status LessonController::startReview() {
   finishedScore_.reset();
   if (courses_.empty()) return fail("no course to review");
   const lessons::Course& course = courses_[std::size_t(courseIndex_)];
-  auto question = lessons::chooseReviewQuestion(session_.curriculum(), session_.progress(), user_->id, course.id, unixNow());
+  auto keys = keysFor(course.datasetId);  // also the structures' display names
+  if (!keys) return tl::unexpected(keys.error());
+  auto session = std::make_unique<lessons::ReviewSession>(session_.curriculum(), session_.progress(), **keys, course, user_->id);
+  auto question = session->next();
   if (!question) return tl::unexpected(question.error());
   if (!*question) {
     asked_.reset();
+    reviewSession_.reset();
     message_ = "Nothing is due for review in this course.";
     events_({{"event", "review_question"}, {"course", course.id}, {"question", nullptr}});
     return {};
   }
-  auto keys = keysFor(course.datasetId);
-  if (!keys) return tl::unexpected(keys.error());
-  auto resolved = quiz::resolveQuestion(**question, **keys);
-  if (!resolved) return tl::unexpected(resolved.error());
-  reviewCourse_ = course;
   Asked asked;
-  asked.question = std::move(*resolved);
+  asked.question = (*question)->question;
   asked.review = true;
   for (const std::string& id : asked.question.choices) asked.choiceNames.push_back(displayName(id));
   const quiz::QuestionKind kind = asked.question.question.kind;
-  if (auto scene = lessons::questionScene(course, asked.question.question.id))
-    show_({scene->structure, scene->presetId, scene->view, scene->camera, scene->clip, locateTarget(asked.question)});
+  const lessons::QuestionScene& scene = (*question)->scene;
+  show_({scene.structure, scene.presetId, scene.view, scene.camera, scene.clip, locateTarget(asked.question)});
   events_({{"event", "review_question"}, {"course", course.id}, {"question", asked.question.question.id},
            {"question_kind", quiz::toString(kind)}, {"target", asked.question.question.target},
            {"choices", asked.question.choices}});
   asked_ = std::move(asked);
+  reviewSession_ = std::move(session);
   message_.clear();
   return {};
 }
 
 void LessonController::dismissReview() {
   if (asked_ && asked_->review) asked_.reset();
+  reviewSession_.reset();
 }
 
 }  // namespace at::app

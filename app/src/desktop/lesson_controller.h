@@ -26,6 +26,7 @@
 #include "learning_session.h"
 #include "lessons/curriculum.h"
 #include "lessons/lesson_engine.h"
+#include "lessons/review_session.h"
 #include "quiz/question.h"
 
 namespace at::app {
@@ -164,7 +165,7 @@ class LessonController {
   std::string readyError_;
   std::vector<Structure> structures_;         // of the course dataset last asked for
   std::unique_ptr<lessons::LessonEngine> engine_;
-  lessons::Course reviewCourse_;              // the course of the review question (synonyms)
+  std::unique_ptr<lessons::ReviewSession> reviewSession_;  // while a review question is asked
   // A lesson being started (declared after engine_: destroyed, that is joined, before it).
   struct Pending {
     std::unique_ptr<lessons::LessonEngine> engine;

@@ -18,13 +18,8 @@ Status LessonController::showMe() {
   std::optional<lessons::QuestionScene> scene;
   if (!asked_->review && engine_ && step_) {
     scene = lessons::showMeScene(engine_->lesson().steps[std::size_t(step_->index)]);
-  } else if (auto asked = lessons::questionScene(reviewCourse_, questionId)) {
-    const std::string& target = asked_->question.question.target;
-    scene = *asked;
-    if (!target.empty() && scene->structure != target) {
-      scene->structure = target;
-      scene->presetId = target + "_wdt";
-    }
+  } else if (asked_->review && reviewSession_) {
+    scene = reviewSession_->showMeScene();
   }
   if (!scene) return fail("question '" + questionId + "' has no view to show its answer in");
   show_({scene->structure, scene->presetId, scene->view, scene->camera, scene->clip, {}});

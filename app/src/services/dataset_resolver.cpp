@@ -12,36 +12,10 @@
 #include "scan_catalogue.h"
 #include "volume/dataset_source.h"
 #include "volume/known_scans.h"
-#include "printable_output.h"
 
 namespace at::app {
 
 namespace fs = std::filesystem;
-
-std::set<std::string> withDatasetOptions(std::set<std::string> commandOptions) {
-  commandOptions.insert({"labels", "names", "series", "intensity", "nrrd-data", "intercept", "slope"});
-  return commandOptions;
-}
-
-std::set<std::string> withDatasetFlags(std::set<std::string> commandFlags) {
-  commandFlags.insert("skip-unreadable");
-  return commandFlags;
-}
-
-DatasetRequest datasetRequestFrom(const cli::Args& args, const std::string& name) {
-  DatasetRequest request;
-  request.name = name;
-  request.labelsPath = args.valueOr("labels", "");
-  request.namesPath = args.valueOr("names", "");
-  request.seriesUid = args.valueOr("series", "");
-  request.intensity = args.valueOr("intensity", "");
-  request.dbPath = args.db();
-  request.skipUnreadableFiles = args.has("skip-unreadable");
-  if (auto folder = args.value("nrrd-data")) request.dataFolder = fs::absolute(*folder).string();
-  request.intercept = args.valueOr("intercept", "");
-  request.slope = args.valueOr("slope", "");
-  return request;
-}
 
 namespace {
 
@@ -171,23 +145,6 @@ Result<Dataset> openNamedDataset(const DatasetRequest& request) {
   return fail(ErrorKind::NotFound, "unknown dataset '" + request.name + "': not built in (phantom, phantom:N, skull), not imported" +
                                        (known.empty() ? std::string() : " (imported: " + str::join(known, ", ") + ")") +
                                        ", and no such file or folder");
-}
-
-void applyDatasetWindow(const Dataset& dataset, float& windowMin, float& windowMax, bool windowGiven,
-                        bool densityWeights) {
-  const IntensityModel& m = dataset.intensity;
-  if (!m.hounsfield() && !windowGiven) {
-    windowMin = m.window[0];
-    windowMax = m.window[1];
-  }
-  static bool noted = false;
-  if (densityWeights && !m.attenuationLike() && !noted) {
-    noted = true;
-    terminalFprintf(stderr,
-                 "anatomy-tutor: note: '%s' is %s: its intensities are not attenuation, and density-weighted distances "
-                 "assume CT-like values (bright = dense)\n",
-                 dataset.id.c_str(), m.modality.c_str());
-  }
 }
 
 std::string unknownStructureMessage(const Dataset& dataset, const std::string& name) {

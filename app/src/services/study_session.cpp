@@ -6,7 +6,6 @@
 
 #include <nlohmann/json.hpp>
 
-#include "commands.h"
 #include "core/atomic_file.h"
 #include "core/printable_text.h"
 #include "core/regular_file.h"
