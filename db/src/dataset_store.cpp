@@ -216,6 +216,27 @@ Status saveDatasetLabels(Database& db, const std::string& name, const std::strin
   });
 }
 
+Status setStructureSystem(Database& db, const std::string& name, const std::string& structureId,
+                          const std::string& system) {
+  return db.writeTransaction([&](Database& d) -> Status {
+    auto find = d.prepare(
+        "SELECT d.id, s.structure_id FROM datasets d LEFT JOIN structures s ON s.dataset_id = d.id AND"
+        " s.structure_id = ?2 WHERE d.name = ?1");
+    if (!find) return tl::unexpected(find.error());
+    find->bind(1, name).bind(2, structureId);
+    auto row = find->step();
+    if (!row) return tl::unexpected(row.error());
+    if (!*row) return fail(ErrorKind::NotFound, "no imported dataset is named '" + name + "'");
+    const std::int64_t id = find->int64(0);
+    if (find->text(1).empty())
+      return fail(ErrorKind::NotFound, "imported dataset '" + name + "' has no structure '" + structureId + "'");
+    auto update = d.prepare("UPDATE structures SET system = ?1 WHERE dataset_id = ?2 AND structure_id = ?3");
+    if (!update) return tl::unexpected(update.error());
+    update->bind(1, system).bind(2, id).bind(3, structureId);
+    return update->run();
+  });
+}
+
 const char* reviewStateId(ReviewState state) {
   switch (state) {
     case ReviewState::InProgress: return "in_progress";

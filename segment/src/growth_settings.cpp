@@ -48,7 +48,40 @@ double medianStepNoise(const Volume& volume, const std::array<float, 2>& window)
   return 1;
 }
 
+// The "bone only" range in stored values (growth_settings.h).
+std::array<float, 2> boneRangeStored(const Volume& volume, const IntensityModel& intensity) {
+  std::vector<std::uint64_t> histogram(65536, 0);
+  int top = -32768;
+  for (std::int16_t v : volume.voxels) ++histogram[std::size_t(v + 32768)], top = std::max(top, int(v));
+  if (intensity.hounsfield()) {
+    const float low = float((kBoneHu - intensity.intercept) / intensity.slope);
+    return {low, std::max(low, float(top))};
+  }
+  // Plain intensities: a pseudo-HU scale from two landmarks, air (the histogram window's low end,
+  // −1000 HU) and soft tissue (the commonest value above the body's threshold, the midpoint of the
+  // window's low end and the mean of all voxels above it: 0 HU), then kBoneHu on that scale.
+  const int air = int(intensity.window[0]);
+  double count = 0, sum = 0;
+  for (std::size_t v = std::size_t(air + 32768); v < histogram.size(); ++v)
+    count += double(histogram[v]), sum += double(histogram[v]) * (double(v) - 32768.0);
+  const int body = count > 0 ? int(std::lround(0.5 * (air + sum / count))) : air;
+  std::size_t soft = std::size_t(body + 32768);
+  for (std::size_t v = soft; v < histogram.size(); ++v)
+    if (histogram[v] > histogram[soft]) soft = v;
+  const double softValue = double(soft) - 32768.0;
+  const float low = float(softValue + (softValue - air) * kBoneHu / 1000.0);
+  return {std::ceil(low), std::max(std::ceil(low), float(top))};
+}
+
 }  // namespace
+
+GrowthParams withRangeLimit(GrowthParams params, const IntensityModel& intensity, const std::array<double, 2>& values) {
+  const std::array<float, 2> stored = storedWindow(intensity, values);
+  params.limitRange = true;
+  params.rangeMin = std::min(stored[0], stored[1]);
+  params.rangeMax = std::max(stored[0], stored[1]);
+  return params;
+}
 
 double basePerMm(double basePerVoxel, double voxelMm) { return basePerVoxel / voxelMm; }
 double basePerVoxelOf(double basePerMmValue, double voxelMm) { return basePerMmValue * voxelMm; }
@@ -70,10 +103,13 @@ GrowthDefaults defaultGrowthSettings(const Volume& volume, const IntensityModel&
   out.stepNoise = medianStepNoise(volume, window);
   const double perVoxel = std::max(kBaseNoiseMultiple * out.stepNoise, kMinBasePerVoxel);
   out.params.baseCost = float(basePerMm(perVoxel, out.voxelMm));
-  char text[200];
-  std::snprintf(text, sizeof text, "base %.4g/mm (%.4g per %.3g mm voxel; step noise %.4g), window %g … %g %s",
+  const std::array<float, 2> bone = boneRangeStored(volume, intensity);
+  out.boneRangeValues = {intensity.valueOf(bone[0]), intensity.valueOf(bone[1])};
+  char text[260];
+  std::snprintf(text, sizeof text,
+                "base %.4g/mm (%.4g per %.3g mm voxel; step noise %.4g), window %g … %g %s, bone only: %g … %g",
                 out.params.baseCost, perVoxel, out.voxelMm, out.stepNoise, out.windowValues[0], out.windowValues[1],
-                intensity.unitName());
+                intensity.unitName(), out.boneRangeValues[0], out.boneRangeValues[1]);
   out.summary = text;
   return out;
 }

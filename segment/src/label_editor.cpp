@@ -189,6 +189,18 @@ Status LabelEditor::setColour(std::uint16_t label, std::array<float, 3> colour) 
   return {};
 }
 
+Status LabelEditor::setSystem(std::uint16_t label, const std::string& system) {
+  if (auto ok = requireStructure(label); !ok) return ok;
+  const std::vector<Structure> before = structures_;
+  std::string trimmed = system;
+  trimmed.erase(0, trimmed.find_first_not_of(" \t"));
+  trimmed.erase(trimmed.find_last_not_of(" \t") + 1);
+  for (Structure& s : structures_)
+    if (s.label == label) s.system = trimmed;
+  commit("system of structure " + std::to_string(label) + ": '" + trimmed + "'", {}, before);
+  return {};
+}
+
 Result<EditSummary> LabelEditor::deleteStructure(std::uint16_t label) {
   if (auto ok = requireStructure(label); !ok) return tl::unexpected(ok.error());
   const std::vector<Structure> before = structures_;

@@ -160,7 +160,7 @@ Result<SeedSet> readSeeds(const std::string& jsonText, const std::string& source
   if (doc.contains("grow")) {
     const json& g = doc["grow"];
     if (!g.is_object()) return r.error("grow", "must be an object");
-    if (auto ok = r.onlyKeys(g, "grow", {"weight", "window", "base"}); !ok) return tl::unexpected(ok.error());
+    if (auto ok = r.onlyKeys(g, "grow", {"weight", "window", "base", "range"}); !ok) return tl::unexpected(ok.error());
     if (g.contains("weight")) {
       if (!g["weight"].is_string()) return r.error("grow.weight", "must be a string");
       set.grow.weight = g["weight"].get<std::string>();
@@ -173,6 +173,11 @@ Result<SeedSet> readSeeds(const std::string& jsonText, const std::string& source
     if (g.contains("base")) {
       if (!g["base"].is_number() || !(g["base"].get<double>() > 0)) return r.error("grow.base", "must be a number > 0");
       set.grow.base = g["base"].get<double>();
+    }
+    if (g.contains("range")) {
+      auto range = r.range(g["range"], "grow.range");
+      if (!range) return tl::unexpected(range.error());
+      set.grow.range = *range;
     }
   }
   return set;
@@ -217,6 +222,7 @@ std::string seedsToJson(const SeedSet& seeds) {
   if (seeds.grow.weight) grow["weight"] = *seeds.grow.weight;
   if (seeds.grow.window) grow["window"] = *seeds.grow.window;
   if (seeds.grow.base) grow["base"] = *seeds.grow.base;
+  if (seeds.grow.range) grow["range"] = *seeds.grow.range;
   if (!grow.empty()) out += ",\n  \"grow\": " + grow.dump();
   return out + "\n}\n";
 }

@@ -10,6 +10,7 @@
 #include <latch>
 #include <set>
 #include <thread>
+#include <tuple>
 
 #include "db/checksum.h"
 #include "db/course_store.h"
@@ -734,4 +735,37 @@ TEST_CASE("SqlErrors_CarryTheirKind_UniqueIsConflict_MissingReferenceIsNotFound_
   auto badMode = db->exec("INSERT INTO attempts (user_id, lesson_id, mode, started_at) VALUES (1, 'l', 'exam!', 1)");
   REQUIRE(!badMode);
   CHECK((badMode.error().kind == ErrorKind::Invalid));
+}
+
+TEST_CASE("A structure's system is stored for that structure of that dataset only; unknown names write nothing") {
+  test::TempDir dir;
+  auto db = Database::open((dir / "s.db").string());
+  REQUIRE(db);
+  Structure liver, spleen;
+  liver.label = 1, liver.id = "liver", liver.displayName = "Liver";
+  spleen.label = 2, spleen.id = "spleen", spleen.displayName = "Spleen", spleen.system = "lymphatic";
+  auto id = registerDataset(*db, sampleRecord("abdomen"), {liver, spleen});
+  auto otherId = registerDataset(*db, sampleRecord("thorax"), {liver});
+  REQUIRE(id);
+  REQUIRE(otherId);
+  REQUIRE(setStructureSystem(*db, "abdomen", "liver", "digestive"));
+  auto structures = datasetStructures(*db, *id);
+  REQUIRE(structures);
+  REQUIRE(structures->size() == 2);
+  CHECK((*structures)[0].system == "digestive");
+  CHECK((*structures)[1].system == "lymphatic");
+  auto other = datasetStructures(*db, *otherId);
+  REQUIRE(other);
+  CHECK((*other)[0].system.empty());
+  for (auto [dataset, structure, named] : {std::tuple{"pelvis", "liver", "'pelvis'"}, {"abdomen", "heart", "'heart'"}}) {
+    auto refused = setStructureSystem(*db, dataset, structure, "x");
+    REQUIRE(!refused);
+    CHECK((refused.error().kind == ErrorKind::NotFound));
+    CHECK(refused.error().message.find(named) != std::string::npos);
+  }
+  auto again = datasetStructures(*db, *id);
+  REQUIRE(again);
+  CHECK((*again)[0].system == "digestive");
+  REQUIRE(setStructureSystem(*db, "abdomen", "liver", ""));  // cleared
+  CHECK((*datasetStructures(*db, *id))[0].system.empty());
 }

@@ -56,7 +56,10 @@ TEST_CASE("Grow from seeds on the phantom: Dice >= 0.90 for every structure larg
   REQUIRE(raster);
   // The growth sees the volume and the seeds only; the labels are the reference.
   segment::LabelEditor editor(LabelMap(phantom->volume.geometry, 0), phantom->structures);
-  GrowthParams params;  // the defaults: gradient weights over -1000 … 2000 HU, base 0.05
+  // Gradient weights over -1000 … 2000 HU, travel 0.05 per 0.2 mm voxel (base 0.25 per mm): with
+  // dense strokes on both sides of every wall, distance should weigh about as much as a faint edge.
+  GrowthParams params;
+  params.baseCost = 0.25f;
   params.backend = WdtBackend::Cpu;
   GrowthStats stats;
   auto grown = editor.growFromSeeds(phantom->volume, raster->seeds, params, &stats);

@@ -171,13 +171,13 @@ class HeapQueue {
 template <CostKernel K>
 void exactWith(const WdtProblem& problem, std::vector<float>& dist) {
   const Geometry& g = problem.grid;
-  float wLo, wHi;
-  wdt::weightRange(K, problem.params.baseCost, wLo, wHi);
   float lenLo = kInf, lenHi = 0;
   for (const Offset& s : offsets(g)) {
     lenLo = std::min(lenLo, s.len);
     lenHi = std::max(lenHi, s.len);
   }
+  float wLo, wHi;
+  wdt::weightRange(K, problem.params.baseCost, lenLo, wLo, wHi);
   // Smallest cost a step can have, with margin for the rounding of the cost itself.
   const double minCost = double(wLo) * double(lenLo) * (1.0 - 1e-5);
   const double maxCost = double(wHi) * double(lenHi) * (1.0 + 1e-5);

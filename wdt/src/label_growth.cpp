@@ -7,6 +7,7 @@
 #include <set>
 #include <string>
 
+#include "growth_smoothing.h"
 #include "wdt/growth_engine.h"
 #include "wdt/label_growth.h"
 #include "wdt/problem.h"
@@ -50,45 +51,17 @@ Result<std::vector<GrowthSeed>> checkedSeeds(const Dims& d, std::vector<GrowthSe
 // Fixed-point units per unit of cost: as many as keep every distance below 2^30 (kGrowthInf is
 // 2^31 − 1). No distance exceeds the cost of a staircase path along the axes from the nearest seed:
 // at most (largest weight) × (nx·sx + ny·sy + nz·sz) before rounding, and rounding each of its
-// nx + ny + nz steps adds at most one unit. 512³ voxels of 1 mm with gradient costs (weights up to
-// 1.05 per mm) get ~6.6·10⁵ units per unit of cost, a resolution far below any step's cost.
+// nx + ny + nz steps adds at most one unit. 512³ voxels of 1 mm with gradient costs (at most
+// base + 1 per mm on that grid) get ~6.6·10⁵ units per unit of cost, a resolution far below any
+// step's cost.
 float fixedPointScale(const Geometry& g, wdt::CostKernel kernel, float base) {
   float lo = 0, hi = 0;
-  wdt::weightRange(kernel, base, lo, hi);
+  const float shortest = float(std::min({g.spacingMm[0], g.spacingMm[1], g.spacingMm[2]}));
+  wdt::weightRange(kernel, base, shortest, lo, hi);
   const double extentMm = g.dims.x * g.spacingMm[0] + g.dims.y * g.spacingMm[1] + g.dims.z * g.spacingMm[2];
   const double steps = double(g.dims.x) + g.dims.y + g.dims.z;
   const double budget = double(1 << 30) - 2 * steps;
   return float(budget / (double(hi) * extentMm * 1.01));
-}
-
-// The values blurred by a Gaussian of `sigmaVoxels` voxels along each axis (separable, taps out to
-// 2.5 sigma, the border value repeated).
-std::vector<float> smoothedValues(const Volume& volume, float sigmaVoxels) {
-  const Dims d = volume.dims();
-  std::vector<float> a(volume.voxels.begin(), volume.voxels.end()), b(a.size());
-  const int radius = std::max(1, int(std::ceil(2.5f * sigmaVoxels)));
-  std::vector<float> taps(std::size_t(2 * radius + 1));
-  float sum = 0;
-  for (int t = -radius; t <= radius; ++t) sum += taps[std::size_t(t + radius)] = std::exp(-0.5f * float(t * t) / (sigmaVoxels * sigmaVoxels));
-  for (float& t : taps) t /= sum;
-  const int n[3] = {d.x, d.y, d.z};
-  const std::size_t stride[3] = {1, std::size_t(d.x), std::size_t(d.x) * std::size_t(d.y)};
-  for (int axis = 0; axis < 3; ++axis) {
-    const int len = n[axis];
-    if (len < 2) continue;
-    for (std::size_t v = 0; v < a.size(); ++v) {
-      const int along = int(v / stride[axis] % std::size_t(len));
-      const std::size_t start = v - std::size_t(along) * stride[axis];
-      float acc = 0;
-      for (int t = -radius; t <= radius; ++t) {
-        const int at = std::clamp(along + t, 0, len - 1);
-        acc += taps[std::size_t(t + radius)] * a[start + std::size_t(at) * stride[axis]];
-      }
-      b[v] = acc;
-    }
-    std::swap(a, b);
-  }
-  return a;
 }
 
 Result<GrowthProblem> makeProblem(const Volume& volume, const GrowthParams& params) {
@@ -106,11 +79,18 @@ Result<GrowthProblem> makeProblem(const Volume& volume, const GrowthParams& para
   problem.grid = volume.geometry;
   problem.density.resize(d.count());
   if (params.smoothingVoxels > 0) {
-    const std::vector<float> values = smoothedValues(volume, params.smoothingVoxels);
+    const std::vector<float> values = params.edgeSigma > 0
+                                          ? wdt::edgePreservingSmoothed(volume, params.smoothingVoxels, params.edgeSigma)
+                                          : wdt::gaussianSmoothed(volume, params.smoothingVoxels);
     for (std::size_t i = 0; i < d.count(); ++i)
       problem.density[i] = wdt::densityByte(values[i], params.windowMin, params.windowMax);
   } else {
     for (std::size_t i = 0; i < d.count(); ++i) problem.density[i] = lut[std::size_t(volume.voxels[i] + 32768)];
+  }
+  if (params.limitRange) {
+    problem.blocked.resize(d.count());
+    for (std::size_t i = 0; i < d.count(); ++i)
+      problem.blocked[i] = volume.voxels[i] < params.rangeMin || volume.voxels[i] > params.rangeMax;
   }
   problem.kernel = wdt::costKernel(params.rule, params.weight);
   problem.baseCost = params.baseCost;
@@ -126,6 +106,13 @@ Status validateGrowthParams(const GrowthParams& p) {
                 std::to_string(p.windowMax));
   if (!std::isfinite(p.smoothingVoxels) || p.smoothingVoxels < 0 || p.smoothingVoxels > 8)
     return fail("growth params: smoothingVoxels must be 0 … 8, got " + std::to_string(p.smoothingVoxels));
+  if (p.limitRange && (!std::isfinite(p.rangeMin) || !std::isfinite(p.rangeMax) || !(p.rangeMax >= p.rangeMin)))
+    return fail("growth params: the range limit must have max >= min, got " + std::to_string(p.rangeMin) + ".." +
+                std::to_string(p.rangeMax));
+  if (p.limitRange && p.backend == WdtBackend::Cuda)
+    return fail("growth params: a range limit grows on the CPU only, backend cuda cannot honour it");
+  if (!std::isfinite(p.edgeSigma) || p.edgeSigma < 0)
+    return fail("growth params: edgeSigma must be >= 0 (0: plain Gaussian smoothing), got " + std::to_string(p.edgeSigma));
   if (!std::isfinite(p.baseCost) || !(p.baseCost > 0))
     return fail("growth params: baseCost must be > 0 (a step that costs nothing lets labels cross freely), got " +
                 std::to_string(p.baseCost));
@@ -158,7 +145,9 @@ Result<LabelGrowth> LabelGrowth::create(const Volume& volume, const GrowthParams
   const bool available = cuda::queryDevice().available;
   if (params.backend == WdtBackend::Cuda && !available)
     return fail("grow from seeds: backend cuda requested but " + cuda::queryDevice().reason);
-  if (params.backend == WdtBackend::Cuda || (params.backend == WdtBackend::Auto && available)) {
+  if (params.limitRange && params.backend == WdtBackend::Auto && available)
+    state->warning = "a range limit grows on the CPU (the CUDA engine has none)";
+  else if (params.backend == WdtBackend::Cuda || (params.backend == WdtBackend::Auto && available)) {
     auto engine = cuda::makeCudaGrowthEngine(*problem);
     if (engine) {
       state->engine = std::move(*engine);

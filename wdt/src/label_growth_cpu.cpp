@@ -528,7 +528,7 @@ class CpuGrowthEngine final : public GrowthEngine {
           const std::uint64_t key = loadKey(&keys_[v]);
           box.d[cell + x] = wdt::growthKeyDistance(key);
           box.l[cell + x] = wdt::growthKeyLabel(key);
-          box.f[cell + x] = wdt::densityFromByte(p_.density[v]);
+          box.f[cell + x] = densityOf(p_, v);
         }
       }
     transposeBox(box.f, box.fT);

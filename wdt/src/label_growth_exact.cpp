@@ -45,14 +45,15 @@ void growExactly(const GrowthProblem& p, std::vector<std::uint64_t>& key) {
     heap.pop();
     if (k != key[u]) continue;  // stale: u was lowered after this push
     const std::int32_t du = wdt::growthKeyDistance(k), lu = wdt::growthKeyLabel(k);
-    const float fu = wdt::densityFromByte(p.density[u]);
+    const float fu = densityOf(p, u);
     const int x = int(u % std::uint32_t(d.x)), y = int(u / std::uint32_t(d.x) % std::uint32_t(d.y)),
               z = int(u / (std::uint32_t(d.x) * std::uint32_t(d.y)));
     for (const Step& s : steps) {
       if (!d.contains(x + s.dx, y + s.dy, z + s.dz)) continue;
       const std::uint32_t v = std::uint32_t(std::int64_t(u) + s.delta);
       const std::int32_t cost =
-          wdt::growthStepCost<K>(fu, wdt::densityFromByte(p.density[v]), s.len, p.baseCost, p.scale);
+          wdt::growthStepCost<K>(fu, densityOf(p, v), s.len, p.baseCost, p.scale);
+      if (cost == wdt::kGrowthInf) continue;  // a blocked voxel: not entered, not left
       const std::uint64_t candidate = wdt::packGrowthKey(wdt::addGrowthCost(du, cost), lu);
       if (candidate < key[v]) {
         key[v] = candidate;

@@ -34,7 +34,7 @@ const char* kUsage =
     "usage: anatomy-tutor segment DATASET --seeds SEEDS.json --out LABELS.nii.gz|LABELS.seg.nrrd\n"
     "                             [--names NAMES.json] [--method grow|threshold] [--backend auto|cpu|cuda]\n"
     "                             [--weight gradient|density|uniform|ascent] [--window LO,HI] [--base B]\n"
-    "                             [--compare] [--save] [--json]\n"
+    "                             [--range LO,HI|bone] [--compare] [--save] [--json]\n"
     "  Labels DATASET from seed strokes. SEEDS.json lists labels ({\"value\", \"name\"}, value 0 being\n"
     "  the background) and strokes in mm ({\"label\", \"points\": [[x,y,z], ...], \"radius_mm\"}); the\n"
     "  format is documented in segment/include/segment/seeds.h.\n"
@@ -47,6 +47,9 @@ const char* kUsage =
     "                      dataset's window: -1000,2000 HU for CT, the histogram window for plain\n"
     "                      intensities); --base B the cost per mm added to every step (default: from the\n"
     "                      data's step noise and voxel size, segment/growth_settings.h; printed)\n"
+    "  --range             grow only into voxels whose value lies in LO..HI (HU or intensities; others\n"
+    "                      keep label 0 unless seeded); 'bone' takes the range derived from the data\n"
+    "                      (300 HU and up for CT; a pseudo-HU bone threshold for plain intensities)\n"
     "  --out               .nii/.nii.gz: uint16 label map; .seg.nrrd: a 3D Slicer segmentation\n"
     "  --names             also write { \"value\": \"name\" } for the labels\n"
     "  --compare           Dice of each label against the dataset's own labels (the built-in phantom's,\n"
@@ -92,6 +95,16 @@ Result<GrowthParams> growthParams(const cli::Args& args, const segment::SeedSet&
   const IntensityModel& m = dataset.intensity;
   p.windowMin = float((window[0] - m.intercept) / m.slope);
   p.windowMax = float((window[1] - m.intercept) / m.slope);
+  if (seeds.grow.range) p = segment::withRangeLimit(p, m, *seeds.grow.range);
+  if (auto text = args.value("range")) {
+    std::array<double, 2> range = defaults.boneRangeValues;
+    if (*text != "bone") {
+      auto parsed = parsePair("range", *text);
+      if (!parsed) return tl::unexpected(parsed.error());
+      range = *parsed;
+    }
+    p = segment::withRangeLimit(p, m, range);
+  }
   if (auto ok = validateGrowthParams(p); !ok) return tl::unexpected(ok.error());
   return p;
 }
@@ -135,7 +148,7 @@ double dice(const LabelMap& a, const LabelMap& b, std::uint16_t label, std::size
 
 int runSegment(const Argv& argv) {
   auto args = cli::Args::parse(
-      argv, withDatasetOptions({"seeds", "out", "names", "method", "backend", "weight", "window", "base"}),
+      argv, withDatasetOptions({"seeds", "out", "names", "method", "backend", "weight", "window", "base", "range"}),
       {"compare", "save", "json"});
   if (!args) return reportError("segment: " + args.error().message, 2);
   if (args->has("help")) {

@@ -17,6 +17,8 @@
 #include "core/printable_text.h"
 #include "commands.h"
 #include "dataset_options.h"
+#include "dataset_resolver.h"
+#include "db/connection.h"
 #include "db/dataset_store.h"
 #include "volume/dataset_source.h"
 #include "volume/image_file.h"
@@ -153,8 +155,10 @@ const char* kDatasetsHelp =
 
 const char* kStructuresHelp =
     "usage: anatomy-tutor structures DATASET [--json]\n"
+    "       anatomy-tutor structures DATASET --structure ID --system SYSTEM   (imported datasets)\n"
     "       anatomy-tutor structures --volume PATH --labels PATH [--names JSON] [--series UID] [--json]\n\n"
-    "Lists a dataset's structures: label value, id, name, system and voxel count.\n"
+    "Lists a dataset's structures: label value, id, name, system and voxel count. --structure ID\n"
+    "--system SYSTEM stores the browsing group of an imported dataset's structure (\"\" clears it).\n"
     "DATASET is a built-in name (phantom, phantom:N, skull) or a volume path (DICOM folder, .nii[.gz],\n"
     ".nrrd/.nhdr, .inv3); --labels gives a label map on any grid (resampled onto the volume), --names a\n"
     "JSON map { \"value\": \"name\" }, --series the DICOM series UID. Datasets from files also take\n"
@@ -256,10 +260,21 @@ int runDatasets(const Argv& argv) {
 }
 
 int runStructures(const Argv& argv) {
-  auto args = cli::Args::parse(argv, kDatasetOptions, withDatasetFlags({"json"}));
+  auto args = cli::Args::parse(argv, with(kDatasetOptions, {"structure", "system"}), withDatasetFlags({"json"}));
   if (!args) return usageError("structures", args.error().message);
   if (args->has("help")) {
     terminalPrintf("%s%s", kStructuresHelp, kDatasetOptionsHelp);
+    return 0;
+  }
+  if (args->value("structure") || args->value("system")) {
+    const auto id = args->value("structure"), system = args->value("system");
+    if (!id || !system) return usageError("structures", "--structure ID and --system SYSTEM go together");
+    if (args->positional().size() != 1) return usageError("structures", "--system needs one imported DATASET name");
+    auto database = db::openDatabase(args->db());
+    if (!database) return reportError("structures: " + database.error().message);
+    if (auto ok = db::setStructureSystem(*database, args->positional()[0], *id, *system); !ok)
+      return reportError("structures: " + ok.error().message);
+    terminalPrintf("%s: structure '%s' is now in system '%s'\n", args->positional()[0].c_str(), id->c_str(), system->c_str());
     return 0;
   }
   auto ds = openDatasetArg(*args);

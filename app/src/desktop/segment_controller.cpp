@@ -55,7 +55,7 @@ void SegmentController::attach(const Dataset& dataset) {
   grownOnce_ = false;
   defaults_ = segment::defaultGrowthSettings(dataset.volume, dataset.intensity);
   settings_ = {segment::basePerVoxelOf(defaults_.params.baseCost, defaults_.voxelMm), defaults_.windowValues,
-               defaults_.params.smoothingVoxels};
+               defaults_.params.smoothingVoxels, false, defaults_.boneRangeValues};
   ++revision_;
   // An imported dataset's review states (a failed read is said; the states start as not started);
   // a built-in scan's (the skull) are the ones its shipped catalogue records.
@@ -103,6 +103,14 @@ Result<std::uint16_t> SegmentController::addLabel(const std::string& name) {
   ++revision_;
   ++labelsRevision_;
   return label;
+}
+
+Status SegmentController::setSystem(std::uint16_t label, const std::string& system) {
+  if (auto ok = requireDataset(); !ok) return ok;
+  if (auto ok = editor_->setSystem(label, system); !ok) return ok;
+  ++revision_;
+  ++labelsRevision_;
+  return {};
 }
 
 Status SegmentController::setCurrentLabel(std::uint16_t label) {

@@ -64,6 +64,8 @@ class SegmentController {
   // "state"}. Errors: the background or an unknown label.
   db::ReviewState reviewState(std::uint16_t label) const;
   Status setReviewState(std::uint16_t label, db::ReviewState state);
+  // The structure's system (browsing group); stored with "Save into the dataset".
+  Status setSystem(std::uint16_t label, const std::string& system);
 
   // --- The slice ------------------------------------------------------------------------------
   // axis 0, 1, 2 (x, y, z) and an index on it; errors name the range.
@@ -119,6 +121,8 @@ class SegmentController {
     double basePerVoxel = 0;
     std::array<double, 2> window{0, 1};
     double smoothingVoxels = 0;
+    bool limitRange = false;             // "bone only": grow only into values in `range`
+    std::array<double, 2> range{0, 0};   // in the dataset's values; defaults to its bone range
   };
   const GrowthSettings& growthSettings() const { return settings_; }
   const segment::GrowthDefaults& growthDefaults() const { return defaults_; }

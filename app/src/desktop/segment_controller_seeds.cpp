@@ -20,6 +20,7 @@ GrowthParams SegmentController::growthParams() const {
     p.windowMax = stored[1];
   }
   p.smoothingVoxels = float(settings_.smoothingVoxels);
+  if (dataset_ && settings_.limitRange) p = segment::withRangeLimit(p, dataset_->intensity, settings_.range);
   return p;
 }
 
@@ -32,6 +33,9 @@ Status SegmentController::setGrowthSettings(const GrowthSettings& settings) {
                 " … " + std::to_string(settings.window[1]));
   if (!(settings.smoothingVoxels >= 0 && settings.smoothingVoxels <= 8))
     return fail("segment editor: smoothing must be 0 … 8 voxels, got " + std::to_string(settings.smoothingVoxels));
+  if (settings.limitRange && !(settings.range[1] >= settings.range[0]))
+    return fail("segment editor: the grow-only range must have high >= low, got " + std::to_string(settings.range[0]) +
+                " … " + std::to_string(settings.range[1]));
   const GrowthSettings before = settings_;
   settings_ = settings;
   if (auto ok = validateGrowthParams(growthParams()); !ok) {
@@ -41,7 +45,8 @@ Status SegmentController::setGrowthSettings(const GrowthSettings& settings) {
   events_({{"event", "segment_growth_settings"},
            {"base_per_voxel", settings_.basePerVoxel},
            {"window", {settings_.window[0], settings_.window[1]}},
-           {"smoothing_voxels", settings_.smoothingVoxels}});
+           {"smoothing_voxels", settings_.smoothingVoxels},
+           {"range", settings_.limitRange ? nlohmann::json{settings_.range[0], settings_.range[1]} : nlohmann::json()}});
   // The live preview: a growth seen on screen is grown again with the new settings.
   if (grownOnce_ && seedsPerLabel().size() >= 2) return grow();
   return {};
@@ -49,7 +54,7 @@ Status SegmentController::setGrowthSettings(const GrowthSettings& settings) {
 
 void SegmentController::resetGrowthSettings() {
   (void)setGrowthSettings({segment::basePerVoxelOf(defaults_.params.baseCost, defaults_.voxelMm), defaults_.windowValues,
-                           defaults_.params.smoothingVoxels});
+                           defaults_.params.smoothingVoxels, false, defaults_.boneRangeValues});
 }
 
 Status SegmentController::saveSeeds(const std::string& path) const {
@@ -84,6 +89,7 @@ Status SegmentController::saveSeeds(const std::string& path) const {
   set.grow.weight = "gradient";
   set.grow.window = settings_.window;
   set.grow.base = double(growthParams().baseCost);
+  if (settings_.limitRange) set.grow.range = settings_.range;
   std::FILE* file = std::fopen(path.c_str(), "wb");
   if (!file) return fail(ErrorKind::Io, "save seeds: cannot write " + path);
   const std::string text = segment::seedsToJson(set);
@@ -118,6 +124,8 @@ Result<std::size_t> SegmentController::loadSeeds(const std::string& path) {
   GrowthSettings settings = settings_;
   if (set->grow.window) settings.window = *set->grow.window;
   if (set->grow.base) settings.basePerVoxel = segment::basePerVoxelOf(*set->grow.base, defaults_.voxelMm);
+  settings.limitRange = set->grow.range.has_value();
+  if (set->grow.range) settings.range = *set->grow.range;
   if (auto ok = setGrowthSettings(settings); !ok) return tl::unexpected(withContext(path, ok.error()));
   ++revision_;
   status_ = "seeds loaded from " + path + ": " + std::to_string(seeds_.size()) + " voxels";

@@ -71,6 +71,12 @@ Status saveDatasetLabels(Database& db, const std::string& name, const std::strin
                          const std::string& labelsChecksum, const std::string& namesPath,
                          const std::vector<Structure>& structures, const ReviewStates* review = nullptr);
 
+// Gives structure `structureId` of imported dataset `name` the browsing group `system` ("middle
+// ear", "skull bones", …; empty clears it). NotFound names the dataset or the structure (nothing is
+// written then); the stored label map and names file are not touched.
+Status setStructureSystem(Database& db, const std::string& name, const std::string& structureId,
+                          const std::string& system);
+
 // The review states stored for dataset `datasetId`'s structures (every structure, by id).
 Result<ReviewStates> datasetReviewStates(Database& db, std::int64_t datasetId);
 

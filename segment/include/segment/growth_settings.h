@@ -5,15 +5,15 @@
 //            2000 HU; plain intensities use the dataset's histogram window (the 0.5th … 99.5th
 //            percentiles, volume/intensity.h), so air sits near 0 and the densest bone near 1
 //            whatever the scanner's scale.
-//   base     the cost per mm added to every step, from the spacing and the data's step noise:
+//   base     the travel cost per mm, from the spacing and the data's step noise:
 //            perVoxel = max(0.1 × the median |Δf| between face neighbours inside the body,
 //            1/256), base = perVoxel / voxelMm (voxelMm the geometric mean of the spacing). A step
-//            costs (base + |Δf|)·len (wdt/step_cost.h), so the travel part of one voxel step is
-//            perVoxel whatever the spacing while an edge's part shrinks with the voxel; the rule
-//            is empirical — measured on a µCT-like 0.1 mm phantom in uint8 intensities and the
-//            3 mm abdominal CT (bench/RESULTS.md "Grow at defaults"): better than the old fixed
-//            0.05 per mm on the µCT's bones (a few points) and on the organs (Dice +0.06 … 0.22) —
-//            an empirical rule, not a derived invariance.
+//            costs base·len + |Δf| (wdt/step_cost.h): an edge costs its contrast once whatever the
+//            voxel size, and one voxel of travel costs perVoxel plus the noise's |Δf| on every grid.
+//            The 0.1 is empirical (bench/RESULTS.md "Grow at defaults"): the abdominal CT's organs
+//            want a small base (the liver's Dice falls from 0.74 to 0.54 as perVoxel rises from
+//            0.1× to 1.3× the noise), the µCT's touching ossicles a large one (malleus 24 % → 76 %
+//            bone); no single multiple serves both, and "bone only" (below) serves the bones.
 //   smoothing none by default (GrowthParams::smoothingVoxels): a blur of one voxel helped the
 //            abdominal CT's organs but cost the µCT's thin ossicles; the editor offers it.
 //
@@ -36,6 +36,13 @@ struct GrowthDefaults {
   double voxelMm = 1;         // geometric mean of the spacing
   double stepNoise = 0;       // median |Δf| between face neighbours inside the body (window units)
   std::array<double, 2> windowValues{};  // the window in the dataset's values (HU or intensities)
+  // The "bone only" range limit the editor offers (GrowthParams::limitRange, off by default), in the
+  // dataset's values: CT in HU from kBoneHu to the largest value; plain intensities from kBoneHu
+  // on a pseudo-HU scale set by two landmarks of the histogram — air (its 0.5th percentile, −1000
+  // HU) and soft tissue (the commonest value above the midpoint of air and the mean above air,
+  // 0 HU) — to the largest value. A scan without soft tissue (a dry skull) has no soft-tissue
+  // peak: there the user sets the range.
+  std::array<double, 2> boneRangeValues{};
   std::string summary;        // one line: "base 0.0123/mm (0.00123 per 0.1 mm voxel), window 0 … 255"
 };
 
@@ -46,7 +53,14 @@ constexpr double kBaseNoiseMultiple = 0.1;
 // The smallest per-voxel base, for noise-free data (one grey level of 256 in the window).
 constexpr double kMinBasePerVoxel = 1.0 / 256.0;
 
+// The lower end of bone in HU for the "bone only" range of a CT (cancellous bone and denser).
+constexpr double kBoneHu = 300.0;
+
 GrowthDefaults defaultGrowthSettings(const Volume& volume, const IntensityModel& intensity);
+
+// `params` limited to the dataset values `values` (stored values inverted through the intensity
+// model; limitRange set).
+GrowthParams withRangeLimit(GrowthParams params, const IntensityModel& intensity, const std::array<double, 2>& values);
 
 // The base per mm for `basePerVoxel` on this grid (basePerVoxel / voxelMm), and back: the editor
 // shows the base per voxel, which means the same on every grid.

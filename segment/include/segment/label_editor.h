@@ -61,6 +61,8 @@ class LabelEditor {
   Result<std::uint16_t> addStructure(const std::string& name, std::optional<std::array<float, 3>> colour = {});
   Status renameStructure(std::uint16_t label, const std::string& name);
   Status setColour(std::uint16_t label, std::array<float, 3> colour);
+  // The structure's browsing group ("middle ear", "skull bones"; empty: none), trimmed; undoable.
+  Status setSystem(std::uint16_t label, const std::string& system);
   Result<EditSummary> deleteStructure(std::uint16_t label);
 
   // Tools. Points are LPS mm; a point or a whole sphere outside the grid is an error naming it.

@@ -36,7 +36,15 @@ struct GrowthProblem {
   wdt::CostKernel kernel = wdt::CostKernel::EdgeGradient;
   float baseCost = 0.05f;
   float scale = 1.0f;  // fixed-point units per unit of cost (growthStepCost, wdt/step_cost.h)
+  // Empty, or one byte per voxel: non-zero where growth may not enter (GrowthParams' range limit).
+  // Only the CPU engine and the exact reference read it (the front end picks the CPU for it).
+  std::vector<std::uint8_t> blocked;
 };
+
+// The density an engine relaxes voxel v with: wdt::kBlockedDensity where blocked, else the byte's.
+inline float densityOf(const GrowthProblem& p, std::size_t v) {
+  return !p.blocked.empty() && p.blocked[v] ? wdt::kBlockedDensity : wdt::densityFromByte(p.density[v]);
+}
 
 // One update's change of the seeds, worked out by the front end. Applied in this order: every
 // voxel whose label is in `resetLabels` goes back to (+infinity, kNoLabel); then every seed of

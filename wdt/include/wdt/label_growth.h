@@ -55,6 +55,18 @@ struct GrowthParams {
   // |Δf| along a path falls several-fold, so noisy data (µCT) no longer makes travel as dear as
   // edges. segment/growth_settings.h picks it from the data.
   float smoothingVoxels = 0;
+  // With smoothingVoxels > 0: 0 blurs with the Gaussian above; > 0 smooths preserving edges
+  // (bilateral, radius ⌈2·smoothingVoxels⌉ ≤ 3 voxels): neighbours whose stored value differs by
+  // more than a few edgeSigma (stored-value units) hardly count, so edges well above the noise stay
+  // sharp — thin bone keeps its voxels — while the noise inside tissues averages out.
+  float edgeSigma = 0;
+  // Range limit ("bone only"): with limitRange, growth never enters a voxel whose stored value lies
+  // outside rangeMin … rangeMax, nor passes through one; such voxels keep label 0 unless they are
+  // seeds themselves (painted voxels keep their label, but do not spread from outside the range).
+  // Limited growth runs on the CPU (the CUDA engine has no range limit; `cuda` is refused).
+  bool limitRange = false;
+  float rangeMin = 0;
+  float rangeMax = 0;
   WdtBackend backend = WdtBackend::Auto;
 };
 

@@ -28,8 +28,11 @@
 namespace at::wdt {
 
 // The cost kernels. Uniform weights (w = 1) make both rules the same cost, len, bit for bit
-// (½(1 + 1)·len = len), so both map to EnterUniform. Gradient and ascent weights belong to the
-// step a → b, not to a voxel; both rules then charge w(a→b)·|step|.
+// (½(1 + 1)·len = len), so both map to EnterUniform. Gradient and ascent costs belong to the
+// step a → b, not to a voxel, and are physical: base·len for the travel plus the intensity change
+// |f(b) − f(a)| (ascent: only a rise) not scaled by the step length — a path's intensity part is
+// the total change of f along it, so crossing an edge costs its contrast once at 0.1 mm or 1 mm
+// voxels and along an axis or a diagonal, while travel costs base per mm.
 enum class CostKernel { EnterDensity, EnterUniform, TrapezoidDensity, EdgeGradient, EdgeAscent };
 
 AT_HOST_DEVICE constexpr CostKernel costKernel(StepRule rule, WeightRule weight) {
@@ -70,10 +73,10 @@ AT_FORCE_INLINE float stepCostFromDensity(float fa, float fb, float len, float b
   } else if constexpr (K == CostKernel::TrapezoidDensity) {
     return trapezoidStepCost(base + fa, base + fb, len);
   } else if constexpr (K == CostKernel::EdgeGradient) {
-    return enteringStepCost(base + absf_portable(fb - fa), len);
+    return base * len + absf_portable(fb - fa);
   } else {
     const float rise = fb - fa;
-    return enteringStepCost(base + (rise > 0.0f ? rise : 0.0f), len);
+    return base * len + (rise > 0.0f ? rise : 0.0f);
   }
 }
 
@@ -126,9 +129,16 @@ constexpr std::int32_t kGrowthInf = 0x7FFFFFFF;  // not reached (yet)
 // and kNoLabel), so that vector units compare them with their signed compares.
 constexpr std::int32_t kNoLabel = 0x7FFFFFFF;
 
-// The fixed-point cost of the step a → b (densities fa, fb as in stepCostFromDensity).
+// The density a growth engine gives a voxel that growth may not enter (outside the params' range
+// limit, label_growth.h): every step into or out of it costs kGrowthInf, so no label reaches it
+// through growth and none passes through it.
+constexpr float kBlockedDensity = -1.0f;
+
+// The fixed-point cost of the step a → b (densities fa, fb as in stepCostFromDensity, or
+// kBlockedDensity: then kGrowthInf).
 template <CostKernel K>
 AT_FORCE_INLINE std::int32_t growthStepCost(float fa, float fb, float len, float base, float scale) {
+  if (fa < 0.0f || fb < 0.0f) return kGrowthInf;
   const std::int32_t c = std::int32_t(stepCostFromDensity<K>(fa, fb, len, base) * scale + 0.5f);
   return c < 1 ? 1 : c;
 }
@@ -158,7 +168,8 @@ AT_FORCE_INLINE void relaxLabelledVoxel(std::int32_t& d, std::int32_t& l, const 
   std::int32_t label = d == best ? l : kNoLabel;
   AT_UNROLL for (int dc = 0; dc < 3; ++dc)
     AT_UNROLL for (int db = 0; db < 3; ++db) {
-      const std::int32_t candidate = c[dc][db] == best ? nl[dc][db] : kNoLabel;
+      // A candidate at +infinity (a blocked step, or an unreached neighbour) carries no label.
+      const std::int32_t candidate = c[dc][db] == best && best != kGrowthInf ? nl[dc][db] : kNoLabel;
       label = candidate < label ? candidate : label;
     }
   d = best;
@@ -174,11 +185,16 @@ AT_FORCE_INLINE std::uint64_t packGrowthKey(std::int32_t d, std::int32_t l) {
 AT_FORCE_INLINE std::int32_t growthKeyDistance(std::uint64_t key) { return std::int32_t(std::uint32_t(key >> 32)); }
 AT_FORCE_INLINE std::int32_t growthKeyLabel(std::uint64_t key) { return std::int32_t(std::uint32_t(key)); }
 
-// Smallest and largest weight (cost per mm) a kernel can produce; the exact reference sizes its
-// buckets from them.
-inline void weightRange(CostKernel k, float base, float& lo, float& hi) {
+// Bounds on the cost per mm of a step of a kernel, for grids whose shortest step is
+// `shortestStepMm`: every step a → b of length len costs at least lo·len and at most hi·len (the
+// edge kernels' intensity part, at most 1 per step, is at most 1/shortestStepMm per mm). The exact
+// reference sizes its buckets and the growth its fixed-point scale from them.
+inline void weightRange(CostKernel k, float base, float shortestStepMm, float& lo, float& hi) {
   if (k == CostKernel::EnterUniform) {
     lo = hi = 1.0f;
+  } else if (k == CostKernel::EdgeGradient || k == CostKernel::EdgeAscent) {
+    lo = base;
+    hi = base + 1.0f / shortestStepMm;
   } else {
     lo = base;
     hi = base + 1.0f;

@@ -21,8 +21,10 @@ namespace at {
 
 enum class StepRule { Entering, Trapezoid };
 // Density: w = base + window(HU) (0..1, quantised to 8 bits). Uniform: w = 1 everywhere (the
-// non-weighted distance the paper compares against). Gradient: w = base + |f(b) − f(a)|;
-// Ascent: w = base + max(f(b) − f(a), 0) (the paper's other options; f = window(HU)).
+// non-weighted distance the paper compares against). Gradient: a step a → b of length len costs
+// base·len + |f(b) − f(a)|; Ascent: base·len + max(f(b) − f(a), 0) (the paper's other options;
+// f = window(HU)). In both, travel costs base per mm and crossing an edge costs its contrast once,
+// whatever the voxel size or the step's direction (wdt/step_cost.h).
 enum class WeightRule { Density, Uniform, Gradient, Ascent };
 enum class WdtBackend { Auto, Cpu, Cuda };
 

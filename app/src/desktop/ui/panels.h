@@ -176,6 +176,8 @@ class SegmentPanel {
   float minDiameterMm_ = 0;
   float marginMm_ = 1.0f;          // margin grow/shrink and hollow thickness
   std::string newLabel_, exportPath_, error_, seedsPath_ = "seeds.json";
+  std::string system_;          // the system field of the current structure (edited, not yet applied)
+  int systemLabel_ = -1;        // the structure system_ was read from
 };
 
 // The course editor window (instructors): a new course on the dataset on screen, a stored one to

@@ -106,6 +106,14 @@ void SegmentPanel::drawLabels(SegmentController& editor, int listLines) {
     ImGui::PopID();
   }
   ImGui::EndChild();
+  // The current structure's system (browsing group), stored with "Save into the dataset".
+  for (const Structure& s : editor.structures()) {
+    if (s.label != editor.currentLabel()) continue;
+    if (systemLabel_ != s.label) systemLabel_ = s.label, system_ = s.system;
+    ImGui::SetNextItemWidth(line * 12);
+    if (ImGui::InputTextWithHint("system", "system, e.g. skull bones", &system_, ImGuiInputTextFlags_EnterReturnsTrue))
+      report(editor.setSystem(s.label, system_));
+  }
   ImGui::SetNextItemWidth(line * 12);
   ImGui::InputTextWithHint("##new", "new label name", &newLabel_);
   ImGui::SameLine();
@@ -183,8 +191,10 @@ void SegmentPanel::drawTools(SegmentController& editor) {
 }
 
 void SegmentPanel::drawGrowthSettings(SegmentController& editor) {
-  // The growth's step cost: (base + |intensity difference in the window|) per mm. Defaults come
-  // from the data; a change grows again at once when a growth is on screen (the live preview).
+  // The growth's step cost: base per mm of travel plus the intensity change in the window (an
+  // edge costs its contrast once). Defaults come from the data; a change grows again at once when
+  // a growth is on screen (the live preview). "Grow only into" limits growth to a value range
+  // (bone only by default: the data's bone range); voxels outside it are labelled only by paint.
   SegmentController::GrowthSettings s = editor.growthSettings();
   ImGui::TextWrapped("defaults from the data: %s", editor.growthDefaults().summary.c_str());
   float base = float(s.basePerVoxel);
@@ -198,10 +208,25 @@ void SegmentPanel::drawGrowthSettings(SegmentController& editor) {
   ImGui::SetNextItemWidth(ImGui::GetFontSize() * 14);
   changed |= ImGui::SliderFloat("smoothing (voxels)", &smoothing, 0.0f, 3.0f, "%.1f");
   ImGui::TextDisabled("  lower base: labels follow edges further; window: the values that matter");
+  bool limit = s.limitRange;
+  float range[2] = {float(s.range[0]), float(s.range[1])};
+  changed |= ImGui::Checkbox("grow only into", &limit);
+  ImGui::SameLine();
+  ImGui::SetNextItemWidth(ImGui::GetFontSize() * 10);
+  changed |= ImGui::InputFloat2("##range", range, "%.0f", ImGuiInputTextFlags_EnterReturnsTrue);
+  ImGui::SameLine();
+  if (ImGui::SmallButton("bone")) {
+    limit = true;
+    range[0] = float(editor.growthDefaults().boneRangeValues[0]);
+    range[1] = float(editor.growthDefaults().boneRangeValues[1]);
+    changed = true;
+  }
   if (changed) {  // latest wins: a drag regrows with the newest value, cancelling the one before
     s.basePerVoxel = base;
     s.window = {window[0], window[1]};
     s.smoothingVoxels = smoothing;
+    s.limitRange = limit;
+    s.range = {range[0], range[1]};
     report(editor.setGrowthSettings(s));
   }
   if (ImGui::Button("Data defaults")) editor.resetGrowthSettings();

@@ -1,0 +1,90 @@
+// Range-limited growth ("bone only", GrowthParams::limitRange): on fresh random volumes the CPU
+// engine equals the exact reference bit for bit, no voxel outside the range is taken by growth, and
+// every grown voxel is joined to a seed of its label through voxels inside the range.
+#include <doctest/doctest.h>
+
+#include <deque>
+#include <random>
+
+#include "growth_cases.h"
+#include "test_support.h"
+#include "wdt/label_growth.h"
+
+using namespace at;
+using namespace at::test;
+
+TEST_CASE("Range-limited growth: exact, never enters voxels outside the range, never passes through them") {
+  std::mt19937_64 rng(test::freshSeed("range-limited growth"));
+  const Dims sizes[] = {{17, 1, 9}, {16, 16, 16}, {33, 20, 7}, {40, 37, 35}};
+  for (const Dims& dims : sizes) {
+    const Volume volume = randomVolume(rng, dims);
+    GrowthParams params = randomParams(rng);
+    params.limitRange = true;
+    params.rangeMin = float(std::uniform_int_distribution<int>(-1000, 500)(rng));
+    params.rangeMax = params.rangeMin + float(std::uniform_int_distribution<int>(200, 2000)(rng));
+    const int labels = std::uniform_int_distribution<int>(2, 5)(rng);
+    const std::vector<GrowthSeed> seeds = randomSeeds(rng, dims, labels, std::max(labels, int(dims.count() / 400) + 2));
+    CAPTURE(dims.toString());
+    CAPTURE(params.rangeMin);
+    CAPTURE(params.rangeMax);
+    auto growth = LabelGrowth::create(volume, params);
+    REQUIRE(growth);
+    REQUIRE(growth->update(seeds));
+    requireEqualToExact(*growth, volume, seeds, params);
+    const auto inRange = [&](std::size_t v) {
+      return volume.voxels[v] >= params.rangeMin && volume.voxels[v] <= params.rangeMax;
+    };
+    std::vector<int> seedLabel(dims.count(), -1);
+    for (const GrowthSeed& s : seeds) seedLabel[s.index] = s.label;
+    // Flood from each seed inside the range through in-range voxels of its label (26-neighbours):
+    // every voxel the growth labelled must be reached, or be a seed.
+    std::vector<char> reached(dims.count(), 0);
+    std::deque<std::size_t> queue;
+    for (const GrowthSeed& s : seeds)
+      if (growth->labels().voxels[s.index] == s.label) reached[s.index] = 1, queue.push_back(s.index);
+    std::size_t outsideTaken = 0, grown = 0;
+    while (!queue.empty()) {
+      const std::size_t v = queue.front();
+      queue.pop_front();
+      if (!inRange(v)) continue;  // a seed outside the range does not spread
+      const int x = int(v % std::size_t(dims.x)), y = int(v / std::size_t(dims.x) % std::size_t(dims.y)),
+                z = int(v / (std::size_t(dims.x) * std::size_t(dims.y)));
+      for (int dz = -1; dz <= 1; ++dz)
+        for (int dy = -1; dy <= 1; ++dy)
+          for (int dx = -1; dx <= 1; ++dx) {
+            if (!dims.contains(x + dx, y + dy, z + dz)) continue;
+            const std::size_t u = dims.index(x + dx, y + dy, z + dz);
+            if (reached[u] || !inRange(u) || growth->labels().voxels[u] != growth->labels().voxels[v]) continue;
+            reached[u] = 1;
+            queue.push_back(u);
+          }
+    }
+    std::size_t unexplained = 0;
+    for (std::size_t v = 0; v < dims.count(); ++v) {
+      if (seedLabel[v] >= 0) continue;
+      if (!inRange(v)) outsideTaken += growth->labels().voxels[v] != 0;
+      else if (growth->labels().voxels[v] != 0 || reached[v]) ++grown, unexplained += !reached[v];
+    }
+    CHECK(outsideTaken == 0);
+    CHECK(unexplained == 0);
+    MESSAGE(dims.toString() << ": " << grown << " voxels grown inside the range");
+  }
+}
+
+TEST_CASE("Range-limited growth refuses an empty range and the cuda backend") {
+  Geometry g;
+  g.dims = {4, 4, 4};
+  const Volume volume(g);
+  GrowthParams params;
+  params.limitRange = true;
+  params.rangeMin = 10;
+  params.rangeMax = 5;
+  auto bad = LabelGrowth::create(volume, params);
+  REQUIRE(!bad);
+  CHECK(bad.error().message.find("range limit") != std::string::npos);
+  params.rangeMax = 20;
+  params.backend = WdtBackend::Cuda;
+  auto cuda = LabelGrowth::create(volume, params);
+  REQUIRE(!cuda);
+  CHECK(cuda.error().message.find("CPU only") != std::string::npos);
+}
