@@ -10,6 +10,7 @@
 #include "dataset_resolver.h"
 #include "db/dataset_store.h"
 #include "volume/known_scans.h"
+#include "render/derived_preset.h"
 #include "render/field_scale.h"
 #include "render/structure_pick.h"
 #include "render/volume_preset.h"
@@ -129,6 +130,9 @@ Status DesktopModel::open() {
 
 Status DesktopModel::showDataset(Dataset dataset, const std::string& startStructure, const std::string& startPreset) {
   auto next = std::make_unique<Dataset>(std::move(dataset));
+  // The CT table, headrest and other objects outside the body are no context: left out here as the
+  // render command leaves them out (derived_preset.h), before anything reads the volume.
+  render::leaveOutNonAnatomy(next->volume, next->labels, render::summariseIntensities(next->volume));
   if (expert_ && expertOn()) setExpert(false);
   if (auto st = explore_.setDataset(*next, startStructure, startPreset); !st) return st;
   fields_.reset();  // it refers to the dataset being replaced

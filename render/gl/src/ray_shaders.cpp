@@ -45,6 +45,7 @@ uniform float uFrontFactor;     // context opacity factor in front of the struct
 uniform vec3 uMaskBoxLo;        // the structure's box, texture coordinates
 uniform vec3 uMaskBoxHi;
 uniform float uDistanceScale;   // log2(alpha) / distance unit
+uniform float uBandN;           // outline: the band's n (render_settings.h, outlineBandN); < 0: none
 uniform vec2 uDataRange;
 uniform vec2 uVisibleHu;
 uniform vec2 uTableSize;
@@ -212,6 +213,13 @@ vec4 castRay(vec2 pixel) {
       if (uHasField != 0) {
         d = texture(uField, oF + tm * dF).r;
         n = normalisedDistance(d);
+        if (uBandN >= 0.0) {
+          // Outline: the n over this sample's step nearest the band, so a band thinner than a step
+          // is drawn wherever the step crosses it rather than where a sample happens to land in it.
+          float na = normalisedDistance(texture(uField, oF + (tm - 0.5 * uStepMm) * dF).r);
+          float nb = normalisedDistance(texture(uField, oF + (tm + 0.5 * uStepMm) * dF).r);
+          n = clamp(uBandN, min(na, nb), max(na, nb));
+        }
       }
       vec4 c = tableAt(hu, n);
       float alpha = c.a * surface * (tm < frontT ? uFrontFactor : 1.0);

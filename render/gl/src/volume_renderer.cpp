@@ -765,6 +765,7 @@ Status VolumeRenderer::prepareState(const RenderSettings& s, bool interactive) {
     glUniform3f(loc("uMaskBoxHi"), float(box[3]) / float(vd.x), float(box[4]) / float(vd.y), float(box[5]) / float(vd.z));
   }
   glUniform1f(loc("uDistanceScale"), float(std::log2(double(s.preset.alpha)) / s.distanceUnit));
+  glUniform1f(loc("uBandN"), outlineBandN(s.preset));
   glUniform2f(loc("uDataRange"), float(table.dataMin), float(table.dataMax));
   const std::array<float, 2> visibleHu = st.tableVisibility.visibleHu();
   glUniform2f(loc("uVisibleHu"), visibleHu[0], visibleHu[1]);

@@ -93,6 +93,10 @@ class ShadingTableCache {
 };
 double effectiveStepMm(const Geometry& volumeGrid, const RenderSettings& settings);
 double effectiveOpacityRefMm(const Geometry& volumeGrid, const RenderSettings& settings);
+// Outline mode's band: the n at which the distance TF is most opaque; −1 for every other mode. Over
+// each step the ray caster (and pick) use the n of the step nearest this one, so that a band in D
+// thinner than a step is drawn where the ray crosses it instead of as speckle where a sample lands.
+float outlineBandN(const Preset& preset);
 // The surface ramp's factor for edge strength g (HU per voxel).
 float surfaceFactor(const Preset& preset, float strength);
 // The value the ray caster composites: opacity corrected from `opacityRefMm` to the step.
