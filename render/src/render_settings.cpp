@@ -223,12 +223,12 @@ PickResult pick(const SceneVolumes& scene, const RenderSettings& s, const Transf
     float n = 0;
     if (fg) {
       const double d = trilinear(*scene.field, fg->patientToIndex(p), [](float v) { return std::isinf(v) ? 1e30 : double(v); });
-      n = normaliseDistance(float(d / s.distanceUnit), alphaF);
+      n = normaliseDistance(float(std::max(0.0, d - s.distanceOffset) / s.distanceUnit), alphaF);
       if (bandN >= 0) {  // as the ray caster: the n over this step nearest the outline's band
         const auto nAt = [&](double at) {
           const double da = trilinear(*scene.field, fg->patientToIndex(ray.origin + at * ray.direction),
                                       [](float v) { return std::isinf(v) ? 1e30 : double(v); });
-          return normaliseDistance(float(da / s.distanceUnit), alphaF);
+          return normaliseDistance(float(std::max(0.0, da - s.distanceOffset) / s.distanceUnit), alphaF);
         };
         const float na = nAt(tm - 0.5 * step), nb = nAt(tm + 0.5 * step);
         n = std::clamp(bandN, std::min(na, nb), std::max(na, nb));

@@ -128,6 +128,7 @@ View viewOf(const Scan& scan, std::uint16_t label, const Preset& preset, const s
   View v{std::move(wdt->field.distances), *settings, {}};
   v.scale = fieldScale(v.field, scan.ds.volume, nullptr, *frame, denseLevel(preset), request.margin, request.minRadiusMm);
   v.settings.distanceUnit = v.scale.distanceUnit;
+  v.settings.distanceOffset = v.scale.distanceOffset;
   v.settings.background = {0, 0, 0, 0};
   v.settings.jitter = false;
   return v;

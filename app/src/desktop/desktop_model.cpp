@@ -363,16 +363,20 @@ std::optional<RenderPlan> DesktopModel::planFrame(Clock::time_point now) {
   return scheduler_.plan(explore_.revision(), explore_.activity(), now, full);
 }
 
-double DesktopModel::distanceUnitOf(const ExploreState::Shown& shown, const render::StructureFrame& frame) const {
+render::FieldScale DesktopModel::fieldScaleOf(const ExploreState::Shown& shown, const render::StructureFrame& frame) const {
   const DistanceField* field = fields_ ? fields_->pickField() : nullptr;
-  if (!field || explore_.fieldLabel() != shown.label) return render::distanceUnitFor(frame);
+  if (!field || explore_.fieldLabel() != shown.label) {
+    render::FieldScale bySize;
+    bySize.distanceUnit = render::distanceUnitFor(frame);
+    return bySize;
+  }
   const double dense = render::denseLevel(shown.preset);
   // Once per field (and data TF): one pass over a subsample of the field near the structure.
   if (fieldUnit_.field != field || fieldUnit_.label != shown.label || fieldUnit_.denseLevel != dense) {
     fieldUnit_ = {field, shown.label, dense,
-                  render::fieldScale(field->distances, dataset_->volume, nullptr, frame, dense).distanceUnit};
+                  render::fieldScale(field->distances, dataset_->volume, nullptr, frame, dense)};
   }
-  return fieldUnit_.unit;
+  return fieldUnit_.scale;
 }
 
 render::RenderSettings DesktopModel::renderSettings(const RenderPlan& plan) const {
@@ -382,7 +386,11 @@ render::RenderSettings DesktopModel::renderSettings(const RenderPlan& plan) cons
   s.camera = explore_.camera();
   // The distance unit from the shown field (render/field_scale.h), as the render command sets it;
   // until the field is there, from the structure's size.
-  if (const render::StructureFrame* frame = explore_.frameOf(shown.label)) s.distanceUnit = distanceUnitOf(shown, *frame);
+  if (const render::StructureFrame* frame = explore_.frameOf(shown.label)) {
+    const render::FieldScale scale = fieldScaleOf(shown, *frame);
+    s.distanceUnit = scale.distanceUnit;
+    s.distanceOffset = scale.distanceOffset;
+  }
   s.width = plan.width;
   s.height = plan.height;
   s.stepMm = render::effectiveStepMm(dataset_->volume.geometry, render::RenderSettings{}) * plan.stepFactor;
