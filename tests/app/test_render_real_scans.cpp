@@ -280,9 +280,10 @@ TEST_CASE("Skull CT: t from 0 to 1 changes the WDT image, and at t = 0 the conte
 TEST_CASE("Abdominal CT: t from 0 to 1 changes the WDT image, and at t = 0 the context fades inside the view") {
   auto abdomen = abdomenOrSkip();
   if (!abdomen) return;
-  // On the 3 mm abdomen the slider changes less than on the skull (measured 5–6 levels for L1, under
-  // 1 for the kidney, whose bone in view is all near: bench/RESULTS.md): the bar here is lower.
-  checkFadesAndSlides(*abdomen, {{"vertebrae_l1", "anterior", true, 4.0}, {"kidney_right", "anterior", true, 0.0}});
+  // On the 3 mm abdomen the slider changes less than on the skull: bone covers a few per cent of
+  // these frames. Measured floors, not the issue's 8 levels: L1 5.4, the kidney 1.7 (0.6 before the
+  // narrow-spread stretch of field_scale.h, kFarQuantileX).
+  checkFadesAndSlides(*abdomen, {{"vertebrae_l1", "anterior", true, 4.0}, {"kidney_right", "anterior", true, 1.0}});
 }
 
 TEST_CASE("Skull CT: WDT and non-weighted differ, and the structure keeps its hue in every mode") {
