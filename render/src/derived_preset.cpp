@@ -89,7 +89,8 @@ std::vector<TfPoint> increasing(std::vector<TfPoint> points) {
 constexpr std::array<float, 3> kBone{0.96f, 0.93f, 0.86f};
 constexpr std::array<float, 3> kOrange{1.0f, 0.5f, 0.12f};
 constexpr std::array<float, 3> kGreen{0.1f, 0.85f, 0.3f};
-constexpr std::array<float, 3> kWarm{1.0f, 0.75f, 0.45f};
+// Lighting's context: neutral, so that the only colour on it is the structure's light (Eq. 6).
+constexpr std::array<float, 3> kNeutral{0.92f, 0.92f, 0.92f};
 
 // The bone surfaces' data TF: zero below the dense band, `peak` opacity from its median, a little
 // less up to its 99th percentile (thin dense walls matter more than thick dense bone).
@@ -212,22 +213,28 @@ Preset derivedPreset(const IntensityLevels& l, RenderMode mode, const std::strin
     case RenderMode::Bare:
     case RenderMode::Unweighted:
       break;
-    case RenderMode::Fuzzy:  // Eqs. 4–5: the highlight fading over the bone
+    case RenderMode::Fuzzy:  // Eqs. 4–5: the highlight fading over the bone next to the structure
       p.t = 0.12f;
-      p.distanceTf = withColour(kOrange, {{0, 0}, {0.35, 0}, {0.65, 0.5f}, {0.92, 1}, {1, 1}});
+      // Full colour within x ≈ 0.2 units, 0.6 at x ≈ 0.9, none beyond x ≈ 2 (n = 0.55): the median
+      // bone in view (x = kContextQuantileX) keeps its own colour, so the gradient stays near the
+      // structure.
+      p.distanceTf = withColour(kOrange, {{0, 0}, {0.55, 0}, {0.8, 0.6f}, {0.95, 1}, {1, 1}});
       break;
     case RenderMode::Outline:  // the bone surface everywhere, a thin band at one weighted distance
       p.t = 1;
       p.contextInFront = 1;  // the band is on the surface in front
       p.dataTf = boneTf(l, 0.9f, 0.9f);
-      p.distanceTf = withColour(kGreen, {{0, 0}, {0.83, 0}, {0.865, 1}, {0.9, 0}, {1, 0}});
+      p.distanceTf = withColour(kGreen, {{0, 0}, {0.845, 0}, {0.865, 1}, {0.885, 0}, {1, 0}});
       break;
     case RenderMode::Lighting:  // Eq. 6: the structure lights the bone around it
       p.t = 0.25f;
       p.dataTf = boneTf(l, 0.3f, 0.3f);
-      p.distanceTf = withColour(kBone, {{0, 0}, {0.3, 0}, {0.6, 1}, {1, 1}});
-      p.highlightRgb = kWarm;
-      p.lightingAlpha = 0.8f;
+      for (TfPoint& q : p.dataTf) std::copy(kNeutral.begin(), kNeutral.end(), q.rgba.begin());
+      p.distanceTf = withColour(kNeutral, {{0, 0}, {0.3, 0}, {0.6, 1}, {1, 1}});
+      // The structure is the light: drawn in its own colour, which is the colour it casts.
+      // k_a = β/(α·x + 1)²: 1.8 at the structure, 0.2 at x = 0.5, 0.025 at the median bone in view
+      // (x = 1.9), so the light falls off inside the view and the far bone is lit only neutrally.
+      p.lightingAlpha = 4.0f;
       p.lightingBeta = 1.8f;
       break;
   }

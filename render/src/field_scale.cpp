@@ -88,7 +88,17 @@ FieldScale fieldScale(const FloatVolume& field, const Volume& volume, const Mask
   const auto q = d.begin() + std::ptrdiff_t(kContextQuantile * double(d.size() - 1));
   std::nth_element(d.begin(), q, d.end());
   out.quantileD = *q;
+  const auto qFar = d.begin() + std::ptrdiff_t(kFarQuantile * double(d.size() - 1));
+  std::nth_element(q, qFar, d.end());
+  out.farQuantileD = *qFar;
   out.distanceUnit = std::max(1e-6, out.quantileD / kContextQuantileX);
+  // A narrow spread (the far quantile short of kFarQuantileX): the map D → x is stretched about the
+  // context quantile so the far quantile lands at kFarQuantileX, x = (D − offset) / unit.
+  const double spread = out.farQuantileD - out.quantileD;
+  if (spread > 0 && spread / out.distanceUnit < kFarQuantileX - kContextQuantileX) {
+    out.distanceUnit = std::max(1e-6, spread / (kFarQuantileX - kContextQuantileX));
+    out.distanceOffset = std::max(0.0, out.quantileD - kContextQuantileX * out.distanceUnit);
+  }
   out.derived = true;
   return out;
 }

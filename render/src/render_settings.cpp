@@ -121,6 +121,14 @@ double effectiveOpacityRefMm(const Geometry& g, const RenderSettings& s) {
   return std::min({g.spacingMm[0], g.spacingMm[1], g.spacingMm[2]});
 }
 
+float outlineBandN(const Preset& preset) {
+  if (preset.mode != RenderMode::Outline || preset.distanceTf.empty()) return -1.0f;
+  const TfPoint* best = &preset.distanceTf.front();
+  for (const TfPoint& q : preset.distanceTf)
+    if (q.rgba[3] > best->rgba[3]) best = &q;
+  return float(best->x);
+}
+
 float surfaceFactor(const Preset& p, float strength) {
   const float lo = p.surfaceGradientHu[0], hi = p.surfaceGradientHu[1];
   float ramp = 1;
@@ -166,6 +174,7 @@ PickResult pick(const SceneVolumes& scene, const RenderSettings& s, const Transf
   const bool structure = scene.labels && scene.selected != 0;
   const float structureAlpha = bare ? 1.0f : s.preset.structureOpacity;
   const float alphaF = s.preset.alpha;
+  const float bandN = outlineBandN(s.preset);
   const Geometry* fg = scene.field ? &scene.field->geometry : nullptr;
   double accumulated = 0, prevMask = 0;
   const auto finish = [&](const Vec3& p, const Vec3& ijk, std::optional<std::uint16_t> label) {
@@ -214,7 +223,16 @@ PickResult pick(const SceneVolumes& scene, const RenderSettings& s, const Transf
     float n = 0;
     if (fg) {
       const double d = trilinear(*scene.field, fg->patientToIndex(p), [](float v) { return std::isinf(v) ? 1e30 : double(v); });
-      n = normaliseDistance(float(d / s.distanceUnit), alphaF);
+      n = normaliseDistance(float(std::max(0.0, d - s.distanceOffset) / s.distanceUnit), alphaF);
+      if (bandN >= 0) {  // as the ray caster: the n over this step nearest the outline's band
+        const auto nAt = [&](double at) {
+          const double da = trilinear(*scene.field, fg->patientToIndex(ray.origin + at * ray.direction),
+                                      [](float v) { return std::isinf(v) ? 1e30 : double(v); });
+          return normaliseDistance(float(std::max(0.0, da - s.distanceOffset) / s.distanceUnit), alphaF);
+        };
+        const float na = nAt(tm - 0.5 * step), nb = nAt(tm + 0.5 * step);
+        n = std::clamp(bandN, std::min(na, nb), std::max(na, nb));
+      }
     }
     float surface = 1;
     if (scene.gradients && !scene.gradients->empty()) {

@@ -6,6 +6,7 @@
 #include <doctest/doctest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -15,6 +16,8 @@
 #include <vector>
 
 #include "dataset_resolver.h"
+#include "headless_desktop.h"
+#include "learning_session.h"
 #include "render/derived_preset.h"
 #include "render/field_scale.h"
 #include "render/gl/egl_context.h"
@@ -125,6 +128,7 @@ View viewOf(const Scan& scan, std::uint16_t label, const Preset& preset, const s
   View v{std::move(wdt->field.distances), *settings, {}};
   v.scale = fieldScale(v.field, scan.ds.volume, nullptr, *frame, denseLevel(preset), request.margin, request.minRadiusMm);
   v.settings.distanceUnit = v.scale.distanceUnit;
+  v.settings.distanceOffset = v.scale.distanceOffset;
   v.settings.background = {0, 0, 0, 0};
   v.settings.jitter = false;
   return v;
@@ -164,6 +168,72 @@ double hueOf(double r, double g, double b) {
   if (mx - mn < 1e-9) return -1000;  // grey: no hue
   double h = mx == r ? (g - b) / (mx - mn) : mx == g ? 2 + (b - r) / (mx - mn) : 4 + (r - g) / (mx - mn);
   return std::fmod(h * 60 + 360, 360);
+}
+
+
+// Image measures for the modes (Figs. 5–7): pixels in a hue, distances from the structure's
+// silhouette, the thickness of a band.
+struct Hsv {
+  double h, s, v;
+};
+Hsv hsvAt(const RgbaImage& im, std::size_t i) {
+  const double r = im.rgba[i * 4] / 255.0, g = im.rgba[i * 4 + 1] / 255.0, b = im.rgba[i * 4 + 2] / 255.0;
+  const double mx = std::max({r, g, b}), mn = std::min({r, g, b});
+  return {hueOf(r, g, b), mx > 0 ? (mx - mn) / mx : 0.0, mx};
+}
+double hueGap(double a, double b) {
+  const double d = std::fabs(a - b);
+  return std::min(d, 360 - d);
+}
+// Whether pixel i is drawn in the colour `rgb` (hue within 25°, saturated, not dark).
+bool inColour(const RgbaImage& im, std::size_t i, const std::array<float, 3>& rgb) {
+  const Hsv c = hsvAt(im, i);
+  return im.rgba[i * 4 + 3] >= 26 && c.s >= 0.35 && c.v >= 0.15 && c.h >= 0 && hueGap(c.h, hueOf(rgb[0], rgb[1], rgb[2])) <= 25;
+}
+// City-block distance in pixels from the set (0 inside it).
+std::vector<int> distanceFrom(const std::vector<bool>& set, int w, int h) {
+  std::vector<int> d(set.size(), 1 << 20);
+  for (std::size_t i = 0; i < set.size(); ++i)
+    if (set[i]) d[i] = 0;
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      int& v = d[std::size_t(y * w + x)];
+      if (x > 0) v = std::min(v, d[std::size_t(y * w + x - 1)] + 1);
+      if (y > 0) v = std::min(v, d[std::size_t((y - 1) * w + x)] + 1);
+    }
+  for (int y = h - 1; y >= 0; --y)
+    for (int x = w - 1; x >= 0; --x) {
+      int& v = d[std::size_t(y * w + x)];
+      if (x + 1 < w) v = std::min(v, d[std::size_t(y * w + x + 1)] + 1);
+      if (y + 1 < h) v = std::min(v, d[std::size_t((y + 1) * w + x)] + 1);
+    }
+  return d;
+}
+// A band's thickness in pixels: twice its area over its boundary length (a strip of width w and
+// length L has area wL and boundary about 2L); and the share of its pixels with at most one of
+// their 8 neighbours in it (speckle rather than a band).
+struct BandShape {
+  std::size_t pixels = 0;
+  double thicknessPx = 0, isolatedShare = 0;
+};
+BandShape bandShape(const std::vector<bool>& band, int w, int h) {
+  BandShape out;
+  std::size_t boundary = 0, isolated = 0;
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      if (!band[std::size_t(y * w + x)]) continue;
+      ++out.pixels;
+      const auto on = [&](int xx, int yy) { return xx >= 0 && yy >= 0 && xx < w && yy < h && band[std::size_t(yy * w + xx)]; };
+      boundary += !on(x - 1, y) + !on(x + 1, y) + !on(x, y - 1) + !on(x, y + 1);
+      int neighbours = 0;
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dx = -1; dx <= 1; ++dx) neighbours += (dx || dy) && on(x + dx, y + dy);
+      isolated += neighbours <= 1;
+    }
+  if (out.pixels == 0) return out;
+  out.thicknessPx = 4.0 * double(out.pixels) / double(std::max<std::size_t>(1, boundary));
+  out.isolatedShare = double(isolated) / double(out.pixels);
+  return out;
 }
 
 struct Case {
@@ -210,9 +280,10 @@ TEST_CASE("Skull CT: t from 0 to 1 changes the WDT image, and at t = 0 the conte
 TEST_CASE("Abdominal CT: t from 0 to 1 changes the WDT image, and at t = 0 the context fades inside the view") {
   auto abdomen = abdomenOrSkip();
   if (!abdomen) return;
-  // On the 3 mm abdomen the slider changes less than on the skull (measured 5–6 levels for L1, under
-  // 1 for the kidney, whose bone in view is all near: bench/RESULTS.md): the bar here is lower.
-  checkFadesAndSlides(*abdomen, {{"vertebrae_l1", "anterior", true, 4.0}, {"kidney_right", "anterior", true, 0.0}});
+  // On the 3 mm abdomen the slider changes less than on the skull: bone covers a few per cent of
+  // these frames. Measured floors, not the issue's 8 levels: L1 5.4, the kidney 1.7 (0.6 before the
+  // narrow-spread stretch of field_scale.h, kFarQuantileX).
+  checkFadesAndSlides(*abdomen, {{"vertebrae_l1", "anterior", true, 4.0}, {"kidney_right", "anterior", true, 1.0}});
 }
 
 TEST_CASE("Skull CT: WDT and non-weighted differ, and the structure keeps its hue in every mode") {
@@ -282,4 +353,106 @@ TEST_CASE("The derived distance unit follows the voxel size: the same anatomy at
     // and t still matters on the µCT
     CHECK(meanGreyChange(iff, draw(*gl, fine, sf->label, vf, 1)) >= 8.0);
   }
+}
+
+TEST_CASE("Skull CT: each mode reads as its figure - outline a thin band, fuzzy colour near the structure, lighting in its colour") {
+  auto skull = skullOrSkip();
+  if (!skull) return;
+  Gl* gl = glOrSkip();
+  if (!gl) return;
+  struct Sight {
+    const char* structure;
+    const char* view;
+  };
+  for (const Sight& sight : {Sight{"zygomatic_arch_left", "lateral_left"}, Sight{"external_acoustic_meatus_right", "lateral_right"},
+                             Sight{"frontal_sinus", "anterior"}}) {
+    const std::string id = sight.structure;
+    CAPTURE(id);
+    const Structure* s = skull->ds.findStructure(id);
+    REQUIRE(s);
+    const std::size_t n = std::size_t(kSize) * kSize;
+    const RgbaImage bare =
+        draw(*gl, *skull, s->label, viewOf(*skull, s->label, derivedPreset(skull->levels, RenderMode::Bare, id), sight.view), 0);
+    std::vector<bool> silhouette(n);
+    for (std::size_t i = 0; i < n; ++i) silhouette[i] = bare.rgba[i * 4 + 3] >= 250;
+    const std::vector<int> fromStructure = distanceFrom(silhouette, kSize, kSize);
+    const auto render = [&](RenderMode mode) {
+      const Preset p = derivedPreset(skull->levels, mode, id);
+      return std::pair{p, draw(*gl, *skull, s->label, viewOf(*skull, s->label, p, sight.view), p.t)};
+    };
+
+    // Outline (Fig. 6): the band's colour lies on the bone as a thin, connected band.
+    {
+      const auto [p, im] = render(RenderMode::Outline);
+      std::vector<bool> band(n);
+      for (std::size_t i = 0; i < n; ++i) band[i] = !silhouette[i] && inColour(im, i, {p.distanceTf[2].rgba[0], p.distanceTf[2].rgba[1], p.distanceTf[2].rgba[2]});
+      const BandShape shape = bandShape(band, kSize, kSize);
+      MESSAGE(id << " outline: band " << 100.0 * double(shape.pixels) / double(n) << " % of the frame, " << shape.thicknessPx
+                  << " px thick, " << 100 * shape.isolatedShare << " % isolated pixels");
+      CHECK(shape.pixels > 40);
+      // (a band, not a wall: where the band's shell of constant D runs along the bone surface it
+      // widens — 7.4 px on the ear canal's temporal bone at 160 px)
+      CHECK(shape.thicknessPx <= 8.0);
+      CHECK(shape.isolatedShare < 0.10);
+    }
+    // Fuzzy (Fig. 5) and lighting (Fig. 7): the structure's colour on the context lies near it.
+    for (RenderMode mode : {RenderMode::Fuzzy, RenderMode::Lighting}) {
+      const std::string modeName = toString(mode);
+      CAPTURE(modeName);
+      const auto [p, im] = render(mode);
+      std::size_t nearDrawn = 0, nearTinted = 0, farDrawn = 0, farTinted = 0;
+      double farSaturation = 0;
+      for (std::size_t i = 0; i < n; ++i) {
+        if (silhouette[i] || im.rgba[i * 4 + 3] < 26 || hsvAt(im, i).v < 0.15) continue;
+        const bool tinted = inColour(im, i, p.highlightRgb);
+        if (fromStructure[i] <= 8) {
+          ++nearDrawn;
+          nearTinted += tinted;
+        } else if (fromStructure[i] >= 30) {
+          ++farDrawn;
+          farTinted += tinted;
+          farSaturation += hsvAt(im, i).s;
+        }
+      }
+      REQUIRE(nearDrawn > 50);
+      const double nearShare = double(nearTinted) / double(nearDrawn);
+      const double farShare = farDrawn ? double(farTinted) / double(farDrawn) : 0.0;
+      const double farSat = farDrawn ? farSaturation / double(farDrawn) : 0.0;
+      MESSAGE(id << " " << std::string(toString(mode)) << ": in the structure's colour " << 100 * nearShare << " % of the context within 8 px, "
+                  << 100 * farShare << " % beyond 30 px (mean saturation there " << farSat << ")");
+      CHECK(nearShare >= 0.15);
+      CHECK(nearShare >= 3 * farShare);  // confined to the neighbourhood
+      CHECK(farShare <= 0.15);
+      CHECK(farSat <= 0.25);  // the far bone is bone-coloured, not tinted (sepia)
+    }
+  }
+}
+
+TEST_CASE("The desktop leaves out the CT headrest as the render command does: both see one volume") {
+  auto skull = skullOrSkip();  // prepared as `render` prepares it
+  if (!skull) return;
+  app::DatasetRequest request;
+  request.name = "skull";
+  auto raw = app::openNamedDataset(request);
+  REQUIRE(raw);
+  std::size_t cleared = 0;  // denser than air and left out: the headrest and the table
+  for (std::size_t i = 0; i < raw->volume.voxels.size(); ++i)
+    cleared += raw->volume.voxels[i] >= -300 && raw->volume.voxels[i] != skull->ds.volume.voxels[i];
+  MESSAGE("voxels of -300 HU or more outside the body, left out: " << cleared);
+  REQUIRE(cleared > 1000);  // the scan has a headrest to leave out
+
+  test::TempDir dir("render-real-desktop");
+  auto session = app::LearningSession::open((dir / "t.db").string());
+  REQUIRE_MESSAGE(session, test::errorText(session));
+  const PresetLibrary library(test::sourceDir() / "data" / "presets");
+  app::DesktopOptions options;
+  options.dataset = "skull";
+  options.scripted = true;
+  options.renderScale = 0.4;
+  app::DesktopModel model(**session, library, options, [](nlohmann::json) {}, [](const std::string&) {});
+  test::HeadlessOptions layout;
+  model.setLayout(test::headlessLayout(layout));
+  auto opened = model.open();
+  REQUIRE_MESSAGE(opened, test::errorText(opened));
+  CHECK(model.dataset().volume.voxels == skull->ds.volume.voxels);
 }

@@ -185,10 +185,12 @@ int runRender(const Argv& argv) {
     const render::FieldScale scale = render::fieldScale(field->distances, dataset->volume, nullptr, *frame,
                                                         render::denseLevel(*preset), request.margin, request.minRadiusMm);
     settings->distanceUnit = scale.distanceUnit * request.contextScale;
+    settings->distanceOffset = scale.distanceOffset;
     const double scaleMs =
         std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - scaleStart).count();
     unitNote = "; distance unit " + formatUnit(settings->distanceUnit) +
-               (scale.derived ? " (median bone D " + formatUnit(scale.quantileD) + "; by size " +
+               (scale.distanceOffset > 0 ? ", offset " + formatUnit(scale.distanceOffset) : std::string()) +
+               (scale.derived ? " (median bone D " + formatUnit(scale.quantileD) + ", 90 % " + formatUnit(scale.farQuantileD) + "; by size " +
                                    formatUnit(render::distanceUnitFor(*frame, request.contextScale)) + ")"
                               : " (from its size)") +
                ", " + formatUnit(scaleMs) + " ms";

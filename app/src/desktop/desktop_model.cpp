@@ -10,6 +10,7 @@
 #include "dataset_resolver.h"
 #include "db/dataset_store.h"
 #include "volume/known_scans.h"
+#include "render/derived_preset.h"
 #include "render/field_scale.h"
 #include "render/structure_pick.h"
 #include "render/volume_preset.h"
@@ -129,6 +130,9 @@ Status DesktopModel::open() {
 
 Status DesktopModel::showDataset(Dataset dataset, const std::string& startStructure, const std::string& startPreset) {
   auto next = std::make_unique<Dataset>(std::move(dataset));
+  // The CT table, headrest and other objects outside the body are no context: left out here as the
+  // render command leaves them out (derived_preset.h), before anything reads the volume.
+  render::leaveOutNonAnatomy(next->volume, next->labels, render::summariseIntensities(next->volume));
   if (expert_ && expertOn()) setExpert(false);
   if (auto st = explore_.setDataset(*next, startStructure, startPreset); !st) return st;
   fields_.reset();  // it refers to the dataset being replaced
@@ -359,16 +363,20 @@ std::optional<RenderPlan> DesktopModel::planFrame(Clock::time_point now) {
   return scheduler_.plan(explore_.revision(), explore_.activity(), now, full);
 }
 
-double DesktopModel::distanceUnitOf(const ExploreState::Shown& shown, const render::StructureFrame& frame) const {
+render::FieldScale DesktopModel::fieldScaleOf(const ExploreState::Shown& shown, const render::StructureFrame& frame) const {
   const DistanceField* field = fields_ ? fields_->pickField() : nullptr;
-  if (!field || explore_.fieldLabel() != shown.label) return render::distanceUnitFor(frame);
+  if (!field || explore_.fieldLabel() != shown.label) {
+    render::FieldScale bySize;
+    bySize.distanceUnit = render::distanceUnitFor(frame);
+    return bySize;
+  }
   const double dense = render::denseLevel(shown.preset);
   // Once per field (and data TF): one pass over a subsample of the field near the structure.
   if (fieldUnit_.field != field || fieldUnit_.label != shown.label || fieldUnit_.denseLevel != dense) {
     fieldUnit_ = {field, shown.label, dense,
-                  render::fieldScale(field->distances, dataset_->volume, nullptr, frame, dense).distanceUnit};
+                  render::fieldScale(field->distances, dataset_->volume, nullptr, frame, dense)};
   }
-  return fieldUnit_.unit;
+  return fieldUnit_.scale;
 }
 
 render::RenderSettings DesktopModel::renderSettings(const RenderPlan& plan) const {
@@ -378,7 +386,11 @@ render::RenderSettings DesktopModel::renderSettings(const RenderPlan& plan) cons
   s.camera = explore_.camera();
   // The distance unit from the shown field (render/field_scale.h), as the render command sets it;
   // until the field is there, from the structure's size.
-  if (const render::StructureFrame* frame = explore_.frameOf(shown.label)) s.distanceUnit = distanceUnitOf(shown, *frame);
+  if (const render::StructureFrame* frame = explore_.frameOf(shown.label)) {
+    const render::FieldScale scale = fieldScaleOf(shown, *frame);
+    s.distanceUnit = scale.distanceUnit;
+    s.distanceOffset = scale.distanceOffset;
+  }
   s.width = plan.width;
   s.height = plan.height;
   s.stepMm = render::effectiveStepMm(dataset_->volume.geometry, render::RenderSettings{}) * plan.stepFactor;

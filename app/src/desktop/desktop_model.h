@@ -28,6 +28,7 @@
 #include "import_controller.h"
 #include "learning_session.h"
 #include "lesson_controller.h"
+#include "render/field_scale.h"
 #include "render/gradient_volume.h"
 #include "render/render_settings.h"
 #include "render/structure_pick.h"
@@ -256,10 +257,12 @@ class DesktopModel {
     const DistanceField* field = nullptr;
     std::uint16_t label = 0;
     double denseLevel = 0;
-    double unit = 1;
+    render::FieldScale scale;
   };
   mutable FieldUnit fieldUnit_;
-  double distanceUnitOf(const ExploreState::Shown& shown, const render::StructureFrame& frame) const;
+  // The shown field's distance unit and offset (render/field_scale.h); from the structure's size
+  // until its field is there.
+  render::FieldScale fieldScaleOf(const ExploreState::Shown& shown, const render::StructureFrame& frame) const;
   render::GradientVolume gradients_;
   mutable render::ShadingTableCache pickTables_;  // pickAt is const; the cache only saves work
   std::uint64_t datasetRevision_ = 0;

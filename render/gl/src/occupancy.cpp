@@ -248,7 +248,7 @@ void computeContextLayers(const OccupancyInputs& in, int kLo, int kHi, std::vect
             for (int r = 0; r < 3; ++r) extent[std::size_t(r)] += std::fabs(columns[a][std::size_t(r)]) * (half + 0.5);
           }
           const float dMin = in.field->minInIndexBox(c - extent, c + extent);
-          const double x = double(dMin) * double(in.log2Alpha) / double(in.distanceUnit);
+          const double x = std::max(0.0, double(dMin) - double(in.distanceOffset)) * double(in.log2Alpha) / double(in.distanceUnit);
           const double nMax = std::isfinite(dMin) ? 2.0 / (1.0 + std::exp2(std::min(x, 126.0))) : 0.0;
           r1 = in.table->rowOf(nMax);
         }

@@ -91,6 +91,7 @@ struct OccupancyInputs {
   const FieldBlockMinima* field = nullptr; // null or invalid: every distance possible
   float log2Alpha = 1;                     // distance normalisation: n = 2 / (1 + 2^(d·log2Alpha/unit))
   float distanceUnit = 1;
+  float distanceOffset = 0;                // d' = max(0, d − offset) before the unit (render_settings.h)
   std::uint16_t selected = 0;
 };
 

@@ -45,6 +45,8 @@ uniform float uFrontFactor;     // context opacity factor in front of the struct
 uniform vec3 uMaskBoxLo;        // the structure's box, texture coordinates
 uniform vec3 uMaskBoxHi;
 uniform float uDistanceScale;   // log2(alpha) / distance unit
+uniform float uDistanceOffset;  // subtracted from D (clamped at 0) before the unit
+uniform float uBandN;           // outline: the band's n (render_settings.h, outlineBandN); < 0: none
 uniform vec2 uDataRange;
 uniform vec2 uVisibleHu;
 uniform vec2 uTableSize;
@@ -64,7 +66,7 @@ uniform vec4 uBackground;
 float maskAt(vec3 t) { return texture(uMask, t).r; }
 
 float normalisedDistance(float d) {
-  return 2.0 / (1.0 + exp2(min(d * uDistanceScale, 126.0)));
+  return 2.0 / (1.0 + exp2(min(max(d - uDistanceOffset, 0.0) * uDistanceScale, 126.0)));
 }
 
 vec4 tableAt(float hu, float n) {
@@ -212,6 +214,13 @@ vec4 castRay(vec2 pixel) {
       if (uHasField != 0) {
         d = texture(uField, oF + tm * dF).r;
         n = normalisedDistance(d);
+        if (uBandN >= 0.0) {
+          // Outline: the n over this sample's step nearest the band, so a band thinner than a step
+          // is drawn wherever the step crosses it rather than where a sample happens to land in it.
+          float na = normalisedDistance(texture(uField, oF + (tm - 0.5 * uStepMm) * dF).r);
+          float nb = normalisedDistance(texture(uField, oF + (tm + 0.5 * uStepMm) * dF).r);
+          n = clamp(uBandN, min(na, nb), max(na, nb));
+        }
       }
       vec4 c = tableAt(hu, n);
       float alpha = c.a * surface * (tm < frontT ? uFrontFactor : 1.0);
@@ -220,13 +229,13 @@ vec4 castRay(vec2 pixel) {
       if (RAY_SHADING != 0) {
         vec3 nrm = strength > 1e-3 ? g * (uMaxStrength / strength) : vec3(0.0);
         if (RAY_MODE == 2) {
-          float ka = uLighting.y / pow(uLighting.x * min(d, 1e6) + 1.0, 2.0);
+          float ka = uLighting.y / pow(uLighting.x * min(max(d - uDistanceOffset, 0.0), 1e6) + 1.0, 2.0);
           rgb = rgb * (ka * uHighlight) + 0.2 * shade(rgb, nrm, dir);
         } else {
           rgb = shade(rgb, nrm, dir);
         }
       } else if (RAY_MODE == 2) {
-        float ka = uLighting.y / pow(uLighting.x * min(d, 1e6) + 1.0, 2.0);
+        float ka = uLighting.y / pow(uLighting.x * min(max(d - uDistanceOffset, 0.0), 1e6) + 1.0, 2.0);
         rgb = rgb * (ka * uHighlight + 0.25);
       }
       acc.rgb += (1.0 - acc.a) * alpha * clamp(rgb, 0.0, 1.0);

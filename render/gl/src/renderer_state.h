@@ -35,7 +35,7 @@ struct OccupancyKey {
   bool context = true;
   float surfaceLo = 0;
   bool surfaceFloor = false;
-  float log2Alpha = 0, distanceUnit = 0;
+  float log2Alpha = 0, distanceUnit = 0, distanceOffset = 0;
   bool operator==(const OccupancyKey&) const = default;
 };
 

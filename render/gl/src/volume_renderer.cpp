@@ -661,6 +661,7 @@ Status VolumeRenderer::prepareState(const RenderSettings& s, bool interactive) {
     key.fieldGeneration = st.fieldGeneration;
     key.log2Alpha = std::log2(s.preset.alpha);
     key.distanceUnit = float(s.distanceUnit);
+    key.distanceOffset = float(s.distanceOffset);
   }
   const Clock::time_point occupancyStart = Clock::now();
   const auto inputsFor = [&](const OccupancyKey& k) {
@@ -673,6 +674,7 @@ Status VolumeRenderer::prepareState(const RenderSettings& s, bool interactive) {
     in.field = k.fieldGeneration != 0 ? &st.fieldMinima : nullptr;
     in.log2Alpha = k.log2Alpha;
     in.distanceUnit = k.distanceUnit;
+    in.distanceOffset = k.distanceOffset;
     return in;
   };
   const auto contextGrid = [&](const OccupancyKey& k) {
@@ -689,7 +691,7 @@ Status VolumeRenderer::prepareState(const RenderSettings& s, bool interactive) {
     if (fieldUsed && interactive) {
       OccupancyKey freeKey = contextKey;
       freeKey.fieldGeneration = 0;
-      freeKey.log2Alpha = freeKey.distanceUnit = 0;
+      freeKey.log2Alpha = freeKey.distanceUnit = freeKey.distanceOffset = 0;
       if (!st.fieldFreeKey || !(*st.fieldFreeKey == freeKey)) {
         st.fieldFreeOccupancy = contextGrid(freeKey);
         st.fieldFreeKey = freeKey;
@@ -765,6 +767,8 @@ Status VolumeRenderer::prepareState(const RenderSettings& s, bool interactive) {
     glUniform3f(loc("uMaskBoxHi"), float(box[3]) / float(vd.x), float(box[4]) / float(vd.y), float(box[5]) / float(vd.z));
   }
   glUniform1f(loc("uDistanceScale"), float(std::log2(double(s.preset.alpha)) / s.distanceUnit));
+  glUniform1f(loc("uBandN"), outlineBandN(s.preset));
+  glUniform1f(loc("uDistanceOffset"), float(s.distanceOffset));
   glUniform2f(loc("uDataRange"), float(table.dataMin), float(table.dataMax));
   const std::array<float, 2> visibleHu = st.tableVisibility.visibleHu();
   glUniform2f(loc("uVisibleHu"), visibleHu[0], visibleHu[1]);

@@ -8,7 +8,7 @@
 // lies within D ≈ 1 of the mandible. A unit fixed in millimetres (or taken from the structure's
 // size) puts every voxel of a real scan in the distance TF's "near" band, so t does nothing.
 //
-// The unit: the context voxels are the field's voxels within the framed view's reach of the
+// The unit (and offset, see kFarQuantileX): the context voxels are the field's voxels within the framed view's reach of the
 // structure (a sphere about its centroid of radius margin × its radius, at least minRadiusMm)
 // that are bone surfaces as the preset's data TF draws it (stored value at or above the level
 // where the data TF reaches half its peak opacity, with a 6-neighbour below it: only surfaces are
@@ -36,10 +36,19 @@ constexpr double kContextQuantile = 0.5;
 // x of the median bone in view: 1.9 units. Chosen so the phantom's structures keep about the unit
 // their size gave them (cochlea ≈ 1, canals ≈ 0.7; bench/RESULTS.md has the table).
 constexpr double kContextQuantileX = 1.9;
+// The far quantile of the bone in view lands at x ≥ kFarQuantileX (f = 0.34: the shipped distance
+// TFs have faded it to about a quarter). Where the bone's weighted distances are spread narrowly —
+// on an abdominal CT every bone is reached through the same soft tissue, D of the 10th to the 90th
+// percentile within a factor 2.3 — no bone is far at x = D / unit, so nothing fades and t adds
+// nothing; there the map is stretched about the context quantile: x = (D − offset) / unit.
+constexpr double kFarQuantile = 0.9;
+constexpr double kFarQuantileX = 3.5;
 constexpr std::size_t kMaxScaleSamples = 1u << 18;
 
 struct FieldScale {
-  double distanceUnit = 1;      // D / distanceUnit is the presets' x
+  double distanceUnit = 1;      // (D − distanceOffset) / distanceUnit is the presets' x (clamped at 0)
+  double distanceOffset = 0;    // 0 unless the spread is narrow (kFarQuantileX)
+  double farQuantileD = 0;      // the measured kFarQuantile quantile of D
   double quantileD = 0;         // the measured quantile of D over the context voxels
   std::size_t contextVoxels = 0;  // voxels the quantile was taken over (0: fell back)
   bool derived = false;         // false: too few context voxels, the size-based unit is kept

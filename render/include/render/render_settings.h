@@ -2,7 +2,8 @@
 // preset, the camera and clipping plane. The GL ray caster (render/gl) and CPU picking read the same
 // settings and classify samples the same way, so a pick returns what the user sees.
 //
-// Sample classification per mode (s = HU, D = distance field, n = f(D / distanceUnit) = 2/(1+α^(D/unit))):
+// Sample classification per mode (s = HU, D = distance field, D' = max(0, D − distanceOffset),
+// n = f(D' / distanceUnit) = 2/(1+α^(D'/unit)); Eq. 6 below on D' too):
 //   context (every mode but bare):
 //     wdt, unweighted, outline, lighting: rgba = table(s, n), the 2-D TF of Algorithm 1.
 //     fuzzy (Eqs. 4–5): w = distTF(n).A; K'd = Kd(1−w) + Kh·w interpolated in CIE XYZ, Kd = dataTF(s).RGB,
@@ -46,6 +47,8 @@ struct RenderSettings {
   double distanceUnit = 1;             // weighted distances are divided by this before f(x) and Eq. 6;
                                        // framing sets it from the structure's size (scene.h), and once
                                        // the field is known from the field (field_scale.h)
+  double distanceOffset = 0;           // D' = max(0, D − offset) is what the unit divides (field_scale.h:
+                                       // a scan whose bone in view lies in a narrow band of D)
   std::array<float, 4> background{0, 0, 0, 0};  // composited under the volume (straight RGBA)
   bool jitter = true;                  // per-pixel ray start offsets (deterministic hash)
   bool shading = true;                 // Phong from gradients
@@ -93,6 +96,10 @@ class ShadingTableCache {
 };
 double effectiveStepMm(const Geometry& volumeGrid, const RenderSettings& settings);
 double effectiveOpacityRefMm(const Geometry& volumeGrid, const RenderSettings& settings);
+// Outline mode's band: the n at which the distance TF is most opaque; −1 for every other mode. Over
+// each step the ray caster (and pick) use the n of the step nearest this one, so that a band in D
+// thinner than a step is drawn where the ray crosses it instead of as speckle where a sample lands.
+float outlineBandN(const Preset& preset);
 // The surface ramp's factor for edge strength g (HU per voxel).
 float surfaceFactor(const Preset& preset, float strength);
 // The value the ray caster composites: opacity corrected from `opacityRefMm` to the step.
