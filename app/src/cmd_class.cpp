@@ -147,6 +147,16 @@ int runRole(const cli::Args& args) {
   return 0;
 }
 
+// The mean score of the graded exams a student handed in (as a percentage, or as a share for
+// CSV); "" when none was handed in.
+std::string examScore(const db::StudentClassProgress& s, bool percent) {
+  if (!s.examScore) return "";
+  char text[32];
+  if (percent) std::snprintf(text, sizeof text, "%.0f%%", 100 * *s.examScore);
+  else std::snprintf(text, sizeof text, "%.3f", *s.examScore);
+  return text;
+}
+
 int runClassProgress(const cli::Args& args) {
   if (args.positional().size() != 2) return reportError("class progress: give the class CODE");
   auto code = db::normalizeClassCode(args.positional()[1]);
@@ -157,21 +167,24 @@ int runClassProgress(const cli::Args& args) {
   auto progress = db::classProgress(*server, *code, args.user().value_or(""));
   if (!progress) return reportError("class progress: " + progress.error().message);
   if (args.has("csv")) {
-    terminalPrintf("student,answers,correct,structures,lessons_started,lessons_finished,last_active_unix,withdrawn\n");
+    terminalPrintf("student,answers,correct,structures,lessons_started,lessons_finished,last_active_unix,withdrawn,"
+                   "exams_handed_in,exam_score\n");
     for (const auto& s : progress->students)
-      terminalPrintf("%s,%d,%d,%d,%d,%d,%s,%s\n", quiz::csvQuoted(s.userName).c_str(), s.answers, s.correct, s.structures,
-                  s.lessonsStarted, s.lessonsFinished, s.lastActive ? std::to_string(*s.lastActive).c_str() : "",
-                  quiz::csvQuoted(s.withdrawal.value_or("")).c_str());
+      terminalPrintf("%s,%d,%d,%d,%d,%d,%s,%s,%d,%s\n", quiz::csvQuoted(s.userName).c_str(), s.answers, s.correct,
+                     s.structures, s.lessonsStarted, s.lessonsFinished,
+                     s.lastActive ? std::to_string(*s.lastActive).c_str() : "",
+                     quiz::csvQuoted(s.withdrawal.value_or("")).c_str(), s.examsHandedIn, examScore(s, false).c_str());
     return 0;
   }
   terminalPrintf("Class %s — %s: %s, %s received\n\n", progress->info.code.c_str(), progress->info.title.c_str(),
               str::countOf(long(progress->students.size()), "student").c_str(),
               str::countOf(long(progress->events), "event").c_str());
-  terminalPrintf("%-20s %8s %6s %11s %8s %9s  %s\n", "student", "answers", "right", "structures", "lessons", "finished",
-              "last active");
+  terminalPrintf("%-20s %8s %6s %11s %8s %9s %11s  %s\n", "student", "answers", "right", "structures", "lessons",
+                 "finished", "exam score", "last active");
   for (const auto& s : progress->students)
-    terminalPrintf("%-20s %8d %6s %11d %8d %9d  %s%s\n", s.userName.c_str(), s.answers, share(s.correct, s.answers).c_str(),
-                s.structures, s.lessonsStarted, s.lessonsFinished, when(s.lastActive).c_str(),
+    terminalPrintf("%-20s %8d %6s %11d %8d %9d %11s  %s%s\n", s.userName.c_str(), s.answers,
+                   share(s.correct, s.answers).c_str(), s.structures, s.lessonsStarted, s.lessonsFinished,
+                   examScore(s, true).c_str(), when(s.lastActive).c_str(),
                 s.withdrawal ? ("  (withdrawn: " + *s.withdrawal + ")").c_str() : "");
   if (!progress->structures.empty()) {
     terminalPrintf("\n%-24s %9s %8s %6s\n", "structure", "students", "answers", "right");

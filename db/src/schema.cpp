@@ -6,6 +6,7 @@
 // JSON documents as TEXT. No pixel data and no patient identifiers are ever stored.
 #include "schema.h"
 
+#include "class_exam_sql.h"
 #include "class_security_sql.h"
 
 #include <algorithm>
@@ -520,6 +521,8 @@ const std::vector<Migration>& migrations() {
        classSecuritySql(), {}, true},
       {16, "study trials: viewing times not measured are blank (NULL), not 0", kUnmeasuredViewingBlank, {}, false,
        kUnmeasuredViewingBlankPostgres},
+      {17, "class server: graded exams, their keys readable by no login, graded and scored by the server",
+       classExamSql(), {}, true},
   };
   return all;
 }
