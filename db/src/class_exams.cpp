@@ -109,13 +109,18 @@ Result<ClassExamSitting> startClassExam(Database& server, const std::string& cod
         });
   });
   if (!status) return tl::unexpected(status.error());
-  auto exam = server.prepare("SELECT title, pass_score FROM class_exams WHERE class_code = ?1 AND exam_id = ?2");
+  auto exam = server.prepare(
+      "SELECT x.title, x.pass_score, EXISTS (SELECT 1 FROM class_exam_sittings s WHERE s.class_code = x.class_code"
+      " AND s.exam_id = x.exam_id AND s.user_name = coalesce(nullif(?3, ''), session_user::text) AND s.finished_at IS NOT NULL)"
+      " FROM class_exams x WHERE x.class_code = ?1 AND x.exam_id = ?2");
   if (!exam) return tl::unexpected(exam.error());
-  exam->bind(1, code).bind(2, examId);
+  exam->bind(1, code).bind(2, examId).bind(3, by.value_or(""));
   if (auto row = exam->step(); !row) return tl::unexpected(row.error());
   else if (*row) {
     out.title = exam->text(0);
     out.passScore = exam->optionalReal(1);
+    const std::string done = exam->text(2);
+    out.handedIn = done == "t" || done == "true" || done == "1";
   }
   auto items = server.prepare(
       "SELECT position, kind, prompt, choices, locate_view, scene, picture FROM class_exam_items"

@@ -156,7 +156,9 @@ TEST_CASE("ClassExam_KeysNeverReachAStudent_GradesAreTheServersAndForgeriesChang
   CHECK(result->items[2].correct);
   CHECK_FALSE(result->items[3].answered);
   CHECK(count(eve, "SELECT count(*) FROM class_exam_answers") == 3);
-  // After handing in: nothing more is graded.
+  // After handing in: nothing more is graded, and a new start says so.
+  CHECK(startClassExam(eve, c.code, "ex", std::nullopt)->handedIn);
+  CHECK_FALSE(sitting->handedIn);
   CHECK_FALSE(answerClassExam(eve, c.code, "ex", 3, {0, std::nullopt, std::nullopt, std::nullopt, 0}, std::nullopt));
 
   // The class's progress shows the exam; closing hands sam's open sitting in; both are audited.

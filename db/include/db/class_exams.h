@@ -61,6 +61,7 @@ struct ClassExamSitting {
   std::optional<double> passScore;
   std::vector<ClassExamItem> items;
   std::set<int> answered;           // positions
+  bool handedIn = false;            // this member's sitting is finished (finishClassExam gives its results)
 };
 // Starts the member's sitting (or returns the one started).
 Result<ClassExamSitting> startClassExam(Database& server, const std::string& code, const std::string& examId,
