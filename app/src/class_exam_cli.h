@@ -6,6 +6,7 @@
 
 #include "cli_args.h"
 #include "learning_session.h"
+#include "lessons/xapi.h"
 #include "terminal_answers.h"
 
 namespace at::app {
@@ -19,5 +20,10 @@ int runClassCloseExam(const cli::Args& args);
 // machine's to give (no class, the exam not open there, or the server not reachable: practice).
 std::optional<int> runServerExam(LearningSession& session, const std::string& userName, const std::string& examId,
                                  AnswerSource& source, const std::optional<std::string>& viewsDir, bool noViews);
+
+// The graded exams of class `code` on `server` as xAPI learner records (each member's sittings
+// with their graded answers; the items carry their choices but not their keys, which stay on the
+// server), for an instructor's or coordinator's login.
+Result<std::vector<lessons::LearnerRecords>> classExamLearners(db::Database& server, const std::string& code);
 
 }  // namespace at::app

@@ -302,4 +302,56 @@ std::optional<int> runServerExam(LearningSession& ls, const std::string& userNam
   return 0;
 }
 
+Result<std::vector<lessons::LearnerRecords>> classExamLearners(db::Database& server, const std::string& code) {
+  auto sittings = db::classExamSittings(server, code);
+  if (!sittings) return tl::unexpected(sittings.error());
+  auto answers = db::classExamAnswers(server, code);
+  if (!answers) return tl::unexpected(answers.error());
+  std::vector<lessons::LearnerRecords> out;
+  for (const db::ClassExamSittingRow& s : *sittings) {
+    if (out.empty() || out.back().user.name != s.userName) {
+      out.emplace_back();
+      out.back().user.name = s.userName;
+    }
+    lessons::ExamRecord record;
+    record.attempt.examId = s.examId;
+    record.attempt.courseId = s.courseId;
+    record.attempt.startedAt = s.startedAt;
+    record.attempt.finishedAt = s.finishedAt;
+    record.attempt.score = s.score.value_or(0);
+    record.attempt.passed = s.passed;
+    for (const db::ClassExamAnswerRow& a : *answers) {
+      if (a.userName != s.userName || a.examId != s.examId) continue;
+      lessons::ExamItem item;
+      item.position = a.position;
+      item.question.question.id = s.examId + "." + code + ".item" + std::to_string(a.position + 1);  // per class: its own draw
+      item.question.question.kind = a.kind == "locate"     ? quiz::QuestionKind::Locate
+                                    : a.kind == "identify" ? quiz::QuestionKind::Identify
+                                                           : quiz::QuestionKind::Name;
+      item.question.choices = a.choices;
+      const auto given = nlohmann::json::parse(a.answerJson, nullptr, false);
+      quiz::Answer answer;
+      if (given.is_object()) {
+        if (given.contains("choice") && given["choice"].is_number_integer()) answer.choice = given["choice"].get<int>();
+        if (given.contains("text") && given["text"].is_string()) answer.text = given["text"].get<std::string>();
+        if (given.contains("pick") && given["pick"].is_object()) {
+          quiz::Pick pick;
+          const auto& p = given["pick"];
+          if (p.contains("structure") && p["structure"].is_string()) pick.structure = p["structure"].get<std::string>();
+          if (p.contains("distance_mm") && p["distance_mm"].is_number()) pick.distanceMm = p["distance_mm"].get<double>();
+          answer.pick = pick;
+        }
+      }
+      item.answer = answer;
+      item.correct = a.correct;
+      item.score = a.score;
+      item.latencyMs = a.latencyMs;
+      item.answeredAt = a.answeredAt;
+      record.items.push_back(std::move(item));
+    }
+    out.back().exams.push_back(std::move(record));
+  }
+  return out;
+}
+
 }  // namespace at::app

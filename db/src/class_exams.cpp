@@ -203,15 +203,35 @@ Result<std::vector<ClassExamSittingRow>> classExamSittings(Database& server, con
   std::vector<ClassExamSittingRow> out;
   if (server.backend() != Backend::Postgres) return out;
   auto s = server.prepare(
-      "SELECT user_name, exam_id, started_at, finished_at, score, passed FROM class_exam_sittings"
-      " WHERE class_code = ?1 ORDER BY user_name, started_at, exam_id");
+      "SELECT s.user_name, s.exam_id, x.course_id, s.started_at, s.finished_at, s.score, s.passed"
+      " FROM class_exam_sittings s JOIN class_exams x ON x.class_code = s.class_code AND x.exam_id = s.exam_id"
+      " WHERE s.class_code = ?1 ORDER BY s.user_name, s.started_at, s.exam_id");
   if (!s) return tl::unexpected(s.error());
   s->bind(1, code);
   auto status = forEachRow(*s, [&](Statement& r) -> Status {
-    ClassExamSittingRow row{r.text(0), r.text(1), r.int64(2), std::nullopt, r.optionalReal(4), std::nullopt};
-    if (!r.isNull(3)) row.finishedAt = r.int64(3);
-    if (!r.isNull(5)) row.passed = r.integer(5) != 0;
+    ClassExamSittingRow row{r.text(0), r.text(1), r.text(2), r.int64(3), std::nullopt, r.optionalReal(5), std::nullopt};
+    if (!r.isNull(4)) row.finishedAt = r.int64(4);
+    if (!r.isNull(6)) row.passed = r.integer(6) != 0;
     out.push_back(std::move(row));
+    return {};
+  });
+  if (!status) return tl::unexpected(status.error());
+  return out;
+}
+
+Result<std::vector<ClassExamAnswerRow>> classExamAnswers(Database& server, const std::string& code) {
+  std::vector<ClassExamAnswerRow> out;
+  if (server.backend() != Backend::Postgres) return out;
+  auto s = server.prepare(
+      "SELECT a.user_name, a.exam_id, a.position, i.kind, i.choices, a.answer, a.correct, a.score, a.latency_ms,"
+      " a.answered_at FROM class_exam_answers a JOIN class_exam_items i ON i.class_code = a.class_code"
+      " AND i.exam_id = a.exam_id AND i.position = a.position WHERE a.class_code = ?1"
+      " ORDER BY a.user_name, a.exam_id, a.position");
+  if (!s) return tl::unexpected(s.error());
+  s->bind(1, code);
+  auto status = forEachRow(*s, [&](Statement& r) -> Status {
+    out.push_back({r.text(0), r.text(1), r.integer(2), r.text(3), stringArray(r.text(4)), r.text(5), r.integer(6) != 0,
+                   r.real(7), r.int64(8), r.int64(9)});
     return {};
   });
   if (!status) return tl::unexpected(status.error());

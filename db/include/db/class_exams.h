@@ -95,12 +95,26 @@ Result<ClassExamResult> finishClassExam(Database& server, const std::string& cod
 
 // One sitting as an instructor sees it (`class progress`, xapi).
 struct ClassExamSittingRow {
-  std::string userName, examId;
+  std::string userName, examId, courseId;
   std::int64_t startedAt = 0;
   std::optional<std::int64_t> finishedAt;
   std::optional<double> score;
   std::optional<bool> passed;
 };
 Result<std::vector<ClassExamSittingRow>> classExamSittings(Database& server, const std::string& code);
+
+// One graded answer as an instructor sees it (xapi): the item as shown, the answer as given (JSON:
+// {choice}, {text} or {pick: {structure, distance_mm}}) and the server's grade.
+struct ClassExamAnswerRow {
+  std::string userName, examId;
+  int position = 0;
+  std::string kind;
+  std::vector<std::string> choices;
+  std::string answerJson;
+  bool correct = false;
+  double score = 0;
+  std::int64_t latencyMs = 0, answeredAt = 0;
+};
+Result<std::vector<ClassExamAnswerRow>> classExamAnswers(Database& server, const std::string& code);
 
 }  // namespace at::db
