@@ -21,6 +21,9 @@
 #include "db/class_server.h"
 #include "db/course_store.h"
 #include "db/sqlite_repositories.h"
+#include "db/study_store.h"
+#include "db/study_withdrawal.h"
+#include "quiz/study_protocol.h"
 #include "lessons/lesson_engine.h"
 #include "secure_class.h"
 #include "test_databases.h"
@@ -192,7 +195,7 @@ TEST_CASE("A student login holds no write on any table: update, delete, truncate
   // times), stays the owner role's, with row-level security on the class tables.
   CHECK(count(c.admin, "SELECT COUNT(*) FROM pg_tables WHERE schemaname = current_schema()"
                        " AND tableowner <> 'at_class_owner'") == 0);
-  CHECK(count(c.admin, "SELECT COUNT(*) FROM pg_tables WHERE schemaname = current_schema() AND rowsecurity") == 9);
+  CHECK(count(c.admin, "SELECT COUNT(*) FROM pg_tables WHERE schemaname = current_schema() AND rowsecurity") == 13);
   CHECK(count(c.admin, "SELECT COUNT(*) FROM information_schema.columns WHERE table_schema = current_schema()"
                        " AND table_name = 'study_trials' AND column_name IN ('view_ms_a', 'view_ms_b')"
                        " AND is_nullable = 'YES'") == 2);
@@ -239,10 +242,13 @@ TEST_CASE("A student reads only her own rows: no one else's answers, no A/B keys
   Database samServer = openAt(c.samUrl);
   Database instructor = openAt(c.instructorUrl);
 
-  // What a student may read at all: her class, her membership, her events (and the schema version).
+  // What a student may read at all: her class, her membership, her events, the class's exams (and
+  // the schema version); the study tables only as their owner, so for her no row of them.
   const std::set<std::string> readable = {"at_schema_version", "classes",           "class_members",
                                           "class_events",      "class_audit",       "class_exams",
-                                          "class_exam_items",  "class_exam_sittings", "class_exam_answers"};
+                                          "class_exam_items",  "class_exam_sittings", "class_exam_answers",
+                                          "studies",           "study_participants", "study_trials",
+                                          "study_ratings"};
   for (const std::string& table : serverTables(c.admin)) {
     CAPTURE(table);
     auto s = samServer.prepare("SELECT COUNT(*) FROM " + table);
@@ -254,6 +260,18 @@ TEST_CASE("A student reads only her own rows: no one else's answers, no A/B keys
   CHECK(count(samServer, "SELECT COUNT(*) FROM class_events WHERE user_name <> '" + c.sam + "'") == 0);
   CHECK(count(samServer, "SELECT COUNT(*) FROM class_members WHERE user_name <> '" + c.sam + "'") == 0);
   CHECK(count(samServer, "SELECT COUNT(*) FROM class_audit") == 0);
+  {  // A study with a participant and their blinded trials (the A/B keys), owned by the coordinator.
+    auto survey = quiz::loadStudyProtocol((test::sourceDir() / "data/studies/paper_survey.json").string());
+    REQUIRE(survey);
+    REQUIRE(saveStudy(c.admin, *survey));
+    REQUIRE(setStudyOwner(c.admin, survey->id, c.coordinator));
+    REQUIRE(enrolOrResume(c.admin, *survey, "P0", survey->groups[0]));
+  }
+  for (const char* study : {"studies", "study_participants", "study_trials"}) {
+    CHECK(count(samServer, std::string("SELECT COUNT(*) FROM ") + study) == 0);
+    CHECK(count(instructor, std::string("SELECT COUNT(*) FROM ") + study) == 0);
+    CHECK(count(c.admin, std::string("SELECT COUNT(*) FROM ") + study) > 0);
+  }
   CHECK(count(c.admin, "SELECT COUNT(*) FROM class_events WHERE user_name = '" + c.eve + "'") == 5);
   // The instructor sees the class: both students' events.
   CHECK(count(instructor, "SELECT COUNT(*) FROM class_events") == 10);
