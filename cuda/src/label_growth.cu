@@ -106,11 +106,11 @@ __global__ void keysToDistances(const unsigned long long* keys, float* out, std:
   }
 }
 
-// A block's shared memory: the brick and its halo as distances, labels and densities (floats:
-// wdt::densityFromByte), and the neighbour mask of the voxels it lowered.
+// A block's shared memory: the brick and its halo as (distance, label) keys (wdt::packGrowthKey:
+// one 64-bit load gives a neighbour's pair) and densities (floats: wdt::densityFromByte), and the
+// neighbour mask of the voxels it lowered.
 struct GrowthShared {
-  std::int32_t d[kCells];
-  std::int32_t l[kCells];
+  unsigned long long key[kCells];
   float f[kCells];
   unsigned mask;
 };
@@ -140,16 +140,17 @@ __device__ __forceinline__ bool sweepAxis(GrowthShared& sh, const int ext[3], in
 #pragma unroll
       for (int db = 0; db < 3; ++db) {
         const int i = prev + (dc - 1) * sc + (db - 1) * sb;
-        n[dc][db] = sh.d[i];
-        nl[dc][db] = sh.l[i];
+        const unsigned long long key = sh.key[i];
+        n[dc][db] = wdt::growthKeyDistance(key);
+        nl[dc][db] = wdt::growthKeyLabel(key);
         fn[dc][db] = wdt::needsNeighbourDensity(K) ? sh.f[i] : 0.0f;
       }
-    std::int32_t d = sh.d[idx], l = sh.l[idx];
+    const unsigned long long own = sh.key[idx];
+    std::int32_t d = wdt::growthKeyDistance(own), l = wdt::growthKeyLabel(own);
     const std::int32_t d0 = d, l0 = l;
     wdt::relaxLabelledVoxel<K>(d, l, n, nl, fn, sh.f[idx], len, base, scale);
     if (d == d0 && l == l0) return false;
-    sh.d[idx] = d;
-    sh.l[idx] = l;
+    sh.key[idx] = wdt::packGrowthKey(d, l);
     return true;
   });
 }
@@ -166,8 +167,7 @@ __device__ __forceinline__ void loadHalo(const SolveArgs& a, GrowthShared& sh, c
     key = __ldcg(a.keys + i);
     f = wdt::densityFromByte(__ldg(a.density + i));
   }
-  sh.d[cell] = wdt::growthKeyDistance(key);
-  sh.l[cell] = wdt::growthKeyLabel(key);
+  sh.key[cell] = key;
   sh.f[cell] = f;
 }
 
@@ -199,8 +199,7 @@ __device__ void visitBrick(const SolveArgs& a, int brick, int round, GrowthShare
 #pragma unroll
   for (int z = 0; z < kEdge; ++z) {
     const int cell = cellIndex(tx, ty, z);
-    sh.d[cell] = wdt::growthKeyDistance(k[z]);
-    sh.l[cell] = wdt::growthKeyLabel(k[z]);
+    sh.key[cell] = k[z];
     sh.f[cell] = wdt::densityFromByte(q[z]);
   }
   forEachHaloCell(t, [&](int, int hx, int hy, int hz) { loadHalo(a, sh, o, hx, hy, hz); });
@@ -222,7 +221,7 @@ __device__ void visitBrick(const SolveArgs& a, int brick, int round, GrowthShare
     for (int z = 0; z < kEdge; ++z) {
       if (z < ext[2]) {
         const int cell = cellIndex(tx, ty, z);
-        const unsigned long long key = wdt::packGrowthKey(sh.d[cell], sh.l[cell]);
+        const unsigned long long key = sh.key[cell];
         if (key != before[z]) {
           a.keys[g0 + nxy * std::size_t(z)] = key;
           mask |= wdt::brickNeighbourMask(tx, ty, z, kEdge);

@@ -247,7 +247,7 @@ Result<Manifest> parseManifest(std::string_view text, const std::string& source)
   AT_TAKE(courseId, c.text("id", true));
   AT_TAKE(courseVersion, c.integer("version", 1, 1000000000));
   AT_TAKE(courseTitle, c.text("title", false));
-  // The course id keys the course's presets in the database (app/src/course_presets.h).
+  // The course id keys the course's presets in the database (app/src/services/course_presets.h).
   if (auto ok = checkSafeName(source + ": " + c.field("id"), courseId); !ok) return tl::unexpected(ok.error());
   m.courseId = courseId;
   m.courseVersion = int(courseVersion);

@@ -35,7 +35,7 @@ using namespace at;
 
 namespace {
 
-// As app/src/terminal_views.h draws them.
+// As app/src/cli/terminal_views.h draws them.
 constexpr int kWidth = 400, kHeight = 300;
 constexpr double kRegionMargin = 2.5;
 

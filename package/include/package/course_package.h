@@ -21,7 +21,7 @@
 // every preset id must be safe names (core/safe_name.h): they become keys and folder names. Nothing is written outside `extractTo`, and there only
 // under fixed names (volume.nrrd, labels.nrrd): entry names never become file paths.
 //
-// This module knows no database: the app stores what it reads (app/src/course_import.h).
+// This module knows no database: the app stores what it reads (app/src/services/course_packages.h).
 #pragma once
 
 #include <cstdint>

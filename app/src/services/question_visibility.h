@@ -14,7 +14,7 @@
 
 namespace at::app {
 
-// How the check draws a question's view (as app/src/terminal_views.h does).
+// How the check draws a question's view (as app/src/cli/terminal_views.h does).
 constexpr int kCheckViewWidth = 400, kCheckViewHeight = 300;
 constexpr double kLocateRegionMargin = 2.5;
 
