@@ -235,6 +235,24 @@ Result<ClassProgress> classProgress(Database& server, const std::string& code, c
   });
   if (!status) return tl::unexpected(status.error());
 
+  // Graded exams handed in on the server (the table exists on a class server only).
+  if (server.backend() == Backend::Postgres) {
+    auto exams = server.prepare(
+        "SELECT user_name, COUNT(*), AVG(score) FROM class_exam_sittings"
+        " WHERE class_code = ?1 AND finished_at IS NOT NULL GROUP BY user_name");
+    if (!exams) return tl::unexpected(exams.error());
+    exams->bind(1, code);
+    status = forEachRow(*exams, [&](Statement& r) -> Status {
+      for (StudentClassProgress& p : out.students)
+        if (p.userName == r.text(0)) {
+          p.examsHandedIn = r.integer(1);
+          p.examScore = r.optionalReal(2);
+        }
+      return {};
+    });
+    if (!status) return tl::unexpected(status.error());
+  }
+
   auto structures = server.prepare(
       "SELECT structure, COUNT(DISTINCT user_name), COUNT(*), SUM(CASE WHEN correct = 1 THEN 1 ELSE 0 END)"
       " FROM class_events WHERE class_code = ?1 AND kind = 'answer' GROUP BY structure ORDER BY structure");

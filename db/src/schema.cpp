@@ -6,7 +6,9 @@
 // JSON documents as TEXT. No pixel data and no patient identifiers are ever stored.
 #include "schema.h"
 
+#include "class_exam_sql.h"
 #include "class_security_sql.h"
+#include "study_security_sql.h"
 
 #include <algorithm>
 #include <cassert>
@@ -495,6 +497,19 @@ constexpr std::string_view kUnmeasuredViewingBlankPostgres = R"SQL(
 ALTER TABLE study_trials ALTER COLUMN view_ms_a DROP NOT NULL, ALTER COLUMN view_ms_b DROP NOT NULL;
 UPDATE study_trials SET view_ms_a = NULL, view_ms_b = NULL WHERE viewing_measured <> 1;
 )SQL";
+
+// A study's owner (the coordinator's login on a class server; '' = whoever administers the
+// database) and its participants' withdrawal (consent withdrawn) or exclusion: when, which, why.
+// Their rows stay; exports and Table 2 leave them out. next_enrolment: the study's next
+// counterbalancing row, drawn by enrolment (at least the participants' highest row + 1, so rows
+// merged in from other machines are never drawn again).
+constexpr std::string_view kStudyOwnersAndWithdrawals = R"SQL(
+ALTER TABLE studies ADD COLUMN owner TEXT NOT NULL DEFAULT '';
+ALTER TABLE studies ADD COLUMN next_enrolment INTEGER NOT NULL DEFAULT 0;
+ALTER TABLE study_participants ADD COLUMN withdrawn_at TEXT;
+ALTER TABLE study_participants ADD COLUMN withdrawal_kind TEXT CHECK (withdrawal_kind IN ('withdrawn', 'excluded'));
+ALTER TABLE study_participants ADD COLUMN withdrawal_reason TEXT;
+)SQL";
 }  // namespace
 
 const std::vector<Migration>& migrations() {
@@ -520,6 +535,12 @@ const std::vector<Migration>& migrations() {
        classSecuritySql(), {}, true},
       {16, "study trials: viewing times not measured are blank (NULL), not 0", kUnmeasuredViewingBlank, {}, false,
        kUnmeasuredViewingBlankPostgres},
+      {17, "class server: graded exams, their keys readable by no login, graded and scored by the server",
+       classExamSql(), {}, true},
+      {18, "studies have an owner and draw enrolment rows from a counter; participants can be withdrawn or excluded",
+       kStudyOwnersAndWithdrawals},
+      {19, "class server: a study's owner reads it, withdraws and excludes its participants (audited)",
+       studySecuritySql(), {}, true},
   };
   return all;
 }

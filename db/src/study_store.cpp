@@ -160,6 +160,29 @@ std::string participantKey(const std::string& studyId, const std::string& partic
   return "study participant|" + studyId + "|" + participantId;
 }
 
+// On a server: the study's next counterbalancing row, counted on (studies.next_enrolment), at
+// least one past the highest row any participant has (rows merged in from other machines
+// included); in a transaction of its own that locks the study's counter row for one statement.
+Result<int> drawStudyRow(Database& db, const std::string& studyId) {
+  const std::string sql =
+      "UPDATE studies SET next_enrolment = GREATEST(next_enrolment, (SELECT coalesce(max(enrolment_index) + 1, 0)"
+      " FROM study_participants WHERE study_id = ?1)) + 1 WHERE id = ?1 RETURNING next_enrolment - 1";
+  int index = -1;
+  const auto draw = [&](Database& d) -> Status {
+    auto st = d.prepare(sql);
+    if (!st) return tl::unexpected(st.error());
+    st->bind(1, studyId);
+    auto row = st->step();
+    if (!row) return tl::unexpected(row.error());
+    if (!*row) return fail(ErrorKind::NotFound, "no study '" + studyId + "' in " + d.path());
+    index = st->integer(0);
+    return {};
+  };
+  auto done = db.keyedWriteTransaction("study rows|" + studyId, draw);
+  if (!done) return tl::unexpected(done.error());
+  return index;
+}
+
 }  // namespace
 
 Result<StudyParticipant> enrolOrResume(Database& db, const quiz::StudyProtocol& protocol,
@@ -172,8 +195,27 @@ Result<StudyParticipant> enrolOrResume(Database& db, const quiz::StudyProtocol& 
     for (const auto& g : protocol.groups) groups += (groups.empty() ? "" : ", ") + g;
     return fail("group '" + group + "' is not one of study '" + protocol.id + "''s groups (" + groups + ")");
   }
-  // The enrolment index is the study's next one (program-wide); the participant's key orders the
-  // new session after that participant's writes in flight (recordRating and the rest check it).
+  // The enrolment index is the study's next counterbalancing row (drawStudyRow). On a server it is
+  // drawn first, in a transaction of its own that locks only the study's counter row for one
+  // UPDATE, so lab machines enrolling at once wait for each other that long, not for each other's
+  // whole enrolment; the enrolment itself then locks only its participant's key. A draw whose
+  // enrolment then fails (or finds the participant enrolled by another machine meanwhile) leaves
+  // its row unused: the next participants take the rows after it. On SQLite (one writer) the row
+  // is the participant count, taken inside the enrolment's transaction.
+  const bool server = db.backend() == Backend::Postgres;
+  std::optional<int> drawn;
+  if (server) {
+    auto known = db.prepare("SELECT 1 FROM study_participants WHERE study_id = ?1 AND participant_id = ?2");
+    if (!known) return tl::unexpected(known.error());
+    known->bind(1, protocol.id).bind(2, participantId);
+    auto row = known->step();
+    if (!row) return tl::unexpected(row.error());
+    if (!*row) {
+      auto index = drawStudyRow(db, protocol.id);
+      if (!index) return tl::unexpected(index.error());
+      drawn = *index;
+    }
+  }
   auto written = db.keyedWriteTransaction(participantKey(protocol.id, participantId), [&](Database& d) -> Status {
     auto existing = d.prepare("SELECT group_name FROM study_participants WHERE study_id = ?1 AND participant_id = ?2");
     if (!existing) return tl::unexpected(existing.error());
@@ -181,6 +223,18 @@ Result<StudyParticipant> enrolOrResume(Database& db, const quiz::StudyProtocol& 
     auto row = existing->step();
     if (!row) return tl::unexpected(row.error());
     if (*row) {
+      // A withdrawn or excluded participant is not resumed (db/study_withdrawal.h).
+      auto withdrawn = d.prepare(
+          "SELECT withdrawal_kind, withdrawal_reason FROM study_participants WHERE study_id = ?1 AND participant_id = ?2"
+          " AND withdrawn_at IS NOT NULL");
+      if (!withdrawn) return tl::unexpected(withdrawn.error());
+      withdrawn->bind(1, protocol.id).bind(2, participantId);
+      auto gone = withdrawn->step();
+      if (!gone) return tl::unexpected(gone.error());
+      if (*gone)
+        return fail(ErrorKind::Conflict, "participant '" + participantId + "' was " + withdrawn->text(0) +
+                                             " from study '" + protocol.id + "' (" + withdrawn->text(1) +
+                                             "); nothing more is recorded for them");
       if (existing->text(0) != group)
         return fail("participant '" + participantId + "' is enrolled in group '" + existing->text(0) + "', not '" +
                     group + "'");
@@ -189,19 +243,22 @@ Result<StudyParticipant> enrolOrResume(Database& db, const quiz::StudyProtocol& 
       bump->bind(1, protocol.id).bind(2, participantId);
       return bump->run();
     }
-    auto count = participantCount(d, protocol.id);
-    if (!count) return tl::unexpected(count.error());
-    const int index = *count;
+    std::optional<int> index = drawn;
+    if (!index) {  // SQLite: the next row inside this transaction (one writer at a time anyway)
+      auto count = participantCount(d, protocol.id);
+      if (!count) return tl::unexpected(count.error());
+      index = *count;
+    }
     auto insert = d.prepare(
         "INSERT INTO study_participants (study_id, participant_id, group_name, enrolment_index) VALUES (?1, ?2, ?3, ?4)");
     if (!insert) return tl::unexpected(insert.error());
-    insert->bind(1, protocol.id).bind(2, participantId).bind(3, group).bind(4, index);
+    insert->bind(1, protocol.id).bind(2, participantId).bind(3, group).bind(4, *index);
     if (auto s = insert->run(); !s) return s;
     auto trial = d.prepare(
         "INSERT INTO study_trials (study_id, participant_id, position, structure, a_condition, b_condition, preset_a, "
         "preset_b) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8)");
     if (!trial) return tl::unexpected(trial.error());
-    for (const quiz::TrialPlan& plan : quiz::planParticipant(protocol.structures.size(), std::size_t(index), protocol.seed)) {
+    for (const quiz::TrialPlan& plan : quiz::planParticipant(protocol.structures.size(), std::size_t(*index), protocol.seed)) {
       const std::string& structure = protocol.structures[plan.structureIndex];
       const int a = plan.aIsFirstCondition ? 0 : 1, b = 1 - a;
       trial->reset();
@@ -216,7 +273,7 @@ Result<StudyParticipant> enrolOrResume(Database& db, const quiz::StudyProtocol& 
       if (auto s = trial->run(); !s) return s;
     }
     return {};
-  }, true);
+  }, !server);
   if (!written) return tl::unexpected(written.error());
   return loadParticipant(db, protocol.id, participantId);
 }
@@ -323,7 +380,8 @@ Result<std::vector<StudyCompletion>> studyCompletion(Database& db, const std::st
   if (!*study) return fail(ErrorKind::NotFound, "no study '" + studyId + "' in " + db.path());
   auto st = db.prepare(
       "SELECT p.participant_id, p.group_name, CASE WHEN p.completed_at IS NULL THEN 0 ELSE 1 END, "
-      " (SELECT count(*) FROM study_ratings r WHERE r.study_id = p.study_id AND r.participant_id = p.participant_id) "
+      " (SELECT count(*) FROM study_ratings r WHERE r.study_id = p.study_id AND r.participant_id = p.participant_id), "
+      " p.withdrawal_kind || ': ' || p.withdrawal_reason "
       "FROM study_participants p WHERE p.study_id = ?1 ORDER BY p.enrolment_index");
   if (!st) return tl::unexpected(st.error());
   st->bind(1, studyId);
@@ -338,6 +396,7 @@ Result<std::vector<StudyCompletion>> studyCompletion(Database& db, const std::st
     c.complete = st->integer(2) != 0;
     c.ratingsGiven = st->integer(3);
     c.ratingsExpected = int((*study)->structures.size() * (*study)->items.size());
+    c.withdrawal = st->optionalText(4);
     out.push_back(c);
   }
   return out;
@@ -346,7 +405,7 @@ Result<std::vector<StudyCompletion>> studyCompletion(Database& db, const std::st
 Result<std::vector<quiz::StudyParticipantRow>> studyParticipantRows(Database& db, const std::string& studyId) {
   auto st = db.prepare(
       "SELECT participant_id, group_name, enrolment_index, session, CASE WHEN completed_at IS NULL THEN 0 ELSE 1 END "
-      "FROM study_participants WHERE study_id = ?1 ORDER BY enrolment_index");
+      "FROM study_participants WHERE study_id = ?1 AND withdrawn_at IS NULL ORDER BY enrolment_index");
   if (!st) return tl::unexpected(st.error());
   st->bind(1, studyId);
   std::vector<quiz::StudyParticipantRow> out;
@@ -383,7 +442,7 @@ Result<std::vector<quiz::StudyResponseRow>> responseRows(Database& db, const qui
       "FROM study_ratings r "
       "JOIN study_trials t ON t.study_id = r.study_id AND t.participant_id = r.participant_id AND t.position = r.position "
       "JOIN study_participants p ON p.study_id = r.study_id AND p.participant_id = r.participant_id "
-      "WHERE r.study_id = ?1" + std::string(participantId ? " AND r.participant_id = ?2" : "") +
+      "WHERE r.study_id = ?1" + std::string(participantId ? " AND r.participant_id = ?2" : " AND p.withdrawn_at IS NULL") +
       " ORDER BY p.enrolment_index, t.position");
   if (!st) return tl::unexpected(st.error());
   st->bind(1, protocol.id);

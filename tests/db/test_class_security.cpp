@@ -21,7 +21,11 @@
 #include "db/class_server.h"
 #include "db/course_store.h"
 #include "db/sqlite_repositories.h"
+#include "db/study_store.h"
+#include "db/study_withdrawal.h"
+#include "quiz/study_protocol.h"
 #include "lessons/lesson_engine.h"
+#include "secure_class.h"
 #include "test_databases.h"
 #include "test_support.h"
 #include "toy_course.h"
@@ -37,52 +41,10 @@ using namespace at::lessons;
 namespace {
 
 using test::openAt;
+using test::SecureClass;
+using test::loginUrl;
+using test::uniqueLogin;
 std::int64_t count(Database& db, const std::string& sql) { return test::scalarCount(db, sql); }
-
-// Login names are cluster-wide; each test makes its own.
-std::string uniqueLogin(const std::string& stem) {
-  static std::atomic<int> counter{0};
-  return stem + "_" + std::to_string(::getpid()) + "_" + std::to_string(counter++);
-}
-
-// `url` (the administrator's) with `login` and `password` in place of its user and password.
-std::string loginUrl(const std::string& url, const std::string& login, const std::string& password) {
-  const auto scheme = url.find("://") + 3;
-  const auto at = url.find('@', scheme);
-  REQUIRE(at != std::string::npos);
-  return url.substr(0, scheme) + login + ":" + password + url.substr(at);
-}
-
-// A class on a fresh server with the toy course: its coordinator, an instructor and two students,
-// each with their own login, and each connected as themselves.
-struct SecureClass {
-  std::string adminUrl;
-  Database admin;
-  std::string code;
-  std::string coordinator = uniqueLogin("ada"), instructor = uniqueLogin("lee"), sam = uniqueLogin("sam"),
-              eve = uniqueLogin("eve");
-  std::string samUrl, eveUrl, coordinatorUrl, instructorUrl;
-
-  explicit SecureClass(const std::string& url) : adminUrl(url), admin(openAt(url)) {
-    REQUIRE(storeCourse(admin, test::toyCourse(), "toy"));
-    auto made = createClass(admin, "Ear anatomy", coordinator);
-    REQUIRE_MESSAGE(made, (made ? "" : made.error().message));
-    code = made->code;
-    coordinatorUrl = account(admin, coordinator, ClassRole::Coordinator);
-    Database coordinatorDb = openAt(coordinatorUrl);
-    instructorUrl = account(coordinatorDb, instructor, ClassRole::Instructor);
-    samUrl = account(coordinatorDb, sam, ClassRole::Student);
-    eveUrl = account(coordinatorDb, eve, ClassRole::Student);
-  }
-
-  std::string account(Database& by, const std::string& name, ClassRole role) {
-    auto made = createClassAccount(by, code, name, role, std::nullopt);
-    REQUIRE_MESSAGE(made, (made ? "" : made.error().message));
-    REQUIRE(made->password);
-    CHECK(made->password->size() >= 16);
-    return loginUrl(adminUrl, name, *made->password);
-  }
-};
 
 // A laptop: its own SQLite file with the toy course, a local user named as the login, joined.
 struct Laptop {
@@ -233,7 +195,7 @@ TEST_CASE("A student login holds no write on any table: update, delete, truncate
   // times), stays the owner role's, with row-level security on the class tables.
   CHECK(count(c.admin, "SELECT COUNT(*) FROM pg_tables WHERE schemaname = current_schema()"
                        " AND tableowner <> 'at_class_owner'") == 0);
-  CHECK(count(c.admin, "SELECT COUNT(*) FROM pg_tables WHERE schemaname = current_schema() AND rowsecurity") == 4);
+  CHECK(count(c.admin, "SELECT COUNT(*) FROM pg_tables WHERE schemaname = current_schema() AND rowsecurity") == 13);
   CHECK(count(c.admin, "SELECT COUNT(*) FROM information_schema.columns WHERE table_schema = current_schema()"
                        " AND table_name = 'study_trials' AND column_name IN ('view_ms_a', 'view_ms_b')"
                        " AND is_nullable = 'YES'") == 2);
@@ -280,8 +242,13 @@ TEST_CASE("A student reads only her own rows: no one else's answers, no A/B keys
   Database samServer = openAt(c.samUrl);
   Database instructor = openAt(c.instructorUrl);
 
-  // What a student may read at all: her class, her membership, her events (and the schema version).
-  const std::set<std::string> readable = {"at_schema_version", "classes", "class_members", "class_events", "class_audit"};
+  // What a student may read at all: her class, her membership, her events, the class's exams (and
+  // the schema version); the study tables only as their owner, so for her no row of them.
+  const std::set<std::string> readable = {"at_schema_version", "classes",           "class_members",
+                                          "class_events",      "class_audit",       "class_exams",
+                                          "class_exam_items",  "class_exam_sittings", "class_exam_answers",
+                                          "studies",           "study_participants", "study_trials",
+                                          "study_ratings"};
   for (const std::string& table : serverTables(c.admin)) {
     CAPTURE(table);
     auto s = samServer.prepare("SELECT COUNT(*) FROM " + table);
@@ -293,6 +260,18 @@ TEST_CASE("A student reads only her own rows: no one else's answers, no A/B keys
   CHECK(count(samServer, "SELECT COUNT(*) FROM class_events WHERE user_name <> '" + c.sam + "'") == 0);
   CHECK(count(samServer, "SELECT COUNT(*) FROM class_members WHERE user_name <> '" + c.sam + "'") == 0);
   CHECK(count(samServer, "SELECT COUNT(*) FROM class_audit") == 0);
+  {  // A study with a participant and their blinded trials (the A/B keys), owned by the coordinator.
+    auto survey = quiz::loadStudyProtocol((test::sourceDir() / "data/studies/paper_survey.json").string());
+    REQUIRE(survey);
+    REQUIRE(saveStudy(c.admin, *survey));
+    REQUIRE(setStudyOwner(c.admin, survey->id, c.coordinator));
+    REQUIRE(enrolOrResume(c.admin, *survey, "P0", survey->groups[0]));
+  }
+  for (const char* study : {"studies", "study_participants", "study_trials"}) {
+    CHECK(count(samServer, std::string("SELECT COUNT(*) FROM ") + study) == 0);
+    CHECK(count(instructor, std::string("SELECT COUNT(*) FROM ") + study) == 0);
+    CHECK(count(c.admin, std::string("SELECT COUNT(*) FROM ") + study) > 0);
+  }
   CHECK(count(c.admin, "SELECT COUNT(*) FROM class_events WHERE user_name = '" + c.eve + "'") == 5);
   // The instructor sees the class: both students' events.
   CHECK(count(instructor, "SELECT COUNT(*) FROM class_events") == 10);

@@ -654,8 +654,18 @@ TEST_CASE("StudyStore_UnmeasuredViewingTimes_StoredBlankNotZero_OldZerosMigrateT
     auto old = db::Database::open(path, options);
     REQUIRE(old.has_value());
     REQUIRE(db::saveStudy(*old, p).has_value());
-    auto part = db::enrolOrResume(*old, p, "P0", "medical");
-    REQUIRE(part.has_value());
+    // P0 enrolled as the program of that version did (row 0 of the counterbalancing square).
+    REQUIRE(old->exec("INSERT INTO study_participants (study_id, participant_id, group_name, enrolment_index)"
+                      " VALUES ('" + p.id + "', 'P0', 'medical', 0)"));
+    for (const quiz::TrialPlan& plan : quiz::planParticipant(p.structures.size(), 0, p.seed)) {
+      const std::string& structure = p.structures[plan.structureIndex];
+      const int a = plan.aIsFirstCondition ? 0 : 1;
+      REQUIRE(old->exec("INSERT INTO study_trials (study_id, participant_id, position, structure, a_condition, b_condition,"
+                        " preset_a, preset_b) VALUES ('" + p.id + "', 'P0', " + std::to_string(plan.position) + ", '" +
+                        structure + "', '" + p.conditions[std::size_t(a)].id + "', '" +
+                        p.conditions[std::size_t(1 - a)].id + "', '" + p.presetFor(structure, a) + "', '" +
+                        p.presetFor(structure, 1 - a) + "')"));
+    }
     // As the program before it wrote them: trial 0 unmeasured as 0, trial 1 measured, looked 0 ms.
     REQUIRE(old->exec("UPDATE study_trials SET view_ms_a = 0, view_ms_b = 0, toggles = 0, viewing_measured = 0"
                       " WHERE position = 0").has_value());

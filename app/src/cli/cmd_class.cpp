@@ -9,6 +9,7 @@
 #include <ctime>
 #include <fstream>
 
+#include "class_exam_cli.h"
 #include "class_sync.h"
 #include "cli_args.h"
 #include "commands.h"
@@ -32,7 +33,9 @@ constexpr const char* kClassHelp =
     "       anatomy-tutor class account CODE NAME --role ROLE --db SERVER [--pgpass FILE]\n"
     "       anatomy-tutor class withdraw CODE MEMBER --reason TEXT --db SERVER\n"
     "       anatomy-tutor class correct EVENT_ID --correct 0|1 --score S --reason TEXT --db SERVER\n"
-    "       anatomy-tutor class audit CODE --db SERVER [--csv]\n\n"
+    "       anatomy-tutor class audit CODE --db SERVER [--csv]\n"
+    "       anatomy-tutor class open-exam CODE EXAM --db SERVER [--local-db PATH] [--views DIR]\n"
+    "       anatomy-tutor class close-exam CODE EXAM --db SERVER\n\n"
     "A class lives on a class server, a PostgreSQL database every member's machine can reach\n"
     "(SERVER: postgresql://LOGIN@host/database, the password in ~/.pgpass; see the README).\n"
     "Each person has their own login (`class account`); on the server a login is who you are, and\n"
@@ -54,7 +57,13 @@ constexpr const char* kClassHelp =
     "  withdraw  a coordinator excludes MEMBER, or a member withdraws (consent withdrawn); the\n"
     "            reason is kept and shown in `class progress`\n"
     "  correct   a coordinator corrects one answer's grade on the server\n"
-    "  audit     role changes, accounts, withdrawals and corrections: who, when, old, new, why\n";
+    "  audit     role changes, accounts, withdrawals and corrections: who, when, old, new, why\n"
+    "  open-exam an instructor or coordinator opens a graded exam: its items are drawn from the\n"
+    "            course on this machine (--local-db), identify and name items sent as pictures, and\n"
+    "            the keys kept on the server, where no student's login can read them. Students who\n"
+    "            joined the class then take it with `anatomy-tutor exam EXAM --user NAME`: each\n"
+    "            answer is graded on the server. `class progress` shows the scores\n"
+    "  close-exam ends it: no new sittings; open ones are handed in with what they answered\n";
 
 constexpr const char* kSyncHelp =
     "usage: anatomy-tutor sync [--db PATH]\n\n"
@@ -147,6 +156,16 @@ int runRole(const cli::Args& args) {
   return 0;
 }
 
+// The mean score of the graded exams a student handed in (as a percentage, or as a share for
+// CSV); "" when none was handed in.
+std::string examScore(const db::StudentClassProgress& s, bool percent) {
+  if (!s.examScore) return "";
+  char text[32];
+  if (percent) std::snprintf(text, sizeof text, "%.0f%%", 100 * *s.examScore);
+  else std::snprintf(text, sizeof text, "%.3f", *s.examScore);
+  return text;
+}
+
 int runClassProgress(const cli::Args& args) {
   if (args.positional().size() != 2) return reportError("class progress: give the class CODE");
   auto code = db::normalizeClassCode(args.positional()[1]);
@@ -157,21 +176,24 @@ int runClassProgress(const cli::Args& args) {
   auto progress = db::classProgress(*server, *code, args.user().value_or(""));
   if (!progress) return reportError("class progress: " + progress.error().message);
   if (args.has("csv")) {
-    terminalPrintf("student,answers,correct,structures,lessons_started,lessons_finished,last_active_unix,withdrawn\n");
+    terminalPrintf("student,answers,correct,structures,lessons_started,lessons_finished,last_active_unix,withdrawn,"
+                   "exams_handed_in,exam_score\n");
     for (const auto& s : progress->students)
-      terminalPrintf("%s,%d,%d,%d,%d,%d,%s,%s\n", quiz::csvQuoted(s.userName).c_str(), s.answers, s.correct, s.structures,
-                  s.lessonsStarted, s.lessonsFinished, s.lastActive ? std::to_string(*s.lastActive).c_str() : "",
-                  quiz::csvQuoted(s.withdrawal.value_or("")).c_str());
+      terminalPrintf("%s,%d,%d,%d,%d,%d,%s,%s,%d,%s\n", quiz::csvQuoted(s.userName).c_str(), s.answers, s.correct,
+                     s.structures, s.lessonsStarted, s.lessonsFinished,
+                     s.lastActive ? std::to_string(*s.lastActive).c_str() : "",
+                     quiz::csvQuoted(s.withdrawal.value_or("")).c_str(), s.examsHandedIn, examScore(s, false).c_str());
     return 0;
   }
   terminalPrintf("Class %s — %s: %s, %s received\n\n", progress->info.code.c_str(), progress->info.title.c_str(),
               str::countOf(long(progress->students.size()), "student").c_str(),
               str::countOf(long(progress->events), "event").c_str());
-  terminalPrintf("%-20s %8s %6s %11s %8s %9s  %s\n", "student", "answers", "right", "structures", "lessons", "finished",
-              "last active");
+  terminalPrintf("%-20s %8s %6s %11s %8s %9s %11s  %s\n", "student", "answers", "right", "structures", "lessons",
+                 "finished", "exam score", "last active");
   for (const auto& s : progress->students)
-    terminalPrintf("%-20s %8d %6s %11d %8d %9d  %s%s\n", s.userName.c_str(), s.answers, share(s.correct, s.answers).c_str(),
-                s.structures, s.lessonsStarted, s.lessonsFinished, when(s.lastActive).c_str(),
+    terminalPrintf("%-20s %8d %6s %11d %8d %9d %11s  %s%s\n", s.userName.c_str(), s.answers,
+                   share(s.correct, s.answers).c_str(), s.structures, s.lessonsStarted, s.lessonsFinished,
+                   examScore(s, true).c_str(), when(s.lastActive).c_str(),
                 s.withdrawal ? ("  (withdrawn: " + *s.withdrawal + ")").c_str() : "");
   if (!progress->structures.empty()) {
     terminalPrintf("\n%-24s %9s %8s %6s\n", "structure", "students", "answers", "right");
@@ -314,7 +336,8 @@ int runAudit(const cli::Args& args) {
 }  // namespace
 
 int runClass(const Argv& argv) {
-  auto args = cli::Args::parse(argv, {"server", "role", "pgpass", "reason", "correct", "score"}, {"csv"});
+  auto args = cli::Args::parse(argv, {"server", "role", "pgpass", "reason", "correct", "score", "local-db", "views"},
+                               {"csv"});
   if (!args) return reportError("class: " + args.error().message);
   if (args->has("help") || args->positional().empty()) {
     terminalPrintf("%s", kClassHelp);
@@ -329,7 +352,11 @@ int runClass(const Argv& argv) {
   if (action == "withdraw") return runWithdraw(*args);
   if (action == "correct") return runCorrect(*args);
   if (action == "audit") return runAudit(*args);
-  return reportError("class: unknown action '" + action + "' (create, join, role, progress, account, withdraw, correct, audit)", 2);
+  if (action == "open-exam") return runClassOpenExam(*args);
+  if (action == "close-exam") return runClassCloseExam(*args);
+  return reportError("class: unknown action '" + action +
+                         "' (create, join, role, progress, account, withdraw, correct, audit, open-exam, close-exam)",
+                     2);
 }
 
 int runSync(const Argv& argv) {

@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <map>
 
+#include "class_exam_cli.h"
 #include "cli_args.h"
 #include "commands.h"
 #include "db/class_server.h"
@@ -129,6 +130,10 @@ int runExam(const Argv& argv) {
   if (!user) return reportError("exam: " + user.error().message);
   if (created) terminalPrintf("created user '%s'\n", user->name.c_str());
 
+  // An exam open in the user's class is taken on the class server (graded there).
+  if (auto onServer = runServerExam(ls, user->name, examId, **source, args->value("views"), args->has("no-views")))
+    return *onServer;
+
   const std::string datasetId = course.datasetId;
   auto keys = ls.keysFor(datasetId);
   if (!keys) return reportError("exam: " + keys.error().message);
@@ -143,7 +148,8 @@ int runExam(const Argv& argv) {
   // On a laptop the items and their keys are in the learner's own file: for a class, practice.
   if (db::backendOf(ls.database()) == db::Backend::Sqlite)
     if (auto joined = db::membershipOf(ls.database(), user->name); joined && *joined)
-      terminalPrintf("  Practice: graded on this machine and not sent to class %s; only an exam on the class server counts.\n",
+      terminalPrintf("  Practice: graded on this machine and not sent to class %s; only an exam the class's instructor\n"
+                     "  opened on the class server (class open-exam) counts.\n",
                   (*joined)->classCode.c_str());
   if (!exam.instructions.empty()) printWrapped(exam.instructions, 2);
   if (session.resumed()) {

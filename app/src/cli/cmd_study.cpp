@@ -24,6 +24,7 @@
 #include "db/connection.h"
 #include "dataset_resolver.h"
 #include "db/study_store.h"
+#include "db/study_withdrawal.h"
 #include "quiz/study_report.h"
 #include "render/preset.h"
 #include "study_session.h"
@@ -42,6 +43,12 @@ const char* kStudyHelp =
     "       anatomy-tutor study status STUDY [--db PATH]\n"
     "       anatomy-tutor study export STUDY --out DIR [--db PATH]\n"
     "       anatomy-tutor study merge STUDY SOURCE... [--db PATH]   (SOURCE: a database or an export folder)\n"
+    "       anatomy-tutor study withdraw STUDY PARTICIPANT --reason TEXT [--exclude] [--db PATH]\n"
+    "register --owner LOGIN: on a class server, the coordinator's login that alone reads the study\n"
+    "  (status, export) and withdraws its participants.\n"
+    "withdraw: the participant withdrew consent (or, with --exclude, is excluded); their rows stay,\n"
+    "  with the reason, but leave every export and the summary; status and the export's\n"
+    "  withdrawals.csv list them, and the change is audited.\n"
     "\n"
     "Preference studies comparing the WDT rendering with the bare-structure rendering of each\n"
     "structure, blinded as A and B with counterbalanced order (the paper's Table 2 design).\n"
@@ -76,6 +83,8 @@ int runRegister(const cli::Args& args) {
   auto database = openDb(args);
   if (!database) return reportError(database.error().message);
   if (auto s = db::saveStudy(*database, *protocol); !s) return reportError(s.error().message);
+  if (const auto owner = args.value("owner"))
+    if (auto s = db::setStudyOwner(*database, protocol->id, *owner); !s) return reportError(s.error().message);
   terminalPrintf("stored study '%s' (%zu structures, %zu items, groups:", protocol->id.c_str(),
               protocol->structures.size(), protocol->items.size());
   for (const auto& g : protocol->groups) terminalPrintf(" %s", g.c_str());
@@ -109,7 +118,7 @@ int runStatus(const cli::Args& args) {
   terminalPrintf("study %s: %zu participant(s)\n", protocol->id.c_str(), completion->size());
   for (const auto& c : *completion)
     terminalPrintf("  %-20s %-14s %3d/%d ratings  %s\n", c.participantId.c_str(), c.group.c_str(), c.ratingsGiven,
-                c.ratingsExpected, c.complete ? "complete" : "in progress");
+                c.ratingsExpected, c.withdrawal ? c.withdrawal->c_str() : c.complete ? "complete" : "in progress");
   return 0;
 }
 
@@ -415,13 +424,16 @@ int runMerge(const cli::Args& args) {
 
 }  // namespace
 
+int runStudyWithdraw(const cli::Args& args);  // cmd_study_withdraw.cpp
+
 int runStudy(const Argv& argv) {
   if (argv.empty() || argv[0] == "--help" || argv[0] == "-h") {
     terminalPrintf("%s", kStudyHelp);
     return argv.empty() ? 2 : 0;
   }
   const std::string verb = argv[0];
-  auto args = cli::Args::parse(Argv(argv.begin() + 1, argv.end()), {"participant", "group", "answers", "out"}, {});
+  auto args = cli::Args::parse(Argv(argv.begin() + 1, argv.end()), {"participant", "group", "answers", "out", "owner", "reason"},
+                               {"exclude"});
   if (!args) return reportError("study " + verb + ": " + args.error().message);
   if (args->has("help")) {
     terminalPrintf("%s", kStudyHelp);
@@ -433,7 +445,8 @@ int runStudy(const Argv& argv) {
   if (verb == "status") return runStatus(*args);
   if (verb == "export") return runExport(*args);
   if (verb == "merge") return runMerge(*args);
-  return reportError("study: unknown action '" + verb + "' (register, list, run, status, export, merge)", 2);
+  if (verb == "withdraw") return runStudyWithdraw(*args);
+  return reportError("study: unknown action '" + verb + "' (register, list, run, status, export, merge, withdraw)", 2);
 }
 
 }  // namespace at::app

@@ -4,10 +4,12 @@
 #include <fstream>
 #include <set>
 
+#include "class_exam_cli.h"
 #include "cli_args.h"
 #include "commands.h"
 #include "core/atomic_file.h"
 #include "core/strings.h"
+#include "db/class_server.h"
 #include "db/exam_store.h"
 #include "db/study_store.h"
 #include "learning_session.h"
@@ -20,7 +22,8 @@ namespace {
 
 constexpr const char* kXapiHelp =
     "usage: anatomy-tutor xapi --out FILE.json [--user NAME] [--homepage URL] [--activity-base URL] [--db PATH]\n"
-    "       anatomy-tutor xapi --out FILE.json --study STUDY [--homepage URL] [--activity-base URL] [--db PATH]\n\n"
+    "       anatomy-tutor xapi --out FILE.json --study STUDY [--homepage URL] [--activity-base URL] [--db PATH]\n"
+    "       anatomy-tutor xapi --out FILE.json --class CODE --db SERVER [--homepage URL] [--activity-base URL]\n\n"
     "Writes learning records as xAPI 1.0.3 statements (a JSON array, as a learning record store\n"
     "takes them on POST /statements): every lesson attempt (attempted; completed with its score),\n"
     "every answer to a lesson or review question (answered, on a cmi.interaction: locate 'other',\n"
@@ -31,6 +34,8 @@ constexpr const char* kXapiHelp =
     "statement on a 'likert' interaction with the study's scale, the participant's pseudonym as\n"
     "actor and their enrolment as registration. Exporting the same records again gives the same\n"
     "statement ids, so a record store keeps each once.\n"
+    "With --class (an instructor's or coordinator's login on the class server): the class's graded\n"
+    "exams, each sitting attempted, each graded answer, completed with the server's score and pass.\n"
     "  --homepage       the system the pseudonyms are accounts of (default http://localhost/anatomy-tutor)\n"
     "  --activity-base  prefix of activity ids (default <homepage>/xapi)\n";
 
@@ -96,7 +101,7 @@ lessons::XapiQuestions answeredQuestions(LearningSession& session, const std::ve
 }  // namespace
 
 int runXapi(const Argv& argv) {
-  auto args = cli::Args::parse(argv, {"out", "study", "homepage", "activity-base"}, {});
+  auto args = cli::Args::parse(argv, {"out", "study", "homepage", "activity-base", "class"}, {});
   if (!args) return reportError("xapi: " + args.error().message);
   if (args->has("help")) {
     terminalPrintf("%s", kXapiHelp);
@@ -112,6 +117,26 @@ int runXapi(const Argv& argv) {
   options.appVersion = AT_VERSION;
   if (auto ok = lessons::checkXapiOptions(options); !ok) return reportError("xapi: " + ok.error().message);
 
+  if (const auto classCode = args->value("class")) {
+    if (args->value("study") || args->user()) return reportError("xapi: --class CODE goes alone (no --study or --user)");
+    if (!args->db() || !db::isPostgresUrl(*args->db()))
+      return reportError("xapi: --class CODE needs --db SERVER (the class server's postgresql:// URL)");
+    auto code = db::normalizeClassCode(*classCode);
+    if (!code) return reportError("xapi: " + code.error().message);
+    db::OpenOptions open;
+    open.create = false;
+    auto server = db::openDatabase(*args->db(), open);
+    if (!server) return reportError("xapi: " + server.error().message);
+    auto learners = classExamLearners(*server, *code);
+    if (!learners) return reportError("xapi: " + learners.error().message);
+    std::size_t sittings = 0;
+    for (const auto& l : *learners) sittings += l.exams.size();
+    const std::string text = lessons::xapiStatementsJson(*learners, {}, options, {});
+    if (auto ok = writeFileAtomically(*out, text + "\n"); !ok) return reportError("xapi: " + ok.error().message);
+    terminalPrintf("wrote %s: statements of %s of class %s\n", out->c_str(),
+                   str::countOf(long(sittings), "graded exam sitting").c_str(), code->c_str());
+    return 0;
+  }
   auto session = LearningSession::open(args->db(), true);
   if (!session) return reportError("xapi: " + session.error().message);
   std::vector<lessons::LearnerRecords> learners;

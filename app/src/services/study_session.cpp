@@ -10,6 +10,8 @@
 #include "core/printable_text.h"
 #include "core/regular_file.h"
 #include "data_paths.h"
+#include "db/study_withdrawal.h"
+#include "quiz/study_report.h"
 #include "quiz/redcap_export.h"
 #include "quiz/responses_long_reader.h"
 #include "svg_raster.h"
@@ -190,6 +192,15 @@ Result<StudyExport> StudyExport::prepare(db::Database& database, const quiz::Stu
               "redcap_dictionary.csv", "redcap_records.csv", "redcap_repeating_forms.csv",
               "summary.csv",           "summary.md",         "summary.svg",
               "summary.png"};
+  auto withdrawn = db::studyWithdrawals(database, protocol.id);
+  if (!withdrawn) return tl::unexpected(withdrawn.error());
+  if (!withdrawn->empty()) {
+    e.withdrawalsCsv_ = "participant_id,group,withdrawal,reason,withdrawn_at_utc\n";
+    for (const db::StudyWithdrawal& w : *withdrawn)
+      e.withdrawalsCsv_ += quiz::csvQuoted(w.participantId) + "," + quiz::csvQuoted(w.group) + "," + db::toString(w.kind) +
+                           "," + quiz::csvQuoted(w.reason) + "," + w.at + "\n";
+    e.names_.push_back("withdrawals.csv");
+  }
   return e;
 }
 
@@ -208,6 +219,7 @@ Status StudyExport::writeNext() {
     case 6: st = writeFileAtomically(path.string(), quiz::summaryCsv(summary_)); break;
     case 7: st = writeFileAtomically(path.string(), quiz::summaryMarkdown(protocol_, summary_, participants_, partial_)); break;
     case 8: st = writeFileAtomically(path.string(), quiz::summarySvg(protocol_, summary_)); break;
+    case 10: st = writeFileAtomically(path.string(), withdrawalsCsv_); break;
     default: {
       auto chart = summaryChart(protocol_, summary_);
       st = chart ? writePng(path.string(), *chart) : Status(tl::unexpected(chart.error()));

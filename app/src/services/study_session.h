@@ -59,7 +59,9 @@ db::RatingRecord makeRating(const quiz::StudyProtocol& protocol, const render::P
 Result<RgbImage> summaryChart(const quiz::StudyProtocol& protocol, const quiz::StudySummary& summary);
 
 // The coordinator's export of one study: 10 files (long and wide CSV with the JSON sidecar of the
-// long one; the REDCap dictionary, records and repeating-form setting; summary CSV/Markdown/SVG/PNG).
+// long one; the REDCap dictionary, records and repeating-form setting; summary CSV/Markdown/SVG/PNG),
+// none of them with a withdrawn or excluded participant's data, and then, when the study has such
+// participants, withdrawals.csv: who, withdrawn or excluded, why and when (no data of theirs).
 // `prepare` reads the database once; `writeNext` writes one file per call.
 class StudyExport {
  public:
@@ -86,6 +88,7 @@ class StudyExport {
   std::size_t participants_ = 0, partial_ = 0;
   std::filesystem::path dir_;
   std::vector<std::string> names_;
+  std::string withdrawalsCsv_;
   std::size_t next_ = 0;
 };
 

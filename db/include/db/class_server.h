@@ -66,6 +66,8 @@ struct StudentClassProgress {
   int lessonsFinished = 0;  // distinct lessons finished at least once
   std::optional<std::int64_t> lastActive;  // Unix seconds of the newest event; none yet: nullopt
   std::optional<std::string> withdrawal;   // withdrawn or excluded: the reason given
+  int examsHandedIn = 0;                   // graded exams on the server (db/class_exams.h) handed in
+  std::optional<double> examScore;         // their mean score; none handed in: nullopt
 };
 // How the class did on one structure.
 struct StructureClassProgress {

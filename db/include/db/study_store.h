@@ -46,6 +46,7 @@ struct StudyCompletion {
   std::string participantId, group;
   int ratingsGiven = 0, ratingsExpected = 0;
   bool complete = false;
+  std::optional<std::string> withdrawal;  // "withdrawn: <reason>" or "excluded: <reason>" (db/study_withdrawal.h)
 };
 
 // Stores (or updates) a study definition. A study that already has participants may only be

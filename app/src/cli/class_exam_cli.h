@@ -1,0 +1,29 @@
+// Graded exams on a class server from the terminal (cmd_class_exam.cpp).
+#pragma once
+
+#include <optional>
+#include <string>
+
+#include "cli_args.h"
+#include "learning_session.h"
+#include "lessons/xapi.h"
+#include "terminal_answers.h"
+
+namespace at::app {
+
+// `class open-exam CODE EXAM --db SERVER [--local-db PATH] [--views DIR]` and `class close-exam`.
+int runClassOpenExam(const cli::Args& args);
+int runClassCloseExam(const cli::Args& args);
+
+// When `userName` joined a class whose server has `examId` open, sits it there (items from the
+// server, answers graded there) and returns the exit status; nullopt when the exam is this
+// machine's to give (no class, the exam not open there, or the server not reachable: practice).
+std::optional<int> runServerExam(LearningSession& session, const std::string& userName, const std::string& examId,
+                                 AnswerSource& source, const std::optional<std::string>& viewsDir, bool noViews);
+
+// The graded exams of class `code` on `server` as xAPI learner records (each member's sittings
+// with their graded answers; the items carry their choices but not their keys, which stay on the
+// server), for an instructor's or coordinator's login.
+Result<std::vector<lessons::LearnerRecords>> classExamLearners(db::Database& server, const std::string& code);
+
+}  // namespace at::app

@@ -1,0 +1,67 @@
+// A class on a fresh class server for the security tests: the toy course, a coordinator, an
+// instructor and two students, each with their own login (a URL that connects as them).
+#pragma once
+
+#include <doctest/doctest.h>
+
+#include <unistd.h>
+
+#include <atomic>
+#include <string>
+
+#include "db/class_accounts.h"
+#include "db/class_server.h"
+#include "db/course_store.h"
+#include "test_databases.h"
+#include "toy_course.h"
+
+namespace at::test {
+
+using namespace at::db;
+
+// Login names are cluster-wide; each test makes its own.
+inline std::string uniqueLogin(const std::string& stem) {
+  static std::atomic<int> counter{0};
+  return stem + "_" + std::to_string(::getpid()) + "_" + std::to_string(counter++);
+}
+
+// `url` (the administrator's) with `login` and `password` in place of its user and password.
+inline std::string loginUrl(const std::string& url, const std::string& login, const std::string& password) {
+  const auto scheme = url.find("://") + 3;
+  const auto at = url.find('@', scheme);
+  REQUIRE(at != std::string::npos);
+  return url.substr(0, scheme) + login + ":" + password + url.substr(at);
+}
+
+// A class on a fresh server with the toy course: its coordinator, an instructor and two students,
+// each with their own login, and each connected as themselves.
+struct SecureClass {
+  std::string adminUrl;
+  Database admin;
+  std::string code;
+  std::string coordinator = uniqueLogin("ada"), instructor = uniqueLogin("lee"), sam = uniqueLogin("sam"),
+              eve = uniqueLogin("eve");
+  std::string samUrl, eveUrl, coordinatorUrl, instructorUrl;
+
+  explicit SecureClass(const std::string& url) : adminUrl(url), admin(openAt(url)) {
+    REQUIRE(storeCourse(admin, test::toyCourse(), "toy"));
+    auto made = createClass(admin, "Ear anatomy", coordinator);
+    REQUIRE_MESSAGE(made, (made ? "" : made.error().message));
+    code = made->code;
+    coordinatorUrl = account(admin, coordinator, ClassRole::Coordinator);
+    Database coordinatorDb = openAt(coordinatorUrl);
+    instructorUrl = account(coordinatorDb, instructor, ClassRole::Instructor);
+    samUrl = account(coordinatorDb, sam, ClassRole::Student);
+    eveUrl = account(coordinatorDb, eve, ClassRole::Student);
+  }
+
+  std::string account(Database& by, const std::string& name, ClassRole role) {
+    auto made = createClassAccount(by, code, name, role, std::nullopt);
+    REQUIRE_MESSAGE(made, (made ? "" : made.error().message));
+    REQUIRE(made->password);
+    CHECK(made->password->size() >= 16);
+    return loginUrl(adminUrl, name, *made->password);
+  }
+};
+
+}  // namespace at::test
