@@ -98,6 +98,12 @@ void FieldService::prefetch(const std::vector<FieldRequest>& requests) {
   wake_.notify_all();
 }
 
+bool FieldService::computing(const FieldRequest& request) const {
+  const std::string key = request.key();
+  std::lock_guard lock(mutex_);
+  return runningKey_ && *runningKey_ == key;
+}
+
 bool FieldService::prefetching() const {
   std::lock_guard lock(mutex_);
   return runningPrefetch_ || !prefetches_.empty();

@@ -81,6 +81,8 @@ class FieldService {
   void prefetch(const std::vector<FieldRequest>& requests);
   // A prefetch is listed or running.
   bool prefetching() const;
+  // The field of `request` is being computed now (asked for or prefetched).
+  bool computing(const FieldRequest& request) const;
   // The labels the service reads are edited (the segment editor): the running computation is
   // cancelled and waited for (at most one WDT pass), then `write` changes the labels while no
   // computation reads them; cached fields of the `changed` labels are dropped, and a device copy
