@@ -264,6 +264,10 @@ Result<ExamResult> ExamSession::results() const {
     x.structure = item.question.question.target;
     x.kind = item.question.question.kind;
     x.answered = item.answer.has_value();
+    x.prompt = item.question.question.prompt;
+    x.rightAnswer = rightAnswerText(item.question, context_);
+    if (item.answer) x.yourAnswer = answerText(item.question, *item.answer, context_);
+    x.scene = showMeScene(item.scene, x.structure);
     if (item.answer) {
       auto grade = quiz::grade(item.question, *item.answer, context_);
       if (!grade) return tl::unexpected(grade.error());

@@ -12,9 +12,9 @@ std::string joined(const std::vector<std::string>& ids, const quiz::GradingConte
 
 }  // namespace
 
-QuestionScene showMeScene(const Step& questionStep) {
-  QuestionScene scene = sceneFor(questionStep);
-  const std::string& target = questionStep.question.target;
+QuestionScene showMeScene(const Step& questionStep) { return showMeScene(sceneFor(questionStep), questionStep.question.target); }
+
+QuestionScene showMeScene(QuestionScene scene, const std::string& target) {
   if (!target.empty() && scene.structure != target) {
     scene.structure = target;
     scene.presetId = target + "_wdt";
@@ -51,6 +51,12 @@ std::string answerText(const quiz::ResolvedQuestion& question, const quiz::Answe
   if (answer.pick) return answer.pick->structure.empty() ? "a click on no structure" : "a click on the " + context.nameInSentence(answer.pick->structure);
   if (answer.order) return joined(*answer.order, context);
   return "";
+}
+
+std::vector<int> LessonEngine::upcomingSteps(int count) const {
+  std::vector<int> out;
+  for (std::size_t p = cursor_ + 1; p < shown_.size() && int(out.size()) < count; ++p) out.push_back(shown_[p]);
+  return out;
 }
 
 std::vector<QuestionOutcome> LessonEngine::outcomes() const {

@@ -13,6 +13,7 @@
 #include <nlohmann/json.hpp>
 
 #include "database.h"  // db/'s private SQL wrapper (at_db_sql_for_tests)
+#include "desktop_exam_fixtures.h"
 #include "headless_desktop.h"
 #include "test_support.h"
 
@@ -24,6 +25,9 @@ namespace {
 
 using Run = at::test::HeadlessRun;
 using at::test::eventsOf;
+using at::test::prepareStudent;
+using at::test::StoredItem;
+using at::test::storedItems;
 
 constexpr const char* kExam = "temporal_bone.practical";
 
@@ -34,52 +38,6 @@ Run runExamScript(const json& actions, const fs::path& db) {
   options.db = db;
   options.user = "examinee";
   return at::test::runHeadless({{"actions", actions}}, options);
-}
-
-// A database whose user 'examinee' finished the exam's prerequisite lessons.
-void prepareStudent(const fs::path& db) {
-  auto database = at::db::Database::open(db.string());
-  REQUIRE(database);
-  REQUIRE(database->exec("INSERT OR IGNORE INTO users (name) VALUES ('examinee')"));  // an earlier run may have made it
-  for (const char* lesson : {"inner_ear", "facial_nerve", "middle_ear"}) {
-    auto done = database->prepare("INSERT INTO attempts (user_id, lesson_id, mode, started_at, finished_at, score)"
-                                  " SELECT id, ?1, 'guided', 100, 200, 1 FROM users WHERE name = 'examinee'");
-    REQUIRE(done);
-    done->bind(1, std::string(lesson));
-    REQUIRE(done->run());
-  }
-}
-
-struct StoredItem {
-  int position = 0;
-  std::string kind, structure, locateView;
-  std::vector<std::string> choices;
-  bool answered = false;
-  bool correct = false;
-};
-
-std::vector<StoredItem> storedItems(const fs::path& db) {
-  auto database = at::db::Database::open(db.string());
-  REQUIRE(database);
-  auto q = database->prepare("SELECT position, kind, structure, locate_view, choices, answer IS NOT NULL, coalesce(correct, 0)"
-                             " FROM exam_items ORDER BY position");
-  REQUIRE(q);
-  std::vector<StoredItem> items;
-  while (true) {
-    auto row = q->step();
-    REQUIRE(row);
-    if (!*row) break;
-    StoredItem item;
-    item.position = q->integer(0);
-    item.kind = q->text(1);
-    item.structure = q->text(2);
-    item.locateView = q->text(3);
-    item.choices = json::parse(q->text(4)).get<std::vector<std::string>>();
-    item.answered = q->integer(5) != 0;
-    item.correct = q->integer(6) != 0;
-    items.push_back(item);
-  }
-  return items;
 }
 
 // Any grade in an event: what an exam must not show before it is handed in.

@@ -122,6 +122,13 @@ TEST_CASE("exam hides names and grades until the end, saves every answer, scores
   CHECK(second.out.find("(saved)") < handedIn);
   CHECK(second.out.find("Results: 3 of 4 items right, score 0.75 — passed (pass mark 0.70)") != std::string::npos);
   CHECK(second.out.find(" 3. ") != std::string::npos);
+  {  // the review: every item with the answer given and the right one
+    const std::string review = second.out.substr(handedIn);
+    std::size_t lines = 0;
+    for (auto at = review.find("      you: "); at != std::string::npos; at = review.find("      you: ", at + 1)) ++lines;
+    CHECK(lines == 4);
+    CHECK(review.find("   answer: ") != std::string::npos);
+  }
   CHECK(scalar(db, "SELECT count(*) FROM exam_attempts WHERE finished_at IS NOT NULL AND score = 0.75 AND passed = 1") == 1);
   CHECK(scalar(db, "SELECT count(*) FROM exam_items WHERE answer IS NOT NULL") == 4);
   CHECK(scalar(db, "SELECT sum(correct) FROM exam_items") == 3);

@@ -378,6 +378,34 @@ TEST_CASE("Interactive play takes typed answers on stdin and stops cleanly at 'q
   CHECK(scalar(dbPath, "SELECT count(*) FROM responses") == 2);
 }
 
+TEST_CASE("Interactive play: 'back' shows the step before again, an answered question with its feedback; the answer stands") {
+  if (!appAvailable()) return;
+  test::TempDir dir;
+  const std::string dbPath = test::freshDatabase(dir, "b.db");
+  storeQuickCourse(dbPath);
+  const auto structures = phantomStructures();
+  // Question 0 (a name question) answered; 'back' at question 1 shows question 0 with its grade
+  // and moves on to question 1 again (input that is not a terminal does not wait), where 'quit' stops.
+  auto r = test::runApp("play quick.check --user hal --new-user --no-views --db '" + dbPath + "'",
+                        structures[0].displayName + "\nback\nquit\n");
+  CHECK_MESSAGE(r.exitCode == 0, r.err);
+  const auto count = [&](const std::string& text) {
+    std::size_t n = 0;
+    for (auto at = r.out.find(text); at != std::string::npos; at = r.out.find(text, at + 1)) ++n;
+    return n;
+  };
+  CHECK(count("Question 0 about") == 2);
+  CHECK(count("Question 1 about") == 2);
+  CHECK(count("answered:") == 1);
+  CHECK(count("✓ Correct") == 2);  // the grade, and the grade shown again
+  CHECK(scalar(dbPath, "SELECT count(*) FROM responses") == 1);
+  // 'back' from an answers file too (the show step before question 0, then question 0 again).
+  const fs::path file = writeLines(dir / "back.jsonl", {"back", "{\"text\": \"" + structures[0].displayName + "\"}"});
+  auto fromFile = test::runApp(playArgs("quick.check", "ian", file, dbPath));
+  CHECK(fromFile.out.find("Question 0 about") != std::string::npos);
+  CHECK(scalar(dbPath, "SELECT count(*) FROM responses") == 2);
+}
+
 TEST_CASE("Quiz-only play skips the teaching steps and records the attempt's mode") {
   if (!appAvailable()) return;
   test::TempDir dir;

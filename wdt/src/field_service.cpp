@@ -59,9 +59,14 @@ void FieldService::request(const FieldRequest& request) {
       if (entry.key == key) return;
     if (runningKey_ && *runningKey_ == key) {
       queued_.reset();  // the running one is what the user wants now
+      runningPrefetch_ = false;  // a prefetch of it becomes the request
       return;
     }
-    if (runningKey_) cancelRunning_ = true;
+    std::erase_if(prefetches_, [&](const FieldRequest& r) { return r.key() == key; });
+    if (runningKey_) {
+      // A prefetch cancelled for the request is tried again once the service is idle.
+      if (!cancelRunning_.exchange(true) && runningPrefetch_) prefetches_.push_front(*runningRequest_);
+    }
     queued_ = request;
   }
   wake_.notify_all();
@@ -70,7 +75,38 @@ void FieldService::request(const FieldRequest& request) {
 void FieldService::cancelAll() {
   std::lock_guard lock(mutex_);
   queued_.reset();
-  if (runningKey_) cancelRunning_ = true;
+  if (runningKey_ && !runningPrefetch_) cancelRunning_ = true;
+}
+
+void FieldService::prefetch(const std::vector<FieldRequest>& requests) {
+  {
+    std::lock_guard lock(mutex_);
+    prefetches_.clear();
+    bool runningListed = false;
+    for (const FieldRequest& r : requests) {
+      const std::string key = r.key();
+      if (runningKey_ && *runningKey_ == key) {
+        runningListed = true;
+        continue;
+      }
+      const bool cached = std::any_of(lru_.begin(), lru_.end(), [&](const Entry& e) { return e.key == key; });
+      const bool listed = std::any_of(prefetches_.begin(), prefetches_.end(), [&](const FieldRequest& p) { return p.key() == key; });
+      if (!cached && !listed) prefetches_.push_back(r);
+    }
+    if (runningPrefetch_ && !runningListed) cancelRunning_ = true;  // no longer expected
+  }
+  wake_.notify_all();
+}
+
+bool FieldService::computing(const FieldRequest& request) const {
+  const std::string key = request.key();
+  std::lock_guard lock(mutex_);
+  return runningKey_ && *runningKey_ == key;
+}
+
+bool FieldService::prefetching() const {
+  std::lock_guard lock(mutex_);
+  return runningPrefetch_ || !prefetches_.empty();
 }
 
 void FieldService::updateLabels(const std::function<void()>& write, const std::vector<std::uint16_t>& changed) {
@@ -121,12 +157,12 @@ std::vector<FinishedField> FieldService::takeFinished() {
 
 bool FieldService::busy() const {
   std::lock_guard lock(mutex_);
-  return runningKey_.has_value() || queued_.has_value();
+  return (runningKey_.has_value() && !runningPrefetch_) || queued_.has_value();
 }
 
 std::optional<FieldService::Running> FieldService::running() const {
   std::lock_guard lock(mutex_);
-  if (!runningRequest_) return std::nullopt;
+  if (!runningRequest_ || runningPrefetch_) return std::nullopt;
   Running r;
   r.request = *runningRequest_;
   r.passesDone = passesDone_.load();
@@ -143,6 +179,7 @@ void FieldService::insert(Entry entry) {
 }
 
 void FieldService::finishRunning() {
+  runningPrefetch_ = false;
   runningKey_.reset();
   runningRequest_.reset();
   changed_.notify_all();
@@ -153,10 +190,19 @@ void FieldService::run() {
     FieldRequest job;
     {
       std::unique_lock lock(mutex_);
-      wake_.wait(lock, [&] { return stop_ || queued_.has_value(); });
+      wake_.wait(lock, [&] { return stop_ || queued_.has_value() || !prefetches_.empty(); });
       if (stop_) return;
-      job = *queued_;
-      queued_.reset();
+      if (queued_) {
+        job = *queued_;
+        queued_.reset();
+        runningPrefetch_ = false;
+      } else {
+        job = prefetches_.front();
+        prefetches_.pop_front();
+        const std::string key = job.key();
+        if (std::any_of(lru_.begin(), lru_.end(), [&](const Entry& e) { return e.key == key; })) continue;
+        runningPrefetch_ = true;
+      }
       runningKey_ = job.key();
       runningRequest_ = job;
       runningSince_ = std::chrono::steady_clock::now();
@@ -182,6 +228,7 @@ void FieldService::run() {
       done.request = job;
       if (!outcome) done.message = outcome.error().message;
       else if (!warning.empty()) done.message = warning;
+      done.prefetched = runningPrefetch_;
       if (done.field) insert({job.label, *runningKey_, done.field, nullptr});
       finished_.push_back(std::move(done));
     }

@@ -84,8 +84,10 @@ Result<Asked> askItem(ExamRun& run, int position) {
                      true);
 }
 
+// The results and the review: each item, the answer given and the right one, and for an item not
+// right its answer's pictures (the target in its own view, and on a slice through it).
 void printResults(const lessons::ExamResult& r, const lessons::ExamSpec& exam,
-                  const std::map<std::string, std::string>& nameById) {
+                  const std::map<std::string, std::string>& nameById, TerminalViews* views) {
   terminalPrintf("\n%s\n", r.timeRanOut ? "Time is up." : "Handed in.");
   terminalPrintf("Results: %d of %s right, score %.2f", r.correct, str::countOf(long(r.items.size()), "item").c_str(), r.score);
   if (r.passed) terminalPrintf(" — %s (pass mark %.2f)", *r.passed ? "passed" : "not passed", exam.passScore.value_or(0));
@@ -95,6 +97,15 @@ void printResults(const lessons::ExamResult& r, const lessons::ExamSpec& exam,
     terminalPrintf("  %2d. %s (%s): ", x.position + 1, name.c_str(), quiz::toString(x.kind));
     const std::string mark = !x.answered ? "– " : x.correct ? "✓ " : x.score > 0 ? "◑ " : "✗ ";
     printWrapped(mark + x.feedback, 0);
+    terminalPrintf("      you: %s   answer: %s\n", x.answered ? x.yourAnswer.c_str() : "(none)", x.rightAnswer.c_str());
+    if (x.correct || !views || !views->pictures()) continue;
+    char stem[200];
+    std::snprintf(stem, sizeof stem, "%s-review-%02d", exam.id.c_str(), x.position + 1);
+    if (auto picture = views->show(x.scene, stem)) terminalPrintf("      view: %s\n", picture->path.c_str());
+    else terminalPrintf("      (no picture: %s)\n", picture.error().message.c_str());
+    if (auto slice = views->showSlice(x.structure, std::string(stem) + "-slice", true))
+      terminalPrintf("      slice: %s\n", slice->path.c_str());
+    else terminalPrintf("      (no slice: %s)\n", slice.error().message.c_str());
   }
 }
 
@@ -195,7 +206,7 @@ int runExam(const Argv& argv) {
   }
   auto results = session.finish();
   if (!results) return reportError("exam: " + results.error().message);
-  printResults(*results, exam, run.nameById);
+  printResults(*results, exam, run.nameById, run.views);
   return 0;
 }
 

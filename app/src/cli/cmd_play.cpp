@@ -38,7 +38,8 @@ constexpr const char* kPlayHelp =
     "predicted recall falls to 90%), until none is due or the answers end.\n\n"
     "Typed answers: the number of a choice; a name; structures separated by commas (order); for a\n"
     "locate question the pixel where the structure is in its picture, as x y (e.g. 180 135), or a\n"
-    "point in millimetres as mm X Y Z. An empty line shows what to type; 'quit' stops and saves.\n"
+    "point in millimetres as mm X Y Z. An empty line shows what to type; 'quit' stops and saves;\n"
+    "'back' goes to the previous step (an answered question shows its answer and feedback again).\n"
     "  --answers    one JSON object per line answering the questions from the current one on:\n"
     "                 {\"choice\": 2}  index of a listed choice (they are printed numbered from 0)\n"
     "                 {\"text\": \"cochlea\"}  a typed name\n"
@@ -65,13 +66,23 @@ void showPicture(TerminalViews* views, const lessons::QuestionScene& scene, cons
               locate ? "  — answer with the pixel x y where it is in this picture" : "");
 }
 
-// "Show me" after a wrong answer: the answer highlighted in its own view (lessons::showMeScene).
+// The answer's slice: the target highlighted on the axial CT slice through it.
+void showAnswerSlice(TerminalViews* views, const std::string& target, const std::string& stem) {
+  if (!views || !views->pictures() || target.empty()) return;
+  auto picture = views->showSlice(target, stem, true);
+  if (picture) terminalPrintf("  slice: %s\n", picture->path.c_str());
+  else terminalPrintf("  (no slice: %s)\n", picture.error().message.c_str());
+}
+
+// "Show me" after a wrong answer: the answer highlighted in its own view (lessons::showMeScene)
+// and on a slice through it.
 void showAnswerIfWrong(const lessons::LessonEngine& engine, TerminalViews* views, const std::string& questionId,
                        const std::string& stem) {
   for (const lessons::QuestionOutcome& o : engine.outcomes()) {
     if (o.questionId != questionId || !o.grade || o.grade->correct) continue;
     terminalPrintf("  the answer: %s\n", o.rightAnswer.c_str());
     showPicture(views, o.scene, stem + "-answer", false);
+    showAnswerSlice(views, o.target, stem + "-answer-slice");
   }
 }
 
@@ -89,6 +100,7 @@ void printLessonReview(const lessons::LessonEngine& engine, TerminalViews* views
       char stem[160];
       std::snprintf(stem, sizeof stem, "%s-review-%02d", lessonId.c_str(), o.position);
       showPicture(views, o.scene, stem, false);
+      showAnswerSlice(views, o.target, std::string(stem) + "-slice");
     }
   }
 }
@@ -216,6 +228,20 @@ int runLesson(const std::string& lessonId, lessons::LessonMode mode, PlayContext
   auto views = openTerminalViews(ctx.session.database(), datasetId, ctx.viewsDir, ctx.noViews);
 
   const bool waitOnShow = ctx.source.interactive() && isatty(0);
+  // After a step that asks nothing (a show step, a question answered before): at a terminal, Enter
+  // goes on and 'back' to the previous step. False when the input ended.
+  enum class Then { Next, Back, Stop };
+  const auto waitAfterStep = [&]() -> Then {
+    if (!waitOnShow) return Then::Next;
+    terminalPrintf("  (Enter to continue, 'back' for the previous step) ");
+    std::fflush(stdout);
+    std::string line;
+    if (!std::getline(std::cin, line)) return Then::Stop;
+    return str::lower(str::trim(line)) == "back" ? Then::Back : Then::Next;
+  };
+  const auto stepBack = [&] {
+    if (auto st = engine.back(); !st) terminalPrintf("  (%s)\n", st.error().message.c_str());
+  };
   while (!engine.atEnd()) {
     auto view = engine.current();
     if (!view) return reportError("play: " + view.error().message);
@@ -229,14 +255,29 @@ int runLesson(const std::string& lessonId, lessons::LessonMode mode, PlayContext
       showPicture(views.get(), view->scene, stem, false);
       printWrapped(view->text, 2);
       std::fflush(stdout);
-      if (waitOnShow) {
-        terminalPrintf("  (Enter to continue) ");
-        std::fflush(stdout);
-        std::string ignored;
-        if (!std::getline(std::cin, ignored)) {
-          terminalPrintf("\nstopped; run the same command to resume\n");
-          return 0;
-        }
+      const Then then = waitAfterStep();
+      if (then == Then::Stop) {
+        terminalPrintf("\nstopped; run the same command to resume\n");
+        return 0;
+      }
+      if (then == Then::Back) {
+        stepBack();
+        continue;
+      }
+    } else if (view->feedback) {  // answered before (reached by 'back'): its answer stands
+      printQuestion("[" + std::to_string(view->position) + "/" + std::to_string(view->count) + "]", view->questionKind,
+                    view->prompt, view->choiceNames);
+      showPicture(views.get(), view->scene, stem, false);
+      terminalPrintf("  answered:\n");
+      printGrade(*view->feedback);
+      const Then then = waitAfterStep();
+      if (then == Then::Stop) {
+        terminalPrintf("\nstopped; run the same command to resume\n");
+        return 0;
+      }
+      if (then == Then::Back) {
+        stepBack();
+        continue;
       }
     } else {
       printQuestion("[" + std::to_string(view->position) + "/" + std::to_string(view->count) + "]", view->questionKind,
@@ -249,7 +290,11 @@ int runLesson(const std::string& lessonId, lessons::LessonMode mode, PlayContext
         auto grade = engine.answer(answer, terminalRender(view->scene), latencyMs);
         if (!grade) return tl::unexpected(grade.error());
         return std::optional<quiz::Grade>(*grade);
-      });
+      }, false, true);
+      if (asked && *asked == Asked::Back) {
+        stepBack();
+        continue;
+      }
       if (!asked)
         return reportError("play: " + asked.error().message +
                            (asked.error().kind == ErrorKind::Io

@@ -179,7 +179,8 @@ void printGrade(const quiz::Grade& grade) {
   std::fflush(stdout);
 }
 
-Result<Asked> askQuestion(AnswerSource& source, const AskedQuestion& question, const GiveAnswer& give, bool allowSkip) {
+Result<Asked> askQuestion(AnswerSource& source, const AskedQuestion& question, const GiveAnswer& give, bool allowSkip,
+                          bool allowBack) {
   const auto shownAt = std::chrono::steady_clock::now();
   while (true) {
     auto line = source.nextLine();
@@ -188,6 +189,7 @@ Result<Asked> askQuestion(AnswerSource& source, const AskedQuestion& question, c
     if (source.interactive() && word == "quit") return Asked::Quit;
     if (source.interactive() && allowSkip && word == "skip") return Asked::Skipped;
     if (source.interactive() && allowSkip && word == "finish") return Asked::Finish;
+    if (allowBack && word == "back") return Asked::Back;
     auto answer = source.interactive() ? parseTypedAnswer(*line, question) : parseFileAnswer(*line, question);
     // Answers read from a file have no response time: 0 records "not measured" (never rated Easy).
     const auto latency = source.interactive() ? std::chrono::duration_cast<std::chrono::milliseconds>(

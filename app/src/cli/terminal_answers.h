@@ -81,15 +81,16 @@ Result<quiz::Answer> parseFileAnswer(const std::string& line, const AskedQuestio
 // "◑ Partly right: … (score 0.67 of 1)".
 void printGrade(const quiz::Grade& grade);
 
-enum class Asked { Answered, Skipped, Finish, Quit, InputEnded };
+enum class Asked { Answered, Skipped, Finish, Quit, InputEnded, Back };
 
 // Reads answers to `question` until `give` accepts one (it records it; it returns the grade to
 // print, or nullopt when grades are held back, as in exams). Interactive input may retry after a
 // bad answer, and with `allowSkip` (exams) 'skip' leaves the question and 'finish' hands in; from a
-// file a bad answer is an error naming its line. 'quit' stops. Answers read from a file are
-// recorded as untimed (latency 0).
+// file a bad answer is an error naming its line. 'quit' stops. With `allowBack` (lessons) 'back',
+// typed or a file line, goes to the previous step. Answers read from a file are recorded as
+// untimed (latency 0).
 using GiveAnswer = std::function<Result<std::optional<quiz::Grade>>(const quiz::Answer&, std::int64_t latencyMs)>;
 Result<Asked> askQuestion(AnswerSource& source, const AskedQuestion& question, const GiveAnswer& give,
-                          bool allowSkip = false);
+                          bool allowSkip = false, bool allowBack = false);
 
 }  // namespace at::app

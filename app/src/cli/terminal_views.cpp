@@ -8,6 +8,7 @@
 #include "course_views.h"
 #include "db/preset_store.h"
 #include "dataset_resolver.h"
+#include "slice_marking.h"
 #include "render/gl/egl_context.h"
 #include "render/gl/volume_renderer.h"
 #include "render/image.h"
@@ -206,7 +207,7 @@ Result<TerminalPicture> TerminalViews::show(const lessons::QuestionScene& scene,
   return TerminalPicture{path.string(), kWidth, kHeight, false};
 }
 
-Result<TerminalPicture> TerminalViews::showSlice(const std::string& targetId, const std::string& stem) {
+Result<TerminalPicture> TerminalViews::showSlice(const std::string& targetId, const std::string& stem, bool highlight) {
   if (!renderer_) return fail("pictures are off");
   const Structure* target = dataset_.findStructure(targetId);
   if (!target) return fail("structure '" + targetId + "' is not in dataset '" + dataset_.id + "'");
@@ -217,8 +218,12 @@ Result<TerminalPicture> TerminalViews::showSlice(const std::string& targetId, co
   request.axis = 2;
   request.index = voxel ? (*voxel)[2] : 0;
   request.scale = kSliceScale;
-  auto image = renderSlice(dataset_.volume, nullptr, dataset_.structures, request);  // no labels
+  const std::vector<Structure> only{*target};
+  if (highlight) request.labelAlpha = 0.65;
+  auto image = highlight ? renderSlice(dataset_.volume, &dataset_.labels, only, request)
+                         : renderSlice(dataset_.volume, nullptr, dataset_.structures, request);  // no labels
   if (!image) return tl::unexpected(image.error());
+  if (highlight) frameStructureOnSlice(*image, dataset_.labels, request, target->label, 4 * kSliceScale);
   drawPixelRulers(*image);
   const fs::path path = dir_ / (stem + ".png");
   if (auto st = writePng(path.string(), *image); !st) return tl::unexpected(st.error());

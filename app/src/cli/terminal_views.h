@@ -60,8 +60,9 @@ class TerminalViews {
   // a click on the target's centre picks the target.
   Result<TerminalPicture> show(const lessons::QuestionScene& scene, const std::string& stem, bool region = false,
                                const std::optional<std::string>& visibleTarget = std::nullopt);
-  // An axial CT slice through the target's centre, without labels, as dir/stem.png.
-  Result<TerminalPicture> showSlice(const std::string& target, const std::string& stem);
+  // An axial CT slice through the target's centre, without labels, as dir/stem.png; with
+  // `highlight` ("show me on a slice") the target alone overlaid in its colour.
+  Result<TerminalPicture> showSlice(const std::string& target, const std::string& stem, bool highlight = false);
 
   // The structure under pixel (x, y) of the last picture, with the weighted distance in mm from
   // `target` to the picked point (for tolerance bands; −1 when it could not be measured).

@@ -353,6 +353,7 @@ void DesktopModel::beginFrame(FieldTarget* target) {
       }
     }
   expertEdited();
+  prefetchLessonFields();
   fields_->update(target, recorder_);
   turnTowardTarget();
 }

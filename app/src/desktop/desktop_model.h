@@ -77,6 +77,7 @@ struct DesktopOptions {
   double renderScale = 1;           // resolution of the full-quality level (slow software GL: < 1)
   double frameBudgetMs = 100;       // at rest, finer levels predicted to cost more are not rendered
   bool scripted = false;            // a UI script drives the app: events are printed, screenshots at full quality
+  bool prefetchLessonFields = true; // a lesson's next steps' fields computed while the student reads
 };
 
 class SegmentController;
@@ -186,10 +187,18 @@ class DesktopModel {
     SliceRequest request;
     RgbImage image;            // one pixel per voxel
     std::uint64_t revision = 0;
+    // "Show me on a slice": the structure overlaid (alone, in its colour); empty for an exam
+    // item's unlabelled slice. Such a slice answers nothing and is shown with the name.
+    std::string highlighted;
   };
   const std::optional<ExamSlice>& examSlice() const { return examSlice_; }
   // A click at pixel (x, y) of the exam slice's image: answers the slice item.
   void clickSlice(double x, double y);
+  // "Show me on a slice" (a lesson's show me and review, the exam review): the axial CT slice
+  // through `structureId`'s anchor (its voxel nearest its centroid) with that structure alone
+  // overlaid, shown in place of the 3-D view until closed or the next step or item [answer_slice].
+  Status showAnswerSlice(const std::string& structureId);
+  void closeAnswerSlice();
   // The slice pixel nearest the in-slice centre of `label`'s voxels on the exam slice (nullopt:
   // no slice, or the structure is not on it).
   std::optional<std::array<double, 2>> slicePixelOf(std::uint16_t label) const;
@@ -241,6 +250,14 @@ class DesktopModel {
   void answerLocate(const Structure* clicked, const std::optional<Vec3>& pointMm);
   void clickGraded(const std::string& clicked, double distanceMm);
   void turnTowardTarget();  // an exam locate item's view (showExamItem)
+  // A running lesson's next step's full-resolution field (and the current step's, while it is still
+  // being computed) in the background while the student reads (FieldView::prefetch): a step's
+  // view is then ready when it is shown instead of seconds later on the CPU. Asked again each
+  // time the step changes; dropped when no lesson runs (desktop_model_lessons.cpp).
+  void prefetchLessonFields();
+  std::string prefetchedFor_;  // the lesson and step the prefetch list was made for
+  // The axial slice through `target`'s anchor; `highlight`: the target overlaid on it.
+  Result<ExamSlice> anchorSlice(const Structure& target, bool highlight);
   void syncStudyView();  // participant mode: the trial's structure with the preset of the side shown
   std::string idOf(std::uint16_t label) const;
 

@@ -4,6 +4,7 @@
 
 #include "desktop_model.h"
 #include "render/target_side.h"
+#include "slice_marking.h"
 
 namespace at::app {
 
@@ -13,7 +14,11 @@ void DesktopModel::showExamItem(const std::optional<ExamController::ItemScene>& 
   turnToward_.reset();
   examSlice_.reset();
   if (!item) return;
-  showLessonStructure({item->scene.structure, item->scene.presetId, item->scene.view, std::nullopt, std::nullopt, {}});
+  showLessonStructure({item->scene.structure, item->scene.presetId, item->scene.view, std::nullopt, std::nullopt, {}, false});
+  if (item->answerOnSlice) {
+    if (auto st = showAnswerSlice(item->target); !st) message("exam review: " + st.error().message);
+    return;
+  }
   if (!item->locate) return;
   const Structure* target = dataset_->findStructure(item->target);
   if (!target) {
@@ -24,25 +29,47 @@ void DesktopModel::showExamItem(const std::optional<ExamController::ItemScene>& 
     turnToward_ = Turn{target->label, lessons::toString(item->scene.view)};
     return;
   }
-  // The axial slice through the target's anchor (its voxel nearest its centroid).
-  const render::StructureFrame* frame = explore_.frameOf(target->label);
-  if (!frame) {
-    message("exam item: structure '" + item->target + "' has no voxels in dataset '" + dataset_->id + "'");
+  auto slice = anchorSlice(*target, false);  // no labels: the student finds the target
+  if (!slice) {
+    message("exam slice: " + slice.error().message);
     return;
   }
+  examSlice_ = std::move(*slice);
+  event({{"event", "exam_slice"}, {"axis", 2}, {"index", examSlice_->request.index},
+         {"width", examSlice_->image.width}, {"height", examSlice_->image.height}});
+}
+
+Result<DesktopModel::ExamSlice> DesktopModel::anchorSlice(const Structure& target, bool highlight) {
+  const render::StructureFrame* frame = explore_.frameOf(target.label);
+  if (!frame) return fail("structure '" + target.id + "' has no voxels in dataset '" + dataset_->id + "'");
   ExamSlice slice;
   slice.request.axis = 2;
   slice.request.index = int(std::lround(dataset_->labels.geometry.patientToIndex(frame->anchorMm)[2]));
-  auto image = renderSlice(dataset_->volume, nullptr, dataset_->structures, slice.request);  // no labels
-  if (!image) {
-    message("exam slice: " + image.error().message);
-    return;
-  }
+  const std::vector<Structure> only{target};
+  if (highlight) slice.request.labelAlpha = 0.65;
+  auto image = renderSlice(dataset_->volume, highlight ? &dataset_->labels : nullptr, highlight ? only : dataset_->structures,
+                           slice.request);
+  if (!image) return tl::unexpected(image.error());
+  if (highlight) frameStructureOnSlice(*image, dataset_->labels, slice.request, target.label);
   slice.image = std::move(*image);
   slice.revision = ++sliceRevision_;
-  examSlice_ = std::move(slice);
-  event({{"event", "exam_slice"}, {"axis", 2}, {"index", examSlice_->request.index},
+  if (highlight) slice.highlighted = target.id;
+  return slice;
+}
+
+Status DesktopModel::showAnswerSlice(const std::string& structureId) {
+  const Structure* target = dataset_->findStructure(structureId);
+  if (!target) return fail("no structure '" + structureId + "' in dataset '" + dataset_->id + "'");
+  auto slice = anchorSlice(*target, true);
+  if (!slice) return tl::unexpected(slice.error());
+  examSlice_ = std::move(*slice);
+  event({{"event", "answer_slice"}, {"structure", structureId}, {"axis", 2}, {"index", examSlice_->request.index},
          {"width", examSlice_->image.width}, {"height", examSlice_->image.height}});
+  return {};
+}
+
+void DesktopModel::closeAnswerSlice() {
+  if (examSlice_ && !examSlice_->highlighted.empty()) examSlice_.reset();
 }
 
 void DesktopModel::turnTowardTarget() {
@@ -64,7 +91,7 @@ void DesktopModel::turnTowardTarget() {
 }
 
 void DesktopModel::clickSlice(double x, double y) {
-  if (!examSlice_ || !exams_->wantsSliceClick()) return;
+  if (!examSlice_ || !examSlice_->highlighted.empty() || !exams_->wantsSliceClick()) return;
   const auto ijk = sliceVoxelAt(dataset_->labels.dims(), examSlice_->request, x, y);
   if (!ijk) return;  // outside the slice: no answer
   const std::uint16_t label = dataset_->labels.at((*ijk)[0], (*ijk)[1], (*ijk)[2]);

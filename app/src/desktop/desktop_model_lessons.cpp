@@ -13,6 +13,9 @@ void DesktopModel::showLessonStructure(const LessonController::Shown& shown) {
     return;
   }
   showStructureWith(shown, *preset);
+  closeAnswerSlice();  // the step before's "show me on a slice" ends here
+  if (shown.onSlice)
+    if (auto st = showAnswerSlice(shown.structure); !st) message("show me on a slice: " + st.error().message);
 }
 
 void DesktopModel::showStructureWith(const LessonController::Shown& shown, const render::Preset& preset) {
@@ -41,6 +44,45 @@ void DesktopModel::showStructureWith(const LessonController::Shown& shown, const
     clip.offsetMm = float(plane.d - dot(plane.normal, explore_.camera().target));
   }
   explore_.setClip(clip);
+}
+
+namespace {
+// The steps after the current one whose fields are prepared: one. On two busy cores a second
+// step's field (and a "show me" field) only competed with the next step's (bench/RESULTS.md).
+constexpr int kPrefetchSteps = 1;
+}  // namespace
+
+void DesktopModel::prefetchLessonFields() {
+  const auto& step = lessons_->step();
+  const lessons::LessonEngine* engine = lessons_->engine();
+  std::string key;
+  if (step && engine && !lessons_->finishedScore() && options_.prefetchLessonFields)
+    key = engine->lesson().id + "#" + std::to_string(step->index);
+  if (key == prefetchedFor_) return;
+  prefetchedFor_ = key;
+  std::vector<std::pair<std::uint16_t, WdtParams>> fields;
+  if (!key.empty()) {
+    const auto& steps = engine->lesson().steps;
+    std::vector<lessons::QuestionScene> scenes;
+    // The step on screen first: its field, prefetched before, keeps being computed.
+    std::vector<int> indices{step->index};
+    for (int index : engine->upcomingSteps(kPrefetchSteps)) indices.push_back(index);
+    for (int index : indices) {
+      const lessons::Step& next = steps[std::size_t(index)];
+      lessons::QuestionScene scene = next.kind == lessons::StepKind::Question ? lessons::sceneFor(next) : lessons::QuestionScene{};
+      if (next.kind == lessons::StepKind::Show) scene.structure = next.show.structure, scene.presetId = next.show.presetId;
+      scenes.push_back(scene);
+    }
+    for (const lessons::QuestionScene& scene : scenes) {
+      const Structure* s = dataset_->findStructure(scene.structure);
+      if (!s) continue;
+      auto preset = presetForStep(library_, scene.structure, scene.presetId, explore_.levels(), &session_.database());
+      if (!preset || preset->mode == render::RenderMode::Bare) continue;
+      if (auto params = render::wdtParamsFor(*preset)) fields.emplace_back(s->label, *params);
+    }
+  }
+  fields_->prefetch(fields);
+  if (!fields.empty()) event({{"event", "prefetch"}, {"step", step->index}, {"fields", fields.size()}});
 }
 
 bool DesktopModel::previewHidesNames() const {

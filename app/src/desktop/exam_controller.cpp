@@ -180,7 +180,8 @@ Status ExamController::show(int position) {
   text.clear();
   shownAt_ = SteadyClock::now();
   const bool locate = view->kind == quiz::QuestionKind::Locate;
-  show_(ItemScene{view->scene, view->target, locate, locate && view->locateView == lessons::ExamLocateView::Slice});
+  show_(ItemScene{view->scene, view->target, locate, locate && view->locateView == lessons::ExamLocateView::Slice,
+                  false});
   json e = {{"event", "exam_item"}, {"exam", session_->exam().id}, {"position", position}, {"count", view->count},
             {"kind", quiz::toString(view->kind)}, {"prompt", view->prompt}, {"answered", view->answered},
             {"seconds_left", session_->secondsLeft()}};
@@ -266,7 +267,8 @@ void ExamController::finished(const lessons::ExamResult& r) {
   json items = json::array();
   for (const lessons::ExamItemResult& x : r.items)
     items.push_back({{"position", x.position}, {"structure", x.structure}, {"kind", quiz::toString(x.kind)},
-                     {"answered", x.answered}, {"correct", x.correct}, {"score", x.score}, {"feedback", x.feedback}});
+                     {"answered", x.answered}, {"correct", x.correct}, {"score", x.score}, {"feedback", x.feedback},
+                     {"your_answer", x.yourAnswer}, {"right_answer", x.rightAnswer}});
   json e = {{"event", "exam_finished"}, {"exam", session_->exam().id}, {"score", r.score}, {"answered", r.answered},
             {"correct", r.correct}, {"time_ran_out", r.timeRanOut}, {"items", items}};
   e["passed"] = r.passed ? json(*r.passed) : json(nullptr);
@@ -287,6 +289,21 @@ void ExamController::leave() {
 void ExamController::closeResults() {
   result_.reset();
   session_.reset();
+  show_(std::nullopt);
+}
+
+Status ExamController::showResultItem(int index, bool onSlice) {
+  if (!result_) return fail("no exam results to review: hand the exam in first");
+  if (index < 0 || index >= int(result_->items.size()))
+    return fail("the exam review has items 0.." + std::to_string(int(result_->items.size()) - 1) + ", not " +
+                std::to_string(index));
+  const lessons::ExamItemResult& x = result_->items[std::size_t(index)];
+  ItemScene scene{x.scene, x.structure, false, false, onSlice};
+  show_(scene);
+  events_({{"event", "exam_review_item"}, {"index", index}, {"structure", x.structure}, {"preset", x.scene.presetId},
+           {"view", lessons::toString(x.scene.view)}, {"slice", onSlice}, {"answered", x.answered},
+           {"correct", x.correct}, {"your_answer", x.yourAnswer}, {"right_answer", x.rightAnswer}});
+  return {};
 }
 
 }  // namespace at::app

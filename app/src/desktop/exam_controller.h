@@ -38,6 +38,9 @@ class ExamController {
     std::string target;     // the item's structure (for framing and picking; never shown)
     bool locate = false;    // a click answers it
     bool slice = false;     // locate on an axial slice through the target, not in the 3-D view
+    // The review after the exam: the target highlighted on the axial slice through its anchor
+    // (shown in place of the 3-D view), besides the scene.
+    bool answerOnSlice = false;
   };
   using ShowItem = std::function<void(const std::optional<ItemScene>&)>;
   using RenderStateSource = std::function<lessons::RenderState()>;
@@ -100,6 +103,10 @@ class ExamController {
   Status finish();                                   // hands in [exam_finished]
   void leave();                                      // answers saved, the clock runs on
   void closeResults();
+  // The review after the exam: result item `index` (0-based, as result()->items) in its show-me
+  // scene (the target in its own WDT view, lessons::ExamItemResult::scene), `onSlice` also on a
+  // slice through the target [exam_review_item]. Only once the exam is handed in.
+  Status showResultItem(int index, bool onSlice = false);
   // Shows an error in the lesson panel (and on stderr).
   void report(const std::string& text) { lessons_.report(text); }
 

@@ -44,6 +44,19 @@ std::string FieldView::idOf(std::uint16_t label) const {
   return st ? st->id : std::to_string(label);
 }
 
+void FieldView::prefetch(const std::vector<std::pair<std::uint16_t, WdtParams>>& fields) {
+  std::vector<FieldRequest> requests;
+  for (const auto& [label, params] : fields) {
+    FieldRequest r;
+    r.label = label;
+    r.params = params;
+    r.params.downsample = 1;
+    r.params.backend = WdtBackend::Auto;  // as request() asks, so that the keys agree
+    requests.push_back(r);
+  }
+  service_->prefetch(requests);
+}
+
 void FieldView::hoverChanged() {
   declinedKey_.clear();
   hoverSince_ = Clock::now();
@@ -96,6 +109,11 @@ void FieldView::takeFinished() {
       (notes_ ? notes_ : messages_)("No CUDA GPU: distance fields run on the " + f.device +
                                     ", coarse while hovering, full resolution at rest.");
     }
+    if (f.prefetched) {  // not on screen yet: no status line
+      events_({{"event", "field_prefetched"}, {"structure", id}, {"downsample", f.request.params.downsample},
+               {"ms", f.ms}, {"device", f.device}});
+      continue;
+    }
     char buf[200];
     std::snprintf(buf, sizeof buf, "%s: field 1/%d in %.0f ms on %s", id.c_str(), f.request.params.downsample, f.ms,
                   f.device.c_str());
@@ -124,7 +142,11 @@ void FieldView::update(FieldTarget* target, FrameRecorder& recorder) {
   const bool coarseReady = coarseCached.ready();
   const bool resting = msBetween(hoverSince_, Clock::now()) > kRefineFieldAfterMs;
   if (!fineReady && !clickWaiting) {
-    if (fine->key() == declinedKey_ && (coarseReady || coarseDownsample() == 1)) {
+    if (service_->computing(*fine)) {
+      // Already on its way (a lesson step's field prefetched while the student read the step
+      // before): taken over as the request rather than cancelled for a coarse one.
+      service_->request(*fine);
+    } else if (fine->key() == declinedKey_ && (coarseReady || coarseDownsample() == 1)) {
       // the user cancelled this full-resolution field: keep the coarse one
     } else if (gpuFields_ || coarseDownsample() == 1 || (coarseReady && resting)) {
       service_->request(*fine);

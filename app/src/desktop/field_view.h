@@ -17,6 +17,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <nlohmann/json.hpp>
@@ -69,6 +70,12 @@ class FieldView {
   void gradeClickDistance(const std::string& clicked, std::uint16_t target, const Vec3& pointMm);
   bool clickPending() const { return pendingClick_.has_value(); }
 
+  // Full-resolution fields the view is expected to need soon (a lesson's next steps: label and the
+  // WDT parameters of the preset it will be shown with), computed while the service is otherwise
+  // idle (wdt::FieldService::prefetch) [field_prefetched as each arrives]. Replaces the last list;
+  // an empty list drops it.
+  void prefetch(const std::vector<std::pair<std::uint16_t, WdtParams>>& fields);
+  bool prefetching() const { return service_->prefetching(); }
   // The full-resolution field being computed, if any: cancelled, and not asked again (an event
   // "field_cancelled" says how far it got). False when none was running.
   bool cancelFineField();

@@ -266,7 +266,7 @@ Status LessonController::showCurrent() {
   json e = {{"event", "lesson_step"}, {"lesson", runningLesson_}, {"position", view->position},
             {"count", view->count}, {"kind", lessons::toString(view->kind)}};
   if (view->kind == lessons::StepKind::Show) {
-    show_({view->structure, view->presetId, view->view, view->scene.camera, view->scene.clip, {}});
+    show_({view->structure, view->presetId, view->view, view->scene.camera, view->scene.clip, {}, false});
     e["structure"] = view->structure;
   } else {
     auto question = engine_->currentQuestion();
@@ -278,7 +278,7 @@ Status LessonController::showCurrent() {
     // The question's scene (lessons::sceneFor): identify and name questions highlight their
     // target; a locate question shows its region, a neighbouring landmark, without marking it.
     show_({view->scene.structure, view->scene.presetId, view->scene.view, view->scene.camera, view->scene.clip,
-           locateTarget(asked.question)});
+           locateTarget(asked.question), false});
     asked_ = std::move(asked);
     e["question"] = view->questionId;
     e["question_kind"] = quiz::toString(view->questionKind);
@@ -406,7 +406,7 @@ Status LessonController::startReview() {
   for (const std::string& id : asked.question.choices) asked.choiceNames.push_back(displayName(id));
   const quiz::QuestionKind kind = asked.question.question.kind;
   const lessons::QuestionScene& scene = (*question)->scene;
-  show_({scene.structure, scene.presetId, scene.view, scene.camera, scene.clip, locateTarget(asked.question)});
+  show_({scene.structure, scene.presetId, scene.view, scene.camera, scene.clip, locateTarget(asked.question), false});
   events_({{"event", "review_question"}, {"course", course.id}, {"question", asked.question.question.id},
            {"question_kind", quiz::toString(kind)}, {"target", asked.question.question.target},
            {"choices", asked.question.choices}});

@@ -47,6 +47,9 @@ class LessonController {
     std::optional<lessons::StepCamera> camera;  // replaces the view's framing
     std::optional<lessons::StepClip> clip;      // none: unclipped
     std::string alsoInView;  // a locate question's target: framed with the structure, not marked
+    // "Show me on a slice": besides the 3-D view, the axial CT slice through the structure's
+    // anchor with the structure alone overlaid, shown in place of the 3-D view until the next step.
+    bool onSlice = false;
   };
   using ShowStructure = std::function<void(const Shown&)>;
   // The render parameters on screen, stored with each answer.
@@ -132,12 +135,13 @@ class LessonController {
   Status back();
   // "Show me", once the question asked is answered: its target highlighted in its own WDT view
   // from the question's side (lessons::showMeScene), the explanation staying in the feedback
-  // [show_me]. Back at the question with back()/next().
-  Status showMe();
+  // [show_me]. Back at the question with back()/next(). `onSlice`: the target highlighted on a
+  // slice through its anchor as well (Shown::onSlice).
+  Status showMe(bool onSlice = false);
   // The lesson just finished, question by question (lessons::LessonEngine::outcomes); empty
   // while a lesson runs. showReviewItem shows one of them in its show-me view [review_item].
   const std::vector<lessons::QuestionOutcome>& lessonReview() const { return review_; }
-  Status showReviewItem(int index);
+  Status showReviewItem(int index, bool onSlice = false);
   void leave();                                // answers are saved: Resume continues the attempt
   void backToLessons();                        // after the score
   Result<quiz::Grade> answer(const quiz::Answer& answer);  // grades and records [graded]

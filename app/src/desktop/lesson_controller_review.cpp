@@ -12,7 +12,7 @@ Status LessonController::back() {
   return showCurrent();
 }
 
-Status LessonController::showMe() {
+Status LessonController::showMe(bool onSlice) {
   if (!asked_ || !asked_->grade) return fail("answer the question first; then \"show me\" shows the answer");
   const std::string& questionId = asked_->question.question.id;
   std::optional<lessons::QuestionScene> scene;
@@ -22,20 +22,21 @@ Status LessonController::showMe() {
     scene = reviewSession_->showMeScene();
   }
   if (!scene) return fail("question '" + questionId + "' has no view to show its answer in");
-  show_({scene->structure, scene->presetId, scene->view, scene->camera, scene->clip, {}});
+  show_({scene->structure, scene->presetId, scene->view, scene->camera, scene->clip, {}, onSlice});
   events_({{"event", "show_me"}, {"question", questionId}, {"structure", scene->structure},
-           {"preset", scene->presetId}, {"view", lessons::toString(scene->view)}});
+           {"preset", scene->presetId}, {"view", lessons::toString(scene->view)}, {"slice", onSlice}});
   return {};
 }
 
-Status LessonController::showReviewItem(int index) {
+Status LessonController::showReviewItem(int index, bool onSlice) {
   if (index < 0 || index >= int(review_.size())) {
     return fail("the lesson review has items 0.." + std::to_string(int(review_.size()) - 1) + ", not " +
                 std::to_string(index));
   }
   const lessons::QuestionOutcome& o = review_[std::size_t(index)];
-  show_({o.scene.structure, o.scene.presetId, o.scene.view, o.scene.camera, o.scene.clip, {}});
+  show_({o.scene.structure, o.scene.presetId, o.scene.view, o.scene.camera, o.scene.clip, {}, onSlice});
   events_({{"event", "review_item"}, {"index", index}, {"question", o.questionId}, {"structure", o.scene.structure},
+           {"slice", onSlice},
            {"correct", o.grade && o.grade->correct}, {"your_answer", o.yourAnswer}, {"right_answer", o.rightAnswer}});
   return {};
 }

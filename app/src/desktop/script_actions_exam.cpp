@@ -84,6 +84,15 @@ ScriptInterpreter::Outcome ScriptInterpreter::examFinish(Context& c) {
   return Progress::Done;
 }
 
+// {"do": "exam_review_item", "index": i, "slice": false}: a row of the exam's results, shown as
+// its "show" (or "slice") button shows it.
+ScriptInterpreter::Outcome ScriptInterpreter::examReviewItem(Context& c) {
+  if (c.model.exams().preparing()) return Progress::Running;
+  if (auto st = c.model.exams().showResultItem(c.action.value("index", -1), c.action.value("slice", false)); !st)
+    return actionError(c.action, st.error());
+  return Progress::Done;
+}
+
 ScriptInterpreter::Outcome ScriptInterpreter::examLeave(Context& c) {
   if (c.model.exams().preparing()) return Progress::Running;
   c.model.exams().leave();

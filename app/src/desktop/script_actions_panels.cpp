@@ -112,14 +112,15 @@ ScriptInterpreter::Outcome ScriptInterpreter::lessonNext(Context& c) {
 }
 
 // {"do": "lesson_back"}, {"do": "show_me"}, {"do": "lesson_review_item", "index": i}: the
-// Lessons panel's Back, Show me and review rows.
+// Lessons panel's Back, Show me and review rows; with "slice": true their "on a slice" buttons.
 ScriptInterpreter::Outcome ScriptInterpreter::lessonReview(Context& c) {
   LessonController& l = c.model.lessons();
   if (l.preparing()) return Progress::Running;
   const std::string verb = c.action.at("do").get<std::string>();
+  const bool onSlice = c.action.value("slice", false);
   Status st = verb == "lesson_back" ? l.back()
-              : verb == "show_me"   ? l.showMe()
-                                    : l.showReviewItem(c.action.value("index", -1));
+              : verb == "show_me"   ? l.showMe(onSlice)
+                                    : l.showReviewItem(c.action.value("index", -1), onSlice);
   if (!st) return actionError(c.action, st.error());
   return Progress::Done;
 }

@@ -35,6 +35,7 @@ const std::map<std::string, ScriptInterpreter::Handler>& ScriptInterpreter::hand
       {"clip", &S::clip},               {"expert", &S::expert},
       {"cancel_field", &S::cancelField}, {"wait", &S::wait},
       {"wait_field", &S::waitField},    {"screenshot", &S::screenshot},
+      {"widgets", &S::widgets},
       {"layout", &S::layout},
       {"record", &S::record},           {"report", &S::report},
       {"hover_sweep", &S::hoverSweep},  {"lesson_user", &S::lessonUser},
@@ -47,6 +48,7 @@ const std::map<std::string, ScriptInterpreter::Handler>& ScriptInterpreter::hand
       {"exam_item", &S::examItem},      {"exam_answer", &S::examAnswer},
       {"slice_click", &S::sliceClick},  {"slice_click_structure", &S::sliceClickStructure},
       {"exam_finish", &S::examFinish},  {"exam_leave", &S::examLeave},
+      {"exam_review_item", &S::examReviewItem},
       {"analytics", &S::analytics},
       {"tf_add_point", &S::tfEdit},     {"tf_move_point", &S::tfEdit},
       {"tf_delete_point", &S::tfEdit},  {"tf_colour", &S::tfEdit},
@@ -288,13 +290,37 @@ ScriptInterpreter::Outcome ScriptInterpreter::wait(Context& c) {
 }
 
 ScriptInterpreter::Outcome ScriptInterpreter::waitField(Context& c) {
-  if (c.model.settled()) return Progress::Done;
+  if (c.model.settled()) {  // how long the view took to be final (a step's full field on the CPU)
+    c.model.event({{"event", "field_settled"}, {"ms", c.elapsedMs}});
+    return Progress::Done;
+  }
   if (c.elapsedMs > c.action.value("timeout_ms", 120000.0)) return timedOut("wait_field timed out");
   return Progress::Running;
 }
 
 ScriptInterpreter::Outcome ScriptInterpreter::screenshot(Context& c) {
   c.host.requestScreenshot(c.action.at("path").get<std::string>());
+  return Progress::Done;
+}
+
+// {"do": "widgets"}: where frames drawn wholly after the action began drew the named widgets, once
+// two frames in a row agree (ImGui applies a scroll the frame after it is asked for), with the
+// window's size ("1280x720") [widgets]; at most 2 s.
+ScriptInterpreter::Outcome ScriptInterpreter::widgets(Context& c) {
+  const json drawn = c.host.widgetRects();
+  const std::uint64_t frame = drawn.value("frame", std::uint64_t(0));
+  if (c.first) {
+    widgetsAfterFrame_ = frame + 1;  // the frame being drawn may predate the action
+    widgetsLast_ = json();
+  }
+  if (c.host.drawsPanels() && c.elapsedMs < 2000) {
+    if (frame <= widgetsAfterFrame_) return Progress::Running;
+    if (drawn.at("widgets") != widgetsLast_) {
+      widgetsLast_ = drawn.at("widgets");
+      return Progress::Running;
+    }
+  }
+  c.model.event({{"event", "widgets"}, {"window", c.host.windowText()}, {"widgets", drawn.at("widgets")}});
   return Progress::Done;
 }
 

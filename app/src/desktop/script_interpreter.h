@@ -6,10 +6,11 @@
 //   view:     select, t, mode, view, hover, hover_structure, click, click_structure, orbit, zoom, clip,
 //             expert, cancel_field (hover and click at {x, y} or at {view_at: [fx, fy]} of the view)
 //   waiting:  wait {ms}, wait_field {timeout_ms} (the view settled: final quality, the field shown)
-//   output:   screenshot {path}, record {on}, report {out}, hover_sweep {dwell_ms, out}, layout
-//   lessons:  lesson_user, lessons, lesson, lesson_next, answer, review, lesson_close
+//   output:   screenshot {path}, widgets, record {on}, report {out}, hover_sweep {dwell_ms, out}, layout
+//   lessons:  lesson_user, lessons, lesson, lesson_next, lesson_back, show_me {slice},
+//             lesson_review_item {index, slice}, answer, review, lesson_close
 //   exams:    exams, exam, exam_item, exam_answer, slice_click, slice_click_structure, exam_finish,
-//             exam_leave
+//             exam_leave, exam_review_item {index, slice}
 //   analytics: analytics {course, group, tab} (the Class analytics window on that class), analytics {close}
 //   expert:   tf_add_point, tf_move_point, tf_delete_point, tf_colour, preset_set, preset_save
 //   studies:  study_start, study_toggle, study_rate, study_comment, study_next, study_close,
@@ -53,6 +54,9 @@ class ScriptHost {
   // The host draws the panels (a window): an action that changes a panel's screen waits until
   // the new screen is on display, whatever the frame rate (false: nothing is drawn, no wait).
   virtual bool drawsPanels() const = 0;
+  // Where the last frame drew the widgets the panels name, and how many frames were drawn
+  // ({"frame": n, "widgets": {…}}, ui/widget_rects.h); none without a window.
+  virtual nlohmann::json widgetRects() const { return {{"frame", 0}, {"widgets", nlohmann::json::object()}}; }
 };
 
 class ScriptInterpreter {
@@ -105,6 +109,7 @@ class ScriptInterpreter {
   Outcome wait(Context&);
   Outcome waitField(Context&);
   Outcome screenshot(Context&);
+  Outcome widgets(Context&);  // [widgets] the window's size and ScriptHost::widgetRects
   Outcome record(Context&);
   Outcome report(Context&);
   Outcome hoverSweep(Context&);
@@ -113,7 +118,7 @@ class ScriptInterpreter {
   Outcome lessonList(Context&);
   Outcome lesson(Context&);
   Outcome lessonNext(Context&);
-  Outcome lessonReview(Context&);  // lesson_back, show_me, lesson_review_item {"index": i}
+  Outcome lessonReview(Context&);  // lesson_back, show_me, lesson_review_item {"index": i}; "slice": true
   Outcome answer(Context&);
   Outcome review(Context&);
   Outcome lessonClose(Context&);
@@ -125,6 +130,7 @@ class ScriptInterpreter {
   Outcome sliceClick(Context&);
   Outcome sliceClickStructure(Context&);
   Outcome examFinish(Context&);
+  Outcome examReviewItem(Context&);  // {"index": i, "slice": false}
   Outcome examLeave(Context&);
   Outcome analytics(Context&);  // script_actions_analytics.cpp
   Outcome tfEdit(Context&);
@@ -169,6 +175,8 @@ class ScriptInterpreter {
   std::deque<nlohmann::json> actions_;
   std::optional<std::string> finalScreenshot_;
   bool begun_ = false;
+  std::uint64_t widgetsAfterFrame_ = 0;  // "widgets": report a frame drawn after this one
+  nlohmann::json widgetsLast_;           // ... whose rectangles agree with the frame before
   Clock::time_point actionStart_;
   bool finished_ = false;
   int status_ = 0;

@@ -105,6 +105,13 @@ struct ExamItemResult {
   bool correct = false;
   double score = 0;
   std::string feedback;  // the grading feedback, or "Not answered."
+  // For the review after the exam: the item's prompt, the student's answer and the key in words
+  // (lessons::answerText / rightAnswerText; yourAnswer empty when not answered), and the scene that
+  // shows the answer (showMeScene of the item's scene: the target in its own WDT view).
+  std::string prompt;
+  std::string yourAnswer;
+  std::string rightAnswer;
+  QuestionScene scene;
 };
 
 struct ExamResult {

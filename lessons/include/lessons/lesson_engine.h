@@ -93,6 +93,9 @@ struct QuestionOutcome {
 // question's camera and clip. For relation and order questions the target is the structure the
 // question trains (Question::target).
 QuestionScene showMeScene(const Step& questionStep);
+// The same for a question asked in `asked` (an exam item's or a review question's scene) about
+// `target`: the scene, its structure and preset replaced by the target's when they differ.
+QuestionScene showMeScene(QuestionScene asked, const std::string& target);
 
 // The key of a resolved question and an answer to it, in words (display names of `context`).
 std::string rightAnswerText(const quiz::ResolvedQuestion& question, const quiz::GradingContext& context);
@@ -126,6 +129,10 @@ class LessonEngine {
   Result<StepView> current() const;
   // The resolved question of the current step (keys included; for the app's pick sampling).
   Result<quiz::ResolvedQuestion> currentQuestion() const;
+
+  // The indices (in lesson().steps) of up to `count` steps this mode shows after the current one,
+  // in order: what a view can prepare while the student reads.
+  std::vector<int> upcomingSteps(int count) const;
 
   // Grades and records the answer to the current question step. Errors: not a question step,
   // already answered, an answer that does not fit (reported, nothing recorded), storage failure

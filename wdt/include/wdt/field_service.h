@@ -5,6 +5,10 @@
 // running computation is cancelled through WdtControl::cancel unless it is for the same key. The
 // caller asks `cached` for what exists and `takeFinished` for what arrived; it waits only where it
 // asks to, for a bounded time (`waitFor`).
+// Prefetches (`prefetch`: fields the caller expects to need soon, e.g. a lesson's next steps) run
+// only while no request is queued or running, in the order given; a request cancels a running
+// prefetch for another key (the prefetch is tried again afterwards), and a request for the key a
+// prefetch is computing takes that computation over.
 // Finished fields go into a small LRU cache keyed by structure label, downsample factor and the
 // WDT parameters that shape the field.
 //
@@ -19,6 +23,7 @@
 #include <atomic>
 #include <chrono>
 #include <condition_variable>
+#include <deque>
 #include <cstdint>
 #include <functional>
 #include <list>
@@ -53,6 +58,7 @@ struct FinishedField {
   double ms = 0;
   std::string device;
   std::string message;  // error, or the backend's warning (e.g. why auto fell back to the CPU)
+  bool prefetched = false;  // computed for `prefetch`, not asked for by `request`
 };
 
 class FieldService {
@@ -68,7 +74,15 @@ class FieldService {
   // cancels a running one for another key.
   void request(const FieldRequest& request);
   // Drops the queued request and cancels the running one (e.g. the user left the structure).
+  // Prefetches stay listed.
   void cancelAll();
+  // Replaces the list of fields to compute while the service is otherwise idle (cached ones are
+  // skipped); an empty list drops it and cancels a running prefetch.
+  void prefetch(const std::vector<FieldRequest>& requests);
+  // A prefetch is listed or running.
+  bool prefetching() const;
+  // The field of `request` is being computed now (asked for or prefetched).
+  bool computing(const FieldRequest& request) const;
   // The labels the service reads are edited (the segment editor): the running computation is
   // cancelled and waited for (at most one WDT pass), then `write` changes the labels while no
   // computation reads them; cached fields of the `changed` labels are dropped, and a device copy
@@ -127,6 +141,8 @@ class FieldService {
   std::condition_variable wake_;
   std::condition_variable changed_;  // an entry was cached or a computation ended (waitFor)
   std::optional<FieldRequest> queued_;
+  std::deque<FieldRequest> prefetches_;  // front first; taken only while queued_ is empty
+  bool runningPrefetch_ = false;         // the running computation is a prefetch
   std::optional<std::string> runningKey_;
   std::optional<FieldRequest> runningRequest_;
   std::chrono::steady_clock::time_point runningSince_;

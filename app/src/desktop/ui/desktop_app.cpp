@@ -22,6 +22,7 @@
 #include "segment_controller.h"
 #include "volume/png_image.h"
 #include "volume_view.h"
+#include "widget_rects.h"
 #include "window.h"
 
 namespace at::app {
@@ -51,6 +52,7 @@ class DesktopApp final : public ScriptHost {
   }
   std::string glText() const override { return window_->glDescription(); }
   bool drawsPanels() const override { return true; }
+  nlohmann::json widgetRects() const override { return app::widgetRects(); }
 
  private:
   void handleEvent(const SDL_Event& e);
@@ -172,6 +174,7 @@ void DesktopApp::takeScreenshot(render::RgbaImage& image, const Status& read) {
 }
 
 void DesktopApp::drawUi() {
+  clearWidgetRects();  // what the last frame drew becomes widgetRects()
   const ViewLayout& l = model_->layout();
   const float panelW = l.panelWidth();
   StudyController& study = model_->study();
@@ -198,7 +201,8 @@ void DesktopApp::drawUi() {
     ImGui::GetBackgroundDrawList()->AddImage(reinterpret_cast<ImTextureID>(image.handle), ImVec2(panelW, 0),
                                              ImVec2(panelW + viewW, viewH), ImVec2(image.uv0[0], image.uv1[1]),
                                              ImVec2(image.uv1[0], image.uv0[1]));
-  const bool sliceShown = model_->examSlice() && model_->exams().running();  // drawn over the 3-D view below
+  const bool sliceShown = model_->examSlice() && (model_->exams().running() || !model_->examSlice()->highlighted.empty());
+  // ... drawn over the 3-D view below
   if (view_->available() && view_->image().handle && !sliceShown)
     drawViewOverlay(model_->explore().camera(), panelW, 0, viewW, viewH, l.uiScale);
   if (!study.participantActive())  // a locate-on-slice exam item: the slice in place of the 3-D view
@@ -272,7 +276,8 @@ void DesktopApp::handleEvent(const SDL_Event& e) {
 
 constexpr const char* kDesktopHelp =
     "usage: anatomy-tutor [desktop] [--course ID] [--dataset D] [--ui-script FILE.json [--screenshot OUT.png]] [--size WxH]\n"
-    "                             [--render-scale S] [--frame-budget MS] [--max-fps N] [--db PATH] [--user NAME]\n"
+    "                             [--render-scale S] [--frame-budget MS] [--max-fps N] [--no-prefetch] [--db PATH]\n"
+    "                             [--user NAME]\n"
     "  Opens the desktop app on a course (explore: hover to highlight, click to select).\n"
     "  --course     the course to start on, by id (`anatomy-tutor courses`; e.g. skull, the head CT's\n"
     "               course): its dataset, on its first lesson's first view (default: temporal_bone)\n"
@@ -291,6 +296,8 @@ constexpr const char* kDesktopHelp =
     "  --frame-budget  frame time the refinement at rest stays within (default 100 ms)\n"
     "  --max-fps    start frames at most N times a second (scripted runs swap without vsync and\n"
     "               otherwise draw as fast as they can; 60 measures them as on a 60 Hz display)\n"
+    "  --no-prefetch  do not compute a lesson's next steps' distance fields while the student reads\n"
+    "               (to measure what the prefetch saves)\n"
     "  --db, --user and --size may also stand before the command.\n"
     "  AT_GL_DEBUG=1 (environment): a debug GL context; each GL error is printed with the call that\n"
     "               raised it (for a bug report when the view says it met a GL error)\n";
@@ -298,7 +305,8 @@ constexpr const char* kDesktopHelp =
 }  // namespace
 
 int runDesktop(const std::vector<std::string>& argv) {
-  auto args = cli::Args::parse(argv, {"dataset", "course", "ui-script", "screenshot", "render-scale", "frame-budget", "max-fps"}, {});
+  auto args = cli::Args::parse(argv, {"dataset", "course", "ui-script", "screenshot", "render-scale", "frame-budget", "max-fps"},
+                               {"no-prefetch"});
   if (!args) return reportError("desktop: " + args.error().message, 2);
   if (args->has("help")) {
     std::string actions;
@@ -326,6 +334,7 @@ int runDesktop(const std::vector<std::string>& argv) {
   auto maxFps = args->number("max-fps", 0);
   if (!maxFps || !(*maxFps == 0 || (*maxFps >= 1 && *maxFps <= 1000))) return reportError("desktop: --max-fps must be a number in 1..1000", 2);
   options.maxFps = *maxFps;
+  options.model.prefetchLessonFields = !args->has("no-prefetch");
   auto renderScale = args->number("render-scale", options.model.renderScale);
   if (!renderScale || !(*renderScale >= 0.1 && *renderScale <= 1)) return reportError("desktop: --render-scale must be a number in 0.1..1", 2);
   options.model.renderScale = *renderScale;

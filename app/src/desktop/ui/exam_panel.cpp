@@ -6,13 +6,15 @@
 #include <imgui_stdlib.h>
 
 #include "core/strings.h"
+#include "quiz/name_matching.h"
 #include "panels.h"
 #include "core/printable_text.h"
 
 namespace at::app {
 
 namespace {
-const ImVec4 kRight{0.5f, 1, 0.5f, 1}, kWrong{1, 0.5f, 0.4f, 1}, kHeading{1, 0.75f, 0.3f, 1}, kQuestion{0.6f, 0.8f, 1, 1};
+const ImVec4 kRight{0.5f, 1, 0.5f, 1}, kWrong{1, 0.5f, 0.4f, 1}, kPartly{1, 0.8f, 0.3f, 1}, kHeading{1, 0.75f, 0.3f, 1},
+    kQuestion{0.6f, 0.8f, 1, 1};
 
 std::string minutes(lessons::UnixSeconds seconds) {
   char text[32];
@@ -156,21 +158,36 @@ void ExamPanel::drawResults(ExamController& exams) {
   if (r.passed && exam)
     ImGui::TextColored(*r.passed ? kRight : kWrong, "%s (pass mark %s)", *r.passed ? "Passed" : "Not passed",
                        percent(exam->passScore.value_or(0)).c_str());
+  if (ImGui::Button("Back to the lessons")) {
+    exams.closeResults();
+    ImGui::PopTextWrapPos();
+    return;
+  }
   ImGui::Separator();
-  for (const lessons::ExamItemResult& x : r.items) {
-    const ImVec4 colour = !x.answered ? ImVec4(0.6f, 0.6f, 0.6f, 1) : x.correct ? kRight : kWrong;
+  // The review: each item, the answer given and the right one; "show" puts the answer up in its
+  // own view, "slice" on a slice through it as well.
+  for (int i = 0; i < int(r.items.size()); ++i) {
+    const lessons::ExamItemResult& x = r.items[std::size_t(i)];
+    const ImVec4 colour = !x.answered ? ImVec4(0.6f, 0.6f, 0.6f, 1) : x.correct ? kRight : x.score > 0 ? kPartly : kWrong;
     const char* mark = !x.answered ? "not answered" : x.correct ? "right" : x.score > 0 ? "partly right" : "wrong";
-    ImGui::TextColored(colour, "%d. %s (%s): %s", x.position + 1, printableUiText(exams.displayName(x.structure)).c_str(),
-                       quiz::toString(x.kind), mark);
-    if (x.answered && !x.correct) ImGui::TextDisabled("   %s", printableUiText(x.feedback).c_str());
+    ImGui::PushID(i);
+    ImGui::TextColored(colour, "%d. %s (%s)", x.position + 1, printableUiText(x.prompt).c_str(), mark);
+    ImGui::TextDisabled("you: %s  -  answer: %s", printableUiText(x.answered ? x.yourAnswer : "(none)").c_str(),
+                        printableUiText(x.rightAnswer).c_str());
+    if (ImGui::SmallButton("show"))
+      if (auto st = exams.showResultItem(i); !st) exams.report(st.error().message);
+    ImGui::SameLine();
+    if (ImGui::SmallButton("slice"))
+      if (auto st = exams.showResultItem(i, true); !st) exams.report(st.error().message);
+    ImGui::PopID();
   }
   ImGui::PopTextWrapPos();
-  if (ImGui::Button("Back to the lessons")) exams.closeResults();
 }
 
 void ExamPanel::drawSlice(DesktopModel& model, float x, float y, float w, float h) {
   const auto& slice = model.examSlice();
-  if (!slice || !model.exams().running()) return;
+  const bool answer = slice && !slice->highlighted.empty();  // "show me on a slice"
+  if (!slice || (!answer && !model.exams().running())) return;
   if (!slice_ || sliceRevision_ != slice->revision) {
     sliceRevision_ = slice->revision;
     render::RgbaImage rgba(slice->image.width, slice->image.height);
@@ -195,7 +212,20 @@ void ExamPanel::drawSlice(DesktopModel& model, float x, float y, float w, float 
   ImGui::Begin("Exam slice", nullptr,
                ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoResize | ImGuiWindowFlags_NoCollapse |
                    ImGuiWindowFlags_NoTitleBar | ImGuiWindowFlags_NoScrollbar);
-  ImGui::TextDisabled("Axial CT slice %d (labels hidden): click the structure asked for.", slice->request.index);
+  if (answer) {
+    const Structure* shown = model.dataset().findStructure(slice->highlighted);
+    const std::string name = shown && !shown->displayName.empty() ? shown->displayName : slice->highlighted;
+    ImGui::TextDisabled("Axial CT slice %d: the %s in colour, framed.", slice->request.index,
+                        printableUiText(quiz::nameInSentence(name)).c_str());
+    ImGui::SameLine();
+    if (ImGui::SmallButton("Back to the 3-D view")) {
+      model.closeAnswerSlice();
+      ImGui::End();
+      return;
+    }
+  } else {
+    ImGui::TextDisabled("Axial CT slice %d (labels hidden): click the structure asked for.", slice->request.index);
+  }
   if (!sliceError_.empty()) ImGui::TextColored(kWrong, "%s", sliceError_.c_str());
   const ImVec2 avail = ImGui::GetContentRegionAvail();
   const float scale = std::max(0.1f, std::min(avail.x / float(slice->image.width), avail.y / float(slice->image.height)));

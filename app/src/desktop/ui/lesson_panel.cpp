@@ -9,6 +9,7 @@
 #include "lessons/repositories.h"
 #include "panels.h"
 #include "volume/dataset_source.h"
+#include "widget_rects.h"
 #include "core/printable_text.h"
 
 namespace at::app {
@@ -134,6 +135,9 @@ void LessonPanel::drawLesson(LessonController& lessons) {
       ImGui::SameLine();
       if (ImGui::SmallButton("show"))
         if (auto st = lessons.showReviewItem(i); !st) lessons.report(st.error().message);
+      ImGui::SameLine();
+      if (ImGui::SmallButton("slice"))
+        if (auto st = lessons.showReviewItem(i, true); !st) lessons.report(st.error().message);
       ImGui::PopID();
     }
     ImGui::PopTextWrapPos();
@@ -165,6 +169,7 @@ void LessonPanel::drawLesson(LessonController& lessons) {
   if (!canGo) ImGui::BeginDisabled();
   if (ImGui::Button(v.position == v.count ? "Finish" : "Next"))
     if (auto st = lessons.next(); !st) lessons.report(st.error().message);
+  noteWidget("lesson_next");
   if (!canGo) ImGui::EndDisabled();
   // Once an answer is graded, its feedback and Next are scrolled into view (a small window, a
   // long question): once per question, so the student may scroll back up.
@@ -242,9 +247,15 @@ void LessonPanel::drawQuestion(LessonController& lessons) {
     // agrees: green, amber for a partial score, red.
     const ImVec4 colour = a.grade->correct ? kRight : a.grade->score > 0 ? kPartly : kWrong;
     ImGui::TextColored(colour, "%s", printableUiText(a.grade->feedback).c_str());
+    noteWidget("lesson_feedback");
     if (a.review) ImGui::TextDisabled("Saved: the review queue is updated.");
-    if (!a.grade->correct && ImGui::Button("Show me"))  // the answer in its own view
-      if (auto st = lessons.showMe(); !st) lessons.report(st.error().message);
+    if (!a.grade->correct) {
+      if (ImGui::Button("Show me"))  // the answer in its own view
+        if (auto st = lessons.showMe(); !st) lessons.report(st.error().message);
+      ImGui::SameLine();
+      if (ImGui::Button("... on a slice"))  // and on a CT slice through it
+        if (auto st = lessons.showMe(true); !st) lessons.report(st.error().message);
+    }
   }
   if (a.review && ImGui::Button(a.grade ? "Done" : "Skip")) lessons.dismissReview();
   ImGui::PopTextWrapPos();

@@ -1,0 +1,118 @@
+// wdt/'s field service prefetching (a lesson's next steps computed while the student reads):
+// prefetched fields equal requested ones, never hold up a request, and are never computed twice.
+#include <doctest/doctest.h>
+
+#include <algorithm>
+#include <chrono>
+#include <functional>
+#include <thread>
+
+#include "test_support.h"
+#include "volume/mask.h"
+#include "volume/phantom.h"
+#include "wdt/field_service.h"
+
+using namespace at;
+using wdt::FieldRequest;
+using wdt::FieldService;
+
+namespace {
+
+FieldRequest requestFor(const Dataset& ds, const std::string& structure, int downsample, bool converge = false) {
+  const Structure* s = ds.findStructure(structure);
+  REQUIRE(s != nullptr);
+  FieldRequest r;
+  r.label = s->label;
+  r.params.downsample = downsample;
+  r.params.converge = converge;
+  r.params.backend = WdtBackend::Cpu;
+  return r;
+}
+
+bool waitUntil(const std::function<bool()>& done, double seconds = 120) {
+  const auto until = std::chrono::steady_clock::now() + std::chrono::duration<double>(seconds);
+  while (!done()) {
+    if (std::chrono::steady_clock::now() > until) return false;
+    std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  }
+  return true;
+}
+
+}  // namespace
+
+TEST_CASE("FieldService_Prefetch_ComputesTheListInOrder_WithoutCountingAsBusy") {
+  const Dataset& ds = test::phantomOfSize(48);
+  FieldService service(ds.volume, ds.labels, 8);
+  const std::vector<FieldRequest> list{requestFor(ds, "cochlea", 1), requestFor(ds, "stapes", 1), requestFor(ds, "malleus", 2)};
+  service.prefetch(list);
+  CHECK(service.prefetching());
+  CHECK_FALSE(service.busy());          // the view may go idle: nothing it asked for is pending
+  CHECK_FALSE(service.running());       // no progress bar for a prefetch
+  REQUIRE(waitUntil([&] { return !service.prefetching(); }));
+  const auto finished = service.takeFinished();
+  REQUIRE(finished.size() == list.size());
+  for (std::size_t i = 0; i < list.size(); ++i) {
+    CHECK(finished[i].request.key() == list[i].key());
+    CHECK(finished[i].prefetched);
+    auto cached = service.cached(list[i]);
+    REQUIRE(cached.host);
+    auto direct = computeWdt(ds.volume, structureMask(ds.labels, list[i].label), list[i].params);
+    REQUIRE(direct);
+    CHECK(cached.host->distances.voxels == direct->field.distances.voxels);
+  }
+  // Listing cached fields again computes nothing.
+  service.prefetch(list);
+  CHECK_FALSE(service.prefetching());
+  service.request(list[0]);
+  CHECK_FALSE(service.busy());
+  CHECK(service.takeFinished().empty());
+}
+
+TEST_CASE("FieldService_RequestDuringAPrefetch_GoesFirst_AndThePrefetchIsDoneAfterwards") {
+  const Dataset& ds = test::phantomOfSize(96);
+  FieldService service(ds.volume, ds.labels, 8);
+  const FieldRequest slow = requestFor(ds, "cochlea", 1, true);  // many passes: still running below
+  service.prefetch({slow});
+  REQUIRE(waitUntil([&] { return service.prefetching(); }));
+  std::this_thread::sleep_for(std::chrono::milliseconds(30));  // the worker has taken it up
+  const FieldRequest quick = requestFor(ds, "stapes", 4);
+  service.request(quick);
+  CHECK(service.busy());
+  REQUIRE(waitUntil([&] { return service.cached(quick).ready(); }));
+  REQUIRE(waitUntil([&] { return !service.prefetching() && !service.busy(); }));
+  CHECK(service.cached(slow).ready());  // tried again once the request was served
+  const auto finished = service.takeFinished();
+  REQUIRE(finished.size() == 2);
+  CHECK(finished[0].request.key() == quick.key());
+  CHECK_FALSE(finished[0].prefetched);
+  CHECK(finished[1].request.key() == slow.key());
+  CHECK(finished[1].prefetched);
+}
+
+TEST_CASE("FieldService_RequestForTheFieldBeingPrefetched_TakesItOver_NotComputedTwice") {
+  const Dataset& ds = test::phantomOfSize(96);
+  FieldService service(ds.volume, ds.labels, 8);
+  const FieldRequest slow = requestFor(ds, "cochlea", 1, true);
+  service.prefetch({slow});
+  std::this_thread::sleep_for(std::chrono::milliseconds(30));
+  service.request(slow);  // the student reached the step before its field was ready
+  REQUIRE(waitUntil([&] { return service.cached(slow).ready() && !service.busy() && !service.prefetching(); }));
+  CHECK(service.cancelledCount() == 0);
+  const auto finished = service.takeFinished();
+  CHECK(std::count_if(finished.begin(), finished.end(), [&](const wdt::FinishedField& f) { return f.request.key() == slow.key(); }) == 1);
+}
+
+TEST_CASE("FieldService_EmptyPrefetchList_CancelsARunningPrefetch_ButNotARequest") {
+  const Dataset& ds = test::phantomOfSize(96);
+  FieldService service(ds.volume, ds.labels, 8);
+  const FieldRequest slow = requestFor(ds, "cochlea", 1, true);
+  service.prefetch({slow});
+  std::this_thread::sleep_for(std::chrono::milliseconds(30));
+  service.prefetch({});  // the lesson ended
+  REQUIRE(waitUntil([&] { return !service.prefetching(); }));
+  CHECK_FALSE(service.cached(slow).ready());
+  const FieldRequest asked = requestFor(ds, "stapes", 2);
+  service.request(asked);
+  service.prefetch({});
+  REQUIRE(waitUntil([&] { return service.cached(asked).ready(); }));
+}
