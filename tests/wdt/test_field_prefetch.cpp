@@ -38,6 +38,12 @@ bool waitUntil(const std::function<bool()>& done, double seconds = 120) {
   return true;
 }
 
+// The size of the phantom whose converged cochlea field stands for a prefetch still running when the
+// test's next call comes: large enough that the field takes hundreds of milliseconds even on an
+// idle machine (a converged 96³ field was done within the test's 30 ms wait), so the cases below
+// meet their precondition however fast or loaded the machine is.
+constexpr int kSlowFieldSize = 256;
+
 }  // namespace
 
 TEST_CASE("FieldService_Prefetch_ComputesTheListInOrder_WithoutCountingAsBusy") {
@@ -69,7 +75,7 @@ TEST_CASE("FieldService_Prefetch_ComputesTheListInOrder_WithoutCountingAsBusy") 
 }
 
 TEST_CASE("FieldService_RequestDuringAPrefetch_GoesFirst_AndThePrefetchIsDoneAfterwards") {
-  const Dataset& ds = test::phantomOfSize(96);
+  const Dataset& ds = test::phantomOfSize(kSlowFieldSize);
   FieldService service(ds.volume, ds.labels, 8);
   const FieldRequest slow = requestFor(ds, "cochlea", 1, true);  // many passes: still running below
   service.prefetch({slow});
@@ -103,7 +109,7 @@ TEST_CASE("FieldService_RequestForTheFieldBeingPrefetched_TakesItOver_NotCompute
 }
 
 TEST_CASE("FieldService_EmptyPrefetchList_CancelsARunningPrefetch_ButNotARequest") {
-  const Dataset& ds = test::phantomOfSize(96);
+  const Dataset& ds = test::phantomOfSize(kSlowFieldSize);
   FieldService service(ds.volume, ds.labels, 8);
   const FieldRequest slow = requestFor(ds, "cochlea", 1, true);
   service.prefetch({slow});
