@@ -38,6 +38,7 @@ std::string accountUrl(const std::string& adminUrl, const std::string& code, con
 }  // namespace
 
 TEST_CASE("ClassExamCli_InstructorOpensStudentSitsOnTheServer_ProgressAndXapiShowTheServersGrade") {
+  if (!test::requireAppBinary("the class exam CLI test")) return;
   auto url = test::freshPostgresDatabase("the class exam CLI test");
   if (!url) return;
   test::TempDir dir;
