@@ -9,7 +9,7 @@
 #include "database.h"  // db/'s private SQL wrapper (at_db_sql_for_tests)
 #include "db/class_server.h"
 #include "db/course_store.h"
-#include "db/sqlite_repositories.h"
+#include "db/sql_repositories.h"
 #include "lessons/lesson_engine.h"
 #include "test_databases.h"
 #include "test_support.h"
@@ -31,14 +31,14 @@ std::int64_t count(Database& db, const std::string& sql) { return test::scalarCo
 struct LearnerMachine {
   Database db;
   std::int64_t userId = 0;
-  SqliteCurriculumRepository curriculum;
-  SqliteProgressRepository progress;
+  SqlCurriculumRepository curriculum;
+  SqlProgressRepository progress;
   test::ToyKeys keys;
 
   LearnerMachine(const std::string& path, const std::string& name)
       : db(openAt(path)), curriculum(db, test::toyBuiltin()), progress(db) {
     REQUIRE(storeCourse(db, test::toyCourse(), "toy"));
-    SqliteUserRepository users(db);
+    SqlUserRepository users(db);
     auto user = users.createUser(name, Role::Student, "");
     REQUIRE(user);
     userId = user->id;
