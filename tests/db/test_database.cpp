@@ -623,8 +623,10 @@ TEST_CASE("Several programs opening one fresh database at once create its schema
 
 TEST_CASE("A class server that closes the connection or restarts: the program goes on, nothing lost or doubled") {
   if (!test::testingOnPostgres()) return;  // a server's behaviour
-  test::TempDir dir;
-  const std::string url = test::freshDatabase(dir, "server");
+  test::PrivatePostgres server;             // stopped below: a cluster of its own, not the shared one
+  const auto fresh = server.freshDatabase("the server-restart test");
+  if (!fresh) return;
+  const std::string url = *fresh;
   auto db = Database::open(url);
   REQUIRE(db);
   const auto insertPreset = [&](const std::string& id) {
@@ -644,9 +646,9 @@ TEST_CASE("A class server that closes the connection or restarts: the program go
   CHECK(insertPreset("after terminate"));
   CHECK(countRows(*db, "presets") == 2);
 
-  if (!test::stopTestPostgres()) return;  // a server this process did not start: not ours to stop
+  REQUIRE(server.stop());
   auto whileDown = insertPreset("while down");
-  bool restarted = test::restartTestPostgres();
+  bool restarted = server.restart();
   REQUIRE(restarted);
   REQUIRE_FALSE(whileDown);
   CHECK((whileDown.error().kind == ErrorKind::Unavailable));
