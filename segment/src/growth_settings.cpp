@@ -69,14 +69,25 @@ std::array<float, 2> boneRangeStored(const Volume& volume, const IntensityModel&
     return {low, std::max(low, float(top))};
   }
   // Plain intensities: a pseudo-HU scale from two landmarks, air (the histogram window's low end,
-  // −1000 HU) and soft tissue (the commonest value above the body's threshold, the midpoint of the
-  // window's low end and the mean of all voxels above it: 0 HU), then kBoneHu on that scale.
+  // −1000 HU) and soft tissue (the commonest value above the valley after the body's threshold, the
+  // midpoint of the window's low end and the mean of all voxels above it: 0 HU), then kBoneHu on
+  // that scale.
   const int air = int(intensity.window[0]);
   double count = 0, sum = 0;
   for (std::size_t v = std::size_t(air + 32768); v < histogram.size(); ++v)
     count += double(histogram[v]), sum += double(histogram[v]) * (double(v) - 32768.0);
   const int body = count > 0 ? int(std::lround(0.5 * (air + sum / count))) : air;
-  std::size_t soft = std::size_t(body + 32768);
+  // From the body's threshold down the air peak's tail to the valley (the histogram smoothed over
+  // 5 values falls no further), then the commonest value above: a scan that is mostly air has more
+  // voxels in the air's tail just above the threshold than at the soft tissue's peak.
+  const auto smoothed = [&](std::size_t v) {
+    std::uint64_t sum = 0;
+    for (std::size_t u = v >= 2 ? v - 2 : 0; u <= v + 2 && u < histogram.size(); ++u) sum += histogram[u];
+    return sum;
+  };
+  std::size_t valley = std::size_t(body + 32768);
+  while (valley + 1 < histogram.size() && smoothed(valley + 1) <= smoothed(valley) && smoothed(valley) > 0) ++valley;
+  std::size_t soft = valley;
   for (std::size_t v = soft; v < histogram.size(); ++v)
     if (histogram[v] > histogram[soft]) soft = v;
   const double softValue = double(soft) - 32768.0;

@@ -108,6 +108,60 @@ ScriptInterpreter::Outcome ScriptInterpreter::segmentGrow(Context& c) {
   return Progress::Done;
 }
 
+// {"do": "segment_growth", "bone_only": true, "range": [lo, hi], "limit": false, "base_per_voxel": b,
+// "window": [lo, hi], "smoothing": s, "defaults": true, "wait": true}: the Segment window's growth
+// settings, each key as its widget sets it ("bone_only" as the "bone" button: the limit on, the
+// data's bone range; "defaults" as "Data defaults", first); keys left out stay. A growth on screen
+// grows again with them (the live preview); with "wait" the script goes on once it is applied.
+ScriptInterpreter::Outcome ScriptInterpreter::segmentGrowth(Context& c) {
+  SegmentController& s = c.model.segmenter();
+  if (c.first) {
+    const json& a = c.action;
+    for (const auto& [key, value] : a.items()) {
+      (void)value;
+      static const char* known[] = {"do", "bone_only", "range", "limit", "base_per_voxel", "window", "smoothing", "defaults", "wait"};
+      if (std::none_of(std::begin(known), std::end(known), [&](const char* k) { return key == k; }))
+        return fail("ui script: segment_growth: unknown key \"" + key + "\"");
+    }
+    if (a.value("defaults", false)) s.resetGrowthSettings();
+    SegmentController::GrowthSettings settings = s.growthSettings();
+    const auto pair = [&](const char* key) -> Result<std::array<double, 2>> {
+      const auto v = a.at(key).get<std::vector<double>>();
+      if (v.size() != 2) return fail(std::string("ui script: segment_growth: \"") + key + "\" must be [low, high]");
+      return std::array<double, 2>{v[0], v[1]};
+    };
+    if (a.value("bone_only", false)) settings.limitRange = true, settings.range = s.growthDefaults().boneRangeValues;
+    if (a.contains("range")) {
+      auto range = pair("range");
+      if (!range) return tl::unexpected(range.error());
+      settings.limitRange = true, settings.range = *range;
+    }
+    if (a.contains("limit")) settings.limitRange = a.at("limit").get<bool>();
+    if (a.contains("window")) {
+      auto window = pair("window");
+      if (!window) return tl::unexpected(window.error());
+      settings.window = *window;
+    }
+    if (a.contains("base_per_voxel")) settings.basePerVoxel = a.at("base_per_voxel").get<double>();
+    if (a.contains("smoothing")) settings.smoothingVoxels = a.at("smoothing").get<double>();
+    if (auto st = s.setGrowthSettings(settings); !st) return tl::unexpected(st.error());
+    if (!a.value("wait", true)) return Progress::Done;
+  }
+  if (s.growing()) return Progress::Running;
+  if (s.growError()) return tl::unexpected(*s.growError());
+  return Progress::Done;
+}
+
+// {"do": "segment_system", "name": "mandible", "system": "skull bones"}: a structure's system
+// (browsing group), as the Segment window's "system" field sets it; stored with segment_save.
+ScriptInterpreter::Outcome ScriptInterpreter::segmentSystem(Context& c) {
+  SegmentController& s = c.model.segmenter();
+  auto label = s.labelNamed(c.action.at("name").get<std::string>());
+  if (!label) return tl::unexpected(label.error());
+  if (auto st = s.setSystem(*label, c.action.at("system").get<std::string>()); !st) return tl::unexpected(st.error());
+  return Progress::Done;
+}
+
 // {"do": "segment_threshold", "voxel": [i, j, k], "low": 150, "high": 255, "min_diameter_mm": 0}:
 // the connected region of values in the range under the voxel takes the current label (low and
 // high default to the dataset's window).

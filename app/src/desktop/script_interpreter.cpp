@@ -62,6 +62,7 @@ const std::map<std::string, ScriptInterpreter::Handler>& ScriptInterpreter::hand
       {"segment_open", &S::segmentOpen}, {"segment_label", &S::segmentLabel},
       {"segment_slice", &S::segmentSlice}, {"segment_seed", &S::segmentSeed},
       {"segment_grow", &S::segmentGrow}, {"segment_undo", &S::segmentUndo},
+      {"segment_growth", &S::segmentGrowth}, {"segment_system", &S::segmentSystem},
       {"segment_redo", &S::segmentRedo}, {"segment_review", &S::segmentReview},
       {"segment_tool", &S::segmentTool},
       {"segment_clear_seeds", &S::segmentClearSeeds}, {"segment_save", &S::segmentSave},

@@ -48,8 +48,8 @@ struct GrowthDefaults {
   // their quarter below 105 … 115, soft tissue's 95th percentile ≤ 67 HU). Vessels and kidneys
   // enhanced by contrast (200 … 400 HU) lie in that range too: there the user raises it. Plain intensities from kBoneHu
   // on a pseudo-HU scale set by two landmarks of the histogram — air (its 0.5th percentile, −1000
-  // HU) and soft tissue (the commonest value above the midpoint of air and the mean above air,
-  // 0 HU) — to the largest value. A scan without soft tissue (a dry skull) has no soft-tissue
+  // HU) and soft tissue (the commonest value above the valley that follows the midpoint of air and
+  // the mean above air, 0 HU) — to the largest value. A scan without soft tissue (a dry skull) has no soft-tissue
   // peak: there the user sets the range.
   std::array<double, 2> boneRangeValues{};
   std::string summary;        // one line: "base 0.0123/mm (0.00123 per 0.1 mm voxel), window 0 … 255"
