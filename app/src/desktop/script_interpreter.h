@@ -191,6 +191,8 @@ class ScriptInterpreter {
   Outcome segmentSlice(Context&);
   Outcome segmentSeed(Context&);
   Outcome segmentGrow(Context&);
+  Outcome segmentGrowth(Context&);
+  Outcome segmentSystem(Context&);
   Outcome segmentUndo(Context&);
   Outcome segmentRedo(Context&);
   Outcome segmentReview(Context&);
