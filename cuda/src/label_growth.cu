@@ -9,6 +9,9 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <cstdio>
+#include <cstdlib>
+#include <string>
 #include <vector>
 
 #include "cuda/wdt_cuda.h"
@@ -29,13 +32,24 @@ using wdt::CostKernel;
 
 constexpr std::int32_t kInf = wdt::kGrowthInf;
 
-// The queues of the rounds: flags and lists per round parity (2 × bricks ints each), counters
-// [round % 3] of the lists' lengths, and the statistics.
+// The queues of the rounds: flags, lists and keys per round parity (2 × bricks ints each),
+// counters [round % 3] of the lists' lengths, the smallest key queued for each round, the visits
+// made in each round, and the statistics. A queued brick's key is a lower bound of the distances
+// its visit can write: the smallest distance among the voxels whose lowering queued it (0 for
+// seeds and reset labels). Keys only order the visits (ordered rounds, solveGrowth); any order
+// reaches the same fixed point.
+constexpr int kMinKeyCounter = 7;   // [7..9]: smallest key queued for round r, at 7 + r % 3
+constexpr int kVisitCounter = 10;   // [10..12]: bricks listed for a visit in round r, at 10 + r % 3
+constexpr int kCounters = 13;
+constexpr std::int32_t kNoKey = 0x7F7F7F7F;  // above every distance (the scale keeps them < 2^30); memset byte 0x7F
+
 struct Queues {
   int* flags = nullptr;
   int* lists = nullptr;
+  int* keys = nullptr;
+  int* visitList = nullptr;  // bricks ints: the bricks a round visits (solveGrowth)
   int* counters = nullptr;  // [0..2] list lengths, [3] rounds run, [4] bricks still active,
-                            // [5] visits, [6] voxels reset
+                            // [5] visits, [6] voxels reset, then kMinKeyCounter, kVisitCounter
   int brickCount = 0;
 };
 
@@ -48,8 +62,14 @@ __device__ __forceinline__ int brickOfVoxel(const GridShape& g, int x, int y, in
   return x / kEdge + g.bricks[0] * (y / kEdge + g.bricks[1] * (z / kEdge));
 }
 
-__device__ __forceinline__ void activate(const Queues& q, int brick, int parity, int counter) {
+// Queues `brick` for the round of list `parity` and counter `counter` with key at most `key`. The
+// caller also lowers that round's smallest key to `key` (noteKey), once for many activations.
+__device__ __forceinline__ void activate(const Queues& q, int brick, int parity, int counter, int key) {
+  atomicMin(q.keys + std::size_t(parity) * q.brickCount + brick, key);
   activateBrick(q.flags, q.counters, q.lists, q.brickCount, brick, parity, counter);
+}
+__device__ __forceinline__ void noteKey(const Queues& q, int counter, int key) {
+  atomicMin(q.counters + kMinKeyCounter + counter, key);
 }
 
 __global__ void fillKeys(unsigned long long* keys, std::size_t count, unsigned long long value) {
@@ -73,7 +93,10 @@ __global__ void resetLabels(unsigned long long* keys, GridShape g, const unsigne
     const int x = int(i % std::size_t(g.n[0])), y = int((i / std::size_t(g.n[0])) % std::size_t(g.n[1])),
               z = int(i / (std::size_t(g.n[0]) * g.n[1]));
     const int brick = brickOfVoxel(g, x, y, z);
-    if (*static_cast<volatile int*>(q.flags + brick) == 0) activate(q, brick, 0, 0);
+    if (*static_cast<volatile int*>(q.flags + brick) == 0) {
+      activate(q, brick, 0, 0, 0);
+      noteKey(q, 0, 0);
+    }
   }
   if (n) atomicAdd(q.counters + 6, n);
 }
@@ -86,7 +109,8 @@ __global__ void writeSeeds(unsigned long long* keys, GridShape g, const unsigned
     keys[i] = wdt::packGrowthKey(0, label[s]);
     const int x = int(i % std::size_t(g.n[0])), y = int((i / std::size_t(g.n[0])) % std::size_t(g.n[1])),
               z = int(i / (std::size_t(g.n[0]) * g.n[1]));
-    activate(q, brickOfVoxel(g, x, y, z), 0, 0);
+    activate(q, brickOfVoxel(g, x, y, z), 0, 0, 0);
+    noteKey(q, 0, 0);
   }
 }
 
@@ -113,6 +137,7 @@ struct GrowthShared {
   unsigned long long key[kCells];
   float f[kCells];
   unsigned mask;
+  int lowest;                // the smallest distance the visit lowered a voxel to
 };
 
 struct SolveArgs {
@@ -124,6 +149,11 @@ struct SolveArgs {
   float base;
   float scale;                   // fixed-point units per unit of cost
   int maxRounds;
+  // Ordered rounds (solveGrowth): the first window above the smallest queued key, and the visits a
+  // round may make per block before the window halves / below which it doubles. ordered false:
+  // every queued brick is visited in every round.
+  bool ordered;
+  int window0, fewVisits, manyVisits;
 };
 
 // The sweep pair (+ then −) along brick axis A with the growth's stencil. Returns whether the
@@ -184,7 +214,10 @@ __device__ void visitBrick(const SolveArgs& a, int brick, int round, GrowthShare
   // Thread (tx, ty) loads the brick's column (tx, ty, 0..15), then its halo cells
   // (forEachHaloCell). Keys are read through L2 only: other multiprocessors write them during the
   // kernel.
-  if (t == 0) sh.mask = 0;
+  if (t == 0) {
+    sh.mask = 0;
+    sh.lowest = kNoKey;
+  }
   const int tx = t % kEdge, ty = t / kEdge;
   const bool column = tx < ext[0] && ty < ext[1];
   const std::size_t g0 = std::size_t(o[0] + tx) + nx * std::size_t(o[1] + ty) + nxy * std::size_t(o[2]);
@@ -213,6 +246,7 @@ __device__ void visitBrick(const SolveArgs& a, int brick, int round, GrowthShare
   // The state still holds what this visit loaded (only this brick writes its voxels): store the
   // column's voxels whose key went down, read again rather than kept in registers through the sweeps.
   unsigned mask = 0;
+  int lowest = kNoKey;
   if (changed && column) {
     unsigned long long before[kEdge];
 #pragma unroll
@@ -225,18 +259,33 @@ __device__ void visitBrick(const SolveArgs& a, int brick, int round, GrowthShare
         if (key != before[z]) {
           a.keys[g0 + nxy * std::size_t(z)] = key;
           mask |= wdt::brickNeighbourMask(tx, ty, z, kEdge);
+          lowest = min(lowest, wdt::growthKeyDistance(key));
         }
       }
     }
   }
+  lowest = __reduce_min_sync(0xffffffffu, lowest);
+  if ((t & 31) == 0 && lowest < kNoKey) atomicMin(&sh.lowest, lowest);
   const int next = (round + 1) % 3;
-  queueAfterVisit(mask, changed, t, brick, b, nb, &sh.mask, [&](int n) { activate(a.q, n, 1 - p, next); });
+  // queueAfterVisit's barrier orders the block's minimum before its reads here.
+  queueAfterVisit(mask, changed, t, brick, b, nb, &sh.mask, [&](int n) { activate(a.q, n, 1 - p, next, sh.lowest); });
+  if (t == 0 && sh.lowest < kNoKey) noteKey(a.q, next, sh.lowest);
   __syncthreads();  // shared memory is the next visit's
 }
 
 // Round r reads list r % 2 (length in counter r % 3), queues for round r + 1 into list (r + 1) % 2
 // (counter (r + 1) % 3) and zeroes counter (r + 2) % 3, which every block read before the last
 // barrier (brick_solver.cu's protocol).
+//
+// Ordered rounds (a.ordered): a round visits only the queued bricks whose key lies within a window
+// above the round's smallest key, and queues the others again for the next round with their keys
+// (brick-level Δ-stepping): the front is worked from the seeds outwards, so fewer bricks are
+// visited with distances that a cheaper path lowers again later. A round has two phases: all
+// threads of the grid sort the list's bricks into this round's visit list and the next round's
+// list; after a grid barrier, block b visits entries b, b + G, b + 2G … of the visit list (G
+// blocks), so the visits spread evenly over the blocks. The window doubles after a round that
+// listed fewer than fewVisits visits a block and halves after one of more than manyVisits; every
+// block computes it from the same count, read after the barrier.
 template <CostKernel K>
 __global__ void __launch_bounds__(kThreads) solveGrowth(SolveArgs a) {
   extern __shared__ unsigned char shared[];
@@ -244,17 +293,55 @@ __global__ void __launch_bounds__(kThreads) solveGrowth(SolveArgs a) {
   const int t = int(threadIdx.x);
   cg::grid_group grid = cg::this_grid();
   int round = 0, active = 0, visits = 0;
+  long long window = a.window0;
+  const int G = int(gridDim.x);
   for (;; ++round) {
     active = __ldcg(a.q.counters + round % 3);
     if (active == 0 || round == a.maxRounds) break;
-    const int p = round & 1;
-    for (int j = int(blockIdx.x); j < active; j += int(gridDim.x)) {
-      const int brick = __ldcg(a.q.lists + std::size_t(p) * a.q.brickCount + j);
-      if (t == 0) a.q.flags[std::size_t(p) * a.q.brickCount + brick] = 0;  // may be queued again in round + 2
-      visitBrick<K>(a, brick, round, sh, t);
+    const int p = round & 1, next = (round + 1) % 3;
+    int* keys = a.q.keys + std::size_t(p) * a.q.brickCount;
+    int* flags = a.q.flags + std::size_t(p) * a.q.brickCount;
+    const int* list = a.q.lists + std::size_t(p) * a.q.brickCount;
+    const long long limit =
+        a.ordered ? (long long)__ldcg(a.q.counters + kMinKeyCounter + round % 3) + window : (long long)kNoKey;
+    for (int first = int(blockIdx.x) * kThreads; first < active; first += G * kThreads) {
+      const int j = first + t;
+      int carried = kNoKey, brick = 0;
+      bool visit = false;
+      if (j < active) {
+        brick = __ldcg(list + j);
+        const int key = __ldcg(keys + brick);
+        flags[brick] = 0;  // may be queued again in round + 2
+        keys[brick] = kNoKey;
+        if (key <= limit) {
+          visit = true;
+        } else {
+          activate(a.q, brick, 1 - p, next, key);
+          carried = key;
+        }
+      }
+      // One atomic a warp for the visit list's slots and one for the next round's smallest key.
+      const unsigned listing = __ballot_sync(0xffffffffu, visit);
+      int slot = 0;
+      if ((t & 31) == 0 && listing) slot = atomicAdd(a.q.counters + kVisitCounter + round % 3, __popc(listing));
+      slot = __shfl_sync(0xffffffffu, slot, 0) + __popc(listing & ((1u << (t & 31)) - 1u));
+      if (visit) a.q.visitList[slot] = brick;
+      carried = __reduce_min_sync(0xffffffffu, carried);
+      if ((t & 31) == 0 && carried < kNoKey) noteKey(a.q, next, carried);
+    }
+    grid.sync();
+    const int listed = __ldcg(a.q.counters + kVisitCounter + round % 3);
+    for (int j = int(blockIdx.x); j < listed; j += G) {
+      visitBrick<K>(a, __ldcg(a.q.visitList + j), round, sh, t);
       ++visits;
     }
-    if (blockIdx.x == 0 && t == 0) a.q.counters[(round + 2) % 3] = 0;
+    if (listed < a.fewVisits * G) window = min(window * 2, (long long)kNoKey);
+    else if (listed > a.manyVisits * G && window > 1) window /= 2;
+    if (blockIdx.x == 0 && t == 0) {  // counters every block read in round − 1
+      a.q.counters[(round + 2) % 3] = 0;
+      a.q.counters[kMinKeyCounter + (round + 2) % 3] = kNoKey;
+      a.q.counters[kVisitCounter + (round + 2) % 3] = 0;
+    }
     grid.sync();
   }
   if (t == 0 && visits) atomicAdd(a.q.counters + 5, visits);
@@ -272,8 +359,6 @@ unsigned gridBlocks(std::size_t count) {
 // ─────────────────────────────────────────────────────────────────────────────────────────────
 // [SECTION] Engine
 // ─────────────────────────────────────────────────────────────────────────────────────────────
-
-constexpr int kCounters = 7;
 
 class CudaGrowthEngine final : public GrowthEngine {
  public:
@@ -298,6 +383,8 @@ class CudaGrowthEngine final : public GrowthEngine {
     AT_ASSIGN(e->density_, DeviceBuffer<std::uint8_t>::allocate(d.count()));
     AT_ASSIGN(e->flags_, DeviceBuffer<int>::allocate(2 * std::size_t(bricks)));
     AT_ASSIGN(e->lists_, DeviceBuffer<int>::allocate(2 * std::size_t(bricks)));
+    AT_ASSIGN(e->brickKeys_, DeviceBuffer<int>::allocate(2 * std::size_t(bricks)));
+    AT_ASSIGN(e->visitList_, DeviceBuffer<int>::allocate(std::size_t(bricks)));
     AT_ASSIGN(e->counters_, DeviceBuffer<int>::allocate(kCounters));
     AT_ASSIGN(e->countersHost_, PinnedBuffer<int>::allocate(kCounters));
     AT_ASSIGN(e->resetBits_, DeviceBuffer<unsigned>::allocate(65536 / 32));
@@ -307,11 +394,14 @@ class CudaGrowthEngine final : public GrowthEngine {
     AT_TRY(check(cudaMemcpyAsync(e->density_.get(), problem.density.data(), d.count(), cudaMemcpyHostToDevice, s),
                  "cudaMemcpyAsync(density, host to device)"));
     AT_TRY(check(cudaMemsetAsync(e->flags_.get(), 0, e->flags_.bytes(), s), "cudaMemsetAsync(brick flags)"));
+    AT_TRY(check(cudaMemsetAsync(e->brickKeys_.get(), 0x7F, e->brickKeys_.bytes(), s), "cudaMemsetAsync(brick keys)"));
     AT_TRY(check(cudaMemsetAsync(e->counters_.get(), 0, e->counters_.bytes(), s), "cudaMemsetAsync(growth counters)"));
     AT_TRY(e->stream_.synchronize());
     e->queues_.brickCount = bricks;
     e->queues_.flags = e->flags_.get();
     e->queues_.lists = e->lists_.get();
+    e->queues_.keys = e->brickKeys_.get();
+    e->queues_.visitList = e->visitList_.get();
     e->queues_.counters = e->counters_.get();
     return std::unique_ptr<GrowthEngine>(std::move(e));
   }
@@ -325,8 +415,12 @@ class CudaGrowthEngine final : public GrowthEngine {
     AT_TRY(start_.record(stream_));
     // Counters 0 … 2 hold the queue: empty after a finished solve, the pending list 0 after a
     // cancelled one. The statistics start from 0.
-    AT_TRY(check(cudaMemsetAsync(counters_.get() + 3, 0, (kCounters - 3) * sizeof(int), s),
+    AT_TRY(check(cudaMemsetAsync(counters_.get() + 3, 0, (kMinKeyCounter - 3) * sizeof(int), s),
                  "cudaMemsetAsync(growth statistics)"));
+    AT_TRY(check(cudaMemsetAsync(counters_.get() + kMinKeyCounter, 0x7F, 3 * sizeof(int), s),
+                 "cudaMemsetAsync(growth round keys)"));
+    AT_TRY(check(cudaMemsetAsync(counters_.get() + kVisitCounter, 0, 3 * sizeof(int), s),
+                 "cudaMemsetAsync(growth round visits)"));
     if (change.fromScratch) {
       fillKeys<<<gridBlocks(n), 256, 0, s>>>(keys_.get(), n, wdt::packGrowthKey(kInf, wdt::kNoLabel));
       AT_TRY(check(cudaGetLastError(), "launch of the key fill kernel"));
@@ -424,6 +518,21 @@ class CudaGrowthEngine final : public GrowthEngine {
     a.base = base_;
     a.scale = scale_;
     a.maxRounds = 1 << 30;
+    // Ordered rounds; the first window: the cost of crossing a brick along an axis at the lowest
+    // cost per mm (wdt::weightRange). AT_CUDA_GROWTH_ORDER=0 visits every queued brick in every
+    // round; =F,M sets fewVisits and manyVisits (for comparisons on one machine).
+    float lo = 0, hi = 0;
+    const float shortest = std::min({sx, sy, sz});
+    wdt::weightRange(kernel_, base_, shortest, lo, hi);
+    a.window0 = int(std::clamp(double(lo) * shortest * kEdge * double(scale_), 1.0, double(1 << 30)));
+    a.ordered = true;
+    a.fewVisits = 4;
+    a.manyVisits = 16;
+    if (const char* v = std::getenv("AT_CUDA_GROWTH_ORDER")) {
+      int few = 0, many = 0;
+      if (std::string(v) == "0") a.ordered = false;
+      else if (std::sscanf(v, "%d,%d", &few, &many) == 2 && few >= 0 && many > few) a.fewVisits = few, a.manyVisits = many;
+    }
     return wdt::withCostKernel(kernel_, [&]<CostKernel K>() -> Status {
       auto* kernel = solveGrowth<K>;
       const int smem = int(sizeof(GrowthShared));
@@ -453,7 +562,7 @@ class CudaGrowthEngine final : public GrowthEngine {
   Stream stream_;
   DeviceBuffer<unsigned long long> keys_;
   DeviceBuffer<std::uint8_t> density_;
-  DeviceBuffer<int> flags_, lists_, counters_;
+  DeviceBuffer<int> flags_, lists_, brickKeys_, visitList_, counters_;
   PinnedBuffer<int> countersHost_;
   DeviceBuffer<unsigned> resetBits_;
   DeviceBuffer<unsigned> seedIndex_;
