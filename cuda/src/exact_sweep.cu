@@ -80,13 +80,13 @@ using Shape = TileShape<32, 16, 512, 2>;
 // memory): 6 planes a group. Measured on an H200 (bench/RESULTS.md): 256³ 1.031 ms a pass
 // against 1.105 with 8 planes (128³ 0.379 against 0.375); 1.54× the tile's voxels computed.
 using OneWaveShape = TileShape<32, 16, 512, 2, 6>;
-// The large tile, for planes whose default tiles would need more than one wave but whose large
-// tiles fit the multiprocessors at once (e.g. 512³ on an H200: 512 default blocks on 132
-// multiprocessors, 128 large ones): one block of 1024 threads a multiprocessor, fewer voxels
-// computed (1.25× the tile's over a group of 6 planes, against 1.79× for the default tile's 8),
-// and no second wave. 6 planes a
-// group: measured on an H200, 512³ 5.30 ms a pass with 4 or 6 planes, 5.31 with 5, 5.75 with 8
-// (48 bytes spilled at 64 registers), 7.15 with the default tile.
+// The large tile, for planes whose default tiles would need more than one wave (e.g. 512³ on an
+// H200: 512 default blocks on 132 multiprocessors, 128 large ones; 1024³: 2048 and 512): one
+// block of 1024 threads a multiprocessor, with the one-wave kernel's densities in shared memory,
+// and fewer voxels computed (1.25× the tile's over a group of 6 planes, against 1.79× for the
+// default tile's 8). Measured on an H200 (bench/RESULTS.md): 512³ 5.30 ms a pass with 4 or 6
+// planes, 5.31 with 5, 5.75 with 8 (48 bytes spilled at 64 registers), 7.15 with the default
+// tile; in several waves, 768³ 20.5 against 25.1 and 1024³ 43.6 against 57.9.
 using LargeShape = TileShape<64, 32, 1024, 1, 6>;
 static_assert(Shape::ringStart(3) == Shape::ringSize(1) + Shape::ringSize(2), "ringStart sums the ring sizes");
 static_assert(Shape::ringStart(Shape::K + 1) == Shape::RN - Shape::Core, "the rings make up the halo");
@@ -147,14 +147,15 @@ __device__ __forceinline__ void allowNextGrid() { asm volatile("griddepcontrol.l
 // wrong fields on an H100). The first group of a sweep reads planes the previous sweep's last group
 // may still be writing, so it waits first.
 //
-// kOneWave (the launch's blocks fit the multiprocessors at once, e.g. 256³ and smaller on an H200):
-// every block starts while the previous group runs, so its old values and densities have arrived
-// by the time the wait returns. Such a block keeps its density bytes in its own shared-memory
-// column, which leaves the registers to issue the previous plane's loads of all slots before the
-// first is stored: one L2 round trip after the wait instead of one a slot. A block of a later
-// wave starts once the previous group is done and would wait for those densities first, an extra
-// round trip; larger launches keep the densities in registers (measured on an H200,
-// bench/RESULTS.md: −6 % a pass at 128³, −1 % at 256³, +1.7 % at 512³ if used there).
+// kOneWave (named for the launches whose blocks fit the multiprocessors at once, e.g. 256³ and
+// smaller on an H200, where every block starts while the previous group runs, so its old values
+// and densities have arrived by the time the wait returns): a block keeps its density bytes in its
+// own shared-memory column, which leaves the registers to issue the previous plane's loads of all
+// slots before the first is stored: one L2 round trip after the wait instead of one a slot. A
+// block of a later wave starts once the previous group is done and waits for those densities
+// first, an extra round trip: with the default tile that lost 1.7 % at 512³ (measured on an H200,
+// bench/RESULTS.md: −6 % a pass at 128³, −1 % at 256³), but the large tile, whose registers
+// could not hold them, takes this kernel in every wave.
 template <class S, CostKernel Cost, bool kWide, bool kOneWave>
 __global__ void __launch_bounds__(S::T, S::MinBlocks) sweepGroup(GroupArgs p) {
   constexpr bool kQn = wdt::needsNeighbourDensity(Cost);
@@ -393,18 +394,16 @@ Status launchExactSweep(const ExactSweepArgs& a, cudaStream_t stream) {
     return (long long)((a.nu + S::TU - 1) / S::TU) * (long long)((a.nv + S::TV - 1) / S::TV);
   };
   const bool oneWave = blocksOf.template operator()<Shape>() <= multiprocessors;
-  // The large tile where it makes the launch one wave and the default tile does not
-  // (AT_WDT_CUDA_LARGE_TILE=0 turns it off, for comparisons on one machine).
+  // The large tile wherever the default tile needs more than one wave (AT_WDT_CUDA_LARGE_TILE=0
+  // keeps the default tile there, for comparisons on one machine).
   static const bool largeTileAllowed = [] {
     const char* v = std::getenv("AT_WDT_CUDA_LARGE_TILE");
     return !(v && std::string(v) == "0");
   }();
-  const bool largeOneWave =
-      largeTileAllowed && !oneWave && blocksOf.template operator()<LargeShape>() <= multiprocessors;
   return launchForRule(a.rule, a.weight, [&]<CostKernel Cost>() {
     if (wide) return launchGroups<Shape, Cost, true, false>(a, stream);
     if (oneWave) return launchGroups<OneWaveShape, Cost, false, true>(a, stream);
-    if (largeOneWave) return launchGroups<LargeShape, Cost, false, true>(a, stream);
+    if (largeTileAllowed) return launchGroups<LargeShape, Cost, false, true>(a, stream);
     return launchGroups<Shape, Cost, false, false>(a, stream);
   });
 }
