@@ -2,8 +2,9 @@
 //
 // A sweep along axis a must visit its planes in order (plane p reads plane p∓1 after that plane's
 // update), and one plane's update reaches one voxel further sideways per plane (a 45° cone). The
-// sweep runs as ceil(planes / K) launches of K planes each (K = 6 or 8: 43 or 32 launches per
-// sweep at 256³, not one per plane; TileShape). In a launch, each block owns a TU × TV tile of lanes and computes its K
+// sweep runs as ceil(planes / K) launches of K planes each (K = 6 or 8, TileShape: 43 or 32
+// launches per sweep at 256³, not one per plane). In a launch, each block owns a TU × TV tile of
+// lanes and computes its K
 // planes in shared memory over the tile plus a halo that shrinks by one voxel per plane (K − 1 at
 // the first plane, 0 at the last): exactly the cone the tile's results depend on. The halo voxels
 // are recomputed redundantly from the same inputs, so they equal what the neighbouring block
@@ -90,7 +91,8 @@ using OneWaveShape = TileShape<32, 16, 512, 2, 6>;
 using LargeShape = TileShape<64, 32, 1024, 1, 6>;
 static_assert(Shape::ringStart(3) == Shape::ringSize(1) + Shape::ringSize(2), "ringStart sums the ring sizes");
 static_assert(Shape::ringStart(Shape::K + 1) == Shape::RN - Shape::Core, "the rings make up the halo");
-static_assert(LargeShape::ringStart(LargeShape::K + 1) == LargeShape::RN - LargeShape::Core, "the rings make up the halo");
+static_assert(LargeShape::ringStart(LargeShape::K + 1) == LargeShape::RN - LargeShape::Core,
+              "the rings make up the halo");
 static_assert(OneWaveShape::ringStart(OneWaveShape::K + 1) == OneWaveShape::RN - OneWaveShape::Core,
               "the rings make up the halo");
 

@@ -192,7 +192,8 @@ class CudaGrowthEngine final : public GrowthEngine {
     if (const char* v = std::getenv("AT_CUDA_GROWTH_ORDER")) {
       int few = 0, many = 0;
       if (std::string(v) == "0") a.ordered = false;
-      else if (std::sscanf(v, "%d,%d", &few, &many) == 2 && few >= 0 && many > few) a.fewVisits = few, a.manyVisits = many;
+      else if (std::sscanf(v, "%d,%d", &few, &many) == 2 && few >= 0 && many > few)
+        a.fewVisits = few, a.manyVisits = many;
     }
     return wdt::withCostKernel(kernel_, [&]<CostKernel K>() -> Status {
       auto* kernel = solveGrowth<K>;
