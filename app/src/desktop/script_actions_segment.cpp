@@ -184,6 +184,17 @@ ScriptInterpreter::Outcome ScriptInterpreter::segmentMargin(Context& c) {
   return Progress::Done;
 }
 
+// {"do": "segment_split", "min_diameter_mm": 0, "min_voxels": 1}: the current structure's pieces
+// become structures of their own, as the Segment window's "Split islands" button.
+ScriptInterpreter::Outcome ScriptInterpreter::segmentSplit(Context& c) {
+  const double diameter = c.action.value("min_diameter_mm", 0.0);
+  const int minVoxels = c.action.value("min_voxels", 1);
+  if (minVoxels < 1) return fail("ui script: segment_split: \"min_voxels\" must be >= 1");
+  auto done = c.model.segmenter().splitIslands(diameter, std::size_t(minVoxels));
+  if (!done) return tl::unexpected(done.error());
+  return Progress::Done;
+}
+
 ScriptInterpreter::Outcome ScriptInterpreter::segmentHollow(Context& c) {
   auto done = c.model.segmenter().hollow(c.action.at("mm").get<double>());
   if (!done) return tl::unexpected(done.error());

@@ -67,7 +67,7 @@ const std::map<std::string, ScriptInterpreter::Handler>& ScriptInterpreter::hand
       {"segment_tool", &S::segmentTool},
       {"segment_clear_seeds", &S::segmentClearSeeds}, {"segment_save", &S::segmentSave},
       {"segment_threshold", &S::segmentThreshold}, {"segment_margin", &S::segmentMargin},
-      {"segment_hollow", &S::segmentHollow}, {"slices_open", &S::slicesOpen},
+      {"segment_hollow", &S::segmentHollow}, {"segment_split", &S::segmentSplit}, {"slices_open", &S::slicesOpen},
       {"course_new", &S::courseNew},    {"course_open", &S::courseOpen},
       {"course_lesson", &S::courseLesson}, {"course_show", &S::courseShow},
       {"course_question", &S::courseQuestion}, {"course_step", &S::courseStep},
