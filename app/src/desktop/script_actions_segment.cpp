@@ -12,6 +12,55 @@ namespace at::app {
 
 using nlohmann::json;
 
+ScriptInterpreter::Feature ScriptInterpreter::segmentActions() {
+  using S = ScriptInterpreter;
+  const ScriptArgument voxel{"voxel", "[i, j, k]"};
+  const ScriptArgument brush{"brush_mm?", "the brush's diameter"};
+  return {"segment",
+          "the segment editor and the Slices window",
+          {
+              {"segment_open", {{"open?", "true (default) opens, false closes"}},
+               "Shows the Segment window on the dataset on screen, with the Slices window.", &S::segmentOpen},
+              {"segment_label", {{"name", "a label name (added when new; background is label 0)"}},
+               "Paints that label next; reports segment_label {name, label}.", &S::segmentLabel},
+              {"segment_slice", {{"axis", "x, y, z or 0, 1, 2"}, {"index", "the slice"}}, "Shows that slice.", &S::segmentSlice},
+              {"segment_seed", {voxel, brush}, "Seeds of the current label in the brush around the voxel.", &S::segmentSeed},
+              {"segment_grow", {{"wait?", "true (default): done once the growth is applied"}},
+               "Grows the labels from their seeds; reports segment_grown.", &S::segmentGrow},
+              {"segment_undo", {}, "Undoes the last edit (Ctrl+Z).", &S::segmentUndo},
+              {"segment_redo", {}, "Redoes it (Ctrl+Shift+Z).", &S::segmentRedo},
+              {"segment_review", {{"name", "a label name"}, {"state", "not_started, in_progress, completed or flagged"}},
+               "Sets a structure's review state.", &S::segmentReview},
+              {"segment_tool", {{"tool", "seeds, threshold, paint or erase"}, brush},
+               "Chooses what a click does (paint and erase: also in the 3-D view).", &S::segmentTool},
+              {"segment_clear_seeds", {}, "Clears the seeds.", &S::segmentClearSeeds},
+              {"segment_save", {{"out?", "export to .nii, .nii.gz or .seg.nrrd instead"}, {"names?", "the names file to write"}},
+               "Stores the labels into the dataset store (an imported dataset), or exports them.", &S::segmentSave},
+              {"segment_threshold",
+               {voxel, {"low?", "default: the dataset's window"}, {"high?", "default: the dataset's window"},
+                {"min_diameter_mm?", "default 0"}},
+               "The connected region of values in range under the voxel takes the current label.", &S::segmentThreshold},
+              {"segment_margin", {{"mm", "grow by (negative: shrink)"}}, "Grows or shrinks the current structure.",
+               &S::segmentMargin},
+              {"segment_hollow", {{"mm", "the wall's thickness"}}, "Hollows the current structure.", &S::segmentHollow},
+              {"segment_split", {{"min_diameter_mm?", "cut bridges thinner than this (default 0)"}, {"min_voxels?", "the smallest piece made a structure (default 1)"}},
+               "The current structure's disconnected pieces become structures NAME (2), … by size.", &S::segmentSplit},
+              {"segment_growth",
+               {{"bone_only?", "true: grow only into the data's bone range (the \"bone\" button)"},
+                {"range?", "[low, high]: grow only into these values"}, {"limit?", "false: no range limit"},
+                {"base_per_voxel?", "the travel cost per voxel"}, {"window?", "[low, high]: the values mapped to 0 … 1"},
+                {"smoothing?", "edge-preserving smoothing, sigma in voxels"}, {"defaults?", "true: the data's defaults first"},
+                {"wait?", "true (default): done once a growth on screen is grown again"}},
+               "Sets the growth settings; reports segment_growth_settings.", &S::segmentGrowth},
+              {"segment_system", {{"name", "a label name"}, {"system", "its browsing group (empty: none)"}},
+               "Sets a structure's system, stored with segment_save.", &S::segmentSystem},
+              {"slices_open",
+               {{"open?", "true (default) or false"}, {"crosshair?", "[i, j, k]: through that voxel"},
+                {"label_alpha?", "the labels' opacity"}},
+               "Shows the Slices window.", &S::slicesOpen},
+          }};
+}
+
 // {"do": "segment_open"}: shows the Segment window (the editor of the dataset on screen) with the
 // Slices window, as the explore panel's Segment... button does ({"open": false} closes the editor).
 ScriptInterpreter::Outcome ScriptInterpreter::segmentOpen(Context& c) {
