@@ -375,3 +375,33 @@ TEST_CASE("UI script: segment_* actions label the phantom, undo, export, and ref
   CHECK(run.exitCode == 2);
   CHECK(run.messages.find("not an imported dataset") != std::string::npos);
 }
+
+TEST_CASE("the segment editor's split islands: two painted blobs of one structure become two structures, one undo") {
+  EditorOnPhantom t(64);
+  app::SegmentController& editor = t.editor;
+  auto label = editor.addLabel("two blobs");
+  REQUIRE(label);
+  editor.tool = app::SegmentController::Tool::Paint;
+  editor.brushMm = 1.5;
+  REQUIRE(editor.brushAtVoxel({12, 12, 12}));
+  REQUIRE(editor.brushAtVoxel({50, 50, 50}));
+  const LabelMap before = editor.labels();
+  auto split = editor.splitIslands(0, 1);
+  REQUIRE_MESSAGE(split, split.error().message);
+  REQUIRE(split->newLabels.size() == 1);
+  REQUIRE(editor.labelNamed("two blobs (2)"));
+  CHECK(*editor.labelNamed("two blobs (2)") == split->newLabels[0]);
+  const Dims d = editor.labels().dims();
+  CHECK(editor.labels().voxels[d.index(12, 12, 12)] != editor.labels().voxels[d.index(50, 50, 50)]);
+  const auto edited = eventsNamed(t.events, "segment_edited");
+  REQUIRE(!edited.empty());
+  CHECK(edited.back()["tool"] == "split_islands");
+  CHECK(edited.back()["voxels"]["two_blobs"].get<std::size_t>() > 0);
+  // Now one piece each: splitting again is an error naming the structure; undo restores both.
+  auto again = editor.splitIslands(0, 1);
+  REQUIRE_FALSE(again);
+  CHECK(again.error().message.find("'two blobs' has 1 piece(s)") != std::string::npos);
+  REQUIRE(editor.undo());
+  CHECK(editor.labels().voxels == before.voxels);
+  CHECK_FALSE(editor.labelNamed("two blobs (2)"));
+}

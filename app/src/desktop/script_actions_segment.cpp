@@ -55,6 +55,17 @@ ScriptInterpreter::Feature ScriptInterpreter::segmentActions() {
               {"segment_margin", {{"mm", "grow by (negative: shrink)"}}, "Grows or shrinks the current structure.",
                &S::segmentMargin},
               {"segment_hollow", {{"mm", "the wall's thickness"}}, "Hollows the current structure.", &S::segmentHollow},
+              {"segment_split", {{"min_diameter_mm?", "cut bridges thinner than this (default 0)"}, {"min_voxels?", "the smallest piece made a structure (default 1)"}},
+               "The current structure's disconnected pieces become structures NAME (2), … by size.", &S::segmentSplit},
+              {"segment_growth",
+               {{"bone_only?", "true: grow only into the data's bone range (the \"bone\" button)"},
+                {"range?", "[low, high]: grow only into these values"}, {"limit?", "false: no range limit"},
+                {"base_per_voxel?", "the travel cost per voxel"}, {"window?", "[low, high]: the values mapped to 0 … 1"},
+                {"smoothing?", "edge-preserving smoothing, sigma in voxels"}, {"defaults?", "true: the data's defaults first"},
+                {"wait?", "true (default): done once a growth on screen is grown again"}},
+               "Sets the growth settings; reports segment_growth_settings.", &S::segmentGrowth},
+              {"segment_system", {{"name", "a label name"}, {"system", "its browsing group (empty: none)"}},
+               "Sets a structure's system, stored with segment_save.", &S::segmentSystem},
               {"slices_open",
                {{"open?", "true (default) or false"}, {"crosshair?", "[i, j, k]: through that voxel"},
                 {"label_alpha?", "the labels' opacity"}},
@@ -230,6 +241,17 @@ ScriptInterpreter::Outcome ScriptInterpreter::segmentThreshold(Context& c) {
 // the current structure.
 ScriptInterpreter::Outcome ScriptInterpreter::segmentMargin(Context& c) {
   auto done = c.model.segmenter().margin(c.action.at("mm").get<double>());
+  if (!done) return tl::unexpected(done.error());
+  return Progress::Done;
+}
+
+// {"do": "segment_split", "min_diameter_mm": 0, "min_voxels": 1}: the current structure's pieces
+// become structures of their own, as the Segment window's "Split islands" button.
+ScriptInterpreter::Outcome ScriptInterpreter::segmentSplit(Context& c) {
+  const double diameter = c.action.value("min_diameter_mm", 0.0);
+  const int minVoxels = c.action.value("min_voxels", 1);
+  if (minVoxels < 1) return fail("ui script: segment_split: \"min_voxels\" must be >= 1");
+  auto done = c.model.segmenter().splitIslands(diameter, std::size_t(minVoxels));
   if (!done) return tl::unexpected(done.error());
   return Progress::Done;
 }

@@ -202,6 +202,7 @@ class ScriptInterpreter {
   Outcome segmentThreshold(Context&);
   Outcome segmentMargin(Context&);
   Outcome segmentHollow(Context&);
+  Outcome segmentSplit(Context&);
   Outcome slicesOpen(Context&);
   // The course editor (script_actions_course.cpp)
   Outcome courseNew(Context&);

@@ -176,6 +176,10 @@ class SegmentController {
   Result<segment::EditSummary> margin(double mm);
   // The current structure keeps a shell of `thicknessMm` inside its surface.
   Result<segment::EditSummary> hollow(double thicknessMm);
+  // The current structure's pieces (bridges thinner than minDiameterMm cut; pieces of at least
+  // minVoxels) become structures of their own (segment::LabelEditor::splitIslands); the largest
+  // stays current.
+  Result<segment::IslandSplit> splitIslands(double minDiameterMm, std::size_t minVoxels);
   // The range a threshold starts from: the dataset's window, in its units.
   std::array<double, 2> valueWindow() const;
 

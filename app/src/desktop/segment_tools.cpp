@@ -100,4 +100,12 @@ Result<segment::EditSummary> SegmentController::hollow(double thicknessMm) {
   return summary;
 }
 
+Result<segment::IslandSplit> SegmentController::splitIslands(double minDiameterMm, std::size_t minVoxels) {
+  if (auto ok = requireStructureCurrent("split islands"); !ok) return tl::unexpected(ok.error());
+  auto split = editor_->splitIslands(current_, minDiameterMm, minVoxels);
+  if (!split) return split;
+  edited("segment_edited", "split_islands", split->summary, {{"new_labels", split->newLabels}}, true);
+  return split;
+}
+
 }  // namespace at::app

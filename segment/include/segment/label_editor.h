@@ -12,6 +12,8 @@
 //   hollow                  keep a shell of a thickness inside a structure's surface (at least
 //                           one voxel: the grid's largest spacing)
 //   smooth                  opening (removes specks and spurs) or closing (fills gaps and holes)
+//   splitIslands            a structure's disconnected pieces (after cutting bridges thinner than a
+//                           diameter) become structures of their own (label_islands.cpp)
 //   structures              add, rename, colour, delete (the last clears its voxels)
 // Edits that change nothing are not recorded. Values of a threshold range are the dataset's (HU or
 // plain intensities: IntensityModel::valueOf).
@@ -38,6 +40,11 @@ struct EditSummary {
 };
 
 enum class Smoothing { Opening, Closing };
+
+struct IslandSplit {
+  EditSummary summary;
+  std::vector<std::uint16_t> newLabels;  // the new structures' labels, largest piece first
+};
 
 struct ThresholdOptions {
   double minDiameterMm = 0;  // 0: no bridge cutting
@@ -88,6 +95,14 @@ class LabelEditor {
   Result<EditSummary> margin(std::uint16_t label, double mm);
   Result<EditSummary> hollow(std::uint16_t label, double thicknessMm);
   Result<EditSummary> smooth(std::uint16_t label, Smoothing operation, double radiusMm);
+  // Splits a structure into its pieces: the 6-connected parts of its voxels, with minDiameterMm > 0
+  // after cutting bridges thinner than that (opening by a ball of that diameter, as
+  // thresholdIsland). The largest piece keeps the structure; every other piece of at least
+  // minVoxels voxels becomes a new structure "NAME (2)", "NAME (3)", … by size, with the
+  // structure's system; voxels in no such piece (the bridges, smaller pieces) keep the structure.
+  // One edit: undo restores the labels and the structure list. Errors: an unknown label, no
+  // second piece of minVoxels voxels (the message gives the pieces' count and largest sizes).
+  Result<IslandSplit> splitIslands(std::uint16_t label, double minDiameterMm = 0, std::size_t minVoxels = 1);
 
   // A brush stroke: the edits between beginStroke and endStroke (paint and erase dabs along a
   // drag) become one edit, one undo. endStroke returns its summary (nullopt: nothing changed).

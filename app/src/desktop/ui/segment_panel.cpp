@@ -174,6 +174,12 @@ void SegmentPanel::drawTools(SegmentController& editor) {
   if (ImGui::Button("Shrink")) report(statusOf(editor.margin(-std::fabs(marginMm_))));
   ImGui::SameLine();
   if (ImGui::Button("Hollow")) report(statusOf(editor.hollow(std::fabs(marginMm_))));
+  ImGui::SameLine();
+  // Pieces of fewer than 27 voxels (a 3 × 3 × 3 speck) stay with the structure: a click must not
+  // turn a noisy label's specks into hundreds of structures.
+  if (ImGui::Button("Split islands")) report(statusOf(editor.splitIslands(minDiameterMm_, 27)));
+  if (ImGui::IsItemHovered())
+    ImGui::SetTooltip("the structure's disconnected pieces (bridges thinner than 'cut bridges' cut) become structures");
 
   if (ImGui::Button(editor.growing() ? "Grow again" : "Grow from seeds")) report(editor.grow());
   // Undo / redo: the buttons, and Ctrl+Z, Ctrl+Shift+Z or Ctrl+Y while this window has the
