@@ -71,7 +71,7 @@ std::string ScriptInterpreter::actionsMarkdown() {
   std::ostringstream out;
   out << "# UI-script actions\n\n"
          "<!-- Written by `anatomy-tutor desktop --help-actions --markdown` from the actions' registration\n"
-         "     tables (app/src/desktop/script_actions_*.cpp); tests/app/test_script_actions_documented.cpp\n"
+         "     tables (app/src/desktop/*/script_actions_*.cpp); tests/app/test_script_actions_documented.cpp\n"
          "     fails when this file differs: regenerate it with scripts/update-ui-script-docs.sh. -->\n\n"
          "`anatomy-tutor desktop --ui-script FILE.json` replays `{\"actions\": [{\"do\": NAME, ...}, ...]}`, one\n"
          "action after another, through the commands the desktop's widgets call; the events they emit are\n"
