@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Rewrites docs/guide/ui-script-actions.md from the UI-script actions' registration tables
-# (app/src/desktop/script_actions_*.cpp) through the built program. test_app's
+# (app/src/desktop/<feature>/script_actions_<feature>.cpp) through the built program. test_app's
 # "docs/guide/ui-script-actions.md is the registry's text" fails until this is run after a change.
 # Usage: scripts/update-ui-script-docs.sh [BUILD_DIR]   (default build/)
 set -euo pipefail

@@ -15,7 +15,7 @@
 
 #include "desktop_model.h"
 #include "desktop_script.h"
-#include "script_interpreter.h"
+#include "script/script_interpreter.h"
 #include "test_support.h"
 
 namespace at::test {

@@ -1,7 +1,7 @@
 // The explore state without a window: what the image shows and when its revision moves.
 #include <doctest/doctest.h>
 
-#include "explore_state.h"
+#include "view/explore_state.h"
 #include "test_support.h"
 
 using namespace at;

@@ -3,7 +3,7 @@
 // and the report's numbers.
 #include <doctest/doctest.h>
 
-#include "frame_scheduler.h"
+#include "view/frame_scheduler.h"
 
 using namespace at::app;
 

@@ -11,7 +11,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "script_interpreter.h"
+#include "script/script_interpreter.h"
 #include "test_support.h"
 
 using namespace at;

@@ -13,7 +13,7 @@
 #include "db/connection.h"
 #include "headless_desktop.h"
 #include "segment/seeds.h"
-#include "segment_controller.h"
+#include "segment_editor/segment_controller.h"
 #include "stroke_seeds.h"
 #include "test_support.h"
 #include "volume/nifti_io.h"

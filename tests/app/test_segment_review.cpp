@@ -6,7 +6,7 @@
 #include "db/connection.h"
 #include "db/dataset_store.h"
 #include "headless_desktop.h"
-#include "segment_controller.h"
+#include "segment_editor/segment_controller.h"
 #include "test_support.h"
 
 using namespace at;

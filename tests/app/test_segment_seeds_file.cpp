@@ -12,7 +12,7 @@
 #include "db/connection.h"
 #include "growth_measures.h"
 #include "segment/seeds.h"
-#include "segment_controller.h"
+#include "segment_editor/segment_controller.h"
 #include "test_support.h"
 
 using namespace at;

@@ -7,8 +7,8 @@
 
 #include "db/connection.h"
 #include "headless_desktop.h"
-#include "segment_controller.h"
-#include "slice_views.h"
+#include "segment_editor/segment_controller.h"
+#include "view/slice_views.h"
 #include "test_support.h"
 #include "volume/slice_image.h"
 

@@ -14,7 +14,7 @@
 #include "render/field_scale.h"
 #include "render/structure_pick.h"
 #include "render/volume_preset.h"
-#include "segment_controller.h"
+#include "segment_editor/segment_controller.h"
 
 namespace at::app {
 

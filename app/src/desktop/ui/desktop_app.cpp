@@ -17,13 +17,13 @@
 
 #include "cli_args.h"
 #include "commands.h"
-#include "panels.h"
-#include "script_interpreter.h"
-#include "segment_controller.h"
+#include "ui/panels.h"
+#include "script/script_interpreter.h"
+#include "segment_editor/segment_controller.h"
 #include "volume/png_image.h"
-#include "volume_view.h"
-#include "widget_rects.h"
-#include "window.h"
+#include "view/ui/volume_view.h"
+#include "ui/widget_rects.h"
+#include "ui/window.h"
 
 namespace at::app {
 

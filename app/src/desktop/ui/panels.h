@@ -10,7 +10,7 @@
 #include <string>
 #include <vector>
 
-#include "analytics_controller.h"
+#include "analytics/analytics_controller.h"
 #include "desktop_model.h"
 #include "render/gl/window_target.h"
 

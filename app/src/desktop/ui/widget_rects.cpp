@@ -1,4 +1,4 @@
-#include "widget_rects.h"
+#include "ui/widget_rects.h"
 
 #include <cstdint>
 #include <utility>

@@ -1,0 +1,138 @@
+// SegmentController: the growth's settings (defaults from the data, the user's changes previewed by
+// growing again) and seeds files (save the painted seeds, load a file's).
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <map>
+
+#include "core/strings.h"
+#include "segment/seeds.h"
+#include "segment_editor/segment_controller.h"
+
+namespace at::app {
+
+GrowthParams SegmentController::growthParams() const {
+  GrowthParams p = defaults_.params;
+  p.baseCost = float(segment::basePerMm(settings_.basePerVoxel, defaults_.voxelMm));
+  if (dataset_) {
+    const auto stored = segment::storedWindow(dataset_->intensity, settings_.window);
+    p.windowMin = stored[0];
+    p.windowMax = stored[1];
+  }
+  p.smoothingVoxels = float(settings_.smoothingVoxels);
+  if (dataset_ && settings_.limitRange) p = segment::withRangeLimit(p, dataset_->intensity, settings_.range);
+  return p;
+}
+
+Status SegmentController::setGrowthSettings(const GrowthSettings& settings) {
+  if (auto ok = requireDataset(); !ok) return ok;
+  if (!std::isfinite(settings.basePerVoxel) || !(settings.basePerVoxel > 0))
+    return fail("segment editor: the base per voxel must be > 0, got " + std::to_string(settings.basePerVoxel));
+  if (!(settings.window[1] > settings.window[0]))
+    return fail("segment editor: the growth window must have high > low, got " + std::to_string(settings.window[0]) +
+                " … " + std::to_string(settings.window[1]));
+  if (!(settings.smoothingVoxels >= 0 && settings.smoothingVoxels <= 8))
+    return fail("segment editor: smoothing must be 0 … 8 voxels, got " + std::to_string(settings.smoothingVoxels));
+  if (settings.limitRange && !(settings.range[1] >= settings.range[0]))
+    return fail("segment editor: the grow-only range must have high >= low, got " + std::to_string(settings.range[0]) +
+                " … " + std::to_string(settings.range[1]));
+  const GrowthSettings before = settings_;
+  settings_ = settings;
+  if (auto ok = validateGrowthParams(growthParams()); !ok) {
+    settings_ = before;
+    return ok;
+  }
+  events_({{"event", "segment_growth_settings"},
+           {"base_per_voxel", settings_.basePerVoxel},
+           {"window", {settings_.window[0], settings_.window[1]}},
+           {"smoothing_voxels", settings_.smoothingVoxels},
+           {"range", settings_.limitRange ? nlohmann::json{settings_.range[0], settings_.range[1]} : nlohmann::json()}});
+  // The live preview: a growth seen on screen is grown again with the new settings.
+  if (grownOnce_ && seedsPerLabel().size() >= 2) return grow();
+  return {};
+}
+
+void SegmentController::resetGrowthSettings() {
+  (void)setGrowthSettings({segment::basePerVoxelOf(defaults_.params.baseCost, defaults_.voxelMm), defaults_.windowValues,
+                           defaults_.params.smoothingVoxels, false, defaults_.boneRangeValues});
+}
+
+Status SegmentController::saveSeeds(const std::string& path) const {
+  if (auto ok = requireDataset(); !ok) return ok;
+  if (seeds_.empty()) return fail("save seeds: no seed is painted");
+  segment::SeedSet set;
+  std::map<std::uint16_t, std::size_t> labelIndex;
+  for (const auto& [label, count] : seedsPerLabel()) {
+    (void)count;
+    segment::SeedLabel l;
+    l.value = label;
+    if (label == 0) {
+      l.name = "background";
+    } else {
+      const auto found = std::find_if(structures().begin(), structures().end(),
+                                      [&](const Structure& s) { return s.label == label; });
+      l.name = found != structures().end() ? found->id : "label_" + std::to_string(label);
+      if (found != structures().end()) l.colour = found->colour;
+    }
+    labelIndex[label] = set.labels.size();
+    set.labels.push_back(l);
+  }
+  const Geometry& g = dataset_->volume.geometry;
+  const Dims d = g.dims;
+  for (const auto& [index, label] : seeds_) {
+    segment::SeedStroke dot;
+    dot.label = labelIndex.at(label);
+    dot.pointsMm.push_back(g.indexToPatient({double(index % std::size_t(d.x)), double(index / std::size_t(d.x) % std::size_t(d.y)),
+                                             double(index / (std::size_t(d.x) * std::size_t(d.y)))}));
+    set.strokes.push_back(std::move(dot));
+  }
+  set.grow.weight = "gradient";
+  set.grow.window = settings_.window;
+  set.grow.base = double(growthParams().baseCost);
+  if (settings_.limitRange) set.grow.range = settings_.range;
+  set.grow.smoothing = settings_.smoothingVoxels;
+  std::FILE* file = std::fopen(path.c_str(), "wb");
+  if (!file) return fail(ErrorKind::Io, "save seeds: cannot write " + path);
+  const std::string text = segment::seedsToJson(set);
+  const bool written = std::fwrite(text.data(), 1, text.size(), file) == text.size();
+  const bool closed = std::fclose(file) == 0;
+  if (!written || !closed) return fail(ErrorKind::Io, "save seeds: writing " + path + " failed");
+  return {};
+}
+
+Result<std::size_t> SegmentController::loadSeeds(const std::string& path) {
+  if (auto ok = requireDataset(); !ok) return tl::unexpected(ok.error());
+  auto set = segment::loadSeeds(path);
+  if (!set) return tl::unexpected(set.error());
+  auto raster = segment::rasteriseSeeds(*set, dataset_->volume.geometry);
+  if (!raster) return tl::unexpected(withContext(path, raster.error()));
+  // The file's labels by name: the background, a structure the editor has, or a new structure.
+  std::vector<std::uint16_t> editorLabel;
+  for (const segment::SeedLabel& l : set->labels) {
+    if (l.value == 0) {
+      editorLabel.push_back(0);
+      continue;
+    }
+    auto found = labelNamed(l.name);
+    if (!found) found = addLabel(l.name);
+    if (!found) return tl::unexpected(withContext(path, found.error()));
+    editorLabel.push_back(*found);
+  }
+  std::map<std::uint16_t, std::uint16_t> byValue;  // file label value → editor label
+  for (std::size_t i = 0; i < set->labels.size(); ++i) byValue[set->labels[i].value] = editorLabel[i];
+  seeds_.clear();
+  for (const GrowthSeed& s : raster->seeds) seeds_[s.index] = byValue.at(s.label);
+  GrowthSettings settings = settings_;
+  if (set->grow.window) settings.window = *set->grow.window;
+  if (set->grow.base) settings.basePerVoxel = segment::basePerVoxelOf(*set->grow.base, defaults_.voxelMm);
+  settings.limitRange = set->grow.range.has_value();
+  if (set->grow.range) settings.range = *set->grow.range;
+  if (set->grow.smoothing) settings.smoothingVoxels = *set->grow.smoothing;
+  if (auto ok = setGrowthSettings(settings); !ok) return tl::unexpected(withContext(path, ok.error()));
+  ++revision_;
+  status_ = "seeds loaded from " + path + ": " + std::to_string(seeds_.size()) + " voxels";
+  events_({{"event", "segment_seeds_loaded"}, {"path", path}, {"seeds", seeds_.size()}});
+  return seeds_.size();
+}
+
+}  // namespace at::app
