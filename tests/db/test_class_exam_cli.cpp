@@ -3,6 +3,7 @@
 // student takes it from her laptop with her own login, the class's progress and xAPI show it.
 #include <doctest/doctest.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -80,8 +81,12 @@ TEST_CASE("ClassExamCli_InstructorOpensStudentSitsOnTheServer_ProgressAndXapiSho
     s->bind(1, code);
     while (*s->step()) locates.push_back(s->integer(0));
   }
-  REQUIRE(locates.size() >= 2);
-  const int answered = locates[1] + 1, rightCount = locates[0] == 0 ? 1 : 2;
+  // The class's draw decides how many locate items there are (none is possible: then the first two
+  // items are answered; the pixel grading itself is tested in test_class_exams.cpp either way).
+  if (locates.empty()) MESSAGE("class " << code << " drew no locate item: no click reaches the server here");
+  const int answered = locates.size() >= 2 ? locates[1] + 1 : locates.size() == 1 ? std::max(locates[0], 1) + 1 : 2;
+  const int rightCount = locates.empty() || locates[0] == 0 ? 1 : 2;
+  const int clicks = int(std::min<std::size_t>(locates.size(), 2));
   std::string lines;
   for (int position = 0; position < answered; ++position) {
     auto s = admin.prepare("SELECT i.kind, k.key_choice, k.target, k.names FROM class_exam_items i JOIN class_exam_keys k"
@@ -90,7 +95,7 @@ TEST_CASE("ClassExamCli_InstructorOpensStudentSitsOnTheServer_ProgressAndXapiSho
     s->bind(1, code).bind(2, position);
     REQUIRE(*s->step());
     const std::string kind = s->text(0);
-    const bool right = position == 0 || position == locates[0];
+    const bool right = position == 0 || (!locates.empty() && position == locates[0]);
     if (kind == "identify")
       lines += "{\"choice\": " + std::to_string(right ? s->integer(1) : (s->integer(1) + 1) % 4) + "}\n";
     else if (kind == "name")
@@ -134,7 +139,7 @@ TEST_CASE("ClassExamCli_InstructorOpensStudentSitsOnTheServer_ProgressAndXapiSho
   std::snprintf(results, sizeof results, "Handed in. Results from the class server: %d of 12 items right, score %.2f",
                 rightCount, rightCount / 12.0);
   CHECK(sat.out.find(results) != std::string::npos);
-  CHECK(test::scalarCount(admin, "SELECT COUNT(*) FROM class_exam_answers WHERE answer LIKE '{\"pixel\"%'") == 2);
+  CHECK(test::scalarCount(admin, "SELECT COUNT(*) FROM class_exam_answers WHERE answer LIKE '{\"pixel\"%'") == clicks);
   // Her laptop's file holds none of the exam's items or keys.
   db::Database local = test::openAt(laptop);
   CHECK(test::scalarCount(local, "SELECT COUNT(*) FROM exam_items") == 0);
