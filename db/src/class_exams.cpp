@@ -1,8 +1,11 @@
 #include "db/class_exams.h"
 
+#include <set>
+
 #include <nlohmann/json.hpp>
 
 #include "database.h"
+#include "quiz/sided_names.h"
 #include "server_refusal.h"
 
 namespace at::db {
@@ -42,6 +45,32 @@ std::vector<std::string> stringArray(const std::string& text) {
 
 }  // namespace
 
+void setNameKey(ClassExamKey& key, const quiz::ResolvedQuestion& question, const quiz::GradingContext& context) {
+  const quiz::Question& q = question.question;
+  key.names.clear();
+  if (const quiz::NameEntry* entry = context.entry(q.target)) key.names = entry->names;
+  if (key.names.empty()) key.names.push_back(q.target);
+  key.names.insert(key.names.end(), q.synonyms.begin(), q.synonyms.end());
+  std::set<std::string> bodies, competitors;
+  key.nameBodies.clear();
+  for (const std::string& name : key.names)
+    if (const std::string body = quiz::splitSide(name).body; !body.empty() && bodies.insert(body).second)
+      key.nameBodies.push_back(body);  // in the names' order: the first closest spelling sets the allowance
+  // The target's own spellings (and its base name) never compete: its counterpart on the other side.
+  std::set<std::string> own = bodies;
+  if (const quiz::NameEntry* entry = context.entry(q.target); entry && !entry->baseName.empty())
+    own.insert(quiz::splitSide(entry->baseName).body);
+  for (const quiz::NameEntry& entry : context.names) {
+    if (entry.structureId == q.target) continue;
+    for (const std::string& name : entry.names)
+      if (const std::string body = quiz::splitSide(name).body; !body.empty() && !own.count(body)) competitors.insert(body);
+  }
+  key.competitorBodies.assign(competitors.begin(), competitors.end());
+  const quiz::Side side = context.side(q.target);
+  key.targetSide = quiz::toString(side);
+  key.askSide = q.askSide && side != quiz::Side::None;
+}
+
 Result<int> openClassExam(Database& server, const std::string& code, const ClassExamOpening& exam,
                           const std::optional<std::string>& by) {
   if (auto ok = requireServer(server); !ok) return tl::unexpected(ok.error());
@@ -51,18 +80,25 @@ Result<int> openClassExam(Database& server, const std::string& code, const Class
     json scene = json::parse(i.sceneJson, nullptr, false);
     if (scene.is_discarded()) return fail("exam '" + exam.examId + "': the scene of an item is not JSON");
     items.push_back({{"kind", i.kind}, {"prompt", i.prompt}, {"choices", i.choices}, {"locate_view", i.locateView},
-                     {"scene", scene}, {"picture", i.pictureBase64}});
+                     {"scene", scene}, {"picture", i.pictureBase64}, {"picture_width", i.pictureWidth},
+                     {"picture_height", i.pictureHeight}});
   }
-  for (const ClassExamKey& k : exam.keys)
+  for (const ClassExamKey& k : exam.keys) {
+    json runs = json::array();
+    for (const PixelRun& r : k.acceptedPixels) runs.push_back({r.y, r.xFrom, r.xTo});
     keys.push_back({{"question_id", k.questionId}, {"target", k.target}, {"key_choice", k.keyChoice},
-                    {"names", k.names}, {"tolerance_mm", k.toleranceMm}});
+                    {"names", k.names}, {"tolerance_mm", k.toleranceMm}, {"accepted_pixels", runs},
+                    {"name_bodies", k.nameBodies}, {"competitor_bodies", k.competitorBodies},
+                    {"target_side", k.targetSide}, {"ask_side", k.askSide}});
+  }
   int count = 0;
   auto status = server.writeTransaction([&](Database& d) -> Status {
     return callServer(
-        d, "SELECT at_open_exam(?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9)",
+        d, "SELECT at_open_exam(?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10)",
         [&](Statement& s) {
           s.bind(1, code).bind(2, exam.examId).bind(3, exam.courseId).bind(4, exam.title).bind(5, exam.timeLimitS);
-          s.bind(6, exam.passScore).bind(7, items.dump()).bind(8, keys.dump()).bind(9, by.value_or(""));
+          s.bind(6, exam.passScore).bind(7, items.dump()).bind(8, keys.dump());
+          s.bind(9, json(exam.prerequisites).dump()).bind(10, by.value_or(""));
         },
         [&](Statement& s) { count = s.integer(0); });
   });
@@ -123,12 +159,13 @@ Result<ClassExamSitting> startClassExam(Database& server, const std::string& cod
     out.handedIn = done == "t" || done == "true" || done == "1";
   }
   auto items = server.prepare(
-      "SELECT position, kind, prompt, choices, locate_view, scene, picture FROM class_exam_items"
-      " WHERE class_code = ?1 AND exam_id = ?2 ORDER BY position");
+      "SELECT position, kind, prompt, choices, locate_view, scene, picture, picture_width, picture_height"
+      " FROM class_exam_items WHERE class_code = ?1 AND exam_id = ?2 ORDER BY position");
   if (!items) return tl::unexpected(items.error());
   items->bind(1, code).bind(2, examId);
   status = forEachRow(*items, [&](Statement& r) -> Status {
-    out.items.push_back({r.integer(0), r.text(1), r.text(2), stringArray(r.text(3)), r.text(4), r.text(5), r.text(6)});
+    out.items.push_back({r.integer(0), r.text(1), r.text(2), stringArray(r.text(3)), r.text(4), r.text(5), r.text(6),
+                         r.integer(7), r.integer(8)});
     return {};
   });
   if (!status) return tl::unexpected(status.error());
@@ -149,11 +186,14 @@ Status answerClassExam(Database& server, const std::string& code, const std::str
   if (auto ok = requireServer(server); !ok) return ok;
   return server.writeTransaction([&](Database& d) -> Status {
     return callServer(
-        d, "SELECT at_answer_exam(?1, ?2, ?3::integer, ?4::integer, ?5, ?6, ?7::double precision, ?8::bigint, ?9)",
+        d, "SELECT at_answer_exam(?1, ?2, ?3::integer, ?4::integer, ?5, ?6::integer, ?7::integer, ?8::bigint, ?9)",
         [&](Statement& s) {
+          const auto some = [](std::optional<int> v) { return v ? std::optional<std::int64_t>(*v) : std::nullopt; };
           s.bind(1, code).bind(2, examId).bind(3, position);
-          s.bind(4, answer.choice ? std::optional<std::int64_t>(*answer.choice) : std::nullopt);
-          s.bind(5, answer.text).bind(6, answer.pick).bind(7, answer.distanceMm).bind(8, answer.latencyMs);
+          s.bind(4, some(answer.choice)).bind(5, answer.text);
+          s.bind(6, some(answer.pixel ? std::optional<int>((*answer.pixel)[0]) : std::nullopt));
+          s.bind(7, some(answer.pixel ? std::optional<int>((*answer.pixel)[1]) : std::nullopt));
+          s.bind(8, answer.latencyMs);
           s.bind(9, by.value_or(""));
         },
         [](Statement&) {});

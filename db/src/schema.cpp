@@ -6,6 +6,7 @@
 // JSON documents as TEXT. No pixel data and no patient identifiers are ever stored.
 #include "schema.h"
 
+#include "class_exam_locate_sql.h"
 #include "class_exam_sql.h"
 #include "class_security_sql.h"
 #include "study_security_sql.h"
@@ -541,6 +542,8 @@ const std::vector<Migration>& migrations() {
        kStudyOwnersAndWithdrawals},
       {19, "class server: a study's owner reads it, withdraws and excludes its participants (audited)",
        studySecuritySql(), {}, true},
+      {20, "class server: locate items graded from the pixel clicked on their picture; exam prerequisites checked there",
+       classExamLocateSql(), {}, true},
   };
   return all;
 }

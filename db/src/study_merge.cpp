@@ -109,6 +109,38 @@ struct Records {
   bool operator==(const Records&) const = default;
 };
 
+// A participant's withdrawal or exclusion as a source recorded it.
+struct Withdrawal {
+  std::string at, kind, reason;
+};
+
+// The withdrawn and excluded participants of `studyId` in `db`.
+Result<std::map<std::string, Withdrawal>> readWithdrawals(Database& db, const std::string& studyId) {
+  std::map<std::string, Withdrawal> out;
+  auto s = db.prepare("SELECT participant_id, withdrawn_at, coalesce(withdrawal_kind, 'withdrawn'),"
+                      " coalesce(withdrawal_reason, '') FROM study_participants WHERE study_id = ?1 AND withdrawn_at IS NOT NULL");
+  if (!s) return tl::unexpected(s.error());
+  s->bind(1, studyId);
+  auto status = forEachRow(*s, [&](Statement& r) -> Status {
+    out[r.text(0)] = Withdrawal{r.text(1), r.text(2), r.text(3)};
+    return {};
+  });
+  if (!status) return tl::unexpected(status.error());
+  return out;
+}
+
+// Carries a source's withdrawal into `d`: a participant withdrawn anywhere stays withdrawn (the
+// target's own withdrawal, when it has one, is kept). Returns whether it changed the target.
+Result<bool> carryWithdrawal(Database& d, const std::string& studyId, const std::string& participantId,
+                             const Withdrawal& w) {
+  auto s = d.prepare("UPDATE study_participants SET withdrawn_at = ?3, withdrawal_kind = ?4, withdrawal_reason = ?5"
+                     " WHERE study_id = ?1 AND participant_id = ?2 AND withdrawn_at IS NULL");
+  if (!s) return tl::unexpected(s.error());
+  s->bind(1, studyId).bind(2, participantId).bind(3, w.at).bind(4, w.kind).bind(5, w.reason);
+  if (auto done = s->step(); !done) return tl::unexpected(done.error());
+  return d.changes() > 0;
+}
+
 Result<std::optional<Records>> readRecords(Database& db, const std::string& studyId, const std::string& participantId) {
   auto participant = readRows(db, "study_participants", kParticipantColumns, studyId, participantId);
   if (!participant) return tl::unexpected(participant.error());
@@ -262,7 +294,9 @@ Result<StudyMergeReport> mergeStudy(Database& into, const std::vector<StudyMerge
     design = *givenDesign;
   }
   std::vector<SourceRecords> fromSources;
+  std::vector<std::map<std::string, Withdrawal>> withdrawals;  // per source (a bundle has none: it leaves them out)
   for (const auto& source : sources) {
+    withdrawals.emplace_back();
     if (!source.db) {
       if (!source.rows || !givenDesign)
         return fail(source.name + ": an export bundle is merged against the study's design, which was not given");
@@ -286,6 +320,9 @@ Result<StudyMergeReport> mergeStudy(Database& into, const std::vector<StudyMerge
     }
     auto records = readAllRecords(*source.db, studyId);
     if (!records) return tl::unexpected(withContext(source.name, records.error()));
+    auto withdrawn = readWithdrawals(*source.db, studyId);
+    if (!withdrawn) return tl::unexpected(withContext(source.name, withdrawn.error()));
+    withdrawals.back() = std::move(*withdrawn);
     fromSources.push_back(SourceRecords{std::move(*records), {}});
   }
   if (!design) return fail("study merge: no databases to merge from");
@@ -305,8 +342,16 @@ Result<StudyMergeReport> mergeStudy(Database& into, const std::vector<StudyMerge
     int next = *count;
     std::map<std::string, std::string> origin;  // participant → where the target's copy came from
     for (std::size_t s = 0; s < sources.size(); ++s) {
-      StudyMergeReport::FromSource from{sources[s].name, 0, 0};
+      StudyMergeReport::FromSource from{sources[s].name, 0, 0, 0};
       const SourceRecords& source = fromSources[s];
+      const auto carry = [&](const std::string& participantId) -> Status {
+        const auto w = withdrawals[s].find(participantId);
+        if (w == withdrawals[s].end()) return {};
+        auto changed = carryWithdrawal(d, studyId, participantId, w->second);
+        if (!changed) return tl::unexpected(changed.error());
+        from.withdrawals += *changed ? 1 : 0;
+        return {};
+      };
       for (const Records& records : source.records) {
         auto existing = readRecords(d, studyId, records.id);
         if (!existing) return tl::unexpected(existing.error());
@@ -326,6 +371,7 @@ Result<StudyMergeReport> mergeStudy(Database& into, const std::vector<StudyMerge
           }
           if (same) {
             ++from.alreadyThere;
+            if (auto st = carry(records.id); !st) return st;
             continue;
           }
           const auto o = origin.find(records.id);
@@ -345,6 +391,7 @@ Result<StudyMergeReport> mergeStudy(Database& into, const std::vector<StudyMerge
           if (auto st = insertRow(d, "study_ratings", kRatingColumns, studyId, records.id, r); !st) return st;
         origin[records.id] = sources[s].name;
         ++from.added;
+        if (auto st = carry(records.id); !st) return st;
       }
       report.sources.push_back(from);
     }

@@ -132,7 +132,9 @@ Interaction interactionOf(const quiz::Answer& a, const XapiQuestion* q) {
     if (!q->resolved.keyOrder.empty()) out.correct = json::array({joinedIds(q->resolved.keyOrder)});
     return out;
   }
-  if (a.pick) out.response = a.pick->structure.empty() ? std::string("nothing") : a.pick->structure;
+  if (a.pick && a.pick->pixel)  // graded on a class server from the pixel clicked on the item's picture
+    out.response = "pixel " + std::to_string((*a.pick->pixel)[0]) + " " + std::to_string((*a.pick->pixel)[1]);
+  else if (a.pick) out.response = a.pick->structure.empty() ? std::string("nothing") : a.pick->structure;
   return out;
 }
 

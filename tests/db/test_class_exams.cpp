@@ -3,7 +3,9 @@
 // the server's grades match the keys, and the class's progress shows the exam.
 #include <doctest/doctest.h>
 
+#include <array>
 #include <cstdio>
+#include <ctime>
 #include <random>
 #include <string>
 #include <vector>
@@ -11,6 +13,7 @@
 #include "database.h"  // db/'s private SQL wrapper (at_db_sql_for_tests)
 #include "db/class_exams.h"
 #include "secure_class.h"
+#include "uuid.h"  // db/src, as the outbox mints event ids
 #include "test_support.h"
 
 using namespace at;
@@ -22,8 +25,9 @@ using test::openAt;
 using test::SecureClass;
 std::int64_t count(Database& db, const std::string& sql) { return test::scalarCount(db, sql); }
 
-// An exam of every kind: two identify items (keys 2 and 0), a name item, a locate item with a
-// 2 mm tolerance. Item texts never name an identify or name item's target.
+// An exam of every kind: two identify items (keys 2 and 0), a name item, a locate item on a 40×30
+// picture whose pixels (5..9, 10) and (6..8, 11) count. Item texts never name an identify or name
+// item's target.
 ClassExamOpening toyExam(const std::string& id) {
   ClassExamOpening x;
   x.examId = id;
@@ -33,11 +37,12 @@ ClassExamOpening toyExam(const std::string& id) {
   x.passScore = 0.5;
   x.items = {{0, "identify", "Which structure is marked?", {"malleus", "incus", "stapes", "cochlea"}, "3d", "{}", "iVBORw0KGgo="},
              {1, "name", "Name the marked structure.", {}, "3d", "{}", "iVBORw0KGgo="},
-             {2, "locate", "Locate the incus.", {}, "3d", R"({"structure":"malleus","preset":"malleus_wdt"})", ""},
+             {2, "locate", "Locate the incus.", {}, "3d", R"({"structure":"malleus","preset":"malleus_wdt"})", "iVBORw0KGgo=",
+              40, 30},
              {3, "identify", "Which structure is marked?", {"cochlea", "malleus", "incus", "stapes"}, "3d", "{}", "iVBORw0KGgo="}};
   x.keys = {{"ex.identify.stapes", "stapes", 2, {}, 0},
             {"ex.name.stapes", "stapes", -1, {"Stapes", "stirrup"}, 0},
-            {"ex.locate.incus", "incus", -1, {}, 2.0},
+            {"ex.locate.incus", "incus", -1, {}, 2.0, {{10, 5, 9}, {11, 6, 8}}},
             {"ex.identify.cochlea", "cochlea", 0, {}, 0}};
   return x;
 }
@@ -46,8 +51,8 @@ ClassExamOpening toyExam(const std::string& id) {
 // refused operation.
 std::string examTables(Database& admin) {
   std::string out;
-  for (const char* table : {"class_exams", "class_exam_items", "class_exam_keys", "class_exam_sittings",
-                            "class_exam_answers", "class_audit"}) {
+  for (const char* table : {"class_exams", "class_exam_items", "class_exam_keys", "class_exam_locate_keys",
+                            "class_exam_sittings", "class_exam_answers", "class_audit"}) {
     auto s = admin.prepare(std::string("SELECT t::text FROM ") + table + " t ORDER BY t::text");
     REQUIRE(s);
     out += std::string(table) + ":\n";
@@ -82,7 +87,8 @@ TEST_CASE("ClassExam_KeysNeverReachAStudent_GradesAreTheServersAndForgeriesChang
 
   // The keys: no SELECT on their table, and no column a student can read says what is right.
   for (const std::string sql : {"SELECT * FROM class_exam_keys", "SELECT key_choice FROM class_exam_keys",
-                                "SELECT count(*) FROM class_exam_keys"}) {
+                                "SELECT count(*) FROM class_exam_keys", "SELECT * FROM class_exam_locate_keys",
+                                "SELECT count(*) FROM class_exam_locate_keys WHERE y = 10"}) {
     CAPTURE(sql);
     auto s = eve.prepare(sql);
     REQUIRE(s);
@@ -91,7 +97,7 @@ TEST_CASE("ClassExam_KeysNeverReachAStudent_GradesAreTheServersAndForgeriesChang
     CHECK(refusedForRights(row.error()));
   }
   CHECK(count(c.admin, "SELECT count(*) FROM information_schema.columns WHERE table_schema = current_schema()"
-                       " AND column_name IN ('target', 'key_choice', 'names', 'tolerance_mm')"
+                       " AND column_name IN ('target', 'key_choice', 'names', 'tolerance_mm', 'y', 'x_from', 'x_to')"
                        " AND table_name LIKE 'class\\_exam%'"
                        " AND has_column_privilege('" + c.eve + "', table_name, column_name, 'SELECT')") == 0);
   // What the student's machine receives: the items without a word of their keys.
@@ -107,7 +113,7 @@ TEST_CASE("ClassExam_KeysNeverReachAStudent_GradesAreTheServersAndForgeriesChang
       }
 
   // Forged grades, as the student login: each refused, and nothing changed at all.
-  CHECK(messageOf(answerClassExam(eve, c.code, "ex", 0, {0, std::nullopt, std::nullopt, std::nullopt, 900}, std::nullopt)) == "ok");
+  CHECK(messageOf(answerClassExam(eve, c.code, "ex", 0, {0, std::nullopt, std::nullopt, 900}, std::nullopt)) == "ok");
   const std::string before = examTables(c.admin);
   const std::vector<std::string> forgeries = {
       "INSERT INTO class_exam_answers (class_code, exam_id, user_name, position, answer, correct, score, answered_at)"
@@ -127,7 +133,15 @@ TEST_CASE("ClassExam_KeysNeverReachAStudent_GradesAreTheServersAndForgeriesChang
       // An answer of the wrong form, an item that is not there:
       "SELECT at_answer_exam('" + c.code + "', 'ex', 1, 2, NULL, NULL, NULL, 0, '')",
       "SELECT at_answer_exam('" + c.code + "', 'ex', 3, 7, NULL, NULL, NULL, 0, '')",
-      "SELECT at_answer_exam('" + c.code + "', 'ex', 9, 0, NULL, NULL, NULL, 0, '')"};
+      "SELECT at_answer_exam('" + c.code + "', 'ex', 9, 0, NULL, NULL, NULL, 0, '')",
+      // A locate item: the structure "picked" (the laptop's say, as before), a grade, a pixel off
+      // the picture, a pixel with a choice:
+      "SELECT at_answer_exam('" + c.code + "', 'ex', 2, NULL, NULL, 'incus', 0.5::double precision, 0, '')",
+      "SELECT at_answer_exam('" + c.code + "', 'ex', 2, NULL, 'incus', NULL, NULL, 0, '')",
+      "SELECT at_answer_exam('" + c.code + "', 'ex', 2, NULL, NULL, 40, 10, 0, '')",
+      "SELECT at_answer_exam('" + c.code + "', 'ex', 2, NULL, NULL, 7, -1, 0, '')",
+      "SELECT at_answer_exam('" + c.code + "', 'ex', 2, 1, NULL, 7, 10, 0, '')",
+      "INSERT INTO class_exam_locate_keys VALUES ('" + c.code + "', 'ex', 2, 0, 0, 39)"};
   for (const std::string& sql : forgeries) {
     CAPTURE(sql);
     auto s = eve.prepare(sql);
@@ -141,13 +155,13 @@ TEST_CASE("ClassExam_KeysNeverReachAStudent_GradesAreTheServersAndForgeriesChang
   CHECK(count(sam, "SELECT count(*) FROM class_exam_sittings") == 0);
   CHECK(startClassExam(eve, c.code, "ex", std::nullopt)->answered == std::set<int>{0});
 
-  CHECK(messageOf(answerClassExam(eve, c.code, "ex", 1, {std::nullopt, "  the STIRRUP ", std::nullopt, std::nullopt, 0},
+  CHECK(messageOf(answerClassExam(eve, c.code, "ex", 1, {std::nullopt, "  the STIRRUP ", std::nullopt, 0},
                                   std::nullopt)) == "ok");
-  CHECK(messageOf(answerClassExam(eve, c.code, "ex", 2, {std::nullopt, std::nullopt, "malleus", 1.5, 0}, std::nullopt)) ==
-        "ok");
+  CHECK(messageOf(answerClassExam(eve, c.code, "ex", 2, {std::nullopt, std::nullopt, std::array<int, 2>{9, 10}, 0},
+                                  std::nullopt)) == "ok");
   auto result = finishClassExam(eve, c.code, "ex", std::nullopt);
   REQUIRE_MESSAGE(result, (result ? "" : result.error().message));
-  // Wrong choice, right name (case, spaces and "the" ignored), a pick within the tolerance, unanswered.
+  // Wrong choice, right name (case, spaces and "the" ignored), a click on a pixel that counts, unanswered.
   CHECK(result->score == doctest::Approx(0.5));
   CHECK(result->passed == std::optional<bool>(true));
   REQUIRE(result->items.size() == 4);
@@ -159,7 +173,7 @@ TEST_CASE("ClassExam_KeysNeverReachAStudent_GradesAreTheServersAndForgeriesChang
   // After handing in: nothing more is graded, and a new start says so.
   CHECK(startClassExam(eve, c.code, "ex", std::nullopt)->handedIn);
   CHECK_FALSE(sitting->handedIn);
-  CHECK_FALSE(answerClassExam(eve, c.code, "ex", 3, {0, std::nullopt, std::nullopt, std::nullopt, 0}, std::nullopt));
+  CHECK_FALSE(answerClassExam(eve, c.code, "ex", 3, {0, std::nullopt, std::nullopt, 0}, std::nullopt));
 
   // The class's progress shows the exam; closing hands sam's open sitting in; both are audited.
   CHECK(startClassExam(sam, c.code, "ex", std::nullopt));
@@ -204,10 +218,11 @@ TEST_CASE("ClassExam_ServerGradesEqualTheKeys_ForRandomAnswers_AndTheDeadlineSto
         const std::vector<std::string> said = {"stapes", "Stirrup", "incus", "stape"};
         a.text = said[random() % said.size()];
         right = *a.text == "stapes" || *a.text == "Stirrup";
-      } else {
-        a.pick = random() % 2 ? "incus" : "malleus";
-        a.distanceMm = double(random() % 40) / 10.0;
-        right = *a.pick == "incus" || *a.distanceMm <= 2.0;
+      } else {  // half the clicks near the pixels that count, so that both grades occur
+        const int x = random() % 2 ? int(random() % 40) : 4 + int(random() % 7);
+        const int y = random() % 2 ? int(random() % 30) : 9 + int(random() % 4);
+        a.pixel = std::array<int, 2>{x, y};
+        right = (y == 10 && x >= 5 && x <= 9) || (y == 11 && x >= 6 && x <= 8);
       }
       REQUIRE(messageOf(answerClassExam(me, c.code, "ex", position, a, std::nullopt)) == "ok");
       score += right ? 1 : 0;
@@ -225,7 +240,7 @@ TEST_CASE("ClassExam_ServerGradesEqualTheKeys_ForRandomAnswers_AndTheDeadlineSto
   REQUIRE(startClassExam(eve, c.code, "late", std::nullopt));
   REQUIRE(c.admin.exec("UPDATE class_exam_sittings SET deadline_at = deadline_at - 601 WHERE exam_id = 'late'"));
   const std::string before = examTables(c.admin);
-  auto late = answerClassExam(eve, c.code, "late", 0, {2, std::nullopt, std::nullopt, std::nullopt, 0}, std::nullopt);
+  auto late = answerClassExam(eve, c.code, "late", 0, {2, std::nullopt, std::nullopt, 0}, std::nullopt);
   REQUIRE_FALSE(late);
   CHECK(late.error().message.find("time is up") != std::string::npos);
   CHECK(examTables(c.admin) == before);
@@ -236,4 +251,42 @@ TEST_CASE("ClassExam_ServerGradesEqualTheKeys_ForRandomAnswers_AndTheDeadlineSto
   auto practice = startClassExam(laptop, c.code, "ex", std::nullopt);
   REQUIRE_FALSE(practice);
   CHECK(practice.error().message.find("practice") != std::string::npos);
+}
+
+TEST_CASE("ClassExam_PrerequisitesAreTheServers_AStudentStartsOnlyAfterFinishingThemThere") {
+  auto url = test::freshPostgresDatabase("the class exam test");
+  if (!url) return;
+  SecureClass c(*url);
+  Database instructor = openAt(c.instructorUrl);
+  Database eve = openAt(c.eveUrl);
+  ClassExamOpening exam = toyExam("after");
+  exam.prerequisites = {"toy.ossicles"};
+  REQUIRE(openClassExam(instructor, c.code, exam, std::nullopt));
+
+  // Unfinished on the server: no sitting, whatever her laptop says; a forged lesson end is refused.
+  auto locked = startClassExam(eve, c.code, "after", std::nullopt);
+  REQUIRE_FALSE(locked);
+  CHECK(locked.error().message.find("locked for " + c.eve + " until toy.ossicles is finished") != std::string::npos);
+  const std::int64_t now = std::int64_t(std::time(nullptr));
+  const auto record = [&](const std::string& kind, const std::string& question, std::optional<double> score) {
+    auto s = eve.prepare("SELECT at_record_event(?1, ?2, ?3, ?4, ?5, 'toy.ossicles', ?6, '', ?7, ?8, '{}')");
+    REQUIRE(s);
+    s->bind(1, newUuid()).bind(2, c.code).bind(3, c.eve).bind(4, kind).bind(5, now).bind(6, question);
+    s->bind(7, score ? std::optional<std::int64_t>(1) : std::nullopt).bind(8, score);
+    REQUIRE(*s->step());
+    return s->text(0);
+  };
+  CHECK(record("lesson_finished", "", 1.0).rfind("refused: ", 0) == 0);
+  CHECK_FALSE(startClassExam(eve, c.code, "after", std::nullopt));
+  CHECK(count(c.admin, "SELECT count(*) FROM class_exam_sittings") == 0);
+  // Play it through (the server checks each event), and the exam opens for her, not for sam.
+  CHECK(record("lesson_started", "", std::nullopt) == "stored");
+  for (const char* q : {"toy.ossicles.name_stapes", "toy.ossicles.identify_incus", "toy.ossicles.locate_malleus"})
+    CHECK(record("answer", q, 1.0) == "stored");
+  CHECK(record("lesson_finished", "", 1.0) == "stored");
+  auto sitting = startClassExam(eve, c.code, "after", std::nullopt);
+  REQUIRE_MESSAGE(sitting, (sitting ? "" : sitting.error().message));
+  Database sam = openAt(c.samUrl);
+  CHECK_FALSE(startClassExam(sam, c.code, "after", std::nullopt));
+  CHECK(count(c.admin, "SELECT count(*) FROM class_exam_sittings") == 1);
 }

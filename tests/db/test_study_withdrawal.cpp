@@ -137,3 +137,47 @@ TEST_CASE("StudyWithdrawal_OnTheServer_OnlyTheOwningCoordinatorReadsAndWithdraws
                                            c.coordinator + "'") == 1);
   CHECK(test::scalarCount(sam, "SELECT COUNT(*) FROM class_audit") == 0);
 }
+
+TEST_CASE("StudyWithdrawal_MergeCarriesWithdrawals_AParticipantWithdrawnOnAnyMachineStaysWithdrawn") {
+  test::TempDir dir;
+  const std::uint64_t seed = test::freshSeed("StudyWithdrawal_MergeCarriesWithdrawals");
+  std::mt19937 random{unsigned(seed)};
+  const quiz::StudyProtocol p = paperSurvey();
+  Database lab = test::openAt((dir / "lab.db").string());
+  REQUIRE(saveStudy(lab, p));
+  enrolAndRate(lab, p, 4, random);
+  const std::string left = "P" + std::to_string(random() % 4);
+  CAPTURE(left);
+  Database merged = test::openAt((dir / "merged.db").string());
+  // Merged once before the withdrawal, then again after it: the second merge carries it.
+  auto first = mergeStudy(merged, {StudyMergeSource{"lab.db", &lab, nullptr}}, p.id);
+  REQUIRE_MESSAGE(first, (first ? "" : first.error().message));
+  CHECK(first->sources.at(0).withdrawals == 0);
+  REQUIRE(withdrawStudyParticipant(lab, p.id, left, StudyWithdrawalKind::Excluded, "colour blind", "dr_ada"));
+  auto second = mergeStudy(merged, {StudyMergeSource{"lab.db", &lab, nullptr}}, p.id);
+  REQUIRE_MESSAGE(second, (second ? "" : second.error().message));
+  CHECK(second->sources.at(0).alreadyThere == 4);
+  CHECK(second->sources.at(0).withdrawals == 1);
+  // Into a fresh file in one go: the same.
+  Database fresh = test::openAt((dir / "fresh.db").string());
+  auto once = mergeStudy(fresh, {StudyMergeSource{"lab.db", &lab, nullptr}}, p.id);
+  REQUIRE(once);
+  CHECK(once->sources.at(0).withdrawals == 1);
+  for (Database* db : {&merged, &fresh}) {
+    auto withdrawals = studyWithdrawals(*db, p.id);
+    REQUIRE(withdrawals);
+    REQUIRE(withdrawals->size() == 1);
+    CHECK(withdrawals->front().participantId == left);
+    CHECK(withdrawals->front().reason == "colour blind");
+    auto rows = studyResponseRows(*db, p);
+    REQUIRE(rows);
+    auto labRows = studyResponseRows(lab, p);
+    REQUIRE(labRows);
+    CHECK(rows->size() == labRows->size());  // the export leaves them out, as on the lab machine
+    for (const auto& r : *rows) CHECK(r.participantId != left);
+  }
+  // Merging again changes nothing more.
+  auto third = mergeStudy(merged, {StudyMergeSource{"lab.db", &lab, nullptr}}, p.id);
+  REQUIRE(third);
+  CHECK(third->sources.at(0).withdrawals == 0);
+}

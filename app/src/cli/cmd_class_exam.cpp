@@ -1,10 +1,12 @@
 // Graded exams on a class server from the terminal (db/class_exams.h):
 //   class open-exam CODE EXAM   an instructor draws the exam's items on their machine (which has the
-//                               course and its dataset), renders the identify and name items' views
-//                               as pictures, and hands items and keys to the server;
+//                               course and its dataset), renders every item's view as a picture,
+//                               works out which pixels of a locate item's picture count (the laptop's
+//                               grader, pixel by pixel), and hands items and keys to the server;
 //   class close-exam CODE EXAM  ends it (open sittings are handed in);
 //   exam EXAM --user NAME       on a machine whose user joined a class that has EXAM open: the items
-//                               come from the server, each answer is sent there and graded there.
+//                               come from the server as pictures, each answer (a locate item's: the
+//                               pixel clicked) is sent there and graded there.
 #include "class_exam_cli.h"
 
 #include <chrono>
@@ -27,6 +29,7 @@
 #include "lessons/lesson_engine.h"
 #include "printable_output.h"
 #include "terminal_answers.h"
+#include "terminal_locate_key.h"
 #include "terminal_views.h"
 
 namespace at::app {
@@ -75,15 +78,6 @@ std::string clock(std::int64_t seconds) {
   return text;
 }
 
-// The accepted names of `target`: its catalogue entry's names and the question's synonyms.
-std::vector<std::string> acceptedNames(const quiz::GradingContext& context, const quiz::ResolvedQuestion& q) {
-  std::vector<std::string> names;
-  if (const quiz::NameEntry* entry = context.entry(q.question.target)) names = entry->names;
-  names.insert(names.end(), q.question.synonyms.begin(), q.question.synonyms.end());
-  if (names.empty()) names.push_back(q.question.target);
-  return names;
-}
-
 }  // namespace
 
 int runClassOpenExam(const cli::Args& args) {
@@ -109,22 +103,19 @@ int runClassOpenExam(const cli::Args& args) {
   if (!items) return reportError("class open-exam: " + items.error().message);
   const quiz::GradingContext context = lessons::gradingContext(*structures, course);
 
-  // Identify and name items go to the server as pictures: their scene marks the answer.
-  std::unique_ptr<TerminalViews> views;
-  bool needPictures = false;
-  for (const lessons::ExamItem& item : *items) needPictures |= item.question.question.kind != quiz::QuestionKind::Locate;
+  // Every item goes to the server as a picture: an identify or name item's scene would name the
+  // answer; a locate item is clicked on its picture and graded there from the pixel.
   const std::string dir = args.valueOr("views", "anatomy-tutor-views");
-  if (needPictures) {
-    auto made = TerminalViews::create(ls.database(), course.datasetId, dir, true);
-    if (!made) return reportError("class open-exam: the items' pictures cannot be made: " + made.error().message);
-    views = std::move(*made);
-  }
+  auto made = TerminalViews::create(ls.database(), course.datasetId, dir, true);
+  if (!made) return reportError("class open-exam: the items' pictures cannot be made: " + made.error().message);
+  std::unique_ptr<TerminalViews> views = std::move(*made);
   db::ClassExamOpening opening;
   opening.examId = examId;
   opening.courseId = course.id;
   opening.title = spec.title;
   opening.timeLimitS = spec.timeLimitS;
   opening.passScore = spec.passScore;
+  opening.prerequisites = spec.prerequisites;
   for (const lessons::ExamItem& item : *items) {
     const quiz::ResolvedQuestion& q = item.question;
     db::ClassExamItem shown;
@@ -133,28 +124,38 @@ int runClassOpenExam(const cli::Args& args) {
     shown.prompt = q.question.prompt;
     key.questionId = q.question.id;
     key.target = q.question.target;
-    if (q.question.kind == quiz::QuestionKind::Locate) {
+    char stem[200];
+    std::snprintf(stem, sizeof stem, "%s-%s-item%02d", code->c_str(), examId.c_str(), item.position + 1);
+    const bool locate = q.question.kind == quiz::QuestionKind::Locate;
+    // A locate item's picture is the view the student's machine showed before: the target's
+    // region, from a side where it can be clicked (or its axial slice).
+    auto picture = !locate ? views->show(item.scene, stem)
+                   : item.locateView == lessons::ExamLocateView::Slice ? views->showSlice(q.question.target, stem)
+                                                                       : views->show(item.scene, stem, true, q.question.target);
+    if (!picture)
+      return reportError("class open-exam: item " + std::to_string(item.position + 1) + ": " + picture.error().message);
+    auto bytes = readBytes(picture->path);
+    if (!bytes) return reportError("class open-exam: " + bytes.error().message);
+    shown.pictureBase64 = toBase64(*bytes);
+    std::error_code ignored;
+    std::filesystem::remove(picture->path, ignored);  // it shows the answer: not left lying about
+    if (locate) {
       shown.kind = "locate";
       shown.locateView = lessons::toString(item.locateView);
       shown.sceneJson = nlohmann::json{{"structure", item.scene.structure}, {"preset", item.scene.presetId},
                                        {"view", lessons::toString(item.scene.view)}, {"target", q.question.target}}
                             .dump();
+      shown.pictureWidth = picture->width;
+      shown.pictureHeight = picture->height;
       key.toleranceMm = q.question.toleranceMm;
+      auto runs = acceptedPixelRuns(*views, *picture, q, context);
+      if (!runs) return reportError("class open-exam: item " + std::to_string(item.position + 1) + ": " + runs.error().message);
+      key.acceptedPixels = std::move(*runs);
     } else {
       shown.kind = q.question.kind == quiz::QuestionKind::Identify ? "identify" : "name";
       shown.choices = q.choices;
       key.keyChoice = q.keyChoice;
-      if (q.question.kind == quiz::QuestionKind::Name) key.names = acceptedNames(context, q);
-      char stem[200];
-      std::snprintf(stem, sizeof stem, "%s-%s-item%02d", code->c_str(), examId.c_str(), item.position + 1);
-      auto picture = views->show(item.scene, stem);
-      if (!picture) return reportError("class open-exam: item " + std::to_string(item.position + 1) + ": " +
-                                       picture.error().message);
-      auto bytes = readBytes(picture->path);
-      if (!bytes) return reportError("class open-exam: " + bytes.error().message);
-      shown.pictureBase64 = toBase64(*bytes);
-      std::error_code ignored;
-      std::filesystem::remove(picture->path, ignored);  // it shows the answer: not left lying about
+      if (q.question.kind == quiz::QuestionKind::Name) db::setNameKey(key, q, context);
     }
     opening.items.push_back(std::move(shown));
     opening.keys.push_back(std::move(key));
@@ -215,17 +216,13 @@ std::optional<int> runServerExam(LearningSession& ls, const std::string& userNam
                  m.classCode.c_str(), sitting->title.c_str(), examId.c_str(),
                  str::countOf(long(sitting->items.size()), "item").c_str(), clock(secondsLeft()).c_str());
 
-  // Locate items are picked on this machine's copy of the dataset.
-  auto found = lessons::findExam(ls.curriculum(), examId);
-  std::unique_ptr<TerminalViews> views;
+  // The choices are listed by name from this machine's copy of the course, when it has it.
   std::map<std::string, std::string> idByName, nameById;
-  if (found) {
+  if (auto found = lessons::findExam(ls.curriculum(), examId))
     if (auto structures = ls.structures(found->first.datasetId)) {
       idByName = structureIdsByName(*structures);
       for (const Structure& s : *structures) nameById[s.id] = s.displayName.empty() ? s.id : s.displayName;
     }
-    views = openTerminalViews(ls.database(), found->first.datasetId, viewsDir, noViews);
-  }
   const std::filesystem::path dir = viewsDir.value_or("anatomy-tutor-views");
   bool handIn = sitting->handedIn;
   if (handIn) terminalPrintf("You handed this exam in already; nothing more is graded.\n");
@@ -243,35 +240,22 @@ std::optional<int> runServerExam(LearningSession& ls, const std::string& userNam
       q.idByName = idByName;
       char stem[200];
       std::snprintf(stem, sizeof stem, "%s-%02d", examId.c_str(), item.position + 1);
-      if (q.kind == quiz::QuestionKind::Locate) {
-        const auto scene = nlohmann::json::parse(item.sceneJson, nullptr, false);
-        q.target = scene.is_object() ? scene.value("target", std::string()) : std::string();
-        q.views = views.get();
-        if (views && views->pictures() && scene.is_object()) {
-          lessons::QuestionScene s;
-          s.structure = scene.value("structure", q.target);
-          s.presetId = scene.value("preset", std::string());
-          if (auto view = lessons::parseCameraView(scene.value("view", std::string("lateral_right")))) s.view = *view;
-          auto picture = item.locateView == "slice" ? views->showSlice(q.target, stem)
-                                                    : views->show(s, stem, true, q.target);
-          if (picture) terminalPrintf("  view: %s  — answer with the pixel x y where it is\n", picture->path.c_str());
-        }
-      } else if (!noViews && !item.pictureBase64.empty()) {
+      // Every item comes as a picture; a locate item is answered with the pixel clicked on it.
+      if (q.kind == quiz::QuestionKind::Locate) q.serverPictureSize = std::array<int, 2>{item.pictureWidth, item.pictureHeight};
+      if (!item.pictureBase64.empty() && (!noViews || q.kind == quiz::QuestionKind::Locate)) {
         std::error_code ignored;
         std::filesystem::create_directories(dir, ignored);
         const std::string path = (dir / (std::string(stem) + ".png")).string();
         if (auto written = writeFileAtomically(path, fromBase64(item.pictureBase64)); written)
-          terminalPrintf("  view: %s\n", path.c_str());
+          terminalPrintf("  view: %s%s\n", path.c_str(),
+                         q.kind == quiz::QuestionKind::Locate ? "  — answer with the pixel x y where it is" : "");
       }
       std::fflush(stdout);
       auto asked = askQuestion(source, q, [&](const quiz::Answer& a, std::int64_t latencyMs) -> Result<std::optional<quiz::Grade>> {
         db::ClassExamAnswer sent;
         sent.choice = a.choice;
         sent.text = a.text;
-        if (a.pick) {
-          sent.pick = a.pick->structure;
-          if (a.pick->distanceMm >= 0) sent.distanceMm = a.pick->distanceMm;
-        }
+        if (a.pick) sent.pixel = a.pick->pixel;
         sent.latencyMs = latencyMs;
         if (auto st = db::answerClassExam(*server, m.classCode, examId, item.position, sent, userName); !st)
           return tl::unexpected(st.error());
@@ -334,12 +318,17 @@ Result<std::vector<lessons::LearnerRecords>> classExamLearners(db::Database& ser
       if (given.is_object()) {
         if (given.contains("choice") && given["choice"].is_number_integer()) answer.choice = given["choice"].get<int>();
         if (given.contains("text") && given["text"].is_string()) answer.text = given["text"].get<std::string>();
-        if (given.contains("pick") && given["pick"].is_object()) {
+        if (given.contains("pick") && given["pick"].is_object()) {  // graded before the server took pixels
           quiz::Pick pick;
           const auto& p = given["pick"];
           if (p.contains("structure") && p["structure"].is_string()) pick.structure = p["structure"].get<std::string>();
           if (p.contains("distance_mm") && p["distance_mm"].is_number()) pick.distanceMm = p["distance_mm"].get<double>();
           answer.pick = pick;
+        }
+        if (given.contains("pixel") && given["pixel"].is_array() && given["pixel"].size() == 2 &&
+            given["pixel"][0].is_number_integer() && given["pixel"][1].is_number_integer()) {
+          answer.pick = quiz::Pick{};
+          answer.pick->pixel = std::array<int, 2>{given["pixel"][0].get<int>(), given["pixel"][1].get<int>()};
         }
       }
       item.answer = answer;

@@ -402,7 +402,8 @@ int runMerge(const cli::Args& args) {
   auto report = db::mergeStudy(*database, sources, studyId, design ? &*design : nullptr);
   if (!report) return reportError("study merge: " + report.error().message);
   for (const auto& from : report->sources)
-    terminalPrintf("%s: %d participant(s) added, %d already there\n", from.name.c_str(), from.added, from.alreadyThere);
+    terminalPrintf("%s: %d participant(s) added, %d already there%s\n", from.name.c_str(), from.added, from.alreadyThere,
+                   from.withdrawals ? (", " + std::to_string(from.withdrawals) + " withdrawal(s) carried").c_str() : "");
   terminalPrintf("study %s in %s: %d participant(s)\n", studyId.c_str(), database->path().c_str(), report->participants);
   terminalPrintf("counterbalancing: %s over the %zu rows of one cycle; participants per row used:",
               report->balanced() ? "balanced" : "NOT balanced", report->cycle);

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <iostream>
 #include <sstream>
@@ -21,6 +22,18 @@ using str::trim;
 
 // A pick on the question's picture (or at a point) as a locate answer.
 Result<quiz::Answer> pickAnswer(const PickInput& input, const AskedQuestion& q) {
+  if (q.serverPictureSize) {
+    const auto [width, height] = *q.serverPictureSize;
+    if (!input.pixel) return fail("a graded locate item is answered with the pixel x y on its picture, not a point in mm");
+    const double x = std::floor((*input.pixel)[0]), y = std::floor((*input.pixel)[1]);
+    if (x < 0 || y < 0 || x >= width || y >= height)
+      return fail("the pixel (" + std::to_string(long(x)) + ", " + std::to_string(long(y)) + ") is outside the " +
+                  std::to_string(width) + "×" + std::to_string(height) + " picture");
+    quiz::Answer a;
+    a.pick = quiz::Pick{};
+    a.pick->pixel = std::array<int, 2>{int(x), int(y)};
+    return a;
+  }
   if (!q.views) {
     if (input.pixel) return fail("there is no picture to pick on (pictures are off): give a point as mm X Y Z");
     return fail("points in mm need the course's dataset, which did not load");
@@ -85,6 +98,7 @@ std::string answerHint(const AskedQuestion& q) {
     case quiz::QuestionKind::Name:
       return "type the structure's name";
     case quiz::QuestionKind::Locate:
+      if (q.serverPictureSize) return "type the pixel where it is in the picture as x y (e.g. 180 135)";
       return q.views ? "type the pixel where it is in the picture as x y (e.g. 180 135), or a point as mm X Y Z"
                      : "type a point where it is as mm X Y Z (LPS millimetres)";
     case quiz::QuestionKind::Order:

@@ -68,6 +68,9 @@ struct AskedQuestion {
   std::vector<std::string> choiceIds;    // identify, relation
   std::map<std::string, std::string> idByName;  // lower-case names and ids → structure id (order)
   TerminalViews* views = nullptr;        // locate: the picture picks are made on (null: none)
+  // locate on a class server: the size of the item's picture as received; a pick is the pixel
+  // itself (Pick::pixel), graded on the server, and a point in mm is refused.
+  std::optional<std::array<int, 2>> serverPictureSize;
 };
 
 // What to type, for an empty or unreadable line.

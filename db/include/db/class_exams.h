@@ -9,6 +9,7 @@
 // none of this exists: an exam taken there is practice.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <optional>
 #include <set>
@@ -16,6 +17,7 @@
 #include <vector>
 
 #include "db/connection.h"
+#include "quiz/grading.h"
 
 namespace at::db {
 
@@ -26,26 +28,46 @@ struct ClassExamItem {
   std::string prompt;
   std::vector<std::string> choices;  // identify: structure ids in display order
   std::string locateView = "3d";     // locate: "3d" or "slice"
-  std::string sceneJson = "{}";      // locate: the scene to pick in (it does not mark the target)
-  std::string pictureBase64;         // identify, name: the view as a PNG
+  std::string sceneJson = "{}";      // locate: the scene the picture shows (it does not mark the target)
+  std::string pictureBase64;         // the item's view as a PNG (locate: the picture clicked on)
+  int pictureWidth = 0, pictureHeight = 0;  // locate: the picture's size in pixels
+};
+// Pixels x_from..x_to (inclusive) of row y of a locate item's picture.
+struct PixelRun {
+  int y = 0, xFrom = 0, xTo = 0;
 };
 // What grades one item; stays on the server.
 struct ClassExamKey {
   std::string questionId;
   std::string target;
   int keyChoice = -1;               // identify
-  std::vector<std::string> names;   // name: accepted names (compared in lower case, letters and digits)
+  std::vector<std::string> names;   // name: accepted names (as written; kept for the record)
   double toleranceMm = 0;           // locate: a pick this near the target also counts
+  // locate: the pixels of the item's picture whose click counts (the target under the click, or
+  // within the tolerance), decided by the laptop's grader for every pixel where the exam is opened.
+  std::vector<PixelRun> acceptedPixels;
+  // name: what the server grades with, by the laptop's rule (quiz::gradeName): the target's and
+  // every other structure's spellings without their side words (quiz::splitSide bodies), the
+  // target's side ("left", "right" or "") and whether the question asks for it. setNameKey fills them.
+  std::vector<std::string> nameBodies, competitorBodies;
+  std::string targetSide;
+  bool askSide = false;
 };
+// Fills `key`'s name fields for `question` (a Name question) from the laptop's grading context:
+// names = the target's catalogue names and the question's synonyms.
+void setNameKey(ClassExamKey& key, const quiz::ResolvedQuestion& question, const quiz::GradingContext& context);
+
 struct ClassExamOpening {
   std::string examId, courseId, title;
   std::int64_t timeLimitS = 0;
   std::optional<double> passScore;
   std::vector<ClassExamItem> items;
   std::vector<ClassExamKey> keys;   // one per item, same order
+  std::vector<std::string> prerequisites;  // lesson ids a member finishes (on the server) before starting
 };
 // Opens the exam in the class (instructors and coordinators; `by` as in class_accounts.h).
-// Conflict when it was opened before. Returns the number of items.
+// Conflict when it was opened before; Invalid when a locate item lacks its picture or pixels.
+// Returns the number of items.
 Result<int> openClassExam(Database& server, const std::string& code, const ClassExamOpening& exam,
                           const std::optional<std::string>& by);
 // Closes it: no new sittings; open ones are handed in. Returns how many were.
@@ -63,7 +85,8 @@ struct ClassExamSitting {
   std::set<int> answered;           // positions
   bool handedIn = false;            // this member's sitting is finished (finishClassExam gives its results)
 };
-// Starts the member's sitting (or returns the one started).
+// Starts the member's sitting (or returns the one started). Refused while the exam's prerequisite
+// lessons are not finished on the server.
 Result<ClassExamSitting> startClassExam(Database& server, const std::string& code, const std::string& examId,
                                         const std::optional<std::string>& by);
 
@@ -71,8 +94,7 @@ Result<ClassExamSitting> startClassExam(Database& server, const std::string& cod
 struct ClassExamAnswer {
   std::optional<int> choice;          // identify
   std::optional<std::string> text;    // name
-  std::optional<std::string> pick;    // locate: the structure under the click
-  std::optional<double> distanceMm;   // locate: its distance from the target, when known
+  std::optional<std::array<int, 2>> pixel;  // locate: the pixel (x, y) clicked on the item's picture
   std::int64_t latencyMs = 0;
 };
 // Sends one answer; the server grades and keeps it and says nothing about the grade.
@@ -104,7 +126,7 @@ struct ClassExamSittingRow {
 Result<std::vector<ClassExamSittingRow>> classExamSittings(Database& server, const std::string& code);
 
 // One graded answer as an instructor sees it (xapi): the item as shown, the answer as given (JSON:
-// {choice}, {text} or {pick: {structure, distance_mm}}) and the server's grade.
+// {choice}, {text} or {pixel: [x, y]}) and the server's grade.
 struct ClassExamAnswerRow {
   std::string userName, examId;
   int position = 0;

@@ -124,6 +124,7 @@ struct StudyMergeReport {
   struct FromSource {
     std::string name;
     int added = 0, alreadyThere = 0;
+    int withdrawals = 0;  // withdrawals and exclusions carried into `into` (its own stay as they are)
   };
   std::vector<FromSource> sources;
   int participants = 0;                     // in `into` after the merge

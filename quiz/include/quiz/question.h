@@ -4,6 +4,7 @@
 // `ResolvedQuestion` (quiz/keys.h) and never written by hand.
 #pragma once
 
+#include <array>
 #include <optional>
 #include <string>
 #include <vector>
@@ -87,6 +88,9 @@ struct ResolvedQuestion {
 struct Pick {
   std::string structure;
   double distanceMm = -1;
+  // The pixel (x, y) clicked, when the pick is judged elsewhere (a class server grades a locate
+  // item from the pixel on its picture; structure and distance then stay unset).
+  std::optional<std::array<int, 2>> pixel;
 };
 
 // A student's answer; exactly the member for the question's kind is set.
