@@ -313,17 +313,19 @@ TEST_CASE("Skull CT: WDT and non-weighted differ, and the structure keeps its hu
   if (!skull) return;
   Gl* gl = glOrSkip();
   if (!gl) return;
-  for (const char* id : {"frontal_sinus", "external_acoustic_meatus_right"}) {
+  for (const char* id : {"frontal_sinus", "external_acoustic_meatus_right", "maxillary_sinus_right"}) {
     CAPTURE(id);
     const Structure* s = skull->ds.findStructure(id);
     REQUIRE(s);
-    const std::string view = std::string(id) == "frontal_sinus" ? "anterior" : "lateral_right";
+    const std::string view = std::string(id) == "external_acoustic_meatus_right" ? "lateral_right" : "anterior";
     const Preset wdt = derivedPreset(skull->levels, RenderMode::Wdt, id);
     const View vw = viewOf(*skull, s->label, wdt, view);
     const View vu = viewOf(*skull, s->label, derivedPreset(skull->levels, RenderMode::Unweighted, id), view);
     const double differ = meanGreyChange(draw(*gl, *skull, s->label, vw, 0), draw(*gl, *skull, s->label, vu, 0));
     MESSAGE(std::string(id) << ": WDT vs non-weighted " << differ << " grey levels");
-    CHECK(differ >= 4.0);
+    // (the WDT reaches through the sinuses' openings to the nasal cavity and the ethmoid cells, the
+    // non-weighted field a cloud around them; the ear canal in the temporal bone differs least)
+    CHECK(differ >= 8.0);
     // The structure's pixels: where bare mode draws it opaque.
     const RgbaImage bare = draw(*gl, *skull, s->label, viewOf(*skull, s->label, derivedPreset(skull->levels, RenderMode::Bare, id), view), 0);
     for (RenderMode mode : {RenderMode::Wdt, RenderMode::Unweighted, RenderMode::Fuzzy, RenderMode::Outline,
