@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Plays one lesson of anatomy-tutor on the terminal, as a student typing answers would.
 
-usage: play-lesson.py [--min-score S] -- COMMAND... -- ANSWER...
+usage: play-lesson.py [--min-score S] [--answers-dir HOST[:SEEN]] -- COMMAND... -- ANSWER...
 
 COMMAND runs `anatomy-tutor play LESSON ...` without --answers (the questions come on stdin).
 Each ANSWER is typed at the next "answer>" prompt, except that for a question that lists numbered
@@ -10,6 +10,9 @@ ANSWER "pick:NAME" answers a locate question as a click on the structure NAME: t
 is left ('quit', which saves), that one answer is given through `--answers` ({"pick": NAME}), and
 the lesson resumes typed. Exits 0 when the lesson ends with every question answered and the share
 of answers graded right (lines starting with a check mark) is at least S (default 1.0).
+--answers-dir: the folder the pick's answers file is written to (default: the temporary folder),
+and, after ':', the path COMMAND sees that folder at (for a COMMAND run in a chroot, whose /tmp is
+the chroot's: --answers-dir ROOT/tmp:/tmp).
 """
 import json
 import os
@@ -20,9 +23,13 @@ import sys
 
 
 def main(argv):
-    min_score = 1.0
-    if argv[:1] == ["--min-score"]:
-        min_score, argv = float(argv[1]), argv[2:]
+    min_score, answers_dir, seen_dir = 1.0, None, None
+    while argv[:1] in (["--min-score"], ["--answers-dir"]):
+        if argv[0] == "--min-score":
+            min_score = float(argv[1])
+        else:
+            answers_dir, _, seen_dir = argv[1].partition(":")
+        argv = argv[2:]
     if argv[:1] != ["--"] or "--" not in argv[1:]:
         sys.exit(__doc__)
     split = argv.index("--", 1)
@@ -34,9 +41,10 @@ def main(argv):
         transcript += output
         if pick is None:
             break
-        with tempfile.NamedTemporaryFile("w", suffix=".jsonl", delete=False) as f:
+        with tempfile.NamedTemporaryFile("w", suffix=".jsonl", delete=False, dir=answers_dir) as f:
             f.write(json.dumps({"pick": pick, "distance_mm": 0}) + "\n")
-        picked = subprocess.run(command + ["--answers", f.name], stdout=subprocess.PIPE, stderr=subprocess.STDOUT)
+        seen = os.path.join(seen_dir, os.path.basename(f.name)) if seen_dir else f.name
+        picked = subprocess.run(command + ["--answers", seen], stdout=subprocess.PIPE, stderr=subprocess.STDOUT)
         os.unlink(f.name)
         transcript += picked.stdout.decode("utf-8", "replace")
     right = len(re.findall(r"^\s*\u2713", transcript, re.M))

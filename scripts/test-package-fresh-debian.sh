@@ -17,7 +17,8 @@ deb=$(bash scripts/package.sh)
 root=${AT_CHROOT:-$(mktemp -d)}
 cleanup() {
   umount "$root/proc" 2>/dev/null || true
-  [ -n "${AT_CHROOT:-}" ] || rm -rf "$root"
+  # Never remove through a /proc still mounted; a kept chroot (AT_CHROOT) stays.
+  if [ -z "${AT_CHROOT:-}" ] && ! mountpoint -q "$root/proc"; then rm -rf "$root" "$root.debootstrap.log"; fi
 }
 trap cleanup EXIT
 
@@ -39,8 +40,10 @@ in_root=(chroot "$root" env -i PATH=/usr/bin:/bin HOME=/tmp/user LANG=C.UTF-8)
 mkdir -p "$root/tmp/user"
 "${in_root[@]}" anatomy-tutor --version
 t=$(stamp)
-python3 scripts/play-lesson.py -- "${in_root[@]}" anatomy-tutor play inner_ear --user fresh --new-user -- \
-  "${inner_ear_answers[@]}" | tail -n 1
+# The locate answers ("pick:…", a click on the structure) go through an answers file: written into
+# the chroot's /tmp, named as the chroot sees it.
+python3 scripts/play-lesson.py --answers-dir "$root/tmp:/tmp" -- "${in_root[@]}" anatomy-tutor play inner_ear \
+  --user fresh --new-user -- "${inner_ear_answers[@]}" | tail -n 1
 echo "test-package-fresh-debian: played inner_ear ($(elapsed "$t"))"
 t=$(stamp)
 chroot "$root" bash -c 'cd /tmp/user && env -i PATH=/usr/bin:/bin HOME=/tmp/user anatomy-tutor >/dev/null && ls anatomy-tutor-views/*.png | wc -l' |

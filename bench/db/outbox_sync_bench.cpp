@@ -1,7 +1,7 @@
 // outbox_sync_bench: a class of students on their own machines sending their answers to a class
 // server through the outbox (db/class_server.h), with the server stopped and started again in the
 // middle. Each student has a SQLite file of their own; every answer is recorded as `play --review`
-// records it (SqliteProgressRepository::recordReviewAnswer: the answer, the learner model and the
+// records it (SqlProgressRepository::recordReviewAnswer: the answer, the learner model and the
 // outbox event in one local transaction) and is followed by a sync, as `play` does. `--workers`
 // threads play the students round-robin, each thread with one server connection (a sync after a
 // failure opens a new one). When half the answers are recorded, --stop-command runs, the server
@@ -29,7 +29,7 @@
 #include "db/class_server.h"
 #include "db/connection.h"
 #include "db/course_store.h"
-#include "db/sqlite_repositories.h"
+#include "db/sql_repositories.h"
 #include "lessons/scheduling.h"
 
 namespace {
@@ -157,7 +157,7 @@ int main(int argc, char** argv) {
     auto local = ok(db::openDatabase(path), path);
     ok(db::joinClass(server, code, name), "joining");
     ok(db::rememberMembership(local, {name, code, o.server, db::ClassRole::Student}), "remembering the class");
-    db::SqliteUserRepository users(local);
+    db::SqlUserRepository users(local);
     const std::int64_t id = ok(users.createUser(name, lessons::Role::Student, ""), "creating a user").id;
     students.push_back(Student{name, std::move(local), id, {}});
   }
@@ -194,7 +194,7 @@ int main(int argc, char** argv) {
       for (int n = 0; n < o.answers; ++n) {
         for (int s = w; s < o.students; s += o.workers) {
           Student& student = students[std::size_t(s)];
-          db::SqliteProgressRepository progress(student.local);
+          db::SqlProgressRepository progress(student.local);
           ok(progress.recordReviewAnswer(answerOf(student, n)), student.name + ": recording");
           ++recorded;
           auto report = ok(db::syncOutbox(student.local, {}, &connections), student.name + ": sync");
@@ -228,7 +228,7 @@ int main(int argc, char** argv) {
   for (const auto& p : progress.students) remoteAnswers[p.userName] = p.answers;
   long lost = 0, duplicated = 0, onServer = 0;
   for (Student& s : students) {
-    db::SqliteProgressRepository mine(s.local);
+    db::SqlProgressRepository mine(s.local);
     const long local = long(ok(mine.reviewResponses(s.userId), "reading back").size());
     if (local != o.answers) die(s.name + ": recorded " + std::to_string(local) + " answers locally");
     const long remote = remoteAnswers[s.name];

@@ -2,8 +2,9 @@
 //
 // A sweep along axis a must visit its planes in order (plane p reads plane p∓1 after that plane's
 // update), and one plane's update reaches one voxel further sideways per plane (a 45° cone). The
-// sweep runs as ceil(planes / K) launches of K planes each (K = 8: 32 launches per sweep at 256³,
-// not one per plane). In a launch, each block owns a TU × TV tile of lanes and computes its K
+// sweep runs as ceil(planes / K) launches of K planes each (K = 6 or 8, TileShape: 43 or 32
+// launches per sweep at 256³, not one per plane). In a launch, each block owns a TU × TV tile of
+// lanes and computes its K
 // planes in shared memory over the tile plus a halo that shrinks by one voxel per plane (K − 1 at
 // the first plane, 0 at the last): exactly the cone the tile's results depend on. The halo voxels
 // are recomputed redundantly from the same inputs, so they equal what the neighbouring block
@@ -23,6 +24,7 @@
 // does), so that every sweep's lanes are coalesced along the contiguous axis.
 #include <cuda_runtime.h>
 
+#include <cstdlib>
 #include <string>
 
 #include "cuda_util.h"
@@ -32,15 +34,12 @@
 namespace at::cuda {
 namespace {
 
-// Tile shape: TU × TV lanes of output per block (u contiguous), K planes per launch, T threads.
-// Measured on an H100 (bench/RESULTS.md): K = 8 beat K = 6 at 128³ and 256³ (K = 10 and 12, with
-// 3–4 planes loaded ahead, were slower still), 32 × 16 beat 32 × 8 and 64 × 16, and loading all K
-// planes up front beat loading 3 or 4 planes ahead.
-struct Shape {
-  static constexpr int TU = 32, TV = 16, K = 8, T = 512;
-  // Two blocks per multiprocessor (at most 64 registers a thread), so that the next group's blocks
-  // can become resident and load while this group's run.
-  static constexpr int MinBlocks = 2;
+// Tile shape: TU × TV lanes of output per block (u contiguous), K planes per launch, T threads,
+// at least MinBlocks blocks a multiprocessor (the register cap).
+template <int TU_, int TV_, int T_, int MinBlocks_, int K_ = 8>
+struct TileShape {
+  static constexpr int TU = TU_, TV = TV_, K = K_, T = T_;
+  static constexpr int MinBlocks = MinBlocks_;
   static constexpr int RU = TU + 2 * K, RV = TV + 2 * K;  // region: the tile and its widest halo
   static constexpr int RN = RU * RV;
   static constexpr int Core = TU * TV;
@@ -72,8 +71,30 @@ struct Shape {
     return ring >= K ? 0 : K - ring;
   }
 };
+// The default tile. Measured on an H100 (bench/RESULTS.md): K = 8 beat K = 6 at 128³ and 256³
+// (K = 10 and 12, with 3–4 planes loaded ahead, were slower still), 32 × 16 beat 32 × 8 and
+// 64 × 16, and loading all K planes up front beat loading 3 or 4 planes ahead. Two blocks a
+// multiprocessor (at most 64 registers a thread), so that the next group's blocks can become
+// resident and load while this group's run.
+using Shape = TileShape<32, 16, 512, 2>;
+// The default tile in one-wave launches (the one-wave kernel, below, keeps densities in shared
+// memory): 6 planes a group. Measured on an H200 (bench/RESULTS.md): 256³ 1.031 ms a pass
+// against 1.105 with 8 planes (128³ 0.379 against 0.375); 1.54× the tile's voxels computed.
+using OneWaveShape = TileShape<32, 16, 512, 2, 6>;
+// The large tile, for planes whose default tiles would need more than one wave (e.g. 512³ on an
+// H200: 512 default blocks on 132 multiprocessors, 128 large ones; 1024³: 2048 and 512): one
+// block of 1024 threads a multiprocessor, with the one-wave kernel's densities in shared memory,
+// and fewer voxels computed (1.25× the tile's over a group of 6 planes, against 1.79× for the
+// default tile's 8). Measured on an H200 (bench/RESULTS.md): 512³ 5.30 ms a pass with 4 or 6
+// planes, 5.31 with 5, 5.75 with 8 (48 bytes spilled at 64 registers), 7.15 with the default
+// tile; in several waves, 768³ 20.5 against 25.1 and 1024³ 43.6 against 57.9.
+using LargeShape = TileShape<64, 32, 1024, 1, 6>;
 static_assert(Shape::ringStart(3) == Shape::ringSize(1) + Shape::ringSize(2), "ringStart sums the ring sizes");
 static_assert(Shape::ringStart(Shape::K + 1) == Shape::RN - Shape::Core, "the rings make up the halo");
+static_assert(LargeShape::ringStart(LargeShape::K + 1) == LargeShape::RN - LargeShape::Core,
+              "the rings make up the halo");
+static_assert(OneWaveShape::ringStart(OneWaveShape::K + 1) == OneWaveShape::RN - OneWaveShape::Core,
+              "the rings make up the halo");
 
 struct GroupArgs {
   const float* src;
@@ -94,8 +115,8 @@ struct RegionVoxel {
   int ru, rv, ring;
 };
 
+template <class S>
 __device__ __forceinline__ RegionVoxel regionVoxel(int n) {
-  using S = Shape;
   if (n < S::Core) return {S::K + n % S::TU, S::K + n / S::TU, 0};
   if (n >= S::RN) return {0, 0, S::K + 1};
   n -= S::Core;
@@ -128,17 +149,17 @@ __device__ __forceinline__ void allowNextGrid() { asm volatile("griddepcontrol.l
 // wrong fields on an H100). The first group of a sweep reads planes the previous sweep's last group
 // may still be writing, so it waits first.
 //
-// kOneWave (the launch's blocks fit the multiprocessors at once, e.g. 256³ and smaller on an H200):
-// every block starts while the previous group runs, so its old values and densities have arrived
-// by the time the wait returns. Such a block keeps its density bytes in its own shared-memory
-// column, which leaves the registers to issue the previous plane's loads of all slots before the
-// first is stored: one L2 round trip after the wait instead of one a slot. A block of a later
-// wave starts once the previous group is done and would wait for those densities first, an extra
-// round trip; larger launches keep the densities in registers (measured on an H200,
-// bench/RESULTS.md: −6 % a pass at 128³, −1 % at 256³, +1.7 % at 512³ if used there).
-template <CostKernel Cost, bool kWide, bool kOneWave>
-__global__ void __launch_bounds__(Shape::T, Shape::MinBlocks) sweepGroup(GroupArgs p) {
-  using S = Shape;
+// kOneWave (named for the launches whose blocks fit the multiprocessors at once, e.g. 256³ and
+// smaller on an H200, where every block starts while the previous group runs, so its old values
+// and densities have arrived by the time the wait returns): a block keeps its density bytes in its
+// own shared-memory column, which leaves the registers to issue the previous plane's loads of all
+// slots before the first is stored: one L2 round trip after the wait instead of one a slot. A
+// block of a later wave starts once the previous group is done and waits for those densities
+// first, an extra round trip: with the default tile that lost 1.7 % at 512³ (measured on an H200,
+// bench/RESULTS.md: −6 % a pass at 128³, −1 % at 256³), but the large tile, whose registers
+// could not hold them, takes this kernel in every wave.
+template <class S, CostKernel Cost, bool kWide, bool kOneWave>
+__global__ void __launch_bounds__(S::T, S::MinBlocks) sweepGroup(GroupArgs p) {
   constexpr bool kQn = wdt::needsNeighbourDensity(Cost);
   constexpr int K = S::K, Slots = S::Slots, Pitch = S::Pitch;
   __shared__ float sD[2][S::PlaneFloats];
@@ -166,7 +187,7 @@ __global__ void __launch_bounds__(Shape::T, Shape::MinBlocks) sweepGroup(GroupAr
   unsigned g[Slots];
 #pragma unroll
   for (int k = 0; k < Slots; ++k) {
-    const RegionVoxel v = regionVoxel(int(threadIdx.x) + k * S::T);
+    const RegionVoxel v = regionVoxel<S>(int(threadIdx.x) + k * S::T);
     const int gu = u0 + v.ru, gv = v0 + v.rv;
     r[k] = v.rv * Pitch + v.ru;
     inRegion[k] = v.ring <= K;
@@ -184,7 +205,10 @@ __global__ void __launch_bounds__(Shape::T, Shape::MinBlocks) sweepGroup(GroupAr
   }
   float oldD[K][Slots];
   std::uint8_t q[K][Slots];
-  __shared__ std::uint8_t sQown[kOneWave ? K : 1][Slots][kOneWave ? S::T : 1];  // [plane][slot][thread]
+  // One-wave launches: [plane][slot][thread] density bytes, in dynamic shared memory
+  // (sharedBytesOf: the large tile's would not fit the 48 KB of static shared memory).
+  extern __shared__ std::uint8_t sQown[];
+  auto qOwn = [&](int plane, int k) -> std::uint8_t& { return sQown[(plane * Slots + k) * S::T + int(threadIdx.x)]; };
 #pragma unroll
   for (int s = 1; s <= K; ++s) {
     const auto plane = s <= steps ? planeOffset(p.first + s - 1) : 0;
@@ -204,7 +228,7 @@ __global__ void __launch_bounds__(Shape::T, Shape::MinBlocks) sweepGroup(GroupAr
     for (int s = 1; s <= K; ++s) {
 #pragma unroll
       for (int k = 0; k < Slots; ++k) {
-        if (s <= S::lastPlaneOfSlot(k)) sQown[s - 1][k][threadIdx.x] = q[s - 1][k];
+        if (s <= S::lastPlaneOfSlot(k)) qOwn(s - 1, k) = q[s - 1][k];
       }
     }
 #pragma unroll
@@ -263,7 +287,7 @@ __global__ void __launch_bounds__(Shape::T, Shape::MinBlocks) sweepGroup(GroupAr
           std::uint8_t qn[3][3];
           gatherNeighbours<kQn>(prev, qPrev, r[k], 1, Pitch, n, qn);
           const float old = oldD[s - 1][k];
-          const std::uint8_t qv = kOneWave ? sQown[s - 1][k][threadIdx.x] : q[s - 1][k];
+          const std::uint8_t qv = kOneWave ? qOwn(s - 1, k) : q[s - 1][k];
           const float v = wdt::relaxVoxel<Cost>(old, n, qn, qv, p.lengths, p.base);
           cur[r[k]] = v;
           if constexpr (kQn) sQ[s & 1][r[k]] = qv;
@@ -290,14 +314,27 @@ __global__ void __launch_bounds__(Shape::T, Shape::MinBlocks) sweepGroup(GroupAr
   }
 }
 
-template <CostKernel Cost, bool kWide, bool kOneWave>
+// Dynamic shared memory of a sweepGroup launch: the one-wave kernels' density column.
+template <class S, bool kOneWave>
+constexpr std::size_t sharedBytesOf() {
+  return kOneWave ? std::size_t(S::K) * S::Slots * S::T : 0;
+}
+
+template <class S, CostKernel Cost, bool kWide, bool kOneWave>
 Status launchGroups(const ExactSweepArgs& a, cudaStream_t stream) {
-  using S = Shape;
+  constexpr std::size_t dynamicBytes = sharedBytesOf<S, kOneWave>();
+  if constexpr (dynamicBytes > 0) {
+    static const cudaError_t raised = cudaFuncSetAttribute(
+        reinterpret_cast<const void*>(sweepGroup<S, Cost, kWide, kOneWave>),
+        cudaFuncAttributeMaxDynamicSharedMemorySize, int(dynamicBytes));
+    if (raised != cudaSuccess) return check(raised, "cudaFuncSetAttribute (sweep kernel shared memory)");
+  }
   GroupArgs p{a.src, a.dst, a.density, a.nu, a.nv, a.na, a.strideV, a.strideA, a.direction, 0, a.lengths,
               a.baseCost, a.lowered};
   cudaLaunchConfig_t config{};
   config.gridDim = dim3((a.nu + S::TU - 1) / S::TU, (a.nv + S::TV - 1) / S::TV);
   config.blockDim = dim3(S::T);
+  config.dynamicSmemBytes = dynamicBytes;
   config.stream = stream;
   cudaLaunchAttribute attribute{};
   attribute.id = cudaLaunchAttributeProgrammaticStreamSerialization;
@@ -305,7 +342,7 @@ Status launchGroups(const ExactSweepArgs& a, cudaStream_t stream) {
   config.attrs = &attribute;
   config.numAttrs = 1;
   for (p.first = 0; p.first < a.na; p.first += S::K) {
-    if (const cudaError_t e = cudaLaunchKernelEx(&config, sweepGroup<Cost, kWide, kOneWave>, p); e != cudaSuccess)
+    if (const cudaError_t e = cudaLaunchKernelEx(&config, sweepGroup<S, Cost, kWide, kOneWave>, p); e != cudaSuccess)
       return check(e, "launch of a sweep kernel");
   }
   return {};
@@ -355,12 +392,21 @@ Status launchExactSweep(const ExactSweepArgs& a, cudaStream_t stream) {
   if (const cudaError_t e = cudaDeviceGetAttribute(&multiprocessors, cudaDevAttrMultiProcessorCount, device);
       e != cudaSuccess)
     return check(e, "cudaDeviceGetAttribute (multiprocessor count)");
-  const long long blocks =
-      (long long)((a.nu + Shape::TU - 1) / Shape::TU) * (long long)((a.nv + Shape::TV - 1) / Shape::TV);
-  const bool oneWave = blocks <= multiprocessors;
+  auto blocksOf = [&]<class S>() {
+    return (long long)((a.nu + S::TU - 1) / S::TU) * (long long)((a.nv + S::TV - 1) / S::TV);
+  };
+  const bool oneWave = blocksOf.template operator()<Shape>() <= multiprocessors;
+  // The large tile wherever the default tile needs more than one wave (AT_WDT_CUDA_LARGE_TILE=0
+  // keeps the default tile there, for comparisons on one machine).
+  static const bool largeTileAllowed = [] {
+    const char* v = std::getenv("AT_WDT_CUDA_LARGE_TILE");
+    return !(v && std::string(v) == "0");
+  }();
   return launchForRule(a.rule, a.weight, [&]<CostKernel Cost>() {
-    if (wide) return launchGroups<Cost, true, false>(a, stream);
-    return oneWave ? launchGroups<Cost, false, true>(a, stream) : launchGroups<Cost, false, false>(a, stream);
+    if (wide) return launchGroups<Shape, Cost, true, false>(a, stream);
+    if (oneWave) return launchGroups<OneWaveShape, Cost, false, true>(a, stream);
+    if (largeTileAllowed) return launchGroups<LargeShape, Cost, false, true>(a, stream);
+    return launchGroups<Shape, Cost, false, false>(a, stream);
   });
 }
 

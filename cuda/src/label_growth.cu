@@ -1,279 +1,25 @@
 // The CUDA engine of the multi-label growth (cuda/label_growth_cuda.h).
 //
-// [SECTION] Kernels   fill, reset of labels, seeds, the rounds over bricks, read-back
-// [SECTION] Engine    device state kept between updates, launches, statistics
+// The kernels are label_growth_kernels.cuh's; here the engine: device state kept between updates,
+// launches, statistics.
 #include "cuda/label_growth_cuda.h"
 
-#include <cooperative_groups.h>
 #include <cuda_runtime.h>
 
 #include <algorithm>
 #include <cstdint>
+#include <cstdio>
+#include <cstdlib>
+#include <string>
 #include <vector>
 
 #include "cuda/wdt_cuda.h"
-#include "brick_box.cuh"
 #include "cuda_util.h"
-#include "wdt/brick_neighbours.h"
+#include "label_growth_kernels.cuh"
 #include "wdt/step_cost.h"
 
 namespace at::cuda {
 namespace {
-
-namespace cg = cooperative_groups;
-using wdt::CostKernel;
-
-// ─────────────────────────────────────────────────────────────────────────────────────────────
-// [SECTION] Kernels
-// ─────────────────────────────────────────────────────────────────────────────────────────────
-
-constexpr std::int32_t kInf = wdt::kGrowthInf;
-
-// The queues of the rounds: flags and lists per round parity (2 × bricks ints each), counters
-// [round % 3] of the lists' lengths, and the statistics.
-struct Queues {
-  int* flags = nullptr;
-  int* lists = nullptr;
-  int* counters = nullptr;  // [0..2] list lengths, [3] rounds run, [4] bricks still active,
-                            // [5] visits, [6] voxels reset
-  int brickCount = 0;
-};
-
-struct GridShape {
-  int n[3];       // voxels per axis
-  int bricks[3];  // bricks per axis
-};
-
-__device__ __forceinline__ int brickOfVoxel(const GridShape& g, int x, int y, int z) {
-  return x / kEdge + g.bricks[0] * (y / kEdge + g.bricks[1] * (z / kEdge));
-}
-
-__device__ __forceinline__ void activate(const Queues& q, int brick, int parity, int counter) {
-  activateBrick(q.flags, q.counters, q.lists, q.brickCount, brick, parity, counter);
-}
-
-__global__ void fillKeys(unsigned long long* keys, std::size_t count, unsigned long long value) {
-  for (std::size_t i = blockIdx.x * std::size_t(blockDim.x) + threadIdx.x; i < count;
-       i += std::size_t(gridDim.x) * blockDim.x)
-    keys[i] = value;
-}
-
-// Every voxel whose label has its bit set in `reset` (65536 bits) goes back to (+infinity,
-// kNoLabel); its brick is queued for round 0.
-__global__ void resetLabels(unsigned long long* keys, GridShape g, const unsigned* reset, Queues q) {
-  const std::size_t count = std::size_t(g.n[0]) * g.n[1] * g.n[2];
-  const unsigned long long none = wdt::packGrowthKey(kInf, wdt::kNoLabel);
-  int n = 0;
-  for (std::size_t i = blockIdx.x * std::size_t(blockDim.x) + threadIdx.x; i < count;
-       i += std::size_t(gridDim.x) * blockDim.x) {
-    const std::int32_t label = wdt::growthKeyLabel(keys[i]);
-    if (label == wdt::kNoLabel || !((reset[label >> 5] >> (label & 31)) & 1u)) continue;
-    keys[i] = none;
-    ++n;
-    const int x = int(i % std::size_t(g.n[0])), y = int((i / std::size_t(g.n[0])) % std::size_t(g.n[1])),
-              z = int(i / (std::size_t(g.n[0]) * g.n[1]));
-    const int brick = brickOfVoxel(g, x, y, z);
-    if (*static_cast<volatile int*>(q.flags + brick) == 0) activate(q, brick, 0, 0);
-  }
-  if (n) atomicAdd(q.counters + 6, n);
-}
-
-// Seeds (voxel index, label) to (0, label); their bricks are queued for round 0.
-__global__ void writeSeeds(unsigned long long* keys, GridShape g, const unsigned* index, const int* label, int count,
-                           Queues q) {
-  for (int s = int(blockIdx.x * blockDim.x + threadIdx.x); s < count; s += int(gridDim.x * blockDim.x)) {
-    const std::size_t i = index[s];
-    keys[i] = wdt::packGrowthKey(0, label[s]);
-    const int x = int(i % std::size_t(g.n[0])), y = int((i / std::size_t(g.n[0])) % std::size_t(g.n[1])),
-              z = int(i / (std::size_t(g.n[0]) * g.n[1]));
-    activate(q, brickOfVoxel(g, x, y, z), 0, 0);
-  }
-}
-
-__global__ void keysToLabels(const unsigned long long* keys, std::uint16_t* out, std::size_t count) {
-  for (std::size_t i = blockIdx.x * std::size_t(blockDim.x) + threadIdx.x; i < count;
-       i += std::size_t(gridDim.x) * blockDim.x) {
-    const std::int32_t l = wdt::growthKeyLabel(keys[i]);
-    out[i] = l == wdt::kNoLabel ? 0 : std::uint16_t(l);
-  }
-}
-
-__global__ void keysToDistances(const unsigned long long* keys, float* out, std::size_t count, float scale) {
-  for (std::size_t i = blockIdx.x * std::size_t(blockDim.x) + threadIdx.x; i < count;
-       i += std::size_t(gridDim.x) * blockDim.x) {
-    const std::int32_t d = wdt::growthKeyDistance(keys[i]);
-    out[i] = d == kInf ? __builtin_huge_valf() : float(d) / scale;
-  }
-}
-
-// A block's shared memory: the brick and its halo as (distance, label) keys (wdt::packGrowthKey:
-// one 64-bit load gives a neighbour's pair) and densities (floats: wdt::densityFromByte), and the
-// neighbour mask of the voxels it lowered.
-struct GrowthShared {
-  unsigned long long key[kCells];
-  float f[kCells];
-  unsigned mask;
-};
-
-struct SolveArgs {
-  unsigned long long* keys;
-  const std::uint8_t* density;
-  GridShape g;
-  Queues q;
-  wdt::SweepLengths lengths[3];  // per sweep axis, plane axes as in wdt::axisSweepLengths
-  float base;
-  float scale;                   // fixed-point units per unit of cost
-  int maxRounds;
-};
-
-// The sweep pair (+ then −) along brick axis A with the growth's stencil. Returns whether the
-// thread's voxels changed. Every thread of the block must call it (it holds the barriers).
-template <CostKernel K, int A>
-__device__ __forceinline__ bool sweepAxis(GrowthShared& sh, const int ext[3], int t, const wdt::SweepLengths& len,
-                                          float base, float scale) {
-  constexpr int sb = cellStride(A == 0 ? 1 : 0), sc = cellStride(A == 2 ? 1 : 2);
-  return sweepPlanes<A, 2>(ext, t, [&](int idx, int prev) {
-    std::int32_t n[3][3], nl[3][3];
-    float fn[3][3];
-#pragma unroll
-    for (int dc = 0; dc < 3; ++dc)
-#pragma unroll
-      for (int db = 0; db < 3; ++db) {
-        const int i = prev + (dc - 1) * sc + (db - 1) * sb;
-        const unsigned long long key = sh.key[i];
-        n[dc][db] = wdt::growthKeyDistance(key);
-        nl[dc][db] = wdt::growthKeyLabel(key);
-        fn[dc][db] = wdt::needsNeighbourDensity(K) ? sh.f[i] : 0.0f;
-      }
-    const unsigned long long own = sh.key[idx];
-    std::int32_t d = wdt::growthKeyDistance(own), l = wdt::growthKeyLabel(own);
-    const std::int32_t d0 = d, l0 = l;
-    wdt::relaxLabelledVoxel<K>(d, l, n, nl, fn, sh.f[idx], len, base, scale);
-    if (d == d0 && l == l0) return false;
-    sh.key[idx] = wdt::packGrowthKey(d, l);
-    return true;
-  });
-}
-
-// One halo cell (hx, hy, hz) (relative to the brick origin o; one coordinate −1 or kEdge) into the
-// box: its key from the state (+infinity, kNoLabel off the grid) and its density.
-__device__ __forceinline__ void loadHalo(const SolveArgs& a, GrowthShared& sh, const int o[3], int hx, int hy, int hz) {
-  const int gx = o[0] + hx, gy = o[1] + hy, gz = o[2] + hz;
-  const int cell = cellIndex(hx, hy, hz);
-  unsigned long long key = wdt::packGrowthKey(kInf, wdt::kNoLabel);
-  float f = 0.0f;
-  if (gx >= 0 && gx < a.g.n[0] && gy >= 0 && gy < a.g.n[1] && gz >= 0 && gz < a.g.n[2]) {
-    const std::size_t i = std::size_t(gx) + std::size_t(a.g.n[0]) * (std::size_t(gy) + std::size_t(a.g.n[1]) * std::size_t(gz));
-    key = __ldcg(a.keys + i);
-    f = wdt::densityFromByte(__ldg(a.density + i));
-  }
-  sh.key[cell] = key;
-  sh.f[cell] = f;
-}
-
-// One block handles one brick for one round.
-template <CostKernel K>
-__device__ void visitBrick(const SolveArgs& a, int brick, int round, GrowthShared& sh, int t) {
-  const int p = round & 1;
-  const int* nb = a.g.bricks;
-  const int b[3] = {brick % nb[0], (brick / nb[0]) % nb[1], brick / (nb[0] * nb[1])};
-  const int o[3] = {b[0] * kEdge, b[1] * kEdge, b[2] * kEdge};
-  const int ext[3] = {min(kEdge, a.g.n[0] - o[0]), min(kEdge, a.g.n[1] - o[1]), min(kEdge, a.g.n[2] - o[2])};
-  const std::size_t nx = std::size_t(a.g.n[0]), nxy = nx * std::size_t(a.g.n[1]);
-
-  // Thread (tx, ty) loads the brick's column (tx, ty, 0..15), then its halo cells
-  // (forEachHaloCell). Keys are read through L2 only: other multiprocessors write them during the
-  // kernel.
-  if (t == 0) sh.mask = 0;
-  const int tx = t % kEdge, ty = t / kEdge;
-  const bool column = tx < ext[0] && ty < ext[1];
-  const std::size_t g0 = std::size_t(o[0] + tx) + nx * std::size_t(o[1] + ty) + nxy * std::size_t(o[2]);
-  unsigned long long k[kEdge];
-  std::uint8_t q[kEdge];
-#pragma unroll
-  for (int z = 0; z < kEdge; ++z) {
-    const bool in = column && z < ext[2];
-    k[z] = in ? __ldcg(a.keys + g0 + nxy * z) : wdt::packGrowthKey(kInf, wdt::kNoLabel);
-    q[z] = in ? __ldg(a.density + g0 + nxy * z) : 0;
-  }
-#pragma unroll
-  for (int z = 0; z < kEdge; ++z) {
-    const int cell = cellIndex(tx, ty, z);
-    sh.key[cell] = k[z];
-    sh.f[cell] = wdt::densityFromByte(q[z]);
-  }
-  forEachHaloCell(t, [&](int, int hx, int hy, int hz) { loadHalo(a, sh, o, hx, hy, hz); });
-  __syncthreads();
-
-  bool changed = sweepAxis<K, 0>(sh, ext, t, a.lengths[0], a.base, a.scale);
-  changed |= sweepAxis<K, 1>(sh, ext, t, a.lengths[1], a.base, a.scale);
-  changed |= sweepAxis<K, 2>(sh, ext, t, a.lengths[2], a.base, a.scale);
-  changed = __syncthreads_or(changed) != 0;
-
-  // The state still holds what this visit loaded (only this brick writes its voxels): store the
-  // column's voxels whose key went down, read again rather than kept in registers through the sweeps.
-  unsigned mask = 0;
-  if (changed && column) {
-    unsigned long long before[kEdge];
-#pragma unroll
-    for (int z = 0; z < kEdge; ++z) before[z] = z < ext[2] ? __ldcg(a.keys + g0 + nxy * z) : 0ull;
-#pragma unroll
-    for (int z = 0; z < kEdge; ++z) {
-      if (z < ext[2]) {
-        const int cell = cellIndex(tx, ty, z);
-        const unsigned long long key = sh.key[cell];
-        if (key != before[z]) {
-          a.keys[g0 + nxy * std::size_t(z)] = key;
-          mask |= wdt::brickNeighbourMask(tx, ty, z, kEdge);
-        }
-      }
-    }
-  }
-  const int next = (round + 1) % 3;
-  queueAfterVisit(mask, changed, t, brick, b, nb, &sh.mask, [&](int n) { activate(a.q, n, 1 - p, next); });
-  __syncthreads();  // shared memory is the next visit's
-}
-
-// Round r reads list r % 2 (length in counter r % 3), queues for round r + 1 into list (r + 1) % 2
-// (counter (r + 1) % 3) and zeroes counter (r + 2) % 3, which every block read before the last
-// barrier (brick_solver.cu's protocol).
-template <CostKernel K>
-__global__ void __launch_bounds__(kThreads) solveGrowth(SolveArgs a) {
-  extern __shared__ unsigned char shared[];
-  GrowthShared& sh = *reinterpret_cast<GrowthShared*>(shared);
-  const int t = int(threadIdx.x);
-  cg::grid_group grid = cg::this_grid();
-  int round = 0, active = 0, visits = 0;
-  for (;; ++round) {
-    active = __ldcg(a.q.counters + round % 3);
-    if (active == 0 || round == a.maxRounds) break;
-    const int p = round & 1;
-    for (int j = int(blockIdx.x); j < active; j += int(gridDim.x)) {
-      const int brick = __ldcg(a.q.lists + std::size_t(p) * a.q.brickCount + j);
-      if (t == 0) a.q.flags[std::size_t(p) * a.q.brickCount + brick] = 0;  // may be queued again in round + 2
-      visitBrick<K>(a, brick, round, sh, t);
-      ++visits;
-    }
-    if (blockIdx.x == 0 && t == 0) a.q.counters[(round + 2) % 3] = 0;
-    grid.sync();
-  }
-  if (t == 0 && visits) atomicAdd(a.q.counters + 5, visits);
-  if (blockIdx.x == 0 && t == 0) {
-    a.q.counters[3] = round;
-    a.q.counters[4] = active;
-  }
-}
-
-unsigned gridBlocks(std::size_t count) {
-  const std::size_t blocks = (count + 255) / 256;
-  return unsigned(std::min<std::size_t>(std::max<std::size_t>(blocks, 1), 16384));
-}
-
-// ─────────────────────────────────────────────────────────────────────────────────────────────
-// [SECTION] Engine
-// ─────────────────────────────────────────────────────────────────────────────────────────────
-
-constexpr int kCounters = 7;
 
 class CudaGrowthEngine final : public GrowthEngine {
  public:
@@ -298,6 +44,8 @@ class CudaGrowthEngine final : public GrowthEngine {
     AT_ASSIGN(e->density_, DeviceBuffer<std::uint8_t>::allocate(d.count()));
     AT_ASSIGN(e->flags_, DeviceBuffer<int>::allocate(2 * std::size_t(bricks)));
     AT_ASSIGN(e->lists_, DeviceBuffer<int>::allocate(2 * std::size_t(bricks)));
+    AT_ASSIGN(e->brickKeys_, DeviceBuffer<int>::allocate(2 * std::size_t(bricks)));
+    AT_ASSIGN(e->visitList_, DeviceBuffer<int>::allocate(std::size_t(bricks)));
     AT_ASSIGN(e->counters_, DeviceBuffer<int>::allocate(kCounters));
     AT_ASSIGN(e->countersHost_, PinnedBuffer<int>::allocate(kCounters));
     AT_ASSIGN(e->resetBits_, DeviceBuffer<unsigned>::allocate(65536 / 32));
@@ -307,11 +55,14 @@ class CudaGrowthEngine final : public GrowthEngine {
     AT_TRY(check(cudaMemcpyAsync(e->density_.get(), problem.density.data(), d.count(), cudaMemcpyHostToDevice, s),
                  "cudaMemcpyAsync(density, host to device)"));
     AT_TRY(check(cudaMemsetAsync(e->flags_.get(), 0, e->flags_.bytes(), s), "cudaMemsetAsync(brick flags)"));
+    AT_TRY(check(cudaMemsetAsync(e->brickKeys_.get(), 0x7F, e->brickKeys_.bytes(), s), "cudaMemsetAsync(brick keys)"));
     AT_TRY(check(cudaMemsetAsync(e->counters_.get(), 0, e->counters_.bytes(), s), "cudaMemsetAsync(growth counters)"));
     AT_TRY(e->stream_.synchronize());
     e->queues_.brickCount = bricks;
     e->queues_.flags = e->flags_.get();
     e->queues_.lists = e->lists_.get();
+    e->queues_.keys = e->brickKeys_.get();
+    e->queues_.visitList = e->visitList_.get();
     e->queues_.counters = e->counters_.get();
     return std::unique_ptr<GrowthEngine>(std::move(e));
   }
@@ -325,8 +76,12 @@ class CudaGrowthEngine final : public GrowthEngine {
     AT_TRY(start_.record(stream_));
     // Counters 0 … 2 hold the queue: empty after a finished solve, the pending list 0 after a
     // cancelled one. The statistics start from 0.
-    AT_TRY(check(cudaMemsetAsync(counters_.get() + 3, 0, (kCounters - 3) * sizeof(int), s),
+    AT_TRY(check(cudaMemsetAsync(counters_.get() + 3, 0, (kMinKeyCounter - 3) * sizeof(int), s),
                  "cudaMemsetAsync(growth statistics)"));
+    AT_TRY(check(cudaMemsetAsync(counters_.get() + kMinKeyCounter, 0x7F, 3 * sizeof(int), s),
+                 "cudaMemsetAsync(growth round keys)"));
+    AT_TRY(check(cudaMemsetAsync(counters_.get() + kVisitCounter, 0, 3 * sizeof(int), s),
+                 "cudaMemsetAsync(growth round visits)"));
     if (change.fromScratch) {
       fillKeys<<<gridBlocks(n), 256, 0, s>>>(keys_.get(), n, wdt::packGrowthKey(kInf, wdt::kNoLabel));
       AT_TRY(check(cudaGetLastError(), "launch of the key fill kernel"));
@@ -424,6 +179,22 @@ class CudaGrowthEngine final : public GrowthEngine {
     a.base = base_;
     a.scale = scale_;
     a.maxRounds = 1 << 30;
+    // Ordered rounds; the first window: the cost of crossing a brick along an axis at the lowest
+    // cost per mm (wdt::weightRange). AT_CUDA_GROWTH_ORDER=0 visits every queued brick in every
+    // round; =F,M sets fewVisits and manyVisits (for comparisons on one machine).
+    float lo = 0, hi = 0;
+    const float shortest = std::min({sx, sy, sz});
+    wdt::weightRange(kernel_, base_, shortest, lo, hi);
+    a.window0 = int(std::clamp(double(lo) * shortest * kEdge * double(scale_), 1.0, double(1 << 30)));
+    a.ordered = true;
+    a.fewVisits = 4;
+    a.manyVisits = 16;
+    if (const char* v = std::getenv("AT_CUDA_GROWTH_ORDER")) {
+      int few = 0, many = 0;
+      if (std::string(v) == "0") a.ordered = false;
+      else if (std::sscanf(v, "%d,%d", &few, &many) == 2 && few >= 0 && many > few)
+        a.fewVisits = few, a.manyVisits = many;
+    }
     return wdt::withCostKernel(kernel_, [&]<CostKernel K>() -> Status {
       auto* kernel = solveGrowth<K>;
       const int smem = int(sizeof(GrowthShared));
@@ -453,7 +224,7 @@ class CudaGrowthEngine final : public GrowthEngine {
   Stream stream_;
   DeviceBuffer<unsigned long long> keys_;
   DeviceBuffer<std::uint8_t> density_;
-  DeviceBuffer<int> flags_, lists_, counters_;
+  DeviceBuffer<int> flags_, lists_, brickKeys_, visitList_, counters_;
   PinnedBuffer<int> countersHost_;
   DeviceBuffer<unsigned> resetBits_;
   DeviceBuffer<unsigned> seedIndex_;

@@ -20,7 +20,7 @@ Result<AnalyticsInput> loadAnalyticsInput(Database& db, CurriculumRepository& cu
   auto structures = curriculum.structures(in.course.datasetId);
   if (structures) in.structures = std::move(*structures);  // a dataset not here: ids are shown instead
 
-  SqliteUserRepository users(db);
+  SqlUserRepository users(db);
   auto all = users.users();
   if (!all) return tl::unexpected(all.error());
   std::set<std::string> localNames;  // every user here, whatever their role
@@ -39,8 +39,8 @@ Result<AnalyticsInput> loadAnalyticsInput(Database& db, CurriculumRepository& cu
     return false;
   };
 
-  SqliteProgressRepository progress(db);
-  SqliteExamRepository exams(db);
+  SqlProgressRepository progress(db);
+  SqlExamRepository exams(db);
   auto log = db.prepare(
       "SELECT id, user_id, question_id, structure, source, score, correct, reviewed_at, rating, latency_ms, phase_before"
       " FROM review_log"

@@ -60,7 +60,7 @@ Result<QuestionScene> parseScene(const std::string& text, const std::string& whe
 
 }  // namespace
 
-Result<std::optional<ExamAttempt>> SqliteExamRepository::openExamAttempt(std::int64_t userId, const std::string& examId) {
+Result<std::optional<ExamAttempt>> SqlExamRepository::openExamAttempt(std::int64_t userId, const std::string& examId) {
   auto found = selectAttempts(db_, "WHERE user_id = ?1 AND exam_id = ?2 AND finished_at IS NULL ORDER BY id DESC LIMIT 1",
                               [&](Statement& s) { s.bind(1, userId).bind(2, examId); });
   if (!found) return tl::unexpected(found.error());
@@ -68,7 +68,7 @@ Result<std::optional<ExamAttempt>> SqliteExamRepository::openExamAttempt(std::in
   return std::optional<ExamAttempt>(found->front());
 }
 
-Result<ExamAttempt> SqliteExamRepository::startExamAttempt(const ExamAttempt& attempt, std::vector<ExamItem>& items) {
+Result<ExamAttempt> SqlExamRepository::startExamAttempt(const ExamAttempt& attempt, std::vector<ExamItem>& items) {
   ExamAttempt a = attempt;
   auto status = db_.writeTransaction([&](Database& d) -> Status {
     auto insert = d.prepare(
@@ -109,7 +109,7 @@ Result<ExamAttempt> SqliteExamRepository::startExamAttempt(const ExamAttempt& at
   return a;
 }
 
-Result<std::vector<ExamItem>> SqliteExamRepository::examItems(std::int64_t attemptId) {
+Result<std::vector<ExamItem>> SqlExamRepository::examItems(std::int64_t attemptId) {
   auto s = db_.prepare(
       "SELECT id, position, question, choices, key_choice, locate_view, scene, answer, correct, score, latency_ms,"
       " answered_at FROM exam_items WHERE attempt_id = ?1 ORDER BY position");
@@ -154,7 +154,7 @@ Result<std::vector<ExamItem>> SqliteExamRepository::examItems(std::int64_t attem
   return out;
 }
 
-Status SqliteExamRepository::recordExamAnswer(const ExamAnswerRecord& record) {
+Status SqlExamRepository::recordExamAnswer(const ExamAnswerRecord& record) {
   const GradedAnswer& g = record.answer;
   auto status = db_.writeTransaction([&](Database& d) -> Status {
     auto update = d.prepare(
@@ -184,7 +184,7 @@ Status SqliteExamRepository::recordExamAnswer(const ExamAnswerRecord& record) {
   return {};
 }
 
-Status SqliteExamRepository::finishExamAttempt(std::int64_t attemptId, UnixSeconds finishedAt, double score,
+Status SqlExamRepository::finishExamAttempt(std::int64_t attemptId, UnixSeconds finishedAt, double score,
                                                std::optional<bool> passed) {
   return db_.writeTransaction([&](Database& d) -> Status {
     auto update = d.prepare("UPDATE exam_attempts SET finished_at = ?2, score = ?3, passed = ?4 WHERE id = ?1");
@@ -198,11 +198,11 @@ Status SqliteExamRepository::finishExamAttempt(std::int64_t attemptId, UnixSecon
   });
 }
 
-Result<std::vector<ExamAttempt>> SqliteExamRepository::examAttempts(std::int64_t userId) {
+Result<std::vector<ExamAttempt>> SqlExamRepository::examAttempts(std::int64_t userId) {
   return selectAttempts(db_, "WHERE user_id = ?1 ORDER BY id DESC", [&](Statement& s) { s.bind(1, userId); });
 }
 
-Result<std::vector<ExamAttempt>> SqliteExamRepository::courseExamAttempts(const std::string& courseId) {
+Result<std::vector<ExamAttempt>> SqlExamRepository::courseExamAttempts(const std::string& courseId) {
   return selectAttempts(db_, "WHERE course_id = ?1 ORDER BY id", [&](Statement& s) { s.bind(1, courseId); });
 }
 

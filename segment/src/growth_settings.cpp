@@ -49,23 +49,45 @@ double medianStepNoise(const Volume& volume, const std::array<float, 2>& window)
 }
 
 // The "bone only" range in stored values (growth_settings.h).
-std::array<float, 2> boneRangeStored(const Volume& volume, const IntensityModel& intensity) {
+std::array<float, 2> boneRangeStored(const Volume& volume, const IntensityModel& intensity, double noiseSigmaStored) {
   std::vector<std::uint64_t> histogram(65536, 0);
   int top = -32768;
   for (std::int16_t v : volume.voxels) ++histogram[std::size_t(v + 32768)], top = std::max(top, int(v));
   if (intensity.hounsfield()) {
-    const float low = float((kBoneHu - intensity.intercept) / intensity.slope);
+    // Soft tissue's peak: the commonest 10 HU bin in −100 … 150 HU; bone starts kBoneNoiseSigmas
+    // noise sigmas above it, kept within kBoneHuMin … kBoneHu.
+    std::vector<std::uint64_t> bins(25, 0);
+    for (std::size_t v = 0; v < histogram.size(); ++v) {
+      const double hu = intensity.valueOf(float(double(v) - 32768.0));
+      if (hu >= -100 && hu < 150) bins[std::size_t((hu + 100) / 10)] += histogram[v];
+    }
+    const std::size_t peakBin = std::size_t(std::max_element(bins.begin(), bins.end()) - bins.begin());
+    const double softHu = -100.0 + 10.0 * double(peakBin) + 5.0;
+    const double sigmaHu = noiseSigmaStored * std::abs(intensity.slope);
+    const double boneHu = std::clamp(softHu + kBoneNoiseSigmas * sigmaHu, kBoneHuMin, kBoneHu);
+    const float low = float(std::ceil((boneHu - intensity.intercept) / intensity.slope));
     return {low, std::max(low, float(top))};
   }
   // Plain intensities: a pseudo-HU scale from two landmarks, air (the histogram window's low end,
-  // −1000 HU) and soft tissue (the commonest value above the body's threshold, the midpoint of the
-  // window's low end and the mean of all voxels above it: 0 HU), then kBoneHu on that scale.
+  // −1000 HU) and soft tissue (the commonest value above the valley after the body's threshold, the
+  // midpoint of the window's low end and the mean of all voxels above it: 0 HU), then kBoneHu on
+  // that scale.
   const int air = int(intensity.window[0]);
   double count = 0, sum = 0;
   for (std::size_t v = std::size_t(air + 32768); v < histogram.size(); ++v)
     count += double(histogram[v]), sum += double(histogram[v]) * (double(v) - 32768.0);
   const int body = count > 0 ? int(std::lround(0.5 * (air + sum / count))) : air;
-  std::size_t soft = std::size_t(body + 32768);
+  // From the body's threshold down the air peak's tail to the valley (the histogram smoothed over
+  // 5 values falls no further), then the commonest value above: a scan that is mostly air has more
+  // voxels in the air's tail just above the threshold than at the soft tissue's peak.
+  const auto smoothed = [&](std::size_t v) {
+    std::uint64_t sum = 0;
+    for (std::size_t u = v >= 2 ? v - 2 : 0; u <= v + 2 && u < histogram.size(); ++u) sum += histogram[u];
+    return sum;
+  };
+  std::size_t valley = std::size_t(body + 32768);
+  while (valley + 1 < histogram.size() && smoothed(valley + 1) <= smoothed(valley) && smoothed(valley) > 0) ++valley;
+  std::size_t soft = valley;
   for (std::size_t v = soft; v < histogram.size(); ++v)
     if (histogram[v] > histogram[soft]) soft = v;
   const double softValue = double(soft) - 32768.0;
@@ -103,12 +125,21 @@ GrowthDefaults defaultGrowthSettings(const Volume& volume, const IntensityModel&
   out.stepNoise = medianStepNoise(volume, window);
   const double perVoxel = std::max(kBaseNoiseMultiple * out.stepNoise, kMinBasePerVoxel);
   out.params.baseCost = float(basePerMm(perVoxel, out.voxelMm));
-  const std::array<float, 2> bone = boneRangeStored(volume, intensity);
+  // The noise's sigma in stored values: the median |a − b| of two independent N(0, σ²) samples is
+  // 0.954 σ (0.6745·√2).
+  out.noiseSigmaStored = out.stepNoise * double(window[1] - window[0]) / 0.954;
+  if (out.noiseSigmaStored > 0) {
+    out.params.smoothingVoxels = float(kSmoothingVoxels);
+    out.params.edgeSigma = float(kEdgeSigmaNoiseMultiple * out.noiseSigmaStored);
+  }
+  const std::array<float, 2> bone = boneRangeStored(volume, intensity, out.noiseSigmaStored);
   out.boneRangeValues = {intensity.valueOf(bone[0]), intensity.valueOf(bone[1])};
-  char text[260];
+  char text[320];
   std::snprintf(text, sizeof text,
-                "base %.4g/mm (%.4g per %.3g mm voxel; step noise %.4g), window %g … %g %s, bone only: %g … %g",
-                out.params.baseCost, perVoxel, out.voxelMm, out.stepNoise, out.windowValues[0], out.windowValues[1],
+                "base %.4g/mm (%.4g per %.3g mm voxel; step noise %.4g), smoothing %g voxel (edge sigma %.3g), "
+                "window %g … %g %s, bone only: %g … %g",
+                out.params.baseCost, perVoxel, out.voxelMm, out.stepNoise, double(out.params.smoothingVoxels),
+                double(out.params.edgeSigma), out.windowValues[0], out.windowValues[1],
                 intensity.unitName(), out.boneRangeValues[0], out.boneRangeValues[1]);
   out.summary = text;
   return out;

@@ -300,7 +300,10 @@ Result<GrowthStats> LabelEditor::computeGrowth(const Volume& volume, const std::
   Growth& g = *growth_;
   const bool sameParams = g.params.rule == params.rule && g.params.weight == params.weight &&
                           g.params.windowMin == params.windowMin && g.params.windowMax == params.windowMax &&
-                          g.params.baseCost == params.baseCost && g.params.backend == params.backend;
+                          g.params.baseCost == params.baseCost && g.params.backend == params.backend &&
+                          g.params.smoothingVoxels == params.smoothingVoxels && g.params.edgeSigma == params.edgeSigma &&
+                          g.params.limitRange == params.limitRange && g.params.rangeMin == params.rangeMin &&
+                          g.params.rangeMax == params.rangeMax;
   if (!g.growth || g.volume != &volume || !(g.dims == volume.dims()) || !sameParams) {
     auto made = LabelGrowth::create(volume, params);
     if (!made) return tl::unexpected(made.error());

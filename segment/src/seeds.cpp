@@ -160,7 +160,7 @@ Result<SeedSet> readSeeds(const std::string& jsonText, const std::string& source
   if (doc.contains("grow")) {
     const json& g = doc["grow"];
     if (!g.is_object()) return r.error("grow", "must be an object");
-    if (auto ok = r.onlyKeys(g, "grow", {"weight", "window", "base", "range"}); !ok) return tl::unexpected(ok.error());
+    if (auto ok = r.onlyKeys(g, "grow", {"weight", "window", "base", "range", "smoothing"}); !ok) return tl::unexpected(ok.error());
     if (g.contains("weight")) {
       if (!g["weight"].is_string()) return r.error("grow.weight", "must be a string");
       set.grow.weight = g["weight"].get<std::string>();
@@ -173,6 +173,12 @@ Result<SeedSet> readSeeds(const std::string& jsonText, const std::string& source
     if (g.contains("base")) {
       if (!g["base"].is_number() || !(g["base"].get<double>() > 0)) return r.error("grow.base", "must be a number > 0");
       set.grow.base = g["base"].get<double>();
+    }
+    if (g.contains("smoothing")) {
+      const json& v = g["smoothing"];
+      if (!v.is_number() || !(v.get<double>() >= 0 && v.get<double>() <= 8))
+        return r.error("grow.smoothing", "must be a number of voxels 0 … 8");
+      set.grow.smoothing = v.get<double>();
     }
     if (g.contains("range")) {
       auto range = r.range(g["range"], "grow.range");
@@ -223,6 +229,7 @@ std::string seedsToJson(const SeedSet& seeds) {
   if (seeds.grow.window) grow["window"] = *seeds.grow.window;
   if (seeds.grow.base) grow["base"] = *seeds.grow.base;
   if (seeds.grow.range) grow["range"] = *seeds.grow.range;
+  if (seeds.grow.smoothing) grow["smoothing"] = *seeds.grow.smoothing;
   if (!grow.empty()) out += ",\n  \"grow\": " + grow.dump();
   return out + "\n}\n";
 }

@@ -103,4 +103,15 @@ inline HeadlessRun runHeadless(const nlohmann::json& script, const HeadlessOptio
 // The events of one kind ({"event": kind, …}), in order.
 inline std::vector<nlohmann::json> eventsOf(const HeadlessRun& run, const std::string& kind) { return eventsOf(run.events, kind); }
 
+// The lesson and exam panel tests' run: `actions` on the 128³ phantom as in an 800×600 window at
+// render scale 0.3, with progress in `db` under `user`.
+inline HeadlessRun runPanelScript(const nlohmann::json& actions, const std::filesystem::path& db, const std::string& user) {
+  HeadlessOptions options;
+  options.height = 600;
+  options.renderScale = 0.3;
+  options.db = db;
+  options.user = user;
+  return runHeadless({{"actions", actions}}, options);
+}
+
 }  // namespace at::test

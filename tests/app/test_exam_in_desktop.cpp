@@ -31,14 +31,7 @@ using at::test::storedItems;
 
 constexpr const char* kExam = "temporal_bone.practical";
 
-Run runExamScript(const json& actions, const fs::path& db) {
-  at::test::HeadlessOptions options;
-  options.height = 600;
-  options.renderScale = 0.3;
-  options.db = db;
-  options.user = "examinee";
-  return at::test::runHeadless({{"actions", actions}}, options);
-}
+Run runExamScript(const json& actions, const fs::path& db) { return at::test::runPanelScript(actions, db, "examinee"); }
 
 // Any grade in an event: what an exam must not show before it is handed in.
 bool showsGrade(const json& e) {

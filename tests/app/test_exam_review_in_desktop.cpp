@@ -27,12 +27,7 @@ using at::test::eventsOf;
 constexpr const char* kExam = "temporal_bone.practical";
 
 Run runScript(const json& actions, const fs::path& db, const std::string& user) {
-  at::test::HeadlessOptions options;
-  options.height = 600;
-  options.renderScale = 0.3;
-  options.db = db;
-  options.user = user;
-  return at::test::runHeadless({{"actions", actions}}, options);
+  return at::test::runPanelScript(actions, db, user);
 }
 
 }  // namespace

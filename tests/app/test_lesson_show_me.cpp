@@ -18,12 +18,7 @@ using json = nlohmann::json;
 namespace {
 
 at::test::HeadlessRun runLessonScript(const json& actions, const fs::path& db, const std::string& user) {
-  at::test::HeadlessOptions options;
-  options.height = 600;
-  options.renderScale = 0.3;
-  options.db = db;
-  options.user = user;
-  return at::test::runHeadless({{"actions", actions}}, options);
+  return at::test::runPanelScript(actions, db, user);
 }
 
 }  // namespace

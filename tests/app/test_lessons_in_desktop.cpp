@@ -15,7 +15,7 @@
 #include <nlohmann/json.hpp>
 
 #include "database.h"  // db/'s private SQL wrapper (at_db_sql_for_tests)
-#include "db/sqlite_repositories.h"
+#include "db/sql_repositories.h"
 #include "headless_desktop.h"
 #include "lessons/course_json.h"
 #include "test_support.h"
@@ -336,8 +336,8 @@ TEST_CASE("a review answer is recorded: a wrong one puts its structure in the qu
   {
     auto database = at::db::Database::open(db.string());
     REQUIRE(database);
-    at::db::SqliteUserRepository users(*database);
-    at::db::SqliteProgressRepository progress(*database);
+    at::db::SqlUserRepository users(*database);
+    at::db::SqlProgressRepository progress(*database);
     auto user = users.findUser("reviewer");
     REQUIRE(user);
     REQUIRE(user->has_value());
@@ -381,8 +381,8 @@ TEST_CASE("a review answer is recorded: a wrong one puts its structure in the qu
   {
     auto database = at::db::Database::open(db.string());
     REQUIRE(database);
-    at::db::SqliteUserRepository users(*database);
-    at::db::SqliteProgressRepository progress(*database);
+    at::db::SqlUserRepository users(*database);
+    at::db::SqlProgressRepository progress(*database);
     const std::int64_t userId = (**users.findUser("reviewer")).id;
     auto stored = progress.reviewResponses(userId);
     REQUIRE(stored);

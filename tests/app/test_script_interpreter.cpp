@@ -139,27 +139,6 @@ TEST_CASE("ScriptInterpreter_Report_CountsAHighlightOnceTheHoveredFieldIsShown")
   CHECK(reports[0]["highlight_ms_max"].get<double>() > 0);
 }
 
-TEST_CASE("ScriptInterpreter_ActionNames_AreTheDocumentedOnes") {
-  const auto names = app::ScriptInterpreter::actionNames();
-  const std::set<std::string> have(names.begin(), names.end());
-  for (const char* documented :
-       {"select", "t", "mode", "view", "hover", "hover_structure", "click", "click_structure", "orbit", "zoom", "clip",
-        "wait", "wait_field", "screenshot", "widgets", "layout", "hover_sweep", "record", "report", "expert", "tf_add_point", "tf_move_point",
-        "tf_delete_point", "tf_colour", "preset_set", "preset_save", "study_start", "study_toggle", "study_rate",
-        "study_comment", "study_next", "study_close", "coordinator_open", "coordinator_export", "coordinator_summary",
-        "lesson_user", "lessons", "lesson", "lesson_next", "lesson_back", "show_me", "lesson_review_item", "answer",
-        "review", "lesson_close", "exams", "exam",
-        "exam_item", "exam_answer", "slice_click", "slice_click_structure", "exam_finish", "exam_leave", "exam_review_item", "analytics", "import",
-        "cancel_import", "open_imported", "cancel_field", "segment_open", "segment_label", "segment_slice",
-        "segment_seed", "segment_grow", "segment_undo", "segment_redo", "segment_review", "segment_tool",
-        "segment_clear_seeds", "segment_save", "segment_threshold",
-        "segment_margin", "segment_hollow", "slices_open", "course_new",
-        "course_open", "course_lesson", "course_show", "course_question", "course_step", "course_save",
-        "course_export", "course_open_package", "open_dataset"})
-    CHECK_MESSAGE(have.count(documented), documented);
-  CHECK(have.size() == 84);
-}
-
 TEST_CASE("ScriptInterpreter_ExpertEdits_ChangeTheViewsPresetAndItsFieldParameters") {
   test::TempDir dir("script-expert");
   const auto r = run(dir, {{{"do", "select"}, {"structure", "cochlea"}},

@@ -326,12 +326,17 @@ TEST_CASE("fixed-pass GPU fields equal the CPU's bit for bit over many tiles and
   if (!requireDevice()) return;
   std::mt19937_64 rng(at::test::freshSeed("cuda tiles"));
   // Planes of several 32×16-lane tiles with partial last tiles and plane groups (8 planes), a
-  // plane of exactly one tile and group, and planes with many tiles in both directions.
-  const at::Dims sizes[] = {{97, 45, 38}, {33, 17, 65}, {180, 170, 19}, {32, 16, 8}, {16, 32, 16}};
+  // plane of exactly one tile and group, and planes with many tiles in both directions. Planes
+  // of more 32×16 tiles than the GPU has multiprocessors run with 64×32 tiles: on an H200 (132)
+  // the 520 × 300 planes in one wave (90 tiles, partial in both directions) and the 1100 × 300
+  // ones in two (180), with partial plane groups (6 planes) at 9 and 13 planes.
+  const at::Dims sizes[] = {{97, 45, 38}, {33, 17, 65},   {180, 170, 19},  {32, 16, 8},
+                            {16, 32, 16}, {520, 300, 9}, {1100, 300, 13}};
   for (const at::Dims& dims : sizes) {
     for (StepRule rule : kRules) {
       for (WeightRule weight : kWeights) {
-        if (dims.x == 180 && !(weight == WeightRule::Density || weight == WeightRule::Gradient)) continue;
+        const bool large = dims.x == 180 || dims.x == 1100;
+        if (large && !(weight == WeightRule::Density || weight == WeightRule::Gradient)) continue;
         checkFixedPassesMatchCpu(randomProblem(rng, dims, {0.7, 0.9, 1.6}, rule, weight));
       }
     }

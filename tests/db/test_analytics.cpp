@@ -83,9 +83,9 @@ void buildClass(ClassFixture& f, std::uint64_t seed) {
   auto database = db::Database::open(f.path);
   REQUIRE(database);
   REQUIRE(db::storeCourse(*database, f.course, "test"));
-  db::SqliteUserRepository users(*database);
-  db::SqliteProgressRepository progress(*database);
-  db::SqliteExamRepository exams(*database);
+  db::SqlUserRepository users(*database);
+  db::SqlProgressRepository progress(*database);
+  db::SqlExamRepository exams(*database);
   const Fsrs fsrs;
   const auto questions = questionsOf(f.course);
   int sequence = 0;
@@ -219,7 +219,7 @@ TEST_CASE("Analytics of a synthetic class of 50 students match the figures recom
   buildClass(f, test::freshSeed("Analytics_SyntheticClass"));
   auto database = db::Database::open(f.path);
   REQUIRE(database);
-  db::SqliteCurriculumRepository curriculum(*database, test::toyBuiltin());
+  db::SqlCurriculumRepository curriculum(*database, test::toyBuiltin());
   auto input = db::loadAnalyticsInput(*database, curriculum, "toy", std::nullopt);
   REQUIRE_MESSAGE(input, (input ? "" : input.error().message));
   CHECK(input->students.size() == 50);
@@ -374,7 +374,7 @@ TEST_CASE("Analytics of a synthetic class of 50 students match the figures recom
   // ones included, stay numbers: a student named like a formula in a group "-A", and one review
   // logged before 1970 (a negative review_time).
   {
-    db::SqliteUserRepository users(*database);
+    db::SqlUserRepository users(*database);
     REQUIRE(users.createUser("=HYPERLINK(\"http://example.org\",\"x\")", Role::Student, "-A"));
     REQUIRE(database->exec("UPDATE review_log SET reviewed_at = -86400 WHERE id = (SELECT min(id) FROM review_log)"));
   }

@@ -10,7 +10,7 @@
 #include "db/class_accounts.h"
 #include "db/class_server.h"
 #include "db/course_store.h"
-#include "db/sqlite_repositories.h"
+#include "db/sql_repositories.h"
 #include "lessons/lesson_engine.h"
 #include "pooled_postgres.h"
 #include "test_databases.h"
@@ -70,7 +70,7 @@ TEST_CASE("ClassPooled_PersonLoginsThroughPgBouncer_SendAsThemselvesOthersRefuse
   test::TempDir dir;
   Database laptop = openAt((dir.path() / "eve.db").string());
   REQUIRE(storeCourse(laptop, test::toyCourse(), "toy"));
-  SqliteUserRepository users(laptop);
+  SqlUserRepository users(laptop);
   auto user = users.createUser(eve, Role::Student, "");
   REQUIRE(user);
   {
@@ -79,8 +79,8 @@ TEST_CASE("ClassPooled_PersonLoginsThroughPgBouncer_SendAsThemselvesOthersRefuse
     REQUIRE_MESSAGE(role, (role ? "" : role.error().message));
     REQUIRE(rememberMembership(laptop, {eve, made->code, eveUrl, *role}));
   }
-  SqliteCurriculumRepository curriculum(laptop, test::toyBuiltin());
-  SqliteProgressRepository progress(laptop);
+  SqlCurriculumRepository curriculum(laptop, test::toyBuiltin());
+  SqlProgressRepository progress(laptop);
   test::ToyKeys keys;
   LessonEngine engine(curriculum, progress, keys);
   REQUIRE(engine.start(user->id, "toy.ossicles"));

@@ -20,7 +20,7 @@
 #include "db/class_accounts.h"
 #include "db/class_server.h"
 #include "db/course_store.h"
-#include "db/sqlite_repositories.h"
+#include "db/sql_repositories.h"
 #include "db/study_store.h"
 #include "db/study_withdrawal.h"
 #include "quiz/study_protocol.h"
@@ -50,14 +50,14 @@ std::int64_t count(Database& db, const std::string& sql) { return test::scalarCo
 struct Laptop {
   Database db;
   std::int64_t userId = 0;
-  SqliteCurriculumRepository curriculum;
-  SqliteProgressRepository progress;
+  SqlCurriculumRepository curriculum;
+  SqlProgressRepository progress;
   test::ToyKeys keys;
 
   Laptop(const std::string& path, const std::string& login, const std::string& serverUrl, const std::string& code)
       : db(openAt(path)), curriculum(db, test::toyBuiltin()), progress(db) {
     REQUIRE(storeCourse(db, test::toyCourse(), "toy"));
-    SqliteUserRepository users(db);
+    SqlUserRepository users(db);
     auto user = users.createUser(login, Role::Student, "");
     REQUIRE(user);
     userId = user->id;

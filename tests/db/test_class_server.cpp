@@ -9,7 +9,7 @@
 #include "database.h"  // db/'s private SQL wrapper (at_db_sql_for_tests)
 #include "db/class_server.h"
 #include "db/course_store.h"
-#include "db/sqlite_repositories.h"
+#include "db/sql_repositories.h"
 #include "lessons/lesson_engine.h"
 #include "test_databases.h"
 #include "test_support.h"
@@ -31,14 +31,14 @@ std::int64_t count(Database& db, const std::string& sql) { return test::scalarCo
 struct LearnerMachine {
   Database db;
   std::int64_t userId = 0;
-  SqliteCurriculumRepository curriculum;
-  SqliteProgressRepository progress;
+  SqlCurriculumRepository curriculum;
+  SqlProgressRepository progress;
   test::ToyKeys keys;
 
   LearnerMachine(const std::string& path, const std::string& name)
       : db(openAt(path)), curriculum(db, test::toyBuiltin()), progress(db) {
     REQUIRE(storeCourse(db, test::toyCourse(), "toy"));
-    SqliteUserRepository users(db);
+    SqlUserRepository users(db);
     auto user = users.createUser(name, Role::Student, "");
     REQUIRE(user);
     userId = user->id;
@@ -158,7 +158,8 @@ TEST_CASE("A user in no class writes nothing into the outbox") {
 }
 
 TEST_CASE("Offline first: answers made while the class server is down reach it once when it is back") {
-  auto url = test::freshPostgresDatabase("the class-server sync test");
+  test::PrivatePostgres classServer;  // stopped below: a cluster of its own, not the shared one
+  auto url = classServer.freshDatabase("the class-server sync test");
   if (!url) return;
   test::TempDir dir;
   Database server = openAt(*url);
@@ -178,11 +179,11 @@ TEST_CASE("Offline first: answers made while the class server is down reach it o
   CHECK(first.servers[0].server.find(':' + std::string("@")) == std::string::npos);
 
   // The server goes down: learning goes on on the laptop, every event waits in the outbox.
-  if (!test::stopTestPostgres()) return;  // a server this process did not start: not ours to stop
-  CHECK(sam.play("toy.ossicles") == 1);   // the last answer, then the lesson's end
+  REQUIRE(classServer.stop());
+  CHECK(sam.play("toy.ossicles") == 1);  // the last answer, then the lesson's end
   CHECK(sam.play("toy.middle") == 3);
   auto down = syncOutbox(sam.db);
-  const bool restarted = test::restartTestPostgres();
+  const bool restarted = classServer.restart();
   REQUIRE(restarted);
   REQUIRE_MESSAGE(down, (down ? "" : down.error().message));
   REQUIRE(down->servers.size() == 1);
@@ -233,7 +234,8 @@ TEST_CASE("Offline first: answers made while the class server is down reach it o
 }
 
 TEST_CASE("Two copies of one laptop's database (a restored backup) push the same events once") {
-  auto url = test::freshPostgresDatabase("the class-server sync test");
+  test::PrivatePostgres classServer;  // stopped below: a cluster of its own, not the shared one
+  auto url = classServer.freshDatabase("the class-server sync test");
   if (!url) return;
   test::TempDir dir;
   Database server = openAt(*url);
@@ -256,7 +258,8 @@ TEST_CASE("Two copies of one laptop's database (a restored backup) push the same
 }
 
 TEST_CASE("Events of a user the server does not know as a member stay in the outbox, with the reason") {
-  auto url = test::freshPostgresDatabase("the class-server sync test");
+  test::PrivatePostgres classServer;  // stopped below: a cluster of its own, not the shared one
+  auto url = classServer.freshDatabase("the class-server sync test");
   if (!url) return;
   test::TempDir dir;
   Database server = openAt(*url);

@@ -12,7 +12,7 @@
 #include "db/analytics_store.h"
 #include "db/class_server.h"
 #include "db/course_store.h"
-#include "db/sqlite_repositories.h"
+#include "db/sql_repositories.h"
 #include "lessons/analytics.h"
 #include "lessons/lesson_engine.h"
 #include "pooled_postgres.h"
@@ -33,13 +33,13 @@ using test::openAt;
 struct Laptop {
   Database db;
   std::int64_t userId = 0;
-  SqliteCurriculumRepository curriculum;
-  SqliteProgressRepository progress;
+  SqlCurriculumRepository curriculum;
+  SqlProgressRepository progress;
   test::ToyKeys keys;
 
   Laptop(const std::string& path, const std::string& name) : db(openAt(path)), curriculum(db, test::toyBuiltin()), progress(db) {
     REQUIRE(storeCourse(db, test::toyCourse(), "toy"));
-    SqliteUserRepository users(db);
+    SqlUserRepository users(db);
     auto user = users.createUser(name, Role::Student, "");
     REQUIRE(user);
     userId = user->id;
@@ -97,12 +97,12 @@ TEST_CASE("ClassView_AnalyticsOnTheServerCountsWhatClassProgressCounts_OutboxStu
     CHECK(sent->complete());
   }
   // A lab machine's user on the server itself, in no class: analytics' class, not class progress'.
-  SqliteUserRepository serverUsers(server);
+  SqlUserRepository serverUsers(server);
   REQUIRE(serverUsers.createUser("lab_user", Role::Student, ""));
 
   auto progress = classProgress(server, made->code, "dr_ada");
   REQUIRE_MESSAGE(progress, (progress ? "" : progress.error().message));
-  SqliteCurriculumRepository curriculum(server, test::toyBuiltin());
+  SqlCurriculumRepository curriculum(server, test::toyBuiltin());
   auto input = loadAnalyticsInput(server, curriculum, test::toyCourse().id, made->code);
   REQUIRE_MESSAGE(input, (input ? "" : input.error().message));
   const ClassAnalytics analytics = computeAnalytics(*input, std::int64_t(std::time(nullptr)));

@@ -4,7 +4,7 @@
 
 #include "database.h"  // db/'s private SQL wrapper (at_db_sql_for_tests)
 #include "db/course_store.h"
-#include "db/sqlite_repositories.h"
+#include "db/sql_repositories.h"
 #include "lessons/course_json.h"
 #include "test_databases.h"
 #include "test_support.h"
@@ -39,7 +39,7 @@ TEST_CASE("DamagedRow_BrokenQuestionJson_LessonLeftOutWithOneLineOthersStillWork
   test::TempDir dir;
   Database db = openWithToyCourses(dir);
   REQUIRE(db.exec("UPDATE questions SET json = '{\"kind\": \"name\", broken' WHERE id = 'toy.ossicles.name_stapes'"));
-  SqliteCurriculumRepository repo(db, test::toyBuiltin());
+  SqlCurriculumRepository repo(db, test::toyBuiltin());
 
   auto all = repo.courses();
   REQUIRE_MESSAGE(all, (all ? "" : all.error().message));
@@ -69,7 +69,7 @@ TEST_CASE("DamagedRow_WrongTypesInStoredJson_CourseLeftOutInsteadOfThrowing") {
   // Synonyms that are numbers once threw out of json::get (a crash of every command).
   REQUIRE(db.exec("UPDATE courses SET synonyms = '{\"stapes\": [1, 2]}' WHERE id = 'toy2'"));
   REQUIRE(db.exec("UPDATE questions SET json = '{\"kind\": 7, \"choices\": {}}' WHERE lesson_id = 'toy.middle'"));
-  SqliteCurriculumRepository repo(db, test::toyBuiltin());
+  SqlCurriculumRepository repo(db, test::toyBuiltin());
   auto all = repo.courses();
   REQUIRE_MESSAGE(all, (all ? "" : all.error().message));
   REQUIRE(all->size() == 1);

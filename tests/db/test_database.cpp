@@ -126,13 +126,13 @@ TEST_CASE("A database at every earlier version migrates to the same schema as a 
       CHECK((*kept)->geometry.spacingMm[1] == doctest::Approx(0.75));
     }
     if (from >= 2) {
-      SqliteCurriculumRepository repo(*db, test::toyBuiltin());
+      SqlCurriculumRepository repo(*db, test::toyBuiltin());
       auto course = repo.course("toy");
       REQUIRE(course);
       CHECK(lessons::courseToJson(*course) == lessons::courseToJson(test::toyCourse()));
     }
     if (from >= 3) {
-      SqliteProgressRepository progress(*db);
+      SqlProgressRepository progress(*db);
       auto responses = progress.responses(3);
       REQUIRE(responses);
       REQUIRE(responses->size() == 1);
@@ -153,12 +153,12 @@ TEST_CASE("A database at every earlier version migrates to the same schema as a 
     // learner (or a new one) is recorded and read back.
     std::int64_t learner = 7;
     if (from < 3) {
-      SqliteUserRepository users(*db);
+      SqlUserRepository users(*db);
       auto created = users.createUser("new-learner", lessons::Role::Student, "");
       REQUIRE(created);
       learner = created->id;
     }
-    SqliteProgressRepository progress(*db);
+    SqlProgressRepository progress(*db);
     lessons::ReviewRecord review;
     review.response.userId = learner;
     review.response.questionId = "toy.ossicles.name_stapes";
@@ -221,7 +221,7 @@ TEST_CASE("Leitner progress of a version-5 database becomes FSRS memory states k
   }
   auto db = Database::open(path);
   REQUIRE_MESSAGE(db, (db ? "" : db.error().message));
-  SqliteProgressRepository progress(*db);
+  SqlProgressRepository progress(*db);
   const auto state = [&](std::int64_t user, const char* structure) {
     auto p = progress.progress(user, structure);
     REQUIRE(p);
@@ -623,8 +623,10 @@ TEST_CASE("Several programs opening one fresh database at once create its schema
 
 TEST_CASE("A class server that closes the connection or restarts: the program goes on, nothing lost or doubled") {
   if (!test::testingOnPostgres()) return;  // a server's behaviour
-  test::TempDir dir;
-  const std::string url = test::freshDatabase(dir, "server");
+  test::PrivatePostgres server;             // stopped below: a cluster of its own, not the shared one
+  const auto fresh = server.freshDatabase("the server-restart test");
+  if (!fresh) return;
+  const std::string url = *fresh;
   auto db = Database::open(url);
   REQUIRE(db);
   const auto insertPreset = [&](const std::string& id) {
@@ -644,9 +646,9 @@ TEST_CASE("A class server that closes the connection or restarts: the program go
   CHECK(insertPreset("after terminate"));
   CHECK(countRows(*db, "presets") == 2);
 
-  if (!test::stopTestPostgres()) return;  // a server this process did not start: not ours to stop
+  REQUIRE(server.stop());
   auto whileDown = insertPreset("while down");
-  bool restarted = test::restartTestPostgres();
+  bool restarted = server.restart();
   REQUIRE(restarted);
   REQUIRE_FALSE(whileDown);
   CHECK((whileDown.error().kind == ErrorKind::Unavailable));

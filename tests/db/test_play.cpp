@@ -646,7 +646,8 @@ TEST_CASE("The skull course travels as a package to a program without it and pla
 
 TEST_CASE("A class through the CLI: join with the code, play while the server is down, sync, the instructor's view") {
   if (!appAvailable()) return;
-  auto url = test::freshPostgresDatabase("the class-server CLI test");
+  test::PrivatePostgres classServer;  // stopped below: a cluster of its own, not the shared one
+  auto url = classServer.freshDatabase("the class-server CLI test");
   if (!url) return;
   test::TempDir dir;
   const std::string server = " --db '" + *url + "'", local = (dir.path() / "laptop.db").string();
@@ -677,10 +678,10 @@ TEST_CASE("A class through the CLI: join with the code, play while the server is
   CHECK(scalar(local, "SELECT COUNT(*) FROM outbox") == 8);  // start, 6 answers, finish
 
   // Offline: the lesson goes on, the answers wait, sync says why and fails; back: they go, once.
-  if (!test::stopTestPostgres()) return;
+  REQUIRE(classServer.stop());
   auto offline = test::runApp(playArgs("quick.check", "kim", answers, local));
   auto syncDown = test::runApp("sync --db '" + local + "'");
-  const bool restarted = test::restartTestPostgres();
+  const bool restarted = classServer.restart();
   REQUIRE(restarted);
   CAPTURE(offline.err);
   CHECK(offline.exitCode == 0);

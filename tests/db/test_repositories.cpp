@@ -9,7 +9,7 @@
 #include "db/course_store.h"
 #include "database.h"  // db/'s private SQL wrapper (at_db_sql_for_tests)
 #include "db/exam_store.h"
-#include "db/sqlite_repositories.h"
+#include "db/sql_repositories.h"
 #include "lessons/course_json.h"
 #include "lessons/lesson_engine.h"
 #include "lessons/scheduling.h"
@@ -71,7 +71,7 @@ TEST_CASE("A stored course reads back identical, including texts with quotes and
   REQUIRE_MESSAGE(stored, (stored ? "" : stored.error().message));
   CHECK(bool(*stored == SeedOutcome::Added));
 
-  SqliteCurriculumRepository repo(db, test::toyBuiltin());
+  SqlCurriculumRepository repo(db, test::toyBuiltin());
   auto back = repo.course("toy");
   REQUIRE_MESSAGE(back, (back ? "" : back.error().message));
   CHECK(courseToJson(*back) == courseToJson(course));
@@ -127,8 +127,8 @@ TEST_CASE("Seeding the same course files twice changes nothing; a newer version 
   }
 
   // A learner answers before the course is updated: the answer must survive the update.
-  SqliteUserRepository users(db);
-  SqliteProgressRepository progress(db);
+  SqlUserRepository users(db);
+  SqlProgressRepository progress(db);
   auto user = users.createUser("ana", Role::Student, "");
   REQUIRE(user);
   auto attempt = progress.startAttempt(user->id, "toy.ossicles", LessonMode::Guided, 100);
@@ -150,7 +150,7 @@ TEST_CASE("Seeding the same course files twice changes nothing; a newer version 
   REQUIRE(updated);
   CHECK(bool((*updated)[0].outcome == SeedOutcome::Updated));
   CHECK(counts() == std::vector<std::int64_t>{1, 2, 7, 5, 1});
-  SqliteCurriculumRepository repo(db, test::toyBuiltin());
+  SqlCurriculumRepository repo(db, test::toyBuiltin());
   CHECK(courseToJson(*repo.course("toy")) == courseToJson(v2));
   CHECK(countRows(db, "responses") == 1);
   CHECK(countRows(db, "attempts") == 1);
@@ -192,7 +192,7 @@ TEST_CASE("Seeding reports a broken course file by name") {
 TEST_CASE("Users are created once, found by pseudonym, and hostile names are kept verbatim") {
   test::TempDir dir;
   Database db = openFresh(dir);
-  SqliteUserRepository users(db);
+  SqlUserRepository users(db);
   const std::string hostile = "x'); DELETE FROM users; --\"";
   auto u = users.createUser(hostile, Role::Coordinator, "group; DROP TABLE users");
   REQUIRE(u);
@@ -216,8 +216,8 @@ TEST_CASE("Users are created once, found by pseudonym, and hostile names are kep
 TEST_CASE("An answer is stored with its progress, ability and difficulty in one transaction") {
   test::TempDir dir;
   Database db = openFresh(dir);
-  SqliteUserRepository users(db);
-  SqliteProgressRepository progress(db);
+  SqlUserRepository users(db);
+  SqlProgressRepository progress(db);
   auto user = users.createUser("ben", Role::Student, "");
   REQUIRE(user);
   CHECK(!progress.openAttempt(user->id, "toy.ossicles")->has_value());
@@ -321,14 +321,14 @@ TEST_CASE("The LessonEngine on the store resumes a lesson at the next step after
   {
     Database db = openAt(path);
     REQUIRE(storeCourse(db, test::toyCourse(), "toy"));
-    SqliteUserRepository users(db);
+    SqlUserRepository users(db);
     userId = users.createUser("cleo", Role::Student, "")->id;
   }
   {
     auto db = Database::open(path);
     REQUIRE(db);
-    SqliteCurriculumRepository curriculum(*db, test::toyBuiltin());
-    SqliteProgressRepository progress(*db);
+    SqlCurriculumRepository curriculum(*db, test::toyBuiltin());
+    SqlProgressRepository progress(*db);
     test::ToyKeys keys;
     LessonEngine engine(curriculum, progress, keys);
     // Prerequisite not finished yet.
@@ -341,8 +341,8 @@ TEST_CASE("The LessonEngine on the store resumes a lesson at the next step after
   }
   auto db = Database::open(path);
   REQUIRE(db);
-  SqliteCurriculumRepository curriculum(*db, test::toyBuiltin());
-  SqliteProgressRepository progress(*db);
+  SqlCurriculumRepository curriculum(*db, test::toyBuiltin());
+  SqlProgressRepository progress(*db);
   test::ToyKeys keys;
   LessonEngine engine(curriculum, progress, keys);
   REQUIRE(engine.start(userId, "toy.ossicles"));
@@ -372,8 +372,8 @@ TEST_CASE("Two connections recording answers for the same user at once lose noth
   std::int64_t userId = 0, attemptA = 0, attemptB = 0;
   {
     Database db = openAt(path);
-    SqliteUserRepository users(db);
-    SqliteProgressRepository progress(db);
+    SqlUserRepository users(db);
+    SqlProgressRepository progress(db);
     userId = users.createUser("dana", Role::Student, "")->id;
     attemptA = progress.startAttempt(userId, "a", LessonMode::Guided, 1)->id;
     attemptB = progress.startAttempt(userId, "b", LessonMode::Guided, 1)->id;
@@ -385,7 +385,7 @@ TEST_CASE("Two connections recording answers for the same user at once lose noth
       *error = db.error().message;
       return;
     }
-    SqliteProgressRepository progress(*db);
+    SqlProgressRepository progress(*db);
     for (int i = 0; i < kAnswers; ++i) {
       AnswerRecord r;
       r.response.attemptId = attempt;
@@ -422,8 +422,8 @@ TEST_CASE("Two connections recording answers for the same user at once lose noth
 TEST_CASE("A review answer is stored with its progress, ability and difficulty in one transaction, outside any attempt") {
   test::TempDir dir;
   Database db = openFresh(dir);
-  SqliteUserRepository users(db);
-  SqliteProgressRepository progress(db);
+  SqlUserRepository users(db);
+  SqlProgressRepository progress(db);
   auto user = users.createUser("eve", Role::Student, "");
   REQUIRE(user);
 
@@ -485,8 +485,8 @@ TEST_CASE("A review answer is stored with its progress, ability and difficulty i
 TEST_CASE("A review answer that fails in its last write leaves no trace of its first ones") {
   test::TempDir dir;
   Database db = openFresh(dir);
-  SqliteUserRepository users(db);
-  SqliteProgressRepository progress(db);
+  SqlUserRepository users(db);
+  SqlProgressRepository progress(db);
   auto user = users.createUser("fay", Role::Student, "");
   REQUIRE(user);
   // The question's difficulty is the transaction's last write: make it fail as a full disk would.
@@ -518,7 +518,7 @@ TEST_CASE("A review answer that fails in its last write leaves no trace of its f
 
   // Through answerReview the failure is reported and the queue does not move either.
   REQUIRE(storeCourse(db, test::toyCourse(), "toy"));
-  SqliteCurriculumRepository curriculum(db, test::toyBuiltin());
+  SqlCurriculumRepository curriculum(db, test::toyBuiltin());
   test::ToyKeys keys;
   ReviewAnswer review;
   review.userId = user->id;
@@ -541,9 +541,9 @@ TEST_CASE("answerReview on the store moves the review queue by FSRS: right answe
   }
   auto db = Database::open(path);
   REQUIRE(db);
-  SqliteCurriculumRepository curriculum(*db, test::toyBuiltin());
-  SqliteProgressRepository progress(*db);
-  SqliteUserRepository users(*db);
+  SqlCurriculumRepository curriculum(*db, test::toyBuiltin());
+  SqlProgressRepository progress(*db);
+  SqlUserRepository users(*db);
   test::ToyKeys keys;
   const std::int64_t userId = users.createUser("gil", Role::Student, "")->id;
   UnixSeconds clock = 2'000'000;
@@ -645,9 +645,9 @@ TEST_CASE("answerReview on the store moves the review queue by FSRS: right answe
 TEST_CASE("Exam attempts and their items round-trip; an item's answer is written once, with its learner update") {
   test::TempDir dir;
   Database db = openFresh(dir);
-  SqliteUserRepository users(db);
-  SqliteProgressRepository progress(db);
-  SqliteExamRepository exams(db);
+  SqlUserRepository users(db);
+  SqlProgressRepository progress(db);
+  SqlExamRepository exams(db);
   const std::int64_t userId = users.createUser("ida", Role::Student, "")->id;
   ExamAttempt attempt;
   attempt.userId = userId;

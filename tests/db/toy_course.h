@@ -7,7 +7,7 @@
 #include <string>
 #include <vector>
 
-#include "db/sqlite_repositories.h"
+#include "db/sql_repositories.h"
 #include "lessons/curriculum.h"
 #include "quiz/keys.h"
 

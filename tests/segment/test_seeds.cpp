@@ -19,7 +19,7 @@ const char* kGood = R"({
   "strokes": [{"label": "liver", "radius_mm": 1, "points": [[1, 2, 3], [4, 2, 3]]},
               {"label": 0, "points": [[-5, -5, 0]]},
               {"label": 7, "points": [[0, 0, 0]]}],
-  "grow": {"weight": "gradient", "window": [-100, 400], "base": 0.01}
+  "grow": {"weight": "gradient", "window": [-100, 400], "base": 0.01, "smoothing": 0.5}
 })";
 
 Geometry grid() {
@@ -51,6 +51,8 @@ TEST_CASE("A seeds file parses, writes back the same, and rasterises its strokes
   auto again = parseSeeds(seedsToJson(*seeds), "again.json");
   REQUIRE(again);
   CHECK(again->strokes.size() == 3);
+  CHECK(seeds->grow.smoothing == 0.5);
+  CHECK(again->grow.smoothing == 0.5);
   CHECK(again->strokes[0].pointsMm == seeds->strokes[0].pointsMm);
   CHECK(again->strokes[0].radiusMm == 1);
 
@@ -87,6 +89,8 @@ TEST_CASE("Bad seeds files and seeds are one-line errors naming the field, the l
              "\"radius_mm\": -1}]}",
              "strokes[0].radius_mm");
   checkError("{\"labels\": [{\"value\": 1, \"name\": \"a\"}], \"strokes\": [], \"grow\": {\"base\": 0}}", "grow.base must be");
+  checkError("{\"labels\": [{\"value\": 1, \"name\": \"a\"}], \"strokes\": [], \"grow\": {\"smoothing\": 9}}",
+             "grow.smoothing must be");
   checkError("{\"labels\": [{\"value\": 1, \"name\": \"a\"}], \"strokes\": [] ", "not valid JSON");
 
   auto outside = parseSeeds(R"({"labels": [{"value": 0, "name": "background"}, {"value": 1, "name": "a"}],

@@ -21,7 +21,7 @@ namespace {
 // The server the tests use, started once per process.
 struct TestServer {
   std::string baseUrl;       // a database the tests make schemas in
-  std::string clusterDir;    // the cluster's folder when the tests may stop and restart it
+  std::string clusterDir;    // the cluster's folder (never stopped by a test: PrivatePostgres)
   bool ownCluster = false;   // this process started the cluster (and stops it at exit)
   std::string whyNot;        // why there is no server
 };
@@ -173,19 +173,54 @@ std::optional<std::string> freshPostgresDatabase(const char* what) {
   return url;
 }
 
-bool stopTestPostgres() {
-  TestServer& s = server();
-  if (s.clusterDir.empty()) return false;
+PrivatePostgres::PrivatePostgres() {
+  dir_ = (fs::temp_directory_path() / "at-pg-private-XXXXXX").string();
+  if (!::mkdtemp(dir_.data())) {
+    whyNot_ = "cannot make a folder for the test's own cluster";
+    dir_.clear();
+    return;
+  }
   int status = 0;
-  runScript("'" + scriptPath() + "' stop '" + s.clusterDir + "' 2>&1", status);
+  url_ = runScript("AT_PG_FAST=1 '" + scriptPath() + "' start '" + dir_ + "' 2>&1", status);
+  if (status != 0) {
+    whyNot_ = url_.empty() ? "scripts/pg-cluster.sh failed" : url_;
+    return;
+  }
+  started_ = true;
+}
+
+PrivatePostgres::~PrivatePostgres() {
+  int status = 0;
+  if (started_) runScript("'" + scriptPath() + "' stop '" + dir_ + "' 2>&1", status);
+  std::error_code ec;
+  if (!dir_.empty()) fs::remove_all(dir_, ec);
+}
+
+std::optional<std::string> PrivatePostgres::freshDatabase(const char* what) {
+  if (!started_) {
+    at::test::skipf("%s needs a PostgreSQL cluster of its own: %s", what, whyNot_.c_str());
+    return std::nullopt;
+  }
+  const std::string schema = "t" + std::to_string(schemas_++);
+  if (auto e = execOnServer(url_, "CREATE SCHEMA " + schema); !e.empty()) {
+    at::test::skipf("%s: cannot create a schema on its own cluster: %s", what, e.c_str());
+    return std::nullopt;
+  }
+  const char separator = url_.find('?') == std::string::npos ? '?' : '&';
+  return url_ + separator + "options=-csearch_path%3D" + schema;
+}
+
+bool PrivatePostgres::stop() {
+  if (!started_) return false;
+  int status = 0;
+  runScript("'" + scriptPath() + "' stop '" + dir_ + "' 2>&1", status);
   return status == 0;
 }
 
-bool restartTestPostgres() {
-  TestServer& s = server();
-  if (s.clusterDir.empty()) return false;
+bool PrivatePostgres::restart() {
+  if (!started_) return false;
   int status = 0;
-  runScript("'" + scriptPath() + "' restart '" + s.clusterDir + "' 2>&1", status);
+  runScript("'" + scriptPath() + "' restart '" + dir_ + "' 2>&1", status);
   return status == 0;
 }
 

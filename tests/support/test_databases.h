@@ -39,10 +39,28 @@ std::string freshDatabase(const TempDir& dir, const std::string& name = "t.db");
 // the clients' SQLite files); nullopt after printing "SKIPPED: <what> …" when no server starts.
 std::optional<std::string> freshPostgresDatabase(const char* what);
 
-// The test cluster's control: stops and starts the test cluster, the fixture's or this process's
-// (for tests of what clients do while the server is down). False for a server given by URL.
-bool stopTestPostgres();
-bool restartTestPostgres();
+// A PostgreSQL cluster of one test's own (scripts/pg-cluster.sh, on a free loopback port), for
+// tests of what clients do while the server is down: stopping it disturbs no test running beside
+// (the shared cluster is never stopped). Stopped and its folder removed when the object dies.
+class PrivatePostgres {
+ public:
+  // Starts the cluster; on failure (no PostgreSQL installed) freshDatabase() reports the skip.
+  PrivatePostgres();
+  ~PrivatePostgres();
+  PrivatePostgres(const PrivatePostgres&) = delete;
+  PrivatePostgres& operator=(const PrivatePostgres&) = delete;
+
+  // The URL of a new, empty schema on it; nullopt after printing "SKIPPED: <what> …".
+  std::optional<std::string> freshDatabase(const char* what);
+  // pg_ctl stop (fast) and start again on the same port and folder: true when it worked.
+  bool stop();
+  bool restart();
+
+ private:
+  std::string dir_, url_, whyNot_;
+  bool started_ = false;
+  int schemas_ = 0;
+};
 
 // Tables (and on SQLite their SQL, on PostgreSQL their columns with types, nullability and
 // defaults, and their indexes): the schema as a comparable set.

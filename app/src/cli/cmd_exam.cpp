@@ -128,7 +128,7 @@ int runExam(const Argv& argv) {
   auto learning = LearningSession::open(args->db());
   if (!learning) return reportError("exam: " + learning.error().message);
   LearningSession& ls = **learning;
-  db::SqliteExamRepository exams(ls.database());
+  db::SqlExamRepository exams(ls.database());
   const std::string examId = args->positional()[0];
   auto found = lessons::findExam(ls.curriculum(), examId);
   if (!found) return reportError("exam: " + found.error().message + " (see `anatomy-tutor lessons`)");

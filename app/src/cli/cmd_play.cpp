@@ -247,29 +247,22 @@ int runLesson(const std::string& lessonId, lessons::LessonMode mode, PlayContext
     if (!view) return reportError("play: " + view.error().message);
     char stem[160];
     std::snprintf(stem, sizeof stem, "%s-%02d", lessonId.c_str(), view->position);
-    if (view->kind == lessons::StepKind::Show) {
-      const std::string heading = view->title.empty() ? view->structureName : view->title;
-      terminalPrintf("\n[%d/%d] %s\n", view->position, view->count, heading.c_str());
-      if (view->labelsVisible && !view->structureName.empty() && view->structureName != heading)
-        terminalPrintf("  structure: %s\n", view->structureName.c_str());
-      showPicture(views.get(), view->scene, stem, false);
-      printWrapped(view->text, 2);
-      std::fflush(stdout);
-      const Then then = waitAfterStep();
-      if (then == Then::Stop) {
-        terminalPrintf("\nstopped; run the same command to resume\n");
-        return 0;
+    if (view->kind == lessons::StepKind::Show || view->feedback) {  // a step that asks nothing
+      if (view->kind == lessons::StepKind::Show) {
+        const std::string heading = view->title.empty() ? view->structureName : view->title;
+        terminalPrintf("\n[%d/%d] %s\n", view->position, view->count, heading.c_str());
+        if (view->labelsVisible && !view->structureName.empty() && view->structureName != heading)
+          terminalPrintf("  structure: %s\n", view->structureName.c_str());
+        showPicture(views.get(), view->scene, stem, false);
+        printWrapped(view->text, 2);
+        std::fflush(stdout);
+      } else {  // answered before (reached by 'back'): its answer stands
+        printQuestion("[" + std::to_string(view->position) + "/" + std::to_string(view->count) + "]", view->questionKind,
+                      view->prompt, view->choiceNames);
+        showPicture(views.get(), view->scene, stem, false);
+        terminalPrintf("  answered:\n");
+        printGrade(*view->feedback);
       }
-      if (then == Then::Back) {
-        stepBack();
-        continue;
-      }
-    } else if (view->feedback) {  // answered before (reached by 'back'): its answer stands
-      printQuestion("[" + std::to_string(view->position) + "/" + std::to_string(view->count) + "]", view->questionKind,
-                    view->prompt, view->choiceNames);
-      showPicture(views.get(), view->scene, stem, false);
-      terminalPrintf("  answered:\n");
-      printGrade(*view->feedback);
       const Then then = waitAfterStep();
       if (then == Then::Stop) {
         terminalPrintf("\nstopped; run the same command to resume\n");

@@ -185,7 +185,7 @@ int runProgress(const Argv& argv) {
   }
 
   // Exams: the latest attempt at each, with its score once handed in.
-  db::SqliteExamRepository exams((*session)->database());
+  db::SqlExamRepository exams((*session)->database());
   auto examAttempts = exams.examAttempts(userId);
   if (!examAttempts) return reportError("progress: " + examAttempts.error().message);
   bool examHeading = false;

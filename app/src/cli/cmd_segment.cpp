@@ -34,7 +34,7 @@ const char* kUsage =
     "usage: anatomy-tutor segment DATASET --seeds SEEDS.json --out LABELS.nii.gz|LABELS.seg.nrrd\n"
     "                             [--names NAMES.json] [--method grow|threshold] [--backend auto|cpu|cuda]\n"
     "                             [--weight gradient|density|uniform|ascent] [--window LO,HI] [--base B]\n"
-    "                             [--range LO,HI|bone] [--compare] [--save] [--json]\n"
+    "                             [--smoothing S] [--range LO,HI|bone] [--compare] [--save] [--json]\n"
     "  Labels DATASET from seed strokes. SEEDS.json lists labels ({\"value\", \"name\"}, value 0 being\n"
     "  the background) and strokes in mm ({\"label\", \"points\": [[x,y,z], ...], \"radius_mm\"}); the\n"
     "  format is documented in segment/include/segment/seeds.h.\n"
@@ -46,7 +46,9 @@ const char* kUsage =
     "                      uniform or ascent; --window LO,HI the values mapped to 0..1 (default: the\n"
     "                      dataset's window: -1000,2000 HU for CT, the histogram window for plain\n"
     "                      intensities); --base B the cost per mm added to every step (default: from the\n"
-    "                      data's step noise and voxel size, segment/growth_settings.h; printed)\n"
+    "                      data's step noise and voxel size, segment/growth_settings.h; printed);\n"
+    "                      --smoothing S edge-preserving smoothing before growth, sigma in voxels\n"
+    "                      (0 none; default 1 where the data are noisy)\n"
     "  --range             grow only into voxels whose value lies in LO..HI (HU or intensities; others\n"
     "                      keep label 0 unless seeded); 'bone' takes the range derived from the data\n"
     "                      (300 HU and up for CT; a pseudo-HU bone threshold for plain intensities)\n"
@@ -83,6 +85,9 @@ Result<GrowthParams> growthParams(const cli::Args& args, const segment::SeedSet&
   auto base = args.number("base", seeds.grow.base.value_or(double(p.baseCost)));
   if (!base) return tl::unexpected(base.error());
   p.baseCost = float(*base);
+  auto smoothing = args.number("smoothing", seeds.grow.smoothing.value_or(double(p.smoothingVoxels)));
+  if (!smoothing) return tl::unexpected(smoothing.error());
+  p.smoothingVoxels = float(*smoothing);
   std::array<double, 2> window{dataset.intensity.valueOf(dataset.intensity.window[0]),
                                dataset.intensity.valueOf(dataset.intensity.window[1])};
   if (seeds.grow.window) window = *seeds.grow.window;
@@ -148,7 +153,7 @@ double dice(const LabelMap& a, const LabelMap& b, std::uint16_t label, std::size
 
 int runSegment(const Argv& argv) {
   auto args = cli::Args::parse(
-      argv, withDatasetOptions({"seeds", "out", "names", "method", "backend", "weight", "window", "base", "range"}),
+      argv, withDatasetOptions({"seeds", "out", "names", "method", "backend", "weight", "window", "base", "smoothing", "range"}),
       {"compare", "save", "json"});
   if (!args) return reportError("segment: " + args.error().message, 2);
   if (args->has("help")) {

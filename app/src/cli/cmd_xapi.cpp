@@ -53,7 +53,7 @@ Result<lessons::LearnerRecords> recordsOf(LearningSession& session, const lesson
   auto reviews = session.progress().reviewResponses(user.id);
   if (!reviews) return tl::unexpected(reviews.error());
   r.reviews = std::move(*reviews);
-  db::SqliteExamRepository exams(session.database());
+  db::SqlExamRepository exams(session.database());
   auto examAttempts = exams.examAttempts(user.id);
   if (!examAttempts) return tl::unexpected(examAttempts.error());
   for (const lessons::ExamAttempt& a : *examAttempts) {

@@ -120,7 +120,7 @@ class ExamController {
   EventSink events_;
   ShowItem show_;
   RenderStateSource renderState_;
-  db::SqliteExamRepository repository_;
+  db::SqlExamRepository repository_;
   std::vector<ExamRow> rows_;
   std::string rowsKey_;  // user, course and finished lessons the rows were made for
   std::vector<Structure> structures_;  // of the exam's dataset (names for the results)

@@ -4,6 +4,19 @@
 
 namespace at::app {
 
+ScriptInterpreter::Feature ScriptInterpreter::analyticsActions() {
+  using S = ScriptInterpreter;
+  return {"analytics",
+          "the Class analytics window",
+          {
+              {"analytics",
+               {{"course?", "the course whose class to show (needed unless close)"}, {"group?", "one group of the class"},
+                {"tab?", "structures, missed, students or lessons"}, {"close?", "true: close the window"}},
+               "Opens the Class analytics window on the course's class, read from the database (or closes it).",
+               &S::analytics},
+          }};
+}
+
 // {"do": "analytics", "course": ID, "group": G, "tab": T}: opens the Class analytics window on the
 // class of the course (of one group when given), read from the database [analytics], on tab T
 // (structures, missed, students or lessons; default: as it was); {"do": "analytics", "close":

@@ -15,6 +15,32 @@ tl::unexpected<Error> courseError(const json& action, const Error& e) {
 
 }  // namespace
 
+ScriptInterpreter::Feature ScriptInterpreter::courseActions() {
+  using S = ScriptInterpreter;
+  const ScriptArgument path{"path", "the package file"};
+  return {"courses",
+          "the Course editor window and the Dataset menu",
+          {
+              {"course_new", {{"id", "the course id"}, {"title?", "its title"}}, "A new course on the dataset on screen.",
+               &S::courseNew},
+              {"course_open", {{"course", "a stored course id"}}, "Opens a stored course to edit.", &S::courseOpen},
+              {"course_lesson", {{"title?", "add a lesson so named"}, {"index?", "choose this lesson"}, {"prerequisites?", "[lesson ids] of the chosen lesson"}},
+               "Adds or chooses a lesson, or sets its prerequisites.", &S::courseLesson},
+              {"course_show", {{"title", "the step's title"}, {"text", "its text"}}, "Adds a show step of what the view shows.",
+               &S::courseShow},
+              {"course_question", {{"question", "a course-file question (its id optional)"}, {"scene?", "true: asked on what the view shows"}},
+               "Adds a question step (a locate question needs scene).", &S::courseQuestion},
+              {"course_step", {{"op", "move, duplicate, delete or preview"}, {"index", "the step"}, {"to?", "where to move it"}},
+               "Edits a step of the chosen lesson.", &S::courseStep},
+              {"course_save", {}, "Saves the course.", &S::courseSave},
+              {"course_export", {path, {"reference_volume?", "include the volume (default false)"}, {"note?", "a note"}},
+               "Exports the course as a package.", &S::courseSave},
+              {"course_open_package", {path, {"volume?", "the volume it was made on"}}, "Opens a course package.",
+               &S::courseSave},
+              {"open_dataset", {{"name", "a dataset"}}, "Switches the dataset, as the Dataset menu does.", &S::openDataset},
+          }};
+}
+
 // {"do": "course_new", "id": "ear_tour", "title": "…"}: a course on the dataset on screen.
 ScriptInterpreter::Outcome ScriptInterpreter::courseNew(Context& c) {
   CourseEditor& e = c.model.courseEditor();

@@ -7,6 +7,30 @@ namespace at::app {
 
 using json = nlohmann::json;
 
+ScriptInterpreter::Feature ScriptInterpreter::examActions() {
+  using S = ScriptInterpreter;
+  return {"exams",
+          "the Exams panel: exams of the course, their items and results",
+          {
+              {"exams", {}, "Reports the course's exams as listed: exams [{id, locked, missing, items, time_limit_s, latest}].",
+               &S::examList},
+              {"exam", {{"exam", "an exam id"}}, "Starts the exam as the Start button does; done once its items are drawn.",
+               &S::exam},
+              {"exam_item", {{"position", "the item's position"}}, "Goes to that item.", &S::examItem},
+              {"exam_answer", {{"value", "a choice's index, id or name; a typed name; a list (order)"}},
+               "Answers the item on screen (a locate item: click, click_structure or slice_click).", &S::examAnswer},
+              {"slice_click", {{"x", "pixel of the slice image"}, {"y", "pixel of the slice image"}},
+               "Clicks the exam's slice image there (waits for the answer's distance field).", &S::sliceClick},
+              {"slice_click_structure", {{"structure", "a structure id"}},
+               "Clicks the structure's pixel nearest its in-slice centre; reports slice_click_structure {on_slice}.",
+               &S::sliceClickStructure},
+              {"exam_finish", {}, "Hands the exam in.", &S::examFinish},
+              {"exam_leave", {}, "Leaves the exam.", &S::examLeave},
+              {"exam_review_item", {{"index", "the row of the results"}, {"slice?", "true: its slice button (default false)"}},
+               "Shows a row of the exam's results as its show (or slice) button does.", &S::examReviewItem},
+          }};
+}
+
 // Reports the exams of the lesson panel's course as the panel lists them [exams].
 ScriptInterpreter::Outcome ScriptInterpreter::examList(Context& c) {
   ExamController& x = c.model.exams();

@@ -12,6 +12,56 @@ namespace at::app {
 
 using nlohmann::json;
 
+ScriptInterpreter::Feature ScriptInterpreter::segmentActions() {
+  using S = ScriptInterpreter;
+  const ScriptArgument voxel{"voxel", "[i, j, k]"};
+  const ScriptArgument brush{"brush_mm?", "the brush's diameter"};
+  return {"segment",
+          "the segment editor and the Slices window",
+          {
+              {"segment_open", {{"open?", "true (default) opens, false closes"}},
+               "Shows the Segment window on the dataset on screen, with the Slices window.", &S::segmentOpen},
+              {"segment_label", {{"name", "a label name (added when new; background is label 0)"}},
+               "Paints that label next; reports segment_label {name, label}.", &S::segmentLabel},
+              {"segment_slice", {{"axis", "x, y, z or 0, 1, 2"}, {"index", "the slice"}}, "Shows that slice.", &S::segmentSlice},
+              {"segment_seed", {voxel, brush}, "Seeds of the current label in the brush around the voxel.", &S::segmentSeed},
+              {"segment_grow", {{"wait?", "true (default): done once the growth is applied"}},
+               "Grows the labels from their seeds; reports segment_grown.", &S::segmentGrow},
+              {"segment_undo", {}, "Undoes the last edit (Ctrl+Z).", &S::segmentUndo},
+              {"segment_growth",
+               {{"bone_only?", "true: limit growth to the data's bone range (the \"bone\" button)"},
+                {"range?", "[low, high]: limit growth to that value range"},
+                {"limit?", "turns the range limit on or off"},
+                {"base_per_voxel?", "the step cost's base"},
+                {"window?", "[low, high]: the intensity window growth works in"},
+                {"smoothing?", "edge-preserving smoothing, in voxels"},
+                {"defaults?", "true: the data's default settings first"},
+                {"wait?", "true (default): done once a growth on screen is applied again"}},
+               "Sets the Segment window's growth settings; keys left out stay.", &S::segmentGrowth},
+              {"segment_system", {{"name", "a label name"}, {"system", "its system (browsing group)"}},
+               "Sets a structure's system; stored with segment_save.", &S::segmentSystem},
+              {"segment_redo", {}, "Redoes it (Ctrl+Shift+Z).", &S::segmentRedo},
+              {"segment_review", {{"name", "a label name"}, {"state", "not_started, in_progress, completed or flagged"}},
+               "Sets a structure's review state.", &S::segmentReview},
+              {"segment_tool", {{"tool", "seeds, threshold, paint or erase"}, brush},
+               "Chooses what a click does (paint and erase: also in the 3-D view).", &S::segmentTool},
+              {"segment_clear_seeds", {}, "Clears the seeds.", &S::segmentClearSeeds},
+              {"segment_save", {{"out?", "export to .nii, .nii.gz or .seg.nrrd instead"}, {"names?", "the names file to write"}},
+               "Stores the labels into the dataset store (an imported dataset), or exports them.", &S::segmentSave},
+              {"segment_threshold",
+               {voxel, {"low?", "default: the dataset's window"}, {"high?", "default: the dataset's window"},
+                {"min_diameter_mm?", "default 0"}},
+               "The connected region of values in range under the voxel takes the current label.", &S::segmentThreshold},
+              {"segment_margin", {{"mm", "grow by (negative: shrink)"}}, "Grows or shrinks the current structure.",
+               &S::segmentMargin},
+              {"segment_hollow", {{"mm", "the wall's thickness"}}, "Hollows the current structure.", &S::segmentHollow},
+              {"slices_open",
+               {{"open?", "true (default) or false"}, {"crosshair?", "[i, j, k]: through that voxel"},
+                {"label_alpha?", "the labels' opacity"}},
+               "Shows the Slices window.", &S::slicesOpen},
+          }};
+}
+
 // {"do": "segment_open"}: shows the Segment window (the editor of the dataset on screen) with the
 // Slices window, as the explore panel's Segment... button does ({"open": false} closes the editor).
 ScriptInterpreter::Outcome ScriptInterpreter::segmentOpen(Context& c) {
@@ -105,6 +155,60 @@ ScriptInterpreter::Outcome ScriptInterpreter::segmentGrow(Context& c) {
   }
   if (s.growing()) return Progress::Running;
   if (s.growError()) return tl::unexpected(*s.growError());
+  return Progress::Done;
+}
+
+// {"do": "segment_growth", "bone_only": true, "range": [lo, hi], "limit": false, "base_per_voxel": b,
+// "window": [lo, hi], "smoothing": s, "defaults": true, "wait": true}: the Segment window's growth
+// settings, each key as its widget sets it ("bone_only" as the "bone" button: the limit on, the
+// data's bone range; "defaults" as "Data defaults", first); keys left out stay. A growth on screen
+// grows again with them (the live preview); with "wait" the script goes on once it is applied.
+ScriptInterpreter::Outcome ScriptInterpreter::segmentGrowth(Context& c) {
+  SegmentController& s = c.model.segmenter();
+  if (c.first) {
+    const json& a = c.action;
+    for (const auto& [key, value] : a.items()) {
+      (void)value;
+      static const char* known[] = {"do", "bone_only", "range", "limit", "base_per_voxel", "window", "smoothing", "defaults", "wait"};
+      if (std::none_of(std::begin(known), std::end(known), [&](const char* k) { return key == k; }))
+        return fail("ui script: segment_growth: unknown key \"" + key + "\"");
+    }
+    if (a.value("defaults", false)) s.resetGrowthSettings();
+    SegmentController::GrowthSettings settings = s.growthSettings();
+    const auto pair = [&](const char* key) -> Result<std::array<double, 2>> {
+      const auto v = a.at(key).get<std::vector<double>>();
+      if (v.size() != 2) return fail(std::string("ui script: segment_growth: \"") + key + "\" must be [low, high]");
+      return std::array<double, 2>{v[0], v[1]};
+    };
+    if (a.value("bone_only", false)) settings.limitRange = true, settings.range = s.growthDefaults().boneRangeValues;
+    if (a.contains("range")) {
+      auto range = pair("range");
+      if (!range) return tl::unexpected(range.error());
+      settings.limitRange = true, settings.range = *range;
+    }
+    if (a.contains("limit")) settings.limitRange = a.at("limit").get<bool>();
+    if (a.contains("window")) {
+      auto window = pair("window");
+      if (!window) return tl::unexpected(window.error());
+      settings.window = *window;
+    }
+    if (a.contains("base_per_voxel")) settings.basePerVoxel = a.at("base_per_voxel").get<double>();
+    if (a.contains("smoothing")) settings.smoothingVoxels = a.at("smoothing").get<double>();
+    if (auto st = s.setGrowthSettings(settings); !st) return tl::unexpected(st.error());
+    if (!a.value("wait", true)) return Progress::Done;
+  }
+  if (s.growing()) return Progress::Running;
+  if (s.growError()) return tl::unexpected(*s.growError());
+  return Progress::Done;
+}
+
+// {"do": "segment_system", "name": "mandible", "system": "skull bones"}: a structure's system
+// (browsing group), as the Segment window's "system" field sets it; stored with segment_save.
+ScriptInterpreter::Outcome ScriptInterpreter::segmentSystem(Context& c) {
+  SegmentController& s = c.model.segmenter();
+  auto label = s.labelNamed(c.action.at("name").get<std::string>());
+  if (!label) return tl::unexpected(label.error());
+  if (auto st = s.setSystem(*label, c.action.at("system").get<std::string>()); !st) return tl::unexpected(st.error());
   return Progress::Done;
 }
 

@@ -1,4 +1,4 @@
-// Helpers shared by the UI script's panel actions (script_actions_*.cpp).
+// Helpers shared by the UI script's actions (script_actions_*.cpp).
 #pragma once
 
 #include <string>
@@ -19,5 +19,8 @@ Result<quiz::Answer> scriptAnswer(quiz::QuestionKind kind, const std::vector<std
 
 // The action's error, prefixed as the script's log shows it.
 tl::unexpected<Error> actionError(const nlohmann::json& action, const Error& e);
+
+// A timeout: something the script waited for never came (the script ends with status 1, not 2).
+tl::unexpected<Error> timedOut(const std::string& what);
 
 }  // namespace at::app

@@ -2,29 +2,13 @@
 // "cochlea"}, …]} replayed one action after another, each through the same DesktopModel commands
 // the widgets use; the events the commands emit are the script's output (one JSON line each).
 //
-// Actions (arguments in the README and `anatomy-tutor desktop --help`):
-//   view:     select, t, mode, view, hover, hover_structure, click, click_structure, orbit, zoom, clip,
-//             expert, cancel_field (hover and click at {x, y} or at {view_at: [fx, fy]} of the view)
-//   waiting:  wait {ms}, wait_field {timeout_ms} (the view settled: final quality, the field shown)
-//   output:   screenshot {path}, widgets, record {on}, report {out}, hover_sweep {dwell_ms, out}, layout
-//   lessons:  lesson_user, lessons, lesson, lesson_next, lesson_back, show_me {slice},
-//             lesson_review_item {index, slice}, answer, review, lesson_close
-//   exams:    exams, exam, exam_item, exam_answer, slice_click, slice_click_structure, exam_finish,
-//             exam_leave, exam_review_item {index, slice}
-//   analytics: analytics {course, group, tab} (the Class analytics window on that class), analytics {close}
-//   expert:   tf_add_point, tf_move_point, tf_delete_point, tf_colour, preset_set, preset_save
-//   studies:  study_start, study_toggle, study_rate, study_comment, study_next, study_close,
-//             coordinator_open, coordinator_export, coordinator_summary
-//   import:   import, cancel_import, open_imported
-//   segment:  segment_open, segment_label, segment_slice, segment_seed, segment_grow, segment_undo,
-//             segment_redo, segment_review, segment_tool, segment_clear_seeds, segment_save,
-//             segment_threshold, segment_margin, segment_hollow
-//   slices:   slices_open
-//   courses:  course_new, course_open, course_lesson, course_show, course_question, course_step,
-//             course_save, course_export, course_open_package, open_dataset
-// An action that waits (a lesson being prepared, an import, an export, a locate answer's distance
-// field, a new study screen until a window has shown it) is asked again next frame. A malformed or failing action ends the script with status 2,
-// something waited for that never came (a timeout) with status 1.
+// The actions are registered by feature, each feature's table beside its handlers
+// (script_actions_<feature>.cpp): name, arguments, one line of help and handler. That table is the
+// one source of `anatomy-tutor desktop --help-actions` (and `--help ACTION`) and of
+// docs/guide/ui-script-actions.md. An action that waits (a lesson being prepared, an import, an
+// export, a locate answer's distance field, a new study screen until a window has shown it) is
+// asked again next frame. A malformed or failing action ends the script with status 2, something
+// waited for that never came (a timeout) with status 1.
 #pragma once
 
 #include <deque>
@@ -39,6 +23,25 @@
 #include "desktop_model.h"
 
 namespace at::app {
+
+// One argument of a UI-script action: its JSON key ("?" at its end: it may be left out) and what it
+// holds (its default when optional).
+struct ScriptArgument {
+  std::string key;
+  std::string what;
+  bool optional() const { return !key.empty() && key.back() == '?'; }
+  std::string name() const { return optional() ? key.substr(0, key.size() - 1) : key; }
+};
+
+// A UI-script action as documented: the feature (desktop area) that registers it, its name, its
+// arguments and what it does.
+struct ScriptActionDoc {
+  std::string feature;
+  std::string featureSummary;
+  std::string name;
+  std::vector<ScriptArgument> arguments;
+  std::string help;
+};
 
 // What the interpreter needs from the window it runs in.
 class ScriptHost {
@@ -74,8 +77,15 @@ class ScriptInterpreter {
   // The screenshot failed to be written: the script ends with status 1.
   void screenshotFailed(const std::string& why, DesktopModel& model);
 
-  // Every action's name, for --help and tests.
+  // Every action the interpreter dispatches, by name.
   static std::vector<std::string> actionNames();
+  // Every registered action, feature by feature in the registry's order (script_action_docs.cpp).
+  static std::vector<ScriptActionDoc> actionDocs();
+  // The actions as `desktop --help-actions` prints them (plain text), as Markdown tables
+  // (docs/guide/ui-script-actions.md is this text), and one action's entry (nullopt: no such action).
+  static std::string actionsText();
+  static std::string actionsMarkdown();
+  static std::optional<std::string> actionText(const std::string& name);
 
  private:
   enum class Progress { Done, Running };
@@ -88,32 +98,56 @@ class ScriptInterpreter {
     double elapsedMs;    // since its first call
   };
   using Handler = Outcome (ScriptInterpreter::*)(Context&);
+  struct Action {
+    const char* name;
+    std::vector<ScriptArgument> arguments;
+    const char* help;
+    Handler handler;
+  };
+  struct Feature {
+    const char* name;
+    const char* summary;
+    std::vector<Action> actions;
+  };
+  // Each feature's actions, defined in its script_actions_<feature>.cpp beside the handlers.
+  static Feature viewActions();
+  static Feature outputActions();
+  static Feature lessonActions();
+  static Feature examActions();
+  static Feature analyticsActions();
+  static Feature expertActions();
+  static Feature studyActions();
+  static Feature importActions();
+  static Feature segmentActions();
+  static Feature courseActions();
+  // The features in the order the help lists them; the dispatch table built from them.
+  static const std::vector<Feature>& features();
   static const std::map<std::string, Handler>& handlers();
   void finish(int status);
 
-  // The view (script_interpreter.cpp)
+  // The view (script_actions_view.cpp)
   Outcome select(Context&);
   Outcome setT(Context&);
   Outcome mode(Context&);
   Outcome view(Context&);
   Outcome hover(Context&);
-  Outcome layout(Context&);
   Outcome click(Context&);
   Outcome hoverStructure(Context&);
   Outcome clickStructure(Context&);
   Outcome orbit(Context&);
   Outcome zoom(Context&);
   Outcome clip(Context&);
-  Outcome expert(Context&);
   Outcome cancelField(Context&);
+  // Waiting and output (script_actions_output.cpp)
   Outcome wait(Context&);
   Outcome waitField(Context&);
   Outcome screenshot(Context&);
   Outcome widgets(Context&);  // [widgets] the window's size and ScriptHost::widgetRects
+  Outcome layout(Context&);
   Outcome record(Context&);
   Outcome report(Context&);
   Outcome hoverSweep(Context&);
-  // The panels (script_actions_panels.cpp)
+  // Lessons (script_actions_lessons.cpp)
   Outcome lessonUser(Context&);
   Outcome lessonList(Context&);
   Outcome lesson(Context&);
@@ -132,10 +166,14 @@ class ScriptInterpreter {
   Outcome examFinish(Context&);
   Outcome examReviewItem(Context&);  // {"index": i, "slice": false}
   Outcome examLeave(Context&);
-  Outcome analytics(Context&);  // script_actions_analytics.cpp
+  // The Class analytics window (script_actions_analytics.cpp)
+  Outcome analytics(Context&);
+  // The expert panel (script_actions_expert.cpp)
+  Outcome expert(Context&);
   Outcome tfEdit(Context&);
   Outcome presetSet(Context&);
   Outcome presetSave(Context&);
+  // Studies (script_actions_studies.cpp)
   Outcome studyStart(Context&);
   Outcome study(Context&);
   Outcome studyRate(Context&);  // waits for the side on screen at full quality
@@ -143,6 +181,7 @@ class ScriptInterpreter {
   Outcome coordinatorOpen(Context&);
   Outcome coordinatorExport(Context&);
   Outcome coordinatorSummary(Context&);
+  // Imports (script_actions_import.cpp)
   Outcome importDataset(Context&);
   Outcome cancelImport(Context&);
   Outcome openImported(Context&);
@@ -152,6 +191,8 @@ class ScriptInterpreter {
   Outcome segmentSlice(Context&);
   Outcome segmentSeed(Context&);
   Outcome segmentGrow(Context&);
+  Outcome segmentGrowth(Context&);
+  Outcome segmentSystem(Context&);
   Outcome segmentUndo(Context&);
   Outcome segmentRedo(Context&);
   Outcome segmentReview(Context&);

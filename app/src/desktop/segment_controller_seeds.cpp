@@ -90,6 +90,7 @@ Status SegmentController::saveSeeds(const std::string& path) const {
   set.grow.window = settings_.window;
   set.grow.base = double(growthParams().baseCost);
   if (settings_.limitRange) set.grow.range = settings_.range;
+  set.grow.smoothing = settings_.smoothingVoxels;
   std::FILE* file = std::fopen(path.c_str(), "wb");
   if (!file) return fail(ErrorKind::Io, "save seeds: cannot write " + path);
   const std::string text = segment::seedsToJson(set);
@@ -126,6 +127,7 @@ Result<std::size_t> SegmentController::loadSeeds(const std::string& path) {
   if (set->grow.base) settings.basePerVoxel = segment::basePerVoxelOf(*set->grow.base, defaults_.voxelMm);
   settings.limitRange = set->grow.range.has_value();
   if (set->grow.range) settings.range = *set->grow.range;
+  if (set->grow.smoothing) settings.smoothingVoxels = *set->grow.smoothing;
   if (auto ok = setGrowthSettings(settings); !ok) return tl::unexpected(withContext(path, ok.error()));
   ++revision_;
   status_ = "seeds loaded from " + path + ": " + std::to_string(seeds_.size()) + " voxels";

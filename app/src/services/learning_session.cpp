@@ -14,7 +14,7 @@
 #include "data_paths.h"
 #include "dataset_resolver.h"
 #include "db/course_store.h"
-#include "db/sqlite_repositories.h"
+#include "db/sql_repositories.h"
 #include "volume/dataset_source.h"
 #include "volume/known_scans.h"
 #include "volume/phantom.h"
@@ -105,9 +105,9 @@ db::BuiltinStructures builtinStructures() {
 std::string courseDirectory() { return dataSubdirectory("courses").string(); }
 
 struct LearningSession::Repositories {
-  db::SqliteCurriculumRepository curriculum;
-  db::SqliteProgressRepository progress;
-  db::SqliteUserRepository users;
+  db::SqlCurriculumRepository curriculum;
+  db::SqlProgressRepository progress;
+  db::SqlUserRepository users;
   explicit Repositories(db::Database& database)
       : curriculum(database, builtinStructures()), progress(database), users(database) {}
 };

@@ -7,7 +7,7 @@
 #include <string>
 
 #include "db/connection.h"
-#include "db/sqlite_repositories.h"
+#include "db/sql_repositories.h"
 #include "lessons/analytics.h"
 
 namespace at::db {

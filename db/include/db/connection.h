@@ -3,7 +3,7 @@
 //
 // Outside db/ a database is only an opaque `Database&` handed to the stores (dataset_store.h,
 // preset_store.h, study_store.h, course_store.h, exam_store.h, analytics_store.h) and the
-// repositories (sqlite_repositories.h). The SQL wrapper — statements, transactions, migrations,
+// repositories (sql_repositories.h). The SQL wrapper — statements, transactions, migrations,
 // the engines — is private to db/ (db/src/database.h); no other module can run SQL.
 //
 // Threads: a process keeps one connection (the app's learning session) and may use it from

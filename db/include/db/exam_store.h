@@ -1,5 +1,6 @@
-// Exam attempts over SQLite (lessons/exam.h's ExamRepository). Borrows a Database that must
-// outlive it; every write is one transaction committed before the call returns.
+// Exam attempts (lessons/exam.h's ExamRepository) over a Database of either backend (SQLite or
+// PostgreSQL). Borrows a Database that must outlive it; every write is one transaction committed
+// before the call returns.
 #pragma once
 
 #include "db/connection.h"
@@ -7,9 +8,9 @@
 
 namespace at::db {
 
-class SqliteExamRepository final : public lessons::ExamRepository {
+class SqlExamRepository final : public lessons::ExamRepository {
  public:
-  explicit SqliteExamRepository(Database& db) : db_(db) {}
+  explicit SqlExamRepository(Database& db) : db_(db) {}
   Result<std::optional<lessons::ExamAttempt>> openExamAttempt(std::int64_t userId, const std::string& examId) override;
   Result<lessons::ExamAttempt> startExamAttempt(const lessons::ExamAttempt& attempt,
                                                 std::vector<lessons::ExamItem>& items) override;

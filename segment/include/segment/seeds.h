@@ -9,8 +9,8 @@
 //                  "range": [-50, 250], "min_diameter_mm": 3} ],        (threshold method only)
 //     "strokes": [ {"label": "liver", "radius_mm": 2, "points": [[x, y, z], [x, y, z], ...]},
 //                  {"label": 0, "points": [[x, y, z]]} ],     a label by name or value; one point = a dot
-//     "grow": {"weight": "gradient", "window": [-160, 240], "base": 0.05, "range": [300, 3000]} }
-//                                                                                       optional
+//     "grow": {"weight": "gradient", "window": [-160, 240], "base": 0.05, "range": [300, 3000],
+//              "smoothing": 1} }                                                         optional
 //
 // Missing fields take defaults: space LPS, radius_mm 0 (the voxels nearest to the line), colour
 // from the label's palette, no range; "grow" fields default as the segment command documents.
@@ -51,6 +51,9 @@ struct GrowOptions {
   std::optional<std::array<double, 2>> window;  // values mapped to 0 … 1
   std::optional<double> base;
   std::optional<std::array<double, 2>> range;   // grow only into values in this range ("bone only")
+  // Edge-preserving smoothing of the values before growth, sigma in voxels (0 … 8; 0: none); the
+  // edge sigma stays the data-derived one (segment/growth_settings.h).
+  std::optional<double> smoothing;
 };
 
 struct SeedSet {

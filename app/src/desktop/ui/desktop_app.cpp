@@ -278,12 +278,14 @@ constexpr const char* kDesktopHelp =
     "usage: anatomy-tutor [desktop] [--course ID] [--dataset D] [--ui-script FILE.json [--screenshot OUT.png]] [--size WxH]\n"
     "                             [--render-scale S] [--frame-budget MS] [--max-fps N] [--no-prefetch] [--db PATH]\n"
     "                             [--user NAME]\n"
+    "       anatomy-tutor desktop --help-actions [--markdown] | --help ACTION\n"
     "  Opens the desktop app on a course (explore: hover to highlight, click to select).\n"
     "  --course     the course to start on, by id (`anatomy-tutor courses`; e.g. skull, the head CT's\n"
     "               course): its dataset, on its first lesson's first view (default: temporal_bone)\n"
     "  --dataset    phantom, phantom:N, skull, a dataset imported into --db, or a volume file or DICOM\n"
     "               folder (default: the course's dataset)\n"
-    "  --ui-script  replay {\"actions\": [...]}; actions: %s\n"
+    "  --ui-script  replay {\"actions\": [...]}: `desktop --help-actions` lists every action with its\n"
+    "               arguments, by feature; `desktop --help ACTION` describes one\n"
     "  --db         the database: imported datasets, presets saved in the expert panel, studies,\n"
     "               lesson progress (default: the user's)\n"
     "  --user       whose lesson progress to show and record (default: student; the same name as\n"
@@ -306,12 +308,20 @@ constexpr const char* kDesktopHelp =
 
 int runDesktop(const std::vector<std::string>& argv) {
   auto args = cli::Args::parse(argv, {"dataset", "course", "ui-script", "screenshot", "render-scale", "frame-budget", "max-fps"},
-                               {"no-prefetch"});
+                               {"no-prefetch", "help-actions", "markdown"});
   if (!args) return reportError("desktop: " + args.error().message, 2);
+  if (args->has("help-actions")) {
+    std::fputs((args->has("markdown") ? ScriptInterpreter::actionsMarkdown() : ScriptInterpreter::actionsText()).c_str(), stdout);
+    return 0;
+  }
   if (args->has("help")) {
-    std::string actions;
-    for (const std::string& name : ScriptInterpreter::actionNames()) actions += (actions.empty() ? "" : ", ") + name;
-    std::printf(kDesktopHelp, actions.c_str());
+    if (args->positional().empty()) {
+      std::fputs(kDesktopHelp, stdout);
+      return 0;
+    }
+    const auto entry = ScriptInterpreter::actionText(args->positional()[0]);
+    if (!entry) return reportError("desktop: no UI-script action '" + args->positional()[0] + "' (see --help-actions)", 2);
+    std::fputs(entry->c_str(), stdout);
     return 0;
   }
   if (!args->positional().empty()) return reportError("desktop: unexpected argument '" + args->positional()[0] + "' (see --help)", 2);

@@ -1,6 +1,7 @@
-// The storage interfaces of lessons/ (lessons/repositories.h) implemented over SQLite. Each
-// repository borrows a Database that must outlive it; every write is one transaction committed
-// before the call returns, retried when another process holds the write lock.
+// The storage interfaces of lessons/ (lessons/repositories.h) implemented in SQL over a Database,
+// whichever backend it opened (SQLite file or PostgreSQL class server). Each repository borrows a
+// Database that must outlive it; every write is one transaction committed before the call returns,
+// retried when another process holds the write lock.
 #pragma once
 
 #include <functional>
@@ -18,9 +19,9 @@ namespace at::db {
 // it does not know. The app passes one built on volume/'s phantom; db/ does not build volumes.
 using BuiltinStructures = std::function<std::optional<std::vector<Structure>>(const std::string& datasetId)>;
 
-class SqliteCurriculumRepository final : public lessons::CurriculumRepository {
+class SqlCurriculumRepository final : public lessons::CurriculumRepository {
  public:
-  explicit SqliteCurriculumRepository(Database& db, BuiltinStructures builtin = {});
+  explicit SqlCurriculumRepository(Database& db, BuiltinStructures builtin = {});
   Result<std::vector<lessons::Course>> courses() override;
   Result<lessons::Course> course(const std::string& courseId) override;
   Result<lessons::Lesson> lesson(const std::string& lessonId) override;
@@ -38,9 +39,9 @@ class SqliteCurriculumRepository final : public lessons::CurriculumRepository {
   std::vector<std::string> skippedNew_;
 };
 
-class SqliteUserRepository final : public lessons::UserRepository {
+class SqlUserRepository final : public lessons::UserRepository {
  public:
-  explicit SqliteUserRepository(Database& db) : db_(db) {}
+  explicit SqlUserRepository(Database& db) : db_(db) {}
   Result<std::optional<lessons::User>> findUser(const std::string& name) override;
   Result<lessons::User> user(std::int64_t userId) override;
   Result<lessons::User> createUser(const std::string& name, lessons::Role role, const std::string& group) override;
@@ -50,9 +51,9 @@ class SqliteUserRepository final : public lessons::UserRepository {
   Database& db_;
 };
 
-class SqliteProgressRepository final : public lessons::ProgressRepository {
+class SqlProgressRepository final : public lessons::ProgressRepository {
  public:
-  explicit SqliteProgressRepository(Database& db) : db_(db) {}
+  explicit SqlProgressRepository(Database& db) : db_(db) {}
   Result<std::optional<lessons::Attempt>> openAttempt(std::int64_t userId, const std::string& lessonId) override;
   Result<lessons::Attempt> startAttempt(std::int64_t userId, const std::string& lessonId, lessons::LessonMode mode,
                                         lessons::UnixSeconds startedAt) override;

@@ -1,4 +1,4 @@
-#include "db/sqlite_repositories.h"
+#include "db/sql_repositories.h"
 
 #include <nlohmann/json.hpp>
 
@@ -91,10 +91,10 @@ ClassEvent answerEvent(const GradedAnswer& g, const LearnerUpdate& u, AnswerSour
 // ---------------------------------------------------------------------------------------------
 // Curriculum
 
-SqliteCurriculumRepository::SqliteCurriculumRepository(Database& db, BuiltinStructures builtin)
+SqlCurriculumRepository::SqlCurriculumRepository(Database& db, BuiltinStructures builtin)
     : db_(db), builtin_(std::move(builtin)) {}
 
-Result<std::vector<Course>> SqliteCurriculumRepository::courses() {
+Result<std::vector<Course>> SqlCurriculumRepository::courses() {
   auto s = db_.prepare("SELECT id FROM courses ORDER BY title, id");
   if (!s) return tl::unexpected(s.error());
   std::vector<std::string> ids;
@@ -113,17 +113,17 @@ Result<std::vector<Course>> SqliteCurriculumRepository::courses() {
   return out;
 }
 
-void SqliteCurriculumRepository::skip(const std::string& what) {
+void SqlCurriculumRepository::skip(const std::string& what) {
   if (skippedEver_.insert(what).second) skippedNew_.push_back(what);
 }
 
-std::vector<std::string> SqliteCurriculumRepository::takeSkipped() {
+std::vector<std::string> SqlCurriculumRepository::takeSkipped() {
   std::vector<std::string> out;
   out.swap(skippedNew_);
   return out;
 }
 
-Result<Course> SqliteCurriculumRepository::course(const std::string& courseId) {
+Result<Course> SqlCurriculumRepository::course(const std::string& courseId) {
   auto s = db_.prepare("SELECT id, title, summary, dataset, version, synonyms FROM courses WHERE id = ?1");
   if (!s) return tl::unexpected(s.error());
   s->bind(1, courseId);
@@ -175,7 +175,7 @@ Result<Course> SqliteCurriculumRepository::course(const std::string& courseId) {
   return c;
 }
 
-Result<Lesson> SqliteCurriculumRepository::lesson(const std::string& lessonId) {
+Result<Lesson> SqlCurriculumRepository::lesson(const std::string& lessonId) {
   auto s = db_.prepare("SELECT id, course_id, title, summary FROM lessons WHERE id = ?1");
   if (!s) return tl::unexpected(s.error());
   s->bind(1, lessonId);
@@ -250,7 +250,7 @@ Result<Lesson> SqliteCurriculumRepository::lesson(const std::string& lessonId) {
   return l;
 }
 
-Result<quiz::Question> SqliteCurriculumRepository::question(const std::string& questionId) {
+Result<quiz::Question> SqlCurriculumRepository::question(const std::string& questionId) {
   auto s = db_.prepare("SELECT json FROM questions WHERE id = ?1");
   if (!s) return tl::unexpected(s.error());
   s->bind(1, questionId);
@@ -260,7 +260,7 @@ Result<quiz::Question> SqliteCurriculumRepository::question(const std::string& q
   return parseQuestionJson(s->text(0), "question '" + questionId + "'");
 }
 
-Result<std::vector<Structure>> SqliteCurriculumRepository::structures(const std::string& datasetId) {
+Result<std::vector<Structure>> SqlCurriculumRepository::structures(const std::string& datasetId) {
   if (builtin_) {
     if (auto found = builtin_(datasetId)) return std::move(*found);
   }
@@ -290,7 +290,7 @@ constexpr const char* kSelectUser = "SELECT id, name, role, group_name FROM user
 
 }  // namespace
 
-Result<std::optional<User>> SqliteUserRepository::findUser(const std::string& name) {
+Result<std::optional<User>> SqlUserRepository::findUser(const std::string& name) {
   auto s = db_.prepare(std::string(kSelectUser) + " WHERE name = ?1");
   if (!s) return tl::unexpected(s.error());
   s->bind(1, name);
@@ -302,7 +302,7 @@ Result<std::optional<User>> SqliteUserRepository::findUser(const std::string& na
   return std::optional<User>(std::move(*u));
 }
 
-Result<User> SqliteUserRepository::user(std::int64_t userId) {
+Result<User> SqlUserRepository::user(std::int64_t userId) {
   auto s = db_.prepare(std::string(kSelectUser) + " WHERE id = ?1");
   if (!s) return tl::unexpected(s.error());
   s->bind(1, userId);
@@ -312,7 +312,7 @@ Result<User> SqliteUserRepository::user(std::int64_t userId) {
   return readUser(*s);
 }
 
-Result<User> SqliteUserRepository::createUser(const std::string& name, Role role, const std::string& group) {
+Result<User> SqlUserRepository::createUser(const std::string& name, Role role, const std::string& group) {
   if (name.empty()) return fail("a user name must not be empty");
   User u{0, name, role, group};
   auto status = db_.writeTransaction([&](Database& d) -> Status {
@@ -334,7 +334,7 @@ Result<User> SqliteUserRepository::createUser(const std::string& name, Role role
   return u;
 }
 
-Result<std::vector<User>> SqliteUserRepository::users() {
+Result<std::vector<User>> SqlUserRepository::users() {
   auto s = db_.prepare(std::string(kSelectUser) + " ORDER BY name");
   if (!s) return tl::unexpected(s.error());
   std::vector<User> out;
@@ -394,7 +394,7 @@ Result<StructureProgress> readProgress(const Statement& s) {
 
 }  // namespace
 
-Result<std::optional<Attempt>> SqliteProgressRepository::openAttempt(std::int64_t userId, const std::string& lessonId) {
+Result<std::optional<Attempt>> SqlProgressRepository::openAttempt(std::int64_t userId, const std::string& lessonId) {
   auto s = db_.prepare(std::string(kSelectAttempt) +
                        " WHERE user_id = ?1 AND lesson_id = ?2 AND finished_at IS NULL ORDER BY id DESC LIMIT 1");
   if (!s) return tl::unexpected(s.error());
@@ -407,7 +407,7 @@ Result<std::optional<Attempt>> SqliteProgressRepository::openAttempt(std::int64_
   return std::optional<Attempt>(std::move(*a));
 }
 
-Result<Attempt> SqliteProgressRepository::startAttempt(std::int64_t userId, const std::string& lessonId,
+Result<Attempt> SqlProgressRepository::startAttempt(std::int64_t userId, const std::string& lessonId,
                                                        LessonMode mode, UnixSeconds startedAt) {
   Attempt a;
   a.userId = userId;
@@ -432,7 +432,7 @@ Result<Attempt> SqliteProgressRepository::startAttempt(std::int64_t userId, cons
   return a;
 }
 
-Status SqliteProgressRepository::finishAttempt(std::int64_t attemptId, UnixSeconds finishedAt, double score) {
+Status SqlProgressRepository::finishAttempt(std::int64_t attemptId, UnixSeconds finishedAt, double score) {
   return db_.writeTransaction([&](Database& d) -> Status {
     auto update = d.prepare("UPDATE attempts SET finished_at = ?2, score = ?3 WHERE id = ?1");
     if (!update) return tl::unexpected(update.error());
@@ -457,7 +457,7 @@ Status SqliteProgressRepository::finishAttempt(std::int64_t attemptId, UnixSecon
   });
 }
 
-Result<bool> SqliteProgressRepository::hasFinished(std::int64_t userId, const std::string& lessonId) {
+Result<bool> SqlProgressRepository::hasFinished(std::int64_t userId, const std::string& lessonId) {
   auto s = db_.prepare(
       "SELECT EXISTS (SELECT 1 FROM attempts WHERE user_id = ?1 AND lesson_id = ?2 AND finished_at IS NOT NULL)");
   if (!s) return tl::unexpected(s.error());
@@ -467,7 +467,7 @@ Result<bool> SqliteProgressRepository::hasFinished(std::int64_t userId, const st
   return *row && s->integer(0) != 0;
 }
 
-Result<std::vector<Response>> SqliteProgressRepository::responses(std::int64_t attemptId) {
+Result<std::vector<Response>> SqlProgressRepository::responses(std::int64_t attemptId) {
   auto s = db_.prepare(std::string("SELECT id, attempt_id, step_index, ") + kGradedAnswerColumns +
                        " FROM responses WHERE attempt_id = ?1 ORDER BY id");
   if (!s) return tl::unexpected(s.error());
@@ -486,7 +486,7 @@ Result<std::vector<Response>> SqliteProgressRepository::responses(std::int64_t a
   return out;
 }
 
-Result<std::int64_t> SqliteProgressRepository::recordAnswer(const AnswerRecord& record) {
+Result<std::int64_t> SqlProgressRepository::recordAnswer(const AnswerRecord& record) {
   const Response& r = record.response;
   const StructureProgress& p = record.update.progress;
   if (p.structureId != r.structureId)
@@ -521,7 +521,7 @@ Result<std::int64_t> SqliteProgressRepository::recordAnswer(const AnswerRecord& 
   return id;
 }
 
-Result<std::int64_t> SqliteProgressRepository::recordReviewAnswer(const ReviewRecord& record) {
+Result<std::int64_t> SqlProgressRepository::recordReviewAnswer(const ReviewRecord& record) {
   const ReviewResponse& r = record.response;
   const StructureProgress& p = record.update.progress;
   if (p.userId != r.userId || p.structureId != r.structureId)
@@ -547,7 +547,7 @@ Result<std::int64_t> SqliteProgressRepository::recordReviewAnswer(const ReviewRe
   return id;
 }
 
-Result<std::vector<ReviewResponse>> SqliteProgressRepository::reviewResponses(std::int64_t userId) {
+Result<std::vector<ReviewResponse>> SqlProgressRepository::reviewResponses(std::int64_t userId) {
   auto s = db_.prepare(std::string("SELECT id, user_id, ") + kGradedAnswerColumns +
                        " FROM review_responses WHERE user_id = ?1 ORDER BY id");
   if (!s) return tl::unexpected(s.error());
@@ -565,7 +565,7 @@ Result<std::vector<ReviewResponse>> SqliteProgressRepository::reviewResponses(st
   return out;
 }
 
-Result<std::vector<ReviewLogEntry>> SqliteProgressRepository::reviewLog(std::int64_t userId) {
+Result<std::vector<ReviewLogEntry>> SqlProgressRepository::reviewLog(std::int64_t userId) {
   auto s = db_.prepare(
       "SELECT id, user_id, structure, question_id, source, reviewed_at, rating, correct, score, latency_ms,"
       " phase_before, elapsed_days, phase_after, stability, difficulty, due_at, rebuilt"
@@ -611,7 +611,7 @@ Result<std::vector<ReviewLogEntry>> SqliteProgressRepository::reviewLog(std::int
   return out;
 }
 
-Result<std::optional<StructureProgress>> SqliteProgressRepository::progress(std::int64_t userId,
+Result<std::optional<StructureProgress>> SqlProgressRepository::progress(std::int64_t userId,
                                                                             const std::string& structureId) {
   auto s = db_.prepare(std::string(kSelectProgress) + " WHERE user_id = ?1 AND structure = ?2");
   if (!s) return tl::unexpected(s.error());
@@ -624,7 +624,7 @@ Result<std::optional<StructureProgress>> SqliteProgressRepository::progress(std:
   return std::optional<StructureProgress>(std::move(*p));
 }
 
-Result<std::vector<StructureProgress>> SqliteProgressRepository::allProgress(std::int64_t userId) {
+Result<std::vector<StructureProgress>> SqlProgressRepository::allProgress(std::int64_t userId) {
   auto s = db_.prepare(std::string(kSelectProgress) + " WHERE user_id = ?1 ORDER BY structure");
   if (!s) return tl::unexpected(s.error());
   s->bind(1, userId);
@@ -639,7 +639,7 @@ Result<std::vector<StructureProgress>> SqliteProgressRepository::allProgress(std
   return out;
 }
 
-Result<std::optional<double>> SqliteProgressRepository::ability(std::int64_t userId) {
+Result<std::optional<double>> SqlProgressRepository::ability(std::int64_t userId) {
   auto s = db_.prepare("SELECT rating FROM user_ability WHERE user_id = ?1");
   if (!s) return tl::unexpected(s.error());
   s->bind(1, userId);
@@ -649,7 +649,7 @@ Result<std::optional<double>> SqliteProgressRepository::ability(std::int64_t use
   return std::optional<double>(s->real(0));
 }
 
-Result<std::optional<double>> SqliteProgressRepository::questionDifficulty(const std::string& questionId) {
+Result<std::optional<double>> SqlProgressRepository::questionDifficulty(const std::string& questionId) {
   auto s = db_.prepare("SELECT difficulty FROM question_stats WHERE question_id = ?1");
   if (!s) return tl::unexpected(s.error());
   s->bind(1, questionId);
@@ -659,7 +659,7 @@ Result<std::optional<double>> SqliteProgressRepository::questionDifficulty(const
   return std::optional<double>(s->real(0));
 }
 
-Result<std::vector<Attempt>> SqliteProgressRepository::attempts(std::int64_t userId) {
+Result<std::vector<Attempt>> SqlProgressRepository::attempts(std::int64_t userId) {
   auto s = db_.prepare(std::string(kSelectAttempt) + " WHERE user_id = ?1 ORDER BY id DESC");
   if (!s) return tl::unexpected(s.error());
   s->bind(1, userId);
