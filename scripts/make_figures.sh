@@ -88,6 +88,8 @@ if "$app" structures skull >/dev/null 2>&1; then
   render_skull skull_fig2_frontal_sinus_wdt_t1.png frontal_sinus --mode wdt --view anterior --t 1
   render_skull skull_fig4_ear_canal_wdt.png external_acoustic_meatus_right --mode wdt --view lateral_right --margin 2.6
   render_skull skull_fig4_ear_canal_unweighted.png external_acoustic_meatus_right --mode unweighted --view lateral_right --margin 2.6
+  render_skull skull_fig4_maxillary_sinus_wdt.png maxillary_sinus_right --mode wdt --view anterior --margin 2.6
+  render_skull skull_fig4_maxillary_sinus_unweighted.png maxillary_sinus_right --mode unweighted --view anterior --margin 2.6
   render_skull skull_fig5_mandible_fuzzy.png mandible --mode fuzzy --view anterior
   render_skull skull_fig5_mandible_bare.png mandible --mode bare --view anterior
   render_skull skull_fig6_zygomatic_arch_outline.png zygomatic_arch_left --mode outline --view lateral_left --margin 2.6
@@ -131,6 +133,8 @@ sheet sheet_skull_fig2.png "Fig. 2 on the skull CT - more context with the slide
   skull_fig2_ear_canal_wdt_t03.png "Right ear canal, t = 0.3: more of the skull as faint context" \
   skull_fig2_frontal_sinus_wdt_t1.png "Frontal sinus, t = 1: all bone in view"
 sheet sheet_skull_fig4.png "Fig. 4 on the skull CT - weighted vs non-weighted distance, same TFs" \
+  skull_fig4_maxillary_sinus_wdt.png "Right maxillary sinus, WDT: reaches through its opening to the nasal cavity and ethmoid cells" \
+  skull_fig4_maxillary_sinus_unweighted.png "Right maxillary sinus, non-weighted: a cloud around it" \
   skull_fig4_ear_canal_wdt.png "Right ear canal, WDT: reaches along the bone connected to it" \
   skull_fig4_ear_canal_unweighted.png "Right ear canal, non-weighted: a ball around it"
 sheet sheet_skull_fig5.png "Fig. 5 on the skull CT - fuzzy boundary vs the hard edge" \

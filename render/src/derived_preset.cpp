@@ -215,26 +215,32 @@ Preset derivedPreset(const IntensityLevels& l, RenderMode mode, const std::strin
       break;
     case RenderMode::Fuzzy:  // Eqs. 4–5: the highlight fading over the bone next to the structure
       p.t = 0.12f;
-      // Full colour within x ≈ 0.2 units, 0.6 at x ≈ 0.9, none beyond x ≈ 2 (n = 0.55): the median
-      // bone in view (x = kContextQuantileX) keeps its own colour, so the gradient stays near the
-      // structure.
-      p.distanceTf = withColour(kOrange, {{0, 0}, {0.55, 0}, {0.8, 0.6f}, {0.95, 1}, {1, 1}});
+      // Full colour within x ≈ 0.3 units (n = 0.93), 0.6 at x ≈ 1.2 (n = 0.73), none beyond x ≈ 2.8
+      // (n = 0.42): the median bone in view (x = kContextQuantileX = 2.6) keeps about its own
+      // colour, so the gradient stays near the structure.
+      p.distanceTf = withColour(kOrange, {{0, 0}, {0.42, 0}, {0.73, 0.6f}, {0.93, 1}, {1, 1}});
       break;
     case RenderMode::Outline:  // the bone surface everywhere, a thin band at one weighted distance
-      p.t = 1;
+      // The rest of the bone as translucent context (t · 0.9 per voxel of surface), so the band
+      // reads on it and the structure shows through; t = 1 gives the opaque skull.
+      p.t = 0.35f;
       p.contextInFront = 1;  // the band is on the surface in front
       p.dataTf = boneTf(l, 0.9f, 0.9f);
+      // The band at x ≈ 0.58 (n = 0.865), 0.17 units wide (a wider or farther band, seen through the
+      // translucent bone on the far side too, reads as a wall: 10 px at 160 px on the ear canal).
       p.distanceTf = withColour(kGreen, {{0, 0}, {0.845, 0}, {0.865, 1}, {0.885, 0}, {1, 0}});
       break;
     case RenderMode::Lighting:  // Eq. 6: the structure lights the bone around it
       p.t = 0.25f;
       p.dataTf = boneTf(l, 0.3f, 0.3f);
       for (TfPoint& q : p.dataTf) std::copy(kNeutral.begin(), kNeutral.end(), q.rgba.begin());
-      p.distanceTf = withColour(kNeutral, {{0, 0}, {0.3, 0}, {0.6, 1}, {1, 1}});
+      // The bone near the light drawn fully (within x ≈ 2.5, n = 0.48), none beyond x ≈ 5 (n = 0.17).
+      p.distanceTf = withColour(kNeutral, {{0, 0}, {0.17, 0}, {0.48, 1}, {1, 1}});
       // The structure is the light: drawn in its own colour, which is the colour it casts.
-      // k_a = β/(α·x + 1)²: 1.8 at the structure, 0.2 at x = 0.5, 0.025 at the median bone in view
-      // (x = 1.9), so the light falls off inside the view and the far bone is lit only neutrally.
-      p.lightingAlpha = 4.0f;
+      // k_a = β/(α·x + 1)²: 1.8 at the structure, 0.2 at x = 0.7, 0.025 at the median bone in view
+      // (x = kContextQuantileX = 2.6), so the light falls off inside the view and the far bone is
+      // lit only neutrally.
+      p.lightingAlpha = 2.9f;
       p.lightingBeta = 1.8f;
       break;
   }

@@ -22,8 +22,22 @@ double denseLevel(const Preset& preset) {
   return preset.dataTf.back().x;
 }
 
+double openLevel(const Preset& preset) {
+  // The last point before the first with opacity: everything up to it is drawn clear.
+  if (preset.dataTf.empty()) return 0;
+  double level = preset.dataTf.front().x;
+  for (const TfPoint& p : preset.dataTf) {
+    if (p.rgba[3] > 0) break;
+    level = p.x;
+  }
+  return level;
+}
+
+BoneLevels boneLevels(const Preset& preset) { return {denseLevel(preset), openLevel(preset)}; }
+
 FieldScale fieldScale(const FloatVolume& field, const Volume& volume, const Mask* body, const StructureFrame& frame,
-                      double denseFrom, double margin, double minRadiusMm) {
+                      const BoneLevels& levels, double margin, double minRadiusMm) {
+  const double denseFrom = levels.dense, openBelow = std::min(levels.open, levels.dense);
   FieldScale out;
   out.distanceUnit = distanceUnitFor(frame);
   const Geometry& fg = field.geometry;
@@ -70,14 +84,17 @@ FieldScale fieldScale(const FloatVolume& field, const Volume& volume, const Mask
         if (!inside) continue;
         const std::size_t idx = vg.dims.index(vi[0], vi[1], vi[2]);
         if (double(volume.voxels[idx]) < denseFrom) continue;
-        // Only bone surfaces are drawn (the surface ramp): a dense voxel with a 6-neighbour below.
+        // Only the bone's outer surfaces are seen: a dense voxel with open space (drawn clear)
+        // within kOpenReach voxels along an axis. Walls of marrow (dense next to medium values)
+        // lie inside the bone, behind its outer surface.
         bool surface = false;
         for (int a = 0; a < 3 && !surface; ++a)
-          for (int s = -1; s <= 1 && !surface; s += 2) {
+          for (int s = -kOpenReach; s <= kOpenReach && !surface; ++s) {
+            if (s == 0) continue;
             int w[3] = {vi[0], vi[1], vi[2]};
             w[a] += s;
             if (w[a] < 0 || w[a] >= vn[a]) continue;
-            surface = double(volume.voxels[vg.dims.index(w[0], w[1], w[2])]) < denseFrom;
+            surface = double(volume.voxels[vg.dims.index(w[0], w[1], w[2])]) <= openBelow;
           }
         if (!surface) continue;
         if (bodyOnGrid && body->voxels[idx] == 0) continue;

@@ -126,7 +126,7 @@ View viewOf(const Scan& scan, std::uint16_t label, const Preset& preset, const s
   auto settings = settingsFor(preset, *frame, request);
   REQUIRE(settings);
   View v{std::move(wdt->field.distances), *settings, {}};
-  v.scale = fieldScale(v.field, scan.ds.volume, nullptr, *frame, denseLevel(preset), request.margin, request.minRadiusMm);
+  v.scale = fieldScale(v.field, scan.ds.volume, nullptr, *frame, boneLevels(preset), request.margin, request.minRadiusMm);
   v.settings.distanceUnit = v.scale.distanceUnit;
   v.settings.distanceOffset = v.scale.distanceOffset;
   v.settings.background = {0, 0, 0, 0};
@@ -256,8 +256,12 @@ void checkFadesAndSlides(const Scan& scan, const std::vector<Case>& cases) {
     CAPTURE(v.scale.distanceUnit);
     CHECK(v.scale.derived);
     const RgbaImage at0 = draw(*gl, scan, s->label, v, 0), at1 = draw(*gl, scan, s->label, v, 1);
-    const double change = meanGreyChange(at0, at1), drawn = drawnShare(at0);
-    MESSAGE(structureId << ": t 0→1 changes " << change << " grey levels; " << 100 * drawn << " % drawn at t = 0");
+    // All the context adds at t = 1 to the structure alone (bare): how much t could change at most.
+    const RgbaImage bare =
+        draw(*gl, scan, s->label, viewOf(scan, s->label, derivedPreset(scan.levels, RenderMode::Bare, s->id), c.view), 0);
+    const double change = meanGreyChange(at0, at1), drawn = drawnShare(at0), context = meanGreyChange(bare, at1);
+    MESSAGE(structureId << ": t 0→1 changes " << change << " grey levels (the context at t = 1 adds " << context
+                        << "); " << 100 * drawn << " % drawn at t = 0");
     CHECK(change >= c.minChange);
     if (c.fadesInView) CHECK(drawn < 0.70);
   }
@@ -268,22 +272,40 @@ void checkFadesAndSlides(const Scan& scan, const std::vector<Case>& cases) {
 TEST_CASE("Skull CT: t from 0 to 1 changes the WDT image, and at t = 0 the context fades inside the view") {
   auto skull = skullOrSkip();
   if (!skull) return;
-  // Sinuses and the ear canal lie inside bone on every side: the bone around them is near context
-  // and fills most of the frame even as the farther bone fades; t must still change the image.
-  checkFadesAndSlides(*skull, {{"frontal_sinus", "anterior", false},
+  // The ear canal lies in the temporal bone on every side: the bone around it is near context and
+  // fills most of the frame even as the farther bone fades (71.5 % drawn at t = 0; 89 % with the
+  // median bone at x = 1.9); t must still change the image.
+  checkFadesAndSlides(*skull, {{"frontal_sinus", "anterior", true},
                                {"orbit_left", "lateral_left", true},
                                {"atlas_c1", "posterior", true},
-                               {"maxillary_sinus_right", "anterior", false},
+                               {"maxillary_sinus_right", "anterior", true},
                                {"external_acoustic_meatus_right", "lateral_right", false}});
 }
 
 TEST_CASE("Abdominal CT: t from 0 to 1 changes the WDT image, and at t = 0 the context fades inside the view") {
   auto abdomen = abdomenOrSkip();
   if (!abdomen) return;
-  // On the 3 mm abdomen the slider changes less than on the skull: bone covers a few per cent of
-  // these frames. Measured floors, not the issue's 8 levels: L1 5.4, the kidney 1.7 (0.6 before the
-  // narrow-spread stretch of field_scale.h, kFarQuantileX).
-  checkFadesAndSlides(*abdomen, {{"vertebrae_l1", "anterior", true, 4.0}, {"kidney_right", "anterior", true, 1.0}});
+  // The median bone in view at the distance TFs' half point and its farthest tenth faded out
+  // (field_scale.h): where the framed view holds bone farther from the structure than its
+  // neighbours, t brings it in. The right kidney from the front sees only the ribs beside it and a
+  // sliver of spine (the context at t = 1 adds 29 levels to the kidney alone, nearly all of it
+  // already near at t = 0): its floor is what it measures, 3.0 (1.7 with the median at x = 1.9).
+  checkFadesAndSlides(*abdomen, {{"vertebrae_l1", "anterior", true},
+                                 {"vertebrae_l2", "lateral_left", true},
+                                 {"kidney_left", "lateral_left", true},
+                                 {"kidney_right", "anterior", true, 2.0}});
+}
+
+TEST_CASE("µCT-like volume: t from 0 to 1 changes the WDT image, and at t = 0 the context fades inside the view") {
+  // The phantom as uint8 plain intensities at 0.1 mm: presets derived from its histogram.
+  const Scan microCt = microCtPhantom(256);
+  // The labyrinth and the facial nerve lie in the petrous bone on every side (lateral canal 71 %,
+  // facial nerve 82 % drawn at t = 0); the malleus hangs in the air of the middle ear (the incus,
+  // behind it from the side, 77 %).
+  checkFadesAndSlides(microCt, {{"cochlea", "superior", true},
+                                {"lateral_semicircular_canal", "superior", false},
+                                {"facial_nerve", "lateral_left", false},
+                                {"malleus", "lateral_left", true}});
 }
 
 TEST_CASE("Skull CT: WDT and non-weighted differ, and the structure keeps its hue in every mode") {
@@ -291,17 +313,19 @@ TEST_CASE("Skull CT: WDT and non-weighted differ, and the structure keeps its hu
   if (!skull) return;
   Gl* gl = glOrSkip();
   if (!gl) return;
-  for (const char* id : {"frontal_sinus", "external_acoustic_meatus_right"}) {
+  for (const char* id : {"frontal_sinus", "external_acoustic_meatus_right", "maxillary_sinus_right"}) {
     CAPTURE(id);
     const Structure* s = skull->ds.findStructure(id);
     REQUIRE(s);
-    const std::string view = std::string(id) == "frontal_sinus" ? "anterior" : "lateral_right";
+    const std::string view = std::string(id) == "external_acoustic_meatus_right" ? "lateral_right" : "anterior";
     const Preset wdt = derivedPreset(skull->levels, RenderMode::Wdt, id);
     const View vw = viewOf(*skull, s->label, wdt, view);
     const View vu = viewOf(*skull, s->label, derivedPreset(skull->levels, RenderMode::Unweighted, id), view);
     const double differ = meanGreyChange(draw(*gl, *skull, s->label, vw, 0), draw(*gl, *skull, s->label, vu, 0));
     MESSAGE(std::string(id) << ": WDT vs non-weighted " << differ << " grey levels");
-    CHECK(differ >= 4.0);
+    // (the WDT reaches through the sinuses' openings to the nasal cavity and the ethmoid cells, the
+    // non-weighted field a cloud around them; the ear canal in the temporal bone differs least)
+    CHECK(differ >= 8.0);
     // The structure's pixels: where bare mode draws it opaque.
     const RgbaImage bare = draw(*gl, *skull, s->label, viewOf(*skull, s->label, derivedPreset(skull->levels, RenderMode::Bare, id), view), 0);
     for (RenderMode mode : {RenderMode::Wdt, RenderMode::Unweighted, RenderMode::Fuzzy, RenderMode::Outline,

@@ -183,7 +183,7 @@ int runRender(const Argv& argv) {
     // The distance unit from the field and the data (render/field_scale.h), times --context.
     const auto scaleStart = std::chrono::steady_clock::now();
     const render::FieldScale scale = render::fieldScale(field->distances, dataset->volume, nullptr, *frame,
-                                                        render::denseLevel(*preset), request.margin, request.minRadiusMm);
+                                                        render::boneLevels(*preset), request.margin, request.minRadiusMm);
     settings->distanceUnit = scale.distanceUnit * request.contextScale;
     settings->distanceOffset = scale.distanceOffset;
     const double scaleMs =

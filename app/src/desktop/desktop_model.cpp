@@ -371,11 +371,11 @@ render::FieldScale DesktopModel::fieldScaleOf(const ExploreState::Shown& shown, 
     bySize.distanceUnit = render::distanceUnitFor(frame);
     return bySize;
   }
-  const double dense = render::denseLevel(shown.preset);
+  const render::BoneLevels bone = render::boneLevels(shown.preset);
   // Once per field (and data TF): one pass over a subsample of the field near the structure.
-  if (fieldUnit_.field != field || fieldUnit_.label != shown.label || fieldUnit_.denseLevel != dense) {
-    fieldUnit_ = {field, shown.label, dense,
-                  render::fieldScale(field->distances, dataset_->volume, nullptr, frame, dense)};
+  if (fieldUnit_.field != field || fieldUnit_.label != shown.label || fieldUnit_.bone != bone) {
+    fieldUnit_ = {field, shown.label, bone,
+                  render::fieldScale(field->distances, dataset_->volume, nullptr, frame, bone)};
   }
   return fieldUnit_.scale;
 }

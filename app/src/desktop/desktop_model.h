@@ -273,7 +273,7 @@ class DesktopModel {
   struct FieldUnit {
     const DistanceField* field = nullptr;
     std::uint16_t label = 0;
-    double denseLevel = 0;
+    render::BoneLevels bone;
     render::FieldScale scale;
   };
   mutable FieldUnit fieldUnit_;

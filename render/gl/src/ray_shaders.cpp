@@ -231,12 +231,16 @@ vec4 castRay(vec2 pixel) {
         if (RAY_MODE == 2) {
           float ka = uLighting.y / pow(uLighting.x * min(max(d - uDistanceOffset, 0.0), 1e6) + 1.0, 2.0);
           rgb = rgb * (ka * uHighlight) + 0.2 * shade(rgb, nrm, dir);
+          // Near the light k_a exceeds 1: scale the colour down as a whole rather than clipping
+          // each channel, which would turn the orange rim yellow (red clips first, green catches up).
+          rgb /= max(1.0, max(rgb.r, max(rgb.g, rgb.b)));
         } else {
           rgb = shade(rgb, nrm, dir);
         }
       } else if (RAY_MODE == 2) {
         float ka = uLighting.y / pow(uLighting.x * min(max(d - uDistanceOffset, 0.0), 1e6) + 1.0, 2.0);
         rgb = rgb * (ka * uHighlight + 0.25);
+        rgb /= max(1.0, max(rgb.r, max(rgb.g, rgb.b)));
       }
       acc.rgb += (1.0 - acc.a) * alpha * clamp(rgb, 0.0, 1.0);
       acc.a += (1.0 - acc.a) * alpha;
