@@ -132,7 +132,7 @@ void ScriptInterpreter::step(DesktopModel& model, ScriptHost& host, Clock::time_
       begun_ = true;
       actionStart_ = now;
     }
-    Context context{model, host, a, first, msBetween(actionStart_, now)};
+    Context context{model, host, a, first, msBetween(actionStart_, now), actionStart_};
     Outcome outcome = Progress::Done;
     try {
       outcome = (this->*handler->second)(context);
@@ -290,8 +290,12 @@ ScriptInterpreter::Outcome ScriptInterpreter::wait(Context& c) {
 }
 
 ScriptInterpreter::Outcome ScriptInterpreter::waitField(Context& c) {
-  if (c.model.settled()) {  // how long the view took to be final (a step's full field on the CPU)
-    c.model.event({{"event", "field_settled"}, {"ms", c.elapsedMs}});
+  if (c.model.settled()) {
+    // How long the view took to be final: its field on screen and the full-quality image of it
+    // rendered ("ms"); "field_ms": when the field alone was on screen (0: it already was).
+    const Clock::time_point shown = c.model.fields().shownAt();
+    const double fieldMs = shown > c.startedAt ? msBetween(c.startedAt, shown) : 0.0;
+    c.model.event({{"event", "field_settled"}, {"ms", c.elapsedMs}, {"field_ms", fieldMs}});
     return Progress::Done;
   }
   if (c.elapsedMs > c.action.value("timeout_ms", 120000.0)) return timedOut("wait_field timed out");
