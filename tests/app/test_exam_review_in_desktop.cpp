@@ -117,5 +117,6 @@ TEST_CASE("a lesson's show me on a slice: the target on the axial slice through 
   const auto slices = eventsOf(r, "answer_slice");
   REQUIRE(slices.size() == 1);
   CHECK(slices[0].value("structure", "") == "cochlea");
-  CHECK(slices[0].value("axis", -1) == 2);
+  CHECK(slices[0].value("axis", -1) == 2);  // the phantom's k axis runs feet to head
+  CHECK(slices[0].value("edges", "") == "left R, right L, top A, bottom P");  // as the Slices panes
 }

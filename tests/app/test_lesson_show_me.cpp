@@ -44,6 +44,14 @@ TEST_CASE("after a wrong click, show me highlights the target in its own view, a
   const auto graded = at::test::eventsOf(r, "graded");
   REQUIRE(graded.size() == 1);
   CHECK_FALSE(graded[0].value("correct", true));
+  // Each wait's settle time, and within it when the field alone was on screen.
+  const auto settled = at::test::eventsOf(r, "field_settled");
+  REQUIRE(settled.size() == 2);
+  for (const json& e : settled) {
+    INFO(e.dump());
+    CHECK(e.at("field_ms").get<double>() >= 0);
+    CHECK(e.at("field_ms").get<double>() <= e.at("ms").get<double>());
+  }
   const auto shown = at::test::eventsOf(r, "show_me");
   REQUIRE(shown.size() == 1);
   CHECK(shown[0].value("structure", "") == "cochlea");  // the answer, highlighted

@@ -122,3 +122,51 @@ TEST_CASE("FieldService_EmptyPrefetchList_CancelsARunningPrefetch_ButNotARequest
   service.prefetch({});
   REQUIRE(waitUntil([&] { return service.cached(asked).ready(); }));
 }
+
+TEST_CASE("FieldService_ListedFields_StayCached_WhileMoreRequestsThanTheCacheHolds_PassThrough") {
+  // A lesson's prefetched fields outlive a hover sweep over every structure (each hover a field):
+  // the cache evicts the fields not on the list; once the list is replaced they may go too.
+  const Dataset& ds = test::phantomOfSize(32);
+  constexpr std::size_t kCapacity = 4;
+  FieldService service(ds.volume, ds.labels, kCapacity);
+  const std::vector<FieldRequest> listed{requestFor(ds, "cochlea", 1), requestFor(ds, "vestibule", 1)};
+  service.prefetch(listed);
+  REQUIRE(waitUntil([&] { return !service.prefetching(); }));
+  int hovered = 0;
+  for (const Structure& s : ds.structures) {
+    if (s.id == "cochlea" || s.id == "vestibule") continue;
+    FieldRequest r = requestFor(ds, s.id, 2);
+    service.request(r);
+    REQUIRE(waitUntil([&] { return service.cached(r).ready(); }));  // the one just put in stays
+    ++hovered;
+  }
+  REQUIRE(hovered > int(kCapacity));  // the precondition: the requests alone overflow the cache
+  for (const FieldRequest& r : listed) CHECK(service.cached(r).ready());
+  service.prefetch({});
+  for (const Structure& s : ds.structures) {
+    if (s.id == "cochlea" || s.id == "vestibule") continue;
+    FieldRequest r = requestFor(ds, s.id, 1);
+    service.request(r);
+    REQUIRE(waitUntil([&] { return service.cached(r).ready(); }));
+  }
+  CHECK_FALSE(service.cached(listed[0]).ready());  // no longer listed: evicted like any other
+  CHECK_FALSE(service.cached(listed[1]).ready());
+}
+
+TEST_CASE("FieldService_HeldPrefetches_DoNotStart_RequestsStillRun_AndTheListRunsOnceReleased") {
+  const Dataset& ds = test::phantomOfSize(32);
+  FieldService service(ds.volume, ds.labels, 8);
+  service.holdPrefetches(true);
+  const FieldRequest listed = requestFor(ds, "cochlea", 1);
+  service.prefetch({listed});
+  const FieldRequest asked = requestFor(ds, "stapes", 1);
+  service.request(asked);
+  REQUIRE(waitUntil([&] { return service.cached(asked).ready(); }));  // a request is never held
+  std::this_thread::sleep_for(std::chrono::milliseconds(200));           // time enough to start a 32³ field
+  CHECK(service.prefetching());                                          // still listed ...
+  CHECK_FALSE(service.computing(listed));                                // ... not started
+  CHECK_FALSE(service.cached(listed).ready());
+  service.holdPrefetches(false);
+  REQUIRE(waitUntil([&] { return service.cached(listed).ready(); }));
+  CHECK_FALSE(service.prefetching());
+}

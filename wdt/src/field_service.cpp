@@ -82,6 +82,8 @@ void FieldService::prefetch(const std::vector<FieldRequest>& requests) {
   {
     std::lock_guard lock(mutex_);
     prefetches_.clear();
+    pinned_.clear();
+    for (const FieldRequest& r : requests) pinned_.push_back(r.key());
     bool runningListed = false;
     for (const FieldRequest& r : requests) {
       const std::string key = r.key();
@@ -96,6 +98,15 @@ void FieldService::prefetch(const std::vector<FieldRequest>& requests) {
     if (runningPrefetch_ && !runningListed) cancelRunning_ = true;  // no longer expected
   }
   wake_.notify_all();
+}
+
+void FieldService::holdPrefetches(bool hold) {
+  {
+    std::lock_guard lock(mutex_);
+    if (prefetchesHeld_ == hold) return;
+    prefetchesHeld_ = hold;
+  }
+  if (!hold) wake_.notify_all();
 }
 
 bool FieldService::computing(const FieldRequest& request) const {
@@ -174,7 +185,18 @@ std::optional<FieldService::Running> FieldService::running() const {
 
 void FieldService::insert(Entry entry) {
   lru_.push_front(std::move(entry));
-  while (lru_.size() > capacity_) lru_.pop_back();
+  const auto isPinned = [&](const Entry& e) { return std::find(pinned_.begin(), pinned_.end(), e.key) != pinned_.end(); };
+  while (lru_.size() > capacity_) {
+    // The least recently used entry that is not on the prefetch list, never the one just put in
+    // (it is what someone is waiting for); the least recently used of all when every other is.
+    auto victim = std::prev(lru_.end());
+    for (auto it = std::prev(lru_.end()); it != lru_.begin(); --it)
+      if (!isPinned(*it)) {
+        victim = it;
+        break;
+      }
+    lru_.erase(victim);
+  }
   changed_.notify_all();
 }
 
@@ -190,7 +212,7 @@ void FieldService::run() {
     FieldRequest job;
     {
       std::unique_lock lock(mutex_);
-      wake_.wait(lock, [&] { return stop_ || queued_.has_value() || !prefetches_.empty(); });
+      wake_.wait(lock, [&] { return stop_ || queued_.has_value() || (!prefetches_.empty() && !prefetchesHeld_); });
       if (stop_) return;
       if (queued_) {
         job = *queued_;

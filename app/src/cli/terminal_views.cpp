@@ -213,11 +213,7 @@ Result<TerminalPicture> TerminalViews::showSlice(const std::string& targetId, co
   if (!target) return fail("structure '" + targetId + "' is not in dataset '" + dataset_.id + "'");
   const auto frame = render::structureFrame(dataset_.labels, target->label);
   if (!frame) return fail("structure '" + targetId + "' has no voxels in dataset '" + dataset_.id + "'");
-  const auto voxel = voxelOf(dataset_.labels.geometry, frame->anchorMm);
-  SliceRequest request;
-  request.axis = 2;
-  request.index = voxel ? (*voxel)[2] : 0;
-  request.scale = kSliceScale;
+  SliceRequest request = anchorSliceRequest(dataset_.labels.geometry, frame->anchorMm, kSliceScale);  // patient orientation
   const std::vector<Structure> only{*target};
   if (highlight) request.labelAlpha = 0.65;
   auto image = highlight ? renderSlice(dataset_.volume, &dataset_.labels, only, request)
@@ -225,6 +221,7 @@ Result<TerminalPicture> TerminalViews::showSlice(const std::string& targetId, co
   if (!image) return tl::unexpected(image.error());
   if (highlight) frameStructureOnSlice(*image, dataset_.labels, request, target->label, 4 * kSliceScale);
   drawPixelRulers(*image);
+  drawSliceEdgeLetters(*image, *request.layout);
   const fs::path path = dir_ / (stem + ".png");
   if (auto st = writePng(path.string(), *image); !st) return tl::unexpected(st.error());
   lastSlice_ = request;

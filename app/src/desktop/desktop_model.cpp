@@ -354,6 +354,9 @@ void DesktopModel::beginFrame(FieldTarget* target) {
     }
   expertEdited();
   prefetchLessonFields();
+  // On the CPU a prefetch and the software renderer share the cores: none starts until the view
+  // on screen has converged (the student is reading), so that it does not slow the image down.
+  fields_->holdPrefetches(viewAvailable_ && !scheduler_.finished(explore_.revision()));
   fields_->update(target, recorder_);
   turnTowardTarget();
 }

@@ -250,10 +250,12 @@ class DesktopModel {
   void answerLocate(const Structure* clicked, const std::optional<Vec3>& pointMm);
   void clickGraded(const std::string& clicked, double distanceMm);
   void turnTowardTarget();  // an exam locate item's view (showExamItem)
-  // A running lesson's next step's full-resolution field (and the current step's, while it is still
-  // being computed) in the background while the student reads (FieldView::prefetch): a step's
-  // view is then ready when it is shown instead of seconds later on the CPU. Asked again each
-  // time the step changes; dropped when no lesson runs (desktop_model_lessons.cpp).
+  // A running lesson's coming fields in the background while the student reads
+  // (lessonFieldNeeds, FieldView::prefetch within its budget): every later step's view, each
+  // question's answer key (locate) and show-me field, and the current step's view while it is
+  // still being computed. A step's field is then there when the step is shown instead of seconds
+  // later on the CPU. Asked again each time the step changes; dropped (and a running prefetch
+  // cancelled) when no lesson runs (desktop_model_lessons.cpp).
   void prefetchLessonFields();
   std::string prefetchedFor_;  // the lesson and step the prefetch list was made for
   // The axial slice through `target`'s anchor; `highlight`: the target overlaid on it.

@@ -1,8 +1,33 @@
 #include "slice_marking.h"
 
 #include <algorithm>
+#include <cmath>
+
+#include "render/overlay.h"
+#include "volume/slice_orientation.h"
 
 namespace at::app {
+
+SliceRequest anchorSliceRequest(const Geometry& grid, const Vec3& anchorMm, int scale) {
+  SliceRequest request;
+  request.layout = patientSliceLayout(grid.direction, PatientPlane::Axial);
+  request.axis = request.layout->sliceAxis;
+  const int extent[3] = {grid.dims.x, grid.dims.y, grid.dims.z};
+  const double index = grid.patientToIndex(anchorMm)[std::size_t(request.axis)];
+  request.index = std::clamp(int(std::lround(index)), 0, std::max(0, extent[request.axis] - 1));
+  request.scale = std::max(1, scale);
+  return request;
+}
+
+void drawSliceEdgeLetters(RgbImage& image, const SliceLayout& layout, int textScale) {
+  const render::Rgb yellow{255, 220, 40};
+  const int w = 5 * textScale, h = 7 * textScale, pad = 9 * textScale;  // clear of the pictures' pixel rulers
+  const auto put = [&](int x, int y, char c) { render::drawText(image, x, y, std::string(1, c), yellow, textScale); };
+  put(pad + 7 * textScale, (image.height - h) / 2, layout.left);  // clear of the left ruler's numbers
+  put(image.width - pad - w, (image.height - h) / 2, layout.right);
+  put((image.width - w) / 2, pad, layout.top);
+  put((image.width - w) / 2, image.height - pad - h, layout.bottom);
+}
 
 bool frameStructureOnSlice(RgbImage& image, const LabelMap& labels, const SliceRequest& request, std::uint16_t label,
                            int margin, int thickness) {

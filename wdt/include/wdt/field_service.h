@@ -77,8 +77,13 @@ class FieldService {
   // Prefetches stay listed.
   void cancelAll();
   // Replaces the list of fields to compute while the service is otherwise idle (cached ones are
-  // skipped); an empty list drops it and cancels a running prefetch.
+  // skipped); an empty list drops it and cancels a running prefetch. Fields on the list stay in
+  // the cache while it lists them: the cache evicts the least recently used field not on it
+  // (a caller keeps the list well below the capacity, FieldView::prefetch).
   void prefetch(const std::vector<FieldRequest>& requests);
+  // While held, no listed prefetch starts (one already running goes on); requests are not held.
+  // For a caller whose own work competes for the same cores (a software renderer converging).
+  void holdPrefetches(bool hold);
   // A prefetch is listed or running.
   bool prefetching() const;
   // The field of `request` is being computed now (asked for or prefetched).
@@ -142,7 +147,9 @@ class FieldService {
   std::condition_variable changed_;  // an entry was cached or a computation ended (waitFor)
   std::optional<FieldRequest> queued_;
   std::deque<FieldRequest> prefetches_;  // front first; taken only while queued_ is empty
+  std::vector<std::string> pinned_;      // keys of the last prefetch list: not evicted while listed
   bool runningPrefetch_ = false;         // the running computation is a prefetch
+  bool prefetchesHeld_ = false;          // holdPrefetches
   std::optional<std::string> runningKey_;
   std::optional<FieldRequest> runningRequest_;
   std::chrono::steady_clock::time_point runningSince_;

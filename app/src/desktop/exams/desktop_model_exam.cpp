@@ -35,7 +35,8 @@ void DesktopModel::showExamItem(const std::optional<ExamController::ItemScene>& 
     return;
   }
   examSlice_ = std::move(*slice);
-  event({{"event", "exam_slice"}, {"axis", 2}, {"index", examSlice_->request.index},
+  event({{"event", "exam_slice"}, {"axis", examSlice_->request.axis}, {"index", examSlice_->request.index},
+         {"edges", examSlice_->request.layout->edgeLetters()},
          {"width", examSlice_->image.width}, {"height", examSlice_->image.height}});
 }
 
@@ -43,8 +44,7 @@ Result<DesktopModel::ExamSlice> DesktopModel::anchorSlice(const Structure& targe
   const render::StructureFrame* frame = explore_.frameOf(target.label);
   if (!frame) return fail("structure '" + target.id + "' has no voxels in dataset '" + dataset_->id + "'");
   ExamSlice slice;
-  slice.request.axis = 2;
-  slice.request.index = int(std::lround(dataset_->labels.geometry.patientToIndex(frame->anchorMm)[2]));
+  slice.request = anchorSliceRequest(dataset_->labels.geometry, frame->anchorMm);  // patient orientation
   const std::vector<Structure> only{target};
   if (highlight) slice.request.labelAlpha = 0.65;
   auto image = renderSlice(dataset_->volume, highlight ? &dataset_->labels : nullptr, highlight ? only : dataset_->structures,
@@ -63,7 +63,8 @@ Status DesktopModel::showAnswerSlice(const std::string& structureId) {
   auto slice = anchorSlice(*target, true);
   if (!slice) return tl::unexpected(slice.error());
   examSlice_ = std::move(*slice);
-  event({{"event", "answer_slice"}, {"structure", structureId}, {"axis", 2}, {"index", examSlice_->request.index},
+  event({{"event", "answer_slice"}, {"structure", structureId}, {"axis", examSlice_->request.axis},
+         {"index", examSlice_->request.index}, {"edges", examSlice_->request.layout->edgeLetters()},
          {"width", examSlice_->image.width}, {"height", examSlice_->image.height}});
   return {};
 }

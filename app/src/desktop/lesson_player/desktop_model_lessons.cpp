@@ -3,6 +3,7 @@
 #include "core/strings.h"
 #include "course_views.h"
 #include "desktop_model.h"
+#include "lesson_player/lesson_field_needs.h"
 
 namespace at::app {
 
@@ -46,12 +47,6 @@ void DesktopModel::showStructureWith(const LessonController::Shown& shown, const
   explore_.setClip(clip);
 }
 
-namespace {
-// The steps after the current one whose fields are prepared: one. On two busy cores a second
-// step's field (and a "show me" field) only competed with the next step's (bench/RESULTS.md).
-constexpr int kPrefetchSteps = 1;
-}  // namespace
-
 void DesktopModel::prefetchLessonFields() {
   const auto& step = lessons_->step();
   const lessons::LessonEngine* engine = lessons_->engine();
@@ -60,29 +55,25 @@ void DesktopModel::prefetchLessonFields() {
     key = engine->lesson().id + "#" + std::to_string(step->index);
   if (key == prefetchedFor_) return;
   prefetchedFor_ = key;
-  std::vector<std::pair<std::uint16_t, WdtParams>> fields;
+  std::vector<wdt::FieldRequest> requests;
   if (!key.empty()) {
     const auto& steps = engine->lesson().steps;
-    std::vector<lessons::QuestionScene> scenes;
-    // The step on screen first: its field, prefetched before, keeps being computed.
-    std::vector<int> indices{step->index};
-    for (int index : engine->upcomingSteps(kPrefetchSteps)) indices.push_back(index);
-    for (int index : indices) {
-      const lessons::Step& next = steps[std::size_t(index)];
-      lessons::QuestionScene scene = next.kind == lessons::StepKind::Question ? lessons::sceneFor(next) : lessons::QuestionScene{};
-      if (next.kind == lessons::StepKind::Show) scene.structure = next.show.structure, scene.presetId = next.show.presetId;
-      scenes.push_back(scene);
-    }
-    for (const lessons::QuestionScene& scene : scenes) {
-      const Structure* s = dataset_->findStructure(scene.structure);
+    // Every step the lesson will still show; FieldView::prefetch keeps what fits its budget.
+    const std::vector<int> upcoming = engine->upcomingSteps(int(steps.size()));
+    for (const LessonFieldNeed& need : lessonFieldNeeds(steps, step->index, upcoming)) {
+      const Structure* s = dataset_->findStructure(need.structure);
       if (!s) continue;
-      auto preset = presetForStep(library_, scene.structure, scene.presetId, explore_.levels(), &session_.database());
+      if (need.kind == LessonFieldNeed::Kind::AnswerKey) {
+        requests.push_back(FieldView::answerKeyRequest(s->label));
+        continue;
+      }
+      auto preset = presetForStep(library_, need.structure, need.presetId, explore_.levels(), &session_.database());
       if (!preset || preset->mode == render::RenderMode::Bare) continue;
-      if (auto params = render::wdtParamsFor(*preset)) fields.emplace_back(s->label, *params);
+      if (auto params = render::wdtParamsFor(*preset)) requests.push_back(FieldView::viewFieldRequest(s->label, *params));
     }
   }
-  fields_->prefetch(fields);
-  if (!fields.empty()) event({{"event", "prefetch"}, {"step", step->index}, {"fields", fields.size()}});
+  const std::size_t kept = fields_->prefetch(requests);
+  if (kept > 0) event({{"event", "prefetch"}, {"step", step->index}, {"fields", kept}});
 }
 
 bool DesktopModel::previewHidesNames() const {

@@ -16,7 +16,7 @@ ScriptInterpreter::Feature ScriptInterpreter::outputActions() {
           {
               {"wait", {{"ms?", "milliseconds (default 0)"}}, "Waits that long (frames go on).", &S::wait},
               {"wait_field", {{"timeout_ms?", "default 120000; a timeout ends the script with status 1"}},
-               "Waits until the view is final (full quality, its distance field shown); reports field_settled {ms}.",
+               "Waits until the view is final (full quality, its distance field shown); reports field_settled {ms, field_ms: when the field alone was on screen}.",
                &S::waitField},
               {"screenshot", {{"path", "PNG file to write"}}, "Saves the window once the current frame is drawn.", &S::screenshot},
               {"widgets", {},
@@ -50,8 +50,12 @@ ScriptInterpreter::Outcome ScriptInterpreter::wait(Context& c) {
 }
 
 ScriptInterpreter::Outcome ScriptInterpreter::waitField(Context& c) {
-  if (c.model.settled()) {  // how long the view took to be final (a step's full field on the CPU)
-    c.model.event({{"event", "field_settled"}, {"ms", c.elapsedMs}});
+  if (c.model.settled()) {
+    // How long the view took to be final: its field on screen and the full-quality image of it
+    // rendered ("ms"); "field_ms": when the field alone was on screen (0: it already was).
+    const Clock::time_point shown = c.model.fields().shownAt();
+    const double fieldMs = shown > c.startedAt ? msBetween(c.startedAt, shown) : 0.0;
+    c.model.event({{"event", "field_settled"}, {"ms", c.elapsedMs}, {"field_ms", fieldMs}});
     return Progress::Done;
   }
   if (c.elapsedMs > c.action.value("timeout_ms", 120000.0)) return timedOut("wait_field timed out");

@@ -91,7 +91,7 @@ void ScriptInterpreter::step(DesktopModel& model, ScriptHost& host, Clock::time_
       begun_ = true;
       actionStart_ = now;
     }
-    Context context{model, host, a, first, msBetween(actionStart_, now)};
+    Context context{model, host, a, first, msBetween(actionStart_, now), actionStart_};
     Outcome outcome = Progress::Done;
     try {
       outcome = (this->*handler->second)(context);

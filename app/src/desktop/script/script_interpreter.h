@@ -96,6 +96,7 @@ class ScriptInterpreter {
     const nlohmann::json& action;
     bool first;          // the action's first call
     double elapsedMs;    // since its first call
+    Clock::time_point startedAt;  // its first call
   };
   using Handler = Outcome (ScriptInterpreter::*)(Context&);
   struct Action {

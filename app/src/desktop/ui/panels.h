@@ -127,6 +127,9 @@ bool beginPanel(const char* title, bool* open, const PanelRect& where);
 struct PaneMouse {
   double x = 0, y = 0;
 };
+// The layout's patient direction letters (L R A P S I) at the middle of the last item's four edges,
+// inside the picture (the Slices panes, the exam and answer slice).
+void drawEdgeLetters(const SliceLayout& layout);
 std::optional<PaneMouse> drawSlicePane(const char* id, const render::gl::ImageTexture& texture, std::array<double, 2> pixelMm,
                                        float side, const std::function<void(double, double)>& grey);
 

@@ -18,7 +18,7 @@ FieldView::FieldView(const Dataset& dataset, ExploreState& state, EventSink even
       messages_(std::move(messages)),
       notes_(std::move(notes)),
       clickGraded_(std::move(clickGraded)),
-      service_(std::make_unique<FieldService>(dataset.volume, dataset.labels, 8)) {}
+      service_(std::make_unique<FieldService>(dataset.volume, dataset.labels, kCacheFields)) {}
 
 FieldView::~FieldView() { service_->cancelAll(); }
 
@@ -44,17 +44,41 @@ std::string FieldView::idOf(std::uint16_t label) const {
   return st ? st->id : std::to_string(label);
 }
 
-void FieldView::prefetch(const std::vector<std::pair<std::uint16_t, WdtParams>>& fields) {
-  std::vector<FieldRequest> requests;
-  for (const auto& [label, params] : fields) {
-    FieldRequest r;
-    r.label = label;
-    r.params = params;
-    r.params.downsample = 1;
-    r.params.backend = WdtBackend::Auto;  // as request() asks, so that the keys agree
-    requests.push_back(r);
+FieldRequest FieldView::viewFieldRequest(std::uint16_t label, const WdtParams& params) {
+  FieldRequest r;
+  r.label = label;
+  r.params = params;
+  r.params.downsample = 1;
+  r.params.backend = WdtBackend::Auto;  // as request() asks
+  return r;
+}
+
+FieldRequest FieldView::answerKeyRequest(std::uint16_t target) {
+  FieldRequest r;
+  r.label = target;
+  r.params = wdt::answerKeyParams();
+  return r;
+}
+
+std::size_t FieldView::prefetch(const std::vector<FieldRequest>& requests) {
+  const Dims& d = dataset_.volume.dims();
+  std::vector<FieldRequest> kept;
+  std::vector<std::string> keys;
+  std::size_t bytes = 0;
+  for (const FieldRequest& r : requests) {
+    if (kept.size() >= kPrefetchFields) break;
+    const std::string key = r.key();
+    if (std::find(keys.begin(), keys.end(), key) != keys.end()) continue;
+    const std::size_t ds = std::size_t(std::max(1, r.params.downsample));
+    const std::size_t fieldBytes = ((std::size_t(d.x) + ds - 1) / ds) * ((std::size_t(d.y) + ds - 1) / ds) *
+                                   ((std::size_t(d.z) + ds - 1) / ds) * sizeof(float);
+    if (bytes + fieldBytes > kPrefetchBudgetBytes) break;
+    bytes += fieldBytes;
+    keys.push_back(key);
+    kept.push_back(r);
   }
-  service_->prefetch(requests);
+  service_->prefetch(kept);
+  return kept.size();
 }
 
 void FieldView::hoverChanged() {
@@ -70,10 +94,7 @@ void FieldView::labelsChanged(const std::function<void()>& write, const std::vec
 }
 
 void FieldView::gradeClickDistance(const std::string& clicked, std::uint16_t target, const Vec3& pointMm) {
-  FieldRequest key;
-  key.label = target;
-  key.params = wdt::answerKeyParams();
-  pendingClick_ = PendingClick{clicked, pointMm, key};
+  pendingClick_ = PendingClick{clicked, pointMm, answerKeyRequest(target)};
   servePendingClick();
 }
 
@@ -183,6 +204,7 @@ void FieldView::update(FieldTarget* target, FrameRecorder& recorder) {
   field_ = chosen.host;
   source_ = source;
   key_ = key;
+  shownAt_ = Clock::now();
   state_.setFieldShown(label, key);
 }
 

@@ -70,12 +70,25 @@ class FieldView {
   void gradeClickDistance(const std::string& clicked, std::uint16_t target, const Vec3& pointMm);
   bool clickPending() const { return pendingClick_.has_value(); }
 
-  // Full-resolution fields the view is expected to need soon (a lesson's next steps: label and the
-  // WDT parameters of the preset it will be shown with), computed while the service is otherwise
-  // idle (wdt::FieldService::prefetch) [field_prefetched as each arrives]. Replaces the last list;
-  // an empty list drops it.
-  void prefetch(const std::vector<std::pair<std::uint16_t, WdtParams>>& fields);
+  // The request of the full-resolution field `label` is shown with under `params` (a preset's WDT
+  // parameters), as the view asks for it; the request of `target`'s answer-key field, as a locate
+  // click off the target asks for it. Prefetch lists are made of these so that the keys agree.
+  static wdt::FieldRequest viewFieldRequest(std::uint16_t label, const WdtParams& params);
+  static wdt::FieldRequest answerKeyRequest(std::uint16_t target);
+  // Fields the view is expected to need soon (a lesson's coming steps), in the order wanted,
+  // computed while the service is otherwise idle (wdt::FieldService::prefetch) [field_prefetched
+  // as each arrives]. Kept: the first of each key, at most kPrefetchFields of them and
+  // kPrefetchBudgetBytes in all (a field that would pass the budget ends the list), so that the
+  // prefetched fields and the view's own (fine and coarse) fit the service's cache together.
+  // Replaces the last list; an empty list drops it and cancels a running prefetch. Returns the
+  // number of fields kept.
+  static constexpr std::size_t kCacheFields = 8;
+  static constexpr std::size_t kPrefetchFields = kCacheFields - 2;
+  static constexpr std::size_t kPrefetchBudgetBytes = std::size_t(512) << 20;
+  std::size_t prefetch(const std::vector<wdt::FieldRequest>& requests);
   bool prefetching() const { return service_->prefetching(); }
+  // wdt::FieldService::holdPrefetches: no prefetch starts while the view is still converging.
+  void holdPrefetches(bool hold) { service_->holdPrefetches(hold); }
   // The full-resolution field being computed, if any: cancelled, and not asked again (an event
   // "field_cancelled" says how far it got). False when none was running.
   bool cancelFineField();
@@ -87,6 +100,8 @@ class FieldView {
   bool settled() const;
   bool busy() const { return service_->busy(); }
   bool uploading() const { return uploading_; }
+  // When the field on screen last became final (update() finished showing it); the epoch before any.
+  Clock::time_point shownAt() const { return shownAt_; }
   std::optional<wdt::FieldService::Running> running() const { return service_->running(); }
   int cancelledCount() const { return service_->cancelledCount(); }
   const std::string& status() const { return status_; }
@@ -110,6 +125,7 @@ class FieldView {
   std::shared_ptr<const DistanceField> field_;
   const void* source_ = nullptr;  // identity of the field on screen; null = none
   std::string key_;
+  Clock::time_point shownAt_{};
   std::string lastUploadError_;  // reported once until an upload call succeeds
   bool gpuFields_ = false;
   bool uploading_ = false;

@@ -234,6 +234,7 @@ void ExamPanel::drawSlice(DesktopModel& model, float x, float y, float w, float 
   const ImVec2 origin = ImGui::GetCursorScreenPos();
   if (slice_ && slice_->handle()) {
     ImGui::Image(reinterpret_cast<ImTextureID>(slice_->handle()), size);
+    if (slice->request.layout) drawEdgeLetters(*slice->request.layout);
     if (ImGui::IsItemClicked(ImGuiMouseButton_Left)) {
       const ImVec2 m = ImGui::GetMousePos();
       model.clickSlice((m.x - origin.x) / scale, (m.y - origin.y) / scale);

@@ -13,6 +13,8 @@ namespace {
 
 const char* kPaneNames[3] = {"sagittal", "coronal", "axial"};
 
+}  // namespace
+
 // The pane's patient direction letters at the middle of its four edges, inside the picture.
 void drawEdgeLetters(const SliceLayout& layout) {
   const ImVec2 lo = ImGui::GetItemRectMin(), hi = ImGui::GetItemRectMax();
@@ -29,8 +31,6 @@ void drawEdgeLetters(const SliceLayout& layout) {
   put(midX, lo.y + pad, layout.top);
   put(midX, hi.y - pad - h, layout.bottom);
 }
-
-}  // namespace
 
 render::RgbaImage toRgba(const RgbImage& image) {
   render::RgbaImage rgba(image.width, image.height);
