@@ -90,7 +90,8 @@ __global__ void resetLabels(unsigned long long* keys, GridShape g, const unsigne
   if (n) atomicAdd(q.counters + 6, n);
 }
 
-// Seeds (voxel index, label) to (0, label); their bricks are queued for round 0.
+// Seeds (voxel index, label) to (0, label); their bricks, and the neighbour bricks whose halo holds
+// a seed (one on a brick's face may lower nothing in its own brick), are queued for round 0.
 __global__ void writeSeeds(unsigned long long* keys, GridShape g, const unsigned* index, const int* label, int count,
                            Queues q) {
   for (int s = int(blockIdx.x * blockDim.x + threadIdx.x); s < count; s += int(gridDim.x * blockDim.x)) {
@@ -99,6 +100,15 @@ __global__ void writeSeeds(unsigned long long* keys, GridShape g, const unsigned
     const int x = int(i % std::size_t(g.n[0])), y = int((i / std::size_t(g.n[0])) % std::size_t(g.n[1])),
               z = int(i / (std::size_t(g.n[0]) * g.n[1]));
     activate(q, brickOfVoxel(g, x, y, z), 0, 0, 0);
+    const unsigned mask = wdt::brickNeighbourMask(x % kEdge, y % kEdge, z % kEdge, kEdge);
+    const int b[3] = {x / kEdge, y / kEdge, z / kEdge};
+    for (int n = 0; n < 27; ++n) {
+      if (!(mask & (1u << n))) continue;
+      const int nb[3] = {b[0] + n % 3 - 1, b[1] + (n / 3) % 3 - 1, b[2] + n / 9 - 1};
+      if (nb[0] < 0 || nb[1] < 0 || nb[2] < 0 || nb[0] >= g.bricks[0] || nb[1] >= g.bricks[1] || nb[2] >= g.bricks[2])
+        continue;
+      activate(q, nb[0] + g.bricks[0] * (nb[1] + g.bricks[1] * nb[2]), 0, 0, 0);
+    }
     noteKey(q, 0, 0);
   }
 }

@@ -77,6 +77,30 @@ TEST_CASE("Grow from seeds on the GPU equals the CPU and the exact reference bit
   }
 }
 
+// A brick made only of seeds lowers nothing itself; the bricks whose halo holds its seeds must still
+// be visited, on the first growth and when the seeds are added to an earlier one.
+TEST_CASE("GPU: seeds filling a brick grow into the bricks beside it, from scratch and incrementally") {
+  if (!requireGrowthDevice()) return;
+  Geometry g;
+  g.dims = {18, 17, 3};
+  g.spacingMm = {0.5, 0.7, 1.1};
+  Volume volume(g);
+  for (std::size_t i = 0; i < volume.voxels.size(); ++i) volume.voxels[i] = std::int16_t(300 + int(i % 7) * 40);
+  GrowthParams params;
+  params.baseCost = 0.05f;
+  std::vector<GrowthSeed> seeds;
+  for (int z = 0; z < 3; ++z)
+    for (int y = 0; y < 16; ++y)
+      for (int x = 0; x < 16; ++x) seeds.push_back({g.dims.index(x, y, z), std::uint16_t(1 + (y % 2))});
+  GrowthPair fresh = makePair(volume, params);
+  requireSameAsCpu(fresh, seeds);
+  requireEqualToExact(fresh.gpu, volume, seeds, params);
+  GrowthPair grown = makePair(volume, params);
+  requireSameAsCpu(grown, {seeds.front()});
+  requireSameAsCpu(grown, seeds);
+  requireEqualToExact(grown.gpu, volume, seeds, params);
+}
+
 TEST_CASE("Incremental GPU updates (strokes added, erased, relabelled, cancelled) stay equal to the CPU") {
   if (!requireGrowthDevice()) return;
   std::mt19937_64 rng(freshSeed("cuda growth incremental"));

@@ -368,7 +368,7 @@ class CpuGrowthEngine final : public GrowthEngine {
     stats.voxelsReset = resetVoxels(change, threads, touched);
     for (const GrowthSeed& s : change.writeSeeds) {
       storeKey(&keys_[s.index], wdt::packGrowthKey(0, s.label));
-      touched.push_back({brickOf(s.index), 0});
+      queueBricksHolding(s.index, touched);
     }
     if (change.fromScratch) std::fill(settled_.begin(), settled_.end(), 0);
     for (const auto& [b, key] : touched) settled_[std::size_t(b)] = 0;
@@ -403,6 +403,24 @@ class CpuGrowthEngine final : public GrowthEngine {
     const std::size_t x = index % std::size_t(d.x), y = (index / std::size_t(d.x)) % std::size_t(d.y),
                       z = index / (std::size_t(d.x) * std::size_t(d.y));
     return int(x / E + std::size_t(bricks_[0]) * (y / E + std::size_t(bricks_[1]) * (z / E)));
+  }
+
+  // Queues (key 0) the brick of voxel `index` and every neighbour brick whose halo holds it: a seed
+  // written on a brick's face must reach the brick across it even when no voxel of its own brick
+  // is lowered (a face of seeds and voxels outside the range limit).
+  void queueBricksHolding(std::size_t index, std::vector<std::pair<int, Dist>>& touched) const {
+    const Dims d = p_.grid.dims;
+    const int x = int(index % std::size_t(d.x)), y = int((index / std::size_t(d.x)) % std::size_t(d.y)),
+              z = int(index / (std::size_t(d.x) * std::size_t(d.y)));
+    const int brick[3] = {x / E, y / E, z / E};
+    touched.push_back({brickOf(index), 0});
+    const unsigned mask = neighbourMask(x % E, y % E, z % E);
+    for (int n = 0; n < 27; ++n) {
+      if (!(mask & (1u << n))) continue;
+      const int nb[3] = {brick[0] + n % 3 - 1, brick[1] + (n / 3) % 3 - 1, brick[2] + n / 9 - 1};
+      if (nb[0] < 0 || nb[1] < 0 || nb[2] < 0 || nb[0] >= bricks_[0] || nb[1] >= bricks_[1] || nb[2] >= bricks_[2]) continue;
+      touched.push_back({nb[0] + bricks_[0] * (nb[1] + bricks_[1] * nb[2]), 0});
+    }
   }
 
   // A fresh state, or the reset of the change's labels; the bricks touched go into `touched` with
