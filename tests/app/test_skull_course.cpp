@@ -93,6 +93,9 @@ const std::map<std::string, std::function<bool(const Vec3&)>>& expectedPlaces() 
       {"petrous_temporal_bone_left", [](const Vec3& p) { return p[0] > 20 && p[0] < 55 && p[1] > 0; }},
       {"atlas_c1", [](const Vec3& p) { return p[1] > 0 && p[2] < -65; }},                  // behind the teeth, lowest
       {"axis_c2", [](const Vec3& p) { return p[1] > 0 && p[2] < -65; }},
+      // Above the notch (k 17 and up) under the zygomatic arch, in front of the condyles.
+      {"coronoid_process_right", [](const Vec3& p) { return p[0] < -30 && p[1] < -20 && p[2] > -60 && p[2] < -40; }},
+      {"coronoid_process_left", [](const Vec3& p) { return p[0] > 30 && p[1] < -20 && p[2] > -60 && p[2] < -40; }},
   };
   return places;
 }
@@ -163,6 +166,11 @@ TEST_CASE("Every skull structure is described, has at least 100 voxels and lies 
   const auto centre = [&](const std::string& id) { return found.at(skull.findStructure(id)->label).mm; };
   CHECK(centre("mandible")[2] < centre("mastoid_air_cells_right")[2]);
   CHECK(centre("mandible")[1] < centre("mastoid_air_cells_left")[1] - 20);
+  // Each coronoid process above the rest of the mandible and in front of it.
+  for (const char* coronoid : {"coronoid_process_right", "coronoid_process_left"}) {
+    CHECK(centre(coronoid)[2] > centre("mandible")[2] + 10);
+    CHECK(centre(coronoid)[1] < centre("mandible")[1] - 5);
+  }
   CHECK(centre("upper_teeth")[2] < centre("orbit_left")[2] - 30);
   CHECK(centre("frontal_sinus")[2] > centre("ethmoid_air_cells")[2]);
   CHECK(centre("ethmoid_air_cells")[1] < centre("sphenoid_sinus")[1]);
