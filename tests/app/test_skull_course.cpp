@@ -19,6 +19,7 @@
 #include "lessons/course_json.h"
 #include "render/scene.h"
 #include "scan_catalogue.h"
+#include "segment/seeds.h"
 #include "skull_scan.h"
 #include "test_support.h"
 #include "volume/png_image.h"
@@ -130,6 +131,31 @@ TEST_CASE("The skull's labels grow bit for bit from the kept seeds, as reviewed"
     REQUIRE(reference.at("voxels").contains(s.displayName));
     CHECK(found.at(s.label).voxels == reference.at("voxels").at(s.displayName).get<std::size_t>());
   }
+}
+
+TEST_CASE("Every skull label with a grow_range in its seeds lies in that range: bones are bone, canals air") {
+  const auto& cache = test::grownSkullCache();
+  if (!cache) return;
+  test::SkullCacheScope scope(*cache);
+  const Dataset skull = openSkull();
+  auto seeds = segment::loadSeeds(test::sourceDir() / "data" / "segmentations" / "skull" / "seeds.json");
+  REQUIRE_MESSAGE(seeds, test::errorText(seeds));
+  int ranged = 0;
+  for (const segment::SeedLabel& l : seeds->labels) {
+    if (!l.growRange) continue;  // the skull's ranges are explicit HU ranges
+    CAPTURE(l.name);
+    ++ranged;
+    std::size_t voxels = 0, outside = 0;
+    for (std::size_t i = 0; i < skull.labels.voxels.size(); ++i) {
+      if (skull.labels.voxels[i] != l.value) continue;
+      ++voxels;
+      const double hu = skull.intensity.valueOf(skull.volume.voxels[i]);
+      outside += hu < (*l.growRange)[0] || hu > (*l.growRange)[1];
+    }
+    CHECK(voxels >= 100);
+    CHECK(outside == 0);
+  }
+  CHECK(ranged >= 10);  // the bones (mandible, coronoid processes, maxilla, arches, C1, C2) and both canals
 }
 
 TEST_CASE("Every skull structure is described, has at least 100 voxels and lies where the anatomy puts it") {
