@@ -88,7 +88,8 @@ RecordedClass recordClass(const std::filesystem::path& db, std::uint64_t seed) {
         r.response.stepIndex = int(i);
         const std::string& target = step.question.target;
         const lessons::StructureProgress before =
-            memory.count(target) ? memory[target] : lessons::StructureProgress{user->id, target};
+            memory.count(target) ? memory[target]
+                                 : lessons::StructureProgress{.userId = user->id, .structureId = target, .memory = {}};
         r.update.rating = lessons::ratingFor(correct, r.response.score, step.question.kind, r.response.latencyMs);
         r.update.memoryBefore = before.memory;
         r.update.progress = lessons::scheduleAnswer(before, r.update.rating, correct, clock, fsrs);
