@@ -71,6 +71,19 @@ inline DesktopRun runDesktopScript(const TempDir& dir, const nlohmann::json& scr
   return r;
 }
 
+// The desktop on a laptop screen: `actions` on the 128³ phantom in a 1280×720 window (at the
+// default render scale), with progress in `db` under `user`. The window size the layout tests
+// check the panels against.
+inline constexpr int kLaptopWidth = 1280, kLaptopHeight = 720;
+inline DesktopRun runLaptopScript(const TempDir& dir, const nlohmann::json& actions, const std::filesystem::path& db,
+                                  const std::string& user) {
+  DesktopOptions options;
+  options.size = std::to_string(kLaptopWidth) + "x" + std::to_string(kLaptopHeight);
+  options.db = db;
+  options.user = user;
+  return runDesktopScript(dir, {{"actions", actions}}, options);
+}
+
 // The events of one kind ({"event": kind, …}), in order.
 inline std::vector<nlohmann::json> eventsOf(const std::vector<nlohmann::json>& events, const std::string& kind) {
   std::vector<nlohmann::json> found;

@@ -88,7 +88,8 @@ RecordedClass recordClass(const std::filesystem::path& db, std::uint64_t seed) {
         r.response.stepIndex = int(i);
         const std::string& target = step.question.target;
         const lessons::StructureProgress before =
-            memory.count(target) ? memory[target] : lessons::StructureProgress{user->id, target};
+            memory.count(target) ? memory[target]
+                                 : lessons::StructureProgress{.userId = user->id, .structureId = target, .memory = {}};
         r.update.rating = lessons::ratingFor(correct, r.response.score, step.question.kind, r.response.latencyMs);
         r.update.memoryBefore = before.memory;
         r.update.progress = lessons::scheduleAnswer(before, r.update.rating, correct, clock, fsrs);
@@ -238,10 +239,6 @@ TEST_CASE("the Class analytics window under Xvfb at 1280x720: tables of the clas
   test::TempDir dir("desktop_analytics_xvfb");
   const auto db = dir / "class.db";
   recordClass(db, test::freshSeed("DesktopAnalytics_Screenshot"));
-  test::DesktopOptions options;
-  options.db = db;
-  options.size = "1280x720";
-  options.user = "instructor";
   const auto shot = dir / "analytics.png";
   json actions = {{{"do", "analytics"}, {"course", kCourse}}, {{"do", "wait"}, {"ms", 300}}, {{"do", "screenshot"}, {"path", shot.string()}}};
   for (const char* tab : {"missed", "students", "lessons"}) {
@@ -249,7 +246,7 @@ TEST_CASE("the Class analytics window under Xvfb at 1280x720: tables of the clas
     actions.push_back({{"do", "wait"}, {"ms", 300}});
     actions.push_back({{"do", "screenshot"}, {"path", (dir / (std::string("analytics_") + tab + ".png")).string()}});
   }
-  const auto run = test::runDesktopScript(dir, {{"actions", actions}}, options);
+  const auto run = test::runLaptopScript(dir, actions, db, "instructor");
   INFO(run.err);
   REQUIRE(run.exitCode == 0);
   CHECK(test::eventsOf(run.events, "screenshot").size() == 4);
@@ -262,8 +259,8 @@ TEST_CASE("the Class analytics window under Xvfb at 1280x720: tables of the clas
   CHECK_FALSE(storedUsers(db).count("instructor"));
   auto image = readPng(shot.string());
   REQUIRE_MESSAGE(image, (image ? "" : image.error().message));
-  CHECK(image->width == 1280);
-  CHECK(image->height == 720);
+  CHECK(image->width == test::kLaptopWidth);
+  CHECK(image->height == test::kLaptopHeight);
   // The window's bars: the error-rate bars are drawn in their red over the view's right part.
   int red = 0;
   for (int y = 0; y < image->height; ++y)

@@ -46,21 +46,17 @@ TEST_CASE("at 1280x720 the order and relation feedback and the Next button are i
             {{"do", "lesson_next"}}, {{"do", "answer"}, {"value", 0}},
             {{"do", "widgets"}}, {{"do", "screenshot"}, {"path", (dir / "relation.png").string()}}}))
     actions.push_back(a);
-  at::test::DesktopOptions options;
-  options.size = "1280x720";
-  options.db = db;
-  options.user = "examinee";
-  const at::test::DesktopRun r = at::test::runDesktopScript(dir, {{"actions", actions}}, options);
+  const at::test::DesktopRun r = at::test::runLaptopScript(dir, actions, db, "examinee");
   INFO(r.err);
   REQUIRE(r.exitCode == 0);
   const auto graded = at::test::eventsOf(r.events, "graded");
   REQUIRE(graded.size() == 6);
   const auto frames = at::test::eventsOf(r.events, "widgets");
   REQUIRE(frames.size() == 2);
-  const json window = {0, 0, 1280, 720};
+  const json window = {0, 0, at::test::kLaptopWidth, at::test::kLaptopHeight};
   for (const json& frame : frames) {
     INFO(frame.dump());
-    CHECK(frame.value("window", "") == "1280x720");
+    CHECK(frame.value("window", "") == std::to_string(at::test::kLaptopWidth) + "x" + std::to_string(at::test::kLaptopHeight));
     for (const char* name : {"lesson_feedback", "lesson_next"}) {
       INFO(name);
       REQUIRE(frame["widgets"].contains(name));

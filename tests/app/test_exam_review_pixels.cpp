@@ -96,11 +96,7 @@ TEST_CASE("the exam review draws each item's target highlighted in its view and 
                                       {{"do", "screenshot"}, {"path", slice}}}))
       actions.push_back(a);
   }
-  at::test::DesktopOptions options;
-  options.size = "1280x720";
-  options.db = db;
-  options.user = "examinee";
-  const at::test::DesktopRun r = at::test::runDesktopScript(dir, {{"actions", actions}}, options);
+  const at::test::DesktopRun r = at::test::runLaptopScript(dir, actions, db, "examinee");
   INFO(r.err);
   REQUIRE(r.exitCode == 0);
   // For a person to look at: AT_KEEP_SCREENSHOTS=DIR keeps a copy of each picture.
@@ -132,8 +128,8 @@ TEST_CASE("the exam review draws each item's target highlighted in its view and 
     // --- "show": the target, in its highlight colour, where it projects.
     auto shot = at::readPng((dir / ("show_" + std::to_string(i) + ".png")).string());
     REQUIRE(shot);
-    REQUIRE(shot->width == 1280);
-    REQUIRE(shot->height == 720);
+    REQUIRE(shot->width == at::test::kLaptopWidth);
+    REQUIRE(shot->height == at::test::kLaptopHeight);
     CHECK(item.value("preset", "") == target + "_wdt");
     const json& where = projected[std::size_t(i)];
     REQUIRE(where.value("structure", "") == target);

@@ -156,7 +156,8 @@ int checkQuestionScenes(const Dataset& dataset, const std::string& datasetId) {
           const Structure* picked = dataset.findStructureByLabel(clicked.label);
           quiz::ResolvedQuestion asked;
           asked.question = q;
-          auto grade = quiz::gradeLocate(asked, quiz::Pick{picked ? picked->id : "", -1}, names);
+          const quiz::Pick pick{.structure = picked ? picked->id : "", .distanceMm = -1, .pixel = std::nullopt};
+          auto grade = quiz::gradeLocate(asked, pick, names);
           REQUIRE(grade);
           CHECK_MESSAGE(grade->correct, grade->feedback);
           located += grade->correct;

@@ -103,7 +103,7 @@ void buildClass(ClassFixture& f, std::uint64_t seed) {
     g.latencyMs = 3000;
     g.answeredAt = at;
     const StructureProgress before = f.memory.count({user, structure}) ? f.memory[{user, structure}]
-                                                                        : StructureProgress{user, structure};
+                                                                        : StructureProgress{.userId = user, .structureId = structure, .memory = {}};
     LearnerUpdate up;
     up.rating = ratingFor(correct, score, kind, g.latencyMs);
     up.memoryBefore = before.memory;

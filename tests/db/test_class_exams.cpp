@@ -8,6 +8,7 @@
 #include <ctime>
 #include <random>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "database.h"  // db/'s private SQL wrapper (at_db_sql_for_tests)
@@ -25,6 +26,31 @@ using test::openAt;
 using test::SecureClass;
 std::int64_t count(Database& db, const std::string& sql) { return test::scalarCount(db, sql); }
 
+// The keys of toyExam's items, one maker a kind. The name key leaves what setNameKey fills empty.
+ClassExamKey identifyKey(const std::string& questionId, const std::string& target, int keyChoice) {
+  ClassExamKey k;
+  k.questionId = questionId;
+  k.target = target;
+  k.keyChoice = keyChoice;
+  return k;
+}
+ClassExamKey nameKey(const std::string& questionId, const std::string& target, std::vector<std::string> names) {
+  ClassExamKey k;
+  k.questionId = questionId;
+  k.target = target;
+  k.names = std::move(names);
+  return k;
+}
+ClassExamKey locateKey(const std::string& questionId, const std::string& target, double toleranceMm,
+                       std::vector<PixelRun> acceptedPixels) {
+  ClassExamKey k;
+  k.questionId = questionId;
+  k.target = target;
+  k.toleranceMm = toleranceMm;
+  k.acceptedPixels = std::move(acceptedPixels);
+  return k;
+}
+
 // An exam of every kind: two identify items (keys 2 and 0), a name item, a locate item on a 40×30
 // picture whose pixels (5..9, 10) and (6..8, 11) count. Item texts never name an identify or name
 // item's target.
@@ -40,10 +66,9 @@ ClassExamOpening toyExam(const std::string& id) {
              {2, "locate", "Locate the incus.", {}, "3d", R"({"structure":"malleus","preset":"malleus_wdt"})", "iVBORw0KGgo=",
               40, 30},
              {3, "identify", "Which structure is marked?", {"cochlea", "malleus", "incus", "stapes"}, "3d", "{}", "iVBORw0KGgo="}};
-  x.keys = {{"ex.identify.stapes", "stapes", 2, {}, 0},
-            {"ex.name.stapes", "stapes", -1, {"Stapes", "stirrup"}, 0},
-            {"ex.locate.incus", "incus", -1, {}, 2.0, {{10, 5, 9}, {11, 6, 8}}},
-            {"ex.identify.cochlea", "cochlea", 0, {}, 0}};
+  x.keys = {identifyKey("ex.identify.stapes", "stapes", 2), nameKey("ex.name.stapes", "stapes", {"Stapes", "stirrup"}),
+            locateKey("ex.locate.incus", "incus", 2.0, {{10, 5, 9}, {11, 6, 8}}),
+            identifyKey("ex.identify.cochlea", "cochlea", 0)};
   return x;
 }
 

@@ -166,8 +166,9 @@ TEST_CASE("A database at every earlier version migrates to the same schema as a 
     review.response.answer.text = "stapes";
     review.response.correct = true;
     review.response.answeredAt = 300000;
-    review.update.progress = {learner, "stapes"};
-    review.update.progress.memory = lessons::Fsrs().review({}, lessons::Rating::Good, 300000);
+    review.update.progress = {.userId = learner,
+                              .structureId = "stapes",
+                              .memory = lessons::Fsrs().review({}, lessons::Rating::Good, 300000)};
     review.update.progress.answered = 1;
     review.update.progress.correct = 1;
     auto recorded = progress.recordReviewAnswer(review);

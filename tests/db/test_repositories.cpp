@@ -37,7 +37,8 @@ std::int64_t countRows(Database& db, const std::string& table) {
 LearnerUpdate firstAnswer(std::int64_t userId, const std::string& structure, Rating rating, UnixSeconds at,
                           double abilityAfter = 1500, double difficultyAfter = 1500) {
   LearnerUpdate u;
-  u.progress = scheduleAnswer(StructureProgress{userId, structure}, rating, rating != Rating::Again, at, Fsrs());
+  const StructureProgress before{.userId = userId, .structureId = structure, .memory = {}};
+  u.progress = scheduleAnswer(before, rating, rating != Rating::Again, at, Fsrs());
   u.rating = rating;
   u.abilityAfter = abilityAfter;
   u.difficultyAfter = difficultyAfter;
@@ -233,7 +234,7 @@ TEST_CASE("An answer is stored with its progress, ability and difficulty in one 
   r.response.stepIndex = 3;
   r.response.questionId = "toy.ossicles.locate_malleus";
   r.response.structureId = "malleus";
-  r.response.answer.pick = quiz::Pick{"incus", 0.25};
+  r.response.answer.pick = quiz::Pick{.structure = "incus", .distanceMm = 0.25, .pixel = std::nullopt};
   r.response.correct = true;
   r.response.score = 1;
   r.response.latencyMs = 4321;
@@ -663,14 +664,22 @@ TEST_CASE("Exam attempts and their items round-trip; an item's answer is written
   items[0].question.question.prompt = "Which structure is marked?";
   items[0].question.choices = {"incus", "stapes", "malleus"};
   items[0].question.keyChoice = 1;
-  items[0].scene = {"stapes", "stapes_wdt", CameraView::Inferior};
+  items[0].scene = {.structure = "stapes",
+                    .presetId = "stapes_wdt",
+                    .view = CameraView::Inferior,
+                    .camera = std::nullopt,
+                    .clip = std::nullopt};
   items[1].position = 1;
   items[1].question.question.id = "toy.exam.locate.incus";
   items[1].question.question.kind = quiz::QuestionKind::Locate;
   items[1].question.question.target = "incus";
   items[1].question.question.prompt = "Locate the Incus on the slice.";
   items[1].locateView = ExamLocateView::Slice;
-  items[1].scene = {"malleus", "malleus_wdt", CameraView::LateralRight};
+  items[1].scene = {.structure = "malleus",
+                     .presetId = "malleus_wdt",
+                     .view = CameraView::LateralRight,
+                     .camera = std::nullopt,
+                     .clip = std::nullopt};
   auto started = exams.startExamAttempt(attempt, items);
   REQUIRE_MESSAGE(started, (started ? "" : started.error().message));
   CHECK(started->id > 0);
@@ -693,7 +702,7 @@ TEST_CASE("Exam attempts and their items round-trip; an item's answer is written
   record.position = 1;
   record.answer.questionId = "toy.exam.locate.incus";
   record.answer.structureId = "incus";
-  record.answer.answer.pick = quiz::Pick{"incus", 0};
+  record.answer.answer.pick = quiz::Pick{.structure = "incus", .distanceMm = 0, .pixel = std::nullopt};
   record.answer.correct = true;
   record.answer.score = 1;
   record.answer.latencyMs = 3000;

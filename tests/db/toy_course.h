@@ -123,7 +123,11 @@ inline lessons::Course toyCourse(int version = 1) {
   locate.target = "malleus";
   locate.toleranceMm = 0.5;
   a.steps.push_back(questionStep(locate));
-  a.steps.back().scene = lessons::QuestionScene{"incus", "incus_wdt", lessons::CameraView::LateralRight};
+  a.steps.back().scene = lessons::QuestionScene{.structure = "incus",
+                                                 .presetId = "incus_wdt",
+                                                 .view = lessons::CameraView::LateralRight,
+                                                 .camera = std::nullopt,
+                                                 .clip = std::nullopt};
   c.lessons.push_back(a);
 
   lessons::Lesson b;

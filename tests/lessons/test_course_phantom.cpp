@@ -239,7 +239,7 @@ TEST_CASE("ShippedCourse_NameQuestionsAcceptSynonymsButNotTheNeighbouringCanal")
   // A grading context built like the engine's: "external auditory canal" is not a typo of the internal one.
   quiz::GradingContext context;
   for (const Structure& s : phantomStructures()) {
-    quiz::NameEntry e{s.id, {s.displayName}};
+    quiz::NameEntry e{.structureId = s.id, .names = {s.displayName}, .baseName = ""};
     for (const std::string& syn : p.course.synonyms[s.id]) e.names.push_back(syn);
     context.names.push_back(e);
   }

@@ -35,7 +35,13 @@ struct Fixture {
     one.courseId = "toy";
     one.title = "Lesson one";
     Step show;
-    show.show = {"cochlea", "cochlea_wdt", CameraView::LateralRight, "Cochlea", "Text."};
+    show.show = {.structure = "cochlea",
+                 .presetId = "cochlea_wdt",
+                 .view = CameraView::LateralRight,
+                 .title = "Cochlea",
+                 .text = "Text.",
+                 .camera = std::nullopt,
+                 .clip = std::nullopt};
     one.steps = {show};
     c.lessons = {one};
     ExamSpec e;
@@ -76,7 +82,7 @@ struct Fixture {
 quiz::Answer rightAnswer(const quiz::ResolvedQuestion& q) {
   quiz::Answer a;
   switch (q.question.kind) {
-    case quiz::QuestionKind::Locate: a.pick = quiz::Pick{q.question.target, 0}; break;
+    case quiz::QuestionKind::Locate: a.pick = quiz::Pick{.structure = q.question.target, .distanceMm = 0, .pixel = std::nullopt}; break;
     case quiz::QuestionKind::Identify: a.choice = q.keyChoice; break;
     default: a.text = q.question.target; break;
   }
@@ -87,7 +93,7 @@ quiz::Answer wrongAnswer(const quiz::ResolvedQuestion& q) {
   quiz::Answer a;
   const std::string other = q.question.target == "malleus" ? "incus" : "malleus";
   switch (q.question.kind) {
-    case quiz::QuestionKind::Locate: a.pick = quiz::Pick{other, 3.0}; break;
+    case quiz::QuestionKind::Locate: a.pick = quiz::Pick{.structure = other, .distanceMm = 3.0, .pixel = std::nullopt}; break;
     case quiz::QuestionKind::Identify: a.choice = (q.keyChoice + 1) % int(q.choices.size()); break;
     default: a.text = other; break;
   }

@@ -417,7 +417,7 @@ TEST_CASE("Review_AsksOnlyAboutTaughtStructures_NotLockedOrUnstartedLessons") {
 
   // The user answers about the incus elsewhere (another course's lesson, an exam): a memory state,
   // but lesson two, whose question asks about it, is not started, so it is not taught here.
-  StructureProgress incus{1, "incus"};
+  StructureProgress incus{.userId = 1, .structureId = "incus", .memory = {}};
   incus = scheduleAnswer(incus, Rating::Good, true, f.clock, Fsrs());
   f.progress.progressMap[{1, "incus"}] = incus;
   CHECK(reviewQueue(f.curriculum, f.progress, 1, "toy", f.clock + 30 * 86400)->empty());

@@ -19,7 +19,7 @@ TEST_CASE("RatingFor_WrongIsAgainPartlyRightIsHardRightIsGoodFastIsEasy") {
 
 TEST_CASE("ScheduleAnswer_MovesTheMemoryStateByFsrsAndCountsAnswers") {
   const Fsrs fsrs;
-  StructureProgress p{7, "cochlea"};
+  StructureProgress p{.userId = 7, .structureId = "cochlea", .memory = {}};
   p = scheduleAnswer(p, Rating::Good, true, 1000, fsrs);
   CHECK((p.memory.phase == MemoryPhase::Learning));
   CHECK(p.memory.due == 1000 + 600);
@@ -31,7 +31,7 @@ TEST_CASE("ScheduleAnswer_MovesTheMemoryStateByFsrsAndCountsAnswers") {
   CHECK(p.correct == 1);
   CHECK(p.memory.lastReview == 2000);
   // The same history gives the same state (the fuzz is drawn from who, what and when).
-  StructureProgress q{7, "cochlea"};
+  StructureProgress q{.userId = 7, .structureId = "cochlea", .memory = {}};
   q = scheduleAnswer(q, Rating::Good, true, 1000, fsrs);
   q = scheduleAnswer(q, Rating::Again, false, 2000, fsrs);
   CHECK(q.memory.due == p.memory.due);
@@ -40,7 +40,7 @@ TEST_CASE("ScheduleAnswer_MovesTheMemoryStateByFsrsAndCountsAnswers") {
 
 TEST_CASE("DueForReview_OrdersByDueTimeThenIdAndSkipsFutureAndUnanswered") {
   const auto at = [](const char* id, at::lessons::UnixSeconds due, int answered) {
-    StructureProgress p{1, id};
+    StructureProgress p{.userId = 1, .structureId = id, .memory = {}};
     p.memory.phase = answered ? MemoryPhase::Review : MemoryPhase::New;
     p.memory.due = due;
     p.answered = answered;

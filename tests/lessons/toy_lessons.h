@@ -14,7 +14,13 @@ namespace at::lessons::toy {
 inline Step showStep(const std::string& structure) {
   Step s;
   s.kind = StepKind::Show;
-  s.show = {structure, structure + "_wdt", CameraView::LateralRight, "About " + structure, "Text."};
+  s.show = {.structure = structure,
+            .presetId = structure + "_wdt",
+            .view = CameraView::LateralRight,
+            .title = "About " + structure,
+            .text = "Text.",
+            .camera = std::nullopt,
+            .clip = std::nullopt};
   return s;
 }
 

@@ -2,6 +2,9 @@
 
 #include <cmath>
 #include <limits>
+#include <string>
+#include <utility>
+#include <vector>
 
 #include "quiz/grading.h"
 
@@ -9,17 +12,22 @@ using namespace at::quiz;
 
 namespace {
 
+// One structure's accepted spellings, with no side (these names carry none).
+NameEntry spellings(std::string structureId, std::vector<std::string> names) {
+  return NameEntry{.structureId = std::move(structureId), .names = std::move(names), .baseName = ""};
+}
+
 GradingContext phantomNames() {
   GradingContext c;
-  c.names = {{"cochlea", {"Cochlea"}},
-             {"vestibule", {"Vestibule"}},
-             {"stapes", {"Stapes", "stirrup"}},
-             {"incus", {"Incus", "anvil"}},
-             {"malleus", {"Malleus", "hammer"}},
-             {"superior_semicircular_canal", {"Superior semicircular canal", "anterior semicircular canal"}},
-             {"posterior_semicircular_canal", {"Posterior semicircular canal"}},
-             {"lateral_semicircular_canal", {"Lateral semicircular canal", "horizontal semicircular canal"}},
-             {"facial_nerve", {"Facial nerve", "cranial nerve VII"}}};
+  c.names = {spellings("cochlea", {"Cochlea"}),
+             spellings("vestibule", {"Vestibule"}),
+             spellings("stapes", {"Stapes", "stirrup"}),
+             spellings("incus", {"Incus", "anvil"}),
+             spellings("malleus", {"Malleus", "hammer"}),
+             spellings("superior_semicircular_canal", {"Superior semicircular canal", "anterior semicircular canal"}),
+             spellings("posterior_semicircular_canal", {"Posterior semicircular canal"}),
+             spellings("lateral_semicircular_canal", {"Lateral semicircular canal", "horizontal semicircular canal"}),
+             spellings("facial_nerve", {"Facial nerve", "cranial nerve VII"})};
   return c;
 }
 
@@ -43,7 +51,7 @@ ResolvedQuestion nameQuestion(const std::string& target, std::vector<std::string
 
 Answer pickAnswer(const std::string& structure, double distanceMm) {
   Answer a;
-  a.pick = Pick{structure, distanceMm};
+  a.pick = Pick{.structure = structure, .distanceMm = distanceMm, .pixel = std::nullopt};
   return a;
 }
 
@@ -152,7 +160,7 @@ TEST_CASE("Name_TypoCloserToAnotherStructure_IsNotAccepted") {
 
   // Classic near-miss pair: ileum vs ilium. One edit from the target but zero from the other.
   GradingContext c;
-  c.names = {{"ileum", {"Ileum"}}, {"ilium", {"Ilium"}}};
+  c.names = {spellings("ileum", {"Ileum"}), spellings("ilium", {"Ilium"})};
   ResolvedQuestion ileum = nameQuestion("ileum");
   auto nearMiss = grade(ileum, textAnswer("ilium"), c);
   REQUIRE(nearMiss);
@@ -166,7 +174,7 @@ TEST_CASE("Name_TypoCloserToAnotherStructure_IsNotAccepted") {
 
 TEST_CASE("Name_LeftRightWordOrderDoesNotMatter") {
   GradingContext c;
-  c.names = {{"kidney_left", {"Left kidney"}}, {"kidney_right", {"Right kidney"}}};
+  c.names = {spellings("kidney_left", {"Left kidney"}), spellings("kidney_right", {"Right kidney"})};
   ResolvedQuestion q = nameQuestion("kidney_left");
   CHECK(grade(q, textAnswer("kidney left"), c)->correct);
   CHECK(grade(q, textAnswer("Kidney (L)"), c)->correct);
@@ -236,8 +244,8 @@ TEST_CASE("NameInSentence_LowerCasesLabelCaseButKeepsAbbreviationsAndProperNames
 
 TEST_CASE("Feedback_NamesInsideSentencesAreLowerCaseAbbreviationsKept") {
   GradingContext c = phantomNames();
-  c.names.push_back({"c1", {"C1", "atlas"}});
-  c.names.push_back({"eustachian_tube", {"Eustachian tube"}});
+  c.names.push_back(spellings("c1", {"C1", "atlas"}));
+  c.names.push_back(spellings("eustachian_tube", {"Eustachian tube"}));
   CHECK(grade(locate("cochlea", 0), pickAnswer("cochlea", 0), c)->feedback == "Correct: that is the cochlea.");
   CHECK(grade(locate("c1", 0), pickAnswer("eustachian_tube", 12.5), c)->feedback ==
         "Not quite: you clicked the Eustachian tube. The C1 was 12.5 mm away.");

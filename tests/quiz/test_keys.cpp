@@ -1,7 +1,11 @@
 #include <doctest/doctest.h>
 
 #include <cmath>
+#include <cstdint>
 #include <limits>
+#include <string>
+#include <utility>
+#include <vector>
 
 #include "quiz/keys.h"
 #include "volume/mask.h"
@@ -12,6 +16,11 @@ using namespace at::quiz;
 namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
+
+// A structure known by its label, id and name alone (no browsing group, no description).
+Structure named(std::uint16_t label, std::string id, std::string displayName) {
+  return {.label = label, .id = std::move(id), .displayName = std::move(displayName), .system = "", .description = ""};
+}
 
 // A 20×5×5 grid of 1 mm voxels at the origin with three slabs along x:
 //   x:   0 1 2 3 4 5 6 7 8 9 10 11 12 13 14 15 16 17 18 19
@@ -27,7 +36,7 @@ Dataset slabs() {
   for (int k = 0; k < 5; ++k)
     for (int j = 0; j < 5; ++j)
       for (int i = 0; i < 20; ++i) d.labels.at(i, j, k) = std::uint16_t(labelAt[i]);
-  d.structures = {{1, "a", "A"}, {2, "b", "B"}, {3, "c", "C"}, {4, "empty", "Empty"}};
+  d.structures = {named(1, "a", "A"), named(2, "b", "B"), named(3, "c", "C"), named(4, "empty", "Empty")};
   return d;
 }
 
@@ -66,7 +75,7 @@ TEST_CASE("MarchLabels_ThinStructureCrossedObliquely_IsNotSkipped") {
   g.dims = {10, 10, 1};
   LabelMap labels(g, 0);
   for (int j = 0; j < 10; ++j) labels.at(5, j, 0) = 1;  // a one-voxel wall at x = 5
-  const std::vector<Structure> s = {{1, "wall", "Wall"}};
+  const std::vector<Structure> s = {named(1, "wall", "Wall")};
   CHECK(marchLabels(labels, s, {0, 0, 0}, {9, 9, 0}) == std::vector<std::string>{"wall"});
   CHECK(marchLabels(labels, s, {0, 9, 0}, {9, 0.3, 0}) == std::vector<std::string>{"wall"});
 }

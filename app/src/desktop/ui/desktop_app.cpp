@@ -1,7 +1,7 @@
 // The desktop application: the frame loop and its wiring. The window (window.h), the volume view
 // (volume_view.h) and the panels (panels.h) on one side; the model with its explore state, fields,
-// scheduler and controllers (../desktop_model.h) on the other; the UI script
-// (../script_interpreter.h) drives the model as the widgets do.
+// scheduler and controllers (desktop_model.h) on the other; the UI script
+// (script/script_interpreter.h) drives the model as the widgets do.
 //
 // A frame: input → model commands; the script's next actions; the model's frame (study view,
 // controllers, fields handed to the view); the view renders what the scheduler plans; the panels
@@ -21,7 +21,7 @@
 #include "script/script_interpreter.h"
 #include "segment_editor/segment_controller.h"
 #include "volume/png_image.h"
-#include "view/ui/volume_view.h"
+#include "ui/volume_view.h"
 #include "ui/widget_rects.h"
 #include "ui/window.h"
 

@@ -1,4 +1,4 @@
-#include "view/ui/volume_view.h"
+#include "ui/volume_view.h"
 
 #include "render/gl/window_target.h"
 #include "render/volume_preset.h"
