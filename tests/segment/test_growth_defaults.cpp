@@ -194,6 +194,10 @@ TEST_CASE("Grow at defaults on a uCT-like volume: bone labels are mostly bone, n
 // smoothing, base 0.1× the step noise) the organs reach 0.79 (liver), 0.88 (spleen), 0.94 (left
 // kidney), 0.84 (right kidney) (bench/RESULTS.md), so the test holds each to >= 0.75 and their mean
 // to at least the fixed base's (0.05 per mm: 0.48, 0.72, 0.67, 0.72) + 0.10: a floor, not the target.
+// Where the liver's missing voxels go: mostly to the background clicks in the portal vein and the
+// inferior vena cava, which this non-contrast CT shows as liver (36 … 37 HU against 45, noise sigma
+// 25 HU); the right kidney misses its renal sinus fat, which the reference counts as kidney
+// (bench/RESULTS.md, "what the labels take").
 TEST_CASE("Grow at defaults on the abdominal CT: liver, spleen and kidneys from <= 5 seeds each") {
   const std::filesystem::path root = test::sharedDataDir() / "totalsegmentator";
   if (!std::filesystem::exists(root / "ct_small.nii.gz")) {
