@@ -330,6 +330,8 @@ TEST_CASE("UI script: segment_* actions label the phantom, undo, export, and ref
       {{"do", "segment_label"}, {"name", "background"}},
       {{"do", "segment_seed"}, {"voxel", {1, 1, 1}}},
       {{"do", "segment_seed"}, {"voxel", {62, 62, 62}}},
+      // A large background dab limited to air values (a local threshold); later clicks are not.
+      {{"do", "segment_seed"}, {"voxel", {1, 1, 1}}, {"brush_mm", 4.0}, {"low", -1100}, {"high", -400}},
       {{"do", "segment_grow"}},
       {{"do", "segment_undo"}},
       {{"do", "segment_grow"}},
@@ -366,6 +368,15 @@ TEST_CASE("UI script: segment_* actions label the phantom, undo, export, and ref
   run = test::runHeadless({{"actions", bad}}, options);
   CHECK(run.exitCode == 2);
   CHECK(run.messages.find("voxel (64, 0, 0) is outside the volume") != std::string::npos);
+  // A seed range needs both ends, and the value under the voxel in it.
+  bad = json::array({{{"do", "segment_seed"}, {"voxel", {1, 1, 1}}, {"low", -1100}}});
+  run = test::runHeadless({{"actions", bad}}, options);
+  CHECK(run.exitCode == 2);
+  CHECK(run.messages.find("\"low\" and \"high\" go together") != std::string::npos);
+  bad = json::array({{{"do", "segment_seed"}, {"voxel", {1, 1, 1}}, {"low", 300}, {"high", 3000}}});
+  run = test::runHeadless({{"actions", bad}}, options);
+  CHECK(run.exitCode == 2);
+  CHECK(run.messages.find("is outside 300 … 3000") != std::string::npos);
   // Redo with nothing undone: one message.
   bad = json::array({{{"do", "segment_redo"}}});
   run = test::runHeadless({{"actions", bad}}, options);
