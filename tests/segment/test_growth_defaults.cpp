@@ -7,11 +7,9 @@
 //   names) — and in the background; every bone's grown label is ≥ 85 % bone voxels.
 //   Abdominal CT (TotalSegmentator, 3 mm): ≤ 5 seeds per organ; Dice for liver, spleen and both
 //   kidneys against the reference.
-// The issue's targets (85 % bone, Dice 0.85) are NOT all met yet at these defaults: 85 % bone is met
-// by four of the five bones after two rounds of background dabs on what the labels spilled onto
-// (the incus 82 … 98 %), and by all five in one growth with the "bone only" range limit; Dice 0.85
-// not for liver and right kidney. The tests hold the measured
-// floors below and print the tables.
+// The issue's targets: 85 % bone is met at these defaults after three rounds of background dabs on
+// what the labels spilled onto (and in one growth with the "bone only" range limit); Dice 0.85 is
+// NOT met for liver and right kidney. The abdominal test holds measured floors and prints the table.
 #include <doctest/doctest.h>
 
 #include <cstdio>
@@ -66,7 +64,7 @@ std::vector<GrowthSeed> microCtSeeds(const test::MicroCt& ct, const std::vector<
 // Background dabs a user adds per label in one round of corrections.
 constexpr int kDabsPerLabel = 3;
 // Rounds of corrections (look, dab, regrow) before the labels are measured.
-constexpr int kCorrectionRounds = 2;
+constexpr int kCorrectionRounds = 3;
 
 // One round of corrections as a user makes them after looking at a growth: for each label of
 // `labels`, up to `dabs` background dabs on the voxels it took that are darker than `boneLow` (the
@@ -138,25 +136,24 @@ std::vector<double> boneFractions(const test::MicroCt& ct, const std::vector<Gro
 }
 
 // The issue's target is >= 85 % for every bone. In one growth at these defaults the malleus reaches
-// only ~34 … 50 % (it varies with the noise): it is ~110 voxels in the tympanic air, and its label
-// takes the tympanic membrane against its handle (a soft-tissue sheet one or two voxels thick, at
-// about −150 HU after partial volume, joined to the canal's lining far from every background seed:
-// no seed rule short of a click on it holds it) — ~150 … 200 voxels; the incus reaches 71 … 82 %,
-// its label taking touching unlabelled bone (bone against bone has no edge) and, through it, some
-// air. A user sees that spill in the slices and dabs background on it: after two rounds (look, at
-// most 3 dabs per label on its voxels darker than the data-derived bone range — spillDabs — and
-// regrow incrementally) every bone but the incus holds >= 85 % (the malleus 100 % in each of 19
-// noise seeds tried), the incus 82.0 … 97.6 % (held to >= 78 %, a measured floor). The one-growth
-// checks are measured floors: every bone but the malleus >= 70 %, each no worse than the fixed base (0.05 per
-// mm, unsmoothed) minus 15 points (5 for the malleus), the mean no worse than it minus 5. With the
-// data-derived "bone only" range limit on (growth_settings.h) one growth reaches the target:
-// >= 85 % each. The noise seed is printed; AT_TEST_SEED replays it.
+// only 29.5 … 50 % (it varies with the noise; 24 seeds): it is ~110 voxels in the tympanic air, and
+// its label takes the tympanic membrane against its handle (a soft-tissue sheet one or two voxels
+// thick, at about −150 HU after partial volume, joined to the canal's lining far from every
+// background seed: no seed rule short of a click on it holds it) — ~150 … 200 voxels; the incus
+// reaches 71 … 84 %, its label taking touching unlabelled bone (bone against bone has no edge) and,
+// through it, some air. A user sees that spill in the slices and dabs background on it: after three
+// rounds (look, at most 3 dabs per label on its voxels darker than the data-derived bone range —
+// spillDabs — and regrow incrementally) every bone holds >= 85 % (24 noise seeds: malleus 100 %,
+// incus 88.1 … 100 %, the others >= 98.4 %). The one-growth checks are measured floors: every bone
+// but the malleus >= 70 %, each no worse than the fixed base (0.05 per mm, unsmoothed) minus 15
+// points (5 for the malleus), the mean no worse than it minus 5. With the data-derived "bone only" range limit on
+// (growth_settings.h) one growth reaches the target: >= 85 % each. The noise seed is printed;
+// AT_TEST_SEED replays it.
 TEST_CASE("Grow at defaults on a uCT-like volume: bone labels are mostly bone, no worse than the fixed base") {
   const std::uint64_t seed = test::freshSeed("uCT-like volume noise");
   const test::MicroCt ct = test::makeMicroCt(128, 0.1, 6.0, seed);
   const Dataset& ds = ct.dataset;
-  const std::uint16_t incus = labelOf(ds, "incus");
-  std::vector<std::uint16_t> bones = {labelOf(ds, "malleus"), incus, labelOf(ds, "stapes"),
+  std::vector<std::uint16_t> bones = {labelOf(ds, "malleus"), labelOf(ds, "incus"), labelOf(ds, "stapes"),
                                       labelOf(ds, "temporal_line")};
   const std::vector<GrowthSeed> seeds = microCtSeeds(ct, bones, 3.0);
   bones.push_back(kPetrousBone);
@@ -180,7 +177,7 @@ TEST_CASE("Grow at defaults on a uCT-like volume: bone labels are mostly bone, n
                 "with base 0.05/mm, %5.1f %% bone only\n",
                 unsigned(bones[i]), 100 * now[i], 100 * corrected[i], kCorrectionRounds, 100 * before[i], 100 * boneOnly[i]);
     CAPTURE(bones[i]);
-    CHECK(corrected[i] >= (bones[i] == incus ? 0.78 : 0.85));
+    CHECK(corrected[i] >= 0.85);
     if (i != 0) CHECK(now[i] >= 0.70);
     CHECK(now[i] >= before[i] - (i == 0 ? 0.05 : 0.15));
     CHECK(boneOnly[i] >= 0.85);
