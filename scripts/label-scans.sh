@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Labels the real scans that fetch-scans.sh fetched, with anatomy-tutor's own segment command, from
 # the seeds kept in the repository (data/segmentations/<scan>/seeds.json). Today one: the skull CT,
-# 21 structures grown from seeds (CPU, a few seconds). The label map and its names go beside the
+# 23 structures grown from seeds, the bones kept to their tissue range (CPU, about half a minute). The label map and its names go beside the
 # scan in the cache folder, where `anatomy-tutor ... skull` finds them:
 #   ${XDG_CACHE_HOME:-~/.cache}/anatomy-tutor/scans/invesalius-examples/skull.labels.nii.gz (+ .names.json)
 # The same seeds give the same labels bit for bit (tests/app/test_skull_course.cpp checks them).
@@ -25,4 +25,5 @@ tmp="$dest/skull.labels.part.nii.gz"
 "$bin" segment skull --seeds data/segmentations/skull/seeds.json --method grow --backend cpu \
   --out "$tmp" --names "$dest/skull.labels.names.json" >/dev/null
 mv "$tmp" "$dest/skull.labels.nii.gz"
-echo "label-scans: skull: $dest/skull.labels.nii.gz (21 structures from data/segmentations/skull/seeds.json)"
+count=$(grep -c '"value": [1-9]' data/segmentations/skull/seeds.json)
+echo "label-scans: skull: $dest/skull.labels.nii.gz ($count structures from data/segmentations/skull/seeds.json)"

@@ -23,6 +23,8 @@ export AT_DATA_DIR="${AT_DATA_DIR:-$root/data}"
 # id and the view that shows it best
 views="upper_teeth inferior
 mandible lateral_right
+coronoid_process_right lateral_right
+coronoid_process_left lateral_left
 maxilla anterior
 zygomatic_arch_right lateral_right
 zygomatic_arch_left lateral_left
@@ -34,14 +36,14 @@ sphenoid_sinus lateral_right
 ethmoid_air_cells anterior
 orbit_right anterior
 orbit_left anterior
-external_acoustic_meatus_right lateral_right
-external_acoustic_meatus_left lateral_left
+external_acoustic_meatus_right anterior
+external_acoustic_meatus_left anterior
 mastoid_air_cells_right lateral_right
 mastoid_air_cells_left lateral_left
 petrous_temporal_bone_right superior
 petrous_temporal_bone_left superior
 atlas_c1 inferior
-axis_c2 inferior"
+axis_c2 posterior"
 
 args=()
 while read -r id view; do

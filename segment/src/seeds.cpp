@@ -88,7 +88,7 @@ Result<SeedSet> readSeeds(const std::string& jsonText, const std::string& source
     const json& j = doc["labels"][i];
     const std::string field = "labels[" + std::to_string(i) + "]";
     if (!j.is_object()) return r.error(field, "must be an object");
-    if (auto ok = r.onlyKeys(j, field, {"value", "name", "colour", "range", "min_diameter_mm"}); !ok)
+    if (auto ok = r.onlyKeys(j, field, {"value", "name", "colour", "range", "min_diameter_mm", "grow_range"}); !ok)
       return tl::unexpected(ok.error());
     SeedLabel label;
     if (!j.contains("value") || !j["value"].is_number_integer() || j["value"].get<long long>() < 0 ||
@@ -116,6 +116,16 @@ Result<SeedSet> readSeeds(const std::string& jsonText, const std::string& source
       if (!j["min_diameter_mm"].is_number() || !(j["min_diameter_mm"].get<double>() >= 0))
         return r.error(field + ".min_diameter_mm", "must be a number >= 0");
       label.minDiameterMm = j["min_diameter_mm"].get<double>();
+    }
+    if (j.contains("grow_range")) {
+      if (j["grow_range"] == "bone") {
+        label.growRangeBone = true;
+      } else {
+        auto range = r.range(j["grow_range"], field + ".grow_range");
+        if (!range) return r.error(field + ".grow_range", "must be \"bone\" or 2 numbers [low, high] with low < high");
+        label.growRange = *range;
+      }
+      if (label.value == 0) return r.error(field + ".grow_range", "the background (value 0) cannot have one");
     }
     set.labels.push_back(std::move(label));
   }
@@ -212,6 +222,8 @@ std::string seedsToJson(const SeedSet& seeds) {
     if (l.colour) j["colour"] = *l.colour;
     if (l.range) j["range"] = *l.range;
     if (l.minDiameterMm > 0) j["min_diameter_mm"] = l.minDiameterMm;
+    if (l.growRangeBone) j["grow_range"] = "bone";
+    else if (l.growRange) j["grow_range"] = *l.growRange;
     out += "    " + j.dump() + (i + 1 < seeds.labels.size() ? ",\n" : "\n");
   }
   out += "  ],\n  \"strokes\": [\n";

@@ -19,6 +19,7 @@
 #include "lessons/course_json.h"
 #include "render/scene.h"
 #include "scan_catalogue.h"
+#include "segment/seeds.h"
 #include "skull_scan.h"
 #include "test_support.h"
 #include "volume/png_image.h"
@@ -93,6 +94,9 @@ const std::map<std::string, std::function<bool(const Vec3&)>>& expectedPlaces() 
       {"petrous_temporal_bone_left", [](const Vec3& p) { return p[0] > 20 && p[0] < 55 && p[1] > 0; }},
       {"atlas_c1", [](const Vec3& p) { return p[1] > 0 && p[2] < -65; }},                  // behind the teeth, lowest
       {"axis_c2", [](const Vec3& p) { return p[1] > 0 && p[2] < -65; }},
+      // Above the notch (k 17 and up) under the zygomatic arch, in front of the condyles.
+      {"coronoid_process_right", [](const Vec3& p) { return p[0] < -30 && p[1] < -20 && p[2] > -60 && p[2] < -40; }},
+      {"coronoid_process_left", [](const Vec3& p) { return p[0] > 30 && p[1] < -20 && p[2] > -60 && p[2] < -40; }},
   };
   return places;
 }
@@ -129,6 +133,31 @@ TEST_CASE("The skull's labels grow bit for bit from the kept seeds, as reviewed"
   }
 }
 
+TEST_CASE("Every skull label with a grow_range in its seeds lies in that range: bones are bone, canals air") {
+  const auto& cache = test::grownSkullCache();
+  if (!cache) return;
+  test::SkullCacheScope scope(*cache);
+  const Dataset skull = openSkull();
+  auto seeds = segment::loadSeeds(test::sourceDir() / "data" / "segmentations" / "skull" / "seeds.json");
+  REQUIRE_MESSAGE(seeds, test::errorText(seeds));
+  int ranged = 0;
+  for (const segment::SeedLabel& l : seeds->labels) {
+    if (!l.growRange) continue;  // the skull's ranges are explicit HU ranges
+    CAPTURE(l.name);
+    ++ranged;
+    std::size_t voxels = 0, outside = 0;
+    for (std::size_t i = 0; i < skull.labels.voxels.size(); ++i) {
+      if (skull.labels.voxels[i] != l.value) continue;
+      ++voxels;
+      const double hu = skull.intensity.valueOf(skull.volume.voxels[i]);
+      outside += hu < (*l.growRange)[0] || hu > (*l.growRange)[1];
+    }
+    CHECK(voxels >= 100);
+    CHECK(outside == 0);
+  }
+  CHECK(ranged >= 10);  // the bones (mandible, coronoid processes, maxilla, arches, C1, C2) and both canals
+}
+
 TEST_CASE("Every skull structure is described, has at least 100 voxels and lies where the anatomy puts it") {
   const auto& cache = test::grownSkullCache();
   if (!cache) return;
@@ -163,6 +192,11 @@ TEST_CASE("Every skull structure is described, has at least 100 voxels and lies 
   const auto centre = [&](const std::string& id) { return found.at(skull.findStructure(id)->label).mm; };
   CHECK(centre("mandible")[2] < centre("mastoid_air_cells_right")[2]);
   CHECK(centre("mandible")[1] < centre("mastoid_air_cells_left")[1] - 20);
+  // Each coronoid process above the rest of the mandible and in front of it.
+  for (const char* coronoid : {"coronoid_process_right", "coronoid_process_left"}) {
+    CHECK(centre(coronoid)[2] > centre("mandible")[2] + 10);
+    CHECK(centre(coronoid)[1] < centre("mandible")[1] - 5);
+  }
   CHECK(centre("upper_teeth")[2] < centre("orbit_left")[2] - 30);
   CHECK(centre("frontal_sinus")[2] > centre("ethmoid_air_cells")[2]);
   CHECK(centre("ethmoid_air_cells")[1] < centre("sphenoid_sinus")[1]);

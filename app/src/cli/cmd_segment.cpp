@@ -18,6 +18,7 @@
 #include "label_output.h"
 #include "segment/growth_settings.h"
 #include "segment/label_editor.h"
+#include "segment/ranged_growth.h"
 #include "segment/seeds.h"
 #include "volume/label_writers.h"
 #include "wdt/label_growth.h"
@@ -49,6 +50,8 @@ const char* kUsage =
     "                      data's step noise and voxel size, segment/growth_settings.h; printed);\n"
     "                      --smoothing S edge-preserving smoothing before growth, sigma in voxels\n"
     "                      (0 none; default 1 where the data are noisy)\n"
+    "  A label's \"grow_range\" ([LO, HI] or \"bone\") keeps it to voxels in that range, grown by a\n"
+    "                      second growth limited to it (segment/ranged_growth.h)\n"
     "  --range             grow only into voxels whose value lies in LO..HI (HU or intensities; others\n"
     "                      keep label 0 unless seeded); 'bone' takes the range derived from the data\n"
     "                      (300 HU and up for CT; a pseudo-HU bone threshold for plain intensities)\n"
@@ -195,6 +198,17 @@ int runSegment(const Argv& argv) {
     applyDatasetWindow(*dataset, params->windowMin, params->windowMax, true, params->weight == WeightRule::Density);
     auto grown = editor.growFromSeeds(dataset->volume, raster->seeds, *params, &stats);
     if (!grown) return reportError("segment: " + grown.error().message);
+    bool anyRange = false;
+    for (const segment::SeedLabel& l : seeds->labels) anyRange = anyRange || l.hasGrowRange();
+    if (anyRange) {
+      // Labels with a "grow_range" keep only their range's voxels (segment/ranged_growth.h).
+      const auto bone = segment::defaultGrowthSettings(dataset->volume, dataset->intensity).boneRangeValues;
+      auto ranged = segment::growWithLabelRanges(dataset->volume, dataset->intensity, editor.labels(), raster->seeds, *params,
+                                                 segment::labelRangesOf(*seeds, bone));
+      if (!ranged) return reportError("segment: " + ranged.error().message);
+      std::vector<Structure> structures = editor.structures();
+      editor = segment::LabelEditor(std::move(*ranged), std::move(structures));
+    }
     if (!stats.warning.empty()) terminalFprintf(stderr, "anatomy-tutor: segment: %s\n", stats.warning.c_str());
     char base[64];
     std::snprintf(base, sizeof base, ", base %.4g/mm", double(params->baseCost));

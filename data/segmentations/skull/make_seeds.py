@@ -28,7 +28,7 @@ def v(i, j, k): return a[(k * NJ + j) * NI + i]
 # The loader's LPS millimetres (docs/skull_landmarks.md), rounded to 0.01 mm.
 def mm(i, j, k): return (round((i - 127.5) * SP, 2), round(-(j - 127.5) * SP, 2), round((k - 53.5) * 1.5, 2))
 
-AIR = (-1100, -400); BONE = (300, 1800); DENSE = (1000, 4000); SOFT = (-150, 100); ANYBONE = (300, 4000); ENAMEL = (1800, 4000); ARCH = (200, 4000)
+AIR = (-1100, -400); AIR_ANY = [-2000, -400]; BONE = (300, 1800); DENSE = (1000, 4000); SOFT = (-150, 100); ANYBONE = (300, 4000); BONE_ANY = [300, 4000]; ENAMEL = (1800, 4000); ARCH = [200, 4000]
 # value, id, colour, [(range, box (i0,i1,j0,j1,k0,k1), start voxel or None = all in box)]
 S = [
  (1, 'Upper teeth', [0.95,0.93,0.80], [(ENAMEL, (80,179,150,224,0,13), None)]),
@@ -44,15 +44,29 @@ S = [
  (11, 'Ethmoid air cells', [0.40,0.55,0.95], [(AIR, (110,144,150,194,30,43), None)]),
  (12, 'Orbit (right)', [0.95,0.35,0.30], [(SOFT, (72,112,150,206,26,52), (93,179,39), ((112,158,38),(91,205,40),4,19))]),
  (13, 'Orbit (left)', [0.30,0.35,0.95], [(SOFT, (143,183,150,206,26,52), (163,182,40), ((143,158,38),(164,205,40),4,19))]),
- (14, 'External acoustic meatus (right)', [0.95,0.60,0.10], [(AIR, (62,94,108,129,15,27), (78,118,22))]),
- (15, 'External acoustic meatus (left)', [0.10,0.60,0.95], [(AIR, (160,199,108,125,15,27), (182,116,22))]),
+ # The canals from the concha to the isthmus before the eardrum (right i 60-86, left i 170-199), at
+ # their own level (k 15-23): the tympanic cavity and attic medial and above them are left out.
+ (14, 'External acoustic meatus (right)', [0.95,0.60,0.10], [(AIR, (60,86,106,126,15,23), (75,118,21))]),
+ (15, 'External acoustic meatus (left)', [0.10,0.60,0.95], [(AIR, (170,199,106,126,15,23), (182,116,21))]),
  (16, 'Mastoid air cells (right)', [0.85,0.30,0.60], [(AIR, (62,84,85,115,8,33), None)]),
  (17, 'Mastoid air cells (left)', [0.60,0.30,0.85], [(AIR, (155,193,85,115,8,33), None)]),
  (18, 'Petrous temporal bone (right)', [0.95,0.90,0.55], [(DENSE, (80,117,100,134,14,27), (94,112,23))]),
  (19, 'Petrous temporal bone (left)', [0.75,0.90,0.55], [(DENSE, (140,177,100,134,14,27), (167,113,23))]),
- (20, 'Atlas (C1)', [0.60,0.80,0.70], [(ANYBONE, (98,116,100,127,0,2), None), (ANYBONE, (140,159,100,127,0,2), None), (ANYBONE, (118,138,122,130,0,3), None)]),
- (21, 'Axis (C2)', [0.70,0.65,0.95], [(ANYBONE, (122,135,108,124,0,7), (129,119,3))]),
+ (20, 'Atlas (C1)', [0.60,0.80,0.70], [(ANYBONE, (98,116,100,127,0,2), None), (ANYBONE, (140,159,100,127,0,2), None), (ANYBONE, (118,138,123,131,0,7), None)]),
+ (21, 'Axis (C2)', [0.70,0.65,0.95], [(ANYBONE, (122,135,108,121,0,6), (129,119,3))]),
+ # The bone of each ramus in front of the mandibular notch, from the notch's lowest level (k 17) up
+ # to the tip under the zygomatic arch (k 25); listed after the mandible, but its core wins (FIRST).
+ (22, 'Coronoid process (right)', [0.95,0.75,0.30], [(BONE, (74,92,152,171,17,27), (82,164,23))]),
+ (23, 'Coronoid process (left)', [0.95,0.55,0.20], [(BONE, (172,190,152,171,17,27), (180,165,23))]),
 ]
+FIRST = ('Coronoid process (right)', 'Coronoid process (left)')
+# Labels that keep only voxels of a tissue range (the seeds file's "grow_range",
+# segment/ranged_growth.h): the bones, so a thin ramus or arch is not padded with the muscle and air
+# around it, and the ear canals, which keep their air and not the skin of their walls.
+GROW_RANGE = {'Mandible': BONE_ANY, 'Maxilla': BONE_ANY, 'Zygomatic arch (right)': ARCH, 'Zygomatic arch (left)': ARCH,
+              'Atlas (C1)': BONE_ANY, 'Axis (C2)': BONE_ANY, 'Coronoid process (right)': BONE_ANY,
+              'Coronoid process (left)': BONE_ANY,
+              'External acoustic meatus (right)': AIR_ANY, 'External acoustic meatus (left)': AIR_ANY}
 
 def inside(b, i, j, k): return b[0] <= i <= b[1] and b[2] <= j <= b[3] and b[4] <= k <= b[5]
 def cone(apex, front, r0, r1):
@@ -85,7 +99,7 @@ def comp(rng, b, start, keep=lambda i, j, k: True):
     return out
 
 owner = {}   # voxel -> label id (first listed wins)
-for value, name, colour, parts in S:
+for value, name, colour, parts in sorted(S, key=lambda s: s[1] not in FIRST):
     for part in parts:
         rng, b, start = part[:3]
         keep = cone(*part[3]) if len(part) > 3 else (lambda i, j, k: True)
@@ -122,7 +136,8 @@ def bg(i, j, k):
     return not near_structure(i, j, k)
 runs('background', bg, 4, 2, 1)
 value_of = {s[1]: s[0] for s in S}; value_of["background"] = 0
-labels = [{"value": 0, "name": "background"}] + [{"value": s[0], "name": s[1], "colour": s[2]} for s in S]
+labels = [{"value": 0, "name": "background"}] + [dict({"value": s[0], "name": s[1], "colour": s[2]},
+            **({"grow_range": GROW_RANGE[s[1]]} if s[1] in GROW_RANGE else {})) for s in S]
 lines = ['{', '  "schema": 1,', '  "space": "LPS",', '  "labels": [']
 lines += ['    ' + json.dumps(l) + (',' if n + 1 < len(labels) else '') for n, l in enumerate(labels)]
 lines += ['  ],', '  "strokes": [']

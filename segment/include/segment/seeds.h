@@ -6,7 +6,9 @@
 //     "space": "LPS",                                   LPS (default) or RAS millimetres
 //     "labels": [ {"value": 0, "name": "background"},
 //                 {"value": 5, "name": "liver", "colour": [0.86, 0.55, 0.39],
-//                  "range": [-50, 250], "min_diameter_mm": 3} ],        (threshold method only)
+//                  "range": [-50, 250], "min_diameter_mm": 3},          (threshold method only)
+//                 {"value": 2, "name": "mandible", "grow_range": "bone"} ],  grow: keep only values in
+//                                                   [low, high] or the data's bone range (ranged_growth.h)
 //     "strokes": [ {"label": "liver", "radius_mm": 2, "points": [[x, y, z], [x, y, z], ...]},
 //                  {"label": 0, "points": [[x, y, z]]} ],     a label by name or value; one point = a dot
 //     "grow": {"weight": "gradient", "window": [-160, 240], "base": 0.05, "range": [300, 3000],
@@ -38,6 +40,11 @@ struct SeedLabel {
   std::optional<std::array<float, 3>> colour;   // linear RGB 0..1
   std::optional<std::array<double, 2>> range;   // threshold method: values (HU or intensities)
   double minDiameterMm = 0;                     // threshold method: cut bridges thinner than this
+  // Grow method: the label keeps only voxels whose value lies in this range ("grow_range": [lo, hi])
+  // or in the dataset's data-derived bone range ("grow_range": "bone"); segment/ranged_growth.h.
+  std::optional<std::array<double, 2>> growRange;
+  bool growRangeBone = false;
+  bool hasGrowRange() const { return growRange.has_value() || growRangeBone; }
 };
 
 struct SeedStroke {

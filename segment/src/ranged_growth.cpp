@@ -1,0 +1,64 @@
+// Growth with per-label value ranges: the ordinary growth, then one range-limited growth per
+// distinct range, combined by the rule in ranged_growth.h.
+#include "segment/ranged_growth.h"
+
+#include <algorithm>
+#include <string>
+
+namespace at::segment {
+
+std::vector<LabelValueRange> labelRangesOf(const SeedSet& seeds, const std::array<double, 2>& boneRangeValues) {
+  std::vector<LabelValueRange> out;
+  for (const SeedLabel& l : seeds.labels) {
+    if (l.growRangeBone) out.push_back({l.value, boneRangeValues});
+    else if (l.growRange) out.push_back({l.value, *l.growRange});
+  }
+  return out;
+}
+
+Result<LabelMap> growWithLabelRanges(const Volume& volume, const IntensityModel& intensity, const LabelMap& unranged,
+                                     const std::vector<GrowthSeed>& seeds, const GrowthParams& params,
+                                     const std::vector<LabelValueRange>& ranges) {
+  if (unranged.voxels.size() != volume.voxels.size())
+    return fail("ranged growth: the labels' grid (" + std::to_string(unranged.voxels.size()) + " voxels) is not the volume's (" +
+                std::to_string(volume.voxels.size()) + ")");
+  std::vector<std::uint8_t> isRanged(65536, 0);
+  for (const LabelValueRange& r : ranges) {
+    if (r.label == 0) return fail("ranged growth: the background (label 0) cannot have a range");
+    if (!(r.values[0] < r.values[1]))
+      return fail("ranged growth: label " + std::to_string(r.label) + ": range " + std::to_string(r.values[0]) + " … " +
+                  std::to_string(r.values[1]) + " is not low < high");
+    isRanged[r.label] = 1;
+  }
+  LabelMap out = unranged;
+  for (std::uint16_t& v : out.voxels)
+    if (isRanged[v]) v = 0;
+  if (ranges.empty()) return out;
+
+  std::vector<std::uint8_t> decided(volume.voxels.size(), 0);
+  std::vector<std::array<double, 2>> done;
+  for (const LabelValueRange& first : ranges) {
+    if (std::find(done.begin(), done.end(), first.values) != done.end()) continue;
+    done.push_back(first.values);
+    std::vector<std::uint8_t> inThisRange(65536, 0);
+    for (const LabelValueRange& r : ranges)
+      if (r.values == first.values) inThisRange[r.label] = 1;
+    GrowthParams limited = withRangeLimit(params, intensity, first.values);
+    limited.backend = WdtBackend::Cpu;  // limited growth runs on the CPU (label_growth.h)
+    auto growth = LabelGrowth::create(volume, limited);
+    if (!growth) return tl::unexpected(growth.error());
+    auto stats = growth->update(seeds);
+    if (!stats) return tl::unexpected(stats.error());
+    const std::vector<std::uint16_t>& grown = growth->labels().voxels;
+    for (std::size_t i = 0; i < grown.size(); ++i) {
+      if (decided[i] || !inThisRange[grown[i]]) continue;
+      const float value = float(volume.voxels[i]);
+      if (value < limited.rangeMin || value > limited.rangeMax) continue;  // a seed painted outside
+      out.voxels[i] = grown[i];
+      decided[i] = 1;
+    }
+  }
+  return out;
+}
+
+}  // namespace at::segment
