@@ -8,10 +8,12 @@
 #include <algorithm>
 #include <chrono>
 #include <map>
+#include <optional>
 #include <thread>
 
 #include "db/connection.h"
 #include "headless_desktop.h"
+#include "segment/local_threshold.h"
 #include "segment/seeds.h"
 #include "segment_editor/segment_controller.h"
 #include "stroke_seeds.h"
@@ -328,6 +330,8 @@ TEST_CASE("UI script: segment_* actions label the phantom, undo, export, and ref
       {{"do", "segment_label"}, {"name", "background"}},
       {{"do", "segment_seed"}, {"voxel", {1, 1, 1}}},
       {{"do", "segment_seed"}, {"voxel", {62, 62, 62}}},
+      // A large background dab limited to air values (a local threshold); later clicks are not.
+      {{"do", "segment_seed"}, {"voxel", {1, 1, 1}}, {"brush_mm", 4.0}, {"low", -1100}, {"high", -400}},
       {{"do", "segment_grow"}},
       {{"do", "segment_undo"}},
       {{"do", "segment_grow"}},
@@ -364,6 +368,15 @@ TEST_CASE("UI script: segment_* actions label the phantom, undo, export, and ref
   run = test::runHeadless({{"actions", bad}}, options);
   CHECK(run.exitCode == 2);
   CHECK(run.messages.find("voxel (64, 0, 0) is outside the volume") != std::string::npos);
+  // A seed range needs both ends, and the value under the voxel in it.
+  bad = json::array({{{"do", "segment_seed"}, {"voxel", {1, 1, 1}}, {"low", -1100}}});
+  run = test::runHeadless({{"actions", bad}}, options);
+  CHECK(run.exitCode == 2);
+  CHECK(run.messages.find("\"low\" and \"high\" go together") != std::string::npos);
+  bad = json::array({{{"do", "segment_seed"}, {"voxel", {1, 1, 1}}, {"low", 300}, {"high", 3000}}});
+  run = test::runHeadless({{"actions", bad}}, options);
+  CHECK(run.exitCode == 2);
+  CHECK(run.messages.find("is outside 300 … 3000") != std::string::npos);
   // Redo with nothing undone: one message.
   bad = json::array({{{"do", "segment_redo"}}});
   run = test::runHeadless({{"actions", bad}}, options);
@@ -404,4 +417,41 @@ TEST_CASE("the segment editor's split islands: two painted blobs of one structur
   REQUIRE(editor.undo());
   CHECK(editor.labels().voxels == before.voxels);
   CHECK_FALSE(editor.labelNamed("two blobs (2)"));
+}
+
+TEST_CASE("the segment editor's seeds in range: a large background dab in the air beside bone seeds only the air") {
+  EditorOnPhantom f(64);
+  app::SegmentController& editor = f.editor;
+  const Volume& volume = f.reference.volume;
+  const Dims d = volume.dims();
+  editor.brushMm = 3.0;
+  // An air voxel with bone within the brush: the first such voxel in index order.
+  std::optional<std::array<int, 3>> click;
+  for (int k = 4; k < d.z - 4 && !click; ++k)
+    for (int j = 4; j < d.y - 4 && !click; ++j)
+      for (int i = 4; i < d.x - 4 && !click; ++i) {
+        if (volume.voxels[d.index(i, j, k)] > -900) continue;
+        for (int dk = -1; dk <= 1 && !click; ++dk)
+          for (int dj = -1; dj <= 1 && !click; ++dj)
+            for (int di = -1; di <= 1 && !click; ++di)
+              if (volume.voxels[d.index(i + di, j + dj, k + dk)] > 600) click = {i, j, k};
+      }
+  REQUIRE(click);
+  const auto whole = editor.paintSeeds(*click);  // the current label is the background
+  REQUIRE(whole);
+  editor.clearSeeds();
+  editor.seedRange = {{-1100, -400}};
+  const auto air = editor.paintSeeds(*click);
+  REQUIRE(air);
+  const auto expected = segment::localThresholdRegion(volume, f.unlabelled.intensity, *click, 3.0, -1100, -400);
+  REQUIRE(expected);
+  CHECK(*air == expected->size());
+  CHECK(*air < *whole);
+  CHECK(editor.seedsPerLabel().at(0) == *air);
+  // A click on a value outside the range is refused and seeds nothing.
+  editor.seedRange = {{500, 3000}};
+  const auto refused = editor.paintSeeds(*click);
+  REQUIRE_FALSE(refused);
+  CHECK(refused.error().message.find("outside") != std::string::npos);
+  CHECK(editor.seedsPerLabel().at(0) == *air);
 }

@@ -7,8 +7,9 @@
 //   names) — and in the background; every bone's grown label is ≥ 85 % bone voxels.
 //   Abdominal CT (TotalSegmentator, 3 mm): ≤ 5 seeds per organ; Dice for liver, spleen and both
 //   kidneys against the reference.
-// The issue's targets (85 % bone, Dice 0.85) are NOT met yet at these defaults (85 % bone is met
-// with the "bone only" range limit); the tests hold the measured floors below and print the tables.
+// The issue's targets: 85 % bone is met at these defaults after three rounds of background dabs on
+// what the labels spilled onto (and in one growth with the "bone only" range limit); Dice 0.85 is
+// NOT met for liver and right kidney. The abdominal test holds measured floors and prints the table.
 #include <doctest/doctest.h>
 
 #include <cstdio>
@@ -60,6 +61,38 @@ std::vector<GrowthSeed> microCtSeeds(const test::MicroCt& ct, const std::vector<
   return seeds;
 }
 
+// Background dabs a user adds per label in one round of corrections.
+constexpr int kDabsPerLabel = 3;
+// Rounds of corrections (look, dab, regrow) before the labels are measured.
+constexpr int kCorrectionRounds = 3;
+
+// One round of corrections as a user makes them after looking at a growth: for each label of
+// `labels`, up to `dabs` background dabs on the voxels it took that are darker than `boneLow` (the
+// data-derived lower end of bone, growth_settings.h: what the slice shows as not bone), at the
+// deepest points of that spill. Uses only the image and the grown labels, never the reference.
+std::vector<GrowthSeed> spillDabs(const Volume& volume, const LabelMap& grown, const std::vector<std::uint16_t>& labels,
+                                  float boneLow, int dabs) {
+  std::vector<GrowthSeed> out;
+  for (std::uint16_t b : labels) {
+    Mask spill(grown.geometry, 0);
+    for (std::size_t v = 0; v < spill.voxels.size(); ++v)
+      spill.voxels[v] = grown.voxels[v] == b && float(volume.voxels[v]) < boneLow;
+    const std::vector<GrowthSeed> more = test::deepestSeeds(spill, dabs, 0.2, 0);
+    out.insert(out.end(), more.begin(), more.end());
+  }
+  return out;
+}
+
+// `seeds` with `more` added; a voxel already seeded keeps its first label.
+std::vector<GrowthSeed> withSeeds(const std::vector<GrowthSeed>& seeds, const std::vector<GrowthSeed>& more) {
+  std::map<std::size_t, std::uint16_t> unique;
+  for (const GrowthSeed& s : seeds) unique.emplace(s.index, s.label);
+  for (const GrowthSeed& s : more) unique.emplace(s.index, s.label);
+  std::vector<GrowthSeed> out;
+  for (const auto& [index, label] : unique) out.push_back({index, label});
+  return out;
+}
+
 std::uint16_t labelOf(const Dataset& ds, const std::string& id) {
   for (const Structure& s : ds.structures)
     if (s.id == id) return s.label;
@@ -71,15 +104,26 @@ std::uint16_t labelOf(const Dataset& ds, const std::string& id) {
 
 // The fraction of bone voxels in each bone's grown label, grown with `params` (CPU); prints each
 // label's size (a label that holds more bone by taking a touching bone's voxels looks better by
-// this measure alone).
+// this measure alone). With `correctionDabs` > 0 the fractions are those after one round of
+// corrections (spillDabs below `boneLow`, then the growth updated incrementally, as the editor does).
 std::vector<double> boneFractions(const test::MicroCt& ct, const std::vector<GrowthSeed>& seeds,
-                                  const std::vector<std::uint16_t>& bones, GrowthParams params) {
+                                  const std::vector<std::uint16_t>& bones, GrowthParams params, int correctionRounds = 0,
+                                  float boneLow = 0) {
   params.backend = WdtBackend::Cpu;
   auto growth = LabelGrowth::create(ct.dataset.volume, params);
   REQUIRE(growth);
   auto stats = growth->update(seeds);
   REQUIRE(stats);
   std::printf("  grown in %.0f ms on %s (base %.4g/mm)\n", stats->msTotal, stats->device.c_str(), double(params.baseCost));
+  std::vector<GrowthSeed> all = seeds;
+  for (int round = 0; round < correctionRounds; ++round) {
+    const std::vector<GrowthSeed> dabs = spillDabs(ct.dataset.volume, growth->labels(), bones, boneLow, kDabsPerLabel);
+    all = withSeeds(all, dabs);
+    stats = growth->update(all);
+    REQUIRE(stats);
+    std::printf("  round %d: %zu background dabs on the labels' spill, regrown in %.0f ms\n", round + 1, dabs.size(),
+                stats->msTotal);
+  }
   std::vector<double> out;
   for (std::uint16_t b : bones) {
     std::size_t voxels = 0, bony = 0;
@@ -91,19 +135,20 @@ std::vector<double> boneFractions(const test::MicroCt& ct, const std::vector<Gro
   return out;
 }
 
-// The issue's target is >= 85 % for every bone. With the physical step cost (an edge costs its
-// contrast once) at these defaults the malleus reaches only ~25 … 42 % (it varies with the noise):
-// it is ~110 voxels in the tympanic air, and its label adds the one-voxel partial-volume shell
-// around it (values between air and ossicle, below the 320 HU bone mark) — ~200 voxels; the incus
-// 74 … 87 %. Where the fixed base (0.05 per mm, unsmoothed) holds 3 … 11 points more bone in the
-// incus, it is because its label takes more of the touching unlabelled bone (the incus label is
-// 1.6 k … 37 k voxels with the noise, for a 140-voxel incus: the 5 petrous seeds cannot hold that
-// bone; in one run measured 7377 voxels with 1400 not bone unsmoothed, 3292 with 790 smoothed). So
-// the test holds the malleus to no worse than the fixed base minus 5 points, every other bone to
-// >= 70 %, each to no worse than the fixed base minus 15 points and the mean over the bones to no
-// worse than it minus 5 — measured floors, not the target. With the data-derived "bone only" range
-// limit on (growth_settings.h) every bone reaches the target: >= 85 % each. The noise seed is
-// printed; AT_TEST_SEED replays it.
+// The issue's target is >= 85 % for every bone. In one growth at these defaults the malleus reaches
+// only 29.5 … 50 % (it varies with the noise; 24 seeds): it is ~110 voxels in the tympanic air, and
+// its label takes the tympanic membrane against its handle (a soft-tissue sheet one or two voxels
+// thick, at about −150 HU after partial volume, joined to the canal's lining far from every
+// background seed: no seed rule short of a click on it holds it) — ~150 … 200 voxels; the incus
+// reaches 71 … 84 %, its label taking touching unlabelled bone (bone against bone has no edge) and,
+// through it, some air. A user sees that spill in the slices and dabs background on it: after three
+// rounds (look, at most 3 dabs per label on its voxels darker than the data-derived bone range —
+// spillDabs — and regrow incrementally) every bone holds >= 85 % (24 noise seeds: malleus 100 %,
+// incus 88.1 … 100 %, the others >= 98.4 %). The one-growth checks are measured floors: every bone
+// but the malleus >= 70 %, each no worse than the fixed base (0.05 per mm, unsmoothed) minus 15
+// points (5 for the malleus), the mean no worse than it minus 5. With the data-derived "bone only" range limit on
+// (growth_settings.h) one growth reaches the target: >= 85 % each. The noise seed is printed;
+// AT_TEST_SEED replays it.
 TEST_CASE("Grow at defaults on a uCT-like volume: bone labels are mostly bone, no worse than the fixed base") {
   const std::uint64_t seed = test::freshSeed("uCT-like volume noise");
   const test::MicroCt ct = test::makeMicroCt(128, 0.1, 6.0, seed);
@@ -125,10 +170,14 @@ TEST_CASE("Grow at defaults on a uCT-like volume: bone labels are mostly bone, n
   const std::vector<double> before = boneFractions(ct, seeds, bones, fixed);
   const std::vector<double> boneOnly =
       boneFractions(ct, seeds, bones, segment::withRangeLimit(defaults.params, ds.intensity, defaults.boneRangeValues));
+  const float boneLow = segment::storedWindow(ds.intensity, defaults.boneRangeValues)[0];
+  const std::vector<double> corrected = boneFractions(ct, seeds, bones, defaults.params, kCorrectionRounds, boneLow);
   for (std::size_t i = 0; i < bones.size(); ++i) {
-    std::printf("  label %2u: %5.1f %% bone at the defaults, %5.1f %% with base 0.05/mm, %5.1f %% bone only\n",
-                unsigned(bones[i]), 100 * now[i], 100 * before[i], 100 * boneOnly[i]);
+    std::printf("  label %2u: %5.1f %% bone at the defaults, %5.1f %% after %d rounds of corrections, %5.1f %% "
+                "with base 0.05/mm, %5.1f %% bone only\n",
+                unsigned(bones[i]), 100 * now[i], 100 * corrected[i], kCorrectionRounds, 100 * before[i], 100 * boneOnly[i]);
     CAPTURE(bones[i]);
+    CHECK(corrected[i] >= 0.85);
     if (i != 0) CHECK(now[i] >= 0.70);
     CHECK(now[i] >= before[i] - (i == 0 ? 0.05 : 0.15));
     CHECK(boneOnly[i] >= 0.85);
@@ -142,6 +191,10 @@ TEST_CASE("Grow at defaults on a uCT-like volume: bone labels are mostly bone, n
 // smoothing, base 0.1× the step noise) the organs reach 0.79 (liver), 0.88 (spleen), 0.94 (left
 // kidney), 0.84 (right kidney) (bench/RESULTS.md), so the test holds each to >= 0.75 and their mean
 // to at least the fixed base's (0.05 per mm: 0.48, 0.72, 0.67, 0.72) + 0.10: a floor, not the target.
+// Where the liver's missing voxels go: mostly to the background clicks in the portal vein and the
+// inferior vena cava, which this non-contrast CT shows as liver (36 … 37 HU against 45, noise sigma
+// 25 HU); the right kidney misses its renal sinus fat, which the reference counts as kidney
+// (bench/RESULTS.md, "what the labels take").
 TEST_CASE("Grow at defaults on the abdominal CT: liver, spleen and kidneys from <= 5 seeds each") {
   const std::filesystem::path root = test::sharedDataDir() / "totalsegmentator";
   if (!std::filesystem::exists(root / "ct_small.nii.gz")) {

@@ -24,7 +24,10 @@ ScriptInterpreter::Feature ScriptInterpreter::segmentActions() {
               {"segment_label", {{"name", "a label name (added when new; background is label 0)"}},
                "Paints that label next; reports segment_label {name, label}.", &S::segmentLabel},
               {"segment_slice", {{"axis", "x, y, z or 0, 1, 2"}, {"index", "the slice"}}, "Shows that slice.", &S::segmentSlice},
-              {"segment_seed", {voxel, brush}, "Seeds of the current label in the brush around the voxel.", &S::segmentSeed},
+              {"segment_seed",
+               {voxel, brush, {"low?", "with high: seed only values in low … high joined to the voxel"},
+                {"high?", "with low (a local threshold; any label, the background too)"}},
+               "Seeds of the current label in the brush around the voxel.", &S::segmentSeed},
               {"segment_grow", {{"wait?", "true (default): done once the growth is applied"}},
                "Grows the labels from their seeds; reports segment_grown.", &S::segmentGrow},
               {"segment_undo", {}, "Undoes the last edit (Ctrl+Z).", &S::segmentUndo},
@@ -131,11 +134,17 @@ ScriptInterpreter::Outcome ScriptInterpreter::segmentSlice(Context& c) {
   return Progress::Done;
 }
 
-// {"do": "segment_seed", "voxel": [i, j, k], "brush_mm": 1.5}: seeds of the current label in the
-// brush around the voxel, as a click in the slice paints them.
+// {"do": "segment_seed", "voxel": [i, j, k], "brush_mm": 1.5, "low": -1100, "high": -400}: seeds of
+// the current label in the brush around the voxel, as a click in the slice paints them; with low
+// and high only the values in that range joined to the voxel (the "seeds only in range" box), and
+// the range stays set for later clicks; without them the range is cleared.
 ScriptInterpreter::Outcome ScriptInterpreter::segmentSeed(Context& c) {
   SegmentController& s = c.model.segmenter();
   if (c.action.contains("brush_mm")) s.brushMm = c.action.at("brush_mm").get<double>();
+  if (c.action.contains("low") != c.action.contains("high"))
+    return fail("ui script: segment_seed: \"low\" and \"high\" go together");
+  s.seedRange.reset();
+  if (c.action.contains("low")) s.seedRange = {{c.action.at("low").get<double>(), c.action.at("high").get<double>()}};
   const auto v = c.action.at("voxel").get<std::vector<int>>();
   if (v.size() != 3) return fail("ui script: segment_seed: \"voxel\" must be [i, j, k]");
   auto painted = s.paintSeeds({v[0], v[1], v[2]});

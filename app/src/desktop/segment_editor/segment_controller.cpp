@@ -10,6 +10,7 @@
 #include "core/strings.h"
 #include "label_output.h"
 #include "scan_catalogue.h"
+#include "segment/local_threshold.h"
 #include "volume/label_writers.h"
 #include "volume/slice_image.h"
 #include "wdt/label_growth.h"
@@ -213,6 +214,14 @@ Result<std::size_t> SegmentController::paintSeeds(const std::array<int, 3>& voxe
     return fail("segment editor: voxel (" + std::to_string(voxel[0]) + ", " + std::to_string(voxel[1]) + ", " +
                 std::to_string(voxel[2]) + ") is outside the volume (" + d.toString() + ")");
   const double r = std::max(0.0, brushMm);
+  if (seedRange) {
+    auto region = segment::localThresholdRegion(dataset_->volume, dataset_->intensity, voxel, r, (*seedRange)[0],
+                                                (*seedRange)[1]);
+    if (!region) return fail("segment editor: seeds in range: " + region.error().message);
+    for (std::size_t v : *region) seeds_[v] = current_;
+    ++revision_;
+    return region->size();
+  }
   int reach[3];
   for (int a = 0; a < 3; ++a) reach[a] = int(std::floor(r / g.spacingMm[std::size_t(a)]));
   std::size_t painted = 0;

@@ -95,8 +95,14 @@ class SegmentController {
 
   // --- Seeds and tools ------------------------------------------------------------------------
   double brushMm = 1.5;  // the brush's radius (seeds, paint, erase); 0: the voxel alone
+  // With a seed range (the dataset's values), a click seeds only the voxels of the brush's ball
+  // whose values lie in it and join the clicked voxel through such voxels: a local threshold, for
+  // any label — one large background dab in the air beside a thin bone seeds the air, not the bone
+  // (segment/local_threshold.h). nullopt: the whole ball.
+  std::optional<std::array<double, 2>> seedRange;
   // Seeds of the current label in the ball of brushMm around the voxel's centre (later seeds
-  // replace earlier ones). Returns the number of voxels seeded. Errors: a voxel outside the grid.
+  // replace earlier ones), limited by seedRange. Returns the number of voxels seeded. Errors: a
+  // voxel outside the grid; with a seed range, the value under the voxel outside it.
   Result<std::size_t> paintSeeds(const std::array<int, 3>& voxel);
   void clearSeeds();
   std::size_t seedCount() const { return seeds_.size(); }

@@ -154,6 +154,20 @@ void SegmentPanel::drawTools(SegmentController& editor) {
   ImGui::SameLine();
   toolButton("erase", Tool::Erase);
   if (editor.brushesInView()) ImGui::TextDisabled("  also on the 3-D view: click or drag (no orbit)");
+  if (editor.tool == Tool::Seeds) {
+    // A local threshold for seeds of any label (the background too): only the brush's voxels in
+    // the range that join the clicked one.
+    bool limited = editor.seedRange.has_value();
+    if (ImGui::Checkbox("seeds only in range", &limited)) {
+      const auto window = editor.valueWindow();
+      editor.seedRange = limited ? std::optional<std::array<double, 2>>({window[0], window[1]}) : std::nullopt;
+    }
+    if (editor.seedRange) {
+      float seedRange[2] = {float((*editor.seedRange)[0]), float((*editor.seedRange)[1])};
+      ImGui::SetNextItemWidth(ImGui::GetFontSize() * 14);
+      if (ImGui::InputFloat2("seed range", seedRange, "%.0f")) editor.seedRange = {{seedRange[0], seedRange[1]}};
+    }
+  }
   if (editor.tool == Tool::Threshold) {
     if (!rangeSet_) {
       const auto window = editor.valueWindow();
