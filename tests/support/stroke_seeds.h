@@ -41,7 +41,9 @@ inline segment::SeedSet strokesInsideLabels(const Dataset& dataset, const Stroke
   const Geometry& g = dataset.labels.geometry;
   const Dims d = g.dims;
   segment::SeedSet set;
-  set.labels.push_back({0, "background", {}, {}, 0});
+  segment::SeedLabel background;
+  background.name = "background";
+  set.labels.push_back(background);
   for (const Structure& s : dataset.structures) {
     segment::SeedLabel label;
     label.value = s.label;
