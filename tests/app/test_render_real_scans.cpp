@@ -272,14 +272,13 @@ void checkFadesAndSlides(const Scan& scan, const std::vector<Case>& cases) {
 TEST_CASE("Skull CT: t from 0 to 1 changes the WDT image, and at t = 0 the context fades inside the view") {
   auto skull = skullOrSkip();
   if (!skull) return;
-  // The ear canal lies in the temporal bone on every side: the bone around it is near context and
-  // fills most of the frame even as the farther bone fades (71.5 % drawn at t = 0; 89 % with the
-  // median bone at x = 1.9); t must still change the image.
+  // The ear canal lies in the temporal bone on every side, yet under 70 % of its frame is drawn at
+  // t = 0 (66 %; 89 % with the median bone at x = 1.9).
   checkFadesAndSlides(*skull, {{"frontal_sinus", "anterior", true},
                                {"orbit_left", "lateral_left", true},
                                {"atlas_c1", "posterior", true},
                                {"maxillary_sinus_right", "anterior", true},
-                               {"external_acoustic_meatus_right", "lateral_right", false}});
+                               {"external_acoustic_meatus_right", "lateral_right", true}});
 }
 
 TEST_CASE("Abdominal CT: t from 0 to 1 changes the WDT image, and at t = 0 the context fades inside the view") {
