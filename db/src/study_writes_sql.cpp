@@ -92,7 +92,9 @@ BEGIN
   EXCEPTION WHEN others THEN
     RAISE EXCEPTION 'study ''%'': its protocol is not JSON', p_id USING ERRCODE = 'invalid_parameter_value';
   END;
-  IF p_id IS NULL OR p_id = '' OR jsonb_typeof(design) IS DISTINCT FROM 'object' OR design->>'id' IS DISTINCT FROM p_id
+  -- The audit names a study's rows by "<study> …": an id has no space, so no study's audit reads
+  -- as another's.
+  IF p_id IS NULL OR p_id !~ '^[^[:space:]]+$' OR jsonb_typeof(design) IS DISTINCT FROM 'object' OR design->>'id' IS DISTINCT FROM p_id
      OR design->>'dataset' IS DISTINCT FROM p_dataset OR coalesce(design->>'title', '') <> coalesce(p_title, '')
      OR (design->>'seed')::numeric IS DISTINCT FROM p_seed::numeric AND p_seed >= 0
      OR jsonb_typeof(design->'structures') IS DISTINCT FROM 'array' OR jsonb_array_length(design->'structures') = 0
@@ -102,7 +104,7 @@ BEGIN
      OR jsonb_typeof(design->'groups') IS DISTINCT FROM 'array' OR jsonb_array_length(design->'groups') = 0
      OR jsonb_typeof(design->'scale'->'min') IS DISTINCT FROM 'number'
      OR jsonb_typeof(design->'scale'->'max') IS DISTINCT FROM 'number' THEN
-    RAISE EXCEPTION 'study ''%'': its protocol does not name the same id, title, dataset and seed, or lacks its structures, two conditions, items, groups or scale',
+    RAISE EXCEPTION 'study ''%'': its id has a space, or its protocol does not name the same id, title, dataset and seed, or lacks its structures, two conditions, items, groups or scale',
       p_id USING ERRCODE = 'invalid_parameter_value';
   END IF;
   SELECT * INTO old FROM studies WHERE id = p_id FOR UPDATE;

@@ -187,6 +187,9 @@ TEST_CASE("StudyServer_ACoordinatorLoginRegistersAndRunsAStudy_NoOtherLoginWrite
   // The rival coordinator may register a study of her own (her own; nothing of Ada's changes).
   REQUIRE(saveStudy(bob, own));
   CHECK(studyOwner(c.admin, own.id) == rival);
+  quiz::StudyProtocol spaced = own;  // "<study> …" would read, in the audit, as her study's rows
+  spaced.id = own.id + " x";
+  CHECK_FALSE(saveStudy(bob, spaced));
   CHECK(test::scalarCount(c.admin, "SELECT COUNT(*) FROM studies WHERE id = " + st + " AND owner = " + sqlText(c.coordinator)) == 1);
 
   // Even the owner cannot write what the program would not: an old session, an off-scale rating,
