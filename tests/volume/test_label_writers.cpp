@@ -5,6 +5,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <random>
 
 #include "io_test_files.h"
@@ -33,14 +34,19 @@ LabelMap randomLabels(std::mt19937_64& rng, Dims dims, const std::vector<std::ui
   LabelMap labels(randomObliqueGeometry(rng, dims), 0);
   std::uniform_int_distribution<int> pick(0, int(values.size()) - 1);
   std::uniform_int_distribution<int> coordinate(0, 1 << 20);
-  for (int blob = 0; blob < 12; ++blob) {
+  // Every value is present (the writers choose their type and extents by what is present): the
+  // last blobs take each value once, and a value any later blob covered is put back on one voxel.
+  const int blobs = 12, firstFixed = blobs - int(values.size());
+  for (int blob = 0; blob < blobs; ++blob) {
     const int ci = coordinate(rng) % dims.x, cj = coordinate(rng) % dims.y, ck = coordinate(rng) % dims.z;
-    const std::uint16_t value = values[std::size_t(pick(rng))];
+    const std::uint16_t value = blob >= firstFixed ? values[std::size_t(blob - firstFixed)] : values[std::size_t(pick(rng))];
     for (int k = 0; k < dims.z; ++k)
       for (int j = 0; j < dims.y; ++j)
         for (int i = 0; i < dims.x; ++i)
           if ((i - ci) * (i - ci) + (j - cj) * (j - cj) + (k - ck) * (k - ck) <= 6) labels.at(i, j, k) = value;
   }
+  for (std::size_t n = 0; n < values.size(); ++n)
+    if (std::find(labels.voxels.begin(), labels.voxels.end(), values[n]) == labels.voxels.end()) labels.voxels[n] = values[n];
   return labels;
 }
 
