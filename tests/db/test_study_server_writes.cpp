@@ -261,12 +261,14 @@ TEST_CASE("StudyServer_ThroughTheCommandLine_TheCoordinatorsLoginRegistersAndRun
 
   // After it, the student's attempts still change nothing, and she reads nothing of it.
   const std::string full = studySnapshot(admin);
-  for (const std::string& args : {run, "study status " + p.id, "study withdraw " + p.id + " P01 --reason spite"}) {
+  for (const std::string& args : {run, "study status " + p.id, "study export " + p.id + " --out '" + (dir.path() / "out").string() + "'",
+                                  "study withdraw " + p.id + " P01 --reason spite"}) {
     CAPTURE(args);
     auto refused = test::runApp(args + " --db '" + c.samUrl + "'");
     CHECK(refused.exitCode != 0);
     CHECK(studySnapshot(admin) == full);
   }
+  CHECK_FALSE(fs::exists(dir.path() / "out" / "responses_long.csv"));
   Database sam = test::openAt(c.samUrl);
   CHECK(test::scalarCount(sam, "SELECT COUNT(*) FROM study_trials") == 0);
 }
