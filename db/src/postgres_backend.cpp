@@ -70,6 +70,8 @@ ErrorKind kindOf(const std::string& state) {
   // Refusals of a class server's functions and grants (class_security_sql.cpp).
   if (state == "42501" || state == "42710") return ErrorKind::Conflict;
   if (state == "P0002") return ErrorKind::NotFound;
+  // A study participant withdrawn, or resumed by a later session (study_writes_sql.cpp).
+  if (state == "55000") return ErrorKind::Conflict;
   if (state == "22023") return ErrorKind::Invalid;
   if (state == "23503") return ErrorKind::NotFound;
   if (state.rfind("23", 0) == 0) return ErrorKind::Invalid;

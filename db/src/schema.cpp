@@ -10,6 +10,7 @@
 #include "class_exam_sql.h"
 #include "class_security_sql.h"
 #include "study_security_sql.h"
+#include "study_writes_sql.h"
 
 #include <algorithm>
 #include <cassert>
@@ -544,6 +545,8 @@ const std::vector<Migration>& migrations() {
        studySecuritySql(), {}, true},
       {20, "class server: locate items graded from the pixel clicked on their picture; exam prerequisites checked there",
        classExamLocateSql(), {}, true},
+      {21, "class server: a study's coordinator registers it and records its participants through audited functions",
+       studyWritesSql(), {}, true},
   };
   return all;
 }

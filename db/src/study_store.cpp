@@ -7,6 +7,7 @@
 #include "database.h"
 #include "quiz/study_design.h"
 #include "study_rows.h"
+#include "study_server_writes.h"
 #include "utc_time.h"
 
 namespace at::db {
@@ -28,6 +29,7 @@ Result<int> participantCount(Database& db, const std::string& studyId) {
 }
 
 Status storeStudyRow(Database& db, const quiz::StudyProtocol& protocol) {
+  if (studyWritesThroughServer(db)) return registerStudyOnServer(db, protocol, "");
   auto st = db.prepare(
       "INSERT INTO studies (id, title, dataset, seed, json) VALUES (?1, ?2, ?3, ?4, ?5) "
       "ON CONFLICT(id) DO UPDATE SET title = excluded.title, dataset = excluded.dataset, seed = excluded.seed, "
@@ -163,13 +165,20 @@ std::string participantKey(const std::string& studyId, const std::string& partic
 // On a server: the study's next counterbalancing row, counted on (studies.next_enrolment), at
 // least one past the highest row any participant has (rows merged in from other machines
 // included); in a transaction of its own that locks the study's counter row for one statement.
+// Drawn by the server's at_draw_study_row (only the study's owner draws), on a server whose schema
+// has it.
 Result<int> drawStudyRow(Database& db, const std::string& studyId) {
-  const std::string sql =
-      "UPDATE studies SET next_enrolment = GREATEST(next_enrolment, (SELECT coalesce(max(enrolment_index) + 1, 0)"
-      " FROM study_participants WHERE study_id = ?1)) + 1 WHERE id = ?1 RETURNING next_enrolment - 1";
   int index = -1;
   const auto draw = [&](Database& d) -> Status {
-    auto st = d.prepare(sql);
+    if (detail::studyWritesThroughServer(d)) {
+      auto drawn = detail::drawStudyRowOnServer(d, studyId);
+      if (!drawn) return tl::unexpected(drawn.error());
+      index = *drawn;
+      return {};
+    }
+    auto st = d.prepare(  // a server at an older schema version, written directly
+        "UPDATE studies SET next_enrolment = GREATEST(next_enrolment, (SELECT coalesce(max(enrolment_index) + 1, 0)"
+        " FROM study_participants WHERE study_id = ?1)) + 1 WHERE id = ?1 RETURNING next_enrolment - 1");
     if (!st) return tl::unexpected(st.error());
     st->bind(1, studyId);
     auto row = st->step();
@@ -217,6 +226,7 @@ Result<StudyParticipant> enrolOrResume(Database& db, const quiz::StudyProtocol& 
     }
   }
   auto written = db.keyedWriteTransaction(participantKey(protocol.id, participantId), [&](Database& d) -> Status {
+    if (server && detail::studyWritesThroughServer(d)) return detail::enrolOnServer(d, protocol, participantId, group, drawn);
     auto existing = d.prepare("SELECT group_name FROM study_participants WHERE study_id = ?1 AND participant_id = ?2");
     if (!existing) return tl::unexpected(existing.error());
     existing->bind(1, protocol.id).bind(2, participantId);
@@ -307,6 +317,7 @@ Status recordRating(Database& db, const StudyParticipant& participant, const Rat
   const std::string& participantId = participant.participantId;
   return db.keyedWriteTransaction(participantKey(studyId, participantId), [&](Database& d) -> Status {
     if (auto current = checkSessionCurrent(d, participant); !current) return current;
+    if (detail::studyWritesThroughServer(d)) return detail::recordRatingOnServer(d, participant, rating);
     auto st = d.prepare(
         "INSERT INTO study_ratings (study_id, participant_id, position, item, rating_ab, response_ms, t, alpha, beta, "
         "app_version, session, created_at, quality_level, quality_full_level, quality_scale, settle_ms) "
@@ -343,6 +354,9 @@ Status recordTrialViewing(Database& db, const StudyParticipant& participant, int
   const std::string& participantId = participant.participantId;
   return db.keyedWriteTransaction(participantKey(studyId, participantId), [&](Database& d) -> Status {
     if (auto current = checkSessionCurrent(d, participant); !current) return current;
+    if (detail::studyWritesThroughServer(d))
+      return detail::recordTrialViewingOnServer(d, participant, position, viewMsA, viewMsB, toggles, comment,
+                                                viewingMeasured);
     auto st = d.prepare(
         "UPDATE study_trials SET view_ms_a = ?4, view_ms_b = ?5, toggles = ?6, comment = ?7, viewing_measured = ?8 "
         "WHERE study_id = ?1 AND participant_id = ?2 AND position = ?3");
@@ -365,6 +379,7 @@ Status markParticipantComplete(Database& db, const StudyParticipant& participant
   const std::string& participantId = participant.participantId;
   return db.keyedWriteTransaction(participantKey(studyId, participantId), [&](Database& d) -> Status {
     if (auto current = checkSessionCurrent(d, participant); !current) return current;
+    if (detail::studyWritesThroughServer(d)) return detail::completeParticipantOnServer(d, participant);
     auto st = d.prepare(
         "UPDATE study_participants SET completed_at = ?3 "
         "WHERE study_id = ?1 AND participant_id = ?2 AND completed_at IS NULL");

@@ -2,6 +2,7 @@
 
 #include "database.h"
 #include "server_refusal.h"
+#include "study_server_writes.h"
 
 namespace at::db {
 
@@ -11,6 +12,7 @@ const char* toString(StudyWithdrawalKind kind) {
 
 Status setStudyOwner(Database& db, const std::string& studyId, const std::string& owner) {
   return db.writeTransaction([&](Database& d) -> Status {
+    if (detail::studyWritesThroughServer(d)) return detail::setStudyOwnerOnServer(d, studyId, owner);
     auto s = d.prepare("UPDATE studies SET owner = ?2 WHERE id = ?1");
     if (!s) return tl::unexpected(s.error());
     s->bind(1, studyId).bind(2, owner);

@@ -65,32 +65,38 @@ Result<std::vector<ExamItem>> drawExamItems(const ExamSpec& exam, const std::vec
   for (const std::string& id : exam.structures)
     if (!find(id)) return fail("exam '" + exam.id + "': structure '" + id + "' is not in the course's dataset");
 
-  // Every structure once (in a shuffled order), each with its own shuffled order of kinds, then
-  // round after round until `count` items.
+  // Every structure once (in a shuffled order), each with its own shuffled order of the kinds it
+  // can be asked in, then round after round until `count` items: round r asks each structure its
+  // r-th kind, and a structure with fewer kinds sits the later rounds out. A structure can be asked
+  // to be located only when the course has a lesson view locating it (see the header), unless
+  // locate is the exam's one kind or there is no course. So each structure's kind is drawn evenly
+  // from the kinds it can be asked in, and no item is asked twice.
   const std::vector<std::string> order = quiz::stableShuffle(exam.structures, seed);
+  const bool otherKinds = std::any_of(exam.kinds.begin(), exam.kinds.end(),
+                                      [](quiz::QuestionKind k) { return k != quiz::QuestionKind::Locate; });
   std::vector<std::vector<std::string>> kindOrder;
-  std::vector<std::string> kindNames;
-  for (quiz::QuestionKind k : exam.kinds) kindNames.push_back(kindWord(k));
-  for (const std::string& id : order) kindOrder.push_back(quiz::stableShuffle(kindNames, seed + "/" + id));
+  std::size_t askable = 0;
+  for (const std::string& id : order) {
+    std::vector<std::string> kindNames;
+    for (quiz::QuestionKind k : exam.kinds)
+      if (k != quiz::QuestionKind::Locate || !course || !otherKinds || lessonLocateStep(*course, id))
+        kindNames.push_back(kindWord(k));
+    askable += kindNames.size();
+    kindOrder.push_back(quiz::stableShuffle(kindNames, seed + "/" + id));
+  }
+  if (askable < std::size_t(exam.count))
+    return fail("exam '" + exam.id + "' asks " + std::to_string(exam.count) + " items, but its structures can be asked only " +
+                std::to_string(askable) + " ways (a structure is located only where a lesson of the course locates it)");
 
   std::vector<ExamItem> items;
   int locateItems = 0;
   for (std::size_t round = 0; round < exam.kinds.size() && int(items.size()) < exam.count; ++round) {
     for (std::size_t i = 0; i < order.size() && int(items.size()) < exam.count; ++i) {
+      if (round >= kindOrder[i].size()) continue;
       const Structure& target = *find(order[i]);
       auto kind = quiz::parseQuestionKind(kindOrder[i][round]);
       if (!kind) return tl::unexpected(kind.error());
-      // A locate item needs a lesson view that shows its target answerable (see the header).
       const Step* lessonStep = course ? lessonLocateStep(*course, target.id) : nullptr;
-      if (*kind == quiz::QuestionKind::Locate && course && !lessonStep) {
-        for (std::size_t k = 1; k < kindOrder[i].size(); ++k) {
-          auto other = quiz::parseQuestionKind(kindOrder[i][(round + k) % kindOrder[i].size()]);
-          if (other && *other != quiz::QuestionKind::Locate) {
-            kind = other;
-            break;
-          }
-        }
-      }
       ExamItem item;
       item.position = int(items.size());
       if (*kind == quiz::QuestionKind::Locate)

@@ -1,12 +1,15 @@
 // A typed name is graded the same on the class server as on the laptop: the server's SQL
 // (at_grade_name, migration 20) against quiz::gradeName for the same keys and the same answers —
 // exact names, typos, accents, articles, punctuation, side words, both sides, names of other
-// structures and typos of them — and a partly right answer keeps its partial score in an exam.
+// structures and typos of them — on a synthetic catalogue and on the shipped courses' real catalogues
+// (their names, synonyms, Latin names and sides), and a partly right answer keeps its partial
+// score in an exam.
 #include <doctest/doctest.h>
 
 #include <array>
 #include <cctype>
 #include <cstdio>
+#include <filesystem>
 #include <random>
 #include <string>
 #include <vector>
@@ -15,9 +18,13 @@
 
 #include "database.h"  // db/'s private SQL wrapper (at_db_sql_for_tests)
 #include "db/class_exams.h"
+#include "lessons/course_json.h"
+#include "lessons/lesson_engine.h"
+#include "lessons/structure_catalogue.h"
 #include "quiz/grading.h"
 #include "secure_class.h"
 #include "test_support.h"
+#include "volume/phantom.h"
 
 using namespace at;
 using namespace at::db;
@@ -171,4 +178,97 @@ TEST_CASE("ClassExamNames_AnExamKeepsThePartialScoreOfANameWithoutItsSide") {
   CHECK(result->items[0].score == doctest::Approx(0.5));
   CHECK(result->items[1].correct);  // one letter missing: forgiven, as on the laptop
   CHECK(result->score == doctest::Approx(0.75));
+}
+
+namespace {
+
+// The structures of a shipped dataset as the laptop knows them: the phantom's own list; for the
+// other datasets the catalogue's entries, each shown as its name with its side (as a labelled
+// scan names them).
+std::vector<Structure> shippedStructures(const lessons::StructureCatalogue& catalogue) {
+  if (catalogue.datasetId == "phantom") return phantomStructures();
+  std::vector<Structure> out;
+  for (const lessons::CatalogueEntry& e : catalogue.entries) {
+    Structure s;
+    s.id = e.structureId;
+    s.displayName = e.name + (e.side == quiz::Side::Left ? " (left)" : e.side == quiz::Side::Right ? " (right)" : "");
+    out.push_back(s);
+  }
+  return out;
+}
+
+}  // namespace
+
+TEST_CASE("ClassExamNames_OnTheShippedCoursesRealCatalogues_TheServerGradesEveryNameAsTheLaptop") {
+  auto url = test::freshPostgresDatabase("the class exam names test");
+  if (!url) return;
+  Database admin = test::openAt(*url);
+  const std::uint64_t seed = test::freshSeed("ClassExamNames_OnTheShippedCoursesRealCatalogues");
+  std::mt19937_64 random(seed);
+  int courses = 0, compared = 0, right = 0, partial = 0, wrong = 0, sided = 0;
+  for (const auto& file : std::filesystem::directory_iterator(test::sourceDir() / "data" / "courses")) {
+    if (file.path().extension() != ".json") continue;
+    auto course = lessons::loadCourseJson(file.path());
+    REQUIRE_MESSAGE(course, (course ? "" : course.error().message));
+    const lessons::StructureCatalogue* catalogue = lessons::shippedCatalogue(course->datasetId);
+    REQUIRE_MESSAGE(catalogue, "no shipped catalogue for " << course->datasetId);
+    ++courses;
+    const std::vector<Structure> structures = shippedStructures(*catalogue);
+    const quiz::GradingContext context = lessons::gradingContext(structures, *course);
+    // The course's own name questions, and a name question (with and without its side) on every
+    // structure of the dataset.
+    std::vector<quiz::ResolvedQuestion> questions;
+    for (const lessons::Lesson& lesson : course->lessons)
+      for (const lessons::Step& step : lesson.steps)
+        if (step.kind == lessons::StepKind::Question && step.question.kind == quiz::QuestionKind::Name)
+          questions.push_back({step.question, {}, -1, {}});
+    const std::size_t ownQuestions = questions.size();
+    for (const Structure& s : structures) {
+      questions.push_back(nameQuestion(s.id, false));
+      questions.push_back(nameQuestion(s.id, true));
+    }
+    // Every spelling the catalogue and the course know, with and without side words, and typos.
+    std::vector<std::string> spellings = {"", "the", "left", "bone"};
+    for (const quiz::NameEntry& e : context.names)
+      for (const std::string& name : e.names) {
+        spellings.push_back(name);
+        spellings.push_back("left " + name);
+        spellings.push_back(name + " (right)");
+      }
+    CAPTURE(file.path().filename().string());
+    CHECK(ownQuestions > 0);
+    for (const quiz::ResolvedQuestion& q : questions) {
+      ClassExamKey key;
+      setNameKey(key, q, context);
+      sided += key.targetSide.empty() ? 0 : 1;
+      std::vector<std::string> typed;
+      for (int i = 0; i < 12; ++i) typed.push_back(spellings[random() % spellings.size()]);
+      for (int i = 0; i < 12; ++i) typed.push_back(mangled(spellings[random() % spellings.size()], random));
+      for (const quiz::NameEntry& e : context.names)  // the target's own names, as typed in a hurry
+        if (e.structureId == q.question.target)
+          for (const std::string& name : e.names) {
+            typed.push_back(name);
+            typed.push_back(mangled(name, random));
+            typed.push_back((random() % 2 ? "right " : "left ") + mangled(name, random));
+          }
+      for (const std::string& text : typed) {
+        auto laptop = quiz::gradeName(q, text, context);
+        REQUIRE(laptop);
+        const double server = serverScore(admin, key, text);
+        CAPTURE(q.question.id);
+        CAPTURE(text);
+        CAPTURE(laptop->feedback);
+        CHECK(server == doctest::Approx(laptop->score));
+        ++compared;
+        (laptop->score >= 1 ? right : laptop->score > 0 ? partial : wrong) += 1;
+      }
+    }
+  }
+  MESSAGE("seed " << seed << ": " << courses << " courses, " << compared << " answers compared, " << right << " right, "
+                  << partial << " partly, " << wrong << " wrong; " << sided << " keys with a side");
+  CHECK(courses >= 2);
+  CHECK(right > 100);
+  CHECK(partial > 20);
+  CHECK(wrong > 100);
+  CHECK(sided > 10);
 }

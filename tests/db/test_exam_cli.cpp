@@ -68,7 +68,11 @@ TEST_CASE("exam hides names and grades until the end, saves every answer, scores
     std::ofstream course(dir / "data" / "courses" / "ex.json");
     course << R"({"schema": 1, "id": "ex", "title": "Exam course", "dataset": "phantom", "version": 1,
       "lessons": [{"id": "ex.look", "title": "Look", "steps": [{"kind": "show", "structure": ")" << a
-           << R"(", "preset": ")" << a << R"(_wdt", "view": "superior", "title": "T", "text": "X"}]}],
+           << R"(", "preset": ")" << a << R"(_wdt", "view": "superior", "title": "T", "text": "X"},
+        {"kind": "question", "structure": ")" << b << R"(", "preset": ")" << b << R"(_wdt", "view": "superior",
+         "question": {"id": "ex.look.locate_a", "kind": "locate", "prompt": "Click it.", "target": ")" << a << R"("}},
+        {"kind": "question", "structure": ")" << a << R"(", "preset": ")" << a << R"(_wdt", "view": "superior",
+         "question": {"id": "ex.look.locate_b", "kind": "locate", "prompt": "Click it.", "target": ")" << b << R"("}}]}],
       "exams": [{"id": "ex.exam", "title": "Quick exam", "structures": [")" << a << "\", \"" << b
            << R"("], "kinds": ["name", "locate"], "count": 4, "time_limit_s": 600, "pass_score": 0.7,
                  "locate_views": ["3d"]}]})";
@@ -88,8 +92,12 @@ TEST_CASE("exam hides names and grades until the end, saves every answer, scores
   CHECK(first.out.find("left the exam") != std::string::npos);
   const auto items = itemsOfOpenAttempt(db);
   REQUIRE(items.size() == 4);
-  // Each structure once before either repeats; a name item never shows the name it asks for.
+  // Each structure once before either repeats, each item once (the course locates both
+  // structures, so the four items are both kinds of both); a name item never shows its name.
   CHECK(items[0].structure != items[1].structure);
+  std::set<std::string> distinct;
+  for (const Item& item : items) distinct.insert(item.kind + " " + item.structure);
+  CHECK(distinct.size() == 4);
   CHECK(first.out.find("[1/4] ") != std::string::npos);
   CHECK(first.out.find(items[0].kind == "name" ? " left — Name the marked structure." : " left — Locate the ") !=
         std::string::npos);

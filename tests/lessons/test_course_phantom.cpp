@@ -6,7 +6,9 @@
 #include <cctype>
 #include <cmath>
 #include <filesystem>
+#include <map>
 #include <memory>
+#include <set>
 
 #include "course_wording.h"
 #include "in_memory_repositories.h"
@@ -327,4 +329,60 @@ TEST_CASE("ShippedCourse_ExamDrawsItsItemsOnThePhantomAndEveryQuestionHasAScene"
         CHECK_MESSAGE(s.scene.has_value(), s.question.id);
         CHECK_MESSAGE(p.keys->hasStructure(sceneFor(s).structure), s.question.id);
       }
+}
+
+TEST_CASE("ShippedCourse_ExamDraw_EachStructuresKindIsEvenAmongTheKindsItCanBeAskedIn_NoItemTwice") {
+  PhantomKeys& p = phantomKeys();
+  REQUIRE_FALSE(p.course.exams.empty());
+  for (const ExamSpec& exam : p.course.exams) {
+    CAPTURE(exam.id);
+    // The pool: every (structure, kind) the exam can ask — locate only where a lesson locates it.
+    std::set<std::string> pool;
+    std::map<std::string, int> kindsOf;
+    for (const std::string& id : exam.structures)
+      for (quiz::QuestionKind k : exam.kinds)
+        if (k != quiz::QuestionKind::Locate || lessonLocateStep(p.course, id)) {
+          pool.insert(exam.id + "." + quiz::toString(k) + "." + id);
+          ++kindsOf[id];
+        }
+    // An exam asking the whole pool draws exactly the pool, for any seed.
+    ExamSpec whole = exam;
+    whole.count = int(pool.size());
+    for (const char* seed : {"class|AAAA2222|x", "class|ZZZZ9999|y", "phantom-test"}) {
+      auto items = drawExamItems(whole, p.dataset.structures, *p.keys, seed, &p.course);
+      REQUIRE_MESSAGE(items, (items ? "" : items.error().message));
+      std::set<std::string> drawn;
+      for (const ExamItem& item : *items) CHECK(drawn.insert(item.question.question.id).second);
+      CHECK(drawn == pool);
+    }
+    ExamSpec tooMany = exam;
+    tooMany.count = int(pool.size()) + 1;
+    CHECK_FALSE(drawExamItems(tooMany, p.dataset.structures, *p.keys, "x", &p.course));
+
+    // The exam as shipped, over many class draws: each structure's kind is even among its kinds.
+    const int draws = 300;
+    std::map<std::string, int> perKind, perItem;
+    for (int s = 0; s < draws; ++s) {
+      auto items = drawExamItems(exam, p.dataset.structures, *p.keys, "class|C" + std::to_string(s * 7919) + "|" + exam.id, &p.course);
+      REQUIRE(items);
+      for (const ExamItem& item : *items) {
+        ++perKind[quiz::toString(item.question.question.kind)];
+        ++perItem[item.question.question.id];
+      }
+    }
+    double expectedLocate = 0;
+    for (const auto& [id, n] : kindsOf) expectedLocate += n == int(exam.kinds.size()) ? 1.0 / n : 0.0;
+    for (const auto& [kind, n] : perKind)
+      MESSAGE(exam.id << ": " << kind << " " << double(n) / draws << " items a draw (pool: "
+                      << std::count_if(pool.begin(), pool.end(), [&](const std::string& q) { return q.find("." + kind + ".") != std::string::npos; })
+                      << " of " << pool.size() << ")");
+    MESSAGE("locate expected " << expectedLocate * exam.count / double(exam.structures.size()) << " a draw");
+    if (exam.count == int(exam.structures.size()))
+      for (const std::string& item : pool) {
+        const std::string id = item.substr(item.rfind('.') + 1);
+        const double expected = 1.0 / kindsOf[id];
+        CAPTURE(item);
+        CHECK(std::abs(double(perItem[item]) / draws - expected) < 0.1);  // > 3.5 standard deviations
+      }
+  }
 }

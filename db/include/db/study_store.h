@@ -49,6 +49,10 @@ struct StudyCompletion {
   std::optional<std::string> withdrawal;  // "withdrawn: <reason>" or "excluded: <reason>" (db/study_withdrawal.h)
 };
 
+// On a class server every write below goes through the server's audited functions
+// (db/src/study_writes_sql.cpp): a coordinator's login registers a study (it becomes hers) and
+// alone records its participants; any other login is refused and nothing changes.
+//
 // Stores (or updates) a study definition. A study that already has participants may only be
 // re-stored unchanged in its structures, conditions, items and seed (an error names the study).
 Status saveStudy(Database& db, const quiz::StudyProtocol& protocol);

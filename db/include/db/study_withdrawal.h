@@ -18,8 +18,9 @@ namespace at::db {
 enum class StudyWithdrawalKind { Withdrawn, Excluded };
 const char* toString(StudyWithdrawalKind kind);  // "withdrawn", "excluded"
 
-// Sets the study's owner (a class server login; "" = the database's administrator). Run by the
-// administrator (a login holds no write on studies). NotFound when there is no such study.
+// Sets the study's owner (a class server login; "" = the database's administrator). On a server
+// the administrator names anyone; the owner's login may hand the study to another coordinator's
+// login (audited, through at_set_study_owner). NotFound when there is no such study.
 Status setStudyOwner(Database& db, const std::string& studyId, const std::string& owner);
 Result<std::string> studyOwner(Database& db, const std::string& studyId);
 

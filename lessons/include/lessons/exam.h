@@ -133,7 +133,9 @@ Result<std::pair<Course, ExamSpec>> findExam(CurriculumRepository& curriculum, c
 // clip) and the tolerance of the first lesson question of the course that asks to locate that
 // structure — views the course checks are answerable (a click on the target's centre picks it:
 // tests/app/test_question_scenes.cpp, `course validate`). A structure that no lesson asks to locate
-// is asked in its next kind instead (identify or name, in its drawn order of kinds); only when
+// is asked only in the exam's other kinds: each structure's kinds are the ones it can be asked in,
+// in a shuffled order, so its kind is drawn evenly among them and no item comes twice (an exam
+// whose count exceeds the items its structures can be asked in is an error). Only when
 // locate is the exam's one kind, or without a course, does its region fall back to the target's
 // nearest neighbour by WDT distance with no tolerance (the app then turns the view to a side from
 // which the target can be clicked).
