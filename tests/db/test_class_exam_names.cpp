@@ -104,6 +104,28 @@ double serverScore(Database& admin, const ClassExamKey& key, const std::string& 
   return s->real(0);
 }
 
+// How many compared answers the laptop graded right, partly right and wrong.
+struct GradeTally {
+  int compared = 0, right = 0, partial = 0, wrong = 0;
+};
+
+// Grades each typed answer to `q` on the laptop (quiz::gradeName) and on the server (key), checks
+// that both give the same score, and counts the laptop's grades.
+void compareGrades(Database& admin, const ClassExamKey& key, const quiz::ResolvedQuestion& q,
+                   const quiz::GradingContext& context, const std::vector<std::string>& typed, GradeTally& tally) {
+  for (const std::string& text : typed) {
+    auto laptop = quiz::gradeName(q, text, context);
+    REQUIRE(laptop);
+    const double server = serverScore(admin, key, text);
+    CAPTURE(q.question.id);
+    CAPTURE(text);
+    CAPTURE(laptop->feedback);
+    CHECK(server == doctest::Approx(laptop->score));
+    ++tally.compared;
+    (laptop->score >= 1 ? tally.right : laptop->score > 0 ? tally.partial : tally.wrong) += 1;
+  }
+}
+
 }  // namespace
 
 TEST_CASE("ClassExamNames_TheServerGradesTypedNamesAsTheLaptopDoes_ForTyposAccentsAndSides") {
@@ -122,30 +144,20 @@ TEST_CASE("ClassExamNames_TheServerGradesTypedNamesAsTheLaptopDoes_ForTyposAccen
                                         "sphenoid sinuss", "ethmoid sinuss", "cn 7", "CN-VII", "lateral  canal",
                                         "Cochlea", "COCLEA", "", "   ", "the"};
   for (const quiz::NameEntry& e : context.names) spellings.insert(spellings.end(), e.names.begin(), e.names.end());
-  int compared = 0, partial = 0, right = 0, wrong = 0;
+  GradeTally tally;
   for (const quiz::ResolvedQuestion& q : questions) {
     ClassExamKey key;
     setNameKey(key, q, context);
     std::vector<std::string> typed = spellings;
     for (int i = 0; i < 60; ++i) typed.push_back(mangled(spellings[random() % spellings.size()], random));
-    for (const std::string& text : typed) {
-      auto laptop = quiz::gradeName(q, text, context);
-      REQUIRE(laptop);
-      const double server = serverScore(admin, key, text);
-      CAPTURE(q.question.id);
-      CAPTURE(text);
-      CAPTURE(laptop->feedback);
-      CHECK(server == doctest::Approx(laptop->score));
-      ++compared;
-      (laptop->score >= 1 ? right : laptop->score > 0 ? partial : wrong) += 1;
-    }
+    compareGrades(admin, key, q, context, typed, tally);
   }
   // The answers must have tried every grade, or the comparison proves little.
-  MESSAGE("seed " << seed << ": " << compared << " answers compared, " << right << " right, " << partial
-                  << " partly, " << wrong << " wrong");
-  CHECK(right > 20);
-  CHECK(partial > 3);
-  CHECK(wrong > 20);
+  MESSAGE("seed " << seed << ": " << tally.compared << " answers compared, " << tally.right << " right, "
+                  << tally.partial << " partly, " << tally.wrong << " wrong");
+  CHECK(tally.right > 20);
+  CHECK(tally.partial > 3);
+  CHECK(tally.wrong > 20);
   CHECK(serverScore(admin, [&] { ClassExamKey k; setNameKey(k, questions[0], context); return k; }(), "orbit") == 0.5);
 }
 
@@ -205,7 +217,8 @@ TEST_CASE("ClassExamNames_OnTheShippedCoursesRealCatalogues_TheServerGradesEvery
   Database admin = test::openAt(*url);
   const std::uint64_t seed = test::freshSeed("ClassExamNames_OnTheShippedCoursesRealCatalogues");
   std::mt19937_64 random(seed);
-  int courses = 0, compared = 0, right = 0, partial = 0, wrong = 0, sided = 0;
+  int courses = 0, sided = 0;
+  GradeTally tally;
   for (const auto& file : std::filesystem::directory_iterator(test::sourceDir() / "data" / "courses")) {
     if (file.path().extension() != ".json") continue;
     auto course = lessons::loadCourseJson(file.path());
@@ -251,24 +264,14 @@ TEST_CASE("ClassExamNames_OnTheShippedCoursesRealCatalogues_TheServerGradesEvery
             typed.push_back(mangled(name, random));
             typed.push_back((random() % 2 ? "right " : "left ") + mangled(name, random));
           }
-      for (const std::string& text : typed) {
-        auto laptop = quiz::gradeName(q, text, context);
-        REQUIRE(laptop);
-        const double server = serverScore(admin, key, text);
-        CAPTURE(q.question.id);
-        CAPTURE(text);
-        CAPTURE(laptop->feedback);
-        CHECK(server == doctest::Approx(laptop->score));
-        ++compared;
-        (laptop->score >= 1 ? right : laptop->score > 0 ? partial : wrong) += 1;
-      }
+      compareGrades(admin, key, q, context, typed, tally);
     }
   }
-  MESSAGE("seed " << seed << ": " << courses << " courses, " << compared << " answers compared, " << right << " right, "
-                  << partial << " partly, " << wrong << " wrong; " << sided << " keys with a side");
+  MESSAGE("seed " << seed << ": " << courses << " courses, " << tally.compared << " answers compared, " << tally.right
+                  << " right, " << tally.partial << " partly, " << tally.wrong << " wrong; " << sided << " keys with a side");
   CHECK(courses >= 2);
-  CHECK(right > 100);
-  CHECK(partial > 20);
-  CHECK(wrong > 100);
+  CHECK(tally.right > 100);
+  CHECK(tally.partial > 20);
+  CHECK(tally.wrong > 100);
   CHECK(sided > 10);
 }
