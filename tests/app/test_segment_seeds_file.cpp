@@ -149,3 +149,61 @@ TEST_CASE("the segment editor's growth settings come from the data, are checked,
                                          [](const json& e) { return e.value("event", "") == "segment_grown"; });
   CHECK(grownEvents == 2);
 }
+
+TEST_CASE("a seeds file's per-label grow ranges survive loading into the segment editor and saving again") {
+  test::TempDir dir;
+  db::Connection database = openDatabase(dir);
+  const Dataset ds = unlabelledMicroCt();
+  app::SegmentController first(database, [](json) {});
+  first.attach(ds);
+  paintSeeds(first, ds.volume.dims());
+  const std::string painted = (dir / "painted.json").string();
+  REQUIRE(first.saveSeeds(painted));
+
+  // The instructor gives "upper" a range and "lower" the bone range in the file.
+  json doc = json::parse(std::ifstream(painted));
+  for (json& label : doc["labels"]) {
+    if (label["name"] == "upper") label["grow_range"] = {40.0, 230.0};
+    if (label["name"] == "lower") label["grow_range"] = "bone";
+  }
+  const std::string ranged = (dir / "ranged.json").string();
+  std::ofstream(ranged) << doc.dump(2);
+
+  std::vector<json> events;
+  app::SegmentController second(database, [&](json e) { events.push_back(std::move(e)); });
+  second.attach(ds);
+  REQUIRE(second.loadSeeds(ranged));
+  CHECK(second.status().find("2 labels have a grow range") != std::string::npos);
+  REQUIRE(!events.empty());
+  CHECK(events.back()["labels_with_grow_range"] == 2);
+  const std::string saved = (dir / "saved.json").string();
+  REQUIRE(second.saveSeeds(saved));
+  auto set = segment::loadSeeds(saved);
+  REQUIRE_MESSAGE(set, test::errorText(set));
+  int upper = 0, lower = 0, others = 0;
+  for (const segment::SeedLabel& l : set->labels) {
+    if (l.name == "upper") {
+      ++upper;
+      REQUIRE(l.growRange);
+      CHECK((*l.growRange)[0] == doctest::Approx(40.0));
+      CHECK((*l.growRange)[1] == doctest::Approx(230.0));
+      CHECK_FALSE(l.growRangeBone);
+    } else if (l.name == "lower") {
+      ++lower;
+      CHECK(l.growRangeBone);
+    } else {
+      others += l.hasGrowRange();
+    }
+  }
+  CHECK(upper == 1);
+  CHECK(lower == 1);
+  CHECK(others == 0);
+
+  // Attaching another dataset forgets them: its seeds are saved without ranges.
+  second.attach(ds);
+  paintSeeds(second, ds.volume.dims());
+  REQUIRE(second.saveSeeds(saved));
+  auto fresh = segment::loadSeeds(saved);
+  REQUIRE(fresh);
+  for (const segment::SeedLabel& l : fresh->labels) CHECK_FALSE(l.hasGrowRange());
+}

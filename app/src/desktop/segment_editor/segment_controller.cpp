@@ -48,6 +48,7 @@ void SegmentController::attach(const Dataset& dataset) {
   const LabelMap start = dataset.labels.empty() ? LabelMap(dataset.volume.geometry, 0) : dataset.labels;
   editor_ = std::make_unique<segment::LabelEditor>(start, dataset.structures);
   seeds_.clear();
+  growRanges_.clear();
   current_ = 0;
   axis_ = 2;
   index_ = dataset.volume.dims().z / 2;

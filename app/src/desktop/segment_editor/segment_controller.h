@@ -213,6 +213,14 @@ class SegmentController {
   const Dataset* dataset_ = nullptr;  // the dataset being labelled (its volume and intensity)
   std::unique_ptr<segment::LabelEditor> editor_;
   std::map<std::size_t, std::uint16_t> seeds_;  // voxel index → label
+  // Per-label grow ranges ("grow_range") of the last seeds file loaded, by editor label: kept so that
+  // saving the seeds writes them back. The live growth here does not apply them (`segment --seeds`
+  // does); loading says so.
+  struct LabelGrowRange {
+    std::optional<std::array<double, 2>> values;
+    bool bone = false;
+  };
+  std::map<std::uint16_t, LabelGrowRange> growRanges_;
   db::ReviewStates review_;                     // by structure id
   std::uint16_t current_ = 0;
   int axis_ = 2, index_ = 0;

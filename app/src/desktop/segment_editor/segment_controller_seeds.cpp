@@ -73,6 +73,10 @@ Status SegmentController::saveSeeds(const std::string& path) const {
                                       [&](const Structure& s) { return s.label == label; });
       l.name = found != structures().end() ? found->id : "label_" + std::to_string(label);
       if (found != structures().end()) l.colour = found->colour;
+      if (const auto range = growRanges_.find(label); range != growRanges_.end()) {
+        l.growRange = range->second.values;
+        l.growRangeBone = range->second.bone;
+      }
     }
     labelIndex[label] = set.labels.size();
     set.labels.push_back(l);
@@ -122,6 +126,9 @@ Result<std::size_t> SegmentController::loadSeeds(const std::string& path) {
   for (std::size_t i = 0; i < set->labels.size(); ++i) byValue[set->labels[i].value] = editorLabel[i];
   seeds_.clear();
   for (const GrowthSeed& s : raster->seeds) seeds_[s.index] = byValue.at(s.label);
+  growRanges_.clear();
+  for (std::size_t i = 0; i < set->labels.size(); ++i)
+    if (set->labels[i].hasGrowRange()) growRanges_[editorLabel[i]] = {set->labels[i].growRange, set->labels[i].growRangeBone};
   GrowthSettings settings = settings_;
   if (set->grow.window) settings.window = *set->grow.window;
   if (set->grow.base) settings.basePerVoxel = segment::basePerVoxelOf(*set->grow.base, defaults_.voxelMm);
@@ -131,7 +138,10 @@ Result<std::size_t> SegmentController::loadSeeds(const std::string& path) {
   if (auto ok = setGrowthSettings(settings); !ok) return tl::unexpected(withContext(path, ok.error()));
   ++revision_;
   status_ = "seeds loaded from " + path + ": " + std::to_string(seeds_.size()) + " voxels";
-  events_({{"event", "segment_seeds_loaded"}, {"path", path}, {"seeds", seeds_.size()}});
+  if (!growRanges_.empty())
+    status_ += "; " + std::to_string(growRanges_.size()) +
+               " labels have a grow range, kept when the seeds are saved but not applied by this live growth (anatomy-tutor segment --seeds applies them)";
+  events_({{"event", "segment_seeds_loaded"}, {"path", path}, {"seeds", seeds_.size()}, {"labels_with_grow_range", growRanges_.size()}});
   return seeds_.size();
 }
 
