@@ -81,11 +81,8 @@ TEST_CASE("Grow from seeds on the GPU equals the CPU and the exact reference bit
 // be visited, on the first growth and when the seeds are added to an earlier one.
 TEST_CASE("GPU: seeds filling a brick grow into the bricks beside it, from scratch and incrementally") {
   if (!requireGrowthDevice()) return;
-  Geometry g;
-  g.dims = {18, 17, 3};
-  g.spacingMm = {0.5, 0.7, 1.1};
-  Volume volume(g);
-  for (std::size_t i = 0; i < volume.voxels.size(); ++i) volume.voxels[i] = std::int16_t(300 + int(i % 7) * 40);
+  Volume volume = repeatingRampVolume({18, 17, 3});
+  const Geometry& g = volume.geometry;
   GrowthParams params;
   params.baseCost = 0.05f;
   std::vector<GrowthSeed> seeds;

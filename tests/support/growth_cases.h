@@ -34,6 +34,17 @@ inline Volume randomVolume(std::mt19937_64& rng, Dims dims) {
   return v;
 }
 
+// A small anisotropic volume of soft-tissue-to-bone values repeating along x (300 … 540 HU), for
+// the deterministic brick-face cases: every step has a cost, nothing is out of a bone range.
+inline Volume repeatingRampVolume(Dims dims) {
+  Geometry g;
+  g.dims = dims;
+  g.spacingMm = {0.5, 0.7, 1.1};
+  Volume v(g);
+  for (std::size_t i = 0; i < v.voxels.size(); ++i) v.voxels[i] = std::int16_t(300 + int(i % 7) * 40);
+  return v;
+}
+
 // Short strokes (runs of voxels along an axis) of random labels; at least two labels.
 inline std::vector<GrowthSeed> randomSeeds(std::mt19937_64& rng, Dims d, int labels, int strokes) {
   std::vector<std::uint16_t> values(static_cast<std::size_t>(labels));

@@ -93,11 +93,8 @@ TEST_CASE("Range-limited growth refuses an empty range and the cuda backend") {
 // is lowered (a brick made only of seeds, or of seeds and voxels outside the range), the growth
 // must still reach across: every case equals the exact reference, and the far side is labelled.
 TEST_CASE("Seeds on a brick face grow into the next brick though their own brick lowers nothing") {
-  Geometry g;
-  g.dims = {18, 3, 2};
-  g.spacingMm = {0.5, 0.7, 1.1};
-  Volume volume(g);
-  for (std::size_t i = 0; i < volume.voxels.size(); ++i) volume.voxels[i] = std::int16_t(300 + int(i % 7) * 40);
+  Volume volume = repeatingRampVolume({18, 3, 2});
+  const Geometry& g = volume.geometry;
   GrowthParams params;
   params.backend = WdtBackend::Cpu;
   params.baseCost = 0.05f;
