@@ -82,12 +82,12 @@ fi
 # The skull CT (1 mm head CT, labels from scripts/label-scans.sh), presets derived from its HU; the
 # distance unit from each field (render/field_scale.h), the headrest left out (derived_preset.h).
 if "$app" structures skull >/dev/null 2>&1; then
-  render_skull skull_fig1_ear_canal_wdt.png external_acoustic_meatus_right --mode wdt --view lateral_right
+  render_skull skull_fig1_ear_canal_wdt.png external_acoustic_meatus_right --mode wdt --view anterior
   render_skull skull_fig1_frontal_sinus_wdt.png frontal_sinus --mode wdt --view anterior
-  render_skull skull_fig2_ear_canal_wdt_t03.png external_acoustic_meatus_right --mode wdt --view lateral_right --t 0.3
+  render_skull skull_fig2_ear_canal_wdt_t03.png external_acoustic_meatus_right --mode wdt --view anterior --t 0.3
   render_skull skull_fig2_frontal_sinus_wdt_t1.png frontal_sinus --mode wdt --view anterior --t 1
-  render_skull skull_fig4_ear_canal_wdt.png external_acoustic_meatus_right --mode wdt --view lateral_right --margin 2.6
-  render_skull skull_fig4_ear_canal_unweighted.png external_acoustic_meatus_right --mode unweighted --view lateral_right --margin 2.6
+  render_skull skull_fig4_ear_canal_wdt.png external_acoustic_meatus_right --mode wdt --view anterior --margin 2.6
+  render_skull skull_fig4_ear_canal_unweighted.png external_acoustic_meatus_right --mode unweighted --view anterior --margin 2.6
   render_skull skull_fig4_maxillary_sinus_wdt.png maxillary_sinus_right --mode wdt --view anterior --margin 2.6
   render_skull skull_fig4_maxillary_sinus_unweighted.png maxillary_sinus_right --mode unweighted --view anterior --margin 2.6
   render_skull skull_fig5_mandible_fuzzy.png mandible --mode fuzzy --view anterior
@@ -127,7 +127,7 @@ sheet sheet_fig7.png "Fig. 7 - the structure lights the bone (Eq. 6)" \
 
 # The same figures on the skull CT, one sheet each.
 sheet sheet_skull_fig1.png "Fig. 1 on the skull CT - context near the structure, fading with weighted distance" \
-  skull_fig1_ear_canal_wdt.png "Right ear canal from the side: the temporal bone around it, the rest fades" \
+  skull_fig1_ear_canal_wdt.png "Right ear canal from the front: the temporal bone around it, the rest fades" \
   skull_fig1_frontal_sinus_wdt.png "Frontal sinus from the front: its bony walls, the face fades"
 sheet sheet_skull_fig2.png "Fig. 2 on the skull CT - more context with the slider t" \
   skull_fig2_ear_canal_wdt_t03.png "Right ear canal, t = 0.3: more of the skull as faint context" \
