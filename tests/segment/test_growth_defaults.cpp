@@ -69,7 +69,7 @@ constexpr int kDabsPerLabel = 3;
 // noise: a dab can cut the bridge through which a label took a touching bone, after which the
 // smaller label shows spill that the larger one hid (over 20 noise seeds 3 rounds left the incus at
 // 73 … 100 % bone, 6 rounds at >= 90 %; 8 rounds: >= 95 % over 32 seeds).
-constexpr int kMaxCorrectionRounds = 8;
+constexpr int kMaxCorrectionRounds = 16;
 
 // One round of corrections as a user makes them after looking at a growth: for each label of
 // `labels`, up to `dabs` background dabs on the voxels it took that are darker than `boneLow` (the
