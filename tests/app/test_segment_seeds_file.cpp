@@ -84,6 +84,7 @@ TEST_CASE("seeds painted in the segment editor, saved and loaded into a fresh ed
   auto raster = segment::rasteriseSeeds(*set, ds.volume.geometry);
   REQUIRE(raster);
   CHECK(raster->seeds.size() == first.seedCount());
+  CHECK(set->strokes.size() * 2 < first.seedCount());  // rows of voxels, not one dot per voxel
 
   std::vector<json> events;
   app::SegmentController second(database, [&](json e) { events.push_back(std::move(e)); });

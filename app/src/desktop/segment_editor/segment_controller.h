@@ -156,7 +156,8 @@ class SegmentController {
   // The ranges the next growth applies, "bone" resolved (empty: the ordinary growth alone).
   segment::LabelRanges labelRanges() const;
 
-  // Seeds as a seeds file (segment/seeds.h): one dot per seed voxel at its centre (LPS mm), the
+  // Seeds as a seeds file (segment/seeds.h): each row of seed voxels of one label a stroke of
+  // radius 0 between its end voxels' centres (LPS mm; it rasterises to exactly those voxels), the
   // labels by name (the background and the structures seeded), and the growth settings — what
   // `anatomy-tutor segment --seeds` grows the same labels from. loadSeeds replaces the painted
   // seeds with a file's (strokes rasterised on this grid), adds the structures it names that the
