@@ -41,31 +41,38 @@ TEST_CASE("Ranged growth: ranged labels stay in range, unranged labels lose voxe
   std::mt19937_64 rng(test::freshSeed("ranged growth"));
   const Geometry g = cube(24);
   Volume v(g, 0);
-  // Random boxes of air, soft tissue and bone over noise.
+  // Random boxes of air, soft tissue and bone over noise; the last three boxes are one of each, so
+  // that every range below holds some voxels.
   std::uniform_int_distribution<int> at(0, 23), size(2, 9), kind(0, 2), noise(-40, 40);
   for (int b = 0; b < 40; ++b) {
     const int i0 = at(rng), j0 = at(rng), k0 = at(rng), s = size(rng);
-    const std::int16_t value = std::array<std::int16_t, 3>{-900, 40, 900}[std::size_t(kind(rng))];
+    const int drawnKind = kind(rng);
+    const std::int16_t value = std::array<std::int16_t, 3>{-900, 40, 900}[std::size_t(b >= 37 ? b - 37 : drawnKind)];
     for (int k = k0; k < std::min(24, k0 + s); ++k)
       for (int j = j0; j < std::min(24, j0 + s); ++j)
         for (int i = i0; i < std::min(24, i0 + s); ++i) v.at(i, j, k) = value;
   }
   for (auto& x : v.voxels) x = std::int16_t(x + noise(rng));
-  std::vector<GrowthSeed> seeds;
-  std::vector<char> used(v.voxels.size(), 0);
-  std::uniform_int_distribution<std::size_t> voxel(0, v.voxels.size() - 1);
-  for (std::uint16_t label = 0; label <= 4; ++label)
-    for (int n = 0; n < 6; ++n) {
-      const std::size_t i = voxel(rng);
-      if (!used[i]) seeds.push_back({i, label}), used[i] = 1;
-    }
-  std::sort(seeds.begin(), seeds.end(), [](const GrowthSeed& a, const GrowthSeed& b) { return a.index < b.index; });
   const std::vector<LabelValueRange> ranges{{1, {300, 3000}}, {2, {300, 3000}}, {3, {-100, 200}}};
   const auto rangeOf = [&](std::uint16_t l) -> const LabelValueRange* {
     for (const auto& r : ranges)
       if (r.label == l) return &r;
     return nullptr;
   };
+  const auto inRange = [&](std::size_t i, const LabelValueRange& r) { return v.voxels[i] >= r.values[0] && v.voxels[i] <= r.values[1]; };
+  // Random seeds; a ranged label's first seed lies in its range (else all its seeds could fall
+  // outside it, it would grow nothing, and the checks below would see no ranged voxel).
+  std::vector<GrowthSeed> seeds;
+  std::vector<char> used(v.voxels.size(), 0);
+  std::uniform_int_distribution<std::size_t> voxel(0, v.voxels.size() - 1);
+  for (std::uint16_t label = 0; label <= 4; ++label)
+    for (int n = 0; n < 6; ++n) {
+      std::size_t i = voxel(rng);
+      if (const LabelValueRange* r = rangeOf(label); r && n == 0)
+        while (used[i] || !inRange(i, *r)) i = voxel(rng);  // the boxes above put voxels in every range
+      if (!used[i]) seeds.push_back({i, label}), used[i] = 1;
+    }
+  std::sort(seeds.begin(), seeds.end(), [](const GrowthSeed& a, const GrowthSeed& b) { return a.index < b.index; });
   const GrowthParams p = cpuParams();
   const LabelMap plain = grow(v, seeds, p);
   auto ranged = growWithLabelRanges(v, IntensityModel{}, plain, seeds, p, ranges);
