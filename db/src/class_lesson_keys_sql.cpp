@@ -180,7 +180,7 @@ $f$;
 -- server: p_keys is a JSON array of {question_id, kind, target, choices, key_choice, key_order,
 -- tolerance_mm, name_bodies, competitor_bodies, target_side, ask_side, structure_ids, spellings}.
 -- Each question must be on the server with that kind and target. The class's answers to those
--- questions are graded again from their answers. Returns the number of keys.
+-- questions are graded from their answers (see below). Returns the number of keys.
 CREATE FUNCTION at_publish_lesson_keys(p_class text, p_keys text, p_by text) RETURNS integer
 LANGUAGE plpgsql SECURITY DEFINER AS $f$
 DECLARE
@@ -190,6 +190,7 @@ DECLARE
   k jsonb;
   q questions%ROWTYPE;
   e record;
+  old_key jsonb;
   given jsonb;
   s double precision;
   n integer := 0;
@@ -229,11 +230,18 @@ BEGIN
       RAISE EXCEPTION 'the key of question % lacks its choices and key choice, its order or its names', q.id
         USING ERRCODE = 'invalid_parameter_value';
     END IF;
+    SELECT key INTO old_key FROM class_lesson_keys WHERE class_code = p_class AND question_id = q.id;
     INSERT INTO class_lesson_keys (class_code, question_id, key, published_by, published_at)
     VALUES (p_class, q.id, k, actor, at_now())
     ON CONFLICT (class_code, question_id) DO UPDATE SET key = excluded.key, published_by = excluded.published_by,
       published_at = excluded.published_at;
-    FOR e IN SELECT uuid, payload FROM class_events WHERE class_code = p_class AND kind = 'answer' AND question_id = q.id LOOP
+    -- Graded again: the answers waiting ungraded, and when the key changed the others — except an
+    -- answer a coordinator corrected (at_correct_event, audited), whose correction stands.
+    FOR e IN SELECT ev.uuid, ev.payload FROM class_events ev
+             WHERE ev.class_code = p_class AND ev.kind = 'answer' AND ev.question_id = q.id
+               AND (ev.correct IS NULL OR old_key IS DISTINCT FROM k)
+               AND NOT EXISTS (SELECT 1 FROM class_audit a WHERE a.action = 'correct' AND a.class_code = p_class
+                               AND a.target = ev.user_name || ' ' || ev.uuid) LOOP
       BEGIN
         given := e.payload::jsonb;
       EXCEPTION WHEN others THEN

@@ -15,6 +15,7 @@
 #include <nlohmann/json.hpp>
 
 #include "database.h"  // db/'s private SQL wrapper (at_db_sql_for_tests)
+#include "db/class_accounts.h"
 #include "db/class_lesson_keys.h"
 #include "db/sql_repositories.h"
 #include "lessons/lesson_engine.h"
@@ -304,7 +305,7 @@ TEST_CASE("ClassLessonGrading_AStudentClaimingRightForWrongAnswersIsGradedByTheS
   CHECK(everything(c.admin) == untouched);
 }
 
-TEST_CASE("ClassLessonGrading_AnswersSentBeforeTheKeysAreGradedWhenTheyArePublished_AndTheLessonEndTakesTheServersMean") {
+TEST_CASE("ClassLessonGrading_AnswersSentBeforeTheKeysAreGradedWhenTheyArePublished_CorrectionsStand_TheLessonEndTakesTheServersMean") {
   auto url = test::freshPostgresDatabase("the lesson grading test");
   if (!url) return;
   test::SecureClass c(*url, false);
@@ -337,11 +338,37 @@ TEST_CASE("ClassLessonGrading_AnswersSentBeforeTheKeysAreGradedWhenTheyArePublis
   CHECK(test::scalarCount(c.admin, "SELECT COUNT(*) FROM class_audit WHERE action = 'lesson_keys' AND actor = '" +
                                        c.instructor + "' AND target = '6 questions'") == 1);
 
+  // A coordinator's correction stands when the keys are published again, even with a changed key;
+  // answers without one follow the new key.
+  std::string identifyUuid;
+  {
+    auto s = c.admin.prepare("SELECT uuid FROM class_events WHERE question_id = 'toy.ossicles.identify_incus'");
+    REQUIRE(s);
+    REQUIRE(*s->step());
+    identifyUuid = s->text(0);
+  }
+  Database coordinator = openAt(c.coordinatorUrl);
+  REQUIRE(correctClassEvent(coordinator, identifyUuid, false, 0.5, "half credit: the stapes touches the incus", std::nullopt));
+  std::vector<std::string> changed = test::toyLessonKeys();
+  for (std::string& k : changed) {
+    json key = json::parse(k);
+    if (key["question_id"] == "toy.ossicles.identify_incus") key["key_choice"] = 2;
+    if (key["question_id"] == "toy.ossicles.locate_malleus") key["tolerance_mm"] = 0.1;
+    k = key.dump();
+  }
+  REQUIRE(publishLessonKeys(instructor, c.code, changed, std::nullopt));
+  CHECK(test::scalarCount(c.admin, "SELECT COUNT(*) FROM class_events WHERE uuid = '" + identifyUuid +
+                                       "' AND correct = 0 AND score = 0.5") == 1);
+  CHECK(test::scalarCount(c.admin, "SELECT COUNT(*) FROM class_events WHERE question_id = 'toy.ossicles.locate_malleus'"
+                                   " AND correct = 0") == 1);  // 0.4 mm is outside the new 0.1 mm
+  REQUIRE(publishLessonKeys(instructor, c.code, test::toyLessonKeys(), std::nullopt));
+
   CHECK(record("SELECT at_record_event('" + newUuid() + "', '" + c.code + "', '" + c.sam + "', 'lesson_finished', " +
                std::to_string(now) + ", 'toy.ossicles', '', '', NULL, 1.0, '{\"score\": 1.0}')") == "stored");
+  // The lesson's end: the mean of the server's grades (1, the corrected 0.5, 1), not her 1.0.
   auto end = c.admin.prepare("SELECT score, payload FROM class_events WHERE kind = 'lesson_finished'");
   REQUIRE(end);
   REQUIRE(*end->step());
-  CHECK(end->real(0) == doctest::Approx(2.0 / 3.0));
-  CHECK(json::parse(end->text(1))["score"].get<double>() == doctest::Approx(2.0 / 3.0));
+  CHECK(end->real(0) == doctest::Approx(2.5 / 3.0));
+  CHECK(json::parse(end->text(1))["score"].get<double>() == doctest::Approx(2.5 / 3.0));
 }
