@@ -239,7 +239,7 @@ TEST_CASE("StudyChecks_StudyMergeIntoTheServerIsTheCurrentCoordinatorsAlone_Chec
     REQUIRE(withdrawStudyParticipant(labs.back(), p.id, "L" + std::to_string(m) + "P0", StudyWithdrawalKind::Withdrawn,
                                      "asked to stop", std::nullopt));
   }
-  const std::vector<StudyMergeSource> sources = {{"lab0.db", &labs[0]}, {"lab1.db", &labs[1]}};
+  const std::vector<StudyMergeSource> sources = {{"lab0.db", &labs[0], nullptr}, {"lab1.db", &labs[1], nullptr}};
 
   // A student, the instructor: refused, nothing changes (the study is not even registered).
   const std::string before = studySnapshot(c.admin);
