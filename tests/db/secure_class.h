@@ -10,8 +10,10 @@
 #include <string>
 
 #include "db/class_accounts.h"
+#include "db/class_lesson_keys.h"
 #include "db/class_server.h"
 #include "db/course_store.h"
+#include "lessons/lesson_engine.h"
 #include "test_databases.h"
 #include "toy_course.h"
 
@@ -33,8 +35,18 @@ inline std::string loginUrl(const std::string& url, const std::string& login, co
   return url.substr(0, scheme) + login + ":" + password + url.substr(at);
 }
 
+// The toy course's answer keys, resolved on the toy dataset as an instructor's machine would.
+inline std::vector<std::string> toyLessonKeys() {
+  ToyKeys keys;
+  const lessons::Course course = toyCourse();
+  auto all = courseLessonKeys(course, keys, lessons::gradingContext(toyStructures(), course));
+  REQUIRE_MESSAGE(all, (all ? "" : all.error().message));
+  return *all;
+}
+
 // A class on a fresh server with the toy course: its coordinator, an instructor and two students,
-// each with their own login, and each connected as themselves.
+// each with their own login, and each connected as themselves. The instructor has published the
+// course's answer keys (unless `publishKeys` is false), so the server grades lesson answers.
 struct SecureClass {
   std::string adminUrl;
   Database admin;
@@ -43,7 +55,7 @@ struct SecureClass {
               eve = uniqueLogin("eve");
   std::string samUrl, eveUrl, coordinatorUrl, instructorUrl;
 
-  explicit SecureClass(const std::string& url) : adminUrl(url), admin(openAt(url)) {
+  explicit SecureClass(const std::string& url, bool publishKeys = true) : adminUrl(url), admin(openAt(url)) {
     REQUIRE(storeCourse(admin, test::toyCourse(), "toy"));
     auto made = createClass(admin, "Ear anatomy", coordinator);
     REQUIRE_MESSAGE(made, (made ? "" : made.error().message));
@@ -53,6 +65,12 @@ struct SecureClass {
     instructorUrl = account(coordinatorDb, instructor, ClassRole::Instructor);
     samUrl = account(coordinatorDb, sam, ClassRole::Student);
     eveUrl = account(coordinatorDb, eve, ClassRole::Student);
+    if (publishKeys) {
+      Database instructorDb = openAt(instructorUrl);
+      auto published = publishLessonKeys(instructorDb, code, toyLessonKeys(), std::nullopt);
+      REQUIRE_MESSAGE(published, (published ? "" : published.error().message));
+      REQUIRE(*published == 6);
+    }
   }
 
   std::string account(Database& by, const std::string& name, ClassRole role) {
