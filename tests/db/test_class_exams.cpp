@@ -132,7 +132,7 @@ TEST_CASE("ClassExam_KeysNeverReachAStudent_GradesAreTheServersAndForgeriesChang
   CHECK(sitting->deadline - sitting->serverNow > 590);
   for (const ClassExamItem& item : sitting->items)
     if (item.kind != "locate")
-      for (const std::string& secret : {"stapes", "Stapes", "stirrup"}) {
+      for (const char* secret : {"stapes", "Stapes", "stirrup"}) {
         CHECK(item.prompt.find(secret) == std::string::npos);
         CHECK(item.sceneJson.find(secret) == std::string::npos);
       }

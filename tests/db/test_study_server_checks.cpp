@@ -199,7 +199,7 @@ TEST_CASE("StudyChecks_ADemotedCoordinatorWritesNothingMoreToHerOwnStudies") {
   refusedAsDemoted(markParticipantComplete(ada, *first), "complete");
   refusedAsDemoted(withdrawStudyParticipant(ada, p.id, "P0", StudyWithdrawalKind::Withdrawn, "asked to stop", std::nullopt),
                    "withdraw");
-  for (const std::string sql : {"SELECT at_draw_study_row('" + p.id + "')",
+  for (const std::string& sql : {"SELECT at_draw_study_row('" + p.id + "')",
                                 "SELECT at_set_study_owner('" + p.id + "', '" + ben + "')"}) {
     auto s = ada.exec(sql);
     refusedAsDemoted(s, sql);
