@@ -16,6 +16,7 @@
 #include "quiz/study_design.h"
 #include "quiz/study_protocol.h"
 #include "secure_class.h"
+#include "study_server_snapshot.h"
 #include "test_support.h"
 
 using namespace at;
@@ -24,23 +25,8 @@ using nlohmann::json;
 
 namespace {
 
-quiz::StudyProtocol paperSurvey() {
-  auto p = quiz::loadStudyProtocol((test::sourceDir() / "data/studies/paper_survey.json").string());
-  REQUIRE(p.has_value());
-  return *p;
-}
-
-// Every row of the study tables and of the audit, as the administrator reads them: one text.
-std::string studySnapshot(Database& admin) {
-  std::string out;
-  for (const char* table : {"studies", "study_participants", "study_trials", "study_ratings", "class_audit"}) {
-    auto s = admin.prepare(std::string("SELECT coalesce(string_agg(t::text, E'\\n' ORDER BY t::text), '') FROM ") + table + " t");
-    REQUIRE(s);
-    REQUIRE(*s->step());
-    out += std::string(table) + ":\n" + s->text(0) + "\n";
-  }
-  return out;
-}
+using test::paperSurvey;
+using test::studySnapshot;
 
 // The trials of row `row` of `p`'s design, as the laptop sends them (study_server_writes.cpp).
 json trialsOfRow(const quiz::StudyProtocol& p, std::size_t row) {
