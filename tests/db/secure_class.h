@@ -8,6 +8,7 @@
 
 #include <atomic>
 #include <string>
+#include <vector>
 
 #include "db/class_accounts.h"
 #include "db/class_lesson_keys.h"
@@ -81,5 +82,23 @@ struct SecureClass {
     return loginUrl(adminUrl, name, *made->password);
   }
 };
+
+// Every row of every table of the server's schema, read by the administrator: one text (a refused
+// operation must leave it byte-identical).
+inline std::string everyServerRow(db::Database& admin) {
+  auto tables = admin.prepare("SELECT tablename FROM pg_tables WHERE schemaname = current_schema() ORDER BY tablename");
+  REQUIRE(tables);
+  std::vector<std::string> names;
+  while (*tables->step()) names.push_back(tables->text(0));
+  REQUIRE(names.size() > 20);
+  std::string out;
+  for (const std::string& table : names) {
+    auto rows = admin.prepare("SELECT coalesce(string_agg(t::text, E'\\n' ORDER BY t::text), '') FROM " + table + " t");
+    REQUIRE(rows);
+    REQUIRE(*rows->step());
+    out += table + ":\n" + rows->text(0) + "\n";
+  }
+  return out;
+}
 
 }  // namespace at::test

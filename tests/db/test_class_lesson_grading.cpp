@@ -53,21 +53,7 @@ std::string sqlText(const std::string& text) {
   return out + "'";
 }
 
-// Every row of every table of the server's schema, read by the administrator: one text.
-std::string everything(Database& admin) {
-  auto tables = admin.prepare("SELECT tablename FROM pg_tables WHERE schemaname = current_schema() ORDER BY tablename");
-  REQUIRE(tables);
-  std::vector<std::string> names;
-  while (*tables->step()) names.push_back(tables->text(0));
-  std::string out;
-  for (const std::string& table : names) {
-    auto rows = admin.prepare("SELECT coalesce(string_agg(t::text, E'\\n' ORDER BY t::text), '') FROM " + table + " t");
-    REQUIRE(rows);
-    REQUIRE(*rows->step());
-    out += table + ":\n" + rows->text(0) + "\n";
-  }
-  return out;
-}
+using test::everyServerRow;
 
 struct Toy {
   lessons::Course course = test::toyCourse();
@@ -280,7 +266,7 @@ TEST_CASE("ClassLessonGrading_AStudentClaimingRightForWrongAnswersIsGradedByTheS
                                    " AND payload LIKE '%\"choice\": 0%' AND correct = 1") == 0);
 
   // Refused, and nothing anywhere changes: answers that do not fit their question, keys read or published.
-  const std::string untouched = everything(c.admin);
+  const std::string untouched = everyServerRow(c.admin);
   for (const auto& [question, answer] : std::vector<std::pair<std::string, std::string>>{
            {"toy.ossicles.identify_incus", R"({"choice": 3})"},
            {"toy.ossicles.identify_incus", R"({"choice": 99999999999})"},
@@ -306,7 +292,7 @@ TEST_CASE("ClassLessonGrading_AStudentClaimingRightForWrongAnswersIsGradedByTheS
   auto viaProgram = publishLessonKeys(sam, c.code, {forgedKey.dump()}, std::nullopt);
   REQUIRE_FALSE(viaProgram);
   CHECK(viaProgram.error().message.find("only its instructors and coordinators") != std::string::npos);
-  CHECK(everything(c.admin) == untouched);
+  CHECK(everyServerRow(c.admin) == untouched);
 }
 
 TEST_CASE("ClassLessonGrading_AnswersSentBeforeTheKeysAreGradedWhenTheyArePublished_CorrectionsStand_TheLessonEndTakesTheServersMean") {
