@@ -18,6 +18,7 @@
 #include "dataset_resolver.h"
 #include "headless_desktop.h"
 #include "learning_session.h"
+#include "shown_dataset.h"
 #include "render/derived_preset.h"
 #include "render/field_scale.h"
 #include "render/gl/egl_context.h"
@@ -465,7 +466,7 @@ TEST_CASE("Skull CT: each mode reads as its figure - outline a thin band, fuzzy 
   }
 }
 
-TEST_CASE("The desktop leaves out the CT headrest as the render command does: both see one volume") {
+TEST_CASE("Every front end leaves out the CT headrest: the desktop and openDatasetForViewing see one volume") {
   auto skull = skullOrSkip();  // prepared as `render` prepares it
   if (!skull) return;
   app::DatasetRequest request;
@@ -492,4 +493,9 @@ TEST_CASE("The desktop leaves out the CT headrest as the render command does: bo
   auto opened = model.open();
   REQUIRE_MESSAGE(opened, test::errorText(opened));
   CHECK(model.dataset().volume.voxels == skull->ds.volume.voxels);
+  // The render command, the terminal pictures (play, exam), default views and course validate's
+  // question checks open it through this one function (shown_dataset.h).
+  auto shown = app::openDatasetForViewing(request);
+  REQUIRE_MESSAGE(shown, test::errorText(shown));
+  CHECK(shown->dataset.volume.voxels == skull->ds.volume.voxels);
 }

@@ -8,6 +8,7 @@
 #include "core/strings.h"
 #include "course_views.h"
 #include "dataset_resolver.h"
+#include "shown_dataset.h"
 #include "db/dataset_store.h"
 #include "volume/known_scans.h"
 #include "render/derived_preset.h"
@@ -132,7 +133,7 @@ Status DesktopModel::showDataset(Dataset dataset, const std::string& startStruct
   auto next = std::make_unique<Dataset>(std::move(dataset));
   // The CT table, headrest and other objects outside the body are no context: left out here as the
   // render command leaves them out (derived_preset.h), before anything reads the volume.
-  render::leaveOutNonAnatomy(next->volume, next->labels, render::summariseIntensities(next->volume));
+  prepareForViewing(*next);
   if (expert_ && expertOn()) setExpert(false);
   if (auto st = explore_.setDataset(*next, startStructure, startPreset); !st) return st;
   fields_.reset();  // it refers to the dataset being replaced
