@@ -416,7 +416,9 @@ __global__ void __launch_bounds__(S::T, S::MinBlocks) sweepPersistent(GroupArgs 
     auto active = [&](int k, int s) { return s <= S::lastPlaneOfSlot(k) && s <= last[k]; };
     // Old values and densities of the group (never written during the sweep): in flight while
     // this block waits for its neighbours.
+    // All loads issued before the first store into shared memory (a store waits for its load).
     float oldD[K][Slots];
+    std::uint8_t q[K][Slots];
 #pragma unroll
     for (int s = 1; s <= K; ++s) {
       const std::size_t plane = s <= steps ? planeOffset(first + s - 1) : 0;
@@ -424,7 +426,14 @@ __global__ void __launch_bounds__(S::T, S::MinBlocks) sweepPersistent(GroupArgs 
       for (int k = 0; k < Slots; ++k) {
         const bool used = active(k, s);
         oldD[s - 1][k] = used ? __ldcg(p.src + plane + g[k]) : kInf;
-        if (s <= S::lastPlaneOfSlot(k)) qOwn(s - 1, k) = used ? __ldg(p.q + plane + g[k]) : 0;
+        q[s - 1][k] = used ? __ldg(p.q + plane + g[k]) : 0;
+      }
+    }
+#pragma unroll
+    for (int s = 1; s <= K; ++s) {
+#pragma unroll
+      for (int k = 0; k < Slots; ++k) {
+        if (s <= S::lastPlaneOfSlot(k)) qOwn(s - 1, k) = q[s - 1][k];
       }
     }
     const bool hasPrev = first > 0;
