@@ -30,7 +30,11 @@ struct ExactSweepArgs {
   StepRule rule = StepRule::Entering;
   WeightRule weight = WeightRule::Density;
   unsigned long long* lowered = nullptr;
+  // Tile progress counters of the persistent sweep (AT_WDT_CUDA_PERSISTENT=1), kSweepProgressCounters
+  // of them, zero when the sweep starts; nullptr: group launches only.
+  unsigned* progress = nullptr;
 };
+constexpr int kSweepProgressCounters = 1024;
 Status launchExactSweep(const ExactSweepArgs& args, cudaStream_t stream);
 
 // out[y + ny·(x + nx·z)] = in[x + nx·(y + ny·z)]: swaps the two fastest axes of an nx×ny×nz array.

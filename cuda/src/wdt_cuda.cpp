@@ -120,6 +120,7 @@ struct Workspace {
   PinnedBuffer<int> flagHost;
   DeviceBuffer<unsigned long long> lowered;  // voxels a pass lowered (sweep kernels add to it)
   PinnedBuffer<unsigned long long> loweredHost;
+  DeviceBuffer<unsigned> progress;  // the persistent sweeps' tile counters, kSweepProgressCounters a sweep
   PinnedBuffer<std::uint8_t> staging[2];
   Event chunkDone[2];
   Event start, end;
@@ -160,6 +161,7 @@ struct Workspace {
     AT_ASSIGN(w->flagHost, PinnedBuffer<int>::allocate(1));
     AT_ASSIGN(w->lowered, DeviceBuffer<unsigned long long>::allocate(1));
     AT_ASSIGN(w->loweredHost, PinnedBuffer<unsigned long long>::allocate(1));
+    AT_ASSIGN(w->progress, DeviceBuffer<unsigned>::allocate(6 * std::size_t(kSweepProgressCounters)));
     for (int i = 0; i < 2; ++i) {
       AT_ASSIGN(w->staging[i], PinnedBuffer<std::uint8_t>::allocate(kStagingBytes));
       AT_ASSIGN(w->chunkDone[i], Event::create(cudaEventDisableTiming));
@@ -276,6 +278,11 @@ Status preparePass(Workspace& w, const Geometry& grid, const WdtParams& params) 
     e.rule = key.rule;
     e.weight = key.weight;
     e.lowered = w.lowered.get();
+    // Each sweep its own zeroed counters (the persistent sweep's), cleared once a pass.
+    AT_TRY(check(cudaMemsetAsync(w.progress.get(), 0, w.progress.size() * sizeof(unsigned), st),
+                 "cudaMemsetAsync(sweep progress counters)"));
+    int sweep = 0;
+    auto counters = [&] { return w.progress.get() + std::size_t(sweep++) * kSweepProgressCounters; };
     const float sx = key.spacing[0], sy = key.spacing[1], sz = key.spacing[2];
     const std::size_t nxy = std::size_t(d.x) * d.y;
     float* a = w.a.get();
@@ -286,8 +293,10 @@ Status preparePass(Workspace& w, const Geometry& grid, const WdtParams& params) 
     e.nu = d.y, e.nv = d.z, e.na = d.x, e.strideV = nxy, e.strideA = std::size_t(d.y);
     e.lengths = wdt::axisSweepLengths(0, sx, sy, sz);
     e.src = b, e.dst = a, e.direction = +1;
+    e.progress = counters();
     AT_TRY(launchExactSweep(e, st));
     e.src = a, e.dst = b, e.direction = -1;
+    e.progress = counters();
     AT_TRY(launchExactSweep(e, st));
     AT_TRY(launchTransposeXY(b, a, d.y, d.x, d.z, st));
     // y sweeps: lanes x, z; planes y.  z sweeps: lanes x, y; planes z.
@@ -295,14 +304,18 @@ Status preparePass(Workspace& w, const Geometry& grid, const WdtParams& params) 
     e.nu = d.x, e.nv = d.z, e.na = d.y, e.strideV = nxy, e.strideA = std::size_t(d.x);
     e.lengths = wdt::axisSweepLengths(1, sx, sy, sz);
     e.src = a, e.dst = b, e.direction = +1;
+    e.progress = counters();
     AT_TRY(launchExactSweep(e, st));
     e.src = b, e.dst = a, e.direction = -1;
+    e.progress = counters();
     AT_TRY(launchExactSweep(e, st));
     e.nu = d.x, e.nv = d.y, e.na = d.z, e.strideV = std::size_t(d.x), e.strideA = nxy;
     e.lengths = wdt::axisSweepLengths(2, sx, sy, sz);
     e.src = a, e.dst = b, e.direction = +1;
+    e.progress = counters();
     AT_TRY(launchExactSweep(e, st));
     e.src = b, e.dst = a, e.direction = -1;
+    e.progress = counters();
     return launchExactSweep(e, st);
   };
   AT_ASSIGN(w.pass, GraphExec::capture(w.stream, enqueuePass));
