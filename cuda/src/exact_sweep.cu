@@ -348,7 +348,7 @@ Status launchGroups(const ExactSweepArgs& a, cudaStream_t stream) {
   return {};
 }
 
-// ─── Persistent sweep (experiment, AT_WDT_CUDA_PERSISTENT=1) ───
+// ─── Persistent sweep (off by default: setPersistentSweeps) ───
 // One launch per sweep: each block owns one tile for the whole sweep and walks its plane groups
 // itself, so the per-slot set-up (region walk, offsets) is paid once a sweep, not once a group,
 // and no launch links the groups. Before group g (g > 0) a block waits until its own tile and its
@@ -371,6 +371,7 @@ __device__ __forceinline__ void storeRelease(unsigned* p, unsigned v) {
 
 template <class S, CostKernel Cost>
 __global__ void __launch_bounds__(S::T, S::MinBlocks) sweepPersistent(GroupArgs p, unsigned* progress) {
+  static_assert(S::K <= S::TU && S::K <= S::TV, "a group's halo reaches only the 8 neighbouring tiles");
   constexpr bool kQn = wdt::needsNeighbourDensity(Cost);
   constexpr int K = S::K, Slots = S::Slots, Pitch = S::Pitch;
   __shared__ float sD[2][S::PlaneFloats];
@@ -599,18 +600,17 @@ Status launchExactSweep(const ExactSweepArgs& a, cudaStream_t stream) {
     const char* v = std::getenv("AT_WDT_CUDA_LARGE_TILE");
     return !(v && std::string(v) == "0");
   }();
-  // Experiment: one persistent launch a sweep where its blocks fit the GPU at once.
-  static const bool persistent = [] {
-    const char* v = std::getenv("AT_WDT_CUDA_PERSISTENT");
-    return v && std::string(v) == "1";
-  }();
   return launchForRule(a.rule, a.weight, [&]<CostKernel Cost>() -> Status {
     if (wide) return launchGroups<Shape, Cost, true, false>(a, stream);
-    if (persistent && a.progress) {
+    // One persistent launch a sweep (asked for by a.progress) where its blocks fit the GPU at once.
+    if (a.progress) {
       bool launched = false;
       if (oneWave) AT_TRY((launchPersistent<OneWaveShape, Cost>(a, stream, &launched)));
       else if (largeTileAllowed) AT_TRY((launchPersistent<LargeShape, Cost>(a, stream, &launched)));
-      if (launched) return {};
+      if (launched) {
+        if (a.persistentLaunches) ++*a.persistentLaunches;
+        return {};
+      }
     }
     if (oneWave) return launchGroups<OneWaveShape, Cost, false, true>(a, stream);
     if (largeTileAllowed) return launchGroups<LargeShape, Cost, false, true>(a, stream);

@@ -30,9 +30,11 @@ struct ExactSweepArgs {
   StepRule rule = StepRule::Entering;
   WeightRule weight = WeightRule::Density;
   unsigned long long* lowered = nullptr;
-  // Tile progress counters of the persistent sweep (AT_WDT_CUDA_PERSISTENT=1), kSweepProgressCounters
-  // of them, zero when the sweep starts; nullptr: group launches only.
+  // Non-null: run the sweep as one persistent launch (setPersistentSweeps) where all its blocks fit
+  // the GPU at once, group launches elsewhere. kSweepProgressCounters tile progress counters, zero
+  // when the sweep starts.
   unsigned* progress = nullptr;
+  int* persistentLaunches = nullptr;  // optional: incremented when the sweep ran as one persistent launch
 };
 constexpr int kSweepProgressCounters = 1024;
 Status launchExactSweep(const ExactSweepArgs& args, cudaStream_t stream);

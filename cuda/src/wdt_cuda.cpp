@@ -96,15 +96,27 @@ Status validate(const WdtProblem& problem) {
 // (pageable) memory and one chunk overlaps the DMA of the other.
 constexpr std::size_t kStagingBytes = std::size_t(4) << 20;
 
+// setPersistentSweeps: -1 until set (then AT_WDT_CUDA_PERSISTENT=1 decides), else 0 or 1.
+std::atomic<int> gPersistentSweeps{-1};
+std::atomic<long long> gPersistentSweepsCaptured{0};
+
+bool persistentSweepsOn() {
+  const int set = gPersistentSweeps.load();
+  if (set >= 0) return set == 1;
+  const char* v = std::getenv("AT_WDT_CUDA_PERSISTENT");
+  return v && std::string(v) == "1";
+}
+
 // What one captured pass depends on besides the workspace's buffers.
 struct PassKey {
   float spacing[3] = {0, 0, 0};
   float baseCost = 0;
   StepRule rule = StepRule::Entering;
   WeightRule weight = WeightRule::Density;
+  bool persistent = false;  // the sweeps as persistent launches (setPersistentSweeps)
   bool operator==(const PassKey& o) const {
     return spacing[0] == o.spacing[0] && spacing[1] == o.spacing[1] && spacing[2] == o.spacing[2] &&
-           baseCost == o.baseCost && rule == o.rule && weight == o.weight;
+           baseCost == o.baseCost && rule == o.rule && weight == o.weight && persistent == o.persistent;
   }
 };
 
@@ -269,20 +281,27 @@ Status preparePass(Workspace& w, const Geometry& grid, const WdtParams& params) 
   key.baseCost = params.baseCost;
   key.rule = params.rule;
   key.weight = params.weight;
+  key.persistent = persistentSweepsOn();
   if (w.passKey && *w.passKey == key) return {};
   w.passKey.reset();
 
+  int persistentLaunches = 0;  // sweeps of the pass captured as persistent launches
   auto enqueuePass = [&](cudaStream_t st) -> Status {
     ExactSweepArgs e;
     e.baseCost = key.baseCost;
     e.rule = key.rule;
     e.weight = key.weight;
     e.lowered = w.lowered.get();
-    // Each sweep its own zeroed counters (the persistent sweep's), cleared once a pass.
-    AT_TRY(check(cudaMemsetAsync(w.progress.get(), 0, w.progress.size() * sizeof(unsigned), st),
-                 "cudaMemsetAsync(sweep progress counters)"));
+    e.persistentLaunches = &persistentLaunches;
+    // Persistent sweeps: each sweep its own tile progress counters, zeroed once a pass.
+    if (key.persistent) {
+      AT_TRY(check(cudaMemsetAsync(w.progress.get(), 0, w.progress.size() * sizeof(unsigned), st),
+                   "cudaMemsetAsync(sweep progress counters)"));
+    }
     int sweep = 0;
-    auto counters = [&] { return w.progress.get() + std::size_t(sweep++) * kSweepProgressCounters; };
+    auto counters = [&]() -> unsigned* {
+      return key.persistent ? w.progress.get() + std::size_t(sweep++) * kSweepProgressCounters : nullptr;
+    };
     const float sx = key.spacing[0], sy = key.spacing[1], sz = key.spacing[2];
     const std::size_t nxy = std::size_t(d.x) * d.y;
     float* a = w.a.get();
@@ -319,6 +338,7 @@ Status preparePass(Workspace& w, const Geometry& grid, const WdtParams& params) 
     return launchExactSweep(e, st);
   };
   AT_ASSIGN(w.pass, GraphExec::capture(w.stream, enqueuePass));
+  gPersistentSweepsCaptured += persistentLaunches;
   w.passKey = key;
   return {};
 }
@@ -465,6 +485,8 @@ double deviceMemoryUsedMiB() {
 }
 
 void setConvergeSweepsBeforeBricks(int passes) { gSweepsBeforeBricks = passes < 0 ? -1 : passes; }
+void setPersistentSweeps(bool on) { gPersistentSweeps = on ? 1 : 0; }
+long long persistentSweepsCaptured() { return gPersistentSweepsCaptured.load(); }
 
 Result<DeviceField> makeDeviceField(const Geometry& grid, float fill) {
   if (!queryDevice().available) return fail("CUDA device field: " + queryDevice().reason);

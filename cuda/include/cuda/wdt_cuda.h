@@ -44,6 +44,17 @@ double deviceMemoryUsedMiB();
 // Process-wide, for tests and benchmarks.
 void setConvergeSweepsBeforeBricks(int passes);
 
+// The sweep kernel of a pass: ceil(planes / K) group launches (the default), or, when on, one
+// persistent launch a sweep whose tiles walk the plane groups themselves, each waiting on its 8
+// neighbouring tiles' progress counters (cooperative launch: used only where every block of the
+// sweep fits the GPU at once, e.g. up to 512³ on an H200; group launches elsewhere). The same field
+// bit for bit either way. Process-wide, for tests and benchmarks; until set, on when the
+// environment has AT_WDT_CUDA_PERSISTENT=1.
+void setPersistentSweeps(bool on);
+// Sweeps captured as persistent launches since the process started (a pass is captured once per
+// grid size and parameters, then replayed): whether the persistent kernel ran.
+long long persistentSweepsCaptured();
+
 // Computes the field on the GPU and copies it back. Errors carry the failing CUDA call's name and
 // message; the caller (computeWdt with backend auto) then falls back to the CPU.
 Result<WdtResult> runCudaBackend(const WdtProblem& problem, const WdtControl& control);
