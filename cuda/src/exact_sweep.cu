@@ -516,11 +516,14 @@ Status launchPersistent(const ExactSweepArgs& a, cudaStream_t stream, bool* laun
   static const cudaError_t raised = cudaFuncSetAttribute(reinterpret_cast<const void*>(kernel),
                                                          cudaFuncAttributeMaxDynamicSharedMemorySize, int(dynamicBytes));
   if (raised != cudaSuccess) return check(raised, "cudaFuncSetAttribute (persistent sweep shared memory)");
-  int device = 0, multiprocessors = 0, perMultiprocessor = 0;
+  int device = 0, multiprocessors = 0, perMultiprocessor = 0, cooperative = 0;
   if (const cudaError_t e = cudaGetDevice(&device); e != cudaSuccess) return check(e, "cudaGetDevice");
   if (const cudaError_t e = cudaDeviceGetAttribute(&multiprocessors, cudaDevAttrMultiProcessorCount, device);
       e != cudaSuccess)
     return check(e, "cudaDeviceGetAttribute (multiprocessor count)");
+  if (const cudaError_t e = cudaDeviceGetAttribute(&cooperative, cudaDevAttrCooperativeLaunch, device); e != cudaSuccess)
+    return check(e, "cudaDeviceGetAttribute (cooperative launch)");
+  if (!cooperative) return {};  // no co-residency guarantee: group launches
   if (const cudaError_t e = cudaOccupancyMaxActiveBlocksPerMultiprocessor(&perMultiprocessor, kernel, S::T, dynamicBytes);
       e != cudaSuccess)
     return check(e, "cudaOccupancyMaxActiveBlocksPerMultiprocessor (persistent sweep)");
