@@ -55,7 +55,11 @@ Result<QuestionScene> parseScene(const std::string& text, const std::string& whe
     return fail(where + ": stored scene is not {structure, preset, view}");
   auto view = parseCameraView(j["view"].get<std::string>());
   if (!view) return fail(where + ": " + view.error().message);
-  return QuestionScene{j["structure"].get<std::string>(), j.value("preset", std::string()), *view};
+  QuestionScene scene;
+  scene.structure = j["structure"].get<std::string>();
+  scene.presetId = j.value("preset", std::string());
+  scene.view = *view;
+  return scene;
 }
 
 }  // namespace

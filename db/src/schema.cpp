@@ -8,7 +8,9 @@
 
 #include "class_exam_locate_sql.h"
 #include "class_exam_sql.h"
+#include "class_lesson_keys_sql.h"
 #include "class_security_sql.h"
+#include "study_checks_sql.h"
 #include "study_security_sql.h"
 #include "study_writes_sql.h"
 
@@ -547,6 +549,10 @@ const std::vector<Migration>& migrations() {
        classExamLocateSql(), {}, true},
       {21, "class server: a study's coordinator registers it and records its participants through audited functions",
        studyWritesSql(), {}, true},
+      {22, "class server: lesson answers graded there from the class's published keys, not as the laptop sent them",
+       classLessonKeysSql(), {}, true},
+      {23, "class server: study writes need a current coordinator; a participant's trials must be the row the server drew",
+       studyChecksSql(), {}, true},
   };
   return all;
 }

@@ -5,9 +5,13 @@
 #include <set>
 #include <type_traits>
 
+#include <nlohmann/json.hpp>
+
 #include "db/study_store.h"
 #include "quiz/study_design.h"
+#include "server_refusal.h"
 #include "study_rows.h"
+#include "study_server_writes.h"
 
 namespace at::db {
 
@@ -101,6 +105,19 @@ Status insertRow(Database& db, const char* table, const std::vector<Column>& col
   return st->run();
 }
 
+// One row as a JSON object {column: value} (nulls as null).
+nlohmann::json rowJson(const std::vector<Column>& columns, const Row& row) {
+  nlohmann::json out = nlohmann::json::object();
+  for (std::size_t i = 0; i < columns.size(); ++i) {
+    const Cell& c = row[i];
+    if (c.null) out[columns[i].name] = nullptr;
+    else if (columns[i].type == Type::Int) out[columns[i].name] = c.integer;
+    else if (columns[i].type == Type::Real) out[columns[i].name] = c.real;
+    else out[columns[i].name] = c.text;
+  }
+  return out;
+}
+
 // Everything one participant recorded.
 struct Records {
   std::string id;
@@ -130,9 +147,25 @@ Result<std::map<std::string, Withdrawal>> readWithdrawals(Database& db, const st
 }
 
 // Carries a source's withdrawal into `d`: a participant withdrawn anywhere stays withdrawn (the
-// target's own withdrawal, when it has one, is kept). Returns whether it changed the target.
+// target's own withdrawal, when it has one, is kept). Returns whether it changed the target. On a
+// class server it goes through at_withdraw_participant (the study's current coordinator, audited;
+// the withdrawal is dated when it is carried).
 Result<bool> carryWithdrawal(Database& d, const std::string& studyId, const std::string& participantId,
                              const Withdrawal& w) {
+  if (detail::studyWritesThroughServer(d)) {
+    auto current = d.prepare("SELECT 1 FROM study_participants WHERE study_id = ?1 AND participant_id = ?2"
+                             " AND withdrawn_at IS NULL");
+    if (!current) return tl::unexpected(current.error());
+    current->bind(1, studyId).bind(2, participantId);
+    auto row = current->step();
+    if (!row) return tl::unexpected(row.error());
+    if (!*row) return false;
+    auto call = d.prepare("SELECT at_withdraw_participant(?1, ?2, ?3, ?4, '')");
+    if (!call) return tl::unexpected(call.error());
+    call->bind(1, studyId).bind(2, participantId).bind(3, w.kind).bind(4, w.reason);
+    if (auto done = call->step(); !done) return tl::unexpected(serverRefusal(done.error()));
+    return true;
+  }
   auto s = d.prepare("UPDATE study_participants SET withdrawn_at = ?3, withdrawal_kind = ?4, withdrawal_reason = ?5"
                      " WHERE study_id = ?1 AND participant_id = ?2 AND withdrawn_at IS NULL");
   if (!s) return tl::unexpected(s.error());
@@ -335,8 +368,12 @@ Result<StudyMergeReport> mergeStudy(Database& into, const std::vector<StudyMerge
     if (*target && !detail::sameDesign(**target, *design))
       return fail(ErrorKind::Conflict, d.path() + ": study '" + studyId + "' has another design than " +
                                            designFrom + "; nothing was merged");
-    if (!*target)
-      if (auto s = detail::storeStudyRow(d, *design); !s) return s;
+    // On a class server every write goes through its checked, audited functions.
+    const bool viaServer = detail::studyWritesThroughServer(d);
+    if (!*target) {
+      if (auto s = viaServer ? detail::registerStudyOnServer(d, *design, "") : detail::storeStudyRow(d, *design); !s)
+        return s;
+    }
     auto count = detail::participantCount(d, studyId);
     if (!count) return tl::unexpected(count.error());
     int next = *count;
@@ -381,6 +418,25 @@ Result<StudyMergeReport> mergeStudy(Database& into, const std::vector<StudyMerge
                           " with other records (two people with one id, or one person run twice); nothing was merged: "
                           "decide which to keep and merge the others");
         }
+        origin[records.id] = sources[s].name;
+        ++from.added;
+        if (viaServer) {  // checked and audited by the server (study_checks_sql.cpp), withdrawal included
+          nlohmann::json all = {{"participant", rowJson(kParticipantColumns, records.participant)},
+                                {"trials", nlohmann::json::array()}, {"ratings", nlohmann::json::array()}};
+          for (const Row& t : records.trials) all["trials"].push_back(rowJson(kTrialColumns, t));
+          for (const Row& r : records.ratings) all["ratings"].push_back(rowJson(kRatingColumns, r));
+          if (const auto w = withdrawals[s].find(records.id); w != withdrawals[s].end()) {
+            all["participant"]["withdrawn_at"] = w->second.at;
+            all["participant"]["withdrawal_kind"] = w->second.kind;
+            all["participant"]["withdrawal_reason"] = w->second.reason;
+            ++from.withdrawals;
+          }
+          auto call = d.prepare("SELECT at_merge_participant(?1, ?2, ?3, ?4)");
+          if (!call) return tl::unexpected(call.error());
+          call->bind(1, studyId).bind(2, records.id).bind(3, all.dump()).bind(4, sources[s].name);
+          if (auto done = call->step(); !done) return tl::unexpected(serverRefusal(done.error()));
+          continue;
+        }
         if (auto st = insertRow(d, "study_participants", kParticipantColumns, studyId, records.id, records.participant,
                                 next++);
             !st)
@@ -389,8 +445,6 @@ Result<StudyMergeReport> mergeStudy(Database& into, const std::vector<StudyMerge
           if (auto st = insertRow(d, "study_trials", kTrialColumns, studyId, records.id, t); !st) return st;
         for (const Row& r : records.ratings)
           if (auto st = insertRow(d, "study_ratings", kRatingColumns, studyId, records.id, r); !st) return st;
-        origin[records.id] = sources[s].name;
-        ++from.added;
         if (auto st = carry(records.id); !st) return st;
       }
       report.sources.push_back(from);

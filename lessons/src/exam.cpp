@@ -55,6 +55,24 @@ const Step* lessonLocateStep(const Course& course, const std::string& structureI
   return nullptr;
 }
 
+namespace {
+
+// Whether `exam` can ask structure `id` to be located (see examPoolSize).
+bool locatable(const ExamSpec& exam, const Course* course, const std::string& id) {
+  const bool otherKinds = std::any_of(exam.kinds.begin(), exam.kinds.end(),
+                                      [](quiz::QuestionKind k) { return k != quiz::QuestionKind::Locate; });
+  return !course || !otherKinds || lessonLocateStep(*course, id);
+}
+
+}  // namespace
+
+std::size_t examPoolSize(const ExamSpec& exam, const Course* course) {
+  std::size_t pool = 0;
+  for (const std::string& id : exam.structures)
+    for (quiz::QuestionKind k : exam.kinds) pool += k != quiz::QuestionKind::Locate || locatable(exam, course, id);
+  return pool;
+}
+
 Result<std::vector<ExamItem>> drawExamItems(const ExamSpec& exam, const std::vector<Structure>& structures,
                                             quiz::KeyComputer& keys, const std::string& seed, const Course* course) {
   const auto find = [&](const std::string& id) -> const Structure* {
@@ -72,19 +90,14 @@ Result<std::vector<ExamItem>> drawExamItems(const ExamSpec& exam, const std::vec
   // locate is the exam's one kind or there is no course. So each structure's kind is drawn evenly
   // from the kinds it can be asked in, and no item is asked twice.
   const std::vector<std::string> order = quiz::stableShuffle(exam.structures, seed);
-  const bool otherKinds = std::any_of(exam.kinds.begin(), exam.kinds.end(),
-                                      [](quiz::QuestionKind k) { return k != quiz::QuestionKind::Locate; });
   std::vector<std::vector<std::string>> kindOrder;
-  std::size_t askable = 0;
   for (const std::string& id : order) {
     std::vector<std::string> kindNames;
     for (quiz::QuestionKind k : exam.kinds)
-      if (k != quiz::QuestionKind::Locate || !course || !otherKinds || lessonLocateStep(*course, id))
-        kindNames.push_back(kindWord(k));
-    askable += kindNames.size();
+      if (k != quiz::QuestionKind::Locate || locatable(exam, course, id)) kindNames.push_back(kindWord(k));
     kindOrder.push_back(quiz::stableShuffle(kindNames, seed + "/" + id));
   }
-  if (askable < std::size_t(exam.count))
+  if (const std::size_t askable = examPoolSize(exam, course); askable < std::size_t(exam.count))
     return fail("exam '" + exam.id + "' asks " + std::to_string(exam.count) + " items, but its structures can be asked only " +
                 std::to_string(askable) + " ways (a structure is located only where a lesson of the course locates it)");
 

@@ -44,7 +44,10 @@ Result<LearnerUpdate> learnerUpdate(ProgressRepository& progress, std::int64_t u
                                     const EngineOptions& options) {
   auto before = progress.progress(userId, question.target);
   if (!before) return tl::unexpected(before.error());
-  const StructureProgress previous = before->value_or(StructureProgress{userId, question.target});
+  StructureProgress never;  // never answered: memory.phase == New
+  never.userId = userId;
+  never.structureId = question.target;
+  const StructureProgress previous = before->value_or(never);
   auto ability = progress.ability(userId);
   if (!ability) return tl::unexpected(ability.error());
   auto difficulty = progress.questionDifficulty(question.id);

@@ -16,7 +16,9 @@ Result<std::optional<ReviewQuestion>> ReviewSession::next() {
   auto resolved = quiz::resolveQuestion(**question, keys_);
   if (!resolved) return tl::unexpected(resolved.error());
   ReviewQuestion asked;
-  asked.scene = questionScene(course_, resolved->question.id).value_or(QuestionScene{resolved->question.target});
+  QuestionScene byDefault;
+  byDefault.structure = resolved->question.target;
+  asked.scene = questionScene(course_, resolved->question.id).value_or(byDefault);
   asked.question = std::move(*resolved);
   current_ = asked;
   return std::optional<ReviewQuestion>(std::move(asked));

@@ -90,6 +90,8 @@ struct LabelEditor::Growth {
   Dims dims;
   GrowthParams params;
   std::optional<LabelGrowth> growth;
+  RangedGrowth ranged;                 // per-label ranges' limited growths (ranged_growth.h)
+  std::optional<LabelMap> rangedLabels;  // the last computeGrowth's labels when it had ranges
 };
 
 LabelEditor::LabelEditor(LabelMap labels, std::vector<Structure> structures)
@@ -286,25 +288,21 @@ Result<EditSummary> LabelEditor::thresholdIsland(const Volume& volume, const Int
 }
 
 Result<EditSummary> LabelEditor::growFromSeeds(const Volume& volume, const std::vector<GrowthSeed>& seeds,
-                                               const GrowthParams& params, GrowthStats* statsOut) {
-  auto stats = computeGrowth(volume, seeds, params);
+                                               const GrowthParams& params, GrowthStats* statsOut,
+                                               const LabelRanges& ranges) {
+  auto stats = computeGrowth(volume, seeds, params, {}, ranges);
   if (!stats) return tl::unexpected(stats.error());
   if (statsOut) *statsOut = *stats;
   return commitGrowth(seeds.size());
 }
 
 Result<GrowthStats> LabelEditor::computeGrowth(const Volume& volume, const std::vector<GrowthSeed>& seeds,
-                                               const GrowthParams& params, const WdtControl& control) {
+                                               const GrowthParams& params, const WdtControl& control,
+                                               const LabelRanges& ranges) {
   if (!volume.geometry.sameGridAs(labels_.geometry)) return fail("grow from seeds: the volume is not on the label map's grid");
   if (!growth_) growth_ = std::make_unique<Growth>();
   Growth& g = *growth_;
-  const bool sameParams = g.params.rule == params.rule && g.params.weight == params.weight &&
-                          g.params.windowMin == params.windowMin && g.params.windowMax == params.windowMax &&
-                          g.params.baseCost == params.baseCost && g.params.backend == params.backend &&
-                          g.params.smoothingVoxels == params.smoothingVoxels && g.params.edgeSigma == params.edgeSigma &&
-                          g.params.limitRange == params.limitRange && g.params.rangeMin == params.rangeMin &&
-                          g.params.rangeMax == params.rangeMax;
-  if (!g.growth || g.volume != &volume || !(g.dims == volume.dims()) || !sameParams) {
+  if (!g.growth || g.volume != &volume || !(g.dims == volume.dims()) || !(g.params == params)) {
     auto made = LabelGrowth::create(volume, params);
     if (!made) return tl::unexpected(made.error());
     g.growth.emplace(std::move(*made));
@@ -312,12 +310,18 @@ Result<GrowthStats> LabelEditor::computeGrowth(const Volume& volume, const std::
     g.dims = volume.dims();
     g.params = params;
   }
-  return g.growth->update(seeds, control);
+  g.rangedLabels.reset();
+  auto stats = g.growth->update(seeds, control);
+  if (!stats || stats->cancelled || ranges.empty()) return stats;
+  auto ranged = g.ranged.apply(volume, g.growth->labels(), seeds, params, ranges, control, &*stats);
+  if (!ranged) return tl::unexpected(ranged.error());
+  if (!stats->cancelled) g.rangedLabels = std::move(*ranged);
+  return stats;
 }
 
 Result<EditSummary> LabelEditor::commitGrowth(std::size_t seedCount) {
   if (!growth_ || !growth_->growth) return fail("grow from seeds: nothing has been grown");
-  const LabelMap& grown = growth_->growth->labels();
+  const LabelMap& grown = growth_->rangedLabels ? *growth_->rangedLabels : growth_->growth->labels();
   Changes changes;
   for (std::size_t i = 0; i < grown.voxels.size(); ++i)
     if (grown.voxels[i] != labels_.voxels[i]) changes.push_back({i, grown.voxels[i]});

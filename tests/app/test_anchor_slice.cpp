@@ -13,6 +13,7 @@
 #include "slice_marking.h"
 #include "volume/slice_image.h"
 #include "volume/slice_orientation.h"
+#include "test_support.h"
 
 using namespace at;
 
@@ -30,10 +31,9 @@ Mat3 permutedDirection(const std::array<int, 3>& perm, const std::array<int, 3>&
 }  // namespace
 
 TEST_CASE("the anchor's slice is axial in patient orientation for every grid orientation, as the Slices panes lay it out") {
-  const unsigned seed = std::random_device{}();
-  std::printf("anchor slice seed %u\n", seed);
+  const std::uint64_t seed = test::freshSeed("anchor slice orientations");
   INFO("seed " << seed);
-  std::mt19937 rng(seed);
+  std::mt19937 rng{unsigned(seed)};
   std::array<int, 3> perm{0, 1, 2};
   int checked = 0;
   do {

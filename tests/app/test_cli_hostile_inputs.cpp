@@ -3,6 +3,8 @@
 // commands that only read, a result despite a read-only database or a full disk.
 #include <doctest/doctest.h>
 
+#include <fcntl.h>
+#include <signal.h>
 #include <sys/mount.h>
 #include <sys/stat.h>
 #include <unistd.h>
@@ -14,9 +16,11 @@
 #include <sstream>
 #include <string>
 #include <thread>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 
+#include "database.h"  // db/'s private SQL wrapper (at_db_sql_for_tests)
 #include "test_support.h"
 #include "volume/nifti_io.h"
 
@@ -187,15 +191,66 @@ TEST_CASE("Two study runs for one participant: the earlier is refused once the l
   answers(dir / "first.jsonl", 1);
   answers(dir / "second.jsonl", 5);
   // The first run rates three structures, waits while the second resumes the participant and
-  // finishes, then goes on.
+  // finishes, then goes on. Its answers come through a FIFO that the test writes, and the second run
+  // starts only once the database holds the first run's three ratings: the order is made, not
+  // hoped for from sleeps (a loaded machine once started the first run more than 2 s late).
+  const fs::path pipe = dir / "first.pipe";
+  REQUIRE(::mkfifo(pipe.c_str(), 0600) == 0);
+  std::vector<std::string> firstLines;
+  {
+    std::ifstream in(dir / "first.jsonl");
+    for (std::string line; std::getline(in, line);) firstLines.push_back(line + "\n");
+  }
+  REQUIRE(firstLines.size() == 13);
+  // The first run stops reading at line 4 or at the refusal, so the test's last write may meet a
+  // closed pipe: SIGPIPE is ignored while the case runs (the write then fails with EPIPE).
+  struct IgnoreSigpipe {
+    struct sigaction saved {};
+    IgnoreSigpipe() {
+      struct sigaction ignore {};
+      ignore.sa_handler = SIG_IGN;
+      ::sigaction(SIGPIPE, &ignore, &saved);
+    }
+    ~IgnoreSigpipe() { ::sigaction(SIGPIPE, &saved, nullptr); }
+  } ignoreSigpipe;
   test::CommandResult first;
-  std::thread firstRun([&] {
-    first = runShell(dir, "{ head -n 3 " + quoted(dir / "first.jsonl") + "; sleep 4; tail -n +4 " +
-                              quoted(dir / "first.jsonl") + "; } | @APP@ " + run + " --answers /dev/stdin" + on);
-  });
-  std::this_thread::sleep_for(std::chrono::seconds(2));
+  std::thread firstRun([&] { first = runShell(dir, "@APP@ " + run + " --answers /dev/stdin" + on + " <" + quoted(pipe)); });
+  // Ends the first run's input and waits for it on every way out of this case, REQUIREs included.
+  struct FinishFirst {
+    int fd;
+    std::thread& run;
+    void now() {
+      if (fd >= 0) ::close(fd);
+      fd = -1;
+      if (run.joinable()) run.join();
+    }
+    ~FinishFirst() { now(); }
+  } firstInput{::open(pipe.c_str(), O_WRONLY), firstRun};  // open returns once the shell opened it
+  REQUIRE(firstInput.fd >= 0);
+  const auto send = [&](std::size_t from, std::size_t to) {
+    for (std::size_t i = from; i < to; ++i)
+      REQUIRE(::write(firstInput.fd, firstLines[i].data(), firstLines[i].size()) == ssize_t(firstLines[i].size()));
+  };
+  send(0, 3);
+  const auto firstRatings = [&]() -> std::int64_t {
+    std::error_code ec;
+    if (fs::file_size(dir / "study.db", ec) == 0 || ec) return 0;
+    auto db = db::Database::open((dir / "study.db").string());
+    if (!db) return 0;  // still being created by the first run: asked again
+    auto s = db->prepare("SELECT count(*) FROM study_ratings WHERE participant_id = 'P01'");
+    if (!s) return 0;
+    auto row = s->step();
+    return row && *row ? s->int64(0) : 0;
+  };
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(120);
+  while (firstRatings() < 3 * 4 && std::chrono::steady_clock::now() < deadline)
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  REQUIRE(firstRatings() == 3 * 4);  // three structures of four items, and no more
   const auto second = test::runApp(run + " --answers " + quoted(dir / "second.jsonl") + on);
-  firstRun.join();
+  std::string rest;
+  for (std::size_t i = 3; i < firstLines.size(); ++i) rest += firstLines[i];
+  [[maybe_unused]] const ssize_t restWritten = ::write(firstInput.fd, rest.data(), rest.size());
+  firstInput.now();
   CHECK_MESSAGE(second.exitCode == 0, second.err);
   CHECK(first.exitCode == 1);  // it once printed success and overwrote the second run's ratings
   CHECK(first.err.find("participant 'P01' was resumed by another session (session 2) after this one (session 1) began") !=

@@ -10,9 +10,12 @@
 
 #include <cmath>
 #include <filesystem>
+#include <fstream>
 #include <string>
 
+#include "dataset_resolver.h"
 #include "desktop_script.h"
+#include "segment/growth_settings.h"
 #include "synthetic_scans.h"
 #include "test_support.h"
 #include "volume/nifti_io.h"
@@ -102,4 +105,102 @@ TEST_CASE("desktop segment editor: 'bone only' grows a label of bone voxels and 
       CHECK(s.value("system", "") == "skull bones");
     }
   CHECK(found);
+}
+
+TEST_CASE("desktop segment editor: a label's own 'bone only' range is applied by the live growth, saved with the seeds, "
+          "and grows the same labels reloaded and through `anatomy-tutor segment`") {
+  if (!test::requireXvfb()) return;
+  test::TempDir dir("desktop-label-range");
+  const Dims dims{64, 56, 48};
+  const FloatVolume uct = test::syntheticMicroCt(dims);
+  const fs::path volume = dir / "skull_uct.nrrd", db = dir / "t.db", seeds = dir / "seeds.json";
+  const fs::path plain = dir / "plain.nii.gz", first = dir / "first.nii.gz", reloaded = dir / "reloaded.nii.gz", cli = dir / "cli.nii.gz";
+  REQUIRE(writeNrrd(volume.string(), uct, ScalarKind::UInt8));
+  auto imported = test::runApp("import --volume '" + volume.string() + "' --name uct --db '" + db.string() + "'");
+  REQUIRE_MESSAGE(imported.exitCode == 0, imported.err);
+  const test::MicroCtLayout layout = test::microCtLayout(dims);
+  const float boneGrey = 0.5f * float(layout.brain + layout.bone);
+  const int ci = int(std::lround(layout.centre[0])), cj = int(std::lround(layout.centre[1]));
+  const int ck = int(std::lround(layout.centre[2] + layout.radius[2] - 0.5 * layout.shell));
+  REQUIRE(uct.at(ci, cj, ck) >= boneGrey);
+  // The data's bone range, as the editor derives it ("bone only").
+  app::DatasetRequest request;
+  request.name = volume.string();
+  request.dbPath = db.string();
+  auto opened = app::openNamedDataset(request);
+  REQUIRE_MESSAGE(opened, test::errorText(opened));
+  const double boneLow = segment::defaultGrowthSettings(opened->volume, opened->intensity).boneRangeValues[0];
+
+  // The vault's seed in the bone, the background's in the air; one growth (the vault takes the soft
+  // tissue inside the skull too), then the vault gets its own "bone only" range (grown again at once).
+  test::DesktopOptions options;
+  options.dataset = "uct";
+  options.db = db;
+  const json paint = json::array({
+      {{"do", "segment_open"}},
+      {{"do", "segment_label"}, {"name", "skull vault"}},
+      {{"do", "segment_slice"}, {"axis", "z"}, {"index", ck}},
+      {{"do", "segment_seed"}, {"voxel", {ci, cj, ck}}, {"brush_mm", 0.05}},
+      {{"do", "segment_label"}, {"name", "background"}},
+      {{"do", "segment_seed"}, {"voxel", {1, 1, 1}}, {"brush_mm", 0.05}},
+      {{"do", "segment_grow"}},
+      {{"do", "segment_save"}, {"out", plain.string()}},
+      {{"do", "segment_label"}, {"name", "skull vault"}, {"grow_range", "bone"}},
+      {{"do", "segment_grow"}},
+      {{"do", "segment_seeds"}, {"save", seeds.string()}},
+      {{"do", "segment_save"}, {"out", first.string()}},
+  });
+  const test::DesktopRun run = test::runDesktopScript(dir, {{"actions", paint}}, options);
+  INFO(run.err);
+  REQUIRE(run.exitCode == 0);
+  const auto grown = test::eventsOf(run, "segment_grown");
+  REQUIRE(grown.size() >= 2);
+  const std::size_t unranged = grown.front()["voxels"]["skull_vault"].get<std::size_t>();
+  const std::size_t ranged = grown.back()["voxels"]["skull_vault"].get<std::size_t>();
+  CAPTURE(unranged);
+  CAPTURE(ranged);
+  REQUIRE(test::eventsOf(run, "segment_label_range").size() == 1);
+
+  // The seeds file says so: the vault's label has "grow_range": "bone".
+  const json saved = json::parse(std::ifstream(seeds));
+  int rangedLabels = 0;
+  for (const json& l : saved["labels"]) rangedLabels += l.contains("grow_range") && l["name"] == "skull_vault" && l["grow_range"] == "bone";
+  CHECK(rangedLabels == 1);
+
+  // Reloaded into a fresh desktop and grown, and grown by the command line: the same labels.
+  const json reload = json::array({
+      {{"do", "segment_open"}},
+      {{"do", "segment_seeds"}, {"load", seeds.string()}},
+      {{"do", "segment_grow"}},
+      {{"do", "segment_save"}, {"out", reloaded.string()}},
+  });
+  const test::DesktopRun again = test::runDesktopScript(dir, {{"actions", reload}}, options);
+  INFO(again.err);
+  REQUIRE(again.exitCode == 0);
+  auto cliRun = test::runApp("segment uct --seeds '" + seeds.string() + "' --backend cpu --out '" + cli.string() + "' --db '" +
+                             db.string() + "'");
+  REQUIRE_MESSAGE(cliRun.exitCode == 0, cliRun.err);
+  auto a = loadNifti(first.string()), b = loadNifti(reloaded.string()), c = loadNifti(cli.string());
+  auto p = loadNifti(plain.string());
+  REQUIRE(p);
+  REQUIRE(a);
+  REQUIRE(b);
+  REQUIRE(c);
+  CHECK(a->image.voxels == b->image.voxels);
+  CHECK(a->image.voxels == c->image.voxels);
+  // The vault's label (its value in the seeds file) holds only voxels of the bone range now.
+  std::uint16_t vault = 0;
+  for (const json& l : saved["labels"])
+    if (l["name"] == "skull_vault") vault = l["value"].get<std::uint16_t>();
+  REQUIRE(vault != 0);
+  std::size_t inVault = 0, soft = 0, inPlainVault = 0, plainSoft = 0;
+  for (std::size_t v = 0; v < uct.voxels.size(); ++v) {
+    if (std::lround(a->image.voxels[v]) == vault) ++inVault, soft += uct.voxels[v] < boneLow;
+    if (std::lround(p->image.voxels[v]) == vault) ++inPlainVault, plainSoft += uct.voxels[v] < boneLow;
+  }
+  CAPTURE(plainSoft);
+  REQUIRE(inPlainVault == unranged);
+  REQUIRE(plainSoft > 0);  // the precondition: without its range the vault takes soft tissue
+  CHECK(inVault == ranged);
+  CHECK(soft == 0);
 }

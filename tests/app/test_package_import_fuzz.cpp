@@ -21,6 +21,7 @@
 #include "learning_session.h"
 #include "lessons/course_json.h"
 #include "package_forgery.h"
+#include "test_support.h"
 
 using namespace at;
 namespace fs = std::filesystem;
@@ -112,8 +113,9 @@ class Forger {
 
 TEST_CASE("PackageImportFuzz_ForgedPackages_NeverTouchOutsideTheDataFolder_RefusalsChangeNothing") {
   if (!test::requireAppBinary("course packages")) return;
+  // AT_IMPORT_FUZZ_SEED (older name) or AT_TEST_SEED replays a run.
   const unsigned seed = std::getenv("AT_IMPORT_FUZZ_SEED") ? unsigned(std::atol(std::getenv("AT_IMPORT_FUZZ_SEED")))
-                                                             : std::random_device{}();
+                                                             : unsigned(test::freshSeed("package import fuzz"));
   const int runs = std::getenv("AT_IMPORT_FUZZ_RUNS") ? std::atoi(std::getenv("AT_IMPORT_FUZZ_RUNS")) : 40;
   MESSAGE("package import fuzz: seed " << seed << " (AT_IMPORT_FUZZ_SEED), " << runs << " imports");
   INFO("seed " << seed);

@@ -13,7 +13,10 @@
 #include "growth_measures.h"
 #include "segment/seeds.h"
 #include "segment_editor/segment_controller.h"
+#include "dataset_resolver.h"
 #include "test_support.h"
+#include "volume/image_file.h"
+#include "volume/nrrd_io.h"
 
 using namespace at;
 using nlohmann::json;
@@ -81,6 +84,7 @@ TEST_CASE("seeds painted in the segment editor, saved and loaded into a fresh ed
   auto raster = segment::rasteriseSeeds(*set, ds.volume.geometry);
   REQUIRE(raster);
   CHECK(raster->seeds.size() == first.seedCount());
+  CHECK(set->strokes.size() * 2 < first.seedCount());  // rows of voxels, not one dot per voxel
 
   std::vector<json> events;
   app::SegmentController second(database, [&](json e) { events.push_back(std::move(e)); });
@@ -173,7 +177,7 @@ TEST_CASE("a seeds file's per-label grow ranges survive loading into the segment
   app::SegmentController second(database, [&](json e) { events.push_back(std::move(e)); });
   second.attach(ds);
   REQUIRE(second.loadSeeds(ranged));
-  CHECK(second.status().find("2 labels have a grow range") != std::string::npos);
+  CHECK(second.status().find("2 labels grow only in their range") != std::string::npos);
   REQUIRE(!events.empty());
   CHECK(events.back()["labels_with_grow_range"] == 2);
   const std::string saved = (dir / "saved.json").string();
@@ -206,4 +210,105 @@ TEST_CASE("a seeds file's per-label grow ranges survive loading into the segment
   auto fresh = segment::loadSeeds(saved);
   REQUIRE(fresh);
   for (const segment::SeedLabel& l : fresh->labels) CHECK_FALSE(l.hasGrowRange());
+}
+
+namespace {
+
+// How many voxels of `label` have a value outside `range` (the dataset's values).
+std::size_t outsideRange(const Dataset& ds, const LabelMap& labels, std::uint16_t label, const std::array<double, 2>& range) {
+  std::size_t outside = 0;
+  for (std::size_t i = 0; i < labels.voxels.size(); ++i) {
+    if (labels.voxels[i] != label) continue;
+    const double value = ds.intensity.valueOf(ds.volume.voxels[i]);
+    outside += value < range[0] || value > range[1];
+  }
+  return outside;
+}
+
+}  // namespace
+
+TEST_CASE("the segment editor's live growth applies per-label grow ranges exactly as `anatomy-tutor segment --seeds` does") {
+  test::TempDir dir;
+  db::Connection database = openDatabase(dir);
+  // The µCT-like volume as a uint8 NRRD file, opened the way the desktop and the command line open it.
+  const Dataset micro = unlabelledMicroCt();
+  FloatVolume image(micro.volume.geometry, 0.0f);
+  for (std::size_t i = 0; i < image.voxels.size(); ++i) image.voxels[i] = float(micro.volume.voxels[i]);
+  const std::string volumePath = (dir / "microct.nrrd").string();
+  REQUIRE(writeNrrd(volumePath, image, ScalarKind::UInt8));
+  app::DatasetRequest request;
+  request.name = volumePath;
+  request.dbPath = (dir / "none.db").string();
+  auto ds = app::openNamedDataset(request);
+  REQUIRE_MESSAGE(ds, test::errorText(ds));
+  REQUIRE_FALSE(ds->intensity.hounsfield());
+
+  std::vector<json> events;
+  app::SegmentController editor(database, [&](json e) { events.push_back(std::move(e)); });
+  editor.attach(*ds);
+  paintSeeds(editor, ds->volume.dims());
+  const std::uint16_t upper = *editor.labelNamed("upper"), lower = *editor.labelNamed("lower");
+  REQUIRE(editor.grow());
+  waitForGrowth(editor);
+  const LabelMap plain = editor.labels();
+
+  // "upper" grows only in the values of its own seed voxels; "lower" in the data's bone range.
+  std::array<double, 2> upperRange{1e9, -1e9};
+  {  // the seed voxels of "upper", through a saved seeds file
+    const std::string painted = (dir / "painted.json").string();
+    REQUIRE(editor.saveSeeds(painted));
+    auto set = segment::loadSeeds(painted);
+    REQUIRE(set);
+    auto raster = segment::rasteriseSeeds(*set, ds->volume.geometry);
+    REQUIRE(raster);
+    for (const GrowthSeed& s : raster->seeds) {
+      if (s.label != upper) continue;
+      const double value = ds->intensity.valueOf(ds->volume.voxels[s.index]);
+      upperRange = {std::min(upperRange[0], value - 1), std::max(upperRange[1], value + 1)};
+    }
+  }
+  const std::array<double, 2> bone = editor.growthDefaults().boneRangeValues;
+  // The precondition: unranged, both labels take voxels outside their ranges.
+  REQUIRE(outsideRange(*ds, plain, upper, upperRange) > 0);
+  REQUIRE(outsideRange(*ds, plain, lower, bone) > 0);
+
+  // Setting a label's range grows again at once (the live preview); errors name the problem.
+  REQUIRE(editor.setLabelGrowRange(upper, app::SegmentController::LabelGrowRange{upperRange, false}));
+  CHECK(editor.growing());
+  waitForGrowth(editor);
+  REQUIRE(editor.setLabelGrowRange(lower, app::SegmentController::LabelGrowRange{std::nullopt, true}));
+  waitForGrowth(editor);
+  CHECK(events.back()["event"] == "segment_grown");
+  const LabelMap ranged = editor.labels();
+  CHECK(outsideRange(*ds, ranged, upper, upperRange) == 0);
+  CHECK(outsideRange(*ds, ranged, lower, bone) == 0);
+  const auto count = [](const LabelMap& m, std::uint16_t l) { return std::count(m.voxels.begin(), m.voxels.end(), l); };
+  CHECK(count(ranged, upper) > 0);
+  CHECK(count(ranged, lower) > 0);
+  MESSAGE("upper " << count(plain, upper) << " -> " << count(ranged, upper) << " voxels, lower " << count(plain, lower)
+                   << " -> " << count(ranged, lower) << " (bone from " << bone[0] << ")");
+  CHECK_FALSE(editor.setLabelGrowRange(0, app::SegmentController::LabelGrowRange{std::nullopt, true}));
+  CHECK_FALSE(editor.setLabelGrowRange(999, app::SegmentController::LabelGrowRange{std::nullopt, true}));
+  auto inverted = editor.setLabelGrowRange(upper, app::SegmentController::LabelGrowRange{std::array<double, 2>{200, 100}, false});
+  REQUIRE_FALSE(inverted);
+  CHECK(inverted.error().message.find("low < high") != std::string::npos);
+  CHECK_FALSE(editor.growing());
+
+  // The command line grows the saved seeds file (ranges included) to the same labels, voxel for voxel.
+  const std::string seedsPath = (dir / "ranged.json").string(), out = (dir / "cli.nii.gz").string();
+  REQUIRE(editor.saveSeeds(seedsPath));
+  const auto r = test::runApp("segment '" + volumePath + "' --seeds '" + seedsPath + "' --backend cpu --out '" + out + "'");
+  REQUIRE_MESSAGE(r.exitCode == 0, r.err);
+  auto loaded = loadImageFile(out);
+  REQUIRE_MESSAGE(loaded, test::errorText(loaded));
+  auto cli = toLabelMap(*loaded, out);
+  REQUIRE(cli);
+  CHECK(cli->voxels == ranged.voxels);
+
+  // Cleared, the ranges no longer apply: the ordinary growth's labels come back.
+  REQUIRE(editor.setLabelGrowRange(upper, std::nullopt));
+  waitForGrowth(editor);
+  REQUIRE(editor.setLabelGrowRange(lower, std::nullopt));
+  waitForGrowth(editor);
+  CHECK(editor.labels().voxels == plain.voxels);
 }

@@ -18,6 +18,7 @@
 #include <thread>
 
 #include "core/atomic_file.h"
+#include "test_support.h"
 
 using namespace at;
 namespace fs = std::filesystem;
@@ -150,9 +151,9 @@ TEST_CASE("AtomicFile_KilledWhileWriting_OldOrNewNeverPartial") {
   TempDir dir;
   const fs::path out = dir.path / "export.csv";
   const std::string old(300000, 'o'), fresh(3000000, 'n');
-  const unsigned seed = std::random_device{}();
-  MESSAGE("seed " << seed);
-  std::mt19937 random(seed);
+  const std::uint64_t seed = test::freshSeed("AtomicFile_KilledWhileWriting");
+  INFO("seed " << seed);
+  std::mt19937 random{unsigned(seed)};
   // Kills land anywhere from before the first byte to after the rename: the delay is drawn over
   // 1.5 times what one whole write takes here.
   const auto writeStart = std::chrono::steady_clock::now();

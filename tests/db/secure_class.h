@@ -8,10 +8,13 @@
 
 #include <atomic>
 #include <string>
+#include <vector>
 
 #include "db/class_accounts.h"
+#include "db/class_lesson_keys.h"
 #include "db/class_server.h"
 #include "db/course_store.h"
+#include "lessons/lesson_engine.h"
 #include "test_databases.h"
 #include "toy_course.h"
 
@@ -33,8 +36,18 @@ inline std::string loginUrl(const std::string& url, const std::string& login, co
   return url.substr(0, scheme) + login + ":" + password + url.substr(at);
 }
 
+// The toy course's answer keys, resolved on the toy dataset as an instructor's machine would.
+inline std::vector<std::string> toyLessonKeys() {
+  ToyKeys keys;
+  const lessons::Course course = toyCourse();
+  auto all = courseLessonKeys(course, keys, lessons::gradingContext(toyStructures(), course));
+  REQUIRE_MESSAGE(all, (all ? "" : all.error().message));
+  return *all;
+}
+
 // A class on a fresh server with the toy course: its coordinator, an instructor and two students,
-// each with their own login, and each connected as themselves.
+// each with their own login, and each connected as themselves. The instructor has published the
+// course's answer keys (unless `publishKeys` is false), so the server grades lesson answers.
 struct SecureClass {
   std::string adminUrl;
   Database admin;
@@ -43,7 +56,7 @@ struct SecureClass {
               eve = uniqueLogin("eve");
   std::string samUrl, eveUrl, coordinatorUrl, instructorUrl;
 
-  explicit SecureClass(const std::string& url) : adminUrl(url), admin(openAt(url)) {
+  explicit SecureClass(const std::string& url, bool publishKeys = true) : adminUrl(url), admin(openAt(url)) {
     REQUIRE(storeCourse(admin, test::toyCourse(), "toy"));
     auto made = createClass(admin, "Ear anatomy", coordinator);
     REQUIRE_MESSAGE(made, (made ? "" : made.error().message));
@@ -53,6 +66,12 @@ struct SecureClass {
     instructorUrl = account(coordinatorDb, instructor, ClassRole::Instructor);
     samUrl = account(coordinatorDb, sam, ClassRole::Student);
     eveUrl = account(coordinatorDb, eve, ClassRole::Student);
+    if (publishKeys) {
+      Database instructorDb = openAt(instructorUrl);
+      auto published = publishLessonKeys(instructorDb, code, toyLessonKeys(), std::nullopt);
+      REQUIRE_MESSAGE(published, (published ? "" : published.error().message));
+      REQUIRE(*published == 6);
+    }
   }
 
   std::string account(Database& by, const std::string& name, ClassRole role) {
@@ -63,5 +82,23 @@ struct SecureClass {
     return loginUrl(adminUrl, name, *made->password);
   }
 };
+
+// Every row of every table of the server's schema, read by the administrator: one text (a refused
+// operation must leave it byte-identical).
+inline std::string everyServerRow(db::Database& admin) {
+  auto tables = admin.prepare("SELECT tablename FROM pg_tables WHERE schemaname = current_schema() ORDER BY tablename");
+  REQUIRE(tables);
+  std::vector<std::string> names;
+  while (*tables->step()) names.push_back(tables->text(0));
+  REQUIRE(names.size() > 20);
+  std::string out;
+  for (const std::string& table : names) {
+    auto rows = admin.prepare("SELECT coalesce(string_agg(t::text, E'\\n' ORDER BY t::text), '') FROM " + table + " t");
+    REQUIRE(rows);
+    REQUIRE(*rows->step());
+    out += table + ":\n" + rows->text(0) + "\n";
+  }
+  return out;
+}
 
 }  // namespace at::test

@@ -132,7 +132,7 @@ TEST_CASE("ClassExam_KeysNeverReachAStudent_GradesAreTheServersAndForgeriesChang
   CHECK(sitting->deadline - sitting->serverNow > 590);
   for (const ClassExamItem& item : sitting->items)
     if (item.kind != "locate")
-      for (const std::string& secret : {"stapes", "Stapes", "stirrup"}) {
+      for (const char* secret : {"stapes", "Stapes", "stirrup"}) {
         CHECK(item.prompt.find(secret) == std::string::npos);
         CHECK(item.sceneJson.find(secret) == std::string::npos);
       }
@@ -293,11 +293,12 @@ TEST_CASE("ClassExam_PrerequisitesAreTheServers_AStudentStartsOnlyAfterFinishing
   REQUIRE_FALSE(locked);
   CHECK(locked.error().message.find("locked for " + c.eve + " until toy.ossicles is finished") != std::string::npos);
   const std::int64_t now = std::int64_t(std::time(nullptr));
-  const auto record = [&](const std::string& kind, const std::string& question, std::optional<double> score) {
-    auto s = eve.prepare("SELECT at_record_event(?1, ?2, ?3, ?4, ?5, 'toy.ossicles', ?6, '', ?7, ?8, '{}')");
+  const auto record = [&](const std::string& kind, const std::string& question, std::optional<double> score,
+                          const std::string& payload = "{}") {
+    auto s = eve.prepare("SELECT at_record_event(?1, ?2, ?3, ?4, ?5, 'toy.ossicles', ?6, '', ?7, ?8, ?9)");
     REQUIRE(s);
     s->bind(1, newUuid()).bind(2, c.code).bind(3, c.eve).bind(4, kind).bind(5, now).bind(6, question);
-    s->bind(7, score ? std::optional<std::int64_t>(1) : std::nullopt).bind(8, score);
+    s->bind(7, score ? std::optional<std::int64_t>(1) : std::nullopt).bind(8, score).bind(9, payload);
     REQUIRE(*s->step());
     return s->text(0);
   };
@@ -306,8 +307,12 @@ TEST_CASE("ClassExam_PrerequisitesAreTheServers_AStudentStartsOnlyAfterFinishing
   CHECK(count(c.admin, "SELECT count(*) FROM class_exam_sittings") == 0);
   // Play it through (the server checks each event), and the exam opens for her, not for sam.
   CHECK(record("lesson_started", "", std::nullopt) == "stored");
-  for (const char* q : {"toy.ossicles.name_stapes", "toy.ossicles.identify_incus", "toy.ossicles.locate_malleus"})
-    CHECK(record("answer", q, 1.0) == "stored");
+  // Each answer carries what was answered (the server grades it from its published keys).
+  for (const auto& [q, answer] : std::vector<std::pair<std::string, std::string>>{
+           {"toy.ossicles.name_stapes", R"({"answer": {"text": "stapes"}})"},
+           {"toy.ossicles.identify_incus", R"({"answer": {"choice": 1}})"},
+           {"toy.ossicles.locate_malleus", R"({"answer": {"pick": "malleus"}})"}})
+    CHECK(record("answer", q, 1.0, answer) == "stored");
   CHECK(record("lesson_finished", "", 1.0) == "stored");
   auto sitting = startClassExam(eve, c.code, "after", std::nullopt);
   REQUIRE_MESSAGE(sitting, (sitting ? "" : sitting.error().message));

@@ -36,22 +36,7 @@ Psql psql(const std::string& url, const std::string& sql) {
   return r;
 }
 
-// Every row of every table of the server's schema, read by the administrator: one text.
-std::string everything(Database& admin) {
-  auto tables = admin.prepare("SELECT tablename FROM pg_tables WHERE schemaname = current_schema() ORDER BY tablename");
-  REQUIRE(tables);
-  std::vector<std::string> names;
-  while (*tables->step()) names.push_back(tables->text(0));
-  REQUIRE(names.size() > 20);
-  std::string out;
-  for (const std::string& table : names) {
-    auto rows = admin.prepare("SELECT coalesce(string_agg(t::text, E'\\n' ORDER BY t::text), '') FROM " + table + " t");
-    REQUIRE(rows);
-    REQUIRE(*rows->step());
-    out += table + ":\n" + rows->text(0) + "\n";
-  }
-  return out;
-}
+using test::everyServerRow;
 
 }  // namespace
 
@@ -81,7 +66,7 @@ TEST_CASE("ClassPsql_AStudentWithPsqlItselfChangesNothingAndReadsOnlyHerOwnRows"
   REQUIRE(c.admin.exec(eveStarted));
   REQUIRE(test::scalarCount(c.admin, "SELECT COUNT(*) FROM class_events WHERE user_name = '" + c.eve + "'") == 1);
 
-  const std::string before = everything(c.admin);
+  const std::string before = everyServerRow(c.admin);
   const std::string q = "'" + c.code + "'";
   const std::vector<std::string> attacks = {
       // promote and impersonate
@@ -119,7 +104,7 @@ TEST_CASE("ClassPsql_AStudentWithPsqlItselfChangesNothingAndReadsOnlyHerOwnRows"
   CHECK(asEve.status == 0);
   CHECK(asEve.output.rfind("refused: ", 0) == 0);
   CHECK(asEve.output.find("but was sent by the login " + c.sam) != std::string::npos);
-  CHECK(everything(c.admin) == before);
+  CHECK(everyServerRow(c.admin) == before);
 
   // What she reads with psql: nothing of eve's, no study row (A/B keys), no audit.
   for (const std::string& sql :

@@ -11,6 +11,7 @@
 #include "db/course_store.h"
 #include "db/sql_repositories.h"
 #include "lessons/lesson_engine.h"
+#include "secure_class.h"
 #include "test_databases.h"
 #include "test_support.h"
 #include "toy_course.h"
@@ -56,11 +57,15 @@ struct LearnerMachine {
 };
 
 // A class "Ear anatomy" coordinated by dr_ada, on a server that has the toy course (it judges
-// the events against it).
+// the events against it) and its answer keys (it grades the answers with them).
 ClassInfo newClass(Database& server) {
   REQUIRE(storeCourse(server, test::toyCourse(), "toy"));
   auto made = createClass(server, "Ear anatomy", "dr_ada");
   REQUIRE_MESSAGE(made, (made ? "" : made.error().message));
+  if (server.backend() == Backend::Postgres) {
+    auto published = publishLessonKeys(server, made->code, test::toyLessonKeys(), "dr_ada");
+    REQUIRE_MESSAGE(published, (published ? "" : published.error().message));
+  }
   return *made;
 }
 

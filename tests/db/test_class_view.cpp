@@ -62,10 +62,9 @@ TEST_CASE("ClassView_AnalyticsOnTheServerCountsWhatClassProgressCounts_OutboxStu
   test::PooledPostgres pooler(20, 5);
   auto urls = test::pooledDatabase(pooler, "the class view test");
   if (!urls) return;
-  const std::uint32_t seed = std::random_device{}();
+  const std::uint64_t seed = test::freshSeed("ClassView_AnalyticsOnTheServer");
   INFO("seed " << seed);
-  std::printf("ClassView seed %u\n", seed);
-  std::mt19937 random(seed);
+  std::mt19937 random{unsigned(seed)};
   test::TempDir dir;
   Database server = openAt(urls->pooled);
   REQUIRE(storeCourse(server, test::toyCourse(), "toy"));

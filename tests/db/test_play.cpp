@@ -663,6 +663,12 @@ TEST_CASE("A class through the CLI: join with the code, play while the server is
   const std::string code = made.out.substr(codeAt + 5, 8);
   CHECK(made.out.find("make each person's login with: anatomy-tutor class account " + code) != std::string::npos);
   CHECK(made.out.find(":" + std::string("@")) == std::string::npos);
+  // The coordinator publishes the course's answer keys from a machine that has the course: the
+  // server grades every answer with them.
+  auto keys = test::runApp("class keys " + code + " --course quick --user dr_ada --local-db '" + local + "'" + server);
+  CAPTURE(keys.err);
+  REQUIRE(keys.exitCode == 0);
+  CHECK(keys.out.find("course quick: 6 keys published to class " + code) != std::string::npos);
 
   for (const char* name : {"sam", "kim"}) {
     auto joined = test::runApp("class join " + code + " --server '" + *url + "' --user " + name + " --db '" + local + "'");

@@ -22,6 +22,7 @@
 #include "quiz/study_protocol.h"
 #include "quiz/study_report.h"
 #include "secure_class.h"
+#include "study_server_snapshot.h"
 #include "test_support.h"
 
 using namespace at;
@@ -30,23 +31,8 @@ namespace fs = std::filesystem;
 
 namespace {
 
-quiz::StudyProtocol paperSurvey() {
-  auto p = quiz::loadStudyProtocol((test::sourceDir() / "data/studies/paper_survey.json").string());
-  REQUIRE(p.has_value());
-  return *p;
-}
-
-// Every row of the study tables and of the audit, as the administrator reads them: one text.
-std::string studySnapshot(Database& admin) {
-  std::string out;
-  for (const char* table : {"studies", "study_participants", "study_trials", "study_ratings", "class_audit"}) {
-    auto s = admin.prepare(std::string("SELECT coalesce(string_agg(t::text, E'\\n' ORDER BY t::text), '') FROM ") + table + " t");
-    REQUIRE(s);
-    REQUIRE(*s->step());
-    out += std::string(table) + ":\n" + s->text(0) + "\n";
-  }
-  return out;
-}
+using test::paperSurvey;
+using test::studySnapshot;
 
 std::string sqlText(const std::string& s) { return "'" + s + "'"; }
 

@@ -71,8 +71,8 @@ std::size_t count(const LabelMap& m, std::uint16_t label) {
 }  // namespace
 
 TEST_CASE("Split islands: separate blobs become structures by size, connected, voxels kept, one undo") {
-  const std::uint64_t seed = std::random_device{}();
-  std::printf("split islands seed %llu\n", static_cast<unsigned long long>(seed));
+  const std::uint64_t seed = test::freshSeed("split islands");
+  INFO("seed " << seed);
   std::mt19937_64 random(seed);
   for (int round = 0; round < 5; ++round) {
     // 2 … 4 balls of label 3 in separate x slabs (gaps of 2+ voxels), another structure beside them.

@@ -3,8 +3,10 @@
 // and a bone plate's label no longer takes the soft tissue around it.
 #include <doctest/doctest.h>
 
+#include <algorithm>
 #include <random>
 
+#include "segment/label_editor.h"
 #include "segment/ranged_growth.h"
 #include "segment/seeds.h"
 #include "test_support.h"
@@ -35,32 +37,50 @@ GrowthParams cpuParams() {
   return p;
 }
 
-}  // namespace
-
-TEST_CASE("Ranged growth: ranged labels stay in range, unranged labels lose voxels only to a range holding them") {
-  std::mt19937_64 rng(test::freshSeed("ranged growth"));
-  const Geometry g = cube(24);
-  Volume v(g, 0);
-  // Random boxes of air, soft tissue and bone over noise.
+// Random boxes of air, soft tissue and bone over noise, on a 24³ grid; the last three boxes are one
+// of each, so that every tissue's range holds some voxels.
+Volume randomBoxes(std::mt19937_64& rng) {
+  Volume v(cube(24), 0);
   std::uniform_int_distribution<int> at(0, 23), size(2, 9), kind(0, 2), noise(-40, 40);
   for (int b = 0; b < 40; ++b) {
     const int i0 = at(rng), j0 = at(rng), k0 = at(rng), s = size(rng);
-    const std::int16_t value = std::array<std::int16_t, 3>{-900, 40, 900}[std::size_t(kind(rng))];
+    const int drawnKind = kind(rng);
+    const std::int16_t value = std::array<std::int16_t, 3>{-900, 40, 900}[std::size_t(b >= 37 ? b - 37 : drawnKind)];
     for (int k = k0; k < std::min(24, k0 + s); ++k)
       for (int j = j0; j < std::min(24, j0 + s); ++j)
         for (int i = i0; i < std::min(24, i0 + s); ++i) v.at(i, j, k) = value;
   }
   for (auto& x : v.voxels) x = std::int16_t(x + noise(rng));
+  return v;
+}
+
+// Up to `perLabel` seeds of each label 0 … 4 at random voxels of `v` (one label per voxel), sorted.
+// A label of `ranges` gets its first seed inside its range (else all its seeds could fall outside
+// it and it would grow nothing); randomBoxes puts voxels in every tissue's range.
+std::vector<GrowthSeed> randomSeeds(std::mt19937_64& rng, const Volume& v, int perLabel,
+                                    const std::vector<LabelValueRange>& ranges = {}) {
   std::vector<GrowthSeed> seeds;
   std::vector<char> used(v.voxels.size(), 0);
   std::uniform_int_distribution<std::size_t> voxel(0, v.voxels.size() - 1);
   for (std::uint16_t label = 0; label <= 4; ++label)
-    for (int n = 0; n < 6; ++n) {
-      const std::size_t i = voxel(rng);
+    for (int n = 0; n < perLabel; ++n) {
+      std::size_t i = voxel(rng);
+      const auto range = std::find_if(ranges.begin(), ranges.end(), [&](const LabelValueRange& r) { return r.label == label; });
+      if (range != ranges.end() && n == 0)
+        while (used[i] || v.voxels[i] < range->values[0] || v.voxels[i] > range->values[1]) i = voxel(rng);
       if (!used[i]) seeds.push_back({i, label}), used[i] = 1;
     }
   std::sort(seeds.begin(), seeds.end(), [](const GrowthSeed& a, const GrowthSeed& b) { return a.index < b.index; });
+  return seeds;
+}
+
+}  // namespace
+
+TEST_CASE("Ranged growth: ranged labels stay in range, unranged labels lose voxels only to a range holding them") {
+  std::mt19937_64 rng(test::freshSeed("ranged growth"));
+  const Volume v = randomBoxes(rng);
   const std::vector<LabelValueRange> ranges{{1, {300, 3000}}, {2, {300, 3000}}, {3, {-100, 200}}};
+  const std::vector<GrowthSeed> seeds = randomSeeds(rng, v, 6, ranges);
   const auto rangeOf = [&](std::uint16_t l) -> const LabelValueRange* {
     for (const auto& r : ranges)
       if (r.label == l) return &r;
@@ -159,4 +179,41 @@ TEST_CASE("A label's grow_range in the seeds file: a range or \"bone\", written 
   auto bg = parseSeeds(R"({"labels": [{"value": 0, "name": "background", "grow_range": "bone"}, {"value": 1, "name": "x"}], "strokes": []})", "s.json");
   REQUIRE(!bg);
   CHECK(bg.error().message.find("labels[0].grow_range") != std::string::npos);
+}
+
+TEST_CASE("Ranged growth kept between seed edits (the segment editor's live growth) equals a fresh one every time") {
+  std::mt19937_64 rng(test::freshSeed("ranged growth kept"));
+  const Volume v = randomBoxes(rng);
+  const GrowthParams p = cpuParams();
+  const std::vector<LabelValueRange> ranges{{1, {300, 3000}}, {2, {-100, 200}}, {3, {300, 3000}}};
+  LabelEditor editor(LabelMap(v.geometry, 0), {});
+  std::vector<GrowthSeed> seeds = randomSeeds(rng, v, 5, ranges);
+  for (int round = 0; round < 4; ++round) {
+    CAPTURE(round);
+    // What the command line computes from scratch: the ordinary growth, then the rule.
+    auto fresh = growWithLabelRanges(v, IntensityModel{}, grow(v, seeds, p), seeds, p, ranges);
+    REQUIRE(fresh);
+    GrowthStats stats;
+    auto edited = editor.growFromSeeds(v, seeds, p, &stats, LabelRanges{IntensityModel{}, ranges});
+    REQUIRE_MESSAGE(edited, (edited ? "" : edited.error().message));
+    CHECK(editor.labels().voxels == fresh->voxels);
+    CHECK(stats.incremental == (round > 0));
+    // The user's next edit: some seeds removed, some relabelled, some added.
+    std::vector<GrowthSeed> next;
+    std::uniform_int_distribution<int> fate(0, 5);
+    std::uniform_int_distribution<int> label(0, 4);
+    for (GrowthSeed s : seeds) {
+      const int f = fate(rng);
+      if (f == 0) continue;
+      if (f == 1) s.label = std::uint16_t(label(rng));
+      next.push_back(s);
+    }
+    for (const GrowthSeed& s : randomSeeds(rng, v, 2))
+      if (std::none_of(next.begin(), next.end(), [&](const GrowthSeed& o) { return o.index == s.index; })) next.push_back(s);
+    std::sort(next.begin(), next.end(), [](const GrowthSeed& a, const GrowthSeed& b) { return a.index < b.index; });
+    seeds = std::move(next);
+  }
+  // Without ranges the editor's labels are the ordinary growth's again.
+  REQUIRE(editor.growFromSeeds(v, seeds, p));
+  CHECK(editor.labels().voxels == grow(v, seeds, p).voxels);
 }

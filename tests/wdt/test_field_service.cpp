@@ -65,8 +65,11 @@ TEST_CASE("FieldService_FieldForAStructure_EqualsComputeWdtBitForBit") {
 TEST_CASE("FieldService_NewerRequest_CancelsTheRunningOne_AndOnlyTheNewestArrives") {
   const Dataset& ds = test::phantomOfSize(96);
   FieldService service(ds.volume, ds.labels, 4);
+  // A field that only a cancel can end: a million fixed passes. (A converged 96³ field could end
+  // within ~30 ms, before the newer request arrives, on a machine that stalls the test's thread.)
   FieldRequest slow = requestFor(ds, "cochlea", 1);
-  slow.params.converge = true;  // many passes: long enough to be cancelled mid-way
+  slow.params.converge = false;
+  slow.params.passes = 1000000;
   service.request(slow);
   const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(30);
   while (!service.running() && std::chrono::steady_clock::now() < until) std::this_thread::sleep_for(std::chrono::milliseconds(1));

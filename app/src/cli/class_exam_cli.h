@@ -14,6 +14,8 @@ namespace at::app {
 // `class open-exam CODE EXAM --db SERVER [--local-db PATH] [--views DIR]` and `class close-exam`.
 int runClassOpenExam(const cli::Args& args);
 int runClassCloseExam(const cli::Args& args);
+// `class keys CODE --db SERVER [--course ID] [--local-db PATH]` (cmd_class_keys.cpp).
+int runClassKeys(const cli::Args& args);
 
 // When `userName` joined a class whose server has `examId` open, sits it there (items from the
 // server, answers graded there) and returns the exit status; nullopt when the exam is this

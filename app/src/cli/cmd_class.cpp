@@ -35,7 +35,8 @@ constexpr const char* kClassHelp =
     "       anatomy-tutor class correct EVENT_ID --correct 0|1 --score S --reason TEXT --db SERVER\n"
     "       anatomy-tutor class audit CODE --db SERVER [--csv]\n"
     "       anatomy-tutor class open-exam CODE EXAM --db SERVER [--local-db PATH] [--views DIR]\n"
-    "       anatomy-tutor class close-exam CODE EXAM --db SERVER\n\n"
+    "       anatomy-tutor class close-exam CODE EXAM --db SERVER\n"
+    "       anatomy-tutor class keys CODE --db SERVER [--course ID] [--local-db PATH]\n\n"
     "A class lives on a class server, a PostgreSQL database every member's machine can reach\n"
     "(SERVER: postgresql://LOGIN@host/database, the password in ~/.pgpass; see the README).\n"
     "Each person has their own login (`class account`); on the server a login is who you are, and\n"
@@ -63,7 +64,10 @@ constexpr const char* kClassHelp =
     "            the keys kept on the server, where no student's login can read them. Students who\n"
     "            joined the class then take it with `anatomy-tutor exam EXAM --user NAME`: each\n"
     "            answer is graded on the server. `class progress` shows the scores\n"
-    "  close-exam ends it: no new sittings; open ones are handed in with what they answered\n";
+    "  close-exam ends it: no new sittings; open ones are handed in with what they answered\n"
+    "  keys      an instructor or coordinator publishes the answer keys of the courses (--course: one)\n"
+    "            from this machine (--local-db) to the server, which then grades every lesson and\n"
+    "            review answer itself; until then the class's answers wait there ungraded\n";
 
 constexpr const char* kSyncHelp =
     "usage: anatomy-tutor sync [--db PATH]\n\n"
@@ -336,7 +340,7 @@ int runAudit(const cli::Args& args) {
 }  // namespace
 
 int runClass(const Argv& argv) {
-  auto args = cli::Args::parse(argv, {"server", "role", "pgpass", "reason", "correct", "score", "local-db", "views"},
+  auto args = cli::Args::parse(argv, {"server", "role", "pgpass", "reason", "correct", "score", "local-db", "views", "course"},
                                {"csv"});
   if (!args) return reportError("class: " + args.error().message);
   if (args->has("help") || args->positional().empty()) {
@@ -354,8 +358,9 @@ int runClass(const Argv& argv) {
   if (action == "audit") return runAudit(*args);
   if (action == "open-exam") return runClassOpenExam(*args);
   if (action == "close-exam") return runClassCloseExam(*args);
+  if (action == "keys") return runClassKeys(*args);
   return reportError("class: unknown action '" + action +
-                         "' (create, join, role, progress, account, withdraw, correct, audit, open-exam, close-exam)",
+                         "' (create, join, role, progress, account, withdraw, correct, audit, open-exam, close-exam, keys)",
                      2);
 }
 

@@ -10,6 +10,7 @@
 #include "db/connection.h"
 #include "dataset_resolver.h"
 #include "db/dataset_store.h"
+#include "lessons/exam.h"
 #include "lessons/course_check.h"
 #include "lessons/course_json.h"
 #include "question_visibility.h"
@@ -84,6 +85,16 @@ int runValidate(const cli::Args& args) {
     steps += lesson.steps.size();
     for (const auto& step : lesson.steps) questions += step.kind == lessons::StepKind::Question;
   }
+  // An exam asking more items than its pool holds (examPoolSize) can never be drawn.
+  int warnings = 0;
+  for (const lessons::ExamSpec& exam : course->exams)
+    if (const std::size_t pool = lessons::examPoolSize(exam, &*course); std::size_t(exam.count) > pool) {
+      terminalFprintf(stderr,
+                      "%s: warning: exam '%s' asks %d items, but its pool holds only %zu (%zu structures, %zu kinds; a "
+                      "structure is located only where a lesson of the course locates it): it cannot be drawn\n",
+                      file.string().c_str(), exam.id.c_str(), exam.count, pool, exam.structures.size(), exam.kinds.size());
+      ++warnings;
+    }
   // Structures are checked when the dataset can be opened here without changing anything.
   std::string structures = "structures not checked: dataset '" + course->datasetId + "' is not here";
   // A known scan counts as here once fetched (scripts/fetch-scans.sh) and labelled (scripts/label-scans.sh).
@@ -124,6 +135,7 @@ int runValidate(const cli::Args& args) {
       structures += "; " + str::countOf(long(checks->size()), "locate question") + " answerable in its view";
     }
   }
+  if (warnings > 0) structures += "; " + str::countOf(warnings, "warning") + " (see above)";
   terminalPrintf("%s: valid: course '%s' version %d on '%s': %s, %s, %s; %s\n", file.string().c_str(),
               course->id.c_str(), course->version, course->datasetId.c_str(),
               str::countOf(long(course->lessons.size()), "lesson").c_str(), str::countOf(long(steps), "step").c_str(),

@@ -3,6 +3,7 @@
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
+#include <optional>
 #include <string>
 
 #include "commands.h"
@@ -65,17 +66,22 @@ int writeDefaultViews(const fs::path& outDir, const std::string& courseId) {
     request.width = 360;  // small: software GL on two cores renders about 10⁵ rays per second
     request.height = 270;
     request.view = lessons::toString(step.view);
-    auto settings = render::settingsFor(*preset, *frame, request);
-    if (!settings) return reportError(settings.error().message);
-    settings->background = {0.04f, 0.04f, 0.05f, 1.0f};
-    applyStepPlacement(*settings, step.camera, step.clip);
-    renderer->setSelected(structure->label);
+    std::optional<FloatVolume> field;
     if (render::modeNeedsField(preset->mode)) {
       auto params = render::wdtParamsFor(*preset);
       if (!params) return reportError(params.error().message);
-      auto field = computeWdt(dataset->volume, structureMask(dataset->labels, structure->label), *params);
-      if (!field) return reportError(structure->id + ": " + field.error().message);
-      if (auto st = renderer->setField(field->field.distances); !st) return reportError(st.error().message);
+      auto wdt = computeWdt(dataset->volume, structureMask(dataset->labels, structure->label), *params);
+      if (!wdt) return reportError(structure->id + ": " + wdt.error().message);
+      field = std::move(wdt->field.distances);
+    }
+    // Framed, placed and scaled as play and the desktop show the step (course_views.h).
+    auto settings = stepViewSettings(*preset, *frame, request, step.camera, step.clip, field ? &*field : nullptr,
+                                     dataset->volume);
+    if (!settings) return reportError(settings.error().message);
+    settings->background = {0.04f, 0.04f, 0.05f, 1.0f};
+    renderer->setSelected(structure->label);
+    if (field) {
+      if (auto st = renderer->setField(*field); !st) return reportError(st.error().message);
     } else {
       renderer->clearField();
     }

@@ -70,7 +70,7 @@ Result<Asked> askItem(ExamRun& run, int position) {
       terminalPrintf("  (no picture: %s)\n", picture.error().message.c_str());
   }
   std::fflush(stdout);
-  AskedQuestion q{item->kind, item->target, item->choiceIds, run.idByName, run.views};
+  AskedQuestion q{item->kind, item->target, item->choiceIds, run.idByName, run.views, std::nullopt};
   return askQuestion(run.source, q,
                      [&](const quiz::Answer& answer, std::int64_t latencyMs) -> Result<std::optional<quiz::Grade>> {
                        lessons::RenderState render;

@@ -188,7 +188,8 @@ int runReview(const std::string& courseId, PlayContext& ctx) {
     showPicture(views.get(), scene, "review-" + std::to_string(number), kind == quiz::QuestionKind::Locate);
     std::fflush(stdout);
 
-    AskedQuestion q{kind, resolved.question.target, resolved.choices, structureIdsByName(*structures), views.get()};
+    AskedQuestion q{kind, resolved.question.target, resolved.choices, structureIdsByName(*structures), views.get(),
+                    std::nullopt};
     auto result = askQuestion(ctx.source, q, [&](const quiz::Answer& answer, std::int64_t latencyMs)
                                                  -> Result<std::optional<quiz::Grade>> {
       auto grade = review.answer(answer, terminalRender(scene), latencyMs);
@@ -277,7 +278,8 @@ int runLesson(const std::string& lessonId, lessons::LessonMode mode, PlayContext
                     view->prompt, view->choiceNames);
       showPicture(views.get(), view->scene, stem, view->questionKind == quiz::QuestionKind::Locate);
       std::fflush(stdout);
-      AskedQuestion q{view->questionKind, view->structure, view->choiceIds, structureIdsByName(*structures), views.get()};
+      AskedQuestion q{view->questionKind, view->structure, view->choiceIds, structureIdsByName(*structures), views.get(),
+                      std::nullopt};
       auto asked = askQuestion(ctx.source, q, [&](const quiz::Answer& answer, std::int64_t latencyMs)
                                                   -> Result<std::optional<quiz::Grade>> {
         auto grade = engine.answer(answer, terminalRender(view->scene), latencyMs);

@@ -182,15 +182,13 @@ int runRender(const Argv& argv) {
     field = std::move(wdt->field);
     // The distance unit from the field and the data (render/field_scale.h), times --context.
     const auto scaleStart = std::chrono::steady_clock::now();
-    const render::FieldScale scale = render::fieldScale(field->distances, dataset->volume, nullptr, *frame,
-                                                        render::boneLevels(*preset), request.margin, request.minRadiusMm);
-    settings->distanceUnit = scale.distanceUnit * request.contextScale;
-    settings->distanceOffset = scale.distanceOffset;
+    const render::FieldScale scale =
+        render::applyFieldScale(*settings, field->distances, dataset->volume, nullptr, *frame, request);
     const double scaleMs =
         std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - scaleStart).count();
     unitNote = "; distance unit " + formatUnit(settings->distanceUnit) +
                (scale.distanceOffset > 0 ? ", offset " + formatUnit(scale.distanceOffset) : std::string()) +
-               (scale.derived ? " (median bone D " + formatUnit(scale.quantileD) + ", 90 % " + formatUnit(scale.farQuantileD) + "; by size " +
+               (scale.derived ? std::string(scale.fromSeen ? " (median seen bone D " : " (median bone D ") + formatUnit(scale.quantileD) + ", 90 % " + formatUnit(scale.farQuantileD) + "; by size " +
                                    formatUnit(render::distanceUnitFor(*frame, request.contextScale)) + ")"
                               : " (from its size)") +
                ", " + formatUnit(scaleMs) + " ms";

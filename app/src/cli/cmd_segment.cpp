@@ -196,19 +196,12 @@ int runSegment(const Argv& argv) {
     auto params = growthParams(*args, *seeds, *dataset);
     if (!params) return reportError("segment: " + params.error().message, 2);
     applyDatasetWindow(*dataset, params->windowMin, params->windowMax, true, params->weight == WeightRule::Density);
-    auto grown = editor.growFromSeeds(dataset->volume, raster->seeds, *params, &stats);
+    // Labels with a "grow_range" keep only their range's voxels (segment/ranged_growth.h), through
+    // the editor's growth as in the desktop's segment editor.
+    const auto bone = segment::defaultGrowthSettings(dataset->volume, dataset->intensity).boneRangeValues;
+    const segment::LabelRanges ranges{dataset->intensity, segment::labelRangesOf(*seeds, bone)};
+    auto grown = editor.growFromSeeds(dataset->volume, raster->seeds, *params, &stats, ranges);
     if (!grown) return reportError("segment: " + grown.error().message);
-    bool anyRange = false;
-    for (const segment::SeedLabel& l : seeds->labels) anyRange = anyRange || l.hasGrowRange();
-    if (anyRange) {
-      // Labels with a "grow_range" keep only their range's voxels (segment/ranged_growth.h).
-      const auto bone = segment::defaultGrowthSettings(dataset->volume, dataset->intensity).boneRangeValues;
-      auto ranged = segment::growWithLabelRanges(dataset->volume, dataset->intensity, editor.labels(), raster->seeds, *params,
-                                                 segment::labelRangesOf(*seeds, bone));
-      if (!ranged) return reportError("segment: " + ranged.error().message);
-      std::vector<Structure> structures = editor.structures();
-      editor = segment::LabelEditor(std::move(*ranged), std::move(structures));
-    }
     if (!stats.warning.empty()) terminalFprintf(stderr, "anatomy-tutor: segment: %s\n", stats.warning.c_str());
     char base[64];
     std::snprintf(base, sizeof base, ", base %.4g/mm", double(params->baseCost));

@@ -125,8 +125,8 @@ Result<const FloatVolume*> TerminalViews::fieldOf(const Structure& structure, co
 }
 
 Result<render::RenderSettings> TerminalViews::settingsFor(const Structure& selected, const render::Preset& preset,
-                                                          const std::string& view, int width, int height,
-                                                          double margin) {
+                                                          const lessons::QuestionScene& scene, const std::string& view,
+                                                          int width, int height, double margin, const FloatVolume* field) {
   auto frame = render::structureFrame(dataset_.labels, selected.label);
   if (!frame) return fail(selected.id + ": " + frame.error().message);
   render::ViewRequest request;
@@ -134,7 +134,8 @@ Result<render::RenderSettings> TerminalViews::settingsFor(const Structure& selec
   request.height = height;
   request.view = view;
   if (margin > 0) request.margin = margin;
-  auto settings = render::settingsFor(preset, *frame, request);
+  // The distance unit from the field on this very view, as the render command and the desktop set it.
+  auto settings = stepViewSettings(preset, *frame, request, scene.camera, scene.clip, field, dataset_.volume);
   if (!settings) return tl::unexpected(settings.error());
   settings->background = {0.04f, 0.04f, 0.05f, 1.0f};
   return settings;
@@ -158,10 +159,7 @@ Result<TerminalPicture> TerminalViews::show(const lessons::QuestionScene& scene,
 
   const std::string ownView = lessons::toString(scene.view);
   auto sideSettings = [&](const std::string& view) -> Result<render::RenderSettings> {
-    auto settings = settingsFor(*selected, *preset, view, kWidth, kHeight, region ? kRegionMargin : 0);
-    if (!settings) return tl::unexpected(settings.error());
-    applyStepPlacement(*settings, scene.camera, scene.clip);
-    return settings;
+    return settingsFor(*selected, *preset, scene, view, kWidth, kHeight, region ? kRegionMargin : 0, field);
   };
   // A step's free camera is the author's choice: kept even when the target does not show.
   const Structure* target = visibleTarget && !scene.camera ? dataset_.findStructure(*visibleTarget) : nullptr;

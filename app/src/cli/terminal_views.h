@@ -75,8 +75,11 @@ class TerminalViews {
  private:
   TerminalViews() = default;
   Result<const FloatVolume*> fieldOf(const Structure& structure, const render::Preset& preset);
+  // The scene's view framed on `view` (its camera and plane put in), the unit from `field` (when
+  // given) on that view: course_views.h stepViewSettings.
   Result<render::RenderSettings> settingsFor(const Structure& selected, const render::Preset& preset,
-                                             const std::string& view, int width, int height, double margin);
+                                             const lessons::QuestionScene& scene, const std::string& view, int width,
+                                             int height, double margin, const FloatVolume* field);
   // The scene's preset, else the structure's shipped or derived WDT preset.
   Result<render::Preset> presetOf(const Structure& structure, const std::string& presetId) const;
   Result<quiz::Pick> pickAt(const std::optional<Vec3>& pointMm, std::uint16_t label, const std::string& target);

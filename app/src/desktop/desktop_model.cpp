@@ -375,10 +375,15 @@ render::FieldScale DesktopModel::fieldScaleOf(const ExploreState::Shown& shown, 
     return bySize;
   }
   const render::BoneLevels bone = render::boneLevels(shown.preset);
-  // Once per field (and data TF): one pass over a subsample of the field near the structure.
-  if (fieldUnit_.field != field || fieldUnit_.label != shown.label || fieldUnit_.bone != bone) {
-    fieldUnit_ = {field, shown.label, bone,
-                  render::fieldScale(field->distances, dataset_->volume, nullptr, frame, bone)};
+  // Once per field, data TF and framed view (not while orbiting): rays through the framed view.
+  const render::FieldView view{explore_.framedCamera(), explore_.framedPixels()[0], explore_.framedPixels()[1],
+                               explore_.clipPlane()};
+  // The view counts only for the modes whose unit comes from the bone it sees (field_scale.h).
+  const bool seen = render::unitFromSeenBone(shown.preset.mode);
+  if (fieldUnit_.field != field || fieldUnit_.label != shown.label || fieldUnit_.bone != bone ||
+      fieldUnit_.seen != seen || (seen && !(fieldUnit_.view == view))) {
+    fieldUnit_ = {field, shown.label, bone, seen, view,
+                  render::fieldScale(field->distances, dataset_->volume, nullptr, frame, bone, seen ? &view : nullptr)};
   }
   return fieldUnit_.scale;
 }

@@ -271,11 +271,13 @@ class DesktopModel {
   std::vector<std::string> messages_;
   std::vector<std::string> notes_;
   std::unique_ptr<Dataset> dataset_;
-  // The shown field's distance unit (render/field_scale.h), computed once per field.
+  // The shown field's distance unit (render/field_scale.h), computed once per field and framed view.
   struct FieldUnit {
     const DistanceField* field = nullptr;
     std::uint16_t label = 0;
     render::BoneLevels bone;
+    bool seen = false;  // measured with the view's seen bone (render::unitFromSeenBone)
+    render::FieldView view;
     render::FieldScale scale;
   };
   mutable FieldUnit fieldUnit_;

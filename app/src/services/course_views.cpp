@@ -7,6 +7,7 @@
 #include <filesystem>
 
 #include "db/preset_store.h"
+#include "render/field_scale.h"
 #include "learning_session.h"
 #include "lessons/course_json.h"
 
@@ -86,6 +87,18 @@ void applyStepPlacement(render::RenderSettings& settings, const std::optional<le
     settings.camera.orthographic = framed.orthographic;
   }
   if (clip) settings.clip = clipOf(*clip);
+}
+
+Result<render::RenderSettings> stepViewSettings(const render::Preset& preset, const render::StructureFrame& frame,
+                                                const render::ViewRequest& request,
+                                                const std::optional<lessons::StepCamera>& camera,
+                                                const std::optional<lessons::StepClip>& clip, const FloatVolume* field,
+                                                const Volume& volume) {
+  auto settings = render::settingsFor(preset, frame, request);
+  if (!settings) return settings;
+  applyStepPlacement(*settings, camera, clip);
+  if (field) render::applyFieldScale(*settings, *field, volume, nullptr, frame, request);
+  return settings;
 }
 
 lessons::StepCamera stepCameraOf(const render::Camera& camera) {

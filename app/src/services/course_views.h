@@ -11,6 +11,8 @@
 #include "render/render_settings.h"
 #include "render/derived_preset.h"
 #include "render/preset.h"
+#include "render/scene.h"
+#include "volume/grid.h"
 #include "core/error.h"
 
 namespace at::db {
@@ -48,5 +50,16 @@ Result<lessons::StepClip> stepClipOf(const render::ClipPlane& plane);
 // it has one) put in: what `play` and the default views render.
 void applyStepPlacement(render::RenderSettings& settings, const std::optional<lessons::StepCamera>& camera,
                         const std::optional<lessons::StepClip>& clip);
+
+// A step's view as every front end draws it (play and exam pictures, default views, the question
+// checks; the render command and the desktop set the unit with the same render::applyFieldScale):
+// framed on `request`, the step's camera and plane put in, and with a field the distance unit
+// measured from that field on that very view (render/field_scale.h); without one, the
+// structure's size-based unit.
+Result<render::RenderSettings> stepViewSettings(const render::Preset& preset, const render::StructureFrame& frame,
+                                                const render::ViewRequest& request,
+                                                const std::optional<lessons::StepCamera>& camera,
+                                                const std::optional<lessons::StepClip>& clip, const FloatVolume* field,
+                                                const Volume& volume);
 
 }  // namespace at::app

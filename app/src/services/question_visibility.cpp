@@ -68,9 +68,10 @@ Result<std::vector<LocateCheck>> checkLocateQuestions(const Dataset& dataset, co
       const std::string viewName = lessons::toString(scene.view);
       request.view = viewName;
       request.margin = kLocateRegionMargin;
-      auto settings = render::settingsFor(*preset, *frame, request);
+      // The view (and its field's distance unit) as play and the desktop show it.
+      auto settings = stepViewSettings(*preset, *frame, request, scene.camera, scene.clip, &fields[region->id],
+                                       dataset.volume);
       if (!settings) return tl::unexpected(withContext(check.path, settings.error()));
-      applyStepPlacement(*settings, scene.camera, scene.clip);
       const auto px = settings->camera.project(*centre, kCheckViewWidth, kCheckViewHeight);
       if (!px || (*px)[0] < 0 || (*px)[0] >= kCheckViewWidth || (*px)[1] < 0 || (*px)[1] >= kCheckViewHeight) {
         check.problem = "the " + target->id + "'s centre is outside the view (" + viewName + ")";

@@ -143,6 +143,11 @@ Result<std::vector<ExamItem>> drawExamItems(const ExamSpec& exam, const std::vec
                                             quiz::KeyComputer& keys, const std::string& seed,
                                             const Course* course = nullptr);
 
+// How many different items `exam` can ask (its pool): each structure once per kind it can be asked
+// in — locate only where a lesson of `course` locates it, unless locate is the exam's one kind or
+// there is no course. drawExamItems refuses an exam whose count exceeds it.
+std::size_t examPoolSize(const ExamSpec& exam, const Course* course = nullptr);
+
 // The first lesson question of `course` that asks to locate `structureId`, or nullptr.
 const Step* lessonLocateStep(const Course& course, const std::string& structureId);
 

@@ -8,29 +8,46 @@
 // lies within D ≈ 1 of the mandible. A unit fixed in millimetres (or taken from the structure's
 // size) puts every voxel of a real scan in the distance TF's "near" band, so t does nothing.
 //
-// The unit (and offset, see kFarQuantileX): the context voxels are the field's voxels within the
-// framed view's reach of the structure (a sphere about its centroid of radius margin × its radius,
-// at least minRadiusMm) that are the bone's outer surfaces as the preset's data TF draws it (stored
-// value at or above the level where the data TF reaches half its peak opacity, with open space —
-// at or below the level the data TF draws clear — within kOpenReach voxels along an axis: the walls
-// of marrow cavities lie inside the bone and are not what the user sees), lie inside the body (when
-// a body mask is given: the CT table and headrest are no context), are reachable (finite D) and
-// are not the structure (D > 0).
-// The unit is their kContextQuantile quantile of D divided by kContextQuantileX, so that quantile
-// of the bone in view lands at x = kContextQuantileX of the presets' f(x) = 2/(1+α^x): with the
+// The unit (and offset, see kFarQuantileX) is measured on two sets of bone surfaces within the
+// framed view's reach (a sphere about the structure's centroid of radius margin × its radius, at
+// least minRadiusMm), each a bone surface as the preset's data TF draws it (stored value at or
+// above the level where the data TF reaches half its peak opacity, next to open space — at or
+// below the level the data TF draws clear: the walls of marrow cavities lie inside the bone),
+// inside the body when a body mask is given (the CT table and headrest are no context), reachable
+// (finite D) and not the structure (D > 0):
+//  - around: every such surface voxel in the sphere (kOpenReach voxels to open space along an
+//    axis): the bone the structure is embedded in, seen or not;
+//  - seen (only with a FieldView: the camera, image size and clip plane of the framed view): the
+//    first bone surface each ray of the view meets inside the sphere; rays that meet the structure
+//    count nothing (that pixel shows the structure; the bone in front is drawn faint).
+// The unit is taken from whichever set lies nearer (smaller median D), so that the farther half of
+// the bone the user sees fades out at t = 0 in both kinds of view:
+//  - a structure that hides the bone behind it (the abdominal CT's right kidney from the front
+//    hides the ribs behind it): the seen surfaces (median D 5.9) lie nearer than all those around
+//    it (7.8); scaled on those around, the bone in view sat at x ≈ 1.3, all drawn at t = 0, and t
+//    changed the image by 3 grey levels;
+//  - a structure embedded in bone (the orbit, the ear canal, the µCT labyrinth): the first surface
+//    each ray meets is the outer shell (far in D) and the bone around the structure lies behind
+//    it; scaled on the seen surfaces the shell stayed drawn at t = 0 (the orbit's t change fell
+//    from 39.5 to 14.8 grey levels, the µCT cochlea drew 73 % of the frame at t = 0).
+// The unit is the chosen set's kContextQuantile quantile of D divided by kContextQuantileX, so
+// that quantile lands at x = kContextQuantileX of the presets' f(x) = 2/(1+α^x): with the
 // shipped and derived distance TFs (full within x ≈ 1.1, half at x ≈ 2.6, gone by x ≈ 4.7) the
-// nearer half of the bone in view is context at t = 0 and the farther half fades out inside the
-// view, on any scan and voxel size — and the slider t brings that farther half in. The shipped
-// presets' x (and lighting's α of Eq. 6, applied to D / unit) are in this unit.
+// nearer half of that bone is context at t = 0 and the farther half fades out inside the view, on
+// any scan and voxel size — and the slider t brings that farther half in. The shipped presets' x
+// (and lighting's α of Eq. 6, applied to D / unit) are in this unit.
 //
 // Cost: one pass over the field's voxels inside the reach's box (a subsample of at most
-// kMaxScaleSamples of them), done once per field — not per frame.
+// kMaxScaleSamples of them) and at most kScaleRaysPerSide² rays marched at half the smallest voxel
+// spacing through the reach, done once per field and framed view — not per frame.
 #pragma once
 
 #include <cstddef>
 #include <optional>
 
+#include "render/camera.h"
 #include "render/preset.h"
+#include "render/render_settings.h"
 #include "render/scene.h"
 #include "volume/grid.h"
 
@@ -52,14 +69,20 @@ constexpr std::size_t kMaxScaleSamples = 1u << 18;
 // A dense voxel is an outer surface when open space lies within this many voxels along an axis
 // (two: a partial-volume voxel between bone and air is not open itself).
 constexpr int kOpenReach = 2;
+// The seen set: rays along the view's longer side, and the fewest first surfaces it must hold.
+constexpr int kScaleRaysPerSide = 128;
+constexpr std::size_t kMinSeenSurfaces = 64;
 
 struct FieldScale {
   double distanceUnit = 1;      // (D − distanceOffset) / distanceUnit is the presets' x (clamped at 0)
   double distanceOffset = 0;    // 0 unless the spread is narrow (kFarQuantileX)
   double farQuantileD = 0;      // the measured kFarQuantile quantile of D
   double quantileD = 0;         // the measured quantile of D over the context voxels
-  std::size_t contextVoxels = 0;  // voxels the quantile was taken over (0: fell back)
+  std::size_t contextVoxels = 0;  // voxels (or seen surfaces) the quantile was taken over (0: fell back)
   bool derived = false;         // false: too few context voxels, the size-based unit is kept
+  bool fromSeen = false;        // the unit was taken from the bone surfaces the view sees first
+  double aroundQuantileD = 0;   // the median D of each set (0: not measured or too few)
+  double seenQuantileD = 0;
 };
 
 // The stored-value level from which the preset's data TF draws bone: the first TF x at which its
@@ -76,11 +99,36 @@ struct BoneLevels {
 };
 BoneLevels boneLevels(const Preset& preset);
 
+// The view the seen set is measured in (RenderSettings' camera, size and clip plane).
+struct FieldView {
+  Camera camera;
+  int width = 512, height = 512;
+  std::optional<ClipPlane> clip;
+  bool operator==(const FieldView&) const = default;
+};
+FieldView fieldViewOf(const RenderSettings& settings);
+
 // The field's unit for a structure (see above). `volume` is the scan the field was computed on
-// (any grid: it is sampled at the field's voxel centres); `body` (on the volume's grid) may be
-// null. With fewer than 64 context voxels the size-based unit (distanceUnitFor) is returned,
-// derived = false.
+// (any grid: it is sampled at the field's voxel centres and along the rays); `body` (on the
+// volume's grid) may be null; `view` null measures the around set only. With fewer than 64
+// context voxels (and kMinSeenSurfaces seen surfaces) the size-based unit (distanceUnitFor) is
+// returned, derived = false.
 FieldScale fieldScale(const FloatVolume& field, const Volume& volume, const Mask* body, const StructureFrame& frame,
-                      const BoneLevels& levels, double margin = 1.6, double minRadiusMm = 3.0);
+                      const BoneLevels& levels, const FieldView* view, double margin = 1.6, double minRadiusMm = 3.0);
+
+// Whether a mode's unit may come from the seen set: only where the unit sets how the context fades
+// with distance (WDT and non-weighted). Outline, fuzzy and lighting mark the bone near the
+// structure (a band, a colour, a light): measured on the bone around it, that neighbourhood stays
+// put when the view turns. (From the seen set the skull's frontal sinus, seen from the front
+// through the thin anterior wall, lost its band: 0.6 % of the frame, 21.9 % isolated pixels.)
+bool unitFromSeenBone(RenderMode mode);
+
+// The one way every front end (render command, desktop, terminal pictures, default views, question
+// checks) sets a framed view's distance unit: fieldScale on `settings`' own view (camera, size,
+// clip: set them first; the view only where unitFromSeenBone(settings.preset.mode)) with the
+// request's margin, then distanceUnit = unit × request.contextScale
+// and distanceOffset. Returns the measure.
+FieldScale applyFieldScale(RenderSettings& settings, const FloatVolume& field, const Volume& volume, const Mask* body,
+                           const StructureFrame& frame, const ViewRequest& request);
 
 }  // namespace at::render

@@ -28,6 +28,7 @@
 
 #include "core/error.h"
 #include "segment/label_history.h"
+#include "segment/ranged_growth.h"
 #include "volume/structure.h"
 #include "wdt/label_growth.h"
 
@@ -80,9 +81,12 @@ class LabelEditor {
                                       double low, double high, std::uint16_t label, const ThresholdOptions& options = {});
   // Relabels every voxel from the seeds (GrowthSeed labels are label values; 0 is background).
   // The growth is kept between calls with the same volume and params: the next call recomputes
-  // only what the seed changes affect. `stats` (optional) receives the growth's statistics.
+  // only what the seed changes affect. `stats` (optional) receives the growth's statistics. With
+  // per-label `ranges` (a seeds file's "grow_range"), the labels are ranged_growth.h's rule over
+  // that growth (its limited growths kept between calls too).
   Result<EditSummary> growFromSeeds(const Volume& volume, const std::vector<GrowthSeed>& seeds,
-                                    const GrowthParams& params, GrowthStats* stats = nullptr);
+                                    const GrowthParams& params, GrowthStats* stats = nullptr,
+                                    const LabelRanges& ranges = {});
   // growFromSeeds in two halves, for a caller that grows on a worker thread: computeGrowth uses
   // only the kept growth (not the labels, structures or history), so another thread may read and
   // edit the labels meanwhile; commitGrowth then applies the grown labels as one edit (on the
@@ -90,7 +94,7 @@ class LabelEditor {
   // `control.cancel` stops it between rounds (stats.cancelled; commit nothing then: the next
   // computeGrowth finishes the work left).
   Result<GrowthStats> computeGrowth(const Volume& volume, const std::vector<GrowthSeed>& seeds, const GrowthParams& params,
-                                    const WdtControl& control = {});
+                                    const WdtControl& control = {}, const LabelRanges& ranges = {});
   Result<EditSummary> commitGrowth(std::size_t seedCount);
   Result<EditSummary> margin(std::uint16_t label, double mm);
   Result<EditSummary> hollow(std::uint16_t label, double thicknessMm);

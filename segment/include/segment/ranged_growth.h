@@ -12,10 +12,12 @@
 //   0       otherwise (what A gave a ranged label outside its range is background).
 // So a ranged label's voxels are always inside its range, and an unranged label loses voxels only
 // to a ranged label whose range holds them. One more growth (CPU) per distinct range.
+// The segment editor's live growth and `anatomy-tutor segment --seeds` both apply it (RangedGrowth).
 #pragma once
 
 #include <array>
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 #include "core/error.h"
@@ -36,9 +38,43 @@ struct LabelValueRange {
 // labels' order; empty when no label has one.
 std::vector<LabelValueRange> labelRangesOf(const SeedSet& seeds, const std::array<double, 2>& boneRangeValues);
 
-// The rule above. `unranged` is A (the ordinary growth's labels on the volume's grid), `params`
-// the ordinary growth's (their own range limit, if any, is replaced by each label range). Errors:
-// a grid mismatch, a range that is not low < high, a ranged label 0, the growth's errors.
+// Per-label ranges as a growth takes them: the ranges (labelRangesOf) and the intensity model that
+// maps their values to the volume's stored values. No range: the ordinary growth alone.
+struct LabelRanges {
+  IntensityModel intensity;
+  std::vector<LabelValueRange> ranges;
+  bool empty() const { return ranges.empty(); }
+};
+
+// The rule above, kept between calls: each distinct range's limited growth is kept with the params
+// and volume it was made for, so growing again after seed edits is incremental (LabelGrowth::update:
+// only what the changed seeds affect), as the ordinary growth is in the segment editor; another
+// volume or params start it afresh. The segment editor (LabelEditor::computeGrowth) and
+// `anatomy-tutor segment` both grow through it, so the desktop and the command line give the same
+// labels from the same seeds file. Not thread-safe: one apply at a time.
+class RangedGrowth {
+ public:
+  RangedGrowth();
+  ~RangedGrowth();
+  RangedGrowth(RangedGrowth&&) noexcept;
+  RangedGrowth& operator=(RangedGrowth&&) noexcept;
+
+  // The rule above. `unranged` is A (the ordinary growth's labels on the volume's grid), `params`
+  // the ordinary growth's (their own range limit, if any, is replaced by each label range).
+  // `control.cancel` stops a limited growth between rounds: then `stats`->cancelled is set and the
+  // labels returned are not the rule's (commit nothing; the next apply finishes the work left).
+  // `stats` (optional) adds the limited growths' brick visits, rounds and compute time. Errors: a
+  // grid mismatch, a range that is not low < high, a ranged label 0, the growth's errors.
+  Result<LabelMap> apply(const Volume& volume, const LabelMap& unranged, const std::vector<GrowthSeed>& seeds,
+                         const GrowthParams& params, const LabelRanges& ranges, const WdtControl& control = {},
+                         GrowthStats* stats = nullptr);
+
+ private:
+  struct Kept;
+  std::vector<std::unique_ptr<Kept>> kept_;
+};
+
+// One apply of a fresh RangedGrowth (nothing kept).
 Result<LabelMap> growWithLabelRanges(const Volume& volume, const IntensityModel& intensity, const LabelMap& unranged,
                                      const std::vector<GrowthSeed>& seeds, const GrowthParams& params,
                                      const std::vector<LabelValueRange>& ranges);

@@ -68,6 +68,7 @@ struct GrowthParams {
   float rangeMin = 0;
   float rangeMax = 0;
   WdtBackend backend = WdtBackend::Auto;
+  bool operator==(const GrowthParams&) const = default;  // every field equal (a kept growth still fits)
 };
 
 // The error names the field ("growth params: baseCost must be > 0, got 0").

@@ -244,7 +244,9 @@ Status ExamController::answer(const quiz::Answer& given) {
 bool ExamController::clicked(const std::string& structure, double distanceMm) {
   if (!wantsClick() && !wantsSliceClick()) return false;
   quiz::Answer a;
-  a.pick = quiz::Pick{structure, distanceMm};
+  a.pick = quiz::Pick{};
+  a.pick->structure = structure;
+  a.pick->distanceMm = distanceMm;
   if (auto st = answer(a); !st) lessons_.report("exam: " + st.error().message);
   return true;
 }

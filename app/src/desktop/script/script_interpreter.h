@@ -189,6 +189,7 @@ class ScriptInterpreter {
   // The segment editor (script_actions_segment.cpp)
   Outcome segmentOpen(Context&);
   Outcome segmentLabel(Context&);
+  Outcome segmentSeeds(Context&);
   Outcome segmentSlice(Context&);
   Outcome segmentSeed(Context&);
   Outcome segmentGrow(Context&);

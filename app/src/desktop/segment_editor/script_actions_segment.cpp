@@ -21,8 +21,12 @@ ScriptInterpreter::Feature ScriptInterpreter::segmentActions() {
           {
               {"segment_open", {{"open?", "true (default) opens, false closes"}},
                "Shows the Segment window on the dataset on screen, with the Slices window.", &S::segmentOpen},
-              {"segment_label", {{"name", "a label name (added when new; background is label 0)"}},
+              {"segment_label",
+               {{"name", "a label name (added when new; background is label 0)"},
+                {"grow_range?", "\"bone\", [low, high] or \"none\": the label grows only in that range"}},
                "Paints that label next; reports segment_label {name, label}.", &S::segmentLabel},
+              {"segment_seeds", {{"save?", "a seeds file to write"}, {"load?", "a seeds file to read"}},
+               "Saves the painted seeds (with the growth settings and label ranges) or loads a file's.", &S::segmentSeeds},
               {"segment_slice", {{"axis", "x, y, z or 0, 1, 2"}, {"index", "the slice"}}, "Shows that slice.", &S::segmentSlice},
               {"segment_seed",
                {voxel, brush, {"low?", "with high: seed only values in low … high joined to the voxel"},
@@ -83,7 +87,34 @@ ScriptInterpreter::Outcome ScriptInterpreter::segmentLabel(Context& c) {
   } else if (auto added = s.addLabel(name); !added) {
     return tl::unexpected(added.error());
   }
+  if (c.action.contains("grow_range")) {
+    const json& range = c.action.at("grow_range");
+    std::optional<SegmentController::LabelGrowRange> wanted;
+    if (range == "bone") {
+      wanted = SegmentController::LabelGrowRange{std::nullopt, true};
+    } else if (range.is_array() && range.size() == 2 && range[0].is_number() && range[1].is_number()) {
+      wanted = SegmentController::LabelGrowRange{std::array<double, 2>{range[0].get<double>(), range[1].get<double>()}, false};
+    } else if (range != "none") {
+      return fail("ui script: segment_label: \"grow_range\" must be \"bone\", [low, high] or \"none\", not " + range.dump());
+    }
+    if (auto st = s.setLabelGrowRange(s.currentLabel(), wanted); !st) return tl::unexpected(st.error());
+  }
   c.model.event({{"event", "segment_label"}, {"name", name}, {"label", s.currentLabel()}});
+  return Progress::Done;
+}
+
+// {"do": "segment_seeds", "save": "seeds.json"} / {"load": "seeds.json"}: the Segment window's
+// "Save seeds" / "Load seeds" (a loaded file's settings take effect; a growth on screen grows again).
+ScriptInterpreter::Outcome ScriptInterpreter::segmentSeeds(Context& c) {
+  SegmentController& s = c.model.segmenter();
+  if (c.action.contains("save") == c.action.contains("load"))
+    return fail("ui script: segment_seeds: give one of \"save\" and \"load\"");
+  if (c.action.contains("save")) {
+    if (auto st = s.saveSeeds(c.action.at("save").get<std::string>()); !st) return tl::unexpected(st.error());
+    return Progress::Done;
+  }
+  auto loaded = s.loadSeeds(c.action.at("load").get<std::string>());
+  if (!loaded) return tl::unexpected(loaded.error());
   return Progress::Done;
 }
 

@@ -275,6 +275,7 @@ Status SegmentController::startGrowth() {
   seeds.reserve(seeds_.size());
   for (const auto& [index, label] : seeds_) seeds.push_back({index, label});
   const GrowthParams params = growthParams();
+  segment::LabelRanges ranges = labelRanges();
   grownOnce_ = true;
   auto job = std::make_unique<GrowJob>();
   job->seedCount = seeds.size();
@@ -282,10 +283,10 @@ Status SegmentController::startGrowth() {
   GrowJob* j = job.get();
   segment::LabelEditor* editor = editor_.get();
   const Volume* volume = &dataset_->volume;
-  job->thread = std::jthread([j, editor, volume, seeds = std::move(seeds), params] {
+  job->thread = std::jthread([j, editor, volume, seeds = std::move(seeds), params, ranges = std::move(ranges)] {
     WdtControl control;
     control.cancel = &j->cancel;
-    j->result = editor->computeGrowth(*volume, seeds, params, control);
+    j->result = editor->computeGrowth(*volume, seeds, params, control, ranges);
     j->finished.store(true, std::memory_order_release);
   });
   job_ = std::move(job);

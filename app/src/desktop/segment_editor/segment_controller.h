@@ -19,6 +19,8 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 
@@ -136,7 +138,26 @@ class SegmentController {
   void resetGrowthSettings();  // back to the data's defaults (grows again like setGrowthSettings)
   GrowthParams growthParams() const;  // what the next growth runs with
 
-  // Seeds as a seeds file (segment/seeds.h): one dot per seed voxel at its centre (LPS mm), the
+  // A label's own grow range, as a seeds file's "grow_range" (segment/ranged_growth.h): the label
+  // keeps only voxels whose value lies in the range, taken by a growth that cannot leave it, so a
+  // thin bone is not padded with the soft tissue and air around it. `bone`: the data's bone range
+  // (growthDefaults().boneRangeValues); else `values` in the dataset's values (HU or intensities).
+  // Every growth applies them exactly as `anatomy-tutor segment --seeds` does (one library path:
+  // LabelEditor::computeGrowth with segment::LabelRanges); saveSeeds writes them, loadSeeds takes a
+  // file's. Setting or clearing one (nullopt) grows again when a growth is on screen. Event
+  // segment_label_range {"label", "range": [lo, hi] | null, "bone"}. Errors: the background, an
+  // unknown label, values not low < high.
+  struct LabelGrowRange {
+    std::optional<std::array<double, 2>> values;
+    bool bone = false;
+  };
+  Status setLabelGrowRange(std::uint16_t label, std::optional<LabelGrowRange> range);
+  std::optional<LabelGrowRange> labelGrowRange(std::uint16_t label) const;
+  // The ranges the next growth applies, "bone" resolved (empty: the ordinary growth alone).
+  segment::LabelRanges labelRanges() const;
+
+  // Seeds as a seeds file (segment/seeds.h): each row of seed voxels of one label a stroke of
+  // radius 0 between its end voxels' centres (LPS mm; it rasterises to exactly those voxels), the
   // labels by name (the background and the structures seeded), and the growth settings — what
   // `anatomy-tutor segment --seeds` grows the same labels from. loadSeeds replaces the painted
   // seeds with a file's (strokes rasterised on this grid), adds the structures it names that the
@@ -213,14 +234,10 @@ class SegmentController {
   const Dataset* dataset_ = nullptr;  // the dataset being labelled (its volume and intensity)
   std::unique_ptr<segment::LabelEditor> editor_;
   std::map<std::size_t, std::uint16_t> seeds_;  // voxel index → label
-  // Per-label grow ranges ("grow_range") of the last seeds file loaded, by editor label: kept so that
-  // saving the seeds writes them back. The live growth here does not apply them (`segment --seeds`
-  // does); loading says so.
-  struct LabelGrowRange {
-    std::optional<std::array<double, 2>> values;
-    bool bone = false;
-  };
-  std::map<std::uint16_t, LabelGrowRange> growRanges_;
+  // Per-label grow ranges (setLabelGrowRange, or a loaded seeds file's "grow_range"), by editor
+  // label, in the order they were given (the seeds file's: ranged_growth.h's rule takes the first
+  // range that claims a voxel).
+  std::vector<std::pair<std::uint16_t, LabelGrowRange>> growRanges_;
   db::ReviewStates review_;                     // by structure id
   std::uint16_t current_ = 0;
   int axis_ = 2, index_ = 0;

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <iterator>
 #include <map>
 
 #include "core/strings.h"
@@ -52,6 +53,44 @@ Status SegmentController::setGrowthSettings(const GrowthSettings& settings) {
   return {};
 }
 
+Status SegmentController::setLabelGrowRange(std::uint16_t label, std::optional<LabelGrowRange> range) {
+  if (auto ok = requireDataset(); !ok) return ok;
+  if (label == 0) return fail("segment editor: the background (label 0) cannot have a grow range");
+  if (std::none_of(structures().begin(), structures().end(), [&](const Structure& s) { return s.label == label; }))
+    return fail(ErrorKind::NotFound, "segment editor: no label " + std::to_string(label));
+  if (range && !range->bone && !(range->values && (*range->values)[0] < (*range->values)[1]))
+    return fail("segment editor: a label's grow range must be \"bone\" or low < high" +
+                (range->values ? ", got " + std::to_string((*range->values)[0]) + " … " + std::to_string((*range->values)[1])
+                               : std::string()));
+  const auto at = std::find_if(growRanges_.begin(), growRanges_.end(), [&](const auto& r) { return r.first == label; });
+  if (!range) {
+    if (at != growRanges_.end()) growRanges_.erase(at);
+  } else if (at != growRanges_.end()) {
+    at->second = *range;
+  } else {
+    growRanges_.push_back({label, *range});
+  }
+  nlohmann::json values = range && !range->bone ? nlohmann::json{(*range->values)[0], (*range->values)[1]} : nlohmann::json();
+  events_({{"event", "segment_label_range"}, {"label", label}, {"range", values}, {"bone", range && range->bone}});
+  if (grownOnce_ && seedsPerLabel().size() >= 2) return grow();  // the live preview
+  return {};
+}
+
+std::optional<SegmentController::LabelGrowRange> SegmentController::labelGrowRange(std::uint16_t label) const {
+  for (const auto& [l, range] : growRanges_)
+    if (l == label) return range;
+  return std::nullopt;
+}
+
+segment::LabelRanges SegmentController::labelRanges() const {
+  segment::LabelRanges out;
+  if (!dataset_) return out;
+  out.intensity = dataset_->intensity;
+  for (const auto& [label, range] : growRanges_)
+    out.ranges.push_back({label, range.bone ? defaults_.boneRangeValues : *range.values});
+  return out;
+}
+
 void SegmentController::resetGrowthSettings() {
   (void)setGrowthSettings({segment::basePerVoxelOf(defaults_.params.baseCost, defaults_.voxelMm), defaults_.windowValues,
                            defaults_.params.smoothingVoxels, false, defaults_.boneRangeValues});
@@ -62,8 +101,17 @@ Status SegmentController::saveSeeds(const std::string& path) const {
   if (seeds_.empty()) return fail("save seeds: no seed is painted");
   segment::SeedSet set;
   std::map<std::uint16_t, std::size_t> labelIndex;
-  for (const auto& [label, count] : seedsPerLabel()) {
-    (void)count;
+  // The seeded labels by value, except that the ranged ones among them keep the order of their
+  // ranges (the rule's order: ranged_growth.h), each in the slot of a ranged label.
+  std::vector<std::uint16_t> order;
+  for (const auto& [label, count] : seedsPerLabel()) order.push_back(label);
+  std::vector<std::uint16_t> rangedOrder;
+  for (const auto& [label, range] : growRanges_)
+    if (std::find(order.begin(), order.end(), label) != order.end()) rangedOrder.push_back(label);
+  std::size_t nextRanged = 0;
+  for (std::uint16_t& label : order)
+    if (labelGrowRange(label)) label = rangedOrder[nextRanged++];
+  for (const std::uint16_t label : order) {
     segment::SeedLabel l;
     l.value = label;
     if (label == 0) {
@@ -73,9 +121,9 @@ Status SegmentController::saveSeeds(const std::string& path) const {
                                       [&](const Structure& s) { return s.label == label; });
       l.name = found != structures().end() ? found->id : "label_" + std::to_string(label);
       if (found != structures().end()) l.colour = found->colour;
-      if (const auto range = growRanges_.find(label); range != growRanges_.end()) {
-        l.growRange = range->second.values;
-        l.growRangeBone = range->second.bone;
+      if (const auto range = labelGrowRange(label)) {
+        l.growRange = range->values;
+        l.growRangeBone = range->bone;
       }
     }
     labelIndex[label] = set.labels.size();
@@ -83,12 +131,28 @@ Status SegmentController::saveSeeds(const std::string& path) const {
   }
   const Geometry& g = dataset_->volume.geometry;
   const Dims d = g.dims;
-  for (const auto& [index, label] : seeds_) {
-    segment::SeedStroke dot;
-    dot.label = labelIndex.at(label);
-    dot.pointsMm.push_back(g.indexToPatient({double(index % std::size_t(d.x)), double(index / std::size_t(d.x) % std::size_t(d.y)),
-                                             double(index / (std::size_t(d.x) * std::size_t(d.y)))}));
-    set.strokes.push_back(std::move(dot));
+  // One stroke of radius 0 per run of seed voxels of one label along a row (i consecutive, j and k
+  // fixed): from the first voxel's centre to the last's. Rasterised, its samples (every half of the
+  // smallest spacing) seed exactly the run's voxels, so the file reloads to the same seeds while
+  // a painted region is written as rows, not as one dot per voxel (a skull's 873 k seed voxels
+  // as dots exceeded the seeds reader's 64 MiB limit).
+  const auto centre = [&](std::size_t index) {
+    return g.indexToPatient({double(index % std::size_t(d.x)), double(index / std::size_t(d.x) % std::size_t(d.y)),
+                             double(index / (std::size_t(d.x) * std::size_t(d.y)))});
+  };
+  for (auto it = seeds_.begin(); it != seeds_.end();) {
+    const std::size_t first = it->first;
+    const std::uint16_t label = it->second;
+    std::size_t last = first;
+    auto next = std::next(it);
+    while (next != seeds_.end() && next->first == last + 1 && next->second == label && next->first % std::size_t(d.x) != 0)
+      last = next->first, ++next;
+    segment::SeedStroke run;
+    run.label = labelIndex.at(label);
+    run.pointsMm.push_back(centre(first));
+    if (last != first) run.pointsMm.push_back(centre(last));
+    set.strokes.push_back(std::move(run));
+    it = next;
   }
   set.grow.weight = "gradient";
   set.grow.window = settings_.window;
@@ -128,7 +192,8 @@ Result<std::size_t> SegmentController::loadSeeds(const std::string& path) {
   for (const GrowthSeed& s : raster->seeds) seeds_[s.index] = byValue.at(s.label);
   growRanges_.clear();
   for (std::size_t i = 0; i < set->labels.size(); ++i)
-    if (set->labels[i].hasGrowRange()) growRanges_[editorLabel[i]] = {set->labels[i].growRange, set->labels[i].growRangeBone};
+    if (set->labels[i].hasGrowRange())
+      growRanges_.push_back({editorLabel[i], {set->labels[i].growRange, set->labels[i].growRangeBone}});
   GrowthSettings settings = settings_;
   if (set->grow.window) settings.window = *set->grow.window;
   if (set->grow.base) settings.basePerVoxel = segment::basePerVoxelOf(*set->grow.base, defaults_.voxelMm);
@@ -139,8 +204,7 @@ Result<std::size_t> SegmentController::loadSeeds(const std::string& path) {
   ++revision_;
   status_ = "seeds loaded from " + path + ": " + std::to_string(seeds_.size()) + " voxels";
   if (!growRanges_.empty())
-    status_ += "; " + std::to_string(growRanges_.size()) +
-               " labels have a grow range, kept when the seeds are saved but not applied by this live growth (anatomy-tutor segment --seeds applies them)";
+    status_ += "; " + std::to_string(growRanges_.size()) + " labels grow only in their range";
   events_({{"event", "segment_seeds_loaded"}, {"path", path}, {"seeds", seeds_.size()}, {"labels_with_grow_range", growRanges_.size()}});
   return seeds_.size();
 }

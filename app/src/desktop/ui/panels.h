@@ -165,6 +165,7 @@ class SegmentPanel {
  private:
   void report(const Status& st);  // the error shown under the controls, or none
   void drawLabels(SegmentController& editor, int listLines);
+  void drawLabelGrowRange(SegmentController& editor, std::uint16_t label);
   void drawSliceControls(SegmentController& editor);
   void drawSlice(SegmentController& editor, float side);  // the picture, its longer side `side` px
   void drawTools(SegmentController& editor);

@@ -223,6 +223,8 @@ Status ExploreState::setView(const std::string& name, int width, int height, std
   auto settings = render::settingsFor(presetOf(label, bare_), *frame, request);
   if (!settings) return tl::unexpected(settings.error());
   camera_ = settings->camera;
+  framedCamera_ = camera_;
+  framedPixels_ = {request.width, request.height};
   viewName_ = name;
   changed();
   return {};
@@ -230,6 +232,7 @@ Status ExploreState::setView(const std::string& name, int width, int height, std
 
 void ExploreState::setCamera(const render::Camera& camera) {
   camera_ = camera;
+  framedCamera_ = camera;
   changed();
 }
 

@@ -81,6 +81,11 @@ class ExploreState {
   float t() const { return t_; }
   const render::Camera& camera() const { return camera_; }
   const std::string& viewName() const { return viewName_; }
+  // The view the structure was last framed in (setView, or a step's camera through setCamera) and
+  // that view's pixel size; orbiting and zooming leave it: the field's distance unit is measured
+  // in it (render/field_scale.h), so the image does not change scale while the user turns it.
+  const render::Camera& framedCamera() const { return framedCamera_; }
+  std::array<int, 2> framedPixels() const { return framedPixels_; }
   const ClipSettings& clip() const { return clip_; }
   std::optional<render::ClipPlane> clipPlane() const;
 
@@ -156,6 +161,8 @@ class ExploreState {
   bool bare_ = false;
   float t_ = 0.5f;
   render::Camera camera_;
+  render::Camera framedCamera_;
+  std::array<int, 2> framedPixels_{512, 512};
   std::string viewName_;
   ClipSettings clip_;
   std::uint16_t fieldLabel_ = 0;

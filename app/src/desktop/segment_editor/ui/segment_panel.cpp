@@ -113,6 +113,7 @@ void SegmentPanel::drawLabels(SegmentController& editor, int listLines) {
     ImGui::SetNextItemWidth(line * 12);
     if (ImGui::InputTextWithHint("system", "system, e.g. skull bones", &system_, ImGuiInputTextFlags_EnterReturnsTrue))
       report(editor.setSystem(s.label, system_));
+    drawLabelGrowRange(editor, s.label);
   }
   ImGui::SetNextItemWidth(line * 12);
   ImGui::InputTextWithHint("##new", "new label name", &newLabel_);
@@ -121,6 +122,29 @@ void SegmentPanel::drawLabels(SegmentController& editor, int listLines) {
     auto added = editor.addLabel(newLabel_);
     report(statusOf(added));
     if (added) newLabel_.clear();
+  }
+}
+
+void SegmentPanel::drawLabelGrowRange(SegmentController& editor, std::uint16_t label) {
+  // The current structure's own grow range (a seeds file's "grow_range"): it keeps only voxels in
+  // the range, grown by a growth that cannot leave it — "bone" for a thin bone that must not take
+  // the soft tissue around it. A growth on screen grows again at once.
+  const auto range = editor.labelGrowRange(label);
+  const int kind = !range ? 0 : range->bone ? 1 : 2;
+  static const char* kKinds[] = {"anywhere", "bone only", "only in range"};
+  const float line = ImGui::GetFontSize();
+  ImGui::SetNextItemWidth(line * 8);
+  int chosen = kind;
+  if (ImGui::Combo("label grows", &chosen, kKinds, 3) && chosen != kind) {
+    if (chosen == 0) report(editor.setLabelGrowRange(label, std::nullopt));
+    if (chosen == 1) report(editor.setLabelGrowRange(label, SegmentController::LabelGrowRange{std::nullopt, true}));
+    if (chosen == 2) report(editor.setLabelGrowRange(label, SegmentController::LabelGrowRange{editor.valueWindow(), false}));
+  }
+  if (range && !range->bone && range->values) {
+    float values[2] = {float((*range->values)[0]), float((*range->values)[1])};
+    ImGui::SetNextItemWidth(line * 10);
+    if (ImGui::InputFloat2("##labelrange", values, "%.0f", ImGuiInputTextFlags_EnterReturnsTrue))
+      report(editor.setLabelGrowRange(label, SegmentController::LabelGrowRange{std::array<double, 2>{values[0], values[1]}, false}));
   }
 }
 
