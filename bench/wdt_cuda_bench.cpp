@@ -7,7 +7,7 @@
 // backend's cached workspace, the measured calls reuse it.
 //
 //   wdt_cuda_bench [--sizes 128,256,512] [--reps 10] [--check-max 256] [--cpu-check-max 0]
-//                  [--sweeps-before-bricks -1] [--z-planes Z] [--sweep-kernel groups,persistent]
+//                  [--sweeps-before-bricks -1] [--z-planes Z] [--sweep-kernel groups,persistent,auto]
 //
 // --check-max: sizes up to this get the exact reference and the CPU backend beside the GPU;
 // --cpu-check-max: sizes up to this (above --check-max) get the CPU backend only, for the
@@ -18,8 +18,9 @@
 // Converge mode runs once per value of --sweeps-before-bricks (whole-volume passes before the
 // brick rounds; see cuda/wdt_cuda.h). --sweep-kernel: each (size, mode) once per sweep kernel
 // listed, in that order (groups: a launch per plane group; persistent: one launch a sweep where it
-// fits, see at::cuda::setPersistentSweeps); each line names it and how many sweeps its captured
-// passes ran persistently. Without the option, the backend's default (AT_WDT_CUDA_PERSISTENT).
+// fits; auto: the backend's default, persistent for the large tile only; see
+// at::cuda::setPersistentSweeps); each line names it and how many sweeps its captured passes ran
+// persistently. Without the option, the backend's default (AT_WDT_CUDA_PERSISTENT).
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -114,8 +115,9 @@ int main(int argc, char** argv) {
       kernels.clear();
       std::stringstream in(argv[a + 1]);
       for (std::string k; std::getline(in, k, ',');) {
-        if (k != "groups" && k != "persistent") {
-          std::fprintf(stderr, "wdt_cuda_bench: --sweep-kernel: unknown kernel '%s' (groups or persistent)\n", k.c_str());
+        if (k != "groups" && k != "persistent" && k != "auto") {
+          std::fprintf(stderr, "wdt_cuda_bench: --sweep-kernel: unknown kernel '%s' (groups, persistent or auto)\n",
+                       k.c_str());
           return 2;
         }
         kernels.push_back(k);
@@ -161,7 +163,11 @@ int main(int argc, char** argv) {
     };
     for (const auto& [mode, sweepsFirst] : runs) {
       for (const std::string& kernel : kernels) {
-        if (!kernel.empty()) at::cuda::setPersistentSweeps(kernel == "persistent");
+        if (!kernel.empty()) {
+          at::cuda::setPersistentSweeps(kernel == "persistent" ? at::cuda::PersistentSweeps::On
+                                        : kernel == "groups"   ? at::cuda::PersistentSweeps::Off
+                                                               : at::cuda::PersistentSweeps::Auto);
+        }
         const long long capturedBefore = at::cuda::persistentSweepsCaptured();
         if (mode == 0) at::cuda::setConvergeSweepsBeforeBricks(sweepsFirst);
         p.params.converge = mode == 0;

@@ -9,7 +9,11 @@
 #   3. the whole test_cuda with the default (group launches);
 #   4. the whole test_cuda again with AT_WDT_CUDA_PERSISTENT=1 (every older case on the new kernel);
 #   5. wdt_cuda_bench again, kernels in the other order, no checks (the spread between rounds);
-#   6. 512³ GPU = CPU bit for bit under the persistent kernel (large tile).
+#   6. 512³ GPU = CPU bit for bit under the persistent kernel (large tile);
+#   7. (if growth_bench is in DIR) label growth at 512³ with 8 labels, CUDA, and at 1024³ with the
+#      GPU's used memory sampled by nvidia-smi every 100 ms (peak in growth1024_mem.txt);
+#   8. (if ncu is on the PATH) an Nsight Compute profile of the persistent sweep at 256³ (its first
+#      6 launches: one pass) and of the group launches' kernel (12 launches), clocks left alone.
 # Every stage runs under `timeout` within one overall budget (a wrong wait hangs rather than
 # fails), a failing stage does not stop the next, and everything is packed into $OUT/wdt35.tgz
 # after each stage, with $OUT/summary.txt beside it.
@@ -47,12 +51,25 @@ stage tests_default 25 "$N/test_cuda" -tce='persistent*'
 stage tests_all_persistent 25 env AT_WDT_CUDA_PERSISTENT=1 "$N/test_cuda" -tce='persistent*'
 stage bench2 35 "$N/wdt_cuda_bench" --sizes 256,512 --reps 10 --check-max 0 --sweep-kernel persistent,groups
 stage bench512cpu 40 "$N/wdt_cuda_bench" --sizes 512 --reps 1 --check-max 0 --cpu-check-max 512 --sweep-kernel persistent
+if [ -x "$N/growth_bench" ]; then
+  stage growth512 60 "$N/growth_bench" --sizes 512 --backends cuda --reps 3 --check-max 0
+  nvidia-smi --query-gpu=timestamp,memory.used --format=csv -lms 100 > "$R/growth1024_mem.txt" 2>&1 &
+  SMI=$!
+  stage growth1024 90 "$N/growth_bench" --sizes 1024 --backends cuda --reps 1 --check-max 0
+  kill "$SMI" 2>/dev/null
+  python3 -c "import sys; v=[int(l.split(',')[1].split()[0]) for l in open(sys.argv[1]) if 'MiB' in l and l[0].isdigit()]; print('growth 1024 peak GPU memory used:', max(v) if v else '?', 'MiB; before:', v[0] if v else '?')" "$R/growth1024_mem.txt" | tee -a "$R/summary.txt"
+fi
+if command -v ncu >/dev/null; then
+  NCU="ncu --clock-control none --section SpeedOfLight --section LaunchStats --section Occupancy --section WarpStateStats --section SchedulerStats --section MemoryWorkloadAnalysis"
+  stage ncu_persistent256 90 env AT_WDT_CUDA_PERSISTENT=1 $NCU -k regex:sweepPersistent --launch-count 6 "$N/wdt_cuda_bench" --sizes 256 --reps 1 --check-max 0 --sweep-kernel persistent
+  stage ncu_groups256 60 $NCU -k regex:sweepGroup --launch-count 12 "$N/wdt_cuda_bench" --sizes 256 --reps 1 --check-max 0 --sweep-kernel groups
+fi
 set +x
 python3 - "$R" <<'PY' | tee "$R/table.txt" || true
 import json, sys, collections
 r = sys.argv[1]
 t = collections.defaultdict(list)
-for name in ("bench1", "bench2", "bench512cpu"):
+for name in ("bench1", "bench2", "bench512cpu", "bench3"):
     try:
         lines = open(f"{r}/{name}.txt").read().splitlines()
     except OSError:

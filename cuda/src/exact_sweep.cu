@@ -348,7 +348,7 @@ Status launchGroups(const ExactSweepArgs& a, cudaStream_t stream) {
   return {};
 }
 
-// ─── Persistent sweep (off by default: setPersistentSweeps) ───
+// ─── Persistent sweep (by default for the large tile only: setPersistentSweeps) ───
 // One launch per sweep: each block owns one tile for the whole sweep and walks its plane groups
 // itself, so the per-slot set-up (region walk, offsets) is paid once a sweep, not once a group,
 // and no launch links the groups. Before group g (g > 0) a block waits until its own tile and its
@@ -369,6 +369,11 @@ __device__ __forceinline__ void storeRelease(unsigned* p, unsigned v) {
   asm volatile("st.release.gpu.global.u32 [%0], %1;" ::"l"(p), "r"(v) : "memory");
 }
 
+// Measured on an H200 (bench/RESULTS.md): faster than the group launches for the large tile (512³
+// 5.17 against 5.30 ms a pass), slower for the one-wave tile (256³ 1.24 against 1.03: one block a
+// multiprocessor cannot overlap a group's set-up with the group before, as the group launches'
+// second resident block does). Slower still there: loading a group's old values during the group
+// before (1.26) and 32 × 8 tiles, two blocks a multiprocessor (1.33 with 6 planes, 1.53 with 4).
 template <class S, CostKernel Cost>
 __global__ void __launch_bounds__(S::T, S::MinBlocks) sweepPersistent(GroupArgs p, unsigned* progress) {
   static_assert(S::K <= S::TU && S::K <= S::TV, "a group's halo reaches only the 8 neighbouring tiles");
@@ -407,6 +412,22 @@ __global__ void __launch_bounds__(S::T, S::MinBlocks) sweepPersistent(GroupArgs 
   }
   const int myTile = int(blockIdx.y) * int(gridDim.x) + int(blockIdx.x);
 
+  // Old values and densities of the group starting at plane `first` (never written during the
+  // sweep; nothing past the last plane).
+  auto loadGroup = [&](int first, float (&oldD)[K][Slots], std::uint8_t (&q)[K][Slots]) {
+    const int steps = min(K, p.na - first);
+#pragma unroll
+    for (int s = 1; s <= K; ++s) {
+      const std::size_t plane = s <= steps ? planeOffset(first + s - 1) : 0;
+#pragma unroll
+      for (int k = 0; k < Slots; ++k) {
+        const bool used = s <= steps && s <= S::lastPlaneOfSlot(k) && s <= lastFull[k];
+        oldD[s - 1][k] = used ? __ldcg(p.src + plane + g[k]) : kInf;
+        q[s - 1][k] = used ? __ldg(p.q + plane + g[k]) : 0;
+      }
+    }
+  };
+
   int lowered = 0;
   unsigned group = 0;
   for (int first = 0; first < p.na; first += K, ++group) {
@@ -415,21 +436,11 @@ __global__ void __launch_bounds__(S::T, S::MinBlocks) sweepPersistent(GroupArgs 
 #pragma unroll
     for (int k = 0; k < Slots; ++k) last[k] = min(steps, lastFull[k]);
     auto active = [&](int k, int s) { return s <= S::lastPlaneOfSlot(k) && s <= last[k]; };
-    // Old values and densities of the group (never written during the sweep): in flight while
-    // this block waits for its neighbours.
-    // All loads issued before the first store into shared memory (a store waits for its load).
+    // The group's loads, in flight while this block waits for its neighbours; all issued before
+    // the first store into shared memory (a store waits for its load).
     float oldD[K][Slots];
     std::uint8_t q[K][Slots];
-#pragma unroll
-    for (int s = 1; s <= K; ++s) {
-      const std::size_t plane = s <= steps ? planeOffset(first + s - 1) : 0;
-#pragma unroll
-      for (int k = 0; k < Slots; ++k) {
-        const bool used = active(k, s);
-        oldD[s - 1][k] = used ? __ldcg(p.src + plane + g[k]) : kInf;
-        q[s - 1][k] = used ? __ldg(p.q + plane + g[k]) : 0;
-      }
-    }
+    loadGroup(first, oldD, q);
 #pragma unroll
     for (int s = 1; s <= K; ++s) {
 #pragma unroll
@@ -531,6 +542,7 @@ Status launchPersistent(const ExactSweepArgs& a, cudaStream_t stream, bool* laun
   if ((long long)grid.x * grid.y > (long long)multiprocessors * perMultiprocessor ||
       (long long)grid.x * grid.y > (long long)kSweepProgressCounters)
     return {};
+  if (a.zeroProgress) AT_TRY(a.zeroProgress());
   GroupArgs p{a.src, a.dst, a.density, a.nu, a.nv, a.na, a.strideV, a.strideA, a.direction, 0, a.lengths,
               a.baseCost, a.lowered};
   cudaLaunchConfig_t config{};
@@ -605,11 +617,14 @@ Status launchExactSweep(const ExactSweepArgs& a, cudaStream_t stream) {
   }();
   return launchForRule(a.rule, a.weight, [&]<CostKernel Cost>() -> Status {
     if (wide) return launchGroups<Shape, Cost, true, false>(a, stream);
-    // One persistent launch a sweep (asked for by a.progress) where its blocks fit the GPU at once.
-    if (a.progress) {
+    // One persistent launch a sweep (a.persistent) where its blocks fit the GPU at once.
+    if (a.progress && a.persistent != PersistentTiles::None) {
       bool launched = false;
-      if (oneWave) AT_TRY((launchPersistent<OneWaveShape, Cost>(a, stream, &launched)));
-      else if (largeTileAllowed) AT_TRY((launchPersistent<LargeShape, Cost>(a, stream, &launched)));
+      if (oneWave && a.persistent == PersistentTiles::All) {
+        AT_TRY((launchPersistent<OneWaveShape, Cost>(a, stream, &launched)));
+      } else if (!oneWave && largeTileAllowed) {
+        AT_TRY((launchPersistent<LargeShape, Cost>(a, stream, &launched)));
+      }
       if (launched) {
         if (a.persistentLaunches) ++*a.persistentLaunches;
         return {};

@@ -96,15 +96,23 @@ Status validate(const WdtProblem& problem) {
 // (pageable) memory and one chunk overlaps the DMA of the other.
 constexpr std::size_t kStagingBytes = std::size_t(4) << 20;
 
-// setPersistentSweeps: -1 until set (then AT_WDT_CUDA_PERSISTENT=1 decides), else 0 or 1.
-std::atomic<int> gPersistentSweeps{-1};
+// setPersistentSweeps: Auto until set (then AT_WDT_CUDA_PERSISTENT decides: 1 on, 0 off).
+std::atomic<int> gPersistentSweeps{int(PersistentSweeps::Auto)};
 std::atomic<long long> gPersistentSweepsCaptured{0};
 
-bool persistentSweepsOn() {
-  const int set = gPersistentSweeps.load();
-  if (set >= 0) return set == 1;
-  const char* v = std::getenv("AT_WDT_CUDA_PERSISTENT");
-  return v && std::string(v) == "1";
+PersistentTiles persistentTiles() {
+  auto mode = PersistentSweeps(gPersistentSweeps.load());
+  if (mode == PersistentSweeps::Auto) {
+    const char* v = std::getenv("AT_WDT_CUDA_PERSISTENT");
+    if (v && std::string(v) == "1") mode = PersistentSweeps::On;
+    if (v && std::string(v) == "0") mode = PersistentSweeps::Off;
+  }
+  switch (mode) {
+    case PersistentSweeps::On: return PersistentTiles::All;
+    case PersistentSweeps::Off: return PersistentTiles::None;
+    case PersistentSweeps::Auto: break;
+  }
+  return PersistentTiles::Large;
 }
 
 // What one captured pass depends on besides the workspace's buffers.
@@ -113,7 +121,7 @@ struct PassKey {
   float baseCost = 0;
   StepRule rule = StepRule::Entering;
   WeightRule weight = WeightRule::Density;
-  bool persistent = false;  // the sweeps as persistent launches (setPersistentSweeps)
+  PersistentTiles persistent = PersistentTiles::None;  // persistent sweeps (setPersistentSweeps)
   bool operator==(const PassKey& o) const {
     return spacing[0] == o.spacing[0] && spacing[1] == o.spacing[1] && spacing[2] == o.spacing[2] &&
            baseCost == o.baseCost && rule == o.rule && weight == o.weight && persistent == o.persistent;
@@ -281,7 +289,7 @@ Status preparePass(Workspace& w, const Geometry& grid, const WdtParams& params) 
   key.baseCost = params.baseCost;
   key.rule = params.rule;
   key.weight = params.weight;
-  key.persistent = persistentSweepsOn();
+  key.persistent = persistentTiles();
   if (w.passKey && *w.passKey == key) return {};
   w.passKey.reset();
 
@@ -293,14 +301,20 @@ Status preparePass(Workspace& w, const Geometry& grid, const WdtParams& params) 
     e.weight = key.weight;
     e.lowered = w.lowered.get();
     e.persistentLaunches = &persistentLaunches;
-    // Persistent sweeps: each sweep its own tile progress counters, zeroed once a pass.
-    if (key.persistent) {
-      AT_TRY(check(cudaMemsetAsync(w.progress.get(), 0, w.progress.size() * sizeof(unsigned), st),
-                   "cudaMemsetAsync(sweep progress counters)"));
-    }
+    // Persistent sweeps: each sweep its own tile progress counters, all zeroed once a pass, before
+    // the pass's first persistent launch (none on a pass without one).
+    e.persistent = key.persistent;
+    bool zeroed = false;
+    e.zeroProgress = [&]() -> Status {
+      if (zeroed) return {};
+      zeroed = true;
+      return check(cudaMemsetAsync(w.progress.get(), 0, w.progress.size() * sizeof(unsigned), st),
+                   "cudaMemsetAsync(sweep progress counters)");
+    };
     int sweep = 0;
     auto counters = [&]() -> unsigned* {
-      return key.persistent ? w.progress.get() + std::size_t(sweep++) * kSweepProgressCounters : nullptr;
+      return key.persistent != PersistentTiles::None ? w.progress.get() + std::size_t(sweep++) * kSweepProgressCounters
+                                                     : nullptr;
     };
     const float sx = key.spacing[0], sy = key.spacing[1], sz = key.spacing[2];
     const std::size_t nxy = std::size_t(d.x) * d.y;
@@ -485,7 +499,7 @@ double deviceMemoryUsedMiB() {
 }
 
 void setConvergeSweepsBeforeBricks(int passes) { gSweepsBeforeBricks = passes < 0 ? -1 : passes; }
-void setPersistentSweeps(bool on) { gPersistentSweeps = on ? 1 : 0; }
+void setPersistentSweeps(PersistentSweeps mode) { gPersistentSweeps = int(mode); }
 long long persistentSweepsCaptured() { return gPersistentSweepsCaptured.load(); }
 
 Result<DeviceField> makeDeviceField(const Geometry& grid, float fill) {

@@ -7,6 +7,7 @@
 #include <doctest/doctest.h>
 
 #include <cstdio>
+#include <cstdlib>
 #include <random>
 #include <vector>
 
@@ -19,11 +20,11 @@ using namespace wdt_cuda_cases;
 
 namespace {
 
-// Turns the persistent sweeps on for one scope, and the default (group launches) back after.
+// Turns the persistent sweeps on for every tile for one scope, and the default back after.
 struct PersistentSweeps {
   PersistentSweeps() { at::cuda::setPersistentSweeps(true); }
   ~PersistentSweeps() {
-    at::cuda::setPersistentSweeps(false);
+    at::cuda::setPersistentSweeps(at::cuda::PersistentSweeps::Auto);
     at::cuda::setConvergeSweepsBeforeBricks(-1);
   }
 };
@@ -96,4 +97,24 @@ TEST_CASE("persistent sweeps: converged fields equal the exact reference bit for
       for (int run = 0; run < 2; ++run) CHECK(sameBits(gpuField(p), gpu));
     }
   }
+}
+
+TEST_CASE("persistent sweeps by default: only where the large tile runs, with the CPU's fields bit for bit") {
+  if (!requireDevice()) return;
+  at::cuda::setPersistentSweeps(at::cuda::PersistentSweeps::Auto);
+  std::mt19937_64 rng(at::test::freshSeed("cuda persistent default"));
+  // 64³: 8 default tiles a plane, one wave on any GPU: group launches (unless the environment's
+  // AT_WDT_CUDA_PERSISTENT overrides the default, as in the test runs that set it).
+  const bool overridden = std::getenv("AT_WDT_CUDA_PERSISTENT") != nullptr;
+  long long before = at::cuda::persistentSweepsCaptured();
+  checkFixedPassesMatchCpu(randomProblem(rng, {64, 64, 64}, {0.8, 0.6, 1.5}, StepRule::Entering, WeightRule::Density));
+  if (!overridden) CHECK(at::cuda::persistentSweepsCaptured() - before == 0);
+  // 520 × 300 planes: 323 default tiles, the large tile (90 blocks) on a GPU of fewer
+  // multiprocessors (e.g. an H200's 132), then persistently.
+  before = at::cuda::persistentSweepsCaptured();
+  for (StepRule rule : kRules) {
+    checkFixedPassesMatchCpu(randomProblem(rng, {520, 300, 9}, {0.7, 0.9, 1.6}, rule, WeightRule::Gradient));
+  }
+  std::printf("persistent sweeps by default: %lld sweeps captured as persistent launches at 520 x 300 x 9\n",
+              at::cuda::persistentSweepsCaptured() - before);
 }
