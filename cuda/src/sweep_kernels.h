@@ -46,6 +46,10 @@ struct ExactSweepArgs {
 };
 constexpr int kSweepProgressCounters = 1024;
 Status launchExactSweep(const ExactSweepArgs& args, cudaStream_t stream);
+// The sweep as one persistent launch (persistent_sweep.cu) of the one-wave tile or the large tile,
+// if all its blocks fit the GPU at once; *launched says whether it did (false: the caller launches
+// the plane groups instead).
+Status launchPersistentSweep(const ExactSweepArgs& args, bool oneWaveTile, cudaStream_t stream, bool* launched);
 
 // out[y + ny·(x + nx·z)] = in[x + nx·(y + ny·z)]: swaps the two fastest axes of an nx×ny×nz array.
 template <class T>
