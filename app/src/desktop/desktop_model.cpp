@@ -134,10 +134,10 @@ Status DesktopModel::showDataset(Dataset dataset, const std::string& startStruct
   // render command leaves them out (derived_preset.h), before anything reads the volume; the
   // segment editor grows on the volume as loaded, as `anatomy-tutor segment` does (scan_volumes.h).
   ShownScan shown = leaveOutNonAnatomyForShowing(*next);
-  segment_->stopGrowth();  // it reads the volumes being replaced
   if (expert_ && expertOn()) setExpert(false);
   if (auto st = explore_.setDataset(*next, startStructure, startPreset); !st) return st;
   fields_.reset();  // it refers to the dataset being replaced
+  segment_->stopGrowth();  // it reads the volumes being replaced
   dataset_ = std::move(next);
   gradients_ = render::computeGradientVolume(dataset_->volume);
   ++datasetRevision_;
