@@ -4,6 +4,7 @@
 #include <cuda_runtime.h>
 
 #include <cstdint>
+#include <functional>
 
 #include "core/error.h"
 #include "wdt/stencil.h"
@@ -13,6 +14,10 @@ namespace at::cuda {
 
 // Fills `d` (count floats) with 0 where seeds[i] != 0 and +infinity elsewhere.
 Status launchInitDistances(float* d, const std::uint8_t* seeds, std::size_t count, cudaStream_t stream);
+
+// Tiles whose sweeps may run as one persistent launch: none, the large tile only (the default:
+// faster than its group launches on an H200, bench/RESULTS.md), or every tile.
+enum class PersistentTiles { None, Large, All };
 
 // One sweep: planes of nu × nv lanes (u contiguous, stride 1; v stride strideV), na planes of
 // stride strideA, visited in `direction`. Reads `src` (the field before the sweep) and writes
@@ -30,8 +35,21 @@ struct ExactSweepArgs {
   StepRule rule = StepRule::Entering;
   WeightRule weight = WeightRule::Density;
   unsigned long long* lowered = nullptr;
+  // Which tiles run the sweep as one persistent launch (setPersistentSweeps) where all its blocks
+  // fit the GPU at once; group launches elsewhere. progress: kSweepProgressCounters tile progress
+  // counters (non-null unless persistent is None), zeroed by zeroProgress, which the launcher calls
+  // before a persistent launch (the caller makes repeated calls in one pass cheap).
+  PersistentTiles persistent = PersistentTiles::None;
+  unsigned* progress = nullptr;
+  std::function<Status()> zeroProgress;
+  int* persistentLaunches = nullptr;  // optional: incremented when the sweep ran as one persistent launch
 };
+constexpr int kSweepProgressCounters = 1024;
 Status launchExactSweep(const ExactSweepArgs& args, cudaStream_t stream);
+// The sweep as one persistent launch (persistent_sweep.cu) of the one-wave tile or the large tile,
+// if all its blocks fit the GPU at once; *launched says whether it did (false: the caller launches
+// the plane groups instead).
+Status launchPersistentSweep(const ExactSweepArgs& args, bool oneWaveTile, cudaStream_t stream, bool* launched);
 
 // out[y + ny·(x + nx·z)] = in[x + nx·(y + ny·z)]: swaps the two fastest axes of an nx×ny×nz array.
 template <class T>

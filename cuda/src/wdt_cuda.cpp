@@ -96,15 +96,35 @@ Status validate(const WdtProblem& problem) {
 // (pageable) memory and one chunk overlaps the DMA of the other.
 constexpr std::size_t kStagingBytes = std::size_t(4) << 20;
 
+// setPersistentSweeps: Auto until set (then AT_WDT_CUDA_PERSISTENT decides: 1 on, 0 off).
+std::atomic<int> gPersistentSweeps{int(PersistentSweeps::Auto)};
+std::atomic<long long> gPersistentSweepsCaptured{0};
+
+PersistentTiles persistentTiles() {
+  auto mode = PersistentSweeps(gPersistentSweeps.load());
+  if (mode == PersistentSweeps::Auto) {
+    const char* v = std::getenv("AT_WDT_CUDA_PERSISTENT");
+    if (v && std::string(v) == "1") mode = PersistentSweeps::On;
+    if (v && std::string(v) == "0") mode = PersistentSweeps::Off;
+  }
+  switch (mode) {
+    case PersistentSweeps::On: return PersistentTiles::All;
+    case PersistentSweeps::Off: return PersistentTiles::None;
+    case PersistentSweeps::Auto: break;
+  }
+  return PersistentTiles::Large;
+}
+
 // What one captured pass depends on besides the workspace's buffers.
 struct PassKey {
   float spacing[3] = {0, 0, 0};
   float baseCost = 0;
   StepRule rule = StepRule::Entering;
   WeightRule weight = WeightRule::Density;
+  PersistentTiles persistent = PersistentTiles::None;  // persistent sweeps (setPersistentSweeps)
   bool operator==(const PassKey& o) const {
     return spacing[0] == o.spacing[0] && spacing[1] == o.spacing[1] && spacing[2] == o.spacing[2] &&
-           baseCost == o.baseCost && rule == o.rule && weight == o.weight;
+           baseCost == o.baseCost && rule == o.rule && weight == o.weight && persistent == o.persistent;
   }
 };
 
@@ -120,6 +140,7 @@ struct Workspace {
   PinnedBuffer<int> flagHost;
   DeviceBuffer<unsigned long long> lowered;  // voxels a pass lowered (sweep kernels add to it)
   PinnedBuffer<unsigned long long> loweredHost;
+  DeviceBuffer<unsigned> progress;  // the persistent sweeps' tile counters, kSweepProgressCounters a sweep
   PinnedBuffer<std::uint8_t> staging[2];
   Event chunkDone[2];
   Event start, end;
@@ -160,6 +181,7 @@ struct Workspace {
     AT_ASSIGN(w->flagHost, PinnedBuffer<int>::allocate(1));
     AT_ASSIGN(w->lowered, DeviceBuffer<unsigned long long>::allocate(1));
     AT_ASSIGN(w->loweredHost, PinnedBuffer<unsigned long long>::allocate(1));
+    AT_ASSIGN(w->progress, DeviceBuffer<unsigned>::allocate(6 * std::size_t(kSweepProgressCounters)));
     for (int i = 0; i < 2; ++i) {
       AT_ASSIGN(w->staging[i], PinnedBuffer<std::uint8_t>::allocate(kStagingBytes));
       AT_ASSIGN(w->chunkDone[i], Event::create(cudaEventDisableTiming));
@@ -267,15 +289,33 @@ Status preparePass(Workspace& w, const Geometry& grid, const WdtParams& params) 
   key.baseCost = params.baseCost;
   key.rule = params.rule;
   key.weight = params.weight;
+  key.persistent = persistentTiles();
   if (w.passKey && *w.passKey == key) return {};
   w.passKey.reset();
 
+  int persistentLaunches = 0;  // sweeps of the pass captured as persistent launches
   auto enqueuePass = [&](cudaStream_t st) -> Status {
     ExactSweepArgs e;
     e.baseCost = key.baseCost;
     e.rule = key.rule;
     e.weight = key.weight;
     e.lowered = w.lowered.get();
+    e.persistentLaunches = &persistentLaunches;
+    // Persistent sweeps: each sweep its own tile progress counters, all zeroed once a pass, before
+    // the pass's first persistent launch (none on a pass without one).
+    e.persistent = key.persistent;
+    bool zeroed = false;
+    e.zeroProgress = [&]() -> Status {
+      if (zeroed) return {};
+      zeroed = true;
+      return check(cudaMemsetAsync(w.progress.get(), 0, w.progress.size() * sizeof(unsigned), st),
+                   "cudaMemsetAsync(sweep progress counters)");
+    };
+    int sweep = 0;
+    auto counters = [&]() -> unsigned* {
+      return key.persistent != PersistentTiles::None ? w.progress.get() + std::size_t(sweep++) * kSweepProgressCounters
+                                                     : nullptr;
+    };
     const float sx = key.spacing[0], sy = key.spacing[1], sz = key.spacing[2];
     const std::size_t nxy = std::size_t(d.x) * d.y;
     float* a = w.a.get();
@@ -286,8 +326,10 @@ Status preparePass(Workspace& w, const Geometry& grid, const WdtParams& params) 
     e.nu = d.y, e.nv = d.z, e.na = d.x, e.strideV = nxy, e.strideA = std::size_t(d.y);
     e.lengths = wdt::axisSweepLengths(0, sx, sy, sz);
     e.src = b, e.dst = a, e.direction = +1;
+    e.progress = counters();
     AT_TRY(launchExactSweep(e, st));
     e.src = a, e.dst = b, e.direction = -1;
+    e.progress = counters();
     AT_TRY(launchExactSweep(e, st));
     AT_TRY(launchTransposeXY(b, a, d.y, d.x, d.z, st));
     // y sweeps: lanes x, z; planes y.  z sweeps: lanes x, y; planes z.
@@ -295,17 +337,22 @@ Status preparePass(Workspace& w, const Geometry& grid, const WdtParams& params) 
     e.nu = d.x, e.nv = d.z, e.na = d.y, e.strideV = nxy, e.strideA = std::size_t(d.x);
     e.lengths = wdt::axisSweepLengths(1, sx, sy, sz);
     e.src = a, e.dst = b, e.direction = +1;
+    e.progress = counters();
     AT_TRY(launchExactSweep(e, st));
     e.src = b, e.dst = a, e.direction = -1;
+    e.progress = counters();
     AT_TRY(launchExactSweep(e, st));
     e.nu = d.x, e.nv = d.y, e.na = d.z, e.strideV = std::size_t(d.x), e.strideA = nxy;
     e.lengths = wdt::axisSweepLengths(2, sx, sy, sz);
     e.src = a, e.dst = b, e.direction = +1;
+    e.progress = counters();
     AT_TRY(launchExactSweep(e, st));
     e.src = b, e.dst = a, e.direction = -1;
+    e.progress = counters();
     return launchExactSweep(e, st);
   };
   AT_ASSIGN(w.pass, GraphExec::capture(w.stream, enqueuePass));
+  gPersistentSweepsCaptured += persistentLaunches;
   w.passKey = key;
   return {};
 }
@@ -452,6 +499,8 @@ double deviceMemoryUsedMiB() {
 }
 
 void setConvergeSweepsBeforeBricks(int passes) { gSweepsBeforeBricks = passes < 0 ? -1 : passes; }
+void setPersistentSweeps(PersistentSweeps mode) { gPersistentSweeps = int(mode); }
+long long persistentSweepsCaptured() { return gPersistentSweepsCaptured.load(); }
 
 Result<DeviceField> makeDeviceField(const Geometry& grid, float fill) {
   if (!queryDevice().available) return fail("CUDA device field: " + queryDevice().reason);

@@ -262,7 +262,7 @@ void checkFadesAndSlides(const Scan& scan, const std::vector<Case>& cases) {
         draw(*gl, scan, s->label, viewOf(scan, s->label, derivedPreset(scan.levels, RenderMode::Bare, s->id), c.view), 0);
     const double change = meanGreyChange(at0, at1), drawn = drawnShare(at0), context = meanGreyChange(bare, at1);
     MESSAGE(structureId << ": t 0→1 changes " << change << " grey levels (the context at t = 1 adds " << context
-                        << "); " << 100 * drawn << " % drawn at t = 0" << (v.scale.cappedByRays ? " (unit capped by the view's rays)" : ""));
+                        << "); " << 100 * drawn << " % drawn at t = 0" << std::string(v.scale.cappedByRays ? " (unit capped by the view's rays)" : ""));
     CHECK(change >= c.minChange);
     if (c.fadesInView) CHECK(drawn < 0.70);
     // AT_TEST_PNG_DIR=DIR: the measured images as DIR/STRUCTURE_VIEW_t0.png and _t1.png, to look at.

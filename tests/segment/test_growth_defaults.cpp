@@ -7,9 +7,9 @@
 //   names) — and in the background; every bone's grown label is ≥ 85 % bone voxels.
 //   Abdominal CT (TotalSegmentator, 3 mm): ≤ 5 seeds per organ; Dice for liver, spleen and both
 //   kidneys against the reference.
-// The issue's targets: 85 % bone is met at these defaults after three rounds of background dabs on
-// what the labels spilled onto (and in one growth with the "bone only" range limit); Dice 0.85 is
-// NOT met for liver and right kidney. The abdominal test holds measured floors and prints the table.
+// The issue's targets: 85 % bone is met at these defaults after rounds of background dabs on what
+// the labels spilled onto (and in one growth with the "bone only" range limit); Dice 0.85 is met for
+// the spleen and the left kidney (asserted) and NOT for the liver and the right kidney (floors).
 #include <doctest/doctest.h>
 
 #include <cstdio>
@@ -192,14 +192,15 @@ TEST_CASE("Grow at defaults on a uCT-like volume: bone labels are mostly bone, n
   CHECK(mean >= mean0 - 0.05);
 }
 
-// The issue's target is Dice >= 0.85 for each organ; measured at these defaults (edge-preserving
-// smoothing, base 0.1× the step noise) the organs reach 0.79 (liver), 0.88 (spleen), 0.94 (left
-// kidney), 0.84 (right kidney) (bench/RESULTS.md), so the test holds each to >= 0.75 and their mean
-// to at least the fixed base's (0.05 per mm: 0.48, 0.72, 0.67, 0.72) + 0.10: a floor, not the target.
-// Where the liver's missing voxels go: mostly to the background clicks in the portal vein and the
-// inferior vena cava, which this non-contrast CT shows as liver (36 … 37 HU against 45, noise sigma
-// 25 HU); the right kidney misses its renal sinus fat, which the reference counts as kidney
-// (bench/RESULTS.md, "what the labels take").
+// The issue's target is Dice >= 0.85 for each organ. At these defaults (edge-preserving smoothing,
+// base 0.1× the step noise) the spleen (0.88) and the left kidney (0.94) meet it and are held to
+// it; the liver (0.79) and the right kidney (0.84) do not (bench/RESULTS.md, "what the labels
+// take"), so they are held to >= 0.75, and the organs' mean to at least the fixed base's (0.05 per
+// mm: 0.48, 0.72, 0.67, 0.72) + 0.10: floors, not the target. Where the liver's missing voxels go:
+// mostly to the background clicks in the portal vein and the inferior vena cava, which this
+// non-contrast CT shows as liver (36 … 37 HU against 45, noise sigma 25 HU), and to lattice clicks
+// in the diaphragm and chest wall beside it (43 … 51 HU); the right kidney misses its renal sinus
+// fat, which the reference counts as kidney. The growth is deterministic (no random draw).
 TEST_CASE("Grow at defaults on the abdominal CT: liver, spleen and kidneys from <= 5 seeds each") {
   const std::filesystem::path root = test::sharedDataDir() / "totalsegmentator";
   if (!std::filesystem::exists(root / "ct_small.nii.gz")) {
@@ -244,7 +245,7 @@ TEST_CASE("Grow at defaults on the abdominal CT: liver, spleen and kidneys from 
     const double d = test::dice(now, l, ds->labels, l), d0 = test::dice(before, l, ds->labels, l);
     std::printf("  %-14s Dice %.3f at the defaults, %.3f with base 0.05/mm\n", organ.c_str(), d, d0);
     CAPTURE(organ);
-    CHECK(d >= 0.75);
+    CHECK(d >= (organ == "spleen" || organ == "kidney_left" ? 0.85 : 0.75));
     mean += d / double(organs.size());
     mean0 += d0 / double(organs.size());
   }

@@ -299,3 +299,50 @@ TEST_CASE("Growth errors: no seed, a seed off the grid, two labels on one voxel,
   p.windowMax = 5;
   CHECK(!LabelGrowth::create(v, p));
 }
+
+// A seed edit costs the region it changes: removing or relabelling seeds resets only the voxels
+// that grew from them (on the CPU), not every voxel of their labels, and the result still equals
+// the exact growth of the new seeds. Many small seeds of few labels, as a labelling of painted
+// dabs; one random seed removed and one relabelled per step.
+TEST_CASE("Removing or relabelling a seed resets only what grew from it, and equals the exact growth") {
+  std::mt19937_64 rng(test::freshSeed("growth local reset"));
+  const Dims dims{48, 40, 36};
+  const Volume volume = randomVolume(rng, dims);
+  GrowthParams params = randomParams(rng);
+  CAPTURE(toString(params.weight));
+  // 60 one-voxel seeds of 3 labels at distinct voxels.
+  std::vector<GrowthSeed> seeds;
+  std::set<std::size_t> taken;
+  std::uniform_int_distribution<std::size_t> voxel(0, dims.count() - 1);
+  const std::uint16_t labels[3] = {0, 7, 12};
+  while (seeds.size() < 60) {
+    const std::size_t v = voxel(rng);
+    if (taken.insert(v).second) seeds.push_back({v, labels[seeds.size() % 3]});
+  }
+  auto growth = LabelGrowth::create(volume, params);
+  REQUIRE(growth);
+  REQUIRE(growth->update(seeds));
+  for (int step = 0; step < 6; ++step) {
+    CAPTURE(step);
+    std::vector<GrowthSeed> next = seeds;
+    std::uniform_int_distribution<std::size_t> pick(0, next.size() - 1);
+    const std::size_t relabelled = pick(rng);
+    const std::uint16_t oldLabel = next[relabelled].label;
+    next[relabelled].label = labels[(std::find(labels, labels + 3, oldLabel) - labels + 1) % 3];
+    std::size_t removed = pick(rng);
+    if (removed == relabelled) removed = (removed + 1) % next.size();
+    const std::uint16_t removedLabel = next[removed].label;
+    next.erase(next.begin() + std::ptrdiff_t(removed));
+    // The voxels a label-wide reset would take: every voxel of the two edited labels.
+    std::size_t ofEditedLabels = 0;
+    for (std::uint16_t l : growth->labels().voxels) ofEditedLabels += l == oldLabel || l == removedLabel;
+    auto stats = growth->update(next);
+    REQUIRE(stats);
+    CHECK(stats->converged);
+    CHECK(stats->voxelsReset >= 2);  // the edited seeds' own voxels at least
+    CHECK(stats->voxelsReset < ofEditedLabels);
+    MESSAGE("reset " << stats->voxelsReset << " voxels of " << ofEditedLabels << " in the edited labels");
+    requireEqualToExact(*growth, volume, next, params);
+    seeds = next;
+  }
+}

@@ -126,6 +126,7 @@ struct LabelGrowth::State {
   LabelMap labels;
   std::vector<GrowthSeed> seeds;  // of the last update, sorted by voxel
   bool started = false;
+  bool converged = false;         // the last update reached the fixed point (not cancelled)
   std::string warning;            // why auto fell back to the CPU; reported by the first update
 };
 
@@ -181,6 +182,7 @@ Result<GrowthStats> LabelGrowth::update(const std::vector<GrowthSeed>& seedsIn, 
     // Merge walk over both sorted lists: a voxel seeded before and not now (or with another label
     // now) resets its old label; a voxel seeded now and not before (or relabelled) is written.
     std::set<std::uint16_t> reset;
+    std::vector<GrowthSeed> removed;
     std::vector<char> written(seeds->size(), 0);
     const std::vector<GrowthSeed>& before = s.seeds;
     std::size_t i = 0, j = 0;
@@ -188,6 +190,7 @@ Result<GrowthStats> LabelGrowth::update(const std::vector<GrowthSeed>& seedsIn, 
       const bool takeOld = j == seeds->size() || (i < before.size() && before[i].index < (*seeds)[j].index);
       const bool takeNew = i == before.size() || (j < seeds->size() && (*seeds)[j].index < before[i].index);
       if (takeOld) {
+        removed.push_back(before[i]);
         reset.insert(before[i++].label);
         ++stats.seedsRemoved;
       } else if (takeNew) {
@@ -195,6 +198,7 @@ Result<GrowthStats> LabelGrowth::update(const std::vector<GrowthSeed>& seedsIn, 
         ++stats.seedsAdded;
       } else {
         if (before[i].label != (*seeds)[j].label) {
+          removed.push_back(before[i]);
           reset.insert(before[i].label);
           written[j] = 1;
           ++stats.seedsRemoved;
@@ -203,14 +207,24 @@ Result<GrowthStats> LabelGrowth::update(const std::vector<GrowthSeed>& seedsIn, 
         ++i, ++j;
       }
     }
-    change.resetLabels.assign(reset.begin(), reset.end());
-    // The reset takes every voxel of those labels, seeds included: the kept ones are written again.
-    for (std::size_t k = 0; k < seeds->size(); ++k)
-      if (written[k] || reset.count((*seeds)[k].label)) change.writeSeeds.push_back((*seeds)[k]);
+    if (s.engine->resetsGrownFromRemovedSeeds() && s.converged) {
+      // Only what grew from the removed seeds is reset: the kept seeds keep their pairs. (That
+      // needs the fixed point, where every voxel's pair comes from a neighbour's: after a cancelled
+      // update the labels' voxels are reset.)
+      change.removedSeeds = std::move(removed);
+      for (std::size_t k = 0; k < seeds->size(); ++k)
+        if (written[k]) change.writeSeeds.push_back((*seeds)[k]);
+    } else {
+      change.resetLabels.assign(reset.begin(), reset.end());
+      // The reset takes every voxel of those labels, seeds included: the kept ones are written again.
+      for (std::size_t k = 0; k < seeds->size(); ++k)
+        if (written[k] || reset.count((*seeds)[k].label)) change.writeSeeds.push_back((*seeds)[k]);
+    }
   }
   if (auto ok = s.engine->apply(change, control, stats); !ok) return tl::unexpected(ok.error());
   s.seeds = std::move(*seeds);
   s.started = true;
+  s.converged = stats.converged;
   if (auto ok = s.engine->readLabels(s.labels); !ok) return tl::unexpected(ok.error());
   if (!s.warning.empty()) stats.warning = std::exchange(s.warning, std::string());
   stats.msTotal = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();

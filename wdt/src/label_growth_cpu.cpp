@@ -365,7 +365,7 @@ class CpuGrowthEngine final : public GrowthEngine {
     stats.device = "CPU (" + std::to_string(threads) + (threads == 1 ? " thread)" : " threads)");
     if (keys_.empty()) wdt::resizeOnHugePages(keys_, p_.grid.dims.count());
     std::vector<std::pair<int, Dist>> touched;
-    stats.voxelsReset = resetVoxels(change, threads, touched);
+    stats.voxelsReset = resetVoxels(change, threads, touched) + resetGrownFrom(change.removedSeeds, touched);
     for (const GrowthSeed& s : change.writeSeeds) {
       storeKey(&keys_[s.index], wdt::packGrowthKey(0, s.label));
       queueBricksHolding(s.index, touched);
@@ -377,6 +377,8 @@ class CpuGrowthEngine final : public GrowthEngine {
     stats.msCompute = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
     return {};
   }
+
+  bool resetsGrownFromRemovedSeeds() const override { return true; }
 
   Status readLabels(LabelMap& out) override {
     out = LabelMap(p_.grid, 0);
@@ -460,6 +462,66 @@ class CpuGrowthEngine final : public GrowthEngine {
     for (std::size_t b = 0; b < brickCount_; ++b)
       if (hit[b]) touched.push_back({int(b), 0});
     return count;
+  }
+
+  // Resets (+infinity, no label) every voxel whose pair came from a removed seed, found on the old
+  // pairs before any is reset: the removed seeds' voxels, then each neighbour v of a found voxel u
+  // with u's label and D(v) = D(u) + cost(u → v) (a shortest path through u reaches v; sums are
+  // exact, so the test is too). A voxel that another path reaches as cheaply is reset as well and
+  // regrown to the same pair. Every voxel not found keeps a pair that a chain of steps from a kept
+  // seed still gives, so regrowing the found ones from their surroundings (their bricks are queued)
+  // ends at the new seeds' fixed point: an edit costs the region it changes.
+  std::size_t resetGrownFrom(const std::vector<GrowthSeed>& removed, std::vector<std::pair<int, Dist>>& touched) {
+    if (removed.empty() || keys_.empty()) return 0;
+    const Dims d = p_.grid.dims;
+    struct Step {
+      int dx, dy, dz;
+      std::int64_t delta;
+      float len;
+    };
+    std::vector<Step> steps;
+    for (int dz = -1; dz <= 1; ++dz)
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dx = -1; dx <= 1; ++dx)
+          if (dx || dy || dz)
+            steps.push_back({dx, dy, dz, dx + std::int64_t(d.x) * (dy + std::int64_t(d.y) * dz),
+                             wdt::stepLength(dx, dy, dz, spacing_[0], spacing_[1], spacing_[2])});
+    std::vector<std::uint8_t> found(d.count(), 0);
+    std::vector<std::size_t> list;
+    for (const GrowthSeed& s : removed)
+      if (!found[s.index]) found[s.index] = 1, list.push_back(s.index);
+    wdt::withCostKernel(p_.kernel, [&]<CostKernel K>() {
+      for (std::size_t head = 0; head < list.size(); ++head) {
+        const std::size_t u = list[head];
+        const std::uint64_t ku = keys_[u];
+        const Dist du = wdt::growthKeyDistance(ku);
+        const std::int32_t lu = wdt::growthKeyLabel(ku);
+        if (du == kInf || lu == wdt::kNoLabel) continue;
+        const float fu = densityOf(p_, u);
+        const int x = int(u % std::size_t(d.x)), y = int(u / std::size_t(d.x) % std::size_t(d.y)),
+                  z = int(u / (std::size_t(d.x) * std::size_t(d.y)));
+        for (const Step& st : steps) {
+          if (!d.contains(x + st.dx, y + st.dy, z + st.dz)) continue;
+          const std::size_t v = std::size_t(std::int64_t(u) + st.delta);
+          if (found[v]) continue;
+          const std::uint64_t kv = keys_[v];
+          if (wdt::growthKeyLabel(kv) != lu) continue;
+          const std::int32_t cost = wdt::growthStepCost<K>(fu, densityOf(p_, v), st.len, p_.baseCost, p_.scale);
+          if (cost == kInf || wdt::addGrowthCost(du, cost) != wdt::growthKeyDistance(kv)) continue;
+          found[v] = 1;
+          list.push_back(v);
+        }
+      }
+    });
+    const std::uint64_t none = wdt::packGrowthKey(kInf, wdt::kNoLabel);
+    std::vector<std::uint8_t> hit(brickCount_, 0);
+    for (std::size_t v : list) {
+      storeKey(&keys_[v], none);
+      hit[std::size_t(brickOf(v))] = 1;
+    }
+    for (std::size_t b = 0; b < brickCount_; ++b)
+      if (hit[b]) touched.push_back({int(b), 0});
+    return list.size();
   }
 
   // Visits until no brick is queued or the run is cancelled (queued bricks then stay queued).

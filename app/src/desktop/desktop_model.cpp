@@ -8,7 +8,6 @@
 #include "core/strings.h"
 #include "course_views.h"
 #include "dataset_resolver.h"
-#include "shown_dataset.h"
 #include "db/dataset_store.h"
 #include "volume/known_scans.h"
 #include "render/derived_preset.h"
@@ -132,11 +131,13 @@ Status DesktopModel::open() {
 Status DesktopModel::showDataset(Dataset dataset, const std::string& startStructure, const std::string& startPreset) {
   auto next = std::make_unique<Dataset>(std::move(dataset));
   // The CT table, headrest and other objects outside the body are no context: left out here as the
-  // render command leaves them out (derived_preset.h), before anything reads the volume.
-  prepareForViewing(*next);
+  // render command leaves them out (derived_preset.h), before anything reads the volume; the
+  // segment editor grows on the volume as loaded, as `anatomy-tutor segment` does (scan_volumes.h).
+  ShownScan shown = leaveOutNonAnatomyForShowing(*next);
   if (expert_ && expertOn()) setExpert(false);
   if (auto st = explore_.setDataset(*next, startStructure, startPreset); !st) return st;
   fields_.reset();  // it refers to the dataset being replaced
+  segment_->stopGrowth();  // it reads the volumes being replaced
   dataset_ = std::move(next);
   gradients_ = render::computeGradientVolume(dataset_->volume);
   ++datasetRevision_;
@@ -146,7 +147,8 @@ Status DesktopModel::showDataset(Dataset dataset, const std::string& startStruct
       [this](const std::string& clicked, double distanceMm) { clickGraded(clicked, distanceMm); },
       [this](const std::string& m) { note(m); });
   expert_ = std::make_unique<TfEditor>(*dataset_, session_.database(), sink);
-  segment_->attach(*dataset_);
+  shown_ = std::move(shown);
+  segment_->attach(*dataset_, &shown_.growthVolume(*dataset_));
   editorLabelsRevision_ = segment_->labelsRevision();
   slices_.attach(*dataset_);
   recorder_.highlightNotWanted();

@@ -27,6 +27,7 @@
 #include "course_editor/course_editor.h"
 #include "import/import_controller.h"
 #include "learning_session.h"
+#include "scan_volumes.h"
 #include "lesson_player/lesson_controller.h"
 #include "render/field_scale.h"
 #include "render/gradient_volume.h"
@@ -271,6 +272,7 @@ class DesktopModel {
   std::vector<std::string> messages_;
   std::vector<std::string> notes_;
   std::unique_ptr<Dataset> dataset_;
+  ShownScan shown_;  // dataset_'s volume as loaded, where showing it left out non-anatomy
   // The shown field's distance unit (render/field_scale.h), computed once per field and framed view.
   struct FieldUnit {
     const DistanceField* field = nullptr;

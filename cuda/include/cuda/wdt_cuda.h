@@ -44,6 +44,21 @@ double deviceMemoryUsedMiB();
 // Process-wide, for tests and benchmarks.
 void setConvergeSweepsBeforeBricks(int passes);
 
+// The sweep kernel of a pass: ceil(planes / K) group launches, or one persistent launch a sweep
+// whose tiles walk the plane groups themselves, each waiting on its 8 neighbouring tiles' progress
+// counters (cooperative launch: used only where every block of the sweep fits the GPU at once,
+// e.g. up to 512³ on an H200; group launches elsewhere). The same field bit for bit either way.
+// On: persistent wherever it fits; Off: group launches only; Auto (the default): persistent for
+// the large tile only (planes whose default tiles need more than one wave, e.g. 512³ on an H200),
+// where it was measured faster (bench/RESULTS.md). Process-wide, for tests and benchmarks; while
+// Auto, the environment's AT_WDT_CUDA_PERSISTENT=1 or 0 means On or Off.
+enum class PersistentSweeps { Auto = -1, Off = 0, On = 1 };
+void setPersistentSweeps(PersistentSweeps mode);
+inline void setPersistentSweeps(bool on) { setPersistentSweeps(on ? PersistentSweeps::On : PersistentSweeps::Off); }
+// Sweeps captured as persistent launches since the process started (a pass is captured once per
+// grid size and parameters, then replayed): whether the persistent kernel ran.
+long long persistentSweepsCaptured();
+
 // Computes the field on the GPU and copies it back. Errors carry the failing CUDA call's name and
 // message; the caller (computeWdt with backend auto) then falls back to the CPU.
 Result<WdtResult> runCudaBackend(const WdtProblem& problem, const WdtControl& control);

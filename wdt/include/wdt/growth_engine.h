@@ -49,9 +49,14 @@ inline float densityOf(const GrowthProblem& p, std::size_t v) {
 // One update's change of the seeds, worked out by the front end. Applied in this order: every
 // voxel whose label is in `resetLabels` goes back to (+infinity, kNoLabel); then every seed of
 // `writeSeeds` is set to (0, label). The bricks holding a voxel either step changed are queued.
+// An engine whose resetsGrownFromRemovedSeeds() is true gets `removedSeeds` instead of
+// `resetLabels` (then empty): it resets only the voxels whose pair came from those seeds (the
+// seeds themselves and the voxels a shortest path from them reaches), before writing `writeSeeds`
+// (then only the new and relabelled seeds).
 struct GrowthChange {
   std::vector<std::uint16_t> resetLabels;  // sorted, unique
   std::vector<GrowthSeed> writeSeeds;      // new and relabelled seeds, and the kept seeds of reset labels
+  std::vector<GrowthSeed> removedSeeds;    // seeds removed or relabelled, with their old labels
   bool fromScratch = false;                // the state is fresh: every voxel starts at +infinity
 };
 
@@ -63,6 +68,9 @@ class GrowthEngine {
   // call). Fills stats' backend, device, voxelsReset, brickVisits, rounds (GPU), converged,
   // cancelled and msCompute.
   virtual Status apply(const GrowthChange& change, const WdtControl& control, GrowthStats& stats) = 0;
+  // Whether the engine takes GrowthChange::removedSeeds (a seed edit then costs what it changes,
+  // not a regrowth of every voxel of the edited labels).
+  virtual bool resetsGrownFromRemovedSeeds() const { return false; }
   // Copies the labels (kNoLabel as 0) or the distances (fixed point / scale; +infinity where no seed
   // reached) of every voxel out.
   virtual Status readLabels(LabelMap& out) = 0;

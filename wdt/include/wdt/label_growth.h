@@ -22,8 +22,9 @@
 //
 // Interactive use: a LabelGrowth keeps its state between updates. When seeds are added, only the
 // region the new seeds win is recomputed; when seeds are removed (or change label), the voxels
-// holding their labels are reset and regrown from their surroundings. Work follows the changing
-// front in bricks of 16³ voxels on both backends.
+// that grew from them (on the CPU: the voxels a shortest path from them reaches; on the GPU, and
+// after a cancelled update: every voxel of their labels) are reset and regrown from their
+// surroundings. Work follows the changing front in bricks of 16³ voxels on both backends.
 #pragma once
 
 #include <cstddef>

@@ -41,10 +41,11 @@ SegmentController::SegmentController(db::Database& database, EventSink events)
 
 SegmentController::~SegmentController() { stopGrowth(); }
 
-void SegmentController::attach(const Dataset& dataset) {
+void SegmentController::attach(const Dataset& dataset, const Volume* grown) {
   stopGrowth();  // it grows the editor and volume being replaced
   growError_.reset();
   dataset_ = &dataset;
+  grown_ = grown ? grown : &dataset.volume;
   const LabelMap start = dataset.labels.empty() ? LabelMap(dataset.volume.geometry, 0) : dataset.labels;
   editor_ = std::make_unique<segment::LabelEditor>(start, dataset.structures);
   seeds_.clear();
@@ -55,7 +56,7 @@ void SegmentController::attach(const Dataset& dataset) {
   grey_.reset(dataset.intensity);
   status_.clear();
   grownOnce_ = false;
-  defaults_ = segment::defaultGrowthSettings(dataset.volume, dataset.intensity);
+  defaults_ = segment::defaultGrowthSettings(*grown_, dataset.intensity);
   settings_ = {segment::basePerVoxelOf(defaults_.params.baseCost, defaults_.voxelMm), defaults_.windowValues,
                defaults_.params.smoothingVoxels, false, defaults_.boneRangeValues};
   ++revision_;
@@ -216,7 +217,7 @@ Result<std::size_t> SegmentController::paintSeeds(const std::array<int, 3>& voxe
                 std::to_string(voxel[2]) + ") is outside the volume (" + d.toString() + ")");
   const double r = std::max(0.0, brushMm);
   if (seedRange) {
-    auto region = segment::localThresholdRegion(dataset_->volume, dataset_->intensity, voxel, r, (*seedRange)[0],
+    auto region = segment::localThresholdRegion(*grown_, dataset_->intensity, voxel, r, (*seedRange)[0],
                                                 (*seedRange)[1]);
     if (!region) return fail("segment editor: seeds in range: " + region.error().message);
     for (std::size_t v : *region) seeds_[v] = current_;
@@ -282,7 +283,7 @@ Status SegmentController::startGrowth() {
   job->start = std::chrono::steady_clock::now();
   GrowJob* j = job.get();
   segment::LabelEditor* editor = editor_.get();
-  const Volume* volume = &dataset_->volume;
+  const Volume* volume = grown_;
   job->thread = std::jthread([j, editor, volume, seeds = std::move(seeds), params, ranges = std::move(ranges)] {
     WdtControl control;
     control.cancel = &j->cancel;

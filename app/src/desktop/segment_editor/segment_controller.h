@@ -47,8 +47,13 @@ class SegmentController {
 
   // A dataset is on screen: the editor starts over from its labels (seeds and history dropped).
   // `dataset` stays valid until the next attach (the model calls it whenever it shows another).
-  void attach(const Dataset& dataset);
+  // `grown` (optional, valid as long): the volume grow from seeds, its defaults and the threshold
+  // tools read, where the shown one had non-anatomy left out (services/scan_volumes.h: the scan as
+  // loaded, as `anatomy-tutor segment` reads it); null: the dataset's own volume.
+  void attach(const Dataset& dataset, const Volume* grown = nullptr);
   bool attached() const { return dataset_ != nullptr; }
+  // Cancels a running growth and waits for it (before the volumes it reads are replaced, closing).
+  void stopGrowth();
   bool windowOpen = false;
 
   // --- Labels: 0 is the background; others are the editor's structures -----------------------
@@ -222,7 +227,6 @@ class SegmentController {
   Status requireDataset() const;
   Result<std::string> stepHistory(bool forward);  // undo (false) or redo (true)
   Status startGrowth();  // with the seeds painted now, on a worker thread
-  void stopGrowth();     // cancels a running growth and waits for it (another dataset, closing)
   Status requireStructureCurrent(const std::string& tool) const;
   // After an edit: the slice is redrawn, the status says what changed, and an event
   // {"event": kind, "tool": tool, "changed": n, "voxels": {structure: count}} is sent.
@@ -232,6 +236,7 @@ class SegmentController {
   db::Database& database_;
   EventSink events_;
   const Dataset* dataset_ = nullptr;  // the dataset being labelled (its volume and intensity)
+  const Volume* grown_ = nullptr;     // what growth and thresholds read (attach), never null once attached
   std::unique_ptr<segment::LabelEditor> editor_;
   std::map<std::size_t, std::uint16_t> seeds_;  // voxel index → label
   // Per-label grow ranges (setLabelGrowRange, or a loaded seeds file's "grow_range"), by editor

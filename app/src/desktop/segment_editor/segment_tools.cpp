@@ -50,7 +50,7 @@ Result<segment::EditSummary> SegmentController::thresholdIsland(const std::array
   segment::ThresholdOptions options;
   options.minDiameterMm = std::max(0.0, minDiameterMm);
   const Vec3 point = g.indexToPatient({double(voxel[0]), double(voxel[1]), double(voxel[2])});
-  auto summary = editor_->thresholdIsland(dataset_->volume, dataset_->intensity, point, low, high, current_, options);
+  auto summary = editor_->thresholdIsland(*grown_, dataset_->intensity, point, low, high, current_, options);
   if (!summary) return summary;
   edited("segment_edited", "threshold", *summary);
   return summary;
