@@ -5,6 +5,8 @@
 #include <limits>
 #include <vector>
 
+#include "render/transfer_function.h"
+
 namespace at::render {
 
 double denseLevel(const Preset& preset) {
@@ -34,7 +36,22 @@ double openLevel(const Preset& preset) {
   return level;
 }
 
-BoneLevels boneLevels(const Preset& preset) { return {denseLevel(preset), openLevel(preset)}; }
+double drawnToX(const Preset& preset) {
+  auto dist = TransferFunction1D::fromPoints(preset.distanceTf);
+  if (!dist || preset.alpha <= 1.0f) return std::numeric_limits<double>::infinity();
+  float peak = 0;
+  for (const TfPoint& p : preset.dataTf) peak = std::max(peak, p.rgba[3]);
+  // x from far to near would need the inverse of f; a scan of x in steps of 0.01 units is cheap.
+  double lastDrawn = -1;
+  for (double x = 0; x <= 40; x += 0.01) {
+    const double k = dist->evaluate(normaliseDistance(float(x), preset.alpha))[3];
+    if (peak * k * k >= kFaintOpacity) lastDrawn = x;
+  }
+  if (lastDrawn < 0) return 0;
+  return lastDrawn >= 39.99 ? std::numeric_limits<double>::infinity() : lastDrawn + 0.01;
+}
+
+BoneLevels boneLevels(const Preset& preset) { return {denseLevel(preset), openLevel(preset), drawnToX(preset)}; }
 
 namespace {
 
@@ -203,6 +220,122 @@ std::vector<float> seenSurfaces(const FloatVolume& field, const Volume& volume, 
   return d;
 }
 
+// The field trilinearly at an index-space position (as the ray caster's texture reads it); +inf
+// outside the grid.
+float fieldAt(const FloatVolume& field, const Vec3& ijk) {
+  const Dims& d = field.geometry.dims;
+  const int n[3] = {d.x, d.y, d.z};
+  int i0[3];
+  double f[3];
+  for (int a = 0; a < 3; ++a) {
+    const double c = std::clamp(ijk[a], 0.0, double(n[a] - 1));
+    i0[a] = std::min(int(c), std::max(0, n[a] - 2));
+    f[a] = n[a] > 1 ? c - i0[a] : 0.0;
+  }
+  double sum = 0;
+  for (int corner = 0; corner < 8; ++corner) {
+    int q[3];
+    double w = 1;
+    for (int a = 0; a < 3; ++a) {
+      const int up = (corner >> a) & 1;
+      q[a] = std::min(i0[a] + up, n[a] - 1);
+      w *= up ? f[a] : 1 - f[a];
+    }
+    if (w == 0) continue;
+    const float v = field.voxels[d.index(q[0], q[1], q[2])];
+    if (!std::isfinite(v)) return std::numeric_limits<float>::infinity();
+    sum += w * v;
+  }
+  return float(sum);
+}
+
+// The nearest bone each ray of the view crosses anywhere inside the volume (the whole ray, not only
+// the reach): a pixel shows context at t = 0 only where its ray crosses bone at a small x. Rays that
+// meet the structure are counted apart (that pixel shows the structure).
+struct RayBone {
+  std::vector<float> nearest;  // the smallest D of a dense voxel on each ray that crosses bone
+  std::size_t rays = 0, structureRays = 0;
+};
+RayBone nearestBoneOnRays(const FloatVolume& field, const Volume& volume, const Mask* body, double denseFrom,
+                          const FieldView& view) {
+  RayBone out;
+  const Geometry& fg = field.geometry;
+  const Geometry& vg = volume.geometry;
+  if (view.width < 1 || view.height < 1) return out;
+  const bool bodyOnGrid = body && body->geometry.dims.count() == vg.dims.count();
+  // One voxel per step: a bone crossing is at least a voxel thick.
+  const double step = std::min({vg.spacingMm[0], vg.spacingMm[1], vg.spacingMm[2]});
+  const double shrink = std::min(1.0, double(kScaleRaysPerSide) / double(std::max(view.width, view.height)));
+  const int w = std::max(1, int(std::lround(view.width * shrink))), h = std::max(1, int(std::lround(view.height * shrink)));
+  const double n[3] = {double(vg.dims.x), double(vg.dims.y), double(vg.dims.z)};
+  for (int py = 0; py < h; ++py)
+    for (int px = 0; px < w; ++px) {
+      ++out.rays;
+      const Ray ray = view.camera.rayThroughPixel(px, py, w, h);
+      const IndexRay rv = indexRay(vg, ray), rf = indexRay(fg, ray);
+      // The ray's segment inside the volume's box (index space, voxel centres −0.5 … n − 0.5).
+      double t0 = 0, t1 = std::numeric_limits<double>::infinity();
+      for (int a = 0; a < 3; ++a) {
+        if (std::fabs(rv.perMm[a]) < 1e-12) {
+          if (rv.origin[a] < -0.5 || rv.origin[a] > n[a] - 0.5) t1 = -1;
+          continue;
+        }
+        double ta = (-0.5 - rv.origin[a]) / rv.perMm[a], tb = (n[a] - 0.5 - rv.origin[a]) / rv.perMm[a];
+        if (ta > tb) std::swap(ta, tb);
+        t0 = std::max(t0, ta);
+        t1 = std::min(t1, tb);
+      }
+      float nearest = std::numeric_limits<float>::infinity();
+      bool structure = false;
+      for (double t = t0 + 0.5 * step; t < t1; t += step) {
+        if (view.clip && !view.clip->keeps(ray.origin + t * ray.direction)) continue;
+        int vi[3], fi[3];
+        if (!voxelOn(rv, t, vg.dims, vi) || !voxelOn(rf, t, fg.dims, fi)) continue;
+        const float D = field.voxels[fg.dims.index(fi[0], fi[1], fi[2])];
+        if (D == 0) {
+          structure = true;
+          break;
+        }
+        const std::size_t idx = vg.dims.index(vi[0], vi[1], vi[2]);
+        if (double(volume.voxels[idx]) < denseFrom) continue;
+        if (bodyOnGrid && body->voxels[idx] == 0) continue;
+        nearest = std::min(nearest, fieldAt(field, rf.origin + t * rf.perMm));
+      }
+      if (structure)
+        ++out.structureRays;
+      else if (std::isfinite(nearest))
+        out.nearest.push_back(nearest);
+    }
+  return out;
+}
+
+// Caps the unit so that at t = 0 at most kMaxDrawnShare of the view's pixels (the structure's
+// included) show context: the rays beyond that share have their nearest bone at x ≥ drawnToX,
+// where the preset draws bone faintly. Only ever shrinks the unit.
+void capByRays(FieldScale& out, RayBone rays, double drawnToX) {
+  out.viewRays = rays.rays;
+  if (rays.rays == 0 || rays.nearest.empty() || !std::isfinite(drawnToX) || drawnToX <= 0) return;
+  out.boneRayShare = double(rays.nearest.size()) / double(rays.rays);
+  std::size_t drawnNow = rays.structureRays;
+  for (float D : rays.nearest) drawnNow += (D - out.distanceOffset) / out.distanceUnit < drawnToX;
+  const double share = double(drawnNow) / double(rays.rays);
+  // Context rays that may stay drawn: the share left after the structure's, but at least
+  // kMinDrawnBoneShare of the rays that cross bone (a structure filling the view keeps some context).
+  const double allowed = std::max(kMaxDrawnShare * double(rays.rays) - double(rays.structureRays),
+                                  kMinDrawnBoneShare * double(rays.nearest.size()));
+  if (share <= kMaxDrawnShare || allowed >= double(rays.nearest.size())) return;
+  const auto kth = rays.nearest.begin() + std::ptrdiff_t(std::max(0.0, std::floor(allowed)));
+  std::nth_element(rays.nearest.begin(), kth, rays.nearest.end());
+  const double D = *kth;
+  out.drawnLimitD = D;
+  if ((D - out.distanceOffset) / out.distanceUnit >= drawnToX) return;  // already faint there
+  // x = D / unit from here: the rays' D follows the anatomy, not the grid (the narrow-spread offset
+  // comes from quantiles of surfaces that a coarser grid samples differently).
+  out.distanceOffset = 0;
+  out.distanceUnit = std::max(1e-6, D / drawnToX);
+  out.cappedByRays = true;
+}
+
 }  // namespace
 
 FieldView fieldViewOf(const RenderSettings& settings) {
@@ -236,6 +369,7 @@ FieldScale fieldScale(const FloatVolume& field, const Volume& volume, const Mask
   out.farQuantileD = q.far;
   out.contextVoxels = q.count;
   unitFromQuantiles(out);
+  if (view) capByRays(out, nearestBoneOnRays(field, volume, body, denseFrom, *view), levels.drawnToX);
   out.derived = true;
   return out;
 }

@@ -18,6 +18,7 @@
 #include "dataset_resolver.h"
 #include "headless_desktop.h"
 #include "learning_session.h"
+#include "shown_dataset.h"
 #include "render/derived_preset.h"
 #include "render/field_scale.h"
 #include "render/gl/egl_context.h"
@@ -261,7 +262,7 @@ void checkFadesAndSlides(const Scan& scan, const std::vector<Case>& cases) {
         draw(*gl, scan, s->label, viewOf(scan, s->label, derivedPreset(scan.levels, RenderMode::Bare, s->id), c.view), 0);
     const double change = meanGreyChange(at0, at1), drawn = drawnShare(at0), context = meanGreyChange(bare, at1);
     MESSAGE(structureId << ": t 0→1 changes " << change << " grey levels (the context at t = 1 adds " << context
-                        << "); " << 100 * drawn << " % drawn at t = 0");
+                        << "); " << 100 * drawn << " % drawn at t = 0" << std::string(v.scale.cappedByRays ? " (unit capped by the view's rays)" : ""));
     CHECK(change >= c.minChange);
     if (c.fadesInView) CHECK(drawn < 0.70);
     // AT_TEST_PNG_DIR=DIR: the measured images as DIR/STRUCTURE_VIEW_t0.png and _t1.png, to look at.
@@ -279,7 +280,8 @@ TEST_CASE("Skull CT: t from 0 to 1 changes the WDT image, and at t = 0 the conte
   auto skull = skullOrSkip();
   if (!skull) return;
   // The ear canal lies in the temporal bone on every side, yet under 70 % of its frame is drawn at
-  // t = 0 (66 %; 89 % with the median bone at x = 1.9).
+  // t = 0 (53 % with the unit capped by the view's rays; 66 % without, 89 % with the median bone
+  // at x = 1.9).
   checkFadesAndSlides(*skull, {{"frontal_sinus", "anterior", true},
                                {"orbit_left", "lateral_left", true},
                                {"atlas_c1", "posterior", true},
@@ -304,12 +306,13 @@ TEST_CASE("Abdominal CT: t from 0 to 1 changes the WDT image, and at t = 0 the c
 TEST_CASE("µCT-like volume: t from 0 to 1 changes the WDT image, and at t = 0 the context fades inside the view") {
   // The phantom as uint8 plain intensities at 0.1 mm: presets derived from its histogram.
   const Scan microCt = microCtPhantom(256);
-  // The labyrinth and the facial nerve lie in the petrous bone on every side (lateral canal 71 %,
-  // facial nerve 82 % drawn at t = 0); the malleus hangs in the air of the middle ear (the incus,
-  // behind it from the side, 77 %).
+  // The labyrinth and the facial nerve lie in the petrous bone on every side: every ray of their
+  // views crosses bone, and with the unit from the bone surfaces alone 71 % (lateral canal) and
+  // 82 % (facial nerve) of the frame was drawn at t = 0; the unit capped by the view's rays
+  // (field_scale.h, kMaxDrawnShare) leaves 59 % and 62 %.
   checkFadesAndSlides(microCt, {{"cochlea", "superior", true},
-                                {"lateral_semicircular_canal", "superior", false},
-                                {"facial_nerve", "lateral_left", false},
+                                {"lateral_semicircular_canal", "superior", true},
+                                {"facial_nerve", "lateral_left", true},
                                 {"malleus", "lateral_left", true}});
 }
 
@@ -369,8 +372,9 @@ TEST_CASE("The derived distance unit follows the voxel size: the same anatomy at
     MESSAGE(std::string(id) << ": unit " << vc.scale.distanceUnit << " at 0.2 mm, " << vf.scale.distanceUnit << " at 0.1 mm");
     REQUIRE(vc.scale.derived);
     REQUIRE(vf.scale.derived);
-    // Weighted millimetres: the same anatomy gives about the same unit whatever the grid.
-    CHECK(vc.scale.distanceUnit == doctest::Approx(vf.scale.distanceUnit).epsilon(0.25));
+    // Weighted millimetres: the same anatomy gives about the same unit whatever the grid (a
+    // relative bound: doctest's Approx adds 1 to the scale, which is no bound on units below 1).
+    CHECK(std::fabs(vc.scale.distanceUnit / vf.scale.distanceUnit - 1) < 0.15);
     if (!gl) continue;
     const RgbaImage ic = draw(*gl, coarse, sc->label, vc, 0), iff = draw(*gl, fine, sf->label, vf, 0);
     const double differ = meanGreyChange(ic, iff);
@@ -462,7 +466,7 @@ TEST_CASE("Skull CT: each mode reads as its figure - outline a thin band, fuzzy 
   }
 }
 
-TEST_CASE("The desktop leaves out the CT headrest as the render command does: both see one volume") {
+TEST_CASE("Every front end leaves out the CT headrest: the desktop and openDatasetForViewing see one volume") {
   auto skull = skullOrSkip();  // prepared as `render` prepares it
   if (!skull) return;
   app::DatasetRequest request;
@@ -489,4 +493,9 @@ TEST_CASE("The desktop leaves out the CT headrest as the render command does: bo
   auto opened = model.open();
   REQUIRE_MESSAGE(opened, test::errorText(opened));
   CHECK(model.dataset().volume.voxels == skull->ds.volume.voxels);
+  // The render command, the terminal pictures (play, exam), default views and course validate's
+  // question checks open it through this one function (shown_dataset.h).
+  auto shown = app::openDatasetForViewing(request);
+  REQUIRE_MESSAGE(shown, test::errorText(shown));
+  CHECK(shown->dataset.volume.voxels == skull->ds.volume.voxels);
 }

@@ -9,6 +9,7 @@
 #include "course_packages.h"
 #include "db/connection.h"
 #include "dataset_resolver.h"
+#include "shown_dataset.h"
 #include "db/dataset_store.h"
 #include "lessons/exam.h"
 #include "lessons/course_check.h"
@@ -117,9 +118,10 @@ int runValidate(const cli::Args& args) {
       DatasetRequest request;
       request.name = course->datasetId;
       request.database = &(*session)->database();
-      auto dataset = openNamedDataset(request);
-      if (!dataset) return reportError("course validate: " + dataset.error().message);
-      auto checks = checkLocateQuestions(*dataset, *course, render::PresetLibrary(defaultPresetsDir()));
+      // Checked in the views a student sees: the CT table and headrest left out (shown_dataset.h).
+      auto shown = openDatasetForViewing(request);
+      if (!shown) return reportError("course validate: " + shown.error().message);
+      auto checks = checkLocateQuestions(shown->dataset, *course, render::PresetLibrary(defaultPresetsDir()));
       if (!checks) return reportError(file.string() + ": " + checks.error().message);
       int answerable = 0;
       for (const LocateCheck& c : *checks) {

@@ -9,6 +9,7 @@
 #include "commands.h"
 #include "course_views.h"
 #include "dataset_resolver.h"
+#include "shown_dataset.h"
 #include "render/gl/egl_context.h"
 #include "render/gl/volume_renderer.h"
 #include "render/scene.h"
@@ -39,14 +40,15 @@ int writeDefaultViews(const fs::path& outDir, const std::string& courseId) {
                        "' is not built in; open it on a display with `anatomy-tutor desktop`");
   DatasetRequest request;  // a built-in name, or a known scan with the labels set-up grew for it
   request.name = datasetName;
-  auto dataset = openNamedDataset(request);
-  if (!dataset) return reportError(dataset.error().message);
+  auto shown = openDatasetForViewing(request);  // the CT table and headrest left out, as everywhere
+  if (!shown) return reportError(shown.error().message);
+  Dataset* dataset = &shown->dataset;
   auto context = render::gl::EglContext::create();
   if (!context) return reportError("offscreen rendering: " + context.error().message);
   auto renderer = render::gl::VolumeRenderer::create();
   if (!renderer) return reportError("offscreen rendering: " + renderer.error().message);
   if (auto st = renderer->setVolume(dataset->volume, dataset->labels); !st) return reportError(st.error().message);
-  const render::IntensityLevels levels = render::summariseIntensities(dataset->volume);
+  const render::IntensityLevels& levels = shown->levels;
 
   std::error_code ec;
   fs::create_directories(outDir, ec);

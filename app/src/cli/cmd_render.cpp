@@ -8,6 +8,7 @@
 #include "commands.h"
 #include "data_paths.h"
 #include "dataset_options.h"
+#include "shown_dataset.h"
 #include "render/gl/egl_context.h"
 #include "render/gl/volume_renderer.h"
 #include "render/derived_preset.h"
@@ -101,12 +102,14 @@ int runRender(const Argv& argv) {
   if (!out) return reportError("render: --out F.png is required", 2);
 
   const render::PresetLibrary library(args->has("presets") ? fs::path(*args->value("presets")) : defaultPresetsDir());
-  auto dataset = openNamedDataset(datasetRequestFrom(*args, args->positional()[0]));
-  if (!dataset) return reportError("render: " + dataset.error().message);
+  // The CT table, headrest and other objects outside the body are no context (shown_dataset.h).
+  auto shown = openDatasetForViewing(datasetRequestFrom(*args, args->positional()[0]));
+  if (!shown) return reportError("render: " + shown.error().message);
+  Dataset* dataset = &shown->dataset;
   const Structure* structure = wholeVolume ? nullptr : dataset->findStructure(args->positional()[1]);
   if (!wholeVolume && !structure) return reportError("render: " + unknownStructureMessage(*dataset, args->positional()[1]));
 
-  const render::IntensityLevels levels = render::summariseIntensities(dataset->volume);
+  const render::IntensityLevels& levels = shown->levels;
   Result<render::Preset> preset = fail("no preset");
   if (wholeVolume) {
     preset = render::wholeVolumePreset(dataset->intensity, dataset->volume.geometry);
@@ -149,8 +152,6 @@ int runRender(const Argv& argv) {
   auto margin = args->number("margin", request.margin);
   if (!margin || *margin < 1 || *margin > 100) return reportError("render: option --margin must be a number in 1..100", 2);
   request.margin = *margin;
-  // The CT table, headrest and other objects outside the body are no context (derived_preset.h).
-  render::leaveOutNonAnatomy(dataset->volume, dataset->labels, levels);
   auto frame = wholeVolume ? Result<render::StructureFrame>(render::volumeFrame(dataset->volume.geometry))
                            : render::structureFrame(dataset->labels, structure->label);
   if (!frame) return reportError("render: " + structure->id + ": " + frame.error().message);
@@ -188,7 +189,9 @@ int runRender(const Argv& argv) {
         std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - scaleStart).count();
     unitNote = "; distance unit " + formatUnit(settings->distanceUnit) +
                (scale.distanceOffset > 0 ? ", offset " + formatUnit(scale.distanceOffset) : std::string()) +
-               (scale.derived ? std::string(scale.fromSeen ? " (median seen bone D " : " (median bone D ") + formatUnit(scale.quantileD) + ", 90 % " + formatUnit(scale.farQuantileD) + "; by size " +
+               (scale.derived ? std::string(scale.fromSeen ? " (median seen bone D " : " (median bone D ") + formatUnit(scale.quantileD) + ", 90 % " + formatUnit(scale.farQuantileD) +
+                                   (scale.cappedByRays ? "; capped: rays' nearest bone beyond D " + formatUnit(scale.drawnLimitD) + " fades" : std::string()) +
+                                   "; by size " +
                                    formatUnit(render::distanceUnitFor(*frame, request.contextScale)) + ")"
                               : " (from its size)") +
                ", " + formatUnit(scaleMs) + " ms";

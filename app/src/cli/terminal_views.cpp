@@ -8,6 +8,7 @@
 #include "course_views.h"
 #include "db/preset_store.h"
 #include "dataset_resolver.h"
+#include "shown_dataset.h"
 #include "slice_marking.h"
 #include "render/gl/egl_context.h"
 #include "render/gl/volume_renderer.h"
@@ -80,10 +81,11 @@ Result<std::unique_ptr<TerminalViews>> TerminalViews::create(db::Database& db, c
   DatasetRequest request;
   request.name = name;
   request.database = &db;
-  auto dataset = openNamedDataset(request);
-  if (!dataset) return tl::unexpected(dataset.error());
-  v->dataset_ = std::move(*dataset);
-  v->levels_ = render::summariseIntensities(v->dataset_.volume);
+  // As the render command and the desktop show it: the CT table and headrest left out.
+  auto shown = openDatasetForViewing(request);
+  if (!shown) return tl::unexpected(shown.error());
+  v->dataset_ = std::move(shown->dataset);
+  v->levels_ = shown->levels;
   v->presets_ = std::make_unique<render::PresetLibrary>(defaultPresetsDir());
   v->database_ = &db;
   if (!pictures) return v;

@@ -37,12 +37,20 @@
 // any scan and voxel size — and the slider t brings that farther half in. The shipped presets' x
 // (and lighting's α of Eq. 6, applied to D / unit) are in this unit.
 //
+// With the view (WDT and non-weighted), what the user sees drawn is checked per pixel too: a pixel
+// shows context at t = 0 when the nearest bone its ray crosses lies at x < drawnToX. Where bone
+// surrounds the structure every ray crosses some of the nearer half of the bone, so the unit above
+// drew 71–82 % of the µCT's labyrinth and facial-nerve frames; there the unit is shrunk (offset 0)
+// until at most kMaxDrawnShare of the pixels, the structure's included, would be drawn.
+//
 // Cost: one pass over the field's voxels inside the reach's box (a subsample of at most
 // kMaxScaleSamples of them) and at most kScaleRaysPerSide² rays marched at half the smallest voxel
-// spacing through the reach, done once per field and framed view — not per frame.
+// spacing through the reach (and once more, a voxel per step, through the volume), done once per
+// field and framed view — not per frame.
 #pragma once
 
 #include <cstddef>
+#include <limits>
 #include <optional>
 
 #include "render/camera.h"
@@ -72,6 +80,16 @@ constexpr int kOpenReach = 2;
 // The seen set: rays along the view's longer side, and the fewest first surfaces it must hold.
 constexpr int kScaleRaysPerSide = 128;
 constexpr std::size_t kMinSeenSurfaces = 64;
+// At most this share of the view's pixels show the structure or context at t = 0 (with a
+// FieldView). A pixel shows context when the nearest bone its ray crosses lies at a small x, so
+// where bone surrounds the structure (the µCT's labyrinth and facial nerve in the petrous bone)
+// every ray crosses some of the nearer half of the bone: with the unit from the surfaces alone
+// 71 % and 82 % of those frames were drawn at t = 0. Each ray's nearest bone (whole ray, dense
+// voxels) is measured; where more than this share would be drawn (nearest bone at x <
+// BoneLevels::drawnToX), the unit is shrunk until the rays beyond this share have it at drawnToX —
+// but at least kMinDrawnBoneShare of the rays that cross bone stay drawn.
+constexpr double kMaxDrawnShare = 0.45;
+constexpr double kMinDrawnBoneShare = 0.25;
 
 struct FieldScale {
   double distanceUnit = 1;      // (D − distanceOffset) / distanceUnit is the presets' x (clamped at 0)
@@ -83,6 +101,13 @@ struct FieldScale {
   bool fromSeen = false;        // the unit was taken from the bone surfaces the view sees first
   double aroundQuantileD = 0;   // the median D of each set (0: not measured or too few)
   double seenQuantileD = 0;
+  // The view's rays (with a FieldView): how many were cast, the share that cross bone and not the
+  // structure, the D beyond which their nearest bone must fade (0: no cap needed), and whether
+  // that cap set the unit (kMaxDrawnShare).
+  std::size_t viewRays = 0;
+  double boneRayShare = 0;
+  double drawnLimitD = 0;
+  bool cappedByRays = false;
 };
 
 // The stored-value level from which the preset's data TF draws bone: the first TF x at which its
@@ -92,9 +117,17 @@ double denseLevel(const Preset& preset);
 // first drawn one): air, fat and soft tissue on the shipped and derived presets, not marrow.
 double openLevel(const Preset& preset);
 
-// What counts as the bone a user sees: dense voxels (≥ dense) with open space (≤ open) near them.
+// The x (distance units) beyond which the preset draws a bone sample faintly at t = 0: its data
+// TF's peak opacity × the distance TF's opacity κ² (Algorithm 1 at t = 0) under kFaintOpacity.
+// Infinity where the distance TF never clears (nothing fades with distance).
+constexpr double kFaintOpacity = 0.1;
+double drawnToX(const Preset& preset);
+
+// What counts as the bone a user sees: dense voxels (≥ dense) with open space (≤ open) near them;
+// and up to which x it is drawn at t = 0 (drawnToX).
 struct BoneLevels {
   double dense = 0, open = 0;
+  double drawnToX = std::numeric_limits<double>::infinity();
   bool operator==(const BoneLevels&) const = default;
 };
 BoneLevels boneLevels(const Preset& preset);
