@@ -212,7 +212,7 @@ Result<ClassProgress> classProgress(Database& server, const std::string& code, c
       "SELECT m.user_name,"
       " SUM(CASE WHEN e.kind = 'answer' AND e.practice = 0 THEN 1 ELSE 0 END),"
       " SUM(CASE WHEN e.kind = 'answer' AND e.practice = 0 AND e.correct = 1 THEN 1 ELSE 0 END),"
-      " COUNT(DISTINCT CASE WHEN e.kind = 'answer' THEN e.structure END),"
+      " COUNT(DISTINCT CASE WHEN e.kind = 'answer' AND e.practice = 0 THEN e.structure END),"
       " COUNT(DISTINCT CASE WHEN e.kind = 'lesson_started' THEN e.lesson_id END),"
       " COUNT(DISTINCT CASE WHEN e.kind = 'lesson_finished' THEN e.lesson_id END),"
       " MAX(e.occurred_at), MAX(m.withdrawal_reason),"

@@ -345,6 +345,7 @@ TEST_CASE("ClassLessonLocate_ClassProgressAndAnalyticsLeavePracticeAnswersOut") 
   // Random answers written as a server stores them: graded, waiting for a key, or practice (every
   // kind at least once for each student, so each count is tested).
   std::map<std::string, std::array<int, 4>> expected;  // answers, right, ungraded, practice
+  std::map<std::string, std::set<std::string>> structuresOf;  // answered about, practice left out
   const std::vector<std::pair<std::string, std::string>> questions = {
       {"toy.ossicles.name_stapes", "stapes"}, {"toy.ossicles.identify_incus", "incus"}, {"toy.ossicles.locate_malleus", "malleus"}};
   std::int64_t at = std::int64_t(std::time(nullptr)) - 1000;
@@ -362,6 +363,7 @@ TEST_CASE("ClassLessonLocate_ClassProgressAndAnalyticsLeavePracticeAnswersOut") 
       s->bind(8, state <= 1 ? std::optional<double>(state == 0 ? 1.0 : 0.0) : std::nullopt);
       s->bind(9, state == 3 ? 1 : 0);
       REQUIRE(s->run());
+      if (state != 3) structuresOf[n].insert(structure);
       auto& e = expected[n];
       e[0] += state != 3;
       e[1] += state == 0;
@@ -380,6 +382,7 @@ TEST_CASE("ClassLessonLocate_ClassProgressAndAnalyticsLeavePracticeAnswersOut") 
     CHECK(p.correct == e[1]);
     CHECK(p.ungraded == e[2]);
     CHECK(p.practice == e[3]);
+    CHECK(p.structures == int(structuresOf[p.userName].size()));
   }
   SqlCurriculumRepository curriculum(server, test::toyBuiltin());
   auto input = loadAnalyticsInput(server, curriculum, test::toyCourse().id, made->code);

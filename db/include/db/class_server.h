@@ -63,7 +63,7 @@ struct StudentClassProgress {
   int correct = 0;          // of those, right as the server graded them
   int ungraded = 0;         // of those, not graded yet (their keys are not on the server: `class keys`)
   int practice = 0;         // answers the server keeps as practice (locate picks it cannot grade)
-  int structures = 0;       // distinct structures answered about
+  int structures = 0;       // distinct structures answered about (practice left out)
   int lessonsStarted = 0;   // distinct lessons
   int lessonsFinished = 0;  // distinct lessons finished at least once
   std::optional<std::int64_t> lastActive;  // Unix seconds of the newest event; none yet: nullopt
