@@ -34,7 +34,7 @@ Status addClassEventStudents(Database& db, AnalyticsInput& in, const std::set<st
 
   auto events = db.prepare(
       "SELECT user_name, kind, occurred_at, lesson_id, question_id, structure, correct, score, payload FROM class_events"
-      + std::string(classCode ? " WHERE class_code = ?1" : "") + " ORDER BY occurred_at, CASE kind WHEN 'lesson_started' THEN 0 WHEN 'answer' THEN 1 ELSE 2 END, received_at, uuid");
+      " WHERE practice = 0" + std::string(classCode ? " AND class_code = ?1" : "") + " ORDER BY occurred_at, CASE kind WHEN 'lesson_started' THEN 0 WHEN 'answer' THEN 1 ELSE 2 END, received_at, uuid");
   if (!events) return tl::unexpected(events.error());
   if (classCode) events->bind(1, *classCode);
   // Events of one second in the order they happen in: a lesson starts, is answered, ends.

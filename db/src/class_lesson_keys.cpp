@@ -11,12 +11,14 @@ namespace at::db {
 
 using nlohmann::json;
 
-std::string lessonKeyJson(const quiz::ResolvedQuestion& question, const quiz::GradingContext& context) {
+std::string lessonKeyJson(const quiz::ResolvedQuestion& question, const quiz::GradingContext& context,
+                          const std::string& locateViews) {
   const quiz::Question& q = question.question;
   json key = {{"question_id", q.id}, {"kind", quiz::toString(q.kind)}, {"target", q.target}};
   switch (q.kind) {
     case quiz::QuestionKind::Locate:
       key["tolerance_mm"] = q.toleranceMm;
+      if (!locateViews.empty()) key["views"] = json::parse(locateViews);
       break;
     case quiz::QuestionKind::Identify:
     case quiz::QuestionKind::Relation:
@@ -51,7 +53,8 @@ std::string lessonKeyJson(const quiz::ResolvedQuestion& question, const quiz::Gr
 }
 
 Result<std::vector<std::string>> courseLessonKeys(const lessons::Course& course, quiz::KeyComputer& keys,
-                                                  const quiz::GradingContext& context) {
+                                                  const quiz::GradingContext& context,
+                                                  const std::map<std::string, std::string>& locateViews) {
   std::vector<std::string> out;
   for (const lessons::Lesson& lesson : course.lessons)
     for (const lessons::Step& step : lesson.steps) {
@@ -60,7 +63,8 @@ Result<std::vector<std::string>> courseLessonKeys(const lessons::Course& course,
       if (!resolved)
         return tl::unexpected(withContext("the key of question " + step.question.id + " (course " + course.id + ")",
                                           resolved.error()));
-      out.push_back(lessonKeyJson(*resolved, context));
+      const auto views = locateViews.find(step.question.id);
+      out.push_back(lessonKeyJson(*resolved, context, views == locateViews.end() ? "" : views->second));
     }
   return out;
 }

@@ -210,12 +210,14 @@ Result<ClassProgress> classProgress(Database& server, const std::string& code, c
   // One row per student member, computed from the events (none yet: a row of zeros).
   auto students = server.prepare(
       "SELECT m.user_name,"
-      " SUM(CASE WHEN e.kind = 'answer' THEN 1 ELSE 0 END),"
-      " SUM(CASE WHEN e.kind = 'answer' AND e.correct = 1 THEN 1 ELSE 0 END),"
-      " COUNT(DISTINCT CASE WHEN e.kind = 'answer' THEN e.structure END),"
+      " SUM(CASE WHEN e.kind = 'answer' AND e.practice = 0 THEN 1 ELSE 0 END),"
+      " SUM(CASE WHEN e.kind = 'answer' AND e.practice = 0 AND e.correct = 1 THEN 1 ELSE 0 END),"
+      " COUNT(DISTINCT CASE WHEN e.kind = 'answer' AND e.practice = 0 THEN e.structure END),"
       " COUNT(DISTINCT CASE WHEN e.kind = 'lesson_started' THEN e.lesson_id END),"
       " COUNT(DISTINCT CASE WHEN e.kind = 'lesson_finished' THEN e.lesson_id END),"
-      " MAX(e.occurred_at), MAX(m.withdrawal_reason)"
+      " MAX(e.occurred_at), MAX(m.withdrawal_reason),"
+      " SUM(CASE WHEN e.kind = 'answer' AND e.practice = 1 THEN 1 ELSE 0 END),"
+      " SUM(CASE WHEN e.kind = 'answer' AND e.practice = 0 AND e.correct IS NULL THEN 1 ELSE 0 END)"
       " FROM class_members m LEFT JOIN class_events e ON e.class_code = m.class_code AND e.user_name = m.user_name"
       " WHERE m.class_code = ?1 AND m.role = 'student' GROUP BY m.user_name ORDER BY m.user_name");
   if (!students) return tl::unexpected(students.error());
@@ -230,6 +232,8 @@ Result<ClassProgress> classProgress(Database& server, const std::string& code, c
     p.lessonsFinished = r.integer(5);
     if (!r.isNull(6)) p.lastActive = r.int64(6);
     p.withdrawal = r.optionalText(7);
+    p.practice = r.integer(8);
+    p.ungraded = r.integer(9);
     out.students.push_back(std::move(p));
     return {};
   });
@@ -255,7 +259,7 @@ Result<ClassProgress> classProgress(Database& server, const std::string& code, c
 
   auto structures = server.prepare(
       "SELECT structure, COUNT(DISTINCT user_name), COUNT(*), SUM(CASE WHEN correct = 1 THEN 1 ELSE 0 END)"
-      " FROM class_events WHERE class_code = ?1 AND kind = 'answer' GROUP BY structure ORDER BY structure");
+      " FROM class_events WHERE class_code = ?1 AND kind = 'answer' AND practice = 0 GROUP BY structure ORDER BY structure");
   if (!structures) return tl::unexpected(structures.error());
   structures->bind(1, code);
   status = forEachRow(*structures, [&](Statement& r) -> Status {

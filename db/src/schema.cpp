@@ -11,6 +11,8 @@
 #include "class_lesson_keys_sql.h"
 #include "class_security_sql.h"
 #include "study_checks_sql.h"
+#include "study_readers_sql.h"
+#include "class_lesson_locate_sql.h"
 #include "study_security_sql.h"
 #include "study_writes_sql.h"
 
@@ -553,6 +555,10 @@ const std::vector<Migration>& migrations() {
        classLessonKeysSql(), {}, true},
       {23, "class server: study writes need a current coordinator; a participant's trials must be the row the server drew",
        studyChecksSql(), {}, true},
+      {24, "class server: a study's owner reads it only while she coordinates a class",
+       studyReadersSql(), {}, true},
+      {25, "class server: lesson locate answers graded from the pixel picked on the question's view, else kept as practice",
+       classLessonLocateSqliteSql(), {}, false, classLessonLocateSql()},
   };
   return all;
 }

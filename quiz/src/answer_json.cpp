@@ -18,6 +18,8 @@ std::string answerToJson(const Answer& answer) {
     if (std::isfinite(answer.pick->distanceMm) && answer.pick->distanceMm >= 0) {
       j["distance_mm"] = answer.pick->distanceMm;
     }
+    if (answer.pick->pixel) j["pixel"] = *answer.pick->pixel;
+    if (!answer.pick->view.empty()) j["view"] = answer.pick->view;
   }
   if (answer.order) j["order"] = *answer.order;
   return j.dump();
@@ -47,10 +49,20 @@ Result<Answer> readAnswer(const nlohmann::json& j) {
         if (!d.is_number() || d.get<double>() < 0) return fail("distance_mm: must be a number >= 0");
         pick.distanceMm = d.get<double>();
       }
+      if (j.contains("pixel")) {
+        const auto& p = j["pixel"];
+        if (!p.is_array() || p.size() != 2 || !p[0].is_number_integer() || !p[1].is_number_integer())
+          return fail("pixel: must be [x, y] in whole pixels");
+        pick.pixel = std::array<int, 2>{p[0].get<int>(), p[1].get<int>()};
+      }
+      if (j.contains("view")) {
+        if (!j["view"].is_string() || !pick.pixel) return fail("view: must be the id of the view a pixel was picked on");
+        pick.view = j["view"].get<std::string>();
+      }
       answer.pick = pick;
       ++fields;
-    } else if (key == "distance_mm") {
-      if (!j.contains("pick")) return fail("distance_mm: only allowed with pick");
+    } else if (key == "distance_mm" || key == "pixel" || key == "view") {
+      if (!j.contains("pick")) return fail(key + ": only allowed with pick");
     } else if (key == "order") {
       if (!value.is_array()) return fail("order: must be an array of structure ids");
       std::vector<std::string> order;
@@ -61,7 +73,7 @@ Result<Answer> readAnswer(const nlohmann::json& j) {
       answer.order = order;
       ++fields;
     } else {
-      return fail("unknown field '" + printableText(key, 40) + "' (expected choice, text, pick with distance_mm, or order)");
+      return fail("unknown field '" + printableText(key, 40) + "' (expected choice, text, pick with distance_mm, pixel and view, or order)");
     }
   }
   if (fields == 0) return fail("no answer: give one of choice, text, pick or order");

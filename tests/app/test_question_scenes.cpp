@@ -163,7 +163,7 @@ int checkQuestionScenes(const Dataset& dataset, const std::string& datasetId) {
           const Structure* picked = dataset.findStructureByLabel(clicked.label);
           quiz::ResolvedQuestion asked;
           asked.question = q;
-          const quiz::Pick pick{.structure = picked ? picked->id : "", .distanceMm = -1, .pixel = std::nullopt};
+          const quiz::Pick pick{.structure = picked ? picked->id : "", .distanceMm = -1, .pixel = std::nullopt, .view = ""};
           auto grade = quiz::gradeLocate(asked, pick, names);
           REQUIRE(grade);
           CHECK_MESSAGE(grade->correct, grade->feedback);

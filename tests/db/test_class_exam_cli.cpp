@@ -150,9 +150,10 @@ TEST_CASE("ClassExamCli_InstructorOpensStudentSitsOnTheServer_ProgressAndXapiSho
   CAPTURE(csv.err);
   REQUIRE(csv.exitCode == 0);
   CAPTURE(csv.out);
-  // Her line ends with the exam columns: one handed in, the server's score.
+  // Her line ends with the exam columns (one handed in, the server's score), then no answer waiting
+  // for its key and none kept as practice.
   char examColumns[40];
-  std::snprintf(examColumns, sizeof examColumns, ",1,%.3f", rightCount / 12.0);
+  std::snprintf(examColumns, sizeof examColumns, ",1,%.3f,0,0", rightCount / 12.0);
   const std::string eveLine = after(csv.out, "\n" + eve + ",");
   CHECK(eveLine.ends_with(examColumns));
 

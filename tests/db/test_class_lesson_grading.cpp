@@ -1,6 +1,8 @@
 // Lesson answers are graded on the class server from the keys its instructor published: the grade
 // the laptop sends is never believed. The server's grade equals the laptop's own grader on every
-// question kind (random answers, seed printed); a student who claims "right" for a wrong answer —
+// question kind (random answers, seed printed) but locate, whose pick the laptop measures and the server
+// does not believe (without a pixel on the question's view it is practice: test_class_lesson_locate.cpp);
+// a student who claims "right" for a wrong answer —
 // through her outbox and sync, or with psql itself — has it stored wrong, and class progress says
 // so; an answer that does not fit its question is refused and changes nothing; no student reads or
 // publishes keys.
@@ -119,15 +121,16 @@ quiz::Answer randomAnswer(const quiz::ResolvedQuestion& q, const quiz::GradingCo
   return a;
 }
 
-// The server's grade of `answer` against `key` as the administrator reads it: the score, or the
-// refusal's message.
-std::variant<double, std::string> serverGrade(Database& admin, const std::string& key, const std::string& answer) {
+// The server's grade of `answer` against `key` as the administrator reads it: the score (none:
+// practice, not graded), or the refusal's message.
+std::variant<std::optional<double>, std::string> serverGrade(Database& admin, const std::string& key,
+                                                             const std::string& answer) {
   auto s = admin.prepare("SELECT at_grade_lesson_answer(?1::jsonb, ?2::jsonb)");
   REQUIRE(s);
   s->bind(1, key).bind(2, answer);
   auto row = s->step();
   if (!row) return row.error().message;
-  return s->real(0);
+  return s->optionalReal(0);
 }
 
 std::string answerEventSql(const std::string& code, const std::string& user, const std::string& question,
@@ -149,7 +152,7 @@ TEST_CASE("ClassLessonGrading_TheServerGradesEveryKindOfLessonAnswerAsTheLaptopD
   const std::uint64_t seed = test::freshSeed("ClassLessonGrading_TheServerGradesEveryKindOfLessonAnswerAsTheLaptopDoes");
   std::mt19937_64 random(seed);
   const Toy toy;
-  int compared = 0, right = 0, partial = 0, wrong = 0, misfits = 0;
+  int compared = 0, right = 0, partial = 0, wrong = 0, misfits = 0, practice = 0;
   for (const quiz::ResolvedQuestion& q : toy.questions) {
     const std::string key = lessonKeyJson(q, toy.context);
     for (int i = 0; i < 120; ++i) {
@@ -165,19 +168,28 @@ TEST_CASE("ClassLessonGrading_TheServerGradesEveryKindOfLessonAnswerAsTheLaptopD
         continue;
       }
       CAPTURE(laptop->feedback);
-      REQUIRE(std::holds_alternative<double>(server));
-      CHECK(std::get<double>(server) == doctest::Approx(laptop->score));
+      REQUIRE(std::holds_alternative<std::optional<double>>(server));
+      const std::optional<double> score = std::get<std::optional<double>>(server);
+      if (q.question.kind == quiz::QuestionKind::Locate) {  // a pick named, not a pixel on the question's view
+        CHECK_FALSE(score);
+        ++practice;
+        continue;
+      }
+      REQUIRE(score);
+      CHECK(*score == doctest::Approx(laptop->score));
       ++compared;
       (laptop->score >= 1 ? right : laptop->score > 0 ? partial : wrong) += 1;
     }
   }
   MESSAGE("seed " << seed << ": " << compared << " answers compared (" << right << " right, " << partial << " partly, "
-                  << wrong << " wrong), " << misfits << " refused on both sides");
+                  << wrong << " wrong), " << misfits << " refused on both sides, " << practice
+                  << " locate picks kept as practice");
   // The answers must have tried every grade, or the comparison proves little.
   CHECK(right > 30);
   CHECK(partial > 3);
   CHECK(wrong > 30);
   CHECK(misfits > 3);
+  CHECK(practice > 30);
 }
 
 TEST_CASE("ClassLessonGrading_AStudentClaimingRightForWrongAnswersIsGradedByTheServerThroughSyncAndPsql") {
@@ -203,7 +215,7 @@ TEST_CASE("ClassLessonGrading_AStudentClaimingRightForWrongAnswersIsGradedByTheS
   REQUIRE(progress.startAttempt(user->id, "toy.ossicles", lessons::LessonMode::Guided, std::time(nullptr)));
   // At least 40 answers, and until one wrong answer has been sent claimed right (the cheat itself:
   // without one the server's grade could not differ from her claims).
-  int laptopRight = 0, sent = 0, wrongSentAsRight = 0;
+  int laptopRight = 0, sent = 0, wrongSentAsRight = 0, locateSent = 0, locateRight = 0;
   double claimedRight = 0;
   for (int i = 0; i < 40 || wrongSentAsRight == 0; ++i) {
     REQUIRE(i < 2000);
@@ -212,9 +224,12 @@ TEST_CASE("ClassLessonGrading_AStudentClaimingRightForWrongAnswersIsGradedByTheS
     auto laptopGrade = quiz::grade(q, answer, toy.context);
     if (!laptopGrade) continue;  // the laptop never sends those
     laptopRight += laptopGrade->correct ? 1 : 0;
+    const bool locate = q.question.kind == quiz::QuestionKind::Locate;  // kept as practice: no pixel
+    locateSent += locate ? 1 : 0;
+    locateRight += locate && laptopGrade->correct ? 1 : 0;
     // Every wrong answer claimed right; a right one claimed either way.
     const int claimed = !laptopGrade->correct ? 1 : int(random() % 2);
-    wrongSentAsRight += laptopGrade->correct ? 0 : 1;
+    wrongSentAsRight += laptopGrade->correct || locate ? 0 : 1;
     claimedRight += claimed;
     ++sent;
     const json payload = {{"source", "lesson"}, {"lesson", "toy.ossicles"}, {"question", q.question.id},
@@ -242,8 +257,9 @@ TEST_CASE("ClassLessonGrading_AStudentClaimingRightForWrongAnswersIsGradedByTheS
   REQUIRE(view);
   for (const auto& s : view->students)
     if (s.userName == c.sam) {
-      CHECK(s.answers == sent);
-      CHECK(s.correct == laptopRight);  // the server's grades, not her claims
+      CHECK(s.answers == sent - locateSent);
+      CHECK(s.correct == laptopRight - locateRight);  // the server's grades, not her claims
+      CHECK(s.practice == locateSent);                // her locate picks: practice, never right
     }
   CHECK(test::scalarCount(c.admin, "SELECT COUNT(*) FROM class_events WHERE user_name = '" + c.sam +
                                        "' AND kind = 'answer' AND (payload::jsonb->>'correct')::boolean <> (correct = 1)") == 0);
@@ -316,15 +332,18 @@ TEST_CASE("ClassLessonGrading_AnswersSentBeforeTheKeysAreGradedWhenTheyArePublis
                               R"({"pick": "incus", "distance_mm": 0.4})", 1, 1.0)) == "stored");
   // No key yet: kept, ungraded (neither her "right" nor anything else).
   CHECK(test::scalarCount(c.admin, "SELECT COUNT(*) FROM class_events WHERE kind = 'answer' AND correct IS NULL") == 3);
+  CHECK(test::scalarCount(c.admin, "SELECT COUNT(*) FROM class_events WHERE practice = 1") == 0);
 
   Database instructor = openAt(c.instructorUrl);
   auto published = publishLessonKeys(instructor, c.code, test::toyLessonKeys(), std::nullopt);
   REQUIRE_MESSAGE(published, (published ? "" : published.error().message));
   CHECK(*published == 6);
-  // Graded now: "Stirrup" is a synonym (right), choice 2 is the stapes (wrong), the click 0.4 mm from
-  // the malleus is within its 0.5 mm (right).
-  CHECK(test::scalarCount(c.admin, "SELECT COUNT(*) FROM class_events WHERE kind = 'answer' AND correct IS NULL") == 0);
-  CHECK(test::scalarCount(c.admin, "SELECT COUNT(*) FROM class_events WHERE kind = 'answer' AND correct = 1") == 2);
+  // Graded now: "Stirrup" is a synonym (right), choice 2 is the stapes (wrong); the click the laptop
+  // says was 0.4 mm from the malleus came without a pixel on the question's view: practice.
+  CHECK(test::scalarCount(c.admin, "SELECT COUNT(*) FROM class_events WHERE kind = 'answer' AND correct IS NULL") == 1);
+  CHECK(test::scalarCount(c.admin, "SELECT COUNT(*) FROM class_events WHERE kind = 'answer' AND correct = 1") == 1);
+  CHECK(test::scalarCount(c.admin, "SELECT COUNT(*) FROM class_events WHERE question_id = 'toy.ossicles.locate_malleus'"
+                                   " AND practice = 1 AND correct IS NULL AND score IS NULL") == 1);
   CHECK(test::scalarCount(c.admin, "SELECT COUNT(*) FROM class_audit WHERE action = 'lesson_keys' AND actor = '" +
                                        c.instructor + "' AND target = '6 questions'") == 1);
 
@@ -350,15 +369,16 @@ TEST_CASE("ClassLessonGrading_AnswersSentBeforeTheKeysAreGradedWhenTheyArePublis
   CHECK(test::scalarCount(c.admin, "SELECT COUNT(*) FROM class_events WHERE uuid = '" + identifyUuid +
                                        "' AND correct = 0 AND score = 0.5") == 1);
   CHECK(test::scalarCount(c.admin, "SELECT COUNT(*) FROM class_events WHERE question_id = 'toy.ossicles.locate_malleus'"
-                                   " AND correct = 0") == 1);  // 0.4 mm is outside the new 0.1 mm
+                                   " AND practice = 1 AND correct IS NULL") == 1);  // still practice
   REQUIRE(publishLessonKeys(instructor, c.code, test::toyLessonKeys(), std::nullopt));
 
   CHECK(record("SELECT at_record_event('" + newUuid() + "', '" + c.code + "', '" + c.sam + "', 'lesson_finished', " +
                std::to_string(now) + ", 'toy.ossicles', '', '', NULL, 1.0, '{\"score\": 1.0}')") == "stored");
-  // The lesson's end: the mean of the server's grades (1, the corrected 0.5, 1), not her 1.0.
+  // The lesson's end: the mean of the server's grades (1, the corrected 0.5; the practice pick left
+  // out), not her 1.0.
   auto end = c.admin.prepare("SELECT score, payload FROM class_events WHERE kind = 'lesson_finished'");
   REQUIRE(end);
   REQUIRE(*end->step());
-  CHECK(end->real(0) == doctest::Approx(2.5 / 3.0));
-  CHECK(json::parse(end->text(1))["score"].get<double>() == doctest::Approx(2.5 / 3.0));
+  CHECK(end->real(0) == doctest::Approx(1.5 / 2.0));
+  CHECK(json::parse(end->text(1))["score"].get<double>() == doctest::Approx(1.5 / 2.0));
 }

@@ -234,7 +234,7 @@ TEST_CASE("An answer is stored with its progress, ability and difficulty in one 
   r.response.stepIndex = 3;
   r.response.questionId = "toy.ossicles.locate_malleus";
   r.response.structureId = "malleus";
-  r.response.answer.pick = quiz::Pick{.structure = "incus", .distanceMm = 0.25, .pixel = std::nullopt};
+  r.response.answer.pick = quiz::Pick{.structure = "incus", .distanceMm = 0.25, .pixel = std::nullopt, .view = ""};
   r.response.correct = true;
   r.response.score = 1;
   r.response.latencyMs = 4321;
@@ -702,7 +702,7 @@ TEST_CASE("Exam attempts and their items round-trip; an item's answer is written
   record.position = 1;
   record.answer.questionId = "toy.exam.locate.incus";
   record.answer.structureId = "incus";
-  record.answer.answer.pick = quiz::Pick{.structure = "incus", .distanceMm = 0, .pixel = std::nullopt};
+  record.answer.answer.pick = quiz::Pick{.structure = "incus", .distanceMm = 0, .pixel = std::nullopt, .view = ""};
   record.answer.correct = true;
   record.answer.score = 1;
   record.answer.latencyMs = 3000;

@@ -16,7 +16,7 @@ inline quiz::Answer rightAnswer(const quiz::ResolvedQuestion& q,
                                 const std::vector<Structure>& structures = toyStructures()) {
   quiz::Answer a;
   switch (q.question.kind) {
-    case quiz::QuestionKind::Locate: a.pick = quiz::Pick{q.question.target, 0.0, std::nullopt}; break;
+    case quiz::QuestionKind::Locate: a.pick = quiz::Pick{q.question.target, 0.0, std::nullopt, ""}; break;
     case quiz::QuestionKind::Identify:
     case quiz::QuestionKind::Relation: a.choice = q.keyChoice; break;
     case quiz::QuestionKind::Order: a.order = q.keyOrder; break;
@@ -32,7 +32,7 @@ inline quiz::Answer rightAnswer(const quiz::ResolvedQuestion& q,
 inline quiz::Answer wrongAnswer(const quiz::ResolvedQuestion& q) {
   quiz::Answer a;
   switch (q.question.kind) {
-    case quiz::QuestionKind::Locate: a.pick = quiz::Pick{"", 0.0, std::nullopt}; break;
+    case quiz::QuestionKind::Locate: a.pick = quiz::Pick{"", 0.0, std::nullopt, ""}; break;
     case quiz::QuestionKind::Identify:
     case quiz::QuestionKind::Relation: a.choice = q.keyChoice == 0 ? 1 : 0; break;
     case quiz::QuestionKind::Order: a.order = {q.keyOrder.rbegin(), q.keyOrder.rend()}; break;

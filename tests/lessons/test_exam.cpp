@@ -82,7 +82,7 @@ struct Fixture {
 quiz::Answer rightAnswer(const quiz::ResolvedQuestion& q) {
   quiz::Answer a;
   switch (q.question.kind) {
-    case quiz::QuestionKind::Locate: a.pick = quiz::Pick{.structure = q.question.target, .distanceMm = 0, .pixel = std::nullopt}; break;
+    case quiz::QuestionKind::Locate: a.pick = quiz::Pick{.structure = q.question.target, .distanceMm = 0, .pixel = std::nullopt, .view = ""}; break;
     case quiz::QuestionKind::Identify: a.choice = q.keyChoice; break;
     default: a.text = q.question.target; break;
   }
@@ -93,7 +93,7 @@ quiz::Answer wrongAnswer(const quiz::ResolvedQuestion& q) {
   quiz::Answer a;
   const std::string other = q.question.target == "malleus" ? "incus" : "malleus";
   switch (q.question.kind) {
-    case quiz::QuestionKind::Locate: a.pick = quiz::Pick{.structure = other, .distanceMm = 3.0, .pixel = std::nullopt}; break;
+    case quiz::QuestionKind::Locate: a.pick = quiz::Pick{.structure = other, .distanceMm = 3.0, .pixel = std::nullopt, .view = ""}; break;
     case quiz::QuestionKind::Identify: a.choice = (q.keyChoice + 1) % int(q.choices.size()); break;
     default: a.text = other; break;
   }

@@ -51,7 +51,7 @@ std::vector<LearnerRecords> learners() {
   r.attempts = {{11, 7, "inner_ear", LessonMode::Guided, 1'790'000'000, 1'790'000'600, 0.75},
                 {12, 7, "facial nerve/1", LessonMode::QuizOnly, 1'790'001'000, std::nullopt, 0}};
   quiz::Answer pick, choice, text, order;
-  pick.pick = quiz::Pick{.structure = "cochlea", .distanceMm = 0.4, .pixel = std::nullopt};
+  pick.pick = quiz::Pick{.structure = "cochlea", .distanceMm = 0.4, .pixel = std::nullopt, .view = ""};
   choice.choice = 2;
   text.text = "vestibule";
   order.order = std::vector<std::string>{"malleus", "incus", "stapes"};
@@ -119,7 +119,7 @@ ExamRecord exam() {
   locate.question.question.kind = quiz::QuestionKind::Locate;
   locate.question.question.target = "stapes";
   locate.answer = quiz::Answer{};
-  locate.answer->pick = quiz::Pick{.structure = "incus", .distanceMm = 2.5, .pixel = std::nullopt};
+  locate.answer->pick = quiz::Pick{.structure = "incus", .distanceMm = 2.5, .pixel = std::nullopt, .view = ""};
   locate.answeredAt = 1'790'002'200;
   ExamItem unanswered;
   unanswered.position = 2;

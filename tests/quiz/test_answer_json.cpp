@@ -50,5 +50,30 @@ TEST_CASE("AnswerJson_MalformedLinesAreErrorsSayingWhy") {
         "column 40, field 'distance_mm': number 1e999 is out of range (beyond ±1.8e308)");
   CHECK(message(R"({"choice": 1e309})").find("field 'choice': number 1e309 is out of range") != std::string::npos);
   // Keys quoted printably: no escape sequence reaches the terminal.
-  CHECK(message("{\"\\u001b[2J\": 1}") == "unknown field '\\x1b[2J' (expected choice, text, pick with distance_mm, or order)");
+  CHECK(message("{\"\\u001b[2J\": 1}") == "unknown field '\\x1b[2J' (expected choice, text, pick with distance_mm, pixel and view, or order)");
+}
+
+TEST_CASE("AnswerJson_APickOnAPictureKeepsItsPixelAndView_WhichAClassServerGrades") {
+  Answer a;
+  a.pick = Pick{.structure = "malleus", .distanceMm = 0.25, .pixel = std::array<int, 2>{181, 7}, .view = "400x300-00ff"};
+  const std::string json = answerToJson(a);
+  auto again = answerFromJson(json);
+  REQUIRE(again);
+  REQUIRE(again->pick);
+  CHECK(again->pick->structure == "malleus");
+  CHECK(again->pick->pixel == std::array<int, 2>{181, 7});
+  CHECK(again->pick->view == "400x300-00ff");
+  CHECK(answerToJson(*again) == json);
+  // A pixel alone (an exam item's, graded elsewhere) has no view.
+  auto exam = answerFromJson(R"({"pick": "", "pixel": [3, 4]})");
+  REQUIRE(exam);
+  CHECK(exam->pick->view.empty());
+  const auto message = [](const char* line) {
+    auto r = answerFromJson(line);
+    return r ? std::string() : r.error().message;
+  };
+  CHECK(message(R"({"pick": "malleus", "pixel": [1.5, 2]})") == "pixel: must be [x, y] in whole pixels");
+  CHECK(message(R"({"pick": "malleus", "pixel": [1, 2, 3]})") == "pixel: must be [x, y] in whole pixels");
+  CHECK(message(R"({"pick": "malleus", "view": "v"})") == "view: must be the id of the view a pixel was picked on");
+  CHECK(message(R"({"view": "v", "choice": 1})") == "view: only allowed with pick");
 }

@@ -51,7 +51,7 @@ ResolvedQuestion nameQuestion(const std::string& target, std::vector<std::string
 
 Answer pickAnswer(const std::string& structure, double distanceMm) {
   Answer a;
-  a.pick = Pick{.structure = structure, .distanceMm = distanceMm, .pixel = std::nullopt};
+  a.pick = Pick{.structure = structure, .distanceMm = distanceMm, .pixel = std::nullopt, .view = ""};
   return a;
 }
 

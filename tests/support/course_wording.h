@@ -75,7 +75,7 @@ inline std::vector<std::string> jargonIn(const std::string& text) {
 inline quiz::Answer rightAnswerTo(const quiz::ResolvedQuestion& q, const std::vector<Structure>& structures) {
   quiz::Answer a;
   switch (q.question.kind) {
-    case quiz::QuestionKind::Locate: a.pick = quiz::Pick{q.question.target, 0, std::nullopt}; break;
+    case quiz::QuestionKind::Locate: a.pick = quiz::Pick{q.question.target, 0, std::nullopt, ""}; break;
     case quiz::QuestionKind::Identify:
     case quiz::QuestionKind::Relation: a.choice = q.keyChoice; break;
     case quiz::QuestionKind::Name:
@@ -92,7 +92,7 @@ inline quiz::Answer wrongAnswerTo(const quiz::ResolvedQuestion& q, const std::ve
   quiz::Answer a;
   switch (q.question.kind) {
     case quiz::QuestionKind::Locate:
-      a.pick = quiz::Pick{q.question.target == structures.front().id ? structures.back().id : structures.front().id, 7.5, std::nullopt};
+      a.pick = quiz::Pick{q.question.target == structures.front().id ? structures.back().id : structures.front().id, 7.5, std::nullopt, ""};
       break;
     case quiz::QuestionKind::Identify:
     case quiz::QuestionKind::Relation: a.choice = (q.keyChoice + 1) % int(q.choices.size()); break;

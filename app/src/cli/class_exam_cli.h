@@ -16,6 +16,14 @@ int runClassOpenExam(const cli::Args& args);
 int runClassCloseExam(const cli::Args& args);
 // `class keys CODE --db SERVER [--course ID] [--local-db PATH]` (cmd_class_keys.cpp).
 int runClassKeys(const cli::Args& args);
+// Publishes the answer keys of `courses` (their locate questions' pixels included) to class `code`
+// on `server` as `by`, printing a line per course. A course whose dataset is not on this machine
+// is skipped with a line saying what to run, or fails when `stopAtFirstMissing`. Without
+// `locatePixels` the locate keys hold no views (their answers are practice until `class keys`
+// publishes them; the line says so). Returns how many keys were published.
+Result<int> publishClassKeys(db::Database& server, const std::string& code, LearningSession& session,
+                             const std::vector<lessons::Course>& courses, const std::optional<std::string>& by,
+                             bool stopAtFirstMissing, bool locatePixels);
 
 // When `userName` joined a class whose server has `examId` open, sits it there (items from the
 // server, answers graded there) and returns the exit status; nullopt when the exam is this

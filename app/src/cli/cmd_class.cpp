@@ -42,7 +42,9 @@ constexpr const char* kClassHelp =
     "Each person has their own login (`class account`); on the server a login is who you are, and\n"
     "--user can only repeat it (the administrator's login names the member it acts for).\n"
     "  create    (the administrator) makes a class, prints its code and puts the installed courses\n"
-    "            on the server; NAME becomes its coordinator\n"
+    "            on the server with their answer keys (those whose dataset this machine has; the\n"
+    "            others are named, for `class keys`; locate questions need `class keys` for their\n"
+    "            pictures' pixels); NAME becomes its coordinator\n"
     "  join      joins NAME to the class with CODE as a student, on the server and in the local\n"
     "            database (--db, default: the usual one): from then on NAME's answers, lesson\n"
     "            starts and ends in `play` and the desktop are sent to the class. While the server\n"
@@ -67,7 +69,9 @@ constexpr const char* kClassHelp =
     "  close-exam ends it: no new sittings; open ones are handed in with what they answered\n"
     "  keys      an instructor or coordinator publishes the answer keys of the courses (--course: one)\n"
     "            from this machine (--local-db) to the server, which then grades every lesson and\n"
-    "            review answer itself; until then the class's answers wait there ungraded\n";
+    "            review answer itself; until then the class's answers wait there ungraded (`class\n"
+    "            progress` counts them). A locate answer counts when picked on the question's\n"
+    "            picture in `play`; any other locate pick is kept there as practice\n";
 
 constexpr const char* kSyncHelp =
     "usage: anatomy-tutor sync [--db PATH]\n\n"
@@ -109,10 +113,22 @@ int runCreate(const cli::Args& args) {
   auto made = db::createClass(*server, args.positional()[1], *args.user());
   if (!made) return reportError("class create: " + made.error().message);
   // The server judges events against the course (its questions, lessons and prerequisites).
-  if (auto seeded = db::seedCourses(*server, courseDirectory()); !seeded)
-    return reportError("class create: putting the courses on the server: " + seeded.error().message);
+  auto seeded = db::seedCourses(*server, courseDirectory());
+  if (!seeded) return reportError("class create: putting the courses on the server: " + seeded.error().message);
   terminalPrintf("class '%s': code %s (%s is its coordinator)\n", made->title.c_str(), made->code.c_str(),
               args.user()->c_str());
+  // Their answer keys go with them, so that the server grades answers from the first one on: each
+  // course whose dataset this machine has (--local-db); the others are named with what to run.
+  auto learning = LearningSession::open(args.value("local-db"));
+  if (!learning) return reportError("class create: the answer keys: " + learning.error().message);
+  std::vector<lessons::Course> courses;
+  for (const db::SeedReport& r : *seeded) {
+    auto course = (*learning)->curriculum().course(r.courseId);
+    if (course) courses.push_back(std::move(*course));
+    else terminalPrintf("course %s: its answer keys were not published (%s)\n", r.courseId.c_str(), course.error().message.c_str());
+  }
+  auto published = publishClassKeys(*server, made->code, **learning, courses, args.user(), false, false);
+  if (!published) return reportError("class create: publishing the answer keys: " + published.error().message);
   std::string shown = db::withoutPassword(*args.db());  // the password is not printed
   if (shown != *args.db()) shown.insert(shown.find('@'), ":PASSWORD");
   terminalPrintf("make each person's login with: anatomy-tutor class account %s NAME --role student --db '%s'\n",
@@ -181,12 +197,13 @@ int runClassProgress(const cli::Args& args) {
   if (!progress) return reportError("class progress: " + progress.error().message);
   if (args.has("csv")) {
     terminalPrintf("student,answers,correct,structures,lessons_started,lessons_finished,last_active_unix,withdrawn,"
-                   "exams_handed_in,exam_score\n");
+                   "exams_handed_in,exam_score,ungraded,practice\n");
     for (const auto& s : progress->students)
-      terminalPrintf("%s,%d,%d,%d,%d,%d,%s,%s,%d,%s\n", quiz::csvQuoted(s.userName).c_str(), s.answers, s.correct,
+      terminalPrintf("%s,%d,%d,%d,%d,%d,%s,%s,%d,%s,%d,%d\n", quiz::csvQuoted(s.userName).c_str(), s.answers, s.correct,
                      s.structures, s.lessonsStarted, s.lessonsFinished,
                      s.lastActive ? std::to_string(*s.lastActive).c_str() : "",
-                     quiz::csvQuoted(s.withdrawal.value_or("")).c_str(), s.examsHandedIn, examScore(s, false).c_str());
+                     quiz::csvQuoted(s.withdrawal.value_or("")).c_str(), s.examsHandedIn, examScore(s, false).c_str(),
+                     s.ungraded, s.practice);
     return 0;
   }
   terminalPrintf("Class %s — %s: %s, %s received\n\n", progress->info.code.c_str(), progress->info.title.c_str(),
@@ -199,6 +216,19 @@ int runClassProgress(const cli::Args& args) {
                    share(s.correct, s.answers).c_str(), s.structures, s.lessonsStarted, s.lessonsFinished,
                    examScore(s, true).c_str(), when(s.lastActive).c_str(),
                 s.withdrawal ? ("  (withdrawn: " + *s.withdrawal + ")").c_str() : "");
+  int ungraded = 0, practice = 0;
+  for (const auto& s : progress->students) {
+    ungraded += s.ungraded;
+    practice += s.practice;
+  }
+  if (ungraded > 0)
+    terminalPrintf("\n%s not graded yet: their answer keys are not on the server; publish them from an "
+                   "instructor's machine with: anatomy-tutor class keys %s --db SERVER\n",
+                   str::countOf(ungraded, "answer").c_str(), progress->info.code.c_str());
+  if (practice > 0)
+    terminalPrintf("%s kept as practice and not counted: locate picks the server cannot grade (made outside the "
+                   "question's picture in `play`)\n",
+                   str::countOf(practice, "answer").c_str());
   if (!progress->structures.empty()) {
     terminalPrintf("\n%-24s %9s %8s %6s\n", "structure", "students", "answers", "right");
     for (const auto& s : progress->structures)

@@ -139,6 +139,14 @@ void sendClassEvents(PlayContext& ctx, bool now = false) {
   if (!line.empty()) terminalPrintf("  (%s)\n", line.c_str());
 }
 
+// A locate pick that is not a pixel on the question's picture (a point in mm) is practice on a
+// class server (db/src/class_lesson_locate_sql.cpp): the student is told so.
+void notePracticePick(const PlayContext& ctx, const quiz::Answer& answer) {
+  if (ctx.classEvents && answer.pick && answer.pick->view.empty())
+    terminalPrintf("  (your class server keeps this pick as practice: there a locate answer counts only as the pixel "
+                   "x y picked on the question's picture)\n");
+}
+
 // play --review COURSE: review questions until nothing is due or the answers end.
 int runReview(const std::string& courseId, PlayContext& ctx) {
   auto course = ctx.curriculum.course(courseId);
@@ -194,6 +202,7 @@ int runReview(const std::string& courseId, PlayContext& ctx) {
                                                  -> Result<std::optional<quiz::Grade>> {
       auto grade = review.answer(answer, terminalRender(scene), latencyMs);
       if (!grade) return tl::unexpected(grade.error());
+      notePracticePick(ctx, answer);
       return std::optional<quiz::Grade>(*grade);
     });
     if (!result) return reportError("play: " + result.error().message + " (earlier answers are saved)");
@@ -284,6 +293,7 @@ int runLesson(const std::string& lessonId, lessons::LessonMode mode, PlayContext
                                                   -> Result<std::optional<quiz::Grade>> {
         auto grade = engine.answer(answer, terminalRender(view->scene), latencyMs);
         if (!grade) return tl::unexpected(grade.error());
+        notePracticePick(ctx, answer);
         return std::optional<quiz::Grade>(*grade);
       }, false, true);
       if (asked && *asked == Asked::Back) {

@@ -1,16 +1,24 @@
 #include "terminal_locate_key.h"
 
+#include <nlohmann/json.hpp>
+
 namespace at::app {
 
-Result<std::vector<db::PixelRun>> acceptedPixelRuns(TerminalViews& views, const TerminalPicture& picture,
-                                                    const quiz::ResolvedQuestion& question,
-                                                    const quiz::GradingContext& context) {
+Result<std::vector<db::PixelRun>> pixelRunsOf(TerminalViews& views, const TerminalPicture& picture,
+                                              const quiz::ResolvedQuestion& question,
+                                              const quiz::GradingContext& context) {
   std::vector<db::PixelRun> runs;
-  for (int y = 0; y < picture.height; ++y) {
+  // Only pixels whose pick can reach the target (or its tolerance) are tried; the others are wrong.
+  const auto box = picture.slice ? std::nullopt
+                                 : views.pixelsThatCanPick(question.question.target, question.question.toleranceMm);
+  const int x0 = box ? std::max(0, (*box)[0]) : 0, y0 = box ? std::max(0, (*box)[1]) : 0;
+  const int x1 = box ? std::min(picture.width - 1, (*box)[2]) : picture.width - 1;
+  const int y1 = box ? std::min(picture.height - 1, (*box)[3]) : picture.height - 1;
+  for (int y = y0; y <= y1; ++y) {
     int runStart = -1;
-    for (int x = 0; x <= picture.width; ++x) {
+    for (int x = x0; x <= x1 + 1; ++x) {
       bool right = false;
-      if (x < picture.width) {
+      if (x <= x1) {
         auto pick = views.pickPixel(x, y, question.question.target);
         if (!pick) return tl::unexpected(pick.error());
         auto grade = quiz::gradeLocate(question, *pick, context);
@@ -24,10 +32,42 @@ Result<std::vector<db::PixelRun>> acceptedPixelRuns(TerminalViews& views, const 
       }
     }
   }
-  if (runs.empty())
+  return runs;
+}
+
+Result<std::vector<db::PixelRun>> acceptedPixelRuns(TerminalViews& views, const TerminalPicture& picture,
+                                                    const quiz::ResolvedQuestion& question,
+                                                    const quiz::GradingContext& context) {
+  auto runs = pixelRunsOf(views, picture, question, context);
+  if (runs && runs->empty())
     return fail("no pixel of the picture of locate item '" + question.question.id + "' picks the " +
                 question.question.target + ": it cannot be answered right");
   return runs;
+}
+
+Result<std::map<std::string, std::string>> lessonLocateViews(TerminalViews& views, const lessons::Course& course,
+                                                             quiz::KeyComputer& keys,
+                                                             const quiz::GradingContext& context) {
+  std::map<std::string, std::string> out;
+  for (const lessons::Lesson& lesson : course.lessons)
+    for (const lessons::Step& step : lesson.steps) {
+      if (step.kind != lessons::StepKind::Question || step.question.kind != quiz::QuestionKind::Locate) continue;
+      const std::string where = "question " + step.question.id + " (course " + course.id + ")";
+      auto resolved = quiz::resolveQuestion(step.question, keys);
+      if (!resolved) return tl::unexpected(withContext("the key of " + where, resolved.error()));
+      auto picture = views.frame(lessons::sceneFor(step), true);  // as `play` shows a locate question
+      if (!picture) return tl::unexpected(withContext("the picture of " + where, picture.error()));
+      auto runs = pixelRunsOf(views, *picture, *resolved, context);
+      if (!runs) return tl::unexpected(withContext("the pixels of " + where, runs.error()));
+      nlohmann::json list = nlohmann::json::array();
+      for (const db::PixelRun& r : *runs) list.push_back({r.y, r.xFrom, r.xTo});
+      out[step.question.id] = nlohmann::json::array({nlohmann::json{{"view", views.lastViewId()},
+                                                                     {"width", picture->width},
+                                                                     {"height", picture->height},
+                                                                     {"runs", std::move(list)}}})
+                                  .dump();
+    }
+  return out;
 }
 
 }  // namespace at::app

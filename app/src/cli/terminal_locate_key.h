@@ -1,10 +1,14 @@
 // The key of a locate item graded on a class server: which pixels of the item's picture count.
 #pragma once
 
+#include <map>
+#include <string>
 #include <vector>
 
 #include "db/class_exams.h"
+#include "lessons/curriculum.h"
 #include "quiz/grading.h"
+#include "quiz/keys.h"
 #include "terminal_views.h"
 
 namespace at::app {
@@ -15,5 +19,18 @@ namespace at::app {
 Result<std::vector<db::PixelRun>> acceptedPixelRuns(TerminalViews& views, const TerminalPicture& picture,
                                                     const quiz::ResolvedQuestion& question,
                                                     const quiz::GradingContext& context);
+// The same, empty when no pixel picks right (every click on the picture is then wrong).
+Result<std::vector<db::PixelRun>> pixelRunsOf(TerminalViews& views, const TerminalPicture& picture,
+                                              const quiz::ResolvedQuestion& question,
+                                              const quiz::GradingContext& context);
+
+// The fixed views of `course`'s lesson locate questions, by question id, as a lesson key's "views"
+// (db/class_lesson_keys.h; JSON [{view, width, height, runs: [[y, x_from, x_to], …]}]): the picture
+// `play` shows for the question (its scene, framed as a locate question), its id
+// (TerminalViews::lastViewId) and the pixels whose click the laptop's grader counts. Works with
+// pictures off (nothing is drawn).
+Result<std::map<std::string, std::string>> lessonLocateViews(TerminalViews& views, const lessons::Course& course,
+                                                             quiz::KeyComputer& keys,
+                                                             const quiz::GradingContext& context);
 
 }  // namespace at::app

@@ -1,7 +1,10 @@
 #include "terminal_views.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
+#include <cstring>
 #include <sstream>
 
 #include "commands.h"
@@ -143,9 +146,9 @@ Result<render::RenderSettings> TerminalViews::settingsFor(const Structure& selec
   return settings;
 }
 
-Result<TerminalPicture> TerminalViews::show(const lessons::QuestionScene& scene, const std::string& stem, bool region,
-                                            const std::optional<std::string>& visibleTarget) {
-  if (!renderer_) return fail("pictures are off");
+Result<TerminalPicture> TerminalViews::frame(const lessons::QuestionScene& scene, bool region,
+                                             const std::optional<std::string>& visibleTarget) {
+  if (!gradients_) gradients_ = std::make_unique<render::GradientVolume>(render::computeGradientVolume(dataset_.volume));
   const Structure* selected = dataset_.findStructure(scene.structure);
   if (!selected) return fail("the view's structure '" + scene.structure + "' is not in dataset '" + dataset_.id + "'");
   auto preset = presetOf(*selected, scene.presetId);
@@ -187,24 +190,150 @@ Result<TerminalPicture> TerminalViews::show(const lessons::QuestionScene& scene,
     chosen = *own;
   }
 
-  renderer_->setSelected(selected->label);
-  if (field) {
-    if (auto st = renderer_->setField(*field); !st) return tl::unexpected(st.error());
-  } else {
-    renderer_->clearField();
-  }
-  auto image = renderer_->render(*chosen);
-  if (!image) return tl::unexpected(image.error());
-  const fs::path path = dir_ / (stem + ".png");
-  RgbImage picture = render::toRgb(*image);
-  render::drawOverlays(picture, chosen->camera);  // orientation marker and scale bar
-  drawPixelRulers(picture);
-  if (auto st = writePng(path.string(), picture); !st) return tl::unexpected(st.error());
   lastSettings_ = *chosen;
   lastSelected_ = selected->label;
   lastField_ = field;
   lastSlice_.reset();
-  return TerminalPicture{path.string(), kWidth, kHeight, false};
+  return TerminalPicture{"", kWidth, kHeight, false};
+}
+
+Result<TerminalPicture> TerminalViews::show(const lessons::QuestionScene& scene, const std::string& stem, bool region,
+                                            const std::optional<std::string>& visibleTarget) {
+  if (!renderer_) return fail("pictures are off");
+  auto framed = frame(scene, region, visibleTarget);
+  if (!framed) return framed;
+  renderer_->setSelected(lastSelected_);
+  if (lastField_) {
+    if (auto st = renderer_->setField(*lastField_); !st) return tl::unexpected(st.error());
+  } else {
+    renderer_->clearField();
+  }
+  auto image = renderer_->render(*lastSettings_);
+  if (!image) return tl::unexpected(image.error());
+  const fs::path path = dir_ / (stem + ".png");
+  RgbImage picture = render::toRgb(*image);
+  render::drawOverlays(picture, lastSettings_->camera);  // orientation marker and scale bar
+  drawPixelRulers(picture);
+  if (auto st = writePng(path.string(), picture); !st) return tl::unexpected(st.error());
+  framed->path = path.string();
+  return framed;
+}
+
+namespace {
+
+// Grows `box` (index space: min i j k, max i j k) by the voxels of `grid` where `inside` holds.
+template <typename T, typename Inside>
+void growBox(const Grid<T>& grid, Inside inside, std::array<double, 6>& box) {
+  const Dims& d = grid.geometry.dims;
+  for (int k = 0; k < d.z; ++k)
+    for (int j = 0; j < d.y; ++j)
+      for (int i = 0; i < d.x; ++i)
+        if (inside(grid.voxels[d.index(i, j, k)])) {
+          box[0] = std::min(box[0], double(i)), box[1] = std::min(box[1], double(j)), box[2] = std::min(box[2], double(k));
+          box[3] = std::max(box[3], double(i)), box[4] = std::max(box[4], double(j)), box[5] = std::max(box[5], double(k));
+        }
+}
+
+// The pixel box (x0, y0, x1, y1, inclusive, clamped) that the 8 corners of `box` (an index box of
+// `g`, grown by one voxel) project into; nullopt when a corner lies behind the eye.
+std::optional<std::array<int, 4>> projectedBox(const Geometry& g, const std::array<double, 6>& box,
+                                               const render::RenderSettings& view) {
+  double x0 = 1e300, y0 = 1e300, x1 = -1e300, y1 = -1e300;
+  for (int corner = 0; corner < 8; ++corner) {
+    const Vec3 ijk = {corner & 1 ? box[3] + 1 : box[0] - 1, corner & 2 ? box[4] + 1 : box[1] - 1,
+                      corner & 4 ? box[5] + 1 : box[2] - 1};
+    const auto p = view.camera.project(g.indexToPatient(ijk), view.width, view.height);
+    if (!p) return std::nullopt;
+    x0 = std::min(x0, (*p)[0]), y0 = std::min(y0, (*p)[1]), x1 = std::max(x1, (*p)[0]), y1 = std::max(y1, (*p)[1]);
+  }
+  const auto clampTo = [](double v, int n) { return int(std::clamp(v, -1.0, double(n))); };
+  return std::array<int, 4>{clampTo(std::floor(x0) - 1, view.width), clampTo(std::floor(y0) - 1, view.height),
+                            clampTo(std::ceil(x1) + 1, view.width), clampTo(std::ceil(y1) + 1, view.height)};
+}
+
+}  // namespace
+
+std::optional<std::array<int, 4>> TerminalViews::pixelsThatCanPick(const std::string& targetId, double toleranceMm) {
+  if (!lastSettings_) return std::nullopt;
+  const Structure* target = dataset_.findStructure(targetId);
+  if (!target) return std::nullopt;
+  const render::RenderSettings& view = *lastSettings_;
+  // A pick names the target only on its voxels (the label under the hit point).
+  std::array<double, 6> labelBox{1e300, 1e300, 1e300, -1e300, -1e300, -1e300};
+  growBox(dataset_.labels, [&](std::uint16_t v) { return v == target->label; }, labelBox);
+  if (labelBox[0] > labelBox[3]) return std::array<int, 4>{0, 0, -1, -1};  // not in the dataset: nothing picks it
+  auto box = projectedBox(dataset_.labels.geometry, labelBox, view);
+  if (!box) return std::nullopt;
+  if (toleranceMm > 0) {  // or within the tolerance: the target field's voxels at most that far (pickAt)
+    auto preset = presetOf(*target, "");
+    if (!preset) return std::nullopt;
+    auto field = fieldOf(*target, *preset);
+    if (!field) return std::nullopt;
+    std::array<double, 6> near{1e300, 1e300, 1e300, -1e300, -1e300, -1e300};
+    growBox(**field, [&](float d) { return d >= 0 && d <= toleranceMm + 1e-6; }, near);
+    if (near[0] <= near[3]) {
+      auto more = projectedBox((*field)->geometry, near, view);
+      if (!more) return std::nullopt;
+      *box = {std::min((*box)[0], (*more)[0]), std::min((*box)[1], (*more)[1]), std::max((*box)[2], (*more)[2]),
+              std::max((*box)[3], (*more)[3])};
+    }
+  }
+  return box;
+}
+
+namespace {
+
+// FNV-1a over 64-bit words (the tail bytes one by one): a fingerprint, not a cryptographic hash.
+std::uint64_t mixBytes(std::uint64_t h, const void* data, std::size_t size) {
+  const auto* bytes = static_cast<const unsigned char*>(data);
+  std::size_t i = 0;
+  for (; i + 8 <= size; i += 8) {
+    std::uint64_t word;
+    std::memcpy(&word, bytes + i, 8);
+    h = (h ^ word) * 0x100000001b3ull;
+    h ^= h >> 29;
+  }
+  for (; i < size; ++i) h = (h ^ bytes[i]) * 0x100000001b3ull;
+  return h;
+}
+
+}  // namespace
+
+std::string TerminalViews::lastViewId() {
+  if (!lastSettings_) return "";
+  if (!dataDigest_) {
+    std::uint64_t h = 0xcbf29ce484222325ull;
+    h = mixBytes(h, dataset_.volume.voxels.data(), dataset_.volume.voxels.size() * sizeof(std::int16_t));
+    h = mixBytes(h, dataset_.labels.voxels.data(), dataset_.labels.voxels.size() * sizeof(std::uint16_t));
+    const auto& g = dataset_.labels.geometry;
+    char grid[400];
+    std::snprintf(grid, sizeof grid, "%s|%.5f %.5f %.5f|%.4f %.4f %.4f|%.6f %.6f %.6f %.6f %.6f %.6f %.6f %.6f %.6f",
+                  g.dims.toString().c_str(), g.spacingMm[0], g.spacingMm[1], g.spacingMm[2], g.originMm[0],
+                  g.originMm[1], g.originMm[2], g.direction.m[0][0], g.direction.m[0][1], g.direction.m[0][2],
+                  g.direction.m[1][0], g.direction.m[1][1], g.direction.m[1][2], g.direction.m[2][0],
+                  g.direction.m[2][1], g.direction.m[2][2]);
+    dataDigest_ = mixBytes(h, grid, std::strlen(grid));
+  }
+  // Everything a pick on the view depends on, as text rounded well below a pixel's size.
+  const render::RenderSettings& r = *lastSettings_;
+  const render::Camera& c = r.camera;
+  const Vec3 eye = c.eye();
+  char text[640];
+  std::snprintf(text, sizeof text,
+                "%dx%d|%.4f %.4f %.4f|%.4f %.4f %.4f|%.4f %.4f %.4f|%.4f %.4f %d|%s|%.5f %.5f %.5f %.5f|%d %d %d|%u",
+                r.width, r.height, eye[0], eye[1], eye[2], c.target[0], c.target[1], c.target[2], c.up()[0], c.up()[1],
+                c.up()[2], c.distanceMm, c.fovYDeg, int(c.orthographic),
+                r.clip ? (std::to_string(r.clip->normal[0]) + " " + std::to_string(r.clip->normal[1]) + " " +
+                          std::to_string(r.clip->normal[2]) + " " + std::to_string(r.clip->d)).c_str()
+                       : "-",
+                r.stepMm, r.opacityRefMm, r.distanceUnit, r.distanceOffset, int(r.jitter), int(r.shading),
+                r.tableSize, unsigned(lastSelected_));
+  std::uint64_t h = mixBytes(*dataDigest_, text, std::strlen(text));
+  const std::string preset = render::presetToJson(r.preset);
+  h = mixBytes(h, preset.data(), preset.size());
+  char id[40];
+  std::snprintf(id, sizeof id, "%dx%d-%016llx", r.width, r.height, (unsigned long long)h);
+  return id;
 }
 
 Result<TerminalPicture> TerminalViews::showSlice(const std::string& targetId, const std::string& stem, bool highlight) {

@@ -60,6 +60,15 @@ class TerminalViews {
   // a click on the target's centre picks the target.
   Result<TerminalPicture> show(const lessons::QuestionScene& scene, const std::string& stem, bool region = false,
                                const std::optional<std::string>& visibleTarget = std::nullopt);
+  // The view show() would draw (same arguments), made the one picks are read on without drawing it
+  // (pictures may be off; the returned picture has no path): what a locate key is worked out on.
+  Result<TerminalPicture> frame(const lessons::QuestionScene& scene, bool region = false,
+                                const std::optional<std::string>& visibleTarget = std::nullopt);
+  // The id of the last 3-D view (empty after a slice or before any view): equal on two machines
+  // exactly when a pixel picks the same there — the same size, camera, clip, preset, selected
+  // structure, sampling and dataset voxels. A class server grades a lesson's locate pixel by it.
+  std::string lastViewId();
+
   // An axial CT slice through the target's centre, without labels, as dir/stem.png; with
   // `highlight` ("show me on a slice") the target alone overlaid in its colour.
   Result<TerminalPicture> showSlice(const std::string& target, const std::string& stem, bool highlight = false);
@@ -67,6 +76,11 @@ class TerminalViews {
   // The structure under pixel (x, y) of the last picture, with the weighted distance in mm from
   // `target` to the picked point (for tolerance bands; −1 when it could not be measured).
   Result<quiz::Pick> pickPixel(double x, double y, const std::string& target);
+  // The pixels (x0, y0, x1, y1 inclusive; x1 < x0 when none) of the last 3-D view outside which no
+  // pick is graded right for `target` with `toleranceMm`: the projection of the target's voxels and
+  // of its field's voxels within the tolerance, each grown by a voxel. nullopt: any pixel may (a
+  // slice, or a box reaching behind the eye).
+  std::optional<std::array<int, 4>> pixelsThatCanPick(const std::string& target, double toleranceMm);
   // The structure at a point in patient LPS millimetres.
   Result<quiz::Pick> pickPointMm(const Vec3& pointMm, const std::string& target);
 
@@ -99,6 +113,7 @@ class TerminalViews {
   std::uint16_t lastSelected_ = 0;
   const FloatVolume* lastField_ = nullptr;
   std::optional<SliceRequest> lastSlice_;
+  std::optional<std::uint64_t> dataDigest_;  // of the volume's and labels' voxels, for lastViewId
 };
 
 // The pictures of a terminal run: none when `off` (--no-views), else written into `dir` (default

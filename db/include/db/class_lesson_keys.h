@@ -4,6 +4,7 @@
 // (quiz::resolveQuestion), and publishes them; no login can read them back.
 #pragma once
 
+#include <map>
 #include <optional>
 #include <string>
 #include <vector>
@@ -20,13 +21,19 @@ namespace at::db {
 // target, the offered choices and key choice (identify, relation), the tolerance (locate), the
 // structures the path meets in order and every structure's id and normalised spellings (order), the
 // spellings without side words of the target and of the others, its side and whether it is asked
-// (name; as setNameKey in class_exams.h).
-std::string lessonKeyJson(const quiz::ResolvedQuestion& question, const quiz::GradingContext& context);
+// (name; as setNameKey in class_exams.h). A locate key holds `locateViews` (a JSON array of the
+// question's fixed views: [{view, width, height, runs: [[y, x_from, x_to], …]}]) when given: the
+// server grades a pixel picked on one of them and keeps every other locate answer as practice
+// (class_lesson_locate_sql.cpp).
+std::string lessonKeyJson(const quiz::ResolvedQuestion& question, const quiz::GradingContext& context,
+                          const std::string& locateViews = "");
 
-// The keys of every question step of `course`, resolved through `keys`. An error names the
+// The keys of every question step of `course`, resolved through `keys`; a locate question's key
+// holds its views from `locateViews` (by question id) when it is there. An error names the
 // question that cannot be resolved.
 Result<std::vector<std::string>> courseLessonKeys(const lessons::Course& course, quiz::KeyComputer& keys,
-                                                  const quiz::GradingContext& context);
+                                                  const quiz::GradingContext& context,
+                                                  const std::map<std::string, std::string>& locateViews = {});
 
 // Publishes (or replaces) `keys` (lessonKeyJson objects) for class `code` on `server`, as `by`
 // (a person's login acts as itself; see class_accounts.h). Answers the class already sent to those

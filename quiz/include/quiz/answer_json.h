@@ -1,6 +1,7 @@
 // Answers as one-line JSON, the format of `play --answers` lines and of stored responses:
 //   {"choice": 2}   {"text": "cochlea"}   {"pick": "stapes", "distance_mm": 0.3}   {"order": ["a","b"]}
-// ("pick" may be "" or null for a click on nothing; "distance_mm" is optional).
+// ("pick" may be "" or null for a click on nothing; "distance_mm" is optional; a pick on a picture
+// also keeps "pixel": [x, y] and, on a fixed view, "view": its id).
 #pragma once
 
 #include <string>

@@ -91,6 +91,9 @@ struct Pick {
   // The pixel (x, y) clicked, when the pick is judged elsewhere (a class server grades a locate
   // item from the pixel on its picture; structure and distance then stay unset).
   std::optional<std::array<int, 2>> pixel;
+  // With a pixel picked on a fixed view (a lesson's question picture): that view's id, from which
+  // a class server grades the pixel (TerminalViews::lastViewId); empty otherwise.
+  std::string view;
 };
 
 // A student's answer; exactly the member for the question's kind is set.

@@ -374,7 +374,7 @@ Result<quiz::Grade> LessonController::answer(const quiz::Answer& answer) {
 bool LessonController::clicked(const std::string& structure, double distanceMm) {
   if (!wantsClick()) return false;
   quiz::Answer a;
-  a.pick = quiz::Pick{structure, distanceMm};
+  a.pick = quiz::Pick{structure, distanceMm, std::nullopt, ""};  // a free view: no pixel a server could grade
   if (auto grade = answer(a); !grade) report("answer: " + grade.error().message);
   return true;
 }
