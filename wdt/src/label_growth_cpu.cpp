@@ -28,6 +28,7 @@
 #include "wdt/huge_pages.h"
 #include "wdt/stencil.h"
 #include "wdt/step_cost.h"
+#include "neighbour_steps.h"
 
 namespace at {
 
@@ -474,18 +475,7 @@ class CpuGrowthEngine final : public GrowthEngine {
   std::size_t resetGrownFrom(const std::vector<GrowthSeed>& removed, std::vector<std::pair<int, Dist>>& touched) {
     if (removed.empty() || keys_.empty()) return 0;
     const Dims d = p_.grid.dims;
-    struct Step {
-      int dx, dy, dz;
-      std::int64_t delta;
-      float len;
-    };
-    std::vector<Step> steps;
-    for (int dz = -1; dz <= 1; ++dz)
-      for (int dy = -1; dy <= 1; ++dy)
-        for (int dx = -1; dx <= 1; ++dx)
-          if (dx || dy || dz)
-            steps.push_back({dx, dy, dz, dx + std::int64_t(d.x) * (dy + std::int64_t(d.y) * dz),
-                             wdt::stepLength(dx, dy, dz, spacing_[0], spacing_[1], spacing_[2])});
+    const std::vector<wdt::NeighbourStep> steps = wdt::neighbourSteps(d, spacing_[0], spacing_[1], spacing_[2]);
     std::vector<std::uint8_t> found(d.count(), 0);
     std::vector<std::size_t> list;
     for (const GrowthSeed& s : removed)
@@ -500,7 +490,7 @@ class CpuGrowthEngine final : public GrowthEngine {
         const float fu = densityOf(p_, u);
         const int x = int(u % std::size_t(d.x)), y = int(u / std::size_t(d.x) % std::size_t(d.y)),
                   z = int(u / (std::size_t(d.x) * std::size_t(d.y)));
-        for (const Step& st : steps) {
+        for (const wdt::NeighbourStep& st : steps) {
           if (!d.contains(x + st.dx, y + st.dy, z + st.dz)) continue;
           const std::size_t v = std::size_t(std::int64_t(u) + st.delta);
           if (found[v]) continue;

@@ -13,6 +13,7 @@
 #include "wdt/growth_engine.h"
 #include "wdt/stencil.h"
 #include "wdt/step_cost.h"
+#include "neighbour_steps.h"
 
 namespace at {
 
@@ -24,18 +25,7 @@ template <CostKernel K>
 void growExactly(const GrowthProblem& p, std::vector<std::uint64_t>& key) {
   const Dims d = p.grid.dims;
   const float sx = float(p.grid.spacingMm[0]), sy = float(p.grid.spacingMm[1]), sz = float(p.grid.spacingMm[2]);
-  struct Step {
-    int dx, dy, dz;
-    std::int64_t delta;
-    float len;
-  };
-  std::vector<Step> steps;
-  for (int dz = -1; dz <= 1; ++dz)
-    for (int dy = -1; dy <= 1; ++dy)
-      for (int dx = -1; dx <= 1; ++dx)
-        if (dx || dy || dz)
-          steps.push_back({dx, dy, dz, dx + std::int64_t(d.x) * (dy + std::int64_t(d.y) * dz),
-                           wdt::stepLength(dx, dy, dz, sx, sy, sz)});
+  const std::vector<wdt::NeighbourStep> steps = wdt::neighbourSteps(d, sx, sy, sz);
   using Entry = std::pair<std::uint64_t, std::uint32_t>;
   std::priority_queue<Entry, std::vector<Entry>, std::greater<Entry>> heap;
   for (std::size_t i = 0; i < key.size(); ++i)
@@ -48,7 +38,7 @@ void growExactly(const GrowthProblem& p, std::vector<std::uint64_t>& key) {
     const float fu = densityOf(p, u);
     const int x = int(u % std::uint32_t(d.x)), y = int(u / std::uint32_t(d.x) % std::uint32_t(d.y)),
               z = int(u / (std::uint32_t(d.x) * std::uint32_t(d.y)));
-    for (const Step& s : steps) {
+    for (const wdt::NeighbourStep& s : steps) {
       if (!d.contains(x + s.dx, y + s.dy, z + s.dz)) continue;
       const std::uint32_t v = std::uint32_t(std::int64_t(u) + s.delta);
       const std::int32_t cost =
