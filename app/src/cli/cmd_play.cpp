@@ -9,6 +9,7 @@
 #include <map>
 #include <unistd.h>
 
+#include "class_practice.h"
 #include "class_sync.h"
 #include "cli_args.h"
 #include "commands.h"
@@ -129,6 +130,7 @@ struct PlayContext {
   std::optional<std::string> viewsDir;
   bool noViews = false;
   OutboxSender* classEvents = nullptr;  // sends the user's answers to their class server
+  bool classMember = false;             // ... which the user joined (answersGoToClassServer)
 };
 
 // Sends what waits for the class server (`now`: whatever the last failure), printing a line when
@@ -140,11 +142,10 @@ void sendClassEvents(PlayContext& ctx, bool now = false) {
 }
 
 // A locate pick that is not a pixel on the question's picture (a point in mm) is practice on a
-// class server (db/src/class_lesson_locate_sql.cpp): the student is told so.
+// class server (class_practice.h): a student whose answers go to one is told so.
 void notePracticePick(const PlayContext& ctx, const quiz::Answer& answer) {
-  if (ctx.classEvents && answer.pick && answer.pick->view.empty())
-    terminalPrintf("  (your class server keeps this pick as practice: there a locate answer counts only as the pixel "
-                   "x y picked on the question's picture)\n");
+  if (ctx.classMember && answer.pick && !classServerGrades(*answer.pick))
+    terminalPrintf("  (%s)\n", practicePickNote().c_str());
 }
 
 // play --review COURSE: review questions until nothing is due or the answers end.
@@ -367,7 +368,7 @@ int runPlay(const Argv& argv) {
 
   OutboxSender classEvents((*session)->database());
   PlayContext ctx{**session, (*session)->curriculum(), (*session)->progress(), **source, user->id, args->value("views"),
-                  args->has("no-views"), &classEvents};
+                  args->has("no-views"), &classEvents, answersGoToClassServer((*session)->database(), user->name)};
   const auto mode = args->has("quiz-only") ? lessons::LessonMode::QuizOnly : lessons::LessonMode::Guided;
   const int status = reviewCourse ? runReview(*reviewCourse, ctx) : runLesson(args->positional()[0], mode, ctx);
   sendClassEvents(ctx, true);  // however it ended: what was saved goes to the class too

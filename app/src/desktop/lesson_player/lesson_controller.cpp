@@ -7,6 +7,7 @@
 #include <map>
 #include <set>
 
+#include "class_practice.h"
 #include "quiz/answer_json.h"
 #include "quiz/grading.h"
 #include "quiz/keys.h"
@@ -124,6 +125,7 @@ Status LessonController::refresh() {
     }
   }
   courseIndex_ = std::clamp(courseIndex_, 0, std::max(0, int(courses_.size()) - 1));
+  answersGoToClass_ = answersGoToClassServer(session_.database(), user_->name);  // `class join` may come meanwhile
   auto attempts = session_.progress().attempts(user_->id);
   if (!attempts) return tl::unexpected(attempts.error());
   std::set<std::string> finished;
@@ -359,6 +361,7 @@ Result<quiz::Grade> LessonController::answer(const quiz::Answer& answer) {
   if (answer.choice) asked_->choice = *answer.choice;
   if (answer.text) asked_->text = *answer.text;
   if (answer.order) asked_->order = *answer.order;
+  asked_->keptAsPractice = answersGoToClass_ && answer.pick && !classServerGrades(*answer.pick);
   json e = {{"event", "graded"},       {"question", asked_->question.question.id},
             {"kind", quiz::toString(asked_->question.question.kind)},
             {"answer", json::parse(quiz::answerToJson(answer), nullptr, false)},
@@ -366,6 +369,7 @@ Result<quiz::Grade> LessonController::answer(const quiz::Answer& answer) {
             {"feedback", grade->feedback}, {"review", asked_->review},
             {"recorded", true}};  // graded means committed: answer() and answerReview() store first
   if (answer.pick) e["clicked"] = answer.pick->structure;
+  if (asked_->keptAsPractice) e["class_practice"] = true;
   events_(e);
   if (auto st = refresh(); !st) report(st.error().message);
   return grade;

@@ -100,12 +100,18 @@ class LessonController {
     std::vector<std::string> order;     // Order: the student's sequence so far (ids)
     int choice = -1;                    // Identify/Relation: the selected choice
     std::string text;                   // Name: typed so far
+    // Answered with a locate pick the class server the answers go to keeps as practice (a click
+    // in the free 3-D view carries no pixel of a fixed picture): the panel says so (class_practice.h).
+    bool keptAsPractice = false;
     std::chrono::steady_clock::time_point shownAt = std::chrono::steady_clock::now();
   };
   Asked* asked() { return asked_ ? &*asked_ : nullptr; }
   const std::string& message() const { return message_; }
   std::string displayName(const std::string& structureId) const;
 
+  // The user's answers go to a class server (answersGoToClassServer, read at each refresh), which
+  // keeps a locate click in the 3-D view as practice: the panel says so before and after one.
+  bool answersGoToClass() const { return answersGoToClass_; }
   // The current step is a locate question not yet answered: a click in the view answers it.
   bool wantsClick() const;
   // ... accepting clicks near its target (a tolerance in mm): a click off the target needs its
@@ -190,6 +196,7 @@ class LessonController {
   std::vector<lessons::QuestionOutcome> review_;  // ... question by question
   std::string runningLesson_;
   std::string message_;
+  bool answersGoToClass_ = false;
 };
 
 }  // namespace at::app

@@ -22,11 +22,12 @@ nlohmann::json& drawn() {
 }
 }  // namespace
 
-void noteWidget(const std::string& name) {
+void noteWidget(const std::string& name, const std::string& text) {
   const ImVec2 a = ImGui::GetItemRectMin(), b = ImGui::GetItemRectMax();
   ImDrawList* list = ImGui::GetWindowDrawList();
   const ImVec2 c0 = list->GetClipRectMin(), c1 = list->GetClipRectMax();
-  drawing()[name] = {{"rect", {a.x, a.y, b.x, b.y}}, {"clip", {c0.x, c0.y, c1.x, c1.y}}};
+  nlohmann::json& w = drawing()[name] = {{"rect", {a.x, a.y, b.x, b.y}}, {"clip", {c0.x, c0.y, c1.x, c1.y}}};
+  if (!text.empty()) w["text"] = text;
 }
 
 void clearWidgetRects() {

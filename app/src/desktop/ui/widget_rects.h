@@ -10,11 +10,12 @@
 
 namespace at::app {
 
-// Call right after drawing the widget (it reads ImGui's last item).
-void noteWidget(const std::string& name);
+// Call right after drawing the widget (it reads ImGui's last item). `text`: the words it shows,
+// reported with its rectangles when not empty.
+void noteWidget(const std::string& name, const std::string& text = "");
 void clearWidgetRects();
 // {"frame": frames drawn so far, "widgets": {name: {"rect": [x0, y0, x1, y1], "clip": [x0, y0,
-// x1, y1]}}} of the frame drawn last.
+// x1, y1], "text"?: words}}} of the frame drawn last.
 nlohmann::json widgetRects();
 
 }  // namespace at::app

@@ -5,6 +5,7 @@
 #include <imgui.h>
 #include <imgui_stdlib.h>
 
+#include "class_practice.h"
 #include "core/strings.h"
 #include "lessons/repositories.h"
 #include "ui/panels.h"
@@ -21,6 +22,14 @@ void wrappedColoured(const ImVec4& colour, const std::string& text) {
   ImGui::PushTextWrapPos(0);
   ImGui::TextColored(colour, "%s", printableUiText(text).c_str());
   ImGui::PopTextWrapPos();
+}
+
+// A note on what the class server does with a locate answer (class_practice.h), in brackets as the
+// terminal prints it; noted as widget `name` with its words.
+void classPracticeNote(const char* name, const std::string& note) {
+  const std::string text = "(" + note + ")";
+  wrappedColoured(kPartly, text);
+  noteWidget(name, text);
 }
 }  // namespace
 
@@ -192,6 +201,7 @@ void LessonPanel::drawQuestion(LessonController& lessons) {
   switch (q.kind) {
     case quiz::QuestionKind::Locate:
       ImGui::TextDisabled("Click it in the 3-D view.");
+      if (open && lessons.answersGoToClass()) classPracticeNote("lesson_practice_ahead", practiceClickAheadNote());
       break;
     case quiz::QuestionKind::Identify:
     case quiz::QuestionKind::Relation:
@@ -248,6 +258,7 @@ void LessonPanel::drawQuestion(LessonController& lessons) {
     const ImVec4 colour = a.grade->correct ? kRight : a.grade->score > 0 ? kPartly : kWrong;
     ImGui::TextColored(colour, "%s", printableUiText(a.grade->feedback).c_str());
     noteWidget("lesson_feedback");
+    if (a.keptAsPractice) classPracticeNote("lesson_practice_kept", practicePickNote());
     if (a.review) ImGui::TextDisabled("Saved: the review queue is updated.");
     if (!a.grade->correct) {
       if (ImGui::Button("Show me"))  // the answer in its own view
