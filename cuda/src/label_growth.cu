@@ -211,8 +211,10 @@ class CudaGrowthEngine final : public GrowthEngine {
       float base = base_, scale = scale_;
       void* params[] = {&keys, &density, &g, &sx, &sy, &sz, &base, &scale, &f};
       // Four blocks a multiprocessor at most (32 listed voxels each at once): most levels are small
-      // next to a grid barrier's cost.
-      return check(cudaLaunchCooperativeKernel(reinterpret_cast<const void*>(kernel), dim3(unsigned(std::min(perSm, 4) * sms)),
+      // next to a grid barrier's cost. AT_CUDA_GROWTH_RESET_BLOCKS=N sets N (for comparisons).
+      int perSmUsed = std::min(perSm, 4);
+      if (const char* v = std::getenv("AT_CUDA_GROWTH_RESET_BLOCKS")) perSmUsed = std::clamp(std::atoi(v), 1, perSm);
+      return check(cudaLaunchCooperativeKernel(reinterpret_cast<const void*>(kernel), dim3(unsigned(perSmUsed * sms)),
                                                dim3(256), params, 0, s),
                    "cudaLaunchCooperativeKernel(local reset kernel)");
     }));
