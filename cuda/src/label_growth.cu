@@ -178,7 +178,7 @@ class CudaGrowthEngine final : public GrowthEngine {
   Status resetGrownFrom(const std::vector<GrowthSeed>& removed) {
     const cudaStream_t s = stream_.get();
     const std::size_t n = grid_.dims.count();
-    if (foundList_.size() != n) {
+    if (foundCount_.size() != 1) {  // allocated last: after a failed allocation all three are again
       AT_ASSIGN(foundList_, DeviceBuffer<unsigned>::allocate(n));
       AT_ASSIGN(foundBits_, DeviceBuffer<unsigned>::allocate(n / 32 + 1));
       AT_ASSIGN(foundCount_, DeviceBuffer<unsigned>::allocate(1));
