@@ -134,3 +134,39 @@ TEST_CASE("Seeds on a brick face grow into the next brick though their own brick
       }
   }
 }
+
+// The range-limited growths of segment::RangedGrowth copy the ordinary growth's density bytes
+// (LabelGrowth::create with sameValues) instead of smoothing the volume again. A growth made so
+// equals the exact reference of its own params bit for bit; one whose source was made with other
+// smoothing or another window does not take the source's values (it still equals its reference).
+TEST_CASE("A growth that copies another growth's values equals the exact reference; other settings' values are not copied") {
+  std::mt19937_64 rng(test::freshSeed("growth with copied values"));
+  const Dims sizes[] = {{17, 1, 9}, {16, 16, 16}, {33, 20, 7}};
+  for (const Dims& dims : sizes) {
+    const Volume volume = randomVolume(rng, dims);
+    GrowthParams params = randomParams(rng);
+    params.smoothingVoxels = std::uniform_real_distribution<float>(0.5f, 1.5f)(rng);
+    params.edgeSigma = std::uniform_int_distribution<int>(0, 1)(rng) ? 0.0f : std::uniform_real_distribution<float>(20, 300)(rng);
+    GrowthParams limited = params;
+    limited.limitRange = true;
+    limited.rangeMin = float(std::uniform_int_distribution<int>(-1000, 500)(rng));
+    limited.rangeMax = limited.rangeMin + float(std::uniform_int_distribution<int>(200, 2000)(rng));
+    const int labels = std::uniform_int_distribution<int>(2, 5)(rng);
+    const std::vector<GrowthSeed> seeds = randomSeeds(rng, dims, labels, std::max(labels, int(dims.count() / 400) + 2));
+    GrowthParams otherSmoothing = params, otherWindow = params;
+    otherSmoothing.smoothingVoxels += 0.75f;
+    otherWindow.windowMax += 500.0f;
+    CAPTURE(dims.toString());
+    CAPTURE(params.smoothingVoxels);
+    CAPTURE(params.edgeSigma);
+    for (const GrowthParams& sourceParams : {params, otherSmoothing, otherWindow}) {
+      auto source = LabelGrowth::create(volume, sourceParams);
+      REQUIRE(source);
+      REQUIRE(source->update(seeds));
+      auto growth = LabelGrowth::create(volume, limited, &*source);
+      REQUIRE(growth);
+      REQUIRE(growth->update(seeds));
+      requireEqualToExact(*growth, volume, seeds, limited);
+    }
+  }
+}

@@ -88,6 +88,7 @@ class CpuGrowthEngine final : public GrowthEngine {
   }
 
   bool resetsGrownFromRemovedSeeds() const override { return true; }
+  const std::vector<std::uint8_t>* hostDensity() const override { return &p_.density; }
 
   Status readLabels(LabelMap& out) override {
     out = LabelMap(p_.grid, 0);
