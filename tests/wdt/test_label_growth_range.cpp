@@ -3,7 +3,9 @@
 // every grown voxel is joined to a seed of its label through voxels inside the range.
 #include <doctest/doctest.h>
 
+#include <algorithm>
 #include <deque>
+#include <map>
 #include <random>
 
 #include "growth_cases.h"
@@ -168,5 +170,54 @@ TEST_CASE("A growth that copies another growth's values equals the exact referen
       REQUIRE(growth->update(seeds));
       requireEqualToExact(*growth, volume, seeds, limited);
     }
+  }
+}
+
+// Bricks (16³) whose every voxel lies outside the range are never visited by the CPU engine (a
+// visit could change nothing there). Volumes where whole bricks are out of range, beside bricks
+// partly and wholly in range, with seeds in all of them (seeds outside the range keep their label
+// and do not spread): the first growth and each later seed edit (seeds added, removed, relabelled)
+// equal the exact reference bit for bit.
+TEST_CASE("Range-limited growth with whole bricks outside the range: first growth and seed edits equal the exact reference") {
+  std::mt19937_64 rng(test::freshSeed("range-limited growth, blocked bricks"));
+  const Dims dims{40, 35, 33};  // 3 × 3 × 3 bricks, the last of each axis partial
+  Volume volume = randomVolume(rng, dims);
+  GrowthParams params = randomParams(rng);
+  params.limitRange = true;
+  params.rangeMin = 0;
+  params.rangeMax = 3000;
+  // Every brick: wholly outside the range (−1000), wholly inside (values raised to >= 0), or mixed.
+  // The first three bricks take one kind each, so every seed draws all three.
+  std::uniform_int_distribution<int> kind(0, 2);
+  for (int bz = 0; bz < 3; ++bz)
+    for (int by = 0; by < 3; ++by)
+      for (int bx = 0; bx < 3; ++bx) {
+        const int b = bx + 3 * (by + 3 * bz), k = b < 3 ? b : kind(rng);
+        for (int z = bz * 16; z < std::min(dims.z, bz * 16 + 16); ++z)
+          for (int y = by * 16; y < std::min(dims.y, by * 16 + 16); ++y)
+            for (int x = bx * 16; x < std::min(dims.x, bx * 16 + 16); ++x) {
+              std::int16_t& v = volume.at(x, y, z);
+              if (k == 0) v = -1000;
+              else if (k == 1) v = std::int16_t(std::abs(int(v)));
+            }
+      }
+  const int labels = std::uniform_int_distribution<int>(2, 5)(rng);
+  std::vector<GrowthSeed> seeds = randomSeeds(rng, dims, labels, 60);
+  auto growth = LabelGrowth::create(volume, params);
+  REQUIRE(growth);
+  REQUIRE(growth->update(seeds));
+  requireEqualToExact(*growth, volume, seeds, params);
+  for (int edit = 0; edit < 4; ++edit) {
+    CAPTURE(edit);
+    std::shuffle(seeds.begin(), seeds.end(), rng);
+    seeds.resize(seeds.size() * 3 / 4);  // some removed
+    if (edit % 2) seeds.front().label = seeds.back().label;  // one relabelled (maybe to its own label)
+    std::map<std::size_t, std::uint16_t> unique;
+    for (const GrowthSeed& s : seeds) unique.emplace(s.index, s.label);
+    for (const GrowthSeed& s : randomSeeds(rng, dims, labels, 15)) unique.emplace(s.index, s.label);  // some added
+    seeds.clear();
+    for (const auto& [index, label] : unique) seeds.push_back({index, label});
+    REQUIRE(growth->update(seeds));
+    requireEqualToExact(*growth, volume, seeds, params);
   }
 }

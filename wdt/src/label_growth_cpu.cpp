@@ -57,6 +57,15 @@ class CpuGrowthEngine final : public GrowthEngine {
     brickCount_ = std::size_t(bricks_[0]) * bricks_[1] * bricks_[2];
     queue_ = std::make_unique<BrickQueue>(brickCount_);
     settled_.assign(brickCount_, 0);
+    if (!p_.blocked.empty()) {
+      // A brick whose every voxel is blocked (range limit) is never queued: no step enters or
+      // leaves a blocked voxel, so a visit could change nothing; its seeds are written directly.
+      allBlocked_.assign(brickCount_, 1);
+      for (int z = 0; z < d.z; ++z)
+        for (int y = 0; y < d.y; ++y)
+          for (int x = 0; x < d.x; ++x)
+            if (!p_.blocked[d.index(x, y, z)]) allBlocked_[std::size_t(x / E + bricks_[0] * (y / E + bricks_[1] * (z / E)))] = 0;
+    }
     for (int a = 0; a < 3; ++a) spacing_[a] = float(p_.grid.spacingMm[a]);
     for (int a = 0; a < 3; ++a) lengths_[a] = wdt::axisSweepLengths(a, spacing_[0], spacing_[1], spacing_[2]);
     avx2_ = __builtin_cpu_supports("avx2") && !std::getenv("AT_WDT_NO_AVX2");
@@ -81,7 +90,7 @@ class CpuGrowthEngine final : public GrowthEngine {
     }
     if (change.fromScratch) std::fill(settled_.begin(), settled_.end(), 0);
     for (const auto& [b, key] : touched) settled_[std::size_t(b)] = 0;
-    queue_->push(touched);
+    pushVisitable(touched);
     runVisits(threads, control, stats);
     stats.msCompute = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
     return {};
@@ -223,6 +232,13 @@ class CpuGrowthEngine final : public GrowthEngine {
     return list.size();
   }
 
+  // Queues `items` but the bricks whose every voxel is blocked (allBlocked_).
+  void pushVisitable(std::vector<std::pair<int, Dist>>& items) {
+    if (!allBlocked_.empty())
+      std::erase_if(items, [&](const std::pair<int, Dist>& item) { return allBlocked_[std::size_t(item.first)] != 0; });
+    queue_->push(items);
+  }
+
   // Visits until no brick is queued or the run is cancelled (queued bricks then stay queued).
   void runVisits(int threads, const WdtControl& control, GrowthStats& stats) {
     std::atomic<std::size_t> visits{0};
@@ -236,7 +252,7 @@ class CpuGrowthEngine final : public GrowthEngine {
       for (int b; (b = queue_->pop(control.cancel, stop)) >= 0; ++n) {
         queued.clear();
         visit(b, *box, *stamps, queued);
-        queue_->push(queued);
+        pushVisitable(queued);
         queue_->finish(b);
       }
       if (stop) cancelled = true;
@@ -355,6 +371,7 @@ class CpuGrowthEngine final : public GrowthEngine {
   std::size_t brickCount_ = 0;
   std::unique_ptr<BrickQueue> queue_;  // kept between calls: a cancelled run's bricks stay queued
   std::vector<std::uint8_t> settled_;  // per brick: its interior is settled (see RowStamps)
+  std::vector<std::uint8_t> allBlocked_;  // per brick, with a range limit: every voxel blocked (never queued)
   float spacing_[3] = {1, 1, 1};
   SweepLengths lengths_[3]{};
   bool avx2_ = false;
