@@ -46,6 +46,7 @@ DesktopModel::DesktopModel(LearningSession& session, const render::PresetLibrary
       options_(std::move(options)),
       events_(std::move(events)),
       messageSink_(std::move(messages)),
+      fieldUnits_(options_.measureFieldUnit, options_.scripted),
       explore_(library, [this](const std::string& m) { message(m); }),
       scheduler_(options_.frameBudgetMs, options_.renderScale) {
   const auto sink = [this](json j) { event(std::move(j)); };
@@ -137,6 +138,7 @@ Status DesktopModel::showDataset(Dataset dataset, const std::string& startStruct
   if (expert_ && expertOn()) setExpert(false);
   if (auto st = explore_.setDataset(*next, startStructure, startPreset); !st) return st;
   fields_.reset();  // it refers to the dataset being replaced
+  fieldUnits_.reset();  // a running measure reads the volume being replaced
   segment_->stopGrowth();  // it reads the volumes being replaced
   dataset_ = std::move(next);
   gradients_ = render::computeGradientVolume(dataset_->volume);
@@ -361,6 +363,7 @@ void DesktopModel::beginFrame(FieldTarget* target) {
   // on screen has converged (the student is reading), so that it does not slow the image down.
   fields_->holdPrefetches(viewAvailable_ && !scheduler_.finished(explore_.revision()));
   fields_->update(target, recorder_);
+  if (fieldUnits_.poll()) explore_.touch();  // the shown field's own unit arrived: render again
   turnTowardTarget();
 }
 
@@ -371,24 +374,23 @@ std::optional<RenderPlan> DesktopModel::planFrame(Clock::time_point now) {
 }
 
 render::FieldScale DesktopModel::fieldScaleOf(const ExploreState::Shown& shown, const render::StructureFrame& frame) const {
-  const DistanceField* field = fields_ ? fields_->pickField() : nullptr;
-  if (!field || explore_.fieldLabel() != shown.label) {
-    render::FieldScale bySize;
-    bySize.distanceUnit = render::distanceUnitFor(frame);
-    return bySize;
-  }
-  const render::BoneLevels bone = render::boneLevels(shown.preset);
+  render::FieldScale bySize;
+  bySize.distanceUnit = render::distanceUnitFor(frame);
+  std::shared_ptr<const DistanceField> field = fields_ ? fields_->shownField() : nullptr;
+  if (!field || explore_.fieldLabel() != shown.label) return bySize;
   // Once per field, data TF and framed view (not while orbiting): rays through the framed view.
-  const render::FieldView view{explore_.framedCamera(), explore_.framedPixels()[0], explore_.framedPixels()[1],
-                               explore_.clipPlane()};
   // The view counts only for the modes whose unit comes from the bone it sees (field_scale.h).
-  const bool seen = render::unitFromSeenBone(shown.preset.mode);
-  if (fieldUnit_.field != field || fieldUnit_.label != shown.label || fieldUnit_.bone != bone ||
-      fieldUnit_.seen != seen || (seen && !(fieldUnit_.view == view))) {
-    fieldUnit_ = {field, shown.label, bone, seen, view,
-                  render::fieldScale(field->distances, dataset_->volume, nullptr, frame, bone, seen ? &view : nullptr)};
-  }
-  return fieldUnit_.scale;
+  FieldUnitRequest request;
+  request.key.field = field.get();
+  request.key.label = shown.label;
+  request.key.bone = render::boneLevels(shown.preset);
+  request.key.seen = render::unitFromSeenBone(shown.preset.mode);
+  request.key.view = {explore_.framedCamera(), explore_.framedPixels()[0], explore_.framedPixels()[1],
+                      explore_.clipPlane()};
+  request.field = std::move(field);
+  request.volume = &dataset_->volume;
+  request.frame = frame;
+  return fieldUnits_.unitFor(request).value_or(bySize);
 }
 
 render::RenderSettings DesktopModel::renderSettings(const RenderPlan& plan) const {
@@ -460,12 +462,13 @@ void DesktopModel::endFrame(Clock::time_point end, double ms) {
 
 bool DesktopModel::settled() const {
   const bool labelsShown = !segment_->attached() || segment_->labelsRevision() == editorLabelsRevision_;
-  return labelsShown && (!viewAvailable_ || scheduler_.finished(explore_.revision())) && fields_->settled() && !turnToward_;
+  return labelsShown && (!viewAvailable_ || scheduler_.finished(explore_.revision())) && fields_->settled() &&
+         !fieldUnits_.measuring() && !turnToward_;
 }
 
 bool DesktopModel::idle() const {
   return !options_.scripted && (!viewAvailable_ || scheduler_.finished(explore_.revision())) && !fields_->busy() &&
-         !fields_->uploading();
+         !fields_->uploading() && !fieldUnits_.measuring();
 }
 
 }  // namespace at::app

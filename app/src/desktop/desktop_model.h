@@ -22,6 +22,7 @@
 #include "analytics/analytics_controller.h"
 #include "exams/exam_controller.h"
 #include "view/explore_state.h"
+#include "view/field_unit.h"
 #include "view/field_view.h"
 #include "view/frame_scheduler.h"
 #include "course_editor/course_editor.h"
@@ -79,6 +80,9 @@ struct DesktopOptions {
   double frameBudgetMs = 100;       // at rest, finer levels predicted to cost more are not rendered
   bool scripted = false;            // a UI script drives the app: events are printed, screenshots at full quality
   bool prefetchLessonFields = true; // a lesson's next steps' fields computed while the student reads
+  // How the shown field's distance unit is measured (empty: measureFieldUnit). On a worker thread
+  // unless scripted (view/field_unit.h).
+  FieldUnitMeasure measureFieldUnit;
 };
 
 class SegmentController;
@@ -273,18 +277,12 @@ class DesktopModel {
   std::vector<std::string> notes_;
   std::unique_ptr<Dataset> dataset_;
   ShownScan shown_;  // dataset_'s volume as loaded, where showing it left out non-anatomy
-  // The shown field's distance unit (render/field_scale.h), computed once per field and framed view.
-  struct FieldUnit {
-    const DistanceField* field = nullptr;
-    std::uint16_t label = 0;
-    render::BoneLevels bone;
-    bool seen = false;  // measured with the view's seen bone (render::unitFromSeenBone)
-    render::FieldView view;
-    render::FieldScale scale;
-  };
-  mutable FieldUnit fieldUnit_;
+  // The shown field's distance unit (render/field_scale.h), measured once per field and framed
+  // view on a worker (synchronously when scripted); taken each frame in beginFrame. Declared after
+  // dataset_: destroyed (its measure waited for) before the volume it reads.
+  mutable FieldUnits fieldUnits_;
   // The shown field's distance unit and offset (render/field_scale.h); from the structure's size
-  // until its field is there.
+  // until its field is there and its unit measured (meanwhile the last unit of the same structure).
   render::FieldScale fieldScaleOf(const ExploreState::Shown& shown, const render::StructureFrame& frame) const;
   render::GradientVolume gradients_;
   mutable render::ShadingTableCache pickTables_;  // pickAt is const; the cache only saves work

@@ -107,6 +107,8 @@ class FieldView {
   const std::string& status() const { return status_; }
   // The host copy of the field on screen, for picking (may lag a GPU field).
   const DistanceField* pickField() const { return field_.get(); }
+  // The same, shared: for work that reads it off the UI thread (the distance unit's measure).
+  std::shared_ptr<const DistanceField> shownField() const { return field_; }
 
  private:
   std::optional<wdt::FieldRequest> request(std::uint16_t label, int downsample) const;
