@@ -389,6 +389,9 @@ TEST_CASE("The derived distance unit follows the voxel size: the same anatomy at
 }
 
 TEST_CASE("Skull CT: each mode reads as its figure - outline a thin band, fuzzy colour near the structure, lighting in its colour") {
+  // (fuzzy and lighting on the orbit from the front and from the side and on the mastoid cells:
+  // before their units came from the bone the view shows next to them, the orbit from the front
+  // coloured 15.5 % of the far bone and the mastoid's fuzzy 9 % of the bone next to it)
   auto skull = skullOrSkip();
   if (!skull) return;
   Gl* gl = glOrSkip();
@@ -396,12 +399,14 @@ TEST_CASE("Skull CT: each mode reads as its figure - outline a thin band, fuzzy 
   struct Sight {
     const char* structure;
     const char* view;
+    bool outline;  // a band is expected (see below)
   };
   // (the ear canal, now its own air from the concha to the isthmus, sits outside the bone, where
-  // no band can lie; fuzzy and lighting do not read yet on the orbit (2 % and 4 % of the near
-  // context tinted) or the mastoid cells (9 % fuzzy): open work this case does not cover)
-  for (const Sight& sight : {Sight{"zygomatic_arch_left", "lateral_left"}, Sight{"zygomatic_arch_right", "lateral_right"},
-                             Sight{"frontal_sinus", "anterior"}}) {
+  // no band can lie; the orbit's and the mastoid's bands break up (9–56 % isolated pixels): open
+  // work this case does not cover)
+  for (const Sight& sight : {Sight{"zygomatic_arch_left", "lateral_left", true}, Sight{"zygomatic_arch_right", "lateral_right", true},
+                             Sight{"frontal_sinus", "anterior", true}, Sight{"orbit_left", "anterior", false},
+                             Sight{"orbit_left", "lateral_left", false}, Sight{"mastoid_air_cells_right", "lateral_right", false}}) {
     const std::string id = sight.structure;
     CAPTURE(id);
     const Structure* s = skull->ds.findStructure(id);
@@ -418,7 +423,7 @@ TEST_CASE("Skull CT: each mode reads as its figure - outline a thin band, fuzzy 
     };
 
     // Outline (Fig. 6): the band's colour lies on the bone as a thin, connected band.
-    {
+    if (sight.outline) {
       const auto [p, im] = render(RenderMode::Outline);
       std::vector<bool> band(n);
       for (std::size_t i = 0; i < n; ++i) band[i] = !silhouette[i] && inColour(im, i, {p.distanceTf[2].rgba[0], p.distanceTf[2].rgba[1], p.distanceTf[2].rgba[2]});
@@ -434,6 +439,17 @@ TEST_CASE("Skull CT: each mode reads as its figure - outline a thin band, fuzzy 
       CHECK(shape.isolatedShare < 0.12);
     }
     // Fuzzy (Fig. 5) and lighting (Fig. 7): the structure's colour on the context lies near it.
+    // Where the bone the view shows far from the structure is about as near in D as the bone next
+    // to it (the orbit from the front: the ethmoid cells and the nasal cavity lie behind its thin
+    // medial wall), no unit colours one and not the other: there the colour must stay confined,
+    // faint if need be.
+    const Preset fuzzy = derivedPreset(skull->levels, RenderMode::Fuzzy, id);
+    const View fuzzyView = viewOf(*skull, s->label, fuzzy, sight.view);
+    const NeighbourBone bone =
+        neighbourBone(fuzzyView.field, skull->ds.volume, nullptr, boneLevels(fuzzy), fieldViewOf(fuzzyView.settings));
+    const bool separates = bone.farD >= kNeighbourSeparates * bone.nearD;
+    MESSAGE(id << " " << std::string(sight.view) << ": median D of the bone seen next to it " << bone.nearD << " (" << bone.nearRays
+                << " rays), far from it " << bone.farD << " (" << bone.farRays << " rays)");
     for (RenderMode mode : {RenderMode::Fuzzy, RenderMode::Lighting}) {
       const std::string modeName = toString(mode);
       CAPTURE(modeName);
@@ -458,7 +474,7 @@ TEST_CASE("Skull CT: each mode reads as its figure - outline a thin band, fuzzy 
       const double farSat = farDrawn ? farSaturation / double(farDrawn) : 0.0;
       MESSAGE(id << " " << std::string(toString(mode)) << ": in the structure's colour " << 100 * nearShare << " % of the context within 8 px, "
                   << 100 * farShare << " % beyond 30 px (mean saturation there " << farSat << ")");
-      CHECK(nearShare >= 0.15);
+      if (separates) CHECK(nearShare >= 0.15);
       CHECK(nearShare >= 3 * farShare);  // confined to the neighbourhood
       CHECK(farShare <= 0.15);
       CHECK(farSat <= 0.25);  // the far bone is bone-coloured, not tinted (sepia)
@@ -499,3 +515,4 @@ TEST_CASE("Every front end leaves out the CT headrest: the desktop and openDatas
   REQUIRE_MESSAGE(shown, test::errorText(shown));
   CHECK(shown->dataset.volume.voxels == skull->ds.volume.voxels);
 }
+
