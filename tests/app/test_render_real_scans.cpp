@@ -261,7 +261,12 @@ void checkFadesAndSlides(const Scan& scan, const std::vector<Case>& cases) {
     const RgbaImage bare =
         draw(*gl, scan, s->label, viewOf(scan, s->label, derivedPreset(scan.levels, RenderMode::Bare, s->id), c.view), 0);
     const double change = meanGreyChange(at0, at1), drawn = drawnShare(at0), context = meanGreyChange(bare, at1);
-    MESSAGE(structureId << ": t 0→1 changes " << change << " grey levels (the context at t = 1 adds " << context
+    // The share of the frame the structure covers (bare draws it opaque): t changes only the rest.
+    std::size_t covered = 0;
+    for (std::size_t i = 0; i < std::size_t(kSize) * kSize; ++i) covered += bare.rgba[i * 4 + 3] >= 250;
+    const double coveredShare = double(covered) / double(kSize * kSize);
+    MESSAGE(structureId << ": t 0→1 changes " << change << " grey levels (" << change / std::max(1e-9, 1 - coveredShare)
+                        << " over the " << 100 * (1 - coveredShare) << " % of the frame the structure leaves; the context at t = 1 adds " << context
                         << "); " << 100 * drawn << " % drawn at t = 0" << std::string(v.scale.cappedByRays ? " (unit capped by the view's rays)" : ""));
     CHECK(change >= c.minChange);
     if (c.fadesInView) CHECK(drawn < 0.70);
