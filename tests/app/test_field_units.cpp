@@ -101,23 +101,30 @@ FieldUnitRequest stubRequest(const Dataset& ds, std::uint16_t label, int viewWid
 
 }  // namespace
 
-TEST_CASE("FieldUnits_TheUnitTakenAfterTheAsyncMeasure_EqualsTheSynchronousFieldScale") {
+TEST_CASE("FieldUnits_TheUnitTakenAfterTheAsyncMeasure_EqualsTheRenderCommandsUnit") {
   const Dataset& ds = test::phantomOfSize(48);
   const render::PresetLibrary library(test::sourceDir() / "data" / "presets");
-  auto preset = library.load("cochlea_wdt");
-  REQUIRE_MESSAGE(preset, (preset ? "" : preset.error().message));
-  auto params = render::wdtParamsFor(*preset);
-  REQUIRE(params);
-  // Every structure, with and without the view's seen bone: the same unit either way.
-  for (const Structure& s : ds.structures) {
-    CAPTURE(s.id);
-    auto frame = render::structureFrame(ds.labels, s.label);
-    if (!frame) continue;  // not in the volume at this size
-    auto wdt = computeWdt(ds.volume, structureMask(ds.labels, s.label), *params);
-    REQUIRE(wdt);
-    auto field = std::make_shared<DistanceField>(std::move(wdt->field));
-    for (const bool seen : {false, true}) {
-      CAPTURE(seen);
+  // Every structure, in a mode of each kind of unit (around, seen, the bone next to it): the unit
+  // render::applyFieldScale sets for the render command on the same view.
+  for (const char* presetId : {"cochlea_wdt", "cochlea_fuzzy", "cochlea_lighting"}) {
+    CAPTURE(presetId);
+    auto preset = library.load(presetId);
+    REQUIRE_MESSAGE(preset, (preset ? "" : preset.error().message));
+    auto params = render::wdtParamsFor(*preset);
+    REQUIRE(params);
+    for (const Structure& s : ds.structures) {
+      CAPTURE(s.id);
+      auto frame = render::structureFrame(ds.labels, s.label);
+      if (!frame) continue;  // not in the volume at this size
+      auto wdt = computeWdt(ds.volume, structureMask(ds.labels, s.label), *params);
+      REQUIRE(wdt);
+      auto field = std::make_shared<DistanceField>(std::move(wdt->field));
+      render::RenderSettings settings;
+      settings.preset = *preset;
+      settings.camera = render::frameCamera(*frame, render::NamedView::LateralRight, 1.0);
+      settings.width = settings.height = 96;
+      const render::FieldScale sync =
+          render::applyFieldScale(settings, field->distances, ds.volume, nullptr, *frame, render::ViewRequest{});
       FieldUnitRequest r;
       r.field = field;
       r.volume = &ds.volume;
@@ -125,12 +132,10 @@ TEST_CASE("FieldUnits_TheUnitTakenAfterTheAsyncMeasure_EqualsTheSynchronousField
       r.key.field = field.get();
       r.key.label = s.label;
       r.key.bone = render::boneLevels(*preset);
-      r.key.seen = seen;
-      r.key.view.camera = render::frameCamera(*frame, render::NamedView::LateralRight, 1.0);
-      r.key.view.width = r.key.view.height = 96;
-      const render::FieldScale sync = render::fieldScale(field->distances, ds.volume, nullptr, *frame, r.key.bone,
-                                                         seen ? &r.key.view : nullptr);
-      FieldUnits units;  // render::fieldScale on a worker
+      r.key.mode = preset->mode;
+      r.key.seen = render::unitFromSeenBone(preset->mode);
+      r.key.view = render::fieldViewOf(settings);
+      FieldUnits units;  // measureFieldUnit on a worker
       CHECK_FALSE(units.unitFor(r).has_value());  // nothing taken for this structure yet: the caller's unit
       CHECK(units.measuring());
       REQUIRE(pollUntilTaken(units));
@@ -138,9 +143,11 @@ TEST_CASE("FieldUnits_TheUnitTakenAfterTheAsyncMeasure_EqualsTheSynchronousField
       const auto taken = units.unitFor(r);
       REQUIRE(taken);
       CHECK(taken->distanceUnit == sync.distanceUnit);
+      CHECK(taken->distanceUnit == settings.distanceUnit);
       CHECK(taken->distanceOffset == sync.distanceOffset);
       CHECK(taken->derived == sync.derived);
       CHECK(taken->fromSeen == sync.fromSeen);
+      CHECK(taken->fromNeighbours == sync.fromNeighbours);
       CHECK(taken->contextVoxels == sync.contextVoxels);
       CHECK_FALSE(units.measuring());  // the same key again: not measured again
       FieldUnits synchronous({}, true);  // the scripted desktop's way: the same unit at once

@@ -379,11 +379,13 @@ render::FieldScale DesktopModel::fieldScaleOf(const ExploreState::Shown& shown, 
   std::shared_ptr<const DistanceField> field = fields_ ? fields_->shownField() : nullptr;
   if (!field || explore_.fieldLabel() != shown.label) return bySize;
   // Once per field, data TF and framed view (not while orbiting): rays through the framed view.
-  // The view counts only for the modes whose unit comes from the bone it sees (field_scale.h).
+  // The view counts only for the modes whose unit comes from the bone it sees (field_scale.h),
+  // measured as render::applyFieldScale measures it for the render command (measureFieldUnit).
   FieldUnitRequest request;
   request.key.field = field.get();
   request.key.label = shown.label;
   request.key.bone = render::boneLevels(shown.preset);
+  request.key.mode = shown.preset.mode;
   request.key.seen = render::unitFromSeenBone(shown.preset.mode);
   request.key.view = {explore_.framedCamera(), explore_.framedPixels()[0], explore_.framedPixels()[1],
                       explore_.clipPlane()};

@@ -6,10 +6,20 @@
 
 namespace at::app {
 
+bool FieldUnitKey::operator==(const FieldUnitKey& o) const {
+  const bool byView = seen || render::unitFromNeighbourBone(mode);
+  return field == o.field && label == o.label && bone == o.bone && mode == o.mode && seen == o.seen &&
+         (!byView || view == o.view);
+}
+
 render::FieldScale measureFieldUnit(const FieldUnitRequest& request) {
   const FieldUnitKey& k = request.key;
-  return render::fieldScale(request.field->distances, *request.volume, nullptr, request.frame, k.bone,
-                            k.seen ? &k.view : nullptr);
+  const FloatVolume& field = request.field->distances;
+  render::FieldScale scale =
+      render::fieldScale(field, *request.volume, nullptr, request.frame, k.bone, k.seen ? &k.view : nullptr);
+  if (render::unitFromNeighbourBone(k.mode))
+    render::unitFromNeighbours(scale, render::neighbourBone(field, *request.volume, nullptr, k.bone, k.view), k.mode);
+  return scale;
 }
 
 FieldUnits::FieldUnits(FieldUnitMeasure measure, bool synchronous)

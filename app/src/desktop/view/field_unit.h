@@ -31,17 +31,17 @@
 namespace at::app {
 
 // What a unit is measured for: the field (by identity), its structure, the bone levels of the
-// preset's data TF, whether the view's seen bone counts (render::unitFromSeenBone) and, only then,
-// the framed view.
+// preset's data TF, its mode, whether the view's seen bone counts (render::unitFromSeenBone) and
+// the framed view — compared only where the mode's unit depends on it (seen, or
+// render::unitFromNeighbourBone).
 struct FieldUnitKey {
   const DistanceField* field = nullptr;
   std::uint16_t label = 0;
   render::BoneLevels bone;
+  render::RenderMode mode = render::RenderMode::Wdt;
   bool seen = false;
   render::FieldView view;
-  bool operator==(const FieldUnitKey& o) const {
-    return field == o.field && label == o.label && bone == o.bone && seen == o.seen && (!seen || view == o.view);
-  }
+  bool operator==(const FieldUnitKey& o) const;
 };
 
 struct FieldUnitRequest {
@@ -51,7 +51,8 @@ struct FieldUnitRequest {
   render::StructureFrame frame;                // the structure's frame (key.label)
 };
 
-// How a request is measured: render::fieldScale on the request (measureFieldUnit) unless a test
+// How a request is measured: as render::applyFieldScale measures it for the render command
+// (fieldScale, then unitFromNeighbours for fuzzy and lighting) in measureFieldUnit, unless a test
 // puts a stand-in in its place. Called on the worker thread (synchronous mode: the caller's).
 using FieldUnitMeasure = std::function<render::FieldScale(const FieldUnitRequest&)>;
 render::FieldScale measureFieldUnit(const FieldUnitRequest& request);
