@@ -50,9 +50,13 @@ Status addClassEventStudents(Database& db, AnalyticsInput& in, const std::set<st
       a.userId = who->second;
       a.questionId = r.text(4);
       if (!courseQuestions.count(a.questionId)) return {};
+      if (r.isNull(6)) {  // waiting for its key on the server: not evidence yet, as in class progress
+        ++in.waitingAnswers;
+        return {};
+      }
       a.order = ++order;
       a.structureId = r.text(5);
-      a.correct = !r.isNull(6) && r.integer(6) != 0;
+      a.correct = r.integer(6) != 0;
       a.score = r.isNull(7) ? (a.correct ? 1.0 : 0.0) : r.real(7);
       a.answeredAt = r.int64(2);
       if (field("source").is_string())
