@@ -3,6 +3,7 @@
 //   render_bench [--size WxH] [--volume N] [--hover-volume N] [--frames N] [--warmup N]
 //                [--cycles N] [--structure ID] [--presets DIR] [--field-downsample F]
 //                [--ray-caster compute|fragment] [--step-voxels S] [--compare-step S [--images DIR]]
+//                [--unit field|size]
 //
 // 1. frame: phantom at N³ (default 512), the structure's WDT preset with Phong shading, a field
 //    from computeWdt (backend auto; downsampled by F for the 512³ set-up), GPU time of each frame
@@ -15,6 +16,12 @@
 // --compare-step renders the frame set-up once with the default step and once with S voxels and
 // prints how far the images differ (mean |diff| per channel, share of pixels off by > 16), writing
 // both as PNG into DIR with --images.
+// --unit field (default) sets the distance unit as every front end does (render::applyFieldScale on
+// the frame's view: the field's bone in view and the view's rays) and reports what that measure
+// costs on the CPU (first call and median of 5) as a field_scale line; in the hover cycle the
+// desktop measures it again for each new field (DesktopModel::fieldScaleOf), so each cycle also
+// copies the field to the host and measures it (field_scale_ms, total_with_scale_ms). --unit size
+// keeps the unit from the structure's size alone (render::settingsFor), as before the measure.
 // EGL only: no SDL, DCMTK or SQLite.
 #include <algorithm>
 #include <chrono>
@@ -26,6 +33,7 @@
 
 #include "render/gl/egl_context.h"
 #include "render/gl/volume_renderer.h"
+#include "render/field_scale.h"
 #include "render/image.h"
 #include "render/preset.h"
 #include "render/scene.h"
@@ -62,6 +70,7 @@ struct Options {
   render::gl::RayCaster rayCaster = render::gl::RayCaster::Compute;
   std::string structure = "cochlea";
   std::string presets = AT_BENCH_PRESETS_DIR;
+  bool fieldUnit = true;  // --unit field|size
 };
 
 bool parse(int argc, char** argv, Options& o) {
@@ -86,7 +95,11 @@ bool parse(int argc, char** argv, Options& o) {
       else return false;
     } else if (a == "--structure" && (v = next())) o.structure = v;
     else if (a == "--presets" && (v = next())) o.presets = v;
-    else return false;
+    else if (a == "--unit" && (v = next())) {
+      if (std::string(v) == "field") o.fieldUnit = true;
+      else if (std::string(v) == "size") o.fieldUnit = false;
+      else return false;
+    } else return false;
   }
   return o.width > 0 && o.height > 0 && o.volume > 8 && o.hoverVolume > 8 && o.frames > 0 && o.cycles > 0 &&
          o.fieldDownsample >= 1 && o.stepVoxels >= 0 && o.compareStepVoxels >= 0;
@@ -105,7 +118,8 @@ int main(int argc, char** argv) {
     std::fprintf(stderr,
                  "usage: render_bench [--size WxH] [--volume N] [--hover-volume N] [--frames N] [--warmup N] "
                  "[--cycles N] [--structure ID] [--presets DIR] [--field-downsample F] "
-                 "[--ray-caster compute|fragment] [--step-voxels S] [--compare-step S [--images DIR]]\n");
+                 "[--ray-caster compute|fragment] [--step-voxels S] [--compare-step S [--images DIR]] "
+                 "[--unit field|size]\n");
     return 2;
   }
   auto ctx = render::gl::EglContext::create();
@@ -145,6 +159,26 @@ int main(int argc, char** argv) {
     if (!settings) return failWith(settings.error().message);
     settings->shading = true;
     settings->stepMm = stepFor(ds.volume.geometry);
+    if (o.fieldUnit) {
+      // The unit as the render command and the desktop set it, once per field and framed view.
+      std::vector<double> scaleMs;
+      render::FieldScale scale;
+      for (int i = 0; i < 5; ++i) {
+        render::RenderSettings measured = *settings;
+        const auto ts = Clock::now();
+        scale = render::applyFieldScale(measured, wdt->field.distances, ds.volume, nullptr, *frame, req);
+        scaleMs.push_back(msSince(ts));
+        if (i == 0) *settings = measured;
+      }
+      std::printf("{\"bench\":\"field_scale\",\"volume\":%d,\"field_grid\":\"%s\",\"width\":%d,\"height\":%d,"
+                  "\"first_ms\":%.1f,\"ms_median\":%.1f,\"view_rays\":%zu,\"derived\":%s,\"from_seen\":%s,"
+                  "\"capped_by_rays\":%s,\"distance_unit\":%.4f,\"distance_offset\":%.4f,\"size_unit\":%.4f}\n",
+                  o.volume, wdt->field.distances.dims().toString().c_str(), o.width, o.height, scaleMs[0],
+                  percentile(scaleMs, 0.5), scale.viewRays, scale.derived ? "true" : "false",
+                  scale.fromSeen ? "true" : "false", scale.cappedByRays ? "true" : "false", settings->distanceUnit,
+                  settings->distanceOffset, render::distanceUnitFor(*frame));
+      std::fflush(stdout);
+    }
     std::vector<double> gpuMs;
     for (int i = 0; i < o.warmup + o.frames; ++i) {
       auto ms = renderer->renderTimed(*settings);
@@ -156,11 +190,12 @@ int main(int argc, char** argv) {
         "{\"bench\":\"render_frame\",\"device\":\"%s\",\"width\":%d,\"height\":%d,\"volume\":%d,\"field_grid\":\"%s\","
         "\"structure\":\"%s\",\"preset\":\"%s\",\"frames\":%d,\"gpu_ms_median\":%.3f,\"gpu_ms_p90\":%.3f,"
         "\"fps_median\":%.1f,\"phantom_ms\":%.0f,\"wdt_ms\":%.1f,\"wdt_device\":\"%s\",\"ray_caster\":\"%s\","
-        "\"step_mm\":%.4f}\n",
+        "\"step_mm\":%.4f,\"unit\":\"%s\",\"distance_unit\":%.4f}\n",
         ctx->description().c_str(), o.width, o.height, o.volume,
         wdt->field.distances.dims().toString().c_str(), s->id.c_str(), preset->id.value_or("?").c_str(), o.frames,
         median, percentile(gpuMs, 0.9), median > 0 ? 1000.0 / median : 0.0, phantomMs, wdt->stats.msTotal,
-        wdt->stats.device.c_str(), rayCasterName, render::effectiveStepMm(ds.volume.geometry, *settings));
+        wdt->stats.device.c_str(), rayCasterName, render::effectiveStepMm(ds.volume.geometry, *settings),
+        o.fieldUnit ? "field" : "size", settings->distanceUnit);
     std::fflush(stdout);
     if (o.compareStepVoxels > 0) {
       render::RenderSettings standard = *settings;
@@ -221,6 +256,7 @@ int main(int argc, char** argv) {
     struct Target {
       std::uint16_t label;
       double x, y;
+      render::StructureFrame frame;  // measured once, as the desktop keeps each structure's frame
     };
     std::vector<Target> targets;
     for (const Structure& s : ds.structures) {
@@ -228,10 +264,12 @@ int main(int argc, char** argv) {
       if (!f) continue;
       auto px = settings->camera.project(f->anchorMm, o.width, o.height);
       if (!px || (*px)[0] < 0 || (*px)[1] < 0 || (*px)[0] >= o.width || (*px)[1] >= o.height) continue;
-      targets.push_back({s.label, (*px)[0], (*px)[1]});
+      targets.push_back({s.label, (*px)[0], (*px)[1], *f});
     }
+    const render::FieldView hoverView = render::fieldViewOf(*settings);
+    const render::BoneLevels hoverBone = render::boneLevels(*preset);
     if (targets.empty()) return failWith("no structure projects into the hover view");
-    std::vector<double> totals, frameGpu;
+    std::vector<double> totals, frameGpu, totalsWithScale, scaleMsAll;
 #if defined(AT_HAVE_CUDA)
     // The volume and labels go to the device once, as the renderer's textures do when a dataset
     // opens; each hover then builds its density bytes and seeds there.
@@ -269,7 +307,8 @@ int main(int argc, char** argv) {
       auto params = render::wdtParamsFor(*preset);
       if (!params) return failWith(params.error().message);
       const auto t1 = Clock::now();
-      double wdtMs = 0, uploadMs = 0;
+      double wdtMs = 0, uploadMs = 0, downloadMs = 0, scaleMs = 0;
+      FloatVolume hostField;
       std::string wdtDevice;
       int passesRun = 0;
       bool onDevice = false;
@@ -287,6 +326,12 @@ int main(int argc, char** argv) {
         if (auto st = renderer->setFieldFromDevice(*dfield); !st) return failWith(st.error().message);
         uploadMs = msSince(t2);
         onDevice = true;
+        if (o.fieldUnit) {
+          // The host copy the desktop keeps for picking, which its unit is measured on.
+          const auto td = Clock::now();
+          if (auto st = cuda::copyToHost(*dfield, hostField); !st) return failWith(st.error().message);
+          downloadMs = msSince(td);
+        }
       }
 #endif
       if (!onDevice) {
@@ -298,31 +343,52 @@ int main(int argc, char** argv) {
         const auto t2 = Clock::now();
         if (auto st = renderer->setField(wdt->field.distances); !st) return failWith(st.error().message);
         uploadMs = msSince(t2);
+        hostField = std::move(wdt->field.distances);
       }
       renderer->setSelected(label);
+      render::RenderSettings cycleSettings = *settings;
+      if (o.fieldUnit) {
+        // DesktopModel::fieldScaleOf: the new field's unit on the framed view, before its first frame.
+        const render::StructureFrame* labelFrame = &tg.frame;
+        for (const Target& other : targets)
+          if (other.label == label) labelFrame = &other.frame;
+        const auto ts = Clock::now();
+        const render::FieldScale scale = render::fieldScale(hostField, ds.volume, nullptr, *labelFrame, hoverBone, &hoverView);
+        scaleMs = msSince(ts);
+        cycleSettings.distanceUnit = scale.distanceUnit;
+        cycleSettings.distanceOffset = scale.distanceOffset;
+      }
       const auto t3 = Clock::now();
-      auto gpu = renderer->renderTimed(*settings);  // waits for the GPU result
+      auto gpu = renderer->renderTimed(cycleSettings);  // waits for the GPU result
       if (!gpu) return failWith(gpu.error().message);
       const double frameMs = msSince(t3);
-      const double total = msSince(t0);
+      // total: pick, field, upload and frame, as before the unit was measured per field; the host
+      // copy and the measure are reported beside it (total_with_scale_ms: the whole cycle).
+      const double totalWithScale = msSince(t0);
+      const double total = totalWithScale - downloadMs - scaleMs;
       // The frame's CPU side: the renderer's preparation (mask, table, occupancy, uniforms).
       const render::gl::PrepareCosts costs = renderer->takeCosts();
       totals.push_back(total);
       frameGpu.push_back(*gpu);
+      totalsWithScale.push_back(totalWithScale);
+      scaleMsAll.push_back(scaleMs);
       std::printf(
           "{\"bench\":\"hover_cycle\",\"volume\":%d,\"cycle\":%d,\"picked_label\":%u,\"pick_hit\":%s,\"pick_ms\":%.3f,"
           "\"wdt_ms\":%.2f,\"wdt_device\":\"%s\",\"wdt_passes\":%d,\"field_path\":\"%s\",\"field_upload_ms\":%.2f,\"frame_ms\":%.2f,"
           "\"frame_gpu_ms\":%.3f,\"prepare_ms\":%.3f,\"mask_ms\":%.3f,\"occupancy_ms\":%.3f,\"table_ms\":%.3f,"
-          "\"total_ms\":%.2f}\n",
+          "\"field_download_ms\":%.2f,\"field_scale_ms\":%.2f,\"total_ms\":%.2f,\"total_with_scale_ms\":%.2f}\n",
           o.hoverVolume, c, unsigned(label), hit.hit ? "true" : "false", pickMs, wdtMs, wdtDevice.c_str(), passesRun,
           onDevice ? "cuda-gl interop" : "host upload", uploadMs, frameMs, *gpu, costs.prepareMs, costs.maskMs,
-          costs.occupancyMs, costs.tableMs, total);
+          costs.occupancyMs, costs.tableMs, downloadMs, scaleMs, total, totalWithScale);
       std::fflush(stdout);
     }
     std::printf("{\"bench\":\"hover_summary\",\"volume\":%d,\"width\":%d,\"height\":%d,\"cycles\":%d,"
-                "\"total_ms_median\":%.2f,\"total_ms_p99\":%.2f,\"total_ms_max\":%.2f,\"frame_gpu_ms_median\":%.3f,\"device\":\"%s\",\"ray_caster\":\"%s\",\"step_mm\":%.4f}\n",
+                "\"total_ms_median\":%.2f,\"total_ms_p99\":%.2f,\"total_ms_max\":%.2f,\"frame_gpu_ms_median\":%.3f,\"device\":\"%s\",\"ray_caster\":\"%s\",\"step_mm\":%.4f,"
+                "\"unit\":\"%s\",\"field_scale_ms_median\":%.2f,\"field_scale_ms_max\":%.2f,\"total_with_scale_ms_median\":%.2f,\"total_with_scale_ms_max\":%.2f}\n",
                 o.hoverVolume, o.width, o.height, o.cycles, percentile(totals, 0.5), percentile(totals, 0.99), percentile(totals, 1.0),
-                percentile(frameGpu, 0.5), ctx->description().c_str(), rayCasterName, render::effectiveStepMm(ds.volume.geometry, *settings));
+                percentile(frameGpu, 0.5), ctx->description().c_str(), rayCasterName, render::effectiveStepMm(ds.volume.geometry, *settings),
+                o.fieldUnit ? "field" : "size", percentile(scaleMsAll, 0.5), percentile(scaleMsAll, 1.0),
+                percentile(totalsWithScale, 0.5), percentile(totalsWithScale, 1.0));
   }
   return 0;
 }

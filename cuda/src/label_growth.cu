@@ -16,6 +16,7 @@
 #include "cuda/wdt_cuda.h"
 #include "cuda_util.h"
 #include "label_growth_kernels.cuh"
+#include "growth_local_reset.cuh"
 #include "wdt/step_cost.h"
 
 namespace at::cuda {
@@ -94,6 +95,7 @@ class CudaGrowthEngine final : public GrowthEngine {
       resetLabels<<<gridBlocks(n), 256, 0, s>>>(keys_.get(), shape_, resetBits_.get(), queues_);
       AT_TRY(check(cudaGetLastError(), "launch of the label reset kernel"));
     }
+    if (!change.fromScratch && !change.removedSeeds.empty()) AT_TRY(resetGrownFrom(change.removedSeeds));
     if (!change.writeSeeds.empty()) {
       const std::size_t count = change.writeSeeds.size();
       std::vector<unsigned> index(count);
@@ -138,6 +140,8 @@ class CudaGrowthEngine final : public GrowthEngine {
     return {};
   }
 
+  bool resetsGrownFromRemovedSeeds() const override { return true; }
+
   Status readLabels(LabelMap& out) override {
     const std::size_t n = grid_.dims.count();
     if (labelsOut_.size() != n) AT_ASSIGN(labelsOut_, DeviceBuffer<std::uint16_t>::allocate(n));
@@ -167,6 +171,56 @@ class CudaGrowthEngine final : public GrowthEngine {
 
  private:
   CudaGrowthEngine() = default;
+
+  // GrowthChange::removedSeeds (growth_local_reset.cuh): the voxels whose pair came from them,
+  // found on the old pairs, then reset and their bricks queued. The first call allocates a list of
+  // every voxel and a bit each (4.125 bytes a voxel, kept for later edits).
+  Status resetGrownFrom(const std::vector<GrowthSeed>& removed) {
+    const cudaStream_t s = stream_.get();
+    const std::size_t n = grid_.dims.count();
+    if (foundCount_.size() != 1) {  // allocated last: after a failed allocation all three are again
+      AT_ASSIGN(foundList_, DeviceBuffer<unsigned>::allocate(n));
+      AT_ASSIGN(foundBits_, DeviceBuffer<unsigned>::allocate(n / 32 + 1));
+      AT_ASSIGN(foundCount_, DeviceBuffer<unsigned>::allocate(1));
+    }
+    AT_TRY(check(cudaMemsetAsync(foundBits_.get(), 0, foundBits_.bytes(), s), "cudaMemsetAsync(found voxels)"));
+    AT_TRY(check(cudaMemsetAsync(foundCount_.get(), 0, sizeof(unsigned), s), "cudaMemsetAsync(found count)"));
+    const std::size_t count = removed.size();
+    std::vector<unsigned> index(count);
+    for (std::size_t i = 0; i < count; ++i) index[i] = unsigned(removed[i].index);
+    if (removedIndex_.size() < count) AT_ASSIGN(removedIndex_, DeviceBuffer<unsigned>::allocate(count));
+    AT_TRY(check(cudaMemcpyAsync(removedIndex_.get(), index.data(), count * sizeof(unsigned), cudaMemcpyHostToDevice, s),
+                 "cudaMemcpyAsync(removed seeds, host to device)"));
+    FoundVoxels f{foundBits_.get(), foundList_.get(), foundCount_.get()};
+    markRemovedSeeds<<<gridBlocks(count), 256, 0, s>>>(removedIndex_.get(), int(count), f);
+    AT_TRY(check(cudaGetLastError(), "launch of the removed-seed kernel"));
+    AT_TRY(stream_.synchronize());  // `index` leaves scope
+    int device = 0, sms = 0;
+    AT_TRY(check(cudaGetDevice(&device), "cudaGetDevice"));
+    AT_TRY(check(cudaDeviceGetAttribute(&sms, cudaDevAttrMultiProcessorCount, device), "cudaDeviceGetAttribute(SM count)"));
+    AT_TRY(wdt::withCostKernel(kernel_, [&]<CostKernel K>() -> Status {
+      auto* kernel = findGrownFromRemoved<K>;
+      int perSm = 0;
+      AT_TRY(check(cudaOccupancyMaxActiveBlocksPerMultiprocessor(&perSm, kernel, 256, 0),
+                   "cudaOccupancyMaxActiveBlocksPerMultiprocessor(local reset kernel)"));
+      if (perSm < 1) return fail("CUDA growth: the local reset kernel's blocks do not fit on a multiprocessor");
+      const unsigned long long* keys = keys_.get();
+      const std::uint8_t* density = density_.get();
+      GridShape g = shape_;
+      float sx = float(grid_.spacingMm[0]), sy = float(grid_.spacingMm[1]), sz = float(grid_.spacingMm[2]);
+      float base = base_, scale = scale_;
+      void* params[] = {&keys, &density, &g, &sx, &sy, &sz, &base, &scale, &f};
+      // Four blocks a multiprocessor at most (32 listed voxels each at once): most levels are small
+      // next to a grid barrier's cost. AT_CUDA_GROWTH_RESET_BLOCKS=N sets N (for comparisons).
+      int perSmUsed = std::min(perSm, 4);
+      if (const char* v = std::getenv("AT_CUDA_GROWTH_RESET_BLOCKS")) perSmUsed = std::clamp(std::atoi(v), 1, perSm);
+      return check(cudaLaunchCooperativeKernel(reinterpret_cast<const void*>(kernel), dim3(unsigned(perSmUsed * sms)),
+                                               dim3(256), params, 0, s),
+                   "cudaLaunchCooperativeKernel(local reset kernel)");
+    }));
+    resetFound<<<unsigned(4 * sms), 256, 0, s>>>(keys_.get(), shape_, f, queues_);
+    return check(cudaGetLastError(), "launch of the found-voxel reset kernel");
+  }
 
   Status solve() {
     SolveArgs a{};
@@ -230,6 +284,7 @@ class CudaGrowthEngine final : public GrowthEngine {
   DeviceBuffer<unsigned> seedIndex_;
   DeviceBuffer<int> seedLabel_;
   DeviceBuffer<std::uint16_t> labelsOut_;
+  DeviceBuffer<unsigned> foundList_, foundBits_, foundCount_, removedIndex_;
   Event start_, end_;
 };
 

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "render/transfer_function.h"
+#include "view_rays.h"
 
 namespace at::render {
 
@@ -54,6 +55,10 @@ double drawnToX(const Preset& preset) {
 BoneLevels boneLevels(const Preset& preset) { return {denseLevel(preset), openLevel(preset), drawnToX(preset)}; }
 
 namespace {
+
+using detail::indexRay;
+using detail::IndexRay;
+using detail::voxelOn;
 
 // The unit and offset from the chosen set's quantiles (see kFarQuantileX).
 void unitFromQuantiles(FieldScale& out) {
@@ -150,23 +155,6 @@ std::vector<float> aroundSurfaces(const FloatVolume& field, const Volume& volume
   return d;
 }
 
-// Index-space position along a ray: origin + t · perMm.
-struct IndexRay {
-  Vec3 origin, perMm;
-};
-IndexRay indexRay(const Geometry& g, const Ray& r) {
-  const Vec3 o = g.patientToIndex(r.origin);
-  return {o, g.patientToIndex(r.origin + r.direction) - o};
-}
-bool voxelOn(const IndexRay& r, double t, const Dims& dims, int ijk[3]) {
-  const int n[3] = {dims.x, dims.y, dims.z};
-  for (int a = 0; a < 3; ++a) {
-    ijk[a] = int(std::lround(r.origin[a] + t * r.perMm[a]));
-    if (ijk[a] < 0 || ijk[a] >= n[a]) return false;
-  }
-  return true;
-}
-
 // The seen set: D of the first bone surface (entered from open space) each ray of the view meets
 // inside the reach; a ray that meets the structure (D = 0) counts nothing.
 std::vector<float> seenSurfaces(const FloatVolume& field, const Volume& volume, const Mask* body,
@@ -178,10 +166,7 @@ std::vector<float> seenSurfaces(const FloatVolume& field, const Volume& volume, 
   if (view.width < 1 || view.height < 1) return d;
   const bool bodyOnGrid = body && body->geometry.dims.count() == vg.dims.count();
   const double step = 0.5 * std::min({vg.spacingMm[0], vg.spacingMm[1], vg.spacingMm[2]});
-  // At most kScaleRaysPerSide rays along the longer side, at pixel centres of an image of the same
-  // aspect (the same frustum).
-  const double shrink = std::min(1.0, double(kScaleRaysPerSide) / double(std::max(view.width, view.height)));
-  const int w = std::max(1, int(std::lround(view.width * shrink))), h = std::max(1, int(std::lround(view.height * shrink)));
+  const auto [w, h] = detail::rayGridOf(view.width, view.height, kScaleRaysPerSide);
   for (int py = 0; py < h; ++py)
     for (int px = 0; px < w; ++px) {
       const Ray ray = view.camera.rayThroughPixel(px, py, w, h);
@@ -265,26 +250,14 @@ RayBone nearestBoneOnRays(const FloatVolume& field, const Volume& volume, const 
   const bool bodyOnGrid = body && body->geometry.dims.count() == vg.dims.count();
   // One voxel per step: a bone crossing is at least a voxel thick.
   const double step = std::min({vg.spacingMm[0], vg.spacingMm[1], vg.spacingMm[2]});
-  const double shrink = std::min(1.0, double(kScaleRaysPerSide) / double(std::max(view.width, view.height)));
-  const int w = std::max(1, int(std::lround(view.width * shrink))), h = std::max(1, int(std::lround(view.height * shrink)));
-  const double n[3] = {double(vg.dims.x), double(vg.dims.y), double(vg.dims.z)};
+  const auto [w, h] = detail::rayGridOf(view.width, view.height, kScaleRaysPerSide);
   for (int py = 0; py < h; ++py)
     for (int px = 0; px < w; ++px) {
       ++out.rays;
       const Ray ray = view.camera.rayThroughPixel(px, py, w, h);
       const IndexRay rv = indexRay(vg, ray), rf = indexRay(fg, ray);
-      // The ray's segment inside the volume's box (index space, voxel centres −0.5 … n − 0.5).
-      double t0 = 0, t1 = std::numeric_limits<double>::infinity();
-      for (int a = 0; a < 3; ++a) {
-        if (std::fabs(rv.perMm[a]) < 1e-12) {
-          if (rv.origin[a] < -0.5 || rv.origin[a] > n[a] - 0.5) t1 = -1;
-          continue;
-        }
-        double ta = (-0.5 - rv.origin[a]) / rv.perMm[a], tb = (n[a] - 0.5 - rv.origin[a]) / rv.perMm[a];
-        if (ta > tb) std::swap(ta, tb);
-        t0 = std::max(t0, ta);
-        t1 = std::min(t1, tb);
-      }
+      double t0 = 0, t1 = 0;
+      detail::boxSegment(rv, vg.dims, t0, t1);
       float nearest = std::numeric_limits<float>::infinity();
       bool structure = false;
       for (double t = t0 + 0.5 * step; t < t1; t += step) {
@@ -379,9 +352,10 @@ bool unitFromSeenBone(RenderMode mode) { return mode == RenderMode::Wdt || mode 
 FieldScale applyFieldScale(RenderSettings& settings, const FloatVolume& field, const Volume& volume, const Mask* body,
                            const StructureFrame& frame, const ViewRequest& request) {
   const FieldView view = fieldViewOf(settings);
-  const FieldScale scale =
-      fieldScale(field, volume, body, frame, boneLevels(settings.preset),
-                 unitFromSeenBone(settings.preset.mode) ? &view : nullptr, request.margin, request.minRadiusMm);
+  const BoneLevels levels = boneLevels(settings.preset);
+  FieldScale scale = fieldScale(field, volume, body, frame, levels, unitFromSeenBone(settings.preset.mode) ? &view : nullptr,
+                                request.margin, request.minRadiusMm);
+  if (unitFromNeighbourBone(settings.preset.mode)) unitFromNeighbours(scale, neighbourBone(field, volume, body, levels, view), settings.preset.mode);
   settings.distanceUnit = scale.distanceUnit * request.contextScale;
   settings.distanceOffset = scale.distanceOffset;
   return scale;

@@ -313,7 +313,7 @@ Result<GrowthStats> LabelEditor::computeGrowth(const Volume& volume, const std::
   g.rangedLabels.reset();
   auto stats = g.growth->update(seeds, control);
   if (!stats || stats->cancelled || ranges.empty()) return stats;
-  auto ranged = g.ranged.apply(volume, g.growth->labels(), seeds, params, ranges, control, &*stats);
+  auto ranged = g.ranged.apply(volume, g.growth->labels(), seeds, params, ranges, control, &*stats, &*g.growth);
   if (!ranged) return tl::unexpected(ranged.error());
   if (!stats->cancelled) g.rangedLabels = std::move(*ranged);
   return stats;

@@ -31,7 +31,7 @@ RangedGrowth& RangedGrowth::operator=(RangedGrowth&&) noexcept = default;
 
 Result<LabelMap> RangedGrowth::apply(const Volume& volume, const LabelMap& unranged, const std::vector<GrowthSeed>& seeds,
                                      const GrowthParams& params, const LabelRanges& labelRanges, const WdtControl& control,
-                                     GrowthStats* stats) {
+                                     GrowthStats* stats, const LabelGrowth* unrangedGrowth) {
   const std::vector<LabelValueRange>& ranges = labelRanges.ranges;
   if (unranged.voxels.size() != volume.voxels.size())
     return fail("ranged growth: the labels' grid (" + std::to_string(unranged.voxels.size()) + " voxels) is not the volume's (" +
@@ -66,7 +66,9 @@ Result<LabelMap> RangedGrowth::apply(const Volume& volume, const LabelMap& unran
       if (k && k->values == first.values && k->volume == &volume && k->dims == volume.dims() && k->params == limited)
         kept = std::move(k);
     if (!kept) {
-      auto growth = LabelGrowth::create(volume, limited);
+      // The values are the ordinary growth's (the same window and smoothing): copied, not smoothed again.
+      const LabelGrowth* sameValues = used.empty() ? unrangedGrowth : &used.back()->growth;
+      auto growth = LabelGrowth::create(volume, limited, sameValues);
       if (!growth) return tl::unexpected(growth.error());
       kept.reset(new Kept{first.values, &volume, volume.dims(), limited, std::move(*growth)});
     }

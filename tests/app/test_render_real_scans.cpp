@@ -261,7 +261,12 @@ void checkFadesAndSlides(const Scan& scan, const std::vector<Case>& cases) {
     const RgbaImage bare =
         draw(*gl, scan, s->label, viewOf(scan, s->label, derivedPreset(scan.levels, RenderMode::Bare, s->id), c.view), 0);
     const double change = meanGreyChange(at0, at1), drawn = drawnShare(at0), context = meanGreyChange(bare, at1);
-    MESSAGE(structureId << ": t 0→1 changes " << change << " grey levels (the context at t = 1 adds " << context
+    // The share of the frame the structure covers (bare draws it opaque): t changes only the rest.
+    std::size_t covered = 0;
+    for (std::size_t i = 0; i < std::size_t(kSize) * kSize; ++i) covered += bare.rgba[i * 4 + 3] >= 250;
+    const double coveredShare = double(covered) / double(kSize * kSize);
+    MESSAGE(structureId << ": t 0→1 changes " << change << " grey levels (" << change / std::max(1e-9, 1 - coveredShare)
+                        << " over the " << 100 * (1 - coveredShare) << " % of the frame the structure leaves; the context at t = 1 adds " << context
                         << "); " << 100 * drawn << " % drawn at t = 0" << std::string(v.scale.cappedByRays ? " (unit capped by the view's rays)" : ""));
     CHECK(change >= c.minChange);
     if (c.fadesInView) CHECK(drawn < 0.70);
@@ -389,6 +394,9 @@ TEST_CASE("The derived distance unit follows the voxel size: the same anatomy at
 }
 
 TEST_CASE("Skull CT: each mode reads as its figure - outline a thin band, fuzzy colour near the structure, lighting in its colour") {
+  // (fuzzy and lighting on the orbit from the front and from the side and on the mastoid cells:
+  // before their units came from the bone the view shows next to them, the orbit from the front
+  // coloured 15.5 % of the far bone and the mastoid's fuzzy 9 % of the bone next to it)
   auto skull = skullOrSkip();
   if (!skull) return;
   Gl* gl = glOrSkip();
@@ -396,12 +404,14 @@ TEST_CASE("Skull CT: each mode reads as its figure - outline a thin band, fuzzy 
   struct Sight {
     const char* structure;
     const char* view;
+    bool outline;  // a band is expected (see below)
   };
   // (the ear canal, now its own air from the concha to the isthmus, sits outside the bone, where
-  // no band can lie; fuzzy and lighting do not read yet on the orbit (2 % and 4 % of the near
-  // context tinted) or the mastoid cells (9 % fuzzy): open work this case does not cover)
-  for (const Sight& sight : {Sight{"zygomatic_arch_left", "lateral_left"}, Sight{"zygomatic_arch_right", "lateral_right"},
-                             Sight{"frontal_sinus", "anterior"}}) {
+  // no band can lie; the orbit's and the mastoid's bands break up (9–56 % isolated pixels): open
+  // work this case does not cover)
+  for (const Sight& sight : {Sight{"zygomatic_arch_left", "lateral_left", true}, Sight{"zygomatic_arch_right", "lateral_right", true},
+                             Sight{"frontal_sinus", "anterior", true}, Sight{"orbit_left", "anterior", false},
+                             Sight{"orbit_left", "lateral_left", false}, Sight{"mastoid_air_cells_right", "lateral_right", false}}) {
     const std::string id = sight.structure;
     CAPTURE(id);
     const Structure* s = skull->ds.findStructure(id);
@@ -418,7 +428,7 @@ TEST_CASE("Skull CT: each mode reads as its figure - outline a thin band, fuzzy 
     };
 
     // Outline (Fig. 6): the band's colour lies on the bone as a thin, connected band.
-    {
+    if (sight.outline) {
       const auto [p, im] = render(RenderMode::Outline);
       std::vector<bool> band(n);
       for (std::size_t i = 0; i < n; ++i) band[i] = !silhouette[i] && inColour(im, i, {p.distanceTf[2].rgba[0], p.distanceTf[2].rgba[1], p.distanceTf[2].rgba[2]});
@@ -434,6 +444,17 @@ TEST_CASE("Skull CT: each mode reads as its figure - outline a thin band, fuzzy 
       CHECK(shape.isolatedShare < 0.12);
     }
     // Fuzzy (Fig. 5) and lighting (Fig. 7): the structure's colour on the context lies near it.
+    // Where the bone the view shows far from the structure is about as near in D as the bone next
+    // to it (the orbit from the front: the ethmoid cells and the nasal cavity lie behind its thin
+    // medial wall), no unit colours one and not the other: there the colour must stay confined,
+    // faint if need be.
+    const Preset fuzzy = derivedPreset(skull->levels, RenderMode::Fuzzy, id);
+    const View fuzzyView = viewOf(*skull, s->label, fuzzy, sight.view);
+    const NeighbourBone bone =
+        neighbourBone(fuzzyView.field, skull->ds.volume, nullptr, boneLevels(fuzzy), fieldViewOf(fuzzyView.settings));
+    const bool separates = bone.farD >= kNeighbourSeparates * bone.nearD;
+    MESSAGE(id << " " << std::string(sight.view) << ": median D of the bone seen next to it " << bone.nearD << " (" << bone.nearRays
+                << " rays), far from it " << bone.farD << " (" << bone.farRays << " rays)");
     for (RenderMode mode : {RenderMode::Fuzzy, RenderMode::Lighting}) {
       const std::string modeName = toString(mode);
       CAPTURE(modeName);
@@ -458,7 +479,7 @@ TEST_CASE("Skull CT: each mode reads as its figure - outline a thin band, fuzzy 
       const double farSat = farDrawn ? farSaturation / double(farDrawn) : 0.0;
       MESSAGE(id << " " << std::string(toString(mode)) << ": in the structure's colour " << 100 * nearShare << " % of the context within 8 px, "
                   << 100 * farShare << " % beyond 30 px (mean saturation there " << farSat << ")");
-      CHECK(nearShare >= 0.15);
+      if (separates) CHECK(nearShare >= 0.15);
       CHECK(nearShare >= 3 * farShare);  // confined to the neighbourhood
       CHECK(farShare <= 0.15);
       CHECK(farSat <= 0.25);  // the far bone is bone-coloured, not tinted (sepia)
@@ -499,3 +520,4 @@ TEST_CASE("Every front end leaves out the CT headrest: the desktop and openDatas
   REQUIRE_MESSAGE(shown, test::errorText(shown));
   CHECK(shown->dataset.volume.voxels == skull->ds.volume.voxels);
 }
+

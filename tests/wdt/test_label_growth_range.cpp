@@ -3,7 +3,9 @@
 // every grown voxel is joined to a seed of its label through voxels inside the range.
 #include <doctest/doctest.h>
 
+#include <algorithm>
 #include <deque>
+#include <map>
 #include <random>
 
 #include "growth_cases.h"
@@ -132,5 +134,90 @@ TEST_CASE("Seeds on a brick face grow into the next brick though their own brick
         CHECK(growth->labels().voxels[g.dims.index(16, y, z)] == 4);
         CHECK(growth->labels().voxels[g.dims.index(13, y, z)] == 0);
       }
+  }
+}
+
+// The range-limited growths of segment::RangedGrowth copy the ordinary growth's density bytes
+// (LabelGrowth::create with sameValues) instead of smoothing the volume again. A growth made so
+// equals the exact reference of its own params bit for bit; one whose source was made with other
+// smoothing or another window does not take the source's values (it still equals its reference).
+TEST_CASE("A growth that copies another growth's values equals the exact reference; other settings' values are not copied") {
+  std::mt19937_64 rng(test::freshSeed("growth with copied values"));
+  const Dims sizes[] = {{17, 1, 9}, {16, 16, 16}, {33, 20, 7}};
+  for (const Dims& dims : sizes) {
+    const Volume volume = randomVolume(rng, dims);
+    GrowthParams params = randomParams(rng);
+    params.smoothingVoxels = std::uniform_real_distribution<float>(0.5f, 1.5f)(rng);
+    params.edgeSigma = std::uniform_int_distribution<int>(0, 1)(rng) ? 0.0f : std::uniform_real_distribution<float>(20, 300)(rng);
+    GrowthParams limited = params;
+    limited.limitRange = true;
+    limited.rangeMin = float(std::uniform_int_distribution<int>(-1000, 500)(rng));
+    limited.rangeMax = limited.rangeMin + float(std::uniform_int_distribution<int>(200, 2000)(rng));
+    const int labels = std::uniform_int_distribution<int>(2, 5)(rng);
+    const std::vector<GrowthSeed> seeds = randomSeeds(rng, dims, labels, std::max(labels, int(dims.count() / 400) + 2));
+    GrowthParams otherSmoothing = params, otherWindow = params;
+    otherSmoothing.smoothingVoxels += 0.75f;
+    otherWindow.windowMax += 500.0f;
+    CAPTURE(dims.toString());
+    CAPTURE(params.smoothingVoxels);
+    CAPTURE(params.edgeSigma);
+    for (const GrowthParams& sourceParams : {params, otherSmoothing, otherWindow}) {
+      auto source = LabelGrowth::create(volume, sourceParams);
+      REQUIRE(source);
+      REQUIRE(source->update(seeds));
+      auto growth = LabelGrowth::create(volume, limited, &*source);
+      REQUIRE(growth);
+      REQUIRE(growth->update(seeds));
+      requireEqualToExact(*growth, volume, seeds, limited);
+    }
+  }
+}
+
+// Bricks (16³) whose every voxel lies outside the range are never visited by the CPU engine (a
+// visit could change nothing there). Volumes where whole bricks are out of range, beside bricks
+// partly and wholly in range, with seeds in all of them (seeds outside the range keep their label
+// and do not spread): the first growth and each later seed edit (seeds added, removed, relabelled)
+// equal the exact reference bit for bit.
+TEST_CASE("Range-limited growth with whole bricks outside the range: first growth and seed edits equal the exact reference") {
+  std::mt19937_64 rng(test::freshSeed("range-limited growth, blocked bricks"));
+  const Dims dims{40, 35, 33};  // 3 × 3 × 3 bricks, the last of each axis partial
+  Volume volume = randomVolume(rng, dims);
+  GrowthParams params = randomParams(rng);
+  params.limitRange = true;
+  params.rangeMin = 0;
+  params.rangeMax = 3000;
+  // Every brick: wholly outside the range (−1000), wholly inside (values raised to >= 0), or mixed.
+  // The first three bricks take one kind each, so every seed draws all three.
+  std::uniform_int_distribution<int> kind(0, 2);
+  for (int bz = 0; bz < 3; ++bz)
+    for (int by = 0; by < 3; ++by)
+      for (int bx = 0; bx < 3; ++bx) {
+        const int b = bx + 3 * (by + 3 * bz), k = b < 3 ? b : kind(rng);
+        for (int z = bz * 16; z < std::min(dims.z, bz * 16 + 16); ++z)
+          for (int y = by * 16; y < std::min(dims.y, by * 16 + 16); ++y)
+            for (int x = bx * 16; x < std::min(dims.x, bx * 16 + 16); ++x) {
+              std::int16_t& v = volume.at(x, y, z);
+              if (k == 0) v = -1000;
+              else if (k == 1) v = std::int16_t(std::abs(int(v)));
+            }
+      }
+  const int labels = std::uniform_int_distribution<int>(2, 5)(rng);
+  std::vector<GrowthSeed> seeds = randomSeeds(rng, dims, labels, 60);
+  auto growth = LabelGrowth::create(volume, params);
+  REQUIRE(growth);
+  REQUIRE(growth->update(seeds));
+  requireEqualToExact(*growth, volume, seeds, params);
+  for (int edit = 0; edit < 4; ++edit) {
+    CAPTURE(edit);
+    std::shuffle(seeds.begin(), seeds.end(), rng);
+    seeds.resize(seeds.size() * 3 / 4);  // some removed
+    if (edit % 2) seeds.front().label = seeds.back().label;  // one relabelled (maybe to its own label)
+    std::map<std::size_t, std::uint16_t> unique;
+    for (const GrowthSeed& s : seeds) unique.emplace(s.index, s.label);
+    for (const GrowthSeed& s : randomSeeds(rng, dims, labels, 15)) unique.emplace(s.index, s.label);  // some added
+    seeds.clear();
+    for (const auto& [index, label] : unique) seeds.push_back({index, label});
+    REQUIRE(growth->update(seeds));
+    requireEqualToExact(*growth, volume, seeds, params);
   }
 }

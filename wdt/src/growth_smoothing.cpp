@@ -3,6 +3,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstddef>
+#include <cstdint>
 #include <thread>
 
 namespace at::wdt {
@@ -55,25 +57,44 @@ std::vector<float> edgePreservingSmoothed(const Volume& volume, float sigmaVoxel
   const int reach = std::max(1, int(std::ceil(4.0f * edgeSigma)));
   std::vector<float> range(std::size_t(reach) + 1);
   for (int t = 0; t <= reach; ++t) range[std::size_t(t)] = std::exp(-0.5f * float(t * t) / (edgeSigma * edgeSigma));
+  // Each tap's index offset, for voxels whose whole neighbourhood lies inside the grid (no bounds
+  // checks there); the taps are summed in the same order either way, so both paths round alike.
+  std::vector<std::ptrdiff_t> offsets;
+  for (const Tap& t : taps) offsets.push_back(std::ptrdiff_t(t.di) + std::ptrdiff_t(d.x) * (t.dj + std::ptrdiff_t(d.y) * t.dk));
   std::vector<float> out(volume.voxels.size());
+  const std::int16_t* voxels = volume.voxels.data();
   const auto slab = [&](int k0, int k1) {
     for (int k = k0; k < k1; ++k)
-      for (int j = 0; j < d.y; ++j)
+      for (int j = 0; j < d.y; ++j) {
+        const bool innerRow = k >= radius && k + radius < d.z && j >= radius && j + radius < d.y;
         for (int i = 0; i < d.x; ++i) {
-          const int centre = volume.voxels[d.index(i, j, k)];
+          const std::size_t v = d.index(i, j, k);
+          const int centre = voxels[v];
           float sum = 0, weight = 0;
-          for (const Tap& t : taps) {
-            const int x = i + t.di, y = j + t.dj, z = k + t.dk;
-            if (x < 0 || y < 0 || z < 0 || x >= d.x || y >= d.y || z >= d.z) continue;
-            const int value = volume.voxels[d.index(x, y, z)];
-            const int diff = std::abs(value - centre);
-            if (diff > reach) continue;
-            const float w = t.weight * range[std::size_t(diff)];
-            sum += w * float(value);
-            weight += w;
+          if (innerRow && i >= radius && i + radius < d.x) {
+            for (std::size_t t = 0; t < taps.size(); ++t) {
+              const int value = voxels[std::ptrdiff_t(v) + offsets[t]];
+              const int diff = std::abs(value - centre);
+              if (diff > reach) continue;
+              const float w = taps[t].weight * range[std::size_t(diff)];
+              sum += w * float(value);
+              weight += w;
+            }
+          } else {
+            for (const Tap& t : taps) {
+              const int x = i + t.di, y = j + t.dj, z = k + t.dk;
+              if (x < 0 || y < 0 || z < 0 || x >= d.x || y >= d.y || z >= d.z) continue;
+              const int value = voxels[d.index(x, y, z)];
+              const int diff = std::abs(value - centre);
+              if (diff > reach) continue;
+              const float w = t.weight * range[std::size_t(diff)];
+              sum += w * float(value);
+              weight += w;
+            }
           }
-          out[d.index(i, j, k)] = sum / weight;  // the centre's own tap has weight 1
+          out[v] = sum / weight;  // the centre's own tap has weight 1
         }
+      }
   };
   const int threads = std::clamp(int(std::thread::hardware_concurrency()), 1, 16);
   std::vector<std::thread> pool;

@@ -64,7 +64,10 @@ float fixedPointScale(const Geometry& g, wdt::CostKernel kernel, float base) {
   return float(budget / (double(hi) * extentMm * 1.01));
 }
 
-Result<GrowthProblem> makeProblem(const Volume& volume, const GrowthParams& params) {
+// The growth's problem; `density`, where given, holds the density bytes already computed for this
+// volume under the same window, smoothing and edge sigma (they are copied, not computed again).
+Result<GrowthProblem> makeProblem(const Volume& volume, const GrowthParams& params,
+                                  const std::vector<std::uint8_t>* density = nullptr) {
   if (auto ok = validateGrowthParams(params); !ok) return tl::unexpected(ok.error());
   const Dims d = volume.dims();
   if (d.count() == 0 || volume.voxels.size() != d.count())
@@ -78,7 +81,9 @@ Result<GrowthProblem> makeProblem(const Volume& volume, const GrowthParams& para
   GrowthProblem problem;
   problem.grid = volume.geometry;
   problem.density.resize(d.count());
-  if (params.smoothingVoxels > 0) {
+  if (density && density->size() == d.count()) {
+    problem.density = *density;
+  } else if (params.smoothingVoxels > 0) {
     const std::vector<float> values = params.edgeSigma > 0
                                           ? wdt::edgePreservingSmoothed(volume, params.smoothingVoxels, params.edgeSigma)
                                           : wdt::gaussianSmoothed(volume, params.smoothingVoxels);
@@ -128,6 +133,7 @@ struct LabelGrowth::State {
   bool started = false;
   bool converged = false;         // the last update reached the fixed point (not cancelled)
   std::string warning;            // why auto fell back to the CPU; reported by the first update
+  const std::int16_t* volumeData = nullptr;  // the voxels it was created on (create's sameValues check)
 };
 
 LabelGrowth::LabelGrowth(std::unique_ptr<State> state) : state_(std::move(state)) {}
@@ -136,9 +142,22 @@ LabelGrowth::LabelGrowth(LabelGrowth&&) noexcept = default;
 LabelGrowth& LabelGrowth::operator=(LabelGrowth&&) noexcept = default;
 
 Result<LabelGrowth> LabelGrowth::create(const Volume& volume, const GrowthParams& params) {
-  auto problem = makeProblem(volume, params);
+  return create(volume, params, nullptr);
+}
+
+Result<LabelGrowth> LabelGrowth::create(const Volume& volume, const GrowthParams& params, const LabelGrowth* sameValues) {
+  const std::vector<std::uint8_t>* density = nullptr;
+  if (sameValues && sameValues->state_) {
+    const State& o = *sameValues->state_;
+    const bool sameValuesAsThese = o.volumeData == volume.voxels.data() && o.grid.dims == volume.dims() &&
+                                   o.params.windowMin == params.windowMin && o.params.windowMax == params.windowMax &&
+                                   o.params.smoothingVoxels == params.smoothingVoxels && o.params.edgeSigma == params.edgeSigma;
+    if (sameValuesAsThese) density = o.engine->hostDensity();
+  }
+  auto problem = makeProblem(volume, params, density);
   if (!problem) return tl::unexpected(problem.error());
   auto state = std::make_unique<State>();
+  state->volumeData = volume.voxels.data();
   state->params = params;
   state->grid = volume.geometry;
   state->labels = LabelMap(volume.geometry, 0);

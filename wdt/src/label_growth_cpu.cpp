@@ -1,343 +1,51 @@
 // The CPU engine of the multi-label growth (growth_engine.h): visits of 16³ bricks in the order of
-// a shared priority queue, by all cores.
+// a shared priority queue (growth_brick_queue.h), by all cores; the state, reset and seeds, the
+// visits.
 //
-// [SECTION] Brick box   a brick and its halo in local arrays, and the sweeps over them
-// [SECTION] Engine      the state, the queue of bricks, reset and seeds, the visits
-//
-// A visit copies its brick and a one-voxel halo into a BrickBox (distances, labels and density
-// bytes, unpacked from the 64-bit keys), sweeps it there — rows along the contiguous axis, written
-// for the auto-vectoriser (AVX2 where the CPU has it) — and stores back the voxels that decreased.
-// The x sweeps run on a transposed copy of the box (y contiguous), as the WDT's CPU backend does
-// for the whole volume.
+// A visit copies its brick and a one-voxel halo into a BrickBox (growth_brick_box.h: distances,
+// labels and density bytes, unpacked from the 64-bit keys), sweeps it there — rows along the
+// contiguous axis, written for the auto-vectoriser (AVX2 where the CPU has it) — and stores back
+// the voxels that decreased. The x sweeps run on a transposed copy of the box (y contiguous), as
+// the WDT's CPU backend does for the whole volume.
 #include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cstdlib>
-#include <condition_variable>
 #include <cstring>
 #include <limits>
 #include <memory>
-#include <mutex>
-#include <queue>
 #include <string>
 #include <thread>
 #include <vector>
 
+#include "growth_brick_box.h"
+#include "growth_brick_queue.h"
+#include "neighbour_steps.h"
 #include "wdt/brick_neighbours.h"
 #include "wdt/growth_engine.h"
 #include "wdt/huge_pages.h"
 #include "wdt/stencil.h"
 #include "wdt/step_cost.h"
-#include "neighbour_steps.h"
 
 namespace at {
 
 namespace {
 
+using growth_cpu::BrickBox;
+using growth_cpu::BrickQueue;
+using growth_cpu::Dist;
+using growth_cpu::E;
+using growth_cpu::kInf;
+using growth_cpu::RelaxBoxFn;
+using growth_cpu::RowStamps;
+using growth_cpu::S;
 using wdt::CostKernel;
 using wdt::SweepLengths;
 
-constexpr int E = kGrowthBrickEdge;
-constexpr int S = E + 2;  // a box edge: the brick and its halo
-constexpr int kCells = S * S * S;
-constexpr std::int32_t kInf = wdt::kGrowthInf;
-using Dist = std::int32_t;  // fixed-point distance (wdt/step_cost.h)
-
-#define AT_ALWAYS_INLINE inline __attribute__((always_inline))
-
-// ─────────────────────────────────────────────────────────────────────────────────────────────
-// [SECTION] Brick box
-// ─────────────────────────────────────────────────────────────────────────────────────────────
-
-// A brick with its halo: distances d, labels l and densities f (densityFromByte: kept as floats, so
-// that the sweeps convert no bytes). Layout N: x fastest, cell x + S·(y + S·z) for box coordinates 0 … S − 1
-// (0 and S − 1 are the halo); layout T (the x sweeps): y fastest, cell y + S·(x + S·z). Cells off
-// the grid hold (+infinity, kNoLabel) and are never swept.
-struct BrickBox {
-  alignas(64) Dist d[kCells];
-  alignas(64) std::int32_t l[kCells];
-  alignas(64) float f[kCells];
-  alignas(64) Dist dT[kCells];
-  alignas(64) std::int32_t lT[kCells];
-  alignas(64) float fT[kCells];
-  int ext[3] = {E, E, E};  // voxels of the brick inside the grid, per axis
-};
-
-// One row of a plane: voxels 1 … n of `d`, `l` (densities f) from the rows c − 1, c, c + 1 of the
-// previous plane; n = FixedN, or rowLength when FixedN is 0. Returns the mask of the voxels that
-// changed (bit b for voxel b).
-template <CostKernel K, int FixedN>
-AT_ALWAYS_INLINE unsigned relaxRow(Dist* __restrict d, std::int32_t* __restrict l, const float* __restrict f,
-                                   const Dist* __restrict pm, const Dist* __restrict p0, const Dist* __restrict pp,
-                                   const std::int32_t* __restrict lm, const std::int32_t* __restrict l0,
-                                   const std::int32_t* __restrict lp, const float* __restrict fm,
-                                   const float* __restrict f0, const float* __restrict fp, int rowLength,
-                                   SweepLengths len, float base, float scale) {
-  const int n = FixedN ? FixedN : rowLength;  // full rows: a fixed count the compiler unrolls
-  std::int32_t changed[E + 1];
-#pragma GCC ivdep
-  for (int b = 1; b <= n; ++b) {
-    const Dist nb[3][3] = {{pm[b - 1], pm[b], pm[b + 1]}, {p0[b - 1], p0[b], p0[b + 1]}, {pp[b - 1], pp[b], pp[b + 1]}};
-    const std::int32_t nl[3][3] = {
-        {lm[b - 1], lm[b], lm[b + 1]}, {l0[b - 1], l0[b], l0[b + 1]}, {lp[b - 1], lp[b], lp[b + 1]}};
-    const float fn[3][3] = {{fm[b - 1], fm[b], fm[b + 1]}, {f0[b - 1], f0[b], f0[b + 1]}, {fp[b - 1], fp[b], fp[b + 1]}};
-    Dist dv = d[b];
-    std::int32_t lv = l[b];
-    const Dist dOld = dv;
-    const std::int32_t lOld = lv;
-    wdt::relaxLabelledVoxel<K>(dv, lv, nb, nl, fn, f[b], len, base, scale);
-    changed[b] = (dv ^ dOld) | (lv ^ lOld);
-    d[b] = dv;
-    l[b] = lv;
-  }
-  unsigned mask = 0;
-  for (int b = 1; b <= n; ++b) mask |= unsigned(changed[b] != 0) << b;
-  return mask;
-}
-
-// Which rows a sweep must relax. A sweep along axis A relaxes each voxel from its 9 neighbours in
-// the previous plane, so a row needs it again only if a voxel of the three previous-plane rows next
-// to it decreased since the row was last relaxed in that direction. The sweeps walk two families of
-// lines: lines along x (the y and z sweeps' rows, indexed [z][y]) and lines along y (the x sweeps'
-// rows in layout T, indexed [z][x]). `lineX`, `lineY` hold the clock time of the last change of any
-// voxel of a line, `swept` the time each row was last relaxed, per sweep direction. A visit starts
-// with every halo line marked changed, and every interior line too unless the brick's interior is
-// known to be settled (its last visit ended with a pass that changed nothing, and no reset or seed
-// touched it since). Changes of an x-halo voxel are marked in the lines along y only: every step
-// from it moves along x, and the x sweeps cover those steps (likewise for the y halo).
-struct RowStamps {
-  int lineX[S][S];
-  int lineY[S][S];
-  int swept[6][S][S];  // [sweep axis · 2 + (direction < 0)][a][c]
-  int clock = 1;
-
-  void start(const int ext[3], bool settled) {
-    for (int z = 0; z < S; ++z)
-      for (int u = 0; u < S; ++u) {
-        const bool haloZ = z == 0 || z > ext[2];
-        lineX[z][u] = settled && !(haloZ || u == 0 || u > ext[1]) ? 0 : 1;
-        lineY[z][u] = settled && !(haloZ || u == 0 || u > ext[0]) ? 0 : 1;
-      }
-    std::memset(swept, 0, sizeof swept);
-    clock = 1;
-  }
-};
-
-// The box arrays and strides of a sweep along Axis (0 = x in layout T, 1 = y, 2 = z in layout N):
-// planes along A, rows along C, voxels along B (contiguous).
-template <int Axis>
-struct SweepAxis {
-  static constexpr int strideA = Axis == 2 ? S * S : S;
-  static constexpr int strideC = Axis == 2 ? S : S * S;
-  static constexpr int a = Axis, b = Axis == 0 ? 1 : 0, c = Axis == 2 ? 1 : 2;
-  // The stamp of the row at plane pa, row pc (its own family), and of the line of the other family
-  // through voxel pb of that row.
-  static int& own(RowStamps& st, int pa, int pc) {
-    return Axis == 1 ? st.lineX[pc][pa] : Axis == 2 ? st.lineX[pa][pc] : st.lineY[pc][pa];
-  }
-  static int& cross(RowStamps& st, int pa, int pb, int pc) {
-    return Axis == 1 ? st.lineY[pc][pb] : Axis == 2 ? st.lineY[pa][pb] : st.lineX[pc][pb];
-  }
-};
-
-// Whether row (pa, pc) must be relaxed by the sweep of direction dir.
-template <int Axis>
-AT_ALWAYS_INLINE bool rowDirty(RowStamps& st, const int* swept, int pa, int pc, int dir) {
-  using X = SweepAxis<Axis>;
-  const int prev = pa - dir;
-  const int latest = std::max({X::own(st, prev, pc - 1), X::own(st, prev, pc), X::own(st, prev, pc + 1)});
-  return latest > swept[pa * S + pc];
-}
-
-template <int Axis>
-bool anyRowDirty(RowStamps& st, const int ext[3], int dir) {
-  const int* swept = &st.swept[Axis * 2 + (dir < 0)][0][0];
-  for (int pa = 1; pa <= ext[SweepAxis<Axis>::a]; ++pa)
-    for (int pc = 1; pc <= ext[SweepAxis<Axis>::c]; ++pc)
-      if (rowDirty<Axis>(st, swept, pa, pc, dir)) return true;
-  return false;
-}
-
-// One sweep along Axis in direction dir over the rows that need it. Returns whether anything changed.
-template <CostKernel K, int Axis>
-AT_ALWAYS_INLINE bool sweepBox(BrickBox& box, RowStamps& st, int dir, SweepLengths len, float base, float scale) {
-  using X = SweepAxis<Axis>;
-  Dist* d = Axis == 0 ? box.dT : box.d;
-  std::int32_t* l = Axis == 0 ? box.lT : box.l;
-  const float* f = Axis == 0 ? box.fT : box.f;
-  const int extA = box.ext[X::a], extB = box.ext[X::b], extC = box.ext[X::c];
-  int* swept = &st.swept[Axis * 2 + (dir < 0)][0][0];
-  const int t = ++st.clock;
-  bool changed = false;
-  for (int step = 0; step < extA; ++step) {
-    const int pa = dir > 0 ? 1 + step : extA - step;
-    for (int pc = 1; pc <= extC; ++pc) {
-      if (!rowDirty<Axis>(st, swept, pa, pc, dir)) continue;
-      swept[pa * S + pc] = t;
-      const int row = pa * X::strideA + pc * X::strideC;
-      const int prev = row - dir * X::strideA;
-      constexpr int sc = X::strideC;
-      Dist* dr = d + row;
-      std::int32_t* lr = l + row;
-      const float* fr = f + row;
-      const Dist* dp = d + prev;
-      const float* fp = f + prev;
-      const std::int32_t* lp = l + prev;
-      const unsigned mask =
-          extB == E ? relaxRow<K, E>(dr, lr, fr, dp - sc, dp, dp + sc, lp - sc, lp, lp + sc, fp - sc, fp, fp + sc, E, len, base, scale)
-                    : relaxRow<K, 0>(dr, lr, fr, dp - sc, dp, dp + sc, lp - sc, lp, lp + sc, fp - sc, fp, fp + sc, extB,
-                                     len, base, scale);
-      if (!mask) continue;
-      changed = true;
-      X::own(st, pa, pc) = t;
-      for (unsigned m = mask; m; m &= m - 1) X::cross(st, pa, __builtin_ctz(m), pc) = t;
-    }
-  }
-  return changed;
-}
-
-// t[y + S·(x + S·z)] = s[x + S·(y + S·z)] (the same map takes T back to N).
-template <class T>
-AT_ALWAYS_INLINE void transposeBox(const T* __restrict s, T* __restrict t) {
-  for (int z = 0; z < S; ++z)
-    for (int y = 0; y < S; ++y)
-      for (int x = 0; x < S; ++x) t[y + S * (x + S * z)] = s[x + S * (y + S * z)];
-}
-
-// Local passes of y± and z± (layout N) and x± (layout T, transposed only when an x sweep has rows
-// to relax) until a pass changes nothing or kLocalPasses ran; returns whether the last pass still
-// changed something. One function per kernel, with an AVX2 clone.
-constexpr int kLocalPasses = 16;
-
-template <CostKernel K>
-AT_ALWAYS_INLINE bool relaxBoxWith(BrickBox& box, RowStamps& st, bool settled, const SweepLengths len[3], float base,
-                                   float scale) {
-  st.start(box.ext, settled);
-  bool changed = true;
-  for (int pass = 0; pass < kLocalPasses && changed; ++pass) {
-    changed = false;
-    for (int dir : {+1, -1}) changed |= sweepBox<K, 1>(box, st, dir, len[1], base, scale);
-    for (int dir : {+1, -1}) changed |= sweepBox<K, 2>(box, st, dir, len[2], base, scale);
-    if (anyRowDirty<0>(st, box.ext, +1) || anyRowDirty<0>(st, box.ext, -1)) {
-      transposeBox(box.d, box.dT);
-      transposeBox(box.l, box.lT);
-      bool changedX = false;
-      for (int dir : {+1, -1}) changedX |= sweepBox<K, 0>(box, st, dir, len[0], base, scale);
-      if (changedX) {
-        transposeBox(box.dT, box.d);
-        transposeBox(box.lT, box.l);
-      }
-      changed |= changedX;
-    }
-  }
-  return changed;
-}
-
-template <CostKernel K>
-bool relaxBoxBaseline(BrickBox& box, RowStamps& st, bool settled, const SweepLengths len[3], float base, float scale) {
-  return relaxBoxWith<K>(box, st, settled, len, base, scale);
-}
-
-template <CostKernel K>
-__attribute__((target("avx2"))) bool relaxBoxAvx2(BrickBox& box, RowStamps& st, bool settled, const SweepLengths len[3],
-                                                  float base, float scale) {
-  return relaxBoxWith<K>(box, st, settled, len, base, scale);
-}
-
-using RelaxBoxFn = bool (*)(BrickBox&, RowStamps&, bool, const SweepLengths[3], float, float);
-
-RelaxBoxFn relaxBoxFunction(CostKernel k, bool avx2) {
-  return wdt::withCostKernel(k, [avx2]<CostKernel K>() -> RelaxBoxFn { return avx2 ? &relaxBoxAvx2<K> : &relaxBoxBaseline<K>; });
-}
-
 unsigned neighbourMask(int x, int y, int z) { return wdt::brickNeighbourMask(x, y, z, E); }
-
-// ─────────────────────────────────────────────────────────────────────────────────────────────
-// [SECTION] Engine
-// ─────────────────────────────────────────────────────────────────────────────────────────────
 
 AT_ALWAYS_INLINE std::uint64_t loadKey(const std::uint64_t* p) { return __atomic_load_n(p, __ATOMIC_RELAXED); }
 AT_ALWAYS_INLINE void storeKey(std::uint64_t* p, std::uint64_t v) { __atomic_store_n(p, v, __ATOMIC_RELAXED); }
-
-// The bricks waiting for a visit, smallest key first: a brick's key is the smallest distance among
-// the changed voxels that queued it, so the front is worked from the seeds outwards (brick-level
-// Dijkstra) and a brick is mostly visited once its surroundings have settled. The GPU runs rounds
-// over every queued brick instead; on a few cores the order saves visits (measured at 128³:
-// 5.3 visits a brick in rounds, bench/RESULTS.md). A brick being visited is not handed out again:
-// one queued during its visit is queued again when the visit ends, so it always sees the stores
-// that queued it (the mutex orders them). One lock per visit (~0.1 ms of work).
-class BrickQueue {
- public:
-  explicit BrickQueue(std::size_t bricks) : key_(bricks, kInf), again_(bricks, kInf), running_(bricks, 0) {}
-
-  // Queues the bricks of `items` (brick, key) or lowers their keys.
-  void push(const std::vector<std::pair<int, Dist>>& items) {
-    if (items.empty()) return;
-    {
-      std::lock_guard<std::mutex> lock(mutex_);
-      for (const auto& [b, key] : items) pushLocked(b, key);
-    }
-    wake_.notify_all();
-  }
-
-  // The next brick to visit, or −1 once nothing is queued and no visit runs, or when *cancel is
-  // set (queued bricks then stay queued).
-  int pop(const std::atomic<bool>* cancel, bool& cancelled) {
-    std::unique_lock<std::mutex> lock(mutex_);
-    for (;;) {
-      if (cancel && cancel->load(std::memory_order_relaxed)) {
-        cancelled = !heap_.empty() || running_count_ > 0;
-        return -1;
-      }
-      while (!heap_.empty()) {
-        const auto [key, b] = heap_.top();
-        heap_.pop();
-        if (key != key_[std::size_t(b)]) continue;  // an older entry of a brick whose key went down
-        key_[std::size_t(b)] = kInf;
-        running_[std::size_t(b)] = 1;
-        ++running_count_;
-        return b;
-      }
-      if (running_count_ == 0) return -1;
-      wake_.wait(lock);
-    }
-  }
-
-  // Ends the visit of b (and queues it again if it was queued meanwhile).
-  void finish(int b) {
-    {
-      std::lock_guard<std::mutex> lock(mutex_);
-      running_[std::size_t(b)] = 0;
-      --running_count_;
-      if (again_[std::size_t(b)] < kInf) {
-        pushLocked(b, again_[std::size_t(b)]);
-        again_[std::size_t(b)] = kInf;
-      }
-    }
-    wake_.notify_all();
-  }
-
-  bool empty() const { return heap_.empty(); }
-
- private:
-  void pushLocked(int b, Dist key) {
-    const std::size_t i = std::size_t(b);
-    if (running_[i]) {
-      again_[i] = std::min(again_[i], key);
-    } else if (key < key_[i]) {
-      key_[i] = key;
-      heap_.push({key, b});
-    }
-  }
-
-  std::mutex mutex_;
-  std::condition_variable wake_;
-  std::priority_queue<std::pair<Dist, int>, std::vector<std::pair<Dist, int>>, std::greater<>> heap_;
-  std::vector<Dist> key_;    // kInf when not queued
-  std::vector<Dist> again_;  // key to queue with when the running visit ends
-  std::vector<char> running_;
-  int running_count_ = 0;
-};
 
 class CpuGrowthEngine final : public GrowthEngine {
  public:
@@ -349,10 +57,19 @@ class CpuGrowthEngine final : public GrowthEngine {
     brickCount_ = std::size_t(bricks_[0]) * bricks_[1] * bricks_[2];
     queue_ = std::make_unique<BrickQueue>(brickCount_);
     settled_.assign(brickCount_, 0);
+    if (!p_.blocked.empty()) {
+      // A brick whose every voxel is blocked (range limit) is never queued: no step enters or
+      // leaves a blocked voxel, so a visit could change nothing; its seeds are written directly.
+      allBlocked_.assign(brickCount_, 1);
+      for (int z = 0; z < d.z; ++z)
+        for (int y = 0; y < d.y; ++y)
+          for (int x = 0; x < d.x; ++x)
+            if (!p_.blocked[d.index(x, y, z)]) allBlocked_[std::size_t(x / E + bricks_[0] * (y / E + bricks_[1] * (z / E)))] = 0;
+    }
     for (int a = 0; a < 3; ++a) spacing_[a] = float(p_.grid.spacingMm[a]);
     for (int a = 0; a < 3; ++a) lengths_[a] = wdt::axisSweepLengths(a, spacing_[0], spacing_[1], spacing_[2]);
     avx2_ = __builtin_cpu_supports("avx2") && !std::getenv("AT_WDT_NO_AVX2");
-    relaxBox_ = relaxBoxFunction(p_.kernel, avx2_);
+    relaxBox_ = growth_cpu::relaxBoxFunction(p_.kernel, avx2_);
     const int hw = int(std::max(1u, std::thread::hardware_concurrency()));
     threads_ = hw;
     // AT_WDT_THREADS=N forces N threads (benchmarks, and tests of the multi-threaded schedule).
@@ -373,13 +90,14 @@ class CpuGrowthEngine final : public GrowthEngine {
     }
     if (change.fromScratch) std::fill(settled_.begin(), settled_.end(), 0);
     for (const auto& [b, key] : touched) settled_[std::size_t(b)] = 0;
-    queue_->push(touched);
+    pushVisitable(touched);
     runVisits(threads, control, stats);
     stats.msCompute = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
     return {};
   }
 
   bool resetsGrownFromRemovedSeeds() const override { return true; }
+  const std::vector<std::uint8_t>* hostDensity() const override { return &p_.density; }
 
   Status readLabels(LabelMap& out) override {
     out = LabelMap(p_.grid, 0);
@@ -514,6 +232,13 @@ class CpuGrowthEngine final : public GrowthEngine {
     return list.size();
   }
 
+  // Queues `items` but the bricks whose every voxel is blocked (allBlocked_).
+  void pushVisitable(std::vector<std::pair<int, Dist>>& items) {
+    if (!allBlocked_.empty())
+      std::erase_if(items, [&](const std::pair<int, Dist>& item) { return allBlocked_[std::size_t(item.first)] != 0; });
+    queue_->push(items);
+  }
+
   // Visits until no brick is queued or the run is cancelled (queued bricks then stay queued).
   void runVisits(int threads, const WdtControl& control, GrowthStats& stats) {
     std::atomic<std::size_t> visits{0};
@@ -527,7 +252,7 @@ class CpuGrowthEngine final : public GrowthEngine {
       for (int b; (b = queue_->pop(control.cancel, stop)) >= 0; ++n) {
         queued.clear();
         visit(b, *box, *stamps, queued);
-        queue_->push(queued);
+        pushVisitable(queued);
         queue_->finish(b);
       }
       if (stop) cancelled = true;
@@ -601,7 +326,7 @@ class CpuGrowthEngine final : public GrowthEngine {
           box.f[cell + x] = densityOf(p_, v);
         }
       }
-    transposeBox(box.f, box.fT);
+    growth_cpu::transposeBox(box.f, box.fT);
   }
 
   void prefetchRow(std::ptrdiff_t rowStart, int x0, int x1) const {
@@ -646,6 +371,7 @@ class CpuGrowthEngine final : public GrowthEngine {
   std::size_t brickCount_ = 0;
   std::unique_ptr<BrickQueue> queue_;  // kept between calls: a cancelled run's bricks stay queued
   std::vector<std::uint8_t> settled_;  // per brick: its interior is settled (see RowStamps)
+  std::vector<std::uint8_t> allBlocked_;  // per brick, with a range limit: every voxel blocked (never queued)
   float spacing_[3] = {1, 1, 1};
   SweepLengths lengths_[3]{};
   bool avx2_ = false;

@@ -189,7 +189,8 @@ int runRender(const Argv& argv) {
         std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - scaleStart).count();
     unitNote = "; distance unit " + formatUnit(settings->distanceUnit) +
                (scale.distanceOffset > 0 ? ", offset " + formatUnit(scale.distanceOffset) : std::string()) +
-               (scale.derived ? std::string(scale.fromSeen ? " (median seen bone D " : " (median bone D ") + formatUnit(scale.quantileD) + ", 90 % " + formatUnit(scale.farQuantileD) +
+               (scale.fromNeighbours ? " (median bone D next to it in view " + formatUnit(scale.nearRingD) + ", far from it " + formatUnit(scale.farRingD) + ")"
+                : scale.derived ? std::string(scale.fromSeen ? " (median seen bone D " : " (median bone D ") + formatUnit(scale.quantileD) + ", 90 % " + formatUnit(scale.farQuantileD) +
                                    (scale.cappedByRays ? "; capped: rays' nearest bone beyond D " + formatUnit(scale.drawnLimitD) + " fades" : std::string()) +
                                    "; by size " +
                                    formatUnit(render::distanceUnitFor(*frame, request.contextScale)) + ")"

@@ -2,9 +2,11 @@
 // exposes CUDA types.
 //
 // The state — a 64-bit (distance, label) key and a density byte per voxel, 9 bytes a voxel, plus
-// two ints per 16³ brick — stays on the device between updates. An update resets the voxels of the
-// labels whose seeds went and writes the new seeds (two small kernels that also queue the bricks
-// they touch), then one cooperative kernel runs rounds over the queued bricks, as the WDT's brick
+// two ints per 16³ brick — stays on the device between updates. An update resets the voxels that
+// grew from the removed or relabelled seeds (found on the old pairs as the CPU engine finds them,
+// wdt/growth_engine.h; the first such edit allocates 4.125 more bytes a voxel for the search) and
+// writes the new seeds (small kernels that also queue the bricks they touch), then one
+// cooperative kernel runs rounds over the queued bricks, as the WDT's brick
 // solver does (cuda/src/brick_solver.h): each active brick is loaded with its halo into shared
 // memory by one block, swept once x+ x− y+ y− z+ z− with wdt::relaxLabelledVoxel (the CPU engine's
 // stencil), and its decreased voxels stored; neighbours whose halo holds a decreased voxel, and the

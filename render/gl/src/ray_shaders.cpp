@@ -214,7 +214,7 @@ vec4 castRay(vec2 pixel) {
       if (uHasField != 0) {
         d = texture(uField, oF + tm * dF).r;
         n = normalisedDistance(d);
-        if (uBandN >= 0.0) {
+        if (RAY_MODE == 3 && uBandN >= 0.0) {
           // Outline: the n over this sample's step nearest the band, so a band thinner than a step
           // is drawn wherever the step crosses it rather than where a sample happens to land in it.
           float na = normalisedDistance(texture(uField, oF + (tm - 0.5 * uStepMm) * dF).r);

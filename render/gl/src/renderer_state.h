@@ -21,10 +21,15 @@ namespace at::render::gl {
 // What a ray caster program is specialised to (compile-time constants of the shader, so that
 // per-sample branches and the unused modes' code leave the program).
 struct RayVariant {
-  static constexpr int kCount = 24;
-  int mode = 0;  // 0 table, 1 bare, 2 lighting
+  static constexpr int kModes = 4;
+  static constexpr int kCount = kModes * 8;
+  // 0 table (WDT, non-weighted, fuzzy), 1 bare, 2 lighting, 3 outline (a table mode whose samples
+  // also look for the band over their step: only its program pays for that branch).
+  int mode = 0;
   bool shading = true, clip = false, structure = false;
-  int index() const { return mode + 3 * (shading ? 1 : 0) + 6 * (clip ? 1 : 0) + 12 * (structure ? 1 : 0); }
+  int index() const {
+    return mode + kModes * ((shading ? 1 : 0) + 2 * (clip ? 1 : 0) + 4 * (structure ? 1 : 0));
+  }
   std::string defines() const;
 };
 

@@ -534,9 +534,9 @@ void VolumeRenderer::setRayCaster(RayCaster r) { state_->rayCaster = r; }
 Status VolumeRenderer::warmUp(const RenderSettings& settings) {
   RenderSettings s = settings;
   s.width = s.height = 8;
-  // The shader's three modes (a table mode stands for all of them), with and without a structure
-  // (selecting and hovering switch between the two) and shading (coarse and full levels).
-  for (RenderMode mode : {RenderMode::Wdt, RenderMode::Bare, RenderMode::Lighting})
+  // The shader's four modes (WDT stands for the table modes but outline), with and without a
+  // structure (selecting and hovering switch between the two) and shading (coarse and full levels).
+  for (RenderMode mode : {RenderMode::Wdt, RenderMode::Bare, RenderMode::Lighting, RenderMode::Outline})
     for (int structure : {0, 1})
       for (bool shading : {false, true}) {
         s.preset.mode = mode;
@@ -734,7 +734,7 @@ Status VolumeRenderer::prepareState(const RenderSettings& s, bool interactive) {
   st.costs.occupancyMs += msSince(occupancyStart);
 
   RayVariant variant;
-  variant.mode = bare ? 1 : (s.preset.mode == RenderMode::Lighting ? 2 : 0);
+  variant.mode = bare ? 1 : s.preset.mode == RenderMode::Lighting ? 2 : s.preset.mode == RenderMode::Outline ? 3 : 0;
   variant.shading = s.shading;
   variant.clip = s.clip.has_value();
   variant.structure = st.warmStructure >= 0 ? st.warmStructure == 1 : st.selected != 0;

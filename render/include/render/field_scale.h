@@ -108,6 +108,10 @@ struct FieldScale {
   double boneRayShare = 0;
   double drawnLimitD = 0;
   bool cappedByRays = false;
+  // Fuzzy and lighting (unitFromNeighbourBone): the median D of the bone seen next to the structure
+  // and far from it in the picture (0: not measured), and whether they set the unit.
+  double nearRingD = 0, farRingD = 0;
+  bool fromNeighbours = false;
 };
 
 // The stored-value level from which the preset's data TF draws bone: the first TF x at which its
@@ -150,16 +154,55 @@ FieldScale fieldScale(const FloatVolume& field, const Volume& volume, const Mask
                       const BoneLevels& levels, const FieldView* view, double margin = 1.6, double minRadiusMm = 3.0);
 
 // Whether a mode's unit may come from the seen set: only where the unit sets how the context fades
-// with distance (WDT and non-weighted). Outline, fuzzy and lighting mark the bone near the
-// structure (a band, a colour, a light): measured on the bone around it, that neighbourhood stays
-// put when the view turns. (From the seen set the skull's frontal sinus, seen from the front
+// with distance (WDT and non-weighted). Outline marks the bone near the structure with a band:
+// measured on the bone around it, the band stays put when the view turns. (Fuzzy and lighting take
+// their unit from the bone seen next to the structure instead: unitFromNeighbours.) (From the seen set the skull's frontal sinus, seen from the front
 // through the thin anterior wall, lost its band: 0.6 % of the frame, 21.9 % isolated pixels.)
 bool unitFromSeenBone(RenderMode mode);
+
+// Fuzzy (Fig. 5) and lighting (Fig. 7) colour the bone the user sees next to the structure: the
+// colour must stay confined to the structure's neighbourhood in the picture. Both measure the view:
+// the first bone surface each ray of the framed view meets (entered from open space), split by how
+// far the ray passes from the structure's silhouette in the picture (rays that meet the structure
+// are the silhouette): the median D of the rays within kNeighbourRing of it (near) and of those
+// beyond kFarFromStructure (far).
+//  - Fuzzy, where the picture tells the two apart (far median ≥ kNeighbourSeparates × near): the
+//    near median lands at x = kNeighbourX (0.7 of the full colour) and the far one at x ≥
+//    kNeighbourFarX (no colour beyond x ≈ 2.8, faint from x ≈ 2), the smaller unit winning.
+//    On the around set alone the skull's mastoid cells coloured 9 % of the bone next to them: the
+//    bone around cells embedded in bone is mostly hidden (septa, the petrous bone) and nearer in D
+//    than the surface seen next to them, which sat at x ≈ 1.9.
+//  - Lighting, and fuzzy where near and far are alike: the around set's unit stays, shrunk (offset
+//    0) only so the far median lies at x ≥ kNeighbourFarX. Lighting's k_a = β/(αx + 1)² puts its
+//    glow at x < 0.5, on the bone touching the structure, which the around set measures (from the
+//    near median the skull's zygomatic arch at margin 2.6 lost its glow: k_a 0.1 there). The bone
+//    seen next to a structure embedded in bone is often the outer shell above it, as far in D as
+//    the rest (the phantom's lateral canal from above: near and far medians 5.8, against 1.0 for
+//    the bone around it; scaled on them the whole shell was lit).
+// What no unit fixes: where the bone seen far from the structure is as near in D as the bone next
+// to it (the skull's orbit from the front: the ethmoid cells and the nasal cavity are reached
+// through the paper-thin medial wall, the far median only 1.3 × the near one), a colour on the near
+// bone reaches the far bone as much; the far cap keeps both faint (confined, but little colour).
+constexpr double kNeighbourRing = 0.05;      // of the ray grid's longer side (8 px of 160)
+constexpr double kFarFromStructure = 0.19;   // (30 px of 160)
+constexpr double kNeighbourX = 1.15;
+constexpr double kNeighbourFarX = 2.3;
+constexpr double kNeighbourSeparates = 1.4;
+constexpr std::size_t kMinNeighbourRays = 32;
+struct NeighbourBone {
+  double nearD = 0, farD = 0;  // median D of each set's first surfaces (0: none)
+  std::size_t nearRays = 0, farRays = 0;
+};
+NeighbourBone neighbourBone(const FloatVolume& field, const Volume& volume, const Mask* body, const BoneLevels& levels,
+                            const FieldView& view);
+bool unitFromNeighbourBone(RenderMode mode);
+// Sets `scale`'s unit from `bone` as above (sets counted only with kMinNeighbourRays rays).
+void unitFromNeighbours(FieldScale& scale, const NeighbourBone& bone, RenderMode mode);
 
 // The one way every front end (render command, desktop, terminal pictures, default views, question
 // checks) sets a framed view's distance unit: fieldScale on `settings`' own view (camera, size,
 // clip: set them first; the view only where unitFromSeenBone(settings.preset.mode)) with the
-// request's margin, then distanceUnit = unit × request.contextScale
+// request's margin, for fuzzy and lighting then unitFromNeighbours on the same view, then distanceUnit = unit × request.contextScale
 // and distanceOffset. Returns the measure.
 FieldScale applyFieldScale(RenderSettings& settings, const FloatVolume& field, const Volume& volume, const Mask* body,
                            const StructureFrame& frame, const ViewRequest& request);

@@ -65,9 +65,12 @@ class RangedGrowth {
   // labels returned are not the rule's (commit nothing; the next apply finishes the work left).
   // `stats` (optional) adds the limited growths' brick visits, rounds and compute time. Errors: a
   // grid mismatch, a range that is not low < high, a ranged label 0, the growth's errors.
+  // `unrangedGrowth` (optional): the ordinary growth, made on this volume with `params`; a limited
+  // growth made afresh copies its values from it (or from the previous range's growth) instead of
+  // smoothing the volume again (LabelGrowth::create with sameValues; the labels are the same).
   Result<LabelMap> apply(const Volume& volume, const LabelMap& unranged, const std::vector<GrowthSeed>& seeds,
                          const GrowthParams& params, const LabelRanges& ranges, const WdtControl& control = {},
-                         GrowthStats* stats = nullptr);
+                         GrowthStats* stats = nullptr, const LabelGrowth* unrangedGrowth = nullptr);
 
  private:
   struct Kept;

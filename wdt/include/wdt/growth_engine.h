@@ -75,6 +75,9 @@ class GrowthEngine {
   // reached) of every voxel out.
   virtual Status readLabels(LabelMap& out) = 0;
   virtual Status readDistances(FloatVolume& out) = 0;
+  // The density bytes the engine grows on (GrowthProblem::density), where it keeps them on the
+  // host (the CPU engine); nullptr where it does not (the GPU engine keeps them on the device).
+  virtual const std::vector<std::uint8_t>* hostDensity() const { return nullptr; }
 };
 
 // The CPU engine: bricks of a round shared among the cores.

@@ -101,6 +101,12 @@ class LabelGrowth {
   // params, `cuda` requested where no device exists (with `auto` that falls back to the CPU and
   // the first update's stats.warning says why).
   static Result<LabelGrowth> create(const Volume& volume, const GrowthParams& params);
+  // As create, but the density bytes (the windowed, smoothed values: the set-up's dearest part) are
+  // copied from `sameValues` where it was created on this same volume object (its voxels unchanged
+  // since: the caller's promise) with the same window, smoothing and edge sigma, and keeps them on
+  // the host (a CPU growth); otherwise, or with nullptr, they are computed. Either way the growth is
+  // create's. For growths on one volume that differ in the range limit only (segment::RangedGrowth).
+  static Result<LabelGrowth> create(const Volume& volume, const GrowthParams& params, const LabelGrowth* sameValues);
   ~LabelGrowth();
   LabelGrowth(LabelGrowth&&) noexcept;
   LabelGrowth& operator=(LabelGrowth&&) noexcept;

@@ -1,0 +1,125 @@
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <vector>
+
+#include "render/field_scale.h"
+#include "view_rays.h"
+
+namespace at::render {
+
+namespace {
+
+double medianOf(std::vector<float>& d) {
+  const auto mid = d.begin() + std::ptrdiff_t((d.size() - 1) / 2);
+  std::nth_element(d.begin(), mid, d.end());
+  return *mid;
+}
+
+// City-block distance in rays from the rays that meet the structure (a large value without any).
+std::vector<int> raysFromStructure(const std::vector<bool>& structure, int w, int h) {
+  std::vector<int> d(structure.size(), 1 << 20);
+  for (std::size_t i = 0; i < structure.size(); ++i)
+    if (structure[i]) d[i] = 0;
+  const auto at = [&](int x, int y) -> int& { return d[std::size_t(y) * std::size_t(w) + std::size_t(x)]; };
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      if (x > 0) at(x, y) = std::min(at(x, y), at(x - 1, y) + 1);
+      if (y > 0) at(x, y) = std::min(at(x, y), at(x, y - 1) + 1);
+    }
+  for (int y = h - 1; y >= 0; --y)
+    for (int x = w - 1; x >= 0; --x) {
+      if (x + 1 < w) at(x, y) = std::min(at(x, y), at(x + 1, y) + 1);
+      if (y + 1 < h) at(x, y) = std::min(at(x, y), at(x, y + 1) + 1);
+    }
+  return d;
+}
+
+}  // namespace
+
+NeighbourBone neighbourBone(const FloatVolume& field, const Volume& volume, const Mask* body, const BoneLevels& levels,
+                            const FieldView& view) {
+  NeighbourBone out;
+  const Geometry& fg = field.geometry;
+  const Geometry& vg = volume.geometry;
+  if (vg.dims.count() == 0 || fg.dims.count() == 0) return out;
+  const auto [w, h] = detail::rayGridOf(view.width, view.height, kScaleRaysPerSide);
+  if (w < 1 || h < 1) return out;
+  const double denseFrom = levels.dense, openBelow = std::min(levels.open, levels.dense);
+  const bool bodyOnGrid = body && body->geometry.dims.count() == vg.dims.count();
+  const double step = 0.5 * std::min({vg.spacingMm[0], vg.spacingMm[1], vg.spacingMm[2]});
+  std::vector<bool> structure(std::size_t(w) * std::size_t(h), false);
+  std::vector<float> first(structure.size(), 0);  // the first bone surface's D on each ray (0: none)
+  for (int py = 0; py < h; ++py)
+    for (int px = 0; px < w; ++px) {
+      const std::size_t i = std::size_t(py) * std::size_t(w) + std::size_t(px);
+      const Ray ray = view.camera.rayThroughPixel(px, py, w, h);
+      const detail::IndexRay rv = detail::indexRay(vg, ray), rf = detail::indexRay(fg, ray);
+      double t0 = 0, t1 = 0;
+      detail::boxSegment(rv, vg.dims, t0, t1);
+      bool open = false;
+      for (double t = t0 + 0.5 * step; t < t1; t += step) {
+        if (view.clip && !view.clip->keeps(ray.origin + t * ray.direction)) continue;
+        int vi[3], fi[3];
+        if (!detail::voxelOn(rv, t, vg.dims, vi) || !detail::voxelOn(rf, t, fg.dims, fi)) continue;
+        const float D = field.voxels[fg.dims.index(fi[0], fi[1], fi[2])];
+        if (D == 0) {  // the structure: this pixel shows it
+          structure[i] = true;
+          break;
+        }
+        if (first[i] > 0) continue;  // (a ray may still meet the structure behind its first bone)
+        const std::size_t idx = vg.dims.index(vi[0], vi[1], vi[2]);
+        const double value = double(volume.voxels[idx]);
+        if (value <= openBelow) {
+          open = true;
+          continue;
+        }
+        if (value < denseFrom || !open) continue;
+        open = false;
+        if (bodyOnGrid && body->voxels[idx] == 0) continue;
+        if (D > 0 && std::isfinite(D)) first[i] = D;
+      }
+    }
+  const std::vector<int> apart = raysFromStructure(structure, w, h);
+  const double side = double(std::max(w, h));
+  std::vector<float> nearD, farD;
+  for (std::size_t i = 0; i < structure.size(); ++i) {
+    if (structure[i] || first[i] <= 0) continue;
+    if (double(apart[i]) <= kNeighbourRing * side)
+      nearD.push_back(first[i]);
+    else if (double(apart[i]) >= kFarFromStructure * side)
+      farD.push_back(first[i]);
+  }
+  out.nearRays = nearD.size();
+  out.farRays = farD.size();
+  if (!nearD.empty()) out.nearD = medianOf(nearD);
+  if (!farD.empty()) out.farD = medianOf(farD);
+  return out;
+}
+
+bool unitFromNeighbourBone(RenderMode mode) { return mode == RenderMode::Fuzzy || mode == RenderMode::Lighting; }
+
+void unitFromNeighbours(FieldScale& scale, const NeighbourBone& bone, RenderMode mode) {
+  scale.nearRingD = bone.nearD;
+  scale.farRingD = bone.farD;
+  const bool near = bone.nearRays >= kMinNeighbourRays && bone.nearD > 0;
+  const bool far = bone.farRays >= kMinNeighbourRays && bone.farD > 0;
+  if (mode == RenderMode::Fuzzy && near && (!far || bone.farD >= kNeighbourSeparates * bone.nearD)) {
+    double unit = bone.nearD / kNeighbourX;
+    if (far) unit = std::min(unit, bone.farD / kNeighbourFarX);
+    scale.distanceUnit = std::max(1e-6, unit);
+    scale.distanceOffset = 0;
+    scale.fromNeighbours = true;
+    scale.derived = true;
+    return;
+  }
+  // Lighting, or a picture that does not tell the bone next to the structure from the far bone: the
+  // around set's unit stays, shrunk (offset 0) only where it would colour the far bone.
+  if (far && (bone.farD - scale.distanceOffset) / scale.distanceUnit < kNeighbourFarX) {
+    scale.distanceUnit = std::max(1e-6, bone.farD / kNeighbourFarX);
+    scale.distanceOffset = 0;
+    scale.fromNeighbours = true;
+  }
+}
+
+}  // namespace at::render
