@@ -17,7 +17,10 @@ namespace at::db {
 // given) who is not a user here (`localNames`): a student with a negative id and the class code
 // as group; their answers to `in.course`'s questions and their attempts at its lessons, rebuilt
 // from the events (a lesson_finished closes the latest attempt of that lesson started before it).
-// What the events do not carry is left out: memory states (FSRS) and exam attempts.
+// Answers the server keeps as practice are left out; answers waiting for their keys (correct blank)
+// are left out too and counted in `in.waitingAnswers`.
+// On a class server, their exams graded there and handed in become attempts at the course's exams.
+// What the events do not carry is left out: memory states (FSRS).
 Status addClassEventStudents(Database& db, lessons::AnalyticsInput& in, const std::set<std::string>& localNames,
                              const std::set<std::string>& courseQuestions, const std::optional<std::string>& classCode);
 

@@ -207,12 +207,13 @@ Result<ClassProgress> classProgress(Database& server, const std::string& code, c
   if (!info) return tl::unexpected(info.error());
   out.info = *info;
 
-  // One row per student member, computed from the events (none yet: a row of zeros).
+  // One row per student member, computed from the events (none yet: a row of zeros). Answers and
+  // right answers are the graded ones; those waiting for their keys and practice are counted apart.
   auto students = server.prepare(
       "SELECT m.user_name,"
-      " SUM(CASE WHEN e.kind = 'answer' AND e.practice = 0 THEN 1 ELSE 0 END),"
+      " SUM(CASE WHEN e.kind = 'answer' AND e.practice = 0 AND e.correct IS NOT NULL THEN 1 ELSE 0 END),"
       " SUM(CASE WHEN e.kind = 'answer' AND e.practice = 0 AND e.correct = 1 THEN 1 ELSE 0 END),"
-      " COUNT(DISTINCT CASE WHEN e.kind = 'answer' AND e.practice = 0 THEN e.structure END),"
+      " COUNT(DISTINCT CASE WHEN e.kind = 'answer' AND e.practice = 0 AND e.correct IS NOT NULL THEN e.structure END),"
       " COUNT(DISTINCT CASE WHEN e.kind = 'lesson_started' THEN e.lesson_id END),"
       " COUNT(DISTINCT CASE WHEN e.kind = 'lesson_finished' THEN e.lesson_id END),"
       " MAX(e.occurred_at), MAX(m.withdrawal_reason),"
@@ -259,7 +260,8 @@ Result<ClassProgress> classProgress(Database& server, const std::string& code, c
 
   auto structures = server.prepare(
       "SELECT structure, COUNT(DISTINCT user_name), COUNT(*), SUM(CASE WHEN correct = 1 THEN 1 ELSE 0 END)"
-      " FROM class_events WHERE class_code = ?1 AND kind = 'answer' AND practice = 0 GROUP BY structure ORDER BY structure");
+      " FROM class_events WHERE class_code = ?1 AND kind = 'answer' AND practice = 0 AND correct IS NOT NULL"
+      " GROUP BY structure ORDER BY structure");
   if (!structures) return tl::unexpected(structures.error());
   structures->bind(1, code);
   status = forEachRow(*structures, [&](Statement& r) -> Status {

@@ -8,6 +8,7 @@
 
 #include "class_exam_locate_sql.h"
 #include "class_exam_sql.h"
+#include "class_lesson_end_sql.h"
 #include "class_lesson_keys_sql.h"
 #include "class_security_sql.h"
 #include "study_checks_sql.h"
@@ -559,6 +560,8 @@ const std::vector<Migration>& migrations() {
        studyReadersSql(), {}, true},
       {25, "class server: lesson locate answers graded from the pixel picked on the question's view, else kept as practice",
        classLessonLocateSqliteSql(), {}, false, classLessonLocateSql()},
+      {26, "class server: a lesson's end scored again, and audited, when its answers are graded again",
+       classLessonEndSql(), {}, true},
   };
   return all;
 }

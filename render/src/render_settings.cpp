@@ -39,24 +39,67 @@ double trilinear(const Grid<T>& g, const Vec3& ijk, F value) {
 // The selected structure's mask as the GPU holds it: 1 where the label is `label`, smoothed by a
 // [1 2 1]³/64 binomial (edge-clamped; a labelled voxel it would drop below 0.5 raised to 0.75),
 // sampled trilinearly.
+// The mask's value at voxel (i, j, k), in 64ths (0 … 64; 48 = 0.75).
+int maskSixtyFourths(const LabelMap& labels, std::uint16_t label, int i, int j, int k) {
+  const Dims& d = labels.dims();
+  int sum = 0;
+  for (int dk = -1; dk <= 1; ++dk)
+    for (int dj = -1; dj <= 1; ++dj)
+      for (int di = -1; di <= 1; ++di) {
+        const int x = std::clamp(i + di, 0, d.x - 1), y = std::clamp(j + dj, 0, d.y - 1), z = std::clamp(k + dk, 0, d.z - 1);
+        if (labels.voxels[d.index(x, y, z)] == label) sum += (2 - std::abs(di)) * (2 - std::abs(dj)) * (2 - std::abs(dk));
+      }
+  return sum < 32 && labels.at(i, j, k) == label ? 48 : sum;
+}
+
 double smoothedMaskAt(const LabelMap& labels, std::uint16_t label, const Vec3& ijk) {
   const Dims& d = labels.dims();
   return trilinear(d, ijk, [&](std::size_t index) {
     const int i = int(index % std::size_t(d.x)), j = int((index / std::size_t(d.x)) % std::size_t(d.y)),
               k = int(index / (std::size_t(d.x) * std::size_t(d.y)));
-    int sum = 0;
-    for (int dk = -1; dk <= 1; ++dk)
-      for (int dj = -1; dj <= 1; ++dj)
-        for (int di = -1; di <= 1; ++di) {
-          const int x = std::clamp(i + di, 0, d.x - 1), y = std::clamp(j + dj, 0, d.y - 1), z = std::clamp(k + dk, 0, d.z - 1);
-          if (labels.voxels[d.index(x, y, z)] == label) sum += (2 - std::abs(di)) * (2 - std::abs(dj)) * (2 - std::abs(dk));
-        }
-    const double smooth = double(sum) / 64.0;
-    return smooth < 0.5 && labels.voxels[index] == label ? 0.75 : smooth;
+    return double(maskSixtyFourths(labels, label, i, j, k)) / 64.0;
   });
 }
 
 }  // namespace
+
+double SelectedMask::at(std::size_t labelIndex) const {
+  const int i = int(labelIndex % std::size_t(dims.x)), j = int((labelIndex / std::size_t(dims.x)) % std::size_t(dims.y)),
+            k = int(labelIndex / (std::size_t(dims.x) * std::size_t(dims.y)));
+  if (i < lo[0] || j < lo[1] || k < lo[2] || i > hi[0] || j > hi[1] || k > hi[2]) return 0;
+  const std::size_t w = std::size_t(hi[0] - lo[0] + 1), h = std::size_t(hi[1] - lo[1] + 1);
+  return double(sixtyFourths[(std::size_t(k - lo[2]) * h + std::size_t(j - lo[1])) * w + std::size_t(i - lo[0])]) / 64.0;
+}
+
+SelectedMask selectedMask(const LabelMap& labels, std::uint16_t label) {
+  SelectedMask m;
+  m.label = label;
+  m.dims = labels.dims();
+  const Dims& d = m.dims;
+  m.lo = {d.x, d.y, d.z};
+  for (int k = 0; k < d.z; ++k)
+    for (int j = 0; j < d.y; ++j)
+      for (int i = 0; i < d.x; ++i)
+        if (labels.voxels[d.index(i, j, k)] == label) {
+          m.lo = {std::min(m.lo[0], i), std::min(m.lo[1], j), std::min(m.lo[2], k)};
+          m.hi = {std::max(m.hi[0], i), std::max(m.hi[1], j), std::max(m.hi[2], k)};
+        }
+  if (m.hi[0] < m.lo[0]) {
+    m.lo = {0, 0, 0};
+    m.hi = {-1, -1, -1};
+    return m;  // no voxel of the label: 0 everywhere
+  }
+  // Grown by one voxel: a voxel next to the label has a share of it; one further has none.
+  m.lo = {std::max(m.lo[0] - 1, 0), std::max(m.lo[1] - 1, 0), std::max(m.lo[2] - 1, 0)};
+  m.hi = {std::min(m.hi[0] + 1, d.x - 1), std::min(m.hi[1] + 1, d.y - 1), std::min(m.hi[2] + 1, d.z - 1)};
+  m.sixtyFourths.reserve(std::size_t(m.hi[0] - m.lo[0] + 1) * std::size_t(m.hi[1] - m.lo[1] + 1) *
+                         std::size_t(m.hi[2] - m.lo[2] + 1));
+  for (int k = m.lo[2]; k <= m.hi[2]; ++k)
+    for (int j = m.lo[1]; j <= m.hi[1]; ++j)
+      for (int i = m.lo[0]; i <= m.hi[0]; ++i)
+        m.sixtyFourths.push_back(std::uint8_t(maskSixtyFourths(labels, label, i, j, k)));
+  return m;
+}
 
 std::array<float, 3> srgbToXyz(const std::array<float, 3>& rgb) {
   const float r = srgbToLinear(rgb[0]), g = srgbToLinear(rgb[1]), b = srgbToLinear(rgb[2]);
@@ -177,6 +220,14 @@ PickResult pick(const SceneVolumes& scene, const RenderSettings& s, const Transf
   const float bandN = outlineBandN(s.preset);
   const Geometry* fg = scene.field ? &scene.field->geometry : nullptr;
   double accumulated = 0, prevMask = 0;
+  const SelectedMask* known = scene.selectedMask && scene.selectedMask->label == scene.selected &&
+                                      scene.selectedMask->dims == g.dims
+                                  ? scene.selectedMask
+                                  : nullptr;
+  const auto maskAt = [&](const Vec3& ijk) {
+    if (known) return trilinear(g.dims, ijk, [&](std::size_t index) { return known->at(index); });
+    return smoothedMaskAt(*scene.labels, scene.selected, ijk);
+  };
   const auto finish = [&](const Vec3& p, const Vec3& ijk, std::optional<std::uint16_t> label) {
     result.hit = true;
     result.pointMm = p;
@@ -196,7 +247,7 @@ PickResult pick(const SceneVolumes& scene, const RenderSettings& s, const Transf
     for (double tm = t0; tm < t1; tm += 2 * step) {
       const Vec3 p = ray.origin + tm * ray.direction;
       if (s.clip && !s.clip->keeps(p)) continue;
-      if (smoothedMaskAt(*scene.labels, scene.selected, g.patientToIndex(p)) >= 0.5) {
+      if (maskAt(g.patientToIndex(p)) >= 0.5) {
         frontT = tm;
         break;
       }
@@ -208,7 +259,7 @@ PickResult pick(const SceneVolumes& scene, const RenderSettings& s, const Transf
       continue;
     }
     const Vec3 ijk = g.patientToIndex(p);
-    const double m = structure ? smoothedMaskAt(*scene.labels, scene.selected, ijk) : 0.0;
+    const double m = structure ? maskAt(ijk) : 0.0;
     if (m >= 0.5) {
       if (prevMask < 0.5) {
         accumulated += (1 - accumulated) * structureAlpha;

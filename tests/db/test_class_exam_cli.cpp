@@ -8,6 +8,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 #include <string>
 
 #include <nlohmann/json.hpp>
@@ -156,6 +157,22 @@ TEST_CASE("ClassExamCli_InstructorOpensStudentSitsOnTheServer_ProgressAndXapiSho
   std::snprintf(examColumns, sizeof examColumns, ",1,%.3f,0,0", rightCount / 12.0);
   const std::string eveLine = after(csv.out, "\n" + eve + ",");
   CHECK(eveLine.ends_with(examColumns));
+
+  // Analytics on the server counts the same exam: her score in the students table, one finished
+  // attempt in the exams table.
+  auto analytics = test::runApp("analytics temporal_bone --group " + code + " --csv --db '" + *url + "'");
+  CAPTURE(analytics.err);
+  REQUIRE(analytics.exitCode == 0);
+  CAPTURE(analytics.out);
+  const std::string scoreLine = "\nstudents," + eve + "," + code + ",exam_score,";
+  const auto scoreAt = analytics.out.find(scoreLine);
+  REQUIRE(scoreAt != std::string::npos);
+  CHECK(std::stod(analytics.out.substr(scoreAt + scoreLine.size())) == doctest::Approx(rightCount / 12.0).epsilon(1e-3));
+  bool finishedOnce = false;
+  std::istringstream analyticsLines(analytics.out);
+  for (std::string line; std::getline(analyticsLines, line);)
+    finishedOnce = finishedOnce || (line.rfind("exams,temporal_bone.practical,", 0) == 0 && line.ends_with(",finished,1"));
+  CHECK(finishedOnce);
 
   const fs::path xapi = dir.path() / "class.json";
   auto exported = test::runApp("xapi --class " + code + " --out '" + xapi.string() + "' --db '" + leeUrl + "'");

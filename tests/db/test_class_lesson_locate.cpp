@@ -331,11 +331,11 @@ TEST_CASE("ClassLessonLocate_AForgedRightPickIsPracticeNotCounted_APixelPickedOn
   MESSAGE("after the keys changed: " << rightNow << " right of " << graded << " graded");
 }
 
-TEST_CASE("ClassLessonLocate_ClassProgressAndAnalyticsLeavePracticeAnswersOut") {
+TEST_CASE("ClassLessonLocate_ClassProgressAndAnalyticsLeavePracticeAndWaitingAnswersOutOfTheRightShare") {
   test::TempDir dir;
   const std::string location = test::freshDatabase(dir, "server.db");
   Database server = openAt(location);
-  const std::uint64_t seed = test::freshSeed("ClassLessonLocate_ClassProgressAndAnalyticsLeavePracticeAnswersOut");
+  const std::uint64_t seed = test::freshSeed("ClassLessonLocate_ClassProgressAndAnalyticsLeavePracticeAndWaitingAnswersOutOfTheRightShare");
   std::mt19937_64 random(seed);
   REQUIRE(storeCourse(server, test::toyCourse(), "toy"));
   auto made = createClass(server, "Ear anatomy", "dr_ada");
@@ -344,8 +344,8 @@ TEST_CASE("ClassLessonLocate_ClassProgressAndAnalyticsLeavePracticeAnswersOut") 
   for (const std::string& n : names) REQUIRE(joinClass(server, made->code, n));
   // Random answers written as a server stores them: graded, waiting for a key, or practice (every
   // kind at least once for each student, so each count is tested).
-  std::map<std::string, std::array<int, 4>> expected;  // answers, right, ungraded, practice
-  std::map<std::string, std::set<std::string>> structuresOf;  // answered about, practice left out
+  std::map<std::string, std::array<int, 4>> expected;  // graded answers, right, waiting, practice
+  std::map<std::string, std::set<std::string>> structuresOf;  // of the graded answers
   const std::vector<std::pair<std::string, std::string>> questions = {
       {"toy.ossicles.name_stapes", "stapes"}, {"toy.ossicles.identify_incus", "incus"}, {"toy.ossicles.locate_malleus", "malleus"}};
   std::int64_t at = std::int64_t(std::time(nullptr)) - 1000;
@@ -363,9 +363,9 @@ TEST_CASE("ClassLessonLocate_ClassProgressAndAnalyticsLeavePracticeAnswersOut") 
       s->bind(8, state <= 1 ? std::optional<double>(state == 0 ? 1.0 : 0.0) : std::nullopt);
       s->bind(9, state == 3 ? 1 : 0);
       REQUIRE(s->run());
-      if (state != 3) structuresOf[n].insert(structure);
+      if (state <= 1) structuresOf[n].insert(structure);
       auto& e = expected[n];
-      e[0] += state != 3;
+      e[0] += state <= 1;
       e[1] += state == 0;
       e[2] += state == 2;
       e[3] += state == 3;
@@ -394,9 +394,12 @@ TEST_CASE("ClassLessonLocate_ClassProgressAndAnalyticsLeavePracticeAnswersOut") 
     seen[nameOf.at(a.userId)][0] += 1;
     seen[nameOf.at(a.userId)][1] += a.correct ? 1 : 0;
   }
+  int waiting = 0;
   for (const std::string& n : names) {
     CAPTURE(n);
     CHECK(seen[n][0] == expected.at(n)[0]);
     CHECK(seen[n][1] == expected.at(n)[1]);
+    waiting += expected.at(n)[2];
   }
+  CHECK(input->waitingAnswers == waiting);
 }

@@ -419,8 +419,9 @@ TEST_CASE("Corrections and withdrawals go through audited functions; the audit c
   CHECK(count(c.admin, "SELECT COUNT(*) FROM class_events WHERE correct = 1") == 2);
   auto audit = classAudit(coordinator, c.code);
   REQUIRE(audit);
-  REQUIRE(std::int64_t(audit->size()) == audited + 1);
-  const ClassAuditEntry& e = audit->back();
+  // Its own row, then the row of the lesson end it changed (her ossicles lesson: 0.5 → 1).
+  REQUIRE(std::int64_t(audit->size()) == audited + 2);
+  const ClassAuditEntry& e = (*audit)[std::size_t(audited)];
   CHECK(e.action == "correct");
   CHECK(e.actor == c.coordinator);
   CHECK(e.login == c.coordinator);
@@ -429,6 +430,13 @@ TEST_CASE("Corrections and withdrawals go through audited functions; the audit c
   CHECK(e.newValue->find("\"correct\" : 1") != std::string::npos);
   CHECK(e.reason == "synonym 'stirrup' accepted");
   CHECK(e.recordedAt.size() >= 20);
+  const ClassAuditEntry& end = audit->back();
+  CHECK(end.action == "lesson_score");
+  CHECK(end.login == c.coordinator);
+  CHECK(end.target.rfind(c.sam + " ", 0) == 0);
+  CHECK(end.oldValue == std::optional<std::string>("{\"score\" : 0.5}"));
+  CHECK(end.newValue == std::optional<std::string>("{\"score\" : 1}"));
+  CHECK(end.reason.find(wrongAnswer) != std::string::npos);
 
   // Withdrawal: kept with its reason; the member's later events no longer count.
   REQUIRE(withdrawMember(coordinator, c.code, c.sam, "consent withdrawn by e-mail", std::nullopt));
@@ -455,7 +463,7 @@ TEST_CASE("Corrections and withdrawals go through audited functions; the audit c
     REQUIRE_FALSE(done);
     CHECK(done.error().message.find("append-only") != std::string::npos);
   }
-  CHECK(count(c.admin, "SELECT COUNT(*) FROM class_audit") == audited + 2);
+  CHECK(count(c.admin, "SELECT COUNT(*) FROM class_audit") == audited + 3);  // correction, lesson end, withdrawal
 }
 
 TEST_CASE("Accounts: a password is shown once, existing logins keep theirs, other roles cannot be taken over") {

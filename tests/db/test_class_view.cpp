@@ -1,12 +1,15 @@
 // One class view: instructor analytics on a class server counts what `class progress` counts —
 // the students who learnt on their own machines and reached the server through the outbox
-// included — read through PgBouncer, as the lab machines reach the server.
+// included — read through PgBouncer, as the lab machines reach the server. Both count graded
+// answers only: those still waiting for their keys are counted apart, in both.
 #include <doctest/doctest.h>
 
 #include <ctime>
 #include <map>
 #include <random>
 #include <set>
+
+#include <nlohmann/json.hpp>
 
 #include "database.h"  // db/'s private SQL wrapper (at_db_sql_for_tests)
 #include "db/analytics_store.h"
@@ -16,6 +19,7 @@
 #include "lessons/analytics.h"
 #include "lessons/lesson_engine.h"
 #include "pooled_postgres.h"
+#include "secure_class.h"  // toyLessonKeys
 #include "test_databases.h"
 #include "test_support.h"
 #include "toy_course.h"
@@ -72,6 +76,20 @@ TEST_CASE("ClassView_AnalyticsOnTheServerCountsWhatClassProgressCounts_OutboxStu
   REQUIRE(made);
   auto other = createClass(server, "Another class", "dr_ada");
   REQUIRE(other);
+  // Part of the course's keys, published before the students play or after their answers arrived:
+  // the name question's always (graded answers), the identify question of the first lesson never
+  // (answers waiting), the rest at random.
+  std::vector<std::string> keys;
+  for (const std::string& k : test::toyLessonKeys()) {
+    const std::string question = nlohmann::json::parse(k)["question_id"];
+    if (question == "toy.ossicles.name_stapes" || (question != "toy.ossicles.identify_incus" && random() % 2)) keys.push_back(k);
+  }
+  const bool keysFirst = random() % 2 == 0;
+  const auto publish = [&] {
+    auto published = publishLessonKeys(server, made->code, keys, std::string("dr_ada"));
+    REQUIRE_MESSAGE(published, (published ? "" : published.error().message));
+  };
+  if (keysFirst) publish();
 
   // Five laptop students of the class (one never plays) and one of another class; each plays the
   // first lesson and, at random, part of the second, with a random pattern of right answers.
@@ -95,6 +113,7 @@ TEST_CASE("ClassView_AnalyticsOnTheServerCountsWhatClassProgressCounts_OutboxStu
     REQUIRE(sent);
     CHECK(sent->complete());
   }
+  if (!keysFirst) publish();
   // A lab machine's user on the server itself, in no class: analytics' class, not class progress'.
   SqlUserRepository serverUsers(server);
   REQUIRE(serverUsers.createUser("lab_user", Role::Student, ""));
@@ -126,7 +145,7 @@ TEST_CASE("ClassView_AnalyticsOnTheServerCountsWhatClassProgressCounts_OutboxStu
     fromAnalytics[nameOf.at(a.userId)].started.insert(a.lessonId);
     if (a.finishedAt) fromAnalytics[nameOf.at(a.userId)].finished.insert(a.lessonId);
   }
-  int total = 0;
+  int total = 0, waiting = 0;
   for (const StudentClassProgress& p : progress->students) {
     CAPTURE(p.userName);
     const Counts& c = fromAnalytics[p.userName];
@@ -136,8 +155,11 @@ TEST_CASE("ClassView_AnalyticsOnTheServerCountsWhatClassProgressCounts_OutboxStu
     CHECK(int(c.started.size()) == p.lessonsStarted);
     CHECK(int(c.finished.size()) == p.lessonsFinished);
     total += p.answers;
+    waiting += p.ungraded;
   }
   CHECK(total > 0);
+  CHECK(waiting > 0);
+  CHECK(input->waitingAnswers == waiting);
   CHECK(analytics.answers == total);
   // Per structure too.
   std::map<std::string, std::pair<int, int>> byStructure;

@@ -224,6 +224,10 @@ int runAnalytics(const Argv& argv) {
   const auto analytics = lessons::computeAnalytics(*input, lessons::UnixSeconds(std::time(nullptr)));
   if (!args->has("csv")) {
     printText(analytics, input->course);
+    if (input->waitingAnswers > 0)
+      terminalPrintf("\n%s on the class server wait for their answer keys and are not counted yet "
+                     "(an instructor publishes them with: anatomy-tutor class keys CODE --db SERVER)\n",
+                     str::countOf(input->waitingAnswers, "answer").c_str());
     return 0;
   }
   auto all = tables(analytics);

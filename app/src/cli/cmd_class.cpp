@@ -51,9 +51,10 @@ constexpr const char* kClassHelp =
     "            cannot be reached they wait in the local database's outbox and are sent when it\n"
     "            is back (or with `anatomy-tutor sync`); learning goes on meanwhile.\n"
     "  role      a coordinator (NAME) makes MEMBER a student, instructor or coordinator\n"
-    "  progress  for instructors and coordinators: each student's answers, share right,\n"
-    "            structures, lessons started and finished and last activity, and each structure's\n"
-    "            answers, computed from the events the server has (--csv: the students as CSV)\n"
+    "  progress  for instructors and coordinators: each student's graded answers, share right,\n"
+    "            answers waiting for their keys, structures, lessons started and finished and\n"
+    "            last activity, and each structure's graded answers, computed from the events the\n"
+    "            server has (--csv: the students as CSV; answers and correct are the graded ones)\n"
     "  account   a coordinator makes NAME's login (ROLE: student, instructor or coordinator) and\n"
     "            prints its password once (--pgpass FILE: appends a ~/.pgpass line to FILE instead);\n"
     "            a login that exists keeps its password and gets the role in this class\n"
@@ -70,8 +71,9 @@ constexpr const char* kClassHelp =
     "  keys      an instructor or coordinator publishes the answer keys of the courses (--course: one)\n"
     "            from this machine (--local-db) to the server, which then grades every lesson and\n"
     "            review answer itself; until then the class's answers wait there ungraded (`class\n"
-    "            progress` counts them). A locate answer counts when picked on the question's\n"
-    "            picture in `play`; any other locate pick is kept there as practice\n";
+    "            progress` shows them as waiting, apart from the graded ones). A locate answer\n"
+    "            counts when picked on the question's picture in `play`; any other locate pick is\n"
+    "            kept there as practice\n";
 
 constexpr const char* kSyncHelp =
     "usage: anatomy-tutor sync [--db PATH]\n\n"
@@ -209,11 +211,12 @@ int runClassProgress(const cli::Args& args) {
   terminalPrintf("Class %s — %s: %s, %s received\n\n", progress->info.code.c_str(), progress->info.title.c_str(),
               str::countOf(long(progress->students.size()), "student").c_str(),
               str::countOf(long(progress->events), "event").c_str());
-  terminalPrintf("%-20s %8s %6s %11s %8s %9s %11s  %s\n", "student", "answers", "right", "structures", "lessons",
-                 "finished", "exam score", "last active");
+  // "answers" and "right" are the graded answers; "waiting" those whose keys are not published yet.
+  terminalPrintf("%-20s %8s %6s %8s %11s %8s %9s %11s  %s\n", "student", "answers", "right", "waiting", "structures",
+                 "lessons", "finished", "exam score", "last active");
   for (const auto& s : progress->students)
-    terminalPrintf("%-20s %8d %6s %11d %8d %9d %11s  %s%s\n", s.userName.c_str(), s.answers,
-                   share(s.correct, s.answers).c_str(), s.structures, s.lessonsStarted, s.lessonsFinished,
+    terminalPrintf("%-20s %8d %6s %8d %11d %8d %9d %11s  %s%s\n", s.userName.c_str(), s.answers,
+                   share(s.correct, s.answers).c_str(), s.ungraded, s.structures, s.lessonsStarted, s.lessonsFinished,
                    examScore(s, true).c_str(), when(s.lastActive).c_str(),
                 s.withdrawal ? ("  (withdrawn: " + *s.withdrawal + ")").c_str() : "");
   int ungraded = 0, practice = 0;
@@ -222,7 +225,7 @@ int runClassProgress(const cli::Args& args) {
     practice += s.practice;
   }
   if (ungraded > 0)
-    terminalPrintf("\n%s not graded yet: their answer keys are not on the server; publish them from an "
+    terminalPrintf("\n%s waiting, not counted yet: their answer keys are not on the server; publish them from an "
                    "instructor's machine with: anatomy-tutor class keys %s --db SERVER\n",
                    str::countOf(ungraded, "answer").c_str(), progress->info.code.c_str());
   if (practice > 0)

@@ -56,7 +56,7 @@ Result<int> publishClassKeys(db::Database& server, const std::string& code, Lear
                    str::countOf(*sent, "key").c_str(), code.c_str());
     if (!locatePixels && locateQuestions > 0)
       terminalPrintf("  its %s stay practice until their pictures' pixels are published: run `anatomy-tutor class "
-                     "keys %s --db SERVER` (minutes: every pixel of each picture is picked)\n",
+                     "keys %s --db SERVER` (slower: the pixels of each question's picture are picked)\n",
                      str::countOf(locateQuestions, "locate question").c_str(), code.c_str());
     published += *sent;
   }

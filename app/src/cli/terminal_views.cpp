@@ -17,6 +17,7 @@
 #include "render/gl/volume_renderer.h"
 #include "render/image.h"
 #include "render/overlay.h"
+#include "render/pick_bounds.h"
 #include "render/scene.h"
 #include "render/structure_pick.h"
 #include "render/target_side.h"
@@ -160,7 +161,9 @@ Result<TerminalPicture> TerminalViews::frame(const lessons::QuestionScene& scene
     field = *f;
   }
   const render::TransferFunction2D table = render::shadingTable(*preset);
-  render::SceneVolumes volumes{&dataset_.volume, &dataset_.labels, field, selected->label, gradients_.get()};
+  auto mask = masks_.find(selected->label);
+  if (mask == masks_.end()) mask = masks_.emplace(selected->label, render::selectedMask(dataset_.labels, selected->label)).first;
+  render::SceneVolumes volumes{&dataset_.volume, &dataset_.labels, field, selected->label, gradients_.get(), &mask->second};
 
   const std::string ownView = lessons::toString(scene.view);
   auto sideSettings = [&](const std::string& view) -> Result<render::RenderSettings> {
@@ -191,6 +194,7 @@ Result<TerminalPicture> TerminalViews::frame(const lessons::QuestionScene& scene
   }
 
   lastSettings_ = *chosen;
+  lastTable_ = render::shadingTable(chosen->preset);  // built once: every pick on this view reads it
   lastSelected_ = selected->label;
   lastField_ = field;
   lastSlice_.reset();
@@ -219,66 +223,19 @@ Result<TerminalPicture> TerminalViews::show(const lessons::QuestionScene& scene,
   return framed;
 }
 
-namespace {
-
-// Grows `box` (index space: min i j k, max i j k) by the voxels of `grid` where `inside` holds.
-template <typename T, typename Inside>
-void growBox(const Grid<T>& grid, Inside inside, std::array<double, 6>& box) {
-  const Dims& d = grid.geometry.dims;
-  for (int k = 0; k < d.z; ++k)
-    for (int j = 0; j < d.y; ++j)
-      for (int i = 0; i < d.x; ++i)
-        if (inside(grid.voxels[d.index(i, j, k)])) {
-          box[0] = std::min(box[0], double(i)), box[1] = std::min(box[1], double(j)), box[2] = std::min(box[2], double(k));
-          box[3] = std::max(box[3], double(i)), box[4] = std::max(box[4], double(j)), box[5] = std::max(box[5], double(k));
-        }
-}
-
-// The pixel box (x0, y0, x1, y1, inclusive, clamped) that the 8 corners of `box` (an index box of
-// `g`, grown by one voxel) project into; nullopt when a corner lies behind the eye.
-std::optional<std::array<int, 4>> projectedBox(const Geometry& g, const std::array<double, 6>& box,
-                                               const render::RenderSettings& view) {
-  double x0 = 1e300, y0 = 1e300, x1 = -1e300, y1 = -1e300;
-  for (int corner = 0; corner < 8; ++corner) {
-    const Vec3 ijk = {corner & 1 ? box[3] + 1 : box[0] - 1, corner & 2 ? box[4] + 1 : box[1] - 1,
-                      corner & 4 ? box[5] + 1 : box[2] - 1};
-    const auto p = view.camera.project(g.indexToPatient(ijk), view.width, view.height);
-    if (!p) return std::nullopt;
-    x0 = std::min(x0, (*p)[0]), y0 = std::min(y0, (*p)[1]), x1 = std::max(x1, (*p)[0]), y1 = std::max(y1, (*p)[1]);
-  }
-  const auto clampTo = [](double v, int n) { return int(std::clamp(v, -1.0, double(n))); };
-  return std::array<int, 4>{clampTo(std::floor(x0) - 1, view.width), clampTo(std::floor(y0) - 1, view.height),
-                            clampTo(std::ceil(x1) + 1, view.width), clampTo(std::ceil(y1) + 1, view.height)};
-}
-
-}  // namespace
-
 std::optional<std::array<int, 4>> TerminalViews::pixelsThatCanPick(const std::string& targetId, double toleranceMm) {
   if (!lastSettings_) return std::nullopt;
   const Structure* target = dataset_.findStructure(targetId);
   if (!target) return std::nullopt;
-  const render::RenderSettings& view = *lastSettings_;
-  // A pick names the target only on its voxels (the label under the hit point).
-  std::array<double, 6> labelBox{1e300, 1e300, 1e300, -1e300, -1e300, -1e300};
-  growBox(dataset_.labels, [&](std::uint16_t v) { return v == target->label; }, labelBox);
-  if (labelBox[0] > labelBox[3]) return std::array<int, 4>{0, 0, -1, -1};  // not in the dataset: nothing picks it
-  auto box = projectedBox(dataset_.labels.geometry, labelBox, view);
-  if (!box) return std::nullopt;
-  if (toleranceMm > 0) {  // or within the tolerance: the target field's voxels at most that far (pickAt)
+  const FloatVolume* field = nullptr;
+  if (toleranceMm > 0) {  // the distances pickAt reads: the target's field under its own preset
     auto preset = presetOf(*target, "");
     if (!preset) return std::nullopt;
-    auto field = fieldOf(*target, *preset);
-    if (!field) return std::nullopt;
-    std::array<double, 6> near{1e300, 1e300, 1e300, -1e300, -1e300, -1e300};
-    growBox(**field, [&](float d) { return d >= 0 && d <= toleranceMm + 1e-6; }, near);
-    if (near[0] <= near[3]) {
-      auto more = projectedBox((*field)->geometry, near, view);
-      if (!more) return std::nullopt;
-      *box = {std::min((*box)[0], (*more)[0]), std::min((*box)[1], (*more)[1]), std::max((*box)[2], (*more)[2]),
-              std::max((*box)[3], (*more)[3])};
-    }
+    auto f = fieldOf(*target, *preset);
+    if (!f) return std::nullopt;
+    field = *f;
   }
-  return box;
+  return render::pixelsThatCanPick(dataset_.labels, target->label, field, toleranceMm, *lastSettings_);
 }
 
 namespace {
@@ -364,12 +321,14 @@ Result<quiz::Pick> TerminalViews::pickAt(const std::optional<Vec3>& pointMm, std
   if (const Structure* s = dataset_.findStructureByLabel(label)) pick.structure = s->id;
   const Structure* t = dataset_.findStructure(target);
   if (pointMm && t) {
-    auto preset = presetOf(*t, "");
-    if (preset) {
-      auto field = fieldOf(*t, *preset);
-      if (field)
-        if (const auto v = voxelOf((*field)->geometry, *pointMm)) pick.distanceMm = (*field)->at((*v)[0], (*v)[1], (*v)[2]);
+    const FloatVolume* field = nullptr;
+    if (auto known = fields_.find(t->id); known != fields_.end()) {
+      field = &known->second;  // computed before: no preset to look up again (a key picks every pixel)
+    } else if (auto preset = presetOf(*t, ""); preset) {
+      if (auto computed = fieldOf(*t, *preset)) field = *computed;
     }
+    if (field)
+      if (const auto v = voxelOf(field->geometry, *pointMm)) pick.distanceMm = field->at((*v)[0], (*v)[1], (*v)[2]);
   }
   return pick;
 }
@@ -385,9 +344,11 @@ Result<quiz::Pick> TerminalViews::pickPixel(double x, double y, const std::strin
   if (x < 0 || y < 0 || x >= lastSettings_->width || y >= lastSettings_->height)
     return fail("the pixel (" + std::to_string(int(x)) + ", " + std::to_string(int(y)) + ") is outside the " +
                 std::to_string(lastSettings_->width) + "×" + std::to_string(lastSettings_->height) + " picture");
-  render::SceneVolumes volumes{&dataset_.volume, &dataset_.labels, lastField_, lastSelected_, gradients_.get()};
+  const auto mask = masks_.find(lastSelected_);  // made by frame()
+  render::SceneVolumes volumes{&dataset_.volume, &dataset_.labels, lastField_, lastSelected_, gradients_.get(),
+                               mask == masks_.end() ? nullptr : &mask->second};
   const render::PickResult hit =
-      render::pickStructure(volumes, *lastSettings_, render::shadingTable(lastSettings_->preset), x, y);
+      render::pickStructure(volumes, *lastSettings_, *lastTable_, x, y);
   return pickAt(hit.hit ? std::optional<Vec3>(hit.pointMm) : std::nullopt, hit.hit ? hit.label : 0, target);
 }
 

@@ -78,8 +78,8 @@ class TerminalViews {
   Result<quiz::Pick> pickPixel(double x, double y, const std::string& target);
   // The pixels (x0, y0, x1, y1 inclusive; x1 < x0 when none) of the last 3-D view outside which no
   // pick is graded right for `target` with `toleranceMm`: the projection of the target's voxels and
-  // of its field's voxels within the tolerance, each grown by a voxel. nullopt: any pixel may (a
-  // slice, or a box reaching behind the eye).
+  // of its field's voxels within the tolerance, each grown by a voxel (render::pixelsThatCanPick).
+  // nullopt: any pixel may (a slice, or a box reaching behind the eye).
   std::optional<std::array<int, 4>> pixelsThatCanPick(const std::string& target, double toleranceMm);
   // The structure at a point in patient LPS millimetres.
   Result<quiz::Pick> pickPointMm(const Vec3& pointMm, const std::string& target);
@@ -106,10 +106,12 @@ class TerminalViews {
   std::unique_ptr<render::gl::EglContext> context_;
   std::unique_ptr<render::gl::VolumeRenderer> renderer_;
   std::map<std::string, FloatVolume> fields_;  // WDT per structure id, computed once
+  std::map<std::uint16_t, render::SelectedMask> masks_;  // smoothed mask per selected label, for picks
   std::unique_ptr<render::GradientVolume> gradients_;  // of the volume, for picking as the desktop does
 
   // What the last picture showed, for picks on it.
   std::optional<render::RenderSettings> lastSettings_;
+  std::optional<render::TransferFunction2D> lastTable_;  // shadingTable(lastSettings_->preset)
   std::uint16_t lastSelected_ = 0;
   const FloatVolume* lastField_ = nullptr;
   std::optional<SliceRequest> lastSlice_;

@@ -59,11 +59,11 @@ Status setMemberRole(Database& server, const std::string& code, const std::strin
 // One student's work in a class, computed from the class events the server has.
 struct StudentClassProgress {
   std::string userName;
-  int answers = 0;          // lesson and review answers, practice left out
+  int answers = 0;          // lesson and review answers the server graded (waiting and practice left out)
   int correct = 0;          // of those, right as the server graded them
-  int ungraded = 0;         // of those, not graded yet (their keys are not on the server: `class keys`)
+  int ungraded = 0;         // answers besides those, waiting for their keys (`class keys`); not practice
   int practice = 0;         // answers the server keeps as practice (locate picks it cannot grade)
-  int structures = 0;       // distinct structures answered about (practice left out)
+  int structures = 0;       // distinct structures of the graded answers
   int lessonsStarted = 0;   // distinct lessons
   int lessonsFinished = 0;  // distinct lessons finished at least once
   std::optional<std::int64_t> lastActive;  // Unix seconds of the newest event; none yet: nullopt
@@ -74,7 +74,7 @@ struct StudentClassProgress {
 // How the class did on one structure.
 struct StructureClassProgress {
   std::string structureId;
-  int students = 0;  // students who answered about it (practice left out)
+  int students = 0;  // students with a graded answer about it (waiting and practice left out)
   int answers = 0;
   int correct = 0;
 };

@@ -51,6 +51,7 @@ struct AnalyticsInput {
   std::vector<Attempt> attempts;              // lesson attempts of the class
   std::vector<StructureProgress> memories;    // memory states of the class
   std::vector<ExamAttempt> examAttempts;      // attempts at the course's exams by the class
+  int waitingAnswers = 0;  // on a class server: answers not graded yet (no key published), not in `answers`
 };
 
 inline constexpr double kAnalyticsEloK = 173.71779276130073;  // 400 / ln 10

@@ -27,6 +27,7 @@
 #include <array>
 #include <cstdint>
 #include <optional>
+#include <vector>
 
 #include "render/camera.h"
 #include "render/gradient_volume.h"
@@ -67,6 +68,19 @@ constexpr double kDefaultStepVoxels = 0.75;
 // Context samples where the selected structure's smoothed mask exceeds this are not drawn.
 constexpr float kMaskHalo = 0.02f;
 
+// The selected structure's smoothed mask (as the GPU holds it: pick()'s per-voxel values, in
+// 64ths) worked out once over the label's box grown by one voxel (0 outside it), so that a pick
+// reads 8 values per sample instead of smoothing 8 × 27 labels. Gives the same numbers exactly.
+struct SelectedMask {
+  std::uint16_t label = 0;
+  Dims dims;                          // of the label map it was made from
+  std::array<int, 3> lo{0, 0, 0};     // the box (inclusive); hi < lo: empty
+  std::array<int, 3> hi{-1, -1, -1};
+  std::vector<std::uint8_t> sixtyFourths;  // box voxels, x fastest
+  double at(std::size_t labelIndex) const;  // the value at a voxel of the label map
+};
+SelectedMask selectedMask(const LabelMap& labels, std::uint16_t label);
+
 // What the ray caster samples. The field may lie on a coarser grid (downsampled); it is sampled
 // trilinearly in the patient frame. `selected` is the label of the structure (0 = none).
 struct SceneVolumes {
@@ -75,6 +89,7 @@ struct SceneVolumes {
   const FloatVolume* field = nullptr;   // distance field on its own grid
   std::uint16_t selected = 0;
   const GradientVolume* gradients = nullptr;  // volume's; null: no surface ramp (every edge full)
+  const SelectedMask* selectedMask = nullptr;  // selectedMask(*labels, selected), or null: smoothed per sample
 };
 
 // The 2-D table the mode samples (see the classification above). For bare mode it is the wdt
