@@ -84,7 +84,7 @@ bool pollUntilTaken(FieldUnits& units) {
 }
 
 // A request on a field of its own (its address is the key's identity) for `label`.
-FieldUnitRequest stubRequest(const Dataset& ds, std::uint16_t label, int viewWidth) {
+FieldUnitRequest requestForInjectedMeasure(const Dataset& ds, std::uint16_t label, int viewWidth) {
   FieldUnitRequest r;
   auto field = std::make_shared<DistanceField>();
   r.field = field;
@@ -163,10 +163,10 @@ TEST_CASE("FieldUnits_ASupersededMeasure_IsNeverTaken_AndOnlyTheNewestWaitingKey
   const std::uint16_t a = ds.findStructure("cochlea")->label, b = ds.findStructure("stapes")->label;
   Gates gates;
   FieldUnits units(gates.measure());
-  const FieldUnitRequest first = stubRequest(ds, a, 64);
-  const FieldUnitRequest sameLabelOtherView = stubRequest(ds, a, 80);
-  const FieldUnitRequest otherLabel = stubRequest(ds, b, 64);
-  const FieldUnitRequest newest = stubRequest(ds, b, 96);
+  const FieldUnitRequest first = requestForInjectedMeasure(ds, a, 64);
+  const FieldUnitRequest sameLabelOtherView = requestForInjectedMeasure(ds, a, 80);
+  const FieldUnitRequest otherLabel = requestForInjectedMeasure(ds, b, 64);
+  const FieldUnitRequest newest = requestForInjectedMeasure(ds, b, 96);
 
   // The first key is measured and taken: it is the stand-in for its label from now on.
   CHECK_FALSE(units.unitFor(first));
@@ -217,7 +217,7 @@ TEST_CASE("FieldUnits_BackToAStructureWhoseFieldStillLives_TakesItsUnitWithoutMe
   std::vector<FieldUnitRequest> requests;
   for (const Structure& s : ds.structures)
     if (render::structureFrame(ds.labels, s.label) && requests.size() < FieldUnits::kKeptUnits)
-      requests.push_back(stubRequest(ds, s.label, 64));
+      requests.push_back(requestForInjectedMeasure(ds, s.label, 64));
   REQUIRE(requests.size() >= 3);
   for (const FieldUnitRequest& r : requests) {
     units.unitFor(r);

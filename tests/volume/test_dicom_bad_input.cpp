@@ -2,9 +2,13 @@
 // DCMTK: each gives a one-line error naming the folder and the problem, never a crash.
 #include <doctest/doctest.h>
 
+#include <algorithm>
 #include <fstream>
 #include <functional>
 #include <iterator>
+#include <string>
+#include <utility>
+#include <vector>
 
 #include "dicom_test_files.h"
 #include "test_support.h"
@@ -335,4 +339,73 @@ TEST_CASE("DICOM bad input: a JPEG 2000 frame whose size disagrees with Rows/Col
   REQUIRE(test::rewriteDicom(source, folder / "slice.dcm", [](DcmDataset& d) { d.putAndInsertUint16(DCM_Columns, 256); }));
   const std::string message = expectSeriesError(folder, "JPEG 2000 image is 512x512 but the header says 256x512");
   CHECK(message.find("slice.dcm") != std::string::npos);
+}
+
+TEST_CASE("DICOM bad input: a SEG whose NumberOfFrames, BitsAllocated or PixelData disagree with its frames is refused") {
+  if (!test::requireSharedData("DICOM SEG frame count")) return;
+  test::TempDir dir("at-dicom-bad");
+  const fs::path seg = dir / "frames.dcm";
+  // liver.dcm: three 512×512 frames described by three per-frame functional groups.
+  const std::vector<std::pair<std::string, std::function<void(DcmDataset&)>>> edits = {
+      {"no NumberOfFrames", [](DcmDataset& d) { delete d.remove(DCM_NumberOfFrames); }},
+      {"NumberOfFrames 0", [](DcmDataset& d) { d.putAndInsertString(DCM_NumberOfFrames, "0"); }},
+      {"NumberOfFrames 1", [](DcmDataset& d) { d.putAndInsertString(DCM_NumberOfFrames, "1"); }},
+      {"NumberOfFrames 2", [](DcmDataset& d) { d.putAndInsertString(DCM_NumberOfFrames, "2"); }},
+      {"NumberOfFrames 4", [](DcmDataset& d) { d.putAndInsertString(DCM_NumberOfFrames, "4"); }},
+      {"NumberOfFrames 100000", [](DcmDataset& d) { d.putAndInsertString(DCM_NumberOfFrames, "100000"); }},
+      {"NumberOfFrames -3", [](DcmDataset& d) { d.putAndInsertString(DCM_NumberOfFrames, "-3"); }},
+      {"BitsAllocated 8", [](DcmDataset& d) { d.putAndInsertUint16(DCM_BitsAllocated, 8); }},
+      {"PixelData of 2 frames", [](DcmDataset& d) {
+         std::vector<Uint8> bits(2 * 512 * 512 / 8, 0xff);
+         d.putAndInsertUint8Array(DCM_PixelData, bits.data(), bits.size());
+       }},
+      {"no PixelData", [](DcmDataset& d) { delete d.remove(DCM_PixelData); }},
+  };
+  for (const auto& [what, edit] : edits) {
+    INFO(what);
+    REQUIRE(test::rewriteDicom(test::sharedData("dcmqi/liver.dcm"), seg, edit));
+    const std::string before = test::readFile(seg);
+    auto loaded = loadImageFile(seg.string());
+    REQUIRE(!loaded);
+    INFO(loaded.error().message);
+    CHECK(loaded.error().message.rfind(seg.string() + ": ", 0) == 0);
+    CHECK(loaded.error().message.find('\n') == std::string::npos);
+    CHECK(test::readFile(seg) == before);
+  }
+}
+
+TEST_CASE("DICOM SEG: binary frames that do not end on a byte boundary are read bit by bit in order") {
+  if (!test::requireSharedData("DICOM SEG bit packing")) return;
+  test::TempDir dir("at-dicom-bad");
+  const fs::path seg = dir / "packed.dcm";
+  // Three 3×3 frames = 27 bits: frame f (in file order) has f + 1 pixels set, so its bits cross
+  // byte boundaries. Frame 1 sets pixel 4, frame 2 pixels 0 and 8, frame 3 pixels 1, 2 and 3.
+  const std::vector<std::vector<int>> setPixels = {{4}, {0, 8}, {1, 2, 3}};
+  std::vector<Uint8> bits(4, 0);
+  for (std::size_t f = 0; f < setPixels.size(); ++f)
+    for (int p : setPixels[f]) {
+      const std::size_t bit = f * 9 + std::size_t(p);
+      bits[bit / 8] |= Uint8(1u << (bit % 8));
+    }
+  REQUIRE(test::rewriteDicom(test::sharedData("dcmqi/liver.dcm"), seg, [&](DcmDataset& d) {
+    d.putAndInsertUint16(DCM_Rows, 3);
+    d.putAndInsertUint16(DCM_Columns, 3);
+    d.putAndInsertUint8Array(DCM_PixelData, bits.data(), bits.size());
+  }));
+  auto loaded = loadDicomSeg(seg.string());
+  REQUIRE_MESSAGE(loaded, (loaded ? "" : loaded.error().message));
+  REQUIRE(loaded->image.geometry.dims.x == 3);
+  REQUIRE(loaded->image.geometry.dims.y == 3);
+  // Each frame lands on one slice; map a frame to its slice by the pixels it sets.
+  std::vector<std::vector<int>> slicesSet;
+  for (int k = 0; k < loaded->image.geometry.dims.z; ++k) {
+    std::vector<int> set;
+    for (int p = 0; p < 9; ++p)
+      if (loaded->image.at(p % 3, p / 3, k) != 0) set.push_back(p);
+    if (!set.empty()) slicesSet.push_back(set);
+  }
+  std::sort(slicesSet.begin(), slicesSet.end());
+  std::vector<std::vector<int>> expected = setPixels;
+  std::sort(expected.begin(), expected.end());
+  CHECK(slicesSet == expected);
 }

@@ -107,6 +107,27 @@ Result<LoadedImage> readDicomSeg(const std::string& path, const ImageLoadOptions
   const std::size_t frameCount = seg->getNumberOfFrames();
   if (rows == 0 || columns == 0) return error("missing Rows/Columns");
   if (frameCount == 0) return error("the segmentation holds no frames");
+  // The frames' bits are read from the dataset's PixelData here, not through dcmseg's getFrame():
+  // DCMTK 3.6.7 indexes its frame list out of bounds when NumberOfFrames disagrees with the
+  // functional groups (an empty list is read at address 0).
+  Uint16 bitsAllocated = 0;
+  if (file.getDataset()->findAndGetUint16(DCM_BitsAllocated, bitsAllocated).bad() || bitsAllocated != 1)
+    return error("a BINARY segmentation needs BitsAllocated 1, this one has " + std::to_string(bitsAllocated));
+  Sint32 declaredFrames = 0;
+  if (file.getDataset()->findAndGetSint32(DCM_NumberOfFrames, declaredFrames).bad() || declaredFrames <= 0)
+    return error("missing or non-positive NumberOfFrames");
+  if (std::size_t(declaredFrames) != frameCount)
+    return error("NumberOfFrames is " + std::to_string(declaredFrames) + " but the functional groups describe " +
+                 std::to_string(frameCount) + " frames");
+  const Uint8* packedBits = nullptr;
+  unsigned long packedBytes = 0;
+  if (file.getDataset()->findAndGetUint8Array(DCM_PixelData, packedBits, &packedBytes).bad() || !packedBits)
+    return error("unreadable PixelData");
+  const std::size_t framePixels = std::size_t(rows) * std::size_t(columns);
+  if (std::size_t(packedBytes) < (frameCount * framePixels + 7) / 8)
+    return error("PixelData holds " + std::to_string(packedBytes) + " bytes, too few for " +
+                 std::to_string(frameCount) + " frames of " + std::to_string(columns) + "x" + std::to_string(rows) +
+                 " bits (file truncated?)");
 
   // Per-frame geometry and segment numbers from the functional groups (shared or per frame).
   FGInterface& groups = seg->getFunctionalGroups();
@@ -199,20 +220,19 @@ Result<LoadedImage> readDicomSeg(const std::string& path, const ImageLoadOptions
     return tl::unexpected(fits.error());
   loaded.image = FloatVolume(geometry, 0.0f);
 
-  // Frames are bit-packed: pixel p of a frame is bit p % 8 (least significant first) of byte p / 8.
-  const std::size_t framePixels = std::size_t(rows) * std::size_t(columns);
+  // Binary frames are bit-packed and concatenated without padding (PS3.5 8.1.1): pixel p of frame
+  // f is bit b % 8 (least significant first) of byte b / 8, where b = f · Rows · Columns + p.
   std::size_t overlapping = 0;
   for (std::size_t f = 0; f < frameCount; ++f) {
     if (!segmentIndex.count(segmentOf[f]))
       return error("frame " + std::to_string(f + 1) + " refers to segment " + std::to_string(segmentOf[f]) +
                    ", which the SegmentSequence does not define");
-    const DcmIODTypes::Frame* frame = seg->getFrame(f);
-    if (!frame || !frame->pixData || frame->length * 8 < framePixels)
-      return error("frame " + std::to_string(f + 1) + " holds too little pixel data (file truncated?)");
     float* slice = loaded.image.voxels.data() + std::size_t(stack->sliceOf[f]) * framePixels;
     const float value = float(segmentOf[f]);
+    const std::size_t firstBit = f * framePixels;
     for (std::size_t p = 0; p < framePixels; ++p) {
-      if (!((frame->pixData[p >> 3] >> (p & 7)) & 1u)) continue;
+      const std::size_t bit = firstBit + p;
+      if (!((packedBits[bit >> 3] >> (bit & 7)) & 1u)) continue;
       if (slice[p] != 0 && slice[p] != value) ++overlapping;
       slice[p] = std::max(slice[p], value);
     }
