@@ -521,7 +521,6 @@ TEST_CASE("Every front end leaves out the CT headrest: the desktop and openDatas
   CHECK(shown->dataset.volume.voxels == skull->ds.volume.voxels);
 }
 
-
 TEST_CASE("Skull CT: the outline band is drawn wherever the bone the view shows next to the structure crosses the band's distance") {
   // The band (Fig. 6) is where the iso-distance shell D = band meets the drawn bone surface. Around
   // the zygomatic arch it comes out as arcs around the arch's two roots: the arch bridges the
