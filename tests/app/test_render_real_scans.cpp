@@ -525,7 +525,7 @@ TEST_CASE("Skull CT: the outline band is drawn wherever the bone the view shows 
   // The band (Fig. 6) is where the iso-distance shell D = band meets the drawn bone surface. Around
   // the zygomatic arch it comes out as arcs around the arch's two roots: the arch bridges the
   // temporal fossa, so above and below its middle the bone the view shows next to it (the temporal
-  // squama across the fossa, the coronoid notch) lies at x ≥ 1–2, the shell at the band's x ≈ 0.58
+  // squama across the fossa, the coronoid notch) lies at x 0.9–5.5, the shell at the band's x ≈ 0.58
   // passes through the temporalis and masseter (not drawn), and no band can lie on bone there.
   // Measured: the silhouette's surroundings split into 64 sectors about its centre in the picture;
   // per ring pixel (1 px to 8 % of the frame from the silhouette) the D the ray meets over its
