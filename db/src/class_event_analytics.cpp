@@ -81,6 +81,7 @@ Status addClassEventStudents(Database& db, AnalyticsInput& in, const std::set<st
         if (it->userId == who->second && it->lessonId == r.text(3) && !it->finishedAt) {
           it->finishedAt = r.int64(2);
           it->score = r.isNull(7) ? 0 : r.real(7);
+          it->scoreKnown = !r.isNull(7);
           break;
         }
     }

@@ -133,15 +133,18 @@ ClassAnalytics computeAnalytics(const AnalyticsInput& in, UnixSeconds now, const
     LessonCompletion c;
     c.lessonId = lesson.id;
     c.title = lesson.title;
-    std::map<std::int64_t, double> best;
-    std::set<std::int64_t> started;
+    std::map<std::int64_t, double> best;  // of the ends with a known score
+    std::set<std::int64_t> started, finished;
     for (const Attempt& a : in.attempts) {
       if (a.lessonId != lesson.id || !classIds.count(a.userId)) continue;
       started.insert(a.userId);
-      if (a.finishedAt) best[a.userId] = std::max(best.count(a.userId) ? best[a.userId] : 0.0, a.score);
+      if (!a.finishedAt) continue;
+      finished.insert(a.userId);
+      if (a.scoreKnown) best[a.userId] = std::max(best.count(a.userId) ? best[a.userId] : 0.0, a.score);
     }
     c.started = int(started.size());
-    c.finished = int(best.size());
+    c.finished = int(finished.size());
+    c.scoresUnknown = int(finished.size() - best.size());
     c.completion = r.classSize ? double(c.finished) / r.classSize : 0;
     if (!best.empty()) {
       double sum = 0;

@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <optional>
 #include <random>
 #include <set>
 #include <sstream>
@@ -245,6 +246,7 @@ TEST_CASE("Analytics of a synthetic class of 50 students match the figures recom
     CHECK(l.finished == finished);
     CHECK(l.completion == doctest::Approx(finished / 50.0));
     if (finished) CHECK(*l.meanBestScore == doctest::Approx(best / finished));
+    CHECK(l.scoresUnknown == 0);  // every end on one machine is scored when it ends
   }
 
   // Question difficulty: Elo with U(n) = 1/(1 + 0.05 n), replayed here over the events in order.
@@ -400,4 +402,33 @@ TEST_CASE("Analytics of a synthetic class of 50 students match the figures recom
   CHECK(text.out.find("class of 51 students") != std::string::npos);  // with the one named like a formula
   CHECK(text.out.find("Hardest structures") != std::string::npos);
   CHECK(test::runApp("analytics nope --db '" + f.path + "'").exitCode != 0);
+}
+
+TEST_CASE("Analytics: an end whose score is not known yet counts as finished, never as a score of 0") {
+  AnalyticsInput in;
+  in.course.id = "toy";
+  in.course.lessons.push_back(Lesson{});
+  in.course.lessons.back().id = "ossicles";
+  for (std::int64_t id : {1, 2, 3}) in.students.push_back(User{id, "s" + std::to_string(id), Role::Student, ""});
+  const auto end = [&](std::int64_t user, std::optional<double> score) {
+    Attempt a;
+    a.id = std::int64_t(in.attempts.size()) + 1;
+    a.userId = user;
+    a.lessonId = "ossicles";
+    a.startedAt = 100;
+    a.finishedAt = 200;
+    a.score = score.value_or(0.0);
+    a.scoreKnown = score.has_value();
+    in.attempts.push_back(a);
+  };
+  end(1, 0.5);
+  end(1, std::nullopt);  // a later run still waiting: her best known score stays 0.5
+  end(2, std::nullopt);  // finished, nothing scored yet
+  end(3, 1.0);
+  const ClassAnalytics a = computeAnalytics(in, 300);
+  REQUIRE(a.lessons.size() == 1);
+  CHECK(a.lessons[0].finished == 3);
+  CHECK(a.lessons[0].scoresUnknown == 1);
+  REQUIRE(a.lessons[0].meanBestScore);
+  CHECK(*a.lessons[0].meanBestScore == doctest::Approx(0.75));
 }

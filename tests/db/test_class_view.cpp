@@ -4,6 +4,7 @@
 // answers only: those still waiting for their keys are counted apart, in both.
 #include <doctest/doctest.h>
 
+#include <algorithm>
 #include <ctime>
 #include <map>
 #include <random>
@@ -161,6 +162,35 @@ TEST_CASE("ClassView_AnalyticsOnTheServerCountsWhatClassProgressCounts_OutboxStu
   CHECK(waiting > 0);
   CHECK(input->waitingAnswers == waiting);
   CHECK(analytics.answers == total);
+  // Per lesson: the finishers, and the mean of each one's best end score among the ends the server
+  // has scored; an end waiting for its keys (blank score) counts as finished, not as a score of 0.
+  auto ends = server.prepare("SELECT user_name, lesson_id, score FROM class_events"
+                             " WHERE kind = 'lesson_finished' AND practice = 0 AND class_code = ?1");
+  REQUIRE(ends);
+  ends->bind(1, made->code);
+  std::map<std::string, std::set<std::string>> finishers;              // lesson → students
+  std::map<std::string, std::map<std::string, double>> bestKnownScore;  // lesson → student → best
+  while (*ends->step()) {
+    finishers[ends->text(1)].insert(ends->text(0));
+    if (const auto score = ends->optionalReal(2)) {
+      double& best = bestKnownScore[ends->text(1)].try_emplace(ends->text(0), 0.0).first->second;
+      best = std::max(best, *score);
+    }
+  }
+  int unknownScores = 0;
+  for (const LessonCompletion& l : analytics.lessons) {
+    CAPTURE(l.lessonId);
+    CHECK(l.finished == int(finishers[l.lessonId].size()));
+    const auto& known = bestKnownScore[l.lessonId];
+    CHECK(l.scoresUnknown == int(finishers[l.lessonId].size() - known.size()));
+    unknownScores += l.scoresUnknown;
+    REQUIRE(l.meanBestScore.has_value() == !known.empty());
+    double sum = 0;
+    for (const auto& [student, best] : known) sum += best;
+    if (!known.empty()) CHECK(*l.meanBestScore == doctest::Approx(sum / double(known.size())));
+  }
+  CHECK(unknownScores > 0);  // the first lesson's identify question never gets its key
+
   // Per structure too.
   std::map<std::string, std::pair<int, int>> byStructure;
   for (const StructureStats& s : analytics.structures) byStructure[s.structureId] = {s.answers, s.correct};

@@ -174,9 +174,10 @@ void printText(const lessons::ClassAnalytics& a, const lessons::Course& course) 
               str::countOf(a.classSize, "student").c_str(), str::countOf(a.answers, "answer").c_str());
   terminalPrintf("\nLesson completion (finished / class)\n");
   for (const auto& l : a.lessons)
-    terminalPrintf("  %-26s %s %4s  %3d started, %3d finished, mean best score %s\n", l.lessonId.c_str(),
+    terminalPrintf("  %-26s %s %4s  %3d started, %3d finished, mean best score %s%s\n", l.lessonId.c_str(),
                 bar(l.completion).c_str(), percent(l.completion).c_str(), l.started, l.finished,
-                l.meanBestScore ? number(*l.meanBestScore, 2).c_str() : "–");
+                l.meanBestScore ? number(*l.meanBestScore, 2).c_str() : "–",
+                l.scoresUnknown ? (", " + std::to_string(l.scoresUnknown) + " finished waiting for keys").c_str() : "");
   terminalPrintf("\nHardest structures (share of right answers; FSRS difficulty 1 easy … 10 hard; predicted recall now)\n");
   for (const auto& s : a.structures)
     terminalPrintf("  %-30s %s %4s right of %4d   difficulty %4.1f   recall %4s (%s)\n", s.name.c_str(),

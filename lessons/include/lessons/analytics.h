@@ -9,7 +9,9 @@
 //                         the question's initial difficulty from the course.
 //   hardest structures    share of right answers (lowest first), then the class's mean FSRS
 //                         difficulty; with the mean predicted recall now.
-//   completion per lesson students with a finished attempt / students in the class.
+//   completion per lesson students with a finished attempt / students in the class; the mean of
+//                         each finisher's best score over the ends whose score is known (a class
+//                         server's end waiting for its keys counts as finished, not as a score).
 //   predicted recall      per student: the mean FSRS retrievability now over the structures taught
 //                         (lessons::taughtStructures' rule), the weakest one, and how many are due.
 //   exams                 attempts, mean score, pass rate; each student's latest finished score.
@@ -86,7 +88,8 @@ struct LessonCompletion {
   int started = 0;
   int finished = 0;
   double completion = 0;         // finished / class size
-  std::optional<double> meanBestScore;  // over students who finished
+  std::optional<double> meanBestScore;  // over students who finished with a known score
+  int scoresUnknown = 0;                // students who finished, none of whose ends has a known score yet
 };
 
 struct StudentRecall {

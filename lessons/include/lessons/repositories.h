@@ -78,6 +78,9 @@ struct Attempt {
   UnixSeconds startedAt = 0;
   std::optional<UnixSeconds> finishedAt;  // unset while in progress
   double score = 0;                        // mean question score, set when finished
+  // False for an end whose score is not known yet: on a class server, one of its answers waits
+  // for its key (or every answer was practice); `score` is then 0 and means nothing.
+  bool scoreKnown = true;
 };
 
 // Render parameters on screen when the answer was given.

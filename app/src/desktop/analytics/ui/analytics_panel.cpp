@@ -229,6 +229,10 @@ void AnalyticsPanel::drawLessons(const AnalyticsController& analytics) {
       ImGui::TableNextColumn();
       if (l.meanBestScore) ImGui::TextUnformatted(percent(*l.meanBestScore).c_str());
       else ImGui::TextDisabled("–");
+      if (l.scoresUnknown) {
+        ImGui::SameLine();
+        ImGui::TextDisabled("(%d waiting for keys)", l.scoresUnknown);
+      }
     }
     ImGui::EndTable();
   }
