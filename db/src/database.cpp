@@ -248,6 +248,11 @@ Status Database::migrate(int target) {
         return {};
       }
       const Migration& m = all[std::size_t(*version)];
+      // A SQLite file is marked as ours in the same transaction that creates its first tables, so
+      // no other program opening it meanwhile sees our tables without our mark (and refuses the
+      // file as another program's).
+      if (engine == Backend::Sqlite)
+        if (auto s = d.exec("PRAGMA application_id = " + std::to_string(detail::kSqliteApplicationId)); !s) return s;
       if (auto s = d.exec(migrationSql(m, engine)); !s)
         return fail(s.error().kind, "migrating to schema version " + std::to_string(m.version) + " (" +
                                         std::string(m.summary) + "): " + s.error().message);

@@ -256,6 +256,10 @@ Result<SqliteFileState> inspectSqlite(const std::string& path) {
     auto handle = openReadOnlyHandle(path, immutable);
     if (!handle) return tl::unexpected(handle.error());
     sqlite3_busy_timeout(handle->get(), 5000);
+    // One read transaction: the version, the mark and the tables come from one snapshot, so a file
+    // another program is migrating at this moment is never seen half marked (closing the handle
+    // ends the transaction).
+    sqlite3_exec(handle->get(), "BEGIN", nullptr, nullptr, nullptr);
     version = queryText(handle->get(), "PRAGMA user_version", rc);
     if (!version) {
       const int primary = rc & 0xff;
