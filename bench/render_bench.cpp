@@ -3,7 +3,7 @@
 //   render_bench [--size WxH] [--volume N] [--hover-volume N] [--frames N] [--warmup N]
 //                [--cycles N] [--structure ID] [--presets DIR] [--field-downsample F]
 //                [--ray-caster compute|fragment] [--step-voxels S] [--compare-step S [--images DIR]]
-//                [--unit field|size]
+//                [--unit field|size] [--mode wdt|fuzzy|lighting|outline|unweighted]
 //
 // 1. frame: phantom at N³ (default 512), the structure's WDT preset with Phong shading, a field
 //    from computeWdt (backend auto; downsampled by F for the 512³ set-up), GPU time of each frame
@@ -22,6 +22,8 @@
 // desktop measures it again for each new field (DesktopModel::fieldScaleOf), so each cycle also
 // copies the field to the host and measures it (field_scale_ms, total_with_scale_ms). --unit size
 // keeps the unit from the structure's size alone (render::settingsFor), as before the measure.
+// --mode picks the frame's preset mode (default wdt): fuzzy and lighting add the measure of the bone
+// seen next to the structure (render::neighbourBone) to the field_scale line's cost.
 // EGL only: no SDL, DCMTK or SQLite.
 #include <algorithm>
 #include <chrono>
@@ -71,6 +73,7 @@ struct Options {
   std::string structure = "cochlea";
   std::string presets = AT_BENCH_PRESETS_DIR;
   bool fieldUnit = true;  // --unit field|size
+  render::RenderMode mode = render::RenderMode::Wdt;  // the frame's preset (--mode)
 };
 
 bool parse(int argc, char** argv, Options& o) {
@@ -99,6 +102,10 @@ bool parse(int argc, char** argv, Options& o) {
       if (std::string(v) == "field") o.fieldUnit = true;
       else if (std::string(v) == "size") o.fieldUnit = false;
       else return false;
+    } else if (a == "--mode" && (v = next())) {
+      auto mode = render::parseRenderMode(v);
+      if (!mode) return false;
+      o.mode = *mode;
     } else return false;
   }
   return o.width > 0 && o.height > 0 && o.volume > 8 && o.hoverVolume > 8 && o.frames > 0 && o.cycles > 0 &&
@@ -119,7 +126,7 @@ int main(int argc, char** argv) {
                  "usage: render_bench [--size WxH] [--volume N] [--hover-volume N] [--frames N] [--warmup N] "
                  "[--cycles N] [--structure ID] [--presets DIR] [--field-downsample F] "
                  "[--ray-caster compute|fragment] [--step-voxels S] [--compare-step S [--images DIR]] "
-                 "[--unit field|size]\n");
+                 "[--unit field|size] [--mode wdt|fuzzy|lighting|outline|unweighted]\n");
     return 2;
   }
   auto ctx = render::gl::EglContext::create();
@@ -140,7 +147,7 @@ int main(int argc, char** argv) {
     const double phantomMs = msSince(t0);
     const Structure* s = ds.findStructure(o.structure);
     if (!s) return failWith("phantom has no structure '" + o.structure + "'");
-    auto preset = library.forStructure(s->id, render::RenderMode::Wdt);
+    auto preset = library.forStructure(s->id, o.mode);
     if (!preset) return failWith(preset.error().message);
     auto params = render::wdtParamsFor(*preset);
     if (!params) return failWith(params.error().message);
@@ -170,10 +177,10 @@ int main(int argc, char** argv) {
         scaleMs.push_back(msSince(ts));
         if (i == 0) *settings = measured;
       }
-      std::printf("{\"bench\":\"field_scale\",\"volume\":%d,\"field_grid\":\"%s\",\"width\":%d,\"height\":%d,"
+      std::printf("{\"bench\":\"field_scale\",\"mode\":\"%s\",\"volume\":%d,\"field_grid\":\"%s\",\"width\":%d,\"height\":%d,"
                   "\"first_ms\":%.1f,\"ms_median\":%.1f,\"view_rays\":%zu,\"derived\":%s,\"from_seen\":%s,"
                   "\"capped_by_rays\":%s,\"distance_unit\":%.4f,\"distance_offset\":%.4f,\"size_unit\":%.4f}\n",
-                  o.volume, wdt->field.distances.dims().toString().c_str(), o.width, o.height, scaleMs[0],
+                  render::toString(o.mode), o.volume, wdt->field.distances.dims().toString().c_str(), o.width, o.height, scaleMs[0],
                   percentile(scaleMs, 0.5), scale.viewRays, scale.derived ? "true" : "false",
                   scale.fromSeen ? "true" : "false", scale.cappedByRays ? "true" : "false", settings->distanceUnit,
                   settings->distanceOffset, render::distanceUnitFor(*frame));

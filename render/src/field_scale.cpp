@@ -167,7 +167,8 @@ std::vector<float> seenSurfaces(const FloatVolume& field, const Volume& volume, 
   const bool bodyOnGrid = body && body->geometry.dims.count() == vg.dims.count();
   const double step = 0.5 * std::min({vg.spacingMm[0], vg.spacingMm[1], vg.spacingMm[2]});
   const auto [w, h] = detail::rayGridOf(view.width, view.height, kScaleRaysPerSide);
-  for (int py = 0; py < h; ++py)
+  std::vector<std::vector<float>> rows(std::size_t(std::max(h, 0)));
+  detail::forEachRowInParallel(h, [&, w = w, h = h](int py) {
     for (int px = 0; px < w; ++px) {
       const Ray ray = view.camera.rayThroughPixel(px, py, w, h);
       // The reach's segment of the ray (|origin + t·direction − centroid| ≤ reach).
@@ -200,8 +201,10 @@ std::vector<float> seenSurfaces(const FloatVolume& field, const Volume& volume, 
         if (bodyOnGrid && body->voxels[idx] == 0) continue;
         if (D > 0 && std::isfinite(D)) first = D;
       }
-      if (first > 0) d.push_back(first);
+      if (first > 0) rows[std::size_t(py)].push_back(first);
     }
+  });
+  for (const auto& row : rows) d.insert(d.end(), row.begin(), row.end());
   return d;
 }
 
@@ -251,9 +254,11 @@ RayBone nearestBoneOnRays(const FloatVolume& field, const Volume& volume, const 
   // One voxel per step: a bone crossing is at least a voxel thick.
   const double step = std::min({vg.spacingMm[0], vg.spacingMm[1], vg.spacingMm[2]});
   const auto [w, h] = detail::rayGridOf(view.width, view.height, kScaleRaysPerSide);
-  for (int py = 0; py < h; ++py)
+  std::vector<RayBone> rows(std::size_t(std::max(h, 0)));
+  detail::forEachRowInParallel(h, [&, w = w, h = h](int py) {
+    RayBone& row = rows[std::size_t(py)];
     for (int px = 0; px < w; ++px) {
-      ++out.rays;
+      ++row.rays;
       const Ray ray = view.camera.rayThroughPixel(px, py, w, h);
       const IndexRay rv = indexRay(vg, ray), rf = indexRay(fg, ray);
       double t0 = 0, t1 = 0;
@@ -275,10 +280,16 @@ RayBone nearestBoneOnRays(const FloatVolume& field, const Volume& volume, const 
         nearest = std::min(nearest, fieldAt(field, rf.origin + t * rf.perMm));
       }
       if (structure)
-        ++out.structureRays;
+        ++row.structureRays;
       else if (std::isfinite(nearest))
-        out.nearest.push_back(nearest);
+        row.nearest.push_back(nearest);
     }
+  });
+  for (const RayBone& row : rows) {
+    out.rays += row.rays;
+    out.structureRays += row.structureRays;
+    out.nearest.insert(out.nearest.end(), row.nearest.begin(), row.nearest.end());
+  }
   return out;
 }
 

@@ -17,7 +17,7 @@ double medianOf(std::vector<float>& d) {
 }
 
 // City-block distance in rays from the rays that meet the structure (a large value without any).
-std::vector<int> raysFromStructure(const std::vector<bool>& structure, int w, int h) {
+std::vector<int> raysFromStructure(const std::vector<char>& structure, int w, int h) {
   std::vector<int> d(structure.size(), 1 << 20);
   for (std::size_t i = 0; i < structure.size(); ++i)
     if (structure[i]) d[i] = 0;
@@ -48,9 +48,10 @@ NeighbourBone neighbourBone(const FloatVolume& field, const Volume& volume, cons
   const double denseFrom = levels.dense, openBelow = std::min(levels.open, levels.dense);
   const bool bodyOnGrid = body && body->geometry.dims.count() == vg.dims.count();
   const double step = 0.5 * std::min({vg.spacingMm[0], vg.spacingMm[1], vg.spacingMm[2]});
-  std::vector<bool> structure(std::size_t(w) * std::size_t(h), false);
+  // One byte a ray (not vector<bool>'s shared words): rows are written by different threads.
+  std::vector<char> structure(std::size_t(w) * std::size_t(h), 0);
   std::vector<float> first(structure.size(), 0);  // the first bone surface's D on each ray (0: none)
-  for (int py = 0; py < h; ++py)
+  detail::forEachRowInParallel(h, [&, w = w, h = h](int py) {
     for (int px = 0; px < w; ++px) {
       const std::size_t i = std::size_t(py) * std::size_t(w) + std::size_t(px);
       const Ray ray = view.camera.rayThroughPixel(px, py, w, h);
@@ -64,7 +65,7 @@ NeighbourBone neighbourBone(const FloatVolume& field, const Volume& volume, cons
         if (!detail::voxelOn(rv, t, vg.dims, vi) || !detail::voxelOn(rf, t, fg.dims, fi)) continue;
         const float D = field.voxels[fg.dims.index(fi[0], fi[1], fi[2])];
         if (D == 0) {  // the structure: this pixel shows it
-          structure[i] = true;
+          structure[i] = 1;
           break;
         }
         if (first[i] > 0) continue;  // (a ray may still meet the structure behind its first bone)
@@ -80,6 +81,7 @@ NeighbourBone neighbourBone(const FloatVolume& field, const Volume& volume, cons
         if (D > 0 && std::isfinite(D)) first[i] = D;
       }
     }
+  });
   const std::vector<int> apart = raysFromStructure(structure, w, h);
   const double side = double(std::max(w, h));
   std::vector<float> nearD, farD;
