@@ -4,7 +4,7 @@
 set -euo pipefail
 
 packages=(
-  build-essential cmake ninja-build pkg-config git
+  build-essential cmake ninja-build pkg-config git ccache
   libsdl2-dev libimgui-dev
   libepoxy-dev libegl-dev libegl1-mesa-dev libgl-dev libgl1-mesa-dri libegl-mesa0
   libsqlite3-dev nlohmann-json3-dev

@@ -12,7 +12,7 @@
 # nvcc's device code is not instrumented) and db_postgres (the db suite again on a PostgreSQL
 # server, which is not our code).
 #
-# usage: scripts/sanitize.sh [ctest arguments]     (AT_JOBS=N sets build parallelism)
+# usage: scripts/sanitize.sh [ctest arguments]     (AT_JOBS=N: build parallelism; AT_TEST_JOBS=N: tests at once)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 jobs=${AT_JOBS:-$(nproc)}
@@ -49,8 +49,8 @@ for m in "${modules[@]}"; do [ "$m" != render ] && without_render+=("$m"); done
 regex="^($(IFS='|'; echo "${without_render[*]}"))\$"
 cd "$dir"
 status=0
-ctest --output-on-failure --timeout 2400 -L "$regex" "$@" || status=1
+ctest --output-on-failure --timeout 2400 -j "${AT_TEST_JOBS:-$(nproc)}" -L "$regex" "$@" || status=1
 if [[ " ${modules[*]} " == *" render "* ]]; then
-  ASAN_OPTIONS="$ASAN_OPTIONS:detect_leaks=0" ctest --output-on-failure --timeout 2400 -L '^render$' "$@" || status=1
+  ASAN_OPTIONS="$ASAN_OPTIONS:detect_leaks=0" ctest --output-on-failure --timeout 2400 -j "${AT_TEST_JOBS:-$(nproc)}" -L '^render$' "$@" || status=1
 fi
 exit "$status"
