@@ -20,7 +20,7 @@ ScriptInterpreter::Feature ScriptInterpreter::outputActions() {
                &S::waitField},
               {"screenshot", {{"path", "PNG file to write"}}, "Saves the window once the current frame is drawn.", &S::screenshot},
               {"widgets", {},
-               "Reports widgets {window, widgets}: where the last settled frames drew the named widgets (at most 2 s).",
+               "Reports widgets {window, widgets}: where the last settled frames drew the named widgets (at most 30 frames).",
                &S::widgets},
               {"layout", {},
                "Reports layout {window, view, editor_docked, slices_docked}: the view's rectangle in window pixels.",
@@ -68,16 +68,19 @@ ScriptInterpreter::Outcome ScriptInterpreter::screenshot(Context& c) {
 }
 
 // {"do": "widgets"}: where frames drawn wholly after the action began drew the named widgets, once
-// two frames in a row agree (ImGui applies a scroll the frame after it is asked for), with the
-// window's size ("1280x720") [widgets]; at most 2 s.
+// two frames in a row agree (ImGui applies a scroll the frame after it is asked for, and shows a
+// scroll bar the frame after the content outgrows its panel), with the window's size ("1280x720")
+// [widgets]; at most 30 frames (widgets that keep moving), counted in frames rather than seconds so
+// that a slow or busy machine (software GL, other work) settles as a fast one does; 60 s at most.
 ScriptInterpreter::Outcome ScriptInterpreter::widgets(Context& c) {
+  constexpr std::uint64_t kMaxSettleFrames = 30;
   const json drawn = c.host.widgetRects();
   const std::uint64_t frame = drawn.value("frame", std::uint64_t(0));
   if (c.first) {
     widgetsAfterFrame_ = frame + 1;  // the frame being drawn may predate the action
     widgetsLast_ = json();
   }
-  if (c.host.drawsPanels() && c.elapsedMs < 2000) {
+  if (c.host.drawsPanels() && frame < widgetsAfterFrame_ + kMaxSettleFrames && c.elapsedMs < 60000) {
     if (frame <= widgetsAfterFrame_) return Progress::Running;
     if (drawn.at("widgets") != widgetsLast_) {
       widgetsLast_ = drawn.at("widgets");
