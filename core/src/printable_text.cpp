@@ -3,36 +3,11 @@
 #include <cstdint>
 #include <cstdio>
 
+#include "core/utf8.h"
+
 namespace at {
 
 namespace {
-
-// Length of the valid UTF-8 sequence starting at text[i] and its code point; 0 if invalid.
-std::size_t decodeUtf8(std::string_view text, std::size_t i, std::uint32_t& codePoint) {
-  const auto byte = [&](std::size_t k) { return static_cast<unsigned char>(text[k]); };
-  const unsigned char b0 = byte(i);
-  std::size_t length = 0;
-  std::uint32_t min = 0;
-  if (b0 < 0x80) {
-    codePoint = b0;
-    return 1;
-  } else if ((b0 & 0xE0) == 0xC0) {
-    length = 2, min = 0x80, codePoint = b0 & 0x1F;
-  } else if ((b0 & 0xF0) == 0xE0) {
-    length = 3, min = 0x800, codePoint = b0 & 0x0F;
-  } else if ((b0 & 0xF8) == 0xF0) {
-    length = 4, min = 0x10000, codePoint = b0 & 0x07;
-  } else {
-    return 0;
-  }
-  if (i + length > text.size()) return 0;
-  for (std::size_t k = 1; k < length; ++k) {
-    if ((byte(i + k) & 0xC0) != 0x80) return 0;
-    codePoint = (codePoint << 6) | (byte(i + k) & 0x3F);
-  }
-  if (codePoint < min || codePoint > 0x10FFFF || (codePoint >= 0xD800 && codePoint <= 0xDFFF)) return 0;
-  return length;
-}
 
 // Code points that move the cursor, start escape sequences or reorder text on display.
 bool isControl(std::uint32_t c) {
@@ -53,10 +28,11 @@ std::string escaped(std::string_view text, std::size_t maxChars, bool keepLines)
       out += "…";
       break;
     }
-    std::uint32_t c = 0;
-    const std::size_t length = decodeUtf8(text, i, c);
+    const Utf8Char decoded = decodeUtf8At(text, i);
+    const std::uint32_t c = decoded.codePoint;
+    const std::size_t length = decoded.length;
     char escape[16];
-    if (length == 0) {
+    if (!decoded.valid) {
       std::snprintf(escape, sizeof escape, "\\x%02x", unsigned(static_cast<unsigned char>(text[i])));
       out += escape;
       i += 1;

@@ -5,6 +5,8 @@
 #include <cstring>
 #include <sstream>
 
+#include "core/utf8.h"
+
 namespace at::quiz {
 namespace {
 
@@ -27,35 +29,15 @@ void appendFold(std::string& out, char folded) {
   }
 }
 
-// Decodes one UTF-8 sequence at text[i]; returns the code point and advances i. Invalid bytes
-// decode as U+FFFD, one byte at a time.
-std::uint32_t decodeUtf8(const std::string& text, std::size_t& i) {
-  const auto byte = [&](std::size_t k) { return static_cast<unsigned char>(text[k]); };
-  const unsigned char c = byte(i);
-  int length = c < 0x80 ? 1 : (c >> 5) == 0x6 ? 2 : (c >> 4) == 0xE ? 3 : (c >> 3) == 0x1E ? 4 : 0;
-  if (length == 0 || i + length > text.size()) {
-    ++i;
-    return 0xFFFD;
-  }
-  std::uint32_t cp = length == 1 ? c : length == 2 ? (c & 0x1F) : length == 3 ? (c & 0x0F) : (c & 0x07);
-  for (int k = 1; k < length; ++k) {
-    if ((byte(i + k) & 0xC0) != 0x80) {
-      ++i;
-      return 0xFFFD;
-    }
-    cp = (cp << 6) | (byte(i + k) & 0x3F);
-  }
-  i += length;
-  return cp;
-}
-
 // Case- and accent-folded text with every non-alphanumeric character as a space.
 std::string foldCharacters(const std::string& text) {
   std::string out;
   std::size_t i = 0;
   while (i < text.size()) {
     const std::size_t start = i;
-    const std::uint32_t cp = decodeUtf8(text, i);
+    const Utf8Char ch = decodeUtf8At(text, i);
+    const std::uint32_t cp = ch.codePoint;
+    i += ch.length;
     if (cp < 0x80) {
       const char c = static_cast<char>(cp);
       if (c >= 'A' && c <= 'Z') out += static_cast<char>(c - 'A' + 'a');

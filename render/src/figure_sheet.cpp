@@ -4,6 +4,7 @@
 #include <cstring>
 #include <sstream>
 
+#include "core/utf8.h"
 #include "render/overlay.h"
 
 namespace at::render {
@@ -26,13 +27,15 @@ std::vector<std::string> wrapCaption(const std::string& caption, int widthPx, in
     std::istringstream words(paragraph);
     std::string word, line;
     while (words >> word) {
-      while (textWidth(word, textScale) > widthPx && word.size() > 1) {  // cut what cannot fit
-        std::size_t n = word.size() - 1;
-        while (n > 1 && textWidth(word.substr(0, n), textScale) > widthPx) --n;
+      // Cut what cannot fit, between characters (never inside a UTF-8 sequence).
+      while (textWidth(word, textScale) > widthPx && utf8Length(word) > 1) {
+        std::size_t n = utf8Length(word) - 1;
+        while (n > 1 && textWidth(utf8Prefix(word, n), textScale) > widthPx) --n;
         if (!line.empty()) lines.push_back(std::move(line));
         line.clear();
-        lines.push_back(word.substr(0, n));
-        word = word.substr(n);
+        const std::string head(utf8Prefix(word, n));
+        word = word.substr(head.size());
+        lines.push_back(head);
       }
       const std::string joined = line.empty() ? word : line + " " + word;
       if (textWidth(joined, textScale) <= widthPx) {

@@ -3,6 +3,9 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
+
+#include "core/utf8.h"
 
 namespace at::render {
 
@@ -107,6 +110,85 @@ constexpr std::uint8_t kFont[95][7] = {
     {0x00, 0x00, 0x08, 0x15, 0x02, 0x00, 0x00},  // '~'
 };
 
+using Glyph = std::array<std::uint8_t, kGlyphHeight>;
+
+Glyph asciiGlyph(char c) {
+  Glyph g;
+  std::memcpy(g.data(), kFont[(c >= 32 && c <= 126 ? c : '?') - 32], g.size());
+  return g;
+}
+
+// Signs and letters beyond ASCII that captions, titles and structure names use: units (µm, °),
+// the paper's symbols (α, β, σ, Δ), typographic punctuation (– — … ’ “ ”), comparisons and arrows.
+struct ExtraGlyph {
+  std::uint32_t codePoint;
+  Glyph rows;
+};
+constexpr ExtraGlyph kExtraGlyphs[] = {
+    {0x00A0, {0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00}},  // no-break space
+    {0x00B0, {0x0C, 0x12, 0x12, 0x0C, 0x00, 0x00, 0x00}},  // °
+    {0x00B1, {0x04, 0x04, 0x1F, 0x04, 0x04, 0x00, 0x1F}},  // ±
+    {0x00B2, {0x0C, 0x02, 0x04, 0x08, 0x0E, 0x00, 0x00}},  // ²
+    {0x00B3, {0x0C, 0x02, 0x0C, 0x02, 0x0C, 0x00, 0x00}},  // ³
+    {0x00B5, {0x00, 0x00, 0x11, 0x11, 0x13, 0x1D, 0x10}},  // µ (micro sign)
+    {0x00B7, {0x00, 0x00, 0x00, 0x0C, 0x0C, 0x00, 0x00}},  // ·
+    {0x00D7, {0x00, 0x11, 0x0A, 0x04, 0x0A, 0x11, 0x00}},  // ×
+    {0x00DF, {0x0E, 0x11, 0x1E, 0x11, 0x11, 0x1E, 0x10}},  // ß
+    {0x00F7, {0x00, 0x04, 0x00, 0x1F, 0x00, 0x04, 0x00}},  // ÷
+    {0x0394, {0x04, 0x04, 0x0A, 0x0A, 0x11, 0x11, 0x1F}},  // Δ
+    {0x03B1, {0x00, 0x00, 0x09, 0x15, 0x12, 0x12, 0x0D}},  // α
+    {0x03B2, {0x0E, 0x11, 0x1E, 0x11, 0x11, 0x1E, 0x10}},  // β
+    {0x03BC, {0x00, 0x00, 0x11, 0x11, 0x13, 0x1D, 0x10}},  // μ (Greek mu)
+    {0x03C3, {0x00, 0x00, 0x0F, 0x12, 0x11, 0x11, 0x0E}},  // σ
+    {0x2013, {0x00, 0x00, 0x00, 0x1F, 0x00, 0x00, 0x00}},  // –
+    {0x2014, {0x00, 0x00, 0x00, 0x1F, 0x00, 0x00, 0x00}},  // —
+    {0x2018, {0x04, 0x08, 0x00, 0x00, 0x00, 0x00, 0x00}},  // ‘
+    {0x2019, {0x04, 0x04, 0x08, 0x00, 0x00, 0x00, 0x00}},  // ’
+    {0x201C, {0x0A, 0x14, 0x00, 0x00, 0x00, 0x00, 0x00}},  // “
+    {0x201D, {0x0A, 0x0A, 0x14, 0x00, 0x00, 0x00, 0x00}},  // ”
+    {0x2026, {0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x15}},  // …
+    {0x2190, {0x00, 0x04, 0x08, 0x1F, 0x08, 0x04, 0x00}},  // ←
+    {0x2192, {0x00, 0x04, 0x02, 0x1F, 0x02, 0x04, 0x00}},  // →
+    {0x2212, {0x00, 0x00, 0x00, 0x1F, 0x00, 0x00, 0x00}},  // − (minus)
+    {0x2264, {0x02, 0x04, 0x08, 0x04, 0x02, 0x00, 0x1F}},  // ≤
+    {0x2265, {0x08, 0x04, 0x02, 0x04, 0x08, 0x00, 0x1F}},  // ≥
+};
+
+// Latin-1 letters U+00C0 … U+00FF: the ASCII letter each is drawn as, and the accent a lower-case
+// letter gets in the two rows above its x-height (g grave, a acute, c circumflex, t tilde,
+// d diaeresis, . none; capitals fill all seven rows, so they are drawn without theirs). '*' marks
+// the code points kExtraGlyphs draws (× ß ÷).
+constexpr char kLatin1Letters[] = "AAAAAAACEEEEIIIIDNOOOOO*OUUUUYP*aaaaaaaceeeeiiiidnooooo*ouuuuypy";
+constexpr char kLatin1Accents[] = "gactd...gacdgacd.tgactd*.gacda.*gactd...gacdgacd.tgactd*.gacda.d";
+static_assert(sizeof kLatin1Letters == 65 && sizeof kLatin1Accents == 65);
+
+Glyph accented(char letter, char accent) {
+  Glyph g = asciiGlyph(letter);
+  if (letter < 'a' || letter > 'z') return g;
+  std::uint8_t top = 0, second = 0;
+  switch (accent) {
+    case 'g': top = 0x08, second = 0x04; break;
+    case 'a': top = 0x02, second = 0x04; break;
+    case 'c': top = 0x04, second = 0x0A; break;
+    case 't': top = 0x0D, second = 0x16; break;
+    case 'd': top = 0x0A, second = 0x00; break;
+    default: return g;
+  }
+  g[0] = top, g[1] = second;  // over 'i' the accent takes the dot's place
+  return g;
+}
+
+// The rows the font draws for one character: printable ASCII, the extra signs, Latin-1 letters;
+// '?' for anything else (one per character, an invalid byte included).
+Glyph glyphFor(std::uint32_t codePoint) {
+  if (codePoint >= 32 && codePoint <= 126) return asciiGlyph(char(codePoint));
+  for (const ExtraGlyph& extra : kExtraGlyphs)
+    if (extra.codePoint == codePoint) return extra.rows;
+  if (codePoint >= 0xC0 && codePoint <= 0xFF && kLatin1Letters[codePoint - 0xC0] != '*')
+    return accented(kLatin1Letters[codePoint - 0xC0], kLatin1Accents[codePoint - 0xC0]);
+  return asciiGlyph('?');
+}
+
 void blend(RgbImage& image, int x, int y, const Rgb& colour, double coverage) {
   if (x < 0 || y < 0 || x >= image.width || y >= image.height || coverage <= 0) return;
   std::uint8_t* p = image.pixel(x, y);
@@ -160,13 +242,15 @@ ScaleBar scaleBar(const Camera& camera, int imageWidth, int imageHeight, double 
   return bar;
 }
 
-int textWidth(std::string_view text, int scale) { return text.empty() ? 0 : (int(text.size()) * 6 - 1) * scale; }
+int textWidth(std::string_view text, int scale) { return text.empty() ? 0 : (int(utf8Length(text)) * 6 - 1) * scale; }
 
 void drawText(RgbImage& image, int x, int y, std::string_view text, Rgb colour, int scale) {
-  for (std::size_t i = 0; i < text.size(); ++i) {
-    const unsigned char ch = static_cast<unsigned char>(text[i]);
-    const std::uint8_t* rows = kFont[(ch >= 32 && ch <= 126 ? ch : '?') - 32];
-    const int gx = x + int(i) * 6 * scale;
+  int column = 0;
+  for (std::size_t i = 0; i < text.size(); ++column) {
+    const Utf8Char ch = decodeUtf8At(text, i);
+    i += ch.length;
+    const Glyph rows = glyphFor(ch.codePoint);
+    const int gx = x + column * 6 * scale;
     for (int r = 0; r < kGlyphHeight; ++r)
       for (int c = 0; c < 5; ++c)
         if (rows[r] & (0x10 >> c))

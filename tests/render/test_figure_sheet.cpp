@@ -1,6 +1,11 @@
 // Figure sheets (render/figure_sheet.h): panels side by side with their captions under a title.
 #include <doctest/doctest.h>
 
+#include <algorithm>
+#include <random>
+#include <string>
+
+#include "core/utf8.h"
 #include "render/figure_sheet.h"
 #include "render/overlay.h"
 
@@ -81,4 +86,79 @@ TEST_CASE("FigureSheet_RefusesNoPanelsOrAnEmptyImage") {
   auto sheet = composeSheet("t", panels);
   REQUIRE_FALSE(sheet);
   CHECK(sheet.error().message.find("panel 1") != std::string::npos);
+}
+
+namespace {
+
+// The pixels drawText lights for `text` alone, as a string of 0/1 (one image row after another).
+std::string inked(const std::string& text) {
+  RgbImage im(std::max(1, textWidth(text, 1)), kGlyphHeight);
+  drawText(im, 0, 0, text, Rgb{255, 255, 255}, 1);
+  std::string bits;
+  for (int y = 0; y < im.height; ++y)
+    for (int x = 0; x < im.width; ++x) bits += im.pixel(x, y)[0] > 127 ? '1' : '0';
+  return bits;
+}
+
+}  // namespace
+
+TEST_CASE("FigureSheet_TextBeyondAsciiIsOneGlyphPerCharacterNotAQuestionMarkPerByte") {
+  // A µCT instructor's title: three glyphs, the first not a '?'.
+  CHECK(textWidth("µCT", 1) == textWidth("uCT", 1));
+  CHECK(inked("µ") != inked("?"));
+  CHECK(inked("µ") != inked("u"));
+  // Every sign and letter the font claims is its own glyph, none a '?', and accents tell letters apart.
+  const std::string drawn[] = {"µ", "μ", "°", "±", "×", "·", "²", "³", "ß", "÷", "α", "β", "σ", "Δ", "–", "—",
+                               "…", "’", "“", "”", "→", "←", "≤", "≥", "−", "é", "è", "ê", "ë", "ñ", "ü", "Ö", "ç"};
+  for (const std::string& c : drawn) {
+    CAPTURE(c);
+    CHECK(textWidth(c, 1) == 5);
+    CHECK(inked(c) != inked("?"));
+  }
+  CHECK(inked("é") != inked("e"));
+  CHECK(inked("é") != inked("è"));
+  CHECK(inked("ï") != inked("i"));
+  CHECK(inked("Ö") == inked("O"));  // capitals have no room above them: drawn bare
+  // Other scripts and bad bytes: one '?' per character or byte.
+  CHECK(inked("耳") == inked("?"));
+  CHECK(inked("\xff") == inked("?"));
+  CHECK(inked("a\xe8\x80z") == inked("a??z"));
+}
+
+TEST_CASE("FigureSheet_WrappedCaptionsNeverCutACharacterAndTitlesKeepTheirSigns") {
+  std::mt19937 rng(3);
+  const std::string pieces[] = {"a", "b", " ", " ", "µ", "é", "—", "耳", "𝛼", "≥"};
+  for (int round = 0; round < 500; ++round) {
+    std::string caption;
+    const int n = 1 + int(rng() % 40);
+    for (int k = 0; k < n; ++k) caption += pieces[rng() % std::size(pieces)];
+    const int width = 6 + int(rng() % 60);
+    std::string joined;
+    for (const std::string& line : wrapCaption(caption, width, 1)) {
+      for (std::size_t i = 0; i < line.size(); i += decodeUtf8At(line, i).length) REQUIRE(decodeUtf8At(line, i).valid);
+      CHECK((textWidth(line, 1) <= width || utf8Length(line) == 1));
+      for (char c : line)
+        if (c != ' ') joined += c;
+    }
+    std::string expected;
+    for (char c : caption)
+      if (c != ' ') expected += c;
+    CHECK(joined == expected);  // nothing lost, nothing split
+  }
+  // The title's first glyph on a sheet is the micro sign's.
+  std::vector<SheetPanel> panels{{filled(200, 40, 0, 0, 0), "0.1 mm"}};
+  SheetLayout layout;
+  layout.gap = 8;
+  layout.textScale = 1;
+  auto sheet = composeSheet("µCT-like", panels, layout);
+  REQUIRE(sheet);
+  RgbImage alone(20, kGlyphHeight * 2);
+  std::string onSheet, expected;
+  drawText(alone, 0, 0, "µ", Rgb{255, 255, 255}, 2);
+  for (int y = 0; y < kGlyphHeight * 2; ++y)
+    for (int x = 0; x < 10; ++x) {
+      onSheet += sheet->pixel(8 + x, 8 + y)[0] > 127 ? '1' : '0';
+      expected += alone.pixel(x, y)[0] > 127 ? '1' : '0';
+    }
+  CHECK(onSheet == expected);
 }

@@ -18,7 +18,9 @@ const char* const kUsage =
     "usage: anatomy-tutor figure-sheet --out SHEET.png [--title TEXT] [--columns N]\n"
     "                                  PANEL.png CAPTION [PANEL.png CAPTION ...]\n"
     "  Lays the panels side by side (N per row with --columns), each with its caption wrapped\n"
-    "  underneath, under the title; captions are printable ASCII ('\\n' in a caption starts a line).\n";
+    "  underneath, under the title ('\\n' in a caption starts a line). Title and captions are UTF-8:\n"
+    "  ASCII, Latin-1 letters and the common signs (µ ° ± × α β σ Δ ≤ ≥ → – — …) are drawn; any\n"
+    "  other character as '?'.\n";
 
 }  // namespace
 

@@ -38,8 +38,11 @@ ScaleBar scaleBar(const Camera& camera, int imageWidth, int imageHeight, double 
 
 using Rgb = std::array<std::uint8_t, 3>;
 
-// Text with the built-in 5 × 7 font (printable ASCII; others drawn as '?'), each font pixel `scale`
-// image pixels, glyphs 6 font pixels apart; (x, y) is the top-left corner. Clipped to the image.
+// UTF-8 text with the built-in 5 × 7 font, one glyph per character: printable ASCII, Latin-1
+// letters (lower case with their accents, capitals without), units and symbols (µ ° ± × α β σ Δ
+// ≤ ≥ → – — … ’ “ ”); any other character, and each byte that is not valid UTF-8, as one '?'.
+// Each font pixel is `scale` image pixels, glyphs 6 font pixels apart; (x, y) is the top-left
+// corner. Clipped to the image. textWidth counts characters, not bytes.
 void drawText(RgbImage& image, int x, int y, std::string_view text, Rgb colour, int scale = 1);
 int textWidth(std::string_view text, int scale = 1);
 constexpr int kGlyphHeight = 7;
