@@ -52,6 +52,8 @@ PooledPostgres::PooledPostgres(int serverConnections, int poolSize) {
     whyNot_ = "cannot make temporary folders";
     return;
   }
+  clusterWatchdog_ = ServiceWatchdog((sourceDir() / "scripts" / "pg-cluster.sh").string(), clusterDir_);
+  bouncerWatchdog_ = ServiceWatchdog((sourceDir() / "scripts" / "pgbouncer.sh").string(), bouncerDir_);
   int status = 0;
   serverUrl_ = run("AT_PG_FAST=1 AT_PG_MAX_CONNECTIONS=" + std::to_string(serverConnections) + " " +
                        script("pg-cluster.sh") + " start '" + clusterDir_ + "'",

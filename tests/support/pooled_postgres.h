@@ -8,6 +8,8 @@
 #include <optional>
 #include <string>
 
+#include "service_watchdog.h"
+
 namespace at::test {
 
 class PooledPostgres {
@@ -30,6 +32,9 @@ class PooledPostgres {
   std::string clusterDir_, bouncerDir_, serverUrl_, pooledUrl_, whyNot_;
   bool clusterStarted_ = false, bouncerStarted_ = false;
   int databases_ = 0;
+  // Stop both if this process dies without the destructor (the pooler's is declared last, so it
+  // is ended first, as the destructor stops the pooler before the server).
+  ServiceWatchdog clusterWatchdog_, bouncerWatchdog_;
 };
 
 // A fresh database through a pooler for `what`, or nullopt after printing "SKIPPED: <what> …".

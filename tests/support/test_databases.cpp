@@ -24,6 +24,7 @@ struct TestServer {
   std::string clusterDir;    // the cluster's folder (never stopped by a test: PrivatePostgres)
   bool ownCluster = false;   // this process started the cluster (and stops it at exit)
   std::string whyNot;        // why there is no server
+  ServiceWatchdog watchdog;  // stops the own cluster if the process dies without its exit handlers
 };
 
 // A script's output without its trailing newlines.
@@ -71,6 +72,7 @@ TestServer& server() {
       s.whyNot = "cannot make a folder for the test cluster";
       return;
     }
+    s.watchdog = ServiceWatchdog(scriptPath(), dir);
     int status = 0;
     const std::string url = runScript("AT_PG_FAST=1 '" + scriptPath() + "' start '" + dir + "' 2>&1", status);
     if (status != 0) {
@@ -180,6 +182,7 @@ PrivatePostgres::PrivatePostgres() {
     dir_.clear();
     return;
   }
+  watchdog_ = ServiceWatchdog(scriptPath(), dir_);
   int status = 0;
   url_ = runScript("AT_PG_FAST=1 '" + scriptPath() + "' start '" + dir_ + "' 2>&1", status);
   if (status != 0) {

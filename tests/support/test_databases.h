@@ -15,6 +15,7 @@
 #include <string>
 
 #include "database.h"  // db/'s private SQL wrapper (at_db_sql_for_tests)
+#include "service_watchdog.h"
 #include "test_support.h"
 
 namespace at::test {
@@ -55,11 +56,16 @@ class PrivatePostgres {
   // pg_ctl stop (fast) and start again on the same port and folder: true when it worked.
   bool stop();
   bool restart();
+  // The cluster's folder (empty if none could be made).
+  const std::string& folder() const { return dir_; }
+  bool started() const { return started_; }
+  const std::string& whyNot() const { return whyNot_; }
 
  private:
   std::string dir_, url_, whyNot_;
   bool started_ = false;
   int schemas_ = 0;
+  ServiceWatchdog watchdog_;  // stops the cluster if this process dies without the destructor
 };
 
 // Tables (and on SQLite their SQL, on PostgreSQL their columns with types, nullability and
