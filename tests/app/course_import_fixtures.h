@@ -13,6 +13,7 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -68,39 +69,37 @@ inline std::map<std::string, std::string> snapshotTree(const std::filesystem::pa
 
 struct MeasuredRun {
   int exitCode = -1;      // -signal when killed by one
-  long peakKib = 0;       // ru_maxrss of the child
+  long peakKib = 0;       // the program's ru_maxrss
   double seconds = 0;
   std::string err;
 };
 
-// Runs the program with `args` (no shell) and measures the child's peak resident memory.
+// Runs the program with `args` (no shell) and measures its peak resident memory: through
+// at_peak_memory (tests/support/peak_memory.cpp), so that what this test process holds is not
+// counted as the program's.
 inline MeasuredRun runAppMeasured(const std::vector<std::string>& args) {
   namespace fs = std::filesystem;
   TempDir dir("at-measured");
-  const fs::path errFile = dir / "stderr";
+  const std::string helper = (fs::path(AT_BINARY_DIR) / "tests" / "at_peak_memory").string();
+  const std::string report = (dir / "report").string(), errFile = (dir / "stderr").string();
   const std::string binary = appBinary().string();
-  std::vector<char*> argv{const_cast<char*>(binary.c_str())};
+  std::vector<char*> argv{const_cast<char*>(helper.c_str()), const_cast<char*>(report.c_str()),
+                          const_cast<char*>(errFile.c_str()), const_cast<char*>(binary.c_str())};
   for (const std::string& a : args) argv.push_back(const_cast<char*>(a.c_str()));
   argv.push_back(nullptr);
   timespec start{}, end{};
   clock_gettime(CLOCK_MONOTONIC, &start);
   const pid_t pid = fork();
   if (pid == 0) {
-    const int err = ::open(errFile.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    const int null = ::open("/dev/null", O_RDWR);
-    dup2(null, 0);
-    dup2(null, 1);
-    dup2(err, 2);
-    execv(binary.c_str(), argv.data());
+    execv(helper.c_str(), argv.data());
     _exit(127);
   }
-  MeasuredRun r;
   int status = 0;
-  rusage usage{};
-  wait4(pid, &status, 0, &usage);
+  waitpid(pid, &status, 0);
   clock_gettime(CLOCK_MONOTONIC, &end);
-  r.exitCode = WIFEXITED(status) ? WEXITSTATUS(status) : -WTERMSIG(status);
-  r.peakKib = usage.ru_maxrss;
+  MeasuredRun r;
+  std::istringstream(readFile(report)) >> r.exitCode >> r.peakKib;
+  REQUIRE_MESSAGE((WIFEXITED(status) && WEXITSTATUS(status) == 0), "at_peak_memory failed for " << binary);
   r.seconds = double(end.tv_sec - start.tv_sec) + 1e-9 * double(end.tv_nsec - start.tv_nsec);
   r.err = readFile(errFile);
   return r;
