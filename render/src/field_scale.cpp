@@ -168,7 +168,7 @@ std::vector<float> seenSurfaces(const FloatVolume& field, const Volume& volume, 
   const double step = 0.5 * std::min({vg.spacingMm[0], vg.spacingMm[1], vg.spacingMm[2]});
   const auto [w, h] = detail::rayGridOf(view.width, view.height, kScaleRaysPerSide);
   std::vector<std::vector<float>> rows(std::size_t(std::max(h, 0)));
-  detail::forEachRowInParallel(h, [&, w = w, h = h](int py) {
+  forEachRowInParallel(h, [&, w = w, h = h](int py) {
     for (int px = 0; px < w; ++px) {
       const Ray ray = view.camera.rayThroughPixel(px, py, w, h);
       // The reach's segment of the ray (|origin + t·direction − centroid| ≤ reach).
@@ -255,7 +255,7 @@ RayBone nearestBoneOnRays(const FloatVolume& field, const Volume& volume, const 
   const double step = std::min({vg.spacingMm[0], vg.spacingMm[1], vg.spacingMm[2]});
   const auto [w, h] = detail::rayGridOf(view.width, view.height, kScaleRaysPerSide);
   std::vector<RayBone> rows(std::size_t(std::max(h, 0)));
-  detail::forEachRowInParallel(h, [&, w = w, h = h](int py) {
+  forEachRowInParallel(h, [&, w = w, h = h](int py) {
     RayBone& row = rows[std::size_t(py)];
     for (int px = 0; px < w; ++px) {
       ++row.rays;

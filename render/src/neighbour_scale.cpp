@@ -51,7 +51,7 @@ NeighbourBone neighbourBone(const FloatVolume& field, const Volume& volume, cons
   // One byte a ray (not vector<bool>'s shared words): rows are written by different threads.
   std::vector<char> structure(std::size_t(w) * std::size_t(h), 0);
   std::vector<float> first(structure.size(), 0);  // the first bone surface's D on each ray (0: none)
-  detail::forEachRowInParallel(h, [&, w = w, h = h](int py) {
+  forEachRowInParallel(h, [&, w = w, h = h](int py) {
     for (int px = 0; px < w; ++px) {
       const std::size_t i = std::size_t(py) * std::size_t(w) + std::size_t(px);
       const Ray ray = view.camera.rayThroughPixel(px, py, w, h);

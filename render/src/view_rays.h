@@ -3,11 +3,10 @@
 #pragma once
 
 #include <algorithm>
-#include <atomic>
 #include <cmath>
-#include <thread>
 #include <vector>
 
+#include "core/parallel_rows.h"
 #include "render/camera.h"
 #include "volume/grid.h"
 
@@ -56,23 +55,6 @@ inline RayGrid rayGridOf(int viewWidth, int viewHeight, int raysPerSide) {
   if (viewWidth < 1 || viewHeight < 1) return {};
   const double shrink = std::min(1.0, double(raysPerSide) / double(std::max(viewWidth, viewHeight)));
   return {std::max(1, int(std::lround(viewWidth * shrink))), std::max(1, int(std::lround(viewHeight * shrink)))};
-}
-
-// Calls rowBody(row) once for every row in [0, rows), the rows handed out one at a time to up to
-// hardware_concurrency threads (the calling thread among them), so that rays through bone and rays
-// through air share the cores evenly. rowBody may write only what belongs to its row; whatever the
-// caller then gathers row by row, in row order, is the same as one thread would have made.
-template <class RowBody>
-void forEachRowInParallel(int rows, const RowBody& rowBody) {
-  const int threads = std::clamp(int(std::thread::hardware_concurrency()), 1, std::max(1, rows));
-  std::atomic<int> next{0};
-  const auto work = [&] {
-    for (int row = next++; row < rows; row = next++) rowBody(row);
-  };
-  std::vector<std::jthread> helpers;
-  helpers.reserve(std::size_t(threads - 1));
-  for (int t = 1; t < threads; ++t) helpers.emplace_back(work);
-  work();
 }
 
 }  // namespace at::render::detail

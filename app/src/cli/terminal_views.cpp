@@ -228,7 +228,7 @@ std::optional<std::array<int, 4>> TerminalViews::pixelsThatCanPick(const std::st
   const Structure* target = dataset_.findStructure(targetId);
   if (!target) return std::nullopt;
   const FloatVolume* field = nullptr;
-  if (toleranceMm > 0) {  // the distances pickAt reads: the target's field under its own preset
+  if (toleranceMm > 0) {  // the distances picks read: the target's field under its own preset
     auto preset = presetOf(*target, "");
     if (!preset) return std::nullopt;
     auto f = fieldOf(*target, *preset);
@@ -315,46 +315,71 @@ Result<TerminalPicture> TerminalViews::showSlice(const std::string& targetId, co
   return TerminalPicture{path.string(), image->width, image->height, true};
 }
 
-Result<quiz::Pick> TerminalViews::pickAt(const std::optional<Vec3>& pointMm, std::uint16_t label,
-                                         const std::string& target) {
+namespace {
+
+// The pick of a point (or of nothing) on `label`, with its distance read from `targetField`.
+quiz::Pick pickOf(const Dataset& dataset, const std::optional<Vec3>& pointMm, std::uint16_t label,
+                  const FloatVolume* targetField) {
   quiz::Pick pick;
-  if (const Structure* s = dataset_.findStructureByLabel(label)) pick.structure = s->id;
-  const Structure* t = dataset_.findStructure(target);
-  if (pointMm && t) {
-    const FloatVolume* field = nullptr;
-    if (auto known = fields_.find(t->id); known != fields_.end()) {
-      field = &known->second;  // computed before: no preset to look up again (a key picks every pixel)
-    } else if (auto preset = presetOf(*t, ""); preset) {
-      if (auto computed = fieldOf(*t, *preset)) field = *computed;
-    }
-    if (field)
-      if (const auto v = voxelOf(field->geometry, *pointMm)) pick.distanceMm = field->at((*v)[0], (*v)[1], (*v)[2]);
-  }
+  if (const Structure* s = dataset.findStructureByLabel(label)) pick.structure = s->id;
+  if (pointMm && targetField)
+    if (const auto v = voxelOf(targetField->geometry, *pointMm))
+      pick.distanceMm = targetField->at((*v)[0], (*v)[1], (*v)[2]);
   return pick;
 }
 
-Result<quiz::Pick> TerminalViews::pickPixel(double x, double y, const std::string& target) {
+}  // namespace
+
+const FloatVolume* TerminalViews::pickFieldOf(const Structure& target) {
+  if (auto known = fields_.find(target.id); known != fields_.end()) return &known->second;
+  if (auto preset = presetOf(target, ""); preset)
+    if (auto computed = fieldOf(target, *preset)) return *computed;
+  return nullptr;
+}
+
+Result<PixelPicks> TerminalViews::pixelPicks(const std::string& target) {
+  if (!lastSlice_ && !lastSettings_) return fail("there is no picture to pick on (pictures are off); give a point as mm X Y Z");
+  PixelPicks picks;
+  picks.dataset_ = &dataset_;
+  picks.target_ = dataset_.findStructure(target);
+  if (picks.target_) picks.targetField_ = pickFieldOf(*picks.target_);
   if (lastSlice_) {
-    const auto ijk = sliceVoxelAt(dataset_.labels.dims(), *lastSlice_, x, y);
-    if (!ijk) return fail("the pixel (" + std::to_string(int(x)) + ", " + std::to_string(int(y)) + ") is outside the slice");
-    const Vec3 p = dataset_.labels.geometry.indexToPatient({double((*ijk)[0]), double((*ijk)[1]), double((*ijk)[2])});
-    return pickAt(p, dataset_.labels.at((*ijk)[0], (*ijk)[1], (*ijk)[2]), target);
+    picks.slice_ = &*lastSlice_;
+    return picks;
   }
-  if (!lastSettings_) return fail("there is no picture to pick on (pictures are off); give a point as mm X Y Z");
-  if (x < 0 || y < 0 || x >= lastSettings_->width || y >= lastSettings_->height)
-    return fail("the pixel (" + std::to_string(int(x)) + ", " + std::to_string(int(y)) + ") is outside the " +
-                std::to_string(lastSettings_->width) + "×" + std::to_string(lastSettings_->height) + " picture");
   const auto mask = masks_.find(lastSelected_);  // made by frame()
-  render::SceneVolumes volumes{&dataset_.volume, &dataset_.labels, lastField_, lastSelected_, gradients_.get(),
-                               mask == masks_.end() ? nullptr : &mask->second};
-  const render::PickResult hit =
-      render::pickStructure(volumes, *lastSettings_, *lastTable_, x, y);
-  return pickAt(hit.hit ? std::optional<Vec3>(hit.pointMm) : std::nullopt, hit.hit ? hit.label : 0, target);
+  picks.settings_ = &*lastSettings_;
+  picks.table_ = &*lastTable_;
+  picks.volumes_ = render::SceneVolumes{&dataset_.volume, &dataset_.labels, lastField_, lastSelected_, gradients_.get(),
+                                        mask == masks_.end() ? nullptr : &mask->second};
+  return picks;
+}
+
+Result<quiz::Pick> PixelPicks::at(double x, double y) const {
+  if (slice_) {
+    const auto ijk = sliceVoxelAt(dataset_->labels.dims(), *slice_, x, y);
+    if (!ijk) return fail("the pixel (" + std::to_string(int(x)) + ", " + std::to_string(int(y)) + ") is outside the slice");
+    const Vec3 p = dataset_->labels.geometry.indexToPatient({double((*ijk)[0]), double((*ijk)[1]), double((*ijk)[2])});
+    return pickOf(*dataset_, p, dataset_->labels.at((*ijk)[0], (*ijk)[1], (*ijk)[2]), targetField_);
+  }
+  if (x < 0 || y < 0 || x >= settings_->width || y >= settings_->height)
+    return fail("the pixel (" + std::to_string(int(x)) + ", " + std::to_string(int(y)) + ") is outside the " +
+                std::to_string(settings_->width) + "×" + std::to_string(settings_->height) + " picture");
+  const render::PickResult hit = render::pickStructure(volumes_, *settings_, *table_, x, y);
+  return pickOf(*dataset_, hit.hit ? std::optional<Vec3>(hit.pointMm) : std::nullopt, hit.hit ? hit.label : 0,
+                targetField_);
+}
+
+Result<quiz::Pick> TerminalViews::pickPixel(double x, double y, const std::string& target) {
+  auto picks = pixelPicks(target);
+  if (!picks) return tl::unexpected(picks.error());
+  return picks->at(x, y);
 }
 
 Result<quiz::Pick> TerminalViews::pickPointMm(const Vec3& pointMm, const std::string& target) {
   const auto v = voxelOf(dataset_.labels.geometry, pointMm);
-  return pickAt(pointMm, v ? dataset_.labels.at((*v)[0], (*v)[1], (*v)[2]) : 0, target);
+  const Structure* t = dataset_.findStructure(target);
+  return pickOf(dataset_, pointMm, v ? dataset_.labels.at((*v)[0], (*v)[1], (*v)[2]) : 0, t ? pickFieldOf(*t) : nullptr);
 }
 
 std::unique_ptr<TerminalViews> openTerminalViews(db::Database& db, const std::string& datasetId,

@@ -17,6 +17,7 @@
 #include "render/gradient_volume.h"
 #include "render/preset.h"
 #include "render/render_settings.h"
+#include "render/scene.h"
 #include "volume/slice_image.h"
 #include "volume/structure.h"
 #include "render/derived_preset.h"
@@ -39,6 +40,26 @@ struct TerminalPicture {
   int width = 0;
   int height = 0;
   bool slice = false;  // a CT slice (pixel → voxel) rather than a 3-D view (pixel → ray)
+};
+
+// Picks on one picture for one target, worked out once (PixelPicks::at changes nothing, so several
+// threads may pick at once: a locate key picks every pixel). Made by TerminalViews::pixelPicks;
+// valid until that object shows or frames its next picture.
+class PixelPicks {
+ public:
+  // The structure under pixel (x, y) and the weighted distance in mm from the target to the
+  // picked point (−1 when it could not be measured), as TerminalViews::pickPixel.
+  Result<quiz::Pick> at(double x, double y) const;
+
+ private:
+  friend class TerminalViews;
+  const Dataset* dataset_ = nullptr;
+  const SliceRequest* slice_ = nullptr;                // a slice picture, or
+  const render::RenderSettings* settings_ = nullptr;  // a 3-D picture with
+  const render::TransferFunction2D* table_ = nullptr;
+  render::SceneVolumes volumes_;
+  const Structure* target_ = nullptr;      // null: no such structure (no distance)
+  const FloatVolume* targetField_ = nullptr;  // null: distance unknown
 };
 
 class TerminalViews {
@@ -76,6 +97,9 @@ class TerminalViews {
   // The structure under pixel (x, y) of the last picture, with the weighted distance in mm from
   // `target` to the picked point (for tolerance bands; −1 when it could not be measured).
   Result<quiz::Pick> pickPixel(double x, double y, const std::string& target);
+  // Picks on the last picture for `target` (its field computed now if it was not yet), for many
+  // pixels or several threads. Error: no picture yet.
+  Result<PixelPicks> pixelPicks(const std::string& target);
   // The pixels (x0, y0, x1, y1 inclusive; x1 < x0 when none) of the last 3-D view outside which no
   // pick is graded right for `target` with `toleranceMm`: the projection of the target's voxels and
   // of its field's voxels within the tolerance, each grown by a voxel (render::pixelsThatCanPick).
@@ -96,7 +120,8 @@ class TerminalViews {
                                              int height, double margin, const FloatVolume* field);
   // The scene's preset, else the structure's shipped or derived WDT preset.
   Result<render::Preset> presetOf(const Structure& structure, const std::string& presetId) const;
-  Result<quiz::Pick> pickAt(const std::optional<Vec3>& pointMm, std::uint16_t label, const std::string& target);
+  // The target's field for distances of picks (computed once); null when it cannot be had.
+  const FloatVolume* pickFieldOf(const Structure& target);
 
   Dataset dataset_;
   render::IntensityLevels levels_;    // derived presets where none is shipped
