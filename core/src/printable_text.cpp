@@ -67,8 +67,13 @@ std::string printableText(std::string_view text, std::size_t maxChars) { return 
 std::string printableLines(std::string_view text) { return escaped(text, std::string_view::npos, true); }
 
 std::string printableUiText(std::string_view text) {
-  std::string out = printableLines(text);
-  for (std::size_t at = out.find("##"); at != std::string::npos; at = out.find("##", at + 2)) out.insert(at + 1, " ");
+  const std::string lines = printableLines(text);
+  std::string out;
+  out.reserve(lines.size());
+  for (std::size_t i = 0; i < lines.size(); ++i) {
+    out += lines[i];
+    if (lines[i] == '#' && i + 1 < lines.size() && lines[i + 1] == '#') out += ' ';  // "##" → "# #"
+  }
   return out;
 }
 
