@@ -206,8 +206,8 @@ ScriptInterpreter::Outcome ScriptInterpreter::segmentGrowth(Context& c) {
   SegmentController& s = c.model.segmenter();
   if (c.first) {
     const json& a = c.action;
-    for (const auto& [key, value] : a.items()) {
-      (void)value;
+    for (const auto& item : a.items()) {
+      const std::string& key = item.key();
       static const char* known[] = {"do", "bone_only", "range", "limit", "base_per_voxel", "window", "smoothing", "defaults", "wait"};
       if (std::none_of(std::begin(known), std::end(known), [&](const char* k) { return key == k; }))
         return fail("ui script: segment_growth: unknown key \"" + key + "\"");
