@@ -71,14 +71,20 @@ std::string fileText(const fs::path& path) {
   return std::string(std::istreambuf_iterator<char>(in), {});
 }
 
+// A stop script in `scratch` that appends "<argument count>|<$1>|<$2>" to scratch/calls.
+fs::path recordingStopScript(const TempDir& scratch) {
+  const fs::path script = scratch.path() / "stop.sh";
+  std::ofstream(script) << "#!/bin/sh\nprintf '%s|%s|%s\\n' \"$#\" \"$1\" \"$2\" >> '" << (scratch.path() / "calls").string()
+                        << "'\n";
+  fs::permissions(script, fs::perms::owner_all);
+  return script;
+}
+
 }  // namespace
 
 TEST_CASE("A killed test's watchdog stops its service once, with the folder as one argument, and removes the folder") {
   TempDir scratch("at-watchdog");
-  const fs::path stopScript = scratch.path() / "stop.sh";
-  const fs::path calls = scratch.path() / "calls";
-  std::ofstream(stopScript) << "#!/bin/sh\nprintf '%s|%s|%s\\n' \"$#\" \"$1\" \"$2\" >> '" << calls.string() << "'\n";
-  fs::permissions(stopScript, fs::perms::owner_all);
+  const fs::path stopScript = recordingStopScript(scratch), calls = scratch.path() / "calls";
   // A folder whose name a shell would take apart or run.
   const fs::path folder = scratch.path() / "svc $(touch pwned) `touch pwned2` 'q\" ;x";
   fs::create_directories(folder / "data");
@@ -98,10 +104,7 @@ TEST_CASE("A killed test's watchdog stops its service once, with the folder as o
 
 TEST_CASE("A watchdog whose owner stopped the service and removed the folder does nothing") {
   TempDir scratch("at-watchdog");
-  const fs::path stopScript = scratch.path() / "stop.sh";
-  const fs::path calls = scratch.path() / "calls";
-  std::ofstream(stopScript) << "#!/bin/sh\necho \"$1\" >> '" << calls.string() << "'\n";
-  fs::permissions(stopScript, fs::perms::owner_all);
+  const fs::path stopScript = recordingStopScript(scratch), calls = scratch.path() / "calls";
   const fs::path folder = scratch.path() / "svc";
   fs::create_directories(folder);
   {
