@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <optional>
 
 namespace at::render {
@@ -188,10 +189,25 @@ float correctedOpacity(float alpha, double stepMm, double refMm) {
   return float(1.0 - std::pow(1.0 - std::clamp(double(alpha), 0.0, 0.999999), stepMm / refMm));
 }
 
-PickResult pick(const SceneVolumes& scene, const RenderSettings& s, const TransferFunction2D& table, double x,
-                double y, double threshold) {
-  PickResult result;
-  if (!scene.volume || scene.volume->empty()) return result;
+namespace {
+
+// A sample the ray caster composites: where it lies and the opacity it adds (before compositing);
+// `structure`: the selected structure's surface (drawn once, where the ray enters it).
+struct MarchedSample {
+  Vec3 pointMm;
+  Vec3 ijk;  // on the volume's grid
+  double opacity;
+  bool structure;
+};
+
+// Beyond this accumulated opacity nothing behind shows.
+constexpr double kOpaque = 0.995;
+
+// Walks the ray through pixel (x, y) front to back as the ray caster does (without jitter), giving
+// `visit` each sample that adds opacity; stops when `visit` returns false or the ray leaves the volume.
+void marchPixel(const SceneVolumes& scene, const RenderSettings& s, const TransferFunction2D& table, double x, double y,
+                const std::function<bool(const MarchedSample&)>& visit) {
+  if (!scene.volume || scene.volume->empty()) return;
   const Geometry& g = scene.volume->geometry;
   const Ray ray = s.camera.rayThroughPixel(x, y, s.width, s.height);
   // Intersect with the volume's box in index space (voxel centres at integers, box ±0.5).
@@ -202,7 +218,7 @@ PickResult pick(const SceneVolumes& scene, const RenderSettings& s, const Transf
   const double hi[3] = {g.dims.x - 0.5, g.dims.y - 0.5, g.dims.z - 0.5};
   for (int a = 0; a < 3; ++a) {
     if (std::fabs(dirIdx[a]) < 1e-12) {
-      if (o[a] < -0.5 || o[a] > hi[a]) return result;
+      if (o[a] < -0.5 || o[a] > hi[a]) return;
       continue;
     }
     double ta = (-0.5 - o[a]) / dirIdx[a], tb = (hi[a] - o[a]) / dirIdx[a];
@@ -210,7 +226,7 @@ PickResult pick(const SceneVolumes& scene, const RenderSettings& s, const Transf
     t0 = std::max(t0, ta);
     t1 = std::min(t1, tb);
   }
-  if (!(t0 < t1)) return result;
+  if (!(t0 < t1)) return;
   const double step = effectiveStepMm(g, s);
   const double refMm = effectiveOpacityRefMm(g, s);
   const bool bare = s.preset.mode == RenderMode::Bare;
@@ -219,7 +235,7 @@ PickResult pick(const SceneVolumes& scene, const RenderSettings& s, const Transf
   const float alphaF = s.preset.alpha;
   const float bandN = outlineBandN(s.preset);
   const Geometry* fg = scene.field ? &scene.field->geometry : nullptr;
-  double accumulated = 0, prevMask = 0;
+  double prevMask = 0;
   const SelectedMask* known = scene.selectedMask && scene.selectedMask->label == scene.selected &&
                                       scene.selectedMask->dims == g.dims
                                   ? scene.selectedMask
@@ -227,18 +243,6 @@ PickResult pick(const SceneVolumes& scene, const RenderSettings& s, const Transf
   const auto maskAt = [&](const Vec3& ijk) {
     if (known) return trilinear(g.dims, ijk, [&](std::size_t index) { return known->at(index); });
     return smoothedMaskAt(*scene.labels, scene.selected, ijk);
-  };
-  const auto finish = [&](const Vec3& p, const Vec3& ijk, std::optional<std::uint16_t> label) {
-    result.hit = true;
-    result.pointMm = p;
-    result.accumulatedOpacity = accumulated;
-    if (label) {
-      result.label = *label;
-    } else if (scene.labels) {
-      const int i = int(std::lround(ijk[0])), j = int(std::lround(ijk[1])), k = int(std::lround(ijk[2]));
-      if (g.dims.contains(i, j, k)) result.label = scene.labels->at(i, j, k);
-    }
-    return result;
   };
   // Where the ray first enters the structure: context in front of it counts at contextInFront of
   // its opacity (as the ray caster draws it; it marches at twice the step).
@@ -261,10 +265,7 @@ PickResult pick(const SceneVolumes& scene, const RenderSettings& s, const Transf
     const Vec3 ijk = g.patientToIndex(p);
     const double m = structure ? maskAt(ijk) : 0.0;
     if (m >= 0.5) {
-      if (prevMask < 0.5) {
-        accumulated += (1 - accumulated) * structureAlpha;
-        if (accumulated >= threshold) return finish(p, ijk, scene.selected);
-      }
+      if (prevMask < 0.5 && !visit({p, ijk, structureAlpha, true})) return;
       prevMask = m;
       continue;
     }
@@ -295,11 +296,45 @@ PickResult pick(const SceneVolumes& scene, const RenderSettings& s, const Transf
     const float a = table.lookup(hu, n)[3];
     const float front = tm < frontT ? s.preset.contextInFront : 1.0f;
     const float ac = a > 0 ? correctedOpacity(a, step, refMm) * surface * front : 0.0f;
-    accumulated += (1 - accumulated) * ac;
-    if (accumulated >= threshold) return finish(p, ijk, std::nullopt);
+    if (!visit({p, ijk, double(ac), false})) return;
   }
+}
+
+
+}  // namespace
+
+PickResult pick(const SceneVolumes& scene, const RenderSettings& s, const TransferFunction2D& table, double x,
+                double y, double threshold) {
+  PickResult result;
+  double accumulated = 0;
+  marchPixel(scene, s, table, x, y, [&](const MarchedSample& sample) {
+    accumulated += (1 - accumulated) * sample.opacity;
+    if (accumulated < threshold) return true;
+    result.hit = true;
+    result.pointMm = sample.pointMm;
+    if (sample.structure) {
+      result.label = scene.selected;
+    } else if (scene.labels) {
+      const Vec3& ijk = sample.ijk;
+      const int i = int(std::lround(ijk[0])), j = int(std::lround(ijk[1])), k = int(std::lround(ijk[2]));
+      if (scene.volume->geometry.dims.contains(i, j, k)) result.label = scene.labels->at(i, j, k);
+    }
+    return false;
+  });
   result.accumulatedOpacity = accumulated;
   return result;
+}
+
+double contextOpacity(const SceneVolumes& scene, const RenderSettings& settings, const TransferFunction2D& table,
+                      double x, double y) {
+  double accumulated = 0, context = 0;
+  marchPixel(scene, settings, table, x, y, [&](const MarchedSample& sample) {
+    const double added = (1 - accumulated) * sample.opacity;
+    accumulated += added;
+    if (!sample.structure) context += added;
+    return accumulated < kOpaque;
+  });
+  return context;
 }
 
 }  // namespace at::render

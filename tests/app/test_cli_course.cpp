@@ -358,6 +358,31 @@ TEST_CASE("CourseCli_Validate_NamesTheFieldOfAStructureTheDatasetLacks") {
   CHECK(good.out.find("valid: course 'temporal_bone'") != std::string::npos);
 }
 
+// A locate question asked in a view that draws nothing but the highlighted region (the bare
+// preset): the cochlea's label lies behind the blackness, so a click there would pick it, but no
+// student can see where that is. `course validate` refuses the file and names the question.
+TEST_CASE("CourseCli_Validate_RefusesALocateQuestionWhoseViewDrawsNothingWhereItsTargetIs") {
+  if (!test::requireAppBinary("course validate")) return;
+  test::TempDir dir;
+  auto course = nlohmann::json::parse(test::readFile(test::sourceDir() / "data" / "courses" / "temporal_bone.json"));
+  nlohmann::json& steps = course["lessons"][0]["steps"];
+  std::size_t at = 0;
+  while (at < steps.size() && !(steps[at].contains("question") && steps[at]["question"]["kind"] == "locate")) ++at;
+  REQUIRE(at < steps.size());
+  steps[at]["preset"] = "vestibule_bare";
+  std::ofstream(dir / "blank.json") << course.dump(2);
+  const std::string before = test::readFile(dir / "blank.json");
+  auto r = test::runApp("course validate " + quoted(dir / "blank.json") + " --db " + quoted(dir / "v.db"));
+  CHECK(r.exitCode != 0);
+  const std::string path = "lessons[0].steps[" + std::to_string(at) + "].question";
+  CHECK_MESSAGE(r.err.find(path + " (" + steps[at]["question"]["id"].get<std::string>() + "): not answerable: the " +
+                           steps[at]["question"]["target"].get<std::string>() + " is not drawn in its view") !=
+                    std::string::npos,
+                r.err);
+  CHECK(r.err.find("1 of 6 locate questions cannot be answered in their views") != std::string::npos);
+  CHECK(test::readFile(dir / "blank.json") == before);
+}
+
 // A step's free camera and clipping plane (course JSON "camera", "clip"): checked by `course
 // validate` with the field's path, stored by `course import`, and what `play` draws.
 TEST_CASE("CourseCli_StepCameraAndClip_AreValidatedStoredAndDrawnByPlay") {

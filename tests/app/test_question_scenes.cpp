@@ -268,6 +268,23 @@ TEST_CASE("Colours named in the shipped courses' texts are the colours the named
   MESSAGE("colour words checked against drawn colours: " << named);
 }
 
+namespace {
+
+// "Click the <target>." asked on the view of `region` drawn with `presetId` from `view`.
+lessons::Step locateStep(const std::string& id, const std::string& target, const std::string& region,
+                         const std::string& presetId, lessons::CameraView view) {
+  lessons::Step step;
+  step.kind = lessons::StepKind::Question;
+  step.question.id = id;
+  step.question.kind = quiz::QuestionKind::Locate;
+  step.question.prompt = "Click the " + target + ".";
+  step.question.target = target;
+  step.scene = lessons::QuestionScene{region, presetId, view, std::nullopt, std::nullopt};
+  return step;
+}
+
+}  // namespace
+
 TEST_CASE("checkLocateQuestions refuses a locate question whose target is hidden in its view") {
   auto dataset = openBuiltinDataset("phantom:128");
   REQUIRE(dataset);
@@ -275,16 +292,9 @@ TEST_CASE("checkLocateQuestions refuses a locate question whose target is hidden
   REQUIRE(course);
   // The incus asked in the context of the tympanic cavity around it: the highlighted cavity is
   // what a click on the incus picks.
-  lessons::Lesson& lesson = course->lessons.front();
-  lessons::Step hidden;
-  hidden.kind = lessons::StepKind::Question;
-  hidden.question.id = "inner_ear.locate_incus_hidden";
-  hidden.question.kind = quiz::QuestionKind::Locate;
-  hidden.question.prompt = "Click the incus.";
-  hidden.question.target = "incus";
-  hidden.scene = lessons::QuestionScene{"tympanic_cavity", "tympanic_cavity_wdt", lessons::CameraView::LateralRight,
-                                        std::nullopt, std::nullopt};
-  lesson.steps.push_back(hidden);
+  const lessons::Step hidden = locateStep("inner_ear.locate_incus_hidden", "incus", "tympanic_cavity",
+                                          "tympanic_cavity_wdt", lessons::CameraView::LateralRight);
+  course->lessons.front().steps.push_back(hidden);
   const render::PresetLibrary presets(test::sourceDir() / "data" / "presets");
   auto checks = app::checkLocateQuestions(*dataset, *course, presets);
   REQUIRE_MESSAGE(checks, (checks ? "" : checks.error().message));
@@ -298,6 +308,49 @@ TEST_CASE("checkLocateQuestions refuses a locate question whose target is hidden
   // Every shipped question beside it stays answerable.
   for (const app::LocateCheck& c : *checks)
     if (c.questionId != found->questionId) CHECK_MESSAGE(c.answerable, c.questionId << ": " << c.problem);
+}
+
+TEST_CASE("checkLocateQuestions refuses a locate question whose view draws nothing where its target is") {
+  // "Click the cochlea" on the vestibule, as the shipped question asks it, but in a view that draws
+  // no context: the bare preset (the structure alone), or the WDT preset with its distance TF
+  // cleared (what a CT preset drew on a plain-intensity µCT). The pick alone still finds the
+  // cochlea's label behind the blackness; the check must refuse it, and only it.
+  auto dataset = openBuiltinDataset("phantom:128");
+  REQUIRE(dataset);
+  test::TempDir dir("at-blank-view");
+  const render::PresetLibrary shipped(test::sourceDir() / "data" / "presets");
+  auto faded = shipped.load("vestibule_wdt");
+  REQUIRE(faded);
+  faded->id = "vestibule_faded";
+  faded->t = 0;
+  for (render::TfPoint& q : faded->distanceTf) q.rgba[3] = 0;
+  for (const auto& entry : std::filesystem::directory_iterator(test::sourceDir() / "data" / "presets"))
+    std::filesystem::copy_file(entry.path(), dir / entry.path().filename());
+  REQUIRE(render::savePreset(*faded, dir / "vestibule_faded.json"));
+  const render::PresetLibrary presets(dir.path());
+  for (const std::string presetId : {"vestibule_bare", "vestibule_faded"}) {
+    CAPTURE(presetId);
+    auto course = lessons::loadCourseJson(test::sourceDir() / "data" / "courses" / "temporal_bone.json");
+    REQUIRE(course);
+    const lessons::Step blank =
+        locateStep("inner_ear.locate_cochlea_blank", "cochlea", "vestibule", presetId, lessons::CameraView::Anterior);
+    course->lessons.front().steps.push_back(blank);
+    auto checks = app::checkLocateQuestions(*dataset, *course, presets);
+    REQUIRE_MESSAGE(checks, (checks ? "" : checks.error().message));
+    for (const app::LocateCheck& c : *checks) {
+      CAPTURE(c.questionId);
+      CAPTURE(c.problem);
+      if (c.questionId != blank.question.id) {
+        CHECK(c.answerable);
+        CHECK(c.shownPixels >= app::kMinShownPixels);
+        continue;
+      }
+      CHECK(c.pickingPixels > 1000);  // the click on the cochlea's centre picks it: the old check passed
+      CHECK(c.shownPixels < app::kMinShownPixels);
+      CHECK_FALSE(c.answerable);
+      CHECK(c.problem.find("the cochlea is not drawn in its view (anterior, region vestibule") != std::string::npos);
+    }
+  }
 }
 
 TEST_CASE("The skull course's question views show their targets; locate questions pick them at their centres") {

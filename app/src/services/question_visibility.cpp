@@ -1,11 +1,14 @@
 #include "question_visibility.h"
 
+#include <algorithm>
 #include <cmath>
 #include <map>
 
+#include "core/parallel_rows.h"
 #include "course_views.h"
 #include "render/derived_preset.h"
 #include "render/gradient_volume.h"
+#include "render/pick_bounds.h"
 #include "render/scene.h"
 #include "render/structure_pick.h"
 #include "volume/mask.h"
@@ -19,6 +22,46 @@ std::optional<Vec3> centreOf(const LabelMap& labels, std::uint16_t label) {
   auto frame = render::structureFrame(labels, label);
   if (!frame) return std::nullopt;
   return frame->anchorMm;
+}
+
+// Counts, on a grid of every kShownGridStep-th pixel, the pixels that pick the target and, of those
+// and the pixels within kShownRingPixels of them, the ones that draw context (render::contextOpacity
+// ≥ kShownOpacity) — rows on all cores.
+void countShownPixels(const render::SceneVolumes& volumes, const render::RenderSettings& settings,
+                      const render::TransferFunction2D& table, std::uint16_t target, LocateCheck& check) {
+  const auto box = render::pixelsThatCanPick(*volumes.labels, target, nullptr, 0, settings);
+  const int x0 = box ? std::max(0, (*box)[0] - kShownRingPixels) : 0;
+  const int y0 = box ? std::max(0, (*box)[1] - kShownRingPixels) : 0;
+  const int x1 = box ? std::min(settings.width - 1, (*box)[2] + kShownRingPixels) : settings.width - 1;
+  const int y1 = box ? std::min(settings.height - 1, (*box)[3] + kShownRingPixels) : settings.height - 1;
+  if (x1 < x0 || y1 < y0) return;
+  const int cols = (x1 - x0) / kShownGridStep + 1, rows = (y1 - y0) / kShownGridStep + 1;
+  std::vector<char> picks(std::size_t(cols) * std::size_t(rows), 0), shows(picks.size(), 0);
+  forEachRowInParallel(rows, [&](int row) {
+    const int y = y0 + row * kShownGridStep;
+    for (int col = 0; col < cols; ++col) {
+      const int x = x0 + col * kShownGridStep;
+      const std::size_t i = std::size_t(row) * std::size_t(cols) + std::size_t(col);
+      picks[i] = render::pickStructure(volumes, settings, table, x, y).label == target;
+      shows[i] = render::contextOpacity(volumes, settings, table, x, y) >= kShownOpacity;
+    }
+  });
+  // The grid cells within the ring of a picking cell (a square ring: Chebyshev distance).
+  const int ring = kShownRingPixels / kShownGridStep;
+  int picking = 0, shown = 0;
+  for (int row = 0; row < rows; ++row)
+    for (int col = 0; col < cols; ++col) {
+      const std::size_t i = std::size_t(row) * std::size_t(cols) + std::size_t(col);
+      picking += picks[i];
+      if (!shows[i]) continue;
+      bool near = false;
+      for (int r = std::max(0, row - ring); r <= std::min(rows - 1, row + ring) && !near; ++r)
+        for (int c = std::max(0, col - ring); c <= std::min(cols - 1, col + ring) && !near; ++c)
+          near = picks[std::size_t(r) * std::size_t(cols) + std::size_t(c)] != 0;
+      shown += near;
+    }
+  check.pickingPixels = picking * kShownGridStep * kShownGridStep;
+  check.shownPixels = shown * kShownGridStep * kShownGridStep;
 }
 
 }  // namespace
@@ -82,12 +125,22 @@ Result<std::vector<LocateCheck>> checkLocateQuestions(const Dataset& dataset, co
                                          &*gradients};
       const render::TransferFunction2D table = render::shadingTable(settings->preset);
       const render::PickResult clicked = render::pickStructure(volumes, *settings, table, (*px)[0], (*px)[1]);
-      check.answerable = clicked.label == target->label;
-      if (!check.answerable) {
+      const bool picksTarget = clicked.label == target->label;
+      if (!picksTarget) {
         const Structure* picked = clicked.hit ? dataset.findStructureByLabel(clicked.label) : nullptr;
         check.problem = "a click on the " + target->id + "'s centre in its view (" + viewName + ", region " +
                         region->id + ") picks " + (picked ? "the " + picked->id : std::string("nothing"));
+        out.push_back(check);
+        continue;
       }
+      countShownPixels(volumes, *settings, table, target->label, check);
+      check.answerable = check.shownPixels >= kMinShownPixels;
+      if (!check.answerable)
+        check.problem = "the " + target->id + " is not drawn in its view (" + viewName + ", region " + region->id +
+                        ", preset " + settings->preset.id.value_or(scene.presetId) + "): " + std::to_string(check.shownPixels) + " of the " +
+                        std::to_string(check.pickingPixels) + " pixels that pick it show it (at least " +
+                        std::to_string(kMinShownPixels) +
+                        " must): choose a view, region or preset in which it is seen, or raise the preset's t";
       out.push_back(check);
     }
   }

@@ -1,7 +1,8 @@
 // Whether each locate question of a course can be answered in its own view: the view rendered as
 // the terminal draws it (400×300, framed on the region with a margin, the step's preset, camera and
-// clip), a click on the target's centre must pick the target. `course validate` refuses a course
-// that fails it; tests/app/test_question_scenes.cpp checks the shipped courses with the same code.
+// clip), a click on the target's centre must pick the target, and context must be drawn where it
+// picks. `course validate` refuses a course that fails it; tests/app/test_question_scenes.cpp
+// checks the shipped courses with the same code.
 #pragma once
 
 #include <string>
@@ -18,11 +19,29 @@ namespace at::app {
 constexpr int kCheckViewWidth = 400, kCheckViewHeight = 300;
 constexpr double kLocateRegionMargin = 2.5;
 
+// A student must see where she is asked to click. The target is drawn only as context of the
+// region's field (it is not marked), and a preset can fade the context out entirely (a CT preset on
+// plain µCT intensities draws none at any t), yet the pick still finds the target's label along the
+// ray: a click on blackness where one knows it lies would be graded right, and nobody could see
+// where that is. So the picture must draw context — the target, its wall or the bone around it —
+// where the target picks or next to it: a pixel counts where the context's composited opacity
+// reaches kShownOpacity and it picks the target or lies within kShownRingPixels of one that does (a
+// cavity seen through its opening, the orbit from the front, shows its rim around those pixels, not
+// on them). At least kMinShownPixels such pixels of the 400×300 view are needed (counted on every
+// kShownGridStep-th pixel of each axis). The highlighted region's own surface does not count.
+constexpr double kShownOpacity = 0.2;
+constexpr int kShownRingPixels = 6;
+constexpr int kMinShownPixels = 100;
+constexpr int kShownGridStep = 2;
+
 struct LocateCheck {
   std::string path;        // "lessons[3].steps[4].question"
   std::string questionId;
-  bool answerable = false;  // a click on the target's centre picks the target
-  std::string problem;      // when not: what the click picks instead, or why it cannot be made
+  // A click on the target's centre picks the target, and context is drawn where it picks it.
+  bool answerable = false;
+  std::string problem;      // when not: what the click picks instead, why it cannot be made, or that it is not drawn
+  int pickingPixels = 0;    // pixels of the view that pick the target (estimated from the grid)
+  int shownPixels = 0;      // pixels at or next to those that draw context
 };
 
 // Checks every locate question of `course` on `dataset` (one WDT per region structure, on the CPU).

@@ -135,4 +135,10 @@ struct PickResult {
 PickResult pick(const SceneVolumes& scene, const RenderSettings& settings, const TransferFunction2D& table,
                 double x, double y, double threshold = 0.5);
 
+// How much of pixel (x, y) is context: the opacity the context samples (everything but the
+// selected structure's surface) add as the ray caster composites them front to back, 0…1. A pixel
+// where the context is faded out, or lies behind the opaque structure, has ≈ 0.
+double contextOpacity(const SceneVolumes& scene, const RenderSettings& settings, const TransferFunction2D& table,
+                      double x, double y);
+
 }  // namespace at::render
