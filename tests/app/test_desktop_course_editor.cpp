@@ -52,8 +52,10 @@ TEST_CASE("CourseEditor_ScriptedAuthoring_SavesExportsAndPlaysInAnotherDatabase"
       {{"do", "course_question"}, {"question", {{"kind", "name"}, {"prompt", "Name it."}, {"target", "cochlea"},
                                                {"synonyms", {"snail"}}}}},
       {{"do", "course_question"}, {"question", {{"kind", "identify"}, {"prompt", "Which is highlighted?"}, {"target", "stapes"}}}},
-      // A locate question asked on a neighbour's view.
+      // A locate question asked on a neighbour's view (from the front: from above the facial nerve
+      // hides the cochlea's centre, and the editor refuses it).
       {{"do", "select"}, {"structure", "vestibule"}},
+      {{"do", "view"}, {"value", "anterior"}},
       {{"do", "course_question"}, {"scene", true},
        {"question", {{"kind", "locate"}, {"prompt", "Click the cochlea."}, {"target", "cochlea"}, {"tolerance_mm", 0.5}}}},
       // A mistake, flagged by its field path, then removed.
@@ -324,4 +326,36 @@ TEST_CASE("CourseEditor_AnEmptyDefaultLesson_DoesNotBlockSave") {
   auto refused = test::runHeadless(nothing, start);
   CHECK(refused.exitCode != 0);
   CHECK(refused.messages.find("no_such_course") != std::string::npos);
+}
+
+// An instructor captures a locate question in a view that draws nothing but the highlighted region
+// (the bare view): the cochlea lies behind blackness, so the editor refuses it, names why, and the
+// draft is unchanged; in the WDT view of the same region it is added.
+TEST_CASE("CourseEditor_LocateQuestionInAViewThatDrawsNothingWhereItsTargetIs_IsRefused") {
+  test::TempDir author("at-author");
+  const json locate = {{"do", "course_question"},
+                       {"scene", true},
+                       {"question", {{"kind", "locate"}, {"prompt", "Click the cochlea."}, {"target", "cochlea"}}}};
+  const json bare = {{"actions", json::array({
+      {{"do", "course_new"}, {"id", "blank_quiz"}, {"title", "Blank quiz"}},
+      {{"do", "select"}, {"structure", "vestibule"}},
+      {{"do", "view"}, {"value", "anterior"}},
+      {{"do", "course_question"}, {"question", {{"kind", "name"}, {"prompt", "Name it."}, {"target", "vestibule"}}}},
+      {{"do", "mode"}, {"value", "bare"}},
+      locate,
+  })}};
+  auto refused = test::runHeadless(bare, on(author / "a.db"));
+  CAPTURE(refused.messages);
+  CHECK(refused.exitCode != 0);
+  CHECK(refused.messages.find("question not added: the cochlea is not drawn in its view (anterior, region vestibule") !=
+        std::string::npos);
+  // The draft still ends with the name question: nothing was added.
+  CHECK(stepKinds(lastEdit(refused)) == std::vector<std::string>{"name:vestibule"});
+
+  json wdt = bare;
+  wdt["actions"][4]["value"] = "wdt";
+  auto added = test::runHeadless(wdt, on(author / "b.db"));
+  CAPTURE(added.messages);
+  CHECK(added.exitCode == 0);
+  CHECK(stepKinds(lastEdit(added)) == std::vector<std::string>{"name:vestibule", "locate:cochlea"});
 }

@@ -67,6 +67,11 @@ DesktopModel::DesktopModel(LearningSession& session, const render::PresetLibrary
                                                                                   scene.camera, scene.clip, {}};
                                               if (captured) showStructureWith(shown, *captured);
                                               else showLessonStructure(shown);
+                                            },
+                                            // On the dataset as shown now (its labels as edited): nothing kept.
+                                            [this](const quiz::Question& q, const lessons::QuestionScene& scene,
+                                                   const render::Preset& preset) {
+                                              return LocateViewChecker(*dataset_).check(q, scene, preset);
                                             });
   scheduler_.setViewPixels(layout_.viewPixelsW(), layout_.viewPixelsH());
   classEvents_ = std::make_unique<BackgroundOutboxSender>(session_.database(), std::chrono::seconds(5));

@@ -66,82 +66,94 @@ void countShownPixels(const render::SceneVolumes& volumes, const render::RenderS
 
 }  // namespace
 
+LocateViewChecker::LocateViewChecker(const Dataset& dataset) : dataset_(dataset) {}
+
+LocateViewChecker::~LocateViewChecker() = default;
+
+const render::IntensityLevels& LocateViewChecker::levels() {
+  if (!levels_) levels_ = render::summariseIntensities(dataset_.volume);
+  return *levels_;
+}
+
+Result<LocateCheck> LocateViewChecker::check(const quiz::Question& question, const lessons::QuestionScene& scene,
+                                             const render::Preset& preset) {
+  LocateCheck check;
+  check.questionId = question.id;
+  const Structure* region = dataset_.findStructure(scene.structure);
+  const Structure* target = dataset_.findStructure(question.target);
+  if (!region || !target)
+    return fail("no structure '" + (region ? question.target : scene.structure) + "' in dataset '" + dataset_.id + "'");
+  if (!gradients_) gradients_ = render::computeGradientVolume(dataset_.volume);
+  auto params = render::wdtParamsFor(preset);
+  if (!params) return tl::unexpected(params.error());
+  // One field per region and preset (the preset sets the field's weights).
+  const std::string fieldKey = region->id + "\n" + preset.id.value_or(preset.name);
+  if (!fields_.count(fieldKey)) {
+    auto wdt = computeWdt(dataset_.volume, structureMask(dataset_.labels, region->label), *params);
+    if (!wdt) return tl::unexpected(withContext("field of '" + region->id + "'", wdt.error()));
+    fields_[fieldKey] = std::move(wdt->field.distances);
+  }
+  const FloatVolume& field = fields_.at(fieldKey);
+  auto frame = render::structureFrame(dataset_.labels, region->label);
+  const auto centre = centreOf(dataset_.labels, target->label);
+  if (!frame || !centre) {
+    check.problem = "the target or its region has no voxels";
+    return check;
+  }
+  render::ViewRequest request;
+  request.width = kCheckViewWidth;
+  request.height = kCheckViewHeight;
+  const std::string viewName = lessons::toString(scene.view);
+  request.view = viewName;
+  request.margin = kLocateRegionMargin;
+  // The view (and its field's distance unit) as play and the desktop show it.
+  auto settings = stepViewSettings(preset, *frame, request, scene.camera, scene.clip, &field, dataset_.volume);
+  if (!settings) return tl::unexpected(settings.error());
+  const auto px = settings->camera.project(*centre, kCheckViewWidth, kCheckViewHeight);
+  if (!px || (*px)[0] < 0 || (*px)[0] >= kCheckViewWidth || (*px)[1] < 0 || (*px)[1] >= kCheckViewHeight) {
+    check.problem = "the " + target->id + "'s centre is outside the view (" + viewName + ")";
+    return check;
+  }
+  const render::SceneVolumes volumes{&dataset_.volume, &dataset_.labels, &field, region->label, &*gradients_};
+  const render::TransferFunction2D table = render::shadingTable(settings->preset);
+  const render::PickResult clicked = render::pickStructure(volumes, *settings, table, (*px)[0], (*px)[1]);
+  if (clicked.label != target->label) {
+    const Structure* picked = clicked.hit ? dataset_.findStructureByLabel(clicked.label) : nullptr;
+    check.problem = "a click on the " + target->id + "'s centre in its view (" + viewName + ", region " + region->id +
+                    ") picks " + (picked ? "the " + picked->id : std::string("nothing"));
+    return check;
+  }
+  countShownPixels(volumes, *settings, table, target->label, check);
+  check.answerable = check.shownPixels >= kMinShownPixels;
+  if (!check.answerable)
+    check.problem = "the " + target->id + " is not drawn in its view (" + viewName + ", region " + region->id +
+                    ", preset " + preset.id.value_or(scene.presetId) + "): " + std::to_string(check.shownPixels) +
+                    " pixels at or next to the " + std::to_string(check.pickingPixels) +
+                    " that pick it draw anything (at least " + std::to_string(kMinShownPixels) +
+                    " must): choose a view, region or preset in which it is seen, or raise the preset's t";
+  return check;
+}
+
 Result<std::vector<LocateCheck>> checkLocateQuestions(const Dataset& dataset, const lessons::Course& course,
                                                       const render::PresetLibrary& presets) {
   std::vector<LocateCheck> out;
-  std::optional<render::IntensityLevels> levels;
-  std::optional<render::GradientVolume> gradients;
-  std::map<std::string, FloatVolume> fields;
+  LocateViewChecker checker(dataset);
   for (std::size_t li = 0; li < course.lessons.size(); ++li) {
     const lessons::Lesson& lesson = course.lessons[li];
     for (std::size_t si = 0; si < lesson.steps.size(); ++si) {
       const lessons::Step& step = lesson.steps[si];
       if (step.kind != lessons::StepKind::Question || step.question.kind != quiz::QuestionKind::Locate) continue;
-      if (!levels) levels = render::summariseIntensities(dataset.volume);
-      if (!gradients) gradients = render::computeGradientVolume(dataset.volume);
-      LocateCheck check;
-      check.path = "lessons[" + std::to_string(li) + "].steps[" + std::to_string(si) + "].question";
-      check.questionId = step.question.id;
+      const std::string path = "lessons[" + std::to_string(li) + "].steps[" + std::to_string(si) + "].question";
       const lessons::QuestionScene scene = lessons::sceneFor(step);
-      const Structure* region = dataset.findStructure(scene.structure);
-      const Structure* target = dataset.findStructure(step.question.target);
-      if (!region || !target) {
-        return fail(check.path + ": no structure '" + (region ? step.question.target : scene.structure) +
+      if (!dataset.findStructure(scene.structure) || !dataset.findStructure(step.question.target))
+        return fail(path + ": no structure '" + (dataset.findStructure(scene.structure) ? step.question.target : scene.structure) +
                     "' in dataset '" + dataset.id + "'");
-      }
-      auto preset = presetForStep(presets, region->id, scene.presetId, *levels);
-      if (!preset) return tl::unexpected(withContext(check.path, preset.error()));
-      if (!fields.count(region->id)) {
-        auto params = render::wdtParamsFor(*preset);
-        if (!params) return tl::unexpected(withContext(check.path, params.error()));
-        auto wdt = computeWdt(dataset.volume, structureMask(dataset.labels, region->label), *params);
-        if (!wdt) return tl::unexpected(withContext(check.path + ": field of '" + region->id + "'", wdt.error()));
-        fields[region->id] = std::move(wdt->field.distances);
-      }
-      auto frame = render::structureFrame(dataset.labels, region->label);
-      const auto centre = centreOf(dataset.labels, target->label);
-      if (!frame || !centre) {
-        check.problem = "the target or its region has no voxels";
-        out.push_back(check);
-        continue;
-      }
-      render::ViewRequest request;
-      request.width = kCheckViewWidth;
-      request.height = kCheckViewHeight;
-      const std::string viewName = lessons::toString(scene.view);
-      request.view = viewName;
-      request.margin = kLocateRegionMargin;
-      // The view (and its field's distance unit) as play and the desktop show it.
-      auto settings = stepViewSettings(*preset, *frame, request, scene.camera, scene.clip, &fields[region->id],
-                                       dataset.volume);
-      if (!settings) return tl::unexpected(withContext(check.path, settings.error()));
-      const auto px = settings->camera.project(*centre, kCheckViewWidth, kCheckViewHeight);
-      if (!px || (*px)[0] < 0 || (*px)[0] >= kCheckViewWidth || (*px)[1] < 0 || (*px)[1] >= kCheckViewHeight) {
-        check.problem = "the " + target->id + "'s centre is outside the view (" + viewName + ")";
-        out.push_back(check);
-        continue;
-      }
-      const render::SceneVolumes volumes{&dataset.volume, &dataset.labels, &fields[region->id], region->label,
-                                         &*gradients};
-      const render::TransferFunction2D table = render::shadingTable(settings->preset);
-      const render::PickResult clicked = render::pickStructure(volumes, *settings, table, (*px)[0], (*px)[1]);
-      const bool picksTarget = clicked.label == target->label;
-      if (!picksTarget) {
-        const Structure* picked = clicked.hit ? dataset.findStructureByLabel(clicked.label) : nullptr;
-        check.problem = "a click on the " + target->id + "'s centre in its view (" + viewName + ", region " +
-                        region->id + ") picks " + (picked ? "the " + picked->id : std::string("nothing"));
-        out.push_back(check);
-        continue;
-      }
-      countShownPixels(volumes, *settings, table, target->label, check);
-      check.answerable = check.shownPixels >= kMinShownPixels;
-      if (!check.answerable)
-        check.problem = "the " + target->id + " is not drawn in its view (" + viewName + ", region " + region->id +
-                        ", preset " + settings->preset.id.value_or(scene.presetId) + "): " + std::to_string(check.shownPixels) + " of the " +
-                        std::to_string(check.pickingPixels) + " pixels that pick it show it (at least " +
-                        std::to_string(kMinShownPixels) +
-                        " must): choose a view, region or preset in which it is seen, or raise the preset's t";
-      out.push_back(check);
+      auto preset = presetForStep(presets, scene.structure, scene.presetId, checker.levels());
+      if (!preset) return tl::unexpected(withContext(path, preset.error()));
+      auto check = checker.check(step.question, scene, *preset);
+      if (!check) return tl::unexpected(withContext(path, check.error()));
+      check->path = path;
+      out.push_back(std::move(*check));
     }
   }
   return out;

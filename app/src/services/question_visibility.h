@@ -5,11 +5,15 @@
 // checks the shipped courses with the same code.
 #pragma once
 
+#include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "core/error.h"
 #include "lessons/curriculum.h"
+#include "render/derived_preset.h"
+#include "render/gradient_volume.h"
 #include "render/preset.h"
 #include "volume/structure.h"
 
@@ -42,6 +46,30 @@ struct LocateCheck {
   std::string problem;      // when not: what the click picks instead, why it cannot be made, or that it is not drawn
   int pickingPixels = 0;    // pixels of the view that pick the target (estimated from the grid)
   int shownPixels = 0;      // pixels at or next to those that draw context
+};
+
+// Checks locate questions on one dataset (which outlives it), keeping what the checks share — the
+// intensity summary, the gradients, each region's field — between them.
+class LocateViewChecker {
+ public:
+  explicit LocateViewChecker(const Dataset& dataset);
+  ~LocateViewChecker();
+  LocateViewChecker(const LocateViewChecker&) = delete;
+  LocateViewChecker& operator=(const LocateViewChecker&) = delete;
+
+  // `question` asked on `scene` drawn with `preset` (the course editor's captured one, or the
+  // step's as presetForStep finds it). `path` is left empty. Errors: the region or target is not
+  // in the dataset, the preset's field cannot be computed (one WDT per region and preset, CPU).
+  Result<LocateCheck> check(const quiz::Question& question, const lessons::QuestionScene& scene,
+                            const render::Preset& preset);
+  // The dataset's intensity summary (for presets derived from it).
+  const render::IntensityLevels& levels();
+
+ private:
+  const Dataset& dataset_;
+  std::optional<render::IntensityLevels> levels_;
+  std::optional<render::GradientVolume> gradients_;
+  std::map<std::string, FloatVolume> fields_;
 };
 
 // Checks every locate question of `course` on `dataset` (one WDT per region structure, on the CPU).

@@ -50,8 +50,13 @@ lessons::Course storedForm(const lessons::Course& draft) {
 
 }  // namespace
 
-CourseEditor::CourseEditor(LearningSession& session, const render::PresetLibrary& library, EventSink events, Preview preview)
-    : session_(session), library_(library), events_(std::move(events)), preview_(std::move(preview)) {}
+CourseEditor::CourseEditor(LearningSession& session, const render::PresetLibrary& library, EventSink events, Preview preview,
+                           LocateViewCheck checkLocate)
+    : session_(session),
+      library_(library),
+      events_(std::move(events)),
+      preview_(std::move(preview)),
+      checkLocate_(std::move(checkLocate)) {}
 
 Result<lessons::Lesson*> CourseEditor::lesson() {
   if (!draft_) return fail("no course is being edited: make a new one or open one");
@@ -217,10 +222,15 @@ Status CourseEditor::addQuestion(quiz::Question question, const std::optional<Ca
   if (scene) {
     lessons::QuestionScene s;
     s.structure = scene->structure;
-    s.presetId = capturePreset(*scene);
     s.view = scene->view;
     s.camera = scene->camera;
     s.clip = scene->clip;
+    if (step.question.kind == quiz::QuestionKind::Locate && checkLocate_) {
+      auto check = checkLocate_(step.question, s, scene->preset);
+      if (!check) return tl::unexpected(withContext("question not added", check.error()));
+      if (!check->answerable) return fail("question not added: " + check->problem);
+    }
+    s.presetId = capturePreset(*scene);
     step.scene = s;
   }
   l->steps.push_back(std::move(step));

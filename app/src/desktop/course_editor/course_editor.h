@@ -18,6 +18,7 @@
 #include "core/error.h"
 #include "course_packages.h"
 #include "learning_session.h"
+#include "question_visibility.h"
 #include "lessons/curriculum.h"
 #include "render/preset.h"
 
@@ -38,9 +39,17 @@ class CourseEditor {
   // with the preset `captured` when the draft holds it, else the preset id as a lesson finds it.
   using Preview = std::function<void(const lessons::QuestionScene& scene, const std::optional<render::Preset>& captured)>;
 
+  // Whether a locate question can be answered in the view captured for it (question_visibility.h),
+  // on the dataset on screen.
+  using LocateViewCheck = std::function<Result<LocateCheck>(const quiz::Question& question,
+                                                            const lessons::QuestionScene& scene,
+                                                            const render::Preset& preset)>;
+
   // `session` and `library` outlive the editor. `events` receives course_edited, course_saved,
-  // course_exported and course_imported.
-  CourseEditor(LearningSession& session, const render::PresetLibrary& library, EventSink events, Preview preview);
+  // course_exported and course_imported. `checkLocate` (may be empty: no check) is asked before a
+  // locate question is added.
+  CourseEditor(LearningSession& session, const render::PresetLibrary& library, EventSink events, Preview preview,
+               LocateViewCheck checkLocate = {});
 
   bool windowOpen = false;
   bool editing() const { return draft_.has_value(); }
@@ -65,6 +74,8 @@ class CourseEditor {
   // the course as "<lesson id>.show_<n>" [course_show, course_question].
   Status addShow(const Capture& capture, const std::string& title, const std::string& text);
   // `question.id` empty: "<lesson id>.q<n>". A locate question needs `scene` (a neighbour's view).
+  // A locate question is refused (nothing changes) when its captured view cannot be answered in:
+  // the click on its target's centre picks something else, or nothing is drawn where it picks.
   Status addQuestion(quiz::Question question, const std::optional<Capture>& scene);
   Status moveStep(std::size_t from, std::size_t to);
   Status duplicateStep(std::size_t index);  // the copy follows it; a question's copy gets a new id
@@ -105,6 +116,7 @@ class CourseEditor {
   const render::PresetLibrary& library_;
   EventSink events_;
   Preview preview_;
+  LocateViewCheck checkLocate_;
   std::optional<lessons::Course> draft_;
   std::optional<int> storedVersion_;                  // of the course opened, or saved
   std::map<std::string, render::Preset> captured_;    // presets of this draft by id
