@@ -145,3 +145,46 @@ TEST_CASE("A test process killed while its own PostgreSQL cluster runs leaves no
   CHECK(within(60, [&] { return ::kill(serverPid, 0) != 0 && errno == ESRCH; }));
   CHECK(within(60, [&] { return !fs::exists(folder); }));
 }
+
+// The cluster the CTest fixture shares (tests/support/test_postgres.sh) outlives the script that
+// starts it; a CTest run killed before its stop test would leave it running. The child here plays
+// CTest: it runs the start script (its parent, as CTest is), checks that the server stays up while
+// it lives, and is killed.
+TEST_CASE("A CTest run killed while the fixture's shared PostgreSQL cluster runs leaves no server and no folder behind") {
+  TempDir scratch("at-fixture");
+  const fs::path listed = scratch.path() / "cluster.txt";
+  const fs::path script = sourceDir() / "tests" / "support" / "test_postgres.sh";
+  const std::string report = reportOfKilledChild([&](auto die) {
+    const pid_t start = ::fork();
+    if (start == 0) {
+      const int null = ::open("/dev/null", O_WRONLY);
+      ::dup2(null, STDOUT_FILENO);
+      ::execlp("bash", "bash", script.c_str(), "start", listed.c_str(), static_cast<char*>(nullptr));
+      ::_exit(127);
+    }
+    int status = 0;
+    ::waitpid(start, &status, 0);
+    if (!fs::exists(listed)) die("skip the start script made no cluster (exit " + std::to_string(WEXITSTATUS(status)) + ")");
+    const std::string folder = fileText(listed).substr(0, fileText(listed).find('\n'));
+    std::ifstream pidFile(fs::path(folder) / "data" / "postmaster.pid");
+    std::string serverPid;
+    std::getline(pidFile, serverPid);
+    // The watcher polls every 2 s: the server must still be up after a few polls.
+    std::this_thread::sleep_for(std::chrono::seconds(5));
+    const bool alive = ::kill(pid_t(std::stol(serverPid)), 0) == 0;
+    die(folder + "\n" + serverPid + "\n" + (alive ? "alive" : "stopped early"));
+  });
+  if (report.rfind("skip ", 0) == 0) {
+    skipf("the killed CTest run's cluster: %s", report.c_str() + 5);
+    return;
+  }
+  const auto first = report.find('\n'), second = report.find('\n', first + 1);
+  REQUIRE(second != std::string::npos);
+  const fs::path folder = report.substr(0, first);
+  const pid_t serverPid = pid_t(std::stol(report.substr(first + 1, second - first - 1)));
+  REQUIRE(serverPid > 1);
+  CHECK(report.substr(second + 1) == "alive");
+  CHECK(within(60, [&] { return ::kill(serverPid, 0) != 0 && errno == ESRCH; }));
+  CHECK(within(60, [&] { return !fs::exists(folder); }));
+  CHECK(within(10, [&] { return !fs::exists(listed); }));
+}
