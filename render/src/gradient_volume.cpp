@@ -2,26 +2,14 @@
 
 #include <algorithm>
 #include <cmath>
-#include <thread>
+
+#include "core/parallel_rows.h"
 
 namespace at::render {
 
 namespace {
 
 constexpr float kBinomial[5] = {1.0f / 16, 4.0f / 16, 6.0f / 16, 4.0f / 16, 1.0f / 16};
-
-// Runs body(z0, z1) over [0, n) split into contiguous ranges, one per thread.
-template <class F>
-void parallelSlabs(int n, int threads, F body) {
-  threads = std::clamp(threads, 1, std::max(1, n));
-  if (threads == 1) {
-    body(0, n);
-    return;
-  }
-  std::vector<std::thread> pool;
-  for (int t = 0; t < threads; ++t) pool.emplace_back(body, n * t / threads, n * (t + 1) / threads);
-  for (std::thread& th : pool) th.join();
-}
 
 std::int16_t snorm16(float v) { return std::int16_t(std::lround(std::clamp(v, -1.0f, 1.0f) * 32767.0f)); }
 
@@ -31,12 +19,11 @@ GradientVolume computeGradientVolume(const Volume& volume, int threads) {
   GradientVolume out;
   out.grid = volume.geometry;
   if (volume.empty()) return out;
-  if (threads <= 0) threads = int(std::max(1u, std::thread::hardware_concurrency()));
   const Dims& d = volume.dims();
   const std::size_t slice = std::size_t(d.x) * std::size_t(d.y);
   // Smoothed along x and y, slice by slice.
   std::vector<float> xy(d.count());
-  parallelSlabs(d.z, threads, [&](int k0, int k1) {
+  forEachBlockInParallel(d.z, [&](int k0, int k1) {
     std::vector<float> row(std::size_t(d.x) * std::size_t(d.y));
     for (int k = k0; k < k1; ++k) {
       const std::int16_t* src = volume.voxels.data() + slice * std::size_t(k);
@@ -56,13 +43,13 @@ GradientVolume computeGradientVolume(const Volume& volume, int threads) {
           dst[std::size_t(j) * std::size_t(d.x) + std::size_t(i)] = s;
         }
     }
-  });
+  }, threads);
   // Smoothed along z on the fly (a window of three smoothed slices), then central differences.
   out.texels.resize(d.count());
   const double sx = volume.geometry.spacingMm[0], sy = volume.geometry.spacingMm[1], sz = volume.geometry.spacingMm[2];
   const Mat3& dir = volume.geometry.direction;
   const double voxelMm = std::cbrt(sx * sy * sz);
-  parallelSlabs(d.z, threads, [&](int k0, int k1) {
+  forEachBlockInParallel(d.z, [&](int k0, int k1) {
     std::vector<float> window[3];
     const auto smoothZ = [&](int k, std::vector<float>& dst) {
       dst.resize(slice);
@@ -107,7 +94,7 @@ GradientVolume computeGradientVolume(const Volume& volume, int threads) {
       std::swap(window[0], window[1]);
       std::swap(window[1], window[2]);
     }
-  });
+  }, threads);
   return out;
 }
 

@@ -5,8 +5,9 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <thread>
 #include <vector>
+
+#include "core/parallel_rows.h"
 
 namespace at::segment {
 
@@ -47,16 +48,6 @@ void transformLine(double* data, std::size_t stride, int n, double s, std::vecto
   }
 }
 
-// Runs body(i0, i1) over [0, n) split among the cores.
-template <class Body>
-void parallelRange(int n, Body body) {
-  const int threads = std::max(1, std::min(n, int(std::thread::hardware_concurrency())));
-  std::vector<std::thread> team;
-  for (int t = 1; t < threads; ++t) team.emplace_back([&, t] { body(n * t / threads, n * (t + 1) / threads); });
-  body(0, n / threads);
-  for (std::thread& t : team) t.join();
-}
-
 }  // namespace
 
 FloatVolume distanceToMask(const Mask& mask) {
@@ -67,7 +58,7 @@ FloatVolume distanceToMask(const Mask& mask) {
   const std::size_t nx = std::size_t(d.x), nxy = nx * std::size_t(d.y);
   // x lines (one per y, z), then y lines (per x, z), then z lines (per x, y); lines of one pass are
   // independent, so they are split among threads by their outer index.
-  parallelRange(d.z, [&](int z0, int z1) {
+  forEachBlockInParallel(d.z, [&](int z0, int z1) {
     std::vector<double> f, zz;
     std::vector<int> v;
     for (int z = z0; z < z1; ++z)
@@ -75,7 +66,7 @@ FloatVolume distanceToMask(const Mask& mask) {
     for (int z = z0; z < z1; ++z)
       for (int x = 0; x < d.x; ++x) transformLine(&sq[std::size_t(x) + nxy * z], nx, d.y, g.spacingMm[1], f, v, zz);
   });
-  parallelRange(d.y, [&](int y0, int y1) {
+  forEachBlockInParallel(d.y, [&](int y0, int y1) {
     std::vector<double> f, zz;
     std::vector<int> v;
     for (int y = y0; y < y1; ++y)

@@ -26,3 +26,28 @@ TEST_CASE("ParallelRows_EveryRowRunsOnceAndAllAreDoneOnReturn") {
     }
   }
 }
+
+TEST_CASE("ParallelBlocks_CoverEveryItemOnceInContiguousBlocks_NoMoreThanAsked") {
+  const int hardware = int(std::max(1u, std::thread::hardware_concurrency()));
+  for (int n : {0, 1, 2, 7, 1000})
+    for (int maxThreads : {0, 1, 3}) {
+      CAPTURE(n);
+      CAPTURE(maxThreads);
+      std::vector<std::atomic<int>> runs(static_cast<std::size_t>(n));
+      std::atomic<int> blocks{0};
+      forEachBlockInParallel(
+          n,
+          [&](int begin, int end) {
+            CHECK(0 <= begin);
+            CHECK(begin < end);  // no empty block is handed out
+            CHECK(end <= n);
+            ++blocks;
+            for (int i = begin; i < end; ++i) runs[std::size_t(i)]++;
+          },
+          maxThreads);
+      for (int i = 0; i < n; ++i) CHECK(runs[std::size_t(i)] == 1);
+      const int allowed = maxThreads > 0 ? std::min(maxThreads, hardware) : hardware;
+      CHECK(blocks <= std::max(0, std::min(n, allowed)));
+      if (n > 0) CHECK(blocks >= 1);
+    }
+}

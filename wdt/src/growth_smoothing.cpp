@@ -5,7 +5,8 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
-#include <thread>
+
+#include "core/parallel_rows.h"
 
 namespace at::wdt {
 
@@ -96,10 +97,7 @@ std::vector<float> edgePreservingSmoothed(const Volume& volume, float sigmaVoxel
         }
       }
   };
-  const int threads = std::clamp(int(std::thread::hardware_concurrency()), 1, 16);
-  std::vector<std::thread> pool;
-  for (int t = 0; t < threads; ++t) pool.emplace_back(slab, d.z * t / threads, d.z * (t + 1) / threads);
-  for (std::thread& t : pool) t.join();
+  forEachBlockInParallel(d.z, slab, 16);
   return out;
 }
 

@@ -2,9 +2,9 @@
 #include <algorithm>
 #include <atomic>
 #include <string>
-#include <thread>
 #include <vector>
 
+#include "core/parallel_rows.h"
 #include "wdt/huge_pages.h"
 #include "wdt/problem.h"
 #include "wdt/stencil.h"
@@ -12,16 +12,6 @@
 namespace at {
 
 namespace {
-
-// Runs body(k0, k1) over [0, n) split among the cores.
-template <class Body>
-void parallelSlices(int n, Body body) {
-  const int threads = std::max(1, std::min(n, int(std::thread::hardware_concurrency())));
-  std::vector<std::thread> team;
-  for (int t = 1; t < threads; ++t) team.emplace_back([&, t] { body(n * t / threads, n * (t + 1) / threads); });
-  body(0, n / threads);
-  for (std::thread& t : team) t.join();
-}
 
 // The full-resolution problem arrays over n voxels; returns whether any seed was set. Restrict
 // parameters: byte stores may alias anything, and without them every iteration reloads every
@@ -78,7 +68,7 @@ Result<WdtProblem> prepareWdtProblem(const Volume& volume, const Mask& seeds, co
     wdt::resizeOnHugePages(problem.seeds, d.count());
     const std::size_t slice = std::size_t(d.x) * d.y;
     std::atomic<bool> anySeed{false};
-    parallelSlices(d.z, [&](int k0, int k1) {
+    forEachBlockInParallel(d.z, [&](int k0, int k1) {
       const std::size_t i0 = slice * k0, n = slice * (k1 - k0);
       if (densityAndSeeds(volume.voxels.data() + i0, seeds.voxels.data() + i0, lut.data(),
                           problem.density.data() + i0, problem.seeds.data() + i0, n))

@@ -1,8 +1,10 @@
-// Work split into rows (of an image, of a picture's pixels, of a volume's slices) run on all cores.
+// Work split into rows (of an image, of a picture's pixels, of a volume's slices) or into contiguous
+// blocks (slabs of a volume), run on all cores.
 #pragma once
 
 #include <algorithm>
 #include <atomic>
+#include <cstdint>
 #include <thread>
 #include <vector>
 
@@ -24,6 +26,23 @@ void forEachRowInParallel(int rows, const RowBody& rowBody) {
   helpers.reserve(std::size_t(threads - 1));
   for (int t = 1; t < threads; ++t) helpers.emplace_back(work);
   work();
+}
+
+// Calls blockBody(begin, end) on [0, n) cut into one contiguous block per thread — up to
+// maxThreads threads (0: hardware_concurrency), never more than n — the calling thread taking the
+// first block. For items that cost alike and whose neighbours share caches (the slabs of a volume,
+// the lines of a separable filter). blockBody may write only what belongs to its block and must not
+// throw; returns when every block is done.
+template <class BlockBody>
+void forEachBlockInParallel(int n, const BlockBody& blockBody, int maxThreads = 0) {
+  if (n <= 0) return;
+  const int hardware = std::max(1, int(std::thread::hardware_concurrency()));
+  const int threads = std::clamp(maxThreads > 0 ? std::min(maxThreads, hardware) : hardware, 1, n);
+  std::vector<std::jthread> helpers;
+  helpers.reserve(std::size_t(threads - 1));
+  for (int t = 1; t < threads; ++t)
+    helpers.emplace_back([&blockBody, n, t, threads] { blockBody(int(std::int64_t(n) * t / threads), int(std::int64_t(n) * (t + 1) / threads)); });
+  blockBody(0, int(std::int64_t(n) / threads));
 }
 
 }  // namespace at

@@ -41,7 +41,8 @@ struct GradientVolume {
   }
 };
 
-// Threads: 0 = hardware concurrency. Deterministic (the same bytes for any thread count).
+// Threads: at most this many (0 = hardware concurrency). Deterministic (the same bytes for any
+// thread count).
 GradientVolume computeGradientVolume(const Volume& volume, int threads = 0);
 
 }  // namespace at::render

@@ -36,6 +36,8 @@
 #include <thread>
 #include <vector>
 
+#include "core/parallel_rows.h"
+
 namespace at {
 
 namespace {
@@ -710,13 +712,7 @@ void blurAxis(std::vector<float>& v, int n, int axis, const std::vector<float>& 
         }
       }
   };
-  if (threads <= 1) {
-    work(0, n);
-    return;
-  }
-  std::vector<std::thread> pool;
-  for (int t = 0; t < threads; ++t) pool.emplace_back(work, n * t / threads, n * (t + 1) / threads);
-  for (std::thread& th : pool) th.join();
+  forEachBlockInParallel(n, work, threads);
 }
 
 Structure makeStructure(const char* id, const char* name, std::array<float, 3> colour, const char* system,
@@ -839,13 +835,7 @@ Dataset makePhantom(const PhantomOptions& options) {
     paintHu(canvas, texture, options.seed, whiteSigmaHu, hu, k0, k1);
   };
   const int threads = std::clamp(int(std::thread::hardware_concurrency()), 1, std::min(16, n));
-  if (threads == 1) {
-    work(0, n);
-  } else {
-    std::vector<std::thread> pool;
-    for (int t = 0; t < threads; ++t) pool.emplace_back(work, n * t / threads, n * (t + 1) / threads);
-    for (std::thread& th : pool) th.join();
-  }
+  forEachBlockInParallel(n, work, threads);
   if (kernel.size() > 1)
     for (int axis = 0; axis < 3; ++axis) blurAxis(hu, n, axis, kernel, threads);
   for (std::size_t v = 0; v < hu.size(); ++v)

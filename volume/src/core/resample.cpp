@@ -3,8 +3,9 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
-#include <thread>
 #include <vector>
+
+#include "core/parallel_rows.h"
 
 namespace at {
 
@@ -47,19 +48,8 @@ Result<LabelMap> resampleLabelsNearest(const LabelMap& source, const Geometry& t
     inside += count;
   };
 
-  const unsigned hardware = std::max(1u, std::thread::hardware_concurrency());
-  const int threads = int(std::min<unsigned>(hardware, unsigned(td.z)));
-  if (threads <= 1 || td.count() < 65536) {
-    work(0, td.z);
-  } else {
-    std::vector<std::thread> pool;
-    const int per = (td.z + threads - 1) / threads;
-    for (int t = 0; t < threads; ++t) {
-      const int begin = t * per, end = std::min(td.z, begin + per);
-      if (begin < end) pool.emplace_back(work, begin, end);
-    }
-    for (auto& thread : pool) thread.join();
-  }
+  // A small grid on the calling thread alone (threads cost more than its work).
+  forEachBlockInParallel(td.z, work, td.count() < 65536 ? 1 : 0);
   if (inside.load() == 0)
     return fail("resampling: the label grid (" + sd.toString() + ", centre " + std::to_string(src.centreMm()[0]) +
                 "," + std::to_string(src.centreMm()[1]) + "," + std::to_string(src.centreMm()[2]) +
