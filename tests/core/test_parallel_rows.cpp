@@ -51,3 +51,15 @@ TEST_CASE("ParallelBlocks_CoverEveryItemOnceInContiguousBlocks_NoMoreThanAsked")
       if (n > 0) CHECK(blocks >= 1);
     }
 }
+
+TEST_CASE("ParallelRows_RunOnNoMoreThreadsThanAsked") {
+  for (int maxThreads : {1, 2}) {
+    CAPTURE(maxThreads);
+    std::vector<std::thread::id> by(200);
+    forEachRowInParallel(
+        200, [&](int row) { by[std::size_t(row)] = std::this_thread::get_id(); }, maxThreads);
+    const std::set<std::thread::id> threads(by.begin(), by.end());
+    CHECK(threads.size() <= std::size_t(maxThreads));
+    if (maxThreads == 1) CHECK(*threads.begin() == std::this_thread::get_id());
+  }
+}

@@ -11,13 +11,14 @@
 namespace at {
 
 // Calls rowBody(row) once for every row in [0, rows), the rows handed out one at a time to up to
-// hardware_concurrency threads (the calling thread among them), so that costly rows and cheap rows
-// share the cores evenly. rowBody may write only what belongs to its row and must not throw;
-// whatever the caller then gathers row by row, in row order, is the same as one thread would have
-// made. Returns when every row is done.
+// hardware_concurrency threads (and at most maxThreads, 0: no limit; the calling thread among
+// them), so that costly rows and cheap rows share the cores evenly. rowBody may write only what
+// belongs to its row and must not throw; whatever the caller then gathers row by row, in row order,
+// is the same as one thread would have made. Returns when every row is done.
 template <class RowBody>
-void forEachRowInParallel(int rows, const RowBody& rowBody) {
-  const int threads = std::clamp(int(std::thread::hardware_concurrency()), 1, std::max(1, rows));
+void forEachRowInParallel(int rows, const RowBody& rowBody, int maxThreads = 0) {
+  const int hardware = std::max(1, int(std::thread::hardware_concurrency()));
+  const int threads = std::clamp(maxThreads > 0 ? std::min(maxThreads, hardware) : hardware, 1, std::max(1, rows));
   std::atomic<int> next{0};
   const auto work = [&] {
     for (int row = next++; row < rows; row = next++) rowBody(row);

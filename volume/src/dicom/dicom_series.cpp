@@ -12,7 +12,6 @@
 #include "volume/dicom_series.h"
 
 #include <algorithm>
-#include <atomic>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
@@ -40,6 +39,7 @@
 #include <openjpeg.h>
 
 #include "../io/load_limits.h"
+#include "core/parallel_rows.h"
 #include "core/printable_text.h"
 #include "core/regular_file.h"
 #include "dicom_support.h"
@@ -654,25 +654,22 @@ Result<LoadedImage> readDicomSeries(const std::string& folder, const ImageLoadOp
 
   // Decode slices in parallel: each worker owns its DCMTK file objects and OpenJPEG codecs.
   const std::size_t sliceVoxels = std::size_t(ref.columns) * std::size_t(ref.rows);
-  std::atomic<std::size_t> next{0};
   std::mutex mutex;  // guards firstError, decoded and the progress callback
   std::optional<std::pair<std::size_t, Error>> firstError;
   std::size_t decoded = 0;
   if (options.progress) options.progress(0, slices.size());
-  auto work = [&]() {
-    for (std::size_t s = next++; s < slices.size(); s = next++) {
-      if (detail::loadCancelled(options)) return;
-      float* out = loaded.image.voxels.data() + std::size_t(stack->sliceOf[s]) * sliceVoxels;
-      auto ok = readSlicePixels(slices[s], out);
-      std::lock_guard lock(mutex);
-      if (!ok && (!firstError || s < firstError->first)) firstError = {s, ok.error()};
-      if (ok && options.progress) options.progress(++decoded, slices.size());
-    }
-  };
-  std::vector<std::thread> pool;
-  for (std::size_t t = 1; t < workers; ++t) pool.emplace_back(work);
-  work();
-  for (std::thread& w : pool) w.join();
+  forEachRowInParallel(
+      int(slices.size()),
+      [&](int row) {
+        if (detail::loadCancelled(options)) return;
+        const std::size_t s = std::size_t(row);
+        float* out = loaded.image.voxels.data() + std::size_t(stack->sliceOf[s]) * sliceVoxels;
+        auto ok = readSlicePixels(slices[s], out);
+        std::lock_guard lock(mutex);
+        if (!ok && (!firstError || s < firstError->first)) firstError = {s, ok.error()};
+        if (ok && options.progress) options.progress(++decoded, slices.size());
+      },
+      int(workers));
   if (detail::loadCancelled(options)) return tl::unexpected(detail::cancelledError(folder));
   if (firstError) return error(firstError->second.message);
   return loaded;
