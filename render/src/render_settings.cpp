@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <functional>
 #include <optional>
 
 namespace at::render {
@@ -204,9 +203,11 @@ struct MarchedSample {
 constexpr double kOpaque = 0.995;
 
 // Walks the ray through pixel (x, y) front to back as the ray caster does (without jitter), giving
-// `visit` each sample that adds opacity; stops when `visit` returns false or the ray leaves the volume.
+// `visit` (bool(const MarchedSample&)) each sample that adds opacity; stops when `visit` returns
+// false or the ray leaves the volume.
+template <class Visit>
 void marchPixel(const SceneVolumes& scene, const RenderSettings& s, const TransferFunction2D& table, double x, double y,
-                const std::function<bool(const MarchedSample&)>& visit) {
+                const Visit& visit) {
   if (!scene.volume || scene.volume->empty()) return;
   const Geometry& g = scene.volume->geometry;
   const Ray ray = s.camera.rayThroughPixel(x, y, s.width, s.height);
@@ -299,7 +300,6 @@ void marchPixel(const SceneVolumes& scene, const RenderSettings& s, const Transf
     if (!visit({p, ijk, double(ac), false})) return;
   }
 }
-
 
 }  // namespace
 
