@@ -36,30 +36,38 @@ void countShownPixels(const render::SceneVolumes& volumes, const render::RenderS
   const int y1 = box ? std::min(settings.height - 1, (*box)[3] + kShownRingPixels) : settings.height - 1;
   if (x1 < x0 || y1 < y0) return;
   const int cols = (x1 - x0) / kShownGridStep + 1, rows = (y1 - y0) / kShownGridStep + 1;
-  std::vector<char> picks(std::size_t(cols) * std::size_t(rows), 0), shows(picks.size(), 0);
+  std::vector<char> picks(std::size_t(cols) * std::size_t(rows), 0);
   forEachRowInParallel(rows, [&](int row) {
-    const int y = y0 + row * kShownGridStep;
-    for (int col = 0; col < cols; ++col) {
-      const int x = x0 + col * kShownGridStep;
-      const std::size_t i = std::size_t(row) * std::size_t(cols) + std::size_t(col);
-      picks[i] = render::pickStructure(volumes, settings, table, x, y).label == target;
-      shows[i] = render::contextOpacity(volumes, settings, table, x, y) >= kShownOpacity;
-    }
+    for (int col = 0; col < cols; ++col)
+      picks[std::size_t(row) * std::size_t(cols) + std::size_t(col)] =
+          render::pickStructure(volumes, settings, table, x0 + col * kShownGridStep, y0 + row * kShownGridStep).label ==
+          target;
   });
-  // The grid cells within the ring of a picking cell (a square ring: Chebyshev distance).
+  // The cells within the ring of a picking cell (a square ring: Chebyshev distance), then which of
+  // them draw context (marched only there).
   const int ring = kShownRingPixels / kShownGridStep;
-  int picking = 0, shown = 0;
+  std::vector<char> near(picks.size(), 0);
   for (int row = 0; row < rows; ++row)
     for (int col = 0; col < cols; ++col) {
-      const std::size_t i = std::size_t(row) * std::size_t(cols) + std::size_t(col);
-      picking += picks[i];
-      if (!shows[i]) continue;
-      bool near = false;
-      for (int r = std::max(0, row - ring); r <= std::min(rows - 1, row + ring) && !near; ++r)
-        for (int c = std::max(0, col - ring); c <= std::min(cols - 1, col + ring) && !near; ++c)
-          near = picks[std::size_t(r) * std::size_t(cols) + std::size_t(c)] != 0;
-      shown += near;
+      if (!picks[std::size_t(row) * std::size_t(cols) + std::size_t(col)]) continue;
+      for (int r = std::max(0, row - ring); r <= std::min(rows - 1, row + ring); ++r)
+        for (int c = std::max(0, col - ring); c <= std::min(cols - 1, col + ring); ++c)
+          near[std::size_t(r) * std::size_t(cols) + std::size_t(c)] = 1;
     }
+  std::vector<char> shows(picks.size(), 0);
+  forEachRowInParallel(rows, [&](int row) {
+    for (int col = 0; col < cols; ++col) {
+      const std::size_t i = std::size_t(row) * std::size_t(cols) + std::size_t(col);
+      if (near[i])
+        shows[i] = render::contextOpacity(volumes, settings, table, x0 + col * kShownGridStep,
+                                          y0 + row * kShownGridStep) >= kShownOpacity;
+    }
+  });
+  int picking = 0, shown = 0;
+  for (std::size_t i = 0; i < picks.size(); ++i) {
+    picking += picks[i];
+    shown += shows[i];
+  }
   check.pickingPixels = picking * kShownGridStep * kShownGridStep;
   check.shownPixels = shown * kShownGridStep * kShownGridStep;
 }
