@@ -303,15 +303,14 @@ void marchPixel(const SceneVolumes& scene, const RenderSettings& s, const Transf
 
 }  // namespace
 
-PickResult pick(const SceneVolumes& scene, const RenderSettings& s, const TransferFunction2D& table, double x,
-                double y, double threshold) {
-  PickResult result;
+PickPair pickAtTwoThresholds(const SceneVolumes& scene, const RenderSettings& s, const TransferFunction2D& table,
+                             double x, double y, double low, double high) {
+  PickPair out;
   double accumulated = 0;
-  marchPixel(scene, s, table, x, y, [&](const MarchedSample& sample) {
-    accumulated += (1 - accumulated) * sample.opacity;
-    if (accumulated < threshold) return true;
+  const auto hitAt = [&](const MarchedSample& sample, PickResult& result) {
     result.hit = true;
     result.pointMm = sample.pointMm;
+    result.accumulatedOpacity = accumulated;
     if (sample.structure) {
       result.label = scene.selected;
     } else if (scene.labels) {
@@ -319,10 +318,22 @@ PickResult pick(const SceneVolumes& scene, const RenderSettings& s, const Transf
       const int i = int(std::lround(ijk[0])), j = int(std::lround(ijk[1])), k = int(std::lround(ijk[2]));
       if (scene.volume->geometry.dims.contains(i, j, k)) result.label = scene.labels->at(i, j, k);
     }
+  };
+  marchPixel(scene, s, table, x, y, [&](const MarchedSample& sample) {
+    accumulated += (1 - accumulated) * sample.opacity;
+    if (!out.low.hit && accumulated >= low) hitAt(sample, out.low);
+    if (accumulated < high) return true;
+    hitAt(sample, out.high);
     return false;
   });
-  result.accumulatedOpacity = accumulated;
-  return result;
+  if (!out.low.hit) out.low.accumulatedOpacity = accumulated;
+  if (!out.high.hit) out.high.accumulatedOpacity = accumulated;
+  return out;
+}
+
+PickResult pick(const SceneVolumes& scene, const RenderSettings& s, const TransferFunction2D& table, double x,
+                double y, double threshold) {
+  return pickAtTwoThresholds(scene, s, table, x, y, threshold, threshold).high;
 }
 
 double contextOpacity(const SceneVolumes& scene, const RenderSettings& settings, const TransferFunction2D& table,

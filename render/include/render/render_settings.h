@@ -135,6 +135,14 @@ struct PickResult {
 PickResult pick(const SceneVolumes& scene, const RenderSettings& settings, const TransferFunction2D& table,
                 double x, double y, double threshold = 0.5);
 
+// pick() at two thresholds (`low` ≤ `high`) from one march: where the ray first shows something
+// and where it turns opaque.
+struct PickPair {
+  PickResult low, high;
+};
+PickPair pickAtTwoThresholds(const SceneVolumes& scene, const RenderSettings& settings,
+                             const TransferFunction2D& table, double x, double y, double low, double high);
+
 // How much of pixel (x, y) is context: the opacity the context samples (everything but the
 // selected structure's surface) add as the ray caster composites them front to back, 0…1. A pixel
 // where the context is faded out, or lies behind the opaque structure, has ≈ 0.
