@@ -1,11 +1,17 @@
 // The desktop's course editor, driven headless through the UI script as an instructor would use
 // it: a course made on the phantom on screen (show steps captured from the view, questions of
 // several kinds, steps duplicated, moved, deleted and previewed, live validation naming the field),
-// saved, exported as a package, opened in another database with Open course…, and played there.
+// saved, exported as a package, opened in another database with Open course…, and played there;
+// and a locate question's view check, which runs on the editor's worker while frames go on.
 #include <doctest/doctest.h>
 
 #include <algorithm>
+#include <atomic>
+#include <chrono>
 #include <cmath>
+#include <condition_variable>
+#include <mutex>
+#include <thread>
 
 #include "cli_checks.h"
 #include "course_views.h"
@@ -358,4 +364,224 @@ TEST_CASE("CourseEditor_LocateQuestionInAViewThatDrawsNothingWhereItsTargetIs_Is
   CAPTURE(added.messages);
   CHECK(added.exitCode == 0);
   CHECK(stepKinds(lastEdit(added)) == std::vector<std::string>{"name:vestibule", "locate:cochlea"});
+}
+
+namespace {
+
+// A locate check whose work waits until the test releases it (or its cancel is set, or 5 s pass),
+// then answers `answerable`: the check a CourseEditor is given, standing in for the view check
+// that takes seconds on a real CT. It notes the thread the work ran on and whether it was
+// released in time.
+struct LatchedCheck {
+  std::mutex mutex;
+  std::condition_variable changed;
+  bool released = false;
+  bool answerable = true;
+  int calls = 0;
+  bool sawCancel = false;
+  bool timedOut = false;
+  std::thread::id workThread;
+
+  void release() {
+    std::lock_guard lock(mutex);
+    released = true;
+    changed.notify_all();
+  }
+  app::CourseEditor::LocateViewCheck check() {
+    return [this](const quiz::Question& question, const lessons::QuestionScene&, const render::Preset&) {
+      ++calls;
+      return [this, id = question.id](const std::atomic<bool>& cancel) -> Result<app::LocateCheck> {
+        std::unique_lock lock(mutex);
+        workThread = std::this_thread::get_id();
+        const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(5);
+        while (!released && !cancel) {
+          if (changed.wait_until(lock, std::min(deadline, std::chrono::steady_clock::now() + std::chrono::milliseconds(5))) ==
+                  std::cv_status::timeout &&
+              std::chrono::steady_clock::now() >= deadline) {
+            timedOut = true;
+            break;
+          }
+        }
+        sawCancel = cancel;
+        app::LocateCheck c;
+        c.questionId = id;
+        c.answerable = answerable;
+        if (!answerable) c.problem = "the cochlea is not drawn in its view (test)";
+        return c;
+      };
+    };
+  }
+};
+
+struct EditorOnPhantom {
+  test::TempDir dir{"at-async-check"};
+  std::unique_ptr<app::LearningSession> session;
+  render::PresetLibrary library{test::sourceDir() / "data" / "presets"};
+  std::vector<json> events;
+  std::unique_ptr<app::CourseEditor> editor;
+
+  explicit EditorOnPhantom(app::CourseEditor::LocateViewCheck check) {
+    auto opened = app::LearningSession::open((dir / "a.db").string());
+    REQUIRE_MESSAGE(opened, (opened ? "" : opened.error().message));
+    session = std::move(*opened);
+    editor = std::make_unique<app::CourseEditor>(
+        *session, library, [this](json e) { events.push_back(std::move(e)); },
+        [](const lessons::QuestionScene&, const std::optional<render::Preset>&) {}, std::move(check));
+    REQUIRE(editor->newCourse("async_quiz", "Async quiz", "phantom"));
+    quiz::Question name;
+    name.kind = quiz::QuestionKind::Name;
+    name.prompt = "Name it.";
+    name.target = "vestibule";
+    REQUIRE(editor->addQuestion(name, std::nullopt));
+  }
+  static quiz::Question locate(const std::string& target) {
+    quiz::Question q;
+    q.kind = quiz::QuestionKind::Locate;
+    q.prompt = "Click the " + target + ".";
+    q.target = target;
+    return q;
+  }
+  static app::CourseEditor::Capture scene() {
+    app::CourseEditor::Capture c;
+    c.structure = "vestibule";
+    c.preset.id = "vestibule_wdt";
+    c.view = lessons::CameraView::Anterior;
+    return c;
+  }
+  std::vector<std::string> steps() const {
+    std::vector<std::string> out;
+    for (const lessons::Step& s : editor->draft().lessons[editor->lessonIndex()].steps)
+      out.push_back(std::string(quiz::toString(s.question.kind)) + ":" + s.question.target);
+    return out;
+  }
+  // Polls as the frames do until the check's result is applied (at most 5 s).
+  void pollUntilChecked() {
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(5);
+    while (editor->checking() && std::chrono::steady_clock::now() < deadline) {
+      editor->poll();
+      std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    }
+    REQUIRE_FALSE(editor->checking());
+  }
+};
+
+double msSince(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+}
+
+}  // namespace
+
+// The locate check runs on the editor's worker: addQuestion returns while the check is still
+// blocked (a synchronous check would hold it until the latch's 5 s ran out), the frames' poll()
+// returns at once meanwhile, the draft is unchanged and stays editable (adding a step is refused so
+// that the order holds), and once released the question asked is appended as the synchronous code
+// appended it; a refused one changes nothing and says why.
+TEST_CASE("CourseEditor_LocateQuestionBeingChecked_DoesNotBlockTheUiThreadAndIsAddedWhenTheCheckEnds") {
+  LatchedCheck latch;
+  EditorOnPhantom on(latch.check());
+  app::CourseEditor& editor = *on.editor;
+
+  const auto asked = std::chrono::steady_clock::now();
+  REQUIRE(editor.addQuestion(EditorOnPhantom::locate("cochlea"), EditorOnPhantom::scene()));
+  CHECK(msSince(asked) < 1000);
+  CHECK(latch.calls == 1);
+  REQUIRE(editor.checking());
+  CHECK_FALSE(test::eventsOf(on.events, "course_question_checking").empty());
+
+  // Frames go on: each poll returns promptly while the check waits; nothing is added yet.
+  for (int frame = 0; frame < 20; ++frame) {
+    const auto start = std::chrono::steady_clock::now();
+    editor.poll();
+    CHECK(msSince(start) < 50);
+    std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  }
+  CHECK(editor.checking());
+  CHECK(on.steps() == std::vector<std::string>{"name:vestibule"});
+  // The draft stays editable; adding another step waits for the check's end.
+  CHECK(editor.setTitle("Renamed while checking", ""));
+  const auto second = editor.addQuestion(EditorOnPhantom::locate("stapes"), EditorOnPhantom::scene());
+  REQUIRE_FALSE(second);
+  CHECK((second.error().kind == ErrorKind::Conflict));
+  CHECK(latch.calls == 1);
+
+  latch.release();
+  on.pollUntilChecked();
+  CHECK_FALSE(latch.timedOut);
+  CHECK(latch.workThread != std::this_thread::get_id());
+  CHECK_FALSE(editor.checkError());
+  CHECK(on.steps() == std::vector<std::string>{"name:vestibule", "locate:cochlea"});
+  const lessons::Step& added = editor.draft().lessons[0].steps.back();
+  CHECK(added.question.id == "async_quiz.lesson_1.q2");
+  REQUIRE(added.scene.has_value());
+  CHECK(added.scene->structure == "vestibule");
+  CHECK(added.scene->presetId == "async_quiz.lesson_1.show_2");
+  CHECK(editor.draft().title == "Renamed while checking");
+  const auto checked = test::eventsOf(on.events, "course_question_checked");
+  REQUIRE(checked.size() == 1);
+  CHECK(checked[0]["added"] == true);
+
+  // A view the check refuses: nothing is added, and the reason is the synchronous check's text.
+  latch.released = false;
+  latch.answerable = false;
+  REQUIRE(editor.addQuestion(EditorOnPhantom::locate("stapes"), EditorOnPhantom::scene()));
+  REQUIRE(editor.checking());
+  latch.release();
+  on.pollUntilChecked();
+  REQUIRE(editor.checkError());
+  CHECK(editor.checkError()->message == "question not added: the cochlea is not drawn in its view (test)");
+  CHECK(on.steps() == std::vector<std::string>{"name:vestibule", "locate:cochlea"});
+}
+
+// The question belongs to the draft it was asked in: a new course started while it is checked drops
+// it (the check is cancelled), and closing the editor while a check waits cancels the work and
+// joins it at once.
+TEST_CASE("CourseEditor_LocateCheckOutlivedByItsDraftOrEditor_IsDroppedAndJoinedCleanly") {
+  LatchedCheck latch;
+  {
+    EditorOnPhantom on(latch.check());
+    REQUIRE(on.editor->addQuestion(EditorOnPhantom::locate("cochlea"), EditorOnPhantom::scene()));
+    REQUIRE(on.editor->newCourse("other_quiz", "", "phantom"));
+    on.pollUntilChecked();
+    CHECK(latch.sawCancel);
+    REQUIRE(on.editor->checkError());
+    CHECK((on.editor->checkError()->kind == ErrorKind::Cancelled));
+    CHECK(on.editor->draft().id == "other_quiz");
+    CHECK(on.editor->draft().lessons[0].steps.empty());
+  }
+  latch.sawCancel = false;
+  EditorOnPhantom on(latch.check());
+  REQUIRE(on.editor->addQuestion(EditorOnPhantom::locate("cochlea"), EditorOnPhantom::scene()));
+  REQUIRE(on.editor->checking());
+  const auto closing = std::chrono::steady_clock::now();
+  on.editor.reset();
+  CHECK(msSince(closing) < 1000);
+  CHECK(latch.sawCancel);
+  CHECK_FALSE(latch.timedOut);
+}
+
+// In the desktop the real view check runs on the editor's worker while the frames go on (the
+// panels are drawn while it runs), the scripted action waits for its result, and the question is
+// added as before.
+TEST_CASE("CourseEditor_LocateQuestionInTheDesktop_IsCheckedWhileFramesGoOn") {
+  test::TempDir author("at-author");
+  int framesWhileChecking = 0;
+  test::HeadlessOptions options = on(author / "a.db");
+  options.drawPanels = [&](app::DesktopModel& model) { framesWhileChecking += model.courseEditor().checking(); };
+  const json script = {{"actions", json::array({
+      {{"do", "course_new"}, {"id", "frames_quiz"}},
+      {{"do", "select"}, {"structure", "vestibule"}},
+      {{"do", "view"}, {"value", "anterior"}},
+      {{"do", "course_question"}, {"scene", true},
+       {"question", {{"kind", "locate"}, {"prompt", "Click the cochlea."}, {"target", "cochlea"}}}},
+      {{"do", "course_show"}, {"title", "After"}, {"text", "added once the check ended"}},
+  })}};
+  auto run = test::runHeadless(script, options);
+  CAPTURE(run.messages);
+  REQUIRE(run.exitCode == 0);
+  CHECK(framesWhileChecking >= 1);
+  const auto checked = test::eventsOf(run, "course_question_checked");
+  REQUIRE(checked.size() == 1);
+  CHECK(checked[0]["added"] == true);
+  MESSAGE("the check took " << checked[0]["ms"].get<double>() << " ms over " << framesWhileChecking << " frames");
+  CHECK(stepKinds(lastEdit(run)) == std::vector<std::string>{"locate:cochlea", "show:vestibule"});
 }

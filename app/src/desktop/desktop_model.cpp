@@ -67,11 +67,8 @@ DesktopModel::DesktopModel(LearningSession& session, const render::PresetLibrary
                                               if (captured) showStructureWith(shown, *captured);
                                               else showLessonStructure(shown);
                                             },
-                                            // On the dataset as shown now (its labels as edited): nothing kept.
                                             [this](const quiz::Question& q, const lessons::QuestionScene& scene,
-                                                   const render::Preset& preset) {
-                                              return LocateViewChecker(*dataset_).check(q, scene, preset);
-                                            });
+                                                   const render::Preset& preset) { return locateCheckWork(q, scene, preset); });
   scheduler_.setViewPixels(layout_.viewPixelsW(), layout_.viewPixelsH());
   classEvents_ = std::make_unique<BackgroundOutboxSender>(session_.database(), std::chrono::seconds(5));
 }
@@ -144,6 +141,8 @@ Status DesktopModel::showDataset(Dataset dataset, const std::string& startStruct
   fields_.reset();  // it refers to the dataset being replaced
   fieldUnits_.reset();  // a running measure reads the volume being replaced
   segment_->stopGrowth();  // it reads the volumes being replaced
+  courses_->stopCheck();    // so does a locate question's check
+  locateChecker_.reset();
   dataset_ = std::move(next);
   gradients_ = render::computeGradientVolume(dataset_->volume);
   ++datasetRevision_;
@@ -255,6 +254,7 @@ void DesktopModel::beginFrame(FieldTarget* target) {
   for (const std::string& line : classEvents_->takeLines()) message(line);
   segment_->poll();
   showEditedLabels();
+  courses_->poll();
   if (!study_->participantActive())  // the participant's trial keeps its dataset
     if (auto imported = imports_->takeDatasetToOpen()) {
       const std::string id = imported->id;

@@ -285,6 +285,14 @@ class DesktopModel {
   // until its field is there and its unit measured (meanwhile the last unit of the same structure).
   render::FieldScale fieldScaleOf(const ExploreState::Shown& shown, const render::StructureFrame& frame) const;
   render::GradientVolume gradients_;
+  // The course editor's locate check on the dataset on screen (desktop_model_course.cpp): the
+  // work to run on the editor's worker for one question. One checker per dataset shown (made at
+  // its first check, dropped with the dataset), sharing gradients_ and keeping regions' fields
+  // between checks; courses_, declared after it, is destroyed first and joins a running check.
+  CourseEditor::LocateCheckWork locateCheckWork(const quiz::Question& question, const lessons::QuestionScene& scene,
+                                                const render::Preset& preset);
+  std::unique_ptr<LocateViewChecker> locateChecker_;
+  std::uint64_t checkerLabelsRevision_ = 0;  // editorLabelsRevision_ when the checker took the labels
   mutable render::ShadingTableCache pickTables_;  // pickAt is const; the cache only saves work
   std::uint64_t datasetRevision_ = 0;
   std::uint64_t editorLabelsRevision_ = 0;  // the editor's labelsRevision() last shown

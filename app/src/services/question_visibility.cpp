@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <map>
 
 #include "core/parallel_rows.h"
@@ -24,20 +25,35 @@ std::optional<Vec3> centreOf(const LabelMap& labels, std::uint16_t label) {
   return frame->anchorMm;
 }
 
+bool isSet(const std::atomic<bool>* flag) { return flag && flag->load(std::memory_order_relaxed); }
+
+// A region's field, as the parameters that make it (what the preset sets of them, at full precision).
+std::string fieldKeyOf(const std::string& regionId, const WdtParams& p) {
+  char text[160];
+  std::snprintf(text, sizeof text, "\n%d %d %.9g %.9g %.9g %d %d %d %d", int(p.rule), int(p.weight), double(p.huMin),
+                double(p.huMax), double(p.baseCost), p.passes, int(p.converge), p.maxPasses, p.downsample);
+  return regionId + text;
+}
+
+tl::unexpected<Error> cancelled() { return fail(ErrorKind::Cancelled, "the locate view check was cancelled"); }
+
 // Counts, on a grid of every kShownGridStep-th pixel, the pixels that pick the target and, of those
 // and the pixels within kShownRingPixels of them, the ones that draw context (render::contextOpacity
-// ≥ kShownOpacity) — rows on all cores.
-void countShownPixels(const render::SceneVolumes& volumes, const render::RenderSettings& settings,
-                      const render::TransferFunction2D& table, std::uint16_t target, LocateCheck& check) {
+// ≥ kShownOpacity) — rows on all cores. False when `cancel` was set meanwhile (the rows left after
+// it are skipped and `check` is not filled in).
+bool countShownPixels(const render::SceneVolumes& volumes, const render::RenderSettings& settings,
+                      const render::TransferFunction2D& table, std::uint16_t target, LocateCheck& check,
+                      const std::atomic<bool>* cancel) {
   const auto box = render::pixelsThatCanPick(*volumes.labels, target, nullptr, 0, settings);
   const int x0 = box ? std::max(0, (*box)[0] - kShownRingPixels) : 0;
   const int y0 = box ? std::max(0, (*box)[1] - kShownRingPixels) : 0;
   const int x1 = box ? std::min(settings.width - 1, (*box)[2] + kShownRingPixels) : settings.width - 1;
   const int y1 = box ? std::min(settings.height - 1, (*box)[3] + kShownRingPixels) : settings.height - 1;
-  if (x1 < x0 || y1 < y0) return;
+  if (x1 < x0 || y1 < y0) return true;
   const int cols = (x1 - x0) / kShownGridStep + 1, rows = (y1 - y0) / kShownGridStep + 1;
   std::vector<char> picks(std::size_t(cols) * std::size_t(rows), 0);
   forEachRowInParallel(rows, [&](int row) {
+    if (isSet(cancel)) return;
     for (int col = 0; col < cols; ++col)
       picks[std::size_t(row) * std::size_t(cols) + std::size_t(col)] =
           render::pickStructure(volumes, settings, table, x0 + col * kShownGridStep, y0 + row * kShownGridStep).label ==
@@ -46,6 +62,7 @@ void countShownPixels(const render::SceneVolumes& volumes, const render::RenderS
   // The cells within the ring of a picking cell (a square ring: Chebyshev distance), then which of
   // them draw context (marched only there).
   const int ring = kShownRingPixels / kShownGridStep;
+  if (isSet(cancel)) return false;
   std::vector<char> near(picks.size(), 0);
   for (int row = 0; row < rows; ++row)
     for (int col = 0; col < cols; ++col) {
@@ -56,6 +73,7 @@ void countShownPixels(const render::SceneVolumes& volumes, const render::RenderS
     }
   std::vector<char> shows(picks.size(), 0);
   forEachRowInParallel(rows, [&](int row) {
+    if (isSet(cancel)) return;
     for (int col = 0; col < cols; ++col) {
       const std::size_t i = std::size_t(row) * std::size_t(cols) + std::size_t(col);
       if (near[i])
@@ -63,6 +81,7 @@ void countShownPixels(const render::SceneVolumes& volumes, const render::RenderS
                                           y0 + row * kShownGridStep) >= kShownOpacity;
     }
   });
+  if (isSet(cancel)) return false;
   int picking = 0, shown = 0;
   for (std::size_t i = 0; i < picks.size(); ++i) {
     picking += picks[i];
@@ -70,13 +89,32 @@ void countShownPixels(const render::SceneVolumes& volumes, const render::RenderS
   }
   check.pickingPixels = picking * kShownGridStep * kShownGridStep;
   check.shownPixels = shown * kShownGridStep * kShownGridStep;
+  return true;
 }
 
 }  // namespace
 
 LocateViewChecker::LocateViewChecker(const Dataset& dataset) : dataset_(dataset) {}
 
+LocateViewChecker::LocateViewChecker(const Dataset& dataset, const render::GradientVolume& gradients)
+    : dataset_(dataset), sharedGradients_(&gradients), maxFields_(kKeptFields) {}
+
 LocateViewChecker::~LocateViewChecker() = default;
+
+void LocateViewChecker::useLabels(LabelMap labels, std::vector<Structure> structures) {
+  Dataset own;
+  own.id = dataset_.id;
+  own.labels = std::move(labels);
+  own.structures = std::move(structures);
+  ownLabels_ = std::move(own);
+  fields_.clear();  // each region's field grew from its voxels as they were
+}
+
+const render::GradientVolume& LocateViewChecker::gradients() {
+  if (sharedGradients_) return *sharedGradients_;
+  if (!gradients_) gradients_ = render::computeGradientVolume(dataset_.volume);
+  return *gradients_;
+}
 
 const render::IntensityLevels& LocateViewChecker::levels() {
   if (!levels_) levels_ = render::summariseIntensities(dataset_.volume);
@@ -84,26 +122,38 @@ const render::IntensityLevels& LocateViewChecker::levels() {
 }
 
 Result<LocateCheck> LocateViewChecker::check(const quiz::Question& question, const lessons::QuestionScene& scene,
-                                             const render::Preset& preset) {
+                                             const render::Preset& preset, const std::atomic<bool>* cancel) {
   LocateCheck check;
   check.questionId = question.id;
-  const Structure* region = dataset_.findStructure(scene.structure);
-  const Structure* target = dataset_.findStructure(question.target);
+  const Dataset& labelled = this->labelled();
+  const Structure* region = labelled.findStructure(scene.structure);
+  const Structure* target = labelled.findStructure(question.target);
   if (!region || !target)
     return fail("no structure '" + (region ? question.target : scene.structure) + "' in dataset '" + dataset_.id + "'");
-  if (!gradients_) gradients_ = render::computeGradientVolume(dataset_.volume);
+  if (isSet(cancel)) return cancelled();
+  const render::GradientVolume& gradients = this->gradients();
   auto params = render::wdtParamsFor(preset);
   if (!params) return tl::unexpected(params.error());
-  // One field per region and preset (the preset sets the field's weights).
-  const std::string fieldKey = region->id + "\n" + preset.id.value_or(preset.name);
+  // One field per region and field parameters (the preset sets the field's weights; the desktop's
+  // presets can be edited under the same id, so the id alone does not name the field).
+  const std::string fieldKey = fieldKeyOf(region->id, *params);
+  ++checks_;
   if (!fields_.count(fieldKey)) {
-    auto wdt = computeWdt(dataset_.volume, structureMask(dataset_.labels, region->label), *params);
+    WdtControl control;
+    control.cancel = cancel;
+    auto wdt = computeWdt(dataset_.volume, structureMask(labelled.labels, region->label), *params, control);
     if (!wdt) return tl::unexpected(withContext("field of '" + region->id + "'", wdt.error()));
-    fields_[fieldKey] = std::move(wdt->field.distances);
+    if (wdt->stats.cancelled || isSet(cancel)) return cancelled();  // a partial field is not kept
+    if (maxFields_ > 0 && fields_.size() >= maxFields_)
+      fields_.erase(std::min_element(fields_.begin(), fields_.end(),
+                                     [](const auto& a, const auto& b) { return a.second.used < b.second.used; }));
+    fields_[fieldKey].distances = std::move(wdt->field.distances);
   }
-  const FloatVolume& field = fields_.at(fieldKey);
-  auto frame = render::structureFrame(dataset_.labels, region->label);
-  const auto centre = centreOf(dataset_.labels, target->label);
+  KeptField& kept = fields_.at(fieldKey);
+  kept.used = checks_;
+  const FloatVolume& field = kept.distances;
+  auto frame = render::structureFrame(labelled.labels, region->label);
+  const auto centre = centreOf(labelled.labels, target->label);
   if (!frame || !centre) {
     check.problem = "the target or its region has no voxels";
     return check;
@@ -122,16 +172,16 @@ Result<LocateCheck> LocateViewChecker::check(const quiz::Question& question, con
     check.problem = "the " + target->id + "'s centre is outside the view (" + viewName + ")";
     return check;
   }
-  const render::SceneVolumes volumes{&dataset_.volume, &dataset_.labels, &field, region->label, &*gradients_};
+  const render::SceneVolumes volumes{&dataset_.volume, &labelled.labels, &field, region->label, &gradients};
   const render::TransferFunction2D table = render::shadingTable(settings->preset);
   const render::PickResult clicked = render::pickStructure(volumes, *settings, table, (*px)[0], (*px)[1]);
   if (clicked.label != target->label) {
-    const Structure* picked = clicked.hit ? dataset_.findStructureByLabel(clicked.label) : nullptr;
+    const Structure* picked = clicked.hit ? labelled.findStructureByLabel(clicked.label) : nullptr;
     check.problem = "a click on the " + target->id + "'s centre in its view (" + viewName + ", region " + region->id +
                     ") picks " + (picked ? "the " + picked->id : std::string("nothing"));
     return check;
   }
-  countShownPixels(volumes, *settings, table, target->label, check);
+  if (!countShownPixels(volumes, *settings, table, target->label, check, cancel)) return cancelled();
   check.answerable = check.shownPixels >= kMinShownPixels;
   if (!check.answerable)
     check.problem = "the " + target->id + " is not drawn in its view (" + viewName + ", region " + region->id +

@@ -5,6 +5,8 @@
 // checks the shipped courses with the same code.
 #pragma once
 
+#include <atomic>
+#include <cstdint>
 #include <map>
 #include <optional>
 #include <string>
@@ -49,27 +51,54 @@ struct LocateCheck {
 };
 
 // Checks locate questions on one dataset (which outlives it), keeping what the checks share — the
-// intensity summary, the gradients, each region's field — between them.
+// intensity summary, the gradients, each region's field — between them. One check at a time: the
+// checker is not safe to use from two threads at once.
 class LocateViewChecker {
  public:
   explicit LocateViewChecker(const Dataset& dataset);
+  // The desktop's checker, kept while `dataset` is on screen and used on a worker thread: it reads
+  // `gradients` (those of dataset.volume, which both outlive the checker and stay unchanged) instead
+  // of computing its own, and it reads the labels and structures given to useLabels — its own copy
+  // — instead of the dataset's, which the segment editor may change while a check runs. It keeps
+  // the fields of the kKeptFields regions and presets checked last (the other form keeps every one:
+  // a course's check visits each once).
+  static constexpr std::size_t kKeptFields = 4;
+  LocateViewChecker(const Dataset& dataset, const render::GradientVolume& gradients);
   ~LocateViewChecker();
   LocateViewChecker(const LocateViewChecker&) = delete;
   LocateViewChecker& operator=(const LocateViewChecker&) = delete;
 
+  // Checks read these labels and structures from now on (a copy of the dataset's as they are now,
+  // on its grid); the fields computed on the previous ones are dropped. Not while a check runs.
+  void useLabels(LabelMap labels, std::vector<Structure> structures);
+
   // `question` asked on `scene` drawn with `preset` (the course editor's captured one, or the
   // step's as presetForStep finds it). `path` is left empty. Errors: the region or target is not
-  // in the dataset, the preset's field cannot be computed (one WDT per region and preset, CPU).
+  // in the dataset, the preset's field cannot be computed (one WDT per region and preset, CPU);
+  // `cancel` set from another thread: an error of kind Cancelled soon after (within one WDT sweep
+  // or one row of the view's pixels), with nothing cached from the check.
   Result<LocateCheck> check(const quiz::Question& question, const lessons::QuestionScene& scene,
-                            const render::Preset& preset);
+                            const render::Preset& preset, const std::atomic<bool>* cancel = nullptr);
   // The dataset's intensity summary (for presets derived from it).
   const render::IntensityLevels& levels();
 
  private:
+  const render::GradientVolume& gradients();
+  // The dataset's labels and structures, or the copy given to useLabels (its volume left empty).
+  const Dataset& labelled() const { return ownLabels_ ? *ownLabels_ : dataset_; }
+
   const Dataset& dataset_;
+  const render::GradientVolume* sharedGradients_ = nullptr;
+  std::optional<Dataset> ownLabels_;
   std::optional<render::IntensityLevels> levels_;
   std::optional<render::GradientVolume> gradients_;
-  std::map<std::string, FloatVolume> fields_;
+  struct KeptField {
+    FloatVolume distances;
+    std::uint64_t used = 0;  // the check that last used it
+  };
+  std::map<std::string, KeptField> fields_;  // by region and field parameters
+  std::size_t maxFields_ = 0;                // 0: no limit
+  std::uint64_t checks_ = 0;
 };
 
 // Checks every locate question of `course` on `dataset` (one WDT per region structure, on the CPU).

@@ -2,7 +2,10 @@
 
 #include <algorithm>
 #include <cctype>
+#include <chrono>
+#include <exception>
 #include <set>
+#include <thread>
 
 #include "core/strings.h"
 #include "course_authoring.h"
@@ -50,6 +53,21 @@ lessons::Course storedForm(const lessons::Course& draft) {
 
 }  // namespace
 
+// A locate question being checked: the snapshot taken when it was asked, and the check's work on
+// its own thread.
+struct CourseEditor::CheckJob {
+  std::atomic<bool> cancel{false};
+  std::atomic<bool> finished{false};
+  std::optional<Result<LocateCheck>> result;  // written by the worker before `finished`
+  std::string lessonId;                       // the lesson chosen when the question was asked
+  lessons::Step step;                         // the question and its scene, as asked
+  Capture scene;
+  bool freshId = false;                       // the editor made the id (made again if taken meanwhile)
+  std::optional<std::string> dropped;         // why the result is no longer wanted (UI thread only)
+  std::chrono::steady_clock::time_point start;
+  std::jthread thread;  // last: joined before the members above go
+};
+
 CourseEditor::CourseEditor(LearningSession& session, const render::PresetLibrary& library, EventSink events, Preview preview,
                            LocateViewCheck checkLocate)
     : session_(session),
@@ -57,6 +75,11 @@ CourseEditor::CourseEditor(LearningSession& session, const render::PresetLibrary
       events_(std::move(events)),
       preview_(std::move(preview)),
       checkLocate_(std::move(checkLocate)) {}
+
+CourseEditor::~CourseEditor() {
+  if (job_) job_->cancel = true;
+  job_.reset();  // joins the worker (no event: the sinks may be going too)
+}
 
 Result<lessons::Lesson*> CourseEditor::lesson() {
   if (!draft_) return fail("no course is being edited: make a new one or open one");
@@ -115,6 +138,7 @@ Status CourseEditor::newCourse(const std::string& id, const std::string& title, 
   first.courseId = id;
   first.title = "Lesson 1";
   course.lessons.push_back(first);
+  dropCheck("a new course was started while its view was being checked");
   draft_ = std::move(course);
   storedVersion_.reset();
   captured_.clear();
@@ -127,6 +151,7 @@ Status CourseEditor::newCourse(const std::string& id, const std::string& title, 
 Status CourseEditor::openCourse(const std::string& courseId) {
   auto course = session_.curriculum().course(courseId);
   if (!course) return tl::unexpected(course.error());
+  dropCheck("another course was opened while its view was being checked");
   storedVersion_ = course->version;
   draft_ = std::move(*course);
   captured_.clear();
@@ -177,8 +202,7 @@ Status CourseEditor::setPrerequisites(const std::vector<std::string>& lessonIds)
   return {};
 }
 
-std::string CourseEditor::capturePreset(const Capture& capture) {
-  const lessons::Lesson& l = draft_->lessons[lesson_];
+std::string CourseEditor::capturePreset(const lessons::Lesson& l, const Capture& capture) {
   std::set<std::string> taken;
   for (const auto& [id, preset] : captured_) taken.insert(id);
   const std::string id = freeId(l.id + ".show_" + std::to_string(l.steps.size() + 1), taken);
@@ -191,6 +215,7 @@ std::string CourseEditor::capturePreset(const Capture& capture) {
 }
 
 Status CourseEditor::addShow(const Capture& capture, const std::string& title, const std::string& text) {
+  if (auto free = requireNoCheck(); !free) return free;
   auto found = lesson();
   if (!found) return tl::unexpected(found.error());
   lessons::Lesson* l = *found;
@@ -198,7 +223,7 @@ Status CourseEditor::addShow(const Capture& capture, const std::string& title, c
   lessons::Step step;
   step.kind = lessons::StepKind::Show;
   step.show.structure = capture.structure;
-  step.show.presetId = capturePreset(capture);
+  step.show.presetId = capturePreset(*l, capture);
   step.show.view = capture.view;
   step.show.camera = capture.camera;
   step.show.clip = capture.clip;
@@ -210,11 +235,14 @@ Status CourseEditor::addShow(const Capture& capture, const std::string& title, c
 }
 
 Status CourseEditor::addQuestion(quiz::Question question, const std::optional<Capture>& scene) {
+  checkError_.reset();
+  if (auto free = requireNoCheck(); !free) return free;
   auto found = lesson();
   if (!found) return tl::unexpected(found.error());
   lessons::Lesson* l = *found;
   const std::set<std::string> taken = questionIds(*draft_);
-  question.id = question.id.empty() ? freeId(l->id + ".q" + std::to_string(l->steps.size() + 1), taken) : question.id;
+  const bool freshId = question.id.empty();
+  question.id = freshId ? freeId(l->id + ".q" + std::to_string(l->steps.size() + 1), taken) : question.id;
   if (taken.count(question.id)) return fail(ErrorKind::Conflict, "question id '" + question.id + "' is already in the course");
   lessons::Step step;
   step.kind = lessons::StepKind::Question;
@@ -225,17 +253,86 @@ Status CourseEditor::addQuestion(quiz::Question question, const std::optional<Ca
     s.view = scene->view;
     s.camera = scene->camera;
     s.clip = scene->clip;
-    if (step.question.kind == quiz::QuestionKind::Locate && checkLocate_) {
-      auto check = checkLocate_(step.question, s, scene->preset);
-      if (!check) return tl::unexpected(withContext("question not added", check.error()));
-      if (!check->answerable) return fail("question not added: " + check->problem);
-    }
-    s.presetId = capturePreset(*scene);
-    step.scene = s;
+    step.scene = s;  // its preset id once added (appendQuestion)
   }
+  if (!scene || step.question.kind != quiz::QuestionKind::Locate || !checkLocate_)
+    return appendQuestion(l->id, std::move(step), scene, freshId);
+  // The check on the worker, on this snapshot; poll() applies its result.
+  auto job = std::make_unique<CheckJob>();
+  job->lessonId = l->id;
+  job->step = std::move(step);
+  job->scene = *scene;
+  job->freshId = freshId;
+  job->start = std::chrono::steady_clock::now();
+  LocateCheckWork work = checkLocate_(job->step.question, *job->step.scene, job->scene.preset);
+  CheckJob* j = job.get();
+  job->thread = std::jthread([j, work = std::move(work)] {
+    try {
+      j->result = work(j->cancel);
+    } catch (const std::exception& e) {  // not to end the program from a worker thread
+      j->result = fail(std::string("the view could not be checked: ") + e.what());
+    }
+    j->finished.store(true, std::memory_order_release);
+  });
+  job_ = std::move(job);
+  events_({{"event", "course_question_checking"}, {"question", job_->step.question.id}, {"target", job_->step.question.target}});
+  return {};
+}
+
+Status CourseEditor::appendQuestion(const std::string& lessonId, lessons::Step step, const std::optional<Capture>& scene,
+                                    bool freshId) {
+  if (!draft_) return fail("no course is being edited: make a new one or open one");
+  const auto l = std::find_if(draft_->lessons.begin(), draft_->lessons.end(), [&](const lessons::Lesson& x) { return x.id == lessonId; });
+  if (l == draft_->lessons.end()) return fail(ErrorKind::NotFound, "question not added: the course has no lesson '" + lessonId + "'");
+  const std::set<std::string> taken = questionIds(*draft_);
+  if (taken.count(step.question.id)) {
+    if (!freshId) return fail(ErrorKind::Conflict, "question id '" + step.question.id + "' is already in the course");
+    step.question.id = freeId(l->id + ".q" + std::to_string(l->steps.size() + 1), taken);
+  }
+  if (scene) step.scene->presetId = capturePreset(*l, *scene);
   l->steps.push_back(std::move(step));
   changed();
   return {};
+}
+
+Status CourseEditor::requireNoCheck() const {
+  if (!job_) return {};
+  return fail(ErrorKind::Conflict, "the locate question '" + job_->step.question.id +
+                                       "' is still being checked: add the next step once it is added or refused");
+}
+
+void CourseEditor::poll() {
+  if (!job_ || !job_->finished.load(std::memory_order_acquire)) return;
+  std::unique_ptr<CheckJob> job = std::move(job_);
+  job->thread.join();
+  const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - job->start).count();
+  const std::string id = job->step.question.id;
+  Status st;
+  if (job->dropped) st = fail(ErrorKind::Cancelled, "question not added: " + *job->dropped);
+  else if (!*job->result) st = tl::unexpected(withContext("question not added", job->result->error()));
+  else if (!(*job->result)->answerable) st = fail("question not added: " + (*job->result)->problem);
+  else st = appendQuestion(job->lessonId, std::move(job->step), job->scene, job->freshId);
+  json e = {{"event", "course_question_checked"}, {"question", id}, {"added", bool(st)}, {"ms", ms}};
+  if (!st) {
+    checkError_ = st.error();
+    e["message"] = st.error().message;
+  }
+  events_(std::move(e));
+}
+
+void CourseEditor::dropCheck(const std::string& why) {
+  if (!job_) return;
+  job_->cancel = true;  // poll() takes it once its work returns
+  job_->dropped = why;
+}
+
+void CourseEditor::stopCheck() {
+  if (!job_) return;
+  job_->cancel = true;
+  const std::string id = job_->step.question.id;
+  job_.reset();  // joins the worker
+  checkError_ = Error{ErrorKind::Cancelled, "question not added: its view check was stopped before it ended"};
+  events_({{"event", "course_question_checked"}, {"question", id}, {"added", false}, {"message", checkError_->message}});
 }
 
 Status CourseEditor::moveStep(std::size_t from, std::size_t to) {

@@ -5,9 +5,15 @@
 // previewed as a student will see them; live validation naming each problem by its field path (as
 // the course reader does); saving into the database (the next version when it changes a stored
 // course), exporting a package, and Open course… (importing one).
+//
+// A locate question is checked before it is added (question_visibility.h): seconds on a real CT,
+// so the check runs on the editor's worker thread and the window keeps drawing meanwhile; poll(),
+// each frame, adds the question (or refuses it) once the check ends.
 #pragma once
 
+#include <atomic>
 #include <functional>
+#include <memory>
 #include <map>
 #include <optional>
 #include <string>
@@ -40,16 +46,26 @@ class CourseEditor {
   using Preview = std::function<void(const lessons::QuestionScene& scene, const std::optional<render::Preset>& captured)>;
 
   // Whether a locate question can be answered in the view captured for it (question_visibility.h),
-  // on the dataset on screen.
-  using LocateViewCheck = std::function<Result<LocateCheck>(const quiz::Question& question,
-                                                            const lessons::QuestionScene& scene,
-                                                            const render::Preset& preset)>;
+  // on the dataset on screen, in two parts. LocateViewCheck is called on the UI thread when Add is
+  // pressed, never while work it returned still runs; it returns the work, which runs on the
+  // editor's worker thread and so must read nothing the UI thread may change meanwhile (it takes
+  // copies, or reads what stays unchanged until stopCheck returns). The work's `cancel` is set when
+  // the check is stopped or its result no longer wanted; it should then return soon (its result is
+  // dropped).
+  using LocateCheckWork = std::function<Result<LocateCheck>(const std::atomic<bool>& cancel)>;
+  using LocateViewCheck = std::function<LocateCheckWork(const quiz::Question& question, const lessons::QuestionScene& scene,
+                                                        const render::Preset& preset)>;
 
   // `session` and `library` outlive the editor. `events` receives course_edited, course_saved,
-  // course_exported and course_imported. `checkLocate` (may be empty: no check) is asked before a
-  // locate question is added.
+  // course_exported, course_imported and, for a locate question's check, course_question_checking
+  // and course_question_checked. `checkLocate` (may be empty: no check) is asked before a locate
+  // question is added.
   CourseEditor(LearningSession& session, const render::PresetLibrary& library, EventSink events, Preview preview,
                LocateViewCheck checkLocate = {});
+  // Cancels a running check and waits for its work to end, before anything it reads goes (no event).
+  ~CourseEditor();
+  CourseEditor(const CourseEditor&) = delete;
+  CourseEditor& operator=(const CourseEditor&) = delete;
 
   bool windowOpen = false;
   bool editing() const { return draft_.has_value(); }
@@ -76,7 +92,28 @@ class CourseEditor {
   // `question.id` empty: "<lesson id>.q<n>". A locate question needs `scene` (a neighbour's view).
   // A locate question is refused (nothing changes) when its captured view cannot be answered in:
   // the click on its target's centre picks something else, or nothing is drawn where it picks.
+  //
+  // A locate question with a scene, when the editor has a check, is checked on the worker: the
+  // call checks what it can at once (a lesson, a free id), takes a snapshot of the question, its
+  // scene and the view's preset, starts the check (event course_question_checking {"question",
+  // "target"}) and returns; checking() is true until poll() applies the result, on a later frame,
+  // to that snapshot: the question is appended to the lesson that was chosen when it was asked
+  // (course_edited), or refused with nothing changed (checkError() says why, with the text a
+  // synchronous check gave). Event course_question_checked {"question", "added", "ms", "message"
+  // when not added}. Meanwhile the draft stays editable, except that adding a step (show or
+  // question) is refused (Conflict), so that steps stay in the order they were asked for; a new or
+  // opened course drops the result (the check is cancelled; checkError() is a Cancelled error).
   Status addQuestion(quiz::Question question, const std::optional<Capture>& scene);
+  // A locate question's check is running (addQuestion); adding a step waits for its end.
+  bool checking() const { return job_ != nullptr; }
+  // What the last addQuestion's check refused, or why its result was dropped; reset by the next
+  // addQuestion.
+  const std::optional<Error>& checkError() const { return checkError_; }
+  // Each frame: applies a finished check's result (addQuestion).
+  void poll();
+  // Cancels a running check and waits for its work to end (before what it reads is replaced: the
+  // dataset on screen; closing); its question is not added (checkError() is a Cancelled error).
+  void stopCheck();
   Status moveStep(std::size_t from, std::size_t to);
   Status duplicateStep(std::size_t index);  // the copy follows it; a question's copy gets a new id
   Status deleteStep(std::size_t index);
@@ -110,7 +147,14 @@ class CourseEditor {
  private:
   Result<lessons::Lesson*> lesson();
   void changed();
-  std::string capturePreset(const Capture& capture);  // stores it in captured_, gives its id
+  // Stores the capture's preset in captured_, named after `lesson`'s next step; gives its id.
+  std::string capturePreset(const lessons::Lesson& lesson, const Capture& capture);
+  Status requireNoCheck() const;  // a Conflict while a locate question is being checked
+  // A step of the lesson `lessonId` of this draft with its captured scene, appended; the question
+  // id, when `freshId`, made anew if it was taken meanwhile.
+  Status appendQuestion(const std::string& lessonId, lessons::Step step, const std::optional<Capture>& scene, bool freshId);
+  // A new draft replaces the one a running check's question belongs to.
+  void dropCheck(const std::string& why);
 
   LearningSession& session_;
   const render::PresetLibrary& library_;
@@ -124,6 +168,9 @@ class CourseEditor {
   std::vector<std::string> problems_;
   std::optional<Previewing> previewing_;
   std::uint64_t revision_ = 0;
+  struct CheckJob;
+  std::unique_ptr<CheckJob> job_;  // the locate check running on its worker, until poll() takes it
+  std::optional<Error> checkError_;
 };
 
 }  // namespace at::app

@@ -77,8 +77,16 @@ ScriptInterpreter::Outcome ScriptInterpreter::courseShow(Context& c) {
 }
 
 // {"do": "course_question", "question": {course-file question, "id" optional}, "scene": true}: a
-// question step; with "scene", asked on what the view shows (a locate question needs it).
+// question step; with "scene", asked on what the view shows (a locate question needs it). A locate
+// question's view is checked on the editor's worker while frames go on: the script goes on once it
+// is added, and fails with the reason when it is refused.
 ScriptInterpreter::Outcome ScriptInterpreter::courseQuestion(Context& c) {
+  CourseEditor& e = c.model.courseEditor();
+  if (!c.first) {
+    if (e.checking()) return Progress::Running;
+    if (e.checkError()) return courseError(c.action, *e.checkError());
+    return Progress::Done;
+  }
   json q = c.action.at("question");
   const bool newId = !q.contains("id");
   if (newId) q["id"] = "new";
@@ -91,8 +99,8 @@ ScriptInterpreter::Outcome ScriptInterpreter::courseQuestion(Context& c) {
     if (!capture) return courseError(c.action, capture.error());
     scene = *capture;
   }
-  if (auto st = c.model.courseEditor().addQuestion(*question, scene); !st) return courseError(c.action, st.error());
-  return Progress::Done;
+  if (auto st = e.addQuestion(*question, scene); !st) return courseError(c.action, st.error());
+  return e.checking() ? Progress::Running : Progress::Done;
 }
 
 // {"do": "course_step", "op": "move"|"duplicate"|"delete"|"preview", "index": N, "to": M}.

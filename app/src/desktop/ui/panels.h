@@ -203,6 +203,7 @@ class CourseEditorPanel {
   int kind_ = 0, target_ = 0, other_ = 0, courseChoice_ = 0;
   float toleranceMm_ = 0;
   bool onView_ = false, reference_ = false;
+  bool checking_ = false;  // the editor was checking a locate question when last drawn
   std::string status_;
   bool failed_ = false;
 };

@@ -60,6 +60,10 @@ void CourseEditorPanel::draw(DesktopModel& model, float x, float y) {
     ImGui::End();
     return;
   }
+  // A locate question's check ended since the last frame: added, or why not.
+  if (checking_ && !editor.checking())
+    report(editor.checkError() ? Status(tl::unexpected(*editor.checkError())) : Status{}, "question added");
+  checking_ = editor.checking();
   if (editor.editing()) drawCourse(model);
   else drawStart(model);
   if (!status_.empty()) {
@@ -213,7 +217,13 @@ void CourseEditorPanel::drawAddStep(DesktopModel& model) {
   ImGui::TextUnformatted("Show step: what the view shows now (structure, preset, t, view)");
   ImGui::InputText("heading", &showTitle_);
   ImGui::InputTextMultiline("text", &showText_, ImVec2(-1, ImGui::GetTextLineHeight() * 3));
-  if (ImGui::Button("Add show step")) {
+  // While a locate question's view is checked (on a worker) no step is added: the steps keep the
+  // order they were asked for.
+  const bool checking = editor.checking();
+  ImGui::BeginDisabled(checking);
+  const bool addShow = ImGui::Button("Add show step");
+  ImGui::EndDisabled();
+  if (addShow) {
     auto capture = model.captureView();
     report(capture ? editor.addShow(*capture, showTitle_, showText_) : Status(tl::unexpected(capture.error())), "");
   }
@@ -230,7 +240,14 @@ void CourseEditorPanel::drawAddStep(DesktopModel& model) {
   if (kind_ == 4) structureCombo("entry", ids, &other_);
   ImGui::Checkbox("ask on what the view shows now", &onView_);
   if (kind_ == 2) ImGui::TextDisabled("a locate question needs the view of a neighbour of its target");
-  if (ImGui::Button("Add question") && !ids.empty()) {
+  ImGui::BeginDisabled(checking);
+  const bool addQuestion = ImGui::Button("Add question");
+  ImGui::EndDisabled();
+  if (checking) {
+    ImGui::SameLine();
+    ImGui::TextDisabled("checking the view: can its target be seen and clicked?...");
+  }
+  if (addQuestion && !ids.empty()) {
     quiz::Question q;
     q.kind = quiz::parseQuestionKind(kKinds[kind_]).value_or(quiz::QuestionKind::Name);
     q.target = ids[std::size_t(target_)];
@@ -247,6 +264,7 @@ void CourseEditorPanel::drawAddStep(DesktopModel& model) {
       else st = tl::unexpected(capture.error());
     }
     report(st ? editor.addQuestion(q, scene) : st, "");
+    checking_ = editor.checking();
   }
 }
 
