@@ -172,7 +172,10 @@ Result<LocateCheck> LocateViewChecker::check(const quiz::Question& question, con
     check.problem = "the " + target->id + "'s centre is outside the view (" + viewName + ")";
     return check;
   }
-  const render::SceneVolumes volumes{&dataset_.volume, &labelled.labels, &field, region->label, &gradients};
+  // The region's smoothed mask worked out once for the view's thousands of picks (the same numbers
+  // as smoothing it per sample).
+  const render::SelectedMask mask = render::selectedMask(labelled.labels, region->label);
+  const render::SceneVolumes volumes{&dataset_.volume, &labelled.labels, &field, region->label, &gradients, &mask};
   const render::TransferFunction2D table = render::shadingTable(settings->preset);
   const render::PickResult clicked = render::pickStructure(volumes, *settings, table, (*px)[0], (*px)[1]);
   if (clicked.label != target->label) {
