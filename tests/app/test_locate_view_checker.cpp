@@ -33,6 +33,22 @@ lessons::QuestionScene sceneOn(const std::string& region, lessons::CameraView vi
   return s;
 }
 
+// The 64³ phantom and the vestibule's shipped WDT preset, on which every case here asks "Click the
+// cochlea" from the front.
+struct VestibuleScene {
+  Dataset dataset;
+  render::Preset preset;
+};
+
+VestibuleScene vestibuleScene() {
+  auto dataset = openBuiltinDataset("phantom:64");
+  REQUIRE(dataset);
+  const render::PresetLibrary library(test::sourceDir() / "data" / "presets");
+  auto preset = library.load("vestibule_wdt");
+  REQUIRE(preset);
+  return {std::move(*dataset), std::move(*preset)};
+}
+
 void checkSame(const Result<app::LocateCheck>& a, const Result<app::LocateCheck>& b) {
   REQUIRE_MESSAGE(a, (a ? "" : a.error().message));
   REQUIRE_MESSAGE(b, (b ? "" : b.error().message));
@@ -45,11 +61,9 @@ void checkSame(const Result<app::LocateCheck>& a, const Result<app::LocateCheck>
 }  // namespace
 
 TEST_CASE("LocateViewChecker_KeptWithSharedGradientsAndItsOwnLabels_AnswersAsAFreshCheckerCheckAfterCheck") {
-  auto dataset = openBuiltinDataset("phantom:64");
-  REQUIRE(dataset);
-  const render::PresetLibrary library(test::sourceDir() / "data" / "presets");
-  auto preset = library.load("vestibule_wdt");
-  REQUIRE(preset);
+  const VestibuleScene scene = vestibuleScene();
+  const Dataset* dataset = &scene.dataset;
+  const render::Preset* preset = &scene.preset;
   const render::GradientVolume gradients = render::computeGradientVolume(dataset->volume);
   app::LocateViewChecker kept(*dataset, gradients);
   kept.useLabels(dataset->labels, dataset->structures);
@@ -77,11 +91,9 @@ TEST_CASE("LocateViewChecker_KeptWithSharedGradientsAndItsOwnLabels_AnswersAsAFr
 }
 
 TEST_CASE("LocateViewChecker_CancelSet_ReturnsACancelledErrorThenChecksAsBefore") {
-  auto dataset = openBuiltinDataset("phantom:64");
-  REQUIRE(dataset);
-  const render::PresetLibrary library(test::sourceDir() / "data" / "presets");
-  auto preset = library.load("vestibule_wdt");
-  REQUIRE(preset);
+  const VestibuleScene scene = vestibuleScene();
+  const Dataset* dataset = &scene.dataset;
+  const render::Preset* preset = &scene.preset;
   app::LocateViewChecker checker(*dataset);
   const auto anterior = sceneOn("vestibule", lessons::CameraView::Anterior);
   std::atomic<bool> cancel{true};
