@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 #include <map>
 
 #include "core/parallel_rows.h"
@@ -13,6 +12,7 @@
 #include "render/scene.h"
 #include "render/structure_pick.h"
 #include "volume/mask.h"
+#include "wdt/field_service.h"
 #include "wdt/wdt.h"
 
 namespace at::app {
@@ -26,14 +26,6 @@ std::optional<Vec3> centreOf(const LabelMap& labels, std::uint16_t label) {
 }
 
 bool isSet(const std::atomic<bool>* flag) { return flag && flag->load(std::memory_order_relaxed); }
-
-// A region's field, as the parameters that make it (what the preset sets of them, at full precision).
-std::string fieldKeyOf(const std::string& regionId, const WdtParams& p) {
-  char text[160];
-  std::snprintf(text, sizeof text, "\n%d %d %.9g %.9g %.9g %d %d %d %d", int(p.rule), int(p.weight), double(p.huMin),
-                double(p.huMax), double(p.baseCost), p.passes, int(p.converge), p.maxPasses, p.downsample);
-  return regionId + text;
-}
 
 tl::unexpected<Error> cancelled() { return fail(ErrorKind::Cancelled, "the locate view check was cancelled"); }
 
@@ -136,7 +128,7 @@ Result<LocateCheck> LocateViewChecker::check(const quiz::Question& question, con
   if (!params) return tl::unexpected(params.error());
   // One field per region and field parameters (the preset sets the field's weights; the desktop's
   // presets can be edited under the same id, so the id alone does not name the field).
-  const std::string fieldKey = fieldKeyOf(region->id, *params);
+  const std::string fieldKey = wdt::FieldRequest{region->label, *params}.key();
   ++checks_;
   if (!fields_.count(fieldKey)) {
     WdtControl control;
