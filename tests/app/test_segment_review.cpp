@@ -129,7 +129,7 @@ TEST_CASE("the skull's structures open in the editor with the review states its 
   Dataset ds = tinyDataset();
   ds.id = "skull";
   ds.structures[0].id = "mandible";
-  ds.structures[1].id = "maxilla";
+  ds.structures[1].id = "axis_c2";
   app::SegmentController editor(*database, [](json) {});
   editor.attach(ds);
   CHECK(editor.reviewState(1) == db::ReviewState::Completed);

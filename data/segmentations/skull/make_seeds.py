@@ -33,7 +33,13 @@ AIR = (-1100, -400); AIR_ANY = [-2000, -400]; BONE = (300, 1800); DENSE = (1000,
 S = [
  (1, 'Upper teeth', [0.95,0.93,0.80], [(ENAMEL, (80,179,150,224,0,13), None)]),
  (2, 'Mandible', [0.85,0.70,0.45], [(BONE, (68,95,126,169,0,21), (84,148,8)), (BONE, (158,190,126,169,0,21), (179,150,8))]),
- (3, 'Maxilla', [0.90,0.55,0.35], [(BONE, (90,164,165,221,4,23), (132,192,12))]),
+ # The alveolar process and palate; the sinus walls and the orbital floor on each side of the
+ # septum (k 20-29); the frontal processes beside the nasal aperture (k 26-38; the growth takes
+ # them on up to the nasion), behind the nasal bones at the front of the bridge (j > 212, left
+ # unlabelled).
+ (3, 'Maxilla', [0.90,0.55,0.35], [(BONE, (90,164,165,221,4,23), (132,192,12)),
+                                   (BONE, (80,124,165,221,20,29), None), (BONE, (133,176,165,221,20,29), None),
+                                   (BONE, (104,124,188,212,26,38), None), (BONE, (133,153,188,212,26,38), None)]),
  (4, 'Zygomatic arch (right)', [0.75,0.55,0.85], [(ARCH, (58,70,130,172,22,28), (64,155,27))]),
  (5, 'Zygomatic arch (left)', [0.55,0.45,0.90], [(ARCH, (186,202,130,172,22,28), (196,150,28))]),
  (6, 'Nasal cavity', [0.30,0.75,0.95], [(AIR, (113,139,150,214,8,29), None)]),
@@ -50,8 +56,13 @@ S = [
  (15, 'External acoustic meatus (left)', [0.10,0.60,0.95], [(AIR, (170,199,106,126,15,23), (182,116,21))]),
  (16, 'Mastoid air cells (right)', [0.85,0.30,0.60], [(AIR, (62,84,85,115,8,33), None)]),
  (17, 'Mastoid air cells (left)', [0.60,0.30,0.85], [(AIR, (155,193,85,115,8,33), None)]),
- (18, 'Petrous temporal bone (right)', [0.95,0.90,0.55], [(DENSE, (80,117,100,134,14,27), (94,112,23))]),
- (19, 'Petrous temporal bone (left)', [0.75,0.90,0.55], [(DENSE, (140,177,100,134,14,27), (167,113,23))]),
+ # The dense bone around the inner ear, and the pyramid's less dense part running forward and
+ # medially from it to the apex beside the clivus (300 HU and up inside a cone from the apex,
+ # radius 3 mm, to the dense part, 9 mm; axial slices k 20-32 show its ridge).
+ (18, 'Petrous temporal bone (right)', [0.95,0.90,0.55], [(DENSE, (80,117,100,134,14,27), (94,112,23)),
+                                                          (ANYBONE, (80,121,98,130,14,32), (94,112,23), ((117,123,28),(88,110,22),3,9))]),
+ (19, 'Petrous temporal bone (left)', [0.75,0.90,0.55], [(DENSE, (140,177,100,134,14,27), (167,113,23)),
+                                                         (ANYBONE, (138,177,98,130,14,32), (167,113,23), ((142,124,28),(170,110,22),3,9))]),
  (20, 'Atlas (C1)', [0.60,0.80,0.70], [(ANYBONE, (98,116,100,127,0,2), None), (ANYBONE, (140,159,100,127,0,2), None), (ANYBONE, (118,138,123,131,0,7), None)]),
  (21, 'Axis (C2)', [0.70,0.65,0.95], [(ANYBONE, (122,135,108,121,0,6), (129,119,3))]),
  # The bone of each ramus in front of the mandibular notch, from the notch's lowest level (k 17) up
@@ -66,6 +77,7 @@ FIRST = ('Coronoid process (right)', 'Coronoid process (left)')
 GROW_RANGE = {'Mandible': BONE_ANY, 'Maxilla': BONE_ANY, 'Zygomatic arch (right)': ARCH, 'Zygomatic arch (left)': ARCH,
               'Atlas (C1)': BONE_ANY, 'Axis (C2)': BONE_ANY, 'Coronoid process (right)': BONE_ANY,
               'Coronoid process (left)': BONE_ANY,
+              'Petrous temporal bone (right)': BONE_ANY, 'Petrous temporal bone (left)': BONE_ANY,
               'External acoustic meatus (right)': AIR_ANY, 'External acoustic meatus (left)': AIR_ANY}
 
 def inside(b, i, j, k): return b[0] <= i <= b[1] and b[2] <= j <= b[3] and b[4] <= k <= b[5]
