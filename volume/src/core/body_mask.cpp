@@ -8,6 +8,11 @@ namespace at {
 
 namespace {
 
+// An eroded piece apart from the body's of at least this volume is another object (a headrest, a
+// table) that keeps the thresholded voxels nearer to it; smaller ones (a nose tip whose core
+// survived the erosion) are reached from whichever core is nearer, like any thresholded voxel.
+constexpr double kMinObjectCoreMm3 = 1000.0;
+
 // Min (erode) or max (dilate) of a 0/1 mask over a box of half-width r[a] along each axis:
 // separable, one pass per axis with a running count.
 void boxFilter(std::vector<std::uint8_t>& m, const Dims& d, const int r[3], bool erode) {
@@ -36,42 +41,89 @@ void boxFilter(std::vector<std::uint8_t>& m, const Dims& d, const int r[3], bool
   }
 }
 
-// Keeps the largest 6-connected component of the non-zero voxels.
-void keepLargestComponent(std::vector<std::uint8_t>& m, const Dims& d) {
-  std::vector<int> comp(m.size(), 0);
+// The 6-connected components of the non-zero voxels: each voxel's component number (0 where the
+// mask is 0, else 1 …) and each component's size (index 0 unused).
+struct Components {
+  std::vector<int> of;
+  std::vector<std::size_t> sizes{0};
+};
+
+std::size_t stepOf(std::size_t p, int axis, int dir, const Dims& d) {
+  const std::size_t sx = 1, sy = std::size_t(d.x), sz = std::size_t(d.x) * std::size_t(d.y);
+  const std::size_t stride[3] = {sx, sy, sz};
+  const int n[3] = {d.x, d.y, d.z};
+  const int at[3] = {int(p % sy), int((p / sy) % std::size_t(d.y)), int(p / sz)};
+  const int next = at[axis] + dir;
+  if (next < 0 || next >= n[axis]) return p;  // off the grid: no neighbour
+  return dir > 0 ? p + stride[axis] : p - stride[axis];
+}
+
+Components componentsOf(const std::vector<std::uint8_t>& m, const Dims& d) {
+  Components c;
+  c.of.assign(m.size(), 0);
   std::vector<std::size_t> stack;
-  int next = 0, best = 0;
-  std::size_t bestSize = 0;
-  const long sx = 1, sy = d.x, sz = long(d.x) * d.y;
   for (std::size_t seed = 0; seed < m.size(); ++seed) {
-    if (!m[seed] || comp[seed]) continue;
-    ++next;
+    if (!m[seed] || c.of[seed]) continue;
+    const int id = int(c.sizes.size());
     std::size_t size = 0;
+    c.of[seed] = id;
     stack.push_back(seed);
-    comp[seed] = next;
     while (!stack.empty()) {
       const std::size_t p = stack.back();
       stack.pop_back();
       ++size;
-      const int i = int(p % std::size_t(d.x)), j = int((p / std::size_t(d.x)) % std::size_t(d.y)),
-                k = int(p / std::size_t(sz));
-      const long nb[6] = {i > 0 ? -sx : 0, i + 1 < d.x ? sx : 0, j > 0 ? -sy : 0, j + 1 < d.y ? sy : 0,
-                          k > 0 ? -sz : 0, k + 1 < d.z ? sz : 0};
-      for (long o : nb) {
-        if (o == 0) continue;
-        const std::size_t q = std::size_t(long(p) + o);
-        if (m[q] && !comp[q]) {
-          comp[q] = next;
-          stack.push_back(q);
+      for (int axis = 0; axis < 3; ++axis)
+        for (int dir : {-1, 1}) {
+          const std::size_t q = stepOf(p, axis, dir, d);
+          if (q != p && m[q] && !c.of[q]) {
+            c.of[q] = id;
+            stack.push_back(q);
+          }
         }
-      }
     }
-    if (size > bestSize) {
-      bestSize = size;
-      best = next;
-    }
+    c.sizes.push_back(size);
   }
-  for (std::size_t p = 0; p < m.size(); ++p) m[p] = std::uint8_t(comp[p] == best && best != 0);
+  return c;
+}
+
+// Keeps the largest 6-connected component of the non-zero voxels.
+void keepLargestComponent(std::vector<std::uint8_t>& m, const Dims& d) {
+  const Components c = componentsOf(m, d);
+  const auto best = std::max_element(c.sizes.begin(), c.sizes.end()) - c.sizes.begin();
+  for (std::size_t p = 0; p < m.size(); ++p) m[p] = std::uint8_t(best != 0 && c.of[p] == int(best));
+}
+
+// Shares the thresholded voxels between the body's core and the other objects' cores: a
+// breadth-first growth inside `thresholded` (6-connected) from all cores at once, each voxel
+// going to the core that reaches it in the fewest steps. Returns the body's voxels. A thin part
+// reached only from the body (the nose, the ears) is body however far it reaches; a thin contact
+// between the body and a headrest is split where the two growths meet.
+std::vector<std::uint8_t> growBodyAgainstObjects(const std::vector<std::uint8_t>& thresholded, const Components& cores,
+                                                 int bodyCore, std::size_t minObjectCore, const Dims& d) {
+  enum : std::uint8_t { kUnreached = 0, kBody = 1, kObject = 2 };
+  std::vector<std::uint8_t> owner(thresholded.size(), kUnreached);
+  std::vector<std::size_t> queue;
+  queue.reserve(thresholded.size() / 4);
+  for (std::size_t p = 0; p < thresholded.size(); ++p) {
+    const int c = cores.of[p];
+    if (c == 0) continue;
+    if (c == bodyCore) owner[p] = kBody;
+    else if (cores.sizes[std::size_t(c)] >= minObjectCore) owner[p] = kObject;
+    else continue;  // a small core (the nose tip) is reached like any thresholded voxel
+    queue.push_back(p);
+  }
+  for (std::size_t head = 0; head < queue.size(); ++head) {
+    const std::size_t p = queue[head];
+    for (int axis = 0; axis < 3; ++axis)
+      for (int dir : {-1, 1}) {
+        const std::size_t q = stepOf(p, axis, dir, d);
+        if (q == p || !thresholded[q] || owner[q] != kUnreached) continue;
+        owner[q] = owner[p];
+        queue.push_back(q);
+      }
+  }
+  for (auto& v : owner) v = std::uint8_t(v == kBody);
+  return owner;
 }
 
 // Fills holes slice by slice across axis `a`: background not 4-connected to the slice's border
@@ -126,14 +178,15 @@ Mask bodyMask(const Volume& volume, double tissueLevel, double neckMm) {
   for (int a = 0; a < 3; ++a) r[a] = std::max(0, int(std::lround(neckMm / std::max(1e-6, g.spacingMm[a]))));
   const std::vector<std::uint8_t> thresholded = m;
   boxFilter(m, g.dims, r, true);
-  keepLargestComponent(m, g.dims);
-  bool any = std::any_of(m.begin(), m.end(), [](std::uint8_t v) { return v != 0; });
-  if (!any) {  // everything thinner than the opening: the unopened largest component
+  const Components cores = componentsOf(m, g.dims);
+  const auto bodyCore = std::max_element(cores.sizes.begin(), cores.sizes.end()) - cores.sizes.begin();
+  if (bodyCore == 0) {  // everything thinner than the erosion: the unopened largest component
     m = thresholded;
     keepLargestComponent(m, g.dims);
   } else {
-    boxFilter(m, g.dims, r, false);
-    for (std::size_t p = 0; p < m.size(); ++p) m[p] = std::uint8_t(m[p] && thresholded[p]);
+    const double voxelMm3 = g.spacingMm[0] * g.spacingMm[1] * g.spacingMm[2];
+    const auto minObjectCore = std::size_t(std::ceil(kMinObjectCoreMm3 / std::max(1e-9, voxelMm3)));
+    m = growBodyAgainstObjects(thresholded, cores, int(bodyCore), std::max<std::size_t>(1, minObjectCore), g.dims);
   }
   for (int a = 0; a < 3; ++a) fillSlices(m, g.dims, a);
   return out;
