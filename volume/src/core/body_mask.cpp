@@ -102,25 +102,33 @@ std::vector<std::uint8_t> growBodyAgainstObjects(const std::vector<std::uint8_t>
                                                  int bodyCore, std::size_t minObjectCore, const Dims& d) {
   enum : std::uint8_t { kUnreached = 0, kBody = 1, kObject = 2 };
   std::vector<std::uint8_t> owner(thresholded.size(), kUnreached);
-  std::vector<std::size_t> queue;
-  queue.reserve(thresholded.size() / 4);
+  const auto competes = [&](int c) { return c == bodyCore || (c != 0 && cores.sizes[std::size_t(c)] >= minObjectCore); };
+  for (std::size_t p = 0; p < thresholded.size(); ++p)
+    if (competes(cores.of[p])) owner[p] = cores.of[p] == bodyCore ? kBody : kObject;
+  // Step by step, keeping only the voxels reached at the last step (a surface, not a volume): the
+  // growth starts from the cores' voxels next to a voxel no core owns.
+  std::vector<std::size_t> front, next;
   for (std::size_t p = 0; p < thresholded.size(); ++p) {
-    const int c = cores.of[p];
-    if (c == 0) continue;
-    if (c == bodyCore) owner[p] = kBody;
-    else if (cores.sizes[std::size_t(c)] >= minObjectCore) owner[p] = kObject;
-    else continue;  // a small core (the nose tip) is reached like any thresholded voxel
-    queue.push_back(p);
-  }
-  for (std::size_t head = 0; head < queue.size(); ++head) {
-    const std::size_t p = queue[head];
-    for (int axis = 0; axis < 3; ++axis)
+    if (owner[p] == kUnreached) continue;
+    bool edge = false;
+    for (int axis = 0; axis < 3 && !edge; ++axis)
       for (int dir : {-1, 1}) {
         const std::size_t q = stepOf(p, axis, dir, d);
-        if (q == p || !thresholded[q] || owner[q] != kUnreached) continue;
-        owner[q] = owner[p];
-        queue.push_back(q);
+        edge = edge || (q != p && owner[q] == kUnreached && thresholded[q]);
       }
+    if (edge) front.push_back(p);
+  }
+  while (!front.empty()) {
+    next.clear();
+    for (const std::size_t p : front)
+      for (int axis = 0; axis < 3; ++axis)
+        for (int dir : {-1, 1}) {
+          const std::size_t q = stepOf(p, axis, dir, d);
+          if (q == p || !thresholded[q] || owner[q] != kUnreached) continue;
+          owner[q] = owner[p];
+          next.push_back(q);
+        }
+    front.swap(next);
   }
   for (auto& v : owner) v = std::uint8_t(v == kBody);
   return owner;
