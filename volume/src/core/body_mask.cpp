@@ -48,14 +48,18 @@ struct Components {
   std::vector<std::size_t> sizes{0};
 };
 
-std::size_t stepOf(std::size_t p, int axis, int dir, const Dims& d) {
-  const std::size_t sx = 1, sy = std::size_t(d.x), sz = std::size_t(d.x) * std::size_t(d.y);
-  const std::size_t stride[3] = {sx, sy, sz};
-  const int n[3] = {d.x, d.y, d.z};
-  const int at[3] = {int(p % sy), int((p / sy) % std::size_t(d.y)), int(p / sz)};
-  const int next = at[axis] + dir;
-  if (next < 0 || next >= n[axis]) return p;  // off the grid: no neighbour
-  return dir > 0 ? p + stride[axis] : p - stride[axis];
+// Calls visit(q) for each 6-neighbour q of voxel p that lies on the grid (p's position worked out
+// once).
+template <class Visit>
+void forEachNeighbour(std::size_t p, const Dims& d, Visit&& visit) {
+  const std::size_t sy = std::size_t(d.x), sz = std::size_t(d.x) * std::size_t(d.y);
+  const int i = int(p % sy), j = int((p / sy) % std::size_t(d.y)), k = int(p / sz);
+  if (i > 0) visit(p - 1);
+  if (i + 1 < d.x) visit(p + 1);
+  if (j > 0) visit(p - sy);
+  if (j + 1 < d.y) visit(p + sy);
+  if (k > 0) visit(p - sz);
+  if (k + 1 < d.z) visit(p + sz);
 }
 
 Components componentsOf(const std::vector<std::uint8_t>& m, const Dims& d) {
@@ -72,14 +76,12 @@ Components componentsOf(const std::vector<std::uint8_t>& m, const Dims& d) {
       const std::size_t p = stack.back();
       stack.pop_back();
       ++size;
-      for (int axis = 0; axis < 3; ++axis)
-        for (int dir : {-1, 1}) {
-          const std::size_t q = stepOf(p, axis, dir, d);
-          if (q != p && m[q] && !c.of[q]) {
-            c.of[q] = id;
-            stack.push_back(q);
-          }
+      forEachNeighbour(p, d, [&](std::size_t q) {
+        if (m[q] && !c.of[q]) {
+          c.of[q] = id;
+          stack.push_back(q);
         }
+      });
     }
     c.sizes.push_back(size);
   }
@@ -111,23 +113,17 @@ std::vector<std::uint8_t> growBodyAgainstObjects(const std::vector<std::uint8_t>
   for (std::size_t p = 0; p < thresholded.size(); ++p) {
     if (owner[p] == kUnreached) continue;
     bool edge = false;
-    for (int axis = 0; axis < 3 && !edge; ++axis)
-      for (int dir : {-1, 1}) {
-        const std::size_t q = stepOf(p, axis, dir, d);
-        edge = edge || (q != p && owner[q] == kUnreached && thresholded[q]);
-      }
+    forEachNeighbour(p, d, [&](std::size_t q) { edge = edge || (owner[q] == kUnreached && thresholded[q]); });
     if (edge) front.push_back(p);
   }
   while (!front.empty()) {
     next.clear();
     for (const std::size_t p : front)
-      for (int axis = 0; axis < 3; ++axis)
-        for (int dir : {-1, 1}) {
-          const std::size_t q = stepOf(p, axis, dir, d);
-          if (q == p || !thresholded[q] || owner[q] != kUnreached) continue;
-          owner[q] = owner[p];
-          next.push_back(q);
-        }
+      forEachNeighbour(p, d, [&](std::size_t q) {
+        if (!thresholded[q] || owner[q] != kUnreached) return;
+        owner[q] = owner[p];
+        next.push_back(q);
+      });
     front.swap(next);
   }
   for (auto& v : owner) v = std::uint8_t(v == kBody);
