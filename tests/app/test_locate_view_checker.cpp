@@ -62,28 +62,28 @@ void checkSame(const Result<app::LocateCheck>& a, const Result<app::LocateCheck>
 
 TEST_CASE("LocateViewChecker_KeptWithSharedGradientsAndItsOwnLabels_AnswersAsAFreshCheckerCheckAfterCheck") {
   const VestibuleScene scene = vestibuleScene();
-  const Dataset* dataset = &scene.dataset;
-  const render::Preset* preset = &scene.preset;
-  const render::GradientVolume gradients = render::computeGradientVolume(dataset->volume);
-  app::LocateViewChecker kept(*dataset, gradients);
-  kept.useLabels(dataset->labels, dataset->structures);
+  const Dataset& dataset = scene.dataset;
+  const render::Preset& preset = scene.preset;
+  const render::GradientVolume gradients = render::computeGradientVolume(dataset.volume);
+  app::LocateViewChecker kept(dataset, gradients);
+  kept.useLabels(dataset.labels, dataset.structures);
 
   const auto anterior = sceneOn("vestibule", lessons::CameraView::Anterior);
-  const auto fresh = app::LocateViewChecker(*dataset).check(locate("cochlea"), anterior, *preset);
-  checkSame(kept.check(locate("cochlea"), anterior, *preset), fresh);
-  checkSame(kept.check(locate("cochlea"), anterior, *preset), fresh);  // on the region's kept field
+  const auto fresh = app::LocateViewChecker(dataset).check(locate("cochlea"), anterior, preset);
+  checkSame(kept.check(locate("cochlea"), anterior, preset), fresh);
+  checkSame(kept.check(locate("cochlea"), anterior, preset), fresh);  // on the region's kept field
   // A preset edited under the same id (the expert panel) makes its own field.
-  render::Preset edited = *preset;
+  render::Preset edited = preset;
   edited.huWindow = {edited.huWindow[0], edited.huWindow[1] * 2};
-  checkSame(kept.check(locate("cochlea"), anterior, edited), app::LocateViewChecker(*dataset).check(locate("cochlea"), anterior, edited));
+  checkSame(kept.check(locate("cochlea"), anterior, edited), app::LocateViewChecker(dataset).check(locate("cochlea"), anterior, edited));
 
   // The cochlea erased from the checker's copy of the labels (the segment editor's edit): its
   // checks read the copy, not the dataset's own labels (which the fresh check above read).
-  LabelMap erased = dataset->labels;
-  const std::uint16_t cochlea = dataset->findStructure("cochlea")->label;
+  LabelMap erased = dataset.labels;
+  const std::uint16_t cochlea = dataset.findStructure("cochlea")->label;
   std::replace(erased.voxels.begin(), erased.voxels.end(), cochlea, std::uint16_t(0));
-  kept.useLabels(std::move(erased), dataset->structures);
-  auto gone = kept.check(locate("cochlea"), anterior, *preset);
+  kept.useLabels(std::move(erased), dataset.structures);
+  auto gone = kept.check(locate("cochlea"), anterior, preset);
   REQUIRE(gone);
   CHECK_FALSE(gone->answerable);
   CHECK(gone->problem == "the target or its region has no voxels");
@@ -92,16 +92,16 @@ TEST_CASE("LocateViewChecker_KeptWithSharedGradientsAndItsOwnLabels_AnswersAsAFr
 
 TEST_CASE("LocateViewChecker_CancelSet_ReturnsACancelledErrorThenChecksAsBefore") {
   const VestibuleScene scene = vestibuleScene();
-  const Dataset* dataset = &scene.dataset;
-  const render::Preset* preset = &scene.preset;
-  app::LocateViewChecker checker(*dataset);
+  const Dataset& dataset = scene.dataset;
+  const render::Preset& preset = scene.preset;
+  app::LocateViewChecker checker(dataset);
   const auto anterior = sceneOn("vestibule", lessons::CameraView::Anterior);
   std::atomic<bool> cancel{true};
-  auto cancelled = checker.check(locate("cochlea"), anterior, *preset, &cancel);
+  auto cancelled = checker.check(locate("cochlea"), anterior, preset, &cancel);
   REQUIRE_FALSE(cancelled);
   CHECK((cancelled.error().kind == ErrorKind::Cancelled));
   cancel = false;
-  auto checked = checker.check(locate("cochlea"), anterior, *preset, &cancel);
+  auto checked = checker.check(locate("cochlea"), anterior, preset, &cancel);
   REQUIRE_MESSAGE(checked, (checked ? "" : checked.error().message));
   CHECK(checked->pickingPixels > 0);
 }
