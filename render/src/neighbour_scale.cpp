@@ -10,11 +10,14 @@ namespace at::render {
 
 namespace {
 
-double medianOf(std::vector<float>& d) {
-  const auto mid = d.begin() + std::ptrdiff_t((d.size() - 1) / 2);
-  std::nth_element(d.begin(), mid, d.end());
-  return *mid;
+// The q-quantile (0 < q < 1) of d, reordering it.
+double quantileOf(std::vector<float>& d, double q) {
+  const auto at = d.begin() + std::ptrdiff_t(double(d.size() - 1) * q);
+  std::nth_element(d.begin(), at, d.end());
+  return *at;
 }
+
+double medianOf(std::vector<float>& d) { return quantileOf(d, 0.5); }
 
 // City-block distance in rays from the rays that meet the structure (a large value without any).
 std::vector<int> raysFromStructure(const std::vector<char>& structure, int w, int h) {
@@ -95,7 +98,10 @@ NeighbourBone neighbourBone(const FloatVolume& field, const Volume& volume, cons
   out.nearRays = nearD.size();
   out.farRays = farD.size();
   if (!nearD.empty()) out.nearD = medianOf(nearD);
-  if (!farD.empty()) out.farD = medianOf(farD);
+  if (!farD.empty()) {
+    out.farD = medianOf(farD);
+    out.farLowD = quantileOf(farD, kFarLowQuantile);
+  }
   return out;
 }
 
@@ -111,6 +117,19 @@ void unitFromNeighbours(FieldScale& scale, const NeighbourBone& bone, RenderMode
     if (far) unit = std::min(unit, bone.farD / kNeighbourFarX);
     scale.distanceUnit = std::max(1e-6, unit);
     scale.distanceOffset = 0;
+    scale.fromNeighbours = true;
+    scale.derived = true;
+    return;
+  }
+  if (mode == RenderMode::Lighting && near && far && bone.farLowD >= kLightSeparates * bone.nearD) {
+    double unit = (bone.farLowD - bone.nearD) / (kNeighbourFarX - kLightNearX);
+    double offset = bone.nearD - kLightNearX * unit;
+    if (offset < 0) {  // the far set's lower quartile more than 4.6 × as far as the near bone: no offset
+      unit = bone.farLowD / kNeighbourFarX;
+      offset = 0;
+    }
+    scale.distanceUnit = std::max(1e-6, unit);
+    scale.distanceOffset = offset;
     scale.fromNeighbours = true;
     scale.derived = true;
     return;

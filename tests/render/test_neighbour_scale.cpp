@@ -18,14 +18,15 @@ double xOf(const FieldScale& s, double D) { return std::max(0.0, D - s.distanceO
 
 }  // namespace
 
-TEST_CASE("unitFromNeighbours: fuzzy colours the bone next to the structure and leaves the far bone; lighting keeps the around unit unless it colours the far bone") {
+TEST_CASE("unitFromNeighbours: fuzzy colours the bone next to the structure and leaves the far bone; lighting lights the near bone and leaves the far one dark") {
   const std::uint64_t seed = test::freshSeed("unitFromNeighbours");
   std::mt19937_64 rng(seed);
-  std::uniform_real_distribution<double> logD(-2.0, 3.0), ratio(0.5, 4.0), offsetShare(0.0, 0.8);
+  std::uniform_real_distribution<double> logD(-2.0, 3.0), ratio(0.5, 6.0), offsetShare(0.0, 0.8), lowShare(0.5, 1.0);
   for (int round = 0; round < 2000; ++round) {
     NeighbourBone bone;
     bone.nearD = std::exp(logD(rng));
     bone.farD = bone.nearD * ratio(rng);
+    bone.farLowD = bone.farD * lowShare(rng);
     bone.nearRays = bone.farRays = kMinNeighbourRays + std::size_t(round % 50);
     FieldScale around;
     around.distanceUnit = std::exp(logD(rng)) / kContextQuantileX;
@@ -33,9 +34,11 @@ TEST_CASE("unitFromNeighbours: fuzzy colours the bone next to the structure and 
     around.derived = true;
     CAPTURE(bone.nearD);
     CAPTURE(bone.farD);
+    CAPTURE(bone.farLowD);
     CAPTURE(around.distanceUnit);
     CAPTURE(around.distanceOffset);
     const bool separated = bone.farD >= kNeighbourSeparates * bone.nearD;
+    const bool lightSeparated = bone.farLowD >= kLightSeparates * bone.nearD;
     for (RenderMode mode : {RenderMode::Fuzzy, RenderMode::Lighting}) {
       CAPTURE(toString(mode));
       FieldScale s = around;
@@ -51,6 +54,18 @@ TEST_CASE("unitFromNeighbours: fuzzy colours the bone next to the structure and 
         CHECK(s.distanceOffset == 0);
         CHECK(xOf(s, bone.nearD) >= kNeighbourX * (1 - 1e-9));
         if (bone.farD / kNeighbourFarX >= bone.nearD / kNeighbourX) CHECK(xOf(s, bone.nearD) == doctest::Approx(kNeighbourX));
+      } else if (mode == RenderMode::Lighting && lightSeparated) {
+        // The near bone at kLightNearX (k_a 0.3 of Eq. 6 with the derived α), or nearer where the
+        // offset would be negative; the far set's lower quartile exactly at kNeighbourFarX; every D
+        // between lands between them, in order.
+        CHECK(s.fromNeighbours);
+        CHECK(s.distanceOffset >= 0);
+        CHECK(xOf(s, bone.nearD) <= kLightNearX * (1 + 1e-9));
+        if (s.distanceOffset > 0) CHECK(xOf(s, bone.nearD) == doctest::Approx(kLightNearX));
+        CHECK(xOf(s, bone.farLowD) == doctest::Approx(kNeighbourFarX));
+        const double mid = 0.5 * (bone.nearD + bone.farLowD);
+        CHECK(xOf(s, mid) > xOf(s, bone.nearD));
+        CHECK(xOf(s, mid) < xOf(s, bone.farLowD));
       } else {
         // The around unit stays where it leaves the far bone faint; else only shrinks.
         if (xOf(around, bone.farD) >= kNeighbourFarX) {

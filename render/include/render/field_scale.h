@@ -172,11 +172,19 @@ bool unitFromSeenBone(RenderMode mode);
 //    On the around set alone the skull's mastoid cells coloured 9 % of the bone next to them: the
 //    bone around cells embedded in bone is mostly hidden (septa, the petrous bone) and nearer in D
 //    than the surface seen next to them, which sat at x ≈ 1.9.
-//  - Lighting, and fuzzy where near and far are alike: the around set's unit stays, shrunk (offset
-//    0) only so the far median lies at x ≥ kNeighbourFarX. Lighting's k_a = β/(αx + 1)² puts its
-//    glow at x < 0.5, on the bone touching the structure, which the around set measures (from the
-//    near median the skull's zygomatic arch at margin 2.6 lost its glow: k_a 0.1 there). The bone
-//    seen next to a structure embedded in bone is often the outer shell above it, as far in D as
+//  - Lighting, where the picture tells the two apart well (the far set's lower quartile, farLowD,
+//    at least kLightSeparates × the near median): an offset and a unit that put the near median at
+//    x = kLightNearX and that quartile at x = kNeighbourFarX (offset 0 where the quartile is more
+//    than 4.6 × as far). With the derived α (2.9) k_a = β/(αx + 1)² is then 1.8 on the bone
+//    touching the structure (D below the offset), 0.3 on the bone next to it and at most 0.03 on
+//    three quarters of the far bone, drawn dim and neutral. Without the offset (the around set's
+//    unit, capped only so the far median lay at kNeighbourFarX) the skull's zygomatic arch lit the
+//    bone at its roots with k_a 0.12. Where the two are closer (the skull's right arch from the side
+//    and frontal sinus from the front: quartile 1.9 and 1.5 × the near median) the offset lit the
+//    far bone behind the translucent surface too: 19 and 41 % of the far pixels in its colour.
+//  - Fuzzy where near and far are alike, and lighting where they are not far enough apart: the
+//    around set's unit stays, shrunk (offset 0) only so the far median lies at x ≥ kNeighbourFarX.
+//    The bone seen next to a structure embedded in bone is often the outer shell above it, as far in D as
 //    the rest (the phantom's lateral canal from above: near and far medians 5.8, against 1.0 for
 //    the bone around it; scaled on them the whole shell was lit).
 // What no unit fixes: where the bone seen far from the structure is as near in D as the bone next
@@ -188,9 +196,13 @@ constexpr double kFarFromStructure = 0.19;   // (30 px of 160)
 constexpr double kNeighbourX = 1.15;
 constexpr double kNeighbourFarX = 2.3;
 constexpr double kNeighbourSeparates = 1.4;
+constexpr double kLightNearX = 0.5;
+constexpr double kFarLowQuantile = 0.25;
+constexpr double kLightSeparates = 2.0;
 constexpr std::size_t kMinNeighbourRays = 32;
 struct NeighbourBone {
   double nearD = 0, farD = 0;  // median D of each set's first surfaces (0: none)
+  double farLowD = 0;          // the far set's kFarLowQuantile quantile (0: none)
   std::size_t nearRays = 0, farRays = 0;
 };
 NeighbourBone neighbourBone(const FloatVolume& field, const Volume& volume, const Mask* body, const BoneLevels& levels,
