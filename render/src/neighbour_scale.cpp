@@ -134,8 +134,9 @@ void unitFromNeighbours(FieldScale& scale, const NeighbourBone& bone, RenderMode
     scale.derived = true;
     return;
   }
-  // Lighting, or a picture that does not tell the bone next to the structure from the far bone: the
-  // around set's unit stays, shrunk (offset 0) only where it would colour the far bone.
+  // Fuzzy where the picture does not tell the bone next to the structure from the far bone, and
+  // lighting where they are not far enough apart for the offset: the around set's unit stays,
+  // shrunk (offset 0) only where it would colour the far bone.
   if (far && (bone.farD - scale.distanceOffset) / scale.distanceUnit < kNeighbourFarX) {
     scale.distanceUnit = std::max(1e-6, bone.farD / kNeighbourFarX);
     scale.distanceOffset = 0;
