@@ -106,3 +106,83 @@ TEST_CASE("editing the data TF in the expert panel changes the view, and Save as
   MESSAGE("mean view difference after the edit: " << diff);
   CHECK(diff > 2.0);
 }
+
+TEST_CASE("the expert panel's mode list shows each mode's own preset and keeps the edits made in a mode") {
+  if (!at::test::requireXvfb()) return;
+  TempDir dir("desktop-expert-modes");
+  const fs::path wdtShot = dir / "wdt.png", lightingShot = dir / "lighting.png", back = dir / "back.png";
+  // The default course opens on the cochlea, whose fuzzy, lighting and unweighted presets are shipped.
+  const json script = {{"actions",
+                        {{{"do", "expert"}},
+                         {{"do", "wait_field"}},
+                         {{"do", "tf_add_point"}, {"tf", "data"}, {"x", 777}, {"rgba", {1, 0, 0, 0.9}}},
+                         {{"do", "wait_field"}},
+                         {{"do", "screenshot"}, {"path", wdtShot.string()}},
+                         {{"do", "preset_set"}, {"mode", "lighting"}},
+                         {{"do", "wait_field"}},
+                         {{"do", "screenshot"}, {"path", lightingShot.string()}},
+                         {{"do", "preset_set"}, {"mode", "fuzzy"}, {"t", 0.5}},
+                         {{"do", "preset_set"}, {"mode", "unweighted"}},
+                         {{"do", "preset_set"}, {"mode", "outline"}},
+                         {{"do", "preset_set"}, {"mode", "fuzzy"}},
+                         {{"do", "preset_set"}, {"mode", "wdt"}},
+                         {{"do", "wait_field"}},
+                         {{"do", "screenshot"}, {"path", back.string()}}}}};
+  at::test::DesktopOptions options;
+  options.size = std::to_string(kWidth) + "x" + std::to_string(kHeight);
+  options.db = dir / "presets.db";
+  const at::test::DesktopRun run = at::test::runDesktopScript(dir, script, options);
+  INFO(run.err);
+  REQUIRE(run.exitCode == 0);
+
+  std::optional<at::render::Preset> started;
+  std::vector<at::render::Preset> switched;
+  for (const json& e : run.events) {
+    if (!e.is_object() || (e.value("event", "") != "expert" && e.value("event", "") != "expert_mode")) continue;
+    auto p = at::render::parsePreset(e.at("preset").dump(), "expert event");
+    REQUIRE_MESSAGE(p.has_value(), p.error().message);
+    if (e.value("event", "") == "expert") started = *p;
+    else switched.push_back(*p);
+  }
+  REQUIRE(started.has_value());
+  REQUIRE(switched.size() == 6);
+  const at::render::RenderMode order[] = {at::render::RenderMode::Lighting, at::render::RenderMode::Fuzzy,
+                                          at::render::RenderMode::Unweighted, at::render::RenderMode::Outline,
+                                          at::render::RenderMode::Fuzzy, at::render::RenderMode::Wdt};
+  for (std::size_t i = 0; i < switched.size(); ++i) CHECK(std::string(at::render::toString(switched[i].mode)) == at::render::toString(order[i]));
+
+  // A mode not yet edited is the structure's own preset in that mode, as `render --mode` uses it.
+  const auto shipped = [](const char* id) {
+    auto p = at::render::loadPreset(at::test::sourceDir() / "data" / "presets" / (std::string(id) + ".json"));
+    REQUIRE_MESSAGE(p.has_value(), p.error().message);
+    return *p;
+  };
+  for (const auto& [got, id] : {std::pair{switched[0], "cochlea_lighting"}, std::pair{switched[1], "cochlea_fuzzy"},
+                                std::pair{switched[2], "cochlea_unweighted"}}) {
+    const at::render::Preset want = shipped(id);
+    CAPTURE(id);
+    CHECK(got.dataTf == want.dataTf);
+    CHECK(got.distanceTf == want.distanceTf);
+    CHECK(got.t == want.t);
+    CHECK(got.lightingAlpha == want.lightingAlpha);
+    CHECK(got.lightingBeta == want.lightingBeta);
+  }
+  // Outline has no shipped cochlea preset: the derived one, a band on the distance axis.
+  CHECK(switched[3].distanceTf != started->distanceTf);
+  // Switching back brings each mode's edits back: fuzzy's t, and the WDT's added data point.
+  CHECK(switched[4].t == 0.5f);
+  CHECK(switched[4].distanceTf == switched[1].distanceTf);
+  CHECK(switched[5].dataTf.size() == started->dataTf.size() + 1);
+  CHECK(std::any_of(switched[5].dataTf.begin(), switched[5].dataTf.end(), [](const auto& p) { return p.x == 777; }));
+  CHECK(switched[5].distanceTf == started->distanceTf);
+
+  // The view follows: lighting draws another image, and the WDT's comes back as it was.
+  auto w = at::readPng(wdtShot.string()), l = at::readPng(lightingShot.string()), b = at::readPng(back.string());
+  REQUIRE(w);
+  REQUIRE(l);
+  REQUIRE(b);
+  const double toLighting = viewDifference(*w, *l), backAgain = viewDifference(*w, *b);
+  MESSAGE("mean view difference WDT → lighting " << toLighting << ", WDT → WDT after the round " << backAgain);
+  CHECK(toLighting > 2.0);
+  CHECK(backAgain < 0.5);
+}

@@ -216,7 +216,7 @@ void DesktopModel::setExpert(bool on) {
     const std::uint16_t label = explore_.shownLabel();
     render::Preset p = explore_.presetOf(label, explore_.bare());
     p.t = explore_.t();
-    expert_->start(p, idOf(label));
+    expert_->start(p, idOf(label), [this, label](render::RenderMode mode) { return explore_.presetInMode(label, mode); });
   }
   expertEdited();
 }

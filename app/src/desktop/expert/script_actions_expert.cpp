@@ -27,7 +27,8 @@ ScriptInterpreter::Feature ScriptInterpreter::expertActions() {
                 {"lighting_alpha?", "the lighting's alpha"}, {"lighting_beta?", "the lighting's beta"},
                 {"rule?", "the WDT's step rule: entering or trapezoid"}, {"base?", "the weight base"},
                 {"hu_window?", "[low, high] HU"}},
-               "Sets the preset's parameters that are given.", &S::presetSet},
+               "Sets the preset's parameters that are given; a new mode first loads that mode's preset (as the panel's mode list does).",
+               &S::presetSet},
               {"preset_save", {{"name", "the preset's name"}, {"export?", "also write it to this JSON file"}},
                "Saves the preset into the database (and exports it).", &S::presetSave},
           }};
@@ -73,13 +74,13 @@ ScriptInterpreter::Outcome ScriptInterpreter::tfEdit(Context& c) {
 
 ScriptInterpreter::Outcome ScriptInterpreter::presetSet(Context& c) {
   if (!c.model.expertOn()) c.model.setExpert(true);
-  render::Preset p = c.model.expert().preset();
   const json& a = c.action;
-  if (a.contains("mode")) {
+  if (a.contains("mode")) {  // as the panel's mode list: the mode's own preset, then the rest given
     auto m = render::parseRenderMode(a.at("mode").get<std::string>());
     if (!m) return actionError(a, m.error());
-    p.mode = *m;
+    c.model.expert().switchMode(*m);
   }
+  render::Preset p = c.model.expert().preset();
   p.t = a.value("t", p.t);
   p.alpha = a.value("alpha", p.alpha);
   p.lightingAlpha = a.value("lighting_alpha", p.lightingAlpha);

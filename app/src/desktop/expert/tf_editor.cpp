@@ -21,9 +21,11 @@ TfEditor::TfEditor(const Dataset& dataset, db::Database& database, EventSink eve
   histogram_ = render::logHistogram(v, 128, huMin_, huMax_);
 }
 
-void TfEditor::start(const render::Preset& base, const std::string& structure) {
+void TfEditor::start(const render::Preset& base, const std::string& structure, ModePresets modePresets) {
   preset_ = base;
   structure_ = structure;
+  modePresets_ = std::move(modePresets);
+  otherModes_.clear();
   active_ = true;
   edited();
   events_({{"event", "expert"}, {"structure", structure}, {"preset", json::parse(render::presetToJson(preset_))}});
@@ -69,6 +71,23 @@ Status TfEditor::setColour(bool data, std::size_t index, const render::Rgba& rgb
   auto st = render::setTfPointColour(pts, index, rgba);
   if (st) edited();
   return st;
+}
+
+void TfEditor::switchMode(render::RenderMode mode) {
+  if (mode == preset_.mode) return;
+  otherModes_[preset_.mode] = preset_;
+  auto kept = otherModes_.find(mode);
+  if (kept != otherModes_.end()) {
+    preset_ = kept->second;
+    otherModes_.erase(kept);
+  } else if (modePresets_) {
+    preset_ = modePresets_(mode);
+    preset_.mode = mode;
+  } else {
+    preset_.mode = mode;
+  }
+  edited();
+  events_({{"event", "expert_mode"}, {"mode", render::toString(mode)}, {"preset", json::parse(render::presetToJson(preset_))}});
 }
 
 Status TfEditor::setParameters(const render::Preset& p) {

@@ -8,6 +8,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <map>
 #include <optional>
 #include <string>
 #include <vector>
@@ -28,12 +29,16 @@ namespace at::app {
 class TfEditor {
  public:
   using EventSink = std::function<void(nlohmann::json)>;
+  // The structure's preset in a mode (the one `render --mode` uses), which a mode not yet edited
+  // starts from.
+  using ModePresets = std::function<render::Preset(render::RenderMode)>;
   // `database`: where "Save as" stores presets (the app's one connection; it outlives the editor).
   TfEditor(const Dataset& dataset, db::Database& database, EventSink events);
 
   bool active() const { return active_; }
-  // Starts editing a copy of `base`, made for `structure` (its id; empty for none) [expert].
-  void start(const render::Preset& base, const std::string& structure);
+  // Starts editing a copy of `base`, made for `structure` (its id; empty for none) [expert];
+  // `modePresets` gives the structure's preset in the other modes.
+  void start(const render::Preset& base, const std::string& structure, ModePresets modePresets);
   void stop() { active_ = false; }
   const render::Preset& preset() const { return preset_; }
   std::uint64_t revision() const { return revision_; }
@@ -43,8 +48,13 @@ class TfEditor {
   Status movePoint(bool data, std::size_t index, double x, float alpha);              // [tf_point]
   Status deletePoint(bool data, std::size_t index);
   Status setColour(bool data, std::size_t index, const render::Rgba& rgba);
-  // The other parameters at once (mode, t, α, lighting, weights); refused unless the preset
-  // still validates.
+  // Shows the preset in `mode`: the copy edited in that mode since start() when there is one (no
+  // edit is lost by switching away and back), else the structure's preset in that mode — each mode
+  // has its own transfer functions, t and lighting, so the WDT's would not read as fuzzy or
+  // lighting [expert_mode].
+  void switchMode(render::RenderMode mode);
+  // The other parameters at once (t, α, lighting, weights; the mode too, keeping everything
+  // else); refused unless the preset still validates.
   Status setParameters(const render::Preset& withParameters);
   // The panel's widgets edit the copy in place, then say so.
   render::Preset& editable() { return preset_; }
@@ -65,6 +75,8 @@ class TfEditor {
   EventSink events_;
   render::Preset preset_;
   std::string structure_;
+  ModePresets modePresets_;
+  std::map<render::RenderMode, render::Preset> otherModes_;  // edited copies of the modes not shown
   bool active_ = false;
   std::uint64_t revision_ = 0;
   double huMin_ = -1024, huMax_ = 3071;

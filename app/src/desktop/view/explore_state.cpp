@@ -137,6 +137,21 @@ const render::Preset& ExploreState::presetOf(std::uint16_t label, bool bare) con
   return presets_.emplace(key, preset).first->second;
 }
 
+render::Preset ExploreState::presetInMode(std::uint16_t label, render::RenderMode mode) const {
+  const render::Preset& cached = presetOf(label, mode == render::RenderMode::Bare);
+  if (cached.mode == mode) return cached;
+  const Structure* s = dataset_ ? dataset_->findStructureByLabel(label) : nullptr;
+  if (wholeVolume_ || !s) {
+    render::Preset p = cached;
+    p.mode = mode;
+    return p;
+  }
+  auto loaded = render::presetOrDerived(library_, s->id, mode, levels_);
+  if (loaded) return *loaded;
+  messages_("presets: " + loaded.error().message + " (using the preset derived from the dataset)");
+  return render::derivedPreset(levels_, mode, s->id);
+}
+
 std::uint16_t ExploreState::displayLabel() const {
   // Field modes keep the structure whose field is on screen until the hovered one's arrives.
   return bare_ ? shownLabel() : (fieldLabel_ ? fieldLabel_ : shownLabel());

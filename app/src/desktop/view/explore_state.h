@@ -94,6 +94,10 @@ class ExploreState {
   // The preset of a structure in a mode: a step's preset when one was set, else the shipped one,
   // else one derived from the dataset's levels (else a built-in default, with a message).
   const render::Preset& presetOf(std::uint16_t label, bool bare) const;
+  // The preset of a structure in any mode, as `render --mode` finds it: presetOf's when that is in
+  // `mode` already (a step's preset included), else the shipped one, else one derived from the
+  // dataset's levels. The whole volume keeps its one preset, in `mode`.
+  render::Preset presetInMode(std::uint16_t label, render::RenderMode mode) const;
   // The WDT parameters of the field `label` needs (the expert's edited preset while editing).
   std::optional<WdtParams> fieldParams(std::uint16_t label) const;
   // The preset picking classifies with: the WDT view's, whatever the mode (the user points at the

@@ -127,12 +127,14 @@ bool ExpertPanel::draw(TfEditor& editor, float x, float width, float height) {
   const auto& modes = render::allRenderModes();
   if (ImGui::BeginCombo("mode", render::toString(p.mode))) {
     for (render::RenderMode m : modes)
-      if (ImGui::Selectable(render::toString(m), m == p.mode)) {
-        p.mode = m;
-        changed = true;
+      if (ImGui::Selectable(render::toString(m), m == p.mode) && m != p.mode) {
+        editor.switchMode(m);  // the mode's own preset (or this session's edits in it)
+        p = editor.preset();
+        edited = true;
       }
     ImGui::EndCombo();
   }
+  if (ImGui::IsItemHovered()) ImGui::SetTooltip("each mode starts from its own preset; edits in a mode are kept when you switch back");
   changed |= ImGui::SliderFloat("t (context)", &p.t, 0, 1, "%.2f");
   changed |= ImGui::SliderFloat("alpha f(x)", &p.alpha, 1.01f, 10, "%.2f");
   changed |= ImGui::DragFloat("lighting alpha", &p.lightingAlpha, 0.01f, 0, 100, "%.3f");
