@@ -113,8 +113,10 @@ TEST_CASE("the expert panel's mode list shows each mode's own preset and keeps t
   const fs::path wdtShot = dir / "wdt.png", lightingShot = dir / "lighting.png", back = dir / "back.png";
   // The default course opens on the cochlea, whose fuzzy, lighting and unweighted presets are shipped.
   const json script = {{"actions",
-                        {{{"do", "expert"}},
+                        {{{"do", "layout"}},
+                         {{"do", "expert"}},
                          {{"do", "wait_field"}},
+                         {{"do", "layout"}},
                          {{"do", "tf_add_point"}, {"tf", "data"}, {"x", 777}, {"rgba", {1, 0, 0, 0.9}}},
                          {{"do", "wait_field"}},
                          {{"do", "screenshot"}, {"path", wdtShot.string()}},
@@ -134,6 +136,15 @@ TEST_CASE("the expert panel's mode list shows each mode's own preset and keeps t
   const at::test::DesktopRun run = at::test::runDesktopScript(dir, script, options);
   INFO(run.err);
   REQUIRE(run.exitCode == 0);
+
+  // The panel docks beside the view instead of covering its right part.
+  std::vector<json> layouts;
+  for (const json& e : run.events)
+    if (e.is_object() && e.value("event", "") == "layout") layouts.push_back(e);
+  REQUIRE(layouts.size() == 2);
+  CHECK(layouts[0]["expert_docked"] == false);
+  CHECK(layouts[1]["expert_docked"] == true);
+  CHECK(layouts[1]["view"]["x"].get<double>() + layouts[1]["view"]["width"].get<double>() == doctest::Approx(kWidth - kExpert));
 
   std::optional<at::render::Preset> started;
   std::vector<at::render::Preset> switched;

@@ -162,7 +162,7 @@ TEST_CASE("desktop (Xvfb, 1280 x 720): the painted label shows in the 3-D view i
   CHECK(distance(redo, paint) < 12);  // redone: the structure again
 }
 
-TEST_CASE("layout: the segment editor docks at the right and the slice panes under the view where the view keeps room") {
+TEST_CASE("layout: the expert panel and the segment editor dock at the right and the slice panes under the view where the view keeps room") {
   for (const auto& [w, h] : {std::pair{1280, 720}, std::pair{1920, 1080}}) {
     CAPTURE(w);
     app::ViewLayout l;
@@ -186,10 +186,32 @@ TEST_CASE("layout: the segment editor docks at the right and the slice panes und
     CHECK(l.rightPx == 0);
     CHECK(l.bottomPx == 0);
   }
+  for (const auto& [w, h] : {std::pair{1280, 720}, std::pair{1920, 1080}}) {  // the expert panel, alone and with the editor
+    CAPTURE(w);
+    app::ViewLayout l;
+    l.windowW = l.framebufferW = w;
+    l.windowH = l.framebufferH = h;
+    l.panelPx = w >= 1200 ? 380 : 320;
+    app::dockPanels(l, false, false, true);
+    CHECK(l.expertPx == app::kExpertPanelPx);
+    CHECK(l.rightPx == 0);
+    CHECK(l.viewLeft() + l.viewWidth() + l.expertPx == doctest::Approx(w));  // the view ends where the panel starts
+    CHECK_FALSE(l.inView(w - l.expertPx / 2, 10));
+    app::dockPanels(l, true, true, true);
+    CHECK(l.expertPx == app::kExpertPanelPx);
+    if (l.rightPx > 0) {  // both columns only where the view keeps its room
+      CHECK(l.viewWidth() >= app::kMinDockedViewPx);
+      CHECK(l.viewLeft() + l.viewWidth() + l.rightPx + l.expertPx == doctest::Approx(w));
+    } else {
+      CHECK(w < 1500);
+      CHECK(l.bottomPx == 0);
+    }
+  }
   app::ViewLayout small;  // too narrow for a docked column: floating windows, the view whole
   small.windowW = small.framebufferW = 800;
   small.windowH = small.framebufferH = 480;
-  app::dockPanels(small, true, true);
+  app::dockPanels(small, true, true, true);
   CHECK(small.rightPx == 0);
+  CHECK(small.expertPx == 0);
   CHECK(small.viewWidth() == doctest::Approx(800 - 320));
 }

@@ -27,15 +27,17 @@ int ViewLayout::viewPixelsH() const {
   return std::max(1, int(std::lround(viewHeight() * double(framebufferH) / std::max(1, windowH))));
 }
 
-void dockPanels(ViewLayout& layout, bool editor, bool slices) {
-  layout.rightPx = layout.bottomPx = 0;
-  if (!editor) return;
+void dockPanels(ViewLayout& layout, bool editor, bool slices, bool expert) {
+  layout.rightPx = layout.bottomPx = layout.expertPx = 0;
   const float s = layout.uiScale, w = float(layout.windowW);
+  if (expert && w - layout.panelWidth() - kExpertPanelPx * s >= kMinDockedViewPx * s) layout.expertPx = kExpertPanelPx * s;
+  if (!editor) return;
   const float column = std::clamp(0.3f * w, 340 * s, 520 * s);
-  if (w - layout.panelWidth() - column < kMinDockedViewPx * s) return;  // too narrow: floating windows
+  const float viewLeft = w - layout.panelWidth() - layout.expertPx - column;
+  if (viewLeft < kMinDockedViewPx * s) return;  // too narrow: floating windows
   layout.rightPx = column;
   // The three panes side by side under the view, each about a third of its width square.
-  if (slices) layout.bottomPx = std::min(0.36f * float(layout.windowH), (w - layout.panelWidth() - column) / 3 + 56 * s);
+  if (slices) layout.bottomPx = std::min(0.36f * float(layout.windowH), viewLeft / 3 + 56 * s);
 }
 
 DesktopModel::DesktopModel(LearningSession& session, const render::PresetLibrary& library, DesktopOptions options,
@@ -188,11 +190,11 @@ Status DesktopModel::switchDataset(const std::string& name) {
 
 void DesktopModel::setLayout(const ViewLayout& layout) {
   if (layout == layout_) return;
-  const bool docking = layout.rightPx != layout_.rightPx || layout.bottomPx != layout_.bottomPx;
+  const bool docking = layout.rightPx != layout_.rightPx || layout.bottomPx != layout_.bottomPx || layout.expertPx != layout_.expertPx;
   layout_ = layout;
   scheduler_.setViewPixels(layout.viewPixelsW(), layout.viewPixelsH());
   explore_.touch();
-  if (docking && opened_) reframe();  // the editor docked or undocked: the view's shape changed
+  if (docking && opened_) reframe();  // a panel docked or undocked: the view's shape changed
 }
 
 bool DesktopModel::select(std::uint16_t label) {

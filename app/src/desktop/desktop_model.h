@@ -49,12 +49,13 @@ struct ViewLayout {
   int framebufferW = 1280, framebufferH = 720;  // drawable pixels
   float uiScale = 1;
   float panelPx = 0;                            // the explore panel's width as drawn (resizable); 0: the default
-  float rightPx = 0;                            // a column docked at the right edge (logical pixels)
-  float bottomPx = 0;                           // a strip docked under the view, left of that column
+  float rightPx = 0;                            // the segment editor's column docked right of the view (logical pixels)
+  float expertPx = 0;                           // the expert panel's column at the window's right edge (logical pixels)
+  float bottomPx = 0;                           // a strip docked under the view, left of those columns
   float panelWidth() const { return panelPx > 0 ? panelPx : 320 * uiScale; }  // logical pixels
   // The view's rectangle in logical pixels.
   float viewLeft() const { return panelWidth(); }
-  float viewWidth() const { return std::max(1.0f, float(windowW) - panelWidth() - rightPx); }
+  float viewWidth() const { return std::max(1.0f, float(windowW) - panelWidth() - rightPx - expertPx); }
   float viewHeight() const { return std::max(1.0f, float(windowH) - bottomPx); }
   bool inView(double x, double y) const {
     return x >= viewLeft() && x < viewLeft() + viewWidth() && y >= 0 && y < viewHeight();
@@ -65,12 +66,15 @@ struct ViewLayout {
   bool operator==(const ViewLayout&) const = default;
 };
 
-// Docks the segment editor (`editor` open) as a column at the window's right edge, and the slice
-// panes (`slices` open too) as a strip under the view, when the window is wide enough for the view
-// to keep kMinDockedViewPx beside them (1280 × 720 and larger at UI scale 1); otherwise they stay
-// floating windows over the view and the layout keeps the view whole.
+// Docks the expert panel (`expert` open) as a column at the window's right edge, the segment editor
+// (`editor` open) as a column left of it, and the slice panes (`slices` open too) as a strip under
+// the view, each when the window is wide enough for the view to keep kMinDockedViewPx beside them
+// (1280 × 720 and larger at UI scale 1, the expert panel and the editor together from about 1500);
+// otherwise they stay windows over the view and the layout keeps the view whole. A docked panel
+// never covers the view, so the structure framed in its centre stays in sight.
 inline constexpr float kMinDockedViewPx = 400;
-void dockPanels(ViewLayout& layout, bool editor, bool slices);
+inline constexpr float kExpertPanelPx = 340;  // the expert panel's width at UI scale 1
+void dockPanels(ViewLayout& layout, bool editor, bool slices, bool expert = false);
 
 struct DesktopOptions {
   std::string dataset;              // empty: the start course's dataset; else as openNamedDataset takes it

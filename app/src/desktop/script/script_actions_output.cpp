@@ -23,7 +23,7 @@ ScriptInterpreter::Feature ScriptInterpreter::outputActions() {
                "Reports widgets {window, widgets}: where the last settled frames drew the named widgets (at most 30 frames).",
                &S::widgets},
               {"layout", {},
-               "Reports layout {window, view, editor_docked, slices_docked}: the view's rectangle in window pixels.",
+               "Reports layout {window, view, editor_docked, expert_docked, slices_docked}: the view's rectangle in window pixels.",
                &S::layout},
               {"record", {{"on?", "true (default) starts, false stops"}}, "Starts or stops the frame recorder.", &S::record},
               {"report", {{"out?", "JSON file to write the report to"}},
@@ -34,13 +34,14 @@ ScriptInterpreter::Feature ScriptInterpreter::outputActions() {
 }
 
 // {"do": "layout"}: an event with the window's size and the view's rectangle (window pixels), and
-// whether the segment editor and the slice panes are docked beside it.
+// whether the segment editor, the expert panel and the slice panes are docked beside it.
 ScriptInterpreter::Outcome ScriptInterpreter::layout(Context& c) {
   const ViewLayout& l = c.model.layout();
   c.model.event({{"event", "layout"},
                  {"window", {l.windowW, l.windowH}},
                  {"view", {{"x", l.viewLeft()}, {"y", 0}, {"width", l.viewWidth()}, {"height", l.viewHeight()}}},
                  {"editor_docked", l.rightPx > 0},
+                 {"expert_docked", l.expertPx > 0},
                  {"slices_docked", l.bottomPx > 0}});
   return Progress::Done;
 }

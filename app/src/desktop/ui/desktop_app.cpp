@@ -62,7 +62,8 @@ class DesktopApp final : public ScriptHost {
     l.panelPx = explore_.width();
     const bool editing = !model_->study().participantActive() && model_->segmenter().windowOpen &&
                          model_->segmenter().attached();
-    dockPanels(l, editing, model_->slices().windowOpen && model_->slices().attached());
+    dockPanels(l, editing, model_->slices().windowOpen && model_->slices().attached(),
+               !model_->study().participantActive() && model_->expertOn());
     return l;
   }
   void frame();
@@ -208,7 +209,7 @@ void DesktopApp::drawUi() {
   if (!study.participantActive())  // a locate-on-slice exam item: the slice in place of the 3-D view
     explore_.exams().drawSlice(*model_, panelW, 0, viewW, viewH);
   if (!study.participantActive() && model_->expertOn() &&
-      expert_.draw(model_->expert(), float(l.windowW) - 340 * l.uiScale, 340 * l.uiScale, float(l.windowH)))
+      expert_.draw(model_->expert(), float(l.windowW) - kExpertPanelPx * l.uiScale, kExpertPanelPx * l.uiScale, float(l.windowH)))
     model_->expertEdited();
   if (!view_->available())
     ImGui::GetBackgroundDrawList()->AddText(ImVec2(panelW + 20, 20), IM_COL32(255, 140, 120, 255),
