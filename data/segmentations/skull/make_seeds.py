@@ -42,12 +42,16 @@ S = [
                                    (BONE, (104,124,188,212,26,38), None), (BONE, (133,153,188,212,26,38), None)]),
  (4, 'Zygomatic arch (right)', [0.75,0.55,0.85], [(ARCH, (58,70,130,172,22,28), (64,155,27))]),
  (5, 'Zygomatic arch (left)', [0.55,0.45,0.90], [(ARCH, (186,202,130,172,22,28), (196,150,28))]),
- (6, 'Nasal cavity', [0.30,0.75,0.95], [(AIR, (113,139,150,214,8,29), None)]),
+ # The airway from the palate up, with the narrow cleft beside the septum between the two ethmoid
+ # labyrinths in front (i 128-132, j 168-200), which the growth takes on up to the cribriform plate.
+ (6, 'Nasal cavity', [0.30,0.75,0.95], [(AIR, (113,139,150,214,8,29), None), (AIR, (128,132,168,200,30,40), None)]),
  (7, 'Maxillary sinus (right)', [0.20,0.85,0.55], [(AIR, (80,112,150,209,0,39), (108,176,21))]),
  (8, 'Maxillary sinus (left)', [0.55,0.90,0.20], [(AIR, (140,174,150,209,0,39), (155,181,23))]),
  (9, 'Frontal sinus', [0.95,0.85,0.25], [(AIR, (105,149,175,214,42,69), (128,199,55))]),
  (10, 'Sphenoid sinus', [0.95,0.45,0.65], [(AIR, (110,149,128,155,20,39), (130,148,31))]),
- (11, 'Ethmoid air cells', [0.40,0.55,0.95], [(AIR, (110,144,150,194,30,43), None)]),
+ # Both labyrinths: in front (j 168-194) the air on each side of that cleft, behind it the wider
+ # posterior cells across the midline.
+ (11, 'Ethmoid air cells', [0.40,0.55,0.95], [(AIR, (110,127,150,194,30,43), None), (AIR, (133,144,150,194,30,43), None)]),
  (12, 'Orbit (right)', [0.95,0.35,0.30], [(SOFT, (72,112,150,206,26,52), (93,179,39), ((112,158,38),(91,205,40),4,19))]),
  (13, 'Orbit (left)', [0.30,0.35,0.95], [(SOFT, (143,183,150,206,26,52), (163,182,40), ((143,158,38),(164,205,40),4,19))]),
  # The canals from the concha to the isthmus before the eardrum (right i 60-86, left i 170-199), at
@@ -73,12 +77,13 @@ S = [
 FIRST = ('Coronoid process (right)', 'Coronoid process (left)')
 # Labels that keep only voxels of a tissue range (the seeds file's "grow_range",
 # segment/ranged_growth.h): the bones, so a thin ramus or arch is not padded with the muscle and air
-# around it, and the ear canals, which keep their air and not the skin of their walls.
+# around it, and the ear canals and ethmoid cells, which keep their air and not the skin of their
+# walls or the cells' bony septa and lining.
 GROW_RANGE = {'Mandible': BONE_ANY, 'Maxilla': BONE_ANY, 'Zygomatic arch (right)': ARCH, 'Zygomatic arch (left)': ARCH,
               'Atlas (C1)': BONE_ANY, 'Axis (C2)': BONE_ANY, 'Coronoid process (right)': BONE_ANY,
               'Coronoid process (left)': BONE_ANY,
               'Petrous temporal bone (right)': BONE_ANY, 'Petrous temporal bone (left)': BONE_ANY,
-              'External acoustic meatus (right)': AIR_ANY, 'External acoustic meatus (left)': AIR_ANY}
+              'Ethmoid air cells': AIR_ANY, 'External acoustic meatus (right)': AIR_ANY, 'External acoustic meatus (left)': AIR_ANY}
 
 def inside(b, i, j, k): return b[0] <= i <= b[1] and b[2] <= j <= b[3] and b[4] <= k <= b[5]
 def cone(apex, front, r0, r1):
