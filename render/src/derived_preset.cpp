@@ -220,15 +220,25 @@ Preset derivedPreset(const IntensityLevels& l, RenderMode mode, const std::strin
       // colour, so the gradient stays near the structure.
       p.distanceTf = withColour(kOrange, {{0, 0}, {0.42, 0}, {0.73, 0.6f}, {0.93, 1}, {1, 1}});
       break;
-    case RenderMode::Outline:  // the bone surface everywhere, a thin band at one weighted distance
-      // The rest of the bone as translucent context (t · 0.9 per voxel of surface), so the band
-      // reads on it and the structure shows through; t = 1 gives the opaque skull.
-      p.t = 0.35f;
-      p.contextInFront = 1;  // the band is on the surface in front
+    case RenderMode::Outline:  // a thin band at one weighted distance on the bone around the structure
+      // The bone near the structure as translucent context (κ = 0.58: 0.9 · 0.58² ≈ 0.3 per voxel of
+      // surface, Algorithm 1), fading with weighted distance as in the WDT view, so the band reads on
+      // it and the structure shows through even inside solid bone (a µCT of a temporal bone, whose
+      // outer surface and inner walls, all drawn, made a wall in front of it); t brings in the rest,
+      // t = 1 the opaque skull.
+      p.t = 0;
+      // The band and bone between the eye and the structure at 0.3 of their opacity: the band's
+      // shell wraps the structure, and inside solid bone it and the bone near it lie in front of
+      // the structure from every side; a structure on the surface (the zygomatic arch) has little
+      // in front of it.
+      p.contextInFront = 0.3f;
       p.dataTf = boneTf(l, 0.9f, 0.9f);
       // The band at x ≈ 0.58 (n = 0.865), 0.17 units wide (a wider or farther band, seen through the
       // translucent bone on the far side too, reads as a wall: 10 px at 160 px on the ear canal).
-      p.distanceTf = withColour(kGreen, {{0, 0}, {0.845, 0}, {0.865, 1}, {0.885, 0}, {1, 0}});
+      p.distanceTf = {point(0, kBone[0], kBone[1], kBone[2], 0), point(0.2, kBone[0], kBone[1], kBone[2], 0),
+                      point(0.45, kBone[0], kBone[1], kBone[2], 0.58f * 0.55f), point(0.75, kBone[0], kBone[1], kBone[2], 0.58f),
+                      point(0.845, kBone[0], kBone[1], kBone[2], 0.58f), point(0.865, kGreen[0], kGreen[1], kGreen[2], 1),
+                      point(0.885, kBone[0], kBone[1], kBone[2], 0.58f), point(1, kBone[0], kBone[1], kBone[2], 0.58f)};
       break;
     case RenderMode::Lighting:  // Eq. 6: the structure lights the bone around it
       p.t = 0.25f;
