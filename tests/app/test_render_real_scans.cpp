@@ -721,7 +721,7 @@ TEST_CASE("µCT-like volume: outline keeps a structure inside solid bone in sigh
       if (silhouette[i]) seen += inColour(im, i, p.highlightRgb);
       else band += inColour(im, i, bandRgb);
     }
-    MESSAGE(id << " outline: " << 100.0 * double(seen) / double(covered) << " % of the silhouette in its colour, band "
+    MESSAGE(std::string(id) << " outline: " << 100.0 * double(seen) / double(covered) << " % of the silhouette in its colour, band "
                 << 100.0 * double(band) / double(n) << " % of the frame, t 0→1 changes " << meanGreyChange(im, all) << " grey levels");
     if (const char* pngDir = std::getenv("AT_TEST_PNG_DIR"); pngDir && *pngDir)
       CHECK(writePng((fs::path(pngDir) / (std::string(id) + "_microct_outline.png")).string(), toRgb(im)));
