@@ -74,6 +74,9 @@ void ExplorePanel::draw(DesktopModel& model, const Status& status) {
     ImGui::TextDisabled("No labelled structures: the whole volume is shown with a transfer function "
                         "derived from its intensities. Label it with Segment...");
     ImGui::PopTextWrapPos();
+  } else if (model.expertOn()) {  // the view shows the expert's preset: its mode and t are set there
+    const render::Preset& edited = model.expert().preset();
+    ImGui::TextDisabled("%s, t %.2f: set in the Expert panel", render::toString(edited.mode), double(edited.t));
   } else {
     int mode = explore.bare() ? 1 : 0;
     if (ImGui::RadioButton("WDT preset", &mode, 0)) explore.setBare(false);
