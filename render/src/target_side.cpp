@@ -1,5 +1,7 @@
 #include "render/target_side.h"
 
+#include "render/click_point.h"
+
 namespace at::render {
 
 std::vector<std::string> targetSidesToTry(const std::string& own) {
@@ -10,11 +12,11 @@ std::vector<std::string> targetSidesToTry(const std::string& own) {
   return sides;
 }
 
-bool targetClickableAt(const Camera& camera, int width, int height, const Vec3& anchorMm, std::uint16_t targetLabel,
-                       const std::function<PickResult(double x, double y)>& pickAt) {
-  const auto p = camera.project(anchorMm, width, height);
-  if (!p || (*p)[0] < 0 || (*p)[1] < 0 || (*p)[0] >= width || (*p)[1] >= height) return false;
-  const PickResult hit = pickAt((*p)[0], (*p)[1]);
+bool targetClickableAt(const Camera& camera, int width, int height, const LabelMap& labels, std::uint16_t targetLabel,
+                       const std::optional<ClipPlane>& clip, const std::function<PickResult(double x, double y)>& pickAt) {
+  const auto middle = middleOfStructure(labels, targetLabel, camera, width, height, clip);
+  if (!middle) return false;
+  const PickResult hit = pickAt(middle->x, middle->y);
   return hit.hit && hit.label == targetLabel;
 }
 

@@ -506,3 +506,80 @@ TEST_CASE("play's pictures use the field's data-aware distance unit, as the rend
   CHECK(toField < 2);
   CHECK(toSize > 8 * std::max(toField, 0.5));
 }
+
+TEST_CASE("checkLocateQuestions: a target in two parts is clicked in the middle of its wider part, not at the voxel nearest its centroid") {
+  // Bone in soft tissue, 0.5 mm voxels (LPS: i to the left, j to the back, k up): a target in two
+  // parts side by side (4 and 12 voxels wide) and a plate in front of the gap between them that
+  // hides the parts' inner edges from the front. The target's centroid lies in the gap; the voxel nearest
+  // it is on the wider part's inner edge, behind the plate: a click there picks the plate. A
+  // student clicks the middle of the wider part, in plain sight.
+  Dataset ds;
+  ds.id = "two_parts";
+  const Dims dims{64, 48, 40};
+  ds.volume.geometry.dims = dims;
+  ds.volume.geometry.spacingMm = {0.5, 0.5, 0.5};
+  ds.volume.voxels.assign(dims.count(), std::int16_t(-1000));
+  for (int k = 4; k < 36; ++k)  // soft tissue round the bone, air outside it (read as Hounsfield units)
+    for (int j = 4; j < 44; ++j)
+      for (int i = 4; i < 60; ++i) ds.volume.voxels[dims.index(i, j, k)] = 40;
+  ds.labels.geometry = ds.volume.geometry;
+  ds.labels.voxels.assign(dims.count(), 0);
+  const auto fill = [&](std::array<int, 3> from, std::array<int, 3> to, std::uint16_t label) {
+    for (int k = from[2]; k < to[2]; ++k)
+      for (int j = from[1]; j < to[1]; ++j)
+        for (int i = from[0]; i < to[0]; ++i) {
+          ds.volume.voxels[dims.index(i, j, k)] = 1200;
+          ds.labels.voxels[dims.index(i, j, k)] = label;
+        }
+  };
+  fill({14, 24, 12}, {18, 36, 28}, 2);  // the narrow part
+  fill({30, 24, 14}, {42, 36, 26}, 2);  // the wide part: 12 × 12 voxels seen from the front
+  fill({16, 18, 10}, {34, 21, 30}, 1);  // the plate in front of the gap (lower j: anterior)
+  ds.structures = {Structure{1, "plate", "Plate", {0.9f, 0.6f, 0.2f}, "", ""}, Structure{2, "pair", "Pair", {0.2f, 0.6f, 0.9f}, "", ""}};
+  auto anchor = render::structureFrame(ds.labels, 2);
+  REQUIRE(anchor);
+  const Vec3 anchorIndex = ds.labels.geometry.patientToIndex(anchor->anchorMm);
+  CAPTURE(anchorIndex[0]);
+  REQUIRE(anchorIndex[0] >= 30);  // on the wide part's inner edge, behind the plate
+  REQUIRE(anchorIndex[0] < 34);
+
+  lessons::Course course;
+  course.id = "two_parts";
+  course.datasetId = ds.id;
+  lessons::Lesson lesson;
+  lesson.id = "two_parts.lesson";
+  lesson.courseId = course.id;
+  lesson.steps.push_back(locateStep("two_parts.locate_pair", "pair", "plate", "plate_wdt", lessons::CameraView::Anterior));
+  course.lessons.push_back(lesson);
+  test::TempDir empty("no-presets");
+  auto checks = app::checkLocateQuestions(ds, course, render::PresetLibrary(empty.path()));
+  REQUIRE_MESSAGE(checks, (checks ? "" : checks.error().message));
+  REQUIRE(checks->size() == 1);
+  const app::LocateCheck& c = checks->front();
+  MESSAGE("click at " << c.clickX << ", " << c.clickY << "; " << c.pickingPixels << " pixels pick it, " << c.shownPixels
+                      << " show context; " << c.problem);
+  CHECK_MESSAGE(c.answerable, c.problem);
+
+  // The click the check makes is on the wide part: the anchor's pixel is on the plate.
+  render::ViewRequest request;
+  request.width = app::kCheckViewWidth;
+  request.height = app::kCheckViewHeight;
+  request.view = "anterior";
+  request.margin = app::kLocateRegionMargin;
+  auto plate = render::structureFrame(ds.labels, 1);
+  REQUIRE(plate);
+  auto settings = render::settingsFor(render::derivedPreset(render::summariseIntensities(ds.volume), render::RenderMode::Wdt, "plate"),
+                                      *plate, request);
+  REQUIRE(settings);
+  const auto wide = settings->camera.project(ds.labels.geometry.indexToPatient({35.5, 29.5, 19.5}), request.width, request.height);
+  REQUIRE(wide);
+  CHECK(std::hypot(c.clickX - (*wide)[0], c.clickY - (*wide)[1]) <= 6);
+
+  // With the plate widened over the whole wide part, its middle is hidden: refused, naming the plate.
+  fill({16, 18, 10}, {46, 21, 30}, 1);
+  auto hidden = app::checkLocateQuestions(ds, course, render::PresetLibrary(empty.path()));
+  REQUIRE(hidden);
+  MESSAGE(hidden->front().problem);
+  CHECK_FALSE(hidden->front().answerable);
+  CHECK(hidden->front().problem.find("picks the plate") != std::string::npos);
+}

@@ -63,9 +63,7 @@ bool clickableFrom(const BuriedTarget& scene, const std::string& side) {
   s.camera = Camera::named(*parseNamedView(side), {0, 0, 0}, 12);
   const SceneVolumes sv{&scene.volume, &scene.labels, &scene.field, 0};
   const TransferFunction2D table = shadingTable(s.preset);
-  auto frame = structureFrame(scene.labels, 1);
-  REQUIRE(frame);
-  return targetClickableAt(s.camera, s.width, s.height, frame->anchorMm, 1,
+  return targetClickableAt(s.camera, s.width, s.height, scene.labels, 1, s.clip,
                            [&](double x, double y) { return pickStructure(sv, s, table, x, y); });
 }
 
@@ -141,14 +139,37 @@ TEST_CASE("targetClickableAt: a target buried in bone is clickable only down its
   CHECK_FALSE(chosen->has_value());
 }
 
-TEST_CASE("targetClickableAt: an anchor outside the picture or behind the eye is not clickable, whatever the pick says") {
+TEST_CASE("targetClickableAt: a target outside the picture, behind the eye or cut away by the clip plane is not clickable, whatever the pick says") {
+  // One voxel labelled 7 at the grid's centre (the origin), seen from above.
+  LabelMap labels;
+  labels.geometry.dims = {5, 5, 5};
+  labels.geometry.spacingMm = {1, 1, 1};
+  labels.geometry.originMm = {-2, -2, -2};
+  labels.voxels.assign(labels.geometry.dims.count(), 0);
+  labels.voxels[labels.geometry.dims.index(2, 2, 2)] = 7;
+  REQUIRE(labels.geometry.indexToPatient({2, 2, 2}) == Vec3{0, 0, 0});
   const Camera camera = Camera::named(NamedView::Superior, {0, 0, 0}, 10);
-  const auto hitsTarget = [](double, double) { return PickResult{true, 7, {0, 0, 0}, 1}; };
+  std::vector<std::array<double, 2>> clicked;
+  const auto hitsTarget = [&](double x, double y) {
+    clicked.push_back({x, y});
+    return PickResult{true, 7, {0, 0, 0}, 1};
+  };
   const auto hitsOther = [](double, double) { return PickResult{true, 3, {0, 0, 0}, 1}; };
   const auto misses = [](double, double) { return PickResult{}; };
-  CHECK(targetClickableAt(camera, 64, 64, {0, 0, 0}, 7, hitsTarget));
-  CHECK_FALSE(targetClickableAt(camera, 64, 64, {0, 0, 0}, 7, hitsOther));
-  CHECK_FALSE(targetClickableAt(camera, 64, 64, {0, 0, 0}, 7, misses));
-  CHECK_FALSE(targetClickableAt(camera, 64, 64, {500, 0, 0}, 7, hitsTarget));        // far outside the view
-  CHECK_FALSE(targetClickableAt(camera, 64, 64, camera.eye() + 5.0 * (camera.eye() - camera.target), 7, hitsTarget));  // behind the eye
+  CHECK(targetClickableAt(camera, 64, 64, labels, 7, std::nullopt, hitsTarget));
+  REQUIRE(clicked.size() == 1);
+  const auto centre = camera.project({0, 0, 0}, 64, 64);
+  REQUIRE(centre);
+  CHECK(std::hypot(clicked[0][0] - (*centre)[0], clicked[0][1] - (*centre)[1]) <= 3.0);  // where it lies (grid of every 2nd pixel)
+  CHECK_FALSE(targetClickableAt(camera, 64, 64, labels, 7, std::nullopt, hitsOther));
+  CHECK_FALSE(targetClickableAt(camera, 64, 64, labels, 7, std::nullopt, misses));
+  CHECK_FALSE(targetClickableAt(camera, 64, 64, labels, 5, std::nullopt, hitsTarget));  // no voxel of label 5
+  const Camera aside = Camera::named(NamedView::Superior, {500, 0, 0}, 10);  // far outside the view
+  CHECK_FALSE(targetClickableAt(aside, 64, 64, labels, 7, std::nullopt, hitsTarget));
+  // From below, looking up at a point 50 mm above it: the voxel lies behind the eye.
+  const Camera past = Camera::named(NamedView::Inferior, {0, 0, 50}, 1);
+  REQUIRE(dot(Vec3{0, 0, 0} - past.eye(), past.forward()) < 0);
+  CHECK_FALSE(targetClickableAt(past, 64, 64, labels, 7, std::nullopt, hitsTarget));
+  CHECK_FALSE(targetClickableAt(camera, 64, 64, labels, 7, ClipPlane{{0, 0, 1}, -0.5}, hitsTarget));  // cut away
+  CHECK(targetClickableAt(camera, 64, 64, labels, 7, ClipPlane{{0, 0, 1}, 0.5}, hitsTarget));          // kept
 }

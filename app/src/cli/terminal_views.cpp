@@ -171,14 +171,12 @@ Result<TerminalPicture> TerminalViews::frame(const lessons::QuestionScene& scene
   };
   // A step's free camera is the author's choice: kept even when the target does not show.
   const Structure* target = visibleTarget && !scene.camera ? dataset_.findStructure(*visibleTarget) : nullptr;
-  auto targetFrame = target ? render::structureFrame(dataset_.labels, target->label)
-                            : Result<render::StructureFrame>(fail("no target to show"));
   std::optional<render::RenderSettings> chosen;  // the scene's own side unless another shows the target
-  if (targetFrame) {
+  if (target) {
     auto side = render::firstSideShowingTarget(ownView, [&](const std::string& view) -> Result<bool> {
       auto settings = sideSettings(view);
       if (!settings) return tl::unexpected(settings.error());
-      const bool shows = render::targetClickableAt(settings->camera, kWidth, kHeight, targetFrame->anchorMm, target->label,
+      const bool shows = render::targetClickableAt(settings->camera, kWidth, kHeight, dataset_.labels, target->label, settings->clip,
                                                    [&](double x, double y) {
                                                      return render::pickStructure(volumes, *settings, table, x, y);
                                                    });

@@ -80,9 +80,8 @@ void DesktopModel::turnTowardTarget() {
   const double left = layout_.viewLeft();
   const int viewW = int(layout_.viewWidth()), viewH = int(layout_.viewHeight());
   const auto side = render::firstSideShowingTarget(turn.view, [&](const std::string& view) -> Result<bool> {
-    const render::StructureFrame* frame = explore_.frameOf(turn.target);
-    if (!frame || !setView(view)) return false;
-    return render::targetClickableAt(explore_.camera(), viewW, viewH, frame->anchorMm, turn.target,
+    if (!setView(view)) return false;
+    return render::targetClickableAt(explore_.camera(), viewW, viewH, dataset_->labels, turn.target, explore_.clipPlane(),
                                      [&](double x, double y) { return pickAt(x + left, y); });
   });
   const std::optional<std::string> chosen = side ? *side : std::nullopt;  // the search itself cannot fail here

@@ -6,6 +6,7 @@
 
 #include "core/parallel_rows.h"
 #include "course_views.h"
+#include "render/click_point.h"
 #include "render/derived_preset.h"
 #include "render/gradient_volume.h"
 #include "render/pick_bounds.h"
@@ -17,13 +18,6 @@
 
 namespace at::app {
 namespace {
-
-// The target voxel nearest the target's centroid (on the structure even when it is curved).
-std::optional<Vec3> centreOf(const LabelMap& labels, std::uint16_t label) {
-  auto frame = render::structureFrame(labels, label);
-  if (!frame) return std::nullopt;
-  return frame->anchorMm;
-}
 
 bool isSet(const std::atomic<bool>* flag) { return flag && flag->load(std::memory_order_relaxed); }
 
@@ -145,8 +139,9 @@ Result<LocateCheck> LocateViewChecker::check(const quiz::Question& question, con
   kept.used = checks_;
   const FloatVolume& field = kept.distances;
   auto frame = render::structureFrame(labelled.labels, region->label);
-  const auto centre = centreOf(labelled.labels, target->label);
-  if (!frame || !centre) {
+  const bool targetHasVoxels =
+      std::find(labelled.labels.voxels.begin(), labelled.labels.voxels.end(), target->label) != labelled.labels.voxels.end();
+  if (!frame || !targetHasVoxels) {
     check.problem = "the target or its region has no voxels";
     return check;
   }
@@ -159,21 +154,28 @@ Result<LocateCheck> LocateViewChecker::check(const quiz::Question& question, con
   // The view (and its field's distance unit) as play and the desktop show it.
   auto settings = stepViewSettings(preset, *frame, request, scene.camera, scene.clip, &field, dataset_.volume);
   if (!settings) return tl::unexpected(settings.error());
-  const auto px = settings->camera.project(*centre, kCheckViewWidth, kCheckViewHeight);
-  if (!px || (*px)[0] < 0 || (*px)[0] >= kCheckViewWidth || (*px)[1] < 0 || (*px)[1] >= kCheckViewHeight) {
-    check.problem = "the " + target->id + "'s centre is outside the view (" + viewName + ")";
+  // Where a student clicks it: the middle of where it lies in the picture (render/click_point.h).
+  const auto middle = render::middleOfStructure(labelled.labels, target->label, settings->camera, kCheckViewWidth,
+                                                kCheckViewHeight, settings->clip, kShownGridStep);
+  if (!middle) {
+    check.problem = "the " + target->id + " lies outside the view (" + viewName + ")";
     return check;
   }
+  check.clickX = middle->x;
+  check.clickY = middle->y;
+  const std::array<double, 2> px{middle->x, middle->y};
   // The region's smoothed mask worked out once for the view's thousands of picks (the same numbers
   // as smoothing it per sample).
   const render::SelectedMask mask = render::selectedMask(labelled.labels, region->label);
   const render::SceneVolumes volumes{&dataset_.volume, &labelled.labels, &field, region->label, &gradients, &mask};
   const render::TransferFunction2D table = render::shadingTable(settings->preset);
-  const render::PickResult clicked = render::pickStructure(volumes, *settings, table, (*px)[0], (*px)[1]);
+  const render::PickResult clicked = render::pickStructure(volumes, *settings, table, px[0], px[1]);
   if (clicked.label != target->label) {
     const Structure* picked = clicked.hit ? labelled.findStructureByLabel(clicked.label) : nullptr;
-    check.problem = "a click on the " + target->id + "'s centre in its view (" + viewName + ", region " + region->id +
-                    ") picks " + (picked ? "the " + picked->id : std::string("nothing"));
+    check.problem = "a click on the middle of the " + target->id + " in its view (" + viewName + ", region " + region->id +
+                    ", pixel " + std::to_string(int(px[0])) + ", " + std::to_string(int(px[1])) + " of " +
+                    std::to_string(kCheckViewWidth) + " × " + std::to_string(kCheckViewHeight) + ") picks " +
+                    (picked ? "the " + picked->id : std::string("nothing"));
     return check;
   }
   if (!countShownPixels(volumes, *settings, table, target->label, check, cancel)) return cancelled();

@@ -1,7 +1,8 @@
 // Whether each locate question of a course can be answered in its own view: the view rendered as
 // the terminal draws it (400×300, framed on the region with a margin, the step's preset, camera and
-// clip), a click on the target's centre must pick the target, and context must be drawn where it
-// picks. `course validate` refuses a course that fails it; tests/app/test_question_scenes.cpp
+// clip), a click on the middle of where the target lies in the picture (render/click_point.h: for a
+// structure in two parts, the middle of the wider part) must pick the target, and context must be
+// drawn where it picks. `course validate` refuses a course that fails it; tests/app/test_question_scenes.cpp
 // checks the shipped courses with the same code.
 #pragma once
 
@@ -43,11 +44,12 @@ constexpr int kShownGridStep = 2;
 struct LocateCheck {
   std::string path;        // "lessons[3].steps[4].question"
   std::string questionId;
-  // A click on the target's centre picks the target, and context is drawn where it picks it.
+  // A click on the middle of the target picks the target, and context is drawn where it picks it.
   bool answerable = false;
   std::string problem;      // when not: what the click picks instead, why it cannot be made, or that it is not drawn
   int pickingPixels = 0;    // pixels of the view that pick the target (estimated from the grid)
   int shownPixels = 0;      // pixels at or next to those that draw context
+  double clickX = 0, clickY = 0;  // the middle of the target in the view: where a student clicks it
 };
 
 // Checks locate questions on one dataset (which outlives it), keeping what the checks share — the

@@ -14,6 +14,7 @@
 #include "core/error.h"
 #include "render/camera.h"
 #include "render/render_settings.h"
+#include "volume/grid.h"
 
 namespace at::render {
 
@@ -21,11 +22,13 @@ namespace at::render {
 // inferior and lateral_left, each once (`own` is not tried twice).
 std::vector<std::string> targetSidesToTry(const std::string& own);
 
-// Whether the target can be clicked in a width × height view from `camera`: its anchor
-// (`anchorMm`, StructureFrame::anchorMm: a point on the structure) projects inside the image, and
-// the pick at that pixel (`pickAt(x, y)`, in the image's pixels) hits `targetLabel`.
-bool targetClickableAt(const Camera& camera, int width, int height, const Vec3& anchorMm, std::uint16_t targetLabel,
-                       const std::function<PickResult(double x, double y)>& pickAt);
+// Whether the target can be clicked in a width × height view from `camera`: a click on the middle
+// of where it lies in the picture (render/click_point.h: the voxels labelled `targetLabel` in
+// `labels` that `clip` keeps, projected; for a target in two parts, the middle of the wider part)
+// hits `targetLabel` (`pickAt(x, y)`, in the image's pixels). False where none of it lies in the
+// picture.
+bool targetClickableAt(const Camera& camera, int width, int height, const LabelMap& labels, std::uint16_t targetLabel,
+                       const std::optional<ClipPlane>& clip, const std::function<PickResult(double x, double y)>& pickAt);
 
 // The first side of targetSidesToTry(own) from which `clickableFrom(side)` says the target can be
 // clicked; nullopt when none can (the caller stays on `own`). An error from `clickableFrom` ends
