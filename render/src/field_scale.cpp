@@ -5,6 +5,7 @@
 #include <limits>
 #include <vector>
 
+#include "render/fuzzy_picture.h"
 #include "render/transfer_function.h"
 #include "view_rays.h"
 
@@ -361,12 +362,21 @@ FieldScale fieldScale(const FloatVolume& field, const Volume& volume, const Mask
 bool unitFromSeenBone(RenderMode mode) { return mode == RenderMode::Wdt || mode == RenderMode::Unweighted; }
 
 FieldScale applyFieldScale(RenderSettings& settings, const FloatVolume& field, const Volume& volume, const Mask* body,
-                           const StructureFrame& frame, const ViewRequest& request) {
+                           const StructureFrame& frame, const ViewRequest& request, const PictureInputs* picture) {
   const FieldView view = fieldViewOf(settings);
   const BoneLevels levels = boneLevels(settings.preset);
   FieldScale scale = fieldScale(field, volume, body, frame, levels, unitFromSeenBone(settings.preset.mode) ? &view : nullptr,
                                 request.margin, request.minRadiusMm);
   if (unitFromNeighbourBone(settings.preset.mode)) unitFromNeighbours(scale, neighbourBone(field, volume, body, levels, view), settings.preset.mode);
+  if (picture && picture->labels) {
+    SceneVolumes scene;
+    scene.volume = &volume;
+    scene.labels = picture->labels;
+    scene.field = &field;
+    scene.selected = picture->selected;
+    scene.gradients = picture->gradients;
+    unitFromFuzzyPicture(scale, scene, settings, request.contextScale);
+  }
   settings.distanceUnit = scale.distanceUnit * request.contextScale;
   settings.distanceOffset = scale.distanceOffset;
   return scale;

@@ -197,6 +197,7 @@ struct MarchedSample {
   Vec3 ijk;  // on the volume's grid
   double opacity;
   bool structure;
+  std::array<float, 3> rgb{};  // unshaded: the table's colour (lighting: times k_a, as the ray caster)
 };
 
 // Beyond this accumulated opacity nothing behind shows.
@@ -266,7 +267,7 @@ void marchPixel(const SceneVolumes& scene, const RenderSettings& s, const Transf
     const Vec3 ijk = g.patientToIndex(p);
     const double m = structure ? maskAt(ijk) : 0.0;
     if (m >= 0.5) {
-      if (prevMask < 0.5 && !visit({p, ijk, structureAlpha, true})) return;
+      if (prevMask < 0.5 && !visit({p, ijk, structureAlpha, true, s.preset.highlightRgb})) return;
       prevMask = m;
       continue;
     }
@@ -294,10 +295,19 @@ void marchPixel(const SceneVolumes& scene, const RenderSettings& s, const Transf
         gc[c] = trilinear(g.dims, ijk, [&](std::size_t i) { return double(scene.gradients->texels[i][c + 1]) / 32767.0; });
       surface = surfaceFactor(s.preset, GradientVolume::strengthOf(float(gc[0]), float(gc[1]), float(gc[2])));
     }
-    const float a = table.lookup(hu, n)[3];
+    const Rgba c = table.lookup(hu, n);
     const float front = tm < frontT ? s.preset.contextInFront : 1.0f;
-    const float ac = a > 0 ? correctedOpacity(a, step, refMm) * surface * front : 0.0f;
-    if (!visit({p, ijk, double(ac), false})) return;
+    const float ac = c[3] > 0 ? correctedOpacity(c[3], step, refMm) * surface * front : 0.0f;
+    std::array<float, 3> rgb{c[0], c[1], c[2]};
+    if (s.preset.mode == RenderMode::Lighting && fg && ac > 0) {  // Eq. 6, as the unshaded ray caster
+      const double d = trilinear(*scene.field, fg->patientToIndex(p), [](float v) { return std::isinf(v) ? 1e30 : double(v); });
+      const double x = std::min(std::max(d - s.distanceOffset, 0.0), 1e6) * double(s.preset.lightingAlpha) / s.distanceUnit;
+      const double ka = double(s.preset.lightingBeta) / ((x + 1) * (x + 1));
+      float top = 1;
+      for (int k = 0; k < 3; ++k) top = std::max(top, rgb[std::size_t(k)] = float(rgb[std::size_t(k)] * (ka * s.preset.highlightRgb[std::size_t(k)] + 0.25)));
+      for (float& v : rgb) v /= top;
+    }
+    if (!visit({p, ijk, double(ac), false, rgb})) return;
   }
 }
 
@@ -346,6 +356,19 @@ double contextOpacity(const SceneVolumes& scene, const RenderSettings& settings,
     return accumulated < kOpaque;
   });
   return context;
+}
+
+CompositedPixel compositePixel(const SceneVolumes& scene, const RenderSettings& settings, const TransferFunction2D& table,
+                               double x, double y) {
+  CompositedPixel out;
+  marchPixel(scene, settings, table, x, y, [&](const MarchedSample& sample) {
+    const double added = (1 - out.alpha) * sample.opacity;
+    for (std::size_t c = 0; c < 3; ++c) out.rgb[c] += added * std::clamp(double(sample.rgb[c]), 0.0, 1.0);
+    out.alpha += added;
+    if (sample.structure) out.structureAlpha += added;
+    return out.alpha < kOpaque;
+  });
+  return out;
 }
 
 }  // namespace at::render

@@ -57,4 +57,24 @@ inline RayGrid rayGridOf(int viewWidth, int viewHeight, int raysPerSide) {
   return {std::max(1, int(std::lround(viewWidth * shrink))), std::max(1, int(std::lround(viewHeight * shrink)))};
 }
 
+// City-block distance in rays from the rays that meet the structure (`structure` non-zero; a large
+// value everywhere without any), on a w × h ray grid.
+inline std::vector<int> raysFromStructure(const std::vector<char>& structure, int w, int h) {
+  std::vector<int> d(structure.size(), 1 << 20);
+  for (std::size_t i = 0; i < structure.size(); ++i)
+    if (structure[i]) d[i] = 0;
+  const auto at = [&](int x, int y) -> int& { return d[std::size_t(y) * std::size_t(w) + std::size_t(x)]; };
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      if (x > 0) at(x, y) = std::min(at(x, y), at(x - 1, y) + 1);
+      if (y > 0) at(x, y) = std::min(at(x, y), at(x, y - 1) + 1);
+    }
+  for (int y = h - 1; y >= 0; --y)
+    for (int x = w - 1; x >= 0; --x) {
+      if (x + 1 < w) at(x, y) = std::min(at(x, y), at(x + 1, y) + 1);
+      if (y + 1 < h) at(x, y) = std::min(at(x, y), at(x, y + 1) + 1);
+    }
+  return d;
+}
+
 }  // namespace at::render::detail

@@ -12,6 +12,8 @@
 
 #include "desktop_model.h"
 #include "headless_desktop.h"
+#include "render/fuzzy_picture.h"
+#include "render/gradient_volume.h"
 #include "render/preset.h"
 #include "view/field_unit.h"
 #include "volume/mask.h"
@@ -104,8 +106,10 @@ FieldUnitRequest requestForInjectedMeasure(const Dataset& ds, std::uint16_t labe
 TEST_CASE("FieldUnits_TheUnitTakenAfterTheAsyncMeasure_EqualsTheRenderCommandsUnit") {
   const Dataset& ds = test::phantomOfSize(48);
   const render::PresetLibrary library(test::sourceDir() / "data" / "presets");
-  // Every structure, in a mode of each kind of unit (around, seen, the bone next to it): the unit
-  // render::applyFieldScale sets for the render command on the same view.
+  // Every structure, in a mode of each kind of unit (around, seen, the bone next to it, fuzzy's
+  // judged on the picture): the unit render::applyFieldScale sets for the render command on the
+  // same view.
+  const render::GradientVolume gradients = render::computeGradientVolume(ds.volume);
   for (const char* presetId : {"cochlea_wdt", "cochlea_fuzzy", "cochlea_lighting"}) {
     CAPTURE(presetId);
     auto preset = library.load(presetId);
@@ -123,8 +127,9 @@ TEST_CASE("FieldUnits_TheUnitTakenAfterTheAsyncMeasure_EqualsTheRenderCommandsUn
       settings.preset = *preset;
       settings.camera = render::frameCamera(*frame, render::NamedView::LateralRight, 1.0);
       settings.width = settings.height = 96;
+      const render::PictureInputs picture{&ds.labels, s.label, &gradients};
       const render::FieldScale sync =
-          render::applyFieldScale(settings, field->distances, ds.volume, nullptr, *frame, render::ViewRequest{});
+          render::applyFieldScale(settings, field->distances, ds.volume, nullptr, *frame, render::ViewRequest{}, &picture);
       FieldUnitRequest r;
       r.field = field;
       r.volume = &ds.volume;
@@ -135,6 +140,12 @@ TEST_CASE("FieldUnits_TheUnitTakenAfterTheAsyncMeasure_EqualsTheRenderCommandsUn
       r.key.mode = preset->mode;
       r.key.seen = render::unitFromSeenBone(preset->mode);
       r.key.view = render::fieldViewOf(settings);
+      if (preset->mode == render::RenderMode::Fuzzy) {  // as the desktop asks for it
+        r.key.fuzzyPreset = *preset;
+        r.key.fuzzyPreset.t = 0;
+        r.labels = &ds.labels;
+        r.gradients = &gradients;
+      }
       FieldUnits units;  // measureFieldUnit on a worker
       CHECK_FALSE(units.unitFor(r).has_value());  // nothing taken for this structure yet: the caller's unit
       CHECK(units.measuring());
@@ -149,6 +160,10 @@ TEST_CASE("FieldUnits_TheUnitTakenAfterTheAsyncMeasure_EqualsTheRenderCommandsUn
       CHECK(taken->fromSeen == sync.fromSeen);
       CHECK(taken->fromNeighbours == sync.fromNeighbours);
       CHECK(taken->contextVoxels == sync.contextVoxels);
+      CHECK(taken->pictureJudged == sync.pictureJudged);
+      CHECK(taken->pictureJudged == (preset->mode == render::RenderMode::Fuzzy));
+      CHECK(taken->fromPicture == sync.fromPicture);
+      CHECK(taken->pictureNear == sync.pictureNear);
       CHECK_FALSE(units.measuring());  // the same key again: not measured again
       FieldUnits synchronous({}, true);  // the scripted desktop's way: the same unit at once
       const auto now = synchronous.unitFor(r);

@@ -8,6 +8,7 @@
 
 #include "commands.h"
 #include "course_views.h"
+#include "render/gradient_volume.h"
 #include "dataset_resolver.h"
 #include "shown_dataset.h"
 #include "render/gl/egl_context.h"
@@ -47,7 +48,9 @@ int writeDefaultViews(const fs::path& outDir, const std::string& courseId) {
   if (!context) return reportError("offscreen rendering: " + context.error().message);
   auto renderer = render::gl::VolumeRenderer::create();
   if (!renderer) return reportError("offscreen rendering: " + renderer.error().message);
-  if (auto st = renderer->setVolume(dataset->volume, dataset->labels); !st) return reportError(st.error().message);
+  // The gradients once, for the renderer and for fuzzy steps' units (render/fuzzy_picture.h).
+  const render::GradientVolume gradients = render::computeGradientVolume(dataset->volume);
+  if (auto st = renderer->setVolume(dataset->volume, dataset->labels, gradients); !st) return reportError(st.error().message);
   const render::IntensityLevels& levels = shown->levels;
 
   std::error_code ec;
@@ -77,8 +80,9 @@ int writeDefaultViews(const fs::path& outDir, const std::string& courseId) {
       field = std::move(wdt->field.distances);
     }
     // Framed, placed and scaled as play and the desktop show the step (course_views.h).
+    const render::PictureInputs picture{&dataset->labels, structure->label, &gradients};
     auto settings = stepViewSettings(*preset, *frame, request, step.camera, step.clip, field ? &*field : nullptr,
-                                     dataset->volume);
+                                     dataset->volume, &picture);
     if (!settings) return reportError(settings.error().message);
     settings->background = {0.04f, 0.04f, 0.05f, 1.0f};
     renderer->setSelected(structure->label);

@@ -20,6 +20,8 @@
 #include "volume/dataset_source.h"
 #include "volume/png_image.h"
 #include "render/field_scale.h"
+#include "render/fuzzy_picture.h"
+#include "render/gradient_volume.h"
 #include "wdt/wdt.h"
 #include "printable_output.h"
 
@@ -32,6 +34,12 @@ namespace fs = std::filesystem;
 std::string formatUnit(double value) {
   char text[32];
   std::snprintf(text, sizeof text, "%.3g", value);
+  return text;
+}
+
+std::string percent(double share) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.0f %%", 100 * share);
   return text;
 }
 
@@ -161,6 +169,8 @@ int runRender(const Argv& argv) {
   if (wholeVolume && !args->has("preset")) settings->opacityRefMm = render::kWholeVolumeRefMm;
 
   std::optional<DistanceField> field;
+  // The volume's gradients, computed once for the renderer and, in fuzzy mode, the unit's picture.
+  std::optional<render::GradientVolume> gradients;
   std::string unitNote;
   double wdtMs = 0;
   std::string wdtDevice = "none";
@@ -182,19 +192,30 @@ int runRender(const Argv& argv) {
     wdtDevice = wdt->stats.device;
     field = std::move(wdt->field);
     // The distance unit from the field and the data (render/field_scale.h), times --context.
+    render::PictureInputs picture{&dataset->labels, structure->label, nullptr};
+    if (preset->mode == render::RenderMode::Fuzzy) {
+      gradients = render::computeGradientVolume(dataset->volume);
+      picture.gradients = &*gradients;
+    }
     const auto scaleStart = std::chrono::steady_clock::now();
     const render::FieldScale scale =
-        render::applyFieldScale(*settings, field->distances, dataset->volume, nullptr, *frame, request);
+        render::applyFieldScale(*settings, field->distances, dataset->volume, nullptr, *frame, request, &picture);
     const double scaleMs =
         std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - scaleStart).count();
     unitNote = "; distance unit " + formatUnit(settings->distanceUnit) +
                (scale.distanceOffset > 0 ? ", offset " + formatUnit(scale.distanceOffset) : std::string()) +
-               (scale.fromNeighbours ? " (median bone D next to it in view " + formatUnit(scale.nearRingD) + ", far from it " + formatUnit(scale.farRingD) + ")"
+               (scale.fromPicture ? " (chosen by the picture: the around bone's median D " + formatUnit(scale.aroundQuantileD) + " at x " +
+                                        formatUnit(scale.pictureAroundX) + "; colour on " + percent(scale.pictureNear) + " next to it, " +
+                                        percent(scale.pictureFar) + " far from it)"
+                : scale.fromNeighbours ? " (median bone D next to it in view " + formatUnit(scale.nearRingD) + ", far from it " + formatUnit(scale.farRingD) + ")"
                 : scale.derived ? std::string(scale.fromSeen ? " (median seen bone D " : " (median bone D ") + formatUnit(scale.quantileD) + ", 90 % " + formatUnit(scale.farQuantileD) +
                                    (scale.cappedByRays ? "; capped: rays' nearest bone beyond D " + formatUnit(scale.drawnLimitD) + " fades" : std::string()) +
                                    "; by size " +
                                    formatUnit(render::distanceUnitFor(*frame, request.contextScale)) + ")"
                               : " (from its size)") +
+               (scale.pictureJudged && !scale.fromPicture
+                    ? "; picture: colour on " + percent(scale.pictureNear) + " next to it, " + percent(scale.pictureFar) + " far from it"
+                    : std::string()) +
                ", " + formatUnit(scaleMs) + " ms";
   }
 
@@ -202,7 +223,9 @@ int runRender(const Argv& argv) {
   if (!context3d) return reportError("render: " + context3d.error().message);
   auto renderer = render::gl::VolumeRenderer::create();
   if (!renderer) return reportError("render: " + renderer.error().message);
-  if (auto st = renderer->setVolume(dataset->volume, dataset->labels); !st)
+  if (auto st = gradients ? renderer->setVolume(dataset->volume, dataset->labels, *gradients)
+                           : renderer->setVolume(dataset->volume, dataset->labels);
+      !st)
     return reportError("render: " + st.error().message);
   if (field)
     if (auto st = renderer->setField(field->distances); !st) return reportError("render: " + st.error().message);

@@ -141,7 +141,8 @@ Result<render::RenderSettings> TerminalViews::settingsFor(const Structure& selec
   request.view = view;
   if (margin > 0) request.margin = margin;
   // The distance unit from the field on this very view, as the render command and the desktop set it.
-  auto settings = stepViewSettings(preset, *frame, request, scene.camera, scene.clip, field, dataset_.volume);
+  const render::PictureInputs picture{&dataset_.labels, selected.label, gradients_.get()};
+  auto settings = stepViewSettings(preset, *frame, request, scene.camera, scene.clip, field, dataset_.volume, &picture);
   if (!settings) return tl::unexpected(settings.error());
   settings->background = {0.04f, 0.04f, 0.05f, 1.0f};
   return settings;

@@ -297,6 +297,12 @@ render::FieldScale DesktopModel::fieldScaleOf(const ExploreState::Shown& shown, 
   request.key.seen = render::unitFromSeenBone(shown.preset.mode);
   request.key.view = {explore_.framedCamera(), explore_.framedPixels()[0], explore_.framedPixels()[1],
                       explore_.clipPlane()};
+  if (shown.preset.mode == render::RenderMode::Fuzzy) {  // fuzzy's unit is judged on the picture
+    request.key.fuzzyPreset = shown.preset;
+    request.key.fuzzyPreset.t = 0;
+    request.labels = &dataset_->labels;
+    request.gradients = &gradients_;
+  }
   request.field = std::move(field);
   request.volume = &dataset_->volume;
   request.frame = frame;

@@ -93,11 +93,11 @@ Result<render::RenderSettings> stepViewSettings(const render::Preset& preset, co
                                                 const render::ViewRequest& request,
                                                 const std::optional<lessons::StepCamera>& camera,
                                                 const std::optional<lessons::StepClip>& clip, const FloatVolume* field,
-                                                const Volume& volume) {
+                                                const Volume& volume, const render::PictureInputs* picture) {
   auto settings = render::settingsFor(preset, frame, request);
   if (!settings) return settings;
   applyStepPlacement(*settings, camera, clip);
-  if (field) render::applyFieldScale(*settings, *field, volume, nullptr, frame, request);
+  if (field) render::applyFieldScale(*settings, *field, volume, nullptr, frame, request, picture);
   return settings;
 }
 

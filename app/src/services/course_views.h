@@ -10,6 +10,7 @@
 #include "render/camera.h"
 #include "render/render_settings.h"
 #include "render/derived_preset.h"
+#include "render/fuzzy_picture.h"
 #include "render/preset.h"
 #include "render/scene.h"
 #include "volume/grid.h"
@@ -55,11 +56,12 @@ void applyStepPlacement(render::RenderSettings& settings, const std::optional<le
 // checks; the render command and the desktop set the unit with the same render::applyFieldScale):
 // framed on `request`, the step's camera and plane put in, and with a field the distance unit
 // measured from that field on that very view (render/field_scale.h); without one, the
-// structure's size-based unit.
+// structure's size-based unit. `picture` (the labels, structure and gradients the view is drawn
+// with) lets a fuzzy view's unit be judged on its picture (render/fuzzy_picture.h).
 Result<render::RenderSettings> stepViewSettings(const render::Preset& preset, const render::StructureFrame& frame,
                                                 const render::ViewRequest& request,
                                                 const std::optional<lessons::StepCamera>& camera,
                                                 const std::optional<lessons::StepClip>& clip, const FloatVolume* field,
-                                                const Volume& volume);
+                                                const Volume& volume, const render::PictureInputs* picture = nullptr);
 
 }  // namespace at::app

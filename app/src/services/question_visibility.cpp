@@ -152,7 +152,8 @@ Result<LocateCheck> LocateViewChecker::check(const quiz::Question& question, con
   request.view = viewName;
   request.margin = kLocateRegionMargin;
   // The view (and its field's distance unit) as play and the desktop show it.
-  auto settings = stepViewSettings(preset, *frame, request, scene.camera, scene.clip, &field, dataset_.volume);
+  const render::PictureInputs picture{&labelled.labels, region->label, &gradients};
+  auto settings = stepViewSettings(preset, *frame, request, scene.camera, scene.clip, &field, dataset_.volume, &picture);
   if (!settings) return tl::unexpected(settings.error());
   // Where a student clicks it: the middle of where it lies in the picture (render/click_point.h).
   const auto middle = render::middleOfStructure(labelled.labels, target->label, settings->camera, kCheckViewWidth,

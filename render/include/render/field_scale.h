@@ -112,6 +112,13 @@ struct FieldScale {
   // and far from it in the picture (0: not measured), and whether they set the unit.
   double nearRingD = 0, farRingD = 0;
   bool fromNeighbours = false;
+  // Fuzzy with the picture's inputs (fuzzy_picture.h): the shares of the context next to the
+  // structure and far from it drawn in its colour at t = kPictureT with the unit taken, whether the
+  // picture chose it, and then at which x it put the around set's median.
+  double pictureNear = 0, pictureFar = 0;
+  bool pictureJudged = false;  // the shares were measured (fuzzy with the picture's inputs)
+  bool fromPicture = false;
+  double pictureAroundX = 0;
 };
 
 // The stored-value level from which the preset's data TF draws bone: the first TF x at which its
@@ -191,16 +198,17 @@ bool unitFromSeenBone(RenderMode mode);
 // to it (the skull's orbit from the front: the ethmoid cells and the nasal cavity are reached
 // through the paper-thin medial wall, the far median only 1.3 × the near one), a colour on the near
 // bone reaches the far bone as much; the far cap keeps both faint (confined, but little colour).
-// Nor does a unit from the bone around a structure embedded in bone (tried, not kept). Inside the
-// µCT-like phantom (uint8, 0.1 mm, from above) the shell over the labyrinth is the first bone each
-// ray meets, next to the structure and far from it alike (D 3.4 and 3.3 for the lateral canal,
-// 5.2 × the median of the bone around it), and fuzzy colours 7 % of the context next to the canal.
-// Placing the around median at x = kNeighbourX coloured 41 % there (1 % far), but on the skull CT,
-// where the same test (seen bone ≥ 2 × the around median) picked the sphenoid sinus, the axis and the
-// left coronoid process, it coloured more of the far bone than of the near (sphenoid from the right:
-// 13 % near, 23 % far; coronoid 3 % and 6 %); capped by the far rays' least D, the canal fell to
-// 0.2 %. Lighting there cannot gain from the unit at all: the unit also sets the opacity, and one
-// that lights the bone around the structure leaves the shell over it opaque and dark.
+// A structure embedded in bone: inside the µCT-like phantom (uint8, 0.1 mm, from above) the shell
+// over the labyrinth is the first bone each ray meets, next to the structure and far from it alike
+// (D 3.4 and 3.3 for the lateral canal, 5.2 × the median of the bone around it), and with the unit
+// from it fuzzy colours 7 % of the context next to the canal. A rule from these measures alone
+// (seen bone ≥ 2 × the around median: the around median at x = kNeighbourX) coloured 41 % there,
+// but on the skull CT it also picked the sphenoid sinus, the axis and the left coronoid process and
+// coloured more of their far bone than of the near (sphenoid from the right: 13 % near, 23 % far).
+// Which unit confines the colour depends on what lies in front of what, so with the picture's
+// inputs fuzzy's unit is judged on the picture itself (fuzzy_picture.h). Lighting cannot gain from
+// the unit there: the unit also sets the opacity, and one that lights the bone around the structure
+// leaves the shell over it opaque and dark.
 constexpr double kNeighbourRing = 0.05;      // of the ray grid's longer side (8 px of 160)
 constexpr double kFarFromStructure = 0.19;   // (30 px of 160)
 constexpr double kNeighbourX = 1.15;
@@ -224,9 +232,12 @@ void unitFromNeighbours(FieldScale& scale, const NeighbourBone& bone, RenderMode
 // The one way every front end (render command, desktop, terminal pictures, default views, question
 // checks) sets a framed view's distance unit: fieldScale on `settings`' own view (camera, size,
 // clip: set them first; the view only where unitFromSeenBone(settings.preset.mode)) with the
-// request's margin, for fuzzy and lighting then unitFromNeighbours on the same view, then distanceUnit = unit × request.contextScale
-// and distanceOffset. Returns the measure.
+// request's margin, for fuzzy and lighting then unitFromNeighbours on the same view, for fuzzy with
+// `picture` (its labels and structure) then unitFromFuzzyPicture (fuzzy_picture.h), then
+// distanceUnit = unit × request.contextScale and distanceOffset. Returns the measure.
+struct PictureInputs;
 FieldScale applyFieldScale(RenderSettings& settings, const FloatVolume& field, const Volume& volume, const Mask* body,
-                           const StructureFrame& frame, const ViewRequest& request);
+                           const StructureFrame& frame, const ViewRequest& request,
+                           const PictureInputs* picture = nullptr);
 
 }  // namespace at::render

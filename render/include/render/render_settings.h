@@ -149,4 +149,15 @@ PickPair pickAtTwoThresholds(const SceneVolumes& scene, const RenderSettings& se
 double contextOpacity(const SceneVolumes& scene, const RenderSettings& settings, const TransferFunction2D& table,
                       double x, double y);
 
+// The colour the ray caster composites at pixel (x, y), front to back, without its light (no
+// gradient shading or specular; lighting mode's k_a of Eq. 6 is applied as the unshaded ray caster
+// does): premultiplied rgb over no background, the accumulated opacity and the part of it the
+// selected structure's surface adds. What a mode's colours show where, measured without a GPU.
+struct CompositedPixel {
+  std::array<double, 3> rgb{};
+  double alpha = 0, structureAlpha = 0;
+};
+CompositedPixel compositePixel(const SceneVolumes& scene, const RenderSettings& settings, const TransferFunction2D& table,
+                               double x, double y);
+
 }  // namespace at::render

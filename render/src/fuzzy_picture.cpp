@@ -1,0 +1,125 @@
+#include "render/fuzzy_picture.h"
+
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+#include "core/parallel_rows.h"
+#include "render/transfer_function.h"
+#include "view_rays.h"
+
+namespace at::render {
+
+namespace {
+
+// Hue in degrees (0 … 360), or −1 for a grey.
+double hueOf(double r, double g, double b) {
+  const double mx = std::max({r, g, b}), mn = std::min({r, g, b});
+  if (mx - mn < 1e-9) return -1;
+  const double h = mx == r ? (g - b) / (mx - mn) : mx == g ? 2 + (b - r) / (mx - mn) : 4 + (r - g) / (mx - mn);
+  return std::fmod(h * 60 + 360, 360);
+}
+
+// The colour fuzzy draws next to the structure: its distance TF's colour at n = 1 (distance 0),
+// which Eqs. 4–5 mix into the bone with the TF's opacity as weight.
+std::array<double, 3> colourNextToStructure(const Preset& preset) {
+  const auto dist = TransferFunction1D::fromPoints(preset.distanceTf);
+  if (!dist) return {preset.highlightRgb[0], preset.highlightRgb[1], preset.highlightRgb[2]};
+  const Rgba c = dist->evaluate(1.0);
+  return {c[0], c[1], c[2]};
+}
+
+bool inColour(const CompositedPixel& p, double targetHue) {
+  const double r = p.rgb[0], g = p.rgb[1], b = p.rgb[2];
+  const double mx = std::max({r, g, b}), mn = std::min({r, g, b});
+  if (mx <= 0 || (mx - mn) / mx < 0.35) return false;
+  const double hue = hueOf(r, g, b);
+  if (hue < 0 || targetHue < 0) return false;
+  const double gap = std::fabs(hue - targetHue);
+  return std::min(gap, 360 - gap) <= 25;
+}
+
+}  // namespace
+
+FuzzyColourShares fuzzyColourShares(const SceneVolumes& scene, const RenderSettings& settings) {
+  FuzzyColourShares out;
+  const auto [w, h] = detail::rayGridOf(settings.width, settings.height, kPictureRaysPerSide);
+  if (w < 1 || h < 1 || !scene.volume || !scene.field) return out;
+  RenderSettings grid = settings;
+  grid.width = w;
+  grid.height = h;
+  const TransferFunction2D table = shadingTable(grid.preset);
+  const auto colour = colourNextToStructure(grid.preset);
+  const double targetHue = hueOf(colour[0], colour[1], colour[2]);
+  std::vector<CompositedPixel> picture(std::size_t(w) * std::size_t(h));
+  forEachRowInParallel(h, [&, w = w](int py) {
+    for (int px = 0; px < w; ++px) picture[std::size_t(py) * std::size_t(w) + std::size_t(px)] = compositePixel(scene, grid, table, px, py);
+  });
+  std::vector<char> structure(picture.size(), 0);
+  for (std::size_t i = 0; i < picture.size(); ++i) structure[i] = picture[i].structureAlpha >= 0.5;
+  const std::vector<int> apart = detail::raysFromStructure(structure, w, h);
+  const double side = double(std::max(w, h));
+  std::size_t nearIn = 0, farIn = 0;
+  for (std::size_t i = 0; i < picture.size(); ++i) {
+    const CompositedPixel& p = picture[i];
+    if (structure[i] || p.alpha < 0.1 || std::max({p.rgb[0], p.rgb[1], p.rgb[2]}) < 0.15) continue;
+    const bool in = inColour(p, targetHue);
+    if (double(apart[i]) <= kNeighbourRing * side) {
+      ++out.nearRays;
+      nearIn += in;
+    } else if (double(apart[i]) >= kFarFromStructure * side) {
+      ++out.farRays;
+      farIn += in;
+    }
+  }
+  if (out.nearRays) out.near = double(nearIn) / double(out.nearRays);
+  if (out.farRays) out.far = double(farIn) / double(out.farRays);
+  return out;
+}
+
+void unitFromFuzzyPicture(FieldScale& scale, const SceneVolumes& scene, const RenderSettings& settings, double contextScale) {
+  if (settings.preset.mode != RenderMode::Fuzzy || !scene.labels || scene.selected == 0) return;
+  RenderSettings look = settings;
+  look.preset.t = kPictureT;
+  // The structure's smoothed mask once for every picture (marched without it, each sample smooths).
+  SceneVolumes withMask = scene;
+  SelectedMask mask;
+  if (!withMask.selectedMask) {
+    mask = selectedMask(*scene.labels, scene.selected);
+    withMask.selectedMask = &mask;
+  }
+  const auto sharesAt = [&](double unit, double offset) {
+    look.distanceUnit = unit * contextScale;
+    look.distanceOffset = offset;
+    return fuzzyColourShares(withMask, look);
+  };
+  const auto score = [](const FuzzyColourShares& s) {
+    return s.nearRays >= kMinPictureRays ? s.near - kFarColourPenalty * s.far : 0.0;
+  };
+  const FuzzyColourShares kept = sharesAt(scale.distanceUnit, scale.distanceOffset);
+  scale.pictureNear = kept.near;
+  scale.pictureFar = kept.far;
+  scale.pictureJudged = true;
+  if (scale.aroundQuantileD <= 0) return;
+  double bestScore = score(kept) + kPictureMargin, bestX = 0;
+  FuzzyColourShares best = kept;
+  for (double x : kPictureAroundX) {
+    const FuzzyColourShares s = sharesAt(scale.aroundQuantileD / x, 0);
+    if (s.nearRays < kMinPictureRays || (s.farRays >= kMinPictureRays && s.far > kMaxFarColour)) continue;
+    if (score(s) > bestScore) {
+      bestScore = score(s);
+      bestX = x;
+      best = s;
+    }
+  }
+  if (bestX == 0) return;
+  scale.distanceUnit = scale.aroundQuantileD / bestX;
+  scale.distanceOffset = 0;
+  scale.pictureNear = best.near;
+  scale.pictureFar = best.far;
+  scale.pictureAroundX = bestX;
+  scale.fromPicture = true;
+  scale.derived = true;
+}
+
+}  // namespace at::render

@@ -1,0 +1,172 @@
+// Fuzzy mode's unit judged on the picture (render/fuzzy_picture.h), and the composite it is judged
+// on (render_settings.h, compositePixel), on the µCT-like phantom (uint8 plain intensities at 0.2 mm)
+// without a GPU.
+#include <doctest/doctest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+#include "render/derived_preset.h"
+#include "render/fuzzy_picture.h"
+#include "render/gradient_volume.h"
+#include "render/scene.h"
+#include "test_support.h"
+#include "volume/mask.h"
+#include "volume/structure.h"
+#include "wdt/wdt.h"
+
+using namespace at;
+using namespace at::render;
+
+namespace {
+
+// The phantom as a µCT would store it: plain uint8 intensities (−1000 … 2000 HU → 0 … 255).
+struct MicroCt {
+  Dataset ds;
+  IntensityLevels levels;
+  GradientVolume gradients;
+};
+const MicroCt& microCt() {
+  static const MicroCt ct = [] {
+    MicroCt m;
+    m.ds = test::phantomOfSize(128);
+    for (auto& v : m.ds.volume.voxels) v = std::int16_t(std::clamp(std::lround((v + 1000.0) * 255.0 / 3000.0), 0L, 255L));
+    m.ds.volume.geometry.spacingMm = {0.2, 0.2, 0.2};
+    m.ds.labels.geometry = m.ds.volume.geometry;
+    m.levels = summariseIntensities(m.ds.volume);
+    m.gradients = computeGradientVolume(m.ds.volume);
+    return m;
+  }();
+  return ct;
+}
+
+struct Framed {
+  FloatVolume field;
+  RenderSettings settings;
+  FieldScale scale;
+  SceneVolumes scene;
+  SelectedMask mask;
+};
+
+// `id` framed from `view` at 160 px in `mode`, its unit set as the front ends set it (with the
+// picture's inputs, or without them).
+Framed framed(const std::string& id, const std::string& view, RenderMode mode, bool withPicture) {
+  const MicroCt& ct = microCt();
+  const Structure* s = ct.ds.findStructure(id);
+  REQUIRE(s);
+  const Preset preset = derivedPreset(ct.levels, mode, id);
+  auto frame = structureFrame(ct.ds.labels, s->label);
+  REQUIRE(frame);
+  auto params = wdtParamsFor(preset, 2);
+  REQUIRE(params);
+  params->backend = WdtBackend::Cpu;
+  auto wdt = computeWdt(ct.ds.volume, structureMask(ct.ds.labels, s->label), *params);
+  REQUIRE(wdt);
+  ViewRequest request;
+  request.width = request.height = 160;
+  request.view = view;
+  auto settings = settingsFor(preset, *frame, request);
+  REQUIRE(settings);
+  Framed f{std::move(wdt->field.distances), *settings, {}, {}, {}};
+  const PictureInputs picture{&ct.ds.labels, s->label, &ct.gradients};
+  f.scale = applyFieldScale(f.settings, f.field, ct.ds.volume, nullptr, *frame, request, withPicture ? &picture : nullptr);
+  f.mask = selectedMask(ct.ds.labels, s->label);
+  f.scene.volume = &ct.ds.volume;
+  f.scene.labels = &ct.ds.labels;
+  f.scene.field = &f.field;
+  f.scene.selected = s->label;
+  f.scene.gradients = &ct.gradients;
+  f.scene.selectedMask = &f.mask;
+  return f;
+}
+
+FuzzyColourShares sharesAtPictureT(const Framed& f) {
+  RenderSettings s = f.settings;
+  s.preset.t = kPictureT;
+  return fuzzyColourShares(f.scene, s);
+}
+
+double score(const FuzzyColourShares& s) { return s.near - kFarColourPenalty * s.far; }
+
+}  // namespace
+
+TEST_CASE("compositePixel: the opacity the picker accumulates, the structure's part of it, colours within it") {
+  for (RenderMode mode : {RenderMode::Wdt, RenderMode::Fuzzy, RenderMode::Lighting}) {
+    CAPTURE(toString(mode));
+    const Framed f = framed("cochlea", "superior", mode, false);
+    const TransferFunction2D table = shadingTable(f.settings.preset);
+    std::size_t drawn = 0;
+    for (int y = 2; y < 160; y += 9)
+      for (int x = 3; x < 160; x += 9) {
+        const CompositedPixel p = compositePixel(f.scene, f.settings, table, x, y);
+        const double context = contextOpacity(f.scene, f.settings, table, x, y);
+        CHECK(p.alpha == doctest::Approx(context + p.structureAlpha).epsilon(1e-9));
+        CHECK(p.alpha <= 1.0);
+        CHECK(p.structureAlpha >= 0.0);
+        for (double c : p.rgb) {
+          CHECK(c >= 0.0);
+          CHECK(c <= p.alpha + 1e-9);  // premultiplied: no colour without opacity
+        }
+        drawn += p.alpha >= 0.1;
+      }
+    CHECK(drawn > 20);
+  }
+}
+
+TEST_CASE("fuzzyColourShares: in colour where all the bone lies at distance 0, nowhere where all of it lies far") {
+  Framed f = framed("cochlea", "lateral_left", RenderMode::Fuzzy, false);
+  f.settings.preset.t = kPictureT;
+  f.settings.distanceOffset = 0;
+  f.settings.distanceUnit = 1e9;  // every D at x ≈ 0: the full colour (Eqs. 4–5, weight 1)
+  const FuzzyColourShares all = fuzzyColourShares(f.scene, f.settings);
+  CHECK(all.nearRays >= kMinPictureRays);
+  CHECK(all.farRays >= kMinPictureRays);
+  CHECK(all.near >= 0.9);
+  CHECK(all.far >= 0.9);
+  f.settings.distanceUnit = 1e-9;  // every D far: weight 0, the bone in its own colour
+  const FuzzyColourShares none = fuzzyColourShares(f.scene, f.settings);
+  CHECK(none.near <= 0.02);  // (the structure's own rim, where its surface adds under half the opacity)
+  CHECK(none.far == 0.0);
+}
+
+TEST_CASE("unitFromFuzzyPicture: inside solid bone the colour reaches the bone next to the structure, never the far bone") {
+  // The cochlea from above lies under the petrous block's shell: the first bone each ray meets is
+  // the shell, as far in D next to the cochlea as far from it, so the neighbours' unit leaves the
+  // bone around it nearly uncoloured. The picture takes a unit from the bone around it.
+  const Framed before = framed("cochlea", "superior", RenderMode::Fuzzy, false);
+  const Framed after = framed("cochlea", "superior", RenderMode::Fuzzy, true);
+  const FuzzyColourShares b = sharesAtPictureT(before), a = sharesAtPictureT(after);
+  MESSAGE("cochlea from above: unit " << before.settings.distanceUnit << " → " << after.settings.distanceUnit
+          << "; colour on " << 100 * b.near << " % → " << 100 * a.near << " % of the context next to it, " << 100 * b.far
+          << " % → " << 100 * a.far << " % far from it");
+  CHECK(after.scale.fromPicture);
+  CHECK(a.near >= b.near + 0.2);
+  CHECK(a.far <= kMaxFarColour);
+
+  // Every view: the unit taken is the kept one, or one that scores clearly better with at most
+  // kMaxFarColour of the far bone in colour; the shares reported are the picture's.
+  for (const auto& [id, view] : {std::pair<std::string, std::string>{"cochlea", "superior"}, {"cochlea", "lateral_left"},
+                                 {"facial_nerve", "superior"}, {"lateral_semicircular_canal", "superior"},
+                                 {"malleus", "lateral_right"}, {"temporal_line", "lateral_left"}}) {
+    CAPTURE(id);
+    CAPTURE(view);
+    const Framed kept = framed(id, view, RenderMode::Fuzzy, false);
+    const Framed chosen = framed(id, view, RenderMode::Fuzzy, true);
+    const FuzzyColourShares k = sharesAtPictureT(kept), c = sharesAtPictureT(chosen);
+    CHECK(chosen.scale.pictureNear == doctest::Approx(c.near));
+    CHECK(chosen.scale.pictureFar == doctest::Approx(c.far));
+    if (chosen.scale.fromPicture) {
+      CHECK(chosen.settings.distanceOffset == 0);
+      CHECK(chosen.settings.distanceUnit == doctest::Approx(chosen.scale.aroundQuantileD / chosen.scale.pictureAroundX));
+      CHECK(c.far <= kMaxFarColour);
+      CHECK(score(c) > score(k) + kPictureMargin - 1e-9);
+    } else {
+      CHECK(chosen.settings.distanceUnit == kept.settings.distanceUnit);
+      CHECK(chosen.settings.distanceOffset == kept.settings.distanceOffset);
+    }
+    // Other modes take nothing from the picture.
+    const Framed wdt = framed(id, view, RenderMode::Wdt, true);
+    CHECK_FALSE(wdt.scale.fromPicture);
+  }
+}
