@@ -5,7 +5,7 @@
 #include <limits>
 #include <vector>
 
-#include "render/fuzzy_picture.h"
+#include "render/picture_scale.h"
 #include "render/transfer_function.h"
 #include "view_rays.h"
 
@@ -375,10 +375,11 @@ FieldScale applyFieldScale(RenderSettings& settings, const FloatVolume& field, c
     scene.field = &field;
     scene.selected = picture->selected;
     scene.gradients = picture->gradients;
-    unitFromFuzzyPicture(scale, scene, settings, request.contextScale);
+    scaleFromPicture(scale, scene, settings, request.contextScale);
   }
   settings.distanceUnit = scale.distanceUnit * request.contextScale;
   settings.distanceOffset = scale.distanceOffset;
+  settings.lightingReach = scale.lightingReach;
   return scale;
 }
 

@@ -203,6 +203,24 @@ struct MarchedSample {
 // Beyond this accumulated opacity nothing behind shows.
 constexpr double kOpaque = 0.995;
 
+// The ray caster's key light (volume_renderer.cpp sets it, ray_shaders.cpp shades with it): from the
+// viewer, a little above and to the left; two-sided Phong with a specular of power 20.
+Vec3 keyLightDirection(const Camera& camera) {
+  const Vec3 right = cross(camera.forward(), camera.up());
+  const Vec3 toLight = -1.0 * camera.forward() + 0.7 * camera.up() - 0.45 * right;
+  return (1.0 / norm(toLight)) * toLight;
+}
+std::array<double, 3> keyLight(const std::array<double, 3>& rgb, const Vec3& nrm, const Vec3& viewDir, const Vec3& light) {
+  if (dot(nrm, nrm) < 1e-6) return {0.75 * rgb[0], 0.75 * rgb[1], 0.75 * rgb[2]};
+  const double ndl = std::fabs(dot(nrm, light));
+  const Vec3 h0 = light - viewDir;
+  const Vec3 h = (1.0 / std::max(1e-12, norm(h0))) * h0;
+  const double spec = std::pow(std::fabs(dot(nrm, h)), 20);
+  std::array<double, 3> out;
+  for (std::size_t k = 0; k < 3; ++k) out[k] = rgb[k] * (0.18 + 0.82 * ndl) + 0.25 * spec;
+  return out;
+}
+
 // Walks the ray through pixel (x, y) front to back as the ray caster does (without jitter), giving
 // `visit` (bool(const MarchedSample&)) each sample that adds opacity; stops when `visit` returns
 // false or the ray leaves the volume.
@@ -233,6 +251,7 @@ void marchPixel(const SceneVolumes& scene, const RenderSettings& s, const Transf
   const double refMm = effectiveOpacityRefMm(g, s);
   const bool bare = s.preset.mode == RenderMode::Bare;
   const bool structure = scene.labels && scene.selected != 0;
+  const Vec3 lightDir = keyLightDirection(s.camera);
   const float structureAlpha = bare ? 1.0f : s.preset.structureOpacity;
   const float alphaF = s.preset.alpha;
   const float bandN = outlineBandN(s.preset);
@@ -289,8 +308,8 @@ void marchPixel(const SceneVolumes& scene, const RenderSettings& s, const Transf
       }
     }
     float surface = 1;
+    double gc[3] = {0, 0, 0};
     if (scene.gradients && !scene.gradients->empty()) {
-      double gc[3];
       for (std::size_t c = 0; c < 3; ++c)
         gc[c] = trilinear(g.dims, ijk, [&](std::size_t i) { return double(scene.gradients->texels[i][c + 1]) / 32767.0; });
       surface = surfaceFactor(s.preset, GradientVolume::strengthOf(float(gc[0]), float(gc[1]), float(gc[2])));
@@ -299,13 +318,22 @@ void marchPixel(const SceneVolumes& scene, const RenderSettings& s, const Transf
     const float front = tm < frontT ? s.preset.contextInFront : 1.0f;
     const float ac = c[3] > 0 ? correctedOpacity(c[3], step, refMm) * surface * front : 0.0f;
     std::array<float, 3> rgb{c[0], c[1], c[2]};
-    if (s.preset.mode == RenderMode::Lighting && fg && ac > 0) {  // Eq. 6, as the unshaded ray caster
+    if (s.preset.mode == RenderMode::Lighting && fg && ac > 0) {  // Eq. 6, as the ray caster
       const double d = trilinear(*scene.field, fg->patientToIndex(p), [](float v) { return std::isinf(v) ? 1e30 : double(v); });
-      const double x = std::min(std::max(d - s.distanceOffset, 0.0), 1e6) * double(s.preset.lightingAlpha) / s.distanceUnit;
+      const double x = std::min(std::max(d - s.distanceOffset, 0.0), 1e6) * double(s.preset.lightingAlpha) /
+                       (s.distanceUnit * s.lightingReach);
       const double ka = double(s.preset.lightingBeta) / ((x + 1) * (x + 1));
-      float top = 1;
-      for (int k = 0; k < 3; ++k) top = std::max(top, rgb[std::size_t(k)] = float(rgb[std::size_t(k)] * (ka * s.preset.highlightRgb[std::size_t(k)] + 0.25)));
-      for (float& v : rgb) v /= top;
+      std::array<double, 3> neutral{0.25 * rgb[0], 0.25 * rgb[1], 0.25 * rgb[2]};  // unshaded
+      if (s.shading) {  // 0.2 of the key light's Phong, as the shaded ray caster
+        const double len = std::sqrt(gc[0] * gc[0] + gc[1] * gc[1] + gc[2] * gc[2]);
+        const Vec3 nrm = len * GradientVolume::kMaxHuPerVoxel > 1e-3 ? Vec3{gc[0] / len, gc[1] / len, gc[2] / len} : Vec3{0, 0, 0};
+        const std::array<double, 3> lit = keyLight({rgb[0], rgb[1], rgb[2]}, nrm, ray.direction, lightDir);
+        for (std::size_t k = 0; k < 3; ++k) neutral[k] = 0.2 * lit[k];
+      }
+      double top = 1;
+      std::array<double, 3> out;
+      for (std::size_t k = 0; k < 3; ++k) top = std::max(top, out[k] = rgb[k] * ka * s.preset.highlightRgb[k] + neutral[k]);
+      for (std::size_t k = 0; k < 3; ++k) rgb[k] = float(out[k] / top);
     }
     if (!visit({p, ijk, double(ac), false, rgb})) return;
   }

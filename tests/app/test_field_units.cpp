@@ -12,7 +12,7 @@
 
 #include "desktop_model.h"
 #include "headless_desktop.h"
-#include "render/fuzzy_picture.h"
+#include "render/picture_scale.h"
 #include "render/gradient_volume.h"
 #include "render/preset.h"
 #include "view/field_unit.h"
@@ -140,9 +140,9 @@ TEST_CASE("FieldUnits_TheUnitTakenAfterTheAsyncMeasure_EqualsTheRenderCommandsUn
       r.key.mode = preset->mode;
       r.key.seen = render::unitFromSeenBone(preset->mode);
       r.key.view = render::fieldViewOf(settings);
-      if (preset->mode == render::RenderMode::Fuzzy) {  // as the desktop asks for it
-        r.key.fuzzyPreset = *preset;
-        r.key.fuzzyPreset.t = 0;
+      if (render::judgedOnPicture(preset->mode)) {  // as the desktop asks for it
+        r.key.picturePreset = *preset;
+        r.key.picturePreset.t = 0;
         r.labels = &ds.labels;
         r.gradients = &gradients;
       }
@@ -161,7 +161,8 @@ TEST_CASE("FieldUnits_TheUnitTakenAfterTheAsyncMeasure_EqualsTheRenderCommandsUn
       CHECK(taken->fromNeighbours == sync.fromNeighbours);
       CHECK(taken->contextVoxels == sync.contextVoxels);
       CHECK(taken->pictureJudged == sync.pictureJudged);
-      CHECK(taken->pictureJudged == (preset->mode == render::RenderMode::Fuzzy));
+      CHECK(taken->pictureJudged == render::judgedOnPicture(preset->mode));
+      CHECK(taken->lightingReach == sync.lightingReach);
       CHECK(taken->fromPicture == sync.fromPicture);
       CHECK(taken->pictureNear == sync.pictureNear);
       CHECK_FALSE(units.measuring());  // the same key again: not measured again

@@ -21,7 +21,7 @@
 #include "shown_dataset.h"
 #include "render/derived_preset.h"
 #include "render/field_scale.h"
-#include "render/fuzzy_picture.h"
+#include "render/picture_scale.h"
 #include "render/gradient_volume.h"
 #include "render/gl/egl_context.h"
 #include "render/gl/volume_renderer.h"
@@ -752,16 +752,17 @@ TEST_CASE("µCT-like volume: outline keeps a structure inside solid bone in sigh
 }
 
 
-TEST_CASE("µCT-like volume: fuzzy colours the bone next to a structure inside solid bone, not the far bone") {
+TEST_CASE("µCT-like volume: fuzzy and lighting colour the bone next to a structure inside solid bone, not the far bone") {
   // From above, the lateral canal and the cochlea lie under the petrous block's shell. The first
   // bone each ray meets is that shell, as far in D next to them as far from them; with the unit
-  // from it (unitFromNeighbours) 7 % of the context next to the canal was in its colour. The unit
-  // judged on the picture (render/fuzzy_picture.h) colours the bone around it.
+  // from it (unitFromNeighbours) fuzzy coloured 7.3 % of the context next to the canal and lighting
+  // lit 0.6 %. Judged on the picture (render/picture_scale.h), fuzzy's unit and lighting's reach
+  // put the colour on the bone around them.
   Gl* gl = glOrSkip();
   if (!gl) return;
   const Scan ct = microCtPhantom(256);
   for (const char* id : {"lateral_semicircular_canal", "cochlea"}) {
-    CAPTURE(id);
+    CAPTURE(std::string(id));
     const Structure* s = ct.ds.findStructure(id);
     REQUIRE(s);
     const RgbaImage bare = draw(*gl, ct, s->label, viewOf(ct, s->label, derivedPreset(ct.levels, RenderMode::Bare, id), "superior"), 0);
@@ -769,18 +770,22 @@ TEST_CASE("µCT-like volume: fuzzy colours the bone next to a structure inside s
     std::vector<bool> silhouette(n);
     for (std::size_t i = 0; i < n; ++i) silhouette[i] = bare.rgba[i * 4 + 3] >= 250;
     const std::vector<int> fromStructure = distanceFrom(silhouette, kSize, kSize);
-    const Preset p = derivedPreset(ct.levels, RenderMode::Fuzzy, id);
-    const View v = viewOf(ct, s->label, p, "superior");
-    const RgbaImage im = draw(*gl, ct, s->label, v, p.t);
-    const ColourShares shares = colourShares(im, silhouette, fromStructure, p.highlightRgb);
-    REQUIRE(shares.nearDrawn > 50);
-    const double nearShare = shares.near, farShare = shares.far;
-    MESSAGE(std::string(id) << " fuzzy from above: unit " << v.settings.distanceUnit
-                << std::string(v.scale.fromPicture ? " (chosen by the picture)" : "")
-                << "; in its colour " << 100 * nearShare << " % of the context within 8 px, " << 100 * farShare << " % beyond 30 px");
-    CHECK(nearShare >= 0.30);
-    CHECK(farShare <= 0.05);
-    if (const char* dir = std::getenv("AT_TEST_PNG_DIR"))
-      CHECK(writePng((fs::path(dir) / (std::string("uct_") + id + "_superior_fuzzy.png")).string(), toRgb(im)));
+    for (RenderMode mode : {RenderMode::Fuzzy, RenderMode::Lighting}) {
+      const std::string modeName = toString(mode);
+      CAPTURE(modeName);
+      const Preset p = derivedPreset(ct.levels, mode, id);
+      const View v = viewOf(ct, s->label, p, "superior");
+      const RgbaImage im = draw(*gl, ct, s->label, v, p.t);
+      const ColourShares shares = colourShares(im, silhouette, fromStructure, p.highlightRgb);
+      REQUIRE(shares.nearDrawn > 50);
+      MESSAGE(std::string(id) << " " << modeName << " from above: unit " << v.settings.distanceUnit << ", light reach "
+                  << v.settings.lightingReach << std::string(v.scale.fromPicture ? " (chosen by the picture)" : "")
+                  << "; in its colour " << 100 * shares.near << " % of the context within 8 px, " << 100 * shares.far
+                  << " % beyond 30 px");
+      CHECK(shares.near >= 0.30);
+      CHECK(shares.far <= 0.05);
+      if (const char* dir = std::getenv("AT_TEST_PNG_DIR"))
+        CHECK(writePng((fs::path(dir) / ("uct_" + std::string(id) + "_superior_" + modeName + ".png")).string(), toRgb(im)));
+    }
   }
 }

@@ -20,7 +20,7 @@
 #include "volume/dataset_source.h"
 #include "volume/png_image.h"
 #include "render/field_scale.h"
-#include "render/fuzzy_picture.h"
+#include "render/picture_scale.h"
 #include "render/gradient_volume.h"
 #include "wdt/wdt.h"
 #include "printable_output.h"
@@ -193,7 +193,7 @@ int runRender(const Argv& argv) {
     field = std::move(wdt->field);
     // The distance unit from the field and the data (render/field_scale.h), times --context.
     render::PictureInputs picture{&dataset->labels, structure->label, nullptr};
-    if (preset->mode == render::RenderMode::Fuzzy) {
+    if (render::judgedOnPicture(preset->mode)) {
       gradients = render::computeGradientVolume(dataset->volume);
       picture.gradients = &*gradients;
     }
@@ -204,16 +204,20 @@ int runRender(const Argv& argv) {
         std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - scaleStart).count();
     unitNote = "; distance unit " + formatUnit(settings->distanceUnit) +
                (scale.distanceOffset > 0 ? ", offset " + formatUnit(scale.distanceOffset) : std::string()) +
-               (scale.fromPicture ? " (chosen by the picture: the around bone's median D " + formatUnit(scale.aroundQuantileD) + " at x " +
-                                        formatUnit(scale.pictureAroundX) + "; colour on " + percent(scale.pictureNear) + " next to it, " +
-                                        percent(scale.pictureFar) + " far from it)"
+               (scale.fromPicture && scale.pictureAroundX > 0
+                    ? " (chosen by the picture: the around bone's median D " + formatUnit(scale.aroundQuantileD) + " at x " +
+                          formatUnit(scale.pictureAroundX) + "; colour on " + percent(scale.pictureNear) + " next to it, " +
+                          percent(scale.pictureFar) + " far from it)"
                 : scale.fromNeighbours ? " (median bone D next to it in view " + formatUnit(scale.nearRingD) + ", far from it " + formatUnit(scale.farRingD) + ")"
                 : scale.derived ? std::string(scale.fromSeen ? " (median seen bone D " : " (median bone D ") + formatUnit(scale.quantileD) + ", 90 % " + formatUnit(scale.farQuantileD) +
                                    (scale.cappedByRays ? "; capped: rays' nearest bone beyond D " + formatUnit(scale.drawnLimitD) + " fades" : std::string()) +
                                    "; by size " +
                                    formatUnit(render::distanceUnitFor(*frame, request.contextScale)) + ")"
                               : " (from its size)") +
-               (scale.pictureJudged && !scale.fromPicture
+               (scale.fromPicture && scale.lightingReach != 1
+                    ? "; light reach × " + formatUnit(scale.lightingReach) + " (chosen by the picture: light on " +
+                          percent(scale.pictureNear) + " next to it, " + percent(scale.pictureFar) + " far from it)"
+                : scale.pictureJudged && !scale.fromPicture
                     ? "; picture: colour on " + percent(scale.pictureNear) + " next to it, " + percent(scale.pictureFar) + " far from it"
                     : std::string()) +
                ", " + formatUnit(scaleMs) + " ms";

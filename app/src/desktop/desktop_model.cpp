@@ -297,9 +297,9 @@ render::FieldScale DesktopModel::fieldScaleOf(const ExploreState::Shown& shown, 
   request.key.seen = render::unitFromSeenBone(shown.preset.mode);
   request.key.view = {explore_.framedCamera(), explore_.framedPixels()[0], explore_.framedPixels()[1],
                       explore_.clipPlane()};
-  if (shown.preset.mode == render::RenderMode::Fuzzy) {  // fuzzy's unit is judged on the picture
-    request.key.fuzzyPreset = shown.preset;
-    request.key.fuzzyPreset.t = 0;
+  if (render::judgedOnPicture(shown.preset.mode)) {  // fuzzy's unit, lighting's reach: judged on the picture
+    request.key.picturePreset = shown.preset;
+    request.key.picturePreset.t = 0;
     request.labels = &dataset_->labels;
     request.gradients = &gradients_;
   }
@@ -320,6 +320,7 @@ render::RenderSettings DesktopModel::renderSettings(const RenderPlan& plan) cons
     const render::FieldScale scale = fieldScaleOf(shown, *frame);
     s.distanceUnit = scale.distanceUnit;
     s.distanceOffset = scale.distanceOffset;
+    s.lightingReach = scale.lightingReach;
   }
   s.width = plan.width;
   s.height = plan.height;

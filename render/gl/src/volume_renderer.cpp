@@ -779,8 +779,9 @@ Status VolumeRenderer::prepareState(const RenderSettings& s, bool interactive) {
     glUniform4f(loc("uClip"), float(s.clip->normal[0]), float(s.clip->normal[1]), float(s.clip->normal[2]),
                 float(s.clip->d));
   glUniform3f(loc("uHighlight"), s.preset.highlightRgb[0], s.preset.highlightRgb[1], s.preset.highlightRgb[2]);
-  // Eq. 6 on D / distanceUnit, so lighting's α is in the same unit as the distance TF's x.
-  glUniform2f(loc("uLighting"), float(double(s.preset.lightingAlpha) / s.distanceUnit), s.preset.lightingBeta);
+  // Eq. 6 on D / (distanceUnit × lightingReach): lighting's α is in the distance TF's unit, the
+  // reach (1 unless the picture chose another, picture_scale.h) lights farther.
+  glUniform2f(loc("uLighting"), float(double(s.preset.lightingAlpha) / (s.distanceUnit * s.lightingReach)), s.preset.lightingBeta);
   // The key light: from the viewer, a little above and to the left, so that surfaces facing the
   // viewer are lit and their slopes read as shape.
   const Vec3 right = cross(s.camera.forward(), s.camera.up());

@@ -112,13 +112,15 @@ struct FieldScale {
   // and far from it in the picture (0: not measured), and whether they set the unit.
   double nearRingD = 0, farRingD = 0;
   bool fromNeighbours = false;
-  // Fuzzy with the picture's inputs (fuzzy_picture.h): the shares of the context next to the
-  // structure and far from it drawn in its colour at t = kPictureT with the unit taken, whether the
-  // picture chose it, and then at which x it put the around set's median.
+  // Fuzzy and lighting with the picture's inputs (picture_scale.h): the shares of the context next
+  // to the structure and far from it drawn in the mode's colour at t = pictureT(mode) with the unit
+  // and reach taken, whether the picture chose them, then at which x fuzzy's unit put the around
+  // set's median, and lighting's reach (Eq. 6 on D' / (unit × reach)).
   double pictureNear = 0, pictureFar = 0;
   bool pictureJudged = false;  // the shares were measured (fuzzy with the picture's inputs)
   bool fromPicture = false;
   double pictureAroundX = 0;
+  double lightingReach = 1;
 };
 
 // The stored-value level from which the preset's data TF draws bone: the first TF x at which its
@@ -206,9 +208,9 @@ bool unitFromSeenBone(RenderMode mode);
 // but on the skull CT it also picked the sphenoid sinus, the axis and the left coronoid process and
 // coloured more of their far bone than of the near (sphenoid from the right: 13 % near, 23 % far).
 // Which unit confines the colour depends on what lies in front of what, so with the picture's
-// inputs fuzzy's unit is judged on the picture itself (fuzzy_picture.h). Lighting cannot gain from
+// inputs fuzzy's unit is judged on the picture itself (picture_scale.h). Lighting cannot gain from
 // the unit there: the unit also sets the opacity, and one that lights the bone around the structure
-// leaves the shell over it opaque and dark.
+// leaves the shell over it opaque and dark; its reach (Eq. 6's x alone) is judged on the picture.
 constexpr double kNeighbourRing = 0.05;      // of the ray grid's longer side (8 px of 160)
 constexpr double kFarFromStructure = 0.19;   // (30 px of 160)
 constexpr double kNeighbourX = 1.15;
@@ -232,9 +234,9 @@ void unitFromNeighbours(FieldScale& scale, const NeighbourBone& bone, RenderMode
 // The one way every front end (render command, desktop, terminal pictures, default views, question
 // checks) sets a framed view's distance unit: fieldScale on `settings`' own view (camera, size,
 // clip: set them first; the view only where unitFromSeenBone(settings.preset.mode)) with the
-// request's margin, for fuzzy and lighting then unitFromNeighbours on the same view, for fuzzy with
-// `picture` (its labels and structure) then unitFromFuzzyPicture (fuzzy_picture.h), then
-// distanceUnit = unit × request.contextScale and distanceOffset. Returns the measure.
+// request's margin, for fuzzy and lighting then unitFromNeighbours on the same view and, with
+// `picture` (its labels and structure), scaleFromPicture (picture_scale.h), then distanceUnit =
+// unit × request.contextScale, distanceOffset and lightingReach. Returns the measure.
 struct PictureInputs;
 FieldScale applyFieldScale(RenderSettings& settings, const FloatVolume& field, const Volume& volume, const Mask* body,
                            const StructureFrame& frame, const ViewRequest& request,

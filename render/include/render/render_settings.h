@@ -50,6 +50,9 @@ struct RenderSettings {
                                        // the field is known from the field (field_scale.h)
   double distanceOffset = 0;           // D' = max(0, D − offset) is what the unit divides (field_scale.h:
                                        // a scan whose bone in view lies in a narrow band of D)
+  double lightingReach = 1;            // lighting's Eq. 6 takes x = D' / (unit × reach): > 1 lights
+                                       // farther without changing what the distance TF draws
+                                       // (picture_scale.h, unitFromLightingPicture)
   std::array<float, 4> background{0, 0, 0, 0};  // composited under the volume (straight RGBA)
   bool jitter = true;                  // per-pixel ray start offsets (deterministic hash)
   bool shading = true;                 // Phong from gradients

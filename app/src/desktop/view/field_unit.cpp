@@ -4,14 +4,14 @@
 #include <exception>
 #include <utility>
 
-#include "render/fuzzy_picture.h"
+#include "render/picture_scale.h"
 
 namespace at::app {
 
 bool FieldUnitKey::operator==(const FieldUnitKey& o) const {
   const bool byView = seen || render::unitFromNeighbourBone(mode);
   return field == o.field && label == o.label && bone == o.bone && mode == o.mode && seen == o.seen &&
-         (!byView || view == o.view) && (mode != render::RenderMode::Fuzzy || fuzzyPreset == o.fuzzyPreset);
+         (!byView || view == o.view) && (!render::judgedOnPicture(mode) || picturePreset == o.picturePreset);
 }
 
 render::FieldScale measureFieldUnit(const FieldUnitRequest& request) {
@@ -22,7 +22,7 @@ render::FieldScale measureFieldUnit(const FieldUnitRequest& request) {
   if (render::unitFromNeighbourBone(k.mode))
     render::unitFromNeighbours(scale, render::neighbourBone(field, *request.volume, nullptr, k.bone, k.view), k.mode);
   const LabelMap* labels = request.labelsCopy ? request.labelsCopy.get() : request.labels;
-  if (k.mode == render::RenderMode::Fuzzy && labels && !labels->empty()) {
+  if (render::judgedOnPicture(k.mode) && labels && !labels->empty()) {
     render::SceneVolumes scene;
     scene.volume = request.volume;
     scene.labels = labels;
@@ -30,12 +30,12 @@ render::FieldScale measureFieldUnit(const FieldUnitRequest& request) {
     scene.selected = k.label;
     scene.gradients = request.gradients;
     render::RenderSettings settings;
-    settings.preset = k.fuzzyPreset;
+    settings.preset = k.picturePreset;
     settings.camera = k.view.camera;
     settings.width = k.view.width;
     settings.height = k.view.height;
     settings.clip = k.view.clip;
-    render::unitFromFuzzyPicture(scale, scene, settings);
+    render::scaleFromPicture(scale, scene, settings);
   }
   return scale;
 }
@@ -75,7 +75,7 @@ void FieldUnits::take(const FieldUnitKey& key, const std::shared_ptr<const Dista
 void FieldUnits::start(const FieldUnitRequest& request) {
   FieldUnitMeasure measure = measure_;
   FieldUnitRequest copied = request;
-  if (copied.labels && copied.key.mode == render::RenderMode::Fuzzy) copied.labelsCopy = std::make_shared<const LabelMap>(*copied.labels);
+  if (copied.labels && render::judgedOnPicture(copied.key.mode)) copied.labelsCopy = std::make_shared<const LabelMap>(*copied.labels);
   copied.labels = nullptr;  // the worker reads the copy only
   running_ = Running{request.key, request.field, request.frame,
                      std::async(std::launch::async, [measure, copied = std::move(copied)] { return measure(copied); })};

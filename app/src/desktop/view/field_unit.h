@@ -34,8 +34,8 @@ namespace at::app {
 // What a unit is measured for: the field (by identity), its structure, the bone levels of the
 // preset's data TF, its mode, whether the view's seen bone counts (render::unitFromSeenBone) and
 // the framed view — compared only where the mode's unit depends on it (seen, or
-// render::unitFromNeighbourBone) — and in fuzzy mode the preset the picture is drawn with
-// (render/fuzzy_picture.h; its t set to 0 by the caller: the picture is judged at its own t, so
+// render::unitFromNeighbourBone) — and in fuzzy and lighting the preset the picture is drawn with
+// (render/picture_scale.h; its t set to 0 by the caller: the picture is judged at its own t, so
 // moving the slider measures nothing).
 struct FieldUnitKey {
   const DistanceField* field = nullptr;
@@ -44,7 +44,7 @@ struct FieldUnitKey {
   render::RenderMode mode = render::RenderMode::Wdt;
   bool seen = false;
   render::FieldView view;
-  render::Preset fuzzyPreset;
+  render::Preset picturePreset;
   bool operator==(const FieldUnitKey& o) const;
 };
 
@@ -53,7 +53,7 @@ struct FieldUnitRequest {
   std::shared_ptr<const DistanceField> field;  // key.field, kept alive while it is measured
   const Volume* volume = nullptr;              // the scan the field was computed on
   render::StructureFrame frame;                // the structure's frame (key.label)
-  // Fuzzy: the shown label map (owned by the UI thread, which edits it: start() hands the worker a
+  // Fuzzy and lighting: the shown label map (owned by the UI thread, which edits it: start() hands the worker a
   // copy, `labelsCopy`) and the volume's gradients (they must outlive the measure, as the volume).
   const LabelMap* labels = nullptr;
   const render::GradientVolume* gradients = nullptr;
@@ -61,8 +61,8 @@ struct FieldUnitRequest {
 };
 
 // How a request is measured: as render::applyFieldScale measures it for the render command
-// (fieldScale, then unitFromNeighbours for fuzzy and lighting, then for fuzzy with the labels
-// unitFromFuzzyPicture) in measureFieldUnit, unless a test
+// (fieldScale, then unitFromNeighbours for fuzzy and lighting, then with the labels
+// scaleFromPicture) in measureFieldUnit, unless a test
 // puts a stand-in in its place. Called on the worker thread (synchronous mode: the caller's).
 using FieldUnitMeasure = std::function<render::FieldScale(const FieldUnitRequest&)>;
 render::FieldScale measureFieldUnit(const FieldUnitRequest& request);

@@ -1,4 +1,4 @@
-// Fuzzy mode's unit judged on the picture (render/fuzzy_picture.h), and the composite it is judged
+// Fuzzy's unit and lighting's reach judged on the picture (render/picture_scale.h), and the composite it is judged
 // on (render_settings.h, compositePixel), on the µCT-like phantom (uint8 plain intensities at 0.2 mm)
 // without a GPU.
 #include <doctest/doctest.h>
@@ -6,9 +6,11 @@
 #include <algorithm>
 #include <cmath>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "render/derived_preset.h"
-#include "render/fuzzy_picture.h"
+#include "render/picture_scale.h"
 #include "render/gradient_volume.h"
 #include "render/scene.h"
 #include "test_support.h"
@@ -45,9 +47,22 @@ struct Framed {
   FloatVolume field;
   RenderSettings settings;
   FieldScale scale;
-  SceneVolumes scene;
   SelectedMask mask;
+  std::uint16_t selected = 0;
 };
+
+// What the ray caster samples for a framed view (pointing into `f`: made where it is used, so that
+// moving a Framed leaves nothing dangling).
+SceneVolumes sceneOf(const Framed& f) {
+  SceneVolumes scene;
+  scene.volume = &microCt().ds.volume;
+  scene.labels = &microCt().ds.labels;
+  scene.field = &f.field;
+  scene.selected = f.selected;
+  scene.gradients = &microCt().gradients;
+  scene.selectedMask = &f.mask;
+  return scene;
+}
 
 // `id` framed from `view` at 160 px in `mode`, its unit set as the front ends set it (with the
 // picture's inputs, or without them).
@@ -68,26 +83,38 @@ Framed framed(const std::string& id, const std::string& view, RenderMode mode, b
   request.view = view;
   auto settings = settingsFor(preset, *frame, request);
   REQUIRE(settings);
-  Framed f{std::move(wdt->field.distances), *settings, {}, {}, {}};
+  Framed f{std::move(wdt->field.distances), *settings, {}, {}, 0};
   const PictureInputs picture{&ct.ds.labels, s->label, &ct.gradients};
   f.scale = applyFieldScale(f.settings, f.field, ct.ds.volume, nullptr, *frame, request, withPicture ? &picture : nullptr);
   f.mask = selectedMask(ct.ds.labels, s->label);
-  f.scene.volume = &ct.ds.volume;
-  f.scene.labels = &ct.ds.labels;
-  f.scene.field = &f.field;
-  f.scene.selected = s->label;
-  f.scene.gradients = &ct.gradients;
-  f.scene.selectedMask = &f.mask;
+  f.selected = s->label;
   return f;
 }
 
-FuzzyColourShares sharesAtPictureT(const Framed& f) {
+PictureColourShares sharesAtPictureT(const Framed& f) {
   RenderSettings s = f.settings;
-  s.preset.t = kPictureT;
-  return fuzzyColourShares(f.scene, s);
+  s.preset.t = pictureT(s.preset.mode);
+  return pictureColourShares(sceneOf(f), s);
 }
 
-double score(const FuzzyColourShares& s) { return s.near - kFarColourPenalty * s.far; }
+double score(const PictureColourShares& s) { return s.near - kFarColourPenalty * s.far; }
+
+// A view framed without the picture's inputs and with them, and each one's shares at pictureT.
+struct KeptAndJudged {
+  Framed kept, judged;
+  PictureColourShares keptShares, judgedShares;
+};
+KeptAndJudged keptAndJudged(const std::string& id, const std::string& view, RenderMode mode) {
+  KeptAndJudged out{framed(id, view, mode, false), framed(id, view, mode, true), {}, {}};
+  out.keptShares = sharesAtPictureT(out.kept);
+  out.judgedShares = sharesAtPictureT(out.judged);
+  return out;
+}
+
+// Structures inside the petrous block, one on its surface (the temporal line), from several sides.
+const std::vector<std::pair<std::string, std::string>> kViews = {
+    {"cochlea", "superior"},       {"cochlea", "lateral_left"},  {"facial_nerve", "superior"},
+    {"lateral_semicircular_canal", "superior"}, {"malleus", "lateral_right"}, {"temporal_line", "lateral_left"}};
 
 }  // namespace
 
@@ -99,8 +126,8 @@ TEST_CASE("compositePixel: the opacity the picker accumulates, the structure's p
     std::size_t drawn = 0;
     for (int y = 2; y < 160; y += 9)
       for (int x = 3; x < 160; x += 9) {
-        const CompositedPixel p = compositePixel(f.scene, f.settings, table, x, y);
-        const double context = contextOpacity(f.scene, f.settings, table, x, y);
+        const CompositedPixel p = compositePixel(sceneOf(f), f.settings, table, x, y);
+        const double context = contextOpacity(sceneOf(f), f.settings, table, x, y);
         CHECK(p.alpha == doctest::Approx(context + p.structureAlpha).epsilon(1e-9));
         CHECK(p.alpha <= 1.0);
         CHECK(p.structureAlpha >= 0.0);
@@ -114,29 +141,29 @@ TEST_CASE("compositePixel: the opacity the picker accumulates, the structure's p
   }
 }
 
-TEST_CASE("fuzzyColourShares: in colour where all the bone lies at distance 0, nowhere where all of it lies far") {
+TEST_CASE("pictureColourShares: in colour where all the bone lies at distance 0, nowhere where all of it lies far") {
   Framed f = framed("cochlea", "lateral_left", RenderMode::Fuzzy, false);
-  f.settings.preset.t = kPictureT;
+  f.settings.preset.t = pictureT(RenderMode::Fuzzy);
   f.settings.distanceOffset = 0;
   f.settings.distanceUnit = 1e9;  // every D at x ≈ 0: the full colour (Eqs. 4–5, weight 1)
-  const FuzzyColourShares all = fuzzyColourShares(f.scene, f.settings);
+  const PictureColourShares all = pictureColourShares(sceneOf(f), f.settings);
   CHECK(all.nearRays >= kMinPictureRays);
   CHECK(all.farRays >= kMinPictureRays);
   CHECK(all.near >= 0.9);
   CHECK(all.far >= 0.9);
   f.settings.distanceUnit = 1e-9;  // every D far: weight 0, the bone in its own colour
-  const FuzzyColourShares none = fuzzyColourShares(f.scene, f.settings);
+  const PictureColourShares none = pictureColourShares(sceneOf(f), f.settings);
   CHECK(none.near <= 0.02);  // (the structure's own rim, where its surface adds under half the opacity)
   CHECK(none.far == 0.0);
 }
 
-TEST_CASE("unitFromFuzzyPicture: inside solid bone the colour reaches the bone next to the structure, never the far bone") {
+TEST_CASE("scaleFromPicture: fuzzy inside solid bone the colour reaches the bone next to the structure, never the far bone") {
   // The cochlea from above lies under the petrous block's shell: the first bone each ray meets is
   // the shell, as far in D next to the cochlea as far from it, so the neighbours' unit leaves the
   // bone around it nearly uncoloured. The picture takes a unit from the bone around it.
   const Framed before = framed("cochlea", "superior", RenderMode::Fuzzy, false);
   const Framed after = framed("cochlea", "superior", RenderMode::Fuzzy, true);
-  const FuzzyColourShares b = sharesAtPictureT(before), a = sharesAtPictureT(after);
+  const PictureColourShares b = sharesAtPictureT(before), a = sharesAtPictureT(after);
   MESSAGE("cochlea from above: unit " << before.settings.distanceUnit << " → " << after.settings.distanceUnit
           << "; colour on " << 100 * b.near << " % → " << 100 * a.near << " % of the context next to it, " << 100 * b.far
           << " % → " << 100 * a.far << " % far from it");
@@ -146,14 +173,10 @@ TEST_CASE("unitFromFuzzyPicture: inside solid bone the colour reaches the bone n
 
   // Every view: the unit taken is the kept one, or one that scores clearly better with at most
   // kMaxFarColour of the far bone in colour; the shares reported are the picture's.
-  for (const auto& [id, view] : {std::pair<std::string, std::string>{"cochlea", "superior"}, {"cochlea", "lateral_left"},
-                                 {"facial_nerve", "superior"}, {"lateral_semicircular_canal", "superior"},
-                                 {"malleus", "lateral_right"}, {"temporal_line", "lateral_left"}}) {
+  for (const auto& [id, view] : kViews) {
     CAPTURE(id);
     CAPTURE(view);
-    const Framed kept = framed(id, view, RenderMode::Fuzzy, false);
-    const Framed chosen = framed(id, view, RenderMode::Fuzzy, true);
-    const FuzzyColourShares k = sharesAtPictureT(kept), c = sharesAtPictureT(chosen);
+    const auto [kept, chosen, k, c] = keptAndJudged(id, view, RenderMode::Fuzzy);
     CHECK(chosen.scale.pictureNear == doctest::Approx(c.near));
     CHECK(chosen.scale.pictureFar == doctest::Approx(c.far));
     if (chosen.scale.fromPicture) {
@@ -169,4 +192,31 @@ TEST_CASE("unitFromFuzzyPicture: inside solid bone the colour reaches the bone n
     const Framed wdt = framed(id, view, RenderMode::Wdt, true);
     CHECK_FALSE(wdt.scale.fromPicture);
   }
+}
+
+TEST_CASE("scaleFromPicture: lighting keeps the distance TF's unit and lights farther only where that keeps the far bone unlit") {
+  // Eq. 6's k_a falls to 0.2 at x = 0.7: inside solid bone the bone around the structure lies
+  // beyond that, behind the shell, and stays dark. A longer reach lights it where the picture shows
+  // that the light stays next to the structure.
+  std::size_t chosen = 0;
+  for (const auto& [id, view] : kViews) {
+    CAPTURE(id);
+    CAPTURE(view);
+    const auto [kept, judged, k, j] = keptAndJudged(id, view, RenderMode::Lighting);
+    MESSAGE(id << " " << view << ": reach " << judged.settings.lightingReach << "; light on " << 100 * k.near << " % → "
+                << 100 * j.near << " % of the context next to it, " << 100 * k.far << " % → " << 100 * j.far << " % far from it");
+    CHECK(judged.scale.pictureJudged);
+    CHECK(judged.settings.distanceUnit == kept.settings.distanceUnit);  // what the distance TF draws is unchanged
+    CHECK(judged.settings.distanceOffset == kept.settings.distanceOffset);
+    CHECK(judged.scale.pictureNear == doctest::Approx(j.near));
+    if (judged.scale.fromPicture) {
+      ++chosen;
+      CHECK(std::find(kLightingReaches.begin(), kLightingReaches.end(), judged.settings.lightingReach) != kLightingReaches.end());
+      CHECK(j.far <= kMaxFarColour);
+      CHECK(score(j) > score(k) + kPictureMargin - 1e-9);
+    } else {
+      CHECK(judged.settings.lightingReach == 1.0);
+    }
+  }
+  CHECK(chosen >= 1);
 }

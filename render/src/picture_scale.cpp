@@ -1,4 +1,4 @@
-#include "render/fuzzy_picture.h"
+#include "render/picture_scale.h"
 
 #include <algorithm>
 #include <cmath>
@@ -20,13 +20,16 @@ double hueOf(double r, double g, double b) {
   return std::fmod(h * 60 + 360, 360);
 }
 
-// The colour fuzzy draws next to the structure: its distance TF's colour at n = 1 (distance 0),
-// which Eqs. 4–5 mix into the bone with the TF's opacity as weight.
-std::array<double, 3> colourNextToStructure(const Preset& preset) {
-  const auto dist = TransferFunction1D::fromPoints(preset.distanceTf);
-  if (!dist) return {preset.highlightRgb[0], preset.highlightRgb[1], preset.highlightRgb[2]};
-  const Rgba c = dist->evaluate(1.0);
-  return {c[0], c[1], c[2]};
+// The colour the mode puts on the bone near the structure: fuzzy's distance TF colour at n = 1
+// (distance 0), which Eqs. 4–5 mix into the bone with the TF's opacity as weight; lighting's light,
+// the highlight (Eq. 6).
+std::array<double, 3> modeColour(const Preset& preset) {
+  if (preset.mode == RenderMode::Fuzzy)
+    if (const auto dist = TransferFunction1D::fromPoints(preset.distanceTf)) {
+      const Rgba c = dist->evaluate(1.0);
+      return {c[0], c[1], c[2]};
+    }
+  return {preset.highlightRgb[0], preset.highlightRgb[1], preset.highlightRgb[2]};
 }
 
 bool inColour(const CompositedPixel& p, double targetHue) {
@@ -41,15 +44,19 @@ bool inColour(const CompositedPixel& p, double targetHue) {
 
 }  // namespace
 
-FuzzyColourShares fuzzyColourShares(const SceneVolumes& scene, const RenderSettings& settings) {
-  FuzzyColourShares out;
+bool judgedOnPicture(RenderMode mode) { return mode == RenderMode::Fuzzy || mode == RenderMode::Lighting; }
+
+float pictureT(RenderMode mode) { return mode == RenderMode::Lighting ? 0.25f : 0.12f; }
+
+PictureColourShares pictureColourShares(const SceneVolumes& scene, const RenderSettings& settings) {
+  PictureColourShares out;
   const auto [w, h] = detail::rayGridOf(settings.width, settings.height, kPictureRaysPerSide);
   if (w < 1 || h < 1 || !scene.volume || !scene.field) return out;
   RenderSettings grid = settings;
   grid.width = w;
   grid.height = h;
   const TransferFunction2D table = shadingTable(grid.preset);
-  const auto colour = colourNextToStructure(grid.preset);
+  const auto colour = modeColour(grid.preset);
   const double targetHue = hueOf(colour[0], colour[1], colour[2]);
   std::vector<CompositedPixel> picture(std::size_t(w) * std::size_t(h));
   forEachRowInParallel(h, [&, w = w](int py) {
@@ -77,10 +84,11 @@ FuzzyColourShares fuzzyColourShares(const SceneVolumes& scene, const RenderSetti
   return out;
 }
 
-void unitFromFuzzyPicture(FieldScale& scale, const SceneVolumes& scene, const RenderSettings& settings, double contextScale) {
-  if (settings.preset.mode != RenderMode::Fuzzy || !scene.labels || scene.selected == 0) return;
+void scaleFromPicture(FieldScale& scale, const SceneVolumes& scene, const RenderSettings& settings, double contextScale) {
+  if (!judgedOnPicture(settings.preset.mode) || !scene.labels || scene.selected == 0) return;
+  const bool fuzzy = settings.preset.mode == RenderMode::Fuzzy;
   RenderSettings look = settings;
-  look.preset.t = kPictureT;
+  look.preset.t = pictureT(settings.preset.mode);
   // The structure's smoothed mask once for every picture (marched without it, each sample smooths).
   SceneVolumes withMask = scene;
   SelectedMask mask;
@@ -88,36 +96,53 @@ void unitFromFuzzyPicture(FieldScale& scale, const SceneVolumes& scene, const Re
     mask = selectedMask(*scene.labels, scene.selected);
     withMask.selectedMask = &mask;
   }
-  const auto sharesAt = [&](double unit, double offset) {
+  const auto sharesAt = [&](double unit, double offset, double reach) {
     look.distanceUnit = unit * contextScale;
     look.distanceOffset = offset;
-    return fuzzyColourShares(withMask, look);
+    look.lightingReach = reach;
+    return pictureColourShares(withMask, look);
   };
-  const auto score = [](const FuzzyColourShares& s) {
+  const auto score = [](const PictureColourShares& s) {
     return s.nearRays >= kMinPictureRays ? s.near - kFarColourPenalty * s.far : 0.0;
   };
-  const FuzzyColourShares kept = sharesAt(scale.distanceUnit, scale.distanceOffset);
+  const auto eligible = [](const PictureColourShares& s) {
+    return s.nearRays >= kMinPictureRays && (s.farRays < kMinPictureRays || s.far <= kMaxFarColour);
+  };
+  const PictureColourShares kept = sharesAt(scale.distanceUnit, scale.distanceOffset, scale.lightingReach);
   scale.pictureNear = kept.near;
   scale.pictureFar = kept.far;
   scale.pictureJudged = true;
-  if (scale.aroundQuantileD <= 0) return;
-  double bestScore = score(kept) + kPictureMargin, bestX = 0;
-  FuzzyColourShares best = kept;
-  for (double x : kPictureAroundX) {
-    const FuzzyColourShares s = sharesAt(scale.aroundQuantileD / x, 0);
-    if (s.nearRays < kMinPictureRays || (s.farRays >= kMinPictureRays && s.far > kMaxFarColour)) continue;
-    if (score(s) > bestScore) {
-      bestScore = score(s);
-      bestX = x;
-      best = s;
+  double bestScore = score(kept) + kPictureMargin, bestX = 0, bestReach = 0;
+  PictureColourShares best = kept;
+  if (fuzzy && scale.aroundQuantileD > 0) {
+    for (double x : kPictureAroundX) {
+      const PictureColourShares s = sharesAt(scale.aroundQuantileD / x, 0, 1);
+      if (eligible(s) && score(s) > bestScore) {
+        bestScore = score(s);
+        bestX = x;
+        best = s;
+      }
+    }
+  } else if (!fuzzy) {
+    for (double reach : kLightingReaches) {
+      const PictureColourShares s = sharesAt(scale.distanceUnit, scale.distanceOffset, reach);
+      if (eligible(s) && score(s) > bestScore) {
+        bestScore = score(s);
+        bestReach = reach;
+        best = s;
+      }
     }
   }
-  if (bestX == 0) return;
-  scale.distanceUnit = scale.aroundQuantileD / bestX;
-  scale.distanceOffset = 0;
+  if (bestX == 0 && bestReach == 0) return;
+  if (bestX > 0) {
+    scale.distanceUnit = scale.aroundQuantileD / bestX;
+    scale.distanceOffset = 0;
+    scale.pictureAroundX = bestX;
+  } else {
+    scale.lightingReach = bestReach;
+  }
   scale.pictureNear = best.near;
   scale.pictureFar = best.far;
-  scale.pictureAroundX = bestX;
   scale.fromPicture = true;
   scale.derived = true;
 }

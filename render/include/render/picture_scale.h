@@ -1,0 +1,90 @@
+// Fuzzy's distance unit (Fig. 5) and lighting's reach (Fig. 7), judged on the colours the framed
+// view's picture shows.
+//
+// Why: unitFromNeighbours (field_scale.h) sets both from the first bone surface each ray of the
+// view meets. Where the structure lies inside solid bone — the µCT-like phantom's lateral canal
+// seen from above — that surface is the outer shell, as far in D next to the structure as far
+// from it: fuzzy coloured 7.3 % of the context next to the canal and lighting lit 0.6 %. A fuzzy
+// unit from the bone around the structure coloured 41 % there; but on the skull CT the same rule,
+// taken from the distances alone, coloured more of the far bone than of the near (the sphenoid
+// sinus, the coronoid process), because which bone shows depends on what lies in front of what in
+// this view. So the candidates are judged on the picture itself, at t = pictureT(mode), the t the
+// mode's derived presets open with, whatever the slider's t (the unit does not change as t moves):
+//  - the picture: compositePixel (render_settings.h, the ray caster's classification; fuzzy
+//    without its light, which changes the brightness and not the hue; lighting with it, since its
+//    neutral part sets how saturated the light's colour looks) on a grid of kPictureRaysPerSide
+//    rays along the view's longer side. A ray is in the mode's colour (fuzzy: the distance TF's
+//    colour at the structure, n = 1; lighting: the light's, the highlight) where the composite is
+//    drawn (opacity ≥ 0.1, value ≥ 0.15) and has that hue (within 25°, saturation ≥ 0.35). near:
+//    the share of the drawn rays within kNeighbourRing of the structure's silhouette (rays where
+//    the structure's surface adds ≥ 0.5 opacity) that are in colour; far: the same beyond
+//    kFarFromStructure. Against the GPU picture (fuzzy: µCT-like phantom and skull CT, 4 units on
+//    each of 10 views) the near shares ran up to 33 points higher (the structure's unlit rim), the
+//    far shares up to 10; across the candidates both rose and fell together, which is what the
+//    choice needs.
+//  - the candidates: fuzzy — the unit unitFromNeighbours set (kept unless another is clearly
+//    better), and the around set's median D (FieldScale::aroundQuantileD) placed at x =
+//    kPictureAroundX[i], offset 0; lighting — the unit stays (it sets what the distance TF draws),
+//    and Eq. 6's k_a takes x = D' / (unit × reach) for reach 1 (kept) or kLightingReaches[i]: a
+//    reach above 1 lights bone farther from the structure (RenderSettings::lightingReach).
+//  - the choice: score = near − kFarColourPenalty × far; a candidate colouring more than
+//    kMaxFarColour of the far rays is never taken; another replaces the kept one only when its score
+//    is higher by kPictureMargin.
+// Cost: at most 1 + 4 pictures of about 40 × 30 rays, each ray marched as the ray caster marches,
+// once per field and framed view: `render skull mastoid_air_cells_right` at 400 × 300 on 2 cores
+// set the fuzzy unit in 331–372 ms and the lighting unit in 252–271 ms, against 60–79 ms for the
+// lighting unit without the picture (bench/RESULTS.md). The desktop measures it on its worker with the rest of the unit
+// (app/src/desktop/view/field_unit.h).
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+
+#include "render/field_scale.h"
+#include "render/gradient_volume.h"
+#include "render/render_settings.h"
+
+namespace at::render {
+
+constexpr int kPictureRaysPerSide = 40;
+constexpr std::array<double, 4> kPictureAroundX = {0.9, 1.15, 1.5, 2.0};
+constexpr std::array<double, 3> kLightingReaches = {1.4, 2.0, 2.8};
+constexpr double kFarColourPenalty = 3.0;
+constexpr double kMaxFarColour = 0.10;
+constexpr double kPictureMargin = 0.10;
+// A share counts only over at least this many drawn rays.
+constexpr std::size_t kMinPictureRays = 16;
+
+// Whether a mode's scale is judged on the picture (fuzzy and lighting), and the t it is judged at.
+bool judgedOnPicture(RenderMode mode);
+float pictureT(RenderMode mode);
+
+// What the picture is drawn from besides the volume and the field: the label map (on the volume's
+// grid), the structure shown and the volume's gradients (null: every edge at full opacity, and
+// lighting without its key light).
+struct PictureInputs {
+  const LabelMap* labels = nullptr;
+  std::uint16_t selected = 0;
+  const GradientVolume* gradients = nullptr;
+};
+
+// The shares of the drawn rays in the mode's colour next to the structure and far from it (see
+// above), for `settings` as they are (their unit, offset, reach and t); counts of the drawn rays in
+// each set.
+struct PictureColourShares {
+  double near = 0, far = 0;
+  std::size_t nearRays = 0, farRays = 0;
+};
+PictureColourShares pictureColourShares(const SceneVolumes& scene, const RenderSettings& settings);
+
+// Judges fuzzy's unit or lighting's reach on the picture (see above) for `settings`' view and
+// preset; `scale` holds what unitFromNeighbours set and the around set's median. `contextScale`
+// multiplies every candidate unit as applyFieldScale applies it. Sets scale's unit (offset 0 when
+// an around candidate wins) or lightingReach, pictureNear/pictureFar (the taken candidate's shares),
+// pictureJudged, fromPicture and pictureAroundX (fuzzy). Does nothing for another mode, without
+// labels or a selected structure.
+void scaleFromPicture(FieldScale& scale, const SceneVolumes& scene, const RenderSettings& settings,
+                      double contextScale = 1.0);
+
+}  // namespace at::render
