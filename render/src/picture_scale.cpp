@@ -69,7 +69,7 @@ PictureColourShares pictureColourShares(const SceneVolumes& scene, const RenderS
   std::size_t nearIn = 0, farIn = 0;
   for (std::size_t i = 0; i < picture.size(); ++i) {
     const CompositedPixel& p = picture[i];
-    if (structure[i] || p.alpha < 0.1 || std::max({p.rgb[0], p.rgb[1], p.rgb[2]}) < 0.15) continue;
+    if (structure[i] || p.structureAlpha >= 0.1 || p.alpha < 0.1 || std::max({p.rgb[0], p.rgb[1], p.rgb[2]}) < 0.15) continue;
     const bool in = inColour(p, targetHue);
     if (double(apart[i]) <= kNeighbourRing * side) {
       ++out.nearRays;

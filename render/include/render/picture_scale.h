@@ -18,7 +18,9 @@
 //    drawn (opacity ≥ 0.1, value ≥ 0.15) and has that hue (within 25°, saturation ≥ 0.35). near:
 //    the share of the drawn rays within kNeighbourRing of the structure's silhouette (rays where
 //    the structure's surface adds ≥ 0.5 opacity) that are in colour; far: the same beyond
-//    kFarFromStructure. Against the GPU picture (fuzzy: µCT-like phantom and skull CT, 4 units on
+//    kFarFromStructure. Rays where the structure adds 0.1 or more (its rim) count in neither: they
+//    show the structure's own colour (with them, the skull's sphenoid sinus in lighting read as
+//    100 % lit next to it, where the GPU picture showed 0 %). Against the GPU picture (fuzzy: µCT-like phantom and skull CT, 4 units on
 //    each of 10 views) the near shares ran up to 33 points higher (the structure's unlit rim), the
 //    far shares up to 10; across the candidates both rose and fell together, which is what the
 //    choice needs.
