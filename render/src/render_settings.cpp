@@ -223,10 +223,11 @@ std::array<double, 3> keyLight(const std::array<double, 3>& rgb, const Vec3& nrm
 
 // Walks the ray through pixel (x, y) front to back as the ray caster does (without jitter), giving
 // `visit` (bool(const MarchedSample&)) each sample that adds opacity; stops when `visit` returns
-// false or the ray leaves the volume.
+// false or the ray leaves the volume. The samples' colours are worked out only with `colour` (the
+// pickers need opacity alone).
 template <class Visit>
 void marchPixel(const SceneVolumes& scene, const RenderSettings& s, const TransferFunction2D& table, double x, double y,
-                const Visit& visit) {
+                const Visit& visit, bool colour = false) {
   if (!scene.volume || scene.volume->empty()) return;
   const Geometry& g = scene.volume->geometry;
   const Ray ray = s.camera.rayThroughPixel(x, y, s.width, s.height);
@@ -318,7 +319,7 @@ void marchPixel(const SceneVolumes& scene, const RenderSettings& s, const Transf
     const float front = tm < frontT ? s.preset.contextInFront : 1.0f;
     const float ac = c[3] > 0 ? correctedOpacity(c[3], step, refMm) * surface * front : 0.0f;
     std::array<float, 3> rgb{c[0], c[1], c[2]};
-    if (s.preset.mode == RenderMode::Lighting && fg && ac > 0) {  // Eq. 6, as the ray caster
+    if (colour && s.preset.mode == RenderMode::Lighting && fg && ac > 0) {  // Eq. 6, as the ray caster
       const double d = trilinear(*scene.field, fg->patientToIndex(p), [](float v) { return std::isinf(v) ? 1e30 : double(v); });
       const double x = std::min(std::max(d - s.distanceOffset, 0.0), 1e6) * double(s.preset.lightingAlpha) /
                        (s.distanceUnit * s.lightingReach);
@@ -395,7 +396,7 @@ CompositedPixel compositePixel(const SceneVolumes& scene, const RenderSettings& 
     out.alpha += added;
     if (sample.structure) out.structureAlpha += added;
     return out.alpha < kOpaque;
-  });
+  }, true);
   return out;
 }
 

@@ -48,7 +48,7 @@ int writeDefaultViews(const fs::path& outDir, const std::string& courseId) {
   if (!context) return reportError("offscreen rendering: " + context.error().message);
   auto renderer = render::gl::VolumeRenderer::create();
   if (!renderer) return reportError("offscreen rendering: " + renderer.error().message);
-  // The gradients once, for the renderer and for fuzzy steps' units (render/picture_scale.h).
+  // The gradients once, for the renderer and for the fuzzy and lighting steps' scales (render/picture_scale.h).
   const render::GradientVolume gradients = render::computeGradientVolume(dataset->volume);
   if (auto st = renderer->setVolume(dataset->volume, dataset->labels, gradients); !st) return reportError(st.error().message);
   const render::IntensityLevels& levels = shown->levels;

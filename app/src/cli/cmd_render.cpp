@@ -169,7 +169,8 @@ int runRender(const Argv& argv) {
   if (wholeVolume && !args->has("preset")) settings->opacityRefMm = render::kWholeVolumeRefMm;
 
   std::optional<DistanceField> field;
-  // The volume's gradients, computed once for the renderer and, in fuzzy mode, the unit's picture.
+  // The volume's gradients, computed once for the renderer and, in fuzzy and lighting, the picture their
+  // scale is judged on (render/picture_scale.h).
   std::optional<render::GradientVolume> gradients;
   std::string unitNote;
   double wdtMs = 0;
