@@ -105,39 +105,59 @@ void scaleFromPicture(FieldScale& scale, const SceneVolumes& scene, const Render
   const auto score = [](const PictureColourShares& s) {
     return s.nearRays >= kMinPictureRays ? s.near - kFarColourPenalty * s.far : 0.0;
   };
-  const auto eligible = [](const PictureColourShares& s) {
+  const auto farClear = [](const PictureColourShares& s) {
     return s.nearRays >= kMinPictureRays && (s.farRays < kMinPictureRays || s.far <= kMaxFarColour);
   };
   const PictureColourShares kept = sharesAt(scale.distanceUnit, scale.distanceOffset, scale.lightingReach);
   scale.pictureNear = kept.near;
   scale.pictureFar = kept.far;
   scale.pictureJudged = true;
-  double bestScore = score(kept) + kPictureMargin, bestX = 0, bestReach = 0;
+  // The kept scale wins by kPictureMargin unless it colours the far bone clearly (then it is shrunk too).
+  const bool keptColoursFar = kept.farRays >= kMinPictureRays && kept.far > kFarColourToShrink;
+  double bestScore = score(kept) + (keptColoursFar ? 0.0 : kPictureMargin), bestX = 0, bestReach = 0, bestShrink = 1;
   PictureColourShares best = kept;
-  if (fuzzy && scale.aroundQuantileD > 0) {
+  if (fuzzy && scale.aroundQuantileD > 0)
     for (double x : kPictureAroundX) {
       const PictureColourShares s = sharesAt(scale.aroundQuantileD / x, 0, 1);
-      if (eligible(s) && score(s) > bestScore) {
+      if (farClear(s) && score(s) > bestScore) {
         bestScore = score(s);
         bestX = x;
         best = s;
       }
     }
-  } else if (!fuzzy) {
+  if (keptColoursFar)
+    for (double shrink : kPictureShrinks) {
+      const PictureColourShares s = fuzzy ? sharesAt(scale.distanceUnit * shrink, scale.distanceOffset, 1)
+                                          : sharesAt(scale.distanceUnit, scale.distanceOffset, scale.lightingReach * shrink);
+      if (farClear(s) && score(s) > bestScore) {
+        bestScore = score(s);
+        bestX = 0;
+        bestShrink = shrink;
+        best = s;
+      }
+    }
+  if (!fuzzy) {
     for (double reach : kLightingReaches) {
       const PictureColourShares s = sharesAt(scale.distanceUnit, scale.distanceOffset, reach);
-      if (eligible(s) && score(s) > bestScore) {
+      if (farClear(s) && score(s) > bestScore) {
         bestScore = score(s);
         bestReach = reach;
+        bestShrink = 1;
         best = s;
       }
     }
   }
-  if (bestX == 0 && bestReach == 0) return;
+  if (bestX == 0 && bestReach == 0 && bestShrink == 1) return;
   if (bestX > 0) {
     scale.distanceUnit = scale.aroundQuantileD / bestX;
     scale.distanceOffset = 0;
     scale.pictureAroundX = bestX;
+  } else if (bestShrink != 1) {
+    if (fuzzy)
+      scale.distanceUnit *= bestShrink;
+    else
+      scale.lightingReach *= bestShrink;
+    scale.pictureShrink = bestShrink;
   } else {
     scale.lightingReach = bestReach;
   }

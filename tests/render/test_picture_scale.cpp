@@ -98,6 +98,11 @@ PictureColourShares sharesAtPictureT(const Framed& f) {
 }
 
 double score(const PictureColourShares& s) { return s.near - kFarColourPenalty * s.far; }
+// Whether the kept scale colours the far bone enough to be shrunk (and to lose its margin).
+bool coloursFar(const PictureColourShares& kept) { return kept.farRays >= kMinPictureRays && kept.far > kFarColourToShrink; }
+// The least score a candidate taken over the kept scale has.
+double scoreToBeat(const PictureColourShares& kept) { return score(kept) + (coloursFar(kept) ? 0.0 : kPictureMargin) - 1e-9; }
+bool isShrink(double factor) { return std::find(kPictureShrinks.begin(), kPictureShrinks.end(), factor) != kPictureShrinks.end(); }
 
 // A view framed without the picture's inputs and with them, and each one's shares at pictureT.
 struct KeptAndJudged {
@@ -180,10 +185,17 @@ TEST_CASE("scaleFromPicture: fuzzy inside solid bone the colour reaches the bone
     CHECK(chosen.scale.pictureNear == doctest::Approx(c.near));
     CHECK(chosen.scale.pictureFar == doctest::Approx(c.far));
     if (chosen.scale.fromPicture) {
-      CHECK(chosen.settings.distanceOffset == 0);
-      CHECK(chosen.settings.distanceUnit == doctest::Approx(chosen.scale.aroundQuantileD / chosen.scale.pictureAroundX));
+      if (chosen.scale.pictureShrink != 1) {  // the kept unit, shrunk: only where it coloured the far bone
+        CHECK(coloursFar(k));
+        CHECK(isShrink(chosen.scale.pictureShrink));
+        CHECK(chosen.settings.distanceUnit == doctest::Approx(kept.settings.distanceUnit * chosen.scale.pictureShrink));
+        CHECK(chosen.settings.distanceOffset == kept.settings.distanceOffset);
+      } else {
+        CHECK(chosen.settings.distanceOffset == 0);
+        CHECK(chosen.settings.distanceUnit == doctest::Approx(chosen.scale.aroundQuantileD / chosen.scale.pictureAroundX));
+      }
       CHECK(c.far <= kMaxFarColour);
-      CHECK(score(c) > score(k) + kPictureMargin - 1e-9);
+      CHECK(score(c) > scoreToBeat(k));
     } else {
       CHECK(chosen.settings.distanceUnit == kept.settings.distanceUnit);
       CHECK(chosen.settings.distanceOffset == kept.settings.distanceOffset);
@@ -211,12 +223,69 @@ TEST_CASE("scaleFromPicture: lighting keeps the distance TF's unit and lights fa
     CHECK(judged.scale.pictureNear == doctest::Approx(j.near));
     if (judged.scale.fromPicture) {
       ++chosen;
-      CHECK(std::find(kLightingReaches.begin(), kLightingReaches.end(), judged.settings.lightingReach) != kLightingReaches.end());
+      const bool longer = std::find(kLightingReaches.begin(), kLightingReaches.end(), judged.settings.lightingReach) !=
+                          kLightingReaches.end();
+      CHECK((longer || (coloursFar(k) && isShrink(judged.settings.lightingReach))));
       CHECK(j.far <= kMaxFarColour);
-      CHECK(score(j) > score(k) + kPictureMargin - 1e-9);
+      CHECK(score(j) > scoreToBeat(k));
     } else {
       CHECK(judged.settings.lightingReach == 1.0);
     }
   }
   CHECK(chosen >= 1);
+}
+
+TEST_CASE("scaleFromPicture: a unit or reach that colours the far bone is shrunk until the far bone is clear") {
+  // A scale that puts the mode's colour on more than kFarColourToShrink of the far bone (here the
+  // unit or the reach stretched 2.5 × beyond what applyFieldScale took) is shrunk (kPictureShrinks)
+  // to the best-scoring one that keeps the far bone clear; the colour next to the structure stays.
+  std::size_t shrunk = 0;
+  for (const auto& [id, view] : kViews)
+    for (RenderMode mode : {RenderMode::Fuzzy, RenderMode::Lighting}) {
+      CAPTURE(id);
+      CAPTURE(view);
+      CAPTURE(std::string(toString(mode)));
+      Framed f = framed(id, view, mode, false);
+      FieldScale stretched = f.scale;
+      stretched.pictureJudged = stretched.fromPicture = false;
+      if (mode == RenderMode::Fuzzy)
+        stretched.distanceUnit = f.settings.distanceUnit * 2.5;  // (the request's context scale is 1)
+      else
+        stretched.lightingReach = 2.5;
+      f.settings.distanceUnit = stretched.distanceUnit;
+      f.settings.lightingReach = stretched.lightingReach;
+      const PictureColourShares before = sharesAtPictureT(f);
+      if (!coloursFar(before)) continue;  // nothing to shrink in this view
+      FieldScale judged = stretched;
+      scaleFromPicture(judged, sceneOf(f), f.settings);
+      CHECK(judged.pictureJudged);
+      if (!judged.fromPicture) {
+        // No candidate that keeps the far bone clear scores better: every candidate colours the far bone too, or loses the
+        // colour next to the structure.
+        CHECK(judged.distanceUnit == stretched.distanceUnit);
+        continue;
+      }
+      ++shrunk;
+      Framed after = f;
+      after.settings.distanceUnit = judged.distanceUnit;
+      after.settings.distanceOffset = judged.distanceOffset;
+      after.settings.lightingReach = judged.lightingReach;
+      const PictureColourShares a = sharesAtPictureT(after);
+      MESSAGE(id << " " << view << " " << toString(mode) << ": in colour " << 100 * before.near << " % → " << 100 * a.near
+                 << " % next to it, " << 100 * before.far << " % → " << 100 * a.far << " % far from it (shrink "
+                 << judged.pictureShrink << ")");
+      CHECK(judged.pictureNear == doctest::Approx(a.near));
+      CHECK(judged.pictureFar == doctest::Approx(a.far));
+      CHECK(a.far <= kMaxFarColour);
+      CHECK(score(a) > score(before));
+      if (judged.pictureShrink != 1) {
+        CHECK(isShrink(judged.pictureShrink));
+        if (mode == RenderMode::Fuzzy)
+          CHECK(judged.distanceUnit == doctest::Approx(stretched.distanceUnit * judged.pictureShrink));
+        else
+          CHECK(judged.lightingReach == doctest::Approx(2.5 * judged.pictureShrink));
+      }
+      if (mode == RenderMode::Lighting) CHECK(judged.distanceUnit == stretched.distanceUnit);
+    }
+  CHECK(shrunk >= 2);
 }

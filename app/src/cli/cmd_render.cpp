@@ -209,6 +209,9 @@ int runRender(const Argv& argv) {
                     ? " (chosen by the picture: the around bone's median D " + formatUnit(scale.aroundQuantileD) + " at x " +
                           formatUnit(scale.pictureAroundX) + "; colour on " + percent(scale.pictureNear) + " next to it, " +
                           percent(scale.pictureFar) + " far from it)"
+                : scale.fromPicture && scale.pictureShrink != 1 && preset->mode == render::RenderMode::Fuzzy
+                    ? " (shrunk × " + formatUnit(scale.pictureShrink) + " by the picture: colour on " + percent(scale.pictureNear) +
+                          " next to it, " + percent(scale.pictureFar) + " far from it)"
                 : scale.fromNeighbours ? " (median bone D next to it in view " + formatUnit(scale.nearRingD) + ", far from it " + formatUnit(scale.farRingD) + ")"
                 : scale.derived ? std::string(scale.fromSeen ? " (median seen bone D " : " (median bone D ") + formatUnit(scale.quantileD) + ", 90 % " + formatUnit(scale.farQuantileD) +
                                    (scale.cappedByRays ? "; capped: rays' nearest bone beyond D " + formatUnit(scale.drawnLimitD) + " fades" : std::string()) +

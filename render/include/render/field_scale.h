@@ -115,11 +115,13 @@ struct FieldScale {
   // Fuzzy and lighting with the picture's inputs (picture_scale.h): the shares of the context next
   // to the structure and far from it drawn in the mode's colour at t = pictureT(mode) with the unit
   // and reach taken, whether the picture chose them, then at which x fuzzy's unit put the around
-  // set's median, and lighting's reach (Eq. 6 on D' / (unit × reach)).
+  // set's median, the factor the kept unit (fuzzy) or reach (lighting) was shrunk by (1: not
+  // shrunk), and lighting's reach (Eq. 6 on D' / (unit × reach)).
   double pictureNear = 0, pictureFar = 0;
   bool pictureJudged = false;  // the shares were measured (fuzzy with the picture's inputs)
   bool fromPicture = false;
   double pictureAroundX = 0;
+  double pictureShrink = 1;
   double lightingReach = 1;
 };
 

@@ -29,10 +29,20 @@
 //    kPictureAroundX[i], offset 0; lighting — the unit stays (it sets what the distance TF draws),
 //    and Eq. 6's k_a takes x = D' / (unit × reach) for reach 1 (kept) or kLightingReaches[i]: a
 //    reach above 1 lights bone farther from the structure (RenderSettings::lightingReach).
+//    Where the kept scale itself colours more than kFarColourToShrink of the far rays, the kept unit
+//    (fuzzy) or reach (lighting) shrunk by kPictureShrinks[i] too: on the skull CT the kept units
+//    tinted the face far from the ethmoid cells and the right maxillary sinus seen from the front
+//    (26 and 24 % of the far rays), and lighting lit the skull base far from the atlas and the
+//    maxilla (22 … 47 %). (From kMaxFarColour on, the shrink took colour from the bone next to
+//    the skull's frontal sinus in lighting, 17.2 → 8.6 % in the GPU picture, where the CPU's far
+//    share of 10.7 % was 2.2 % in the GPU's.)
 //  - the choice: score = near − kFarColourPenalty × far; a candidate colouring more than
-//    kMaxFarColour of the far rays is never taken; another replaces the kept one only when its score
-//    is higher by kPictureMargin.
-// Cost: at most 1 + 4 pictures of about 40 × 30 rays, each ray marched as the ray caster marches,
+//    kMaxFarColour of the far rays is never taken; another replaces the kept one when its score is
+//    higher — by kPictureMargin unless the kept one colours more than kFarColourToShrink. Where no unit
+//    tells the near bone from the far (the skull's ethmoid cells from the front: GPU picture 55.9 %
+//    near, 33.3 % far), the score prefers little colour (5.2 / 2.7 %) to colour on the far bone: a
+//    tint far from the structure tells a student that bone is near it.
+// Cost: at most 1 + 4 pictures of about 40 × 30 rays (4 more where the kept scale colours the far bone), each ray marched as the ray caster marches,
 // once per field and framed view: `render skull mastoid_air_cells_right` at 400 × 300 on 2 cores
 // set the fuzzy unit in 331–372 ms and the lighting unit in 252–271 ms, against 60–79 ms for the
 // lighting unit without the picture (bench/RESULTS.md). The desktop measures it on its worker with the rest of the unit
@@ -52,8 +62,10 @@ namespace at::render {
 constexpr int kPictureRaysPerSide = 40;
 constexpr std::array<double, 4> kPictureAroundX = {0.9, 1.15, 1.5, 2.0};
 constexpr std::array<double, 3> kLightingReaches = {1.4, 2.0, 2.8};
+constexpr std::array<double, 4> kPictureShrinks = {0.85, 0.75, 0.65, 0.55};
 constexpr double kFarColourPenalty = 3.0;
 constexpr double kMaxFarColour = 0.10;
+constexpr double kFarColourToShrink = 0.15;
 constexpr double kPictureMargin = 0.10;
 // A share counts only over at least this many drawn rays.
 constexpr std::size_t kMinPictureRays = 16;
@@ -84,7 +96,7 @@ PictureColourShares pictureColourShares(const SceneVolumes& scene, const RenderS
 // preset; `scale` holds what unitFromNeighbours set and the around set's median. `contextScale`
 // multiplies every candidate unit as applyFieldScale applies it. Sets scale's unit (offset 0 when
 // an around candidate wins) or lightingReach, pictureNear/pictureFar (the taken candidate's shares),
-// pictureJudged, fromPicture and pictureAroundX (fuzzy). Does nothing for another mode, without
+// pictureJudged, fromPicture, pictureAroundX (fuzzy) and pictureShrink. Does nothing for another mode, without
 // labels or a selected structure.
 void scaleFromPicture(FieldScale& scale, const SceneVolumes& scene, const RenderSettings& settings,
                       double contextScale = 1.0);
