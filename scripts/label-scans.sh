@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Labels the real scans that fetch-scans.sh fetched, with anatomy-tutor's own segment command, from
 # the seeds kept in the repository (data/segmentations/<scan>/seeds.json). Today one: the skull CT,
-# 23 structures grown from seeds, the bones kept to their tissue range (CPU, about half a minute). The label map and its names go beside the
+# 24 structures grown from seeds, the bones kept to their tissue range (CPU, about half a minute). The label map and its names go beside the
 # scan in the cache folder, where `anatomy-tutor ... skull` finds them:
 #   ${XDG_CACHE_HOME:-~/.cache}/anatomy-tutor/scans/invesalius-examples/skull.labels.nii.gz (+ .names.json)
 # The same seeds give the same labels bit for bit (tests/app/test_skull_course.cpp checks them).

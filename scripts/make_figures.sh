@@ -93,6 +93,7 @@ if "$app" structures skull >/dev/null 2>&1; then
   render_skull skull_fig5_mandible_fuzzy.png mandible --mode fuzzy --view anterior
   render_skull skull_fig5_mandible_bare.png mandible --mode bare --view anterior
   render_skull skull_fig6_zygomatic_arch_outline.png zygomatic_arch_left --mode outline --view lateral_left --margin 2.6
+  render_skull skull_fig6_temporal_line_outline.png temporal_line_left --mode outline --view lateral_left
   render_skull skull_fig7_zygomatic_arch_lighting.png zygomatic_arch_left --mode lighting --view lateral_left --margin 2.6
 else
   echo "make_figures: the skull CT is not fetched (scripts/fetch-scans.sh): skull sheets left out" >&2
@@ -141,6 +142,7 @@ sheet sheet_skull_fig5.png "Fig. 5 on the skull CT - fuzzy boundary vs the hard 
   skull_fig5_mandible_fuzzy.png "Mandible, fuzzy: its colour fades into the neighbouring bone" \
   skull_fig5_mandible_bare.png "Mandible, hard edge (the segment alone)"
 sheet sheet_skull_fig6.png "Fig. 6 on the skull CT - a band of constant weighted distance on the bone" \
+  skull_fig6_temporal_line_outline.png "Left temporal line (the paper's landmark): a band on each side of it along the skull" \
   skull_fig6_zygomatic_arch_outline.png "Left zygomatic arch: a band on the lateral skull around it"
 sheet sheet_skull_fig7.png "Fig. 7 on the skull CT - a small bone lights the bone near it (Eq. 6)" \
   skull_fig7_zygomatic_arch_lighting.png "Left zygomatic arch as the light"

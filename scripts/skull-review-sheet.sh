@@ -43,7 +43,8 @@ mastoid_air_cells_left lateral_left
 petrous_temporal_bone_right superior
 petrous_temporal_bone_left superior
 atlas_c1 inferior
-axis_c2 posterior"
+axis_c2 posterior
+temporal_line_left lateral_left"
 
 args=()
 while read -r id view; do

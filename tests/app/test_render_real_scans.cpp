@@ -462,7 +462,10 @@ TEST_CASE("Skull CT: each mode reads as its figure - outline a thin band, fuzzy 
   // kNeighbourX) from which the rim can have its full colour with the far bone uncoloured, so the
   // far cap wins (fuzzy 7.8 % of the rim); from the side, lighting lights 5.8 % of the rim
   // (28 % with the old mask; fuzzy there 61 %).
-  for (const Sight& sight : {Sight{"zygomatic_arch_left", "lateral_left", true}, Sight{"zygomatic_arch_right", "lateral_right", true},
+  // The left temporal line (the paper's Fig. 6 landmark, a strip of the vault's outer table): a
+  // band along it on both sides.
+  for (const Sight& sight : {Sight{"temporal_line_left", "lateral_left", true},
+                             Sight{"zygomatic_arch_left", "lateral_left", true}, Sight{"zygomatic_arch_right", "lateral_right", true},
                              Sight{"frontal_sinus", "anterior", false}, Sight{"orbit_left", "anterior", false, false, true},
                              Sight{"orbit_left", "lateral_left", false, true, false},
                              Sight{"mastoid_air_cells_right", "lateral_right", false}}) {

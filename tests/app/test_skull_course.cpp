@@ -97,6 +97,8 @@ const std::map<std::string, std::function<bool(const Vec3&)>>& expectedPlaces() 
       // Above the notch (k 17 and up) under the zygomatic arch, in front of the condyles.
       {"coronoid_process_right", [](const Vec3& p) { return p[0] < -30 && p[1] < -20 && p[2] > -60 && p[2] < -40; }},
       {"coronoid_process_left", [](const Vec3& p) { return p[0] > 30 && p[1] < -20 && p[2] > -60 && p[2] < -40; }},
+      // On the left side of the vault, above the zygomatic arch (whose level is z ≈ -45).
+      {"temporal_line_left", [](const Vec3& p) { return p[0] > 45 && p[2] > -20; }},
   };
   return places;
 }

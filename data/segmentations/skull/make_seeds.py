@@ -9,7 +9,7 @@ remade (about a minute, pure Python). Each structure is a tissue range (HU), a b
 (i, j, k inclusive, found on `anatomy-tutor slice skull` images; docs/skull_landmarks.md) and a
 voxel inside it: the voxels of that range connected to the voxel inside the box (or all of them
 in the box where no voxel is given; orbits also inside a cone from the apex to the opening) are
-the structure's core. Seeds are runs along i of core voxels on every 3rd row and 2nd slice; the
+the structure's core (the temporal line's: the outer table along an arch, ARC below). Seeds are runs along i of core voxels on every 3rd row and 2nd slice; the
 background gets runs on every 4th row and 2nd slice of the voxels at least 3 voxels in-plane from
 every core. `anatomy-tutor segment --method grow` then gives every voxel the label of the seed it
 reaches most cheaply (gradient weights), which fills the gaps and sets the boundaries.
@@ -73,15 +73,51 @@ S = [
  # to the tip under the zygomatic arch (k 25); listed after the mandible, but its core wins (FIRST).
  (22, 'Coronoid process (right)', [0.95,0.75,0.30], [(BONE, (74,92,152,171,17,27), (82,164,23))]),
  (23, 'Coronoid process (left)', [0.95,0.55,0.20], [(BONE, (172,190,152,171,17,27), (180,165,23))]),
+ # A region for Fig. 6 (the temporal line outlined): the outer table of the left side of the vault
+ # along the superior temporal line, where the temporalis fascia attaches. The line is not a ridge
+ # this 1 mm CT shows, so its course is drawn as anatomy places it: an arch over the temporal fossa
+ # from the zygomatic process of the frontal bone (above the lateral orbital rim, k 48) up to its
+ # highest point (j 130, k 80, about 8 cm above the zygomatic arch) and down behind the ear to the
+ # supramastoid crest (j 92, k 35) — ARC below; a strip about 5 mm wide and 3 voxels deep.
+ (24, 'Temporal line (left)', [0.35,0.80,0.95], [('arc',)]),
 ]
+# The temporal line's arch (voxels): its top, the half-widths in j in front of and behind the top,
+# the level of its ends (k) and of its front end (the frontal bone above the orbit), the strip's
+# half-width as a share of the arch's radius, and the outer table's depth (voxels of bone from the
+# skull's outer surface inward along i, the left side), and the least i of that surface: at the
+# front of the vault the first bone outward from the middle is the forehead beside the frontal
+# sinus, which faces forward; the line runs on the side of the skull.
+ARC = dict(jtop=130, ktop=80, aj_front=68, aj_back=38, kend=35, kfront=48, halfwidth=0.045, depth=3, imin=170)
 FIRST = ('Coronoid process (right)', 'Coronoid process (left)')
+
+def outer_table_arc(a):
+    # The left vault's outer surface per row (k, j): from the middle (i 128) outward, the first bone
+    # and the bone after it with gaps of at most 3 voxels (the diploe); what lies beyond a wider gap
+    # (the scalp, the head holder behind the occiput) is not the skull.
+    out = set()
+    for k in range(a['kend'], NK):
+        for j in range(NJ):
+            front = j >= a['jtop']
+            if front and k < a['kfront']: continue
+            aj = a['aj_front'] if front else a['aj_back']
+            r = (((j - a['jtop']) / aj) ** 2 + ((k - a['kend']) / (a['ktop'] - a['kend'])) ** 2) ** 0.5
+            if abs(r - 1) > a['halfwidth']: continue
+            last = None
+            for i in range(128, NI):
+                if BONE_ANY[0] <= v(i, j, k):
+                    if last is not None and i - last > 3: break
+                    last = i
+            if last is None or last < a['imin']: continue
+            for i in range(last - a['depth'] + 1, last + 1):
+                if BONE_ANY[0] <= v(i, j, k): out.add((i, j, k))
+    return out
 # Labels that keep only voxels of a tissue range (the seeds file's "grow_range",
 # segment/ranged_growth.h): the bones, so a thin ramus or arch is not padded with the muscle and air
 # around it, and the ear canals and ethmoid cells, which keep their air and not the skin of their
 # walls or the cells' bony septa and lining.
 GROW_RANGE = {'Mandible': BONE_ANY, 'Maxilla': BONE_ANY, 'Zygomatic arch (right)': ARCH, 'Zygomatic arch (left)': ARCH,
               'Atlas (C1)': BONE_ANY, 'Axis (C2)': BONE_ANY, 'Coronoid process (right)': BONE_ANY,
-              'Coronoid process (left)': BONE_ANY,
+              'Coronoid process (left)': BONE_ANY, 'Temporal line (left)': BONE_ANY,
               'Petrous temporal bone (right)': BONE_ANY, 'Petrous temporal bone (left)': BONE_ANY,
               'Ethmoid air cells': AIR_ANY, 'External acoustic meatus (right)': AIR_ANY, 'External acoustic meatus (left)': AIR_ANY}
 
@@ -118,6 +154,9 @@ def comp(rng, b, start, keep=lambda i, j, k: True):
 owner = {}   # voxel -> label id (first listed wins)
 for value, name, colour, parts in sorted(S, key=lambda s: s[1] not in FIRST):
     for part in parts:
+        if part[0] == 'arc':
+            for p in outer_table_arc(ARC): owner.setdefault(p, name)
+            continue
         rng, b, start = part[:3]
         keep = cone(*part[3]) if len(part) > 3 else (lambda i, j, k: True)
         for p in comp(rng, b, start, keep): owner.setdefault(p, name)
@@ -144,9 +183,9 @@ def runs(name, pred, jstep, kstep, joff=0):
 for value, name, colour, parts in S:
     runs(name, lambda i, j, k, n=name: owner.get((i, j, k)) == n, 3, 2)
     for part in parts:
-        start = part[2]
+        start = part[2] if part[0] != 'arc' else None
         if start: strokes[name].append([mm(*start)])
-boxes = [p[1] for s in S for p in s[3]]
+boxes = [p[1] for s in S for p in s[3] if p[0] != 'arc']
 def nearbox(i, j, k, m):
     return any(b[0]-m <= i <= b[1]+m and b[2]-m <= j <= b[3]+m and b[4]-m//2 <= k <= b[5]+m//2 for b in boxes)
 def bg(i, j, k):
