@@ -271,7 +271,7 @@ TEST_CASE("scaleFromPicture: a unit or reach that colours the far bone is shrunk
       after.settings.distanceOffset = judged.distanceOffset;
       after.settings.lightingReach = judged.lightingReach;
       const PictureColourShares a = sharesAtPictureT(after);
-      MESSAGE(id << " " << view << " " << toString(mode) << ": in colour " << 100 * before.near << " % → " << 100 * a.near
+      MESSAGE(id << " " << view << " " << std::string(toString(mode)) << ": in colour " << 100 * before.near << " % → " << 100 * a.near
                  << " % next to it, " << 100 * before.far << " % → " << 100 * a.far << " % far from it (shrink "
                  << judged.pictureShrink << ")");
       CHECK(judged.pictureNear == doctest::Approx(a.near));
