@@ -112,7 +112,8 @@ void scaleFromPicture(FieldScale& scale, const SceneVolumes& scene, const Render
   scale.pictureNear = kept.near;
   scale.pictureFar = kept.far;
   scale.pictureJudged = true;
-  // The kept scale wins by kPictureMargin unless it colours the far bone clearly (then it is shrunk too).
+  // The kept scale wins by kPictureMargin unless it colours the far bone clearly (then it is also
+  // tried shrunk).
   const bool keptColoursFar = kept.farRays >= kMinPictureRays && kept.far > kFarColourToShrink;
   double bestScore = score(kept) + (keptColoursFar ? 0.0 : kPictureMargin), bestX = 0, bestReach = 0, bestShrink = 1;
   PictureColourShares best = kept;

@@ -38,12 +38,12 @@
 //    share of 10.7 % was 2.2 % in the GPU's.)
 //  - the choice: score = near − kFarColourPenalty × far; a candidate colouring more than
 //    kMaxFarColour of the far rays is never taken; another replaces the kept one when its score is
-//    higher — by kPictureMargin unless the kept one colours more than kFarColourToShrink. Where no unit
-//    tells the near bone from the far (the skull's ethmoid cells from the front: GPU picture 55.9 %
+//    higher — by kPictureMargin unless the kept one colours more than kFarColourToShrink. Where no
+//    unit tells the near bone from the far (the skull's ethmoid cells from the front: GPU picture 55.9 %
 //    near, 33.3 % far), the score prefers little colour (5.2 / 2.7 %) to colour on the far bone: a
 //    tint far from the structure tells a student that bone is near it.
-// Cost: at most 1 + 4 pictures of about 40 × 30 rays (4 more where the kept scale colours the far bone), each ray marched as the ray caster marches,
-// once per field and framed view: `render skull mastoid_air_cells_right` at 400 × 300 on 2 cores
+// Cost: at most 1 + 4 pictures of about 40 × 30 rays (4 more where the kept scale colours the far
+// bone), each ray marched as the ray caster marches, once per field and framed view: `render skull mastoid_air_cells_right` at 400 × 300 on 2 cores
 // set the fuzzy unit in 331–372 ms and the lighting unit in 252–271 ms, against 60–79 ms for the
 // lighting unit without the picture (bench/RESULTS.md). The desktop measures it on its worker with the rest of the unit
 // (app/src/desktop/view/field_unit.h).
@@ -96,8 +96,8 @@ PictureColourShares pictureColourShares(const SceneVolumes& scene, const RenderS
 // preset; `scale` holds what unitFromNeighbours set and the around set's median. `contextScale`
 // multiplies every candidate unit as applyFieldScale applies it. Sets scale's unit (offset 0 when
 // an around candidate wins) or lightingReach, pictureNear/pictureFar (the taken candidate's shares),
-// pictureJudged, fromPicture, pictureAroundX (fuzzy) and pictureShrink. Does nothing for another mode, without
-// labels or a selected structure.
+// pictureJudged, fromPicture, pictureAroundX (fuzzy) and pictureShrink. Does nothing for another
+// mode, without labels or a selected structure.
 void scaleFromPicture(FieldScale& scale, const SceneVolumes& scene, const RenderSettings& settings,
                       double contextScale = 1.0);
 
