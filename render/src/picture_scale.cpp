@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <vector>
 
 #include "core/parallel_rows.h"
@@ -21,12 +22,12 @@ double hueOf(double r, double g, double b) {
 }
 
 // The colour the mode puts on the bone near the structure: fuzzy's distance TF colour at n = 1
-// (distance 0), which Eqs. 4–5 mix into the bone with the TF's opacity as weight; lighting's light,
-// the highlight (Eq. 6).
+// (distance 0), which Eqs. 4–5 mix into the bone with the TF's opacity as weight; outline's band,
+// the distance TF's colour at the band's n; lighting's light, the highlight (Eq. 6).
 std::array<double, 3> modeColour(const Preset& preset) {
-  if (preset.mode == RenderMode::Fuzzy)
+  if (preset.mode == RenderMode::Fuzzy || preset.mode == RenderMode::Outline)
     if (const auto dist = TransferFunction1D::fromPoints(preset.distanceTf)) {
-      const Rgba c = dist->evaluate(1.0);
+      const Rgba c = dist->evaluate(preset.mode == RenderMode::Fuzzy ? 1.0 : double(outlineBandN(preset)));
       return {c[0], c[1], c[2]};
     }
   return {preset.highlightRgb[0], preset.highlightRgb[1], preset.highlightRgb[2]};
@@ -44,9 +45,13 @@ bool inColour(const CompositedPixel& p, double targetHue) {
 
 }  // namespace
 
-bool judgedOnPicture(RenderMode mode) { return mode == RenderMode::Fuzzy || mode == RenderMode::Lighting; }
+bool judgedOnPicture(RenderMode mode) {
+  return mode == RenderMode::Fuzzy || mode == RenderMode::Lighting || mode == RenderMode::Outline;
+}
 
-float pictureT(RenderMode mode) { return mode == RenderMode::Lighting ? 0.25f : 0.12f; }
+float pictureT(RenderMode mode) {
+  return mode == RenderMode::Lighting ? 0.25f : mode == RenderMode::Outline ? 0.0f : 0.12f;
+}
 
 PictureColourShares pictureColourShares(const SceneVolumes& scene, const RenderSettings& settings) {
   PictureColourShares out;
@@ -66,12 +71,13 @@ PictureColourShares pictureColourShares(const SceneVolumes& scene, const RenderS
   for (std::size_t i = 0; i < picture.size(); ++i) structure[i] = picture[i].structureAlpha >= 0.5;
   const std::vector<int> apart = detail::raysFromStructure(structure, w, h);
   const double side = double(std::max(w, h));
+  const double nearRing = grid.preset.mode == RenderMode::Outline ? kOutlineRing : kNeighbourRing;
   std::size_t nearIn = 0, farIn = 0;
   for (std::size_t i = 0; i < picture.size(); ++i) {
     const CompositedPixel& p = picture[i];
     if (structure[i] || p.structureAlpha >= 0.1 || p.alpha < 0.1 || std::max({p.rgb[0], p.rgb[1], p.rgb[2]}) < 0.15) continue;
     const bool in = inColour(p, targetHue);
-    if (double(apart[i]) <= kNeighbourRing * side) {
+    if (double(apart[i]) <= nearRing * side) {
       ++out.nearRays;
       nearIn += in;
     } else if (double(apart[i]) >= kFarFromStructure * side) {
@@ -83,6 +89,42 @@ PictureColourShares pictureColourShares(const SceneVolumes& scene, const RenderS
   if (out.farRays) out.far = double(farIn) / double(out.farRays);
   return out;
 }
+
+namespace {
+
+// Outline (see the header): the kept unit unless its band shows on too few rays next to the
+// structure; then each stretch in turn replaces the best so far where its band shows without
+// covering the bone next to the structure, keeps the far bone clear and scores better by
+// kOutlineStretchMargin.
+void outlineFromPicture(FieldScale& scale, const std::function<PictureColourShares(double)>& sharesAt) {
+  const PictureColourShares kept = sharesAt(scale.distanceUnit);
+  scale.pictureNear = kept.near;
+  scale.pictureFar = kept.far;
+  scale.pictureJudged = true;
+  if (kept.nearRays < kMinPictureRays || kept.near >= kOutlineBandShows) return;
+  const auto score = [](const PictureColourShares& s) { return s.near - kFarColourPenalty * s.far; };
+  double bestScore = score(kept), bestStretch = 1;
+  PictureColourShares best = kept;
+  for (double stretch : kOutlineStretches) {
+    const PictureColourShares s = sharesAt(scale.distanceUnit * stretch);
+    if (s.nearRays < kMinPictureRays || s.near < kOutlineBandShows || s.near > kOutlineBandMost) continue;
+    if (s.farRays >= kMinPictureRays && s.far > kMaxFarColour) continue;
+    if (score(s) > bestScore + kOutlineStretchMargin) {
+      bestScore = score(s);
+      bestStretch = stretch;
+      best = s;
+    }
+  }
+  if (bestStretch == 1) return;
+  scale.distanceUnit *= bestStretch;
+  scale.pictureStretch = bestStretch;
+  scale.pictureNear = best.near;
+  scale.pictureFar = best.far;
+  scale.fromPicture = true;
+  scale.derived = true;
+}
+
+}  // namespace
 
 void scaleFromPicture(FieldScale& scale, const SceneVolumes& scene, const RenderSettings& settings, double contextScale) {
   if (!judgedOnPicture(settings.preset.mode) || !scene.labels || scene.selected == 0) return;
@@ -102,6 +144,10 @@ void scaleFromPicture(FieldScale& scale, const SceneVolumes& scene, const Render
     look.lightingReach = reach;
     return pictureColourShares(withMask, look);
   };
+  if (settings.preset.mode == RenderMode::Outline) {
+    outlineFromPicture(scale, [&](double unit) { return sharesAt(unit, scale.distanceOffset, scale.lightingReach); });
+    return;
+  }
   const auto score = [](const PictureColourShares& s) {
     return s.nearRays >= kMinPictureRays ? s.near - kFarColourPenalty * s.far : 0.0;
   };

@@ -291,3 +291,53 @@ TEST_CASE("scaleFromPicture: a unit or reach that colours the far bone gives way
     }
   CHECK(shrunk >= 2);
 }
+
+TEST_CASE("scaleFromPicture: an outline band hidden next to the structure moves out to the bone the view shows, never onto the far bone") {
+  // The band lies at one weighted distance; where the bone the view shows next to the structure is
+  // all farther than that (its shell runs inside the bone or within the structure's halo), the
+  // kept unit draws no band. Here every view's unit is squeezed to 0.3 × what applyFieldScale took,
+  // which pulls the band into the structure's rim. Where the squeezed band shows on under
+  // kOutlineBandShows of the rays next to the structure, the picture stretches the unit
+  // (kOutlineStretches) to the stretch whose band shows there without covering that bone
+  // (≤ kOutlineBandMost), keeps the far bone clear (≤ kMaxFarColour) and scores best; where the band
+  // shows, the unit stays.
+  std::size_t stretched = 0, kept = 0;
+  for (const auto& [id, view] : kViews)
+    for (double squeeze : {1.0, 0.3}) {
+      CAPTURE(id);
+      CAPTURE(view);
+      CAPTURE(squeeze);
+      Framed f = framed(id, view, RenderMode::Outline, false);
+      FieldScale start = f.scale;
+      start.pictureJudged = start.fromPicture = false;
+      start.distanceUnit = f.settings.distanceUnit * squeeze;  // (the request's context scale is 1)
+      f.settings.distanceUnit = start.distanceUnit;
+      const PictureColourShares before = sharesAtPictureT(f);
+      FieldScale judged = start;
+      scaleFromPicture(judged, sceneOf(f), f.settings);
+      CHECK(judged.pictureJudged);
+      CHECK(judged.distanceOffset == start.distanceOffset);
+      if (before.nearRays < kMinPictureRays || before.near >= kOutlineBandShows || !judged.fromPicture) {
+        CHECK(judged.distanceUnit == start.distanceUnit);
+        CHECK(judged.pictureStretch == 1.0);
+        kept += before.near >= kOutlineBandShows;
+        continue;
+      }
+      ++stretched;
+      CHECK(std::find(kOutlineStretches.begin(), kOutlineStretches.end(), judged.pictureStretch) != kOutlineStretches.end());
+      CHECK(judged.distanceUnit == doctest::Approx(start.distanceUnit * judged.pictureStretch));
+      Framed after = f;
+      after.settings.distanceUnit = judged.distanceUnit;
+      const PictureColourShares a = sharesAtPictureT(after);
+      MESSAGE(id << " " << view << " × " << squeeze << ": band on " << 100 * before.near << " % → " << 100 * a.near
+                 << " % of the bone next to it, " << 100 * before.far << " % → " << 100 * a.far << " % far from it (stretch "
+                 << judged.pictureStretch << ")");
+      CHECK(judged.pictureNear == doctest::Approx(a.near));
+      CHECK(a.near >= kOutlineBandShows);
+      CHECK(a.near <= kOutlineBandMost);
+      CHECK(a.far <= kMaxFarColour);
+      CHECK(score(a) > score(before) + kOutlineStretchMargin);
+    }
+  CHECK(stretched >= 2);
+  CHECK(kept >= 2);
+}

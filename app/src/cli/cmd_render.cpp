@@ -209,6 +209,9 @@ int runRender(const Argv& argv) {
                     ? " (chosen by the picture: the around bone's median D " + formatUnit(scale.aroundQuantileD) + " at x " +
                           formatUnit(scale.pictureAroundX) + "; colour on " + percent(scale.pictureNear) + " next to it, " +
                           percent(scale.pictureFar) + " far from it)"
+                : scale.fromPicture && scale.pictureStretch != 1
+                    ? " (stretched × " + formatUnit(scale.pictureStretch) + " by the picture: the band on " + percent(scale.pictureNear) +
+                          " of the bone next to it, " + percent(scale.pictureFar) + " far from it)"
                 : scale.fromPicture && scale.pictureShrink != 1 && preset->mode == render::RenderMode::Fuzzy
                     ? " (shrunk × " + formatUnit(scale.pictureShrink) + " by the picture: colour on " + percent(scale.pictureNear) +
                           " next to it, " + percent(scale.pictureFar) + " far from it)"

@@ -297,7 +297,7 @@ render::FieldScale DesktopModel::fieldScaleOf(const ExploreState::Shown& shown, 
   request.key.seen = render::unitFromSeenBone(shown.preset.mode);
   request.key.view = {explore_.framedCamera(), explore_.framedPixels()[0], explore_.framedPixels()[1],
                       explore_.clipPlane()};
-  if (render::judgedOnPicture(shown.preset.mode)) {  // fuzzy's unit, lighting's reach: judged on the picture
+  if (render::judgedOnPicture(shown.preset.mode)) {  // fuzzy's and outline's unit, lighting's reach: judged on the picture
     request.key.picturePreset = shown.preset;
     request.key.picturePreset.t = 0;
     request.labels = &dataset_->labels;

@@ -112,16 +112,18 @@ struct FieldScale {
   // and far from it in the picture (0: not measured), and whether they set the unit.
   double nearRingD = 0, farRingD = 0;
   bool fromNeighbours = false;
-  // Fuzzy and lighting with the picture's inputs (picture_scale.h): the shares of the context next
+  // Fuzzy, lighting and outline with the picture's inputs (picture_scale.h): the shares of the context next
   // to the structure and far from it drawn in the mode's colour at t = pictureT(mode) with the unit
   // and reach taken, whether the picture chose them, then at which x fuzzy's unit put the around
   // set's median, the factor the kept unit (fuzzy) or reach (lighting) was shrunk by (1: not
   // shrunk), and lighting's reach (Eq. 6 on D' / (unit × reach)).
   double pictureNear = 0, pictureFar = 0;
-  bool pictureJudged = false;  // the shares were measured (fuzzy with the picture's inputs)
+  bool pictureJudged = false;  // the shares were measured (a mode judgedOnPicture, with the picture's inputs)
   bool fromPicture = false;
   double pictureAroundX = 0;
   double pictureShrink = 1;
+  // Outline: the factor the unit was stretched by so the band reaches bone the view shows (1: not).
+  double pictureStretch = 1;
   double lightingReach = 1;
 };
 
@@ -166,7 +168,8 @@ FieldScale fieldScale(const FloatVolume& field, const Volume& volume, const Mask
 
 // Whether a mode's unit may come from the seen set: only where the unit sets how the context fades
 // with distance (WDT and non-weighted). Outline marks the bone near the structure with a band:
-// measured on the bone around it, the band stays put when the view turns. (Fuzzy and lighting take
+// measured on the bone around it, the band stays put when the view turns (unless the view shows
+// no band at that unit: picture_scale.h then stretches it). (Fuzzy and lighting take
 // their unit from the bone seen next to the structure instead: unitFromNeighbours.) (From the seen set the skull's frontal sinus, seen from the front
 // through the thin anterior wall, lost its band: 0.6 % of the frame, 21.9 % isolated pixels.)
 bool unitFromSeenBone(RenderMode mode);

@@ -1,5 +1,5 @@
-// Fuzzy's distance unit (Fig. 5) and lighting's reach (Fig. 7), judged on the colours the framed
-// view's picture shows.
+// Fuzzy's distance unit (Fig. 5), lighting's reach (Fig. 7) and outline's unit (Fig. 6), judged on
+// the colours the framed view's picture shows.
 //
 // Why: unitFromNeighbours (field_scale.h) sets both from the first bone surface each ray of the
 // view meets. Where the structure lies inside solid bone — the µCT-like phantom's lateral canal
@@ -42,10 +42,27 @@
 //    unit tells the near bone from the far (the skull's ethmoid cells from the front: GPU picture 55.9 %
 //    near, 33.3 % far), the score prefers little colour (5.2 / 2.7 %) to colour on the far bone: a
 //    tint far from the structure tells a student that bone is near it.
+// Outline: the band lies at one weighted distance (x ≈ 0.58 units) and is drawn where its shell
+// meets the bone the view shows. Where that bone next to the structure is all farther in D — one
+// 3 mm voxel of bone already spans D 1.2 on the abdominal CT, so around L1 the band's D 1.18 lay in
+// the structure's halo; the skull's frontal sinus seen from the front through its anterior wall
+// (outer surface at D 1.1–1.5, the band at 0.66) — no band showed. So where the kept unit's band is
+// in its colour on under kOutlineBandShows of the drawn rays within kOutlineRing of the structure
+// (the neighbouring bone lies a few voxels out, beyond kNeighbourRing; on the skull CT at 160,
+// 400 × 300 and 560 × 720 px the bands that read had 12–38 %, the mandible, the temporal line and
+// both zygomatic arches, and the hidden or speckled ones at most 4.5 %), the unit is tried × each of
+// kOutlineStretches; a stretch replaces the best so far where its band shows there without covering
+// that bone (≤ kOutlineBandMost: beyond it the band's shell seen through translucent bone reads as
+// a green fog, as on the skull's mastoid cells at × 3.4, 43 %), colours at most kMaxFarColour of
+// the far rays and scores better (near − kFarColourPenalty × far) by kOutlineStretchMargin. The
+// stretch moves the band and the context's fade together (the fade's unit is the band's); where the
+// kept band shows, the unit stays, as measured on the bone around the structure.
 // Cost: at most 1 + 4 pictures of about 40 × 30 rays (4 more where the kept scale colours the far
 // bone), each ray marched as the ray caster marches, once per field and framed view: `render skull mastoid_air_cells_right` at 400 × 300 on 2 cores
 // set the fuzzy unit in 331–372 ms and the lighting unit in 252–271 ms, against 60–79 ms for the
-// lighting unit without the picture (bench/RESULTS.md). The desktop measures it on its worker with the rest of the unit
+// lighting unit without the picture (bench/RESULTS.md); outline's unit in 65–66 ms where the
+// kept band shows (the mandible from the side) and 347–369 ms where all four stretches are tried
+// (the frontal sinus from the front). The desktop measures it on its worker with the rest of the unit
 // (app/src/desktop/view/field_unit.h).
 #pragma once
 
@@ -69,8 +86,17 @@ constexpr double kFarColourToShrink = 0.15;
 constexpr double kPictureMargin = 0.10;
 // A share counts only over at least this many drawn rays.
 constexpr std::size_t kMinPictureRays = 16;
+// Outline: next to the structure means within this share of the grid's longer side (the band lies
+// on the neighbouring bone, a few voxels out); the band shows where at least kOutlineBandShows of
+// the drawn rays there are in its colour; else the unit is tried stretched by kOutlineStretches.
+constexpr double kOutlineRing = 0.12;
+constexpr double kOutlineBandShows = 0.06;
+constexpr double kOutlineBandMost = 0.30;
+constexpr std::array<double, 4> kOutlineStretches = {1.5, 2.0, 2.6, 3.4};
+constexpr double kOutlineStretchMargin = 0.05;
 
-// Whether a mode's scale is judged on the picture (fuzzy and lighting), and the t it is judged at.
+// Whether a mode's scale is judged on the picture (fuzzy, lighting and outline), and the t it is
+// judged at.
 bool judgedOnPicture(RenderMode mode);
 float pictureT(RenderMode mode);
 
@@ -92,12 +118,12 @@ struct PictureColourShares {
 };
 PictureColourShares pictureColourShares(const SceneVolumes& scene, const RenderSettings& settings);
 
-// Judges fuzzy's unit or lighting's reach on the picture (see above) for `settings`' view and
-// preset; `scale` holds what unitFromNeighbours set and the around set's median. `contextScale`
+// Judges fuzzy's unit, lighting's reach or outline's unit on the picture (see above) for
+// `settings`' view and preset; `scale` holds what unitFromNeighbours set and the around set's median. `contextScale`
 // multiplies every candidate unit as applyFieldScale applies it. Sets scale's unit (offset 0 when
 // an around candidate wins) or lightingReach, pictureNear/pictureFar (the taken candidate's shares),
-// pictureJudged, fromPicture, pictureAroundX (fuzzy) and pictureShrink. Does nothing for another
-// mode, without labels or a selected structure.
+// pictureJudged, fromPicture, pictureAroundX (fuzzy), pictureShrink and pictureStretch (outline).
+// Does nothing for another mode, without labels or a selected structure.
 void scaleFromPicture(FieldScale& scale, const SceneVolumes& scene, const RenderSettings& settings,
                       double contextScale = 1.0);
 

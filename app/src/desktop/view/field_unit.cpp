@@ -9,7 +9,7 @@
 namespace at::app {
 
 bool FieldUnitKey::operator==(const FieldUnitKey& o) const {
-  const bool byView = seen || render::unitFromNeighbourBone(mode);
+  const bool byView = seen || render::unitFromNeighbourBone(mode) || render::judgedOnPicture(mode);
   return field == o.field && label == o.label && bone == o.bone && mode == o.mode && seen == o.seen &&
          (!byView || view == o.view) && (!render::judgedOnPicture(mode) || picturePreset == o.picturePreset);
 }

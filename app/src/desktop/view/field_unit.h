@@ -33,8 +33,9 @@ namespace at::app {
 
 // What a unit is measured for: the field (by identity), its structure, the bone levels of the
 // preset's data TF, its mode, whether the view's seen bone counts (render::unitFromSeenBone) and
-// the framed view — compared only where the mode's unit depends on it (seen, or
-// render::unitFromNeighbourBone) — and in fuzzy and lighting the preset the picture is drawn with
+// the framed view — compared only where the mode's unit depends on it (seen,
+// render::unitFromNeighbourBone or render::judgedOnPicture) — and in the modes judged on the
+// picture (fuzzy, lighting, outline) the preset the picture is drawn with
 // (render/picture_scale.h; its t set to 0 by the caller: the picture is judged at its own t, so
 // moving the slider measures nothing).
 struct FieldUnitKey {
