@@ -43,6 +43,15 @@ bool inColour(const CompositedPixel& p, double targetHue) {
   return std::min(gap, 360 - gap) <= 25;
 }
 
+// The choice's rules (see the header): the score, 0 over too few rays next to the structure, and
+// whether a candidate keeps the far bone clear.
+double pictureScore(const PictureColourShares& s) {
+  return s.nearRays >= kMinPictureRays ? s.near - kFarColourPenalty * s.far : 0.0;
+}
+bool keepsFarClear(const PictureColourShares& s) {
+  return s.nearRays >= kMinPictureRays && (s.farRays < kMinPictureRays || s.far <= kMaxFarColour);
+}
+
 }  // namespace
 
 bool judgedOnPicture(RenderMode mode) {
@@ -102,15 +111,13 @@ void outlineFromPicture(FieldScale& scale, const std::function<PictureColourShar
   scale.pictureFar = kept.far;
   scale.pictureJudged = true;
   if (kept.nearRays < kMinPictureRays || kept.near >= kOutlineBandShows) return;
-  const auto score = [](const PictureColourShares& s) { return s.near - kFarColourPenalty * s.far; };
-  double bestScore = score(kept), bestStretch = 1;
+  double bestScore = pictureScore(kept), bestStretch = 1;
   PictureColourShares best = kept;
   for (double stretch : kOutlineStretches) {
     const PictureColourShares s = sharesAt(scale.distanceUnit * stretch);
-    if (s.nearRays < kMinPictureRays || s.near < kOutlineBandShows || s.near > kOutlineBandMost) continue;
-    if (s.farRays >= kMinPictureRays && s.far > kMaxFarColour) continue;
-    if (score(s) > bestScore + kOutlineStretchMargin) {
-      bestScore = score(s);
+    if (!keepsFarClear(s) || s.near < kOutlineBandShows || s.near > kOutlineBandMost) continue;
+    if (pictureScore(s) > bestScore + kOutlineStretchMargin) {
+      bestScore = pictureScore(s);
       bestStretch = stretch;
       best = s;
     }
@@ -148,12 +155,6 @@ void scaleFromPicture(FieldScale& scale, const SceneVolumes& scene, const Render
     outlineFromPicture(scale, [&](double unit) { return sharesAt(unit, scale.distanceOffset, scale.lightingReach); });
     return;
   }
-  const auto score = [](const PictureColourShares& s) {
-    return s.nearRays >= kMinPictureRays ? s.near - kFarColourPenalty * s.far : 0.0;
-  };
-  const auto farClear = [](const PictureColourShares& s) {
-    return s.nearRays >= kMinPictureRays && (s.farRays < kMinPictureRays || s.far <= kMaxFarColour);
-  };
   const PictureColourShares kept = sharesAt(scale.distanceUnit, scale.distanceOffset, scale.lightingReach);
   scale.pictureNear = kept.near;
   scale.pictureFar = kept.far;
@@ -161,13 +162,13 @@ void scaleFromPicture(FieldScale& scale, const SceneVolumes& scene, const Render
   // The kept scale wins by kPictureMargin unless it colours the far bone clearly (then it is also
   // tried shrunk).
   const bool keptColoursFar = kept.farRays >= kMinPictureRays && kept.far > kFarColourToShrink;
-  double bestScore = score(kept) + (keptColoursFar ? 0.0 : kPictureMargin), bestX = 0, bestReach = 0, bestShrink = 1;
+  double bestScore = pictureScore(kept) + (keptColoursFar ? 0.0 : kPictureMargin), bestX = 0, bestReach = 0, bestShrink = 1;
   PictureColourShares best = kept;
   if (fuzzy && scale.aroundQuantileD > 0)
     for (double x : kPictureAroundX) {
       const PictureColourShares s = sharesAt(scale.aroundQuantileD / x, 0, 1);
-      if (farClear(s) && score(s) > bestScore) {
-        bestScore = score(s);
+      if (keepsFarClear(s) && pictureScore(s) > bestScore) {
+        bestScore = pictureScore(s);
         bestX = x;
         best = s;
       }
@@ -176,8 +177,8 @@ void scaleFromPicture(FieldScale& scale, const SceneVolumes& scene, const Render
     for (double shrink : kPictureShrinks) {
       const PictureColourShares s = fuzzy ? sharesAt(scale.distanceUnit * shrink, scale.distanceOffset, 1)
                                           : sharesAt(scale.distanceUnit, scale.distanceOffset, scale.lightingReach * shrink);
-      if (farClear(s) && score(s) > bestScore) {
-        bestScore = score(s);
+      if (keepsFarClear(s) && pictureScore(s) > bestScore) {
+        bestScore = pictureScore(s);
         bestX = 0;
         bestShrink = shrink;
         best = s;
@@ -186,8 +187,8 @@ void scaleFromPicture(FieldScale& scale, const SceneVolumes& scene, const Render
   if (!fuzzy) {
     for (double reach : kLightingReaches) {
       const PictureColourShares s = sharesAt(scale.distanceUnit, scale.distanceOffset, reach);
-      if (farClear(s) && score(s) > bestScore) {
-        bestScore = score(s);
+      if (keepsFarClear(s) && pictureScore(s) > bestScore) {
+        bestScore = pictureScore(s);
         bestReach = reach;
         bestShrink = 1;
         best = s;

@@ -57,7 +57,7 @@ void applyStepPlacement(render::RenderSettings& settings, const std::optional<le
 // framed on `request`, the step's camera and plane put in, and with a field the distance unit
 // measured from that field on that very view (render/field_scale.h); without one, the
 // structure's size-based unit. `picture` (the labels, structure and gradients the view is drawn
-// with) lets a fuzzy view's unit and a lighting view's reach be judged on its picture
+// with) lets a fuzzy or outline view's unit and a lighting view's reach be judged on its picture
 // (render/picture_scale.h).
 Result<render::RenderSettings> stepViewSettings(const render::Preset& preset, const render::StructureFrame& frame,
                                                 const render::ViewRequest& request,

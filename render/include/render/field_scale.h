@@ -112,13 +112,13 @@ struct FieldScale {
   // and far from it in the picture (0: not measured), and whether they set the unit.
   double nearRingD = 0, farRingD = 0;
   bool fromNeighbours = false;
-  // Fuzzy, lighting and outline with the picture's inputs (picture_scale.h): the shares of the context next
-  // to the structure and far from it drawn in the mode's colour at t = pictureT(mode) with the unit
-  // and reach taken, whether the picture chose them, then at which x fuzzy's unit put the around
-  // set's median, the factor the kept unit (fuzzy) or reach (lighting) was shrunk by (1: not
-  // shrunk), and lighting's reach (Eq. 6 on D' / (unit × reach)).
+  // Fuzzy, lighting and outline with the picture's inputs (picture_scale.h): the shares of the
+  // context next to the structure and far from it drawn in the mode's colour at t = pictureT(mode)
+  // with the unit and reach taken, whether the picture chose them, then at which x fuzzy's unit put
+  // the around set's median, the factor the kept unit (fuzzy) or reach (lighting) was shrunk by
+  // (1: not shrunk), and lighting's reach (Eq. 6 on D' / (unit × reach)).
   double pictureNear = 0, pictureFar = 0;
-  bool pictureJudged = false;  // the shares were measured (a mode judgedOnPicture, with the picture's inputs)
+  bool pictureJudged = false;  // the shares were measured (judgedOnPicture, with its inputs)
   bool fromPicture = false;
   double pictureAroundX = 0;
   double pictureShrink = 1;

@@ -119,8 +119,8 @@ struct PictureColourShares {
 PictureColourShares pictureColourShares(const SceneVolumes& scene, const RenderSettings& settings);
 
 // Judges fuzzy's unit, lighting's reach or outline's unit on the picture (see above) for
-// `settings`' view and preset; `scale` holds what unitFromNeighbours set and the around set's median. `contextScale`
-// multiplies every candidate unit as applyFieldScale applies it. Sets scale's unit (offset 0 when
+// `settings`' view and preset; `scale` holds what unitFromNeighbours set and the around set's
+// median. `contextScale` multiplies every candidate unit as applyFieldScale applies it. Sets scale's unit (offset 0 when
 // an around candidate wins) or lightingReach, pictureNear/pictureFar (the taken candidate's shares),
 // pictureJudged, fromPicture, pictureAroundX (fuzzy), pictureShrink and pictureStretch (outline).
 // Does nothing for another mode, without labels or a selected structure.
