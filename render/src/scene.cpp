@@ -84,7 +84,22 @@ double distanceUnitFor(const StructureFrame& f, double scale) {
 }
 
 Camera frameCamera(const StructureFrame& f, NamedView view, double aspect, double margin, double minHalfHeightMm) {
-  Camera c = Camera::named(view, f.centroidMm, std::max(f.radiusMm, minHalfHeightMm));
+  return frameCamera(f, Camera::named(view, f.centroidMm, std::max(f.radiusMm, minHalfHeightMm)), aspect, margin,
+                     minHalfHeightMm);
+}
+
+double shareInView(const StructureFrame& f, const Camera& camera, int width, int height) {
+  const std::vector<Vec3> centre{f.centroidMm};
+  const std::vector<Vec3>& points = f.pointsMm.empty() ? centre : f.pointsMm;
+  std::size_t inside = 0;
+  for (const Vec3& p : points)
+    if (const auto px = camera.project(p, width, height))
+      inside += (*px)[0] >= 0 && (*px)[0] <= width && (*px)[1] >= 0 && (*px)[1] <= height;
+  return double(inside) / double(points.size());
+}
+
+Camera frameCamera(const StructureFrame& f, const Camera& orientation, double aspect, double margin, double minHalfHeightMm) {
+  Camera c = orientation;
   const Vec3 right = cross(c.forward(), c.up());
   // The extent in the view plane (voxel centres, widened by half a voxel).
   double lo[2] = {1e30, 1e30}, hi[2] = {-1e30, -1e30};

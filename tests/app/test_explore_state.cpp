@@ -169,3 +169,64 @@ TEST_CASE("ExploreState_CourseStartPresetOnADatasetWithoutItsStructure_IsNotGive
   f.state.setFieldShown(first, "key");
   CHECK(f.state.shown().preset.id != std::optional<std::string>("cochlea_wdt"));
 }
+
+// A structure chosen in a view framed on another may lie (partly) outside it: bringIntoView frames
+// it from the side the camera looks from, for every structure of the dataset and from every named
+// side, zoomed in as far as a user may have; a structure the view shows whole keeps the camera.
+TEST_CASE("ExploreState_BringIntoView_FramesAStructureOutsideTheViewFromTheSameSide_AndLeavesOneShownWholeAlone") {
+  Fixture f;
+  const int w = 800, h = 480;
+  int movedCount = 0, keptCount = 0;
+  for (const char* view : {"anterior", "lateral_left", "superior"}) {
+    for (const Structure& s : f.dataset.structures) {
+      CAPTURE(view);
+      CAPTURE(s.id);
+      REQUIRE(f.state.select(f.label("cochlea")));
+      REQUIRE(f.state.setView(view, w, h));
+      const render::Camera viewed = f.state.camera();
+      CHECK_FALSE(f.state.bringIntoView(f.label("cochlea"), w, h));  // framed by the view: shown whole
+      CHECK(f.state.camera() == viewed);
+      f.state.zoom(6);  // the user zoomed in on the cochlea
+      const render::Camera zoomed = f.state.camera();
+      const render::StructureFrame& frame = *f.state.frameOf(s.label);
+      const double before = render::shareInView(frame, zoomed, w, h);
+      REQUIRE(f.state.select(s.label));
+      const auto revision = f.state.revision();
+      const bool moved = f.state.bringIntoView(s.label, w, h);
+      CHECK(moved == (before < ExploreState::kShownWhole));
+      CHECK(render::shareInView(frame, f.state.camera(), w, h) >= ExploreState::kShownWhole);
+      // The same side and the same up: only the target and the distance change.
+      for (std::size_t a = 0; a < 3; ++a) {
+        CHECK(f.state.camera().forward()[a] == doctest::Approx(zoomed.forward()[a]));
+        CHECK(f.state.camera().up()[a] == doctest::Approx(zoomed.up()[a]));
+      }
+      ++(moved ? movedCount : keptCount);
+      if (moved) {
+        CHECK(f.state.revision() > revision);
+        CHECK(f.state.framedCamera() == f.state.camera());  // the field's unit is judged on this view
+      } else {
+        CHECK(f.state.camera() == zoomed);
+      }
+      // Shown whole now: a second call changes nothing.
+      const render::Camera framed = f.state.camera();
+      CHECK_FALSE(f.state.bringIntoView(s.label, w, h));
+      CHECK(f.state.camera() == framed);
+    }
+  }
+  MESSAGE(movedCount << " structures framed, " << keptCount << " shown whole already");
+  CHECK(movedCount > 0);
+}
+
+TEST_CASE("FrameCamera_FromANamedCameraSide_IsTheNamedViewsFraming") {
+  Fixture f;
+  for (const Structure& s : f.dataset.structures) {
+    const render::StructureFrame& frame = *f.state.frameOf(s.label);
+    for (render::NamedView v : {render::NamedView::Anterior, render::NamedView::LateralRight, render::NamedView::Inferior}) {
+      const render::Camera named = render::frameCamera(frame, v, 1.5, 2.5);
+      const render::Camera along = render::frameCamera(frame, render::Camera::named(v, {0, 0, 0}, 100), 1.5, 2.5);
+      CAPTURE(s.id);
+      CHECK(along == named);
+      CHECK(render::shareInView(frame, named, 600, 400) == 1.0);
+    }
+  }
+}

@@ -197,9 +197,13 @@ void DesktopModel::setLayout(const ViewLayout& layout) {
   if (docking && opened_) reframe();  // a panel docked or undocked: the view's shape changed
 }
 
-bool DesktopModel::select(std::uint16_t label) {
+bool DesktopModel::select(std::uint16_t label, Framing framing) {
+  const bool changed = explore_.selected() != label;
   if (!explore_.select(label)) return false;
   event({{"event", "select"}, {"label", label}, {"structure", idOf(label)}});
+  if (changed && framing == Framing::kBringIntoView &&
+      explore_.bringIntoView(label, layout_.viewPixelsW(), layout_.viewPixelsH()))
+    event({{"event", "framed"}, {"structure", idOf(label)}});
   return true;
 }
 

@@ -158,7 +158,11 @@ class DesktopModel {
   // of one dab; a drag brackets its dabs with the editor's beginStroke / endStroke.
   void brushAt(double x, double y);
   void clearHover() { setHovered(0); }
-  bool select(std::uint16_t label);  // [select]
+  // [select] Selects the structure; from the list (kBringIntoView) a structure the view does not
+  // show whole is framed from the side the view looks from (ExploreState::bringIntoView), a click on
+  // it in the 3-D view (kKeepCamera) leaves the camera where the user put it.
+  enum class Framing { kBringIntoView, kKeepCamera };
+  bool select(std::uint16_t label, Framing framing = Framing::kBringIntoView);
   Status setView(const std::string& name);
   // The current named view again (the start view before any), framed for the layout now.
   void reframe();

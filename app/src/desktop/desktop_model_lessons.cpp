@@ -27,7 +27,7 @@ void DesktopModel::showStructureWith(const LessonController::Shown& shown, const
   }
   explore_.usePreset(s->label, preset, preset.t);
   setHovered(0);
-  select(s->label);
+  select(s->label, Framing::kKeepCamera);  // the step's view frames it below
   const std::string view =
       shown.view ? lessons::toString(*shown.view) : (explore_.viewName().empty() ? startView_ : explore_.viewName());
   const Structure* alsoInView = shown.alsoInView.empty() ? nullptr : dataset_->findStructure(shown.alsoInView);

@@ -78,7 +78,7 @@ void DesktopModel::clickAt(double x, double y) {
     return;
   }
   if (exams_->running()) return;  // the item's view stays
-  if (explore_.hovered()) select(explore_.hovered());
+  if (explore_.hovered()) select(explore_.hovered(), Framing::kKeepCamera);
 }
 
 void DesktopModel::answerLocate(const Structure* clicked, const std::optional<Vec3>& pointMm) {

@@ -59,6 +59,13 @@ double distanceUnitFor(const StructureFrame& frame, double scale = 1.0);
 // given aspect (width / height), and at least a view of half-height `minHalfHeightMm`.
 Camera frameCamera(const StructureFrame& frame, NamedView view, double aspect, double margin = 1.6,
                    double minHalfHeightMm = 3.0);
+// The same from the side `orientation` looks from: its direction, up, field of view and projection
+// are kept; its target and distance are replaced.
+Camera frameCamera(const StructureFrame& frame, const Camera& orientation, double aspect, double margin = 1.6,
+                   double minHalfHeightMm = 3.0);
+// The share (0 … 1) of the structure's points (StructureFrame::pointsMm, else its centroid) that
+// `camera` shows inside an image of width × height pixels.
+double shareInView(const StructureFrame& frame, const Camera& camera, int width, int height);
 
 // Step rule, HU window and base cost from the preset; uniform weights for the unweighted mode.
 Result<WdtParams> wdtParamsFor(const Preset& preset, int passes = 2);

@@ -232,7 +232,7 @@ Status ExploreState::setView(const std::string& name, int width, int height, std
   }
   render::ViewRequest request;
   request.view = name;
-  request.margin = wholeVolume_ ? 1.6 : 2.5;  // the whole grid as the render command frames it
+  request.margin = framingMargin();
   request.width = std::max(1, width);
   request.height = std::max(1, height);
   auto settings = render::settingsFor(presetOf(label, bare_), *frame, request);
@@ -243,6 +243,22 @@ Status ExploreState::setView(const std::string& name, int width, int height, std
   viewName_ = name;
   changed();
   return {};
+}
+
+// A structure's extent times this fills the view: room around it to orbit and hover; the whole
+// grid as the render command frames it.
+double ExploreState::framingMargin() const { return wholeVolume_ ? 1.6 : 2.5; }
+
+bool ExploreState::bringIntoView(std::uint16_t label, int width, int height) {
+  const render::StructureFrame* frame = frameOf(label);
+  width = std::max(1, width);
+  height = std::max(1, height);
+  if (!frame || render::shareInView(*frame, camera_, width, height) >= kShownWhole) return false;
+  camera_ = render::frameCamera(*frame, camera_, double(width) / double(height), framingMargin());
+  framedCamera_ = camera_;
+  framedPixels_ = {width, height};
+  changed();
+  return true;
 }
 
 void ExploreState::setCamera(const render::Camera& camera) {

@@ -107,7 +107,7 @@ class ExploreState {
   std::uint16_t fieldLabel() const { return fieldLabel_; }
 
   // Changes. Each returns whether anything changed; revision() moves when the image would.
-  bool select(std::uint16_t label);
+  bool select(std::uint16_t label);  // the camera stays (bringIntoView moves it)
   bool setHovered(std::uint16_t label);
   bool setBare(bool bare);
   bool setT(float t);
@@ -118,6 +118,13 @@ class ExploreState {
   Status setView(const std::string& name, int width, int height, std::uint16_t alsoInView = 0);
   // A step's free camera replaces the view's framing (the named view stays the view's name).
   void setCamera(const render::Camera& camera);
+  // Where under kShownWhole of the structure's points lie inside a width × height image, frames it
+  // from the side the camera looks from now (its direction and up kept, the margin setView uses):
+  // a structure chosen from the list may lie outside the view that framed the previous one (the
+  // abdomen's spleen framed, the liver chosen: most of it off screen). Returns whether the camera
+  // moved; a structure the view shows whole keeps the camera, zoom and orbit included.
+  bool bringIntoView(std::uint16_t label, int width, int height);
+  static constexpr double kShownWhole = 0.98;
   void orbit(double azimuthDeg, double elevationDeg);
   void zoom(double factor);
   void pan(double dxPixels, double dyPixels, int viewHeightPixels);
@@ -139,6 +146,7 @@ class ExploreState {
   std::uint64_t activity() const { return activity_; }
 
  private:
+  double framingMargin() const;
   std::uint16_t displayLabel() const;
   void rebuildBrowser();  // bySystem_ from the dataset's structures with frames
   void startOn(const Structure& structure, const std::string& presetId);  // selected, with its step preset
