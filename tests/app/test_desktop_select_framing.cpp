@@ -1,7 +1,8 @@
 // Choosing a structure in the desktop brings it into view: the structure list (and the UI script's
-// `select`) frames a structure the view does not show whole from the side the view looks from; a
-// click on a structure in the 3-D view keeps the camera where the user put it. On the abdominal CT
-// the start view framed the spleen, and the liver chosen from the list lay mostly off screen.
+// `select`) frames a structure the view does not show whole (or shows small) from the side the view
+// looks from; a click on a structure in the 3-D view keeps the camera where the user put it. On the
+// abdominal CT the start view framed the spleen, and the liver chosen from the list lay mostly off
+// screen.
 #include <doctest/doctest.h>
 
 #include <optional>

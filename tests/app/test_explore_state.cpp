@@ -190,10 +190,11 @@ TEST_CASE("ExploreState_BringIntoView_FramesAStructureOutsideTheViewFromTheSameS
       const render::Camera zoomed = f.state.camera();
       const render::StructureFrame& frame = *f.state.frameOf(s.label);
       const double before = render::shareInView(frame, zoomed, w, h);
+      const double framedDistance = render::frameCamera(frame, zoomed, double(w) / h, 2.5).distanceMm;
       REQUIRE(f.state.select(s.label));
       const auto revision = f.state.revision();
       const bool moved = f.state.bringIntoView(s.label, w, h);
-      CHECK(moved == (before < ExploreState::kShownWhole));
+      CHECK(moved == (before < ExploreState::kShownWhole || zoomed.distanceMm > ExploreState::kFarthestShown * framedDistance));
       CHECK(render::shareInView(frame, f.state.camera(), w, h) >= ExploreState::kShownWhole);
       // The same side and the same up: only the target and the distance change.
       for (std::size_t a = 0; a < 3; ++a) {
@@ -215,6 +216,14 @@ TEST_CASE("ExploreState_BringIntoView_FramesAStructureOutsideTheViewFromTheSameS
   }
   MESSAGE(movedCount << " structures framed, " << keptCount << " shown whole already");
   CHECK(movedCount > 0);
+  // Shown whole but small: the cochlea's view zoomed out, a structure inside it chosen.
+  REQUIRE(f.state.select(f.label("cochlea")));
+  REQUIRE(f.state.setView("anterior", w, h));
+  f.state.zoom(1.0 / 8);
+  const render::Camera far = f.state.camera();
+  REQUIRE(render::shareInView(*f.state.frameOf(f.label("cochlea")), far, w, h) == 1.0);
+  CHECK(f.state.bringIntoView(f.label("cochlea"), w, h));
+  CHECK(f.state.camera().distanceMm == doctest::Approx(far.distanceMm / 8));
 }
 
 TEST_CASE("FrameCamera_FromANamedCameraSide_IsTheNamedViewsFraming") {

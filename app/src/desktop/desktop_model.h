@@ -159,8 +159,9 @@ class DesktopModel {
   void brushAt(double x, double y);
   void clearHover() { setHovered(0); }
   // [select] Selects the structure; from the list (kBringIntoView) a structure the view does not
-  // show whole is framed from the side the view looks from (ExploreState::bringIntoView), a click on
-  // it in the 3-D view (kKeepCamera) leaves the camera where the user put it.
+  // show whole (or shows small) is framed from the side the view looks from
+  // (ExploreState::bringIntoView); a click on it in the 3-D view (kKeepCamera) leaves the camera
+  // where the user put it.
   enum class Framing { kBringIntoView, kKeepCamera };
   bool select(std::uint16_t label, Framing framing = Framing::kBringIntoView);
   Status setView(const std::string& name);

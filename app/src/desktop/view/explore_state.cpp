@@ -253,8 +253,11 @@ bool ExploreState::bringIntoView(std::uint16_t label, int width, int height) {
   const render::StructureFrame* frame = frameOf(label);
   width = std::max(1, width);
   height = std::max(1, height);
-  if (!frame || render::shareInView(*frame, camera_, width, height) >= kShownWhole) return false;
-  camera_ = render::frameCamera(*frame, camera_, double(width) / double(height), framingMargin());
+  if (!frame) return false;
+  const render::Camera framed = render::frameCamera(*frame, camera_, double(width) / double(height), framingMargin());
+  if (render::shareInView(*frame, camera_, width, height) >= kShownWhole && camera_.distanceMm <= kFarthestShown * framed.distanceMm)
+    return false;
+  camera_ = framed;
   framedCamera_ = camera_;
   framedPixels_ = {width, height};
   changed();

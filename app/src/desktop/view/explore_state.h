@@ -118,13 +118,17 @@ class ExploreState {
   Status setView(const std::string& name, int width, int height, std::uint16_t alsoInView = 0);
   // A step's free camera replaces the view's framing (the named view stays the view's name).
   void setCamera(const render::Camera& camera);
-  // Where under kShownWhole of the structure's points lie inside a width × height image, frames it
-  // from the side the camera looks from now (its direction and up kept, the margin setView uses):
-  // a structure chosen from the list may lie outside the view that framed the previous one (the
-  // abdomen's spleen framed, the liver chosen: most of it off screen). Returns whether the camera
-  // moved; a structure the view shows whole keeps the camera, zoom and orbit included.
+  // Where under kShownWhole of the structure's points lie inside a width × height image, or the
+  // camera is more than kFarthestShown times as far as framing it would put it (it shows at under
+  // half the size), frames it from the side the camera looks from now (its direction and up kept,
+  // the margin setView uses): a structure chosen from the list may lie outside the view that framed
+  // the previous one (the abdomen's spleen framed, the liver chosen: most of it off screen), or be a
+  // speck in it (the right kidney chosen after the liver: 87 of 720 pixels high). Returns whether
+  // the camera moved; a structure the view shows whole and large enough keeps the camera, zoom and
+  // orbit included.
   bool bringIntoView(std::uint16_t label, int width, int height);
   static constexpr double kShownWhole = 0.98;
+  static constexpr double kFarthestShown = 2.0;
   void orbit(double azimuthDeg, double elevationDeg);
   void zoom(double factor);
   void pan(double dxPixels, double dyPixels, int viewHeightPixels);

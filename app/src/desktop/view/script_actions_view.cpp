@@ -27,7 +27,7 @@ ScriptInterpreter::Feature ScriptInterpreter::viewActions() {
   return {"view",
           "the 3-D view and the explore panel",
           {
-              {"select", {structure}, "Selects the structure as its list entry does: one the view does not show whole is framed from the side the view looks from (a click on it in the view keeps the camera).", &S::select},
+              {"select", {structure}, "Selects the structure as its list entry does: one the view does not show whole (or shows small) is framed from the side the view looks from (a click on it in the view keeps the camera).", &S::select},
               {"t", {{"value", "the blend t between bare and weighted rendering, 0..1"}}, "Sets the explore panel's t.", &S::setT},
               {"mode", {{"value", "\"wdt\" or \"bare\""}}, "Switches between weighted-distance and bare rendering.", &S::mode},
               {"view", {{"value", "anterior, posterior, lateral_left, lateral_right, superior or inferior"}}, "Turns the camera to a named view.", &S::view},
