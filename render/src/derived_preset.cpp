@@ -1,6 +1,7 @@
 #include "render/derived_preset.h"
 
 #include "volume/body_mask.h"
+#include "volume/intensity_landmarks.h"
 
 #include <algorithm>
 #include <array>
@@ -141,7 +142,12 @@ IntensityLevels summariseIntensities(const Volume& volume, IntensityScale scale)
   } else {
     l.background = p1;
     const double range = std::max(1.0, p99 - p1);
-    const Mode tissue = modeIn(h, p1 + 0.05 * range, p99, std::max(1, int(range / 256)));
+    // The tissue's mode above the air: above the valley after the body's threshold
+    // (volume/intensity_landmarks.h), where a scanner's second air level inside its field of view
+    // (a CT stored without its rescale: 0 outside the circle, about 100 inside) no longer counts.
+    const SoftTissueLandmarks landmarks = softTissueLandmarks(h.counts, int(p1));
+    const double from = std::max(p1 + 0.05 * range, double(landmarks.valley));
+    const Mode tissue = modeIn(h, from, std::max(from, p99), std::max(1, int(range / 256)));
     l.tissue = tissue.centre;
     denseFrom = l.tissue + std::max(4.0 * tissue.halfWidth, 0.03 * range);
   }

@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <vector>
 
+#include "volume/intensity_landmarks.h"
 #include "wdt/problem.h"
 #include "wdt/wdt.h"
 
@@ -50,9 +51,9 @@ double medianStepNoise(const Volume& volume, const std::array<float, 2>& window)
 
 // The "bone only" range in stored values (growth_settings.h).
 std::array<float, 2> boneRangeStored(const Volume& volume, const IntensityModel& intensity, double noiseSigmaStored) {
-  std::vector<std::uint64_t> histogram(65536, 0);
+  const std::vector<std::uint64_t> histogram = valueHistogram(volume.voxels);
   int top = -32768;
-  for (std::int16_t v : volume.voxels) ++histogram[std::size_t(v + 32768)], top = std::max(top, int(v));
+  for (std::int16_t v : volume.voxels) top = std::max(top, int(v));
   if (intensity.hounsfield()) {
     // Soft tissue's peak: the commonest 10 HU bin in −100 … 150 HU; bone starts kBoneNoiseSigmas
     // noise sigmas above it, kept within kBoneHuMin … kBoneHu.
@@ -69,28 +70,11 @@ std::array<float, 2> boneRangeStored(const Volume& volume, const IntensityModel&
     return {low, std::max(low, float(top))};
   }
   // Plain intensities: a pseudo-HU scale from two landmarks, air (the histogram window's low end,
-  // −1000 HU) and soft tissue (the commonest value above the valley after the body's threshold, the
-  // midpoint of the window's low end and the mean of all voxels above it: 0 HU), then kBoneHu on
-  // that scale.
+  // −1000 HU) and soft tissue (volume/intensity_landmarks.h: the commonest value above the valley
+  // after the body's threshold, 0 HU), then kBoneHu on that scale.
   const int air = int(intensity.window[0]);
-  double count = 0, sum = 0;
-  for (std::size_t v = std::size_t(air + 32768); v < histogram.size(); ++v)
-    count += double(histogram[v]), sum += double(histogram[v]) * (double(v) - 32768.0);
-  const int body = count > 0 ? int(std::lround(0.5 * (air + sum / count))) : air;
-  // From the body's threshold down the air peak's tail to the valley (the histogram smoothed over
-  // 5 values falls no further), then the commonest value above: a scan that is mostly air has more
-  // voxels in the air's tail just above the threshold than at the soft tissue's peak.
-  const auto smoothed = [&](std::size_t v) {
-    std::uint64_t sum = 0;
-    for (std::size_t u = v >= 2 ? v - 2 : 0; u <= v + 2 && u < histogram.size(); ++u) sum += histogram[u];
-    return sum;
-  };
-  std::size_t valley = std::size_t(body + 32768);
-  while (valley + 1 < histogram.size() && smoothed(valley + 1) <= smoothed(valley) && smoothed(valley) > 0) ++valley;
-  std::size_t soft = valley;
-  for (std::size_t v = soft; v < histogram.size(); ++v)
-    if (histogram[v] > histogram[soft]) soft = v;
-  const double softValue = double(soft) - 32768.0;
+  const SoftTissueLandmarks landmarks = softTissueLandmarks(histogram, air);
+  const double softValue = landmarks.softTissue;
   const float low = float(softValue + (softValue - air) * kBoneHu / 1000.0);
   return {std::ceil(low), std::max(std::ceil(low), float(top))};
 }
