@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <tuple>
 
@@ -68,8 +70,25 @@ Result<DatasetRecord> readRecord(const Statement& s, const Database& db) {
   if (const auto options = s.optionalText(21)) {
     const auto json = nlohmann::json::parse(*options, nullptr, false);
     if (!json.is_object()) return fail("dataset '" + r.name + "': stored load options are not a JSON object");
+    const auto wrong = [&](const char* field, const char* what) {
+      return fail("dataset '" + r.name + "': stored load option " + field + " is not " + what);
+    };
+    if (json.contains("skip_unreadable") && !json["skip_unreadable"].is_boolean()) return wrong("skip_unreadable", "true or false");
+    if (json.contains("data_folder") && !json["data_folder"].is_string()) return wrong("data_folder", "a path");
     r.skipUnreadableFiles = json.value("skip_unreadable", false);
     r.dataFolder = json.value("data_folder", "");
+    if (json.contains("intensity")) {
+      const auto choice = json["intensity"].is_string() ? parseIntensityChoice(json["intensity"].get<std::string>())
+                                                        : Result<IntensityChoice>(fail("not a string"));
+      if (!choice) return wrong("intensity", "auto, hu or plain");
+      r.intensity = *choice;
+    }
+    for (const auto& [field, value] : {std::pair{"intercept", &r.intercept}, std::pair{"slope", &r.slope}}) {
+      if (!json.contains(field)) continue;
+      if (!json[field].is_number() || !std::isfinite(json[field].get<double>())) return wrong(field, "a finite number");
+      *value = json[field].get<double>();
+    }
+    if (r.slope && *r.slope == 0) return wrong("slope", "a number other than 0");
   }
   return r;
 }
@@ -145,6 +164,9 @@ Result<std::int64_t> registerDataset(Database& db, const DatasetRecord& record,
     nlohmann::json loadOptions = nlohmann::json::object();
     if (record.skipUnreadableFiles) loadOptions["skip_unreadable"] = true;
     if (!record.dataFolder.empty()) loadOptions["data_folder"] = record.dataFolder;
+    if (record.intensity != IntensityChoice::Auto) loadOptions["intensity"] = intensityChoiceName(record.intensity);
+    if (record.intercept) loadOptions["intercept"] = *record.intercept;
+    if (record.slope) loadOptions["slope"] = *record.slope;
     // load_options only when there are some: the column exists from schema 9 on.
     auto insert = d.prepare(
         std::string("INSERT INTO datasets (name, species, volume_path, volume_checksum, labels_path, labels_checksum,"
@@ -339,7 +361,19 @@ DatasetFiles datasetFiles(const DatasetRecord& record) {
   files.id = record.name;
   files.skipUnreadableFiles = record.skipUnreadableFiles;
   files.dataFolder = record.dataFolder;
+  files.intensity = record.intensity;
+  files.intercept = record.intercept;
+  files.slope = record.slope;
   return files;
+}
+
+std::string loadOptionArguments(const DatasetRecord& record) {
+  std::string out;
+  if (record.intensity != IntensityChoice::Auto) out += std::string(" --intensity ") + intensityChoiceName(record.intensity);
+  char number[64];
+  if (record.intercept) std::snprintf(number, sizeof number, " --intercept %.17g", *record.intercept), out += number;
+  if (record.slope) std::snprintf(number, sizeof number, " --slope %.17g", *record.slope), out += number;
+  return out;
 }
 
 Result<DatasetFiles> verifiedDatasetFiles(const DatasetRecord& record) {
@@ -347,7 +381,8 @@ Result<DatasetFiles> verifiedDatasetFiles(const DatasetRecord& record) {
                                (record.labelsPath.empty() ? "" : " --labels " + record.labelsPath) +
                                (record.namesPath.empty() ? "" : " --names " + record.namesPath) +
                                (record.skipUnreadableFiles ? " --skip-unreadable" : "") +
-                               (record.dataFolder.empty() ? "" : " --nrrd-data " + record.dataFolder) + " --name " +
+                               (record.dataFolder.empty() ? "" : " --nrrd-data " + record.dataFolder) +
+                               loadOptionArguments(record) + " --name " +
                                record.name + " --replace";
   for (const auto& [path, recorded, what] : {std::tuple{&record.volumePath, &record.volumeChecksum, "volume"},
                                              std::tuple{&record.labelsPath, &record.labelsChecksum, "labels"}}) {

@@ -30,3 +30,41 @@ TEST_CASE("slice: --intercept -1024 turns a CT stored without its rescale into H
   test::checkOneLineError(test::runApp("slice phantom:32 --axis z --index 3 --out \"" + out + "\" --slope 2"),
                           "apply to datasets from files");
 }
+
+// The same options on import are kept with the dataset: every later open of its name reads the
+// values as at import (a slice of the imported name is the file's with the options, byte for byte);
+// a refused import leaves the database file byte-identical.
+TEST_CASE("import: --intercept, --slope and --intensity are kept with the dataset; bad values store nothing") {
+  if (!test::requireSharedData("headsq NRRD") || !test::requireAppBinary("import --intercept")) return;
+  test::TempDir dir;
+  const auto quoted = [](const std::filesystem::path& p) { return "'" + p.string() + "'"; };
+  const std::string nrrd = quoted(test::sharedData("headsq/nrrd/quarter.nhdr"));
+  const std::string db = quoted(dir / "t.db");
+  const auto slice = [&](const std::string& dataset, const std::string& options, const std::string& png) {
+    const auto r = test::runApp("slice " + dataset + " --db " + db + " --axis z --index 40 --out " + quoted(dir / png) + options);
+    REQUIRE_MESSAGE(r.exitCode == 0, r.err);
+    return r.out;
+  };
+  REQUIRE(test::runApp("import --volume " + nrrd + " --name head_hu --intercept -1024 --db " + db).exitCode == 0);
+  REQUIRE(test::runApp("import --volume " + nrrd + " --name head_plain --intercept -1024 --intensity plain --db " + db).exitCode == 0);
+  REQUIRE(test::runApp("import --volume " + nrrd + " --name head_raw --db " + db).exitCode == 0);
+  CHECK(slice("head_hu", "", "hu.png").find("window 400,2000") != std::string::npos);
+  slice(nrrd, " --intercept -1024", "file_hu.png");
+  CHECK(test::readFile(dir / "hu.png") == test::readFile(dir / "file_hu.png"));
+  CHECK(slice("head_plain", "", "plain.png").find("window 400,2000") == std::string::npos);
+  CHECK(slice("head_raw", "", "raw.png").find("window 400,2000") == std::string::npos);
+  slice(nrrd, "", "file_raw.png");
+  CHECK(test::readFile(dir / "raw.png") == test::readFile(dir / "file_raw.png"));
+  // The options of an imported dataset are its own: giving them again is refused.
+  test::checkOneLineError(test::runApp("slice head_hu --db " + db + " --axis z --index 40 --out " + quoted(dir / "x.png") +
+                                       " --intercept 5"),
+                          "apply to datasets from files");
+  const std::string before = test::readFile(dir / "t.db");
+  for (const auto& [options, message] :
+       {std::pair{" --intercept abc", "--intercept: 'abc' is not a number"}, std::pair{" --slope 0", "slope: must be a finite number other than 0"},
+        std::pair{" --slope nan", "--slope: 'nan' is not a number"}, std::pair{" --intensity kelvin", "unknown 'kelvin'"}}) {
+    CAPTURE(options);
+    test::checkOneLineError(test::runApp("import --volume " + nrrd + " --name head_bad --db " + db + options), message);
+    CHECK(test::readFile(dir / "t.db") == before);
+  }
+}

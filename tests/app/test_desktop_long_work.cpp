@@ -173,3 +173,35 @@ TEST_CASE("FullResolutionCpuField_CancelledFromTheApp_StopsAndIsNotAskedForAgain
   // Fields computed on the CPU are announced once in the app's messages.
   CHECK(r.messages.find("No CUDA GPU: distance fields run on the CPU") != std::string::npos);
 }
+
+// An instructor's head CT stored without its rescale (headsq): imported from the app as it is, the
+// app says its values are plain intensities and how to read them in HU; imported with the intercept
+// the form offers, it is CT in HU, and the dataset keeps that reading for every later open.
+TEST_CASE("ImportInTheApp_CtStoredWithoutItsRescale_SaysHowToReadItAndKeepsTheInterceptGiven") {
+  if (!at::test::requireSharedData("desktop import rescale")) return;
+  TempDir dir("desktop-import-rescale");
+  const fs::path db = dir / "t.db";
+  const std::string head = at::test::sharedData("headsq/dicom").string();
+  const json script = {{"actions",
+                        {{{"do", "import"}, {"volume", head}, {"name", "head_as_stored"}},
+                         {{"do", "import"}, {"volume", head}, {"name", "head_bad"}, {"intercept", -1024}, {"slope", 0}},
+                         {{"do", "import"}, {"volume", head}, {"name", "head"}, {"intercept", -1024}},
+                         {{"do", "open_imported"}}}}};
+  const Run r = runDesktop(dir, script, db);
+  INFO(r.messages);
+  REQUIRE(r.exitCode == 0);
+  const auto done = eventsOf(r, "import_done");
+  REQUIRE(done.size() == 2);
+  CHECK(done[0].at("values") == "plain");
+  CHECK(done[1].at("values") == "hu");
+  CHECK(done[0].at("values_reason").get<std::string>().find("--intercept -1024 reads it in HU") != std::string::npos);
+  CHECK(done[1].at("values_reason").get<std::string>().find("reads it in HU") == std::string::npos);
+  const auto failed = eventsOf(r, "import_failed");
+  REQUIRE(failed.size() == 1);
+  CHECK(at::test::importedDatasetNames(db) == std::vector<std::string>{"head", "head_as_stored"});
+  // Later opens read "head" in HU: the slice command's grey window is the CT one.
+  const auto slice = at::test::runApp("slice head --db '" + db.string() + "' --axis z --index 40 --out '" +
+                                      (dir / "s.png").string() + "'");
+  REQUIRE_MESSAGE(slice.exitCode == 0, slice.err);
+  CHECK(slice.out.find("window 400,2000") != std::string::npos);
+}

@@ -453,6 +453,55 @@ TEST_CASE("Registering a dataset under a name already used fails and writes noth
   CHECK((*listed)[0].geometry.dims == Dims{4, 5, 6});
 }
 
+TEST_CASE("How a dataset's values are read (unit, intercept, slope) is kept with it; damaged stored options are one-line errors") {
+  test::TempDir dir;
+  auto db = Database::open(test::freshDatabase(dir, "d.db"));
+  REQUIRE(db);
+  DatasetRecord r = sampleRecord("headsq");
+  r.intensity = IntensityChoice::Hounsfield;
+  r.intercept = -1024;
+  r.slope = 0.5;
+  REQUIRE(registerDataset(*db, r, {}));
+  REQUIRE(registerDataset(*db, sampleRecord("plain"), {}));
+  auto found = findDataset(*db, "headsq");
+  REQUIRE(found);
+  REQUIRE(*found);
+  CHECK(((**found).intensity == IntensityChoice::Hounsfield));
+  CHECK((**found).intercept == std::optional<double>(-1024));
+  CHECK((**found).slope == std::optional<double>(0.5));
+  const DatasetFiles files = datasetFiles(**found);
+  CHECK((files.intensity == IntensityChoice::Hounsfield));
+  CHECK(files.intercept == std::optional<double>(-1024));
+  CHECK(files.slope == std::optional<double>(0.5));
+  CHECK(loadOptionArguments(**found) == " --intensity hu --intercept -1024 --slope 0.5");
+  auto other = findDataset(*db, "plain");
+  REQUIRE(other);
+  REQUIRE(*other);
+  CHECK(((**other).intensity == IntensityChoice::Auto));
+  CHECK_FALSE((**other).intercept);
+  CHECK_FALSE((**other).slope);
+  CHECK(loadOptionArguments(**other).empty());
+  // Stored options of the wrong type or value (a hand-edited or hostile database file): reading the
+  // dataset fails with one line naming the option, never an exception or a silent default.
+  for (const auto& [json, field] : {std::pair{R"({"intercept": "minus"})", "intercept"},
+                                    std::pair{R"({"slope": 0})", "slope"},
+                                    std::pair{R"({"slope": null})", "slope"},
+                                    std::pair{R"({"intensity": "kelvin"})", "intensity"},
+                                    std::pair{R"({"intensity": 3})", "intensity"},
+                                    std::pair{R"({"skip_unreadable": "yes"})", "skip_unreadable"},
+                                    std::pair{R"({"data_folder": 7})", "data_folder"}}) {
+    CAPTURE(json);
+    auto update = db->prepare("UPDATE datasets SET load_options = ?1 WHERE name = 'headsq'");
+    REQUIRE(update);
+    update->bind(1, std::string(json));
+    REQUIRE(update->run());
+    auto damaged = findDataset(*db, "headsq");
+    REQUIRE_FALSE(damaged);
+    CHECK(damaged.error().message.find("dataset 'headsq': stored load option " + std::string(field)) != std::string::npos);
+    CHECK(damaged.error().message.find('\n') == std::string::npos);
+  }
+}
+
 TEST_CASE("Saving edited labels replaces the files and structures of that dataset only; an unknown name writes nothing") {
   test::TempDir dir;
   auto db = Database::open((dir / "s.db").string());

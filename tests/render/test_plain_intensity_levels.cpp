@@ -126,6 +126,15 @@ TEST_CASE("Real head CT stored without its rescale (headsq): the derived context
   auto ds = openDatasetFiles(files);
   REQUIRE_MESSAGE(ds, test::errorText(ds));
   REQUIRE_FALSE(ds->intensity.hounsfield());  // no value at air's −1000: read as plain intensities
+  // `info`, `import` and the desktop say how to read it in HU.
+  CHECK(ds->intensity.reason.find("--intercept -1024 reads it in HU") != std::string::npos);
+  {
+    Volume rescaled = ds->volume;
+    IntensityModel model = ds->intensity;
+    REQUIRE(applyRescale(rescaled, model, -1024, 1, IntensityChoice::Auto));
+    CHECK(model.hounsfield());
+    CHECK(model.reason.find("reads it in HU") == std::string::npos);
+  }
   const IntensityLevels plain = summariseIntensities(ds->volume, IntensityScale::Plain);
   Volume hu = ds->volume;
   for (auto& v : hu.voxels) v = std::int16_t(v - 1024);

@@ -1,6 +1,8 @@
 // anatomy-tutor import: registers a dataset (volume + optional labels and names) in the database
 // through importDataset (dataset_import.h), which the desktop app's import panel runs as well.
+#include <cmath>
 #include <cstdio>
+#include <cstdlib>
 
 #include "cli_args.h"
 #include "commands.h"
@@ -15,7 +17,7 @@ namespace {
 constexpr const char* kImportHelp =
     "usage: anatomy-tutor import --volume PATH --name NAME [--labels PATH] [--names NAMES.json]\n"
     "                            [--species SPECIES] [--replace] [--skip-unreadable] [--nrrd-data DIR]\n"
-    "                            [--db PATH]\n\n"
+    "                            [--intensity auto|hu|plain] [--intercept B] [--slope A] [--db PATH]\n\n"
     "Registers a dataset in the database: the volume (a DICOM folder, .nii, .nii.gz, .nrrd, .nhdr, .inv3),\n"
     "an optional label map on the same anatomy (any of those formats or DICOM SEG) and an optional\n"
     "JSON of label names ({\"1\": \"spleen\", …}). Both are loaded first to check that they align.\n"
@@ -25,12 +27,16 @@ constexpr const char* kImportHelp =
     "  --replace  register NAME again, replacing the dataset of that name (after its files changed)\n"
     "  --skip-unreadable, --nrrd-data DIR: as for `structures`; kept with the dataset for later opens\n"
     "  --species  human (default), dog, cat, horse, … (lower-case letters, '-' and '_')\n"
+    "  --intensity  auto (default): CT in HU or plain intensities as the file tells; hu or plain forces one\n"
+    "  --intercept, --slope  for values the file does not calibrate (a raw volume, a CT stored without\n"
+    "             its rescale, e.g. --intercept -1024): values become value x slope + intercept; reaching\n"
+    "             air (<= -500) reads them as CT in HU. All three are kept with the dataset for later opens\n"
     "  --db       database file (default: $XDG_DATA_HOME/anatomy-tutor/anatomy-tutor.db)\n";
 
 }  // namespace
 
 int runImport(const Argv& argv) {
-  auto args = cli::Args::parse(argv, {"volume", "labels", "names", "name", "species", "nrrd-data"},
+  auto args = cli::Args::parse(argv, {"volume", "labels", "names", "name", "species", "nrrd-data", "intensity", "intercept", "slope"},
                                {"replace", "skip-unreadable"});
   if (!args) return reportError("import: " + args.error().message);
   if (args->has("help")) {
@@ -52,6 +58,20 @@ int runImport(const Argv& argv) {
   request.replace = args->has("replace");
   request.skipUnreadableFiles = args->has("skip-unreadable");
   request.dataFolder = args->valueOr("nrrd-data", "");
+  if (auto text = args->value("intensity")) {
+    auto choice = parseIntensityChoice(*text);
+    if (!choice) return reportError("import: --" + choice.error().message);
+    request.intensity = *choice;
+  }
+  for (const auto& [option, target] : {std::pair{"intercept", &request.intercept}, std::pair{"slope", &request.slope}}) {
+    const auto text = args->value(option);
+    if (!text) continue;
+    char* end = nullptr;
+    const double value = std::strtod(text->c_str(), &end);
+    if (text->empty() || *end != '\0' || !std::isfinite(value))
+      return reportError(std::string("import: --") + option + ": '" + *text + "' is not a number");
+    *target = value;
+  }
   auto database = db::openDatabase(args->db());
   if (!database) return reportError("import: " + database.error().message);
   auto imported = importDataset(*database, request);

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cmath>
 #include <filesystem>
 #include <map>
 
@@ -79,6 +80,13 @@ Result<ImportedDataset> importDataset(db::Database& database, const ImportReques
     if (!p) return tl::unexpected(p.error());
     record.dataFolder = *p;
   }
+
+  record.intensity = request.intensity;
+  record.intercept = request.intercept;
+  record.slope = request.slope;
+  if (record.slope && (*record.slope == 0 || !std::isfinite(*record.slope)))
+    return fail("slope: must be a finite number other than 0");
+  if (record.intercept && !std::isfinite(*record.intercept)) return fail("intercept: must be a finite number");
 
   // Fail fast on a taken name, before the (possibly long) load.
   auto existing = db::findDataset(database, record.name);

@@ -13,6 +13,7 @@
 
 #include "db/dataset_store.h"
 #include "core/error.h"
+#include "volume/intensity.h"
 #include "volume/structure.h"
 
 namespace at::app {
@@ -26,6 +27,10 @@ struct ImportRequest {
   bool replace = false;               // a dataset of that name is replaced (its files changed)
   bool skipUnreadableFiles = false;   // a DICOM folder's unreadable files are skipped (kept for later opens)
   std::string dataFolder;             // a detached NRRD header may read data files here (kept too)
+  // How the volume's values are read (kept too; DatasetFiles): a forced unit, and a rescale for a
+  // volume whose file calibrates nothing (a raw volume, a CT stored without its rescale).
+  IntensityChoice intensity = IntensityChoice::Auto;
+  std::optional<double> intercept, slope;
 };
 
 // The stages in the order they run.

@@ -27,40 +27,19 @@ Result<double> numberOption(const std::string& option, const std::string& text) 
   return value;
 }
 
-// --intercept/--slope on a dataset from files: its values v become v·slope + intercept; reaching
-// air (≤ −500) makes it CT in HU (stored as HU, the HU window) unless --intensity plain was given.
-Status applyRescale(Dataset& dataset, const DatasetRequest& request) {
-  double intercept = 0, slope = 1;
+// --intercept/--slope as numbers (applied by openDatasetFiles: volume/intensity.h, applyRescale).
+Status readRescale(const DatasetRequest& request, DatasetFiles& files) {
   if (!request.intercept.empty()) {
     auto v = numberOption("intercept", request.intercept);
     if (!v) return tl::unexpected(v.error());
-    intercept = *v;
+    files.intercept = *v;
   }
   if (!request.slope.empty()) {
     auto v = numberOption("slope", request.slope);
     if (!v) return tl::unexpected(v.error());
     if (*v == 0) return fail("--slope: must not be 0");
-    slope = *v;
+    files.slope = *v;
   }
-  IntensityModel& m = dataset.intensity;
-  const double newSlope = m.slope * slope, newIntercept = m.intercept * slope + intercept;
-  double lowest = std::numeric_limits<double>::infinity();
-  for (std::int16_t v : dataset.volume.voxels) lowest = std::min(lowest, v * newSlope + newIntercept);
-  const bool plainForced = request.intensity == "plain";
-  char given[96];
-  std::snprintf(given, sizeof given, "--intercept %g --slope %g", intercept, slope);
-  if (!plainForced && (request.intensity == "hu" || lowest <= -500)) {
-    for (std::int16_t& v : dataset.volume.voxels)
-      v = std::int16_t(std::clamp(std::nearbyint(v * newSlope + newIntercept), -32768.0, 32767.0));
-    IntensityModel hu;
-    hu.modality = m.modality;
-    hu.reason = std::string(given) + ": values down to air (<= -500): CT in HU";
-    m = hu;
-    return {};
-  }
-  m.slope = newSlope;
-  m.intercept = newIntercept;
-  m.reason += std::string("; ") + given;
   return {};
 }
 
@@ -107,10 +86,8 @@ Result<Dataset> openNamedDataset(const DatasetRequest& request) {
     }
     files.skipUnreadableFiles = request.skipUnreadableFiles;
     files.dataFolder = request.dataFolder;
-    auto dataset = openDatasetFiles(files);
-    if (!dataset || (request.intercept.empty() && request.slope.empty())) return dataset;
-    if (auto ok = applyRescale(*dataset, request); !ok) return tl::unexpected(ok.error());
-    return dataset;
+    if (auto ok = readRescale(request, files); !ok) return tl::unexpected(ok.error());
+    return openDatasetFiles(files);
   }
   std::optional<db::Connection> opened;
   db::Database* database = request.database;

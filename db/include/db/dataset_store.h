@@ -42,6 +42,10 @@ struct DatasetRecord {
   std::string namesPath;            // absolute or empty
   bool skipUnreadableFiles = false; // how the files are read (DatasetFiles): as at import
   std::string dataFolder;           // absolute or empty
+  // How the volume's values are read, as at import (DatasetFiles): the unit asked for and the
+  // user's rescale (--intensity, --intercept, --slope).
+  IntensityChoice intensity = IntensityChoice::Auto;
+  std::optional<double> intercept, slope;
   Geometry geometry;                // of the volume
   std::string orientation;          // e.g. "LPS"
   std::string createdAt;            // ISO-8601 UTC, set by the database
@@ -91,6 +95,10 @@ Result<std::vector<Structure>> datasetStructures(Database& db, std::int64_t data
 
 // The files to hand to openDatasetFiles for a registered dataset.
 DatasetFiles datasetFiles(const DatasetRecord& record);
+
+// The import options that say how its values are read, as command-line arguments (" --intensity
+// hu --intercept -1024"; empty when none was given): for messages that tell how to import again.
+std::string loadOptionArguments(const DatasetRecord& record);
 
 // The same, once the volume's and the labels' checksums are those recorded at import: a file
 // replaced or changed since (even by one on the same grid) is a Conflict naming the file, both

@@ -6,6 +6,7 @@
 #include <atomic>
 #include <cstddef>
 #include <functional>
+#include <optional>
 #include <string>
 
 #include "core/error.h"
@@ -25,6 +26,9 @@ struct DatasetFiles {
   // the folder a detached NRRD header may read data files from besides its own.
   bool skipUnreadableFiles = false;
   std::string dataFolder;
+  // The user's rescale of the volume's values (applyRescale, volume/intensity.h): v·slope +
+  // intercept; either alone takes the other's neutral value.
+  std::optional<double> intercept, slope;
 };
 
 // "phantom" or "phantom:N" → the built-in phantom; anything else → error (the app resolves names).

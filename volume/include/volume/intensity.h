@@ -60,6 +60,16 @@ struct IntensityEvidence {
 // Returns the unit and the reason line.
 std::pair<IntensityUnit, std::string> decideIntensity(const IntensityEvidence& evidence, IntensityChoice choice);
 
+// A rescale the user gives where the file calibrates nothing (a raw or NRRD volume, a CT stored
+// without its rescale): values v become v·slope + intercept (after the file's own mapping). Where
+// the result reaches air (≤ −500) or `choice` is Hounsfield, and `choice` is not Plain, the volume
+// becomes CT in HU: its voxels are stored as HU and its model is the HU model. Otherwise the model
+// keeps plain intensities with the rescale in its value mapping. The reason line names the options
+// ("--intercept -1024 --slope 1"). Errors: a slope of 0 or a value that is not finite.
+Status applyRescale(Volume& volume, IntensityModel& model, double intercept, double slope, IntensityChoice choice);
+// The inverse of parseIntensityChoice ("auto", "hu", "plain").
+const char* intensityChoiceName(IntensityChoice choice);
+
 // The window of plain intensities: the 0.5th and 99.5th percentiles of the stored values, widened
 // to at least one step. (A µCT's air then sits at density ≈ 0 and its densest bone at ≈ 1.)
 std::array<float, 2> histogramWindow(const std::vector<std::int16_t>& stored);

@@ -4,6 +4,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <limits>
 
 namespace at {
 
@@ -12,6 +14,38 @@ Result<IntensityChoice> parseIntensityChoice(const std::string& text) {
   if (text == "hu") return IntensityChoice::Hounsfield;
   if (text == "plain") return IntensityChoice::Plain;
   return fail("intensity: unknown '" + text + "' (use auto, hu or plain)");
+}
+
+const char* intensityChoiceName(IntensityChoice choice) {
+  switch (choice) {
+    case IntensityChoice::Auto: return "auto";
+    case IntensityChoice::Hounsfield: return "hu";
+    case IntensityChoice::Plain: return "plain";
+  }
+  return "auto";
+}
+
+Status applyRescale(Volume& volume, IntensityModel& model, double intercept, double slope, IntensityChoice choice) {
+  if (!std::isfinite(intercept)) return fail("--intercept: must be a finite number");
+  if (!std::isfinite(slope) || slope == 0) return fail("--slope: must be a finite number other than 0");
+  const double newSlope = model.slope * slope, newIntercept = model.intercept * slope + intercept;
+  double lowest = std::numeric_limits<double>::infinity();
+  for (std::int16_t v : volume.voxels) lowest = std::min(lowest, v * newSlope + newIntercept);
+  char given[96];
+  std::snprintf(given, sizeof given, "--intercept %g --slope %g", intercept, slope);
+  if (choice != IntensityChoice::Plain && (choice == IntensityChoice::Hounsfield || lowest <= -500)) {
+    for (std::int16_t& v : volume.voxels)
+      v = std::int16_t(std::clamp(std::nearbyint(v * newSlope + newIntercept), -32768.0, 32767.0));
+    IntensityModel hu;
+    hu.modality = model.modality;
+    hu.reason = std::string(given) + (lowest <= -500 ? ": values down to air (<= -500): CT in HU" : ": CT in HU as asked");
+    model = hu;
+    return {};
+  }
+  model.slope = newSlope;
+  model.intercept = newIntercept;
+  model.reason += std::string("; ") + given;
+  return {};
 }
 
 std::pair<IntensityUnit, std::string> decideIntensity(const IntensityEvidence& e, IntensityChoice choice) {

@@ -109,6 +109,11 @@ Result<Dataset> openDatasetFiles(const DatasetFiles& files, const DatasetLoadCon
   dataset.displayName = dataset.id;
   dataset.volume = std::move(volume->volume);
   dataset.intensity = std::move(volume->intensity);
+  if (files.intercept || files.slope)
+    if (auto ok = applyRescale(dataset.volume, dataset.intensity, files.intercept.value_or(0), files.slope.value_or(1),
+                               files.intensity);
+        !ok)
+      return fail(files.volumePath + ": " + ok.error().message);
   dataset.provenance.source = files.volumePath;
   dataset.provenance.notes = volumeImage->notes;
   const Geometry& grid = dataset.volume.geometry;

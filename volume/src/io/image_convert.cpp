@@ -16,6 +16,7 @@
 #include "volume/image_file.h"
 #include "core/json_document.h"
 #include "core/printable_text.h"
+#include "volume/intensity_landmarks.h"
 
 namespace at {
 
@@ -34,6 +35,9 @@ const char* toString(ScalarKind kind) {
 }
 
 namespace {
+
+// Soft tissue lies within this many HU of water (fat −100, muscle and organs up to about 100).
+constexpr double kSoftTissueHu = 150;
 
 std::string voxelName(const Dims& dims, std::size_t index) {
   const std::size_t i = index % std::size_t(dims.x);
@@ -121,6 +125,20 @@ Result<StoredVolume> toStoredVolume(const LoadedImage& loaded, const std::string
     out.volume.voxels[n] = std::int16_t(std::clamp(s, kLow, kHigh));
   }
   model.window = histogramWindow(out.volume.voxels);
+  // A CT stored without its rescale (HU + 1024: air near 0, soft tissue near 1024, as VTK's headsq)
+  // reads as plain intensities; the reason says how to read it in HU.
+  if (model.modality == "CT" || (model.modality.empty() && !evidence.unsignedStorage)) {
+    const SoftTissueLandmarks l = softTissueLandmarks(valueHistogram(out.volume.voxels), int(model.window[0]));
+    const double soft = model.valueOf(l.softTissue), air = model.valueOf(model.window[0]);
+    if (soft >= 1024 - kSoftTissueHu && soft <= 1024 + kSoftTissueHu && air >= -100 && air <= 300) {
+      char hint[200];
+      std::snprintf(hint, sizeof hint,
+                    "; its air at %.0f and soft tissue at %.0f are where a CT stored as HU + 1024 has them: if it is "
+                    "one, --intercept -1024 reads it in HU",
+                    air, soft);
+      model.reason += hint;
+    }
+  }
   return out;
 }
 

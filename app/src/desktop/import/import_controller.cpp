@@ -181,12 +181,16 @@ void ImportController::poll() {
                   name.c_str(), g.dims.toString().c_str(), g.spacingMm[0], g.spacingMm[1], g.spacingMm[2],
                   result->record.orientation.c_str(), result->dataset.structures.size());
     status_ = text;
+    const IntensityModel& values = result->dataset.intensity;
+    status_ += std::string(" Values: ") + (values.hounsfield() ? "CT in HU" : "plain intensities") + " (" + values.reason + ").";
     for (const std::string& warning : result->dataset.provenance.warnings) status_ += " Warning: " + warning + ".";
     if (!result->emptyStructures.empty())
       status_ += " " + std::to_string(result->emptyStructures.size()) + " named structures have no voxel on the grid.";
     events_({{"event", "import_done"}, {"name", name}, {"structures", result->dataset.structures.size()},
              {"dims", {g.dims.x, g.dims.y, g.dims.z}}, {"empty_structures", result->emptyStructures},
-             {"warnings", result->dataset.provenance.warnings}});
+             {"warnings", result->dataset.provenance.warnings},
+             {"values", result->dataset.intensity.hounsfield() ? "hu" : "plain"},
+             {"values_reason", result->dataset.intensity.reason}});
     imported_ = std::move(result->dataset);
   } else if (result.error().kind == ErrorKind::Cancelled) {
     status_ = "Import of '" + name + "' cancelled; nothing was stored.";

@@ -15,6 +15,8 @@ ScriptInterpreter::Feature ScriptInterpreter::importActions() {
               {"import",
                {{"volume", "the volume file or DICOM folder"}, {"name", "the dataset's name"}, {"labels?", "a label volume"},
                 {"names?", "the labels' names (JSON)"}, {"species?", "default human"},
+                {"intensity?", "auto (default), hu or plain"}, {"intercept?", "rescale: value x slope + intercept"},
+                {"slope?", "rescale (default 1 with an intercept)"},
                 {"wait?", "true (default): done when the import ends; false: at once"},
                 {"cancel_at?", "a stage name: cancel as that stage starts"}},
                "Starts an import as the Import window's form does.", &S::importDataset},
@@ -35,6 +37,13 @@ ScriptInterpreter::Outcome ScriptInterpreter::importDataset(Context& c) {
     request.namesPath = c.action.value("names", "");
     request.name = c.action.at("name").get<std::string>();
     request.species = c.action.value("species", "human");
+    if (c.action.contains("intensity")) {
+      auto choice = parseIntensityChoice(c.action.at("intensity").get<std::string>());
+      if (!choice) return fail("ui script: import: \"intensity\": " + choice.error().message);
+      request.intensity = *choice;
+    }
+    if (c.action.contains("intercept")) request.intercept = c.action.at("intercept").get<double>();
+    if (c.action.contains("slope")) request.slope = c.action.at("slope").get<double>();
     std::optional<ImportStage> cancelAt;
     if (c.action.contains("cancel_at")) {
       cancelAt = parseImportStage(c.action.at("cancel_at").get<std::string>());

@@ -23,6 +23,22 @@ void ImportPanel::draw(ImportController& imports, float x, float y) {
   ImGui::InputTextWithHint("names", "optional: JSON {\"1\": \"spleen\", ...}", &form.namesPath);
   ImGui::InputTextWithHint("name", "what the dataset will be called", &form.name);
   ImGui::InputText("species", &form.species);
+  // How the values are read (kept with the dataset): the unit, and a rescale for values the file
+  // does not calibrate (a raw volume, a CT stored without its rescale: intercept -1024).
+  const char* units[] = {"as the file says", "CT in HU", "plain intensities"};
+  int unit = form.intensity == IntensityChoice::Hounsfield ? 1 : form.intensity == IntensityChoice::Plain ? 2 : 0;
+  if (ImGui::Combo("values", &unit, units, 3))
+    form.intensity = unit == 1 ? IntensityChoice::Hounsfield : unit == 2 ? IntensityChoice::Plain : IntensityChoice::Auto;
+  bool rescale = form.intercept.has_value() || form.slope.has_value();
+  if (ImGui::Checkbox("rescale the values: value x slope + intercept", &rescale)) {
+    form.intercept = rescale ? std::optional<double>(0) : std::nullopt;
+    form.slope = rescale ? std::optional<double>(1) : std::nullopt;
+  }
+  if (rescale) {
+    double intercept = form.intercept.value_or(0), slope = form.slope.value_or(1);
+    if (ImGui::InputDouble("intercept", &intercept, 0, 0, "%g")) form.intercept = intercept;
+    if (ImGui::InputDouble("slope", &slope, 0, 0, "%g")) form.slope = slope;
+  }
   ImGui::PopItemWidth();
   if (ImGui::Button("Import"))
     if (auto st = imports.start(form); !st) error_ = st.error().message;
