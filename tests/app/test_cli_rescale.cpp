@@ -68,3 +68,23 @@ TEST_CASE("import: --intercept, --slope and --intensity are kept with the datase
     CHECK(test::readFile(dir / "t.db") == before);
   }
 }
+
+// headsq's voxels are 3.2 × 3.2 × 1.5 mm: its sagittal and coronal slices come out 2.1 × as wide
+// as their voxel counts (the anatomy's proportions), its axial slice as it is; the phantom's cubic
+// voxels give one pixel per voxel.
+TEST_CASE("slice: pictures of anisotropic voxels have square pixels in mm") {
+  if (!test::requireSharedData("headsq DICOM") || !test::requireAppBinary("slice square pixels")) return;
+  test::TempDir dir;
+  const std::string head = "'" + test::sharedData("headsq/dicom").string() + "'";
+  const std::string out = "'" + (dir / "s.png").string() + "'";
+  for (const auto& [plane, size] : {std::pair{"sagittal", "(137x93, pixels of 1.500 mm"}, std::pair{"coronal", "(137x93, pixels of 1.500 mm"},
+                                    std::pair{"axial", "(64x64, pixels of 3.200 mm"}}) {
+    const auto r = test::runApp("slice " + head + " --plane " + plane + " --index 20 --out " + out);
+    CAPTURE(plane);
+    REQUIRE_MESSAGE(r.exitCode == 0, r.err);
+    CHECK(r.out.find(size) != std::string::npos);
+  }
+  const auto phantom = test::runApp("slice phantom:32 --plane coronal --index 10 --out " + out);
+  REQUIRE(phantom.exitCode == 0);
+  CHECK(phantom.out.find("(32x32, ") != std::string::npos);
+}

@@ -221,7 +221,9 @@ const char* kSliceHelp =
     "--plane instead shows the slice in patient orientation, whatever the file's voxel order, in the\n"
     "radiological convention: the patient's left on the image's right (axial, coronal), anterior up\n"
     "(axial) or superior up (coronal, sagittal; sagittal has anterior on the left); --index then\n"
-    "counts along the voxel axis that crosses the plane. The edge letters (L R A P S I) are printed.\n";
+    "counts along the voxel axis that crosses the plane. The edge letters (L R A P S I) are printed.\n"
+    "Pixels are square in millimetres, so the picture has the anatomy's proportions: a voxel longer\n"
+    "along the columns or the rows (3.2 x 1.5 mm) spans that many more pixels (printed: their size).\n";
 
 }  // namespace
 
@@ -484,12 +486,17 @@ int runSlice(const Argv& argv) {
   request.windowCentreHu = (centre - intensity.intercept) / intensity.slope;
   request.windowWidthHu = width / intensity.slope;
   request.labelAlpha = *alpha;
-  auto image = renderSlice(ds->volume, &ds->labels, ds->structures, request);
-  if (!image) return reportError("slice: " + image.error().message);
-  if (auto st = writePng(*out, *image); !st) return reportError("slice: " + st.error().message);
-  terminalPrintf("wrote %s (%dx%d, %s index %d of %s, window %s,%s; %s)\n", out->c_str(), image->width, image->height,
-              across.c_str(), *index, ds->id.c_str(), formatDouble(centre, 0).c_str(), formatDouble(width, 0).c_str(),
-              layout.edgeLetters().c_str());
+  auto voxels = renderSlice(ds->volume, &ds->labels, ds->structures, request);
+  if (!voxels) return reportError("slice: " + voxels.error().message);
+  // Square pixels: the picture keeps the anatomy's proportions whatever the voxels' shape.
+  const auto& spacing = ds->volume.geometry.spacingMm;
+  double pixelMm = 0;
+  const RgbImage image = withSquarePixels(
+      *voxels, {spacing[std::size_t(layout.columnAxis)], spacing[std::size_t(layout.rowAxis)]}, &pixelMm);
+  if (auto st = writePng(*out, image); !st) return reportError("slice: " + st.error().message);
+  terminalPrintf("wrote %s (%dx%d, pixels of %s mm, %s index %d of %s, window %s,%s; %s)\n", out->c_str(), image.width,
+                 image.height, formatDouble(pixelMm, 3).c_str(), across.c_str(), *index, ds->id.c_str(),
+                 formatDouble(centre, 0).c_str(), formatDouble(width, 0).c_str(), layout.edgeLetters().c_str());
   return 0;
 }
 

@@ -32,6 +32,13 @@ struct SliceRequest {
 Result<RgbImage> renderSlice(const Volume& volume, const LabelMap* labels, const std::vector<Structure>& structures,
                              const SliceRequest& request);
 
+// `image` (renderSlice's, one pixel per voxel) with square pixels in millimetres: where a voxel is
+// longer along the columns or the rows (`pixelMm`: mm of one pixel along each), that direction is
+// stretched by nearest neighbour so a pixel spans the shorter side both ways, and the picture has
+// the anatomy's proportions (a 3.2 × 3.2 × 1.5 mm head CT's sagittal slice is 2.1 × as wide as its
+// voxel count). Returns the side of a pixel in mm through `squareMm`.
+RgbImage withSquarePixels(const RgbImage& image, std::array<double, 2> pixelMm, double* squareMm = nullptr);
+
 // The voxel shown at pixel (x, y) of renderSlice's image; nullopt outside it.
 std::optional<std::array<int, 3>> sliceVoxelAt(const Dims& dims, const SliceRequest& request, double x, double y);
 

@@ -79,4 +79,25 @@ std::optional<std::array<int, 3>> sliceVoxelAt(const Dims& d, const SliceRequest
   return ijk;
 }
 
+RgbImage withSquarePixels(const RgbImage& image, std::array<double, 2> pixelMm, double* squareMm) {
+  const double side = std::min(pixelMm[0], pixelMm[1]);
+  if (squareMm) *squareMm = side;
+  if (!(side > 0) || image.width <= 0 || image.height <= 0) return image;
+  // Within 1 %: already square (rounding would only repeat a column or a row somewhere).
+  const double sx = pixelMm[0] / side, sy = pixelMm[1] / side;
+  if (sx < 1.01 && sy < 1.01) return image;
+  RgbImage out;
+  out.width = std::max(1, int(std::lround(image.width * sx)));
+  out.height = std::max(1, int(std::lround(image.height * sy)));
+  out.rgb.resize(std::size_t(out.width) * std::size_t(out.height) * 3);
+  for (int y = 0; y < out.height; ++y) {
+    const int from = std::min(image.height - 1, int((y + 0.5) * image.height / out.height));
+    for (int x = 0; x < out.width; ++x) {
+      const int column = std::min(image.width - 1, int((x + 0.5) * image.width / out.width));
+      std::copy_n(image.pixel(column, from), 3, out.pixel(x, y));
+    }
+  }
+  return out;
+}
+
 }  // namespace at
