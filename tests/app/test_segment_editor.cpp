@@ -455,3 +455,100 @@ TEST_CASE("the segment editor's seeds in range: a large background dab in the ai
   CHECK(refused.error().message.find("outside") != std::string::npos);
   CHECK(editor.seedsPerLabel().at(0) == *air);
 }
+
+// Where seeds are painted the patient's sides must be where a radiologist expects them, whatever
+// the file's voxel order: the editor's slice is the Slices window's patient picture (radiological),
+// for LPS (DICOM), RAS and LAS (NIfTI) grids and a sagittally acquired one (voxel axes S, A, L).
+TEST_CASE("the segment editor's slice is in patient orientation for any voxel order: right-anterior at the axial picture's top left") {
+  test::TempDir dir;
+  auto database = db::openDatabase((dir / "t.db").string());
+  REQUIRE(database);
+  struct Grid {
+    const char* name;
+    Mat3 direction;
+  };
+  Mat3 ras, las, sagittal;
+  ras.m = {{{-1, 0, 0}, {0, -1, 0}, {0, 0, 1}}};
+  las.m = {{{1, 0, 0}, {0, -1, 0}, {0, 0, 1}}};
+  sagittal.m = {{{0, 0, 1}, {0, -1, 0}, {1, 0, 0}}};  // i → superior, j → anterior, k → left
+  for (const Grid& grid : {Grid{"LPS", Mat3::identity()}, Grid{"RAS", ras}, Grid{"LAS", las}, Grid{"sagittal", sagittal}}) {
+    CAPTURE(grid.name);
+    Geometry g;
+    g.dims = {24, 20, 16};
+    g.spacingMm = {1.0, 1.5, 2.0};
+    g.direction = grid.direction;
+    Dataset ds;
+    ds.id = "oriented";
+    ds.volume = Volume(g, 0);
+    // Distinct values so that two pictures agree only if they show the same voxels in one place.
+    for (std::size_t v = 0; v < ds.volume.voxels.size(); ++v) ds.volume.voxels[v] = std::int16_t(-1000 + int(v % 2000));
+    ds.labels = LabelMap(g, 0);
+    app::SegmentController editor(*database, [](json) {});
+    editor.attach(ds);
+    // The voxel nearest the patient's right-anterior-superior corner (LPS: smallest x and y,
+    // largest z) is a seed; its pixel lies in the top-left quadrant of the axial picture.
+    std::size_t corner = 0;
+    double best = 1e300;
+    const Dims d = g.dims;
+    for (int k = 0; k < d.z; ++k)
+      for (int j = 0; j < d.y; ++j)
+        for (int i = 0; i < d.x; ++i) {
+          const Vec3 p = g.indexToPatient({double(i), double(j), double(k)});
+          const double score = p[0] + p[1] - p[2];
+          if (score < best) best = score, corner = d.index(i, j, k);
+        }
+    const std::array<int, 3> cornerVoxel{int(corner % std::size_t(d.x)), int(corner / std::size_t(d.x) % std::size_t(d.y)),
+                                         int(corner / (std::size_t(d.x) * std::size_t(d.y)))};
+    editor.brushMm = 0;
+    REQUIRE(editor.paintSeeds(cornerVoxel));
+    for (PatientPlane plane : {PatientPlane::Sagittal, PatientPlane::Coronal, PatientPlane::Axial}) {
+      CAPTURE(planeName(plane));
+      const int axis = editor.axisOfPlane(plane);
+      REQUIRE(editor.setSlice(axis, cornerVoxel[std::size_t(axis)]));
+      const SliceLayout layout = editor.sliceLayout();
+      CHECK(layout.sliceAxis == axis);
+      // The Slices window's picture of that plane, in the same grey window: the same pixels but the seed.
+      SliceRequest request;
+      request.layout = patientSliceLayout(g.direction, plane);
+      request.index = cornerVoxel[std::size_t(axis)];
+      request.scale = 2;
+      request.windowCentreHu = editor.greyWindow()[0];
+      request.windowWidthHu = editor.greyWindow()[1];
+      const auto expected = renderSlice(ds.volume, nullptr, {}, request);
+      const auto shown = editor.sliceImage(2, 0.0);
+      REQUIRE(expected);
+      REQUIRE(shown);
+      REQUIRE(shown->width == expected->width);
+      REQUIRE(shown->height == expected->height);
+      std::size_t differing = 0;
+      for (std::size_t b = 0; b < shown->rgb.size(); ++b) differing += shown->rgb[b] != expected->rgb[b];
+      CHECK(differing <= 4 * 3);  // the seed's 2 × 2 pixels
+      // The seed's pixel maps back to its voxel, and sits where the letters say.
+      std::optional<std::pair<int, int>> seedPixel;
+      for (int y = 0; y < shown->height && !seedPixel; ++y)
+        for (int x = 0; x < shown->width && !seedPixel; ++x)
+          if (shown->pixel(x, y)[0] == 255 && shown->pixel(x, y)[1] == 255 && shown->pixel(x, y)[2] == 255 &&
+              expected->pixel(x, y)[0] != 255)
+            seedPixel = std::pair{x, y};
+      REQUIRE(seedPixel);
+      CHECK(editor.voxelAtPixel(2, seedPixel->first + 0.5, seedPixel->second + 0.5) == cornerVoxel);
+      const bool leftHalf = seedPixel->first < shown->width / 2, topHalf = seedPixel->second < shown->height / 2;
+      if (plane == PatientPlane::Axial) {
+        CHECK(layout.left == 'R');
+        CHECK(layout.top == 'A');
+        CHECK(leftHalf);
+        CHECK(topHalf);
+      } else if (plane == PatientPlane::Coronal) {
+        CHECK(layout.left == 'R');
+        CHECK(layout.top == 'S');
+        CHECK(leftHalf);
+        CHECK(topHalf);
+      } else {
+        CHECK(layout.left == 'A');
+        CHECK(layout.top == 'S');
+        CHECK(leftHalf);
+        CHECK(topHalf);
+      }
+    }
+  }
+}

@@ -27,7 +27,7 @@ ScriptInterpreter::Feature ScriptInterpreter::segmentActions() {
                "Paints that label next; reports segment_label {name, label}.", &S::segmentLabel},
               {"segment_seeds", {{"save?", "a seeds file to write"}, {"load?", "a seeds file to read"}},
                "Saves the painted seeds (with the growth settings and label ranges) or loads a file's.", &S::segmentSeeds},
-              {"segment_slice", {{"axis", "x, y, z or 0, 1, 2"}, {"index", "the slice"}}, "Shows that slice.", &S::segmentSlice},
+              {"segment_slice", {{"axis", "x, y, z or 0, 1, 2: the voxel axis it crosses"}, {"index", "the slice"}}, "Shows that slice, in patient orientation (radiological).", &S::segmentSlice},
               {"segment_seed",
                {voxel, brush, {"low?", "with high: seed only values in low … high joined to the voxel"},
                 {"high?", "with low (a local threshold; any label, the background too)"}},

@@ -147,11 +147,24 @@ Status SegmentController::showAxis(int axis) {
   return setSlice(axis, (axis == 0 ? d.x : axis == 1 ? d.y : d.z) / 2);
 }
 
+SliceLayout SegmentController::sliceLayout() const {
+  const Mat3 direction = dataset_ ? dataset_->volume.geometry.direction : Mat3::identity();
+  for (PatientPlane plane : {PatientPlane::Sagittal, PatientPlane::Coronal, PatientPlane::Axial}) {
+    const SliceLayout layout = patientSliceLayout(direction, plane);
+    if (layout.sliceAxis == axis_) return layout;
+  }
+  return voxelSliceLayout(axis_, direction);  // not reached: the planes take the three axes
+}
+
+int SegmentController::axisOfPlane(PatientPlane plane) const {
+  return patientSliceLayout(dataset_ ? dataset_->volume.geometry.direction : Mat3::identity(), plane).sliceAxis;
+}
+
 std::array<double, 2> SegmentController::slicePixelMm() const {
   if (!dataset_) return {1, 1};
   const auto& sp = dataset_->volume.geometry.spacingMm;
-  const int u = axis_ == 0 ? 1 : 0, v = axis_ == 2 ? 1 : 2;  // renderSlice's image axes
-  return {sp[std::size_t(u)], sp[std::size_t(v)]};
+  const SliceLayout layout = sliceLayout();
+  return {sp[std::size_t(layout.columnAxis)], sp[std::size_t(layout.rowAxis)]};
 }
 
 Status SegmentController::setSlice(int axis, int index) {
@@ -170,15 +183,17 @@ Status SegmentController::setSlice(int axis, int index) {
 Result<RgbImage> SegmentController::sliceImage(int scale, double labelAlpha) const {
   if (auto ok = requireDataset(); !ok) return tl::unexpected(ok.error());
   SliceRequest request;
-  request.axis = axis_;
+  request.layout = sliceLayout();
   request.index = index_;
   request.scale = scale;
   request.labelAlpha = labelAlpha;
   grey_.applyTo(request);
   auto image = renderSlice(dataset_->volume, &editor_->labels(), editor_->structures(), request);
   if (!image || seeds_.empty()) return image;
-  // Seeds on this slice, opaque.
+  // Seeds on this slice, opaque, where the layout puts their voxels.
   const Dims d = dataset_->volume.dims();
+  const SliceLayout& layout = *request.layout;
+  const int extent[3] = {d.x, d.y, d.z};
   for (const auto& [index, label] : seeds_) {
     const int ijk[3] = {int(index % std::size_t(d.x)), int(index / std::size_t(d.x) % std::size_t(d.y)),
                         int(index / (std::size_t(d.x) * std::size_t(d.y)))};
@@ -186,9 +201,9 @@ Result<RgbImage> SegmentController::sliceImage(int scale, double labelAlpha) con
     std::array<std::uint8_t, 3> colour{255, 255, 255};
     for (const Structure& s : editor_->structures())
       if (s.label == label) colour = {toByte(s.colour[0]), toByte(s.colour[1]), toByte(s.colour[2])};
-    const int u = axis_ == 0 ? 1 : 0, v = axis_ == 2 ? 1 : 2;
-    const int extentV = v == 1 ? d.y : d.z;
-    const int col = ijk[u], row = v == 2 ? extentV - 1 - ijk[v] : ijk[v];
+    const int u = ijk[layout.columnAxis], v = ijk[layout.rowAxis];
+    const int col = layout.columnReversed ? extent[layout.columnAxis] - 1 - u : u;
+    const int row = layout.rowReversed ? extent[layout.rowAxis] - 1 - v : v;
     for (int dy = 0; dy < scale; ++dy)
       for (int dx = 0; dx < scale; ++dx) std::copy(colour.begin(), colour.end(), image->pixel(col * scale + dx, row * scale + dy));
   }
@@ -202,7 +217,7 @@ void SegmentController::dragWindow(double dx, double dy) {
 std::optional<std::array<int, 3>> SegmentController::voxelAtPixel(int scale, double x, double y) const {
   if (!dataset_) return std::nullopt;
   SliceRequest request;
-  request.axis = axis_;
+  request.layout = sliceLayout();
   request.index = index_;
   request.scale = scale;
   return sliceVoxelAt(dataset_->volume.dims(), request, x, y);

@@ -31,6 +31,7 @@
 #include "segment/growth_settings.h"
 #include "segment/label_editor.h"
 #include "volume/png_image.h"
+#include "volume/slice_orientation.h"
 #include "volume/structure.h"
 
 namespace at::app {
@@ -75,8 +76,15 @@ class SegmentController {
   Status setSystem(std::uint16_t label, const std::string& system);
 
   // --- The slice ------------------------------------------------------------------------------
-  // axis 0, 1, 2 (x, y, z) and an index on it; errors name the range.
+  // The slice across voxel axis 0, 1, 2 (x, y, z) at an index on it; errors name the range. The
+  // picture shows it in patient orientation as the Slices window does (sliceLayout: the
+  // radiological convention of volume/slice_orientation.h, its edge letters), whatever the file's
+  // voxel order: a NIfTI in RAS and its DICOM series are painted on the same picture.
   Status setSlice(int axis, int index);
+  // The patient layout of the current slice (its plane: the one voxel axis `axis()` crosses).
+  SliceLayout sliceLayout() const;
+  // The voxel axis that crosses `plane` (2 for the axial plane of an axial scan).
+  int axisOfPlane(PatientPlane plane) const;
   int axis() const { return axis_; }
   int index() const { return index_; }
   int sliceCount() const;  // along the current axis
@@ -91,7 +99,7 @@ class SegmentController {
   std::array<double, 2> greyWindow() const { return grey_.centreWidth(); }
   // The slice: grey in the dragged window, labels at `labelAlpha`, seeds opaque in their label's
   // colour (background seeds white); `scale` pixels per voxel. Its pixel → voxel map is sliceVoxelAt
-  // (volume/slice_image.h) with the same axis, index and scale.
+  // (volume/slice_image.h) with sliceLayout(), the index and the scale.
   Result<RgbImage> sliceImage(int scale, double labelAlpha = 0.45) const;
   std::optional<std::array<int, 3>> voxelAtPixel(int scale, double x, double y) const;
   // Changes whenever the slice picture would (labels, seeds, slice).

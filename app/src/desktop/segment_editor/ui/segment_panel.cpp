@@ -149,12 +149,13 @@ void SegmentPanel::drawLabelGrowRange(SegmentController& editor, std::uint16_t l
 }
 
 void SegmentPanel::drawSliceControls(SegmentController& editor) {
-  ImGui::TextUnformatted("x sagittal, y coronal, z axial; right-drag: grey window");
-  ImGui::TextUnformatted("  axis");
-  for (int a = 0; a < 3; ++a) {
-    ImGui::SameLine();
-    if (ImGui::RadioButton(a == 0 ? "x" : a == 1 ? "y" : "z", editor.axis() == a) && a != editor.axis())
-      report(editor.showAxis(a));
+  ImGui::TextUnformatted("radiological: the patient's left on the right; right-drag: grey window");
+  // The three planes, each named with the voxel axis it crosses (x, y or z in the file's order).
+  for (int plane = 0; plane < 3; ++plane) {
+    const int axis = editor.axisOfPlane(PatientPlane(plane));
+    if (plane > 0) ImGui::SameLine();
+    const std::string label = std::string(planeName(PatientPlane(plane))) + " (" + char('x' + axis) + ")";
+    if (ImGui::RadioButton(label.c_str(), editor.axis() == axis) && axis != editor.axis()) report(editor.showAxis(axis));
   }
   int index = editor.index();
   ImGui::SetNextItemWidth(ImGui::GetFontSize() * 14);
@@ -317,6 +318,7 @@ void SegmentPanel::drawSlice(SegmentController& editor, float side) {
   // At the voxels' aspect, the longer side `side` long; a right drag sets the grey window.
   const auto mouse = drawSlicePane("##slice", *texture_, editor.slicePixelMm(), side,
                                    [&](double dx, double dy) { editor.dragWindow(dx, dy); });
+  drawEdgeLetters(editor.sliceLayout());
   if (!mouse || !ImGui::IsMouseDown(ImGuiMouseButton_Left)) return;
   const auto voxel = editor.voxelAtPixel(scale, mouse->x, mouse->y);
   if (!voxel || voxel == lastPainted_) return;
