@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cctype>
-#include <cmath>
 #include <filesystem>
 #include <map>
 
@@ -84,9 +83,7 @@ Result<ImportedDataset> importDataset(db::Database& database, const ImportReques
   record.intensity = request.intensity;
   record.intercept = request.intercept;
   record.slope = request.slope;
-  if (record.slope && (*record.slope == 0 || !std::isfinite(*record.slope)))
-    return fail("slope: must be a finite number other than 0");
-  if (record.intercept && !std::isfinite(*record.intercept)) return fail("intercept: must be a finite number");
+  if (auto ok = checkRescale(record.intercept.value_or(0), record.slope.value_or(1)); !ok) return tl::unexpected(ok.error());
 
   // Fail fast on a taken name, before the (possibly long) load.
   auto existing = db::findDataset(database, record.name);

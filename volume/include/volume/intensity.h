@@ -67,6 +67,9 @@ std::pair<IntensityUnit, std::string> decideIntensity(const IntensityEvidence& e
 // keeps plain intensities with the rescale in its value mapping. The reason line names the options
 // ("--intercept -1024 --slope 1"). Errors: a slope of 0 or a value that is not finite.
 Status applyRescale(Volume& volume, IntensityModel& model, double intercept, double slope, IntensityChoice choice);
+// The rule applyRescale checks first, for callers that refuse a bad rescale before loading (an
+// import): a finite intercept, a finite slope other than 0; the message names the option.
+Status checkRescale(double intercept, double slope);
 // The inverse of parseIntensityChoice ("auto", "hu", "plain").
 const char* intensityChoiceName(IntensityChoice choice);
 

@@ -25,9 +25,14 @@ const char* intensityChoiceName(IntensityChoice choice) {
   return "auto";
 }
 
-Status applyRescale(Volume& volume, IntensityModel& model, double intercept, double slope, IntensityChoice choice) {
+Status checkRescale(double intercept, double slope) {
   if (!std::isfinite(intercept)) return fail("--intercept: must be a finite number");
   if (!std::isfinite(slope) || slope == 0) return fail("--slope: must be a finite number other than 0");
+  return {};
+}
+
+Status applyRescale(Volume& volume, IntensityModel& model, double intercept, double slope, IntensityChoice choice) {
+  if (auto ok = checkRescale(intercept, slope); !ok) return ok;
   const double newSlope = model.slope * slope, newIntercept = model.intercept * slope + intercept;
   double lowest = std::numeric_limits<double>::infinity();
   for (std::int16_t v : volume.voxels) lowest = std::min(lowest, v * newSlope + newIntercept);
