@@ -8,7 +8,7 @@ Not run at set-up: set-up runs `anatomy-tutor segment skull --seeds seeds.json` 
 remade (about a minute, pure Python). Each structure is a tissue range (HU), a box of voxels
 (i, j, k inclusive, found on `anatomy-tutor slice skull` images; docs/skull_landmarks.md) and a
 voxel inside it: the voxels of that range connected to the voxel inside the box (or all of them
-in the box where no voxel is given; orbits also inside a cone from the apex to the opening) are
+in the box where no voxel is given; orbits also inside a cone from the apex and behind their opening, OPENING) are
 the structure's core (the temporal line's: the outer table along an arch, ARC below). Seeds are runs along i of core voxels on every 3rd row and 2nd slice; the
 background gets runs on every 4th row and 2nd slice of the voxels at least 3 voxels in-plane from
 every core. `anatomy-tutor segment --method grow` then gives every voxel the label of the seed it
@@ -121,6 +121,15 @@ GROW_RANGE = {'Mandible': BONE_ANY, 'Maxilla': BONE_ANY, 'Zygomatic arch (right)
               'Petrous temporal bone (right)': BONE_ANY, 'Petrous temporal bone (left)': BONE_ANY,
               'Ethmoid air cells': AIR_ANY, 'External acoustic meatus (right)': AIR_ANY, 'External acoustic meatus (left)': AIR_ANY}
 
+# The orbital opening: an orbit is the cavity behind the line from its medial rim (the frontal
+# process of the maxilla beside the nose) to its lateral rim (the zygomatic bone), in (i, j) on axial
+# slices k 32-48 (the rims' foremost bone). The eyelids, the front of the globe and the skin of the
+# brow and cheek in front of that line are left out, so from the front the rim frames the orbit.
+OPENING = {'Orbit (right)': ((115, 196), (79, 188)), 'Orbit (left)': ((141, 196), (178, 188))}
+def behind_opening(medial, lateral):
+    (im, jm), (il, jl) = medial, lateral
+    return lambda i, j, k: j <= jm + (jl - jm) * (i - im) / (il - im)
+
 def inside(b, i, j, k): return b[0] <= i <= b[1] and b[2] <= j <= b[3] and b[4] <= k <= b[5]
 def cone(apex, front, r0, r1):
     A = (apex[0]*0.957, apex[1]*0.957, apex[2]*1.5); F = (front[0]*0.957, front[1]*0.957, front[2]*1.5)
@@ -159,6 +168,9 @@ for value, name, colour, parts in sorted(S, key=lambda s: s[1] not in FIRST):
             continue
         rng, b, start = part[:3]
         keep = cone(*part[3]) if len(part) > 3 else (lambda i, j, k: True)
+        if name in OPENING:
+            in_cone, behind = keep, behind_opening(*OPENING[name])
+            keep = lambda i, j, k, c=in_cone, b=behind: c(i, j, k) and b(i, j, k)
         for p in comp(rng, b, start, keep): owner.setdefault(p, name)
 
 def near_structure(i, j, k, r=2):
