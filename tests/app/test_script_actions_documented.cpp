@@ -106,6 +106,33 @@ TEST_CASE("UI-script actions: the repository's scripts use documented actions, t
   CHECK(actions > 20);
 }
 
+TEST_CASE("UI-script actions: a malformed action's message names the required arguments it leaves out, on one line") {
+  int checked = 0;
+  for (const auto& doc : app::ScriptInterpreter::actionDocs()) {
+    CAPTURE(doc.name);
+    const json bare = {{"do", doc.name}};
+    const std::string message = app::ScriptInterpreter::malformedActionMessage(bare, doc.name, "type must be string");
+    CHECK(message.find('\n') == std::string::npos);
+    CHECK(message.rfind("ui script: action " + bare.dump() + ": ", 0) == 0);
+    json complete = bare;
+    bool required = false;
+    for (const auto& arg : doc.arguments) {
+      CHECK(message.find(arg.key) != std::string::npos);  // what the action takes
+      if (arg.optional()) continue;
+      required = true;
+      CHECK(message.find("\"" + arg.name() + "\"") != std::string::npos);
+      complete[arg.name()] = 1;
+    }
+    if (!doc.arguments.empty()) CHECK(message.find("desktop --help " + doc.name + ")") != std::string::npos);
+    // Given every required argument, the reader's own error is what is wrong.
+    const std::string typed = app::ScriptInterpreter::malformedActionMessage(complete, doc.name, "type must be string");
+    CHECK(typed.find("missing") == std::string::npos);
+    CHECK(typed.find(": type must be string") != std::string::npos);
+    checked += required;
+  }
+  CHECK(checked > 30);
+}
+
 TEST_CASE("UI-script actions: `desktop --help-actions` prints the registry, `desktop --help ACTION` one entry") {
   if (!test::requireAppBinary("the desktop's action help")) return;
   const auto all = test::runApp("desktop --help-actions");

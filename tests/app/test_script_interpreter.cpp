@@ -76,6 +76,13 @@ TEST_CASE("ScriptInterpreter_UnknownOrMalformedAction_EndsWithStatus2AndSaysWhic
   r = run(dir, {{{"do", "t"}, {"value", "high"}}});
   CHECK(r.exitCode == 2);
   CHECK(r.messages.find("{\"do\":\"t\",\"value\":\"high\"}") != std::string::npos);
+  // An argument under the wrong key: the documented one is named as missing, with what the action
+  // takes, on one line (not nlohmann's "key 'value' not found").
+  r = run(dir, {{{"do", "view"}, {"view", "anterior"}}});
+  CHECK(r.exitCode == 2);
+  CHECK(r.messages.find("ui script: action {\"do\":\"view\",\"view\":\"anterior\"}: \"value\" missing (view takes value: "
+                        "desktop --help view)\n") != std::string::npos);
+  CHECK(r.messages.find("json.exception") == std::string::npos);
   r = run(dir, {{{"do", "select"}, {"structure", "spleen"}}});
   CHECK(r.exitCode == 2);
   CHECK(r.messages.find("no structure 'spleen'") != std::string::npos);

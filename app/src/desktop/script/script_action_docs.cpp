@@ -67,6 +67,22 @@ std::optional<std::string> ScriptInterpreter::actionText(const std::string& name
   return std::nullopt;
 }
 
+std::string ScriptInterpreter::malformedActionMessage(const nlohmann::json& action, const std::string& name,
+                                                      const std::string& error) {
+  std::string missing, takes;
+  for (const ScriptActionDoc& a : actionDocs()) {
+    if (a.name != name) continue;
+    takes = argumentKeys(a);
+    for (const ScriptArgument& arg : a.arguments)
+      if (!arg.optional() && !(action.is_object() && action.contains(arg.name())))
+        missing += (missing.empty() ? "\"" : ", \"") + arg.name() + "\"";
+  }
+  std::string out = "ui script: action " + action.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace) + ": " +
+                    (missing.empty() ? error : missing + " missing");
+  if (!takes.empty()) out += " (" + name + " takes " + takes + ": desktop --help " + name + ")";
+  return out;
+}
+
 std::string ScriptInterpreter::actionsMarkdown() {
   std::ostringstream out;
   out << "# UI-script actions\n\n"

@@ -96,7 +96,7 @@ void ScriptInterpreter::step(DesktopModel& model, ScriptHost& host, Clock::time_
     try {
       outcome = (this->*handler->second)(context);
     } catch (const std::exception& e) {  // nlohmann's type and range errors: a malformed action
-      outcome = fail("ui script: action " + a.dump() + ": " + e.what());
+      outcome = fail(malformedActionMessage(a, what, e.what()));
     }
     if (!outcome) {
       model.message(outcome.error().message);

@@ -86,6 +86,10 @@ class ScriptInterpreter {
   static std::string actionsText();
   static std::string actionsMarkdown();
   static std::optional<std::string> actionText(const std::string& name);
+  // The one-line message for an action its handler could not read (`error`: nlohmann's type or
+  // range error): the documented required arguments it leaves out, or else that error, then the
+  // arguments the action takes and where they are described (desktop --help NAME).
+  static std::string malformedActionMessage(const nlohmann::json& action, const std::string& name, const std::string& error);
 
  private:
   enum class Progress { Done, Running };
