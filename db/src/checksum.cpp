@@ -3,6 +3,7 @@
 
 #include "core/regular_file.h"
 #include "core/sha256.h"
+#include "volume/nrrd_io.h"
 
 #include <algorithm>
 #include <array>
@@ -31,10 +32,28 @@ Status hashFile(Sha256& sha, const std::filesystem::path& file) {
 
 }  // namespace
 
-Result<std::string> checksumPath(const std::string& path) {
+Result<std::string> checksumPath(const std::string& path, const std::string& nrrdDataFolder) {
   namespace fs = std::filesystem;
   std::error_code ec;
   Sha256 sha;
+  if (fs::is_regular_file(path, ec)) {
+    ImageLoadOptions options;
+    options.dataFolder = nrrdDataFolder;
+    auto dataFiles = nrrdDataFiles(path, options);
+    if (!dataFiles) return tl::unexpected(dataFiles.error());
+    if (!dataFiles->empty()) {
+      // The header, then each data file in reading order: a separator no header ends with, its
+      // size, a separator, its bytes.
+      if (auto s = hashFile(sha, path); !s) return tl::unexpected(s.error());
+      for (const std::string& file : *dataFiles) {
+        sha.update(std::string_view("\0data\0", 6));
+        sha.update(std::to_string(fs::file_size(file, ec)));
+        sha.update(std::string_view("\0", 1));
+        if (auto s = hashFile(sha, file); !s) return tl::unexpected(s.error());
+      }
+      return "sha256:" + sha.hex();
+    }
+  }
   if (fs::is_directory(path, ec)) {
     std::vector<fs::path> files;
     for (const auto& entry : fs::recursive_directory_iterator(path, ec))
@@ -55,6 +74,18 @@ Result<std::string> checksumPath(const std::string& path) {
     return fail(ErrorKind::NotFound, path + ": no such file or folder");
   }
   return "sha256:" + sha.hex();
+}
+
+Result<std::optional<std::string>> headerOnlyNrrdChecksum(const std::string& path, const std::string& nrrdDataFolder) {
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(path, ec)) return std::optional<std::string>{};
+  ImageLoadOptions options;
+  options.dataFolder = nrrdDataFolder;
+  auto dataFiles = nrrdDataFiles(path, options);
+  if (!dataFiles || dataFiles->empty()) return std::optional<std::string>{};
+  Sha256 sha;
+  if (auto s = hashFile(sha, path); !s) return tl::unexpected(s.error());
+  return std::optional<std::string>("sha256:" + sha.hex());
 }
 
 }  // namespace at::db

@@ -4,6 +4,11 @@
 // option; built-in datasets refuse the options.
 #include <doctest/doctest.h>
 
+#include <filesystem>
+#include <fstream>
+
+#include <nlohmann/json.hpp>
+
 #include "cli_checks.h"
 #include "test_support.h"
 
@@ -87,4 +92,47 @@ TEST_CASE("slice: pictures of anisotropic voxels have square pixels in mm") {
   const auto phantom = test::runApp("slice phantom:32 --plane coronal --index 10 --out " + out);
   REQUIRE(phantom.exitCode == 0);
   CHECK(phantom.out.find("(32x32, ") != std::string::npos);
+}
+
+// info takes an imported dataset's name too: its volume file as imported, with its values read as
+// the other commands read them (the import's --intercept shown and applied: the HU range, not the
+// stored one), its checksum checked, and the file options refused.
+TEST_CASE("info DATASET describes an imported dataset as it is read, with its load options") {
+  if (!test::requireSharedData("headsq NRRD") || !test::requireAppBinary("info DATASET")) return;
+  test::TempDir dir;
+  const auto quoted = [](const std::filesystem::path& p) { return "'" + p.string() + "'"; };
+  // A copy of the NRRD (header and its 93 data files), so one can be changed after the import.
+  const std::filesystem::path copy = dir / "headsq";
+  std::filesystem::copy(test::sharedData("headsq/nrrd"), copy);
+  const std::string nrrd = quoted(copy / "quarter.nhdr");
+  const std::string db = quoted(dir / "t.db");
+  REQUIRE(test::runApp("import --volume " + nrrd + " --name head_hu --intercept -1024 --db " + db).exitCode == 0);
+  REQUIRE(test::runApp("import --volume " + nrrd + " --name head_raw --db " + db).exitCode == 0);
+
+  const auto hu = test::runApp("info head_hu --db " + db);
+  REQUIRE_MESSAGE(hu.exitCode == 0, hu.err);
+  CHECK(hu.out.find("dataset:     head_hu (human, imported ") != std::string::npos);
+  CHECK(hu.out.find("values read with --intercept -1024)") != std::string::npos);
+  CHECK(hu.out.find("path:        " + (copy / "quarter.nhdr").string()) != std::string::npos);
+  CHECK(hu.out.find("intensity:   Hounsfield units") != std::string::npos);
+  CHECK(hu.out.find("HU range:    -1024.0 … 2902.0") != std::string::npos);  // the file stores 0 … 3926
+  const auto raw = test::runApp("info head_raw --db " + db);
+  REQUIRE(raw.exitCode == 0);
+  CHECK(raw.out.find("values read as stored)") != std::string::npos);
+  CHECK(raw.out.find("intensity:   plain intensities") != std::string::npos);
+  CHECK(raw.out.find("value range: 0.0 … 3926.0") != std::string::npos);
+  const auto asJson = test::runApp("info head_hu --json --db " + db);
+  REQUIRE(asJson.exitCode == 0);
+  const auto j = nlohmann::json::parse(asJson.out);
+  CHECK(j.at("dataset").at("name") == "head_hu");
+  CHECK(j.at("dataset").at("load_options") == "--intercept -1024");
+  CHECK(j.at("intensity").at("unit") == "HU");
+  CHECK(j.at("value_range").at(0).get<double>() == -1024.0);
+
+  // File options belong to files; an unknown name says what was looked for.
+  test::checkOneLineError(test::runApp("info head_hu --labels x.nii --db " + db), "applies to files, not to imported 'head_hu'");
+  test::checkOneLineError(test::runApp("info head_nothing --db " + db), "no such file or folder, scan or imported dataset");
+  // A volume changed since its import is refused, naming the dataset and the file.
+  { std::ofstream(copy / "quarter.40", std::ios::binary | std::ios::app) << "x"; }
+  test::checkOneLineError(test::runApp("info head_hu --db " + db), "dataset 'head_hu': its volume");
 }

@@ -813,6 +813,63 @@ TEST_CASE("checksumPath hashes a file's bytes and notices a changed file in a fo
   CHECK(!checksumPath((dir / "nothing").string()));
 }
 
+// A detached NRRD header (headsq's: 93 slice files) names its data in other files: the checksum a
+// dataset records covers each of them, so a slice file changed after an import is noticed, not only
+// a changed header. The header's bytes alone (what was recorded before) stay readable for datasets
+// imported then.
+TEST_CASE("checksumPath of a detached NRRD header covers every data file it names, each file's change noticed") {
+  test::TempDir dir;
+  const int slices = 5;
+  {
+    std::ofstream header(dir / "h.nhdr", std::ios::binary);
+    header << "NRRD0004\ntype: uint8\ndimension: 3\nsizes: 4 3 " << slices
+           << "\nencoding: raw\ndata file: s%d.raw 1 " << slices << " 1\n";
+  }
+  for (int n = 1; n <= slices; ++n) std::ofstream(dir / ("s" + std::to_string(n) + ".raw"), std::ios::binary) << std::string(12, char('a' + n));
+  const std::string header = (dir / "h.nhdr").string();
+  auto first = checksumPath(header);
+  REQUIRE_MESSAGE(first, first.error().message);
+  auto headerOnly = headerOnlyNrrdChecksum(header);
+  REQUIRE(headerOnly);
+  REQUIRE(*headerOnly);
+  CHECK(**headerOnly == "sha256:" + sha256Hex(test::readFile(dir / "h.nhdr")));
+  CHECK(*first != **headerOnly);
+  std::set<std::string> seen{*first};
+  for (int n = 1; n <= slices; ++n) {
+    CAPTURE(n);
+    const fs::path slice = dir / ("s" + std::to_string(n) + ".raw");
+    const std::string before = test::readFile(slice);
+    std::string changed = before;
+    changed[std::size_t(n) % changed.size()] ^= 1;  // one bit of one slice
+    { std::ofstream(slice, std::ios::binary) << changed; }
+    auto now = checksumPath(header);
+    REQUIRE(now);
+    CHECK(seen.insert(*now).second);  // differs from the original and from every other change
+    CHECK(**headerOnlyNrrdChecksum(header) == **headerOnly);
+    { std::ofstream(slice, std::ios::binary) << before; }
+  }
+  CHECK(*checksumPath(header) == *first);
+  // A missing slice is an error naming it; a header whose data lie outside its folder is refused
+  // as the loader refuses it, unless that folder is the one allowed.
+  fs::rename(dir / "s3.raw", dir / "s3.moved");
+  auto missing = checksumPath(header);
+  REQUIRE_FALSE(missing);
+  CHECK(missing.error().message.find("s3.raw") != std::string::npos);
+  fs::rename(dir / "s3.moved", dir / "s3.raw");
+  fs::create_directories(dir / "h");
+  { std::ofstream(dir / "h" / "out.nhdr", std::ios::binary) << "NRRD0004\ntype: uint8\ndimension: 3\nsizes: 4 3 1\nencoding: raw\ndata file: ../s1.raw\n"; }
+  auto outside = checksumPath((dir / "h" / "out.nhdr").string());
+  REQUIRE_FALSE(outside);
+  CHECK(outside.error().message.find("lies outside") != std::string::npos);
+  CHECK(checksumPath((dir / "h" / "out.nhdr").string(), dir.path().string()));
+  // An attached NRRD and any other file: the file's bytes, as before.
+  { std::ofstream(dir / "a.nrrd", std::ios::binary) << "NRRD0004\ntype: uint8\ndimension: 1\nsizes: 2\nencoding: raw\n\nab"; }
+  CHECK(*checksumPath((dir / "a.nrrd").string()) == "sha256:" + sha256Hex(test::readFile(dir / "a.nrrd")));
+  auto attached = headerOnlyNrrdChecksum((dir / "a.nrrd").string());
+  REQUIRE(attached);
+  CHECK(!*attached);
+}
+
 TEST_CASE("SqlErrors_CarryTheirKind_UniqueIsConflict_MissingReferenceIsNotFound_CheckIsInvalid") {
   test::TempDir dir;
   auto db = Database::open(test::freshDatabase(dir, "k.db"));

@@ -174,3 +174,47 @@ TEST_CASE("Imported files changed since their import are refused by checksum, an
   REQUIRE(all);
   CHECK(all->size() == 1);
 }
+
+// A detached NRRD volume: a slice file changed after the import is refused like a changed header.
+// A dataset imported when the checksum covered the header alone (its record holds the header's
+// checksum) still opens while its header is unchanged; a changed header is refused either way.
+TEST_CASE("An imported detached NRRD's data files are checked too; a record of its header alone still opens") {
+  test::TempDir dir;
+  auto db = Database::open((dir / "d.db").string());
+  REQUIRE(db);
+  const fs::path header = dir / "ct.nhdr";
+  { std::ofstream(header, std::ios::binary) << "NRRD0004\ntype: uint8\ndimension: 3\nsizes: 2 2 2\nencoding: raw\ndata file: z%d.raw 0 1 1\n"; }
+  for (const char* slice : {"z0.raw", "z1.raw"}) std::ofstream(dir / slice, std::ios::binary) << "abcd";
+  DatasetRecord record;
+  record.name = "slices";
+  record.volumePath = header.string();
+  record.volumeChecksum = *checksumPath(header.string());
+  record.geometry.dims = {2, 2, 2};
+  record.orientation = "LPS";
+  REQUIRE(registerDataset(*db, record, {}));
+  DatasetRecord legacy = record;
+  legacy.name = "slices_before";
+  legacy.volumeChecksum = **headerOnlyNrrdChecksum(header.string());
+  REQUIRE(registerDataset(*db, legacy, {}));
+  const auto verified = [&](const std::string& name) {
+    auto stored = findDataset(*db, name);
+    REQUIRE(stored);
+    REQUIRE(stored->has_value());
+    return verifiedDatasetFiles(**stored);
+  };
+  CHECK(verified("slices"));
+  CHECK(verified("slices_before"));
+
+  std::ofstream(dir / "z1.raw", std::ios::binary) << "abce";  // one byte of the second slice
+  auto changed = verified("slices");
+  REQUIRE_FALSE(changed);
+  CHECK((changed.error().kind == ErrorKind::Conflict));
+  CHECK(changed.error().message.rfind("dataset 'slices': its volume " + header.string() + " has changed since it was imported", 0) == 0);
+  CHECK(verified("slices_before"));  // its record cannot tell: the header is as it was
+
+  std::ofstream(dir / "z1.raw", std::ios::binary) << "abcd";
+  CHECK(verified("slices"));
+  { std::ofstream(header, std::ios::binary | std::ios::app) << "# a comment\n"; }
+  CHECK_FALSE(verified("slices"));
+  CHECK_FALSE(verified("slices_before"));
+}

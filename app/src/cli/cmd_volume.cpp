@@ -167,11 +167,14 @@ const char* kStructuresHelp =
 // --- info -------------------------------------------------------------------------------------
 
 const char* kInfoHelp =
-    "usage: anatomy-tutor info FILE|DIR|SCAN [--json] [--labels PATH] [--names JSON] [--series UID]\n"
+    "usage: anatomy-tutor info FILE|DIR|SCAN|DATASET [--json] [--labels PATH] [--names JSON] [--series UID]\n"
     "                          [--intensity auto|hu|plain] [--skip-unreadable] [--nrrd-data DIR]\n\n"
     "Loads any supported input (DICOM series folder, DICOM SEG, NIfTI, NRRD, InVesalius .inv3) and\n"
     "prints its dimensions, spacing, origin, orientation, stored type, value range and loader notes.\n"
-    "SCAN is a real scan fetched by scripts/fetch-scans.sh (skull).\n"
+    "SCAN is a real scan fetched by scripts/fetch-scans.sh (skull). DATASET is a dataset imported into\n"
+    "--db (`anatomy-tutor datasets`): its volume file as imported (checked against its checksum), read\n"
+    "as the other commands read it (its values with the --intensity/--intercept/--slope given at\n"
+    "import, printed), with its structures (a file or folder of that name wins).\n"
     "An image's intensity model: CT in Hounsfield units (DICOM Modality CT, or values down to air\n"
     "at -1000), or plain intensities (unsigned µCT exports, MR, ...) with a window from the\n"
     "histogram; --intensity forces one. A file is listed as a label map when it names segments or\n"
@@ -181,6 +184,19 @@ const char* kInfoHelp =
     "Only regular files are read (FIFOs and devices are refused).\n";
 
 bool isIntegerKind(ScalarKind k) { return k != ScalarKind::Float32 && k != ScalarKind::Float64; }
+
+std::string trimmed(const std::string& text) {
+  const auto from = text.find_first_not_of(' ');
+  return from == std::string::npos ? std::string() : text.substr(from);
+}
+
+// The dataset imported into --db under `name`, if there is one (no database file: none).
+Result<std::optional<db::DatasetRecord>> importedDatasetNamed(const cli::Args& args, const std::string& name) {
+  auto database = db::openExistingDatabase(args.db());
+  if (!database) return tl::unexpected(database.error());
+  if (!*database) return std::optional<db::DatasetRecord>{};
+  return db::findDataset(**database, name);
+}
 
 struct ValueSummary {
   double min = 0, max = 0;
@@ -313,29 +329,65 @@ int runInfo(const Argv& argv) {
   if (pos.empty()) return usageError("info", "missing FILE or DIR (see --help)");
   if (pos.size() > 1) return usageError("info", "unexpected argument '" + pos[1] + "' (one FILE or DIR only)");
   std::string path = pos[0];
-  // A scan's name wins over a file of that name, as built-in names do everywhere (./skull is the file).
-  if (const KnownScan* scan = findKnownScan(path)) {
-    auto file = knownScanFile(*scan);
-    if (!file) return reportError("info: " + file.error().message);
-    path = file->string();
-  }
-
   ImageLoadOptions options;
   options.dicomSeriesUid = args->valueOr("series", "");
   options.skipUnreadableFiles = args->has("skip-unreadable");
   if (auto folder = args->value("nrrd-data")) options.dataFolder = fs::absolute(*folder).string();
+  // A scan's name wins over a file of that name, as built-in names do everywhere (./skull is the file).
+  std::optional<db::DatasetRecord> imported;
+  std::error_code ec;
+  if (const KnownScan* scan = findKnownScan(path)) {
+    auto file = knownScanFile(*scan);
+    if (!file) return reportError("info: " + file.error().message);
+    path = file->string();
+  } else if (!fs::exists(path, ec)) {
+    auto found = importedDatasetNamed(*args, path);
+    if (!found) return reportError("info: " + found.error().message);
+    if (!*found)
+      return reportError("info: " + path + ": no such file or folder, scan or imported dataset (`anatomy-tutor datasets` lists "
+                         "the datasets)");
+    imported = std::move(*found);
+  }
+  std::optional<Dataset> asImported;  // the imported dataset as the other commands read it
+  if (imported) {
+    for (const char* option : {"labels", "names", "series", "intensity", "skip-unreadable", "nrrd-data"})
+      if (args->has(option))
+        return usageError("info", std::string("--") + option + " applies to files, not to imported '" + imported->name +
+                                      "' (its files are read as at import)");
+    auto files = db::verifiedDatasetFiles(*imported);
+    if (!files) return reportError("info: " + files.error().message);
+    path = files->volumePath;
+    options.dicomSeriesUid = files->dicomSeriesUid;
+    options.skipUnreadableFiles = files->skipUnreadableFiles;
+    options.dataFolder = files->dataFolder;
+    auto dataset = openDatasetArg(*args);
+    if (!dataset) return reportError("info: " + dataset.error().message);
+    asImported = std::move(*dataset);
+  }
   auto loaded = loadImageFile(path, options);
   if (!loaded) return reportError("info: " + loaded.error().message);
   const Geometry& g = loaded->image.geometry;
-  const ValueSummary values = summarise(loaded->image);
+  ValueSummary values = summarise(loaded->image);
   // A file given alone is a label map when it names its segments or passes the documented test
   // (volume/intensity.h: few integer values, piecewise constant); a µCT's uint8 data is not one.
-  const bool labelMap = !loaded->segments.empty() ||
-                        (isIntegerKind(loaded->storedKind) && values.fewValues && looksLikeLabelMap(loaded->image));
+  // An imported dataset's volume is its image.
+  const bool labelMap = !asImported && (!loaded->segments.empty() || (isIntegerKind(loaded->storedKind) && values.fewValues &&
+                                                                       looksLikeLabelMap(loaded->image)));
   auto intensityChoice = parseIntensityChoice(args->valueOr("intensity", "auto"));
   if (!intensityChoice) return usageError("info", "--intensity: " + intensityChoice.error().message);
   std::optional<IntensityModel> intensity;
-  if (!labelMap) {
+  if (asImported) {
+    // Its values as read (after the import's rescale), not as the file stores them.
+    intensity = asImported->intensity;
+    values = ValueSummary{};
+    bool first = true;
+    for (auto v : asImported->volume.voxels) {
+      const double value = asImported->intensity.valueOf(v);
+      if (first || value < values.min) values.min = value;
+      if (first || value > values.max) values.max = value;
+      first = false;
+    }
+  } else if (!labelMap) {
     auto stored = toStoredVolume(*loaded, path, *intensityChoice);
     if (!stored) return reportError("info: " + stored.error().message);
     intensity = std::move(stored->intensity);
@@ -352,7 +404,11 @@ int runInfo(const Argv& argv) {
     std::size_t voxels;
   };
   std::vector<LabelRow> labels;
-  if (args->has("labels")) {
+  if (asImported) {
+    const std::vector<std::size_t> counts = labelHistogram(asImported->labels);
+    for (const Structure& s : asImported->structures)
+      labels.push_back({long(s.label), s.id, s.displayName, counts[s.label]});
+  } else if (args->has("labels")) {
     DatasetFiles files;
     files.volumePath = path;
     files.labelsPath = *args->value("labels");
@@ -386,6 +442,11 @@ int runInfo(const Argv& argv) {
   if (args->has("json")) {
     json out = geometryJson(g);
     out["path"] = path;
+    if (imported)
+      out["dataset"] = {{"name", imported->name},
+                        {"imported", imported->createdAt},
+                        {"species", imported->species},
+                        {"load_options", trimmed(db::loadOptionArguments(*imported))}};
     out["kind"] = labelMap ? "label map" : "image";
     if (intensity) out["intensity"] = intensityJson(*intensity);
     out["stored_type"] = toString(loaded->storedKind);
@@ -399,6 +460,11 @@ int runInfo(const Argv& argv) {
     out["labels"] = list;
     std::printf("%s\n", out.dump(-1, ' ', true, nlohmann::json::error_handler_t::replace).c_str());
     return 0;
+  }
+  if (imported) {
+    const std::string readWith = trimmed(db::loadOptionArguments(*imported));
+    terminalPrintf("dataset:     %s (%s, imported %s; values read %s)\n", imported->name.c_str(), imported->species.c_str(),
+                   imported->createdAt.c_str(), readWith.empty() ? "as stored" : ("with " + readWith).c_str());
   }
   terminalPrintf("path:        %s\n", path.c_str());
   terminalPrintf("kind:        %s\n", labelMap ? "label map" : "image");

@@ -117,12 +117,12 @@ Result<ImportedDataset> importDataset(db::Database& database, const ImportReques
   if (cancelled()) return fail(ErrorKind::Cancelled, kImportCancelled);
 
   stage(ImportStage::Checksums);
-  auto volumeSum = db::checksumPath(record.volumePath);
+  auto volumeSum = db::checksumPath(record.volumePath, record.dataFolder);
   if (!volumeSum) return tl::unexpected(volumeSum.error());
   record.volumeChecksum = *volumeSum;
   if (!record.labelsPath.empty()) {
     if (cancelled()) return fail(ErrorKind::Cancelled, kImportCancelled);
-    auto labelsSum = db::checksumPath(record.labelsPath);
+    auto labelsSum = db::checksumPath(record.labelsPath, record.dataFolder);
     if (!labelsSum) return tl::unexpected(labelsSum.error());
     record.labelsChecksum = *labelsSum;
   }

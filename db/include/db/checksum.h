@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <string_view>
 
@@ -15,7 +16,13 @@ namespace at::db {
 using at::sha256Hex;
 
 // "sha256:<hex>" of a file's bytes, or for a folder (a DICOM series) of the sorted list of its
-// regular files' relative names and contents.
-Result<std::string> checksumPath(const std::string& path);
+// regular files' relative names and contents. A detached NRRD header's checksum covers the data
+// files it names too (volume/nrrd_io.h: nrrdDataFiles, read from the header's folder or from
+// `nrrdDataFolder`, as --nrrd-data allows), so a data file changed after an import is noticed.
+Result<std::string> checksumPath(const std::string& path, const std::string& nrrdDataFolder = "");
+// The checksum of a detached NRRD header's bytes alone: what checksumPath gave before it covered
+// the data files, accepted for datasets imported then (verifiedDatasetFiles). nullopt for
+// anything else.
+Result<std::optional<std::string>> headerOnlyNrrdChecksum(const std::string& path, const std::string& nrrdDataFolder = "");
 
 }  // namespace at::db

@@ -16,6 +16,12 @@ namespace at {
 
 Result<LoadedImage> loadNrrd(const std::string& path, const ImageLoadOptions& options = {});
 
+// The data files a detached NRRD header names, resolved and in the order loadNrrd reads them, each
+// checked to lie in the folder the header may read from (its own, or options.dataFolder) as
+// loadNrrd checks it; empty for a NRRD with attached data and for a file that is not a NRRD (does not
+// start with "NRRD000"). What a dataset's checksum covers besides the header (db/checksum.h).
+Result<std::vector<std::string>> nrrdDataFiles(const std::string& path, const ImageLoadOptions& options = {});
+
 // Writes an attached-header gzip NRRD (LPS) with optional `key:=value` lines (keys without ":="
 // and line breaks); used by tests to make inputs and by the .seg.nrrd writer.
 Status writeNrrd(const std::string& path, const FloatVolume& image, ScalarKind storedKind,

@@ -971,4 +971,21 @@ Status writeNrrd(const std::string& path, const FloatVolume& image, ScalarKind s
   return out->commit();
 }
 
+Result<std::vector<std::string>> nrrdDataFiles(const std::string& path, const ImageLoadOptions& options) {
+  auto headerFile = openRegularFile(path, path);
+  if (!headerFile) return tl::unexpected(headerFile.error());
+  auto magic = readFileRange(*headerFile, 0, 8, path);
+  if (!magic) return tl::unexpected(magic.error());
+  if (magic->size() < 8 || magic->compare(0, 7, "NRRD000") != 0) return std::vector<std::string>{};
+  auto headerBytes = readHeaderBytes(*headerFile, path);
+  if (!headerBytes) return tl::unexpected(headerBytes.error());
+  auto header = parseHeader(path, *headerBytes);
+  if (!header) return tl::unexpected(header.error());
+  auto files = dataFiles(path, *header);
+  if (!files) return tl::unexpected(files.error());
+  for (const std::string& file : *files)
+    if (auto inside = checkDataFileConfined(path, file, options); !inside) return tl::unexpected(inside.error());
+  return files;
+}
+
 }  // namespace at
