@@ -1,6 +1,7 @@
 // File and folder checksums over core/sha256.h (streaming: large volumes need no full copy in memory).
 #include "db/checksum.h"
 
+#include "core/printable_text.h"
 #include "core/regular_file.h"
 #include "core/sha256.h"
 #include "volume/nrrd_io.h"
@@ -49,7 +50,7 @@ Result<std::string> checksumPath(const std::string& path, const std::string& nrr
         sha.update(std::string_view("\0data\0", 6));
         sha.update(std::to_string(fs::file_size(file, ec)));
         sha.update(std::string_view("\0", 1));
-        if (auto s = hashFile(sha, file); !s) return tl::unexpected(s.error());
+        if (auto s = hashFile(sha, file); !s) return tl::unexpected(printableError(s.error()));  // names from the header
       }
       return "sha256:" + sha.hex();
     }

@@ -971,7 +971,9 @@ Status writeNrrd(const std::string& path, const FloatVolume& image, ScalarKind s
   return out->commit();
 }
 
-Result<std::vector<std::string>> nrrdDataFiles(const std::string& path, const ImageLoadOptions& options) {
+namespace {
+
+Result<std::vector<std::string>> listDataFiles(const std::string& path, const ImageLoadOptions& options) {
   auto headerFile = openRegularFile(path, path);
   if (!headerFile) return tl::unexpected(headerFile.error());
   auto magic = readFileRange(*headerFile, 0, 8, path);
@@ -986,6 +988,12 @@ Result<std::vector<std::string>> nrrdDataFiles(const std::string& path, const Im
   for (const std::string& file : *files)
     if (auto inside = checkDataFileConfined(path, file, options); !inside) return tl::unexpected(inside.error());
   return files;
+}
+
+}  // namespace
+
+Result<std::vector<std::string>> nrrdDataFiles(const std::string& path, const ImageLoadOptions& options) {
+  return withPrintableError(listDataFiles(path, options));
 }
 
 }  // namespace at
