@@ -11,6 +11,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <vector>
 
 namespace at::db {
@@ -44,9 +45,19 @@ Result<std::string> checksumPath(const std::string& path, const std::string& nrr
     if (!dataFiles) return tl::unexpected(dataFiles.error());
     if (!dataFiles->empty()) {
       // The header, then each data file in reading order: a separator no header ends with, its
-      // size, a separator, its bytes.
+      // size, a separator, its bytes. A file the header names again (LIST may repeat a name up to
+      // a million times) is hashed once and then stands as the position of its first naming, so
+      // the work is bounded by the folder's bytes, as for a DICOM folder.
       if (auto s = hashFile(sha, path); !s) return tl::unexpected(s.error());
-      for (const std::string& file : *dataFiles) {
+      std::map<fs::path, std::size_t> firstNamed;
+      for (std::size_t i = 0; i < dataFiles->size(); ++i) {
+        const std::string& file = (*dataFiles)[i];
+        const auto [first, isNew] = firstNamed.emplace(fs::weakly_canonical(file, ec), i);
+        if (!isNew) {
+          sha.update(std::string_view("\0again\0", 7));
+          sha.update(std::to_string(first->second));
+          continue;
+        }
         sha.update(std::string_view("\0data\0", 6));
         sha.update(std::to_string(fs::file_size(file, ec)));
         sha.update(std::string_view("\0", 1));
@@ -87,6 +98,14 @@ Result<std::optional<std::string>> headerOnlyNrrdChecksum(const std::string& pat
   Sha256 sha;
   if (auto s = hashFile(sha, path); !s) return tl::unexpected(s.error());
   return std::optional<std::string>("sha256:" + sha.hex());
+}
+
+Result<std::string> checksumAsRecorded(const std::string& path, const std::string& recorded, const std::string& nrrdDataFolder) {
+  auto now = checksumPath(path, nrrdDataFolder);
+  if (!now || *now == recorded) return now;
+  auto headerOnly = headerOnlyNrrdChecksum(path, nrrdDataFolder);
+  if (headerOnly && *headerOnly && **headerOnly == recorded) return **headerOnly;
+  return now;
 }
 
 }  // namespace at::db

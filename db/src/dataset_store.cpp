@@ -387,14 +387,10 @@ Result<DatasetFiles> verifiedDatasetFiles(const DatasetRecord& record) {
   for (const auto& [path, recorded, what] : {std::tuple{&record.volumePath, &record.volumeChecksum, "volume"},
                                              std::tuple{&record.labelsPath, &record.labelsChecksum, "labels"}}) {
     if (path->empty()) continue;
-    auto now = checksumPath(*path, record.dataFolder);
+    // (a detached NRRD imported before checksums covered its data files: its header is checked)
+    auto now = checksumAsRecorded(*path, *recorded, record.dataFolder);
     if (!now)
       return tl::unexpected(withContext("dataset '" + record.name + "': its " + what + " cannot be read", now.error()));
-    // A detached NRRD imported before checksums covered its data files: its header is checked.
-    if (*now != *recorded) {
-      auto headerOnly = headerOnlyNrrdChecksum(*path, record.dataFolder);
-      if (headerOnly && *headerOnly && **headerOnly == *recorded) continue;
-    }
     if (*now != *recorded)
       return fail(ErrorKind::Conflict,
                   "dataset '" + record.name + "': its " + what + " " + *path +

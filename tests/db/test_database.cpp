@@ -862,6 +862,21 @@ TEST_CASE("checksumPath of a detached NRRD header covers every data file it name
   REQUIRE_FALSE(outside);
   CHECK(outside.error().message.find("lies outside") != std::string::npos);
   CHECK(checksumPath((dir / "h" / "out.nhdr").string(), dir.path().string()));
+  // A file named again (LIST may name one file up to a million times) is hashed once and stands
+  // as its first naming afterwards: a header naming s1 then s1 differs from one naming s1 then a
+  // copy of it, and a change to s1 still shows.
+  { std::ofstream(dir / "s1copy.raw", std::ios::binary) << test::readFile(dir / "s1.raw"); }
+  const auto listHeader = [&](const std::string& name, const std::string& second) {
+    std::ofstream(dir / name, std::ios::binary) << "NRRD0004\ntype: uint8\ndimension: 3\nsizes: 4 3 2\nencoding: raw\ndata file: LIST\ns1.raw\n"
+                                                  << second << "\n";
+    return (dir / name).string();
+  };
+  const std::string twice = listHeader("twice.nhdr", "s1.raw"), copied = listHeader("copied.nhdr", "s1copy.raw");
+  auto twiceSum = checksumPath(twice);
+  REQUIRE_MESSAGE(twiceSum, twiceSum.error().message);
+  CHECK(*twiceSum != *checksumPath(copied));
+  { std::ofstream(dir / "s1.raw", std::ios::binary) << std::string(12, 'z'); }
+  CHECK(*checksumPath(twice) != *twiceSum);
   // An attached NRRD and any other file: the file's bytes, as before.
   { std::ofstream(dir / "a.nrrd", std::ios::binary) << "NRRD0004\ntype: uint8\ndimension: 1\nsizes: 2\nencoding: raw\n\nab"; }
   CHECK(*checksumPath((dir / "a.nrrd").string()) == "sha256:" + sha256Hex(test::readFile(dir / "a.nrrd")));

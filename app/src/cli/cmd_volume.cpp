@@ -15,6 +15,7 @@
 
 #include "cli_args.h"
 #include "core/printable_text.h"
+#include "core/strings.h"
 #include "commands.h"
 #include "dataset_options.h"
 #include "dataset_resolver.h"
@@ -185,11 +186,6 @@ const char* kInfoHelp =
 
 bool isIntegerKind(ScalarKind k) { return k != ScalarKind::Float32 && k != ScalarKind::Float64; }
 
-std::string trimmed(const std::string& text) {
-  const auto from = text.find_first_not_of(' ');
-  return from == std::string::npos ? std::string() : text.substr(from);
-}
-
 // The dataset imported into --db under `name`, if there is one (no database file: none).
 Result<std::optional<db::DatasetRecord>> importedDatasetNamed(const cli::Args& args, const std::string& name) {
   auto database = db::openExistingDatabase(args.db());
@@ -354,15 +350,15 @@ int runInfo(const Argv& argv) {
       if (args->has(option))
         return usageError("info", std::string("--") + option + " applies to files, not to imported '" + imported->name +
                                       "' (its files are read as at import)");
-    auto files = db::verifiedDatasetFiles(*imported);
-    if (!files) return reportError("info: " + files.error().message);
-    path = files->volumePath;
-    options.dicomSeriesUid = files->dicomSeriesUid;
-    options.skipUnreadableFiles = files->skipUnreadableFiles;
-    options.dataFolder = files->dataFolder;
+    // Opening it checks its files against their checksums; the file is then described as read.
     auto dataset = openDatasetArg(*args);
     if (!dataset) return reportError("info: " + dataset.error().message);
     asImported = std::move(*dataset);
+    const DatasetFiles files = db::datasetFiles(*imported);
+    path = files.volumePath;
+    options.dicomSeriesUid = files.dicomSeriesUid;
+    options.skipUnreadableFiles = files.skipUnreadableFiles;
+    options.dataFolder = files.dataFolder;
   }
   auto loaded = loadImageFile(path, options);
   if (!loaded) return reportError("info: " + loaded.error().message);
@@ -446,7 +442,7 @@ int runInfo(const Argv& argv) {
       out["dataset"] = {{"name", imported->name},
                         {"imported", imported->createdAt},
                         {"species", imported->species},
-                        {"load_options", trimmed(db::loadOptionArguments(*imported))}};
+                        {"load_options", str::trim(db::loadOptionArguments(*imported))}};
     out["kind"] = labelMap ? "label map" : "image";
     if (intensity) out["intensity"] = intensityJson(*intensity);
     out["stored_type"] = toString(loaded->storedKind);
@@ -462,7 +458,7 @@ int runInfo(const Argv& argv) {
     return 0;
   }
   if (imported) {
-    const std::string readWith = trimmed(db::loadOptionArguments(*imported));
+    const std::string readWith = str::trim(db::loadOptionArguments(*imported));
     terminalPrintf("dataset:     %s (%s, imported %s; values read %s)\n", imported->name.c_str(), imported->species.c_str(),
                    imported->createdAt.c_str(), readWith.empty() ? "as stored" : ("with " + readWith).c_str());
   }

@@ -229,13 +229,9 @@ Result<CourseImportReport> importCoursePackage(LearningSession& session, const C
                                  (d.referenceNote.empty() ? "" : "; " + d.referenceNote);
       if (request.volumePath.empty())
         return fail(ErrorKind::NotFound, name + ": the package does not include its volume: give the scan with --volume PATH (" + wanted + ")");
-      auto sum = db::checksumPath(request.volumePath);
+      // (a package from before checksums covered a detached NRRD's data files recorded its header's)
+      auto sum = db::checksumAsRecorded(request.volumePath, d.sourceVolumeChecksum);
       if (!sum) return tl::unexpected(sum.error());
-      // A package from before checksums covered a detached NRRD's data files recorded its header's.
-      if (*sum != d.sourceVolumeChecksum)
-        if (auto headerOnly = db::headerOnlyNrrdChecksum(request.volumePath); headerOnly && *headerOnly &&
-                                                                             **headerOnly == d.sourceVolumeChecksum)
-          sum = **headerOnly;
       if (*sum != d.sourceVolumeChecksum)
         return fail(name + ": " + request.volumePath + " is not the course's volume: expected " + wanted + ", the file has " +
                     shortChecksum(*sum));

@@ -24,5 +24,8 @@ Result<std::string> checksumPath(const std::string& path, const std::string& nrr
 // the data files, accepted for datasets imported then (verifiedDatasetFiles). nullopt for
 // anything else.
 Result<std::optional<std::string>> headerOnlyNrrdChecksum(const std::string& path, const std::string& nrrdDataFolder = "");
+// The checksum to hold against one recorded earlier: checksumPath, or the header-only checksum
+// where that is what was recorded (a detached NRRD imported or exported before).
+Result<std::string> checksumAsRecorded(const std::string& path, const std::string& recorded, const std::string& nrrdDataFolder = "");
 
 }  // namespace at::db
