@@ -52,7 +52,10 @@ Result<std::string> checksumPath(const std::string& path, const std::string& nrr
       std::map<fs::path, std::size_t> firstNamed;
       for (std::size_t i = 0; i < dataFiles->size(); ++i) {
         const std::string& file = (*dataFiles)[i];
-        const auto [first, isNew] = firstNamed.emplace(fs::weakly_canonical(file, ec), i);
+        std::error_code resolveError;  // (the loader's confinement check resolved it already)
+        fs::path resolved = fs::weakly_canonical(file, resolveError);
+        if (resolveError) resolved = file;
+        const auto [first, isNew] = firstNamed.emplace(resolved, i);
         if (!isNew) {
           sha.update(std::string_view("\0again\0", 7));
           sha.update(std::to_string(first->second));
