@@ -65,6 +65,12 @@ class Fields {
     if (n < lo || n > hi) return fail(where(key) + "must be " + std::to_string(lo) + ".." + std::to_string(hi));
     return n;
   }
+  Result<double> number(const char* key) const {
+    if (!j_.contains(key)) return fail(where(key) + "missing");
+    const json& v = j_[key];
+    if (!v.is_number() || !std::isfinite(v.get<double>())) return fail(where(key) + "must be a finite number");
+    return v.get<double>();
+  }
   Result<std::vector<double>> numbers(const char* key, std::size_t count) const {
     if (!j_.contains(key)) return fail(where(key) + "missing");
     const json& v = j_[key];
@@ -125,10 +131,39 @@ Result<Geometry> readGeometry(const json& j, const std::string& source, const st
   return g;
 }
 
+json readingJson(const VolumeReading& r) {
+  json j = {{"intensity", intensityChoiceName(r.intensity)}};
+  if (r.intercept) j["intercept"] = *r.intercept;
+  if (r.slope) j["slope"] = *r.slope;
+  return j;
+}
+
+// Held to the bounds of a user's --intercept and --slope (checkRescale, volume/intensity.h).
+Result<VolumeReading> readReading(const json& j, const std::string& source, const std::string& path) {
+  Fields f(j, source, path);
+  if (auto ok = f.expect({"intensity", "intercept", "slope"}); !ok) return tl::unexpected(ok.error());
+  AT_TAKE(intensity, f.text("intensity", true));
+  auto choice = parseIntensityChoice(intensity);
+  if (!choice) return fail(f.where("intensity") + "must be auto, hu or plain, not '" + intensity + "'");
+  VolumeReading r;
+  r.intensity = *choice;
+  if (f.has("intercept")) {
+    AT_TAKE(intercept, f.number("intercept"));
+    if (!checkRescale(intercept, 1)) return fail(f.where("intercept") + "must be a number within ±" + kRescaleInterceptLimitText);
+    r.intercept = intercept;
+  }
+  if (f.has("slope")) {
+    AT_TAKE(slope, f.number("slope"));
+    if (!checkRescale(0, slope)) return fail(f.where("slope") + "must be a number other than 0 within ±" + kRescaleSlopeLimitText);
+    r.slope = slope;
+  }
+  return r;
+}
+
 Result<DatasetEntry> readDataset(const json& j, const std::string& source) {
   Fields f(j, source, "dataset");
   if (auto ok = f.expect({"name", "source", "species", "geometry", "source_volume_checksum", "source_labels_checksum",
-                          "reference"});
+                          "reference", "reading"});
       !ok)
     return tl::unexpected(ok.error());
   DatasetEntry d;
@@ -162,6 +197,11 @@ Result<DatasetEntry> readDataset(const json& j, const std::string& source) {
   d.sourceLabelsChecksum = labelsSum;
   if ((d.source == VolumeSource::Reference) != f.has("reference"))
     return fail(f.where("reference") + (f.has("reference") ? "only for a referenced volume" : "missing"));
+  if (f.has("reading")) {
+    if (builtin) return fail(f.where("reading") + "not allowed for a built-in dataset");
+    AT_TAKE(reading, readReading(f.raw("reading"), source, f.field("reading")));
+    d.reading = reading;
+  }
   if (f.has("reference")) {
     Fields r(f.raw("reference"), source, f.field("reference"));
     if (auto ok = r.expect({"file_name", "note"}); !ok) return tl::unexpected(ok.error());
@@ -212,6 +252,7 @@ std::string manifestToJson(const Manifest& m) {
   if (!m.dataset.sourceLabelsChecksum.empty()) dataset["source_labels_checksum"] = m.dataset.sourceLabelsChecksum;
   if (m.dataset.source == VolumeSource::Reference)
     dataset["reference"] = {{"file_name", m.dataset.referenceFileName}, {"note", m.dataset.referenceNote}};
+  if (m.dataset.reading) dataset["reading"] = readingJson(*m.dataset.reading);
   json files = json::array();
   for (const PackagedFile& f : m.files) files.push_back({{"path", f.path}, {"size", f.size}, {"sha256", f.sha256}});
   const json j = {{"format", kFormatName},

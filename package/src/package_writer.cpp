@@ -139,6 +139,8 @@ Status writePackage(const fs::path& out, const PackageInput& input) {
   manifest.courseVersion = input.course.version;
   manifest.courseTitle = input.course.title;
   manifest.dataset = input.dataset;
+  // Version 1 readers know every field but the reading: a package without one stays readable by them.
+  manifest.formatVersion = input.dataset.reading ? kFormatVersion : 1;
   for (const Entry& e : entries) manifest.files.push_back({e.path, e.size, e.sha256});
   entries.insert(entries.begin(), document("manifest.json", manifestToJson(manifest)));
 
@@ -183,6 +185,24 @@ Result<DatasetFilesWritten> writeDatasetFiles(const Dataset& dataset, const fs::
     if (auto ok = writeNrrd(out.labels.string(), labels, ScalarKind::UInt16); !ok) return tl::unexpected(ok.error());
   }
   return out;
+}
+
+std::optional<VolumeReading> includedVolumeReading(const Dataset& dataset) {
+  const IntensityModel& model = dataset.intensity;
+  // What the importer's loader knows of volume.nrrd: int16 values, no modality, no rescale.
+  IntensityEvidence evidence;
+  if (!dataset.volume.voxels.empty()) {
+    const auto [lo, hi] = std::minmax_element(dataset.volume.voxels.begin(), dataset.volume.voxels.end());
+    evidence.minValue = *lo;
+    evidence.maxValue = *hi;
+  }
+  const bool asStored = model.slope == 1 && model.intercept == 0;
+  if (decideIntensity(evidence, IntensityChoice::Auto).first == model.unit && asStored) return std::nullopt;
+  VolumeReading reading;
+  reading.intensity = model.hounsfield() ? IntensityChoice::Hounsfield : IntensityChoice::Plain;
+  if (model.intercept != 0) reading.intercept = model.intercept;
+  if (model.slope != 1) reading.slope = model.slope;
+  return reading;
 }
 
 }  // namespace at::package

@@ -66,7 +66,9 @@ TEST_CASE("import: --intercept, --slope and --intensity are kept with the datase
                           "apply to datasets from files");
   const std::string before = test::readFile(dir / "t.db");
   for (const auto& [options, message] :
-       {std::pair{" --intercept abc", "--intercept: 'abc' is not a number"}, std::pair{" --slope 0", "slope: must be a finite number other than 0"},
+       {std::pair{" --intercept abc", "--intercept: 'abc' is not a number"}, std::pair{" --slope 0", "--slope: must be a number other than 0 within ±1e12"},
+        std::pair{" --slope 1e300", "--slope: must be a number other than 0 within ±1e12"},
+        std::pair{" --intercept -1e300", "--intercept: must be a number within ±1e15"},
         std::pair{" --slope nan", "--slope: 'nan' is not a number"}, std::pair{" --intensity kelvin", "unknown 'kelvin'"}}) {
     CAPTURE(options);
     test::checkOneLineError(test::runApp("import --volume " + nrrd + " --name head_bad --db " + db + options), message);

@@ -4,6 +4,7 @@
 #include <doctest/doctest.h>
 
 #include <fstream>
+#include <random>
 
 #include <nlohmann/json.hpp>
 
@@ -187,14 +188,37 @@ TEST_CASE("CoursePackage_AlteredPackages_AreRefusedWithOneLineNamingTheEntry") {
   SUBCASE("a newer format version") {
     auto newer = altered(dir, file, "newer.atcourse", [](auto& e) {
       auto m = nlohmann::json::parse(test::findEntry(e, "manifest.json")->data);
-      m["format_version"] = 2;
+      m["format_version"] = kFormatVersion + 1;
       m["something_new"] = true;
       test::findEntry(e, "manifest.json")->data = m.dump();
     });
-    expectRefused(newer, {"format version 2", "newer than this program reads (1)"});
+    expectRefused(newer, {("format version " + std::to_string(kFormatVersion + 1)).c_str(),
+                          ("newer than this program reads (" + std::to_string(kFormatVersion) + ")").c_str()});
     auto read = readPackageFile(newer);
     REQUIRE_FALSE(read);
     CHECK((read.error().kind == ErrorKind::Unavailable));
+  }
+  SUBCASE("a hostile reading of the volume's values") {
+    const std::vector<std::pair<nlohmann::json, std::string>> cases = {
+        {{{"intensity", "kelvin"}}, "dataset.reading.intensity: must be auto, hu or plain, not 'kelvin'"},
+        {{{"intercept", 5}}, "dataset.reading.intensity: missing"},
+        {{{"intensity", "plain"}, {"slope", 0}}, "dataset.reading.slope: must be a number other than 0 within ±1e12"},
+        {{{"intensity", "plain"}, {"slope", -1e300}}, "dataset.reading.slope: must be a number other than 0 within ±1e12"},
+        {{{"intensity", "hu"}, {"intercept", 1e16}}, "dataset.reading.intercept: must be a number within ±1e15"},
+        {{{"intensity", "hu"}, {"intercept", "-1024"}}, "dataset.reading.intercept: must be a finite number"},
+        {{{"intensity", "hu"}, {"offset", 1}}, "dataset.reading.offset: unknown field"},
+        {nlohmann::json::array(), "dataset.reading: must be an object"}};
+    for (const auto& [reading, message] : cases) {
+      CAPTURE(reading.dump());
+      expectRefused(altered(dir, file, "reading.atcourse",
+                            [&](auto& e) {
+                              auto m = nlohmann::json::parse(test::findEntry(e, "manifest.json")->data);
+                              m["format_version"] = 2;
+                              m["dataset"]["reading"] = reading;
+                              test::findEntry(e, "manifest.json")->data = m.dump();
+                            }),
+                    {"reading.atcourse: manifest.json", message.c_str()});
+    }
   }
   SUBCASE("names that escape the package") {
     for (const char* name : {"../evil.json", "/tmp/evil.json", "presets/../../evil.json", "presets/./x.json", "a\\b.json",
@@ -348,4 +372,61 @@ TEST_CASE("CoursePackage_RandomlyDamagedBytes_AreReadOrRefusedInOneLineNeverCras
     }
   }
   CHECK(refused > 250);  // a changed byte inside a checksummed entry or header is noticed
+}
+
+// The reading a package records gives the dataset back: for any unit, rescale and value range, the
+// written volume.nrrd read with it has the dataset's unit, values and grey window; where none is
+// recorded, the file read by itself already does (so no package records a needless one).
+TEST_CASE("CoursePackage_IncludedVolumeReading_GivesTheDatasetsUnitValuesAndWindowBack") {
+  const std::uint64_t seed = test::freshSeed("CoursePackage_IncludedVolumeReading");
+  std::mt19937_64 rng(seed);
+  const auto pick = [&](auto&& list) { return list[std::uniform_int_distribution<std::size_t>(0, list.size() - 1)(rng)]; };
+  int recorded = 0, trials = 0;
+  for (; trials < 40; ++trials) {
+    Dataset ds;
+    ds.id = "values";
+    Geometry g;
+    g.dims = {7, 6, 5};
+    g.spacingMm = {0.1, 0.1, 0.1};
+    ds.volume = Volume(g);
+    const int lo = pick(std::vector<int>{-32768, -3000, -1024, -499, 0, 100}), span = pick(std::vector<int>{10, 400, 3000, 60000});
+    const int hi = std::min(32767, lo + span);
+    for (std::int16_t& v : ds.volume.voxels) v = std::int16_t(std::uniform_int_distribution<int>(lo, hi)(rng));
+    IntensityModel& m = ds.intensity;
+    m.unit = pick(std::vector<IntensityUnit>{IntensityUnit::Hounsfield, IntensityUnit::Plain});
+    if (!m.hounsfield()) {
+      m.slope = pick(std::vector<double>{1, 1, 0.5, 3.75, 1.0 / 256});
+      m.intercept = pick(std::vector<double>{0, 0, 33508, -1024, 12.5});
+      m.window = histogramWindow(ds.volume.voxels);
+    }
+    CAPTURE(trials);
+    CAPTURE(lo);
+    CAPTURE(hi);
+    CAPTURE(m.hounsfield());
+    CAPTURE(m.slope);
+    CAPTURE(m.intercept);
+    test::TempDir dir;
+    auto files = writeDatasetFiles(ds, dir.path(), false);
+    REQUIRE_MESSAGE(files, test::errorText(files));
+    const std::optional<VolumeReading> reading = includedVolumeReading(ds);
+    DatasetFiles open;
+    open.volumePath = files->volume.string();
+    if (reading) {
+      ++recorded;
+      open.intensity = reading->intensity;
+      open.intercept = reading->intercept;
+      open.slope = reading->slope;
+    }
+    auto loaded = openDatasetFiles(open);
+    REQUIRE_MESSAGE(loaded, test::errorText(loaded));
+    CHECK(loaded->intensity.unit == m.unit);
+    CHECK(loaded->intensity.window == m.window);
+    std::size_t differ = 0;
+    for (std::size_t n = 0; n < ds.volume.voxels.size(); ++n)
+      differ += loaded->intensity.valueOf(loaded->volume.voxels[n]) != m.valueOf(ds.volume.voxels[n]);
+    CHECK(differ == 0);
+  }
+  MESSAGE(recorded << " of " << trials << " datasets needed a reading (seed " << seed << ")");
+  CHECK(recorded > 0);
+  CHECK(recorded < trials);
 }

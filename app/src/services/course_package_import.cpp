@@ -85,6 +85,11 @@ Result<StagedDataset> stageDataset(db::Database& database, const package::Course
   files.volumePath = (staged / volumeName).string();
   if (pkg.hasLabels) files.labelsPath = (staged / "labels.nrrd").string();
   files.id = d.name;
+  if (d.reading) {
+    files.intensity = d.reading->intensity;
+    files.intercept = d.reading->intercept;
+    files.slope = d.reading->slope;
+  }
   auto loaded = openDatasetFiles(files);
   if (!loaded) return tl::unexpected(withContext(name + ": dataset '" + d.name + "'", loaded.error()));
   if (d.geometry && !loaded->volume.geometry.sameGridAs(*d.geometry))
@@ -95,6 +100,10 @@ Result<StagedDataset> stageDataset(db::Database& database, const package::Course
   db::DatasetRecord& record = out.record;
   record.name = d.name;
   record.species = d.species;
+  // Read as the package says at every later open too.
+  record.intensity = files.intensity;
+  record.intercept = files.intercept;
+  record.slope = files.slope;
   auto volumeSum = db::checksumPath(files.volumePath);
   if (!volumeSum) return tl::unexpected(volumeSum.error());
   record.volumeChecksum = *volumeSum;

@@ -153,11 +153,20 @@ Result<CourseExportReport> exportCourse(LearningSession& session, const render::
     d.geometry = dataset->volume.geometry;
     d.sourceVolumeChecksum = (*record)->volumeChecksum;
     d.sourceLabelsChecksum = (*record)->labelsChecksum;
+    // The importer reads the volume file with the options that give this dataset's values: the
+    // author's own for a referenced file, those of the written int16 NRRD for an included one.
     if (request.referenceVolume) {
       d.referenceFileName = fs::path((*record)->volumePath).filename().string();
       d.referenceNote = request.referenceNote;
+      const db::DatasetRecord& r = **record;
+      if (r.intensity != IntensityChoice::Auto || r.intercept || r.slope) d.reading = package::VolumeReading{r.intensity, r.intercept, r.slope};
     } else {
       input.volumeFile = files->volume;
+      d.reading = package::includedVolumeReading(*dataset);
+      if (d.reading)
+        if (auto ok = checkRescale(d.reading->intercept.value_or(0), d.reading->slope.value_or(1)); !ok)
+          return fail("dataset '" + course->datasetId + "': its values are stored scaled beyond what a package records (" +
+                      ok.error().message + "): export it with --reference-volume");
     }
     input.labelsFile = files->labels;
     input.structures = dataset->structures;

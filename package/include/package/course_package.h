@@ -3,7 +3,7 @@
 // that may not be redistributed, a reference by content hash with a download note).
 //
 // The container is a POSIX tar archive written and read with libarchive (gzip-compressed tars are
-// read too). Format version 1 holds, in this order:
+// read too). Format version 2 holds, in this order:
 //
 //   manifest.json            format name and version, the course's id/version/title/dataset, the
 //                            dataset entry, and every other file with its size and SHA-256
@@ -12,6 +12,9 @@
 //   dataset/structures.json  [{label, id, name, colour, system, description}] (not for built-ins)
 //   dataset/labels.nrrd      the label map on the volume's grid (uint16 NRRD; when it has one)
 //   dataset/volume.nrrd      the volume (int16 NRRD, LPS; only when included)
+//
+// Version 2 adds the dataset entry's `reading` (how the volume file's values are read); a package
+// without one is written as version 1, which earlier programs read.
 //
 // Reading verifies as it streams: manifest.json first; then each entry must be a regular file
 // listed in the manifest at one of the names above, of the listed size and SHA-256; at the end
@@ -35,12 +38,13 @@
 #include "lessons/curriculum.h"
 #include "render/preset.h"
 #include "volume/geometry.h"
+#include "volume/intensity.h"
 #include "volume/structure.h"
 
 namespace at::package {
 
 inline constexpr const char* kFormatName = "anatomy-tutor-course";
-inline constexpr int kFormatVersion = 1;
+inline constexpr int kFormatVersion = 2;  // the newest this program reads and writes
 inline constexpr const char* kExtension = ".atcourse";
 
 // Where the dataset's volume comes from on the machine that imports the package.
@@ -50,6 +54,17 @@ enum class VolumeSource {
   Reference,  // not in the package: the importer supplies a file with the recorded checksum
 };
 const char* toString(VolumeSource source);  // "builtin", "included", "reference"
+
+// How the importer reads the dataset's volume file: the loader's options (DatasetFiles,
+// volume/intensity.h) — the unit forced, and value = file value · slope + intercept. A package
+// records one where the file read by itself would give other values than the author's: an included
+// volume of plain intensities stored shifted or scaled to fit int16 (a 16-bit µCT), or whose values
+// reach −500 (read as HU otherwise), or of HU without air (read as plain otherwise); a referenced
+// file the author imported with --intensity, --intercept or --slope.
+struct VolumeReading {
+  IntensityChoice intensity = IntensityChoice::Auto;
+  std::optional<double> intercept, slope;
+};
 
 struct DatasetEntry {
   std::string name;                   // the course's dataset id
@@ -63,6 +78,7 @@ struct DatasetEntry {
   std::string sourceLabelsChecksum;   // likewise for the author's label file ("" without labels)
   std::string referenceFileName;      // Reference: the file's name as distributed ("Cranium.inv3")
   std::string referenceNote;          // Reference: where to get it and under which licence
+  std::optional<VolumeReading> reading;  // included and reference only; none: read as the file says
 };
 
 struct PackagedFile {
@@ -156,6 +172,10 @@ struct DatasetFilesWritten {
   std::filesystem::path volume, labels;
 };
 Result<DatasetFilesWritten> writeDatasetFiles(const Dataset& dataset, const std::filesystem::path& dir, bool withLabels);
+// How the importer must read the volume.nrrd writeDatasetFiles wrote from `dataset` to get the
+// dataset's values and unit back (none where reading it by itself does: HU with air, or plain
+// intensities stored as they are, none down to −500).
+std::optional<VolumeReading> includedVolumeReading(const Dataset& dataset);
 
 // Structures as dataset/structures.json holds them, and back (strict: unknown fields, repeated
 // labels or ids, colours outside 0..1 are errors naming the entry).

@@ -68,7 +68,11 @@ std::pair<IntensityUnit, std::string> decideIntensity(const IntensityEvidence& e
 // ("--intercept -1024 --slope 1"). Errors: a slope of 0 or a value that is not finite.
 Status applyRescale(Volume& volume, IntensityModel& model, double intercept, double slope, IntensityChoice choice);
 // The rule applyRescale checks first, for callers that refuse a bad rescale before loading (an
-// import): a finite intercept, a finite slope other than 0; the message names the option.
+// import): an intercept within ±1e15, a slope other than 0 within ±1e12 (so that every int16 value
+// maps to a finite one); the message names the option.
+inline constexpr double kRescaleInterceptLimit = 1e15, kRescaleSlopeLimit = 1e12;
+inline constexpr const char* kRescaleInterceptLimitText = "1e15";
+inline constexpr const char* kRescaleSlopeLimitText = "1e12";
 Status checkRescale(double intercept, double slope);
 // The inverse of parseIntensityChoice ("auto", "hu", "plain").
 const char* intensityChoiceName(IntensityChoice choice);

@@ -26,8 +26,10 @@ const char* intensityChoiceName(IntensityChoice choice) {
 }
 
 Status checkRescale(double intercept, double slope) {
-  if (!std::isfinite(intercept)) return fail("--intercept: must be a finite number");
-  if (!std::isfinite(slope) || slope == 0) return fail("--slope: must be a finite number other than 0");
+  if (!(std::fabs(intercept) <= kRescaleInterceptLimit))
+    return fail(std::string("--intercept: must be a number within ±") + kRescaleInterceptLimitText);
+  if (!(std::fabs(slope) <= kRescaleSlopeLimit) || slope == 0)
+    return fail(std::string("--slope: must be a number other than 0 within ±") + kRescaleSlopeLimitText);
   return {};
 }
 

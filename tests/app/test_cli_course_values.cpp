@@ -1,0 +1,149 @@
+// A course package carries its dataset's values, not only its voxels: on the student's machine the
+// dataset reads in the author's unit with the author's values and grey window (`info NAME --json`
+// alike, slices byte-identical), for volumes whose file read by itself would say otherwise — a
+// 16-bit µCT stored shifted into int16, plain intensities that reach −500, a CT cropped to no air,
+// and referenced files the author read with --intercept, --slope or --intensity. A package that
+// needs no reading stays format version 1, which earlier programs read.
+#include <doctest/doctest.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include <nlohmann/json.hpp>
+
+#include "../package/tar_files.h"
+#include "cli_checks.h"
+#include "synthetic_scans.h"
+#include "test_support.h"
+#include "volume/nrrd_io.h"
+
+using namespace at;
+namespace fs = std::filesystem;
+
+namespace {
+
+std::string quoted(const fs::path& p) { return "'" + p.string() + "'"; }
+
+nlohmann::json run(const std::string& args) {
+  const auto r = test::runApp(args);
+  REQUIRE_MESSAGE(r.exitCode == 0, args << ": " << r.err);
+  return r.out.empty() || r.out[0] != '{' ? nlohmann::json(r.out) : nlohmann::json::parse(r.out);
+}
+
+// What a user sees of a dataset's values: the unit, the values' range and the grey window (the
+// stored form may differ between the author's file and the package's int16 NRRD).
+nlohmann::json valuesSeen(const std::string& name, const fs::path& db) {
+  const nlohmann::json info = run("info " + name + " --json --db " + quoted(db));
+  return {{"unit", info["intensity"]["unit"]}, {"window", info["intensity"]["window"]}, {"values", info["value_range"]},
+          {"labels", info["labels"]}};
+}
+
+// A volume of the synthetic µCT's shape with values `grey·scale + offset` written as `kind`, and
+// its label map (1 bone, 2 the soft tissue inside) and names in `dir`.
+void writeScan(const fs::path& dir, double scale, double offset, ScalarKind kind) {
+  FloatVolume v = test::syntheticMicroCt({40, 36, 30});
+  FloatVolume labels(v.geometry, 0.0f);
+  for (std::size_t n = 0; n < v.voxels.size(); ++n) {
+    labels.voxels[n] = v.voxels[n] > 150 ? 1.0f : (v.voxels[n] > 50 ? 2.0f : 0.0f);
+    v.voxels[n] = float(v.voxels[n] * scale + offset);
+  }
+  REQUIRE(writeNrrd((dir / "scan.nrrd").string(), v, kind));
+  REQUIRE(writeNrrd((dir / "labels.nrrd").string(), labels, ScalarKind::UInt16));
+  std::ofstream(dir / "names.json") << R"({"1": "bone", "2": "soft tissue"})";
+}
+
+struct Shared {
+  nlohmann::json author, student;
+  int formatVersion = 0;
+  nlohmann::json reading;  // the manifest's dataset.reading, or null
+  std::string authorSlice, studentSlice;
+};
+
+// Imports the scan in `dir` with `importOptions`, makes a course on it, exports it (with
+// `exportOptions`) and imports the package into a fresh database, giving the scan where it is
+// referenced; what the author and the student see.
+Shared shareScan(const test::TempDir& dir, const std::string& importOptions, const std::string& exportOptions) {
+  const fs::path author = dir / "a.db", student = dir / "s.db", package = dir / "c.atcourse";
+  run("import --volume " + quoted(dir / "scan.nrrd") + " --labels " + quoted(dir / "labels.nrrd") + " --names " +
+      quoted(dir / "names.json") + " --name scan --db " + quoted(author) + importOptions);
+  run("course new tour --dataset scan --db " + quoted(author));
+  run("course export tour --out " + quoted(package) + " --db " + quoted(author) + exportOptions);
+  const bool referenced = exportOptions.find("--reference-volume") != std::string::npos;
+  run("course import " + quoted(package) + (referenced ? " --volume " + quoted(dir / "scan.nrrd") : "") + " --db " + quoted(student));
+  Shared out;
+  out.author = valuesSeen("scan", author);
+  out.student = valuesSeen("scan", student);
+  auto entries = test::readTar(package);
+  const auto manifest = nlohmann::json::parse(test::findEntry(entries, "manifest.json")->data);
+  out.formatVersion = manifest["format_version"].get<int>();
+  out.reading = manifest["dataset"].value("reading", nlohmann::json());
+  for (const auto& [db, png] : {std::pair{author, dir / "a.png"}, std::pair{student, dir / "s.png"}})
+    run("slice scan --axis z --index 15 --out " + quoted(png) + " --db " + quoted(db));
+  out.authorSlice = test::readFile(dir / "a.png");
+  out.studentSlice = test::readFile(dir / "s.png");
+  return out;
+}
+
+void checkSameValues(const Shared& s) {
+  CHECK(s.student == s.author);
+  CHECK(s.studentSlice == s.authorSlice);
+}
+
+}  // namespace
+
+TEST_CASE("CourseCli_PackagedDataset_ReadsWithTheAuthorsUnitValuesAndWindow") {
+  if (!test::requireAppBinary("course packages")) return;
+  SUBCASE("a 16-bit µCT above 32767, included: stored shifted into int16, read back as plain intensities") {
+    test::TempDir dir("at-values");
+    writeScan(dir.path(), 256, 100, ScalarKind::UInt16);  // up to 65380
+    const Shared s = shareScan(dir, "", "");
+    CHECK(s.author["unit"] == "plain");
+    CHECK(s.author["values"][1].get<double>() > 60000);
+    checkSameValues(s);
+    CHECK(s.formatVersion == 2);
+    CHECK(s.reading["intensity"] == "plain");
+  }
+  SUBCASE("plain intensities down to -2000 (--intensity plain), included") {
+    test::TempDir dir("at-values");
+    writeScan(dir.path(), 10, -2000, ScalarKind::Int16);
+    const Shared s = shareScan(dir, " --intensity plain", "");
+    CHECK(s.author["unit"] == "plain");
+    checkSameValues(s);
+    CHECK(s.reading == nlohmann::json{{"intensity", "plain"}});
+  }
+  SUBCASE("a CT cropped to no air (--intensity hu), included") {
+    test::TempDir dir("at-values");
+    writeScan(dir.path(), 4, 0, ScalarKind::Int16);  // 0 … 1020 HU
+    const Shared s = shareScan(dir, " --intensity hu", "");
+    CHECK(s.author["unit"] == "HU");
+    checkSameValues(s);
+    CHECK(s.reading == nlohmann::json{{"intensity", "hu"}});
+  }
+  SUBCASE("a CT stored as HU + 1024 read with --intercept -1024: included needs no reading, referenced keeps the options") {
+    test::TempDir dir("at-values");
+    writeScan(dir.path(), 8, 0, ScalarKind::Int16);  // air near 110, bone near 1570: HU + 1024
+    const Shared included = shareScan(dir, " --intercept -1024", "");
+    CHECK(included.author["unit"] == "HU");
+    checkSameValues(included);
+    CHECK(included.formatVersion == 1);
+    CHECK(included.reading.is_null());
+    test::TempDir again("at-values");
+    writeScan(again.path(), 8, 0, ScalarKind::Int16);
+    const Shared referenced = shareScan(again, " --intercept -1024", " --reference-volume");
+    CHECK(referenced.author == included.author);
+    checkSameValues(referenced);
+    CHECK(referenced.reading == nlohmann::json{{"intensity", "auto"}, {"intercept", -1024.0}});
+  }
+  SUBCASE("plain intensities read with --slope 0.5, referenced and included") {
+    for (const char* exportOptions : {" --reference-volume", ""}) {
+      CAPTURE(exportOptions);
+      test::TempDir dir("at-values");
+      writeScan(dir.path(), 1, 0, ScalarKind::UInt8);
+      const Shared s = shareScan(dir, " --slope 0.5", exportOptions);
+      CHECK(s.author["unit"] == "plain");
+      CHECK(s.author["values"][1].get<double>() <= 127.5);
+      checkSameValues(s);
+      CHECK(s.reading["slope"] == 0.5);
+    }
+  }
+}
