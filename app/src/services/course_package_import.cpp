@@ -16,6 +16,7 @@
 #include "lessons/course_check.h"
 #include "volume/dataset_source.h"
 #include "volume/known_scans.h"
+#include "volume/nrrd_io.h"
 
 namespace at::app {
 
@@ -44,25 +45,56 @@ std::set<std::string> idsOf(const std::vector<Structure>& structures) {
 // "sha256:0123456789ab…" for messages.
 std::string shortChecksum(const std::string& checksum) { return checksum.size() > 19 ? checksum.substr(0, 19) + "…" : checksum; }
 
-// Copies a file or a folder (a DICOM series) to `to`.
+// Copies the scan a user gives for a package that references it to `to`: a folder (a DICOM
+// series), a file, or a detached NRRD header with the data files it names, each at its place
+// relative to the header (they lie in the header's folder: nrrdDataFiles). Writes only under
+// `to`'s folder; a data file named by an absolute path or through ".." stays behind, and the copy
+// then fails its checksum or its load with one line.
 Status copyVolume(const fs::path& from, const fs::path& to) {
   std::error_code ec;
-  if (fs::is_directory(from, ec)) fs::copy(from, to, fs::copy_options::recursive, ec);
-  else fs::copy_file(from, to, ec);
-  if (ec) return fail(ErrorKind::Io, from.string() + ": cannot copy into " + to.string() + " (" + ec.message() + ")");
+  const auto cannot = [&](const fs::path& source, const fs::path& target) {
+    return fail(ErrorKind::Io, source.string() + ": cannot copy into " + target.string() + " (" + ec.message() + ")");
+  };
+  if (fs::is_directory(from, ec)) {
+    fs::copy(from, to, fs::copy_options::recursive, ec);
+    return ec ? cannot(from, to) : Status{};
+  }
+  fs::create_directories(to.parent_path(), ec);
+  fs::copy_file(from, to, ec);
+  if (ec) return cannot(from, to);
+  auto dataFiles = nrrdDataFiles(from.string());
+  if (!dataFiles) return tl::unexpected(dataFiles.error());
+  const fs::path header = fs::weakly_canonical(fs::absolute(from), ec), folder = header.parent_path();
+  std::set<fs::path> copied;
+  for (const std::string& file : *dataFiles) {
+    const fs::path resolved = fs::weakly_canonical(fs::absolute(file), ec);
+    if (resolved == header || !copied.insert(resolved).second) continue;
+    const fs::path inside = resolved.lexically_relative(folder);
+    if (inside.empty() || *inside.begin() == "..") return fail(from.string() + ": data file " + file + " lies outside its folder");
+    const fs::path target = to.parent_path() / inside;
+    if (target == to) return fail(from.string() + ": data file " + file + " would take the place of the header's copy " + to.string());
+    fs::create_directories(target.parent_path(), ec);
+    if (!ec) fs::copy_file(resolved, target, ec);
+    if (ec) return cannot(resolved, target);
+  }
   return {};
 }
 
 // The name a referenced volume is kept under in the dataset's folder: "volume" with the user's
 // file's extensions (".inv3", ".nii.gz"), so that its reader is chosen as before and no outside
-// name becomes a path.
-std::string referencedVolumeName(const fs::path& given) {
+// name becomes a path; a detached NRRD header keeps its name in a folder "volume" of its own, with
+// its data files under the names it gives them (so that no data file lands on the label map); a
+// header whose name is not a plain one (core/safe_name.h) is kept as volume.nhdr.
+Result<std::string> referencedVolumeName(const fs::path& given) {
   std::error_code ec;
-  if (fs::is_directory(given, ec)) return "volume";
+  if (fs::is_directory(given, ec)) return std::string("volume");
   const std::string file = given.filename().string();
+  auto dataFiles = nrrdDataFiles(given.string());
+  if (!dataFiles) return tl::unexpected(dataFiles.error());
+  if (!dataFiles->empty()) return "volume/" + (isSafeName(file) ? file : std::string("volume.nhdr"));
   const std::size_t dot = file.find('.', 1);
   const std::string name = dot == std::string::npos ? "volume" : "volume" + file.substr(dot);
-  return isSafeName(name) ? name : "volume";
+  return isSafeName(name) ? name : std::string("volume");
 }
 
 // A dataset registered from the staged files: the record as it will be stored (paths relative to
@@ -78,8 +110,15 @@ Result<StagedDataset> stageDataset(db::Database& database, const package::Course
   const fs::path staged = staging.datasetFolder();
   std::string volumeName = "volume.nrrd";
   if (d.source != package::VolumeSource::Included) {
-    volumeName = referencedVolumeName(request.volumePath);
-    if (auto ok = copyVolume(request.volumePath, staged / volumeName); !ok) return tl::unexpected(ok.error());
+    auto referenced = referencedVolumeName(request.volumePath);
+    if (!referenced) return tl::unexpected(withContext(name, referenced.error()));
+    volumeName = *referenced;
+    if (auto ok = copyVolume(request.volumePath, staged / volumeName); !ok) return tl::unexpected(withContext(name, ok.error()));
+    auto copied = db::checksumAsRecorded((staged / volumeName).string(), d.sourceVolumeChecksum);
+    if (!copied) return tl::unexpected(withContext(name, copied.error()));
+    if (*copied != d.sourceVolumeChecksum)
+      return fail(name + ": " + request.volumePath + ": its copy in the data folder is not the course's volume (" +
+                  shortChecksum(*copied) + "): a data file it names by an absolute path or through '..' does not travel");
   }
   DatasetFiles files;
   files.volumePath = (staged / volumeName).string();
