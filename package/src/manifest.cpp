@@ -135,13 +135,14 @@ json readingJson(const VolumeReading& r) {
   json j = {{"intensity", intensityChoiceName(r.intensity)}};
   if (r.intercept) j["intercept"] = *r.intercept;
   if (r.slope) j["slope"] = *r.slope;
+  if (r.skipUnreadableFiles) j["skip_unreadable"] = true;
   return j;
 }
 
 // Held to the bounds of a user's --intercept and --slope (checkRescale, volume/intensity.h).
 Result<VolumeReading> readReading(const json& j, const std::string& source, const std::string& path) {
   Fields f(j, source, path);
-  if (auto ok = f.expect({"intensity", "intercept", "slope"}); !ok) return tl::unexpected(ok.error());
+  if (auto ok = f.expect({"intensity", "intercept", "slope", "skip_unreadable"}); !ok) return tl::unexpected(ok.error());
   AT_TAKE(intensity, f.text("intensity", true));
   auto choice = parseIntensityChoice(intensity);
   if (!choice) return fail(f.where("intensity") + "must be auto, hu or plain, not '" + intensity + "'");
@@ -156,6 +157,10 @@ Result<VolumeReading> readReading(const json& j, const std::string& source, cons
     AT_TAKE(slope, f.number("slope"));
     if (!checkRescale(0, slope)) return fail(f.where("slope") + "must be a number other than 0 within ±" + kRescaleSlopeLimitText);
     r.slope = slope;
+  }
+  if (f.has("skip_unreadable")) {
+    if (!f.raw("skip_unreadable").is_boolean()) return fail(f.where("skip_unreadable") + "must be true or false");
+    r.skipUnreadableFiles = f.raw("skip_unreadable").get<bool>();
   }
   return r;
 }

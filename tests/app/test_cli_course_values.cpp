@@ -15,6 +15,7 @@
 #include "cli_checks.h"
 #include "synthetic_scans.h"
 #include "test_support.h"
+#include "volume/dataset_source.h"
 #include "volume/nrrd_io.h"
 
 using namespace at;
@@ -146,4 +147,36 @@ TEST_CASE("CourseCli_PackagedDataset_ReadsWithTheAuthorsUnitValuesAndWindow") {
       CHECK(s.reading["slope"] == 0.5);
     }
   }
+}
+
+// A referenced DICOM folder the author imported with --skip-unreadable (a truncated file among
+// the slices): the student's `course import` has no such option, so the package says so and the
+// folder reads as the author's (before: refused, suggesting an option the command lacks).
+TEST_CASE("CourseCli_ReferencedDicomFolder_SkipsTheUnreadableFilesTheAuthorSkipped") {
+  if (!test::requireSharedData("headsq DICOM") || !test::requireAppBinary("course packages")) return;
+  test::TempDir dir("at-values");
+  const fs::path ct = dir / "ct";
+  fs::create_directories(ct);
+  for (const auto& e : fs::directory_iterator(test::sharedData("headsq/dicom")))
+    if (e.path().extension() == ".dcm") fs::copy_file(e.path(), ct / e.path().filename());
+  std::ofstream(ct / "CTHead50b.dcm", std::ios::binary) << test::readFile(ct / "CTHead50.dcm").substr(0, 300);
+  DatasetFiles files;
+  files.volumePath = ct.string();
+  files.skipUnreadableFiles = true;
+  auto read = openDatasetFiles(files);
+  REQUIRE_MESSAGE(read, test::errorText(read));
+  FloatVolume labels(read->volume.geometry, 0.0f);
+  for (std::size_t n = 0; n < labels.voxels.size(); ++n) labels.voxels[n] = read->volume.voxels[n] > 2000 ? 1.0f : 0.0f;
+  REQUIRE(writeNrrd((dir / "labels.nrrd").string(), labels, ScalarKind::UInt16));
+  std::ofstream(dir / "names.json") << R"({"1": "bone"})";
+  const fs::path author = dir / "a.db", student = dir / "s.db", package = dir / "c.atcourse";
+  run("import --volume " + quoted(ct) + " --labels " + quoted(dir / "labels.nrrd") + " --names " + quoted(dir / "names.json") +
+      " --name head --skip-unreadable --db " + quoted(author));
+  run("course new tour --dataset head --db " + quoted(author));
+  run("course export tour --out " + quoted(package) + " --reference-volume --db " + quoted(author));
+  run("course import " + quoted(package) + " --volume " + quoted(ct) + " --db " + quoted(student));
+  CHECK(valuesSeen("head", student) == valuesSeen("head", author));
+  for (const auto& [db, png] : {std::pair{author, dir / "a.png"}, std::pair{student, dir / "s.png"}})
+    run("slice head --axis z --index 40 --out " + quoted(png) + " --db " + quoted(db));
+  CHECK(test::readFile(dir / "s.png") == test::readFile(dir / "a.png"));
 }

@@ -207,6 +207,7 @@ TEST_CASE("CoursePackage_AlteredPackages_AreRefusedWithOneLineNamingTheEntry") {
         {{{"intensity", "hu"}, {"intercept", 1e16}}, "dataset.reading.intercept: must be a number within ±1e15"},
         {{{"intensity", "hu"}, {"intercept", "-1024"}}, "dataset.reading.intercept: must be a finite number"},
         {{{"intensity", "hu"}, {"offset", 1}}, "dataset.reading.offset: unknown field"},
+        {{{"intensity", "auto"}, {"skip_unreadable", "yes"}}, "dataset.reading.skip_unreadable: must be true or false"},
         {nlohmann::json::array(), "dataset.reading: must be an object"}};
     for (const auto& [reading, message] : cases) {
       CAPTURE(reading.dump());

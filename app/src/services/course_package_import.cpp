@@ -128,6 +128,7 @@ Result<StagedDataset> stageDataset(db::Database& database, const package::Course
     files.intensity = d.reading->intensity;
     files.intercept = d.reading->intercept;
     files.slope = d.reading->slope;
+    files.skipUnreadableFiles = d.reading->skipUnreadableFiles;
   }
   auto loaded = openDatasetFiles(files);
   if (!loaded) return tl::unexpected(withContext(name + ": dataset '" + d.name + "'", loaded.error()));
@@ -143,6 +144,7 @@ Result<StagedDataset> stageDataset(db::Database& database, const package::Course
   record.intensity = files.intensity;
   record.intercept = files.intercept;
   record.slope = files.slope;
+  record.skipUnreadableFiles = files.skipUnreadableFiles;
   auto volumeSum = db::checksumPath(files.volumePath);
   if (!volumeSum) return tl::unexpected(volumeSum.error());
   record.volumeChecksum = *volumeSum;

@@ -159,7 +159,8 @@ Result<CourseExportReport> exportCourse(LearningSession& session, const render::
       d.referenceFileName = fs::path((*record)->volumePath).filename().string();
       d.referenceNote = request.referenceNote;
       const db::DatasetRecord& r = **record;
-      if (r.intensity != IntensityChoice::Auto || r.intercept || r.slope) d.reading = package::VolumeReading{r.intensity, r.intercept, r.slope};
+      if (r.intensity != IntensityChoice::Auto || r.intercept || r.slope || r.skipUnreadableFiles)
+        d.reading = package::VolumeReading{r.intensity, r.intercept, r.slope, r.skipUnreadableFiles};
     } else {
       input.volumeFile = files->volume;
       d.reading = package::includedVolumeReading(*dataset);

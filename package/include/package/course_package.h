@@ -60,10 +60,11 @@ const char* toString(VolumeSource source);  // "builtin", "included", "reference
 // records one where the file read by itself would give other values than the author's: an included
 // volume of plain intensities stored shifted or scaled to fit int16 (a 16-bit µCT), or whose values
 // reach −500 (read as HU otherwise), or of HU without air (read as plain otherwise); a referenced
-// file the author imported with --intensity, --intercept or --slope.
+// file the author imported with --intensity, --intercept, --slope or --skip-unreadable.
 struct VolumeReading {
   IntensityChoice intensity = IntensityChoice::Auto;
   std::optional<double> intercept, slope;
+  bool skipUnreadableFiles = false;  // a DICOM folder's unreadable files skipped, as the author's were
 };
 
 struct DatasetEntry {
