@@ -33,9 +33,10 @@ ScriptInterpreter::Feature ScriptInterpreter::courseActions() {
               {"course_step", {{"op", "move, duplicate, delete or preview"}, {"index", "the step"}, {"to?", "where to move it"}},
                "Edits a step of the chosen lesson.", &S::courseStep},
               {"course_save", {}, "Saves the course.", &S::courseSave},
-              {"course_export", {path, {"reference_volume?", "include the volume (default false)"}, {"note?", "a note"}},
+              {"course_export", {path, {"reference_volume?", "true: leave the volume out, referenced by its checksum (default false: included)"},
+                                 {"note?", "where to get a referenced volume"}},
                "Exports the course as a package.", &S::courseSave},
-              {"course_open_package", {path, {"volume?", "the volume it was made on"}}, "Opens a course package.",
+              {"course_open_package", {path, {"volume?", "the scan a package references (a file, a DICOM folder or a detached NRRD header)"}}, "Opens a course package.",
                &S::courseSave},
               {"open_dataset", {{"name", "a dataset"}}, "Switches the dataset, as the Dataset menu does.", &S::openDataset},
           }};
