@@ -8,7 +8,9 @@
 #include <nlohmann/json.hpp>
 
 #include "package/course_package.h"
+#include "core/printable_text.h"
 #include "core/safe_name.h"
+#include "volume/structure_forms.h"
 
 namespace at::package {
 
@@ -177,6 +179,8 @@ Result<DatasetEntry> readDataset(const json& j, const std::string& source) {
   AT_TAKE(species, f.text("species", false));
   d.name = name;
   if (!species.empty()) d.species = species;
+  if (!isValidSpecies(d.species))
+    return fail(f.where("species") + "'" + printableText(d.species, 40) + "' is not a species name (lower-case letters, '-', '_')");
   if (kind == "builtin") d.source = VolumeSource::Builtin;
   else if (kind == "included") d.source = VolumeSource::Included;
   else if (kind == "reference") d.source = VolumeSource::Reference;
@@ -341,6 +345,13 @@ Result<std::vector<Structure>> parseStructuresJson(std::string_view text, const 
     AT_TAKE(colour, f.numbers("colour", 3));
     AT_TAKE(system, f.text("system", false));
     AT_TAKE(description, f.text("description", false));
+    // The forms an import gives (volume/structure.h): ids that key questions and lessons, names
+    // and systems shown on one line of a listing, descriptions with no terminal escapes.
+    if (!isValidStructureId(id)) return fail(f.where("id") + "'" + printableText(id, 40) + "' is not a structure id (a-z, 0-9, '_')");
+    if (!isPrintableLine(name, 200)) return fail(f.where("name") + "must be one printable line of at most 200 bytes");
+    if (!isPrintableLine(system, 200)) return fail(f.where("system") + "must be one printable line of at most 200 bytes");
+    if (!isPrintableLines(description, 4000))
+      return fail(f.where("description") + "must be printable text (no terminal escapes) of at most 4000 bytes");
     if (!labels.insert(int(label)).second) return fail(f.where("label") + "label " + std::to_string(label) + " is listed twice");
     if (!ids.insert(id).second) return fail(f.where("id") + "'" + id + "' is listed twice");
     for (double c : colour)

@@ -13,6 +13,7 @@
 #include "lessons/course_json.h"
 #include "package/course_package.h"
 #include "volume/nrrd_io.h"
+#include "volume/structure_forms.h"
 
 namespace at::package {
 
@@ -105,6 +106,11 @@ Status checkInput(const PackageInput& in) {
     return fail(std::string("package: the volume file ") + (in.volumeFile.empty() ? "is missing" : "is given but not included"));
   if (d.source == VolumeSource::Reference && d.referenceFileName.empty())
     return fail("package: a referenced volume needs the file's name");
+  // Nothing the reader would refuse: the species and structures held to the importers' forms.
+  if (!isValidSpecies(d.species)) return fail("package: species '" + d.species + "' is not a species name (lower-case letters, '-', '_')");
+  if (!in.structures.empty())
+    if (auto ok = parseStructuresJson(structuresToJson(in.structures), "package: dataset/structures.json"); !ok)
+      return tl::unexpected(ok.error());
   for (const PackagedPreset& p : in.presets)
     if (!safeEntryName(p.id) || p.id.find('/') != std::string::npos)
       return fail("package: preset id '" + p.id + "' is not a plain file name");

@@ -43,8 +43,8 @@ const Dataset& miniDataset() {
   return d;
 }
 
-// An included-volume package of the mini dataset in `dir`.
-fs::path writeIncluded(const test::TempDir& dir) {
+// What an included-volume package of the mini dataset is written from (its data files in `dir`).
+PackageInput includedInput(const test::TempDir& dir) {
   auto files = writeDatasetFiles(miniDataset(), dir.path(), true);
   REQUIRE_MESSAGE(files, test::errorText(files));
   PackageInput in;
@@ -61,8 +61,13 @@ fs::path writeIncluded(const test::TempDir& dir) {
   in.volumeFile = files->volume;
   in.labelsFile = files->labels;
   in.createdBy = "test";
+  return in;
+}
+
+// An included-volume package of the mini dataset in `dir`.
+fs::path writeIncluded(const test::TempDir& dir) {
   const fs::path out = dir / "mini.atcourse";
-  auto ok = writePackage(out, in);
+  auto ok = writePackage(out, includedInput(dir));
   REQUIRE_MESSAGE(ok, (ok ? "" : ok.error().message));
   return out;
 }
@@ -221,6 +226,18 @@ TEST_CASE("CoursePackage_AlteredPackages_AreRefusedWithOneLineNamingTheEntry") {
                     {"reading.atcourse: manifest.json", message.c_str()});
     }
   }
+  SUBCASE("a species no import gives") {
+    for (const char* species : {"Dog", "dog\nskull", "dog\x1b[31m", "d o g"}) {
+      CAPTURE(species);
+      expectRefused(altered(dir, file, "species.atcourse",
+                            [&](auto& e) {
+                              auto m = nlohmann::json::parse(test::findEntry(e, "manifest.json")->data);
+                              m["dataset"]["species"] = species;
+                              test::findEntry(e, "manifest.json")->data = m.dump();
+                            }),
+                    {"manifest.json: dataset.species: ", "is not a species name"});
+    }
+  }
   SUBCASE("names that escape the package") {
     for (const char* name : {"../evil.json", "/tmp/evil.json", "presets/../../evil.json", "presets/./x.json", "a\\b.json",
                              "presets//x.json", ".hidden"}) {
@@ -343,6 +360,47 @@ TEST_CASE("Structures_RoundTripAndStrictErrorsNameTheEntry") {
   CHECK(errorOf(R"([{"label": 1, "id": "a", "name": "A", "colour": [1,1,1]}, {"label": 1, "id": "b", "name": "B", "colour": [1,1,1]}])") ==
         "s.json: [1].label: label 1 is listed twice");
   CHECK(errorOf(R"([{"label": 1e999}])").find("not valid JSON") != std::string::npos);
+}
+
+// A package's structures never went through an importer: ids, names, systems and descriptions
+// that no import gives (a line break that fakes a listing's next row, a terminal escape, a path)
+// are refused, and the writer refuses to write them.
+TEST_CASE("Structures_FromAPackage_HoldTheFormsAnImportGives") {
+  const auto errorOf = [](const nlohmann::json& field) {
+    nlohmann::json s = {{"label", 1}, {"id", "marrow"}, {"name", "Marrow"}, {"colour", {1, 1, 1}}, {"system", "bone"},
+                        {"description", "Line one.\nLine two."}};
+    s.update(field);
+    auto r = parseStructuresJson(nlohmann::json::array({s}).dump(), "s.json");
+    return r ? std::string() : r.error().message;
+  };
+  CHECK(errorOf(nlohmann::json::object()).empty());
+  for (const char* id : {"Marrow", "../x", "a b", "a-b", "a.b", "", "\x1b[31m"}) {
+    CAPTURE(id);
+    CHECK(errorOf({{"id", id}}).find("s.json: [0].id: ") == 0);
+  }
+  CHECK(errorOf({{"id", std::string(101, 'a')}}).find("[0].id") != std::string::npos);
+  for (const std::string& name : {std::string("Marrow\n    2  fake          Fake"), std::string("A\x1b]0;title\x07"),
+                                  std::string("A\u202eB"), std::string(201, 'n')}) {
+    CAPTURE(name);
+    CHECK(errorOf({{"name", name}}) == "s.json: [0].name: must be one printable line of at most 200 bytes");
+    CHECK(errorOf({{"system", name}}) == "s.json: [0].system: must be one printable line of at most 200 bytes");
+  }
+  CHECK(errorOf({{"description", "A\x1b[2J"}}).find("[0].description: must be printable text") != std::string::npos);
+  CHECK(errorOf({{"description", std::string(4001, 'd')}}).find("[0].description") != std::string::npos);
+
+  // The writer: a species or a structure the reader would refuse is not written.
+  test::TempDir dir;
+  const PackageInput in = includedInput(dir);
+  PackageInput badName = in;
+  badName.structures[0].displayName = "Two\nlines";
+  auto refused = writePackage(dir / "bad.atcourse", badName);
+  REQUIRE_FALSE(refused);
+  CHECK(refused.error().message.find("[0].name: must be one printable line") != std::string::npos);
+  PackageInput badSpecies = in;
+  badSpecies.dataset.species = "Dog";
+  REQUIRE_FALSE(writePackage(dir / "bad.atcourse", badSpecies));
+  CHECK_FALSE(fs::exists(dir / "bad.atcourse"));
+  REQUIRE(writePackage(dir / "good.atcourse", in));
 }
 
 TEST_CASE("CoursePackage_RandomlyDamagedBytes_AreReadOrRefusedInOneLineNeverCrash") {

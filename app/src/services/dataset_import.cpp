@@ -8,16 +8,11 @@
 #include "core/safe_name.h"
 #include "db/checksum.h"
 #include "volume/dataset_source.h"
+#include "volume/structure_forms.h"
 
 namespace at::app {
 
 namespace {
-
-bool validSpecies(const std::string& s) {
-  return !s.empty() && std::all_of(s.begin(), s.end(), [](unsigned char c) {
-    return std::islower(c) || c == '-' || c == '_';
-  });
-}
 
 // `what` names the input in messages ("volume", "labels", "names").
 Result<std::string> absolutePath(const std::string& what, const std::string& path) {
@@ -53,7 +48,7 @@ Result<ImportedDataset> importDataset(db::Database& database, const ImportReques
   if (isBuiltinDatasetName(request.name)) return fail("'" + request.name + "' is the built-in dataset's name; choose another name");
   // Dataset names become folder names (a course export, the data folder, the segmentations).
   if (auto ok = checkSafeName("dataset name", request.name); !ok) return tl::unexpected(ok.error());
-  if (!validSpecies(request.species))
+  if (!isValidSpecies(request.species))
     return fail("species '" + request.species + "': use lower-case letters, '-' and '_' (human, dog, …)");
 
   ImportedDataset out;

@@ -1,12 +1,34 @@
 #include "volume/structure.h"
+#include "volume/structure_forms.h"
 
 #include <algorithm>
 #include <cctype>
 #include <cmath>
 
+#include "core/printable_text.h"
 #include "core/strings.h"
 
 namespace at {
+
+bool isValidSpecies(const std::string& species) {
+  return !species.empty() && std::all_of(species.begin(), species.end(), [](unsigned char c) {
+    return (c >= 'a' && c <= 'z') || c == '-' || c == '_';
+  });
+}
+
+bool isValidStructureId(const std::string& id) {
+  return !id.empty() && id.size() <= 100 && std::all_of(id.begin(), id.end(), [](unsigned char c) {
+    return (c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') || c == '_';
+  });
+}
+
+bool isPrintableLine(const std::string& text, std::size_t maxBytes) {
+  return text.size() <= maxBytes && printableText(text, text.size() + 1) == text;
+}
+
+bool isPrintableLines(const std::string& text, std::size_t maxBytes) {
+  return text.size() <= maxBytes && printableLines(text) == text;
+}
 
 std::string displayNameOf(const std::string& name) {
   std::string out = name;

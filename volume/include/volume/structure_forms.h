@@ -1,0 +1,19 @@
+// The forms the importers give a dataset's species and structures (str::identifier, displayNameOf
+// of printableText), held against those from a course package, which never went through them.
+#pragma once
+
+#include <cstddef>
+#include <string>
+
+namespace at {
+
+// A species: lower-case letters, '-' and '_' ("human", "dog").
+bool isValidSpecies(const std::string& species);
+// A structure id: 1 … 100 of a-z, 0-9 and '_'.
+bool isValidStructureId(const std::string& id);
+// A name or system: one printable line (printableText leaves it as it is) of at most `maxBytes`.
+bool isPrintableLine(const std::string& text, std::size_t maxBytes);
+// A description: printable lines (printableLines leaves them as they are) of at most `maxBytes`.
+bool isPrintableLines(const std::string& text, std::size_t maxBytes);
+
+}  // namespace at
