@@ -1,6 +1,7 @@
 // Property fuzzing of course package import (not only parsing): random forgeries of a legitimate
 // package — hostile dataset, course and preset names, padded and damaged documents, renamed,
-// dropped and duplicated entries, most with the checksums recomputed — are imported for real
+// dropped and duplicated entries, readings of the volume's values at and past their bounds,
+// structures no import gives, most with the checksums recomputed — are imported for real
 // (importCoursePackage, as `course import` and the desktop's Open course… run it) into a scratch
 // data folder. Properties, for every input:
 //   * no file or folder outside the data folder is created, changed or removed;
@@ -65,7 +66,7 @@ class Forger {
     course = nlohmann::json::parse(text);
     manifest["course"]["id"] = courseId;
     for (int changes = 1 + pick(3); changes > 0; --changes) {
-      switch (pick(7)) {
+      switch (pick(9)) {
         case 0: {  // the dataset's name
           const std::string name = kNames[std::size_t(pick(int(kNames.size())))];
           manifest["dataset"]["name"] = name;
@@ -93,6 +94,27 @@ class Forger {
         case 4: entries.erase(entries.begin() + 1 + pick(int(entries.size()) - 1)); break;
         case 5: entries.push_back(entries[std::size_t(1 + pick(int(entries.size()) - 1))]); break;
         case 6: entries[std::size_t(1 + pick(int(entries.size()) - 1))].name = kNames[std::size_t(pick(int(kNames.size())))]; break;
+        case 7: {  // how the volume's values are read: any unit, rescales at and past their bounds
+          nlohmann::json reading = {{"intensity", std::vector<std::string>{"auto", "hu", "plain", "kelvin"}[std::size_t(pick(4))]}};
+          const std::vector<double> intercepts = {0, -1024, 32768, 1e15, -1e16, -3e38}, slopes = {1, 0.5, 1e-300, 1e12, -2e12, 0};
+          if (pick(2)) reading["intercept"] = intercepts[std::size_t(pick(int(intercepts.size())))];
+          if (pick(2)) reading["slope"] = slopes[std::size_t(pick(int(slopes.size())))];
+          if (pick(2)) reading["skip_unreadable"] = pick(2) == 1;
+          manifest["format_version"] = 2;
+          manifest["dataset"]["reading"] = reading;
+          break;
+        }
+        case 8: {  // a structure's id, name or description as no import gives it
+          if (test::TarEntry* st = test::findEntry(entries, "dataset/structures.json")) {
+            auto structures = nlohmann::json::parse(st->data, nullptr, false);  // maybe damaged by an earlier change
+            if (!structures.is_array()) break;
+            const std::vector<std::string> texts = {"Ear\n    9  fake  Fake", "\x1b[2J", "a/b", "Cochlea", std::string(300, 'x'), "ok_id"};
+            const char* field = std::vector<const char*>{"id", "name", "system", "description"}[std::size_t(pick(4))];
+            if (!structures.empty()) structures[std::size_t(pick(int(structures.size())))][field] = texts[std::size_t(pick(int(texts.size())))];
+            st->data = structures.dump();
+          }
+          break;
+        }
       }
     }
     test::findEntry(entries, "manifest.json")->data = manifest.dump();
