@@ -348,8 +348,8 @@ Result<std::vector<Structure>> parseStructuresJson(std::string_view text, const 
     // The forms an import gives (volume/structure.h): ids that key questions and lessons, names
     // and systems shown on one line of a listing, descriptions with no terminal escapes.
     if (!isValidStructureId(id)) return fail(f.where("id") + "'" + printableText(id, 40) + "' is not a structure id (a-z, 0-9, '_')");
-    if (!isPrintableLine(name, 200)) return fail(f.where("name") + "must be one printable line of at most 200 bytes");
-    if (!isPrintableLine(system, 200)) return fail(f.where("system") + "must be one printable line of at most 200 bytes");
+    if (!isPrintableLine(name, 600)) return fail(f.where("name") + "must be one printable line of at most 600 bytes");
+    if (!isPrintableLine(system, 600)) return fail(f.where("system") + "must be one printable line of at most 600 bytes");
     if (!isPrintableLines(description, 4000))
       return fail(f.where("description") + "must be printable text (no terminal escapes) of at most 4000 bytes");
     if (!labels.insert(int(label)).second) return fail(f.where("label") + "label " + std::to_string(label) + " is listed twice");

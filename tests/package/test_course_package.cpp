@@ -374,16 +374,19 @@ TEST_CASE("Structures_FromAPackage_HoldTheFormsAnImportGives") {
     return r ? std::string() : r.error().message;
   };
   CHECK(errorOf(nlohmann::json::object()).empty());
+  // The longest name an import gives: 120 characters of 4 bytes each and "…" (printableText).
+  CHECK(errorOf({{"name", std::string(120 * 4, 'n') + "\u2026"}}).empty());
+  CHECK(errorOf({{"name", "Schl\u00e4fenbein \u9acb"}}).empty());
   for (const char* id : {"Marrow", "../x", "a b", "a-b", "a.b", "", "\x1b[31m"}) {
     CAPTURE(id);
     CHECK(errorOf({{"id", id}}).find("s.json: [0].id: ") == 0);
   }
   CHECK(errorOf({{"id", std::string(101, 'a')}}).find("[0].id") != std::string::npos);
   for (const std::string& name : {std::string("Marrow\n    2  fake          Fake"), std::string("A\x1b]0;title\x07"),
-                                  std::string("A\u202eB"), std::string(201, 'n')}) {
+                                  std::string("A\u202eB"), std::string(601, 'n')}) {
     CAPTURE(name);
-    CHECK(errorOf({{"name", name}}) == "s.json: [0].name: must be one printable line of at most 200 bytes");
-    CHECK(errorOf({{"system", name}}) == "s.json: [0].system: must be one printable line of at most 200 bytes");
+    CHECK(errorOf({{"name", name}}) == "s.json: [0].name: must be one printable line of at most 600 bytes");
+    CHECK(errorOf({{"system", name}}) == "s.json: [0].system: must be one printable line of at most 600 bytes");
   }
   CHECK(errorOf({{"description", "A\x1b[2J"}}).find("[0].description: must be printable text") != std::string::npos);
   CHECK(errorOf({{"description", std::string(4001, 'd')}}).find("[0].description") != std::string::npos);

@@ -11,7 +11,8 @@ namespace at {
 bool isValidSpecies(const std::string& species);
 // A structure id: 1 … 100 of a-z, 0-9 and '_'.
 bool isValidStructureId(const std::string& id);
-// A name or system: one printable line (printableText leaves it as it is) of at most `maxBytes`.
+// A name or system: one printable line (printableText leaves it as it is) of at most `maxBytes`
+// (a package allows 600: the 120 characters and "…" an import keeps, of up to 4 bytes each).
 bool isPrintableLine(const std::string& text, std::size_t maxBytes);
 // A description: printable lines (printableLines leaves them as they are) of at most `maxBytes`.
 bool isPrintableLines(const std::string& text, std::size_t maxBytes);
