@@ -14,6 +14,7 @@
 
 #include "../package/tar_files.h"
 #include "cli_checks.h"
+#include "lab_machine.h"
 #include "db/connection.h"
 #include "db/dataset_store.h"
 #include "test_databases.h"
@@ -227,23 +228,7 @@ TEST_CASE("CourseCli_ReferencedVolume_IsAskedForAndCheckedByItsChecksum") {
 
 namespace {
 
-// One lab machine: its own data folder (XDG_DATA_HOME) while in scope.
-class OnMachine {
- public:
-  explicit OnMachine(const fs::path& dataHome) {
-    if (const char* old = std::getenv("XDG_DATA_HOME")) previous_ = old;
-    ::setenv("XDG_DATA_HOME", dataHome.c_str(), 1);
-  }
-  ~OnMachine() {
-    if (previous_) ::setenv("XDG_DATA_HOME", previous_->c_str(), 1);
-    else ::unsetenv("XDG_DATA_HOME");
-  }
-  OnMachine(const OnMachine&) = delete;
-  OnMachine& operator=(const OnMachine&) = delete;
-
- private:
-  std::optional<std::string> previous_;
-};
+using test::OnMachine;
 
 // The files under `dir`, relative to it.
 std::vector<std::string> filesUnder(const fs::path& dir) {

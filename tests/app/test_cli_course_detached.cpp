@@ -16,6 +16,8 @@
 
 #include "../package/tar_files.h"
 #include "cli_checks.h"
+#include "lab_machine.h"
+#include "test_databases.h"
 #include "db/checksum.h"
 #include "test_support.h"
 #include "volume/dataset_source.h"
@@ -176,4 +178,48 @@ TEST_CASE("CourseCli_ReferencedDetachedNrrd_RecordedByItsHeaderAlone_IsAcceptedW
   auto imported = runIn("course import " + quoted(legacy) + " --volume " + quoted(author / "scan.nhdr") + " --db " + quoted(db));
   REQUIRE_MESSAGE(imported.exitCode == 0, imported.err);
   CHECK(slicePng(db, student / "s.png") == slicePng(author / "a.db", author / "a.png"));
+}
+
+// On a class server the dataset's row is stored once and each lab machine keeps its own copy of a
+// referenced scan: a machine whose copy was damaged imports the package again and gets it back
+// (the copy replaces the files left there, where it refused them as existing before).
+TEST_CASE("CourseCli_ReferencedDetachedNrrdOnAClassServer_EachLabMachinePlacesAndRepairsItsCopy") {
+  if (!test::requireAppBinary("course packages")) return;
+  auto url = test::freshPostgresDatabase("the class-server detached NRRD test");
+  if (!url) return;
+  test::TempDir author("at-author"), labA("at-lab-a"), labB("at-lab-b");
+  writeDetached(author.path(), "scan.nhdr", [](int k) { return "slices/s" + std::to_string(k) + ".raw"; });
+  const fs::path package = authorReferencedCourse(author.path(), "scan.nhdr");
+  const std::string import = "course import " + quoted(package) + " --volume " + quoted(author / "scan.nhdr") + " --db '" + *url + "'";
+  const auto folderOf = [](const fs::path& lab) {
+    const fs::path servers = lab / "anatomy-tutor" / "servers";
+    REQUIRE(fs::exists(servers));
+    return fs::directory_iterator(servers)->path() / "datasets" / "ear_slices" / "volume";
+  };
+  {
+    test::OnMachine machine(labA.path());
+    auto imported = runIn(import);
+    REQUIRE_MESSAGE(imported.exitCode == 0, imported.err);
+    CHECK(test::readFile(folderOf(labA.path()) / "slices" / "s5.raw") == test::readFile(author / "slices" / "s5.raw"));
+  }
+  test::OnMachine machine(labB.path());
+  auto placed = runIn(import);
+  REQUIRE_MESSAGE(placed.exitCode == 0, placed.err);
+  CHECK(placed.out.find("its files placed on this machine") != std::string::npos);
+  const fs::path copy = folderOf(labB.path());
+  const std::string original = test::readFile(copy / "slices" / "s5.raw");
+  std::string damaged = original;
+  damaged[10] = char(damaged[10] ^ 0x40);
+  std::ofstream(copy / "slices" / "s5.raw", std::ios::binary) << damaged;
+  fs::remove(copy / "slices" / "s6.raw");
+  fs::create_symlink(author / "slices" / "s5.raw", copy / "slices" / "s6.raw");  // a link left there is replaced, not written through
+  const std::string linkedBefore = test::readFile(author / "slices" / "s5.raw");
+  auto repaired = runIn(import);
+  REQUIRE_MESSAGE(repaired.exitCode == 0, repaired.err);
+  CHECK(repaired.out.find("its files placed on this machine") != std::string::npos);
+  CHECK(test::readFile(copy / "slices" / "s5.raw") == original);
+  CHECK_FALSE(fs::is_symlink(copy / "slices" / "s6.raw"));
+  CHECK(test::readFile(copy / "slices" / "s6.raw") == test::readFile(author / "slices" / "s6.raw"));
+  CHECK(test::readFile(author / "slices" / "s5.raw") == linkedBefore);
+  CHECK(test::postgresValue(*url, "SELECT COUNT(*) FROM datasets WHERE name = 'ear_slices'") == "1");
 }

@@ -49,7 +49,9 @@ std::string shortChecksum(const std::string& checksum) { return checksum.size() 
 // series), a file, or a detached NRRD header with the data files it names, each at its place
 // relative to the header (they lie in the header's folder: nrrdDataFiles). Writes only under
 // `to`'s folder; a data file named by an absolute path or through ".." stays behind, and the copy
-// then fails its checksum or its load with one line.
+// then fails its checksum or its load with one line. A file already at a target (left by an
+// earlier copy on this machine: a lab machine placing a class server's files again) is replaced;
+// a link there is removed, never followed.
 Status copyVolume(const fs::path& from, const fs::path& to) {
   std::error_code ec;
   const auto cannot = [&](const fs::path& source, const fs::path& target) {
@@ -74,7 +76,9 @@ Status copyVolume(const fs::path& from, const fs::path& to) {
     const fs::path target = to.parent_path() / inside;
     if (target == to) return fail(from.string() + ": data file " + file + " would take the place of the header's copy " + to.string());
     fs::create_directories(target.parent_path(), ec);
-    if (!ec) fs::copy_file(resolved, target, ec);
+    std::error_code absent;  // a target that does not exist yet is no error
+    if (!ec && fs::is_symlink(fs::symlink_status(target, absent))) fs::remove(target, ec);
+    if (!ec) fs::copy_file(resolved, target, fs::copy_options::overwrite_existing, ec);
     if (ec) return cannot(resolved, target);
   }
   return {};
@@ -166,17 +170,17 @@ Result<StagedDataset> stageDataset(db::Database& database, const package::Course
 }
 
 // Whether this machine has the files of a dataset registered with relative paths (a class
-// server's dataset, imported on another machine), with the recorded checksums.
-Result<bool> filesHere(const db::DatasetRecord& record) {
+// server's dataset, imported on another machine), with the recorded checksums. A copy whose
+// checksum cannot be taken (a data file missing, or resolving outside its folder through a link
+// left there) is not the recorded one: it is placed again.
+bool filesHere(const db::DatasetRecord& record) {
   std::error_code ec;
   if (!fs::exists(record.volumePath, ec) || (!record.labelsPath.empty() && !fs::exists(record.labelsPath, ec))) return false;
   auto volume = db::checksumPath(record.volumePath);
-  if (!volume) return tl::unexpected(volume.error());
-  if (*volume != record.volumeChecksum) return false;
+  if (!volume || *volume != record.volumeChecksum) return false;
   if (record.labelsPath.empty()) return true;
   auto labels = db::checksumPath(record.labelsPath);
-  if (!labels) return tl::unexpected(labels.error());
-  return *labels == record.labelsChecksum;
+  return labels && *labels == record.labelsChecksum;
 }
 
 // Puts the package's files (or the user's referenced volume) where the server's record of the
@@ -210,9 +214,7 @@ Status placeFilesHere(const db::DatasetRecord& record, const package::CoursePack
     fs::rename(pkg.labelsFile, record.labelsPath, ec);
     if (ec) return fail(ErrorKind::Io, record.labelsPath + ": cannot move into place (" + ec.message() + ")");
   }
-  auto here = filesHere(record);
-  if (!here) return tl::unexpected(here.error());
-  if (!*here)
+  if (!filesHere(record))
     return fail(ErrorKind::Conflict, name + ": dataset '" + d.name + "': the files are not those the server recorded (" +
                                          shortChecksum(record.volumeChecksum) + ")");
   return {};
@@ -305,9 +307,7 @@ Result<CourseImportReport> importCoursePackage(LearningSession& session, const C
   // under this machine's folder for the server, at the paths the row records.
   const bool server = db::isPostgresUrl(db::pathOf(database));
   if (server && existing) {
-    auto here = filesHere(*existing);
-    if (!here) return tl::unexpected(withContext(name, here.error()));
-    if (!*here) {
+    if (!filesHere(*existing)) {
       if (!assets) return tl::unexpected(withContext(name, assets.error()));
       if (auto placed = placeFilesHere(*existing, *pkg, request, *assets, name); !placed) return tl::unexpected(placed.error());
       report.dataset = DatasetAction::PlacedHere;
