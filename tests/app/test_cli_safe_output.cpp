@@ -163,6 +163,43 @@ TEST_CASE("SafeOutput_HostileCourseTitles_NeverReachTheTerminalRaw") {
   }
 }
 
+// A listing prints one row per course (lesson, study): a title that holds a line break (or a
+// carriage return) shows it as \n, so it cannot put a row of its own under the others.
+TEST_CASE("SafeOutput_TitlesWithLineBreaks_StayInTheirRow") {
+  if (!test::requireAppBinary("titles with line breaks")) return;
+  test::TempDir dir;
+  const std::string db = " --db " + quoted(dir / "t.db");
+  const std::string forgedRow = "forged_course            Forged title    dataset phantom      1 lesson (version 9)";
+  const std::string shipped = test::runApp("courses" + db).out;  // the default courses' rows
+  const auto rows = [](const std::string& text) { return std::count(text.begin(), text.end(), '\n'); };
+  REQUIRE(rows(shipped) >= 1);
+  for (const std::string& breakText : {std::string("\n"), std::string("\r"), std::string("\r\n"), std::string("\xe2\x80\xa8")}) {
+    CAPTURE(breakText.size());
+    const std::string id = "broken" + std::to_string(breakText.size()) + std::to_string(int((unsigned char)breakText[0]));
+    auto r = test::runApp("course new " + id + " --dataset phantom --title 'Skull" + breakText + forgedRow + "' --out " +
+                          quoted(dir / (id + ".json")) + db);
+    REQUIRE_MESSAGE(r.exitCode == 0, r.err);
+    r = test::runApp("course import " + quoted(dir / (id + ".json")) + db);
+    REQUIRE_MESSAGE(r.exitCode == 0, r.err);
+  }
+  auto courses = test::runApp("courses" + db);
+  REQUIRE_MESSAGE(courses.exitCode == 0, courses.err);
+  auto list = test::runApp("course list" + db);
+  REQUIRE_MESSAGE(list.exitCode == 0, list.err);
+  for (const test::CommandResult* r : {&courses, &list}) {
+    CAPTURE(r->out);
+    CHECK(rows(r->out) == rows(shipped) + 4);  // one row per course
+    CHECK(r->out.find('\r') == std::string::npos);
+    CHECK(r->out.find("\nforged_course") == std::string::npos);
+    CHECK(r->out.find("\xe2\x80\xa8") == std::string::npos);
+    CHECK(r->out.find("Skull\\nforged_course") != std::string::npos);  // shown as an escape, in its row
+  }
+  auto lessons = test::runApp("lessons broken110" + db);
+  REQUIRE_MESSAGE(lessons.exitCode == 0, lessons.err);
+  CHECK(lessons.out.rfind("broken110 — Skull\\nforged_course", 0) == 0);
+  CHECK(lessons.out.find("\nforged_course") == std::string::npos);
+}
+
 TEST_CASE("SafeOutput_DamagedLessonRow_OtherCommandsWorkWithOneWarningLine") {
   if (!test::requireAppBinary("damaged row")) return;
   test::TempDir dir;

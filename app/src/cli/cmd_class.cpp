@@ -208,17 +208,17 @@ int runClassProgress(const cli::Args& args) {
                      s.ungraded, s.practice);
     return 0;
   }
-  terminalPrintf("Class %s — %s: %s, %s received\n\n", progress->info.code.c_str(), progress->info.title.c_str(),
+  terminalPrintf("Class %s — %s: %s, %s received\n\n", rowCell(progress->info.code).c_str(), rowCell(progress->info.title).c_str(),
               str::countOf(long(progress->students.size()), "student").c_str(),
               str::countOf(long(progress->events), "event").c_str());
   // "answers" and "right" are the graded answers; "waiting" those whose keys are not published yet.
   terminalPrintf("%-20s %8s %6s %8s %11s %8s %9s %11s  %s\n", "student", "answers", "right", "waiting", "structures",
                  "lessons", "finished", "exam score", "last active");
   for (const auto& s : progress->students)
-    terminalPrintf("%-20s %8d %6s %8d %11d %8d %9d %11s  %s%s\n", s.userName.c_str(), s.answers,
+    terminalPrintf("%-20s %8d %6s %8d %11d %8d %9d %11s  %s%s\n", rowCell(s.userName).c_str(), s.answers,
                    share(s.correct, s.answers).c_str(), s.ungraded, s.structures, s.lessonsStarted, s.lessonsFinished,
                    examScore(s, true).c_str(), when(s.lastActive).c_str(),
-                s.withdrawal ? ("  (withdrawn: " + *s.withdrawal + ")").c_str() : "");
+                s.withdrawal ? ("  (withdrawn: " + rowCell(*s.withdrawal) + ")").c_str() : "");
   int ungraded = 0, practice = 0;
   for (const auto& s : progress->students) {
     ungraded += s.ungraded;
@@ -235,7 +235,7 @@ int runClassProgress(const cli::Args& args) {
   if (!progress->structures.empty()) {
     terminalPrintf("\n%-24s %9s %8s %6s\n", "structure", "students", "answers", "right");
     for (const auto& s : progress->structures)
-      terminalPrintf("%-24s %9d %8d %6s\n", s.structureId.c_str(), s.students, s.answers, share(s.correct, s.answers).c_str());
+      terminalPrintf("%-24s %9d %8d %6s\n", rowCell(s.structureId).c_str(), s.students, s.answers, share(s.correct, s.answers).c_str());
   }
   return 0;
 }

@@ -46,7 +46,8 @@ int runCourses(const Argv& argv) {
   auto courses = (*session)->curriculum().courses();
   if (!courses) return reportError("courses: " + courses.error().message);
   for (const auto& c : *courses)
-    terminalPrintf("%-24s %-44s dataset %-12s %s%s (version %d)\n", c.id.c_str(), c.title.c_str(), c.datasetId.c_str(),
+    terminalPrintf("%-24s %-44s dataset %-12s %s%s (version %d)\n", rowCell(c.id).c_str(), rowCell(c.title).c_str(),
+                   rowCell(c.datasetId).c_str(),
                 str::countOf(long(c.lessons.size()), "lesson").c_str(),
                 c.exams.empty() ? "" : (", " + str::countOf(long(c.exams.size()), "exam")).c_str(), c.version);
   return 0;
@@ -76,22 +77,22 @@ int runLessons(const Argv& argv) {
     courses.push_back(std::move(*one));
   }
   for (const auto& c : courses) {
-    terminalPrintf("%s — %s\n", c.id.c_str(), c.title.c_str());
+    terminalPrintf("%s — %s\n", rowCell(c.id).c_str(), rowCell(c.title).c_str());
     for (const auto& l : c.lessons) {
-      terminalPrintf("  %-28s %-40s %s, %s", l.id.c_str(), l.title.c_str(), str::countOf(long(l.steps.size()), "step").c_str(),
+      terminalPrintf("  %-28s %-40s %s, %s", rowCell(l.id).c_str(), rowCell(l.title).c_str(), str::countOf(long(l.steps.size()), "step").c_str(),
                   str::countOf(questionCount(l), "question").c_str());
       if (!l.prerequisites.empty()) {
         terminalPrintf("  after:");
-        for (const auto& p : l.prerequisites) terminalPrintf(" %s", p.c_str());
+        for (const auto& p : l.prerequisites) terminalPrintf(" %s", rowCell(p).c_str());
       }
       terminalPrintf("\n");
     }
     for (const auto& e : c.exams) {
-      terminalPrintf("  %-28s %-40s %s, %d min  (exam)", e.id.c_str(), e.title.c_str(), str::countOf(e.count, "item").c_str(),
+      terminalPrintf("  %-28s %-40s %s, %d min  (exam)", rowCell(e.id).c_str(), rowCell(e.title).c_str(), str::countOf(e.count, "item").c_str(),
                   (e.timeLimitS + 59) / 60);
       if (!e.prerequisites.empty()) {
         terminalPrintf("  after:");
-        for (const auto& p : e.prerequisites) terminalPrintf(" %s", p.c_str());
+        for (const auto& p : e.prerequisites) terminalPrintf(" %s", rowCell(p).c_str());
       }
       terminalPrintf("\n");
     }

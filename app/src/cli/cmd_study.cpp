@@ -102,7 +102,7 @@ int runList(const cli::Args& args) {
     std::size_t done = 0, total = completion ? completion->size() : 0;
     if (completion)
       for (const auto& c : *completion) done += c.complete ? 1 : 0;
-    terminalPrintf("%-28s %zu/%zu participants complete  %s\n", s.id.c_str(), done, total, s.title.c_str());
+    terminalPrintf("%-28s %zu/%zu participants complete  %s\n", rowCell(s.id).c_str(), done, total, rowCell(s.title).c_str());
   }
   return 0;
 }

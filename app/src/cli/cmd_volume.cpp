@@ -266,7 +266,8 @@ int runDatasets(const Argv& argv) {
     std::printf("%s\n", json{{"datasets", list}}.dump(-1, ' ', true, nlohmann::json::error_handler_t::replace).c_str());
     return 0;
   }
-  for (const auto& r : rows) terminalPrintf("%-10s %s — %s\n", r.id.c_str(), r.name.c_str(), r.detail.c_str());
+  for (const auto& r : rows)
+    terminalPrintf("%-10s %s — %s\n", rowCell(r.id).c_str(), rowCell(r.name).c_str(), rowCell(r.detail).c_str());
   if (imported->empty())
     terminalPrintf("(no imported datasets yet: `anatomy-tutor import` adds them; any supported file or folder can\n"
                 " also be opened by its path)\n");

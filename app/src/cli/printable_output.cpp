@@ -40,4 +40,6 @@ int terminalFprintf(std::FILE* stream, const char* format, ...) {
   return written;
 }
 
+std::string rowCell(std::string_view outside) { return printableText(outside, 1000); }
+
 }  // namespace at::app
