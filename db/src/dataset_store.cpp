@@ -12,6 +12,7 @@
 #include "database.h"
 #include "core/sha256.h"
 #include "db/checksum.h"
+#include "volume/structure_forms.h"
 
 namespace at::db {
 
@@ -89,6 +90,11 @@ Result<DatasetRecord> readRecord(const Statement& s, const Database& db) {
       *value = json[field].get<double>();
     }
     if (r.slope && *r.slope == 0) return wrong("slope", "a number other than 0");
+    if (json.contains("modality")) {
+      if (!json["modality"].is_string() || !isDicomModalityCode(json["modality"].get<std::string>()))
+        return wrong("modality", "a DICOM modality code");
+      r.modality = json["modality"].get<std::string>();
+    }
   }
   return r;
 }
@@ -167,6 +173,7 @@ Result<std::int64_t> registerDataset(Database& db, const DatasetRecord& record,
     if (record.intensity != IntensityChoice::Auto) loadOptions["intensity"] = intensityChoiceName(record.intensity);
     if (record.intercept) loadOptions["intercept"] = *record.intercept;
     if (record.slope) loadOptions["slope"] = *record.slope;
+    if (!record.modality.empty()) loadOptions["modality"] = record.modality;
     // load_options only when there are some: the column exists from schema 9 on.
     auto insert = d.prepare(
         std::string("INSERT INTO datasets (name, species, volume_path, volume_checksum, labels_path, labels_checksum,"
@@ -364,6 +371,7 @@ DatasetFiles datasetFiles(const DatasetRecord& record) {
   files.intensity = record.intensity;
   files.intercept = record.intercept;
   files.slope = record.slope;
+  files.modality = record.modality;
   return files;
 }
 

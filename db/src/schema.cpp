@@ -373,8 +373,10 @@ WHERE (SELECT p.session FROM study_participants p
 ALTER TABLE study_trials ADD COLUMN viewing_measured INTEGER NOT NULL DEFAULT 1;
 )SQL";
 
-// How an imported dataset's files are read (import --skip-unreadable, --nrrd-data), kept so that
-// every later open reads them the same way: JSON {"skip_unreadable": true, "data_folder": "/abs"}.
+// How an imported dataset's files are read (import --skip-unreadable, --nrrd-data, --intensity,
+// --intercept, --slope; a package's modality), kept so that every later open reads them the same
+// way: JSON {"skip_unreadable": true, "data_folder": "/abs", "intensity": "plain", "intercept": -1024,
+// "slope": 1, "modality": "MR"}, each key only where it is set.
 constexpr std::string_view kDatasetLoadOptions = R"SQL(
 ALTER TABLE datasets ADD COLUMN load_options TEXT;
 )SQL";

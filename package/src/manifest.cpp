@@ -138,13 +138,14 @@ json readingJson(const VolumeReading& r) {
   if (r.intercept) j["intercept"] = *r.intercept;
   if (r.slope) j["slope"] = *r.slope;
   if (r.skipUnreadableFiles) j["skip_unreadable"] = true;
+  if (!r.modality.empty()) j["modality"] = r.modality;
   return j;
 }
 
 // Held to the bounds of a user's --intercept and --slope (checkRescale, volume/intensity.h).
 Result<VolumeReading> readReading(const json& j, const std::string& source, const std::string& path) {
   Fields f(j, source, path);
-  if (auto ok = f.expect({"intensity", "intercept", "slope", "skip_unreadable"}); !ok) return tl::unexpected(ok.error());
+  if (auto ok = f.expect({"intensity", "intercept", "slope", "skip_unreadable", "modality"}); !ok) return tl::unexpected(ok.error());
   AT_TAKE(intensity, f.text("intensity", true));
   auto choice = parseIntensityChoice(intensity);
   if (!choice) return fail(f.where("intensity") + "must be auto, hu or plain, not '" + intensity + "'");
@@ -163,6 +164,13 @@ Result<VolumeReading> readReading(const json& j, const std::string& source, cons
   if (f.has("skip_unreadable")) {
     if (!f.raw("skip_unreadable").is_boolean()) return fail(f.where("skip_unreadable") + "must be true or false");
     r.skipUnreadableFiles = f.raw("skip_unreadable").get<bool>();
+  }
+  if (f.has("modality")) {
+    AT_TAKE(modality, f.text("modality", true));
+    if (!isDicomModalityCode(modality))
+      return fail(f.where("modality") + "must be a DICOM modality code (up to 16 of A-Z, 0-9, '_' and ' '), not '" +
+                  modality + "'");
+    r.modality = modality;
   }
   return r;
 }

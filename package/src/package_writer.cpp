@@ -203,11 +203,18 @@ std::optional<VolumeReading> includedVolumeReading(const Dataset& dataset) {
     evidence.maxValue = *hi;
   }
   const bool asStored = model.slope == 1 && model.intercept == 0;
-  if (decideIntensity(evidence, IntensityChoice::Auto).first == model.unit && asStored) return std::nullopt;
+  const bool sameValues = decideIntensity(evidence, IntensityChoice::Auto).first == model.unit && asStored;
+  // An MR's modality would be lost with the DICOM header, and with it the note that its intensities
+  // are not attenuation; the others (CT, none) change nothing a student sees.
+  const bool modalityMatters = !model.attenuationLike();
+  if (sameValues && !modalityMatters) return std::nullopt;
   VolumeReading reading;
-  reading.intensity = model.hounsfield() ? IntensityChoice::Hounsfield : IntensityChoice::Plain;
-  if (model.intercept != 0) reading.intercept = model.intercept;
-  if (model.slope != 1) reading.slope = model.slope;
+  if (!sameValues) {
+    reading.intensity = model.hounsfield() ? IntensityChoice::Hounsfield : IntensityChoice::Plain;
+    if (model.intercept != 0) reading.intercept = model.intercept;
+    if (model.slope != 1) reading.slope = model.slope;
+  }
+  if (modalityMatters) reading.modality = model.modality;
   return reading;
 }
 

@@ -146,6 +146,39 @@ TEST_CASE("CourseCli_ReferencedDetachedNrrd_WithAbsoluteDataFileNames_IsRefusedA
   CHECK(snapshot(student.path()) == before);
 }
 
+// A scan whose data files the author read from another folder (--nrrd-data: the header names them
+// through "..") cannot travel by reference — a student's import copies the header's folder only —
+// so that export is refused with one line naming the way out and writes nothing; the volume
+// included travels and reads as the author's.
+TEST_CASE("CourseCli_DetachedNrrdReadWithNrrdData_ReferencedExportRefused_IncludedTravels") {
+  if (!test::requireAppBinary("course packages")) return;
+  test::TempDir author("at-author"), student("at-student");
+  const fs::path headerFolder = author / "header";
+  fs::create_directories(headerFolder);
+  writeDetached(headerFolder, "scan.nhdr", [](int k) { return "../raw/s" + std::to_string(k) + ".raw"; });
+  REQUIRE(fs::exists(author / "raw" / "s31.raw"));
+  const fs::path db = author / "a.db", package = author / "ear.atcourse";
+  for (const std::string& args :
+       {"import --volume " + quoted(headerFolder / "scan.nhdr") + " --nrrd-data " + quoted(author / "raw") + " --labels " +
+            quoted(headerFolder / "seg" / "labels.nrrd") + " --names " + quoted(headerFolder / "seg" / "names.json") +
+            " --name ear_slices --slope 2 --db " + quoted(db),
+        "course new tour --dataset ear_slices --db " + quoted(db)}) {
+    auto r = runIn(args);
+    REQUIRE_MESSAGE(r.exitCode == 0, args << ": " << r.err);
+  }
+  const auto before = snapshot(author.path());
+  auto refused = runIn("course export tour --out " + quoted(package) + " --reference-volume --db " + quoted(db));
+  test::checkOneLineError(refused, "its NRRD data files lie outside the header's folder");
+  CHECK(refused.err.find("without --reference-volume") != std::string::npos);
+  CHECK(snapshot(author.path()) == before);
+  auto exported = runIn("course export tour --out " + quoted(package) + " --db " + quoted(db));
+  REQUIRE_MESSAGE(exported.exitCode == 0, exported.err);
+  const fs::path studentDb = student / "s.db";
+  auto imported = runIn("course import " + quoted(package) + " --db " + quoted(studentDb));
+  REQUIRE_MESSAGE(imported.exitCode == 0, imported.err);
+  CHECK(slicePng(studentDb, student / "s.png") == slicePng(db, author / "a.png"));
+}
+
 // Packages exported before a detached NRRD's checksum covered its data files recorded the header's
 // bytes alone: the student's header is still accepted while it is unchanged, and refused when not.
 TEST_CASE("CourseCli_ReferencedDetachedNrrd_RecordedByItsHeaderAlone_IsAcceptedWhileTheHeaderIsUnchanged") {

@@ -3,15 +3,18 @@
 // alike, slices byte-identical), for volumes whose file read by itself would say otherwise — a
 // 16-bit µCT stored shifted into int16, plain intensities that reach −500, a CT cropped to no air,
 // and referenced files the author read with --intercept, --slope or --intensity. A package that
-// needs no reading stays format version 1, which earlier programs read.
+// needs no reading stays format version 1, which earlier programs read. An included MR keeps its
+// modality, and with it the note that density-weighted distances assume CT.
 #include <doctest/doctest.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 
 #include <nlohmann/json.hpp>
 
 #include "../package/tar_files.h"
+#include "../volume/dicom_test_files.h"
 #include "cli_checks.h"
 #include "synthetic_scans.h"
 #include "test_support.h"
@@ -179,4 +182,77 @@ TEST_CASE("CourseCli_ReferencedDicomFolder_SkipsTheUnreadableFilesTheAuthorSkipp
   for (const auto& [db, png] : {std::pair{author, dir / "a.png"}, std::pair{student, dir / "s.png"}})
     run("slice head --axis z --index 40 --out " + quoted(png) + " --db " + quoted(db));
   CHECK(test::readFile(dir / "s.png") == test::readFile(dir / "a.png"));
+}
+
+// An MR (DICOM Modality MR) shared with its volume included: the package's int16 NRRD has no
+// modality, so the package says it, and the student's dataset — and a package the student exports
+// from it again — carries the note that its intensities are not attenuation (before: lost, and
+// density-weighted distances on it came with no note).
+TEST_CASE("CourseCli_IncludedMr_KeepsItsModalityAndTheNote") {
+  if (!test::requireSharedData("headsq DICOM") || !test::requireAppBinary("course packages")) return;
+  test::TempDir dir("at-values");
+  const fs::path mr = dir / "mr";
+  fs::create_directories(mr);
+  for (const auto& e : fs::directory_iterator(test::sharedData("headsq/dicom")))
+    if (e.path().extension() == ".dcm")
+      REQUIRE(test::rewriteDicom(e.path(), mr / e.path().filename(),
+                                 [](DcmDataset& d) { d.putAndInsertString(DCM_Modality, "MR"); }));
+  DatasetFiles files;
+  files.volumePath = mr.string();
+  auto read = openDatasetFiles(files);
+  REQUIRE_MESSAGE(read, test::errorText(read));
+  FloatVolume labels(read->volume.geometry, 0.0f);
+  for (int k = 40; k < 50; ++k)
+    for (int j = 28; j < 36; ++j)
+      for (int i = 28; i < 36; ++i) labels.at(i, j, k) = 1.0f;
+  REQUIRE(writeNrrd((dir / "labels.nrrd").string(), labels, ScalarKind::UInt16));
+  std::ofstream(dir / "names.json") << R"({"1": "block"})";
+  const fs::path author = dir / "a.db", student = dir / "s.db", third = dir / "t.db";
+  run("import --volume " + quoted(mr) + " --labels " + quoted(dir / "labels.nrrd") + " --names " + quoted(dir / "names.json") +
+      " --name mrhead --db " + quoted(author));
+  run("course new tour --dataset mrhead --db " + quoted(author));
+  run("course export tour --out " + quoted(dir / "a.atcourse") + " --db " + quoted(author));
+  run("course import " + quoted(dir / "a.atcourse") + " --db " + quoted(student));
+  run("course export tour --out " + quoted(dir / "s.atcourse") + " --db " + quoted(student));
+  run("course import " + quoted(dir / "s.atcourse") + " --db " + quoted(third));
+  for (const fs::path& package : {dir / "a.atcourse", dir / "s.atcourse"}) {
+    CAPTURE(package);
+    auto entries = test::readTar(package);
+    const auto manifest = nlohmann::json::parse(test::findEntry(entries, "manifest.json")->data);
+    CHECK(manifest["format_version"] == 2);
+    CHECK(manifest["dataset"]["reading"] == nlohmann::json{{"intensity", "auto"}, {"modality", "MR"}});
+  }
+  for (const fs::path& db : {author, student, third}) {
+    CAPTURE(db);
+    const nlohmann::json info = run("info mrhead --json --db " + quoted(db));
+    CHECK(info["intensity"]["modality"] == "MR");
+    CHECK(valuesSeen("mrhead", db) == valuesSeen("mrhead", author));
+    const auto r = test::runApp("wdt mrhead block --backend cpu --json --db " + quoted(db));
+    REQUIRE_MESSAGE(r.exitCode == 0, r.err);
+    CHECK(r.err.find("'mrhead' is MR: its intensities are not attenuation") != std::string::npos);
+  }
+}
+
+// A volume whose values a package cannot record (stored in int16 with a scale beyond ±1e12: a float
+// export in other units than a scanner's): the included export is refused with one line that names
+// the dataset and the way out, and writes no package; the referenced one still shares the course.
+TEST_CASE("CourseCli_ValuesScaledBeyondAPackagesBounds_IncludedExportRefusedInOneLine") {
+  if (!test::requireAppBinary("course packages")) return;
+  test::TempDir dir("at-values");
+  writeScan(dir.path(), 1e15, 0, ScalarKind::Float32);  // up to 2.55e17
+  const fs::path author = dir / "a.db", student = dir / "s.db", package = dir / "c.atcourse";
+  run("import --volume " + quoted(dir / "scan.nrrd") + " --labels " + quoted(dir / "labels.nrrd") + " --names " +
+      quoted(dir / "names.json") + " --name scan --db " + quoted(author));
+  run("course new tour --dataset scan --db " + quoted(author));
+  const std::string authorDb = test::readFile(author);
+  const auto r = test::runApp("course export tour --out " + quoted(package) + " --db " + quoted(author));
+  CHECK(r.exitCode != 0);
+  CHECK(std::count(r.err.begin(), r.err.end(), '\n') == 1);
+  CHECK(r.err.find("dataset 'scan'") != std::string::npos);
+  CHECK(r.err.find("--reference-volume") != std::string::npos);
+  CHECK_FALSE(fs::exists(package));
+  CHECK(test::readFile(author) == authorDb);
+  run("course export tour --reference-volume --out " + quoted(package) + " --db " + quoted(author));
+  run("course import " + quoted(package) + " --volume " + quoted(dir / "scan.nrrd") + " --db " + quoted(student));
+  CHECK(valuesSeen("scan", student) == valuesSeen("scan", author));
 }

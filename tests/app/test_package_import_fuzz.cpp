@@ -100,6 +100,7 @@ class Forger {
           if (pick(2)) reading["intercept"] = intercepts[std::size_t(pick(int(intercepts.size())))];
           if (pick(2)) reading["slope"] = slopes[std::size_t(pick(int(slopes.size())))];
           if (pick(2)) reading["skip_unreadable"] = pick(2) == 1;
+          if (pick(2)) reading["modality"] = std::vector<std::string>{"MR", "CT", "mr", "", "MR\x1b[2J", std::string(17, 'P')}[std::size_t(pick(6))];
           manifest["format_version"] = 2;
           manifest["dataset"]["reading"] = reading;
           break;

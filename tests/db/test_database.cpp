@@ -453,7 +453,7 @@ TEST_CASE("Registering a dataset under a name already used fails and writes noth
   CHECK((*listed)[0].geometry.dims == Dims{4, 5, 6});
 }
 
-TEST_CASE("How a dataset's values are read (unit, intercept, slope) is kept with it; damaged stored options are one-line errors") {
+TEST_CASE("How a dataset's values are read (unit, intercept, slope, modality) is kept with it; damaged stored options are one-line errors") {
   test::TempDir dir;
   auto db = Database::open(test::freshDatabase(dir, "d.db"));
   REQUIRE(db);
@@ -461,6 +461,7 @@ TEST_CASE("How a dataset's values are read (unit, intercept, slope) is kept with
   r.intensity = IntensityChoice::Hounsfield;
   r.intercept = -1024;
   r.slope = 0.5;
+  r.modality = "MR";
   REQUIRE(registerDataset(*db, r, {}));
   REQUIRE(registerDataset(*db, sampleRecord("plain"), {}));
   auto found = findDataset(*db, "headsq");
@@ -473,6 +474,8 @@ TEST_CASE("How a dataset's values are read (unit, intercept, slope) is kept with
   CHECK((files.intensity == IntensityChoice::Hounsfield));
   CHECK(files.intercept == std::optional<double>(-1024));
   CHECK(files.slope == std::optional<double>(0.5));
+  CHECK((**found).modality == "MR");
+  CHECK(files.modality == "MR");
   CHECK(loadOptionArguments(**found) == " --intensity hu --intercept -1024 --slope 0.5");
   auto other = findDataset(*db, "plain");
   REQUIRE(other);
@@ -480,6 +483,7 @@ TEST_CASE("How a dataset's values are read (unit, intercept, slope) is kept with
   CHECK(((**other).intensity == IntensityChoice::Auto));
   CHECK_FALSE((**other).intercept);
   CHECK_FALSE((**other).slope);
+  CHECK((**other).modality.empty());
   CHECK(loadOptionArguments(**other).empty());
   // Stored options of the wrong type or value (a hand-edited or hostile database file): reading the
   // dataset fails with one line naming the option, never an exception or a silent default.
@@ -489,7 +493,10 @@ TEST_CASE("How a dataset's values are read (unit, intercept, slope) is kept with
                                     std::pair{R"({"intensity": "kelvin"})", "intensity"},
                                     std::pair{R"({"intensity": 3})", "intensity"},
                                     std::pair{R"({"skip_unreadable": "yes"})", "skip_unreadable"},
-                                    std::pair{R"({"data_folder": 7})", "data_folder"}}) {
+                                    std::pair{R"({"data_folder": 7})", "data_folder"},
+                                    std::pair{R"({"modality": "mr"})", "modality"},
+                                    std::pair{R"({"modality": "MR\n"})", "modality"},
+                                    std::pair{R"({"modality": 1})", "modality"}}) {
     CAPTURE(json);
     auto update = db->prepare("UPDATE datasets SET load_options = ?1 WHERE name = 'headsq'");
     REQUIRE(update);

@@ -213,6 +213,11 @@ TEST_CASE("CoursePackage_AlteredPackages_AreRefusedWithOneLineNamingTheEntry") {
         {{{"intensity", "hu"}, {"intercept", "-1024"}}, "dataset.reading.intercept: must be a finite number"},
         {{{"intensity", "hu"}, {"offset", 1}}, "dataset.reading.offset: unknown field"},
         {{{"intensity", "auto"}, {"skip_unreadable", "yes"}}, "dataset.reading.skip_unreadable: must be true or false"},
+        {{{"intensity", "auto"}, {"modality", "mr"}}, "dataset.reading.modality: must be a DICOM modality code"},
+        {{{"intensity", "auto"}, {"modality", "MR\n\x1b[2J"}}, "dataset.reading.modality: must be a DICOM modality code"},
+        {{{"intensity", "auto"}, {"modality", std::string(17, 'M')}}, "dataset.reading.modality: must be a DICOM modality code"},
+        {{{"intensity", "auto"}, {"modality", ""}}, "dataset.reading.modality: must not be empty"},
+        {{{"intensity", "auto"}, {"modality", 5}}, "dataset.reading.modality: must be a string"},
         {nlohmann::json::array(), "dataset.reading: must be an object"}};
     for (const auto& [reading, message] : cases) {
       CAPTURE(reading.dump());
@@ -436,8 +441,9 @@ TEST_CASE("CoursePackage_RandomlyDamagedBytes_AreReadOrRefusedInOneLineNeverCras
   CHECK(refused > 250);  // a changed byte inside a checksummed entry or header is noticed
 }
 
-// The reading a package records gives the dataset back: for any unit, rescale and value range, the
-// written volume.nrrd read with it has the dataset's unit, values and grey window; where none is
+// The reading a package records gives the dataset back: for any unit, rescale, value range and
+// modality, the written volume.nrrd read with it has the dataset's unit, values and grey window and
+// an MR stays an MR; where none is
 // recorded, the file read by itself already does (so no package records a needless one).
 TEST_CASE("CoursePackage_IncludedVolumeReading_GivesTheDatasetsUnitValuesAndWindowBack") {
   const std::uint64_t seed = test::freshSeed("CoursePackage_IncludedVolumeReading");
@@ -461,7 +467,9 @@ TEST_CASE("CoursePackage_IncludedVolumeReading_GivesTheDatasetsUnitValuesAndWind
       m.intercept = pick(std::vector<double>{0, 0, 33508, -1024, 12.5});
       m.window = histogramWindow(ds.volume.voxels);
     }
+    m.modality = pick(std::vector<std::string>{"", "", "CT", "MR"});
     CAPTURE(trials);
+    CAPTURE(m.modality);
     CAPTURE(lo);
     CAPTURE(hi);
     CAPTURE(m.hounsfield());
@@ -478,10 +486,12 @@ TEST_CASE("CoursePackage_IncludedVolumeReading_GivesTheDatasetsUnitValuesAndWind
       open.intensity = reading->intensity;
       open.intercept = reading->intercept;
       open.slope = reading->slope;
+      open.modality = reading->modality;
     }
     auto loaded = openDatasetFiles(open);
     REQUIRE_MESSAGE(loaded, test::errorText(loaded));
     CHECK(loaded->intensity.unit == m.unit);
+    CHECK(loaded->intensity.attenuationLike() == m.attenuationLike());  // an MR's note is not lost
     CHECK(loaded->intensity.window == m.window);
     std::size_t differ = 0;
     for (std::size_t n = 0; n < ds.volume.voxels.size(); ++n)

@@ -133,6 +133,7 @@ Result<StagedDataset> stageDataset(db::Database& database, const package::Course
     files.intercept = d.reading->intercept;
     files.slope = d.reading->slope;
     files.skipUnreadableFiles = d.reading->skipUnreadableFiles;
+    files.modality = d.reading->modality;
   }
   auto loaded = openDatasetFiles(files);
   if (!loaded) return tl::unexpected(withContext(name + ": dataset '" + d.name + "'", loaded.error()));
@@ -149,6 +150,7 @@ Result<StagedDataset> stageDataset(db::Database& database, const package::Course
   record.intercept = files.intercept;
   record.slope = files.slope;
   record.skipUnreadableFiles = files.skipUnreadableFiles;
+  record.modality = files.modality;
   auto volumeSum = db::checksumPath(files.volumePath);
   if (!volumeSum) return tl::unexpected(volumeSum.error());
   record.volumeChecksum = *volumeSum;

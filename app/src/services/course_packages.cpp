@@ -16,6 +16,7 @@
 #include "lessons/course_json.h"
 #include "volume/dataset_source.h"
 #include "volume/known_scans.h"
+#include "volume/nrrd_io.h"
 
 namespace at::app {
 
@@ -159,8 +160,15 @@ Result<CourseExportReport> exportCourse(LearningSession& session, const render::
       d.referenceFileName = fs::path((*record)->volumePath).filename().string();
       d.referenceNote = request.referenceNote;
       const db::DatasetRecord& r = **record;
-      if (r.intensity != IntensityChoice::Auto || r.intercept || r.slope || r.skipUnreadableFiles)
-        d.reading = package::VolumeReading{r.intensity, r.intercept, r.slope, r.skipUnreadableFiles};
+      // A student's course import copies a detached NRRD header with the data files in its own
+      // folder (copyVolume); files the author read from another folder (--nrrd-data) cannot follow.
+      if (!r.dataFolder.empty())
+        if (auto confined = nrrdDataFiles(r.volumePath); !confined)
+          return fail("dataset '" + course->datasetId + "': its NRRD data files lie outside the header's folder (imported with " +
+                      "--nrrd-data " + r.dataFolder + "), where no student's course import can place them: export it " +
+                      "without --reference-volume to include the volume");
+      if (r.intensity != IntensityChoice::Auto || r.intercept || r.slope || r.skipUnreadableFiles || !r.modality.empty())
+        d.reading = package::VolumeReading{r.intensity, r.intercept, r.slope, r.skipUnreadableFiles, r.modality};
     } else {
       input.volumeFile = files->volume;
       d.reading = package::includedVolumeReading(*dataset);

@@ -46,6 +46,9 @@ struct DatasetRecord {
   // user's rescale (--intensity, --intercept, --slope).
   IntensityChoice intensity = IntensityChoice::Auto;
   std::optional<double> intercept, slope;
+  // The volume's DICOM Modality where its file has none (DatasetFiles::modality): "MR" for an MR
+  // from a course package. Upper-case letters, digits, '_' and ' ', at most 16 (DICOM's CS).
+  std::string modality;
   Geometry geometry;                // of the volume
   std::string orientation;          // e.g. "LPS"
   std::string createdAt;            // ISO-8601 UTC, set by the database

@@ -60,11 +60,15 @@ const char* toString(VolumeSource source);  // "builtin", "included", "reference
 // records one where the file read by itself would give other values than the author's: an included
 // volume of plain intensities stored shifted or scaled to fit int16 (a 16-bit µCT), or whose values
 // reach −500 (read as HU otherwise), or of HU without air (read as plain otherwise); a referenced
-// file the author imported with --intensity, --intercept, --slope or --skip-unreadable.
+// file the author imported with --intensity, --intercept, --slope or --skip-unreadable; an included
+// MR's modality.
 struct VolumeReading {
   IntensityChoice intensity = IntensityChoice::Auto;
   std::optional<double> intercept, slope;
   bool skipUnreadableFiles = false;  // a DICOM folder's unreadable files skipped, as the author's were
+  // The volume's DICOM Modality where the package's file does not give it and it matters: "MR" (its
+  // intensities are not attenuation, so density-weighted distances carry a note); empty otherwise.
+  std::string modality;
 };
 
 struct DatasetEntry {

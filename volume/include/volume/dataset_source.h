@@ -29,6 +29,9 @@ struct DatasetFiles {
   // The user's rescale of the volume's values (applyRescale, volume/intensity.h): v·slope +
   // intercept; either alone takes the other's neutral value.
   std::optional<double> intercept, slope;
+  // The DICOM Modality of a volume whose file records none ("MR" for an MR shared as a course
+  // package's NRRD): taken as the dataset's modality where the file gives none; a file's own wins.
+  std::string modality;
 };
 
 // "phantom" or "phantom:N" → the built-in phantom; anything else → error (the app resolves names).

@@ -1,4 +1,4 @@
-// The forms the importers give a dataset's species and structures (str::identifier, displayNameOf
+// The forms the importers give a dataset's species, modality and structures (str::identifier, displayNameOf
 // of printableText), held against those from a course package, which never went through them.
 #pragma once
 
@@ -16,5 +16,8 @@ bool isValidStructureId(const std::string& id);
 bool isPrintableLine(const std::string& text, std::size_t maxBytes);
 // A description: printable lines (printableLines leaves them as they are) of at most `maxBytes`.
 bool isPrintableLines(const std::string& text, std::size_t maxBytes);
+// A DICOM Modality as the tag holds it (a code string: "CT", "MR", "PT"): 1 … 16 of A-Z, 0-9, '_'
+// and ' ', not starting with ' '.
+bool isDicomModalityCode(const std::string& code);
 
 }  // namespace at

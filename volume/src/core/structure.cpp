@@ -30,6 +30,12 @@ bool isPrintableLines(const std::string& text, std::size_t maxBytes) {
   return text.size() <= maxBytes && printableLines(text) == text;
 }
 
+bool isDicomModalityCode(const std::string& code) {
+  return !code.empty() && code.size() <= 16 && code[0] != ' ' && std::all_of(code.begin(), code.end(), [](unsigned char c) {
+    return (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '_' || c == ' ';
+  });
+}
+
 std::string displayNameOf(const std::string& name) {
   std::string out = name;
   std::replace(out.begin(), out.end(), '_', ' ');

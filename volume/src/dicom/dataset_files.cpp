@@ -109,6 +109,7 @@ Result<Dataset> openDatasetFiles(const DatasetFiles& files, const DatasetLoadCon
   dataset.displayName = dataset.id;
   dataset.volume = std::move(volume->volume);
   dataset.intensity = std::move(volume->intensity);
+  if (dataset.intensity.modality.empty()) dataset.intensity.modality = files.modality;
   if (files.intercept || files.slope)
     if (auto ok = applyRescale(dataset.volume, dataset.intensity, files.intercept.value_or(0), files.slope.value_or(1),
                                files.intensity);
