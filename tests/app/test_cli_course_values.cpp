@@ -16,6 +16,8 @@
 #include "../package/tar_files.h"
 #include "../volume/dicom_test_files.h"
 #include "cli_checks.h"
+#include "desktop_script.h"
+#include "intensity_notes.h"
 #include "synthetic_scans.h"
 #include "test_support.h"
 #include "volume/dataset_source.h"
@@ -231,6 +233,28 @@ TEST_CASE("CourseCli_IncludedMr_KeepsItsModalityAndTheNote") {
     REQUIRE_MESSAGE(r.exitCode == 0, r.err);
     CHECK(r.err.find("'mrhead' is MR: its intensities are not attenuation") != std::string::npos);
   }
+  // The desktop says it too, among its notes, on the student's machine.
+  if (!test::requireXvfb()) return;
+  test::DesktopOptions desktop;
+  desktop.dataset = "mrhead";
+  desktop.db = student;
+  desktop.screenshot = (dir / "desktop.png").string();
+  const test::DesktopRun shown = test::runDesktopScript(dir, {{"actions", {{{"do", "wait_field"}}}}}, desktop);
+  REQUIRE_MESSAGE(shown.exitCode == 0, shown.err);
+  CHECK(shown.err.find("'mrhead' is MR: its intensities are not attenuation, and density-weighted distances assume CT-like") !=
+        std::string::npos);
+}
+
+TEST_CASE("DensityWeightsNote_OnlyWhereTheIntensitiesAreNotAttenuation") {
+  Dataset d;
+  d.id = "scan";
+  for (const char* modality : {"", "CT", "OT"}) {
+    d.intensity.modality = modality;
+    CHECK_FALSE(app::densityWeightsNote(d));
+  }
+  d.intensity.modality = "MR";
+  REQUIRE(app::densityWeightsNote(d));
+  CHECK(app::densityWeightsNote(d)->rfind("'scan' is MR: its intensities are not attenuation", 0) == 0);
 }
 
 // A volume whose values a package cannot record (stored in int16 with a scale beyond ±1e12: a float

@@ -3,6 +3,7 @@
 #include <cstdio>
 #include <filesystem>
 
+#include "intensity_notes.h"
 #include "printable_output.h"
 
 namespace at::app {
@@ -42,12 +43,10 @@ void applyDatasetWindow(const Dataset& dataset, float& windowMin, float& windowM
     windowMax = m.window[1];
   }
   static bool noted = false;
-  if (densityWeights && !m.attenuationLike() && !noted) {
+  if (!densityWeights || noted) return;
+  if (const auto note = densityWeightsNote(dataset)) {
     noted = true;
-    terminalFprintf(stderr,
-                 "anatomy-tutor: note: '%s' is %s: its intensities are not attenuation, and density-weighted distances "
-                 "assume CT-like values (bright = dense)\n",
-                 dataset.id.c_str(), m.modality.c_str());
+    terminalFprintf(stderr, "anatomy-tutor: note: %s\n", note->c_str());
   }
 }
 

@@ -8,6 +8,7 @@
 #include "core/strings.h"
 #include "course_views.h"
 #include "dataset_resolver.h"
+#include "intensity_notes.h"
 #include "db/dataset_store.h"
 #include "volume/known_scans.h"
 #include "render/derived_preset.h"
@@ -161,6 +162,7 @@ Status DesktopModel::showDataset(Dataset dataset, const std::string& startStruct
   recorder_.highlightNotWanted();
   lastPickMm_.reset();
   lessons_->setViewDataset(dataset_->id);
+  if (const auto weightsNote = densityWeightsNote(*dataset_)) note(*weightsNote);
   reframe();
   if (opened_)
     event({{"event", "dataset"}, {"dataset", dataset_->id}, {"structures", dataset_->structures.size()},
