@@ -8,6 +8,7 @@
 #include <utility>
 
 #include "core/strings.h"
+#include "ui/list_rows.h"
 #include "ui/panels.h"
 #include "core/printable_text.h"
 
@@ -74,8 +75,9 @@ void AnalyticsPanel::draw(AnalyticsController& analytics, float x, float y, floa
   const std::string current = analytics.loaded() ? analytics.course().title : "(choose a course)";
   ImGui::SetNextItemWidth(em * 26);
   if (ImGui::BeginCombo("Course", printableUiText(current).c_str())) {
-    for (const auto& c : *courses_)
-      if (ImGui::Selectable(printableUiText(c.title).c_str(), analytics.loaded() && analytics.course().id == c.id))
+    for (int i = 0; i < int(courses_->size()); ++i)
+      if (const auto& c = (*courses_)[std::size_t(i)];
+          listRowSelectable(i, c.title, analytics.loaded() && analytics.course().id == c.id))
         report(analytics.load(c.id));
     ImGui::EndCombo();
   }

@@ -4,6 +4,7 @@
 #include <imgui_stdlib.h>
 
 #include "core/strings.h"
+#include "ui/list_rows.h"
 #include "ui/panels.h"
 #include "core/printable_text.h"
 
@@ -27,7 +28,7 @@ bool structureCombo(const char* label, const std::vector<std::string>& ids, int*
   bool changed = false;
   if (ImGui::BeginCombo(label, printableUiText(ids[std::size_t(*index)]).c_str())) {
     for (int i = 0; i < int(ids.size()); ++i)
-      if (ImGui::Selectable(printableUiText(ids[std::size_t(i)]).c_str(), i == *index)) changed = (*index = i, true);
+      if (listRowSelectable(i, ids[std::size_t(i)], i == *index)) changed = (*index = i, true);
     ImGui::EndCombo();
   }
   return changed;
@@ -86,7 +87,7 @@ void CourseEditorPanel::drawStart(DesktopModel& model) {
     courseChoice_ = std::clamp(courseChoice_, 0, int(courses.size()) - 1);
     if (ImGui::BeginCombo("stored course", printableUiText(courses[std::size_t(courseChoice_)].id).c_str())) {
       for (int i = 0; i < int(courses.size()); ++i)
-        if (ImGui::Selectable(printableUiText(courses[std::size_t(i)].id).c_str(), i == courseChoice_)) courseChoice_ = i;
+        if (listRowSelectable(i, courses[std::size_t(i)].id, i == courseChoice_)) courseChoice_ = i;
       ImGui::EndCombo();
     }
     if (ImGui::Button("Edit")) report(editor.openCourse(courses[std::size_t(courseChoice_)].id), "");
@@ -114,7 +115,7 @@ void CourseEditorPanel::drawCourse(DesktopModel& model) {
   const std::size_t li = editor.lessonIndex();
   if (!course.lessons.empty() && ImGui::BeginCombo("lesson", printableUiText(course.lessons[li].title).c_str())) {
     for (std::size_t i = 0; i < course.lessons.size(); ++i)
-      if (ImGui::Selectable(printableUiText(course.lessons[i].title).c_str(), i == li)) report(editor.selectLesson(i), "");
+      if (listRowSelectable(int(i), course.lessons[i].title, i == li)) report(editor.selectLesson(i), "");
     ImGui::EndCombo();
   }
   ImGui::InputTextWithHint("##lesson_title", "new lesson's title", &lessonTitle_);
@@ -127,7 +128,7 @@ void CourseEditorPanel::drawCourse(DesktopModel& model) {
       const std::string& id = course.lessons[i].id;
       bool on = std::find(prerequisites.begin(), prerequisites.end(), id) != prerequisites.end();
       ImGui::SameLine();
-      if (ImGui::Checkbox(printableUiText(course.lessons[i].title).c_str(), &on)) {
+      if (listRowCheckbox(int(i), course.lessons[i].title, &on)) {
         if (on) prerequisites.push_back(id);
         else prerequisites.erase(std::remove(prerequisites.begin(), prerequisites.end(), id), prerequisites.end());
         report(editor.setPrerequisites(prerequisites), "");

@@ -8,6 +8,7 @@
 #include "class_practice.h"
 #include "core/strings.h"
 #include "lessons/repositories.h"
+#include "ui/list_rows.h"
 #include "ui/panels.h"
 #include "volume/dataset_source.h"
 #include "ui/widget_rects.h"
@@ -81,7 +82,7 @@ void LessonPanel::drawLists(LessonController& lessons) {
   ImGui::SetNextItemWidth(-FLT_MIN);
   if (ImGui::BeginCombo("##course", printableUiText(course.title).c_str())) {
     for (int i = 0; i < int(courses.size()); ++i)
-      if (ImGui::Selectable(printableUiText(courses[std::size_t(i)].title).c_str(), i == lessons.courseIndex()) && i != lessons.courseIndex())
+      if (listRowSelectable(i, courses[std::size_t(i)].title, i == lessons.courseIndex()) && i != lessons.courseIndex())
         if (auto st = lessons.selectCourse(i); !st) lessons.report(st.error().message);
     ImGui::EndCombo();
   }

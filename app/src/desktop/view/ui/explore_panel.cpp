@@ -6,6 +6,7 @@
 #include <imgui_stdlib.h>
 
 #include "core/strings.h"
+#include "ui/list_rows.h"
 #include "ui/panels.h"
 #include "segment_editor/segment_controller.h"
 #include "core/printable_text.h"
@@ -143,7 +144,7 @@ void ExplorePanel::drawStructures(DesktopModel& model, bool hideNames) {
     if (!query.empty()) ImGui::SetNextItemOpen(true);
     if (ImGui::TreeNode(printableUiText(system).c_str())) {
       for (const Structure* s : shown) {
-        if (ImGui::Selectable(printableUiText(s->displayName).c_str(), s->label == model.explore().selected())) model.select(s->label);
+        if (listRowSelectable(int(s->label), s->displayName, s->label == model.explore().selected())) model.select(s->label);
         if (ImGui::IsItemHovered() && !s->description.empty()) {
           ImGui::BeginTooltip();
           ImGui::PushTextWrapPos(ImGui::GetFontSize() * 25);
