@@ -181,6 +181,7 @@ TEST_CASE("SafeOutput_TitlesWithLineBreaks_StayInTheirRow") {
     REQUIRE_MESSAGE(r.exitCode == 0, r.err);
     r = test::runApp("course import " + quoted(dir / (id + ".json")) + db);
     REQUIRE_MESSAGE(r.exitCode == 0, r.err);
+    CHECK(r.out.find("\nforged_course") == std::string::npos);  // its report's line too
   }
   auto courses = test::runApp("courses" + db);
   REQUIRE_MESSAGE(courses.exitCode == 0, courses.err);

@@ -890,8 +890,8 @@ void packageSeeds() {
   const std::string referenceTar = packageFile(reference);
   seed("package", "reference.atcourse", referenceTar);
   seed("package", "reference.parts", assembledParts(referenceTar));
-  // Read with a rescale (format version 2): a referenced scan the author read with options.
-  reference.dataset.reading = package::VolumeReading{IntensityChoice::Plain, -1024.0, 0.5};
+  // Read with a rescale (format version 2): a referenced scan the author read with options, an MR.
+  reference.dataset.reading = package::VolumeReading{IntensityChoice::Plain, -1024.0, 0.5, false, "MR"};
   const std::string readingTar = packageFile(reference);
   seed("package", "reading.atcourse", readingTar);
   seed("package", "reading.parts", assembledParts(readingTar));

@@ -170,7 +170,7 @@ Status writeWideCsv(const std::vector<Table>& all, const std::filesystem::path& 
 }
 
 void printText(const lessons::ClassAnalytics& a, const lessons::Course& course) {
-  terminalPrintf("Analytics: %s (%s) — class of %s, %s\n", course.title.c_str(), course.id.c_str(),
+  terminalPrintf("Analytics: %s (%s) — class of %s, %s\n", rowCell(course.title).c_str(), course.id.c_str(),
               str::countOf(a.classSize, "student").c_str(), str::countOf(a.answers, "answer").c_str());
   terminalPrintf("\nLesson completion (finished / class)\n");
   for (const auto& l : a.lessons)

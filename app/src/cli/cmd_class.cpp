@@ -117,7 +117,7 @@ int runCreate(const cli::Args& args) {
   // The server judges events against the course (its questions, lessons and prerequisites).
   auto seeded = db::seedCourses(*server, courseDirectory());
   if (!seeded) return reportError("class create: putting the courses on the server: " + seeded.error().message);
-  terminalPrintf("class '%s': code %s (%s is its coordinator)\n", made->title.c_str(), made->code.c_str(),
+  terminalPrintf("class '%s': code %s (%s is its coordinator)\n", rowCell(made->title).c_str(), made->code.c_str(),
               args.user()->c_str());
   // Their answer keys go with them, so that the server grades answers from the first one on: each
   // course whose dataset this machine has (--local-db); the others are named with what to run.
@@ -157,7 +157,7 @@ int runJoin(const cli::Args& args) {
   if (auto kept = db::rememberMembership(*local, {*name, *code, *url, *role}); !kept)
     return reportError("class join: " + kept.error().message);
   terminalPrintf("%s joined class %s (%s) as %s; answers in %s are sent to %s\n", name->c_str(), code->c_str(),
-              info->title.c_str(), db::toString(*role), local->path().c_str(), server->path().c_str());
+              rowCell(info->title).c_str(), db::toString(*role), local->path().c_str(), server->path().c_str());
   return 0;
 }
 

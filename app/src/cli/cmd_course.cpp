@@ -69,7 +69,7 @@ int runNew(const cli::Args& args) {
   } else if (auto stored = saveCourse(**session, *course, "course new"); !stored) {
     return reportError("course new: " + stored.error().message);
   }
-  terminalPrintf("course '%s' (%s) on '%s': %s, %s%s\n", course->id.c_str(), course->title.c_str(),
+  terminalPrintf("course '%s' (%s) on '%s': %s, %s%s\n", course->id.c_str(), rowCell(course->title).c_str(),
               course->datasetId.c_str(), str::countOf(long(course->lessons.size()), "lesson").c_str(),
               str::countOf(long(course->lessons.front().steps.size()), "step").c_str(),
               args.has("out") ? (", written to " + *args.value("out") + " (not stored: edit it, then `course import` it)").c_str()
@@ -165,7 +165,7 @@ int runImportFile(const cli::Args& args) {
   request.volumePath = args.valueOr("volume", "");
   auto report = importCoursePackage(**session, request);
   if (!report) return reportError(report.error().message);
-  terminalPrintf("course '%s' (%s) version %d: %s\n", report->courseId.c_str(), report->courseTitle.c_str(), report->version,
+  terminalPrintf("course '%s' (%s) version %d: %s\n", report->courseId.c_str(), rowCell(report->courseTitle).c_str(), report->version,
               db::toString(report->outcome));
   terminalPrintf("  dataset '%s': %s%s\n", report->datasetId.c_str(), toString(report->dataset),
               report->datasetFolder.empty() ? "" : (" into " + report->datasetFolder.string()).c_str());

@@ -97,10 +97,10 @@ int writeDefaultViews(const fs::path& outDir, const std::string& courseId) {
     std::snprintf(name, sizeof name, "%02d_%s_%s.png", index, structure->id.c_str(), render::toString(preset->mode));
     const fs::path out = outDir / name;
     if (auto st = writePng(out.string(), render::toRgb(*image)); !st) return reportError(st.error().message);
-    terminalPrintf("wrote %s (%s, %s view)\n", out.string().c_str(), step.title.c_str(), lessons::toString(step.view));
+    terminalPrintf("wrote %s (%s, %s view)\n", out.string().c_str(), rowCell(step.title).c_str(), lessons::toString(step.view));
   }
   const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  terminalPrintf("%d views of '%s' in %.1f s (%s)\n", index, course->lessons.front().title.c_str(), s,
+  terminalPrintf("%d views of '%s' in %.1f s (%s)\n", index, rowCell(course->lessons.front().title).c_str(), s,
               context->description().c_str());
   return 0;
 }

@@ -152,7 +152,7 @@ int runExam(const Argv& argv) {
   if (auto started = session.start(user->id, examId); !started) return reportError("exam: " + started.error().message);
   const lessons::ExamSpec& exam = session.exam();
 
-  terminalPrintf("Exam: %s (%s), course %s\n", exam.title.c_str(), exam.id.c_str(), course.title.c_str());
+  terminalPrintf("Exam: %s (%s), course %s\n", rowCell(exam.title).c_str(), exam.id.c_str(), rowCell(course.title).c_str());
   terminalPrintf("  %s, %s", str::countOf(session.itemCount(), "item").c_str(), clock(exam.timeLimitS).c_str());
   if (exam.passScore) terminalPrintf(", pass mark %.0f%%", 100 * *exam.passScore);
   terminalPrintf(". Labels are hidden and no answer is marked until you finish.\n");

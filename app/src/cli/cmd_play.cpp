@@ -161,7 +161,7 @@ int runReview(const std::string& courseId, PlayContext& ctx) {
   if (!keysFound) return reportError("play: " + keysFound.error().message);
   quiz::KeyComputer& keys = **keysFound;
 
-  terminalPrintf("Review: %s (%s)\n", course->title.c_str(), courseId.c_str());
+  terminalPrintf("Review: %s (%s)\n", rowCell(course->title).c_str(), courseId.c_str());
   {
     const auto now = lessons::UnixSeconds(std::time(nullptr));
     auto taught = lessons::taughtStructures(ctx.curriculum, ctx.progress, ctx.userId, courseId);
@@ -231,8 +231,8 @@ int runLesson(const std::string& lessonId, lessons::LessonMode mode, PlayContext
   if (auto started = engine.start(ctx.userId, lessonId, mode); !started)
     return reportError("play: " + started.error().message);
 
-  terminalPrintf("Lesson: %s (%s), course %s — %s attempt %lld%s\n", engine.lesson().title.c_str(), lessonId.c_str(),
-              course->title.c_str(), engine.resumed() ? "resuming" : "new", (long long)engine.attempt().id,
+  terminalPrintf("Lesson: %s (%s), course %s — %s attempt %lld%s\n", rowCell(engine.lesson().title).c_str(), lessonId.c_str(),
+              rowCell(course->title).c_str(), engine.resumed() ? "resuming" : "new", (long long)engine.attempt().id,
               engine.attempt().mode == lessons::LessonMode::QuizOnly ? ", quiz only" : "");
   if (!engine.lesson().summary.empty()) printWrapped(engine.lesson().summary, 2);
   std::fflush(stdout);

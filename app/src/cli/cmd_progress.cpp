@@ -181,7 +181,7 @@ int runProgress(const Argv& argv) {
       }
       if (open) state = best >= 0 ? state + "; another attempt in progress" : "in progress, play resumes it";
       if (tries > 0) state += " (" + str::countOf(tries, "attempt") + ")";
-      terminalPrintf("  %-28s %-40s %s\n", l.id.c_str(), l.title.c_str(), state.c_str());
+      terminalPrintf("  %-28s %-40s %s\n", l.id.c_str(), rowCell(l.title).c_str(), state.c_str());
     }
   }
 
@@ -206,7 +206,7 @@ int runProgress(const Argv& argv) {
       }
       const auto tries = std::count_if(examAttempts->begin(), examAttempts->end(),
                                        [&](const lessons::ExamAttempt& a) { return a.examId == e.id; });
-      terminalPrintf("  %-28s %-40s %s (%s)\n", e.id.c_str(), e.title.c_str(), state.c_str(),
+      terminalPrintf("  %-28s %-40s %s (%s)\n", e.id.c_str(), rowCell(e.title).c_str(), state.c_str(),
                   str::countOf(tries, "attempt").c_str());
     }
 
