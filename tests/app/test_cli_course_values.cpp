@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 
 #include <nlohmann/json.hpp>
 
@@ -90,6 +91,30 @@ Shared shareScan(const test::TempDir& dir, const std::string& importOptions, con
   return out;
 }
 
+// The real head CT's DICOM series (../shared/data/headsq/dicom) copied into `folder`, each file
+// changed by `edit` when one is given (DCMTK).
+void copyHeadSeries(const fs::path& folder, const std::function<void(DcmDataset&)>& edit = {}) {
+  fs::create_directories(folder);
+  for (const auto& e : fs::directory_iterator(test::sharedData("headsq/dicom"))) {
+    if (e.path().extension() != ".dcm") continue;
+    if (edit)
+      REQUIRE(test::rewriteDicom(e.path(), folder / e.path().filename(), edit));
+    else
+      fs::copy_file(e.path(), folder / e.path().filename());
+  }
+}
+
+// The author's side: `volume` imported as dataset `name` into `db` with `labels` (label 1, named
+// "block") and `importOptions`, and a course "tour" on it.
+void authorCourse(const fs::path& dir, const fs::path& volume, const FloatVolume& labels, const std::string& name,
+                  const std::string& importOptions, const fs::path& db) {
+  REQUIRE(writeNrrd((dir / "labels.nrrd").string(), labels, ScalarKind::UInt16));
+  std::ofstream(dir / "names.json") << R"({"1": "block"})";
+  run("import --volume " + quoted(volume) + " --labels " + quoted(dir / "labels.nrrd") + " --names " +
+      quoted(dir / "names.json") + " --name " + name + importOptions + " --db " + quoted(db));
+  run("course new tour --dataset " + name + " --db " + quoted(db));
+}
+
 void checkSameValues(const Shared& s) {
   CHECK(s.student == s.author);
   CHECK(s.studentSlice == s.authorSlice);
@@ -161,9 +186,7 @@ TEST_CASE("CourseCli_ReferencedDicomFolder_SkipsTheUnreadableFilesTheAuthorSkipp
   if (!test::requireSharedData("headsq DICOM") || !test::requireAppBinary("course packages")) return;
   test::TempDir dir("at-values");
   const fs::path ct = dir / "ct";
-  fs::create_directories(ct);
-  for (const auto& e : fs::directory_iterator(test::sharedData("headsq/dicom")))
-    if (e.path().extension() == ".dcm") fs::copy_file(e.path(), ct / e.path().filename());
+  copyHeadSeries(ct);
   std::ofstream(ct / "CTHead50b.dcm", std::ios::binary) << test::readFile(ct / "CTHead50.dcm").substr(0, 300);
   DatasetFiles files;
   files.volumePath = ct.string();
@@ -172,12 +195,8 @@ TEST_CASE("CourseCli_ReferencedDicomFolder_SkipsTheUnreadableFilesTheAuthorSkipp
   REQUIRE_MESSAGE(read, test::errorText(read));
   FloatVolume labels(read->volume.geometry, 0.0f);
   for (std::size_t n = 0; n < labels.voxels.size(); ++n) labels.voxels[n] = read->volume.voxels[n] > 2000 ? 1.0f : 0.0f;
-  REQUIRE(writeNrrd((dir / "labels.nrrd").string(), labels, ScalarKind::UInt16));
-  std::ofstream(dir / "names.json") << R"({"1": "bone"})";
   const fs::path author = dir / "a.db", student = dir / "s.db", package = dir / "c.atcourse";
-  run("import --volume " + quoted(ct) + " --labels " + quoted(dir / "labels.nrrd") + " --names " + quoted(dir / "names.json") +
-      " --name head --skip-unreadable --db " + quoted(author));
-  run("course new tour --dataset head --db " + quoted(author));
+  authorCourse(dir.path(), ct, labels, "head", " --skip-unreadable", author);
   run("course export tour --out " + quoted(package) + " --reference-volume --db " + quoted(author));
   run("course import " + quoted(package) + " --volume " + quoted(ct) + " --db " + quoted(student));
   CHECK(valuesSeen("head", student) == valuesSeen("head", author));
@@ -194,11 +213,7 @@ TEST_CASE("CourseCli_IncludedMr_KeepsItsModalityAndTheNote") {
   if (!test::requireSharedData("headsq DICOM") || !test::requireAppBinary("course packages")) return;
   test::TempDir dir("at-values");
   const fs::path mr = dir / "mr";
-  fs::create_directories(mr);
-  for (const auto& e : fs::directory_iterator(test::sharedData("headsq/dicom")))
-    if (e.path().extension() == ".dcm")
-      REQUIRE(test::rewriteDicom(e.path(), mr / e.path().filename(),
-                                 [](DcmDataset& d) { d.putAndInsertString(DCM_Modality, "MR"); }));
+  copyHeadSeries(mr, [](DcmDataset& d) { d.putAndInsertString(DCM_Modality, "MR"); });
   DatasetFiles files;
   files.volumePath = mr.string();
   auto read = openDatasetFiles(files);
@@ -207,12 +222,8 @@ TEST_CASE("CourseCli_IncludedMr_KeepsItsModalityAndTheNote") {
   for (int k = 40; k < 50; ++k)
     for (int j = 28; j < 36; ++j)
       for (int i = 28; i < 36; ++i) labels.at(i, j, k) = 1.0f;
-  REQUIRE(writeNrrd((dir / "labels.nrrd").string(), labels, ScalarKind::UInt16));
-  std::ofstream(dir / "names.json") << R"({"1": "block"})";
   const fs::path author = dir / "a.db", student = dir / "s.db", third = dir / "t.db";
-  run("import --volume " + quoted(mr) + " --labels " + quoted(dir / "labels.nrrd") + " --names " + quoted(dir / "names.json") +
-      " --name mrhead --db " + quoted(author));
-  run("course new tour --dataset mrhead --db " + quoted(author));
+  authorCourse(dir.path(), mr, labels, "mrhead", "", author);
   run("course export tour --out " + quoted(dir / "a.atcourse") + " --db " + quoted(author));
   run("course import " + quoted(dir / "a.atcourse") + " --db " + quoted(student));
   run("course export tour --out " + quoted(dir / "s.atcourse") + " --db " + quoted(student));
