@@ -33,12 +33,14 @@ TEST_CASE("DesktopSelect_FromTheList_FramesEveryStructureTheViewDoesNotShowWhole
   options.height = 720;
   std::vector<FrameSeen> frames;
   std::vector<std::string> ids;
-  std::map<std::uint16_t, const render::StructureFrame*> frameOf;
+  // Copies: the model (and the frames it holds) is gone when runHeadless returns.
+  std::map<std::uint16_t, render::StructureFrame> frameOf;
   options.drawPanels = [&](app::DesktopModel& model) {
     frames.push_back({model.explore().camera(), model.layout().viewPixelsW(), model.layout().viewPixelsH(),
                       model.explore().selected()});
     if (frameOf.empty())
-      for (const Structure& s : model.dataset().structures) frameOf[s.label] = model.explore().frameOf(s.label);
+      for (const Structure& s : model.dataset().structures)
+        if (const render::StructureFrame* frame = model.explore().frameOf(s.label)) frameOf[s.label] = *frame;
   };
   // Every structure from the list, each after zooming in on the one before (the view framed on it,
   // then closer, as a user looks at it).
@@ -78,7 +80,8 @@ TEST_CASE("DesktopSelect_FromTheList_FramesEveryStructureTheViewDoesNotShowWhole
     while (next < listed.size() && listed[next] != f.selected) ++next;  // one selection may fall before a frame
     if (next == listed.size()) break;
     CAPTURE(f.selected);
-    CHECK(render::shareInView(*frameOf[f.selected], f.camera, f.width, f.height) >= app::ExploreState::kShownWhole);
+    REQUIRE(frameOf.count(f.selected) == 1);
+    CHECK(render::shareInView(frameOf.at(f.selected), f.camera, f.width, f.height) >= app::ExploreState::kShownWhole);
     ++checked;
     ++next;
   }
