@@ -381,6 +381,10 @@ std::string loadOptionArguments(const DatasetRecord& record) {
   char number[64];
   if (record.intercept) std::snprintf(number, sizeof number, " --intercept %.17g", *record.intercept), out += number;
   if (record.slope) std::snprintf(number, sizeof number, " --slope %.17g", *record.slope), out += number;
+  // (a code may hold spaces: quoted then for a shell)
+  if (!record.modality.empty())
+    out += record.modality.find(' ') == std::string::npos ? " --modality " + record.modality
+                                                          : " --modality '" + record.modality + "'";
   return out;
 }
 

@@ -195,8 +195,13 @@ Result<DatasetFilesWritten> writeDatasetFiles(const Dataset& dataset, const fs::
 
 std::optional<VolumeReading> includedVolumeReading(const Dataset& dataset) {
   const IntensityModel& model = dataset.intensity;
-  // What the importer's loader knows of volume.nrrd: int16 values, no modality, no rescale.
+  // An MR's modality would be lost with the DICOM header, and with it the note that its intensities
+  // are not attenuation; the others (CT, none) change nothing a student sees.
+  const bool modalityMatters = !model.attenuationLike();
+  // What the importer's loader knows of volume.nrrd: int16 values, no rescale, and no modality but
+  // the one this reading records (which counts in its unit as a file's own: DatasetFiles::modality).
   IntensityEvidence evidence;
+  if (modalityMatters) evidence.modality = model.modality;
   if (!dataset.volume.voxels.empty()) {
     const auto [lo, hi] = std::minmax_element(dataset.volume.voxels.begin(), dataset.volume.voxels.end());
     evidence.minValue = *lo;
@@ -204,9 +209,6 @@ std::optional<VolumeReading> includedVolumeReading(const Dataset& dataset) {
   }
   const bool asStored = model.slope == 1 && model.intercept == 0;
   const bool sameValues = decideIntensity(evidence, IntensityChoice::Auto).first == model.unit && asStored;
-  // An MR's modality would be lost with the DICOM header, and with it the note that its intensities
-  // are not attenuation; the others (CT, none) change nothing a student sees.
-  const bool modalityMatters = !model.attenuationLike();
   if (sameValues && !modalityMatters) return std::nullopt;
   VolumeReading reading;
   if (!sameValues) {

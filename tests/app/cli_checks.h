@@ -14,6 +14,16 @@
 
 namespace at::test {
 
+// A path in single quotes, for the shell that runApp starts.
+inline std::string quotedPath(const std::filesystem::path& p) { return "'" + p.string() + "'"; }
+
+// A command that must succeed and print one JSON object.
+inline nlohmann::json runAppJson(const std::string& args) {
+  const auto r = runApp(args);
+  REQUIRE_MESSAGE(r.exitCode == 0, args << ": " << r.err);
+  return nlohmann::json::parse(r.out);
+}
+
 // A failing command says what is wrong on exactly one line of stderr.
 inline void checkOneLineError(const CommandResult& r, const std::string& mustMention) {
   CHECK(r.exitCode != 0);

@@ -19,13 +19,12 @@
 
 #include <nlohmann/json.hpp>
 
+#include "cli_checks.h"
 #include "package/course_package.h"
 #include "test_databases.h"
 #include "test_support.h"
 
 namespace at::test {
-
-inline std::string quotedPath(const std::filesystem::path& p) { return "'" + p.string() + "'"; }
 
 // Course "ear_tour" on the 32³ phantom imported as "ear_lab" in `dir`/a.db, exported to `package`.
 inline void exportEarTour(const std::filesystem::path& dir, const std::filesystem::path& package, int size = 32) {

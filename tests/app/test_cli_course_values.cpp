@@ -291,3 +291,24 @@ TEST_CASE("CourseCli_ValuesScaledBeyondAPackagesBounds_IncludedExportRefusedInOn
   run("course import " + quoted(package) + " --volume " + quoted(dir / "scan.nrrd") + " --db " + quoted(student));
   CHECK(valuesSeen("scan", student) == valuesSeen("scan", author));
 }
+
+// An MR that came as a NRRD (its file records no modality), imported with --modality MR: the
+// package carries the modality, included or referenced, and the student's dataset reads as the
+// author's with the note.
+TEST_CASE("CourseCli_MrGivenItsModalityAtImport_TravelsIncludedAndReferenced") {
+  if (!test::requireAppBinary("course packages")) return;
+  for (const char* exportOptions : {"", " --reference-volume"}) {
+    CAPTURE(exportOptions);
+    test::TempDir dir("at-values");
+    writeScan(dir.path(), 12, 40, ScalarKind::UInt16);
+    const Shared s = shareScan(dir, " --modality MR", exportOptions);
+    checkSameValues(s);
+    CHECK(s.formatVersion == 2);
+    CHECK(s.reading.value("modality", "") == "MR");
+    const nlohmann::json info = run("info scan --json --db " + quoted(dir / "s.db"));
+    CHECK(info["intensity"]["modality"] == "MR");
+    const auto r = test::runApp("wdt scan bone --backend cpu --json --db " + quoted(dir / "s.db"));
+    REQUIRE_MESSAGE(r.exitCode == 0, r.err);
+    CHECK(r.err.find("'scan' is MR: its intensities are not attenuation") != std::string::npos);
+  }
+}

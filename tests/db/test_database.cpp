@@ -476,7 +476,7 @@ TEST_CASE("How a dataset's values are read (unit, intercept, slope, modality) is
   CHECK(files.slope == std::optional<double>(0.5));
   CHECK((**found).modality == "MR");
   CHECK(files.modality == "MR");
-  CHECK(loadOptionArguments(**found) == " --intensity hu --intercept -1024 --slope 0.5");
+  CHECK(loadOptionArguments(**found) == " --intensity hu --intercept -1024 --slope 0.5 --modality MR");
   auto other = findDataset(*db, "plain");
   REQUIRE(other);
   REQUIRE(*other);

@@ -8,6 +8,7 @@
 #include "commands.h"
 #include "dataset_import.h"
 #include "db/connection.h"
+#include "intensity_notes.h"
 #include "printable_output.h"
 
 namespace at::app {
@@ -17,7 +18,8 @@ namespace {
 constexpr const char* kImportHelp =
     "usage: anatomy-tutor import --volume PATH --name NAME [--labels PATH] [--names NAMES.json]\n"
     "                            [--species SPECIES] [--replace] [--skip-unreadable] [--nrrd-data DIR]\n"
-    "                            [--intensity auto|hu|plain] [--intercept B] [--slope A] [--db PATH]\n\n"
+    "                            [--intensity auto|hu|plain] [--intercept B] [--slope A] [--modality CODE]\n"
+    "                            [--db PATH]\n\n"
     "Registers a dataset in the database: the volume (a DICOM folder, .nii, .nii.gz, .nrrd, .nhdr, .inv3),\n"
     "an optional label map on the same anatomy (any of those formats or DICOM SEG) and an optional\n"
     "JSON of label names ({\"1\": \"spleen\", …}). Both are loaded first to check that they align.\n"
@@ -31,12 +33,15 @@ constexpr const char* kImportHelp =
     "  --intercept, --slope  for values the file does not calibrate (a raw volume, a CT stored without\n"
     "             its rescale, e.g. --intercept -1024): values become value x slope + intercept; reaching\n"
     "             air (<= -500) reads them as CT in HU. All three are kept with the dataset for later opens\n"
+    "  --modality  the DICOM modality of a volume whose file records none (a NIfTI or NRRD MR: MR), kept\n"
+    "             too: on MR, PT, NM, US, … density-weighted distances come with a note that they assume CT\n"
     "  --db       database file (default: $XDG_DATA_HOME/anatomy-tutor/anatomy-tutor.db)\n";
 
 }  // namespace
 
 int runImport(const Argv& argv) {
-  auto args = cli::Args::parse(argv, {"volume", "labels", "names", "name", "species", "nrrd-data", "intensity", "intercept", "slope"},
+  auto args = cli::Args::parse(argv, {"volume", "labels", "names", "name", "species", "nrrd-data", "intensity", "intercept", "slope",
+                                       "modality"},
                                {"replace", "skip-unreadable"});
   if (!args) return reportError("import: " + args.error().message);
   if (args->has("help")) {
@@ -63,6 +68,11 @@ int runImport(const Argv& argv) {
     if (!choice) return reportError("import: --" + choice.error().message);
     request.intensity = *choice;
   }
+  if (auto text = args->value("modality")) {
+    auto code = parseModalityCode(*text);  // (an empty one too: "as the file says" is leaving it out)
+    if (!code) return reportError("import: --" + code.error().message);
+    request.modality = *code;
+  }
   for (const auto& [option, target] : {std::pair{"intercept", &request.intercept}, std::pair{"slope", &request.slope}}) {
     const auto text = args->value(option);
     if (!text) continue;
@@ -85,6 +95,7 @@ int runImport(const Argv& argv) {
   terminalPrintf("  volume  %s  %s\n", record.volumePath.c_str(), record.volumeChecksum.c_str());
   if (!record.labelsPath.empty()) terminalPrintf("  labels  %s  %s\n", record.labelsPath.c_str(), record.labelsChecksum.c_str());
   for (const auto& note : imported->dataset.provenance.notes) terminalPrintf("  note: %s\n", note.c_str());
+  if (const auto note = densityWeightsNote(imported->dataset)) terminalPrintf("  note: %s\n", note->c_str());
   for (const auto& warning : imported->dataset.provenance.warnings) terminalPrintf("  warning: %s\n", warning.c_str());
   if (!imported->emptyStructures.empty()) {
     terminalPrintf("  warning: %zu structures have no voxel on the volume grid:", imported->emptyStructures.size());

@@ -169,7 +169,7 @@ const char* kStructuresHelp =
 
 const char* kInfoHelp =
     "usage: anatomy-tutor info FILE|DIR|SCAN|DATASET [--json] [--labels PATH] [--names JSON] [--series UID]\n"
-    "                          [--intensity auto|hu|plain] [--skip-unreadable] [--nrrd-data DIR]\n\n"
+    "                          [--intensity auto|hu|plain] [--modality CODE] [--skip-unreadable] [--nrrd-data DIR]\n\n"
     "Loads any supported input (DICOM series folder, DICOM SEG, NIfTI, NRRD, InVesalius .inv3) and\n"
     "prints its dimensions, spacing, origin, orientation, stored type, value range and loader notes.\n"
     "SCAN is a real scan fetched by scripts/fetch-scans.sh (skull). DATASET is a dataset imported into\n"
@@ -316,7 +316,8 @@ int runStructures(const Argv& argv) {
 }
 
 int runInfo(const Argv& argv) {
-  auto args = cli::Args::parse(argv, {"labels", "names", "series", "intensity", "nrrd-data"}, withDatasetFlags({"json"}));
+  auto args = cli::Args::parse(argv, {"labels", "names", "series", "intensity", "nrrd-data", "modality"},
+                               withDatasetFlags({"json"}));
   if (!args) return usageError("info", args.error().message);
   if (args->has("help")) {
     terminalPrintf("%s%s", kInfoHelp, kDatasetOptionsHelp);
@@ -347,7 +348,7 @@ int runInfo(const Argv& argv) {
   }
   std::optional<Dataset> asImported;  // the imported dataset as the other commands read it
   if (imported) {
-    for (const char* option : {"labels", "names", "series", "intensity", "skip-unreadable", "nrrd-data"})
+    for (const char* option : {"labels", "names", "series", "intensity", "skip-unreadable", "nrrd-data", "modality"})
       if (args->has(option))
         return usageError("info", std::string("--") + option + " applies to files, not to imported '" + imported->name +
                                       "' (its files are read as at import)");
@@ -363,6 +364,14 @@ int runInfo(const Argv& argv) {
   }
   auto loaded = loadImageFile(path, options);
   if (!loaded) return reportError("info: " + loaded.error().message);
+  // --modality names what a file does not record (as for every command: DatasetFiles::modality).
+  std::string givenModality;
+  if (auto text = args->value("modality")) {
+    auto code = parseModalityCode(*text);
+    if (!code) return usageError("info", "--" + code.error().message);
+    givenModality = *code;
+    if (auto ok = takeGivenModality(*loaded, givenModality, path); !ok) return reportError("info: " + ok.error().message);
+  }
   const Geometry& g = loaded->image.geometry;
   ValueSummary values = summarise(loaded->image);
   // A file given alone is a label map when it names its segments or passes the documented test
@@ -415,6 +424,7 @@ int runInfo(const Argv& argv) {
     files.id = fs::path(path).filename().string();
     files.skipUnreadableFiles = options.skipUnreadableFiles;
     files.dataFolder = options.dataFolder;
+    files.modality = givenModality;
     auto ds = openDatasetFiles(files);
     if (!ds) return reportError("info: " + ds.error().message);
     const std::vector<std::size_t> counts = labelHistogram(ds->labels);

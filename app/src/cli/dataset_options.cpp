@@ -11,7 +11,7 @@ namespace at::app {
 namespace fs = std::filesystem;
 
 std::set<std::string> withDatasetOptions(std::set<std::string> commandOptions) {
-  commandOptions.insert({"labels", "names", "series", "intensity", "nrrd-data", "intercept", "slope"});
+  commandOptions.insert({"labels", "names", "series", "intensity", "nrrd-data", "intercept", "slope", "modality"});
   return commandOptions;
 }
 
@@ -32,6 +32,7 @@ DatasetRequest datasetRequestFrom(const cli::Args& args, const std::string& name
   if (auto folder = args.value("nrrd-data")) request.dataFolder = fs::absolute(*folder).string();
   request.intercept = args.valueOr("intercept", "");
   request.slope = args.valueOr("slope", "");
+  request.modality = args.valueOr("modality", "");
   return request;
 }
 

@@ -12,8 +12,8 @@
 namespace at::app {
 
 // A command's valued options plus the ones every dataset-taking command accepts beside its
-// DATASET: --labels, --names, --series, --intensity, --nrrd-data, --intercept and --slope (datasets from files only;
-// --db is global).
+// DATASET: --labels, --names, --series, --intensity, --nrrd-data, --intercept, --slope and
+// --modality (datasets from files only; --db is global).
 std::set<std::string> withDatasetOptions(std::set<std::string> commandOptions);
 // A command's flags plus the dataset flag --skip-unreadable (datasets from files only).
 std::set<std::string> withDatasetFlags(std::set<std::string> commandFlags);
@@ -25,7 +25,9 @@ inline constexpr const char* kDatasetOptionsHelp =
     "                     under the header's own folder)\n"
     "  --intercept B --slope M  a volume file's values v read as v*M + B (a raw/NRRD CT stored without its\n"
     "                     rescale: --intercept -1024); values reaching air (<= -500) make it CT in HU\n"
-    "                     (not for info, which describes the file as stored)\n";
+    "                     (not for info, which describes the file as stored)\n"
+    "  --modality CODE    the DICOM modality of a file that records none (an MR NIfTI or NRRD: MR); on\n"
+    "                     MR, PT, NM, US, … density-weighted distances come with a note\n";
 
 // The request for dataset `name` with the dataset options given in `args`.
 DatasetRequest datasetRequestFrom(const cli::Args& args, const std::string& name);

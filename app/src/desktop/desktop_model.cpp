@@ -93,6 +93,10 @@ void DesktopModel::message(const std::string& text) {
 void DesktopModel::note(const std::string& text) {
   notes_.push_back(text);
   if (notes_.size() > 3) notes_.erase(notes_.begin());
+  report(text);
+}
+
+void DesktopModel::report(const std::string& text) {
   std::fprintf(stderr, "anatomy-tutor: %s\n", text.c_str());
   if (messageSink_) messageSink_(text);
 }
@@ -162,7 +166,9 @@ Status DesktopModel::showDataset(Dataset dataset, const std::string& startStruct
   recorder_.highlightNotWanted();
   lastPickMm_.reset();
   lessons_->setViewDataset(dataset_->id);
-  if (const auto weightsNote = densityWeightsNote(*dataset_)) note(*weightsNote);
+  // Shown with the dataset's name for as long as it is shown (the notes keep only the last few).
+  datasetCaution_ = densityWeightsNote(*dataset_);
+  if (datasetCaution_) report(*datasetCaution_);
   reframe();
   if (opened_)
     event({{"event", "dataset"}, {"dataset", dataset_->id}, {"structures", dataset_->structures.size()},

@@ -245,9 +245,14 @@ class DesktopModel {
   // Neutral information (not a problem): shown apart from the messages, also on stderr.
   void note(const std::string& text);
   const std::vector<std::string>& notes() const { return notes_; }
+  // What holds for the shown dataset as long as it is shown (its intensities are not attenuation:
+  // services/intensity_notes.h), reported once as a note when it opens; empty: nothing.
+  const std::optional<std::string>& datasetCaution() const { return datasetCaution_; }
   void event(nlohmann::json e) { events_(std::move(e)); }
 
  private:
+  // A line for the user on stderr and to the message sink (the scripted mode's events).
+  void report(const std::string& text);
   void setHovered(std::uint16_t label);
   // The editor's labels and structures into the dataset on screen when they changed: the voxels
   // that differ (the field service's labels, written while no field reads them), the structure
@@ -284,6 +289,7 @@ class DesktopModel {
   MessageSink messageSink_;
   std::vector<std::string> messages_;
   std::vector<std::string> notes_;
+  std::optional<std::string> datasetCaution_;
   std::unique_ptr<Dataset> dataset_;
   ShownScan shown_;  // dataset_'s volume as loaded, where showing it left out non-anatomy
   // The shown field's distance unit (render/field_scale.h), measured once per field and framed

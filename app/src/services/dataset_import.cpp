@@ -79,6 +79,11 @@ Result<ImportedDataset> importDataset(db::Database& database, const ImportReques
   record.intercept = request.intercept;
   record.slope = request.slope;
   if (auto ok = checkRescale(record.intercept.value_or(0), record.slope.value_or(1)); !ok) return tl::unexpected(ok.error());
+  if (!request.modality.empty()) {
+    auto modality = parseModalityCode(request.modality);
+    if (!modality) return fail("--" + modality.error().message);
+    record.modality = *modality;
+  }
 
   // Fail fast on a taken name, before the (possibly long) load.
   auto existing = db::findDataset(database, record.name);

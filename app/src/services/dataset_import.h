@@ -31,6 +31,9 @@ struct ImportRequest {
   // volume whose file calibrates nothing (a raw volume, a CT stored without its rescale).
   IntensityChoice intensity = IntensityChoice::Auto;
   std::optional<double> intercept, slope;
+  // The modality of a volume whose file records none (an MR NIfTI: "MR"; parseModalityCode), kept
+  // too; empty: as the file says.
+  std::string modality;
 };
 
 // The stages in the order they run.

@@ -48,16 +48,16 @@ Status readRescale(const DatasetRequest& request, DatasetFiles& files) {
 Result<Dataset> openNamedDataset(const DatasetRequest& request) {
   const bool fileOptions = !request.labelsPath.empty() || !request.namesPath.empty() || !request.seriesUid.empty() ||
                            !request.intensity.empty() || request.skipUnreadableFiles || !request.dataFolder.empty() ||
-                           !request.intercept.empty() || !request.slope.empty();
+                           !request.intercept.empty() || !request.slope.empty() || !request.modality.empty();
   if (isBuiltinDatasetName(request.name)) {
     if (fileOptions)
-      return fail("--labels, --names, --series, --intensity, --skip-unreadable, --nrrd-data, --intercept and --slope "
-                  "apply to datasets from files, not to '" + request.name + "'");
+      return fail("--labels, --names, --series, --intensity, --skip-unreadable, --nrrd-data, --intercept, --slope and "
+                  "--modality apply to datasets from files, not to '" + request.name + "'");
     return openBuiltinDataset(request.name);
   }
   if (const KnownScan* scan = findKnownScan(request.name)) {
-    if (!request.seriesUid.empty() || request.skipUnreadableFiles || !request.dataFolder.empty())
-      return fail("--series, --skip-unreadable and --nrrd-data apply to DICOM folders and NRRD files, not to '" +
+    if (!request.seriesUid.empty() || request.skipUnreadableFiles || !request.dataFolder.empty() || !request.modality.empty())
+      return fail("--series, --skip-unreadable, --nrrd-data and --modality apply to DICOM folders and NRRD files, not to '" +
                   request.name + "'");
     if (!request.namesPath.empty() && request.labelsPath.empty()) return fail("--names needs --labels PATH");
     auto dataset = openKnownScan(*scan, {request.labelsPath, request.namesPath});
@@ -87,6 +87,11 @@ Result<Dataset> openNamedDataset(const DatasetRequest& request) {
     files.skipUnreadableFiles = request.skipUnreadableFiles;
     files.dataFolder = request.dataFolder;
     if (auto ok = readRescale(request, files); !ok) return tl::unexpected(ok.error());
+    if (!request.modality.empty()) {
+      auto modality = parseModalityCode(request.modality);
+      if (!modality) return fail("--" + modality.error().message);
+      files.modality = *modality;
+    }
     return openDatasetFiles(files);
   }
   std::optional<db::Connection> opened;
@@ -102,8 +107,9 @@ Result<Dataset> openNamedDataset(const DatasetRequest& request) {
     if (!record) return tl::unexpected(record.error());
     if (*record) {
       if (fileOptions)
-        return fail("--labels, --names, --series, --intensity, --skip-unreadable and --nrrd-data apply to datasets "
-                    "from files, not to imported '" + request.name + "' (its files are read as at import)");
+        return fail("--labels, --names, --series, --intensity, --skip-unreadable, --nrrd-data, --intercept, --slope "
+                    "and --modality apply to datasets from files, not to imported '" + request.name +
+                    "' (its files are read as at import)");
       // The files must be those imported: a file changed since is refused (checksums).
       auto files = db::verifiedDatasetFiles(**record);
       if (!files) return tl::unexpected(files.error());

@@ -34,6 +34,9 @@ struct DatasetRequest {
   // stored without its rescale, e.g. int16 with air at 0 and B = −1024). Values reaching air
   // (≤ −500) then make the volume CT in HU, unless --intensity plain says otherwise.
   std::string intercept, slope;
+  // paths only: --modality CODE for a file that records none (an MR NIfTI: MR), as parseModalityCode
+  // takes it; a file that records another is refused.
+  std::string modality;
 };
 
 // Errors name what was tried ("unknown dataset 'abdomen': not built in, not imported in

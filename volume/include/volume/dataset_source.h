@@ -29,8 +29,9 @@ struct DatasetFiles {
   // The user's rescale of the volume's values (applyRescale, volume/intensity.h): v·slope +
   // intercept; either alone takes the other's neutral value.
   std::optional<double> intercept, slope;
-  // The DICOM Modality of a volume whose file records none ("MR" for an MR shared as a course
-  // package's NRRD): taken as the dataset's modality where the file gives none; a file's own wins.
+  // The DICOM Modality of a volume whose file records none ("MR" for an MR NIfTI, or an MR shared as a
+  // course package's NRRD; a code as isDicomModalityCode takes): the dataset's modality, counted in
+  // deciding its unit as a file's own. A file that records another modality is refused.
   std::string modality;
 };
 

@@ -74,6 +74,10 @@ struct StoredVolume {
 };
 Result<StoredVolume> toStoredVolume(const LoadedImage& loaded, const std::string& pathForMessages,
                                     IntensityChoice choice = IntensityChoice::Auto);
+// A modality the user gives (`given`, a code as parseModalityCode returns it; empty: none) for an
+// image whose file records none: it becomes the image's (with a note saying so), and toStoredVolume
+// counts it as the file's own. A file that records another modality is refused, naming `pathForMessages`.
+Status takeGivenModality(LoadedImage& loaded, const std::string& given, const std::string& pathForMessages);
 // Converts a loaded image to labels; errors if values are negative, non-integer or > 65535.
 Result<LabelMap> toLabelMap(const LoadedImage& loaded, const std::string& pathForMessages);
 

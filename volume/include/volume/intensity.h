@@ -22,7 +22,8 @@ enum class IntensityUnit { Hounsfield, Plain };
 
 struct IntensityModel {
   IntensityUnit unit = IntensityUnit::Hounsfield;
-  std::string modality;  // DICOM Modality ("CT", "MR", …) where the file says; empty otherwise
+  // DICOM Modality ("CT", "MR", …) where the file says or the user gave it (--modality); else empty
+  std::string modality;
   // value = stored · slope + intercept: HU, or the file's intensity (uint16 data above 32767 and
   // fractional data are stored shifted and scaled to fit int16).
   double slope = 1, intercept = 0;
@@ -32,12 +33,22 @@ struct IntensityModel {
   std::string reason;  // one line: how the unit was decided ("DICOM Modality CT", "unsigned uint8 data", …)
 
   bool hounsfield() const { return unit == IntensityUnit::Hounsfield; }
-  // Whether brighter means denser (CT, µCT). MR intensities are not attenuation: density-weighted
-  // distances on them assume a CT-like meaning the data does not have.
-  bool attenuationLike() const { return modality != "MR"; }
+  // Whether brighter means denser: a volume with no modality (µCT exports, NIfTI/NRRD CT), an X-ray
+  // modality (CT, DX, CR, MG, XA, RF, …) or "OT" (other: unknown). Any other modality (MR, PT, NM,
+  // US, …) measures something that is not attenuation: density-weighted distances on it assume a
+  // CT-like meaning the data does not have (isAttenuationModality).
+  bool attenuationLike() const;
   double valueOf(double stored) const { return stored * slope + intercept; }
   const char* unitName() const { return hounsfield() ? "HU" : "intensity"; }
 };
+
+// Whether a DICOM Modality code names attenuation imaging (see attenuationLike): empty, "OT", or
+// one of the X-ray modalities.
+bool isAttenuationModality(const std::string& modality);
+
+// A modality the user gives for a file that records none (--modality, the import window): a DICOM
+// code, case-insensitive ("mr" is MR). Errors name the field: "modality: 'x' is not …".
+Result<std::string> parseModalityCode(const std::string& text);
 
 // What the user asked for: decide from the file (auto), or force one unit.
 enum class IntensityChoice { Auto, Hounsfield, Plain };
@@ -45,7 +56,7 @@ Result<IntensityChoice> parseIntensityChoice(const std::string& text);  // "auto
 
 // What the loader knows about an image's values, the input of decideIntensity.
 struct IntensityEvidence {
-  std::string modality;       // DICOM Modality, empty where the format has none
+  std::string modality;       // DICOM Modality: the file's, or one given for a file without; else empty
   bool rescaleGiven = false;  // DICOM RescaleSlope/Intercept present, or NIfTI scl_slope set
   bool unsignedStorage = false;  // stored as uint8/uint16/uint32
   double minValue = 0, maxValue = 0;  // after any rescale

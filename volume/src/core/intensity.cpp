@@ -5,9 +5,33 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <iterator>
 #include <limits>
 
+#include "core/printable_text.h"
+#include "volume/structure_forms.h"
+
 namespace at {
+
+bool isAttenuationModality(const std::string& modality) {
+  // DICOM PS3.3 C.7.3.1.1.1: the X-ray modalities (projection, angiography, mammography, intra-oral,
+  // panoramic, radiographic imaging, digital fluoroscopy) and CT.
+  static const char* const kXRay[] = {"CT", "CR", "DX", "DF", "DS", "MG", "XA", "RF", "RG", "IO", "PX", "OT"};
+  if (modality.empty()) return true;
+  return std::any_of(std::begin(kXRay), std::end(kXRay), [&](const char* code) { return modality == code; });
+}
+
+bool IntensityModel::attenuationLike() const { return isAttenuationModality(modality); }
+
+Result<std::string> parseModalityCode(const std::string& text) {
+  std::string code = text;
+  for (char& c : code)
+    if (c >= 'a' && c <= 'z') c = char(c - 'a' + 'A');
+  if (!isDicomModalityCode(code))
+    return fail("modality: '" + printableText(text, 40) +
+                "' is not a DICOM modality code (CT, MR, PT, US, …: 1 to 16 of A-Z, 0-9, '_' and ' ')");
+  return code;
+}
 
 Result<IntensityChoice> parseIntensityChoice(const std::string& text) {
   if (text == "auto") return IntensityChoice::Auto;
@@ -63,7 +87,7 @@ std::pair<IntensityUnit, std::string> decideIntensity(const IntensityEvidence& e
     if (airInHu) return {IntensityUnit::Hounsfield, "DICOM Modality CT, values down to air"};
     return {IntensityUnit::Plain, "DICOM Modality CT but no value at or below -500 (air is -1000 HU): CT numbers not in HU"};
   }
-  if (!e.modality.empty()) return {IntensityUnit::Plain, "DICOM Modality " + e.modality + ": plain intensities"};
+  if (!e.modality.empty()) return {IntensityUnit::Plain, "Modality " + e.modality + ": plain intensities"};
   if (e.unsignedStorage && !e.rescaleGiven)
     return {IntensityUnit::Plain, "unsigned integer data without rescale (µCT or MR export): plain intensities"};
   if (airInHu) return {IntensityUnit::Hounsfield, "values down to air (<= -500): CT in HU"};

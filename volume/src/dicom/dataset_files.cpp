@@ -101,6 +101,7 @@ Result<Dataset> openDatasetFiles(const DatasetFiles& files, const DatasetLoadCon
   volumeOptions.dicomSeriesUid = files.dicomSeriesUid;
   auto volumeImage = loadImageFile(files.volumePath, volumeOptions);
   if (!volumeImage) return tl::unexpected(volumeImage.error());
+  if (auto ok = takeGivenModality(*volumeImage, files.modality, files.volumePath); !ok) return tl::unexpected(ok.error());
   auto volume = toStoredVolume(*volumeImage, files.volumePath, files.intensity);
   if (!volume) return tl::unexpected(volume.error());
 
@@ -109,7 +110,6 @@ Result<Dataset> openDatasetFiles(const DatasetFiles& files, const DatasetLoadCon
   dataset.displayName = dataset.id;
   dataset.volume = std::move(volume->volume);
   dataset.intensity = std::move(volume->intensity);
-  if (dataset.intensity.modality.empty()) dataset.intensity.modality = files.modality;
   if (files.intercept || files.slope)
     if (auto ok = applyRescale(dataset.volume, dataset.intensity, files.intercept.value_or(0), files.slope.value_or(1),
                                files.intensity);

@@ -75,6 +75,16 @@ Result<Volume> toHuVolume(const LoadedImage& loaded, const std::string& pathForM
   return out;
 }
 
+Status takeGivenModality(LoadedImage& loaded, const std::string& given, const std::string& pathForMessages) {
+  if (given.empty() || loaded.modality == given) return {};
+  if (!loaded.modality.empty())
+    return fail(pathForMessages + ": its DICOM Modality is " + loaded.modality + ", not the " + given +
+                " given (a modality is given only for files that record none)");
+  loaded.modality = given;
+  loaded.notes.push_back("modality " + given + " as given (the file records none)");
+  return {};
+}
+
 Result<StoredVolume> toStoredVolume(const LoadedImage& loaded, const std::string& pathForMessages,
                                     IntensityChoice choice) {
   const FloatVolume& image = loaded.image;

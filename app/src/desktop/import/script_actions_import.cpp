@@ -17,6 +17,7 @@ ScriptInterpreter::Feature ScriptInterpreter::importActions() {
                 {"names?", "the labels' names (JSON)"}, {"species?", "default human"},
                 {"intensity?", "auto (default), hu or plain"}, {"intercept?", "rescale: value x slope + intercept"},
                 {"slope?", "rescale (default 1 with an intercept)"},
+                {"modality?", "a DICOM modality (MR, PT, …) for a file that records none"},
                 {"wait?", "true (default): done when the import ends; false: at once"},
                 {"cancel_at?", "a stage name: cancel as that stage starts"}},
                "Starts an import as the Import window's form does.", &S::importDataset},
@@ -44,6 +45,7 @@ ScriptInterpreter::Outcome ScriptInterpreter::importDataset(Context& c) {
     }
     if (c.action.contains("intercept")) request.intercept = c.action.at("intercept").get<double>();
     if (c.action.contains("slope")) request.slope = c.action.at("slope").get<double>();
+    request.modality = c.action.value("modality", "");
     std::optional<ImportStage> cancelAt;
     if (c.action.contains("cancel_at")) {
       cancelAt = parseImportStage(c.action.at("cancel_at").get<std::string>());

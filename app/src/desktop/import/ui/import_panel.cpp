@@ -39,6 +39,8 @@ void ImportPanel::draw(ImportController& imports, float x, float y) {
     if (ImGui::InputDouble("intercept", &intercept, 0, 0, "%g")) form.intercept = intercept;
     if (ImGui::InputDouble("slope", &slope, 0, 0, "%g")) form.slope = slope;
   }
+  // What the file does not say (a NIfTI or NRRD MR): the import refuses a code DICOM does not know.
+  ImGui::InputTextWithHint("modality", "optional, for a file that records none: MR, PT, US, CT, ...", &form.modality);
   ImGui::PopItemWidth();
   if (ImGui::Button("Import"))
     if (auto st = imports.start(form); !st) error_ = st.error().message;

@@ -42,6 +42,13 @@ void ExplorePanel::draw(DesktopModel& model, const Status& status) {
   }
   ImGui::SameLine();
   ImGui::TextDisabled("%s", dataset.displayName.empty() ? printableUiText(dataset.id).c_str() : printableUiText(dataset.displayName).c_str());
+  // What the user must keep in mind about this dataset's pictures: under its name, not among the
+  // notes at the panel's foot (below the fold of a small window).
+  if (const auto& caution = model.datasetCaution()) {
+    ImGui::PushTextWrapPos(0);
+    ImGui::TextColored(ImVec4(1, 0.82f, 0.4f, 1), "%s", printableUiText(*caution).c_str());
+    ImGui::PopTextWrapPos();
+  }
   if (ImGui::SmallButton("Studies...")) model.study().coordinatorOpen = true;
   ImGui::SameLine();
   if (ImGui::SmallButton("Import...")) model.imports().windowOpen = true;
