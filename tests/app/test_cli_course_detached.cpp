@@ -11,6 +11,7 @@
 #include <fstream>
 #include <functional>
 #include <map>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 
@@ -135,8 +136,19 @@ TEST_CASE("CourseCli_ReferencedDetachedNrrd_WithAbsoluteDataFileNames_IsRefusedA
   if (!test::requireAppBinary("course packages")) return;
   test::TempDir author("at-author"), student("at-student");
   const fs::path root = author.path();
+  // Such a package is no longer exported (the referenced export refuses the header): one from an
+  // earlier program, forged here as the package of a header with relative names whose checksum is
+  // the absolute one's.
+  writeDetached(root, "rel.nhdr", [&](int k) { return "slices/s" + std::to_string(k) + ".raw"; });
   writeDetached(root, "abs.nhdr", [&](int k) { return (root / "slices" / ("s" + std::to_string(k) + ".raw")).string(); });
-  const fs::path package = authorReferencedCourse(root, "abs.nhdr");
+  const fs::path package = authorReferencedCourse(root, "rel.nhdr");
+  auto absoluteSum = db::checksumPath((root / "abs.nhdr").string(), "");
+  REQUIRE(absoluteSum);
+  auto entries = test::readTar(package);
+  auto manifest = nlohmann::json::parse(test::findEntry(entries, "manifest.json")->data);
+  manifest["dataset"]["source_volume_checksum"] = *absoluteSum;
+  test::findEntry(entries, "manifest.json")->data = manifest.dump();
+  test::writeTar(package, entries);
   // The student has another course stored already: the refused import must leave it all as it was.
   const fs::path db = student / "s.db";
   REQUIRE(runIn("course list --db " + quoted(db)).exitCode == 0);
@@ -255,4 +267,58 @@ TEST_CASE("CourseCli_ReferencedDetachedNrrdOnAClassServer_EachLabMachinePlacesAn
   CHECK(test::readFile(copy / "slices" / "s6.raw") == test::readFile(author / "slices" / "s6.raw"));
   CHECK(test::readFile(author / "slices" / "s5.raw") == linkedBefore);
   CHECK(test::postgresValue(*url, "SELECT COUNT(*) FROM datasets WHERE name = 'ear_slices'") == "1");
+}
+
+// A header that names its data files by absolute paths (inside its own folder, so that it imports
+// without --nrrd-data) reads the author's files wherever it is copied, and one naming them through
+// ".." needs folders a student's copy does not make: the referenced export is refused in one line and
+// writes nothing; the included export travels. Names relative to the header's folder export as before.
+TEST_CASE("CourseCli_DetachedNrrdNamingItsDataByAbsolutePaths_ReferencedExportRefused_IncludedTravels") {
+  if (!test::requireAppBinary("course packages")) return;
+  struct Naming {
+    const char* what;
+    std::function<std::string(const fs::path& folder, int k)> name;
+    bool travels;
+  };
+  const std::vector<Naming> namings = {
+      {"absolute, in its folder", [](const fs::path& f, int k) { return (f / ("s" + std::to_string(k) + ".raw")).string(); }, false},
+      {"absolute for one slice", [](const fs::path& f, int k) {
+         return k == 5 ? (f / "s5.raw").string() : "s" + std::to_string(k) + ".raw"; }, false},
+      {"through a subfolder's ..", [](const fs::path&, int k) { return "sub/../t" + std::to_string(k) + ".raw"; }, false},
+      {"relative, with ./ and a subfolder", [](const fs::path&, int k) {
+         return k % 2 ? "./s" + std::to_string(k) + ".raw" : "sub/t" + std::to_string(k) + ".raw"; }, true},
+  };
+  for (const Naming& naming : namings) {
+    CAPTURE(naming.what);
+    test::TempDir author("at-author"), student("at-student");
+    const fs::path folder = author / "scan";
+    fs::create_directories(folder);
+    writeDetached(folder, "scan.nhdr", [&](int k) { return naming.name(folder, k); });
+    const fs::path db = author / "a.db", package = author / "ear.atcourse";
+    for (const std::string& args :
+         {"import --volume " + quoted(folder / "scan.nhdr") + " --labels " + quoted(folder / "seg" / "labels.nrrd") +
+              " --names " + quoted(folder / "seg" / "names.json") + " --name ear_slices --db " + quoted(db),
+          "course new tour --dataset ear_slices --db " + quoted(db)}) {
+      auto r = runIn(args);
+      REQUIRE_MESSAGE(r.exitCode == 0, args << ": " << r.err);
+    }
+    const auto before = snapshot(author.path());
+    auto referenced = runIn("course export tour --out " + quoted(package) + " --reference-volume --db " + quoted(db));
+    const fs::path studentDb = student / "s.db";
+    if (naming.travels) {
+      REQUIRE_MESSAGE(referenced.exitCode == 0, referenced.err);
+      auto imported = runIn("course import " + quoted(package) + " --volume " + quoted(folder / "scan.nhdr") + " --db " +
+                            quoted(studentDb));
+      REQUIRE_MESSAGE(imported.exitCode == 0, imported.err);
+    } else {
+      test::checkOneLineError(referenced, "names its data files by absolute paths or through '..'");
+      CHECK(referenced.err.find("without --reference-volume") != std::string::npos);
+      CHECK(snapshot(author.path()) == before);
+      auto included = runIn("course export tour --out " + quoted(package) + " --db " + quoted(db));
+      REQUIRE_MESSAGE(included.exitCode == 0, included.err);
+      auto imported = runIn("course import " + quoted(package) + " --db " + quoted(studentDb));
+      REQUIRE_MESSAGE(imported.exitCode == 0, imported.err);
+    }
+    CHECK(slicePng(studentDb, student / "s.png") == slicePng(db, author / "a.png"));
+  }
 }

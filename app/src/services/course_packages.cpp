@@ -167,6 +167,15 @@ Result<CourseExportReport> exportCourse(LearningSession& session, const render::
           return fail("dataset '" + course->datasetId + "': its NRRD data files lie outside the header's folder (imported with " +
                       "--nrrd-data " + r.dataFolder + "), where no student's course import can place them: export it " +
                       "without --reference-volume to include the volume");
+      // A header naming its data files by absolute paths reads the author's files wherever it is
+      // copied (on a student's machine: nothing, or files that are not the scan's); one naming them
+      // through ".." needs folders the student's copy does not make.
+      auto relative = nrrdDataFilesRelativeToHeader(r.volumePath);
+      if (!relative) return tl::unexpected(relative.error());
+      if (!*relative)
+        return fail("dataset '" + course->datasetId + "': its NRRD header " + r.volumePath +
+                    " names its data files by absolute paths or through '..', which a student's copy of its folder " +
+                    "cannot follow: export it without --reference-volume to include the volume");
       if (r.intensity != IntensityChoice::Auto || r.intercept || r.slope || r.skipUnreadableFiles || !r.modality.empty())
         d.reading = package::VolumeReading{r.intensity, r.intercept, r.slope, r.skipUnreadableFiles, r.modality};
     } else {

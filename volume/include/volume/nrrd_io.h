@@ -21,6 +21,11 @@ Result<LoadedImage> loadNrrd(const std::string& path, const ImageLoadOptions& op
 // loadNrrd checks it; empty for a NRRD with attached data and for a file that is not a NRRD (does not
 // start with "NRRD000"). What a dataset's checksum covers besides the header (db/checksum.h).
 Result<std::vector<std::string>> nrrdDataFiles(const std::string& path, const ImageLoadOptions& options = {});
+// Whether a detached NRRD header names every data file relative to its own folder, with no ".."
+// (no absolute path; not out of the folder, nor through a subfolder and back): what a copy of the
+// folder's files elsewhere still reads. True for a NRRD with attached data, for a file that is not a
+// NRRD and for a folder (a DICOM series).
+Result<bool> nrrdDataFilesRelativeToHeader(const std::string& path);
 
 // Writes an attached-header gzip NRRD (LPS) with optional `key:=value` lines (keys without ":="
 // and line breaks); used by tests to make inputs and by the .seg.nrrd writer.

@@ -973,17 +973,25 @@ Status writeNrrd(const std::string& path, const FloatVolume& image, ScalarKind s
 
 namespace {
 
-Result<std::vector<std::string>> listDataFiles(const std::string& path, const ImageLoadOptions& options) {
+// The header of the NRRD at `path`; none for a file that is not a NRRD.
+Result<std::optional<NrrdHeader>> headerOf(const std::string& path) {
   auto headerFile = openRegularFile(path, path);
   if (!headerFile) return tl::unexpected(headerFile.error());
   auto magic = readFileRange(*headerFile, 0, 8, path);
   if (!magic) return tl::unexpected(magic.error());
-  if (magic->size() < 8 || magic->compare(0, 7, "NRRD000") != 0) return std::vector<std::string>{};
+  if (magic->size() < 8 || magic->compare(0, 7, "NRRD000") != 0) return std::optional<NrrdHeader>{};
   auto headerBytes = readHeaderBytes(*headerFile, path);
   if (!headerBytes) return tl::unexpected(headerBytes.error());
   auto header = parseHeader(path, *headerBytes);
   if (!header) return tl::unexpected(header.error());
-  auto files = dataFiles(path, *header);
+  return std::optional<NrrdHeader>(std::move(*header));
+}
+
+Result<std::vector<std::string>> listDataFiles(const std::string& path, const ImageLoadOptions& options) {
+  auto header = headerOf(path);
+  if (!header) return tl::unexpected(header.error());
+  if (!*header) return std::vector<std::string>{};
+  auto files = dataFiles(path, **header);
   if (!files) return tl::unexpected(files.error());
   for (const std::string& file : *files)
     if (auto inside = checkDataFileConfined(path, file, options); !inside) return tl::unexpected(inside.error());
@@ -994,6 +1002,22 @@ Result<std::vector<std::string>> listDataFiles(const std::string& path, const Im
 
 Result<std::vector<std::string>> nrrdDataFiles(const std::string& path, const ImageLoadOptions& options) {
   return withPrintableError(listDataFiles(path, options));
+}
+
+Result<bool> nrrdDataFilesRelativeToHeader(const std::string& path) {
+  std::error_code ec;
+  if (fs::is_directory(path, ec)) return true;  // a DICOM series
+  auto header = headerOf(path);
+  if (!header) return withPrintableError(Result<bool>(tl::unexpected(header.error())));
+  if (!*header) return true;
+  // Resolved against no folder, each name stays as the header writes it.
+  auto names = dataFiles(fs::path(path).filename().string(), **header);
+  if (!names) return withPrintableError(Result<bool>(tl::unexpected(names.error())));
+  for (const std::string& name : *names) {
+    const fs::path p(name);
+    if (p.is_absolute() || std::any_of(p.begin(), p.end(), [](const fs::path& part) { return part == ".."; })) return false;
+  }
+  return true;
 }
 
 }  // namespace at
