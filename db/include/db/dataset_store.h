@@ -47,7 +47,8 @@ struct DatasetRecord {
   IntensityChoice intensity = IntensityChoice::Auto;
   std::optional<double> intercept, slope;
   // The volume's DICOM Modality where its file has none (DatasetFiles::modality): "MR" for an MR
-  // NIfTI imported with --modality MR, or an MR from a course package. Upper-case letters, digits, '_' and ' ', at most 16 (DICOM's CS).
+  // NIfTI imported with --modality MR, or an MR from a course package. Upper-case letters, digits,
+  // '_' and ' ', at most 16 (DICOM's CS).
   std::string modality;
   Geometry geometry;                // of the volume
   std::string orientation;          // e.g. "LPS"
@@ -100,7 +101,8 @@ Result<std::vector<Structure>> datasetStructures(Database& db, std::int64_t data
 DatasetFiles datasetFiles(const DatasetRecord& record);
 
 // The import options that say how its values are read, as command-line arguments (" --intensity
-// hu --intercept -1024 --modality MR"; empty when none was given): for messages that tell how to import again.
+// hu --intercept -1024 --modality MR"; empty when none was given): for messages that tell how to
+// import again.
 std::string loadOptionArguments(const DatasetRecord& record);
 
 // The same, once the volume's and the labels' checksums are those recorded at import: a file

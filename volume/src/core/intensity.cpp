@@ -14,8 +14,9 @@
 namespace at {
 
 bool isAttenuationModality(const std::string& modality) {
-  // DICOM PS3.3 C.7.3.1.1.1: the X-ray modalities (projection, angiography, mammography, intra-oral,
-  // panoramic, radiographic imaging, digital fluoroscopy) and CT.
+  // DICOM PS3.3 C.7.3.1.1.1: CT and the X-ray modalities (projection, angiography, mammography,
+  // intra-oral, panoramic, radiographic imaging, digital fluoroscopy); OT (other) is unknown, so no
+  // note is given for it.
   static const char* const kXRay[] = {"CT", "CR", "DX", "DF", "DS", "MG", "XA", "RF", "RG", "IO", "PX", "OT"};
   if (modality.empty()) return true;
   return std::any_of(std::begin(kXRay), std::end(kXRay), [&](const char* code) { return modality == code; });
