@@ -138,3 +138,27 @@ TEST_CASE("info DATASET describes an imported dataset as it is read, with its lo
   { std::ofstream(copy / "quarter.40", std::ios::binary | std::ios::app) << "x"; }
   test::checkOneLineError(test::runApp("info head_hu --db " + db), "dataset 'head_hu': its volume");
 }
+
+// A fetched scan is read one way (its entry's); the options that would read a file another way are
+// refused in one line by every command, before anything is read or written, fetched or not.
+TEST_CASE("A fetched scan refuses the options that read a file another way, in one line, writing nothing") {
+  if (!test::requireAppBinary("fetched scan options")) return;
+  test::TempDir dir;
+  const std::string out = "'" + (dir / "out.png").string() + "'";
+  const std::string field = "'" + (dir / "out.nii.gz").string() + "'";
+  for (const std::string option : {"--intensity plain", "--intensity hu", "--intercept -1024", "--slope 2", "--modality MR",
+                                   "--series 1.2.3", "--skip-unreadable", "--nrrd-data ."}) {
+    CAPTURE(option);
+    test::checkOneLineError(test::runApp("slice skull --axis z --index 3 --out " + out + " " + option),
+                            "not to the fetched scan 'skull' (it is read as fetched)");
+    test::checkOneLineError(test::runApp("wdt skull mandible --out " + field + " " + option),
+                            "not to the fetched scan 'skull' (it is read as fetched)");
+    const auto info = test::runApp("info skull " + option);
+    if (option.rfind("--intercept", 0) == 0 || option.rfind("--slope", 0) == 0) {
+      test::checkOneLineError(info, "unknown option");  // info describes the file as stored
+    } else {
+      test::checkOneLineError(info, "applies to volume files and folders, not to the fetched scan 'skull'");
+    }
+  }
+  CHECK(std::filesystem::is_empty(dir.path()));
+}

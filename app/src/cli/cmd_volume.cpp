@@ -335,6 +335,11 @@ int runInfo(const Argv& argv) {
   std::optional<db::DatasetRecord> imported;
   std::error_code ec;
   if (const KnownScan* scan = findKnownScan(path)) {
+    // Described as every command reads it, so the options that read a file another way are refused.
+    for (const char* option : {"series", "intensity", "skip-unreadable", "nrrd-data", "modality"})
+      if (args->has(option))
+        return usageError("info", std::string("--") + option + " applies to volume files and folders, not to the fetched scan '" +
+                                      scan->name + "' (it is read as fetched)");
     auto file = knownScanFile(*scan);
     if (!file) return reportError("info: " + file.error().message);
     path = file->string();

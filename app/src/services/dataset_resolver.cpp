@@ -56,9 +56,11 @@ Result<Dataset> openNamedDataset(const DatasetRequest& request) {
     return openBuiltinDataset(request.name);
   }
   if (const KnownScan* scan = findKnownScan(request.name)) {
-    if (!request.seriesUid.empty() || request.skipUnreadableFiles || !request.dataFolder.empty() || !request.modality.empty())
-      return fail("--series, --skip-unreadable, --nrrd-data and --modality apply to DICOM folders and NRRD files, not to '" +
-                  request.name + "'");
+    // A fetched scan is read one way, the way its entry says; only its labels may be another file.
+    if (!request.seriesUid.empty() || request.skipUnreadableFiles || !request.dataFolder.empty() || !request.modality.empty() ||
+        !request.intensity.empty() || !request.intercept.empty() || !request.slope.empty())
+      return fail("--series, --intensity, --skip-unreadable, --nrrd-data, --intercept, --slope and --modality apply to "
+                  "volume files and folders, not to the fetched scan '" + request.name + "' (it is read as fetched)");
     if (!request.namesPath.empty() && request.labelsPath.empty()) return fail("--names needs --labels PATH");
     auto dataset = openKnownScan(*scan, {request.labelsPath, request.namesPath});
     if (!dataset) return dataset;
