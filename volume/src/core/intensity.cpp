@@ -85,8 +85,8 @@ std::pair<IntensityUnit, std::string> decideIntensity(const IntensityEvidence& e
   if (choice == IntensityChoice::Plain) return {IntensityUnit::Plain, "plain intensities as asked (--intensity plain)"};
   const bool airInHu = e.minValue <= -500;
   if (e.modality == "CT") {
-    if (airInHu) return {IntensityUnit::Hounsfield, "DICOM Modality CT, values down to air"};
-    return {IntensityUnit::Plain, "DICOM Modality CT but no value at or below -500 (air is -1000 HU): CT numbers not in HU"};
+    if (airInHu) return {IntensityUnit::Hounsfield, "Modality CT, values down to air"};
+    return {IntensityUnit::Plain, "Modality CT but no value at or below -500 (air is -1000 HU): CT numbers not in HU"};
   }
   if (!e.modality.empty()) return {IntensityUnit::Plain, "Modality " + e.modality + ": plain intensities"};
   if (e.unsignedStorage && !e.rescaleGiven)
