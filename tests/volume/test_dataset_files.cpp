@@ -12,6 +12,8 @@
 #include "volume/dataset_source.h"
 #include "volume/dicom_seg.h"
 #include "volume/image_file.h"
+#include "volume/nifti_io.h"
+#include "volume/resample.h"
 
 using namespace at;
 namespace fs = std::filesystem;
@@ -245,4 +247,50 @@ TEST_CASE("Dataset files: no patient identifier from the DICOM headers survives 
     for (const std::string& note : image->notes) CHECK_MESSAGE(note.find(marker) == std::string::npos, note);
     for (const SegmentInfo& s : image->segments) CHECK(s.name.find(marker) == std::string::npos);
   }
+}
+
+// A label map on a finer grid than its volume can hold a structure smaller than the volume's voxels;
+// resampled onto the volume it has no voxel left. It is not dropped silently: one warning line names
+// the label file and the structure (name, label, voxels); every label that kept a voxel is a structure.
+TEST_CASE("Dataset files: labels lost to resampling onto a coarser volume are named in one warning") {
+  if (!test::requireSharedData("ct_small.nii.gz and seg_small.nii.gz")) return;
+  DatasetFiles files;
+  files.volumePath = test::sharedData("totalsegmentator/ct_small.nii.gz").string();
+  files.labelsPath = test::sharedData("totalsegmentator/seg_small.nii.gz").string();
+  auto coarse = openDatasetFiles(files);
+  REQUIRE_MESSAGE(coarse, (coarse ? "" : coarse.error().message));
+  // The reference labels on a grid of half the spacing (same origin: every other fine voxel centre
+  // is a coarse one), plus a two-voxel "accessory spleen" on fine voxels between coarse centres.
+  Geometry fine = coarse->labels.geometry;
+  for (auto& s : fine.spacingMm) s /= 2;
+  fine.dims = {fine.dims.x * 2, fine.dims.y * 2, fine.dims.z * 2};
+  auto refined = resampleLabelsNearest(coarse->labels, fine);
+  REQUIRE(refined);
+  const std::uint16_t accessory = 200;
+  refined->at(61, 51, 15) = accessory;
+  refined->at(61, 51, 17) = accessory;
+  test::TempDir dir("at-lost-labels");
+  files.labelsPath = (dir / "fine_labels.nii.gz").string();
+  REQUIRE(writeNiftiLabels(files.labelsPath, *refined));
+  files.namesPath = (dir / "names.json").string();
+  std::ofstream(files.namesPath) << "{ \"" << accessory << "\": \"Accessory spleen\" }";
+  auto dataset = openDatasetFiles(files);
+  REQUIRE_MESSAGE(dataset, (dataset ? "" : dataset.error().message));
+  CHECK(dataset->structures.size() == coarse->structures.size());
+  CHECK_FALSE(dataset->findStructure("accessory_spleen"));
+  REQUIRE(dataset->provenance.warnings.size() == 1);
+  const std::string& warning = dataset->provenance.warnings[0];
+  INFO(warning);
+  CHECK(oneLine(warning));
+  CHECK(warning.find(files.labelsPath + ": 1 label lost every voxel") == 0);
+  CHECK(warning.find("200 'Accessory spleen' (2 voxels)") != std::string::npos);
+  CHECK(warning.find("3 x 3 x 3 mm grid") != std::string::npos);
+  // Labelled on the volume's own grid, nothing is lost and nothing is said.
+  refined->at(60, 50, 16) = accessory;
+  files.labelsPath = (dir / "fine_labels_kept.nii.gz").string();
+  REQUIRE(writeNiftiLabels(files.labelsPath, *refined));
+  auto kept = openDatasetFiles(files);
+  REQUIRE(kept);
+  CHECK(kept->provenance.warnings.empty());
+  CHECK(kept->findStructure("accessory_spleen"));
 }

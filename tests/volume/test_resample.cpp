@@ -143,3 +143,41 @@ TEST_CASE("seg_small resampled onto the CT grid (the same grid) is unchanged, an
   REQUIRE(back);
   CHECK(back->voxels == labels->voxels);
 }
+
+// labelsLostInResampling names exactly the source labels no resampled voxel carries, with their
+// source voxel counts, for random maps resampled onto coarser, shifted grids.
+TEST_CASE("resampling: the labels lost are exactly those the resampled map lacks") {
+  std::mt19937_64 rng(test::freshSeed("labels lost in resampling"));
+  for (int trial = 0; trial < 20; ++trial) {
+    Geometry fine;
+    fine.dims = {24, 20, 16};
+    fine.spacingMm = {0.5, 0.5, 0.5};
+    LabelMap source(fine, 0);
+    // A few labels of 1 … 40 voxels scattered over the grid, on top of one large label.
+    std::uniform_int_distribution<int> x(0, 23), y(0, 19), z(0, 15), size(1, 40);
+    for (auto& v : source.voxels) v = 1;
+    for (std::uint16_t label = 2; label < 12; ++label)
+      for (int n = size(rng); n > 0; --n) source.at(x(rng), y(rng), z(rng)) = label;
+    Geometry coarse;
+    coarse.dims = {5, 4, 3};
+    coarse.spacingMm = {2.5, 2.5, 2.5};
+    std::uniform_real_distribution<double> shift(-2.0, 2.0);
+    coarse.originMm = {shift(rng), shift(rng), shift(rng)};
+    auto resampled = resampleLabelsNearest(source, coarse);
+    REQUIRE(resampled);
+    std::vector<std::size_t> before(65536, 0), after(65536, 0);
+    for (auto v : source.voxels) ++before[v];
+    for (auto v : resampled->voxels) ++after[v];
+    const std::vector<LostLabel> lost = labelsLostInResampling(source, *resampled);
+    std::size_t expected = 0;
+    for (std::size_t label = 1; label < 65536; ++label) {
+      if (!before[label] || after[label]) continue;
+      ++expected;
+      auto it = std::find_if(lost.begin(), lost.end(), [&](const LostLabel& l) { return l.label == label; });
+      REQUIRE(it != lost.end());
+      CHECK(it->sourceVoxels == before[label]);
+    }
+    CHECK(lost.size() == expected);
+    CHECK(std::is_sorted(lost.begin(), lost.end(), [](const LostLabel& a, const LostLabel& b) { return a.label < b.label; }));
+  }
+}

@@ -113,6 +113,7 @@ int runRender(const Argv& argv) {
   // The CT table, headrest and other objects outside the body are no context (shown_dataset.h).
   auto shown = openDatasetForViewing(datasetRequestFrom(*args, args->positional()[0]));
   if (!shown) return reportError("render: " + shown.error().message);
+  reportDatasetWarnings(shown->dataset);
   Dataset* dataset = &shown->dataset;
   const Structure* structure = wholeVolume ? nullptr : dataset->findStructure(args->positional()[1]);
   if (!wholeVolume && !structure) return reportError("render: " + unknownStructureMessage(*dataset, args->positional()[1]));

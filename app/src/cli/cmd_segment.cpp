@@ -181,6 +181,7 @@ int runSegment(const Argv& argv) {
   request.namesPath.clear();
   auto dataset = openNamedDataset(request);
   if (!dataset) return reportError("segment: " + dataset.error().message);
+  reportDatasetWarnings(*dataset);
   if (args->has("compare") && dataset->structures.empty())
     return reportError("segment: --compare needs the dataset's own labels (--labels FILE for a volume file)");
   auto raster = segment::rasteriseSeeds(*seeds, dataset->volume.geometry);

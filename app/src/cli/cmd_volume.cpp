@@ -55,7 +55,9 @@ Result<Dataset> openDatasetArg(const cli::Args& args) {
   if (volume && !pos.empty()) return fail("give either DATASET or --volume PATH, not both");
   if (!volume && pos.empty()) return fail("missing DATASET (a built-in name such as 'phantom', or a path)");
   if (pos.size() > 1) return fail("unexpected argument '" + pos[1] + "' (one DATASET only)");
-  return openNamedDataset(datasetRequestFrom(args, volume ? *volume : pos[0]));
+  auto dataset = openNamedDataset(datasetRequestFrom(args, volume ? *volume : pos[0]));
+  if (dataset) reportDatasetWarnings(*dataset);
+  return dataset;
 }
 
 std::vector<std::size_t> labelHistogram(const LabelMap& labels) {

@@ -117,6 +117,7 @@ int runWdt(const Argv& argv) {
   const std::string datasetName = args.positional()[0], structureName = args.positional()[1];
   auto dataset = openNamedDataset(datasetRequestFrom(args, datasetName));
   if (!dataset) return reportError("wdt: " + dataset.error().message);
+  reportDatasetWarnings(*dataset);
   const Structure* structure = dataset->findStructure(structureName);
   if (!structure) return reportError("wdt: " + unknownStructureMessage(*dataset, structureName));
   const Mask mask = structureMask(dataset->labels, structure->label);

@@ -36,6 +36,11 @@ DatasetRequest datasetRequestFrom(const cli::Args& args, const std::string& name
   return request;
 }
 
+void reportDatasetWarnings(const Dataset& dataset) {
+  for (const std::string& warning : dataset.provenance.warnings)
+    terminalFprintf(stderr, "anatomy-tutor: warning: %s\n", warning.c_str());
+}
+
 void applyDatasetWindow(const Dataset& dataset, float& windowMin, float& windowMax, bool windowGiven,
                         bool densityWeights) {
   const IntensityModel& m = dataset.intensity;

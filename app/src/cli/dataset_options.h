@@ -32,6 +32,10 @@ inline constexpr const char* kDatasetOptionsHelp =
 // The request for dataset `name` with the dataset options given in `args`.
 DatasetRequest datasetRequestFrom(const cli::Args& args, const std::string& name);
 
+// Says on stderr, one line each, what the dataset's files leave the user to check (a label map off
+// its volume, labels lost to resampling: Provenance::warnings), as `import` does.
+void reportDatasetWarnings(const Dataset& dataset);
+
 // The window that maps a dataset's stored values to density 0 … 1 for density weights: the HU
 // window the caller has (a preset's, --hu-window) for CT, the dataset's own window (from its
 // histogram) for plain intensities unless `windowGiven`. On a dataset whose intensities are not

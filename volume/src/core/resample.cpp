@@ -59,4 +59,15 @@ Result<LabelMap> resampleLabelsNearest(const LabelMap& source, const Geometry& t
   return out;
 }
 
+std::vector<LostLabel> labelsLostInResampling(const LabelMap& source, const LabelMap& resampled) {
+  std::vector<std::size_t> before(65536, 0);
+  std::vector<bool> after(65536, false);
+  for (std::uint16_t v : source.voxels) ++before[v];
+  for (std::uint16_t v : resampled.voxels) after[v] = true;
+  std::vector<LostLabel> lost;
+  for (std::size_t label = 1; label < before.size(); ++label)
+    if (before[label] && !after[label]) lost.push_back({std::uint16_t(label), before[label]});
+  return lost;
+}
+
 }  // namespace at

@@ -80,6 +80,39 @@ std::string datasetIdFromPath(const std::string& path) {
   return id.empty() ? "dataset" : id;
 }
 
+// A label's name from the label file's own segments, else from the names file; empty if neither has one.
+std::string labelNameFrom(std::uint16_t label, const std::vector<SegmentInfo>& segments,
+                          const std::map<std::uint16_t, std::string>& names) {
+  auto segment = std::find_if(segments.begin(), segments.end(), [&](const SegmentInfo& i) { return i.label == label; });
+  if (segment != segments.end()) return segment->name;
+  if (auto it = names.find(label); it != names.end()) return it->second;
+  return {};
+}
+
+// One line naming the labels file and every label the resampling lost (at most 8, then a count),
+// each with its name from the file's segments or the names file where it has one.
+std::string lostLabelsWarning(const std::vector<LostLabel>& lost, const std::vector<SegmentInfo>& segments,
+                              const std::map<std::uint16_t, std::string>& names, const std::string& labelsPath,
+                              const Geometry& grid) {
+  constexpr std::size_t kNamed = 8;
+  std::string listed;
+  for (std::size_t n = 0; n < lost.size() && n < kNamed; ++n) {
+    const LostLabel& l = lost[n];
+    const std::string name = labelNameFrom(l.label, segments, names);
+    if (n) listed += ", ";
+    listed += std::to_string(l.label);
+    if (!name.empty()) listed += " '" + printableText(name, 60) + "'";
+    listed += " (" + str::countOf(static_cast<long long>(l.sourceVoxels), "voxel") + ")";
+  }
+  if (lost.size() > kNamed) listed += " and " + std::to_string(lost.size() - kNamed) + " more";
+  const std::string spacing = formatNumber(grid.spacingMm[0]) + " x " + formatNumber(grid.spacingMm[1]) + " x " +
+                              formatNumber(grid.spacingMm[2]) + " mm";
+  return labelsPath + ": " + str::countOf(static_cast<long long>(lost.size()), "label") + " lost every voxel when resampled onto the volume's " +
+         spacing + " grid (smaller than its voxels, or outside the volume), so " +
+         (lost.size() == 1 ? "it is" : "they are") + " left out: " + listed +
+         " - label on the volume's own grid to keep them";
+}
+
 }  // namespace
 
 Result<Dataset> openDatasetFiles(const DatasetFiles& files, const DatasetLoadControl& control) {
@@ -120,6 +153,7 @@ Result<Dataset> openDatasetFiles(const DatasetFiles& files, const DatasetLoadCon
   const Geometry& grid = dataset.volume.geometry;
 
   std::vector<SegmentInfo> segments;
+  std::vector<LostLabel> lostLabels;  // labels the resampling onto the volume's grid left without a voxel
   if (files.labelsPath.empty()) {
     dataset.labels = LabelMap(grid, 0);
   } else {
@@ -149,6 +183,7 @@ Result<Dataset> openDatasetFiles(const DatasetFiles& files, const DatasetLoadCon
           "labels resampled (nearest neighbour) from their " + labels->geometry.dims.toString() + " " +
           labels->geometry.orientationCode() + " grid onto the volume's " + grid.dims.toString() + " " +
           grid.orientationCode() + " grid through both patient frames");
+      lostLabels = labelsLostInResampling(*labels, *resampled);
       dataset.labels = std::move(*resampled);
     }
     if (auto warning = labelFitWarning(dataset.volume, dataset.intensity, dataset.labels, files.labelsPath); !warning.empty())
@@ -163,6 +198,8 @@ Result<Dataset> openDatasetFiles(const DatasetFiles& files, const DatasetLoadCon
     if (!loadedNames) return tl::unexpected(loadedNames.error());
     names = std::move(*loadedNames);
   }
+  if (!lostLabels.empty())
+    dataset.provenance.warnings.push_back(lostLabelsWarning(lostLabels, segments, names, files.labelsPath, grid));
 
   // Only labels present in the map become structures.
   std::vector<std::size_t> counts(65536, 0);
@@ -173,14 +210,9 @@ Result<Dataset> openDatasetFiles(const DatasetFiles& files, const DatasetLoadCon
     Structure s;
     s.label = std::uint16_t(label);
     s.colour = paletteColour(s.label);
-    std::string name;
+    const std::string name = labelNameFrom(s.label, segments, names);
     auto segment = std::find_if(segments.begin(), segments.end(), [&](const SegmentInfo& i) { return i.label == label; });
-    if (segment != segments.end()) {
-      name = segment->name;
-      s.colour = segment->colour;
-    } else if (auto it = names.find(s.label); it != names.end()) {
-      name = it->second;
-    }
+    if (segment != segments.end()) s.colour = segment->colour;
     s.id = str::identifier(name);
     if (s.id.empty()) s.id = "label_" + std::to_string(label);
     if (usedIds.count(s.id)) s.id.append(1, '_').append(std::to_string(label));
