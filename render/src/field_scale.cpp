@@ -176,11 +176,18 @@ std::vector<float> seenSurfaces(const FloatVolume& field, const Volume& volume, 
       const Vec3 oc = ray.origin - frame.centroidMm;
       const double b = dot(oc, ray.direction), c = dot(oc, oc) - reach * reach, disc = b * b - c;
       if (disc <= 0) continue;
-      const double t0 = std::max(0.0, -b - std::sqrt(disc)), t1 = -b + std::sqrt(disc);
+      const double t0 = std::max(0.0, -b - std::sqrt(disc));
       const IndexRay rv = indexRay(vg, ray), rf = indexRay(fg, ray);
+      // Only the part inside the volume is marched (the reach may be far larger than a µCT's
+      // volume), on the same sample positions as the whole segment would have.
+      double box0 = 0, box1 = 0;
+      detail::boxSegment(rv, vg.dims, box0, box1);
+      const double t1 = std::min(-b + std::sqrt(disc), box1);
+      double tFirst = t0 + 0.5 * step;
+      if (box0 > tFirst) tFirst += std::floor((box0 - tFirst) / step) * step;
       bool open = false;
       float first = 0;  // the first surface's D (0: none yet)
-      for (double t = t0 + 0.5 * step; t < t1; t += step) {
+      for (double t = tFirst; t < t1; t += step) {
         if (view.clip && !view.clip->keeps(ray.origin + t * ray.direction)) continue;
         int vi[3], fi[3];
         if (!voxelOn(rv, t, vg.dims, vi)) continue;
@@ -333,7 +340,7 @@ FieldScale fieldScale(const FloatVolume& field, const Volume& volume, const Mask
   FieldScale out;
   out.distanceUnit = distanceUnitFor(frame);
   if (volume.geometry.dims.count() == 0 || field.geometry.dims.count() == 0) return out;
-  const double reach = std::max(minRadiusMm, margin * frame.radiusMm);
+  const double reach = std::max(minRadiusMm * fineVoxelScale(frame), margin * frame.radiusMm);
   std::vector<float> around = aroundSurfaces(field, volume, body, frame, denseFrom, openBelow, reach);
   const Quantiles a = quantilesOf(around);
   Quantiles s;

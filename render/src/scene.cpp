@@ -79,13 +79,15 @@ double contextRadiusMm(const StructureFrame& f) {
   return std::sqrt(equivalent * std::max(f.radiusMm, equivalent));
 }
 
+double fineVoxelScale(const StructureFrame& f) { return at::fineVoxelScale(f.voxelMm); }
+
 double distanceUnitFor(const StructureFrame& f, double scale) {
-  return std::clamp(scale * contextRadiusMm(f) / kReferenceContextMm, 0.4, 40.0);
+  return std::clamp(scale * contextRadiusMm(f) / kReferenceContextMm, 0.4 * fineVoxelScale(f), 40.0);
 }
 
 Camera frameCamera(const StructureFrame& f, NamedView view, double aspect, double margin, double minHalfHeightMm) {
-  return frameCamera(f, Camera::named(view, f.centroidMm, std::max(f.radiusMm, minHalfHeightMm)), aspect, margin,
-                     minHalfHeightMm);
+  return frameCamera(f, Camera::named(view, f.centroidMm, std::max(f.radiusMm, minHalfHeightMm * fineVoxelScale(f))),
+                     aspect, margin, minHalfHeightMm);
 }
 
 double shareInView(const StructureFrame& f, const Camera& camera, int width, int height) {
@@ -119,7 +121,7 @@ Camera frameCamera(const StructureFrame& f, const Camera& orientation, double as
   // the centre, lies inside the frustum: |x|·margin ≤ (d + z)·tan·aspect and |y|·margin ≤ (d + z)·tan.
   const double tanHalf = std::tan(c.fovYDeg * 3.14159265358979323846 / 360.0);
   const double pad = 0.5 * f.voxelMm;
-  double distance = minHalfHeightMm / tanHalf;
+  double distance = minHalfHeightMm * fineVoxelScale(f) / tanHalf;
   for (const Vec3& p : points) {
     const Vec3 q = p - c.target;
     const double x = std::fabs(dot(q, right)) + pad, y = std::fabs(dot(q, c.up())) + pad, z = dot(q, c.forward());

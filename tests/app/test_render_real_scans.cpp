@@ -436,6 +436,39 @@ TEST_CASE("The derived distance unit follows the voxel size: the same anatomy at
   }
 }
 
+// A µCT finer than 0.1 mm (here the 0.1 mm phantom's own voxels said to be 10 µm) is framed and
+// faded voxel for voxel as at 0.1 mm: the view's least half-height, the unit's floor and the reach
+// searched for context bone shrink with the voxel (render/scene.h, fineVoxelScale). Before, a
+// 3 mm floor framed a 10 µm µCT's structure as a speck and the context search marched millimetres
+// of rays at a twentieth of its voxel (seconds at 1 µm, no end at 1 nm).
+TEST_CASE("A uCT finer than 0.1 mm renders as the same voxels at 0.1 mm, scaled") {
+  const Scan at100 = microCtPhantom(256);
+  Dataset scaled = test::phantomOfSize(256);
+  for (auto& v : scaled.volume.voxels) v = std::int16_t(std::clamp(std::lround((v + 1000.0) * 255.0 / 3000.0), 0L, 255L));
+  scaled.volume.geometry.spacingMm = {0.01, 0.01, 0.01};
+  for (std::size_t a = 0; a < 3; ++a) scaled.volume.geometry.originMm[a] = 0.1 * at100.ds.volume.geometry.originMm[a];
+  scaled.labels.geometry = scaled.volume.geometry;
+  const Scan at10 = prepared(std::move(scaled));
+  Gl* gl = glOrSkip();
+  for (const auto& [id, mode] : {std::pair{"cochlea", RenderMode::Wdt}, std::pair{"incus", RenderMode::Fuzzy}}) {
+    CAPTURE(id);
+    const Structure* s = at100.ds.findStructure(id);
+    REQUIRE(s);
+    const View v100 = viewOf(at100, s->label, derivedPreset(at100.levels, mode, id), "superior");
+    const View v10 = viewOf(at10, s->label, derivedPreset(at10.levels, mode, id), "superior");
+    MESSAGE(std::string(id) << ": unit " << v100.settings.distanceUnit << " at 0.1 mm, " << v10.settings.distanceUnit
+                            << " at 0.01 mm; camera " << v100.settings.camera.distanceMm << " / "
+                            << v10.settings.camera.distanceMm << " mm");
+    CHECK(std::fabs(v10.settings.distanceUnit * 10 / v100.settings.distanceUnit - 1) < 0.01);
+    CHECK(std::fabs(v10.settings.camera.distanceMm * 10 / v100.settings.camera.distanceMm - 1) < 0.01);
+    if (!gl) continue;
+    const RgbaImage i100 = draw(*gl, at100, s->label, v100, 0), i10 = draw(*gl, at10, s->label, v10, 0);
+    const double differ = meanGreyChange(i100, i10);
+    MESSAGE(std::string(id) << ": 0.1 mm vs 0.01 mm images differ by " << differ << " grey levels");
+    CHECK(differ < 1.0);
+  }
+}
+
 TEST_CASE("Skull CT: each mode reads as its figure - outline a thin band, fuzzy colour near the structure, lighting in its colour") {
   // (fuzzy and lighting on the orbit from the front and from the side and on the mastoid cells:
   // before their units came from the bone the view shows next to them, the orbit from the front

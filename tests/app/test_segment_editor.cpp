@@ -552,3 +552,35 @@ TEST_CASE("the segment editor's slice is in patient orientation for any voxel or
     }
   }
 }
+
+// The brush's 1.5 mm suits CT and a 0.1 mm µCT; on a finer µCT it keeps its voxels (a 10 µm µCT's
+// brush is 0.15 mm), and a radius the user set follows from one dataset's scale to the next.
+TEST_CASE("the segment editor's brush covers the same voxels on a uCT finer than 0.1 mm as at 0.1 mm") {
+  EditorOnPhantom f(64);
+  app::SegmentController& editor = f.editor;
+  Dataset at100 = f.unlabelled, at10 = f.unlabelled;
+  at100.volume.geometry.spacingMm = {0.1, 0.1, 0.1};
+  at10.volume.geometry.spacingMm = {0.01, 0.01, 0.01};
+  const auto dab = [&](const Dataset& dataset) {
+    editor.attach(dataset);
+    REQUIRE(editor.addLabel("bone"));
+    const auto seeded = editor.paintSeeds({32, 32, 32});
+    REQUIRE_MESSAGE(seeded, test::errorText(seeded));
+    return *seeded;
+  };
+  CHECK(editor.brushMm == doctest::Approx(1.5));  // the 0.4 mm phantom: the CT default
+  const std::size_t seeded100 = dab(at100);
+  CHECK(editor.brushMm == doctest::Approx(1.5));
+  CHECK(editor.brushScale() == doctest::Approx(1.0));
+  const std::size_t seeded10 = dab(at10);
+  CHECK(editor.brushMm == doctest::Approx(0.15));
+  CHECK(editor.brushScale() == doctest::Approx(0.1));
+  MESSAGE("a dab seeds " << seeded100 << " voxels at 0.1 mm, " << seeded10 << " at 0.01 mm");
+  CHECK(seeded100 > 10000);  // a ball of 15 voxels' radius
+  CHECK(std::abs(double(seeded100) - double(seeded10)) <= 0.01 * double(seeded100));
+  editor.brushMm = 0.05;  // the user's 5 voxels on the 10 µm scan are 0.5 mm at 0.1 mm
+  editor.attach(at100);
+  CHECK(editor.brushMm == doctest::Approx(0.5));
+  editor.attach(f.unlabelled);
+  CHECK(editor.brushMm == doctest::Approx(0.5));
+}

@@ -10,10 +10,10 @@
 //
 // The unit (and offset, see kFarQuantileX) is measured on two sets of bone surfaces within the
 // framed view's reach (a sphere about the structure's centroid of radius margin × its radius, at
-// least minRadiusMm), each a bone surface as the preset's data TF draws it (stored value at or
-// above the level where the data TF reaches half its peak opacity, next to open space — at or
-// below the level the data TF draws clear: the walls of marrow cavities lie inside the bone),
-// inside the body when a body mask is given (the CT table and headrest are no context), reachable
+// least minRadiusMm times fineVoxelScale), each a bone surface as the preset's data TF draws it
+// (stored value at or above the level where the data TF reaches half its peak opacity, next to
+// open space — at or below the level the data TF draws clear: the walls of marrow cavities lie
+// inside the bone), inside the body when a body mask is given (the CT table and headrest are no context), reachable
 // (finite D) and not the structure (D > 0):
 //  - around: every such surface voxel in the sphere (kOpenReach voxels to open space along an
 //    axis): the bone the structure is embedded in, seen or not;

@@ -48,15 +48,22 @@ StructureFrame unionFrame(const StructureFrame& a, const StructureFrame& b);
 // thin one (a nerve, a canal) less than its length, so its context hugs it rather than filling the
 // box around it. Phantom: cochlea ≈ 2.9 mm, a semicircular canal ≈ 2.2 mm; a vertebra ≈ 28 mm.
 double contextRadiusMm(const StructureFrame& frame);
+// The millimetre floors of framing and context (the view's least half-height, the distance unit's
+// floor, the reach searched for context bone) are scaled by the frame's fineVoxelScale
+// (volume/geometry.h): a structure of a µCT finer than 0.1 mm is framed and faded voxel for voxel
+// as at 0.1 mm.
+double fineVoxelScale(const StructureFrame& frame);
+
 // The distance unit (RenderSettings::distanceUnit) for a structure: its context radius over
 // kReferenceContextMm (the radius presets are written for, a cochlea's), times `scale`, clamped to
-// 0.4..40 so that tiny or huge labels keep a usable context.
+// 0.4..40 (the floor times fineVoxelScale) so that tiny or huge labels keep a usable context.
 constexpr double kReferenceContextMm = 3.0;
 double distanceUnitFor(const StructureFrame& frame, double scale = 1.0);
 
 // A camera looking from the named side at the structure: centred on its extent as seen from that
 // side and far enough (perspective included) that the extent times `margin` fills the view of the
-// given aspect (width / height), and at least a view of half-height `minHalfHeightMm`.
+// given aspect (width / height), and at least a view of half-height `minHalfHeightMm` times
+// fineVoxelScale.
 Camera frameCamera(const StructureFrame& frame, NamedView view, double aspect, double margin = 1.6,
                    double minHalfHeightMm = 3.0);
 // The same from the side `orientation` looks from: its direction, up, field of view and projection
@@ -79,7 +86,7 @@ struct ViewRequest {
   std::optional<std::array<float, 4>> clip; // overrides preset.clip
   double margin = 1.6;                      // the structure's extent times this fills the view
   double contextScale = 1.0;                // multiplies the structure's distance unit
-  double minRadiusMm = 3;                   // smallest half-height of the view
+  double minRadiusMm = 3;                   // smallest half-height of the view (times fineVoxelScale)
 };
 
 // Settings for rendering `preset` around the structure (framed camera, distance unit from its

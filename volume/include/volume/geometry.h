@@ -71,4 +71,11 @@ struct Geometry {
   std::string orientationCode() const;
 };
 
+// Millimetre floors written for CT and a 0.1 mm µCT (the least half-height of a view, a distance
+// unit's floor, a brush's default radius) are scaled by this below kFineVoxelMm, so a finer µCT
+// gets them voxel for voxel as at 0.1 mm: 1 for `voxelMm` ≥ kFineVoxelMm (and for 0, unknown),
+// voxelMm / kFineVoxelMm below.
+constexpr double kFineVoxelMm = 0.1;
+inline double fineVoxelScale(double voxelMm) { return voxelMm > 0 && voxelMm < kFineVoxelMm ? voxelMm / kFineVoxelMm : 1.0; }
+
 }  // namespace at

@@ -53,6 +53,10 @@ void SegmentController::attach(const Dataset& dataset, const Volume* grown) {
   current_ = 0;
   axis_ = 2;
   index_ = dataset.volume.dims().z / 2;
+  const Vec3& spacing = dataset.volume.geometry.spacingMm;
+  const double scale = fineVoxelScale(std::max({spacing[0], spacing[1], spacing[2]}));
+  brushMm *= scale / brushScale_;
+  brushScale_ = scale;
   grey_.reset(dataset.intensity);
   status_.clear();
   grownOnce_ = false;

@@ -109,7 +109,13 @@ class SegmentController {
   std::uint64_t labelsRevision() const { return labelsRevision_; }
 
   // --- Seeds and tools ------------------------------------------------------------------------
-  double brushMm = 1.5;  // the brush's radius (seeds, paint, erase); 0: the voxel alone
+  // The brush's radius (seeds, paint, erase); 0: the voxel alone. 1.5 mm on CT and a 0.1 mm µCT;
+  // on a finer µCT it is kept voxel for voxel (times fineVoxelScale, volume/geometry.h): attach
+  // rescales it from one dataset's scale to the next.
+  double brushMm = 1.5;
+  // fineVoxelScale of the attached dataset's largest spacing (1: none): the Segment window's
+  // lengths (brush, margin, bridges) are kept voxel for voxel with it.
+  double brushScale() const { return brushScale_; }
   // With a seed range (the dataset's values), a click seeds only the voxels of the brush's ball
   // whose values lie in it and join the clicked voxel through such voxels: a local threshold, for
   // any label — one large background dab in the air beside a thin bone seeds the air, not the bone
@@ -264,6 +270,7 @@ class SegmentController {
   std::optional<Error> growError_;
   segment::GrowthDefaults defaults_;
   GrowthSettings settings_;
+  double brushScale_ = 1.0;
   bool grownOnce_ = false;  // a growth was started since attach (settings changes preview)
 };
 

@@ -177,6 +177,8 @@ class SegmentPanel {
   bool stroking_ = false;          // a paint / erase drag in the slice is under way
   float range_[2] = {0, 0};        // the island's value range (dataset units), from its window
   bool rangeSet_ = false;
+  // In mm at a scale of 1 (CT, a 0.1 mm µCT); shown and applied times the editor's brushScale, so
+  // on a finer µCT they keep their voxels as the brush does.
   float minDiameterMm_ = 0;
   float marginMm_ = 1.0f;          // margin grow/shrink and hollow thickness
   std::string newLabel_, exportPath_, error_, seedsPath_ = "seeds.json";
