@@ -110,8 +110,14 @@ void ExplorePanel::draw(DesktopModel& model, const Status& status) {
     const char* axes[] = {"left-right", "anterior-posterior", "inferior-superior"};
     clipChanged |= ImGui::Combo("axis", &clip.axis, axes, 3);
     clipChanged |= ImGui::Checkbox("flip side", &clip.flip);
-    const float range = float(std::max(5.0, explore.camera().distanceMm));
-    clipChanged |= ImGui::SliderFloat("offset mm", &clip.offsetMm, -range, range, "%.1f");
+    // At least 5 mm, kept voxel for voxel on a µCT finer than 0.1 mm (volume/geometry.h), with
+    // the finer steps such a scan needs.
+    const Vec3& spacing = dataset.volume.geometry.spacingMm;
+    const double voxelScale = fineVoxelScale(std::max({spacing[0], spacing[1], spacing[2]}));
+    const bool fine = voxelScale < 1;
+    const float range = float(std::max(5.0 * voxelScale, explore.camera().distanceMm));
+    clipChanged |= ImGui::SliderFloat("offset mm", &clip.offsetMm, -range, range, fine ? "%.4f" : "%.1f",
+                                      fine ? ImGuiSliderFlags_NoRoundToFormat : ImGuiSliderFlags_None);
   }
   if (clipChanged) explore.setClip(clip);
   ImGui::Separator();
