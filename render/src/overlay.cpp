@@ -234,10 +234,16 @@ ScaleBar scaleBar(const Camera& camera, int imageWidth, int imageHeight, double 
   if (bar.mm == 0) bar.mm = decade;
   bar.pixels = bar.mm / mmPerPixel;
   char text[32];
+  // The unit a reader of that scale uses: cm from 1 cm, mm down to 0.1 mm, then µm (a µCT's bar
+  // reads "50 µm", not "0.05 mm"), and nm below 1 µm.
   if (bar.mm >= 10 && std::fmod(bar.mm, 10.0) == 0)
     std::snprintf(text, sizeof text, "%g cm", bar.mm / 10);
-  else
+  else if (bar.mm >= 0.1)
     std::snprintf(text, sizeof text, "%g mm", bar.mm);
+  else if (bar.mm >= 1e-3)
+    std::snprintf(text, sizeof text, "%g µm", bar.mm * 1e3);
+  else
+    std::snprintf(text, sizeof text, "%g nm", bar.mm * 1e6);
   bar.label = text;
   return bar;
 }

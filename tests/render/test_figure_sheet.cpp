@@ -162,3 +162,29 @@ TEST_CASE("FigureSheet_WrappedCaptionsNeverCutACharacterAndTitlesKeepTheirSigns"
     }
   CHECK(onSheet == expected);
 }
+
+// The scale bar is a round length no wider than a fifth of the picture, labelled in the unit a
+// reader of that scale uses, at every scale from a whole CT to a nanometre µCT.
+TEST_CASE("ScaleBar_ReadsInCmMmMicrometresOrNanometres_AtEveryScale") {
+  Camera camera;
+  const double halfHeightPerMm = std::tan(camera.fovYDeg * 3.14159265358979323846 / 360.0);
+  const std::vector<std::pair<double, std::string>> cases = {
+      {300.0, "cm"}, {30.0, "cm"},  {3.0, "mm"},  {0.6, "mm"},  {0.3, "mm"},
+      {0.1, "µm"},   {0.03, "µm"},  {3e-3, "µm"}, {3e-4, "nm"}, {3e-6, "nm"}};
+  for (const auto& [halfHeightMm, unit] : cases) {
+    CAPTURE(halfHeightMm);
+    camera.distanceMm = halfHeightMm / halfHeightPerMm;
+    const ScaleBar bar = scaleBar(camera, 400, 400);
+    CAPTURE(bar.label);
+    const double mmPerPixel = millimetresPerPixel(camera, 400);
+    CHECK(bar.pixels <= 0.2 * 400 + 1e-6);
+    CHECK(bar.pixels >= 0.2 * 400 / 5.0 - 1e-6);  // 1, 2 or 5 × 10^k: at least a fifth of the room
+    CHECK(bar.mm == doctest::Approx(bar.pixels * mmPerPixel));
+    CHECK(bar.label.size() > unit.size() + 1);
+    CHECK(bar.label.compare(bar.label.size() - unit.size(), unit.size(), unit) == 0);
+    // The number before the unit times the unit is the bar's length.
+    const double number = std::stod(bar.label);
+    const double scale = unit == "cm" ? 10 : unit == "mm" ? 1 : unit == "µm" ? 1e-3 : 1e-6;
+    CHECK(number * scale == doctest::Approx(bar.mm));
+  }
+}

@@ -32,7 +32,7 @@ double millimetresPerPixel(const Camera& camera, int imageHeight);
 struct ScaleBar {
   double mm = 0;
   double pixels = 0;
-  std::string label;  // "5 mm", "0.5 mm", "2 cm" …
+  std::string label;  // "2 cm", "5 mm", "0.5 mm", "50 µm", "20 nm" (the unit a reader of that scale uses)
 };
 ScaleBar scaleBar(const Camera& camera, int imageWidth, int imageHeight, double maxFraction = 0.2);
 
