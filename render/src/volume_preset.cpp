@@ -7,12 +7,16 @@ namespace at::render {
 
 namespace {
 
-// The opacity per kWholeVolumeRefMm of ray that adds up to `total` over `lengthMm`.
-float opacityOver(double total, double lengthMm) {
-  return float(1.0 - std::pow(1.0 - total, kWholeVolumeRefMm / std::max(lengthMm, kWholeVolumeRefMm)));
+// The opacity per `refMm` of ray that adds up to `total` over `lengthMm`.
+float opacityOver(double total, double lengthMm, double refMm) {
+  return float(1.0 - std::pow(1.0 - total, refMm / std::max(lengthMm, refMm)));
 }
 
 }  // namespace
+
+double wholeVolumeRefMm(const Geometry& grid) {
+  return kWholeVolumeRefMm * at::fineVoxelScale(std::max({grid.spacingMm[0], grid.spacingMm[1], grid.spacingMm[2]}));
+}
 
 Preset wholeVolumePreset(const IntensityModel& intensity, const Geometry& grid) {
   Preset p;
@@ -20,6 +24,7 @@ Preset wholeVolumePreset(const IntensityModel& intensity, const Geometry& grid) 
   p.id = std::string("whole_volume");
   p.mode = RenderMode::Wdt;
   p.t = 1.0f;
+  const double refMm = wholeVolumeRefMm(grid);
   p.distanceTf = {{0, {1, 1, 1, 0}}, {1, {1, 1, 1, 0}}};
   const Rgba clear{0, 0, 0, 0};
   if (intensity.hounsfield()) {
@@ -30,7 +35,8 @@ Preset wholeVolumePreset(const IntensityModel& intensity, const Geometry& grid) 
     // bone white from 160 HU (at 3 mm, vertebrae and ribs average 150–250 HU) to opaque at 350 HU.
     // (An opacity spread over the whole volume instead left a 3 mm abdomen nearly black.)
     const double voxel = std::min({grid.spacingMm[0], grid.spacingMm[1], grid.spacingMm[2]});
-    const float tissue = opacityOver(0.15, voxel), boneLow = opacityOver(0.75, voxel), bone = opacityOver(0.99, voxel);
+    const float tissue = opacityOver(0.15, voxel, refMm), boneLow = opacityOver(0.75, voxel, refMm),
+                bone = opacityOver(0.99, voxel, refMm);
     p.surfaceGradientHu = {30, 200};
     const Rgba flesh{0.98f, 0.74f, 0.64f, tissue};
     p.dataTf = {{-1000, clear}, {-250, clear}, {-100, flesh}, {100, flesh}, {160, {0.97f, 0.93f, 0.86f, boneLow}},
@@ -41,7 +47,7 @@ Preset wholeVolumePreset(const IntensityModel& intensity, const Geometry& grid) 
   const double across = std::max({extent[0], extent[1], extent[2]});
   // Soft tissue adds up to 25 % opacity across the whole volume; dense material to 90 % within
   // 4 % of it (a bone's thickness), so bone shows through tissue whatever the volume's size.
-  const float tissue = opacityOver(0.25, across), dense = opacityOver(0.9, 0.04 * across);
+  const float tissue = opacityOver(0.25, across, refMm), dense = opacityOver(0.9, 0.04 * across, refMm);
   const Rgba flesh{0.85f, 0.62f, 0.52f, tissue};
   const double lo = intensity.window[0], width = intensity.window[1] - intensity.window[0];
   const auto at = [&](double f) { return lo + f * width; };

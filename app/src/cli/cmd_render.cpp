@@ -167,7 +167,7 @@ int runRender(const Argv& argv) {
   auto settings = render::settingsFor(*preset, *frame, request);
   if (!settings) return reportError("render: " + settings.error().message, 2);
   settings->background = {0.04f, 0.04f, 0.05f, 1.0f};
-  if (wholeVolume && !args->has("preset")) settings->opacityRefMm = render::kWholeVolumeRefMm;
+  if (wholeVolume && !args->has("preset")) settings->opacityRefMm = render::wholeVolumeRefMm(dataset->volume.geometry);
 
   std::optional<DistanceField> field;
   // The volume's gradients, computed once for the renderer and, in fuzzy and lighting, the picture their

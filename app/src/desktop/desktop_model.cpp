@@ -342,7 +342,7 @@ render::RenderSettings DesktopModel::renderSettings(const RenderPlan& plan) cons
   s.background = {0.04f, 0.04f, 0.05f, 1.0f};
   s.clip = explore_.clipPlane();
   // The whole volume's data TF states its opacities per this length of ray (volume_preset.h).
-  if (explore_.wholeVolume()) s.opacityRefMm = render::kWholeVolumeRefMm;
+  if (explore_.wholeVolume()) s.opacityRefMm = render::wholeVolumeRefMm(dataset_->volume.geometry);
   return s;
 }
 

@@ -16,10 +16,14 @@ namespace at::render {
 // Plain intensities, over their histogram window (volume/intensity.h): clear below 28 % of it
 // (air, background), faint tissue around 35–42 %, rising to white dense material at its top, with
 // context surfaces at edges of 1 % … 10 % of the window per voxel, opacities scaled to the grid's
-// size so tissue stays a haze. Opacities are given per kWholeVolumeRefMm of ray; TF points are in
-// stored values, as the ray caster samples them.
-constexpr double kWholeVolumeRefMm = 0.25;
+// size so tissue stays a haze. Opacities are given per wholeVolumeRefMm(grid) of ray (the
+// renderer's RenderSettings::opacityRefMm); TF points are in stored values, as the ray caster
+// samples them.
 Preset wholeVolumePreset(const IntensityModel& intensity, const Geometry& grid);
+// The length of ray the whole-volume preset's opacities are per: kWholeVolumeRefMm, kept voxel for
+// voxel on a µCT finer than 0.1 mm (times fineVoxelScale of the largest spacing, volume/geometry.h).
+constexpr double kWholeVolumeRefMm = 0.25;
+double wholeVolumeRefMm(const Geometry& grid);
 
 // The frame of the whole grid: its centre, 0.6 × its largest side as the radius, and its corner
 // voxels as the points a view is framed around.
